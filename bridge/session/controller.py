@@ -113,13 +113,14 @@ Rules:
    ``noise_deg`` and a reading's step) not moved since (not beyond ``noise_deg``: the frame lost
    or garbled on the line, one of an RC2800's two; an Easycomm box ignores a bearing it cannot
    read), or if the controller refuses it before it moved the rotor (motion.py rule 8: a flipped
-   bit made a frame it refuses). One sent mid-turn (the rotor moves whether its frame came or
-   not) is judged by where the rotor rests instead: at a reading at that time or later that
-   shows it come to rest (no movement for ``settle_s``) where the turn before it was going
-   (within ``tolerance_deg`` + ``noise_deg`` on each axis that turn named), the frame was lost
-   (a probe: turning to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error
-   16 s later blamed the brake; and a rotor that jammed mid-turn, not moved since, was sent
-   its new target twice). It goes again, try 2, with the raw bearing its first try
+   bit made a frame it refuses). An axis that was turning when it went (mid-turn: it moves
+   whether the frame came or not) is judged by where it rests instead: a reading at that time or
+   later that shows the rotor come to rest (no movement for ``settle_s``) with that axis where
+   the turn before was going (within ``tolerance_deg`` + ``noise_deg``) shows the frame lost (a
+   probe: turning to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error 16 s
+   later blamed the brake; and a rotor that jammed mid-turn, not moved since, was sent its new
+   target twice). Each axis on its own: an RC2800's elevation frame lost under a new azimuth, or
+   its azimuth's under a new elevation. It goes again, try 2, with the raw bearing its first try
    resolved (an axis it left out included), if the bridge still stands for it (``Again``:
    targets.py rule 8, no newer target, stop or end of its feature since; if not, a refusal is
    reported as ever), with a warning in the log (a refusal some codecs read as junk is still
@@ -268,39 +269,57 @@ def _to_turn(
     return az_from, el_from
 
 
-def _each_moved(
-    start: tuple[float | None, float | None], m: mo.Motion, cfg: mo.MotionConfig
-) -> bool:
-    """Rule 11: whether each axis that had to turn (``_to_turn``) is now more than ``noise_deg``
-    from where it stood."""
-    az_from, el_from = start
-    az, el = m.position_deg, m.el_position_deg
-    if az_from is not None and (
-        az is None or mo.angle_error(az, az_from, cfg.az_wraps) <= cfg.noise_deg
-    ):
-        return False
-    return el_from is None or (el is not None and abs(el - el_from) > cfg.noise_deg)
-
-
 def _turn_least_s(cfg: mo.MotionConfig) -> float:
     """Rule 2: the least time mid-turn without a valid reply that makes the controller
     offline: TURN_SILENCE_SHARE of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least."""
     return max(cfg.stall_timeout_s * TURN_SILENCE_SHARE, TURN_SILENCE_LEAST_S)
 
 
-def _rests_at(
-    before: tuple[float, float | None], m: mo.Motion, cfg: mo.MotionConfig, now: float
-) -> bool:
-    """Rule 11: whether the rotor, sent a target mid-turn, has come to rest (no movement for
-    ``settle_s``) where the turn before it was going (within ``tolerance_deg`` + ``noise_deg``
-    on each axis it named): the new target's frame was lost or garbled on the line."""
-    az, el = m.position_deg, m.el_position_deg
-    if az is None or m.progress_t is None or now < m.progress_t + cfg.settle_s:
-        return False
+def _turning_to(m: mo.Motion, cfg: mo.MotionConfig) -> tuple[float | None, float | None]:
+    """Rule 11: the bearing each axis is turning to (a target sent now is sent mid-turn), None
+    for an axis that is not: no turn under way, or already within ``tolerance_deg`` of it."""
+    if m.state is not mo.MOVING or m.stop_sent_t is not None or m.target_deg is None:
+        return None, None
+    az, el, to_el = m.position_deg, m.el_position_deg, m.el_target_deg
+    to_az: float | None = m.target_deg
+    if az is not None and mo.angle_error(az, m.target_deg, cfg.az_wraps) <= cfg.tolerance_deg:
+        to_az = None
+    if to_el is not None and (el is None or abs(el - to_el) <= cfg.tolerance_deg):
+        to_el = None
+    return to_az, to_el
+
+
+def _left_behind(
+    start: tuple[float | None, float | None],
+    before: tuple[float | None, float | None],
+    m: mo.Motion,
+    cfg: mo.MotionConfig,
+    now: float,
+) -> tuple[bool, bool]:
+    """Rule 11: whether an axis that had to turn (``_to_turn``: where it stood) may yet be
+    found left behind by the target's frame, and whether one is now. One that was still when
+    the target went is left behind while it has not moved more than ``noise_deg`` from where it
+    stood; one that was turning (``_turning_to``: ``before``, mid-turn, moves whether the frame
+    came or not) once the rotor has come to rest (no movement for ``settle_s``) where that
+    turn was going, within ``tolerance_deg`` + ``noise_deg`` (an attack pass: judged on both
+    axes together, an RC2800's lost elevation frame under a new azimuth went unseen)."""
+    open_ = lost = False
+    rests = m.progress_t is not None and now >= m.progress_t + cfg.settle_s
     near = cfg.tolerance_deg + cfg.noise_deg
-    if mo.angle_error(az, before[0], cfg.az_wraps) > near:
-        return False
-    return before[1] is None or el is None or abs(el - before[1]) <= near
+    axes = (
+        (m.position_deg, start[0], before[0], cfg.az_wraps),
+        (m.el_position_deg, start[1], before[1], False),
+    )
+    for pos, stood, was, wraps in axes:
+        if stood is None:
+            continue  # (no turn of its own to make)
+        if was is None:  # still when the target went: moved since, or not
+            if pos is None or mo.angle_error(pos, stood, wraps) <= cfg.noise_deg:
+                open_ = lost = True
+        else:  # turning: left where the turn before was going, or not (yet)
+            open_ = True
+            lost = lost or (rests and pos is not None and mo.angle_error(pos, was, wraps) <= near)
+    return open_, lost
 
 
 def _where(reply: PositionReply) -> str:
@@ -360,7 +379,8 @@ class Controller:
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
-        self._retry_before: tuple[float, float | None] | None = None  # ... the turn it ended
+        self._retry_before: tuple[float | None, float | None] = (None, None)  # ... each axis's
+        # bearing it was turning to when the target went (mid-turn), None for a still one
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -848,14 +868,11 @@ class Controller:
         due = self._retry_t + wait + mo.BRAKE_GUARD_S + cfg.moving_poll_interval_s
         if m.target_deg is None or m.state is not mo.MOVING:  # (a stop drops the target)
             self._retry = None
-        elif self._retry_before is not None:  # sent mid-turn: its movement tells nothing
-            if now >= due and _rests_at(self._retry_before, m, mc, now) and link.free():
-                if not link.stop_due:
-                    self._retry = None
-                    self.notes.append(Again(target, *self._retry_raw))
-        elif _each_moved(self._retry_from, m, mc):
+            return
+        open_, lost = _left_behind(self._retry_from, self._retry_before, m, mc, now)
+        if not open_:
             self._retry = None
-        elif now >= due and link.free() and not link.stop_due:
+        elif lost and now >= due and link.free() and not link.stop_due:
             self._retry = None
             self.notes.append(Again(target, *self._retry_raw))
 
@@ -1052,9 +1069,7 @@ class Controller:
             self._retry, self._retry_t = target, now
             self._retry_raw = todo.az_deg, todo.el_deg
             self._retry_from = _to_turn(m, cfg, az, el)
-            turning = m.state is mo.MOVING and m.stop_sent_t is None
-            before = m.target_deg if turning else None
-            self._retry_before = None if before is None else (before, m.el_target_deg)
+            self._retry_before = _turning_to(m, cfg.motion)
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -324,3 +324,37 @@ def test_a_rotor_stuck_short_of_the_turn_before_is_no_lost_target(rig: Rig) -> N
     [frame] = {w.data for w in v.writes if w.t >= t and w.data not in before} - {b"S\r"}
     assert [w.data for w in v.writes if w.t >= t].count(frame) == 1
     assert [e.kind for e in v.errors(since=t)] == ["stalled"]
+
+
+@pytest.mark.parametrize(
+    ("model", "lose", "as_"),
+    [
+        ("rc2800", b"E40.0\r", None),  # its elevation frame lost, its azimuth's came
+        ("rc2800", b"A200.0\r", None),  # and the other way round
+        ("easycomm2", b"AZ200.0 EL40.0\n", b"AZ200.0 DL40.0\n"),  # a word the box ignores
+        ("easycomm2", b"AZ200.0 EL40.0\n", b"AY200.0 EL40.0\n"),
+    ],
+)
+def test_one_axis_of_a_target_sent_mid_turn_lost_on_the_line_goes_again(
+    rig: Rig, model: str, lose: bytes, as_: bytes | None
+) -> None:
+    """Turning from 0/10 to 100/10, sent 200/40 at 60 with one axis's part of it lost (an
+    attack pass: judged on both axes together, a lost elevation under a new azimuth left the
+    antenna at 10 degrees and a stall blamed the brake; a lost azimuth under a new elevation,
+    before this change too): each axis is judged on its own (controller.py rule 11), and the
+    target arrives whole, with no error."""
+    v = rig(model, emulator={**FAST, "start_az_deg": 0, "start_el_deg": 10}, settings=FAST)
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    v.target(100.0, 10.0)
+    v.run_until(lambda h: (h.status.bearing_deg or 0.0) >= 60, 60, "at 60")
+    t = v.now
+    if as_ is None:
+        v.drop_writes(lose)
+    else:
+        v.garble_writes(lose, as_)
+    v.target(200.0, 40.0)
+    v.run_until(lambda h: h.state is IDLE, 90, "at rest")
+
+    assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 40.0)
+    assert v.errors(since=t) == []
