@@ -138,9 +138,11 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
     stop frame) is refused outright by the kernel (EAGAIN), with room to spare; the bridge took
     that for a stuck adapter and dropped the link (a stop express test failed so under load).
     Every frame reaches the wire whole, however often the other writer is in the way. (This
-    writer never pauses, unlike the express, which writes one frame a stop: how long the tty
-    may be taken from the bridge here is a deadline, scaled.)"""
-    monkeypatch.setattr(port_module, "WRITE_WAIT_S", slow(port_module.WRITE_WAIT_S))
+    writer never pauses, unlike the express, which writes one frame a stop, and on a loaded
+    machine the reader that drains the tty here may wait for a core while the writer fills it:
+    how long the tty may be taken from the bridge is a second here, scaled. The bridge before
+    gave up at the first refusal; a CI run under load gave up after 0.05 s scaled.)"""
+    monkeypatch.setattr(port_module, "WRITE_WAIT_S", slow(1.0))
     # the other writer here pours bytes without a pause, so the tty may hold many while the
     # reader waits for a core: that is the test below's (a full buffer), not this one's
     monkeypatch.setattr(port_module, "FULL_BYTES", 1 << 30)
