@@ -113,23 +113,26 @@ Rules:
    ``noise_deg`` and a reading's step) not moved since (not beyond ``noise_deg``: the frame lost
    or garbled on the line, one of an RC2800's two; an Easycomm box ignores a bearing it cannot
    read), or if the controller refuses it before it moved the rotor (motion.py rule 8: a flipped
-   bit made a frame it refuses). An axis that was turning when it went (mid-turn: it moves
-   whether the frame came or not) is judged by where it rests instead: a reading at that time or
-   later that shows the rotor come to rest (no movement for ``settle_s``) with that axis where
-   the turn before was going (within ``tolerance_deg`` + ``noise_deg``) shows the frame lost (a
-   probe: turning to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error 16 s
-   later blamed the brake; and a rotor that jammed mid-turn, not moved since, was sent its new
-   target twice). Each axis on its own: an RC2800's elevation frame lost under a new azimuth, or
-   its azimuth's under a new elevation. It goes again, try 2, with the raw bearing its first try
-   resolved (an axis it left out included), if the bridge still stands for it (``Again``:
-   targets.py rule 8, no newer target, stop or end of its feature since; if not, a refusal is
-   reported as ever), with a warning in the log (a refusal some codecs read as junk is still
-   told as junk); the time is judged at the reading by the settings then in effect (rule 7: a
-   speed set in the same batch as the target slows it); a second refusal is reported, and a turn
-   that does not start then is a stall as ever (``stall_timeout_s`` from the try that went). A
-   stop ends the tries. Not on the Rotor-EZ, RotorCard or DCU-1: a bearing while their motor
-   runs (a jammed rotor's) stops it, against the controller's rule (docs/architecture.md rule
-   7).
+   bit made a frame it refuses). An axis that was turning when it went (mid-turn, more than
+   ``noise_deg`` from where that turn was going; or at rest within ``tolerance_deg`` of the last
+   azimuth written, where a slow rotor called arrived may creep on: it moves whether the frame
+   came or not) is judged by where it rests instead: a reading at that time or later that shows
+   the rotor come to rest (no movement for ``settle_s``) with that axis where the turn before
+   was going (within ``tolerance_deg`` + ``noise_deg``) shows the frame lost (a probe: turning
+   to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error 16 s later blamed the
+   brake; and a rotor that jammed mid-turn, not moved since, was sent its new target twice).
+   Each axis on its own: an RC2800's elevation frame lost under a new azimuth, or its azimuth's
+   under a new elevation; and a target sent at 97 on the way to 100, lost, judged by whether it
+   moved, was a stall that blamed the brake. It goes again, try 2, with the raw bearing its
+   first try resolved (an axis it left out included), if the bridge still stands for it
+   (``Again``: targets.py rule 8, no newer target, stop or end of its feature since; if not, a
+   refusal is reported as ever), with a warning in the log (a refusal some codecs read as junk
+   is still told as junk); the time is judged at the reading by the settings then in effect
+   (rule 7: a speed set in the same batch as the target slows it); a second refusal is reported,
+   and a turn that does not start then is a stall as ever (``stall_timeout_s`` from the try that
+   went). A stop ends the tries. Not on the Rotor-EZ, RotorCard or DCU-1: a bearing while their
+   motor runs (a jammed rotor's) stops it, against the controller's rule (docs/architecture.md
+   rule 7).
 """
 
 from __future__ import annotations
@@ -275,16 +278,32 @@ def _turn_least_s(cfg: mo.MotionConfig) -> float:
     return max(cfg.stall_timeout_s * TURN_SILENCE_SHARE, TURN_SILENCE_LEAST_S)
 
 
-def _turning_to(m: mo.Motion, cfg: mo.MotionConfig) -> tuple[float | None, float | None]:
-    """Rule 11: the bearing each axis is turning to (a target sent now is sent mid-turn), None
-    for an axis that is not: no turn under way, or already within ``tolerance_deg`` of it."""
-    if m.state is not mo.MOVING or m.stop_sent_t is not None or m.target_deg is None:
+def _turning_to(
+    m: mo.Motion, cfg: mo.MotionConfig, sent_az: float | None
+) -> tuple[float | None, float | None]:
+    """Rule 11: the bearing each axis may still be turning to when a target goes now (it then
+    moves whether the frame came or not): the turn's under way, or, at rest within
+    ``tolerance_deg`` of the last azimuth written (``sent_az``), that one (a slow rotor called
+    arrived may creep on to it); None for an axis within ``noise_deg`` of it (it cannot move
+    more than that: whether it moved tells) or with none. An attack pass: with the tolerance
+    here, a target sent at 97 on the way to 100, lost, ended as a stall that blamed the
+    brake."""
+    if m.stop_sent_t is not None:
         return None, None
-    az, el, to_el = m.position_deg, m.el_position_deg, m.el_target_deg
-    to_az: float | None = m.target_deg
-    if az is not None and mo.angle_error(az, m.target_deg, cfg.az_wraps) <= cfg.tolerance_deg:
-        to_az = None
-    if to_el is not None and (el is None or abs(el - to_el) <= cfg.tolerance_deg):
+    az, el = m.position_deg, m.el_position_deg
+    to_az: float | None
+    if m.state is mo.MOVING and m.target_deg is not None:
+        to_az, to_el = m.target_deg, m.el_target_deg
+    elif sent_az is not None and az is not None:
+        if mo.angle_error(az, sent_az, cfg.az_wraps) > cfg.tolerance_deg:
+            return None, None  # (stopped short of it, or turned away since: still)
+        to_az, to_el = sent_az, None
+    else:
+        return None, None
+    if az is not None and to_az is not None:
+        if mo.angle_error(az, to_az, cfg.az_wraps) <= cfg.noise_deg:
+            to_az = None
+    if to_el is not None and (el is None or abs(el - to_el) <= cfg.noise_deg):
         to_el = None
     return to_az, to_el
 
@@ -1063,13 +1082,14 @@ class Controller:
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
         self.target_last = True
         az, el = todo.wire
+        sent_az = self._sent_az  # (rule 11: the target written before this one)
         self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
         self._retry = None  # rule 11: one try more, where the controller takes one at any time
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now
             self._retry_raw = todo.az_deg, todo.el_deg
             self._retry_from = _to_turn(m, cfg, az, el)
-            self._retry_before = _turning_to(m, cfg.motion)
+            self._retry_before = _turning_to(m, cfg.motion, sent_az)
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -358,3 +358,48 @@ def test_one_axis_of_a_target_sent_mid_turn_lost_on_the_line_goes_again(
 
     assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 40.0)
     assert v.errors(since=t) == []
+
+
+@pytest.mark.parametrize(("model", "speed"), [("rt21", 6.0), ("gs232b", 6.0), ("gs232b", 1.0)])
+def test_a_target_sent_in_the_last_degrees_of_a_turn_the_line_lost_goes_again(
+    rig: Rig, model: str, speed: float
+) -> None:
+    """Turning from 80 to 100, a new target sent at 97 (within the tolerance of 100, and more
+    than the noise band short of it) and lost: the rotor ends the turn before at 100, whether
+    the frame came or not (an attack pass: judged by whether it moved, the lost frame ended as
+    a stall that blamed the brake). A GS-232B at 1 deg/s with whole-degree readings is called
+    arrived at 97 and creeps on to 100: the same (before this change too)."""
+    speeds = {"az_speed_deg_s": speed}
+    v = rig(model, emulator={**speeds, "start_az_deg": 80}, settings=speeds)
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    v.target(100.0)
+    motion = lambda: v.session.controller.motion  # noqa: E731
+    v.run_until(lambda h: 97.0 <= (motion().position_deg or 0.0) < 98.0, 60, "at 97")
+    t = v.now
+    lost = _lose_next_new_frame(v)
+    v.target(200.0)
+    v.run_until(lambda h: lost, 5, "the new target's frame, lost")
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 200.0) < 1, 200, "at 200")
+
+    assert v.errors(since=t) == []
+    assert [w.data for w in v.writes if w.t >= t].count(lost[0]) == 2
+
+
+def test_a_target_lost_after_a_stop_short_of_the_one_before_goes_again(rig: Rig) -> None:
+    """Turning to 100, stopped at 60, at rest; a new target lost: the rotor is still, far from
+    the target written before, so whether it moved tells (controller.py rule 11), and the
+    target goes again with no error."""
+    v = _turning_to(rig, "gs232b", 100.0, 60.0)
+    v.stop()
+    v.run_until(lambda h: h.state is IDLE, 20, "at rest")
+    v.run_for(2)
+    t = v.now
+    lost = _lose_next_new_frame(v)
+    v.target(200.0)
+    v.run_until(lambda h: lost, 5, "the new target's frame, lost")
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 200.0) < 1, 60, "at 200")
+
+    assert v.errors(since=t) == []
+    assert [w.data for w in v.writes if w.t >= t].count(lost[0]) == 2
+    assert [w.t - t for w in v.writes if w.t >= t and w.data == lost[0]][1] < 4.0
