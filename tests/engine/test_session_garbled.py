@@ -9,6 +9,8 @@ import os
 import select
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState
 from bridge.protocols.base import JunkReply
 from bridge.protocols.gs232 import MODELS as GS232
@@ -448,24 +450,6 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
     assert off - t < 10.0, off - t
 
 
-def test_a_rot2prog_silent_a_few_seconds_mid_turn_stays_online_and_arrives(rig: Rig) -> None:
-    """Silence mid-turn shorter than half the stall timeout is no offline (controller.py rule
-    2's least mid-turn silence): the turn goes on, and arrives with no error."""
-    v = rig("rot2prog")
-    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
-    t = v.now
-    v.target(40.0)
-    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.set_silent(True)
-    v.run_for(4)
-    v.set_silent(False)
-    v.run_until(lambda h: h.state is IDLE, 60, "arrived")
-
-    assert v.errors("serial", since=t) == [] and v.errors("stalled", since=t) == []
-    assert {s.available for s in v.published(since=t)} == {True}
-    assert abs(v.status.bearing_deg - 40.0) <= 3.0
-
-
 def test_a_jammed_rot2prog_that_answers_is_still_called_stalled(rig: Rig) -> None:
     """Readings that show no progress are a stall as ever, however long silence_timeout_s is
     (controller.py rule 2 cuts the silence short mid-turn only for a line with no reading)."""
@@ -484,24 +468,29 @@ def test_a_jammed_rot2prog_that_answers_is_still_called_stalled(rig: Rig) -> Non
     assert v.status.available
 
 
-def test_replies_lost_for_a_second_mid_turn_with_a_short_stall_timeout_are_ridden_out(
-    rig: Rig,
+@pytest.mark.parametrize(
+    ("model", "settings", "az", "silent_s"),
+    [("rot2prog", {}, 40.0, 4.0), ("gs232b", {"stall_timeout_s": 3.0}, 200.0, 1.3)],
+)
+def test_a_short_silence_mid_turn_is_ridden_out(
+    rig: Rig, model: str, settings: dict[str, float], az: float, silent_s: float
 ) -> None:
-    """stall_timeout_s 3: a GS-232B whose replies are lost for 1.3 s mid-turn (two exchanges
-    at its 1 s reply timeout) stays online and arrives (an attack pass: half the stall timeout,
-    1.5 s, took it offline 20 times in 20, and a noisy line's RC2800 38 times in 63 turns;
-    controller.py rule 2 rides out the default silence timeout, 3 s, at least)."""
-    v = rig("gs232b", settings={"stall_timeout_s": 3.0})
+    """Replies lost mid-turn for less than the least mid-turn silence (controller.py rule 2:
+    half the stall timeout, and the default silence timeout, 3 s, at least): the controller
+    stays online and the rotor arrives with no error. A Rot2Prog at its defaults silent 4 s;
+    a GS-232B with stall_timeout_s 3 silent 1.3 s, two exchanges at its 1 s reply timeout (an
+    attack pass: at half the stall timeout, 1.5 s, it went offline 20 times in 20, and a noisy
+    line's RC2800 38 times in 63 turns)."""
+    v = rig(model, settings=settings)
     v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
     t = v.now
-    v.target(200.0)
+    v.target(az)
     v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.run_for(1)
     v.set_silent(True)
-    v.run_for(1.3)
+    v.run_for(silent_s)
     v.set_silent(False)
     v.run_until(lambda h: h.state is IDLE, 60, "arrived")
 
     assert v.errors("serial", since=t) == [] and v.errors("stalled", since=t) == []
     assert {s.available for s in v.published(since=t)} == {True}
-    assert abs(v.status.bearing_deg - 200.0) <= 3.0
+    assert abs(v.status.bearing_deg - az) <= 3.0
