@@ -20,16 +20,18 @@ Rules:
    ``silence_timeout_s``. While a target is out, either is offline before the turn could be
    called stalled however long ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE
    of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least, without a valid reply (without a
-   byte, for one that gives nothing: lost replies are ridden out), and the error says the rotor
-   may still be turning (a move it heard goes on, stops.py rule 3): a stall needs readings that
-   show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence: one
-   that went silent mid-turn was called stalled at 10 s, an error that blamed the brake, and
-   rotor health counted a stall; an attack pass: at half a 3 s stall timeout, two lost replies
-   took a GS-232B offline). One that never gave a valid reply but garbled ones is said to (the
-   wrong baud rate looks so), not to give none. (Reviews: with silence_timeout_s 6, a GS-232B
-   turning when its replies went to garbage stayed online 12 s and was called stalled at 10 s,
-   an error that blamed the brake; a slow one whose last movement was seconds before its last
-   valid reply, at 5.4 s of the default 3.)
+   byte, for one that gives nothing: lost replies are ridden out). Where that comes before
+   silence alone would make it offline, a stop goes, where the stall's went (in case it still
+   hears; owed again when it answers, stops.py rule 3); otherwise the error says the rotor may
+   still be turning (a move it heard goes on, as ever). A stall needs readings that show none (a
+   Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence: one that went
+   silent mid-turn was called stalled at 10 s, an error that blamed the brake, and rotor health
+   counted a stall; a review: offline with no stop, a jammed one's motor drove on; an attack
+   pass: at half a 3 s stall timeout, two lost replies took a GS-232B offline). One that never
+   gave a valid reply but garbled ones is said to (the wrong baud rate looks so), not to give
+   none. (Reviews: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
+   stayed online 12 s and was called stalled at 10 s, an error that blamed the brake; a slow one
+   whose last movement was seconds before its last valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -114,25 +116,25 @@ Rules:
    or garbled on the line, one of an RC2800's two; an Easycomm box ignores a bearing it cannot
    read), or if the controller refuses it before it moved the rotor (motion.py rule 8: a flipped
    bit made a frame it refuses). An axis that was turning when it went (mid-turn, more than
-   ``noise_deg`` from where that turn was going; or at rest within ``tolerance_deg`` of the last
-   azimuth written, where a slow rotor called arrived may creep on: it moves whether the frame
-   came or not) is judged by where it rests instead: a reading at that time or later that shows
-   the rotor come to rest (no movement for ``settle_s``) with that axis where the turn before
-   was going (within ``tolerance_deg`` + ``noise_deg``) shows the frame lost (a probe: turning
-   to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error 16 s later blamed the
-   brake; and a rotor that jammed mid-turn, not moved since, was sent its new target twice).
-   Each axis on its own: an RC2800's elevation frame lost under a new azimuth, or its azimuth's
-   under a new elevation; and a target sent at 97 on the way to 100, lost, judged by whether it
-   moved, was a stall that blamed the brake. It goes again, try 2, with the raw bearing its
-   first try resolved (an axis it left out included), if the bridge still stands for it
-   (``Again``: targets.py rule 8, no newer target, stop or end of its feature since; if not, a
-   refusal is reported as ever), with a warning in the log (a refusal some codecs read as junk
-   is still told as junk); the time is judged at the reading by the settings then in effect
-   (rule 7: a speed set in the same batch as the target slows it); a second refusal is reported,
-   and a turn that does not start then is a stall as ever (``stall_timeout_s`` from the try that
-   went). A stop ends the tries. Not on the Rotor-EZ, RotorCard or DCU-1: a bearing while their
-   motor runs (a jammed rotor's) stops it, against the controller's rule (docs/architecture.md
-   rule 7).
+   ``noise_deg`` from where that turn was going; or with no turn under way within
+   ``tolerance_deg`` of the last azimuth written, where a slow rotor called arrived may creep
+   on; not after a stop: it moves whether the frame came or not) is judged by where it rests
+   instead: a reading at that time or later that shows the rotor come to rest (no movement for
+   ``settle_s``) with that axis where the turn before was going (within ``tolerance_deg`` +
+   ``noise_deg``) shows the frame lost (a probe: turning to 100, sent 200 at 60, lost: it rested
+   at 100, and a "stalled" error 16 s later blamed the brake; and a rotor that jammed mid-turn,
+   not moved since, was sent its new target twice). Each axis on its own: an RC2800's elevation
+   frame lost under a new azimuth, or its azimuth's under a new elevation; and a target sent at
+   97 on the way to 100, lost, judged by whether it moved, was a stall that blamed the brake. It
+   goes again, try 2, with the raw bearing its first try resolved (an axis it left out
+   included), if the bridge still stands for it (``Again``: targets.py rule 8, no newer target,
+   stop or end of its feature since; if not, a refusal is reported as ever), with a warning in
+   the log (a refusal some codecs read as junk is still told as junk); the time is judged at the
+   reading by the settings then in effect (rule 7: a speed set in the same batch as the target
+   slows it); a second refusal is reported, and a turn that does not start then is a stall as
+   ever (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-
+   EZ, RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
+   the controller's rule (docs/architecture.md rule 7).
 """
 
 from __future__ import annotations
@@ -282,12 +284,14 @@ def _turning_to(
     m: mo.Motion, cfg: mo.MotionConfig, sent_az: float | None
 ) -> tuple[float | None, float | None]:
     """Rule 11: the bearing each axis may still be turning to when a target goes now (it then
-    moves whether the frame came or not): the turn's under way, or, at rest within
-    ``tolerance_deg`` of the last azimuth written (``sent_az``), that one (a slow rotor called
-    arrived may creep on to it); None for an axis within ``noise_deg`` of it (it cannot move
-    more than that: whether it moved tells) or with none. An attack pass: with the tolerance
-    here, a target sent at 97 on the way to 100, lost, ended as a stall that blamed the
-    brake."""
+    moves whether the frame came or not): the turn's under way, or, with none (the rotor
+    called arrived, or a turn whose target was dropped), the last azimuth written
+    (``sent_az``) if the rotor is within ``tolerance_deg`` of it (a slow rotor called arrived
+    may creep on to it); None for an axis within ``noise_deg`` of it (it cannot move more than
+    that: whether it moved tells), with none, or after a stop (then whether it moved tells:
+    a target lost while the rotor coasts after a STOP is a stall, as before). An attack pass:
+    with the tolerance here, a target sent at 97 on the way to 100, lost, ended as a stall
+    that blamed the brake."""
     if m.stop_sent_t is not None:
         return None, None
     az, el = m.position_deg, m.el_position_deg
@@ -394,7 +398,7 @@ class Controller:
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
-        self._retry: Target | None = None  # rule 11: the target sent once, until it moved
+        self._retry: Target | None = None  # rule 11: the target sent once, until judged
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
@@ -871,10 +875,11 @@ class Controller:
 
     def _retry_check(self, link: Link, now: float) -> None:
         """Rule 11, at a reading: the target sent once is sent again if this reading, from
-        its time on, shows an axis that had to turn not moved since it went out (an attack
-        pass: the elevation frame of an RC2800's two lost, the azimuth came, and the stall
-        told blamed the brake); the tries end once each has moved, or the target came or was
-        dropped."""
+        its time on, shows an axis that had to turn left behind by its frame (``_left_behind``:
+        a still one not moved since it went out, one turning at rest where the turn before was
+        going; an attack pass: the elevation frame of an RC2800's two lost, the azimuth came,
+        and the stall told blamed the brake); the tries end once no axis can be found left
+        behind any more, or the target came or was dropped."""
         m, target, cfg = self.motion, self._retry, self.cfg
         assert target is not None
         mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
@@ -1116,7 +1121,13 @@ class Controller:
         if silent and self.answering:
             m = self.motion
             turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
-            if self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
+            if turning and now < (  # rule 2: offline before silence alone would make it so,
+                self._silent_offline_t(link, now, False)  # where the stall would have
+                if by_silence  # stopped it: the stop goes, in case it still hears
+                else self._garbled_offline_t(link, now, False)
+            ):
+                self.stop(now)
+            elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
                 self.stops.repeat_due(m, math.inf)  # (a silent controller may still hear: its
                 self.stop(now)  # motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
@@ -1135,11 +1146,16 @@ class Controller:
                     f"controller on {cfg.port} answers only garbled replies (no valid reply for "
                     f"{quiet_s:.3g} s)"
                 )
-            if turning:  # (rule 2: a turn not seen to its end, not a stall; a move it heard
+            stopped = turning and self.motion.stop_sent_t is not None
+            if turning and not stopped:  # (rule 2: a turn not seen to its end, not a stall; a
                 why += " while the rotor turned to its target (it may still be turning)"
-            why += "" if by_silence else ": a noisy line?"  # (goes on: stops.py rule 3)
+            elif stopped:  # move it heard goes on, stops.py rule 3; or stopped where the stall
+                why += " while the rotor turned to its target"  # would have stopped it)
+            why += "" if by_silence else ": a noisy line?"
             self.motion = mo.link_down(self.motion)
-            if unseen is not None:  # (said: the stop may cut short a move that was heard)
+            if stopped:
+                why += "; stopped, in case it still hears, and again when it answers"
+            elif unseen is not None:  # (said: the stop may cut short a move that was heard)
                 why += "; the last stop, no reading showed taking, goes again when it answers"
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
@@ -1166,43 +1182,44 @@ class Controller:
         cfg = self.cfg
         return min(cfg.silence_timeout_s, _turn_least_s(cfg.motion))
 
-    def _silent_offline_t(self, link: Link, now: float) -> float:
+    def _silent_offline_t(self, link: Link, now: float, turn: bool = True) -> float:
         """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
-        after its last byte, or sooner while a target is out (``_turn_offline_t``)."""
+        after its last byte, or sooner while a target is out (``_turn_offline_t``; ``turn``
+        False: not that)."""
         heard_t = now - link.silent_for(now)
-        return min(heard_t + self.cfg.silence_timeout_s, self._turn_offline_t(link, heard_t))
+        until = heard_t + self.cfg.silence_timeout_s
+        return min(until, self._turn_offline_t(link, heard_t)) if turn else until
+
+    def _garbled_offline_t(self, link: Link, now: float, turn: bool = True) -> float:
+        """Rule 2: when garbled answers alone no longer keep the controller online: at most
+        GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
+        at the motion machine's stall check (``_stall_check_t``), but not sooner than one timeout
+        after that reply; or sooner while a target is out (``_turn_offline_t``; ``turn`` False:
+        not that)."""
+        timeout_s = self.cfg.silence_timeout_s
+        valid_t = now - link.unread_for(now)
+        until = min(valid_t + GARBLED_SILENCE_FACTOR * timeout_s, self._stall_check_t(link))
+        until = max(valid_t + timeout_s, until)
+        return min(until, self._turn_offline_t(link, valid_t)) if turn else until
 
     def _turn_offline_t(self, link: Link, heard_t: float) -> float:
         """Rule 2: while a target is out, when a line that gives no valid reply since
-        ``heard_t`` is offline however long ``silence_timeout_s`` is: before the motion machine
-        could call the turn stalled (from the last movement it saw, motion.py ``progress_t``;
-        less a moving poll and a reply time, how late the check may come), but never sooner
-        than ``_turn_least_s`` after ``heard_t`` (lost replies on a noisy line are ridden out:
-        an attack pass, at half a 3 s stall timeout two lost GS-232 replies went offline);
-        inf with no target out."""
+        ``heard_t`` is offline however long ``silence_timeout_s`` is: at the motion machine's
+        stall check (``_stall_check_t``), but never sooner than ``_turn_least_s`` after
+        ``heard_t`` (lost replies on a noisy line are ridden out: an attack pass, at half a 3 s
+        stall timeout two lost GS-232 replies went offline); inf with no target out."""
+        return max(self._stall_check_t(link), heard_t + _turn_least_s(self.cfg.motion))
+
+    def _stall_check_t(self, link: Link) -> float:
+        """Rule 2: the last check before the motion machine could call the turn under way
+        stalled: ``stall_timeout_s`` from the last movement it saw (motion.py ``progress_t``),
+        less a moving poll and a reply time, how late the check may come; inf with none."""
         progress_t = self.motion.progress_t
         if progress_t is None:
             return math.inf
         cfg = self.cfg
         late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
-        turn_t = progress_t + cfg.motion.stall_timeout_s - late_s
-        return max(turn_t, heard_t + _turn_least_s(cfg.motion))
-
-    def _garbled_offline_t(self, link: Link, now: float) -> float:
-        """Rule 2: when garbled answers alone no longer keep the controller online: at most
-        GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
-        before the motion machine could call the turn stalled (from the last movement it saw,
-        motion.py ``progress_t``; less a moving poll and a reply time, how late the check may
-        come); never sooner than one timeout after that reply."""
-        cfg = self.cfg
-        timeout_s = cfg.silence_timeout_s
-        valid_t = now - link.unread_for(now)
-        until = valid_t + GARBLED_SILENCE_FACTOR * timeout_s
-        progress_t = self.motion.progress_t
-        if progress_t is not None:
-            late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
-            until = min(until, progress_t + cfg.motion.stall_timeout_s - late_s)
-        return min(max(valid_t + timeout_s, until), self._turn_offline_t(link, valid_t))
+        return progress_t + cfg.motion.stall_timeout_s - late_s
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:
         """Rule 6."""

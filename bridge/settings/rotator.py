@@ -250,9 +250,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         gt=0,
         le=600,
         description="no reply this long: the rotator is offline (one that answers only "
-        "garbled replies after twice this; while it turns to a target, either sooner: offline "
-        "before the turn could be called stalled, where that leaves half stall_timeout_s, and "
-        "3 s at least). "
+        "garbled replies after twice this; while it turns to a target, either may come sooner, "
+        "before the turn could be called stalled, but not within half stall_timeout_s, nor 3 s, "
+        "of the last reply). "
         "Longer than the idle poll interval; by default 3 s, or two idle polls and a reply "
         "time where that is longer",
         examples=[5],

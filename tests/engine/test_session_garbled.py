@@ -6,6 +6,7 @@ gives only garbage goes offline after two silence timeouts, one that gives nothi
 from __future__ import annotations
 
 import os
+import re
 import select
 from collections.abc import Callable
 
@@ -14,7 +15,9 @@ import pytest
 from bridge.core.model import MotionState
 from bridge.protocols.base import JunkReply
 from bridge.protocols.gs232 import MODELS as GS232
+from bridge.session.controller import TURN_SILENCE_LEAST_S
 from bridge.session.link import JUNK_QUIET_S, Link
+from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from tests.engine.test_lines import polled, worker_on_a_pty
 from tests.engine.virtual import VirtualRotator
 from tests.support import wait_until
@@ -404,10 +407,11 @@ def test_a_rot2prog_gone_silent_mid_turn_goes_offline_before_a_stall_is_called(
     rig: Rig,
 ) -> None:
     """A Rot2Prog at its 600 baud (idle-polled every 9.3 s: silence_timeout_s 19.4 by default)
-    that goes silent while it turns to a target: offline, with words that say the rotor may
-    still be turning, before the motion machine, fed no reading, could call the turn stalled
-    (controller.py rule 2: it was called "stalled" at 10 s, an error that blamed the brake,
-    and rotor health counted a stall)."""
+    that goes silent while it turns to a target, jammed, its replies lost but still hearing:
+    offline, with words that say so, before the motion machine, fed no reading, could call the
+    turn stalled; and stopped, as the stall stopped it (controller.py rule 2: it was called
+    "stalled" at 10 s, an error that blamed the brake, and rotor health counted a stall; a
+    review: offline with no stop, the motor drove on against the jam)."""
     v = rig("rot2prog")
     assert v.cfg.silence_timeout_s > v.cfg.motion.stall_timeout_s  # (the case: its defaults)
     v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
@@ -416,15 +420,41 @@ def test_a_rot2prog_gone_silent_mid_turn_goes_offline_before_a_stall_is_called(
     v.run_for(2)
     t = v.now
     v.set_silent(True)
+    v.jam()
     v.run_for(25)
 
     assert v.errors("stalled", since=t) == []
     assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
     [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
-    assert "stopped answering" in why.message and "may still be turning" in why.message
     assert 5.0 <= off - t < 10.0, off - t  # half the stall timeout at least, and before it
+    said = re.search(r"stopped answering \(no valid reply for ([0-9.]+) s\)", why.message)
+    assert said is not None and off - t - 0.05 <= float(said[1]) <= off - t + 0.6  # (a reply
+    # cut short by the silence: the last valid one came a poll before it)
+    assert "stopped, in case it still hears" in why.message
+    assert not v.truth().is_moving  # (the stop reached the box: it hears)
     assert v.state is MotionState.OFFLINE
     assert {s.health.stalls for s in v.published() if s.health is not None} == {0}  # (1 was)
+
+
+def test_a_jammed_rotor_whose_controller_then_falls_silent_is_still_called_stalled(
+    rig: Rig,
+) -> None:
+    """Readings that showed no progress for 6 s, then silence: the stall is told by them, not
+    an offline (controller.py rule 2: mid-turn, no offline before half the stall timeout
+    without a reply, which here comes after the stall)."""
+    v = rig("rot2prog")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(200.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(2)
+    t = v.now
+    v.jam()
+    v.run_for(6)
+    v.set_silent(True)
+    v.run_for(10)
+
+    [stall] = v.errors("stalled", since=t)
+    assert "no progress for 10 s" in stall.message
 
 
 def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long_timeout(
@@ -446,7 +476,7 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
     assert v.errors("stalled", since=t) == []
     assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
     [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
-    assert "only garbled replies" in why.message and "may still be turning" in why.message
+    assert "only garbled replies" in why.message and "stopped, in case it still" in why.message
     assert off - t < 10.0, off - t
 
 
@@ -494,3 +524,9 @@ def test_a_short_silence_mid_turn_is_ridden_out(
     assert v.errors("serial", since=t) == [] and v.errors("stalled", since=t) == []
     assert {s.available for s in v.published(since=t)} == {True}
     assert abs(v.status.bearing_deg - az) <= 3.0
+
+
+def test_the_least_mid_turn_silence_is_the_default_silence_timeout() -> None:
+    """controller.py rule 2 rides out the default silence timeout mid-turn at least: the two
+    numbers are one."""
+    assert TURN_SILENCE_LEAST_S == DEFAULT_SILENCE_TIMEOUT_S

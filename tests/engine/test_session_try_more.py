@@ -278,7 +278,7 @@ def _sent_lost_and_come(v: VirtualRotator, az: float) -> tuple[float, bytes]:
     return t, lost[0]
 
 
-def _turning_to(rig: Rig, model: str, az: float, at: float) -> VirtualRotator:
+def _rig_turning(rig: Rig, model: str, az: float, at: float) -> VirtualRotator:
     """Turning from 0 to ``az``, at ``at`` now."""
     speeds = FAST if model not in ("prosistel", "rt21") else {"az_speed_deg_s": 6.0}
     v = rig(model, emulator=speeds, settings=speeds)
@@ -295,7 +295,7 @@ def test_a_target_sent_mid_turn_the_line_lost_goes_again_where_the_turn_before_e
     """Turning to 100, sent 200 at 60, its frame lost: the rotor came to rest at 100, and
     16 s later a "stalled" error blamed the brake. Now, once it rests where the turn before
     was going, the target goes again, and it comes with no error (controller.py rule 11)."""
-    v = _turning_to(rig, model, 100.0, 60.0)
+    v = _rig_turning(rig, model, 100.0, 60.0)
     t = v.now
     lost = _lose_next_new_frame(v)
     v.target(200.0)
@@ -310,7 +310,7 @@ def test_a_target_sent_mid_turn_the_line_lost_goes_again_where_the_turn_before_e
 @pytest.mark.parametrize("model", ["gs232b", "easycomm2"])
 def test_a_target_sent_mid_turn_that_came_goes_once(rig: Rig, model: str) -> None:
     """The same turn with nothing lost: one frame for the new target, no try more."""
-    v = _turning_to(rig, model, 100.0, 60.0)
+    v = _rig_turning(rig, model, 100.0, 60.0)
     t = v.now
     before = {w.data for w in v.writes}
     v.target(200.0)
@@ -325,7 +325,7 @@ def test_a_rotor_stuck_short_of_the_turn_before_is_no_lost_target(rig: Rig) -> N
     """A target sent mid-turn to a rotor that jammed short of where it was going: it rests
     elsewhere than where the turn before would have ended, so nothing goes again; the stall
     is told, as ever."""
-    v = _turning_to(rig, "gs232b", 100.0, 60.0)
+    v = _rig_turning(rig, "gs232b", 100.0, 60.0)
     v.jam()
     t = v.now
     before = {w.data for w in v.writes}
@@ -397,7 +397,7 @@ def test_a_target_lost_after_a_stop_short_of_the_one_before_goes_again(rig: Rig)
     """Turning to 100, stopped at 60, at rest; a new target lost: the rotor is still, far from
     the target written before, so whether it moved tells (controller.py rule 11), and the
     target goes again with no error."""
-    v = _turning_to(rig, "gs232b", 100.0, 60.0)
+    v = _rig_turning(rig, "gs232b", 100.0, 60.0)
     v.stop()
     v.run_until(lambda h: h.state is IDLE, 20, "at rest")
     v.run_for(2)
