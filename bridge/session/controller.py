@@ -21,17 +21,19 @@ Rules:
    called stalled however long ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE
    of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least, without a valid reply (without a
    byte, for one that gives nothing: lost replies are ridden out). Where that comes before
-   silence alone would make it offline, a stop goes, where the stall's went (in case it still
-   hears; owed again when it answers, stops.py rule 3); otherwise the error says the rotor may
-   still be turning (a move it heard goes on, as ever). A stall needs readings that show none (a
-   Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence: one that went
-   silent mid-turn was called stalled at 10 s, an error that blamed the brake, and rotor health
-   counted a stall; a review: offline with no stop, a jammed one's motor drove on; an attack
-   pass: at half a 3 s stall timeout, two lost replies took a GS-232B offline). One that never
-   gave a valid reply but garbled ones is said to (the wrong baud rate looks so), not to give
-   none. (Reviews: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
-   stayed online 12 s and was called stalled at 10 s, an error that blamed the brake; a slow one
-   whose last movement was seconds before its last valid reply, at 5.4 s of the default 3.)
+   silence or garbage alone would make it offline (GARBLED_SILENCE_FACTOR timeouts, with no
+   target out), a stop goes, where the stall's went (in case it still hears; owed again when it
+   answers, stops.py rule 3); otherwise the error says the rotor may still be turning (a move it
+   heard goes on, as ever). A stall needs readings that show none (a Rot2Prog at its 600 baud,
+   idle-polled every 9.3 s, waits 19.4 s of silence: one that went silent mid-turn was called
+   stalled at 10 s, an error that blamed the brake, and rotor health counted a stall; a review:
+   offline with no stop, a jammed one's motor drove on, and an attack pass: the same for a
+   jammed GS-232B whose replies went to garbage; an attack pass: at half a 3 s stall timeout,
+   two lost replies took a GS-232B offline). One that never gave a valid reply but garbled ones
+   is said to (the wrong baud rate looks so), not to give none. (Reviews: with silence_timeout_s
+   6, a GS-232B turning when its replies went to garbage stayed online 12 s and was called
+   stalled at 10 s, an error that blamed the brake; a slow one whose last movement was seconds
+   before its last valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -1119,6 +1121,17 @@ class Controller:
         # (never answered: no valid reply for one timeout, as ever)
         never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
         if silent and self.answering:
+            if by_silence:
+                quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)
+                why = (
+                    f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:g} s)"
+                )
+            else:  # rule 2: garbled answers only (its limit: before a stop moves the stall's)
+                quiet_s = self._garbled_offline_t(link, now) - (now - unread_s)
+                why = (
+                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
+                    f"{quiet_s:.3g} s)"
+                )
             m = self.motion
             turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
             if turning and now < (  # rule 2: offline before silence alone would make it so,
@@ -1135,17 +1148,6 @@ class Controller:
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
                 self.stops.owed = True  # when it answers again, as released if it was the
                 self._released_owed = unseen == self._released_unseen_t  # released lock's
-            if by_silence:
-                quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)
-                why = (
-                    f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:g} s)"
-                )
-            else:  # rule 2: garbled answers only
-                quiet_s = self._garbled_offline_t(link, now) - (now - unread_s)
-                why = (
-                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
-                    f"{quiet_s:.3g} s)"
-                )
             stopped = turning and self.motion.stop_sent_t is not None
             if turning and not stopped:  # (rule 2: a turn not seen to its end, not a stall; a
                 why += " while the rotor turned to its target (it may still be turning)"
@@ -1154,7 +1156,8 @@ class Controller:
             why += "" if by_silence else ": a noisy line?"
             self.motion = mo.link_down(self.motion)
             if stopped:
-                why += "; stopped, in case it still hears, and again when it answers"
+                said = "stopped, in case it still hears, and again when it answers"
+                why += f"; {said}" if by_silence else f" {said.capitalize()}"
             elif unseen is not None:  # (said: the stop may cut short a move that was heard)
                 why += "; the last stop, no reading showed taking, goes again when it answers"
             # the drop before tracking's end: a target of tracking's own is reported dropped
@@ -1185,7 +1188,7 @@ class Controller:
     def _silent_offline_t(self, link: Link, now: float, turn: bool = True) -> float:
         """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
         after its last byte, or sooner while a target is out (``_turn_offline_t``; ``turn``
-        False: not that)."""
+        False: when silence alone makes it so, as with no target out)."""
         heard_t = now - link.silent_for(now)
         until = heard_t + self.cfg.silence_timeout_s
         return min(until, self._turn_offline_t(link, heard_t)) if turn else until
@@ -1194,13 +1197,16 @@ class Controller:
         """Rule 2: when garbled answers alone no longer keep the controller online: at most
         GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
         at the motion machine's stall check (``_stall_check_t``), but not sooner than one timeout
-        after that reply; or sooner while a target is out (``_turn_offline_t``; ``turn`` False:
-        not that)."""
+        after that reply; or sooner while a target is out (``_turn_offline_t``). ``turn``
+        False: when garbage alone makes it so, as with no target out (an attack pass: a jammed
+        GS-232B whose replies went to garbage went offline at its stall check with no stop)."""
         timeout_s = self.cfg.silence_timeout_s
         valid_t = now - link.unread_for(now)
-        until = min(valid_t + GARBLED_SILENCE_FACTOR * timeout_s, self._stall_check_t(link))
-        until = max(valid_t + timeout_s, until)
-        return min(until, self._turn_offline_t(link, valid_t)) if turn else until
+        until = valid_t + GARBLED_SILENCE_FACTOR * timeout_s
+        if not turn:
+            return until
+        until = max(valid_t + timeout_s, min(until, self._stall_check_t(link)))
+        return min(until, self._turn_offline_t(link, valid_t))
 
     def _turn_offline_t(self, link: Link, heard_t: float) -> float:
         """Rule 2: while a target is out, when a line that gives no valid reply since

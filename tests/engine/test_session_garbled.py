@@ -476,7 +476,7 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
     assert v.errors("stalled", since=t) == []
     assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
     [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
-    assert "only garbled replies" in why.message and "stopped, in case it still" in why.message
+    assert "only garbled replies" in why.message and "Stopped, in case it still" in why.message
     assert off - t < 10.0, off - t
 
 
@@ -530,3 +530,27 @@ def test_the_least_mid_turn_silence_is_the_default_silence_timeout() -> None:
     """controller.py rule 2 rides out the default silence timeout mid-turn at least: the two
     numbers are one."""
     assert TURN_SILENCE_LEAST_S == DEFAULT_SILENCE_TIMEOUT_S
+
+
+def test_a_jammed_gs232b_whose_replies_go_to_garbage_is_stopped_where_the_stall_would_be(
+    rig: Rig,
+) -> None:
+    """A GS-232B at its defaults turning to 350 jams; 4 s later every reply comes garbled: it
+    goes offline before the stall the readings were leading to, and gets the stop that stall
+    would have written, in case it still hears (an attack pass: offline at the stall check,
+    garbage alone not yet enough, and no stop: the motor drove on against the jam)."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(350.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(2)
+    t = v.now
+    v.jam()
+    v.run_for(4)
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    v.run_for(30)
+
+    [why] = v.errors("serial", since=t)
+    assert "only garbled replies" in why.message and "Stopped, in case it still" in why.message
+    assert v.sent(since=t).count(b"S\r") >= 1
+    assert not v.truth().is_moving
