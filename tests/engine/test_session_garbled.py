@@ -56,6 +56,15 @@ def garble_lines(
     return when
 
 
+def turning(v: VirtualRotator, az: float, after_s: float = 2.0) -> VirtualRotator:
+    """``v`` online and at rest, sent ``az``, and turning ``after_s`` seconds since it began."""
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(az)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(after_s)
+    return v
+
+
 def test_two_garbled_satel_reports_in_a_row_keep_it_online_and_are_asked_again(
     rig: Rig,
 ) -> None:
@@ -442,11 +451,7 @@ def test_a_jammed_rotor_whose_controller_then_falls_silent_is_still_called_stall
     """Readings that showed no progress for 6 s, then silence: the stall is told by them, not
     an offline (controller.py rule 2: mid-turn, no offline before half the stall timeout
     without a reply, which here comes after the stall)."""
-    v = rig("rot2prog")
-    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
-    v.target(200.0)
-    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.run_for(2)
+    v = turning(rig("rot2prog"), 200.0)
     t = v.now
     v.jam()
     v.run_for(6)
@@ -464,11 +469,7 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
     from mid-turn on goes offline with words that say so before the turn could be called
     stalled (controller.py rule 2: one timeout at least after the last valid reply came
     after the stall)."""
-    v = rig("gs232b", settings={"silence_timeout_s": 20.0})
-    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
-    v.target(350.0)
-    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.run_for(1)
+    v = turning(rig("gs232b", settings={"silence_timeout_s": 20.0}), 350.0, after_s=1)
     t = v.now
     v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
     v.run_for(25)
@@ -483,11 +484,7 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
 def test_a_jammed_rot2prog_that_answers_is_still_called_stalled(rig: Rig) -> None:
     """Readings that show no progress are a stall as ever, however long silence_timeout_s is
     (controller.py rule 2 cuts the silence short mid-turn only for a line with no reading)."""
-    v = rig("rot2prog")
-    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
-    v.target(200.0)
-    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.run_for(2)
+    v = turning(rig("rot2prog"), 200.0)
     t = v.now
     v.jam()
     v.run_for(20)
@@ -539,11 +536,7 @@ def test_a_jammed_gs232b_whose_replies_go_to_garbage_is_stopped_where_the_stall_
     goes offline before the stall the readings were leading to, and gets the stop that stall
     would have written, in case it still hears (an attack pass: offline at the stall check,
     garbage alone not yet enough, and no stop: the motor drove on against the jam)."""
-    v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
-    v.target(350.0)
-    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
-    v.run_for(2)
+    v = turning(rig("gs232b"), 350.0)
     t = v.now
     v.jam()
     v.run_for(4)
