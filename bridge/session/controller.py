@@ -1134,9 +1134,9 @@ class Controller:
                 )
             m = self.motion
             turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
-            if turning and now < (  # rule 2: offline before silence alone would make it so,
-                self._silent_offline_t(link, now, False)  # where the stall would have
-                if by_silence  # stopped it: the stop goes, in case it still hears
+            if turning and now < (  # rule 2: offline before silence or garbage alone would
+                self._silent_offline_t(link, now, False)  # make it so, where the stall would
+                if by_silence  # have stopped it: the stop goes, in case it still hears
                 else self._garbled_offline_t(link, now, False)
             ):
                 self.stop(now)
@@ -1155,11 +1155,13 @@ class Controller:
                 why += " while the rotor turned to its target"  # would have stopped it)
             why += "" if by_silence else ": a noisy line?"
             self.motion = mo.link_down(self.motion)
+            said = None
             if stopped:
-                said = "stopped, in case it still hears, and again when it answers"
-                why += f"; {said}" if by_silence else f" {said.capitalize()}"
+                said = "a stop sent, in case it still hears, and again when it answers"
             elif unseen is not None:  # (said: the stop may cut short a move that was heard)
-                why += "; the last stop, no reading showed taking, goes again when it answers"
+                said = "the last stop, no reading showed taking, goes again when it answers"
+            if said is not None:
+                why += f"; {said}" if by_silence else f" {said[0].upper()}{said[1:]}"
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]

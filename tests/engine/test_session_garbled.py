@@ -439,7 +439,7 @@ def test_a_rot2prog_gone_silent_mid_turn_goes_offline_before_a_stall_is_called(
     said = re.search(r"stopped answering \(no valid reply for ([0-9.]+) s\)", why.message)
     assert said is not None and off - t - 0.05 <= float(said[1]) <= off - t + 0.6  # (a reply
     # cut short by the silence: the last valid one came a poll before it)
-    assert "stopped, in case it still hears" in why.message
+    assert "; a stop sent, in case it still hears" in why.message
     assert not v.truth().is_moving  # (the stop reached the box: it hears)
     assert v.state is MotionState.OFFLINE
     assert {s.health.stalls for s in v.published() if s.health is not None} == {0}  # (1 was)
@@ -477,7 +477,8 @@ def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long
     assert v.errors("stalled", since=t) == []
     assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
     [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
-    assert "only garbled replies" in why.message and "Stopped, in case it still" in why.message
+    assert "only garbled replies" in why.message
+    assert "a noisy line? A stop sent, in case it still hears" in why.message
     assert off - t < 10.0, off - t
 
 
@@ -544,6 +545,22 @@ def test_a_jammed_gs232b_whose_replies_go_to_garbage_is_stopped_where_the_stall_
     v.run_for(30)
 
     [why] = v.errors("serial", since=t)
-    assert "only garbled replies" in why.message and "Stopped, in case it still" in why.message
+    assert "only garbled replies" in why.message
+    assert "a noisy line? A stop sent, in case it still hears" in why.message
     assert v.sent(since=t).count(b"S\r") >= 1
     assert not v.truth().is_moving
+
+
+def test_a_stop_owed_to_a_line_gone_to_garbage_is_said_in_one_sentence(rig: Rig) -> None:
+    """An operator's STOP mid-turn, then every reply garbled: offline with the words for the
+    garbage and for the stop owed, each its own sentence (a last read: "a noisy line?; the
+    last stop")."""
+    v = turning(rig("gs232b"), 350.0)
+    v.stop()
+    v.run_for(0.1)
+    t = v.now
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    v.run_for(15)
+
+    [why] = v.errors("serial", since=t)
+    assert "a noisy line? The last stop, no reading showed taking, goes again" in why.message
