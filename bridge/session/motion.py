@@ -9,7 +9,10 @@ Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
    movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
-   last command, so a rotor that has not started yet is not "still"). While a setting slows
+   last command, so a rotor that has not started yet is not "still"), as a reading shows it:
+   the clock alone never says a rotor stopped (a CI run: the lines starved for 0.35 s, the
+   rotor 2 degrees short of its target and still turning was called arrived, and the status
+   showed it 2 degrees short for good). While a setting slows
    the rotor (controller.py rule 7: a GS-232 at X1), never shorter than it takes at its slower
    axis's speed to go a step of its readings beyond ``noise_deg``, plus a moving poll
    (``settle_for``: a review found a GS-232 at X1, 1.5 degrees a second, called arrived at
@@ -277,7 +280,7 @@ def reading(
             still_since_t=now,
             idle_not_before_t=now + cfg.settle_s,
         )
-        return tick(m, cfg, now)
+        return tick(m, cfg, now, True)
     anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
     before = m  # (rule 5 compares this reading with the one before)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
@@ -301,7 +304,7 @@ def reading(
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
         if passed is not None:  # rule 5
-            m, events = tick(_dropped(m), cfg, now)
+            m, events = tick(_dropped(m), cfg, now, True)
             return m, [passed, *events]
     if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
@@ -315,9 +318,9 @@ def reading(
             elif m.away_err is None or err <= m.away_err:
                 m = replace(m, away_err=err)  # the first reading away: one more must follow
             else:
-                m, events = tick(_dropped(m), cfg, now)
+                m, events = tick(_dropped(m), cfg, now, True)
                 return m, [Event.TURNED_AWAY, *events]
-    return tick(m, cfg, now)
+    return tick(m, cfg, now, True)
 
 
 def _dropped(m: Motion) -> Motion:
@@ -565,8 +568,11 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
 
 
-def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
-    """Time-driven transitions: settling, arrival, stall, end of the brake window."""
+def tick(
+    m: Motion, cfg: MotionConfig, now: float, read: bool = False
+) -> tuple[Motion, list[Event]]:
+    """Time-driven transitions: settling, stall, end of the brake window; arrival and a stop
+    only at a reading (``read``: rule 2)."""
     events: list[Event] = []
     if not cfg.spec.can_report_position:  # (the spec's: no property call at every step)
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
@@ -576,7 +582,7 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
     if m.state is OFFLINE:
         return m, events
     if m.state is MOVING:
-        still = now >= _moved_ref(m) + cfg.settle_s
+        still = read and now >= _moved_ref(m) + cfg.settle_s  # rule 2
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
@@ -681,10 +687,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
     (the soonest kept as it goes, no list: this runs at every step of every rotator)."""
     soonest: float | None = None
     state = m.state
-    if state is MOVING:
-        t = _moved_ref(m) + cfg.settle_s
-        if t > now:
-            soonest = t
+    if state is MOVING:  # (arrival and a stop come with a reading: rule 2)
         if m.progress_t is not None:
             t = m.progress_t + cfg.stall_timeout_s
             if t > now and (soonest is None or t < soonest):
@@ -711,6 +714,11 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
                 if soonest is None or t_or_none < soonest:
                     soonest = t_or_none
     return soonest
+
+
+def still_from(m: Motion, cfg: MotionConfig) -> float:
+    """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``)."""
+    return _moved_ref(m) + cfg.settle_s
 
 
 def _moved_ref(m: Motion) -> float:

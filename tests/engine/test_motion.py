@@ -29,6 +29,13 @@ def feed(m: mo.Motion, readings: list[tuple[float, float]], cfg: mo.MotionConfig
     return m, events
 
 
+def still(m: mo.Motion, t: float, cfg: mo.MotionConfig = CFG) -> tuple[mo.Motion, list[mo.Event]]:
+    """A reading at ``t`` that finds the rotor where the last one did (rule 2: only a reading
+    says it is still)."""
+    assert m.position_deg is not None
+    return mo.reading(m, cfg, m.position_deg, t, m.el_position_deg)
+
+
 def ready(at: float = 0.0, az: float = 100.0) -> mo.Motion:
     m = mo.link_up(mo.Motion(), CFG, at)
     m, _ = mo.reading(m, CFG, az, at)
@@ -63,7 +70,7 @@ def test_commanded_move_arrives_then_brakes_then_idles() -> None:
     assert m.state is S.MOVING  # not yet steady
     last_move_t = m.last_move_t
     assert last_move_t is not None
-    m, events = mo.tick(m, CFG, last_move_t + CFG.settle_s)
+    m, events = still(m, last_move_t + CFG.settle_s)
     assert events == [mo.Event.ARRIVED] and m.state is S.BRAKING and m.target_deg is None
     assert mo.plan_target(m, CFG, last_move_t + CFG.settle_s) is mo.Plan.WAIT
     # the brake window counts from the last change (plus one poll), not from the detection
@@ -75,11 +82,29 @@ def test_commanded_move_arrives_then_brakes_then_idles() -> None:
     assert m.state is S.IDLE
 
 
+def test_the_clock_alone_never_calls_a_rotor_still() -> None:
+    """Rule 2: readings missed (a starved line, lost replies) are no stillness: only a reading
+    ``settle_s`` after the last movement says the rotor arrived, or stopped."""
+    m = mo.commanded(ready(), CFG, 110, 10.0)
+    m, _ = feed(m, [(10.2, 103), (10.4, 106), (10.6, 108)])
+    m, events = mo.tick(m, CFG, 10.6 + CFG.settle_s + 1.0)  # (before a stall)
+    assert events == [] and m.state is S.MOVING and m.target_deg == 110
+    m, events = mo.reading(m, CFG, 110, 10.6 + CFG.settle_s + 1.1)  # it turned on: movement
+    assert events == [] and m.state is S.MOVING
+    m, events = still(m, 10.6 + CFG.settle_s + 1.1 + CFG.settle_s)
+    assert events == [mo.Event.ARRIVED] and m.position_deg == 110
+    m, _ = feed(ready(), [(20.0, 103), (20.5, 106)])  # by hand: its stop, the same
+    m, events = mo.tick(m, CFG, 30.0)
+    assert events == [] and m.state is S.MOVING
+    m, events = still(m, 30.0)
+    assert events == [mo.Event.STOPPED] and m.state is S.IDLE  # (its brake window: over)
+
+
 def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:
     """A preset pressed 1.2 s after the arrival: the brake delay runs from the stop itself."""
     m = mo.commanded(ready(), CFG, 110, 10.0)
     m, _ = feed(m, [(10.2, 103), (10.4, 106), (10.6, 109), (10.8, 110), (11.0, 110)])
-    m, events = mo.tick(m, CFG, 10.6 + CFG.settle_s)
+    m, events = still(m, 10.6 + CFG.settle_s)
     assert events == [mo.Event.ARRIVED]
     m, _ = mo.tick(m, CFG, 10.6 + CFG.settle_s + 1.2)
     assert mo.plan_target(m, CFG, 13.3) is mo.Plan.WAIT
@@ -95,7 +120,7 @@ def test_manual_rotation_shows_as_moving() -> None:
     m = ready()
     m, _ = feed(m, [(20.0, 103), (20.5, 106), (21.0, 109)])
     assert m.state is S.MOVING and m.target_deg is None
-    m, events = mo.tick(m, CFG, 22.5)
+    m, events = still(m, 22.5)
     assert events == [mo.Event.STOPPED] and m.state is S.BRAKING
 
 
@@ -117,7 +142,7 @@ def test_retarget_while_turning_is_stop_then_wait_for_stillness_and_brake() -> N
     assert mo.plan_target(m, CFG, 11.1) is mo.Plan.WAIT
     m, events = feed(m, [(11.25, 107), (11.5, 107), (12.0, 108)])
     assert m.state is S.MOVING  # stopping, not yet steady for settle_s
-    m, events = mo.tick(m, CFG, 12.5)  # 1.5 s after the last movement
+    m, events = still(m, 12.5)  # 1.5 s after the last movement
     assert events == [mo.Event.STOPPED] and m.state is S.BRAKING
     assert mo.plan_target(m, CFG, 17.4) is mo.Plan.WAIT
     m, _ = mo.tick(m, CFG, 17.5)
@@ -145,7 +170,7 @@ def test_wrap_at_north_counts_as_near() -> None:
     assert mo.angle_error(359, 1, wraps=False) == 358
     m = mo.commanded(ready(az=358), CFG, 0, 10.0)
     m, _ = feed(m, [(10.5, 359), (11.0, 360)])
-    m, events = mo.tick(m, CFG, 13.0)
+    m, events = still(m, 13.0)
     assert events == [mo.Event.ARRIVED]
 
 
@@ -194,8 +219,8 @@ def test_while_moving_progress_is_published_and_jitter_back_is_not() -> None:
 
 
 def test_next_deadline_is_in_the_future() -> None:
-    m = mo.commanded(ready(), CFG, 200, 10.0)
-    assert mo.next_deadline(m, CFG, 10.0) == 11.5
+    m = mo.commanded(ready(), CFG, 200, 10.0)  # (an arrival comes with a reading: rule 2)
+    assert mo.next_deadline(m, CFG, 10.0) == 10.0 + CFG.stall_timeout_s
     m, _ = mo.tick(m, CFG, 30.0)
     assert m.state is S.STALLED
     assert mo.next_deadline(m, CFG, 30.0) == 35.0
@@ -208,7 +233,7 @@ def test_the_long_way_round_is_progress_not_a_stall() -> None:
     readings = [(10 + i * 0.25, 10 + 1.5 * i) for i in range(1, 240)]
     m, events = feed(m, [(t, az) for t, az in readings if az <= 351])
     assert mo.Event.STALLED not in events
-    m, events = mo.tick(m, CFG, 70.0)
+    m, events = still(m, 70.0)
     assert mo.Event.ARRIVED in events
 
 
@@ -252,7 +277,7 @@ def test_a_slew_that_ended_unseen_is_no_stall_and_the_next_reading_decides() -> 
     m, events = mo.tick(m, CFG, 30.0)
     assert events == [] and m.state is S.MOVING
     m, events = mo.reading(m, CFG, 200, 30.2)
-    m, events2 = mo.tick(m, CFG, 31.8)
+    m, events2 = still(m, 31.8)
     assert events + events2 == [mo.Event.ARRIVED]
     # without the hook the same tick is a stall: the test above is not vacuous
     _, events = mo.tick(mo.commanded(ready(), CFG, 200, 10.0), CFG, 30.0)
@@ -290,7 +315,7 @@ def test_a_spid_turned_away_from_its_target_is_the_front_panel_and_loses_the_tar
     assert events == [mo.Event.TURNED_AWAY]
     assert m.state is S.MOVING and m.target_deg is None  # nothing is sent: the hand has it
     m, events = feed(m, [(13.5, 92.0), (14.0, 92.0)], SPID)
-    m, events = mo.tick(m, SPID, 16.0)
+    m, events = still(m, 16.0, SPID)
     assert events == [mo.Event.STOPPED]
 
 
@@ -323,7 +348,7 @@ def test_a_coast_or_one_stray_reading_past_the_target_is_no_pass() -> None:
     assert mo.Event.PASSED not in events + more and m.target_deg == 10
     m, events = feed(mo.commanded(ready(az=330), CFG, 10, 10.0), [*to_10, (15.5, 60.0)])
     m, more = feed(m, [(16.0, 10.5), (16.5, 10.5), (17.0, 10.5)])
-    m, last = mo.tick(m, CFG, 30.0)
+    m, last = still(m, 30.0)
     assert mo.Event.PASSED not in events + more + last and mo.Event.ARRIVED in more + last
 
 
@@ -496,9 +521,7 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
 def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> float | None:
     """next_deadline as its rules say it, every time in a list, the soonest in the future."""
     times: list[float] = []
-    if m.state is S.MOVING:
-        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
-        times.append(ref + cfg.settle_s)
+    if m.state is S.MOVING:  # (arrival and a stop come with a reading: rule 2)
         if m.progress_t is not None:
             times.append(m.progress_t + cfg.stall_timeout_s)
         if m.stop_sent_t is not None:
