@@ -810,10 +810,13 @@ class Controller:
             self._retry_check(link, now)
         if self._released_stop_t is not None:
             self._release_check(now)
-        moving = self.motion.state is mo.MOVING
-        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.spec.az_wraps)
+        m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
+        moving = m.state is mo.MOVING
+        coasting = not moving and (m.state is mo.BRAKING or mo.settling(m))
+        az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
+        az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
-            self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
+            self.el_shown.feed(reply.el_deg, moving, deadband_deg, False, coasting)
 
     def _unasked(self, was: mo.Motion, now: float) -> None:
         """Rule 10: ``was`` the motion before this reading."""

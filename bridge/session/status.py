@@ -49,9 +49,11 @@ class Hysteresis:
     value: float | None = None
     direction: int = 0
 
-    def feed(self, reading: float, moving: bool, deadband_deg: float, wraps: bool) -> None:
+    def feed(
+        self, reading: float, moving: bool, deadband_deg: float, wraps: bool, coasting: bool
+    ) -> None:
         new, self.direction = publishable_bearing(
-            self.value, self.direction, reading, moving, deadband_deg, wraps
+            self.value, self.direction, reading, moving, deadband_deg, wraps, coasting
         )
         if new is not None:
             self.value = new
@@ -200,12 +202,16 @@ def publishable_bearing(
     moving: bool,
     deadband_deg: float,
     wraps: bool,
+    coasting: bool = False,
 ) -> tuple[float | None, int]:
     """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
 
     At rest only a change beyond the deadband is published. While moving, every step in the
     direction of travel is published (dashboards stay fresh), but a step back inside the
-    deadband is analog jitter and is not.
+    deadband is analog jitter and is not. So is a step on in the direction of travel while
+    the rotor comes to rest after a turn (``coasting``: braking, or settling): the last
+    degrees of a turn are the bearing it ends at, not jitter (a CI run: a rotor called
+    arrived 2 degrees short, at the reading that found it still, was shown there for good).
     """
     if published_deg is None:
         return reading_deg, 0
@@ -213,7 +219,7 @@ def publishable_bearing(
     if delta == 0:
         return None, direction
     step = 1 if delta > 0 else -1
-    if abs(delta) > deadband_deg or (moving and step == direction):
+    if abs(delta) > deadband_deg or ((moving or coasting) and step == direction):
         return reading_deg, step
     if moving and direction == 0:
         return reading_deg, step
