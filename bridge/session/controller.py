@@ -812,7 +812,9 @@ class Controller:
             self._release_check(now)
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
         moving = m.state is mo.MOVING
-        coasting = not moving and (m.state is mo.BRAKING or mo.settling(m))
+        coasting = not moving and (  # (this reading ended the turn, or it comes to rest)
+            before is mo.MOVING or m.state is mo.BRAKING or mo.settling(m)
+        )
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
@@ -1136,7 +1138,12 @@ class Controller:
                     f"{quiet_s:.3g} s)"
                 )
             m = self.motion
-            turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
+            turning = (  # (at its target by the last reading: arrived, but for that reading)
+                m.state is mo.MOVING
+                and m.target_deg is not None
+                and m.stop_sent_t is None
+                and not mo.at_target(m, cfg.motion)
+            )
             if turning and now < (  # rule 2: offline before silence or garbage alone would
                 self._silent_offline_t(link, now, False)  # make it so, where the stall would
                 if by_silence  # have stopped it: the stop goes, in case it still hears
@@ -1224,11 +1231,11 @@ class Controller:
     def _stall_check_t(self, link: Link) -> float:
         """Rule 2: the last check before the motion machine could call the turn under way
         stalled: ``stall_timeout_s`` from the last movement it saw (motion.py ``progress_t``),
-        less a moving poll and a reply time, how late the check may come; inf with none."""
-        progress_t = self.motion.progress_t
-        if progress_t is None:
+        less a moving poll and a reply time, how late the check may come; inf with none, or
+        with the rotor at its target (motion.py rule 3: no stall then)."""
+        progress_t, cfg = self.motion.progress_t, self.cfg
+        if progress_t is None or mo.at_target(self.motion, cfg.motion):  # (at it: no stall)
             return math.inf
-        cfg = self.cfg
         late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
         return progress_t + cfg.motion.stall_timeout_s - late_s
 

@@ -255,6 +255,13 @@ def slew_ended(m: Motion, now: float) -> Motion:
     return replace(m, last_move_t=now, progress_t=now if m.target_deg is not None else None)
 
 
+def at_target(m: Motion, cfg: MotionConfig) -> bool:
+    """Within ``tolerance_deg`` of the target by the last reading: no stall can come (rule 3);
+    the reading that finds it still says it arrived."""
+    err = target_error(m, cfg)
+    return err is not None and err <= cfg.tolerance_deg
+
+
 def target_error(m: Motion, cfg: MotionConfig) -> float | None:
     """How far the rotor is from its target (the worse axis), or None if unknown."""
     if m.target_deg is None or m.position_deg is None:
@@ -588,7 +595,11 @@ def tick(
             if still and err is not None and err <= cfg.tolerance_deg:
                 events.append(Event.ARRIVED)
                 m = _at_rest(m, cfg, now, BRAKING)
-            elif err is not None and now >= (m.progress_t or now) + cfg.stall_timeout_s:
+            elif (  # (off target: one at it waits for the reading that shows it still)
+                err is not None
+                and err > cfg.tolerance_deg
+                and now >= (m.progress_t or now) + cfg.stall_timeout_s
+            ):
                 events.append(Event.STALLED)
                 m = _at_rest(m, cfg, now, STALLED)
         elif still:
@@ -675,10 +686,7 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
         if m.stop_sent_t is None:
             return Plan.STOP_FIRST
         # a stop went out: send another only if a reading since shows it did not take
-        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
-        if moved_since and now >= m.stop_sent_t + cfg.stop_resend_s:
-            return Plan.STOP_FIRST
-        return Plan.WAIT
+        return Plan.STOP_FIRST if stop_again(m, cfg, now) else Plan.WAIT
     return Plan.WAIT  # braking (or no reading yet)
 
 
@@ -692,8 +700,11 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             t = m.progress_t + cfg.stall_timeout_s
             if t > now and (soonest is None or t < soonest):
                 soonest = t
-        if m.stop_sent_t is not None:
+        if m.stop_sent_t is not None:  # (stop_again's window)
             t = m.stop_sent_t + cfg.stop_resend_s
+            if t > now and (soonest is None or t < soonest):
+                soonest = t
+            t = _moved_ref(m) + cfg.settle_s
             if t > now and (soonest is None or t < soonest):
                 soonest = t
     elif (state is BRAKING or state is STALLED) and m.still_since_t is not None:
@@ -719,6 +730,16 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 def still_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``)."""
     return _moved_ref(m) + cfg.settle_s
+
+
+def stop_again(m: Motion, cfg: MotionConfig, now: float) -> bool:
+    """Whether a stop that went out is to go again (``stop_resend_s`` on, a reading since
+    showed the rotor turn; stops.py rule 2): while it still turns, a movement seen in the last
+    ``settle_s``; past that, the next reading may find it still (rule 2), and none is owed."""
+    sent_t, moved_t = m.stop_sent_t, m.last_move_t
+    if m.state is not MOVING or sent_t is None or moved_t is None or moved_t <= sent_t:
+        return False
+    return sent_t + cfg.stop_resend_s <= now < still_from(m, cfg)
 
 
 def _moved_ref(m: Motion) -> float:

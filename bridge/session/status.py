@@ -209,7 +209,8 @@ def publishable_bearing(
     At rest only a change beyond the deadband is published. While moving, every step in the
     direction of travel is published (dashboards stay fresh), but a step back inside the
     deadband is analog jitter and is not. So is a step on in the direction of travel while
-    the rotor comes to rest after a turn (``coasting``: braking, or settling): the last
+    the rotor comes to rest after a turn (``coasting``: the reading that found it still,
+    then braking, or settling): the last
     degrees of a turn are the bearing it ends at, not jitter (a CI run: a rotor called
     arrived 2 degrees short, at the reading that found it still, was shown there for good).
     """

@@ -25,18 +25,18 @@ Rules:
    (meanwhile the stop express, where it runs, writes its own frame for a STOP 0.1 s or more
    after its last). A controller that reports no position while it turns (a SatEL's slew) is
    never merged then.
-2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
-   again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
-   is written when its gap ends, before anything else of that step, and is no try). Lock ON
-   always sends a stop, whatever the bridge believes the rotor is doing. An operator's STOP
-   (or lock ON) to a rotor the bridge took for at rest is checked too, until the next target
-   or until the move after it ended: that state may be a guess (the first reading of a
-   connection, readings missed for a while, a stall whose motor may still be driving), and a
-   stop lost then must not leave the rotor turning. The price: a move by hand long after such
-   a stop is stopped once too; not after the lock is released (controller.py
-   ``lock_released``: the lock's stop is checked while it holds, and its release says the
-   tower work is over; a lock kept across a restart owes its stop on the first connect,
-   session.py rule 11).
+2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later (a movement
+   since the stop, less than ``settle_s`` old: ``motion.stop_again``), it is sent again, and
+   after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1, is written when
+   its gap ends, before anything else of that step, and is no try). Lock ON always sends a stop,
+   whatever the bridge believes the rotor is doing. An operator's STOP (or lock ON) to a rotor
+   the bridge took for at rest is checked too, until the next target or until the move after it
+   ended: that state may be a guess (the first reading of a connection, readings missed for a
+   while, a stall whose motor may still be driving), and a stop lost then must not leave the
+   rotor turning. The price: a move by hand long after such a stop is stopped once too; not
+   after the lock is released (controller.py ``lock_released``: the lock's stop is checked while
+   it holds, and its release says the tower work is over; a lock kept across a restart owes its
+   stop on the first connect, session.py rule 11).
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
@@ -270,12 +270,8 @@ class Stops:
         if m.stop_sent_t is None:
             self._tries = 0
             return False, None
-        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
-        late = now >= m.stop_sent_t + cfg.stop_resend_s  # as motion.next_deadline
-        if m.state is not MotionState.MOVING or not moved_since or not late or target_going:
+        if target_going or not mo.stop_again(m, cfg, now):
             return False, None
-        if now >= mo.still_from(m, cfg):  # still turning: a movement in the last settle_s;
-            return False, None  # a reading may show it still (motion.py rule 2)
         self._tries += 1
         error = None
         if self._tries == STOP_TRIES_BEFORE_ERROR:

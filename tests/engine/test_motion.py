@@ -100,6 +100,31 @@ def test_the_clock_alone_never_calls_a_rotor_still() -> None:
     assert events == [mo.Event.STOPPED] and m.state is S.IDLE  # (its brake window: over)
 
 
+def test_a_rotor_at_its_target_with_its_readings_lost_is_no_stall() -> None:
+    """Rule 3: off target, no progress for ``stall_timeout_s`` is a stall; at its target (by the
+    last reading) it is the reading that finds it still, when it comes, that says arrived."""
+    m = mo.commanded(ready(), CFG, 110, 10.0)
+    m, _ = feed(m, [(10.2, 103), (10.4, 106), (10.6, 109)])
+    m, events = mo.tick(m, CFG, 10.6 + CFG.stall_timeout_s + 1)
+    assert events == [] and m.state is S.MOVING and mo.at_target(m, CFG)
+    m, events = still(m, 10.6 + CFG.stall_timeout_s + 1.1)
+    assert events == [mo.Event.ARRIVED]
+
+
+def test_a_stop_goes_again_only_while_readings_show_the_rotor_turning() -> None:
+    """stops.py rule 2 (``stop_again``): from ``stop_resend_s`` after the stop, while a movement
+    since it is less than ``settle_s`` old; after that the next reading may find it still."""
+    m = mo.stop_sent(mo.commanded(ready(), CFG, 200, 10.0), CFG, 10.5)
+    m, _ = feed(m, [(11.0, 104), (11.5, 108), (12.0, 112)])
+    late = 10.5 + CFG.stop_resend_s
+    assert not mo.stop_again(m, CFG, late - 0.01)
+    assert mo.stop_again(m, CFG, late) and mo.plan_target(m, CFG, late) is mo.Plan.STOP_FIRST
+    assert mo.stop_again(m, CFG, 12.0 + CFG.settle_s - 0.01)
+    assert not mo.stop_again(m, CFG, 12.0 + CFG.settle_s)  # (readings lost since: no proof)
+    assert mo.plan_target(m, CFG, 12.0 + CFG.settle_s) is mo.Plan.WAIT
+    assert mo.next_deadline(m, CFG, late) == 12.0 + CFG.settle_s
+
+
 def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:
     """A preset pressed 1.2 s after the arrival: the brake delay runs from the stop itself."""
     m = mo.commanded(ready(), CFG, 110, 10.0)
@@ -524,8 +549,9 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
     if m.state is S.MOVING:  # (arrival and a stop come with a reading: rule 2)
         if m.progress_t is not None:
             times.append(m.progress_t + cfg.stall_timeout_s)
-        if m.stop_sent_t is not None:
-            times.append(m.stop_sent_t + cfg.stop_resend_s)
+        if m.stop_sent_t is not None:  # (a stop's repeat: from resend, until still)
+            ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t) if t is not None)
+            times += [m.stop_sent_t + cfg.stop_resend_s, ref + cfg.settle_s]
     if m.state in (S.BRAKING, S.STALLED) and m.still_since_t is not None:
         times.append(m.still_since_t + cfg.brake_delay_s)
     if m.idle_not_before_t is not None:

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState, SetOption, Target
+from bridge.core.model import ErrorKind, MotionState, SetOption, Target
 from bridge.emulators.gs232 import Outcome
 from tests.engine.test_session_passed import flicker_el
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
@@ -318,3 +318,23 @@ def test_a_bearing_garbled_into_one_the_box_refuses_is_sent_once_more(rig: Rig) 
     v.run_until(settled_at(200), 90, "at 200")
     assert v.errors(since=t) == []
     assert [f.data for f in v.frames(since=t) if f.data.startswith(b"M")] == [b"M:00", b"M200"]
+
+
+@pytest.mark.parametrize("stall_s", [3.0, 4.0])
+def test_replies_lost_at_the_target_are_no_stall(rig: Rig, stall_s: float) -> None:
+    """motion.py rule 3 (an attack pass): a rotor that came to its target, its replies lost
+    from just after, waits for the reading that shows it still (rule 2); the stall check,
+    which did not ask for an error beyond the tolerance, called it stalled at its target
+    ("brake paddle pressed or rotor stuck") and stopped it, before the silence made the
+    controller offline."""
+    v = rig("gs232b", settings={"stall_timeout_s": stall_s})
+    v.run_until_state(IDLE, 60)
+    v.target(100)
+    v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 100) < 0.5, 60)
+    v.run_for(1.0)
+    t0 = v.now
+    v.set_silent(True)
+    v.run_for(6)
+    assert [e.kind for t, e in v.events if t >= t0] == [ErrorKind.SERIAL]  # offline, no stall
+    assert "turn" not in v.events[-1][1].message  # (at its target: no turn under way)
+    assert b"S\r" not in v.sent(since=t0)  # no stop

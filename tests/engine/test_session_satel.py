@@ -282,3 +282,23 @@ def test_a_stop_whose_report_is_spoiled_shows_no_bearing_of_before_the_slew(rig:
     v.run_until(lambda h: h.state is IDLE, 30, "idle")
     shown = [s for s in v.published(since=t) if s.bearing_deg is not None and not s.estimated]
     assert shown and all(abs(s.bearing_deg - v.truth().az_deg) < 3 for s in shown)
+
+
+def test_one_lost_reply_after_a_stop_sends_no_second_stop(rig: Rig) -> None:
+    """motion.py ``stop_again`` (an attack pass): a new target mid-slew, the stop, the report
+    after it (a movement since the stop), then the answer to the next poll lost. A stop's
+    repeat asks for a movement in the last ``settle_s``: the target's own way to it did not,
+    and a second stop went to a rotor at rest, the target a settle time later."""
+    v = ready(rig)
+    v.target(170)
+    v.run_for(8)
+    t0 = v.now
+    v.target(90)
+    link = v.session.controller.link
+    assert link is not None
+    v.run_until(lambda h: link.slew is None and b"s" in h.sent(since=t0), 10, "stopped")
+    v.set_silent(True)
+    v.run_for(1.0)  # one poll's answer lost
+    v.set_silent(False)
+    v.run_until(lambda h: b"p90 0\r\n" in h.sent(since=t0), 10, "the new point sent")
+    assert v.sent(since=t0).count(b"s") == 1
