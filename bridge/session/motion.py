@@ -169,6 +169,7 @@ class Motion:
     progress_t: float | None = None  # last movement while a target is active
     idle_not_before_t: float | None = None
     stop_sent_t: float | None = None
+    stop_read_t: float | None = None  # the first reading after the last stop (``stop_again``)
     busy_until_t: float | None = None  # no feedback: when the last move is assumed done
     assumed_deg: float | None = None  # no feedback: where the last move should have ended
     # elevation, for az/el controllers; movement on either axis is movement
@@ -300,6 +301,9 @@ def reading(
     moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
     if el_deg is not None and m.el_anchor_deg is not None:
         moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    sent_t, read_t = m.stop_sent_t, m.stop_read_t
+    if sent_t is not None and (read_t is None or read_t < sent_t):
+        changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
     if moved:
         changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
         changes["last_move_t"], changes["still_since_t"] = now, None
@@ -733,11 +737,16 @@ def still_from(m: Motion, cfg: MotionConfig) -> float:
 
 
 def stop_again(m: Motion, cfg: MotionConfig, now: float) -> bool:
-    """Whether a stop that went out is to go again (``stop_resend_s`` on, a reading since
-    showed the rotor turn; stops.py rule 2): while it still turns, a movement seen in the last
-    ``settle_s``; past that, the next reading may find it still (rule 2), and none is owed."""
-    sent_t, moved_t = m.stop_sent_t, m.last_move_t
-    if m.state is not MOVING or sent_t is None or moved_t is None or moved_t <= sent_t:
+    """Whether a stop that went out is to go again (stops.py rule 2): from ``stop_resend_s`` on,
+    a movement seen after the first reading after the stop, less than ``settle_s`` old. The
+    first reading shows where the rotor was when the stop came, not that it turned on since
+    (an attack pass: replies lost across a stop that took, the first after them moved the
+    rotor by the way it came, and a second stop went to a rotor at rest); past ``settle_s``,
+    the next reading may find it still (rule 2), and none is owed."""
+    sent_t, read_t, moved_t = m.stop_sent_t, m.stop_read_t, m.last_move_t
+    if m.state is not MOVING or sent_t is None or read_t is None or moved_t is None:
+        return False
+    if read_t < sent_t or moved_t <= read_t:  # (no reading since it, or no movement after)
         return False
     return sent_t + cfg.stop_resend_s <= now < still_from(m, cfg)
 

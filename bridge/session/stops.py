@@ -26,17 +26,17 @@ Rules:
    after its last). A controller that reports no position while it turns (a SatEL's slew) is
    never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later (a movement
-   since the stop, less than ``settle_s`` old: ``motion.stop_again``), it is sent again, and
-   after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1, is written when
-   its gap ends, before anything else of that step, and is no try). Lock ON always sends a stop,
-   whatever the bridge believes the rotor is doing. An operator's STOP (or lock ON) to a rotor
-   the bridge took for at rest is checked too, until the next target or until the move after it
-   ended: that state may be a guess (the first reading of a connection, readings missed for a
-   while, a stall whose motor may still be driving), and a stop lost then must not leave the
-   rotor turning. The price: a move by hand long after such a stop is stopped once too; not
-   after the lock is released (controller.py ``lock_released``: the lock's stop is checked while
-   it holds, and its release says the tower work is over; a lock kept across a restart owes its
-   stop on the first connect, session.py rule 11).
+   after the first reading after the stop, less than ``settle_s`` old: ``motion.stop_again``),
+   it is sent again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed,
+   rule 1, is written when its gap ends, before anything else of that step, and is no try). Lock
+   ON always sends a stop, whatever the bridge believes the rotor is doing. An operator's STOP
+   (or lock ON) to a rotor the bridge took for at rest is checked too, until the next target or
+   until the move after it ended: that state may be a guess (the first reading of a connection,
+   readings missed for a while, a stall whose motor may still be driving), and a stop lost then
+   must not leave the rotor turning. The price: a move by hand long after such a stop is stopped
+   once too; not after the lock is released (controller.py ``lock_released``: the lock's stop is
+   checked while it holds, and its release says the tower work is over; a lock kept across a
+   restart owes its stop on the first connect, session.py rule 11).
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again

@@ -115,7 +115,9 @@ def test_a_stop_goes_again_only_while_readings_show_the_rotor_turning() -> None:
     """stops.py rule 2 (``stop_again``): from ``stop_resend_s`` after the stop, while a movement
     since it is less than ``settle_s`` old; after that the next reading may find it still."""
     m = mo.stop_sent(mo.commanded(ready(), CFG, 200, 10.0), CFG, 10.5)
-    m, _ = feed(m, [(11.0, 104), (11.5, 108), (12.0, 112)])
+    m, _ = feed(m, [(11.0, 104)])  # where the stop found it: no proof it turned on
+    assert not mo.stop_again(m, CFG, 10.5 + CFG.stop_resend_s)
+    m, _ = feed(m, [(11.5, 108), (12.0, 112)])
     late = 10.5 + CFG.stop_resend_s
     assert not mo.stop_again(m, CFG, late - 0.01)
     assert mo.stop_again(m, CFG, late) and mo.plan_target(m, CFG, late) is mo.Plan.STOP_FIRST

@@ -175,7 +175,15 @@ def test_a_repeat_merged_into_a_stop_goes_out_when_its_gap_ends_unless_the_rotor
 def test_a_stop_that_did_not_take_is_sent_again_and_the_last_try_says_so() -> None:
     cfg, stops = rig().motion, Stops()
     moved_t = 20.0 - cfg.settle_s / 2  # a movement seen since the stop, settle_s not over
-    turning = replace(IDLE_AT_90, state=MotionState.MOVING, stop_sent_t=10.0, last_move_t=moved_t)
+    turning = replace(
+        IDLE_AT_90,
+        state=MotionState.MOVING,
+        stop_sent_t=10.0,
+        stop_read_t=10.2,
+        last_move_t=moved_t,
+    )
+    first = replace(turning, stop_read_t=moved_t)  # its only movement: where the stop found it
+    assert stops.check(first, cfg, 20.0, False) == (False, None)
     assert stops.check(turning, cfg, 10.5, False) == (False, None)  # not late yet
     assert stops.check(turning, cfg, 20.0, True) == (False, None)  # a target stops it anyway
     # one settle_s after its last movement, the next reading may find it still (motion rule 2)

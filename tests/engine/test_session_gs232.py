@@ -338,3 +338,24 @@ def test_replies_lost_at_the_target_are_no_stall(rig: Rig, stall_s: float) -> No
     assert [e.kind for t, e in v.events if t >= t0] == [ErrorKind.SERIAL]  # offline, no stall
     assert "turn" not in v.events[-1][1].message  # (at its target: no turn under way)
     assert b"S\r" not in v.sent(since=t0)  # no stop
+
+
+def test_replies_lost_across_a_stop_that_took_send_no_second_stop(rig: Rig) -> None:
+    """motion.py ``stop_again`` (an attack pass): replies lost from 0.5 s before a stop to 1 s
+    after it; the controller heard it and the rotor stopped at once. The first reading after
+    the gap shows the way the rotor came before the stop, no turning since: a second stop
+    went to the rotor at rest 2 s on."""
+    v = rig("gs232a", emulator={"start_az_deg": 10})
+    v.run_until_state(IDLE, 60)
+    v.target(200)
+    v.run_for(8)
+    v.set_silent(True)
+    v.run_for(0.5)
+    t0 = v.now
+    v.stop()
+    v.run_for(1.0)
+    v.set_silent(False)
+    v.run_until_state(IDLE, 30)
+    v.run_for(5)
+    assert not v.truth().is_moving and v.truth().az_deg < 200
+    assert [w.t - t0 for w in v.writes if w.t >= t0 and w.data == b"S\r"] == [0.0]

@@ -403,6 +403,25 @@ def test_a_jittering_reading_arrives_goes_idle_and_the_bearing_does_not_flap(rig
     assert v.state is IDLE and v.status.bearing_deg == bearing
 
 
+def test_replies_lost_across_the_stop_before_a_target_send_no_second_stop(rig: Rig) -> None:
+    """motion.py ``stop_again`` (an attack pass): a target behind the turning rotor, its stop
+    heard, the replies lost from 0.5 s before it to 0.6 s after. The first reading after them
+    shows the way the rotor came before the stop: a second ``;`` went to the rotor at rest
+    (invalid in its brake delay), and the target waited for nothing."""
+    v = ready(rig, emulator={"start_az_deg": 10, "jitter_deg": 0})
+    v.target(200)
+    v.run_for(8)
+    v.set_silent(True)
+    v.run_for(0.5)
+    t0 = v.now
+    v.target(100)  # behind it: the stop first, then the brake delay
+    v.run_for(0.6)
+    v.set_silent(False)
+    v.run_until(at(v, 100), 60, "arrived at 100")
+    assert [w.t - t0 for w in v.writes if w.t >= t0 and w.data == b";"] == [0.0]
+    assert commands(v, t0)[0] == (b";", "stop")
+
+
 # -- streams of targets (targets.py rule 2) ---------------------------------------------------
 def test_a_dragged_slider_reaches_the_wire_as_a_few_targets_and_ends_at_the_last(
     rig: Rig,
