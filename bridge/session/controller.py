@@ -24,16 +24,18 @@ Rules:
    silence or garbage alone would make it offline (GARBLED_SILENCE_FACTOR timeouts, with no
    target out), a stop goes, where the stall's went (in case it still hears; owed again when it
    answers, stops.py rule 3); otherwise the error says the rotor may still be turning (a move it
-   heard goes on, as ever). A stall needs readings that show none (a Rot2Prog at its 600 baud,
-   idle-polled every 9.3 s, waits 19.4 s of silence: one that went silent mid-turn was called
-   stalled at 10 s, an error that blamed the brake, and rotor health counted a stall; a review:
-   offline with no stop, a jammed one's motor drove on, and an attack pass: the same for a
-   jammed GS-232B whose replies went to garbage; an attack pass: at half a 3 s stall timeout,
-   two lost replies took a GS-232B offline). One that never gave a valid reply but garbled ones
-   is said to (the wrong baud rate looks so), not to give none. (Reviews: with silence_timeout_s
-   6, a GS-232B turning when its replies went to garbage stayed online 12 s and was called
-   stalled at 10 s, an error that blamed the brake; a slow one whose last movement was seconds
-   before its last valid reply, at 5.4 s of the default 3.)
+   heard goes on, as ever). A rotor whose last reading put it at its target is no turn under way
+   (motion.py rule 3: no stall can come, only the reading that finds it still is missing):
+   offline as with no target out, and the error says nothing of a turn. A stall needs readings
+   that show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence:
+   one that went silent mid-turn was called stalled at 10 s, an error that blamed the brake, and
+   rotor health counted a stall; a review: offline with no stop, a jammed one's motor drove on,
+   and an attack pass: the same for a jammed GS-232B whose replies went to garbage; an attack
+   pass: at half a 3 s stall timeout, two lost replies took a GS-232B offline). One that never
+   gave a valid reply but garbled ones is said to (the wrong baud rate looks so), not to give
+   none. (Reviews: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
+   stayed online 12 s and was called stalled at 10 s, an error that blamed the brake; a slow one
+   whose last movement was seconds before its last valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -481,6 +483,9 @@ class Controller:
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
+        # the way of a turn before the link went down is no way the rotor turns now
+        # (status.py rule 1: a step on that way while it comes to rest is shown)
+        self.az_shown.direction = self.el_shown.direction = 0
         self.options.connected(self.answering)
         self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
@@ -812,9 +817,7 @@ class Controller:
             self._release_check(now)
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
         moving = m.state is mo.MOVING
-        coasting = not moving and (  # (this reading ended the turn, or it comes to rest)
-            before is mo.MOVING or m.state is mo.BRAKING or mo.settling(m)
-        )
+        coasting = not moving and (before is mo.MOVING or m.state is mo.BRAKING)
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
@@ -1138,7 +1141,8 @@ class Controller:
                     f"{quiet_s:.3g} s)"
                 )
             m = self.motion
-            turning = (  # (at its target by the last reading: arrived, but for that reading)
+            turning = (  # (at its target by the last reading: no turn under way, only the
+                # reading that finds it still is missing, motion.py rule 2)
                 m.state is mo.MOVING
                 and m.target_deg is not None
                 and m.stop_sent_t is None

@@ -86,11 +86,11 @@ Rules:
    any command written after the target (a setting, a query: the controller asks,
    controller.py). A new bearing refused while the rotor still turns to the one before: the
    target is dropped and the rotor stays ``moving`` (stops.py then stops it).
-9. Every time ``tick`` compares the clock with is one ``next_deadline`` looks at: a motion
-   that ``tick`` left as it was at ``t0`` (one it made, ``reading``'s, which ends with
-   ``tick``, or one a stop or a target made since at ``t0``) stays as it is at every time
-   before ``next_deadline(m, cfg, t0)``, so the controller does not tick it before then
-   (controller.py ``tick``).
+9. Every time ``tick`` (with no reading: rule 2) or ``plan_target`` compares the clock with is
+   one ``next_deadline`` looks at: a motion that ``tick`` left as it was at ``t0`` (one it made,
+   ``reading``'s, which ends with ``tick``, or one a stop or a target made since at ``t0``)
+   stays as it is at every time before ``next_deadline(m, cfg, t0)``, so the controller does not
+   tick it before then (controller.py ``tick``).
 """
 
 from __future__ import annotations
@@ -288,7 +288,7 @@ def reading(
             still_since_t=now,
             idle_not_before_t=now + cfg.settle_s,
         )
-        return tick(m, cfg, now, True)
+        return tick(m, cfg, now, read=True)
     anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
     before = m  # (rule 5 compares this reading with the one before)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
@@ -315,7 +315,7 @@ def reading(
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
         if passed is not None:  # rule 5
-            m, events = tick(_dropped(m), cfg, now, True)
+            m, events = tick(_dropped(m), cfg, now, read=True)
             return m, [passed, *events]
     if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
@@ -329,9 +329,9 @@ def reading(
             elif m.away_err is None or err <= m.away_err:
                 m = replace(m, away_err=err)  # the first reading away: one more must follow
             else:
-                m, events = tick(_dropped(m), cfg, now, True)
+                m, events = tick(_dropped(m), cfg, now, read=True)
                 return m, [Event.TURNED_AWAY, *events]
-    return tick(m, cfg, now, True)
+    return tick(m, cfg, now, read=True)
 
 
 def _dropped(m: Motion) -> Motion:
@@ -582,8 +582,9 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
 def tick(
     m: Motion, cfg: MotionConfig, now: float, read: bool = False
 ) -> tuple[Motion, list[Event]]:
-    """Time-driven transitions: settling, stall, end of the brake window; arrival and a stop
-    only at a reading (``read``: rule 2)."""
+    """Time-driven transitions: settling, stall, end of the brake window; the rotor found
+    arrived or stopped (``Event.ARRIVED``, ``Event.STOPPED``) only at a reading (``read``:
+    rule 2)."""
     events: list[Event] = []
     if not cfg.spec.can_report_position:  # (the spec's: no property call at every step)
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
@@ -699,7 +700,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
     (the soonest kept as it goes, no list: this runs at every step of every rotator)."""
     soonest: float | None = None
     state = m.state
-    if state is MOVING:  # (arrival and a stop come with a reading: rule 2)
+    if state is MOVING:  # (the rotor found still comes with a reading: rule 2)
         if m.progress_t is not None:
             t = m.progress_t + cfg.stall_timeout_s
             if t > now and (soonest is None or t < soonest):
@@ -724,6 +725,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             busy,
             None if busy is None else busy + cfg.brake_delay_s,
             None if stop is None else stop + cfg.brake_delay_s,
+            None if stop is None else stop + cfg.brake_delay_s + BRAKE_GUARD_S,  # (plan_target)
         ):
             if t_or_none is not None and t_or_none > now:
                 if soonest is None or t_or_none < soonest:

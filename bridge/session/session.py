@@ -681,7 +681,9 @@ class RotatorSession:
     def _try_target(self, link: Link, now: float) -> None:
         ctl, pending = self.controller, self.targets.pending
         assert pending is not None
-        todo = decide(self.cfg, link, ctl.motion, self.targets, self.fence.held, now)
+        # (the controller's configuration: a speed setting's settle time, controller.py rule 7,
+        # the one its stop's repeat, stops.py rule 2, counts with too: a cold review)
+        todo = decide(ctl.cfg, link, ctl.motion, self.targets, self.fence.held, now)
         if todo.go is Go.DONE:
             self._aimed(self.targets.done(), todo.wire)
         elif todo.go is Go.STOP_FIRST:

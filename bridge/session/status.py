@@ -4,7 +4,8 @@ returns.
 
 Rules:
 1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
-   jitter of a still rotor never reaches a dashboard.
+   jitter of a still rotor never reaches a dashboard, but for a step on the way it turned at
+   the reading that finds it still and in its brake window (the last degrees of a turn).
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
    ``estimated`` set, the target and the time it should be over; after that the state is
@@ -208,11 +209,11 @@ def publishable_bearing(
 
     At rest only a change beyond the deadband is published. While moving, every step in the
     direction of travel is published (dashboards stay fresh), but a step back inside the
-    deadband is analog jitter and is not. So is a step on in the direction of travel while
-    the rotor comes to rest after a turn (``coasting``: the reading that found it still,
-    then braking, or settling): the last
-    degrees of a turn are the bearing it ends at, not jitter (a CI run: a rotor called
-    arrived 2 degrees short, at the reading that found it still, was shown there for good).
+    deadband is analog jitter and is not. While the rotor comes to rest after a turn
+    (``coasting``: the reading that found it still, then its brake window), a step on in the
+    direction of travel is published too, however small: the last degrees of a turn are the
+    bearing it ends at, not jitter (a CI run: a rotor called arrived 2 degrees short, at the
+    reading that found it still, was shown there for good).
     """
     if published_deg is None:
         return reading_deg, 0

@@ -42,8 +42,7 @@ Rules:
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
    (stopping is always safe). So is the last stop written when the port fails or the
    controller is found silent, unless a reading since showed the rotor at rest (``unseen_t``;
-   a connection's first reading is a guess, and before motion.py rule 2 the machine's own
-   clock took a rotor no reading showed for stopped): found silent, the first frame after its first
+   a connection's first reading is a guess): found silent, the first frame after its first
    reading once it answers again, as a released lock's if it was one (rule 2). (An attack
    pass: a noise burst ate a GS-232B's STOP and the polls around it; taken for stopped for
    want of readings, then offline, and back online the rotor ran 26 s on to the target the

@@ -221,7 +221,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         2.0,
         ge=0,
         le=45,
-        description="a still rotor's readings that change less than this are not published",
+        description="a still rotor's readings that change less than this are not published "
+        "(but for the last degrees of a turn, on the way it turned, as it comes to rest)",
         examples=[1.0],
     )
     noise_deg: float | None = Field(

@@ -245,6 +245,18 @@ def test_while_moving_progress_is_published_and_jitter_back_is_not() -> None:
     assert shown == [101, 102, 103, 104, 105, 120, 121]
 
 
+def test_the_last_degrees_of_a_turn_are_published_as_it_comes_to_rest() -> None:
+    """status.py rule 1: coasting (the reading that found it still, its brake window), a step
+    on the way it turned is published inside the deadband; a step back is not, nor a step
+    with no way known (after a reconnect)."""
+    pb = publishable_bearing
+    assert pb(58, 1, 60, False, 2, True, coasting=True) == (60, 1)
+    assert pb(58, 1, 60, False, 2, True) == (None, 1)  # at rest: the deadband
+    assert pb(58, 1, 57, False, 2, True, coasting=True) == (None, 1)  # back: jitter
+    assert pb(58, 0, 60, False, 2, True, coasting=True) == (None, 0)  # no way known
+    assert pb(359, 1, 1, False, 2, True, coasting=True) == (1, 1)  # on across north
+
+
 def test_next_deadline_is_in_the_future() -> None:
     m = mo.commanded(ready(), CFG, 200, 10.0)  # (an arrival comes with a reading: rule 2)
     assert mo.next_deadline(m, CFG, 10.0) == 10.0 + CFG.stall_timeout_s
@@ -563,12 +575,13 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
             times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
         if m.stop_sent_t is not None:
             times.append(m.stop_sent_t + cfg.brake_delay_s)
+            times.append(m.stop_sent_t + cfg.brake_delay_s + mo.BRAKE_GUARD_S)
     future = [t for t in times if t > now]
     return min(future) if future else None
 
 
 _TIMES = st.one_of(st.none(), st.sampled_from([0.0, 1.0, 2.5, 4.0, 7.0, 9.0, 12.0]))
-_CLOCKS = ("last_move_t", "target_t", "stop_sent_t", "progress_t", "still_since_t")
+_CLOCKS = ("last_move_t", "target_t", "stop_sent_t", "stop_read_t", "progress_t", "still_since_t")
 _CLOCKS += ("idle_not_before_t", "busy_until_t")
 
 
@@ -604,12 +617,15 @@ def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
 ) -> None:
     """motion.py rule 9 (the controller ticks no motion before its next deadline): a motion
     ``tick`` left at ``t0``, or one a stop or a target made from it at ``t0``, is what
-    ``tick`` makes of it at any time before ``next_deadline``."""
+    ``tick`` makes of it at any time before ``next_deadline``, and ``plan_target`` says of it
+    what it said at ``t0``."""
     cfg = CFG if feedback else DCU
     left, _ = mo.tick(m, cfg, t0)
     for made in (left, mo.stop_sent(left, cfg, t0), mo.commanded(left, cfg, 150.0, t0)):
         assert mo.tick(made, cfg, t0) == (made, [])
         deadline = mo.next_deadline(made, cfg, t0)
         end = t0 + 30.0 if deadline is None else deadline
+        plan = mo.plan_target(made, cfg, t0)  # (and what it says of a target: a cold review)
         for t in (t0 + (end - t0) * f for f in (0.25, 0.5, 0.999)):
             assert mo.tick(made, cfg, t) == (made, []), (made, t)
+            assert mo.plan_target(made, cfg, t) is plan, (made, t)

@@ -15,6 +15,7 @@ import pytest
 
 from bridge.core.model import ErrorKind, MotionState, SetOption, Target
 from bridge.emulators.gs232 import Outcome
+from bridge.session import motion as mo
 from tests.engine.test_session_passed import flicker_el
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
@@ -331,8 +332,9 @@ def test_replies_lost_at_the_target_are_no_stall(rig: Rig, stall_s: float) -> No
     v.run_until_state(IDLE, 60)
     v.target(100)
     v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 100) < 0.5, 60)
-    v.run_for(1.0)
-    t0 = v.now
+    v.run_for(0.5)  # (a reading or two at it: not yet still for settle_s)
+    t0, motion = v.now, v.session.controller.motion
+    assert motion.state is MOVING and mo.at_target(motion, v.cfg.motion)  # (not vacuous)
     v.set_silent(True)
     v.run_for(6)
     assert [e.kind for t, e in v.events if t >= t0] == [ErrorKind.SERIAL]  # offline, no stall

@@ -294,11 +294,14 @@ def test_one_lost_reply_after_a_stop_sends_no_second_stop(rig: Rig) -> None:
     v.run_for(8)
     t0 = v.now
     v.target(90)
-    link = v.session.controller.link
+    controller = v.session.controller
+    link = controller.link
     assert link is not None
     v.run_until(lambda h: link.slew is None and b"s" in h.sent(since=t0), 10, "stopped")
+    motion = controller.motion  # (the report after the stop: a movement since it)
+    assert motion.stop_sent_t is not None and (motion.last_move_t or 0) > motion.stop_sent_t
     v.set_silent(True)
     v.run_for(1.0)  # one poll's answer lost
     v.set_silent(False)
     v.run_until(lambda h: b"p90 0\r\n" in h.sent(since=t0), 10, "the new point sent")
-    assert v.sent(since=t0).count(b"s") == 1
+    assert [w.data for w in v.writes if w.t >= t0 and w.data == b"s"] == [b"s"]
