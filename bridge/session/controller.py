@@ -483,9 +483,6 @@ class Controller:
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
-        # the way of a turn before the link went down is no way the rotor turns now
-        # (status.py rule 1: a step on that way while it comes to rest is shown)
-        self.az_shown.direction = self.el_shown.direction = 0
         self.options.connected(self.answering)
         self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
@@ -816,6 +813,8 @@ class Controller:
         if self._released_stop_t is not None:
             self._release_check(now)
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
+        if was.anchor_deg is None:  # a connection's first reading (or after readings lost:
+            self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()  # shown as it is
         moving = m.state is mo.MOVING
         coasting = not moving and (before is mo.MOVING or m.state is mo.BRAKING)
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg

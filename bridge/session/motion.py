@@ -287,6 +287,7 @@ def reading(
             el_anchor_deg=el_deg,
             still_since_t=now,
             idle_not_before_t=now + cfg.settle_s,
+            stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
         )
         return tick(m, cfg, now, read=True)
     anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
@@ -302,7 +303,7 @@ def reading(
     if el_deg is not None and m.el_anchor_deg is not None:
         moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
-    if sent_t is not None and (read_t is None or read_t < sent_t):
+    if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
     if moved:
         changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
@@ -748,7 +749,7 @@ def stop_again(m: Motion, cfg: MotionConfig, now: float) -> bool:
     sent_t, read_t, moved_t = m.stop_sent_t, m.stop_read_t, m.last_move_t
     if m.state is not MOVING or sent_t is None or read_t is None or moved_t is None:
         return False
-    if read_t < sent_t or moved_t <= read_t:  # (no reading since it, or no movement after)
+    if read_t <= sent_t or moved_t <= read_t:  # (no reading since it, or no movement after)
         return False
     return sent_t + cfg.stop_resend_s <= now < still_from(m, cfg)
 

@@ -5,7 +5,9 @@ returns.
 Rules:
 1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
    jitter of a still rotor never reaches a dashboard, but for a step on the way it turned at
-   the reading that finds it still and in its brake window (the last degrees of a turn).
+   the reading that finds it still and in its brake window (the last degrees of a turn). A
+   connection's first reading, and the first after readings were lost (offline, a SatEL's
+   report lost), is shown as it is (controller.py ``_reading``: the rotor may have moved).
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
    ``estimated`` set, the target and the time it should be over; after that the state is

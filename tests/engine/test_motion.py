@@ -125,6 +125,11 @@ def test_a_stop_goes_again_only_while_readings_show_the_rotor_turning() -> None:
     assert not mo.stop_again(m, CFG, 12.0 + CFG.settle_s)  # (readings lost since: no proof)
     assert mo.plan_target(m, CFG, 12.0 + CFG.settle_s) is mo.Plan.WAIT
     assert mo.next_deadline(m, CFG, late) == 12.0 + CFG.settle_s
+    # a stop owed on connect: the connection's first reading is the first after it (a last
+    # read: it was not, and the repeat waited a reading more)
+    m = mo.stop_sent(mo.link_up(mo.Motion(), CFG, 0.0), CFG, 0.0)
+    m, _ = mo.reading(m, CFG, 100, 0.2)
+    assert m.stop_read_t == 0.2
 
 
 def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:

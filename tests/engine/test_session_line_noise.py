@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from bridge.core.model import ErrorKind, MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -70,16 +70,20 @@ def test_a_flipped_tens_digit_while_it_settles_at_its_target(rig: Rig) -> None:
     assert min(shown) >= 130, f"published {min(shown)} with the rotor standing at 135"
 
 
-# a Rotor-EZ (a brake delay), a RotorCard (none) and a Prosistel (none, tenths)
+# a Rotor-EZ (a brake delay), a RotorCard (none) and a Prosistel (none, tenths); the replies
+# lost for less than the silence timeout, for longer (offline), or the port unplugged a second
+@pytest.mark.parametrize("lost", ["replies", "offline", "port"])
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard", "prosistel"])
 def test_readings_lost_near_the_target_call_no_arrival_and_its_last_degrees_are_shown(
-    rig: Rig, model: str
+    rig: Rig, model: str, lost: str
 ) -> None:
     """motion.py rule 2, status.py rule 1 (a CI run): the replies of a rotor 2 degrees short of
     its target and still turning lost for longer than ``settle_s``. The clock alone called it
     arrived there, and the reading at 60 that came next was within the deadband of the 58
     shown: the status said 58 for good while the rotor stood at 60. Without a brake, the
-    reading that found it arrived was not shown either (an attack pass)."""
+    reading that found it arrived was not shown either (an attack pass); nor the first after
+    the controller was offline, or the port back, once the way of travel was forgotten there
+    (a last read)."""
     emulator = {"jitter_deg": 0, "start_az_deg": 10} if model != "prosistel" else {}
     v = rig(model, emulator=emulator)
     v.run_until_state(IDLE, 60)
@@ -87,11 +91,23 @@ def test_readings_lost_near_the_target_call_no_arrival_and_its_last_degrees_are_
     controller = v.session.controller
     v.run_until(lambda h: (controller.motion.anchor_deg or 0) >= 58, 60, "2 degrees short")
     assert v.truth().is_moving and v.truth().az_deg < 59.5
-    v.set_silent(True)
-    v.run_for(v.cfg.motion.settle_s + 0.3)  # (shorter than the silence timeout)
-    assert v.status.state is MOVING and v.status.target_az_deg == 60  # no reading: no arrival
-    v.set_silent(False)
+    shown = v.status.bearing_deg
+    assert shown is not None and shown < 59.5
+    if lost == "port":
+        v.link_down()
+        v.run_for(1.0)
+        v.link_up()
+    else:
+        v.set_silent(True)
+        quiet_s = v.cfg.motion.settle_s + 0.3 if lost == "replies" else 8.0
+        assert (quiet_s < v.cfg.silence_timeout_s) is (lost == "replies")
+        v.run_for(quiet_s)
+        if lost == "replies":  # no reading: no arrival
+            assert v.status.state is MOVING and v.status.target_az_deg == 60
+        v.set_silent(False)
     v.run_until_state(IDLE, 30)
     v.run_for(10)
     assert v.truth().az_deg == 60 and not v.truth().is_moving
-    assert v.status.bearing_deg == 60 and v.events == []
+    assert v.status.bearing_deg == 60
+    kinds = [e.kind for _, e in v.events]
+    assert kinds == ([] if lost == "replies" else [ErrorKind.SERIAL])
