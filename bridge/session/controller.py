@@ -145,8 +145,10 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from enum import Enum
+from functools import partial
 from typing import NamedTuple, cast
 
 from bridge.core.model import ErrorKind, RotatorStatus, SettingValue, Target
@@ -387,6 +389,7 @@ class Controller:
         self.version: str | None = None
         self.controller_time: str | None = None  # its own clock (SatEL)
         self._silence_reported = False
+        self._afresh = False  # status.py rule 1: the next first reading is shown as it is
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
@@ -510,7 +513,7 @@ class Controller:
             self._released_owed = True  # (the released lock's: stops.py rule 2)
         self.link = None
         self.answering = False
-        self.motion = mo.link_down(self.motion)
+        self._lose_motion(mo.link_down)
         self._pass_ends = False  # (a last try not written: owed, checked as any)
 
     # -- stops ---------------------------------------------------------------------------------
@@ -813,14 +816,27 @@ class Controller:
         if self._released_stop_t is not None:
             self._release_check(now)
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
-        if was.anchor_deg is None:  # a connection's first reading (or after readings lost:
-            self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()  # shown as it is
+        if was.anchor_deg is None and self._afresh:  # (``_lose_motion``)
+            self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
+            self._afresh = False
         moving = m.state is mo.MOVING
         coasting = not moving and (before is mo.MOVING or m.state is mo.BRAKING)
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, deadband_deg, False, coasting)
+
+    def _lose_motion(self, lose: Callable[[mo.Motion], mo.Motion]) -> None:
+        """The readings are lost (the port closed, the controller offline, a SatEL's report):
+        the motion is rebuilt by ``lose``. A rotor that was turning, or had a target out, may
+        be anywhere near when they come back: the first reading then is shown as it is
+        (status.py rule 1; a last read: the 2 degrees it turned on from the 58 shown were
+        inside the deadband). One at rest keeps the bearing shown: a first reading of jitter,
+        or one a noisy line made, would move it (an attack pass: 12 changes in 20 replugs)."""
+        m = self.motion
+        if m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
+            self._afresh = True
+        self.motion = lose(m)
 
     def _unasked(self, was: mo.Motion, now: float) -> None:
         """Rule 10: ``was`` the motion before this reading."""
@@ -975,7 +991,7 @@ class Controller:
                     self._watch_until = now + self.cfg.motion.settle_s  # unanswered may have
                     link.poll_every(now, self.cfg.moving_poll_interval_s)  # been a command
                 if todo.track_lost:
-                    self.motion = mo.track_lost(self.motion, self.cfg.motion)
+                    self._lose_motion(partial(mo.track_lost, cfg=self.cfg.motion))
         self.flush_stop(now)
         link.flush_outbox(now)
         junk = link.quiet_junk(now)
@@ -1167,7 +1183,7 @@ class Controller:
             elif stopped:  # move it heard goes on, stops.py rule 3; or stopped where the stall
                 why += " while the rotor turned to its target"  # would have stopped it)
             why += "" if by_silence else ": a noisy line?"
-            self.motion = mo.link_down(self.motion)
+            self._lose_motion(mo.link_down)
             said = None
             if stopped:
                 said = "a stop sent, in case it still hears, and again when it answers"

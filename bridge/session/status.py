@@ -5,9 +5,10 @@ returns.
 Rules:
 1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
    jitter of a still rotor never reaches a dashboard, but for a step on the way it turned at
-   the reading that finds it still and in its brake window (the last degrees of a turn). A
-   connection's first reading, and the first after readings were lost (offline, a SatEL's
-   report lost), is shown as it is (controller.py ``_reading``: the rotor may have moved).
+   the reading that finds it still and in its brake window (the last degrees of a turn). The
+   first reading after readings were lost (the port closed, the controller offline, a SatEL's
+   report lost) while the rotor turned or had a target out is shown as it is: it may be
+   anywhere near (controller.py ``_lose_motion``).
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
    ``estimated`` set, the target and the time it should be over; after that the state is

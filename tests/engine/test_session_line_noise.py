@@ -111,3 +111,28 @@ def test_readings_lost_near_the_target_call_no_arrival_and_its_last_degrees_are_
     assert v.status.bearing_deg == 60
     kinds = [e.kind for _, e in v.events]
     assert kinds == ([] if lost == "replies" else [ErrorKind.SERIAL])
+
+
+def test_a_still_rotors_bearing_shown_stays_across_replugs_and_offline_spells(rig: Rig) -> None:
+    """controller.py ``_lose_motion`` (an attack pass): a first reading shown as it is after
+    every reconnect moved a still Rotor-EZ's bearing with its jitter, 100 to 102 and back, at
+    12 of 20 replugs. Only a rotor that turned, or had a target out, when its readings were
+    lost starts the bearing shown afresh."""
+    v = rig("rotorez", emulator={"jitter_deg": 2, "start_az_deg": 100})
+    v.run_until_state(IDLE, 60)
+    v.run_for(10)
+    shown = v.status.bearing_deg
+    assert shown is not None and abs(shown - 100) <= 2
+    for i in range(8):
+        if i % 2:
+            v.link_down()
+            v.run_for(1.0)
+            v.link_up()
+        else:
+            v.set_silent(True)
+            v.run_for(v.cfg.silence_timeout_s + 1)
+            v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 30, "back")
+        v.run_for(2.0 + 0.37 * i)  # (the jitter's phase differs each time)
+        assert v.status.bearing_deg == shown, i
+    assert b";102" in b"".join(data for _, data in v.received)  # (it jittered all along)
