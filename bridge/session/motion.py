@@ -9,15 +9,14 @@ Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
    movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
-   last command, so a rotor that has not started yet is not "still"), as a reading shows it:
-   the clock alone never says a rotor stopped (a CI run: the lines starved for 0.35 s, the
-   rotor 2 degrees short of its target and still turning was called arrived, and the status
-   showed it 2 degrees short for good). While a setting slows
-   the rotor (controller.py rule 7: a GS-232 at X1), never shorter than it takes at its slower
-   axis's speed to go a step of its readings beyond ``noise_deg``, plus a moving poll
-   (``settle_for``: a review found a GS-232 at X1, 1.5 degrees a second, called arrived at
-   128.9 on its way to 130). Speeds the user configures are the user's to pair with
-   ``settle_s``.
+   last command, so a rotor that has not started yet is not "still"), as a reading shows it: the
+   clock alone never says a rotor stopped (a CI run: the lines starved for 0.35 s, the rotor 2
+   degrees short of its target and still turning was called arrived, and the status showed it 2
+   degrees short for good). While a setting slows the rotor (controller.py rule 7: a GS-232 at
+   X1), never shorter than it takes at its slower axis's speed to go a step of its readings
+   beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
+   degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
+   the user's to pair with ``settle_s``.
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
@@ -595,7 +594,7 @@ def tick(
     if m.state is OFFLINE:
         return m, events
     if m.state is MOVING:
-        still = read and now >= _moved_ref(m) + cfg.settle_s  # rule 2
+        still = read and now >= still_from(m, cfg)  # rule 2
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
@@ -710,7 +709,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             t = m.stop_sent_t + cfg.stop_resend_s
             if t > now and (soonest is None or t < soonest):
                 soonest = t
-            t = _moved_ref(m) + cfg.settle_s
+            t = still_from(m, cfg)
             if t > now and (soonest is None or t < soonest):
                 soonest = t
     elif (state is BRAKING or state is STALLED) and m.still_since_t is not None:
