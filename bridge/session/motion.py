@@ -16,7 +16,9 @@ Rules:
    X1), never shorter than it takes at its slower axis's speed to go a step of its readings
    beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
    degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
-   the user's to pair with ``settle_s``.
+   the user's to pair with ``settle_s``. A target for a controller that must be stopped first,
+   come while the rotor stands at its target still by the clock with that reading late, waits
+   for it: no stop to a rotor at rest (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
@@ -688,8 +690,9 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
         rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
     if m.state is MOVING:
-        if m.stop_sent_t is None:
-            return Plan.STOP_FIRST
+        if m.stop_sent_t is None:  # (at its target and still by the clock, the reading that
+            came = at_target(m, cfg) and now >= still_from(m, cfg)  # says so late: no stop,
+            return Plan.WAIT if came else Plan.STOP_FIRST  # the target waits for it: rule 2)
         # a stop went out: send another only if a reading since shows it did not take
         return Plan.STOP_FIRST if stop_again(m, cfg, now) else Plan.WAIT
     return Plan.WAIT  # braking (or no reading yet)
@@ -709,6 +712,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             t = m.stop_sent_t + cfg.stop_resend_s
             if t > now and (soonest is None or t < soonest):
                 soonest = t
+        if m.stop_sent_t is not None or at_target(m, cfg):  # (plan_target's at its target)
             t = still_from(m, cfg)
             if t > now and (soonest is None or t < soonest):
                 soonest = t

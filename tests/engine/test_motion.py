@@ -107,6 +107,11 @@ def test_a_rotor_at_its_target_with_its_readings_lost_is_no_stall() -> None:
     m, _ = feed(m, [(10.2, 103), (10.4, 106), (10.6, 109)])
     m, events = mo.tick(m, CFG, 10.6 + CFG.stall_timeout_s + 1)
     assert events == [] and m.state is S.MOVING and mo.at_target(m, CFG)
+    # a new target: a rotor that may still turn its last degrees is stopped first; one at
+    # its target and still by the clock is not (its reading is late): the target waits for it
+    assert mo.plan_target(m, CFG, 10.6 + CFG.settle_s - 0.01) is mo.Plan.STOP_FIRST
+    assert mo.plan_target(m, CFG, 10.6 + CFG.settle_s) is mo.Plan.WAIT
+    assert mo.next_deadline(m, CFG, 10.6) == 10.6 + CFG.settle_s
     m, events = still(m, 10.6 + CFG.stall_timeout_s + 1.1)
     assert events == [mo.Event.ARRIVED]
 
@@ -568,9 +573,11 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
     if m.state is S.MOVING:  # (arrival and a stop come with a reading: rule 2)
         if m.progress_t is not None:
             times.append(m.progress_t + cfg.stall_timeout_s)
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
         if m.stop_sent_t is not None:  # (a stop's repeat: from resend, until still)
-            ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t) if t is not None)
             times += [m.stop_sent_t + cfg.stop_resend_s, ref + cfg.settle_s]
+        elif mo.at_target(m, cfg):  # (plan_target: at its target, no stop once still)
+            times.append(ref + cfg.settle_s)
     if m.state in (S.BRAKING, S.STALLED) and m.still_since_t is not None:
         times.append(m.still_since_t + cfg.brake_delay_s)
     if m.idle_not_before_t is not None:

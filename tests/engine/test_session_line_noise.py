@@ -136,3 +136,82 @@ def test_a_still_rotors_bearing_shown_stays_across_replugs_and_offline_spells(ri
         v.run_for(2.0 + 0.37 * i)  # (the jitter's phase differs each time)
         assert v.status.bearing_deg == shown, i
     assert b";102" in b"".join(data for _, data in v.received)  # (it jittered all along)
+
+
+@pytest.mark.parametrize("how", ["replug", "offline"])
+def test_a_still_rotor_that_last_turned_up_keeps_its_bearing_across_a_reconnect(
+    rig: Rig, how: str
+) -> None:
+    """controller.py ``_lose_motion`` (an attack pass): the connection's first reading opens
+    an assumed brake window, shown as coasting, and the way of travel kept from the last
+    turn (up, long before) let a jitter reading that way through: 102 shown for good."""
+    v = rig("rotorez", emulator={"jitter_deg": 0, "start_az_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.target(100)
+    v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 60, "at 100")
+    v.run_for(10)
+    assert v.status.bearing_deg == 100
+    v.device.jitter_deg = 2  # the pot now reads 100, 102, 100, ... (as a real one may)
+    v.run_for(30)
+    assert v.status.bearing_deg == 100  # at rest: the deadband holds
+    if how == "replug":
+        v.link_down()
+        v.run_for(1.0)
+        v.link_up()
+    else:
+        v.set_silent(True)
+        v.run_for(v.cfg.silence_timeout_s + 1)
+        v.set_silent(False)
+    v.run_until(lambda h: h.status.available, 30, "back")
+    v.run_for(10)
+    assert not v.truth().is_moving and v.truth().az_deg == 100
+    assert v.status.bearing_deg == 100
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
+def test_a_new_target_while_the_reading_that_finds_the_rotor_still_is_lost_sends_no_stop(
+    rig: Rig, model: str
+) -> None:
+    """motion.py ``plan_target`` (an attack pass): the rotor came to its target and stands
+    there; the replies are lost for 2 s (less than the silence timeout) from 0.3 s after it
+    stopped; a new target at 1.9 s. The motion is moving, at its target, until a reading
+    finds it still: the target stopped the rotor first, a stop to a rotor at rest (the
+    Rotor-EZ answers it as invalid), and waited a brake delay from it."""
+    v = rig(model, emulator={"jitter_deg": 0, "start_az_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.target(100)
+    v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 100) < 0.5, 60)
+    v.run_for(0.3)
+    assert v.session.controller.motion.state is MOVING  # (the still reading not yet come)
+    v.set_silent(True)
+    t0 = v.now
+    v.run_for(1.9)
+    v.target(150)
+    v.run_for(0.1)
+    v.set_silent(False)
+    v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 150, 60, "at 150")
+    assert [w.data for w in v.writes if w.t >= t0 and w.data == b";"] == []
+
+
+@pytest.mark.parametrize("model", ["gs232b", "rotorez", "rotorcard"])
+def test_a_replug_whose_first_reading_comes_in_the_last_degrees_shows_where_it_stops(
+    rig: Rig, model: str
+) -> None:
+    """controller.py ``_lose_motion`` (an attack pass; before this change too): the port
+    unplugged mid-turn, back as the rotor comes in; the connection's first reading (58, shown
+    as it is) is 2 degrees short and the rotor stops at 60 a moment later: inside the noise
+    band (no movement) and the deadband (no way of travel known), so the status said 58 for
+    good: the CI symptom, on the replug route. The steps after it until the rotor settles
+    are shown as it turns."""
+    emulator = {"start_az_deg": 10} | ({"jitter_deg": 0} if model != "gs232b" else {})
+    v = rig(model, emulator=emulator)
+    v.run_until_state(IDLE, 30)
+    v.target(60)
+    v.run_until(lambda h: h.truth().az_deg >= 50, 30, "at 50")
+    v.link_down()
+    v.run_for(1.25)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 30, "back")
+    v.run_for(20)
+    assert v.truth().az_deg == 60 and not v.truth().is_moving
+    assert v.status.bearing_deg == 60
