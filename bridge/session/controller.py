@@ -390,7 +390,6 @@ class Controller:
         self.controller_time: str | None = None  # its own clock (SatEL)
         self._silence_reported = False
         self._afresh = False  # status.py rule 1: the next first reading is shown as it is
-        self._afresh_settling = False  # and the steps after it, until the rotor settles
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
@@ -819,11 +818,8 @@ class Controller:
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
         if was.anchor_deg is None and self._afresh:  # (``_lose_motion``)
             self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
-            self._afresh, self._afresh_settling = False, True
+            self._afresh = False
         moving = m.state is mo.MOVING
-        if self._afresh_settling:  # (the connection's settle time, motion.py rule 4: it may
-            self._afresh_settling = m.idle_not_before_t is not None  # turn its last degrees
-            moving = moving or self._afresh_settling  # either way yet: shown as it turns)
         coasting = not moving and (before is mo.MOVING or m.state is mo.BRAKING)
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
@@ -835,11 +831,10 @@ class Controller:
         the motion is rebuilt by ``lose``. A rotor that was turning, or had a target out, may
         be anywhere near when they come back: the first reading then is shown as it is
         (status.py rule 1; a last read: the 2 degrees it turned on from the 58 shown were
-        inside the deadband), and so are the steps after it until the rotor settles (an attack
-        pass: plugged back in 2 degrees short, the rotor's last 2 were not shown). One at rest
-        keeps the bearing shown, and forgets the way of its last turn: a first reading of
-        jitter, or one a noisy line made, would move it (attack passes: 12 changes in 20
-        replugs; a still rotor whose last turn went up showed its jitter up for good)."""
+        inside the deadband). One at rest keeps the bearing shown, and forgets the way of its
+        last turn: a first reading of jitter, or one a noisy line made, would move it (attack
+        passes: 12 changes in 20 replugs; a still rotor whose last turn went up showed its
+        jitter up for good)."""
         m = self.motion
         if m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
             self._afresh = True

@@ -8,8 +8,8 @@ Rules:
    the reading that finds it still and in its brake window (the last degrees of a turn). The
    first reading after readings were lost (the port closed, the controller offline, a SatEL's
    report lost) while the rotor turned or had a target out is shown as it is: it may be
-   anywhere near; so is each step after it until the rotor settles (controller.py
-   ``_lose_motion``). One at rest forgets the way of its last turn then.
+   anywhere near (controller.py ``_lose_motion``). One at rest forgets the way of its last
+   turn then.
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
    ``estimated`` set, the target and the time it should be over; after that the state is

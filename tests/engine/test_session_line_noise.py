@@ -191,27 +191,3 @@ def test_a_new_target_while_the_reading_that_finds_the_rotor_still_is_lost_sends
     v.set_silent(False)
     v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 150, 60, "at 150")
     assert [w.data for w in v.writes if w.t >= t0 and w.data == b";"] == []
-
-
-@pytest.mark.parametrize("model", ["gs232b", "rotorez", "rotorcard"])
-def test_a_replug_whose_first_reading_comes_in_the_last_degrees_shows_where_it_stops(
-    rig: Rig, model: str
-) -> None:
-    """controller.py ``_lose_motion`` (an attack pass; before this change too): the port
-    unplugged mid-turn, back as the rotor comes in; the connection's first reading (58, shown
-    as it is) is 2 degrees short and the rotor stops at 60 a moment later: inside the noise
-    band (no movement) and the deadband (no way of travel known), so the status said 58 for
-    good: the CI symptom, on the replug route. The steps after it until the rotor settles
-    are shown as it turns."""
-    emulator = {"start_az_deg": 10} | ({"jitter_deg": 0} if model != "gs232b" else {})
-    v = rig(model, emulator=emulator)
-    v.run_until_state(IDLE, 30)
-    v.target(60)
-    v.run_until(lambda h: h.truth().az_deg >= 50, 30, "at 50")
-    v.link_down()
-    v.run_for(1.25)
-    v.link_up()
-    v.run_until(lambda h: h.status.available, 30, "back")
-    v.run_for(20)
-    assert v.truth().az_deg == 60 and not v.truth().is_moving
-    assert v.status.bearing_deg == 60
