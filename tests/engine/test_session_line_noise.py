@@ -70,6 +70,19 @@ def test_a_flipped_tens_digit_while_it_settles_at_its_target(rig: Rig) -> None:
     assert min(shown) >= 130, f"published {min(shown)} with the rotor standing at 135"
 
 
+def lose_readings(v: VirtualRotator, how: str) -> None:
+    """The readings lost, then back: the port unplugged a second ("port"), or the replies lost
+    past the silence timeout ("offline")."""
+    if how == "port":
+        v.link_down()
+        v.run_for(1.0)
+        v.link_up()
+    else:
+        v.set_silent(True)
+        v.run_for(v.cfg.silence_timeout_s + 1)
+        v.set_silent(False)
+
+
 # a Rotor-EZ (a brake delay), a RotorCard (none) and a Prosistel (none, tenths); the replies
 # lost for less than the silence timeout, for longer (offline), or the port unplugged a second
 @pytest.mark.parametrize("lost", ["replies", "offline", "port"])
@@ -93,18 +106,13 @@ def test_readings_lost_near_the_target_call_no_arrival_and_its_last_degrees_are_
     assert v.truth().is_moving and v.truth().az_deg < 59.5
     shown = v.status.bearing_deg
     assert shown is not None and shown < 59.5
-    if lost == "port":
-        v.link_down()
-        v.run_for(1.0)
-        v.link_up()
-    else:
+    if lost == "replies":
         v.set_silent(True)
-        quiet_s = v.cfg.motion.settle_s + 0.3 if lost == "replies" else 8.0
-        assert (quiet_s < v.cfg.silence_timeout_s) is (lost == "replies")
-        v.run_for(quiet_s)
-        if lost == "replies":  # no reading: no arrival
-            assert v.status.state is MOVING and v.status.target_az_deg == 60
+        v.run_for(v.cfg.motion.settle_s + 0.3)  # (shorter than the silence timeout)
+        assert v.status.state is MOVING and v.status.target_az_deg == 60  # no reading: no arrival
         v.set_silent(False)
+    else:
+        lose_readings(v, lost)
     v.run_until_state(IDLE, 30)
     v.run_for(10)
     assert v.truth().az_deg == 60 and not v.truth().is_moving
@@ -124,21 +132,14 @@ def test_a_still_rotors_bearing_shown_stays_across_replugs_and_offline_spells(ri
     shown = v.status.bearing_deg
     assert shown is not None and abs(shown - 100) <= 2
     for i in range(8):
-        if i % 2:
-            v.link_down()
-            v.run_for(1.0)
-            v.link_up()
-        else:
-            v.set_silent(True)
-            v.run_for(v.cfg.silence_timeout_s + 1)
-            v.set_silent(False)
+        lose_readings(v, "port" if i % 2 else "offline")
         v.run_until(lambda h: h.status.available, 30, "back")
         v.run_for(2.0 + 0.37 * i)  # (the jitter's phase differs each time)
         assert v.status.bearing_deg == shown, i
     assert b";102" in b"".join(data for _, data in v.received)  # (it jittered all along)
 
 
-@pytest.mark.parametrize("how", ["replug", "offline"])
+@pytest.mark.parametrize("how", ["port", "offline"])
 def test_a_still_rotor_that_last_turned_up_keeps_its_bearing_across_a_reconnect(
     rig: Rig, how: str
 ) -> None:
@@ -154,14 +155,7 @@ def test_a_still_rotor_that_last_turned_up_keeps_its_bearing_across_a_reconnect(
     v.device.jitter_deg = 2  # the pot now reads 100, 102, 100, ... (as a real one may)
     v.run_for(30)
     assert v.status.bearing_deg == 100  # at rest: the deadband holds
-    if how == "replug":
-        v.link_down()
-        v.run_for(1.0)
-        v.link_up()
-    else:
-        v.set_silent(True)
-        v.run_for(v.cfg.silence_timeout_s + 1)
-        v.set_silent(False)
+    lose_readings(v, how)
     v.run_until(lambda h: h.status.available, 30, "back")
     v.run_for(10)
     assert not v.truth().is_moving and v.truth().az_deg == 100
