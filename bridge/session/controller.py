@@ -838,8 +838,8 @@ class Controller:
         m = self.motion
         if m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
             self._afresh = True
-        else:  # (the way of its last turn, however long ago, is no way it turns after: an
-            self.az_shown.direction = self.el_shown.direction = 0  # attack pass, D1 below)
+        else:  # (the way of its last turn, however long ago, is no way it turns after)
+            self.az_shown.direction = self.el_shown.direction = 0
         self.motion = lose(m)
 
     def _unasked(self, was: mo.Motion, now: float) -> None:
