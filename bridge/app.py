@@ -111,6 +111,8 @@ def worker_config(
             # readings while moving come at most 1.5 intervals apart (link.py rule 8), each an
             # exchange long: the rotor may have stopped that long before the last change showed
             poll_margin_s=1.5 * r.moving_poll_interval_s + spec.exchange_time_s(r.effective_baud),
+            az_limits_deg=(az_min, az_max),
+            el_limits_deg=r.effective_el_limits,
         ),
         idle_poll_interval_s=r.effective_idle_poll_interval_s,
         moving_poll_interval_s=r.moving_poll_interval_s,
@@ -171,7 +173,12 @@ def axis_configs(
         own = r.axis_settings(axis)
         cfg = worker_config(own, sky, follow)
         pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
-        motion = replace(cfg.motion, spec=spec)
+        # (motion.py rule 10: each box held to the rotator's limits, as the judge holds it)
+        limits = (
+            (pointing.az_min_deg, pointing.az_max_deg),
+            (pointing.el_min_deg, pointing.el_max_deg),
+        )
+        motion = replace(cfg.motion, spec=spec, az_limits_deg=limits[0], el_limits_deg=limits[1])
         wind = cfg.wind
         if axis is Axis.AZIMUTH and pointing.park is not None:
             # the park's azimuth alone: the azimuth box turns no elevation, and judged with

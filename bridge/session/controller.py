@@ -180,7 +180,8 @@ GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online t
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
-_PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK)  # stops.py rule 4: a bounded stop series
+#: stops.py rule 4: a bounded stop series
+_PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK, mo.Event.PAST_LIMIT)
 
 
 def _turned(

@@ -92,6 +92,18 @@ Rules:
    ``reading``'s, which ends with ``tick``, or one a stop or a target made since at ``t0``)
    stays as it is at every time before ``next_deadline(m, cfg, t0)``, so the controller does not
    tick it before then (controller.py ``tick``).
+10. Limits hold on the way too (pointing.py rule 4 holds them for targets): while a target is
+   out, a reading that shows an axis moved outward (more than ``noise_deg`` from where it last
+   moved since the target went out, rule 5's) to more than ``noise_deg`` beyond a limit it is
+   held to (``az_limits_deg``, ``el_limits_deg``: the judge's raw ones) is ``past limit``: the
+   target dropped and the rotor stopped at once, as a pass is. The controller is heading
+   elsewhere: a GS-232 target frame is one flipped bit from a jog (``W`` to ``U``, up until
+   stopped: an attack pass ran an elevation held to 90 degrees to 103, and a pass 10 degrees
+   beyond the target told it only there). The elevation always; the azimuth on a scale that
+   does not wrap (a wrapping controller picks its own way round, which may sweep past a
+   limit); neither on a box that does not turn it (a composite's elevation box's azimuth). A
+   rotor outside a limit (set narrower since, or turned there by hand) that a target brings
+   back moves inward; its jitter is no movement (rule 1).
 """
 
 from __future__ import annotations
@@ -126,6 +138,9 @@ class MotionConfig:
     nominal_speed_deg_s: float = 6.0
     stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
     poll_margin_s: float = 0.2  # readings while moving come this often (rule 4)
+    # rule 10: the raw limits each axis is held to (pointing.py rule 4's, the judge's)
+    az_limits_deg: tuple[float, float] = (-math.inf, math.inf)
+    el_limits_deg: tuple[float, float] = (-math.inf, math.inf)
 
     @property
     def can_report_position(self) -> bool:
@@ -199,6 +214,7 @@ class Event(enum.StrEnum):
     TURNED_AWAY = "turned away"
     PASSED = "passed"  # rule 5: turned on past its target
     TURNED_BACK = "turned back"  # rule 5: a wrapping azimuth turned back on its way
+    PAST_LIMIT = "past limit"  # rule 10: turned on beyond a limit while a target was out
 
 
 class Plan(enum.StrEnum):
@@ -314,6 +330,9 @@ def reading(
             changes["progress_t"] = now
     if changes:
         m = _with(m, changes)
+    if moved and m.target_deg is not None and _outward_past_limit(m, cfg):  # rule 10
+        m, events = tick(_dropped(m), cfg, now, read=True)
+        return m, [Event.PAST_LIMIT, *events]
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
         if passed is not None:  # rule 5
@@ -334,6 +353,49 @@ def reading(
                 m, events = tick(_dropped(m), cfg, now, read=True)
                 return m, [Event.TURNED_AWAY, *events]
     return tick(m, cfg, now, read=True)
+
+
+def _outward_past_limit(m: Motion, cfg: MotionConfig) -> bool:
+    """Rule 10: whether ``m``'s reading shows an axis moved outward beyond a limit (by more
+    than ``noise_deg`` each: from where that axis last moved, and past the limit)."""
+    noise, spec = cfg.noise_deg, cfg.spec
+    el = m.el_position_deg
+    if el is not None and spec.has_elevation:
+        low, high = cfg.el_limits_deg
+        since = m.el_from_deg
+        if (el > high + noise or el < low - noise) and (
+            since is not None and abs(el - since) > noise and (el > high) is (el > since)
+        ):
+            return True
+    az = m.position_deg
+    if az is None or spec.az_wraps or not spec.turns_azimuth:
+        return False
+    low, high = cfg.az_limits_deg
+    since = m.az_from_deg
+    return (az > high + noise or az < low - noise) and (
+        since is not None and abs(az - since) > noise and (az > high) is (az > since)
+    )
+
+
+def past_limit(m: Motion, cfg: MotionConfig) -> tuple[str, float, str] | None:
+    """Rule 10, in words: the axis ``m`` has beyond a limit it is held to by more than
+    ``noise_deg`` (``"elevation"`` or ``"azimuth"``), that limit, and its setting's name."""
+    noise, spec = cfg.noise_deg, cfg.spec
+    el = m.el_position_deg
+    if el is not None and spec.has_elevation:
+        low, high = cfg.el_limits_deg
+        if el > high + noise:
+            return "elevation", high, "el_max_deg"
+        if el < low - noise:
+            return "elevation", low, "el_min_deg"
+    az = m.position_deg
+    if az is not None and not spec.az_wraps and spec.turns_azimuth:
+        low, high = cfg.az_limits_deg
+        if az > high + noise:
+            return "azimuth", high, "az_max_deg"
+        if az < low - noise:
+            return "azimuth", low, "az_min_deg"
+    return None
 
 
 def _dropped(m: Motion) -> Motion:

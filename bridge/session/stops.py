@@ -57,14 +57,14 @@ Rules:
    a heard one included (the safe side; a review: a deaf burst ate a STOP and the target
    after it, and the rotor ran on, back online, to the bearing before both).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
-   stopped once it comes to rest; one that turned on past it or turned back on its way, and a
-   rotor still turning to the bearing before a new one the controller refused, are stopped
-   at once. Each ends
+   stopped once it comes to rest; one that turned on past it, turned back on its way or past
+   a limit (motion.py rule 10), and a rotor still turning to the bearing before a new one the
+   controller refused, are stopped at once. Each ends
    tracking. Such a stop is written at once, whatever the line is doing (link.py
    ``write_stop``: a motor driving a jammed rotor does not wait for a reply to end), and is
    owed as any (rule 3). The pass's and the refusal's, written while the rotor turns, are
    that turn's stop for rules 1, 2 and 3: checked and owed as an operator's (a pass comes of
-   a line that lost a frame), but for the end: the pass's is sent again
+   a line that lost a frame), but for the end: the pass's (the limit's too) is sent again
    STOP_TRIES_BEFORE_ERROR times at most, and with the error the rotor is left alone (a hand
    at the panel in the settle time after an arrival looks like a pass: stopped four times at
    most, not fought on, and owed to no silence after); a stop anew meanwhile, or one owed
@@ -287,6 +287,19 @@ class Stops:
         ``shown``: the bearing the user sees there (pointing.py: ``m``'s is the controller's
         own), in the error's words."""
         pos = m.position_deg if shown is None else shown
+        where = f"{pos:g}°"  # (an elevation's pass is told with the elevation: an attack pass)
+        if m.el_position_deg is not None and cfg.spec.has_elevation:
+            el = f"elevation {m.el_position_deg:g}°"
+            where = f"{where}, {el}" if cfg.spec.turns_azimuth else el
+        if event is mo.Event.PAST_LIMIT:
+            past = mo.past_limit(m, cfg)
+            limit = "a limit" if past is None else f"its {past[0]} limit, {past[1]:g}° ({past[2]})"
+            why = (
+                f"rotor turned past {limit} on its way to its target, now at {where} (a command "
+                "garbled on the line, or a hand at the panel): target dropped and the rotor "
+                "stopped; send the target again"
+            )
+            return Verdict(True, Report(ErrorKind.STALLED, why), "past a limit")
         if event is mo.Event.STALLED:
             why = (
                 f"rotor stalled at {pos:g}° (no progress for {cfg.stall_timeout_s:g} s): brake "
@@ -303,14 +316,14 @@ class Stops:
             return Verdict(False, Report(ErrorKind.STALLED, why), "turned by hand")
         if event is mo.Event.PASSED:
             why = (
-                f"rotor turned on past its target, now at {pos:g}° (the target may never have "
+                f"rotor turned on past its target, now at {where} (the target may never have "
                 "reached the controller, or a hand at the panel): target dropped and the rotor "
                 "stopped; send the target again"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "passed its target")
         if event is mo.Event.TURNED_BACK:  # (stopped as a pass is: at once, a bounded series)
             why = (
-                f"rotor turned back on its way to its target, now at {pos:g}° (a command "
+                f"rotor turned back on its way to its target, now at {where} (a command "
                 "garbled on the line, or a hand at the panel): target dropped and the rotor "
                 "stopped; send the target again"
             )

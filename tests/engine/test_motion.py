@@ -388,6 +388,69 @@ def test_a_rotor_that_turns_on_past_its_target_passed_it() -> None:
     assert events == [mo.Event.PASSED] and m.target_deg is None, readings
 
 
+HELD = mo.MotionConfig(
+    REGISTRY["gs232b"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=0, settle_s=1.5,
+    noise_deg=2, el_limits_deg=(0.0, 90.0),
+)  # fmt: skip
+
+
+def held_moving_to(el_from: float, el_target: float, az: float = 100.0) -> mo.Motion:
+    m = mo.link_up(mo.Motion(), HELD, 0)
+    m, _ = mo.reading(m, HELD, az, 0.0, el_from)
+    m, _ = mo.tick(m, HELD, 2.0)
+    return mo.commanded(m, HELD, az, 10.0, el_target)
+
+
+def feed_el(m: mo.Motion, els: list[float], t0: float = 10.0, cfg: mo.MotionConfig = HELD):
+    events: list[mo.Event] = []
+    for i, el in enumerate(els, 1):
+        assert m.position_deg is not None
+        m, ev = mo.reading(m, cfg, m.position_deg, t0 + 0.5 * i, el)
+        events += ev
+    return m, events
+
+
+def test_an_elevation_turning_on_past_its_limit_is_stopped_there() -> None:
+    """Rule 10 (an attack pass: a GS-232 target frame one flipped bit from ``U``, up until
+    stopped, ran an elevation held to 90 degrees to 103, told only by a pass 10 degrees beyond
+    its target): a movement outward beyond the limit by more than the noise drops the target
+    and tells ``past limit``; the reading and the limit are in its words."""
+    m = held_moving_to(80, 89)
+    m, events = feed_el(m, [81, 83, 85, 87, 89, 91, 92])
+    assert events == [] and m.el_target_deg == 89  # at the limit and within the noise of it
+    m, events = feed_el(m, [94], 13.5)
+    assert events[:1] == [mo.Event.PAST_LIMIT] and m.target_deg is m.el_target_deg is None
+    assert mo.past_limit(m, HELD) == ("elevation", 90.0, "el_max_deg")
+    # below the horizon the same, and on a scale that does not wrap the azimuth too
+    m, events = feed_el(held_moving_to(10, 2), [8, 5, 2, -1, -4])
+    assert events[:1] == [mo.Event.PAST_LIMIT], events
+    assert mo.past_limit(m, HELD) == ("elevation", 0.0, "el_min_deg")
+    spid = replace(SPID, az_limits_deg=(-180.0, 200.0))
+    m = mo.commanded(spid_moving_to(120), spid, 190, 10.0)
+    m, events = feed(m, [(10.5, 180), (11.0, 190), (11.5, 200), (12.0, 205)], spid)
+    assert events[:1] == [mo.Event.PAST_LIMIT] and mo.past_limit(m, spid)[:2] == ("azimuth", 200)
+
+
+def test_a_rotor_outside_a_limit_brought_back_or_jittering_there_is_no_limit_crossed() -> None:
+    """Rule 10: a rotor a narrower limit leaves outside (or a hand turned there) moves inward
+    to a target inside; its jitter out there, with the azimuth turning, is no movement of
+    the elevation; and a wrapping azimuth is never judged (its controller picks its way)."""
+    m = held_moving_to(97, 60, az=100)
+    m = mo.commanded(m, HELD, 200, 10.0, 60)  # the azimuth turns, the elevation jitters
+    readings = [(106, 98), (112, 97), (118, 99), (124, 98), (130, 99)]
+    events: list[mo.Event] = []
+    for i, (az, el) in enumerate(readings, 1):
+        m, ev = mo.reading(m, HELD, az, 10 + 0.5 * i, el)
+        events += ev
+    assert events == [] and m.el_target_deg == 60
+    m, events = feed_el(m, [95, 92, 89, 85], 13.0)
+    assert events == [] and m.el_target_deg == 60
+    wrapping = replace(CFG, az_limits_deg=(20.0, 340.0))
+    m = mo.commanded(ready(az=330), wrapping, 10, 10.0)  # the long way round a stop at north
+    m, events = feed(m, [(10.5, 334), (11.0, 338), (11.5, 342), (12.0, 346), (12.5, 350)], wrapping)
+    assert mo.Event.PAST_LIMIT not in events
+
+
 def test_a_coast_or_one_stray_reading_past_the_target_is_no_pass() -> None:
     """Rule 5: the few degrees a rotor coasts on past its target (within the margin), or one
     corrupt reading far past it, is no controller heading elsewhere."""

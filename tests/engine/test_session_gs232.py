@@ -361,3 +361,29 @@ def test_replies_lost_across_a_stop_that_took_send_no_second_stop(rig: Rig) -> N
     v.run_for(5)
     assert not v.truth().is_moving and v.truth().az_deg < 200
     assert [w.t - t0 for w in v.writes if w.t >= t0 and w.data == b"S\r"] == [0.0]
+
+
+def test_a_target_garbled_into_a_jog_up_is_stopped_past_the_elevation_limit(rig: Rig) -> None:
+    """motion.py rule 10 (an attack pass): a target frame is one flipped bit from a jog (``W``
+    0x57, ``U`` 0x55: up until stopped; K3NG goes by the first letter alone). With the
+    elevation held to 90 degrees, the rotor climbed through its target, 89, to 103 before a
+    pass 10 degrees beyond it was told. It is stopped just past its limit now, and the error
+    says which limit, and where the rotor is on both axes."""
+    v = rig(
+        "gs232b",
+        emulator={**FAST, "start_az_deg": 100, "start_el_deg": 10},
+        settings={"el_max_deg": 90},
+    )
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.garble_writes(b"W100 089\r", b"U\r")
+    v.target(100, 89)
+    v.run_until(lambda h: b"S\r" in h.sent(since=t), 60, "a stop")
+    v.run_until_state(IDLE, 10)
+    truth = v.truth()
+    assert not truth.is_moving and truth.el_deg is not None and truth.el_deg < 95, truth
+    said = v.errors("stalled", since=t)
+    assert len(said) == 1, said
+    assert "elevation limit, 90° (el_max_deg)" in said[0].message, said[0].message
+    assert f"now at 100°, elevation {v.status.elevation_deg:g}°" in said[0].message
+    assert v.sent(since=t).count(b"S\r") == 1 and v.status.target_el_deg is None
