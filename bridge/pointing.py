@@ -28,7 +28,9 @@ Rules:
    station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
    target while one is being approached, turning or braking, else to the bearing; never to a
    target a stop put before it dropped, though the status it is made from predates that stop:
-   runtime/rotator.py ``_seen``).
+   runtime/rotator.py ``_seen``). A nudge is less than a turn each way: a step of 360 degrees
+   or more is refused (an attack pass: ``1e308`` turned a rotor to its remainder, 296, and
+   ``720`` was taken as no step at all).
 7. A place without a direction from the station is refused: the station's own position (no
    bearing at all) and its antipode, where every direction is a great circle of the same
    length (a locator's centre has one: JO62qm's is AD67ql). Anything short of these has a
@@ -48,6 +50,8 @@ from bridge.core import geo
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
 from bridge.protocols.base import ModelSpec, half_up
+
+MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
 
 
 def norm360(deg: float) -> float:
@@ -259,6 +263,13 @@ class Pointing:
         (its target dropped: the nudge is from the bearing)."""
         if not d_az and not d_el:
             raise Refused(RefusalCode.INVALID, "a nudge of 0 degrees moves nothing")
+        for step, axis in ((d_az, "azimuth"), (d_el or 0.0, "elevation")):
+            if not -MAX_NUDGE_DEG < step < MAX_NUDGE_DEG:
+                raise Refused(
+                    RefusalCode.INVALID,
+                    f"a nudge of {step:g} degrees in {axis} is a turn or more: a nudge is less "
+                    f"than {MAX_NUDGE_DEG:g} degrees either way",
+                )
         # from the target while the rotor is on its way (turning, braking before it turns, or
         # idle with a target still waiting to go out, as a rotor with no brake is while it
         # settles: a second press of a nudge button adds to the first), else from the bearing

@@ -108,6 +108,18 @@ def test_presets_park_and_nudges_become_true_bearings() -> None:
     assert p.judge(Target(p.nudged(near, 10, None)[0], 0), 355).az_deg == 365
 
 
+@pytest.mark.parametrize("step", [(1e308, None), (-1e300, None), (720, None), (360, None),
+                                  (-360, None), (10, 1e308), (0, -400)])  # fmt: skip
+def test_a_nudge_of_a_turn_or_more_is_refused(step: tuple[float, float | None]) -> None:
+    """Rule 6 (an attack pass): ``1e308`` on ``R/nudge`` turned the rotor to its remainder,
+    296 degrees, ``-1e300`` to north, and ``720`` was taken as no step at all; each is refused
+    now, and a step just short of a turn is still a nudge."""
+    p = Pointing.of(SPID)
+    still = RotatorStatus("t", MotionState.IDLE, bearing_deg=100, elevation_deg=10)
+    assert refused(p.nudged, still, *step) is RefusalCode.INVALID
+    assert p.nudged(still, 359.5, -89) == (99.5, -79)
+
+
 def test_a_place_becomes_the_great_circle_bearing_from_the_station() -> None:
     berlin, tokyo = geo.parse_locator("JO62qm"), geo.parse_locator("PM95vq")
     az, info = toward(berlin, *tokyo, locator="PM95vq")
