@@ -213,3 +213,15 @@ def test_only_ascii_numbers_and_one_name_per_axis(parse, raw: bytes, why: str) -
     {"az": 30, "azimuth": 181} silently went to 181."""
     with pytest.raises(pl.PayloadError, match=why):
         parse(raw)
+
+
+@pytest.mark.parametrize(
+    "lines",
+    [["N" * 65, "1 a", "2 b"], ["SAT\u202e", "1 a", "2 b"], ["SAT", "1 a\x1b[2J", "2 b"]],
+)
+def test_a_tles_name_and_lines_are_held_to_a_bare_names_rules(lines: list[str]) -> None:
+    """An attack pass: the name line of ``{"tle": [...]}`` skipped the bare name's checks, so
+    a line break, terminal escapes or a bidi override reached the log and the retained state."""
+    with pytest.raises(pl.PayloadError, match="at most 64 printable characters"):
+        pl.parse_track(json.dumps({"tle": lines}).encode())
+    assert pl.parse_track(json.dumps({"tle": ["N" * 64, "1 a", "2 b"]}).encode())[0] == "N" * 64

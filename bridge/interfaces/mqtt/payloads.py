@@ -230,6 +230,13 @@ def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
     if len(strings) == 2:
         strings.insert(0, "")
     name, line1, line2 = strings
+    # (the name is shown and logged as a bare one is: an attack pass sent a line break and
+    # terminal escapes in it, a log line forged and the retained state carrying them)
+    if len(name) > MAX_NAME_CHARS or not all(line.isprintable() for line in strings):
+        raise PayloadError(
+            f"track: the TLE's name is at most {MAX_NAME_CHARS} printable characters, and its "
+            "lines printable text"
+        )
     name = name or line1[2:7].strip()  # the catalog number, as a TLE file without names
     return name, (name, line1, line2)
 
