@@ -129,8 +129,9 @@ def test_every_key_says_what_it_means_and_what_leaving_it_out_does(
 COMPANIONS: dict[str, dict[str, Any]] = {
     "latitude_deg": {"longitude_deg": 13.4},
     "longitude_deg": {"latitude_deg": 52.5},
-    "cert_file": {"key_file": "/etc/rotor-bridge/client.key"},
-    "key_file": {"cert_file": "/etc/rotor-bridge/client.crt"},
+    "ca_file": {"enabled": True},  # (files without TLS enabled are refused)
+    "cert_file": {"key_file": "/etc/rotor-bridge/client.key", "enabled": True},
+    "key_file": {"cert_file": "/etc/rotor-bridge/client.crt", "enabled": True},
     "park_el_deg": {"park_az_deg": 0},
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},

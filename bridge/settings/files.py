@@ -26,6 +26,12 @@ def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path
     for name, f in (("ca_file", ca_file), ("cert_file", cert_file), ("key_file", key_file)):
         if f is not None and not f.is_file():
             raise ValueError(f"{name} {f} is not a readable file")
+        if f is not None and name == "key_file" and f.stat().st_mode & stat.S_IROTH:
+            raise ValueError(  # (as password_file: a private key is a secret too)
+                f"key_file {f} is readable by every user; let only the user that runs "
+                "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
+                "chmod 640)"
+            )
         try:
             if f is not None:
                 f.open("rb").close()
@@ -64,9 +70,17 @@ def read_password_file(path: Path) -> str:
         text = path.read_text()
     except OSError as exc:
         raise ValueError(f"password_file {path}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"password_file {path} is not UTF-8 text") from None
     if mode & (stat.S_IROTH | stat.S_IWOTH):
         raise ValueError(
             f"password_file {path} is readable by every user; let only the user that runs "
             "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
         )
-    return text.strip("\r\n")
+    password = text.strip("\r\n")
+    if not password or "\n" in password or "\r" in password:
+        raise ValueError(
+            f"password_file {path} must hold the password on one line (it holds "
+            f"{'nothing' if not password else 'several lines'})"
+        )
+    return password

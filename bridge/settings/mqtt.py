@@ -48,10 +48,14 @@ class _Strict(BaseModel):
 
 class TlsSettings(_Strict):
     """``[mqtt.tls]``: an encrypted connection to the broker, with a client certificate if the
-    broker asks for one. Every file is checked while the configuration loads."""
+    broker asks for one. Every file is checked while the configuration loads; a file given with
+    ``enabled`` false is refused (the connection would not be encrypted)."""
 
     enabled: bool = Field(
-        False, description="connect with TLS (the broker's TLS port, usually 8883)", examples=[True]
+        False,
+        description="connect with TLS (the broker's TLS port, usually 8883); the files below "
+        "are refused without it",
+        examples=[True],
     )
     ca_file: Path | None = Field(
         None,
@@ -85,6 +89,13 @@ class TlsSettings(_Strict):
         # loaded here as the MQTT client will load them, so a bad file is a config error now and
         # not a traceback at start (paho's tls_set would raise it)
         check_tls_files(self.ca_file, self.cert_file, self.key_file)
+        given = [n for n in ("ca_file", "cert_file", "key_file") if getattr(self, n) is not None]
+        if given and not self.enabled:  # (an attack pass: the password went out in the clear)
+            raise ValueError(
+                f"{', '.join(given)} given but enabled is false: the bridge would connect "
+                "without TLS (and send a password in the clear); set enabled = true, or leave "
+                "the files out"
+            )
         return self
 
 
@@ -181,6 +192,13 @@ class MqttSettings(_Strict):
     @classmethod
     def _topic(cls, v: str) -> str:
         return check_topic(v)
+
+    @field_validator("host")
+    @classmethod
+    def _host(cls, v: str) -> str:
+        if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
+            raise ValueError(f"a host name or address, got {v!r}")
+        return v
 
     @model_validator(mode="after")
     def _password_file(self) -> MqttSettings:

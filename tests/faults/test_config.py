@@ -87,6 +87,8 @@ CASES: list[tuple[str, str | bytes, str]] = [
         "go together",
     ),  # fmt: skip
     ("tls ca missing", BASE + '[mqtt.tls]\nenabled = true\nca_file = "/nope.crt"\n', "mqtt.tls"),
+    ("host empty", edit('host = "127.0.0.1"', 'host = ""'), "mqtt.host"),  # (paho's traceback)
+    ("host with a space", edit('host = "127.0.0.1"', 'host = "broker lan"'), "mqtt.host"),
     ("rotator singular", edit("[[rotators]]", "[[rotator]]"), "did you mean [[rotators]]?"),
     ("typo in a table", edit("[mqtt]", "[mqtt_]"), "unknown table [mqtt_]: did you mean [mqtt]?"),
     ("missing key", edit('model = "rotorez"\n', ""), "rotators[0].model: missing"),
@@ -331,6 +333,54 @@ def test_tls_files_that_cannot_be_used_are_exit_2_and_one_message(
         assert SECRET not in err and "Traceback" not in err, (why, err)
     out = run_cli("run", "-c", str(path))  # the real process too
     assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [(b"one\ntwo\n", "on one line (it holds several lines)"), (b"\n", "(it holds nothing)"),
+     (b"\xff\xfe", "is not UTF-8 text")],
+)  # fmt: skip
+def test_a_password_file_of_no_one_line_password_is_exit_2_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes, said: str
+) -> None:
+    """An attack pass: two lines became a password with a line break in it, an empty file
+    \"a password\", and a file not UTF-8 a message that named no field."""
+    secret = tmp_path / "pw"
+    secret.write_bytes(content)
+    secret.chmod(0o600)
+    path = tmp_path / "pw.toml"
+    path.write_text(edit(f'password = "{SECRET}"', f"password_file = {str(secret)!r}"))
+    code, out, err = run_main(capsys, "check-config", "-c", str(path))
+    assert (code, out) == (2, "") and f"password_file {secret} " in err and said in err, err
+
+
+def test_tls_files_with_tls_not_enabled_are_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
+) -> None:
+    """An attack pass: ``[mqtt.tls]`` with its files and port 8883 but ``enabled`` left out
+    said "no TLS" and "config OK", and the bridge sent its password in the clear."""
+    path = tmp_path / "tls.toml"
+    path.write_text(BASE + f"[mqtt.tls]\nca_file = {str(pki.dir / 'ca.crt')!r}\n")
+    for command in ("run", "check-config"):
+        code, out, err = run_main(capsys, command, "-c", str(path))
+        assert (code, out) == (2, ""), err
+        assert "mqtt.tls: ca_file given but enabled is false" in err and SECRET not in err, err
+
+
+def test_a_key_file_every_user_may_read_is_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
+) -> None:
+    """An attack pass: a private key readable by all was taken, where such a password file is
+    refused."""
+    key = tmp_path / "client.key"
+    key.write_bytes(pki.path("client.key").read_bytes())
+    key.chmod(0o644)
+    crt = pki.dir / "client.crt"
+    tls = f"[mqtt.tls]\nenabled = true\ncert_file = {str(crt)!r}\nkey_file = {str(key)!r}\n"
+    path = tmp_path / "key.toml"
+    path.write_text(BASE + tls)
+    code, out, err = run_main(capsys, "check-config", "-c", str(path))
+    assert (code, out) == (2, "") and f"key_file {key} is readable by every user" in err, err
 
 
 # -- random documents shaped like the schema ---------------------------------------------------
