@@ -93,10 +93,14 @@ Rules:
    stays as it is at every time before ``next_deadline(m, cfg, t0)``, so the controller does not
    tick it before then (controller.py ``tick``).
 10. Limits hold on the way too (pointing.py rule 4 holds them for targets): while a target is
-   out, a reading that shows an axis moved outward (more than ``noise_deg`` from where it last
-   moved since the target went out, rule 5's) to more than ``noise_deg`` beyond a limit it is
-   held to (``az_limits_deg``, ``el_limits_deg``: the judge's raw ones) is ``past limit``: the
-   target dropped and the rotor stopped at once, as a pass is. The controller is heading
+   out, two readings in a row more than ``tolerance_deg + noise_deg`` beyond a limit an axis
+   is held to (``az_limits_deg``, ``el_limits_deg``: the judge's raw ones), the second further
+   out than the first and more than ``noise_deg`` from where that axis last moved since the
+   target went out (rule 5's), are ``past limit`` (``Motion.past`` says which): the target
+   dropped and the rotor stopped at once, as a pass is. Not one reading (a review: one digit
+   flipped, 86 read as 96, stopped a rotor short of its target at 89 and ended tracking), and
+   not the coast of a turn to a target at its limit (arrival allows ``tolerance_deg``; a
+   review: a SPID's elevation read -0.1 at 0). The controller is heading
    elsewhere: a GS-232 target frame is one flipped bit from a jog (``W`` to ``U``, up until
    stopped: an attack pass ran an elevation held to 90 degrees to 103, and a pass 10 degrees
    beyond the target told it only there). The elevation always; the azimuth on a scale that
@@ -170,6 +174,9 @@ Watch = tuple[float, float | None, int]
 #: closed in on it (two at most: two, it heads for it), its closest error since the first of
 #: them, and the error of a first movement back (or None)
 Back = tuple[int, float, float | None]
+#: rule 10: the axis that turned on past its limit ("azimuth" or "elevation"), its reading
+#: and that limit (the controller's values), and the limit's setting
+Past = tuple[str, float, float, str]
 
 
 @dataclass(frozen=True)
@@ -204,6 +211,7 @@ class Motion:
     # since the target went out: the shared anchor of rule 1 moves with either axis
     az_from_deg: float | None = None
     el_from_deg: float | None = None
+    past: Past | None = None  # rule 10: the limit the last target's turn went past, if it did
 
 
 class Event(enum.StrEnum):
@@ -330,9 +338,11 @@ def reading(
             changes["progress_t"] = now
     if changes:
         m = _with(m, changes)
-    if moved and m.target_deg is not None and _outward_past_limit(m, cfg):  # rule 10
-        m, events = tick(_dropped(m), cfg, now, read=True)
-        return m, [Event.PAST_LIMIT, *events]
+    if moved and m.target_deg is not None:  # rule 10
+        past = _past_limit(before, m, cfg)
+        if past is not None:
+            m, events = tick(_dropped(replace(m, past=past)), cfg, now, read=True)
+            return m, [Event.PAST_LIMIT, *events]
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
         if passed is not None:  # rule 5
@@ -355,47 +365,54 @@ def reading(
     return tick(m, cfg, now, read=True)
 
 
-def _outward_past_limit(m: Motion, cfg: MotionConfig) -> bool:
-    """Rule 10: whether ``m``'s reading shows an axis moved outward beyond a limit (by more
-    than ``noise_deg`` each: from where that axis last moved, and past the limit)."""
-    noise, spec = cfg.noise_deg, cfg.spec
-    el = m.el_position_deg
-    if el is not None and spec.has_elevation:
+def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
+    """Rule 10: the axis ``m``'s reading shows turned on outward beyond a limit (the first
+    found, the elevation's first), or None."""
+    spec, margin, noise = cfg.spec, cfg.tolerance_deg + cfg.noise_deg, cfg.noise_deg
+    if spec.has_elevation:
         low, high = cfg.el_limits_deg
-        since = m.el_from_deg
-        if (el > high + noise or el < low - noise) and (
-            since is not None and abs(el - since) > noise and (el > high) is (el > since)
-        ):
-            return True
-    az = m.position_deg
-    if az is None or spec.az_wraps or not spec.turns_azimuth:
-        return False
-    low, high = cfg.az_limits_deg
-    since = m.az_from_deg
-    return (az > high + noise or az < low - noise) and (
-        since is not None and abs(az - since) > noise and (az > high) is (az > since)
-    )
-
-
-def past_limit(m: Motion, cfg: MotionConfig) -> tuple[str, float, str] | None:
-    """Rule 10, in words: the axis ``m`` has beyond a limit it is held to by more than
-    ``noise_deg`` (``"elevation"`` or ``"azimuth"``), that limit, and its setting's name."""
-    noise, spec = cfg.noise_deg, cfg.spec
-    el = m.el_position_deg
-    if el is not None and spec.has_elevation:
-        low, high = cfg.el_limits_deg
-        if el > high + noise:
-            return "elevation", high, "el_max_deg"
-        if el < low - noise:
-            return "elevation", low, "el_min_deg"
-    az = m.position_deg
-    if az is not None and not spec.az_wraps and spec.turns_azimuth:
+        way = _beyond(
+            before.el_position_deg, m.el_position_deg, m.el_from_deg, low, high, margin, noise
+        )
+        if way:
+            assert m.el_position_deg is not None
+            return (
+                "elevation",
+                m.el_position_deg,
+                *((high, "el_max_deg") if way > 0 else (low, "el_min_deg")),
+            )
+    if spec.turns_azimuth and not spec.az_wraps:
         low, high = cfg.az_limits_deg
-        if az > high + noise:
-            return "azimuth", high, "az_max_deg"
-        if az < low - noise:
-            return "azimuth", low, "az_min_deg"
+        way = _beyond(before.position_deg, m.position_deg, m.az_from_deg, low, high, margin, noise)
+        if way:
+            assert m.position_deg is not None
+            return (
+                "azimuth",
+                m.position_deg,
+                *((high, "az_max_deg") if way > 0 else (low, "az_min_deg")),
+            )
     return None
+
+
+def _beyond(
+    last: float | None,
+    pos: float | None,
+    since: float | None,
+    low: float,
+    high: float,
+    margin: float,
+    noise: float,
+) -> int:
+    """Rule 10, one axis: 1 (-1) if this reading (``pos``) and the one before (``last``) are
+    both more than ``margin`` above its high limit (below its low one), this one further out
+    and more than ``noise`` from where the axis last moved (``since``); else 0."""
+    if last is None or pos is None or since is None:
+        return 0
+    if pos > last > high + margin and pos - since > noise:
+        return 1
+    if pos < last < low - margin and since - pos > noise:
+        return -1
+    return 0
 
 
 def _dropped(m: Motion) -> Motion:
@@ -582,6 +599,7 @@ def commanded(
         el_pass=_there(m.el_position_deg, el_target_deg, cfg),
         az_from_deg=m.position_deg,
         el_from_deg=m.el_position_deg,
+        past=None,
         away_err=None,
         az_back=None,
         # rule 5: sent while it turns, the readings of twice the settle time may be of the way

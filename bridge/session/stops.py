@@ -292,12 +292,15 @@ class Stops:
             el = f"elevation {m.el_position_deg:g}°"
             where = f"{where}, {el}" if cfg.spec.turns_azimuth else el
         if event is mo.Event.PAST_LIMIT:
-            past = mo.past_limit(m, cfg)
-            limit = "a limit" if past is None else f"its {past[0]} limit, {past[1]:g}° ({past[2]})"
+            beyond = "a limit"
+            if m.past is not None:
+                axis, at, limit, setting = m.past
+                scale = " on the controller's scale" if axis == "azimuth" else ""
+                beyond = f"its {axis} limit: {at:g}°{scale}, beyond {setting} {limit:g}°"
             why = (
-                f"rotor turned past {limit} on its way to its target, now at {where} (a command "
-                "garbled on the line, or a hand at the panel): target dropped and the rotor "
-                "stopped; send the target again"
+                f"rotor turned past {beyond}, on its way to its target; now at {where} (a "
+                "command garbled on the line, or a hand at the panel): target dropped and the "
+                "rotor stopped; send the target again"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "past a limit")
         if event is mo.Event.STALLED:

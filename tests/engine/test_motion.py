@@ -413,22 +413,34 @@ def feed_el(m: mo.Motion, els: list[float], t0: float = 10.0, cfg: mo.MotionConf
 def test_an_elevation_turning_on_past_its_limit_is_stopped_there() -> None:
     """Rule 10 (an attack pass: a GS-232 target frame one flipped bit from ``U``, up until
     stopped, ran an elevation held to 90 degrees to 103, told only by a pass 10 degrees beyond
-    its target): a movement outward beyond the limit by more than the noise drops the target
-    and tells ``past limit``; the reading and the limit are in its words."""
+    its target): two readings in a row more than ``tolerance_deg + noise_deg`` past the limit,
+    the second further out and a movement, drop the target and tell ``past limit``; which
+    axis, its reading and limit are in ``Motion.past``."""
     m = held_moving_to(80, 89)
-    m, events = feed_el(m, [81, 83, 85, 87, 89, 91, 92])
-    assert events == [] and m.el_target_deg == 89  # at the limit and within the noise of it
-    m, events = feed_el(m, [94], 13.5)
+    m, events = feed_el(m, [81, 83, 85, 87, 89, 91, 93, 95, 96])
+    assert events == [] and m.el_target_deg == 89  # once, or within the margin
+    m, events = feed_el(m, [98], 15.0)
     assert events[:1] == [mo.Event.PAST_LIMIT] and m.target_deg is m.el_target_deg is None
-    assert mo.past_limit(m, HELD) == ("elevation", 90.0, "el_max_deg")
+    assert m.past == ("elevation", 98, 90.0, "el_max_deg")
     # below the horizon the same, and on a scale that does not wrap the azimuth too
-    m, events = feed_el(held_moving_to(10, 2), [8, 5, 2, -1, -4])
+    m, events = feed_el(held_moving_to(10, 2), [8, 5, 2, -1, -4, -6, -8])
     assert events[:1] == [mo.Event.PAST_LIMIT], events
-    assert mo.past_limit(m, HELD) == ("elevation", 0.0, "el_min_deg")
+    assert m.past == ("elevation", -8, 0.0, "el_min_deg")
     spid = replace(SPID, az_limits_deg=(-180.0, 200.0))
     m = mo.commanded(spid_moving_to(120), spid, 190, 10.0)
-    m, events = feed(m, [(10.5, 180), (11.0, 190), (11.5, 200), (12.0, 205)], spid)
-    assert events[:1] == [mo.Event.PAST_LIMIT] and mo.past_limit(m, spid)[:2] == ("azimuth", 200)
+    m, events = feed(m, [(10.5, 180), (11.0, 190), (11.5, 200), (12.0, 206), (12.5, 209)], spid)
+    assert events[:1] == [mo.Event.PAST_LIMIT] and m.past == ("azimuth", 209, 200, "az_max_deg")
+    assert mo.commanded(m, spid, 190, 13.0).past is None  # (a new target's turn: none yet)
+
+
+def test_one_corrupt_reading_or_a_coast_past_a_limit_is_no_limit_crossed() -> None:
+    """Rule 10, a review: one reply with a digit flipped (86 read 96) past the limit stopped
+    the rotor short of its target, 89, and ended tracking; and a turn to a target at the
+    limit that coasts a little past it (within the tolerance arrival allows) is no crossing."""
+    m, events = feed_el(held_moving_to(60, 89), [70, 80, 96, 87, 89, 89, 89, 89, 89])
+    assert events == [mo.Event.ARRIVED] and m.past is None
+    m, events = feed_el(held_moving_to(60, 90), [70, 80, 88, 91, 93, 93, 93, 93, 93])
+    assert events == [mo.Event.ARRIVED] and m.past is None
 
 
 def test_a_rotor_outside_a_limit_brought_back_or_jittering_there_is_no_limit_crossed() -> None:
