@@ -320,6 +320,38 @@ def test_with_every_slot_held_by_idle_connections_a_new_clients_stop_is_carried_
             sock.close()
 
 
+def test_with_every_slot_held_by_clients_over_their_budget_a_stop_drops_one_of_them(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 3, an attack pass: twenty programs chattering on sixteen slots each had complete
+    lines unread (paused over their budgets), so none could be dropped: every stop was turned
+    away, and the one quiet program, Gpredict, was dropped first. A client paused over its
+    budget now goes first, whatever it left unread; the quiet one stays."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, rate_bytes_s=1000.0, read_bytes=64, max_clients=4)
+    quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+    quiet.sendall(b"C\r")
+    assert _read(quiet, 8) == b"AZ=120\r\n"  # an established program, idle from now on
+    greedy = []
+    for n in range(1, 4):
+        sock = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+        sock.sendall(b"C\r" * 300)
+        assert _read(sock, 32 * 8) == b"AZ=120\r\n" * 32
+        wait_until(lambda n=n: server.paused == n, 10, "paused over its budget")
+        greedy.append(sock)
+    try:
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+        assert _closed_by_peer(greedy[0])  # paused the longest
+        quiet.sendall(b"C\r")
+        assert _read(quiet, 8) == b"AZ=120\r\n"  # still served
+    finally:
+        for sock in [quiet, *greedy]:
+            sock.close()
+
+
 def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:

@@ -15,9 +15,12 @@ Rules:
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
-   a client is dropped to make room among those ``_Client.evictable`` (no command half
-   received, or one left half received for more than PENDING_GRACE_S) with no complete
-   command line unread: first the newest that has never finished a command, else the one
+   a client is dropped to make room: first one paused over its budget (rule 5), the one
+   paused longest, with whatever it sent unread (a flood always has complete lines unread,
+   so an attack pass's 20 clients chattering on 16 slots turned every stop away and dropped
+   the one quiet program, Gpredict, first); else among those ``_Client.evictable`` (no
+   command half received, or one left half received for more than PENDING_GRACE_S) with no
+   complete command line unread: the newest that has never finished a command, else the one
    idle longest (an established program is dropped last); only when none may go is the
    newcomer turned away. A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
@@ -126,6 +129,7 @@ class _Client:
         self.useful_s = now  # connected, or last finished a command
         self.pending_s: float | None = None  # first byte of a command not yet complete
         self.done = False  # has finished a command: an established program, dropped last
+        self.over_s: float | None = None  # rule 3: paused over its budget since (a flood)
 
     def evictable(self, now: float) -> bool:
         return self.pending_s is None or now - self.pending_s > PENDING_GRACE_S
@@ -513,14 +517,16 @@ class LineServer:
             return True, ""
         else:
             why = f"all {self._max_clients} slots"
+        flooding = [(c, k) for c, k in pool if k.over_s is not None]
         candidates = [
             (c, k) for c, k in pool if k.evictable(now) and not _line_ready(c, self._ends)
         ]
-        if not candidates:
+        if flooding:  # over its budget the longest: its unread lines are its flood's
+            victim = min(flooding, key=lambda pair: pair[1].over_s or 0.0)[0]
+        elif not candidates:
             return False, f"{why} taken, every client mid-command"
-        fresh = [(c, k) for c, k in candidates if not k.done]
-        if fresh:  # never finished a command: the newest goes first
-            victim = max(fresh, key=lambda pair: pair[1].since_s)[0]
+        elif fresh := [(c, k) for c, k in candidates if not k.done]:
+            victim = max(fresh, key=lambda pair: pair[1].since_s)[0]  # the newest goes first
         else:  # every one has a history: the one idle longest
             victim = min(candidates, key=lambda pair: pair[1].useful_s)[0]
         gone = self._clients.pop(victim)
@@ -590,6 +596,8 @@ class LineServer:
                 if pause_s > 0:  # rule 5: in the kernel, unread, until back in credit
                     if not over:
                         over = True
+                        if me is not None:  # rule 3: dropped first to make room
+                            me.over_s = self._clock()
                         self.paused += 1
                         self._paused_log.warn(
                             self._clock(), "%s sends faster than a client may: paused", who
@@ -599,6 +607,7 @@ class LineServer:
                     continue
                 over = False
                 if me is not None:  # rule 3: what _make_room weighs
+                    me.over_s = None
                     me.pending_s = pending_since
                     me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
