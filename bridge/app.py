@@ -22,6 +22,7 @@ Rules:
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import gc
 import logging
@@ -54,7 +55,7 @@ from bridge.runtime.lines import Lines
 from bridge.runtime.listeners import contained
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.rotator import Rotator
-from bridge.runtime.state_store import StateStore
+from bridge.runtime.state_store import InUse, StateStore, held
 from bridge.runtime.worker import WorkerConfig
 from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.session.motion import MotionConfig
@@ -417,6 +418,24 @@ class App:
         # interfaces/mqtt/lane.py rule 4: a stop before a backlog
         self.client.before_message = self.lane.first
         self.client.watch_owned(self.topics.owned())
+        # state_store.py rule 7: this installation's lock, the last of the start (nothing after
+        # it can fail and leave it held) and before anything connects (start)
+        self._installation = contextlib.ExitStack()
+        try:
+            self._installation.enter_context(held(settings.state_file))
+        except InUse as exc:
+            by = f" ({exc.holder})" if exc.holder else ""
+            raise ConfigError(
+                f"another rotor-bridge runs this installation{by}: its state_file "
+                f"{settings.state_file} is in use. Stop that one first (two would take turns "
+                "on the broker under one client id, and a stop could be lost between them), or "
+                "give this one its own state_file"
+            ) from None
+
+    def release(self) -> None:
+        """This installation's lock let go (state_store.py rule 7): at the stop, or when the
+        start failed."""
+        self._installation.close()
 
     def _publishers(self, feature: Feature) -> tuple[Callable[[str], None], ...]:
         """A feature's retained topics under the base topic (``B/spots``); the console's
@@ -714,6 +733,7 @@ class App:
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         self.express.stop()  # (the ports are closed: it holds none)
+        self.release()
         log.info("stopped")
 
 
@@ -727,8 +747,10 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     # signal is handled, the wait is on it; on the main thread, on the signals
     on_main = threading.current_thread() is threading.main_thread()
     wait = ending.wait if on_main or stop_event is None else stop_event.wait
+    # (SIGHUP: the terminal of a bridge run by hand closed; as the others, a clean stop)
+    signals = signal.SIGTERM, signal.SIGINT, signal.SIGHUP
     try:
-        with ending.on_signals(signal.SIGTERM, signal.SIGINT):  # a second one: rule 3 there
+        with ending.on_signals(*signals):  # a second one: rule 3 there
             return _serve(settings, wait, ending, stop_event)
     finally:
         ending.close()
@@ -744,7 +766,11 @@ def _serve(
         app = App(settings)
     except OSError as exc:  # not foreseen, but a start that cannot work all the same
         raise ConfigError(f"cannot start: {exc}") from None
-    app.start()
+    try:
+        app.start()
+    except BaseException:
+        app.release()
+        raise
     # rule 12: a full collection no longer walks the start-up's 70,000 objects (30-80 ms). No
     # collection first: it walked them all once more (15 ms of the start's CPU) to free what a
     # start leaves as garbage, some 30 KB (Home Assistant's entities, with no finalizer), kept

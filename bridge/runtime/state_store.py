@@ -27,19 +27,27 @@ Rules:
    the order of the decisions, before the step lets go; ``wake`` then starts the writer.
 6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
    that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
+7. One process runs an installation (``held``): a bridge holds an exclusive lock on
+   ``<state file>.lock`` beside its state file while it runs (the kernel lets go when it
+   ends, however it ends), and one that finds it taken does not start. An attack pass ran the
+   same configuration twice: the two took turns throwing each other off the broker under one
+   client id, the real one backing off up to a minute each time, and a STOP that reached the
+   one that could not open the port was lost without a word (and both wrote the same state
+   file).
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import json
 import logging
 import os
 import stat
 import tempfile
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from bridge.core.model import Control, SettingValue
@@ -82,6 +90,38 @@ def _read(path: Path) -> str:
             if kind is None:
                 return f.read().decode()
     raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+
+
+class InUse(Exception):
+    """Rule 7: another process holds this installation's state file."""
+
+    def __init__(self, lock_path: Path, holder: str) -> None:
+        super().__init__(f"{lock_path} is held by {holder or 'another process'}")
+        self.holder = holder
+
+
+@contextlib.contextmanager
+def held(path: Path | None) -> Iterator[None]:
+    """Rule 7: the installation's lock held for the ``with`` block (nothing without a state
+    file); InUse if another process holds it, OSError if it cannot be made."""
+    if path is None:
+        yield
+        return
+    lock_path = path.with_name(path.name + ".lock")
+    lock_path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
+            raise InUse(lock_path, f"process {holder}" if holder.isdigit() else "") from None
+        with contextlib.suppress(OSError):  # who holds it, for the next one's message only
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)  # (the lock with it)
 
 
 class StateStore:

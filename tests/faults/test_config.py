@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.cli import main
+from bridge.runtime.state_store import held
 from bridge.settings import ConfigError, load_settings
 from tests.faults.conftest import Pki
 from tests.support import retained_snapshot, run_cli, to_toml
@@ -239,6 +240,24 @@ def test_a_state_file_that_cannot_be_written_is_exit_2_and_one_line(
     assert "Not a directory" in line
     assert retained_snapshot(broker.port, "#") == {}
     assert blocker.read_text() == "not a directory\n"
+
+
+def test_a_second_run_of_one_installation_is_exit_2_naming_the_first(
+    tmp_path: Path, broker: Mosquitto, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """state_store.py rule 7, an attack pass: the same configuration run twice took turns
+    throwing the first off the broker under one client id, and a STOP that reached the one
+    that could not open the port was lost without a word. The second now does not start."""
+    state_file = tmp_path / "state" / "state.json"
+    config = start_up_config(tmp_path, broker.port, state_file=state_file)
+    with held(state_file):
+        code, out, err = run_main(capsys, "run", "-c", str(config))
+    assert (code, out) == (2, ""), err
+    assert f"another rotor-bridge runs this installation (process {os.getpid()})" in err, err
+    assert f"state_file {state_file} is in use" in err and "Traceback" not in err, err
+    assert retained_snapshot(broker.port, "#") == {}  # nothing published, nobody thrown off
+    with held(state_file):  # let go when the first ended
+        pass
 
 
 def test_a_state_file_whose_content_cannot_be_written_is_exit_2_and_leaves_nothing(

@@ -71,6 +71,29 @@ def test_broker_down_at_start_then_up_then_sigterm_is_a_clean_exit(tmp_path: Pat
         emu.close()
 
 
+def test_sighup_a_closed_terminal_is_a_clean_stop(tmp_path: Path) -> None:
+    """An attack pass: closing the terminal of a bridge run by hand killed it (exit 129), with
+    no offline said but the last will's. SIGHUP now stops it as SIGTERM does."""
+    broker = Mosquitto(tmp_path / "broker").start()
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1, jitter_deg=0)
+    proc = start_bridge(
+        write_config(tmp_path, broker.port, tmp_path / "tty"), tmp_path / "bridge.log"
+    )
+    try:
+        probe = Probe(broker.port, "rotor/#")
+        probe.wait_value("rotor/availability", "online", timeout_s=40)
+        proc.send_signal(signal.SIGHUP)
+        assert proc.wait(slow(10)) == 0
+        assert "SIGHUP received, shutting down" in (tmp_path / "bridge.log").read_text()
+        assert retained_snapshot(broker.port, "rotor/#")["rotor/availability"] == b"offline"
+        probe.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        broker.stop()
+        emu.close()
+
+
 def test_killed_bridge_is_marked_offline_by_its_last_will(tmp_path: Path) -> None:
     broker = Mosquitto(tmp_path / "broker").start()
     emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1)
