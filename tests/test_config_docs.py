@@ -62,7 +62,7 @@ def files_unread() -> Iterator[None]:
 
     with (
         mock.patch.object(settings_mqtt, "check_tls_files", pairing_only),
-        mock.patch.object(settings_mqtt, "read_password_file", lambda path: ""),
+        mock.patch.object(settings_mqtt, "read_password_file", lambda path: "s3cret"),
         mock.patch.object(settings_web, "read_password_file", lambda path: "long enough"),
     ):
         yield

@@ -77,10 +77,4 @@ def read_password_file(path: Path) -> str:
             f"password_file {path} is readable by every user; let only the user that runs "
             "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
         )
-    password = text.strip("\r\n")
-    if not password or "\n" in password or "\r" in password:
-        raise ValueError(
-            f"password_file {path} must hold the password on one line (it holds "
-            f"{'nothing' if not password else 'several lines'})"
-        )
-    return password
+    return text.strip("\r\n")

@@ -206,7 +206,13 @@ class MqttSettings(_Strict):
             return self
         if self.password is not None:
             raise ValueError("set password or password_file, not both")
-        self.password = SecretStr(read_password_file(self.password_file))
+        password = read_password_file(self.password_file)
+        if not password or "\n" in password or "\r" in password:  # (an attack pass)
+            raise ValueError(
+                f"password_file {self.password_file} must hold the password on one line (it "
+                f"holds {'nothing' if not password else 'several lines'})"
+            )
+        self.password = SecretStr(password)
         return self
 
     # the state file of the installation these settings belong to (Settings fills it in)
