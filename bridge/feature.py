@@ -231,7 +231,12 @@ class Feature:
         return self.service is not None and on is not None and on(settings)
 
     def on_for(self, rotator_settings: BaseModel) -> bool:
-        """Whether a rotator's table turns this feature on (always, without ``configured``)."""
+        """Whether a rotator's table turns this feature on (always, without ``configured``;
+        never for a feature of the station, a ``service``: its settings turn it on for all,
+        app.py asks them. An attack pass: every rotator got the DX cluster's "Turn to spot"
+        in Home Assistant without a ``[dxcluster]``)."""
+        if self.service is not None and self.configured is None:
+            return False
         return self.configured is None or self.configured(rotator_settings)
 
 

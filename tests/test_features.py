@@ -422,3 +422,16 @@ def test_a_part_that_takes_commands_must_bear_its_features_name() -> None:
         "auto-park", Wake.STEP, True, lambda s: False, lambda s, scene: None, lambda s, now: None
     )
     assert Feature("autopark", "docs/mqtt.md", "a toy", part=silent).name == "autopark"
+
+
+def test_a_station_feature_is_on_for_no_rotator_by_its_table() -> None:
+    """An attack pass: without ``[dxcluster]`` every rotator got the DX cluster's "Turn to
+    spot" select in Home Assistant (its one option "no spots yet", refused when picked): a
+    feature of the station (a ``service``) is on only when the station's settings run it."""
+    from bridge.features.dxcluster import FEATURE as DXCLUSTER
+    from bridge.features.tracking import FEATURE as TRACKING
+    from bridge.settings import RotatorSettings
+
+    r = RotatorSettings.model_validate({"id": "hf", "model": "rotorez", "port": "/dev/ttyUSB0"})
+    assert not DXCLUSTER.on_for(r)
+    assert TRACKING.on_for(r)  # (a rotator's own, with no table to turn it on)
