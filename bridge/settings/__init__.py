@@ -165,6 +165,17 @@ class Settings(BaseSettings):
         dup = {p for p in ports if ports.count(p) > 1}
         if dup:
             raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
+        # one device under two names (a /dev/serial/by-id link and its ttyUSB0): the second
+        # was offline for good, "busy: another program holds it" (an attack pass)
+        device: dict[str, str] = {}
+        for p in ports:
+            real = os.path.realpath(p) if p else p
+            if real in device:
+                raise ValueError(
+                    f"port {p} is {device[real]} under another name (both {real}): one device "
+                    "is given to two rotators"
+                )
+            device[real] = p
         rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
         if len(set(rotctld)) != len(rotctld):
             raise ValueError("two rotators share one rotctld_port")
@@ -200,6 +211,11 @@ class Settings(BaseSettings):
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
             raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
+        if self.wsjtx.enabled and self.wsjtx.port in {*pst, *n1mm_ports}:  # (an attack pass)
+            what = "a pst_udp_port" if self.wsjtx.port in pst else "an n1mm_udp_port"
+            raise ValueError(
+                f"wsjtx.port {self.wsjtx.port} is also {what}: one UDP port, one program"
+            )
         named = [r for r in self.rotators if r.n1mm_rotor_name is not None]
         names = [(r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name) for r in named]
         for key in {n for n in names if names.count(n) > 1}:  # one name, chosen by band

@@ -487,6 +487,13 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
             raise ValueError(
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
+        least_stall_s = self.settle_s + 2 * self.moving_poll_interval_s
+        if spec.can_report_position and self.stall_timeout_s <= least_stall_s:
+            raise ValueError(  # (an attack pass: 0.1 s stalled every target before it turned)
+                f"stall_timeout_s {self.stall_timeout_s:g} must be longer than settle_s and "
+                f"two moving poll intervals ({least_stall_s:g} s): a rotor would be called "
+                "stalled before a reading could show it turning"
+            )
         self.check_pointing(self.pointing)
         if self.wind_topic is not None and self.wind_park_az_deg is not None:  # wind.py rule 1
             az, el = self.wind_park_az_deg, self.park_el_deg

@@ -89,6 +89,18 @@ CASES: list[tuple[str, str | bytes, str]] = [
     ),  # fmt: skip
     ("tls ca missing", BASE + '[mqtt.tls]\nenabled = true\nca_file = "/nope.crt"\n', "mqtt.tls"),
     ("host empty", edit('host = "127.0.0.1"', 'host = ""'), "mqtt.host"),  # (paho's traceback)
+    # the same device under two names; absurd stalls; one UDP port twice (an attack pass)
+    (
+        "one device two names",
+        BASE + SPID.replace("/dev/ttyUSB1", "/dev/../dev/ttyUSB0"),
+        "port /dev/../dev/ttyUSB0 is /dev/ttyUSB0 under another name",
+    ),
+    ("stall before a reading", BASE + "stall_timeout_s = 0.1\n", "stall_timeout_s 0.1 must be"),
+    (
+        "wsjtx on the pst port",
+        BASE + "pst_udp_port = 12000\n[wsjtx]\nenabled = true\nport = 12000\n",
+        "wsjtx.port 12000 is also a pst_udp_port",
+    ),
     ("host with a space", edit('host = "127.0.0.1"', 'host = "broker lan"'), "mqtt.host"),
     ("rotator singular", edit("[[rotators]]", "[[rotator]]"), "did you mean [[rotators]]?"),
     ("typo in a table", edit("[mqtt]", "[mqtt_]"), "unknown table [mqtt_]: did you mean [mqtt]?"),
