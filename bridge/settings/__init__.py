@@ -283,6 +283,20 @@ class Settings(BaseSettings):
         """settings/groups.py rule 4: members are rotators, a group's topics no other's."""
         roots = {r.id: self.rotator_topic(r) for r in self.rotators}
         seen: set[str] = set()
+        # Home Assistant's entity ids write a "-" as "_": two ids that differ only so would ask
+        # for the same entities (an attack pass: one got "_2", in whichever order discovery
+        # came, and dashboards pointed at the other antenna)
+        slugs: dict[str, tuple[str, str]] = {}
+        for kind, ident in [("rotator", r.id) for r in self.rotators] + [
+            ("group", g.id) for g in self.groups
+        ]:
+            slug = ident.replace("-", "_")
+            other = slugs.setdefault(slug, (kind, ident))
+            if other[1] != ident:  # (one id twice: the checks below name it)
+                raise ValueError(
+                    f"{kind} id {ident!r} and {other[0]} {other[1]!r} are one name to Home "
+                    f"Assistant ({slug}: it writes '-' as '_'): give one of them another id"
+                )
         for i, g in enumerate(self.groups):
             where = f"groups[{i}]"
             if g.id in seen:

@@ -97,6 +97,13 @@ CASES: list[tuple[str, str | bytes, str]] = [
     ),
     ("stall before a reading", BASE + "stall_timeout_s = 0.1\n", "stall_timeout_s 0.1 must be"),
     (
+        "ids one name to HA",
+        BASE
+        + SPID.replace('"sat"', '"tow-er"')
+        + SPID.replace('"sat"', '"tow_er"').replace("USB1", "USB2"),
+        "rotator id 'tow_er' and rotator 'tow-er' are one",
+    ),
+    (
         "wsjtx on the pst port",
         BASE + "pst_udp_port = 12000\n[wsjtx]\nenabled = true\nport = 12000\n",
         "wsjtx.port 12000 is also a pst_udp_port",
