@@ -20,7 +20,9 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
    socket that cannot be read any more (EBADF, ENOTSOCK) is reported once and dropped: the
    selector is made anew without it, so it can never wake the thread again.
-8. A flood cannot starve a stop (docs/architecture.md rule 12), nor hide one: the thread never
+8. A flood cannot starve a stop (docs/architecture.md rule 12), nor hide one it reads (a flood
+   faster than the reads overflows the system's buffer, and the system drops datagrams, a stop
+   among them: an attack pass, 175,000 a second on loopback; docs/loggers.md): the thread never
    sleeps while a datagram waits (a sleeping reader lets the system's buffer fill with the
    flood, and a stop sent then is dropped or queued behind it), so every wake-up reads what
    waits, PER_WAKEUP a socket (rule 3), and comes straight back for more. Each datagram is
