@@ -405,6 +405,19 @@ def test_tls_files_with_tls_not_enabled_are_exit_2(
         assert "mqtt.tls: ca_file given but enabled is false" in err and SECRET not in err, err
 
 
+def test_check_config_refuses_a_cty_file_the_start_would_stop_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An attack pass: ``[dxcluster]`` with a cty_file that is not there printed "NOT FOUND"
+    and then "config OK", where the start stops on it."""
+    path = tmp_path / "dx.toml"
+    dx = '[dxcluster]\nenabled = true\nhost = "dxc.example.org"\nlogin = "G4ABC"\n'
+    path.write_text(BASE + f"{dx}cty_file = {str(tmp_path / 'cty.dat')!r}\n")
+    code, out, err = run_main(capsys, "check-config", "-c", str(path))
+    assert code == 2 and "config OK" not in out, out
+    assert f"dxcluster.cty_file {tmp_path / 'cty.dat'} cannot be read" in err, err
+
+
 def test_a_key_file_every_user_may_read_is_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
 ) -> None:
