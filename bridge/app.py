@@ -418,19 +418,7 @@ class App:
         # interfaces/mqtt/lane.py rule 4: a stop before a backlog
         self.client.before_message = self.lane.first
         self.client.watch_owned(self.topics.owned())
-        # state_store.py rule 7: this installation's lock, the last of the start (nothing after
-        # it can fail and leave it held) and before anything connects (start)
-        self._installation = contextlib.ExitStack()
-        try:
-            self._installation.enter_context(held(settings.state_file))
-        except InUse as exc:
-            by = f" ({exc.holder})" if exc.holder else ""
-            raise ConfigError(
-                f"another rotor-bridge runs this installation{by}: its state_file "
-                f"{settings.state_file} is in use. Stop that one first (two would take turns "
-                "on the broker under one client id, and a stop could be lost between them), or "
-                "give this one its own state_file"
-            ) from None
+        self._installation = contextlib.ExitStack()  # state_store.py rule 7 (start takes it)
 
     def release(self) -> None:
         """This installation's lock let go (state_store.py rule 7): at the stop, or when the
@@ -661,7 +649,24 @@ class App:
                 log.exception("checking the TLE file failed")
 
     def start(self) -> None:
-        """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
+        """ConfigError, before anything runs or is published, if a rotctld port cannot be had
+        or another process runs this installation (state_store.py rule 7: its lock, taken
+        first; a bridge built and never started holds none)."""
+        state_file = self.settings.state_file
+        try:
+            self._installation.enter_context(held(state_file))
+        except InUse as exc:
+            by = f" ({exc.holder})" if exc.holder else ""
+            raise ConfigError(
+                f"another rotor-bridge runs this installation{by}: its state_file {state_file} "
+                "is in use. Stop that one first (two would take turns on the broker under one "
+                "client id, and a stop could be lost between them), or give this one its own "
+                "state_file"
+            ) from None
+        except OSError as exc:
+            raise ConfigError(
+                f"state_file {state_file}: the lock beside it cannot be made: {exc.strerror or exc}"
+            ) from None
         # the sky worker computes in Python for up to a second; a thread waking for a stop waits
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)
