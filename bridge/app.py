@@ -66,6 +66,8 @@ from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import SkyWorker
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
+    from pathlib import Path
+
     from bridge.interfaces.loggers import LoggerEndpoints
     from bridge.interfaces.ptylines import PtyLineServer
     from bridge.interfaces.rotctld import RotctldServer
@@ -264,14 +266,11 @@ class App:
             on_problem=lambda topic, problem: self._denied(topic, problem),
             on_info=lambda problem, on: self._info(problem, on),
         )
-        store = self.store = StateStore(settings.state_file)
+        store = self.store = StateStore(settings.state_file)  # (proven writable by start)
         try:
-            store.check_writable()
+            store.check_kind()  # (a FIFO, a directory: refused now, nothing written: rule 4)
         except OSError as exc:
-            where = f" ({exc.filename})" if exc.filename else ""
-            raise ConfigError(
-                f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
-            ) from None
+            raise _unwritable(settings.state_file, exc) from None
         self.lines = Lines()  # one thread serves every serial line (runtime/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
@@ -664,9 +663,12 @@ class App:
                 "state_file"
             ) from None
         except OSError as exc:
-            raise ConfigError(
-                f"state_file {state_file}: the lock beside it cannot be made: {exc.strerror or exc}"
-            ) from None
+            raise _unwritable(state_file, exc) from None
+        try:
+            self.store.check_writable()  # (state_store.py rule 3: once this one holds it)
+        except OSError as exc:
+            self.release()
+            raise _unwritable(state_file, exc) from None
         # the sky worker computes in Python for up to a second; a thread waking for a stop waits
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)
@@ -742,6 +744,12 @@ class App:
         log.info("stopped")
 
 
+def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:
+    """The start's words for a state file it cannot write (or lock beside)."""
+    where = f" ({exc.filename})" if exc.filename else ""
+    return ConfigError(f"state_file {state_file} cannot be written: {exc.strerror or exc}{where}")
+
+
 def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     """Run until SIGTERM/SIGINT (or ``stop_event``); exit code 0 on a clean stop.
 
@@ -752,8 +760,10 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     # signal is handled, the wait is on it; on the main thread, on the signals
     on_main = threading.current_thread() is threading.main_thread()
     wait = ending.wait if on_main or stop_event is None else stop_event.wait
-    # (SIGHUP: the terminal of a bridge run by hand closed; as the others, a clean stop)
-    signals = signal.SIGTERM, signal.SIGINT, signal.SIGHUP
+    # (SIGHUP: the terminal of a bridge run by hand closed; as the others, a clean stop, but
+    # not under nohup, which asked for it to be ignored: a review)
+    hup = () if signal.getsignal(signal.SIGHUP) is signal.SIG_IGN else (signal.SIGHUP,)
+    signals = signal.SIGTERM, signal.SIGINT, *hup
     try:
         with ending.on_signals(*signals):  # a second one: rule 3 there
             return _serve(settings, wait, ending, stop_event)

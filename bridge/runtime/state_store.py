@@ -29,7 +29,9 @@ Rules:
    that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
 7. One process runs an installation (``held``): a bridge holds an exclusive lock on
    ``<state file>.lock`` beside its state file while it runs (the kernel lets go when it
-   ends, however it ends), and one that finds it taken does not start. An attack pass ran the
+   ends, however it ends; the file stays, and one it may not write is locked read-only), and
+   one that finds it taken does not start: before it writes the state file (rule 3), so it
+   cannot undo the running one's last save. An attack pass ran the
    same configuration twice: the two took turns throwing each other off the broker under one
    client id, the real one backing off up to a minute each time, and a STOP that reached the
    one that could not open the port was lost without a word (and both wrote the same state
@@ -109,7 +111,10 @@ def held(path: Path | None) -> Iterator[None]:
         return
     lock_path = path.with_name(path.name + ".lock")
     lock_path.parent.mkdir(parents=True, exist_ok=True)
-    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    try:
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    except PermissionError:  # (left by root's run by hand: flock needs no write, a review)
+        fd = os.open(lock_path, os.O_RDONLY | os.O_CLOEXEC)
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
 from bridge import emulators
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto, free_port
+from tests.support.process import bridge_env
 from tests.support.waiting import slow
 
 
@@ -86,6 +88,37 @@ def test_sighup_a_closed_terminal_is_a_clean_stop(tmp_path: Path) -> None:
         assert proc.wait(slow(10)) == 0
         assert "SIGHUP received, shutting down" in (tmp_path / "bridge.log").read_text()
         assert retained_snapshot(broker.port, "rotor/#")["rotor/availability"] == b"offline"
+        probe.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        broker.stop()
+        emu.close()
+
+
+def test_sighup_under_nohup_is_ignored_as_asked(tmp_path: Path) -> None:
+    """A review: ``nohup rotor-bridge run`` asks for SIGHUP to be ignored, and the handler for
+    a closed terminal must not undo that."""
+    broker = Mosquitto(tmp_path / "broker").start()
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1, jitter_deg=0)
+    cfg = write_config(tmp_path, broker.port, tmp_path / "tty")
+    with (tmp_path / "bridge.log").open("wb") as log:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "bridge", "run", "-c", str(cfg)],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env=bridge_env(),
+            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN),  # as nohup
+        )
+    try:
+        probe = Probe(broker.port, "rotor/#")
+        probe.wait_value("rotor/availability", "online", timeout_s=40)
+        proc.send_signal(signal.SIGHUP)
+        probe.publish("rotor/target", "90")  # answered only by a bridge still running
+        probe.wait_value("rotor/state", "moving", timeout_s=20)
+        assert proc.poll() is None
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(slow(10)) == 0
         probe.close()
     finally:
         if proc.poll() is None:
