@@ -16,7 +16,8 @@ Rules:
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
    a client is dropped to make room: first one paused over its budget (rule 5), the one
-   paused longest, with whatever it sent unread (a flood always has complete lines unread,
+   paused longest, with whatever it sent unread, a stop behind its flood too (it waited
+   behind its own flood anyway; a flood always has complete lines unread,
    so an attack pass's 20 clients chattering on 16 slots turned every stop away and dropped
    the one quiet program, Gpredict, first); else among those ``_Client.evictable`` (no
    command half received, or one left half received for more than PENDING_GRACE_S) with no

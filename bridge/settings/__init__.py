@@ -173,7 +173,8 @@ class Settings(BaseSettings):
             if real in device:
                 raise ValueError(
                     f"port {p} is {device[real]} under another name (both {real}): one device "
-                    "is given to two rotators"
+                    "is given to two rotators (name each by its /dev/serial/by-id link: a "
+                    "ttyUSB number may go to another adapter at the next boot)"
                 )
             device[real] = p
         rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]

@@ -90,11 +90,13 @@ class TlsSettings(_Strict):
         # not a traceback at start (paho's tls_set would raise it)
         check_tls_files(self.ca_file, self.cert_file, self.key_file)
         given = [n for n in ("ca_file", "cert_file", "key_file") if getattr(self, n) is not None]
-        if given and not self.enabled:  # (an attack pass: the password went out in the clear)
+        # (an attack pass: files given, enabled left out, the password went out in the clear;
+        # enabled = false written out is a choice, a review: TLS switched off for a while)
+        if given and "enabled" not in self.model_fields_set:
             raise ValueError(
-                f"{', '.join(given)} given but enabled is false: the bridge would connect "
-                "without TLS (and send a password in the clear); set enabled = true, or leave "
-                "the files out"
+                f"{', '.join(given)} given but enabled left out: the bridge would connect "
+                "without TLS (and send a password in the clear); set enabled = true (or false, "
+                "to connect without TLS all the same)"
             )
         return self
 

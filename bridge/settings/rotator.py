@@ -487,12 +487,15 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
             raise ValueError(
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
-        least_stall_s = self.settle_s + 2 * self.moving_poll_interval_s
+        # a movement is more than the noise band, seen by two readings (an attack pass: 0.1 s
+        # stalled every target before it turned; a review: settle_s has nothing to do with it)
+        az_speed = max(self.effective_speeds_deg_s[0], 1e-9)
+        least_stall_s = 2 * self.moving_poll_interval_s + self.effective_noise_deg / az_speed
         if spec.can_report_position and self.stall_timeout_s <= least_stall_s:
-            raise ValueError(  # (an attack pass: 0.1 s stalled every target before it turned)
-                f"stall_timeout_s {self.stall_timeout_s:g} must be longer than settle_s and "
-                f"two moving poll intervals ({least_stall_s:g} s): a rotor would be called "
-                "stalled before a reading could show it turning"
+            raise ValueError(
+                f"stall_timeout_s {self.stall_timeout_s:g} must be longer than it takes a "
+                f"reading to show the rotor turning ({least_stall_s:.2g} s: two moving polls "
+                "and noise_deg at its speed)"
             )
         self.check_pointing(self.pointing)
         if self.wind_topic is not None and self.wind_park_az_deg is not None:  # wind.py rule 1
