@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from bridge import emulators
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto, free_port
@@ -73,52 +75,38 @@ def test_broker_down_at_start_then_up_then_sigterm_is_a_clean_exit(tmp_path: Pat
         emu.close()
 
 
-def test_sighup_a_closed_terminal_is_a_clean_stop(tmp_path: Path) -> None:
+@pytest.mark.parametrize("nohup", [False, True])
+def test_sighup_a_closed_terminal_is_a_clean_stop_but_not_under_nohup(
+    tmp_path: Path, nohup: bool
+) -> None:
     """An attack pass: closing the terminal of a bridge run by hand killed it (exit 129), with
-    no offline said but the last will's. SIGHUP now stops it as SIGTERM does."""
-    broker = Mosquitto(tmp_path / "broker").start()
-    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1, jitter_deg=0)
-    proc = start_bridge(
-        write_config(tmp_path, broker.port, tmp_path / "tty"), tmp_path / "bridge.log"
-    )
-    try:
-        probe = Probe(broker.port, "rotor/#")
-        probe.wait_value("rotor/availability", "online", timeout_s=40)
-        proc.send_signal(signal.SIGHUP)
-        assert proc.wait(slow(10)) == 0
-        assert "SIGHUP received, shutting down" in (tmp_path / "bridge.log").read_text()
-        assert retained_snapshot(broker.port, "rotor/#")["rotor/availability"] == b"offline"
-        probe.close()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        broker.stop()
-        emu.close()
-
-
-def test_sighup_under_nohup_is_ignored_as_asked(tmp_path: Path) -> None:
-    """A review: ``nohup rotor-bridge run`` asks for SIGHUP to be ignored, and the handler for
-    a closed terminal must not undo that."""
+    no offline said but the last will's; SIGHUP now stops it as SIGTERM does. A review: under
+    ``nohup``, which asks for SIGHUP to be ignored, it runs on."""
     broker = Mosquitto(tmp_path / "broker").start()
     emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1, jitter_deg=0)
     cfg = write_config(tmp_path, broker.port, tmp_path / "tty")
+    ignore = (lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN)) if nohup else None
     with (tmp_path / "bridge.log").open("wb") as log:
         proc = subprocess.Popen(
             [sys.executable, "-m", "bridge", "run", "-c", str(cfg)],
             stdout=log,
             stderr=subprocess.STDOUT,
             env=bridge_env(),
-            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN),  # as nohup
+            preexec_fn=ignore,
         )
     try:
         probe = Probe(broker.port, "rotor/#")
         probe.wait_value("rotor/availability", "online", timeout_s=40)
         proc.send_signal(signal.SIGHUP)
-        probe.publish("rotor/target", "90")  # answered only by a bridge still running
-        probe.wait_value("rotor/state", "moving", timeout_s=20)
-        assert proc.poll() is None
-        proc.send_signal(signal.SIGTERM)
+        if nohup:
+            probe.publish("rotor/target", "90")  # answered only by a bridge still running
+            probe.wait_value("rotor/state", "moving", timeout_s=20)
+            assert proc.poll() is None
+            proc.send_signal(signal.SIGTERM)
         assert proc.wait(slow(10)) == 0
+        said = "SIGTERM" if nohup else "SIGHUP"
+        assert f"{said} received, shutting down" in (tmp_path / "bridge.log").read_text()
+        assert retained_snapshot(broker.port, "rotor/#")["rotor/availability"] == b"offline"
         probe.close()
     finally:
         if proc.poll() is None:
