@@ -266,7 +266,7 @@ class App:
             on_problem=lambda topic, problem: self._denied(topic, problem),
             on_info=lambda problem, on: self._info(problem, on),
         )
-        store = self.store = StateStore(settings.state_file)  # (proven writable by start)
+        store = self.store = StateStore(settings.state_file, deferred=True)  # (written by start)
         try:
             store.check_kind()  # (a FIFO, a directory: refused now, nothing written: rule 4)
         except OSError as exc:

@@ -27,15 +27,15 @@ Rules:
    the order of the decisions, before the step lets go; ``wake`` then starts the writer.
 6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
    that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
-7. One process runs an installation (``held``): a bridge holds an exclusive lock on
-   ``<state file>.lock`` beside its state file while it runs (the kernel lets go when it
-   ends, however it ends; the file stays, and one it may not write is locked read-only), and
-   one that finds it taken does not start: before it writes the state file (rule 3), so it
-   cannot undo the running one's last save. An attack pass ran the
-   same configuration twice: the two took turns throwing each other off the broker under one
-   client id, the real one backing off up to a minute each time, and a STOP that reached the
-   one that could not open the port was lost without a word (and both wrote the same state
-   file).
+7. One process runs an installation (``held``): a bridge holds an exclusive lock on ``<state
+   file>.lock`` beside its state file while it runs (the kernel lets go when it ends, however it
+   ends; the file stays, and one it may not write is locked read-only), and one that finds it
+   taken does not start: before it writes the state file (rule 3; its saves until then wait,
+   ``deferred``: a last read found a malformed file's replacement written while building the
+   rotators), so it cannot undo the running one's last save. An attack pass ran the same
+   configuration twice: the two took turns throwing each other off the broker under one client
+   id, the real one backing off up to a minute each time, and a STOP that reached the one that
+   could not open the port was lost without a word (and both wrote the same state file).
 """
 
 from __future__ import annotations
@@ -94,6 +94,18 @@ def _read(path: Path) -> str:
     raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
 
 
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a read-only lock file keeps an older run's pid: a last
+    read)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # (another user's)
+    return True
+
+
 class InUse(Exception):
     """Rule 7: another process holds this installation's state file."""
 
@@ -111,27 +123,40 @@ def held(path: Path | None) -> Iterator[None]:
         return
     lock_path = path.with_name(path.name + ".lock")
     lock_path.parent.mkdir(parents=True, exist_ok=True)
+    flags = os.O_CLOEXEC | os.O_NONBLOCK  # (a FIFO there must not hang the start)
+    writable = True
     try:
-        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-    except PermissionError:  # (left by root's run by hand: flock needs no write, a review)
-        fd = os.open(lock_path, os.O_RDONLY | os.O_CLOEXEC)
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | flags, 0o644)
+    except PermissionError:
+        if not lock_path.exists():
+            raise  # (the directory is not this user's: said as such)
+        # left by root's run by hand: flock needs no write access (a review)
+        fd, writable = os.open(lock_path, os.O_RDONLY | flags), False
     try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(errno.EINVAL, f"{lock_path} is not a regular file")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
-            raise InUse(lock_path, f"process {holder}" if holder.isdigit() else "") from None
-        with contextlib.suppress(OSError):  # who holds it, for the next one's message only
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            known = holder.isdigit() and _alive(int(holder))  # (not a stale pid)
+            raise InUse(lock_path, f"process {holder}" if known else "") from None
+        if writable:
+            with contextlib.suppress(OSError):  # who holds it, for the next one's message only
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield
     finally:
         os.close(fd)  # (the lock with it)
 
 
 class StateStore:
-    def __init__(self, path: Path | None) -> None:
+    def __init__(self, path: Path | None, *, deferred: bool = False) -> None:
+        """``deferred``: nothing is written before ``check_writable`` (rule 7: the bridge holds
+        the installation's lock by then); a save asked before is made then."""
         self._path = path
+        self._deferred = deferred  # rule 7: saves wait for check_writable
+        self._owed = False  # a save asked while deferred
         self._lock = threading.Lock()
         self._writer = OnDemandThread("state")  # rule 5
         self._data: dict[str, dict[str, object]] = {}
@@ -194,6 +219,9 @@ class StateStore:
         with self._lock:
             self._write(self._path, put_in_place=not self.corrupt)
             self._dirty = self._dirty and self.corrupt  # malformed entries now written locked
+            self._deferred, owed, self._owed = False, self._owed, False
+            if owed:  # (rule 7: an unreadable file's locked replacement, asked before)
+                self._save()
 
     def locked(self, rotator_id: str) -> bool:
         with self._lock:
@@ -312,6 +340,9 @@ class StateStore:
 
     def _save(self) -> bool:
         if self._path is None:
+            return True
+        if self._deferred:  # rule 7: made by check_writable, once the lock is held
+            self._owed = True
             return True
         try:
             self._path.parent.mkdir(parents=True, exist_ok=True)

@@ -494,7 +494,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         if spec.can_report_position and self.stall_timeout_s <= least_stall_s:
             raise ValueError(
                 f"stall_timeout_s {self.stall_timeout_s:g} must be longer than it takes a "
-                f"reading to show the rotor turning ({least_stall_s:.2g} s: two moving polls "
+                f"reading to show the rotor turning ({least_stall_s:.3g} s: two moving polls "
                 "and noise_deg at its speed)"
             )
         self.check_pointing(self.pointing)

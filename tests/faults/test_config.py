@@ -261,8 +261,13 @@ def test_a_state_file_that_cannot_be_written_is_exit_2_and_one_line(
     assert blocker.read_text() == "not a directory\n"
 
 
+@pytest.mark.parametrize(
+    "content",
+    ['{"rotators": {"tower": {"locked": true}}}', '{"rotators": {"tower": {"locked": "no"}}}'],
+    ids=["valid", "malformed"],
+)
 def test_a_second_run_of_one_installation_is_exit_2_naming_the_first(
-    tmp_path: Path, broker: Mosquitto, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, broker: Mosquitto, capsys: pytest.CaptureFixture[str], content: str
 ) -> None:
     """state_store.py rule 7, an attack pass: the same configuration run twice took turns
     throwing the first off the broker under one client id, and a STOP that reached the one
@@ -270,12 +275,12 @@ def test_a_second_run_of_one_installation_is_exit_2_naming_the_first(
     state_file = tmp_path / "state" / "state.json"
     config = start_up_config(tmp_path, broker.port, state_file=state_file)
     state_file.parent.mkdir()
-    state_file.write_text('{"rotators": {"tower": {"locked": true}}}')
+    state_file.write_text(content)  # (a malformed entry is replaced, locked, by a start)
     before = state_file.stat().st_ino
     with held(state_file):
         code, out, err = run_main(capsys, "run", "-c", str(config))
-    # (a review: the refused one wrote the state file over, and could undo the first's save)
-    assert state_file.stat().st_ino == before
+    # (reviews: the refused one wrote the state file over, and could undo the first's save)
+    assert state_file.stat().st_ino == before and state_file.read_text() == content
     assert (code, out) == (2, ""), err
     assert f"another rotor-bridge runs this installation (process {os.getpid()})" in err, err
     assert f"state_file {state_file} is in use" in err and "Traceback" not in err, err
