@@ -176,12 +176,12 @@ def axis_configs(
         own = r.axis_settings(axis)
         cfg = worker_config(own, sky, follow)
         pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
-        # (motion.py rule 10: each box held to the rotator's limits, as the judge holds it)
-        limits = (
-            (pointing.az_min_deg, pointing.az_max_deg),
-            (pointing.el_min_deg, pointing.el_max_deg),
+        motion = replace(  # (motion.py rule 10: held to the rotator's limits, as judged)
+            cfg.motion,
+            spec=spec,
+            az_limits_deg=(pointing.az_min_deg, pointing.az_max_deg),
+            el_limits_deg=(pointing.el_min_deg, pointing.el_max_deg),
         )
-        motion = replace(cfg.motion, spec=spec, az_limits_deg=limits[0], el_limits_deg=limits[1])
         wind = cfg.wind
         if axis is Axis.AZIMUTH and pointing.park is not None:
             # the park's azimuth alone: the azimuth box turns no elevation, and judged with

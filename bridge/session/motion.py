@@ -93,21 +93,20 @@ Rules:
    stays as it is at every time before ``next_deadline(m, cfg, t0)``, so the controller does not
    tick it before then (controller.py ``tick``).
 10. Limits hold on the way too (pointing.py rule 4 holds them for targets): while a target is
-   out, two readings in a row more than ``tolerance_deg + noise_deg`` beyond a limit an axis
-   is held to (``az_limits_deg``, ``el_limits_deg``: the judge's raw ones), the second further
-   out than the first and more than ``noise_deg`` from where that axis last moved since the
-   target went out (rule 5's), are ``past limit`` (``Motion.past`` says which): the target
-   dropped and the rotor stopped at once, as a pass is. Not one reading (a review: one digit
-   flipped, 86 read as 96, stopped a rotor short of its target at 89 and ended tracking), and
-   not the coast of a turn to a target at its limit (arrival allows ``tolerance_deg``; a
-   review: a SPID's elevation read -0.1 at 0). The controller is heading
-   elsewhere: a GS-232 target frame is one flipped bit from a jog (``W`` to ``U``, up until
-   stopped: an attack pass ran an elevation held to 90 degrees to 103, and a pass 10 degrees
-   beyond the target told it only there). The elevation always; the azimuth on a scale that
-   does not wrap (a wrapping controller picks its own way round, which may sweep past a
-   limit); neither on a box that does not turn it (a composite's elevation box's azimuth). A
-   rotor outside a limit (set narrower since, or turned there by hand) that a target brings
-   back moves inward; its jitter is no movement (rule 1).
+   out, two readings in a row more than ``tolerance_deg + noise_deg`` beyond a limit an axis is
+   held to (``az_limits_deg``, ``el_limits_deg``: the judge's raw ones), the second further out
+   than the first and more than ``noise_deg`` from where that axis last moved since the target
+   went out (rule 5's), are ``past limit`` (``Motion.past`` says which): the target dropped and
+   the rotor stopped at once, as a pass is. Not one reading (a review: one digit flipped, 86
+   read as 96, stopped a rotor short of its target at 89 and ended tracking), and not the coast
+   of a turn to a target at its limit (arrival allows ``tolerance_deg``; a review: a SPID's
+   elevation read -0.1 at 0). The controller is heading elsewhere: a GS-232 target frame is one
+   flipped bit from a jog (``W`` to ``U``, up until stopped: an attack pass ran an elevation
+   held to 90 degrees to 103, and a pass 10 degrees beyond the target told it only there). The
+   elevation always; the azimuth on a scale that does not wrap (a wrapping controller picks its
+   own way round, which may sweep past a limit); neither on a box that does not turn it (a
+   composite's elevation box's azimuth). A rotor outside a limit (set narrower since, or turned
+   there by hand) that a target brings back moves inward; its jitter is no movement (rule 1).
 """
 
 from __future__ import annotations
@@ -366,53 +365,26 @@ def reading(
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
-    """Rule 10: the axis ``m``'s reading shows turned on outward beyond a limit (the first
-    found, the elevation's first), or None."""
+    """Rule 10: the axis ``m``'s reading shows turned on outward beyond a limit (the
+    elevation's first), or None: this reading and the one before both more than ``margin``
+    past the limit, this one further out and more than ``noise_deg`` from where the axis last
+    moved."""
     spec, margin, noise = cfg.spec, cfg.tolerance_deg + cfg.noise_deg, cfg.noise_deg
+    axes = []
     if spec.has_elevation:
-        low, high = cfg.el_limits_deg
-        way = _beyond(
-            before.el_position_deg, m.el_position_deg, m.el_from_deg, low, high, margin, noise
-        )
-        if way:
-            assert m.el_position_deg is not None
-            return (
-                "elevation",
-                m.el_position_deg,
-                *((high, "el_max_deg") if way > 0 else (low, "el_min_deg")),
-            )
+        el = before.el_position_deg, m.el_position_deg, m.el_from_deg, cfg.el_limits_deg
+        axes.append(("elevation", "el", *el))
     if spec.turns_azimuth and not spec.az_wraps:
-        low, high = cfg.az_limits_deg
-        way = _beyond(before.position_deg, m.position_deg, m.az_from_deg, low, high, margin, noise)
-        if way:
-            assert m.position_deg is not None
-            return (
-                "azimuth",
-                m.position_deg,
-                *((high, "az_max_deg") if way > 0 else (low, "az_min_deg")),
-            )
+        az = before.position_deg, m.position_deg, m.az_from_deg, cfg.az_limits_deg
+        axes.append(("azimuth", "az", *az))
+    for axis, key, last, pos, since, (low, high) in axes:
+        if last is None or pos is None or since is None:
+            continue
+        if pos > last > high + margin and pos - since > noise:
+            return axis, pos, high, f"{key}_max_deg"
+        if pos < last < low - margin and since - pos > noise:
+            return axis, pos, low, f"{key}_min_deg"
     return None
-
-
-def _beyond(
-    last: float | None,
-    pos: float | None,
-    since: float | None,
-    low: float,
-    high: float,
-    margin: float,
-    noise: float,
-) -> int:
-    """Rule 10, one axis: 1 (-1) if this reading (``pos``) and the one before (``last``) are
-    both more than ``margin`` above its high limit (below its low one), this one further out
-    and more than ``noise`` from where the axis last moved (``since``); else 0."""
-    if last is None or pos is None or since is None:
-        return 0
-    if pos > last > high + margin and pos - since > noise:
-        return 1
-    if pos < last < low - margin and since - pos > noise:
-        return -1
-    return 0
 
 
 def _dropped(m: Motion) -> Motion:
