@@ -352,6 +352,47 @@ def test_with_every_slot_held_by_clients_over_their_budget_a_stop_drops_one_of_t
             sock.close()
 
 
+def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_quiet_one(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 3, a review: programs that stay under their budgets but always leave a command
+    half sent (``C\rC``, then ``\rC``, ...) were never dropped to make room, so with every
+    slot so held the quiet program, Gpredict, was dropped for the operator instead (and
+    with no quiet one, the operator's stop was turned away). One that has not been at rest
+    between commands for PENDING_GRACE_S now goes first, the one the longest."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, max_clients=4)
+    quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+    quiet.sendall(b"C\r")
+    assert _read(quiet, 8) == b"AZ=120\r\n"  # an established program, at rest from now on
+    streams = []
+    for _ in range(3):
+        sock = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+        sock.sendall(b"C\rC")
+        assert _read(sock, 8) == b"AZ=120\r\n"
+        streams.append(sock)
+        clock.t += 1.0
+    try:
+        for sock in streams:  # each finishes one and begins the next, as ever
+            sock.sendall(b"\rC")
+            assert _read(sock, 8) == b"AZ=120\r\n"
+        wait_until(
+            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 3,
+            10,
+            "the three mid-command",
+        )
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+        assert _closed_by_peer(streams[0])  # never at rest the longest
+        quiet.sendall(b"C\r")
+        assert _read(quiet, 8) == b"AZ=120\r\n"  # still served
+    finally:
+        for sock in [quiet, *streams]:
+            sock.close()
+
+
 def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:

@@ -19,11 +19,15 @@ Rules:
    paused longest, with whatever it sent unread, a stop behind its flood too (it waited
    behind its own flood anyway; a flood always has complete lines unread,
    so an attack pass's 20 clients chattering on 16 slots turned every stop away and dropped
-   the one quiet program, Gpredict, first); else among those ``_Client.evictable`` (no
-   command half received, or one left half received for more than PENDING_GRACE_S) with no
-   complete command line unread: the newest that has never finished a command, else the one
-   idle longest (an established program is dropped last); only when none may go is the
-   newcomer turned away. A peer
+   the one quiet program, Gpredict, first); then one mid-command at every read for more than
+   PENDING_GRACE_S (``_Client.streaming``: a command half received that long, or lines sent
+   on and on with the next always begun), the one the longest, its unread lines too (a
+   review: clients under their budgets that always left a command half sent were never
+   dropped, so they kept a stop out and Gpredict was dropped in their place); else among
+   those ``_Client.evictable`` (no command half received) with no complete command line
+   unread: the newest that has never finished a command, else the one idle longest (an
+   established program is dropped last); only when none may go is the newcomer turned away.
+   A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
    past that makes room among its own clients the same way or is turned away, so one host's
    connections cannot fill the port for the others. Loopback has no such share: every program
@@ -129,11 +133,17 @@ class _Client:
         self.since_s = now  # connected
         self.useful_s = now  # connected, or last finished a command
         self.pending_s: float | None = None  # first byte of a command not yet complete
+        self.rest_s = now  # connected, or last read with no command left half received
         self.done = False  # has finished a command: an established program, dropped last
         self.over_s: float | None = None  # rule 3: paused over its budget since (a flood)
 
-    def evictable(self, now: float) -> bool:
-        return self.pending_s is None or now - self.pending_s > PENDING_GRACE_S
+    def evictable(self) -> bool:
+        return self.pending_s is None
+
+    def streaming(self, now: float) -> bool:
+        """Rule 3: mid-command at every read for more than PENDING_GRACE_S (one command
+        half received for that long, or lines sent on and on with the next always begun)."""
+        return self.pending_s is not None and now - self.rest_s > PENDING_GRACE_S
 
 
 def _loopback(host: str) -> bool:
@@ -519,11 +529,12 @@ class LineServer:
         else:
             why = f"all {self._max_clients} slots"
         flooding = [(c, k) for c, k in pool if k.over_s is not None]
-        candidates = [
-            (c, k) for c, k in pool if k.evictable(now) and not _line_ready(c, self._ends)
-        ]
+        streaming = [(c, k) for c, k in pool if k.over_s is None and k.streaming(now)]
+        candidates = [(c, k) for c, k in pool if k.evictable() and not _line_ready(c, self._ends)]
         if flooding:  # over its budget the longest: its unread lines are its flood's
             victim = min(flooding, key=lambda pair: pair[1].over_s or 0.0)[0]
+        elif streaming:  # never at rest the longest: its unread lines are its stream's
+            victim = min(streaming, key=lambda pair: pair[1].rest_s)[0]
         elif not candidates:
             return False, f"{why} taken, every client mid-command"
         elif fresh := [(c, k) for c, k in candidates if not k.done]:
@@ -589,7 +600,7 @@ class LineServer:
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
         over = False  # rule 5: over its budget now (said once each time)
-        last_bytes = self._clock()
+        last_bytes = rest = self._clock()  # rest: the last read that left no command begun
         pending_since: float | None = None  # the first byte of a command not yet complete
         try:
             while True:
@@ -609,7 +620,7 @@ class LineServer:
                 over = False
                 if me is not None:  # rule 3: what _make_room weighs
                     me.over_s = None
-                    me.pending_s = pending_since
+                    me.pending_s, me.rest_s = pending_since, rest
                     me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
@@ -649,7 +660,7 @@ class LineServer:
                 if finished and me is not None:
                     me.done = True  # rule 3: an established program, dropped last
                 if session.idle and not guard.holding:
-                    pending_since, unfinished = None, 0
+                    pending_since, unfinished, rest = None, 0, last_bytes
                 elif finished:  # rule 5: counted from the last command finished, not read
                     pending_since, unfinished = last_bytes, raw  # its tail: within this read
                 else:
