@@ -34,6 +34,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.web import auth
 from bridge.interfaces.web.connections import MAX_PER_ADDRESS
 from bridge.interfaces.web.files import installation_secret
+from bridge.interfaces.web.server import _named
 from bridge.settings import ConfigError
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
@@ -426,6 +427,7 @@ def test_a_status_pushed_is_the_r_status_document(console: tuple[Rig, ConsoleCli
 
 
 def test_a_taken_port_is_a_clear_error_and_leaves_nothing_running(rig: Rig) -> None:
+    """The error names the address and the setting to change (``web.port``)."""
     holder = socket.socket()
     holder.bind(("127.0.0.1", 0))
     holder.listen()
@@ -434,7 +436,7 @@ def test_a_taken_port_is_a_clear_error_and_leaves_nothing_running(rig: Rig) -> N
     rig.add("hf")
     before = {t.name for t in threading.enumerate()}
     try:
-        with pytest.raises(ConfigError, match="in use"):
+        with pytest.raises(ConfigError, match=r"127\.0\.0\.1:\d+: the port is in use .*web\.port"):
             rig.start()
     finally:
         holder.close()
@@ -792,3 +794,15 @@ def test_a_token_of_one_bridge_is_not_good_on_another_with_the_same_password(
     )
     assert again.valid(token, now)  # the same installation after a restart
     assert (tmp_path / "tower" / "console-secret").stat().st_mode & 0o077 == 0
+
+
+def test_a_bind_name_that_does_not_resolve_names_web_bind() -> None:
+    """A config review: ``web.bind = "shack-pc"`` that the machine cannot resolve ended ``run``
+    with the resolver's own words ("Name or service not known") and no setting named."""
+    failure = socket.gaierror(socket.EAI_NONAME, "Name or service not known")
+    named = _named(failure, "shack-pc", 8754)
+    assert named.strerror == (  # (what the start says: app.py)
+        "web console: cannot listen on shack-pc:8754: web.bind 'shack-pc' is no address this "
+        "machine can resolve (Name or service not known)"
+    )
+    assert named.errno == socket.EAI_NONAME  # (not EADDRNOTAVAIL: no "not yet" at boot)

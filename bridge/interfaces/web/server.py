@@ -43,9 +43,11 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import errno
 import gzip
 import json
 import logging
+import socket
 import threading
 import time
 from collections.abc import Awaitable, Callable
@@ -68,6 +70,19 @@ log = logging.getLogger(__name__)
 BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def _named(exc: OSError, bind: str, port: int) -> OSError:
+    """``listen``'s failure with the address and the settings to change (its errno kept: the
+    start tells an address not up yet at boot by it)."""
+    where = f"{bind or '(every address)'}:{port}"
+    if isinstance(exc, socket.gaierror):
+        why = f"web.bind {bind!r} is no address this machine can resolve ({exc.strerror or exc})"
+    elif exc.errno == errno.EADDRINUSE:
+        why = "the port is in use by another program: change web.port"
+    else:
+        why = f"{exc.strerror or exc}: check web.bind and web.port"
+    return OSError(exc.errno, f"web console: cannot listen on {where}: {why}")
 
 
 def _json(doc: object, status: int = 200) -> web.Response:
@@ -156,11 +171,13 @@ class WebConsole:
         self._thread.start()
         try:
             asyncio.run_coroutine_threadsafe(self._start(), loop).result(timeout=30.0)
-        except BaseException:
+        except BaseException as exc:
             loop.call_soon_threadsafe(loop.stop)
             self._thread.join(timeout=5.0)
             loop.close()
             self._loop = self._thread = None
+            if isinstance(exc, OSError):  # the settings to change, named (a name that does
+                raise _named(exc, self.bind, self.port) from None  # not resolve said nothing)
             raise
         self._running = True
         log.info("web console on %s", self.url)
