@@ -11,7 +11,8 @@ Rules:
    so it reaches the file whole or not at all. Before a
    line that would take the file past ``max_bytes`` the file is rotated: ``audit.jsonl`` becomes
    ``audit.jsonl.1``, that one ``.2``, up to ``keep`` old files; the oldest is deleted.
-3. A write that fails (a full disk, a removed directory, no permission) is never fatal: the
+3. A write that fails (a full disk, a removed directory, no permission) is never fatal (nor is
+   a bug in making a batch's lines: logged, its lines lost and counted, the writer goes on): the
    file is cut back to its size before that line (a short write on a full disk leaves no torn
    line), the line and the rest of its batch are dropped and counted (``lines_lost``,
    ``write_failures``), and the failure is reported once (``on_problem``) until a write
@@ -32,6 +33,7 @@ import json
 import logging
 import os
 import queue
+import re
 import stat
 import threading
 from collections.abc import Callable, Sequence
@@ -49,12 +51,15 @@ _STOP = object()
 
 
 _LINE_BREAKS = str.maketrans({"\x85": "\\u0085", "\u2028": "\\u2028", "\u2029": "\\u2029"})
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def audit_line(doc: dict[str, object]) -> str:
     """An event as one JSON line (rule 2): besides what JSON escapes, the characters other
-    readers break lines at (str.splitlines, editors) are escaped too."""
-    return json.dumps(doc, separators=(",", ":"), ensure_ascii=False).translate(_LINE_BREAKS)
+    readers break lines at (str.splitlines, editors) are escaped too, and so is a lone
+    surrogate (a JSON ``\\ud800`` in a payload: no UTF-8 has it, and writing it raised)."""
+    line = json.dumps(doc, separators=(",", ":"), ensure_ascii=False).translate(_LINE_BREAKS)
+    return _SURROGATE.sub(lambda m: f"\\u{ord(m.group()):04x}", line)
 
 
 class AuditFile:
@@ -125,7 +130,12 @@ class AuditFile:
                     break
             events = [e for e in batch if isinstance(e, AuditEvent)]
             if events:
-                self._write(events)
+                try:
+                    self._write(events)
+                except Exception:  # rule 3: a bug costs its batch, never the writer
+                    self.lines_lost += len(events)
+                    self._unsaid += len(events)
+                    log.exception("audit file %s: %d line(s) lost", self.path, len(events))
             for item in batch:
                 if isinstance(item, threading.Event):
                     item.set()

@@ -114,7 +114,7 @@ def test_whatever_a_sender_wrote_each_event_stays_one_line_of_json(tmp_path: Pat
     path = tmp_path / "audit.jsonl"
     audit = AuditFile(path, 1_000_000)
     audit.start()
-    nasty = 'a\nb\r\x85c\u2028d\u2029e"}\n{"forged": true} Jörg'
+    nasty = 'a\nb\r\x85c\u2028d\u2029e"}\n{"forged": true} Jörg \ud800'
     sent = [
         AuditEvent(1.0, "rotor", Origin(Source.MQTT, "DL1ABC"), nasty, "refused: " + nasty, None),
         event(1),
@@ -127,6 +127,32 @@ def test_whatever_a_sender_wrote_each_event_stays_one_line_of_json(tmp_path: Pat
     assert len(written) == 2
     assert written[0]["command"] == nasty and written[0]["result"] == "refused: " + nasty
     assert "Jörg" in path.read_text()  # names stay readable, not \\u escapes
+    # an attack pass: a lone surrogate (JSON "\\ud800" in a console name or a claim's key)
+    # could not be encoded, and the writer's thread died: every later line was lost, unsaid
+    assert "\\ud800" in path.read_text()
+
+
+def test_a_fault_in_writing_costs_its_lines_never_the_writer(tmp_path: Path) -> None:
+    """Rule 3: whatever a write raises (not only OSError), its lines are lost and counted,
+    and the next are written."""
+    path = tmp_path / "audit.jsonl"
+    faults = [ValueError("a bug")]
+
+    def write(fd: int, data: bytes) -> int:
+        if faults:
+            raise faults.pop()
+        return os.write(fd, data)
+
+    audit = AuditFile(path, 1_000_000, os_write=write)
+    audit.start()
+    audit.put(event(0))
+    audit.flush()
+    audit.put(event(1))
+    audit.flush()
+    audit.stop()
+    written = lines(path)
+    assert [d["command"] for d in written] == ["P 1 0"]
+    assert written[0]["dropped"] == 1 and audit.lines_lost == 1
 
 
 def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -> None:

@@ -57,6 +57,9 @@ def test_a_locator_is_checked_and_written_as_locators_are() -> None:
         (b'{"command":"toward","latitude_deg":91,"longitude_deg":0}', "-90..90"),
         (b'{"command":"preset","name":""}', "1 to 80"),
         (b'{"command":"preset","name":"a\\u0000b"}', "control characters"),
+        # an attack pass: a lone surrogate killed the audit writer; the remote answered 500
+        (b'{"command":"preset","name":"\\ud800"}', "control characters"),
+        (b'{"command":"track","body":"\\udfff"}', "control characters"),
         (b'{"command":[]}', "unknown command"),
         (b'{"command":"target","az":10,"az":350}', "key 'az' given twice"),
         (b"[" * 3000, "nested too deep"),

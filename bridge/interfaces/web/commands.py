@@ -250,7 +250,8 @@ def _text(doc: dict[str, object], key: str) -> str:
     value = doc.get(key)
     if not isinstance(value, str) or not value.strip() or len(value) > 80:
         raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
-    if any(unicodedata.category(c) == "Cc" for c in value):  # as the settings take names
+    if any(unicodedata.category(c) in ("Cc", "Cs") for c in value):  # (as the settings take
+        # names; a lone surrogate, JSON's "\\ud800", is no text: MQTT could not send it)
         raise BadCommand(f'"{key}" must be text without control characters')
     return value
 
