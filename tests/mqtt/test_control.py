@@ -44,6 +44,10 @@ def test_a_release_may_name_who_released_it() -> None:
     assert parse_release(b"RELEASE") is None
     assert parse_release(b'{"operator": "\\u001b[2J"}') is None  # not printable: nobody
     assert parse_release(b"{broken") is None
+    # an attack pass: JSON nested past the parser's depth raised, and the release was lost
+    assert parse_release(b'{"a":' + b"[" * 200_000) is None
+    assert parse_release(b'{"a":' + b"[" * 100 + b"]" * 100 + b"}") is None
+    assert parse_release(b'{"operator": "\\ud800"}') is None  # a lone surrogate: nobody
 
 
 def test_r_control_says_who_and_until_when_or_nobody() -> None:

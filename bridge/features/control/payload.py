@@ -51,10 +51,13 @@ def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
 
 
 def parse_release(payload: bytes) -> str | None:
-    """Rule 2: who the payload says released it, or None."""
+    """Rule 2: who the payload says released it, or None (a payload no command is as long as,
+    or JSON nested past the parser's depth, an attack pass: names nobody, and still releases)."""
+    if len(payload) > MAX_COMMAND_BYTES or not payload.strip().startswith(b"{"):
+        return None
     try:
-        obj = json.loads(payload.decode("utf-8")) if payload.strip().startswith(b"{") else None
-    except (UnicodeDecodeError, json.JSONDecodeError):
+        obj = json.loads(payload.decode("utf-8"))
+    except (ValueError, RecursionError):  # (not UTF-8, not JSON)
         return None
     return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
 
