@@ -51,6 +51,7 @@ from bridge.core.ending import Ending
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
+from bridge.interfaces.mqtt.payloads import one_line
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.interfaces.rotctld import RotctldServer
@@ -231,7 +232,12 @@ class Remote:
         if said is not None and not retain:  # rule 7
             event = parse_event(payload)
             if event is not None:
-                log.warning("%s: the station says: %s (%s)", said, event.message, event.command)
+                log.warning(  # (escaped: the station's message quotes what its sender wrote)
+                    "%s: the station says: %s (%s)",
+                    said,
+                    one_line(event.message),
+                    one_line(str(event.command)),
+                )
         feed = self.feed
         if feed is not None:
             feed.on_message(topic, payload, retain)

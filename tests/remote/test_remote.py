@@ -315,6 +315,11 @@ def test_another_operators_lease_is_refused_at_once_and_the_stations_refusals_ar
         other.publish("rotor/lock", "ON", qos=1)  # the station judges again: R/error, logged
         other.publish("rotor/target", "100", qos=1)
         wait_until(lambda: "the station says: rotator is locked" in caplog.text, 10, "logged")
+        # an attack pass: the station's refusal quotes the sender's key, and the remote's
+        # log took its line break: a line of the remote's own, forged by anyone on the broker
+        other.publish("rotor/control/claim", '{"minutes": 5, "\\nFAKE: forged": 1}', qos=1)
+        wait_until(lambda: "\\nFAKE: forged" in caplog.text, 10, "the refusal, escaped")
+        assert not any("\nFAKE" in r.getMessage() for r in caplog.records)
     finally:
         other.loop_stop()
         other.disconnect()

@@ -70,6 +70,16 @@ class PayloadError(ValueError):
     pass
 
 
+LOGGED_CHARS = 200  # service.py rule 4: of a command or a reason, in a log line
+
+
+def one_line(text: str) -> str:
+    """What a sender wrote, for a log line (service.py rule 4): what is not printable escaped
+    (no payload starts a log line of its own), cut short."""
+    shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return shown if len(shown) <= LOGGED_CHARS else shown[: LOGGED_CHARS - 3] + "..."
+
+
 def _text(payload: bytes) -> str:
     if len(payload) > MAX_COMMAND_BYTES:
         raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")

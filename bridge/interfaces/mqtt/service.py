@@ -325,8 +325,8 @@ class MqttService:
         log.info(  # rule 4: the same line for whoever reads the log (journalctl -f)
             "%s: refused %s: %s",
             rotator_id,
-            _one_line(event.command or "input"),
-            _one_line(str(doc["message"])),
+            pl.one_line(event.command or "input"),
+            pl.one_line(str(doc["message"])),
         )
 
     # -- groups (rule 10) ---------------------------------------------------------------------
@@ -360,8 +360,8 @@ class MqttService:
         log.info(
             "group %s: refused %s: %s",
             group_id,
-            _one_line(str(doc.get("command") or "input")),
-            _one_line(str(doc["message"])),
+            pl.one_line(str(doc.get("command") or "input")),
+            pl.one_line(str(doc["message"])),
         )
 
     def _group_message(
@@ -672,11 +672,3 @@ EMPTY_311 = (  # rule 1
     "empty payload (under MQTT 3.1.1 an empty message may be the deletion of a retained one: "
     "nothing was done)"
 )
-LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line
-
-
-def _one_line(text: str) -> str:
-    """Rule 4: what is not printable escaped (no payload starts a log line of its own), cut
-    short."""
-    shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
-    return shown if len(shown) <= LOGGED_CHARS else shown[: LOGGED_CHARS - 3] + "..."
