@@ -5,8 +5,10 @@ opened: the rotator is offline, so a target the lease lets through is refused fo
 from __future__ import annotations
 
 import json
+import threading
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -162,6 +164,31 @@ def test_the_lease_survives_a_restart(tmp_path: Path) -> None:
     again, _, _ = rotator(tmp_path, clock)
     assert again.operators.holder == Control("DL1ABC", T0 + 1800)
     assert refused(lambda: again.submit(Target(10, origin=OTHER))) == "leased"
+
+
+def test_a_flood_of_renewed_claims_is_one_save_of_the_newest(tmp_path: Path) -> None:
+    """Rule 1, an attack pass: 1,500 renewing claims queued as many writes of the state file,
+    each with its fsync, and a lock ON's save waited a minute behind them on an SD card."""
+    clock = Clock()
+    rot, _, _ = rotator(tmp_path, clock)
+    store = rot._store
+    gate = threading.Event()
+    store.later(gate.wait)  # the writer busy (a slow disk) while the claims come
+    written: list[bytes] = []
+    write = store._write
+
+    def counted(path: Path, **kw: Any) -> None:
+        write(path, **kw)
+        written.append((tmp_path / "state.json").read_bytes())
+
+    store._write = counted  # type: ignore[method-assign]
+    for minutes in range(1, 51):  # the holder renews, and renews
+        rot.submit(Claim("DL1ABC", minutes, origin=HOLDER), "claim")
+    gate.set()
+    store.flush()
+    assert len(written) == 1
+    kept = json.loads(written[0])["rotators"]["t"]["lease"]
+    assert kept == {"operator": "DL1ABC", "until": T0 + 50 * 60}  # the newest
 
 
 def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None:
