@@ -448,12 +448,12 @@ class App:
         for r in settings.rotators if settings.mqtt.stop_express else ():
             t = self.topics.rotator(r.id)
             topics[t.lock] = (r.id, "lock")  # every rotator's lock ON, said (its rule 11)
+            topics[t.stop] = (r.id, "stop")  # and stop, written or said (its rules 3, 11)
             # (a rotator of two boxes has two ports: its stops take the stop lane)
             # (nor does a stop of several frames: an RC2800's, paced by the session)
             if r.spec.stop_anytime and not r.axes:
                 stop = r.spec.codec_factory().encode_stop()
                 if isinstance(stop, bytes):
-                    topics[t.stop] = (r.id, "stop")
                     frames[r.id] = stop
         groups = {  # a group's stop: each member's frame (interfaces/mqtt/groups.py)
             self.topics.group(g.id).stop: tuple(g.rotators) for g in settings.groups
@@ -474,14 +474,15 @@ class App:
         return express
 
     def _express_wrote(self, rotator_id: str, t: float) -> None:
-        """interfaces/mqtt/express.py rule 11: a stop frame the express wrote at ``t`` is the
-        rotator's stop too when neither connection could have had that stop."""
+        """interfaces/mqtt/express.py rule 11: a stop the express wrote a frame for at ``t``,
+        or read at ``t`` and wrote none for, is the rotator's stop too when neither connection
+        could have had that stop."""
         rotator = self._heard_only_by_express(rotator_id, t)
         if rotator is None:
             return
         log.warning(
-            "%s: a stop the stop express heard and wrote while the bridge's connections were "
-            "away: carried out here too",
+            "%s: a stop the stop express heard while the bridge's connections were away: "
+            "carried out here too",
             rotator_id,
         )
         rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")

@@ -454,3 +454,31 @@ def test_a_lock_on_only_the_express_heard_is_set_for_a_rotator_it_writes_no_fram
         mast.submit(Target(200.0, source=Source.WEB), "target 200")
     time.sleep(1.0)  # what a move would take to show: none
     assert abs(spid.state().az_deg - az) < 1 and not spid.state().is_moving
+
+
+def test_a_groups_stop_only_the_express_heard_stops_the_members_it_writes_no_frame_for(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11, an attack pass: after a broker restart the express was back before
+    the bridge's connections, and a group's stop then stopped the Rotor-EZ it writes for while
+    the group's SPID turned on to the group's target (no frame of its own, and no copy of that
+    stop ever comes to the bridge's connections). It is said, and the SPID stopped too."""
+    tower = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
+    mast = rig.add("mast", "rot2prog", emu={"start_az_deg": 10, "az_speed_deg_s": 6.0})
+    rig.sections = {"groups": [{"id": "stack", "rotators": ["tower", "mast"]}]}
+    app = rig.start()
+    rig.ready("tower")
+    rig.ready("mast")
+    express_ready(app)
+    rig.probe.publish("rotor/stack/target", "300")
+    tower.wait_for(lambda s: s.is_moving, slow(10))
+    mast.wait_for(lambda s: s.is_moving, slow(10))
+    rotator = next(r for r in app.rotators if r.id == "mast")
+    with express_alone(app, broker) as operator:
+        operator.publish("rotor/stack/stop", "STOP")
+        mast.wait_for(lambda s: not s.is_moving, slow(10))
+        tower.wait_for(lambda s: not s.is_moving, slow(10))
+        wait_until(lambda: rotator.status.target_az_deg is None, 10, "the SPID's target gone")
+        az = mast.state().az_deg
+        time.sleep(1.0)  # what a move would take to show: none
+        assert abs(mast.state().az_deg - az) < 1 and not mast.state().is_moving

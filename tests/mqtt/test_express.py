@@ -43,8 +43,9 @@ TOPICS = {
     "rotor/a/stop": ("a", "stop"),
     "rotor/a/lock": ("a", "lock"),
     "rotor/b/stop": ("b", "stop"),
+    "rotor/c/stop": ("c", "stop"),  # (a SPID, say: no frame the express may write)
 }
-GROUPS = {"rotor/stack/stop": ["a", "b"]}
+GROUPS = {"rotor/stack/stop": ["a", "b"], "rotor/all/stop": ["a", "c"]}
 SYNC = "rotor/bridge/fence/express"
 
 
@@ -153,6 +154,31 @@ def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None
         {"op": "locked", "rotator": "a", "t": 100.0, "operator": None},
         {"op": "wrote", "rotator": "a", "t": 100.0 + GAP_S},
     ]
+    rig.mine.setblocking(False)
+    with pytest.raises(BlockingIOError):
+        rig.mine.recv(65536)
+
+
+def test_a_stop_it_writes_no_frame_for_is_said_once_a_gap(rig: ChildRig) -> None:
+    """Rule 11, an attack pass: a group's stop heard by the express alone (the bridge's
+    connections not back after a broker restart) stopped the member it writes for, and its
+    SPID turned on. A stop it writes no frame for, a member's or a rotator's own, is said (the
+    bridge carries it out if it never had it), once a gap in a flood."""
+    now = [100.0]
+    rig.child.clock = lambda: now[0]
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.stop("rotor/all/stop")
+    assert port.written() == b";"
+    assert rig.word() == {"op": "wrote", "rotator": "a", "t": 100.0}
+    assert rig.word() == {"op": "heard", "rotator": "c", "t": 100.0}
+    for _ in range(100):
+        rig.stop("rotor/c/stop")
+    now[0] += GAP_S
+    rig.stop("rotor/c/stop")
+    assert rig.word() == {"op": "heard", "rotator": "c", "t": 100.0 + GAP_S}
+    rig.stop("rotor/b/stop")  # b's port not handed over (unplugged, say): said, not written
+    assert rig.word() == {"op": "heard", "rotator": "b", "t": 100.0 + GAP_S}
     rig.mine.setblocking(False)
     with pytest.raises(BlockingIOError):
         rig.mine.recv(65536)
@@ -499,11 +525,16 @@ def test_a_tty_found_stuck_is_waited_for_no_more_until_it_takes_a_frame(
         rig.hand("a", 1, a)
         rig.hand("b", 2, b)
         rig.stop("rotor/a/stop")  # found stuck: waited for once
+        first = 100.0
         now[0] += GAP_S
         came = now[0]
         rig.stop("rotor/a/stop")
         rig.stop("rotor/b/stop")
         assert b.written() == b"S\r"
+        # (a's stops, no frame of them taken, are said: rule 11, the bridge's own if only
+        # the express heard them)
+        assert rig.word() == {"op": "heard", "rotator": "a", "t": first}
+        assert rig.word() == {"op": "heard", "rotator": "a", "t": came}
         assert rig.word() == {"op": "wrote", "rotator": "b", "t": came}  # not after a's wait
         full[0] = False  # a's line moves again: its frame goes, and it is waited for again
         now[0] += GAP_S

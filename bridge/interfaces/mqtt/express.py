@@ -21,11 +21,11 @@ Rules:
 2. Its connection is the lane's in all but the client id (``express_client_id``): the same
    broker settings, credentials and TLS (the password handed over the control socket, never
    on the command line), the protocol the main connection settled on, subscribed to the stop
-   and lock topics, the stop topics of the groups its rotators are in, and its own sync topic
+   and lock topics of every rotator, the stop topics of the groups, and its own sync topic
    (rule 8), without the broker's replay of a retained message (lastword.py rule 6). It
    publishes its sync words, nothing else.
 3. What it does, and all it does: a message on ``R/stop`` (any payload), a lock ON on
-   ``R/lock`` or a message on ``G/stop`` of a group (each member it writes for), not a
+   ``R/lock`` or a message on ``G/stop`` of a group (each member), not a
    replay (under MQTT 3.1.1 a retained flag means "replayed"; the session carries such a
    stop out once, lastword.py rule 6) nor an empty retained message (the deletion of a
    retained one: service.py rule 1), is one ``os.write`` of that rotator's stop frame on its
@@ -146,7 +146,12 @@ Rules:
    tower, and a rotator stopped but not locked took the next target from any front end. The
    express reads every rotator's lock topic for this, also of those it writes no frame for (a
    SPID, a SatEL, an RC2800, a rotator of two boxes: each locked as the others; a bridge with
-   none it writes for runs no express, and has no such relay). A
+   none it writes for runs no express, and has no such relay). Their stops too, and a group's
+   stop for every member: a stop it writes no frame for (no frame of that model, its port
+   not held, nothing of the frame taken) it says (``heard``, with the time it read it; once
+   in GAP_S a rotator), and the same test gives the rotator its stop (an attack pass: after
+   a broker restart the express came back first, and a ``G/stop`` stopped the group's
+   Rotor-EZ while its SPID turned on to the group's target). A
    lock ON a connection heard too within the second before is set twice, and a lock OFF
    carried out between the two is undone: the safe side, said in docs/mqtt.md.
 """
@@ -320,12 +325,8 @@ class Express:
         read, at that time, from that operator (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
-        self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames or rk[1] == "lock"}
-        self._groups = {
-            t: members
-            for t, all_members in (groups or {}).items()
-            if (members := [m for m in all_members if m in frames])
-        }
+        self._topics = dict(topics)
+        self._groups = {t: list(members) for t, members in (groups or {}).items() if members}
         self._frames = frames
         self._sync_topic = sync_topic
         self._on_problem = on_problem
@@ -668,6 +669,9 @@ class Express:
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
                 self._carry_alone("a stop it wrote", self._on_wrote, word["rotator"], word["t"])
+            elif op == "heard":
+                log.debug("stop express: %s's stop read, no frame written", word["rotator"])
+                self._carry_alone("a stop it heard", self._on_wrote, word["rotator"], word["t"])
             elif op == "locked":
                 log.debug("stop express: %s's lock ON read", word["rotator"])
                 self._carry_alone(
@@ -928,6 +932,7 @@ class _Child:
         self._v5 = not config["mqtt311"]
         self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
         self._locked_next: dict[str, float] = {}  # ... when its lock ON is said again (rule 11)
+        self._heard_next: dict[str, float] = {}  # ... when a stop it wrote no frame for is said
         self._stuck: set[str] = set()  # rule 9: rotators whose tty took nothing for a whole wait
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
@@ -1035,53 +1040,71 @@ class _Child:
         if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
             return
         read_t = self.clock()
-        owed = [(rid, *tried) for rid in rids if (tried := self._stop(rid)) is not None]
+        owed, unwritten = [], []
+        for rid in rids:
+            tried = self._stop(rid)
+            if tried is False:
+                unwritten.append(rid)
+            elif tried is not True:
+                owed.append((rid, *tried))
         for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
-            self._finish(rid, now, held, done)
-        if locks and read_t >= self._locked_next.get(rids[0], read_t):  # rule 11: the lock
-            self._locked_next[rids[0]] = read_t + GAP_S  # itself, its frame gone or not, and who
-            self.say(op="locked", rotator=rids[0], t=read_t, operator=operator)  # a flood: once
+            if not self._finish(rid, now, held, done):
+                unwritten.append(rid)
+        if locks:  # rule 11: the lock itself, its frame gone or not, and who sent it
+            if read_t >= self._locked_next.get(rids[0], read_t):  # (a flood: said once)
+                self._locked_next[rids[0]] = read_t + GAP_S
+                self.say(op="locked", rotator=rids[0], t=read_t, operator=operator)
+            return
+        for rid in unwritten:  # rule 11: a stop with no frame of this express's, said
+            if read_t >= self._heard_next.get(rid, read_t):  # (a flood: once in GAP_S)
+                self._heard_next[rid] = read_t + GAP_S
+                self.say(op="heard", rotator=rid, t=read_t)
 
-    def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | None:
-        """Rule 3: the frame's one write, at once; what a write cut short or refused leaves
-        owed (when the stop came, the port, the bytes taken) is returned for ``_finish``."""
+    def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | bool:
+        """Rule 3: the frame's one write, at once (True: written; False: nothing went, or
+        another frame went within GAP_S); what a write cut short or refused leaves owed (when
+        the stop came, the port, the bytes taken) is returned for ``_finish``."""
         with self._lock:
             held, now = self._ports.get(rid), self.clock()
-            if held is None or now < self._next.get(rid, now):
-                return None
+            if held is None or rid not in self._frames:
+                return False
+            if now < self._next.get(rid, now):
+                return True  # (rule 3: one went, and was said, less than GAP_S ago)
             frame = self._frames[rid]
             try:
                 done = self.write(held[1], frame)
             except BlockingIOError:  # refused whole: the serial-lines thread inside its write
                 done = 0
             except OSError:
-                return None  # rule 3: nothing went; the session's own stop follows
+                return False  # rule 3: nothing went; the session's own stop follows
             if done == 0 and rid in self._stuck:
-                return None  # rule 9: its tty is stuck; the session's own stop follows
+                return False  # rule 9: its tty is stuck; the session's own stop follows
             if done < len(frame):  # (part taken: a stuck tty moves again)
                 return now, held, done
             self._next[rid] = now + GAP_S
             self._stuck.discard(rid)
         self.say(op="wrote", rotator=rid, t=now)
-        return None
+        return True
 
-    def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> None:
-        """Rule 9: the rest of a frame a write left owed, when the port takes bytes again."""
+    def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> bool:
+        """Rule 9: the rest of a frame a write left owed, when the port takes bytes again;
+        False if none of it went."""
         with self._lock:
             if self._ports.get(rid) is not held:
-                return  # given back meanwhile (closed): nothing more goes to it, nor its copy
+                return done > 0  # given back meanwhile (closed): nothing more goes to it
             whole = self._write_whole(held[1], self._frames[rid], done)
             if whole:
                 self._stuck.discard(rid)
             else:  # rule 9: stuck: no more waits for it until it takes bytes again
                 self._stuck.add(rid)
             if whole is None:
-                return  # rule 3: nothing went; the session's own stop follows
+                return False  # rule 3: nothing went; the session's own stop follows
             self._next[rid] = now + GAP_S
         if whole:
             self.say(op="wrote", rotator=rid, t=now)
         else:
             self.say(op="half", rotator=rid)
+        return True
 
     def _write_whole(self, fd: int, frame: bytes, done: int) -> bool | None:
         """Rule 9: ``done`` bytes of ``frame`` written; True: the rest written too; None:
