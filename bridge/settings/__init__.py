@@ -40,6 +40,7 @@ from pydantic import (
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
 
 from bridge.feature import topic_words
+from bridge.protocols.axes import BEARING_IS_ELEVATION
 from bridge.settings import errors as settings_errors
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
@@ -283,6 +284,7 @@ class Settings(BaseSettings):
     def _groups(self) -> Settings:
         """settings/groups.py rule 4: members are rotators, a group's topics no other's."""
         roots = {r.id: self.rotator_topic(r) for r in self.rotators}
+        models = {r.id: r.model for r in self.rotators}
         seen: set[str] = set()
         # Home Assistant's entity ids write a "-" as "_": two ids that differ only so would ask
         # for the same entities (an attack pass: one got "_2", in whichever order discovery
@@ -308,6 +310,12 @@ class Settings(BaseSettings):
                     raise ValueError(
                         f"{where}.rotators: {rid!r} is no rotator's id (the rotators are "
                         f"{', '.join(roots)})"
+                    )
+                model = models[rid]
+                if model in BEARING_IS_ELEVATION:  # (an attack pass: G/target 80 tilted it)
+                    raise ValueError(
+                        f"{where}.rotators: {rid!r} is a {model} box, whose bearing is an "
+                        "elevation: a group turns its members in azimuth; leave it out"
                     )
             if g.id in reserved():
                 whose = topic_words().get(g.id)

@@ -11,8 +11,9 @@ Rules:
    compass reads: ``lower = 180`` points the lower antenna the other way). A member's limits
    are true bearings (after its offset) within 0..360, the lower first; they only narrow what
    the member's own judge accepts.
-4. The cross-checks against the rotators (an unknown id, an id that clashes with a rotator's
-   topic or a word of the bridge's own topics) are settings/'s, which sees both. The words are
+4. The cross-checks against the rotators (an unknown id, a box made for an elevation rotor
+   alone, whose bearing is an elevation, an id that clashes with a rotator's topic or a word
+   of the bridge's own topics) are settings/'s, which sees both. The words are
    the core's (``CORE_WORDS``, written here) and each registered feature's first topic words,
    from its declaration (``reserved``): a new feature needs no line here.
 5. A rotator's topic is held to the same (settings/ ``_rotator_topics``): one that lies under
