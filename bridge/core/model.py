@@ -494,6 +494,9 @@ class RotatorStatus:
     # what a feature's session part shows (session/parts.py ``Part.status``), by the part's
     # name; a feature's StatusBlock reads its own (bridge/feature.py)
     features: dict[str, object] = field(default_factory=dict)
+    # a stop the controller is owed (session/stops.py rule 3: taken while its port was out or it
+    # was silent), its first frame when it can have one; kept across a restart (runtime/kept.py)
+    stop_owed: bool = False
 
     @property
     def moving(self) -> bool:

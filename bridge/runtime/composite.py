@@ -144,6 +144,7 @@ def merge(
         estimated=az.estimated or el.estimated,
         controller_time=az.controller_time or el.controller_time,
         parked=az.parked and el.parked,
+        stop_owed=az.stop_owed or el.stop_owed,
     )
 
 
@@ -242,6 +243,7 @@ class CompositeWorker:
         health: dict[str, object] | None = None,
         storm: bool = False,
         storm_halted: bool = False,
+        stop_owed: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -266,6 +268,7 @@ class CompositeWorker:
                 health=health if axis is Axis.AZIMUTH else None,  # the azimuth's is shown
                 storm=storm,
                 storm_halted=storm_halted,
+                stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,

@@ -37,6 +37,12 @@ Rules:
    lock, never refused) can send thousands a second, and each was a rewrite of the state file
    with its fsyncs, in line before a lock word said after them (its save held back for
    minutes on an SD card, the card worn for nothing).
+8. A stop owed outlives a restart (session/stops.py rule 3: one taken while the port was out,
+   or the controller silent, is its first frame when it can have one): ``seen_stop`` looks at
+   every status on the lines thread (``stop_owed``) as ``seen_wind`` does, and hands a stop
+   owed, or owed no more, to the writer; the next start owes it (session.py rule 11). An
+   attack pass: a STOP sent while the adapter was out, the bridge restarted before it came
+   back, and the rotor turned on to its old target. A save that fails is reported (rule 3).
 """
 
 from __future__ import annotations
@@ -115,6 +121,7 @@ class Kept:
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
         self.storm_halted = self.storm and store.storm_halted(rotator_id)
+        self.stop_owed = store.stop_owed(rotator_id)  # rule 8
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
@@ -123,6 +130,21 @@ class Kept:
         if storm != self.storm or halted != self.storm_halted:
             self.storm, self.storm_halted = storm, halted
             self._store.later(lambda: self._save_storm_now(storm, halted))
+
+    def seen_stop(self, owed: bool) -> None:
+        """Rule 8 (lines thread: it only compares and hands over)."""
+        if owed != self.stop_owed:
+            self.stop_owed = owed
+            self._store.later(lambda: self._save_stop_now(owed))
+
+    def _save_stop_now(self, owed: bool) -> None:
+        if not self._store.set_stop_owed(self._id, owed):
+            self._report(
+                ErrorKind.STATE,
+                f"a stop {'owed' if owed else 'sent'} could not be saved: a restart would "
+                f"{'not owe it' if owed else 'send it again'} (state file not writable)",
+                "stop",
+            )
 
     def _save_storm_now(self, storm: bool, halted: bool) -> None:
         if not self._store.set_storm(self._id, storm, halted=halted):

@@ -148,6 +148,7 @@ class Rotator:
                 health=store.health(self.id),
                 storm=self._kept.storm,  # kept.py rule 4
                 storm_halted=self._kept.storm_halted,
+                stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -164,6 +165,7 @@ class Rotator:
                 health=store.health(self.id),
                 storm=self._kept.storm,
                 storm_halted=self._kept.storm_halted,
+                stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,
@@ -191,6 +193,7 @@ class Rotator:
         """Every status to the listeners, once rotor health's memory had a look at it."""
         self._health.seen(status.health)
         self._kept.seen_wind(status.wind)
+        self._kept.seen_stop(status.stop_owed)
         self._on_status(status)
 
     def _reset_health(self) -> None:

@@ -1,5 +1,6 @@
 """What must survive a restart of the bridge: each rotator's safety lock, the options the
-user set (the controller forgets them at power-off, so the bridge re-applies them), what rotor
+user set (the controller forgets them at power-off, so the bridge re-applies them), a stop owed
+to a controller (kept.py rule 8), what rotor
 health (session/health.py) has learned of the rotor, and the control lease (runtime/lease.py).
 
 Rules:
@@ -322,6 +323,22 @@ class StateStore:
                 entry["storm_halted"] = True
             else:
                 entry.pop("storm_halted", None)
+            return self._save()
+
+    def stop_owed(self, rotator_id: str) -> bool:
+        """Whether a stop was owed to the rotator when last written (kept.py rule 8); one that
+        is not false (a damaged entry) is owed: a stop more is the safe side."""
+        with self._lock:
+            return self._data.get(rotator_id, {}).get("stop_owed", False) is not False
+
+    def set_stop_owed(self, rotator_id: str, owed: bool) -> bool:
+        """Remember a stop owed, or owed no more; False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if owed:
+                entry["stop_owed"] = True
+            else:
+                entry.pop("stop_owed", None)
             return self._save()
 
     def set_locked(self, rotator_id: str, locked: bool) -> bool:

@@ -86,6 +86,7 @@ class Worker:
         health: dict[str, object] | None = None,
         storm: bool = False,
         storm_halted: bool = False,
+        stop_owed: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -101,6 +102,7 @@ class Worker:
             health=health,
             storm=storm,
             storm_halted=storm_halted,
+            stop_owed=stop_owed,
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

@@ -463,6 +463,7 @@ class Controller:
             wire,  # pending_wire
             wall_offset_s,
             features,
+            self.stops.owed,  # stop_owed
         )
 
     def take_notes(self) -> list[Note]:

@@ -43,6 +43,9 @@ Rules:
     A session that starts locked (a lock the state file kept) owes one: the lock ON may have
     come while the port was out, and its stop was owed in the process that ended (an attack
     pass: restarted before the adapter came back, the rotor turned on to its target, locked).
+    So does one that starts with a stop owed (the status says one is, ``stop_owed``, and the
+    state file keeps it: kept.py rule 8): a STOP taken while the adapter was out was lost to a
+    restart before it came back, and the rotor turned on to its old target (an attack pass).
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
    that was taken: a command after it that is carried out clears it.
 13. The last word (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane holds the
@@ -171,6 +174,7 @@ class RotatorSession:
         health: dict[str, object] | None = None,  # what the state file kept (health.py)
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
         storm_halted: bool = False,  # ... and its park stopped (wind.py rule 3)
+        stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -179,7 +183,8 @@ class RotatorSession:
         self.controller = Controller(cfg, options)
         # rule 11: a lock kept from before (the state file) owes a stop: the lock ON that set
         # it may have come while the port was closed, its stop owed in a process now ended
-        if locked:
+        # (and so does a stop owed then: taken while the port was out, say)
+        if locked or stop_owed:
             self.controller.owe_stop()
         self.targets = Targets(cfg)
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
@@ -188,7 +193,12 @@ class RotatorSession:
         self.wind = WindPark(cfg, storm=storm and cfg.wind is not None, halted=storm_halted)
         self.health = Health(cfg, health)
         self.view = st.View()
-        self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
+        self.status = RotatorStatus(
+            cfg.rotator_id,
+            locked=locked,
+            health=self.health.report,
+            stop_owed=self.controller.stops.owed,
+        )
         # rule 17: the parts handed in (the features', from the app), in the order they run
         parts: tuple[Part[RotatorSession], ...] = (
             session_parts() if cfg.parts is None else cfg.parts
@@ -739,6 +749,7 @@ class RotatorSession:
             view.park_raw,
             view.last_operator,
             view.control,
+            ctl.stops.owed,  # (kept across a restart: runtime/kept.py)
             # what the parts show (st.Features, in its order: the last _SHOWN of the key)
             tracker.info,
             tracker.ended,

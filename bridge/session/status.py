@@ -109,6 +109,7 @@ class Seen(NamedTuple):
     pending_wire: tuple[float | None, float | None] | None  # ...and its raw values, if known
     wall_offset_s: float
     features: Features
+    stop_owed: bool  # stops.py rule 3
 
 
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
@@ -167,6 +168,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         last_operator=view.last_operator,
         control=view.control,
         features=dict(seen.features.parts) if seen.features.parts else {},
+        stop_owed=seen.stop_owed,
     )
     return status
 

@@ -203,6 +203,34 @@ def test_a_lock_kept_across_a_restart_stops_the_rotor_on_the_first_connect(model
         assert again.truth().az_deg < 150
 
 
+@pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
+def test_a_stop_owed_across_a_restart_stops_the_rotor_on_the_first_connect(model: str) -> None:
+    """Session rule 11, an attack pass: a STOP while the adapter was out (its stop owed), then
+    the bridge restarted before the adapter came back: nothing kept the stop, and the rotor
+    turned on to its old target. The status says the stop is owed (the state file keeps it:
+    runtime/kept.py rule 8), the next start owes it, and says so no more once it is written."""
+    with VirtualRotator(model) as v:
+        v.run_until_state(MotionState.IDLE, 90)
+        v.target(170)
+        v.run_for(5)
+        v.link_down()
+        v.run_for(0.3)
+        v.stop()
+        v.run_for(1)
+        assert v.status.stop_owed
+        device, now = v.device, v.now
+    with VirtualRotator(model, stop_owed=True, connect=False, start_s=now) as again:
+        again.device = device  # the same controller, still turning
+        assert again.status.stop_owed  # (the first status says so: nothing saves it away)
+        t = again.now
+        again.link_up()
+        again.run_for(30)
+        stop = again.cfg.spec.codec_factory().encode_stop()
+        assert again.sent(since=t)[0] == (stop[0] if isinstance(stop, list) else stop)
+        assert not again.truth().is_moving and again.truth().az_deg < 150
+        assert not again.status.stop_owed and not again.status.locked
+
+
 @pytest.mark.parametrize("again", ["lock", "stop"])
 def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -> None:
     """stops.py rule 2: a locked start with the adapter out, the lock released, then (the

@@ -22,6 +22,21 @@ def test_lock_and_options_survive_a_restart(tmp_path: Path) -> None:
     assert json.loads(path.read_text())["rotators"]["tower"]["locked"] is True
 
 
+def test_a_stop_owed_survives_a_restart_and_a_damaged_one_is_owed(tmp_path: Path) -> None:
+    """kept.py rule 8: a stop owed is kept until it is owed no more; a value that is not
+    false (a hand-edited file) is owed: one stop more is the safe side."""
+    path = tmp_path / "state.json"
+    s = StateStore(path)
+    assert s.stop_owed("tower") is False
+    assert s.set_stop_owed("tower", True) is True
+    assert StateStore(path).stop_owed("tower") is True
+    assert s.set_stop_owed("tower", False) is True
+    assert "stop_owed" not in json.loads(path.read_text())["rotators"]["tower"]
+    assert StateStore(path).stop_owed("tower") is False
+    path.write_text('{"rotators": {"tower": {"stop_owed": "yes"}}}')
+    assert StateStore(path).stop_owed("tower") is True
+
+
 def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) -> None:
     path = tmp_path / "state.json"
     path.write_text("{not json")

@@ -67,6 +67,7 @@ def test_what_the_controller_hands_the_status_is_each_value_by_its_name(
     assert ctl.link is not None and ctl.link.slew is None
     ctl.version, ctl.controller_time, ctl.answering = "version", "clock", answering
     ctl.az_shown.value, ctl.el_shown.value = 11.0, 22.0
+    ctl.stops.owed = not locked  # (never the lock's value: a swap would show)
     features = st.Features(tracking_ended="ended")
     seen = ctl.seen(session.status, session.view, None, locked, 33.0, features)
     assert seen._asdict() == {
@@ -86,4 +87,5 @@ def test_what_the_controller_hands_the_status_is_each_value_by_its_name(
         "pending_wire": None,
         "wall_offset_s": 33.0,
         "features": features,
+        "stop_owed": not locked,
     }

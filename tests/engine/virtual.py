@@ -89,6 +89,7 @@ class VirtualRotator:
         emulator: Mapping[str, Any] | None = None,
         options: dict[str, SettingValue] | None = None,
         locked: bool = False,
+        stop_owed: bool = False,  # as the state file kept it (runtime/kept.py rule 8)
         connect: bool = True,
         start_s: float = 0.0,
         sky: Sky | None = None,
@@ -105,7 +106,7 @@ class VirtualRotator:
         self.settings = rotator
         self.cfg = cfg or worker_config(rotator, sky, follow)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
-        self.session = RotatorSession(self.cfg, options=options, locked=locked)
+        self.session = RotatorSession(self.cfg, options=options, locked=locked, stop_owed=stop_owed)
         self.mailbox = Mailbox()
         self.connected = False
         self.writes: list[Sent] = []

@@ -13,6 +13,7 @@ import time
 import pytest
 
 from tests.support.rig import Rig
+from tests.support.waiting import wait_until
 
 BEARING_FRAMES = (
     "executed",
@@ -156,6 +157,35 @@ def test_lock_refuses_motion_and_survives_a_restart(rig: Rig) -> None:
     rig.probe.wait_value("rotor/state", "idle", after=t)
     rig.probe.publish("rotor/target", "120")
     emu.wait_for(lambda s: near(s.az_deg, 120) and not s.is_moving, 15)
+
+
+def test_a_stop_sent_while_the_adapter_is_out_survives_a_restart_before_it_comes_back(
+    rig: Rig,
+) -> None:
+    """An attack pass: a STOP while the adapter was out (the rotor turning on to 300), then the
+    bridge restarted (an upgrade, a reboot) before the adapter came back: the stop it owed was
+    lost with the process, and the rotor turned on to its old target. The state file keeps it
+    now (runtime/kept.py rule 8): the next start writes it first, then forgets it."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
+    state = rig.tmp / "state.json"
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 20)
+    t = time.monotonic()
+    emu.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    rig.probe.publish("rotor/stop", "STOP")
+    wait_until(lambda: b'"stop_owed": true' in state.read_bytes(), 10, "the stop kept")
+    rig.stop()
+    emu.replug(power_cycle=False)  # the controller kept its power: still turning to 300
+    assert emu.state().is_moving
+    t = time.monotonic()
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", after=t)
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert emu.frames("stop")[-1].time_s >= t
+    wait_until(lambda: b"stop_owed" not in state.read_bytes(), 10, "the stop forgotten")
 
 
 def test_lock_on_stops_a_turning_rotor(rig: Rig) -> None:
