@@ -393,6 +393,40 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
             sock.close()
 
 
+def test_a_client_quiet_for_a_while_then_mid_stop_is_not_taken_for_a_stream(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 3, a review of the rule above: its first form counted from the client's last read
+    at rest, so a client quiet for 10 s whose ``S`` had come without its CR counted as
+    streaming for 10 s, and a newcomer dropped it, its stop with it. A run of reads mid-command
+    is counted from its own first read."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, max_clients=2)
+    a = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
+    a.sendall(b"C\r")
+    assert _read(a, 8) == b"AZ=120\r\n"
+    clock.t += 10.0
+    b = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
+    b.sendall(b"C\r")
+    assert _read(b, 8) == b"AZ=120\r\n"
+    try:
+        a.sendall(b"S")  # a stop's first byte, its CR still to come
+        wait_until(
+            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 1,
+            10,
+            "a mid-command",
+        )
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
+            late.sendall(b"C\r")
+            assert _read(late, 8) == b"AZ=120\r\n"
+        assert _closed_by_peer(b)  # at rest: room made of it
+        a.sendall(b"\r")
+        wait_until(lambda: [type(c) for c in tower.submitted] == [Stop], 10, "a's stop")
+    finally:
+        for sock in (a, b):
+            sock.close()
+
+
 def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:

@@ -133,7 +133,8 @@ class _Client:
         self.since_s = now  # connected
         self.useful_s = now  # connected, or last finished a command
         self.pending_s: float | None = None  # first byte of a command not yet complete
-        self.rest_s = now  # connected, or last read with no command left half received
+        # the first read of a run that has left a command half received at every read since
+        self.stream_s: float | None = None
         self.done = False  # has finished a command: an established program, dropped last
         self.over_s: float | None = None  # rule 3: paused over its budget since (a flood)
 
@@ -143,7 +144,7 @@ class _Client:
     def streaming(self, now: float) -> bool:
         """Rule 3: mid-command at every read for more than PENDING_GRACE_S (one command
         half received for that long, or lines sent on and on with the next always begun)."""
-        return self.pending_s is not None and now - self.rest_s > PENDING_GRACE_S
+        return self.stream_s is not None and now - self.stream_s > PENDING_GRACE_S
 
 
 def _loopback(host: str) -> bool:
@@ -534,7 +535,7 @@ class LineServer:
         if flooding:  # over its budget the longest: its unread lines are its flood's
             victim = min(flooding, key=lambda pair: pair[1].over_s or 0.0)[0]
         elif streaming:  # never at rest the longest: its unread lines are its stream's
-            victim = min(streaming, key=lambda pair: pair[1].rest_s)[0]
+            victim = min(streaming, key=lambda pair: pair[1].stream_s or 0.0)[0]
         elif not candidates:
             return False, f"{why} taken, every client mid-command"
         elif fresh := [(c, k) for c, k in candidates if not k.done]:
@@ -600,8 +601,9 @@ class LineServer:
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
         over = False  # rule 5: over its budget now (said once each time)
-        last_bytes = rest = self._clock()  # rest: the last read that left no command begun
+        last_bytes = self._clock()
         pending_since: float | None = None  # the first byte of a command not yet complete
+        stream_since: float | None = None  # rule 3: mid-command at every read since
         try:
             while True:
                 pause_s = budget.wait_s(self._clock())
@@ -620,7 +622,7 @@ class LineServer:
                 over = False
                 if me is not None:  # rule 3: what _make_room weighs
                     me.over_s = None
-                    me.pending_s, me.rest_s = pending_since, rest
+                    me.pending_s, me.stream_s = pending_since, stream_since
                     me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
@@ -660,13 +662,15 @@ class LineServer:
                 if finished and me is not None:
                     me.done = True  # rule 3: an established program, dropped last
                 if session.idle and not guard.holding:
-                    pending_since, unfinished, rest = None, 0, last_bytes
+                    pending_since, unfinished, stream_since = None, 0, None
                 elif finished:  # rule 5: counted from the last command finished, not read
                     pending_since, unfinished = last_bytes, raw  # its tail: within this read
                 else:
                     unfinished += raw
                     if pending_since is None:
                         pending_since = last_bytes
+                if pending_since is not None and stream_since is None:
+                    stream_since = last_bytes  # rule 3: a run of reads mid-command begins
                 if unfinished > self._max_unfinished:  # rule 5: a line with no end
                     self._dropped_log.warn(
                         self._clock(),
