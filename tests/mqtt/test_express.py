@@ -559,6 +559,9 @@ def test_a_frame_the_port_never_finishes_taking_is_said(rig: ChildRig) -> None:
     rig.hand("b", 1, port)
     rig.stop("rotor/b/stop")
     assert rig.word() == {"op": "half", "rotator": "b"}
+    # rule 11, a review: a half frame is no stop (a GS-232's S then M180 is SM180): said as
+    # heard, so the bridge carries the stop out if only the express had it
+    assert rig.word() == {"op": "heard", "rotator": "b", "t": 100.0}
 
 
 def test_client_id_is_the_lanes_rule_with_its_own_mark() -> None:

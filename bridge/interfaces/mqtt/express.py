@@ -147,8 +147,9 @@ Rules:
    express reads every rotator's lock topic for this, also of those it writes no frame for (a
    SPID, a SatEL, an RC2800, a rotator of two boxes: each locked as the others; a bridge with
    none it writes for runs no express, and has no such relay). Their stops too, and a group's
-   stop for every member: a stop it writes no frame for (no frame of that model, its port
-   not held, nothing of the frame taken) it says (``heard``, with the time it read it; once
+   stop for every member: a stop it writes no whole frame for (no frame of that model, its
+   port not held, the frame not taken whole: rule 9) it says (``heard``, with the time it
+   read it; once
    in GAP_S a rotator), and the same test gives the rotator its stop (an attack pass: after
    a broker restart the express came back first, and a ``G/stop`` stopped the group's
    Rotor-EZ while its SPID turned on to the group's target). A
@@ -1088,10 +1089,10 @@ class _Child:
 
     def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> bool:
         """Rule 9: the rest of a frame a write left owed, when the port takes bytes again;
-        False if none of it went."""
+        False if it is not whole (a half frame is no stop: rule 11 says it as none)."""
         with self._lock:
             if self._ports.get(rid) is not held:
-                return done > 0  # given back meanwhile (closed): nothing more goes to it
+                return False  # given back meanwhile (closed): nothing more goes to it
             whole = self._write_whole(held[1], self._frames[rid], done)
             if whole:
                 self._stuck.discard(rid)
@@ -1104,7 +1105,7 @@ class _Child:
             self.say(op="wrote", rotator=rid, t=now)
         else:
             self.say(op="half", rotator=rid)
-        return True
+        return whole
 
     def _write_whole(self, fd: int, frame: bytes, done: int) -> bool | None:
         """Rule 9: ``done`` bytes of ``frame`` written; True: the rest written too; None:
