@@ -146,11 +146,19 @@ class AuditFile:
         lines = []
         carried = 0  # rule 3: lines lost before, said in the first line written
         for event in events:
-            doc = event.as_dict()
-            if self._dropped or self._unsaid:  # rule 1 (read and reset here only: a count,
-                carried = self._dropped + self._unsaid  # not a promise)
-                doc["dropped"], self._dropped, self._unsaid = carried, 0, 0
-            lines.append(audit_line(doc) + "\n")
+            try:
+                doc = event.as_dict()
+                if self._dropped or self._unsaid:  # rule 1 (read and reset here only: a
+                    doc["dropped"] = self._dropped + self._unsaid  # count, not a promise)
+                line = audit_line(doc)
+            except Exception:  # rule 3: a bug costs its line, counted in the next one
+                self.lines_lost += 1
+                self._unsaid += 1
+                log.exception("audit file %s: a line lost", self.path)
+                continue
+            if "dropped" in doc:
+                carried, self._dropped, self._unsaid = self._dropped + self._unsaid, 0, 0
+            lines.append(line + "\n")
         done, exc = self._append(lines)
         self.lines_written += done
         if exc is not None:  # rule 3
@@ -176,7 +184,7 @@ class AuditFile:
             if self._on_problem is not None:
                 self._on_problem(None)
 
-    def _append(self, lines: list[str]) -> tuple[int, OSError | None]:
+    def _append(self, lines: list[str]) -> tuple[int, Exception | None]:
         """Rule 2: the lines appended, one ``os.write`` each on an O_APPEND descriptor; how many
         were, and the error that ended it (rule 3: the file is cut back to the line before)."""
         fd, done, size = -1, 0, 0
@@ -196,7 +204,7 @@ class AuditFile:
                 self._append_line(fd, data)
                 size += len(data)
                 done += 1
-        except OSError as exc:
+        except Exception as exc:  # (rule 3: whatever a write raises, not only OSError)
             return done, exc
         finally:
             if fd >= 0:
@@ -210,7 +218,7 @@ class AuditFile:
         before = os.fstat(fd).st_size
         try:
             written = self._os_write(fd, data)
-        except OSError:
+        except Exception:
             _cut(fd, before)
             raise
         if written != len(data):

@@ -155,6 +155,23 @@ def test_a_fault_in_writing_costs_its_lines_never_the_writer(tmp_path: Path) -> 
     assert written[0]["dropped"] == 1 and audit.lines_lost == 1
 
 
+def test_an_event_no_line_can_be_made_of_costs_that_line_alone(tmp_path: Path) -> None:
+    """Rule 3, a review: a fault in making one line of a batch lost the whole batch, and the
+    count of lines lost before it went with it."""
+    path = tmp_path / "audit.jsonl"
+    audit = AuditFile(path, 1_000_000)
+    bad = AuditEvent(1.0, "rotor", Origin(Source.MQTT, "DL1ABC"), object(), "?", None)  # type: ignore[arg-type]
+    audit._dropped = 2  # (two left out by a full queue before: said in the next line)
+    for one in (event(0), bad, event(2)):
+        audit.put(one)
+    audit.start()
+    audit.flush()
+    audit.stop()
+    written = lines(path)
+    assert [d["command"] for d in written] == ["P 0 0", "P 2 0"]
+    assert written[0]["dropped"] == 2 and written[1]["dropped"] == 1
+
+
 def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -> None:
     """Rule 1, docs/architecture.md rule 12: a front end's thread (paho's, the lines thread
     after a stop) hands events to the trail while the writer hangs on the disk (an NFS mount

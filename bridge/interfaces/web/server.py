@@ -176,8 +176,10 @@ class WebConsole:
             self._thread.join(timeout=5.0)
             loop.close()
             self._loop = self._thread = None
-            if isinstance(exc, OSError):  # the settings to change, named (a name that does
-                raise _named(exc, self.bind, self.port) from None  # not resolve said nothing)
+            # the settings to change, named (a name that does not resolve said nothing); not a
+            # start that took too long (TimeoutError is an OSError: no setting is at fault)
+            if isinstance(exc, OSError) and not isinstance(exc, TimeoutError):
+                raise _named(exc, self.bind, self.port) from None
             raise
         self._running = True
         log.info("web console on %s", self.url)
