@@ -132,6 +132,20 @@ def _closed_by_peer(sock: socket.socket) -> bool:
     return True
 
 
+def _gone(sock: socket.socket) -> bool:
+    """Whether the peer closed ``sock`` (nothing of it is left unread), without waiting."""
+    timeout = sock.gettimeout()
+    sock.setblocking(False)  # (a socket with a timeout waits for it before a recv)
+    try:
+        return sock.recv(1, socket.MSG_PEEK) == b""
+    except BlockingIOError:
+        return False
+    except ConnectionResetError:
+        return True
+    finally:
+        sock.settimeout(timeout)
+
+
 def test_budget_lets_a_second_of_bytes_through_then_a_steady_rate() -> None:
     budget = Budget(1000.0, now=0.0)
     assert budget.wait_s(0.0) == 0.0
@@ -390,6 +404,52 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
         assert _read(quiet, 8) == b"AZ=120\r\n"  # still served
     finally:
         for sock in [quiet, *streams]:
+            sock.close()
+
+
+def test_clients_mid_command_but_for_a_moment_every_two_seconds_go_before_a_quiet_one(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 3, an attack pass on the rule above: clients that rested between commands for a
+    moment every 1.9 s (``\r``, then ``C`` a few ms later) were never taken for streams, so
+    a full port of them turned every stop away, and with a quiet program among them dropped
+    that one. The share of its time a client spends mid-command is what counts."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, max_clients=3)
+    quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+    quiet.sendall(b"C\r")
+    assert _read(quiet, 8) == b"AZ=120\r\n"  # an established program, at rest from now on
+    hogs = [socket.create_connection(("127.0.0.1", server.port), timeout=slow(30)) for _ in "ab"]
+    try:
+        wait_until(lambda: server.client_count == 3, 10, "every slot taken")
+        for _ in range(2):
+            for sock in hogs:
+                sock.sendall(b"C")  # begun...
+            wait_until(
+                lambda: sum(c.pending_s is not None for c in server._clients.values()) == 2,
+                10,
+                "both mid-command",
+            )
+            clock.t += 1.9
+            for sock in hogs:
+                sock.sendall(b"\r")  # ...at rest for a moment
+                assert _read(sock, 8) == b"AZ=120\r\n"
+        for sock in hogs:
+            sock.sendall(b"C")  # and begun again
+        wait_until(
+            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 2,
+            10,
+            "both mid-command again",
+        )
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+        quiet.sendall(b"C\r")
+        assert _read(quiet, 8) == b"AZ=120\r\n"  # still served
+        wait_until(lambda: sum(map(_gone, hogs)) == 1, 10, "one of them dropped")
+    finally:
+        for sock in [quiet, *hogs]:
             sock.close()
 
 

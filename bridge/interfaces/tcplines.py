@@ -19,14 +19,17 @@ Rules:
    paused longest, with whatever it sent unread, a stop behind its flood too (it waited
    behind its own flood anyway; a flood always has complete lines unread,
    so an attack pass's 20 clients chattering on 16 slots turned every stop away and dropped
-   the one quiet program, Gpredict, first); then one mid-command at every read for more than
-   PENDING_GRACE_S (``_Client.streaming``: a command half received that long, or lines sent
-   on and on with the next always begun), the one the longest, its unread lines too (a
-   review: clients under their budgets that always left a command half sent were never
-   dropped, so they kept a stop out and Gpredict was dropped in their place); else among
-   those ``_Client.evictable`` (no command half received) with no complete command line
-   unread: the newest that has never finished a command, else the one idle longest (an
-   established program is dropped last); only when none may go is the newcomer turned away.
+   the one quiet program, Gpredict, first); then one that has had a command half received for
+   more than PENDING_GRACE_S in all and for more than SPLIT_SHARE of its time connected
+   (``_Client.splitting``: a program's command comes whole, or split for milliseconds; one
+   typed by hand at a telnet prompt takes seconds), the one the most of its time, mid-command
+   or not, its unread lines too (reviews: clients under their budgets that always left a
+   command half sent, or did but for a moment every 1.9 s, were never dropped, so they kept
+   every stop out, and dropped Gpredict in their place); else among those
+   ``_Client.evictable`` (no command half received) with no complete command line unread: the
+   newest that has never finished a command, else the one idle longest (an established
+   program is dropped last); only when none may go is the newcomer turned away (clients
+   mid-command at that moment; each spends most of its time at rest, or is dropped first).
    A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
    past that makes room among its own clients the same way or is turned away, so one host's
@@ -94,6 +97,7 @@ LINE_ENDS = b"\r\n"  # what ends a command, unless a front end names its own (ru
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
 ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
 PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
+SPLIT_SHARE = 0.25  # rule 3: mid-command more of its time than this: dropped first for room
 ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
@@ -133,18 +137,22 @@ class _Client:
         self.since_s = now  # connected
         self.useful_s = now  # connected, or last finished a command
         self.pending_s: float | None = None  # first byte of a command not yet complete
-        # the first read of a run that has left a command half received at every read since
+        # rule 3: the first read of a run that has left a command half received at every read
+        # since, and the time of the runs before it
         self.stream_s: float | None = None
+        self.mid_s = 0.0
         self.done = False  # has finished a command: an established program, dropped last
         self.over_s: float | None = None  # rule 3: paused over its budget since (a flood)
 
     def evictable(self) -> bool:
         return self.pending_s is None
 
-    def streaming(self, now: float) -> bool:
-        """Rule 3: mid-command at every read for more than PENDING_GRACE_S (one command
-        half received for that long, or lines sent on and on with the next always begun)."""
-        return self.stream_s is not None and now - self.stream_s > PENDING_GRACE_S
+    def splitting(self, now: float) -> float:
+        """Rule 3: the share of its time connected this client has spent with a command half
+        received, if that is more than PENDING_GRACE_S and more than SPLIT_SHARE; else 0."""
+        mid = self.mid_s + (now - self.stream_s if self.stream_s is not None else 0.0)
+        life = now - self.since_s
+        return mid / life if mid > PENDING_GRACE_S and mid > SPLIT_SHARE * life else 0.0
 
 
 def _loopback(host: str) -> bool:
@@ -530,12 +538,12 @@ class LineServer:
         else:
             why = f"all {self._max_clients} slots"
         flooding = [(c, k) for c, k in pool if k.over_s is not None]
-        streaming = [(c, k) for c, k in pool if k.over_s is None and k.streaming(now)]
+        splitting = [(k.splitting(now), c) for c, k in pool if k.over_s is None]
         candidates = [(c, k) for c, k in pool if k.evictable() and not _line_ready(c, self._ends)]
         if flooding:  # over its budget the longest: its unread lines are its flood's
             victim = min(flooding, key=lambda pair: pair[1].over_s or 0.0)[0]
-        elif streaming:  # never at rest the longest: its unread lines are its stream's
-            victim = min(streaming, key=lambda pair: pair[1].stream_s or 0.0)[0]
+        elif max(splitting, key=lambda pair: pair[0])[0] > 0.0:  # the most of its time
+            victim = max(splitting, key=lambda pair: pair[0])[1]  # mid-command, unread lines too
         elif not candidates:
             return False, f"{why} taken, every client mid-command"
         elif fresh := [(c, k) for c, k in candidates if not k.done]:
@@ -604,6 +612,7 @@ class LineServer:
         last_bytes = self._clock()
         pending_since: float | None = None  # the first byte of a command not yet complete
         stream_since: float | None = None  # rule 3: mid-command at every read since
+        mid_total = 0.0  # rule 3: the time of the runs mid-command before it
         try:
             while True:
                 pause_s = budget.wait_s(self._clock())
@@ -622,7 +631,7 @@ class LineServer:
                 over = False
                 if me is not None:  # rule 3: what _make_room weighs
                     me.over_s = None
-                    me.pending_s, me.stream_s = pending_since, stream_since
+                    me.pending_s, me.stream_s, me.mid_s = pending_since, stream_since, mid_total
                     me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
@@ -662,6 +671,8 @@ class LineServer:
                 if finished and me is not None:
                     me.done = True  # rule 3: an established program, dropped last
                 if session.idle and not guard.holding:
+                    if stream_since is not None:  # rule 3: a run mid-command ends
+                        mid_total += last_bytes - stream_since
                     pending_since, unfinished, stream_since = None, 0, None
                 elif finished:  # rule 5: counted from the last command finished, not read
                     pending_since, unfinished = last_bytes, raw  # its tail: within this read
