@@ -170,6 +170,18 @@ def test_tag_soup_is_read_or_malformed_and_numbers_are_finite(text: str) -> None
         assert value is None or value == value and abs(value) != float("inf")
 
 
+@pytest.mark.parametrize("flag", [b"abc", b"2", b"yes", b"-1", b"1.0"])
+def test_a_bidirectional_flag_other_than_0_or_1_is_malformed(flag: bytes) -> None:
+    """Rule 1, an attack pass: ``<bidirectional>abc</bidirectional>`` was taken as a yes, and
+    the rotor turned to the reciprocal bearing."""
+    datagram = (
+        b"<N1MMRotor><rotor>Tower</rotor><goazi>260</goazi><offset>0.0</offset>"
+        b"<bidirectional>" + flag + b"</bidirectional><freqband>14</freqband></N1MMRotor>"
+    )
+    with pytest.raises(Malformed, match="bidirectional"):
+        parse_n1mm(datagram)
+
+
 @pytest.mark.parametrize(
     "datagram",
     [

@@ -203,7 +203,10 @@ def parse_n1mm(datagram: bytes) -> N1mmRequest:
     if not 0.0 <= az <= 360.0:
         raise Malformed(f"goazi {az:g} outside 0..360")
     offset = _number(values["offset"], "offset") if values.get("offset") else 0.0
-    bidirectional = values.get("bidirectional", "0") not in ("", "0")
+    flag = values.get("bidirectional", "0").strip()
+    if flag not in ("", "0", "1"):  # (an attack pass: "abc" was a yes: the reciprocal bearing)
+        raise Malformed(f"bidirectional {flag[:16]!r} is neither 0 nor 1")
+    bidirectional = flag == "1"
     try:
         band: float | None = _number(values["freqband"], "freqband")
     except (KeyError, Malformed):
