@@ -132,6 +132,13 @@ def _closed_by_peer(sock: socket.socket) -> bool:
     return True
 
 
+def _wait_mid_command(server: LineServer, n: int, what: str) -> None:
+    """Until ``n`` of the server's clients have a command half received (rule 3)."""
+    wait_until(
+        lambda: sum(c.pending_s is not None for c in server._clients.values()) == n, 10, what
+    )
+
+
 def _gone(sock: socket.socket) -> bool:
     """Whether the peer closed ``sock`` (nothing of it is left unread), without waiting."""
     timeout = sock.gettimeout()
@@ -390,11 +397,7 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
         for sock in streams:  # each finishes one and begins the next, as ever
             sock.sendall(b"\rC")
             assert _read(sock, 8) == b"AZ=120\r\n"
-        wait_until(
-            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 3,
-            10,
-            "the three mid-command",
-        )
+        _wait_mid_command(server, 3, "the three mid-command")
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
             operator.sendall(b"S\rC\r")
             assert _read(operator, 8) == b"AZ=120\r\n"
@@ -425,22 +428,14 @@ def test_clients_mid_command_but_for_a_moment_every_two_seconds_go_before_a_quie
         for _ in range(2):
             for sock in hogs:
                 sock.sendall(b"C")  # begun...
-            wait_until(
-                lambda: sum(c.pending_s is not None for c in server._clients.values()) == 2,
-                10,
-                "both mid-command",
-            )
+            _wait_mid_command(server, 2, "both mid-command")
             clock.t += 1.9
             for sock in hogs:
                 sock.sendall(b"\r")  # ...at rest for a moment
                 assert _read(sock, 8) == b"AZ=120\r\n"
         for sock in hogs:
             sock.sendall(b"C")  # and begun again
-        wait_until(
-            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 2,
-            10,
-            "both mid-command again",
-        )
+        _wait_mid_command(server, 2, "both mid-command again")
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
             operator.sendall(b"S\rC\r")
             assert _read(operator, 8) == b"AZ=120\r\n"
@@ -471,11 +466,7 @@ def test_a_client_quiet_for_a_while_then_mid_stop_is_not_taken_for_a_stream(
     assert _read(b, 8) == b"AZ=120\r\n"
     try:
         a.sendall(b"S")  # a stop's first byte, its CR still to come
-        wait_until(
-            lambda: sum(c.pending_s is not None for c in server._clients.values()) == 1,
-            10,
-            "a mid-command",
-        )
+        _wait_mid_command(server, 1, "a mid-command")
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
             late.sendall(b"C\r")
             assert _read(late, 8) == b"AZ=120\r\n"

@@ -178,36 +178,15 @@ def test_a_stop_waiting_for_a_half_duplex_line_is_sent_first_when_the_port_is_ba
     assert not v.truth().is_moving
 
 
+@pytest.mark.parametrize("halt", ["lock", "stop"])
 @pytest.mark.parametrize("model", ["rotorez", "gs232b", "easycomm2", "rot2prog", "md01"])
-def test_a_lock_kept_across_a_restart_stops_the_rotor_on_the_first_connect(model: str) -> None:
-    """Session rule 11: lock ON while the adapter was out (its stop owed), then the bridge
-    restarted before the adapter came back: the state file gave the lock back, not the stop
-    owed, and the rotor turned on to its target, shown locked (an attack pass)."""
-    with VirtualRotator(model) as v:
-        v.run_until_state(MotionState.IDLE, 90)
-        v.target(170)
-        v.run_for(5)
-        v.link_down()
-        v.run_for(0.3)
-        v.lock(True)  # tower work; the port is out: its stop is owed, in this process
-        v.run_for(1)
-        device, now = v.device, v.now
-    with VirtualRotator(model, locked=True, connect=False, start_s=now) as again:
-        again.device = device  # the same controller, still turning
-        t = again.now
-        again.link_up()
-        again.run_for(30)
-        stop = again.cfg.spec.codec_factory().encode_stop()
-        assert again.sent(since=t)[0] == (stop[0] if isinstance(stop, list) else stop)
-        assert again.status.locked and not again.truth().is_moving
-        assert again.truth().az_deg < 150
-
-
-@pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
-def test_a_stop_owed_across_a_restart_stops_the_rotor_on_the_first_connect(model: str) -> None:
-    """Session rule 11, an attack pass: a STOP while the adapter was out (its stop owed), then
-    the bridge restarted before the adapter came back: nothing kept the stop, and the rotor
-    turned on to its old target. The status says the stop is owed (the state file keeps it:
+def test_a_halt_kept_across_a_restart_stops_the_rotor_on_the_first_connect(
+    model: str, halt: str
+) -> None:
+    """Session rule 11, two attack passes: a lock ON, or a STOP, while the adapter was out
+    (its stop owed), then the bridge restarted before the adapter came back: the state file
+    gave the lock back but not the stop owed (and kept nothing of a STOP), and the rotor
+    turned on to its target. The status says the stop is owed (the state file keeps it:
     runtime/kept.py rule 8), the next start owes it, and says so no more once it is written."""
     with VirtualRotator(model) as v:
         v.run_until_state(MotionState.IDLE, 90)
@@ -215,11 +194,15 @@ def test_a_stop_owed_across_a_restart_stops_the_rotor_on_the_first_connect(model
         v.run_for(5)
         v.link_down()
         v.run_for(0.3)
-        v.stop()
+        if halt == "lock":
+            v.lock(True)  # tower work; the port is out: its stop is owed, in this process
+        else:
+            v.stop()
         v.run_for(1)
         assert v.status.stop_owed
         device, now = v.device, v.now
-    with VirtualRotator(model, stop_owed=True, connect=False, start_s=now) as again:
+    kept = {"locked": True} if halt == "lock" else {"stop_owed": True}
+    with VirtualRotator(model, **kept, connect=False, start_s=now) as again:  # type: ignore[arg-type]
         again.device = device  # the same controller, still turning
         assert again.status.stop_owed  # (the first status says so: nothing saves it away)
         t = again.now
@@ -228,7 +211,7 @@ def test_a_stop_owed_across_a_restart_stops_the_rotor_on_the_first_connect(model
         stop = again.cfg.spec.codec_factory().encode_stop()
         assert again.sent(since=t)[0] == (stop[0] if isinstance(stop, list) else stop)
         assert not again.truth().is_moving and again.truth().az_deg < 150
-        assert not again.status.stop_owed and not again.status.locked
+        assert again.status.locked is (halt == "lock") and not again.status.stop_owed
 
 
 @pytest.mark.parametrize("again", ["lock", "stop"])
