@@ -17,6 +17,7 @@ from bridge.interfaces.gs232 import Gs232Session
 from bridge.interfaces.tcplines import (
     ACCEPTS_S,
     HTTP_FIRST_LINE_MAX,
+    Close,
     HttpGuard,
     LineServer,
     _Client,
@@ -428,14 +429,25 @@ def test_clients_mid_command_but_for_a_moment_every_two_seconds_go_before_a_quie
         for _ in range(2):
             for sock in hogs:
                 sock.sendall(b"C")  # begun...
-            _wait_mid_command(server, 2, "both mid-command")
+            wait_until(  # (records as their threads set them after this read, not before)
+                lambda: sum(c.stream_s == clock.t for c in server._clients.values()) == 2,
+                10,
+                "both mid-command",
+            )
             clock.t += 1.9
             for sock in hogs:
                 sock.sendall(b"\r")  # ...at rest for a moment
                 assert _read(sock, 8) == b"AZ=120\r\n"
         for sock in hogs:
             sock.sendall(b"C")  # and begun again
-        _wait_mid_command(server, 2, "both mid-command again")
+        wait_until(  # (each record as its thread last set it: both runs counted, begun again)
+            lambda: (
+                sum(c.pending_s is not None and c.mid_s > 3.7 for c in server._clients.values())
+                == 2
+            ),
+            10,
+            "both mid-command again",
+        )
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
             operator.sendall(b"S\rC\r")
             assert _read(operator, 8) == b"AZ=120\r\n"
@@ -478,11 +490,13 @@ def test_a_client_quiet_for_a_while_then_mid_stop_is_not_taken_for_a_stream(
             sock.close()
 
 
-def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
+def test_a_client_in_the_middle_of_a_command_goes_last_and_the_oldest_half_first(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:
-    """The room is made from idle clients only: one whose command is half received (it may
-    be a stop arriving) keeps its slot, and a newcomer is turned away when all are so."""
+    """Room is made from clients at rest first: one whose command is half received (it may
+    be a stop arriving) goes last, and then the one whose half came first (a program's
+    command is split for milliseconds; attack passes held every slot with clients forever
+    mid-command, and every stop was turned away). A newcomer is never turned away."""
     clock = FakeClock()
     tower, server = gs232(clock=clock, max_clients=2)
     busy = [socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) for _ in "ab"]
@@ -490,20 +504,15 @@ def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
         wait_until(lambda: server.client_count == 2, 10, "both connected")
         for sock in busy:
             sock.sendall(b"C2\rS")  # a stop's first byte, its CR still to come
-        wait_until(
-            lambda: all(c.pending_s is not None for c in server._clients.values()),
-            10,
-            "both mid-command",
-        )
-        try:  # the reset may come before connect() returns
-            with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
-                assert _closed_by_peer(late)
-        except ConnectionResetError:
-            pass
-        for sock in busy:
-            sock.sendall(b"\r")
             assert _read(sock, 16) == b"AZ=120  EL=000\r\n"
-        wait_until(lambda: len(tower.submitted) == 2, 10, "both stops carried out")
+            _wait_mid_command(server, busy.index(sock) + 1, "mid-command")
+            clock.t += 0.5
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
+            late.sendall(b"C\r")
+            assert _read(late, 8) == b"AZ=120\r\n"
+        assert _closed_by_peer(busy[0])  # its half the older
+        busy[1].sendall(b"\r")
+        wait_until(lambda: [type(c) for c in tower.submitted] == [Stop], 10, "b's stop")
     finally:
         for sock in busy:
             sock.close()
@@ -530,6 +539,104 @@ def test_one_address_off_loopback_holds_a_quarter_of_the_slots_and_loopback_no_s
         for a, b in pairs:
             a.close()
             b.close()
+
+
+class _Chatty:
+    """A session whose ``big`` command has an answer longer than the socket's buffers hold
+    (32 MB; Linux's largest send buffer is 4 MB by default): for a client that reads none,
+    its thread waits in that send."""
+
+    def __init__(self, heard: list[bytes]) -> None:
+        self._heard, self._rest = heard, b""
+
+    @property
+    def idle(self) -> bool:
+        return not self._rest
+
+    def feed(self, data: bytes) -> list[bytes | Close]:
+        *lines, self._rest = (self._rest + data).split(b"\n")
+        self._heard.extend(lines)
+        return [b"x" * (32 << 20) if line == b"big" else b"ok\n" for line in lines]
+
+
+def test_a_client_that_reads_no_replies_is_dropped_first_for_room() -> None:
+    """Rule 3, an attack pass: clients under their budgets that asked for long answers and
+    read none held every slot of a rotctld port for good (each thread waited in its send,
+    its record at rest with lines unread: never a candidate), and the one quiet program was
+    dropped for a newcomer as the only client at rest. One whose reply waits goes first."""
+    clock, heard = FakeClock(), []
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: _Chatty(heard),
+        label="t",
+        key="t",
+        clock=clock,
+        max_clients=2,
+        rate_bytes_s=1e9,
+    )
+    server.start()
+    quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
+    hog = socket.socket()
+    hog.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # (no autotuning: it reads none)
+    hog.connect(("127.0.0.1", server.port))
+    try:
+        quiet.sendall(b"small\n")
+        assert _read(quiet, 3) == b"ok\n"
+        hog.sendall(b"big\n")  # an answer it never reads
+        wait_until(  # (the hog's: it never finished a command; quiet's reply sent, its
+            # record so: under a fake clock a moment's lag there is a second's)
+            lambda: [c.sending_s is None for c in server._clients.values()] == [True, False],
+            slow(10),
+            "a send waiting on the hog",
+        )
+        clock.t += 1.0
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as op:
+            op.sendall(b"stop\n")
+            assert _read(op, 3) == b"ok\n"
+        quiet.sendall(b"small\n")
+        assert _read(quiet, 3) == b"ok\n"  # still served
+        wait_until(lambda: server.client_count == 1, slow(10), "the hog dropped, quiet kept")
+    finally:
+        quiet.close()
+        hog.close()
+        server.stop()
+
+
+def test_the_order_clients_are_dropped_in_for_room() -> None:
+    """Rule 3, the order (attack passes found a way round each order before it): a flood
+    paused over its budget; one whose replies wait unread (16 such, under their budgets,
+    held every slot of a rotctld port for good, and Gpredict was dropped as the only client
+    at rest); one mid-command most of its time; one that never finished a command; one idle;
+    the newest established (chattier clients than Gpredict got it dropped as the one idle
+    longest); one mid-command now, its half the oldest first; one with a line not read yet."""
+    now = 1000.0
+
+    def client(since: float, **state: Any) -> _Client:
+        c = _Client(threading.Thread(), "127.0.0.1", since)
+        c.done, c.useful_s = True, now - 1.0
+        for key, value in state.items():
+            setattr(c, key, value)
+        return c
+
+    order = [
+        ("flood", client(900.0, over_s=now - 5.0), False),
+        ("flood, later", client(900.0, over_s=now - 1.0), False),
+        ("no reply read", client(900.0, sending_s=now - 3.0), False),
+        ("mid most of its time", client(990.0, pending_s=now - 1.0, mid_s=4.0), False),
+        ("never finished", client(990.0, done=False), False),
+        ("idle", client(100.0, useful_s=now - 60.0), False),
+        ("busy, newer", client(950.0), False),
+        ("busy, older", client(100.0), False),
+        ("half, older", client(100.0, pending_s=now - 0.5, stream_s=now - 0.5), False),
+        ("half, newer", client(100.0, pending_s=now - 0.01, stream_s=now - 0.01), False),
+        ("a line unread", client(100.0), True),
+        ("being read", client(100.0, pending_s=now - 9.0, reading=True), False),
+    ]
+    ranked = sorted(order, key=lambda item: item[1].rank(now, item[2]))
+    assert [name for name, _, _ in ranked] == [name for name, _, _ in order]
+    assert client(900.0, sending_s=now - 0.1).rank(now, False)[0] == 5  # a send under way
 
 
 def _flood_one_byte(port: int, done: threading.Event, started: threading.Semaphore) -> None:

@@ -15,28 +15,28 @@ Rules:
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
-   a client is dropped to make room: first one paused over its budget (rule 5), the one
-   paused longest, with whatever it sent unread, a stop behind its flood too (it waited
-   behind its own flood anyway; a flood always has complete lines unread,
-   so an attack pass's 20 clients chattering on 16 slots turned every stop away and dropped
-   the one quiet program, Gpredict, first); then one that has had a command half received for
-   more than PENDING_GRACE_S in all and for more than SPLIT_SHARE of its time connected
-   (``_Client.splitting``: a program's command comes whole, or split for milliseconds; one
-   typed by hand at a telnet prompt takes seconds), the one the most of its time, mid-command
-   or not, its unread lines too (reviews: clients under their budgets that always left a
-   command half sent, or did but for a moment every 1.9 s, were never dropped, so they kept
-   every stop out, and dropped Gpredict in their place); else among those
-   ``_Client.evictable`` (no command half received) with no complete command line unread: the
-   newest that has never finished a command, else the one idle longest (an established
-   program is dropped last); only when none may go is the newcomer turned away (clients
-   mid-command at that moment; each spends most of its time at rest, or is dropped first).
+   a client is dropped to make room, never the newcomer turned away, in this order
+   (``_Client.rank``; each step a way round the order before it that an attack pass or a
+   review found, each keeping every stop out of a full port of local programs under their
+   budgets, or getting the one quiet program, Gpredict, dropped in their place): one paused
+   over its budget (rule 5), the longest first, whatever it sent unread (a stop behind its
+   flood waited behind it anyway); one whose reply has waited SEND_STALL_S to be sent (it
+   reads none: its thread waits in its send, its lines unread); one that has had a command
+   half received for more than PENDING_GRACE_S in all and more than SPLIT_SHARE of its time
+   connected (``splitting``: a program's command comes whole, or split for milliseconds), the
+   most of its time first; then of those at rest (no command half received, none unread) the
+   newest that never finished a command, then one idle for IDLE_S (the longest first), then
+   the newest established connection (a program connected before a flood is kept; the one
+   idle longest was Gpredict, polling once a second among chattier clients); then one with a
+   command half received now, the one whose half came first (a program's is milliseconds
+   old); last one with a complete command line not read yet (a stop, maybe, read in a
+   moment). Drops are logged at most once per 10 s, with a count and why.
    A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
-   past that makes room among its own clients the same way or is turned away, so one host's
-   connections cannot fill the port for the others. Loopback has no such share: every program
-   on the host is 127.0.0.1 (or ::1), so a share would be a limit on the shack's own programs;
-   there the make-room rule is what lets the operator in. Drops and refusals are logged at
-   most once per 10 s, with a count.
+   past that makes room among its own clients the same way, so one host's connections cannot
+   fill the port for the others. Loopback has no such share: every program on the host is
+   127.0.0.1 (or ::1), so a share would be a limit on the shack's own programs; there the
+   make-room rule is what lets the operator in.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
 5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
@@ -60,8 +60,9 @@ Rules:
    bytes without finishing a command (no command is near that long) is dropped and logged (at
    most once per LOG_S, with a count); the bytes are counted from the last command finished
    (a read that finishes one counts its own bytes at most), so commands sent back to back,
-   however the reads cut them, never add up. A well-behaved client's stop is read at its first
-   wake-up: its budget is its own.
+   however the reads cut them, never add up. A client that takes no reply for SEND_WAIT_S
+   (its replies unread, the socket's buffers full) is dropped and logged. A well-behaved
+   client's stop is read at its first wake-up: its budget is its own.
 6. A command ends at CR or LF unless the front end names its own ends (``ends``: a DCU-1's
    ``;`` as well); rules 2, 3 and 5 look for those.
 """
@@ -98,6 +99,9 @@ LOG_S = 10.0  # rule 5's log lines, at most this often a port
 ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
 PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
 SPLIT_SHARE = 0.25  # rule 3: mid-command more of its time than this: dropped first for room
+SEND_STALL_S = 0.5  # rule 3: a reply still being sent after this: its client reads none
+SEND_WAIT_S = 10.0  # rule 5: a client that takes no reply for this long is dropped
+IDLE_S = 30.0  # rule 3: an established client that finished no command for this long is idle
 ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
@@ -143,9 +147,28 @@ class _Client:
         self.mid_s = 0.0
         self.done = False  # has finished a command: an established program, dropped last
         self.over_s: float | None = None  # rule 3: paused over its budget since (a flood)
+        self.sending_s: float | None = None  # rule 3: a reply being sent since
+        self.reading = False  # rule 3: what it sent is being read and carried out now
 
-    def evictable(self) -> bool:
-        return self.pending_s is None
+    def rank(self, now: float, line_unread: bool) -> tuple[int, float]:
+        """Rule 3: where this client stands in the order clients are dropped for room (the
+        least first); ``line_unread``: at rest with a complete command line not read yet."""
+        if self.over_s is not None:
+            return 0, self.over_s  # a flood: paused over its budget, the longest first
+        if self.sending_s is not None and now - self.sending_s > SEND_STALL_S:
+            return 1, self.sending_s  # its replies not read: a send waits on it
+        share = self.splitting(now)
+        if share > 0.0:
+            return 2, -share  # mid-command the most of its time
+        if self.pending_s is not None and not self.reading:
+            return 6, self.pending_s  # mid-command now: the oldest half command first
+        if line_unread or self.reading:
+            return 7, -self.since_s  # a line just come (a stop?), read now or in a moment
+        if not self.done:
+            return 3, -self.since_s  # never finished a command: the newest first
+        if now - self.useful_s > IDLE_S:
+            return 4, self.useful_s  # idle: the longest first
+        return 5, -self.since_s  # established and busy: the newest connection first
 
     def splitting(self, now: float) -> float:
         """Rule 3: the share of its time connected this client has spent with a command half
@@ -153,6 +176,18 @@ class _Client:
         mid = self.mid_s + (now - self.stream_s if self.stream_s is not None else 0.0)
         life = now - self.since_s
         return mid / life if mid > PENDING_GRACE_S and mid > SPLIT_SHARE * life else 0.0
+
+
+_RANKS = (  # rule 3: why a client was dropped for room, by its ``_Client.rank``
+    "sending faster than a client may",
+    "reading no replies",
+    "mid-command most of its time",
+    "never finished a command",
+    "idle",
+    "the newest of the established",
+    "the oldest command half received",
+    "a command line not read yet",
+)
 
 
 def _loopback(host: str) -> bool:
@@ -520,8 +555,9 @@ class LineServer:
         return bucket
 
     def _make_room(self, host: str, now: float) -> tuple[bool, str]:
-        """Rule 3, under the lock: whether a client from ``host`` may come in, dropping the
-        longest-idle evictable client if the port (or the peer's share) is full."""
+        """Rule 3, under the lock: whether a client from ``host`` may come in (always, but
+        while the port stops), dropping the client ``_Client.rank`` puts first if the port
+        (or the peer's share) is full."""
         if self._stopping:
             return False, "stopping"
         pool = list(self._clients.items())
@@ -537,19 +573,10 @@ class LineServer:
             return True, ""
         else:
             why = f"all {self._max_clients} slots"
-        flooding = [(c, k) for c, k in pool if k.over_s is not None]
-        splitting = [(k.splitting(now), c) for c, k in pool if k.over_s is None]
-        candidates = [(c, k) for c, k in pool if k.evictable() and not _line_ready(c, self._ends)]
-        if flooding:  # over its budget the longest: its unread lines are its flood's
-            victim = min(flooding, key=lambda pair: pair[1].over_s or 0.0)[0]
-        elif max(splitting, key=lambda pair: pair[0])[0] > 0.0:  # the most of its time
-            victim = max(splitting, key=lambda pair: pair[0])[1]  # mid-command, unread lines too
-        elif not candidates:
-            return False, f"{why} taken, every client mid-command"
-        elif fresh := [(c, k) for c, k in candidates if not k.done]:
-            victim = max(fresh, key=lambda pair: pair[1].since_s)[0]  # the newest goes first
-        else:  # every one has a history: the one idle longest
-            victim = min(candidates, key=lambda pair: pair[1].useful_s)[0]
+        lines = {c for c, k in pool if k.pending_s is None and _line_ready(c, self._ends)}
+        victim, rank = min(
+            ((c, k.rank(now, c in lines)) for c, k in pool), key=lambda pair: pair[1]
+        )
         gone = self._clients.pop(victim)
         try:
             victim.shutdown(socket.SHUT_RDWR)  # its thread wakes, says it is gone, closes
@@ -557,11 +584,12 @@ class LineServer:
             pass
         self._room_log.warn(
             now,
-            "%s for %s: %s taken, dropped a client (%s, idle %.0f s) to let one in",
+            "%s for %s: %s taken, dropped a client (%s, %s, idle %.0f s) to let one in",
             self.label,
             self.rotator_id,
             why,
             gone.host,
+            _RANKS[rank[0]],
             now - gone.useful_s,
         )
         return True, ""
@@ -632,6 +660,7 @@ class LineServer:
                 if me is not None:  # rule 3: what _make_room weighs
                     me.over_s = None
                     me.pending_s, me.stream_s, me.mid_s = pending_since, stream_since, mid_total
+                    me.reading = False
                     me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
@@ -647,6 +676,8 @@ class LineServer:
                     data = conn.recv(self._read_bytes)
                 except TimeoutError:
                     continue
+                if me is not None:  # rule 3: its lines out of the kernel, not carried out yet
+                    me.reading = True
                 if not data:
                     break
                 last_bytes, raw = self._clock(), len(data)
@@ -661,11 +692,20 @@ class LineServer:
                     )
                     return
                 replies = session.feed(data) if data else ()
+                conn.settimeout(SEND_WAIT_S)  # rule 5: a client that reads no reply goes
                 for reply in replies:
                     if isinstance(reply, Close):
                         return
                     if reply:
-                        conn.sendall(reply)
+                        if me is not None:  # rule 3: a send that waits is dropped first
+                            me.sending_s = self._clock()
+                        try:
+                            conn.sendall(reply)
+                        except TimeoutError:
+                            log.info("%s dropped: took no reply for %g s", who, SEND_WAIT_S)
+                            return
+                        if me is not None:
+                            me.sending_s = None
                 budget.spend(raw + REPLY_COST * len(replies), self._clock())
                 finished = any(not isinstance(r, Close) for r in replies)
                 if finished and me is not None:
