@@ -3,6 +3,7 @@ client's CR-ended first line goes through at once, HTTP never does."""
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import threading
 from collections.abc import Callable, Iterator
@@ -342,6 +343,35 @@ def test_with_every_slot_held_by_idle_connections_a_new_clients_stop_is_carried_
             sock.close()
 
 
+def test_a_client_dropped_for_room_carries_out_nothing_more_of_what_it_sent(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 3, a review: a client dropped to make room was only shut down, and its thread
+    read on what the kernel still held: a flood paused over its budget, dropped for the
+    operator, went on turning the rotor with its queued targets after the operator's stop
+    (for minutes: a megabyte at its budget's rate)."""
+    tower, server = gs232(max_clients=1)
+    flood = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
+    name = f"gs232-tower-{flood.getsockname()[1]}"
+    try:
+        flood.setblocking(False)
+        queued = 0
+        with contextlib.suppress(BlockingIOError):
+            while queued < 1 << 20:
+                queued += flood.send(b"M120\r" * 2000)
+        wait_until(lambda: server.paused == 1, 10, "paused over its budget")
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+        wait_until(
+            lambda: all(t.name != name for t in threading.enumerate()), slow(10), "its thread gone"
+        )
+        stops = [i for i, c in enumerate(tower.submitted) if isinstance(c, Stop)]
+        assert stops == [len(tower.submitted) - 1]  # nothing after the stop
+    finally:
+        flood.close()
+
+
 def test_with_every_slot_held_by_clients_over_their_budget_a_stop_drops_one_of_them(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:
@@ -610,7 +640,9 @@ def test_the_order_clients_are_dropped_in_for_room() -> None:
     held every slot of a rotctld port for good, and Gpredict was dropped as the only client
     at rest); one mid-command most of its time; one that never finished a command; one idle;
     the newest established (chattier clients than Gpredict got it dropped as the one idle
-    longest); one mid-command now, its half the oldest first; one with a line not read yet."""
+    longest); one just come with no command yet (a review: each later connection dropped it
+    before its stop came); one mid-command now, its half the oldest first; one with a line
+    not read yet."""
     now = 1000.0
 
     def client(since: float, **state: Any) -> _Client:
@@ -629,6 +661,7 @@ def test_the_order_clients_are_dropped_in_for_room() -> None:
         ("idle", client(100.0, useful_s=now - 60.0), False),
         ("busy, newer", client(950.0), False),
         ("busy, older", client(100.0), False),
+        ("just come, no command yet", client(999.0, done=False), False),
         ("half, older", client(100.0, pending_s=now - 0.5, stream_s=now - 0.5), False),
         ("half, newer", client(100.0, pending_s=now - 0.01, stream_s=now - 0.01), False),
         ("a line unread", client(100.0), True),
@@ -698,7 +731,8 @@ def test_an_established_program_is_dropped_after_a_connection_that_never_sent_a_
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:
     """Making room dropped the client whose last command was longest ago: a logger that asked
-    a minute ago went before a connection made a second ago that never said a word."""
+    a minute ago went before a connection made seconds ago that never said a word (one made
+    within PENDING_GRACE_S is let send its first command: the order test above)."""
     clock = FakeClock()
     _tower, server = gs232(clock=clock, max_clients=2)
     logger = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
@@ -709,7 +743,7 @@ def test_an_established_program_is_dropped_after_a_connection_that_never_sent_a_
         clock.t += 60.0
         silent = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
         wait_until(lambda: server.client_count == 2, 10, "both connected")
-        clock.t += 1.0
+        clock.t += 3.0
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
             operator.sendall(b"S\rC\r")
             assert _read(operator, 8) == b"AZ=120\r\n"

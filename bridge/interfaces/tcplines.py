@@ -25,12 +25,16 @@ Rules:
    half received for more than PENDING_GRACE_S in all and more than SPLIT_SHARE of its time
    connected (``splitting``: a program's command comes whole, or split for milliseconds), the
    most of its time first; then of those at rest (no command half received, none unread) the
-   newest that never finished a command, then one idle for IDLE_S (the longest first), then
-   the newest established connection (a program connected before a flood is kept; the one
-   idle longest was Gpredict, polling once a second among chattier clients); then one with a
-   command half received now, the one whose half came first (a program's is milliseconds
-   old); last one with a complete command line not read yet (a stop, maybe, read in a
-   moment). Drops are logged at most once per 10 s, with a count and why.
+   newest that never finished a command in PENDING_GRACE_S, then one idle for IDLE_S (the
+   longest first), then the newest established connection (a program connected before a
+   flood is kept; the one idle longest was Gpredict, polling once a second among chattier
+   clients); then one just come that has sent no command yet (a review: each later
+   connection dropped it before the stop it was opened for came); then one with a command
+   half received now, the one whose half came first (a program's is milliseconds old); last
+   one with a complete command line not read yet or being read (a stop, maybe). A client
+   dropped carries out nothing more of what it sent (a review: a flood dropped for the
+   operator read on its queued targets after the operator's stop). Drops are logged at most
+   once per 10 s, with a count and why.
    A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
    past that makes room among its own clients the same way, so one host's connections cannot
@@ -161,11 +165,12 @@ class _Client:
         if share > 0.0:
             return 2, -share  # mid-command the most of its time
         if self.pending_s is not None and not self.reading:
-            return 6, self.pending_s  # mid-command now: the oldest half command first
+            return 7, self.pending_s  # mid-command now: the oldest half command first
         if line_unread or self.reading:
-            return 7, -self.since_s  # a line just come (a stop?), read now or in a moment
-        if not self.done:
-            return 3, -self.since_s  # never finished a command: the newest first
+            return 8, -self.since_s  # a line just come (a stop?), read now or in a moment
+        if not self.done:  # never finished a command: the newest first, but one just come
+            young = now - self.since_s <= PENDING_GRACE_S  # (its stop may be on its way)
+            return (6 if young else 3), -self.since_s
         if now - self.useful_s > IDLE_S:
             return 4, self.useful_s  # idle: the longest first
         return 5, -self.since_s  # established and busy: the newest connection first
@@ -185,6 +190,7 @@ _RANKS = (  # rule 3: why a client was dropped for room, by its ``_Client.rank``
     "never finished a command",
     "idle",
     "the newest of the established",
+    "just connected, no command yet",
     "the oldest command half received",
     "a command line not read yet",
 )
@@ -633,6 +639,10 @@ class LineServer:
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         with self._lock:
             me = self._clients.get(conn)  # None: already dropped to make room
+        if me is None:  # rule 3: a client dropped runs nothing more, however much it sent
+            conn.close()
+            log.info("%s gone (dropped to make room)", who)
+            return
         guard = HttpGuard(self._ends)
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
@@ -676,8 +686,9 @@ class LineServer:
                     data = conn.recv(self._read_bytes)
                 except TimeoutError:
                     continue
-                if me is not None:  # rule 3: its lines out of the kernel, not carried out yet
-                    me.reading = True
+                me.reading = True  # rule 3: its lines out of the kernel, not carried out yet
+                if self._clients.get(conn) is not me:  # rule 3: dropped to make room: what it
+                    break  # sent is not carried out (a flood's queue ran on after its drop)
                 if not data:
                     break
                 last_bytes, raw = self._clock(), len(data)
