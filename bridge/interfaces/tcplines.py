@@ -657,8 +657,7 @@ class LineServer:
                 if pause_s > 0:  # rule 5: in the kernel, unread, until back in credit
                     if not over:
                         over = True
-                        if me is not None:  # rule 3: dropped first to make room
-                            me.over_s = self._clock()
+                        me.over_s = self._clock()  # rule 3: dropped first to make room
                         self.paused += 1
                         self._paused_log.warn(
                             self._clock(), "%s sends faster than a client may: paused", who
@@ -667,11 +666,10 @@ class LineServer:
                         return
                     continue
                 over = False
-                if me is not None:  # rule 3: what _make_room weighs
-                    me.over_s = None
-                    me.pending_s, me.stream_s, me.mid_s = pending_since, stream_since, mid_total
-                    me.reading = False
-                    me.useful_s = last_bytes if pending_since is None else me.useful_s
+                me.over_s = None  # rule 3: what _make_room weighs
+                me.pending_s, me.stream_s, me.mid_s = pending_since, stream_since, mid_total
+                me.reading = False
+                me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
                 deadline = last_bytes + self._idle_timeout_s
@@ -708,18 +706,16 @@ class LineServer:
                     if isinstance(reply, Close):
                         return
                     if reply:
-                        if me is not None:  # rule 3: a send that waits is dropped first
-                            me.sending_s = self._clock()
+                        me.sending_s = self._clock()  # rule 3: one that waits goes first
                         try:
                             conn.sendall(reply)
                         except TimeoutError:
                             log.info("%s dropped: took no reply for %g s", who, SEND_WAIT_S)
                             return
-                        if me is not None:
-                            me.sending_s = None
+                        me.sending_s = None
                 budget.spend(raw + REPLY_COST * len(replies), self._clock())
                 finished = any(not isinstance(r, Close) for r in replies)
-                if finished and me is not None:
+                if finished:
                     me.done = True  # rule 3: an established program, dropped last
                 if session.idle and not guard.holding:
                     if stream_since is not None:  # rule 3: a run mid-command ends
