@@ -134,6 +134,13 @@ def _closed_by_peer(sock: socket.socket) -> bool:
     return True
 
 
+def _operator_stop(server: LineServer) -> None:
+    """The operator connects to a full port and sends a stop, then a question it answers."""
+    with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+        operator.sendall(b"S\rC\r")
+        assert _read(operator, 8) == b"AZ=120\r\n"
+
+
 def _wait_mid_command(server: LineServer, n: int, what: str) -> None:
     """Until ``n`` of the server's clients have a command half received (rule 3)."""
     wait_until(
@@ -309,9 +316,7 @@ def test_a_stop_gets_through_a_flood_of_connections_opened_and_closed(
     try:
         for _ in flooders:
             assert started.acquire(timeout=slow(30))
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
     finally:
         done.set()
         for thread in flooders:
@@ -331,9 +336,7 @@ def test_with_every_slot_held_by_idle_connections_a_new_clients_stop_is_carried_
     ]
     try:
         wait_until(lambda: server.client_count == 16, 10, "every slot taken")
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         assert [type(c) for c in tower.submitted] == [Stop]
         assert _closed_by_peer(hogs[-1])  # the newest that never sent a command went
         said = [r.getMessage() for r in caplog.records if "to let one in" in r.getMessage()]
@@ -360,9 +363,7 @@ def test_a_client_dropped_for_room_carries_out_nothing_more_of_what_it_sent(
             while queued < 1 << 20:
                 queued += flood.send(b"M120\r" * 2000)
         wait_until(lambda: server.paused == 1, 10, "paused over its budget")
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         wait_until(
             lambda: all(t.name != name for t in threading.enumerate()), slow(10), "its thread gone"
         )
@@ -392,9 +393,7 @@ def test_with_every_slot_held_by_clients_over_their_budget_a_stop_drops_one_of_t
         wait_until(lambda n=n: server.paused == n, 10, "paused over its budget")
         greedy.append(sock)
     try:
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         assert [type(c) for c in tower.submitted] == [Stop]
         assert _closed_by_peer(greedy[0])  # paused the longest
         quiet.sendall(b"C\r")
@@ -410,8 +409,8 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
     """Rule 3, a review: programs that stay under their budgets but always leave a command
     half sent (``C\rC``, then ``\rC``, ...) were never dropped to make room, so with every
     slot so held the quiet program, Gpredict, was dropped for the operator instead (and
-    with no quiet one, the operator's stop was turned away). One that has not been at rest
-    between commands for PENDING_GRACE_S now goes first, the one the longest."""
+    with no quiet one, the operator's stop was turned away). One mid-command for more than
+    PENDING_GRACE_S and a quarter of its time now goes first, the most of its time first."""
     clock = FakeClock()
     tower, server = gs232(clock=clock, max_clients=4)
     quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
@@ -429,9 +428,7 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
             sock.sendall(b"\rC")
             assert _read(sock, 8) == b"AZ=120\r\n"
         _wait_mid_command(server, 3, "the three mid-command")
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         assert [type(c) for c in tower.submitted] == [Stop]
         assert _closed_by_peer(streams[0])  # never at rest the longest
         quiet.sendall(b"C\r")
@@ -478,9 +475,7 @@ def test_clients_mid_command_but_for_a_moment_every_two_seconds_go_before_a_quie
             10,
             "both mid-command again",
         )
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         assert [type(c) for c in tower.submitted] == [Stop]
         quiet.sendall(b"C\r")
         assert _read(quiet, 8) == b"AZ=120\r\n"  # still served
@@ -744,9 +739,7 @@ def test_an_established_program_is_dropped_after_a_connection_that_never_sent_a_
         silent = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
         wait_until(lambda: server.client_count == 2, 10, "both connected")
         clock.t += 3.0
-        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
-            operator.sendall(b"S\rC\r")
-            assert _read(operator, 8) == b"AZ=120\r\n"
+        _operator_stop(server)
         assert _closed_by_peer(silent)
         logger.sendall(b"C\r")
         assert _read(logger, 8) == b"AZ=120\r\n"  # still served
