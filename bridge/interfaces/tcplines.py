@@ -47,8 +47,12 @@ Rules:
    most ``max_clients`` threads a port, each started only for a connection alive when accepted
    and within its peer address's ACCEPTS_S a second (a burst of as many). The accept loop takes
    every connection from the kernel at once (a backlog full of dead connections kept a real
-   client waiting, or dropped it): one its peer already closed is closed with no thread and no
-   budget; one over its peer's budget waits in the accept loop, no thread, until the budget
+   client waiting, or dropped it): a wake-up drains the kernel's queue (ACCEPT_BATCH at most),
+   which is BACKLOG long, not Python's 128 (two threads connecting and closing as fast as they
+   could kept 128 full: the kernel dropped the operator's handshake, and its retries got the
+   stop in 1, 2 or 4 s later, 8 stops of 40; now 0 of 40 took over 0.2 s,
+   benchmarks/operator_stop_flood.py); one its peer already closed is closed with no thread
+   and no budget; one over its peer's budget waits in the accept loop, no thread, until the budget
    allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
    (rule 6) unread goes at once, ahead of the budget: it may be a stop. At most
    ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
@@ -109,6 +113,8 @@ IDLE_S = 30.0  # rule 3: an established client that finished no command for this
 ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
+BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
+ACCEPT_BATCH = 256  # rule 5: connections taken from it a wake-up, at most
 
 
 class RareLog:
@@ -346,7 +352,9 @@ class LineServer:
         host, port = self._bind, self._requested_port
         try:
             family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
-            self._listener = socket.create_server((host, port), family=family)
+            self._listener = socket.create_server(
+                (host, port), family=family, backlog=BACKLOG
+            )  # rule 5
         except OSError as exc:
             # create_server's strerror repeats the address; the plain reason is enough
             code = exc.errno or 0
@@ -444,8 +452,10 @@ class LineServer:
         if any(key.fileobj == self._wake_r for key, _ in events):
             return True
         for key, _ in events:
-            if key.fileobj is listener:
-                self._take(listener, waiting, sel)
+            if key.fileobj is listener:  # rule 5: the queue drained, not one a wake-up
+                for _ in range(ACCEPT_BATCH):
+                    if not self._take(listener, waiting, sel):
+                        break
                 continue
             conn = key.fileobj  # a waiting one: its bytes came, or it left
             if not isinstance(conn, socket.socket) or conn not in waiting:
@@ -466,30 +476,31 @@ class LineServer:
         listener: socket.socket,
         waiting: dict[socket.socket, tuple[str, int]],
         sel: selectors.BaseSelector,
-    ) -> None:
+    ) -> bool:
         """Rule 5: one connection from the kernel's queue, at once: closed if its peer already
-        left, a thread if its peer is within its budget, else it waits here (no thread)."""
+        left, a thread if its peer is within its budget, else it waits here (no thread); False
+        when the queue had none (or accept failed)."""
         try:
             conn, peer = listener.accept()
         except BlockingIOError:
-            return
+            return False
         except OSError as exc:
             self._accept_log.warn(
                 self._clock(), "%s for %s: accept failed: %s", self.label, self.rotator_id, exc
             )
             if exc.errno in (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM):
                 self._ended.wait(ERROR_PAUSE_S)  # the listener stays readable: no spin
-            return
+            return False
         if not _alive(conn):  # its peer already left: no thread, no budget
             conn.close()
-            return
+            return True
         now = self._clock()
         queued = any(p[0] == peer[0] for p in waiting.values())
         ready = _line_ready(conn, self._ends)  # a complete command waiting: ahead of the budget
         if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
             conn.setblocking(True)
             self._admit(conn, peer)
-            return
+            return True
         if len(waiting) >= self._max_clients:  # the newest without a complete command goes
             partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
             silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
@@ -509,9 +520,10 @@ class LineServer:
                 peer[0],
             )
             if gone is conn:
-                return
+                return True
         waiting[conn] = peer
         sel.register(conn, selectors.EVENT_READ)
+        return True
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
