@@ -34,6 +34,8 @@ from bridge.interfaces.loggers.datagrams import (
         ),
         (b"<PST><STOP>1</STOP></PST>", PstRequest(stop=True)),
         (b"<PST><PARK>1</PARK></PST>", PstRequest(park=True)),
+        (b"<PST><PARK>0</PARK></PST>", PstRequest()),  # no park: nothing to do
+        (b"<PST><PARK>0</PARK><STOP>1</STOP><PARK>x</PARK></PST>", PstRequest(stop=True)),
         (b"<PST><QRA>KN34BJ</QRA></PST>", PstRequest(locator="KN34BJ")),
         (b"<PST>AZ?</PST>", PstRequest(queries=("AZ",))),
         (b"<PST>EL?</PST>", PstRequest(queries=("EL",))),
@@ -78,6 +80,14 @@ def test_what_the_pst_clients_send_is_read(datagram: bytes, request_: PstRequest
         "<PST><AZIMUTH>85</AZIMUTH></PST>°".encode(),  # not ASCII
         b"<PST>" + b" " * MAX_DATAGRAM + b"</PST>",
         b"",
+        # a park that is neither 1 nor 0 (an attack pass: each of these parked the rotor)
+        b"<PST><PARK>0.0</PARK></PST>",
+        b"<PST><PARK>false</PARK></PST>",
+        b"<PST><PARK>no</PARK></PST>",
+        b"<PST><PARK></PARK></PST>",
+        b"<PST><PARK> 00 </PARK></PST>",
+        b"<PST><QRA>JO</QRA></PST>",  # a field: a continent, no place to turn to
+        b"<PST><QRA>JO62QM1</QRA></PST>",
     ],
 )
 def test_anything_else_is_malformed(datagram: bytes) -> None:

@@ -4,7 +4,9 @@ and rendered. Pure. Written from ../shared/protocols/logger-udp.md.
 Rules:
 1. A datagram is at most MAX_DATAGRAM bytes of ASCII; anything else is Malformed, and so is
    every datagram that is not wholly understood: a number that is not one (NaN, inf, empty,
-   ``12x``), text outside the tags, a tag left open. Malformed datagrams move nothing.
+   ``12x``), text outside the tags, a tag left open, a ``PARK`` that is neither ``1`` nor ``0``
+   (an attack pass: ``0.0``, ``false`` or ``no`` parked the rotor), a ``QRA`` that is no 4, 6
+   or 8 characters. Malformed datagrams move nothing.
 2. PST: ``<PST>`` ... ``</PST>``, tags matched in any case, several in one datagram, parsed
    all before anything is done. A value is a decimal number, optionally followed by the
    ``.2`` Hamlib 4.6 appends (``120.000000.2``). ``STOP`` wins over everything else in the
@@ -136,12 +138,17 @@ def _pst(body: str) -> PstRequest:
         tag, value = m.group("tag").upper(), m.group("value")
         if tag in ("AZIMUTH", "ELEVATION"):
             targets.setdefault(tag, set()).add(_number(value, tag))
-        elif tag == "QRA":
+        elif tag == "QRA":  # 4, 6 or 8 characters (a field of 2 is a whole continent)
+            if len(value.strip()) not in (4, 6, 8):
+                raise Malformed(f"QRA: {value.strip()[:20]!r} is no 4, 6 or 8 character locator")
             targets.setdefault(tag, set()).add(value.strip())
         elif tag == "STOP":
             stop = True
-        elif tag == "PARK":
-            targets.setdefault(tag, set()).add(value.strip() != "0")
+        elif tag == "PARK":  # 1 parks, 0 does not; nothing else is either (rule 2)
+            word = value.strip()
+            if word not in ("0", "1"):
+                raise Malformed(f"PARK: {word[:20]!r} is neither 1 nor 0")
+            targets.setdefault(tag, set()).add(word == "1")
         else:
             ignored.append(tag)
     ambiguous = [tag for tag, values in targets.items() if len(values) > 1]
