@@ -42,6 +42,20 @@ def test_readings_reach_the_rotators_of_their_topic_in_km_h(
     assert len(caplog.records) == 2
 
 
+def test_a_reading_no_wind_can_have_is_dropped_in_either_unit(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """An attack pass: ``1e308`` in m/s was finite, became infinite km/h, started a storm
+    and put ``Infinity`` (no JSON) in R/status. Over WIND_MAX_KMH is a sensor's fault."""
+    got: list[float] = []
+    subs, handle = wind_feed([("w/ms", "m/s", lambda v, r: got.append(v))], FakeClock())
+    caplog.set_level(logging.WARNING, "bridge.features.wind.feed")
+    for junk in (b"1e308", b"300"):  # 300 m/s: 1,080 km/h
+        assert handle("w/ms", junk, False)
+    assert got == [] and "over 1000 km/h" in caplog.text
+    assert handle("w/ms", b"250", False) and got == [900.0]  # 900 km/h: a reading
+
+
 def rotator(**wind: Any) -> RotatorSettings:
     return RotatorSettings(id="t", model="rotorez", port="/x", **wind)
 

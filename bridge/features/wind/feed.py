@@ -9,9 +9,11 @@ Rules:
    (re)subscribing is handed on as replayed (session/wind.py rule 6: it never ends a storm):
    the topic is subscribed without retain-as-published (connection.py rule 1), so the retain
    flag says "replayed" under MQTT 5 and MQTT 3.1.1 alike.
-3. A payload that is no reading (text, a negative or non-finite number) is dropped and logged
-   at most once per BAD_LOG_S per topic; the wind park's silence report (wind.py rule 4)
-   tells the user when nothing readable comes at all.
+3. A payload that is no reading (text, a negative or non-finite number, or one over
+   WIND_MAX_KMH once in km/h: no wind ever measured came near; an attack pass sent ``1e308``
+   in m/s, which became infinite km/h, parked the rotor and put ``Infinity`` in R/status,
+   which is no JSON) is dropped and logged at most once per BAD_LOG_S per topic; the wind
+   park's silence report (wind.py rule 4) tells the user when nothing readable comes at all.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ log = logging.getLogger(__name__)
 
 BAD_LOG_S = 60.0
 KMH_PER_MS = 3.6
+WIND_MAX_KMH = 1000.0  # rule 3: a sensor's fault above this (the highest gust measured: 408)
 
 Handler = Callable[[str, bytes, bool], bool]
 
@@ -47,14 +50,17 @@ def wind_feed(
             value = parse_number(payload, "wind speed")
             if value < 0 or not math.isfinite(value):
                 raise PayloadError("wind speed must be 0 or more")
+            kmh = [value * KMH_PER_MS if unit == "m/s" else value for unit, _ in mine]  # rule 1
+            if max(kmh) > WIND_MAX_KMH:
+                raise PayloadError(f"{value:g} is over {WIND_MAX_KMH:g} km/h: a sensor's fault?")
         except PayloadError as exc:
             now = clock()
             if now - logged.get(topic, -math.inf) >= BAD_LOG_S:
                 logged[topic] = now
                 log.warning("wind topic %s: reading dropped: %s", topic, exc)
             return True
-        for unit, to in mine:  # rule 1
-            to(value * KMH_PER_MS if unit == "m/s" else value, retain)  # rule 2
+        for speed, (_, to) in zip(kmh, mine, strict=True):
+            to(speed, retain)  # rule 2
         return True
 
     return sorted({t for t, _, _ in entries}), on_message
