@@ -96,6 +96,7 @@ log = logging.getLogger(__name__)
 
 # mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
+NEWER_MESSAGE = "a newer command came after it was asked: not carried out"
 
 
 class Rotator:
@@ -240,6 +241,7 @@ class Rotator:
         hold: int | None = None,
         echo: bool = False,
         since: int | None = None,
+        ticket: int | None = None,
     ) -> None:
         """The one way a front end reaches the judge (rules in the module header): queue
         ``command`` (a value of core/model.py's ``Command`` union) or raise Refused, reported on
@@ -250,7 +252,9 @@ class Rotator:
         (interfaces/mqtt/halts.py), not audited twice; ``since``: the halt count (``halts``)
         when the command was asked, for a front end that submits it a while later (the DX
         cluster's look-up): a stop or lock ON put since then overtakes it, however late it is
-        judged (mailbox.py rule 10)."""
+        judged (mailbox.py rule 10); ``ticket``: for such a command, its place in the order of
+        commands taken when it was asked (``ticket()``): any motion command put since then
+        overtakes it too (mailbox.py rule 10a)."""
         if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
             message = f"not a command the bridge knows: {type(command).__name__}"
             self.report(ErrorKind.REFUSED, message, described)
@@ -261,7 +265,7 @@ class Rotator:
         what = what or described or describe_command(command)
         epoch = self._mailbox.epoch if since is None else since  # before the judge (rule 10)
         try:
-            result = self._carry(command, what, who, hold, epoch)
+            result = self._carry(command, what, who, hold, epoch, ticket)
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=who)
             raise
@@ -269,7 +273,13 @@ class Rotator:
             self.operators.audit(who, what, result)
 
     def _carry(
-        self, command: Command, what: str, who: Origin, hold: int | None, epoch: int
+        self,
+        command: Command,
+        what: str,
+        who: Origin,
+        hold: int | None,
+        epoch: int,
+        ticket: int | None = None,
     ) -> str | None:
         """The decision for each kind: the audit trail's result, None for a command it does
         not keep (a health reset moves nothing), or Refused (reported by ``submit``).
@@ -299,7 +309,8 @@ class Rotator:
                 step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
                 self._judged(Target(*step, src, origin=by), epoch)
             case Toward():
-                self._toward(command, epoch, command.latitude_deg, command.longitude_deg)
+                lat, lon = command.latitude_deg, command.longitude_deg
+                self._toward(command, epoch, lat, lon, ticket=ticket)
             case TakePath():
                 status, halted = self._seen()
                 info = None if halted else status.target_info  # the place of the current target
@@ -313,6 +324,12 @@ class Rotator:
             case FeatureCommand():
                 self._feature(command, epoch)
         return EXECUTED
+
+    def ticket(self) -> int:
+        """A place in the order of commands (mailbox.py rule 10a): what a front end that
+        submits a motion command a while after it was asked takes when it is asked, and hands
+        to ``submit`` (``ticket``)."""
+        return self._mailbox.ticket()
 
     @property
     def halts(self) -> int:
@@ -334,6 +351,8 @@ class Rotator:
         latitude_deg: float,
         longitude_deg: float,
         locator: str | None = None,
+        *,
+        ticket: int | None = None,
     ) -> None:
         """A place, by the path asked for: a target with where it lies (``target_info``)."""
         if isinstance(command, Toward):
@@ -345,9 +364,17 @@ class Rotator:
             long_path=command.long_path,
             locator=locator,
         )
-        self._judged(Target(az, None, command.source, info=info, origin=command.origin), epoch)
+        target = Target(az, None, command.source, info=info, origin=command.origin)
+        self._judged(target, epoch, ticket=ticket)
 
-    def _judged(self, command: ControllerCommand, epoch: int, hold: int | None = None) -> None:
+    def _judged(
+        self,
+        command: ControllerCommand,
+        epoch: int,
+        hold: int | None = None,
+        *,
+        ticket: int | None = None,
+    ) -> None:
         """A target, a stop or an option: judged (``_check``) and put in the mailbox (a
         target with ``epoch``, the halt count read before it was judged: mailbox.py rule 10)."""
         judged = self._check(command)
@@ -358,8 +385,8 @@ class Rotator:
         elif isinstance(judged, Stop):
             self.last_halt_s = time.monotonic()
             self._mailbox.put(judged, hold=hold)
-        elif not self._mailbox.put(judged, epoch=epoch):
-            self._overtaken()
+        elif not self._mailbox.put(judged, epoch=epoch, ticket=ticket):
+            self._overtaken(newer=self._mailbox.epoch == epoch)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
@@ -439,10 +466,11 @@ class Rotator:
         following."""
         self._mailbox.put_heard(heard)
 
-    def _overtaken(self) -> NoReturn:
+    def _overtaken(self, newer: bool = False) -> NoReturn:
         """A motion command the mailbox dropped: a stop or lock ON from another thread was put
-        while it was judged (mailbox.py rule 10). Refused like any, and said so."""
-        raise Refused(RefusalCode.STALE, STALE_MESSAGE)
+        while it was judged (mailbox.py rule 10), or (``newer``) a motion command put after
+        it was asked (rule 10a). Refused like any, and said so."""
+        raise Refused(RefusalCode.STALE, NEWER_MESSAGE if newer else STALE_MESSAGE)
 
     def _check_start(self, who: Origin) -> None:
         """A track or follow start: the judge's order (``_check``), with no target to judge."""

@@ -51,6 +51,13 @@ Rules:
     stop and lock ON up to it (session.py ``halts_applied``), so a judge that reads a larger
     count knows the status it sees predates a halt (a nudge is then from the bearing, not from
     the target the stop dropped: runtime/rotator.py).
+10a. A place in the order of commands (``ticket``): a front end that asks a motion command
+    now and puts it a while later (the DX cluster's call, looked up on a thread of its own)
+    takes a ticket when it is asked, and puts it with it; every motion command, stop or lock
+    ON put without one takes the next at its put. One put with a ticket older than the newest
+    put is dropped (the put returns False): a target sent after the call was asked is the
+    later word, however long the look-up took (an attack pass: the call, looked up after a
+    plain target of 200 was put, turned the rotor back to the call's bearing).
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -170,6 +177,8 @@ class Mailbox:
         self._woken = False  # rule 5: a wake byte is owed for the batch being filled
         self._fd_lock = threading.Lock()  # rule 8
         self._epoch = 0  # rule 10: stops and lock ONs put so far
+        self._tickets = itertools.count(1)  # rule 10a
+        self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -188,6 +197,22 @@ class Mailbox:
         a count read late is only newer, never one that lets a stale command in)."""
         return self._epoch
 
+    def ticket(self) -> int:
+        """Rule 10a: a place in the order of commands, for one asked now and put later (``next``
+        on an ``itertools.count`` is one step under the interpreter's lock)."""
+        return next(self._tickets)
+
+    def _placed(self, ticket: int | None) -> bool:
+        """Rule 10a (under the lock): False if ``ticket`` is older than the newest put; else
+        the newest is this one (a command put without a ticket takes the next)."""
+        if ticket is None:
+            self._newest = next(self._tickets)
+            return True
+        if ticket < self._newest:
+            return False
+        self._newest = ticket
+        return True
+
     def put(
         self,
         command: Target | Stop | SetOption,
@@ -195,11 +220,14 @@ class Mailbox:
         hold: int | None = None,
         wake: bool = True,
         epoch: int | None = None,
+        ticket: int | None = None,
     ) -> bool:
         """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5;
-        ``epoch``: the halt count a target was judged at (rule 10). False: dropped (rule 10)."""
+        ``epoch``: the halt count a target was judged at (rule 10); ``ticket``: its place in the
+        order of commands, taken when it was asked (rule 10a). False: dropped (rules 10, 10a)."""
         with self._lock:
             if isinstance(command, Stop):
+                self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.stop = command
                 self._batch.target = None
@@ -211,7 +239,7 @@ class Mailbox:
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
-                if self._stale(epoch):
+                if self._stale(epoch) or not self._placed(ticket):
                     return False
                 self._batch.target = combine(command, self._batch.target)
             else:
@@ -231,6 +259,7 @@ class Mailbox:
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
             if locked:
+                self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None
@@ -285,6 +314,8 @@ class Mailbox:
         with self._lock:
             if self._stale(epoch):
                 return False
+            if (track.body or track.lookup) is not None:
+                self._placed(None)  # rule 10a
             self._batch.track = track
             self._batch.target = None
             self._batch.follow = None  # rule 9: the later command wins
@@ -301,6 +332,7 @@ class Mailbox:
                 return False
             self._batch.follow = follow
             if follow.on:  # following off ends nothing else
+                self._placed(None)  # rule 10a
                 self._batch.target = None
                 self._batch.track = None
                 if self._batch.feature_commands:
@@ -315,6 +347,7 @@ class Mailbox:
             if self._stale(epoch):
                 return False
             if command.moves:
+                self._placed(None)  # rule 10a
                 self._batch.target = None  # rule 12: the later command wins
             self._batch.feature_commands.append(command)
         self._wake_once()

@@ -140,10 +140,23 @@ class Asked:
     def __init__(self) -> None:
         self.calls: list[tuple[object, ...]] = []
         self.halts = 0  # the halt count (runtime/rotator.py)
+        self.tickets = 0  # places in the order of commands taken (mailbox.py rule 10a)
 
-    def submit(self, command: Toward, described: str, *, since: int | None = None) -> None:
+    def ticket(self) -> int:
+        self.tickets += 1
+        return self.tickets
+
+    def submit(
+        self,
+        command: Toward,
+        described: str,
+        *,
+        since: int | None = None,
+        ticket: int | None = None,
+    ) -> None:
         lat, lon, long_path = command.latitude_deg, command.longitude_deg, command.long_path
         assert since == 0  # the count when it was asked goes to the judge (rule 4)
+        assert ticket is not None and 0 < ticket <= self.tickets  # ... and its place (rule 4)
         self.calls.append(("go", lat, lon, command.source, described, long_path, command.origin))
 
     def report_refusal(self, message: str, command: str | None, *, origin: Origin) -> None:

@@ -30,7 +30,10 @@ Rules:
    it: the call is refused, never turned to after the stop (docs/architecture.md rule 11). The
    rotator's halt count read when it was asked goes with it to the judge (``submit``'s
    ``since``), which drops it at the put if a halt came since, however long the look-up took
-   (a clock compared before the look-up let a stop that came during it be overtaken).
+   (a clock compared before the look-up let a stop that came during it be overtaken); so is
+   its place in the order of the rotator's commands (``ticket``): a target sent after the
+   call was asked is the later word, and the call is refused (an attack pass: a target of 200
+   sent while the call's look-up ran was overtaken by it, the rotor turned back to the call).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
    session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more):
@@ -101,6 +104,7 @@ class _Aim:
     described: str
     origin: Origin
     halts: int  # rule 4: the rotator's halt count when it was asked
+    ticket: int  # rule 4: its place in the order of the rotator's commands, taken then
 
 
 @dataclass
@@ -300,7 +304,7 @@ class DxCluster:
     ) -> None:
         """From paho's thread: queued for the aim thread; a full queue is refused at once."""
         try:
-            aim = _Aim(rotator, call, long_path, described, origin, rotator.halts)
+            aim = _Aim(rotator, call, long_path, described, origin, rotator.halts, rotator.ticket())
             self._aims.put_nowait(aim)
         except queue.Full:
             rotator.report_refusal(
@@ -343,7 +347,7 @@ class DxCluster:
             source=Source.DXCLUSTER,
             origin=aim.origin,
         )
-        aim.rotator.submit(toward, aim.described, since=aim.halts)  # rule 4
+        aim.rotator.submit(toward, aim.described, since=aim.halts, ticket=aim.ticket)  # rule 4
 
 
 def _keepalive(sock: socket.socket) -> None:

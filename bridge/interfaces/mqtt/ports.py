@@ -35,7 +35,9 @@ class RotatorPort(FrontRotator, Protocol):
         hold: int | None = None,
         echo: bool = False,
         since: int | None = None,
+        ticket: int | None = None,
     ) -> None: ...
+    def ticket(self) -> int: ...  # a place in the order of commands (mailbox.py rule 10a)
     def release(self, marker: int, *, clear: bool = False) -> None: ...
 
 
