@@ -254,6 +254,7 @@ class CompositeWorker:
         self._urgent = frozenset({self._box})
         self._on_status = on_status
         self._halts_applied = 0
+        self._newest_applied = 0
         self.composition = Composition(cfg.rotator_id)
         self._halted = Halts()  # rule 6
         self.boxes: dict[Axis, Worker] = {}
@@ -283,6 +284,11 @@ class CompositeWorker:
         """mailbox.py rule 10, as a worker's: the merged status shows every stop and lock ON
         up to it (set once both boxes' statuses were handed on: ``serve``)."""
         return self._halts_applied
+
+    @property
+    def newest_applied(self) -> int:
+        """mailbox.py rule 10a, as a worker's (set with ``halts_applied``)."""
+        return self._newest_applied
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)
@@ -334,6 +340,7 @@ class CompositeWorker:
             if batch:
                 self._hand(split(batch), now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
+                self._newest_applied = batch.newest
         for box in self.boxes.values():
             fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):

@@ -97,6 +97,9 @@ log = logging.getLogger(__name__)
 # mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
 NEWER_MESSAGE = "a newer command came after it was asked: not carried out"
+ON_ITS_WAY_MESSAGE = (
+    "a target sent just before it is still on its way to the controller: send it again"
+)
 
 
 class Rotator:
@@ -340,9 +343,17 @@ class Rotator:
     def _seen(self) -> tuple[RotatorStatus, bool]:
         """The status a command relative to the target is made from, and whether a stop or
         lock ON put before it is not in that status yet (mailbox.py rule 10): the target it
-        shows is then the one that halt dropped, and nothing is on its way."""
-        applied = self._worker.halts_applied  # first: the status read next is at least as new
-        return self.status, self._mailbox.epoch > applied
+        shows is then the one that halt dropped, and nothing is on its way. A motion command
+        put before it and not in that status yet (rule 10a) makes the target it shows an old
+        one: refused, to be sent again (an attack pass: target 100, then a nudge of +10 before
+        the lines thread took the target, went to the old target's bearing plus 10, and the
+        100 was never sent)."""
+        worker = self._worker
+        applied, shown = worker.halts_applied, worker.newest_applied  # first: the status read
+        status, halted = self.status, self._mailbox.epoch > applied  # next is at least as new
+        if not halted and self._mailbox.newest > shown:
+            raise Refused(RefusalCode.STALE, ON_ITS_WAY_MESSAGE)
+        return status, halted
 
     def _toward(
         self,

@@ -253,6 +253,11 @@ class Worker:
         """mailbox.py rule 10: the halt count the status shows every stop and lock ON up to."""
         return self.session.halts_applied
 
+    @property
+    def newest_applied(self) -> int:
+        """mailbox.py rule 10a: the newest place the status shows every command up to."""
+        return self.session.newest_applied
+
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None
         if isinstance(result, Exception):

@@ -57,7 +57,10 @@ Rules:
     ON put without one takes the next at its put. One put with a ticket older than the newest
     put is dropped (the put returns False): a target sent after the call was asked is the
     later word, however long the look-up took (an attack pass: the call, looked up after a
-    plain target of 200 was put, turned the rotor back to the call's bearing).
+    plain target of 200 was put, turned the rotor back to the call's bearing). A batch taken
+    carries the newest place put (``Batch.newest``), as it carries the halt count: a judge
+    that reads a newer one in the mailbox knows the status it sees predates a motion command
+    (a nudge is then refused: runtime/rotator.py).
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -126,6 +129,7 @@ class Batch:
     # that target would (runtime/composite.py rule 2: tracking, following, a part's motion)
     epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
     # in this batch or an earlier one)
+    newest: int = 0  # rule 10a: the newest place put when taken (likewise)
     # rule 12, in the order put, with where a stop, lock or clearing came among them
     feature_commands: list[FeatureCommand | PartsEnd] = field(default_factory=list)
 
@@ -196,6 +200,12 @@ class Mailbox:
         """Rule 10: the halt count, read before judging a motion command (one attribute read:
         a count read late is only newer, never one that lets a stale command in)."""
         return self._epoch
+
+    @property
+    def newest(self) -> int:
+        """Rule 10a: the place of the newest motion command or halt put (one attribute read:
+        read late, it is only newer)."""
+        return self._newest
 
     def ticket(self) -> int:
         """Rule 10a: a place in the order of commands, for one asked now and put later (``next``
@@ -399,6 +409,7 @@ class Mailbox:
         with self._lock:
             batch, self._batch = self._batch, Batch()
             batch.epoch = self._epoch  # rule 10
+            batch.newest = self._newest  # rule 10a
             self._woken = False  # rule 5
             batch.options = list(self._option_order.values())
             self._option_order = {}

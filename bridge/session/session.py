@@ -227,6 +227,7 @@ class RotatorSession:
         # stop and lock ON up to it (set once the step built the status: a thread that reads
         # this count and then the status sees a status at least that new)
         self.halts_applied = 0
+        self.newest_applied = 0  # mailbox.py rule 10a: likewise, the newest place applied
 
     @property
     def name(self) -> str:
@@ -337,6 +338,7 @@ class RotatorSession:
             self._end(batch.ends, now)
         actions = self._step(now)
         self.halts_applied = batch.epoch  # (after the status: see __init__)
+        self.newest_applied = batch.newest
         return actions
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
