@@ -405,6 +405,10 @@ def test_set_pos_errors(station: StationFactory) -> None:
     refused = [(e.kind, e.command) for e in st.events]
     assert ("refused", "rotctld set_pos 999 0") in refused
     assert ("refused", "rotctld set_pos 90 10") in refused  # MQTT's error topic hears of it
+    for typed in ("abc 0", "nan 0", "90 x"):  # no numbers: said too (package rule 6)
+        assert ("refused", f"rotctld set_pos {typed}") in refused
+    said = next(e.message for e in st.events if e.command == "rotctld set_pos nan 0")
+    assert said == "P 'nan 0': the azimuth and elevation are no numbers"
 
 
 def test_a_locked_rotator_rejects_moves_but_not_stop(station: StationFactory) -> None:

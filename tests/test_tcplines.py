@@ -92,9 +92,13 @@ class _Tower:
     def __init__(self) -> None:
         self.status = SimpleNamespace(bearing_deg=120.0, elevation_deg=0.0, available=True)
         self.submitted: list[Target | Stop] = []
+        self.refused: list[str] = []  # package gs232 rule 12: a line it carries out no part of
 
     def submit(self, command: Target | Stop, described: str | None = None) -> None:
         self.submitted.append(command)
+
+    def report_refusal(self, message: str, command: str | None, *, origin: object = None) -> None:
+        self.refused.append(message)
 
 
 @pytest.fixture

@@ -370,9 +370,11 @@ class Mailbox:
         self._wake_once()
 
     def put_note(self, message: str) -> None:
-        """A refusal decided outside the worker, so that the status shows it as the last error."""
+        """A refusal decided outside the worker, so that the status shows it as the last error
+        (the newest alone is kept: it is the one the status shows, and a flood of refusals
+        keeps no list)."""
         with self._lock:
-            self._batch.notes.append(message)
+            self._batch.notes = [message]
         self._wake_once()
 
     def put_wind(self, speed_kmh: float, replayed: bool = False) -> None:

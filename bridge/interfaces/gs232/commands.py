@@ -112,6 +112,13 @@ class _Session(ABC, Generic[Item]):
     def answer(self, item: Item) -> bytes:
         """The protocol's reply to one command (b"" for none)."""
 
+    def _not_carried_out(self, why: str, described: str) -> None:
+        """Package rule 12: a line that is no command the bridge carries out is said on
+        R/error (rate-limited there) and in the audit trail, besides the protocol's answer:
+        the client's user sees why nothing moved (an attack pass: ``M180.5`` and ``AZnan``
+        were answered on the wire alone, and logged at debug)."""
+        self.rotator.report_refusal(why, described, origin=self.origin)
+
 
 class _LineSession(_Session[str | None]):
     """A protocol whose commands are lines (LineSplitter)."""
@@ -173,6 +180,11 @@ class Gs232Session(_LineSession):
                 return GS232_ERROR  # Rotator.submit has reported it on R/error
             return b""
         log.debug("gs232 for %s: %r not understood", self.rotator.id, line)
+        if line is None:
+            self._not_carried_out("a line too long to be a GS-232 command", "gs232 (long line)")
+        else:
+            why = f"{line!r} is no GS-232 command the bridge carries out"
+            self._not_carried_out(why, described)
         return GS232_ERROR
 
 
@@ -195,6 +207,7 @@ class EasycommSession(_LineSession):
                 alarms.append(f"refused {exc.code.value}")
         if req.invalid is not None:  # nothing else runs (package rule 3)
             alarms.insert(0, f"invalid {req.invalid}")
+            self._not_carried_out(f"Easycomm: invalid {req.invalid}", described)  # rule 12
             return "".join(f"AL{alarm}\n" for alarm in alarms).encode("latin-1")
         if req.park and not req.stop:
             try:
@@ -211,6 +224,9 @@ class EasycommSession(_LineSession):
             except Refused as exc:
                 alarms.append(f"refused {exc.code.value}")
         alarms += [f"{word} not available" for word in req.unsupported]
+        if req.unsupported:  # rule 12 (a garbled poll's AZ ML reads as a jog asked)
+            asked = ", ".join(req.unsupported)
+            self._not_carried_out(f"Easycomm: {asked} not carried out by the bridge", described)
         words = self._answers(req.queries)
         if words is None:
             alarms.append("position unknown")
@@ -278,6 +294,7 @@ class Dcu1Session(_Session[Dcu1Request]):
         if item.kind is Dcu1Kind.VERSION:
             return DCU1_ERROR  # the banner names the version
         log.debug("dcu1 for %s: %r not understood", self.rotator.id, item.text)
+        self._not_carried_out(f"{item.text!r} is no DCU-1 command", described)  # rule 12
         return DCU1_ERROR
 
     def _turn(self, item: Dcu1Request, described: str) -> bytes:

@@ -41,7 +41,8 @@ class LineSplitter:
                 break  # the last piece has no end yet
             if self._overlong:
                 out.append(None)
-            elif line := self._buf.decode("latin-1").strip():
+            elif line := self._buf.strip().decode("latin-1"):  # (ASCII blanks alone: latin-1's
+                # others, \x1c-\x1f, \x85, \xa0, are no blanks of these protocols)
                 out.append(line)
             self._buf, self._overlong = b"", False
         return out

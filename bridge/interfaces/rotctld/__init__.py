@@ -33,7 +33,9 @@ Rules:
 5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
    currently have is an error code, never the last value seen.
 6. Motion goes through Rotator.submit with Source.ROTCTLD, so the lock, the limits and the link
-   state are judged in one place and MQTT shows the refusal or the move.
+   state are judged in one place and MQTT shows the refusal or the move. A ``P`` whose
+   arguments are no numbers (``nan``, ``inf``, ``12x``) is answered ``RPRT -1`` and said on
+   ``R/error`` too, as the GS-232 ports say theirs (package gs232 rule 12).
 7. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs
    (interfaces/tcplines.py rule 2): rotctld parses any bytes as commands, so a web page open on the
    shack PC could otherwise turn the antenna through a loopback port (a ``POST`` body of ``P 200

@@ -96,7 +96,9 @@ class RotctldCommands:
 
     def _set_pos(self, req: Request) -> tuple[int, str]:
         az, el = (_number(a) for a in req.args)
-        if az is None or el is None:
+        if az is None or el is None:  # package rule 6: said on R/error too
+            why = f"P {' '.join(req.args)!r}: the azimuth and elevation are no numbers"
+            self.rotator.report_refusal(why, _describe(req), origin=self._origin)
             return -RIG_EINVAL, ""
         el_deg = el if self.rotator.spec.has_elevation or el != 0 else None
         code, body = self._submit_target(az, el_deg, req)
