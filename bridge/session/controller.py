@@ -86,9 +86,14 @@ Rules:
    the second is asked once the stop is out; readings at the idle rate agree within
    ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A composite box's
    axis that is never turned is kept so too: axes.py rule 5.)
-10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``: not from a
-   connection's first reading, which cannot tell a turn under way from a new one, a review: a
-   reconnect mid-turn stopped the user's own move) with no target out is stopped, once a reading
+10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from a
+   connection's first readings (still or braking, before the motion settled) where the port
+   closed with the rotor still and no target out, or where this session never had it open
+   and every such turn is stopped (an attack pass: a poll garbled into a jog in those first
+   seconds ran an Easycomm to its end stop past ``az_min_deg``, and a Rotor-EZ replugged after
+   a STOP on to the target it was stopped short of), but not where the port closed while it
+   turned or had a target out (a review: a reconnect mid-turn stopped the user's own move),
+   with no target out is stopped, once a reading
    puts it more than UNASKED_MOVE_DEG from where it rested on either axis (never a pot's jitter,
    which the doubt of rule 9 lets through when two readings agree), by a stop checked as an
    operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
@@ -405,6 +410,9 @@ class Controller:
         self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
+        self._still_at_close: bool | None = None  # rule 10: still, no target out, when the port
+        # last closed (None: this session never had it open)
+        self._connect_guard = False  # rule 10: a turn from a connection's first readings judged
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until judged
         self._retry_t = math.inf  # rule 11: when it was sent
@@ -485,6 +493,8 @@ class Controller:
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed
+        still = self._still_at_close  # rule 10: known still when it closed, or (never open)
+        self._connect_guard = still if still is not None else self.cfg.unasked_moves == "stop"
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -515,6 +525,9 @@ class Controller:
             self._released_owed = True  # (the released lock's: stops.py rule 2)
         self.link = None
         self.answering = False
+        m = self.motion  # rule 10: still, with no target out, as the port closes?
+        self._still_at_close = m.state is not mo.MOVING and m.target_deg is None
+        self._still_at_close &= m.el_target_deg is None and m.stop_sent_t is None
         self._lose_motion(mo.link_down)
         self._pass_ends = False  # (a last try not written: owed, checked as any)
 
@@ -554,6 +567,7 @@ class Controller:
         stop rules and the next poll learn it alike (a review found the owed stop's own copy
         of these lines had lost two of them)."""
         self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        self._connect_guard = False  # (rule 10: a stop's own checks watch it from now)
         self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
         if not self.cfg.spec.can_report_position:
             self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
@@ -847,15 +861,22 @@ class Controller:
     def _unasked(self, was: mo.Motion, now: float) -> None:
         """Rule 10: ``was`` the motion before this reading."""
         m = self.motion
+        if mo.at_rest(m):
+            self._connect_guard = False  # (settled: at_rest judges from now on)
         if m.state is not mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
             self._rested = None
             return
         cfg = self.cfg.motion
         if was.state is not mo.MOVING and was.position_deg is not None:  # a turn begins
             self._rested = None
-            if mo.at_rest(was) and (  # (from a settled rest: not a connection's first reading,
-                self.cfg.unasked_moves == "stop"  # a guess; not after a stall: stops.py rule 4)
-                or self._short_of_target(was.position_deg, cfg)
+            # from a settled rest (not after a stall: stops.py rule 4), or from the first
+            # readings of a connection whose rotor was still when the port closed (or, where
+            # every such turn is stopped, the first this session opened): not from one that
+            # was turning, or had a target out (a turn under way across a reconnect)
+            first = self._connect_guard and (was.state is mo.IDLE or was.state is mo.BRAKING)
+            self._connect_guard = False
+            if (mo.at_rest(was) or first) and (
+                self.cfg.unasked_moves == "stop" or self._short_of_target(was.position_deg, cfg)
             ):
                 self._rested = (was.position_deg, was.el_position_deg)
             self._guarded = False  # (the first turn ends the guard, stopped or not)
@@ -1120,6 +1141,7 @@ class Controller:
         az, el = todo.wire
         sent_az = self._sent_az  # (rule 11: the target written before this one)
         self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
+        self._connect_guard = False  # (rule 10: a turn now is asked for)
         self._retry = None  # rule 11: one try more, where the controller takes one at any time
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now

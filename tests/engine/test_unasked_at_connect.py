@@ -1,0 +1,104 @@
+"""controller.py rule 10 in a connection's first readings: a poll one flipped bit from a move
+(Easycomm's ``AZ EL`` read as ``AZ ML``, the Rotor-EZ's ``AI1;`` as ``AM1;``) garbled before
+the motion settled after a connect turned the rotor unwatched (an attack pass: an Easycomm ran
+from 100 to its end stop at 0, past ``az_min_deg``; a Rotor-EZ stopped short of 300 went on to
+300 after its adapter was replugged). A turn under way across a reconnect (the user's own) is
+still followed, not stopped. Virtual time, the project's emulators; what is asserted is where
+the emulated rotor went."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bridge.core.model import MotionState, Target
+from tests.engine.virtual import VirtualRotator
+
+
+def garble(v: VirtualRotator, frame: bytes, into: bytes, nth: int) -> None:
+    """The ``nth`` ``frame`` written reaches the controller as ``into`` (one flipped bit)."""
+    seen = 0
+
+    def line(data: bytes, now: float) -> bytes:
+        nonlocal seen
+        if data == frame:
+            seen += 1
+            if seen == nth:
+                return into
+        return data
+
+    v.to_device = line
+
+
+def lowest_az(v: VirtualRotator, seconds: float) -> float:
+    low, end = math.inf, v.now + seconds
+    while v.now < end:
+        v.run_for(0.1)
+        low = min(low, v.truth().az_deg)
+    return low
+
+
+def stopped_says(v: VirtualRotator) -> list[str]:
+    return [e.message for e in v.errors() if "no command from the bridge" in e.message]
+
+
+def test_an_easycomm_first_poll_garbled_into_a_jog_is_stopped() -> None:
+    v = VirtualRotator(
+        "easycomm2",
+        settings={"az_min_deg": 40},
+        emulator={"start_az_deg": 100, "start_el_deg": 10},
+        connect=False,
+    )
+    garble(v, b"AZ EL\n", b"AZ ML\n", 1)  # the first poll of the first connection
+    v.link_up()
+    assert lowest_az(v, 60) > 80  # stopped a few degrees on, not at the end stop (0)
+    assert len(stopped_says(v)) == 1
+
+
+def test_a_rotorez_stopped_short_then_replugged_is_not_turned_on_to_the_old_target() -> None:
+    v = VirtualRotator("rotorez", emulator={"start_az_deg": 100})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.aim(Target(300))
+    v.run_until(lambda h: h.truth().az_deg > 150, 60)
+    v.stop()
+    v.run_for(15)
+    rest = v.truth().az_deg
+    v.link_down()
+    v.run_for(2)
+    garble(v, b"AI1;", b"AM1;", 3)  # in the first seconds, before the motion settles
+    v.link_up()
+    v.run_for(90)
+    assert v.truth().az_deg < rest + 15  # not on to 300
+    assert len(stopped_says(v)) == 1
+
+
+def replugged_mid_turn(model: str, emulator: dict[str, float]) -> VirtualRotator:
+    """The user's target under way when the adapter is replugged: the controller turns on."""
+    v = VirtualRotator(model, emulator=emulator)
+    v.run_until_state(MotionState.IDLE, 30)
+    v.aim(Target(300))
+    v.run_until(lambda h: h.truth().az_deg > 150, 60)
+    v.link_down()
+    v.run_for(1)
+    v.link_up()
+    return v
+
+
+@pytest.mark.parametrize(
+    ("model", "emulator"),
+    [
+        ("easycomm2", {"start_az_deg": 100, "start_el_deg": 10}),
+        ("rotorez", {"start_az_deg": 100}),
+    ],
+)
+def test_a_turn_under_way_across_a_replug_is_followed_not_stopped(
+    model: str, emulator: dict[str, float]
+) -> None:
+    """A review, when the first readings were exempt: a reconnect mid-turn must not stop the
+    user's own move; the port closed while it turned, so its first readings are not judged."""
+    v = replugged_mid_turn(model, emulator)
+    v.run_until(lambda h: abs(h.truth().az_deg - 300) < 2, 90)
+    v.run_for(5)
+    assert stopped_says(v) == []
+    assert abs(v.truth().az_deg - 300) < 2
