@@ -269,6 +269,10 @@ MODELS: dict[str, ModelSpec] = {
         full_duplex=False,
         stop_interrupts=True,
         reports_while_moving=False,
+        # its own frames are each one flipped bit from a jog that runs until told otherwise
+        # (z, s and p from r, t from u: an attack pass ran it past az_max_deg and el_max_deg):
+        # every turn nobody asked for is stopped (set follow to turn it by its own commands)
+        unasked_moves="stop",
         reply_timeout_s=2.0,
         noise_deg=1.0,
         # the rotor it usually drives, a Yaesu G-5500: 360 deg in 58-70 s, 180 deg in 67-81 s
