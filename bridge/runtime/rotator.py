@@ -98,7 +98,7 @@ log = logging.getLogger(__name__)
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
 NEWER_MESSAGE = "a newer command came after it was asked: not carried out"
 ON_ITS_WAY_MESSAGE = (
-    "a target sent just before it is still on its way to the controller: send it again"
+    "a command sent just before it is still on its way to the controller: send it again"
 )
 
 
@@ -308,19 +308,22 @@ class Rotator:
             case Park():
                 self._judged(Target(*self.pointing.parking(), src, park=True, origin=by), epoch)
             case Nudge():
+                ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
-                self._judged(Target(*step, src, origin=by), epoch)
+                self._judged(Target(*step, src, origin=by), epoch, ticket=ticket)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 self._toward(command, epoch, lat, lon, ticket=ticket)
             case TakePath():
+                ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 info = None if halted else status.target_info  # the place of the current target
                 if info is None:
                     message = "no locator or coordinate target to take the other path to"
                     raise Refused(RefusalCode.INVALID, message)
-                self._toward(command, epoch, info.latitude_deg, info.longitude_deg, info.locator)
+                lat, lon, locator = info.latitude_deg, info.longitude_deg, info.locator
+                self._toward(command, epoch, lat, lon, locator, ticket=ticket)
             case ResetHealth():
                 self._reset_health()
                 return None
@@ -344,14 +347,16 @@ class Rotator:
         """The status a command relative to the target is made from, and whether a stop or
         lock ON put before it is not in that status yet (mailbox.py rule 10): the target it
         shows is then the one that halt dropped, and nothing is on its way. A motion command
-        put before it and not in that status yet (rule 10a) makes the target it shows an old
-        one: refused, to be sent again (an attack pass: target 100, then a nudge of +10 before
-        the lines thread took the target, went to the old target's bearing plus 10, and the
-        100 was never sent)."""
+        put before it, after the last halt, and not in that status yet (rule 10a) makes the
+        target it shows an old one: refused, to be sent again (an attack pass: target 100,
+        then a nudge of +10 before the lines thread took the target, went to the old target's
+        bearing plus 10, and the 100 was never sent; a review: the same with a STOP before the
+        target). The command made from it is put with a ticket taken before this look, so one
+        put after the look overtakes it (rule 10a)."""
         worker = self._worker
         applied, shown = worker.halts_applied, worker.newest_applied  # first: the status read
         status, halted = self.status, self._mailbox.epoch > applied  # next is at least as new
-        if not halted and self._mailbox.newest > shown:
+        if self._mailbox.motion_unseen(shown):
             raise Refused(RefusalCode.STALE, ON_ITS_WAY_MESSAGE)
         return status, halted
 

@@ -183,6 +183,7 @@ class Mailbox:
         self._epoch = 0  # rule 10: stops and lock ONs put so far
         self._tickets = itertools.count(1)  # rule 10a
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
+        self._halt_placed = 0  # rule 10a: ... and of the newest halt
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -201,27 +202,28 @@ class Mailbox:
         a count read late is only newer, never one that lets a stale command in)."""
         return self._epoch
 
-    @property
-    def newest(self) -> int:
-        """Rule 10a: the place of the newest motion command or halt put (one attribute read:
-        read late, it is only newer)."""
-        return self._newest
-
     def ticket(self) -> int:
         """Rule 10a: a place in the order of commands, for one asked now and put later (``next``
         on an ``itertools.count`` is one step under the interpreter's lock)."""
         return next(self._tickets)
 
-    def _placed(self, ticket: int | None) -> bool:
-        """Rule 10a (under the lock): False if ``ticket`` is older than the newest put; else
-        the newest is this one (a command put without a ticket takes the next)."""
+    def _placed(self, ticket: int | None) -> int:
+        """Rule 10a (under the lock): 0 if ``ticket`` is older than the newest put; else the
+        newest is this one (a command put without a ticket takes the next), returned."""
         if ticket is None:
             self._newest = next(self._tickets)
-            return True
-        if ticket < self._newest:
-            return False
-        self._newest = ticket
-        return True
+        elif ticket < self._newest:
+            return 0
+        else:
+            self._newest = ticket
+        return self._newest
+
+    def motion_unseen(self, applied: int) -> bool:
+        """Rule 10a: whether a motion command was put after the place ``applied`` (the newest
+        a status shows) and after the newest halt: a target that status does not show is on
+        its way."""
+        with self._lock:
+            return self._newest > applied and self._newest != self._halt_placed
 
     def put(
         self,
@@ -237,7 +239,7 @@ class Mailbox:
         order of commands, taken when it was asked (rule 10a). False: dropped (rules 10, 10a)."""
         with self._lock:
             if isinstance(command, Stop):
-                self._placed(None)  # rule 10a
+                self._halt_placed = self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.stop = command
                 self._batch.target = None
@@ -269,7 +271,7 @@ class Mailbox:
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
             if locked:
-                self._placed(None)  # rule 10a
+                self._halt_placed = self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bridge.core.errors import Refused
-from bridge.core.model import Nudge, Origin, Source, Target
+from bridge.core.model import Nudge, Origin, Source, Stop, Target
 from bridge.runtime.rotator import ON_ITS_WAY_MESSAGE
 from tests.engine.test_halt_epoch import START_AZ, Bench
 
@@ -51,3 +51,24 @@ def test_a_nudge_once_the_target_is_taken_adds_to_it(bench: Bench) -> None:
     bench.v.run_for(30.0)
     assert bench.rot.status.bearing_deg == pytest.approx(110.0, abs=1.0)
     assert not bench.events
+
+
+def test_a_nudge_after_a_stop_and_a_target_not_yet_taken_is_refused(bench: Bench) -> None:
+    """A review: with a STOP put before the target, the nudge was made from the bearing (the
+    stop's rule) and replaced the 100: the rotor went to 40."""
+    bench.rot.submit(Stop(Source.MQTT, origin=WHO), "stop")
+    bench.rot.submit(Target(100.0, None, Source.MQTT, origin=WHO), "target '100'")
+    with pytest.raises(Refused, match="still on its way"):
+        bench.rot.submit(Nudge(10.0, None, source=Source.MQTT, origin=WHO), "nudge '+10'")
+    bench.v._take()
+    bench.v.run_for(30.0)
+    assert bench.rot.status.bearing_deg == pytest.approx(100.0, abs=1.0)
+
+
+def test_a_nudge_after_a_stop_alone_is_made_from_the_bearing(bench: Bench) -> None:
+    """The stop's own rule stands: nothing is on its way, the nudge is from where it stands."""
+    bench.rot.submit(Stop(Source.MQTT, origin=WHO), "stop")
+    bench.rot.submit(Nudge(10.0, None, source=Source.MQTT, origin=WHO), "nudge '+10'")
+    bench.v._take()
+    bench.v.run_for(30.0)
+    assert bench.rot.status.bearing_deg == pytest.approx(START_AZ + 10.0, abs=1.0)
