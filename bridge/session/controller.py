@@ -86,14 +86,16 @@ Rules:
    the second is asked once the stop is out; readings at the idle rate agree within
    ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A composite box's
    axis that is never turned is kept so too: axes.py rule 5.)
-10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from a
-   connection's first readings (still or braking, before the motion settled) where the port
-   closed with the rotor still and no target out, or where this session never had it open
-   and every such turn is stopped (an attack pass: a poll garbled into a jog in those first
-   seconds ran an Easycomm to its end stop past ``az_min_deg``, and a Rotor-EZ replugged after
-   a STOP on to the target it was stopped short of), but not where the port closed while it
-   turned or had a target out (a review: a reconnect mid-turn stopped the user's own move),
-   with no target out is stopped, once a reading
+10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
+   first readings back (a port opened, a controller answering again; still or braking, before
+   the motion settled) where the rotor was still with no target out when the readings were
+   lost, or where this session never had any and every such turn is stopped (its ``stop``
+   error then names a restart mid-turn first; an attack pass: a poll garbled into a jog in
+   those first seconds ran an Easycomm to its end stop past ``az_min_deg``, and a Rotor-EZ
+   replugged after a STOP on to the target it was stopped short of; a review: the same for
+   a controller answering again after a silence), but not where it was turning or had a
+   target out (a review: a reconnect mid-turn stopped the user's own move), with no target
+   out is stopped, once a reading
    puts it more than UNASKED_MOVE_DEG from where it rested on either axis (never a pot's jitter,
    which the doubt of rule 9 lets through when two readings agree), by a stop checked as an
    operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
@@ -410,9 +412,11 @@ class Controller:
         self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
-        self._still_at_close: bool | None = None  # rule 10: still, no target out, when the port
-        # last closed (None: this session never had it open)
-        self._connect_guard = False  # rule 10: a turn from a connection's first readings judged
+        self._still_at_close: bool | None = None  # rule 10: still, no target out, when the
+        # readings were last lost (the port closed, the controller silent; None: never had any)
+        self._connect_guard = False  # rule 10: a turn from the first readings back is judged
+        self._guard_at_start = False  # rule 10: ... and they are this session's first
+        self._rested_at_start = False  # rule 10: ``_rested`` is from those
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until judged
         self._retry_t = math.inf  # rule 11: when it was sent
@@ -493,8 +497,6 @@ class Controller:
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed
-        still = self._still_at_close  # rule 10: known still when it closed, or (never open)
-        self._connect_guard = still if still is not None else self.cfg.unasked_moves == "stop"
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -525,9 +527,6 @@ class Controller:
             self._released_owed = True  # (the released lock's: stops.py rule 2)
         self.link = None
         self.answering = False
-        m = self.motion  # rule 10: still, with no target out, as the port closes?
-        self._still_at_close = m.state is not mo.MOVING and m.target_deg is None
-        self._still_at_close &= m.el_target_deg is None and m.stop_sent_t is None
         self._lose_motion(mo.link_down)
         self._pass_ends = False  # (a last try not written: owed, checked as any)
 
@@ -807,6 +806,10 @@ class Controller:
         owed = first = False
         if not self.answering:
             self.answering, owed, first = True, self.stops.owed, True
+            still = self._still_at_close  # rule 10: a turn from these first readings judged?
+            guard = still if still is not None else self.cfg.unasked_moves == "stop"
+            self._connect_guard = guard and self.motion.stop_sent_t is None
+            self._guard_at_start = still is None
             self.options.all_due()
             self._retune()
             log.info("%s: controller answering", self.name)
@@ -852,7 +855,10 @@ class Controller:
         passes: 12 changes in 20 replugs; a still rotor whose last turn went up showed its
         jitter up for good)."""
         m = self.motion
-        if m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
+        turning = m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None
+        self._still_at_close = not turning and m.stop_sent_t is None  # rule 10
+        self._connect_guard = False  # (armed again by the first reading back)
+        if turning:
             self._afresh = True
         else:  # (the way of its last turn, however long ago, is no way it turns after)
             self.az_shown.direction = self.el_shown.direction = 0
@@ -870,15 +876,17 @@ class Controller:
         if was.state is not mo.MOVING and was.position_deg is not None:  # a turn begins
             self._rested = None
             # from a settled rest (not after a stall: stops.py rule 4), or from the first
-            # readings of a connection whose rotor was still when the port closed (or, where
-            # every such turn is stopped, the first this session opened): not from one that
-            # was turning, or had a target out (a turn under way across a reconnect)
+            # readings back (a port opened, a controller answering again) where it was still
+            # when they were lost (or, where every such turn is stopped, this session's first):
+            # not where it was turning, or had a target out (a turn under way across a
+            # reconnect)
             first = self._connect_guard and (was.state is mo.IDLE or was.state is mo.BRAKING)
             self._connect_guard = False
             if (mo.at_rest(was) or first) and (
                 self.cfg.unasked_moves == "stop" or self._short_of_target(was.position_deg, cfg)
             ):
                 self._rested = (was.position_deg, was.el_position_deg)
+                self._rested_at_start = first and self._guard_at_start
             self._guarded = False  # (the first turn ends the guard, stopped or not)
         rested = self._rested
         if rested is None or m.position_deg is None:
@@ -891,7 +899,13 @@ class Controller:
             return
         self._rested = None
         true = self.cfg.aim.true_of  # (the bearings the user sees, not the controller's)
-        if self.cfg.unasked_moves == "stop" or self._sent_az is None:
+        if self._rested_at_start:  # (a review: a restart mid-turn was blamed on the line)
+            why = (
+                "it was turning when the bridge started (a restart mid-turn?), or a poll a noisy "
+                "line made a command, or a hand at the panel"
+            )
+            then = 'send the target again; set unasked_moves = "follow" to let such turns be'
+        elif self.cfg.unasked_moves == "stop" or self._sent_az is None:
             why = "a poll a noisy line made a command, or a hand at the panel"
             then = 'set unasked_moves = "follow" to let such turns be'
         else:

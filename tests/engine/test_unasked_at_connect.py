@@ -102,3 +102,35 @@ def test_a_turn_under_way_across_a_replug_is_followed_not_stopped(
     v.run_for(5)
     assert stopped_says(v) == []
     assert abs(v.truth().az_deg - 300) < 2
+
+
+def test_a_jog_as_the_controller_answers_again_after_a_silence_is_stopped() -> None:
+    """A review: only a port opened armed the guard; a controller that went silent (a box
+    power-cycled, its cable pulled at the box) and answered again on a port left open had
+    its second poll garbled into a jog, and ran to its end stop."""
+    v = VirtualRotator(
+        "easycomm2",
+        settings={"az_min_deg": 40},
+        emulator={"start_az_deg": 100, "start_el_deg": 10},
+    )
+    v.run_until_state(MotionState.IDLE, 30)
+    v.run_for(10)
+    v.set_silent(True)
+    v.run_until(lambda h: not h.status.available, 120)
+    v.set_silent(False)
+    garble(v, b"AZ EL\n", b"AZ ML\n", 2)
+    assert lowest_az(v, 90) > 80
+    assert len(stopped_says(v)) == 1
+
+
+def test_a_turn_seen_at_the_first_connect_names_a_restart_mid_turn() -> None:
+    """A review: a bridge started while the rotor turns (a restart mid-turn) stops it where
+    every such turn is stopped; the error says that cause first, not only a noisy line."""
+    v = VirtualRotator(
+        "easycomm2", emulator={"start_az_deg": 100, "start_el_deg": 10}, connect=False
+    )
+    v.manual_rotate(300.0)  # turning as the bridge starts (the previous process's target)
+    v.link_up()
+    v.run_for(30)
+    (said,) = stopped_says(v)
+    assert "turning when the bridge started" in said and v.truth().az_deg < 150
