@@ -84,8 +84,9 @@ Rules:
     the settings' keys (settings_rotator.EMULATION_KEYS) name the same ones.
 12. A line that is no command the bridge carries out (GS-232's ``?>``: one it does not know,
     one too long; an Easycomm line with a malformed word, or a word it cannot do, ``ML``; a
-    DCU-1 command that is none) is said on ``R/error`` and in the audit trail too, with what
-    was sent (rate-limited there, as every refusal is), besides the protocol's answer (an
+    DCU-1 command that is none) is said on ``R/error`` and in the log too, with what was
+    sent (rate-limited there, as every refusal is; not in the audit trail, which is not, and
+    which it would flood: it is no command), besides the protocol's answer (an
     attack pass: ``M180.5``, ``AZnan``, ``AP1999;`` were answered on the wire alone, and the
     client's user never learnt why nothing moved). Blanks around a line are ASCII's alone:
     ``\x1fM180`` is no ``M180``.

@@ -114,10 +114,12 @@ class _Session(ABC, Generic[Item]):
 
     def _not_carried_out(self, why: str, described: str) -> None:
         """Package rule 12: a line that is no command the bridge carries out is said on
-        R/error (rate-limited there) and in the audit trail, besides the protocol's answer:
-        the client's user sees why nothing moved (an attack pass: ``M180.5`` and ``AZnan``
-        were answered on the wire alone, and logged at debug)."""
-        self.rotator.report_refusal(why, described, origin=self.origin)
+        R/error and in the log (rate-limited there), besides the protocol's answer: the
+        client's user sees why nothing moved (an attack pass: ``M180.5`` and ``AZnan`` were
+        answered on the wire alone, and logged at debug). Not in the audit trail, which is
+        not rate-limited: it is no command (a review: a client's junk lines would have rotated
+        the commands out of its file)."""
+        self.rotator.report_refusal(why, described)
 
 
 class _LineSession(_Session[str | None]):

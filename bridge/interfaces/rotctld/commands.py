@@ -98,7 +98,7 @@ class RotctldCommands:
         az, el = (_number(a) for a in req.args)
         if az is None or el is None:  # package rule 6: said on R/error too
             why = f"P {' '.join(req.args)!r}: the azimuth and elevation are no numbers"
-            self.rotator.report_refusal(why, _describe(req), origin=self._origin)
+            self.rotator.report_refusal(why, _describe(req))  # (no audit: gs232 rule 12)
             return -RIG_EINVAL, ""
         el_deg = el if self.rotator.spec.has_elevation or el != 0 else None
         code, body = self._submit_target(az, el_deg, req)
