@@ -27,6 +27,7 @@ from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
 from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
+from tests.support.waiting import factor
 
 
 @pytest.fixture
@@ -57,6 +58,20 @@ SLOW_POLLS = {
     "silence_timeout_s": 30.0,
 }
 STOP_WAIT_S = 0.5  # a guard well inside one poll interval, not a latency bound
+
+
+def slowed_polls() -> tuple[dict[str, float], float]:
+    """SLOW_POLLS and STOP_WAIT_S both made longer by the machine's factor (waiting.py rule 1),
+    so that the wait stays a third of a poll interval on a busy machine: a stop that only the
+    next poll brings out still misses it, and one the wake-up brings out is not timed out by
+    the load (CI, under another process's flood: a wait of 0.5 s, unscaled, timed out)."""
+    f = factor()
+    polls = dict(SLOW_POLLS)
+    for key in ("idle_poll_interval_s", "moving_poll_interval_s", "settle_s"):
+        polls[key] *= f
+    return polls, STOP_WAIT_S * f
+
+
 FINAL_TRIALS = 5
 
 
@@ -110,7 +125,8 @@ def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: Emulat
     needs none (stops merge). Polls are SLOW_POLLS apart, so the proof is the order, not a
     measured latency."""
     events: list[ErrorEvent] = []
-    rot = make_rotator(emu, lambda s: None, events, Opens(), SLOW_POLLS)
+    polls, stop_wait_s = slowed_polls()
+    rot = make_rotator(emu, lambda s: None, events, Opens(), polls)
     rot.start()
     rng = random.Random(13)
     stops = 0
@@ -131,7 +147,7 @@ def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: Emulat
                     return stops  # the target went out: its stop must follow
                 return [None] if rot.status.target_az_deg is None else []  # caught in time
 
-            frames = emu.wait_until(settled, bool, timeout_s=STOP_WAIT_S)
+            frames = emu.wait_until(settled, bool, timeout_s=stop_wait_s)
             stops += frames[0] is not None
         # then FINAL_TRIALS more with the target surely out first: on a loaded machine every
         # stop above may have caught its target in the mailbox. A lost wake-up leaves a stop for
@@ -153,7 +169,7 @@ def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: Emulat
                     f for f in d.log[seen:] if f.data == b";" and f.time_s >= t
                 ],
                 bool,
-                timeout_s=STOP_WAIT_S,
+                timeout_s=stop_wait_s,
             )
             stops += 1
     finally:
