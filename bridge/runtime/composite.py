@@ -287,7 +287,10 @@ class CompositeWorker:
 
     @property
     def newest_applied(self) -> int:
-        """mailbox.py rule 10a, as a worker's (set with ``halts_applied``)."""
+        """mailbox.py rule 10a, as a worker's (set with ``halts_applied``; none while a box's
+        status cannot show the target waiting there: session.py ``newest_applied``)."""
+        if any(box.session.controller.pending_unshown for box in self.boxes.values()):
+            return 0
         return self._newest_applied
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:

@@ -415,6 +415,7 @@ class Controller:
         self._still_at_close: bool | None = None  # rule 10: still, no target out, when the
         # readings were last lost (the port closed, the controller silent; None: never had any)
         self._connect_guard = False  # rule 10: a turn from the first readings back is judged
+        self.pending_unshown = False  # ``seen``: the status built last shows no target waiting
         self._guard_at_start = False  # rule 10: ... and they are this session's first
         self._rested_at_start = False  # rule 10: ``_rested`` is from those
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
@@ -454,6 +455,8 @@ class Controller:
                 wire = link.codec.wire_target(az, el) if az is not None else None
             except NotReady:  # (protocols/base.py: it goes once the codec can count it)
                 wire = None
+        # a target waiting that this status cannot show (session.py ``newest_applied``)
+        self.pending_unshown = pending is not None and wire is None
         if link is not None and link.stop_due and motion.target_deg is not None:
             # a stop waits for a half-duplex line (link.py rule 3): the target is dropped, as
             # once it is written (a nudge is then made from the bearing: runtime/rotator.py)
@@ -856,7 +859,10 @@ class Controller:
         jitter up for good)."""
         m = self.motion
         turning = m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None
-        self._still_at_close = not turning and m.stop_sent_t is None  # rule 10
+        if turning or mo.at_rest(m):  # rule 10: what the motion knows; lost again before it
+            self._still_at_close = not turning and m.stop_sent_t is None  # knew (a port that
+            # flaps, a silence then the port lost), what the loss before found (an attack
+            # pass: the rebuilt motion read as still, and the user's turn was stopped)
         self._connect_guard = False  # (armed again by the first reading back)
         if turning:
             self._afresh = True

@@ -227,7 +227,15 @@ class RotatorSession:
         # stop and lock ON up to it (set once the step built the status: a thread that reads
         # this count and then the status sees a status at least that new)
         self.halts_applied = 0
-        self.newest_applied = 0  # mailbox.py rule 10a: likewise, the newest place applied
+        self._newest_taken = 0  # mailbox.py rule 10a: the newest place of the batches applied
+
+    @property
+    def newest_applied(self) -> int:
+        """mailbox.py rule 10a: the newest place the status shows every command up to; none
+        (0) while a target waits that it cannot show (its raw value not known yet: a SPID
+        before its resolution is learned; an attack pass: target 100 then a nudge +10 just
+        after a connect went to the bearing plus 10), so a nudge is refused meanwhile."""
+        return 0 if self.controller.pending_unshown else self._newest_taken
 
     @property
     def name(self) -> str:
@@ -338,7 +346,7 @@ class RotatorSession:
             self._end(batch.ends, now)
         actions = self._step(now)
         self.halts_applied = batch.epoch  # (after the status: see __init__)
-        self.newest_applied = batch.newest
+        self._newest_taken = batch.newest
         return actions
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:

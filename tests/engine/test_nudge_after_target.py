@@ -72,3 +72,20 @@ def test_a_nudge_after_a_stop_alone_is_made_from_the_bearing(bench: Bench) -> No
     bench.v._take()
     bench.v.run_for(30.0)
     assert bench.rot.status.bearing_deg == pytest.approx(START_AZ + 10.0, abs=1.0)
+
+
+def test_a_nudge_before_the_status_can_show_the_target_is_refused(bench: Bench) -> None:
+    """An attack pass: just after a connect the MD-01's resolution is not yet learned, so the
+    status cannot show the target taken (its raw value unknown); a nudge then was made from
+    the bearing and replaced it: the rotor went to 40."""
+    bench.rot.submit(Target(100.0, None, Source.MQTT, origin=WHO), "target '100'")
+    bench.v._take()
+    assert bench.rot.status.target_az_deg is None  # (taken, not shown yet)
+    with pytest.raises(Refused, match="still on its way"):
+        bench.rot.submit(Nudge(10.0, None, source=Source.MQTT, origin=WHO), "nudge '+10'")
+    bench.v.run_for(30.0)
+    assert bench.rot.status.bearing_deg == pytest.approx(100.0, abs=1.0)
+    bench.rot.submit(Nudge(10.0, None, source=Source.MQTT, origin=WHO), "nudge '+10'")
+    bench.v._take()  # shown now: the nudge is from where it stands
+    bench.v.run_for(30.0)
+    assert bench.rot.status.bearing_deg == pytest.approx(110.0, abs=1.0)

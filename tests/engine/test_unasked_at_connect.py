@@ -134,3 +134,40 @@ def test_a_turn_seen_at_the_first_connect_names_a_restart_mid_turn() -> None:
     v.run_for(30)
     (said,) = stopped_says(v)
     assert "turning when the bridge started" in said and v.truth().az_deg < 150
+
+
+@pytest.mark.parametrize(
+    ("model", "emulator"),
+    [
+        ("easycomm2", {"start_az_deg": 100, "start_el_deg": 10}),
+        ("rotorez", {"start_az_deg": 100}),
+    ],
+)
+@pytest.mark.parametrize("lost_again", ["the port flaps", "silent, then the port lost"])
+def test_a_turn_under_way_lost_twice_is_still_followed(
+    model: str, emulator: dict[str, float], lost_again: str
+) -> None:
+    """An attack pass: the readings lost a second time before the motion was known again (a
+    loose plug that flaps; a serial server whose replies stall and then its connection drops)
+    found the motion rebuilt by the first loss, took it for still, and the user's turn was
+    stopped at the reconnect. What the first loss found is kept."""
+    v = VirtualRotator(model, emulator=emulator)
+    v.run_until_state(MotionState.IDLE, 30)
+    v.aim(Target(300))
+    v.run_until(lambda h: h.truth().az_deg > 150, 60)
+    if lost_again == "the port flaps":
+        v.link_down()
+        v.run_for(1)
+        v.link_up()
+        v.run_for(0.05)  # (no reading yet)
+    else:
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 60)
+        v.set_silent(False)
+    v.link_down()
+    v.run_for(1)
+    v.link_up()
+    v.run_until(lambda h: abs(h.truth().az_deg - 300) < 2, 90)
+    v.run_for(5)
+    assert stopped_says(v) == []
+    assert abs(v.truth().az_deg - 300) < 2
