@@ -87,6 +87,7 @@ STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.
     + '; if the broker does speak MQTT 5, set mqtt.protocol = "5"'
 )
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
+HALT_WAIT_S = 2.0  # claim rule 4: how long a yielding bridge waits for its stops to be written
 
 
 def worker_config(
@@ -632,9 +633,26 @@ class App:
 
     def _refused(self, message: str) -> None:
         """Another bridge owns the base topic (interfaces/mqtt/claim.py): ``run`` stops, exit code
-        2."""
+        2; 1 where it yields while running (claim rule 4: ``stop`` halts every rotator first)."""
         self.failure = message
         self.failed.set()
+
+    def _halt_all(self) -> None:
+        """Claim rule 4: before the bridge yields its base topic while running, every rotator
+        is stopped, and the stops written (up to HALT_WAIT_S): nothing of this process is left
+        to stop one after it goes."""
+        marks = []
+        for rot in self.rotators:
+            try:
+                rot.submit(Stop(Source.MQTT), "stop: the bridge yields its base topic")
+            except Exception:  # (a stop is never refused; a bug must not keep the others)
+                log.exception("%s: the stop before yielding failed", rot.id)
+                continue
+            marks.append((rot, rot.halts))
+        deadline = time.monotonic() + HALT_WAIT_S
+        for rot, mark in marks:
+            while rot.halts_applied < mark and time.monotonic() < deadline:
+                self._stopped.wait(0.01)
 
     def check_catalog(self) -> None:
         """The TLE file re-read if it changed; Home Assistant's track select follows it."""
@@ -723,6 +741,8 @@ class App:
             self.wsjtx.stop()
 
     def stop(self) -> None:
+        if self.client.yielded:
+            self._halt_all()  # claim rule 4: before anything else stops
         self._stopped.set()
         self.client.shutting_down()
         if self.discovery is not None:
@@ -802,5 +822,7 @@ def _serve(
         app.stop()
         gc.unfreeze()  # a caller that runs the bridge again (the tests) keeps no garbage
     if app.failure is not None:
+        if app.client.yielded:  # claim rule 4: the next start's first look decides
+            raise NotYet(app.failure)
         raise ConfigError(app.failure)
     return 0

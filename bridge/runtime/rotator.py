@@ -343,6 +343,11 @@ class Rotator:
         while after it was asked reads when it is asked, and hands to ``submit`` (``since``)."""
         return self._mailbox.epoch
 
+    @property
+    def halts_applied(self) -> int:
+        """The halt count the session has carried out up to (mailbox.py rule 10)."""
+        return self._worker.halts_applied
+
     def _seen(self) -> tuple[RotatorStatus, bool]:
         """The status a command relative to the target is made from, and whether a stop or
         lock ON put before it is not in that status yet (mailbox.py rule 10): the target it

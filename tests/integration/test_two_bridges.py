@@ -97,6 +97,26 @@ def test_of_two_bridges_that_met_while_running_the_younger_yields(rig: Rig) -> N
     assert left["rotor/bridge/state"] == b"online"  # the other's, not overwritten with offline
 
 
+def test_a_bridge_that_yields_while_running_stops_its_rotors_first(rig: Rig) -> None:
+    """An attack pass: one forged info (not retained) made a bridge yield mid-turn, and it
+    went for good (code 2), its stop express with it: a STOP after it reached nothing and the
+    rotor ran on. Now it stops every rotor before it goes, and exits with code 1 (systemd
+    starts it again: its first look then decides on what the broker holds)."""
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    app = rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    older = Instance("rotor-forged-0001", "nowhere", 1, 0.0)
+    rig.probe.publish("rotor/bridge/info", older.info([]), retain=False)
+    wait_until(app.failed.is_set, 5, "this bridge yields")
+    assert app.client.yielded
+    rig.stop()
+    assert any(f.data == b";" for f in emu.frames())  # the Rotor-EZ's stop, written
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert emu.state().az_deg < 290  # stopped on its way, not at the target
+
+
 def test_the_refusing_bridge_exits_with_code_2_naming_the_other(tmp_path: Path, rig: Rig) -> None:
     rig.add("tower")
     app = rig.start()
@@ -116,3 +136,16 @@ def test_the_refusing_bridge_exits_with_code_2_naming_the_other(tmp_path: Path, 
     assert done.returncode == 2, done.stderr
     assert app.me.id in done.stderr and "mqtt.base_topic" in done.stderr
     assert json.loads(bridge_topics(rig.broker.port)["rotor/bridge/info"])["instance"] == app.me.id
+
+
+def test_the_yielding_bridge_process_exits_with_code_1(rig: Rig) -> None:
+    """Claim rule 4: the service exits with code 1, which systemd restarts (its unit keeps
+    code 2, a configuration error or a refusal at the first look, from a restart)."""
+    rig.add("tower")
+    bridge = rig.start_process()
+    rig.ready("tower", 30)
+    older = Instance("rotor-forged-0002", "nowhere", 1, 0.0)
+    rig.probe.publish("rotor/bridge/info", older.info([]), retain=False)
+    wait_until(lambda: not bridge.alive(), 20, "the bridge process yields")
+    assert bridge.proc is not None and bridge.proc.returncode == 1
+    assert "rotor-forged-0002" in bridge.log()

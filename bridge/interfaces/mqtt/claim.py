@@ -25,8 +25,12 @@ Rules:
    are left alone and named in the log.
 4. Live: another instance's info arriving while the bridge runs means two bridges passed
    their first looks at the same moment. The younger one (the later start; an equal start:
-   the greater instance id) yields, exit code 2; the older puts its own info back (client.py
-   rule 10) and goes on.
+   the greater instance id) yields; the older puts its own info back (client.py rule 10) and
+   goes on. Yielding stops every rotator first and exits with code 1, which systemd restarts:
+   the next start's first look (rule 2) decides on what the broker holds, refusing (code 2)
+   while the other is there and online. One message proves no other bridge (an attack pass:
+   one forged, non-retained info on ``B/bridge/info`` ended a bridge mid-turn for good, code
+   2, its stop express with it, and the STOP after it reached nothing: the rotor ran on).
 """
 
 from __future__ import annotations

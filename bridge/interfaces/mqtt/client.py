@@ -144,6 +144,7 @@ class MqttClient(Connection):
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self.refused: str | None = None
+        self.yielded = False  # claim rule 4: refused while running (not at a first look)
         self._heartbeat = heartbeat  # rule 2
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
@@ -488,6 +489,7 @@ class MqttClient(Connection):
             if look is not None and topic == look.claim.info_topic:
                 self.refused = look.live_info(payload)  # claim rule 4
                 if self.refused is not None:
+                    self.yielded = True
                     self._stopping = True  # nothing more goes out, nothing is put back
                     self.connected.clear()  # (every publish checks it, under this lock)
             say = False
