@@ -482,8 +482,8 @@ class App:
         if rotator is None:
             return
         log.warning(
-            "%s: a stop the stop express heard while the bridge's connections were away: "
-            "carried out here too",
+            "%s: a stop the stop express heard while the bridge's connections may have been "
+            "away: carried out here too",
             rotator_id,
         )
         rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")
@@ -509,7 +509,12 @@ class App:
         # the broker took it: a subscription the broker took in that moment missed it)
         if self.client.heard_since(heard) or self.lane.heard_since(heard):
             return None  # (it came, or comes, on one of them, in its order)
+        if self.mqtt.halt_read_since(rotator_id, self._connection_heard_since):
+            return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
+
+    def _connection_heard_since(self, via: str, t: float) -> bool:
+        return (self.client if via == "main" else self.lane).heard_since(t)
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs

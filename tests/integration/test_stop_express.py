@@ -482,3 +482,38 @@ def test_a_groups_stop_only_the_express_heard_stops_the_members_it_writes_no_fra
         az = mast.state().az_deg
         time.sleep(1.0)  # what a move would take to show: none
         assert abs(mast.state().az_deg - az) < 1 and not mast.state().is_moving
+
+
+def test_a_target_after_a_stop_just_after_a_broker_restart_is_not_dropped_by_the_express(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11: a second after the bridge's connections came back from a broker
+    restart, a STOP read by them both and by the express was also taken as one only the
+    express could have heard (the margin), and its late second stop dropped the target sent
+    after the STOP, unsaid (an attack pass). A connection that read that rotator's halt and
+    has had its topics since stands for the express's: no second stop. The express is held
+    by a signal so that it reads the STOP after the bridge took the target (a busy host)."""
+    rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 30.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    app.express.up.clear()
+    broker.restart()
+    wait_until(app.express.up.is_set, 15, "the express is back")
+    wait_until(lambda: app.client.heard_since(time.monotonic()), 15, "the main connection is back")
+    wait_until(lambda: app.lane.heard_since(time.monotonic()), 15, "the stop lane is back")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    operator = Probe(broker.port, "")
+    os.kill(child.pid, signal.SIGSTOP)
+    try:
+        operator.publish("rotor/stop", "STOP")
+        operator.publish("rotor/target", "200")
+        rotator = app.rotators[0]
+        wait_until(lambda: rotator.status.target_az_deg == 200.0, 10, "the target taken")
+    finally:
+        os.kill(child.pid, signal.SIGCONT)
+        operator.close()
+    wait_until(lambda: app.express.wrote, 10, "the express wrote its stop")
+    rig.arrived("tower", 200)

@@ -136,7 +136,10 @@ Rules:
    a second before then (app.py EXPRESS_HEARD_MARGIN_S: the express reads a stop a moment
    after the broker took it; a broker restart the express came back from first, a connection
    between its drop and its SUBACK: clean starts, so no copy of that stop will ever come to
-   them), the
+   them), and neither read a halt of that rotator and has had them since (interfaces/mqtt/
+   halts.py ``read_since``: it had the stop, or its halt is the later; an attack pass: a
+   second after a broker restart the margin took a STOP both had read for one only the
+   express heard, and its second stop dropped the target sent after the STOP), the
    rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
    never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
    express sent the target it held at the brake window's end). A frame for a lock ON is such

@@ -101,6 +101,20 @@ class Halts:
         self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
         # the stop express's hold (interfaces/mqtt/express.py rule 8), asked before each halt's put
         self.express: Callable[[str], None] | None = None
+        # express.py rule 11: when each connection last read a halt of each rotator (monotonic)
+        self._read: dict[tuple[str, str], float] = {}
+
+    def read_since(self, rotator_id: str, heard_since: Callable[[str, float], bool]) -> bool:
+        """express.py rule 11: whether a connection read a halt of this rotator and has had its
+        command topics without a break since (``heard_since(connection, t)``): then any stop
+        published since reached it, and one published before is older than that halt, which
+        stands for it; a stop only the express read needs no second stop (an attack pass: the
+        second one, a second after a broker restart, dropped a target sent after the STOP)."""
+        for via in ("main", "lane"):
+            t = self._read.get((via, rotator_id))
+            if t is not None and heard_since(via, t):
+                return True
+        return False
 
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message): holds end with
@@ -292,6 +306,8 @@ class Halts:
         rot = self._rotators.get(rotator_id)
         if rot is None or kind not in ("stop", "lock"):
             return
+        if not retain and (kind == "stop" or switch_on(payload)):
+            self._read["lane", rotator_id] = self._clock()  # (read_since)
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
@@ -333,6 +349,8 @@ class Halts:
     ) -> None:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
+        if not retain:
+            self._read["main", rot.id] = self._clock()  # (read_since)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
             self.carry(rot, kind, what, origin=origin, echo=copy.echo)
@@ -385,6 +403,8 @@ class Halts:
             return
         what = pl.describe("stop", payload)
         newest = held = 0
+        for rot in members:
+            self._read["lane", rot.id] = self._clock()  # (read_since)
         with self._lock:
             for rot in members:
                 marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
