@@ -417,6 +417,7 @@ class Controller:
         self._connect_guard = False  # rule 10: a turn from the first readings back is judged
         self.pending_unshown = False  # ``seen``: the status built last shows no target waiting
         self._guard_at_start = False  # rule 10: ... and they are this session's first
+        self._known_since_loss = False  # rule 10: a turn or a settled rest seen since then
         self._rested_at_start = False  # rule 10: ``_rested`` is from those
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until judged
@@ -819,6 +820,8 @@ class Controller:
         cfg, was = self.cfg, self.motion
         before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        if self.motion.state is mo.MOVING or mo.at_rest(self.motion):
+            self._known_since_loss = True  # (rule 10: what a loss of readings then finds)
         if self._watching() or self._rested is not None:  # rule 10
             self._unasked(was, now)
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
@@ -859,10 +862,12 @@ class Controller:
         jitter up for good)."""
         m = self.motion
         turning = m.state is mo.MOVING or m.target_deg is not None or m.el_target_deg is not None
-        if turning or mo.at_rest(m):  # rule 10: what the motion knows; lost again before it
-            self._still_at_close = not turning and m.stop_sent_t is None  # knew (a port that
-            # flaps, a silence then the port lost), what the loss before found (an attack
-            # pass: the rebuilt motion read as still, and the user's turn was stopped)
+        if turning or self._known_since_loss:  # rule 10: what the motion knows; lost again
+            self._still_at_close = not turning and m.stop_sent_t is None  # before it knew (a
+            # port that flaps, a silence then the port lost), what the loss before found (an
+            # attack pass: the rebuilt motion read as still, the user's turn was stopped; a
+            # review: one braking after a turn seen is known, its stillness too)
+        self._known_since_loss = False
         self._connect_guard = False  # (armed again by the first reading back)
         if turning:
             self._afresh = True

@@ -13,6 +13,7 @@ import math
 import pytest
 
 from bridge.core.model import MotionState, Target
+from bridge.session import motion as mo
 from tests.engine.virtual import VirtualRotator
 
 
@@ -171,3 +172,35 @@ def test_a_turn_under_way_lost_twice_is_still_followed(
     v.run_for(5)
     assert stopped_says(v) == []
     assert abs(v.truth().az_deg - 300) < 2
+
+
+def test_a_jog_after_a_replug_while_braking_after_a_turn_followed_is_stopped() -> None:
+    """A review of the mend above: the readings lost while the rotor braked after a turn the
+    bridge had followed since the last replug (neither turning nor settled) were taken for
+    unknown, the stillness of the loss before (turning) was kept, and a jog after the next
+    replug ran the rotor to its end stop. A motion seen turning or at rest since the last
+    loss is known."""
+    v = VirtualRotator(
+        "easycomm2",
+        settings={"az_min_deg": 40, "brake_delay_s": 5},
+        emulator={"start_az_deg": 100, "start_el_deg": 10},
+    )
+    v.run_until_state(MotionState.IDLE, 30)
+    v.aim(Target(200))
+    v.run_until(lambda h: h.truth().az_deg > 150, 60)
+    v.link_down()  # lost mid-turn: the turn goes on and is followed
+    v.run_for(1)
+    v.link_up()
+    v.run_until(lambda h: abs(h.truth().az_deg - 200) < 2, 90)
+
+    def braking(h: VirtualRotator) -> bool:
+        m = h.session.controller.motion
+        return m.target_deg is None and m.state is not mo.MOVING and not mo.at_rest(m)
+
+    v.run_until(braking, 10)
+    v.link_down()  # lost while it brakes
+    v.run_for(2)
+    garble(v, b"AZ EL\n", b"AZ ML\n", 2)
+    v.link_up()
+    assert lowest_az(v, 90) > 150  # stopped a few degrees on, not at the end stop
+    assert len(stopped_says(v)) == 1
