@@ -478,7 +478,7 @@ class App:
         """interfaces/mqtt/express.py rule 11: a stop the express wrote a frame for at ``t``,
         or read at ``t`` and wrote none for, is the rotator's stop too when neither connection
         could have had that stop."""
-        rotator = self._heard_only_by_express(rotator_id, t)
+        rotator = self._heard_only_by_express(rotator_id, t, "stop")
         if rotator is None:
             return
         log.warning(
@@ -491,7 +491,7 @@ class App:
     def _express_locked(self, rotator_id: str, t: float, operator: str | None) -> None:
         """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` (from
         ``operator``) is set when neither connection could have had it."""
-        rotator = self._heard_only_by_express(rotator_id, t)
+        rotator = self._heard_only_by_express(rotator_id, t, "lock")
         if rotator is None:
             return
         log.warning(
@@ -502,14 +502,14 @@ class App:
         lock = Lock(True, source=Source.MQTT, origin=self.mqtt.origin(operator))
         rotator.submit(lock, "lock ON (heard by the stop express)")
 
-    def _heard_only_by_express(self, rotator_id: str, t: float) -> Rotator | None:
-        """Rule 11's test: the rotator, if neither connection could have had what the express
-        read at ``t``."""
+    def _heard_only_by_express(self, rotator_id: str, t: float, kind: str) -> Rotator | None:
+        """Rule 11's test: the rotator, if neither connection could have had the ``kind``
+        ("stop" or "lock") the express read at ``t``."""
         heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read it, a moment after
         # the broker took it: a subscription the broker took in that moment missed it)
         if self.client.heard_since(heard) or self.lane.heard_since(heard):
             return None  # (it came, or comes, on one of them, in its order)
-        if self.mqtt.halt_read_since(rotator_id, self._connection_heard_since):
+        if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since):
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
 

@@ -336,3 +336,24 @@ def test_a_stop_while_a_nudge_is_judged_overtakes_it(
     bench.v._take()
     bench.v.run_for(30)
     assert not bench.v.truth().is_moving and len(bench.sets()) == 1  # the first target's only
+
+
+def test_a_halt_a_connection_read_stands_for_the_express_s_of_its_kind_only(bench: Bench) -> None:
+    """express.py rule 11 (halts.py ``read_since``): a connection that read a STOP, and has had
+    its topics since, stands for a stop only the express read; only a lock ON it read stands
+    for a lock ON (a review: a STOP read after a lock ON only the express had would have left
+    the rotator unlocked). A connection with a break since stands for nothing."""
+
+    def always(via: str, t: float) -> bool:  # subscribed without a break since t
+        return True
+
+    def broke(via: str, t: float) -> bool:
+        return False
+
+    lane = bench.lane
+    assert not lane.read_since("v", "stop", always)
+    lane.on_lane("rotor/v/stop", b"STOP", False)
+    assert lane.read_since("v", "stop", always) and not lane.read_since("v", "lock", always)
+    assert not lane.read_since("v", "stop", broke)
+    lane.on_lane("rotor/v/lock", b"ON", False)
+    assert lane.read_since("v", "lock", always)

@@ -101,19 +101,25 @@ class Halts:
         self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
         # the stop express's hold (interfaces/mqtt/express.py rule 8), asked before each halt's put
         self.express: Callable[[str], None] | None = None
-        # express.py rule 11: when each connection last read a halt of each rotator (monotonic)
-        self._read: dict[tuple[str, str], float] = {}
+        # express.py rule 11: when each connection last read a stop, a lock ON, of each rotator
+        self._read: dict[tuple[str, str, str], float] = {}  # (connection, rotator, kind)
 
-    def read_since(self, rotator_id: str, heard_since: Callable[[str, float], bool]) -> bool:
-        """express.py rule 11: whether a connection read a halt of this rotator and has had its
-        command topics without a break since (``heard_since(connection, t)``): then any stop
-        published since reached it, and one published before is older than that halt, which
-        stands for it; a stop only the express read needs no second stop (an attack pass: the
-        second one, a second after a broker restart, dropped a target sent after the STOP)."""
+    def read_since(
+        self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
+    ) -> bool:
+        """express.py rule 11: whether a connection read a halt of this rotator that stands
+        for a ``kind`` ("stop" or "lock") only the express read, and has had its command topics
+        without a break since (``heard_since(connection, t)``): then that one reached it too, or
+        is older than the halt it read. A stop or a lock ON stands for a stop; only a lock ON
+        for a lock ON (a review: a STOP read after a lock ON only the express had would have
+        left the rotator unlocked). An attack pass: a second after a broker restart, the
+        express's second stop dropped a target sent after a STOP both connections had read."""
+        kinds = ("stop", "lock") if kind == "stop" else ("lock",)
         for via in ("main", "lane"):
-            t = self._read.get((via, rotator_id))
-            if t is not None and heard_since(via, t):
-                return True
+            for halt in kinds:
+                t = self._read.get((via, rotator_id, halt))
+                if t is not None and heard_since(via, t):
+                    return True
         return False
 
     def main_gone(self) -> None:
@@ -307,7 +313,7 @@ class Halts:
         if rot is None or kind not in ("stop", "lock"):
             return
         if not retain and (kind == "stop" or switch_on(payload)):
-            self._read["lane", rotator_id] = self._clock()  # (read_since)
+            self._read["lane", rotator_id, kind] = self._clock()  # (read_since)
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
@@ -350,7 +356,7 @@ class Halts:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
         if not retain:
-            self._read["main", rot.id] = self._clock()  # (read_since)
+            self._read["main", rot.id, kind] = self._clock()  # (read_since)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
             self.carry(rot, kind, what, origin=origin, echo=copy.echo)
@@ -404,7 +410,7 @@ class Halts:
         what = pl.describe("stop", payload)
         newest = held = 0
         for rot in members:
-            self._read["lane", rot.id] = self._clock()  # (read_since)
+            self._read["lane", rot.id, "stop"] = self._clock()  # (read_since)
         with self._lock:
             for rot in members:
                 marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())

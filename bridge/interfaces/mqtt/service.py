@@ -233,9 +233,11 @@ class MqttService:
     def markers_allowed(self) -> None:
         self._halts.markers_allowed()
 
-    def halt_read_since(self, rotator_id: str, heard_since: Callable[[str, float], bool]) -> bool:
+    def halt_read_since(
+        self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
+    ) -> bool:
         """interfaces/mqtt/express.py rule 11 (halts.py ``read_since``)."""
-        return self._halts.read_since(rotator_id, heard_since)
+        return self._halts.read_since(rotator_id, kind, heard_since)
 
     def hold_for_express(self, hold: Callable[[str], None]) -> None:
         """Every MQTT stop and lock ON is shown to the stop express first
