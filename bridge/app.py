@@ -655,9 +655,11 @@ class App:
                 continue
             marks.append((rot, rot.halts))
         deadline = time.monotonic() + HALT_WAIT_S
-        for rot, mark in marks:
-            while rot.halts_applied < mark and time.monotonic() < deadline:
-                self._stopped.wait(0.01)
+        for rot, mark in marks:  # applied, and written (a review: a SPID's waits for a reply)
+            while not (rot.halts_applied >= mark and rot.stop_written):
+                if time.monotonic() >= deadline:
+                    break
+                time.sleep(0.01)  # (shutting down: nothing else waits on this thread)
 
     def check_catalog(self) -> None:
         """The TLE file re-read if it changed; Home Assistant's track select follows it."""
@@ -746,8 +748,6 @@ class App:
             self.wsjtx.stop()
 
     def stop(self) -> None:
-        if self.client.yielded:
-            self._halt_all()  # claim rule 4: before anything else stops
         self._stopped.set()
         self.client.shutting_down()
         if self.discovery is not None:
@@ -759,6 +759,8 @@ class App:
             service.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (interfaces/web/server.py rule 6)
+        if self.client.yielded:  # claim rule 4: once no front end can send a move after it (a
+            self._halt_all()  # review), while the lines still run and the lane takes stops
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)

@@ -286,12 +286,18 @@ class CompositeWorker:
         return self._halts_applied
 
     @property
+    def stop_due(self) -> bool:
+        """Either box's stop waits for its line (worker.py ``stop_due``)."""
+        return any(box.stop_due for box in self.boxes.values())
+
+    @property
     def newest_applied(self) -> int:
         """mailbox.py rule 10a, as a worker's (set with ``halts_applied``; none while a box's
         status cannot show the target waiting there: session.py ``newest_applied``)."""
-        if any(box.session.controller.pending_unshown for box in self.boxes.values()):
+        applied = self._newest_applied  # (first, as session.py reads its own)
+        if any(box.session.target_unshown for box in self.boxes.values()):
             return 0
-        return self._newest_applied
+        return applied
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)

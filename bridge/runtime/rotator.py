@@ -348,6 +348,11 @@ class Rotator:
         """The halt count the session has carried out up to (mailbox.py rule 10)."""
         return self._worker.halts_applied
 
+    @property
+    def stop_written(self) -> bool:
+        """No stop waits for the line (a half-duplex one owes a reply first: link.py rule 3)."""
+        return not self._worker.stop_due
+
     def _seen(self) -> tuple[RotatorStatus, bool]:
         """The status a command relative to the target is made from, and whether a stop or
         lock ON put before it is not in that status yet (mailbox.py rule 10): the target it

@@ -254,6 +254,13 @@ class Worker:
         return self.session.halts_applied
 
     @property
+    def stop_due(self) -> bool:
+        """A stop waits for the line (link.py rule 3: a half-duplex line owes a reply first);
+        read from another thread (claim rule 4's halt), an attribute read."""
+        link = self.session.controller.link
+        return link is not None and link.stop_due
+
+    @property
     def newest_applied(self) -> int:
         """mailbox.py rule 10a: the newest place the status shows every command up to."""
         return self.session.newest_applied

@@ -228,6 +228,7 @@ class RotatorSession:
         # this count and then the status sees a status at least that new)
         self.halts_applied = 0
         self._newest_taken = 0  # mailbox.py rule 10a: the newest place of the batches applied
+        self.target_unshown = False  # ... and whether ``status`` cannot show the target waiting
 
     @property
     def newest_applied(self) -> int:
@@ -235,7 +236,8 @@ class RotatorSession:
         (0) while a target waits that it cannot show (its raw value not known yet: a SPID
         before its resolution is learned; an attack pass: target 100 then a nudge +10 just
         after a connect went to the bearing plus 10), so a nudge is refused meanwhile."""
-        return 0 if self.controller.pending_unshown else self._newest_taken
+        taken = self._newest_taken  # (first: read in the order the lines thread writes the
+        return 0 if self.target_unshown else taken  # status, then this, then the place)
 
     @property
     def name(self) -> str:
@@ -781,6 +783,7 @@ class RotatorSession:
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
         self.status = status  # also when only the controller's clock changed (status rule 4)
+        self.target_unshown = ctl.pending_unshown  # (after the status: ``newest_applied``)
 
     def _shown(self, now: float) -> dict[str, object]:
         """parts.py rule 6: what each part shows in the status, by its name (one that raises

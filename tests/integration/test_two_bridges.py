@@ -149,3 +149,32 @@ def test_the_yielding_bridge_process_exits_with_code_1(rig: Rig) -> None:
     wait_until(lambda: not bridge.alive(), 20, "the bridge process yields")
     assert bridge.proc is not None and bridge.proc.returncode == 1
     assert "rotor-forged-0002" in bridge.log()
+
+
+def test_a_bridge_refused_at_a_reconnect_stops_its_rotors_and_yields(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """A review: mid-turn, the broker came back holding another installation's info and
+    ``online`` (forged, or a second bridge started during the outage): the reconnect's first
+    look refused, and the bridge ended for good (code 2) with no stop. After it ran, such a
+    refusal is a yield (claim rule 4): its rotors stopped first, then code 1."""
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    app = rig.start()
+    rig.ready("tower")
+    app.client._client.reconnect_delay_set(3, 3)  # (time to put the other's info there)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    broker.restart()
+    other = Instance("rotor-other-000003", "elsewhere", 9, app.me.started_unix - 60)
+    operator = Probe(broker.port, "")
+    try:
+        operator.publish("rotor/bridge/info", other.info([]), retain=True)
+        operator.publish("rotor/bridge/state", "online", retain=True)
+        wait_until(app.failed.is_set, 20, "the reconnect's look refuses")
+    finally:
+        operator.close()
+    assert app.client.yielded and app.failure is not None and "rotor-other-000003" in app.failure
+    rig.stop()
+    assert any(f.data == b";" for f in emu.frames())  # the Rotor-EZ's stop, written
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert emu.state().az_deg < 290

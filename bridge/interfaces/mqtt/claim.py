@@ -26,7 +26,11 @@ Rules:
 4. Live: another instance's info arriving while the bridge runs means two bridges passed
    their first looks at the same moment. The younger one (the later start; an equal start:
    the greater instance id) yields; the older puts its own info back (client.py rule 10) and
-   goes on. Yielding stops every rotator first and exits with code 1, which systemd restarts:
+   goes on. A bridge refused at a reconnect's first look (rule 2), after it ran, yields the
+   same way (a review: mid-turn, a broker back with another's info and ``online``, forged or
+   a second bridge started during the outage, ended it for good with no stop). Yielding
+   stops every rotator
+   (once no front end can move one after it) and exits with code 1, which systemd restarts:
    the next start's first look (rule 2) decides on what the broker holds, refusing (code 2)
    while the other is there and online. One message proves no other bridge (an attack pass:
    one forged, non-retained info on ``B/bridge/info`` ended a bridge mid-turn for good, code

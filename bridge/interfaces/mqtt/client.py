@@ -144,7 +144,8 @@ class MqttClient(Connection):
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self.refused: str | None = None
-        self.yielded = False  # claim rule 4: refused while running (not at a first look)
+        self.yielded = False  # claim rule 4: refused while running (not at its first look)
+        self._ran = False  # a look has let this bridge run
         self._heartbeat = heartbeat  # rule 2
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
@@ -425,8 +426,10 @@ class MqttClient(Connection):
             outcome = look.end(timed_out=timed_out)
             if outcome.refused is not None:
                 self.refused = outcome.refused
+                self.yielded = self._ran  # (a reconnect's look: the bridge ran: claim rule 4)
                 self._stopping = True
             else:
+                self._ran = True
                 self._open(outcome)
         if self.refused is not None:
             self._refuse()
