@@ -33,6 +33,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
+from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.interfaces.mqtt.halts import Halts
 from bridge.interfaces.mqtt.topics import Topics
 from bridge.interfaces.web.commands import WebCommand, carry_out
@@ -357,3 +358,17 @@ def test_a_halt_a_connection_read_stands_for_the_express_s_of_its_kind_only(benc
     assert not lane.read_since("v", "stop", broke)
     lane.on_lane("rotor/v/lock", b"ON", False)
     assert lane.read_since("v", "lock", always)
+
+
+def test_a_group_s_stop_read_on_the_main_connection_stands_for_each_member_s(
+    bench: Bench,
+) -> None:
+    """A review: a group's STOP read on the main connection was not kept for ``read_since``
+    (the lane's was), so the express's report of the same stop gave each member a second one,
+    which could drop a target sent right after it."""
+    halts = bench.lane
+    halts._publisher.publish_marker = lambda topic, payload: None  # type: ignore[method-assign]
+    halts._groups["g"] = Group("g", "G", (Member("v"),))
+    assert not halts.read_since("v", "stop", lambda via, t: via == "main")
+    halts.main_group_stop("g", "rotor/group/g/stop", "STOP", False)
+    assert halts.read_since("v", "stop", lambda via, t: via == "main")

@@ -432,6 +432,8 @@ class Halts:
         lane_marker: int | None = None
         with self._lock:
             for rot in self._members(group_id):
+                if not retain:  # (read_since: a review, as a member's own stop is)
+                    self._read["main", rot.id, "stop"] = self._clock()
                 copy = self.word.main_halt(rot.id, "stop")
                 self._stop_member(rot, what, None, origin, copy.echo)
                 self._release(copy.released, copy.upto)  # lastword.py rule 9
