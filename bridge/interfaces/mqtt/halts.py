@@ -122,6 +122,11 @@ class Halts:
                     return True
         return False
 
+    def _noted(self, via: str, rotator_id: str, kind: str) -> None:
+        """``read_since``'s books: ``via`` ("main" or "lane") read a live halt (never a replayed
+        one) of this ``kind`` ("stop" or "lock") for this rotator now."""
+        self._read[via, rotator_id, kind] = self._clock()
+
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message): holds end with
         clearing (lastword.py rule 5)."""
@@ -313,7 +318,7 @@ class Halts:
         if rot is None or kind not in ("stop", "lock"):
             return
         if not retain and (kind == "stop" or switch_on(payload)):
-            self._read["lane", rotator_id, kind] = self._clock()  # (read_since)
+            self._noted("lane", rotator_id, kind)
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
@@ -356,7 +361,7 @@ class Halts:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
         if not retain:
-            self._read["main", rot.id, kind] = self._clock()  # (read_since)
+            self._noted("main", rot.id, kind)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
             self.carry(rot, kind, what, origin=origin, echo=copy.echo)
@@ -410,7 +415,7 @@ class Halts:
         what = pl.describe("stop", payload)
         newest = held = 0
         for rot in members:
-            self._read["lane", rot.id, "stop"] = self._clock()  # (read_since)
+            self._noted("lane", rot.id, "stop")
         with self._lock:
             for rot in members:
                 marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
@@ -432,8 +437,8 @@ class Halts:
         lane_marker: int | None = None
         with self._lock:
             for rot in self._members(group_id):
-                if not retain:  # (read_since: a review, as a member's own stop is)
-                    self._read["main", rot.id, "stop"] = self._clock()
+                if not retain:  # (a review: as a member's own stop is)
+                    self._noted("main", rot.id, "stop")
                 copy = self.word.main_halt(rot.id, "stop")
                 self._stop_member(rot, what, None, origin, copy.echo)
                 self._release(copy.released, copy.upto)  # lastword.py rule 9
