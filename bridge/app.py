@@ -750,6 +750,8 @@ class App:
     def stop(self) -> None:
         self._stopped.set()
         self.client.shutting_down()
+        if self.client.yielded:  # claim rule 4: at once, before any front end takes its time
+            self._halt_all()  # to close (a web console's up to 10 s: a turn went on meanwhile)
         if self.discovery is not None:
             self.discovery.stop()
         for server in self._text_ports():
@@ -759,8 +761,8 @@ class App:
             service.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (interfaces/web/server.py rule 6)
-        if self.client.yielded:  # claim rule 4: once no front end can send a move after it (a
-            self._halt_all()  # review), while the lines still run and the lane takes stops
+        if self.client.yielded:  # claim rule 4: again once no front end can send a move after
+            self._halt_all()  # it (a review), while the lines still run and the lane takes stops
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bridge.interfaces.mqtt.claim import Instance
-from tests.support import Probe, retained_snapshot, wait_until
+from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.process import run_cli, to_toml
 from tests.support.rig import Rig
@@ -115,6 +115,37 @@ def test_a_bridge_that_yields_while_running_stops_its_rotors_first(rig: Rig) -> 
     assert any(f.data == b";" for f in emu.frames())  # the Rotor-EZ's stop, written
     emu.wait_for(lambda s: not s.is_moving, 10)
     assert emu.state().az_deg < 290  # stopped on its way, not at the target
+
+
+def test_a_yielding_bridge_stops_its_rotors_before_it_closes_a_front_end(rig: Rig) -> None:
+    """A review: the stop came only once every front end had closed; a web console takes up to
+    10 s to, a TCP client that reads nothing 3 s, and the rotor turned on meanwhile. Now the
+    stop is on the wire before the first front end is asked to close (and again after)."""
+    emu = rig.add("tower", emu={"start_az_deg": 10}, rotctld_port=free_port())
+    app = rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    server = app.rotctld[0]
+    stopped_before_close: list[bool] = []
+    close = server.stop
+
+    def watched_close(*args: object, **kwargs: object) -> None:  # (a spy: it closes as ever)
+        try:  # (the emulator reads what the bridge wrote a moment later)
+            wait_until(lambda: any(f.data == b";" for f in emu.frames()), 2, "the stop")
+            stopped_before_close.append(True)
+        except AssertionError:
+            stopped_before_close.append(False)
+        close(*args, **kwargs)  # type: ignore[arg-type]
+
+    server.stop = watched_close  # type: ignore[method-assign]
+    older = Instance("rotor-forged-0003", "nowhere", 1, 0.0)
+    rig.probe.publish("rotor/bridge/info", older.info([]), retain=False)
+    wait_until(app.failed.is_set, 5, "this bridge yields")
+    rig.stop()
+    assert stopped_before_close == [True]
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert emu.state().az_deg < 290
 
 
 def test_the_refusing_bridge_exits_with_code_2_naming_the_other(tmp_path: Path, rig: Rig) -> None:
