@@ -53,6 +53,14 @@ Rules:
    answer, as autopark.py rule 1 has it for one controller); each box then parks its own axis,
    the azimuth box the park's azimuth alone (app.py ``axis_configs``, as the wind's park),
    together once the rotator was left alone that long.
+8. No axis turns alone to a target while the rotator is offline: when a box stops answering,
+   a target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first)
+   is dropped there, as a single controller's is when its line goes (said on R/error), and a
+   target handed out while either box does not answer is refused in both (a review: the
+   azimuth box's target, held back by its brake delay, went out after the elevation box was
+   unplugged, and the azimuth turned alone under an ``offline`` status). A turn already on
+   its way goes on, as a single controller's does when its line goes; a STOP still reaches
+   the box that answers.
 """
 
 from __future__ import annotations
@@ -159,6 +167,7 @@ class Composition:
         self._error: str | None = None
         self._ended: str | None = None  # rule 4: why the first one ended
         self._owed: dict[Axis, tuple[bool, bool]] = {}  # (tracking, following) to end
+        self._dropped: set[Axis] = set()  # rule 8: a waiting target to drop there
         self._first = True
 
     def seen(self, axis: Axis, status: RotatorStatus) -> RotatorStatus | None:
@@ -176,6 +185,8 @@ class Composition:
             self._owe(Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH, track, follow)
             if track and self._ended is None:
                 self._ended = status.tracking_ended
+        if before.available and not status.available:  # rule 8, on the edge
+            self._dropped.add(Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH)
         self.boxes[axis] = status
         for mine, theirs in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
             box = self.boxes[mine]  # rule 4: one that tracks while the other does not answer
@@ -198,19 +209,31 @@ class Composition:
         self._owed[axis] = (owed[0] or track, owed[1] or follow)
 
     def ends(self) -> dict[Axis, Batch]:
-        """Rule 4: a batch ending tracking or following in the box that still has it."""
+        """Rule 4: a batch ending tracking or following in the box that still has it; rule 8:
+        dropping a target waiting in the box whose other stopped answering."""
         out: dict[Axis, Batch] = {}
-        for axis, (track, follow) in self._owed.items():
+        for axis in AXES:
+            track, follow = self._owed.get(axis, (False, False))
             mine = self.boxes[axis]
             track = track and mine.tracking is not None
             follow = follow and mine.following is not None
-            if track or follow:
+            offline = OFFLINE if axis in self._dropped else None
+            if track or follow or offline:
                 out[axis] = Batch(
                     track=Track(None, Source.TRACKING) if track else None,
                     follow=Follow(False) if follow else None,
+                    offline=offline,
                 )
-        self._owed = {}
+        self._owed, self._dropped = {}, set()
         return out
+
+    def offline(self, batches: dict[Axis, Batch]) -> dict[Axis, Batch]:
+        """Rule 8: a target handed to a box whose other does not answer is refused there."""
+        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
+            batch = batches[axis]
+            if batch.target is not None and not self.boxes[other].available:
+                batches[axis] = replace(batch, offline=OFFLINE)
+        return batches
 
 
 class Halts:
@@ -347,7 +370,8 @@ class CompositeWorker:
         if self._box in ready:
             batch = self._mailbox.take()
             if batch:
-                self._hand(split(batch), now)  # rule 1: both boxes in this one serve
+                batches = self.composition.offline(split(batch))  # rule 8
+                self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
                 self._newest_applied = batch.newest
         for box in self.boxes.values():

@@ -127,6 +127,8 @@ class Batch:
     activity: bool = False  # a command to a composite's other box (runtime/composite.py rule 7)
     ends: str | None = None  # a target to a composite's other box: what it ends here too, as
     # that target would (runtime/composite.py rule 2: tracking, following, a part's motion)
+    offline: str | None = None  # a composite's other box does not answer (why): no target is
+    # taken here, and one waiting is dropped (runtime/composite.py rule 8)
     epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
     # in this batch or an earlier one)
     newest: int = 0  # rule 10a: the newest place put when taken (likewise)
@@ -149,6 +151,7 @@ class Batch:
         feeds = self.follow is not None or self.heard is not None
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
         feeds = feeds or bool(self.feature_commands) or self.activity or self.ends is not None
+        feeds = feeds or self.offline is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
     def drop_moving(self) -> None:

@@ -313,6 +313,8 @@ class RotatorSession:
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
         cleared = self._fence(batch, now)
+        if batch.offline is not None:  # (runtime/composite.py rule 8)
+            self._drop_pending(batch.offline)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
@@ -339,7 +341,7 @@ class RotatorSession:
         if batch.target is not None:
             what = describe_command(batch.target)
             self._end(f"{batch.target.source.value} target", now)  # never combined
-            refused = self._refused()
+            refused = batch.offline or self._refused()
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:

@@ -135,6 +135,42 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
         assert v.status.state is not MotionState.OFFLINE
 
 
+def test_a_target_held_back_in_one_box_is_dropped_when_the_other_is_unplugged() -> None:
+    """A review: re-targeted mid-turn, the Rotor-EZ box stops first and holds the new azimuth
+    for its brake delay; the elevation box was unplugged meanwhile (the rotator offline), and
+    when the delay ended the azimuth went out anyway: it turned alone, from 31 to 113 and on."""
+    emulators = {Axis.AZIMUTH: {"speed_deg_s": 6.0}, Axis.ELEVATION: FAST[Axis.ELEVATION]}
+    with VirtualComposite("rotorez", "gs232b", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(120.0, 20.0))
+        v.run_until(lambda h: h.az.truth().az_deg > 30, 30, "turning")
+        t = v.now
+        v.aim(Target(300.0, 40.0))  # while turning: a stop, the brake delay, then the target
+        v.run_for(0.2)
+        v.el.link_down()
+        v.run_for(0.1)
+        assert not v.status.available
+        az = v.az.truth().az_deg
+        v.run_for(20.0)
+        assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
+        assert v.az.truth().az_deg == pytest.approx(az, abs=2.0)
+        assert v.status.last_error == "target dropped: rotator offline"
+
+
+def test_a_target_handed_out_while_one_box_is_unplugged_moves_neither() -> None:
+    """Rule 8: the judge refuses a target while the rotator is offline, but one it took just
+    before a box went must not turn the other alone."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.el.link_down()
+        v.run_for(0.1)
+        az = v.az.truth().az_deg
+        v.aim(Target(200.0, 30.0))  # (the harness's judge does not look at the link)
+        v.run_for(3.0)
+        assert v.az.truth().az_deg == az and not v.az.truth().is_moving
+        assert v.status.last_error == "rotator offline"
+
+
 def test_tracking_ends_in_both_boxes_when_one_box_is_unplugged() -> None:
     lat, lon = sun_up_somewhere(SUN_EPOCH)
     sky = Sky(lat, lon)

@@ -112,7 +112,7 @@ class VirtualComposite:
     def _take(self) -> None:
         batch = self.mailbox.take()
         if batch:
-            self._hand(split(batch))
+            self._hand(self.composition.offline(split(batch)))  # (rules 1 and 8)
 
     def _hand(self, batches: dict[Axis, Batch]) -> None:
         for axis, batch in batches.items():
