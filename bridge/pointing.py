@@ -39,6 +39,14 @@ Rules:
 8. A target already in raw values (one a session part made: a feature's, judged by its own
    code) is checked again by ``check_raw`` against the limits and the keep-out sectors, with
    the messages of rules 3-5: the session sends nothing those refuse, whoever judged it.
+9. A target may carry an arc its turn must stay inside (``Target.within_deg``, true bearings:
+   a group member's limits, interfaces/mqtt/groups.py rule 2). Of the raw values that point
+   its way (rule 2), the judge takes one whose turn from where the rotor is stays inside, and
+   refuses the target if there is none; from outside the arc, the one that turns least
+   outside it. Its side is then fixed: the session sends that value, not the side nearest
+   when it sends (with no reading to judge from, as rule 2 has it). A review: a group's
+   ``upper = [20, 340]`` on a 450-degree rotor at 300, sent 30, went to 390, through the
+   340..20 the group keeps it out of.
 """
 
 from __future__ import annotations
@@ -52,6 +60,7 @@ from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
 from bridge.protocols.base import ModelSpec, half_up
 
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
+WITHIN_SLACK_DEG = 0.5  # rule 9: a reading's step at an edge is not a turn outside
 
 
 def norm360(deg: float) -> float:
@@ -161,15 +170,24 @@ class Pointing:
     def keep_out_of(self, bearing_deg: float) -> tuple[float, float] | None:
         return next((s for s in self.keep_out if in_sector(bearing_deg, s)), None)
 
-    def raw_for(self, az_deg: float, current_raw_deg: float | None) -> float:
-        """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal."""
+    def raw_for(
+        self,
+        az_deg: float,
+        current_raw_deg: float | None,
+        within: tuple[float, float] | None = None,
+    ) -> float:
+        """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal,
+        or if ``within`` (rule 9) is given and every legal one turns outside it."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not math.isfinite(az_deg):
             raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
         if not 0.0 <= az_deg <= 360.0:
             if self.az_wraps:
                 raise Refused(RefusalCode.LIMITS, f"azimuth {az_deg:g} outside 0..360")
-            return self._checked(az_deg, az_deg - self.offset_deg)
+            raw = self._checked(az_deg, az_deg - self.offset_deg)
+            if within is not None and current_raw_deg is not None:
+                self._within(az_deg, current_raw_deg, [raw], within)
+            return raw
         base = norm360(az_deg - self.offset_deg)
         legal = [
             base + k * 360.0
@@ -178,10 +196,42 @@ class Pointing:
         ]
         if not legal:
             return self._checked(az_deg, base)  # raises, naming the raw value
+        if within is not None and current_raw_deg is not None:
+            legal = self._within(az_deg, current_raw_deg, legal, within)
         if self.az_wraps:  # the controller picks its own way round: 0 rather than 360
             return base if base in legal else legal[-1]
         anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
         return min(legal, key=lambda r: (abs(r - anchor), r))
+
+    def _outside_deg(self, from_raw: float, to_raw: float, within: tuple[float, float]) -> float:
+        """Rule 9: how many degrees of the turn from ``from_raw`` to ``to_raw`` lie outside
+        ``within`` (true bearings, lower first)."""
+        lo, hi = within
+        t0 = min(from_raw, to_raw) + self.offset_deg
+        t1 = max(from_raw, to_raw) + self.offset_deg
+        if hi - lo >= 360.0:
+            return 0.0
+        inside = 0.0
+        for k in range(math.floor((t0 - hi) / 360.0), math.ceil((t1 - lo) / 360.0) + 1):
+            inside += max(0.0, min(t1, hi + 360.0 * k) - max(t0, lo + 360.0 * k))
+        return (t1 - t0) - inside
+
+    def _within(
+        self, az_deg: float, current_raw: float, legal: list[float], within: tuple[float, float]
+    ) -> list[float]:
+        """Rule 9: the legal raw values whose turn from ``current_raw`` stays inside ``within``
+        (from a rotor outside it: those that turn least outside it); Refused if none."""
+        outside = [self._outside_deg(current_raw, r, within) for r in legal]
+        least = min(outside)
+        lo, hi = within
+        at = self.true_of(current_raw)
+        if (lo <= at <= hi or lo <= at + 360.0 <= hi) and least > WITHIN_SLACK_DEG:
+            raise Refused(
+                RefusalCode.LIMITS,
+                f"azimuth {az_deg:g} is not reached from {self.true_of(current_raw):g} without "
+                f"turning outside {lo:g}..{hi:g}",
+            )
+        return [r for r, out in zip(legal, outside, strict=True) if out <= least]
 
     def judge(self, target: Target, current_raw_deg: float | None) -> Target:
         """``target`` (true bearings) checked and converted to the controller's raw values."""
@@ -197,7 +247,7 @@ class Pointing:
                     "keep-out sector "
                     f"{sector[0]:g}..{sector[1]:g}: refused",
                 )
-            raw_az = self.raw_for(target.az_deg, current_raw_deg)
+            raw_az = self.raw_for(target.az_deg, current_raw_deg, target.within_deg)
             self._check_sent_keep_out(target.az_deg, raw_az)
         if target.el_deg is not None:
             if not self.has_elevation:
@@ -210,7 +260,9 @@ class Pointing:
             if not self._sent_within(el, lo, hi, el=True):
                 why = self._rounding(f"elevation {el:g}", el, lo, hi, el=True)
                 raise Refused(RefusalCode.LIMITS, why)
-        return replace(target, az_deg=raw_az, true_az_deg=self._side_free(target.az_deg))
+        fixed = target.within_deg is not None and current_raw_deg is not None  # (rule 9)
+        side_free = None if fixed else self._side_free(target.az_deg)
+        return replace(target, az_deg=raw_az, true_az_deg=side_free)  # (rule 9: its side)
 
     def check_raw(self, target: Target) -> None:
         """Rule 8: Refused if the controller may not be sent ``target`` (raw values)."""

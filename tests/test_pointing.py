@@ -69,6 +69,27 @@ def test_a_spid_with_an_offset_and_narrow_limits() -> None:
     assert refused(p.raw_for, 600, 5) is RefusalCode.LIMITS  # raw 510
 
 
+def test_a_turn_kept_inside_an_arc_takes_the_side_that_stays_in_it() -> None:
+    """Rule 9, a review: a group's limits 20..340 on a 450-degree rotor at 300; 30 went to 390,
+    through the 340..20 the group keeps it out of."""
+    over = Pointing.of(REGISTRY["gs232b-az-450"])
+    assert over.judge(Target(30), 300).az_deg == 390  # no arc: the least travel
+    kept = over.judge(Target(30, within_deg=(20, 340)), 300)
+    assert (kept.az_deg, kept.true_az_deg) == (30, None)  # the side fixed: sent as judged
+    assert over.judge(Target(50, within_deg=(20, 340)), 390).az_deg == 410  # past north: on
+    assert refused(over.judge, Target(330, within_deg=(20, 340)), 380) is RefusalCode.LIMITS
+    south = Pointing.of(EZ, offset_deg=180)  # a 360-degree rotor whose stop is at north
+    assert south.judge(Target(200, within_deg=(20, 340)), 120).az_deg == 20  # (true 300)
+    with pytest.raises(Refused) as exc:  # (true 300 to 30 only through north)
+        south.judge(Target(30, within_deg=(20, 340)), 120)
+    assert exc.value.code is RefusalCode.LIMITS
+    assert exc.value.message == "azimuth 30 is not reached from 300 without turning outside 20..340"
+    assert south.judge(Target(30, within_deg=(20, 340)), 180).az_deg == 210  # from true 0: in
+    assert over.judge(Target(30, within_deg=(20, 340)), 19.7).az_deg == 30  # at an edge
+    assert over.judge(Target(30, within_deg=(0, 360)), 300).az_deg == 390  # the whole circle
+    assert over.judge(Target(30, within_deg=(20, 340)), None).true_az_deg == 30  # (rule 2)
+
+
 @pytest.mark.parametrize(
     ("sector", "inside", "outside"),
     [

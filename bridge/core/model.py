@@ -192,6 +192,8 @@ class Target:
     # session picks the side from where the rotor is when it sends, not when the command came.
     true_az_deg: float | None = None
     origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
+    # true bearings, lower first, the turn must stay inside (pointing.py rule 9: a group's limits)
+    within_deg: tuple[float, float] | None = None
 
 
 def combine(newer: Target, older: Target | None) -> Target:
@@ -203,7 +205,9 @@ def combine(newer: Target, older: Target | None) -> Target:
     if older is None or older.source is not newer.source or older.park:
         return newer  # only a sender's own two halves: never a park or a tracking step
     if newer.az_deg is None and older.az_deg is not None:
-        newer = replace(newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg)
+        newer = replace(
+            newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg, within_deg=older.within_deg
+        )
     if newer.el_deg is None and older.el_deg is not None:
         newer = replace(newer, el_deg=older.el_deg)
     return newer

@@ -100,7 +100,7 @@ def split(batch: Batch) -> dict[Axis, Batch]:
     if target is not None and target.az_deg is not None:
         az = replace(target, el_deg=None)
     if target is not None and target.el_deg is not None:
-        el = replace(target, az_deg=None, true_az_deg=None)
+        el = replace(target, az_deg=None, true_az_deg=None, within_deg=None)
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
     moved = target is not None  # rule 7: the quiet spell starts again in both
     # rule 2: a target leaving an axis out ends in that box what it ends in the other

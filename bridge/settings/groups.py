@@ -86,7 +86,8 @@ class GroupSettings(BaseModel):
     limits: dict[str, tuple[float, float]] = Field(
         default_factory=dict,
         description="a member's narrower azimuth limits in this group, true bearings after "
-        "its offset, [lowest, highest]: a group target outside them is refused for that member",
+        "its offset, [lowest, highest]: a group target outside them is refused for that "
+        "member, and its turn stays inside them (the side that does, or none)",
         examples=[{"upper": [20, 340]}],
         json_schema_extra={"unset": "each member's own limits only"},
     )

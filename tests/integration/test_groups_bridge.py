@@ -62,6 +62,20 @@ def test_one_group_target_turns_both_members_each_with_its_offset(rig: Rig) -> N
     assert retained["rotor/stack/availability"] == b"online"
 
 
+def test_a_members_group_limits_hold_on_its_way_not_only_at_its_target(rig: Rig) -> None:
+    """A review: ``limits = { upper = [20, 340] }`` keeps the upper antenna out of 340..20; a
+    450-degree rotor at 300, sent the group's 30, was sent M390 and swept through north."""
+    up = rig.add("upper", model="gs232b-az-450", emu={"start_az_deg": 300})
+    rig.add("lower", emu={"start_az_deg": 120})
+    rig.sections = {"groups": [{**GROUP, "limits": {"upper": [20, 340]}}]}
+    rig.start()
+    rig.ready("upper")
+    rig.ready("lower")
+    rig.probe.publish("rotor/stack/target", "30")
+    rig.arrived("upper", 30)
+    assert [f.data for f in up.frames("move")] == [b"M030"]  # the long way, inside 20..340
+
+
 def test_one_group_stop_while_turning_stops_both(rig: Rig) -> None:
     up, low = stack(rig, speed=20.0)
     rig.start()

@@ -11,7 +11,8 @@ Rules:
 2. Each member's part is one ``Target``: the group's azimuth plus the member's offset, brought
    into 0..360; the elevation as given. The group's azimuth itself must be 0..360 (an
    offset would make 361 a bearing the member takes). A part outside the member's group limits (true
-   bearings, after its offset) is that member's refusal, decided here.
+   bearings, after its offset) is that member's refusal, decided here; a part inside them carries
+   them, and the member's judge keeps the turn inside them too (pointing.py rule 9).
 3. The others still turn: a member's refusal, here or by its own judge (its limits, its lock,
    the wind, its lease, its link), is reported on the group's error topic and in the group's
    status, and costs the other members nothing (docs/groups.md says why).
@@ -101,7 +102,8 @@ def fan_out(
                 )
             )
             continue
-        parts.append(Part(m.id, Target(member_az, el, Source.MQTT, origin=origin)))
+        target = Target(member_az, el, Source.MQTT, origin=origin, within_deg=lo_hi)
+        parts.append(Part(m.id, target))
     return parts
 
 
