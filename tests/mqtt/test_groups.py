@@ -110,6 +110,20 @@ def test_the_groups_status_is_its_members_with_its_refusals() -> None:
     assert doc["state"] == "offline" and doc["available"] is False and doc["bearing"] is None
 
 
+def test_the_groups_bearing_is_its_first_available_members() -> None:
+    """A review: the first member unplugged, the group turned to 100; its status still showed
+    the first member's last reading, 10, while the only member that turned pointed at 100."""
+    unplugged = RotatorStatus("upper", MotionState.OFFLINE, 10.0, available=False)
+    statuses = {
+        "upper": unplugged,
+        "lower": RotatorStatus("lower", MotionState.IDLE, 280.0, available=True),
+    }
+    doc = json.loads(status_json(STACK, statuses, {}))
+    assert doc["bearing"] == 100.0 and doc["state"] == "idle" and doc["moving"] is False
+    alone = {"upper": unplugged, "lower": None}  # none available: the last one known
+    assert json.loads(status_json(STACK, alone, {}))["bearing"] == 10.0
+
+
 # -- the service -------------------------------------------------------------------------------
 def group_service(
     refuse_lower: Refused | None = None,

@@ -17,9 +17,10 @@ Rules:
    the wind, its lease, its link), is reported on the group's error topic and in the group's
    status, and costs the other members nothing (docs/groups.md says why).
 4. The group's status is its members' (each one's bearing, elevation, state, availability)
-   with the refusals of the group's last target; the group's bearing is its first member's
-   less that member's offset. A group is available while any member is: a stop must reach
-   whichever member can still hear one.
+   with the refusals of the group's last target; the group's bearing is its first available
+   member's less that member's offset (a review: an unplugged first member's last reading was
+   shown while the others turned elsewhere). A group is available while any member is: a
+   stop must reach whichever member can still hear one.
 """
 
 from __future__ import annotations
@@ -141,11 +142,13 @@ def group_state(statuses: Mapping[str, RotatorStatus | None]) -> MotionState:
 
 
 def group_bearing(group: Group, statuses: Mapping[str, RotatorStatus | None]) -> float | None:
-    """Rule 4: the first member with a bearing, less its offset."""
-    for m in group.members:
-        s = statuses.get(m.id)
-        if s is not None and s.bearing_deg is not None:
-            return round((s.bearing_deg - m.offset_deg) % 360.0, 1)
+    """Rule 4: the first available member with a bearing, less its offset (none available: the
+    first with a bearing, the last one known)."""
+    for available in (True, False):
+        for m in group.members:
+            s = statuses.get(m.id)
+            if s is not None and s.bearing_deg is not None and (s.available or not available):
+                return round((s.bearing_deg - m.offset_deg) % 360.0, 1)
     return None
 
 
