@@ -40,6 +40,10 @@ Rules:
 4. ``VExxx`` is the controller's version whenever it comes.
 5. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent.
+6. A line longer than 80 bytes is noise, whole or not, and is never matched; a reply line is
+   read one way only (no pattern that backtracks: an attack pass, ``AZ1`` and 32 ``UP`` words
+   in one read held the serial-lines thread 3 s, its every rotator and stop with it, and 126
+   bytes longer than two minutes).
 """
 
 from __future__ import annotations
@@ -66,9 +70,11 @@ EL_READ_MIN_DEG = -90  # a reading below the horizon is a reading (a rotor parke
 _MAX_LINE = 80
 _NUM = rb"[-+]?\d{1,3}(?:\.\d*)?"  # 123.4, 123, 5.
 # a reply at the end of its line, with whatever came before it on that line in "pre"
+_RADIO = rb"(?:UP|DN|UM|DM|UR|DR)"
+# (a radio word's mode is no radio word: ``UP UP`` reads one way only, rule 6)
 _REPLY = re.compile(
     rb"(?P<pre>.*?)(?:AZ\s*(?P<az>" + _NUM + rb"))?\s*(?:EL\s*(?P<el>" + _NUM + rb"))?"
-    rb"(?P<radio>(?:\s+(?:UP|DN|UM|DM|UR|DR)\S*(?:\s+[A-Z]{2,3})?)*)\s*",
+    rb"(?P<radio>(?:\s+" + _RADIO + rb"\S*(?:\s+(?!" + _RADIO + rb")[A-Z]{2,3})?)*)\s*",
     re.DOTALL,
 )
 _VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
@@ -140,6 +146,9 @@ class EasycommCodec(OneQuery):
             self._line(line, out)
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
+        if len(raw) > _MAX_LINE + 2:  # rule 6: (with its CR LF) never matched
+            self._junk(raw, JunkReason.NOISE, "line too long", out)
+            return
         if _CHATTER.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
             return

@@ -169,6 +169,17 @@ def test_a_line_without_end_is_given_up_once_too_long() -> None:
     assert positions(codec.feed(b"\n")) == []
 
 
+def test_a_whole_line_too_long_is_noise_and_never_matched() -> None:
+    """Rule 6, an attack pass: ``AZ1`` and 32 ``UP`` words in one read (a whole line, so the
+    cap on a line without end never saw it) held the serial-lines thread 3 s in the pattern."""
+    codec = asked(2)
+    replies = codec.feed(b"AZ1" + b" UP" * 32 + b" !\n")
+    assert [(j.reason, j.detail) for j in junk(replies)] == [(JunkReason.NOISE, "line too long")]
+    replies = codec.feed(b"AZ1" + b" UP" * 24 + b" !\n")  # 80 bytes: judged, read one way
+    assert positions(replies) == [] and junk(replies)[0].reason is JunkReason.NOISE
+    assert positions(asked(2).feed(b"AZ10.0 EL5.0 UP UP DN FM\n")) == [(10.0, 5.0)]
+
+
 def test_an_expired_query_takes_no_late_reply() -> None:
     codec = asked(2)
     codec.expire_query()
