@@ -75,9 +75,13 @@ Rules:
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
    that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
    models); a silent controller's report after its slew is not doubted, nor is a connection's
-   first. A doubted reading is no reading for anything: not the motion's, not a target's fresh
-   one (targets.py rule 7: a target waits for the answer), not one a stop cuts short (rule 5);
-   but the controller answered (no silence). Readings at rest that go on disagreeing (a line
+   first, but for the first back where the rotor stood still when its readings were lost (a
+   port replugged, a controller answering again after a silence): that one is doubted against
+   where it stood (an attack pass: believed unchecked, one flipped bit was shown as the bearing
+   at rest, and a nudge from it turned the rotor 190 degrees). A doubted reading is no reading
+   for anything: not the motion's, not a target's fresh one (targets.py rule 7: a target waits
+   for the answer), not one a stop cuts short (rule 5); but the controller answered (no
+   silence). Readings at rest that go on disagreeing (a line
    gone bad, a failing position sensor) are asked for at the usual polls, not at once, and told
    from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings agreed on. A
    reading asked again at once agrees with the doubted one within ``doubt_deg`` plus twice what
@@ -711,6 +715,10 @@ class Controller:
         m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
         self._doubted = NOT_DOUBTED
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
+        el_stands = m.el_anchor_deg
+        if stands is None and self._still_at_close and m.state is not mo.MOVING:
+            stands, el_stands = m.position_deg, m.el_position_deg  # (the first back: where it
+            # stood still when the readings were lost, an attack pass)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             if stands is not None and cfg.spec.reports_while_moving:
@@ -721,7 +729,7 @@ class Controller:
         # no move for the motion machine (within noise_deg of where it stands): taken; a move
         # is what is doubted, however small (a review: a flip of 2 degrees, taken, turned the
         # motion to MOVING, and a second glitch in its settle time was published as a move)
-        if not _apart(reply, stands, m.el_anchor_deg, cfg.noise_deg, wraps):
+        if not _apart(reply, stands, el_stands, cfg.noise_deg, wraps):
             if doubted.reply is not None:  # back where it stood: the one before was noise
                 away = mo.angle_error(doubted.reply.az_deg, stands, wraps)
                 self._say(

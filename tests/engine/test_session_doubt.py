@@ -95,6 +95,55 @@ def test_a_move_by_hand_at_rest_is_believed_on_the_reading_after(rig: Rig, model
     assert v.errors(since=t) == []
 
 
+@pytest.mark.parametrize("model", MODELS)
+def test_a_flipped_bit_in_the_first_reading_after_a_replug_at_rest_is_never_taken(
+    rig: Rig, model: str
+) -> None:
+    """An attack pass: the first reading back after a replug (or a silence) was believed
+    unchecked; one flipped bit in it was published as the bearing at rest, and a nudge then
+    turned the rotor some 190 degrees. Where it stood still when its readings were lost, the
+    first one back is doubted as any reading at rest is."""
+    v = at_rest(rig, model)
+    rest = v.status.bearing_deg
+    v.link_down()
+    v.run_for(2.0)
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.link_up()
+    v.run_until(lambda h: bool(flipped) and h.status.available, 60, "back, the flipped reply")
+    v.run_for(20)
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} == {rest}
+    assert v.status.bearing_deg == rest and v.state is MotionState.IDLE
+
+
+def test_a_flipped_bit_in_the_first_reading_after_a_silence_at_rest_is_never_taken(
+    rig: Rig,
+) -> None:
+    v = at_rest(rig, "gs232b")
+    rest = v.status.bearing_deg
+    v.to_host = lambda data, now: b""  # the controller silent: offline
+    v.run_until(lambda h: not h.status.available, 60, "offline")
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped) and h.status.available, 60, "back, the flipped reply")
+    v.run_for(20)
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} == {rest}
+    assert v.status.bearing_deg == rest
+
+
+def test_a_move_by_hand_while_unplugged_is_believed_on_the_reading_after(rig: Rig) -> None:
+    v = at_rest(rig, "gs232b")
+    v.link_down()
+    t = v.now
+    v.manual_rotate(250.0)
+    v.run_until(lambda h: h.truth().az_deg == 250.0 and not h.truth().is_moving, 120, "turned")
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 60, "back")
+    v.run_for(10)
+    assert v.status.bearing_deg is not None and abs(v.status.bearing_deg - 250.0) <= 1.0
+    assert not any(f.startswith(b"S") for f in v.sent(since=t))  # no stop: nothing to stop
+
+
 @pytest.mark.parametrize("model", [m for m in MODELS if m != "satel"])  # (silent as it slews)
 def test_a_flipped_bit_in_a_reading_while_turning_is_never_published(rig: Rig, model: str) -> None:
     """Rule 9 while the rotor turns: a reading further from the one before than the rotor can
