@@ -109,7 +109,9 @@ class Rt21Codec(OneQuery):
             segment = bytes(self._buf[:end])
             del self._buf[: end + 1]
             self._segment(segment, out)
-        tail = _PARTIAL.search(self._buf)
+        # (looked for in the last bytes only: from every start of a long run of spaces, a
+        # pattern that fails at its end is a square of the run: an attack pass)
+        tail = _PARTIAL.search(self._buf, max(0, len(self._buf) - _MAX_PENDING))
         start = tail.start() if tail is not None else len(self._buf)
         if start:  # rule 2: these bytes begin no reply, whatever follows
             self._junk(bytes(self._buf[:start]), JunkReason.NOISE, "not a reply", out)
