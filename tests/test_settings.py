@@ -556,6 +556,27 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
 
 
 @pytest.mark.parametrize(
+    "variable",
+    [
+        "ROTOR_BRIDGE_WEB__HOST_NAMES=shack.example.org",
+        "ROTOR_BRIDGE_DXCLUSTER__BANDS=20m",
+        "ROTOR_BRIDGE_MQTT__TLS=on",
+    ],
+)
+def test_a_list_or_table_set_from_the_environment_not_in_json_names_its_variable(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str
+) -> None:
+    """An attack pass: these ended check-config and run in a 58-line traceback that named
+    neither the variable nor the key."""
+    name, value = variable.split("=")
+    monkeypatch.setenv(name, value)
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__HOST", "broker.lan")  # (plain: not named)
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL))
+    assert str(err.value).startswith(f"{name}: a list or a table is set from the environment")
+
+
+@pytest.mark.parametrize(
     ("model", "said"),
     [
         ("rotor-ez", "did you mean rotorez?"),

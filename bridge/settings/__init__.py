@@ -24,20 +24,27 @@ Rules:
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args, get_origin
 
 from pydantic import (
+    BaseModel,
     Field,
     PrivateAttr,
     ValidationError,
     field_validator,
     model_validator,
 )
-from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
+from pydantic_settings import (
+    BaseSettings,
+    PydanticBaseSettingsSource,
+    SettingsConfigDict,
+    SettingsError,
+)
 
 from bridge.feature import topic_words
 from bridge.protocols.axes import BEARING_IS_ELEVATION
@@ -420,9 +427,58 @@ def settings_from(
         settings = Settings(**data)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, data, env)) from None
+    except SettingsError as exc:  # a variable pydantic-settings reads as JSON, and cannot
+        raise ConfigError(_not_json(exc, env)) from None
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
     return settings
+
+
+def _not_json(exc: SettingsError, env: Any) -> str:
+    """A list or a table set from the environment is JSON (an attack pass: a plain value there
+    ended ``run`` in a traceback naming neither the variable nor the key)."""
+    m = re.search(r'field "(\w+)"', str(exc))
+    table = (m.group(1) if m else "").upper()
+    names = sorted(
+        k
+        for k in env
+        if table
+        and k.upper().startswith(f"{ENV_PREFIX}{table}")
+        and _complex(k.upper().removeprefix(ENV_PREFIX).lower().split("__"))
+        and not _is_json(env[k])
+    )
+    where = ", ".join(names) or f"a {ENV_PREFIX}{table or '...'} variable"
+    return (
+        f"{where}: a list or a table is set from the environment in JSON "
+        f"({ENV_PREFIX}WEB__HOST_NAMES='[\"shack.example.org\"]'), or in the configuration file"
+    )
+
+
+def _complex(path: list[str]) -> bool:
+    """Whether the key at ``path`` (a table's, then its key's) is a list or a table: what
+    pydantic-settings reads from the environment as JSON."""
+    model: Any = Settings
+    annotation: Any = None
+    for name in path:
+        fields = getattr(model, "model_fields", None)
+        if not fields or name not in fields:
+            return False
+        annotation = fields[name].annotation
+        model = next((a for a in (annotation, *get_args(annotation)) if isinstance(a, type)), None)
+    kinds = (annotation, *get_args(annotation))
+    return any(
+        get_origin(a) in (list, dict, tuple, set)
+        or (isinstance(a, type) and issubclass(a, (BaseModel, list, dict, tuple, set)))
+        for a in kinds
+    )
+
+
+def _is_json(text: str) -> bool:
+    try:
+        json.loads(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
