@@ -556,6 +556,28 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
 
 
 @pytest.mark.parametrize(
+    ("host", "said"),
+    [
+        ("mqtt://broker.lan:1883", "not a URL"),
+        ("broker.lan:1883", "without its port"),
+        ("x" * 64 + ".lan", "is no host name"),
+        ("broker..lan", "is no host name"),
+    ],
+)
+def test_a_broker_host_that_can_never_connect_is_refused_naming_the_key(
+    tmp_path: Path, host: str, said: str
+) -> None:
+    """An attack pass: a URL passed check-config ("config OK", then "Name or service not
+    known" at every retry, naming no key); a label over 63 characters logged a traceback at
+    every retry."""
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL.replace('"127.0.0.1"', f'"{host}"')))
+    assert "mqtt.host" in str(err.value) and said in str(err.value)
+    for fine in ("broker.lan", "broker.lan.", "192.168.1.2", "::1", "fe80::1%eth0"):
+        load_settings(write(tmp_path, MINIMAL.replace('"127.0.0.1"', f'"{fine}"')))
+
+
+@pytest.mark.parametrize(
     "variable",
     [
         "ROTOR_BRIDGE_WEB__HOST_NAMES=shack.example.org",

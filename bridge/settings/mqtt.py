@@ -200,6 +200,17 @@ class MqttSettings(_Strict):
     def _host(cls, v: str) -> str:
         if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
             raise ValueError(f"a host name or address, got {v!r}")
+        if "://" in v or "/" in v:  # (an attack pass: check-config said "config OK")
+            raise ValueError(
+                f"a host name or address, not a URL: {v!r} (the port is mqtt.port, TLS mqtt.tls)"
+            )
+        if v.count(":") == 1:  # (IPv6 has two at least)
+            raise ValueError(f"a host name or address, without its port: {v!r} (mqtt.port)")
+        name = v.removesuffix(".")
+        if ":" not in v and (  # a name or IPv4, as DNS takes them (an attack pass: a longer
+            len(name) > 253 or any(not 0 < len(label) <= 63 for label in name.split("."))
+        ):  # one logged a traceback at every retry)
+            raise ValueError(f"{v!r} is no host name: at most 253 characters, 1 to 63 between dots")
         return v
 
     @model_validator(mode="after")
