@@ -298,6 +298,7 @@ class App:
                 password=password.get_secret_value() if password is not None else None,
                 frame_ancestors=list(settings.web.frame_ancestors),
                 host_names=list(settings.web.host_names),
+                trusted_proxies=list(settings.web.trusted_proxies),
                 secret=installation_secret(settings.state_file.with_name("console-secret"))
                 if password is not None
                 else b"",

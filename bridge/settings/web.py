@@ -16,6 +16,7 @@ Rules:
 
 from __future__ import annotations
 
+import ipaddress
 import re
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,28 @@ class WebSettings(BaseModel):
         examples=[["shack.example.org"]],
         json_schema_extra={"unset": "IP addresses and localhost only"},
     )
+    trusted_proxies: list[str] = Field(
+        default_factory=list,
+        description="addresses (or networks) of your reverse proxies, whose X-Forwarded-For "
+        "header names the browser's address: failed logins are then limited, and commands "
+        "audited, per browser rather than per proxy. Only the proxies you run: anyone can "
+        "write that header",
+        examples=[["127.0.0.1"]],
+        json_schema_extra={"unset": "the connection's address: no X-Forwarded-For is believed"},
+    )
     _password: SecretStr | None = PrivateAttr(default=None)
+
+    @field_validator("trusted_proxies")
+    @classmethod
+    def _proxies(cls, values: list[str]) -> list[str]:
+        for value in values:
+            try:
+                ipaddress.ip_network(value, strict=False)
+            except ValueError:
+                raise ValueError(
+                    f"{value!r} is no address or network (127.0.0.1, ::1, 10.0.0.0/8)"
+                ) from None
+        return values
 
     @property
     def password(self) -> SecretStr | None:

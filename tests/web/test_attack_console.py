@@ -307,6 +307,54 @@ def test_a_login_flood_from_other_addresses_does_not_lock_the_operator_out() -> 
     assert limiter.wait("2001:db8:1::1", 0.0) is None
 
 
+def _login(client: ConsoleClient, password: str, **headers: str) -> int:
+    """A login as a browser sends it, with ``headers`` (Host, Origin, X-Forwarded-For...)."""
+    sent = {
+        "Content-Type": "application/json",
+        **{k.replace("_", "-"): v for k, v in headers.items()},
+    }
+    body = json.dumps({"password": password}).encode()
+    return client.request("POST", "/api/login", body, sent).status
+
+
+def test_a_rebinding_pages_wrong_logins_do_not_hold_back_the_operators_own(
+    guarded: tuple[Rig, ConsoleClient],
+) -> None:
+    """An attack pass: a page whose name was pointed at the bridge (DNS rebinding), open in the
+    operator's own browser, sent five wrong passwords from the operator's address; the
+    operator's right one was then answered 429 for as long as the page went on."""
+    _rig, client = guarded
+    evil = {"Host": "rebind.evil.example", "Origin": "http://rebind.evil.example"}
+    answers = [_login(client, "guess", **evil) for _ in range(auth.LOGIN_BURST_PER_CLIENT + 2)]
+    assert answers[-1] == 429  # (the page's own tries are limited)
+    mine = {"Host": f"127.0.0.1:{client.port}", "Origin": f"http://127.0.0.1:{client.port}"}
+    assert _login(client, PASSWORD, **mine) == 200
+    assert _login(client, PASSWORD, Host=f"localhost:{client.port}") == 200
+
+
+@pytest.mark.parametrize("trusted", [True, False])
+def test_behind_a_trusted_proxy_one_visitors_wrong_logins_hold_back_only_theirs(
+    rig: Rig, tmp_path: Path, trusted: bool
+) -> None:
+    """An attack pass: behind the reverse proxy every browser came from the proxy's address,
+    and one visitor's wrong passwords kept the operator's right one refused (429). A proxy in
+    ``trusted_proxies`` names each browser in X-Forwarded-For (its last entry: the earlier
+    ones anyone writes); the visitor's forged first entries change nothing."""
+    secret = tmp_path / "web-password"
+    secret.write_text(PASSWORD + "\n")
+    secret.chmod(0o600)
+    extra = {"trusted_proxies": ["127.0.0.1"]} if trusted else {}
+    web = rig.sections["web"] = web_section(password_file=str(secret), **extra)
+    rig.add("hf")
+    rig.start()
+    rig.ready("hf")
+    client = ConsoleClient(web["port"])
+    for n in range(auth.LOGIN_BURST_PER_CLIENT + 2):  # "forged" entries, then the proxy's
+        _login(client, "guess", X_Forwarded_For=f"198.51.100.{n}, 203.0.113.5")
+    operator = _login(client, PASSWORD, X_Forwarded_For="192.0.2.10")
+    assert operator == (200 if trusted else 429)
+
+
 def test_a_wrong_password_is_401_and_the_body_games_do_not_500(
     guarded: tuple[Rig, ConsoleClient],
 ) -> None:

@@ -3,6 +3,8 @@ limit, the Origin and the host name."""
 
 from __future__ import annotations
 
+import ipaddress
+
 import pytest
 
 from bridge.interfaces.web import auth
@@ -53,6 +55,40 @@ def test_failed_logins_are_limited_per_address_and_a_success_costs_nothing() -> 
     assert wait is not None and wait > 1
     assert limit.wait("10.0.0.2", T0) is None  # another address has its own tries
     assert limit.wait("10.0.0.1", T0 + auth.LOGIN_EVERY_S) is None  # one more, later
+
+
+def test_failed_logins_count_by_address_and_the_kind_of_name_asked_for() -> None:
+    names = ("shack.example.org",)
+    key = auth.login_key
+    assert key("10.0.0.1", "127.0.0.1:8754", names) == key("10.0.0.1", "10.0.0.9", names)
+    assert key("10.0.0.1", "localhost:8754", names) != key("10.0.0.1", "127.0.0.1", names)
+    assert key("10.0.0.1", "Shack.example.org:443", names) == "10.0.0.1 shack.example.org"
+    evil = key("10.0.0.1", "rebind.evil.example", names)
+    assert evil == key("10.0.0.1", "other.evil.example", names)  # one bucket for all others
+    assert evil not in {key("10.0.0.1", h, names) for h in ("127.0.0.1", "shack.example.org")}
+    assert key("2001:db8::1", "[::1]:8754") == key("2001:db8::2", "[::2]") == "2001:db8::/64 ip"
+
+
+@pytest.mark.parametrize(
+    ("peer", "forwarded", "client"),
+    [
+        ("127.0.0.1", "192.0.2.10", "192.0.2.10"),  # the browser, by the trusted proxy
+        ("127.0.0.1", "6.6.6.6, 192.0.2.10", "192.0.2.10"),  # a forged first entry
+        ("127.0.0.1", "192.0.2.10, 10.0.0.2", "192.0.2.10"),  # through two trusted proxies
+        ("127.0.0.1", "10.0.0.2", "127.0.0.1"),  # only proxies: the connection's
+        ("127.0.0.1", "junk, 192.0.2.10", "192.0.2.10"),
+        ("127.0.0.1", "192.0.2.10, junk", "127.0.0.1"),  # nothing past junk is believed
+        ("192.0.2.99", "192.0.2.10", "192.0.2.99"),  # not a proxy: its header is not believed
+        ("::ffff:127.0.0.1", "192.0.2.10", "192.0.2.10"),
+        ("127.0.0.1", None, "127.0.0.1"),
+        (None, "192.0.2.10", "?"),
+    ],
+)
+def test_only_a_trusted_proxy_is_believed_about_the_browsers_address(
+    peer: str | None, forwarded: str | None, client: str
+) -> None:
+    proxies = (ipaddress.ip_network("127.0.0.1"), ipaddress.ip_network("10.0.0.0/8"))
+    assert auth.forwarded_client(peer, forwarded, proxies) == client
 
 
 @pytest.mark.parametrize(

@@ -15,10 +15,12 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    so tokens outlive a restart and die with a changed password. A token past its life is still
    genuine: it carries a STOP or a lock ON (docs/architecture.md rule 11), nothing else.
 3. A password is compared in constant time (digests of equal length). Failed logins are
-   limited per client address (an IPv6 address by its /64, which one client has plenty of); a
-   client over its limit is answered without the password being looked at, so a flood learns
-   nothing, and a right password from another address is never held back by it. A login that
-   succeeds costs nothing (each new tab logs in).
+   limited per client address (an IPv6 address by its /64, which one client has plenty of) and
+   kind of name asked for (``login_key``); a client over its limit is answered without the
+   password being looked at, so a flood learns nothing, and a right password from another
+   address, or from the operator's own page while another name's page in the same browser
+   floods (an attack pass: a DNS-rebinding page locked the operator's own logins out), is
+   never held back by it. A login that succeeds costs nothing (each new tab logs in).
 4. A POST whose ``Origin`` is not this host (the ``Host`` header, or the ``X-Forwarded-Host`` a
    reverse proxy sets) is refused: another site's page, even one holding a token. A request
    without ``Origin`` is not a browser's and needs the token like any.
@@ -28,6 +30,11 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    rebinding) would otherwise be "this host" and could fetch a token. Behind a proxy the name
    asked for is the ``X-Forwarded-Host`` it passes on, checked the same way (a name pointed at
    the proxy is the same attack).
+6. Behind a reverse proxy every request comes from the proxy's address. One listed in
+   ``trusted_proxies`` is believed about the browser's (its ``X-Forwarded-For``'s last entry
+   that is no listed proxy), for the login's limit and for who sent a command; nothing else's
+   ``X-Forwarded-For`` is (an attack pass: through the proxy, one visitor's wrong passwords
+   held back the operator's right one for as long as they went on).
 """
 
 from __future__ import annotations
@@ -123,6 +130,62 @@ class LoginLimiter:
         while len(self._clients) > CLIENTS_KEPT:
             self._clients.popitem(last=False)
         bucket.take(now_s)
+
+
+def login_key(client: str, host: str | None, names: tuple[str, ...] = ()) -> str:
+    """Rule 3: whose failed logins count together: the client's address (``client_key``) and
+    the kind of name the request was addressed to (an IP literal, ``localhost``, each of
+    ``names``, or any other name), so that a page of another name open in the operator's
+    browser (DNS rebinding) spends its own tries, not those of the operator's own tab, and a
+    client that writes names of its own gets a few buckets more, not one per name."""
+    kind = "*"
+    if host_is_local_name(host):
+        kind = "localhost" if _bare(host).endswith("localhost") else "ip"
+    elif host and _bare(host) in names:
+        kind = _bare(host)
+    return f"{client_key(client)} {kind}"
+
+
+def _bare(host: str | None) -> str:
+    """The name of a Host header, lower case, without its port or brackets."""
+    name = (host or "").strip()
+    if name.startswith("["):
+        return name[1:].partition("]")[0].casefold()
+    return (name.rsplit(":", 1)[0] if name.count(":") == 1 else name).casefold()
+
+
+def forwarded_client(
+    peer: str | None,
+    forwarded_for: str | None,
+    proxies: Networks,
+) -> str:
+    """Rule 6: the client a request is from: the connection's address, or, from one of
+    ``proxies``, the last address in ``X-Forwarded-For`` that is not one of them (what the
+    nearest proxy saw; those before it anyone can write)."""
+    if not peer or not forwarded_for or not _among(peer, proxies):
+        return peer or "?"
+    for entry in reversed(forwarded_for.split(",")):
+        entry = entry.strip()
+        try:
+            ipaddress.ip_address(entry)
+        except ValueError:
+            return peer  # (no address: nothing after it is believed)
+        if not _among(entry, proxies):
+            return entry
+    return peer
+
+
+Networks = tuple[ipaddress.IPv4Network | ipaddress.IPv6Network, ...]
+
+
+def _among(address: str, networks: Networks) -> bool:
+    try:
+        ip = ipaddress.ip_address(address)
+    except ValueError:
+        return False
+    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
+        ip = ip.ipv4_mapped
+    return any(ip in net for net in networks)
 
 
 def client_key(client: str) -> str:

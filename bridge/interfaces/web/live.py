@@ -52,8 +52,10 @@ class Live:
         *,
         trust: Callable[[asyncio.BaseTransport | None], None],
         halt: Callable[[str, bytes, str | None], None],
+        client: Callable[[web.Request], str | None] = lambda request: request.remote,
     ) -> None:
         self.feed, self._tokens, self._wall = feed, tokens, wall
+        self._client = client  # who a request is from (auth.py rule 6)
         self._headers = headers  # the console's safety headers (server.py rule 3)
         self._trust = trust  # connections.py rule 1
         # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address
@@ -148,7 +150,7 @@ class Live:
             return ws
         self._trust(request.transport)
         page = self.join(token)
-        reader = asyncio.get_running_loop().create_task(self._read(ws, page, request.remote))
+        reader = asyncio.get_running_loop().create_task(self._read(ws, page, self._client(request)))
         try:
             await ws.send_str('{"event":"hello"}')
             while await _next(page):

@@ -19,9 +19,9 @@ Rules:
    frame it and steer clicks onto the map).
 4. A command is judged by the rotator's judge (commands.py); the answer says what the judge
    said (409 with the refusal's code), and the refusal reaches every page as an error event
-   too, as it reaches R/error. Who sent it is ``web`` and the connection's address (aiohttp's
-   ``request.remote``, as the login's limit counts it): behind a reverse proxy, the proxy's,
-   since no ``X-Forwarded-For`` is believed (anyone can write one).
+   too, as it reaches R/error. Who sent it is ``web`` and the client's address, as the login's
+   limit counts it (auth.py rule 6): behind a reverse proxy, the proxy's, unless it is one of
+   ``trusted_proxies`` (anyone can write an ``X-Forwarded-For``).
 5. Slow work (projecting the coastlines, reading the TLE file's names) runs on the loop's
    executor, never on the loop: a STOP posted meanwhile is carried out at once
    (docs/architecture.md rule 12). So do the commands of a rotator whose commands wait for a
@@ -45,6 +45,7 @@ import asyncio
 import concurrent.futures
 import errno
 import gzip
+import ipaddress
 import json
 import logging
 import socket
@@ -98,6 +99,7 @@ class WebConsole:
         password: str | None,
         frame_ancestors: list[str],
         host_names: list[str] | None = None,
+        trusted_proxies: list[str] | None = None,
         secret: bytes = b"",
         station: tuple[float, float] | None,
         locator: str | None,
@@ -107,6 +109,7 @@ class WebConsole:
         self.bind, self.port = bind, port
         self._password = password
         self._host_names = tuple(host_names or ())
+        self._proxies = tuple(ipaddress.ip_network(p, strict=False) for p in trusted_proxies or ())
         self._tokens = auth.Tokens(auth.key_for(password, secret))
         self._logins = auth.LoginLimiter()
         self._station, self._locator = station, locator
@@ -134,6 +137,7 @@ class WebConsole:
             self._headers,
             trust=lambda transport: self._conns.trust(transport),
             halt=self._halt,
+            client=self._client,
         )
         self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
@@ -296,6 +300,11 @@ class WebConsole:
 
         return checked
 
+    def _client(self, request: web.Request) -> str:
+        """Who a request is from (auth.py rule 6: a trusted proxy's browser)."""
+        forwarded = request.headers.get("X-Forwarded-For")
+        return auth.forwarded_client(request.remote, forwarded, self._proxies)
+
     def _token_ok(self, request: web.Request) -> bool:
         if not self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall()):
             return False
@@ -335,8 +344,10 @@ class WebConsole:
     async def _login(self, request: web.Request) -> web.StreamResponse:
         if self._password is None:
             return _json({"token": self._tokens.issue(self._wall())})
-        client, now = request.remote or "?", time.monotonic()
-        wait_s = self._logins.wait(client, now)
+        client, now = self._client(request), time.monotonic()
+        name = request.headers.get("X-Forwarded-Host", "").split(",")[0].strip()
+        key = auth.login_key(client, name or request.headers.get("Host"), self._host_names)
+        wait_s = self._logins.wait(key, now)
         if wait_s is not None:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
             return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
@@ -346,7 +357,7 @@ class WebConsole:
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
         if not isinstance(given, str) or not auth.password_matches(given, self._password):
-            self._logins.failed(client, now)
+            self._logins.failed(key, now)
             log.warning("web console: a wrong password from %s", client)
             return _json({"error": "wrong password"}, 401)
         return _json({"token": self._tokens.issue(self._wall())})
@@ -454,7 +465,7 @@ class WebConsole:
             body = await asyncio.wait_for(request.read(), BODY_S)
         except TimeoutError:
             return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
-        by = Origin(Source.WEB, None, request.remote)  # rule 4
+        by = Origin(Source.WEB, None, self._client(request))  # rule 4
         try:
             cmd = parse(body)
         except BadCommand as exc:
@@ -482,15 +493,17 @@ class WebConsole:
             if far is not None and away:  # rule 5
                 if halt:
                     self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
-                    done = far.submit(carry_out, rot, cmd, request.remote)
+                    done = far.submit(carry_out, rot, cmd, self._client(request))
                 else:
                     posted = self._far_halts.get(rot.id, 0)
-                    done = far.submit(self._far_move, rot, cmd, request.remote, posted, since)
+                    done = far.submit(
+                        self._far_move, rot, cmd, self._client(request), posted, since
+                    )
                     self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
                     done.add_done_callback(lambda _: self._far_moved(rot.id))
                 await asyncio.wrap_future(done)
             else:
-                carry_out(rot, cmd, request.remote, since)
+                carry_out(rot, cmd, self._client(request), since)
         except Refused as exc:
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:
