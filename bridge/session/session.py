@@ -300,6 +300,8 @@ class RotatorSession:
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
             self._end("lock", now)
             self._drop_pending(None)
+            self.view.target_info, self.view.park_raw = None, None  # (as a stop's ``_taken``: an
+            # attack pass, "long path" after a lock turned to the target the lock had dropped)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self._activity(now)  # (unlocking starts a new spell)

@@ -137,6 +137,23 @@ def test_a_waiting_locator_target_is_the_current_one_and_a_success_clears_the_la
     assert v.status.last_error is None
 
 
+@pytest.mark.parametrize("halt", ["stop", "lock"])
+def test_a_halt_ends_the_place_of_the_target_it_dropped(rig: Rig, halt: str) -> None:
+    """An attack pass: after a lock ON the status still showed the locator target it had
+    stopped (Home Assistant's distance to it), and a "long path" button press then turned the
+    rotor to that cancelled target's long path; after a STOP it did not."""
+    v = ready(rig)
+    info = TargetInfo(-35.3, 149.1, 16000.0, 120.0, 300.0, locator="QF44")
+    v.command(Target(120.0, None, Source.MQTT, info=info))
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    assert v.status.target_info == info
+    v.stop() if halt == "stop" else v.lock(True)
+    assert v.status.target_info is None
+    if halt == "lock":
+        v.lock(False)
+        assert v.status.target_info is None
+
+
 def test_a_stop_lost_on_the_line_is_sent_again_while_a_held_target_waits(rig: Rig) -> None:
     """Rule 5's check of a stop goes on while a target is held (it is not going out)."""
     v = rig("rotorez", emulator={"start_az_deg": 10, "speed_deg_s": 5.0})
