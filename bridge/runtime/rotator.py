@@ -284,8 +284,9 @@ class Rotator:
         epoch: int,
         ticket: int | None = None,
     ) -> str | None:
-        """The decision for each kind: the audit trail's result, None for a command it does
-        not keep (a health reset moves nothing), or Refused (reported by ``submit``).
+        """The decision for each kind: the audit trail's result (a health reset's too: it
+        moves nothing, but ends a baseline and its warnings, an attack pass), or Refused
+        (reported by ``submit``).
         ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10)."""
         src, by = command.source, command.origin
         match command:
@@ -324,9 +325,8 @@ class Rotator:
                     raise Refused(RefusalCode.INVALID, message)
                 lat, lon, locator = info.latitude_deg, info.longitude_deg, info.locator
                 self._toward(command, epoch, lat, lon, locator, ticket=ticket)
-            case ResetHealth():
+            case ResetHealth():  # (audited: it ends the baseline and its warnings)
                 self._reset_health()
-                return None
             case FeatureCommand():
                 self._feature(command, epoch)
         return EXECUTED

@@ -129,9 +129,9 @@ def test_every_kind_of_command_reaches_the_judge_through_submit(bench: Bench) ->
     assert not status().locked
     bench.submit(Stop(Source.MQTT, WHO), "stop")
     assert bench.last_audit() == ("DL1ABC", "stop", "executed")
-    audited = len(bench.audit)
-    bench.submit(ResetHealth(origin=WHO), "health reset")  # moves nothing: no audit line
-    assert len(bench.audit) == audited
+    bench.submit(ResetHealth(origin=WHO), "health reset")  # moves nothing, but an attack
+    assert bench.last_audit() == ("DL1ABC", "health reset", "executed")  # pass: it ends the
+    # baseline and its warnings (a slowing motor), and no record said who did
     # an option this model has not: the judge's own words
     assert bench.refused(SetOption("overlap", True, origin=WHO), "option overlap") == "unsupported"
     assert "has no option 'overlap'" in bench.events[-1].message
