@@ -17,6 +17,7 @@ from __future__ import annotations
 from bridge.core.model import Origin, ResetHealth, RotatorHealth, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
 from bridge.features.health.payload import health_json
+from bridge.interfaces.mqtt.payloads import parse_press
 from bridge.session.parts import Part, Scene, Wake
 from bridge.session.session import RotatorSession
 
@@ -32,7 +33,8 @@ def _health(status: RotatorStatus) -> RotatorHealth | None:
 
 
 def _reset(payload: bytes, by: Origin) -> ResetHealth:
-    """Any payload: it moves nothing, so no lease is asked."""
+    """A press (payloads.py ``parse_press``): it moves nothing, so no lease is asked."""
+    parse_press(payload, "reset rotor health")
     return ResetHealth(source=Source.MQTT, origin=by)
 
 
