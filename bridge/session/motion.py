@@ -255,7 +255,7 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         # we cannot know whether it is still turning or braking: assume the worst once
         worst = cfg.az_span_deg / cfg.nominal_speed_deg_s
         return Motion(state=UNKNOWN, busy_until_t=now + worst)
-    return Motion(state=OFFLINE, position_deg=m.position_deg)
+    return Motion(state=OFFLINE, position_deg=m.position_deg, el_position_deg=m.el_position_deg)
 
 
 def link_down(m: Motion) -> Motion:

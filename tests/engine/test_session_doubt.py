@@ -116,6 +116,42 @@ def test_a_flipped_bit_in_the_first_reading_after_a_replug_at_rest_is_never_take
     assert v.status.bearing_deg == rest and v.state is MotionState.IDLE
 
 
+def test_a_flipped_elevation_bit_in_the_first_reading_after_a_replug_is_never_taken(
+    rig: Rig,
+) -> None:
+    """A review: the elevation's stand was lost with the port (only the azimuth was kept), so
+    EL=045 read as EL=145 was taken at once, and an azimuth-only target then sent W160 145."""
+    v = rig("gs232b", settings={"unasked_moves": "follow"})
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.aim(Target(150.0, 45.0))
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.now > 30, 200, "at 150/45")
+    v.run_for(10)
+    rest = v.status.elevation_deg
+    v.link_down()
+    v.run_for(2.0)
+    t = v.now
+    when: list[float] = []
+    tail = bytearray(b"   ")
+
+    def flip(data: bytes, now: float) -> bytes:  # EL=045 reads EL=145 (0x30 -> 0x31)
+        out = bytearray()
+        for b in data:
+            if not when and b == ord("0") and bytes(tail) == b"EL=":
+                when.append(now)
+                b = ord("1")
+            tail[:] = tail[-2:] + bytes([b])
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = flip
+    v.link_up()
+    v.run_until(lambda h: bool(when) and h.status.available, 60, "back, the flipped reply")
+    v.aim(Target(160.0, None))
+    v.run_for(30)
+    assert {s.elevation_deg for s in v.published(since=t)} - {None} == {rest}
+    assert [w for w in v.sent(since=t) if w.startswith(b"W")] == [b"W160 045\r"]
+
+
 def test_a_flipped_bit_in_the_first_reading_after_a_silence_at_rest_is_never_taken(
     rig: Rig,
 ) -> None:
