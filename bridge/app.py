@@ -87,6 +87,7 @@ STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.
     + '; if the broker does speak MQTT 5, set mqtt.protocol = "5"'
 )
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
+YIELDING = "the bridge is stopping: it yields its base topic to another bridge"
 HALT_WAIT_S = 2.0  # claim rule 4: how long a yielding bridge waits for its stops to be written
 
 
@@ -752,7 +753,9 @@ class App:
         self._stopped.set()
         self.client.shutting_down()
         if self.client.yielded:  # claim rule 4: at once, before any front end takes its time
-            self._halt_all()  # to close (a web console's up to 10 s: a turn went on meanwhile)
+            for rot in self.rotators:  # to close (a web console's up to 10 s: a turn went on
+                rot.leave(YIELDING)  # meanwhile), and no front end still open turns one again
+            self._halt_all()
         if self.discovery is not None:
             self.discovery.stop()
         for server in self._text_ports():

@@ -137,6 +137,7 @@ class Rotator:
         self._wall = wall
         self._kept = Kept(store, self.id, self.spec, report=self.report)
         self._mailbox = Mailbox()
+        self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
@@ -289,6 +290,8 @@ class Rotator:
         (reported by ``submit``).
         ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10)."""
         src, by = command.source, command.origin
+        if self._leaving is not None and not isinstance(command, Stop | Lock):
+            raise Refused(RefusalCode.OFFLINE, self._leaving)  # (``leave``)
         match command:
             case Target() | Stop() | SetOption():
                 self._judged(command, epoch, hold)
@@ -330,6 +333,13 @@ class Rotator:
             case FeatureCommand():
                 self._feature(command, epoch)
         return EXECUTED
+
+    def leave(self, why: str) -> None:
+        """From now on only a stop or a lock word is taken, every other command refused with
+        ``why`` (app.py: a bridge that yields its base topic stops every rotor, and a front
+        end not closed yet must not turn one again: a review, a rotctld client's P after that
+        stop turned the rotor until the front ends had closed)."""
+        self._leaving = why
 
     def ticket(self) -> int:
         """A place in the order of commands (mailbox.py rule 10a): what a front end that

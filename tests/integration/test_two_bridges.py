@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import logging
+import socket
 import time
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.process import run_cli, to_toml
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 PREFIX = "homeassistant"
 
@@ -121,13 +123,16 @@ def test_a_yielding_bridge_stops_its_rotors_before_it_closes_a_front_end(rig: Ri
     """A review: the stop came only once every front end had closed; a web console takes up to
     10 s to, a TCP client that reads nothing 3 s, and the rotor turned on meanwhile. Now the
     stop is on the wire before the first front end is asked to close (and again after)."""
-    emu = rig.add("tower", emu={"start_az_deg": 10}, rotctld_port=free_port())
+    port = free_port()
+    emu = rig.add("tower", emu={"start_az_deg": 10}, rotctld_port=port)
     app = rig.start()
     rig.ready("tower")
+    client = socket.create_connection(("127.0.0.1", port), timeout=slow(5))
     rig.probe.publish("rotor/target", "300")
     emu.wait_for(lambda s: s.is_moving, 10)
     server = app.rotctld[0]
     stopped_before_close: list[bool] = []
+    answers: list[bytes] = []
     close = server.stop
 
     def watched_close(*args: object, **kwargs: object) -> None:  # (a spy: it closes as ever)
@@ -136,6 +141,9 @@ def test_a_yielding_bridge_stops_its_rotors_before_it_closes_a_front_end(rig: Ri
             stopped_before_close.append(True)
         except AssertionError:
             stopped_before_close.append(False)
+        # a review: a client still connected then sent P, and the rotor turned again
+        client.sendall(b"P 200.0 0.0\n")
+        answers.append(client.recv(100))
         close(*args, **kwargs)  # type: ignore[arg-type]
 
     server.stop = watched_close  # type: ignore[method-assign]
@@ -143,7 +151,10 @@ def test_a_yielding_bridge_stops_its_rotors_before_it_closes_a_front_end(rig: Ri
     rig.probe.publish("rotor/bridge/info", older.info([]), retain=False)
     wait_until(app.failed.is_set, 5, "this bridge yields")
     rig.stop()
+    client.close()
     assert stopped_before_close == [True]
+    assert answers == [b"RPRT -5\n"]  # (offline: the bridge is stopping)
+    assert not any(f.data.startswith(b"AP1200") for f in emu.frames())
     emu.wait_for(lambda s: not s.is_moving, 10)
     assert emu.state().az_deg < 290
 

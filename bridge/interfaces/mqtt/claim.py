@@ -30,7 +30,8 @@ Rules:
    same way (a review: mid-turn, a broker back with another's info and ``online``, forged or
    a second bridge started during the outage, ended it for good with no stop). Yielding
    stops every rotator at once, and again once no front end can move one after it (a review:
-   stopped only then, a turn went on while the web console took up to 10 s to close), and
+   stopped only then, a turn went on while the web console took up to 10 s to close; another:
+   a front end still open then turned it again, so nothing but a halt is taken meanwhile), and
    exits with code 1, which systemd restarts:
    the next start's first look (rule 2) decides on what the broker holds, refusing (code 2)
    while the other is there and online. One message proves no other bridge (an attack pass:
