@@ -501,6 +501,9 @@ class RotatorStatus:
     # a stop the controller is owed (session/stops.py rule 3: taken while its port was out or it
     # was silent), its first frame when it can have one; kept across a restart (runtime/kept.py)
     stop_owed: bool = False
+    # the raw azimuth of the last target written, which the controller keeps and the rotor
+    # rests short of (session/controller.py rule 10); kept across a restart (runtime/kept.py)
+    short_of_deg: float | None = None
 
     @property
     def moving(self) -> bool:

@@ -267,6 +267,7 @@ class CompositeWorker:
         storm: bool = False,
         storm_halted: bool = False,
         stop_owed: bool = False,
+        short_of: float | None = None,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -293,6 +294,7 @@ class CompositeWorker:
                 storm=storm,
                 storm_halted=storm_halted,
                 stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
+                short_of=short_of if axis is Axis.AZIMUTH else None,  # (the status's)
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,

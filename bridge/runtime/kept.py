@@ -43,6 +43,11 @@ Rules:
    owed, or owed no more, to the writer; the next start owes it (session.py rule 11). An
    attack pass: a STOP sent while the adapter was out, the bridge restarted before it came
    back, and the rotor turned on to its old target. A save that fails is reported (rule 3).
+9. The target a Rotor-EZ or RotorCard keeps and its rotor rests short of (session/controller.py
+   rule 10, ``short_of_deg`` in the status) outlives a restart as a stop owed does: the next
+   start guards a turn on to it (noticed in an attack pass: stopped short of 300, the bridge
+   restarted, and a poll garbled into ``AM1;`` turned the rotor on to 300 unsaid). It is
+   saved only when it changes: at a stop short of the target, and at the next turn.
 """
 
 from __future__ import annotations
@@ -122,6 +127,7 @@ class Kept:
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
         self.storm_halted = self.storm and store.storm_halted(rotator_id)
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
+        self.short_of = store.short_of(rotator_id)  # rule 9
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
@@ -136,6 +142,21 @@ class Kept:
         if owed != self.stop_owed:
             self.stop_owed = owed
             self._store.later(lambda: self._save_stop_now(owed))
+
+    def seen_short_of(self, raw_az: float | None) -> None:
+        """Rule 9 (lines thread: it only compares and hands over)."""
+        if raw_az != self.short_of:
+            self.short_of = raw_az
+            self._store.later(lambda: self._save_short_of_now(raw_az))
+
+    def _save_short_of_now(self, raw_az: float | None) -> None:
+        if not self._store.set_short_of(self._id, raw_az):
+            self._report(
+                ErrorKind.STATE,
+                "where the rotor was stopped short of its target could not be saved: after a "
+                "restart a turn on to it would not be stopped (state file not writable)",
+                None,
+            )
 
     def _save_stop_now(self, owed: bool) -> None:
         if not self._store.set_stop_owed(self._id, owed):

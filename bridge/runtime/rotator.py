@@ -154,6 +154,7 @@ class Rotator:
                 storm=self._kept.storm,  # kept.py rule 4
                 storm_halted=self._kept.storm_halted,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
+                short_of=self._kept.short_of,  # kept.py rule 9
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -171,6 +172,7 @@ class Rotator:
                 storm=self._kept.storm,
                 storm_halted=self._kept.storm_halted,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
+                short_of=self._kept.short_of,  # kept.py rule 9
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,
@@ -199,6 +201,7 @@ class Rotator:
         self._health.seen(status.health)
         self._kept.seen_wind(status.wind)
         self._kept.seen_stop(status.stop_owed)
+        self._kept.seen_short_of(status.short_of_deg)
         self._on_status(status)
 
     def _reset_health(self) -> None:

@@ -46,6 +46,7 @@ import errno
 import fcntl
 import json
 import logging
+import math
 import os
 import stat
 import tempfile
@@ -339,6 +340,25 @@ class StateStore:
                 entry["stop_owed"] = True
             else:
                 entry.pop("stop_owed", None)
+            return self._save()
+
+    def short_of(self, rotator_id: str) -> float | None:
+        """The target the rotor rested short of when last written (kept.py rule 9); None for
+        none or a damaged entry."""
+        with self._lock:
+            value = self._data.get(rotator_id, {}).get("short_of")
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return None
+        return float(value) if math.isfinite(value) else None
+
+    def set_short_of(self, rotator_id: str, raw_az: float | None) -> bool:
+        """Remember it, or that there is none; False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if raw_az is not None:
+                entry["short_of"] = raw_az
+            else:
+                entry.pop("short_of", None)
             return self._save()
 
     def set_locked(self, rotator_id: str, locked: bool) -> bool:

@@ -87,6 +87,7 @@ class Worker:
         storm: bool = False,
         storm_halted: bool = False,
         stop_owed: bool = False,
+        short_of: float | None = None,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -103,6 +104,7 @@ class Worker:
             storm=storm,
             storm_halted=storm_halted,
             stop_owed=stop_owed,
+            short_of=short_of,
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

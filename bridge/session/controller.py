@@ -117,7 +117,9 @@ Rules:
      by hand after it is the operator's: ``lock_released``): a hand at the panel after a STOP is
      stopped once, then followed; a poll garbled after a move by hand is not caught (writing the
      rest bearing to the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand
-     at the panel short and turned a rotor at 360 a full circle).
+     at the panel short and turned a rotor at 360 a full circle). The target it rested short of
+     is in the status (``short_of_deg``) and outlives a restart (runtime/kept.py rule 9): the
+     next session starts guarded, its first readings too (``keep_short_of``).
    While such a turn would be stopped, a poll left unanswered or answered in part at rest (what
    a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
    polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
@@ -484,7 +486,22 @@ class Controller:
             wall_offset_s,
             features,
             self.stops.owed,  # stop_owed
+            self._short_of(motion),  # short_of_deg
         )
+
+    def _short_of(self, m: mo.Motion) -> float | None:
+        """Rule 10: the last target written, while the guard is on and the rotor, not turning,
+        rests short of it (kept across a restart: ``keep_short_of``); None otherwise."""
+        sent = self._sent_az
+        if not self._guarded or sent is None or m.state is mo.MOVING or m.position_deg is None:
+            return None
+        return sent if self._short_of_target(m.position_deg, self.cfg.motion) else None
+
+    def keep_short_of(self, raw_az: float) -> None:
+        """Rule 10, at the start: the target the rotor rested short of when the bridge last ran
+        (runtime/kept.py rule 9): its guard as if written in this session."""
+        if self.cfg.unasked_moves == "after-stop":
+            self._sent_az, self._guarded = raw_az, True
 
     def take_notes(self) -> list[Note]:
         """What happened since the last call that the session must act on, in order."""
@@ -819,7 +836,7 @@ class Controller:
         if not self.answering:
             self.answering, owed, first = True, self.stops.owed, True
             still = self._still_at_close  # rule 10: a turn from these first readings judged?
-            guard = still if still is not None else self.cfg.unasked_moves == "stop"
+            guard = still if still is not None else self._watching()  # (a kept short_of)
             self._connect_guard = guard and self.motion.stop_sent_t is None
             self._guard_at_start = still is None
             self.options.all_due()
@@ -918,7 +935,8 @@ class Controller:
             return
         self._rested = None
         true = self.cfg.aim.true_of  # (the bearings the user sees, not the controller's)
-        if self._rested_at_start:  # (a review: a restart mid-turn was blamed on the line)
+        if self._rested_at_start and self.cfg.unasked_moves == "stop":  # (a review: a restart
+            # mid-turn was blamed on the line; after-stop's guard at the start is a kept one)
             why = (
                 "it was turning when the bridge started (a restart mid-turn?), or a poll a noisy "
                 "line made a command, or a hand at the panel"

@@ -175,6 +175,7 @@ class RotatorSession:
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
         storm_halted: bool = False,  # ... and its park stopped (wind.py rule 3)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
+        short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -186,6 +187,8 @@ class RotatorSession:
         # (and so does a stop owed then: taken while the port was out, say)
         if locked or stop_owed:
             self.controller.owe_stop()
+        if short_of is not None:  # (controller.py rule 10)
+            self.controller.keep_short_of(short_of)
         self.targets = Targets(cfg)
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower

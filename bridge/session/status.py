@@ -110,6 +110,7 @@ class Seen(NamedTuple):
     wall_offset_s: float
     features: Features
     stop_owed: bool  # stops.py rule 3
+    short_of_deg: float | None  # controller.py rule 10 (``short_of``)
 
 
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
@@ -169,6 +170,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         control=view.control,
         features=dict(seen.features.parts) if seen.features.parts else {},
         stop_owed=seen.stop_owed,
+        short_of_deg=seen.short_of_deg,
     )
     return status
 

@@ -16,6 +16,7 @@ import pytest
 
 from bridge.core.model import MotionState, Target
 from bridge.emulators.rotorez_models import Outcome
+from bridge.session.session import RotatorSession
 from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_UNSURE_S
 from tests.engine.virtual import VirtualRotator
 
@@ -909,6 +910,43 @@ def test_a_poll_garbled_into_execute_after_a_stop_does_not_turn_the_rotor_on(
     assert "keeps the bearing 300°" in said and said.endswith("turn it again at the panel to go on")
     assert [f for f, _ in commands(v, t)] == [b"AM1;", b";"]
     assert_never_disobeyed(v)
+
+
+def test_a_poll_garbled_into_execute_after_a_restart_does_not_turn_it_on_to_the_kept_target(
+    rig: Rig,
+) -> None:
+    """Noticed and left in an earlier pass: the after-stop guard knew the target the rotor was
+    stopped short of, a restart of the bridge forgot it, and a poll garbled into AM1 in the
+    first seconds turned the rotor on to 300. The status names it (``short_of_deg``, kept in
+    the state file: runtime/kept.py rule 9), and the next session starts guarded."""
+    v = stopped_short_of_300(rig, "stop")
+    assert v.status.short_of_deg == 300.0
+    rest = v.truth().az_deg
+    v.link_down(None)
+    v.run_for(1)
+    v.session = RotatorSession(v.cfg, short_of=300.0)  # the bridge restarted
+    v._do(v.session.start(v.now))
+    t = v.now
+    v.garble_writes(QUERY, b"AM1;")  # (the first poll of the new session)
+    v.link_up()
+    v.run_until(lambda h: unasked(h) != [], 20, "the turn seen and stopped")
+    v.run_for(15)
+    # not on to 300 (the first poll: seen turning from its first reading, a few degrees on)
+    assert not v.truth().is_moving and v.truth().az_deg < rest + 20
+    [said] = unasked(v)
+    assert "keeps the bearing 300°" in said
+    assert b";" in [f for f, _ in commands(v, t)]
+
+
+def test_what_the_rotor_is_kept_short_of_ends_with_its_next_turn_or_arrival(rig: Rig) -> None:
+    v = stopped_short_of_300(rig, "stop")
+    assert v.status.short_of_deg == 300.0
+    v.target(200)
+    v.run_until(lambda h: h.state is MOVING, 10, "turning")
+    assert v.status.short_of_deg is None  # (saved only at such changes)
+    v.run_until(at(v, 200), 60, "at 200")
+    v.run_for(10)
+    assert v.status.short_of_deg is None
 
 
 def test_a_hand_at_the_panel_after_a_stop_is_stopped_once_then_followed(rig: Rig) -> None:

@@ -37,6 +37,20 @@ def test_a_stop_owed_survives_a_restart_and_a_damaged_one_is_owed(tmp_path: Path
     assert StateStore(path).stop_owed("tower") is True
 
 
+def test_the_target_a_rotor_rests_short_of_survives_a_restart(tmp_path: Path) -> None:
+    """kept.py rule 9; a damaged value is none (a guard the less, never a move)."""
+    path = tmp_path / "state.json"
+    s = StateStore(path)
+    assert s.short_of("tower") is None
+    assert s.set_short_of("tower", 300.0) is True
+    assert StateStore(path).short_of("tower") == 300.0
+    assert s.set_short_of("tower", None) is True
+    assert "short_of" not in json.loads(path.read_text())["rotators"]["tower"]
+    for damaged in ('"300"', "true", "1e999", "[300]"):
+        path.write_text('{"rotators": {"tower": {"short_of": ' + damaged + "}}}")
+        assert StateStore(path).short_of("tower") is None
+
+
 def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) -> None:
     path = tmp_path / "state.json"
     path.write_text("{not json")

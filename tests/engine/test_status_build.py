@@ -62,12 +62,13 @@ def test_what_the_controller_hands_the_status_is_each_value_by_its_name(
     v = VirtualRotator("rotorez", emulator={"speed_deg_s": 4.0})
     v.run_for(3.0)
     v.manual_rotate(90.0)
-    v.run_for(2.0)
+    v.run_for(30.0)  # (at rest there: a target kept short of is shown only then)
     session, ctl = v.session, v.session.controller
     assert ctl.link is not None and ctl.link.slew is None
     ctl.version, ctl.controller_time, ctl.answering = "version", "clock", answering
     ctl.az_shown.value, ctl.el_shown.value = 11.0, 22.0
     ctl.stops.owed = not locked  # (never the lock's value: a swap would show)
+    ctl.keep_short_of(200.0)  # (rule 10: stopped short of it)
     features = st.Features(tracking_ended="ended")
     seen = ctl.seen(session.status, session.view, None, locked, 33.0, features)
     assert seen._asdict() == {
@@ -88,4 +89,5 @@ def test_what_the_controller_hands_the_status_is_each_value_by_its_name(
         "wall_offset_s": 33.0,
         "features": features,
         "stop_owed": not locked,
+        "short_of_deg": 200.0,
     }

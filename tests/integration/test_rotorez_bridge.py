@@ -188,6 +188,34 @@ def test_a_stop_sent_while_the_adapter_is_out_survives_a_restart_before_it_comes
     wait_until(lambda: b"stop_owed" not in state.read_bytes(), 10, "the stop forgotten")
 
 
+def test_a_turn_on_to_the_target_it_was_stopped_short_of_is_stopped_after_a_restart(
+    rig: Rig,
+) -> None:
+    """Noticed in an attack pass: the Rotor-EZ keeps the bearing of its last target, and one
+    flipped bit makes the poll AI1; the command to turn there, AM1;. Stopped short of 300,
+    the bridge restarted and forgot it: such a turn went on to 300, unsaid. The state file
+    keeps it now (runtime/kept.py rule 9), and the turn is stopped."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
+    state = rig.tmp / "state.json"
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 20)
+    rig.probe.publish("rotor/stop", "STOP")
+    wait_until(lambda: b'"short_of": 300' in state.read_bytes(), 20, "kept")
+    rig.stop()
+    t = time.monotonic()
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", after=t)
+    emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 20)
+    rest = emu.state().az_deg
+    emu.inject(b"AM1;", to="device")  # (as a poll garbled on its way)
+    error = rig.probe.wait_for("rotor/error", lambda m: b"no command" in m.payload, after=t)
+    assert "keeps the bearing 300" in json.loads(error.payload)["message"]
+    emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 20)
+    assert emu.state().az_deg < rest + 20  # not on to 300
+
+
 def test_lock_on_stops_a_turning_rotor(rig: Rig) -> None:
     emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
     rig.start()
