@@ -562,6 +562,8 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("broker.lan:1883", "without its port"),
         ("x" * 64 + ".lan", "is no host name"),
         ("broker..lan", "is no host name"),
+        ("[::1]:1883", "without brackets"),  # (a review)
+        ("[::1]", "without brackets"),
     ],
 )
 def test_a_broker_host_that_can_never_connect_is_refused_naming_the_key(

@@ -417,6 +417,7 @@ class Controller:
         self._pass_ends = False  # ... and the stop due now its last try: given up once written
         self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
+        self._short_latched: float | None = None  # rule 10: ``_short_of`` said it (latched)
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self._still_at_close: bool | None = None  # rule 10: still, no target out, when the
         # readings were last lost (the port closed, the controller silent; None: never had any)
@@ -493,9 +494,22 @@ class Controller:
         """Rule 10: the last target written, while the guard is on and the rotor, not turning,
         rests short of it (kept across a restart: ``keep_short_of``); None otherwise."""
         sent = self._sent_az
-        if not self._guarded or sent is None or m.state is mo.MOVING or m.position_deg is None:
+        if not self._guarded or sent is None or m.state is mo.MOVING:
+            self._short_latched = None
             return None
-        return sent if self._short_of_target(m.position_deg, self.cfg.motion) else None
+        if self._short_latched == sent:  # (until a turn, another target or the guard's end: a
+            return sent  # review, a rest at the tolerance's edge flipped it at every poll)
+        # no reading yet (a start, its controller not answering): as kept (an attack pass:
+        # forgotten by such a start, a second restart was unguarded)
+        if m.position_deg is None or self._short_of_target(m.position_deg, self.cfg.motion):
+            self._short_latched = sent
+            return sent
+        return None
+
+    @property
+    def short_of_deg(self) -> float | None:
+        """Rule 10's ``_short_of`` now (the first status's, before any step)."""
+        return self._short_of(self.motion)
 
     def keep_short_of(self, raw_az: float) -> None:
         """Rule 10, at the start: the target the rotor rested short of when the bridge last ran

@@ -201,6 +201,7 @@ class RotatorSession:
             locked=locked,
             health=self.health.report,
             stop_owed=self.controller.stops.owed,
+            short_of_deg=self.controller.short_of_deg,  # (kept: the first status says so too)
         )
         # rule 17: the parts handed in (the features', from the app), in the order they run
         parts: tuple[Part[RotatorSession], ...] = (

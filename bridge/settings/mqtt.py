@@ -204,6 +204,8 @@ class MqttSettings(_Strict):
             raise ValueError(
                 f"a host name or address, not a URL: {v!r} (the port is mqtt.port, TLS mqtt.tls)"
             )
+        if v.startswith("["):  # (an address in brackets is a URL's: getaddrinfo takes none)
+            raise ValueError(f"an IPv6 address is written without brackets here: {v!r}")
         if v.count(":") == 1:  # (IPv6 has two at least)
             raise ValueError(f"a host name or address, without its port: {v!r} (mqtt.port)")
         name = v.removesuffix(".")

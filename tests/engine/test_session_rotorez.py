@@ -938,6 +938,35 @@ def test_a_poll_garbled_into_execute_after_a_restart_does_not_turn_it_on_to_the_
     assert b";" in [f for f, _ in commands(v, t)]
 
 
+def test_what_the_rotor_is_kept_short_of_is_kept_by_a_start_whose_port_is_out(rig: Rig) -> None:
+    """An attack pass: a start whose controller did not answer yet (the adapter out) showed
+    none, the state file forgot it, and the restart after that was unguarded."""
+    v = stopped_short_of_300(rig, "stop")
+    v.link_down(None)
+    v.run_for(1)
+    v.session = RotatorSession(v.cfg, short_of=300.0)  # the bridge restarted, the port out
+    v._do(v.session.start(v.now))
+    v.run_for(5)
+    assert {s.short_of_deg for s in v.published(since=v.now - 5)} == {300.0}
+
+
+def test_what_the_rotor_is_kept_short_of_does_not_flip_with_the_jitter_at_its_edge(
+    rig: Rig,
+) -> None:
+    """A review: stopped about 6 degrees short of 300, right at the edge of tolerance and
+    noise, the readings' jitter flipped it at every idle poll, a state-file write each (599
+    in 10 minutes)."""
+    v = ready(rig, emulator={"start_az_deg": 250, "speed_deg_s": 4.0})
+    v.target(300)
+    v.run_until(lambda h: h.truth().az_deg >= 293.6, 60, "near 294")
+    v.stop()
+    v.run_until(lambda h: h.state is IDLE and not h.truth().in_brake_delay, 30, "at rest")
+    t = v.now
+    v.run_for(600)
+    values = [s.short_of_deg for s in v.published(since=t)]
+    assert sum(1 for a, b in zip(values, values[1:], strict=False) if a != b) <= 1
+
+
 def test_what_the_rotor_is_kept_short_of_ends_with_its_next_turn_or_arrival(rig: Rig) -> None:
     v = stopped_short_of_300(rig, "stop")
     assert v.status.short_of_deg == 300.0

@@ -512,10 +512,10 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/park", b"\xff" * 8, "payload is not UTF-8 text", "park '" + "\ufffd" * 8 + "'"),
         ("rotor/park", b"P" * 4096, "payload too large (4096 bytes, at most 256)",
          "park '" + "P" * 40 + "'\u2026"),
-        ("rotor/park", b"OFF", "'OFF' does not park: send PARK, RESET or ON", "park 'OFF'"),
-        ("rotor/park", b"0", "'0' does not park: send PARK, RESET or ON", "park '0'"),
+        ("rotor/park", b"OFF", "'OFF' does not park: send PARK", "park 'OFF'"),
+        ("rotor/park", b"0", "'0' does not park: send PARK", "park '0'"),
         ("rotor/health/reset", b"false",
-         "'false' does not reset rotor health: send PARK, RESET or ON", "health_reset 'false'"),
+         "'false' does not reset rotor health: send RESET", "health_reset 'false'"),
     ],
 )  # fmt: skip
 def test_a_bad_payload_is_refused_and_nothing_moves(

@@ -34,7 +34,7 @@ def _health(status: RotatorStatus) -> RotatorHealth | None:
 
 def _reset(payload: bytes, by: Origin) -> ResetHealth:
     """A press (payloads.py ``parse_press``): it moves nothing, so no lease is asked."""
-    parse_press(payload, "reset rotor health")
+    parse_press(payload, "reset rotor health", "RESET")
     return ResetHealth(source=Source.MQTT, origin=by)
 
 

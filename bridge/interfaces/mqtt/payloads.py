@@ -304,14 +304,14 @@ def text(payload: bytes) -> str:
     return _text(payload)
 
 
-def parse_press(payload: bytes, what: str) -> str:
+def parse_press(payload: bytes, what: str, word: str) -> str:
     """A button's press (``R/park``, ``R/health/reset``): any text but a word that says no
     (OFF, 0, false: a dashboard's switch turned off must not park a rotor) and none of what
     any payload may not be (not UTF-8, too large: rule 2; an attack pass parked a rotor on
     4096 bytes of 0xFF)."""
     text = _text(payload)
     if text.lower() in _FALSE:
-        raise PayloadError(f"{text[:20]!r} does not {what}: send PARK, RESET or ON")
+        raise PayloadError(f"{text[:20]!r} does not {what}: send {word}")
     return text
 
 

@@ -652,7 +652,7 @@ def parse_command(
     if kind == "preset":
         return GoToPreset(pl.parse_name(payload, "preset"), source=src, origin=by)
     if kind == "park":
-        pl.parse_press(payload, "park")
+        pl.parse_press(payload, "park", "PARK")
         return Park(source=src, origin=by)
     if kind == "nudge":
         d_az, d_el = pl.parse_nudge(payload)

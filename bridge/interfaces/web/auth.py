@@ -134,16 +134,13 @@ class LoginLimiter:
 
 def login_key(client: str, host: str | None, names: tuple[str, ...] = ()) -> str:
     """Rule 3: whose failed logins count together: the client's address (``client_key``) and
-    the kind of name the request was addressed to (an IP literal, ``localhost``, each of
-    ``names``, or any other name), so that a page of another name open in the operator's
-    browser (DNS rebinding) spends its own tries, not those of the operator's own tab, and a
-    client that writes names of its own gets a few buckets more, not one per name."""
-    kind = "*"
-    if host_is_local_name(host):
-        kind = "localhost" if _bare(host).endswith("localhost") else "ip"
-    elif host and _bare(host) in names:
-        kind = _bare(host)
-    return f"{client_key(client)} {kind}"
+    whether the request was addressed to one of the console's own names (an IP literal,
+    ``localhost``, one of ``names``) or another, so that a page of another name open in the
+    operator's browser (DNS rebinding) spends its own tries, not those of the operator's own
+    tab, and a client that writes names of its own gets one bucket more, not one per name (a
+    review: one per kind of name was three and more)."""
+    ours = host_is_local_name(host, names)
+    return f"{client_key(client)} {'ours' if ours else 'other'}"
 
 
 def _bare(host: str | None) -> str:
