@@ -21,6 +21,9 @@ Rules:
 4. Anything at the path that is not a regular file (a FIFO, a device, a socket, a directory)
    is never opened for reading, which could wait for ever (a FIFO without a writer) or touch
    hardware (a serial device), and never replaced: ``check_writable`` refuses it by its kind.
+   So is a symbolic link to nothing (a volume not mounted yet: an attack pass, it was read as
+   no file, a kept lock was lost, and the link was replaced by a new file); a link to a file
+   is written through, the file replaced, never the link.
 5. ``later`` runs a save on the store's own writer thread, in the order asked: a lock or an
    option set from an MQTT callback must not hold that connection (and a stop behind it) for
    an fsync, tens of milliseconds on an SD card. ``flush`` waits for what was asked so far.
@@ -76,10 +79,13 @@ def _not_regular(mode: int) -> str | None:
 
 
 def _kind_at(path: Path) -> str | None:
-    """What is at ``path`` (symbolic links followed) if it exists and is not a regular file."""
+    """What is at ``path`` (symbolic links followed) if it exists and is not a regular file; a
+    link to nothing (rule 4)."""
     try:
         return _not_regular(os.stat(path).st_mode)
     except FileNotFoundError:
+        if os.path.islink(path):
+            return "link to a file that is not there (a volume not mounted yet?)"
         return None
 
 
@@ -166,7 +172,7 @@ class StateStore:
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
         self._dirty = False  # a malformed entry was replaced: written down at the first read
         self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
-        if path is not None and path.exists():
+        if path is not None and (path.exists() or path.is_symlink()):
             self._kind = _kind_at(path)
             if self._kind is not None:
                 self.corrupt = True  # nothing read: every rotator locked, should it be used
@@ -393,6 +399,7 @@ class StateStore:
         """The content, in full and on the disk, then renamed over ``path`` (rule 1); without
         ``put_in_place`` it is removed instead (rule 3). OSError if any step fails."""
         content = json.dumps({"rotators": self._data}, indent=1, sort_keys=True).encode()
+        path = Path(os.path.realpath(path))  # rule 4: through a link, never over it
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".state-")
         renamed = False
         try:

@@ -51,6 +51,22 @@ def test_the_target_a_rotor_rests_short_of_survives_a_restart(tmp_path: Path) ->
         assert StateStore(path).short_of("tower") is None
 
 
+def test_a_state_file_behind_a_link_is_written_through_it(tmp_path: Path) -> None:
+    """Rule 4, an attack pass: the first save replaced the link with a file of its own, and
+    the file it pointed to (on another volume, say) was never read again."""
+    real = tmp_path / "data" / "state.json"
+    real.parent.mkdir()
+    StateStore(real).set_locked("tower", True)
+    link = tmp_path / "state.json"
+    link.symlink_to(real)
+    s = StateStore(link, deferred=True)
+    assert s.locked("tower") is True
+    s.check_writable()
+    assert s.set_locked("yagi", True) is True
+    assert link.is_symlink()
+    assert StateStore(real).locked("yagi") is True and StateStore(real).locked("tower") is True
+
+
 def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) -> None:
     path = tmp_path / "state.json"
     path.write_text("{not json")

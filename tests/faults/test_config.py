@@ -315,7 +315,9 @@ def test_a_state_file_whose_content_cannot_be_written_is_exit_2_and_leaves_nothi
     assert retained_snapshot(broker.port, "#") == {}
 
 
-@pytest.mark.parametrize("kind", ["FIFO", "directory"])
+@pytest.mark.parametrize(
+    "kind", ["FIFO", "directory", "link to a file that is not there (a volume not mounted yet?)"]
+)
 def test_a_state_file_that_is_no_regular_file_is_exit_2_naming_it_at_once(
     tmp_path: Path, broker: Mosquitto, kind: str
 ) -> None:
@@ -325,8 +327,10 @@ def test_a_state_file_that_is_no_regular_file_is_exit_2_naming_it_at_once(
     state_file.parent.mkdir()
     if kind == "FIFO":
         os.mkfifo(state_file)
-    else:
+    elif kind == "directory":
         state_file.mkdir()
+    else:  # an attack pass: read as no file (a kept lock lost), and replaced by a new one
+        os.symlink(tmp_path / "not-mounted" / "state.json", state_file)
     config = start_up_config(tmp_path, broker.port, state_file=state_file)
     line = the_one_line(run_cli("run", "-c", str(config), timeout_s=10))
     assert line == (
@@ -334,7 +338,8 @@ def test_a_state_file_that_is_no_regular_file_is_exit_2_naming_it_at_once(
         f"it is a {kind}, not a regular file"
     )
     assert list(state_file.parent.iterdir()) == [state_file]  # nothing written beside it
-    assert state_file.is_fifo() if kind == "FIFO" else state_file.is_dir()  # nor over it
+    kept = {"FIFO": state_file.is_fifo(), "directory": state_file.is_dir()}
+    assert kept.get(kind, state_file.is_symlink())  # nor over it
     assert retained_snapshot(broker.port, "#") == {}
 
 
