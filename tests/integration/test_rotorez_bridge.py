@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
+from typing import Any
 
 import pytest
 
+from bridge.emulators.pty import EmulatedPort
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until
 
@@ -159,6 +162,16 @@ def test_lock_refuses_motion_and_survives_a_restart(rig: Rig) -> None:
     emu.wait_for(lambda s: near(s.az_deg, 120) and not s.is_moving, 15)
 
 
+def turning_to_300(rig: Rig) -> tuple[EmulatedPort[Any], Path]:
+    """A Rotor-EZ on its way from 10 to 300 at 6 degrees a second, and the state file."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 20)
+    return emu, rig.tmp / "state.json"
+
+
 def test_a_stop_sent_while_the_adapter_is_out_survives_a_restart_before_it_comes_back(
     rig: Rig,
 ) -> None:
@@ -166,12 +179,7 @@ def test_a_stop_sent_while_the_adapter_is_out_survives_a_restart_before_it_comes
     bridge restarted (an upgrade, a reboot) before the adapter came back: the stop it owed was
     lost with the process, and the rotor turned on to its old target. The state file keeps it
     now (runtime/kept.py rule 8): the next start writes it first, then forgets it."""
-    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
-    state = rig.tmp / "state.json"
-    rig.start()
-    rig.ready("tower")
-    rig.probe.publish("rotor/target", "300")
-    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 20)
+    emu, state = turning_to_300(rig)
     t = time.monotonic()
     emu.unplug()
     rig.probe.wait_value("rotor/availability", "offline", after=t)
@@ -195,12 +203,7 @@ def test_a_turn_on_to_the_target_it_was_stopped_short_of_is_stopped_after_a_rest
     flipped bit makes the poll AI1; the command to turn there, AM1;. Stopped short of 300,
     the bridge restarted and forgot it: such a turn went on to 300, unsaid. The state file
     keeps it now (runtime/kept.py rule 9), and the turn is stopped."""
-    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
-    state = rig.tmp / "state.json"
-    rig.start()
-    rig.ready("tower")
-    rig.probe.publish("rotor/target", "300")
-    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 20)
+    emu, state = turning_to_300(rig)
     rig.probe.publish("rotor/stop", "STOP")
     wait_until(lambda: b'"short_of": 300' in state.read_bytes(), 20, "kept")
     rig.stop()
