@@ -81,14 +81,14 @@ Rules:
    at rest, and a nudge from it turned the rotor 190 degrees). A doubted reading is no reading
    for anything: not the motion's, not a target's fresh one (targets.py rule 7: a target waits
    for the answer), not one a stop cuts short (rule 5); but the controller answered (no
-   silence). Readings at rest that go on disagreeing (a line
-   gone bad, a failing position sensor) are asked for at the usual polls, not at once, and told
-   from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings agreed on. A
-   reading asked again at once agrees with the doubted one within ``doubt_deg`` plus twice what
-   the rotor turns at its speed between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while
-   taken for still is believed on its second reading, also when a stop cut the first short and
-   the second is asked once the stop is out; readings at the idle rate agree within
-   ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A composite box's
+   silence). Readings at rest that go on disagreeing (a line gone bad, a failing position
+   sensor) are asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in
+   a row on; the bearing shown is the last two readings agreed on. A reading asked again at
+   once agrees with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its
+   speed between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
+   believed on its second reading, also when a stop cut the first short and the second is
+   asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
+   (polls half a minute apart would let any two agree). (A composite box's
    axis that is never turned is kept so too: axes.py rule 5.)
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
    first readings back (a port opened, a controller answering again; still or braking, before
