@@ -469,7 +469,7 @@ class App:
             groups=groups,
             sync_topic=self.topics.bridge_fence_express,
             on_hold=lambda rid, n: self._by_id[rid].express_hold(n),
-            on_release=lambda rid, n: self._by_id[rid].express_release(n),
+            on_release=lambda rid, n, lost: self._by_id[rid].express_release(n, lost),
             on_wrote=self._express_wrote,
             on_locked=self._express_locked,
         )

@@ -436,9 +436,10 @@ class Rotator:
         express.py rule 8): put before the stop it comes with."""
         self._mailbox.put_express_hold(n)
 
-    def express_release(self, n: int) -> None:
-        """The stop express answered up to sync word ``n``: its holds up to it end."""
-        self._mailbox.put_express_release(n)
+    def express_release(self, n: int, lost: bool = False) -> None:
+        """The stop express answered up to sync word ``n``: its holds up to it end (``lost``:
+        by its connection's end or its own, what waited is dropped: session/stops.py rule 5)."""
+        self._mailbox.put_express_release(n, lost)
 
     def _track(self, command: TrackBody, what: str, epoch: int) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or its TLE);

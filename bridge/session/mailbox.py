@@ -27,7 +27,8 @@ Rules:
    would have caught up was lost) ends every hold and drops a target or track put before it;
    a target or hold put after it is newer and stays (the session applies it first).
    The stop express's hold (interfaces/mqtt/express.py rule 8) has numbers of its own:
-   ``put_express_hold`` and ``put_express_release``; nothing clears it but its own release.
+   ``put_express_hold`` and ``put_express_release``; nothing clears it but its own release,
+   which drops what waited if it came by the express's loss (stops.py rule 5).
 7. A lock ON leaves its stop in the batch (``lock_on``) even when a lock OFF follows it in the
    same batch: the lock ON always stops the rotor.
 8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
@@ -119,6 +120,7 @@ class Batch:
     release_clear: bool = False
     express_hold: int | None = None  # rule 6: the newest sync word the express's hold waits for
     express_release: int | None = None  # ... and the one its answer reached
+    express_lost: bool = False  # ... given by its connection's end, not its word (stops.py rule 5)
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
@@ -311,11 +313,13 @@ class Mailbox:
             held = self._batch.express_hold
             self._batch.express_hold = n if held is None else max(held, n)
 
-    def put_express_release(self, n: int) -> None:
-        """Rule 6: the stop express's holds up to ``n`` end."""
+    def put_express_release(self, n: int, lost: bool = False) -> None:
+        """Rule 6: the stop express's holds up to ``n`` end (``lost``: its connection ended,
+        or it did, before its word came back)."""
         with self._lock:
             done = self._batch.express_release
             self._batch.express_release = n if done is None else max(done, n)
+            self._batch.express_lost = self._batch.express_lost or lost
         self._wake_once()
 
     def _hold(self, marker: int | None) -> None:

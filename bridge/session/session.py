@@ -146,7 +146,7 @@ from bridge.session.link import Link
 from bridge.session.mailbox import Batch, Halt, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
-from bridge.session.stops import CLEARED, Fence
+from bridge.session.stops import Fence
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.wind import WindPark
 from bridge.sky.worker import Answer
@@ -484,7 +484,7 @@ class RotatorSession:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited (True)."""
         if not self.fence.apply(batch):
             return False
-        self._drop_pending(CLEARED)
+        self._drop_pending(self.fence.cleared_why)
         self._end("a stop or lock came first; send the {} command again", now)
         return True
 

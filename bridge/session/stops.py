@@ -83,7 +83,11 @@ Rules:
    that clears (the connection that would have caught up was lost) ends every hold, and what
    waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6). The stop
    express's hold (interfaces/mqtt/express.py rule 8) is a second one, with numbers of its own: a
-   target waits while either is held; its release never clears (what waited is newer than the stop).
+   target waits while either is held; its release clears only when the express's connection
+   (or the express) ended before its word came back, which no clock bounds: what waited is
+   dropped then, said (EXPRESS_LOST), not sent late (an attack pass: a firewall that dropped
+   the express's flow alone held a target sent after a STOP until the keepalive noticed, and
+   the rotor turned 45 s after, unasked).
 6. A controller that reports no position (a DCU-1) gets every stop twice, STOP_REPEAT_GAP_S
    apart: no reading can show one lost, and stopping is always safe (an attack pass: one bit
    flipped in a lock ON's ``AS1;`` and the rotor turned on 27 s). A target written in between
@@ -108,6 +112,10 @@ STOP_TRIES_BEFORE_ERROR = 3
 STOP_MERGE_MIN_S = 1.0  # rule 1: stops merge within the brake window, or at least this long
 STOP_REPEAT_GAP_S = 0.1  # rule 1: a repeat this soon to a rotor maybe still turning is owed
 STOP_UNSURE_S = 1.0  # rule 3: a stop written this recently when the port failed is sent again
+EXPRESS_LOST = (
+    "the stop express lost its connection while the target waited for it to confirm the stop "
+    "before; send it again"
+)
 CLEARED = (
     "a stop or lock from the stop lane came before it, and the MQTT connection that would have "
     "told which was published first dropped; send it again"
@@ -354,6 +362,7 @@ class Fence:
     def __init__(self) -> None:
         self._hold: int | None = None
         self._express: int | None = None  # rule 5: the stop express's sync word waited for
+        self.cleared_why = CLEARED  # rule 5: why what waited was dropped at the last clearing
 
     @property
     def held(self) -> bool:
@@ -363,6 +372,7 @@ class Fence:
         """Take a batch's hold and release in; whether a held fence was cleared (what waited
         is then dropped: CLEARED says why)."""
         cleared = batch.release_clear and self._hold is not None  # (before the rest)
+        self.cleared_why = CLEARED
         if cleared:
             self._hold = None
         if batch.hold is not None:
@@ -377,4 +387,6 @@ class Fence:
         if done is not None and self._express is not None and self._express <= done:
             self._express = None
             log.debug("the stop express's hold ended")
+            if batch.express_lost and not cleared:  # rule 5: ended by its loss
+                cleared, self.cleared_why = True, EXPRESS_LOST
         return cleared

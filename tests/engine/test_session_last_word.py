@@ -14,6 +14,7 @@ import pytest
 
 from bridge.core.model import MotionState, Source, Stop, Target, TargetInfo
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.session.stops import EXPRESS_LOST
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -70,6 +71,26 @@ def test_a_target_after_a_stop_waits_for_the_stop_expresss_answer(rig: Rig) -> N
     v._take()
     v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 120) < 4, 120, "at 120")
     assert bearings(v, since=t) == [b"AP1120\r"]
+
+
+def test_a_target_waiting_for_an_express_that_lost_its_connection_is_dropped(rig: Rig) -> None:
+    """stops.py rule 5, an attack pass: a firewall dropped the express's flow alone; its hold
+    ended only when its keepalive noticed, and the target sent after the STOP then went out
+    45 s late, unasked. Ended by the express's loss, what waited is dropped and said."""
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put_express_hold(1)
+    v.mailbox.put(Stop(Source.MQTT))
+    v.mailbox.put(Target(120.0))  # published just after the stop
+    v._take()
+    v.run_for(45)
+    v.mailbox.put_express_release(1, lost=True)
+    v._take()
+    v.run_for(20)
+    assert bearings(v, since=t) == [] and not v.truth().is_moving
+    assert v.status.last_error == f"target dropped: {EXPRESS_LOST}"
+    v.target(150)  # sent again: it goes
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 150) < 4, 120, "at 150")
 
 
 def test_a_hold_ended_by_a_lost_connection_drops_what_waited(rig: Rig) -> None:

@@ -17,8 +17,10 @@ import ctypes
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +33,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import Source, Target
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.faults.conftest import mosquitto_password_file
+from tests.support import free_port
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Line, Rig
@@ -249,6 +252,67 @@ def test_an_express_that_dies_is_said_started_again_and_writes_again(rig: Rig) -
     rig.probe.publish("rotor/stop", "")
     wait_until(lambda: app.express.wrote, 10, "the new express wrote the stop")
     emu.wait_for(lambda s: not s.is_moving, 10)
+
+
+class DeadFlow:
+    """A TCP relay to the broker that, once told, swallows the traffic of the connection whose
+    CONNECT carried ``marker`` both ways and keeps its sockets open (a firewall or NAT that
+    dropped one flow): no end of file, only the keepalive notices."""
+
+    def __init__(self, upstream: int) -> None:
+        self.upstream, self.port = upstream, free_port()
+        self.dead: set[bytes] = set()
+        self.server = socket.create_server(("127.0.0.1", self.port))
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self.server.accept()
+            except OSError:
+                return
+            broker = socket.create_connection(("127.0.0.1", self.upstream))
+            first = client.recv(65536)
+            broker.sendall(first)
+            for a, b in ((client, broker), (broker, client)):
+                threading.Thread(target=self._pump, args=(a, b, first), daemon=True).start()
+
+    def _pump(self, a: socket.socket, b: socket.socket, first: bytes) -> None:
+        with contextlib.suppress(OSError):
+            while data := a.recv(65536):
+                if not any(marker in first for marker in self.dead):
+                    b.sendall(data)
+        for end in (a, b):
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+
+def test_a_target_held_for_an_express_whose_flow_died_is_dropped_not_sent_late(
+    rig: Rig,
+) -> None:
+    """An attack pass: a firewall dropped the express's flow alone (the main connection and
+    the lane lived). A STOP, then a target 0.3 s later: the target waited for the express's
+    answer until its keepalive noticed, then went out, 45 s after it was sent. A hold ended by
+    the express's loss drops what waited (session/stops.py rule 5), and says so."""
+    rig.express = True
+    relay = DeadFlow(rig.broker.port)
+    rig.mqtt_extra = {"port": relay.port, "keepalive_s": 5}
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 10.0})
+    app = rig.start()
+    rig.ready("tower")
+    wait_until(app.express.up.is_set, 10, "the express up")
+    rig.probe.publish("rotor/target", "100")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    relay.dead.add(app.express.client_id.encode())
+    t = time.monotonic()
+    rig.probe.publish("rotor/stop", "STOP")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    rig.probe.publish("rotor/target", "200")
+    error = rig.probe.wait_for(
+        "rotor/error", lambda m: b"stop express lost" in m.payload, timeout_s=60, after=t
+    )
+    assert json.loads(error.payload)["command"] == "target az 200"
+    assert not [f for f in emu.frames() if f.time_s >= t and f.data.startswith(b"AP1")]
 
 
 def test_the_express_ends_with_the_bridge(rig: Rig) -> None:

@@ -808,12 +808,15 @@ ANSWERS_LATE = (  # answers each sync word when the next is asked for (a slow ex
 class Holds:
     def __init__(self) -> None:
         self.log: list[tuple[str, str, int]] = []
+        self.lost: list[tuple[str, int]] = []
 
     def hold(self, rid: str, n: int) -> None:
         self.log.append(("hold", rid, n))
 
-    def release(self, rid: str, n: int) -> None:
+    def release(self, rid: str, n: int, lost: bool = False) -> None:
         self.log.append(("release", rid, n))
+        if lost:  # (by the express's loss: session/stops.py rule 5)
+            self.lost.append((rid, n))
 
 
 def _read_by_the_child(e: Express) -> None:
@@ -848,6 +851,38 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
         assert child is not None
         child.kill()  # nothing of it can write any more: the last hold ends
         wait_until(lambda: ("release", "a", 3) in holds.log, 10, "a's hold ended by its end")
+        assert holds.lost == [("a", 3)]  # (by its end, not its word: what waited is dropped)
+    finally:
+        e.stop()
+
+
+ANSWERS_LOST = (  # its connection ends with a request unanswered (session/stops.py rule 5)
+    "import json, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    's.send(b\'{"op": "up"}\')\n'
+    "while True:\n"
+    "    word = s.recv(65536)\n"
+    "    if not word:\n"
+    "        break\n"
+    "    word = json.loads(word)\n"
+    "    if word.get('op') == 'sync':\n"
+    "        s.send(json.dumps({'op': 'synced', 'n': word['n'], 'lost': True}).encode())\n"
+)
+
+
+def test_a_hold_ended_by_the_expresss_lost_connection_is_told_as_lost() -> None:
+    """An attack pass: a firewall dropped the express's flow alone; the answer its
+    connection's end gave looked like its word, and the target held behind the STOP went out
+    45 s late. The bridge is told which it was."""
+    problems, holds = Problems(), Holds()
+    e = express([sys.executable, "-c", ANSWERS_LOST], problems, holds)
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        e.hold("a")
+        wait_until(lambda: ("release", "a", 1) in holds.log, 10, "a's hold ended")
+        assert holds.lost == [("a", 1)]
     finally:
         e.stop()
 

@@ -316,7 +316,7 @@ class Express:
         groups: dict[str, tuple[str, ...]] | None = None,
         sync_topic: str | None = None,
         on_hold: Callable[[str, int], None] | None = None,
-        on_release: Callable[[str, int], None] | None = None,
+        on_release: Callable[[str, int, bool], None] | None = None,
         on_wrote: Callable[[str, float], None] | None = None,
         on_locked: Callable[[str, float, str | None], None] | None = None,
     ) -> None:
@@ -433,8 +433,9 @@ class Express:
         except OSError:
             pass  # gone: its end answers every hold
 
-    def _answered(self, n: int) -> None:
-        """Rule 8: the holds up to sync word ``n`` end (and those it answers, _Outbox)."""
+    def _answered(self, n: int, lost: bool = False) -> None:
+        """Rule 8: the holds up to sync word ``n`` end (and those it answers, _Outbox); ``lost``:
+        by the express's connection's end, not its word."""
         with self._lock:
             sock = self._sock
         if sock is not None:  # (its lock apart: a send under it must not hold up a hold)
@@ -445,14 +446,14 @@ class Express:
                 del self._holds[rid]
                 self._held_since.pop(rid, None)
                 if self._on_release is not None:
-                    self._on_release(rid, n)
+                    self._on_release(rid, n, lost)
 
     def _gone(self) -> None:
         """Under the lock: the child is gone; every hold ends (nothing of it writes)."""
         self._sock = None
         for rid in list(self._holds):
             if self._on_release is not None:
-                self._on_release(rid, self._sync)
+                self._on_release(rid, self._sync, True)
         self._holds.clear()
         self._held_since.clear()
 
@@ -659,7 +660,7 @@ class Express:
                 self._started_at = time.monotonic()
                 self.up.clear()
             elif op == "synced":
-                self._answered(word["n"])
+                self._answered(word["n"], bool(word.get("lost")))
             elif op == "held":
                 self._held(word["rotator"], True)
             elif op == "dropped":
@@ -978,9 +979,9 @@ class _Child:
             self._marks[word] = mark
         self.link.publish(self._sync_topic, f"{mark} {word}")
 
-    def _answer(self, answer: int | None) -> None:
+    def _answer(self, answer: int | None, lost: bool = False) -> None:
         if answer is not None:
-            self.say(op="synced", n=answer)
+            self.say(op="synced", n=answer, **({"lost": True} if lost else {}))
 
     def asked(self, n: int, again: bool) -> None:
         """A request from the bridge (its socket's thread)."""
@@ -998,7 +999,7 @@ class _Child:
             if up:
                 self.sync.accepted()
                 return
-            self._answer(self.sync.ended())
+            self._answer(self.sync.ended(), lost=True)  # (rule 8: what waited is dropped)
             if self._upped:
                 self._upped = False
                 self.say(op="down")
