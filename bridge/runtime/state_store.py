@@ -87,6 +87,8 @@ def _kind_at(path: Path) -> str | None:
         if os.path.islink(path):
             return "link to a file that is not there (a volume not mounted yet?)"
         return None
+    except OSError as exc:  # (a link that loops: ELOOP)
+        return f"link that cannot be followed ({exc.strerror})"
 
 
 def _read(path: Path) -> str:
@@ -129,6 +131,8 @@ def held(path: Path | None) -> Iterator[None]:
     if path is None:
         yield
         return
+    if path.exists():  # rule 4: beside the file a link names (a review: two installations
+        path = Path(os.path.realpath(path))  # naming one file two ways both started)
     lock_path = path.with_name(path.name + ".lock")
     lock_path.parent.mkdir(parents=True, exist_ok=True)
     flags = os.O_CLOEXEC | os.O_NONBLOCK  # (a FIFO there must not hang the start)

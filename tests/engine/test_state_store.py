@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge.runtime.state_store import StateStore
+from bridge.runtime.state_store import InUse, StateStore, held
 
 
 def test_lock_and_options_survive_a_restart(tmp_path: Path) -> None:
@@ -65,6 +65,28 @@ def test_a_state_file_behind_a_link_is_written_through_it(tmp_path: Path) -> Non
     assert s.set_locked("yagi", True) is True
     assert link.is_symlink()
     assert StateStore(real).locked("yagi") is True and StateStore(real).locked("tower") is True
+
+
+def test_the_installations_lock_follows_the_file_a_link_names(tmp_path: Path) -> None:
+    """Rule 7, a review: held by the link's name, the lock let a second installation naming
+    the same file by its real path start too."""
+    real = tmp_path / "data" / "state.json"
+    real.parent.mkdir()
+    StateStore(real).set_locked("tower", False)
+    link = tmp_path / "state.json"
+    link.symlink_to(real)
+    with held(link), pytest.raises(InUse):
+        with held(real):
+            pass
+
+
+def test_a_state_file_link_that_loops_is_refused_by_its_kind(tmp_path: Path) -> None:
+    loop = tmp_path / "state.json"
+    loop.symlink_to(loop)
+    s = StateStore(loop, deferred=True)
+    assert s.corrupt and s.locked("tower") is True
+    with pytest.raises(OSError, match="link that cannot be followed"):
+        s.check_writable()
 
 
 def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) -> None:
