@@ -193,6 +193,7 @@ GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online t
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
+_RESTS = (mo.IDLE, mo.BRAKING, mo.STALLED)  # rule 10: where ``_short_of`` judges
 #: stops.py rule 4: a bounded stop series
 _PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK, mo.Event.PAST_LIMIT)
 
@@ -499,9 +500,9 @@ class Controller:
             return None
         if self._short_latched == sent:  # (until a turn, another target or the guard's end: a
             return sent  # review, a rest at the tolerance's edge flipped it at every poll)
-        # no reading yet (a start, its controller not answering): as kept (an attack pass:
-        # forgotten by such a start, a second restart was unguarded)
-        if m.position_deg is None or self._short_of_target(m.position_deg, self.cfg.motion):
+        if m.state not in _RESTS or m.position_deg is None:  # (readings lost mid-turn are no
+            return None  # rest: a review, a restart mid-turn then stopped the user's turn)
+        if self._short_of_target(m.position_deg, self.cfg.motion):
             self._short_latched = sent
             return sent
         return None
@@ -514,8 +515,9 @@ class Controller:
     def keep_short_of(self, raw_az: float) -> None:
         """Rule 10, at the start: the target the rotor rested short of when the bridge last ran
         (runtime/kept.py rule 9): its guard as if written in this session."""
-        if self.cfg.unasked_moves == "after-stop":
-            self._sent_az, self._guarded = raw_az, True
+        if self.cfg.unasked_moves == "after-stop":  # (latched: before any reading, as kept;
+            # an attack pass, a start whose controller did not answer yet forgot it)
+            self._sent_az, self._guarded, self._short_latched = raw_az, True, raw_az
 
     def take_notes(self) -> list[Note]:
         """What happened since the last call that the session must act on, in order."""

@@ -967,6 +967,22 @@ def test_what_the_rotor_is_kept_short_of_does_not_flip_with_the_jitter_at_its_ed
     assert sum(1 for a, b in zip(values, values[1:], strict=False) if a != b) <= 1
 
 
+def test_readings_lost_mid_turn_are_no_rest_short_of_the_target(rig: Rig) -> None:
+    """A review: the port lost mid-turn, the motion was taken for a rest short of 300, kept,
+    and the next start stopped the user's own turn as one nobody asked for."""
+    v = ready(rig, emulator={"start_az_deg": 10, "speed_deg_s": 6.0})
+    v.target(300)
+    v.run_for(10)
+    v.link_down(None)
+    v.run_for(1)
+    assert v.status.short_of_deg is None
+    v.session = RotatorSession(v.cfg, short_of=v.status.short_of_deg)  # the bridge restarted
+    v._do(v.session.start(v.now))
+    v.link_up()  # the rotor still on its way to 300, as the user asked
+    v.run_until(lambda h: h.truth().az_deg > 295 and not h.truth().is_moving, 90, "at 300")
+    assert unasked(v) == []
+
+
 def test_what_the_rotor_is_kept_short_of_ends_with_its_next_turn_or_arrival(rig: Rig) -> None:
     v = stopped_short_of_300(rig, "stop")
     assert v.status.short_of_deg == 300.0

@@ -226,6 +226,20 @@ def test_a_turn_on_to_the_target_it_was_stopped_short_of_is_stopped_after_a_rest
     assert emu.state().az_deg < rest + 20  # not on to 300
 
 
+def test_a_restart_of_the_bridge_mid_turn_lets_the_users_turn_go_on(rig: Rig) -> None:
+    """A review of the mend above: readings lost mid-turn (the bridge stopping) were taken for
+    a rest short of 300, the state file kept it, and the next start stopped the user's own
+    turn, blaming a garbled poll."""
+    emu, state = turning_to_300(rig)
+    rig.stop()  # systemctl restart, mid-turn
+    assert b"short_of" not in state.read_bytes()
+    t = time.monotonic()
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", after=t)
+    emu.wait_for(lambda s: s.az_deg > 290 and not s.is_moving, 60)  # on to 300, as asked
+    assert rig.probe.on("rotor/error") == []
+
+
 def test_lock_on_stops_a_turning_rotor(rig: Rig) -> None:
     emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
     rig.start()
