@@ -420,6 +420,24 @@ def test_a_client_that_takes_the_expresss_client_id_is_said(rig: Rig) -> None:
         thief.close()
 
 
+def test_a_client_that_takes_the_stop_lanes_client_id_is_said(rig: Rig) -> None:
+    """An attack pass: another client connecting with the lane's client id kept it down, and
+    nothing said so anywhere (no error, B/bridge/info's problems empty): stops quietly lost
+    their own connection."""
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    wait_until(app.lane.connected.is_set, 10, "the lane up")
+    thief = Probe(rig.broker_port, "", client_id=app.lane.client_id)
+    try:
+        mark = app.lane.client_id.encode()
+        info = rig.probe.wait_for("rotor/bridge/info", lambda m: mark in m.payload, 30)
+        (said,) = [p for p in json.loads(info.payload)["problems"] if "client id" in p]
+        assert said.startswith("stop lane: ") and app.lane.client_id in said
+    finally:
+        thief.close()
+
+
 @contextlib.contextmanager
 def express_alone(app: App, broker: Mosquitto) -> Iterator[Probe]:
     """The broker restarted, the express back and the bridge's two connections not (their

@@ -24,8 +24,10 @@ Rules:
    shortened with a hash to 23 characters if it would be longer).
 3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
    limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
-   (the bridge's problems, B/bridge/info): stops then take the main connection only. Its own
-   disconnects are logged at debug level (the main connection says the same). Its takeover
+   (the bridge's problems, B/bridge/info): stops then take the main connection only. So is a
+   fight over its client id (another client connecting with it: an attack pass found it
+   said nowhere, while stops quietly lost their connection). Its other disconnects are logged
+   at debug level (the main connection says the same). Its takeover
    back-off is client.py rule 7's (connection.py), counting only connections that were
    accepted.
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
@@ -54,7 +56,13 @@ import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.interfaces.fdwait import readable
-from bridge.interfaces.mqtt.connection import Connection, Ending, MessageHandler, Options
+from bridge.interfaces.mqtt.connection import (
+    Connection,
+    Ending,
+    MessageHandler,
+    Options,
+    takeover_message,
+)
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -165,6 +173,8 @@ class StopLane(Connection):
 
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
+        if fight:  # rule 3: a fight over its client id is its own (an attack pass: unsaid)
+            self._report(f"stop lane: {takeover_message(self.client_id, ending)}")
 
     def _report(self, problem: str, topic: str = "") -> None:
         """Rule 3: once per problem, an error, handed on (never on paho's thread)."""
