@@ -87,8 +87,10 @@ def _kind_at(path: Path) -> str | None:
         if os.path.islink(path):
             return "link to a file that is not there (a volume not mounted yet?)"
         return None
-    except OSError as exc:  # (a link that loops: ELOOP)
-        return f"link that cannot be followed ({exc.strerror})"
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:  # (a link that loops)
+            return f"link that cannot be followed ({exc.strerror})"
+        raise
 
 
 def _read(path: Path) -> str:
