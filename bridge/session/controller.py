@@ -500,8 +500,10 @@ class Controller:
             return None
         if self._short_latched == sent:  # (until a turn, another target or the guard's end: a
             return sent  # review, a rest at the tolerance's edge flipped it at every poll)
-        if m.state not in _RESTS or m.position_deg is None:  # (readings lost mid-turn are no
-            return None  # rest: a review, a restart mid-turn then stopped the user's turn)
+        # (readings lost mid-turn are no rest, nor the first one back, a guess: no move seen
+        # by these readings; reviews, a restart then stopped the user's own turn)
+        if m.state not in _RESTS or m.position_deg is None or m.last_move_t is None:
+            return None
         if self._short_of_target(m.position_deg, self.cfg.motion):
             self._short_latched = sent
             return sent

@@ -983,6 +983,22 @@ def test_readings_lost_mid_turn_are_no_rest_short_of_the_target(rig: Rig) -> Non
     assert unasked(v) == []
 
 
+def test_the_first_reading_after_a_replug_mid_turn_is_no_rest_short_of_the_target(
+    rig: Rig,
+) -> None:
+    """A review: the first reading back (braking or idle: a guess) was taken for a rest
+    short of 300 for a second, and the state file kept it."""
+    v = ready(rig, emulator={"start_az_deg": 10, "speed_deg_s": 6.0})
+    v.target(300)
+    v.run_for(10)
+    v.link_down(None)
+    v.run_for(1)
+    n = len(v.statuses)
+    v.link_up()  # the rotor still on its way to 300
+    v.run_until(lambda h: h.truth().az_deg > 295 and not h.truth().is_moving, 90, "at 300")
+    assert {s.short_of_deg for _t, s in v.statuses[n:]} == {None}
+
+
 def test_what_the_rotor_is_kept_short_of_ends_with_its_next_turn_or_arrival(rig: Rig) -> None:
     v = stopped_short_of_300(rig, "stop")
     assert v.status.short_of_deg == 300.0
