@@ -121,6 +121,7 @@ class Batch:
     express_hold: int | None = None  # rule 6: the newest sync word the express's hold waits for
     express_release: int | None = None  # ... and the one its answer reached
     express_lost: bool = False  # ... given by its connection's end, not its word (stops.py rule 5)
+    lost_target: Target | None = None  # ... and the target that waited for it in this batch
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
@@ -317,9 +318,18 @@ class Mailbox:
         """Rule 6: the stop express's holds up to ``n`` end (``lost``: its connection ended,
         or it did, before its word came back)."""
         with self._lock:
-            done = self._batch.express_release
-            self._batch.express_release = n if done is None else max(done, n)
-            self._batch.express_lost = self._batch.express_lost or lost
+            batch = self._batch
+            done = batch.express_release
+            batch.express_release = n if done is None else max(done, n)
+            if lost:  # what waited in this batch is dropped too, as a clearing release drops it
+                batch.express_lost = True  # (a review: only the session's waiting one was)
+                batch.lost_target = batch.target or batch.lost_target
+                batch.target = None
+                batch.track = None
+                batch.follow = None
+                if batch.feature_commands:  # rule 12
+                    batch.drop_moving()
+                    batch.mark("clear")
         self._wake_once()
 
     def _hold(self, marker: int | None) -> None:

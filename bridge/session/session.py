@@ -146,7 +146,7 @@ from bridge.session.link import Link
 from bridge.session.mailbox import Batch, Halt, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
-from bridge.session.stops import Fence
+from bridge.session.stops import EXPRESS_LOST, Fence
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.wind import WindPark
 from bridge.sky.worker import Answer
@@ -319,6 +319,9 @@ class RotatorSession:
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
         cleared = self._fence(batch, now)
+        if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
+            what = describe_command(batch.lost_target)
+            self._error(ErrorKind.REFUSED, f"target dropped: {EXPRESS_LOST}", command=what)
         if batch.offline is not None:  # (runtime/composite.py rule 8)
             self._drop_pending(batch.offline)
         if batch.health_reset:

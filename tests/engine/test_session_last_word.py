@@ -93,6 +93,23 @@ def test_a_target_waiting_for_an_express_that_lost_its_connection_is_dropped(rig
     v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 150) < 4, 120, "at 150")
 
 
+def test_a_target_taken_with_the_express_losing_its_connection_is_dropped_too(rig: Rig) -> None:
+    """A review: a target that waited in the mailbox's batch (taken with the lost release,
+    not before it) went out; the one the session held was dropped."""
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put_express_hold(1)
+    v.mailbox.put(Stop(Source.MQTT))
+    v._take()
+    v.run_for(45)
+    v.mailbox.put(Target(120.0))  # published while the hold waits
+    v.mailbox.put_express_release(1, lost=True)  # (taken in one batch)
+    v._take()
+    v.run_for(20)
+    assert bearings(v, since=t) == [] and not v.truth().is_moving
+    assert v.status.last_error == f"target dropped: {EXPRESS_LOST}"
+
+
 def test_a_hold_ended_by_a_lost_connection_drops_what_waited(rig: Rig) -> None:
     """Rule 13: the target's place in line is lost; it is reported, never carried out."""
     v = ready(rig)
