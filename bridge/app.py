@@ -413,6 +413,7 @@ class App:
             subscriptions=self.mqtt.stop_lane_subscriptions(),
             on_message=self.mqtt.on_lane_message,
             on_denied=self._denied,
+            on_info=self._info,
             on_new_connection=self.mqtt.lane_connected,
             on_subscribed=self.mqtt.lane_subscribed,
             no_replay=self.mqtt.no_replay_subscriptions(),

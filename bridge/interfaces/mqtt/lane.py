@@ -24,12 +24,13 @@ Rules:
    shortened with a hash to 23 characters if it would be longer).
 3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
    limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
-   (the bridge's problems, B/bridge/info): stops then take the main connection only. So is a
-   fight over its client id (another client connecting with it: an attack pass found it
-   said nowhere, while stops quietly lost their connection). Its other disconnects are logged
-   at debug level (the main connection says the same). Its takeover
-   back-off is client.py rule 7's (connection.py), counting only connections that were
-   accepted.
+   (the bridge's problems, B/bridge/info): stops then take the main connection only. A fight
+   over its client id (another client connecting with it: an attack pass found it said
+   nowhere, while stops quietly lost their connection) is logged and said on B/bridge/info
+   (``on_info``) once an episode, and unsaid once a connection lasts STABLE_S (a review). Its
+   other disconnects are logged at debug level (the main connection says the same). Its
+   takeover back-off is client.py rule 7's (connection.py), counting only connections that
+   were accepted.
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
@@ -57,6 +58,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.mqtt.connection import (
+    STABLE_S,
     Connection,
     Ending,
     MessageHandler,
@@ -92,6 +94,7 @@ class StopLane(Connection):
         subscriptions: list[str],
         on_message: MessageHandler,
         on_denied: Callable[[str, str], None] | None = None,
+        on_info: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         self.client_id = lane_client_id(settings)
@@ -104,6 +107,9 @@ class StopLane(Connection):
         self._started = False
         self._start_lock = threading.Lock()
         self._reported: set[str] = set()
+        self._on_info = on_info
+        self._fight: str | None = None  # rule 3: a fight over the client id said, till calm
+        self._opens = 0  # connections opened so far (rule 3: the one a calm check is for)
         self.clock: Callable[[], float] = time.monotonic  # rule 4 (the tests give their own)
         self.sleep: Callable[[float], None] = time.sleep
         self._window_t = -1e18  # rule 4: the second the main connection's waits are counted in
@@ -157,6 +163,22 @@ class StopLane(Connection):
     def _opened(self, client: paho.Client) -> None:
         self.connected.set()
         log.debug("stop lane connected as %s", self.client_id)
+        self._opens += 1
+        if self._fight is not None:  # rule 3: unsaid once a connection lasts STABLE_S
+            calm = threading.Timer(STABLE_S, self._calm, args=(self._opens,))
+            calm.daemon = True
+            calm.start()
+
+    def _calm(self, opened: int) -> None:
+        """Rule 3: the connection opened ``opened``-th is still up STABLE_S later: the fight
+        over the client id is over."""
+        fight = self._fight
+        if fight is None or opened != self._opens or not self.connected.is_set():
+            return
+        self._fight = None
+        log.info("stop lane: its client id %r is its own again", self.client_id)
+        if self._on_info is not None:
+            self._on_info(fight, False)
 
     def _denied(self, topic: str, reason: str) -> None:
         self._report(
@@ -173,8 +195,11 @@ class StopLane(Connection):
 
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
-        if fight:  # rule 3: a fight over its client id is its own (an attack pass: unsaid)
-            self._report(f"stop lane: {takeover_message(self.client_id, ending)}")
+        if fight and self._fight is None:  # rule 3: a fight over its client id is its own (an
+            self._fight = f"stop lane: {takeover_message(self.client_id, ending)}"  # attack
+            log.error("%s", self._fight)  # pass: nothing said it)
+            if self._on_info is not None:
+                self._on_info(self._fight, True)
 
     def _report(self, problem: str, topic: str = "") -> None:
         """Rule 3: once per problem, an error, handed on (never on paho's thread)."""
