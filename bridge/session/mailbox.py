@@ -162,6 +162,16 @@ class Batch:
         kept = [c for c in self.feature_commands if isinstance(c, PartsEnd) or not c.moves]
         self.feature_commands = kept
 
+    def clear_waiting(self) -> None:
+        """Rule 6: a clearing release (the lane's, or the stop express's lost answer) drops the
+        motion put before it: the target, a track or follow command, the features' moves."""
+        self.target = None
+        self.track = None
+        self.follow = None
+        if self.feature_commands:  # rule 12
+            self.drop_moving()
+            self.mark("clear")
+
     def mark(self, what: Halt) -> None:
         """Rule 12: a stop, lock or clearing came after the feature commands put so far."""
         if self.feature_commands and self.feature_commands[-1] != PartsEnd(what):
@@ -298,12 +308,7 @@ class Mailbox:
             batch.release = marker if batch.release is None else max(batch.release, marker)
             if clear:
                 batch.release_clear = True
-                batch.target = None
-                batch.track = None
-                batch.follow = None
-                if batch.feature_commands:  # rule 12
-                    batch.drop_moving()
-                    batch.mark("clear")
+                batch.clear_waiting()
                 batch.hold = None  # ended with the rest: a hold put after it is newer
         self._wake_once()
 
@@ -324,12 +329,7 @@ class Mailbox:
             if lost:  # what waited in this batch is dropped too, as a clearing release drops it
                 batch.express_lost = True  # (a review: only the session's waiting one was)
                 batch.lost_target = batch.target or batch.lost_target
-                batch.target = None
-                batch.track = None
-                batch.follow = None
-                if batch.feature_commands:  # rule 12
-                    batch.drop_moving()
-                    batch.mark("clear")
+                batch.clear_waiting()
         self._wake_once()
 
     def _hold(self, marker: int | None) -> None:
