@@ -278,6 +278,9 @@ class DeadFlow:
             for a, b in ((client, broker), (broker, client)):
                 threading.Thread(target=self._pump, args=(a, b, first), daemon=True).start()
 
+    def close(self) -> None:
+        self.server.close()  # (the relayed connections end with the bridge's)
+
     def _pump(self, a: socket.socket, b: socket.socket, first: bytes) -> None:
         with contextlib.suppress(OSError):
             while data := a.recv(65536):
@@ -297,6 +300,7 @@ def test_a_target_held_for_an_express_whose_flow_died_is_dropped_not_sent_late(
     the express's loss drops what waited (session/stops.py rule 5), and says so."""
     rig.express = True
     relay = DeadFlow(rig.broker.port)
+    rig.scope.callback(relay.close)
     rig.mqtt_extra = {"port": relay.port, "keepalive_s": 5}
     emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 10.0})
     app = rig.start()
