@@ -132,6 +132,9 @@ class LoginLimiter:
         bucket.take(now_s)
 
 
+Networks = tuple[ipaddress.IPv4Network | ipaddress.IPv6Network, ...]  # rule 6: the proxies
+
+
 def login_key(client: str, host: str | None, names: tuple[str, ...] = ()) -> str:
     """Rule 3: whose failed logins count together: the client's address (``client_key``) and
     whether the request was addressed to one of the console's own names (an IP literal,
@@ -141,14 +144,6 @@ def login_key(client: str, host: str | None, names: tuple[str, ...] = ()) -> str
     review: one per kind of name was three and more)."""
     ours = host_is_local_name(host, names)
     return f"{client_key(client)} {'ours' if ours else 'other'}"
-
-
-def _bare(host: str | None) -> str:
-    """The name of a Host header, lower case, without its port or brackets."""
-    name = (host or "").strip()
-    if name.startswith("["):
-        return name[1:].partition("]")[0].casefold()
-    return (name.rsplit(":", 1)[0] if name.count(":") == 1 else name).casefold()
 
 
 def forwarded_client(
@@ -170,9 +165,6 @@ def forwarded_client(
         if not _among(entry, proxies):
             return entry
     return peer
-
-
-Networks = tuple[ipaddress.IPv4Network | ipaddress.IPv6Network, ...]
 
 
 def _among(address: str, networks: Networks) -> bool:
