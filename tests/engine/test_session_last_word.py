@@ -56,15 +56,21 @@ def test_a_target_read_after_a_lane_stop_waits_and_the_main_copy_of_the_stop_dro
     assert t < v.now
 
 
+def held_behind_a_stop(v: VirtualRotator) -> None:
+    """A stop with the stop express's hold 1 (express.py rule 8), and a target to 120
+    published just after it, taken together."""
+    v.mailbox.put_express_hold(1)
+    v.mailbox.put(Stop(Source.MQTT))
+    v.mailbox.put(Target(120.0))
+    v._take()
+
+
 def test_a_target_after_a_stop_waits_for_the_stop_expresss_answer(rig: Rig) -> None:
     """interfaces/mqtt/express.py rule 8: the express may still write its frame for the stop; the
     move read after the stop goes out only when the express answered for it."""
     v = ready(rig)
     t = v.now
-    v.mailbox.put_express_hold(1)
-    v.mailbox.put(Stop(Source.MQTT))
-    v.mailbox.put(Target(120.0))  # published just after the stop
-    v._take()
+    held_behind_a_stop(v)
     v.run_for(8)
     assert bearings(v, since=t) == [] and not v.truth().is_moving
     v.mailbox.put_express_release(1)
@@ -79,10 +85,7 @@ def test_a_target_waiting_for_an_express_that_lost_its_connection_is_dropped(rig
     45 s late, unasked. Ended by the express's loss, what waited is dropped and said."""
     v = ready(rig)
     t = v.now
-    v.mailbox.put_express_hold(1)
-    v.mailbox.put(Stop(Source.MQTT))
-    v.mailbox.put(Target(120.0))  # published just after the stop
-    v._take()
+    held_behind_a_stop(v)
     v.run_for(45)
     v.mailbox.put_express_release(1, lost=True)
     v._take()

@@ -787,11 +787,13 @@ def test_a_port_closing_as_the_bridge_stops_is_not_called_a_hung_express(
 
 
 # -- the parent's side of rule 8, rule 6's restart, a fight said ---------------------------------
-ANSWERS_LATE = (  # answers each sync word when the next is asked for (a slow express)
+UP_THEN_READS = (  # a fake express: up at once, then a loop over the bridge's words
     "import json, socket, sys\n"
     "s = socket.socket(fileno=int(sys.argv[-1]))\n"
     "s.recv(65536)\n"
     's.send(b\'{"op": "up"}\')\n'
+)
+ANSWERS_LATE = UP_THEN_READS + (  # answers each sync word when the next is asked for (slow)
     "last = None\n"
     "while True:\n"
     "    word = s.recv(65536)\n"
@@ -856,11 +858,7 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
         e.stop()
 
 
-ANSWERS_LOST = (  # its connection ends with a request unanswered (session/stops.py rule 5)
-    "import json, socket, sys\n"
-    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
-    "s.recv(65536)\n"
-    's.send(b\'{"op": "up"}\')\n'
+ANSWERS_LOST = UP_THEN_READS + (  # its connection ends with every request unanswered
     "while True:\n"
     "    word = s.recv(65536)\n"
     "    if not word:\n"
