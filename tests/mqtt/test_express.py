@@ -787,13 +787,11 @@ def test_a_port_closing_as_the_bridge_stops_is_not_called_a_hung_express(
 
 
 # -- the parent's side of rule 8, rule 6's restart, a fight said ---------------------------------
-UP_THEN_READS = (  # a fake express: up at once, then a loop over the bridge's words
+ON_SYNC = (  # a fake express: up at once, then what follows for each sync word it is asked
     "import json, socket, sys\n"
     "s = socket.socket(fileno=int(sys.argv[-1]))\n"
     "s.recv(65536)\n"
     's.send(b\'{"op": "up"}\')\n'
-)
-ANSWERS_LATE = UP_THEN_READS + (  # answers each sync word when the next is asked for (slow)
     "last = None\n"
     "while True:\n"
     "    word = s.recv(65536)\n"
@@ -801,6 +799,8 @@ ANSWERS_LATE = UP_THEN_READS + (  # answers each sync word when the next is aske
     "        break\n"
     "    word = json.loads(word)\n"
     "    if word.get('op') == 'sync':\n"
+)
+ANSWERS_LATE = ON_SYNC + (  # answers each sync word when the next is asked for (slow)
     "        if last is not None:\n"
     "            s.send(json.dumps({'op': 'synced', 'n': last}).encode())\n"
     "        last = word['n']\n"
@@ -858,13 +858,7 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
         e.stop()
 
 
-ANSWERS_LOST = UP_THEN_READS + (  # its connection ends with every request unanswered
-    "while True:\n"
-    "    word = s.recv(65536)\n"
-    "    if not word:\n"
-    "        break\n"
-    "    word = json.loads(word)\n"
-    "    if word.get('op') == 'sync':\n"
+ANSWERS_LOST = ON_SYNC + (  # its connection ends with every request unanswered
     "        s.send(json.dumps({'op': 'synced', 'n': word['n'], 'lost': True}).encode())\n"
 )
 
