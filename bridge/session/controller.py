@@ -81,15 +81,19 @@ Rules:
    at rest, and a nudge from it turned the rotor 190 degrees). A doubted reading is no reading
    for anything: not the motion's, not a target's fresh one (targets.py rule 7: a target waits
    for the answer), not one a stop cuts short (rule 5); but the controller answered (no
-   silence). Readings at rest that go on disagreeing (a line gone bad, a failing position
-   sensor) are asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in
-   a row on; the bearing shown is the last two readings agreed on. A reading asked again at
-   once agrees with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its
-   speed between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
+   silence), and the first back after a loss makes it answering again as a reading would (its
+   options, its connect guard, a stop owed written at once), shown at the bearing it stood at
+   (a review: a line that went on disagreeing after a replug kept the rotator offline, where
+   the same inside a session leaves it online).
+   Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
+   asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on;
+   the bearing shown is the last two readings agreed on. A reading asked again at once agrees
+   with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its speed
+   between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
    asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
-   (polls half a minute apart would let any two agree). (A composite box's
-   axis that is never turned is kept so too: axes.py rule 5.)
+   (polls half a minute apart would let any two agree). (A composite box's axis that is never
+   turned is kept so too: axes.py rule 5.)
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
    first readings back (a port opened, a controller answering again; still or braking, before
    the motion settled) where the rotor was still with no target out when the readings were
@@ -740,6 +744,13 @@ class Controller:
             link.heard(now)  # (the controller answers: its value is what is doubted)
             if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
                 self._ask_again(link, now, once=False)
+            if not self.answering:  # rule 9: the first back, doubted, is an answer all the same
+                self._answers_again()
+                if self.stops.owed:  # stops.py rule 3: the stop it went silent with, at once
+                    log.info(
+                        "%s: sending again the stop it went silent before confirming", self.name
+                    )
+                    self._send_owed(link, now)
             return False
         self._reading(link, reply, now)
         return True
@@ -852,14 +863,8 @@ class Controller:
             self.controller_time = reply.controller_time
         owed = first = False
         if not self.answering:
-            self.answering, owed, first = True, self.stops.owed, True
-            still = self._still_at_close  # rule 10: a turn from these first readings judged?
-            guard = still if still is not None else self._watching()  # (a kept short_of)
-            self._connect_guard = guard and self.motion.stop_sent_t is None
-            self._guard_at_start = still is None
-            self.options.all_due()
-            self._retune()
-            log.info("%s: controller answering", self.name)
+            owed, first = self.stops.owed, True
+            self._answers_again()
         cfg, was = self.cfg, self.motion
         before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
@@ -893,6 +898,17 @@ class Controller:
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, deadband_deg, False, coasting)
+
+    def _answers_again(self) -> None:
+        """The controller answers (again): its first reading taken, or doubted (rule 9)."""
+        self.answering = True
+        still = self._still_at_close  # rule 10: a turn from these first readings judged?
+        guard = still if still is not None else self._watching()  # (a kept short_of)
+        self._connect_guard = guard and self.motion.stop_sent_t is None
+        self._guard_at_start = still is None
+        self.options.all_due()
+        self._retune()
+        log.info("%s: controller answering", self.name)
 
     def _lose_motion(self, lose: Callable[[mo.Motion], mo.Motion]) -> None:
         """The readings are lost (the port closed, the controller offline, a SatEL's report):

@@ -236,6 +236,32 @@ def test_readings_at_rest_that_go_on_disagreeing_are_reported_and_polled_as_ever
     assert any("readings in a row at rest disagree" in m for m in told), told
 
 
+def test_a_failing_sensor_after_a_replug_leaves_the_rotator_online_where_it_stood(
+    rig: Rig,
+) -> None:
+    """A review: the same failing sensor, first seen after a replug, kept the rotator offline
+    (every target refused) for as long as its readings disagreed, where inside a session it
+    stays online at the last bearing two readings agreed on. The first reading back, doubted,
+    is an answer all the same."""
+    v = at_rest(rig, "gs232b")
+    rest = v.status.bearing_deg
+    v.link_down()
+    v.run_for(2.0)
+    digits = iter(b"2340" * 1000)  # 150 reads 250, 350, 450, 50, 250...
+    v.to_host = lambda data, now: (
+        data.replace(b"1", bytes([next(digits)])) if b"1" in data else data
+    )
+    t = v.now
+    v.link_up()
+    v.run_for(30)
+    assert v.status.available and v.status.bearing_deg == rest
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} == {rest}
+    # (offline until the port answers; never shown turning)
+    assert {s.state for s in v.published(since=t)} <= {MotionState.OFFLINE, MotionState.IDLE}
+    told = [e.message for e in v.errors(since=t)]
+    assert any("readings in a row at rest disagree" in m for m in told), told
+
+
 # -- where the rule's first form did not reach (a cold review) ---------------------------------
 FAST = {
     Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
