@@ -5,6 +5,7 @@ port. Its start's deadline scales with the machine (waiting.py rule 1)."""
 
 from __future__ import annotations
 
+import os
 import random
 import signal
 import socket
@@ -28,20 +29,43 @@ def _ephemeral_low() -> int:
         return 32768
 
 
+def _own_range() -> range:
+    """This process's share of the ports below the kernel's range for outgoing connections:
+    one slice per parallel worker (``PYTEST_XDIST_WORKER`` gwN of
+    ``PYTEST_XDIST_WORKER_COUNT``), so that two workers never pick the same port (they did:
+    both found it free, and the second to listen failed, once in eight CI runs)."""
+    low, top = 10_000, _ephemeral_low()
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    try:
+        index, count = int(worker.removeprefix("gw")), int(os.environ["PYTEST_XDIST_WORKER_COUNT"])
+    except (KeyError, ValueError):
+        return range(low, top)
+    if not 0 <= index < count or top - low < 100 * count:
+        return range(low, top)
+    share = (top - low) // count
+    return range(low + index * share, low + (index + 1) * share)
+
+
+_HANDED: set[int] = set()  # the ports this process picked: not picked twice, bound or not
+
+
 def free_port() -> int:
-    """A loopback port free now, below the kernel's range for outgoing connections: a port the
-    kernel hands out (bind to 0) is one every other test's outgoing connection may take before
-    the test listens on it, which a busy parallel suite does; one below that range only a
-    listener can take."""
-    top = _ephemeral_low()
-    for _ in range(50):
-        port = _PICK.randrange(10_000, top)
+    """A loopback port free now, below the kernel's range for outgoing connections (a port the
+    kernel hands out, bind to 0, is one any test's outgoing connection may take before the test
+    listens on it, which a busy parallel suite does; one below that range only a listener can
+    take), from this worker's own share (``_own_range``) and never one it picked before."""
+    ports = _own_range()
+    for _ in range(200):
+        port = _PICK.choice(ports)
+        if port in _HANDED:
+            continue
         with socket.socket() as s:
             try:
                 s.bind(("127.0.0.1", port))
             except OSError:
                 continue
-            return port
+        _HANDED.add(port)
+        return port
     with socket.socket() as s:  # a crowded range: the kernel's choice
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
