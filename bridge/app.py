@@ -641,7 +641,12 @@ class App:
 
     def _refused(self, message: str) -> None:
         """Another bridge owns the base topic (interfaces/mqtt/claim.py): ``run`` stops, exit code
-        2; 1 where it yields while running (claim rule 4: ``stop`` halts every rotator first)."""
+        2; 1 where it yields while running (claim rule 4: ``stop`` halts every rotator first).
+        Yielding, every rotator takes nothing but a halt from the verdict on, not from ``stop``
+        (a review: ``_serve``'s wait, up to a second, let a front end turn one meanwhile)."""
+        if self.client.yielded:
+            for rot in self.rotators:
+                rot.leave(YIELDING)
         self.failure = message
         self.failed.set()
 

@@ -159,6 +159,25 @@ def test_a_yielding_bridge_stops_its_rotors_before_it_closes_a_front_end(rig: Ri
     assert emu.state().az_deg < 290
 
 
+def test_a_yielding_bridge_turns_no_rotor_between_its_verdict_and_its_stop(rig: Rig) -> None:
+    """A review: from the verdict to ``stop`` (the serve loop's wait, up to a second) every
+    front end still took targets, and a rotctld ``P`` then turned the rotor: refused now."""
+    port = free_port()
+    emu = rig.add("tower", emu={"start_az_deg": 10}, rotctld_port=port)
+    app = rig.start()
+    rig.ready("tower")
+    client = socket.create_connection(("127.0.0.1", port), timeout=slow(5))
+    older = Instance("rotor-forged-0004", "nowhere", 1, 0.0)
+    rig.probe.publish("rotor/bridge/info", older.info([]), retain=False)
+    wait_until(app.failed.is_set, 5, "this bridge yields")
+    client.sendall(b"P 200.0 0.0\n")  # (before ``stop``: the test has not called it)
+    answer = client.recv(100)
+    rig.stop()
+    client.close()
+    assert answer == b"RPRT -5\n"
+    assert not any(f.data.startswith(b"AP1") for f in emu.frames())
+
+
 def test_the_refusing_bridge_exits_with_code_2_naming_the_other(tmp_path: Path, rig: Rig) -> None:
     rig.add("tower")
     app = rig.start()
