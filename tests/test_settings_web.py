@@ -219,3 +219,16 @@ def test_host_names_are_names_alone(tmp_path: Path) -> None:
     assert ok.web.host_names == ["shack.example.org"]
     said = refused(tmp_path, '[web]\nhost_names = ["https://shack.example.org/"]\n')
     assert "web.host_names" in said and "not a host name" in said
+
+
+def test_a_trusted_proxy_network_wider_than_one_address_is_warned_about(tmp_path: Path) -> None:
+    """An attack pass: the docs say to list only the proxies, but a LAN listed (any host on it
+    may then write X-Forwarded-For and be limited and audited as another browser) passed
+    check-config without a word."""
+    s = load(
+        tmp_path,
+        '[web]\nenabled = true\ntrusted_proxies = ["127.0.0.1", "::1", "10.0.0.9/32", '
+        '"192.168.1.0/24"]\n',
+    )
+    (warning,) = [w for w in config_warnings(s) if w.startswith("web.trusted_proxies")]
+    assert warning.startswith("web.trusted_proxies: 192.168.1.0/24 is a network of 256 addresses")

@@ -22,6 +22,7 @@ Rules:
 from __future__ import annotations
 
 import getpass
+import ipaddress
 import os
 from pathlib import Path
 from typing import Any
@@ -176,6 +177,15 @@ def config_warnings(settings: Settings) -> list[str]:
             "speaks plain HTTP, so its password and every command cross the network "
             "unencrypted; keep it on 127.0.0.1 behind a reverse proxy that speaks HTTPS"
         )
+    for proxy in web.trusted_proxies if web.enabled else ():
+        net = ipaddress.ip_network(proxy, strict=False)  # (valid: settings/web.py)
+        if net.num_addresses > 1:
+            found.append(
+                f"web.trusted_proxies: {proxy} is a network of {net.num_addresses:,} "
+                "addresses: any host in it can name itself another browser in X-Forwarded-For "
+                "(its failed logins then limited as another's, its commands audited as "
+                "another's); list only your reverse proxies' own addresses"
+            )
     return found
 
 

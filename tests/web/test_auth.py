@@ -80,6 +80,15 @@ def test_failed_logins_count_by_address_and_the_kind_of_name_asked_for() -> None
         ("::ffff:127.0.0.1", "192.0.2.10", "192.0.2.10"),
         ("127.0.0.1", None, "127.0.0.1"),
         (None, "192.0.2.10", "?"),
+        # a port some proxies add (an attack pass: such an entry was taken for junk, and every
+        # browser behind the proxy counted as the proxy)
+        ("127.0.0.1", "192.0.2.10:51234", "192.0.2.10"),
+        ("127.0.0.1", "[2001:db8::7]:51234", "2001:db8::7"),
+        ("127.0.0.1", "[2001:db8::7]", "2001:db8::7"),
+        ("127.0.0.1", "2001:db8::7", "2001:db8::7"),
+        ("127.0.0.1", "6.6.6.6:1, 10.0.0.2:443", "6.6.6.6"),  # a proxy with its port, skipped
+        ("127.0.0.1", "192.0.2.10:port", "127.0.0.1"),  # no port: junk
+        ("127.0.0.1", "[2001:db8::7]:", "127.0.0.1"),
     ],
 )
 def test_only_a_trusted_proxy_is_believed_about_the_browsers_address(

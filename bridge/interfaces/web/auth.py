@@ -34,7 +34,9 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    ``trusted_proxies`` is believed about the browser's (its ``X-Forwarded-For``'s last entry
    that is no listed proxy), for the login's limit and for who sent a command; nothing else's
    ``X-Forwarded-For`` is (an attack pass: through the proxy, one visitor's wrong passwords
-   held back the operator's right one for as long as they went on).
+   held back the operator's right one for as long as they went on). An entry with the port
+   some proxies add is read as its address (it was taken for junk, and every browser counted
+   as the proxy); a listed network wider than one address is check-config's warning.
 """
 
 from __future__ import annotations
@@ -156,15 +158,34 @@ def forwarded_client(
     nearest proxy saw; those before it anyone can write)."""
     if not peer or not forwarded_for or not _among(peer, proxies):
         return peer or "?"
-    for entry in reversed(forwarded_for.split(",")):
-        entry = entry.strip()
-        try:
-            ipaddress.ip_address(entry)
-        except ValueError:
+    for item in reversed(forwarded_for.split(",")):
+        entry = _address(item.strip())
+        if entry is None:
             return peer  # (no address: nothing after it is believed)
         if not _among(entry, proxies):
             return entry
     return peer
+
+
+def _address(entry: str) -> str | None:
+    """An ``X-Forwarded-For`` entry's address: as it is, or with the port some proxies add
+    (``192.0.2.7:51234``, ``[2001:db8::7]:51234``); None if it is none."""
+    for text in (entry, *_without_port(entry)):
+        try:
+            return str(ipaddress.ip_address(text))
+        except ValueError:
+            continue
+    return None
+
+
+def _without_port(entry: str) -> tuple[str, ...]:
+    if entry.startswith("["):  # [v6]:port, or [v6]
+        host, sep, port = entry[1:].partition("]")
+        return (host,) if sep and (port == "" or port[:1] == ":" and port[1:].isdigit()) else ()
+    host, sep, port = entry.rpartition(":")
+    if sep and port.isdigit() and ":" not in host:  # v4:port (a bare v6 has many colons)
+        return (host,)
+    return ()
 
 
 def _among(address: str, networks: Networks) -> bool:
