@@ -68,6 +68,11 @@ class Lease:
         held = self._held
         return held if held is not None and not _ended(held, now_unix) else None
 
+    def has_ended(self, now_unix: float) -> bool:
+        """Rule 3: whether ``expired`` would tell of an end now (asking changes nothing)."""
+        held = self._held
+        return held is not None and _ended(held, now_unix)
+
     def expired(self, now_unix: float) -> Control | None:
         """Rule 3: the lease that has ended by itself since the last call, once."""
         held = self._held

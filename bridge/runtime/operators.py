@@ -16,6 +16,13 @@ Rules:
    back) arms itself again. The end is a step like a release (rule 1); the timer is armed
    after the step, under a lock of its own (starting a thread waits for it: never in the
    owner's step), for the lease as it is then, so the last arming follows the last change.
+   The lease's end is the wall clock's and the timer's wait the monotonic clock's: a wall
+   clock stepped forward (NTP on a board without a clock chip, after a restart that restored
+   the lease) ended it for the judge while the status named the holder until the timer, up
+   to the whole lease later (an attack pass). So the timer waits LEASE_CHECK_S at most, and
+   the judge ends a lease it finds over (``refusal``) as the timer would, before it answers.
+   A lease kept in the state file that ended while the bridge was stopped ends at the start:
+   audited, and gone from the file (it stayed there, and a clock set back later revived it).
 3. Every command judged, executed or refused, from every interface, is one audit event handed
    to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
    listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
@@ -41,6 +48,7 @@ from bridge.session.mailbox import Mailbox
 log = logging.getLogger(__name__)
 
 EXECUTED = "executed"
+LEASE_CHECK_S = 60.0  # rule 2: the longest the timer waits before it looks at the wall clock
 
 
 class Timer(Protocol):
@@ -77,9 +85,10 @@ class Operators:
         self._report = report
         self._on_audit = on_audit
         kept = store.lease(rotator_id)  # state_store.py rule 6
+        self._forget = False  # rule 2: a kept lease that cannot hold, gone from the file at start
         if kept is not None and restorable(kept, wall()) is None:  # lease.py rule 6
             log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
-            kept = None
+            kept, self._forget = None, True
         self._lease = Lease(kept)
         self._owner = owner or Owner(store, mailbox)  # rule 1: the rotator's, shared with the lock
         self._timer_lock = threading.Lock()  # rule 2
@@ -92,10 +101,17 @@ class Operators:
     def start(self) -> None:
         """The lease kept across a restart shows in the status, and ends by itself."""
         with self._owner:
-            held = self._lease.holder(self._wall())
+            now = self._wall()
+            held = self._lease.holder(now)
+            ended = self._lease.expired(now)  # rule 2: one that ended while the bridge was down
             if held is not None:
                 self._mailbox.put_control(held, wake=False)  # woken after the step
+            elif ended is not None or self._forget:
+                self._changed(None)
         self._arm()
+        if ended is not None:
+            log.info("%s: the control lease of %s ended while stopped", self._id, ended.operator)
+            self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
 
     def stop(self) -> None:
         with self._timer_lock:
@@ -107,7 +123,11 @@ class Operators:
         return self._lease.holder(self._wall())
 
     def refusal(self, who: str) -> str | None:
-        """lease.py rule 5: why a motion command from ``who`` is refused, or None."""
+        """lease.py rule 5: why a motion command from ``who`` is refused, or None; a lease the
+        wall clock ended before its timer fired is ended first (rule 2). Never asked in an
+        owner's step (the judge asks before its step)."""
+        if self._lease.has_ended(self._wall()):
+            self._expire()
         return self._lease.refusal(who, self._wall())
 
     # -- claims and releases (rule 4) -----------------------------------------------------
@@ -165,7 +185,8 @@ class Operators:
             held = self._lease.holder(now)
             if held is None or self._stopped:
                 return
-            self._timer = self._start_timer(max(0.0, held.until_unix - now), self._expire)
+            wait_s = min(LEASE_CHECK_S, max(0.0, held.until_unix - now))  # (rule 2)
+            self._timer = self._start_timer(wait_s, self._expire)
 
     def _expire(self) -> None:
         with self._owner:  # rule 1: an end is a change like a release

@@ -28,7 +28,7 @@ from bridge.core.model import (
     Target,
     TrackBody,
 )
-from bridge.runtime.operators import Operators
+from bridge.runtime.operators import LEASE_CHECK_S, Operators
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.session.mailbox import Mailbox
@@ -206,7 +206,7 @@ def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None
     ops.claim("DL1ABC", 2, HOLDER)
     assert mailbox.take().control == Control("DL1ABC", T0 + 120)
     [(delay_s, fire)] = timers.live()
-    assert delay_s == 120
+    assert delay_s == LEASE_CHECK_S  # (rule 2: it looks at the wall clock at least so often)
     clock.now += 119.5  # the wall clock was set forward a little less than the timer ran
     fire()  # early: nothing ends, a new timer for the rest
     assert ops.holder is not None and not mailbox.take()
@@ -220,6 +220,55 @@ def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None
     store.flush()
     assert "lease" not in json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]
     mailbox.close()
+
+
+def test_a_wall_clock_stepped_past_the_end_ends_the_lease_for_the_judge_and_the_status_alike(
+    tmp_path: Path,
+) -> None:
+    """An attack pass: NTP stepped the wall clock an hour forward (a board without a clock
+    chip, after a restart that restored the lease); the judge let anyone turn the rotor while
+    R/control, R/status and the console named the holder until the timer fired, which waits
+    on the monotonic clock: up to the whole lease later. The judge's own look ends it, said
+    and audited; the timer looks at least every LEASE_CHECK_S."""
+    clock, timers, mailbox = Clock(), Timers(), Mailbox()
+    audit: list[AuditEvent] = []
+    ops = Operators(
+        "t", StateStore(tmp_path / "state.json"), mailbox, wall=clock, bearing=lambda: None,
+        report=lambda *a: None, timer=timers, on_audit=audit.append,
+    )  # fmt: skip
+    ops.claim("DL1ABC", 30, HOLDER)
+    assert mailbox.take().control == Control("DL1ABC", T0 + 1800)
+    assert [d for d, _ in timers.live()] == [LEASE_CHECK_S]
+    clock.now += 3600
+    assert ops.refusal("G4XYZ") is None  # free for the judge...
+    batch = mailbox.take()
+    assert batch.control_set and batch.control is None  # ... and for the status
+    assert [(a.origin.who, a.command) for a in audit] == [("DL1ABC", "control expired")]
+    assert timers.live() == []
+    mailbox.close()
+
+
+def test_a_kept_lease_that_ended_while_the_bridge_was_stopped_is_audited_and_forgotten(
+    tmp_path: Path,
+) -> None:
+    """An attack pass: it was neither audited nor taken out of the state file (where a clock
+    set back at a later boot made it hold again)."""
+    clock = Clock()
+    rot, _, _ = rotator(tmp_path, clock)
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
+    rot.operators.stop()
+    rot._store.flush()
+    clock.now += 2 * 3600  # stopped for two hours
+    again, audit, _ = rotator(tmp_path, clock)
+    again.operators.start()
+    again._store.flush()
+    assert again.operators.holder is None
+    assert "lease" not in json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]
+    assert [(a.origin.who, a.command) for a in audit] == [("DL1ABC", "control expired")]
+    clock.now -= 2 * 3600  # the clock set back: nothing left to revive
+    third, _, _ = rotator(tmp_path, clock)
+    assert third.operators.holder is None
+    again.operators.stop()
 
 
 def test_input_refused_before_it_became_a_command_is_audited_when_its_sender_is_known(
@@ -269,6 +318,10 @@ def test_a_kept_lease_with_the_clock_set_back_ends_within_a_claims_longest(
     clock.now -= 3 * 86400
     again, _, _ = rotator(tmp_path, clock)
     assert again.operators.holder is None
+    again.operators.start()  # gone from the file: the clock put right later revives nothing
+    again._store.flush()
+    assert "lease" not in json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]
+    again.operators.stop()
 
 
 def test_tracking_is_a_motion_command_the_lease_judges(tmp_path: Path) -> None:
