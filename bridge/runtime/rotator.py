@@ -540,7 +540,12 @@ class Rotator:
         with ``origin`` (who sent it) it is in the audit trail too."""
         self.report(ErrorKind.REFUSED, message, command)
         if origin is not None:
-            self.operators.audit(origin, command or "input", f"refused: {message}")
+            self.audit_refusal(message, command or "input", origin)
+
+    def audit_refusal(self, message: str, command: str, origin: Origin) -> None:
+        """A refusal in the audit trail alone (a group's command refused before it was split
+        among its members, said once on ``G/error``: interfaces/mqtt/service.py rule 10)."""
+        self.operators.audit(origin, command, f"refused: {message}")
 
     def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)

@@ -194,9 +194,13 @@ def test_a_retained_or_bad_group_target_moves_nothing_and_says_why(
 ) -> None:
     svc, pub, upper, lower = group_service()
     svc.on_message("rotor/stack/target", payload, retain)
-    assert upper.calls == [] and lower.calls == []
     (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
     assert why in error["message"] and error["kind"] == "refused"
+    # nothing for either member but its audit trail (an attack pass: in none before)
+    for member in (upper, lower):
+        ((said, message, command, who),) = member.calls
+        assert said == "audited" and message == error["message"] and who == "mqtt"
+        assert command.endswith("(group stack)")
 
 
 def test_a_group_stop_on_the_main_connection_stops_every_member_even_retained() -> None:

@@ -156,6 +156,9 @@ class RecordingRotator:
     ) -> None:
         self.calls.append(("refused", message, command))
 
+    def audit_refusal(self, message: str, command: str, origin: Origin) -> None:
+        self.calls.append(("audited", message, command, origin.who))
+
     def release(self, marker: int, *, clear: bool = False) -> None:
         self.calls.append(("release", marker, *(["clear"] if clear else [])))
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.core.model import Command, RotatorStatus
+from bridge.core.model import Command, Origin, RotatorStatus
 from bridge.front import FrontRotator
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
@@ -37,6 +37,7 @@ class RotatorPort(FrontRotator, Protocol):
         since: int | None = None,
         ticket: int | None = None,
     ) -> None: ...
+    def audit_refusal(self, message: str, command: str, origin: Origin) -> None: ...
     def ticket(self) -> int: ...  # a place in the order of commands (mailbox.py rule 10a)
     def release(self, marker: int, *, clear: bool = False) -> None: ...
 

@@ -346,6 +346,17 @@ class MqttService:
             pub(g.availability, "online" if group_available(statuses) else "offline")
             pub(g.status, group_status_json(group, statuses, refused))
 
+    def _refuse_group(self, group: Group, message: str, what: str, origin: Origin) -> None:
+        """A group's command refused before it was split: said once on ``G/error``, and in
+        every member's audit trail, as a member's own refused command is (an attack pass: a
+        retained or unreadable ``G/target`` was in no audit trail)."""
+        self._report_group(group.id, message, what)
+        said = f"{what} (group {group.id})"
+        for member in group.member_ids:
+            rot = self._rotators.get(member)
+            if rot is not None:
+                rot.audit_refusal(message, said, origin)
+
     def _report_group(self, group_id: str, message: str, command: str) -> None:
         """A refusal of a group's command on ``G/error`` (rule 4's limit) and in the log."""
         self._group_event(
@@ -407,7 +418,7 @@ class MqttService:
         elif gated:
             why = "not taken: the bridge is still checking its base topic; send it again"
         if why is not None:
-            self._report_group(group_id, why, what)
+            self._refuse_group(group, why, what, origin)
             return
         has_elevation = {
             mid: rot.spec.has_elevation
@@ -417,7 +428,7 @@ class MqttService:
         try:
             parts = fan_out(group, payload, has_elevation, origin)
         except pl.PayloadError as exc:
-            self._report_group(group_id, str(exc), what)
+            self._refuse_group(group, str(exc), what, origin)
             return
         refused: dict[str, str] = {}
         for part in parts:  # rule 10: the others still turn (groups.py rule 3)
