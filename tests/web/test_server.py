@@ -7,6 +7,7 @@ from __future__ import annotations
 import http.client
 import json
 import threading
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -252,6 +253,37 @@ def test_a_stop_over_the_live_feed_and_a_bad_body_are_audited_with_the_browsers_
             "web",
             "127.0.0.1",
         )
+
+
+def test_a_halt_the_page_sends_both_ways_is_one_event_in_the_audit_trail(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """An attack pass: the page sends a STOP or lock ON over its WebSocket and by POST (one
+    may be lost); one click was two audit events (three with the page's retry), where MQTT's
+    two connections make one. The copy with the same page and number is not carried out again."""
+    rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+    origin = {"Origin": f"http://127.0.0.1:{client.port}"}
+    lock = {"command": "lock", "on": True, "page": "tab-1", "seq": 7}
+
+    async def click() -> None:
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(url, headers=origin) as ws:
+                await ws.send_str(json.dumps({"token": client.token}))
+                await ws.receive(timeout=slow(10))  # hello: the token is in
+                await ws.send_str(json.dumps({"rotator": "hf", **lock}))
+                await ws.receive(timeout=slow(10))  # (a status) read before the POST
+
+    t = time.monotonic()
+    run_async(click())
+    assert client.command("hf", **lock).status == 200  # its POST
+    assert client.command("hf", **lock).status == 200  # the page's retry
+    assert client.command("hf", command="lock", on=False).status == 200
+    unlocked = rig.probe.wait_for("rotor/audit", lambda m: "lock OFF" in m.text, after=t)
+    events = [json.loads(m.text)["command"] for m in rig.probe.on("rotor/audit") if m.t >= t]
+    assert [e for e in events if "lock ON" in e] == ["lock ON"], events
+    assert unlocked is not None
+    rig.probe.wait_value("rotor/lock/state", "OFF", after=t)  # (the unlock went through)
 
 
 def test_a_stop_put_between_the_consoles_look_and_its_command_refuses_the_command(

@@ -287,6 +287,17 @@ class Order:
                 return STALE
         return None
 
+    def carried(self, rotator_id: str, cmd: WebCommand) -> bool:
+        """Whether ``cmd`` is a halt the page numbered and the console carried out already, as
+        the rotator's latest: the page sends each halt both over its WebSocket and by POST
+        (console.js), and one click was two events in the audit trail (an attack pass). The
+        second copy is not carried out again (the first was); any other halt in between, and
+        the copy goes again (stopping twice is harmless)."""
+        if not cmd.halts() or cmd.page is None or cmd.seq is None:
+            return False
+        _at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
+        return page == cmd.page and seq == cmd.seq
+
     def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
         self._last[rotator_id] = (now, cmd.page, cmd.seq)
         if cmd.page is not None and cmd.seq is not None:

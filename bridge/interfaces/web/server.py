@@ -408,8 +408,8 @@ class WebConsole:
             cmd = parse(body)
         except BadCommand:
             return
-        if rot is None or not cmd.halts():
-            return
+        if rot is None or not cmd.halts() or self._order.carried(rot.id, cmd):
+            return  # (a halt its POST carried out: commands.py ``Order.carried``)
         far = self._far.get(rot.id)
         if far is not None and rot.commands_block:  # rule 5
             self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
@@ -473,6 +473,8 @@ class WebConsole:
             rot.report_refusal(str(exc), said, origin=by)
             return _json({"error": str(exc), "code": "invalid"}, 400)
         halt = cmd.halts()
+        if halt and self._order.carried(rot.id, cmd):  # (its WebSocket's copy carried it out)
+            return _json({"ok": True})
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
         far = self._far.get(rot.id)
