@@ -19,7 +19,7 @@ from bridge.app import worker_config
 from bridge.core.model import ErrorEvent, Lock, MotionState
 from bridge.emulators import EmulatedPort
 from bridge.interfaces.rotctld import QUIT, Request, RequestParser, RotctldServer
-from bridge.interfaces.rotctld.parser import OVERLONG
+from bridge.interfaces.rotctld.parser import OVERLONG, holds_stop
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings, Settings
@@ -911,3 +911,24 @@ def test_clients_dropped_for_room_are_logged_once_with_a_count(
         for client in clients:
             client.close()
         small.stop()
+
+
+@pytest.mark.parametrize(
+    ("data", "stop"),
+    [
+        (b"S\n", True),
+        (b"p\nS\n", True),
+        (b"\\stop\n", True),
+        (b"+S\n", True),
+        (b"P 200 S\n", True),  # rule 1: a stop where a number is awaited
+        (b"p\n", False),
+        (b"P 200 10\n", False),
+        (b"\\get_pos\n", False),
+    ],
+)
+def test_a_stop_among_the_first_commands_is_told_for_the_accept_loop(
+    data: bytes, stop: bool
+) -> None:
+    """interfaces/tcplines.py rule 5: a connection whose first commands hold a stop goes
+    ahead of its address's budget."""
+    assert holds_stop(data) is stop

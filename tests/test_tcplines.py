@@ -4,6 +4,7 @@ client's CR-ended first line goes through at once, HTTP never does."""
 from __future__ import annotations
 
 import contextlib
+import logging
 import socket
 import threading
 from collections.abc import Callable, Iterator
@@ -15,9 +16,12 @@ import pytest
 from bridge.core.model import Stop, Target
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.gs232 import Gs232Session
+from bridge.interfaces.gs232.parser import gs232_holds_stop
 from bridge.interfaces.tcplines import (
     ACCEPTS_S,
+    CHATTER_BURST,
     HTTP_FIRST_LINE_MAX,
+    YOUNG_KEPT,
     Close,
     HttpGuard,
     LineServer,
@@ -107,6 +111,7 @@ def gs232() -> Iterator[Callable[..., tuple[_Tower, LineServer]]]:
 
     def make(**kw: Any) -> tuple[_Tower, LineServer]:
         tower = _Tower()
+        kw.setdefault("halts", gs232_holds_stop)  # (as the GS-232 port is made)
         server = LineServer(
             "tower", 0, "127.0.0.1", lambda: Gs232Session(tower), label="gs232", key="gs232", **kw
         )
@@ -243,9 +248,11 @@ def test_threads_start_no_faster_than_a_peers_budget_and_the_rest_wait_without_o
     """In virtual time: a client dropped (or a crowd) connecting again at once costs a thread
     each time; past ACCEPTS_S a second from one address the next connections wait, taken from
     the kernel but with no thread, and are served when time passes, but for one whose first
-    command is complete (it may be a stop): that one goes at once."""
+    commands hold a stop: that one goes at once. Any other complete command waits (an attack
+    pass: every complete line went ahead, and a few threads connecting, asking ``C`` and
+    closing started 4,000 client threads a second)."""
     clock = FakeClock()
-    _tower, server = gs232(clock=clock, max_clients=40)
+    tower, server = gs232(clock=clock, max_clients=40)
     crowd = [
         socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
         for _ in range(int(ACCEPTS_S) + 5)
@@ -253,15 +260,18 @@ def test_threads_start_no_faster_than_a_peers_budget_and_the_rest_wait_without_o
     try:
         wait_until(lambda: server.client_count == int(ACCEPTS_S), 10, "a second's worth taken")
         crowd[-1].sendall(b"C")  # part of a command: still no thread
+        crowd[-3].sendall(b"C\r")  # a complete command, no stop: no thread either
         quiet = threading.Event()
         quiet.wait(0.2)  # not a deadline: a quiet period
         assert server.client_count == int(ACCEPTS_S)
-        crowd[-2].sendall(b"C\r")  # a complete command goes ahead of the budget
+        crowd[-2].sendall(b"C\rS\r")  # a stop goes ahead of the budget
         assert _read(crowd[-2], 8) == b"AZ=120\r\n"
         assert server.client_count == int(ACCEPTS_S) + 1
+        assert [type(c) for c in tower.submitted] == [Stop]
         clock.t += 1.0
         crowd[-1].sendall(b"\r")
         assert _read(crowd[-1], 8) == b"AZ=120\r\n"
+        assert _read(crowd[-3], 8) == b"AZ=120\r\n"
         wait_until(lambda: server.client_count == len(crowd), 10, "all taken")
     finally:
         for sock in crowd:
@@ -342,7 +352,9 @@ def test_with_every_slot_held_by_idle_connections_a_new_clients_stop_is_carried_
         wait_until(lambda: server.client_count == 16, 10, "every slot taken")
         _operator_stop(server)
         assert [type(c) for c in tower.submitted] == [Stop]
-        assert _closed_by_peer(hogs[-1])  # the newest that never sent a command went
+        # the newest that never sent a command went, but for the YOUNG_KEPT newest (just come:
+        # their stop may be on its way)
+        assert _closed_by_peer(hogs[-1 - YOUNG_KEPT])
         said = [r.getMessage() for r in caplog.records if "to let one in" in r.getMessage()]
         assert len(said) == 1 and "all 16 slots taken" in said[0], said
     finally:
@@ -802,3 +814,69 @@ def test_out_of_descriptors_the_accept_loop_pauses_and_says_so_rarely(
     said = [r for r in caplog.records if "accept failed" in r.getMessage()]
     assert len(said) == 1, len(said)
     assert tries < 100, tries  # 50 ms between tries: about 6 in 0.3 s; a spin makes thousands
+
+
+def test_a_storm_of_connections_each_with_one_complete_line_starts_no_more_threads_than_the_budget(
+    gs232: Callable[..., tuple[_Tower, LineServer]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """An attack pass: four threads connecting, sending ``C`` and closing, as fast as they
+    could, started 8,726 client threads in 2 s (a complete line went ahead of the budget),
+    the serial thread starved, and 17,453 log lines. In virtual time (no second passes) the
+    budget's burst is all that starts; a stop still goes ahead of it, and the coming and
+    going is said at INFO a few times, not at every connection."""
+    caplog.set_level(logging.DEBUG, logger="bridge.interfaces.tcplines")
+    tower, server = gs232(clock=FakeClock())
+
+    def storm() -> None:
+        for _ in range(100):
+            with contextlib.suppress(OSError):
+                with socket.create_connection(("127.0.0.1", server.port), timeout=slow(5)) as s:
+                    s.sendall(b"C\r")
+
+    threads = [threading.Thread(target=storm, daemon=True) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    _operator_stop(server)
+    assert [type(c) for c in tower.submitted] == [Stop]
+    connected = [r for r in caplog.records if r.getMessage().endswith(" connected")]
+    assert len(connected) <= ACCEPTS_S + 1, len(connected)  # (and the operator's)
+    loud = [r for r in connected if r.levelno == logging.INFO]
+    assert len(loud) <= CHATTER_BURST, len(loud)
+
+
+def _served(server: LineServer, sock: socket.socket) -> bool:
+    """Whether the client at ``sock``'s end has a thread of the server's (its name ends in
+    the client's port)."""
+    name = f"-{sock.getsockname()[1]}"
+    with server._lock:
+        return any(k.thread.name.endswith(name) for k in server._clients.values())
+
+
+def test_a_polling_program_keeps_its_connection_beside_a_trickle_of_silent_connections(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """An attack pass: a program opening a silent connection every 0.1 s kept every slot
+    with connections just come, each kept before an established one: Gpredict, polling, was
+    dropped again and again, and a STOP it sent went with it. Of one address's connections
+    just come only the YOUNG_KEPT newest are kept before it."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock)
+    gpredict = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
+    trickle: list[socket.socket] = []
+    try:
+        gpredict.sendall(b"C\r")
+        assert _read(gpredict, 8) == b"AZ=120\r\n"  # established
+        for _ in range(17):  # two more than the slots left
+            clock.t += 0.1  # each is just come (PENDING_GRACE_S) when the next comes
+            sock = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
+            trickle.append(sock)
+            wait_until(lambda sock=sock: _served(server, sock), 10, "taken")  # type: ignore[misc]
+        gpredict.sendall(b"S\rC\r")
+        assert _read(gpredict, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+    finally:
+        gpredict.close()
+        for sock in trickle:
+            sock.close()

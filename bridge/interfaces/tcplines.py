@@ -29,7 +29,10 @@ Rules:
    longest first), then the newest established connection (a program connected before a
    flood is kept; the one idle longest was Gpredict, polling once a second among chattier
    clients); then one just come that has sent no command yet (a review: each later
-   connection dropped it before the stop it was opened for came); then one with a command
+   connection dropped it before the stop it was opened for came), of one address only the
+   YOUNG_KEPT newest (an attack pass: all of them were, and a silent connection every 0.1 s
+   dropped Gpredict again and again, with the STOP it had sent; the rest rank as never
+   finished a command); then one with a command
    half received now, the one whose half came first (a program's is milliseconds old); last
    one with a complete command line not read yet or being read (a stop, maybe). A client
    dropped carries out nothing more of what it sent (a review: a flood dropped for the
@@ -53,12 +56,19 @@ Rules:
    stop in 1, 2 or 4 s later, 8 stops of 40; now 0 of 40 took over 0.2 s,
    benchmarks/operator_stop_flood.py); one its peer already closed is closed with no thread
    and no budget; one over its peer's budget waits in the accept loop, no thread, until the budget
-   allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
-   (rule 6) unread goes at once, ahead of the budget: it may be a stop. At most
-   ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
-   part of a line before one that has sent nothing yet (it may be about to) (said at most
-   once per LOG_S). accept() out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said
-   at most once per LOG_S); any error in the loop is logged so and the loop carries on. Over budget
+   allows (oldest first), and is closed as soon as its peer leaves. One whose first complete
+   commands (rule 6; READ_BYTES of them, what its first read takes) hold a stop, as the front
+   end's parser says (``halts``), goes at once, ahead of the budget, STOP_ACCEPTS_S a second
+   from one address at most; any other command waits its turn (an attack pass: every complete
+   line went ahead, and four threads connecting, asking ``C`` and closing started 8,726
+   client threads in 2 s: the serial-lines thread starved and a controller was called
+   silent). At most ``max_clients`` wait; past that the newest without a stop unread is
+   reset, one that sent bytes before one that has sent nothing yet (it may be about to)
+   (said at most once per LOG_S). A client's coming and going is logged at INFO CHATTER_S a
+   second at most (a burst of CHATTER_BURST), the rest at DEBUG (the same pass: 1,863 lines
+   a second, past journald's limit, which then drops the service's warnings too). accept()
+   out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said at most once per
+   LOG_S); any error in the loop is logged so and the loop carries on. Over budget
    is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
    would be turned away with it. So a flood of connect-and-close costs an accept and a close each
    and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
@@ -115,6 +125,10 @@ PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is loo
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
 ACCEPT_BATCH = 256  # rule 5: connections taken from it a wake-up, at most
+STOP_ACCEPTS_S = 50.0  # rule 5: connections with a stop unread let in a second, per peer
+YOUNG_KEPT = 2  # rule 3: of one address's connections just come, the newest kept so many
+CHATTER_S = 1.0  # rule 5: connections said connected and gone at INFO a second (a burst of
+CHATTER_BURST = 10.0  # as many), the rest at DEBUG
 
 
 class RareLog:
@@ -160,9 +174,10 @@ class _Client:
         self.sending_s: float | None = None  # rule 3: a reply being sent since
         self.reading = False  # rule 3: what it sent is being read and carried out now
 
-    def rank(self, now: float, line_unread: bool) -> tuple[int, float]:
+    def rank(self, now: float, line_unread: bool, fresh: bool = True) -> tuple[int, float]:
         """Rule 3: where this client stands in the order clients are dropped for room (the
-        least first); ``line_unread``: at rest with a complete command line not read yet."""
+        least first); ``line_unread``: at rest with a complete command line not read yet;
+        ``fresh``: one of the YOUNG_KEPT newest connections of its address."""
         if self.over_s is not None:
             return 0, self.over_s  # a flood: paused over its budget, the longest first
         if self.sending_s is not None and now - self.sending_s > SEND_STALL_S:
@@ -175,7 +190,7 @@ class _Client:
         if line_unread or self.reading:
             return 8, -self.since_s  # a line just come (a stop?), read now or in a moment
         if not self.done:  # never finished a command: the newest first, but one just come
-            young = now - self.since_s <= PENDING_GRACE_S  # (its stop may be on its way)
+            young = fresh and now - self.since_s <= PENDING_GRACE_S  # (its stop may come)
             return (6 if young else 3), -self.since_s
         if now - self.useful_s > IDLE_S:
             return 4, self.useful_s  # idle: the longest first
@@ -202,6 +217,18 @@ _RANKS = (  # rule 3: why a client was dropped for room, by its ``_Client.rank``
 )
 
 
+def _newest_young(pool: list[tuple[socket.socket, _Client]], now: float) -> set[socket.socket]:
+    """Rule 3: of each address's connections just come with no command yet, the YOUNG_KEPT
+    newest (an attack pass: every such connection was kept before an established one, so ten
+    silent connections a second from one program dropped Gpredict again and again, and a
+    STOP it had just sent with it; the one opened for a stop is the newest when it comes)."""
+    young: dict[str, list[tuple[float, socket.socket]]] = {}
+    for conn, k in pool:
+        if not k.done and k.pending_s is None and now - k.since_s <= PENDING_GRACE_S:
+            young.setdefault(k.host, []).append((k.since_s, conn))
+    return {c for each in young.values() for _t, c in sorted(each)[-YOUNG_KEPT:]}
+
+
 def _loopback(host: str) -> bool:
     try:
         addr = ipaddress.ip_address(host.split("%")[0])
@@ -226,15 +253,19 @@ def _alive(conn: socket.socket) -> bool:
 def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
     """Rules 3 and 5: True if a complete command (ended by one of ``ends``) waits unread in
     the kernel."""
+    data = _peek(conn, MAX_UNFINISHED)
+    return any(bytes([end]) in data for end in ends)
+
+
+def _peek(conn: socket.socket, size: int) -> bytes:
+    """What waits unread in the kernel, up to ``size`` bytes, at once (b"" if nothing)."""
     try:
         if conn.gettimeout():  # a client's thread set one: recv() would poll for it first
             with socket.socket(fileno=os.dup(conn.fileno())) as peek:  # no timeout: at once
-                data = peek.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
-        else:
-            data = conn.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+                return peek.recv(size, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+        return conn.recv(size, socket.MSG_PEEK | socket.MSG_DONTWAIT)
     except OSError:
-        return False
-    return any(bytes([end]) in data for end in ends)
+        return b""
 
 
 def _reset(conn: socket.socket) -> None:
@@ -288,16 +319,22 @@ class LineServer:
         read_bytes: int = READ_BYTES,
         max_unfinished: int = MAX_UNFINISHED,
         ends: bytes = LINE_ENDS,
+        halts: Callable[[bytes], bool] | None = None,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
         sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
-        and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6).
+        and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6);
+        ``halts``: whether a client's first complete commands hold a stop (rule 5: the
+        front end's parser says; none, and no connection goes ahead of the budget).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
         self._read_bytes = read_bytes
         self._max_unfinished = max_unfinished
         self._ends = ends
+        self._halts = halts
+        self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
+        self._chatter = TokenBucket.full(CHATTER_BURST, CHATTER_S, clock())  # rule 5
         self._paused_log = RareLog()
         self._dropped_log = RareLog()
         self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
@@ -465,11 +502,26 @@ class LineServer:
             if not _alive(conn):
                 del waiting[conn]
                 conn.close()
-            elif _line_ready(conn, self._ends):  # a complete command: ahead of the budget
+            elif self._stop_first(conn, waiting[conn][0]):  # a stop: ahead of the budget
                 peer = waiting.pop(conn)
                 conn.setblocking(True)
                 self._admit(conn, peer)
         return False
+
+    def _stop_first(self, conn: socket.socket, host: str) -> bool:
+        """Rule 5: whether ``conn`` goes ahead of its peer's budget: a stop among its first
+        complete commands (READ_BYTES of them, what its first read takes), within its peer's
+        STOP_ACCEPTS_S a second. Any other command waits for the budget (an attack pass: any
+        complete line went ahead, and connect, ``p``, close from a few threads started 4,000
+        client threads a second, the serial thread starved and a controller called silent)."""
+        if self._halts is None:
+            return False
+        data = _peek(conn, self._read_bytes)
+        cut = max(data.rfind(bytes([end])) for end in self._ends)
+        if cut < 0 or not self._halts(data[: cut + 1]):
+            return False
+        now = self._clock()
+        return self._bucket(self._stop_accepts, host, STOP_ACCEPTS_S, now).take(now)
 
     def _take(
         self,
@@ -496,15 +548,15 @@ class LineServer:
             return True
         now = self._clock()
         queued = any(p[0] == peer[0] for p in waiting.values())
-        ready = _line_ready(conn, self._ends)  # a complete command waiting: ahead of the budget
+        ready = self._stop_first(conn, peer[0])  # a stop waiting: ahead of the budget
         if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
             conn.setblocking(True)
             self._admit(conn, peer)
             return True
-        if len(waiting) >= self._max_clients:  # the newest without a complete command goes
+        if len(waiting) >= self._max_clients:  # the newest without a stop unread goes
             partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
             silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
-            gone = next((c for c in partial + silent if not _line_ready(c, self._ends)), conn)
+            gone = next((c for c in partial + silent if not self._holds_stop(c)), conn)
             if gone is conn:
                 _reset(conn)
             else:
@@ -535,8 +587,8 @@ class LineServer:
         next_s: float | None = None
         held: set[str] = set()
         for conn, peer in list(waiting.items()):
-            if conn not in sel.get_map():  # it has sent bytes: see whether a line is complete
-                if _line_ready(conn, self._ends):
+            if conn not in sel.get_map():  # it has sent bytes: see whether a stop is complete
+                if self._stop_first(conn, peer[0]):
                     del waiting[conn]
                     conn.setblocking(True)
                     self._admit(conn, peer)
@@ -560,16 +612,30 @@ class LineServer:
             self._admit(conn, peer)
         return next_s
 
+    def _holds_stop(self, conn: socket.socket) -> bool:
+        """Rule 5: a stop among the complete commands ``conn`` has sent (no budget asked)."""
+        if self._halts is None:
+            return False
+        data = _peek(conn, self._read_bytes)
+        cut = max(data.rfind(bytes([end])) for end in self._ends)
+        return cut >= 0 and self._halts(data[: cut + 1])
+
     def _accept_budget(self, host: str, now: float) -> TokenBucket:
-        bucket = self._accepts.get(host)
+        return self._bucket(self._accepts, host, ACCEPTS_S, now)
+
+    @staticmethod
+    def _bucket(
+        buckets: dict[str, TokenBucket], host: str, rate_s: float, now: float
+    ) -> TokenBucket:
+        bucket = buckets.get(host)
         if bucket is None:
-            if len(self._accepts) >= PEERS_KEPT:  # forget those back to a full bucket
-                full = [h for h, b in self._accepts.items() if now - b.t >= 1.0]
+            if len(buckets) >= PEERS_KEPT:  # forget those back to a full bucket
+                full = [h for h, b in buckets.items() if now - b.t >= b.burst / b.rate_per_s]
                 for h in full:
-                    del self._accepts[h]
-                if len(self._accepts) >= PEERS_KEPT:
-                    self._accepts.clear()
-            bucket = self._accepts[host] = TokenBucket.full(ACCEPTS_S, ACCEPTS_S, now)
+                    del buckets[h]
+                if len(buckets) >= PEERS_KEPT:
+                    buckets.clear()
+            bucket = buckets[host] = TokenBucket.full(rate_s, rate_s, now)
         return bucket
 
     def _make_room(self, host: str, now: float) -> tuple[bool, str]:
@@ -592,8 +658,9 @@ class LineServer:
         else:
             why = f"all {self._max_clients} slots"
         lines = {c for c, k in pool if k.pending_s is None and _line_ready(c, self._ends)}
+        fresh = _newest_young(pool, now)
         victim, rank = min(
-            ((c, k.rank(now, c in lines)) for c, k in pool), key=lambda pair: pair[1]
+            ((c, k.rank(now, c in lines, c in fresh)) for c, k in pool), key=lambda pair: pair[1]
         )
         gone = self._clients.pop(victim)
         try:
@@ -647,13 +714,13 @@ class LineServer:
 
     def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         who = f"{self.label} for {self.rotator_id}: client {peer[0]}:{peer[1]}"
-        log.info("%s connected", who)
+        self._say("%s connected", who)
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         with self._lock:
             me = self._clients.get(conn)  # None: already dropped to make room
         if me is None:  # rule 3: a client dropped runs nothing more, however much it sent
             conn.close()
-            log.info("%s gone (dropped to make room)", who)
+            self._say("%s gone (dropped to make room)", who)
             return
         guard = HttpGuard(self._ends)
         budget = Budget(self._rate_bytes_s, self._clock())
@@ -756,7 +823,15 @@ class LineServer:
                 self._clients.pop(conn, None)
             conn.close()
             dropped = "" if session.idle else " (an unfinished command was dropped)"
-            log.info("%s gone%s", who, dropped)
+            self._say("%s gone%s", who, dropped)
+
+    def _say(self, msg: str, *args: object) -> None:
+        """Rule 5: a client's coming and going at INFO, CHATTER_S a second at most (a burst of
+        CHATTER_BURST), the rest at DEBUG (an attack pass: 1,863 lines a second, and journald's
+        limit then drops every line of the service, its safety warnings too)."""
+        with self._lock:
+            loud = self._chatter.take(self._clock())
+        log.log(logging.INFO if loud else logging.DEBUG, msg, *args)
 
 
 _REQUEST_LINE = re.compile(rb"^[A-Za-z]{3,10} \S* ?HTTP/\d(\.\d)?\s*$")

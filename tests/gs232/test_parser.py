@@ -3,6 +3,8 @@ and each protocol's reading of a line (junk, partial lines, NaN, huge numbers)."
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
 from bridge.interfaces.gs232.parser import (
@@ -11,6 +13,9 @@ from bridge.interfaces.gs232.parser import (
     Gs232Kind,
     Gs232Request,
     LineSplitter,
+    dcu1_holds_stop,
+    easycomm_holds_stop,
+    gs232_holds_stop,
     parse_easycomm,
     parse_gs232,
 )
@@ -136,3 +141,28 @@ def test_a_stop_beside_a_malformed_easycomm_word_still_stops(line: str) -> None:
 
 def test_an_overlong_easycomm_line_is_invalid() -> None:
     assert parse_easycomm(None).invalid == "an overlong line"
+
+
+@pytest.mark.parametrize(
+    ("holds", "data", "stop"),
+    [
+        (gs232_holds_stop, b"S\r", True),
+        (gs232_holds_stop, b"C\rA\r", True),
+        (gs232_holds_stop, b"E\n", True),
+        (gs232_holds_stop, b"C\rM120\r", False),
+        (gs232_holds_stop, b"S", False),  # no end yet: no command
+        (easycomm_holds_stop, b"AZ EL\nSA SE\n", True),
+        (easycomm_holds_stop, b"AZ120.0 SA\n", True),
+        (easycomm_holds_stop, b"AZ EL\n", False),
+        (dcu1_holds_stop, b";", True),
+        (dcu1_holds_stop, b"AI1;AS1;", True),
+        (dcu1_holds_stop, b"AI1;", False),
+        (dcu1_holds_stop, b"AP1120;AM1;", False),
+    ],
+)
+def test_a_stop_among_complete_commands_is_told_for_the_accept_loop(
+    holds: Callable[[bytes], bool], data: bytes, stop: bool
+) -> None:
+    """interfaces/tcplines.py rule 5: a connection whose first commands hold a stop goes
+    ahead of its address's budget; the front end's own parser says which."""
+    assert holds(data) is stop

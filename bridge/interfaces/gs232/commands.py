@@ -29,6 +29,9 @@ from bridge.interfaces.gs232.parser import (
     Gs232Kind,
     Gs232Request,
     LineSplitter,
+    dcu1_holds_stop,
+    easycomm_holds_stop,
+    gs232_holds_stop,
     parse_easycomm,
     parse_gs232,
 )
@@ -323,6 +326,7 @@ class Emulation:
 
     key: str
     session: Callable[..., LineSession]  # (rotator, peer, **options)
+    halts: Callable[[bytes], bool]  # whether complete commands hold a stop (tcplines rule 5)
     ends: bytes = LINE_ENDS
     options: tuple[str, ...] = ()  # each session's keyword, from the setting <key>_<option>
 
@@ -355,6 +359,7 @@ class Emulation:
             key=self.key,
             idle_timeout_s=IDLE_TIMEOUT_S,
             ends=self.ends,
+            halts=self.halts,
         )
 
     def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:
@@ -373,9 +378,9 @@ class Emulation:
 EMULATIONS = {
     e.key: e
     for e in (
-        Emulation("gs232", Gs232Session, options=("replies",)),
-        Emulation("easycomm", EasycommSession),
-        Emulation("dcu1", Dcu1Session, ends=b"\r\n;"),
+        Emulation("gs232", Gs232Session, gs232_holds_stop, options=("replies",)),
+        Emulation("easycomm", EasycommSession, easycomm_holds_stop),
+        Emulation("dcu1", Dcu1Session, dcu1_holds_stop, ends=b"\r\n;"),
     )
 }
 

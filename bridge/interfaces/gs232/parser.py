@@ -253,3 +253,23 @@ class Dcu1Reader:
             elif first not in (_CR, _LF):
                 out.append(Dcu1Request(Dcu1Kind.INVALID, token.decode("latin-1")))
         return out
+
+
+# -- stops, for the TCP port's accept loop (interfaces/tcplines.py rule 5) ---------------------
+
+
+def gs232_holds_stop(data: bytes) -> bool:
+    """Whether the complete lines in ``data`` hold a GS-232B stop (``S``, ``A``, ``E``)."""
+    stops = (Gs232Kind.STOP, Gs232Kind.STOP_AZ, Gs232Kind.STOP_EL)
+    return any(parse_gs232(line).kind in stops for line in LineSplitter().feed(data))
+
+
+def easycomm_holds_stop(data: bytes) -> bool:
+    """Whether the complete lines in ``data`` hold an Easycomm stop word (``SA``, ``SE``)."""
+    return any(parse_easycomm(line).stop for line in LineSplitter().feed(data))
+
+
+def dcu1_holds_stop(data: bytes) -> bool:
+    """Whether ``data`` holds a DCU-1 stop (``;``, ``AS1;``, a frame ended by ``;`` that is
+    none: package rule 9)."""
+    return any(r.kind is Dcu1Kind.STOP or r.stops for r in Dcu1Reader().feed(data))

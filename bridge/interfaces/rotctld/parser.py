@@ -243,3 +243,10 @@ class RequestParser:
         request = Request(self._command, tuple(self._args), self._extended, self._sep)
         self._clear()
         return request
+
+
+def holds_stop(data: bytes) -> bool:
+    """Whether the commands ``data`` completes hold a stop (interfaces/tcplines.py rule 5:
+    a connection with one goes ahead of its address's budget)."""
+    made = RequestParser().feed(data)
+    return any(isinstance(r, Request) and r.command.name == "stop" for r in made)

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 from bridge.core.model import Origin, Source
 from bridge.interfaces.rotctld.commands import Rotator, RotctldCommands
-from bridge.interfaces.rotctld.parser import Quit, RequestParser
+from bridge.interfaces.rotctld.parser import Quit, RequestParser, holds_stop
 from bridge.interfaces.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
 
 
@@ -59,5 +59,6 @@ class RotctldServer(LineServer):
             useful_within_s=useful_within_s,
             clock=clock,
             peer_session=lambda peer: RotctldSession(rotator, peer),
+            halts=holds_stop,
         )
         self.rotator = rotator
