@@ -477,10 +477,11 @@ class App:
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express
 
-    def _express_wrote(self, rotator_id: str, t: float) -> None:
+    def _express_wrote(self, rotator_id: str, t: float, operator: str | None = None) -> None:
         """interfaces/mqtt/express.py rule 11: a stop the express wrote a frame for at ``t``,
-        or read at ``t`` and wrote none for, is the rotator's stop too when neither connection
-        could have had that stop."""
+        or read at ``t`` and wrote none for (from ``operator``), is the rotator's stop too
+        when neither connection could have had that stop (audited as its sender's: an attack
+        pass found it named ``mqtt`` alone)."""
         rotator = self._heard_only_by_express(rotator_id, t, "stop")
         if rotator is None:
             return
@@ -489,7 +490,8 @@ class App:
             "away: carried out here too",
             rotator_id,
         )
-        rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")
+        stop = Stop(Source.MQTT, self.mqtt.origin(operator))
+        rotator.submit(stop, "stop (heard by the stop express)")
 
     def _express_locked(self, rotator_id: str, t: float, operator: str | None) -> None:
         """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` (from

@@ -199,8 +199,21 @@ def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
     assert rig.word() == {"op": "locked", "rotator": "a", "t": 100.0, "operator": None}
     rig.child.clock = lambda: 101.0
     rig.child.on_message("rotor/a/lock", b"ON", False, "alice", None)
-    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "wrote", "rotator": "a", "t": 101.0, "operator": "alice"}
     assert rig.word() == {"op": "locked", "rotator": "a", "t": 101.0, "operator": "alice"}
+
+
+def test_a_stop_written_or_heard_names_who_sent_it(rig: ChildRig) -> None:
+    """Rule 11, an attack pass: the bridge carries out a stop the express alone had, and its
+    audit trail named ``mqtt``, not the remote operator who sent it."""
+    port = Port()
+    rig.child.clock = lambda: 100.0
+    rig.hand("a", 1, port)
+    rig.child.on_message("rotor/a/stop", b"STOP", False, "DL1ABC", None)
+    assert port.written() == b";"
+    assert rig.word() == {"op": "wrote", "rotator": "a", "t": 100.0, "operator": "DL1ABC"}
+    rig.child.on_message("rotor/c/stop", b"STOP", False, "DL1ABC", None)  # no port of its own
+    assert rig.word() == {"op": "heard", "rotator": "c", "t": 100.0, "operator": "DL1ABC"}
 
 
 def test_a_lock_on_replayed_under_311_is_not_said_to_the_bridge() -> None:

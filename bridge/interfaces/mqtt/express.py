@@ -317,7 +317,7 @@ class Express:
         sync_topic: str | None = None,
         on_hold: Callable[[str, int], None] | None = None,
         on_release: Callable[[str, int, bool], None] | None = None,
-        on_wrote: Callable[[str, float], None] | None = None,
+        on_wrote: Callable[[str, float, str | None], None] | None = None,
         on_locked: Callable[[str, float, str | None], None] | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"): the stops of
@@ -673,10 +673,22 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
-                self._carry_alone("a stop it wrote", self._on_wrote, word["rotator"], word["t"])
+                self._carry_alone(
+                    "a stop it wrote",
+                    self._on_wrote,
+                    word["rotator"],
+                    word["t"],
+                    word.get("operator"),
+                )
             elif op == "heard":
                 log.debug("stop express: %s's stop read, no frame written", word["rotator"])
-                self._carry_alone("a stop it heard", self._on_wrote, word["rotator"], word["t"])
+                self._carry_alone(
+                    "a stop it heard",
+                    self._on_wrote,
+                    word["rotator"],
+                    word["t"],
+                    word.get("operator"),
+                )
             elif op == "locked":
                 log.debug("stop express: %s's lock ON read", word["rotator"])
                 self._carry_alone(
@@ -1047,13 +1059,13 @@ class _Child:
         read_t = self.clock()
         owed, unwritten = [], []
         for rid in rids:
-            tried = self._stop(rid)
+            tried = self._stop(rid, operator)
             if tried is False:
                 unwritten.append(rid)
             elif tried is not True:
                 owed.append((rid, *tried))
         for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
-            if not self._finish(rid, now, held, done):
+            if not self._finish(rid, now, held, done, operator):
                 unwritten.append(rid)
         if locks:  # rule 11: the lock itself, its frame gone or not, and who sent it
             if read_t >= self._locked_next.get(rids[0], read_t):  # (a flood: said once)
@@ -1063,9 +1075,9 @@ class _Child:
         for rid in unwritten:  # rule 11: a stop with no frame of this express's, said
             if read_t >= self._heard_next.get(rid, read_t):  # (a flood: once in GAP_S)
                 self._heard_next[rid] = read_t + GAP_S
-                self.say(op="heard", rotator=rid, t=read_t)
+                self.say(op="heard", rotator=rid, t=read_t, **_sender(operator))
 
-    def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | bool:
+    def _stop(self, rid: str, operator: str | None) -> tuple[float, tuple[int, int], int] | bool:
         """Rule 3: the frame's one write, at once (True: written; False: nothing went, or
         another frame went within GAP_S); what a write cut short or refused leaves owed (when
         the stop came, the port, the bytes taken) is returned for ``_finish``."""
@@ -1088,10 +1100,12 @@ class _Child:
                 return now, held, done
             self._next[rid] = now + GAP_S
             self._stuck.discard(rid)
-        self.say(op="wrote", rotator=rid, t=now)
+        self.say(op="wrote", rotator=rid, t=now, **_sender(operator))  # (rule 11: who)
         return True
 
-    def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> bool:
+    def _finish(
+        self, rid: str, now: float, held: tuple[int, int], done: int, operator: str | None
+    ) -> bool:
         """Rule 9: the rest of a frame a write left owed, when the port takes bytes again;
         False if it is not whole (a half frame is no stop: rule 11 says it as none)."""
         with self._lock:
@@ -1106,7 +1120,7 @@ class _Child:
                 return False  # rule 3: nothing went; the session's own stop follows
             self._next[rid] = now + GAP_S
         if whole:
-            self.say(op="wrote", rotator=rid, t=now)
+            self.say(op="wrote", rotator=rid, t=now, **_sender(operator))
         else:
             self.say(op="half", rotator=rid)
         return whole
@@ -1212,3 +1226,9 @@ def main(argv: list[str]) -> int:
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv))
+
+
+def _sender(operator: str | None) -> dict[str, str]:
+    """Rule 11: who sent a stop, in the word that says it was written or heard (none: no
+    key, as before operators were named)."""
+    return {} if operator is None else {"operator": operator}
