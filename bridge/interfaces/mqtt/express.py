@@ -1224,11 +1224,11 @@ def main(argv: list[str]) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main(sys.argv))
-
-
 def _sender(operator: str | None) -> dict[str, str]:
     """Rule 11: who sent a stop, in the word that says it was written or heard (none: no
     key, as before operators were named)."""
     return {} if operator is None else {"operator": operator}
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
