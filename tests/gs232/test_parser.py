@@ -123,7 +123,10 @@ def test_easycomm_lines_are_read(line: str, request_: EasycommRequest) -> None:
 
 @pytest.mark.parametrize(
     "line",
-    ["AZnan EL0", "AZinf", "AZ1e9", "AZ99999.0", "EL--5", "AZ10 ELx", "AZ1,5", "AZ+"],
+    [
+        *("AZnan EL0", "AZinf", "AZ1e9", "AZ99999.0", "EL--5", "AZ10 ELx", "AZ1,5", "AZ+"),
+        *("AZ190 AZ200", "AZ10 EL5 EL50", "EL5 AZ10 el50"),  # which is meant? (not the last)
+    ],
 )
 def test_an_easycomm_line_with_a_malformed_number_does_nothing(line: str) -> None:
     request_ = parse_easycomm(line)
@@ -131,7 +134,9 @@ def test_an_easycomm_line_with_a_malformed_number_does_nothing(line: str) -> Non
     assert request_.az_deg is None and request_.el_deg is None and not request_.stop
 
 
-@pytest.mark.parametrize("line", ["SA SE AZ1x", "AZ1x SA SE", "SA SE EL--", "AZnan SA"])
+@pytest.mark.parametrize(
+    "line", ["SA SE AZ1x", "AZ1x SA SE", "SA SE EL--", "AZnan SA", "AZ190 SA AZ200"]
+)
 def test_a_stop_beside_a_malformed_easycomm_word_still_stops(line: str) -> None:
     """Package rule 6: the line does nothing else (rule 3), but stops."""
     request_ = parse_easycomm(line)

@@ -41,8 +41,9 @@ Rules:
 3. Easycomm II: a line's words are read together; ``AZ`` and ``EL`` without a number are
    questions, answered in one line in the order asked (``AZ120.0 EL0.0``), ``VE`` with
    ``VErotor-bridge``; ``AZx``/``ELy`` set (the axis left out keeps its target), ``SA``/``SE``
-   stop, ``PARK`` parks. A malformed number makes the whole line do nothing but stop
-   (rule 6: ``SA AZ1x`` stops, and is answered with the alarm). Refusals, moves it cannot
+   stop, ``PARK`` parks. A malformed number, or an axis given twice (``AZ190 AZ200``: which
+   is meant?), makes the whole line do nothing but stop (rule 6: ``SA AZ1x`` stops, and is
+   answered with the alarm). Refusals, moves it cannot
    do and a position it does not have are answered with an ``AL`` line; a radio's words
    (``UP``, ``DN``, ...) are ignored.
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
@@ -79,7 +80,8 @@ Rules:
     station's own are set on ``R/option``). An invalid command, a refused move and a stop the
     remote cannot deliver are answered with the banner; a stop itself is never answered (a
     real board prints the banner for a ``;`` while still, which only makes Hamlib flush).
-11. The protocols offered are one table, commands.EMULATIONS (key, session, ends): the
+11. The protocols offered are one table, commands.EMULATIONS (key, session, the parser's
+    look for a stop that lets a connection ahead of the accept budget, ends): the
     station (app.py) and the remote (remote/run.py) make every port and pty from it, and
     the settings' keys (settings_rotator.EMULATION_KEYS) name the same ones.
 12. A line that is no command the bridge carries out (GS-232's ``?>``: one it does not know,

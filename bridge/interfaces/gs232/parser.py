@@ -138,7 +138,8 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
         elif head in ("AZ", "EL") and value == "":
             queries.append(head)
         elif head in ("AZ", "EL"):
-            if not _NUMBER.fullmatch(value):
+            twice = az is not None if head == "AZ" else el is not None  # which one is meant?
+            if twice or not _NUMBER.fullmatch(value):  # (``AZ190 AZ200``: neither, not the last)
                 invalid = invalid or word[:16]  # (the line's stop words are still looked for)
                 continue
             if head == "AZ":
