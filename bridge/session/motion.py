@@ -34,7 +34,12 @@ Rules:
    turning: no target goes out before ``settle_s`` of stillness after the first reading. Without
    a brake (``brake_delay_s`` 0: SPID, SatEL, RotorCard) the rotor is never ``braking``: it is
    ``idle`` from the first still reading (a turning one shows ``moving`` at the next), and that
-   wait is kept apart (``settling``).
+   wait is kept apart (``settling``). Where its readings were lost while it turned or had a
+   target out (``link_down``: a port replugged, a controller silent mid-turn), the first
+   reading back is ``moving`` instead, from that reading: it stops as any turn does, when
+   readings show it still (rule 2), never by the clock alone (an attack pass: replies lost
+   for a moment after the first reading back, the clock settled it, the status showed it idle
+   while it turned, and an Easycomm's turn was then stopped as one nobody asked for).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -211,6 +216,7 @@ class Motion:
     az_from_deg: float | None = None
     el_from_deg: float | None = None
     past: Past | None = None  # rule 10: the limit the last target's turn went past, if it did
+    lost_turning: bool = False  # rule 4: its readings were lost while it turned (link_down)
 
 
 class Event(enum.StrEnum):
@@ -255,11 +261,24 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         # we cannot know whether it is still turning or braking: assume the worst once
         worst = cfg.az_span_deg / cfg.nominal_speed_deg_s
         return Motion(state=UNKNOWN, busy_until_t=now + worst)
-    return Motion(state=OFFLINE, position_deg=m.position_deg, el_position_deg=m.el_position_deg)
+    return Motion(
+        state=OFFLINE,
+        position_deg=m.position_deg,
+        el_position_deg=m.el_position_deg,
+        lost_turning=m.lost_turning,
+    )
 
 
 def link_down(m: Motion) -> Motion:
-    return Motion(state=OFFLINE, position_deg=m.position_deg, el_position_deg=m.el_position_deg)
+    """The readings lost (the port closed, the controller silent): whether it was turning, or
+    had a target out, is kept for the first reading back (rule 4)."""
+    turning = m.state is MOVING or m.target_deg is not None or m.el_target_deg is not None
+    return Motion(
+        state=OFFLINE,
+        position_deg=m.position_deg,
+        el_position_deg=m.el_position_deg,
+        lost_turning=turning or m.lost_turning,
+    )
 
 
 def track_lost(m: Motion, cfg: MotionConfig) -> Motion:
@@ -300,6 +319,22 @@ def target_error(m: Motion, cfg: MotionConfig) -> float | None:
 def reading(
     m: Motion, cfg: MotionConfig, az_deg: float, now: float, el_deg: float | None = None
 ) -> tuple[Motion, list[Event]]:
+    if m.anchor_deg is None and m.lost_turning:
+        # rule 4: the first reading back where it was turning when its readings were lost: it
+        # turns until readings show it still (rule 2), not still by the clock
+        m = replace(
+            m,
+            state=MOVING,
+            position_deg=az_deg,
+            anchor_deg=az_deg,
+            el_position_deg=el_deg,
+            el_anchor_deg=el_deg,
+            last_move_t=now,
+            changed_t=now,
+            lost_turning=False,
+            stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,
+        )
+        return tick(m, cfg, now, read=True)
     if m.anchor_deg is None:
         # first reading since the link came up: the brake window may still be running
         m = replace(

@@ -214,7 +214,8 @@ def test_a_stop_to_a_stalled_rotor_is_sent_again_when_it_turns_after_all(rig: Ri
 
 def reconnected_mid_turn(rig: Rig, model: str) -> VirtualRotator:
     """Turning to 170 when its adapter was pulled and plugged back in: the first reading of the
-    new connection takes the turning rotor for at rest (motion.py rule 4)."""
+    new connection shows it turning, from that reading on (motion.py rule 4; it was taken for
+    at rest, braking or settling, before an attack pass)."""
     v = rig(model)
     v.run_until_state(IDLE, 60)
     v.target(170)
@@ -229,13 +230,12 @@ def reconnected_mid_turn(rig: Rig, model: str) -> VirtualRotator:
 
 @pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
 def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, model: str) -> None:
-    """stops.py rule 2: the first reading of a new connection takes a rotor that turned on
-    meanwhile for at rest (braking, or settling without a brake: motion.py rule 4, it may be
-    turning); an operator's STOP then, lost
-    on the line, is sent again once the readings show it turning (an attack pass: a stop to a
-    rotor taken for at rest went unchecked, and the rotor ran on to its old target)."""
+    """stops.py rule 2: an operator's STOP right after a reconnect mid-turn, lost on the line,
+    is sent again once the readings show the rotor turning on (an attack pass: a stop to a
+    rotor the first reading back took for at rest went unchecked, and the rotor ran on to its
+    old target)."""
     v = reconnected_mid_turn(rig, model)
-    assert v.state is not MOVING
+    assert v.state is MOVING  # (motion.py rule 4: turning until readings show it still)
     v.drop_writes(v.cfg.spec.codec_factory().encode_stop())  # (a codec of its own: SPID's
     # encode_stop notes the reply it asks for)
     v.stop()

@@ -1,0 +1,121 @@
+"""A port replugged (or a controller silent) while the rotor turns to the user's target: the
+first reading back is a turn (motion.py rule 4), which stops when readings show it still, never
+by the clock. An attack pass: its first reading taken, its replies then lost for a moment, the
+clock settled it, the status said idle while it turned, and where unasked turns are stopped
+(controller.py rule 10) the user's own turn was stopped, blamed on a noisy line or a hand."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.core.model import ErrorKind, MotionState, Target
+from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual_composite import VirtualComposite
+
+
+def _replug_then_lose_replies(
+    v: VirtualRotator | VirtualComposite, box: VirtualRotator, lost_s: float
+) -> float:
+    """Unplug ``box`` mid-turn for 2 s, replug, let its first reading through, then lose its
+    replies for ``lost_s``. Returns the unplug time."""
+    t = v.now
+    box.link_down()
+    v.run_for(2.0)
+    tl = v.now
+    box.link_up()
+    v.run_until(lambda h: any(tt >= tl and s.available for tt, s in box.statuses), 5)
+    v.run_for(0.02)  # the first reading back taken (it was turning: shown as it is)
+    box.set_silent(True)
+    v.run_for(lost_s)
+    box.set_silent(False)
+    return t
+
+
+@pytest.mark.parametrize("lost_s", [1.5, 2.5])
+def test_a_turn_across_a_replug_is_not_stopped_as_unasked_after_a_few_lost_replies(
+    lost_s: float,
+) -> None:
+    with VirtualRotator("easycomm3") as v:  # unasked_moves = "stop", its default
+        v.run_until(lambda h: h.status.available, 10)
+        v.run_for(1.0)
+        v.target(200.0, 0.0)
+        v.run_until(lambda h: h.truth().az_deg > 8, 30)
+        t = _replug_then_lose_replies(v, v, lost_s)
+        v.run_for(60.0)
+        stops = [e.message for e in v.errors(ErrorKind.STOP, since=t)]
+        assert stops == [], stops  # observed: "the rotor turned with no command from the bridge"
+        assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)  # observed: 30-36
+
+
+def test_a_composite_turn_across_a_replug_of_its_azimuth_box_is_not_cut_short() -> None:
+    with VirtualComposite("easycomm3", "gs232b") as v:
+        v.run_until(lambda h: h.status.available, 20)
+        v.run_for(1.0)
+        v.aim(Target(200.0, 30.0))
+        v.run_until(lambda h: h.az.truth().az_deg > 8, 30)
+        t = _replug_then_lose_replies(v, v.az, 1.5)
+        v.run_for(60.0)
+        assert [e.message for e in v.az.errors(ErrorKind.STOP, since=t)] == []
+        assert v.az.truth().az_deg == pytest.approx(200.0, abs=1.0)
+
+
+@pytest.mark.parametrize("lost_s", [0.0, 1.5])
+@pytest.mark.parametrize(
+    "model", ["gs232b", "easycomm3-az", "rt21", "rot2prog", "md01", "rc2800-az", "prosistel"]
+)
+def test_no_idle_status_while_a_rotor_known_to_turn_turns_after_a_replug(
+    model: str, lost_s: float
+) -> None:
+    emu = {"az_speed_deg_s": 6.0} if model == "rt21" else {}
+    with VirtualRotator(model, emulator=emu) as v:
+        v.run_until(lambda h: h.status.available, 20)
+        v.run_for(1.0)
+        v.target(200.0)
+        v.run_until(lambda h: abs(h.truth().az_deg) > 8, 30)
+        _replug_then_lose_replies(v, v, lost_s)
+        lying = 0.0  # seconds an online status said idle while the rotor turned
+        for _ in range(200):
+            v.run_for(0.05)
+            if v.status.available and v.status.state is MotionState.IDLE and v.truth().is_moving:
+                lying += 0.05
+        # a moment is a poll; observed: seconds (the first reading back settles by the clock)
+        assert lying <= 1.0, (lying, v.truth().az_deg)
+
+
+def test_a_turn_across_a_silence_is_not_stopped_as_unasked_after_a_few_lost_replies() -> None:
+    """The same after the controller went silent mid-turn (offline) and answered again."""
+    with VirtualRotator("easycomm3") as v:
+        v.run_until(lambda h: h.status.available, 10)
+        v.run_for(1.0)
+        v.target(200.0, 0.0)
+        v.run_until(lambda h: h.truth().az_deg > 8, 30)
+        t = v.now
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 5, "answering again")
+        v.run_for(0.02)
+        v.set_silent(True)
+        v.run_for(1.5)
+        v.set_silent(False)
+        v.run_for(60.0)
+        assert [e.message for e in v.errors(ErrorKind.STOP, since=t)] == []
+        assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
+def test_a_rotor_ez_turn_across_a_replug_is_not_stopped_after_a_few_lost_replies(
+    model: str,
+) -> None:
+    """The Rotor-EZ's "after-stop" guard: the rest the clock made is short of the target out."""
+    with VirtualRotator(
+        model, settings={"brake_delay_s": 1.0}, emulator={"speed_deg_s": 6.0, "brake_delay_s": 1.0}
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10)
+        v.run_for(6.0)
+        v.target(200.0)
+        v.run_until(lambda h: h.truth().az_deg > 8, 30)
+        t = _replug_then_lose_replies(v, v, 2.5)
+        v.run_for(60.0)
+        assert [e.message for e in v.errors(ErrorKind.STOP, since=t)] == []
+        assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)
