@@ -25,9 +25,11 @@ Rules:
    command ended tracking in the azimuth box alone, and the elevation box went on tracking
    by itself, the status saying nothing was tracked).
 3. The status is the azimuth box's, with the elevation box's elevation and elevation target:
-   connected and available only when both are, offline when either is (the judge then refuses
-   targets and track commands: the safe side), moving when either moves; the last error is the
-   newer of the two.
+   connected and available only when both are (the judge then refuses targets and track
+   commands: the safe side), moving when either is read turning, else offline when either
+   is; the last error is the newer of the two. (An attack pass: the azimuth box read turning
+   on while the elevation box was unplugged was shown offline and not moving, and a group
+   with that rotator said idle.)
 4. Tracking and following run in both sessions (each aims its own axis); when one ends (an
    unplugged box, a stop, the horizon) the other is ended too, and the status says why the
    first one ended. One that runs in a box while the other does not answer (begun there
@@ -130,10 +132,10 @@ def merge(
 ) -> RotatorStatus:
     """Rule 3: the rotator's status from its two boxes' (``error``: the newer last error)."""
     states = {az.state, el.state}
-    if MotionState.OFFLINE in states:
-        state = MotionState.OFFLINE
-    elif MotionState.MOVING in states:
+    if MotionState.MOVING in states:  # (a box read turning while the other is out: turning)
         state = MotionState.MOVING
+    elif MotionState.OFFLINE in states:
+        state = MotionState.OFFLINE
     else:
         order = (MotionState.STALLED, MotionState.BRAKING, MotionState.UNKNOWN)
         state = next((s for s in order if s in states), az.state)

@@ -6,6 +6,7 @@ against the test's own solar formula (tests/support/sky.py)."""
 from __future__ import annotations
 
 import itertools
+import json
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from bridge.core.model import (
     ErrorKind,
     FeatureCommand,
     MotionState,
+    RotatorStatus,
     Source,
     Stop,
     Target,
@@ -26,6 +28,7 @@ from bridge.core.model import (
 )
 from bridge.feature import Feature
 from bridge.features import FEATURES
+from bridge.interfaces.mqtt.groups import Group, Member, status_json
 from bridge.protocols.axes import Axis
 from bridge.runtime.composite import CompositeWorker
 from bridge.runtime.port import PortError
@@ -120,12 +123,14 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
         v.run_for(2.0)
         v.el.link_down()
         v.run_for(0.1)
-        assert not v.status.available and v.status.state is MotionState.OFFLINE
+        # (offline; but the azimuth box is read turning on: shown so, composite.py rule 3)
+        assert not v.status.available and v.status.state is MotionState.MOVING
         assert v.status.last_error == "virtual port unplugged"
         t = v.now
         v.stop()
         assert v.az.sent(since=t) == [b";"]  # the box still plugged stops at once
         v.run_for(3.0)
+        assert v.status.state is MotionState.OFFLINE  # (the azimuth at rest, the other out)
         az = v.az.truth().az_deg
         v.run_for(3.0)
         assert v.az.truth().az_deg == az < 100.0  # still, short of the target
@@ -133,6 +138,23 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
         assert v.el.sent(since=v.now)[:1] == [b"S\r"]
         v.run_until(online, 10, "both boxes answer again")
         assert v.status.state is not MotionState.OFFLINE
+
+
+def test_a_group_with_a_rotator_whose_azimuth_box_turns_on_alone_says_it_moves() -> None:
+    """An attack pass: the elevation box unplugged mid-turn (the azimuth's turn on its way
+    goes on, rule 8), the rotator was shown offline and not moving, and a group with it and
+    an idle rotator said idle."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 30.0))
+        v.run_for(2.0)
+        v.el.link_down()
+        v.run_for(3.0)
+        assert v.az.truth().is_moving and v.status.moving and not v.status.available
+        mast = RotatorStatus("mast", state=MotionState.IDLE, bearing_deg=10.0, available=True)
+        group = Group("stack", "stack", (Member("sky"), Member("mast")))
+        doc = json.loads(status_json(group, {"sky": v.status, "mast": mast}, {}))
+        assert doc["moving"] and doc["state"] == "moving" and doc["available"]
 
 
 def test_a_target_held_back_in_one_box_is_dropped_when_the_other_is_unplugged() -> None:

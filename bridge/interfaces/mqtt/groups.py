@@ -128,13 +128,15 @@ def group_available(statuses: Mapping[str, RotatorStatus | None]) -> bool:
 
 
 def group_state(statuses: Mapping[str, RotatorStatus | None]) -> MotionState:
-    """Moving while any member moves; offline when none is available; else the first
-    member's state that is not idle, or idle."""
+    """Moving while any member is read turning, available or not (a composite's azimuth box
+    turning on while its elevation box is out: an attack pass found the group said idle);
+    offline when none is available; else the first member's state that is not idle, or
+    idle."""
+    if any(s is not None and s.state is MotionState.MOVING for s in statuses.values()):
+        return MotionState.MOVING
     known = [s for s in statuses.values() if s is not None and s.available]
     if not known:
         return MotionState.OFFLINE
-    if any(s.state is MotionState.MOVING for s in known):
-        return MotionState.MOVING
     for s in known:
         if s.state is not MotionState.IDLE:
             return s.state
