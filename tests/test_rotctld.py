@@ -924,6 +924,7 @@ def test_clients_dropped_for_room_are_logged_once_with_a_count(
         (b"p\n", False),
         (b"P 200 10\n", False),
         (b"\\get_pos\n", False),
+        (b"q\nS\n", False),  # (the quit ends the connection first: an attack pass)
     ],
 )
 def test_a_stop_among_the_first_commands_is_told_for_the_accept_loop(

@@ -880,3 +880,132 @@ def test_a_polling_program_keeps_its_connection_beside_a_trickle_of_silent_conne
         gpredict.close()
         for sock in trickle:
             sock.close()
+
+
+def _connect(port: int, data: bytes = b"", src: str = "127.0.0.1") -> socket.socket:
+    sock = socket.socket()
+    sock.settimeout(slow(10))
+    sock.bind((src, 0))
+    sock.connect(("127.0.0.1", port))
+    if data:
+        sock.sendall(data)
+    return sock
+
+
+def _answer(sock: socket.socket, n: int) -> bytes:
+    """``n`` bytes of reply, or what a reset connection gives (b"<reset>")."""
+    try:
+        return _read(sock, n)
+    except (ConnectionResetError, BrokenPipeError):
+        return b"<reset>"
+
+
+def test_stops_a_session_would_never_run_go_no_faster_than_any_command(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """An attack pass: ``GET / HTTP/1.0`` then ``S`` held a stop for the accept loop, which the
+    session never runs (HttpGuard closes it): a flood of them spent the stops' budget and kept
+    every waiting place, and the operator's real stop was the connection reset. The stop is
+    looked for in what HttpGuard lets through."""
+    tower, server = gs232(clock=FakeClock(), max_clients=4)
+    fakes = [_connect(server.port, b"GET / HTTP/1.0\r\nS\r\n") for _ in range(40)]
+    try:
+        wait_until(lambda: len(server.waiting) == 16, 10, "the fakes wait, over the budget")
+        with _connect(server.port, b"S\rC\r") as operator:
+            assert _answer(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+    finally:
+        for sock in fakes:
+            sock.close()
+
+
+def test_every_loopback_address_shares_one_budget(
+    gs232: Callable[..., tuple[_Tower, LineServer]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """An attack pass: a local program may bind each connection to another address of
+    127.0.0.0/8; each had a budget of its own, and 200 connections started 200 threads."""
+    caplog.set_level(logging.DEBUG, logger="bridge.interfaces.tcplines")
+    _tower, server = gs232(clock=FakeClock())  # (64 may wait)
+    for i in range(60):
+        _connect(server.port, b"C\r", src=f"127.0.{i // 250}.{i % 250 + 1}").close()
+
+    def connected() -> int:
+        return sum(r.getMessage().endswith(" connected") for r in caplog.records)
+
+    wait_until(lambda: connected() + len(server.waiting) == 60, 10, "each started or waiting")
+    assert connected() <= ACCEPTS_S, connected()
+
+
+def test_a_polling_program_keeps_its_connection_beside_silent_ones_from_other_loopback_addresses(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """The trickle above, from 127.0.0.2, .3, ... (an attack pass: YOUNG_KEPT counted per
+    address, so all were kept before Gpredict, which was dropped with its STOP)."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock)
+    gpredict = _connect(server.port, b"C\r")
+    trickle: list[socket.socket] = []
+    try:
+        assert _read(gpredict, 8) == b"AZ=120\r\n"
+        for i in range(17):
+            clock.t += 0.1
+            sock = _connect(server.port, src=f"127.0.0.{i + 2}")
+            trickle.append(sock)
+            wait_until(lambda sock=sock: _served(server, sock), 10, "taken")  # type: ignore[misc]
+        gpredict.sendall(b"S\rC\r")
+        assert _answer(gpredict, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+    finally:
+        gpredict.close()
+        for sock in trickle:
+            sock.close()
+
+
+def test_a_stop_split_across_segments_outlasts_the_silent_connections_that_came_before_it(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """An attack pass: with every waiting place taken by silent connections, the operator's
+    ``S`` (its CR in the next segment) was the first reset when one more came: the newest
+    with bytes went first. The oldest waiting goes now: the operator's connection is the
+    newest."""
+    tower, server = gs232(clock=FakeClock(), max_clients=4)
+    held = [_connect(server.port) for _ in range(int(ACCEPTS_S) + 16)]  # the burst, then full
+    try:
+        wait_until(lambda: len(server.waiting) == 16, 10, "every waiting place taken")
+        operator = _connect(server.port, b"S")
+        wait_until(lambda: len(server.waiting) == 16 and _gone(held[int(ACCEPTS_S)]), 10, "in")
+        held.append(_connect(server.port))  # one more silent connection
+        wait_until(lambda: _gone(held[int(ACCEPTS_S) + 1]), 10, "the next oldest reset")
+        operator.sendall(b"\rC\r")
+        assert _answer(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+        operator.close()
+    finally:
+        for sock in held:
+            sock.close()
+
+
+def test_a_waiting_connection_is_read_for_a_stop_once_per_bytes_it_sent(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """An attack pass: the accept thread read every waiting connection for a stop again for
+    each newcomer and at every wake-up (some 33 parses a connection: 18 s of CPU in 20 s of
+    a flood, the operator's stops 4 s late); once per bytes sent now."""
+    calls = [0]
+
+    def counting(data: bytes) -> bool:
+        calls[0] += 1
+        return gs232_holds_stop(data)
+
+    _tower, server = gs232(clock=FakeClock(), halts=counting, max_clients=4)  # (16 wait)
+    held = [_connect(server.port, b"C\r") for _ in range(int(ACCEPTS_S) + 16)]
+    try:
+        wait_until(lambda: len(server.waiting) == 16, 10, "every waiting place taken")
+        before = calls[0]
+        for _ in range(50):  # newcomers with bytes: each read once, the oldest reset
+            held.append(_connect(server.port, b"C\r"))
+        wait_until(lambda: _gone(held[-50 - 1]), 10, "the older ones reset")
+        assert calls[0] - before <= 2 * 50 + 16, calls[0] - before
+    finally:
+        for sock in held:
+            sock.close()

@@ -32,9 +32,9 @@ Rules:
    connection dropped it before the stop it was opened for came), of one address only the
    YOUNG_KEPT newest (an attack pass: all of them were, and a silent connection every 0.1 s
    dropped Gpredict again and again, with the STOP it had sent; the rest rank as never
-   finished a command); then one with a command
-   half received now, the one whose half came first (a program's is milliseconds old); last
-   one with a complete command line not read yet or being read (a stop, maybe). A client
+   finished a command); then one with a command half received now, the one whose half came
+   first (a program's is milliseconds old); last one with a complete command line not read
+   yet or being read (a stop, maybe). A client
    dropped carries out nothing more of what it sent (a review: a flood dropped for the
    operator read on its queued targets after the operator's stop). Drops are logged at most
    once per 10 s, with a count and why.
@@ -42,8 +42,10 @@ Rules:
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
    past that makes room among its own clients the same way, so one host's connections cannot
    fill the port for the others. Loopback has no such share: every program on the host is
-   127.0.0.1 (or ::1), so a share would be a limit on the shack's own programs; there the
-   make-room rule is what lets the operator in.
+   loopback (127.0.0.0/8 and ::1 count as one address, here and in rule 5: a program may
+   bind any of them, an attack pass took 500), so a share would be a limit on the shack's
+   own programs; there the make-room rule is what lets the operator in. An IPv6 address
+   counts as its /64.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
 5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
@@ -56,17 +58,23 @@ Rules:
    stop in 1, 2 or 4 s later, 8 stops of 40; now 0 of 40 took over 0.2 s,
    benchmarks/operator_stop_flood.py); one its peer already closed is closed with no thread
    and no budget; one over its peer's budget waits in the accept loop, no thread, until the budget
-   allows (oldest first), and is closed as soon as its peer leaves. One whose first complete
-   commands (rule 6; READ_BYTES of them, what its first read takes) hold a stop, as the front
-   end's parser says (``halts``), goes at once, ahead of the budget, STOP_ACCEPTS_S a second
-   from one address at most; any other command waits its turn (an attack pass: every complete
-   line went ahead, and four threads connecting, asking ``C`` and closing started 8,726
-   client threads in 2 s: the serial-lines thread starved and a controller was called
-   silent). At most ``max_clients`` wait; past that the newest without a stop unread is
-   reset, one that sent bytes before one that has sent nothing yet (it may be about to)
-   (said at most once per LOG_S). A client's coming and going is logged at INFO CHATTER_S a
-   second at most (a burst of CHATTER_BURST), the rest at DEBUG (the same pass: 1,863 lines
-   a second, past journald's limit, which then drops the service's warnings too). accept()
+   allows (oldest first), and is closed as soon as its peer leaves (one that sent bytes: when
+   it is let in). One whose first commands (READ_BYTES of them, what its first read takes)
+   hold a stop its session would carry out (what HttpGuard lets through, read by the front
+   end's parser, ``halts``: rotctld's stops before a quit) goes at once, ahead of the budget,
+   STOP_ACCEPTS_S a second from one address at most; any other command waits its turn (an
+   attack pass: every complete line went ahead, and four threads connecting, asking ``C`` and
+   closing started 8,726 client threads in 2 s, the serial-lines thread starved and a
+   controller was called silent; the next pass: a request line before an ``S`` held a stop
+   for the loop, never run, and a flood of them kept the operator's real one out). A waiting
+   connection is read for a stop once per bytes it sent (the same pass: read again for every
+   newcomer, 18 s of the accept thread's CPU in 20). At most 4 ``max_clients`` wait; past
+   that the oldest without a stop unread is reset (the newest is the one an operator opened
+   for a stop, maybe sent in two segments: an attack pass found it the first reset), and if
+   every one holds a stop, the newcomer (said at most once per LOG_S). A client's coming and
+   going is logged at INFO CHATTER_S a second at most (a burst of CHATTER_BURST), the rest at
+   DEBUG (an attack pass: 1,863 lines a second, past journald's limit, which then drops the
+   service's warnings too), and a connection refused as HTTP at most once per LOG_S. accept()
    out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said at most once per
    LOG_S); any error in the loop is logged so and the loop carries on. Over budget
    is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
@@ -98,6 +106,7 @@ import socket
 import struct
 import threading
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
@@ -225,8 +234,27 @@ def _newest_young(pool: list[tuple[socket.socket, _Client]], now: float) -> set[
     young: dict[str, list[tuple[float, socket.socket]]] = {}
     for conn, k in pool:
         if not k.done and k.pending_s is None and now - k.since_s <= PENDING_GRACE_S:
-            young.setdefault(k.host, []).append((k.since_s, conn))
-    return {c for each in young.values() for _t, c in sorted(each)[-YOUNG_KEPT:]}
+            young.setdefault(_peer_key(k.host), []).append((k.since_s, conn))
+    newest = (sorted(each, key=lambda pair: pair[0])[-YOUNG_KEPT:] for each in young.values())
+    return {conn for each in newest for _t, conn in each}
+
+
+def _peer_key(host: str) -> str:
+    """Rules 3 and 5: whose budget and share a connection from ``host`` counts against: every
+    loopback address is one (a program on the host may bind any of 127.0.0.0/8: an attack pass
+    took 500 of them, a budget each), an IPv6 address its /64 (one host has all of it), any
+    other address its own."""
+    if _loopback(host):
+        return "loopback"
+    try:
+        addr = ipaddress.ip_address(host.split("%")[0])
+    except ValueError:
+        return host
+    if isinstance(addr, ipaddress.IPv6Address):
+        if addr.ipv4_mapped is not None:
+            return str(addr.ipv4_mapped)
+        return str(ipaddress.ip_network(f"{addr}/64", strict=False))
+    return host
 
 
 def _loopback(host: str) -> bool:
@@ -334,6 +362,12 @@ class LineServer:
         self._ends = ends
         self._halts = halts
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
+        self._http_log = RareLog()
+        self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
+            weakref.WeakKeyDictionary()
+        )  # rule 5: a waiting connection's bytes peeked, and whether they hold a stop
+        self._waiting_max = 4 * max_clients  # rule 5
+        self.waiting: dict[socket.socket, tuple[str, int]] = {}  # the accept loop's, once run
         self._chatter = TokenBucket.full(CHATTER_BURST, CHATTER_S, clock())  # rule 5
         self._paused_log = RareLog()
         self._dropped_log = RareLog()
@@ -457,6 +491,7 @@ class LineServer:
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
         waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
+        self.waiting = waiting  # (read by the tests: how many wait)
         with selectors.DefaultSelector() as sel:
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
@@ -501,27 +536,73 @@ class LineServer:
                 sel.unregister(conn)
             if not _alive(conn):
                 del waiting[conn]
+                self._looked.pop(conn, None)
                 conn.close()
-            elif self._stop_first(conn, waiting[conn][0]):  # a stop: ahead of the budget
-                peer = waiting.pop(conn)
-                conn.setblocking(True)
-                self._admit(conn, peer)
+            elif self._stop_in(conn):  # a stop: ahead of the budget, or at the door
+                self._stop_now(conn, waiting.pop(conn), waiting)
         return False
 
-    def _stop_first(self, conn: socket.socket, host: str) -> bool:
-        """Rule 5: whether ``conn`` goes ahead of its peer's budget: a stop among its first
-        complete commands (READ_BYTES of them, what its first read takes), within its peer's
-        STOP_ACCEPTS_S a second. Any other command waits for the budget (an attack pass: any
-        complete line went ahead, and connect, ``p``, close from a few threads started 4,000
-        client threads a second, the serial thread starved and a controller called silent)."""
+    def _stop_in(self, conn: socket.socket) -> bool:
+        """Rule 5: whether ``conn``'s first commands (READ_BYTES of them, what its first read
+        takes) hold a stop its session would carry out: what HttpGuard lets through, read by
+        the front end's parser (``halts``). Asked again only when more bytes came."""
         if self._halts is None:
             return False
         data = _peek(conn, self._read_bytes)
-        cut = max(data.rfind(bytes([end])) for end in self._ends)
-        if cut < 0 or not self._halts(data[: cut + 1]):
-            return False
+        seen = self._looked.get(conn)
+        if seen is not None and seen[0] == len(data):
+            return seen[1]
+        guard = HttpGuard(self._ends)
+        body = guard.feed(data)
+        stop = bool(body) and guard.http is None and self._halts(body)
+        self._looked[conn] = (len(data), stop)
+        return stop
+
+    def _stop_now(
+        self,
+        conn: socket.socket,
+        peer: tuple[str, int],
+        waiting: dict[socket.socket, tuple[str, int]],
+    ) -> None:
+        """Rule 5: a connection whose first commands hold a stop: a thread at once, within its
+        peer's STOP_ACCEPTS_S a second, else it waits (no thread), ahead of the others when
+        room must be made (``_queue``). Past that budget the stops come from one program
+        faster than any operator sends them: the rotor is stopped by them already."""
         now = self._clock()
-        return self._bucket(self._stop_accepts, host, STOP_ACCEPTS_S, now).take(now)
+        if self._bucket(self._stop_accepts, _peer_key(peer[0]), STOP_ACCEPTS_S, now).take(now):
+            self._looked.pop(conn, None)
+            conn.setblocking(True)
+            self._admit(conn, peer)
+        else:
+            self._queue(conn, peer, waiting)
+
+    def _queue(
+        self,
+        conn: socket.socket,
+        peer: tuple[str, int],
+        waiting: dict[socket.socket, tuple[str, int]],
+    ) -> None:
+        """Rule 5: ``conn`` waits, no thread. Full (WAITING_MAX): the oldest waiting that holds
+        no stop is reset to make room (the newest is the operator's, come to send one: an
+        attack pass found the newest reset first, a stop split across segments with it); if
+        every one holds a stop, ``conn`` itself (their stops, carried out after it came, are
+        its own)."""
+        if len(waiting) >= self._waiting_max:
+            gone = next((c for c in waiting if not self._stop_in(c)), conn)
+            if gone is not conn:
+                del waiting[gone]
+            self._looked.pop(gone, None)
+            _reset(gone)
+            self._over_log.warn(
+                self._clock(),
+                "%s for %s: %s connects faster than a client may: connection reset",
+                self.label,
+                self.rotator_id,
+                peer[0],
+            )
+            if gone is conn:
+                return
+        waiting[conn] = peer
 
     def _take(
         self,
@@ -530,8 +611,9 @@ class LineServer:
         sel: selectors.BaseSelector,
     ) -> bool:
         """Rule 5: one connection from the kernel's queue, at once: closed if its peer already
-        left, a thread if its peer is within its budget, else it waits here (no thread); False
-        when the queue had none (or accept failed)."""
+        left, a thread if its peer is within its budget (or its first commands hold a stop:
+        ``_stop_now``), else it waits here (no thread); False when the queue had none (or
+        accept failed)."""
         try:
             conn, peer = listener.accept()
         except BlockingIOError:
@@ -547,78 +629,54 @@ class LineServer:
             conn.close()
             return True
         now = self._clock()
-        queued = any(p[0] == peer[0] for p in waiting.values())
-        ready = self._stop_first(conn, peer[0])  # a stop waiting: ahead of the budget
-        if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
+        key = _peer_key(peer[0])
+        if self._stop_in(conn):
+            self._stop_now(conn, peer, waiting)
+        elif not any(_peer_key(p[0]) == key for p in waiting.values()) and self._accept_budget(
+            key, now
+        ).take(now):
+            self._looked.pop(conn, None)
             conn.setblocking(True)
             self._admit(conn, peer)
-            return True
-        if len(waiting) >= self._max_clients:  # the newest without a stop unread goes
-            partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
-            silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
-            gone = next((c for c in partial + silent if not self._holds_stop(c)), conn)
-            if gone is conn:
-                _reset(conn)
-            else:
-                if gone in sel.get_map():
-                    sel.unregister(gone)
-                del waiting[gone]
-                _reset(gone)
-            self._over_log.warn(
-                now,
-                "%s for %s: %s connects faster than a client may: connection reset",
-                self.label,
-                self.rotator_id,
-                peer[0],
-            )
-            if gone is conn:
-                return True
-        waiting[conn] = peer
-        sel.register(conn, selectors.EVENT_READ)
+        else:
+            self._queue(conn, peer, waiting)
+        if conn in waiting and not _peek(conn, 1):  # silent: woken by its first bytes (those
+            sel.register(conn, selectors.EVENT_READ)  # that sent some: _admit_waiting looks)
         return True
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
     ) -> float | None:
-        """Rule 5: a thread for each waiting connection with a complete command line, then
-        for each whose peer is back in credit, oldest first; returns how long until the next
-        one may go (None: none waits)."""
+        """Rule 5: each waiting connection whose first commands hold a stop (``_stop_now``),
+        then a thread for each whose peer is back in credit, oldest first; returns how long
+        until the next may go (None: none waits)."""
         now = self._clock()
         next_s: float | None = None
         held: set[str] = set()
         for conn, peer in list(waiting.items()):
-            if conn not in sel.get_map():  # it has sent bytes: see whether a stop is complete
-                if self._stop_first(conn, peer[0]):
+            if conn in waiting and conn not in sel.get_map():  # it sent bytes: a stop now?
+                if self._stop_in(conn):
                     del waiting[conn]
-                    conn.setblocking(True)
-                    self._admit(conn, peer)
-                else:
+                    self._stop_now(conn, peer, waiting)
+                if conn in waiting:
                     next_s = PARTIAL_POLL_S
         for conn, peer in list(waiting.items()):
-            if peer[0] in held:
+            key = _peer_key(peer[0])
+            if key in held or conn not in waiting:
                 continue
-            bucket = self._accept_budget(peer[0], now)
+            bucket = self._accept_budget(key, now)
             if not bucket.take(now):
-                held.add(peer[0])
+                held.add(key)
                 wait_s = max(0.001, (1.0 - bucket.tokens) / bucket.rate_per_s)
                 next_s = wait_s if next_s is None else min(next_s, wait_s)
                 continue
-            if conn not in waiting:
-                continue
             del waiting[conn]
+            self._looked.pop(conn, None)
             if conn in sel.get_map():
                 sel.unregister(conn)
             conn.setblocking(True)
             self._admit(conn, peer)
         return next_s
-
-    def _holds_stop(self, conn: socket.socket) -> bool:
-        """Rule 5: a stop among the complete commands ``conn`` has sent (no budget asked)."""
-        if self._halts is None:
-            return False
-        data = _peek(conn, self._read_bytes)
-        cut = max(data.rfind(bytes([end])) for end in self._ends)
-        return cut >= 0 and self._halts(data[: cut + 1])
 
     def _accept_budget(self, host: str, now: float) -> TokenBucket:
         return self._bucket(self._accepts, host, ACCEPTS_S, now)
@@ -646,7 +704,8 @@ class LineServer:
             return False, "stopping"
         pool = list(self._clients.items())
         if not _loopback(host):
-            own = [(c, k) for c, k in pool if k.host == host]
+            key = _peer_key(host)
+            own = [(c, k) for c, k in pool if _peer_key(k.host) == key]
             if len(own) >= self._max_per_peer:
                 pool, why = own, f"{host}'s share of {self._max_per_peer} slots"
             elif len(pool) < self._max_clients:
@@ -770,8 +829,9 @@ class LineServer:
                     break
                 last_bytes, raw = self._clock(), len(data)
                 data = guard.feed(data)
-                if guard.http:
-                    log.warning(
+                if guard.http:  # (rare: a flood of them is one line at most once per LOG_S)
+                    self._http_log.warn(
+                        self._clock(),
                         "%s sent %s: connection closed, nothing executed "
                         "(a web page may try to reach %s on this host)",
                         who,

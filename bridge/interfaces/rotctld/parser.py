@@ -246,7 +246,12 @@ class RequestParser:
 
 
 def holds_stop(data: bytes) -> bool:
-    """Whether the commands ``data`` completes hold a stop (interfaces/tcplines.py rule 5:
-    a connection with one goes ahead of its address's budget)."""
-    made = RequestParser().feed(data)
-    return any(isinstance(r, Request) and r.command.name == "stop" for r in made)
+    """Whether the commands ``data`` completes hold a stop the session carries out (before a
+    quit, which ends the connection first): interfaces/tcplines.py rule 5, a connection with
+    one goes ahead of its address's budget."""
+    for item in RequestParser().feed(data):
+        if isinstance(item, Quit):
+            return False
+        if item.command.name == "stop":
+            return True
+    return False
