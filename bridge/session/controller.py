@@ -415,6 +415,7 @@ class Controller:
         self._doubted = NOT_DOUBTED  # rule 9: a reading of a rotor not turning asked again
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
+        self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
@@ -542,6 +543,7 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
+        self._first_unread = False
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
@@ -573,7 +575,7 @@ class Controller:
         if self.stops.owed and unseen is not None and unseen == self._released_unseen_t:
             self._released_owed = True  # (the released lock's: stops.py rule 2)
         self.link = None
-        self.answering = False
+        self.answering = self._first_unread = False
         self._lose_motion(mo.link_down)
         self._pass_ends = False  # (a last try not written: owed, checked as any)
 
@@ -746,6 +748,7 @@ class Controller:
                 self._ask_again(link, now, once=False)
             if not self.answering:  # rule 9: the first back, doubted, is an answer all the same
                 self._answers_again()
+                self._first_unread = True  # (the first taken is still the connection's first)
                 if self.stops.owed:  # stops.py rule 3: the stop it went silent with, at once
                     log.info(
                         "%s: sending again the stop it went silent before confirming", self.name
@@ -865,6 +868,9 @@ class Controller:
         if not self.answering:
             owed, first = self.stops.owed, True
             self._answers_again()
+        elif self._first_unread:  # rule 9: a doubted one made it answering; this is the first
+            first = True  # taken, a guess as any first is (stops.py rule 3; a review: it showed
+        self._first_unread = False  # a stop lost at the reconnect taken, and it was owed no more)
         cfg, was = self.cfg, self.motion
         before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
@@ -1285,7 +1291,7 @@ class Controller:
             elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
                 self.stops.repeat_due(m, math.inf)  # (a silent controller may still hear: its
                 self.stop(now)  # motion is lost with the readings just below)
-            self.answering, busy = False, False  # (the waiting target is dropped)
+            self.answering = busy = self._first_unread = False  # (the waiting target is dropped)
             unseen = self.stops.unseen_t
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
                 self.stops.owed = True  # when it answers again, as released if it was the

@@ -16,6 +16,7 @@ import pytest
 from bridge.core.model import ErrorKind, MotionState, Target
 from bridge.protocols.axes import Axis
 from bridge.session import controller as C
+from bridge.session.stops import STOP_UNSURE_S
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -260,6 +261,34 @@ def test_a_failing_sensor_after_a_replug_leaves_the_rotator_online_where_it_stoo
     assert {s.state for s in v.published(since=t)} <= {MotionState.OFFLINE, MotionState.IDLE}
     told = [e.message for e in v.errors(since=t)]
     assert any("readings in a row at rest disagree" in m for m in told), told
+
+
+def test_a_stop_lost_at_a_reconnect_stays_owed_when_the_first_reading_back_was_doubted(
+    rig: Rig,
+) -> None:
+    """A review: the first reading back doubted made the controller answering, so the first
+    one taken after it was no connection's first, and stops.py rule 3 took it for proof that
+    a STOP lost on the line at the reconnect had taken (a lone reading always looks still):
+    the port lost again, the stop was owed no more."""
+    v = at_rest(rig, "gs232b")  # at rest at 150
+    v.link_down()
+    v.run_for(1.0)
+    v.manual_rotate(300.0)  # it turns while the port is out (a hand at the panel)
+    v.run_for(4.0)
+    v.stop()  # the operator's STOP while the port is out: owed, the first frame at connect
+    v.run_for(0.2)
+    assert v.status.stop_owed
+    v.drop_writes(b"S\r")  # ... and the line loses it
+    stop_t = v.now
+    v.link_up()
+    c = v.session.controller
+    # the first reading back (~175) is doubted (apart from 150), the one asked at once taken
+    v.run_until(lambda h: c.motion.position_deg is not None and c.motion.position_deg > 160, 10)
+    v.run_until(lambda h: h.now >= stop_t + STOP_UNSURE_S + 0.01, 5)
+    assert v.truth().is_moving  # the stop never arrived
+    v.link_down()  # the adapter drops out again
+    v.run_for(0.2)
+    assert v.status.stop_owed
 
 
 # -- where the rule's first form did not reach (a cold review) ---------------------------------
