@@ -23,6 +23,8 @@ Rules:
    the judge ends a lease it finds over (``refusal``) as the timer would, before it answers.
    A lease kept in the state file that ended while the bridge was stopped ends at the start:
    audited, and gone from the file (it stayed there, and a clock set back later revived it).
+   A claim or a release that finds the lease over by the clock ends it first, said and
+   audited (a review: a release then found it free, and the status named its holder).
 3. Every command judged, executed or refused, from every interface, is one audit event handed
    to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
    listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
@@ -102,16 +104,14 @@ class Operators:
         """The lease kept across a restart shows in the status, and ends by itself."""
         with self._owner:
             now = self._wall()
+            ended = self._ended(now)  # rule 2: one that ended while the bridge was down
             held = self._lease.holder(now)
-            ended = self._lease.expired(now)  # rule 2: one that ended while the bridge was down
             if held is not None:
                 self._mailbox.put_control(held, wake=False)  # woken after the step
-            elif ended is not None or self._forget:
+            elif self._forget:
                 self._changed(None)
         self._arm()
-        if ended is not None:
-            log.info("%s: the control lease of %s ended while stopped", self._id, ended.operator)
-            self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
+        self._said_ended(ended)
 
     def stop(self) -> None:
         with self._timer_lock:
@@ -134,12 +134,16 @@ class Operators:
     def claim(self, operator: object, minutes: object, origin: Origin) -> Control:
         """Raise Refused if the claim is refused (the judge reports and audits it, as every
         command: rotator.py ``submit``)."""
+        ended: Control | None = None
         try:
             with self._owner:  # rule 1
+                ended = self._ended(self._wall())  # rule 2: over by the clock: said first
                 held = self._lease.claim(operator, minutes, self._wall())
                 self._changed(held)
         except LeaseError as exc:
             raise Refused(RefusalCode.INVALID, str(exc)) from None
+        finally:
+            self._said_ended(ended)
         self._arm()
         log.info("%s: %s holds the control lease (%s)", self._id, held.operator, origin.who)
         return held
@@ -147,13 +151,29 @@ class Operators:
     def release(self, origin: Origin) -> Control | None:
         """Anyone may (lease.py rule 4); releasing a free lease changes nothing (None)."""
         with self._owner:  # rule 1
-            held = self._lease.release(self._wall())
-            if held is not None:
+            ended = self._ended(self._wall())  # rule 2: over by the clock (a review: the
+            held = self._lease.release(self._wall())  # release found it free, and the status
+            if held is not None:  # named its holder for good)
                 self._changed(None)
+        self._said_ended(ended)
         self._arm()
         if held is not None:
             log.info("%s: %s released the control lease", self._id, origin.who)
         return held
+
+    def _ended(self, now: float) -> Control | None:
+        """Rule 2, in an owner's step: the lease the wall clock ended, ended (to the status
+        and the state file), once; ``_said_ended`` audits it after the step."""
+        ended = self._lease.expired(now)
+        if ended is not None:
+            self._changed(None)
+        return ended
+
+    def _said_ended(self, ended: Control | None) -> None:
+        if ended is None:
+            return
+        log.info("%s: the control lease of %s has ended", self._id, ended.operator)
+        self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
 
     def _changed(self, held: Control | None) -> None:
         """In the owner's step (rule 1): to the status, and in line for the state file."""
@@ -190,14 +210,9 @@ class Operators:
 
     def _expire(self) -> None:
         with self._owner:  # rule 1: an end is a change like a release
-            ended = self._lease.expired(self._wall())
-            if ended is not None:
-                self._changed(None)
+            ended = self._ended(self._wall())
         self._arm()  # early (rule 2): a new timer for the rest; ended: none
-        if ended is None:
-            return
-        log.info("%s: the control lease of %s has ended", self._id, ended.operator)
-        self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
+        self._said_ended(ended)
 
     # -- the trail (rule 3) ------------------------------------------------------------------
     def audit(self, origin: Origin, command: str, result: str) -> None:

@@ -248,6 +248,33 @@ def test_a_wall_clock_stepped_past_the_end_ends_the_lease_for_the_judge_and_the_
     mailbox.close()
 
 
+def test_a_release_or_a_claim_over_a_lease_the_wall_clock_ended_ends_it_first(
+    tmp_path: Path,
+) -> None:
+    """A review: a release within the minute after the clock stepped past the end found it
+    free, cancelled the timer and told the status nothing: R/control named the holder for
+    good, the end in no audit trail; a claim over it replaced it unaudited."""
+    for then in ("release", "claim"):
+        clock, timers, mailbox = Clock(), Timers(), Mailbox()
+        audit: list[AuditEvent] = []
+        ops = Operators(
+            "t", StateStore(tmp_path / f"{then}.json"), mailbox, wall=clock,
+            bearing=lambda: None, report=lambda *a: None, timer=timers, on_audit=audit.append,
+        )  # fmt: skip
+        ops.claim("DL1ABC", 30, HOLDER)
+        assert mailbox.take().control == Control("DL1ABC", T0 + 1800)
+        clock.now += 3600  # NTP steps the wall clock forward
+        if then == "release":
+            assert ops.release(OTHER) is None  # (it had ended: nothing to release)
+            batch = mailbox.take()
+            assert batch.control_set and batch.control is None
+        else:
+            ops.claim("G4XYZ", 10, OTHER)
+            assert mailbox.take().control == Control("G4XYZ", T0 + 3600 + 600)
+        assert [(a.origin.who, a.command) for a in audit] == [("DL1ABC", "control expired")]
+        mailbox.close()
+
+
 def test_a_kept_lease_that_ended_while_the_bridge_was_stopped_is_audited_and_forgotten(
     tmp_path: Path,
 ) -> None:
