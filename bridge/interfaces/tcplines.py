@@ -368,6 +368,7 @@ class LineServer:
         )  # rule 5: a waiting connection's bytes peeked, and whether they hold a stop
         self._waiting_max = 4 * max_clients  # rule 5
         self.waiting: dict[socket.socket, tuple[str, int]] = {}  # the accept loop's, once run
+        self._sel: selectors.BaseSelector | None = None  # the accept loop's, while it runs
         self._chatter = TokenBucket.full(CHATTER_BURST, CHATTER_S, clock())  # rule 5
         self._paused_log = RareLog()
         self._dropped_log = RareLog()
@@ -493,6 +494,7 @@ class LineServer:
         waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
         self.waiting = waiting  # (read by the tests: how many wait)
         with selectors.DefaultSelector() as sel:
+            self._sel = sel  # (the accept loop's alone)
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
             try:
@@ -582,16 +584,18 @@ class LineServer:
         peer: tuple[str, int],
         waiting: dict[socket.socket, tuple[str, int]],
     ) -> None:
-        """Rule 5: ``conn`` waits, no thread. Full (WAITING_MAX): the oldest waiting that holds
-        no stop is reset to make room (the newest is the operator's, come to send one: an
-        attack pass found the newest reset first, a stop split across segments with it); if
-        every one holds a stop, ``conn`` itself (their stops, carried out after it came, are
-        its own)."""
+        """Rule 5: ``conn`` waits, no thread. Full (4 ``max_clients``): the oldest waiting that
+        holds no stop is reset to make room (the newest is the operator's, come to send one:
+        an attack pass found the newest reset first, a stop split across segments with it);
+        if every one holds a stop, the oldest (a review: the newcomer was, the operator's stop
+        behind a flood of stops each with a move; a newer stop is the last word)."""
         if len(waiting) >= self._waiting_max:
-            gone = next((c for c in waiting if not self._stop_in(c)), conn)
-            if gone is not conn:
-                del waiting[gone]
+            gone = next((c for c in waiting if not self._stop_in(c)), next(iter(waiting)))
+            del waiting[gone]
             self._looked.pop(gone, None)
+            sel = self._sel
+            if sel is not None and gone in sel.get_map():  # (its number is a new one's once
+                sel.unregister(gone)  # closed: registered again, a KeyError in the loop)
             _reset(gone)
             self._over_log.warn(
                 self._clock(),
@@ -600,8 +604,6 @@ class LineServer:
                 self.rotator_id,
                 peer[0],
             )
-            if gone is conn:
-                return
         waiting[conn] = peer
 
     def _take(
