@@ -110,6 +110,7 @@ import weakref
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from bridge.core.peers import peer_key
 from bridge.core.ratelimit import Budget, TokenBucket
 
 log = logging.getLogger(__name__)
@@ -244,17 +245,7 @@ def _peer_key(host: str) -> str:
     loopback address is one (a program on the host may bind any of 127.0.0.0/8: an attack pass
     took 500 of them, a budget each), an IPv6 address its /64 (one host has all of it), any
     other address its own."""
-    if _loopback(host):
-        return "loopback"
-    try:
-        addr = ipaddress.ip_address(host.split("%")[0])
-    except ValueError:
-        return host
-    if isinstance(addr, ipaddress.IPv6Address):
-        if addr.ipv4_mapped is not None:
-            return str(addr.ipv4_mapped)
-        return str(ipaddress.ip_network(f"{addr}/64", strict=False))
-    return host
+    return "loopback" if _loopback(host) else peer_key(host)
 
 
 def _loopback(host: str) -> bool:

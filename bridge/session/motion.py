@@ -319,33 +319,23 @@ def target_error(m: Motion, cfg: MotionConfig) -> float | None:
 def reading(
     m: Motion, cfg: MotionConfig, az_deg: float, now: float, el_deg: float | None = None
 ) -> tuple[Motion, list[Event]]:
-    if m.anchor_deg is None and m.lost_turning:
-        # rule 4: the first reading back where it was turning when its readings were lost: it
-        # turns until readings show it still (rule 2), not still by the clock
-        m = replace(
-            m,
-            state=MOVING,
-            position_deg=az_deg,
-            anchor_deg=az_deg,
-            el_position_deg=el_deg,
-            el_anchor_deg=el_deg,
-            last_move_t=now,
-            changed_t=now,
-            lost_turning=False,
-            stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,
-        )
-        return tick(m, cfg, now, read=True)
     if m.anchor_deg is None:
-        # first reading since the link came up: the brake window may still be running
+        # first reading since the link came up: the brake window may still be running; where
+        # the rotor turned when its readings were lost, it turns from this reading until
+        # readings show it still (rule 2), not still by the clock (rule 4)
+        turning = m.lost_turning
         m = replace(
             m,
-            state=BRAKING if cfg.brake_delay_s > 0 else IDLE,
+            state=MOVING if turning else BRAKING if cfg.brake_delay_s > 0 else IDLE,
             position_deg=az_deg,
             anchor_deg=az_deg,
             el_position_deg=el_deg,
             el_anchor_deg=el_deg,
-            still_since_t=now,
-            idle_not_before_t=now + cfg.settle_s,
+            last_move_t=now if turning else m.last_move_t,
+            changed_t=now if turning else m.changed_t,
+            still_since_t=None if turning else now,
+            idle_not_before_t=None if turning else now + cfg.settle_s,
+            lost_turning=False,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
         )
         return tick(m, cfg, now, read=True)
