@@ -1040,3 +1040,59 @@ def test_a_waiting_connection_is_read_for_a_stop_once_per_bytes_it_sent(
     finally:
         for sock in held:
             sock.close()
+
+
+def test_lan_hosts_of_one_ipv6_64_do_not_share_one_hosts_slots(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """A review: a shack's LAN on IPv6 (SLAAC) is the router's one /64; counted as one peer,
+    three programs on three computers had one computer's share of the slots (2 of 8), and
+    one was dropped. Each address has its own share."""
+    _tower, server = gs232(clock=FakeClock(), max_clients=8)  # max_per_peer 2
+    lst = socket.create_server(("127.0.0.1", 0))
+    ours: list[socket.socket] = []
+    theirs: list[socket.socket] = []
+    try:
+        for host in ("2001:db8:1:2::10", "2001:db8:1:2::11", "2001:db8:1:2::12"):
+            c = socket.create_connection(lst.getsockname())
+            s, _ = lst.accept()
+            ours.append(c)
+            theirs.append(s)
+            server._admit(s, (host, 40000 + len(theirs)))
+        wait_until(lambda: server.client_count == 3 or any(_gone(c) for c in ours), 5, "served")
+        assert server.client_count == 3 and not any(_gone(c) for c in ours)
+    finally:
+        for c in ours:
+            c.close()
+        lst.close()
+
+
+def test_a_newcomer_with_no_stop_does_not_reset_a_waiting_stop(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """A review: with the waiting list full of stops, a newcomer whose bytes hold none (a
+    poll) reset the oldest waiting stop, which was never carried out. The poll is reset."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, max_clients=4)  # (16 may wait)
+    flood = [_connect(server.port, b"C\r") for _ in range(int(ACCEPTS_S))]  # the budget spent
+    try:
+        spent = lambda: "loopback" in server._accepts and server._accepts["loopback"].tokens < 1  # noqa: E731
+        wait_until(spent, 10, "the budget spent")
+        for _ in range(int(STOP_ACCEPTS_S)):  # the stops' budget spent (each admitted)
+            flood.append(_connect(server.port, b"S\r"))
+        operator = _connect(server.port, b"S\rC\r")
+        mine = operator.getsockname()[1]
+        wait_until(lambda: any(p[1] == mine for p in server.waiting.values()), 10, "it waits")
+        for _ in range(15):  # more stops: the list full of stops, the operator's the oldest
+            flood.append(_connect(server.port, b"S\r"))
+        wait_until(lambda: len(server.waiting) == 16, 10, "full of stops")
+        poll = _connect(server.port, b"C\r")  # a poll: no stop in it
+        flood.append(poll)
+        wait_until(lambda: _gone(poll) or _gone(operator), 10, "one of them reset")
+        assert not _gone(operator), "the waiting stop was reset for a poll"
+        clock.t += 2.0
+        assert _answer(operator, 8) == b"AZ=120\r\n"
+        operator.close()
+    finally:
+        for sock in flood:
+            sock.close()

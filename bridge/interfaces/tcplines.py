@@ -44,8 +44,7 @@ Rules:
    fill the port for the others. Loopback has no such share: every program on the host is
    loopback (127.0.0.0/8 and ::1 count as one address, here and in rule 5: a program may
    bind any of them, an attack pass took 500), so a share would be a limit on the shack's
-   own programs; there the make-room rule is what lets the operator in. An IPv6 address
-   counts as its /64.
+   own programs; there the make-room rule is what lets the operator in.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
 5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
@@ -71,7 +70,8 @@ Rules:
    newcomer, 18 s of the accept thread's CPU in 20). At most 4 ``max_clients`` wait; past
    that the oldest without a stop unread is reset (the newest is the one an operator opened
    for a stop, maybe sent in two segments: an attack pass found it the first reset), and if
-   every one holds a stop, the newcomer (said at most once per LOG_S). A client's coming and
+   every one holds a stop, their oldest for a newcomer that holds one too, else the newcomer
+   (said at most once per LOG_S). A client's coming and
    going is logged at INFO CHATTER_S a second at most (a burst of CHATTER_BURST), the rest at
    DEBUG (an attack pass: 1,863 lines a second, past journald's limit, which then drops the
    service's warnings too), and a connection refused as HTTP at most once per LOG_S. accept()
@@ -96,6 +96,7 @@ Rules:
 from __future__ import annotations
 
 import errno
+import functools
 import ipaddress
 import logging
 import math
@@ -110,7 +111,6 @@ import weakref
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge.core.peers import peer_key
 from bridge.core.ratelimit import Budget, TokenBucket
 
 log = logging.getLogger(__name__)
@@ -240,12 +240,13 @@ def _newest_young(pool: list[tuple[socket.socket, _Client]], now: float) -> set[
     return {conn for each in newest for _t, conn in each}
 
 
+@functools.lru_cache(maxsize=4096)  # (asked for every waiting connection at each newcomer)
 def _peer_key(host: str) -> str:
     """Rules 3 and 5: whose budget and share a connection from ``host`` counts against: every
     loopback address is one (a program on the host may bind any of 127.0.0.0/8: an attack pass
-    took 500 of them, a budget each), an IPv6 address its /64 (one host has all of it), any
-    other address its own."""
-    return "loopback" if _loopback(host) else peer_key(host)
+    took 500 of them, a budget each), any other address its own (an IPv6 LAN is one /64: a
+    review found its hosts sharing one host's slots when counted so)."""
+    return "loopback" if _loopback(host) else host
 
 
 def _loopback(host: str) -> bool:
@@ -578,11 +579,15 @@ class LineServer:
         """Rule 5: ``conn`` waits, no thread. Full (4 ``max_clients``): the oldest waiting that
         holds no stop is reset to make room (the newest is the operator's, come to send one:
         an attack pass found the newest reset first, a stop split across segments with it);
-        if every one holds a stop, the oldest (a review: the newcomer was, the operator's stop
-        behind a flood of stops each with a move; a newer stop is the last word)."""
+        if every one holds a stop, the oldest of them for a newcomer that holds one too (a
+        review: the newcomer was, the operator's stop behind a flood of stops each with a
+        move; a newer stop is the last word), else the newcomer (a stop is kept before a poll:
+        the next review)."""
         if len(waiting) >= self._waiting_max:
-            gone = next((c for c in waiting if not self._stop_in(c)), next(iter(waiting)))
-            del waiting[gone]
+            gone = next((c for c in waiting if not self._stop_in(c)), None)
+            if gone is None:
+                gone = next(iter(waiting)) if self._stop_in(conn) else conn
+            waiting.pop(gone, None)
             self._looked.pop(gone, None)
             sel = self._sel
             if sel is not None and gone in sel.get_map():  # (its number is a new one's once
@@ -595,6 +600,8 @@ class LineServer:
                 self.rotator_id,
                 peer[0],
             )
+            if gone is conn:
+                return
         waiting[conn] = peer
 
     def _take(

@@ -49,7 +49,6 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from urllib.parse import urlsplit
 
-from bridge.core.peers import peer_key
 from bridge.core.ratelimit import TokenBucket
 
 TOKEN_LIFETIME_S = 7 * 24 * 3600.0
@@ -200,9 +199,16 @@ def _among(address: str, networks: Networks) -> bool:
 
 
 def client_key(client: str) -> str:
-    """An IPv6 address counts by its /64 (one client has all of it), any other as it is
-    (core/peers.py)."""
-    return peer_key(client)
+    """An IPv6 address counts by its /64 (one client has all of it), any other as it is."""
+    try:
+        address = ipaddress.ip_address(client)
+    except ValueError:
+        return client
+    if isinstance(address, ipaddress.IPv6Address):
+        if address.ipv4_mapped is not None:
+            return str(address.ipv4_mapped)
+        return str(ipaddress.ip_network(f"{address}/64", strict=False))
+    return str(address)
 
 
 def _wait(bucket: TokenBucket) -> float:
