@@ -10,7 +10,10 @@ Rules:
 1. A move starts when the motion machine says ``moving`` (a command sent, or a hand on the
    front panel) and ends when it says anything else; a new target while it turns (a controller
    that takes one, SPID) ends the move and starts another. A move that ends offline or
-   unknown is forgotten: the readings stopped, nothing can be said of it.
+   unknown is forgotten: the readings stopped, nothing can be said of it. The first reading
+   back after a replug mid-turn, taken for a turn (motion.py rule 4), starts none until a
+   reading shows the rotor move (a review: one that had come to rest meanwhile was counted
+   a move, its pot's jitter for its turning).
 2. The speed of a move is measured over its steady part only: the readings between 20 % and
    80 % of the way it turned (STEADY), so neither the start (the start delay, a motor coming
    up to speed) nor the end (braking, coasting, a slow approach) counts; a move too short for
@@ -138,7 +141,8 @@ class Health:
             self._stop_t = m.stop_sent_t
             if move is not None and move.stop_t is None:
                 move.stop_t = m.stop_sent_t
-        if m.state is mo.MOVING:
+        if m.state is mo.MOVING and not (move is None and m.lost_turning):  # (taken for a turn
+            # after a replug, none seen yet: no move until a reading shows one, motion.py rule 4)
             retarget = move is not None and m.target_t is not None and m.target_t != move.target_t
             if move is not None and retarget and move.target_t is not None:
                 self._move = None

@@ -39,7 +39,10 @@ Rules:
    reading back is ``moving`` instead, from that reading: it stops as any turn does, when
    readings show it still (rule 2), never by the clock alone (an attack pass: replies lost
    for a moment after the first reading back, the clock settled it, the status showed it idle
-   while it turned, and an Easycomm's turn was then stopped as one nobody asked for).
+   while it turned, and an Easycomm's turn was then stopped as one nobody asked for). Until a
+   reading shows it move, a target for a controller stopped first waits (no stop to a rotor
+   that came to rest while its port was out: a review), and that reading is no change of
+   bearing (rotor health counts no move from it).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -323,7 +326,7 @@ def reading(
         # first reading since the link came up: the brake window may still be running; where
         # the rotor turned when its readings were lost, it turns from this reading until
         # readings show it still (rule 2), not still by the clock (rule 4)
-        turning = m.lost_turning
+        turning = m.lost_turning  # (kept till a reading shows it move, or rest: plan_target)
         m = replace(
             m,
             state=MOVING if turning else BRAKING if cfg.brake_delay_s > 0 else IDLE,
@@ -332,10 +335,8 @@ def reading(
             el_position_deg=el_deg,
             el_anchor_deg=el_deg,
             last_move_t=now if turning else m.last_move_t,
-            changed_t=now if turning else m.changed_t,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
-            lost_turning=False,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
         )
         return tick(m, cfg, now, read=True)
@@ -358,6 +359,8 @@ def reading(
         changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
         changes["last_move_t"], changes["still_since_t"] = now, None
         changes["state"] = MOVING
+        if m.lost_turning:  # (rule 4: a reading shows it turning, as it was taken for)
+            changes["lost_turning"] = False
         if m.target_deg is not None:
             changes["progress_t"] = now
     if changes:
@@ -721,6 +724,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         m,
         state=state,
         still_since_t=stopped_t,
+        lost_turning=False,
         target_deg=None,
         el_target_deg=None,
         target_t=None,
@@ -767,6 +771,9 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
         rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
     if m.state is MOVING:
+        if m.stop_sent_t is None and m.lost_turning:  # rule 4: taken for turning, not seen
+            return Plan.WAIT  # to (a review: a stop to a rotor that came to rest while its
+            # port was out); the next reading says which
         if m.stop_sent_t is None:  # (at its target and still by the clock, the reading that
             came = at_target(m, cfg) and now >= still_from(m, cfg)  # says so late: no stop,
             return Plan.WAIT if came else Plan.STOP_FIRST  # the target waits for it: rule 2)

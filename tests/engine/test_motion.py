@@ -638,6 +638,7 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
         el_anchor_deg=None,
         last_move_t=2000.0,
         still_since_t=None,
+        lost_turning=False,  # (rule 4: a reading showed it turning)
     )
     assert moved == mo.tick(expected, CFG, 2000.0)[0]
 

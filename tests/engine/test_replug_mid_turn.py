@@ -119,3 +119,41 @@ def test_a_rotor_ez_turn_across_a_replug_is_not_stopped_after_a_few_lost_replies
         v.run_for(60.0)
         assert [e.message for e in v.errors(ErrorKind.STOP, since=t)] == []
         assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)
+
+
+def _came_to_rest_while_unplugged(v: VirtualRotator) -> None:
+    v.run_until(lambda h: h.status.available, 20)
+    v.run_for(10)
+    v.target(60, 20) if v.cfg.spec.has_elevation else v.target(60)
+    v.run_for(2)
+    assert v.truth().is_moving
+    v.link_down()
+    v.run_for(60)
+    assert not v.truth().is_moving
+    v.link_up()
+    v.run_until(lambda h: h.session.controller.motion.anchor_deg is not None, 30, "a reading")
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "satel"])
+def test_a_target_after_a_replug_that_finds_the_rotor_at_rest_sends_no_stop(model: str) -> None:
+    """A review: taken for turning (it was, when its port went), a rotor that came to rest
+    meanwhile got a stop before the next target on a controller stopped first (a stop to a
+    rotor at rest, the target 1.5 s later). The target waits for the next reading."""
+    with VirtualRotator(model) as v:
+        _came_to_rest_while_unplugged(v)
+        t = v.now
+        v.target(120, 30) if v.cfg.spec.has_elevation else v.target(120)
+        v.run_for(40)
+        stop = v.cfg.spec.codec_factory().encode_stop()
+        assert stop not in v.sent(since=t), v.sent(since=t)[:4]  # observed: the stop first
+
+
+@pytest.mark.parametrize("model", ["rotorez", "gs232b"])
+def test_a_replug_that_finds_the_rotor_at_rest_counts_no_move_in_rotor_health(model: str) -> None:
+    """A review: the first reading back, taken for a turn, was counted a move that turned
+    nothing."""
+    with VirtualRotator(model) as v:
+        _came_to_rest_while_unplugged(v)
+        v.run_for(30)
+        health = v.status.health
+        assert health is not None and health.moves == 0, health  # observed: 1, nothing turned
