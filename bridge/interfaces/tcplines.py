@@ -532,7 +532,7 @@ class LineServer:
                 del waiting[conn]
                 self._looked.pop(conn, None)
                 conn.close()
-            elif self._stop_in(conn):  # a stop: ahead of the budget, or at the door
+            elif self._stop_in(conn):  # a stop: ahead of the budget (_stop_now)
                 self._stop_now(conn, waiting.pop(conn), waiting)
         return False
 
