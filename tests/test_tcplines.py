@@ -893,6 +893,37 @@ def _connect(port: int, data: bytes = b"", src: str = "127.0.0.1") -> socket.soc
     return sock
 
 
+def _flood(port: int, data: bytes, n: int) -> list[socket.socket]:
+    """``n`` connections sending ``data``, those the port reset at once (a full waiting
+    list: rule 5) left out."""
+    out = []
+    for _ in range(n):
+        with contextlib.suppress(ConnectionResetError, BrokenPipeError):
+            out.append(_connect(port, data))
+    return out
+
+
+def _waiting_stop(server: LineServer) -> socket.socket:
+    """The operator's stop, waiting in the accept loop (no budget left); a connection reset on
+    its way in (one that has sent nothing yet may be, beyond a full list: rule 5) is opened
+    again, as a program does."""
+    for _ in range(10):
+        with contextlib.suppress(ConnectionResetError, BrokenPipeError):
+            sock = _connect(server.port, b"S\rC\r")
+            if _placed(server, sock):
+                return sock
+            sock.close()
+    raise AssertionError("the operator's connection was reset ten times")
+
+
+def _placed(server: LineServer, sock: socket.socket) -> bool:
+    """Until ``sock`` waits in the accept loop (True) or was reset (False)."""
+    mine = sock.getsockname()[1]
+    waits = lambda: any(p[1] == mine for p in server.waiting.values())  # noqa: E731
+    wait_until(lambda: _gone(sock) or waits(), 10, "the operator's stop waits")
+    return not _gone(sock)
+
+
 def _answer(sock: socket.socket, n: int) -> bytes:
     """``n`` bytes of reply, or what a reset connection gives (b"<reset>")."""
     try:
@@ -998,16 +1029,13 @@ def test_a_stop_behind_a_full_list_of_waiting_stops_is_never_the_one_reset(
     waits its turn, and is carried out when the budget comes back."""
     clock = FakeClock()
     _tower, server = gs232(clock=clock, max_clients=4)
-    flood = [_connect(server.port, b"C\r") for _ in range(int(ACCEPTS_S))]  # the budget spent
+    flood = _flood(server.port, b"C\r", int(ACCEPTS_S))  # the budget spent
     try:
         spent = lambda: "loopback" in server._accepts and server._accepts["loopback"].tokens < 1  # noqa: E731
         wait_until(spent, 10, "the budget spent")
-        for _ in range(int(STOP_ACCEPTS_S) + 16 + 4):  # the stops' spent, then 16 wait
-            flood.append(_connect(server.port, b"S\rM100\r"))
+        flood += _flood(server.port, b"S\rM100\r", int(STOP_ACCEPTS_S) + 16 + 4)  # (16 wait)
         wait_until(lambda: len(server.waiting) == 16, 10, "full of stops")
-        operator = _connect(server.port, b"S\rC\r")
-        mine = operator.getsockname()[1]
-        wait_until(lambda: any(p[1] == mine for p in server.waiting.values()), 10, "it waits")
+        operator = _waiting_stop(server)
         clock.t += 2.0  # the budgets back: every waiting one goes, the operator's too
         assert _answer(operator, 8) == b"AZ=120\r\n"
         operator.close()
@@ -1074,21 +1102,16 @@ def test_a_newcomer_with_no_stop_does_not_reset_a_waiting_stop(
     poll) reset the oldest waiting stop, which was never carried out. The poll is reset."""
     clock = FakeClock()
     tower, server = gs232(clock=clock, max_clients=4)  # (16 may wait)
-    flood = [_connect(server.port, b"C\r") for _ in range(int(ACCEPTS_S))]  # the budget spent
+    flood = _flood(server.port, b"C\r", int(ACCEPTS_S))  # the budget spent
     try:
         spent = lambda: "loopback" in server._accepts and server._accepts["loopback"].tokens < 1  # noqa: E731
         wait_until(spent, 10, "the budget spent")
-        for _ in range(int(STOP_ACCEPTS_S)):  # the stops' budget spent (each admitted)
-            flood.append(_connect(server.port, b"S\r"))
-        operator = _connect(server.port, b"S\rC\r")
-        mine = operator.getsockname()[1]
-        wait_until(lambda: any(p[1] == mine for p in server.waiting.values()), 10, "it waits")
-        for _ in range(15):  # more stops: the list full of stops, the operator's the oldest
-            flood.append(_connect(server.port, b"S\r"))
-        wait_until(lambda: len(server.waiting) == 16, 10, "full of stops")
-        poll = _connect(server.port, b"C\r")  # a poll: no stop in it
-        flood.append(poll)
-        wait_until(lambda: _gone(poll) or _gone(operator), 10, "one of them reset")
+        flood += _flood(server.port, b"S\r", int(STOP_ACCEPTS_S) + 16)  # the list full of stops
+        wait_until(lambda: len(server.waiting) >= 16, 10, "full of stops")
+        operator = _waiting_stop(server)  # the newest stop
+        polls = _flood(server.port, b"C\r", 20)  # polls: no stop in them
+        flood += polls
+        wait_until(lambda: all(_gone(p) for p in polls) or _gone(operator), 10, "polls reset")
         assert not _gone(operator), "the waiting stop was reset for a poll"
         clock.t += 2.0
         assert _answer(operator, 8) == b"AZ=120\r\n"

@@ -70,8 +70,9 @@ Rules:
    newcomer, 18 s of the accept thread's CPU in 20). At most 4 ``max_clients`` wait; past
    that the oldest without a stop unread is reset (the newest is the one an operator opened
    for a stop, maybe sent in two segments: an attack pass found it the first reset), and if
-   every one holds a stop, their oldest for a newcomer that holds one too, else the newcomer
-   (said at most once per LOG_S). A client's coming and
+   every one holds a stop, their oldest for a newcomer that holds one too, the newcomer if
+   its bytes hold none, and one that has sent nothing yet waits beyond the limit (one at
+   most) for its bytes to decide (said at most once per LOG_S). A client's coming and
    going is logged at INFO CHATTER_S a second at most (a burst of CHATTER_BURST), the rest at
    DEBUG (an attack pass: 1,863 lines a second, past journald's limit, which then drops the
    service's warnings too), and a connection refused as HTTP at most once per LOG_S. accept()
@@ -579,12 +580,17 @@ class LineServer:
         """Rule 5: ``conn`` waits, no thread. Full (4 ``max_clients``): the oldest waiting that
         holds no stop is reset to make room (the newest is the operator's, come to send one:
         an attack pass found the newest reset first, a stop split across segments with it);
-        if every one holds a stop, the oldest of them for a newcomer that holds one too (a
-        review: the newcomer was, the operator's stop behind a flood of stops each with a
-        move; a newer stop is the last word), else the newcomer (a stop is kept before a poll:
-        the next review)."""
+        if every one holds a stop: the oldest of them for a newcomer that holds one too (a
+        review: the newcomer was reset, the operator's stop behind a flood of stops each with a
+        move; a newer stop is the last word); the newcomer itself if its bytes hold none (a
+        stop is kept before a poll: the next review); one that has sent nothing yet waits
+        beyond the limit, its bytes to decide (the operator's come a moment after its
+        connection), one at most: the next newcomer finds it the oldest without a stop."""
         if len(waiting) >= self._waiting_max:
             gone = next((c for c in waiting if not self._stop_in(c)), None)
+            if gone is None and not self._stop_in(conn) and not _peek(conn, 1):
+                waiting[conn] = peer  # (none sent yet: ``_accept_once`` reads its first bytes)
+                return
             if gone is None:
                 gone = next(iter(waiting)) if self._stop_in(conn) else conn
             waiting.pop(gone, None)
