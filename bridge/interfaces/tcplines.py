@@ -565,11 +565,18 @@ class LineServer:
         faster than any operator sends them: the rotor is stopped by them already."""
         now = self._clock()
         if self._bucket(self._stop_accepts, _peer_key(peer[0]), STOP_ACCEPTS_S, now).take(now):
-            self._looked.pop(conn, None)
-            conn.setblocking(True)
-            self._admit(conn, peer)
+            self._let_in(conn, peer)
         else:
             self._queue(conn, peer, waiting)
+
+    def _let_in(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        """Rule 5: a thread for ``conn``, out of the accept loop's books and its selector."""
+        self._looked.pop(conn, None)
+        sel = self._sel
+        if sel is not None and conn in sel.get_map():
+            sel.unregister(conn)
+        conn.setblocking(True)
+        self._admit(conn, peer)
 
     def _queue(
         self,
@@ -641,9 +648,7 @@ class LineServer:
         elif not any(_peer_key(p[0]) == key for p in waiting.values()) and self._accept_budget(
             key, now
         ).take(now):
-            self._looked.pop(conn, None)
-            conn.setblocking(True)
-            self._admit(conn, peer)
+            self._let_in(conn, peer)
         else:
             self._queue(conn, peer, waiting)
         if conn in waiting and not _peek(conn, 1):  # silent: woken by its first bytes (those
@@ -677,11 +682,7 @@ class LineServer:
                 next_s = wait_s if next_s is None else min(next_s, wait_s)
                 continue
             del waiting[conn]
-            self._looked.pop(conn, None)
-            if conn in sel.get_map():
-                sel.unregister(conn)
-            conn.setblocking(True)
-            self._admit(conn, peer)
+            self._let_in(conn, peer)
         return next_s
 
     def _accept_budget(self, host: str, now: float) -> TokenBucket:
