@@ -63,6 +63,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--firmware-version", help="the answer to VE, without the letters (Easycomm family)"
     )
     parser.add_argument(
+        "--easycomm-firmware",
+        choices=("generic", "satnogs", "k3ng"),
+        help="whose reading of Easycomm the box has: SatNOGS's (a bare AZ turns to 0) or K3NG's "
+        "(answers +123.4) (Easycomm family; default generic)",
+    )
+    parser.add_argument(
         "--reply-padding",
         choices=("none", "space", "zero"),
         help="the bearing's padding (RT-21): space ' 5.0;' (default), none '5.0;', zero '005.0;'",
@@ -123,7 +129,11 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
         if args.model.startswith("gs232"):
             opts.update(blank_lines_after_w=args.blank_lines_after_w)
         if args.model.startswith("easycomm"):
-            opts.update(decimals=args.decimals, version=args.firmware_version)
+            opts.update(
+                decimals=args.decimals,
+                version=args.firmware_version,
+                firmware=args.easycomm_firmware,
+            )
         if args.model.startswith("rc2800"):
             opts.update(echo=args.echo or None, stream_s=args.stream_s)
         if args.model.startswith("prosistel"):

@@ -39,6 +39,18 @@ Rules:
 5. Every command is logged once with its Outcome; motion is logged as MotionEvents.
    power_cycle() stops the motors, drops a half-received line and anything not yet sent; the
    rotors stay where they are.
+6. ``firmware`` picks whose reading of the protocol this box has: ``generic`` (the rules above),
+   or two real ones, written from their sources:
+   - ``satnogs``: the SatNOGS rotator firmware's easycomm.h. A line beginning ``AZ EL`` is
+     answered ``AZaaa.a ELeee.e``; any other line beginning ``AZ`` is a target, its azimuth the
+     number after the letters read as C's atof (nothing there is 0: a bare ``AZ`` turns the
+     rotor to 0), then an ``EL`` word the same way, unanswered. ``SA SE`` is answered with the
+     position and stops both. ``VE`` is answered; anything else (``EL`` alone) does nothing.
+   - ``k3ng``: K3NG's rotator controller in Easycomm mode, its default build. Each word is
+     carried out when a space, CR or LF ends it, and answered at once with what it says and
+     that same byte: a bare ``AZ`` ``+aaa.a``, a bare ``EL`` ``+eee.e`` (``-`` below 0; ``?``
+     on an azimuth build), a target or a stop nothing, anything it cannot read ``?``, ``VE``
+     ``VE002``. So ``AZ EL`` LF is answered ``+aaa.a +eee.e`` LF.
 """
 
 from __future__ import annotations
@@ -51,13 +63,23 @@ from bridge.emulators.base import LoggedFrame, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.twoaxes import EL_TOP_DEG, TwoAxes
 
-__all__ = ["MODELS", "EasycommController", "EasycommModel", "EasycommState", "Outcome"]
+__all__ = [
+    "FIRMWARE",
+    "MODELS",
+    "EasycommController",
+    "EasycommModel",
+    "EasycommState",
+    "Outcome",
+]
 
 AZ_TOP_DEG = 360.0
 _MAX_LINE = 64
 _VALUE = re.compile(r"(AZ|EL)([-+]?\d+(?:\.\d*)?)")
 _VELOCITY = re.compile(r"(VL|VR|VU|VD)(\d{1,5})")
 _RADIO = ("UP", "DN", "UM", "DM", "UR", "DR")
+FIRMWARE = ("generic", "satnogs", "k3ng")  # rule 6
+_ATOF = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+))")  # the number C's atof reads, if any
+_K3NG_VALUE = re.compile(r"(AZ|EL)\d{1,3}\.\d")  # AZx.x AZxx.x AZxxx.x
 
 
 class Outcome(enum.StrEnum):
@@ -116,25 +138,34 @@ class EasycommController(TwoAxes):
         decimals: int = 1,
         spacing: int = 1,
         version: str = "2.0",
+        firmware: str = "generic",
         processing_delay_s: float = 0.002,
         now: float = 0.0,
     ) -> None:
         if decimals not in (0, 1, 2) or not 0 <= spacing <= 4:
             raise ValueError("decimals must be 0..2 and spacing 0..4")
+        if firmware not in FIRMWARE:
+            raise ValueError(f"firmware must be one of {', '.join(FIRMWARE)}")
         axes = (start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s)
         line = (baud, line_ending, processing_delay_s)
         self.spec: EasycommModel = self._build(model, MODELS, AZ_TOP_DEG, axes, line, now)
         self.decimals = decimals
         self.spacing = spacing
         self.version = version
+        self.firmware = firmware
 
     # -- sans-IO surface ------------------------------------------------------------------------
 
     def receive(self, data: bytes, now: float) -> None:
         now = self._update(now)
+        if self.firmware == "k3ng":
+            self._k3ng_bytes(data, now)
+            return
         for line, too_long in self._lines(data, _MAX_LINE):
             if too_long:  # no line is this long
                 self._log.append(LoggedFrame(now, line, Outcome.REFUSED.value))
+            elif self.firmware == "satnogs":
+                self._satnogs_line(line, now)
             else:
                 self._line(line, now)
 
@@ -248,3 +279,68 @@ class EasycommController(TwoAxes):
         else:
             value = self._el.position_deg if self.spec.elevation else 0.0
         return f"{word}{value:.{self.decimals}f}"
+
+    # -- rule 6: the firmware of two real boxes ---------------------------------------------------
+
+    def _position(self) -> str:
+        el = self._el.position_deg if self.spec.elevation else 0.0
+        return f"AZ{self._az.position_deg:.1f} EL{el:.1f}"
+
+    def _satnogs_line(self, line: bytes, now: float) -> None:
+        text = line.decode("latin-1")
+        if text.startswith("AZ EL"):
+            self._log.append(LoggedFrame(now, line, Outcome.QUERY.value))
+            self._tx.send(self._position().encode() + self.line_ending, now)
+        elif text.startswith("AZ"):
+            words = text.split(" ")
+            outcome = self._satnogs_value("AZ", words[0][2:12], now)
+            if len(words) > 1 and words[1].startswith("EL"):
+                self._satnogs_value("EL", words[1][2:12], now)
+            self._log.append(LoggedFrame(now, line, outcome.value))
+        elif text.startswith("SA SE"):
+            self._tx.send(self._position().encode() + self.line_ending, now)
+            self._halt(now, "serial SA SE")
+            self._log.append(LoggedFrame(now, line, Outcome.STOP.value))
+        elif text.startswith("VE"):
+            self._tx.send(f"VESatNOGS-{self.version}".encode() + self.line_ending, now)
+            self._log.append(LoggedFrame(now, line, Outcome.INFO.value))
+        else:
+            self._log.append(LoggedFrame(now, line, Outcome.IGNORED.value))
+
+    def _satnogs_value(self, axis: str, data: str, now: float) -> Outcome:
+        if any(c.isalpha() for c in data):  # its isNumber: letters only are refused
+            return Outcome.REFUSED
+        m = _ATOF.match(data)
+        return self._move(axis, float(m.group(1)) if m else 0.0, now)
+
+    def _k3ng_bytes(self, data: bytes, now: float) -> None:
+        for value in data:
+            if value not in (0x20, 0x0D, 0x0A):
+                if len(self._rx_line) < _MAX_LINE:
+                    self._rx_line.append(value)
+                continue
+            word, self._rx_line = bytes(self._rx_line).decode("latin-1"), bytearray()
+            if len(word) < 2:  # its buffer must hold two characters to be carried out
+                continue
+            outcome, answer = self._k3ng_word(word, now)
+            self._log.append(LoggedFrame(now, word.encode(), outcome.value))
+            self._tx.send(answer.encode() + bytes([value]), now)
+
+    def _k3ng_word(self, word: str, now: float) -> tuple[Outcome, str]:
+        elevation = self.spec.elevation
+        if word == "AZ":
+            return Outcome.QUERY, f"+{self._az.position_deg:.1f}"
+        if word == "EL" and elevation:
+            el = self._el.position_deg
+            return Outcome.QUERY, f"{'+' if el >= 0 else ''}{el:.1f}"
+        if _K3NG_VALUE.fullmatch(word) and (word[0] == "A" or elevation):
+            outcome = self._move(word[:2], float(word[2:]), now)
+            return outcome, "" if outcome is Outcome.MOVE else "?"
+        if word[0] == "S" and (word[1] == "A" or (word[1] == "E" and elevation)):
+            self._halt(now, f"serial {word[:2]}", "az" if word[1] == "A" else "el")
+            return Outcome.STOP, ""
+        if word[0] == "M" and (word[1] in "LR" or (word[1] in "UD" and elevation)):
+            return self._jog(word[1], None, now)
+        if word.startswith("VE"):
+            return Outcome.INFO, "VE002"
+        return Outcome.REFUSED, "?"

@@ -15,10 +15,9 @@ project's protocol sheet, and our emulator's traffic with rotctl.
 Frames we send (each ends in LF):
   ``AZ123.4 EL45.0``  turn to azimuth and elevation, tenths of a degree (az/el models)
   ``AZ123.4``         turn to azimuth (azimuth models)
-  ``AZ EL``           ask both, answered ``AZ123.4 EL45.0`` on one line
+  ``AZ EL``           ask both, answered ``AZ123.4 EL45.0`` on one line (azimuth models too)
   ``AZ`` LF ``EL``    ask each on its own line (the ``-separate`` models: controllers that answer
                       AZ and EL only when asked separately), answered ``AZ123.4`` and ``EL45.0``
-  ``AZ``              ask the azimuth (azimuth models)
   ``SA SE``           stop azimuth and elevation (also to an azimuth controller: SE is harmless)
   ``VE``              ask the version, once at connect (Easycomm III), answered ``VExxx``
 Not sent: ``VL VR VU VD`` (velocities) and ``CR``/``CW`` (configuration registers) are the
@@ -44,6 +43,18 @@ Rules:
    read one way only (no pattern that backtracks: an attack pass, ``AZ1`` and 32 ``UP`` words
    in one read held the serial-lines thread 3 s, its every rotator and stop with it, and 126
    bytes longer than two minutes).
+7. K3NG's firmware in its default build answers a bare ``AZ`` or ``EL`` with the value alone,
+   always signed (``+123.4``, ``-1.5``), and ends each answer with the byte that ended the
+   question: ``AZ EL`` LF is answered ``+123.4 +45.0`` LF, and on an azimuth build
+   ``+123.4 ?`` (it has no ``EL``). Such a line's values fill the open query's axes in order,
+   the azimuth first; the ``?`` is read only by an azimuth model, to which a ``?`` alone is
+   harmless too (its answer to the stop's ``SE``: the stop stays ``SA SE``, the one stop the
+   SatNOGS firmware knows). Without its sign a bare number is never a reply.
+8. Every model asks ``AZ EL`` on one line but the ``-separate`` ones, an azimuth model too:
+   the SatNOGS firmware reads any other line that begins ``AZ`` as a target, a bare ``AZ`` as
+   "turn to 0" (and answers nothing), so a bare ``AZ`` is never sent to a controller of
+   unknown firmware as a question. (The ``-separate`` models ask ``AZ`` and ``EL`` alone, as
+   Hamlib does: never for a SatNOGS controller, which docs/controllers.md says.)
 """
 
 from __future__ import annotations
@@ -77,9 +88,14 @@ _REPLY = re.compile(
     rb"(?P<radio>(?:\s+" + _RADIO + rb"\S*(?:\s+(?!" + _RADIO + rb")[A-Z]{2,3})?)*)\s*",
     re.DOTALL,
 )
+# K3NG's default build (rule 7): +123.4, +123.4 +45.0, +123.4 -1.5, on an azimuth build +123.4 ?
+_K3NG = re.compile(
+    rb"\s*(?P<a>[-+]\d{1,3}(?:\.\d*)?)(?: +(?:(?P<b>[-+]\d{1,3}(?:\.\d*)?)|(?P<q>\?)))?\s*"
+)
 _VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
 _ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
 _CHATTER = re.compile(rb"[\r\n ]*")
+_NO_SE = re.compile(rb"[\r\n ]*\?[\r\n ]*")  # rule 7
 
 
 class EasycommCodec(OneQuery):
@@ -116,9 +132,7 @@ class EasycommCodec(OneQuery):
     def encode_query(self) -> bytes:
         self._open_query()
         self._az = self._el = None
-        if not self.elevation:
-            return b"AZ\n"
-        return b"AZ\nEL\n" if self.separate else b"AZ EL\n"
+        return b"AZ\nEL\n" if self.separate else b"AZ EL\n"  # rule 8
 
     def encode_version(self) -> bytes | None:
         return b"VE\n" if self.version == 3 else None
@@ -127,6 +141,8 @@ class EasycommCodec(OneQuery):
         return [b"VE\n"] if self.version == 3 else []
 
     def harmless(self, junk: bytes) -> bool:
+        if not self.elevation and _NO_SE.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
+            return True
         return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
 
     # -- decoding -------------------------------------------------------------------------
@@ -152,6 +168,9 @@ class EasycommCodec(OneQuery):
         if _CHATTER.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
             return
+        if not self.elevation and _NO_SE.fullmatch(raw):  # rule 7
+            out.append(JunkReply(raw, JunkReason.CHATTER, "SE refused (an azimuth build)"))
+            return
         if m := _ALARM.fullmatch(raw):
             alarm = m.group("a").decode("ascii", "replace")
             out.append(JunkReply(raw, JunkReason.CHATTER, f"controller alarm: {alarm}"))
@@ -159,12 +178,22 @@ class EasycommCodec(OneQuery):
         if m := _VERSION.fullmatch(raw):
             out.append(VersionReply(m.group("v").decode("ascii")))
             return
-        m = _REPLY.fullmatch(raw)
-        if m is None or (m.group("az") is None and m.group("el") is None):
-            self._junk(raw, JunkReason.NOISE, "not a reply line", out)
-            return
-        az = None if m.group("az") is None else float(m.group("az"))
-        el = None if m.group("el") is None else float(m.group("el"))
+        if k := _K3NG.fullmatch(raw):  # rule 7
+            if k.group("q") and self.elevation:
+                self._junk(raw, JunkReason.NOISE, "no elevation from an az/el model", out)
+                return
+            pre = b""
+            values = [float(v) for v in k.group("a", "b") if v is not None]
+            az = values.pop(0) if self._az is None else None
+            el = values.pop(0) if values and self.elevation else None
+        else:
+            m = _REPLY.fullmatch(raw)
+            if m is None or (m.group("az") is None and m.group("el") is None):
+                self._junk(raw, JunkReason.NOISE, "not a reply line", out)
+                return
+            pre = m.group("pre")
+            az = None if m.group("az") is None else float(m.group("az"))
+            el = None if m.group("el") is None else float(m.group("el"))
         if (az is not None and not 0 <= az <= AZ_MAX_DEG) or (
             el is not None and not EL_READ_MIN_DEG <= el <= EL_MAX_DEG
         ):
@@ -176,7 +205,7 @@ class EasycommCodec(OneQuery):
         if not self._query_open:
             out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
             return
-        if m.group("pre").strip(b"\r\n "):
+        if pre.strip(b"\r\n "):
             self._noisy = True
         self._az = self._az if az is None else az
         self._el = self._el if el is None else el
@@ -190,11 +219,13 @@ class EasycommCodec(OneQuery):
 
 
 def _spec(name: str, display: str, version: int, *, elevation: bool, separate: bool) -> ModelSpec:
-    query = b"AZ\nEL\n" if separate else (b"AZ EL\n" if elevation else b"AZ\n")
-    # the longest answer (the width varies with the value): AZ359.9 EL180.0 LF, or on two lines
-    reply = b"AZ359.9 EL180.0\n" if elevation else b"AZ359.9\n"
+    query = b"AZ\nEL\n" if separate else b"AZ EL\n"  # rule 8
+    # the longest answer (the width varies with the value): AZ359.9 EL180.0 LF, or on two lines;
+    # an azimuth box answers EL0.0 (a SatNOGS used for azimuth alone: a few bytes more)
+    reply = b"AZ359.9 EL180.0\n" if elevation else b"AZ359.9 EL0.0\n"
     defaults: dict[str, Any] = dict(
-        manufacturer="SatNOGS, K3NG",  # and others speaking the protocol
+        # and others speaking the protocol; a bare AZ turns a SatNOGS to 0 (rule 8)
+        manufacturer="K3NG" if separate else "SatNOGS, K3NG",
         codec_factory=lambda: EasycommCodec(version, elevation=elevation, separate=separate),
         baud=19200,  # SatNOGS controllers; K3NG's firmware runs at 9600 (set baud)
         has_elevation=elevation,
@@ -207,8 +238,9 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         az_wraps=True,
         reply_timeout_s=0.4,  # Hamlib waits 200 ms; an Arduino's loop may be busy stepping
         noise_deg=0.1,  # encoders or steps counted, read in tenths
-        # a poll's EL is one bit from ML (a jog), the space of AZ EL from 0; AZ alone from none
-        unasked_moves="stop" if elevation else "follow",
+        # a poll's EL is one bit from ML (a jog), the space of AZ EL from 0 (rule 8: every
+        # model asks AZ EL, an azimuth one too)
+        unasked_moves="stop",
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=6.0,
         whole_degrees=False,

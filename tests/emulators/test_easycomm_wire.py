@@ -94,3 +94,30 @@ def test_park_and_power_cycle() -> None:
 def test_every_model_is_in_the_registry() -> None:
     names = {n for n in emulators.EMULATORS if n.startswith("easycomm")}
     assert names == {f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate")}
+
+
+def test_satnogs_firmware_takes_a_bare_az_for_a_target_of_0() -> None:
+    """Its easycomm.h (the emulator's rule 6): only a line beginning ``AZ EL`` asks."""
+    device = EasycommController("easycomm2", firmware="satnogs", start_az_deg=200, start_el_deg=20)
+    assert ask(device, b"AZ EL\n", 0) == b"AZ200.0 EL20.0\n"
+    assert ask(device, b"AZ\n", 0) == b""  # no answer, and the rotor turns to 0
+    assert device.state(0.1).target_az_deg == 0.0 and device.state(0.1).is_moving
+    assert ask(device, b"SA SE\n", 0.2).startswith(b"AZ19")  # answered, and stopped
+    assert not device.state(0.3).is_moving
+    assert ask(device, b"AZ150.5 EL30\n", 1) == b""
+    assert device.state(1.1).target_az_deg == 150.5
+    assert ask(device, b"EL\n", 2) == ask(device, b"AZ1X\n", 2) == b""  # nothing, no move
+    assert [f.outcome for f in device.log][-2:] == ["ignored", "refused"]
+
+
+def test_k3ng_firmware_answers_each_word_with_its_value_and_its_ending_byte() -> None:
+    device = EasycommController("easycomm2", firmware="k3ng", start_az_deg=200, start_el_deg=20)
+    assert ask(device, b"AZ EL\n", 0) == b"+200.0 +20.0\n"
+    assert ask(device, b"AZ\r\n", 0) == b"+200.0\r"  # the LF after the CR ends an empty word
+    assert ask(device, b"AZ150.0 EL30.0\n", 0) == b" \n"  # targets: nothing but the endings
+    assert device.state(0.1).target_az_deg == 150.0
+    assert ask(device, b"SA SE\n", 1) == b" \n" and not device.state(1.1).is_moving
+    assert ask(device, b"AZ999.0 AZ5 XX VE\n", 2) == b"? ? ? VE002\n"
+    az_only = EasycommController("easycomm2-az", firmware="k3ng", start_az_deg=200)
+    assert ask(az_only, b"AZ EL\n", 0) == b"+200.0 ?\n"
+    assert ask(az_only, b"SA SE\n", 0) == b" ?\n"

@@ -296,13 +296,24 @@ def test_an_operators_stop_lost_before_the_turn_is_judged_is_still_sent_until_it
 
 
 @pytest.mark.parametrize("model", ["easycomm2-az", "easycomm3-az"])
-def test_an_azimuth_box_whose_poll_no_flipped_bit_makes_a_move_follows_a_hand(
+def test_an_azimuth_box_asks_as_the_az_el_ones_and_stops_a_turn_nobody_asked_for(
     rig: Rig, model: str
 ) -> None:
+    """Its poll is ``AZ EL`` too (easycomm.py rule 8), one flipped bit from a jog: a turn from
+    rest is stopped, and a user who turns it by hand says ``unasked_moves = "follow"``."""
     v = settled(ready(rig, model, start_az_deg=200))
     v.manual_rotate(250)
-    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 250) < 0.1, 30, "at 250")
-    assert v.errors() == []
+    v.run_until(lambda h: unasked(h) != [], 20, "the turn seen")
+    v.run_until(lambda h: not h.truth().is_moving, 5, "stopped")
+    assert v.truth().az_deg < 215
+    follows = rig(
+        model, settings={"unasked_moves": "follow"}, emulator={**FAST, "start_az_deg": 200}
+    )
+    follows.run_until_state(IDLE, 30)
+    settled(follows)
+    follows.manual_rotate(250)
+    follows.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 250) < 0.1, 30, "at 250")
+    assert follows.errors() == []
 
 
 def test_an_elevation_turn_nobody_asked_for_is_told_with_its_elevation(rig: Rig) -> None:
@@ -422,3 +433,48 @@ def test_a_stop_before_the_try_more_ends_it(rig: Rig) -> None:
     v.run_for(15)
     assert v.sent(since=t).count(b"AZ200.0 EL10.0\n") == 1
     assert v.truth().az_deg == 100 and v.errors(since=t) == []
+
+
+# -- two real firmwares (easycomm.py rules 7 and 8; the emulator's rule 6) ---------------------
+def el_of(model: str, el_deg: float) -> dict[str, float]:
+    return {} if model.endswith("-az") else {"start_el_deg": el_deg}
+
+
+@pytest.mark.parametrize("model", ["easycomm2", "easycomm3", "easycomm2-az", "easycomm3-az"])
+def test_a_satnogs_controller_is_never_turned_by_a_poll(rig: Rig, model: str) -> None:
+    """Its firmware reads a bare ``AZ`` as "turn to 0": an azimuth model that asked so turned
+    the rotor from 200 to 0 at its first poll, unanswered, and called the controller silent."""
+    v = ready(rig, model, firmware="satnogs", start_az_deg=200, **el_of(model, 20))
+    v.run_for(30)
+    assert v.frames("move") == [] and v.truth().az_deg == 200
+    assert v.status.available and v.status.bearing_deg == 200 and v.errors() == []
+    v.target(150, 30)
+    v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 150, 60, "at 150")
+    assert [f.data for f in v.frames("move")] == (
+        [b"AZ150.0 EL30.0"] if model in ("easycomm2", "easycomm3") else [b"AZ150.0"]
+    )
+
+
+@pytest.mark.parametrize(
+    ("model", "answer"),
+    [
+        ("easycomm2", b"+200.0 +20.0\n"),
+        ("easycomm2-az", b"+200.0 ?\n"),
+        ("easycomm3-separate", b"+20.0\n"),
+    ],
+)
+def test_a_k3ng_controller_is_read_turned_and_stopped(rig: Rig, model: str, answer: bytes) -> None:
+    """Its default build answers a bare ``AZ`` and ``EL`` with signed values alone: the bridge
+    never came online with it."""
+    v = ready(rig, model, firmware="k3ng", start_az_deg=200, **el_of(model, 20))
+    assert answer in b"".join(data for _, data in v.received)
+    assert v.status.available and v.status.bearing_deg == 200 and v.errors() == []
+    if model != "easycomm2-az":
+        assert v.status.elevation_deg == 20
+    v.target(300, 40)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 220, 30, "turning")
+    v.stop()
+    v.run_until(lambda h: h.state is IDLE, 10, "stopped")
+    assert not v.truth().is_moving and 220 < v.truth().az_deg < 235
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)
+    assert v.errors() == []

@@ -64,7 +64,7 @@ def test_azimuth_controller_turns_and_refuses_an_elevation(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "95.5")
     emu.wait_for(lambda s: s.az_deg == 95.5 and not s.is_moving, 20)
     assert [f.data for f in emu.frames("move")] == [b"AZ95.5"]
-    assert {f.data for f in emu.frames("query")} == {b"AZ"}
+    assert {f.data for f in emu.frames("query")} == {b"AZ", b"EL"}  # asked AZ EL, as all are
     t = time.monotonic()
     rig.probe.publish("rotor/target", "100 20")  # an elevation it cannot do
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)

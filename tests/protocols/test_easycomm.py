@@ -42,7 +42,7 @@ def test_commands_on_the_wire() -> None:
     assert azel.encode_target(123.44, 45.05) == [b"AZ123.4 EL45.1\n"]  # tenths, half up
     assert azel.encode_target(5, 0) == [b"AZ5.0 EL0.0\n"]
     assert az.encode_target(359.96) == [b"AZ360.0\n"]
-    assert (azel.encode_query(), az.encode_query()) == (b"AZ EL\n", b"AZ\n")
+    assert (azel.encode_query(), az.encode_query()) == (b"AZ EL\n", b"AZ EL\n")  # rule 8
     assert separate.encode_query() == b"AZ\nEL\n"
     assert azel.encode_stop() == az.encode_stop() == b"SA SE\n"
     assert (azel.encode_version(), azel.encode_connect(0.0), azel.encode_enable()) == (
@@ -223,3 +223,36 @@ def test_the_model_table() -> None:
         HamlibRotType.OTHER
     }
     assert REGISTRY["easycomm2"].whole_degrees is False  # tenths on the wire
+
+
+# -- K3NG's default build (rule 7) ------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("reply", "elevation", "separate", "want"),
+    [
+        (b"+123.4 +45.0\n", True, False, (123.4, 45.0)),
+        (b"+123.4 -1.5\n", True, False, (123.4, -1.5)),
+        (b"+123.4\n+45.0\n", True, True, (123.4, 45.0)),
+        (b"+123.4 ?\n", False, False, (123.4, None)),
+        (b"+123.4 +45.0\n", False, False, (123.4, None)),
+    ],
+)
+def test_k3ngs_signed_values_answer_the_query_azimuth_first(
+    reply: bytes, elevation: bool, separate: bool, want: tuple[float, float | None]
+) -> None:
+    codec = asked(2, elevation=elevation, separate=separate)
+    replies = codec.feed(reply)
+    assert positions(replies) == [want] and junk(replies) == []
+
+
+@pytest.mark.parametrize("reply", [b"123.4 45.0\n", b"+123.4 ?\n", b"+123.4 +45.0 +1.0\n"])
+def test_a_number_without_its_sign_or_a_missing_elevation_is_no_reading(reply: bytes) -> None:
+    codec = asked(2)
+    replies = codec.feed(reply)
+    assert positions(replies) == [] and junk(replies)[0].reason is JunkReason.NOISE
+
+
+def test_k3ngs_refused_se_is_harmless_to_an_azimuth_model_alone() -> None:
+    az, azel = asked(2, elevation=False), asked(2)
+    assert az.harmless(b" ?\n") and not azel.harmless(b" ?\n")
+    assert [j.reason for j in junk(az.feed(b" ?\n"))] == [JunkReason.CHATTER]
+    assert positions(az.feed(b"+10.0 ?\n")) == [(10.0, None)]
