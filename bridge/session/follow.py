@@ -7,10 +7,13 @@ as ``Heard`` inputs (interfaces/wsjtx/server.py reads the datagrams on a thread 
 Rules:
 1. Following is off until a Follow command switches it on, and ends on ``R/follow off``, a
    stop, the lock, a track command, any other target (a manual one, rotctld's P, a preset, a
-   nudge, a park), a stall, the serial link going down or the controller falling silent: the
-   rotor never turns by itself after any of these. The status says why
-   (``following_ended``). Its own targets are put by the session, not through the mailbox,
-   so they never end it.
+   nudge, a park), the rotor turned by hand, a stall, the serial link going down or the
+   controller falling silent: the rotor never turns by itself after any of these. The status
+   says why (``following_ended``). Its own targets are put by the session, not through the
+   mailbox, so they never end it. Turned by hand is as tracking has it (parts.py rule 8): the
+   rotor turning with no target and no stop of the bridge's out, further than the tolerance
+   from the bearing it last turned to (a hand before its first bearing is no concern of it: the
+   next grid turns the rotor anyway).
 2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
    from the station (the long path if asked). The same grid again moves nothing (the
    deadband), whatever else the program's status says; so does a status without a grid, or
@@ -19,7 +22,9 @@ Rules:
    the program transmits waits, shown as ``held``, until a status says the transmission has
    ended; then the newest grid is turned to. A transmission that begins while its own turn is
    under way (the usual case: the grid is named a second before the transmit period) stops
-   the turn (``Proposal.halt``), and the grid is turned to again once it has ended.
+   the turn (``Proposal.halt``), and the grid is turned to again once it has ended. Its own
+   turn is its target waiting or out with the rotor turning; a turn with none is not its own
+   (rule 1: a hand ends following, never stopped and undone after the transmission).
 4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
    on every change and at least at every decoding period): the rotor turns to the partner of
    the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
@@ -60,10 +65,11 @@ from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Sou
 from bridge.pointing import toward
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene
+from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
 
 log = logging.getLogger(__name__)
 
+HAND = "turned by hand"  # rule 1: following_ended
 FRESH_S = 30.0  # rule 4
 IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said once)
 IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
@@ -106,6 +112,7 @@ class Follower:
         self._heard: Heard | None = None
         self._heard_t = -math.inf
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
+        self._bearing: float | None = None  # rule 1: the bearing last turned to (a hand's from)
         self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
         self._instance: str | None = None  # rule 8: the program followed
         self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
@@ -120,7 +127,7 @@ class Follower:
     def start(self, follow: Follow, now: float) -> None:
         """Rule 1; rule 4: only a fresh status turns the rotor at once."""
         self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
-        self.ended, self._aimed, self._off_band = None, None, None
+        self.ended, self._aimed, self._bearing, self._off_band = None, None, None, None
         starter = follow.origin.operator if follow.origin is not None else None
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
@@ -134,7 +141,7 @@ class Follower:
         if self.info is None:
             return False
         log.info("%s: following ended: %s", self._rig.rotator_id, why)
-        self.info, self.ended, self._aimed = None, why, None
+        self.info, self.ended, self._aimed, self._bearing = None, why, None, None
         return True
 
     def heard(self, heard: Heard, now: float) -> None:
@@ -171,9 +178,18 @@ class Follower:
         )
 
     def _turning(self, scene: Scene) -> bool:
-        """Its own turn is under way: while it follows, anything else that moves ends it."""
+        """Rule 3: its own turn is under way: its target waiting, or one out with the rotor
+        turning (while it follows, any other target has ended it: rule 1)."""
+        m = scene.motion
         own = scene.pending is not None and scene.pending.source is Source.WSJTX
-        return self._aimed is not None and (own or scene.motion.state is MotionState.MOVING)
+        out = m.state is MotionState.MOVING and m.target_deg is not None
+        return self._aimed is not None and (own or out)
+
+    def _turned_by_hand(self, scene: Scene) -> bool:
+        """Rule 1: turned away from the bearing it last turned to, by no target of the bridge's."""
+        if self._bearing is None:
+            return False
+        return turned_by_hand(scene, self._rig.aim, self._bearing, self._rig.motion.tolerance_deg)
 
     def _off_band_why(self, heard: Heard) -> tuple[str, str] | None:
         """Rule 9: the band ``heard`` is on and why it is not for this rotator's antenna, or
@@ -197,6 +213,8 @@ class Follower:
         info, heard = self.info, self._heard
         if info is None or heard is None:
             return NOTHING
+        if self._turned_by_hand(scene):  # rule 1: the session ends it (its targets dropped)
+            return Proposal(ended=HAND, busy=True)
         grid = grid_of(heard.grid)
         holding = heard.transmitting and self._rig.follow.hold_while_tx
         if holding and self._turning(scene):  # rule 3: the turn under way stops
@@ -235,6 +253,7 @@ class Follower:
             self.info = replace(info, call=call, grid=grid, bearing_deg=None, held=False)
             what = f"follow {call or '?'} {grid}"
             return Proposal(error=Report(ErrorKind.REFUSED, f"following: {why}", what), busy=True)
+        self._bearing = az
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False
         )

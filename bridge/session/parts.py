@@ -1,7 +1,7 @@
 """What the session's parts (tracking.py, autopark.py) see and what they hand back
 (docs/architecture.md, "parts decide and return"), and how the session's step runs one
-(``Part``: each feature's package declares its part's, bridge/features/). Frozen data, nothing
-else.
+(``Part``: each feature's package declares its part's, bridge/features/). Frozen data, and one
+reading of a scene two parts share (rule 8).
 
 Rules:
 1. A part never holds the session: it gets a ``Scene`` (a read-only view of the moment) and
@@ -44,6 +44,10 @@ Rules:
    part while the session would refuse a user's target (locked, offline, a storm). And no
    part's step target goes to a locked rotor, nor in a storm but the wind's own park: the
    session drops it, whatever the part says.
+8. A hand on the front panel is a command too: tracking and following each end on one
+   (``turned_by_hand``): the rotor turning with no target and no stop of the bridge's out, and
+   already further from the part's last target than the part allows for (its tolerance, and
+   tracking's step): not jitter, coasting or a late start.
 """
 
 from __future__ import annotations
@@ -54,6 +58,7 @@ from enum import Flag, auto
 from typing import Generic, NamedTuple, TypeVar
 
 from bridge.core.model import FeatureCommand, Target
+from bridge.pointing import Pointing, angle_between
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 
@@ -85,12 +90,24 @@ class Proposal:
 
     target: Target | None = None  # put it as the pending target
     error: Report | None = None  # hand this error event out
-    ended: str | None = None  # tracking ended for this reason: drop a target of its own
+    ended: str | None = None  # end tracking and following for this reason (their targets dropped)
     busy: bool = False  # activity: auto-park's quiet spell starts again (autopark.py rule 1)
     halt: bool = False  # stop the turn under way (following: a transmission began, follow.py)
 
 
 NOTHING = Proposal()
+
+
+def turned_by_hand(scene: Scene, aim: Pointing, last_deg: float | None, far_deg: float) -> bool:
+    """Rule 8: turning with no target and no stop of the bridge's out, and more than
+    ``far_deg`` from ``last_deg`` (the part's last target, a true bearing): a hand on the front
+    panel. With nothing to measure by (no last target, no reading), any such turn."""
+    m = scene.motion
+    if m.state is not mo.MOVING or m.target_deg is not None or m.stop_sent_t is not None:
+        return False
+    if last_deg is None or m.position_deg is None:
+        return True
+    return angle_between(aim.true_of(m.position_deg), last_deg) > far_deg
 
 
 @dataclass(frozen=True)

@@ -6,13 +6,14 @@ comes from skytrack.py (the sky worker's answers, rule 8).
 Rules:
 1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, any
    other target (a manual one, rotctld's P, a preset, a nudge, a park), the rotor turned by
-   hand, a stall, the serial link going down or the controller falling silent: the rotor never
-   turns by itself after any of these. The status says why (``tracking_ended``). Tracking's
-   own targets are put here, not in the mailbox, so they never end it. It goes on from pass
-   to pass until it is ended. A step is measured from the last target and, once the rotor
-   has got there (arrived, not still on its way), from where it really is: a rotor that fell
-   short or was turned gets the step again; one turned away while still holding the last step
-   is left to the motion machine's verdict (a stall ends tracking), never pulled back.
+   hand (parts.py rule 8), a stall, the serial link going down or the controller falling
+   silent: the rotor never turns by itself after any of these. The status says why
+   (``tracking_ended``). Tracking's own targets are put here, not in the mailbox, so they
+   never end it. It goes on from pass to pass until it is ended. A step is measured from the
+   last target and, once the rotor has got there (arrived, not still on its way), from where
+   it really is: a rotor that fell short or was turned gets the step again; one turned away
+   while still holding the last step is left to the motion machine's verdict (a stall ends
+   tracking), never pulled back.
 2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
    when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
@@ -57,7 +58,7 @@ from bridge.pointing import angle_between
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene
+from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
 from bridge.session.skytrack import SkyTrack
 from bridge.sky import Body, Pass
 from bridge.sky.worker import Answer, LookupQuestion, Question
@@ -255,19 +256,11 @@ class Tracker:
         return put
 
     def _turned_by_hand(self, scene: Scene) -> bool:
-        """Turning with no target and no stop of ours, and already further from the last
-        tracking target than a step and the tolerance: a hand on the front panel, not jitter,
-        coasting or a late start on a small step."""
-        m = scene.motion
-        if m.state is not MotionState.MOVING or m.target_deg is not None:
-            return False
-        if m.stop_sent_t is not None:
-            return False
-        if self._last is None or m.position_deg is None:
-            return True
-        at = self._rig.aim.true_of(m.position_deg)
+        """Rule 1 (parts.py rule 8): a hand on the front panel, further from the last tracking
+        target than a step and the tolerance (a late start on a small step is not one)."""
+        last = self._last[0] if self._last is not None else None
         far_deg = self.cfg.step_deg + self._rig.motion.tolerance_deg
-        return _apart((at, None), (self._last[0], None)) > far_deg
+        return turned_by_hand(scene, self._rig.aim, last, far_deg)
 
     def _near(self, scene: Scene, az: float, el: float | None) -> bool:
         """The rotor really is within a step (and its tolerance) of (az, el): the last target

@@ -6,19 +6,21 @@ tests/integration/test_pointing_bridge.py, not the bridge's core/geo.py."""
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from typing import Any
 
 import pytest
 
 from bridge.app import worker_config
 from bridge.core.model import ErrorKind, MotionState, Source
+from bridge.features.follow import follow_state
 from bridge.session import follow as fo
 from bridge.session.config import FollowConfig, WorkerConfig
 from bridge.session.follow import Follow, Follower, Heard
 from bridge.session.parts import NOTHING, Scene
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
-from tests.engine.test_parts import scene
+from tests.engine.test_parts import IDLE_AT_90, scene
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 
@@ -115,6 +117,35 @@ def test_a_held_grid_that_goes_away_holds_nothing_any_more() -> None:
     part.heard(Heard("JA1ABC", "PM95", True), 3.0)  # back to the partner turned to
     assert part.step(at(3.0)).target is None
     assert part.info is not None and not part.info.held
+
+
+def test_a_turn_by_no_target_of_its_own_away_from_its_bearing_ends_it_its_own_is_held() -> None:
+    """Rule 1: a hand at the front panel (turning, no target and no stop of the bridge's out,
+    further than the tolerance from the bearing last turned to) ends following, transmitting or
+    not; rule 3: its own turn (a target out, still turning) is held while it transmits."""
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False), 1.0)
+    target = part.step(at(1.0)).target
+    assert target is not None and target.az_deg is not None
+    pm95 = bearing("PM95")
+    turning = replace(IDLE_AT_90, state=MotionState.MOVING, target_deg=None)
+    by_hand = replace(turning, position_deg=(pm95 + 40.0) % 360.0)
+    own = replace(by_hand, target_deg=target.az_deg)
+    stopped = replace(by_hand, stop_sent_t=1.5)  # the rotor coasting after a stop of ours
+    jitter = replace(turning, position_deg=(pm95 + 2.0) % 360.0)  # within the tolerance (3)
+    for transmitting in (False, True):
+        part.heard(Heard("JA1ABC", "PM95", transmitting), 2.0)
+        for motion in (stopped, jitter):
+            quiet = part.step(scene(2.0, motion))
+            assert quiet.ended is None and not quiet.halt and quiet.target is None
+        ended = part.step(scene(2.0, by_hand))
+        assert ended.ended == "turned by hand"
+        assert ended.target is None and not ended.halt
+    held = part.step(scene(2.0, own))  # transmitting: its own turn stops
+    assert held.halt and held.ended is None and part.info is not None and part.info.held
+    part.heard(Heard("JA1ABC", "PM95", False), 15.0)
+    again = part.step(scene(15.0, replace(IDLE_AT_90, position_deg=(pm95 + 20.0) % 360.0)))
+    assert again.target is not None and again.ended is None  # and goes on after it
 
 
 def test_without_hold_while_tx_a_transmitting_status_turns_it_at_once() -> None:
@@ -306,6 +337,49 @@ def test_a_transmission_beginning_during_the_turn_holds_the_rotor_until_it_ends(
         v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > where + 1, 60, "")
         assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
         assert v.status.following is not None and not v.status.following.held
+
+
+def _turned_by_hand_while_following(v: VirtualRotator, transmission: bool) -> float:
+    """Following, the rotor at the partner's bearing: the operator turns the beam by hand at
+    the controller's panel toward 300, and WSJT-X's next status (the same partner) comes while
+    the rotor turns, transmitting or not, and the transmission ends. Run until a minute after
+    the rotor is at rest; when the hand came."""
+    v.follow(True)
+    v.heard("JA1ABC", "PM95")
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 1, 60, "there")
+    assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+    v.run_for(5.0)
+    hand = v.now
+    v.manual_rotate(300.0)  # a hand at the panel
+    v.run_until(lambda h: h.truth().is_moving and h.state is MotionState.MOVING, 10, "turning")
+    v.run_for(4.0)  # some 40 degrees of it
+    v.heard("JA1ABC", "PM95", transmission)  # WSJT-X's next status
+    v.run_for(3.0)
+    v.heard("JA1ABC", "PM95", False)  # (the transmission, if any, has ended)
+    v.run_until(lambda h: not h.truth().is_moving, 60, "the hand's turn over")
+    v.run_for(60.0)
+    return hand
+
+
+@pytest.mark.parametrize("transmission", [True, False], ids=["transmitting", "receiving"])
+def test_a_hand_at_the_panel_ends_following_and_the_rotor_is_never_turned_back(
+    transmission: bool,
+) -> None:
+    """An attack pass: a transmission period beginning while the operator turned the beam by
+    hand took the hand's turn for following's own: it was stopped, and once the transmission
+    had ended a new target turned the rotor back to the partner, unasked. The hand ends
+    following, as it ends tracking: nothing more is sent, and the rotor stays where the hand
+    left it."""
+    with spid() as v:
+        hand = _turned_by_hand_while_following(v, transmission)
+        sent = [f.outcome for f in v.frames(since=hand)]
+        assert set(sent) == {"status"}, sent  # polls only: no stop, no target
+        assert angle_between(v.truth().az_deg, 300.0) < 1  # where the hand left it
+        assert v.status.following is None and v.status.following_ended == "turned by hand"
+        assert follow_state(v.status) == "off"  # R/follow/state
+        v.heard("W1AW", "FN31")  # a new partner turns nothing either
+        v.run_for(60.0)
+        assert v.frames("set", since=hand) == [] and angle_between(v.truth().az_deg, 300.0) < 1
 
 
 def test_follow_on_while_locked_is_refused_and_nothing_moves() -> None:
