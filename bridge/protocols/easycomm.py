@@ -18,7 +18,8 @@ Frames we send (each ends in LF):
   ``AZ EL``           ask both, answered ``AZ123.4 EL45.0`` on one line (azimuth models too)
   ``AZ`` LF ``EL``    ask each on its own line (the ``-separate`` models: controllers that answer
                       AZ and EL only when asked separately), answered ``AZ123.4`` and ``EL45.0``
-  ``SA SE``           stop azimuth and elevation (also to an azimuth controller: SE is harmless)
+  ``SA SE``           stop azimuth and elevation (also to an azimuth controller: SE is harmless;
+                      a SatNOGS answers it with the position, rule 9)
   ``VE``              ask the version, once at connect (Easycomm III), answered ``VExxx``
 Not sent: ``VL VR VU VD`` (velocities) and ``CR``/``CW`` (configuration registers) are the
 controller's own settings; ``ML MR MU MD`` (turn until stopped) have no place in a bridge that
@@ -55,11 +56,16 @@ Rules:
    "turn to 0" (and answers nothing), so a bare ``AZ`` is never sent to a controller of
    unknown firmware as a question. (The ``-separate`` models ask ``AZ`` and ``EL`` alone, as
    Hamlib does: never for a SatNOGS controller, which docs/controllers.md says.)
+9. The SatNOGS firmware answers ``SA SE`` with the position; others answer nothing. A whole
+   position line that comes after a stop before the next query, or after it once this
+   controller was seen to answer a stop, is that answer: harmless chatter, never a reading
+   (nor a reply nobody asked for, told on R/error at every stop).
 """
 
 from __future__ import annotations
 
 import re
+from collections import deque
 from typing import Any
 
 from bridge.protocols.base import (
@@ -115,6 +121,9 @@ class EasycommCodec(OneQuery):
         self._noisy = False  # junk arrived since the query was opened
         self._az: float | None = None  # what this exchange has said so far
         self._el: float | None = None
+        self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
+        self._answers_stop = False  # rule 9: this controller was seen to answer one
+        self._stop_said: deque[bytes] = deque(maxlen=4)  # rule 9: those answers, for harmless
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -127,11 +136,13 @@ class EasycommCodec(OneQuery):
         return [b"AZ%.1f EL%.1f\n" % (az, el)]
 
     def encode_stop(self) -> bytes:
+        self._stop_open = True  # rule 9
         return b"SA SE\n"
 
     def encode_query(self) -> bytes:
         self._open_query()
         self._az = self._el = None
+        self._stop_open = self._stop_open and self._answers_stop  # rule 9
         return b"AZ\nEL\n" if self.separate else b"AZ EL\n"  # rule 8
 
     def encode_version(self) -> bytes | None:
@@ -141,6 +152,8 @@ class EasycommCodec(OneQuery):
         return [b"VE\n"] if self.version == 3 else []
 
     def harmless(self, junk: bytes) -> bool:
+        for said in self._stop_said:  # rule 9: a SatNOGS's answer to a stop
+            junk = junk.replace(said, b"")
         if not self.elevation and _NO_SE.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
             return True
         return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
@@ -202,6 +215,12 @@ class EasycommCodec(OneQuery):
         if not self.elevation and az is None:
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
+        whole = az is not None and (el is not None or not self.elevation)
+        if self._stop_open and whole and not pre.strip(b"\r\n "):  # rule 9
+            self._stop_open, self._answers_stop = False, True
+            self._stop_said.append(raw)
+            out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))
+            return
         if not self._query_open:
             out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
             return
@@ -245,7 +264,7 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         nominal_el_speed_deg_s=6.0,
         whole_degrees=False,
         tenths=True,  # rule 5
-        stop_anytime=True,  # SA SE is not answered
+        stop_anytime=True,  # SA SE waits for no reply (a SatNOGS answers it: rule 9)
         query_bytes=len(query),
         reply_bytes=len(reply),
         hamlib_model=204 if version == 3 else 202,

@@ -478,3 +478,18 @@ def test_a_k3ng_controller_is_read_turned_and_stopped(rig: Rig, model: str, answ
     assert not v.truth().is_moving and 220 < v.truth().az_deg < 235
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)
     assert v.errors() == []
+
+
+@pytest.mark.parametrize("model", ["easycomm2", "easycomm2-az"])
+def test_a_satnogs_answer_to_a_stop_is_no_junk_and_no_reading(rig: Rig, model: str) -> None:
+    """Its firmware answers ``SA SE`` with the position (rule 9): it was told on R/error as
+    bytes that are no reply at every stop."""
+    v = ready(rig, model, firmware="satnogs", start_az_deg=200, **el_of(model, 20))
+    for bearing in (300, 100):
+        v.target(bearing) if model.endswith("-az") else v.target(bearing, 40)
+        v.run_until(lambda h: h.state is MOVING and abs(h.truth().az_deg - 200) > 20, 30, "on")
+        v.stop()
+        v.run_until(lambda h: h.state is IDLE, 10, "stopped")
+        v.run_for(5)
+    assert b"SA SE\n" in v.sent() and v.errors() == []
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)

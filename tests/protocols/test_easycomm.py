@@ -256,3 +256,24 @@ def test_k3ngs_refused_se_is_harmless_to_an_azimuth_model_alone() -> None:
     assert az.harmless(b" ?\n") and not azel.harmless(b" ?\n")
     assert [j.reason for j in junk(az.feed(b" ?\n"))] == [JunkReason.CHATTER]
     assert positions(az.feed(b"+10.0 ?\n")) == [(10.0, None)]
+
+
+# -- a SatNOGS's answer to a stop (rule 9) ----------------------------------------------------
+def test_a_position_after_a_stop_is_its_answer_not_a_reading_nor_junk_told() -> None:
+    codec = EasycommCodec(2)
+    codec.encode_stop()
+    replies = codec.feed(b"AZ220.0 EL40.0\n")
+    assert positions(replies) == [] and [j.reason for j in junk(replies)] == [JunkReason.CHATTER]
+    assert codec.harmless(b"AZ220.0 EL40.0\n") and not codec.harmless(b"AZ221.0 EL40.0\n")
+    codec.encode_stop()  # once seen to answer, its answer is awaited ahead of the next poll's
+    codec.encode_query()
+    assert positions(codec.feed(b"AZ219.0 EL40.0\nAZ218.0 EL40.0\n")) == [(218.0, 40.0)]
+
+
+def test_a_controller_that_answers_no_stop_keeps_its_poll_answer() -> None:
+    codec = EasycommCodec(2)
+    codec.encode_stop()
+    codec.encode_query()
+    assert positions(codec.feed(b"+219.0 +40.0\n")) == [(219.0, 40.0)]
+    codec.encode_stop()
+    assert positions(codec.feed(b"AZ1.0 EL40.0\n")) == []  # no query open: never a reading
