@@ -59,7 +59,9 @@ Rules:
 9. The SatNOGS firmware answers ``SA SE`` with the position; others answer nothing. A whole
    position line that comes after a stop before the next query, or after it once this
    controller was seen to answer a stop, is that answer: harmless chatter, never a reading
-   (nor a reply nobody asked for, told on R/error at every stop).
+   (nor a reply nobody asked for, told on R/error at every stop). Once it was seen to, a
+   whole position line with no query open is taken for the answer to a stop this codec did
+   not send (the stop express writes its own copy, ``ModelSpec.stop_anytime``).
 """
 
 from __future__ import annotations
@@ -197,8 +199,9 @@ class EasycommCodec(OneQuery):
                 return
             pre = b""
             values = [float(v) for v in k.group("a", "b") if v is not None]
-            az = values.pop(0) if self._az is None else None
-            el = values.pop(0) if values and self.elevation else None
+            first = self._az is None or not self._query_open  # unasked: read as a whole answer
+            az = values.pop(0) if first else None
+            el = values.pop(0) if values else None
         else:
             m = _REPLY.fullmatch(raw)
             if m is None or (m.group("az") is None and m.group("el") is None):
@@ -207,6 +210,8 @@ class EasycommCodec(OneQuery):
             pre = m.group("pre")
             az = None if m.group("az") is None else float(m.group("az"))
             el = None if m.group("el") is None else float(m.group("el"))
+        if not self.elevation and az is not None:
+            el = None  # rule 2: an azimuth model ignores it, out of range or not
         if (az is not None and not 0 <= az <= AZ_MAX_DEG) or (
             el is not None and not EL_READ_MIN_DEG <= el <= EL_MAX_DEG
         ):
@@ -216,7 +221,8 @@ class EasycommCodec(OneQuery):
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
         whole = az is not None and (el is not None or not self.elevation)
-        if self._stop_open and whole and not pre.strip(b"\r\n "):  # rule 9
+        stop_answer = self._stop_open or (self._answers_stop and not self._query_open)
+        if stop_answer and whole and not pre.strip(b"\r\n "):  # rule 9
             self._stop_open, self._answers_stop = False, True
             self._stop_said.append(raw)
             out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))

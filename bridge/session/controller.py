@@ -108,7 +108,7 @@ Rules:
    which the doubt of rule 9 lets through when two readings agree), by a stop checked as an
    operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
    button is let be), and a ``stop`` error says why (in true bearings), where
-   - ``unasked_moves`` is "stop" (an Easycomm az/el box's default, whose poll is one flipped bit
+   - ``unasked_moves`` is "stop" (an Easycomm box's default, whose poll is one flipped bit
      from a jog, ``EL`` read as ``ML``, and its space from a ``0``, ``AZ0EL``, which a lenient
      parser reads as a move to 0: an attack soak ran a rotor to its end stop that way): every
      such turn, a hand at the panel's too;

@@ -240,7 +240,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "poll a noisy line made a command): follow it; stop it once it is 5 degrees from where "
         "the rotor rested and say so on R/error; or after-stop: only the first after a STOP, a "
         "lock or a pass left the rotor short of its target. By default stop on an Easycomm "
-        "az/el box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
+        "box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
         "panel; a composite's elevation box follows), and on the SatEL, whose every frame is "
         "one from a jog, after-stop on the Rotor-EZ and "
         "RotorCard, whose poll is one from 'turn to the last target', follow on the others",

@@ -277,3 +277,34 @@ def test_a_controller_that_answers_no_stop_keeps_its_poll_answer() -> None:
     assert positions(codec.feed(b"+219.0 +40.0\n")) == [(219.0, 40.0)]
     codec.encode_stop()
     assert positions(codec.feed(b"AZ1.0 EL40.0\n")) == []  # no query open: never a reading
+
+
+def test_an_azimuth_model_ignores_the_elevation_on_its_line_in_range_or_not() -> None:
+    """Rule 2, since rule 8 asks it AZ EL: a SatNOGS's unused channel may say anything."""
+    out = asked(2, elevation=False).feed(b"AZ100.0 EL-120.0\n")
+    assert positions(out) == [(100.0, None)] and junk(out) == []
+
+
+@pytest.mark.parametrize("late", [b"+12.0 ?\n", b"AZ12.0 EL0.0\n"])
+def test_an_answer_nobody_asked_for_is_unsolicited_in_either_form(late: bytes) -> None:
+    """A second answer in one exchange spoils the held reading (link.py rule 9): a K3NG's was
+    taken for an elevation, harmless, and a late answer stood."""
+    codec = asked(2, elevation=False)
+    assert positions(codec.feed(b"+10.0 ?\n")) == [(10.0, None)]
+    assert [j.reason for j in junk(codec.feed(late))] == [JunkReason.UNSOLICITED]
+
+
+def test_once_it_answered_a_stop_a_whole_line_unasked_is_a_stop_express_copys_answer() -> None:
+    """The stop express writes its own SA SE (rule 9): a SatNOGS's answer to it came with no
+    stop of this codec's, a reply nobody asked for, told at every stop."""
+    codec = EasycommCodec(2)
+    codec.encode_query()
+    codec.feed(b"AZ10.0 EL5.0\n")
+    assert [j.reason for j in junk(codec.feed(b"AZ11.0 EL5.0\n"))] == [JunkReason.UNSOLICITED]
+    codec.encode_stop()
+    codec.feed(b"AZ12.0 EL5.0\n")  # seen to answer a stop
+    replies = codec.feed(b"AZ13.0 EL5.0\n")  # the express's, unasked
+    assert [j.reason for j in junk(replies)] == [JunkReason.CHATTER]
+    assert codec.harmless(b"AZ12.0 EL5.0\nAZ13.0 EL5.0\n")
+    half = junk(codec.feed(b"AZ13.0\n"))  # not a whole answer: no stop's
+    assert [j.reason for j in half] == [JunkReason.UNSOLICITED]
