@@ -194,10 +194,10 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
     )
     assert used.az_speed_deg_s == r["az_speed_deg_s"]
     assert r["unasked_moves"] == used.unasked_moves == spec.unasked_moves
-    easycomm_azel = model.startswith("easycomm") and spec.has_elevation
+    easycomm = model.startswith("easycomm")  # every one asks AZ EL (easycomm.py rule 8)
     rotorez = model in ("rotorez", "rotorcard")
     assert used.unasked_moves == (  # (controller.py rule 10; a SatEL: its frames near jogs)
-        "stop" if easycomm_azel or model == "satel" else "after-stop" if rotorez else "follow"
+        "stop" if easycomm or model == "satel" else "after-stop" if rotorez else "follow"
     )
     assert used.tracking.step_deg == r["track_step_deg"] == r["tolerance_deg"]  # the default
     if spec.has_elevation:
