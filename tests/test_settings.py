@@ -3,12 +3,13 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from bridge.core.model import Target
 from bridge.protocols import REGISTRY
-from bridge.settings import ConfigError, RotatorSettings, load_settings
+from bridge.settings import ConfigError, RotatorSettings, load_settings, settings_from
 from bridge.settings.report import config_warnings, masked
 from tests.support import cli, run_cli
 
@@ -686,3 +687,65 @@ def test_check_config_writes_no_state_file_and_warns_of_a_directory_it_cannot_wr
     monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)  # as non-root
     (warning,) = [w for w in config_warnings(s) if w.startswith("state_file")]
     assert warning.startswith(f"state_file: {tmp_path} cannot be written by "), warning
+
+
+# -- what passed check-config and then crashed or misbehaved (an attack pass) -----------------
+
+
+def refusal(data: dict[str, Any]) -> str:
+    """The configuration error ``data`` (a TOML document, no environment) is refused with."""
+    with pytest.raises(ConfigError) as err:
+        settings_from(data, {})
+    return str(err.value)
+
+
+def document(rotator: dict[str, Any] | None = None, **mqtt: Any) -> dict[str, Any]:
+    tower = {"id": "tower", "model": "rotorez", "port": "/dev/ttyUSB0", **(rotator or {})}
+    return {"mqtt": {"host": "127.0.0.1", **mqtt}, "rotators": [tower]}
+
+
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [
+        ("mqtt", "port"),
+        ("mqtt", "keepalive_s"),
+        ("web", "port"),
+        ("homeassistant", "birth_delay_s"),
+        ("rotators", "park_az_deg"),
+        ("rotators", "az_max_deg"),
+        ("rotators", "rotctld_port"),
+        ("rotators", "baud"),
+        ("rotators", "presets"),
+        ("rotators", "keep_out"),
+        (None, "audit_max_bytes"),
+    ],
+)
+def test_a_boolean_where_a_number_belongs_is_refused_naming_the_key(
+    table: str | None, key: str
+) -> None:
+    """pydantic reads true as 1: `port = true` connected to port 1, `park_az_deg = true`
+    parked the antenna at 1 degree, `az_max_deg = true` limited it to 0..1."""
+    value: Any = {"presets": {"EU": True}, "keep_out": [[True, 20]]}.get(key, True)
+    data = document()
+    if table == "rotators":
+        data["rotators"][0][key] = value
+        where = f"rotators[0].{key}"
+    elif table is not None:
+        data.setdefault(table, {})[key] = value
+        where = f"{table}.{key}"
+    else:
+        data[key] = value
+        where = key
+    assert f"{where}: must be a number, not true or false" in refusal(data)
+
+
+def test_a_number_from_the_environment_is_still_read_as_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PORT", "8883")
+    monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__PARK_AZ_DEG", "180")
+    s = settings_from(document(), os.environ)
+    assert (s.mqtt.port, s.rotators[0].park_az_deg) == (8883, 180.0)
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PORT", "true")
+    with pytest.raises(ConfigError, match=r"mqtt\.port \(from ROTOR_BRIDGE_MQTT__PORT\)"):
+        settings_from(document(), os.environ)

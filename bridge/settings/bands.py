@@ -16,15 +16,15 @@ Rules:
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
 
 from bridge.core.bands import UnknownBand, canonical
+from bridge.settings.base import Strict
 
 
-class BandFields(BaseModel):
+class BandFields(Strict):
     """The band part of ``[[rotators]]``."""
 
-    model_config = ConfigDict(extra="forbid")
     bands: list[str] = Field(
         default_factory=list,
         description="the bands this rotator's antenna is for, as loggers write them "

@@ -16,9 +16,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bridge.core.bands import NAMES, UnknownBand, band_of_hz, canonical
+from bridge.settings.base import Strict
 
 DEFAULT_PORT = 7300  # DX Spider's usual telnet port (many nodes also take 23 or 8000)
 
@@ -31,11 +32,10 @@ def band_of(freq_khz: float) -> str | None:
     return band_of_hz(freq_khz * 1000)
 
 
-class DxClusterSettings(BaseModel):
+class DxClusterSettings(Strict):
     """``[dxcluster]``: spots from a DX cluster node (telnet), on ``B/spots``, and turning a
     rotator to a spotted call (``R/target`` ``{"call": ...}``)."""
 
-    model_config = ConfigDict(extra="forbid")
     enabled: bool = Field(
         False,
         description="connect to a DX cluster node and publish its spots (B/spots)",

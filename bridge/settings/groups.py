@@ -27,9 +27,10 @@ from __future__ import annotations
 
 import re
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bridge.feature import registered, topic_words
+from bridge.settings.base import Strict
 
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
@@ -57,10 +58,9 @@ def station_words() -> frozenset[str]:
     return frozenset(("bridge", *(s.split("/")[0] for f in registered() for s in f.base_topics)))
 
 
-class GroupSettings(BaseModel):
+class GroupSettings(Strict):
     """One ``[[groups]]`` table."""
 
-    model_config = ConfigDict(extra="forbid")
     id: str = Field(
         description="the group's id: its topics are <base_topic>/<id>/target and /stop; "
         "letters, digits, - and _ (at most 32), not a rotator's id",

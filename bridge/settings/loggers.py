@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import ipaddress
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
+
+from bridge.settings.base import Strict
 
 
-class LoggerFields(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class LoggerFields(Strict):
     pst_udp_port: int | None = Field(
         None,
         ge=1,

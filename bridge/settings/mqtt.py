@@ -19,8 +19,6 @@ from pathlib import Path
 from typing import Literal
 
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
     PrivateAttr,
     SecretStr,
@@ -28,6 +26,7 @@ from pydantic import (
     model_validator,
 )
 
+from bridge.settings.base import Strict
 from bridge.settings.files import check_tls_files, read_password_file
 
 _TOPIC_BAD = re.compile(r"[+#\x00]")
@@ -42,11 +41,7 @@ def check_topic(v: str) -> str:
     return v
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-
-class TlsSettings(_Strict):
+class TlsSettings(Strict):
     """``[mqtt.tls]``: an encrypted connection to the broker, with a client certificate if the
     broker asks for one. Every file is checked while the configuration loads; a file given with
     ``enabled`` false is refused (the connection would not be encrypted)."""
@@ -101,7 +96,7 @@ class TlsSettings(_Strict):
         return self
 
 
-class MqttSettings(_Strict):
+class MqttSettings(Strict):
     """``[mqtt]``: the broker the bridge connects to, and the topics it uses there."""
 
     host: str = Field(
@@ -254,7 +249,7 @@ class MqttSettings(_Strict):
         return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"
 
 
-class HomeAssistantSettings(_Strict):
+class HomeAssistantSettings(Strict):
     """``[homeassistant]``: MQTT discovery, so every rotator appears in Home Assistant as a
     device with its controls, by itself."""
 

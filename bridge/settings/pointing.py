@@ -11,23 +11,23 @@ import math
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bridge.core import geo
 from bridge.core.errors import Refused
 from bridge.core.model import Target
 from bridge.pointing import Pointing, norm360
 from bridge.protocols.base import ModelSpec
+from bridge.settings.base import Strict
 
 PRESET_NAME_MAX = 32
 Degrees = Annotated[float, Field(allow_inf_nan=False)]
 
 
-class StationSettings(BaseModel):
+class StationSettings(Strict):
     """``[station]``: where the antenna is; needed for targets by locator or coordinates and
     for tracking."""
 
-    model_config = ConfigDict(extra="forbid")
     locator: str | None = Field(
         None,
         description="the station's Maidenhead locator (2, 4, 6 or 8 characters); or "
@@ -76,11 +76,10 @@ class StationSettings(BaseModel):
         return self.latitude_deg, self.longitude_deg
 
 
-class TrackingSettings(BaseModel):
+class TrackingSettings(Strict):
     """``[tracking]``: where satellites' orbital elements come from (never downloaded). Each
     rotator's tracking keys are in ``[[rotators]]``."""
 
-    model_config = ConfigDict(extra="forbid")
     tle_file: Path | None = Field(
         None,
         description="a TLE file (Celestrak's 3-line form) naming the satellites that can be "
@@ -91,10 +90,9 @@ class TrackingSettings(BaseModel):
     )
 
 
-class PointingFields(BaseModel):
+class PointingFields(Strict):
     """The pointing part of ``[[rotators]]`` (the rotator's model supplies spec and limits)."""
 
-    model_config = ConfigDict(extra="forbid")
     az_offset_deg: Degrees = Field(
         0.0,
         ge=-360,

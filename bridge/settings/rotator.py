@@ -24,7 +24,7 @@ from __future__ import annotations
 import re
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
@@ -32,6 +32,7 @@ from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
+from bridge.settings.base import Strict
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_topic
@@ -50,13 +51,11 @@ EMULATION_KEYS = ("gs232", "easycomm", "dcu1")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
-class AxisSettings(BaseModel):
+class AxisSettings(Strict):
     """A rotator whose azimuth and elevation are turned by two controllers on two ports (an
     RT-21 for the azimuth and a GS-232B box for the elevation, say) gives an `azimuth` and an
     `elevation` table in place of `model` and `port`, each with these keys. The two are one
     rotator: one status, one judge of every command, and one STOP stops both."""
-
-    model_config = ConfigDict(extra="forbid")
 
     model: str = Field(
         description="the controller that turns this axis (any model for the azimuth; for the "

@@ -22,8 +22,6 @@ from pathlib import Path
 from typing import Any
 
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
     PrivateAttr,
     SecretStr,
@@ -31,6 +29,7 @@ from pydantic import (
     model_validator,
 )
 
+from bridge.settings.base import Strict
 from bridge.settings.files import read_password_file
 from bridge.settings.loggers import is_loopback
 
@@ -49,11 +48,10 @@ _NAME = re.compile(
 )
 
 
-class WebSettings(BaseModel):
+class WebSettings(Strict):
     """``[web]``: the operator console, the beam on a map in any browser, served by the bridge
     itself over HTTP."""
 
-    model_config = ConfigDict(extra="forbid")
     enabled: bool = Field(
         False,
         description="serve the operator console (the beam on a map, the rotators' controls) "

@@ -19,15 +19,16 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from bridge.settings.base import Strict
 
 KMH_PER_MS = 3.6
 
 
-class WindFields(BaseModel):
+class WindFields(Strict):
     """The wind part of ``[[rotators]]``."""
 
-    model_config = ConfigDict(extra="forbid")
     wind_topic: str | None = Field(
         None,
         description="an MQTT topic carrying the wind speed as a number (a weather station, "

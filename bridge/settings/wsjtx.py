@@ -13,16 +13,17 @@ from __future__ import annotations
 
 import ipaddress
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
+
+from bridge.settings.base import Strict
 
 DEFAULT_PORT = 2237  # WSJT-X's own default UDP server port
 
 
-class WsjtxSettings(BaseModel):
+class WsjtxSettings(Strict):
     """``[wsjtx]``: WSJT-X's or JTDX's UDP messages, so that a rotator can follow the QSO
     partner (``R/follow``)."""
 
-    model_config = ConfigDict(extra="forbid")
     enabled: bool = Field(
         False,
         description="listen for WSJT-X's (or JTDX's) UDP messages, so that a rotator can "
