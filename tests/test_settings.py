@@ -704,6 +704,68 @@ def document(rotator: dict[str, Any] | None = None, **mqtt: Any) -> dict[str, An
     return {"mqtt": {"host": "127.0.0.1", **mqtt}, "rotators": [tower]}
 
 
+@pytest.mark.parametrize("topic", ["rb\u0001x", "rb\nx", "rb\tx", "rb\u007fx", "rb\u0085x"])
+def test_a_topic_with_a_control_character_is_refused_naming_the_key(topic: str) -> None:
+    """mosquitto drops a CONNECT whose will topic (under the base topic) holds one ("Malformed
+    UTF-8"): the bridge blamed the broker's access rules, fell back to MQTT 3.1.1 and never
+    connected."""
+    said = ": a topic is printable text (no control characters)"
+    assert f"mqtt.base_topic: holds U+{ord(topic[2]):04X}{said}" in refusal(
+        document(base_topic=topic)
+    )
+    assert f"rotators[0].topic: holds U+{ord(topic[2]):04X}" in refusal(document({"topic": topic}))
+    ha = {**document(), "homeassistant": {"discovery_prefix": topic}}
+    assert "homeassistant.discovery_prefix: holds U+" in refusal(ha)
+    ha = {**document(), "homeassistant": {"status_topic": topic}}
+    assert "homeassistant.status_topic: holds U+" in refusal(ha)
+    wind = {"wind_topic": topic, "wind_park_above": 60, "park_az_deg": 0}
+    assert "rotators[0]: wind_topic: one topic, without wildcards" in refusal(document(wind))
+
+
+def test_a_topic_the_bridge_publishes_under_does_not_start_with_a_dollar() -> None:
+    """$SYS and the like are the broker's: it takes no message from a client there."""
+    said = "must not start with '$': the broker keeps those topics for itself"
+    assert f"mqtt.base_topic: {said}" in refusal(document(base_topic="$rotor"))
+    assert f"rotators[0].topic: {said}" in refusal(document({"topic": "$shack/tower"}))
+    ha = {**document(), "homeassistant": {"discovery_prefix": "$ha"}}
+    assert f"homeassistant.discovery_prefix: {said}" in refusal(ha)
+    # Home Assistant's status topic is Home Assistant's: the bridge only listens there
+    ha = {**document(), "homeassistant": {"status_topic": "$ha/status"}}
+    assert settings_from(ha, {}).homeassistant.status_topic == "$ha/status"
+    assert settings_from(document(base_topic="shack/$rotor"), {}).mqtt.base_topic == "shack/$rotor"
+
+
+@pytest.mark.parametrize(
+    ("key", "most"),
+    [("client_id", 65530), ("username", 65535), ("password", 65535), ("base_topic", 64511)],
+)
+def test_an_mqtt_string_longer_than_mqtt_allows_is_refused_naming_the_key(
+    key: str, most: int
+) -> None:
+    """MQTT's strings are at most 65535 bytes: a longer client id or base topic passed, and run
+    logged a struct.error traceback at every connection attempt, never connecting. The base
+    topic keeps room for the levels the bridge adds, the client id for the stop lane's
+    "-stop"; the length is counted in UTF-8, and the value is never quoted."""
+    fine = {"username": "rotor", key: "é" * (most // 2)}
+    off = {"homeassistant": {"enabled": False}}  # (its discovery prefix: below)
+    assert settings_from({**document(**fine), **off}, {}).mqtt.username is not None
+    text = refusal({**document(**{**fine, key: "é" * (most // 2) + "ab"}), **off})
+    assert f"mqtt.{key}: a " in text and f"is at most {most} bytes in UTF-8" in text, text
+    assert "éé" not in text
+    ha = {**document(base_topic="r" * 40_000), "homeassistant": {"discovery_prefix": "h" * 30_000}}
+    assert "mqtt.base_topic and homeassistant.discovery_prefix are together at most" in refusal(ha)
+    settings_from({**ha, "homeassistant": {**ha["homeassistant"], "enabled": False}}, {})
+
+
+def test_a_password_file_longer_than_mqtt_allows_is_refused_unquoted(tmp_path: Path) -> None:
+    pw = tmp_path / "pw"
+    pw.write_text("x" * 70_000 + "\n")
+    os.chmod(pw, 0o600)
+    text = refusal(document(username="rotor", password_file=str(pw)))
+    assert f"mqtt: password_file {pw}: a password is at most 65535 bytes" in text
+    assert "xxx" not in text
+
+
 @pytest.mark.parametrize(
     ("table", "key"),
     [

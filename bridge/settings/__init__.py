@@ -53,7 +53,13 @@ from bridge.settings.base import numbers_not_booleans
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
 from bridge.settings.groups import GroupSettings, reserved, station_words
-from bridge.settings.mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
+from bridge.settings.mqtt import (
+    MQTT_STRING_MAX,
+    TOPIC_ROOM,
+    HomeAssistantSettings,
+    MqttSettings,
+    TlsSettings,
+)
 from bridge.settings.pointing import StationSettings, TrackingSettings
 from bridge.settings.rotator import EMULATION_KEYS, RotatorSettings
 from bridge.settings.web import WebSettings
@@ -253,6 +259,14 @@ class Settings(BaseSettings):
             prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
         ):
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
+        # discovery's topics hold both (<prefix>/<platform>/rotorbridge_<base>_r_<id>/...)
+        both = len(prefix.encode()) + len(self.mqtt.base_topic.encode())
+        if self.homeassistant.enabled and both > MQTT_STRING_MAX - TOPIC_ROOM:
+            raise ValueError(
+                "mqtt.base_topic and homeassistant.discovery_prefix are together at most "
+                f"{MQTT_STRING_MAX - TOPIC_ROOM} bytes in UTF-8 (discovery's topics hold both, "
+                f"and MQTT's limit is {MQTT_STRING_MAX}); these are {both}"
+            )
         return self
 
     @model_validator(mode="after")

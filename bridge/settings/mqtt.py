@@ -30,15 +30,50 @@ from bridge.settings.base import Strict
 from bridge.settings.files import check_tls_files, read_password_file
 
 _TOPIC_BAD = re.compile(r"[+#\x00]")
+# MQTT's strings (a topic, the client id, the user name, the password) are at most this many
+# bytes in UTF-8: a longer one ended every connection attempt in a traceback (an attack pass)
+MQTT_STRING_MAX = 65535
+# what the bridge adds under a topic of its own: a rotator's id and its words under the base
+# topic (<base>/<id>/option/<name>/state), Home Assistant's node and object ids after the
+# discovery prefix (<prefix>/<platform>/rotorbridge_<base>_r_<id>/<object>/config): a few
+# hundred bytes at most, with room to spare
+TOPIC_ROOM = 1024
+# what the stop lane and the stop express add to a client id set (interfaces/mqtt/lane.py)
+CLIENT_ID_ROOM = len("-stop")
 
 
-def check_topic(v: str) -> str:
-    """``v`` if it is a plain topic (no wildcards, no leading, trailing or double '/')."""
+def check_topic(v: str, *, own: bool = True) -> str:
+    """``v`` if it is a plain topic: no wildcards, no leading, trailing or double '/', nothing
+    that is not printable (mosquitto drops a client whose topic holds a control character, the
+    will's among them, at every CONNECT: an attack pass), and short enough for MQTT. ``own``: a
+    topic the bridge publishes under, which leaves room for the levels it adds (TOPIC_ROOM) and
+    does not start with '$' (the broker's own topics, $SYS: it would take no message there)."""
     if not v or v.startswith("/") or v.endswith("/") or _TOPIC_BAD.search(v) or "//" in v:
         raise ValueError(
             "must be a plain topic like 'rotor' (no wildcards, no leading/trailing '/')"
         )
+    bad = next((c for c in v if not c.isprintable()), None)
+    if bad is not None:
+        raise ValueError(
+            f"holds U+{ord(bad):04X}: a topic is printable text (no control characters)"
+        )
+    if own and v.startswith("$"):
+        raise ValueError("must not start with '$': the broker keeps those topics for itself")
+    if own:
+        room = f"{TOPIC_ROOM} for the levels the bridge adds"
+        check_length(v, MQTT_STRING_MAX - TOPIC_ROOM, "a topic", room)
+    else:
+        check_length(v, MQTT_STRING_MAX, "a topic")
     return v
+
+
+def check_length(v: str, most: int, what: str, room: str = "") -> None:
+    """ValueError if ``v`` is longer than ``most`` bytes in UTF-8 (``room``: what is kept from
+    MQTT's limit, and why); the value is not quoted (a password may be one)."""
+    size = len(v.encode(errors="surrogatepass"))
+    if size > most:
+        why = f"MQTT's limit is {MQTT_STRING_MAX}{', less ' + room if room else ''}"
+        raise ValueError(f"{what} is at most {most} bytes in UTF-8 ({why}); this is {size}")
 
 
 class TlsSettings(Strict):
@@ -190,6 +225,28 @@ class MqttSettings(Strict):
     def _topic(cls, v: str) -> str:
         return check_topic(v)
 
+    @field_validator("client_id")
+    @classmethod
+    def _client_id(cls, v: str | None) -> str | None:
+        if v is not None:
+            room = f"{CLIENT_ID_ROOM} for the stop lane's '-stop'"
+            check_length(v, MQTT_STRING_MAX - CLIENT_ID_ROOM, "a client id", room)
+        return v
+
+    @field_validator("username")
+    @classmethod
+    def _username(cls, v: str | None) -> str | None:
+        if v is not None:
+            check_length(v, MQTT_STRING_MAX, "a user name")
+        return v
+
+    @field_validator("password")
+    @classmethod
+    def _password(cls, v: SecretStr | None) -> SecretStr | None:
+        if v is not None:
+            check_length(v.get_secret_value(), MQTT_STRING_MAX, "a password")
+        return v
+
     @field_validator("host")
     @classmethod
     def _host(cls, v: str) -> str:
@@ -222,6 +279,10 @@ class MqttSettings(Strict):
                 f"password_file {self.password_file} must hold the password on one line (it "
                 f"holds {'nothing' if not password else 'several lines'})"
             )
+        try:
+            check_length(password, MQTT_STRING_MAX, "a password")
+        except ValueError as exc:
+            raise ValueError(f"password_file {self.password_file}: {exc}") from None
         self.password = SecretStr(password)
         return self
 
@@ -277,7 +338,12 @@ class HomeAssistantSettings(Strict):
         examples=[5],
     )
 
-    @field_validator("discovery_prefix", "status_topic")
+    @field_validator("discovery_prefix")
     @classmethod
     def _topic(cls, v: str) -> str:
         return check_topic(v)
+
+    @field_validator("status_topic")
+    @classmethod
+    def _status_topic(cls, v: str) -> str:
+        return check_topic(v, own=False)  # Home Assistant's: the bridge only listens there

@@ -89,8 +89,12 @@ class WindFields(Strict):
         """Rules 1-3."""
         if self.wind_topic is None:
             return self
-        if not self.wind_topic.strip() or any(c in self.wind_topic for c in "+#\0"):
-            raise ValueError("wind_topic: one topic, without wildcards (+, #)")
+        topic = self.wind_topic
+        if not topic.strip() or any(c in topic for c in "+#") or not topic.isprintable():
+            raise ValueError(
+                "wind_topic: one topic, without wildcards (+, #), in printable text (no "
+                "control characters: the broker would drop the bridge for it)"
+            )
         if self.wind_park_above is None:
             raise ValueError("wind_topic needs wind_park_above (the speed to park above)")
         if self.wind_release_below is not None and self.wind_release_below > self.wind_park_above:
