@@ -132,6 +132,8 @@ COMPANIONS: dict[str, dict[str, Any]] = {
     "ca_file": {"enabled": True},  # (files without TLS enabled are refused)
     "cert_file": {"key_file": "/etc/rotor-bridge/client.key", "enabled": True},
     "key_file": {"cert_file": "/etc/rotor-bridge/client.crt", "enabled": True},
+    "mqtt.password": {"username": "rotor"},  # (a password goes with a user name)
+    "mqtt.password_file": {"username": "rotor"},
     "park_el_deg": {"park_az_deg": 0},
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},

@@ -74,6 +74,7 @@ def test_rotor_speeds_default_to_the_model_and_reach_the_engine(tmp_path: Path) 
 
 def test_environment_overrides_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__HOST", "broker.lan")
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__USERNAME", "rotor")
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PASSWORD", "hunter2")
     monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "/dev/ttyUSB7")
     monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__IDLE_POLL_INTERVAL_S", "5")
@@ -811,3 +812,17 @@ def test_a_number_from_the_environment_is_still_read_as_one(
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PORT", "true")
     with pytest.raises(ConfigError, match=r"mqtt\.port \(from ROTOR_BRIDGE_MQTT__PORT\)"):
         settings_from(document(), os.environ)
+
+
+@pytest.mark.parametrize("login", [{"password": "s3cret-pw"}, {"password_file": "pw"}])
+def test_a_password_without_a_username_is_refused(tmp_path: Path, login: dict[str, str]) -> None:
+    """The MQTT client logs in only with a user name: a password without one went unused, and
+    check-config said "no login"."""
+    if "password_file" in login:
+        (tmp_path / "pw").write_text("s3cret-pw\n")
+        os.chmod(tmp_path / "pw", 0o600)
+        login = {"password_file": str(tmp_path / "pw")}
+    key = next(iter(login))
+    text = refusal(document(**login))
+    assert f"mqtt.{key}: needs mqtt.username" in text and "s3cret" not in text, text
+    assert settings_from(document(username="rotor", **login), {}).mqtt.password is not None

@@ -22,6 +22,7 @@ from pydantic import (
     Field,
     PrivateAttr,
     SecretStr,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
@@ -142,21 +143,22 @@ class MqttSettings(Strict):
     )
     username: str | None = Field(
         None,
-        description="the user name to log in to the broker with",
+        description="the user name to log in to the broker with; needed with a password",
         examples=["rotor"],
         json_schema_extra={"unset": "no login"},
     )
     password: SecretStr | None = Field(
         None,
-        description="the password; better in password_file (this file then holds a secret: "
-        "check-config warns). Never printed.",
+        description="the password, with username; better in password_file (this file then "
+        "holds a secret: check-config warns). Never printed.",
         examples=["s3cret"],
         json_schema_extra={"unset": "no password"},
     )
     password_file: Path | None = Field(
         None,
         description="a file holding the password (one line), readable by the service user and "
-        "not by every user (chown root:rotor-bridge, chmod 640); not together with password",
+        "not by every user (chown root:rotor-bridge, chmod 640); with username, not together "
+        "with password",
         examples=["/etc/rotor-bridge/mqtt-password"],
         json_schema_extra={"unset": "no password file"},
     )
@@ -242,9 +244,17 @@ class MqttSettings(Strict):
 
     @field_validator("password")
     @classmethod
-    def _password(cls, v: SecretStr | None) -> SecretStr | None:
+    def _password(cls, v: SecretStr | None, info: ValidationInfo) -> SecretStr | None:
         if v is not None:
+            _needs_username(info)
             check_length(v.get_secret_value(), MQTT_STRING_MAX, "a password")
+        return v
+
+    @field_validator("password_file")
+    @classmethod
+    def _password_file_user(cls, v: Path | None, info: ValidationInfo) -> Path | None:
+        if v is not None:
+            _needs_username(info)
         return v
 
     @field_validator("host")
@@ -308,6 +318,17 @@ class MqttSettings(Strict):
         digest = hashlib.sha256(key).hexdigest()[:6]
         short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
         return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"
+
+
+def _needs_username(info: ValidationInfo) -> None:
+    """A password goes with a user name (an attack pass: without one the MQTT client logged in
+    with neither, and check-config said "no login" of a configuration holding a password).
+    A user name that did not validate is said already, and not here."""
+    if "username" in info.data and info.data["username"] is None:
+        raise ValueError(
+            "needs mqtt.username: the bridge logs in with a user name and its password, and "
+            "would leave a password without one unused"
+        )
 
 
 class HomeAssistantSettings(Strict):
