@@ -705,6 +705,32 @@ def document(rotator: dict[str, Any] | None = None, **mqtt: Any) -> dict[str, An
     return {"mqtt": {"host": "127.0.0.1", **mqtt}, "rotators": [tower]}
 
 
+@pytest.mark.parametrize(
+    "variable",
+    [
+        "ROTOR_BRIDGE_MQTT__PASSWORD",
+        "ROTOR_BRIDGE_MQTT__USERNAME",
+        "ROTOR_BRIDGE_MQTT__BASE_TOPIC",
+        "ROTOR_BRIDGE_MQTT__CLIENT_ID",
+        "ROTOR_BRIDGE_ROTATORS__TOWER__PORT",
+    ],
+)
+def test_an_environment_value_that_is_not_utf8_is_refused_naming_the_variable_not_the_value(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str
+) -> None:
+    """os.environ holds a byte that is not UTF-8 as a lone surrogate: check-config said "config
+    OK" (or ended in a traceback, for the base topic) and run ended in one where the MQTT client
+    encoded the password, the user name, the client id or a topic."""
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__USERNAME", "rotor")
+    monkeypatch.setenv(variable, "s3cret\udcff")  # what os.environ holds for b"s3cret\xff"
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL))
+    assert str(err.value) == f"{variable}: not UTF-8 text: set it again, in UTF-8"
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={variable: "s3cret\udcff"})
+    assert out.returncode == 2 and out.stdout == "", out
+    assert variable in out.stderr and "s3cret" not in out.stderr and "Traceback" not in out.stderr
+
+
 @pytest.mark.parametrize("topic", ["rb\u0001x", "rb\nx", "rb\tx", "rb\u007fx", "rb\u0085x"])
 def test_a_topic_with_a_control_character_is_refused_naming_the_key(topic: str) -> None:
     """mosquitto drops a CONNECT whose will topic (under the base topic) holds one ("Malformed
