@@ -55,8 +55,8 @@ def test_a_rotator_may_be_in_two_groups() -> None:
         ({"id": "bridge"}, "groups[0].id: 'bridge' is a word of the bridge's own topics:"),
         ({"id": "track"}, "'track' is a word of the bridge's own topics (the tracking feature's)"),
         ({"id": "spots"}, "'spots' is a word of the bridge's own topics (the dxcluster feature's)"),
-        ({"id": "a/b"}, "groups.0.id: must be 1 to 32 letters"),
-        ({"id": "stack\n"}, "groups.0.id: must be 1 to 32 letters"),
+        ({"id": "a/b"}, "groups.0.id: must be 1 to 32 lower-case letters"),
+        ({"id": "stack\n"}, "groups.0.id: must be 1 to 32 lower-case letters"),
         ({"offsets": {"lowr": 180}}, "offsets.lowr names no member of the group"),
         ({"offsets": {"lower": 360}}, "lower = 360: an offset is 0 to 360"),
         ({"limits": {"upper": [300, 20]}}, "upper = [300, 20]: limits are true bearings"),
@@ -92,6 +92,17 @@ def test_a_box_made_for_an_elevation_rotor_alone_is_no_member() -> None:
     ) in str(err.value)
     both = {"id": "both", "rotators": ["upper", "sat"]}
     assert settings_from({"rotators": rotators, "groups": [both]}, {}).groups[0].id == "both"
+
+
+@pytest.mark.parametrize("gid", ["Stack", "STACK", "Tower"])
+def test_a_group_id_with_capitals_is_refused_as_a_rotator_id_is(gid: str) -> None:
+    """An attack pass: a group "Tower" beside a rotator "tower" passed, and its discovery
+    asked for number.Tower_target_azimuth, no entity id, which Home Assistant lower-cases to
+    the rotator's own number.tower_target_azimuth."""
+    with pytest.raises(ConfigError) as err:
+        load({"id": gid, "rotators": ["upper", "lower"]})
+    assert "groups[0].id: must be 1 to 32 lower-case letters, digits, - or _" in str(err.value)
+    assert load({"id": gid.lower(), "rotators": ["upper", "lower"]}).groups[0].id == gid.lower()
 
 
 def test_a_group_id_used_twice_is_refused() -> None:

@@ -32,7 +32,7 @@ from pydantic import Field, field_validator, model_validator
 from bridge.feature import registered, topic_words
 from bridge.settings.base import Strict
 
-_ID = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
+_ID = re.compile(r"^[a-z0-9_-]{1,32}$")
 
 # rule 4: the first level of every core topic under a rotator's root and of the bridge's own
 # under the base topic (interfaces/mqtt/topics.py; tests/mqtt/test_groups.py keeps the two in
@@ -63,7 +63,7 @@ class GroupSettings(Strict):
 
     id: str = Field(
         description="the group's id: its topics are <base_topic>/<id>/target and /stop; "
-        "letters, digits, - and _ (at most 32), not a rotator's id",
+        "lower-case letters, digits, - and _ (at most 32), not a rotator's id",
         examples=["stack"],
     )
     name: str | None = Field(
@@ -96,7 +96,10 @@ class GroupSettings(Strict):
     @classmethod
     def _id(cls, v: str) -> str:
         if not _ID.fullmatch(v):  # not match: its $ passes a final newline
-            raise ValueError("must be 1 to 32 letters, digits, - or _ (it is a topic level)")
+            raise ValueError(
+                "must be 1 to 32 lower-case letters, digits, - or _ (it is a topic level, and "
+                "Home Assistant's entity ids, made from it, are lower case), as a rotator's id"
+            )
         return v
 
     @field_validator("offsets")
