@@ -840,6 +840,14 @@ def test_a_number_from_the_environment_is_still_read_as_one(
         settings_from(document(), os.environ)
 
 
+@pytest.mark.parametrize("name", ["Tab\tName", "EU\n", "JA\u0085"])
+def test_a_preset_name_no_command_could_pick_is_refused_naming_it(name: str) -> None:
+    """R/preset refuses a name that is not printable (payloads.parse_name): Home Assistant's
+    select offered it, and every pick of it was refused."""
+    text = refusal(document({"presets": {name: 90}}))
+    assert f"rotators[0]: presets: name {name!r} must be printable text" in text, text
+
+
 @pytest.mark.parametrize("login", [{"password": "s3cret-pw"}, {"password_file": "pw"}])
 def test_a_password_without_a_username_is_refused(tmp_path: Path, login: dict[str, str]) -> None:
     """The MQTT client logs in only with a user name: a password without one went unused, and

@@ -221,6 +221,11 @@ class PointingFields(Strict):
                     f"second, and differ (got {start:g}, {end:g})"
                 )
         for name, value in self.presets.items():
+            if not name.isprintable():  # (an attack pass: R/preset refuses it, payloads.py)
+                raise ValueError(
+                    f"presets: name {name!r} must be printable text (no tab, no control "
+                    "character): R/preset and Home Assistant's select could never pick it"
+                )
             if not name.strip() or name != name.strip() or len(name) > PRESET_NAME_MAX:
                 raise ValueError(
                     f"presets: name {name!r} must be 1..{PRESET_NAME_MAX} characters "
