@@ -77,6 +77,26 @@ def test_nonsense_is_refused_naming_the_key(rotator: dict[str, Any], words: str)
     assert words in str(err.value), str(err.value)
 
 
+@pytest.mark.parametrize(
+    ("axis", "port", "said"),
+    [
+        ("azimuth", "", "must name the serial port"),
+        ("elevation", " ", "must name the serial port"),
+        ("elevation", "/dev/ttyEL\x00", "must not hold a NUL byte"),
+    ],
+)
+def test_a_box_port_that_names_no_serial_port_is_refused_naming_the_key(
+    axis: str, port: str, said: str
+) -> None:
+    """As a rotator's own port (an attack pass), on one line: not again as the port of both."""
+    box = {**(AZ if axis == "azimuth" else EL), "port": port}
+    with pytest.raises(ConfigError) as err:
+        load(**({"azimuth": AZ, "elevation": EL} | {axis: box}))
+    lines = str(err.value).splitlines()
+    assert lines[0] == "invalid configuration:" and len(lines) == 2, lines
+    assert lines[1].startswith(f"  rotators[0]: {axis}.port: {said}"), lines
+
+
 def test_a_box_port_is_no_other_rotators() -> None:
     doc = {
         "rotators": [

@@ -848,6 +848,20 @@ def test_a_preset_name_no_command_could_pick_is_refused_naming_it(name: str) -> 
     assert f"rotators[0]: presets: name {name!r} must be printable text" in text, text
 
 
+@pytest.mark.parametrize(
+    ("port", "said"),
+    [
+        ("", "must name the serial port"),
+        ("   ", "must name the serial port"),
+        ("/dev/ttyUSB0\x00", "must not hold a NUL byte"),
+    ],
+)
+def test_a_port_that_names_no_serial_port_is_refused_naming_the_key(port: str, said: str) -> None:
+    """An empty port passed and the bridge tried to open it for ever; a NUL byte ended the
+    check of the ports in "configuration: embedded null byte", naming no key."""
+    assert f"rotators[0].port: {said}" in refusal(document({"port": port}))
+
+
 @pytest.mark.parametrize("login", [{"password": "s3cret-pw"}, {"password_file": "pw"}])
 def test_a_password_without_a_username_is_refused(tmp_path: Path, login: dict[str, str]) -> None:
     """The MQTT client logs in only with a user name: a password without one went unused, and

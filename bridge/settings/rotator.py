@@ -12,7 +12,8 @@ Rules:
    rotator that could not work is a configuration error naming the key; so is a line rate no
    controller is set to (BAUD_MIN..BAUD_MAX).
 3. The port is a name, never opened here: loading a configuration touches no hardware
-   (check-config reports a port that does not exist as a warning).
+   (check-config reports a port that does not exist as a warning). An empty name, or one
+   with a NUL byte, names no port and is refused (check_port).
 4. A composite rotator (protocols/axes.py) gives ``azimuth`` and ``elevation`` tables, each a
    model and a port, in place of ``model`` and ``port``: its ``model`` reads ``AZ+EL`` and its
    ``port`` both ports; a model that cannot drive its axis, one port for both, or ``model``
@@ -51,6 +52,19 @@ EMULATION_KEYS = ("gs232", "easycomm", "dcu1")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
+def check_port(v: str) -> str:
+    """``v`` if it can name a serial port: not empty (an attack pass: the bridge tried to open
+    "" for ever) and without a NUL byte (no path holds one; it ended the check of the ports in
+    "embedded null byte", naming no key)."""
+    if not v.strip():
+        raise ValueError(
+            "must name the serial port (`rotor-bridge ports` lists them), not be empty"
+        )
+    if "\0" in v:
+        raise ValueError("must not hold a NUL byte (no path does)")
+    return v
+
+
 class AxisSettings(Strict):
     """A rotator whose azimuth and elevation are turned by two controllers on two ports (an
     RT-21 for the azimuth and a GS-232B box for the elevation, say) gives an `azimuth` and an
@@ -82,6 +96,11 @@ class AxisSettings(Strict):
             raise ValueError(unknown_model(v, list(REGISTRY)))  # settings/errors.py rule 4
         return v
 
+    @field_validator("port")
+    @classmethod
+    def _port(cls, v: str) -> str:
+        return check_port(v)
+
 
 class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     """``[[rotators]]``: one table per rotator controller (at least one)."""
@@ -103,6 +122,12 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                     '{ model = "...", port = "..." }'
                 )
             tables.append(table)
+        for axis, table in zip(Axis, tables, strict=True):  # (said so, not in the port of both)
+            if isinstance(table["port"], str):
+                try:
+                    check_port(table["port"])
+                except ValueError as exc:
+                    raise ValueError(f"{axis.value}.port: {exc}") from None
         az, el = tables
         model, port = f"{az['model']}+{el['model']}", f"{az['port']}+{el['port']}"
         for key, derived in (("model", model), ("port", port), ("baud", None)):
@@ -439,6 +464,11 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         if v not in REGISTRY:
             raise ValueError(unknown_model(v, list(REGISTRY)))  # settings/errors.py rule 4
         return v
+
+    @field_validator("port")
+    @classmethod
+    def _port(cls, v: str) -> str:
+        return check_port(v)
 
     @field_validator("topic")
     @classmethod
