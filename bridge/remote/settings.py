@@ -8,7 +8,8 @@ Rules:
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
    take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
    client hears its replies on port + 1), a pty's path; nor the console's web.port.
-3. A problem is a ConfigError naming the key as the file spells it, one line each.
+3. A problem is a ConfigError naming the key as the file spells it, one line each; a table is
+   settings/base.py's ``Strict`` (no unknown key, no boolean where a number goes).
 4. An endpoint offers one thing at least (rotctld, GS-232, Easycomm or DCU-1 on TCP or a pty,
    PstRotator UDP); every bind is loopback unless set.
 5. ``[web]`` is the bridge's own table (WebSettings), with its refusal of a console beyond
@@ -23,18 +24,15 @@ import re
 import socket
 from typing import Any, Literal, NamedTuple
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from bridge.settings import ConfigError, read_toml
+from bridge.settings.base import Strict
 from bridge.settings.errors import describe
 from bridge.settings.mqtt import MqttSettings
 from bridge.settings.web import WebSettings
 
 ENV_PREFIX = "ROTOR_REMOTE_"  # no variables are read; describe() wants a prefix to name
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 _BIND = "127.0.0.1"
@@ -75,7 +73,7 @@ def _pty(what: str) -> Any:
     )
 
 
-class Endpoint(_Strict):
+class Endpoint(Strict):
     """``[[endpoints]]``: local ports onto one of the station's rotators (rule 4: one at least)."""
 
     rotator: str | None = Field(
@@ -118,7 +116,7 @@ class Endpoint(_Strict):
         return out
 
 
-class RemoteSettings(_Strict):
+class RemoteSettings(Strict):
     operator: str = Field(
         min_length=1,
         max_length=64,

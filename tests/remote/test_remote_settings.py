@@ -3,6 +3,7 @@ binds unless set, and a problem named by the key as the file spells it."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -85,3 +86,24 @@ def test_the_acknowledgement_wait_is_a_setting_within_the_expiry(tmp_path: Path)
     with pytest.raises(ConfigError) as caught:
         load_remote_settings(str(path))
     assert "ack_wait_s (6) must not be more than command_expiry_s (5)" in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "head", "said"),
+    [
+        (
+            "rotctld_port = true",
+            "",
+            "endpoints[0].rotctld_port: must be a number, not true or false",
+        ),
+        ("rotctld_port = 4533", "ack_wait_s = true\n", "ack_wait_s: must be a number"),
+    ],
+)
+def test_a_boolean_where_a_number_goes_is_refused_naming_the_key(
+    tmp_path: Path, endpoint: str, head: str, said: str
+) -> None:
+    """pydantic reads true as 1: an endpoint on port 1, an acknowledgement awaited 1 s."""
+    path = tmp_path / "remote.toml"
+    path.write_text(head + HEAD + f"[[endpoints]]\n{endpoint}\n")
+    with pytest.raises(ConfigError, match=re.escape(said)):
+        load_remote_settings(str(path))
