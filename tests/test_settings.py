@@ -706,29 +706,41 @@ def document(rotator: dict[str, Any] | None = None, **mqtt: Any) -> dict[str, An
 
 
 @pytest.mark.parametrize(
-    "variable",
+    ("variable", "key", "what"),
     [
-        "ROTOR_BRIDGE_MQTT__PASSWORD",
-        "ROTOR_BRIDGE_MQTT__USERNAME",
-        "ROTOR_BRIDGE_MQTT__BASE_TOPIC",
-        "ROTOR_BRIDGE_MQTT__CLIENT_ID",
-        "ROTOR_BRIDGE_ROTATORS__TOWER__PORT",
+        ("ROTOR_BRIDGE_MQTT__PASSWORD", "mqtt.password", "a password must be UTF-8 text"),
+        ("ROTOR_BRIDGE_MQTT__USERNAME", "mqtt.username", "a user name must be UTF-8 text"),
+        ("ROTOR_BRIDGE_MQTT__BASE_TOPIC", "mqtt.base_topic", "holds U+DCFF, which MQTT does not"),
+        ("ROTOR_BRIDGE_MQTT__CLIENT_ID", "mqtt.client_id", "a client id must be UTF-8 text"),
     ],
 )
-def test_an_environment_value_that_is_not_utf8_is_refused_naming_the_variable_not_the_value(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str
+def test_an_mqtt_string_from_the_environment_that_is_not_utf8_is_refused_naming_its_key(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str, key: str, what: str
 ) -> None:
     """os.environ holds a byte that is not UTF-8 as a lone surrogate: check-config said "config
     OK" (or ended in a traceback, for the base topic) and run ended in one where the MQTT client
-    encoded the password, the user name, the client id or a topic."""
+    encoded the password, the user name, the client id or a topic. Never the value."""
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__USERNAME", "rotor")
     monkeypatch.setenv(variable, "s3cret\udcff")  # what os.environ holds for b"s3cret\xff"
     with pytest.raises(ConfigError) as err:
         load_settings(write(tmp_path, MINIMAL))
-    assert str(err.value) == f"{variable}: not UTF-8 text: set it again, in UTF-8"
+    assert f"{key} (from {variable}): {what}" in str(err.value)
     out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={variable: "s3cret\udcff"})
     assert out.returncode == 2 and out.stdout == "", out
     assert variable in out.stderr and "s3cret" not in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize(
+    "variable", ["ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "ROTOR_BRIDGE_STATE_FILE", "HOME"]
+)
+def test_a_path_that_is_not_utf8_is_a_path_all_the_same(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str
+) -> None:
+    """A Linux path is bytes: a serial port's, the state file's (hashed into the default client
+    id: a home folder not in UTF-8 ended check-config in a traceback, a review)."""
+    monkeypatch.setenv(variable, f"{tmp_path}/d\udce9")
+    settings = load_settings(write(tmp_path, MINIMAL))
+    assert settings.mqtt.effective_client_id().startswith("rotor-")
 
 
 @pytest.mark.parametrize("topic", ["rb\u0001x", "rb\nx", "rb\tx", "rb\u007fx", "rb\u0085x"])
@@ -736,7 +748,7 @@ def test_a_topic_with_a_control_character_is_refused_naming_the_key(topic: str) 
     """mosquitto drops a CONNECT whose will topic (under the base topic) holds one ("Malformed
     UTF-8"): the bridge blamed the broker's access rules, fell back to MQTT 3.1.1 and never
     connected."""
-    said = ": a topic is printable text (no control characters)"
+    said = ", which MQTT does not carry (a control character, a lone surrogate or a non-character)"
     assert f"mqtt.base_topic: holds U+{ord(topic[2]):04X}{said}" in refusal(
         document(base_topic=topic)
     )
@@ -840,12 +852,24 @@ def test_a_number_from_the_environment_is_still_read_as_one(
         settings_from(document(), os.environ)
 
 
-@pytest.mark.parametrize("name", ["Tab\tName", "EU\n", "JA\u0085"])
+@pytest.mark.parametrize("name", ["Tab\tName", "EU\n", "JA\u0085", "X\ufdd0"])
 def test_a_preset_name_no_command_could_pick_is_refused_naming_it(name: str) -> None:
-    """R/preset refuses a name that is not printable (payloads.parse_name): Home Assistant's
-    select offered it, and every pick of it was refused."""
+    """R/preset refuses a name MQTT does not carry (payloads.parse_name, core/text.py): Home
+    Assistant's select offered it, and every pick of it was refused."""
     text = refusal(document({"presets": {name: 90}}))
-    assert f"rotators[0]: presets: name {name!r} must be printable text" in text, text
+    assert f"rotators[0]: presets: name {name!r} holds U+" in text, text
+
+
+@pytest.mark.parametrize("name", ["شمال\u200cغرب", "my\u00a0shack", "\U0001fae8 Ham"])
+def test_a_preset_name_in_any_script_is_taken_and_picked(name: str) -> None:
+    """A zero-width non-joiner (Persian), a no-break space, a character newer than Python's
+    tables: str.isprintable refused each (a review); the settings, R/preset and the console
+    share core/text.py's rule."""
+    from bridge.interfaces.mqtt.payloads import parse_name
+
+    settings = settings_from(document({"presets": {name: 90}, "topic": f"rotor/{name}"}), {})
+    assert name in settings.rotators[0].presets
+    assert parse_name(name.encode(), "preset") == name
 
 
 @pytest.mark.parametrize(
@@ -874,3 +898,22 @@ def test_a_password_without_a_username_is_refused(tmp_path: Path, login: dict[st
     text = refusal(document(**login))
     assert f"mqtt.{key}: needs mqtt.username" in text and "s3cret" not in text, text
     assert settings_from(document(username="rotor", **login), {}).mqtt.password is not None
+
+
+@pytest.mark.parametrize(
+    ("where", "key"),
+    [
+        ({"state_file": "/tmp/a\x00b"}, "state_file"),
+        ({"audit_file": "/tmp/a\x00b"}, "audit_file"),
+        ({"mqtt": {"host": "h", "username": "u", "password_file": "/a\x00"}}, "mqtt.password_file"),
+        ({"tracking": {"tle_file": "/tmp/a\x00b"}}, "tracking.tle_file"),
+        (
+            {"rotators": [{"id": "t", "model": "rotorez", "port": "/p", "gs232_pty": "/x\x00"}]},
+            "rotators[0].gs232_pty",
+        ),
+    ],
+)
+def test_a_nul_byte_in_any_path_is_refused_naming_its_key(where: dict[str, Any], key: str) -> None:
+    """A state file's ended check-config in a traceback, a password file's named no key, and an
+    audit file's, a TLE file's and a pty's were "config OK" (a review; settings/base.py rule 3)."""
+    assert f"{key}: must not hold a NUL byte" in refusal({**document(), **where})

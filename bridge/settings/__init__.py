@@ -9,7 +9,8 @@ Where the parts are: the broker's tables in settings/mqtt.py, a rotator's in
 settings/rotator.py (its pointing and loggers' keys in settings/pointing.py and
 settings/loggers.py), the console's in settings/web.py, the engine values derived for keys
 left out in settings/defaults.py, the files settings name in settings/files.py, the wording of
-errors in settings/errors.py.
+errors in settings/errors.py, the base of every table (no unknown key, no boolean for a number,
+no NUL) in settings/base.py; what MQTT's text may hold is core/text.py's.
 check-config's report is settings/report.py; docs/configuration.md is written from these models
 by config_doc.py.
 
@@ -393,7 +394,6 @@ def load_settings(
 ) -> Settings:
     """Read, merge and validate; raise ConfigError with one message per problem."""
     env = os.environ if environ is None else environ
-    _check_utf8(env)  # (before ROTOR_BRIDGE_CONFIG is opened and named in a message)
     path = path or env.get("ROTOR_BRIDGE_CONFIG")
     data: dict[str, Any] = read_toml(path) if path else {}
     return settings_from(data, env, path)
@@ -425,7 +425,6 @@ def settings_from(
 ) -> Settings:
     """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
     env = os.environ if environ is None else environ
-    _check_utf8(env)
     _apply_rotator_env(data, env)
     unknown = [k for k in data if k not in Settings.model_fields]
     if (
@@ -451,23 +450,6 @@ def settings_from(
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
     return settings
-
-
-def _check_utf8(env: Any) -> None:
-    """Every ROTOR_BRIDGE_ variable is UTF-8 text (an attack pass: os.environ holds a byte that
-    is not UTF-8 as a lone surrogate, '\\udcff'; such a value passed check-config and ended
-    ``run`` in a traceback where paho encoded the password, the user name or a topic). The
-    value is never quoted: it may be a password. pydantic-settings reads os.environ whatever
-    ``env`` is, so both are looked at."""
-    for source in (env, os.environ) if env is not os.environ else (env,):
-        for key, value in source.items():
-            if not key.upper().startswith(ENV_PREFIX):
-                continue
-            try:
-                f"{key}{value}".encode()
-            except UnicodeEncodeError:
-                name = key.encode(errors="backslashreplace").decode()
-                raise ConfigError(f"{name}: not UTF-8 text: set it again, in UTF-8") from None
 
 
 def _not_json(exc: SettingsError, env: Any) -> str:

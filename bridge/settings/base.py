@@ -8,6 +8,9 @@ Rules:
    so ``port = true`` connected to port 1 and ``park_az_deg = true`` parked at 1 degree (an
    attack pass). A number written as text (``"60"``, what the environment gives) is still read
    as one; a key that takes a boolean as well is left alone.
+3. No text holds a NUL byte, a path's above all (``state_file``, ``audit_file``, a TLS or
+   password file, a TLE or cty file, a pty's link): none can, and a NUL ended check-config in a
+   traceback, or named no key (a review).
 """
 
 from __future__ import annotations
@@ -43,11 +46,32 @@ def takes_boolean_for_number(annotation: Any, value: Any) -> bool:
 
 
 def numbers_not_booleans(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
-    """A before-validator for every field (rule 2); ValueError names no value."""
+    """A before-validator for every field (rules 2 and 3); ValueError names no value."""
     field = cls.model_fields.get(info.field_name or "")
     if field is not None and takes_boolean_for_number(field.annotation, value):
         raise ValueError("must be a number, not true or false")
+    if (field is None or not _a_model(field.annotation)) and _holds_nul(value):
+        raise ValueError("must not hold a NUL byte (no path or name does)")
     return value
+
+
+def _holds_nul(value: Any) -> bool:
+    """Rule 3: ``value``, or a text in a list or a table of it, holds a NUL (a table of a model
+    of its own is not looked into here: that model looks, and names its key)."""
+    if isinstance(value, str):
+        return "\0" in value
+    if isinstance(value, list | tuple):
+        return any(_holds_nul(v) for v in value if not isinstance(v, dict))
+    if isinstance(value, dict):
+        return any(_holds_nul(k) or _holds_nul(v) for k, v in value.items())
+    return False
+
+
+def _a_model(annotation: Any) -> bool:
+    """Whether ``annotation`` is a settings table of its own (a model, also with None)."""
+    if get_origin(annotation) in (Union, types.UnionType):
+        return any(_a_model(a) for a in get_args(annotation))
+    return isinstance(annotation, type) and issubclass(annotation, BaseModel)
 
 
 class Strict(BaseModel):

@@ -27,6 +27,7 @@ from pydantic import (
     model_validator,
 )
 
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings.base import Strict
 from bridge.settings.files import check_tls_files, read_password_file
 
@@ -45,7 +46,7 @@ CLIENT_ID_ROOM = len("-stop")
 
 def check_topic(v: str, *, own: bool = True) -> str:
     """``v`` if it is a plain topic: no wildcards, no leading, trailing or double '/', nothing
-    that is not printable (mosquitto drops a client whose topic holds a control character, the
+    core/text.py refuses (mosquitto drops a client whose topic holds a control character, the
     will's among them, at every CONNECT: an attack pass), and short enough for MQTT. ``own``: a
     topic the bridge publishes under, which leaves room for the levels it adds (TOPIC_ROOM) and
     does not start with '$' (the broker's own topics, $SYS: it would take no message there)."""
@@ -53,11 +54,9 @@ def check_topic(v: str, *, own: bool = True) -> str:
         raise ValueError(
             "must be a plain topic like 'rotor' (no wildcards, no leading/trailing '/')"
         )
-    bad = next((c for c in v if not c.isprintable()), None)
+    bad = bad_char(v)
     if bad is not None:
-        raise ValueError(
-            f"holds U+{ord(bad):04X}: a topic is printable text (no control characters)"
-        )
+        raise ValueError(f"holds {bad}, {NOT_TEXT}")
     if own and v.startswith("$"):
         raise ValueError("must not start with '$': the broker keeps those topics for itself")
     if own:
@@ -69,9 +68,14 @@ def check_topic(v: str, *, own: bool = True) -> str:
 
 
 def check_length(v: str, most: int, what: str, room: str = "") -> None:
-    """ValueError if ``v`` is longer than ``most`` bytes in UTF-8 (``room``: what is kept from
-    MQTT's limit, and why); the value is not quoted (a password may be one)."""
-    size = len(v.encode(errors="surrogatepass"))
+    """ValueError if ``v`` is not UTF-8 text (a lone surrogate: what Python makes of a byte
+    from the environment that is not UTF-8, which ended ``run`` in a traceback where paho
+    encoded it) or is longer than ``most`` bytes in UTF-8 (``room``: what is kept from MQTT's
+    limit, and why); the value is never quoted (a password may be one)."""
+    try:
+        size = len(v.encode())
+    except UnicodeEncodeError:
+        raise ValueError(f"{what} must be UTF-8 text: set it again, in UTF-8") from None
     if size > most:
         why = f"MQTT's limit is {MQTT_STRING_MAX}{', less ' + room if room else ''}"
         raise ValueError(f"{what} is at most {most} bytes in UTF-8 ({why}); this is {size}")
@@ -314,7 +318,8 @@ class MqttSettings(Strict):
         if self.client_id:
             return self.client_id
         host = socket.gethostname()
-        key = f"{host}\n{self.base_topic}\n{self._state_file}".encode()
+        # (a state file's path need not be UTF-8: only hashed)
+        key = f"{host}\n{self.base_topic}\n{self._state_file}".encode(errors="surrogatepass")
         digest = hashlib.sha256(key).hexdigest()[:6]
         short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
         return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"

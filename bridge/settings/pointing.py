@@ -16,6 +16,7 @@ from pydantic import Field, field_validator, model_validator
 from bridge.core import geo
 from bridge.core.errors import Refused
 from bridge.core.model import Target
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.pointing import Pointing, norm360
 from bridge.protocols.base import ModelSpec
 from bridge.settings.base import Strict
@@ -221,10 +222,11 @@ class PointingFields(Strict):
                     f"second, and differ (got {start:g}, {end:g})"
                 )
         for name, value in self.presets.items():
-            if not name.isprintable():  # (an attack pass: R/preset refuses it, payloads.py)
+            bad = bad_char(name)  # (an attack pass: R/preset refuses it, payloads.py)
+            if bad is not None:
                 raise ValueError(
-                    f"presets: name {name!r} must be printable text (no tab, no control "
-                    "character): R/preset and Home Assistant's select could never pick it"
+                    f"presets: name {name!r} holds {bad}, {NOT_TEXT}: R/preset and Home "
+                    "Assistant's select could never pick it"
                 )
             if not name.strip() or name != name.strip() or len(name) > PRESET_NAME_MAX:
                 raise ValueError(

@@ -21,6 +21,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings.base import Strict
 
 KMH_PER_MS = 3.6
@@ -90,10 +91,11 @@ class WindFields(Strict):
         if self.wind_topic is None:
             return self
         topic = self.wind_topic
-        if not topic.strip() or any(c in topic for c in "+#") or not topic.isprintable():
+        bad = bad_char(topic)
+        if not topic.strip() or any(c in topic for c in "+#") or bad is not None:
             raise ValueError(
-                "wind_topic: one topic, without wildcards (+, #), in printable text (no "
-                "control characters: the broker would drop the bridge for it)"
+                "wind_topic: one topic, without wildcards (+, #)"
+                + ("" if bad is None else f": it holds {bad}, {NOT_TEXT}")
             )
         if self.wind_park_above is None:
             raise ValueError("wind_topic needs wind_park_above (the speed to park above)")

@@ -23,6 +23,7 @@ from typing import Any
 from bridge.core import geo
 from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import RotatorStatus, TargetInfo
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.feature import StatusBlock, status_blocks
 from bridge.interfaces.mqtt.call_payload import Called, CallError, parse_called
 from bridge.pointing import Pointing
@@ -216,8 +217,9 @@ def _one_name_each(obj: dict[str, object]) -> None:
 
 def parse_name(payload: bytes, what: str) -> str:
     text = _text(payload)
-    if any(not c.isprintable() for c in text):
-        raise PayloadError(f"{what} must be printable text")
+    bad = bad_char(text)  # (the settings' rule for a preset's name: core/text.py)
+    if bad is not None:
+        raise PayloadError(f"{what} holds {bad}, {NOT_TEXT}")
     return text
 
 

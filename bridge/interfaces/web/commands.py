@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import json
 import math
-import unicodedata
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 
@@ -54,6 +53,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
+from bridge.core.text import bad_char
 from bridge.interfaces.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
@@ -250,8 +250,8 @@ def _text(doc: dict[str, object], key: str) -> str:
     value = doc.get(key)
     if not isinstance(value, str) or not value.strip() or len(value) > 80:
         raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
-    if any(unicodedata.category(c) in ("Cc", "Cs") for c in value):  # (as the settings take
-        # names; a lone surrogate, JSON's "\\ud800", is no text: MQTT could not send it)
+    if bad_char(value) is not None:  # (as the settings and R/preset take names: core/text.py;
+        # a lone surrogate, JSON's "\\ud800", is no text: MQTT could not send it)
         raise BadCommand(f'"{key}" must be text without control characters')
     return value
 

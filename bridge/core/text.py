@@ -1,0 +1,31 @@
+"""Text the bridge takes from a user (a topic, a preset's name, a name in a command) and hands
+on over MQTT: one rule for the settings, the MQTT payloads and the console, which is MQTT's
+and mosquitto's. An MQTT string may hold no control character (U+0000-001F, U+007F-009F: a
+broker drops the client at its CONNECT or PUBLISH, the will's topic among them), no lone
+surrogate (what Python makes of a byte that is not UTF-8: it cannot be sent at all) and no
+non-character (U+FDD0-FDEF, U+xFFFE, U+xFFFF). Everything else is text: a no-break space, a
+zero-width joiner in Persian or an emoji, characters newer than Python's Unicode tables.
+(``str.isprintable`` refuses all of those: a review found it refusing real users' names.)
+"""
+
+from __future__ import annotations
+
+__all__ = ["NOT_TEXT", "bad_char"]
+
+# what a refusal says after the character: U+0001, {NOT_TEXT}
+NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or a non-character)"
+
+
+def bad_char(text: str) -> str | None:
+    """The first character of ``text`` MQTT's strings may not hold, as ``U+XXXX``; None."""
+    for c in text:
+        n = ord(c)
+        if (
+            n <= 0x1F
+            or 0x7F <= n <= 0x9F
+            or 0xD800 <= n <= 0xDFFF
+            or 0xFDD0 <= n <= 0xFDEF
+            or n & 0xFFFE == 0xFFFE
+        ):
+            return f"U+{n:04X}"
+    return None
