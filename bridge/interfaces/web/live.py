@@ -11,7 +11,12 @@ Rules:
    urgent, rather than when its STOP is answered 401), and when the bridge stops.
 4. The WebSocket's token is its first message (a browser cannot give a WebSocket a header),
    within TOKEN_WAIT_S; its Origin was checked with the opening request (server.py). Until the
-   token is in it counts as a page (MAX_PAGES) and shows no token (connections.py rule 1).
+   token is in it shows no token (connections.py rule 1) and holds a place among MAX_PAGES, but
+   never keeps a page out: a socket is refused (503) only when MAX_PAGES pages are open, and
+   when pages and sockets waiting for their token fill MAX_PAGES, the oldest one still waiting
+   is closed (1013, try again later) to make room, as connections.py rule 1 does at its caps
+   (an attack pass: a host with no password opened tokenless sockets again as they were
+   closed, and every new tab of the operator's was answered 503).
 5. A page sends its STOP and lock ON over its WebSocket as well as by POST: when a flood holds
    every connection a new POST could take, the socket the page already has still carries them.
    Nothing else is taken over it.
@@ -25,6 +30,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+from collections import OrderedDict
 from collections.abc import Callable
 
 from aiohttp import WSMsgType, web
@@ -40,6 +46,7 @@ PING_S = 10.0
 TOKEN_WAIT_S = 3.0  # the WebSocket's token (its first message) comes within this
 MAX_PAGES = 100  # open streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
+ROOM_MADE = 1013  # rule 4: a socket still waiting for its token, closed for one (try again later)
 
 
 class Live:
@@ -60,7 +67,9 @@ class Live:
         self._trust = trust  # connections.py rule 1
         # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address
         self._halt = halt
-        self._opening = 0  # WebSockets upgraded, their token not in yet (they count as pages)
+        # rule 4: the WebSockets whose token is not in yet, oldest first; each one's future is
+        # set when it is to make room
+        self._waiting: OrderedDict[asyncio.Future[None], None] = OrderedDict()
         self._newest: dict[str, tuple[RotatorStatus, float]] = {}  # written by the lines thread
         self._spots: str | None = None  # written by the DX cluster's thread (rule 6)
 
@@ -88,7 +97,7 @@ class Live:
 
     async def events(self, request: web.Request) -> web.StreamResponse:
         """``api/events``, an event stream (scripts; the caller checked its token)."""
-        if self.feed.pages >= MAX_PAGES:  # each holds a connection: a flood is not served
+        if not self._room():  # each holds a connection: a flood is not served
             return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
         response = web.StreamResponse(
             headers={
@@ -115,6 +124,16 @@ class Live:
             self.feed.leave(page)
         return response
 
+    def _room(self) -> bool:
+        """Rule 4: room for one more stream, made if need be by closing the oldest socket still
+        waiting for its token; False when MAX_PAGES pages are open."""
+        if self.feed.pages >= MAX_PAGES:
+            return False
+        while self.feed.pages + len(self._waiting) >= MAX_PAGES:
+            oldest, _ = self._waiting.popitem(last=False)
+            oldest.set_result(None)
+        return True
+
     def join(self, token: str | None) -> Page:
         """A page joins, then takes every newest status not rendered yet (the lines thread
         hands statuses over only while a page is open: on_status); it ends with its token
@@ -133,18 +152,19 @@ class Live:
         """The page's feed: a WebSocket (a browser's own connections to a host are few, six
         over HTTP/1.1, and a page's event stream held one of them: six tabs left none for a
         STOP). The token comes as the first message; then the same messages as api/events."""
-        if self.feed.pages + self._opening >= MAX_PAGES:
+        if not self._room():
             return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
         ws = web.WebSocketResponse(max_msg_size=4096)
-        self._opening += 1
+        room = asyncio.get_running_loop().create_future()
+        self._waiting[room] = None
         try:
             await ws.prepare(request)
-            first = await asyncio.wait_for(ws.receive(), TOKEN_WAIT_S)
-            token = json.loads(first.data).get("token") if first.type == WSMsgType.TEXT else None
-        except (TimeoutError, ValueError, AttributeError, RecursionError, TypeError):
-            token = None
+            token = await self._token(ws, room)
         finally:
-            self._opening -= 1
+            self._waiting.pop(room, None)
+        if room.done():  # rule 4: closed to make room (the page tries again with its token)
+            await ws.close(code=ROOM_MADE, message=b"room made for a page with its token")
+            return ws
         if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
             await ws.close(code=4401, message=b"no valid token")
             return ws
@@ -167,6 +187,25 @@ class Live:
             reader.cancel()
             await ws.close(code=4401 if page.expired else 1001)  # 4401: the token's life ended
         return ws
+
+    async def _token(self, ws: web.WebSocketResponse, room: asyncio.Future[None]) -> object:
+        """What the socket's first message gives as its token (rule 4); None when nothing came
+        within TOKEN_WAIT_S, or ``room`` was set first (a newer socket needs the place)."""
+        receiving = asyncio.ensure_future(ws.receive())
+        try:
+            await asyncio.wait(
+                (receiving, room), timeout=TOKEN_WAIT_S, return_when=asyncio.FIRST_COMPLETED
+            )
+        finally:
+            if not receiving.done():  # (its close, next, waits for it to end)
+                receiving.cancel()
+        if room.done() or not receiving.done():
+            return None
+        first = receiving.result()
+        try:
+            return json.loads(first.data).get("token") if first.type == WSMsgType.TEXT else None
+        except (ValueError, AttributeError, RecursionError, TypeError):
+            return None
 
     async def _read(self, ws: web.WebSocketResponse, page: Page, peer: str | None) -> None:
         """What the page sends: a STOP or a lock ON, sent here as well as by POST (rule 5);
