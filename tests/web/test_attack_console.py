@@ -332,6 +332,46 @@ def test_a_rebinding_pages_wrong_logins_do_not_hold_back_the_operators_own(
     assert _login(client, PASSWORD, Host=f"localhost:{client.port}") == 200
 
 
+def test_a_rebinding_page_naming_the_consoles_address_in_x_forwarded_host_spends_its_own_tries(
+    guarded: tuple[Rig, ConsoleClient],
+) -> None:
+    """An attack pass: the rebinding page of the test above also wrote X-Forwarded-Host (any
+    page may, on its own origin's requests, without a preflight) naming the console's own
+    address; the login's limit believed it from any client, the page's wrong passwords counted
+    as the operator's own tab's, and the operator's right one was answered 429."""
+    _rig, client = guarded
+    own = f"127.0.0.1:{client.port}"
+    evil = {"Host": "rebind.evil.example", "Origin": "http://rebind.evil.example"}
+    for written in (own, f"rebind.evil.example, {own}", f"{own}, localhost"):
+        answers = [
+            _login(client, "guess", **evil, X_Forwarded_Host=written)
+            for _ in range(auth.LOGIN_BURST_PER_CLIENT + 2)
+        ]
+        assert answers[-1] == 429  # (the page's own tries are limited)
+        assert _login(client, PASSWORD, Host=own, Origin=f"http://{own}") == 200, written
+
+
+def test_behind_the_documented_proxy_the_name_the_browser_used_still_decides_whose_tries(
+    guarded: tuple[Rig, ConsoleClient],
+) -> None:
+    """Held: docs/console.md's nginx and Caddy ask the bridge as 127.0.0.1 and write the name
+    the browser used in X-Forwarded-Host over any the page wrote. A rebinding page's name
+    pointed at the proxy spends its own tries; the operator's page, by the proxy's address,
+    is still let in."""
+    _rig, client = guarded
+    proxy = {"Host": f"127.0.0.1:{client.port}"}
+    evil = {
+        **proxy,
+        "X_Forwarded_Host": "rebind.evil.example",
+        "Origin": "https://rebind.evil.example",
+    }
+    for _ in range(auth.LOGIN_BURST_PER_CLIENT + 2):
+        _login(client, "guess", **evil)
+    assert _login(client, "guess", **evil) == 429
+    mine = {**proxy, "X_Forwarded_Host": "192.168.1.10:8443", "Origin": "https://192.168.1.10:8443"}
+    assert _login(client, PASSWORD, **mine) == 200
+
+
 @pytest.mark.parametrize("trusted", [True, False])
 def test_behind_a_trusted_proxy_one_visitors_wrong_logins_hold_back_only_theirs(
     rig: Rig, tmp_path: Path, trusted: bool

@@ -66,6 +66,26 @@ def test_failed_logins_count_by_address_and_the_kind_of_name_asked_for() -> None
     assert others == {"10.0.0.1 other"}  # one bucket for every other name
     assert key("2001:db8::1", "[::1]:8754") == key("2001:db8::2", "[::2]") == "2001:db8::/64 ours"
 
+    # X-Forwarded-Host counts beside Host, never instead of it: any page may write it (an
+    # attack pass: a rebinding page named the console's address there, and spent the operator's
+    # tries); a proxy asks the bridge by its address and passes on the name the browser used
+    for host, forwarded, kind in [
+        ("rebind.evil.example", "127.0.0.1:8754", "other"),
+        ("rebind.evil.example", "shack.example.org", "other"),
+        ("127.0.0.1:8754", "rebind.evil.example", "other"),
+        ("127.0.0.1:8754", "shack.example.org, rebind.evil.example", "other"),
+        ("127.0.0.1:8754", "rebind.evil.example, shack.example.org", "other"),
+        ("127.0.0.1:8754", "shack.example.org", "ours"),  # docs/console.md's nginx and Caddy
+        ("127.0.0.1:8754", "192.168.1.10:8443", "ours"),
+        ("shack.example.org", "shack.example.org", "ours"),  # Caddy passing Host on as it came
+        ("127.0.0.1:8754", "", "ours"),
+        ("127.0.0.1:8754", None, "ours"),
+    ]:
+        assert key("10.0.0.1", host, names, forwarded=forwarded) == f"10.0.0.1 {kind}", (
+            host,
+            forwarded,
+        )
+
 
 @pytest.mark.parametrize(
     ("peer", "forwarded", "client"),

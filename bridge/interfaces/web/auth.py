@@ -20,7 +20,12 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    password being looked at, so a flood learns nothing, and a right password from another
    address, or from the operator's own page while another name's page in the same browser
    floods (an attack pass: a DNS-rebinding page locked the operator's own logins out), is
-   never held back by it. A login that succeeds costs nothing (each new tab logs in).
+   never held back by it. A login is to one of the console's own names only when its ``Host``
+   and every name in any ``X-Forwarded-Host`` are (rule 5's names, read as rule 5 reads them):
+   any page may write that header on its own origin's requests, and a rebinding page that
+   named the console's own address in it spent the operator's tries (an attack pass). Behind a
+   proxy, which writes it over any a page wrote, the name the browser used still decides. A
+   login that succeeds costs nothing (each new tab logs in).
 4. A POST whose ``Origin`` is not this host (the ``Host`` header, or the ``X-Forwarded-Host`` a
    reverse proxy sets) is refused: another site's page, even one holding a token. A request
    without ``Origin`` is not a browser's and needs the token like any.
@@ -137,14 +142,19 @@ class LoginLimiter:
 Networks = tuple[ipaddress.IPv4Network | ipaddress.IPv6Network, ...]  # rule 6: the proxies
 
 
-def login_key(client: str, host: str | None, names: tuple[str, ...] = ()) -> str:
+def login_key(
+    client: str, host: str | None, names: tuple[str, ...] = (), *, forwarded: str | None = None
+) -> str:
     """Rule 3: whose failed logins count together: the client's address (``client_key``) and
     whether the request was addressed to one of the console's own names (an IP literal,
     ``localhost``, one of ``names``) or another, so that a page of another name open in the
     operator's browser (DNS rebinding) spends its own tries, not those of the operator's own
     tab, and a client that writes names of its own gets one bucket more, not one per name (a
-    review: one per kind of name was three and more)."""
-    ours = host_is_local_name(host, names)
+    review: one per kind of name was three and more). Its own names are ``host`` and every
+    name in ``forwarded`` (the ``X-Forwarded-Host``, if any), all of them: a rebinding page
+    writes the console's own address there, its ``Host`` it cannot."""
+    asked = [host, *(forwarded.split(",") if forwarded and forwarded.strip() else ())]
+    ours = all(host_is_local_name(name, names) for name in asked)
     return f"{client_key(client)} {'ours' if ours else 'other'}"
 
 

@@ -345,8 +345,10 @@ class WebConsole:
         if self._password is None:
             return _json({"token": self._tokens.issue(self._wall())})
         client, now = self._client(request), time.monotonic()
-        name = request.headers.get("X-Forwarded-Host", "").split(",")[0].strip()
-        key = auth.login_key(client, name or request.headers.get("Host"), self._host_names)
+        forwarded = ",".join(request.headers.getall("X-Forwarded-Host", ()))
+        key = auth.login_key(
+            client, request.headers.get("Host"), self._host_names, forwarded=forwarded
+        )
         wait_s = self._logins.wait(key, now)
         if wait_s is not None:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
