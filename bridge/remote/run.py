@@ -314,6 +314,7 @@ class Remote:
             password=password.get_secret_value() if password is not None else None,
             frame_ancestors=list(s.web.frame_ancestors),
             host_names=list(s.web.host_names),
+            trusted_proxies=list(s.web.trusted_proxies),
             secret=secrets.token_bytes(32),  # logins end with the remote's run
             station=first.station,
             locator=first.locator,

@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import socket
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.interfaces.web import auth
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import wait_until
@@ -174,6 +176,38 @@ def test_broker_away_the_page_is_told_offline_and_nothing_moves_when_it_is_back(
 def test_a_console_beyond_loopback_without_a_password_is_refused(station: Rig) -> None:
     with pytest.raises(ValueError, match=r"web.password_file"):
         remote_settings(station, free_port(), bind="0.0.0.0")
+
+
+@pytest.mark.parametrize("trusted", [True, False])
+def test_behind_a_trusted_proxy_one_visitors_wrong_logins_hold_back_only_theirs(
+    station: Rig, tmp_path: Path, trusted: bool
+) -> None:
+    """An attack pass: the remote's console took ``[web] trusted_proxies`` and never used it;
+    behind a reverse proxy every browser came from the proxy's address, and one visitor's
+    wrong passwords held back the operator's right one (429), as on the bridge before it
+    believed its proxy (web/auth.py rule 6)."""
+    secret = tmp_path / "web-password"
+    secret.write_text("correct horse battery\n")
+    secret.chmod(0o600)
+    port = free_port()
+    proxies = {"trusted_proxies": ["127.0.0.1"]} if trusted else {}
+    r = Remote(remote_settings(station, port, password_file=str(secret), **proxies))
+    r.start()
+    try:
+        client = ConsoleClient(port)
+
+        def login(password: str, browser: str) -> int:
+            headers = {"X-Forwarded-For": browser}
+            doc = {"password": password}
+            return client.post("/api/login", doc, token=False, headers=headers).status
+
+        for _ in range(auth.LOGIN_BURST_PER_CLIENT + 2):  # a visitor behind the proxy guesses
+            login("guess", "203.0.113.5")
+        assert login("guess", "203.0.113.5") == 429
+        # the operator, another browser behind the same proxy
+        assert login("correct horse battery", "192.0.2.10") == (200 if trusted else 429)
+    finally:
+        r.stop()
 
 
 def test_a_console_port_already_taken_is_a_start_error_naming_it(station: Rig) -> None:
