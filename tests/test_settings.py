@@ -706,40 +706,48 @@ def document(rotator: dict[str, Any] | None = None, **mqtt: Any) -> dict[str, An
 
 
 @pytest.mark.parametrize(
-    ("variable", "key", "what"),
+    ("variable", "key"),
     [
-        ("ROTOR_BRIDGE_MQTT__PASSWORD", "mqtt.password", "a password must be UTF-8 text"),
-        ("ROTOR_BRIDGE_MQTT__USERNAME", "mqtt.username", "a user name must be UTF-8 text"),
-        ("ROTOR_BRIDGE_MQTT__BASE_TOPIC", "mqtt.base_topic", "holds U+DCFF, which MQTT does not"),
-        ("ROTOR_BRIDGE_MQTT__CLIENT_ID", "mqtt.client_id", "a client id must be UTF-8 text"),
+        ("ROTOR_BRIDGE_MQTT__PASSWORD", "mqtt.password"),
+        ("ROTOR_BRIDGE_MQTT__USERNAME", "mqtt.username"),
+        ("ROTOR_BRIDGE_MQTT__BASE_TOPIC", "mqtt.base_topic"),
+        ("ROTOR_BRIDGE_MQTT__CLIENT_ID", "mqtt.client_id"),
+        ("ROTOR_BRIDGE_ROTATORS__TOWER__NAME", "rotators[0].name"),
+        ("ROTOR_BRIDGE_ROTATORS__TOWER__ROTCTLD_BIND", "rotators[0].rotctld_bind"),
+        ("ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "rotators[0].port"),
+        ("ROTOR_BRIDGE_STATE_FILE", "state_file"),
+        ("ROTOR_BRIDGE_MQTT__TLS__CA_FILE", "mqtt.tls.ca_file"),
     ],
 )
-def test_an_mqtt_string_from_the_environment_that_is_not_utf8_is_refused_naming_its_key(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str, key: str, what: str
+def test_a_value_from_the_environment_that_is_not_utf8_is_refused_naming_its_key(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str, key: str
 ) -> None:
-    """os.environ holds a byte that is not UTF-8 as a lone surrogate: check-config said "config
-    OK" (or ended in a traceback, for the base topic) and run ended in one where the MQTT client
-    encoded the password, the user name, the client id or a topic. Never the value."""
+    """os.environ holds a byte that is not UTF-8 as a lone surrogate (settings/base.py rule
+    3): check-config said "config OK", then run ended in a traceback where the MQTT client
+    encoded the password, the user name, the client id or a topic, or where a bind address was
+    looked up; a rotator's name broke its Home Assistant discovery; a path named in an error
+    ended check-config in one. Never the value."""
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__USERNAME", "rotor")
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__TLS__ENABLED", "true")
     monkeypatch.setenv(variable, "s3cret\udcff")  # what os.environ holds for b"s3cret\xff"
     with pytest.raises(ConfigError) as err:
         load_settings(write(tmp_path, MINIMAL))
-    assert f"{key} (from {variable}): {what}" in str(err.value)
+    assert f"{key} (from {variable}): must be UTF-8 text: set it again, in UTF-8" in str(err.value)
     out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={variable: "s3cret\udcff"})
     assert out.returncode == 2 and out.stdout == "", out
     assert variable in out.stderr and "s3cret" not in out.stderr and "Traceback" not in out.stderr
 
 
-@pytest.mark.parametrize(
-    "variable", ["ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "ROTOR_BRIDGE_STATE_FILE", "HOME"]
-)
-def test_a_path_that_is_not_utf8_is_a_path_all_the_same(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, variable: str
+def test_the_config_files_own_path_and_the_home_folder_need_not_be_utf8(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A Linux path is bytes: a serial port's, the state file's (hashed into the default client
-    id: a home folder not in UTF-8 ended check-config in a traceback, a review)."""
-    monkeypatch.setenv(variable, f"{tmp_path}/d\udce9")
-    settings = load_settings(write(tmp_path, MINIMAL))
+    """No keys: the bridge opens them (the home folder's state file path is hashed into the
+    default client id as bytes: a home folder not in UTF-8 ended check-config in a traceback)."""
+    folder = tmp_path / "d\udce9"
+    folder.mkdir()
+    monkeypatch.setenv("HOME", str(folder))
+    monkeypatch.setenv("ROTOR_BRIDGE_CONFIG", str(write(folder, MINIMAL)))
+    settings = load_settings(None)
     assert settings.mqtt.effective_client_id().startswith("rotor-")
 
 
@@ -917,3 +925,10 @@ def test_a_nul_byte_in_any_path_is_refused_naming_its_key(where: dict[str, Any],
     """A state file's ended check-config in a traceback, a password file's named no key, and an
     audit file's, a TLE file's and a pty's were "config OK" (a review; settings/base.py rule 3)."""
     assert f"{key}: must not hold a NUL byte" in refusal({**document(), **where})
+
+
+@pytest.mark.parametrize("key", ["client_id", "username"])
+def test_a_client_id_or_user_name_mqtt_does_not_carry_is_refused(key: str) -> None:
+    """mosquitto closes such a CONNECT, and the bridge blamed the broker's access rules."""
+    for value in ("rb\x01", "rb\ufdd0"):
+        assert f"mqtt.{key}: a " in refusal(document(**{"username": "u", key: value}))

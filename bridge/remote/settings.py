@@ -24,8 +24,9 @@ import re
 import socket
 from typing import Any, Literal, NamedTuple
 
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
+from bridge.core.model import OPERATOR_CHARS, valid_operator
 from bridge.settings import ConfigError, read_toml
 from bridge.settings.base import Strict
 from bridge.settings.errors import describe
@@ -119,7 +120,7 @@ class Endpoint(Strict):
 class RemoteSettings(Strict):
     operator: str = Field(
         min_length=1,
-        max_length=64,
+        max_length=OPERATOR_CHARS,
         pattern=r"^\S(.*\S)?$",
         description="who operates (a call sign): carried with every command",
     )
@@ -151,6 +152,16 @@ class RemoteSettings(Strict):
         description="the operator console, served here for the station's rotators: the "
         "bridge's own [web] table (loopback unless password_file is set)",
     )
+
+    @field_validator("operator")
+    @classmethod
+    def _operator(cls, v: str) -> str:
+        """As the station reads it (core/model.py ``valid_operator``): a control character
+        in it got every command's connection dropped by mosquitto (an MQTT 5 user property),
+        and a name longer than the station takes was ignored there (a review)."""
+        if valid_operator(v) != v:
+            raise ValueError(f"1 to {OPERATOR_CHARS} printable characters, no control character")
+        return v
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:

@@ -10,7 +10,13 @@ Rules:
    as one; a key that takes a boolean as well is left alone.
 3. No text holds a NUL byte, a path's above all (``state_file``, ``audit_file``, a TLS or
    password file, a TLE or cty file, a pty's link): none can, and a NUL ended check-config in a
-   traceback, or named no key (a review).
+   traceback, or named no key (a review). Nor a lone surrogate, what Python makes of a byte
+   from the environment that is not UTF-8: a name with one broke its rotator's Home Assistant
+   discovery (a JSON parser refuses it), a bind address ended ``run`` in a traceback, a path
+   named in an error ended check-config in one (reviews). So every value, a path's too, is
+   UTF-8 text (a Linux path may be other bytes: the bridge names its paths in its messages and
+   on MQTT, and takes none that is not). The configuration file's own path and the home folder
+   are no keys: they may be any bytes.
 """
 
 from __future__ import annotations
@@ -50,21 +56,32 @@ def numbers_not_booleans(cls: type[BaseModel], value: Any, info: ValidationInfo)
     field = cls.model_fields.get(info.field_name or "")
     if field is not None and takes_boolean_for_number(field.annotation, value):
         raise ValueError("must be a number, not true or false")
-    if (field is None or not _a_model(field.annotation)) and _holds_nul(value):
-        raise ValueError("must not hold a NUL byte (no path or name does)")
+    if field is None or not _a_model(field.annotation):
+        fault = _text_fault(value)
+        if fault is not None:
+            raise ValueError(fault)
     return value
 
 
-def _holds_nul(value: Any) -> bool:
-    """Rule 3: ``value``, or a text in a list or a table of it, holds a NUL (a table of a model
-    of its own is not looked into here: that model looks, and names its key)."""
+def _text_fault(value: Any) -> str | None:
+    """Rule 3: what is wrong with ``value``'s text, or a text in a list or a table of it (a
+    table of a model of its own is not looked into here: that model looks, and names its key);
+    None. The value is never quoted (a password may be one)."""
     if isinstance(value, str):
-        return "\0" in value
+        if "\0" in value:
+            return "must not hold a NUL byte (no path or name does)"
+        try:
+            value.encode()
+        except UnicodeEncodeError:
+            return "must be UTF-8 text: set it again, in UTF-8"
+        return None
     if isinstance(value, list | tuple):
-        return any(_holds_nul(v) for v in value if not isinstance(v, dict))
-    if isinstance(value, dict):
-        return any(_holds_nul(k) or _holds_nul(v) for k, v in value.items())
-    return False
+        inner = [_text_fault(v) for v in value if not isinstance(v, dict)]
+    elif isinstance(value, dict):
+        inner = [_text_fault(t) for kv in value.items() for t in kv]
+    else:
+        return None
+    return next((fault for fault in inner if fault is not None), None)
 
 
 def _a_model(annotation: Any) -> bool:

@@ -235,6 +235,7 @@ class MqttSettings(Strict):
     @classmethod
     def _client_id(cls, v: str | None) -> str | None:
         if v is not None:
+            _mqtt_text(v, "a client id")
             room = f"{CLIENT_ID_ROOM} for the stop lane's '-stop'"
             check_length(v, MQTT_STRING_MAX - CLIENT_ID_ROOM, "a client id", room)
         return v
@@ -243,6 +244,7 @@ class MqttSettings(Strict):
     @classmethod
     def _username(cls, v: str | None) -> str | None:
         if v is not None:
+            _mqtt_text(v, "a user name")
             check_length(v, MQTT_STRING_MAX, "a user name")
         return v
 
@@ -323,6 +325,15 @@ class MqttSettings(Strict):
         digest = hashlib.sha256(key).hexdigest()[:6]
         short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
         return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"
+
+
+def _mqtt_text(v: str, what: str) -> None:
+    """A client id or a user name holds nothing core/text.py refuses: mosquitto closes such a
+    CONNECT, and the bridge blamed the broker's access rules (a review). (Not the password:
+    MQTT carries it as bytes.)"""
+    bad = bad_char(v)
+    if bad is not None:
+        raise ValueError(f"{what} holds {bad}, {NOT_TEXT}")
 
 
 def _needs_username(info: ValidationInfo) -> None:

@@ -3,6 +3,7 @@ binds unless set, and a problem named by the key as the file spells it."""
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -106,4 +107,15 @@ def test_a_boolean_where_a_number_goes_is_refused_naming_the_key(
     path = tmp_path / "remote.toml"
     path.write_text(head + HEAD + f"[[endpoints]]\n{endpoint}\n")
     with pytest.raises(ConfigError, match=re.escape(said)):
+        load_remote_settings(str(path))
+
+
+@pytest.mark.parametrize("operator", ["K1\x01X", "DL1\x85ABC", "X\ufdd0", "D" * 33])
+def test_an_operator_the_station_would_not_take_is_refused(tmp_path: Path, operator: str) -> None:
+    """It goes with every command as an MQTT 5 user property: a control character in it got
+    the connection dropped by mosquitto, and a name past the station's 32 was ignored there."""
+    path = tmp_path / "remote.toml"
+    head = HEAD.replace('operator = "DL1ABC"', f"operator = {json.dumps(operator)}")
+    path.write_text(head + "[[endpoints]]\nrotctld_port = 4533\n")
+    with pytest.raises(ConfigError, match=r"operator: (1 to 32 printable|.* at most 32 char)"):
         load_remote_settings(str(path))

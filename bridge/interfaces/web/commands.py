@@ -53,7 +53,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
-from bridge.core.text import bad_char
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.interfaces.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
@@ -250,9 +250,9 @@ def _text(doc: dict[str, object], key: str) -> str:
     value = doc.get(key)
     if not isinstance(value, str) or not value.strip() or len(value) > 80:
         raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
-    if bad_char(value) is not None:  # (as the settings and R/preset take names: core/text.py;
-        # a lone surrogate, JSON's "\\ud800", is no text: MQTT could not send it)
-        raise BadCommand(f'"{key}" must be text without control characters')
+    bad = bad_char(value)  # (as the settings and R/preset take names: core/text.py; a lone
+    if bad is not None:  # surrogate, JSON's "\\ud800", is no text: MQTT could not send it)
+        raise BadCommand(f'"{key}" holds {bad}, {NOT_TEXT}')
     return value
 
 
