@@ -232,3 +232,14 @@ def test_a_trusted_proxy_network_wider_than_one_address_is_warned_about(tmp_path
     )
     (warning,) = [w for w in config_warnings(s) if w.startswith("web.trusted_proxies")]
     assert warning.startswith("web.trusted_proxies: 192.168.1.0/24 is a network of 256 addresses")
+
+
+def test_trusted_proxies_without_host_names_is_warned_about(tmp_path: Path) -> None:
+    """A review: behind a proxy reached by a name, a rebinding page's name pointed at the proxy
+    and the operator's own counted their failed logins in one bucket (both "another name"),
+    and the page's guesses held the operator's right password back."""
+    proxied = '[web]\nenabled = true\ntrusted_proxies = ["127.0.0.1"]\n'
+    (warning,) = [w for w in config_warnings(load(tmp_path, proxied)) if "host_names" in w]
+    assert warning.startswith("web.host_names: none listed, with trusted_proxies")
+    named = load(tmp_path, proxied + 'host_names = ["shack.example.org"]\n')
+    assert not [w for w in config_warnings(named) if "host_names" in w]

@@ -101,12 +101,16 @@ async def _open(
 
 
 async def _page(session: aiohttp.ClientSession, url: str, client: ConsoleClient) -> Any:
-    """The page's live feed: its token sent first; the socket once it said hello, else what the
-    page saw (the HTTP status it was refused with, or the message that came instead)."""
-    ws = await _open(session, url, client)
-    if isinstance(ws, int):
-        return ws
-    await ws.send_str(json.dumps({"token": client.token}))
+    """The page's live feed, its token given with the opening request as live.js gives it
+    (live.py rule 4); the socket once it said hello, else what the page saw (the HTTP status it
+    was refused with, or the message that came instead)."""
+    try:
+        ws = await session.ws_connect(
+            url, headers=_origin(client), protocols=("rotor-bridge", f"token.{client.token}")
+        )
+    except aiohttp.WSServerHandshakeError as exc:
+        return exc.status
+    assert ws.protocol == "rotor-bridge"  # (a browser fails a socket whose offer is not echoed)
     message = await ws.receive(timeout=slow(10))
     return ws if message.data == '{"event":"hello"}' else (message.type, message.data)
 
@@ -153,10 +157,12 @@ def test_websockets_waiting_for_their_token_never_keep_the_operators_page_out(
 def test_room_is_made_by_closing_a_socket_without_its_token_never_a_page(
     console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The room of the test above is made only of sockets waiting for their token: one more
-    such socket closes the oldest waiting, as a page does (it was refused 503), and never a
-    page whose token is in; with MAX_PAGES pages open, the next socket is refused (503), token
-    or not, and every page goes on being served."""
+    """The room of the test above is made only of sockets waiting for their token, and only for
+    a page: one more such socket is refused (503) and closes none (a review: when any newcomer
+    made room, a flood that opened its sockets again as they were closed shut out a page whose
+    token took 50 ms to come); a page whose token is in is never closed; with MAX_PAGES pages
+    open, the next socket is refused (503), token or not, and every page goes on being
+    served."""
     from bridge.interfaces.web import live
 
     _rig, client = console
@@ -168,10 +174,9 @@ def test_room_is_made_by_closing_a_socket_without_its_token_never_a_page(
         async with aiohttp.ClientSession() as session:
             pages = [await _page(session, url, client) for _ in range(2)]
             silent = [await _open(session, url, client) for _ in range(2)]
-            assert silent[1] != 503, "a silent socket kept another out"
-            assert await _closed(silent[0]) == live.ROOM_MADE
+            assert silent[1] == 503, "a socket without its token made room"
             pages.append(await _page(session, url, client))
-            assert await _closed(silent[1]) == live.ROOM_MADE
+            assert await _closed(silent[0]) == live.ROOM_MADE
             assert all(isinstance(ws, aiohttp.ClientWebSocketResponse) for ws in pages), pages
             # the pages fill MAX_PAGES: the next is refused, none of theirs is closed
             assert await _open(session, url, client) == 503
@@ -211,6 +216,88 @@ def test_a_socket_silent_past_token_wait_s_is_closed_4401_and_leaves_its_place(
             await page.close()
 
     run_async(attempt())
+
+
+@pytest.mark.parametrize(
+    "first",
+    [
+        pytest.param(b"\x00" * 10, id="binary"),
+        pytest.param("x" * 10_000, id="huge"),
+        pytest.param("[1, 2]", id="a-list"),
+        pytest.param('"token"', id="a-string"),
+        pytest.param('{"token": ["a"]}', id="token-not-text"),
+        pytest.param('{"token": null}', id="token-null"),
+        pytest.param("[" * 5000 + "]" * 5000, id="nested"),
+        pytest.param('{"token": 1e999}', id="infinite"),
+    ],
+)
+def test_a_first_message_that_is_not_a_token_is_closed_4401_and_told_nothing(
+    console: tuple[Rig, ConsoleClient], first: Any
+) -> None:
+    """Held: whatever comes first, the socket is closed before anything is told, and the
+    console still serves the next page (no handler died with a 500 or hung)."""
+    _rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+
+    async def attempt() -> tuple[int | None, list[Any]]:
+        got: list[Any] = []
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(url, headers=_origin(client)) as ws:
+                if isinstance(first, bytes):
+                    await ws.send_bytes(first)
+                else:
+                    await ws.send_str(first)
+                while True:
+                    message = await ws.receive(timeout=slow(12))
+                    if message.type != aiohttp.WSMsgType.TEXT:
+                        break
+                    got.append(message.data)
+                return ws.close_code, got
+
+    code, got = run_async(attempt())
+    assert got == [] and code in (4401, 1009), (code, got)
+    assert client.get("/api/hello").status == 200
+
+
+@pytest.mark.parametrize("offer", ["token.", "token.none", "token.0.1.2"])
+def test_a_token_offered_with_the_opening_request_that_is_not_one_is_closed_4401(
+    console: tuple[Rig, ConsoleClient], offer: str
+) -> None:
+    """The page then drops it and asks for a new one (live.js), as after a first message."""
+    _rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+
+    async def attempt() -> tuple[int | None, aiohttp.WSMsgType]:
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(
+                url, headers=_origin(client), protocols=("rotor-bridge", offer)
+            ) as ws:
+                message = await ws.receive(timeout=slow(12))
+                return ws.close_code, message.type
+
+    assert run_async(attempt()) == (4401, aiohttp.WSMsgType.CLOSE)
+
+
+def test_a_token_that_came_is_taken_though_its_socket_was_chosen_to_give_way() -> None:
+    """A review: the room a page needed was made of a socket whose token had come in the same
+    turn of the event loop, and the token was thrown away (the page closed 1013)."""
+    from types import SimpleNamespace
+
+    from bridge.interfaces.web.live import Live
+
+    class Socket:
+        def __init__(self, room: asyncio.Future[None]) -> None:
+            self.room = room
+
+        async def receive(self) -> SimpleNamespace:
+            self.room.set_result(None)  # a page's room made as the token comes
+            return SimpleNamespace(type=aiohttp.WSMsgType.TEXT, data='{"token": "T"}')
+
+    async def main() -> object:
+        room = asyncio.get_running_loop().create_future()
+        return await Live._token(Live.__new__(Live), Socket(room), room)  # type: ignore[arg-type]
+
+    assert asyncio.run(main()) == "T"
 
 
 # -- the connection cap ------------------------------------------------------------------------

@@ -9,14 +9,19 @@ Rules:
 2. A page that joins gets every rotator's newest first (``join``), then changes.
 3. A stream ends when its token's life does (the page then asks for a new one while nothing is
    urgent, rather than when its STOP is answered 401), and when the bridge stops.
-4. The WebSocket's token is its first message (a browser cannot give a WebSocket a header),
-   within TOKEN_WAIT_S; its Origin was checked with the opening request (server.py). Until the
-   token is in it shows no token (connections.py rule 1) and holds a place among MAX_PAGES, but
-   never keeps a page out: a socket is refused (503) only when MAX_PAGES pages are open, and
-   when pages and sockets waiting for their token fill MAX_PAGES, the oldest one still waiting
-   is closed (1013, try again later) to make room, as connections.py rule 1 does at its caps
-   (an attack pass: a host with no password opened tokenless sockets again as they were
-   closed, and every new tab of the operator's was answered 503).
+4. The page gives the WebSocket's token with its opening request, as a subprotocol beside
+   TOKEN_PROTOCOL (``token.<token>``: a browser cannot give a WebSocket a header, and a token's
+   characters are a subprotocol's), so it is a page the moment it is open and never waits;
+   its Origin was checked with that request (server.py). A client that does not (a script)
+   gives it as its first message, within TOKEN_WAIT_S; until then it shows no token
+   (connections.py rule 1) and holds a place among MAX_PAGES, but never keeps a page out: a
+   page with its token is refused (503) only when MAX_PAGES pages are open, and when pages and
+   sockets waiting for their token fill MAX_PAGES, the oldest one still waiting is closed
+   (1013, try again later) to make room for it; a socket without its token makes room for
+   none, and is refused instead (attack passes: a host with no password opened tokenless
+   sockets again as they were closed, and every new tab of the operator's was answered 503;
+   then, with any newcomer making room, closed 1013 whenever its token took 50 ms to come). A
+   token that came is taken, even when its socket was chosen to give way in the same turn.
 5. A page sends its STOP and lock ON over its WebSocket as well as by POST: when a flood holds
    every connection a new POST could take, the socket the page already has still carries them.
    Nothing else is taken over it.
@@ -47,6 +52,8 @@ TOKEN_WAIT_S = 3.0  # the WebSocket's token (its first message) comes within thi
 MAX_PAGES = 100  # open streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
 ROOM_MADE = 1013  # rule 4: a socket still waiting for its token, closed for one (try again later)
+TOKEN_PROTOCOL = "rotor-bridge"  # rule 4: the subprotocol echoed to a page giving its token so
+TOKEN_OFFER = "token."  # rule 4: the subprotocol that carries the token
 
 
 class Live:
@@ -124,10 +131,13 @@ class Live:
             self.feed.leave(page)
         return response
 
-    def _room(self) -> bool:
-        """Rule 4: room for one more stream, made if need be by closing the oldest socket still
-        waiting for its token; False when MAX_PAGES pages are open."""
+    def _room(self, page: bool = True) -> bool:
+        """Rule 4: room for one more stream, made for a ``page`` (one with its token) if need be
+        by closing the oldest socket still waiting for its token; False when MAX_PAGES pages are
+        open, or, for a socket without its token, when there is no room without that."""
         if self.feed.pages >= MAX_PAGES:
+            return False
+        if not page and self.feed.pages + len(self._waiting) >= MAX_PAGES:
             return False
         while self.feed.pages + len(self._waiting) >= MAX_PAGES:
             oldest, _ = self._waiting.popitem(last=False)
@@ -151,20 +161,27 @@ class Live:
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         """The page's feed: a WebSocket (a browser's own connections to a host are few, six
         over HTTP/1.1, and a page's event stream held one of them: six tabs left none for a
-        STOP). The token comes as the first message; then the same messages as api/events."""
-        if not self._room():
+        STOP). The token comes with the opening request, or as the first message (rule 4); then
+        the same messages as api/events."""
+        offered = _offered_token(request)
+        if not self._room(page=offered is not None):
             return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
-        ws = web.WebSocketResponse(max_msg_size=4096)
-        room = asyncio.get_running_loop().create_future()
-        self._waiting[room] = None
-        try:
+        if offered is not None:
+            ws = web.WebSocketResponse(max_msg_size=4096, protocols=(TOKEN_PROTOCOL,))
             await ws.prepare(request)
-            token = await self._token(ws, room)
-        finally:
-            self._waiting.pop(room, None)
-        if room.done():  # rule 4: closed to make room (the page tries again with its token)
-            await ws.close(code=ROOM_MADE, message=b"room made for a page with its token")
-            return ws
+            token: object = offered
+        else:
+            ws = web.WebSocketResponse(max_msg_size=4096)
+            room = asyncio.get_running_loop().create_future()
+            self._waiting[room] = None
+            try:
+                await ws.prepare(request)
+                token = await self._token(ws, room)
+            finally:
+                self._waiting.pop(room, None)
+            if token is None and room.done():  # rule 4: closed to make room for a page
+                await ws.close(code=ROOM_MADE, message=b"room made for a page with its token")
+                return ws
         if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
             await ws.close(code=4401, message=b"no valid token")
             return ws
@@ -190,7 +207,7 @@ class Live:
 
     async def _token(self, ws: web.WebSocketResponse, room: asyncio.Future[None]) -> object:
         """What the socket's first message gives as its token (rule 4); None when nothing came
-        within TOKEN_WAIT_S, or ``room`` was set first (a newer socket needs the place)."""
+        within TOKEN_WAIT_S, or ``room`` was set before it came (a page needs the place)."""
         receiving = asyncio.ensure_future(ws.receive())
         try:
             await asyncio.wait(
@@ -199,7 +216,7 @@ class Live:
         finally:
             if not receiving.done():  # (its close, next, waits for it to end)
                 receiving.cancel()
-        if room.done() or not receiving.done():
+        if not receiving.done() or receiving.cancelled():  # (a token that came is taken)
             return None
         first = receiving.result()
         try:
@@ -253,3 +270,13 @@ def with_console(
         publish(doc)
 
     return both
+
+
+def _offered_token(request: web.Request) -> str | None:
+    """Rule 4: the token a page gives with its opening request, as a subprotocol."""
+    for header in request.headers.getall("Sec-WebSocket-Protocol", ()):
+        for offer in header.split(","):
+            offer = offer.strip()
+            if offer.startswith(TOKEN_OFFER):
+                return offer[len(TOKEN_OFFER) :]
+    return None

@@ -6,7 +6,8 @@
 //    password a new one is fetched at once, with one the login form is shown.
 // 2. The live feed is api/live, a WebSocket (a browser keeps a few HTTP connections per host,
 //    six over HTTP/1.1: an event stream per tab held one each, and six tabs left none for a
-//    STOP; WebSockets are counted apart), its token the first message. When it closes, fails,
+//    STOP; WebSockets are counted apart), its token a subprotocol of its opening request
+//    ('token.<token>' beside 'rotor-bridge': live.py rule 4). When it closes, fails,
 //    or is silent for 25 s, the page is told at once (onOnline(false)) and it reconnects: every
 //    1 s, then backing off to 5 s; each connect reads api/config first (onConfig), since the
 //    bridge may have restarted with another one.
@@ -154,20 +155,20 @@ export async function connect({ onConfig, onEvent, onOnline }) {
   }
 }
 
-/** api/live until it ends; resolves with the close code. The token is the first message
- *  (a WebSocket cannot carry a header); "hello" says the bridge took it (then onOpen). */
+/** api/live until it ends; resolves with the close code. The token goes with the opening
+ *  request as a subprotocol (a WebSocket cannot carry a header; live.py rule 4: a socket that
+ *  gives it so never waits for room); "hello" says the bridge took it (then onOpen). */
 function readLive(onEvent, onOpen) {
   return new Promise((resolve) => {
     const url = new URL('api/live', location.href);
     url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
-    const ws = new WebSocket(url);
+    const ws = new WebSocket(url, ['rotor-bridge', 'token.' + (session.token || 'none')]);
     let watchdog = 0;
     const kick = (ms) => {
       clearTimeout(watchdog);
       watchdog = setTimeout(() => ws.close(), ms);
     };
     kick(ASK_MS); // an opening the bridge never answers is lost
-    ws.onopen = () => ws.send(JSON.stringify({ token: session.token || '' }));
     ws.onmessage = (m) => {
       kick(SILENCE_MS);
       let doc;
