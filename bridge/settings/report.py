@@ -10,6 +10,8 @@ Rules:
    the summary only says whether there is one; the console's password is no field, so it is
    not in the values at all.
 3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
+   The remote, whose file has no check-config, logs its ``[web]`` table's as it starts
+   (web_warnings).
 4. The summary says what a user checks first: each rotator's model and whether its port is
    there, the broker, and what is on (Home Assistant, the web console, rotctld and loggers'
    ports, the station, tracking). Looking at a port never opens it.
@@ -32,6 +34,7 @@ from bridge.runtime.state_store import StateStore
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.settings.loggers import is_loopback
 from bridge.settings.rotator import EMULATION_KEYS
+from bridge.settings.web import WebSettings
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
@@ -170,7 +173,13 @@ def config_warnings(settings: Settings) -> list[str]:
                     f"address: {label} has no authentication, anyone who can reach port {port} "
                     "there can turn the antenna"
                 )
-    web = settings.web
+    return found + web_warnings(settings.web)
+
+
+def web_warnings(web: WebSettings) -> list[str]:
+    """What config_warnings says of a ``[web]`` table, the bridge's or the remote's (whose file
+    has no check-config: it logs these as it starts)."""
+    found: list[str] = []
     if web.enabled and not is_loopback(web.bind):
         found.append(
             f"web.bind: {web.bind or '(every address)'} is not a loopback address: the console "

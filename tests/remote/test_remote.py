@@ -353,3 +353,18 @@ def test_a_dead_station_a_restored_broker_still_calls_online_is_no_reading_and_n
             wait_until(lambda: ask(port, b"p\n") == b"42.00\n0.00\n", 10, "the station heard")
     finally:
         r.stop()
+
+
+def test_the_remote_logs_what_check_config_would_warn_of_its_console(tmp_path: Path) -> None:
+    """Its file has no check-config: a console behind a proxy with no host name listed (a
+    rebinding page's failed logins counted with the operator's) was said nowhere."""
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "DL1ABC"\n[mqtt]\nport = {free_port()}\n'
+        f'[web]\nenabled = true\nport = {free_port()}\ntrusted_proxies = ["127.0.0.1"]\n'
+        f"[[endpoints]]\nrotctld_port = {free_port()}\n"
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(30), check=False)
+    assert done.returncode == 2 and "cannot reach the station's broker" in done.stderr
+    assert "WARNING bridge.cli: web.host_names: none listed, with trusted_proxies" in done.stderr
