@@ -558,6 +558,7 @@ class App:
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
                     features=frozenset(f.name for f in FEATURES if f.on_for(r) or f.name in on),
+                    two_boxes=bool(r.axes),
                 )
             )
         publisher = DiscoveryPublisher(

@@ -150,7 +150,9 @@ def test_target_number_uses_the_rotator_limits_and_topics() -> None:
         t: json.loads(p) for t, p in all_configs("ha", Identity("rotor"), topics, [info]).items()
     }
     num = msgs["ha/number/rotorbridge_rotor_r_tower/target_azimuth/config"]
-    assert (num["min"], num["max"], num["step"]) == (10, 350, 1)
+    # every true bearing the status shows is in range, whatever the limits (a number drops a
+    # state outside it)
+    assert (num["min"], num["max"], num["step"]) == (0, 360, 1)
     assert num["command_topic"] == "rotor/target" and "retain" not in num
     sw = msgs["ha/switch/rotorbridge_rotor_r_tower/option_jam/config"]
     assert (sw["command_topic"], sw["state_topic"], sw["entity_category"]) == (
@@ -501,14 +503,18 @@ def test_target_azimuth_is_the_range_of_true_bearings() -> None:
         num = from_settings(**kw)["number.target_azimuth"]
         return num["min"], num["max"]
 
+    # 0..360 always (the status shows true bearings: a number drops a state outside its range,
+    # a review: 180..630 for a south-centred 450 degree Yaesu dropped 90), and the targets
+    # beyond that a rotor that can pass 360 takes
     assert az() == (0, 360)
-    assert az(az_min_deg=10, az_max_deg=350) == (10, 350)  # no offset: the limits as they are
+    assert az(az_min_deg=10, az_max_deg=350) == (0, 360)
     assert az(az_offset_deg=180) == (0, 360)  # a south-centred Rotor-EZ: every bearing
     assert az(az_offset_deg=180, az_min_deg=10, az_max_deg=350) == (0, 360)
-    # a SPID can pass 360: its limits, shifted by the offset (the overlap names the side)
     assert az(model="rot2prog", az_offset_deg=10) == (-170, 550)
-    assert az(model="rot2prog", az_offset_deg=10, az_min_deg=0, az_max_deg=450) == (10, 460)
+    assert az(model="rot2prog", az_offset_deg=10, az_min_deg=0, az_max_deg=450) == (0, 460)
     assert az(model="rot2prog", az_min_deg=0, az_max_deg=450) == (0, 450)
+    assert az(model="gs232b-450", az_offset_deg=180) == (0, 630)
+    assert az(model="md01", az_min_deg=-180, az_max_deg=180) == (-180, 360)
 
 
 def test_every_need_names_a_rotator_info_field_or_a_model_capability() -> None:
@@ -579,10 +585,15 @@ def test_track_select_offers_off_sun_moon_and_the_tle_files_satellites() -> None
     sel = msgs["select.track"]
     assert sel["options"] == ["off", "sun", "moon", "AO-7", "ISS (ZARYA)", "NOAA 19"]
     assert (sel["command_topic"], sel["state_topic"]) == ("rotor/track", "rotor/tracking")
-    assert "retain" not in sel and "value_template" not in sel  # R/tracking is the option itself
+    assert "retain" not in sel
     assert sel["availability"] == [{"topic": "rotor/bridge/state"}, {"topic": "rotor/availability"}]
     assert tracking_discovery(satellites=())["select.track"]["options"] == ["off", "sun", "moon"]
-    # what R/tracking says is one of the options, whatever is followed (else HA shows an error)
+    # what R/tracking says is shown as itself when it is an option, else as none (a TLE sent
+    # whole, a satellite past the file's first: HA logged an invalid option and kept "off")
+    template = re.fullmatch(
+        r"\{\{ value if value in (\[.*\]) else 'None' \}\}", sel["value_template"]
+    )
+    assert template is not None and json.loads(template.group(1)) == sel["options"]
     for body in (None, "sun", "moon", "ISS (ZARYA)"):
         tracking = None if body is None else TrackingInfo(body, "tracking")
         assert tracking_state(RotatorStatus("tower", tracking=tracking)) in sel["options"]

@@ -109,6 +109,10 @@ def test_home_assistant_sees_one_az_el_rotator(rig: Rig) -> None:
     assert f"{prefix}/sensor/{device}/bearing/config" in configs
     assert f"{prefix}/sensor/{device}/elevation/config" in configs
     assert f"{prefix}/number/{device}/target_elevation/config" in configs
+    # its rotor health is its azimuth box's: no elevation speeds that never get a value (a
+    # review: Home Assistant logged a template warning at every health report)
+    assert f"{prefix}/sensor/{device}/speed_cw/config" in configs
+    assert f"{prefix}/sensor/{device}/speed_up/config" not in configs
     models = {c["device"].get("model") for c in configs.values() if "device" in c}
     assert any("RT-21" in (m or "") and "GS-232B" in (m or "") for m in models), models
 

@@ -14,6 +14,7 @@ What it is made of:
 
 from __future__ import annotations
 
+import json
 from datetime import UTC, datetime
 
 from bridge.core.model import Origin, RotatorStatus, Source, TrackBody, TrackingInfo
@@ -87,10 +88,13 @@ def _tracked(field: str) -> str:
 
 
 def _select(r: RotatorView) -> dict[str, object]:
-    options = getattr(r, TRACK_OPTIONS)  # RotatorInfo's (needs: it has some)
+    options = list(getattr(r, TRACK_OPTIONS))  # RotatorInfo's (needs: it has some)
     return {
         "command_topic": r.topics.feature(COMMAND), "state_topic": r.topics.feature(STATE),
-        "options": list(options), "icon": "mdi:satellite-variant",
+        # a body not among the options (a TLE sent whole, a satellite past the first of the
+        # file's) is no option: Home Assistant kept showing "off" (a review)
+        "value_template": f"{{{{ value if value in {json.dumps(options)} else 'None' }}}}",
+        "options": options, "icon": "mdi:satellite-variant",
     }  # fmt: skip
 
 

@@ -248,7 +248,11 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("number", "target_azimuth", "Target azimuth", config=lambda r: {
         "command_topic": r.topics.target, "state_topic": r.topics.status,
         "value_template": _current_or("target", "bearing"),
-        "min": r.az_min_deg, "max": r.az_max_deg, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+        # (the range holds every true bearing the status shows, 0..360, and every target the
+        # rotator takes: a number drops a state outside it, a review: a south-centred 450° rotor's
+        # 180..630 dropped 90)
+        "min": min(r.az_min_deg, 0.0), "max": max(r.az_max_deg, 360.0), **TARGET_BOX,
+        "icon": "mdi:compass-outline"}),
     Entity("sensor", "elevation", "Elevation", needs="has_elevation", config=lambda r: {
         "state_topic": r.topics.elevation, "state_class": "measurement", **DEGREES,
         "suggested_display_precision": 1, "icon": "mdi:angle-acute"}),

@@ -51,6 +51,9 @@ class RotatorInfo:
     can_follow: bool = False  # [wsjtx] and a station: R/follow (session/follow.py)
     features: frozenset[str] = frozenset()  # the registered features it has (bridge/feature.py)
     spot_options: tuple[str, ...] = ()  # [dxcluster] and a station: the newest spots' calls
+    # its health measures an elevation: an az/el model's own (a rotator of two boxes shows its
+    # azimuth box's health alone, runtime/composite.py)
+    el_health: bool = False
 
     @classmethod
     def of(
@@ -66,6 +69,7 @@ class RotatorInfo:
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
         features: frozenset[str] = frozenset(),
+        two_boxes: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -88,6 +92,7 @@ class RotatorInfo:
             can_follow=can_follow,
             features=features,
             spot_options=spot_options(()) if DXCLUSTER in features and has_station else (),
+            el_health=spec.has_elevation and not two_boxes,
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
