@@ -238,8 +238,12 @@ def test_trusted_proxies_without_host_names_is_warned_about(tmp_path: Path) -> N
     """A review: behind a proxy reached by a name, a rebinding page's name pointed at the proxy
     and the operator's own counted their failed logins in one bucket (both "another name"),
     and the page's guesses held the operator's right password back."""
-    proxied = '[web]\nenabled = true\ntrusted_proxies = ["127.0.0.1"]\n'
+    path = password_file(tmp_path, PASSWORD + "\n")
+    proxied = f'[web]\nenabled = true\ntrusted_proxies = ["127.0.0.1"]\npassword_file = "{path}"\n'
     (warning,) = [w for w in config_warnings(load(tmp_path, proxied)) if "host_names" in w]
     assert warning.startswith("web.host_names: none listed, with trusted_proxies")
     named = load(tmp_path, proxied + 'host_names = ["shack.example.org"]\n')
     assert not [w for w in config_warnings(named) if "host_names" in w]
+    # without a password a name not listed is refused whatever it is: nothing to warn of
+    bare = load(tmp_path, '[web]\nenabled = true\ntrusted_proxies = ["127.0.0.1"]\n')
+    assert not [w for w in config_warnings(bare) if "host_names" in w]

@@ -195,7 +195,7 @@ def web_warnings(web: WebSettings) -> list[str]:
                 "(its failed logins then limited as another's, its commands audited as "
                 "another's); list only your reverse proxies' own addresses"
             )
-    if web.enabled and web.trusted_proxies and not web.host_names:
+    if web.enabled and web.trusted_proxies and not web.host_names and web.password_file:
         found.append(
             "web.host_names: none listed, with trusted_proxies: if the proxy is reached by a "
             "name, list it, or a hostile page of another name pointed at the proxy (DNS "

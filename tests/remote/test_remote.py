@@ -359,9 +359,13 @@ def test_the_remote_logs_what_check_config_would_warn_of_its_console(tmp_path: P
     """Its file has no check-config: a console behind a proxy with no host name listed (a
     rebinding page's failed logins counted with the operator's) was said nowhere."""
     conf = tmp_path / "remote.toml"
+    secret = tmp_path / "web-password"
+    secret.write_text("correct horse battery\n")
+    secret.chmod(0o600)
     conf.write_text(
         f'operator = "DL1ABC"\n[mqtt]\nport = {free_port()}\n'
         f'[web]\nenabled = true\nport = {free_port()}\ntrusted_proxies = ["127.0.0.1"]\n'
+        f'password_file = "{secret}"\n'
         f"[[endpoints]]\nrotctld_port = {free_port()}\n"
     )
     argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]

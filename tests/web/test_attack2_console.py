@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
+import re
 import socket
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -278,6 +281,105 @@ def test_a_token_offered_with_the_opening_request_that_is_not_one_is_closed_4401
     assert run_async(attempt()) == (4401, aiohttp.WSMsgType.CLOSE)
 
 
+@pytest.mark.parametrize("how", ["token-only", "two-header-lines"])
+def test_a_token_offered_as_a_subprotocol_is_never_written_to_the_log(
+    console: tuple[Rig, ConsoleClient], caplog: pytest.LogCaptureFixture, how: str
+) -> None:
+    """A review: a client offering ``token.<token>`` without ``rotor-bridge`` (or with it on a
+    second header line, which aiohttp does not read) was served, and aiohttp logged its offers
+    at WARNING, the token (a week's, a password's worth) among them. Now it is refused 400
+    before the handshake."""
+    from multidict import CIMultiDict
+
+    _rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+    offer = f"token.{client.token}"
+
+    async def attempt() -> str:
+        headers = CIMultiDict(_origin(client))
+        headers.add("Sec-WebSocket-Protocol", offer)
+        if how == "two-header-lines":
+            headers.add("Sec-WebSocket-Protocol", "rotor-bridge")
+        async with aiohttp.ClientSession() as session:
+            try:
+                async with session.ws_connect(url, headers=headers) as ws:
+                    return str((await ws.receive(timeout=slow(10))).data)
+            except aiohttp.WSServerHandshakeError as exc:
+                return str(exc.status)
+
+    caplog.set_level(logging.DEBUG)
+    assert run_async(attempt()) == "400"
+    assert [r.getMessage() for r in caplog.records if client.token in r.getMessage()] == []
+
+
+def test_a_socket_offering_a_token_that_is_not_one_makes_no_room(
+    console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rule 4, a review: an offer of ``token.<anything>`` counted as a page with its token, so
+    anyone without a password closed a script's waiting socket (1013); it is closed 4401 and
+    takes no place."""
+    from bridge.interfaces.web import live
+
+    _rig, client = console
+    monkeypatch.setattr(live, "MAX_PAGES", 2)
+    monkeypatch.setattr(live, "TOKEN_WAIT_S", 3600.0)
+    url = f"http://127.0.0.1:{client.port}/api/live"
+
+    async def attempt() -> tuple[int | None, list[str]]:
+        async with aiohttp.ClientSession() as session:
+            waiting = [await _open(session, url, client) for _ in range(2)]
+            async with session.ws_connect(
+                url, headers=_origin(client), protocols=("rotor-bridge", "token.bogus")
+            ) as bogus:
+                await bogus.receive(timeout=slow(10))
+                code = bogus.close_code
+            said = []
+            for ws in waiting:  # each still waits: its token, sent now, is taken
+                assert not isinstance(ws, int)
+                await ws.send_str(json.dumps({"token": client.token}))
+                said.append(str((await ws.receive(timeout=slow(10))).data))
+                await ws.close()
+            return code, said
+
+    assert run_async(attempt()) == (4401, ['{"event":"hello"}'] * 2)
+
+
+def test_the_real_page_is_served_while_tokenless_sockets_fill_max_pages(
+    console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch, browser: Browser
+) -> None:
+    """live.js gives its token with the opening request (live.py rule 4): Chromium's page is
+    served while MAX_PAGES sockets wait for theirs, and one more such socket is refused."""
+    from bridge.interfaces.web import live
+
+    _rig, client = console
+    monkeypatch.setattr(live, "MAX_PAGES", 3)
+    monkeypatch.setattr(live, "TOKEN_WAIT_S", 3600.0)
+    url = f"http://127.0.0.1:{client.port}/api/live"
+
+    async def hold(ready: asyncio.Event, done: asyncio.Event) -> None:
+        async with aiohttp.ClientSession() as session:
+            flood = [await _open(session, url, client) for _ in range(live.MAX_PAGES)]
+            assert not any(isinstance(ws, int) for ws in flood), flood
+            assert await _open(session, url, client) == 503
+            ready.set()
+            await done.wait()
+
+    loop = asyncio.new_event_loop()
+    ready, done = asyncio.Event(), asyncio.Event()
+    holding = threading.Thread(target=loop.run_until_complete, args=(hold(ready, done),))
+    holding.start()
+    try:
+        asyncio.run_coroutine_threadsafe(ready.wait(), loop).result(slow(20))
+        page = browser.new_page()
+        page.goto(f"http://127.0.0.1:{client.port}/")
+        expect(page.locator("#bearing")).to_have_text(re.compile(r"\d"), timeout=slow_ms(15_000))
+        page.close()
+    finally:
+        loop.call_soon_threadsafe(done.set)
+        holding.join(slow(20))
+        loop.close()
+
+
 def test_a_token_that_came_is_taken_though_its_socket_was_chosen_to_give_way() -> None:
     """A review: the room a page needed was made of a socket whose token had come in the same
     turn of the event loop, and the token was thrown away (the page closed 1013)."""
@@ -297,7 +399,7 @@ def test_a_token_that_came_is_taken_though_its_socket_was_chosen_to_give_way() -
         room = asyncio.get_running_loop().create_future()
         return await Live._token(Live.__new__(Live), Socket(room), room)  # type: ignore[arg-type]
 
-    assert asyncio.run(main()) == "T"
+    assert run_async(main()) == "T"
 
 
 # -- the connection cap ------------------------------------------------------------------------

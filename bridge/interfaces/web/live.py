@@ -21,7 +21,11 @@ Rules:
    none, and is refused instead (attack passes: a host with no password opened tokenless
    sockets again as they were closed, and every new tab of the operator's was answered 503;
    then, with any newcomer making room, closed 1013 whenever its token took 50 ms to come). A
-   token that came is taken, even when its socket was chosen to give way in the same turn.
+   token that came is taken, even when its socket was chosen to give way in the same turn,
+   while fewer than MAX_PAGES pages are open. A token offered that is not one is closed 4401
+   and takes no place; an offer whose first header line does not name TOKEN_PROTOCOL is
+   refused (400) before the handshake, where aiohttp would log every offer, the token with
+   them (a review).
 5. A page sends its STOP and lock ON over its WebSocket as well as by POST: when a flood holds
    every connection a new POST could take, the socket the page already has still carries them.
    Nothing else is taken over it.
@@ -163,7 +167,17 @@ class Live:
         over HTTP/1.1, and a page's event stream held one of them: six tabs left none for a
         STOP). The token comes with the opening request, or as the first message (rule 4); then
         the same messages as api/events."""
+        first_line = request.headers.get("Sec-WebSocket-Protocol")  # (all aiohttp reads)
+        if first_line is not None and TOKEN_PROTOCOL not in (
+            o.strip() for o in first_line.split(",")
+        ):  # aiohttp would log every offer, the token with them
+            return web.json_response({"error": f"offer {TOKEN_PROTOCOL} first"}, status=400)
         offered = _offered_token(request)
+        if offered is not None and not self._tokens.valid(offered, self._wall()):
+            ws = web.WebSocketResponse(max_msg_size=4096, protocols=(TOKEN_PROTOCOL,))
+            await ws.prepare(request)
+            await ws.close(code=4401, message=b"no valid token")
+            return ws
         if not self._room(page=offered is not None):
             return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
         if offered is not None:
@@ -171,7 +185,7 @@ class Live:
             await ws.prepare(request)
             token: object = offered
         else:
-            ws = web.WebSocketResponse(max_msg_size=4096)
+            ws = web.WebSocketResponse(max_msg_size=4096, protocols=(TOKEN_PROTOCOL,))
             room = asyncio.get_running_loop().create_future()
             self._waiting[room] = None
             try:
@@ -179,7 +193,7 @@ class Live:
                 token = await self._token(ws, room)
             finally:
                 self._waiting.pop(room, None)
-            if token is None and room.done():  # rule 4: closed to make room for a page
+            if room.done() and (token is None or self.feed.pages >= MAX_PAGES):
                 await ws.close(code=ROOM_MADE, message=b"room made for a page with its token")
                 return ws
         if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
