@@ -128,7 +128,7 @@ def cmd_remote(args: argparse.Namespace) -> int:
             except ConfigError as exc:
                 raise _fail(exc) from None
             _setup_logging(args.log_level or "INFO")
-            from bridge.settings.report import web_warnings
+            from bridge.settings.web import web_warnings
 
             for warning in web_warnings(settings.web):  # (settings/report.py rule 3)
                 logging.getLogger(__name__).warning("%s", warning)

@@ -11,7 +11,7 @@ Rules:
    not in the values at all.
 3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
    The remote, whose file has no check-config, logs its ``[web]`` table's as it starts
-   (web_warnings).
+   (settings/web.py web_warnings: no POSIX module in it, as the remote runs on Windows too).
 4. The summary says what a user checks first: each rotator's model and whether its port is
    there, the broker, and what is on (Home Assistant, the web console, rotctld and loggers'
    ports, the station, tracking). Looking at a port never opens it.
@@ -24,7 +24,6 @@ Rules:
 from __future__ import annotations
 
 import getpass
-import ipaddress
 import os
 from pathlib import Path
 from typing import Any
@@ -34,7 +33,7 @@ from bridge.runtime.state_store import StateStore
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.settings.loggers import is_loopback
 from bridge.settings.rotator import EMULATION_KEYS
-from bridge.settings.web import WebSettings
+from bridge.settings.web import web_warnings
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
@@ -174,34 +173,6 @@ def config_warnings(settings: Settings) -> list[str]:
                     "there can turn the antenna"
                 )
     return found + web_warnings(settings.web)
-
-
-def web_warnings(web: WebSettings) -> list[str]:
-    """What config_warnings says of a ``[web]`` table, the bridge's or the remote's (whose file
-    has no check-config: it logs these as it starts)."""
-    found: list[str] = []
-    if web.enabled and not is_loopback(web.bind):
-        found.append(
-            f"web.bind: {web.bind or '(every address)'} is not a loopback address: the console "
-            "speaks plain HTTP, so its password and every command cross the network "
-            "unencrypted; keep it on 127.0.0.1 behind a reverse proxy that speaks HTTPS"
-        )
-    for proxy in web.trusted_proxies if web.enabled else ():
-        net = ipaddress.ip_network(proxy, strict=False)  # (valid: settings/web.py)
-        if net.num_addresses > 1:
-            found.append(
-                f"web.trusted_proxies: {proxy} is a network of {net.num_addresses:,} "
-                "addresses: any host in it can name itself another browser in X-Forwarded-For "
-                "(its failed logins then limited as another's, its commands audited as "
-                "another's); list only your reverse proxies' own addresses"
-            )
-    if web.enabled and web.trusted_proxies and not web.host_names and web.password_file:
-        found.append(
-            "web.host_names: none listed, with trusted_proxies: if the proxy is reached by a "
-            "name, list it, or a hostile page of another name pointed at the proxy (DNS "
-            "rebinding) counts its wrong passwords with yours, and holds your login back"
-        )
-    return found
 
 
 def summary(settings: Settings) -> list[str]:

@@ -187,3 +187,32 @@ class WebSettings(Strict):
                 "reverse proxy that asks for a password"
             )
         return self
+
+
+def web_warnings(web: WebSettings) -> list[str]:
+    """What check-config warns of a ``[web]`` table (settings/report.py rule 3), the bridge's or
+    the remote's (whose file has no check-config: it logs these as it starts). Here, not in
+    report.py: the remote runs on Windows too, and report.py needs POSIX modules."""
+    found: list[str] = []
+    if web.enabled and not is_loopback(web.bind):
+        found.append(
+            f"web.bind: {web.bind or '(every address)'} is not a loopback address: the console "
+            "speaks plain HTTP, so its password and every command cross the network "
+            "unencrypted; keep it on 127.0.0.1 behind a reverse proxy that speaks HTTPS"
+        )
+    for proxy in web.trusted_proxies if web.enabled else ():
+        net = ipaddress.ip_network(proxy, strict=False)  # (valid: settings/web.py)
+        if net.num_addresses > 1:
+            found.append(
+                f"web.trusted_proxies: {proxy} is a network of {net.num_addresses:,} "
+                "addresses: any host in it can name itself another browser in X-Forwarded-For "
+                "(its failed logins then limited as another's, its commands audited as "
+                "another's); list only your reverse proxies' own addresses"
+            )
+    if web.enabled and web.trusted_proxies and not web.host_names and web.password_file:
+        found.append(
+            "web.host_names: none listed, with trusted_proxies: if the proxy is reached by a "
+            "name, list it, or a hostile page of another name pointed at the proxy (DNS "
+            "rebinding) counts its wrong passwords with yours, and holds your login back"
+        )
+    return found
