@@ -932,3 +932,18 @@ def test_a_client_id_or_user_name_mqtt_does_not_carry_is_refused(key: str) -> No
     """mosquitto closes such a CONNECT, and the bridge blamed the broker's access rules."""
     for value in ("rb\x01", "rb\ufdd0"):
         assert f"mqtt.{key}: a " in refusal(document(**{"username": "u", key: value}))
+
+
+def test_a_rotators_list_or_table_from_the_environment_is_json() -> None:
+    """docs/configuration.md: a list or a table is set from the environment in JSON; a
+    rotator's was handed on as its text and refused as no table (a review)."""
+    env = {
+        "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS": '{"home": 10, "eu": 45}',
+        "ROTOR_BRIDGE_ROTATORS__TOWER__KEEP_OUT": "[[100, 120]]",
+    }
+    settings = settings_from(document(), env)
+    assert settings.rotators[0].presets == {"home": 10, "eu": 45}
+    assert settings.rotators[0].keep_out == [(100, 120)]
+    with pytest.raises(ConfigError) as err:
+        settings_from(document(), {"ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS": "home=10"})
+    assert str(err.value).startswith("ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS: a list or a table")

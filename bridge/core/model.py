@@ -17,6 +17,8 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from typing import get_args
 
+from bridge.core.text import bad_char
+
 
 class MotionState(enum.StrEnum):
     """What the rotor is doing, as far as the bridge can tell."""
@@ -54,13 +56,13 @@ OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctl
 
 
 def valid_operator(text: object) -> str | None:
-    """``text`` as an operator's name (short printable text, spaces at the ends dropped), or
-    None if it is not one."""
+    """``text`` as an operator's name (short text MQTT carries, core/text.py; spaces at the
+    ends dropped), or None if it is not one."""
     if not isinstance(text, str):
         return None
     name = text.strip()
-    if not name or len(name) > OPERATOR_CHARS or not name.isprintable():
-        return None
+    if not name or len(name) > OPERATOR_CHARS or bad_char(name) is not None:
+        return None  # (core/text.py: isprintable refused a no-break space, a review)
     return name
 
 

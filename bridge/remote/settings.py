@@ -27,6 +27,7 @@ from typing import Any, Literal, NamedTuple
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge.core.model import OPERATOR_CHARS, valid_operator
+from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings import ConfigError, read_toml
 from bridge.settings.base import Strict
 from bridge.settings.errors import describe
@@ -159,8 +160,11 @@ class RemoteSettings(Strict):
         """As the station reads it (core/model.py ``valid_operator``): a control character
         in it got every command's connection dropped by mosquitto (an MQTT 5 user property),
         and a name longer than the station takes was ignored there (a review)."""
+        bad = bad_char(v)
+        if bad is not None:
+            raise ValueError(f"holds {bad}, {NOT_TEXT}")
         if valid_operator(v) != v:
-            raise ValueError(f"1 to {OPERATOR_CHARS} printable characters, no control character")
+            raise ValueError(f"1 to {OPERATOR_CHARS} characters, no space at either end")
         return v
 
     @model_validator(mode="after")
