@@ -50,7 +50,7 @@ from pydantic_settings import (
 from bridge.feature import topic_words
 from bridge.protocols.axes import BEARING_IS_ELEVATION
 from bridge.settings import errors as settings_errors
-from bridge.settings.base import numbers_not_booleans
+from bridge.settings.base import plain_value
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
 from bridge.settings.groups import GroupSettings, reserved, station_words
@@ -162,7 +162,7 @@ class Settings(BaseSettings):
     # mqtt.password is written in the configuration file itself (check-config warns)
     _password_in_file: bool = PrivateAttr(default=False)
     # settings/base.py rule 2, as every table's (a BaseSettings is no Strict)
-    _numbers_not_booleans = field_validator("*", mode="before")(numbers_not_booleans)
+    _plain_value = field_validator("*", mode="before")(plain_value)
 
     @field_validator("log_level")
     @classmethod

@@ -1,8 +1,10 @@
-"""The base of every settings table: unknown keys refused, and no boolean where a number goes.
+"""The base of every settings table: unknown keys refused, no boolean where a number goes, and
+text that is UTF-8 with no NUL in it.
 
 Rules:
 1. Every table's model derives from ``Strict`` (the top level, a BaseSettings, calls
-   ``numbers_not_booleans`` itself): an unknown key is an error (settings/ rule 1).
+   ``plain_value`` itself, on every key as Strict does): an unknown key is an error
+   (settings/ rule 1).
 2. A key that takes a number (``int`` or ``float``, also with None, or in a list, a tuple or a
    table's values) refuses ``true`` and ``false``: pydantic's lax mode reads them as 1 and 0,
    so ``port = true`` connected to port 1 and ``park_az_deg = true`` parked at 1 degree (an
@@ -51,7 +53,7 @@ def takes_boolean_for_number(annotation: Any, value: Any) -> bool:
     return False
 
 
-def numbers_not_booleans(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
+def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     """A before-validator for every field (rules 2 and 3); ValueError names no value."""
     field = cls.model_fields.get(info.field_name or "")
     if field is not None and takes_boolean_for_number(field.annotation, value):
@@ -96,4 +98,4 @@ class Strict(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    _numbers_not_booleans = field_validator("*", mode="before")(numbers_not_booleans)
+    _plain_value = field_validator("*", mode="before")(plain_value)
