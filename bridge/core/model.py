@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import enum
 import math
+import unicodedata
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from typing import get_args
@@ -53,16 +54,26 @@ class Source(enum.StrEnum):
 
 
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
+_HIDDEN = ("Cf", "Zl", "Zp")  # valid_operator: format characters, line and paragraph separators
+_JOINERS = ("\u200c", "\u200d")  # valid_operator: what Persian, the Indic scripts, emoji need
 
 
 def valid_operator(text: object) -> str | None:
-    """``text`` as an operator's name (short text MQTT carries, core/text.py; spaces at the
-    ends dropped), or None if it is not one."""
+    """``text`` as an operator's name, or None if it is not one: short text MQTT carries
+    (core/text.py: isprintable refused a no-break space and Persian's zero-width non-joiner, a
+    review), in its compatibility form (NFKC: a no-break space is a space, so the name typed on
+    a Mac and on a phone is one operator to the lease), spaces at the ends dropped, with no
+    invisible format character (a zero-width space, a word joiner: two names that look alike
+    were two operators) and no direction override or line separator (the name shown reversed
+    the rest of the console's line, the lease's end among it); the joiners a script needs
+    (U+200C, U+200D) stay."""
     if not isinstance(text, str):
         return None
-    name = text.strip()
+    name = unicodedata.normalize("NFKC", text).strip()
     if not name or len(name) > OPERATOR_CHARS or bad_char(name) is not None:
-        return None  # (core/text.py: isprintable refused a no-break space, a review)
+        return None
+    if any(unicodedata.category(c) in _HIDDEN and c not in _JOINERS for c in name):
+        return None
     return name
 
 

@@ -163,9 +163,12 @@ class RemoteSettings(Strict):
         bad = bad_char(v)
         if bad is not None:
             raise ValueError(f"holds {bad}, {NOT_TEXT}")
-        if valid_operator(v) != v:
-            raise ValueError(f"1 to {OPERATOR_CHARS} characters, no space at either end")
-        return v
+        name = valid_operator(v)  # (its compatibility form: the station's, the lease's)
+        if name is None:
+            raise ValueError(
+                f"1 to {OPERATOR_CHARS} characters, none of them invisible or a direction override"
+            )
+        return name
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:

@@ -85,8 +85,8 @@ class Lease:
         """Rules 1, 2: the new lease, or LeaseError saying why not."""
         name = valid_operator(operator)
         if name is None:
-            raise LeaseError(f"operator must be text of 1 to {OPERATOR_CHARS} printable characters")
-        if name.split(" ", 1)[0].casefold() in INTERFACES:  # rule 1
+            raise LeaseError(f"operator must be a name of 1 to {OPERATOR_CHARS} characters")
+        if name.split(None, 1)[0].casefold() in INTERFACES:  # rule 1
             raise LeaseError(
                 f"{name!r} is how the bridge names an interface, not an operator: claim the "
                 "lease with your call sign"

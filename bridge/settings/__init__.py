@@ -508,7 +508,7 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
         if _complex(["rotators", field]):  # a list or a table: JSON, as for the other tables
             try:  # (a review: the text itself was handed on, and refused as no table)
                 value = json.loads(value)
-            except ValueError:
+            except (ValueError, RecursionError):
                 raise ConfigError(
                     f"{key}: a list or a table is set from the environment in JSON "
                     f"({ENV_PREFIX}ROTATORS__{m.group(1)}__PRESETS='{{\"EU\": 45}}'), or in the "

@@ -104,7 +104,25 @@ def test_the_wall_clock_set_far_back_ends_the_lease_rather_than_stretch_it() -> 
     assert lease.claim("G4XYZ", 10, back).operator == "G4XYZ"
 
 
-@pytest.mark.parametrize("name", ["mqtt", "MQTT", "rotctld 127.0.0.1", "web 10.0.0.2", "pst"])
+def test_an_operators_name_is_its_compatibility_form_without_invisible_characters() -> None:
+    """A review: a name typed with a no-break space (a Mac's Option-Space) and the same with a
+    space were two operators, the lease refusing its own holder; a zero-width space made a
+    look-alike of another's name; a direction override showed the console's line reversed, the
+    lease's end with it. Persian's zero-width non-joiner stays a letter's."""
+    assert valid_operator("DL1ABC\u00a0Jo") == "DL1ABC Jo"
+    assert valid_operator("\uff24\uff2c\uff11ABC") == "DL1ABC"  # fullwidth letters
+    for hidden in ("\u200b", "\u2060", "\ufeff", "\u202e", "\u2066", "\u2028", "\U000e0041"):
+        assert valid_operator(f"DL1{hidden}ABC") is None, hex(ord(hidden))
+    persian = "\u0645\u062d\u0645\u062f\u200c\u0631\u0636\u0627"
+    assert valid_operator(persian) == persian
+    lease = Lease()
+    held = lease.claim("DL1ABC\u00a0Jo", 30, T0)
+    assert lease.refusal(valid_operator("DL1ABC Jo"), T0) is None and held.operator == "DL1ABC Jo"
+
+
+@pytest.mark.parametrize(
+    "name", ["mqtt", "MQTT", "rotctld 127.0.0.1", "web 10.0.0.2", "pst", "rotctld\u00a0127.0.0.1"]
+)
 def test_an_interfaces_name_cannot_claim_the_lease(name: str) -> None:
     """Rule 1: 'mqtt' would make every nameless MQTT client, Home Assistant too, the holder."""
     lease = Lease()

@@ -472,7 +472,7 @@ class MqttService:
         if name is None:
             level = logging.DEBUG if self._bad_operator_said else logging.WARNING
             self._bad_operator_said = True
-            log.log(level, "operator %r ignored: not 1 to 32 printable characters", operator[:40])
+            log.log(level, "operator %r ignored: not a name of 1 to 32 characters", operator[:40])
             return Origin(Source.MQTT)
         return Origin(Source.MQTT, name)
 
