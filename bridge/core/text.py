@@ -17,7 +17,8 @@ NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or 
 
 
 def bad_char(text: str) -> str | None:
-    """The first character of ``text`` MQTT's strings may not hold, as ``U+XXXX``; None."""
+    """The first character of ``text`` MQTT's strings may not hold, as ``U+XXXX``, or None
+    when it holds none."""
     for c in text:
         n = ord(c)
         if (
