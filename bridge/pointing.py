@@ -44,9 +44,12 @@ Rules:
    its way (rule 2), the judge takes one whose turn from where the rotor is stays inside, and
    refuses the target if there is none; from outside the arc, the one that turns least
    outside it. Its side is then fixed: the session sends that value, not the side nearest
-   when it sends (with no reading to judge from, as rule 2 has it). A review: a group's
+   when it sends. With no reading to judge from (a DCU-1, which never answers), the target is
+   refused unless no turn can leave the arc (a scale of true bearings that wraps: no offset),
+   since the way it turns depends on where the rotor is. A review: a group's
    ``upper = [20, 340]`` on a 450-degree rotor at 300, sent 30, went to 390, through the
-   340..20 the group keeps it out of.
+   340..20 the group keeps it out of; an attack pass: a south-centred DCU-1 at true 300, sent
+   the group's 30, turned through north on its scale (120 to 210).
 """
 
 from __future__ import annotations
@@ -185,7 +188,7 @@ class Pointing:
             if self.az_wraps:
                 raise Refused(RefusalCode.LIMITS, f"azimuth {az_deg:g} outside 0..360")
             raw = self._checked(az_deg, az_deg - self.offset_deg)
-            if within is not None and current_raw_deg is not None:
+            if within is not None:
                 self._within(az_deg, current_raw_deg, [raw], within)
             return raw
         base = norm360(az_deg - self.offset_deg)
@@ -196,7 +199,7 @@ class Pointing:
         ]
         if not legal:
             return self._checked(az_deg, base)  # raises, naming the raw value
-        if within is not None and current_raw_deg is not None:
+        if within is not None:
             legal = self._within(az_deg, current_raw_deg, legal, within)
         if self.az_wraps:  # the controller picks its own way round: 0 rather than 360
             return base if base in legal else legal[-1]
@@ -217,13 +220,28 @@ class Pointing:
         return (t1 - t0) - inside
 
     def _within(
-        self, az_deg: float, current_raw: float, legal: list[float], within: tuple[float, float]
+        self,
+        az_deg: float,
+        current_raw: float | None,
+        legal: list[float],
+        within: tuple[float, float],
     ) -> list[float]:
         """Rule 9: the legal raw values whose turn from ``current_raw`` stays inside ``within``
-        (from a rotor outside it: those that turn least outside it); Refused if none."""
+        (from a rotor outside it: those that turn least outside it); Refused if none, and
+        where no reading shows the way (``current_raw`` None) unless no turn can leave it."""
+        lo, hi = within
+        if current_raw is None:
+            # a scale of true bearings that wraps (no offset) turns between two bearings of an
+            # arc without leaving it; elsewhere the way depends on where the rotor is
+            if hi - lo >= 360.0 or (self.az_wraps and self.offset_deg % 360.0 == 0.0):
+                return legal
+            raise Refused(
+                RefusalCode.LIMITS,
+                f"azimuth {az_deg:g}: where the {self.model_name} is is not known, so a turn "
+                f"that stays inside {lo:g}..{hi:g} cannot be chosen",
+            )
         outside = [self._outside_deg(current_raw, r, within) for r in legal]
         least = min(outside)
-        lo, hi = within
         at = self.true_of(current_raw)
         if (lo <= at <= hi or lo <= at + 360.0 <= hi) and least > WITHIN_SLACK_DEG:
             raise Refused(

@@ -87,7 +87,11 @@ def test_a_turn_kept_inside_an_arc_takes_the_side_that_stays_in_it() -> None:
     assert south.judge(Target(30, within_deg=(20, 340)), 180).az_deg == 210  # from true 0: in
     assert over.judge(Target(30, within_deg=(20, 340)), 19.7).az_deg == 30  # at an edge
     assert over.judge(Target(30, within_deg=(0, 360)), 300).az_deg == 390  # the whole circle
-    assert over.judge(Target(30, within_deg=(20, 340)), None).true_az_deg == 30  # (rule 2)
+    # no reading: the way is not known (rule 9), but on a scale of true bearings that wraps
+    assert refused(over.judge, Target(30, within_deg=(20, 340)), None) is RefusalCode.LIMITS
+    assert refused(south.judge, Target(200, within_deg=(20, 340)), None) is RefusalCode.LIMITS
+    assert Pointing.of(EZ).judge(Target(30, within_deg=(20, 340)), None).az_deg == 30
+    assert over.judge(Target(30, within_deg=(0, 360)), None).true_az_deg == 30  # (rule 2)
 
 
 @pytest.mark.parametrize(
