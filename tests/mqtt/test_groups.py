@@ -55,6 +55,24 @@ def test_a_member_outside_its_group_limits_is_refused_and_the_others_still_turn(
     assert targets(fan_out(narrow, b"20", AZ_ONLY))[0] == ("upper", 20.0, None, None)
 
 
+def test_north_is_inside_limits_that_end_at_0_or_at_360() -> None:
+    """An attack pass: 360 (Home Assistant's top) was refused for limits 0..90, 0 for limits
+    300..360, and the group's 180 plus an offset of 180 for limits 340..360."""
+    north = Group(
+        "stack",
+        "Stack",
+        (
+            Member("upper", 0.0, (0.0, 90.0)),
+            Member("lower", 0.0, (300.0, 360.0)),
+            Member("third", 180.0, (340.0, 360.0)),
+        ),
+    )
+    assert [p.refused for p in fan_out(north, b"360", {})][:2] == [None, None]
+    assert [p.refused for p in fan_out(north, b"0", {})][:2] == [None, None]
+    assert targets(fan_out(north, b"180", {}))[2] == ("third", 0.0, None, None)
+    assert targets(fan_out(north, b"91", {}))[0][3] is not None  # still refused beyond
+
+
 def test_an_elevation_needs_every_member_to_have_one_else_nothing_moves() -> None:
     both = {"upper": True, "lower": True}
     assert targets(fan_out(STACK, b'{"azimuth": 10, "elevation": 30}', both)) == [

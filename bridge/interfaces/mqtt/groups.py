@@ -11,8 +11,9 @@ Rules:
 2. Each member's part is one ``Target``: the group's azimuth plus the member's offset, brought
    into 0..360; the elevation as given. The group's azimuth itself must be 0..360 (an
    offset would make 361 a bearing the member takes). A part outside the member's group limits (true
-   bearings, after its offset) is that member's refusal, decided here; a part inside them carries
-   them, and the member's judge keeps the turn inside them too (pointing.py rule 9).
+   bearings, after its offset; north is 0 and 360 alike) is that member's refusal, decided
+   here; a part inside them carries them, and the member's judge keeps the turn inside them
+   too (pointing.py rule 9).
 3. The others still turn: a member's refusal, here or by its own judge (its limits, its lock,
    the wind, its lease, its link), is reported on the group's error topic and in the group's
    status, and costs the other members nothing (docs/groups.md says why).
@@ -66,6 +67,14 @@ def member_bearing(az_deg: float, offset_deg: float) -> float:
     return az_deg if offset_deg == 0 else (az_deg + offset_deg) % 360.0
 
 
+def _inside(az_deg: float, lo_hi: tuple[float, float]) -> bool:
+    """Rule 2: a bearing inside a member's limits, north as either 0 or 360 (an attack pass:
+    ``360``, Home Assistant's top, was refused for limits 0..90, and the group's 180 with an
+    offset of 180 for limits 340..360)."""
+    lo, hi = lo_hi
+    return any(lo <= az_deg + turn <= hi for turn in (0.0, 360.0, -360.0))
+
+
 def fan_out(
     group: Group,
     payload: bytes,
@@ -93,7 +102,7 @@ def fan_out(
     for m in group.members:
         member_az = member_bearing(az, m.offset_deg)
         lo_hi = m.limits_deg
-        if lo_hi is not None and not lo_hi[0] <= member_az <= lo_hi[1]:
+        if lo_hi is not None and not _inside(member_az, lo_hi):
             parts.append(
                 Part(
                     m.id,
