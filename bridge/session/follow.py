@@ -48,7 +48,10 @@ Rules:
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
    bands again; the grid is then turned to. With following on for each rotator of a station
    with one antenna per band, the one whose antenna is on the radio's band turns. A turn under
-   way when the band changes is not stopped (it was for the partner heard on its band).
+   way when the band changes is not stopped (it was for the partner heard on its band), nor
+   by a transmission on another band (rule 3's hold is for this antenna's band: an attack
+   pass, the 20 m antenna stopped half way when WSJT-X moved to 40 m and transmitted there,
+   and nothing turned it on).
 """
 
 from __future__ import annotations
@@ -191,6 +194,12 @@ class Follower:
             return False
         return turned_by_hand(scene, self._rig.aim, self._bearing, self._rig.motion.tolerance_deg)
 
+    def _on_my_band(self, heard: Heard) -> bool:
+        """Rule 9: ``heard``'s dial is on one of this antenna's bands, or could be (no bands,
+        no dial given)."""
+        bands = self._rig.follow.bands
+        return not bands or heard.dial_hz is None or band_of_hz(heard.dial_hz) in bands
+
     def _off_band_why(self, heard: Heard) -> tuple[str, str] | None:
         """Rule 9: the band ``heard`` is on and why it is not for this rotator's antenna, or
         None (it is)."""
@@ -216,7 +225,9 @@ class Follower:
         if self._turned_by_hand(scene):  # rule 1: the session ends it (its targets dropped)
             return Proposal(ended=HAND, busy=True)
         grid = grid_of(heard.grid)
-        holding = heard.transmitting and self._rig.follow.hold_while_tx
+        # rule 9: a transmission on another band goes out on another antenna: this one's turn
+        # under way is not stopped for it (nor is it a turn this one waits for)
+        holding = heard.transmitting and self._rig.follow.hold_while_tx and self._on_my_band(heard)
         if holding and self._turning(scene):  # rule 3: the turn under way stops
             self._aimed = None  # turned to again after the transmission
             self.info = replace(info, held=True)

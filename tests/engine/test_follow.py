@@ -504,3 +504,20 @@ def test_of_two_antennas_the_one_on_the_dials_band_turns_in_the_session() -> Non
         assert angle_between(high.truth().az_deg, bearing("QF56")) <= 0.5
         assert angle_between(low.truth().az_deg, bearing("PM95")) <= 0.5  # still on PM95
         assert low.errors("refused")[-1].message.startswith("following: WSJT-X's dial 14.074 MHz")
+
+
+def test_a_turn_under_way_is_not_stopped_by_a_transmission_on_another_band() -> None:
+    """Rule 9: a turn under way when the band changes is not stopped (it was for the partner
+    heard on its band). An attack pass: the 20 m antenna turning to PM95, WSJT-X moved to 40 m
+    and transmitted there at once: hold-while-TX stopped the 20 m antenna half way, and with
+    the dial off its bands nothing ever turned it on, left pointing at neither."""
+    with spid(bands=["20m"]) as v:
+        v.follow(True)
+        v.heard("JA1ABC", "PM95", dial_hz=TWENTY)
+        v.run_for(1.5)
+        assert v.truth().is_moving
+        v.heard("JA1ABC", "PM95", True, dial_hz=FORTY)  # on 40 m, transmitting on the other antenna
+        v.run_for(12.6)
+        v.heard("JA1ABC", "PM95", False, dial_hz=FORTY)
+        v.run_until(lambda h: h.state is MotionState.IDLE and not h.truth().is_moving, 60, "")
+        assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
