@@ -33,8 +33,8 @@ def test_gs232_lines_it_does_not_carry_out_are_said_and_move_nothing() -> None:
 def test_easycomm_malformed_and_unsupported_words_are_said() -> None:
     tower = _Tower()
     ec = EasycommSession(tower, "192.168.1.20")  # type: ignore[arg-type]
-    assert ec.feed(b"AZnan\n") == [b"ALinvalid AZnan\n"]
-    assert ec.feed(b"AZ ML\n") == [b"AZ120.0\nALML not available\n"]  # a garbled poll
+    assert ec.feed(b"AZnan\n") == [b""]  # asked nothing: answered with nothing
+    assert ec.feed(b"AZ ML\n") == [b"AZ120.0\n"]  # a garbled poll: its one line
     assert tower.submitted == []
     assert [m for m, _ in tower.refusals] == [
         "Easycomm: invalid AZnan",

@@ -276,9 +276,9 @@ def test_every_other_interface_names_its_peer_in_the_audit_trail(
     audited(1)
     assert line(gs232_port, b"M200\r") == b"?>\r\n"  # refused: the GS-232 error prompt
     audited(2)
-    assert line(easycomm_port, b"AZ200.0\n").startswith(b"ALrefused")
+    assert line(easycomm_port, b"AZ200.0\nVE\n") == b"VErotor-bridge\n"  # refused: R/error
     audited(3)
-    assert line(easycomm_port, b"PARK\n").startswith(b"ALrefused")
+    assert line(easycomm_port, b"PARK\nVE\n") == b"VErotor-bridge\n"
     audited(4)
     assert console.command("tower", command="target", az=200).status == 409
     audited(5)

@@ -32,7 +32,8 @@ rotators/easycomm/easycomm.c, rotators/easycomm/easycomm.txt), which are the jud
 
 Rules:
 1. Lines end at CR or LF; empty lines are nothing (Hamlib's ``W`` ends with CR CR). A line longer
-   than any command is junk: GS-232 answers it with the error prompt, Easycomm with an alarm.
+   than any command is junk: GS-232 answers it with the error prompt, Easycomm with nothing
+   (rule 3).
 2. GS-232B: ``C`` (``AZ=aaa``), ``B`` (``EL=eee``) and ``C2`` (``AZ=aaa  EL=eee``) answer with
    CR LF; ``Maaa`` and ``Waaa eee`` set; ``S``, ``A`` and ``E`` stop. Anything else, a refused
    target and a position the bridge does not have answer ``?>`` CR LF; an accepted command
@@ -42,9 +43,14 @@ Rules:
    questions, answered in one line in the order asked (``AZ120.0 EL0.0``), ``VE`` with
    ``VErotor-bridge``; ``AZx``/``ELy`` set (the axis left out keeps its target), ``SA``/``SE``
    stop, ``PARK`` parks. A malformed number, or an axis given twice (``AZ190 AZ200``: which
-   is meant?), makes the whole line do nothing but stop (rule 6: ``SA AZ1x`` stops, and is
-   answered with the alarm). Refusals, moves it cannot
-   do and a position it does not have are answered with an ``AL`` line; a radio's words
+   is meant?), makes the whole line do nothing but stop (rule 6: ``SA AZ1x`` stops). Only a
+   line that asks something is answered, with one line: its answers, ``ALposition unknown``
+   when the bridge does not have the position, ``ALinvalid <word>`` when the line is
+   malformed. A line that asks nothing is answered with nothing, also when it is refused, a
+   move the bridge cannot do (``ML``, ``RESET``) or malformed: Hamlib's ``-m 202``/``-m 204``
+   read no reply to a set, stop, park, reset or move, and took such an alarm line as the next
+   ``AZ EL``'s answer (the tracker's next ``p`` failed, "Command rejected by the rig"). What
+   was refused or not carried out is said on ``R/error`` (rules 5 and 12). A radio's words
    (``UP``, ``DN``, ...) are ignored.
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
    ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator. A position the bridge
@@ -57,7 +63,7 @@ Rules:
 6. A stop is never refused by the bridge; ``A`` (azimuth) and ``E`` (elevation) stop the whole
    rotator, more than asked but never less. A line that stops does nothing else. On the remote
    (remote/rotator.py) a stop that cannot be delivered (its broker away) is answered as a
-   refusal is: ``?>``, ``ALrefused offline``, the DCU-1's banner.
+   refusal is: ``?>``, nothing on Easycomm (rule 3: the log says it), the DCU-1's banner.
 7. The sockets, threads, idle timeout, HTTP refusal and budgets are the shared line server's
    (interfaces/tcplines.py), the pty, its link and its thread the pty server's
    (interfaces/ptylines.py); this package owns what the bytes mean, and cuts lines in time linear in

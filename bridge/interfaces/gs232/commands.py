@@ -203,22 +203,21 @@ class EasycommSession(_LineSession):
 
     def execute(self, line: str | None, req: EasycommRequest) -> bytes:
         described = f"easycomm {line}"
-        alarms: list[str] = []
         if req.stop:  # a line that stops does nothing else, and a malformed word beside it
             # keeps it from nothing (package rules 3 and 6)
             try:
                 self.rotator.submit(Stop(Source.EASYCOMM, self.origin), described)
-            except Refused as exc:  # the remote's, its broker away (package rule 6)
-                alarms.append(f"refused {exc.code.value}")
+            except Refused:  # the remote's, its broker away (package rule 6): reported there
+                pass
         if req.invalid is not None:  # nothing else runs (package rule 3)
-            alarms.insert(0, f"invalid {req.invalid}")
             self._not_carried_out(f"Easycomm: invalid {req.invalid}", described)  # rule 12
-            return "".join(f"AL{alarm}\n" for alarm in alarms).encode("latin-1")
+            # package rule 3: a line that asked nothing is answered with nothing
+            return f"ALinvalid {req.invalid}\n".encode("latin-1") if req.queries else b""
         if req.park and not req.stop:
             try:
                 self.rotator.submit(Park(source=Source.EASYCOMM, origin=self.origin), described)
-            except Refused as exc:
-                alarms.append(f"refused {exc.code.value}")
+            except Refused:  # Rotator.submit has reported it on R/error
+                pass
         elif not req.stop and (req.az_deg is not None or req.el_deg is not None):
             el = req.el_deg
             if el == 0 and not self.rotator.spec.has_elevation:
@@ -226,19 +225,16 @@ class EasycommSession(_LineSession):
             try:
                 target = Target(req.az_deg, el, Source.EASYCOMM, origin=self.origin)
                 self.rotator.submit(target, described)
-            except Refused as exc:
-                alarms.append(f"refused {exc.code.value}")
-        alarms += [f"{word} not available" for word in req.unsupported]
+            except Refused:  # Rotator.submit has reported it on R/error
+                pass
         if req.unsupported:  # rule 12 (a garbled poll's AZ ML reads as a jog asked)
             asked = ", ".join(req.unsupported)
             self._not_carried_out(f"Easycomm: {asked} not carried out by the bridge", described)
+        if not req.queries:  # package rule 3: Hamlib reads no reply to a line that asks
+            return b""  # nothing; what was refused is on R/error (Rotator.submit, rule 12)
         words = self._answers(req.queries)
-        if words is None:
-            alarms.append("position unknown")
-            words = []
-        lines = [" ".join(words)] if words else []
-        lines += ["AL" + alarm for alarm in alarms]
-        return "".join(text + "\n" for text in lines).encode("ascii", "replace")
+        line = "ALposition unknown" if words is None else " ".join(words)
+        return (line + "\n").encode("ascii", "replace")
 
     def _answers(self, queries: tuple[str, ...]) -> list[str] | None:
         words = []

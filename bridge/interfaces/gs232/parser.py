@@ -156,7 +156,7 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
             # a radio's words (UP, DN, DM, ...) and the mode words that follow them
             ignored.append(word[:16])
     if invalid is not None:  # package rule 3: nothing runs, but a stop (rule 6)
-        return EasycommRequest(stop=stop, invalid=invalid)
+        return EasycommRequest(tuple(queries), stop=stop, invalid=invalid)
     return EasycommRequest(
         tuple(queries), az, el, stop, park, tuple(unsupported), None, tuple(ignored)
     )
