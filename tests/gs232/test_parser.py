@@ -110,6 +110,8 @@ def test_gs232_junk_is_unknown(line: str | None) -> None:
         ("PARK", EasycommRequest(park=True)),
         ("RESET", EasycommRequest(unsupported=("RESET",))),
         ("ML", EasycommRequest(unsupported=("ML",))),
+        ("VL0050", EasycommRequest(unsupported=("VL",))),  # Easycomm III's jog (-m 204's M)
+        ("VU0010", EasycommRequest(unsupported=("VU",))),
         # Easycomm I's line: the radio's words are ignored, the bearing taken
         (
             "AZ10.0 EL5.0 UP000 XXX DN000 XXX",

@@ -91,7 +91,8 @@ Rules:
     station (app.py) and the remote (remote/run.py) make every port and pty from it, and
     the settings' keys (settings_rotator.EMULATION_KEYS) name the same ones.
 12. A line that is no command the bridge carries out (GS-232's ``?>``: one it does not know,
-    one too long; an Easycomm line with a malformed word, or a word it cannot do, ``ML``; a
+    one too long; an Easycomm line with a malformed word, or a word it cannot do, ``ML`` or
+    Easycomm III's ``VL0050``; a
     DCU-1 command that is none) is said on ``R/error`` and in the log too, with what was
     sent (rate-limited there, as every refusal is; not in the audit trail, which is not, and
     which it would flood: it is no command), besides the protocol's answer (an

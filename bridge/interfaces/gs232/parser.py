@@ -98,6 +98,8 @@ def parse_gs232(line: str | None) -> Gs232Request:
 # -- Easycomm II -----------------------------------------------------------------------------
 
 UNSUPPORTED_WORDS = frozenset({"ML", "MR", "MU", "MD", "RESET"})
+# Easycomm III's jog at a speed (Hamlib's -m 204 ``M``: ``VL0050``): as unsupported as ``ML``
+VELOCITY_WORDS = frozenset({"VL", "VR", "VU", "VD"})
 _NUMBER = re.compile(r"[+-]?(?:\d{1,4}(?:\.\d*)?|\.\d+)")
 
 
@@ -150,7 +152,7 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
             stop = True
         elif head == "VE" and value == "":
             queries.append("VE")
-        elif head in UNSUPPORTED_WORDS:
+        elif head in UNSUPPORTED_WORDS or head in VELOCITY_WORDS:
             unsupported.append(head)
         else:
             # a radio's words (UP, DN, DM, ...) and the mode words that follow them
