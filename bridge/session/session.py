@@ -731,11 +731,8 @@ class RotatorSession:
     def _aimed(self, target: Target | None, wire: tuple[float, float | None]) -> None:
         """What the status says about the target now taken (status.py rule 4)."""
         if target is not None:
-            self.view.last_source = target.source.value
-            if target.origin is not None:  # following's: wsjtx (follow.py rule 7)
-                self.view.last_operator = target.origin.who
-            elif target.source is not Source.TRACKING:  # tracking's: who started it stays
-                self.view.last_operator = None  # the bridge's own (auto-park, the wind)
+            view = self.view
+            view.last_source, view.last_operator = st.sent_by(target, view.last_operator)
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
 

@@ -16,7 +16,9 @@ Rules:
    ``unknown`` and the target is cleared. The bridge never shows more than it knows.
 4. Bearings and targets are shown as true bearings (pointing.py), with the controller's raw
    value beside them (``raw_bearing``, ``overlap``). ``parked`` holds while the rotor is still
-   within tolerance of the park position it was last sent to.
+   within tolerance of the park position it was last sent to. A target shown while it waits
+   to go out (asked first, a brake) is shown with its own source and operator (``sent_by``; a
+   contract check: a rotctld target was shown beside ``last_command_source: mqtt``).
 5. A status is emitted when something a user would notice changed. The controller's own clock
    (SatEL) ticks every second: it rides along in the next status but never causes one.
 6. ``current`` gives every field of ``RotatorStatus`` a value, and makes it as the dataclass's
@@ -37,6 +39,7 @@ from bridge.core.model import (
     RotatorHealth,
     RotatorStatus,
     SettingValue,
+    Source,
     Target,
     TargetInfo,
     TrackingInfo,
@@ -113,6 +116,16 @@ class Seen(NamedTuple):
     short_of_deg: float | None  # controller.py rule 10 (``short_of``)
 
 
+def sent_by(target: Target, operator: str | None) -> tuple[str, str | None]:
+    """Rule 4: the source and operator the status names for ``target``; ``operator`` the one
+    named before (a track's stays: who started it)."""
+    if target.origin is not None:  # following's: wsjtx (follow.py rule 7)
+        return target.source.value, target.origin.who
+    if target.source is Source.TRACKING:
+        return target.source.value, operator
+    return target.source.value, None  # the bridge's own (auto-park, the wind)
+
+
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
     """The status as of ``now``."""
     m, spec, view = seen.motion, rig.spec, seen.view
@@ -137,6 +150,9 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
     aim = rig.aim
     raw = bearing if spec.can_report_position else None
     pending = seen.pending
+    source, operator = view.last_source, view.last_operator
+    if pending is not None:  # rule 4: the target shown waiting, with who sent it
+        source, operator = sent_by(pending, operator)
     status = _new(RotatorStatus)  # rule 6 (its fields in their order)
     status.__dict__.update(
         rotator_id=seen.previous.rotator_id,
@@ -151,7 +167,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         version=seen.version,
         options=dict(seen.options),
         last_error=view.last_error,
-        last_command_source=view.last_source,
+        last_command_source=source,
         estimated=estimated,
         controller_time=seen.controller_time,
         expected_end_unix=expected_end,
@@ -166,7 +182,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         following_ended=seen.features.following_ended,
         wind=seen.features.wind,
         health=seen.features.health,
-        last_operator=view.last_operator,
+        last_operator=operator,
         control=view.control,
         features=dict(seen.features.parts) if seen.features.parts else {},
         stop_owed=seen.stop_owed,

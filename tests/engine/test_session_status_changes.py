@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from bridge.core.model import Control, RotatorStatus
+from bridge.core.model import Control, MotionState, Origin, RotatorStatus, Source, Target
 from bridge.session.follow import Follow
 from tests.engine.test_follow import STATION
 from tests.engine.test_wind import WIND
@@ -133,3 +133,38 @@ def test_a_newer_target_waiting_for_the_brake_is_shown_at_once() -> None:
         v.target(150.0)
         fresh = v.published(since=t)
         assert fresh and fresh[-1].target_az_deg == 150.0
+
+
+@pytest.mark.parametrize("model", ["md01", "rotorez", "gs232b"])
+def test_a_target_shown_waiting_is_shown_with_who_sent_it(model: str) -> None:
+    """The status that first shows a new target (still waiting to go out: asked first, or a
+    brake) names its source and operator, not the previous command's (a contract check: a
+    rotctld target showed ``last_command_source: mqtt`` until it went out)."""
+    with VirtualRotator(model) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.command(Target(100.0, None, Source.MQTT, origin=Origin(Source.MQTT, "DL1ABC")))
+        v.run_until(
+            lambda h: (
+                h.status.state is MotionState.IDLE
+                and h.status.bearing_deg is not None
+                and abs(h.status.bearing_deg - 100.0) < 2.0
+            ),
+            200,
+            "arrived",
+        )
+        v.run_for(2.0)
+        t = v.now
+        v.command(
+            Target(200.0, None, Source.ROTCTLD, origin=Origin(Source.ROTCTLD, None, "10.0.0.9"))
+        )
+        v.run_until(
+            lambda h: (
+                h.published(since=t) and any(s.target_az_deg == 200.0 for s in h.published(since=t))
+            ),
+            10,
+            "the target shown",
+        )
+        shown = [s for s in v.published(since=t) if s.target_az_deg == 200.0]
+        assert [(s.last_command_source, s.last_operator) for s in shown[:1]] == [
+            ("rotctld", "rotctld 10.0.0.9")
+        ]
