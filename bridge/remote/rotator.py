@@ -254,15 +254,22 @@ class RemoteRotator:
         (``halts_besides`` its source) read when it was asked (interfaces/web/port.py rules 2a
         and 2b): a move is refused if one went out since, up to the moment it is handed to
         the link, under the link's send lock (the order the broker takes them in)."""
+        # a front end that asks and submits at once (rotctld, GS-232, the loggers): its move is
+        # asked now, and a stop or lock ON of any front end counted from here on refuses it up
+        # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
+        # rule 10; an attack pass: the remote's rotctld P, judged, then the console's STOP sent
+        # first: the P reached the broker after it and the station turned the rotor)
+        asked = self.halts if since is None else None
         try:
-            self._send(command, since)
+            self._send(command, since, asked)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
 
-    def _send(self, command: Command, since: int | None = None) -> None:
+    def _send(self, command: Command, since: int | None = None, asked: int | None = None) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
-        a place goes as the place, park as park."""
+        a place goes as the place, park as park. ``asked``: the count of every front end's
+        stops and lock ONs when a move without ``since`` was asked (``submit``)."""
         t = self.topics
         match command:
             case Stop():
@@ -280,6 +287,8 @@ class RemoteRotator:
         # a move from here on: judged now, and ``since`` again as it is handed to the link
         source = command.source
         guard = None if since is None else lambda: self._not_halted_since(since, source)
+        if asked is not None:
+            guard = lambda: self._not_halted_at_all_since(asked)  # noqa: E731
         match command:
             case Target() if command.az_deg is not None:
                 self.check_move(since, source)
@@ -293,7 +302,7 @@ class RemoteRotator:
                     self._send_json(t.target, doc, guard)
             case Park():  # rule 3 first: the link's word, then the station's park position
                 self.check_move(since, source)
-                self._send(Target(*self.pointing.parking(), source, park=True), since)
+                self._send(Target(*self.pointing.parking(), source, park=True), since, asked)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 place = place_doc(lat, lon, command.locator)
@@ -340,6 +349,11 @@ class RemoteRotator:
         if held is not None and held.operator != self._operator and now < held.until_unix:
             text = held.held_text(now)
             raise Refused(RefusalCode.LEASED, f"{text}: only they may turn it (control lease)")
+
+    def _not_halted_at_all_since(self, asked: int) -> None:
+        with self._halts_lock:
+            if self.halts != asked:
+                raise Refused(RefusalCode.STALE, HALTED_SINCE)
 
     def _not_halted_since(self, since: int, source: Source) -> None:
         if self.halts_besides(source) != since:

@@ -268,3 +268,32 @@ def test_a_station_rotator_of_two_boxes_is_served_by_the_remote() -> None:
     rot = RemoteRotator("dish", station.rotator("dish"), station, azel, view, link, "X", 5)
     assert Gs232Session(rot).feed(b"W120 030\r") == [b""]
     assert link.sent == [("rotor/dish/target", '{"azimuth":120,"elevation":30}')]
+
+
+def test_a_loggers_move_judged_before_the_consoles_stop_is_never_sent_after_it() -> None:
+    """docs/architecture.md rule 11 on the remote: a move judged before a STOP another front end
+    sent on another thread never runs after it. The remote's rotctld P (no ``since``: it asks
+    and submits at once) was judged, then the console's STOP went out before the link took the
+    P: the P reached the broker after the STOP, and the station turned the rotor after it. The
+    station's own judge drops such a P (mailbox.py rule 10); the remote must not send it."""
+    link = Link()
+    remote = rotator(link, FakeClock(100.0))
+    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
+    hand_on = link.send
+
+    def send(
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
+        if topic.endswith("/target"):  # the console's STOP, between the judge and the link
+            console.submit(Stop(Source.WEB))
+        hand_on(topic, payload, operator, expiry_s, check)
+
+    link.send = send  # type: ignore[method-assign]
+    with pytest.raises(Refused) as caught:
+        remote.submit(Target(200.0, None, Source.ROTCTLD), "rotctld P 200")
+    assert caught.value.code is RefusalCode.STALE
+    assert link.sent == [("rotor/tower/stop", "stop")]
