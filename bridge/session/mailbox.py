@@ -55,7 +55,8 @@ Rules:
 10a. A place in the order of commands (``ticket``): a front end that asks a motion command
     now and puts it a while later (the DX cluster's call, looked up on a thread of its own)
     takes a ticket when it is asked, and puts it with it; every motion command, stop or lock
-    ON put without one takes the next at its put. One put with a ticket older than the newest
+    ON put without one takes the next at its put, and so does a lock OFF (a command asked while
+    the lock was ON is not carried out after it). One put with a ticket older than the newest
     put is dropped (the put returns False): a target sent after the call was asked is the
     later word, however long the look-up took (an attack pass: the call, looked up after a
     plain target of 200 was put, turned the rotor back to the call's bearing). A batch taken
@@ -284,10 +285,14 @@ class Mailbox:
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
             self._batch.lock = locked
+            # rule 10a: a lock OFF takes a place too, so a motion command asked before it (while
+            # the lock was ON) and put after it is not carried out (an attack pass: a DX call
+            # asked while locked, looked up after the OFF, turned the rotor; a plain target at
+            # its place was refused by the lock). Not motion: a nudge is not refused by it.
+            self._halt_placed = self._placed(None)
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
             if locked:
-                self._halt_placed = self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None

@@ -372,3 +372,27 @@ def test_a_group_s_stop_read_on_the_main_connection_stands_for_each_member_s(
     assert not halts.read_since("v", "stop", lambda via, t: via == "main")
     halts.main_group_stop("g", "rotor/group/g/stop", "STOP", False)
     assert halts.read_since("v", "stop", lambda via, t: via == "main")
+
+
+def test_a_call_asked_while_locked_never_turns_the_rotor_after_the_lock_off(bench: Bench) -> None:
+    """mailbox.py rule 10a with the lock: the DX cluster's call (``R/target {"call": ...}``) is
+    asked, then looked up and judged on a thread of its own. Asked while the lock was ON, with
+    the lock OFF published right after it and read before its look-up ended, it was judged
+    after the OFF and turned the rotor: a plain target published at its place was refused by
+    the lock. The lock OFF is the later word: the call asked before it is not carried out."""
+    rot = bench.rot
+    carry_out(rot, WebCommand("lock", on=True), CONSOLE)
+    since, ticket = rot.halts, rot.ticket()  # the call asked (interfaces/dxcluster/client.py)
+    carry_out(rot, WebCommand("lock", on=False), CONSOLE)  # the OFF, read meanwhile
+    with pytest.raises(Refused):
+        rot.submit(
+            Toward(35.7, 139.7, "PM95vq", source=Source.DXCLUSTER),
+            "call",
+            since=since,
+            ticket=ticket,
+        )
+    batch = rot._mailbox.take()
+    bench.v._do(bench.v.session.commands(batch, bench.v.now))
+    served(bench)
+    assert bench.sets() == []
+    assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
