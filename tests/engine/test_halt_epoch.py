@@ -396,3 +396,47 @@ def test_a_call_asked_while_locked_never_turns_the_rotor_after_the_lock_off(benc
     served(bench)
     assert bench.sets() == []
     assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
+
+
+def _call_asked(rot: Rotator) -> tuple[int, int]:
+    return rot.halts, rot.ticket()  # as the DX cluster's aim (interfaces/dxcluster/client.py)
+
+
+def _call_judged(bench: Bench, asked: tuple[int, int], who: Origin) -> None:
+    since, ticket = asked
+    rot = bench.rot
+    toward = Toward(35.7, 139.7, "PM95vq", source=Source.DXCLUSTER, origin=who)
+    try:
+        rot.submit(toward, "call", since=since, ticket=ticket)
+    except Refused:
+        pass
+    batch = rot._mailbox.take()
+    bench.v._do(bench.v.session.commands(batch, bench.v.now))
+    served(bench)
+
+
+def test_a_call_asked_while_another_held_the_lease_never_turns_the_rotor_after_its_release(
+    bench: Bench,
+) -> None:
+    """mailbox.py rule 10a with the lease: DL2BBB asks for a call while DL1AAA holds the
+    rotator; DL1AAA releases it before the look-up ends. The call was asked when it would have
+    been refused: it is not carried out after the release (an attack pass: it turned the
+    rotor)."""
+    rot = bench.rot
+    rot.operators.claim("DL1AAA", 30, Origin(Source.MQTT, "DL1AAA"))
+    asked = _call_asked(rot)
+    rot.operators.release(Origin(Source.MQTT, "DL1AAA"))
+    _call_judged(bench, asked, Origin(Source.MQTT, "DL2BBB"))
+    assert bench.sets() == []
+    assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
+
+
+def test_the_holders_own_call_still_turns_after_they_renew_the_lease(bench: Bench) -> None:
+    """A renewal by the holder is no new word on the rotator: their call asked before it turns."""
+    rot = bench.rot
+    me = Origin(Source.MQTT, "DL1AAA")
+    rot.operators.claim("DL1AAA", 30, me)
+    asked = _call_asked(rot)
+    rot.operators.claim("DL1AAA", 60, me)
+    _call_judged(bench, asked, me)
+    assert bench.sets() != []
