@@ -33,3 +33,35 @@ def test_a_group_target_with_limits_is_refused_where_no_reading_shows_the_way(ri
     v.run_for(60)
     assert [f.data for f in v.frames(since=t)] == []  # nothing sent to the controller
     assert v.truth().az_deg == 120  # the antenna never swept through north
+
+
+
+@pytest.mark.parametrize(("start_raw", "group_az"), [(330, 0.0), (330, 360.0), (0, 310.0)])
+def test_an_arc_that_ends_at_north_is_refused_where_no_reading_shows_the_way(
+    rig: Rig, start_raw: int, group_az: float
+) -> None:
+    # a DCU-1 with no offset (its scale's stop at true north) in a group with
+    # ``limits = { upper = [300, 360] }`` (groups.py rule 2 takes the group's 0 as 360 there):
+    # the DCU-1 gets 360 as 000, so at true 330 the group's north turned it 330 -> 0 through
+    # 300..0, and from raw 0 (true north, inside the arc) any turn goes round the other way
+    v = rig("dcu1", emulator={"start_az_deg": start_raw})
+    cfg = v.cfg.motion
+    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    assert v.status.available and v.status.raw_bearing_deg is None
+    t = v.now
+    with pytest.raises(Refused) as refused:
+        v.aim(Target(group_az, within_deg=(300.0, 360.0)))
+    assert refused.value.code is RefusalCode.LIMITS
+    v.run_for(60)
+    assert [f.data for f in v.frames(since=t)] == []
+    assert v.truth().az_deg == start_raw
+
+
+def test_an_arc_clear_of_north_is_kept_where_no_reading_shows_the_way(rig: Rig) -> None:
+    # the same DCU-1 with limits 20..340: from inside the arc, no turn on its scale leaves it
+    v = rig("dcu1", emulator={"start_az_deg": 300})
+    cfg = v.cfg.motion
+    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    v.aim(Target(30.0, within_deg=(20.0, 340.0)))
+    v.run_for(60)
+    assert v.truth().az_deg == pytest.approx(30.0, abs=1.0)
