@@ -45,8 +45,9 @@ Rules:
    refuses the target if there is none; from outside the arc, the one that turns least
    outside it. Its side is then fixed: the session sends that value, not the side nearest
    when it sends. With no reading to judge from (a DCU-1, which never answers), the target is
-   refused unless no turn can leave the arc (a scale of true bearings that wraps: no offset),
-   since the way it turns depends on where the rotor is. A review: a group's
+   refused unless no turn can leave the arc (a scale of true bearings that wraps, no offset,
+   and an arc clear of north, where its stop is), since the way it turns depends on where the
+   rotor is. A review: a group's
    ``upper = [20, 340]`` on a 450-degree rotor at 300, sent 30, went to 390, through the
    340..20 the group keeps it out of; an attack pass: a south-centred DCU-1 at true 300, sent
    the group's 30, turned through north on its scale (120 to 210).
@@ -232,8 +233,13 @@ class Pointing:
         lo, hi = within
         if current_raw is None:
             # a scale of true bearings that wraps (no offset) turns between two bearings of an
-            # arc without leaving it; elsewhere the way depends on where the rotor is
-            if hi - lo >= 360.0 or (self.az_wraps and self.offset_deg % 360.0 == 0.0):
+            # arc clear of its stop without leaving it; an arc that ends at north (0..90,
+            # 300..360) has the stop at its end, where north is raw 0 or 360 (the DCU-1 gets
+            # 360 as 000: at true 330, the group's 0 turned it 330 -> 0 the long way round,
+            # and from there the next 310 went round again); elsewhere the way depends on
+            # where the rotor is
+            clear = 0.0 < lo and hi < 360.0
+            if hi - lo >= 360.0 or (clear and self.az_wraps and self.offset_deg % 360.0 == 0.0):
                 return legal
             raise Refused(
                 RefusalCode.LIMITS,
