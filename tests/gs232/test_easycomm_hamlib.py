@@ -64,3 +64,17 @@ def test_hamlib_reads_the_position_after_a_refused_or_unsupported_command(
         server.stop()
     assert done.returncode == 0, done.stderr[-600:]
     assert done.stdout.split()[-2:] == ["120.00", "0.00"], done.stdout
+
+
+def test_a_set_that_fails_inside_the_bridge_is_answered_with_nothing_too() -> None:
+    """Package rule 3 on the failure path (rule 8 of the house: logged): ``ALinternal error``
+    after a set was the next ``AZ EL``'s answer to Hamlib, as the alarm lines were."""
+
+    class Broken(_Tower):
+        def submit(self, command: object, described: str | None = None) -> None:
+            raise RuntimeError("a bug")
+
+    ec = EasycommSession(Broken(), "127.0.0.1")  # type: ignore[arg-type]
+    assert ec.feed(b"AZ100.0 EL0.0\n") == [b""]
+    assert ec.feed(b"AZ EL \n") == [b"AZ120.0 EL0.0\n"]
+    assert ec.feed(b"AZ100.0 AZ EL\n") == [b"ALinternal error\n"]  # asked: it is told
