@@ -199,7 +199,14 @@ class EasycommSession(_LineSession):
     name, failed_reply, source = "easycomm", b"ALinternal error\n", Source.EASYCOMM
 
     def answer(self, line: str | None) -> bytes:
-        return self.execute(line, parse_easycomm(line))
+        req = parse_easycomm(line)
+        try:
+            return self.execute(line, req)
+        except Exception:  # package rule 3: a line that asked nothing is answered with nothing
+            if req.queries:
+                raise  # (feed logs it and answers ``failed_reply``)
+            log.exception("%s for %s: %r failed", self.name, self.rotator.id, line)
+            return b""
 
     def execute(self, line: str | None, req: EasycommRequest) -> bytes:
         described = f"easycomm {line}"
