@@ -243,8 +243,8 @@ class Pointing:
                 return legal
             raise Refused(
                 RefusalCode.LIMITS,
-                f"azimuth {az_deg:g}: where the {self.model_name} is is not known, so a turn "
-                f"that stays inside {lo:g}..{hi:g} cannot be chosen",
+                f"azimuth {az_deg:g}: the {self.model_name} has no reading of where it points, "
+                f"so a turn that stays inside {lo:g}..{hi:g} cannot be chosen",
             )
         outside = [self._outside_deg(current_raw, r, within) for r in legal]
         least = min(outside)

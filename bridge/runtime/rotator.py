@@ -96,6 +96,7 @@ log = logging.getLogger(__name__)
 
 # mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
+OFFLINE_MESSAGE = "rotator offline (serial link down or controller silent)"
 NEWER_MESSAGE = "a newer command came after it was asked: not carried out"
 ON_ITS_WAY_MESSAGE = (
     "a command sent just before it is still on its way to the controller: send it again"
@@ -516,9 +517,7 @@ class Rotator:
         """A track or follow start: the judge's order (``_check``), with no target to judge."""
         self._check_motion(who.who)
         if not self.status.available:
-            raise Refused(
-                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
-            )
+            raise Refused(RefusalCode.OFFLINE, OFFLINE_MESSAGE)
 
     def _lock(self, locked: bool, hold: int | None) -> None:
         """Never refused; ``hold`` as for ``submit``. The lock, the mailbox put and the save
@@ -574,11 +573,14 @@ class Rotator:
             return judged
         self._check_motion(self._who(command))
         status = self.status
+        offline = not status.available
+        if offline and status.raw_bearing_deg is None and command.within_deg is not None:
+            # a group member's limits need a reading (pointing.py rule 9): the link is why
+            # there is none, and the refusal says so, not the limits (a review)
+            raise Refused(RefusalCode.OFFLINE, OFFLINE_MESSAGE)
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
-        if not status.available:
-            raise Refused(
-                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
-            )
+        if offline:
+            raise Refused(RefusalCode.OFFLINE, OFFLINE_MESSAGE)
         return raw
 
     @staticmethod

@@ -9,11 +9,14 @@ part must be refused, not sent."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.core.model import Target
+from bridge.core.model import ErrorEvent, Target
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -33,7 +36,6 @@ def test_a_group_target_with_limits_is_refused_where_no_reading_shows_the_way(ri
     v.run_for(60)
     assert [f.data for f in v.frames(since=t)] == []  # nothing sent to the controller
     assert v.truth().az_deg == 120  # the antenna never swept through north
-
 
 
 @pytest.mark.parametrize(("start_raw", "group_az"), [(330, 0.0), (330, 360.0), (0, 310.0)])
@@ -65,3 +67,29 @@ def test_an_arc_clear_of_north_is_kept_where_no_reading_shows_the_way(rig: Rig) 
     v.aim(Target(30.0, within_deg=(20.0, 340.0)))
     v.run_for(60)
     assert v.truth().az_deg == pytest.approx(30.0, abs=1.0)
+
+
+def test_an_unplugged_member_s_part_is_refused_as_offline_not_as_its_limits(
+    rig: Rig, tmp_path: Path
+) -> None:
+    """The judge every front end calls (runtime/rotator.py): a member with no reading because
+    its link is down is refused as offline, not told of limits it has no reading to keep (a
+    review: an unplugged south-centred DCU-1 got the limits' refusal, on its R/error and the
+    group's G/error)."""
+    v = rig("dcu1", settings={"az_offset_deg": 180}, emulator={"start_az_deg": 120})
+    events: list[ErrorEvent] = []
+    rot = Rotator(v.cfg, StateStore(tmp_path / "state.json"), lambda s: None, events.append)
+    try:
+        v.mailbox.close()  # the rotator's front half on this session (as test_halt_epoch's Bench)
+        v.mailbox = rot._mailbox
+        rot._worker.session = v.session
+        v.link_down()
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        with pytest.raises(Refused) as refused:
+            rot.submit(Target(30.0, within_deg=(20.0, 340.0)), "group stack: target 30")
+        assert refused.value.code is RefusalCode.OFFLINE
+        assert [e.message for e in events] == [
+            "rotator offline (serial link down or controller silent)"
+        ]
+    finally:
+        rot.operators.stop()
