@@ -10,7 +10,13 @@ Rules:
    (the session's comes from the mailbox, in the same step). Each lock word queues a save of
    the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
    last word is the last written, whatever order the front ends asked in; words that come
-   while a save waits for the writer join it, which writes the last of them (rule 7).
+   while a save waits for the writer join it, which writes the last of them (rule 7). The
+   status (``R/lock/state``, ``R/status``) shows the lock the writer saved last, not the
+   word: the word is in effect at once (its stop, the judge's refusals), and is said once it
+   is on the disk, so a crash after the bridge said lock ON never restarts it unlocked (an
+   attack pass: the bridge killed the moment ``R/lock/state`` said ON came back OFF in 4 of
+   6 rounds, and a target turned the rotor). A save that fails is said as rule 3 has it, and
+   the lock it could not save is shown (it is in effect).
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
@@ -113,8 +119,10 @@ class Kept:
         spec: ModelSpec,
         *,
         report: Callable[[ErrorKind, str, str | None], None],
+        saved_lock: Callable[[bool], None] = lambda locked: None,
     ) -> None:
         self._store = store
+        self._saved_lock = saved_lock  # rule 2: the status shows the lock once it is saved
         self._id = rotator_id
         self._spec = spec
         self._report = report
@@ -229,3 +237,4 @@ class Kept:
                 "it will not survive a restart (state file not writable)",
                 "lock",
             )
+        self._saved_lock(locked)  # rule 2: now the status says it (and, failed, the error)

@@ -136,8 +136,10 @@ class Rotator:
         self._store = store
         self._on_event = on_event
         self._wall = wall
-        self._kept = Kept(store, self.id, self.spec, report=self.report)
         self._mailbox = Mailbox()
+        self._kept = Kept(
+            store, self.id, self.spec, report=self.report, saved_lock=self._mailbox.put_lock_saved
+        )
         self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept

@@ -114,6 +114,7 @@ class Batch:
     target: Target | None = None
     options: list[SetOption] = field(default_factory=list)
     lock: bool | None = None
+    lock_saved: bool | None = None  # the lock the state file now holds (runtime/kept.py rule 2)
     notes: list[str] = field(default_factory=list)
     track: Track | None = None  # applied after the stop and before the target (tracking.py)
     lock_on: bool = False  # rule 7: a lock ON was put, whatever ``lock`` ends as
@@ -147,6 +148,7 @@ class Batch:
         settings = (
             self.options
             or self.lock is not None
+            or self.lock_saved is not None
             or self.notes
             or self.health_reset
             or self.control_set
@@ -307,6 +309,13 @@ class Mailbox:
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5
             self._wake_once()
+
+    def put_lock_saved(self, locked: bool) -> None:
+        """The state writer has saved the lock as ``locked`` (or failed to, and said so): the
+        status shows it from now on (runtime/kept.py rule 2)."""
+        with self._lock:
+            self._batch.lock_saved = locked
+        self._wake_once()
 
     def put_release(self, marker: int, *, clear: bool = False) -> None:
         """Rule 6: the holds up to ``marker`` end; ``clear``: what waits before it is dropped."""

@@ -179,6 +179,7 @@ class RotatorSession:
     ) -> None:
         self.cfg = cfg
         self.locked = locked
+        self.lock_shown = locked  # the lock saved (runtime/kept.py rule 2): the status's
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
@@ -297,6 +298,8 @@ class RotatorSession:
         unlocked = batch.lock is False and (self.locked or batch.lock_on)
         if batch.lock is not None:
             self.locked = batch.lock
+        if batch.lock_saved is not None:  # (the status says what a restart would find)
+            self.lock_shown = batch.lock_saved
         if unlocked:  # parts.py rule 7: nothing turned on while locked turns it once unlocked
             self._end_parts("lock released", now)
             if not batch.lock_on:  # (an ON then OFF in one batch: its stop is checked)
@@ -762,7 +765,7 @@ class RotatorSession:
             ctl.controller_time,
             ctl.options.revision,
             self.targets.pending,
-            self.locked,
+            self.lock_shown,
             view.last_error,
             view.last_source,
             view.target_info,
@@ -785,7 +788,7 @@ class RotatorSession:
         self._status_key = key
         shown = st.Features._make(key[-_SHOWN:])
         seen = ctl.seen(
-            self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
+            self.status, self.view, self.targets.pending, self.lock_shown, self.wall_offset_s, shown
         )
         status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
         if st.worth_emitting(status, self.status):

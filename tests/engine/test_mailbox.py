@@ -131,6 +131,7 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
     puts = {
         "put": lambda mb: mb.put(Target(10.0)),
         "put_lock": lambda mb: mb.put_lock(True),
+        "put_lock_saved": lambda mb: mb.put_lock_saved(True),
         "put_release": lambda mb: mb.put_release(1),
         "put_express_release": lambda mb: mb.put_express_release(1),
         "put_track": lambda mb: mb.put_track(Track(None)),
@@ -150,6 +151,9 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         try:
             put(mb)
             assert select.select([mb], [], [], 0)[0] == [mb], f"{name} woke nothing"
+            # ... and leaves a batch the worker applies (one it takes for empty is dropped:
+            # the lock's save, said to the session, was never shown)
+            assert mb.take(), f"{name} left a batch that reads as empty"
         finally:
             mb.close()
 

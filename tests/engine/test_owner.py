@@ -124,8 +124,9 @@ class Station:
         for thread in self.threads:
             thread.join(slow(10))
             assert not thread.is_alive()
+        self.store.flush()  # (the writer says what it saved to the session: kept.py rule 2)
         self.rot._worker.serve(0.0, {self.rot._mailbox.fileno()})
-        self.store.flush()
+        self.store.flush()  # (what the session's step handed the writer: a stop owed)
         return self.statuses[-1]
 
     def restarted(self) -> Rotator:
@@ -310,3 +311,34 @@ def test_a_lane_lock_on_starts_no_thread_and_writes_no_byte_under_the_word_lock(
     assert os.read(mailbox.fileno(), 4096)  # and the lines thread woken
     st.store.flush()
     assert StateStore(st.path).locked("tower") is True
+
+
+@pytest.mark.parametrize("word", [True, False])
+def test_the_lock_is_said_only_once_the_state_file_holds_it(tmp_path: Path, word: bool) -> None:
+    """kept.py rule 2: a lock word is in effect at once (the judge) and said (the status:
+    ``R/lock/state``, ``R/status``) once the writer has saved it: every status that shows a
+    lock finds it in the state file, so a crash right after the bridge said lock ON restarts
+    it locked (an attack pass: the bridge killed the moment R/lock/state said ON came back
+    unlocked in 4 of 6 rounds, and a target turned the rotor)."""
+    if not word:  # (a lock OFF: from a lock the file kept)
+        kept = StateStore(tmp_path / "state.json")
+        kept.set_locked("tower", True)
+        kept.flush()
+    st = Station(tmp_path)
+    assert st.statuses[-1].locked is not word
+    busy, go = threading.Event(), threading.Event()
+
+    def writer_busy() -> None:  # the writer on an earlier save, a slow SD card
+        busy.set()
+        go.wait(slow(10))
+
+    st.store.later(writer_busy)
+    assert busy.wait(slow(10))
+    console_lock(st.rot, word)
+    st.rot._worker.serve(0.0, {st.rot._mailbox.fileno()})
+    assert st.rot.locked is word  # in effect: the judge refuses motion (or takes it) now
+    assert st.statuses[-1].locked is not word  # not said: the file does not hold it yet
+    assert StateStore(st.path).locked("tower") is not word
+    go.set()
+    shown = st.settle()
+    assert shown.locked is word and StateStore(st.path).locked("tower") is word

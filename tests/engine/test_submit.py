@@ -49,8 +49,10 @@ class Bench(EpochBench):
     preset, a park position, a station and WSJT-X (test_halt_epoch.py's bench)."""
 
     def submit(self, command: Command, described: str) -> None:
-        """``command`` through the one entry, then the session takes what it queued."""
+        """``command`` through the one entry, then the session takes what it queued (and
+        what the state writer said it saved: runtime/kept.py rule 2)."""
         self.rot.submit(command, described)
+        self.rot._store.flush()
         self.v._take()
 
     def refused(self, command: Command, described: str) -> RefusalCode:

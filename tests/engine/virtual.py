@@ -193,8 +193,12 @@ class VirtualRotator:
         setting = self.cfg.spec.setting(name)
         self.command(SetOption(name, setting.read(value) if setting is not None else value))
 
-    def lock(self, locked: bool) -> None:
+    def lock(self, locked: bool, *, saved: bool = True) -> None:
+        """A lock word, saved at once (the writer's part, runtime/kept.py rule 2) unless not
+        ``saved``."""
         self.mailbox.put_lock(locked)
+        if saved:
+            self.mailbox.put_lock_saved(locked)
         self._take()
 
     def track(self, body: Body | None) -> None:
