@@ -41,10 +41,12 @@ def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
             probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
             said_on = threading.Event()
 
-            def on_message(client, userdata, m, pid=bridge.pid) -> None:  # noqa: ANN001
-                if m.payload == b"ON" and not said_on.is_set():
+            def on_message(  # noqa: ANN001
+                client, userdata, m, pid: int = bridge.pid, said: threading.Event = said_on
+            ) -> None:
+                if m.payload == b"ON" and not said.is_set():
                     os.kill(pid, signal.SIGKILL)  # the crash, right after the bridge said ON
-                    said_on.set()
+                    said.set()
 
             watcher = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=f"watcher-{round_}")
             watcher.on_message = on_message

@@ -227,6 +227,18 @@ def test_a_retained_stop_live_always_replayed_once_per_message() -> None:
     assert w.retained_halt("r/stop", b"now", replayed=True)
 
 
+def test_a_halt_carried_out_live_under_311_is_not_carried_out_again_when_replayed() -> None:
+    """Rule 6: under MQTT 3.1.1 a retained STOP published while the bridge runs arrives without
+    its flag; the broker's replay of it after a restart is not a second stop (an attack pass:
+    it stopped a rotor mid-turn to a later target)."""
+    w = LastWord()
+    w.live_halt("r/stop", b"STOP")
+    assert not w.retained_halt("r/stop", b"STOP", replayed=True)  # the replay of what was obeyed
+    assert w.retained_halt("r/stop", b"other", replayed=True)  # another message
+    w.live_halt("r/stop", b"")  # an empty live stop remembers nothing
+    assert not w.retained_halt("r/stop", b"other", replayed=True)
+
+
 def test_markers_allowed_again_go_out_for_the_next_lane_halt() -> None:
     """Rule 7: judged on every connect: a probe back on a later connection turns them on."""
     w = LastWord(token="t")

@@ -337,6 +337,7 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_halt(rot, topic, kind, payload)
             return
+        self.live_halt(topic, payload)
         what = pl.describe(kind, payload)
         with self._lock:
             marker = self.word.lane_halt(rotator_id, kind, self._clock(), self._holds_possible())
@@ -381,6 +382,14 @@ class Halts:
         if not carried:  # said (the lock stays ON against it), once the lock is let go: a
             rot.report_refusal(LOCK_OFF_OLDER, "lock OFF", origin=origin)  # stop may wait
 
+    def live_halt(self, topic: str, payload: bytes) -> None:
+        """lastword.py rule 6 under MQTT 3.1.1: a live stop or lock ON, its payload remembered
+        as carried out (it may have been published retained: its replay is no new stop)."""
+        if self.retain_is_live:
+            return
+        with self._lock:
+            self.word.live_halt(topic, payload)
+
     def retained_deleted(self, topic: str) -> None:
         with self._lock:
             self.word.retained_halt(topic, b"", replayed=True)  # forgotten (rule 6)
@@ -412,6 +421,7 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_group_stop(group_id, topic, payload)
             return
+        self.live_halt(topic, payload)
         what = pl.describe("stop", payload)
         newest = held = 0
         for rot in members:

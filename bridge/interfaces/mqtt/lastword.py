@@ -53,7 +53,13 @@ but not the order between them. So:
    topics are subscribed so that the broker replays nothing (retain handling 2) and a retained
    one is always live; under MQTT 3.1.1 a live one arrives without the flag, and one with it
    is a replay, known by its payload (a new payload on the topic is a new message; an empty
-   retained message deletes it and is forgotten).
+   retained message deletes it and is forgotten). A live one under MQTT 3.1.1 may have been
+   published retained (the broker clears the flag on the way), so its payload is remembered
+   as carried out too (``live_halt``): the broker's replay of it after its restart is not a
+   second stop (an attack pass: a rotor turning to a later target was stopped mid-turn by
+   the replay of a retained STOP it had obeyed when it was published, NATS and mosquitto
+   keeping it across the restart). A replay of the same payload published while the bridge
+   was away is then not carried out either, as under MQTT 5, which replays none.
 7. Whether the main connection can read its markers is learnt from the broker, never from a
    marker that is late: a subscription it denies (SUBACK), a marker publish it refuses (MQTT 5
    PUBACK), or the probe the main connection publishes on the marker topic right before its
@@ -298,6 +304,12 @@ class LastWord:
         return n if hmac.compare_digest(seal, self._seal(n, lane).encode()) else 0
 
     # -- rule 6 ----------------------------------------------------------------------------------
+    def live_halt(self, topic: str, payload: bytes) -> None:
+        """Rule 6 under MQTT 3.1.1: a live stop or lock ON carried out, perhaps published
+        retained: a replay of the same payload is not carried out again."""
+        if payload:
+            self._retained[topic] = payload
+
     def retained_halt(self, topic: str, payload: bytes, replayed: bool) -> bool:
         """Whether a retained stop or lock ON is carried out: a live one always, a replay once."""
         if not payload:

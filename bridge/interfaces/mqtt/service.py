@@ -405,6 +405,7 @@ class MqttService:
             if retain and not self._halts.retain_is_live:
                 self._halts.replayed_group_stop(group_id, topic, payload)
             else:
+                self._halts.live_halt(topic, payload)  # (3.1.1: lastword.py rule 6)
                 self._halts.main_group_stop(group_id, topic, what, retain, origin)
             return
         why = None
@@ -559,6 +560,7 @@ class MqttService:
             )
             return
         if halt:
+            self._halts.live_halt(topic, payload)  # (3.1.1: perhaps retained; lastword rule 6)
             self._halts.main_halt(rot, topic, kind, what, retain, origin)
             return
         if kind == "lock":
