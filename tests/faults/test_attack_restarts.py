@@ -19,6 +19,7 @@ from tests.support import Probe, retained_snapshot
 from tests.support.brokers import Nats, find_nats
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 
 def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
@@ -56,12 +57,12 @@ def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
             try:
                 time.sleep(0.3)  # (the retained OFF delivered first)
                 watcher.publish("rotor/lock", "ON", qos=1)
-                assert said_on.wait(10), "the bridge never said lock ON"
+                assert said_on.wait(slow(10)), "the bridge never said lock ON"
             finally:
                 watcher.loop_stop()
                 watcher.disconnect()
             assert bridge.proc is not None
-            bridge.proc.wait(10)
+            bridge.proc.wait(slow(10))
             t = time.monotonic()
             bridge = rig.start_process()
             probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
