@@ -121,13 +121,13 @@ def test_a_retained_stop_does_not_stop_the_rotor_again_after_a_broker_restart_on
             t = time.monotonic()
             probe.publish("rotor/stop", "STOP", retain=True)  # a dashboard button set to retain
             probe.wait_for("rotor/audit", lambda m: b"stop" in m.payload, after=t)  # carried out
-            probe.publish("rotor/target", "200")
+            probe.publish("rotor/target", "90")
             emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 10)  # well on its way
             broker.stop()  # (NATS and mosquitto both keep the retained STOP)
             broker.start()
             assert retained_snapshot(broker.port, "rotor/stop") == {"rotor/stop": b"STOP"}
             emu.wait_for(lambda s: not s.is_moving, 60)
-            assert abs(emu.state().az_deg - 200) <= 3, emu.state()
+            assert abs(emu.state().az_deg - 90) <= 3, emu.state()
     finally:
         probe.close()
         broker.stop()
