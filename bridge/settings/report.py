@@ -139,6 +139,13 @@ def config_warnings(settings: Settings) -> list[str]:
             f"tracking.tle_file: {tle} does not exist now; satellites can be tracked by name "
             "once it does (it is read when it changes)"
         )
+    wsjtx = settings.wsjtx
+    if wsjtx.enabled and not is_loopback(wsjtx.bind):  # a forged Status turns a follower
+        found.append(
+            f"wsjtx.bind: {wsjtx.bind} is not a loopback address: WSJT-X's UDP protocol has no "
+            "authentication, anyone who can reach it can name the grid a following rotator "
+            "turns to"
+        )
     for i, r in enumerate(settings.rotators):
         where = f"rotators[{i}]"
         keys = [f"{a}.port" for a in ("azimuth", "elevation")] if r.axes else ["port"]

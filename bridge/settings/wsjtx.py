@@ -40,7 +40,8 @@ class WsjtxSettings(Strict):
     bind: str = Field(
         "127.0.0.1",
         description="the address to listen on: WSJT-X on this machine sends to 127.0.0.1; "
-        "with multicast_group, the address of the interface to join it on (0.0.0.0: any)",
+        "with multicast_group, the address of the interface to join it on (0.0.0.0: any); "
+        "the protocol has no authentication (check-config warns off loopback)",
         examples=["0.0.0.0"],
     )
     multicast_group: str | None = Field(

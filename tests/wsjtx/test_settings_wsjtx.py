@@ -60,3 +60,24 @@ def test_a_rotator_can_follow_only_with_the_listener_and_the_station(tmp_path: P
         settings = load(tmp_path, f'state_file = "{tmp_path / "state.json"}"\n' + text)
         app = App(settings)  # built, never started: no socket, no broker, no serial port
         assert [r.can_follow for r in app.rotators] == [can], text
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        '[wsjtx]\nenabled = true\nbind = "0.0.0.0"\n',
+        '[wsjtx]\nenabled = true\nbind = "192.168.1.5"\nmulticast_group = "239.255.0.1"\n',
+    ],
+)
+def test_check_config_warns_of_a_wsjtx_port_off_loopback(tmp_path: Path, table: str) -> None:
+    """WSJT-X's UDP protocol has no authentication: off loopback, anyone on the network can
+    send the Status that a following rotator turns to (a forged grid), as check-config says of
+    the loggers' and rotctld's ports."""
+    from bridge.settings.report import config_warnings
+
+    (warning,) = [w for w in config_warnings(load(tmp_path, table)) if w.startswith("wsjtx.")]
+    assert "wsjtx.bind" in warning and "no authentication" in warning
+    quiet = load(tmp_path, '[wsjtx]\nenabled = true\nmulticast_group = "239.255.0.1"\n')
+    assert not [w for w in config_warnings(quiet) if w.startswith("wsjtx.")]
+    off = load(tmp_path, '[wsjtx]\nbind = "0.0.0.0"\n')
+    assert not [w for w in config_warnings(off) if w.startswith("wsjtx.")]
