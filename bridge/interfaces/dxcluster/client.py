@@ -36,9 +36,11 @@ Rules:
    sent while the call's look-up ran was overtaken by it, the rotor turned back to the call).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
-   session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more):
-   a node sending faster is not read until the budget allows (the thread sleeps in the
-   kernel, the node's bytes wait in TCP's buffers), counted in ``paused``.
+   session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more,
+   each read READ_COST more: a node sending every byte in a segment of its own, paced just
+   under the budget, woke the thread some 30,000 times a second, a fifth of a core of Python
+   for a few KB): a node sending faster is not read until the budget allows (the thread sleeps
+   in the kernel, the node's bytes wait in TCP's buffers), counted in ``paused``.
 """
 
 from __future__ import annotations
@@ -73,6 +75,7 @@ AIM_QUEUE = 16
 READ_BYTES = 4096  # rule 5
 RATE_BYTES_S = 32768.0  # rule 5: some 400 spot lines a second, far more than a busy node's
 LINE_COST = 64  # rule 5: each line costs as many bytes more (its parse, its place)
+READ_COST = 64  # rule 5: each read costs as many bytes more (a wake-up, the spots' ages)
 _PROMPTS = (b"login:", b"your call", b"callsign:")
 
 
@@ -222,7 +225,8 @@ class DxCluster:
                     raise ConnectionError("the node closed the connection")
                 before = lines.long_lines
                 complete = lines.feed(data)
-                budget.spend(len(data) + LINE_COST * len(complete), self.clock())
+                cost = READ_COST + len(data) + LINE_COST * len(complete)
+                budget.spend(cost, self.clock())
                 self.counts.long_lines += lines.long_lines - before
                 if not logged_in and any(
                     p in line.lower() for line in [*complete, lines.pending] for p in _PROMPTS
