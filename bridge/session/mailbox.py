@@ -35,8 +35,11 @@ Rules:
    writes into a descriptor number the system has handed to someone else meanwhile.
 9. A follow command (on or off) is a command like a track command (rule 2): on, it replaces a
    target or track command put before it, and one put after it replaces it; a stop or lock ON
-   drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
-   dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
+   drops it. What WSJT-X says (``put_heard``) is no command: each program's newest status is
+   kept (HEARD_KEPT programs at most, in the order put), never dropped by anything (follow.py
+   rule 4 decides whether it is fresh): a second program's status put after the followed
+   one's "transmitting" in the same batch replaced it, and the beam turned on through the
+   transmission (follow.py rule 3); nor is a wind reading
    (``put_wind``: the highest since the last take, so that no gust is lost; one the broker
    replayed apart, wind.py rule 6).
 10. The halt count (``epoch``): every stop and lock ON put adds one to it, under the lock the
@@ -95,6 +98,8 @@ from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, 
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 
+HEARD_KEPT = 8  # rule 9: the programs whose newest status a batch keeps (a flood of names: 8)
+
 Halt = Literal["stop", "lock", "unlock", "clear"]  # what a PartsEnd marks (rule 12)
 
 
@@ -126,7 +131,7 @@ class Batch:
     express_lost: bool = False  # ... given by its connection's end, not its word (stops.py rule 5)
     lost_target: Target | None = None  # ... and the target that waited for it in this batch
     follow: Follow | None = None  # rule 9: applied after the track command
-    heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
+    heard: tuple[Heard, ...] = ()  # rule 9: each program's newest status, in the order put
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
@@ -155,7 +160,7 @@ class Batch:
         )
         fence = self.hold is not None or self.release is not None
         fence = fence or self.express_hold is not None or self.express_release is not None
-        feeds = self.follow is not None or self.heard is not None
+        feeds = self.follow is not None or bool(self.heard)
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
         feeds = feeds or bool(self.feature_commands) or self.activity or self.ends is not None
         feeds = feeds or self.offline is not None
@@ -399,9 +404,10 @@ class Mailbox:
         return True
 
     def put_heard(self, heard: Heard) -> None:
-        """Rule 9: what WSJT-X said; the newest wins."""
+        """Rule 9: what WSJT-X said; each program's newest is kept."""
         with self._lock:
-            self._batch.heard = heard
+            others = [h for h in self._batch.heard if h.instance != heard.instance]
+            self._batch.heard = (*others[max(0, len(others) - HEARD_KEPT + 1) :], heard)
         self._wake_once()
 
     def put_note(self, message: str) -> None:

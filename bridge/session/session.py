@@ -285,8 +285,8 @@ class RotatorSession:
             self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
             self.view.last_error = note
-        if batch.heard is not None:
-            self.follower.heard(batch.heard, now)  # rule 15
+        for heard in batch.heard:  # each program's newest, in the order put
+            self.follower.heard(heard, now)  # rule 15
         if batch.wind_replayed is not None:  # wind.py rule 6: before a fresh one
             self.wind.reading(batch.wind_replayed, now, replayed=True)
         if batch.wind is not None:

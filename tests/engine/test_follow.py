@@ -521,3 +521,25 @@ def test_a_turn_under_way_is_not_stopped_by_a_transmission_on_another_band() -> 
         v.heard("JA1ABC", "PM95", False, dial_hz=FORTY)
         v.run_until(lambda h: h.state is MotionState.IDLE and not h.truth().is_moving, 60, "")
         assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+
+
+def test_a_transmission_start_is_not_lost_beside_another_programs_status_in_one_batch() -> None:
+    """Two WSJT-X instances (SO2R, or a second station in the multicast group) send their
+    statuses at the same period boundaries, so both can land in one mailbox batch before the
+    serial-lines thread takes it. The followed instance's "transmitting" must not be replaced
+    by the other's status: the turn stops while it transmits, as with one program (the
+    mailbox kept only the newest status, the other's, and the beam kept turning through the
+    transmission)."""
+    with spid() as v:
+        v.follow(True)
+        v.mailbox.put_heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"))
+        v._take()
+        v.run_for(1.5)
+        assert v.truth().is_moving
+        v.mailbox.put_heard(Heard("JA1ABC", "PM95", True, "WSJT-X - 20m"))  # it transmits
+        v.mailbox.put_heard(Heard("W1AW", "FN31", False, "WSJT-X - 6m"))  # the other decodes
+        v._take()
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the turn stopped")
+        where = v.truth().az_deg
+        assert angle_between(where, bearing("PM95")) > 5  # stopped on the way
+        assert v.status.following is not None and v.status.following.held
