@@ -373,3 +373,29 @@ def test_a_node_sending_a_byte_a_segment_wakes_the_client_a_bounded_number_of_ti
         assert node.reads <= RATE_BYTES_S / 32  # a second's budget buys at most ~1000 reads
     finally:
         dx.stop()
+
+
+def test_a_node_that_logs_in_sends_a_spot_and_hangs_up_says_so_rarely_in_the_log(
+    published: list[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A node (or whoever poses as one) that prompts, sends one spot and closes, over and over:
+    its spot resets the back-off (rule 2), so the client logs in about once a second for as
+    long as it goes on. The failures were said once a minute, but each login was a line of its
+    own: 86,400 lines a day in the log. Now the logins are said like the failures."""
+
+    def one_spot(s: Session) -> None:
+        s.send(b"login: ")
+        s.read_line()
+        s.send(SPOT)
+
+    cluster = FakeCluster([one_spot] * 6)
+    dx = client(cluster.port, published)
+    caplog.set_level("INFO", logger="bridge.interfaces.dxcluster.client")
+    dx.start()
+    try:
+        wait_until(lambda: dx.counts.connects >= 6, 20, "six logins")
+    finally:
+        dx.stop()
+        cluster.close()
+    said = [r for r in caplog.records if "logged in" in r.getMessage()]
+    assert len(said) == 1, [r.getMessage() for r in said]

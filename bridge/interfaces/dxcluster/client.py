@@ -12,7 +12,8 @@ Rules:
    it connects again after a back-off: ``backoff_s`` (1 s) doubling to MAX_BACKOFF_S (60 s);
    a session that logged in and then brought a spot or lasted MAX_BACKOFF_S resets it (a node
    that refuses the call sign after the prompt and hangs up is not tried every second).
-   Failures are logged at most once per LOG_EVERY_S, with how many since; a fault behind a
+   Failures and logins are logged at most once per LOG_EVERY_S, with how many since (a node
+   that sends a spot and hangs up is logged in to every second); a fault behind a
    line (a bug) likewise, with its traceback: the session goes on (house rule 8). Nothing
    ends the thread but stop() (which waits for a connect under way at most 5 s).
 3. ``B/spots`` is published (retained) when the kept spots change: a new spot, or one aged
@@ -130,6 +131,8 @@ class DxCluster:
         self._aims: queue.Queue[_Aim | None] = queue.Queue(AIM_QUEUE)
         self._logged_s = -math.inf
         self._since = 0
+        self._login_said_s = -math.inf  # rule 2: when a login was last said
+        self._logins_since = 0
         self._published: str | None = None
         self._published_s = -math.inf
         self._calls: tuple[str, ...] | None = None
@@ -235,7 +238,7 @@ class DxCluster:
                     lines.reset()  # the prompt is no part of the next line
                     logged_in = True
                     self.counts.connects += 1
-                    log.info("DX cluster: logged in to %s:%d", self.host, self.port)
+                    self._logged_in()
                     continue  # the prompt's own line is no spot
                 quiet = self.counts.spots == spots  # a node that sends spots unasked is kept
                 if not logged_in and quiet and self.clock() > deadline:  # rule 1: it talks and
@@ -251,6 +254,17 @@ class DxCluster:
             with self._sock_lock:
                 self._sock = None
             sock.close()
+
+    def _logged_in(self) -> None:
+        """Rule 2: said at most once per LOG_EVERY_S, with how many since (a node that sends a
+        spot and hangs up is logged in to again every second)."""
+        self._logins_since += 1
+        now = self.clock()
+        if now - self._login_said_s < LOG_EVERY_S:
+            return
+        count, self._logins_since, self._login_said_s = self._logins_since, 0, now
+        again = f" ({count} times since last said)" if count > 1 else ""
+        log.info("DX cluster: logged in to %s:%d%s", self.host, self.port, again)
 
     def _line(self, line: bytes) -> None:
         spot = parse_spot(line)
