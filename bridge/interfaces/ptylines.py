@@ -47,9 +47,9 @@ Rules:
 9. A client cannot starve a stop (docs/architecture.md rule 12), as on the TCP ports
    (interfaces/tcplines.py rule 5): a wake-up reads at most tcplines.READ_BYTES (so runs at most
    that many commands), and the pty has a budget of tcplines.RATE_BYTES_S, each reply costing
-   tcplines.REPLY_COST more; over it, the thread sleeps on the stop pipe (in the kernel) and
-   the client's bytes wait in the pty (its writes block or fail, as on a serial line),
-   counted in ``paused``.
+   tcplines.REPLY_COST more and each wake-up tcplines.READ_COST more; over it, the thread
+   sleeps on the stop pipe (in the kernel) and the client's bytes wait in the pty (its writes
+   block or fail, as on a serial line), counted in ``paused``.
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ from typing import Protocol
 
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.fdwait import readable
-from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
+from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, READ_COST, REPLY_COST
 
 log = logging.getLogger(__name__)
 
@@ -286,7 +286,7 @@ class PtyLineServer:
                     session = self._session()
                 elif reply:
                     self._write(reply)
-            budget.spend(len(data) + REPLY_COST * len(replies), self._clock())
+            budget.spend(READ_COST + len(data) + REPLY_COST * len(replies), self._clock())
             if session.idle:
                 pending_since = None
             elif pending_since is None:

@@ -82,8 +82,10 @@ Rules:
    would be turned away with it. So a flood of connect-and-close costs an accept and a close each
    and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
    commands); each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
-   REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
-   TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
+   REPLY_COST more and each wake-up READ_COST more (clients sending a byte a segment, under
+   their byte budgets, woke their threads 100,000 times a second: a whole core): over it,
+   its thread sleeps in the kernel (an Event) and its bytes wait in TCP's buffers, said once
+   (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
    bytes without finishing a command (no command is near that long) is dropped and logged (at
    most once per LOG_S, with a count); the bytes are counted from the last command finished
    (a read that finishes one counts its own bytes at most), so commands sent back to back,
@@ -122,6 +124,7 @@ REFUSAL_LOG_S = 10.0  # connections turned away are logged at most this often, w
 READ_BYTES = 64  # at most this much read, and so at most this many commands run, a wake-up
 RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of as many
 REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
+READ_COST = 32  # each wake-up (each read) costs this many bytes of the budget (rule 5)
 MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
 LINE_ENDS = b"\r\n"  # what ends a command, unless a front end names its own (rule 6)
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
@@ -859,7 +862,7 @@ class LineServer:
                             log.info("%s dropped: took no reply for %g s", who, SEND_WAIT_S)
                             return
                         me.sending_s = None
-                budget.spend(raw + REPLY_COST * len(replies), self._clock())
+                budget.spend(READ_COST + raw + REPLY_COST * len(replies), self._clock())
                 finished = any(not isinstance(r, Close) for r in replies)
                 if finished:
                     me.done = True  # rule 3: an established program, dropped last
