@@ -48,6 +48,7 @@ from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.interfaces.mqtt.lane import StopLane
 from bridge.interfaces.mqtt.payloads import ConsoleFacts
 from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.stale import StaleTopics
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 from bridge.protocols.axes import Axis
 from bridge.runtime.audit import AuditTrail
@@ -407,6 +408,7 @@ class App:
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
+        self._stale(settings)  # interfaces/mqtt/stale.py: a removed rotator's retained topics
         self.client.add_subscriptions(self.mqtt.subscriptions())
         self.lane = StopLane(
             settings.mqtt,
@@ -538,6 +540,22 @@ class App:
                 listener(value)
 
         return call
+
+    def _stale(self, settings: Settings) -> None:
+        """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained is
+        deleted at the first look, when the base topic was this bridge's."""
+        roots = {settings.rotator_topic(r) for r in settings.rotators}
+        roots |= {settings.group_topic(g) for g in settings.groups}
+        stale = StaleTopics(self.topics, roots)
+        clear = self.client.clear_retained
+
+        def on_message(topic: str, payload: bytes, retain: bool) -> bool:
+            doomed = stale.stale(topic) if retain and payload else []
+            for t in doomed:
+                clear(t)
+            return bool(doomed)
+
+        self.mqtt.add_feature(stale.subscriptions, on_message)
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant

@@ -131,3 +131,35 @@ def test_a_retained_stop_does_not_stop_the_rotor_again_after_a_broker_restart_on
     finally:
         probe.close()
         broker.stop()
+
+
+def test_a_rotator_removed_after_a_crash_is_not_left_online(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """interfaces/mqtt/stale.py: a rotator removed from the configuration kept its retained
+    topics for ever (only its Home Assistant configs were deleted). After a crash (the last
+    will covers ``B/bridge/state`` alone) ``R/availability`` stayed ``online`` and ``R/state``
+    ``moving``: a dashboard or a remote reading ``rotor/+/availability`` showed a rotator that
+    no longer exists as online and turning. The next start deletes what it left."""
+    with Rig(tmp_path, broker, probe) as rig:
+        rig.add("a")
+        rig.add("b")
+        rig.add("c", emu={"start_az_deg": 10})
+        bridge = rig.start_process()
+        probe.wait_value("rotor/c/availability", "online", timeout_s=30)
+        probe.publish("rotor/c/target", "200")
+        probe.wait_value("rotor/c/state", "moving", timeout_s=10)
+        bridge.kill()
+        probe.wait_value("rotor/bridge/state", "offline", timeout_s=20)
+        left = retained_snapshot(broker.port, "rotor/c/#")
+        assert left["rotor/c/availability"] == b"online" and left["rotor/c/state"] == b"moving"
+        rig.rotators = [r for r in rig.rotators if r["id"] != "c"]
+        t = time.monotonic()
+        rig.start_process()
+        for topic in left:  # each deleted (an empty retained message), none left
+            probe.wait_for(topic, lambda m: m.payload == b"", timeout_s=30, after=t)
+        assert retained_snapshot(broker.port, "rotor/c/#") == {}
+        probe.wait_value("rotor/a/availability", "online", timeout_s=30, after=t)
+        assert retained_snapshot(broker.port, "rotor/a/availability") == {
+            "rotor/a/availability": b"online"
+        }

@@ -138,10 +138,10 @@ def say_clears(outcome: Outcome) -> None:
     rest = len(clears) - CLEARS_NAMED
     some = f"{named} and {rest} more" if rest > 0 else named
     if outcome.clear:
-        log.info("cleared %d retained config(s) this bridge no longer makes: %s", len(clears), some)
+        log.info("cleared %d retained topic(s) this bridge no longer makes: %s", len(clears), some)
     else:
         log.warning(
-            "left alone %d retained config(s) this bridge does not generate, as the base "
+            "left alone %d retained topic(s) this bridge does not generate, as the base "
             "topic was not its own (delete them by hand if that bridge is gone for good): %s",
             len(clears),
             some,
@@ -155,7 +155,7 @@ def say_clear(said: EventLimiter, topic: str, *, cleared: bool) -> None:
         return
     more = f" ({left_out} more like it not logged)" if left_out else ""
     if cleared:
-        log.info("cleared %s, a retained config this bridge no longer makes%s", topic, more)
+        log.info("cleared %s, a retained topic this bridge no longer makes%s", topic, more)
     else:
         log.warning(
             "%s was published by another client: not ours to delete; left alone%s", topic, more

@@ -1,0 +1,74 @@
+"""The retained topics of a rotator or group no longer configured: a rotator removed or renamed,
+a group removed, a station gone from one rotator (its topics on the base topic itself) to
+several. Pure: which filters to read and, for a message read, which topics to delete; the
+client deletes them (client.py ``clear_retained``, rules 14 and 15).
+
+Rules:
+1. An attack pass: a rotator removed after a crash kept its retained topics for ever,
+   ``R/availability`` ``online`` and ``R/state`` ``moving`` among them (the last will covers
+   ``B/bridge/state`` alone), and a dashboard or a remote reading ``B/+/availability`` showed a
+   rotator that no longer exists as online and turning. Each root under the base topic
+   (``B/<id>``, where the bridge puts a rotator or a group by default) and the base topic itself
+   tells that it was one by its retained ``availability``; one that is no configured rotator's
+   or group's root has every retained topic a rotator or a group publishes there deleted
+   (``stale``); its options' states, whose names depend on its model, are read each on its
+   own (``B/+/option/+/state``: a model's options are not listed without importing every
+   controller family, start-up CPU for nothing). Both change seldom: reading them costs
+   nothing per reading, under MQTT 3.1.1 either, where the bridge hears its own messages. A
+   rotator with a ``topic`` of its own elsewhere is not looked for.
+2. The deletions are the first look's (client.py rule 14; claim.py rule 3): asked while it
+   runs (the broker hands over its retained messages then), sent only when the base topic was
+   this bridge's, and said in the log in a few lines (rule 15). An ``availability`` published
+   while the bridge runs is another client's: nothing is deleted for it.
+"""
+
+from __future__ import annotations
+
+from bridge.feature import registered
+from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics, Topics
+
+
+class StaleTopics:
+    """Rule 1: the filters to read, and what a message read on them leaves to delete."""
+
+    def __init__(self, topics: Topics, roots: set[str]) -> None:
+        self._base = topics.base
+        self._roots = roots  # every configured rotator's and group's root
+        self._owned = set(topics.owned())  # (never one of these, whatever its root)
+        self._states = [s.suffix for f in registered() for s in f.states]
+
+    @property
+    def subscriptions(self) -> list[str]:
+        b = self._base
+        return [f"{b}/+/availability", f"{b}/availability", f"{b}/+/option/+/state"] + [
+            f"{b}/option/+/state"
+        ]
+
+    def stale(self, topic: str) -> list[str]:
+        """Rule 1: what ``topic`` (read on ``subscriptions``) leaves to delete: every retained
+        topic a rotator or a group publishes under a root no longer configured, for its
+        availability; the option state itself, for one of its options' states."""
+        root, leaf = self._root(topic)
+        if root is None or root in self._roots:
+            return []
+        if leaf != "availability":
+            return [topic]
+        r, g = RotatorTopics(root), GroupTopics(root)
+        found = [r.bearing, r.elevation, r.state, r.status, r.version, r.presets, r.info]
+        found += [r.lock_state, *(r.feature(suffix) for suffix in self._states)]
+        found += [g.status, g.availability]  # (a group's availability is a rotator's too)
+        return [t for t in dict.fromkeys(found) if t not in self._owned]
+
+    def _root(self, topic: str) -> tuple[str | None, str]:
+        """The root ``topic`` is under (the base topic or ``B/<id>``) and what it is there:
+        ``availability`` or ``option``; (None, "") for any other topic."""
+        head, _, leaf = topic.rpartition("/")
+        if leaf == "availability":
+            root = head
+        elif leaf == "state" and head.rpartition("/")[0].endswith("/option"):
+            root, leaf = head.rpartition("/")[0][: -len("/option")], "option"
+        else:
+            return None, ""
+        if root == self._base or root.rpartition("/")[0] == self._base:
+            return root, leaf
+        return None, ""

@@ -1,0 +1,55 @@
+"""What a removed rotator or group left retained (interfaces/mqtt/stale.py): which messages
+name a root no longer configured, and which topics are then deleted. Pure."""
+
+from __future__ import annotations
+
+from bridge.interfaces.mqtt.stale import StaleTopics
+from bridge.interfaces.mqtt.topics import Topics
+
+
+def several() -> StaleTopics:
+    topics = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"}, {"stack": "rotor/stack"})
+    return StaleTopics(topics, {"rotor/a", "rotor/b", "rotor/stack"})
+
+
+def test_a_removed_rotator_s_availability_deletes_everything_a_rotator_keeps_there() -> None:
+    doomed = several().stale("rotor/c/availability")
+    for leaf in ("availability", "bearing", "elevation", "state", "status", "version"):
+        assert f"rotor/c/{leaf}" in doomed
+    for leaf in ("presets", "info", "lock/state", "control", "health"):
+        assert f"rotor/c/{leaf}" in doomed
+    assert all(t.startswith("rotor/c/") for t in doomed)
+    assert "rotor/c/target" not in doomed and "rotor/c/stop" not in doomed  # (commands)
+
+
+def test_a_removed_rotator_s_option_state_is_deleted_by_itself() -> None:
+    assert several().stale("rotor/c/option/jam/state") == ["rotor/c/option/jam/state"]
+
+
+def test_what_the_bridge_has_now_is_never_stale() -> None:
+    stale = several()
+    for topic in (
+        "rotor/a/availability",
+        "rotor/b/option/jam/state",
+        "rotor/stack/availability",  # a group's
+        "rotor/bridge/state",
+        "rotor/a/bearing",  # (no filter reads it)
+        "elsewhere/c/availability",  # not under the base topic
+        "rotor/c/d/availability",  # nor a root of it
+    ):
+        assert stale.stale(topic) == [], topic
+
+
+def test_one_rotator_s_topics_on_the_base_topic_are_stale_once_there_are_several() -> None:
+    doomed = several().stale("rotor/availability")
+    assert "rotor/bearing" in doomed and "rotor/lock/state" in doomed
+    assert not any(t.startswith("rotor/bridge/") for t in doomed)
+    assert several().stale("rotor/option/jam/state") == ["rotor/option/jam/state"]
+
+
+def test_with_one_rotator_on_the_base_topic_its_own_are_not_stale() -> None:
+    topics = Topics("rotor", {"tower": "rotor"})
+    stale = StaleTopics(topics, {"rotor"})
+    assert stale.stale("rotor/availability") == []
+    assert stale.stale("rotor/option/jam/state") == []
+    assert "rotor/tower/bearing" in stale.stale("rotor/tower/availability")  # of several, once
