@@ -91,14 +91,17 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         # as printed: mosquitto_pub -t <base>/target -m 120
         probe.publish(f"{base}/target", "120")
         probe.wait_for(f"{base}/state", lambda m: m.text == "moving")
-        probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 120) <= 3, timeout_s=20)
-        msg = probe.wait_for(
+        there = probe.wait_for(
+            f"{base}/bearing", lambda m: abs(float(m.text) - 120) <= 3, timeout_s=20
+        )
+        msg = probe.wait_for(  # (the status that showed the target waiting was idle too)
             f"{base}/status",
             lambda m: (
                 json.loads(m.payload)["state"] == "idle"
                 and json.loads(m.payload)["last_command_source"] == "mqtt"
             ),
             timeout_s=20,
+            after=there.t,
         )
         assert abs(json.loads(msg.payload)["bearing"] - 120) <= 3
 
