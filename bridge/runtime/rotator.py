@@ -318,6 +318,8 @@ class Rotator:
             case Park():
                 self._judged(Target(*self.pointing.parking(), src, park=True, origin=by), epoch)
             case Nudge():
+                self.operators.refusal(who.who)  # a lease the clock ended, ended first: its
+                # place is not one after the ticket (review 92)
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
@@ -326,6 +328,7 @@ class Rotator:
                 lat, lon = command.latitude_deg, command.longitude_deg
                 self._toward(command, epoch, lat, lon, ticket=ticket)
             case TakePath():
+                self.operators.refusal(who.who)  # (as a nudge's)
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 info = None if halted else status.target_info  # the place of the current target

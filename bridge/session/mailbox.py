@@ -209,6 +209,7 @@ class Mailbox:
         self._tickets = itertools.count(1)  # rule 10a
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
+        self._motion_placed = 0  # rule 10a: ... and of the newest motion command
         self._holder: str | None = None  # rule 10a: the lease's holder put last
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
@@ -249,7 +250,10 @@ class Mailbox:
         a status shows) and after the newest halt: a target that status does not show is on
         its way."""
         with self._lock:
-            return self._newest > applied and self._newest != self._halt_placed
+            # (a lock OFF or a change of the lease takes a place but is not motion, and
+            # must not hide a motion command put before it: review 92)
+            placed = self._motion_placed
+            return placed > applied and placed > self._halt_placed
 
     def put(
         self,
@@ -279,6 +283,7 @@ class Mailbox:
             elif isinstance(command, Target):
                 if self._stale(epoch) or not self._placed(ticket):
                     return False
+                self._motion_placed = self._newest  # rule 10a
                 self._batch.target = combine(command, self._batch.target)
             else:
                 self._option_order.pop(command.name, None)
@@ -298,7 +303,9 @@ class Mailbox:
             # the lock was ON) and put after it is not carried out (an attack pass: a DX call
             # asked while locked, looked up after the OFF, turned the rotor; a plain target at
             # its place was refused by the lock). Not motion: a nudge is not refused by it.
-            self._halt_placed = self._placed(None)
+            placed = self._placed(None)
+            if locked:
+                self._halt_placed = placed
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
             if locked:
@@ -365,7 +372,7 @@ class Mailbox:
             if self._stale(epoch):
                 return False
             if (track.body or track.lookup) is not None:
-                self._placed(None)  # rule 10a
+                self._motion_placed = self._placed(None)  # rule 10a
             self._batch.track = track
             self._batch.target = None
             self._batch.follow = None  # rule 9: the later command wins
@@ -382,7 +389,7 @@ class Mailbox:
                 return False
             self._batch.follow = follow
             if follow.on:  # following off ends nothing else
-                self._placed(None)  # rule 10a
+                self._motion_placed = self._placed(None)  # rule 10a
                 self._batch.target = None
                 self._batch.track = None
                 if self._batch.feature_commands:
@@ -397,7 +404,7 @@ class Mailbox:
             if self._stale(epoch):
                 return False
             if command.moves:
-                self._placed(None)  # rule 10a
+                self._motion_placed = self._placed(None)  # rule 10a
                 self._batch.target = None  # rule 12: the later command wins
             self._batch.feature_commands.append(command)
         self._wake_once()
@@ -447,7 +454,7 @@ class Mailbox:
             holder = None if control is None else control.operator
             if holder != self._holder:
                 self._holder = holder
-                self._halt_placed = self._placed(None)  # not motion (see put_lock)
+                self._placed(None)  # not motion, nor a halt (see put_lock)
         if wake:
             self._wake_once()
 
