@@ -10,13 +10,15 @@ Rules:
    (the session's comes from the mailbox, in the same step). Each lock word queues a save of
    the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
    last word is the last written, whatever order the front ends asked in; words that come
-   while a save waits for the writer join it, which writes the last of them (rule 7). The
-   status (``R/lock/state``, ``R/status``) shows the lock the writer saved last, not the
-   word: the word is in effect at once (its stop, the judge's refusals), and is said once it
-   is on the disk, so a crash after the bridge said lock ON never restarts it unlocked (an
-   attack pass: the bridge killed the moment ``R/lock/state`` said ON came back OFF in 4 of
-   6 rounds, and a target turned the rotor). A save that fails is said as rule 3 has it, and
-   the lock it could not save is shown (it is in effect).
+   while a save waits for the writer join it, which writes the last of them (rule 7). A
+   word is in effect at once (its stop, the judge's refusals). The status (``R/lock/state``,
+   ``R/status``) shows the lock ON only while it is in effect and the writer has saved it,
+   so a crash after the bridge said lock ON never restarts it unlocked (an attack pass: the
+   bridge killed the moment ``R/lock/state`` said ON came back OFF in 4 of 6 rounds, and a
+   target turned the rotor), and a lock OFF at once, so the status never says locked while
+   a target turns the rotor (a review); a host that dies before that OFF is saved restarts
+   locked, the safe side. A save that fails is said as rule 3 has it, and the lock it could
+   not save is shown (it is in effect).
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
@@ -230,11 +232,14 @@ class Kept:
     def _save_lock_now(self) -> None:
         with self._unsaved_guard:  # rule 7: the last word so far
             locked, self._lock_unsaved = self.locked, False
-        if not self._store.set_locked(self._id, locked):
+        try:
+            saved = self._store.set_locked(self._id, locked)
+        finally:  # rule 2: now the status says it (and, failed, the error below)
+            self._saved_lock(locked)
+        if not saved:
             self._report(
                 ErrorKind.STATE,
                 f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
                 "it will not survive a restart (state file not writable)",
                 "lock",
             )
-        self._saved_lock(locked)  # rule 2: now the status says it (and, failed, the error)

@@ -318,8 +318,6 @@ class Rotator:
             case Park():
                 self._judged(Target(*self.pointing.parking(), src, park=True, origin=by), epoch)
             case Nudge():
-                self.operators.refusal(who.who)  # a lease the clock ended, ended first: its
-                # place is not one after the ticket (review 92)
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
@@ -328,7 +326,6 @@ class Rotator:
                 lat, lon = command.latitude_deg, command.longitude_deg
                 self._toward(command, epoch, lat, lon, ticket=ticket)
             case TakePath():
-                self.operators.refusal(who.who)  # (as a nudge's)
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 info = None if halted else status.target_info  # the place of the current target
@@ -591,6 +588,12 @@ class Rotator:
     @staticmethod
     def _who(command: Target | SetOption) -> str:
         return command.origin.who if command.origin is not None else command.source.value
+
+    def check_motion(self, origin: Origin) -> None:
+        """Refused if motion from ``origin`` would be refused now for the lock, the wind or the
+        lease (``_check_motion``): for a front end that asks a command and submits it a while
+        later (the DX cluster's call), judged when asked too; reported by the caller."""
+        self._check_motion(origin.who)
 
     def _check_motion(self, who: str) -> None:
         """Refused for motion now, in this order (docs/architecture.md rule 11; never asked

@@ -58,12 +58,14 @@ Rules:
 10a. A place in the order of commands (``ticket``): a front end that asks a motion command
     now and puts it a while later (the DX cluster's call, looked up on a thread of its own)
     takes a ticket when it is asked, and puts it with it; every motion command, stop or lock
-    ON put without one takes the next at its put, and so do a lock OFF and a new holder of the
-    control lease, or none (a command asked while the lock was ON, or while another held the
-    lease, is not carried out after it). One put with a ticket older than the newest
-    put is dropped (the put returns False): a target sent after the call was asked is the
-    later word, however long the look-up took (an attack pass: the call, looked up after a
-    plain target of 200 was put, turned the rotor back to the call's bearing). A batch taken
+    ON put without one takes the next at its put, and so does a lock OFF (a command asked while
+    the lock was ON is not carried out after it; one asked while another held the control
+    lease is refused when asked: interfaces/dxcluster/client.py rule 4). One put with a ticket
+    older than the newest put is dropped (the put returns False): a target sent after the call
+    was asked is the later word, however long the look-up took (an attack pass: the call,
+    looked up after a plain target of 200 was put, turned the rotor back to the call's
+    bearing). A lock OFF is no motion command: a nudge after it still sees a target put before
+    it as on its way (``motion_unseen``; a review). A batch taken
     carries the newest place put (``Batch.newest``), as it carries the halt count: a judge
     that reads a newer one in the mailbox knows the status it sees predates a motion command
     (a nudge is then refused: runtime/rotator.py).
@@ -210,7 +212,6 @@ class Mailbox:
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
-        self._holder: str | None = None  # rule 10a: the lease's holder put last
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -444,17 +445,9 @@ class Mailbox:
         self._wake_once()
 
     def put_control(self, control: Control | None, *, wake: bool = True) -> None:
-        """The control lease changed (the status shows its holder); ``wake``: rule 5. A new
-        holder, or none, takes a place in the order (rule 10a), as a lock OFF does: a command
-        asked while another held the lease is not carried out after its release (an attack
-        pass: a DX call asked then, looked up after the release, turned the rotor). A renewal
-        by the holder takes none (its own call asked before it still turns)."""
+        """The control lease changed (the status shows its holder); ``wake``: rule 5."""
         with self._lock:
             self._batch.control, self._batch.control_set = control, True
-            holder = None if control is None else control.operator
-            if holder != self._holder:
-                self._holder = holder
-                self._placed(None)  # not motion, nor a halt (see put_lock)
         if wake:
             self._wake_once()
 

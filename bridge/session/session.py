@@ -179,7 +179,7 @@ class RotatorSession:
     ) -> None:
         self.cfg = cfg
         self.locked = locked
-        self.lock_shown = locked  # the lock saved (runtime/kept.py rule 2): the status's
+        self.lock_shown = locked  # the lock saved last (runtime/kept.py rule 2)
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
@@ -765,7 +765,7 @@ class RotatorSession:
             ctl.controller_time,
             ctl.options.revision,
             self.targets.pending,
-            self.lock_shown,
+            self.locked and self.lock_shown,  # (runtime/kept.py rule 2)
             view.last_error,
             view.last_source,
             view.target_info,
@@ -788,7 +788,12 @@ class RotatorSession:
         self._status_key = key
         shown = st.Features._make(key[-_SHOWN:])
         seen = ctl.seen(
-            self.status, self.view, self.targets.pending, self.lock_shown, self.wall_offset_s, shown
+            self.status,
+            self.view,
+            self.targets.pending,
+            self.locked and self.lock_shown,  # in effect and saved: kept.py rule 2
+            self.wall_offset_s,
+            shown,
         )
         status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
         if st.worth_emitting(status, self.status):

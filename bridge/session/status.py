@@ -151,8 +151,8 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
     raw = bearing if spec.can_report_position else None
     pending = seen.pending
     source, operator = view.last_source, view.last_operator
-    if pending is not None:  # rule 4: the target shown waiting, with who sent it
-        source, operator = sent_by(pending, operator)
+    if seen.pending_wire is not None and pending is not None:  # rule 4: the target shown
+        source, operator = sent_by(pending, operator)  # waiting, with who sent it
     status = _new(RotatorStatus)  # rule 6 (its fields in their order)
     status.__dict__.update(
         rotator_id=seen.previous.rotator_id,

@@ -93,3 +93,37 @@ def test_two_calls_asked_in_a_row_both_turn_the_later_last(bench: Bench) -> None
     assert not [e.message for e in bench.events], "neither call refused"
     bearing = bench.rot.status.bearing_deg
     assert bearing is not None and 200.0 < bearing < 260.0  # Rio's, the later call
+
+
+def test_a_call_asked_while_another_holds_the_lease_is_refused_when_asked(bench: Bench) -> None:
+    """dxcluster/client.py rule 4: DL2BBB asks for a call while DL1AAA holds the rotator, and
+    DL1AAA releases it before the look-up ends. Judged only when put, the call turned the rotor
+    (an attack pass): it was asked when it would have been refused, and is refused then."""
+    holder = Origin(Source.MQTT, "DL1AAA")
+    bench.rot.operators.claim("DL1AAA", 30, holder)
+    dx, go = held_cluster()
+    dx.aim(bench.rot, "JA1ABC", False, 'target {"call":"JA1ABC"}', WHO)
+    bench.rot.operators.release(holder)
+    go.set()
+    assert dx._aims.empty()  # nothing queued for the look-up
+    bench.v._take()
+    bench.v.run_for(40.0)
+    assert bench.sets() == []
+    assert [e.message for e in bench.events][-1].startswith("DL1AAA holds the rotator")
+
+
+def test_the_asker_s_own_claim_during_the_look_up_does_not_refuse_their_call(
+    bench: Bench,
+) -> None:
+    """The lease claimed by the call's own asker while it is looked up is no word against it
+    (a review: when a change of the lease took a place in the order, it dropped the call)."""
+    dx, go = held_cluster()
+    dx.aim(bench.rot, "JA1ABC", False, 'target {"call":"JA1ABC"}', WHO)
+    join = turned(dx, 1)
+    bench.rot.operators.claim("G4ABC", 30, WHO)
+    go.set()
+    join()
+    bench.v._take()
+    bench.v.run_for(40.0)
+    assert bench.sets() != []
+    assert not [e.message for e in bench.events]

@@ -146,6 +146,9 @@ class Asked:
         self.tickets += 1
         return self.tickets
 
+    def check_motion(self, origin: Origin) -> None:
+        """Nothing refuses motion here (the real judge's: test_call_overtaken.py)."""
+
     def submit(
         self,
         command: Toward,

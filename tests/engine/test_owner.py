@@ -315,11 +315,12 @@ def test_a_lane_lock_on_starts_no_thread_and_writes_no_byte_under_the_word_lock(
 
 @pytest.mark.parametrize("word", [True, False])
 def test_the_lock_is_said_only_once_the_state_file_holds_it(tmp_path: Path, word: bool) -> None:
-    """kept.py rule 2: a lock word is in effect at once (the judge) and said (the status:
-    ``R/lock/state``, ``R/status``) once the writer has saved it: every status that shows a
+    """kept.py rule 2: a lock ON is in effect at once (the judge) and said (the status:
+    ``R/lock/state``, ``R/status``) once the writer has saved it: every status that shows the
     lock finds it in the state file, so a crash right after the bridge said lock ON restarts
     it locked (an attack pass: the bridge killed the moment R/lock/state said ON came back
-    unlocked in 4 of 6 rounds, and a target turned the rotor)."""
+    unlocked in 4 of 6 rounds, and a target turned the rotor). A lock OFF is said at once
+    (never locked shown while a target turns the rotor); its save follows."""
     if not word:  # (a lock OFF: from a lock the file kept)
         kept = StateStore(tmp_path / "state.json")
         kept.set_locked("tower", True)
@@ -337,7 +338,7 @@ def test_the_lock_is_said_only_once_the_state_file_holds_it(tmp_path: Path, word
     console_lock(st.rot, word)
     st.rot._worker.serve(0.0, {st.rot._mailbox.fileno()})
     assert st.rot.locked is word  # in effect: the judge refuses motion (or takes it) now
-    assert st.statuses[-1].locked is not word  # not said: the file does not hold it yet
+    assert st.statuses[-1].locked is False  # ON not said: the file does not hold it yet
     assert StateStore(st.path).locked("tower") is not word
     go.set()
     shown = st.settle()

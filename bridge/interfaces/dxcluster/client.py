@@ -35,6 +35,10 @@ Rules:
    its place in the order of the rotator's commands (``ticket``): a target sent after the
    call was asked is the later word, and the call is refused (an attack pass: a target of 200
    sent while the call's look-up ran was overtaken by it, the rotor turned back to the call).
+   The lock, the wind and the lease are judged when it is asked too (``check_motion``), and
+   again when it is put: a call asked while another held the lease, or the lock was ON, is
+   refused then, not turned to once the lease was released (an attack pass: it was); a lock
+   OFF takes a place in the order as well (mailbox.py rule 10a).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
    session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more,
@@ -320,7 +324,13 @@ class DxCluster:
     def aim(
         self, rotator: RotatorPort, call: str, long_path: bool, described: str, origin: Origin
     ) -> None:
-        """From paho's thread: queued for the aim thread; a full queue is refused at once."""
+        """From paho's thread: queued for the aim thread; a full queue is refused at once, and
+        so is a call the lock, the wind or the lease refuses now (rule 4)."""
+        try:
+            rotator.check_motion(origin)
+        except Refused as exc:
+            rotator.report_refusal(exc.message, described, origin=origin)
+            return
         try:
             aim = _Aim(rotator, call, long_path, described, origin, rotator.halts, rotator.ticket())
             self._aims.put_nowait(aim)

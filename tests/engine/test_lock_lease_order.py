@@ -1,6 +1,7 @@
-"""Review 92: failing tests for what the review found (tests/engine/test_halt_epoch.py's
-bench: the real judge and session on a virtual MD-01; the bench takes the mailbox only when
-told, so the order is forced, not timed)."""
+"""A lock OFF and the control lease beside motion commands (mailbox.py rule 10a, kept.py rule
+2), as a review found them: tests/engine/test_halt_epoch.py's bench, the real judge and
+session on a virtual MD-01; the bench takes the mailbox only when told, so the order is
+forced, not timed."""
 
 from __future__ import annotations
 
@@ -29,9 +30,10 @@ def bench(tmp_path: Path) -> Iterator[Bench]:
 def test_a_lease_claim_or_lock_off_does_not_hide_a_target_on_its_way_from_a_nudge(
     bench: Bench, between: str
 ) -> None:
-    """mailbox.py rule 10a: a claim (free -> DL1AAA) or a lock OFF takes a place and sets
-    ``_halt_placed`` to it, so ``motion_unseen`` says nothing is on its way although target
-    100 waits untaken; the nudge is made from the status (30) and replaces the 100."""
+    """mailbox.py rule 10a: a lock OFF takes a place in the order, but is no motion command:
+    target 100 still waits untaken, and a nudge then is refused as one made from a status that
+    does not show it (when the OFF, or a claim, counted as a halt, the nudge was made from the
+    bearing, 30, replaced the 100, and the rotor went to 40)."""
     rot = bench.rot
     rot.submit(Target(100.0, None, Source.MQTT, origin=ME), "target '100'")
     if between == "claim":
@@ -46,9 +48,9 @@ def test_a_lease_claim_or_lock_off_does_not_hide_a_target_on_its_way_from_a_nudg
 
 
 def test_a_nudge_is_not_refused_by_the_lease_end_its_own_judge_finds(bench: Bench) -> None:
-    """The nudge takes its ticket, then the judge's lease check (operators.refusal) ends a
-    lease the wall clock has ended (its timer not fired yet): put_control(None) takes a place
-    after the ticket, and the nudge is dropped as 'a newer command came after it'."""
+    """A lease the wall clock has ended (its timer not fired yet) is ended by the nudge's own
+    judge: no word against the nudge (when a change of the lease took a place in the order,
+    the nudge was dropped as 'a newer command came after it')."""
     rot = bench.rot
     rot.submit(Claim("DL1AAA", 1, source=Source.MQTT, origin=ME), "claim")
     real = rot.operators._wall
@@ -60,8 +62,8 @@ def test_a_nudge_is_not_refused_by_the_lease_end_its_own_judge_finds(bench: Benc
 
 
 def test_a_call_asked_before_its_asker_claims_the_lease_still_turns(bench: Bench) -> None:
-    """rule 10a with the lease: DL1AAA asks for a call while the lease is free, then claims it
-    before the look-up ends: their own claim is no word against their own call."""
+    """DL1AAA asks for a call while the lease is free, then claims it before the look-up
+    ends: their own claim is no word against their own call."""
     rot = bench.rot
     since, ticket = rot.halts, rot.ticket()
     rot.submit(Claim("DL1AAA", 30, source=Source.MQTT, origin=ME), "claim")
@@ -73,9 +75,9 @@ def test_a_call_asked_before_its_asker_claims_the_lease_still_turns(bench: Bench
 
 
 def test_the_status_never_says_locked_while_the_rotor_turns(bench: Bench) -> None:
-    """kept.py rule 2: a lock OFF is in effect at once, said once saved. While its save
-    waits (a slow card, the writer on an earlier save), a target is taken and the rotor turns
-    with R/status and R/lock/state saying the lock is ON."""
+    """kept.py rule 2: a lock OFF is in effect at once and said at once. Said only once
+    saved, while its save waited (a slow card, the writer on an earlier save) a target was
+    taken and the rotor turned with R/status and R/lock/state saying the lock was ON."""
     rot, store = bench.rot, bench.rot._store
     rot.submit(Lock(True, source=Source.MQTT, origin=ME), "lock ON")
     store.flush()
