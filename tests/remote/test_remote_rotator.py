@@ -169,13 +169,9 @@ def test_a_move_asked_before_a_stop_that_went_out_is_not_sent() -> None:
     ]
 
 
-def test_a_stop_counted_while_a_move_is_on_its_way_to_the_link_is_never_overtaken() -> None:
-    """interfaces/web/port.py rule 2b up to the hand-off (interfaces/mqtt/remote.py rule 9):
-    the logger's STOP counted after the console's move was judged, before the link took it,
-    still refuses the move, which would reach the broker after the STOP."""
-    link = Link()
-    remote = rotator(link, FakeClock(100.0))
-    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
+def stop_on_the_way(link: Link, stop: Callable[[], None]) -> None:
+    """``stop`` runs when the link is handed a target: a STOP sent on another thread between
+    the judge and the link."""
     hand_on = link.send
 
     def send(
@@ -185,11 +181,21 @@ def test_a_stop_counted_while_a_move_is_on_its_way_to_the_link_is_never_overtake
         expiry_s: int,
         check: Callable[[], None] | None = None,
     ) -> None:
-        if topic.endswith("/target"):  # the logger's STOP, between the judge and the link
-            remote.submit(Stop(Source.ROTCTLD), "rotctld S")
+        if topic.endswith("/target"):
+            stop()
         hand_on(topic, payload, operator, expiry_s, check)
 
     link.send = send  # type: ignore[method-assign]
+
+
+def test_a_stop_counted_while_a_move_is_on_its_way_to_the_link_is_never_overtaken() -> None:
+    """interfaces/web/port.py rule 2b up to the hand-off (interfaces/mqtt/remote.py rule 9):
+    the logger's STOP counted after the console's move was judged, before the link took it,
+    still refuses the move, which would reach the broker after the STOP."""
+    link = Link()
+    remote = rotator(link, FakeClock(100.0))
+    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
+    stop_on_the_way(link, lambda: remote.submit(Stop(Source.ROTCTLD), "rotctld S"))  # logger's
     with pytest.raises(Refused) as caught:
         console.submit(Target(200.0, None, Source.WEB), "console target 200", since=console.halts)
     assert caught.value.code is RefusalCode.STALE
@@ -279,20 +285,7 @@ def test_a_loggers_move_judged_before_the_consoles_stop_is_never_sent_after_it()
     link = Link()
     remote = rotator(link, FakeClock(100.0))
     console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
-    hand_on = link.send
-
-    def send(
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if topic.endswith("/target"):  # the console's STOP, between the judge and the link
-            console.submit(Stop(Source.WEB))
-        hand_on(topic, payload, operator, expiry_s, check)
-
-    link.send = send  # type: ignore[method-assign]
+    stop_on_the_way(link, lambda: console.submit(Stop(Source.WEB)))  # the console's
     with pytest.raises(Refused) as caught:
         remote.submit(Target(200.0, None, Source.ROTCTLD), "rotctld P 200")
     assert caught.value.code is RefusalCode.STALE
