@@ -163,3 +163,41 @@ def test_a_rotator_removed_after_a_crash_is_not_left_online(
         assert retained_snapshot(broker.port, "rotor/a/availability") == {
             "rotor/a/availability": b"online"
         }
+
+
+def test_the_first_look_leaves_a_nested_bridge_and_a_rotator_named_option_alone(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """review 93, interfaces/mqtt/stale.py: a second bridge on ``rotor/site2`` (one rotator:
+    its topics on ``rotor/site2/...``) had its retained bearing, state, status and lock
+    deleted by the bridge on ``rotor`` at its first look (``rotor/+/availability`` read
+    ``rotor/site2/availability`` as a removed rotator's); and a configured rotator named
+    ``option`` lost its retained ``R/lock/state`` at every restart (``rotor/option/+/state``
+    read it as an option state of a rotator once on the base topic), for good: the client's
+    cache lost it too, and an unchanged lock is not published again."""
+    (tmp_path / "other").mkdir()
+    (tmp_path / "ours").mkdir()
+    with Rig(tmp_path / "other", broker, probe) as other:
+        other.base = "rotor/site2"
+        other.add("far")
+        other.start()
+        other.ready("far", timeout_s=40)
+        probe.wait_value("rotor/site2/lock/state", "OFF", timeout_s=20)
+        theirs = retained_snapshot(broker.port, "rotor/site2/#")
+        with Rig(tmp_path / "ours", broker, probe) as rig:
+            rig.add("a")
+            rig.add("option")
+            rig.start()
+            rig.ready("option", timeout_s=40)
+            probe.wait_value("rotor/option/lock/state", "OFF", timeout_s=20)
+            rig.stop()  # a restart: the second first look reads it all retained
+            t = time.monotonic()
+            rig.start()
+            rig.ready("option", timeout_s=40, after=t)
+            probe.wait_value("rotor/bridge/state", "online", timeout_s=20, after=t)
+            time.sleep(1.0)  # (the look's deletions are sent as it ends)
+            ours = retained_snapshot(broker.port, "rotor/option/lock/state")
+            assert ours == {"rotor/option/lock/state": b"OFF"}, "a configured rotator's lock"
+            left = retained_snapshot(broker.port, "rotor/site2/#")
+            for topic in ("rotor/site2/bearing", "rotor/site2/state", "rotor/site2/lock/state"):
+                assert left.get(topic) == theirs[topic], f"another bridge's {topic} deleted"

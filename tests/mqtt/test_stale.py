@@ -53,3 +53,33 @@ def test_with_one_rotator_on_the_base_topic_its_own_are_not_stale() -> None:
     assert stale.stale("rotor/availability") == []
     assert stale.stale("rotor/option/jam/state") == []
     assert "rotor/tower/bearing" in stale.stale("rotor/tower/availability")  # of several, once
+
+
+def test_a_rotator_named_option_keeps_its_lock_and_feature_states() -> None:
+    """review 93: a rotator whose id is ``option`` (several rotators, so its root is
+    ``rotor/option``) publishes ``rotor/option/lock/state`` and ``rotor/option/follow/state``;
+    ``rotor/option/+/state`` reads them as option states of a rotator once on the base topic,
+    and the first look deleted the configured rotator's lock state (and took it out of the
+    client's cache: it was not put back)."""
+    topics = Topics("rotor", {"option": "rotor/option", "b": "rotor/b"})
+    stale = StaleTopics(topics, {"rotor/option", "rotor/b"})
+    assert stale.stale("rotor/option/lock/state") == []
+    assert stale.stale("rotor/option/follow/state") == []
+    assert stale.stale("rotor/option/jam/state") == ["rotor/option/jam/state"]  # (still stale)
+
+
+def test_another_bridge_on_a_base_topic_nested_under_ours_is_left_alone() -> None:
+    """review 93: a second bridge on ``rotor/site2`` with one rotator keeps its state on
+    ``rotor/site2/...`` and says so on ``rotor/site2/bridge/state``; this bridge (base
+    ``rotor``) read ``rotor/site2/availability`` as a removed rotator's and deleted the other
+    bridge's bearing, state, status, lock and options."""
+    stale = several()
+    assert "rotor/+/bridge/state" in stale.subscriptions
+    # its retained bridge state comes first (its filter is subscribed before the others)
+    assert stale.subscriptions.index("rotor/+/bridge/state") < stale.subscriptions.index(
+        "rotor/+/availability"
+    )
+    assert stale.stale("rotor/site2/bridge/state") == []
+    assert stale.stale("rotor/site2/availability") == []
+    assert stale.stale("rotor/site2/option/jam/state") == []
+    assert "rotor/site3/bearing" in stale.stale("rotor/site3/availability")  # (still stale)
