@@ -20,6 +20,13 @@ Rules:
    runs (the broker hands over its retained messages then), sent only when the base topic was
    this bridge's, and said in the log in a few lines (rule 15). An ``availability`` published
    while the bridge runs is another client's: nothing is deleted for it.
+3. Review 93: a root that holds a bridge's own retained state (``B/<x>/bridge/state``) is
+   another bridge's base topic, nested under ours (a second station on ``rotor/site2``, one
+   rotator on its base topic): its topics were deleted as a removed rotator's. That filter is
+   subscribed first, so its retained messages arrive before any availability of that root. A
+   topic of a configured rotator is never stale, whatever filter reads it (a rotator named
+   ``option`` has its ``R/lock/state`` on ``B/option/lock/state``, which reads as an option
+   state of a rotator once on the base topic), nor is anything under ``B/bridge``.
 """
 
 from __future__ import annotations
@@ -36,23 +43,29 @@ class StaleTopics:
         self._roots = roots  # every configured rotator's and group's root
         self._owned = set(topics.owned())  # (never one of these, whatever its root)
         self._states = [s.suffix for f in registered() for s in f.states]
+        self._bridges: set[str] = {f"{topics.base}/bridge"}  # rule 3: another bridge's base
 
     @property
     def subscriptions(self) -> list[str]:
         b = self._base
-        return [f"{b}/+/availability", f"{b}/availability", f"{b}/+/option/+/state"] + [
-            f"{b}/option/+/state"
+        return [f"{b}/+/bridge/state", f"{b}/+/availability", f"{b}/availability"] + [
+            f"{b}/+/option/+/state",
+            f"{b}/option/+/state",
         ]
 
     def stale(self, topic: str) -> list[str]:
         """Rule 1: what ``topic`` (read on ``subscriptions``) leaves to delete: every retained
         topic a rotator or a group publishes under a root no longer configured, for its
         availability; the option state itself, for one of its options' states."""
+        head, _, under = topic.rpartition("/bridge/")
+        if under == "state" and head.rpartition("/")[0] == self._base:
+            self._bridges.add(head)  # rule 3
+            return []
         root, leaf = self._root(topic)
-        if root is None or root in self._roots:
+        if root is None or root in self._roots or root in self._bridges:
             return []
         if leaf != "availability":
-            return [topic]
+            return [topic] if topic not in self._owned else []  # rule 3
         r, g = RotatorTopics(root), GroupTopics(root)
         found = [r.bearing, r.elevation, r.state, r.status, r.version, r.presets, r.info]
         found += [r.lock_state, *(r.feature(suffix) for suffix in self._states)]
