@@ -343,3 +343,53 @@ def test_the_lock_is_said_only_once_the_state_file_holds_it(tmp_path: Path, word
     go.set()
     shown = st.settle()
     assert shown.locked is word and StateStore(st.path).locked("tower") is word
+
+
+@pytest.mark.parametrize("first", ["kept ON", "ON being saved"])
+def test_a_lock_on_after_an_off_is_not_said_while_the_off_is_saved(
+    tmp_path: Path, first: str
+) -> None:
+    """review 93, kept.py rule 2: ON, OFF, ON. The second ON was said at once: the session
+    still had the first ON as the lock saved last (kept from the file, or said by its save
+    that ended after the OFF), while the writer was writing the OFF. The file held OFF while
+    ``R/lock/state`` said ON: a crash then restarted the bridge unlocked although it said
+    lock ON (what rule 2 is there to prevent)."""
+    if first == "kept ON":
+        kept = StateStore(tmp_path / "state.json")
+        kept.set_locked("tower", True)
+        kept.flush()
+    st = Station(tmp_path)
+    serve = lambda: st.rot._worker.serve(0.0, {st.rot._mailbox.fileno()})  # noqa: E731
+    real = st.store.set_locked
+    wrote: dict[bool, threading.Event] = {True: threading.Event(), False: threading.Event()}
+    go: dict[bool, threading.Event] = {True: threading.Event(), False: threading.Event()}
+
+    def slow_save(rid: str, locked: bool) -> bool:  # the write done, its word not yet said
+        saved = real(rid, locked)
+        wrote[locked].set()
+        go[locked].wait(slow(10))
+        return saved
+
+    st.store.set_locked = slow_save  # type: ignore[method-assign]
+    if first == "ON being saved":
+        console_lock(st.rot, True)
+        serve()
+        assert wrote[True].wait(slow(10))
+    else:
+        go[True].set()
+    console_lock(st.rot, False)
+    serve()
+    assert st.statuses[-1].locked is False
+    go[True].set()  # (the first ON's save, if any, says itself now)
+    assert wrote[False].wait(slow(10))  # the OFF is in the file; its save not said yet
+    assert StateStore(st.path).locked("tower") is False
+    serve()
+    console_lock(st.rot, True)
+    serve()
+    assert st.rot.locked is True
+    shown = st.statuses[-1].locked
+    on_file = StateStore(st.path).locked("tower")
+    assert not (shown and not on_file), "lock ON said while the state file holds OFF"
+    go[False].set()
+    final = st.settle()
+    assert final.locked is True and StateStore(st.path).locked("tower") is True
