@@ -18,7 +18,10 @@ Rules:
    target turned the rotor), and a lock OFF at once, so the status never says locked while
    a target turns the rotor (a review); a host that dies before that OFF is saved restarts
    locked, the safe side. A save that fails is said as rule 3 has it, and the lock it could
-   not save is shown (it is in effect).
+   not save is shown (it is in effect). A save says ON only if no lock word came after it
+   read the lock (under the guard the words take), and a lock OFF takes back, in the
+   mailbox, an ON said before it (review 93: ON, OFF, ON said the second ON at once, from the
+   first one's save, while the writer wrote the OFF: the file held OFF under a status ON).
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
@@ -235,7 +238,9 @@ class Kept:
         try:
             saved = self._store.set_locked(self._id, locked)
         finally:  # rule 2: now the status says it (and, failed, the error below)
-            self._saved_lock(locked)
+            with self._unsaved_guard:  # (a word since: its own save says it; review 93: an
+                # ON said by a save that read it before an OFF, with the OFF being written)
+                self._saved_lock(locked and not self._lock_unsaved)
         if not saved:
             self._report(
                 ErrorKind.STATE,

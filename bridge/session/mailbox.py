@@ -309,6 +309,8 @@ class Mailbox:
                 self._halt_placed = placed
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
+            if not locked:  # runtime/kept.py rule 2: an ON after it is said once it is saved,
+                self._batch.lock_saved = False  # not by a save said before this OFF (review 93)
             if locked:
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
@@ -323,12 +325,13 @@ class Mailbox:
         if wake:  # rule 5
             self._wake_once()
 
-    def put_lock_saved(self, locked: bool) -> None:
+    def put_lock_saved(self, locked: bool, *, wake: bool = True) -> None:
         """The state writer has saved the lock as ``locked`` (or failed to, and said so): the
         status shows it from now on (runtime/kept.py rule 2)."""
         with self._lock:
             self._batch.lock_saved = locked
-        self._wake_once()
+        if wake:
+            self._wake_once()
 
     def put_release(self, marker: int, *, clear: bool = False) -> None:
         """Rule 6: the holds up to ``marker`` end; ``clear``: what waits before it is dropped."""
