@@ -83,3 +83,22 @@ def test_another_bridge_on_a_base_topic_nested_under_ours_is_left_alone() -> Non
     assert stale.stale("rotor/site2/availability") == []
     assert stale.stale("rotor/site2/option/jam/state") == []
     assert "rotor/site3/bearing" in stale.stale("rotor/site3/availability")  # (still stale)
+
+
+def test_a_rotator_replaced_by_a_group_of_its_id_leaves_no_ghost() -> None:
+    """review 93, rule 4: rotator ``stack`` removed and a group ``stack`` added: the root's
+    availability is the group's, and the rotator's bearing, lock, options and ``R/info`` (by
+    which a remote finds rotators) stayed for ever."""
+    stale = StaleTopics(
+        Topics("rotor", {"a": "rotor/a", "b": "rotor/b"}, {"stack": "rotor/stack"}),
+        {"rotor/a", "rotor/b", "rotor/stack"},
+        {"rotor/stack"},
+    )
+    assert "rotor/stack/info" in stale.subscriptions
+    doomed = stale.stale("rotor/stack/info")
+    for leaf in ("info", "bearing", "state", "lock/state", "presets", "control"):
+        assert f"rotor/stack/{leaf}" in doomed
+    assert "rotor/stack/status" not in doomed and "rotor/stack/availability" not in doomed
+    assert stale.stale("rotor/stack/option/jam/state") == ["rotor/stack/option/jam/state"]
+    assert stale.stale("rotor/stack/availability") == []  # (the group's own)
+    assert stale.stale("rotor/a/option/jam/state") == []
