@@ -545,8 +545,8 @@ class App:
         """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained is
         deleted at the first look, when the base topic was this bridge's."""
         roots = {settings.rotator_topic(r) for r in settings.rotators}
-        roots |= {settings.group_topic(g) for g in settings.groups}
-        stale = StaleTopics(self.topics, roots)
+        groups = {settings.group_topic(g) for g in settings.groups}
+        stale = StaleTopics(self.topics, roots | groups, groups)
         clear = self.client.clear_retained
 
         def on_message(topic: str, payload: bytes, retain: bool) -> bool:

@@ -27,6 +27,11 @@ Rules:
    topic of a configured rotator is never stale, whatever filter reads it (a rotator named
    ``option`` has its ``R/lock/state`` on ``B/option/lock/state``, which reads as an option
    state of a rotator once on the base topic), nor is anything under ``B/bridge``.
+4. Review 93: a rotator removed and a group given its id shares its root, whose availability
+   is then the group's: the rotator's bearing, state, lock, options and ``R/info`` (by which a
+   remote finds rotators) stayed for ever, a ghost rotator. A group's ``G/info`` (a group
+   publishes none) and its root's option states tell a rotator was there: its topics that a
+   group does not publish are deleted.
 """
 
 from __future__ import annotations
@@ -38,9 +43,10 @@ from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics, Topics
 class StaleTopics:
     """Rule 1: the filters to read, and what a message read on them leaves to delete."""
 
-    def __init__(self, topics: Topics, roots: set[str]) -> None:
+    def __init__(self, topics: Topics, roots: set[str], groups: set[str] | None = None) -> None:
         self._base = topics.base
         self._roots = roots  # every configured rotator's and group's root
+        self._groups = set(groups or ())  # rule 4: the groups' roots (never a rotator's)
         self._owned = set(topics.owned())  # (never one of these, whatever its root)
         self._states = [s.suffix for f in registered() for s in f.states]
         self._bridges: set[str] = {f"{topics.base}/bridge"}  # rule 3: another bridge's base
@@ -51,6 +57,7 @@ class StaleTopics:
         return [f"{b}/+/bridge/state", f"{b}/+/availability", f"{b}/availability"] + [
             f"{b}/+/option/+/state",
             f"{b}/option/+/state",
+            *(f"{g}/info" for g in sorted(self._groups)),  # rule 4
         ]
 
     def stale(self, topic: str) -> list[str]:
@@ -61,16 +68,25 @@ class StaleTopics:
         if under == "state" and head.rpartition("/")[0] == self._base:
             self._bridges.add(head)  # rule 3
             return []
+        if topic.endswith("/info") and topic[: -len("/info")] in self._groups:  # rule 4
+            return self._rotator_only(topic[: -len("/info")])
         root, leaf = self._root(topic)
+        if root in self._groups and leaf == "option":  # rule 4
+            return [topic]
         if root is None or root in self._roots or root in self._bridges:
             return []
         if leaf != "availability":
             return [topic] if topic not in self._owned else []  # rule 3
-        r, g = RotatorTopics(root), GroupTopics(root)
-        found = [r.bearing, r.elevation, r.state, r.status, r.version, r.presets, r.info]
-        found += [r.lock_state, *(r.feature(suffix) for suffix in self._states)]
-        found += [g.status, g.availability]  # (a group's availability is a rotator's too)
+        g = GroupTopics(root)
+        found = [*self._rotator_only(root), g.status, g.availability]  # (a rotator's too)
         return [t for t in dict.fromkeys(found) if t not in self._owned]
+
+    def _rotator_only(self, root: str) -> list[str]:
+        """The retained topics a rotator keeps at ``root`` that a group does not."""
+        r = RotatorTopics(root)
+        found = [r.bearing, r.elevation, r.state, r.version, r.presets, r.info]
+        found += [r.lock_state, *(r.feature(suffix) for suffix in self._states)]
+        return [t for t in found if t not in self._owned]
 
     def _root(self, topic: str) -> tuple[str | None, str]:
         """The root ``topic`` is under (the base topic or ``B/<id>``) and what it is there:
