@@ -556,6 +556,7 @@ class App:
             return bool(doomed)
 
         self.mqtt.add_feature(stale.subscriptions, on_message)
+        self.client.spare = stale.spared  # (rule 3: judged when the look ends)
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant

@@ -20,7 +20,7 @@ Rules:
    locked, the safe side. A save that fails is said as rule 3 has it, and the lock it could
    not save is shown (it is in effect). A save says ON only if no lock word came after it
    read the lock (under the guard the words take), and a lock OFF takes back, in the
-   mailbox, an ON said before it (review 93: ON, OFF, ON said the second ON at once, from the
+   mailbox, an ON said before it (a review: ON, OFF, ON said the second ON at once, from the
    first one's save, while the writer wrote the OFF: the file held OFF under a status ON).
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
@@ -238,7 +238,7 @@ class Kept:
         try:
             saved = self._store.set_locked(self._id, locked)
         finally:  # rule 2: now the status says it (and, failed, the error below)
-            with self._unsaved_guard:  # (a word since: its own save says it; review 93: an
+            with self._unsaved_guard:  # (a word since: its own save says it; a review: an
                 # ON said by a save that read it before an OFF, with the OFF being written)
                 self._saved_lock(locked and not self._lock_unsaved)
         if not saved:

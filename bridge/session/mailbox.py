@@ -252,7 +252,7 @@ class Mailbox:
         its way."""
         with self._lock:
             # (a lock OFF or a change of the lease takes a place but is not motion, and
-            # must not hide a motion command put before it: review 92)
+            # must not hide a motion command put before it: a review)
             placed = self._motion_placed
             return placed > applied and placed > self._halt_placed
 
@@ -310,7 +310,7 @@ class Mailbox:
             if not locked and self._batch.feature_commands:  # rule 12
                 self._batch.mark("unlock")
             if not locked:  # runtime/kept.py rule 2: an ON after it is said once it is saved,
-                self._batch.lock_saved = False  # not by a save said before this OFF (review 93)
+                self._batch.lock_saved = False  # not by a save said before this OFF (a review)
             if locked:
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7

@@ -102,3 +102,15 @@ def test_a_rotator_replaced_by_a_group_of_its_id_leaves_no_ghost() -> None:
     assert stale.stale("rotor/stack/option/jam/state") == ["rotor/stack/option/jam/state"]
     assert stale.stale("rotor/stack/availability") == []  # (the group's own)
     assert stale.stale("rotor/a/option/jam/state") == []
+
+
+def test_another_bridge_s_base_topic_is_spared_whichever_came_first() -> None:
+    """Rule 3: the nested bridge's availability may come before its ``bridge/state`` (a broker
+    need not send retained messages in the order of the filters): what it asked to delete is
+    spared at the look's end, once both have come."""
+    stale = several()
+    doomed = stale.stale("rotor/site2/availability")  # first: looks like a removed rotator's
+    assert "rotor/site2/bearing" in doomed
+    assert stale.stale("rotor/site2/bridge/state") == []
+    assert all(stale.spared(t) for t in doomed)
+    assert not stale.spared("rotor/c/bearing")

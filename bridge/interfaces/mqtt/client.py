@@ -62,6 +62,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Unpack
 
 import paho.mqtt.client as paho
@@ -138,6 +139,8 @@ class MqttClient(Connection):
         self._owned.will = (will_topic, b"offline")
         self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
+        # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
+        self.spare: Callable[[str], bool] | None = None
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
         self._fence_topic = fence_topic  # rule 16
@@ -410,6 +413,9 @@ class MqttClient(Connection):
         for topic, event in self._delivery.take_backlog():
             send(topic, event, 1, retain=False)
         if look is not None:
+            spare = self.spare  # interfaces/mqtt/stale.py rule 3: judged once all came
+            if spare is not None:
+                look = replace(look, clears=[t for t in look.clears if not spare(t)])
             if look.clear:
                 for topic in look.clears:
                     send(topic, b"", 1, retain=True)

@@ -20,16 +20,17 @@ Rules:
    runs (the broker hands over its retained messages then), sent only when the base topic was
    this bridge's, and said in the log in a few lines (rule 15). An ``availability`` published
    while the bridge runs is another client's: nothing is deleted for it.
-3. Review 93: a root that holds a bridge's own retained state (``B/<x>/bridge/state``) is
-   another bridge's base topic, nested under ours (a second station on ``rotor/site2``, one
-   rotator on its base topic): its topics were deleted as a removed rotator's. That filter is
-   subscribed first, so its retained messages arrive before any availability of that root. A
-   topic of a configured rotator is never stale, whatever filter reads it (a rotator named
-   ``option`` has its ``R/lock/state`` on ``B/option/lock/state``, which reads as an option
-   state of a rotator once on the base topic), nor is anything under ``B/bridge``.
-4. Review 93: a rotator removed and a group given its id shares its root, whose availability
+3. A root that holds a bridge's own retained state (``B/<x>/bridge/state``) is another
+   bridge's base topic, nested under ours (a second station on ``rotor/site2``, one rotator on
+   its base topic): its topics were deleted as a removed rotator's (a review). Such a root is
+   spared at the look's end (``spared``, client.py rule 14), when every retained message the
+   broker held has come, whatever order the broker sent them in. A topic of a configured
+   rotator is never stale, whatever filter reads it (a rotator named ``option`` has its
+   ``R/lock/state`` on ``B/option/lock/state``, which reads as an option state of a rotator
+   once on the base topic), nor is anything under ``B/bridge``.
+4. A rotator removed and a group given its id shares its root, whose availability
    is then the group's: the rotator's bearing, state, lock, options and ``R/info`` (by which a
-   remote finds rotators) stayed for ever, a ghost rotator. A group's ``G/info`` (a group
+   remote finds rotators) stayed for ever, a ghost rotator (a review). A group's ``G/info`` (a group
    publishes none) and its root's option states tell a rotator was there: its topics that a
    group does not publish are deleted.
 """
@@ -80,6 +81,10 @@ class StaleTopics:
         g = GroupTopics(root)
         found = [*self._rotator_only(root), g.status, g.availability]  # (a rotator's too)
         return [t for t in dict.fromkeys(found) if t not in self._owned]
+
+    def spared(self, topic: str) -> bool:
+        """Rule 3, at the look's end: ``topic`` is under another bridge's base topic."""
+        return any(topic.startswith(bridge + "/") for bridge in self._bridges)
 
     def _rotator_only(self, root: str) -> list[str]:
         """The retained topics a rotator keeps at ``root`` that a group does not."""
