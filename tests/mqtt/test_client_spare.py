@@ -1,0 +1,61 @@
+"""client.py rule 14 with stale.py rule 3, end to end with a real mosquitto: a nested bridge's
+availability read *before* its ``bridge/state`` (filters subscribed in that order: MQTT promises
+no order) is spared by ``spare`` at the look's end; a removed rotator's topics are still deleted.
+Without the client's ``spare`` (or the app's wiring) nothing else protects it: the fault test
+in tests/faults relies on mosquitto's filter order (``bridge/state`` subscribed first)."""
+
+from __future__ import annotations
+
+import time
+
+from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.stale import StaleTopics
+from bridge.interfaces.mqtt.topics import Topics
+from bridge.settings import MqttSettings
+from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
+
+
+def test_a_nested_bridge_read_before_its_bridge_state_is_spared(broker: Mosquitto) -> None:
+    seed = Probe(broker.port, "t/#")
+    for topic, value in [
+        ("t/site2/availability", "online"),
+        ("t/site2/bearing", "10"),
+        ("t/gone/availability", "online"),
+        ("t/gone/bearing", "20"),
+        ("t/site2/bridge/state", "online"),
+    ]:
+        seed.publish(topic, value, retain=True)
+    seed.wait_value("t/site2/bridge/state", "online", 5)
+    seed.close()
+    stale = StaleTopics(Topics("t", {"a": "t/a", "b": "t/b"}), {"t/a", "t/b"})
+    settings = MqttSettings(port=broker.port, base_topic="t", client_id="spare-under-test")
+    me = Instance.me("spare-under-test")
+    client: MqttClient
+
+    def on_message(topic: str, payload: bytes, retain: bool, *_: object) -> None:
+        if retain and payload:
+            for t in stale.stale(topic):
+                client.clear_retained(t)
+
+    # the availability filter first: the nested bridge's state comes after its availability
+    subs = ["t/+/availability", *(s for s in stale.subscriptions if s != "t/+/availability")]
+    client = MqttClient(
+        settings,
+        will_topic="t/bridge/state",
+        subscriptions=subs,
+        on_message=on_message,
+        claim=Claim(me, "t", "t/bridge/info", "t/bridge/hello"),
+    )
+    client.spare = stale.spared
+    client.start()
+    try:
+        wait_until(lambda: client.connected.is_set() and not client.gated, 10, "the look done")
+        time.sleep(0.5)
+        left = retained_snapshot(broker.port, "t/#")
+        assert "t/gone/bearing" not in left  # (a removed rotator's: deleted)
+        assert left.get("t/site2/bearing") == b"10", "a nested bridge's bearing deleted"
+        assert left.get("t/site2/availability") == b"online"
+    finally:
+        client.stop()
