@@ -84,7 +84,9 @@ class StaleTopics:
 
     def spared(self, topic: str) -> bool:
         """Rule 3, at the look's end: ``topic`` is under another bridge's base topic."""
-        return any(topic.startswith(bridge + "/") for bridge in self._bridges)
+        bridges = tuple(self._bridges)  # (one step: paho's thread may add one meanwhile, when
+        # the look timed out and this runs on the timer's)
+        return any(topic.startswith(bridge + "/") for bridge in bridges)
 
     def _rotator_only(self, root: str) -> list[str]:
         """The retained topics a rotator keeps at ``root`` that a group does not."""
