@@ -125,9 +125,11 @@ class Kept:
         *,
         report: Callable[[ErrorKind, str, str | None], None],
         saved_lock: Callable[[bool], None] = lambda locked: None,
+        wake: Callable[[], None] = lambda: None,
     ) -> None:
         self._store = store
         self._saved_lock = saved_lock  # rule 2: the status shows the lock once it is saved
+        self._wake = wake  # ... and the lines thread is woken for it (not under the guard)
         self._id = rotator_id
         self._spec = spec
         self._report = report
@@ -240,7 +242,8 @@ class Kept:
         finally:  # rule 2: now the status says it (and, failed, the error below)
             with self._unsaved_guard:  # (a word since: its own save says it; a review: an
                 # ON said by a save that read it before an OFF, with the OFF being written)
-                self._saved_lock(locked and not self._lock_unsaved)
+                self._saved_lock(locked and not self._lock_unsaved)  # (no wake byte here:
+            self._wake()  # the owner's step takes this guard, and writes nothing: rule 5)
         if not saved:
             self._report(
                 ErrorKind.STATE,

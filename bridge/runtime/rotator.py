@@ -42,6 +42,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from typing import NoReturn
 
 import serial
@@ -138,7 +139,12 @@ class Rotator:
         self._wall = wall
         self._mailbox = Mailbox()
         self._kept = Kept(
-            store, self.id, self.spec, report=self.report, saved_lock=self._mailbox.put_lock_saved
+            store,
+            self.id,
+            self.spec,
+            report=self.report,
+            saved_lock=partial(self._mailbox.put_lock_saved, wake=False),
+            wake=self._mailbox.wake_once,
         )
         self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's

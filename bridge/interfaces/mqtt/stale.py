@@ -30,9 +30,9 @@ Rules:
    once on the base topic), nor is anything under ``B/bridge``.
 4. A rotator removed and a group given its id shares its root, whose availability
    is then the group's: the rotator's bearing, state, lock, options and ``R/info`` (by which a
-   remote finds rotators) stayed for ever, a ghost rotator (a review). A group's ``G/info`` (a group
-   publishes none) and its root's option states tell a rotator was there: its topics that a
-   group does not publish are deleted.
+   remote finds rotators) stayed for ever, a ghost rotator (a review). A group's ``G/info`` (a
+   group publishes none) tells a rotator was there: its topics that a group does not publish
+   are deleted; an option state under a group's root is deleted by itself.
 """
 
 from __future__ import annotations
