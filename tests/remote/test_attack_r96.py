@@ -1,0 +1,79 @@
+"""Attack pass 96 on the remote: two endpoints onto one station rotator (one GS-232A port for
+PstRotatorAz beside a GS-232B or rotctld one: ``gs232_replies`` is per endpoint, so serving both
+takes two ``[[endpoints]]`` naming the same rotator)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Source, Stop, Target
+from bridge.remote.run import Remote
+from bridge.remote.settings import RemoteSettings
+from tests.support.mosquitto import free_port
+from tests.support.rig import Rig
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def remote(station: Rig) -> Iterator[Remote]:
+    r = Remote(
+        RemoteSettings(
+            operator="DL1ABC",
+            mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
+            endpoints=[
+                {"rotator": "tower", "rotctld_port": free_port()},
+                {"rotator": "tower", "gs232_port": free_port(), "gs232_replies": "A"},
+            ],
+            web={"enabled": True, "port": free_port()},
+        )
+    )
+    r.start()
+    yield r
+    r.stop()
+
+
+def test_a_stop_on_one_endpoint_refuses_a_move_another_endpoint_judged_before_it(
+    remote: Remote,
+) -> None:
+    """docs/architecture.md rule 11 across the remote's front ends: the GS-232A port's STOP,
+    sent while the rotctld port's P was between its judge and the link, must not be overtaken
+    by the P (remote/rotator.py ``submit``). With one RemoteRotator per endpoint, the STOP was
+    counted on the other's and the P went out after it: the rotor turned after the STOP."""
+    rotctld_rot, gs232_rot = remote.rotators
+    assert remote.link is not None
+    link = remote.link
+    hand_on: Callable[..., None] = link.send
+
+    def send(topic: str, payload: str, *args: object, **kw: object) -> None:
+        if topic.endswith("/target"):  # the GS-232A client's S, on its own thread, now
+            gs232_rot.submit(Stop(Source.GS232), "gs232 S")
+        hand_on(topic, payload, *args, **kw)
+
+    link.send = send  # type: ignore[method-assign]
+    with pytest.raises(Refused) as caught:
+        rotctld_rot.submit(Target(200.0, None, Source.ROTCTLD), "rotctld P 200")
+    assert caught.value.code is RefusalCode.STALE
+
+
+def test_the_console_shows_one_rotator_once_and_its_stop_counts_for_every_endpoint(
+    remote: Remote,
+) -> None:
+    """The console's STOP must refuse a rotctld move judged before it on either endpoint."""
+    assert remote.console is not None
+    shown = list(remote.console._rotators.values())
+    assert [r.id for r in shown] == ["tower"]
+    console_rot = shown[0]
+    for rot in remote.rotators:
+        before = rot.halts
+        console_rot.submit(Stop(Source.WEB))
+        assert rot.halts == before + 1, "the console's STOP counted on every endpoint's rotator"
