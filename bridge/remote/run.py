@@ -103,6 +103,9 @@ class Remote:
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
     _locks: set[str] = field(default_factory=set)
+    # one RemoteRotator per station rotator, however many endpoints name it: its halt count is
+    # what refuses a move judged before another front end's STOP (remote/rotator.py ``submit``)
+    _made: dict[RotatorTopics, RemoteRotator] = field(default_factory=dict)
 
     @property
     def station(self) -> StationTopics:
@@ -294,7 +297,7 @@ class Remote:
     # -- the console (rule 6; remote/console.py) --------------------------------------------
     def _start_console(self) -> str:
         s = self.settings
-        rotators = list(self.rotators)
+        rotators = list(dict.fromkeys(self.rotators))  # (two endpoints onto one: shown once)
         known = {rot.topics for rot in rotators}
         for rid in self.station.described(self.view.topics()):
             topics = self.station.rotator(rid)
@@ -341,10 +344,13 @@ class Remote:
         a dropped connection must not lose (interfaces/mqtt/remote.py rule 6)."""
         s = self.settings
         assert self.link is not None
+        made = self._made.get(topics)
+        if made is not None:  # another endpoint onto the same rotator: the same halt count
+            return made
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
         self._errors[topics.error] = rid
-        return RemoteRotator(
+        made = self._made[topics] = RemoteRotator(
             rid,
             topics,
             self.station,
@@ -355,6 +361,7 @@ class Remote:
             s.command_expiry_s,
             s.moving_max_age_s,
         )
+        return made
 
     def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
         """A station rotator no endpoint names, for the console alone (None: not usable)."""
