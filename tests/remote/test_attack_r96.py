@@ -77,3 +77,23 @@ def test_the_console_shows_one_rotator_once_and_its_stop_counts_for_every_endpoi
         before = rot.halts
         console_rot.submit(Stop(Source.WEB))
         assert rot.halts == before + 1, "the console's STOP counted on every endpoint's rotator"
+
+
+def test_a_status_with_a_number_past_a_floats_range_reads_as_unavailable_not_a_crash() -> None:
+    """readings.py rule 1: anyone allowed on R/status can put anything there, and it reads as
+    ValueError, never more. A pass track holding an integer past a float's range raised
+    OverflowError out of ``status``: the console's ticker logged a traceback every second and
+    showed no rotator's status any more, and a rotctld ``p`` got no answer."""
+    from tests.remote.test_remote_rotator import rotator
+    from tests.support.clock import FakeClock
+    from tests.support.remote import Link
+
+    rot = rotator(Link(), FakeClock())
+    huge = b"1" + b"0" * 400
+    rot._view.put(
+        rot.topics.status,
+        b'{"state":"idle","bearing":120,"connected":true,"available":true,'
+        b'"tracking":{"body":"ISS","pass_track":[[' + huge + b",10]]}}",
+    )
+    status = rot.status
+    assert not status.available
