@@ -160,7 +160,15 @@ def _tracking(doc: object) -> TrackingInfo | None:
 
 def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
-    the console draws (the place targeted, the body tracked)."""
+    the console draws (the place targeted, the body tracked). Rule 1: ValueError, never more
+    (an integer past a float's range in a pass track raised OverflowError)."""
+    try:
+        return _status(rotator_id, payload)
+    except OverflowError as exc:
+        raise ValueError(f"a number in the status is out of range: {exc}") from None
+
+
+def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
     doc = json.loads(payload)
     if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
         raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
