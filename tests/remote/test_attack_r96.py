@@ -97,3 +97,21 @@ def test_a_status_with_a_number_past_a_floats_range_reads_as_unavailable_not_a_c
     )
     status = rot.status
     assert not status.available
+
+
+def test_presets_and_an_error_event_with_a_number_past_a_floats_range_are_left_out() -> None:
+    """R/presets and R/error are anyone's the ACL lets publish there: a preset whose bearing is
+    an integer past a float's range raised OverflowError from the console's rotator's
+    ``pointing`` (every use: the page's state, each command judged), and such an error event's
+    time raised on paho's thread, losing it; the other presets stay, the event is not one."""
+    from bridge.remote.console import Drawn, RemoteConsoleRotator, parse_event
+    from tests.remote.test_remote_rotator import rotator
+    from tests.support.clock import FakeClock
+    from tests.support.remote import Link
+
+    huge = b"1" + b"0" * 400
+    remote = rotator(Link(), FakeClock())
+    remote._view.put(remote.topics.presets, b'{"far":' + huge + b',"north":0}')
+    console = RemoteConsoleRotator(remote, Drawn(), remote._view)
+    assert console.pointing.presets == {"north": (0.0, None)}
+    assert parse_event(b'{"kind":"refused","message":"x","time":' + huge + b"}") is None
