@@ -105,7 +105,7 @@ def parse_presets(payload: bytes | None) -> dict[str, tuple[float, float | None]
                 out[str(name)] = (float(value), None)
             elif isinstance(value, list) and len(value) == 2:
                 out[str(name)] = (float(value[0]), float(value[1]))
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):  # (an integer past a float's range)
             continue
     return out
 
@@ -120,7 +120,7 @@ def parse_event(payload: bytes) -> ErrorEvent | None:
             doc.get("command") if isinstance(doc.get("command"), str) else None,
             float(doc["time"]),
         )
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, OverflowError):
         return None
 
 
