@@ -115,3 +115,39 @@ def test_presets_and_an_error_event_with_a_number_past_a_floats_range_are_left_o
     console = RemoteConsoleRotator(remote, Drawn(), remote._view)
     assert console.pointing.presets == {"north": (0.0, None)}
     assert parse_event(b'{"kind":"refused","message":"x","time":' + huge + b"}") is None
+
+
+def test_a_page_s_move_numbered_before_its_stop_kept_while_the_broker_was_away_never_goes() -> (
+    None
+):
+    """commands.py rule 5 on the remote: a command a page numbered before a STOP the same page
+    sent after it is stale however late it comes. The STOP pressed while the station's broker
+    was away is kept and sent first on reconnect (interfaces/mqtt/remote.py rule 6), but its
+    answer was a refusal (OFFLINE, not delivered yet), so the console did not note it: the
+    page's older target, held up on the way and arriving after the reconnect, went out after
+    that STOP and turned the rotor."""
+    from bridge.interfaces.web.view import RotatorFacts
+    from bridge.remote.console import Drawn, RemoteConsoleRotator
+    from tests.remote.test_remote_rotator import rotator
+    from tests.support.clock import FakeClock
+    from tests.support.console import ConsoleClient
+    from tests.support.remote import Link
+    from tests.web.test_far_commands import new_console
+
+    link = Link()
+    remote_rot = rotator(link, FakeClock())
+    console = new_console()
+    console.attach(RemoteConsoleRotator(remote_rot, Drawn(), remote_rot._view), RotatorFacts())
+    console.listen()
+    try:
+        client = ConsoleClient(console.port)
+        client.session()
+        link.up = False  # the station's broker away: the STOP is kept (the stand-in refuses it)
+        stop = client.command("tower", command="stop", page="p1", seq=6)
+        assert stop.status == 409 and stop.doc["code"] == "offline"
+        link.up = True  # back: the kept STOP goes first
+        late = client.command("tower", command="target", az=200, page="p1", seq=5)
+        assert late.status == 409, late
+        assert [t for t, _ in link.sent if t.endswith("/target")] == []
+    finally:
+        console.stop()
