@@ -300,6 +300,12 @@ class Order:
 
     def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
         self._last[rotator_id] = (now, cmd.page, cmd.seq)
+        self.pressed(rotator_id, cmd)
+
+    def pressed(self, rotator_id: str, cmd: WebCommand) -> None:
+        """A halt the page numbered, carried out or not: one refused as not delivered yet (the
+        remote's, its broker away) is kept and sent first on reconnect, so what the page
+        numbered before it is stale all the same (not ``carried``: its other copy still goes)."""
         if cmd.page is not None and cmd.seq is not None:
             key = (cmd.page, rotator_id)
             self._halt_seq[key] = max(cmd.seq, self._halt_seq.pop(key, cmd.seq))

@@ -421,6 +421,7 @@ class WebConsole:
         try:
             carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
+            self._order.pressed(rot.id, cmd)
             return
         self._order.halted(rot.id, cmd, time.monotonic())
 
@@ -452,6 +453,8 @@ class WebConsole:
         """A halt carried out off the loop (rule 5), back on the loop."""
         if not done.cancelled() and done.exception() is None:
             self._order.halted(rotator_id, cmd, time.monotonic())
+        else:  # (kept far away and sent first on reconnect: commands.py ``pressed``)
+            self._order.pressed(rotator_id, cmd)
 
     async def _command(self, request: web.Request) -> web.StreamResponse:
         token = request.headers.get(TOKEN_HEADER)
@@ -509,6 +512,8 @@ class WebConsole:
             else:
                 carry_out(rot, cmd, self._client(request), since)
         except Refused as exc:
+            if halt:  # (kept far away and sent first on reconnect: commands.py ``pressed``)
+                self._order.pressed(rot.id, cmd)
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:
             self._order.halted(rot.id, cmd, time.monotonic())
