@@ -117,9 +117,7 @@ def test_presets_and_an_error_event_with_a_number_past_a_floats_range_are_left_o
     assert parse_event(b'{"kind":"refused","message":"x","time":' + huge + b"}") is None
 
 
-def test_a_page_s_move_numbered_before_its_stop_kept_while_the_broker_was_away_never_goes() -> (
-    None
-):
+def test_a_page_s_move_numbered_before_its_stop_kept_while_the_broker_was_away_never_goes() -> None:
     """commands.py rule 5 on the remote: a command a page numbered before a STOP the same page
     sent after it is stale however late it comes. The STOP pressed while the station's broker
     was away is kept and sent first on reconnect (interfaces/mqtt/remote.py rule 6), but its
