@@ -1,6 +1,7 @@
-"""Attack pass 96 on the remote: two endpoints onto one station rotator (one GS-232A port for
+"""An attack pass on the remote: two endpoints onto one station rotator (one GS-232A port for
 PstRotatorAz beside a GS-232B or rotctld one: ``gs232_replies`` is per endpoint, so serving both
-takes two ``[[endpoints]]`` naming the same rotator)."""
+takes two ``[[endpoints]]`` naming the same rotator), a console STOP kept while the station's
+broker is away, and numbers past a float's range in what the station publishes."""
 
 from __future__ import annotations
 
