@@ -220,10 +220,12 @@ class Follower:
     def step(self, scene: Scene) -> Proposal:
         """Run by the session with its other rules, while the controller answers."""
         info, heard = self.info, self._heard
-        if info is None or heard is None:
+        if info is None:
             return NOTHING
         if self._turned_by_hand(scene):  # rule 1: the session ends it (its targets dropped)
             return Proposal(ended=HAND, busy=True)
+        if heard is None:  # rule 6: following waits for WSJT-X, the rotor is not idle
+            return Proposal(busy=True)
         grid = grid_of(heard.grid)
         # rule 9: a transmission on another band goes out on another antenna: this one's turn
         # under way is not stopped for it (nor is it a turn this one waits for)
