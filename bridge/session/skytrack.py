@@ -58,8 +58,10 @@ class SkyTrack:
         elif isinstance(q, PositionsQuestion) and isinstance(answer.value, list):
             index = self._window_index(q)
             if index is not None:
-                if len(self._windows) >= WINDOWS_KEPT:
-                    self._windows.pop(min(self._windows))  # the oldest
+                if len(self._windows) >= WINDOWS_KEPT:  # the farthest from this one (the
+                    # oldest, unless the clock stepped back: then the min was the window the
+                    # step needs beside this one, and each evicted the other without end)
+                    self._windows.pop(max(self._windows, key=lambda i: abs(i - index)))
                 self._windows[index] = answer.value
             else:
                 self._flip_track = {q: answer.value}
