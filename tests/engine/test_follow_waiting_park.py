@@ -21,4 +21,3 @@ def test_following_switched_on_before_wsjtx_speaks_holds_auto_park_off() -> None
         v.heard("JA1ABC", "PM95")  # WSJT-X comes up: following turns, as before
         v.run_for(60.0)
         assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
-
