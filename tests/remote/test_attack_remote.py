@@ -130,14 +130,6 @@ def remote_settings(broker_port: int, port: int, **extra: Any) -> RemoteSettings
 
 
 @pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
-@pytest.fixture
 def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
     port = free_port()
     r = Remote(remote_settings(station.broker.port, port))

@@ -18,14 +18,6 @@ from tests.support.rig import Rig
 
 
 @pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
-@pytest.fixture
 def remote(station: Rig) -> Iterator[Remote]:
     r = Remote(
         RemoteSettings(

@@ -72,14 +72,6 @@ def settings(broker: Mosquitto, port: int, **extra: Any) -> RemoteSettings:
 
 
 @pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
-@pytest.fixture
 def remote(station: Rig) -> Iterator[tuple[Remote, int, list[str]]]:
     port = free_port()
     r = Remote(settings(station.broker, port))  # type: ignore[arg-type]

@@ -33,14 +33,6 @@ from tests.support.waiting import slow
 pytestmark = pytest.mark.hamlib
 
 
-@pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
 class Endpoints:
     """The remote with every kind of endpoint onto the station's ``tower``."""
 

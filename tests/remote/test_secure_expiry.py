@@ -92,14 +92,6 @@ def relay_conf(gate: Gate) -> str:
 
 
 @pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
-@pytest.fixture
 def relay(tmp_path: Path, station: Rig) -> Iterator[tuple[Mosquitto, Gate]]:
     gate = Gate(station.broker.port)
     broker = Mosquitto(tmp_path / "relay", extra_conf=relay_conf(gate)).start()

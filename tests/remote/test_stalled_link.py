@@ -79,14 +79,6 @@ class StallingLink:
 
 
 @pytest.fixture
-def station(rig: Rig) -> Rig:
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    return rig
-
-
-@pytest.fixture
 def link(station: Rig) -> Iterator[StallingLink]:
     stalling = StallingLink(station.broker.port)
     yield stalling

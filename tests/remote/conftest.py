@@ -1,0 +1,16 @@
+"""The station the remote's tests drive: one emulated Rotor-EZ, ``tower``, bridged and
+answering (a module with a station of its own defines its own ``station``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.support.rig import Rig
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
