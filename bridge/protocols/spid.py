@@ -13,9 +13,12 @@ az = 100*H1 + 10*H2 + H3 + H4/10 - 360, el likewise; PH/PV = pulses per degree (
 Rules:
 1. Set: pulses = floor(PH * (360 + angle)) as four ASCII digits (Hamlib truncates the same way,
    so a target snaps down to the controller's grid); Rot1Prog: three digits of 360 + az, then
-   ASCII '0' and six zero bytes. The resolution is learned from status replies; without one,
-   ``encode_target`` refuses (a guessed resolution would point the antenna elsewhere). The
-   engine sends targets only after a reading, so this never bites in practice.
+   ASCII '0' and six zero bytes. The floor is of the angle meant, not of its binary rounding:
+   a step missed by a millionth of a pulse is that step (true 251.2 less an offset of -4.9 is
+   256.09999999999997, which is 256.1 at 10 pulses per degree, not 256.0). The resolution is
+   learned from status replies; without one, ``encode_target`` refuses (a guessed resolution
+   would point the antenna elsewhere). The engine sends targets only after a reading, so this
+   never bites in practice.
 2. Stop and status are answered with a position frame; a set is answered only by an MD-01.
    ``awaiting_reply`` says whether a frame is still owed.
 3. A reply frame starts with 0x57, ends with 0x20, carries raw digits (0..9) and a known
@@ -65,11 +68,17 @@ K_STOP, K_STATUS, K_SET = 0x0F, 0x1F, 0x2F
 RESOLUTIONS = (1, 2, 4, 10)
 AZ_RANGE = (-180.0, 540.0)  # rule 5: what the controller turns
 _MAX_DEBUG_LINE = 200
+_GRID_SLACK = 1e-6  # rule 1: of a pulse, far below any step, far above a double's rounding
 _DEBUG_LINES = re.compile(rb"(\d+:[^\n]*\n)+")
 
 
 def _frame(k: int, body: bytes = bytes(10)) -> bytes:
     return bytes([START]) + body + bytes([k, END])
+
+
+def _pulses(per: int, deg: float) -> int:
+    """Rule 1: the pulses a set counts for ``deg`` at ``per`` pulses per degree."""
+    return math.floor(per * (360 + deg) + _GRID_SLACK)
 
 
 class SpidCodec(Plain):
@@ -110,22 +119,22 @@ class SpidCodec(Plain):
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
         if self.variant == "rot1prog":
-            return math.floor(360 + az_deg) - 360.0, None
+            return _pulses(1, az_deg) - 360.0, None
         ph, pv = self._need_resolution()
-        az = math.floor(ph * (360 + az_deg)) / ph - 360
-        el = None if el_deg is None else math.floor(pv * (360 + el_deg)) / pv - 360
+        az = _pulses(ph, az_deg) / ph - 360
+        el = None if el_deg is None else _pulses(pv, el_deg) / pv - 360
         return az, el
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         if self.variant == "rot1prog":
-            h = math.floor(360 + az_deg)
+            h = _pulses(1, az_deg)
             if not 0 <= h <= 999:
                 raise ValueError(f"azimuth {az_deg} outside the frame's range")
             body = b"%03d" % h + b"0" + bytes(6)
             return [_frame(K_SET, body)]
         ph, pv = self._need_resolution()
-        h = math.floor(ph * (360 + az_deg))
-        v = math.floor(pv * (360 + (el_deg or 0.0)))
+        h = _pulses(ph, az_deg)
+        v = _pulses(pv, el_deg or 0.0)
         if not (0 <= h <= 9999 and 0 <= v <= 9999):
             raise ValueError(f"target {az_deg}/{el_deg} outside the frame's range")
         body = b"%04d" % h + bytes([ph]) + b"%04d" % v + bytes([pv])

@@ -6,6 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from bridge.core.model import Target
+from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import JunkReason, JunkReply, NotReady, PositionReply, Reply
 from bridge.protocols.spid import SpidCodec
@@ -56,6 +58,21 @@ def test_targets_snap_down_to_the_resolution_grid() -> None:
     assert known(2).wire_target(-10.3, 12.25) == (-10.5, 12.0)
     assert known(4).wire_target(123.3, 0) == (123.25, 0.0)
     assert known(1).wire_target(200.9, 45.5) == (200.0, 45.0)
+
+
+def test_a_bearing_on_the_grid_after_the_offset_goes_out_at_its_own_step() -> None:
+    """Rule 1: an MD-01 at 10 pulses per degree whose rotor's north lies 4.9 degrees west of
+    true is asked for true 251.2: the controller's 256.1 (in binary 256.09999999999997, the
+    subtraction's rounding) goes out as 2561 tenths and reads 256.1, not a tenth below."""
+    aim = Pointing.of(REGISTRY["md01"], offset_deg=-4.9)
+    c = known(10, "md01")
+    for true in (251.2, 251.7, 300.3):
+        raw = aim.judge(Target(az_deg=true, el_deg=10.0), None).az_deg
+        assert raw is not None
+        frame = c.encode_target(raw, 10.0)[0]
+        want = round((360 + true + 4.9) * 10)
+        assert frame[1:5] == b"%04d" % want, (true, raw, frame)
+        assert c.wire_target(raw, 10.0)[0] == pytest.approx(true + 4.9)
 
 
 @pytest.mark.parametrize("ph", [1, 2, 4, 10])
