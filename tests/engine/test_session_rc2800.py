@@ -152,3 +152,25 @@ def test_an_az_el_satellite_pass_is_followed_within_3_degrees() -> None:
         assert len(moves(v)) > 50 and not v.frames(Outcome.REFUSED)
         assert v.truth().too_soon == 0 and min(axis_gaps(v)) >= 0.2 - 1e-9
     assert BERLIN  # the station the pass was computed for
+
+
+def test_a_bearing_the_box_answers_with_an_error_is_sent_once_more_then_dropped(
+    rig: Rig,
+) -> None:
+    """``A ERR=n`` is the box's refusal (rc2800.py rule 1): a target garbled on the line into one
+    out of range goes out once more at once (controller.py rule 11) and turns the rotor; one
+    the box refuses again is reported refused, the rotor at rest where it was, rather than
+    waited on until the stall check gives up on it."""
+    v = ready(rig, "rc2800-az", start_az_deg=10)
+    v.garble_writes(b"A123.4\r", b"A999\r")
+    t = v.now
+    v.target(123.4)
+    v.run_until(settled_at(123.4), 60, "at 123.4 after the box refused the garbled bearing")
+    assert v.sent(since=t).count(b"A123.4\r") == 2 and len(v.frames(Outcome.REFUSED)) == 1
+    v.garble_writes(b"A200.0\r", b"A999\r", count=2)
+    t = v.now
+    v.target(200)
+    v.run_until(lambda h: h.errors("refused", since=t) != [], 2, "the refusal reported")
+    v.run_until_state(IDLE, 1)
+    assert v.status.bearing_deg == 123.4 and not v.truth().is_moving
+    assert v.errors("stalled") == [] and len(v.frames(Outcome.REFUSED, since=t)) == 2
