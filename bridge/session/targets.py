@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 from bridge.core.model import Source, Target, combine
 from bridge.pointing import Pointing
-from bridge.protocols.base import NotReady
+from bridge.protocols.base import HoldsOnGrid, NotReady
 from bridge.session import motion as mo
 from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
@@ -128,22 +128,34 @@ class Targets:
         return min(self._pending_t + BURST_QUIET_S, self._stream_t + self._max_wait_s)
 
 
-def resolve(target: Target, m: mo.Motion, aim: Pointing) -> tuple[float | None, float | None]:
+def resolve(
+    target: Target, m: mo.Motion, aim: Pointing, codec: object = None
+) -> tuple[float | None, float | None]:
     """The raw values to send now: a target whose side is free takes the side nearest to where
     the rotor is now (pointing.py rule 2); an axis left out keeps its current target, else its
-    position."""
+    position, as ``codec`` must be asked for it to stay on the step it read (a Rot2Prog at 0.25
+    degrees reads 44.25 as 44.2, and 44.2 asked for is 44.0: protocols/base.py HoldsOnGrid)."""
     az = target.az_deg
     if target.true_az_deg is not None and m.position_deg is not None:
         az = aim.raw_for(target.true_az_deg, m.position_deg)
     has_elevation = aim.has_elevation
     if az is None:
-        az = m.target_deg if m.target_deg is not None else m.position_deg
+        az = m.target_deg if m.target_deg is not None else _kept(codec, m.position_deg, "azimuth")
     el = target.el_deg
     if has_elevation and el is None:
-        el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
+        el = m.el_target_deg
+        if el is None:
+            el = _kept(codec, m.el_position_deg, "elevation")
         if el is None:
             return None, None
     return az, el
+
+
+def _kept(codec: object, deg: float | None, axis: str) -> float | None:
+    """What to ask for to keep ``axis`` where it read ``deg`` (None: not read yet)."""
+    if deg is None or not isinstance(codec, HoldsOnGrid):
+        return deg
+    return codec.held(deg, axis)
 
 
 class Go(enum.Enum):
@@ -170,7 +182,7 @@ def decide(
     assert pending is not None
     if link.stop_due or held:
         return Sending(Go.WAIT)  # rule 4
-    az, el = resolve(pending, m, rig.aim)
+    az, el = resolve(pending, m, rig.aim, link.codec)
     if az is None:
         return Sending(Go.WAIT)  # no reading yet to keep the other axis where it is
     try:

@@ -360,3 +360,19 @@ def test_a_stop_lost_after_a_reconnect_mid_turn_is_sent_again(
     v.run_for(60)
     assert not v.truth().is_moving and v.truth().az_deg < 100
     assert v.sent(since=t).count(stop) >= lost + 1
+
+
+def test_an_azimuth_or_an_elevation_alone_keeps_the_other_axis_on_its_step(rig: Rig) -> None:
+    """At 4 pulses a degree the box reads 44.25 as 44.2, and 44.2 asked for is 44.0 (rule 1's
+    floor): an axis sent alone asks for the other's own step, as the box read it, so the other
+    axis does not creep down a step at every such target."""
+    v = rig(
+        "rot2prog", emulator={"resolution_ppd": 4, "start_az_deg": 120.75, "start_el_deg": 44.25}
+    )
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.target(130)
+    v.run_until(settled_at(130, 44.25), 60, "at 130, the elevation where it was")
+    v.target(None, 40.75)
+    v.run_until(settled_at(130, 40.75), 60, "at 40.75 of elevation, the azimuth where it was")
+    assert sets(v, t) == [(4 * 490, 4 * 404 + 1), (4 * 490, 4 * 400 + 3)]
