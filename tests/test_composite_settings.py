@@ -51,8 +51,9 @@ def test_an_rt21_box_may_turn_the_elevation() -> None:
     assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 180.0)
 
 
-def test_a_prosistel_d_box_on_an_elevation_rotor_may_turn_the_elevation() -> None:
-    r = load(azimuth=AZ, elevation={**EL, "model": "prosistel-el"})
+@pytest.mark.parametrize("model", ["prosistel-el", "prosistel-el-a"])  # unit E, or unit A
+def test_a_prosistel_d_box_on_an_elevation_rotor_may_turn_the_elevation(model: str) -> None:
+    r = load(azimuth=AZ, elevation={**EL, "model": model})
     assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 90.0)  # the box's own 0..90
 
 

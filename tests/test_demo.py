@@ -42,7 +42,7 @@ ALL_MODELS += [
     "gs232b-az-450",
 ]
 ALL_MODELS += [f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate")]
-ALL_MODELS += ["rt21", "prosistel", "prosistel-el", "prosistel-combi"]
+ALL_MODELS += ["rt21", "prosistel", "prosistel-el", "prosistel-el-a", "prosistel-combi"]
 ALL_MODELS += ["rc2800", "rc2800-az"]
 
 

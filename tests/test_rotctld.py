@@ -565,6 +565,7 @@ HAMLIB_FACTS = {
     "satel": (2101, b"AzEl", b"SatEL rotator"),
     "prosistel": (1701, b"Az", b"None"),
     "prosistel-el": (1702, b"Az", b"None"),  # its elevation is the bearing it answers
+    "prosistel-el-a": (1704, b"Az", b"None"),  # the same, a box answering as unit A
     "prosistel-combi": (1703, b"AzEl", b"None"),
 }
 RANGES = {
@@ -573,6 +574,7 @@ RANGES = {
     "md01": b"min_az=-180.000000\nmax_az=540.000000\nmin_el=-20.000000\nmax_el=210.000000\n",
     "satel": b"min_az=0.000000\nmax_az=360.000000\nmin_el=0.000000\nmax_el=90.000000\n",
     "prosistel-el": b"min_az=0.000000\nmax_az=90.000000\nmin_el=0.000000\nmax_el=0.000000\n",
+    "prosistel-el-a": b"min_az=0.000000\nmax_az=90.000000\nmin_el=0.000000\nmax_el=0.000000\n",
     "prosistel-combi": b"min_az=0.000000\nmax_az=360.000000\nmin_el=0.000000\nmax_el=90.000000\n",
 }
 CAPS_ROT_TYPE = {b"Other": b"Other", b"Az": b"Azimuth", b"AzEl": b"Az-El"}

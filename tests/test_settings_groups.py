@@ -70,24 +70,25 @@ def test_every_mistake_names_its_key(group: dict[str, Any], said: str) -> None:
     assert said.replace("groups.0.", "groups[0].") in str(err.value)
 
 
-def test_a_box_made_for_an_elevation_rotor_alone_is_no_member() -> None:
+@pytest.mark.parametrize("model", ["prosistel-el", "prosistel-el-a"])  # unit E, or unit A
+def test_a_box_made_for_an_elevation_rotor_alone_is_no_member(model: str) -> None:
     """An attack pass: a group of a yagi's Rotor-EZ and its Prosistel elevation box took
     ``G/target 80`` and tilted the elevation rotor to 80 (that box's bearing is its
     elevation). Such a box is refused as a member; an az/el rotator of two boxes is not."""
     rotators = [
         *ROTATORS,
-        {"id": "tilt", "model": "prosistel-el", "port": "/dev/ttyUSB2"},
+        {"id": "tilt", "model": model, "port": "/dev/ttyUSB2"},
         {
             "id": "sat",
             "azimuth": {"model": "rotorez", "port": "/dev/ttyUSB3"},
-            "elevation": {"model": "prosistel-el", "port": "/dev/ttyUSB4"},
+            "elevation": {"model": model, "port": "/dev/ttyUSB4"},
         },
     ]
     tower = {"id": "tower", "rotators": ["upper", "tilt"]}
     with pytest.raises(ConfigError) as err:
         settings_from({"rotators": rotators, "groups": [tower]}, {})
     assert (
-        "groups[0].rotators: 'tilt' is a prosistel-el box, whose bearing is an elevation: a "
+        f"groups[0].rotators: 'tilt' is a {model} box, whose bearing is an elevation: a "
         "group turns its members in azimuth; leave it out"
     ) in str(err.value)
     both = {"id": "both", "rotators": ["upper", "sat"]}

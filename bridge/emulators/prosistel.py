@@ -1,9 +1,10 @@
 """Prosistel D and Combi-Track rotator controller emulator, sans-IO.
 
 What the device is: Prosistel's controllers. A D box drives one rotor in whole degrees, as unit
-A (an azimuth rotor, 0..360) or unit E (an elevation rotor, 0..90); a Combi-Track drives an
-azimuth rotor as unit A and an elevation rotor as unit B, in tenths of a degree. Each rotor has
-a brake the box sets when the motor stops. A new bearing while turning is taken at once.
+A (an azimuth rotor, 0..360) or unit E (an elevation rotor, 0..90), or, set up as an azimuth box
+on an elevation rotor, as unit A in 0..90; a Combi-Track drives an azimuth rotor as unit A and
+an elevation rotor as unit B, in tenths of a degree. Each rotor has a brake the box sets when
+the motor stops. A new bearing while turning is taken at once.
 
 Frame: STX (0x02), the unit's letter, the command's letter, its value, CR. Every command is
 answered by STX, the unit, the command and what it says, comma-separated, and CR:
@@ -19,10 +20,11 @@ frame are ignored; an STX starts a frame afresh.
 
 Source documents (written from these, never from bridge/protocols): the project's protocol
 sheet (Prosistel's commands as gathered there) and Hamlib 4.5.4's prosistel backend (models
-1701, 1702, 1703: the commands it sends, the unit letters, the stop values, the answers quoted
-in its comments: ``A,?,290,R``, ``A,?,1000,R``, ``B,?,0900,R``, ``B,?,E,00003``) and its traffic
-seen with rotctl. Hamlib reads only the unit and the command letter of an answer to ``G`` and
-``S``: what follows them, and the error code 00001, are this emulator's choice.
+1701, 1702, 1703 and 1704 "D elevation CBOX az": the commands it sends, the unit letters, the
+stop values, the answers quoted in its comments: ``A,?,290,R``, ``A,?,1000,R``, ``B,?,0900,R``,
+``B,?,E,00003``) and its traffic seen with rotctl. Hamlib reads only the unit and the command
+letter of an answer to ``G`` and ``S``: what follows them, and the error code 00001, are this
+emulator's choice.
 
 Rules:
 1. Sans-IO: bytes in through receive(data, now), out through due_output(now), paced at line
@@ -80,6 +82,7 @@ class ProsistelModel:
 MODELS: dict[str, ProsistelModel] = {
     "prosistel": ProsistelModel("prosistel", {"A": "az"}, 1, 997, 999),
     "prosistel-el": ProsistelModel("prosistel-el", {"E": "el"}, 1, 997, 999),
+    "prosistel-el-a": ProsistelModel("prosistel-el-a", {"A": "el"}, 1, 997, 999),
     "prosistel-combi": ProsistelModel("prosistel-combi", {"A": "az", "B": "el"}, 10, 9777, 9999),
 }
 

@@ -44,6 +44,7 @@ MODULES: dict[str, str] = {
     "rt21": "rt21",
     "prosistel": "prosistel",
     "prosistel-el": "prosistel",
+    "prosistel-el-a": "prosistel",
     "prosistel-combi": "prosistel",
     "rc2800": "rc2800",
     "rc2800-az": "rc2800",

@@ -73,11 +73,12 @@ class Axis(enum.StrEnum):
 
 
 # rule 2: one-axis boxes made to turn an elevation rotor as well as an azimuth one
-ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el"})  # (prosistel-el: a D box, unit E)
+# (prosistel-el: a D box, unit E; prosistel-el-a: one answering as unit A)
+ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el", "prosistel-el-a"})
 ONE_AXIS_EL_MAX_DEG = 180.0
 # ... and of those, the models made for the elevation alone: as a rotator of its own, what such a
 # box calls its bearing is an elevation (a group's azimuth would tilt it)
-BEARING_IS_ELEVATION = frozenset({"prosistel-el"})
+BEARING_IS_ELEVATION = frozenset({"prosistel-el", "prosistel-el-a"})
 
 
 def can_drive(spec: ModelSpec, axis: Axis) -> str | None:

@@ -1,17 +1,19 @@
 """Prosistel D (one rotor: azimuth or elevation) and Combi-Track (azimuth and elevation): the codec.
 
 Device: Prosistel's rotator controllers. The D series (and the PRO series, which speaks the same)
-drives one rotor in whole degrees, as unit A (azimuth, 0..360) or unit E (elevation, 0..90); the
-Combi-Track drives an azimuth and an elevation rotor as two units, A and B, in tenths of a
-degree. 9600 8N1, no flow control. Every frame starts with
+drives one rotor in whole degrees, as unit A (azimuth, 0..360) or unit E (elevation, 0..90); a D
+box set up as an azimuth box but fitted to an elevation rotor answers as unit A, in 0..90
+(Hamlib's "D elevation CBOX az"). The Combi-Track drives an azimuth and an elevation rotor as
+two units, A and B, in tenths of a degree. 9600 8N1, no flow control. Every frame starts with
 STX (0x02) and ends with CR; a command is the unit's letter, the command's letter and its value
 (``STX A G 123 CR``), and every command is answered by the unit, the command and what it says,
 comma-separated (``STX A,?,123,B CR``). Some boxes send their position over and over unasked
 (continuous position monitoring, CPM) until ``STX A S CR`` turns it off.
 Sources: the project's protocol sheet (Prosistel's documents as gathered there); Hamlib 4.5.4's
-prosistel backend (prosistel.c: models 1701 D azimuth, 1702 D elevation, 1703 Combi-Track; its
-commands, its unit letters, its stop values and the reply examples in its comments) and its
-author's notes in Hamlib's tracker (the D tried on a PST-61D; the three families).
+prosistel backend (prosistel.c: models 1701 D azimuth, 1702 D elevation, 1703 Combi-Track, 1704
+D elevation CBOX az, an elevation rotor on unit A; its commands, its unit letters, its stop
+values and the reply examples in its comments) and its author's notes in Hamlib's tracker (the
+D tried on a PST-61D; the three families).
 
 Frames we send (STX written ``^B``):
   ``^BAG123\\r``            turn unit A to 123 (D: degrees; Combi-Track: ``^BAG1234\\r``, tenths),
@@ -20,8 +22,9 @@ Frames we send (STX written ``^B``):
   ``^BAG999\\r``            stop at once (the hard stop; Combi-Track ``^BAG9999\\r`` per unit)
   ``^BAS\\r``               at open: no continuous position output (per unit)
 The Combi-Track's units go one frame each: A, then B, for a target, a query, a stop. A D on an
-elevation rotor is sent the same frames for unit E; its elevation is that rotator's bearing (the
-box has no azimuth), as with one box of an az/el pair on two ports.
+elevation rotor is sent the same frames for unit E (or for unit A, a box set up as an azimuth
+box: prosistel-el-a); its elevation is that rotator's bearing (the box has no azimuth), as with
+one box of an az/el pair on two ports.
 Not sent: the soft stop (``G997``, Combi-Track ``G9777``): with the box's PWM ramps on it slows
 the rotor down over the ramp, so the rotor goes on turning after the user's STOP; the hard stop
 stops it where it is (rule 4).
@@ -97,6 +100,8 @@ class Family:
 D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999, range(1, 4))
 # a D on an elevation rotor: its one unit, E, is the rotator's bearing (0..90)
 D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999, range(1, 4))
+# ... and one set up as an azimuth box (Hamlib's "D elevation CBOX az"): the same, as unit A
+D_ELEVATION_UNIT_A = Family(("A",), (EL_MAX_DEG,), 1, 999, range(1, 4))
 COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999, range(4, 5))
 
 
@@ -252,18 +257,25 @@ def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
     return ModelSpec(name=name, display_name=display, **defaults)
 
 
+# A D on an elevation rotor (either unit): Hamlib's 1702 and 1704 are El rotators, but this
+# rotator's bearing is the elevation: the bridge's rotctld port answers it as an azimuth in 0..90,
+# and says so in dump_state, so a client's view of the port is one that fits together
+_ELEVATION_AS_BEARING: dict[str, Any] = dict(
+    hamlib_rot_type=HamlibRotType.AZ,
+    nominal_speed_deg_s=3.0,  # an elevation rotor's speed, as the bearing's
+)
+
 MODELS: dict[str, ModelSpec] = {
     "prosistel": _spec("prosistel", "D azimuth", D_AZIMUTH, hamlib_model=1701),
     "prosistel-el": _spec(
-        "prosistel-el",
-        "D elevation",
-        D_ELEVATION,
-        hamlib_model=1702,
-        # Hamlib's 1702 is an El rotator, but this rotator's bearing is the elevation: the
-        # bridge's rotctld port answers it as an azimuth in 0..90, and says so in dump_state,
-        # so a client's view of the port is one that fits together
-        hamlib_rot_type=HamlibRotType.AZ,
-        nominal_speed_deg_s=3.0,  # an elevation rotor's speed, as the bearing's
+        "prosistel-el", "D elevation", D_ELEVATION, hamlib_model=1702, **_ELEVATION_AS_BEARING
+    ),
+    "prosistel-el-a": _spec(
+        "prosistel-el-a",
+        "D elevation (unit A)",
+        D_ELEVATION_UNIT_A,
+        hamlib_model=1704,
+        **_ELEVATION_AS_BEARING,
     ),
     "prosistel-combi": _spec(
         "prosistel-combi", "Combi-Track az/el", COMBI_TRACK, hamlib_model=1703

@@ -42,8 +42,8 @@ BRANDS = {
     "easycomm2 in satellite mode",
     "satnogs": "a SatNOGS rotator controller speaks Easycomm: easycomm2 (easycomm3 with "
     "firmware that has it)",
-    "prosistel": "Prosistel's D box is prosistel (azimuth) or prosistel-el (elevation), its "
-    "Combi-Track prosistel-combi",
+    "prosistel": "Prosistel's D box is prosistel (azimuth) or prosistel-el (elevation; "
+    "prosistel-el-a if it answers as unit A), its Combi-Track prosistel-combi",
     "combitrack": "Prosistel's Combi-Track is prosistel-combi",
 }
 

@@ -73,7 +73,7 @@ class AxisSettings(Strict):
 
     model: str = Field(
         description="the controller that turns this axis (any model for the azimuth; for the "
-        "elevation an az/el model, or rt21 or prosistel-el)",
+        "elevation an az/el model, or rt21, prosistel-el or prosistel-el-a)",
         examples=["rt21"],
     )
     port: str = Field(

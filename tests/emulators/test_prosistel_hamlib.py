@@ -1,15 +1,16 @@
 """Hamlib's rotctl as the independent judge of the Prosistel emulator: models 1701 (D azimuth),
-1702 (D elevation) and 1703 (Combi-Track az+el) set, read and stop it on a pty.
+1702 (D elevation), 1703 (Combi-Track az+el) and 1704 (D elevation CBOX az: an elevation rotor
+on unit A) set, read and stop it on a pty.
 
 Hamlib 4.5.4 turns the continuous position output off at open (``STX A S CR``; ``E`` on the D
-elevation, ``A`` and ``B`` on the Combi-Track), sends a bearing as ``STX A G n CR`` (tenths on
-the Combi-Track), asks ``STX A ? CR`` and stops with the soft stop (997; 9777 on the
-Combi-Track). It flushes its input before every command and reads every answer up to its CR,
-taking only answers whose command letter is its own. So a box that streams its position is no
-fit for Hamlib 4.5.4: a line in flight when it opens the port is taken for the answer to its
-``S`` (the tail of ``STX A,?,200,B CR`` after the flush) and the open fails; the streaming is
-proven on the wire (test_prosistel_wire.py) and against the bridge instead. rotctl must be
-installed (libhamlib-utils): a missing judge is a failure, never a skip.
+elevation, ``A`` on 1704, ``A`` and ``B`` on the Combi-Track), sends a bearing as
+``STX A G n CR`` (tenths on the Combi-Track), asks ``STX A ? CR`` and stops with the soft stop
+(997; 9777 on the Combi-Track). It flushes its input before every command and reads every
+answer up to its CR, taking only answers whose command letter is its own. So a box that streams
+its position is no fit for Hamlib 4.5.4: a line in flight when it opens the port is taken for
+the answer to its ``S`` (the tail of ``STX A,?,200,B CR`` after the flush) and the open fails;
+the streaming is proven on the wire (test_prosistel_wire.py) and against the bridge instead.
+rotctl must be installed (libhamlib-utils): a missing judge is a failure, never a skip.
 """
 
 from __future__ import annotations
@@ -96,6 +97,26 @@ def test_hamlib_drives_a_d_box_on_an_elevation_rotor(
         (b"\x02E?\r", "query"),
         (b"\x02EG997\r", "stop"),
     ]
+    assert not port.frames(Outcome.REFUSED)
+
+
+def test_hamlib_drives_a_d_box_on_an_elevation_rotor_answering_as_unit_a(
+    make_port: PortFactory, hamlib: Hamlib
+) -> None:
+    """Hamlib's 1704 sends unit A the elevation and reads unit A's position as the elevation."""
+    port = make_port("prosistel-el-a", start_el_deg=4.0, el_speed_deg_s=500.0)
+    assert hamlib(1704, port, "p") == ["0.00", "4.00"]
+    assert commands(port) == [(b"\x02AS\r", "output off"), (b"\x02A?\r", "query")]
+    hamlib(1704, port, "P", "0", "45")
+    port.wait_for(lambda s: not s.is_moving and s.el_deg == 45.0)
+    assert hamlib(1704, port, "p", "S") == ["0.00", "45.00"]
+    assert (b"\x02AG45\r", "move") in commands(port)
+    assert commands(port)[-3:] == [
+        (b"\x02AS\r", "output off"),
+        (b"\x02A?\r", "query"),
+        (b"\x02AG997\r", "stop"),
+    ]
+    assert port.state().az_deg == 0.0  # the box has no azimuth
     assert not port.frames(Outcome.REFUSED)
 
 

@@ -20,6 +20,34 @@ def test_positions_in_whole_degrees_and_in_tenths() -> None:
     assert ask(Prosistel("prosistel-el", start_el_deg=45.0), b"\x02E?\r", 0) == (b"\x02E,?,045,B\r")
 
 
+def test_a_d_on_an_elevation_rotor_set_up_as_an_azimuth_box_answers_as_unit_a() -> None:
+    """Hamlib's 1704 (D elevation CBOX az): the elevation rotor is unit A, 0..90; unit E is
+    not there."""
+    device = Prosistel("prosistel-el-a", start_el_deg=45.0, el_speed_deg_s=5.0)
+    assert ask(device, b"\x02A?\r", 0) == b"\x02A,?,045,B\r"
+    assert ask(device, b"\x02E?\r", 0) == b"\x02E,?,E,00003\r"  # no unit E
+    assert ask(device, b"\x02AS\r", 0) == b"\x02A,S,B\r"
+    assert ask(device, b"\x02AG91\r", 0) == b"\x02A,G,E,00001\r"  # above an elevation's 90
+    assert ask(device, b"\x02AG90\r", 0.0) == b"\x02A,G,R\r"
+    running = ask(device, b"\x02A?\r", 2.0)
+    assert running.startswith(b"\x02A,?,0") and running.endswith(b",R\r")  # on its way up
+    assert ask(device, b"\x02AG997\r", 2.0) == b"\x02A,G,B\r"  # Hamlib's stop
+    state = device.state(5.0)
+    assert state.el_deg is not None and 45.0 < state.el_deg < 90.0 and not state.is_moving
+    assert abs(int(running[5:8]) - state.el_deg) <= 1 and state.az_deg == 0.0
+    assert [f.outcome for f in device.log] == [
+        "query",
+        "refused",
+        "output off",
+        "refused",
+        "move",
+        "query",
+        "stop",
+    ]
+    with pytest.raises(ValueError, match="no rotor"):
+        Prosistel("prosistel-el-a", start_az_deg=10.0)
+
+
 def test_a_bearing_runs_at_once_and_reads_r_while_running() -> None:
     device = Prosistel(az_speed_deg_s=10.0)
     assert ask(device, b"\x02AG100\r", 0.0) == b"\x02A,G,R\r"
@@ -81,7 +109,7 @@ def test_a_new_stx_starts_the_frame_afresh_and_bytes_outside_one_are_ignored() -
 
 
 def test_the_registry_builds_each_model() -> None:
-    for model in ("prosistel", "prosistel-el", "prosistel-combi"):
+    for model in ("prosistel", "prosistel-el", "prosistel-el-a", "prosistel-combi"):
         device = emulators.create(model, now=0.0)
         assert isinstance(device, Prosistel) and device.spec.name == model
     with pytest.raises(ValueError, match="no rotor"):

@@ -1,8 +1,9 @@
 """Prosistel D and Combi-Track end to end: real mosquitto, real pyserial on a pty, the bridge, and
 the Prosistel emulator (written from the documents and judged by Hamlib's rotctl -m 1701/1703)
 as the controller. Every check runs on the D on an azimuth rotor (unit A, whole degrees) and the
-Combi-Track (units A and B, tenths); the D on an elevation rotor (unit E) is the D's codec on
-another unit, and is checked for what differs: its bearing is an elevation, 0..90."""
+Combi-Track (units A and B, tenths); the D on an elevation rotor (unit E, or unit A on a box set
+up as an azimuth box) is the D's codec on another unit, and is checked for what differs: its
+bearing is an elevation, 0..90."""
 
 from __future__ import annotations
 
@@ -157,17 +158,21 @@ def test_a_box_that_ignores_its_input_is_offline_and_nothing_moves(rig: Rig, mod
     emu.wait_for(lambda s: s.az_deg == 30.0 and not s.is_moving, 15)
 
 
-def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(rig: Rig) -> None:
-    emu = rig.add("mast", model="prosistel-el", emu={"start_el_deg": 10})
+@pytest.mark.parametrize(("model", "unit"), [("prosistel-el", b"E"), ("prosistel-el-a", b"A")])
+def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(
+    rig: Rig, model: str, unit: bytes
+) -> None:
+    emu = rig.add("mast", model=model, emu={"start_el_deg": 10})
     rig.start()
     rig.ready("mast", timeout_s=15)
-    assert frames(emu, "output off") == [b"\x02ES\r"]
+    assert frames(emu, "output off") == [b"\x02%sS\r" % unit]
     assert rig.retained()["rotor/bearing"] == b"10"  # the elevation is this rotator's bearing
     rig.probe.publish("rotor/target", "45.4")
     emu.wait_for(lambda s: s.el_deg == 45.0 and not s.is_moving, 20)
     t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
-    assert rig.status("mast").bearing_deg == 45.0 and frames(emu, "move") == [b"\x02EG45\r"]
+    assert rig.status("mast").bearing_deg == 45.0
+    assert frames(emu, "move") == [b"\x02%sG45\r" % unit]
 
     assert "outside" in rig.refused("mast", "91")
     rig.probe.publish("rotor/target", "0")
@@ -176,5 +181,5 @@ def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(rig: Rig) -> 
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     assert stopped.el_deg is not None and stopped.el_deg > 5
     # the hard stop (again, if a reading in flight showed the rotor still turning)
-    assert set(frames(emu, "stop")) == {b"\x02EG999\r"} and frames(emu, "refused") == []
+    assert set(frames(emu, "stop")) == {b"\x02%sG999\r" % unit} and frames(emu, "refused") == []
     assert emu.state().az_deg == 0.0  # the box has no azimuth

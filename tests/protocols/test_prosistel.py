@@ -23,6 +23,7 @@ from bridge.protocols.prosistel import (
     COMBI_TRACK,
     D_AZIMUTH,
     D_ELEVATION,
+    D_ELEVATION_UNIT_A,
     Family,
     ProsistelCodec,
 )
@@ -75,6 +76,29 @@ def test_a_d_on_an_elevation_rotor_speaks_as_unit_e_within_0_to_90() -> None:
     assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
 
 
+def test_a_d_on_an_elevation_rotor_set_up_as_unit_a_speaks_as_unit_a_within_0_to_90() -> None:
+    """Hamlib's 1704 (D elevation CBOX az): unit A's frames, an elevation rotor's range."""
+    codec = ProsistelCodec(D_ELEVATION_UNIT_A)
+    assert codec.encode_target(45.4) == [b"\x02AG45\r"]
+    assert codec.encode_target(89.5) == [b"\x02AG90\r"]  # half up, within 0..90
+    assert (codec.encode_query(), codec.encode_stop()) == (b"\x02A?\r", b"\x02AG999\r")
+    assert codec.encode_connect(0.0) == [b"\x02AS\r"]
+    for deg in (90.6, -0.6, 180.0):
+        with pytest.raises(ValueError, match=f"bearing {deg:g} outside 0..90"):
+            codec.encode_target(deg)
+    assert codec.wire_target(12.5) == (13.0, None)
+    got = asked(D_ELEVATION_UNIT_A).feed(b"\x02A,?,091,B\r")  # above an elevation's 90
+    assert positions(got) == [] and junk(got)[0].reason is JunkReason.SPOILED
+    got = asked(D_ELEVATION_UNIT_A).feed(b"\x02E,?,045,B\r")  # a unit-E box on the line
+    assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
+    got = asked(D_ELEVATION_UNIT_A).feed(b"\x02A,?,0450,B\r")  # a Combi-Track's tenths
+    assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
+    codec = asked(D_ELEVATION_UNIT_A)
+    got = codec.feed(b"\x02A,S,B\r\x02A,G,R\r\x02A,?,090,B\r")  # answers, then the position
+    assert positions(got) == [(90.0, None)]
+    assert {j.reason for j in junk(got)} == {JunkReason.CHATTER}
+
+
 def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None:
     d, combi = ProsistelCodec(D), ProsistelCodec(COMBI)
     for az in (360.5, -0.6, 997, 999):
@@ -93,6 +117,7 @@ def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None
         (D, b"\x02A,?,290,R\r", (290.0, None)),
         (D, b"\x02A,?,7,B\r", (7.0, None)),
         (D_ELEVATION, b"\x02E,?,045,R\r", (45.0, None)),  # the elevation is the bearing
+        (D_ELEVATION_UNIT_A, b"\x02A,?,45,R\r", (45.0, None)),  # ... on unit A too
         (COMBI, b"\x02A,?,1000,R\r\x02B,?,0900,B\r", (100.0, 90.0)),
         (COMBI, b"\x02B,?,0455,R\r\x02A,?,3600,R\r", (360.0, 45.5)),  # either order
     ],
@@ -199,6 +224,17 @@ def test_the_model_table() -> None:
         False,
         3.0,
     )
+    el_a = REGISTRY["prosistel-el-a"]
+    assert (el_a.display_name, el_a.hamlib_model, el_a.hamlib_rot_type) == (
+        "D elevation (unit A)",
+        1704,  # Hamlib's "D elevation CBOX az", an El rotator answered as an azimuth, as 1702
+        HamlibRotType.AZ,
+    )
+    codec = el_a.codec_factory()
+    assert isinstance(codec, ProsistelCodec) and codec.family is D_ELEVATION_UNIT_A
+    for name in ("az_max_deg", "az_wraps", "has_elevation", "nominal_speed_deg_s", "whole_degrees"):
+        assert getattr(el_a, name) == getattr(el, name), name
+    assert (el_a.query_bytes, el_a.reply_bytes) == (el.query_bytes, el.reply_bytes)
     assert d.az_wraps and (d.az_max_deg, combi.az_max_deg) == (360.0, 360.0)
     assert (d.manufacturer, d.display_name, d.baud) == ("Prosistel", "D azimuth", 9600)
     assert (combi.display_name, combi.baud) == ("Combi-Track az/el", 9600)

@@ -75,6 +75,7 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "rt21": 1.0,
         "prosistel": 1.0,
         "prosistel-el": 1.0,
+        "prosistel-el-a": 1.0,
         "prosistel-combi": 1.0,
         "rc2800": 1.0,
         "rc2800-az": 1.0,
@@ -112,6 +113,7 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "rt21": (405, HamlibRotType.OTHER, None),
         "prosistel": (1701, HamlibRotType.AZ, None),
         "prosistel-el": (1702, HamlibRotType.AZ, None),  # its elevation is its bearing
+        "prosistel-el-a": (1704, HamlibRotType.AZ, None),  # the same, on unit A
         "prosistel-combi": (1703, HamlibRotType.AZEL, None),
         # Hamlib's one model of the current protocol; the azimuth box is driven by it too
         "rc2800": (1001, HamlibRotType.AZEL, None),

@@ -82,7 +82,7 @@ FAST_RC2800 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 RC2800_MODELS = ("rc2800", "rc2800-az")
 # Prosistel: a D (whole degrees) or a Combi-Track (tenths, two units), 9600 baud, own brakes
 FAST_PROSISTEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
-PROSISTEL_MODELS = ("prosistel", "prosistel-el", "prosistel-combi")
+PROSISTEL_MODELS = ("prosistel", "prosistel-el", "prosistel-el-a", "prosistel-combi")
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
