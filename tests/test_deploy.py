@@ -324,10 +324,42 @@ def test_web_page_finds_the_websocket_listener(flow: list[dict]) -> None:
     http_in, template, _ = _page_chain(flow)
     (listener,) = _of_type(flow, "websocket-listener")
     assert listener["wholemsg"] == "false"
-    # The page opens "ws/rotor" relative to its own directory.
-    assert '"ws/rotor"' in template["template"]
-    page_dir = posixpath.dirname(http_in["url"])
-    assert posixpath.join(page_dir, "ws/rotor") == listener["path"]
+    # The page opens "ws/" and its own name relative to its own directory (what it makes of
+    # each path: test_a_second_page_opens_its_own_websocket).
+    assert '"ws/$1"' in template["template"]
+    page_dir, name = posixpath.split(http_in["url"])
+    assert posixpath.join(page_dir, "ws", name) == listener["path"]
+
+
+def test_a_second_page_opens_its_own_websocket(flow: list[dict]) -> None:
+    # A station with two rotators imports the flow twice and serves the copy at /rotor-<id>
+    # with a listener at /ws/rotor-<id> (docs/node-red.md): that page must open its own
+    # listener, not the first page's, or it shows and turns the first rotator.
+    page = _page_chain(flow)[1]["template"]
+    (expression,) = re.findall(r"var wsUrl = ([^;]*);", page)
+    script = f"""
+        const out = {{}};
+        for (const path of JSON.parse(process.argv[1])) {{
+            const location = {{ protocol: "http:", host: "shack:1880", pathname: path }};
+            out[path] = {expression};
+        }}
+        process.stdout.write(JSON.stringify(out));
+    """
+    paths = ["/rotor", "/rotor/", "/rotor-sat", "/red/rotor-sat", "/red/rotor"]
+    proc = subprocess.run(
+        [_node_js(), "-e", script, json.dumps(paths)],
+        capture_output=True,
+        text=True,
+        timeout=slow(60),
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout) == {
+        "/rotor": "ws://shack:1880/ws/rotor",
+        "/rotor/": "ws://shack:1880/ws/rotor",
+        "/rotor-sat": "ws://shack:1880/ws/rotor-sat",
+        "/red/rotor-sat": "ws://shack:1880/red/ws/rotor-sat",
+        "/red/rotor": "ws://shack:1880/red/ws/rotor",
+    }
 
 
 def _relay(flow: list[dict]) -> dict:
