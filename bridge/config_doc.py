@@ -69,7 +69,8 @@ The smallest useful file: one rotator, and the broker (the default is this host)
 A key with a plain value (text, a number, true or false) can be set from the environment
 instead, which beats the file:
 `ROTOR_BRIDGE_` and the key, tables joined with `__` (`ROTOR_BRIDGE_MQTT__HOST=broker.lan`);
-a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`). A list or a
+a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`), and its boxes'
+the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/ttyUSB2`). A list or a
 table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`).
 `config/example.toml` is a commented starting point with the keys most people change.
 """

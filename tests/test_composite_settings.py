@@ -46,6 +46,26 @@ def test_a_composite_rotator_is_az_from_one_box_and_el_from_the_other() -> None:
     assert (again.model, again.ports) == (r.model, r.ports)
 
 
+def test_a_box_s_key_comes_from_the_environment_as_any_other_table_s() -> None:
+    # As ROTOR_BRIDGE_MQTT__TLS__ENABLED reaches mqtt.tls: an adapter that came back under
+    # another name is set without editing the file (it was refused: "did you mean azimuth?").
+    document = {"rotators": [{"id": "sky", "azimuth": dict(AZ), "elevation": dict(EL)}]}
+    environ = {
+        "ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT": "/dev/ttyUSB3",
+        "ROTOR_BRIDGE_ROTATORS__SKY__ELEVATION__BAUD": "4800",
+    }
+    r = settings_from(document, environ=environ).rotators[0]
+    assert r.ports == ["/dev/ttyUSB3", "/dev/ttyEL"]
+    assert r.elevation is not None and r.elevation.baud == 4800
+    document = {"rotators": [{"id": "sky", "azimuth": dict(AZ), "elevation": dict(EL)}]}
+    with pytest.raises(ConfigError) as err:
+        settings_from(document, environ={"ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PROT": "/dev/x"})
+    assert (
+        "rotators[0].azimuth.prot (from ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PROT): unknown key: "
+        "did you mean port?"
+    ) in str(err.value)
+
+
 def test_an_rt21_box_may_turn_the_elevation() -> None:
     r = load(azimuth=AZ, elevation={**EL, "model": "rt21"})
     assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 180.0)

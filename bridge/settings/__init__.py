@@ -504,8 +504,9 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
         m = _ROTATOR_ENV.match(key)
         if not m:
             continue
-        rid, field = m.group(1).lower(), m.group(2).lower()
-        if _complex(["rotators", field]):  # a list or a table: JSON, as for the other tables
+        # a key of a table in the rotator (its azimuth box's port) joined with "__" as elsewhere
+        rid, path = m.group(1).lower(), m.group(2).lower().split("__")
+        if _complex(["rotators", *path]):  # a list or a table: JSON, as for the other tables
             try:  # (a review: the text itself was handed on, and refused as no table)
                 value = json.loads(value)
             except (ValueError, RecursionError):
@@ -516,7 +517,11 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
                 ) from None
         for r in data.get("rotators", []):
             if isinstance(r, dict) and str(r.get("id", "")).lower() == rid:
-                r[field] = value
+                for name in path[:-1]:
+                    if not isinstance(r.get(name), dict):
+                        r[name] = {}
+                    r = r[name]
+                r[path[-1]] = value
                 break
         else:
             raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
