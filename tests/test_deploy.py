@@ -802,6 +802,24 @@ def _udev_rules() -> list[dict[str, tuple[str, str]]]:
     return rules
 
 
+@pytest.mark.parametrize("path", [UNIT, SYSUSERS, UDEV], ids=lambda p: p.name)
+def test_install_commands_in_a_deploy_file_work_from_the_top_of_the_repository(
+    path: Path,
+) -> None:
+    """Each file says where its commands run, and each file they copy is there."""
+    text = path.read_text()
+    assert "from the top of the rotor-bridge repository" in text
+    copies = 0
+    for line in (line for line in text.splitlines() if "cp " in line):
+        for command in line.lstrip("# (").removeprefix("or: ").split("&&"):
+            argv = shlex.split(command.split("#")[0].rstrip(") "))
+            argv = argv[1:] if argv[:1] == ["sudo"] else argv
+            if argv[:1] == ["cp"]:
+                copies += 1
+                assert (ROOT / argv[1]).is_file(), f"{path.name}: {command.strip()}"
+    assert copies
+
+
 def test_udev_rule_gives_the_adapter_a_stable_name_for_group_dialout() -> None:
     (rule,) = _udev_rules()
     assert rule["SUBSYSTEM"] == ("==", "tty")
