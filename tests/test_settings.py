@@ -11,7 +11,7 @@ from bridge.core.model import Target
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, RotatorSettings, load_settings, settings_from
 from bridge.settings.report import config_warnings, masked
-from tests.support import cli, run_cli
+from tests.support import ROOT, cli, run_cli
 
 MINIMAL = """
 [mqtt]
@@ -225,7 +225,7 @@ def test_check_config_shows_what_the_pointing_settings_mean(tmp_path: Path) -> N
         "az_offset_deg = 90\n"
     )
     doc, warnings = check_config(write(tmp_path, text))
-    assert warnings == [] or all("does not exist" in w for w in warnings)
+    assert all("does not exist" in w or "is numbered" in w for w in warnings), warnings
     lat, lon = doc["station"]["position_deg"]  # the square's centre, to check on a map
     assert (lat, lon) == (pytest.approx(52.521, abs=1e-3), pytest.approx(13.375, abs=1e-3))
     tower, sky = doc["rotators"]
@@ -495,6 +495,34 @@ def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) 
     assert any(line.startswith(f"warning: rotators[1].port: {missing}") for line in lines)
     assert "sum-S3cret" not in said and "{" not in said  # every value only with --full
     assert lines[-1] == f"config OK: {path}"
+
+
+def test_a_port_the_kernel_numbers_is_warned_about(tmp_path: Path) -> None:
+    # Two Rotor-EZs on /dev/ttyUSB0 and /dev/ttyUSB1 answer alike: once the adapters come up
+    # the other way round (a reboot, a re-plug), each rotator's commands turn the other
+    # antenna, and nothing on the line says so.
+    text = (
+        '[[rotators]]\nid = "high"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
+        '[[rotators]]\nid = "low"\nmodel = "rotorez"\nport = "/dev/ttyACM1"\n'
+    )
+    warned = [w for w in config_warnings(load_settings(write(tmp_path, text), environ={}))]
+    for i, port in enumerate(["/dev/ttyUSB0", "/dev/ttyACM1"]):
+        assert (
+            f"rotators[{i}].port: {port} is numbered in the order the adapters appear: after a "
+            "re-plug or a reboot it can name another adapter (another rotator's controller, a "
+            "radio), or none; name the adapter by its /dev/serial/by-id/ path (`rotor-bridge "
+            "ports`)"
+        ) in warned, warned
+    stable = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"
+    text = text.replace("/dev/ttyUSB0", stable).replace("/dev/ttyACM1", "/dev/rotor-low")
+    warned = config_warnings(load_settings(write(tmp_path, text), environ={}))
+    assert not [w for w in warned if "numbered" in w], warned
+
+
+@pytest.mark.parametrize("name", ["example.toml", "band-map.toml", "two-boxes.toml"])
+def test_the_example_configurations_name_adapters_by_a_stable_path(name: str) -> None:
+    s = load_settings(ROOT / "config" / name, environ={})
+    assert not [w for w in config_warnings(s) if "numbered" in w]
 
 
 def test_check_config_names_the_gap_an_offset_puts_in_narrowed_limits(tmp_path: Path) -> None:

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import getpass
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,9 @@ from bridge.settings.rotator import EMULATION_KEYS
 from bridge.settings.web import web_warnings
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
+# a USB serial adapter's name the kernel gives in the order adapters appear (not by-id, no udev
+# link): which controller it reaches can change with a re-plug or a reboot
+_NUMBERED = re.compile(r"/dev/tty(?:USB|ACM)\d+")
 # what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
 SHOWN = {
     "mqtt.client_id": "the client id in use: the one set, or the default made for this "
@@ -154,6 +158,13 @@ def config_warnings(settings: Settings) -> list[str]:
                 found.append(
                     f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
                     "ports` lists the serial ports); the bridge keeps trying to open it"
+                )
+            if _NUMBERED.fullmatch(path):  # two alike controllers swapped turn the wrong antenna
+                found.append(
+                    f"{where}.{key}: {path} is numbered in the order the adapters appear: after "
+                    "a re-plug or a reboot it can name another adapter (another rotator's "
+                    "controller, a radio), or none; name the adapter by its /dev/serial/by-id/ "
+                    "path (`rotor-bridge ports`)"
                 )
         for key, on, bind in (
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
