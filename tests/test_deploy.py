@@ -1165,6 +1165,32 @@ def test_the_readme_install_commands_work_as_typed(heading: str) -> None:
     assert any(argv[-2:] == ["-c", SHIPPED_CONFIG] for argv in commands)
 
 
+@pytest.mark.parametrize(
+    ("doc", "heading"),
+    [
+        ("README.md", "## Install for real"),
+        ("docs/deployment.md", "## Install into a virtual environment"),
+        ("docs/deployment.md", "## systemd"),
+    ],
+)
+def test_installing_as_root_leaves_the_clone_to_its_user(doc: str, heading: str) -> None:
+    """pip builds in the clone: as root it leaves build/ and the egg-info there owned by root,
+    and the user's ./demo and ./tests/run (an editable install) then fail: "Cannot update
+    time stamp of directory 'rotor_bridge.egg-info'". The commands remove them again."""
+    name = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["name"]
+    leftovers = {"build", name.replace("-", "_") + ".egg-info"}
+    commands = _shell_commands(_section((ROOT / doc).read_text(), heading))
+    installs = [i for i, argv in enumerate(commands) if argv[-2:] == ["install", "."]]
+    assert installs, "no pip install . here"
+    for i in installs:
+        removed = set()
+        for argv in commands[i + 1 :]:
+            argv = argv[1:] if argv[:1] == ["sudo"] else argv
+            if argv[:2] == ["rm", "-rf"]:
+                removed |= set(argv[2:])
+        assert leftovers <= removed, (doc, heading, commands[i])
+
+
 def test_docs_name_only_files_a_clone_has() -> None:
     for doc in DOCS:
         text = doc.read_text()
