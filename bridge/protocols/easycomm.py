@@ -61,7 +61,13 @@ Rules:
    controller was seen to answer a stop, is that answer: harmless chatter, never a reading
    (nor a reply nobody asked for, told on R/error at every stop). Once it was seen to, a
    whole position line with no query open is taken for the answer to a stop this codec did
-   not send (the stop express writes its own copy, ``ModelSpec.stop_anytime``).
+   not send (the stop express writes its own copy, ``ModelSpec.stop_anytime``). A stop
+   written while a query is open (the line is full duplex) is answered after it: the query's
+   answer comes first and is the query's, and only a line after it can be the stop's. (A
+   review: the poll's answer in flight was taken for the stop's, on a controller that answers
+   no stop; the poll waited out its reply time, the codec took the controller for one that
+   answers stops, so the repeat of a double STOP ate the next poll's answer too, and 1 s
+   without a reading put the rotator offline.)
 """
 
 from __future__ import annotations
@@ -124,6 +130,7 @@ class EasycommCodec(OneQuery):
         self._az: float | None = None  # what this exchange has said so far
         self._el: float | None = None
         self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
+        self._stop_behind = False  # rule 9: that stop went while a query was open: after it
         self._answers_stop = False  # rule 9: this controller was seen to answer one
         self._stop_said: deque[bytes] = deque(maxlen=4)  # rule 9: those answers, for harmless
 
@@ -139,12 +146,14 @@ class EasycommCodec(OneQuery):
 
     def encode_stop(self) -> bytes:
         self._stop_open = True  # rule 9
+        self._stop_behind = self._query_open  # rule 9: the query's answer comes first
         return b"SA SE\n"
 
     def encode_query(self) -> bytes:
         self._open_query()
         self._az = self._el = None
         self._stop_open = self._stop_open and self._answers_stop  # rule 9
+        self._stop_behind = False  # (this query went after the stop)
         return b"AZ\nEL\n" if self.separate else b"AZ EL\n"  # rule 8
 
     def encode_version(self) -> bytes | None:
@@ -221,7 +230,8 @@ class EasycommCodec(OneQuery):
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
         whole = az is not None and (el is not None or not self.elevation)
-        stop_answer = self._stop_open or (self._answers_stop and not self._query_open)
+        stop_first = self._stop_open and not (self._stop_behind and self._query_open)  # rule 9
+        stop_answer = stop_first or (self._answers_stop and not self._query_open)
         if stop_answer and whole and not pre.strip(b"\r\n "):  # rule 9
             self._stop_open, self._answers_stop = False, True
             self._stop_said.append(raw)

@@ -17,7 +17,7 @@ from bridge.core.model import MotionState
 from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.protocols.axes import Axis
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator, moves, settled_at
+from tests.engine.virtual import Sent, VirtualRotator, moves, settled_at
 from tests.engine.virtual_composite import VirtualComposite
 
 Rig = Callable[..., VirtualRotator]
@@ -493,3 +493,29 @@ def test_a_satnogs_answer_to_a_stop_is_no_junk_and_no_reading(rig: Rig, model: s
         v.run_for(5)
     assert b"SA SE\n" in v.sent() and v.errors() == []
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)
+
+
+@pytest.mark.parametrize("firmware", ["generic", "k3ng", "satnogs"])
+def test_a_double_stop_right_after_a_poll_loses_no_reading(rig: Rig, firmware: str) -> None:
+    """Rule 9: a stop written while a poll's answer is on its way is answered after it. The
+    poll's answer was taken for the stop's: on a controller that answers no stop the poll
+    waited out its reply time, the codec took the controller for one that answers stops, the
+    STOP's repeat ate the next poll's answer too, and with the rig's timings (the integration
+    tests': a 1 s silence timeout) the rotator went offline, the next target refused. A
+    SatNOGS answers both, the poll first: its answer to the stop is still no reading."""
+    settings = {"idle_poll_interval_s": 0.3, "moving_poll_interval_s": 0.1, "settle_s": 0.6}
+    v = rig(
+        "easycomm2",
+        settings={**settings, "stall_timeout_s": 2.5, "silence_timeout_s": 1.0},
+        emulator={**FAST, "firmware": firmware, "start_az_deg": 10},
+    )
+    v.run_until_state(IDLE, 30)
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, b"AZ EL\n"), 5, "a poll just written")
+    t = v.now
+    v.target(300, 0)  # (its answer still on the line)
+    v.stop()
+    v.run_for(0.05)
+    v.stop()  # the main connection's copy of the lane's STOP (lastword.py rule 1)
+    v.run_for(3)
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))
+    assert v.state is IDLE and v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)

@@ -279,6 +279,25 @@ def test_a_controller_that_answers_no_stop_keeps_its_poll_answer() -> None:
     assert positions(codec.feed(b"AZ1.0 EL40.0\n")) == []  # no query open: never a reading
 
 
+@pytest.mark.parametrize("answer", [b"AZ219.0 EL40.0\n", b"+219.0 +40.0\n"])
+def test_a_stop_written_behind_an_open_poll_leaves_the_polls_answer_to_it(answer: bytes) -> None:
+    """Rule 9: the controller answers in the order it was asked; the poll's answer was taken
+    for the stop's and the codec, taking this controller for one that answers stops, then ate
+    the first poll's answer after every stop."""
+    codec = EasycommCodec(2)
+    codec.encode_query()
+    codec.encode_stop()  # (full duplex: the poll's answer still on its way)
+    assert positions(codec.feed(answer)) == [(219.0, 40.0)]
+    codec.encode_stop()
+    codec.encode_query()
+    assert positions(codec.feed(b"AZ218.0 EL40.0\n")) == [(218.0, 40.0)]
+    codec.encode_query()  # a SatNOGS: the stop's answer after the poll's
+    codec.encode_stop()
+    replies = codec.feed(b"AZ217.0 EL40.0\nAZ217.0 EL40.0\n")
+    assert positions(replies) == [(217.0, 40.0)]
+    assert [j.reason for j in junk(replies)] == [JunkReason.CHATTER]
+
+
 def test_an_azimuth_model_ignores_the_elevation_on_its_line_in_range_or_not() -> None:
     """Rule 2, since rule 8 asks it AZ EL: a SatNOGS's unused channel may say anything."""
     out = asked(2, elevation=False).feed(b"AZ100.0 EL-120.0\n")
