@@ -5,7 +5,9 @@ Rules:
 1. A TLE is two lines of 69 characters (trailing blanks dropped), starting "1 " and "2 ", each
    ending in its checksum (sgp4's own: the sum of its digits, a minus sign counting 1, modulo
    10), with one catalog number on both lines, and elements that sgp4 accepts and propagates at
-   their epoch. Anything else is SkyError naming the line and what is wrong.
+   their epoch. Anything else is SkyError naming the line and what is wrong. A TLE is ASCII:
+   a line holding any other character is refused first (``str.isdigit`` takes ``²`` and ``٣``,
+   which ``int`` refuses or reads: the checksum's sum, sgp4's too, raised ValueError).
 2. A TLE file (parse_tles) is 3-line sets (a name line, Space-Track's "0 " prefix dropped) or
    bare 2-line sets (named by their catalog number); blank lines and CRLF are fine; a bad set is
    reported, naming its line, and skipped; a name seen again is reported and the later set used.
@@ -78,6 +80,9 @@ def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
     from sgp4.io import compute_checksum
 
     for number, line in ((1, line1), (2, line2)):
+        if not line.isascii():  # rule 1
+            odd = next(c for c in line if not c.isascii())
+            return number, f"holds {odd!r} (U+{ord(odd):04X}): a TLE line is ASCII text"
         if len(line) != 69:
             return number, f"has {len(line)} characters, a TLE line has 69"
         if not line.startswith(f"{number} "):

@@ -383,3 +383,27 @@ def test_without_a_station_tracking_is_refused_naming_the_station(rig: Rig) -> N
     err = error_after(rig, "dish", t)
     assert err["kind"] == "refused" and "[station]" in err["message"], err
     assert emu.frames("set", "set: clamped") == []
+
+
+def test_a_tle_with_a_digit_that_is_not_ascii_is_refused_and_tracking_still_works(
+    rig: Rig,
+) -> None:
+    """An attack pass: a TLE sent on ``R/track`` with a superscript two (``²``, which
+    ``str.isdigit`` takes and ``int`` refuses) in its lines was said nowhere: the check of its
+    checksum raised ValueError on paho's thread, the log had a traceback, ``R/error`` nothing.
+    It is refused there, naming the line, nothing moves, and the sun is tracked after it."""
+    emu = rig.add("dish", model="md01", emu=QUICK_EMU, **QUICK_BRIDGE)
+    wall = Wall(SUN_EPOCH)
+    start(rig, SUN_STATION, wall=wall)
+    line1, line2 = synthetic_tle(
+        "X", SUN_EPOCH, inclination_deg=51.6, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    for bad in ([line1[:68] + "²", line2], [line1[:30] + "²" + line1[31:], line2]):
+        t = time.monotonic()
+        rig.probe.publish("rotor/track", json.dumps({"tle": ["X", *bad]}))
+        err = error_after(rig, "dish", t)
+        assert err["kind"] == "refused" and "TLE line 1" in err["message"], err
+        assert "ASCII" in err["message"], err
+    assert emu.frames("set", "set: clamped") == []
+    rig.probe.publish("rotor/track", "sun")
+    emu.wait_for(on_the_sun(SUN_STATION, wall), timeout_s=20)
