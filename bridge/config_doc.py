@@ -71,7 +71,9 @@ instead, which beats the file:
 `ROTOR_BRIDGE_` and the key, tables joined with `__` (`ROTOR_BRIDGE_MQTT__HOST=broker.lan`);
 a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`), and its boxes'
 the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/ttyUSB2`). A list or a
-table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`).
+table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`). A
+`ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
+takes `__`) is an error, as an unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
 `config/example.toml` is a commented starting point with the keys most people change.
 """
 

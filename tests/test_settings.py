@@ -976,3 +976,29 @@ def test_a_rotators_list_or_table_from_the_environment_is_json() -> None:
     with pytest.raises(ConfigError) as err:
         settings_from(document(), {"ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS": "home=10"})
     assert str(err.value).startswith("ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS: a list or a table")
+
+
+@pytest.mark.parametrize(
+    ("variable", "hint"),
+    [
+        ("ROTOR_BRIDGE_MQTT_HOST=broker.lan", "did you mean ROTOR_BRIDGE_MQTT__HOST?"),
+        ("ROTOR_BRIDGE_ROTATOR__TOWER__PORT=/dev/ttyUSB9", "did you mean ROTOR_BRIDGE_ROTATORS__"),
+        ("ROTOR_BRIDGE_LOGLEVEL=DEBUG", "did you mean ROTOR_BRIDGE_LOG_LEVEL?"),
+        ("rotor_bridge_statefile=/tmp/s.json", "did you mean ROTOR_BRIDGE_STATE_FILE?"),
+    ],
+)
+def test_a_variable_of_the_bridge_that_names_no_key_is_refused_naming_it(
+    tmp_path: Path, variable: str, hint: str
+) -> None:
+    """An attack pass: a variable whose first word is no key of the file's top (one ``_``
+    where tables take ``__``, ``ROTATOR`` for ``ROTATORS``) was dropped without a word:
+    check-config said "config OK" and the bridge went to the file's broker, or opened the
+    file's port, while the user thought it changed. A typo must not silently do nothing."""
+    name, value = variable.split("=")
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={name: value})
+    assert out.returncode == 2, out
+    assert "config OK" not in out.stdout
+    assert f"{name}: " in out.stderr and "unknown" in out.stderr and hint in out.stderr, out
+    path = str(write(tmp_path, MINIMAL))
+    good = {"ROTOR_BRIDGE_MQTT__HOST": "broker.lan", "rotor_bridge_log_level": "DEBUG"}
+    assert cli("check-config", env={"ROTOR_BRIDGE_CONFIG": path, **good}).returncode == 0

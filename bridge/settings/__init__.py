@@ -21,10 +21,15 @@ Rules:
    per problem; the password never appears in one.
 3. Loading touches no hardware: a serial port is a name here (check-config looks whether it
    exists, as a warning).
+4. A ``ROTOR_BRIDGE_*`` variable whose first word is no key of the file's top (but
+   ``ROTOR_BRIDGE_CONFIG``) is an error naming it, as rule 1 for the file: pydantic-settings
+   drops it without a word (``ROTOR_BRIDGE_MQTT_HOST``, one ``_`` where a table takes ``__``,
+   left the bridge on the file's broker).
 """
 
 from __future__ import annotations
 
+import difflib
 import json
 import os
 import re
@@ -425,6 +430,7 @@ def settings_from(
 ) -> Settings:
     """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
     env = os.environ if environ is None else environ
+    _check_variables(env)
     _apply_rotator_env(data, env)
     unknown = [k for k in data if k not in Settings.model_fields]
     if (
@@ -497,6 +503,29 @@ def _is_json(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _check_variables(env: Any) -> None:
+    """Rule 4: ConfigError naming the first variable of the bridge that names no key."""
+    known = [*Settings.model_fields, "config"]
+    for key in sorted(env):
+        if not key.upper().startswith(ENV_PREFIX):
+            continue
+        name = key[len(ENV_PREFIX) :].lower()
+        first = name.split("__")[0]
+        if first in known:
+            continue
+        table = next((t for t in known if first.startswith(f"{t}_")), None)
+        if table is None:
+            table = next(iter(difflib.get_close_matches(first, known, n=1, cutoff=0.6)), None)
+            rest = name[len(first) :]
+        else:
+            rest = "__" + name[len(table) + 1 :]
+        hint = f": did you mean {ENV_PREFIX}{(table + rest).upper()}?" if table else ""
+        raise ConfigError(
+            f"{key}: unknown key {first!r} (the keys at the top: "
+            f"{', '.join(Settings.model_fields)}; a table's keys are joined with __){hint}"
+        )
 
 
 def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
