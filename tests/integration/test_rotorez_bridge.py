@@ -137,6 +137,24 @@ def test_options_the_model_does_not_have_are_refused(rig: Rig) -> None:
     assert emu.frames("option", "invalid") == []
 
 
+def test_a_setting_the_model_does_not_have_is_refused_as_that_whatever_its_value(
+    rig: Rig,
+) -> None:
+    """An attack pass: a GS-232's ``speed`` sent to a Rotor-EZ (``R/option/speed 2``) was
+    refused as "expected ON or OFF, got '2'": the user was told the value was wrong, and that
+    the setting takes ON or OFF, when the controller has no such setting at all."""
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    for value in ("2", "fast", "ON"):
+        t = time.monotonic()
+        rig.probe.publish("rotor/option/speed", value)
+        err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+        assert err["kind"] == "refused" and err["command"] == f"option speed '{value}'", err
+        assert err["message"].startswith("Rotor-EZ has no option 'speed' (options: "), err
+    assert emu.frames("option", "invalid") == []
+
+
 def test_lock_refuses_motion_and_survives_a_restart(rig: Rig) -> None:
     emu = rig.add("tower", emu={"start_az_deg": 50})
     rig.start()

@@ -405,11 +405,12 @@ M = Source.MQTT
         ("rotor/b/stop", b"", ("submit", Stop(M), "stop")),  # a plain stop takes any payload
         ("rotor/b/lock", b"ON", ("lock", True)),
         ("rotor/b/lock", b"false", ("lock", False)),
-        ("rotor/b/option/jam", b"on", ("submit", SetOption("jam", True, M), "option jam 'on'")),
+        # (a name the model does not declare goes to its judge as text, refused there)
+        ("rotor/b/option/jam", b"on", ("submit", SetOption("jam", "on", M), "option jam 'on'")),
         (
             "rotor/b/option/unstick",
             b"0",
-            ("submit", SetOption("unstick", False, M), "option unstick '0'"),
+            ("submit", SetOption("unstick", "0", M), "option unstick '0'"),
         ),
         ("rotor/b/preset", b" EU ", ("preset", "EU", M, "preset ' EU '")),
         ("rotor/b/park", b"PRESS", ("park", M, "park 'PRESS'")),  # any payload but empty

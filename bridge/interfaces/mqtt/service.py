@@ -678,8 +678,13 @@ def parse_command(
 
 
 def _setting_value(spec: ModelSpec | None, name: str, payload: bytes) -> SettingValue:
-    """R/option/<name>'s payload by the setting's declaration (PayloadError if it refuses)."""
+    """R/option/<name>'s payload by the setting's declaration (PayloadError if it refuses). A
+    name ``spec`` does not declare goes to the judge as text, which refuses the name (an attack
+    pass: ``speed 2`` to a Rotor-EZ was refused as "expected ON or OFF", a wrong value of a
+    switch, when the controller has no such setting)."""
     setting = spec.setting(name) if spec is not None else None
+    if setting is None and spec is not None:
+        return pl.text(payload)
     if setting is None or setting.kind is SettingKind.BOOL:
         return pl.parse_switch(payload)  # the words of a bad switch as they always were
     try:
