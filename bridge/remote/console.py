@@ -32,7 +32,6 @@ Rules:
 
 from __future__ import annotations
 
-import json
 import logging
 import threading
 import time
@@ -53,6 +52,7 @@ from bridge.core.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
+from bridge.remote.readings import load
 from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView
 
 log = logging.getLogger(__name__)
@@ -75,7 +75,7 @@ class Drawn:
 
     @classmethod
     def parse(cls, payload: bytes) -> Drawn:
-        doc = json.loads(payload)
+        doc = load(payload)
         where = doc.get("station")
         station, locator = None, None
         if isinstance(where, dict):
@@ -95,7 +95,7 @@ class Drawn:
 def parse_presets(payload: bytes | None) -> dict[str, tuple[float, float | None]]:
     """``R/presets``: name -> azimuth or [azimuth, elevation]; anything else is left out."""
     try:
-        doc = json.loads(payload) if payload else {}
+        doc = load(payload) if payload else {}  # (readings.py rule 1)
     except ValueError:
         return {}
     out: dict[str, tuple[float, float | None]] = {}
@@ -113,7 +113,7 @@ def parse_presets(payload: bytes | None) -> dict[str, tuple[float, float | None]
 def parse_event(payload: bytes) -> ErrorEvent | None:
     """``R/error`` (docs/mqtt.md) back into an ErrorEvent; None when it is not one."""
     try:
-        doc = json.loads(payload)
+        doc = load(payload)
         return ErrorEvent(
             ErrorKind(doc["kind"]),
             str(doc["message"]),

@@ -4,8 +4,9 @@ interfaces/mqtt/payloads.py, for the remote (docs/mqtt.md says what each field m
 Rules:
 1. Anyone the broker's ACL lets publish there can put anything there: a payload that is not
    what the station writes (not an object, a number that is not finite or too large, a model
-   this version does not know) raises ValueError (InfoError for R/info), never more, and a
-   field that is absent or of the wrong kind reads as unknown.
+   this version does not know, JSON nested past the parser's depth: ``load``) raises
+   ValueError (InfoError for R/info), never more, and a field that is absent or of the wrong
+   kind reads as unknown.
 """
 
 from __future__ import annotations
@@ -34,6 +35,16 @@ class InfoError(ValueError):
     """The station's R/info cannot be used (a model this version does not know)."""
 
 
+def load(payload: bytes) -> Any:
+    """A station's payload as JSON; rule 1: ValueError for anything that is none, JSON
+    nested past the parser's depth too (an attack pass: a forged ``R/control`` of 100 KB of
+    ``{"holder":`` raised RecursionError at every move a client asked for)."""
+    try:
+        return json.loads(payload)
+    except RecursionError:
+        raise ValueError("JSON nested too deep") from None
+
+
 @dataclass(frozen=True)
 class Info:
     """The station's ``R/info``, parsed."""
@@ -45,7 +56,7 @@ class Info:
 
     @classmethod
     def parse(cls, payload: bytes) -> Info:
-        doc = json.loads(payload)
+        doc = load(payload)
         model = str(doc["model"])
         spec = _spec(model)
         if spec is None:
@@ -169,7 +180,7 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
 
 
 def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
-    doc = json.loads(payload)
+    doc = load(payload)
     if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
         raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
 
@@ -210,7 +221,7 @@ def parse_control(payload: bytes | None) -> Control | None:
     """``R/control`` (features/control/payload.py): who holds the control lease, or None (free,
     or not a payload the station writes: the station judges every command again anyway)."""
     try:
-        doc = json.loads(payload or b"null")
+        doc = load(payload or b"null")
     except ValueError:
         return None
     if not isinstance(doc, dict) or not isinstance(doc.get("holder"), str):

@@ -27,7 +27,14 @@ from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.interfaces.mqtt.topics import StationTopics
 from bridge.interfaces.rotctld.server import RotctldSession
-from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator, drawn_of
+from bridge.remote.console import (
+    ConsoleFeed,
+    Drawn,
+    RemoteConsoleRotator,
+    drawn_of,
+    parse_event,
+    parse_presets,
+)
 from bridge.remote.rotator import Info, RemoteRotator, StationView
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
@@ -79,6 +86,8 @@ HOSTILE_STATUSES = [
     pytest.param(idle_status("NaN"), id="a NaN bearing"),
     pytest.param(idle_status("Infinity"), id="an infinite bearing"),
     pytest.param(idle_status("1e400"), id="a bearing past a float"),
+    # an attack pass: JSON nested past the parser's depth raised RecursionError, not ValueError
+    pytest.param(b"[" * 100_000, id="JSON nested past the parser's depth"),
 ]
 
 
@@ -113,6 +122,22 @@ def test_one_rotators_forged_status_does_not_freeze_the_consoles_other_rotators(
     feed.on_message(good.topics.status, idle_status("123.0"))
     assert [s.bearing_deg for s in pages.statuses["b"]] == [123.0]
     assert not pages.statuses["a"][-1].available
+
+
+def test_forged_control_presets_and_errors_nested_past_the_parsers_depth_are_no_crash() -> None:
+    """An attack pass: ``R/control``, ``R/presets`` and ``R/error`` nested past the JSON
+    parser's depth raised RecursionError where a forged payload must read as none: every
+    move a client asked for raised with it (the lease's look at ``R/control``), and the
+    console's presets and error events with them."""
+    deep = b'{"holder":' * 100_000
+    view, link = StationView(FakeClock()), Link()
+    rot = station_rotator(view, "tower", link)
+    view.put(rot.topics.status, idle_status("10.0"))
+    view.put(rot.topics.feature("control"), deep)
+    assert RotctldSession(rot).feed(b"P 120 0\n") == [b"RPRT 0\n"]  # type: ignore[arg-type]
+    assert [topic for topic, _ in link.sent] == ["rotor/tower/target"]
+    assert parse_presets(deep) == {}
+    assert parse_event(deep) is None
 
 
 # -- the broker dropping at the worst moment ---------------------------------------------------
