@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt.claim import Instance
 from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
@@ -239,3 +240,31 @@ def test_a_bridge_refused_at_a_reconnect_stops_its_rotors_and_yields(
     assert any(f.data == b";" for f in emu.frames())  # the Rotor-EZ's stop, written
     emu.wait_for(lambda s: not s.is_moving, 10)
     assert emu.state().az_deg < 290
+
+
+@pytest.mark.parametrize(
+    "forged",
+    [
+        pytest.param(b"[" * 100_000, id="JSON nested past the parser's depth"),
+        pytest.param(
+            b'{"instance": "x", "started": 1' + b"0" * 400 + b"}", id="a start past a float"
+        ),
+    ],
+)
+def test_a_forged_info_no_bridge_writes_is_no_other_bridge_and_the_bridge_runs(
+    rig: Rig, forged: bytes
+) -> None:
+    """An attack pass: a retained ``B/bridge/info`` nested past the JSON parser's depth, or
+    with a start time past a float's range, raised (RecursionError, OverflowError) in the
+    first look, on paho's thread, at every connect: the look never ended, and every target was
+    refused "still checking" for as long as the forged message stayed on the broker, restarts
+    included. Junk names no instance (claim.py rule 2): the base topic is the bridge's own."""
+    rig.probe.publish("rotor/bridge/info", forged, retain=True)
+    rig.probe.publish("rotor/bridge/state", "online", retain=True)
+    emu = rig.add("tower", emu={"start_az_deg": 20})
+    app = rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "120")
+    rig.arrived("tower", 120)
+    assert [f.data for f in emu.frames(*BEARING_OUTCOMES)] == [b"AP1120\r"]
+    assert Instance.parse(bridge_topics(rig.broker.port)["rotor/bridge/info"]) == app.me

@@ -74,21 +74,28 @@ class Instance:
     @staticmethod
     def parse(payload: bytes) -> Instance | None:
         """The instance an info payload names; None for anything else (an older bridge's
-        ``{"problems": [...]}``, junk, an empty deletion)."""
+        ``{"problems": [...]}``, junk, an empty deletion). Junk is anything another client may
+        retain there: JSON nested past the parser's depth, a start past a float's range (an
+        attack pass: each raised in the first look, on paho's thread, at every connect, and the
+        bridge never ran while the forged message stayed on the broker)."""
         try:
             doc = json.loads(payload)
-        except (ValueError, UnicodeDecodeError):
+        except (ValueError, RecursionError):  # (UnicodeDecodeError is a ValueError)
             return None
         if not isinstance(doc, dict):
             return None
         iid, host, pid, started = (doc.get(k) for k in ("instance", "host", "pid", "started"))
         if not isinstance(iid, str) or not iid:
             return None
+        try:
+            started_unix = float(started) if isinstance(started, int | float) else 0.0
+        except OverflowError:
+            return None
         return Instance(
             iid,
             host if isinstance(host, str) else "?",
             pid if isinstance(pid, int) and not isinstance(pid, bool) else 0,
-            float(started) if isinstance(started, int | float) else 0.0,
+            started_unix,
         )
 
     def described(self) -> str:
