@@ -396,6 +396,22 @@ def test_a_word_forged_by_another_client_ends_no_hold(rig: ChildRig) -> None:
     assert rig.word() == {"op": "synced", "n": 2}  # after the frame, not before it
 
 
+def test_a_sync_word_whose_number_is_too_long_or_not_ascii_is_ignored(rig: ChildRig) -> None:
+    """An attack pass: a word on its sync topic whose number has more digits than ``int`` reads
+    (5000) raised ValueError on paho's thread: a traceback in the log for each one anyone
+    allowed there published. Such a word is another's, as a forged one is (and so is one whose
+    digits are not ASCII)."""
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.ask(1)
+    seen = wait_until(lambda: rig.published, 5, "its word published")[0]
+    token = seen.partition(" ")[0]
+    for number in ("\u00b2", "9" * 5000, "\u0661"):
+        rig.child.on_message(SYNC, f"{token} {number}".encode(), False, None, None)
+    rig.back()
+    assert rig.word() == {"op": "synced", "n": 1}
+
+
 def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
     a, b = Port(), Port()
     rig.hand("a", 1, a)

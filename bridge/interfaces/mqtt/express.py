@@ -204,6 +204,7 @@ RESTART_FIRST_S = 1.0  # rule 6: the first wait before an express that ended is 
 RESTART_MAX_S = 60.0  # ... doubling up to this
 RESTART_STABLE_S = 60.0  # ... back to the first once one ran this long
 RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this long
+WORD_DIGITS = 20  # rule 8: a sync word's number, at most (a longer one is none of its own)
 LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
 TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
 READ_WAIT_S = 2.0  # rule 8: a word of the bridge's left unread this long: a hung express
@@ -1023,7 +1024,7 @@ class _Child:
 
     def _read_back(self, payload: bytes) -> None:
         mark, _, number = payload.decode("ascii", "replace").partition(" ")
-        if not number.isdigit():
+        if not number.isdigit() or len(number) > WORD_DIGITS:  # (5000 digits: int() raised)
             return
         w = int(number)
         with self._sync_lock:
