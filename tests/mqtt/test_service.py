@@ -475,6 +475,8 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/target/elevation", b"up", "elevation must be a number, got 'up'",
          "target_elevation 'up'"),
         ("rotor/lock", b"maybe", "expected ON or OFF, got 'maybe'", "lock 'maybe'"),
+        # as sent: an attack pass saw '{"call":"ja1abc"}' for {"call":"JA1ABC"}
+        ("rotor/lock", b"Locked", "expected ON or OFF, got 'Locked'", "lock 'Locked'"),
         ("rotor/option/jam", b"2", "expected ON or OFF, got '2'", "option jam '2'"),
         ("rotor/target", b"JZ62", "locator 'JZ62': second character must be a letter A..R, got 'Z'",
          "target 'JZ62'"),

@@ -318,12 +318,13 @@ def parse_press(payload: bytes, what: str, word: str) -> str:
 
 
 def parse_switch(payload: bytes) -> bool:
-    text = _text(payload).lower()
-    if text in _TRUE:
+    text = _text(payload)
+    word = text.lower()
+    if word in _TRUE:
         return True
-    if text in _FALSE:
+    if word in _FALSE:
         return False
-    raise PayloadError(f"expected ON or OFF, got {text[:20]!r}")
+    raise PayloadError(f"expected ON or OFF, got {text[:20]!r}")  # as sent, not lower-cased
 
 
 def describe(kind: str, payload: bytes) -> str:
