@@ -609,3 +609,59 @@ def test_a_target_after_a_stop_just_after_a_broker_restart_is_not_dropped_by_the
         operator.close()
     wait_until(lambda: app.express.wrote, 10, "the express wrote its stop")
     rig.arrived("tower", 200)
+
+
+def test_a_stop_the_express_read_late_after_a_broker_restart_still_drops_the_held_target(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11, against a clock (docs/architecture.md rule 15): a STOP published
+    after a broker restart while only the express was back reaches the controller through the
+    express alone; the bridge's connections, subscribed just after it, never get a copy. The
+    bridge judged whether they could have had it by the time the express read it, less a
+    second: an express held up longer than that (a busy host, here a signal) read it after the
+    connections' SUBACK plus the second, the stop was taken for theirs, and the target the
+    bridge held for the Rotor-EZ's brake window went out when the window ended: the rotor
+    turned after the STOP."""
+    brake = 30.0  # longer than the restart and the reconnects below: the target still waits
+    emu = rig.add(
+        "tower",
+        emu={"start_az_deg": 10, "speed_deg_s": 20.0, "brake_delay_s": brake},
+        brake_delay_s=brake,
+    )
+    app = rig.start()
+    rig.ready("tower", slow(brake + 10))  # (past the start-up brake window)
+    express_ready(app)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, slow(15))
+    rig.probe.publish("rotor/target", "100")  # a Rotor-EZ is stopped first; 100 waits
+    emu.wait_for(lambda s: not s.is_moving, slow(10))
+    rotator = app.rotators[0]
+    assert rotator.status.target_az_deg == 100.0  # held for the brake window
+    stop_t = time.monotonic()
+    app.client._client.reconnect_delay_set(8, 8)  # the bridge's two back after the express
+    app.lane._client.reconnect_delay_set(8, 8)
+    app.express.up.clear()
+    broker.restart()
+    wait_until(app.express.up.is_set, 15, "the express is back")
+    express_ready(app)
+    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
+    child = app.express._child
+    assert child is not None
+    operator = Probe(broker.port, "")
+    os.kill(child.pid, signal.SIGSTOP)  # it will read the STOP late
+    try:
+        operator.publish("rotor/stop", "STOP")  # (the broker has it for the express alone)
+        wait_until(lambda: app.client.heard_since(time.monotonic() - 1.5), 30, "main back")
+        wait_until(lambda: app.lane.heard_since(time.monotonic() - 1.5), 30, "the lane back")
+    finally:
+        os.kill(child.pid, signal.SIGCONT)
+        operator.close()
+    wait_until(lambda: app.express.wrote, 10, "the express wrote the stop")
+    wait_until(
+        lambda: rotator.status.target_az_deg is None or emu.state().is_moving,
+        slow(brake + 15),
+        "the held target dropped (or sent)",
+    )
+    sent = [f.data for f in emu.frames(*BEARING_OUTCOMES) if f.time_s >= stop_t]
+    assert sent == [] and not emu.state().is_moving
+    assert rotator.status.target_az_deg is None
