@@ -79,7 +79,6 @@ if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it 
 __all__ = ["App", "NotYet", "run", "worker_config"]
 
 log = logging.getLogger(__name__)
-EXPRESS_HEARD_MARGIN_S = 1.0  # express.py rule 11: a subscription this recent may have missed it
 
 GIL_SWITCH_S = 0.0005
 STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.1
@@ -241,6 +240,7 @@ class App:
             on_allowed=self._allowed,
             on_connect=self._connected,
             on_new_connection=self._main_new,
+            on_subscribed=lambda: self._vouch("main"),
             on_connection_lost=lambda: self.mqtt.main_gone(),
             no_replay=self.topics.stop_lane(),
             replayed=[  # a feature's input whose retain flag says "replayed" (the wind's)
@@ -417,7 +417,7 @@ class App:
             on_denied=self._denied,
             on_info=self._info,
             on_new_connection=self.mqtt.lane_connected,
-            on_subscribed=self.mqtt.lane_subscribed,
+            on_subscribed=self._lane_subscribed,
             no_replay=self.mqtt.no_replay_subscriptions(),
         )
         # interfaces/mqtt/lane.py rule 4: a stop before a backlog
@@ -512,13 +512,24 @@ class App:
     def _heard_only_by_express(self, rotator_id: str, t: float, kind: str) -> Rotator | None:
         """Rule 11's test: the rotator, if neither connection could have had the ``kind``
         ("stop" or "lock") the express read at ``t``."""
-        heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read it, a moment after
-        # the broker took it: a subscription the broker took in that moment missed it)
-        if self.client.heard_since(heard) or self.lane.heard_since(heard):
-            return None  # (it came, or comes, on one of them, in its order)
+        for via, connection in (("main", self.client), ("lane", self.lane)):
+            vouched = self.express.vouched(via)  # (the express's word came after its SUBACK,
+            if vouched is not None and connection.heard_since(vouched):  # and this after that)
+                return None  # (it came, or comes, on one of them, in its order)
         if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since):
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
+
+    def _lane_subscribed(self) -> None:
+        self.mqtt.lane_subscribed()
+        self._vouch("lane")
+
+    def _vouch(self, via: str) -> None:
+        """express.py rule 11: a connection's command topics subscribed (on its paho thread):
+        the express is asked to vouch that the stops it says from then on came after it."""
+        since = (self.client if via == "main" else self.lane).subscribed_since
+        if since is not None:
+            self.express.vouch(via, since)
 
     def _connection_heard_since(self, via: str, t: float) -> bool:
         return (self.client if via == "main" else self.lane).heard_since(t)

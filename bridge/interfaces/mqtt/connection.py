@@ -486,6 +486,11 @@ class Connection:
         self._guard.connect_failed()
         self._failed()
 
+    @property
+    def subscribed_since(self) -> float | None:
+        """When this connection's command topics were last subscribed, while that lasts."""
+        return self._subscribed_since
+
     def heard_since(self, t: float) -> bool:
         """Whether this connection has had its command topics since before ``t`` (monotonic)
         without a break: a message published at ``t`` reaches it, or has (express.py rule 10).

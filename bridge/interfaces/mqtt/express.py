@@ -132,17 +132,23 @@ Rules:
    another program would keep such a stop waiting (docs/architecture.md).
 11. A stop only the express heard is the bridge's too. Each frame it writes it says (``wrote``,
    with the time it wrote it, the machine's monotonic clock, its own as the bridge's), and
-   when neither of the bridge's connections had its command topics without a break since
-   a second before then (app.py EXPRESS_HEARD_MARGIN_S: the express reads a stop a moment
-   after the broker took it; a broker restart the express came back from first, a connection
-   between its drop and its SUBACK: clean starts, so no copy of that stop will ever come to
-   them), and neither read a halt of that rotator and has had them since (interfaces/mqtt/
+   when neither of the bridge's connections has had its command topics without a break since
+   before the broker took that stop (a broker restart the express came back from first, a
+   connection between its drop and its SUBACK: clean starts, so no copy of that stop will ever
+   come to them), and neither read a halt of that rotator and has had them since (interfaces/mqtt/
    halts.py ``read_since``: it had the stop, or its halt is the later; an attack pass: a
    second after a broker restart the margin took a STOP both had read for one only the
    express heard, and its second stop dropped the target sent after the STOP), the
    rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
    never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
-   express sent the target it held at the brake window's end). A frame for a lock ON is such
+   express sent the target it held at the brake window's end). "Before the broker took it"
+   is an order, not a time (docs/architecture.md rule 15): each connection's SUBACK asks the
+   express for a sync word (``vouch``), and a stop it says after that word's answer reached
+   the broker after the word, so after the subscription; one said before the answer may have
+   come before it, and is carried out here too (twice at worst: the safe side). Judged by
+   the time the express read it less a second, an express held up longer than that (a busy
+   host) read a stop published before the SUBACKs after them, and the held target went out
+   after the STOP (review 102). A frame for a lock ON is such
    a stop too, and the lock ON itself the express says (``locked``, with the time it read it
    and who sent it, a frame written or not): one neither connection could have had, by the
    same test, is set (``on_locked``): the lock is what a user turns on before climbing the
@@ -156,8 +162,9 @@ Rules:
    in GAP_S a rotator), and the same test gives the rotator its stop (an attack pass: after
    a broker restart the express came back first, and a ``G/stop`` stopped the group's
    Rotor-EZ while its SPID turned on to the group's target). A
-   lock ON a connection heard too within the second before is set twice, and a lock OFF
-   carried out between the two is undone: the safe side, said in docs/mqtt.md.
+   lock ON a connection heard too, just after its SUBACK (before the express answered for
+   it), is set twice, and a lock OFF carried out between the two is undone: the safe side,
+   said in docs/mqtt.md.
 """
 
 from __future__ import annotations
@@ -354,6 +361,10 @@ class Express:
         self._sync = 0  # rule 8: the newest sync word asked for
         self._holds: dict[str, int] = {}  # rotator -> the sync word its hold waits for
         self._held_since: dict[str, float] = {}  # ... since when (rule 8: resent, said)
+        # rule 11: a bridge connection's subscription (its ``since``) waiting for a sync word,
+        # and the newest one each connection had vouched for by an answer
+        self._vouching: dict[int, tuple[str, float]] = {}
+        self._vouched: dict[str, float] = {}
         self._asked_at = 0.0  # when a sync word was last asked for again
         self.clock: Callable[[], float] = time.monotonic
         self.up = threading.Event()  # its connection subscribed (the tests wait for it)
@@ -420,6 +431,35 @@ class Express:
             self._on_hold(rotator_id, n)  # before the stop's put (halts.py)
         later(partial(self._ask, n))  # a system call: once the last word's lock is let go
 
+    # -- rule 11: which subscriptions of the bridge's a stop the express reads came after
+    def vouch(self, via: str, since: float) -> None:
+        """The bridge's connection ``via`` ("main" or "lane") has had its command topics since
+        ``since`` (its SUBACK, on its paho thread): a sync word is asked for, and once it is
+        answered every stop the express says after the answer reached the broker after that
+        subscription, so reaches that connection too (``vouched``)."""
+        with self._lock:
+            if self._sock is None:  # no express: one started later subscribes after this
+                self._vouched[via] = since
+                return
+            self._sync += 1
+            n = self._sync
+            self._vouching[n] = (via, since)
+        later(partial(self._ask, n))
+
+    def vouched(self, via: str) -> float | None:
+        """Rule 11: the ``since`` of ``via``'s newest subscription the express answered for (on
+        the reader's thread, in the order of the express's words), or None."""
+        with self._lock:
+            return self._vouched.get(via)
+
+    def _vouch_up_to(self, n: int) -> None:
+        """Under the lock: the subscriptions waiting for sync words up to ``n`` are vouched for
+        (an answer given at once, or by the express's end, too: whatever it reads later comes
+        on a subscription of its own made after it)."""
+        for m in [m for m in self._vouching if m <= n]:
+            via, since = self._vouching.pop(m)
+            self._vouched[via] = since
+
     def _ask(self, n: int, again: bool = False) -> None:
         """Rule 8: sync word ``n`` asked for (or answered with one not read yet); a socket the
         express does not read is a hang."""
@@ -442,6 +482,7 @@ class Express:
         if sock is not None:  # (its lock apart: a send under it must not hold up a hold)
             n = sock.answer(n)
         with self._lock:
+            self._vouch_up_to(n)
             done = [rid for rid, m in self._holds.items() if m <= n]
             for rid in done:
                 del self._holds[rid]
@@ -452,6 +493,7 @@ class Express:
     def _gone(self) -> None:
         """Under the lock: the child is gone; every hold ends (nothing of it writes)."""
         self._sock = None
+        self._vouch_up_to(self._sync)
         for rid in list(self._holds):
             if self._on_release is not None:
                 self._on_release(rid, self._sync, True)
