@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.interfaces.gs232 import commands as gs232_commands
 from bridge.interfaces.gs232.parser import Dcu1Kind, Dcu1Reader
 from tests.integration.test_gs232_integration import gs232_ask, rotctl, settled
 from tests.support import free_port, wait_until
@@ -251,3 +252,35 @@ def test_the_rotorez_driver_drives_a_bridges_own_dcu1_pty(
     stopped = emu.wait_for(lambda s: not s.is_moving, 10)
     assert stopped.az_deg < 290
     assert [f.data for f in emu.frames(*BEARING_OUTCOMES)] == [b"AP1120\r", b"AP1300\r"]
+
+
+@pytest.mark.parametrize("by", ["mqtt", "its own semicolon"])
+def test_a_bearing_ap1_stored_before_a_stop_is_not_turned_to_by_an_am1_after_it(
+    rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, by: str
+) -> None:
+    """Package rule 10 and docs/architecture.md rule 11: ``AP1ddd;`` keeps a bearing, ``AM1;``
+    turns to it. A STOP between the two (an operator's on MQTT, or the program's own ``;``)
+    dropped every target the bridge held, but not the bearing the endpoint kept: the AM1 that
+    came after it turned the rotor to a bearing given before the STOP. Only DCU1_STORED_S,
+    a clock, stood between them (here made long, so that the order alone decides)."""
+    monkeypatch.setattr(gs232_commands, "DCU1_STORED_S", 3600.0)
+    port, _path = start(rig, tmp_path)
+    assert rig.app is not None
+    rotator = rig.app.rotators[0]
+    with client(port) as program:
+        program.send(b"AP1200;")
+        assert program.answer() == b";010"  # read after the AP1: kept, turned nothing
+        halts = rotator.halts
+        if by == "mqtt":
+            rig.probe.publish("rotor/stop", "STOP")
+        else:
+            program.send(b";")
+        wait_until(lambda: rotator.halts > halts, 10, "the STOP carried out")
+        program.send(b"AM1;")
+        program.answer()  # (behind the AM1: it was judged)
+
+    def refused() -> bool:
+        return any(b"AM1" in m.payload for m in rig.probe.on("rotor/error"))
+
+    wait_until(lambda: moves(rig) or refused(), 10, "the AM1 refused, or a move")
+    assert moves(rig) == [] and not rig.emus["tower"].state().is_moving
