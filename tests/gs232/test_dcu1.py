@@ -132,8 +132,11 @@ class _Tower:
         self.submitted: list[Target | Stop] = []
         self.refusals: list[tuple[str, str | None]] = []
         self.refuse: set[type] = set()
+        self.halts = 0  # the judge's count of STOPs and lock ONs, every interface's
 
     def submit(self, command: Target | Stop, described: str | None = None) -> None:
+        if isinstance(command, Stop):
+            self.halts += 1
         if type(command) in self.refuse:
             raise Refused(RefusalCode.LOCKED, "locked")
         self.submitted.append(command)
@@ -172,6 +175,21 @@ def test_a_bearing_kept_too_long_turns_nothing() -> None:
     dcu.feed(b"AP1210;")
     clock.t += DCU1_STORED_S - 0.1
     assert dcu.feed(b"AM1;") == [b""] and [t.az_deg for t in tower.submitted] == [210]  # type: ignore[union-attr]
+
+
+def test_a_bearing_kept_before_a_stop_turns_nothing_after_it() -> None:
+    """Package rule 10 (review 102): a STOP or lock ON from any interface, or this client's own
+    ``;``, between AP1 and AM1 leaves the AP1's bearing behind, however soon AM1 comes."""
+    tower = _Tower()
+    dcu = session(tower)
+    dcu.feed(b"AP1200;")
+    tower.halts += 1  # an operator's STOP, on MQTT
+    assert dcu.feed(b"AM1;") == [DCU1_ERROR] and tower.submitted == []
+    assert tower.refusals[-1][1] == "dcu1 AM1;"
+    assert dcu.feed(b"AP1210;;AM1;") == [b"", b"", DCU1_ERROR]
+    assert [type(c) for c in tower.submitted] == [Stop]
+    assert dcu.feed(b"AP1220;AM1;") == [b"", b""]  # a STOP before it: taken
+    assert [t.az_deg for t in tower.submitted[1:]] == [220]  # type: ignore[union-attr]
 
 
 def test_ap1_with_cr_turns_at_once() -> None:

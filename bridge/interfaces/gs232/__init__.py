@@ -79,7 +79,11 @@ Rules:
 10. DCU-1 commands: ``AP1ddd;`` keeps the bearing and turns nothing; ``AM1;`` turns to it once,
     if it was kept within DCU1_STORED_S (1 s: the programs send both together; a pty outlives
     its clients and cannot tell one from the next, so a bearing one left must not be the
-    next one's), else it is refused on ``R/error`` and turns nothing; ``AP1ddd`` CR
+    next one's), and if no STOP or lock ON (from any interface, this client's ``;`` too) came
+    after it: a bearing given before a STOP is never turned to after it (docs/architecture.md
+    rule 11; review 102: the clock alone let an ``AM1;`` after an operator's STOP turn the
+    rotor to the ``AP1``'s bearing); else it is refused on ``R/error`` and turns nothing;
+    ``AP1ddd`` CR
     turns at once; ``AI1;`` (or ``AI1`` CR) answers ``;ddd``, the true bearing rounded to a
     whole degree, 360 as 000, and nothing while the bridge does not have it (Hamlib's
     ``-m 401`` would otherwise ask for ever); the options are taken and change nothing (the

@@ -256,22 +256,33 @@ class EasycommSession(_LineSession):
         return words
 
 
+class Dcu1Rotator(FrontRotator, Protocol):
+    """What the DCU-1 session asks of a rotator besides a front end's (package rule 10): the
+    count of its STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
+    remote's, of its own front ends, remote/rotator.py)."""
+
+    @property
+    def halts(self) -> int: ...
+
+
 class Dcu1Session(_Session[Dcu1Request]):
     """One DCU-1 / Rotor-EZ client (package rules 9 and 10). ``clock``: when AP1 stored its
     bearing (monotonic seconds)."""
+
+    rotator: Dcu1Rotator
 
     name, failed_reply, source = "dcu1", DCU1_ERROR, Source.DCU1
 
     def __init__(
         self,
-        rotator: Rotator,
+        rotator: Dcu1Rotator,
         peer: str | None = None,
         *,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         super().__init__(rotator, peer)
         self._clock = clock
-        self._stored: tuple[int, float] | None = None  # AP1's bearing, and when
+        self._stored: tuple[int, float, int] | None = None  # AP1's bearing, when, the halts
 
     def reader(self) -> Dcu1Reader:
         return Dcu1Reader()
@@ -293,7 +304,7 @@ class Dcu1Session(_Session[Dcu1Request]):
             return b";%03d" % (math.floor(where[0] + 0.5) % 360)
         if item.kind is Dcu1Kind.STORE:
             assert item.az_deg is not None
-            self._stored = (item.az_deg, self._clock())
+            self._stored = (item.az_deg, self._clock(), self.rotator.halts)
             return b""
         if item.kind is Dcu1Kind.EXECUTE or item.kind is Dcu1Kind.GOTO:
             return self._turn(item, described)
@@ -311,6 +322,10 @@ class Dcu1Session(_Session[Dcu1Request]):
             stored, self._stored = self._stored, None
             if stored is None or self._clock() - stored[1] > DCU1_STORED_S:
                 why = f"AM1; with no bearing stored by AP1 in the last {DCU1_STORED_S:g} s"
+                self.rotator.report_refusal(why, described, origin=self.origin)
+                return DCU1_ERROR
+            if self.rotator.halts != stored[2]:  # package rule 10: a STOP came after it
+                why = "AM1; after a STOP or lock ON that came after the AP1's bearing"
                 self.rotator.report_refusal(why, described, origin=self.origin)
                 return DCU1_ERROR
             az_deg = stored[0]
