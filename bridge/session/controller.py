@@ -11,7 +11,12 @@ Rules:
    shown (status.py rule 1).
 2. A controller that reports positions is "available" only after a valid reading, and stops
    being available after ``silence_timeout_s`` without one (tracking ends, a waiting target is
-   dropped). A DCU-1 is available while its port is open (it never answers). A garbled answer
+   dropped), counted only once a question went out since that reply and its time passed
+   unanswered (link.py ``asked_since_heard``): time in which the bridge asked nothing (its
+   process held, a host that stalls) is no silence of the controller's, nor a stall's
+   (docs/architecture.md rule 15; review 102: held 12 s mid-turn, the session called it
+   silent and stalled at its first step after, and stopped it short).
+   A DCU-1 is available while its port is open (it never answers). A garbled answer
    (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
    without a valid reply at most, and offline before the motion machine could call a turn fed no
    reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll and a
@@ -1137,7 +1142,8 @@ class Controller:
         if (link is None or link.slew is None) and (
             self.motion is not seen or self.cfg.motion is not cfg or now >= deadline
         ):
-            self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
+            asking = -math.inf if link is None else link.asking_since  # (rule 2: a stall too)
+            self.motion, events = mo.tick(self.motion, self.cfg.motion, now, asking_since=asking)
             if events:
                 self._motion_events(events, now)
         if link is None or not self.answering:
@@ -1254,14 +1260,19 @@ class Controller:
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
         silent = by_silence = False
-        if unread_s >= self._least_silence_s:  # (the cheap look first, at every step of every
+        asked = link.asked_since_heard  # (rule 2: no silence in time nothing was asked)
+        if (
+            asked and unread_s >= self._least_silence_s
+        ):  # (the cheap look first, at every step of every
             by_silence = now >= self._silent_offline_t(link, now)  # rotor: rule 2)
             unread = now >= self._garbled_offline_t(link, now)  # (garbage only)
             silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a
                 by_silence or unread  # reply owed may still come)
             )
         # (never answered: no valid reply for one timeout, as ever)
-        never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
+        never = (
+            asked and link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
+        )
         if silent and self.answering:
             if by_silence:
                 quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)

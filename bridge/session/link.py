@@ -161,6 +161,8 @@ class Link:
         self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
         self._held_after = False  # rule 9: bytes were read after the held reading
         self._last_write_t = -math.inf  # rule 10
+        self._asked_t = -math.inf  # rule 2: the last frame written that awaits a reply
+        self._first_asked_t = -math.inf  # ... the first of them since the last valid reply
         self._last_axis: bytes | None = None
         self._garbled = False  # rule 11: the reply owed now came garbled
         self._garbled_t = -math.inf  # rule 11: the last garbled answer
@@ -232,6 +234,9 @@ class Link:
         self._last_axis = self._axis(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
+            if self._asked_t <= self._heard_from():  # rule 2
+                self._first_asked_t = now
+            self._asked_t = now
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
             self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
@@ -549,8 +554,27 @@ class Link:
 
     def unread_for(self, now: float) -> float:
         """Rule 2: how long since a valid reply (or a slew's wait ended)."""
+        return now - self._heard_from()
+
+    def _heard_from(self) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
-        return now - max(heard, self._quiet_from_t, self._heard_t)
+        return max(heard, self._quiet_from_t, self._heard_t)
+
+    @property
+    def asked_since_heard(self) -> bool:
+        """Rule 2: a question went out since the last valid reply (or a slew's wait ended):
+        only then can the controller be silent. Time the bridge did not ask in (its process
+        held, a host that stalls) is no silence of the controller's (docs/architecture.md
+        rule 15; review 102)."""
+        return self._asked_t > self._heard_from()
+
+    @property
+    def asking_since(self) -> float | None:
+        """Rule 2: when the first question since the last valid reply went out, while nothing
+        has come since the last one (a reply held, rule 9, or garbled, rule 11, is no
+        silence); else None."""
+        unanswered = self.asked_since_heard and self._read_t < self._asked_t
+        return self._first_asked_t if unanswered else None
 
     # -- junk ---------------------------------------------------------------------------------
     def add_junk(self, data: bytes, now: float) -> None:

@@ -21,6 +21,11 @@ Rules:
    for it: no stop to a rotor at rest (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
+   A stall is told by a reading, or by time while the controller is asked and does not
+   answer (``tick``'s ``asking_since``), never by time in which the bridge asked nothing:
+   its process held mid-turn (SIGSTOP, a host that stalls) longer than the timeout, the rotor
+   turning on meanwhile, was called stalled and stopped short (docs/architecture.md rule 15;
+   review 102).
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
    end stop first moves away from a target across the stop.)
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
@@ -662,11 +667,17 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
 
 
 def tick(
-    m: Motion, cfg: MotionConfig, now: float, read: bool = False
+    m: Motion,
+    cfg: MotionConfig,
+    now: float,
+    read: bool = False,
+    asking_since: float | None = -math.inf,
 ) -> tuple[Motion, list[Event]]:
     """Time-driven transitions: settling, stall, end of the brake window; the rotor found
     arrived or stopped (``Event.ARRIVED``, ``Event.STOPPED``) only at a reading (``read``:
-    rule 2)."""
+    rule 2); a stall (rule 3) only at a reading, or by time while the controller is asked and
+    does not answer: ``asking_since`` the first question since its last reply (link.py),
+    at the stall's time at the latest; None: nothing asked since (controller.py rule 2)."""
     events: list[Event] = []
     if not cfg.spec.can_report_position:  # (the spec's: no property call at every step)
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
@@ -677,15 +688,17 @@ def tick(
         return m, events
     if m.state is MOVING:
         still = read and now >= still_from(m, cfg)  # rule 2
+        stall_t = (m.progress_t or now) + cfg.stall_timeout_s
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
                 events.append(Event.ARRIVED)
                 m = _at_rest(m, cfg, now, BRAKING)
             elif (  # (off target: one at it waits for the reading that shows it still)
-                err is not None
+                (read or (asking_since is not None and asking_since <= stall_t))  # (rule 3)
+                and err is not None
                 and err > cfg.tolerance_deg
-                and now >= (m.progress_t or now) + cfg.stall_timeout_s
+                and now >= stall_t
             ):
                 events.append(Event.STALLED)
                 m = _at_rest(m, cfg, now, STALLED)

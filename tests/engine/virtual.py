@@ -289,6 +289,33 @@ class VirtualRotator:
         while self.now < end:
             self._step(end)
 
+    def pause(self, seconds: float) -> None:
+        """The bridge's process held for ``seconds`` (SIGSTOP, a host that stalls): the line
+        and the controller go on, what the controller sends waits in the port, and the
+        session is not stepped; then it is, as the lines thread wakes (the port's bytes first,
+        if any: runtime/worker.py ``serve``)."""
+        end, held = self.now + seconds, b""
+        while True:
+            times = [end]
+            device_t = self.device.next_wakeup(self.now)
+            if device_t is not None:
+                times.append(device_t)
+            line_t = self._tx.next_due_s()
+            if line_t is not None:
+                times.append(line_t)
+            self.now = max(self.now, min(times))
+            arrived = self._tx.due(self.now)
+            if arrived:
+                self.device.receive(arrived, self.now)
+            out = self.device.due_output(self.now)
+            if out and not self._silent and self.connected:
+                held += out
+            if self.now >= end:
+                break
+        if held:
+            self.received.append((self.now, held))
+            self._do(self.session.bytes_received(held, self.now))
+
     def run_until(
         self, predicate: Callable[[VirtualRotator], object], timeout_s: float, what: str = ""
     ) -> float:
