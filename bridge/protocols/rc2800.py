@@ -26,9 +26,13 @@ Rules:
    it ends with its answer (untrusted) or at its deadline, not with the noise: the box may
    still be answering, and a query written then would take that answer for its own.
    A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
-   chatter, never a reply. ``A ERR=n`` is the box's refusal (REFUSED, as the GS-232's ``?>``):
-   no reading, reported; a target it answers that has not moved the rotor is dropped at once,
-   not waited on until a stall (motion.py rule 8).
+   chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported. On the
+   azimuth box it is the box's refusal (REFUSED, as the GS-232's ``?>``): a target it answers
+   that has not moved the rotor is dropped at once, not waited on until a stall (motion.py
+   rule 8). On the az/el box it is not: a target is a frame for each axis, each answered for
+   its own, and the other axis's frame may have turned its rotor (a review: ``E ERR=2`` to the
+   elevation's frame was taken for the target's refusal, reported so, the target dropped,
+   while the azimuth turned 190 degrees to it); the stall check judges that target.
 2. A query (or a stop, whose axis selections are answered too) waits for a line of each axis it
    asked, in order; when the last has come, they are one reading (UNTRUSTED if any noise came
    in the exchange: the engine asks again). An axis's line while nothing is asked is kept; a
@@ -149,7 +153,9 @@ class Rc2800Codec(Plain):
             return
         if m := _ERROR.fullmatch(raw):
             code = m.group("code").decode()
-            out.append(JunkReply(raw, JunkReason.REFUSED, f"controller error {code}"))
+            # rule 1: a target's refusal only where a target is one frame
+            reason = JunkReason.CHATTER if self.elevation else JunkReason.REFUSED
+            out.append(JunkReply(raw, reason, f"controller error {code}"))
             return
         m = _POSITION.fullmatch(raw)
         if m is None:

@@ -174,3 +174,19 @@ def test_a_bearing_the_box_answers_with_an_error_is_sent_once_more_then_dropped(
     v.run_until_state(IDLE, 1)
     assert v.status.bearing_deg == 123.4 and not v.truth().is_moving
     assert v.errors("stalled") == [] and len(v.frames(Outcome.REFUSED, since=t)) == 2
+
+
+def test_an_elevation_the_az_el_box_refuses_is_no_refusal_of_a_target_its_azimuth_turns_to(
+    rig: Rig,
+) -> None:
+    """rc2800.py rule 1: on the az/el box a target is two frames, each answered for its own
+    axis: an ``E ERR=n`` refuses the elevation's frame alone, and the azimuth's frame turns the
+    rotor. Taken for the target's refusal (a review), the bridge said "the controller refused
+    the target" and showed no target while the azimuth turned 190 degrees to it."""
+    v = ready(rig, "rc2800", start_az_deg=10, start_el_deg=5)
+    v.garble_writes(b"E45.0\r", b"E999\r", count=2)  # (or a box set up for less than 180)
+    t = v.now
+    v.target(200, 45)
+    v.run_until(lambda h: h.truth().az_deg == 200 and not h.truth().is_moving, 60, "at 200")
+    assert v.errors("refused", since=t) == []
+    assert len(v.frames(Outcome.REFUSED, since=t)) == 2

@@ -172,8 +172,11 @@ def test_out_of_range_is_spoiled_an_error_is_reported_and_noise_spoils_the_excha
     out = feed(codec, b"A P= 361.0 S=9 MV\rE P= 181.0 S=9 MV\r")
     assert positions(out) == [] and {j.reason for j in junk(out)} == {JunkReason.SPOILED}
     (err,) = junk(feed(codec, b"A ERR=2\r"))
-    assert err.reason is JunkReason.REFUSED and "error 2" in err.detail
+    # rule 1: the az/el box's error refuses one axis's frame, no target; the azimuth box's does
+    assert err.reason is JunkReason.CHATTER and "error 2" in err.detail
     assert not codec.harmless(b"A ERR=2\r")
+    (err,) = junk(feed(Rc2800Codec(elevation=False), b"A ERR=2\r"))
+    assert err.reason is JunkReason.REFUSED and "error 2" in err.detail
     codec.encode_query()
     out = feed(codec, b"A P=  10.0 S=9 MV\rgarbage\rE P=  20.0 S=9 MV\r")
     assert positions(out) == [] and junk(out)[-1].reason is JunkReason.UNTRUSTED
