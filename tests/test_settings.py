@@ -983,6 +983,9 @@ def test_a_rotators_list_or_table_from_the_environment_is_json() -> None:
     [
         ("ROTOR_BRIDGE_MQTT_HOST=broker.lan", "did you mean ROTOR_BRIDGE_MQTT__HOST?"),
         ("ROTOR_BRIDGE_ROTATOR__TOWER__PORT=/dev/ttyUSB9", "did you mean ROTOR_BRIDGE_ROTATORS__"),
+        # (a review: the rotators' own variables were dropped as silently, the file's port used)
+        ("ROTOR_BRIDGE_ROTATORS__TOWER_PORT=/dev/ttyUSB9", "ROTATORS__TOWER__PORT?"),
+        ("ROTOR_BRIDGE_ROTATORS__TOWER=/dev/ttyUSB9", "ROTATORS__<ID>__<KEY>"),
         ("ROTOR_BRIDGE_LOGLEVEL=DEBUG", "did you mean ROTOR_BRIDGE_LOG_LEVEL?"),
         ("rotor_bridge_statefile=/tmp/s.json", "did you mean ROTOR_BRIDGE_STATE_FILE?"),
     ],

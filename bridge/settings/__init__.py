@@ -24,7 +24,10 @@ Rules:
 4. A ``ROTOR_BRIDGE_*`` variable whose first word is no key of the file's top (but
    ``ROTOR_BRIDGE_CONFIG``) is an error naming it, as rule 1 for the file: pydantic-settings
    drops it without a word (``ROTOR_BRIDGE_MQTT_HOST``, one ``_`` where a table takes ``__``,
-   left the bridge on the file's broker).
+   left the bridge on the file's broker). So is a ``ROTOR_BRIDGE_ROTATORS__`` variable that
+   names no rotator's key (``ROTOR_BRIDGE_ROTATORS__TOWER_PORT``: the settings source drops
+   every such variable, and only ``ROTATORS__<ID>__<KEY>`` is read; a review: the bridge
+   opened the file's port).
 """
 
 from __future__ import annotations
@@ -532,6 +535,8 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
     for key, value in env.items():
         m = _ROTATOR_ENV.match(key)
         if not m:
+            if key.upper().startswith(f"{ENV_PREFIX}ROTATORS__"):  # rule 4
+                raise ConfigError(_no_rotator_key(key, data))
             continue
         # a key of a table in the rotator (its azimuth box's port) joined with "__" as elsewhere
         rid, path = m.group(1).lower(), m.group(2).lower().split("__")
@@ -554,6 +559,21 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
                 break
         else:
             raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
+
+
+def _no_rotator_key(key: str, data: dict[str, Any]) -> str:
+    """Rule 4: why ``key`` (``ROTOR_BRIDGE_ROTATORS__`` and no ``<ID>__<KEY>``) is refused."""
+    rest = key[len(f"{ENV_PREFIX}ROTATORS__") :]
+    ids = [str(r.get("id", "")) for r in data.get("rotators", []) if isinstance(r, dict)]
+    hint = ""
+    for rid in sorted((i for i in ids if i), key=len, reverse=True):
+        if rest.lower().startswith(f"{rid.lower()}_") and len(rest) > len(rid) + 1:
+            hint = f": did you mean {ENV_PREFIX}ROTATORS__{rid.upper()}__{rest[len(rid) + 1 :]}?"
+            break
+    return (
+        f"{key}: unknown rotator key (a rotator's key is {ENV_PREFIX}ROTATORS__<ID>__<KEY>, "
+        f"joined with __: {ENV_PREFIX}ROTATORS__TOWER__PORT){hint}"
+    )
 
 
 def format_validation_error(
