@@ -67,7 +67,10 @@ Rules:
    review: the poll's answer in flight was taken for the stop's, on a controller that answers
    no stop; the poll waited out its reply time, the codec took the controller for one that
    answers stops, so the repeat of a double STOP ate the next poll's answer too, and 1 s
-   without a reading put the rotator offline.)
+   without a reading put the rotator offline.) If that query's time runs out first, its
+   answer may still come: the next whole line is still the stop's answer (harmless), but it
+   does not show that this controller answers stops (a review: a poll answered after its
+   reply time taught it so, and every later stop ate the next poll's answer).
 """
 
 from __future__ import annotations
@@ -131,6 +134,7 @@ class EasycommCodec(OneQuery):
         self._el: float | None = None
         self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
         self._stop_behind = False  # rule 9: that stop went while a query was open: after it
+        self._stop_unsure = False  # rule 9: ... and that query's time ran out: its answer late?
         self._answers_stop = False  # rule 9: this controller was seen to answer one
         self._stop_said: deque[bytes] = deque(maxlen=4)  # rule 9: those answers, for harmless
 
@@ -147,13 +151,19 @@ class EasycommCodec(OneQuery):
     def encode_stop(self) -> bytes:
         self._stop_open = True  # rule 9
         self._stop_behind = self._query_open  # rule 9: the query's answer comes first
+        self._stop_unsure = False
         return b"SA SE\n"
+
+    def expire_query(self) -> None:
+        if self._query_open and self._stop_open and self._stop_behind:  # rule 9
+            self._stop_unsure = True
+        super().expire_query()
 
     def encode_query(self) -> bytes:
         self._open_query()
         self._az = self._el = None
         self._stop_open = self._stop_open and self._answers_stop  # rule 9
-        self._stop_behind = False  # (this query went after the stop)
+        self._stop_behind = self._stop_unsure = False  # (this query went after the stop)
         return b"AZ\nEL\n" if self.separate else b"AZ EL\n"  # rule 8
 
     def encode_version(self) -> bytes | None:
@@ -233,7 +243,9 @@ class EasycommCodec(OneQuery):
         stop_first = self._stop_open and not (self._stop_behind and self._query_open)  # rule 9
         stop_answer = stop_first or (self._answers_stop and not self._query_open)
         if stop_answer and whole and not pre.strip(b"\r\n "):  # rule 9
-            self._stop_open, self._answers_stop = False, True
+            self._stop_open = False
+            self._answers_stop = self._answers_stop or not self._stop_unsure  # rule 9
+            self._stop_unsure = False
             self._stop_said.append(raw)
             out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))
             return

@@ -298,6 +298,21 @@ def test_a_stop_written_behind_an_open_poll_leaves_the_polls_answer_to_it(answer
     assert [j.reason for j in junk(replies)] == [JunkReason.CHATTER]
 
 
+def test_a_poll_answered_after_its_time_with_a_stop_behind_it_teaches_nothing() -> None:
+    """Rule 9 (a review): the poll's time ran out with a stop written behind it, and its
+    answer came after all: taken for the stop's, it taught the codec that this controller (a
+    K3NG, answering no stop) answers stops, and every later stop ate the next poll's answer."""
+    codec = EasycommCodec(2)
+    codec.encode_query()
+    codec.encode_stop()
+    codec.expire_query()
+    replies = codec.feed(b"AZ219.0 EL40.0\n")  # (late: no reading, and no notice either)
+    assert positions(replies) == [] and [j.reason for j in junk(replies)] == [JunkReason.CHATTER]
+    codec.encode_stop()  # a later stop, nothing answers it
+    codec.encode_query()
+    assert positions(codec.feed(b"AZ218.0 EL40.0\n")) == [(218.0, 40.0)]
+
+
 def test_an_azimuth_model_ignores_the_elevation_on_its_line_in_range_or_not() -> None:
     """Rule 2, since rule 8 asks it AZ EL: a SatNOGS's unused channel may say anything."""
     out = asked(2, elevation=False).feed(b"AZ100.0 EL-120.0\n")
