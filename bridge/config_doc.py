@@ -48,7 +48,7 @@ host = "127.0.0.1"
 [[rotators]]
 id = "tower"
 model = "rotorez"
-port = "/dev/ttyUSB0"
+port = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"
 """
 
 INTRO = f"""# Configuration
@@ -69,9 +69,9 @@ The smallest useful file: one rotator, and the broker (the default is this host)
 A key with a plain value (text, a number, true or false) can be set from the environment
 instead, which beats the file:
 `ROTOR_BRIDGE_` and the key, tables joined with `__` (`ROTOR_BRIDGE_MQTT__HOST=broker.lan`);
-a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`), and its boxes'
-the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/ttyUSB2`). A list or a
-table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`). A
+a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/serial/by-id/...`),
+and its boxes' the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/serial/by-id/...`).
+A list or a table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`). A
 `ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
 takes `__`) is an error, as an unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
 `config/example.toml` is a commented starting point with the keys most people change.

@@ -2,7 +2,7 @@
 
 Environment: ``ROTOR_BRIDGE_<FIELD>``, nested with ``__`` (``ROTOR_BRIDGE_MQTT__HOST=broker``).
 Rotators are a list in the file; their fields are overridden by id:
-``ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1``. The file itself is ``--config`` or
+``ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/serial/by-id/...``. The file itself is ``--config`` or
 ``ROTOR_BRIDGE_CONFIG``.
 
 Where the parts are: the broker's tables in settings/mqtt.py, a rotator's in

@@ -167,7 +167,12 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         description="a composite rotator (its azimuth from one controller, its elevation from "
         "another): the azimuth's box, `{ model = ..., port = ... }`, with elevation, in place "
         "of model and port; any model",
-        examples=[{"model": "rt21", "port": "/dev/ttyUSB0"}],
+        examples=[
+            {
+                "model": "rt21",
+                "port": "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_AZ0001-if00-port0",
+            }
+        ],
         json_schema_extra={"unset": "model and port name one controller"},
     )
     elevation: AxisSettings | None = Field(
@@ -175,7 +180,12 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         description="the elevation's box of a composite rotator, a model that reports where "
         "it points: an az/el box used for its elevation (its azimuth is never turned), or an "
         "rt21 box on the elevation rotor",
-        examples=[{"model": "gs232b", "port": "/dev/ttyUSB1"}],
+        examples=[
+            {
+                "model": "gs232b",
+                "port": "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_EL0001-if00-port0",
+            }
+        ],
         json_schema_extra={"unset": "model and port name one controller"},
     )
     baud: int | None = Field(
