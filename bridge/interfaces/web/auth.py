@@ -107,9 +107,12 @@ class Tokens:
 
 
 def password_matches(given: str, password: str) -> bool:
-    """Rule 3: in constant time, whatever the lengths."""
+    """Rule 3: in constant time, whatever the lengths. A lone surrogate (JSON's ``\\ud800``,
+    which no password file holds: it is UTF-8) is a wrong password like any, counted against
+    the tries (an attack pass: its ``encode`` raised, a 500 with a traceback, never limited)."""
     return hmac.compare_digest(
-        hashlib.sha256(given.encode()).digest(), hashlib.sha256(password.encode()).digest()
+        hashlib.sha256(given.encode("utf-8", "surrogatepass")).digest(),
+        hashlib.sha256(password.encode()).digest(),
     )
 
 

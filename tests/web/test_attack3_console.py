@@ -1,0 +1,53 @@
+"""A third attack pass on the operator console (bridge/interfaces/web/): a neighbour on the LAN,
+with nothing but the console's port. Real parts: the bridge in this process on an emulated
+controller (pty) and a real mosquitto.
+
+Each test failed on the code it was written against (a finding of the pass):
+- a login whose password holds a lone surrogate (JSON's ``\\ud800``) was a 500, logged with a
+  traceback and never counted against the address's tries: unlimited, each an ERROR in the log;
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.web import auth
+from tests.support.console import ConsoleClient, web_section
+from tests.support.rig import Rig
+
+PASSWORD = "correct horse battery"
+
+
+@pytest.fixture
+def guarded(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, ConsoleClient]]:
+    """A console with a password, as one on the LAN has."""
+    secret = tmp_path / "web-password"
+    secret.write_text(PASSWORD + "\n")
+    secret.chmod(0o600)
+    web = rig.sections["web"] = web_section(password_file=str(secret))
+    rig.add("hf")
+    rig.start()
+    rig.ready("hf")
+    yield rig, ConsoleClient(web["port"])
+
+
+def _login(client: ConsoleClient, body: bytes) -> int:
+    headers = {"Content-Type": "application/json", "Origin": f"http://127.0.0.1:{client.port}"}
+    return client.request("POST", "/api/login", body, headers).status
+
+
+def test_a_password_no_text_can_hold_is_a_wrong_one_and_counts_against_the_tries(
+    guarded: tuple[Rig, ConsoleClient], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A lone surrogate in the password (valid JSON, no UTF-8) is a wrong password: 401, then
+    429 like any other guess, and no traceback in the log."""
+    _rig, client = guarded
+    caplog.set_level(logging.INFO)
+    body = b'{"password": "\\ud800' + PASSWORD.encode() + b'"}'
+    answers = [_login(client, body) for _ in range(auth.LOGIN_BURST_PER_CLIENT + 1)]
+    assert answers == [401] * auth.LOGIN_BURST_PER_CLIENT + [429], answers
+    assert not [r for r in caplog.records if r.exc_info], "a traceback was logged"
