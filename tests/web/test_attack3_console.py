@@ -5,11 +5,15 @@ controller (pty) and a real mosquitto.
 Each test failed on the code it was written against (a finding of the pass):
 - a login whose password holds a lone surrogate (JSON's ``\\ud800``) was a 500, logged with a
   traceback and never counted against the address's tries: unlimited, each an ERROR in the log;
+- every malformed HTTP request was logged by aiohttp at ERROR with its traceback, eleven
+  lines each, two thousand requests a second from one client: the bridge's own warnings
+  drowned, and journald's rate limit drops every line of the service;
 """
 
 from __future__ import annotations
 
 import logging
+import socket
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -18,6 +22,7 @@ import pytest
 from bridge.interfaces.web import auth
 from tests.support.console import ConsoleClient, web_section
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 PASSWORD = "correct horse battery"
 
@@ -51,3 +56,23 @@ def test_a_password_no_text_can_hold_is_a_wrong_one_and_counts_against_the_tries
     answers = [_login(client, body) for _ in range(auth.LOGIN_BURST_PER_CLIENT + 1)]
     assert answers == [401] * auth.LOGIN_BURST_PER_CLIENT + [429], answers
     assert not [r for r in caplog.records if r.exc_info], "a traceback was logged"
+
+
+def test_a_flood_of_malformed_requests_does_not_flood_the_log(
+    guarded: tuple[Rig, ConsoleClient], caplog: pytest.LogCaptureFixture
+) -> None:
+    """Each malformed request is refused (400), but what the log says of them is a few lines,
+    no traceback: the log is the bridge's, not the neighbour's."""
+    _rig, client = guarded
+    caplog.set_level(logging.INFO)
+    flood = 200
+    for _ in range(flood):
+        with socket.create_connection(("127.0.0.1", client.port), timeout=slow(10)) as s:
+            s.sendall(
+                b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: 1\r\nContent-Length: 2\r\n\r\n"
+            )
+            assert s.recv(64).startswith(b"HTTP/1.0 400")
+    said = [r for r in caplog.records if r.levelno >= logging.INFO and "aiohttp" in r.name]
+    said += [r for r in caplog.records if r.name.startswith("bridge.interfaces.web")]
+    assert len(said) <= flood // 10, f"{len(said)} lines for {flood} requests"
+    assert not [r for r in said if r.exc_info], "a traceback was logged"

@@ -37,6 +37,12 @@ Rules:
    moves wait per rotator (the one under way included); one more is refused at once (409,
    code ``busy``), never queued. A STOP or lock ON is never refused so.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
+7. What the HTTP server logs of a request it could not serve (``Quieter``) is the client's doing,
+   not the bridge's: a malformed request is one line naming its sender and what was wrong, no
+   traceback; any such line (a request's error too) goes at its level NOISE_BURST at once, then
+   one every NOISE_EVERY_S, the rest at DEBUG (an attack pass: aiohttp logged every malformed
+   request at ERROR with its traceback, 22,000 lines a second from one client that needed no
+   token, and journald's rate limit then drops every line of the service, its warnings too).
 """
 
 from __future__ import annotations
@@ -54,10 +60,12 @@ import time
 from collections.abc import Awaitable, Callable
 
 from aiohttp import web
+from aiohttp.http_exceptions import HttpProcessingError
 
 from bridge import __version__
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
+from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import BadCommand, Order, WebCommand, carry_out, parse
 from bridge.interfaces.web.connections import Connections
@@ -70,7 +78,38 @@ log = logging.getLogger(__name__)
 
 BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
+NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
+NOISE_EVERY_S = 10.0
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+class Quieter(logging.Filter):
+    """Rule 7, on the logger the HTTP server is given (the event loop's thread alone logs)."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__()
+        self._clock = clock
+        self._loud = TokenBucket.full(NOISE_BURST, 1.0 / NOISE_EVERY_S, clock())
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        exc = record.exc_info[1] if record.exc_info else None
+        if isinstance(exc, HttpProcessingError):  # the client's bytes: what was wrong, in short
+            said = (str(exc.message).splitlines() or [""])[0][:80]
+            who = record.args[0] if isinstance(record.args, tuple) and record.args else "?"
+            record.msg = "web console: a malformed request from %s refused (%d: %r)"
+            record.args = (who, exc.code, said)
+            record.exc_info, record.exc_text = None, None
+            record.levelno, record.levelname = logging.WARNING, "WARNING"
+        if self._loud.take(self._clock()):
+            return True
+        record.levelno, record.levelname = logging.DEBUG, "DEBUG"
+        return logging.getLogger(record.name).isEnabledFor(logging.DEBUG)
+
+
+http_log = logging.getLogger(__name__ + ".http")  # rule 7: the HTTP server's own
+http_log.addFilter(Quieter())
 
 
 def _named(exc: OSError, bind: str, port: int) -> OSError:
@@ -201,7 +240,9 @@ class WebConsole:
         app.router.add_post("/api/rotators/{rid}/command", self._command)
         app.router.add_get("/{name}", self._file)
         # the streams end themselves at stop (feed.close): nothing is worth waiting long for
-        runner = self._runner = web.AppRunner(app, access_log=None, shutdown_timeout=1.0)
+        runner = self._runner = web.AppRunner(
+            app, access_log=None, shutdown_timeout=1.0, logger=http_log
+        )
         await runner.setup()
         # served through Connections (connections.py), not a TCPSite: what is held is counted
         server = runner.server
