@@ -76,7 +76,7 @@ from bridge.interfaces.web.port import ConsoleRotator
 
 log = logging.getLogger(__name__)
 
-BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
+BODY_S = 10.0  # a command's or a login's body arrives within this, or it is not waited for
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
 NOISE_EVERY_S = 10.0
@@ -394,8 +394,10 @@ class WebConsole:
         if wait_s is not None:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
             return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
-        try:
-            doc = await request.json()
+        try:  # its body within BODY_S, as a command's (connections.py rule 2)
+            doc = await asyncio.wait_for(request.json(), BODY_S)
+        except TimeoutError:
+            return _json({"error": f"the login's body did not come within {BODY_S:g} s"}, 408)
         except (ValueError, RecursionError):
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
