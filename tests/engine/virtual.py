@@ -296,14 +296,7 @@ class VirtualRotator:
         if any: runtime/worker.py ``serve``)."""
         end, held = self.now + seconds, b""
         while True:
-            times = [end]
-            device_t = self.device.next_wakeup(self.now)
-            if device_t is not None:
-                times.append(device_t)
-            line_t = self._tx.next_due_s()
-            if line_t is not None:
-                times.append(line_t)
-            self.now = max(self.now, min(times))
+            self.now = max(self.now, min([end, *self._wire_times()]))
             arrived = self._tx.due(self.now)
             if arrived:
                 self.device.receive(arrived, self.now)
@@ -336,17 +329,17 @@ class VirtualRotator:
     def run_until_state(self, state: MotionState, timeout_s: float) -> float:
         return self.run_until(lambda h: h.state is state, timeout_s, f"state {state.value}")
 
+    def _wire_times(self) -> list[float]:
+        """When the controller or the line next has something to do (none: nothing due)."""
+        times = [self.device.next_wakeup(self.now), self._tx.next_due_s()]
+        return [t for t in times if t is not None]
+
     def next_time(self, until: float) -> float:
         """The time of the next thing that can happen here, ``until`` at the latest (rule 1)."""
         times = [until]
         if self.connected:
             times.append(self.session.next_wakeup())
-        device_t = self.device.next_wakeup(self.now)
-        if device_t is not None:
-            times.append(device_t)
-        line_t = self._tx.next_due_s()
-        if line_t is not None:
-            times.append(line_t)
+        times += self._wire_times()
         times += [due for due, _gen, _answer in self._answers]
         return max(self.now, min(times))
 
@@ -354,12 +347,7 @@ class VirtualRotator:
         times = [until]
         if self.connected:
             times.append(self.session.next_wakeup())
-        device_t = self.device.next_wakeup(self.now)
-        if device_t is not None:
-            times.append(device_t)
-        line_t = self._tx.next_due_s()
-        if line_t is not None:
-            times.append(line_t)
+        times += self._wire_times()
         times += [due for due, _gen, _answer in self._answers]
         t = max(self.now, min(times))
         if t > self.now:

@@ -31,8 +31,10 @@ import pytest
 from bridge.app import App
 from bridge.core.errors import Refused
 from bridge.core.model import Source, Target
+from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt import lane as lane_module
+from bridge.runtime.rotator import Rotator
 from tests.faults.conftest import mosquitto_password_file
 from tests.support import free_port
 from tests.support.mosquitto import Mosquitto
@@ -466,6 +468,26 @@ def express_alone(app: App, broker: Mosquitto) -> Iterator[Probe]:
         operator.close()
 
 
+def held_for_the_brake_window(rig: Rig, brake: float) -> tuple[App, EmulatedPort[Any], Rotator]:
+    """A Rotor-EZ turned to 300 and sent 100 mid-turn: stopped first, 100 is held for the
+    brake window of ``brake`` seconds (the bridge's app, the emulator, the rotator)."""
+    emu = rig.add(
+        "tower",
+        emu={"start_az_deg": 10, "speed_deg_s": 20.0, "brake_delay_s": brake},
+        brake_delay_s=brake,
+    )
+    app = rig.start()
+    rig.ready("tower", slow(brake + 10))  # (past the start-up brake window)
+    express_ready(app)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, slow(15))
+    rig.probe.publish("rotor/target", "100")  # a Rotor-EZ is stopped first; 100 waits
+    emu.wait_for(lambda s: not s.is_moving, slow(10))
+    rotator = app.rotators[0]
+    assert rotator.status.target_az_deg == 100.0  # held for the brake window
+    return app, emu, rotator
+
+
 def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
     rig: Rig, broker: Mosquitto
 ) -> None:
@@ -475,20 +497,7 @@ def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
     Rotor-EZ's brake window went out when the window ended, and the rotor turned (an attack
     pass); now that stop is the bridge's too, and the held target is dropped."""
     brake = 3.0
-    emu = rig.add(
-        "tower",
-        emu={"start_az_deg": 10, "speed_deg_s": 20.0, "brake_delay_s": brake},
-        brake_delay_s=brake,
-    )
-    app = rig.start()
-    rig.ready("tower")
-    express_ready(app)
-    rig.probe.publish("rotor/target", "300")
-    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, slow(15))
-    rig.probe.publish("rotor/target", "100")  # a Rotor-EZ is stopped first; 100 waits
-    emu.wait_for(lambda s: not s.is_moving, slow(10))
-    rotator = app.rotators[0]
-    assert rotator.status.target_az_deg == 100.0  # held for the brake window
+    app, emu, rotator = held_for_the_brake_window(rig, brake)
     stopped_at = emu.state().az_deg
     stop_t = time.monotonic()
     with express_alone(app, broker) as operator:
@@ -623,20 +632,7 @@ def test_a_stop_the_express_read_late_after_a_broker_restart_still_drops_the_hel
     bridge held for the Rotor-EZ's brake window went out when the window ended: the rotor
     turned after the STOP."""
     brake = 30.0  # longer than the restart and the reconnects below: the target still waits
-    emu = rig.add(
-        "tower",
-        emu={"start_az_deg": 10, "speed_deg_s": 20.0, "brake_delay_s": brake},
-        brake_delay_s=brake,
-    )
-    app = rig.start()
-    rig.ready("tower", slow(brake + 10))  # (past the start-up brake window)
-    express_ready(app)
-    rig.probe.publish("rotor/target", "300")
-    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, slow(15))
-    rig.probe.publish("rotor/target", "100")  # a Rotor-EZ is stopped first; 100 waits
-    emu.wait_for(lambda s: not s.is_moving, slow(10))
-    rotator = app.rotators[0]
-    assert rotator.status.target_az_deg == 100.0  # held for the brake window
+    app, emu, rotator = held_for_the_brake_window(rig, brake)
     stop_t = time.monotonic()
     app.client._client.reconnect_delay_set(8, 8)  # the bridge's two back after the express
     app.lane._client.reconnect_delay_set(8, 8)

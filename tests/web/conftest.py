@@ -63,6 +63,22 @@ class ConsoleBridge:
         assert client.command("hf", command="stop").status == 200
 
 
+PASSWORD = "correct horse battery"  # the console's password where a test gives it one
+
+
+@pytest.fixture
+def guarded(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, ConsoleClient]]:
+    """A console with a password, as one on the LAN has, and one rotator, ``hf``."""
+    secret = tmp_path / "web-password"
+    secret.write_text(PASSWORD + "\n")
+    secret.chmod(0o600)
+    web = rig.sections["web"] = web_section(password_file=str(secret))
+    rig.add("hf")
+    rig.start()
+    rig.ready("hf")
+    yield rig, ConsoleClient(web["port"])
+
+
 @pytest.fixture(scope="module")
 def console_bridge(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ConsoleBridge]:
     tmp: Path = tmp_path_factory.mktemp("console")

@@ -15,30 +15,14 @@ from __future__ import annotations
 
 import logging
 import socket
-from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 
 from bridge.interfaces.web import auth, server
-from tests.support.console import ConsoleClient, web_section
+from tests.support.console import ConsoleClient
 from tests.support.rig import Rig
 from tests.support.waiting import slow
-
-PASSWORD = "correct horse battery"
-
-
-@pytest.fixture
-def guarded(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, ConsoleClient]]:
-    """A console with a password, as one on the LAN has."""
-    secret = tmp_path / "web-password"
-    secret.write_text(PASSWORD + "\n")
-    secret.chmod(0o600)
-    web = rig.sections["web"] = web_section(password_file=str(secret))
-    rig.add("hf")
-    rig.start()
-    rig.ready("hf")
-    yield rig, ConsoleClient(web["port"])
+from tests.web.conftest import PASSWORD
 
 
 def _login(client: ConsoleClient, body: bytes) -> int:

@@ -42,9 +42,9 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms
+from tests.web.conftest import PASSWORD
 
 URL = "/api/rotators/hf/command"
-PASSWORD = "correct horse battery"
 
 
 @pytest.fixture
@@ -57,19 +57,6 @@ def console(rig: Rig) -> Iterator[tuple[Rig, ConsoleClient]]:
     client = ConsoleClient(web["port"])
     client.session()
     yield rig, client
-
-
-@pytest.fixture
-def guarded(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, ConsoleClient]]:
-    """A console with a password."""
-    secret = tmp_path / "web-password"
-    secret.write_text(PASSWORD + "\n")
-    secret.chmod(0o600)
-    web = rig.sections["web"] = web_section(password_file=str(secret))
-    rig.add("hf")
-    rig.start()
-    rig.ready("hf")
-    yield rig, ConsoleClient(web["port"])
 
 
 def _raw(client: ConsoleClient, body: bytes) -> Any:
