@@ -1146,6 +1146,13 @@ class Controller:
             self.motion, events = mo.tick(self.motion, self.cfg.motion, now, asking_since=asking)
             if events:
                 self._motion_events(events, now)
+            if (  # rule 2: a stall's deadline with nothing asked: the reading that decides,
+                link is not None  # asked now, not a moving poll later (a reply under way
+                and asking is None  # is that reading)
+                and not link.reply_owed
+                and mo.stall_due(self.motion, self.cfg.motion, now)
+            ):
+                link.poll_now(now)
         if link is None or not self.answering:
             return
         if self.options.enable_due and link.slew is None and link.free() and not link.stop_due:

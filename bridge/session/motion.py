@@ -25,7 +25,9 @@ Rules:
    answer (``tick``'s ``asking_since``), never by time in which the bridge asked nothing:
    its process held mid-turn (SIGSTOP, a host that stalls) longer than the timeout, the rotor
    turning on meanwhile, was called stalled and stopped short (docs/architecture.md rule 15;
-   review 102).
+   review 102). At the stall's time with nothing asked, the controller is asked at once
+   (``stall_due``, controller.py ``tick``): its reading decides a reply time later, not a
+   moving poll later (a review: the motor drove on against a jam for one more moving poll).
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
    end stop first moves away from a target across the stop.)
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
@@ -793,6 +795,17 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
         # a stop went out: send another only if a reading since shows it did not take
         return Plan.STOP_FIRST if stop_again(m, cfg, now) else Plan.WAIT
     return Plan.WAIT  # braking (or no reading yet)
+
+
+def stall_due(m: Motion, cfg: MotionConfig, now: float) -> bool:
+    """Rule 3: turning off target with no movement for ``stall_timeout_s``, the stall not
+    called for want of a reading since (``tick``'s): the controller is to be asked at once,
+    not at the next moving poll (a review: the motor drove against a jam a moving poll longer,
+    2 s for a GS-232B polled every 2 s while turning)."""
+    if m.state is not MOVING or m.progress_t is None or now < m.progress_t + cfg.stall_timeout_s:
+        return False
+    err = target_error(m, cfg)
+    return err is not None and err > cfg.tolerance_deg
 
 
 def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
