@@ -396,3 +396,39 @@ def test_a_call_asked_while_locked_never_turns_the_rotor_after_the_lock_off(benc
     served(bench)
     assert bench.sets() == []
     assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review of 090451a, not mended: the DCU-1 session checks the halt count, then "
+    "submits without it (since=None), so a STOP between the two is not seen",
+)
+def test_an_am1_whose_ap1_came_before_a_stop_never_turns_after_it(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """gs232/ package rule 10 (review 102, 090451a): the AP1's bearing is kept with the halt
+    count and an AM1 after a STOP is refused. The count is read at the AM1 and the target
+    submitted after: a STOP from the stop lane in between (another thread, the interpreter
+    lock switched there) is counted after the check and before the submit takes its own
+    count, so the AP1's bearing, given before the STOP, goes out after it. Passing the count
+    kept with the bearing as the submit's ``since`` (mailbox.py rule 10) would drop it."""
+    from bridge.interfaces.gs232 import Dcu1Session
+
+    dcu = Dcu1Session(bench.rot)
+    assert dcu.feed(b"AP1200;") == [b""]
+    real = bench.rot.submit
+    once = [True]
+
+    def submit(command: object, *args: object, **kw: object) -> None:
+        if once[0] and isinstance(command, Target):
+            once[0] = False
+            on_a_thread(*halts(bench)["lane STOP"])  # after the AM1's check, before its put
+        real(command, *args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(bench.rot, "submit", submit)
+    dcu.feed(b"AM1;")
+    batch = bench.rot._mailbox.take()
+    bench.v._do(bench.v.session.commands(batch, bench.v.now))
+    served(bench)
+    assert bench.sets() == []  # the AP1's bearing never reached the controller
+    assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
