@@ -374,6 +374,11 @@ class RemoteRotator:
             self.halts += 1
             self._halts_from[source] = self._halts_from.get(source, 0) + 1
 
+    def halts_for(self, source: Source) -> int:
+        """The count a command of ``source`` asked now hands to ``submit`` as ``since``
+        (``halts_besides``: its own front end's halts do not refuse its move)."""
+        return self.halts_besides(source)
+
     def halts_besides(self, source: Source) -> int:
         """The stops and lock ONs sent from every front end but ``source``'s
         (interfaces/web/port.py rule 2b)."""

@@ -67,6 +67,7 @@ from bridge.core.model import (
     ResetHealth,
     RotatorStatus,
     SetOption,
+    Source,
     Stop,
     TakePath,
     Target,
@@ -363,6 +364,12 @@ class Rotator:
     def halts(self) -> int:
         """The halt count now (mailbox.py rule 10): what a front end that submits a command a
         while after it was asked reads when it is asked, and hands to ``submit`` (``since``)."""
+        return self._mailbox.epoch
+
+    def halts_for(self, source: Source) -> int:
+        """The count a command of ``source`` asked now hands to ``submit`` as ``since``: the
+        halt count, every front end's (the remote's counts its own front ends': remote/
+        rotator.py ``halts_besides``)."""
         return self._mailbox.epoch
 
     @property

@@ -398,11 +398,6 @@ def test_a_call_asked_while_locked_never_turns_the_rotor_after_the_lock_off(benc
     assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review of 090451a, not mended: the DCU-1 session checks the halt count, then "
-    "submits without it (since=None), so a STOP between the two is not seen",
-)
 def test_an_am1_whose_ap1_came_before_a_stop_never_turns_after_it(
     bench: Bench, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -410,8 +405,8 @@ def test_an_am1_whose_ap1_came_before_a_stop_never_turns_after_it(
     count and an AM1 after a STOP is refused. The count is read at the AM1 and the target
     submitted after: a STOP from the stop lane in between (another thread, the interpreter
     lock switched there) is counted after the check and before the submit takes its own
-    count, so the AP1's bearing, given before the STOP, goes out after it. Passing the count
-    kept with the bearing as the submit's ``since`` (mailbox.py rule 10) would drop it."""
+    count, so the AP1's bearing, given before the STOP, went out after it. The count kept with
+    the bearing is now the submit's ``since`` (mailbox.py rule 10): the STOP overtakes it."""
     from bridge.interfaces.gs232 import Dcu1Session
 
     dcu = Dcu1Session(bench.rot)

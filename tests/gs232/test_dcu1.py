@@ -134,7 +134,14 @@ class _Tower:
         self.refuse: set[type] = set()
         self.halts = 0  # the judge's count of STOPs and lock ONs, every interface's
 
-    def submit(self, command: Target | Stop, described: str | None = None) -> None:
+    def halts_for(self, source: Source) -> int:
+        return self.halts
+
+    def submit(
+        self, command: Target | Stop, described: str | None = None, *, since: int | None = None
+    ) -> None:
+        if since is not None and since != self.halts:  # (mailbox.py rule 10, as the judge)
+            raise Refused(RefusalCode.STALE, "a STOP came after it")
         if isinstance(command, Stop):
             self.halts += 1
         if type(command) in self.refuse:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from bridge.core.errors import Refused
-from bridge.core.model import Origin, Park, Source, Stop, Target
+from bridge.core.model import Command, Origin, Park, Source, Stop, Target
 from bridge.front import FrontRotator
 from bridge.interfaces.gs232.parser import (
     Dcu1Kind,
@@ -259,10 +259,17 @@ class EasycommSession(_LineSession):
 class Dcu1Rotator(FrontRotator, Protocol):
     """What the DCU-1 session asks of a rotator besides a front end's (package rule 10): the
     count of its STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
-    remote's, of its own front ends, remote/rotator.py)."""
+    remote's, of its own front ends, remote/rotator.py), the count a command of ``source``
+    asked now hands to ``submit`` as ``since`` (``halts_for``), and ``submit`` taking it."""
 
     @property
     def halts(self) -> int: ...
+
+    def halts_for(self, source: Source) -> int: ...
+
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None: ...
 
 
 class Dcu1Session(_Session[Dcu1Request]):
@@ -282,7 +289,8 @@ class Dcu1Session(_Session[Dcu1Request]):
     ) -> None:
         super().__init__(rotator, peer)
         self._clock = clock
-        self._stored: tuple[int, float, int] | None = None  # AP1's bearing, when, the halts
+        # AP1's bearing, when, the halts then, and the count its move hands to submit (since)
+        self._stored: tuple[int, float, int, int] | None = None
 
     def reader(self) -> Dcu1Reader:
         return Dcu1Reader()
@@ -304,7 +312,13 @@ class Dcu1Session(_Session[Dcu1Request]):
             return b";%03d" % (math.floor(where[0] + 0.5) % 360)
         if item.kind is Dcu1Kind.STORE:
             assert item.az_deg is not None
-            self._stored = (item.az_deg, self._clock(), self.rotator.halts)
+            rotator = self.rotator
+            self._stored = (
+                item.az_deg,
+                self._clock(),
+                rotator.halts,
+                rotator.halts_for(Source.DCU1),
+            )
             return b""
         if item.kind is Dcu1Kind.EXECUTE or item.kind is Dcu1Kind.GOTO:
             return self._turn(item, described)
@@ -317,7 +331,7 @@ class Dcu1Session(_Session[Dcu1Request]):
         return DCU1_ERROR
 
     def _turn(self, item: Dcu1Request, described: str) -> bytes:
-        az_deg = item.az_deg
+        az_deg, since = item.az_deg, None
         if item.kind is Dcu1Kind.EXECUTE:  # the bearing AP1 stored, once, while fresh
             stored, self._stored = self._stored, None
             if stored is None or self._clock() - stored[1] > DCU1_STORED_S:
@@ -328,10 +342,11 @@ class Dcu1Session(_Session[Dcu1Request]):
                 why = "AM1; after a STOP or lock ON that came after the AP1's bearing"
                 self.rotator.report_refusal(why, described, origin=self.origin)
                 return DCU1_ERROR
-            az_deg = stored[0]
+            # a STOP between the check above and the put overtakes the bearing: mailbox.py
+            az_deg, since = stored[0], stored[3]  # rule 10 (a review: it went out after it)
         try:
             target = Target(az_deg, None, Source.DCU1, origin=self.origin)
-            self.rotator.submit(target, described)
+            self.rotator.submit(target, described, since=since)
         except Refused:
             return DCU1_ERROR  # Rotator.submit has reported it on R/error
         return b""
