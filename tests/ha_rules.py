@@ -230,3 +230,23 @@ def validate(topic: str, payload: dict, prefix: str = "homeassistant") -> list[s
     if payload.get("retain") is True and platform in WRITABLE:
         errs.append(f"{topic}: command must not be retained")
     return errs
+
+
+def number_state(payload: dict, rendered: str) -> float | None | str:
+    """What Home Assistant's MQTT number makes of its value_template's output (number.mqtt,
+    HA core's ``MqttNumber._message_received``): ``payload_reset`` ("None" unless set) is
+    unknown (None); a value outside min..max is dropped with an error in HA's log ("Invalid
+    value for number...": the entity keeps what it showed before, unknown after a start),
+    returned here as a string saying so, as is a payload that is no number."""
+    if not rendered.strip():
+        return "ignored: empty"
+    if rendered == payload.get("payload_reset", "None"):
+        return None
+    try:
+        value = float(rendered)
+    except ValueError:
+        return f"ignored: {rendered!r} is not a number"
+    lo, hi = payload.get("min", 1), payload.get("max", 100)
+    if not lo <= value <= hi:
+        return f"dropped: {value:g} outside {lo:g}..{hi:g}"
+    return value

@@ -14,7 +14,7 @@ from datetime import datetime
 import pytest
 
 from bridge.core import geo
-from bridge.core.model import FollowingInfo, RotatorStatus, TrackingInfo
+from bridge.core.model import FollowingInfo, MotionState, RotatorStatus, TrackingInfo
 from bridge.features.follow import follow_state
 from bridge.features.tracking import tracking_state
 from bridge.interfaces.homeassistant import (
@@ -32,7 +32,7 @@ from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
-from tests.ha_rules import validate
+from tests.ha_rules import number_state, validate
 from tests.support.waiting import slow, wait_until
 
 
@@ -367,7 +367,9 @@ def test_az_el_models_get_elevation_entities_with_their_limits() -> None:
         t: json.loads(p) for t, p in all_configs("ha", Identity("rotor"), topics, [info]).items()
     }
     el = msgs["ha/number/rotorbridge_rotor_r_sat/target_elevation/config"]
-    assert (el["min"], el["max"], el["command_topic"]) == (0, 90, "rotor/target/elevation")
+    # the controller's whole range, which holds every elevation the status shows, not the
+    # limits 0..90 (test_the_target_elevation_shows_an_elevation_below_or_above_...)
+    assert (el["min"], el["max"], el["command_topic"]) == (-20, 210, "rotor/target/elevation")
     assert (
         msgs["ha/sensor/rotorbridge_rotor_r_sat/elevation/config"]["state_topic"]
         == "rotor/elevation"
@@ -629,11 +631,13 @@ def test_tracked_body_sensors_read_the_status_and_say_what_they_measure() -> Non
 # Jinja2 is not among the test dependencies, so the few constructs these templates use are
 # rendered here with Jinja's meaning: a dict's key read as an attribute (a name that is also a
 # dict method would give the method: refused here), ``x is defined`` false only for a missing
-# key (JSON null is defined), an attribute of an undefined value an error, ``a if c else b``
-# as in Python, and output as str() (None renders "None", which HA's MQTT sensor takes as
+# key (JSON null is defined), ``x is none`` and ``x is not none`` true and false for JSON null,
+# an attribute of an undefined value an error, ``a if c else b`` and parentheses as in Python,
+# and output as str() (None renders "None", which HA's MQTT sensor takes as
 # unknown). A template using anything else fails the test rather than being guessed at.
-_TOKENS = re.compile(r"\s*('[^']*'|[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)")
+_TOKENS = re.compile(r"\s*('[^']*'|[()]|[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)")
 _WORDS = {"if", "else", "and", "or", "not"}
+_NONE_TESTS = (["is", "not", "none"], ["is", "none"])
 
 
 class _Undefined:
@@ -677,7 +681,13 @@ def render(template: str, payload: str) -> str:
             python.append(f"_defined({tok})")
             i += 3
             continue
-        assert tok in _WORDS or tok.startswith(("'", "value_json")), tok
+        test = next((t for t in _NONE_TESTS if tokens[i + 1 : i + 1 + len(t)] == t), None)
+        if test is not None:  # Jinja's test "none": JSON null
+            assert tok.startswith("value_json"), tok
+            python.append(f"{tok} {' '.join(test[:-1])} None")
+            i += 1 + len(test)
+            continue
+        assert tok in _WORDS or tok in ("(", ")") or tok.startswith(("'", "value_json")), tok
         python.append(tok)
         i += 1
     names = {
@@ -697,6 +707,11 @@ def test_the_renderer_follows_jinja_on_what_these_templates_use() -> None:
     assert render("{{ value_json.a.zz if value_json.a.zz is defined else 'x' }}", doc) == "x"
     assert render("{{ value_json.zz }}", doc) == ""  # undefined renders empty
     assert render("{{ 'ON' if value_json.f else 'OFF' }}", doc) == "OFF"
+    assert render("{{ value_json.a.n if value_json.a.n is not none else 'x' }}", doc) == "x"
+    assert render("{{ 'y' if value_json.a.n is none else 'x' }}", doc) == "y"
+    assert render(
+        "{{ value_json.a.n if value_json.a.n is not none else (value_json.a.b) }}", doc
+    ) == ("1.5")
     with pytest.raises(AssertionError, match="UndefinedError"):
         render("{{ value_json.zz.b }}", doc)
     with pytest.raises(AssertionError, match="method"):
@@ -812,3 +827,50 @@ def test_the_wind_entities_are_there_only_with_a_wind_topic_and_pass_the_rules()
             platform, obj = key.split(".")
             topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
             assert validate(topic, found[key]) == [], key
+
+
+def _number_shows(model: str, status: RotatorStatus, **limits: float) -> dict[str, object]:
+    """What Home Assistant's target numbers show of ``status``, for a rotator configured with
+    ``limits`` (ha_rules.number_state: a value outside the range is dropped)."""
+    cfg = RotatorSettings(id="tower", model=model, port="/dev/null", **limits)
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=False, nudge_step_deg=10,
+    )  # fmt: skip
+    msgs = {
+        t.split("/")[3]: json.loads(p)
+        for t, p in all_configs("homeassistant", Identity("rotor"), topics, [info]).items()
+    }
+    doc = status_json(status, 1_780_000_000.0, has_elevation=cfg.spec.has_elevation)
+    return {
+        oid: number_state(msgs[oid], render(msgs[oid]["value_template"], doc))
+        for oid in ("target_azimuth", "target_elevation")
+        if oid in msgs
+    }
+
+
+@pytest.mark.parametrize("model", ["rot2prog", "md01", "gs232b"])
+def test_the_target_elevation_shows_an_elevation_below_or_above_the_configured_limits(
+    model: str,
+) -> None:
+    """Found against a SPID emulator with el_min_deg = 10: the rotor rests at 0 until it is first
+    turned, the status says elevation 0, and a number whose range was the configured 10..90
+    dropped it (Home Assistant logs "Invalid value ... (range 10.0 - 90.0)" at every status and
+    the entity stays unknown); the same above el_max_deg (a GS-232B limited to 90, as
+    config/two-boxes.toml does, parked at 180 by its own controller)."""
+    spec = REGISTRY[model]
+    for el in (spec.el_min_deg, 0.0, 5.0, 95.0, spec.el_max_deg):
+        idle = RotatorStatus(
+            "tower", MotionState.IDLE, bearing_deg=120.0, elevation_deg=el, available=True
+        )
+        shown = _number_shows(model, idle, el_min_deg=10, el_max_deg=90)
+        assert shown == {"target_azimuth": 120.0, "target_elevation": el}, el
+    # a target within the limits, as before
+    moving = RotatorStatus(
+        "tower", MotionState.MOVING, bearing_deg=120.0, elevation_deg=0.0,
+        target_az_deg=200.0, target_el_deg=45.0, available=True,
+    )  # fmt: skip
+    assert _number_shows(model, moving, el_min_deg=10, el_max_deg=90) == {
+        "target_azimuth": 200.0, "target_elevation": 45.0
+    }  # fmt: skip

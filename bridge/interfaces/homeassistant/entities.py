@@ -21,7 +21,9 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
    are online (``availability_mode: all``). Entities that must work while the rotator is
    unreachable (the safety lock, the connection state, the last error) follow the bridge only.
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
-   the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
+   the azimuth's are true bearings (Pointing.target_range: an offset shifts them). Each range
+   holds every value its state template shows (a number drops a state outside its range): 0..360
+   for the azimuth, the controller's whole range for the elevation.
 6. A controller setting's entity comes from its declaration (protocols/base.py ``Setting``): a
    bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
    select (its names); all on R/option/<name> with R/option/<name>/state, in the config
@@ -260,7 +262,11 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
            config=lambda r: {
         "command_topic": r.topics.target_elevation, "state_topic": r.topics.status,
         "value_template": _current_or("target_elevation", "elevation"),
-        "min": r.el_min_deg, "max": r.el_max_deg, **TARGET_BOX}),
+        # (the range holds every elevation the status shows, the controller's whole range, as
+        # the azimuth's: a rotor resting at 0 below el_min_deg = 10 was dropped, the number
+        # stuck at unknown with an error in Home Assistant's log at every status)
+        "min": min(r.el_min_deg, r.spec.el_min_deg), "max": max(r.el_max_deg, r.spec.el_max_deg),
+        **TARGET_BOX}),
     Entity("button", "stop", "Stop", config=lambda r: {
         "command_topic": r.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
     Entity("select", "preset", "Preset", needs="presets", config=lambda r: {
