@@ -135,8 +135,11 @@ def test_device_blocks_and_availability() -> None:
     assert bearing["unit_of_measurement"] == "°" and bearing["state_class"] == "measurement_angle"
     assert bearing["default_entity_id"] == "sensor.tower_bearing"
     assert bearing["origin"]["name"] == "rotor-bridge"
-    # must work while the rotator is unreachable: follow the bridge only
-    for obj in ("lock", "connected", "last_error"):
+    # must work while the rotator is unreachable: follow the bridge only (the stop too: a stop
+    # is never refused, one for a rotator that does not answer is owed and sent first when it
+    # answers again; a button that went unavailable with the rotator left Home Assistant's user
+    # no stop while the link flapped, and an automation's button.press skipped it silently)
+    for obj in ("stop", "lock", "connected", "last_error"):
         cfg = next(p for t, p in msgs.items() if t.split("/")[3] == obj)
         assert cfg["availability"] == [{"topic": "rotor/bridge/state"}], obj
     bridge = msgs["homeassistant/binary_sensor/rotorbridge_rotor/connection/config"]

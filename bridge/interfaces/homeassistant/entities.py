@@ -19,7 +19,8 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
    locator, long path and distance with the station's position.
 2. Entities that describe the rotator are available only while both the bridge and the rotator
    are online (``availability_mode: all``). Entities that must work while the rotator is
-   unreachable (the safety lock, the connection state, the last error) follow the bridge only.
+   unreachable (the stop, the safety lock, the connection state, the last error) follow the
+   bridge only.
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them). Each range
    holds every value its state template shows (a number drops a state outside its range): 0..360
@@ -267,7 +268,9 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         # stuck at unknown with an error in Home Assistant's log at every status)
         "min": min(r.el_min_deg, r.spec.el_min_deg), "max": max(r.el_max_deg, r.spec.el_max_deg),
         **TARGET_BOX}),
-    Entity("button", "stop", "Stop", config=lambda r: {
+    # rule 2: a stop is never refused (one for a rotator that does not answer is owed and sent
+    # first when it answers again), so its button stays while the bridge runs
+    Entity("button", "stop", "Stop", bridge_only=True, config=lambda r: {
         "command_topic": r.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
     Entity("select", "preset", "Preset", needs="presets", config=lambda r: {
         "command_topic": r.topics.preset, "options": list(r.presets),
