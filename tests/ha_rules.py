@@ -139,7 +139,10 @@ BINARY_CLASSES = {
 }
 STATE_CLASSES = {"measurement", "measurement_angle", "total", "total_increasing"}
 WRITABLE = {"number", "switch", "button", "select", "text"}
-SLUG = re.compile(r"^[a-z0-9_]+$")
+# an entity id's object id (HA core's valid_entity_id): lower-case letters, digits and '_', no
+# '_' at either end and no '__' (its slugify writes what a config asks for so, and two ids that
+# differ only there ask for one entity)
+SLUG = re.compile(r"^(?!.*__)(?!_)[a-z0-9_]+(?<!_)$")
 TOPIC_ID = re.compile(r"^[a-zA-Z0-9_-]+$")
 
 

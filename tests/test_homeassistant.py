@@ -165,6 +165,18 @@ def test_target_number_uses_the_rotator_limits_and_topics() -> None:
     )
 
 
+@pytest.mark.parametrize("base", ["rotor", "home/rotor-1", "Shack/Rotor", "rotor_"])
+@pytest.mark.parametrize("rid", ["tower", "tower-", "tow--er", "tow_-er", "2m_"])
+def test_every_entity_id_asked_for_is_one_home_assistant_takes(base: str, rid: str) -> None:
+    """An id the settings take ("tower-", "tow--er") or a base topic with '-', '/' or capitals
+    asked for an entity id Home Assistant does not write ("sensor.tower__bearing",
+    "binary_sensor.rotorbridge_home_rotor-1_connection"): it made "sensor.tower_bearing" of the
+    first, the entity of a rotator "tower" beside it."""
+    msgs = build({rid: "rot2prog"}, base=base)
+    for topic, payload in msgs.items():
+        assert validate(topic, payload) == [], topic
+
+
 def test_several_rotators_have_distinct_ids() -> None:
     msgs = build({"tower": "rotorez", "yagi": "rotorcard"})
     uids = [p["unique_id"] for p in msgs.values()]

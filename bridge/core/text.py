@@ -10,7 +10,9 @@ zero-width joiner in Persian or an emoji, characters newer than Python's Unicode
 
 from __future__ import annotations
 
-__all__ = ["NOT_TEXT", "bad_char"]
+import re
+
+__all__ = ["NOT_TEXT", "bad_char", "entity_slug"]
 
 # what a refusal says after the character: U+0001, {NOT_TEXT}
 NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or a non-character)"
@@ -30,3 +32,15 @@ def bad_char(text: str) -> str | None:
         ):
             return f"U+{n:04X}"
     return None
+
+
+_NOT_SLUG = re.compile(r"[^a-z0-9]+")
+
+
+def entity_slug(text: str) -> str:
+    """``text`` as Home Assistant writes it in an entity id (its ``slugify``): lower case, each
+    run of other characters ('-', '_', '/' and the like) one '_', none at either end. An entity
+    id may hold no '-' and no '__' (``valid_entity_id``): ``tower-`` asked for
+    ``sensor.tower__bearing``, which Home Assistant makes ``sensor.tower_bearing``, the entity
+    of a rotator ``tower`` beside it."""
+    return _NOT_SLUG.sub("_", text.lower()).strip("_")

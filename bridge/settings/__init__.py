@@ -55,6 +55,7 @@ from pydantic_settings import (
     SettingsError,
 )
 
+from bridge.core.text import entity_slug
 from bridge.feature import topic_words
 from bridge.protocols.axes import BEARING_IS_ELEVATION
 from bridge.settings import errors as settings_errors
@@ -319,19 +320,21 @@ class Settings(BaseSettings):
         roots = {r.id: self.rotator_topic(r) for r in self.rotators}
         models = {r.id: r.model for r in self.rotators}
         seen: set[str] = set()
-        # Home Assistant's entity ids write a "-" as "_": two ids that differ only so would ask
-        # for the same entities (an attack pass: one got "_2", in whichever order discovery
-        # came, and dashboards pointed at the other antenna)
+        # Home Assistant's entity ids write each run of "-" and "_" as one "_", none at the end
+        # (core/text.py entity_slug): two ids that differ only so would ask for the same
+        # entities (an attack pass: one got "_2", in whichever order discovery came, and
+        # dashboards pointed at the other antenna; "tower" and "tower-" the same, found later)
         slugs: dict[str, tuple[str, str]] = {}
         for kind, ident in [("rotator", r.id) for r in self.rotators] + [
             ("group", g.id) for g in self.groups
         ]:
-            slug = ident.replace("-", "_")
+            slug = entity_slug(ident)
             other = slugs.setdefault(slug, (kind, ident))
             if other[1] != ident:  # (one id twice: the checks below name it)
                 raise ValueError(
                     f"{kind} id {ident!r} and {other[0]} {other[1]!r} are one name to Home "
-                    f"Assistant ({slug}: it writes '-' as '_'): give one of them another id"
+                    f"Assistant ({slug}: it writes each run of '-' and '_' as one '_', none at "
+                    "the end): give one of them another id"
                 )
         for i, g in enumerate(self.groups):
             where = f"groups[{i}]"

@@ -104,6 +104,11 @@ CASES: list[tuple[str, str | bytes, str]] = [
         "rotator id 'tow_er' and rotator 'tow-er' are one",
     ),
     (
+        "ids one name to HA, a trailing dash",
+        BASE + SPID + SPID.replace('"sat"', '"sat-"').replace("USB1", "USB2"),
+        "rotator id 'sat-' and rotator 'sat' are one",
+    ),
+    (
         "wsjtx on the pst port",
         BASE + "pst_udp_port = 12000\n[wsjtx]\nenabled = true\nport = 12000\n",
         "wsjtx.port 12000 is also a pst_udp_port",

@@ -41,6 +41,7 @@ from typing import Protocol
 
 from bridge import __version__
 from bridge.core.model import MotionState
+from bridge.core.text import entity_slug
 from bridge.feature import registered
 from bridge.interfaces.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
@@ -54,17 +55,18 @@ def _entity(
     platform: str,
     node: str,
     object_id: str,
-    entity_slug: str,
+    named: str,
     name: str | None,
     device: dict[str, object],
     availability: list[dict[str, str]] | None,
     **config: object,
 ) -> tuple[tuple[str, str, str], dict[str, object]]:
-    """((platform, node, object_id), payload); availability None: the entity has none."""
+    """((platform, node, object_id), payload); availability None: the entity has none. The entity
+    id asked for is ``named``'s slug (core/text.py entity_slug), then the object id."""
     payload: dict[str, object] = {
         "name": name,
         "unique_id": f"{node}_{object_id}",
-        "default_entity_id": f"{platform}.{entity_slug}_{object_id}",
+        "default_entity_id": f"{platform}.{entity_slug(named)}_{object_id}",
         "device": device,
         "origin": ORIGIN,
         "qos": 1,
@@ -337,13 +339,12 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
         device["sw_version"] = r.version
     both = [{"topic": topics.bridge_state}, {"topic": r.topics.availability}]
     bridge_only = [{"topic": topics.bridge_state}]
-    slug = r.rotator_id.replace("-", "_")
     out: Configs = {}
     for row in rows():
         for e in row.expand(r):
             avail = bridge_only if e.bridge_only else both
             where, payload = _entity(
-                e.platform, node, e.object_id, slug, e.name, device, avail, **e.config(r)
+                e.platform, node, e.object_id, r.rotator_id, e.name, device, avail, **e.config(r)
             )
             out[where] = payload
     return out
@@ -385,11 +386,12 @@ def group_configs(ident: Identity, topics: Topics, g: GroupInfo) -> Configs:
     }
     both = [{"topic": topics.bridge_state}, {"topic": g.topics.availability}]
     bridge_only = [{"topic": topics.bridge_state}]
-    slug = g.group_id.replace("-", "_")
     out: Configs = {}
     for platform, object_id, name, stop, config in GROUP_ENTITIES:
         avail = bridge_only if stop else both
-        where, payload = _entity(platform, node, object_id, slug, name, device, avail, **config(g))
+        where, payload = _entity(
+            platform, node, object_id, g.group_id, name, device, avail, **config(g)
+        )
         out[where] = payload
     return out
 
