@@ -237,11 +237,21 @@ def test_stale_configs_of_ours_are_cleared_and_others_left_alone() -> None:
     current = "homeassistant/sensor/rotorbridge_rotor_r_tower/bearing/config"
     foreign = "homeassistant/sensor/0x00124b/temperature/config"
     other_bridge = "homeassistant/sensor/rotorbridge_rotor2_r_x/bearing/config"
+    # a bridge whose base topic is "rotor/r/x": its node ids begin with ours, "rotorbridge_rotor_r_"
+    # (it was cleared, its entities gone from Home Assistant each time it published them)
+    under_ours = "homeassistant/sensor/rotorbridge_rotor_r_x_r_tower/bearing/config"
+    ours = json.dumps({"availability": [{"topic": "rotor/bridge/state"}, {"topic": "rotor/x"}]})
+    theirs = json.dumps({"availability": [{"topic": "rotor/r/x/bridge/state"}]})
     for topic in (ours_gone, current, foreign, other_bridge):
-        assert pub.on_message(topic, b'{"x":1}', True) is True
-    assert rec.cleared == [ours_gone]
+        assert pub.on_message(topic, ours.encode(), True) is True
+    assert pub.on_message(under_ours, theirs.encode(), True) is True
+    assert pub.on_message(under_ours, b"not json", True) is True
+    # the bridge device's own config follows the bridge's state by its state topic
+    old_bridge = "homeassistant/binary_sensor/rotorbridge_rotor/old/config"
+    assert pub.on_message(old_bridge, b'{"state_topic": "rotor/bridge/state"}', True) is True
+    assert rec.cleared == [ours_gone, old_bridge]
     assert pub.on_message(ours_gone, b"", True) is True  # our own clearing, echoed: nothing more
-    assert rec.cleared == [ours_gone]
+    assert rec.cleared == [ours_gone, old_bridge]
     assert pub.on_message("rotor/target", b"1", False) is False
 
 

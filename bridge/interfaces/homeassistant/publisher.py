@@ -5,8 +5,9 @@ thread (a timer) and a lock.
 
 Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
 4. Configs are published only when they changed. Configs under our node ids that we no longer
-   generate (a rotator removed from the configuration) are cleared with an empty retained
-   payload when the broker shows them to us; the client says what it did (or, for a config
+   generate (a rotator removed from the configuration), and that follow our bridge's state (a
+   node id alone may be another bridge's), are cleared with an empty retained payload when the
+   broker shows them to us; the client says what it did (or, for a config
    another client publishes while the bridge runs, that it left it alone), a flood of them in a
    few lines (interfaces/mqtt/client.py rule 15).
 5. On Home Assistant's birth message every config is published again at once (``publish_again``,
@@ -28,6 +29,7 @@ retained. ``on_status`` looks at a reading's version before taking it (see there
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
 import time
@@ -153,9 +155,30 @@ class DiscoveryPublisher:
             return True
         with self._lock:
             stale = topic not in self._current
-        if stale:
+        if stale and self._names_our_bridge(payload):
             self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
         return True
+
+    def _names_our_bridge(self, payload: bytes) -> bool:
+        """Rule 4: a config is ours if it follows our bridge's state (every config this bridge
+        ever published does: its availability, or the bridge's connection state). Node ids alone
+        do not say it: another bridge's base topic can make ours a prefix of its node ids
+        (``rotor/r/x`` beside ``rotor``: rotorbridge_rotor_r_x...), and clearing its configs
+        took its entities out of Home Assistant, again each time it published them."""
+        try:
+            config = json.loads(payload)
+        except (ValueError, UnicodeDecodeError):
+            return False
+        if not isinstance(config, dict):
+            return False
+        ours = self._topics.bridge_state
+        availability = config.get("availability")
+        topics = (
+            [a.get("topic") for a in availability if isinstance(a, dict)]
+            if isinstance(availability, list)
+            else []
+        )
+        return config.get("state_topic") == ours or ours in topics
 
     def _schedule_republish(self) -> None:
         """Rule 5: a round of configs now and state after the delay, unless one runs."""
