@@ -255,6 +255,28 @@ def test_stale_configs_of_ours_are_cleared_and_others_left_alone() -> None:
     assert pub.on_message("rotor/target", b"1", False) is False
 
 
+def test_another_bridge_on_our_own_config_topics_is_said_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Base topics "shack/rotor" and "shack_rotor" are one node id (rotorbridge_shack_rotor):
+    two such bridges overwrite each other's configs, their entities flipping between them at
+    each start and each birth, and nothing said why."""
+    rec = Recorder()
+    pub = publisher(rec)
+    pub.publish_all()
+    topic = "homeassistant/sensor/rotorbridge_rotor_r_tower/bearing/config"
+    mine = dict(rec.published)[topic]
+    caplog.set_level(logging.WARNING)
+    assert pub.on_message(topic, mine.encode(), True) is True  # our own, echoed: nothing said
+    twin = json.loads(mine)
+    twin["availability"] = [{"topic": "ro/tor/bridge/state"}, {"topic": "ro/tor/availability"}]
+    for _ in range(3):
+        assert pub.on_message(topic, json.dumps(twin).encode(), True) is True
+    said = [r for r in caplog.records if "another bridge" in r.getMessage()]
+    assert len(said) == 1 and topic in said[0].getMessage()
+    assert rec.cleared == []  # it is one of ours: nothing cleared
+
+
 def test_version_change_republishes_device_info_once() -> None:
     rec = Recorder()
     pub = publisher(rec)

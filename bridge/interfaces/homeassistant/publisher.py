@@ -7,9 +7,10 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
 4. Configs are published only when they changed. Configs under our node ids that we no longer
    generate (a rotator removed from the configuration), and that follow our bridge's state (a
    node id alone may be another bridge's), are cleared with an empty retained payload when the
-   broker shows them to us; the client says what it did (or, for a config
-   another client publishes while the bridge runs, that it left it alone), a flood of them in a
-   few lines (interfaces/mqtt/client.py rule 15).
+   broker shows them to us; the client says what it did (or, for a config another client
+   publishes while the bridge runs, that it left it alone), a flood of them in a few lines
+   (interfaces/mqtt/client.py rule 15). Another bridge's config on one of our own topics (base
+   topics that differ only in characters a node id cannot hold) is said once.
 5. On Home Assistant's birth message every config is published again at once (``publish_again``,
    whether changed or not: a broker that replays retained messages only to exact-topic
    subscriptions, RabbitMQ, gives Home Assistant's ``homeassistant/#`` none of them), then the
@@ -83,6 +84,7 @@ class DiscoveryPublisher:
         self._births_since = 0  # rule 5: births that began no round since it
         self._stopped = False
         self._current: dict[str, str] = {}
+        self._said_twin = False  # rule 4: another bridge on our node ids, said once
 
     @property
     def subscriptions(self) -> list[str]:
@@ -154,9 +156,22 @@ class DiscoveryPublisher:
         if not self._ident.owns(node) or not payload:
             return True
         with self._lock:
-            stale = topic not in self._current
-        if stale and self._names_our_bridge(payload):
-            self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
+            ours = self._current.get(topic)
+        if ours is None:
+            if self._names_our_bridge(payload):
+                self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
+        elif (
+            payload != ours.encode() and not self._said_twin and not self._names_our_bridge(payload)
+        ):
+            self._said_twin = True  # rule 4: once, however often the two overwrite each other
+            log.warning(
+                "another bridge publishes Home Assistant's config %s, one of ours: its base "
+                "topic differs from ours (%r) only in characters a node id cannot hold "
+                "(shack/rotor and shack_rotor are one node, rotorbridge_shack_rotor), so the two "
+                "overwrite each other's entities; give one of them another base topic",
+                topic,
+                self._topics.base,
+            )
         return True
 
     def _names_our_bridge(self, payload: bytes) -> bool:
