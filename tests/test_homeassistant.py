@@ -414,9 +414,9 @@ def test_az_el_models_get_elevation_entities_with_their_limits() -> None:
         t: json.loads(p) for t, p in all_configs("ha", Identity("rotor"), topics, [info]).items()
     }
     el = msgs["ha/number/rotorbridge_rotor_r_sat/target_elevation/config"]
-    # the controller's whole range, which holds every elevation the status shows, not the
+    # every elevation the status shows, the controller's whole range among them, not the
     # limits 0..90 (test_the_target_elevation_shows_an_elevation_below_or_above_...)
-    assert (el["min"], el["max"], el["command_topic"]) == (-20, 210, "rotor/target/elevation")
+    assert (el["min"], el["max"], el["command_topic"]) == (-90, 210, "rotor/target/elevation")
     assert (
         msgs["ha/sensor/rotorbridge_rotor_r_sat/elevation/config"]["state_topic"]
         == "rotor/elevation"
@@ -897,7 +897,7 @@ def _number_shows(model: str, status: RotatorStatus, **limits: float) -> dict[st
     }
 
 
-@pytest.mark.parametrize("model", ["rot2prog", "md01", "gs232b"])
+@pytest.mark.parametrize("model", ["rot2prog", "md01", "gs232b", "easycomm3", "rc2800", "satel"])
 def test_the_target_elevation_shows_an_elevation_below_or_above_the_configured_limits(
     model: str,
 ) -> None:
@@ -905,19 +905,20 @@ def test_the_target_elevation_shows_an_elevation_below_or_above_the_configured_l
     turned, the status says elevation 0, and a number whose range was the configured 10..90
     dropped it (Home Assistant logs "Invalid value ... (range 10.0 - 90.0)" at every status and
     the entity stays unknown); the same above el_max_deg (a GS-232B limited to 90, as
-    config/two-boxes.toml does, parked at 180 by its own controller)."""
+    config/two-boxes.toml does, parked at 180 by its own controller); and below the model's own
+    range, which an Easycomm's or an RC2800's codec reads (a rotor parked at -0.5)."""
     spec = REGISTRY[model]
-    for el in (spec.el_min_deg, 0.0, 5.0, 95.0, spec.el_max_deg):
+    for el in (-0.5, spec.el_min_deg, 0.0, 5.0, 85.0, spec.el_max_deg):
         idle = RotatorStatus(
             "tower", MotionState.IDLE, bearing_deg=120.0, elevation_deg=el, available=True
         )
-        shown = _number_shows(model, idle, el_min_deg=10, el_max_deg=90)
+        shown = _number_shows(model, idle, el_min_deg=10, el_max_deg=80)
         assert shown == {"target_azimuth": 120.0, "target_elevation": el}, el
     # a target within the limits, as before
     moving = RotatorStatus(
         "tower", MotionState.MOVING, bearing_deg=120.0, elevation_deg=0.0,
         target_az_deg=200.0, target_el_deg=45.0, available=True,
     )  # fmt: skip
-    assert _number_shows(model, moving, el_min_deg=10, el_max_deg=90) == {
+    assert _number_shows(model, moving, el_min_deg=10, el_max_deg=80) == {
         "target_azimuth": 200.0, "target_elevation": 45.0
     }  # fmt: skip

@@ -24,7 +24,7 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them). Each range
    holds every value its state template shows (a number drops a state outside its range): 0..360
-   for the azimuth, the controller's whole range for the elevation.
+   for the azimuth, -90..180 and the controller's whole range for the elevation.
 6. A controller setting's entity comes from its declaration (protocols/base.py ``Setting``): a
    bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
    select (its names); all on R/option/<name> with R/option/<name>/state, in the config
@@ -241,6 +241,9 @@ DISTANCE = (
 
 
 DEGREES = {"unit_of_measurement": "°"}
+# rule 3: every elevation a status may show (protocols/easycomm.py and rc2800.py read from -90;
+# a model's own range, a SPID's -20..210, widens it)
+EL_SHOWN = (-90.0, 180.0)
 SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
 TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
 DIAGNOSTIC = {"entity_category": "diagnostic"}
@@ -265,11 +268,12 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
            config=lambda r: {
         "command_topic": r.topics.target_elevation, "state_topic": r.topics.status,
         "value_template": _current_or("target_elevation", "elevation"),
-        # (the range holds every elevation the status shows, the controller's whole range, as
-        # the azimuth's: a rotor resting at 0 below el_min_deg = 10 was dropped, the number
-        # stuck at unknown with an error in Home Assistant's log at every status)
-        "min": min(r.el_min_deg, r.spec.el_min_deg), "max": max(r.el_max_deg, r.spec.el_max_deg),
-        **TARGET_BOX}),
+        # (the range holds every elevation the status shows, as the azimuth's: a rotor resting
+        # at 0 below el_min_deg = 10 was dropped, the number stuck at unknown with an error in
+        # Home Assistant's log at every status; an Easycomm or RC2800 reads down to -90, a rotor
+        # parked at -0.5, a SPID to 210)
+        "min": min(r.el_min_deg, r.spec.el_min_deg, EL_SHOWN[0]),
+        "max": max(r.el_max_deg, r.spec.el_max_deg, EL_SHOWN[1]), **TARGET_BOX}),
     # rule 2: a stop is never refused (one for a rotator that does not answer is owed and sent
     # first when it answers again), so its button stays while the bridge runs
     Entity("button", "stop", "Stop", bridge_only=True, config=lambda r: {
