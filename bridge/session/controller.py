@@ -25,13 +25,22 @@ Rules:
    ``silence_timeout_s``. While a target is out, either is offline before the turn could be
    called stalled however long ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE
    of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least, without a valid reply (without a
-   byte, for one that gives nothing: lost replies are ridden out). Where that comes before
-   silence or garbage alone would make it offline (GARBLED_SILENCE_FACTOR timeouts, with no
-   target out), a stop goes, where the stall's went (in case it still hears; owed again when it
-   answers, stops.py rule 3); otherwise the error says the rotor may still be turning (a move it
-   heard goes on, as ever). A rotor whose last reading put it at its target is no turn under way
-   (motion.py rule 3: no stall can come, only the reading that finds it still is missing):
-   offline as with no target out, and the error says nothing of a turn. A stall needs readings
+   byte, for one that gives nothing: lost replies are ridden out). A turn under way that goes
+   offline so, whichever came first, is stopped then, in case the controller still hears (its
+   replies lost or garbled on their way), and the stop is owed again when it answers (stops.py
+   rule 3); the error says so. The bridge watches a turn's stall and its limits only through
+   readings, and a turn no reading watches does not go on: a jammed rotor's motor would drive on
+   against the jam; a free one is cut short, its target dropped as any waiting one, to be sent
+   again once the controller answers (the price of safety; a stop to a rotor at rest is
+   harmless). (A review: the stop went only where that offline came before silence or garbage
+   alone would have made it so, where the stall's would have gone; at the defaults, 3 s of
+   silence or 6 s of garbage came first, the error said the rotor may still be turning, and a
+   jammed Rotor-EZ, GS-232B, Easycomm, RC2800, Prosistel or RT-21 drove on against its jam 60 s
+   later; a free one ran on unwatched to its target, 26 s.) The error still says the rotor may be
+   turning where the stop could not be written yet. A rotor whose last reading put it at its
+   target is no turn under way (motion.py rule 3: no stall can come, only the reading that finds
+   it still is missing): offline as with no target out, and the error says nothing of a turn
+   (nor does it get a stop; one owed goes as ever). A stall needs readings
    that show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence:
    one that went silent mid-turn was called stalled at 10 s, an error that blamed the brake, and
    rotor health counted a stall; a review: offline with no stop, a jammed one's motor drove on,
@@ -1300,12 +1309,8 @@ class Controller:
                 and m.stop_sent_t is None
                 and not mo.at_target(m, cfg.motion)
             )
-            if turning and now < (  # rule 2: offline before silence or garbage alone would
-                self._silent_offline_t(link, now, False)  # make it so, where the stall would
-                if by_silence  # have stopped it: the stop goes, in case it still hears
-                else self._garbled_offline_t(link, now, False)
-            ):
-                self.stop(now)
+            if turning:  # rule 2: a turn no reading watches any more is stopped, in case it
+                self.stop(now)  # still hears (its stall and limits unseen); owed just below
             elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
                 self.stops.repeat_due(m, math.inf)  # (a silent controller may still hear: its
                 self.stop(now)  # motion is lost with the readings just below)
@@ -1315,10 +1320,10 @@ class Controller:
                 self.stops.owed = True  # when it answers again, as released if it was the
                 self._released_owed = unseen == self._released_unseen_t  # released lock's
             stopped = turning and self.motion.stop_sent_t is not None
-            if turning and not stopped:  # (rule 2: a turn not seen to its end, not a stall; a
-                why += " while the rotor turned to its target (it may still be turning)"
-            elif stopped:  # move it heard goes on, stops.py rule 3; or stopped where the stall
-                why += " while the rotor turned to its target"  # would have stopped it)
+            if turning and not stopped:  # (rule 2: its stop waits for the line: a turn not
+                why += " while the rotor turned to its target (it may still be turning)"  # seen
+            elif stopped:  # to its end, not a stall)
+                why += " while the rotor turned to its target"
             why += "" if by_silence else ": a noisy line?"
             self._lose_motion(mo.link_down)
             said = None
@@ -1353,26 +1358,21 @@ class Controller:
         cfg = self.cfg
         return min(cfg.silence_timeout_s, _turn_least_s(cfg.motion))
 
-    def _silent_offline_t(self, link: Link, now: float, turn: bool = True) -> float:
+    def _silent_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
-        after its last byte, or sooner while a target is out (``_turn_offline_t``; ``turn``
-        False: when silence alone makes it so, as with no target out)."""
+        after its last byte, or sooner while a target is out (``_turn_offline_t``)."""
         heard_t = now - link.silent_for(now)
         until = heard_t + self.cfg.silence_timeout_s
-        return min(until, self._turn_offline_t(link, heard_t)) if turn else until
+        return min(until, self._turn_offline_t(link, heard_t))
 
-    def _garbled_offline_t(self, link: Link, now: float, turn: bool = True) -> float:
+    def _garbled_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when garbled answers alone no longer keep the controller online: at most
         GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
         at the motion machine's stall check (``_stall_check_t``), but not sooner than one timeout
-        after that reply; or sooner while a target is out (``_turn_offline_t``). ``turn``
-        False: when garbage alone makes it so, as with no target out (an attack pass: a jammed
-        GS-232B whose replies went to garbage went offline at its stall check with no stop)."""
+        after that reply; or sooner while a target is out (``_turn_offline_t``)."""
         timeout_s = self.cfg.silence_timeout_s
         valid_t = now - link.unread_for(now)
         until = valid_t + GARBLED_SILENCE_FACTOR * timeout_s
-        if not turn:
-            return until
         until = max(valid_t + timeout_s, min(until, self._stall_check_t(link)))
         return min(until, self._turn_offline_t(link, valid_t))
 

@@ -399,21 +399,46 @@ def test_a_stop_and_the_target_after_it_lost_in_a_short_burst_do_not_leave_the_o
 
 def test_a_target_heard_after_a_stop_clears_the_stop_owed(rig: Rig) -> None:
     """stops.py rule 3: a reading after the target shows the controller hearing again; the
-    stop before that target is owed no more, and a later silence does not stop the new move."""
+    stop before that target is owed no more, and a port that fails later does not stop the
+    new move. (A silence mid-turn stops it whatever came before: controller.py rule 2.)"""
     v = turning_to_300(rig)
     v.stop()
     v.run_for(0.3)
     v.target(100.0)
     v.run_until(lambda h: h.truth().is_moving, 10, "turning to 100")
     v.run_for(1)
-    v.set_silent(True)  # it hears, its replies are lost: found silent
-    v.run_until(lambda h: not h.status.available, 10, "offline")
     t = v.now
-    v.set_silent(False)
+    v.link_down()
+    v.run_for(1)
+    v.link_up()
     v.run_until(lambda h: h.status.available, 10, "online again")
     v.run_until(lambda h: not h.truth().is_moving, 120, "at rest")
     assert abs(v.truth().az_deg - 100.0) < 4, v.truth()
     assert b"S\r" not in v.sent(since=t)
+
+
+def test_a_silence_mid_turn_after_a_stop_and_a_target_heard_stops_the_new_move(
+    rig: Rig,
+) -> None:
+    """controller.py rule 2: the same turn, its replies lost instead: offline with a stop sent
+    (it hears: the rotor stops short of 100), and again when it answers (stops.py rule 3)."""
+    v = turning_to_300(rig)
+    v.stop()
+    v.run_for(0.3)
+    v.target(100.0)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning to 100")
+    v.run_for(1)
+    t = v.now
+    v.set_silent(True)  # it hears, its replies are lost: found silent
+    v.run_until(lambda h: not h.status.available, 10, "offline")
+    assert b"S\r" in v.sent(since=t)
+    v.run_for(2)
+    assert not v.truth().is_moving and abs(v.truth().az_deg - 100.0) > 10, v.truth()
+    back = v.now
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(1)
+    assert b"S\r" in v.sent(since=back)  # (owed: the first frame after its first reading)
 
 
 def test_a_dcu1s_lock_on_whose_stop_frame_the_line_garbles_still_stops_the_rotor(
