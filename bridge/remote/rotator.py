@@ -259,7 +259,11 @@ class RemoteRotator:
         # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
         # rule 10; an attack pass: the remote's rotctld P, judged, then the console's STOP sent
         # first: the P reached the broker after it and the station turned the rotor)
-        asked = self.halts if since is None else None
+        # and with ``since`` too: from here on every front end's counts, its own included (a
+        # review: the DCU-1 endpoint's since, halts_besides(DCU1), left out another DCU-1
+        # client's ';' counted between this submit and the hand-off, and the AM1's bearing,
+        # asked before that stop, went to the broker after it)
+        asked = self.halts
         try:
             self._send(command, since, asked)
         except Refused as exc:
@@ -269,7 +273,7 @@ class RemoteRotator:
     def _send(self, command: Command, since: int | None = None, asked: int | None = None) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
         a place goes as the place, park as park. ``asked``: the count of every front end's
-        stops and lock ONs when a move without ``since`` was asked (``submit``)."""
+        stops and lock ONs when the move was handed to ``submit``, ``since`` or not."""
         t = self.topics
         match command:
             case Stop():
@@ -286,9 +290,15 @@ class RemoteRotator:
                 return
         # a move from here on: judged now, and ``since`` again as it is handed to the link
         source = command.source
-        guard = None if since is None else lambda: self._not_halted_since(since, source)
-        if asked is not None:
-            guard = lambda: self._not_halted_at_all_since(asked)  # noqa: E731
+        guard: Callable[[], None] | None = None
+        if since is not None or asked is not None:
+
+            def guard() -> None:
+                if since is not None:
+                    self._not_halted_since(since, source)
+                if asked is not None:
+                    self._not_halted_at_all_since(asked)
+
         match command:
             case Target() if command.az_deg is not None:
                 self.check_move(since, source)
