@@ -33,3 +33,16 @@ def test_a_group_is_a_device_with_its_target_its_stop_and_its_state() -> None:
     state = mine[f"homeassistant/sensor/{node}/state/config"]
     assert state["state_topic"] == "rotor/stack/status"
     assert ident.owns(node)
+
+
+def test_a_group_whose_id_is_only_dashes_and_underscores_asks_for_entity_ids_ha_writes() -> None:
+    """The settings take a group id of '-' and '_' only (settings/groups.py: [a-z0-9_-]); its
+    slug is empty (core/text.py entity_slug), and the entity ids asked for were
+    ``button._stop`` and ``number._target_azimuth``, which no entity id may be (a leading '_':
+    Home Assistant's valid_entity_id). A review of 9f5dd5a."""
+    for gid in ("-", "_", "_-_"):
+        topics = Topics("rotor", {"upper": "rotor/upper", "lower": "rotor/lower"}, {gid: "rotor/g"})
+        group = GroupInfo(gid, "G", topics.group(gid), ("upper", "lower"))
+        configs = all_configs("homeassistant", Identity("rotor"), topics, [], (group,))
+        for topic, payload in configs.items():
+            assert validate(topic, json.loads(payload)) == [], (gid, topic)

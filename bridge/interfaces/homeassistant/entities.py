@@ -62,11 +62,16 @@ def _entity(
     **config: object,
 ) -> tuple[tuple[str, str, str], dict[str, object]]:
     """((platform, node, object_id), payload); availability None: the entity has none. The entity
-    id asked for is ``named``'s slug (core/text.py entity_slug), then the object id."""
+    id asked for is ``named``'s slug (core/text.py entity_slug), then the object id; the object
+    id alone where the slug is empty (a group id of '-' and '_' only, which the settings take:
+    a review found ``button._stop`` asked for, an id Home Assistant does not write)."""
+    slug = entity_slug(named)
     payload: dict[str, object] = {
         "name": name,
         "unique_id": f"{node}_{object_id}",
-        "default_entity_id": f"{platform}.{entity_slug(named)}_{object_id}",
+        "default_entity_id": f"{platform}.{slug}_{object_id}"
+        if slug
+        else f"{platform}.{object_id}",
         "device": device,
         "origin": ORIGIN,
         "qos": 1,
