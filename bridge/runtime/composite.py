@@ -60,9 +60,12 @@ Rules:
    is dropped there, as a single controller's is when its line goes (said on R/error), and a
    target handed out while either box does not answer is refused in both (a review: the
    azimuth box's target, held back by its brake delay, went out after the elevation box was
-   unplugged, and the azimuth turned alone under an ``offline`` status). A turn already on
-   its way goes on, as a single controller's does when its line goes; a STOP still reaches
-   the box that answers.
+   unplugged, and the azimuth turned alone under an ``offline`` status). A turn to a target
+   already on its way in the box that answers is stopped there: the rotator's turn is no
+   longer watched whole, and a single controller gone silent mid-turn is stopped on both
+   axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
+   the bridge had dropped, under an ``offline`` status). A STOP still reaches the box that
+   answers.
 """
 
 from __future__ import annotations

@@ -594,6 +594,18 @@ class Controller:
         self._pass_ends = False  # (a last try not written: owed, checked as any)
 
     # -- stops ---------------------------------------------------------------------------------
+    def turning(self) -> bool:
+        """Rule 2: a turn to a target under way, no stop sent for it (at its target by the last
+        reading: no turn under way, only the reading that finds it still is missing, motion.py
+        rule 2)."""
+        m = self.motion
+        return (
+            m.state is mo.MOVING
+            and m.target_deg is not None
+            and m.stop_sent_t is None
+            and not mo.at_target(m, self.cfg.motion)
+        )
+
     def stop(self, now: float, merge: bool = False, ends_pass: bool = False) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
         is closed, as the first frame it gets (stops.py rule 3); ``ends_pass``: a pass's last
@@ -1302,13 +1314,7 @@ class Controller:
                     f"{quiet_s:.3g} s)"
                 )
             m = self.motion
-            turning = (  # (at its target by the last reading: no turn under way, only the
-                # reading that finds it still is missing, motion.py rule 2)
-                m.state is mo.MOVING
-                and m.target_deg is not None
-                and m.stop_sent_t is None
-                and not mo.at_target(m, cfg.motion)
-            )
+            turning = self.turning()
             if turning:  # rule 2: a turn no reading watches any more is stopped, in case it
                 self.stop(now)  # still hears (its stall and limits unseen); owed just below
             elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now

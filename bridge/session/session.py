@@ -327,6 +327,8 @@ class RotatorSession:
             self._error(ErrorKind.REFUSED, f"target dropped: {EXPRESS_LOST}", command=what)
         if batch.offline is not None:  # (runtime/composite.py rule 8)
             self._drop_pending(batch.offline)
+            if ctl.turning():  # (its turn is the rotator's, which no reading watches whole:
+                ctl.stop(now)  # stopped, as one controller gone silent mid-turn is)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:

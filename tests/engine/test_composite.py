@@ -141,14 +141,14 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
 
 
 def test_a_group_with_a_rotator_whose_azimuth_box_turns_on_alone_says_it_moves() -> None:
-    """An attack pass: the elevation box unplugged mid-turn (the azimuth's turn on its way
-    goes on, rule 8), the rotator was shown offline and not moving, and a group with it and
-    an idle rotator said idle."""
+    """An attack pass: the elevation box unplugged while the azimuth turned on alone (then a
+    turn on its way; since rule 8 stops that, a hand at the azimuth box's panel), the rotator
+    was shown offline and not moving, and a group with it and an idle rotator said idle."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(online, 10, "both boxes answer")
-        v.aim(Target(200.0, 30.0))
-        v.run_for(2.0)
         v.el.link_down()
+        v.run_for(1.0)
+        v.az.manual_rotate(200.0)
         v.run_for(3.0)
         assert v.az.truth().is_moving and v.status.moving and not v.status.available
         mast = RotatorStatus("mast", state=MotionState.IDLE, bearing_deg=10.0, available=True)
@@ -658,25 +658,24 @@ def test_a_box_whose_unused_axis_never_reads_the_same_twice_still_turns(axis: Ax
         assert len(box.sent(since=t)) < 400  # (polled as ever, not without end)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review of d35d250, not mended (a design choice left to the owner): a box that goes "
-    "silent mid-turn gets its offline stop (controller.py rule 2), but the other box turns on "
-    "alone to its target under an offline status (composite.py rule 8 still says a turn on "
-    "its way goes on 'as a single controller's does', which d35d250 changed)",
-)
-def test_a_box_gone_silent_mid_turn_stops_the_other_boxs_turn_too() -> None:
+@pytest.mark.parametrize("how", ["silent", "unplugged"])
+def test_a_box_gone_silent_mid_turn_stops_the_other_boxs_turn_too(how: str) -> None:
     """One GS-232B az/el box that goes silent mid-turn is stopped on both axes (d35d250); the
     same antenna on two boxes had only the silent box stopped, the azimuth box running on to
-    the target the bridge dropped, while the rotator showed offline."""
+    the target the bridge dropped, while the rotator showed offline (composite.py rule 8). An
+    elevation box unplugged mid-turn (nothing can be written to it) stops the azimuth's too."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(online, 10, "both boxes answer")
         v.aim(Target(200.0, 60.0))
         v.run_for(2.0)
         t = v.now
-        v.el.set_silent(True)
+        if how == "silent":
+            v.el.set_silent(True)
+        else:
+            v.el.link_down()
         v.run_until(lambda c: not c.status.available, 10, "offline")
-        assert b"S\r" in v.el.sent(since=t)  # (the silent box: its offline stop)
+        if how == "silent":
+            assert b"S\r" in v.el.sent(since=t)  # (the silent box: its offline stop)
         v.run_for(3.0)
         assert not v.az.truth().is_moving
         assert v.az.truth().az_deg < 100.0  # (stopped short, not on at 200)
