@@ -81,10 +81,10 @@ def test_an_unplugged_box_refuses_targets_and_the_other_still_stops(rig: Rig) ->
     # the status says which box went away (read once the status itself has it: the
     # availability topic may come first)
     wait_until(lambda: "serial-by-id-sky-el" in (status(rig)["last_error"] or ""), 10)
-    rig.probe.publish("rotor/stop", "STOP")
-    az.wait_for_frame(b";", "stop", 5)
-    stopped = az.wait_for(lambda s: not s.is_moving, 5)
+    az.wait_for_frame(b";", "stop", 5)  # the azimuth's turn stopped with it (rule 8): no
+    stopped = az.wait_for(lambda s: not s.is_moving, 5)  # axis turns on alone, unwatched
     assert stopped.az_deg < 290
+    rig.probe.publish("rotor/stop", "STOP")  # (a STOP is taken while the rotator is offline)
     t = time.monotonic()
     rig.probe.publish("rotor/target", "100 20")
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
