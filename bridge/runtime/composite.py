@@ -64,8 +64,12 @@ Rules:
    already on its way in the box that answers is stopped there: the rotator's turn is no
    longer watched whole, and a single controller gone silent mid-turn is stopped on both
    axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
-   the bridge had dropped, under an ``offline`` status). A STOP still reaches the box that
-   answers.
+   the bridge had dropped, under an ``offline`` status). The storm's park goes on there
+   (session.py ``_storm_park``): each box parks its own axis, as one does alone in a storm
+   begun while the other did not answer, and nobody can send it again in the storm (a review
+   of 83a398d: the azimuth box's park, stopped when the elevation box fell silent for 4 s,
+   was never tried again, the antenna left 140 degrees short of it for the whole storm). A
+   STOP still reaches the box that answers.
 """
 
 from __future__ import annotations

@@ -214,6 +214,7 @@ class RotatorSession:
         self._waking_measuring = tuple(p for p in self._waking if not p.deciding)  # rule 20
         self._ending = tuple(p for p in parts if p.end is not None)
         self._storm_seen = self.wind.storm  # parts.py rule 7: a storm kept was seen
+        self._answered = False  # wind.py rule 7: the controller answered at the last step
         self._parts_named = {p.name: p for p in parts}
         self._showing = tuple((p.name, p.status) for p in parts if p.status is not None)
         # parts.py rule 4: the state of the parts the session knows by their Part alone
@@ -276,6 +277,8 @@ class RotatorSession:
         why = "serial link down" if reason is not None else "bridge stopped"
         self._end(why, now)  # (what waits is reported dropped: next line)
         self._drop_pending("serial link down")
+        if reason is not None:
+            self.wind.lost()  # wind.py rule 7: the park owed again, once it answers
         return self._step(now)
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
@@ -327,8 +330,9 @@ class RotatorSession:
             self._error(ErrorKind.REFUSED, f"target dropped: {EXPRESS_LOST}", command=what)
         if batch.offline is not None:  # (runtime/composite.py rule 8)
             self._drop_pending(batch.offline)
-            if ctl.turning():  # (its turn is the rotator's, which no reading watches whole:
-                ctl.stop(now)  # stopped, as one controller gone silent mid-turn is)
+            if ctl.turning() and not self._storm_park():  # (its turn is the rotator's, which
+                ctl.stop(now)  # no reading watches whole: stopped, as one controller gone
+                # silent mid-turn is; but the storm's park, this box's own axis, goes on)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
@@ -576,6 +580,9 @@ class RotatorSession:
         ctl.tick(now)  # the motion machine's clock, an enable owed
         if ctl.notes:
             self._heed(now)
+        if self._answered and not ctl.answering:  # wind.py rule 7: offline in a storm,
+            self.wind.lost()  # its park (stopped at the offline, or dropped) owed again
+        self._answered = ctl.link is not None and ctl.answering
         if ctl.link is not None and ctl.answering:
             ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
             if ctl.notes:
@@ -666,6 +673,12 @@ class RotatorSession:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
         self._propose(proposal, now, True)
+
+    def _storm_park(self) -> bool:
+        """The turn under way is the storm's park (wind.py): on a rotator of two boxes, one
+        box's park goes on when the other stops answering (runtime/composite.py rule 8), as
+        it parks alone in a storm begun while the other did not answer."""
+        return self.wind.storm and self.view.last_source == Source.WIND.value
 
     def _still(self, target: Target) -> bool:
         """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but

@@ -30,6 +30,12 @@ Rules:
    new reading: it may start a storm or start the hold again (the safe side), and it is the
    speed shown while no new reading has come; it never starts or continues a calm, so it never
    ends a storm, and it says nothing of silence (rule 4: the station may be long gone).
+7. A park the line took from the rotator in a storm (the controller offline or its port gone:
+   a turn under way stopped at the offline, session/controller.py rule 2, or a park waiting
+   dropped) is owed again, proposed once the controller answers, unless a stop or lock ON
+   halted it (rule 3): motion is refused in the storm, so nobody can send it again. (A review
+   of d35d250: a GS-232B whose replies were lost for 4 s while it parked for the storm was
+   stopped at the offline, and stood 140 degrees short of the park for the rest of the storm.)
 """
 
 from __future__ import annotations
@@ -116,6 +122,11 @@ class WindPark:
         """Rule 3: a stop or lock ON; the park is not tried again in this storm."""
         self._park_owed = False
         self._halted = self.storm
+
+    def lost(self) -> None:
+        """Rule 7: the line took the rotator (offline, unplugged) in this storm."""
+        if self.storm and not self._halted:
+            self._park_owed = True
 
     def refusal(self) -> str | None:
         """Why motion is refused now (rule 1), if it is."""

@@ -1,0 +1,108 @@
+"""The storm's park and the offline stop (wind.py rule 7, runtime/composite.py rule 8): a
+controller that goes offline mid-park is stopped (session/controller.py rule 2), and its park
+is sent again once it answers; on a rotator of two boxes, the other box's park goes on. (A
+review of d35d250 and 83a398d: after 4 s of lost replies, the park stood 140 degrees short for
+the whole storm, and nobody could send it again: motion is refused in a storm.)"""
+
+from __future__ import annotations
+
+from bridge.core.model import MotionState, Target
+from bridge.protocols.axes import Axis
+from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual_composite import VirtualComposite
+
+FAST = {
+    Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
+    Axis.ELEVATION: {"az_speed_deg_s": 6.0, "el_speed_deg_s": 2.5},
+}
+WIND = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 180, "park_el_deg": 0}
+
+
+def test_composite_storm_park_survives_a_short_silence_of_the_elevation_box() -> None:
+    with VirtualComposite("rt21", "gs232b", settings=WIND, emulators=FAST) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(10.0, 30.0))
+        v.run_until(
+            lambda h: abs(h.az.truth().az_deg - 10) < 1 and abs(h.el.truth().el_deg - 30) < 1,
+            120,
+            "at 10/30",
+        )
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.run_for(2.0)
+        assert v.az.truth().is_moving
+        v.el.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        v.run_for(1.0)
+        v.el.set_silent(False)
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(120.0)
+        assert v.status.wind is not None and v.status.wind.storm
+        assert abs(v.az.truth().az_deg - 180.0) < 1.0, v.az.truth()
+        assert abs(v.el.truth().el_deg) < 1.0, v.el.truth()  # (its own park, owed again)
+
+
+def test_single_storm_park_survives_a_short_silence() -> None:
+    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    try:
+        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
+        v.target(10.0, 30.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
+        v.run_for(5)
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.run_for(2.0)
+        assert v.truth().is_moving
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        v.run_for(1.0)
+        v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(120.0)
+        assert v.status.wind is not None and v.status.wind.storm
+        assert abs(v.truth().az_deg - 180.0) < 1.0, (v.truth(), [e.message for e in v.errors()])
+    finally:
+        v.close()
+
+
+def test_a_park_stopped_by_the_operator_is_not_sent_again_after_an_offline() -> None:
+    """wind.py rule 3 holds: the operator's STOP in the storm, then a silence: no park again."""
+    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    try:
+        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
+        v.target(10.0, 30.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.run_for(2.0)
+        v.stop()
+        v.run_for(2.0)
+        az = v.truth().az_deg
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(60.0)
+        assert abs(v.truth().az_deg - az) < 1.0, v.truth()
+    finally:
+        v.close()
+
+
+def test_a_park_unplugged_mid_turn_is_finished_after_the_replug() -> None:
+    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    try:
+        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
+        v.target(10.0, 30.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.run_for(2.0)
+        v.link_down()
+        v.power_cycle()  # (the controller lost its power with the line: the turn ended)
+        v.run_for(5.0)
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(120.0)
+        assert abs(v.truth().az_deg - 180.0) < 1.0, v.truth()
+    finally:
+        v.close()
