@@ -397,16 +397,22 @@ def test_a_stop_and_the_target_after_it_lost_in_a_short_burst_do_not_leave_the_o
     assert any("past its target" in e.message for e in v.errors()), v.errors()
 
 
-def test_a_target_heard_after_a_stop_clears_the_stop_owed(rig: Rig) -> None:
-    """stops.py rule 3: a reading after the target shows the controller hearing again; the
-    stop before that target is owed no more, and a port that fails later does not stop the
-    new move. (A silence mid-turn stops it whatever came before: controller.py rule 2.)"""
+def stopped_then_turning_to_100(rig: Rig) -> VirtualRotator:
+    """Turning to 300, stopped, then sent 100: a second into that turn."""
     v = turning_to_300(rig)
     v.stop()
     v.run_for(0.3)
     v.target(100.0)
     v.run_until(lambda h: h.truth().is_moving, 10, "turning to 100")
     v.run_for(1)
+    return v
+
+
+def test_a_target_heard_after_a_stop_clears_the_stop_owed(rig: Rig) -> None:
+    """stops.py rule 3: a reading after the target shows the controller hearing again; the
+    stop before that target is owed no more, and a port that fails later does not stop the
+    new move. (A silence mid-turn stops it whatever came before: controller.py rule 2.)"""
+    v = stopped_then_turning_to_100(rig)
     t = v.now
     v.link_down()
     v.run_for(1)
@@ -422,12 +428,7 @@ def test_a_silence_mid_turn_after_a_stop_and_a_target_heard_stops_the_new_move(
 ) -> None:
     """controller.py rule 2: the same turn, its replies lost instead: offline with a stop sent
     (it hears: the rotor stops short of 100), and again when it answers (stops.py rule 3)."""
-    v = turning_to_300(rig)
-    v.stop()
-    v.run_for(0.3)
-    v.target(100.0)
-    v.run_until(lambda h: h.truth().is_moving, 10, "turning to 100")
-    v.run_for(1)
+    v = stopped_then_turning_to_100(rig)
     t = v.now
     v.set_silent(True)  # it hears, its replies are lost: found silent
     v.run_until(lambda h: not h.status.available, 10, "offline")

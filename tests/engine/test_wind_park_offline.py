@@ -18,6 +18,22 @@ FAST = {
 WIND = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 180, "park_el_deg": 0}
 
 
+def parking() -> VirtualRotator:
+    """A GS-232B at rest at 10 / 30, its wind park at 180 / 0."""
+    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
+    v.target(10.0, 30.0)
+    v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
+    return v
+
+
+def storm(v: VirtualRotator) -> None:
+    """A storm begins; two seconds into its park."""
+    v.mailbox.put_wind(90.0)
+    v._take()
+    v.run_for(2.0)
+
+
 def test_composite_storm_park_survives_a_short_silence_of_the_elevation_box() -> None:
     with VirtualComposite("rt21", "gs232b", settings=WIND, emulators=FAST) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
@@ -43,15 +59,10 @@ def test_composite_storm_park_survives_a_short_silence_of_the_elevation_box() ->
 
 
 def test_single_storm_park_survives_a_short_silence() -> None:
-    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    v = parking()
     try:
-        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
-        v.target(10.0, 30.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
         v.run_for(5)
-        v.mailbox.put_wind(90.0)
-        v._take()
-        v.run_for(2.0)
+        storm(v)
         assert v.truth().is_moving
         v.set_silent(True)
         v.run_until(lambda h: not h.status.available, 10, "offline")
@@ -67,14 +78,9 @@ def test_single_storm_park_survives_a_short_silence() -> None:
 
 def test_a_park_stopped_by_the_operator_is_not_sent_again_after_an_offline() -> None:
     """wind.py rule 3 holds: the operator's STOP in the storm, then a silence: no park again."""
-    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    v = parking()
     try:
-        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
-        v.target(10.0, 30.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
-        v.mailbox.put_wind(90.0)
-        v._take()
-        v.run_for(2.0)
+        storm(v)
         v.stop()
         v.run_for(2.0)
         az = v.truth().az_deg
@@ -89,14 +95,9 @@ def test_a_park_stopped_by_the_operator_is_not_sent_again_after_an_offline() -> 
 
 
 def test_a_park_unplugged_mid_turn_is_finished_after_the_replug() -> None:
-    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0})
+    v = parking()
     try:
-        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
-        v.target(10.0, 30.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
-        v.mailbox.put_wind(90.0)
-        v._take()
-        v.run_for(2.0)
+        storm(v)
         v.link_down()
         v.power_cycle()  # (the controller lost its power with the line: the turn ended)
         v.run_for(5.0)

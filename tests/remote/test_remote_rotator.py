@@ -292,37 +292,17 @@ def test_a_loggers_move_judged_before_the_consoles_stop_is_never_sent_after_it()
     assert link.sent == [("rotor/tower/stop", "stop")]
 
 
-class _StopFirstLink(Link):
-    """A link whose next guarded move finds ``first`` run just before it (another thread's
-    STOP, counted and handed on while this move waited for the send lock)."""
-
-    first: Callable[[], None] | None = None
-
-    def send(
-        self,
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if check is not None and self.first is not None:
-            first, self.first = self.first, None
-            first()
-        super().send(topic, payload, operator, expiry_s, check)
-
-
 def test_another_dcu1_clients_stop_before_an_am1_is_handed_on_refuses_it() -> None:
     """Two DCU-1 clients on the remote's endpoint (gs232/ rule 10): A's AM1 is submitted with
     the count kept with its AP1 (``halts_for``: halts_besides DCU1), then B's ``;`` is counted
     and goes to the broker before A's bearing is handed on. The bearing, asked before that
     stop, must not follow it (a review of 1d6026b: B's stop is a DCU-1 one, left out of
     halts_besides, and the rotor turned after it; before, the submit's own count caught it)."""
-    link = _StopFirstLink()
+    link = Link()
     rot = rotator(link, FakeClock())
     a, b = Dcu1Session(rot), Dcu1Session(rot)
     assert a.feed(b"AP1120;") == [b""]
-    link.first = lambda: b.feed(b";") and None
+    stop_on_the_way(link, lambda: b.feed(b";") and None)
     assert a.feed(b"AM1;") == [DCU1_ERROR]
     assert link.sent == [("rotor/tower/stop", "stop")]
 
