@@ -179,7 +179,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,
         description="the elevation's box of a composite rotator, a model that reports where "
         "it points: an az/el box used for its elevation (its azimuth is never turned), or an "
-        "rt21 box on the elevation rotor",
+        "rt21, prosistel-el or prosistel-el-a box on the elevation rotor",
         examples=[
             {
                 "model": "gs232b",
