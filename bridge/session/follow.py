@@ -12,8 +12,9 @@ Rules:
    says why (``following_ended``). Its own targets are put by the session, not through the
    mailbox, so they never end it. Turned by hand is as tracking has it (parts.py rule 8): the
    rotor turning with no target and no stop of the bridge's out, further than the tolerance
-   from the bearing it last turned to (a hand before its first bearing is no concern of it: the
-   next grid turns the rotor anyway).
+   from the bearing it last turned to, or at all before it has turned to one (nothing heard
+   yet, no grid, a grid refused or off band): the operator took the antenna by hand, and the
+   next grid must not turn it away from where the hand left it (a review: it did).
 2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
    from the station (the long path if asked). The same grid again moves nothing (the
    deadband), whatever else the program's status says; so does a status without a grid, or
@@ -189,9 +190,8 @@ class Follower:
         return self._aimed is not None and (own or out)
 
     def _turned_by_hand(self, scene: Scene) -> bool:
-        """Rule 1: turned away from the bearing it last turned to, by no target of the bridge's."""
-        if self._bearing is None:
-            return False
+        """Rule 1: turned away from the bearing it last turned to, by no target of the bridge's
+        (before its first bearing: any such turn)."""
         return turned_by_hand(scene, self._rig.aim, self._bearing, self._rig.motion.tolerance_deg)
 
     def _on_my_band(self, heard: Heard) -> bool:

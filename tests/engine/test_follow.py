@@ -382,6 +382,30 @@ def test_a_hand_at_the_panel_ends_following_and_the_rotor_is_never_turned_back(
         assert v.frames("set", since=hand) == [] and angle_between(v.truth().az_deg, 300.0) < 1
 
 
+@pytest.mark.parametrize("before", ["nothing heard", "no grid heard"])
+def test_a_hand_at_the_panel_before_following_has_turned_the_rotor_ends_it_too(
+    before: str,
+) -> None:
+    """Rule 1, a review's gap: following on, the rotor not yet turned to anyone (nothing heard,
+    or a status without a grid), the operator turns the beam by hand at the panel. WSJT-X's
+    first status naming a partner then turned it away from where the hand left it, a surprise
+    move. A hand ends following whenever it is on, as a user's target does."""
+    with spid() as v:
+        v.follow(True)
+        if before == "no grid heard":
+            v.heard("JA1ABC", "")  # moves nothing (rule 2)
+        v.run_for(5.0)
+        hand = v.now
+        v.manual_rotate(300.0)  # a hand at the panel
+        v.run_until(lambda h: not h.truth().is_moving, 60, "the hand's turn over")
+        v.run_for(5.0)
+        assert v.status.following is None and v.status.following_ended == "turned by hand"
+        assert follow_state(v.status) == "off"  # R/follow/state
+        v.heard("JA1ABC", "PM95")  # WSJT-X names a partner
+        v.run_for(60.0)
+        assert v.frames("set", since=hand) == [] and angle_between(v.truth().az_deg, 300.0) < 1
+
+
 def test_follow_on_while_locked_is_refused_and_nothing_moves() -> None:
     with spid() as v:
         v.lock(True)
