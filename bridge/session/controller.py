@@ -1288,18 +1288,20 @@ class Controller:
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
         silent = by_silence = False
-        asked = link.asked_since_heard  # (rule 2: no silence in time nothing was asked)
-        if (
-            asked and unread_s >= self._least_silence_s
-        ):  # (the cheap look first, at every step of every
-            by_silence = now >= self._silent_offline_t(link, now)  # rotor: rule 2)
+        # (the cheap look first, at every step of every rotor; then no silence in time
+        # nothing was asked in: rule 2)
+        if unread_s >= self._least_silence_s and link.asked_since_heard:
+            by_silence = now >= self._silent_offline_t(link, now)
             unread = now >= self._garbled_offline_t(link, now)  # (garbage only)
             silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a
                 by_silence or unread  # reply owed may still come)
             )
         # (never answered: no valid reply for one timeout, as ever)
         never = (
-            asked and link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
+            link.last_reply_t is None
+            and not link.reply_owed
+            and unread_s >= timeout_s
+            and link.asked_since_heard
         )
         if silent and self.answering:
             if by_silence:
