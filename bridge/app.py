@@ -45,6 +45,7 @@ from bridge.interfaces.mqtt.client import MqttClient
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES
 from bridge.interfaces.mqtt.express import Express
 from bridge.interfaces.mqtt.groups import Group, Member
+from bridge.interfaces.mqtt.heartbeat import StationTime
 from bridge.interfaces.mqtt.lane import StopLane
 from bridge.interfaces.mqtt.payloads import ConsoleFacts
 from bridge.interfaces.mqtt.service import MqttService
@@ -227,6 +228,8 @@ class App:
         self.failed = threading.Event()
         self._lane_started = False
         self._problems_lock = threading.Lock()  # rule 4
+        # the heartbeat's wall clock and the one a stamped command is judged by (heartbeat.py)
+        station_time = StationTime(wall, time.monotonic)
         self.client = MqttClient(
             settings.mqtt,
             will_topic=self.topics.bridge_state,
@@ -235,7 +238,7 @@ class App:
                 topic, payload, retain, operator, gated=self.client.gated, stamp=stamp
             ),
             heartbeat=self.topics.bridge_heartbeat,  # client.py rule 2
-            wall=wall,
+            wall=station_time.beat,
             on_denied=self._denied,
             on_allowed=self._allowed,
             on_connect=self._connected,
@@ -268,6 +271,7 @@ class App:
             retain_is_live=settings.mqtt.protocol != "3.1.1",  # "auto": until it steps down
             on_problem=lambda topic, problem: self._denied(topic, problem),
             on_info=lambda problem, on: self._info(problem, on),
+            stamp_clock=station_time.now_unix,  # heartbeat.py rule 6
         )
         store = self.store = StateStore(settings.state_file, deferred=True)  # (written by start)
         try:

@@ -31,6 +31,17 @@ Rules:
    cannot read. Stop and lock ON are never refused (docs/architecture.md rule 11): the
    service does not ask. A command without a stamp (a dashboard, Home Assistant) is judged as
    before: it has only the broker's expiry.
+6. The station judges a stamp by its steady clock, not by its wall clock as it reads now
+   (``StationTime``; docs/architecture.md rule 15): a wall clock set back (a time server
+   found after boot) would make a command the link held up look younger by the step, and one
+   held for its expiry plus the step would turn the rotor. Each heartbeat's wall clock is kept
+   as its offset from the steady clock (the largest per BUCKET_S, for STATION_MEMORY_S: longer
+   than the remote keeps a beat), and a stamp's age is the steady clock now plus the largest
+   offset kept (or the wall clock's offset now, if larger) less the stamp. With no step, that
+   is the wall clock now; after a step back, a stamp reckoned from a beat before the step is
+   judged by its true age (not refused as "ahead"), and one reckoned from a later beat looks
+   older by the step, the safe direction, until the old beats are forgotten; after a step
+   forward, a stamp from before it looks older by the step, as before.
 """
 
 from __future__ import annotations
@@ -49,6 +60,7 @@ MAX_BUCKETS = int(CLOCK_WINDOW_S / BUCKET_S) + 2
 AHEAD_S = 1.0  # rule 5
 SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
 MAX_EXPIRY_S = 3600.0
+STATION_MEMORY_S = 2 * CLOCK_WINDOW_S  # rule 6
 
 
 def beat_payload(now_unix: float) -> str:
@@ -118,6 +130,46 @@ class StationClock:
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
             self._offsets.popleft()
+
+
+class StationTime:
+    """Rule 6 on the station: ``beat`` is the wall clock a heartbeat carries (kept as its
+    offset from ``clock``, the steady clock), ``now_unix`` the time a stamp is judged by.
+    ``beat`` runs on paho's thread, ``now_unix`` on whichever thread judges a command."""
+
+    def __init__(self, wall: Callable[[], float], clock: Callable[[], float]) -> None:
+        self._wall = wall
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._offsets: deque[tuple[float, float]] = deque()  # (first beat, largest offset)
+
+    def beat(self) -> float:
+        with self._lock:
+            now, wall = self._clock(), self._wall()
+            offset = wall - now
+            kept = self._offsets
+            if kept and now - kept[-1][0] < BUCKET_S:
+                first, best = kept[-1]
+                kept[-1] = (first, max(best, offset))
+            else:
+                kept.append((now, offset))
+            self._forget(now)
+            return wall
+
+    def now_unix(self) -> float:
+        with self._lock:
+            now = self._clock()
+            self._forget(now)
+            offset = self._wall() - now
+            for _, kept in self._offsets:
+                if kept > offset:
+                    offset = kept
+            return now + offset
+
+    def _forget(self, now: float) -> None:
+        kept = self._offsets
+        while kept and now - kept[0][0] > STATION_MEMORY_S:
+            kept.popleft()
 
 
 @dataclass(frozen=True)

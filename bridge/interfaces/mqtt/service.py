@@ -50,8 +50,10 @@ Rules:
    says how many were left out. The audit file has them all.
 9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
    remote sends) is refused when it is older than its expiry, from the future or unreadable
-   (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
-   The same on the stop lane, for the lock OFF it carries out while the main connection is down.
+   (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
+   rule 6; the wall clock when none is given): a link that held it up must not turn the rotor
+   late. Halts: never. The same on the stop lane, for the lock OFF it carries out while the
+   main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -119,12 +121,14 @@ class MqttService:
         retain_is_live: bool = True,
         on_problem: Callable[[str, str], None] | None = None,
         on_info: Callable[[str, bool], None] | None = None,
+        stamp_clock: Callable[[], float] | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
         self.topics = topics
         self._publisher = publisher
         self._wall = wall
+        self._stamp_clock = wall if stamp_clock is None else stamp_clock  # rule 9
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._audit_limiter = EventLimiter(
             clock, round(5 * error_events_per_s), error_events_per_s
@@ -493,7 +497,7 @@ class MqttService:
 
     def _late(self, stamp: Stamp | None) -> str | None:
         """Rule 9: why a stamped command (never a halt) is too old to carry out, or None."""
-        return None if stamp is None else stamp.judge(self._wall())
+        return None if stamp is None else stamp.judge(self._stamp_clock())
 
     def on_message(
         self,
