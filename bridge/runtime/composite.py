@@ -64,8 +64,10 @@ Rules:
    already on its way in the box that answers is stopped there: the rotator's turn is no
    longer watched whole, and a single controller gone silent mid-turn is stopped on both
    axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
-   the bridge had dropped, under an ``offline`` status). The storm's park goes on there
-   (session.py ``_storm_park``): each box parks its own axis, as one does alone in a storm
+   the bridge had dropped, under an ``offline`` status). The storm's park goes on there,
+   under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
+   attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
+   and never sent again): each box parks its own axis, as one does alone in a storm
    begun while the other did not answer, and nobody can send it again in the storm (a review
    of 83a398d: the azimuth box's park, stopped when the elevation box fell silent for 4 s,
    was never tried again, the antenna left 140 degrees short of it for the whole storm). A

@@ -329,7 +329,8 @@ class RotatorSession:
             what = describe_command(batch.lost_target)
             self._error(ErrorKind.REFUSED, f"target dropped: {EXPRESS_LOST}", command=what)
         if batch.offline is not None:  # (runtime/composite.py rule 8)
-            self._drop_pending(batch.offline)
+            if not self._storm_park_waiting():  # (the storm's park, this box's own axis,
+                self._drop_pending(batch.offline)  # waits on: nobody could send it again)
             if ctl.turning() and not self._storm_park():  # (its turn is the rotator's, which
                 ctl.stop(now)  # no reading watches whole: stopped, as one controller gone
                 # silent mid-turn is; but the storm's park, this box's own axis, goes on)
@@ -679,6 +680,15 @@ class RotatorSession:
         box's park goes on when the other stops answering (runtime/composite.py rule 8), as
         it parks alone in a storm begun while the other did not answer."""
         return self.wind.storm and self.view.last_source == Source.WIND.value
+
+    def _storm_park_waiting(self) -> bool:
+        """The target waiting is the storm's park (wind.py): on a rotator of two boxes, kept
+        when the other box stops answering (runtime/composite.py rule 8), as one under way
+        goes on (``_storm_park``; an attack pass: a Rotor-EZ azimuth box's park, held back by
+        its brake delay when the elevation box fell silent, was dropped, and nothing sent it
+        again: the antenna stood 150 degrees short of the park for the whole storm)."""
+        pending = self.targets.pending
+        return self.wind.storm and pending is not None and pending.source is Source.WIND
 
     def _still(self, target: Target) -> bool:
         """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but

@@ -58,6 +58,34 @@ def test_composite_storm_park_survives_a_short_silence_of_the_elevation_box() ->
         assert abs(v.el.truth().el_deg) < 1.0, v.el.truth()  # (its own park, owed again)
 
 
+def test_composite_storm_park_waiting_in_the_brake_delay_survives_the_other_box_offline() -> None:
+    """A Rotor-EZ azimuth box turning when the storm begins: a stop first, the park waits out
+    the brake delay; the elevation box falls silent meanwhile. The park still goes (an attack
+    pass: it was dropped there, and the antenna stood 150 degrees short of it all storm)."""
+    az_box = {Axis.AZIMUTH: {"speed_deg_s": 6.0}, Axis.ELEVATION: FAST[Axis.ELEVATION]}
+    with VirtualComposite("rotorez", "gs232b", settings=WIND, emulators=az_box) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(10.0, 30.0))
+        v.run_until(
+            lambda h: abs(h.az.truth().az_deg - 10) < 1 and abs(h.el.truth().el_deg - 30) < 1,
+            120,
+            "at 10/30",
+        )
+        v.aim(Target(300.0, 30.0))
+        v.run_until(lambda h: h.az.truth().az_deg > 20, 30, "turning toward 300")
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.el.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        assert v.az.truth().in_brake_delay  # (the park still waiting when the box went out)
+        v.el.set_silent(False)
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(120.0)
+        assert v.status.wind is not None and v.status.wind.storm
+        assert abs(v.az.truth().az_deg - 180.0) < 1.0, v.az.truth()
+        assert abs(v.el.truth().el_deg) < 1.0, v.el.truth()
+
+
 def test_single_storm_park_survives_a_short_silence() -> None:
     v = parking()
     try:
