@@ -192,9 +192,16 @@ def axis_configs(
             pointing = replace(pointing, park=(pointing.park[0], None))
             wind = None if wind is None else replace(wind, park=(wind.park[0], None))
         unasked = r.unasked_moves_of(axis)  # (controller.py rule 10)
-        boxes.append(
+        tracking = replace(cfg.tracking, flip=False)  # (tracking.py rule 4: one flip for both
+        boxes.append(  # boxes cannot be decided by each box's session alone)
             replace(
-                cfg, spec=spec, motion=motion, pointing=pointing, wind=wind, unasked_moves=unasked
+                cfg,
+                spec=spec,
+                motion=motion,
+                pointing=pointing,
+                wind=wind,
+                unasked_moves=unasked,
+                tracking=tracking,
             )
         )
     return boxes[0], boxes[1]

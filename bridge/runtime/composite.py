@@ -30,7 +30,8 @@ Rules:
    is; the last error is the newer of the two. (An attack pass: the azimuth box read turning
    on while the elevation box was unplugged was shown offline and not moving, and a group
    with that rotator said idle.)
-4. Tracking and following run in both sessions (each aims its own axis); when one ends (an
+4. Tracking and following run in both sessions (each aims its own axis, never flipped:
+   session/tracking.py rule 4); when one ends (an
    unplugged box, a stop, the horizon) the other is ended too, and the status says why the
    first one ended. One that runs in a box while the other does not answer (begun there
    after the judge took the command while the other box went offline, which refused it) is

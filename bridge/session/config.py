@@ -22,6 +22,7 @@ class TrackConfig:
     min_el_deg: float = 0.0
     step_deg: float = 3.0
     at_los: str = "stay"  # or "park"
+    flip: bool = True  # tracking.py rule 4; False on a rotator of two boxes (app.axis_configs)
 
 
 @dataclass(frozen=True)

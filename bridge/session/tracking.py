@@ -29,7 +29,11 @@ Rules:
    during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
    (the first from where the rotor is); the saving must exceed FLIP_SAVING_DEG at the azimuth
    speed. A pass across a
-   stop (the north on a 0..360 rotor) then stays clear of it. Decided once per pass.
+   stop (the north on a 0..360 rotor) then stays clear of it. Decided once per pass. Never on a
+   rotator of two boxes (``TrackConfig.flip``): each box's session would decide it for its own
+   axis, from what its own box knows (an attack pass: an RT-21 azimuth box never flipped, its
+   GS-232B elevation box, 0..180, flew the pass at 180 - el, and the antenna faced 180 degrees
+   away from the satellite for the whole pass).
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is skipped, reported once per pass, and the rotor holds until the
    body is back where it may go.
@@ -299,6 +303,8 @@ class Tracker:
         8). Satellites only: the sun and the moon move too slowly across a "pass" of half a day
         for a flip to be worth its elevation travel."""
         aim, rig = self._rig.aim, self._rig
+        if not self.cfg.flip:  # (one box of two: it would decide for its own axis alone)
+            return False
         if not aim.has_elevation or aim.el_max_deg < 180.0 - self.cfg.min_el_deg:
             return False
         if sky.body.kind != "satellite":

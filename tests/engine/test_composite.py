@@ -45,9 +45,15 @@ from bridge.sky.worker import LookupQuestion
 from tests.engine import virtual_composite
 from tests.engine.test_catalog import ISS, three_line
 from tests.engine.test_follow import STATION
-from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
+from tests.engine.test_session_tracking import (
+    BERLIN,
+    SUN_EPOCH,
+    a_pass_that,
+    off_deg,
+    sun_up_somewhere,
+)
 from tests.engine.virtual_composite import VirtualComposite
-from tests.support.sky import sun_altaz
+from tests.support.sky import sgp4_altaz, sun_altaz
 
 FAST = {
     Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
@@ -93,6 +99,36 @@ def test_an_rt21_and_a_gs232b_track_the_sun_within_1_5_degrees() -> None:
         # the elevation box's own azimuth was never turned (protocols/axes.py rule 2)
         assert v.el.truth().az_deg == 0.0
         assert all(w.startswith((b"W000 ", b"C2")) for w in v.el.sent()), v.el.sent()
+
+
+def test_a_satellite_pass_is_never_flown_flipped_by_the_elevation_box_alone() -> None:
+    """tracking.py rule 4: a pass across the north, the elevation box allowed 0..180 (a flip
+    would save the azimuth's unwind). Each box's session decided the flip alone: the RT-21
+    azimuth box (no elevation) never flips, the GS-232B elevation box flew 180 - el, and the
+    antenna faced away from the satellite for the whole pass (an attack pass). Now neither
+    flips: the elevation stays below the zenith, and the antenna is on the satellite but for
+    the azimuth's one unwind through its stop (60 s at 6 degrees a second)."""
+    line1, line2, aos, los = a_pass_that(across_north=True)
+    settings = {"az_min_deg": 0, "az_max_deg": 360, "el_min_deg": 0, "el_max_deg": 180}
+    sky = Sky(*BERLIN)
+    with VirtualComposite(
+        "rt21", "gs232b", settings=settings, emulators=FAST, sky=sky, wall_epoch_s=aos - 600
+    ) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_until(lambda h: h.wall() >= aos + 30, 700, "the pass under way")
+        off_s = seconds = 0
+        highest = 0.0
+        while v.wall() < los:
+            v.run_for(1.0)
+            sat_az, sat_el = sgp4_altaz(line1, line2, *BERLIN, v.wall())
+            az, el = v.az.truth().az_deg, v.el.truth().el_deg
+            assert el is not None
+            highest = max(highest, el)
+            off_s += max(off_deg(az, sat_az), abs(el - sat_el)) > 5.0
+            seconds += 1
+        assert highest <= 90.0, highest
+        assert off_s <= 60, (off_s, seconds)
 
 
 def test_one_stop_stops_both_boxes() -> None:
