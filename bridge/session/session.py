@@ -583,6 +583,8 @@ class RotatorSession:
             self._heed(now)
         if self._answered and not ctl.answering:  # wind.py rule 7: offline in a storm,
             self.wind.lost()  # its park (stopped at the offline, or dropped) owed again
+        elif self.status.parked and self._storm_park() and self.targets.pending is None:
+            self.wind.arrived()  # (wind.py rule 7: the last status saw it at the storm's park)
         self._answered = ctl.link is not None and ctl.answering
         if ctl.link is not None and ctl.answering:
             ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)

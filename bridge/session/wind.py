@@ -36,6 +36,9 @@ Rules:
    halted it (rule 3): motion is refused in the storm, so nobody can send it again. (A review
    of d35d250: a GS-232B whose replies were lost for 4 s while it parked for the storm was
    stopped at the offline, and stood 140 degrees short of the park for the rest of the storm.)
+   A park the rotor was seen to reach (``arrived``) is no park the line took: an offline after
+   it owes nothing (an attack pass: a rotor turned at its front panel after the storm's park,
+   its line silent for 3 s, was turned back to the park by itself once it answered).
 """
 
 from __future__ import annotations
@@ -66,6 +69,7 @@ class WindPark:
         self._silent = False
         self._park_owed = storm and not halted  # rule 3: a park stopped stays stopped
         self._halted = storm and halted  # ... across a restart (kept.py rule 4) and a reset
+        self._arrived = False  # rule 7: the rotor was seen at this storm's park
         self._wall_offset_s = 0.0
 
     @property
@@ -109,7 +113,7 @@ class WindPark:
         """Rule 1: a reading above the park level; rule 2: no calm since."""
         self._calm_since = None
         if not self.storm:
-            self.storm, self._park_owed, self._halted = True, True, False
+            self.storm, self._park_owed, self._halted, self._arrived = True, True, False, False
             self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
             log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
 
@@ -125,8 +129,13 @@ class WindPark:
 
     def lost(self) -> None:
         """Rule 7: the line took the rotator (offline, unplugged) in this storm."""
-        if self.storm and not self._halted:
+        if self.storm and not self._halted and not self._arrived:
             self._park_owed = True
+
+    def arrived(self) -> None:
+        """Rule 7: the rotor was seen at rest at this storm's park: an offline owes it no more."""
+        if self.storm and not self._park_owed:
+            self._arrived = True
 
     def refusal(self) -> str | None:
         """Why motion is refused now (rule 1), if it is."""
@@ -166,7 +175,7 @@ class WindPark:
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if not (self.storm and self._park_owed) or scene.locked:
             return NOTHING if error is None else Proposal(error=error)
-        self._park_owed = False
+        self._park_owed = self._arrived = False
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
         try:
             judged = self._rig.aim.judge(park, scene.motion.position_deg)
