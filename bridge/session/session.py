@@ -583,7 +583,7 @@ class RotatorSession:
             self._heed(now)
         if self._answered and not ctl.answering:  # wind.py rule 7: offline in a storm,
             self.wind.lost()  # its park (stopped at the offline, or dropped) owed again
-        elif self.status.parked and self._storm_park() and self.targets.pending is None:
+        elif self._storm_park_seen():
             self.wind.arrived()  # (wind.py rule 7: the last status saw it at the storm's park)
         self._answered = ctl.link is not None and ctl.answering
         if ctl.link is not None and ctl.answering:
@@ -682,6 +682,19 @@ class RotatorSession:
         box's park goes on when the other stops answering (runtime/composite.py rule 8), as
         it parks alone in a storm begun while the other did not answer."""
         return self.wind.storm and self.view.last_source == Source.WIND.value
+
+    def _storm_park_seen(self) -> bool:
+        """wind.py rule 7: the last status saw the rotor at rest at the storm's park. Never on a
+        controller that cannot report where it stands (a DCU-1): its ``parked`` says only that
+        the estimated move is over (a review of 3e4f0f4: a DCU-1 whose adapter had wedged when
+        the storm began never heard its park, was unplugged and plugged in again, and the park
+        was not sent again: the antenna stood 150 degrees from it for the whole storm)."""
+        return (
+            self.cfg.spec.can_report_position
+            and self.status.parked
+            and self._storm_park()
+            and self.targets.pending is None
+        )
 
     def _storm_park_waiting(self) -> bool:
         """The target waiting is the storm's park (wind.py): on a rotator of two boxes, kept

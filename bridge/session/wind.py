@@ -38,7 +38,9 @@ Rules:
    stopped at the offline, and stood 140 degrees short of the park for the rest of the storm.)
    A park the rotor was seen to reach (``arrived``) is no park the line took: an offline after
    it owes nothing (an attack pass: a rotor turned at its front panel after the storm's park,
-   its line silent for 3 s, was turned back to the park by itself once it answered).
+   its line silent for 3 s, was turned back to the park by itself once it answered). A rotor
+   that cannot report its position (a DCU-1) is never seen there: the end of its estimated
+   move is no arrival, and an offline owes its park again (a review of 3e4f0f4).
 """
 
 from __future__ import annotations

@@ -155,3 +155,29 @@ def test_a_park_reached_and_turned_away_by_hand_is_not_sent_again_after_an_offli
         v.run_for(60.0)
         assert v.status.wind is not None and v.status.wind.storm
         assert abs(v.truth().az_deg - 250.0) < 1.0, v.truth()
+
+
+def test_a_dcu1_park_never_seen_is_sent_again_after_the_port_comes_back() -> None:
+    """wind.py rule 7: a DCU-1 cannot report where it stands, so its storm park is never seen
+    reached (``parked`` only says its estimated move is over). Its adapter wedged when the
+    storm began (the park never reached the controller), the operator unplugs it and plugs it
+    in again: the park goes again and the antenna ends at the park, as before the rule."""
+    settings = {k: w for k, w in WIND.items() if k != "park_el_deg"}  # (azimuth only)
+    v = VirtualRotator("dcu1", settings=settings, emulator={"start_az_deg": 30})
+    try:
+        cfg = v.cfg.motion
+        v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+        v.set_deaf(True)  # (a wedged adapter: what the bridge writes never arrives)
+        storm(v)
+        v.run_until(lambda h: h.status.parked, 120, "the park's estimated move over")
+        wind(v, 85.0)  # (the storm's next reading)
+        v.run_for(60.0)
+        assert abs(v.truth().az_deg - 30.0) < 1.0  # (it never heard the park)
+        v.link_down()
+        v.set_deaf(False)
+        v.link_up()
+        v.run_for(120.0)
+        assert v.status.wind is not None and v.status.wind.storm
+        assert abs(v.truth().az_deg - 180.0) < 1.0, v.truth()
+    finally:
+        v.close()
