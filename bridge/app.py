@@ -245,7 +245,7 @@ class App:
                 topic, payload, retain, operator, gated=self.client.gated, stamp=stamp
             ),
             heartbeat=self.topics.bridge_heartbeat,  # client.py rule 2
-            wall=station_time.beat,
+            wall=station_time.now_unix,
             on_denied=self._denied,
             on_allowed=self._allowed,
             on_connect=self._connected,

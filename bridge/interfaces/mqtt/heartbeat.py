@@ -8,7 +8,7 @@ computers' clocks need not agree, so the remote does not stamp its own clock: it
 station's clock as the station's heartbeat lets it reckon it, never later than the truth.
 
 Rules:
-1. The station's bridge publishes its wall clock (unix seconds) on ``B/bridge/heartbeat`` every
+1. The station's bridge publishes its clock (unix seconds: rule 6) on ``B/bridge/heartbeat`` every
    HEARTBEAT_S while its main connection is up (after its first look; not when it refused to
    run), QoS 0, NOT retained: one that arrives is a bridge alive now (a retained value the
    broker restored from its file is no news of anyone).
@@ -31,17 +31,16 @@ Rules:
    cannot read. Stop and lock ON are never refused (docs/architecture.md rule 11): the
    service does not ask. A command without a stamp (a dashboard, Home Assistant) is judged as
    before: it has only the broker's expiry.
-6. The station judges a stamp by its steady clock, not by its wall clock as it reads now
-   (``StationTime``; docs/architecture.md rule 15): a wall clock set back (a time server
-   found after boot) would make a command the link held up look younger by the step, and one
-   held for its expiry plus the step would turn the rotor. Each heartbeat's wall clock is kept
-   as its offset from the steady clock (the largest per BUCKET_S, for STATION_MEMORY_S: longer
-   than the remote keeps a beat), and a stamp's age is the steady clock now plus the largest
-   offset kept (or the wall clock's offset now, if larger) less the stamp. With no step, that
-   is the wall clock now; after a step back, a stamp reckoned from a beat before the step is
-   judged by its true age (not refused as "ahead"), and one reckoned from a later beat looks
-   older by the step, the safe direction, until the old beats are forgotten; after a step
-   forward, a stamp from before it looks older by the step, as before.
+6. The station's clock, the one its heartbeats carry and the one it judges a stamp by, is its
+   wall clock never set back (``StationTime``; docs/architecture.md rule 15): its steady clock
+   plus the largest offset between the two this process has seen. A wall clock set back (a
+   time server found after boot) would otherwise make a command the link held up look younger
+   by the step (one held for its expiry plus the step would turn the rotor), and a fresh one
+   reckoned from a beat before the step look as if from the future. Set back, the station's
+   clock goes on from where it was, ahead of the wall clock by the step, until the process
+   ends; set forward, it follows at once (a command stamped before the step looks older by
+   it, the safe direction). A client that stamps by its own synchronised wall clock instead
+   of the heartbeat's (rule 4 allows it) sees its commands look older by a step back.
 """
 
 from __future__ import annotations
@@ -60,7 +59,6 @@ MAX_BUCKETS = int(CLOCK_WINDOW_S / BUCKET_S) + 2
 AHEAD_S = 1.0  # rule 5
 SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
 MAX_EXPIRY_S = 3600.0
-STATION_MEMORY_S = 2 * CLOCK_WINDOW_S  # rule 6
 
 
 def beat_payload(now_unix: float) -> str:
@@ -133,43 +131,23 @@ class StationClock:
 
 
 class StationTime:
-    """Rule 6 on the station: ``beat`` is the wall clock a heartbeat carries (kept as its
-    offset from ``clock``, the steady clock), ``now_unix`` the time a stamp is judged by.
-    ``beat`` runs on paho's thread, ``now_unix`` on whichever thread judges a command."""
+    """Rule 6 on the station: ``now_unix`` is the station's clock (its heartbeats carry it, its
+    stamps are judged by it); ``wall`` and ``clock`` (the steady one) are read under a lock,
+    from paho's thread (the beat) and whichever thread judges a command."""
 
     def __init__(self, wall: Callable[[], float], clock: Callable[[], float]) -> None:
         self._wall = wall
         self._clock = clock
         self._lock = threading.Lock()
-        self._offsets: deque[tuple[float, float]] = deque()  # (first beat, largest offset)
-
-    def beat(self) -> float:
-        with self._lock:
-            now, wall = self._clock(), self._wall()
-            offset = wall - now
-            kept = self._offsets
-            if kept and now - kept[-1][0] < BUCKET_S:
-                first, best = kept[-1]
-                kept[-1] = (first, max(best, offset))
-            else:
-                kept.append((now, offset))
-            self._forget(now)
-            return wall
+        self._offset = -math.inf  # the largest wall - steady seen
 
     def now_unix(self) -> float:
         with self._lock:
             now = self._clock()
-            self._forget(now)
             offset = self._wall() - now
-            for _, kept in self._offsets:
-                if kept > offset:
-                    offset = kept
-            return now + offset
-
-    def _forget(self, now: float) -> None:
-        kept = self._offsets
-        while kept and now - kept[0][0] > STATION_MEMORY_S:
-            kept.popleft()
+            if offset > self._offset:
+                self._offset = offset
+            return now + self._offset
 
 
 @dataclass(frozen=True)
