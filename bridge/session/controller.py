@@ -15,7 +15,12 @@ Rules:
    unanswered (link.py ``asked_since_heard``): time in which the bridge asked nothing (its
    process held, a host that stalls) is no silence of the controller's, nor a stall's
    (docs/architecture.md rule 15; review 102: held 12 s mid-turn, the session called it
-   silent and stalled at its first step after, and stopped it short).
+   silent and stalled at its first step after, and stopped it short); and only once the
+   questions since reach the silence's end: where they do not (the last went out a reply time
+   before it, lost), one asked then decides (link.py rule 2), unless a stall could be called
+   by then (``_stall_check_t``: that offline cannot wait; a review: a line that lost 2.6 s of
+   every 3.6 s took a GS-232B offline and stopped its turn, although it answered every time
+   the line let it).
    A DCU-1 is available while its port is open (it never answers). A garbled answer
    (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
    without a valid reply at most, and offline before the motion machine could call a turn fed no
@@ -210,6 +215,7 @@ DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two do
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
+ASKED_MARGIN_S = 1e-6  # rule 2: the questions reach the silence's end (rounding)
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 _RESTS = (mo.IDLE, mo.BRAKING, mo.STALLED)  # rule 10: where ``_short_of`` judges
 #: stops.py rule 4: a bounded stop series
@@ -1291,11 +1297,19 @@ class Controller:
         # (the cheap look first, at every step of every rotor; then no silence in time
         # nothing was asked in: rule 2)
         if unread_s >= self._least_silence_s and link.asked_since_heard:
-            by_silence = now >= self._silent_offline_t(link, now)
-            unread = now >= self._garbled_offline_t(link, now)  # (garbage only)
+            silent_at = self._silent_offline_t(link, now)
+            garbled_at = self._garbled_offline_t(link, now)  # (garbage only)
+            by_silence, unread = now >= silent_at, now >= garbled_at
             silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a
                 by_silence or unread  # reply owed may still come)
             )
+            # rule 2: the questions must reach the silence's end, or one asked now decides
+            # (not once a stall could be called: that offline cannot wait)
+            heard_t = now - link.silent_for(now) if by_silence else now - unread_s
+            asked_s = (silent_at if by_silence else garbled_at) - heard_t - ASKED_MARGIN_S
+            if silent and link.asked_for_s < asked_s and now < self._stall_check_t(link):
+                link.ask_verdict(now)
+                silent = by_silence = False
         # (never answered: no valid reply for one timeout, as ever)
         never = (
             link.last_reply_t is None

@@ -16,7 +16,14 @@ Rules:
 2. Silence is counted from the last valid reply, or from the end of a wait for a slew's report
    (a controller that was silent for a whole slew was not "not answering"), or from the last
    garbled answer (rule 11; ``unread_for`` counts without those: controller.py rule 2 bounds
-   them).
+   them). Only the questions show it is the controller's (docs/architecture.md rule 15):
+   ``asked_for_s`` reaches from the question the last valid reply answered to the last one
+   asked. Where the clock has passed the silence's end and the questions have not (the last
+   went out a reply time before the end, and was lost), the controller is asked once more then
+   (``ask_verdict``): that reply, owed only until it can be whole (rule 7's hold, rule 9's quiet
+   time) and VERDICT_SLACK_S, decides. (A review: a GS-232B whose line lost 2.6 s of every
+   3.6 s was called silent 3.2 s into a turn, and the turn stopped, just as the question that
+   went next would have been answered.)
 3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
    except a stop on a controller that takes one at any time (``spec.stop_interrupts``).
 4. A poll is sent only when due, when nothing is owed and no stop is waiting, and not before
@@ -117,6 +124,7 @@ SETTLE_BYTES = 3  # rule 9: the next byte of a reply sent back to back comes aft
 SETTLE_MIN_S = 0.005  # rule 9: at a high baud rate, a little longer than three byte times
 LATE_MAX_S = 0.05  # rule 7: a USB adapter's latency timer (16 ms by default), and more
 LATE_EASE = 1 / 256  # rule 7: of the learned lateness, given back per reply whole in time
+VERDICT_SLACK_S = 0.2  # rule 2: a verdict's reply is owed this long after it can be whole
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
@@ -145,6 +153,8 @@ class Link:
         self._learns = False  # rule 7: the poll was one frame
         self.late_s = 0.0  # rule 7: how late this controller's replies have been whole
         self._quiet_from_t = now  # silence counts from here when no reply came since
+        self._answered_t = now  # rule 2: when the question the last valid reply answered went out
+        self._verdict = False  # rule 2: the next poll is a verdict
         self._reply_deadline: float | None = None
         self._next_poll = now
         self._refusal_until = -math.inf  # rule 4: a target's refusal can come until then
@@ -474,7 +484,7 @@ class Link:
         if self._slew is None:
             return False
         self._slew = None
-        self._quiet_from_t = now
+        self._quiet_from_t = self._answered_t = now
         return True
 
     def got_reading(self, now: float) -> None:
@@ -483,6 +493,7 @@ class Link:
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a reading, which gives a poll its
             self._repolled = False  # re-poll back (its last frame's: rule 10's two axes)
+        self._answered(now)
         self._last_reply_t = now
         self._slew = None
 
@@ -494,7 +505,13 @@ class Link:
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a valid reply, which gives a poll
             self._repolled = False  # its re-poll back
+        self._answered(now)
         self._heard_t = now
+
+    def _answered(self, now: float) -> None:
+        """Rule 2: a valid reply came now: the question it answered went out then (a reply
+        to no question since the last one answered, the controller's own, counts from now)."""
+        self._answered_t = self._asked_t if self.asked_since_heard else now
 
     def ask_again(self, now: float, once: bool) -> None:
         """The reply was not usable: close it and poll at once (``once``: if its poll was no
@@ -540,6 +557,12 @@ class Link:
         self.write(query, now)
         if isinstance(asked, list):
             self._queue(asked[1:], now + self._gap_s, now, poll=True)
+        if self._verdict and self._reply_deadline is not None:  # rule 2
+            self._verdict = False
+            last_t = now + (len(asked) - 1) * self._gap_s if isinstance(asked, list) else now
+            whole_s = (len(query) + self.spec.reply_bytes + 1) * self._byte_s + self.late_s
+            by = last_t + whole_s + self._settle_s + VERDICT_SLACK_S
+            self._reply_deadline = min(self._reply_deadline, by)
         self._next_poll = _grid(now, interval_s)
         self._repolled, self._repoll_due = self._repoll_due, False  # rule 11
         self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
@@ -555,6 +578,18 @@ class Link:
     def unread_for(self, now: float) -> float:
         """Rule 2: how long since a valid reply (or a slew's wait ended)."""
         return now - self._heard_from()
+
+    @property
+    def asked_for_s(self) -> float:
+        """Rule 2: how far the questions since the last valid reply (or a slew's wait ended)
+        reach: from the question that reply answered to the last one (0: none since)."""
+        return self._asked_t - self._answered_t if self.asked_since_heard else 0.0
+
+    def ask_verdict(self, now: float) -> None:
+        """Rule 2: the controller has given no valid reply for its silence's time, but the
+        bridge asked nothing in its last part: a poll now, whose reply is owed only until it can
+        be whole (rule 7's hold) and the quiet time of rule 9, plus VERDICT_SLACK_S."""
+        self._next_poll, self._verdict = now, True
 
     def _heard_from(self) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
