@@ -319,3 +319,41 @@ def test_a_stop_reaches_the_controller_in_order_beside_clients_flooding_the_port
     frames = [f.data for f in emu.log()]
     target = frames.index(next(f for f in frames if f.startswith(b"AP1300")))
     assert b";" in frames[target + 1 :]  # the stop, after the target
+
+
+def _exchange(sock: socket.socket, request: bytes, expected_len: int) -> bytes:
+    """``request`` on a connection kept open, and the ``expected_len`` bytes it is answered."""
+    sock.sendall(request)
+    buf = b""
+    while len(buf) < expected_len:
+        chunk = sock.recv(expected_len - len(buf))
+        if not chunk:
+            break
+        buf += chunk
+    return buf
+
+
+def test_a_gs232_client_that_sent_a_bearing_past_360_reads_it_past_360(
+    rig: Rig, rotctl_path: str
+) -> None:
+    """A 450-degree GS-232 client (Hamlib's -m 603 takes up to 450) that sent W400 reads AZ=400
+    at 400, as its controller would answer; one that never named the overlap reads AZ=040, as
+    rotctld's p answers each client in its own terms. (Read back as 040, the first client saw
+    its rotor 360 degrees short of the target it had just reached.)"""
+    port = start(rig, "gs232b-az-450", start_az_deg=350)
+    with (
+        socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as overlap,
+        socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as compass,
+    ):
+        assert _exchange(overlap, b"W400 000\r\r", 0) == b""  # as Hamlib's -m 603 sends it
+        rig.arrived("tower", 40)
+        wait_until(lambda: settled(rig, 40, 0), 10, "the bridge's status at 40")
+        assert rig.status("tower").raw_bearing_deg == pytest.approx(400, abs=1)
+        reading = b"AZ=400  EL=000\r\n"
+        assert _exchange(overlap, b"C2\r", len(reading)) == reading
+        assert _exchange(overlap, b"C\r", len(b"AZ=400\r\n")) == b"AZ=400\r\n"
+        reading = b"AZ=040  EL=000\r\n"
+        assert _exchange(compass, b"C2\r", len(reading)) == reading
+    # Hamlib's own, in one session: P 400 (W400 000) and p (C2) read back 400
+    az = rotctl(rotctl_path, GS232, port, "P", "400", "0", "p").split()[0]
+    assert float(az) == 400

@@ -39,6 +39,7 @@ from bridge.interfaces.tcplines import LINE_ENDS, LineServer, LineSession
 
 if TYPE_CHECKING:
     from bridge.interfaces.ptylines import PtyLineServer
+    from bridge.pointing import Pointing
 
 
 # what these commands use of a rotator: the bridge's own or the remote's (front.py)
@@ -55,12 +56,16 @@ _STOPS = (Gs232Kind.STOP, Gs232Kind.STOP_AZ, Gs232Kind.STOP_EL)
 Item = TypeVar("Item")
 
 
-def _position(rotator: Rotator) -> tuple[float, float] | None:
+def _position(rotator: Rotator, pointing: Pointing | None = None) -> tuple[float, float] | None:
     """The true bearing and elevation now (0 without an elevation axis), None when the bridge
-    does not currently have them: never the last value seen (rotctld's rule 5)."""
+    does not currently have them: never the last value seen (rotctld's rule 5). With the
+    rotator's ``pointing`` (a client that named the side, package rule 4), the true bearing
+    unfolded past 360 on a rotor that does not wrap, as rotctld's ``p`` answers such a client."""
     status = rotator.status
     el = status.elevation_deg if rotator.spec.has_elevation else 0.0
     az = status.bearing_deg
+    if pointing is not None and not pointing.az_wraps and status.raw_bearing_deg is not None:
+        az = status.raw_bearing_deg + pointing.offset_deg
     if not rotator.spec.can_report_position or not status.available or az is None or el is None:
         return None
     return az, el
@@ -132,9 +137,19 @@ class _LineSession(_Session[str | None]):
         return LineSplitter()
 
 
+class Gs232Rotator(FrontRotator, Protocol):
+    """What the GS-232 session asks of a rotator besides a front end's: its pointing (the
+    offset and whether its azimuth wraps), for a client that named the side (package rule 4)."""
+
+    @property
+    def pointing(self) -> Pointing: ...
+
+
 class Gs232Session(_LineSession):
     """One GS-232 client; ``replies`` "A" or "B": the controller whose readings it gives
-    (package rule 2)."""
+    (package rule 2). ``names_side``: its last accepted bearing was past 360 (package rule 4)."""
+
+    rotator: Gs232Rotator
 
     name, failed_reply = "gs232", GS232_ERROR
 
@@ -143,6 +158,7 @@ class Gs232Session(_LineSession):
         if replies not in ("A", "B"):
             raise ValueError(f"GS-232 replies are A or B, not {replies!r}")
         self.replies = replies
+        self.names_side = False
 
     def answer(self, line: str | None) -> bytes:
         return self.execute(line, parse_gs232(line))
@@ -156,7 +172,7 @@ class Gs232Session(_LineSession):
                 return GS232_ERROR
             return b""
         if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
-            where = _position(self.rotator)
+            where = _position(self.rotator, self.rotator.pointing if self.names_side else None)
             if where is None:
                 return GS232_ERROR
             az_text, el_text = _azimuth(where[0]), f"{round(where[1]):03d}"
@@ -183,6 +199,7 @@ class Gs232Session(_LineSession):
                 self.rotator.submit(target, described)
             except Refused:
                 return GS232_ERROR  # Rotator.submit has reported it on R/error
+            self.names_side = req.az_deg is not None and not 0 <= req.az_deg <= 360  # rule 4
             return b""
         log.debug("gs232 for %s: %r not understood", self.rotator.id, line)
         if line is None:
