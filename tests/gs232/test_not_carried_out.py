@@ -4,6 +4,8 @@ audit trail), so the client's user learns why nothing moved; nothing is submitte
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from bridge.core.model import Stop, Target
 from bridge.interfaces.gs232 import Dcu1Session, EasycommSession, Gs232Session
 from bridge.interfaces.gs232.commands import DCU1_ERROR, GS232_ERROR
@@ -53,3 +55,28 @@ def test_a_dcu1_command_that_is_none_is_said_and_a_stop_still_stops() -> None:
         "'Q' is no DCU-1 command",
         "'AP1999;' is no DCU-1 command",
     ]
+
+
+def test_an_easycomm_axis_word_behind_junk_turns_neither_axis() -> None:
+    """Package rule 3: ``;AZ200.0`` is no azimuth (``\\x1fM180`` is no ``M180`` either, rule
+    12), and the line beside it is malformed: nothing turns, not even the elevation its good
+    word names, and it is said. Hamlib's -m 204 ends its Easycomm III configuration commands
+    with ``\\n;`` (``GS\\n;``), which puts a ``;`` in front of the next line; read as a radio's
+    word and dropped, the line turned the elevation alone, the azimuth left where it was."""
+    tower = _Tower()
+    tower.spec = SimpleNamespace(has_elevation=True, can_report_position=True)
+    ec = EasycommSession(tower, "192.168.1.20")  # type: ignore[arg-type]
+    assert ec.feed(b"GS\n;AZ200.0 EL30.0\n") == [b"", b""]
+    assert ec.feed(b"\x1fAZ200.0 EL30.0\n") == [b""]
+    assert ec.feed(b";AZ EL\n") == [b"ALinvalid ;AZ\n"]  # not half an answer
+    assert tower.submitted == []
+    assert [m for m, _ in tower.refusals] == [
+        "Easycomm: invalid ;AZ200.0",
+        "Easycomm: invalid \x1fAZ200.0",
+        "Easycomm: invalid ;AZ",
+    ]
+    assert ec.feed(b";SA SE\n") == [b""]  # a stop beside it still stops (rule 6)
+    assert [type(c) for c in tower.submitted] == [Stop]
+    # a radio's words are still ignored (Hamlib's -m 201 line)
+    assert ec.feed(b"AZ200.0 EL30.0 UP000 XXX DN000 XXX\n") == [b""]
+    assert [type(c) for c in tower.submitted] == [Stop, Target]

@@ -128,6 +128,8 @@ def test_easycomm_lines_are_read(line: str, request_: EasycommRequest) -> None:
     [
         *("AZnan EL0", "AZinf", "AZ1e9", "AZ99999.0", "EL--5", "AZ10 ELx", "AZ1,5", "AZ+"),
         *("AZ190 AZ200", "AZ10 EL5 EL50", "EL5 AZ10 el50"),  # which is meant? (not the last)
+        # an axis word behind junk is none, and the line is not half of it (package rule 3)
+        *(";AZ200.0 EL30.0", "\x1fAZ200.0 EL30.0", "AZ200.0\x1cEL30.0", "EL30 UP000 X;Z"),
     ],
 )
 def test_an_easycomm_line_with_a_malformed_number_does_nothing(line: str) -> None:

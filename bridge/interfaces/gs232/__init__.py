@@ -50,8 +50,13 @@ Rules:
    move the bridge cannot do (``ML``, ``RESET``) or malformed: Hamlib's ``-m 202``/``-m 204``
    read no reply to a set, stop, park, reset or move, and took such an alarm line as the next
    ``AZ EL``'s answer (the tracker's next ``p`` failed, "Command rejected by the rig"). What
-   was refused or not carried out is said on ``R/error`` (rules 5 and 12). A radio's words
-   (``UP``, ``DN``, ...) are ignored.
+   was refused or not carried out is said on ``R/error`` (rules 5 and 12). Words are
+   separated by ASCII spaces and tabs alone. A radio's words (``UP000``, ``XXX``, ...) and an
+   Easycomm III word the bridge does not serve (``GS``) are ignored: a word it does not know
+   is ignored only when it is letters, digits and points; any other is malformed
+   (``;AZ200.0``: Hamlib's ``-m 204`` ends its configuration commands with ``\n;``, which puts
+   a ``;`` in front of its next line; dropped as a radio's word, it left ``EL30.0`` beside it
+   to turn the elevation alone).
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
    ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator; a GS-232 client whose
    last accepted bearing was past 360 (``W400``: a 450-degree controller's overlap) reads the

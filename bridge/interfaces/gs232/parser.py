@@ -101,6 +101,10 @@ UNSUPPORTED_WORDS = frozenset({"ML", "MR", "MU", "MD", "RESET"})
 # Easycomm III's jog at a speed (Hamlib's -m 204 ``M``: ``VL0050``): as unsupported as ``ML``
 VELOCITY_WORDS = frozenset({"VL", "VR", "VU", "VD"})
 _NUMBER = re.compile(r"[+-]?(?:\d{1,4}(?:\.\d*)?|\.\d+)")
+# what a word the bridge does not know may be and still be ignored: a radio's (``UP000``,
+# ``XXX``), an Easycomm III word it does not serve (``GS``); anything else is malformed
+_FOREIGN_WORD = re.compile(r"[A-Za-z0-9.]+")
+_BLANKS = re.compile(r"[ \t]+")  # ASCII's alone: a control character is no blank (rule 12)
 
 
 @dataclass(frozen=True)
@@ -130,7 +134,9 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
     el: float | None = None
     stop = park = False
     invalid: str | None = None
-    for word in line.split():
+    for word in _BLANKS.split(line):
+        if not word:
+            continue
         head, value = word[:2].upper(), word[2:]
         if word.upper() in ("PARK", "RESET"):
             if word.upper() == "PARK":
@@ -154,9 +160,11 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
             queries.append("VE")
         elif head in UNSUPPORTED_WORDS or head in VELOCITY_WORDS:
             unsupported.append(head)
-        else:
+        elif _FOREIGN_WORD.fullmatch(word):
             # a radio's words (UP, DN, DM, ...) and the mode words that follow them
             ignored.append(word[:16])
+        else:  # ``;AZ200.0``: no azimuth, and the line's other words are not half of it
+            invalid = invalid or word[:16]
     if invalid is not None:  # package rule 3: nothing runs, but a stop (rule 6)
         return EasycommRequest(tuple(queries), stop=stop, invalid=invalid)
     return EasycommRequest(
