@@ -13,7 +13,10 @@ Rules:
    that one exists and marks the target (Target.true_az_deg); the engine picks the side when
    it sends, from the position it has then (a target that waited, e.g. for a brake, is not
    sent to the side that was nearest when it came). A target outside 0..360 on such a rotor
-   names the side itself: 400 is "40, past north clockwise" (raw = value - offset). A
+   names the side itself: 400 is "40, past north clockwise" (raw = value - offset), and a
+   client that named it reads the rotor the same way (``unfolded``: raw + offset, the offset
+   read from the true bearing beside the raw value, so the remote, whose pointing has none,
+   reads it too). A
    controller whose scale wraps picks its own way round: it gets the value in 0..360 (0, not
    360, where both are legal).
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
@@ -65,12 +68,28 @@ from bridge.protocols.base import ModelSpec, half_up
 
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
 WITHIN_SLACK_DEG = 0.5  # rule 9: a reading's step at an edge is not a turn outside
+UNFOLD_TIE_DEG = 1e-6  # rule 2: an offset read this near -180 is 180 (``unfolded``)
 
 
 def norm360(deg: float) -> float:
     """``deg`` folded into [0, 360) (never 360, never -0.0)."""
     out = deg % 360.0
     return 0.0 if out >= 360.0 or out == 0.0 else out
+
+
+def unfolded(bearing_deg: float | None, raw_deg: float | None) -> float | None:
+    """Rule 2: a reading as a target that names its side says it (400, not 40): raw + offset,
+    the offset read from the true bearing beside the raw value (the settings keep it in
+    (-180, 180]), so that a far client's reading needs no offset (the remote's pointing has
+    none: its ranges are true bearings already); None without both values. (A review: the
+    remote added its own offset, none, to the station's raw value: AZ=390 for 400 on a rotor
+    mounted 10 degrees off north, AZ=220 on a south-centred one.)"""
+    if bearing_deg is None or raw_deg is None:
+        return None
+    offset = 180.0 - (180.0 - (bearing_deg - raw_deg)) % 360.0
+    if offset < UNFOLD_TIE_DEG - 180.0:  # (180 that rounding put a hair past -180)
+        offset += 360.0
+    return raw_deg + offset
 
 
 def angle_between(a_deg: float, b_deg: float) -> float:

@@ -8,7 +8,7 @@ import pytest
 from bridge.core import geo
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target
-from bridge.pointing import Pointing, in_sector, norm360, toward
+from bridge.pointing import Pointing, in_sector, norm360, toward, unfolded
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import composite_spec
 
@@ -281,3 +281,16 @@ def test_nudges_count_from_where_the_rotor_is_going_on_either_side() -> None:
     stalled = RotatorStatus("t", MotionState.STALLED, bearing_deg=105, target_az_deg=210)
     assert p.nudged(stalled, 10, None) == (115, None)  # stuck: from where it is
     assert refused(p.nudged, stalled, 0, None) is RefusalCode.INVALID
+
+
+@pytest.mark.parametrize("offset_deg", [180.0, -179.7, 10.3, -0.1, 0.0])
+@pytest.mark.parametrize("raw_deg", [0.0, 5.7, 220.3, 400.3, 449.7])
+def test_a_reading_unfolds_to_raw_plus_the_offset_read_from_its_true_bearing(
+    offset_deg: float, raw_deg: float
+) -> None:
+    """Rule 2: ``unfolded`` gives raw + offset from the true bearing and the raw value alone
+    (the remote knows no offset), a south-centred rotor's 180 too where rounding puts the
+    difference a hair past -180."""
+    aim = Pointing.of(REGISTRY["gs232b-az-450"], offset_deg=offset_deg)
+    assert unfolded(aim.true_of(raw_deg), raw_deg) == pytest.approx(raw_deg + offset_deg)
+    assert unfolded(None, raw_deg) is None and unfolded(40.0, None) is None

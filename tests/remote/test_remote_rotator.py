@@ -10,11 +10,23 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.core.model import Lock, Park, Source, Stop, Target, Toward
+from bridge.core.model import (
+    Lock,
+    MotionState,
+    Park,
+    RotatorStatus,
+    Source,
+    Stop,
+    Target,
+    Toward,
+)
 from bridge.interfaces.gs232 import Dcu1Session, EasycommSession, Gs232Session
 from bridge.interfaces.gs232.commands import DCU1_ERROR
-from bridge.interfaces.mqtt.payloads import info_json
+from bridge.interfaces.mqtt.payloads import info_json, status_json
 from bridge.interfaces.mqtt.topics import StationTopics
+from bridge.interfaces.rotctld.server import RotctldSession
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
 from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
 from bridge.settings import settings_from
@@ -315,3 +327,47 @@ def test_an_ap1_and_its_am1_turn_the_rotor_and_the_clients_own_stop_between_refu
     assert Dcu1Session(rot).feed(b"AP1120;AM1;") == [b"", b""]
     assert Dcu1Session(rot).feed(b"AP1130;;AM1;")[-1] == DCU1_ERROR
     assert link.sent == [("rotor/tower/target", '{"azimuth":120}'), ("rotor/tower/stop", "stop")]
+
+
+def _far_450(offset_deg: float, raw_deg: float) -> RemoteRotator:
+    """The remote's view of a station's 450-degree GS-232B turned ``offset_deg`` off north
+    (its R/info: true bearings, no offset), at rest at raw ``raw_deg`` (its R/status)."""
+    spec = REGISTRY["gs232b-az-450"]
+    aim = Pointing.of(spec, offset_deg=offset_deg)
+    clock, station = FakeClock(), StationTopics("rotor")
+    view = StationView(clock)
+    view.put(station.bridge_state, b"online")
+    view.put(station.bridge_heartbeat, b"1700000000.000")
+    view.put(station.rotator("tower").availability, b"online")
+    info = Info.parse(info_json("tower", spec, aim, can_track=False).encode())
+    rot = RemoteRotator(
+        "tower", station.rotator("tower"), station, info, view, Link(), "DL1ABC", 5, clock=clock
+    )
+    at = RotatorStatus(
+        "tower",
+        state=MotionState.IDLE,
+        bearing_deg=aim.true_of(raw_deg),
+        raw_bearing_deg=raw_deg,
+        connected=True,
+        available=True,
+    )
+    view.put(station.rotator("tower").status, status_json(at, 1.7e9, False, aim.shows_raw).encode())
+    return rot
+
+
+@pytest.mark.parametrize(("offset_deg", "raw_deg"), [(10.0, 390.0), (-20.0, 420.0), (180.0, 220.0)])
+def test_a_far_client_that_named_the_side_reads_its_bearing_past_360_off_north_too(
+    offset_deg: float, raw_deg: float
+) -> None:
+    """On the remote, a GS-232 client that sent W400 and a rotctld client that sent P 400 read
+    400 once the station's rotor, mounted ``offset_deg`` off north, is there (raw 400 less the
+    offset), as they do at the station. Before: the station's raw value with the remote's
+    offset, which is none (its ranges are true bearings): AZ=390 for 400, 360 off and more."""
+    rot = _far_450(offset_deg, raw_deg)
+    gs232 = Gs232Session(rot)
+    assert gs232.feed(b"W400 000\r") == [b""]
+    assert gs232.feed(b"C\r") == [b"AZ=400\r\n"]
+    rotctld = RotctldSession(rot)
+    assert rotctld.feed(b"P 400 0\n") == [b"RPRT 0\n"]
+    assert rotctld.feed(b"p\n") == [b"400.00\n0.00\n"]
+    assert Gs232Session(rot).feed(b"C\r") == [b"AZ=040\r\n"]  # (one that named no side)

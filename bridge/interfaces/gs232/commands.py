@@ -36,6 +36,7 @@ from bridge.interfaces.gs232.parser import (
     parse_gs232,
 )
 from bridge.interfaces.tcplines import LINE_ENDS, LineServer, LineSession
+from bridge.pointing import unfolded
 
 if TYPE_CHECKING:
     from bridge.interfaces.ptylines import PtyLineServer
@@ -65,7 +66,7 @@ def _position(rotator: Rotator, pointing: Pointing | None = None) -> tuple[float
     el = status.elevation_deg if rotator.spec.has_elevation else 0.0
     az = status.bearing_deg
     if pointing is not None and not pointing.az_wraps and status.raw_bearing_deg is not None:
-        az = status.raw_bearing_deg + pointing.offset_deg
+        az = unfolded(az, status.raw_bearing_deg)
     if not rotator.spec.can_report_position or not status.available or az is None or el is None:
         return None
     return az, el

@@ -11,6 +11,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import Origin, Source, Stop, Target
 from bridge.front import FrontRotator
 from bridge.interfaces.rotctld.parser import Request
+from bridge.pointing import unfolded
 from bridge.protocols.base import HamlibRotType
 
 if TYPE_CHECKING:
@@ -88,7 +89,7 @@ class RotctldCommands:
             # a client that sent P 400 reads 400 back (in the range \dump_state gives): the true
             # bearing unfolded, as P takes it (pointing.py rule 2); one that sent P 40 reads 40
             # even where the bridge took it on to raw 400, the shorter way
-            az = status.raw_bearing_deg + aim.offset_deg
+            az = unfolded(az, status.raw_bearing_deg)
         el = status.elevation_deg if spec.has_elevation else 0.0
         if not status.available or az is None or el is None:
             return _link_code(status.connected), ""
