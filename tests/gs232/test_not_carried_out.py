@@ -58,25 +58,41 @@ def test_a_dcu1_command_that_is_none_is_said_and_a_stop_still_stops() -> None:
 
 
 def test_an_easycomm_axis_word_behind_junk_turns_neither_axis() -> None:
-    """Package rule 3: ``;AZ200.0`` is no azimuth (``\\x1fM180`` is no ``M180`` either, rule
-    12), and the line beside it is malformed: nothing turns, not even the elevation its good
-    word names, and it is said. Hamlib's -m 204 ends its Easycomm III configuration commands
-    with ``\\n;`` (``GS\\n;``), which puts a ``;`` in front of the next line; read as a radio's
-    word and dropped, the line turned the elevation alone, the azimuth left where it was."""
+    """Package rule 3: ``\x1fAZ200.0`` is no azimuth (``\x1fM180`` is no ``M180`` either, rule
+    12), nor ``AZ200.0;``, and the line beside it is malformed: nothing turns, not even the
+    elevation its good word names, and it is said."""
     tower = _Tower()
     tower.spec = SimpleNamespace(has_elevation=True, can_report_position=True)
     ec = EasycommSession(tower, "192.168.1.20")  # type: ignore[arg-type]
-    assert ec.feed(b"GS\n;AZ200.0 EL30.0\n") == [b"", b""]
     assert ec.feed(b"\x1fAZ200.0 EL30.0\n") == [b""]
-    assert ec.feed(b";AZ EL\n") == [b"ALinvalid ;AZ\n"]  # not half an answer
+    assert ec.feed(b"AZ200.0; EL30.0\n") == [b""]
+    assert ec.feed(b";;AZ EL\n") == [b"ALinvalid ;AZ\n"]  # not half an answer
     assert tower.submitted == []
     assert [m for m, _ in tower.refusals] == [
-        "Easycomm: invalid ;AZ200.0",
         "Easycomm: invalid \x1fAZ200.0",
+        "Easycomm: invalid AZ200.0;",
         "Easycomm: invalid ;AZ",
     ]
-    assert ec.feed(b";SA SE\n") == [b""]  # a stop beside it still stops (rule 6)
+    assert ec.feed(b"\x1fSA SE\n") == [b""]  # a stop beside it still stops (rule 6)
     assert [type(c) for c in tower.submitted] == [Stop]
     # a radio's words are still ignored (Hamlib's -m 201 line)
     assert ec.feed(b"AZ200.0 EL30.0 UP000 XXX DN000 XXX\n") == [b""]
     assert [type(c) for c in tower.submitted] == [Stop, Target]
+
+
+def test_hamlibs_easycomm3_line_after_a_configuration_command_is_carried_out() -> None:
+    """Package rule 3: Hamlib's -m 204 ends its configuration commands with ``\\n;``
+    (``GS\\n;``, ``CR 1\\n;``), which puts a ``;`` in front of its next line: that line is
+    Hamlib's own command and does what it says, both axes turned, both asked answered. Before:
+    refused as malformed (``;AZ200.0`` said on R/error, nothing turned; ``;AZ`` answered
+    ``ALinvalid``, and rotctl's next ``p`` failed)."""
+    tower = _Tower()
+    tower.spec = SimpleNamespace(has_elevation=True, can_report_position=True)
+    tower.status = SimpleNamespace(available=True, bearing_deg=200.0, elevation_deg=30.0)
+    ec = EasycommSession(tower, "192.168.1.20")  # type: ignore[arg-type]
+    assert ec.feed(b"GS\n;AZ200.0 EL30.0\n") == [b"", b""]
+    assert [(c.az_deg, c.el_deg) for c in tower.submitted] == [(200.0, 30.0)]  # type: ignore[union-attr]
+    assert ec.feed(b"CR 1\n;AZ\n") == [b"", b"AZ200.0\n"]
+    assert ec.feed(b"VE\n;SA SE \n")[1] == b""
+    assert [type(c) for c in tower.submitted] == [Target, Stop]
+    assert tower.refusals == []

@@ -102,6 +102,9 @@ def test_gs232_junk_is_unknown(line: str | None) -> None:
         ("EL AZ", EasycommRequest(queries=("EL", "AZ"))),
         ("VE", EasycommRequest(queries=("VE",))),
         ("AZ120.0 EL30.5", EasycommRequest(az_deg=120.0, el_deg=30.5)),
+        # Hamlib's -m 204 after a configuration command (``GS\n;``): its ``;`` starts the line
+        (";AZ120.0 EL30.5", EasycommRequest(az_deg=120.0, el_deg=30.5)),
+        (";AZ EL", EasycommRequest(queries=("AZ", "EL"))),
         ("AZ120", EasycommRequest(az_deg=120.0)),
         ("EL.5", EasycommRequest(el_deg=0.5)),
         ("az10 el5", EasycommRequest(az_deg=10.0, el_deg=5.0)),
@@ -129,7 +132,8 @@ def test_easycomm_lines_are_read(line: str, request_: EasycommRequest) -> None:
         *("AZnan EL0", "AZinf", "AZ1e9", "AZ99999.0", "EL--5", "AZ10 ELx", "AZ1,5", "AZ+"),
         *("AZ190 AZ200", "AZ10 EL5 EL50", "EL5 AZ10 el50"),  # which is meant? (not the last)
         # an axis word behind junk is none, and the line is not half of it (package rule 3)
-        *(";AZ200.0 EL30.0", "\x1fAZ200.0 EL30.0", "AZ200.0\x1cEL30.0", "EL30 UP000 X;Z"),
+        *(";;AZ200.0 EL30.0", "\x1fAZ200.0 EL30.0", "AZ200.0\x1cEL30.0", "EL30 UP000 X;Z"),
+        *(" ;AZ200.0 EL30.0", "AZ200.0 ;EL30.0"),  # (only a line's first byte is Hamlib's)
     ],
 )
 def test_an_easycomm_line_with_a_malformed_number_does_nothing(line: str) -> None:

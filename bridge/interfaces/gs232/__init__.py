@@ -54,9 +54,11 @@ Rules:
    separated by ASCII spaces and tabs alone. A radio's words (``UP000``, ``XXX``, ...) and an
    Easycomm III word the bridge does not serve (``GS``) are ignored: a word it does not know
    is ignored only when it is letters, digits and points; any other is malformed
-   (``;AZ200.0``: Hamlib's ``-m 204`` ends its configuration commands with ``\n;``, which puts
-   a ``;`` in front of its next line; dropped as a radio's word, it left ``EL30.0`` beside it
-   to turn the elevation alone).
+   (``\x1fAZ200.0``, ``AZ200.0;``: dropped as a radio's word, it left ``EL30.0`` beside it to
+   turn the elevation alone). One ``;`` that starts a line is no word of it: Hamlib's ``-m 204``
+   ends its configuration commands with ``\n;`` (``GS\n;``), which puts it in front of its
+   next line, ``;AZ200.0 EL30.0`` or ``;AZ`` (a review: refused as malformed, Hamlib's own
+   move did nothing and its next ``p`` failed).
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
    ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator; a GS-232 client whose
    last accepted bearing was past 360 (``W400``: a 450-degree controller's overlap) reads the

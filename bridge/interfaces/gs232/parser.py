@@ -104,6 +104,8 @@ _NUMBER = re.compile(r"[+-]?(?:\d{1,4}(?:\.\d*)?|\.\d+)")
 # what a word the bridge does not know may be and still be ignored: a radio's (``UP000``,
 # ``XXX``), an Easycomm III word it does not serve (``GS``); anything else is malformed
 _FOREIGN_WORD = re.compile(r"[A-Za-z0-9.]+")
+# Hamlib's -m 204 ends a configuration command with ``\n;``: the next line starts with it
+HAMLIB_CONF_TAIL = ";"
 _BLANKS = re.compile(r"[ \t]+")  # ASCII's alone: a control character is no blank (rule 12)
 
 
@@ -127,6 +129,8 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
     """One line (from LineSplitter): its words, separated by spaces."""
     if line is None:
         return EasycommRequest(invalid="an overlong line")
+    if line.startswith(HAMLIB_CONF_TAIL):  # package rule 3: the tail of Hamlib's -m 204
+        line = line[1:]  # configuration command before it (``GS\n;``), no word of this line
     queries: list[str] = []
     unsupported: list[str] = []
     ignored: list[str] = []
