@@ -339,6 +339,7 @@ class App:
                 on_audit=self.audit.of(r.id),
                 axes=axis_configs(r, sky, follow),  # a composite's two boxes (axis_configs)
                 port_watch=self.express.watch(r.id),
+                fence=self.mqtt,  # interfaces/mqtt/service.py rule 11
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,

@@ -32,7 +32,12 @@ for no part of this rotator's that takes commands is refused (``unsupported``); 
 the rotor like a track start (the lock, the wind, the lease, the link; put with its halt
 count), one that does not like a controller setting (the lease alone). It is never a stop,
 never on the stop lane, and a stop or lock ON drops it as it drops a target (mailbox.py
-rule 12).
+rule 12). A stop or lock ON from any interface but MQTT (the console, rotctld, GS-232, Easycomm,
+DCU-1, the loggers) is told to the ``fence`` right before it is put and right after (never
+under the owner's lock, and a fence that raises costs the halt nothing): the MQTT service then
+refuses a move, or a lock OFF, that its main connection reads for this rotator but was
+published before that halt (interfaces/mqtt/lastword.py rule 11); MQTT's own halts are ordered
+by the last word.
 """
 
 from __future__ import annotations
@@ -43,7 +48,7 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
-from typing import NoReturn
+from typing import NoReturn, Protocol
 
 import serial
 
@@ -105,6 +110,14 @@ ON_ITS_WAY_MESSAGE = (
 )
 
 
+class HaltFence(Protocol):
+    """The module's docstring: what is told of a halt from an interface other than MQTT
+    (interfaces/mqtt/service.py rule 11)."""
+
+    def fence_asked(self, rotator_id: str) -> None: ...
+    def fence_carried(self, rotator_id: str, lock: bool) -> None: ...
+
+
 class Rotator:
     def __init__(
         self,
@@ -124,8 +137,10 @@ class Rotator:
         on_audit: Callable[[AuditEvent], None] | None = None,
         axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
         port_watch: PortWatch | None = None,
+        fence: HaltFence | None = None,
     ) -> None:
         self.id = cfg.rotator_id
+        self._fence = fence  # the module's docstring: another interface's halt, to MQTT
         self.name = name or cfg.rotator_id
         self.spec: ModelSpec = cfg.spec
         self.pointing = cfg.aim  # limits, offset, keep-out, presets, park: the judge's terms
@@ -306,6 +321,10 @@ class Rotator:
         if self._leaving is not None and not isinstance(command, Stop | Lock):
             raise Refused(RefusalCode.OFFLINE, self._leaving)  # (``leave``)
         match command:
+            case Stop() if src is not Source.MQTT:  # (a stop is judged by nothing)
+                self._fenced(False, lambda: self._judged(command, epoch, hold))
+            case Lock() if command.on and src is not Source.MQTT:
+                self._fenced(True, lambda: self._lock(True, hold))
             case Target() | Stop() | SetOption():
                 self._judged(command, epoch, hold)
             case Lock():
@@ -346,6 +365,23 @@ class Rotator:
             case FeatureCommand():
                 self._feature(command, epoch)
         return EXECUTED
+
+    def _fenced(self, lock: bool, halt: Callable[[], None]) -> None:
+        """The module's docstring: another interface's stop (``lock``: lock ON), told to the
+        fence before and after it is put; a fence that fails is logged, the halt goes on."""
+        fence = self._fence
+        if fence is None:
+            halt()
+            return
+        try:
+            fence.fence_asked(self.id)
+        except Exception:
+            log.exception("%s: the MQTT fence failed (the halt goes on)", self.id)
+        halt()
+        try:
+            fence.fence_carried(self.id, lock)
+        except Exception:
+            log.exception("%s: the MQTT fence failed (the halt went out)", self.id)
 
     def leave(self, why: str) -> None:
         """From now on only a stop or a lock word is taken, every other command refused with

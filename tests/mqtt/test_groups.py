@@ -15,6 +15,7 @@ from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Stop, 
 from bridge.feature import registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
+from bridge.interfaces.mqtt.halts import FENCED
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 from bridge.settings.groups import CORE_WORDS, reserved
@@ -296,3 +297,16 @@ def test_the_groups_status_and_availability_follow_its_members() -> None:
     assert pub.retained["rotor/stack/availability"] == "offline"  # not a member
     svc.stop()
     assert "rotor/stack/availability" in pub.log[0]
+
+
+def test_a_group_target_read_behind_a_members_halt_from_another_interface_skips_that_member() -> (
+    None
+):
+    """service.py rule 11: the lower yagi stopped on the console, and a group target published
+    before, read late: the others turn (groups.md), that member refuses it as older."""
+    svc, _pub, upper, lower = group_service()
+    svc.fence_asked("lower")
+    svc.fence_carried("lower", lock=False)
+    svc.on_message("rotor/stack/target", b"120", False, "alice")
+    assert upper.calls == [("submit", Target(120.0, None, M), "target '120' (group stack)")]
+    assert lower.calls == [("refused", FENCED, "target '120' (group stack)")]

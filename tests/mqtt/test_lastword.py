@@ -263,3 +263,37 @@ def test_no_echo_is_noted_while_the_lanes_subscription_is_not_acknowledged() -> 
     assert w.lane_halt("a", "stop", 2.0)  # carried out at once, with a hold
     copy = w.main_halt("b", "stop")  # in step now: noted as before
     assert copy.lane_marker is not None and w.lane_halt("b", "stop", 3.0) is None
+
+
+def test_another_interfaces_halt_fences_the_main_connections_older_moves_until_its_marker() -> None:
+    """Rule 11: a stop or lock ON from the console, rotctld, a logger; what the main connection
+    reads before the fence's marker came back was published before it. A stop fences moves
+    alone; a lock ON fences a lock OFF too; a later fence for the rotator outlasts an earlier
+    marker; a resent marker (rule 5) ends it; the connection dropping ends it."""
+    w = LastWord(token="t")
+    n = w.fence("a", lock=False, now=0.0)
+    assert n == 1 and w.fenced("a") and not w.fenced("a", lock_off=True) and not w.fenced("b")
+    assert w.markers_out and not w.holding  # (a fence holds nothing back in the mailbox)
+    m = w.fence("a", lock=True, now=0.1)
+    assert m == 2 and w.fenced("a", lock_off=True)
+    assert w.marker_back(w.marker(1).encode()) == (1, [])
+    assert w.fenced("a") and w.fenced("a", lock_off=True)  # the newer halt's marker is out
+    assert w.marker_back(w.marker(2).encode()) == (2, [])
+    assert not w.fenced("a") and not w.fenced("a", lock_off=True)
+    w.fence("a", lock=True, now=HOUR_S)
+    resent = w.resend_due(HOUR_S + RESEND_S)
+    assert resent is not None and w.marker_back(w.marker(resent).encode())[0] == resent
+    assert not w.fenced("a")
+    w.fence("a", lock=True, now=2 * HOUR_S)
+    w.main_gone()  # nothing older comes on the next connection
+    assert not w.fenced("a", lock_off=True)
+
+
+def test_no_fence_while_the_main_connection_cannot_read_its_markers() -> None:
+    """Rule 11 with rule 7: a fence no marker could end would refuse every MQTT move for
+    good; none is put, and one up when the markers are found denied ends."""
+    w = LastWord(token="t")
+    w.fence("a", lock=True, now=0.0)
+    w.markers_denied()
+    assert not w.fenced("a", lock_off=True)
+    assert w.fence("a", lock=True, now=1.0) is None and not w.fenced("a")

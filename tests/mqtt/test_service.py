@@ -36,7 +36,12 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
-from bridge.interfaces.mqtt.halts import LOCK_OFF_OLDER, LOCK_OFF_SUBSCRIBING
+from bridge.interfaces.mqtt.halts import (
+    FENCED,
+    LOCK_OFF_FENCED,
+    LOCK_OFF_OLDER,
+    LOCK_OFF_SUBSCRIBING,
+)
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
@@ -104,6 +109,10 @@ class RecordingRotator:
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
 
+    @property
+    def halts(self) -> int:
+        return 0  # (no halt is counted here: the judge's, runtime/rotator.py)
+
     def submit(
         self,
         command: Command,
@@ -111,6 +120,7 @@ class RecordingRotator:
         *,
         hold: int | None = None,
         echo: bool = False,
+        since: int | None = None,
     ) -> None:
         """Every command the service sends, recorded as what it asks for (who sent it: in
         ``origins``)."""
@@ -682,6 +692,50 @@ def test_a_lock_off_read_while_the_lanes_on_waits_for_its_copy_is_older() -> Non
     # said on R/error, not only logged (an attack pass: right after the lane reconnected, an
     # OFF published after the ON was refused so too, with only an INFO line for it)
     assert ("refused", LOCK_OFF_OLDER, "lock OFF") in tower.calls
+
+
+def test_moves_and_a_lock_off_read_behind_another_interfaces_halt_are_refused_as_older() -> None:
+    """lastword.py rule 11 (an attack pass): the console's lock ON, then a lock OFF and a
+    target published before it, read late on the main connection, unlocked and turned the
+    rotor. Fenced until the halt's marker comes back: refused, said on R/error; a stop fences
+    the moves alone; after the marker both are taken again."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=True)  # the console's lock ON, put between the two
+    ((topic, marker, _),) = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
+    svc.on_message("rotor/lock", b"OFF", False)
+    svc.on_message("rotor/target", b"120", False)
+    svc.on_message("rotor/preset", b"EU", False)
+    svc.on_message("rotor/nudge", b"10", False)
+    assert tower.calls == [
+        ("refused", LOCK_OFF_FENCED, "lock OFF"),
+        ("refused", FENCED, "target '120'"),
+        ("refused", FENCED, "preset 'EU'"),
+        ("refused", FENCED, "nudge '10'"),
+    ]
+    tower.calls.clear()
+    svc.on_message("rotor/option/jam", b"OFF", False)  # moves nothing: taken
+    svc.on_message(topic, marker.encode(), False)  # the main connection caught up
+    svc.on_message("rotor/lock", b"OFF", False)
+    svc.on_message("rotor/target", b"120", False)
+    assert [c[0] for c in tower.calls] == ["submit", "lock", "submit"]
+    tower.calls.clear()
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=False)  # rotctld's S
+    svc.on_message("rotor/lock", b"OFF", False)  # a stop fences no lock word
+    svc.on_message("rotor/target", b"120", False)
+    assert tower.calls == [("lock", False), ("refused", FENCED, "target '120'")]
+
+
+def test_a_move_read_while_another_interfaces_halt_is_asked_and_not_fenced_yet_is_refused() -> None:
+    """lastword.py rule 11: the halt is counted before it is put and fenced after: a move the
+    main connection reads in between would otherwise go out after it."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.fence_asked("tower")
+    svc.on_message("rotor/target", b"120", False)
+    assert tower.calls == [("refused", FENCED, "target '120'")]
 
 
 def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:

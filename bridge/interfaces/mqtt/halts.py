@@ -17,6 +17,12 @@ Every stop and lock ON carried out here is first shown to the stop express (``ex
 interfaces/mqtt/express.py rule 8), which may put the rotator's targets on a hold of its own, in the
 same step: the express may still be writing its frame for that stop, and a target sent before it
 did would be stopped by it.
+
+A stop or lock ON another interface carried out (the console, rotctld, a logger) fences its
+rotator (lastword.py rule 11): counted before it is put (``fence_asked``, under a lock of its own
+that nothing holds for longer than a count), fenced after (``fence_carried``, with a marker on
+the main connection); the service asks ``fenced`` before it hands on a move, and the main
+connection's lock OFF is asked here.
 """
 
 from __future__ import annotations
@@ -46,6 +52,16 @@ LOCK_OFF_SUBSCRIBING = (
     "lock OFF on the stop connection not carried out: the main connection was subscribing "
     "again and may carry it out itself, after what was published before it; if the lock is "
     "still ON, send lock OFF again"
+)
+# lastword.py rule 11: published before another interface's stop or lock ON, read after it
+FENCED = (
+    "published before a STOP or lock ON that another interface (the console, rotctld, a "
+    "logger) carried out first: not carried out"
+)
+LOCK_OFF_FENCED = (
+    "lock OFF not carried out: it was published before a lock ON that another interface (the "
+    "console, a logger) carried out first; the lock stays ON (make sure nobody is working on "
+    "the tower before unlocking)"
 )
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
@@ -103,6 +119,11 @@ class Halts:
         self.express: Callable[[str], None] | None = None
         # express.py rule 11: when each connection last read a stop, a lock ON, of each rotator
         self._read: dict[tuple[str, str, str], float] = {}  # (connection, rotator, kind)
+        # lastword.py rule 11: another interface's halts asked (before their put) and fenced
+        # (after it), per rotator; asked under a lock of their own, which nothing else takes
+        self._asked_lock = threading.Lock()
+        self._asked: dict[str, int] = {}
+        self._fenced: dict[str, int] = {}
 
     def read_since(
         self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
@@ -163,6 +184,36 @@ class Halts:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
         with self._lock:
             self.word.echoes = False
+
+    # -- another interface's halt (lastword.py rule 11) ---------------------------------------
+    def fence_asked(self, rotator_id: str) -> None:
+        """Right before another interface's stop or lock ON is put (runtime/rotator.py): from
+        here on the main connection's moves for this rotator are refused until its fence is
+        up and ended (``fenced``), so that none read meanwhile goes out after it. One count
+        under a lock nothing else holds for longer: the stop waits for nothing."""
+        with self._asked_lock:
+            self._asked[rotator_id] = self._asked.get(rotator_id, 0) + 1
+
+    def fence_carried(self, rotator_id: str, lock: bool) -> None:
+        """Right after it was put (``lock``: a lock ON): its fence, and the marker that ends
+        it, published after the halt was carried out."""
+        with self._lock:
+            self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
+            heard = self._publisher.hears  # (not subscribed: nothing older will be read)
+            n = self.word.fence(rotator_id, lock, self._clock()) if heard else None
+        if n is not None:
+            self._send_marker(n)
+
+    def fenced(self, rotator_id: str, lock_off: bool = False) -> bool:
+        """Whether a move (``lock_off``: a lock OFF) the main connection reads now for this
+        rotator was published before another interface's halt: its fence still up, or a halt
+        asked and not fenced yet (counted first, under the lock, then the asked: a halt asked
+        after that is put after the move was read, and the move's halt count drops it)."""
+        with self._lock:
+            fenced, up = self._fenced.get(rotator_id, 0), self.word.fenced(rotator_id, lock_off)
+        with self._asked_lock:
+            asked = self._asked.get(rotator_id, 0)
+        return up or asked > fenced
 
     def _holds_possible(self) -> bool:
         """Whether the main connection will read what was published before a lane halt (and
@@ -375,12 +426,14 @@ class Halts:
 
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
+        fenced = self.fenced(rot.id, lock_off=True)  # lastword.py rule 11
         with self._lock:
-            carried = self.word.main_lock_off(rot.id)
+            carried = not fenced and self.word.main_lock_off(rot.id)
             if carried:
                 rot.submit(Lock(False, source=Source.MQTT, origin=origin))
         if not carried:  # said (the lock stays ON against it), once the lock is let go: a
-            rot.report_refusal(LOCK_OFF_OLDER, "lock OFF", origin=origin)  # stop may wait
+            why = LOCK_OFF_FENCED if fenced else LOCK_OFF_OLDER  # stop may wait
+            rot.report_refusal(why, "lock OFF", origin=origin)
 
     def live_halt(self, topic: str, payload: bytes) -> None:
         """lastword.py rule 6 under MQTT 3.1.1: a live stop or lock ON, its payload remembered

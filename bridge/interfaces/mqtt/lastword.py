@@ -91,6 +91,18 @@ but not the order between them. So:
    (targets published before a STOP then went out after it). A forged marker, or one torn or
    too long, is no marker; a copy of a real one republished on its own topic can come only
    after the real one, which ended the same holds already.
+11. A stop or lock ON another interface carried out (the console, rotctld, GS-232, Easycomm,
+   DCU-1, the loggers) comes on neither connection, so nothing above orders it against what
+   the main connection has not read yet: a target, or a lock OFF, published before it and
+   read after it was carried out (a backlog, a slow machine) turned the rotor again, or
+   unlocked it (an attack pass: the console's lock ON, then an older MQTT lock OFF read
+   late, left the rotator unlocked under a page that had said ON). So such a halt puts a
+   **fence** on its rotator (``fence``) and a marker goes out on the main connection: until
+   one at least as new comes back, the main connection's moves for that rotator, and its lock
+   OFF after a lock ON, were published before the marker and are refused as stale
+   (``fenced``); what it reads after the marker is taken. Like a hold, no clock ends a
+   fence; the connection dropping does (rule 5: nothing older comes on the next one). While
+   the main connection cannot read its markers (rule 7) no fence is put: none could end.
 """
 
 from __future__ import annotations
@@ -138,6 +150,8 @@ class LastWord:
     echoes: bool = True  # False: the lane cannot read its markers (rule 4 then notes nothing)
     markers: bool = True  # False: the main connection cannot read its markers (rule 7)
     _retained: dict[str, bytes] = field(default_factory=dict)  # rule 6
+    # rule 11: rotator -> (the marker its fence waits for, whether a lock ON is among its halts)
+    _fences: dict[str, tuple[int, bool]] = field(default_factory=dict)
 
     # -- the lane (rule 2) -------------------------------------------------------------------
     def lane_halt(self, rotator_id: str, kind: str, now: float, hold: bool = True) -> int | None:
@@ -194,6 +208,26 @@ class LastWord:
             while echoes and echoes[0] <= n:
                 echoes.popleft()
 
+    # -- another interface's halt (rule 11) ----------------------------------------------------
+    def fence(self, rotator_id: str, lock: bool, now: float) -> int | None:
+        """Rule 11: a stop (``lock``: a lock ON) another interface carried out: the number of
+        the marker to publish, the fence ending when one at least as new comes back; None
+        while the main connection cannot read its markers (rule 7)."""
+        if not self.markers:
+            return None
+        self._next += 1
+        n = self._next
+        old = self._fences.get(rotator_id)
+        self._fences[rotator_id] = (n, lock or (old is not None and old[1]))
+        self._marker_sent_at[n] = now
+        return n
+
+    def fenced(self, rotator_id: str, lock_off: bool = False) -> bool:
+        """Rule 11: whether the main connection's move (``lock_off``: its lock OFF) for this
+        rotator is refused: published before another interface's stop or lock ON."""
+        fence = self._fences.get(rotator_id)
+        return fence is not None and (fence[1] or not lock_off)
+
     # -- the main connection (rule 1) ----------------------------------------------------------
     def main_halt(self, rotator_id: str, kind: str) -> Copy:
         """A stop or lock ON read on the main connection (it is carried out whatever this says):
@@ -236,6 +270,8 @@ class LastWord:
         for waiting in self._lane_waiting.values():
             while waiting and waiting[0][0] <= n:  # its main copy came before, or was
                 waiting.popleft()  # lost: either way none is to come (rule 1)
+        for rid in [rid for rid, (m, _) in self._fences.items() if m <= n]:
+            del self._fences[rid]  # rule 11
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
             del self._holds[rid]
@@ -251,6 +287,7 @@ class LastWord:
         self._held_since.clear()
         self._marker_sent_at.clear()
         self._lane_waiting.clear()
+        self._fences.clear()  # rule 11: nothing older comes on the next connection
         self._resend_s = RESEND_S
         if self._lane_sub != NOT_YET:
             self._main_past = self._next
@@ -261,6 +298,7 @@ class LastWord:
         any more; the holds stay, each until its main copy."""
         self.markers = False
         self._marker_sent_at.clear()
+        self._fences.clear()  # rule 11: no marker could end them
 
     def markers_allowed(self) -> None:
         """Rule 7: a probe came back on a new connection: markers go out again (for the halts

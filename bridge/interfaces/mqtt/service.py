@@ -60,6 +60,12 @@ Rules:
    refused, and moving nothing), each handed to that member's own ``submit``. Refusals go on
    ``G/error`` (rule 4's limit, per group) and in ``G/status``, each member's also on its own
    ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses.
+11. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
+   track or follow start, a feature's command that moves, a group's target for each member)
+   while another interface's stop or lock ON fences its rotator (lastword.py rule 11) was
+   published before that halt: refused on ``R/error`` as stale, and its halt count is read
+   before the fence is asked, so a halt put after that drops it in the mailbox. A lock OFF
+   read then, after a lock ON, is refused as halts.py says.
 """
 
 from __future__ import annotations
@@ -77,6 +83,8 @@ from bridge.core.model import (
     Command,
     ErrorEvent,
     ErrorKind,
+    FeatureCommand,
+    FollowQso,
     GoToPreset,
     Nudge,
     Origin,
@@ -88,6 +96,7 @@ from bridge.core.model import (
     TakePath,
     Target,
     Toward,
+    TrackBody,
     setting_text,
     valid_operator,
 )
@@ -96,7 +105,7 @@ from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
-from bridge.interfaces.mqtt.halts import Halts, switch_on
+from bridge.interfaces.mqtt.halts import FENCED, Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
@@ -182,6 +191,15 @@ class MqttService:
             rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console, rotator.id
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
+
+    def fence_asked(self, rotator_id: str) -> None:
+        """Rule 11: another interface's stop or lock ON is about to be put (runtime/rotator.py
+        ``HaltFence``)."""
+        self._halts.fence_asked(rotator_id)
+
+    def fence_carried(self, rotator_id: str, lock: bool) -> None:
+        """Rule 11: ... and was put (``lock``: a lock ON)."""
+        self._halts.fence_carried(rotator_id, lock)
 
     def attach_group(self, group: Group) -> None:
         """Rule 10: a group of attached rotators."""
@@ -445,8 +463,13 @@ class MqttService:
                 refused[part.member] = part.refused or "refused"
                 rot.report_refusal(refused[part.member], said, origin=origin)
                 continue
+            since = rot.halts  # rule 11: read before the fence is asked
+            if self._halts.fenced(rot.id):
+                refused[part.member] = FENCED
+                rot.report_refusal(FENCED, said, origin=origin)
+                continue
             try:
-                rot.submit(part.target, said)
+                rot.submit(part.target, said, since=since)
             except Refused as exc:
                 refused[part.member] = exc.message
         if refused:
@@ -588,12 +611,18 @@ class MqttService:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
+        since = None
+        if isinstance(command, Called) or (command is not None and moves(command)):
+            since = rot.halts  # rule 11: read before the fence is asked
+            if self._halts.fenced(rot.id):
+                rot.report_refusal(FENCED, what, origin=by)
+                return
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
             self._by_call(rot, command.call, command.long_path, what, by)
         elif command is not None:
-            rot.submit(command, what)
+            rot.submit(command, what, since=since)
 
 
 class _Outbound(NamedTuple):
@@ -630,6 +659,20 @@ class _Outbound(NamedTuple):
             tuple((s, t.feature(s.suffix)) for s in states if s.after_status),
             pl.StatusText(spec.has_elevation),
         )
+
+
+def moves(command: Command) -> bool:
+    """Rule 11: whether ``command`` may turn the rotor (what a stop or lock ON overtakes)."""
+    match command:
+        case Target() | GoToPreset() | Park() | Nudge() | Toward() | TakePath():
+            return True
+        case TrackBody():
+            return not command.off
+        case FollowQso():
+            return command.on
+        case FeatureCommand():
+            return command.moves
+    return False
 
 
 def parse_command(

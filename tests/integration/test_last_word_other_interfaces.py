@@ -1,0 +1,100 @@
+"""The last word across interfaces (interfaces/mqtt/lastword.py rule 11): a stop or lock ON
+given on the console, rotctld, a logger comes on neither MQTT connection, yet a target or a
+lock OFF published on MQTT before it and read after it (a backlog) must not turn the rotor
+again, nor unlock it. Real parts: mosquitto, the bridge (App) with its console and rotctld
+port, an emulated Rotor-EZ on a pty.
+
+The backlog is stood in for, as in test_stop_lane.py, by a main connection held on one message
+until the test lets it go: that message was published before the other interface's halt."""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from bridge.app import App
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from tests.support import free_port
+from tests.support.console import ConsoleClient, web_section
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+
+@contextmanager
+def main_held_on(app: App, topic: str, payload: bytes) -> Iterator[threading.Event]:
+    """The main connection stuck on ``topic`` = ``payload`` (set once it is) until the block
+    ends; the stop lane reads on meanwhile."""
+    release, held = threading.Event(), threading.Event()
+    handle = app.client._handler
+
+    def stuck(t: str, p: bytes, retain: bool, *rest: object) -> None:
+        if t == topic and p == payload:
+            held.set()
+            release.wait(slow(30))
+        handle(t, p, retain, *rest)
+
+    app.client._handler = stuck
+    try:
+        yield held
+    finally:
+        release.set()
+
+
+def test_an_older_mqtt_lock_off_read_after_the_consoles_lock_on_leaves_it_locked(
+    rig: Rig,
+) -> None:
+    """Someone at the tower locks the rotator on the console, which says ON; a lock OFF an
+    automation published just before, held up on the main connection, was read after it and
+    unlocked the rotator (a lane's lock ON is kept from that by rule 8; the console's was not)."""
+    web = rig.sections["web"] = web_section()
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    console = ConsoleClient(web["port"])
+    console.session()
+    rot = app.rotators[0]
+    t = time.monotonic()
+    with main_held_on(app, "rotor/lock", b"OFF") as held:
+        rig.probe.publish("rotor/lock", "OFF")  # published first, read last
+        wait_until(held.is_set, 10, "the main connection held on the lock OFF")
+        assert console.command("tower", command="lock", on=True).status == 200
+        wait_until(lambda: rot.status.locked, 10, "locked")
+    err = rig.probe.wait_for("rotor/error", lambda m: b"lock OFF" in m.payload, 10, after=t)
+    assert "published before a lock ON" in json.loads(err.payload)["message"]
+    assert rot.locked and rig.probe.wait_value("rotor/lock/state", "ON", 10, after=t)
+    # a lock OFF published after it is the last word: obeyed (the fence's marker went out
+    # with the lock ON, so the main connection reads it before this)
+    rig.probe.publish("rotor/lock", "OFF")
+    wait_until(lambda: not rot.locked, 10, "unlocked by the newer OFF")
+
+
+def test_a_target_published_before_a_rotctld_stop_and_read_after_it_never_turns_the_rotor(
+    rig: Rig,
+) -> None:
+    """The operator stops the rotor with Hamlib's S; a target published just before, behind
+    on the main connection, was read after the stop and turned the rotor again."""
+    port = free_port()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, rotctld_port=port)
+    app = rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    t = time.monotonic()
+    with main_held_on(app, "rotor/target", b"300") as held:
+        rig.probe.publish("rotor/target", "300")  # published first, read last
+        wait_until(held.is_set, 10, "the main connection held on the target")
+        with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+            s.sendall(b"S\n")
+            assert s.recv(100) == b"RPRT 0\n"
+        emu.wait_for(lambda s: not s.is_moving, 10)
+    err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+    assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
+    assert not emu.state().is_moving
+    assert not [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+    # a target published after the stop is obeyed (after the fence's marker, as above)
+    rig.probe.publish("rotor/target", "60")
+    rig.arrived("tower", 60)
