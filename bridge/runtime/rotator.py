@@ -377,11 +377,13 @@ class Rotator:
             fence.fence_asked(self.id)
         except Exception:
             log.exception("%s: the MQTT fence failed (the halt goes on)", self.id)
-        halt()
         try:
-            fence.fence_carried(self.id, lock)
-        except Exception:
-            log.exception("%s: the MQTT fence failed (the halt went out)", self.id)
+            halt()
+        finally:  # (asked and never fenced, it would refuse every MQTT move for good)
+            try:
+                fence.fence_carried(self.id, lock)
+            except Exception:
+                log.exception("%s: the MQTT fence failed (the halt went out)", self.id)
 
     def leave(self, why: str) -> None:
         """From now on only a stop or a lock word is taken, every other command refused with

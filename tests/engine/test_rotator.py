@@ -8,7 +8,7 @@ import pytest
 from bridge.app import worker_config
 from bridge.core.errors import Refused
 from bridge.core.geo import parse_locator
-from bridge.core.model import ErrorEvent, Lock, SetOption, Stop, Target, Toward
+from bridge.core.model import ErrorEvent, Lock, SetOption, Source, Stop, Target, Toward
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings
@@ -111,3 +111,43 @@ def test_the_lock_and_options_are_saved_off_the_callers_thread(tmp_path) -> None
     store.flush()
     assert not any(waited_out)
     assert StateStore(tmp_path / "state.json").locked("t") is True
+
+
+class _Fence:
+    """What the MQTT service is told of a halt from another interface (rotator.py
+    ``HaltFence``); ``fail``: it raises."""
+
+    def __init__(self, rot: list[Rotator], fail: bool = False) -> None:
+        self.told: list[tuple[str, object]] = []
+        self._rot, self._fail = rot, fail
+
+    def fence_asked(self, rotator_id: str) -> None:
+        self.told.append(("asked", self._rot[0].halts))  # before the put: the count then
+        if self._fail:
+            raise RuntimeError("a bug in the fence")
+
+    def fence_carried(self, rotator_id: str, lock: bool) -> None:
+        self.told.append(("carried", lock))
+        if self._fail:
+            raise RuntimeError("a bug in the fence")
+
+
+@pytest.mark.parametrize("fail", [False, True], ids=["fence", "a fence that raises"])
+def test_another_interfaces_halt_is_told_to_the_fence_around_its_put_and_mqtts_is_not(
+    fail: bool,
+) -> None:
+    """interfaces/mqtt/lastword.py rule 11: the console's lock ON and rotctld's stop are told
+    before their put (the halt count not yet up) and after; MQTT's own are ordered by the last
+    word, not told; a fence that raises costs the halt nothing."""
+    holder: list[Rotator] = []
+    fence = _Fence(holder, fail)
+    cfg = worker_config(RotatorSettings(id="t", model="rotorez", port="/dev/null"))
+    rot = Rotator(cfg, StateStore(None), lambda s: None, lambda e: None, fence=fence)
+    holder.append(rot)
+    rot.submit(Stop(Source.ROTCTLD))
+    rot.submit(Lock(True, source=Source.WEB))
+    rot.submit(Lock(False, source=Source.WEB))  # a lock OFF fences nothing
+    rot.submit(Stop(Source.MQTT))
+    rot.submit(Lock(True, source=Source.MQTT))
+    assert fence.told == [("asked", 0), ("carried", False), ("asked", 1), ("carried", True)]
+    assert rot.halts == 4 and rot.locked
