@@ -198,22 +198,25 @@ class Halts:
         """Right after it was put (``lock``: a lock ON): its fence, and the marker that ends
         it, published after the halt was carried out."""
         with self._lock:
-            self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
             heard = self._publisher.hears  # (not subscribed: nothing older will be read)
             n = self.word.fence(rotator_id, lock, self._clock()) if heard else None
+            # counted once the fence is up (``fenced`` reads them the other way round)
+            self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
         if n is not None:
             self._send_marker(n)
 
     def fenced(self, rotator_id: str, lock_off: bool = False) -> bool:
         """Whether a move (``lock_off``: a lock OFF) the main connection reads now for this
         rotator was published before another interface's halt: its fence still up, or a halt
-        asked and not fenced yet (counted first, under the lock, then the asked: a halt asked
-        after that is put after the move was read, and the move's halt count drops it)."""
-        with self._lock:
-            fenced, up = self._fenced.get(rotator_id, 0), self.word.fenced(rotator_id, lock_off)
-        with self._asked_lock:
-            asked = self._asked.get(rotator_id, 0)
-        return up or asked > fenced
+        asked and not fenced yet. Read without a lock (each read is one dict look-up): the
+        main connection asks it for every move, and a lock it took that often would keep a
+        stop on the lane waiting for it under a flood (a plain lock goes to whoever holds
+        the interpreter lock). The fenced count first: a halt counted there has its fence up
+        already; then the fence; then the asked: a halt asked after that is put after the
+        move was read, and the move's halt count drops it."""
+        fenced = self._fenced.get(rotator_id, 0)
+        up = self.word.fenced(rotator_id, lock_off)
+        return up or self._asked.get(rotator_id, 0) > fenced
 
     def _holds_possible(self) -> bool:
         """Whether the main connection will read what was published before a lane halt (and
