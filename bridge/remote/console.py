@@ -9,10 +9,11 @@ Rules:
    (rotator.py rule 3), through the remote's link: QoS 1, an expiry, the operator
    (interfaces/mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at
    once, STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
-   tracking off are sent whatever the remote thinks of the station. A command that moves is
-   refused at once too while the station is not current (rotator.py rule 1: its bridge or the
-   rotator offline, no heartbeat), locked or leased to another (rotator.py rule 6), as the
-   station's judge would refuse it.
+   tracking off are sent whatever the remote thinks of the station (a lock ON the station's
+   bridge may not hear is answered as not delivered all the same: rotator.py rule 3). A
+   command that moves is refused at once too while the station is not current (rotator.py
+   rule 1: its bridge or the rotator offline, no heartbeat), locked or leased to another
+   (rotator.py rule 6), as the station's judge would refuse it.
 2. The station's judge has the last word: what it refuses comes back on ``R/error`` and reaches
    every page as an error event. What the remote refuses itself (offline, a target outside the
    station's ranges) is reported to the pages alone: the station never heard of it.

@@ -37,7 +37,11 @@ Rules:
    connection and still take a stop on its stop lane, interfaces/mqtt/lane.py), and then it is kept
    and sent first on reconnect (interfaces/mqtt/remote.py rule 6): OFFLINE tells the client it has
    not reached the station yet. The lock and tracking off, like a stop, never move: they go
-   whenever the link is up.
+   whenever the link is up. A lock ON sent while the station's bridge is not heard (offline,
+   or no heartbeat) is answered with OFFLINE once the broker has it (LOCK_UNHEARD): a bridge
+   that is down never reads it (its session is clean) and starts again unlocked, and someone
+   about to climb the tower must not be told it is locked (an attack pass: the console said
+   lock ON, the station's bridge restarted, the rotator was unlocked).
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
    coordinates) on ``R/target``: the station knows where it is, the remote does not.
@@ -98,6 +102,11 @@ STATION_SILENT = (
     f"the station's bridge is not heard (no heartbeat within {SILENT_S:g} s): nothing sent"
 )
 LOCKED = "the station's safety lock is ON: nothing turns until it is switched off"
+LOCK_UNHEARD = (
+    "lock ON sent, but the station's bridge is not heard (offline, or no heartbeat): it may "
+    "never reach the rotator, and a bridge that starts again does not know of it; make sure "
+    "the station shows the lock ON before anyone works on the tower"
+)
 HALTED_SINCE = "a STOP or lock ON went out after it was asked: not sent (send it again)"
 
 
@@ -231,6 +240,15 @@ class RemoteRotator:
             return STATION_AWAY
         return None
 
+    def _bridge_unheard(self) -> bool:
+        """Rule 3: the station's bridge itself is offline or silent (a rotator offline under
+        a bridge that runs still takes its lock)."""
+        view = self._view
+        return (
+            not view.live_within(self._station.bridge_heartbeat, SILENT_S)
+            or view.get(self._station.bridge_state) != b"online"
+        )
+
     @property
     def status(self) -> RotatorStatus:
         raw = self._view.get(self.topics.status)
@@ -284,6 +302,8 @@ class RemoteRotator:
                 if command.on:
                     self.halted(command.source)
                 self.publish(t.lock, "ON" if command.on else "OFF")
+                if command.on and self._bridge_unheard():  # rule 3: sent, maybe to nobody
+                    raise Refused(RefusalCode.OFFLINE, LOCK_UNHEARD)
                 return
             case TrackBody() if command.off:
                 self.publish(t.feature(tracking.COMMAND), command.name)

@@ -21,9 +21,10 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.core.errors import Refused
-from bridge.core.model import RotatorStatus
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Lock, RotatorStatus, Source
 from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
+from bridge.interfaces.mqtt.heartbeat import SILENT_S
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.interfaces.mqtt.topics import StationTopics
 from bridge.interfaces.rotctld.server import RotctldSession
@@ -592,3 +593,36 @@ def test_an_old_one_rotator_description_beside_the_stations_rotators_is_no_choic
     )
     with pytest.raises(StartError, match=r"rotators mast, tower.*name one in endpoints.rotator"):
         Remote(s).start()
+
+
+@pytest.mark.parametrize(
+    "gone",
+    ["the station's bridge offline", "its heartbeat silent", "its rotator offline"],
+)
+def test_a_lock_on_the_stations_bridge_may_not_hear_is_sent_and_said_to_be_undelivered(
+    gone: str,
+) -> None:
+    """Someone about to climb the tower locks the rotator on the remote's console while the
+    station's bridge is down (restarting): the lock ON went to the broker and the page said
+    OK, but a bridge that is down never reads it (clean session) and started again unlocked.
+    Sent all the same (its lane may still read it), and answered as not delivered; a rotator
+    offline under a bridge that runs takes its lock: answered OK."""
+    clock = FakeClock()
+    view, link = StationView(clock), Link()
+    rot = station_rotator(view, "tower", link)
+    if gone == "the station's bridge offline":
+        view.put(STATION.bridge_state, b"offline")
+    elif gone == "its heartbeat silent":
+        clock.t += SILENT_S + 1
+    else:
+        view.put(rot.topics.availability, b"offline")
+    command = Lock(True, source=Source.WEB)
+    if gone == "its rotator offline":
+        rot.submit(command)
+    else:
+        with pytest.raises(Refused) as refused:
+            rot.submit(command)
+        assert refused.value.code is RefusalCode.OFFLINE
+        assert "may never reach the rotator" in refused.value.message
+    assert link.sent == [(rot.topics.lock, "ON")]
+    rot.submit(Lock(False, source=Source.WEB))  # an OFF that is lost unlocks nothing: OK

@@ -148,6 +148,7 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
     console.submit(Stop(Source.WEB))
     assert console.last_halt_s == 100.0
     mono.t = 200.0
+    remote._view.put(StationTopics("rotor").bridge_heartbeat, b"1700000100.000")  # still heard
     console.submit(Lock(False, source=Source.WEB))  # lock OFF halts nothing
     assert console.last_halt_s == 100.0
     console.submit(Lock(True, source=Source.WEB))
