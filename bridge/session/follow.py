@@ -53,6 +53,13 @@ Rules:
    by a transmission on another band (rule 3's hold is for this antenna's band: an attack
    pass, the 20 m antenna stopped half way when WSJT-X moved to 40 m and transmitted there,
    and nothing turned it on).
+10. The DX call is shown (the status's ``following.call``, Home Assistant's sensor, the log,
+   a refusal on R/error) only if it could be a call sign as WSJT-X writes one: at most MAX_CALL
+   characters, none of them a control character or one MQTT does not carry (core/text.py).
+   Anything else is shown as none (``?`` in a refusal); the grid is followed all the same (it,
+   not the call, is what the rotor turns to). Whoever reaches WSJT-X's port chooses the call
+   (an attack pass: a line end in it forged lines in the bridge's log, and a call of 300
+   characters made Home Assistant refuse the sensor's state at every status).
 """
 
 from __future__ import annotations
@@ -66,6 +73,7 @@ from bridge.core import geo
 from bridge.core.bands import band_of_hz, describe_hz
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Source, Target
+from bridge.core.text import bad_char
 from bridge.pointing import toward
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
@@ -78,6 +86,7 @@ FRESH_S = 30.0  # rule 4
 IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said once)
 IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
 NAME_SHOWN = 40  # characters of an instance name a log line quotes (WSJT-X's Id is short)
+MAX_CALL = 32  # rule 10: WSJT-X's longest (a compound call in <>) is some 15 characters
 
 
 @dataclass(frozen=True)
@@ -100,6 +109,14 @@ class Follow:
     source: Source = Source.MQTT  # who asked
     described: str | None = None  # the command as the user gave it (a refusal names it)
     origin: Origin | None = None  # who asked (the status's last_operator)
+
+
+def call_of(text: str) -> str | None:
+    """Rule 10: the DX call as shown, stripped, or None (none given, or no call sign)."""
+    call = text.strip()
+    if not call or len(call) > MAX_CALL or bad_char(call) is not None:
+        return None
+    return call
 
 
 def grid_of(text: str) -> str | None:
@@ -247,11 +264,11 @@ class Follower:
             said, self._off_band = self._off_band == band, band
             if said:
                 return Proposal(busy=True)
-            what = f"follow {heard.call.strip() or '?'} {grid}"
+            what = f"follow {call_of(heard.call) or '?'} {grid}"
             return Proposal(error=Report(ErrorKind.REFUSED, why, what), busy=True)
         self._off_band = None
         self._aimed = grid
-        call = heard.call.strip() or None
+        call = call_of(heard.call)  # rule 10
         try:
             lat, lon = geo.parse_locator(grid)
             az, place = toward(
@@ -270,5 +287,5 @@ class Follower:
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False
         )
-        log.info("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call, grid, az)
+        log.info("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call or "?", grid, az)
         return Proposal(target=judged, busy=True)

@@ -567,3 +567,46 @@ def test_a_transmission_start_is_not_lost_beside_another_programs_status_in_one_
         where = v.truth().az_deg
         assert angle_between(where, bearing("PM95")) > 5  # stopped on the way
         assert v.status.following is not None and v.status.following.held
+
+
+# -- what WSJT-X names, as shown (rule 10) -----------------------------------------------
+@pytest.mark.parametrize(
+    "call",
+    [
+        "K1ABC\n2026-01-01 00:00:00 CRITICAL bridge: rotator 'hf' lock OFF",  # a forged log line
+        "K" * 300,  # past Home Assistant's longest state (255): its sensor refuses every status
+        "K1ABC\x1b[2J",  # a terminal's escape (a journal read with less -R, a console)
+    ],
+)
+def test_a_dx_call_that_is_no_call_sign_is_not_shown_nor_logged_and_the_grid_still_turns(
+    call: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    """WSJT-X's DX call comes from whoever can reach its UDP port (a program on this computer,
+    the multicast group's other members, the LAN with ``bind = 0.0.0.0``): up to a kilobyte of
+    any text. It was shown as the followed station (``R/status``, Home Assistant's sensor) and
+    written into the log as sent: a line end forged log lines, and a call longer than 255
+    characters made Home Assistant refuse the sensor's state at every status. A call with a
+    control character or longer than any call sign is shown as none; its grid is followed as
+    before (the grid, not the call, is what the rotor turns to)."""
+    caplog.set_level(logging.INFO, "bridge.session.follow")
+    part = following(rig())
+    part.heard(Heard(call, "PM95", False), 1.0)
+    proposal = part.step(at(1.0))
+    assert proposal.target is not None and proposal.target.az_deg is not None
+    assert angle_between(proposal.target.az_deg, bearing("PM95")) < 0.1
+    assert part.info is not None and part.info.call is None and part.info.grid == "PM95"
+    logged = [r.getMessage() for r in caplog.records]
+    assert logged and all(call not in line and "\n" not in line for line in logged)
+    assert all(len(line) < 200 for line in logged)
+
+
+def test_a_refusal_names_a_real_call_and_no_junk() -> None:
+    """The R/error of a grid the judge refuses names the call as the status does (rule 10)."""
+    east, west = bearing("PM95"), bearing("FN31")
+    part = following(rig(keep_out=[[east - 10.0, east + 10.0], [west - 10.0, west + 10.0]]))
+    part.heard(Heard("JA1ABC\r\nforged", "PM95", False), 1.0)
+    error = part.step(at(1.0)).error
+    assert error is not None and error.command == "follow ? PM95"
+    part.heard(Heard(" W1AW ", "FN31", False), 2.0)
+    error = part.step(at(2.0)).error
+    assert error is not None and error.command == "follow W1AW FN31"
