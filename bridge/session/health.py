@@ -21,7 +21,11 @@ Rules:
    turned: clockwise (raw azimuth growing) or counter-clockwise; up or down in elevation.
 3. The start delay is from the command to when the rotor left where it stood: the first
    reading beyond the motion machine's noise band from there (a still potentiometer's jitter is
-   no start), set back by the way it had gone at the move's steady speed; for a move from rest
+   no start), set back by the way it had gone at the move's steady speed; a move too short for
+   one (a tracking step, a nudge) is set back at the speed that way the recent moves or the
+   baseline give, and gives none while no speed is known (a review: its first reading beyond
+   the band taken as its start, a Rotor-EZ's 0.1 s start read 0.8 s, and a few small steps
+   warned of a start delay grown seven times over); for a move from rest
    whose turning the polls saw (and that left the band); a move without a command (the
    front panel), a new target taken while turning and a controller silent while it turns
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
@@ -203,7 +207,7 @@ class Health:
         turned = move.first_change_t is not None
         if move.target_t is not None and move.from_rest and move.first_change_t is not None:
             seen_turning = sum(1 for r in move.readings if r[0] > move.first_change_t) >= 2
-            left_t = _left_t(times, axes, values, self._noise_deg)
+            left_t = _left_t(times, axes, self._speeds(values, move.factor), self._noise_deg)
             if seen_turning and left_t is not None:  # not a silent slew's report (SatEL)
                 values["delay"] = max(0.0, left_t - move.target_t)
         for key in [k for k in values if k.endswith(("_up", "_down"))]:  # rule 9
@@ -231,6 +235,16 @@ class Health:
         self._judge.add(done)
         self.report = self._judge.report()
         return self.report
+
+    def _speeds(self, values: dict[str, float], factor: float | None) -> dict[str, float]:
+        """Rule 3: the speeds a start is set back at: the move's own, else the judge's that
+        way (full speeds, at the move's factor: rule 9)."""
+        speeds = dict(values)
+        for key in (f"{axis}_{way}" for axis in ("az", "el") for way in ("up", "down")):
+            known = self._judge.known_speed(key)
+            if key not in speeds and known is not None and factor is not None:
+                speeds[key] = known * factor
+        return speeds
 
     def _unwrapped(self, az: list[float]) -> list[float]:
         """Raw azimuths as a continuous path (a scale that wraps at 360: 359 -> 1 is +2)."""
@@ -299,11 +313,11 @@ def _left_t(
     times: list[float], axes: list[tuple[str, list[float]]], speeds: dict[str, float], noise: float
 ) -> float | None:
     """Rule 3: when the rotor left where it stood (the first reading beyond the noise band on
-    either axis, set back by the way it had gone at the move's speed, where measured)."""
+    either axis, set back by the way it had gone at the speed that way; none known: None)."""
     for k, t in enumerate(times):
         for axis, path in axes:
             gone = path[k] - path[0]
             if abs(gone) > noise:
                 speed = speeds.get(f"{axis}_{'up' if gone > 0 else 'down'}")
-                return t - abs(gone) / speed if speed else t
+                return t - abs(gone) / speed if speed else None
     return None

@@ -176,6 +176,12 @@ class Judge:
     def recent_median(self, key: str) -> float | None:
         return _median(self.recent[key])
 
+    def known_speed(self, key: str) -> float | None:
+        """A speed the moves so far give (the recent ones', else the baseline's): health.py
+        rule 3 sets a short move's start back at it."""
+        speed = self.recent_median(key)
+        return speed if speed is not None else self.baseline[key]
+
     def warnings(self) -> list[str]:
         """Rules 2-4."""
         out: list[str] = []

@@ -475,3 +475,23 @@ def test_a_long_move_keeps_few_readings_and_is_measured_all_the_same() -> None:
     assert report.moves >= 6
     assert report.az.speed_up_deg_s == pytest.approx(0.6, rel=0.02)
     assert report.start_delay_s == pytest.approx(Bench.START_S, abs=Bench.POLL_S)
+
+
+def test_short_steps_from_rest_start_no_later_than_long_moves(rig: Rig) -> None:
+    """A review: a move too short to measure its own speed (a tracking step, a nudge of a few
+    degrees) had its start taken at its first reading beyond the noise band, not set back as a
+    long move's is: a Rotor-EZ's 0.1 s start read 0.8 s, and a few such steps warned of a
+    start delay grown seven times over. Set back at the speed the other moves gave, they
+    warn of nothing."""
+    v = _settled(rig, settings={"health_baseline_moves": 3})
+    for i in range(6):
+        health = _move(v, 300 if i % 2 == 0 else 30)
+    base = health.baseline_start_delay_s
+    assert base is not None and base < 0.3
+    az = v.truth().az_deg
+    for _ in range(8):  # small steps clockwise, each from rest: no speed of their own
+        az += 6.0
+        health = _move(v, az)
+    assert health.warnings == ()
+    assert health.start_delay_s is not None
+    assert health.start_delay_s == pytest.approx(base, abs=0.3)
