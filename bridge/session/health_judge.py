@@ -28,7 +28,14 @@ Rules:
 6. A memory that cannot be read (another version, a hand edit) is logged and replaced by a
    fresh one: health is never a reason not to start. A number that is no finite float (an
    integer too large for one, NaN, Infinity, which Python's JSON reads) is unreadable: it
-   would otherwise reach ``R/health`` as ``Infinity``, which no JSON parser takes.
+   would otherwise reach ``R/health`` as ``Infinity``, which no JSON parser takes. So is one
+   no move could have given (BOUNDS: a speed not above 0 or beyond the settings' 360 °/s, a
+   negative start delay, coast, total or arrival error, a stall far off any scale, a count
+   beyond 2**53, which a JSON reader takes back inexactly): a review found a negative
+   baseline start delay or coast kept, which warned at every move, a huge speed that warned
+   for good, and a zero or negative one under which the rotor's slowing went unseen for good.
+   What is learning is kept to what ``_learn`` keeps (twice ``baseline_moves`` values). A move
+   that measured such a value (a corrupt path) adds it nowhere: the memory must read back.
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ import logging
 import math
 import statistics
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from bridge.core.model import AxisHealth, RotatorHealth
 from bridge.session.config import HealthConfig
@@ -52,10 +59,20 @@ STALL_MEMORY = 20  # rule 3
 STALL_REPEATS = 3
 STALL_NEAR_DEG = 5.0
 MEMORY_VERSION = 1
+MAX_COUNT = 2**53  # rule 6
+MAX_SPEED_DEG_S = 360.0  # the settings' az_speed_deg_s and el_speed_deg_s at most
+MAX_DELAY_S = 600.0  # the settings' stall_timeout_s at most: a longer start is a stall
+MAX_DEG = 720.0  # a coast, an arrival error: more than any controller's scale
+STALL_SCALE_DEG = (-360.0, 720.0)  # every controller's raw azimuths (SPID's -180..540)
 
 SPEEDS = ("az_up", "az_down", "el_up", "el_down")
 COASTS = ("az_coast", "el_coast")
 METRICS = (*SPEEDS, "delay", *COASTS)
+BOUNDS = {  # rule 6: what a move can give, (lowest, highest, the lowest excluded)
+    **dict.fromkeys(SPEEDS, (0.0, MAX_SPEED_DEG_S, True)),
+    "delay": (0.0, MAX_DELAY_S, False),
+    **dict.fromkeys(COASTS, (0.0, MAX_DEG, False)),
+}
 NAMES = {
     "az_up": "clockwise",
     "az_down": "counter-clockwise",
@@ -142,6 +159,9 @@ class Judge:
 
     # -- a move -----------------------------------------------------------------------------
     def add(self, move: Move) -> None:
+        values = {k: v for k, v in move.values.items() if _fits(v, *BOUNDS[k])}  # rule 6
+        if values != move.values:
+            move = replace(move, values=values)
         self.moves += 1
         self.motor_on_s += move.motor_on_s
         for i in (0, 1):
@@ -305,10 +325,10 @@ class Judge:
         if memory.get("version") != MEMORY_VERSION:
             raise ValueError(f"version {memory.get('version')!r}")
         self.moves, self.stalls = _count(memory["moves"]), _count(memory["stalls"])
-        self.motor_on_s = _floats([memory["motor_on_s"]])[0]
-        self.odometer_deg = _floats(memory["odometer_deg"])
-        self.last_coast = _maybe_floats(memory["last_coast_deg"])
-        self.last_error = _maybe_floats(memory["last_error_deg"])
+        self.motor_on_s = _within(_floats([memory["motor_on_s"]]), 0.0, math.inf)[0]
+        self.odometer_deg = _within(_floats(memory["odometer_deg"]), 0.0, math.inf)
+        self.last_coast = _maybe_floats(memory["last_coast_deg"], 0.0, MAX_DEG)
+        self.last_error = _maybe_floats(memory["last_error_deg"], 0.0, MAX_DEG)
         if len(self.odometer_deg) != 2 or len(self.last_coast) != 2 or len(self.last_error) != 2:
             raise ValueError("not two axes")
         baseline, learning, recent = memory["baseline"], memory["learning"], memory["recent"]
@@ -316,27 +336,44 @@ class Judge:
             raise ValueError("baseline, learning or recent is not a table")
         assert isinstance(baseline, dict) and isinstance(learning, dict)
         assert isinstance(recent, dict)
-        kept = {k: _maybe_floats([baseline.get(k)])[0] for k in METRICS}
+        kept = {k: _maybe_floats([baseline.get(k)], *BOUNDS[k])[0] for k in METRICS}
         if memory["from_settings"] is True:  # rule 1: the speeds set then, not kept if no
             kept.update(dict.fromkeys(SPEEDS))  # longer set: learned from the moves after
         kept.update({k: v for k, v in self.baseline.items() if v is not None})  # set now: win
         self.baseline = kept
         self.learned = _count(memory["learned"])
-        self.learning = {k: _floats(learning.get(k, [])) for k in METRICS}
-        self.recent = {k: _floats(recent.get(k, []))[-WINDOW:] for k in METRICS}
-        self.stall_at = _floats(memory["stall_at"])[-STALL_MEMORY:]
+        most = 2 * self._cfg.baseline_moves  # (what _learn keeps)
+        self.learning = {
+            k: _within(_floats(learning.get(k, [])), *BOUNDS[k])[-most:] for k in METRICS
+        }
+        self.recent = {
+            k: _within(_floats(recent.get(k, [])), *BOUNDS[k])[-WINDOW:] for k in METRICS
+        }
+        self.stall_at = _within(_floats(memory["stall_at"]), *STALL_SCALE_DEG)[-STALL_MEMORY:]
 
 
 def _count(raw: object) -> int:
-    if isinstance(raw, bool) or not isinstance(raw, int) or raw < 0:
-        raise ValueError(f"{raw!r} is no count")
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 0 <= raw <= MAX_COUNT:
+        raise ValueError("no count")  # (not its digits: one too long to print raises)
     return raw
 
 
-def _maybe_floats(raw: object) -> list[float | None]:
+def _fits(value: float, lo: float, hi: float, above: bool = False) -> bool:
+    """Rule 6: a value a move could have given (``above``: lo excluded)."""
+    return (lo < value if above else lo <= value) and value <= hi
+
+
+def _within(values: list[float], lo: float, hi: float, above: bool = False) -> list[float]:
+    """Rule 6: values a move could have given, or ValueError."""
+    if not all(_fits(v, lo, hi, above) for v in values):
+        raise ValueError(f"a value outside {lo:g}..{hi:g}")
+    return values
+
+
+def _maybe_floats(raw: object, lo: float, hi: float, above: bool = False) -> list[float | None]:
     if not isinstance(raw, list):
         raise ValueError("not a list")
-    return [None if v is None else _floats([v])[0] for v in raw]
+    return [None if v is None else _within(_floats([v]), lo, hi, above)[0] for v in raw]
 
 
 def _grown(now: float, base: float, pct: float, floor: float) -> bool:

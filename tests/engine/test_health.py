@@ -495,3 +495,49 @@ def test_short_steps_from_rest_start_no_later_than_long_moves(rig: Rig) -> None:
     assert health.warnings == ()
     assert health.start_delay_s is not None
     assert health.start_delay_s == pytest.approx(base, abs=0.3)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"baseline": {"delay": -5.0}},  # every start "longer than its baseline": a false alarm
+        {"baseline": {"az_coast": -3.0}},
+        {"baseline": {"az_up": 1e300}},  # every speed "100 % below its baseline"
+        {"baseline": {"az_up": -6.0, "az_down": 0.0}},  # no speed ever below it: blind
+        {"recent": {"az_up": [-1.0, -1.0, -1.0]}},
+        {"learning": {"delay": [-9.0, -9.0, -9.0]}, "learned": 0, "baseline": {}},
+        {"stall_at": [1e300, 1e300, 1e300]},  # "3 stalls near 1000...0°"
+        {"odometer_deg": [-1e9, 0.0]},  # a total Home Assistant keeps as ever increasing
+        {"motor_on_s": -50.0},
+        {"moves": 10**4000},  # no JSON reader takes it back exactly
+    ],
+)
+def test_a_memory_no_rotor_could_have_made_starts_afresh(bad: dict[str, object]) -> None:
+    """A review: values no move could have measured (a hand edit, a hostile state file) were
+    taken as the baseline: a negative start delay or coast warned at every move, a huge speed
+    warned for good, a negative or zero one made the rotor's slowing unseen for good."""
+    bench = Bench(lambda n, up: 6.0)
+    for n in range(8):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    kept = json.loads(json.dumps(bench.reports[-1].memory))
+    assert bench.reports[-1].baseline_from == "learning"  # (20 moves to learn by default)
+    bench.health = Health(bench.cfg, {**kept, **bad})  # health is never a reason not to start
+    bench.reports.clear()
+    for n in range(30):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+        assert bench.reports[-1].warnings == (), (n, bench.reports[-1].warnings)
+    assert bench.reports[-1].moves == 30  # started afresh
+    assert bench.reports[-1].az.odometer_deg >= 0 and bench.reports[-1].motor_on_s >= 0
+    bench.speed = lambda n, up: 6.0 * (0.7 if up else 1.0)  # and a real slowing still warns
+    for n in range(16):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert [w for w in bench.reports[-1].warnings if w.startswith("clockwise 4.")]
+
+
+def test_a_value_no_rotor_gives_is_no_measurement_and_the_memory_reads_back() -> None:
+    """What the part keeps, it can read back (rule 6 would throw away the totals with it)."""
+    judge = Judge(HealthConfig(), False)
+    judge.add(Move(values={"az_up": 6.0}, travel_deg=(90.0, 0.0), motor_on_s=15.0))
+    judge.add(Move(values={"az_up": 5000.0, "delay": -1.0}, travel_deg=(90.0, 0.0)))
+    again = Judge(HealthConfig(), False, json.loads(json.dumps(judge.memory()))).report()
+    assert (again.moves, again.az.odometer_deg, again.motor_on_s) == (2, 180.0, 15.0)
