@@ -30,8 +30,15 @@ Rules:
    front panel), a new target taken while turning and a controller silent while it turns
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
-   came to rest. The arrival error is of a move that came to rest by itself: not one stopped,
-   stalled or ended by a new target while turning (it arrived nowhere).
+   came to rest; a stop sent again (stops.py rule 2) counts from the first the rotor obeyed:
+   not one after which it went on, over the second half of the time until the next went out,
+   at HEARD_SHARE or more of the speed it came at over SPEED_SPAN_S (it did not slow: a stop
+   the line lost; a review found the rotor's full speed for 2 s counted as its coast, 13
+   degrees where it coasts one, and a few such stops warned that the brake no longer holds).
+   A rotor still that fast a second after a stop it heard has its coast counted from the
+   next. Its speed is measured up to the stop it obeyed. The arrival error is of a move that
+   came to rest by itself: not one stopped, stalled or ended by a new target while turning (it
+   arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -72,6 +79,9 @@ MIN_SPAN_S = 1.0
 MIN_SPAN_DEG = 5.0
 MAX_READINGS = 1_200  # rule 6: four minutes of readings at 0.2 s before thinning
 KEEP_RECENT = 200  # rule 6
+HEARD_SHARE = 0.8  # rule 3: a stop after which the rotor did not slow was not heard
+SPEED_SPAN_S = 1.0  # rule 3: the speed a stop came at, over the readings of the second before
+MAX_STOPS = 16  # a stop sent again (stops.py rule 2) a few times at most
 _GONE = (MotionState.OFFLINE, MotionState.UNKNOWN)
 
 
@@ -86,7 +96,8 @@ class _Move:
     target_az: float | None = None
     target_el: float | None = None
     first_change_t: float | None = None
-    stop_t: float | None = None
+    stop_t: float | None = None  # the first stop sent
+    stops: list[float] = field(default_factory=list)  # every stop sent (rule 3: which took)
     from_rest: bool = True  # not a new target taken while turning (rule 3: no start delay)
     factor: float | None = 1.0  # rule 9: the speed factor throughout (None: it changed)
 
@@ -145,6 +156,8 @@ class Health:
             self._stop_t = m.stop_sent_t
             if move is not None and move.stop_t is None:
                 move.stop_t = m.stop_sent_t
+            if move is not None and len(move.stops) < MAX_STOPS:
+                move.stops.append(m.stop_sent_t)
         if m.state is mo.MOVING and not (move is None and m.lost_turning):  # (taken for a turn
             # after a replug, none seen yet: no move until a reading shows one, motion.py rule 4)
             retarget = move is not None and m.target_t is not None and m.target_t != move.target_t
@@ -198,9 +211,10 @@ class Health:
         for i, (axis, path) in enumerate(axes):
             travel[i], moved_t = _travel(times, path, self._noise_deg)
             last_moved_t = max(last_moved_t, moved_t)
-            self._speed(axis, times, path, move.stop_t, values)
-            if move.stop_t is not None:
-                coast = _coast(times, path, move.stop_t)
+            heard_t = _heard(times, path, move.stops) if move.stops else None
+            self._speed(axis, times, path, heard_t, values)
+            if heard_t is not None:
+                coast = _coast(times, path, heard_t)
                 if coast is not None:
                     values[f"{axis}_coast"] = coast
         stalled = m.state is MotionState.STALLED
@@ -293,6 +307,27 @@ def _travel(times: list[float], path: list[float], noise: float) -> tuple[float,
         if abs(a - anchor) > noise:
             total, anchor, moved_t = total + abs(a - anchor), a, t
     return total + abs(path[-1] - anchor), moved_t
+
+
+def _heard(times: list[float], path: list[float], stops: list[float]) -> float:
+    """Rule 3: the stop the rotor obeyed: the first after which it did not turn on, over the
+    second half of the time until the next went out, at HEARD_SHARE of the speed it came at
+    over SPEED_SPAN_S (it slowed: a coast); the last one sent otherwise."""
+    for stop_t, next_t in zip(stops, stops[1:], strict=False):
+        came = _speed_over(times, path, stop_t - SPEED_SPAN_S, stop_t)
+        went = _speed_over(times, path, (stop_t + next_t) / 2, next_t)
+        if not came or went is None or went / came < HEARD_SHARE:
+            return stop_t
+    return stops[-1]
+
+
+def _speed_over(times: list[float], path: list[float], t0: float, t1: float) -> float | None:
+    """The speed between the first and the last reading within [t0, t1], if two are."""
+    inside = [i for i, t in enumerate(times) if t0 <= t <= t1]
+    if len(inside) < 2 or times[inside[-1]] <= times[inside[0]]:
+        return None
+    i, j = inside[0], inside[-1]
+    return (path[j] - path[i]) / (times[j] - times[i])
 
 
 def _coast(times: list[float], path: list[float], stop_t: float) -> float | None:

@@ -541,3 +541,65 @@ def test_a_value_no_rotor_gives_is_no_measurement_and_the_memory_reads_back() ->
     judge.add(Move(values={"az_up": 5000.0, "delay": -1.0}, travel_deg=(90.0, 0.0)))
     again = Judge(HealthConfig(), False, json.loads(json.dumps(judge.memory()))).report()
     assert (again.moves, again.az.odometer_deg, again.motor_on_s) == (2, 180.0, 15.0)
+
+
+def _stopped_move(v: VirtualRotator, *, lose_stop: bool) -> RotatorHealth:
+    """Across the dial, stopped by the operator 5 s on; the line losing that stop's frame
+    (the bridge sends it again when it sees the rotor turn on, stops.py rule 2)."""
+    moves = _health(v).moves
+    v.target(340 if v.truth().az_deg < 180 else 20)
+    v.run_for(5)
+    if lose_stop:
+        v.drop_writes(v.session.controller.link.codec.encode_stop())  # type: ignore[union-attr]
+    v.stop()
+    v.run_until(lambda h: _health(h).moves > moves and h.state is not MotionState.MOVING, 60)
+    v.run_until_state(MotionState.IDLE, 30)  # the brake window over
+    return _health(v)
+
+
+def test_a_stop_the_line_lost_is_no_coast_of_the_rotor(rig: Rig) -> None:
+    """A review: the coast was counted from the first stop sent; one the line lost, the
+    rotor turned on at full speed until the stop went again 2 s later, and that was its
+    "coast": 13 degrees where it coasts one, and a few such stops warned that the brake no
+    longer holds."""
+    v = _settled(rig, settings={"health_baseline_moves": 3})
+    for _ in range(4):
+        health = _stopped_move(v, lose_stop=False)
+    assert health.az.baseline_coast_deg is not None and health.az.baseline_coast_deg <= 2.0
+    for _ in range(6):
+        health = _stopped_move(v, lose_stop=True)
+        assert health.warnings == ()
+    assert health.az.coast_deg is not None and health.az.coast_deg <= 2.0
+
+
+def test_a_slipping_brake_shows_its_whole_coast_though_the_stop_went_twice() -> None:
+    """The other side of the stop the line lost: a rotor that heard the stop and slows, but
+    coasts 10 degrees over 3.3 s (its brake slipping), is sent the stop again 2 s on; its
+    coast counts from the first stop, the one it obeyed."""
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    health, mcfg = Health(cfg), cfg.motion
+    m = mo.link_up(mo.Motion(), mcfg, 0.0)
+    now, report = 0.0, None
+    start_t, stop_t, coast_s = 5.0, 20.0, 10.0 / 3.0  # 6 deg/s, slowing to rest in 3.3 s
+
+    def at(t: float) -> float:
+        if t < start_t:
+            return 20.0
+        if t < stop_t:
+            return 20.0 + 6.0 * (t - start_t)
+        s = min(t - stop_t, coast_s)
+        return 20.0 + 6.0 * (stop_t - start_t) + 6.0 * s - 0.9 * s * s
+
+    while report is None:
+        assert now < 60.0, "the move never ended"
+        if now == start_t:
+            m = mo.commanded(m, mcfg, 300.0, now)
+        if now in (stop_t, stop_t + 2.0):  # the second: stops.py rule 2, it still turned
+            m = mo.stop_sent(m, mcfg, now)
+        health.step(m, now)
+        now += 0.25
+        m, _events = mo.reading(m, mcfg, float(round(at(now))), now)
+        report = health.step(m, now)
+    assert report.az.coast_deg == pytest.approx(10.0, abs=1.5)
