@@ -66,6 +66,7 @@ Rules:
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -323,10 +324,9 @@ def _heard(times: list[float], path: list[float], stops: list[float]) -> float:
 
 def _speed_over(times: list[float], path: list[float], t0: float, t1: float) -> float | None:
     """The speed between the first and the last reading within [t0, t1], if two are."""
-    inside = [i for i, t in enumerate(times) if t0 <= t <= t1]
-    if len(inside) < 2 or times[inside[-1]] <= times[inside[0]]:
+    i, j = bisect_left(times, t0), bisect_right(times, t1) - 1  # (rule 6: times in order)
+    if j <= i or times[j] <= times[i]:
         return None
-    i, j = inside[0], inside[-1]
     return (path[j] - path[i]) / (times[j] - times[i])
 
 
