@@ -166,11 +166,13 @@ class Judge:
         self.motor_on_s += move.motor_on_s
         for i in (0, 1):
             self.odometer_deg[i] += move.travel_deg[i]
-            if move.arrival_error_deg[i] is not None:
-                self.last_error[i] = move.arrival_error_deg[i]
+            error = move.arrival_error_deg[i]
+            if error is not None and _fits(error, 0.0, MAX_DEG):  # rule 6
+                self.last_error[i] = error
         if move.stalled_at_deg is not None:
             self.stalls += 1
-            self.stall_at = [*self.stall_at, move.stalled_at_deg][-STALL_MEMORY:]
+            if _fits(move.stalled_at_deg, *STALL_SCALE_DEG):  # rule 6
+                self.stall_at = [*self.stall_at, move.stalled_at_deg][-STALL_MEMORY:]
         for i, key in enumerate(COASTS):
             coast = move.values.get(key)
             if coast is not None:

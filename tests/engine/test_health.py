@@ -539,8 +539,10 @@ def test_a_value_no_rotor_gives_is_no_measurement_and_the_memory_reads_back() ->
     judge = Judge(HealthConfig(), False)
     judge.add(Move(values={"az_up": 6.0}, travel_deg=(90.0, 0.0), motor_on_s=15.0))
     judge.add(Move(values={"az_up": 5000.0, "delay": -1.0}, travel_deg=(90.0, 0.0)))
+    judge.add(Move(arrival_error_deg=(5000.0, None), stalled_at_deg=9999.0))  # a garbled scale
     again = Judge(HealthConfig(), False, json.loads(json.dumps(judge.memory()))).report()
-    assert (again.moves, again.az.odometer_deg, again.motor_on_s) == (2, 180.0, 15.0)
+    assert (again.moves, again.az.odometer_deg, again.motor_on_s) == (3, 180.0, 15.0)
+    assert again.stalls == 1
 
 
 def _stopped_move(v: VirtualRotator, *, lose_stop: bool) -> RotatorHealth:
