@@ -35,7 +35,8 @@ Rules:
    baseline start delay or coast kept, which warned at every move, a huge speed that warned
    for good, and a zero or negative one under which the rotor's slowing went unseen for good.
    What is learning is kept to what ``_learn`` keeps (twice ``baseline_moves`` values). A move
-   that measured such a value (a corrupt path) adds it nowhere: the memory must read back.
+   that measured such a value (a corrupt path, a garbled scale) adds it nowhere (its stall is
+   still counted, not its place): the memory must read back.
 """
 
 from __future__ import annotations
