@@ -13,13 +13,16 @@ from pathlib import Path
 import pytest
 
 from bridge.core.errors import Refused
-from bridge.core.model import Origin, Source, Target
+from bridge.core.model import Origin, Source, Stop, Target
 from bridge.interfaces.dxcluster.book import Book, Kept
 from bridge.interfaces.dxcluster.client import DxCluster
 from bridge.interfaces.dxcluster.cty import parse_dat
 from bridge.interfaces.dxcluster.spots import Spot
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.engine.test_halt_epoch import Bench
+from tests.mqtt.test_service import RecordingPublisher
 from tests.support.waiting import slow
 
 WHO = Origin(Source.MQTT, "G4ABC")
@@ -127,3 +130,32 @@ def test_the_asker_s_own_claim_during_the_look_up_does_not_refuse_their_call(
     bench.v.run_for(40.0)
     assert bench.sets() != []
     assert not [e.message for e in bench.events]
+
+
+def test_a_call_read_on_mqtt_as_rotctld_stops_is_refused_not_turned_to(bench: Bench) -> None:
+    """interfaces/mqtt/service.py rule 11 (a review): the main connection reads a call target
+    published before rotctld's S, finds no fence yet, and rotctld's stop is put before the
+    call reaches the aimer. The halt count the service read before it asked the fence goes
+    with the call: read again by the aimer, after the stop, it let the call turn the rotor
+    after the stop."""
+    svc = MqttService(Topics("rotor", {"v": "rotor"}), RecordingPublisher(), wall=lambda: 0.0)
+    svc.attach(bench.rot)
+    dx, go = held_cluster()
+    svc.aim_calls_with(dx.aim)
+    unfenced = svc._halts.fenced
+
+    def stopped_right_after(rotator_id: str, lock_off: bool = False) -> bool:
+        fenced = unfenced(rotator_id, lock_off)
+        bench.rot.submit(Stop(Source.ROTCTLD), "S")  # rotctld's thread, between the two
+        return fenced
+
+    svc._halts.fenced = stopped_right_after  # type: ignore[method-assign]
+    svc.on_message("rotor/target", b'{"call": "JA1ABC"}', False, "G4ABC")
+    go.set()
+    turned(dx, 1)()
+    bench.v._take()
+    bench.v.run_for(40.0)
+    assert bench.sets() == []  # the controller was never told to turn
+    assert [e.message for e in bench.events] == [
+        "JA1ABC: a stop came after it was asked: not turned"
+    ]

@@ -29,7 +29,9 @@ Rules:
    ``dxcluster`` and the asker's origin kept for the audit. An unknown call, or no station,
    is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked overtakes
    it: the call is refused, never turned to after the stop (docs/architecture.md rule 11). The
-   rotator's halt count read when it was asked goes with it to the judge (``submit``'s
+   rotator's halt count read when it was asked (by the MQTT service, before it asked its fence
+   for another interface's halt: a stop put between the two is after the call, an attack
+   pass: read here, it was not) goes with it to the judge (``submit``'s
    ``since``), which drops it at the put if a halt came since, however long the look-up took
    (a clock compared before the look-up let a stop that came during it be overtaken); so is
    its place in the order of the rotator's commands (``ticket``): a target sent after the
@@ -322,17 +324,26 @@ class DxCluster:
 
     # -- turning to a call (rule 4) ------------------------------------------------------------
     def aim(
-        self, rotator: RotatorPort, call: str, long_path: bool, described: str, origin: Origin
+        self,
+        rotator: RotatorPort,
+        call: str,
+        long_path: bool,
+        described: str,
+        origin: Origin,
+        since: int | None = None,
     ) -> None:
         """From paho's thread: queued for the aim thread; a full queue is refused at once, and
-        so is a call the lock, the wind or the lease refuses now (rule 4)."""
+        so is a call the lock, the wind or the lease refuses now (rule 4). ``since``: the halt
+        count the asker read before it asked the MQTT fence (interfaces/mqtt/service.py rule
+        11); read here when not given."""
         try:
             rotator.check_motion(origin)
         except Refused as exc:
             rotator.report_refusal(exc.message, described, origin=origin)
             return
         try:
-            aim = _Aim(rotator, call, long_path, described, origin, rotator.halts, rotator.ticket())
+            halts = rotator.halts if since is None else since
+            aim = _Aim(rotator, call, long_path, described, origin, halts, rotator.ticket())
             self._aims.put_nowait(aim)
         except queue.Full:
             rotator.report_refusal(

@@ -114,8 +114,9 @@ from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
 
-# (the rotator, the call, long path?, the command as described, who asked)
-CallAimer = Callable[[RotatorPort, str, bool, str, Origin], None]
+# (the rotator, the call, long path?, the command as described, who asked, the halt count read
+# before the fence was asked: rule 11)
+CallAimer = Callable[[RotatorPort, str, bool, str, Origin, int], None]
 
 
 class MqttService:
@@ -620,7 +621,8 @@ class MqttService:
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
-            self._by_call(rot, command.call, command.long_path, what, by)
+            assert since is not None  # (read above, before the fence was asked)
+            self._by_call(rot, command.call, command.long_path, what, by, since)
         elif command is not None:
             rot.submit(command, what, since=since)
 
