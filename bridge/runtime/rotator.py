@@ -37,7 +37,10 @@ DCU-1, the loggers) is told to the ``fence`` right before it is put and right af
 under the owner's lock, and a fence that raises costs the halt nothing): the MQTT service then
 refuses a move, or a lock OFF, that its main connection reads for this rotator but was
 published before that halt (interfaces/mqtt/lastword.py rule 11); MQTT's own halts are ordered
-by the last word.
+by the last word. As a move does, the main connection's lock OFF comes with the halt count read
+before the fence was asked (``since``): while the lock is ON, one that a stop or lock ON put
+since has made old is refused (``stale``, the lock stays ON), decided under the owner's lock, so
+a lock ON put between that look and the lock OFF's put is the last word.
 """
 
 from __future__ import annotations
@@ -105,6 +108,10 @@ log = logging.getLogger(__name__)
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
 OFFLINE_MESSAGE = "rotator offline (serial link down or controller silent)"
 NEWER_MESSAGE = "a newer command came after it was asked: not carried out"
+LOCK_OFF_STALE_MESSAGE = (
+    "lock OFF not carried out: a STOP or lock ON was put while it was being judged; the lock "
+    "stays ON (make sure nobody is working on the tower, then send lock OFF again)"
+)
 ON_ITS_WAY_MESSAGE = (
     "a command sent just before it is still on its way to the controller: send it again"
 )
@@ -297,7 +304,7 @@ class Rotator:
         what = what or described or describe_command(command)
         epoch = self._mailbox.epoch if since is None else since  # before the judge (rule 10)
         try:
-            result = self._carry(command, what, who, hold, epoch, ticket)
+            result = self._carry(command, what, who, hold, epoch, ticket, since)
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=who)
             raise
@@ -312,11 +319,13 @@ class Rotator:
         hold: int | None,
         epoch: int,
         ticket: int | None = None,
+        since: int | None = None,
     ) -> str | None:
         """The decision for each kind: the audit trail's result (a health reset's too: it
         moves nothing, but ends a baseline and its warnings, an attack pass), or Refused
         (reported by ``submit``).
-        ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10)."""
+        ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10);
+        ``since``: the one the caller read (a lock OFF's, ``_lock``)."""
         src, by = command.source, command.origin
         if self._leaving is not None and not isinstance(command, Stop | Lock):
             raise Refused(RefusalCode.OFFLINE, self._leaving)  # (``leave``)
@@ -328,7 +337,7 @@ class Rotator:
             case Target() | Stop() | SetOption():
                 self._judged(command, epoch, hold)
             case Lock():
-                self._lock(command.on, hold)
+                self._lock(command.on, hold, since)
             case Claim():
                 self.operators.claim(command.operator, command.minutes, who)
             case Release():
@@ -572,10 +581,16 @@ class Rotator:
         if not self.status.available:
             raise Refused(RefusalCode.OFFLINE, OFFLINE_MESSAGE)
 
-    def _lock(self, locked: bool, hold: int | None) -> None:
-        """Never refused; ``hold`` as for ``submit``. The lock, the mailbox put and the save
-        queued for the state file are one step (kept.py rules 2, 5), from every interface."""
+    def _lock(self, locked: bool, hold: int | None, since: int | None = None) -> None:
+        """Never refused, but a lock OFF put with a halt count (``since``, as for ``submit``)
+        that a stop or lock ON put since has made old while the lock is ON: it may be older
+        than that lock ON (interfaces/mqtt/lastword.py rule 11), and the lock stays ON.
+        ``hold`` as for ``submit``. The lock, the mailbox put and the save queued for the state
+        file are one step (kept.py rules 2, 5), from every interface."""
         with self._owner:
+            if not locked and since is not None and self._kept.locked:
+                if self._mailbox.epoch != since:
+                    raise Refused(RefusalCode.STALE, LOCK_OFF_STALE_MESSAGE)
             self._kept.set_lock(locked)
             if locked:
                 self.last_halt_s = time.monotonic()

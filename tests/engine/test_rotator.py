@@ -9,9 +9,12 @@ from bridge.app import worker_config
 from bridge.core.errors import Refused
 from bridge.core.geo import parse_locator
 from bridge.core.model import ErrorEvent, Lock, SetOption, Source, Stop, Target, Toward
-from bridge.runtime.rotator import Rotator
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
+from bridge.runtime.rotator import LOCK_OFF_STALE_MESSAGE, Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings
+from tests.mqtt.test_service import RecordingPublisher
 from tests.support.waiting import slow
 
 
@@ -151,3 +154,26 @@ def test_another_interfaces_halt_is_told_to_the_fence_around_its_put_and_mqtts_i
     rot.submit(Lock(True, source=Source.MQTT))
     assert fence.told == [("asked", 0), ("carried", False), ("asked", 1), ("carried", True)]
     assert rot.halts == 4 and rot.locked
+
+
+def test_an_mqtt_lock_off_read_as_the_consoles_lock_on_is_put_leaves_the_lock_on() -> None:
+    """interfaces/mqtt/lastword.py rule 11 (a review): the main connection reads a lock OFF
+    published before the console's lock ON and finds no fence yet; the console's lock ON is
+    asked, put and fenced before the lock OFF reaches the judge. The lock OFF then unlocked
+    the rotator under a page that had said ON: it is refused, the lock stays ON."""
+    events: list[ErrorEvent] = []
+    cfg = worker_config(RotatorSettings(id="t", model="rotorez", port="/dev/null"))
+    svc = MqttService(Topics("rotor", {"t": "rotor"}), RecordingPublisher(), wall=lambda: 0.0)
+    rot = Rotator(cfg, StateStore(None), lambda s: None, events.append, fence=svc)
+    svc.attach(rot)
+    unfenced = svc._halts.fenced
+
+    def locked_right_after(rotator_id: str, lock_off: bool = False) -> bool:
+        fenced = unfenced(rotator_id, lock_off)
+        rot.submit(Lock(True, source=Source.WEB))  # the console's thread, between the two
+        return fenced
+
+    svc._halts.fenced = locked_right_after  # type: ignore[method-assign]
+    svc.on_message("rotor/lock", b"OFF", False, "G4ABC")
+    assert rot.locked
+    assert [e.message for e in events] == [LOCK_OFF_STALE_MESSAGE]

@@ -32,6 +32,7 @@ import threading
 from collections.abc import Callable
 
 from bridge.core.afterlock import Deferring
+from bridge.core.errors import Refused
 from bridge.core.model import Lock, Origin, Source, Stop
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group
@@ -429,11 +430,15 @@ class Halts:
 
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
-        fenced = self.fenced(rot.id, lock_off=True)  # lastword.py rule 11
+        since = rot.halts  # lastword.py rule 11: read before the fence is asked, so that a
+        fenced = self.fenced(rot.id, lock_off=True)  # lock ON put after that refuses it
         with self._lock:
             carried = not fenced and self.word.main_lock_off(rot.id)
             if carried:
-                rot.submit(Lock(False, source=Source.MQTT, origin=origin))
+                try:
+                    rot.submit(Lock(False, source=Source.MQTT, origin=origin), since=since)
+                except Refused:
+                    return  # (the judge said why: a lock ON came while it was judged)
         if not carried:  # said (the lock stays ON against it), once the lock is let go: a
             why = LOCK_OFF_FENCED if fenced else LOCK_OFF_OLDER  # stop may wait
             rot.report_refusal(why, "lock OFF", origin=origin)

@@ -64,8 +64,10 @@ Rules:
    track or follow start, a feature's command that moves, a group's target for each member)
    while another interface's stop or lock ON fences its rotator (lastword.py rule 11) was
    published before that halt: refused on ``R/error`` as stale, and its halt count is read
-   before the fence is asked, so a halt put after that drops it in the mailbox. A lock OFF
-   read then, after a lock ON, is refused as halts.py says.
+   before the fence is asked, so a halt put after that drops it in the mailbox (a call's goes
+   to the DX cluster's aimer with it). A lock OFF read then, after a lock ON, is refused as
+   halts.py says; its halt count goes with it too, and the judge refuses it if a lock ON
+   came between (runtime/rotator.py).
 """
 
 from __future__ import annotations
