@@ -297,3 +297,22 @@ def test_no_fence_while_the_main_connection_cannot_read_its_markers() -> None:
     w.markers_denied()
     assert not w.fenced("a", lock_off=True)
     assert w.fence("a", lock=True, now=1.0) is None and not w.fenced("a")
+
+
+def test_the_copy_of_a_lane_stop_read_after_another_interfaces_halt_ends_no_fence() -> None:
+    """Rule 11 (a review): an MQTT STOP, a target, then the console's STOP, published in that
+    order; the lane reads the MQTT STOP only after the console's was fenced, so its number is
+    the newer. Its copy on the main connection says nothing of what was published before the
+    console's STOP (the target, read next): it ended the fence and forgot its marker, and the
+    target turned the rotor after the console's STOP. Only a marker ends a fence."""
+    w = LastWord(token="t")
+    fence = w.fence("r", False, 0.0)  # the console's STOP
+    assert fence is not None
+    assert w.lane_halt("r", "stop", 0.0) == fence + 1  # the older MQTT STOP, read late
+    assert w.main_halt("r", "stop").echo  # its copy: the lane's hold ends ...
+    assert not w.holding
+    assert w.fenced("r")  # ... the fence does not: the target read next was published before
+    resent = w.resend_due(RESEND_S)  # its marker is still waited for (sent again if lost)
+    assert resent is not None
+    w.marker_back(w.marker(resent).encode())
+    assert not w.fenced("r")

@@ -728,6 +728,21 @@ def test_moves_and_a_lock_off_read_behind_another_interfaces_halt_are_refused_as
     assert tower.calls == [("lock", False), ("refused", FENCED, "target '120'")]
 
 
+def test_a_target_behind_the_copy_of_a_lane_stop_read_late_stays_fenced() -> None:
+    """lastword.py rule 11 (a review): an MQTT STOP, a target of 120, then rotctld's S; the
+    lane reads the MQTT STOP after the S was fenced. The main connection's copy of that stop
+    ended the fence, and the target, published before the S, turned the rotor after it."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=False)  # rotctld's S
+    svc.on_lane_message("rotor/stop", b"", False)  # the MQTT STOP published before it
+    svc.on_message("rotor/stop", b"", False)  # its copy on the main connection
+    tower.calls.clear()
+    svc.on_message("rotor/target", b"120", False)
+    assert tower.calls == [("refused", FENCED, "target '120'")]
+
+
 def test_a_move_read_while_another_interfaces_halt_is_asked_and_not_fenced_yet_is_refused() -> None:
     """lastword.py rule 11: the halt is counted before it is put and fenced after: a move the
     main connection reads in between would otherwise go out after it."""

@@ -102,7 +102,11 @@ but not the order between them. So:
    OFF after a lock ON, were published before the marker and are refused as stale
    (``fenced``); what it reads after the marker is taken. Like a hold, no clock ends a
    fence; the connection dropping does (rule 5: nothing older comes on the next one). While
-   the main connection cannot read its markers (rule 7) no fence is put: none could end.
+   the main connection cannot read its markers (rule 7) no fence is put: none could end. A
+   fence ends by a marker alone, never by the main copy of a lane halt (rule 9): the lane
+   numbers a halt when it reads it, and one published before another interface's halt may
+   be read after it (an attack pass: an MQTT STOP, a target, then rotctld's S; the lane read
+   the MQTT STOP late, its copy ended the S's fence, and the target turned the rotor).
 """
 
 from __future__ import annotations
@@ -240,7 +244,8 @@ class LastWord:
             if after > self._main_past and self.markers:
                 return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
-            return Copy(echo=True, upto=n, released=tuple(self._passed(n)))
+            released = tuple(self._passed(n, fences=False))  # (rule 11: a marker alone)
+            return Copy(echo=True, upto=n, released=released)
         if not self.echoes or self._lane_sub == NOT_YET:  # (rule 4: nothing to note against)
             return Copy()
         self._lane_next += 1
@@ -260,17 +265,23 @@ class LastWord:
         self._main_past = max(self._main_past, n)
         return n, self._passed(n)
 
-    def _passed(self, n: int) -> list[str]:
+    def _passed(self, n: int, fences: bool = True) -> list[str]:
         """The main connection has read everything published before marker or lane halt
-        ``n``: the holds up to it end, and what waited for it is done."""
+        ``n``: the holds up to it end, and what waited for it is done. Not ``fences``: ``n``
+        is a lane halt's, numbered when the lane read it, which may be after another
+        interface's halt that came later (rule 11): the fences stay, and so do the markers
+        out that would end one."""
+        waited = [m for m, _ in self._fences.values()] if not fences else []
         for sent in [m for m in self._marker_sent_at if m <= n]:
+            if any(f <= sent for f in waited):
+                continue
             del self._marker_sent_at[sent]
         if not self._marker_sent_at:
             self._resend_s = RESEND_S
         for waiting in self._lane_waiting.values():
             while waiting and waiting[0][0] <= n:  # its main copy came before, or was
                 waiting.popleft()  # lost: either way none is to come (rule 1)
-        for rid in [rid for rid, (m, _) in self._fences.items() if m <= n]:
+        for rid in [rid for rid, (m, _) in self._fences.items() if fences and m <= n]:
             del self._fences[rid]  # rule 11
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
