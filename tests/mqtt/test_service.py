@@ -862,6 +862,37 @@ def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -
     assert said[-1] == (said[0][0], False)
 
 
+def test_a_fence_whose_marker_never_comes_back_is_said_while_it_lasts() -> None:
+    """lastword.py rule 11 (a review): rotctld's S fenced the rotator and its marker never came
+    back (a broker that drops the bridge's own messages, an ACL changed under a live
+    connection): every MQTT move was refused as published before the S, for hours, with
+    nothing on B/bridge/info, unlike a lane's hold. Said once while it lasts, unsaid when a
+    marker ends it."""
+    clock = FakeClock(0.0)
+    said: list[tuple[str, bool]] = []
+    pub = RecordingPublisher()
+    svc = MqttService(
+        Topics("rotor", {"tower": "rotor"}),
+        pub,
+        wall=lambda: NOW_UNIX,
+        clock=clock,
+        on_info=lambda problem, on: said.append((problem, on)),
+    )
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=False)
+    for _ in range(3600):  # an hour of markers that never come back
+        clock.t += 1.0
+        svc._halts.resend_if_due()
+        svc._halts.say_long_holds()
+    assert [on for _p, on in said] == [True]
+    assert said[0][0].startswith("tower: a STOP or lock ON from another interface")
+    (last,) = [m for m in pub.sent if m[0] == "rotor/bridge/fence"][-1:]
+    svc.on_message(last[0], last[1].encode(), False)  # the main connection caught up
+    svc._halts.say_long_holds()
+    assert said[-1] == (said[0][0], False)
+
+
 def test_a_lane_stop_while_the_main_connection_subscribes_holds_what_it_will_read() -> None:
     """An attack pass: between the main connection's SUBSCRIBE and its SUBACK the lane's stop
     held nothing (the main connection counted as down), so a target published before the

@@ -4,8 +4,9 @@ retained halts, the report of a long hold. lastword.py decides; this carries its
 into the rotators, each decision and the mailbox put it lets through under one lock.
 
 One timer at a time (TICK_S, while a hold or a marker is out or a long hold is reported) sends
-a marker again and reports a long hold on ``B/bridge/info`` (``on_info``, never on paho's
-threads); it decides nothing (lastword.py rule 5): no hold ends by it.
+a marker again and reports a long hold, or a long fence (lastword.py rule 11), on
+``B/bridge/info`` (``on_info``, never on paho's threads); it decides nothing (lastword.py rule
+5): no hold or fence ends by it.
 
 A group's stop (``G/stop``, interfaces/mqtt/groups.py) is a stop of each of its members, on either
 connection: the same decisions, member by member, in one step under the same lock (a lane's
@@ -115,7 +116,8 @@ class Halts:
         # start the state writer once it has let go (kept.py rule 5)
         self._lock = Deferring()
         self._timer: threading.Timer | None = None
-        self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
+        # (rotator, "hold" or "fence") -> its long hold or fence, as said (on_info)
+        self._said: dict[tuple[str, str], str] = {}
         # the stop express's hold (interfaces/mqtt/express.py rule 8), asked before each halt's put
         self.express: Callable[[str], None] | None = None
         # express.py rule 11: when each connection last read a stop, a lock ON, of each rotator
@@ -283,23 +285,35 @@ class Halts:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
         when it ends; it holds all the same."""
         with self._lock:
-            held = self.word.long_holds(self._clock())
+            now = self._clock()
             markers = self.word.markers
-            ended = {rid: said for rid, said in self._said.items() if rid not in held}
-            new = {rid: self._long_hold(rid, markers) for rid in held if rid not in self._said}
-            for rid in ended:
-                del self._said[rid]
+            held = {(rid, "hold") for rid in self.word.long_holds(now)}
+            held |= {(rid, "fence") for rid in self.word.long_fences(now)}  # lastword rule 11
+            ended = {key: said for key, said in self._said.items() if key not in held}
+            new = {key: self._long_hold(*key, markers) for key in held if key not in self._said}
+            for key in ended:
+                del self._said[key]
             self._said.update(new)
         for problem in new.values():
             log.warning("%s", problem)
             if self._on_info is not None:
                 self._on_info(problem, True)
-        for rid, problem in ended.items():
-            log.info("%s: the hold of the stop lane ended", rid)
+        for (rid, kind), problem in ended.items():
+            what = "hold of the stop lane" if kind == "hold" else "fence of another's halt"
+            log.info("%s: the %s ended", rid, what)
             if self._on_info is not None:
                 self._on_info(problem, False)
 
-    def _long_hold(self, rid: str, markers: bool) -> str:
+    def _long_hold(self, rid: str, kind: str, markers: bool) -> str:
+        if kind == "fence":  # lastword.py rule 11 (only while the markers can be read)
+            return (
+                f"{rid}: a STOP or lock ON from another interface (the console, rotctld, a "
+                f"logger) has fenced this rotator's MQTT moves for more than {LONG_HOLD_S:g} s: "
+                "the main connection has not yet read the marker sent after it on "
+                f"{self.topics.bridge_fence} (a flood of targets, a slow link, a broker that "
+                "drops the bridge's messages?). Until it does, MQTT targets are refused as "
+                "older; stops and locks go through"
+            )
         caught_up = (
             f"its marker on {self.topics.bridge_fence} comes back"
             if markers

@@ -101,7 +101,8 @@ but not the order between them. So:
    one at least as new comes back, the main connection's moves for that rotator, and its lock
    OFF after a lock ON, were published before the marker and are refused as stale
    (``fenced``); what it reads after the marker is taken. Like a hold, no clock ends a
-   fence; the connection dropping does (rule 5: nothing older comes on the next one). While
+   fence; the connection dropping does (rule 5: nothing older comes on the next one); one
+   longer than LONG_HOLD_S is reported as a long hold is (its MQTT moves are refused). While
    the main connection cannot read its markers (rule 7) no fence is put: none could end. A
    fence ends by a marker alone, never by the main copy of a lane halt (rule 9): the lane
    numbers a halt when it reads it, and one published before another interface's halt may
@@ -156,6 +157,7 @@ class LastWord:
     _retained: dict[str, bytes] = field(default_factory=dict)  # rule 6
     # rule 11: rotator -> (the marker its fence waits for, whether a lock ON is among its halts)
     _fences: dict[str, tuple[int, bool]] = field(default_factory=dict)
+    _fenced_since: dict[str, float] = field(default_factory=dict)  # rule 11: for the report
 
     # -- the lane (rule 2) -------------------------------------------------------------------
     def lane_halt(self, rotator_id: str, kind: str, now: float, hold: bool = True) -> int | None:
@@ -223,6 +225,7 @@ class LastWord:
         n = self._next
         old = self._fences.get(rotator_id)
         self._fences[rotator_id] = (n, lock or (old is not None and old[1]))
+        self._fenced_since.setdefault(rotator_id, now)
         self._marker_sent_at[n] = now
         return n
 
@@ -283,6 +286,7 @@ class LastWord:
                 waiting.popleft()  # lost: either way none is to come (rule 1)
         for rid in [rid for rid, (m, _) in self._fences.items() if fences and m <= n]:
             del self._fences[rid]  # rule 11
+            self._fenced_since.pop(rid, None)
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
             del self._holds[rid]
@@ -299,6 +303,7 @@ class LastWord:
         self._marker_sent_at.clear()
         self._lane_waiting.clear()
         self._fences.clear()  # rule 11: nothing older comes on the next connection
+        self._fenced_since.clear()
         self._resend_s = RESEND_S
         if self._lane_sub != NOT_YET:
             self._main_past = self._next
@@ -310,6 +315,7 @@ class LastWord:
         self.markers = False
         self._marker_sent_at.clear()
         self._fences.clear()  # rule 11: no marker could end them
+        self._fenced_since.clear()
 
     def markers_allowed(self) -> None:
         """Rule 7: a probe came back on a new connection: markers go out again (for the halts
@@ -330,6 +336,12 @@ class LastWord:
     def long_holds(self, now: float) -> dict[str, float]:
         """Rule 5: the rotators held for LONG_HOLD_S or more, and since when (to report)."""
         return {rid: since for rid, since in self._held_since.items() if now - since >= LONG_HOLD_S}
+
+    def long_fences(self, now: float) -> dict[str, float]:
+        """Rule 11: the rotators fenced for LONG_HOLD_S or more, and since when (to report, as
+        a long hold is: their MQTT moves are refused while it lasts)."""
+        since = self._fenced_since.items()
+        return {rid: t for rid, t in since if now - t >= LONG_HOLD_S}
 
     @property
     def holding(self) -> bool:
