@@ -143,7 +143,9 @@ class LastWord:
     _next: int = 0
     _holds: dict[str, int] = field(default_factory=dict)  # rotator -> marker it waits for
     _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
-    _marker_sent_at: dict[int, float] = field(default_factory=dict)  # markers still out
+    _marker_sent_at: dict[int, float] = field(
+        default_factory=dict
+    )  # markers still out, by number (so by age)
     _resend_s: float = RESEND_S
     # rule 9: (rotator, kind) -> (number, the marker the main connection must have passed for
     # the main copy to count), oldest first
@@ -274,11 +276,15 @@ class LastWord:
         is a lane halt's, numbered when the lane read it, which may be after another
         interface's halt that came later (rule 11): the fences stay, and so do the markers
         out that would end one."""
-        waited = [m for m, _ in self._fences.values()] if not fences else []
-        for sent in [m for m in self._marker_sent_at if m <= n]:
-            if any(f <= sent for f in waited):
-                continue
-            del self._marker_sent_at[sent]
+        sent_at = self._marker_sent_at  # (numbered in order: the oldest first)
+        if fences:  # (from the front: a marker back costs what it ends, not all that are out)
+            while sent_at and (oldest := next(iter(sent_at))) <= n:
+                del sent_at[oldest]
+        else:
+            waited = [m for m, _ in self._fences.values()]
+            for sent in [m for m in sent_at if m <= n]:
+                if not any(f <= sent for f in waited):
+                    del sent_at[sent]
         if not self._marker_sent_at:
             self._resend_s = RESEND_S
         for waiting in self._lane_waiting.values():
@@ -325,7 +331,8 @@ class LastWord:
     def resend_due(self, now: float) -> int | None:
         """Rule 5: a new marker to publish when the oldest out has waited its turn (RESEND_S,
         doubling up to RESEND_MAX_S), else None. Never gives up, never ends a hold."""
-        if not self._marker_sent_at or now - min(self._marker_sent_at.values()) < self._resend_s:
+        sent_at = self._marker_sent_at  # (the oldest first: numbered, and sent, in order)
+        if not sent_at or now - next(iter(sent_at.values())) < self._resend_s:
             return None
         self._resend_s = min(2 * self._resend_s, RESEND_MAX_S)
         self._next += 1
