@@ -435,6 +435,9 @@ class App:
         # interfaces/mqtt/lane.py rule 4: a stop before a backlog
         self.client.before_message = self.lane.first
         self.client.watch_owned(self.topics.owned())
+        # runtime/kept.py rule 10: a lock ON an earlier run said, which the state file lost
+        by_lock_state = {self.topics.rotator(rot.id).lock_state: rot for rot in self.rotators}
+        self.client.witness(set(by_lock_state), partial(_heard, by_lock_state))
         self._installation = contextlib.ExitStack()  # state_store.py rule 7 (start takes it)
 
     def release(self) -> None:
@@ -827,6 +830,15 @@ class App:
         self.express.stop()  # (the ports are closed: it holds none)
         self.release()
         log.info("stopped")
+
+
+def _heard(by_lock_state: dict[str, Rotator], heard: dict[str, bytes]) -> None:
+    """runtime/kept.py rule 10: each rotator's ``R/lock/state`` as the broker held it before
+    this start (interfaces/mqtt/look.py rule 14)."""
+    for topic, payload in heard.items():
+        rot = by_lock_state.get(topic)
+        if rot is not None:
+            rot.heard_lock(payload)
 
 
 def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:

@@ -59,6 +59,15 @@ Rules:
    start guards a turn on to it (noticed in an attack pass: stopped short of 300, the bridge
    restarted, and a poll garbled into ``AM1;`` turned the rotor on to 300 unsaid). It is
    saved only when it changes: at a stop short of the target, and at the next turn.
+10. A state file that does not say the rotator's lock (a new one: the service run by hand,
+   whose default ``state_file`` is another; a container recreated without its volume; the file
+   deleted; or a lock ON its save failed to keep, rule 3) is not the last word on it: the
+   ``R/lock/state`` ON the broker held from an earlier run (interfaces/mqtt/look.py rule 14)
+   locks the rotator (``heard_lock``), saved as any lock ON and said (kind ``state``), unless a
+   lock word has been said since the start (it is newer). An attack pass: the lock ON set for
+   tower work came back OFF after a restart on a new state file, the retained ON was put back
+   as OFF without a word, and a target turned the rotor. A file that says OFF wins: it was
+   written after the ON the broker holds, or the ON is a stranger's.
 """
 
 from __future__ import annotations
@@ -136,6 +145,7 @@ class Kept:
         self._unsaved: dict[str, SettingValue] = {}  # rule 7: options whose save is queued
         self._unsaved_guard = threading.Lock()  # the owner's step and the writer's
         self._lock_unsaved = False  # rule 7: a lock save is queued and has not read the lock
+        self.lock_unsaid = not store.holds_lock(rotator_id)  # rule 10 (no word since start)
         self.locked = store.locked(rotator_id)  # rule 2: the one copy
         if self.locked:  # rule 6
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
@@ -230,6 +240,7 @@ class Kept:
         """Rule 2, in the owner's step (rule 5): the lock is ``locked``, and saved as that."""
         with self._unsaved_guard:
             self.locked = locked
+            self.lock_unsaid = False  # rule 10: a word since the start is newer
             queued, self._lock_unsaved = self._lock_unsaved, True
         if not queued:
             self._store.queue(self._save_lock_now)

@@ -112,6 +112,10 @@ LOCK_OFF_STALE_MESSAGE = (
     "lock OFF not carried out: a STOP or lock ON was put while it was being judged; the lock "
     "stays ON (make sure nobody is working on the tower, then send lock OFF again)"
 )
+HEARD_LOCK_MESSAGE = (  # kept.py rule 10
+    "lock ON kept from the broker: R/lock/state said ON before this start, and the state file "
+    "did not say this rotator's lock (a new or another state_file?); lock OFF releases it"
+)
 ON_ITS_WAY_MESSAGE = (
     "a command sent just before it is still on its way to the controller: send it again"
 )
@@ -595,6 +599,22 @@ class Rotator:
             if locked:
                 self.last_halt_s = time.monotonic()
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
+
+    def heard_lock(self, payload: bytes) -> bool:
+        """kept.py rule 10: ``R/lock/state`` as the broker held it from an earlier run (MQTT's
+        first look); ON locks the rotator if the state file did not say its lock and no lock
+        word came since the start. True if it did."""
+        with self._owner:  # (one step with every lock word: one said since is newer)
+            if payload != b"ON" or not self._kept.lock_unsaid or self._kept.locked:
+                return False
+            self._kept.set_lock(True)
+            self.last_halt_s = time.monotonic()
+            self._mailbox.put_lock(True, wake=False)  # woken after the step
+        who = Origin(Source.MQTT, "retained R/lock/state")
+        self.operators.audit(who, describe_command(Lock(on=True)), EXECUTED)
+        self.report(ErrorKind.STATE, HEARD_LOCK_MESSAGE, "lock")
+        log.warning("%s: %s", self.id, HEARD_LOCK_MESSAGE)
+        return True
 
     def note(self, message: str) -> None:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""

@@ -7,7 +7,8 @@ Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
    beside it, fsynced, renamed over it (and the directory fsynced). A write that fails leaves
    no temporary file behind and the old file as it was.
-2. A missing file means "nothing set"; an unreadable one is reported and treated as empty,
+2. A missing file means "nothing set" (a lock it does not say may be taken from the broker:
+   kept.py rule 10, ``holds_lock``); an unreadable one is reported and treated as empty,
    except that every rotator whose lock state cannot be read starts locked (safety before
    convenience) and is written down as locked, so it stays locked across restarts until someone
    unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
@@ -249,6 +250,12 @@ class StateStore:
                 self._save()
                 return True
             return bool(entry.get("locked", False))
+
+    def holds_lock(self, rotator_id: str) -> bool:
+        """Whether the file said the rotator's lock, either way, when read (an unreadable one
+        locks every rotator: rule 2); one that did not may have lost it (kept.py rule 10)."""
+        with self._lock:
+            return self.corrupt or "locked" in self._data.get(rotator_id, {})
 
     def options(self, rotator_id: str) -> dict[str, SettingValue]:
         """As kept: on/off, a number or a choice's name (kept.py reads them by their model)."""

@@ -201,3 +201,35 @@ def test_the_first_look_leaves_a_nested_bridge_and_a_rotator_named_option_alone(
             left = retained_snapshot(broker.port, "rotor/site2/#")
             for topic in ("rotor/site2/bearing", "rotor/site2/state", "rotor/site2/lock/state"):
                 assert left.get(topic) == theirs[topic], f"another bridge's {topic} deleted"
+
+
+def test_a_lock_on_outlives_a_state_file_that_lost_it(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """kept.py rule 10: the bridge started on a state file that holds no lock for the rotator
+    (the service run by hand, whose default state_file is another; a container recreated
+    without its volume; the file deleted) while the broker still holds the ``R/lock/state`` ON
+    an earlier run said. The state file alone decided: the bridge came back unlocked, put OFF
+    over the retained ON without a word, and a target turned a rotor locked for tower work."""
+    state = tmp_path / "state.json"
+    with Rig(tmp_path, broker, probe) as rig:
+        emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+        t = time.monotonic()
+        bridge = rig.start_process()
+        probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
+        probe.publish("rotor/lock", "ON")
+        probe.wait_value("rotor/lock/state", "ON", after=t)
+        bridge.terminate()
+        state.unlink()  # (another state file: it holds nothing of this rotator)
+        t = time.monotonic()
+        rig.start_process()
+        probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
+        said = probe.wait_for("rotor/error", lambda m: b"R/lock/state" in m.payload, after=t)
+        assert b"state file" in said.payload, said.payload
+        probe.wait_value("rotor/lock/state", "ON", after=t)
+        assert json.loads(state.read_text())["rotators"]["tower"]["locked"] is True
+        t = time.monotonic()
+        probe.publish("rotor/target", "100")
+        refused = probe.wait_for("rotor/error", lambda m: b"target" in m.payload, after=t)
+        assert b"locked" in refused.payload, refused.payload
+        assert abs(emu.state().az_deg - 10) < 3, "a rotor locked before the restart turned"

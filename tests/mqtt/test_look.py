@@ -76,3 +76,36 @@ def test_a_younger_live_bridge_yields_to_an_older_one() -> None:
     younger = Instance("rotor-young", "attic", 300, 2000.0)
     assert lk.live_info(younger.info([]).encode()) is None
     assert lk.live_info(ME.info([]).encode()) is None
+
+
+LOCK = "t/r/lock/state"
+
+
+def test_the_first_look_that_lets_the_bridge_run_hands_on_what_an_earlier_run_said() -> None:
+    """Rule 14 (runtime/kept.py rule 10): a rotator's retained lock state seen during the look
+    is handed on once, by the first look that opens; it stays the owned-topic judge's too."""
+    lk = look()
+    lk.witness({LOCK})
+    assert not lk.saw(LOCK, b"ON")  # no look under way: nothing kept
+    lk.begin()
+    assert not lk.saw(LOCK, b"ON")  # kept, and left to the owned-topic judge (rule 10)
+    lk.saw(INFO, OTHER.info([]).encode())
+    lk.saw(STATE, b"online")
+    assert lk.end(timed_out=False).heard == {}  # refused: nothing runs, nothing handed on
+    lk.begin()
+    assert not lk.saw(LOCK, b"ON")
+    lk.saw(STATE, b"offline")  # (the other one is gone now)
+    assert lk.end(timed_out=False).heard == {LOCK: b"ON"}
+    lk.begin()  # a reconnect: what the broker holds now is this run's own
+    lk.saw(LOCK, b"OFF")
+    assert lk.end(timed_out=False).heard == {}
+
+
+def test_a_look_that_timed_out_hands_on_what_it_saw() -> None:
+    """An ACL that denies the hello leaves the look to its timeout: the lock it saw counts."""
+    lk = look()
+    lk.witness({LOCK})
+    lk.begin()
+    lk.saw(LOCK, b"ON")
+    lk.saw("t/r/lock", b"ON")  # (no witness: not kept)
+    assert lk.end(timed_out=True).heard == {LOCK: b"ON"}

@@ -12,7 +12,8 @@ each written out in the module that keeps it:
 - owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
-  only halts are taken while it runs, ``gated``); 15 deletions said in a few lines.
+  only halts are taken while it runs, ``gated``; what an earlier run left on the witnessed
+  topics handed to ``witness``'s hook once it ends); 15 deletions said in a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
@@ -141,6 +142,7 @@ class MqttClient(Connection):
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
+        self._on_heard: Callable[[dict[str, bytes]], None] | None = None  # rule 14: witnesses
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
         self._fence_topic = fence_topic  # rule 16
@@ -194,6 +196,14 @@ class MqttClient(Connection):
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
         self._subscriptions = [*self._subscriptions, *topics]
+
+    def witness(self, topics: set[str], on_heard: Callable[[dict[str, bytes]], None]) -> None:
+        """Rule 14: what the broker held on ``topics`` from an earlier run, handed to
+        ``on_heard`` once the process's first look lets the bridge run (after its own values
+        went out; paho's thread, the lock not held); before ``start()``."""
+        if self._look is not None:
+            self._look.witness(topics)
+            self._on_heard = on_heard
 
     def watch_owned(self, filters: list[str]) -> None:
         """Rule 10: the filters of the retained topics the bridge publishes; before ``start()``."""
@@ -430,6 +440,7 @@ class MqttClient(Connection):
             if look.looking != n or not self._up or self._stopping:
                 return
             outcome = look.end(timed_out=timed_out)
+            heard = outcome.heard
             if outcome.refused is not None:
                 self.refused = outcome.refused
                 self.yielded = self._ran  # (a reconnect's look: the bridge ran: claim rule 4)
@@ -439,7 +450,10 @@ class MqttClient(Connection):
                 self._open(outcome)
         if self.refused is not None:
             self._refuse()
-        elif self._on_connect_hook is not None:
+            return
+        if heard and self._on_heard is not None:
+            self._on_heard(heard)
+        if self._on_connect_hook is not None:
             self._on_connect_hook()
 
     def _look_timed_out(self, n: int) -> None:

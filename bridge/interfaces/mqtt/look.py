@@ -19,6 +19,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    look after one of those in this process: nothing is deleted, and the configs are named in
    the log as left alone (claim rule 3). Another instance's info arriving while the bridge runs
    is judged by claim rule 4 (``live_info``).
+   The values the broker held on the topics handed to ``witness`` (each rotator's
+   ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
+   owned-topic judge all the same), and the first look of the process that lets the bridge run
+   hands them on (``Outcome.heard``): what an earlier run said, before this one published
+   anything (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on.
 15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
    (thousands of configs published under the bridge's node ids) is a few lines: a few at once
    (CLEARS_SAID_AT_ONCE), then one a minute (client.py's FOREIGN_LOG_S, the limiter it hands
@@ -29,7 +34,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
 from bridge.interfaces.mqtt.limiter import EventLimiter
@@ -48,6 +53,7 @@ class Outcome:
     refused: str | None
     clear: bool
     clears: list[str]
+    heard: dict[str, bytes] = field(default_factory=dict)  # rule 14: the witnesses' values
 
 
 class FirstLook:
@@ -59,6 +65,13 @@ class FirstLook:
         self._seen: dict[str, bytes] = {}  # retained info/state seen during the look
         self._clears: list[str] = []
         self._took_over = False  # for the life of the process (claim rule 3)
+        self._witnesses: frozenset[str] = frozenset()  # rule 14: their retained values kept
+        self._heard: dict[str, bytes] = {}
+        self._opened = False  # a look has let the bridge run: later ones hand nothing on
+
+    def witness(self, topics: set[str]) -> None:
+        """Rule 14: the topics whose values of an earlier run the first look hands on."""
+        self._witnesses = frozenset(topics)
 
     def _hello(self, n: int) -> bytes:
         return f"{self.claim.me.id} {n}".encode()
@@ -69,6 +82,7 @@ class FirstLook:
         n = self.looking = self._looks
         self._seen = {}
         self._clears = []
+        self._heard = {}
         return self._hello(n)
 
     def ended_by(self, payload: bytes) -> int | None:
@@ -78,7 +92,12 @@ class FirstLook:
 
     def saw(self, topic: str, payload: bytes) -> bool:
         """Whether a message belongs to the look under way (and is kept for its verdict)."""
-        if self.looking is None or topic not in (self.claim.info_topic, self._state_topic):
+        if self.looking is None:
+            return False
+        if topic in self._witnesses:  # rule 14: kept, and judged as an owned topic's value
+            self._heard[topic] = payload
+            return False
+        if topic not in (self.claim.info_topic, self._state_topic):
             return False
         self._seen[topic] = payload
         return True
@@ -103,6 +122,8 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
+        heard, self._heard = ({} if self._opened else self._heard), {}
+        self._opened = True
         if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
             self._took_over = True
             log.warning(
@@ -110,7 +131,7 @@ class FirstLook:
                 self.claim.base_topic,
                 other.described() if other else "another bridge",
             )
-        return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears)
+        return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard)
 
     def say_timed_out(self, timeout_s: float) -> None:
         log.warning(
