@@ -12,8 +12,10 @@ Rules:
    except that every rotator whose lock state cannot be read starts locked (safety before
    convenience) and is written down as locked, so it stays locked across restarts until someone
    unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
-   are not on/off, a number or a name) does the same for its rotator alone, and the rotator's
-   status says why (``problems``).
+   are not on/off, a number or a name, a key given twice with two values) does the same for
+   its rotator alone, and the rotator's status says why (``problems``). A key given twice is
+   read as neither value (core/jsonkeys.py), anywhere in the file: json's own reading keeps the
+   last, and a hand-edited ``"locked": true, "locked": false`` started the rotator unlocked.
 3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
    content it holds is written as in rule 1, so a full disk or a quota is found at the start,
    not when a lock set for tower work is silently not kept. An unreadable file is not replaced
@@ -58,6 +60,7 @@ import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import Control, SettingValue
 from bridge.core.ondemand import OnDemandThread
 
@@ -105,6 +108,19 @@ def _read(path: Path) -> str:
             if kind is None:
                 return f.read().decode()
     raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+
+
+class _TwoValues(list[object]):
+    """Rule 2: a JSON object with a key given twice, with two values, as its pairs: no table,
+    so whatever holds it is malformed (its entry, its rotator's options) or ignored."""
+
+
+def _object(pairs: list[tuple[str, object]]) -> dict[str, object] | _TwoValues:
+    """``json.loads``' ``object_pairs_hook`` for the state file (rule 2)."""
+    try:
+        return unique_keys(pairs)
+    except DuplicateKey:
+        return _TwoValues(pairs)
 
 
 def _alive(pid: int) -> bool:
@@ -185,7 +201,7 @@ class StateStore:
                 self.corrupt = True  # nothing read: every rotator locked, should it be used
                 return
             try:
-                loaded = json.loads(_read(path))
+                loaded = json.loads(_read(path), object_pairs_hook=_object)
                 if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
                     raise ValueError("no 'rotators' table")
                 self._data = {

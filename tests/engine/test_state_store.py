@@ -259,3 +259,28 @@ def test_a_flood_of_lock_words_costs_the_card_a_write_or_two_and_the_last_word_i
     assert len(writes) <= 2, len(writes)
     assert writes[-1] == {"tower": {"locked": True}}
     assert StateStore(path).locked("tower") is True
+
+
+@pytest.mark.parametrize(
+    "entry",
+    [
+        '{"locked": true, "locked": false}',
+        '{"locked": false, "options": {"jam": true, "jam": false}}',
+    ],
+)
+def test_a_key_given_twice_with_two_values_is_read_as_neither(tmp_path: Path, entry: str) -> None:
+    """state_store.py rule 2: json keeps the last value of a key given twice; a hand-edited
+    ``"locked": true, "locked": false`` started the rotator unlocked. Now its entry is
+    malformed: that rotator alone starts locked, and says why."""
+    path = tmp_path / "state.json"
+    path.write_text(f'{{"rotators": {{"tower": {entry}, "yagi": {{"locked": false}}}}}}')
+    s = StateStore(path)
+    assert s.locked("tower") is True and "entry for 'tower' is malformed" in s.problems["tower"]
+    assert s.locked("yagi") is False and "yagi" not in s.problems
+
+
+def test_the_same_value_twice_is_one_value(tmp_path: Path) -> None:
+    path = tmp_path / "state.json"
+    path.write_text('{"rotators": {"tower": {"locked": false, "locked": false}}}')
+    s = StateStore(path)
+    assert s.locked("tower") is False and s.problems == {}
