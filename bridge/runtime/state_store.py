@@ -6,7 +6,10 @@ health (session/health.py) has learned of the rotor, and the control lease (runt
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
    beside it, fsynced, renamed over it (and the directory fsynced). A write that fails leaves
-   no temporary file behind and the old file as it was.
+   no temporary file behind and the old file as it was. One a process killed mid-write left
+   (SIGKILL, the OOM killer, a power cut: one a crash, for years) is named after the file and
+   removed by the next start, which holds the installation's lock (rule 7), so it is no other
+   process's; another file's in the same directory is left alone.
 2. A missing file means "nothing set" (a lock it does not say may be taken from the broker:
    kept.py rule 10, ``holds_lock``); an unreadable one is reported and treated as empty,
    except that every rotator whose lock state cannot be read starts locked (safety before
@@ -50,6 +53,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import glob
 import json
 import logging
 import math
@@ -247,6 +251,7 @@ class StateStore:
             return
         self.check_kind()
         self._path.parent.mkdir(parents=True, exist_ok=True)
+        _remove_leftovers(Path(os.path.realpath(self._path)))  # rule 1
         with self._lock:
             self._write(self._path, put_in_place=not self.corrupt)
             self._dirty = self._dirty and self.corrupt  # malformed entries now written locked
@@ -429,7 +434,8 @@ class StateStore:
         ``put_in_place`` it is removed instead (rule 3). OSError if any step fails."""
         content = json.dumps({"rotators": self._data}, indent=1, sort_keys=True).encode()
         path = Path(os.path.realpath(path))  # rule 4: through a link, never over it
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".state-")
+        prefix, suffix = _temporary(path)
+        fd, tmp = tempfile.mkstemp(suffix, prefix, path.parent)
         renamed = False
         try:
             with os.fdopen(fd, "wb") as f:
@@ -445,6 +451,22 @@ class StateStore:
                     os.unlink(tmp)
         if renamed:
             _sync_directory(path.parent)
+
+
+def _temporary(path: Path) -> tuple[str, str]:
+    """Rule 1: the name of a temporary file of ``path``'s, around mkstemp's random part."""
+    return f".{path.name}.", ".tmp"
+
+
+def _remove_leftovers(path: Path) -> None:
+    """Rule 1: the temporary files of ``path``'s a killed process left beside it."""
+    prefix, suffix = _temporary(path)
+    with contextlib.suppress(OSError):
+        for leftover in path.parent.glob(f"{glob.escape(prefix)}*{suffix}"):
+            with contextlib.suppress(OSError):
+                if stat.S_ISREG(leftover.lstat().st_mode):  # (never what a link names)
+                    leftover.unlink()
+                    log.info("removed %s, left by a write that was cut short", leftover)
 
 
 def _sync_directory(directory: Path) -> None:

@@ -284,3 +284,22 @@ def test_the_same_value_twice_is_one_value(tmp_path: Path) -> None:
     path.write_text('{"rotators": {"tower": {"locked": false, "locked": false}}}')
     s = StateStore(path)
     assert s.locked("tower") is False and s.problems == {}
+
+
+def test_a_write_a_killed_process_left_is_removed_at_the_next_start(tmp_path: Path) -> None:
+    """state_store.py rule 1: a bridge killed between the temporary file and its rename (the
+    OOM killer, a power cut) left it beside the state file, one more at every such crash, for
+    ever. The next start, holding the installation's lock, removes its own file's; another
+    state file's in the same directory (a second installation) is left alone."""
+    path = tmp_path / "state.json"
+    StateStore(path).set_locked("tower", True)
+    leftover = tmp_path / ".state.json.k1ll3d.tmp"
+    leftover.write_text('{"rotators": {"tow')
+    others = tmp_path / ".site2.json.abc123.tmp"
+    others.write_text("{}")
+    with held(path):
+        StateStore(path).check_writable()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["state.json", "state.json.lock", others.name]
+    )
+    assert StateStore(path).locked("tower") is True
