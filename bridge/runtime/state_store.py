@@ -46,6 +46,9 @@ Rules:
    configuration twice: the two took turns throwing each other off the broker under one client
    id, the real one backing off up to a minute each time, and a STOP that reached the one that
    could not open the port was lost without a word (and both wrote the same state file).
+8. What the file holds beside ``rotators`` (a newer version's tables) is written back as it
+   was read, as a rotator's entry keeps the keys it does not know: an update rolled back, the
+   older version's next save dropped them, and the newer one, started again, had lost them.
 """
 
 from __future__ import annotations
@@ -195,6 +198,7 @@ class StateStore:
         self._lock = threading.Lock()
         self._writer = OnDemandThread("state")  # rule 5
         self._data: dict[str, dict[str, object]] = {}
+        self._others: dict[str, object] = {}  # rule 8: tables beside ``rotators``, kept as read
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
         self._dirty = False  # a malformed entry was replaced: written down at the first read
@@ -211,6 +215,7 @@ class StateStore:
                 self._data = {
                     str(k): self._entry(path, str(k), v) for k, v in loaded["rotators"].items()
                 }
+                self._others = {k: v for k, v in loaded.items() if k != "rotators"}
             except (OSError, ValueError, RecursionError) as exc:  # (nesting past the parser's
                 # depth: a few kilobytes of brackets)
                 why = "nested too deep" if isinstance(exc, RecursionError) else exc
@@ -432,7 +437,8 @@ class StateStore:
     def _write(self, path: Path, *, put_in_place: bool = True) -> None:
         """The content, in full and on the disk, then renamed over ``path`` (rule 1); without
         ``put_in_place`` it is removed instead (rule 3). OSError if any step fails."""
-        content = json.dumps({"rotators": self._data}, indent=1, sort_keys=True).encode()
+        whole = {**self._others, "rotators": self._data}  # rule 8
+        content = json.dumps(whole, indent=1, sort_keys=True).encode()
         path = Path(os.path.realpath(path))  # rule 4: through a link, never over it
         prefix, suffix = _temporary(path)
         fd, tmp = tempfile.mkstemp(suffix, prefix, path.parent)

@@ -303,3 +303,21 @@ def test_a_write_a_killed_process_left_is_removed_at_the_next_start(tmp_path: Pa
         ["state.json", "state.json.lock", others.name]
     )
     assert StateStore(path).locked("tower") is True
+
+
+def test_what_a_newer_version_keeps_survives_a_save_of_this_one(tmp_path: Path) -> None:
+    """state_store.py rule 8: an update rolled back to this version, which saves a lock; the
+    newer version started again finds its own tables and keys as it left them."""
+    path = tmp_path / "state.json"
+    newer = {
+        "version": 7,
+        "groups": {"stack": {"locked": True}},
+        "rotators": {"tower": {"locked": False, "future": [1, 2]}},
+    }
+    path.write_text(json.dumps(newer))
+    s = StateStore(path)
+    s.check_writable()
+    assert s.set_locked("tower", True)
+    kept = json.loads(path.read_text())
+    assert kept["version"] == 7 and kept["groups"] == {"stack": {"locked": True}}
+    assert kept["rotators"]["tower"] == {"locked": True, "future": [1, 2]}
