@@ -435,6 +435,14 @@ class App:
         # interfaces/mqtt/lane.py rule 4: a stop before a backlog
         self.client.before_message = self.lane.first
         self.client.watch_owned(self.topics.owned())
+        for rid in sorted(store.locked_ids() - set(self._by_id)):  # state_store.py rule 9
+            log.warning(
+                "state file %s keeps the safety lock ON for %r, which is no rotator of the "
+                "configuration (renamed or removed?): that lock holds nothing now; a renamed "
+                "rotator starts as its new id was kept",
+                settings.state_file,
+                rid,
+            )
         # runtime/kept.py rule 10: a lock ON an earlier run said, which the state file lost
         by_lock_state = {self.topics.rotator(rot.id).lock_state: rot for rot in self.rotators}
         self.client.witness(set(by_lock_state), partial(_heard, by_lock_state))

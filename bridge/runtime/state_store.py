@@ -49,6 +49,10 @@ Rules:
 8. What the file holds beside ``rotators`` (a newer version's tables) is written back as it
    was read, as a rotator's entry keeps the keys it does not know: an update rolled back, the
    older version's next save dropped them, and the newer one, started again, had lost them.
+9. A rotator's entry outlives its rotator (a rotator removed, or renamed: its entry is kept
+   by its id): a lock ON kept for an id that no rotator of the configuration has is said in
+   the log at every start (app.py, ``locked_ids``), since it locks nothing: a rotator renamed
+   while locked for tower work starts as its new id was kept.
 """
 
 from __future__ import annotations
@@ -282,6 +286,11 @@ class StateStore:
         locks every rotator: rule 2); one that did not may have lost it (kept.py rule 10)."""
         with self._lock:
             return self.corrupt or "locked" in self._data.get(rotator_id, {})
+
+    def locked_ids(self) -> set[str]:
+        """Rule 9: the rotators the file keeps locked, configured or not."""
+        with self._lock:
+            return {rid for rid, entry in self._data.items() if entry.get("locked") is True}
 
     def options(self, rotator_id: str) -> dict[str, SettingValue]:
         """As kept: on/off, a number or a choice's name (kept.py reads them by their model)."""

@@ -2,12 +2,15 @@ from __future__ import annotations
 
 import errno
 import json
+import logging
 import os
 from pathlib import Path
 
 import pytest
 
+from bridge.app import App
 from bridge.runtime.state_store import InUse, StateStore, held
+from bridge.settings import Settings
 
 
 def test_lock_and_options_survive_a_restart(tmp_path: Path) -> None:
@@ -321,3 +324,21 @@ def test_what_a_newer_version_keeps_survives_a_save_of_this_one(tmp_path: Path) 
     kept = json.loads(path.read_text())
     assert kept["version"] == 7 and kept["groups"] == {"stack": {"locked": True}}
     assert kept["rotators"]["tower"] == {"locked": True, "future": [1, 2]}
+
+
+def test_a_lock_kept_for_a_rotator_no_longer_configured_is_said_at_start(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """state_store.py rule 9: the rotator locked for tower work was renamed in the file
+    ('tower' to 'hf'): the renamed one starts unlocked, and the start said nothing of it."""
+    path = tmp_path / "state.json"
+    path.write_text(json.dumps({"rotators": {"tower": {"locked": True}, "old": {}}}))
+    settings = Settings(
+        state_file=path,
+        rotators=[{"id": "hf", "model": "rotorez", "port": str(tmp_path / "tty")}],
+    )
+    with caplog.at_level(logging.WARNING, logger="bridge"):
+        App(settings)  # built, never started: no broker, no serial port
+    said = [m for m in caplog.messages if "keeps the safety lock ON for 'tower'" in m]
+    assert len(said) == 1 and "no rotator of the configuration" in said[0]
+    assert not any("'old'" in m for m in caplog.messages)  # (not locked: nothing to say)
