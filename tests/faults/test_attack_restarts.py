@@ -203,8 +203,9 @@ def test_the_first_look_leaves_a_nested_bridge_and_a_rotator_named_option_alone(
                 assert left.get(topic) == theirs[topic], f"another bridge's {topic} deleted"
 
 
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
 def test_a_lock_on_outlives_a_state_file_that_lost_it(
-    tmp_path: Path, broker: Mosquitto, probe: Probe
+    tmp_path: Path, broker: Mosquitto, probe: Probe, protocol: str
 ) -> None:
     """kept.py rule 10: the bridge started on a state file that holds no lock for the rotator
     (the service run by hand, whose default state_file is another; a container recreated
@@ -213,6 +214,7 @@ def test_a_lock_on_outlives_a_state_file_that_lost_it(
     over the retained ON without a word, and a target turned a rotor locked for tower work."""
     state = tmp_path / "state.json"
     with Rig(tmp_path, broker, probe) as rig:
+        rig.mqtt_extra = {"protocol": protocol}  # (3.1.1: the bridge hears its own messages)
         emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
         t = time.monotonic()
         bridge = rig.start_process()
