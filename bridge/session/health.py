@@ -31,14 +31,18 @@ Rules:
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
    came to rest; a stop sent again (stops.py rule 2) counts from the first the rotor obeyed:
-   not one after which it went on, over the second half of the time until the next went out,
-   at HEARD_SHARE or more of the speed it came at over SPEED_SPAN_S (it did not slow: a stop
+   not one after which it went on, over the second half of the time until the next went out
+   ``stop_resend_s`` or more after it (as stops.py rule 2 sends a lost one again), at
+   HEARD_SHARE or more of the speed it came at over SPEED_SPAN_S (it did not slow: a stop
    the line lost; a review found the rotor's full speed for 2 s counted as its coast, 13
    degrees where it coasts one, and a few such stops warned that the brake no longer holds).
    A rotor still that fast a second after a stop it heard has its coast counted from the
-   next. Its speed is measured up to the stop it obeyed. The arrival error is of a move that
-   came to rest by itself: not one stopped, stalled or ended by a new target while turning (it
-   arrived nowhere).
+   next. A stop followed only by stops sent sooner (the operator's STOP again while the rotor
+   coasts) is taken as obeyed: a few readings so soon after it tell no coast from a drive (a
+   review: whole degrees read a slipping brake's 9 degree coast as a drive, counted from the
+   second STOP, 1.5 to 7 degrees). Its speed is measured up to the stop it obeyed. The
+   arrival error is of a move that came to rest by itself: not one stopped, stalled or ended
+   by a new target while turning (it arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -115,6 +119,7 @@ class Health:
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
         self._noise_deg = cfg.motion.noise_deg  # rule 3
+        self._resend_s = cfg.motion.stop_resend_s  # rule 3: a lost stop is sent again then
         self._judge = Judge(cfg.health, self._has_el, memory, wraps=self._wraps)
         if off_at is not None:
             self.report = off_at
@@ -212,7 +217,7 @@ class Health:
         for i, (axis, path) in enumerate(axes):
             travel[i], moved_t = _travel(times, path, self._noise_deg)
             last_moved_t = max(last_moved_t, moved_t)
-            heard_t = _heard(times, path, move.stops) if move.stops else None
+            heard_t = _heard(times, path, move.stops, self._resend_s) if move.stops else None
             self._speed(axis, times, path, heard_t, values)
             if heard_t is not None:
                 coast = _coast(times, path, heard_t)
@@ -310,11 +315,16 @@ def _travel(times: list[float], path: list[float], noise: float) -> tuple[float,
     return total + abs(path[-1] - anchor), moved_t
 
 
-def _heard(times: list[float], path: list[float], stops: list[float]) -> float:
+def _heard(times: list[float], path: list[float], stops: list[float], resend_s: float) -> float:
     """Rule 3: the stop the rotor obeyed: the first after which it did not turn on, over the
-    second half of the time until the next went out, at HEARD_SHARE of the speed it came at
-    over SPEED_SPAN_S (it slowed: a coast); the last one sent otherwise."""
-    for stop_t, next_t in zip(stops, stops[1:], strict=False):
+    second half of the time until the next went out ``resend_s`` or more after it, at
+    HEARD_SHARE of the speed it came at over SPEED_SPAN_S (it slowed: a coast; none went out
+    so late: it is taken as obeyed); the last one sent otherwise."""
+    for k, stop_t in enumerate(stops[:-1]):
+        later = bisect_left(stops, stop_t + resend_s, k + 1)  # (motion.py's stop_again sum)
+        if later == len(stops):
+            return stop_t  # only stops sent sooner: too soon to tell a coast from a drive
+        next_t = stops[later]
         came = _speed_over(times, path, stop_t - SPEED_SPAN_S, stop_t)
         went = _speed_over(times, path, (stop_t + next_t) / 2, next_t)
         if not came or went is None or went / came < HEARD_SHARE:

@@ -605,3 +605,65 @@ def test_a_slipping_brake_shows_its_whole_coast_though_the_stop_went_twice() -> 
         m, _events = mo.reading(m, mcfg, float(round(at(now))), now)
         report = health.step(m, now)
     assert report.az.coast_deg == pytest.approx(10.0, abs=1.5)
+
+
+def _coast_read(stops: tuple[float, ...], at: Callable[[float], float]) -> float | None:
+    """The coast R/health shows of a move from 20 degrees clockwise, commanded at 1 s, its
+    azimuth ``at`` a time read in whole degrees every 0.2 s, the stops sent at ``stops``."""
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    health, mcfg = Health(cfg), cfg.motion
+    m = mo.link_up(mo.Motion(), mcfg, 0.0)
+    k, now, report = 0, 0.0, None
+    while report is None:
+        assert now < 60.0, "the move never ended"
+        k += 1
+        then = k / 5
+        for sent_t in stops:
+            if now < sent_t <= then:
+                m = mo.stop_sent(m, mcfg, sent_t)
+                health.step(m, sent_t)
+        now = then
+        if now == 1.0:
+            m = mo.commanded(m, mcfg, 300.0, now)
+            health.step(m, now)
+        m, _events = mo.reading(m, mcfg, float(round(at(now))), now)
+        report = health.step(m, now)
+    return report.az.coast_deg
+
+
+@pytest.mark.parametrize("again_s", [0.6, 1.0, 1.2, 1.5])
+def test_a_slipping_brake_shows_its_whole_coast_though_the_operator_stopped_it_twice(
+    again_s: float,
+) -> None:
+    """A review: a rotor that heard the stop and slows, coasting 9 degrees over 3 s (its
+    brake slipping), was stopped again by the operator while it still turned (the natural
+    thing to do when a rotor does not stop); the few readings between two stops so close
+    (whole degrees) looked like a rotor that went on, the first stop was taken for lost and
+    the coast counted from the second: 1.5 to 7 degrees, a failing brake looking sound. A
+    stop is judged lost only by one sent a resend time on (stops.py rule 2), as a lost one is."""
+    stop_t, coast_s = 11.0, 3.0  # 6 deg/s, slowing to rest in 3 s: 9 degrees
+
+    def at(t: float) -> float:
+        if t < 1.0:
+            return 20.0
+        if t < stop_t:
+            return 20.0 + 6.0 * (t - 1.0)
+        s = min(t - stop_t, coast_s)
+        return 20.0 + 6.0 * (stop_t - 1.0) + 6.0 * s - s * s
+
+    assert _coast_read((stop_t, stop_t + again_s), at) == pytest.approx(9.0, abs=1.5)
+
+
+def test_stops_the_line_lost_twice_count_no_coast_till_the_one_obeyed() -> None:
+    """The other side: the line lost the first stop and the operator's STOP again a second on;
+    the bridge's own resend 2 s after that is the one the rotor obeyed (coasting a degree)."""
+    heard_t = 14.0
+
+    def at(t: float) -> float:
+        if t < 1.0:
+            return 20.0
+        return 20.0 + 6.0 * (min(t, heard_t) - 1.0) + 6.0 * min(max(t - heard_t, 0.0), 0.2)
+
+    assert _coast_read((11.0, 12.0, heard_t), at) == pytest.approx(1.2, abs=1.0)
