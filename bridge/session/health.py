@@ -40,9 +40,12 @@ Rules:
    next. A stop followed only by stops sent sooner (the operator's STOP again while the rotor
    coasts) is taken as obeyed: a few readings so soon after it tell no coast from a drive (a
    review: whole degrees read a slipping brake's 9 degree coast as a drive, counted from the
-   second STOP, 1.5 to 7 degrees). Its speed is measured up to the stop it obeyed. The
-   arrival error is of a move that came to rest by itself: not one stopped, stalled or ended
-   by a new target while turning (it arrived nowhere).
+   second STOP, 1.5 to 7 degrees). An axis not turning when that stop went out (an
+   elevation-only move's azimuth, an axis that had arrived) has no coast (a review: an
+   elevation-only stop's azimuth coast was 0, learned, and such stops pulled the azimuth
+   coast's median to 0, its brake unwatched). Its speed is measured up to the stop it
+   obeyed. The arrival error is of a move that came to rest by itself: not one stopped,
+   stalled or ended by a new target while turning (it arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -342,15 +345,21 @@ def _speed_over(times: list[float], path: list[float], t0: float, t1: float) -> 
 
 def _coast(times: list[float], path: list[float], stop_t: float) -> float | None:
     """Rule 3: from where the rotor was at the stop (the last reading before it, carried on
-    at the speed of the two last) to where it came to rest, the way it was turning."""
-    before = [i for i, t in enumerate(times) if t <= stop_t]
-    if len(before) < 2:
+    at the speed of the two last) to where it came to rest, the way it was turning; None for
+    an axis that was not turning then (over the second before the stop and the last reading
+    before it)."""
+    j = bisect_right(times, stop_t) - 1  # (rule 6: times in order)
+    if j < 1:
         return None
-    i, j = before[-2], before[-1]
+    since = min(j - 1, max(0, bisect_right(times, stop_t - SPEED_SPAN_S) - 1))
+    came = path[j] - path[since]
+    if came == 0:
+        return None  # an elevation-only move's azimuth, an axis that had arrived
+    i = j - 1
     dt = times[j] - times[i]
     speed = (path[j] - path[i]) / dt if dt > 0 else 0.0
     at_stop = path[j] + speed * (stop_t - times[j])
-    way = 1.0 if speed >= 0 else -1.0
+    way = 1.0 if came > 0 else -1.0
     return max(0.0, (path[-1] - at_stop) * way)
 
 

@@ -667,3 +667,29 @@ def test_stops_the_line_lost_twice_count_no_coast_till_the_one_obeyed() -> None:
         return 20.0 + 6.0 * (min(t, heard_t) - 1.0) + 6.0 * min(max(t - heard_t, 0.0), 0.2)
 
     assert _coast_read((11.0, 12.0, heard_t), at) == pytest.approx(1.2, abs=1.0)
+
+
+def test_an_elevation_only_stop_is_no_azimuth_coast(rig: Rig) -> None:
+    """A review: an az/el rotor stopped while only its elevation turned had an azimuth coast of
+    0.0 shown and learned (the azimuth never turned): such stops, mixed with the azimuth's
+    own, pull the azimuth coast's median and baseline to 0, a failing azimuth brake unseen.
+    An axis not turning when the stop went out has no coast."""
+    speeds = {"az_speed_deg_s": 12.0, "el_speed_deg_s": 6.0}
+    v = rig("rot2prog", emulator={"resolution_ppd": 1, **speeds})
+    v.run_until_state(MotionState.IDLE, 30)
+    for _ in range(4):
+        moves = _health(v).moves
+        truth = v.truth()
+        v.target(truth.az_deg, 80 if (truth.el_deg or 0.0) < 40 else 5)  # elevation only
+        v.run_for(4)
+        v.stop()
+        v.run_until(
+            lambda h, n=moves: _health(h).moves > n and h.state is not MotionState.MOVING, 60
+        )
+        v.run_until_state(MotionState.IDLE, 30)
+    health = _health(v)
+    assert health.moves == 4 and health.el is not None and health.el.coast_deg is not None
+    assert health.az.coast_deg is None
+    kept = health.memory
+    assert isinstance(kept["recent"], dict) and "az_coast" not in kept["recent"]
+    assert isinstance(kept["learning"], dict) and "az_coast" not in kept["learning"]
