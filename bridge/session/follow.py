@@ -55,7 +55,8 @@ Rules:
    and nothing turned it on).
 10. The DX call is shown (the status's ``following.call``, Home Assistant's sensor, the log,
    a refusal on R/error) only if it could be a call sign as WSJT-X writes one: at most MAX_CALL
-   characters, none of them a control character or one MQTT does not carry (core/text.py).
+   characters, printable ASCII (no control character, no Unicode line separator or
+   right-to-left override, which a log viewer may honour: a review).
    Anything else is shown as none (``?`` in a refusal); the grid is followed all the same (it,
    not the call, is what the rotor turns to). Whoever reaches WSJT-X's port chooses the call
    (an attack pass: a line end in it forged lines in the bridge's log, and a call of 300
@@ -73,7 +74,6 @@ from bridge.core import geo
 from bridge.core.bands import band_of_hz, describe_hz
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Source, Target
-from bridge.core.text import bad_char
 from bridge.pointing import toward
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
@@ -114,8 +114,8 @@ class Follow:
 def call_of(text: str) -> str | None:
     """Rule 10: the DX call as shown, stripped, or None (none given, or no call sign)."""
     call = text.strip()
-    if not call or len(call) > MAX_CALL or bad_char(call) is not None:
-        return None
+    if not call or len(call) > MAX_CALL or not (call.isascii() and call.isprintable()):
+        return None  # (a call sign is ASCII: no line separator, no right-to-left override)
     return call
 
 

@@ -576,6 +576,8 @@ def test_a_transmission_start_is_not_lost_beside_another_programs_status_in_one_
         "K1ABC\n2026-01-01 00:00:00 CRITICAL bridge: rotator 'hf' lock OFF",  # a forged log line
         "K" * 300,  # past Home Assistant's longest state (255): its sensor refuses every status
         "K1ABC\x1b[2J",  # a terminal's escape (a journal read with less -R, a console)
+        "K1ABC\u2028forged",  # a line separator: a line end to a viewer that honours it
+        "\u202eCBA1K",  # a right-to-left override: the log's text read backwards
     ],
 )
 def test_a_dx_call_that_is_no_call_sign_is_not_shown_nor_logged_and_the_grid_still_turns(
