@@ -35,15 +35,20 @@ def storm(v: VirtualRotator) -> None:
     v.run_for(2.0)
 
 
+def at_10_30(v: VirtualComposite) -> None:
+    """Both boxes answering, the rotor at rest at 10/30 (before the storm)."""
+    v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+    v.aim(Target(10.0, 30.0))
+    v.run_until(
+        lambda h: abs(h.az.truth().az_deg - 10) < 1 and abs(h.el.truth().el_deg - 30) < 1,
+        120,
+        "at 10/30",
+    )
+
+
 def test_composite_storm_park_survives_a_short_silence_of_the_elevation_box() -> None:
     with VirtualComposite("rt21", "gs232b", settings=WIND, emulators=FAST) as v:
-        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
-        v.aim(Target(10.0, 30.0))
-        v.run_until(
-            lambda h: abs(h.az.truth().az_deg - 10) < 1 and abs(h.el.truth().el_deg - 30) < 1,
-            120,
-            "at 10/30",
-        )
+        at_10_30(v)
         v.mailbox.put_wind(90.0)
         v._take()
         v.run_for(2.0)
@@ -65,13 +70,7 @@ def test_composite_storm_park_waiting_in_the_brake_delay_survives_the_other_box_
     pass: it was dropped there, and the antenna stood 150 degrees short of it all storm)."""
     az_box = {Axis.AZIMUTH: {"speed_deg_s": 6.0}, Axis.ELEVATION: FAST[Axis.ELEVATION]}
     with VirtualComposite("rotorez", "gs232b", settings=WIND, emulators=az_box) as v:
-        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
-        v.aim(Target(10.0, 30.0))
-        v.run_until(
-            lambda h: abs(h.az.truth().az_deg - 10) < 1 and abs(h.el.truth().el_deg - 30) < 1,
-            120,
-            "at 10/30",
-        )
+        at_10_30(v)
         v.aim(Target(300.0, 30.0))
         v.run_until(lambda h: h.az.truth().az_deg > 20, 30, "turning toward 300")
         v.mailbox.put_wind(90.0)

@@ -830,10 +830,8 @@ def test_while_gated_only_halts_are_taken_and_the_rest_is_reported() -> None:
     assert "first look" in str(tower.calls[0][1])
 
 
-def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -> None:
-    """lastword.py rule 5, halts.py's timer work in virtual time: markers sent again, never
-    given up; the hold said once on B/bridge/info, never ended by the clock; the main
-    connection's copy of the stop ends it, and the saying."""
+def saying_service() -> tuple[FakeClock, list[tuple[str, bool]], RecordingPublisher, MqttService]:
+    """One rotator's service on a fake clock, what it says on B/bridge/info kept."""
     clock = FakeClock(0.0)
     said: list[tuple[str, bool]] = []
     pub = RecordingPublisher()
@@ -844,6 +842,14 @@ def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -
         clock=clock,
         on_info=lambda problem, on: said.append((problem, on)),
     )
+    return clock, said, pub, svc
+
+
+def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -> None:
+    """lastword.py rule 5, halts.py's timer work in virtual time: markers sent again, never
+    given up; the hold said once on B/bridge/info, never ended by the clock; the main
+    connection's copy of the stop ends it, and the saying."""
+    clock, said, pub, svc = saying_service()
     tower = RecordingRotator("tower", "rotorez")
     svc.attach(tower)
     svc.on_lane_message("rotor/stop", b"", False)
@@ -868,16 +874,7 @@ def test_a_fence_whose_marker_never_comes_back_is_said_while_it_lasts() -> None:
     connection): every MQTT move was refused as published before the S, for hours, with
     nothing on B/bridge/info, unlike a lane's hold. Said once while it lasts, unsaid when a
     marker ends it."""
-    clock = FakeClock(0.0)
-    said: list[tuple[str, bool]] = []
-    pub = RecordingPublisher()
-    svc = MqttService(
-        Topics("rotor", {"tower": "rotor"}),
-        pub,
-        wall=lambda: NOW_UNIX,
-        clock=clock,
-        on_info=lambda problem, on: said.append((problem, on)),
-    )
+    clock, said, pub, svc = saying_service()
     svc.attach(RecordingRotator("tower", "rotorez"))
     svc.fence_asked("tower")
     svc.fence_carried("tower", lock=False)
