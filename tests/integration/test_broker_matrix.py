@@ -5,7 +5,9 @@ unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, NATS
 message before the QoS 1 one sent right before it, which once made the fence look denied).
 Each case: the protocol said at start, a target turns the rotor, a STOP while turning stops it,
 the retained state for a subscriber that comes late, the last will, the fence markers
-(lastword.py rule 7), and under 3.1.1 a flood of targets without a false "another client
+(lastword.py rule 7), an MQTT target after rotctld's stop (the fence of lastword.py rule 11
+ends on this broker), a lock ON the broker keeps across a restart on a new state file
+(runtime/kept.py rule 10), and under 3.1.1 a flood of targets without a false "another client
 published" while a real stranger is still put back and said.
 
 Real parts: the broker, the bridge (App, or its own process for the last will) and an emulated
@@ -24,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import Probe, retained_snapshot, wait_until
+from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
 from tests.support.mosquitto import BrokerError, Mosquitto
 from tests.support.rig import Rig
@@ -298,3 +300,60 @@ def test_a_broker_restart_gets_every_retained_value_back(kind: str, station: Rig
     snap = wait_until(back, max(30, station.ready_s), "the retained state after the restart")
     assert snap["rotor/bridge/state"] == b"online"
     assert snap["rotor/availability"] == b"online"
+
+
+def test_an_mqtt_target_after_a_rotctld_stop_turns_the_rotor_once_the_marker_is_back(
+    station: Rig,
+) -> None:
+    """lastword.py rule 11: rotctld's ``S`` fences the rotator's MQTT moves until the marker the
+    bridge publishes on its main connection comes back through the broker. A fence that never
+    ended on a broker (one that does not hand the bridge its own messages, or MQTT 3.1.1, where
+    it hears them all) would refuse every MQTT target from then on."""
+    port = free_port()
+    emu = station.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, rotctld_port=port)
+    station.start()
+    station.ready("tower")
+    station.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 30, 20)
+    t = time.monotonic()
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+        s.sendall(b"S\n")
+        assert s.recv(100) == b"RPRT 0\n"
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    # the fence's marker has passed the broker: what is published now comes after it
+    station.probe.wait_for(
+        "rotor/bridge/fence", lambda m: not m.payload.startswith(b"probe "), 20, after=t
+    )
+    t = time.monotonic()
+    station.probe.publish("rotor/target", "60")
+    station.arrived("tower", 60)
+    refusals = [m.text for m in station.probe.on("rotor/error") if m.t >= t]
+    assert refusals == []
+
+
+def test_a_restart_on_a_new_state_file_keeps_the_lock_the_broker_holds(
+    kind: str, station: Rig, tmp_path: Path
+) -> None:
+    """runtime/kept.py rule 10 on each broker: the lock ON an earlier run left retained on
+    ``R/lock/state`` locks a bridge started on a state file that says nothing of the lock
+    (interfaces/mqtt/look.py rule 14 hears it during the first look): a broker that hands the
+    retained value after the look's hello, or not to the bridge's subscription, would let it
+    start unlocked and a target turn a rotor locked for tower work."""
+    emu = station.add("tower", emu={"start_az_deg": 10})
+    station.start()
+    station.ready("tower")
+    t = time.monotonic()
+    station.probe.publish("rotor/lock", "ON")
+    station.probe.wait_value("rotor/lock/state", "ON", after=t)
+    station.stop()
+    (tmp_path / "state.json").unlink()  # (a new state file: nothing of this rotator)
+    t = time.monotonic()
+    app = station.start()
+    station.ready("tower", after=t)
+    wait_until(lambda: app.rotators[0].locked, 10, "the rotator locked after the restart")
+    station.probe.wait_value("rotor/lock/state", "ON", after=t)
+    t = time.monotonic()
+    station.probe.publish("rotor/target", "100")
+    refused = station.probe.wait_for("rotor/error", lambda m: b"100" in m.payload, 10, after=t)
+    assert b"locked" in refused.payload, refused.payload
+    assert abs(emu.state().az_deg - 10) < 3, "a rotor locked before the restart turned"

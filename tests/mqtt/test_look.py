@@ -109,3 +109,24 @@ def test_a_look_that_timed_out_hands_on_what_it_saw() -> None:
     lk.saw(LOCK, b"ON")
     lk.saw("t/r/lock", b"ON")  # (no witness: not kept)
     assert lk.end(timed_out=True).heard == {LOCK: b"ON"}
+
+
+def test_a_witness_the_broker_replays_after_the_hello_is_handed_on_on_that_connection_only() -> (
+    None
+):
+    """Rule 14: aedes streams a subscription's retained messages beside what follows, so the
+    lock ON an earlier run left can come after the hello; retained, on the connection of the
+    look that opened, it is handed on still. A live value, a later connection's, or one before
+    any look opened is not."""
+    lk = look()
+    lk.witness({LOCK})
+    assert lk.late(LOCK, b"ON", retained=True) == {}  # no look has opened yet
+    lk.begin()
+    assert lk.end(timed_out=False).heard == {}  # the hello came back before the replay
+    assert lk.late(LOCK, b"ON", retained=True) == {LOCK: b"ON"}
+    assert lk.late(LOCK, b"ON", retained=False) == {}  # live: a stranger's, or the bridge's
+    assert lk.late(STATE, b"offline", retained=True) == {}  # no witness
+    lk.connection_ended()
+    lk.begin()  # a reconnect: what the broker holds now is this run's own
+    assert lk.end(timed_out=False).heard == {}
+    assert lk.late(LOCK, b"ON", retained=True) == {}

@@ -354,7 +354,7 @@ class MqttClient(Connection):
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         self._will_heard = None  # rule 10: the connection ended, so that ``offline`` was ours
         if self._look is not None:
-            self._look.looking = None  # one assignment: no lock (paho may hold its own here)
+            self._look.connection_ended()  # two assignments: no lock (paho may hold its own)
         if was_up and self._on_connection_lost is not None:  # nothing more of it will come
             self._on_connection_lost()
         return was_up and not self._stopping
@@ -372,7 +372,7 @@ class MqttClient(Connection):
         if self._beat.due(self._clock()):
             self._client.publish(topic, beat_payload(self._wall()).encode(), qos=0)
 
-    def _intercepted(self, topic: str, payload: bytes) -> bool:
+    def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None
@@ -380,6 +380,10 @@ class MqttClient(Connection):
             return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None and self._look_saw(self._look, topic, payload):
             return True
+        if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
+            late = self._look.late(topic, payload, retained)
+            if late and self._on_heard is not None:
+                self._on_heard(late)
         return bool(self._owned.filters) and self._foreign(topic, payload)
 
     def _fence_back(self, topic: str) -> None:

@@ -436,7 +436,7 @@ class Connection:
     def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
         return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
 
-    def _intercepted(self, topic: str, payload: bytes) -> bool:
+    def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
         """Whether a message is the connection's own business, not the handler's."""
         return False
 
@@ -556,7 +556,7 @@ class Connection:
                 log.exception("error letting the stop lane go first")
         try:
             payload = bytes(msg.payload)
-            if not self._intercepted(msg.topic, payload):
+            if not self._intercepted(msg.topic, payload, bool(msg.retain)):
                 self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg), stamp_of(msg))
         except Exception:  # rule 5: a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)

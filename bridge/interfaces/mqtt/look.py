@@ -24,6 +24,16 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    owned-topic judge all the same), and the first look of the process that lets the bridge run
    hands them on (``Outcome.heard``): what an earlier run said, before this one published
    anything (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on.
+   Not every broker sends a subscription's retained messages before what is published after
+   it: aedes (Node-RED's) streams them from its store after the SUBACK, beside the messages
+   that follow, so the hello can come back first and a retained ``R/lock/state`` ON after it
+   (the bridge then started unlocked and put OFF over it). Under MQTT 3.1.1 a message that
+   comes with the retain flag is such a replay (the broker clears the flag of a live one), of
+   what the broker held when the bridge subscribed, before it published anything: so on the
+   connection whose look handed the witnesses on, and until it ends (``connection_ended``), a
+   witness that comes retained after the look is handed on too (``late``). Not under MQTT 5,
+   where the bridge keeps the flag of a live message (retain-as-published): there a stranger's
+   live retained value would pass for an earlier run's.
 15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
    (thousands of configs published under the bridge's node ids) is a few lines: a few at once
    (CLEARS_SAID_AT_ONCE), then one a minute (client.py's FOREIGN_LOG_S, the limiter it hands
@@ -68,6 +78,7 @@ class FirstLook:
         self._witnesses: frozenset[str] = frozenset()  # rule 14: their retained values kept
         self._heard: dict[str, bytes] = {}
         self._opened = False  # a look has let the bridge run: later ones hand nothing on
+        self._late = False  # rule 14: the connection of that look lasts: its replays count
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -123,6 +134,7 @@ class FirstLook:
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
         heard, self._heard = ({} if self._opened else self._heard), {}
+        self._late = not self._opened  # rule 14: the rest of its connection's replays count
         self._opened = True
         if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
             self._took_over = True
@@ -132,6 +144,19 @@ class FirstLook:
                 other.described() if other else "another bridge",
             )
         return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard)
+
+    def late(self, topic: str, payload: bytes, retained: bool) -> dict[str, bytes]:
+        """Rule 14: a witness the broker replays (``retained``, under MQTT 3.1.1: the caller
+        asks only then) after the look that handed the witnesses on, on its connection: what to
+        hand on as they were."""
+        if not (retained and self._late and self.looking is None and topic in self._witnesses):
+            return {}
+        return {topic: payload}
+
+    def connection_ended(self) -> None:
+        """Rule 14: a new connection's replays are of what this run published."""
+        self.looking = None
+        self._late = False
 
     def say_timed_out(self, timeout_s: float) -> None:
         log.warning(
