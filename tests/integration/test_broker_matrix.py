@@ -28,6 +28,7 @@ import pytest
 
 from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
+from tests.support.console import ConsoleClient, web_section
 from tests.support.mosquitto import BrokerError, Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -329,6 +330,31 @@ def test_an_mqtt_target_after_a_rotctld_stop_turns_the_rotor_once_the_marker_is_
     station.arrived("tower", 60)
     refusals = [m.text for m in station.probe.on("rotor/error") if m.t >= t]
     assert refusals == []
+
+
+def test_an_mqtt_lock_off_after_the_consoles_lock_on_unlocks_once_the_marker_is_back(
+    station: Rig,
+) -> None:
+    """lastword.py rule 11 for the lock: the console's lock ON fences the main connection's
+    lock OFF until its marker comes back through the broker; a lock OFF published after that
+    is the last word on every broker, and unlocks."""
+    web = station.sections["web"] = web_section()
+    station.add("tower", emu={"start_az_deg": 10})
+    app = station.start()
+    station.ready("tower")
+    console = ConsoleClient(web["port"])
+    console.session()
+    t = time.monotonic()
+    assert console.command("tower", command="lock", on=True).status == 200
+    station.probe.wait_value("rotor/lock/state", "ON", after=t)
+    station.probe.wait_for(
+        "rotor/bridge/fence", lambda m: not m.payload.startswith(b"probe "), 20, after=t
+    )
+    t = time.monotonic()
+    station.probe.publish("rotor/lock", "OFF")
+    station.probe.wait_value("rotor/lock/state", "OFF", after=t)
+    assert not app.rotators[0].locked
+    assert [m.text for m in station.probe.on("rotor/error") if m.t >= t] == []
 
 
 def test_a_restart_on_a_new_state_file_keeps_the_lock_the_broker_holds(
