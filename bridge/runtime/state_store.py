@@ -9,7 +9,9 @@ Rules:
    no temporary file behind and the old file as it was. One a process killed mid-write left
    (SIGKILL, the OOM killer, a power cut: one a crash, for years) is named after the file and
    removed by the next start, which holds the installation's lock (rule 7), so it is no other
-   process's; another file's in the same directory is left alone.
+   process's; another file's in the same directory is left alone, also one whose name begins
+   with this one's (``.state.json.<8 hex digits>.tmp`` is the only name removed: a glob on
+   ``.state.json.*.tmp`` removed ``state.json.site2``'s, a write of that bridge under way).
 2. A missing file means "nothing set" (a lock it does not say may be taken from the broker:
    kept.py rule 10, ``holds_lock``); an unreadable one is reported and treated as empty,
    except that every rotator whose lock state cannot be read starts locked (safety before
@@ -65,8 +67,8 @@ import json
 import logging
 import math
 import os
+import secrets
 import stat
-import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -76,6 +78,8 @@ from bridge.core.model import Control, SettingValue
 from bridge.core.ondemand import OnDemandThread
 
 log = logging.getLogger(__name__)
+
+TEMPORARY_BYTES = 4  # rule 1: the random part of a temporary file's name
 
 _KINDS = (
     (stat.S_ISDIR, "directory"),
@@ -449,8 +453,8 @@ class StateStore:
         whole = {**self._others, "rotators": self._data}  # rule 8
         content = json.dumps(whole, indent=1, sort_keys=True).encode()
         path = Path(os.path.realpath(path))  # rule 4: through a link, never over it
-        prefix, suffix = _temporary(path)
-        fd, tmp = tempfile.mkstemp(suffix, prefix, path.parent)
+        tmp = path.parent / _temporary(path, secrets.token_hex(TEMPORARY_BYTES))
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o600)
         renamed = False
         try:
             with os.fdopen(fd, "wb") as f:
@@ -468,16 +472,19 @@ class StateStore:
             _sync_directory(path.parent)
 
 
-def _temporary(path: Path) -> tuple[str, str]:
-    """Rule 1: the name of a temporary file of ``path``'s, around mkstemp's random part."""
-    return f".{path.name}.", ".tmp"
+def _temporary(path: Path, random: str) -> str:
+    """Rule 1: the name of a temporary file of ``path``'s around its random part: hex digits,
+    TEMPORARY_BYTES of them (a pattern no other state file's temporary names fit)."""
+    return f".{path.name}.{random}.tmp"
 
 
 def _remove_leftovers(path: Path) -> None:
-    """Rule 1: the temporary files of ``path``'s a killed process left beside it."""
-    prefix, suffix = _temporary(path)
+    """Rule 1: the temporary files of ``path``'s a killed process left beside it; no other
+    file's (``state.json.site2``'s begin as ``state.json``'s do, and a write of theirs may be
+    under way)."""
+    pattern = _temporary(Path(glob.escape(path.name)), "[0-9a-f]" * (2 * TEMPORARY_BYTES))
     with contextlib.suppress(OSError):
-        for leftover in path.parent.glob(f"{glob.escape(prefix)}*{suffix}"):
+        for leftover in path.parent.glob(pattern):
             with contextlib.suppress(OSError):
                 if stat.S_ISREG(leftover.lstat().st_mode):  # (never what a link names)
                     leftover.unlink()

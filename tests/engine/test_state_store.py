@@ -296,7 +296,7 @@ def test_a_write_a_killed_process_left_is_removed_at_the_next_start(tmp_path: Pa
     state file's in the same directory (a second installation) is left alone."""
     path = tmp_path / "state.json"
     StateStore(path).set_locked("tower", True)
-    leftover = tmp_path / ".state.json.k1ll3d.tmp"
+    leftover = tmp_path / ".state.json.6b1113d0.tmp"
     leftover.write_text('{"rotators": {"tow')
     others = tmp_path / ".site2.json.abc123.tmp"
     others.write_text("{}")
@@ -342,3 +342,20 @@ def test_a_lock_kept_for_a_rotator_no_longer_configured_is_said_at_start(
     said = [m for m in caplog.messages if "keeps the safety lock ON for 'tower'" in m]
     assert len(said) == 1 and "no rotator of the configuration" in said[0]
     assert not any("'old'" in m for m in caplog.messages)  # (not locked: nothing to say)
+
+
+def test_the_start_leaves_the_writes_of_a_state_file_named_after_its_own_alone(
+    tmp_path: Path,
+) -> None:
+    """state_store.py rule 1: a second installation's state file in the same directory whose
+    name begins with this one's (``state.json.site2`` beside ``state.json``) has temporary
+    files that began like this one's: this start removed them, a write of that bridge under
+    way among them (its rename then failed: a lock ON it said could not be saved)."""
+    path = tmp_path / "state.json"
+    StateStore(path).set_locked("tower", True)
+    theirs = [tmp_path / ".state.json.site2.0a1b2c3d.tmp", tmp_path / ".state.json.x.tmp"]
+    for other in theirs:
+        other.write_text('{"rotators": {}}')
+    with held(path):
+        StateStore(path).check_writable()
+    assert all(other.exists() for other in theirs)
