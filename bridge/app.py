@@ -445,6 +445,8 @@ class App:
             )
         # runtime/kept.py rule 10: a lock ON an earlier run said, which the state file lost
         by_lock_state = {self.topics.rotator(rot.id).lock_state: rot for rot in self.rotators}
+        for rot in self.rotators:
+            rot.await_heard_lock()  # (no motion until the first look has said it)
         self.client.witness(set(by_lock_state), partial(_heard, by_lock_state))
         self._installation = contextlib.ExitStack()  # state_store.py rule 7 (start takes it)
 
@@ -842,11 +844,9 @@ class App:
 
 def _heard(by_lock_state: dict[str, Rotator], heard: dict[str, bytes]) -> None:
     """runtime/kept.py rule 10: each rotator's ``R/lock/state`` as the broker held it before
-    this start (interfaces/mqtt/look.py rule 14)."""
-    for topic, payload in heard.items():
-        rot = by_lock_state.get(topic)
-        if rot is not None:
-            rot.heard_lock(payload)
+    this start (interfaces/mqtt/look.py rule 14), None where it held none."""
+    for topic, rot in by_lock_state.items():
+        rot.heard_lock(heard.get(topic))
 
 
 def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:

@@ -59,15 +59,23 @@ Rules:
    start guards a turn on to it (noticed in an attack pass: stopped short of 300, the bridge
    restarted, and a poll garbled into ``AM1;`` turned the rotor on to 300 unsaid). It is
    saved only when it changes: at a stop short of the target, and at the next turn.
-10. A state file that does not say the rotator's lock (a new one: the service run by hand,
-   whose default ``state_file`` is another; a container recreated without its volume; the file
-   deleted; or a lock ON its save failed to keep, rule 3) is not the last word on it: the
-   ``R/lock/state`` ON the broker held from an earlier run (interfaces/mqtt/look.py rule 14)
-   locks the rotator (``heard_lock``), saved as any lock ON and said (kind ``state``), unless a
-   lock word has been said since the start (it is newer). An attack pass: the lock ON set for
-   tower work came back OFF after a restart on a new state file, the retained ON was put back
-   as OFF without a word, and a target turned the rotor. A file that says OFF wins: it was
-   written after the ON the broker holds, or the ON is a stranger's.
+10. A state file that does not say the rotator's lock (a new one: the service run by hand, whose
+   default ``state_file`` is another; a container recreated without its volume; the file
+   deleted; or a lock ON its save failed to keep, rule 3, where no lock was saved before) is not
+   the last word on it: the ``R/lock/state`` ON the broker held from an earlier run
+   (interfaces/mqtt/look.py rule 14) locks the rotator (``heard_lock``), saved as any lock ON
+   and said (kind ``state``), unless a lock word has been said since the start (it is newer). An
+   attack pass: the lock ON set for tower work came back OFF after a restart on a new state
+   file, the retained ON was put back as OFF without a word, and a target turned the rotor.
+   Until that look has said it (the broker down, or slower to start than the bridge;
+   ``await_heard_lock``), such a rotator refuses motion, as a locked one does (a review:
+   rotctld, the console and the loggers run before the look, and a tracking program's target
+   turned the rotor meanwhile); a lock word ends the wait. The bridge's own moves are not
+   judged: auto-park (``park_after_idle_s``) still parks it while the broker stays away that
+   long. A file that says the lock wins, and waits for no broker: OFF was written after the ON
+   the broker holds, or the ON is a stranger's, or (not told apart) the ON's save failed after
+   an OFF was saved: a lock ON whose save failed is taken from the broker only where the file
+   never said the rotator's lock.
 """
 
 from __future__ import annotations

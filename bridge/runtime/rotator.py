@@ -8,8 +8,9 @@ the link state checked against a command. A refused command raises Refused (with
 front ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never
 reaches the mailbox, so it can never move anything. The worker judges nothing anew: it only
 drops an accepted target that the lock or a lost link overtook before it could be sent, and
-reports that as a refusal too. Motion is judged in one order: the lock, the wind (safety), the
-control lease (coordination), the pointing judge, the link (``_check``). Each command carries
+reports that as a refusal too. Motion is judged in one order: the lock (and a lock not known
+yet: kept.py rule 10), the wind (safety), the control lease (coordination), the pointing
+judge, the link (``_check``). Each command carries
 who sent it (``origin``): the lease (operators.py) refuses a target, a controller setting, a track
 or follow start from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
 (docs/architecture.md rule 11); every command judged here, executed or refused, is an audit
@@ -116,6 +117,11 @@ HEARD_LOCK_MESSAGE = (  # kept.py rule 10
     "lock ON kept from the broker: R/lock/state said ON before this start, and the state file "
     "did not say this rotator's lock (a new or another state_file?); lock OFF releases it"
 )
+UNHEARD_LOCK_MESSAGE = (  # kept.py rule 10
+    "motion refused: the state file does not say this rotator's safety lock, and the broker's "
+    "R/lock/state, which may say ON, has not been read yet (the MQTT broker not reached); "
+    "a lock OFF releases it"
+)
 ON_ITS_WAY_MESSAGE = (
     "a command sent just before it is still on its way to the controller: send it again"
 )
@@ -175,6 +181,7 @@ class Rotator:
         )
         self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
+        self._unheard = False  # kept.py rule 10: the lock waits for the broker (await_heard_lock)
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
         self._worker: Worker | CompositeWorker
@@ -600,16 +607,24 @@ class Rotator:
                 self.last_halt_s = time.monotonic()
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
 
-    def heard_lock(self, payload: bytes) -> bool:
+    def await_heard_lock(self) -> None:
+        """kept.py rule 10: motion is refused while the state file has not said the lock and
+        ``heard_lock`` has not been called (before the front ends start)."""
+        self._unheard = True
+
+    def heard_lock(self, payload: bytes | None) -> bool:
         """kept.py rule 10: ``R/lock/state`` as the broker held it from an earlier run (MQTT's
-        first look); ON locks the rotator if the state file did not say its lock and no lock
-        word came since the start. True if it did."""
+        first look; None: it held none); ON locks the rotator if the state file did not say its
+        lock and no lock word came since the start. True if it did. Motion waits no more."""
         with self._owner:  # (one step with every lock word: one said since is newer)
-            if payload != b"ON" or not self._kept.lock_unsaid or self._kept.locked:
-                return False
-            self._kept.set_lock(True)
-            self.last_halt_s = time.monotonic()
-            self._mailbox.put_lock(True, wake=False)  # woken after the step
+            took = payload == b"ON" and self._kept.lock_unsaid and not self._kept.locked
+            if took:
+                self._kept.set_lock(True)
+                self.last_halt_s = time.monotonic()
+                self._mailbox.put_lock(True, wake=False)  # woken after the step
+            self._unheard = False  # (after the lock: a target judged meanwhile is overtaken)
+        if not took:
+            return False
         who = Origin(Source.MQTT, "retained R/lock/state")
         self.operators.audit(who, describe_command(Lock(on=True)), EXECUTED)
         self.report(ErrorKind.STATE, HEARD_LOCK_MESSAGE, "lock")
@@ -683,10 +698,13 @@ class Rotator:
 
     def _check_motion(self, who: str) -> None:
         """Refused for motion now, in this order (docs/architecture.md rule 11; never asked
-        for a stop or lock): the lock, then the wind (safety), then the lease (coordination);
+        for a stop or lock): the lock (or one not known yet), then the wind (safety), then the
+        lease (coordination);
         the pointing judge and the link come after, in ``_check``."""
         if self._kept.locked:  # the owner's lock: the one copy (kept.py rule 2)
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        if self._unheard and self._kept.lock_unsaid:  # kept.py rule 10: not known yet
+            raise Refused(RefusalCode.LOCKED, UNHEARD_LOCK_MESSAGE)
         wind = self.status.wind
         if wind is not None and wind.refusal:  # session/wind.py rule 1
             raise Refused(RefusalCode.LOCKED, wind.refusal)

@@ -12,7 +12,7 @@ import pytest
 
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorEvent, ErrorKind, Target
-from bridge.runtime.rotator import HEARD_LOCK_MESSAGE
+from bridge.runtime.rotator import HEARD_LOCK_MESSAGE, OFFLINE_MESSAGE, UNHEARD_LOCK_MESSAGE
 from bridge.runtime.state_store import StateStore
 from tests.engine.test_owner import Station, console_lock
 
@@ -62,7 +62,47 @@ def test_a_lock_word_since_the_start_is_newer(tmp_path: Path) -> None:
 
 def test_anything_but_on_changes_nothing(tmp_path: Path) -> None:
     st, events = _with_file(tmp_path, None)
-    for payload in (b"OFF", b"", b"on", b"ON\x00", b"1"):
+    for payload in (b"OFF", b"", b"on", b"ON\x00", b"1", None):
         assert not st.rot.heard_lock(payload)
     st.settle()
     assert not st.rot.locked and events == []
+
+
+@pytest.mark.parametrize("entry", [None, {"options": {}}], ids=["no file", "no lock"])
+def test_no_motion_until_the_broker_said_a_lock_the_state_file_does_not_say(
+    tmp_path: Path, entry: dict[str, object] | None
+) -> None:
+    """Before the first look (the broker down, or slower to start than the bridge) a target
+    from rotctld, the console or a logger turned a rotor whose lock only the broker still
+    held; it is refused until the look hands on what the broker held (nothing: free)."""
+    st, _ = _with_file(tmp_path, entry)
+    st.rot.await_heard_lock()
+    with pytest.raises(Refused, match="R/lock/state") as refused:
+        st.rot.submit(Target(100.0, None))
+    assert refused.value.message == UNHEARD_LOCK_MESSAGE
+    assert not st.rot.heard_lock(None)
+    assert _judged(st) == OFFLINE_MESSAGE  # (the judge goes on: this station has no link)
+
+
+@pytest.mark.parametrize("said", [False, True], ids=["file says OFF", "file says ON"])
+def test_a_state_file_that_says_the_lock_waits_for_no_broker(tmp_path: Path, said: bool) -> None:
+    st, _ = _with_file(tmp_path, {"locked": said})
+    st.rot.await_heard_lock()
+    assert _judged(st) != UNHEARD_LOCK_MESSAGE
+
+
+def _judged(st: Station) -> str:
+    """What the judge says of a target (no link here: at best, that the rotator is offline)."""
+    with pytest.raises(Refused) as refused:
+        st.rot.submit(Target(100.0, None))
+    return refused.value.message
+
+
+def test_a_lock_word_before_the_broker_is_reached_ends_the_wait(tmp_path: Path) -> None:
+    """The operator's lock OFF (the console) is the last word: a target after it is taken."""
+    st, _ = _with_file(tmp_path, None)
+    st.rot.await_heard_lock()
+    console_lock(st.rot, False)
+    assert _judged(st) == OFFLINE_MESSAGE
+    assert not st.rot.heard_lock(b"ON")
+    assert not st.rot.locked

@@ -16,11 +16,14 @@ from pathlib import Path
 import paho.mqtt.client as mqtt
 import pytest
 
+from bridge.core.errors import Refused
+from bridge.core.model import Source, Target
+from bridge.runtime.rotator import Rotator
 from tests.support import Probe, retained_snapshot
 from tests.support.brokers import Nats, find_nats
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
-from tests.support.waiting import slow
+from tests.support.waiting import slow, wait_until
 
 
 def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
@@ -235,3 +238,38 @@ def test_a_lock_on_outlives_a_state_file_that_lost_it(
         refused = probe.wait_for("rotor/error", lambda m: b"target" in m.payload, after=t)
         assert b"locked" in refused.payload, refused.payload
         assert abs(emu.state().az_deg - 10) < 3, "a rotor locked before the restart turned"
+
+
+def test_nothing_turns_a_rotor_whose_lock_is_unknown_before_the_broker_said_it(
+    tmp_path: Path, probe: Probe
+) -> None:
+    """kept.py rule 10: a start on a state file that does not say the rotator's lock learns it
+    from the broker's ``R/lock/state`` at the first look, but the serial link, rotctld, the
+    loggers and the console ran before: a target sent meanwhile (a tracking program that
+    reconnects at once; the broker still down after a power cut, or slower to start than the
+    bridge) turned a rotor locked for tower work, until the broker came. Motion is refused
+    until the first look has said the lock; what it finds there (nothing here) then decides."""
+    late = Mosquitto(tmp_path / "broker")  # (not started yet: the bridge starts without it)
+    with Rig(tmp_path, late, probe) as rig:
+        emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+        app = rig.start()
+        rot = app.rotators[0]
+        wait_until(lambda: rot.status.available, what="the serial link up")
+        with pytest.raises(Refused, match="R/lock/state"):
+            rot.submit(Target(100.0, None, Source.ROTCTLD))
+        assert abs(emu.state().az_deg - 10) < 3, "a rotor whose lock is not known turned"
+        late.start()
+        try:
+            wait_until(lambda: _accepted(rot, Target(100.0, None, Source.ROTCTLD)), what="free")
+            rig.arrived("tower", 100)
+        finally:
+            rig.stop()
+            late.stop()
+
+
+def _accepted(rot: Rotator, target: Target) -> bool:
+    try:
+        rot.submit(target)
+    except Refused:
+        return False
+    return True

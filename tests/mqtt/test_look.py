@@ -91,14 +91,14 @@ def test_the_first_look_that_lets_the_bridge_run_hands_on_what_an_earlier_run_sa
     assert not lk.saw(LOCK, b"ON")  # kept, and left to the owned-topic judge (rule 10)
     lk.saw(INFO, OTHER.info([]).encode())
     lk.saw(STATE, b"online")
-    assert lk.end(timed_out=False).heard == {}  # refused: nothing runs, nothing handed on
+    assert lk.end(timed_out=False).heard is None  # refused: nothing runs, nothing handed on
     lk.begin()
     assert not lk.saw(LOCK, b"ON")
     lk.saw(STATE, b"offline")  # (the other one is gone now)
     assert lk.end(timed_out=False).heard == {LOCK: b"ON"}
     lk.begin()  # a reconnect: what the broker holds now is this run's own
     lk.saw(LOCK, b"OFF")
-    assert lk.end(timed_out=False).heard == {}
+    assert lk.end(timed_out=False).heard is None
 
 
 def test_a_look_that_timed_out_hands_on_what_it_saw() -> None:
@@ -128,5 +128,15 @@ def test_a_witness_the_broker_replays_after_the_hello_is_handed_on_on_that_conne
     assert lk.late(STATE, b"offline", retained=True) == {}  # no witness
     lk.connection_ended()
     lk.begin()  # a reconnect: what the broker holds now is this run's own
-    assert lk.end(timed_out=False).heard == {}
+    assert lk.end(timed_out=False).heard is None
     assert lk.late(LOCK, b"ON", retained=True) == {}
+
+
+def test_the_first_look_that_opens_says_so_when_the_broker_held_nothing() -> None:
+    """Rule 14: an empty hand-over, not none: the rotators that waited for it may move."""
+    lk = look()
+    lk.witness({LOCK})
+    lk.begin()
+    assert lk.end(timed_out=False).heard == {}
+    lk.begin()
+    assert lk.end(timed_out=False).heard is None

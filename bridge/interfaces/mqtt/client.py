@@ -13,7 +13,8 @@ each written out in the module that keeps it:
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
   only halts are taken while it runs, ``gated``; what an earlier run left on the witnessed
-  topics handed to ``witness``'s hook once it ends); 15 deletions said in a few lines.
+  topics handed to ``witness``'s hook once it ends, before ``online``); 15 deletions said in
+  a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
@@ -198,9 +199,10 @@ class MqttClient(Connection):
         self._subscriptions = [*self._subscriptions, *topics]
 
     def witness(self, topics: set[str], on_heard: Callable[[dict[str, bytes]], None]) -> None:
-        """Rule 14: what the broker held on ``topics`` from an earlier run, handed to
-        ``on_heard`` once the process's first look lets the bridge run (after its own values
-        went out; paho's thread, the lock not held); before ``start()``."""
+        """Rule 14: what the broker held on ``topics`` from an earlier run (none: empty),
+        handed to ``on_heard`` once the process's first look lets the bridge run, before its
+        own values and ``online`` go out (paho's thread or the look's timer, the lock not
+        held); before ``start()``."""
         if self._look is not None:
             self._look.witness(topics)
             self._on_heard = on_heard
@@ -444,19 +446,25 @@ class MqttClient(Connection):
             if look.looking != n or not self._up or self._stopping:
                 return
             outcome = look.end(timed_out=timed_out)
-            heard = outcome.heard
             if outcome.refused is not None:
                 self.refused = outcome.refused
                 self.yielded = self._ran  # (a reconnect's look: the bridge ran: claim rule 4)
                 self._stopping = True
-            else:
+            elif outcome.heard is None or self._on_heard is None:
                 self._ran = True
                 self._open(outcome)
         if self.refused is not None:
             self._refuse()
             return
-        if heard and self._on_heard is not None:
-            self._on_heard(heard)
+        if outcome.heard is not None and self._on_heard is not None:
+            # rule 14: before ``online``, so nothing that waits for it (a target sent on it)
+            # finds a rotator still waiting for its lock; outside the lock (it reports)
+            self._on_heard(outcome.heard)
+            with self._lock:
+                if look.looking is not None or not self._up or self._stopping:
+                    return  # the connection ended meanwhile: the next one's look opens
+                self._ran = True
+                self._open(outcome)
         if self._on_connect_hook is not None:
             self._on_connect_hook()
 

@@ -22,8 +22,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    The values the broker held on the topics handed to ``witness`` (each rotator's
    ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
    owned-topic judge all the same), and the first look of the process that lets the bridge run
-   hands them on (``Outcome.heard``): what an earlier run said, before this one published
-   anything (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on.
+   hands them on (``Outcome.heard``, empty if there were none: a rotator whose lock it waited
+   for is free then): what an earlier run said, before this one published anything
+   (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on (None).
    Not every broker sends a subscription's retained messages before what is published after
    it: aedes (Node-RED's) streams them from its store after the SUBACK, beside the messages
    that follow, so the hello can come back first and a retained ``R/lock/state`` ON after it
@@ -44,7 +45,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
 from bridge.interfaces.mqtt.limiter import EventLimiter
@@ -63,7 +64,7 @@ class Outcome:
     refused: str | None
     clear: bool
     clears: list[str]
-    heard: dict[str, bytes] = field(default_factory=dict)  # rule 14: the witnesses' values
+    heard: dict[str, bytes] | None = None  # rule 14: the witnesses' values (the first open)
 
 
 class FirstLook:
@@ -133,7 +134,7 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
-        heard, self._heard = ({} if self._opened else self._heard), {}
+        heard, self._heard = (None if self._opened else self._heard), {}
         self._late = not self._opened  # rule 14: the rest of its connection's replays count
         self._opened = True
         if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
