@@ -842,11 +842,19 @@ class App:
         log.info("stopped")
 
 
-def _heard(by_lock_state: dict[str, Rotator], heard: dict[str, bytes]) -> None:
+def _heard(
+    by_lock_state: dict[str, Rotator], heard: dict[str, bytes]
+) -> dict[str, Callable[[], bool]]:
     """runtime/kept.py rule 10: each rotator's ``R/lock/state`` as the broker held it before
-    this start (interfaces/mqtt/look.py rule 14), None where it held none."""
-    for topic, rot in by_lock_state.items():
-        rot.heard_lock(heard.get(topic))
+    this start (interfaces/mqtt/look.py rule 14), None where it held none; the topics whose
+    ON locked its rotator, each with whether it is locked still (left as the broker holds them
+    while it is: the OFF cached before is older)."""
+    taken = [(t, rot) for t, rot in by_lock_state.items() if rot.heard_lock(heard.get(t))]
+    return {topic: _locked_still(rot) for topic, rot in taken}
+
+
+def _locked_still(rot: Rotator) -> Callable[[], bool]:
+    return lambda: rot.locked
 
 
 def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:

@@ -88,6 +88,9 @@ from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
+# rule 14: the witnesses' hook: what the broker held -> the topics it took, and whether each holds
+Heard = Callable[[dict[str, bytes]], dict[str, Callable[[], bool]]]
+
 STATE_QOS = 0  # rule 8
 # rule 10 (MQTT 3.1.1): a broker shutting down sends the bridge its own last will and closes the
 # connection right after; an ``offline`` the connection outlives by this long was a stranger's
@@ -143,7 +146,7 @@ class MqttClient(Connection):
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
-        self._on_heard: Callable[[dict[str, bytes]], None] | None = None  # rule 14: witnesses
+        self._on_heard: Heard | None = None  # rule 14: the witnesses' hook
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
         self._fence_topic = fence_topic  # rule 16
@@ -198,11 +201,14 @@ class MqttClient(Connection):
         """More topic filters (features such as discovery); before ``start()``."""
         self._subscriptions = [*self._subscriptions, *topics]
 
-    def witness(self, topics: set[str], on_heard: Callable[[dict[str, bytes]], None]) -> None:
+    def witness(self, topics: set[str], on_heard: Heard) -> None:
         """Rule 14: what the broker held on ``topics`` from an earlier run (none: empty),
         handed to ``on_heard`` once the process's first look lets the bridge run, before its
         own values and ``online`` go out (paho's thread or the look's timer, the lock not
-        held); before ``start()``."""
+        held); before ``start()``. It returns the topics whose value it took as its own, each
+        with whether it still holds: those the open leaves as the broker holds them (their
+        cached values, older, are not put over them; the cache takes the broker's, so the next
+        change goes out)."""
         if self._look is not None:
             self._look.witness(topics)
             self._on_heard = on_heard
@@ -412,13 +418,21 @@ class MqttClient(Connection):
             if self._delivery.denied(topic):
                 self._on_denied(topic, problem)
 
-    def _open(self, look: Outcome | None) -> None:
-        """Under the lock: the state goes out (rules 3 and 12), then the deletions a look let
-        through (rule 14), then ``connected``."""
+    def _open(
+        self, look: Outcome | None, taken: dict[str, Callable[[], bool]] | None = None
+    ) -> None:
+        """Under the lock: the state goes out (rules 3 and 12; but ``taken``, rule 14: the
+        broker's value is the newer one), then the deletions a look let through (rule 14),
+        then ``connected``."""
         send = self._delivery.send
         self._delivery.take_dirty()  # every retained value goes out below
         send(self._will_topic, b"online", 1, retain=True)
-        for topic, (data, qos) in self._retained.items():
+        heard = look.heard if look is not None and taken else None
+        for topic, (data, qos) in list(self._retained.items()):
+            holds = taken.get(topic) if taken else None
+            if heard is not None and holds is not None and topic in heard and holds():
+                self._retained[topic] = (heard[topic], qos)  # the broker's: a change goes out
+                continue
             self._owned.sent(topic, data)
             if topic != self._will_topic:
                 send(topic, data, qos, retain=True)
@@ -459,12 +473,12 @@ class MqttClient(Connection):
         if outcome.heard is not None and self._on_heard is not None:
             # rule 14: before ``online``, so nothing that waits for it (a target sent on it)
             # finds a rotator still waiting for its lock; outside the lock (it reports)
-            self._on_heard(outcome.heard)
+            taken = self._on_heard(outcome.heard)
             with self._lock:
                 if look.looking is not None or not self._up or self._stopping:
                     return  # the connection ended meanwhile: the next one's look opens
                 self._ran = True
-                self._open(outcome)
+                self._open(outcome, taken)
         if self._on_connect_hook is not None:
             self._on_connect_hook()
 

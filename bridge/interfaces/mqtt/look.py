@@ -25,6 +25,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    hands them on (``Outcome.heard``, empty if there were none: a rotator whose lock it waited
    for is free then): what an earlier run said, before this one published anything
    (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on (None).
+   They are handed on before ``online`` and the cached values go out, and a value the hook
+   took (an ON that locked its rotator) is left as the broker holds it while it holds: the
+   OFF cached before it is older (a review: put over it, the lock was shown OFF, and a crash
+   before the lock's save left neither the file nor the broker ON).
    Not every broker sends a subscription's retained messages before what is published after
    it: aedes (Node-RED's) streams them from its store after the SUBACK, beside the messages
    that follow, so the hello can come back first and a retained ``R/lock/state`` ON after it
