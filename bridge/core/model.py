@@ -189,6 +189,7 @@ class WindInfo:
     silent: bool = False  # no reading for wind_silent_min: the state is kept
     refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
     halted: bool = False  # in a storm: its park was stopped, not tried again (wind.py rule 3)
+    arrived: bool = False  # in a storm: its park was seen reached, owed no more (wind.py rule 7)
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,9 @@ Rules:
    commands: the safe side), moving when either is read turning, else offline when either
    is; the last error is the newer of the two. (An attack pass: the azimuth box read turning
    on while the elevation box was unplugged was shown offline and not moving, and a group
-   with that rotator said idle.)
+   with that rotator said idle.) Its wind is the azimuth box's, whose storm's park is seen
+   reached (session/wind.py rule 7, kept over a restart by runtime/kept.py rule 4) only when
+   both boxes' parks were: otherwise a restart in the storm parks both again.
 4. Tracking and following run in both sessions (each aims its own axis, never flipped:
    session/tracking.py rule 4); when one ends (an
    unplugged box, a stop, the horizon) the other is ended too, and the status says why the
@@ -150,6 +152,9 @@ def merge(
         order = (MotionState.STALLED, MotionState.BRAKING, MotionState.UNKNOWN)
         state = next((s for s in order if s in states), az.state)
     versions = [v for v in (az.version, el.version) if v]
+    wind = az.wind  # (its park seen reached only if both boxes' parks were)
+    if wind is not None and el.wind is not None:
+        wind = replace(wind, arrived=wind.arrived and el.wind.arrived)
     return replace(
         az,
         rotator_id=rotator_id,
@@ -165,6 +170,7 @@ def merge(
         controller_time=az.controller_time or el.controller_time,
         parked=az.parked and el.parked,
         stop_owed=az.stop_owed or el.stop_owed,
+        wind=wind,
     )
 
 
@@ -278,6 +284,7 @@ class CompositeWorker:
         health: dict[str, object] | None = None,
         storm: bool = False,
         storm_halted: bool = False,
+        storm_arrived: bool = False,  # (both boxes were seen at their parks: ``merge``)
         stop_owed: bool = False,
         short_of: float | None = None,
         wall: Callable[[], float] = time.time,
@@ -305,6 +312,7 @@ class CompositeWorker:
                 health=health if axis is Axis.AZIMUTH else None,  # the azimuth's is shown
                 storm=storm,
                 storm_halted=storm_halted,
+                storm_arrived=storm_arrived,
                 stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
                 short_of=short_of if axis is Axis.AZIMUTH else None,  # (the status's)
                 wall=wall,

@@ -25,13 +25,17 @@ Rules:
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
-   every status on the lines thread and hands a storm begun or ended to the writer; the next
-   start begins in the storm (parked again, motion refused) until readings end it; a storm
-   whose park a STOP or lock ON stopped (wind.py rule 3) is kept so too, and the next start
-   does not park again (the operator's last word outlives the restart, as the lock does). The wind
-   park has one owner, the session on the lines thread: it alone decides a storm, the judge
-   reads the session's status, and the save is queued on that same thread in the order the
-   storms came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
+   every status on the lines thread and hands a storm begun or ended, and its park stopped or
+   seen reached, to the writer; the next start begins in the storm (motion refused) until
+   readings end it, and parks again unless its park was stopped or seen reached. One whose
+   park a STOP or lock ON stopped (wind.py rule 3) is not parked again: the operator's last
+   word outlives the restart, as the lock does. Nor is one whose park the rotor was seen to
+   reach (wind.py rule 7, the status's ``arrived``): someone may have turned it by hand at the
+   controller since, and it is not turned back by itself; one whose park was not seen reached
+   (the bridge died mid-park; a DCU-1, which is never seen there) parks again. The wind park
+   has one owner, the session on the lines thread: it alone decides a storm, the judge reads
+   the session's status, and the save is queued on that same thread in the order the storms
+   came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
 5. ``Owner`` is one rotator's safety step (docs/architecture.md rule 14): a lock word, a
    claim, a release or the end of the control lease, and an option, are decided, put in the
    mailbox and their save queued under its one lock, from every interface's thread, so that
@@ -159,6 +163,7 @@ class Kept:
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
         self.storm_halted = self.storm and store.storm_halted(rotator_id)
+        self.storm_arrived = self.storm and store.storm_arrived(rotator_id)
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
 
@@ -166,9 +171,10 @@ class Kept:
         """Rule 4 (lines thread: it only compares and hands over)."""
         storm = wind is not None and wind.storm
         halted = storm and wind is not None and wind.halted
-        if storm != self.storm or halted != self.storm_halted:
-            self.storm, self.storm_halted = storm, halted
-            self._store.later(lambda: self._save_storm_now(storm, halted))
+        arrived = storm and wind is not None and wind.arrived
+        if (storm, halted, arrived) != (self.storm, self.storm_halted, self.storm_arrived):
+            self.storm, self.storm_halted, self.storm_arrived = storm, halted, arrived
+            self._store.later(lambda: self._save_storm_now(storm, halted, arrived))
 
     def seen_stop(self, owed: bool) -> None:
         """Rule 8 (lines thread: it only compares and hands over)."""
@@ -200,8 +206,8 @@ class Kept:
                 "stop",
             )
 
-    def _save_storm_now(self, storm: bool, halted: bool) -> None:
-        if not self._store.set_storm(self._id, storm, halted=halted):
+    def _save_storm_now(self, storm: bool, halted: bool, arrived: bool) -> None:
+        if not self._store.set_storm(self._id, storm, halted=halted, arrived=arrived):
             self._report(
                 ErrorKind.STATE,
                 f"the storm's {'start' if storm else 'end'} could not be saved: a restart "

@@ -196,6 +196,7 @@ class Rotator:
                 health=store.health(self.id),
                 storm=self._kept.storm,  # kept.py rule 4
                 storm_halted=self._kept.storm_halted,
+                storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
                 wall=wall,
@@ -214,6 +215,7 @@ class Rotator:
                 health=store.health(self.id),
                 storm=self._kept.storm,
                 storm_halted=self._kept.storm_halted,
+                storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
                 wall=wall,

@@ -369,19 +369,24 @@ class StateStore:
         with self._lock:
             return self._data.get(rotator_id, {}).get("storm_halted") is True
 
-    def set_storm(self, rotator_id: str, storm: bool, *, halted: bool = False) -> bool:
-        """Remember a storm begun or ended, and whether its park was stopped; False if it
-        could not be written."""
+    def storm_arrived(self, rotator_id: str) -> bool:
+        """Whether that storm's park was seen reached (session/wind.py rule 7): only a true
+        says so (anything else, a damaged entry, parks again: the safe side)."""
+        with self._lock:
+            return self._data.get(rotator_id, {}).get("storm_arrived") is True
+
+    def set_storm(
+        self, rotator_id: str, storm: bool, *, halted: bool = False, arrived: bool = False
+    ) -> bool:
+        """Remember a storm begun or ended, whether its park was stopped, and whether it was
+        seen reached; False if it could not be written."""
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
-            if storm:
-                entry["storm"] = True
-            else:
-                entry.pop("storm", None)
-            if storm and halted:
-                entry["storm_halted"] = True
-            else:
-                entry.pop("storm_halted", None)
+            for key, on in (("storm", storm), ("storm_halted", halted), ("storm_arrived", arrived)):
+                if storm and on:
+                    entry[key] = True
+                else:
+                    entry.pop(key, None)
             return self._save()
 
     def stop_owed(self, rotator_id: str) -> bool:

@@ -86,6 +86,7 @@ class Worker:
         health: dict[str, object] | None = None,
         storm: bool = False,
         storm_halted: bool = False,
+        storm_arrived: bool = False,
         stop_owed: bool = False,
         short_of: float | None = None,
         wall: Callable[[], float] = time.time,
@@ -103,6 +104,7 @@ class Worker:
             health=health,
             storm=storm,
             storm_halted=storm_halted,
+            storm_arrived=storm_arrived,
             stop_owed=stop_owed,
             short_of=short_of,
         )

@@ -174,6 +174,7 @@ class RotatorSession:
         health: dict[str, object] | None = None,  # what the state file kept (health.py)
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
         storm_halted: bool = False,  # ... and its park stopped (wind.py rule 3)
+        storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
     ) -> None:
@@ -194,7 +195,12 @@ class RotatorSession:
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower
         self.autopark = AutoPark(cfg)
-        self.wind = WindPark(cfg, storm=storm and cfg.wind is not None, halted=storm_halted)
+        self.wind = WindPark(
+            cfg,
+            storm=storm and cfg.wind is not None,
+            halted=storm_halted,
+            arrived=storm_arrived and cfg.spec.can_report_position,  # (never a DCU-1's)
+        )
         self.health = Health(cfg, health)
         self.view = st.View()
         self.status = RotatorStatus(

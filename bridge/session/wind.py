@@ -38,9 +38,14 @@ Rules:
    stopped at the offline, and stood 140 degrees short of the park for the rest of the storm.)
    A park the rotor was seen to reach (``arrived``) is no park the line took: an offline after
    it owes nothing (an attack pass: a rotor turned at its front panel after the storm's park,
-   its line silent for 3 s, was turned back to the park by itself once it answered). A rotor
-   that cannot report its position (a DCU-1) is never seen there: the end of its estimated
-   move is no arrival, and an offline owes its park again (a review of 3e4f0f4).
+   its line silent for 3 s, was turned back to the park by itself once it answered). That
+   holds across a restart in the storm (the status's ``arrived``, kept by runtime/kept.py
+   rule 4) and a reset of this part (session.py rule 14): neither parks again (a review of
+   this rule: a bridge restarted in the storm turned a rotor moved by hand back to the park
+   by itself), while a start in a storm whose park was not seen reached (the bridge died
+   mid-park) parks again, as it did. A rotor that cannot report its position (a DCU-1) is
+   never seen there: the end of its estimated move is no arrival, and an offline or a restart
+   owes its park again (a review of 3e4f0f4).
 """
 
 from __future__ import annotations
@@ -59,7 +64,9 @@ log = logging.getLogger(__name__)
 class WindPark:
     """Without a wind topic (``rig.wind`` None) it never does anything."""
 
-    def __init__(self, rig: WorkerConfig, *, storm: bool = False, halted: bool = False) -> None:
+    def __init__(
+        self, rig: WorkerConfig, *, storm: bool = False, halted: bool = False, arrived: bool = False
+    ) -> None:
         self._rig, self._cfg = rig, rig.wind or WindConfig(0.0, 0.0, 0.0, (0.0, None), 0.0)
         self.on = rig.wind is not None
         self.storm = storm
@@ -69,9 +76,11 @@ class WindPark:
         self._since_t: float | None = None  # silence counts from here before any reading
         self._calm_since: float | None = None
         self._silent = False
-        self._park_owed = storm and not halted  # rule 3: a park stopped stays stopped
-        self._halted = storm and halted  # ... across a restart (kept.py rule 4) and a reset
-        self._arrived = False  # rule 7: the rotor was seen at this storm's park
+        # rules 3 and 7: a park stopped stays stopped, and one seen reached is done, across a
+        # restart (kept.py rule 4) and a reset
+        self._park_owed = storm and not halted and not arrived
+        self._halted = storm and halted
+        self._arrived = storm and arrived  # rule 7: the rotor was seen at this storm's park
         self._wall_offset_s = 0.0
 
     @property
@@ -86,6 +95,7 @@ class WindPark:
             silent=self._silent,
             refusal=self.refusal(),
             halted=self._halted,
+            arrived=self._arrived,
         )
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
@@ -128,6 +138,11 @@ class WindPark:
         """Rule 3: a stop or lock ON; the park is not tried again in this storm."""
         self._park_owed = False
         self._halted = self.storm
+
+    @property
+    def park_arrived(self) -> bool:
+        """Rule 7: the rotor was seen at this storm's park: it is not sent again."""
+        return self._arrived
 
     def lost(self) -> None:
         """Rule 7: the line took the rotator (offline, unplugged) in this storm."""

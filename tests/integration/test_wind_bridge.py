@@ -18,11 +18,11 @@ from tests.support.rig import Rig
 TOPIC = "weather/station/wind"
 
 
-def start(rig: Rig, **wind: Any) -> None:
+def start(rig: Rig, emu: dict[str, Any] | None = None, **wind: Any) -> None:
     rig.add(
         "tower",
         "md01",
-        emu={"start_az_deg": 120},  # 30 degrees from the storm's park: quick
+        emu={"start_az_deg": 120, **(emu or {})},  # 30 degrees from the storm's park: quick
         wind_topic=TOPIC,
         wind_unit="m/s",
         wind_park_above=20,  # 72 km/h
@@ -159,27 +159,32 @@ def test_the_storms_park_turns_the_rotor_while_a_lease_is_held_and_the_wind_refu
     )
 
 
-def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
-    """kept.py rule 4: only readings end a storm (wind.py rule 2), not a restart. A reading
-    between the two levels after the restart (50 km/h; park above 72, release below 36) ends
-    nothing: the rotor stays parked and motion refused."""
-    start(rig, wind_hold_min=1)
-    rig.probe.publish(TOPIC, "25")  # 90 km/h, not retained: after the restart no reading says it
-    rig.arrived("tower", 90.0, timeout_s=30)
-    wind_of(rig, lambda w: w.get("storm"))
+def in_the_state_file(rig: Rig, key: str) -> None:
     wait_until(
-        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get("storm"),
+        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get(key),
         10,
-        "the storm in the state file",
+        f"{key} in the state file",
     )
-    rig.stop()
+
+
+def test_a_storm_outlives_a_restart_of_the_bridge_which_finishes_its_park(rig: Rig) -> None:
+    """kept.py rule 4: only readings end a storm (wind.py rule 2), not a restart. The bridge
+    stops in the storm's park (a slow rotor, 210 degrees from it): the park was never seen
+    reached, so the next start sends it again. A reading between the two levels after the
+    restart (50 km/h; park above 72, release below 36) ends nothing: motion stays refused."""
+    start(rig, emu={"start_az_deg": 300, "az_speed_deg_s": 3.0}, wind_hold_min=1)
+    rig.probe.publish(TOPIC, "25")  # 90 km/h, not retained: after the restart no reading says it
+    wait_until(lambda: rig.emu.frames("set"), 10, "the park sent")
+    in_the_state_file(rig, "storm")
+    rig.stop()  # (its stop halts the rotor on its way: 70 s from the park at 3 degrees a second)
+    assert rig.emu.state().az_deg > 150.0
     parks = len(rig.emu.frames("set"))
     mark, t_restart = rig.probe.mark(), time.monotonic()
     rig.start()
     rig.ready("tower", after=t_restart)
     assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
-    # the storm's park is owed again after the restart (a hand may have turned the rotor while
-    # the bridge was down): it is written once, to the same park, whenever the first step takes it
+    # the storm's park is owed again after the restart: it is written once, to the same park,
+    # whenever the first step takes it
     wait_until(lambda: len(rig.emu.frames("set")) == parks + 1, 10, "the park written again")
     rig.probe.publish(TOPIC, "14")  # 50 km/h: neither a storm nor a calm
     wind_of(rig, lambda w: 45 < (w.get("speed_kmh") or 0) < 55, mark)
@@ -189,6 +194,30 @@ def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "200")
     assert "parked for the storm" in error_after(rig, before, "refused")["message"]
     assert len(rig.emu.frames("set")) == sets
+
+
+def test_a_storm_park_reached_is_not_done_again_by_a_restart(rig: Rig) -> None:
+    """wind.py rule 7 across a restart (kept.py rule 4): the rotor was seen at the storm's
+    park, then turned by hand at the controller's panel; the bridge restarted in the same storm
+    leaves it where the hand put it (it turned it back to the park by itself), and the storm
+    goes on."""
+    start(rig, wind_hold_min=1)
+    rig.probe.publish(TOPIC, "25")  # 90 km/h
+    rig.arrived("tower", 90.0, timeout_s=30)
+    in_the_state_file(rig, "storm_arrived")
+    rig.emu.manual_rotate(200.0)
+    wait_until(lambda: abs(rig.emu.state().az_deg - 200.0) < 1.0, 30, "turned by hand")
+    rig.stop()
+    sets = len(rig.emu.frames("set"))
+    mark, t_restart = rig.probe.mark(), time.monotonic()
+    rig.start()
+    rig.ready("tower", after=t_restart)
+    assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
+    before = rig.probe.mark()
+    rig.probe.publish("rotor/target", "150")  # judged after the steps that would have parked
+    assert "parked for the storm" in error_after(rig, before, "refused")["message"]
+    assert len(rig.emu.frames("set")) == sets
+    assert abs(rig.emu.state().az_deg - 200.0) < 1.0
 
 
 def test_a_storm_park_the_operator_stopped_is_not_done_again_by_a_restart(rig: Rig) -> None:
