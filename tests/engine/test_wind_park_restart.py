@@ -9,12 +9,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from bridge.core.model import MotionState, RotatorStatus, Target, WindInfo
 from bridge.protocols import REGISTRY
 from bridge.runtime.composite import merge
 from bridge.runtime.kept import Kept
 from bridge.runtime.state_store import StateStore
+from bridge.session.parts import Proposal, Scene
 from bridge.session.session import RotatorSession
+from bridge.session.wind import WindPark
 from tests.engine.test_wind import wind, windy
 from tests.engine.virtual import VirtualRotator
 
@@ -117,6 +121,32 @@ def test_a_dcu1_park_is_sent_again_by_a_restart_whatever_the_file_says(tmp_path:
         assert abs(v.truth().az_deg - 180.0) < 1.0, v.truth()
     finally:
         v.close()
+
+
+def test_a_wind_part_reset_after_the_park_was_reached_does_not_park_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 7 through a reset (session.py rule 14): parked, turned by hand, then a bug in the
+    wind's part: the reset leaves the rotor where the hand left it."""
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        v.manual_rotate(250.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 250.0) < 1, 60, "turned by hand")
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+        real, raised = WindPark.step, []
+
+        def once(self: WindPark, scene: Scene) -> Proposal:
+            if not raised:
+                raised.append(True)
+                raise RuntimeError("a bug")
+            return real(self, scene)
+
+        monkeypatch.setattr(WindPark, "step", once)
+        v.run_for(60.0)
+        assert raised and v.errors("internal")
+        assert abs(v.truth().az_deg - 250.0) < 1.0, v.truth()
+        assert v.status.wind is not None and v.status.wind.storm
 
 
 def test_a_two_box_rotators_park_is_reached_only_when_both_boxes_reached_theirs() -> None:

@@ -80,8 +80,10 @@ def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
 
 
 def _reset(s: RotatorSession, now: float) -> None:
-    # a storm goes on (refusing is the safe side); a park stopped stays stopped (wind.py rule 3)
-    s.wind = WindPark(s.cfg, storm=s.wind.storm, halted=s.wind.park_halted)
+    # a storm goes on (refusing is the safe side); a park stopped stays stopped (wind.py rule 3),
+    # and one seen reached is not sent again (rule 7)
+    w = s.wind
+    s.wind = WindPark(s.cfg, storm=w.storm, halted=w.park_halted, arrived=w.park_arrived)
 
 
 # its session part (parts.py rule 4)
