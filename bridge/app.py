@@ -246,6 +246,7 @@ class App:
             ),
             heartbeat=self.topics.bridge_heartbeat,  # client.py rule 2
             wall=station_time.now_unix,
+            station=station_time.identity,  # heartbeat.py rule 7
             on_denied=self._denied,
             on_allowed=self._allowed,
             on_connect=self._connected,
@@ -279,6 +280,7 @@ class App:
             on_problem=lambda topic, problem: self._denied(topic, problem),
             on_info=lambda problem, on: self._info(problem, on),
             stamp_clock=station_time.now_unix,  # heartbeat.py rule 6
+            station=station_time.identity,  # heartbeat.py rule 7
         )
         store = self.store = StateStore(settings.state_file, deferred=True)  # (written by start)
         try:

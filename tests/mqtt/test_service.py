@@ -174,11 +174,12 @@ class RecordingRotator:
 
 
 def service(
-    models: dict[str, str], **rotator_kw: object
+    models: dict[str, str], *, station: str | None = None, **rotator_kw: object
 ) -> tuple[MqttService, RecordingPublisher, dict[str, RecordingRotator]]:
+    """``station``: the process the station's heartbeats name (heartbeat.py rule 7)."""
     roots = {rid: "rotor" if len(models) == 1 else f"rotor/{rid}" for rid in models}
     pub = RecordingPublisher()
-    svc = MqttService(Topics("rotor", roots), pub, wall=lambda: NOW_UNIX)
+    svc = MqttService(Topics("rotor", roots), pub, wall=lambda: NOW_UNIX, station=station)
     rots = {rid: RecordingRotator(rid, m, **rotator_kw) for rid, m in models.items()}  # type: ignore[arg-type]
     for rot in rots.values():
         svc.attach(rot)

@@ -12,8 +12,10 @@ import sys
 import threading
 from typing import Any
 
+import paho.mqtt.client as paho_client
 import pytest
 from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.errors import RefusalCode, Refused
@@ -204,12 +206,92 @@ def test_the_station_clock_never_goes_back_and_judges_stamps_by_their_true_age()
     assert station.now_unix() == pytest.approx(wall())
 
 
+def test_a_command_stamped_against_the_station_before_it_restarted_is_refused() -> None:
+    """heartbeat.py rule 7: the station's wall clock set back 10 s, then its bridge restarted
+    (its clock starts from the lower wall clock). A target the remote stamped from the old
+    process's beats and the link held up 12 s reads 2 s old by the new clock: refused for the
+    process it names, not carried out. One the new process's beats stamped is carried out;
+    one naming no process (an older remote, another client that stamps) is judged by its age."""
+    svc, _, rots = service({"tower": "rotorez"}, station="b2")
+    held = Stamp.of(NOW_UNIX - 2.0, 5, "a1")
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=held)
+    svc.on_message("rotor/target", b"120", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX, 5, "b2"))
+    svc.on_message("rotor/target", b"90", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX, 5))
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=held)
+    calls = rots["tower"].calls
+    assert [c[0] for c in calls] == ["refused", "submit", "submit", "submit"]
+    assert "before it restarted: not carried out; send it again" in calls[0][1]
+    assert calls[3][1] == Stop()  # a stop is never refused
+
+
+def test_a_lock_off_on_the_stop_lane_stamped_against_the_old_process_is_refused() -> None:
+    """service.py rule 9 on the stop lane too: its lock OFF is judged as the main connection's."""
+    svc, pub, rots = service({"tower": "rotorez"}, station="b2")
+    pub.up = pub.hears = False  # the main connection is down: the lane carries out a lock OFF
+    svc.on_lane_message("rotor/lock", b"OFF", False, "DL1ABC", Stamp.of(NOW_UNIX, 5, "a1"))
+    assert [c[0] for c in rots["tower"].calls] == ["refused"]
+    assert "before it restarted" in str(rots["tower"].calls[0][1])
+    svc.on_lane_message("rotor/lock", b"OFF", False, "DL1ABC", Stamp.of(NOW_UNIX, 5, "b2"))
+    assert [c[:2] for c in rots["tower"].calls[1:]] == [("lock", False)]
+
+
+def test_the_remote_forgets_its_reckoning_when_the_beats_name_another_station_process() -> None:
+    """heartbeat.py rule 7 on the remote: the old process's beats reckoned the station's clock
+    10 s ahead of the new process's (its wall clock was set back before the restart). At the
+    first beat of the new process the old reckoning is gone: the stamp follows the new clock
+    at once (not "ahead" for a minute) and names the new process."""
+    mono = FakeClock(50.0)
+    clock = StationClock(mono)
+    old_station = 1_700_000_010.0
+    for _ in range(5):
+        clock.heard(old_station - 0.05, "a1")
+        mono.t += 2.0
+        old_station += 2.0
+    before = clock.stamp(5)
+    assert before is not None and before.station == "a1"
+    assert float(before.sent) == pytest.approx(old_station - 0.05)
+    new_station = old_station - 10.0  # the restarted bridge: its clock 10 s behind the old one
+    clock.heard(new_station - 0.05, "b2")
+    after = clock.stamp(5)
+    assert after is not None and after.station == "b2"
+    assert float(after.sent) == pytest.approx(new_station - 0.05)
+    assert after.judge(new_station, "b2") is None  # fresh, not "ahead of this station's clock"
+    clock.heard(new_station + 2.0, None)  # an older bridge (no name) beats now: forgotten too
+    assert clock.stamp(5) == Stamp.of(new_station + 2.0, 5)
+    mono.t += 2.0
+    clock.heard(new_station + 4.0, None)  # the same nameless process: learnt on, not forgotten
+    assert len(clock._offsets) == 2
+
+
+def test_the_link_stamps_with_the_process_the_heartbeats_name() -> None:
+    """remote.py rule 8: a live heartbeat's user property ``station`` goes into the stamp of
+    every command sent from its reckoning; a retained beat says nothing."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    beat = paho_message("rotor/bridge/heartbeat", b"1700000100.000", [("station", "b2")])
+    link._on_message(None, None, beat)
+    replayed = paho_message("rotor/bridge/heartbeat", b"1700000200.000", [("station", "zz")])
+    replayed.retain = True
+    link._on_message(None, None, replayed)
+    link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    ((_, props),) = paho.published
+    assert props.UserProperty == [
+        ("operator", "DL1ABC"),
+        ("sent", "1700000100.000"),
+        ("expiry", "5"),
+        ("station", "b2"),
+    ]
+
+
 def test_the_stamp_travels_as_user_properties_and_reads_back() -> None:
     stamp = Stamp.of(1_700_000_000.1234, 5)
     pairs = [("operator", "DL1ABC"), *stamp.properties()]
     assert pairs[1:] == [("sent", "1700000000.123"), ("expiry", "5")]
     assert Stamp.of_properties(pairs) == stamp
     assert Stamp.of_properties([("operator", "DL1ABC")]) is None
+    named = Stamp.of(1_700_000_000.0, 5, "b2")  # heartbeat.py rule 7
+    assert named.properties()[2:] == [("station", "b2")]
+    assert Stamp.of_properties([("operator", "DL1ABC"), *named.properties()]) == named
+    assert Stamp.of_properties([("station", "b2")]) is None  # a name alone is no stamp
 
 
 # -- the remote's link: answered only once the broker has it ----------------------------------
@@ -241,6 +323,16 @@ class Paho:
         return []
 
 
+def paho_message(
+    topic: str, payload: bytes, pairs: list[tuple[str, str]]
+) -> paho_client.MQTTMessage:
+    msg = paho_client.MQTTMessage(topic=topic.encode())
+    msg.payload = payload
+    msg.properties = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+    msg.properties.UserProperty = pairs
+    return msg
+
+
 def link_on(ack: ReasonCode | None) -> tuple[RemoteLink, Paho]:
     link = RemoteLink(
         MqttSettings(),
@@ -248,6 +340,7 @@ def link_on(ack: ReasonCode | None) -> tuple[RemoteLink, Paho]:
         [],
         lambda topic, payload, retain: None,
         last_word=lambda topic, payload: topic.endswith("/stop"),
+        heartbeat="rotor/bridge/heartbeat",
         clock=FakeClock(),
         ack_wait_s=0.0,  # the broker's answer is there at once, or never
     )
@@ -383,25 +476,38 @@ def test_a_flood_on_the_heartbeat_topic_never_keeps_a_stop_or_a_move_from_going(
 
 
 # -- the station's side of the heartbeat: its main connection beats while it is the bridge ----
-def test_the_station_beats_from_its_connection_only_while_connected_and_not_refused() -> None:
+@pytest.mark.parametrize(
+    ("protocol", "named"),
+    [("auto", [("station", "b2")]), ("5", [("station", "b2")]), ("3.1.1", None)],
+)
+def test_the_station_beats_from_its_connection_only_while_connected_and_not_refused(
+    protocol: str, named: list[tuple[str, str]] | None
+) -> None:
+    """Each beat names this process (heartbeat.py rule 7) where MQTT 5 can: not under 3.1.1."""
     clock = FakeClock()
     client = MqttClient(
-        MqttSettings(),
+        MqttSettings(protocol=protocol),  # type: ignore[arg-type]
         will_topic="rotor/bridge/state",
         subscriptions=[],
         on_message=lambda *a: None,
         heartbeat="rotor/bridge/heartbeat",
         clock=clock,
         wall=lambda: 1_700_000_000.25,
+        station="b2",
     )
-    beats: list[tuple[str, bytes, int]] = []
-    client._client.publish = lambda topic, payload, qos: beats.append((topic, payload, qos))  # type: ignore[assignment,method-assign,misc]
+    beats: list[tuple[str, bytes, int, list[tuple[str, str]] | None]] = []
+
+    def publish(topic: str, payload: bytes, qos: int, properties: Any) -> None:
+        beats.append((topic, payload, qos, getattr(properties, "UserProperty", None)))
+
+    client._client.publish = publish  # type: ignore[assignment,method-assign]
     client._tick()  # not connected (or its first look still runs): nothing
     client.connected.set()
     for _ in range(9):  # paho's loop, a round every half second
         client._tick()
         clock.t += 0.5
-    assert beats == [("rotor/bridge/heartbeat", b"1700000000.250", 0)] * 3  # at 0, 2 and 4 s
+    beat = ("rotor/bridge/heartbeat", b"1700000000.250", 0, named)
+    assert beats == [beat] * 3  # at 0, 2 and 4 s
     client.refused = "another bridge runs on rotor"
     clock.t += 10
     client._tick()

@@ -21,6 +21,8 @@ each written out in the module that keeps it:
    refused) the heartbeat (``heartbeat``: its topic) carries the wall clock every HEARTBEAT_S,
    QoS 0, not retained (heartbeat.py rule 1), from paho's own loop (Client.tick): a bridge whose
    broker was restored from its file says ``online`` for ever, a heartbeat only while it lives.
+   Under MQTT 5 each beat names this process (``station``: the user property of heartbeat.py
+   rule 7); under MQTT 3.1.1 it cannot.
 3. On every connect: subscribe again and re-publish every retained message we own (the broker
    may have restarted without persistence and lost them). Retained messages are kept in a
    cache; while disconnected they only update the cache; events wait (rule 13).
@@ -68,12 +70,14 @@ from dataclasses import replace
 from typing import Unpack
 
 import paho.mqtt.client as paho
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
-from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload
+from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload, beat_properties
 from bridge.interfaces.mqtt.limiter import EventLimiter
 from bridge.interfaces.mqtt.look import (
     CLEARS_SAID_AT_ONCE,
@@ -116,6 +120,7 @@ class MqttClient(Connection):
         clock: Callable[[], float] = time.monotonic,
         heartbeat: str | None = None,
         wall: Callable[[], float] = time.time,
+        station: str | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
@@ -159,6 +164,7 @@ class MqttClient(Connection):
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
         self._wall = wall
+        self._station = station  # rule 2: the process the beats name (heartbeat.py rule 7)
 
     @property
     def problems(self) -> list[str]:
@@ -378,7 +384,12 @@ class MqttClient(Connection):
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
         if self._beat.due(self._clock()):
-            self._client.publish(topic, beat_payload(self._wall()).encode(), qos=0)
+            props = None
+            if self._station is not None and self._v5:  # (3.1.1 has no properties)
+                props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+                props.UserProperty = beat_properties(self._station)
+            payload = beat_payload(self._wall()).encode()
+            self._client.publish(topic, payload, qos=0, properties=props)
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
         if topic == self._fence_topic and payload.startswith(b"probe "):

@@ -25,7 +25,8 @@ Rules:
    are kept one per second of arrival (the largest offset of that second), so a flood on the
    heartbeat topic costs no command more than a minute's worth of beats.
 4. A command carries its send time on the station's clock and its expiry as the MQTT 5 user
-   properties ``sent`` and ``expiry`` (``Stamp``); a stop and a lock ON may go unstamped.
+   properties ``sent`` and ``expiry`` (``Stamp``; and ``station``: rule 7); a stop and a lock
+   ON may go unstamped.
 5. The station refuses a command whose stamp says it is older than its expiry, or from more
    than AHEAD_S in the future (the reckoning went wrong: refused, and said), or a stamp it
    cannot read. Stop and lock ON are never refused (docs/architecture.md rule 11): the
@@ -41,11 +42,25 @@ Rules:
    ends; set forward, it follows at once (a command stamped before the step looks older by
    it, the safe direction). A client that stamps by its own synchronised wall clock instead
    of the heartbeat's (rule 4 allows it) sees its commands look older by a step back.
+7. Rule 6 holds within one process only: a station's bridge that restarts after its wall clock
+   was set back starts from the lower wall clock, while the remote still reckons from the old
+   process's beats (rule 3, up to CLOCK_WINDOW_S): a command the link held up would look
+   younger by the step, and fresh ones ahead. So each beat names the station process it comes
+   from, as the MQTT 5 user property ``station`` (``StationTime.identity``, a random token made
+   at start; the payload is unchanged), and the remote forgets its reckoning whenever a beat
+   names another process than the beat before it (``StationClock.heard``; a beat without one,
+   an older station's or one that speaks MQTT 3.1.1, is a process of no name). A command
+   stamped from a reckoning carries that process's name beside ``sent`` (``Stamp.station``),
+   and the station refuses a stamp naming another process than itself (stamped against the
+   station's bridge before it restarted); a stamp naming none (an older remote, another
+   client that stamps) is judged as rule 5 says. An older station ignores the property, an
+   older remote never sends it.
 """
 
 from __future__ import annotations
 
 import math
+import secrets
 import threading
 from collections import deque
 from collections.abc import Callable
@@ -58,12 +73,27 @@ BUCKET_S = 1.0  # rule 3: beats kept one per second of arrival
 MAX_BUCKETS = int(CLOCK_WINDOW_S / BUCKET_S) + 2
 AHEAD_S = 1.0  # rule 5
 SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
+STATION = "station"  # rule 7: the user property naming the station's process
 MAX_EXPIRY_S = 3600.0
 
 
 def beat_payload(now_unix: float) -> str:
     """Rule 1: the station's wall clock, unix seconds to the millisecond."""
     return f"{now_unix:.3f}"
+
+
+def beat_properties(identity: str) -> list[tuple[str, str]]:
+    """Rule 7: the user properties of a heartbeat, naming the station's process."""
+    return [(STATION, identity)]
+
+
+def station_of(pairs: list[tuple[str, str]]) -> str | None:
+    """Rule 7: the station process a heartbeat's or a stamp's user properties name; None
+    without one."""
+    for key, value in pairs:
+        if key == STATION:
+            return str(value)
+    return None
 
 
 def parse_beat(payload: bytes) -> float:
@@ -99,10 +129,15 @@ class StationClock:
         self._lock = threading.Lock()
         # (first arrival, the largest station - arrival among the beats from then on)
         self._offsets: deque[tuple[float, float]] = deque(maxlen=MAX_BUCKETS)
+        self._station: str | None = None  # rule 7: the process the offsets came from
 
-    def heard(self, station_unix: float) -> None:
+    def heard(self, station_unix: float, station: str | None = None) -> None:
+        """A live beat; ``station``: the process it names (rule 7), None for none."""
         with self._lock:
             now = self._clock()
+            if station != self._station:  # rule 7: another process, another clock
+                self._offsets.clear()
+                self._station = station
             offset = station_unix - now
             if self._offsets and now - self._offsets[-1][0] < BUCKET_S:
                 first, best = self._offsets[-1]
@@ -118,12 +153,25 @@ class StationClock:
 
     def now_unix(self) -> float | None:
         """The station's clock now, never later than it (rule 3); None without a recent beat."""
+        reckoned = self.reckon()
+        return None if reckoned is None else reckoned[0]
+
+    def reckon(self) -> tuple[float, str | None] | None:
+        """``now_unix`` and the station process its beats came from (rule 7), read together."""
         with self._lock:
             now = self._clock()
             self._trim(now)
             if not self._offsets:
                 return None
-            return now + max(offset for _, offset in self._offsets)
+            return now + max(offset for _, offset in self._offsets), self._station
+
+    def stamp(self, expiry_s: float) -> Stamp | None:
+        """Rules 4 and 7: a command's stamp sent now; None without a recent beat."""
+        reckoned = self.reckon()
+        if reckoned is None:
+            return None
+        sent, station = reckoned
+        return Stamp.of(sent, expiry_s, station)
 
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
@@ -133,9 +181,13 @@ class StationClock:
 class StationTime:
     """Rule 6 on the station: ``now_unix`` is the station's clock (its heartbeats carry it, its
     stamps are judged by it); ``wall`` and ``clock`` (the steady one) are read under a lock,
-    from paho's thread (the beat) and whichever thread judges a command."""
+    from paho's thread (the beat) and whichever thread judges a command. ``identity`` names
+    this process's clock (rule 7): a random token unless one is given."""
 
-    def __init__(self, wall: Callable[[], float], clock: Callable[[], float]) -> None:
+    def __init__(
+        self, wall: Callable[[], float], clock: Callable[[], float], identity: str | None = None
+    ) -> None:
+        self.identity = secrets.token_hex(8) if identity is None else identity
         self._wall = wall
         self._clock = clock
         self._lock = threading.Lock()
@@ -152,28 +204,37 @@ class StationTime:
 
 @dataclass(frozen=True)
 class Stamp:
-    """Rule 4: a command's ``sent`` and ``expiry`` user properties, as they came."""
+    """Rule 4: a command's ``sent`` and ``expiry`` user properties, as they came; rule 7: the
+    station process ``sent`` was reckoned from (``station``), None when it names none."""
 
     sent: str
     expiry: str | None
+    station: str | None = None
 
     @classmethod
-    def of(cls, sent_unix: float, expiry_s: float) -> Stamp:
-        return cls(f"{sent_unix:.3f}", f"{expiry_s:g}")
+    def of(cls, sent_unix: float, expiry_s: float, station: str | None = None) -> Stamp:
+        return cls(f"{sent_unix:.3f}", f"{expiry_s:g}", station)
 
     def properties(self) -> list[tuple[str, str]]:
-        return [(SENT, self.sent), (EXPIRY, self.expiry or "")]
+        named = [] if self.station is None else [(STATION, self.station)]
+        return [(SENT, self.sent), (EXPIRY, self.expiry or ""), *named]
 
     @classmethod
     def of_properties(cls, pairs: list[tuple[str, str]]) -> Stamp | None:
         """The stamp among a message's user properties; None without ``sent``."""
-        found = {str(k): str(v) for k, v in pairs if k in (SENT, EXPIRY)}
+        found = {str(k): str(v) for k, v in pairs if k in (SENT, EXPIRY, STATION)}
         if SENT not in found:
             return None
-        return cls(found[SENT], found.get(EXPIRY))
+        return cls(found[SENT], found.get(EXPIRY), found.get(STATION))
 
-    def judge(self, now_unix: float) -> str | None:
-        """Rule 5: why the command is refused, or None (fresh)."""
+    def judge(self, now_unix: float, station: str | None = None) -> str | None:
+        """Rules 5 and 7: why the command is refused, or None (fresh); ``station``: the
+        judging process's identity (None: no stamp's name is asked)."""
+        if self.station is not None and station is not None and self.station != station:
+            return (
+                "stamped against this station's bridge before it restarted: not carried out; "
+                "send it again"
+            )
         try:
             sent = float(self.sent)
             expiry = float(self.expiry if self.expiry is not None else "nan")

@@ -39,8 +39,10 @@ Rules:
    ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
    dropped, rule 3) and the command refused.
 8. A command is stamped with its send time on the station's clock as its live heartbeats let
-   the remote reckon it (heartbeat.py); without one heard, a move is refused. A halt goes
-   unstamped: it never asks the reckoning, so nothing about the heartbeat can keep it back.
+   the remote reckon it (heartbeat.py), and with the station process that reckoning came
+   from (the heartbeats' user property ``station``: heartbeat.py rule 7); without one heard, a
+   move is refused. A halt goes unstamped: it never asks the reckoning, so nothing about the
+   heartbeat can keep it back.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -69,7 +71,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.connection import Connection
-from bridge.interfaces.mqtt.heartbeat import Stamp, StationClock, parse_beat
+from bridge.interfaces.mqtt.heartbeat import Stamp, StationClock, parse_beat, station_of
 from bridge.settings.mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -108,14 +110,12 @@ class RemoteLink(Connection):
         def handle(
             topic: str, payload: bytes, retain: bool, _operator: str | None, _stamp: Stamp | None
         ) -> None:
-            if topic == heartbeat and not retain:  # rule 8: only a live one says the time
-                with contextlib.suppress(ValueError):
-                    self.station_clock.heard(parse_beat(payload))
             on_message(topic, payload, retain)  # a station's state carries no operator
 
         super().__init__(
             settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
         )
+        self._heartbeat = heartbeat
         self._auto = False  # rule 1: never steps down to MQTT 3.1.1
         self._send_lock = threading.Lock()
         self._on_change = on_change
@@ -166,10 +166,10 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, KEPT)
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            sent = None if halt else self.station_clock.now_unix()  # rule 8: a halt goes bare
+            sent = None if halt else self.station_clock.stamp(expiry_s)  # rule 8: a halt: bare
             if sent is None and not halt:
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
-            stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()
+            stamp = [] if sent is None else sent.properties()
             props.UserProperty = [("operator", operator), *stamp]
             if check is not None:
                 check()  # rule 9
@@ -302,6 +302,17 @@ class RemoteLink(Connection):
                 self._unawaited.add(info.mid)
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
+    def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
+        """Rule 8: a live heartbeat says the station's time and, in its user property
+        ``station``, which process of the station's bridge beats (heartbeat.py rule 7); then
+        every message goes on to the handler as the bridge's would."""
+        if msg.topic == self._heartbeat and not msg.retain:  # only a live one says the time
+            props = getattr(msg, "properties", None)
+            station = station_of(getattr(props, "UserProperty", None) or [])
+            with contextlib.suppress(ValueError):
+                self.station_clock.heard(parse_beat(bytes(msg.payload)), station)
+        super()._on_message(client, userdata, msg)
+
     def _refused(self, reason: str) -> None:
         if self._ever_up:
             super()._refused(reason)

@@ -52,8 +52,10 @@ Rules:
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
    rule 6; the wall clock when none is given): a link that held it up must not turn the rotor
-   late. Halts: never. The same on the stop lane, for the lock OFF it carries out while the
-   main connection is down.
+   late. So is one whose user property ``station`` names another process than ``station``
+   (this one's, as its heartbeats name it: heartbeat.py rule 7): its send time was reckoned
+   from a clock that ended when the station's bridge restarted. Halts: never. The same on
+   the stop lane, for the lock OFF it carries out while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -134,6 +136,7 @@ class MqttService:
         on_problem: Callable[[str, str], None] | None = None,
         on_info: Callable[[str, bool], None] | None = None,
         stamp_clock: Callable[[], float] | None = None,
+        station: str | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
@@ -141,6 +144,7 @@ class MqttService:
         self._publisher = publisher
         self._wall = wall
         self._stamp_clock = wall if stamp_clock is None else stamp_clock  # rule 9
+        self._station = station  # rule 9: this process, as its heartbeats name it
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._audit_limiter = EventLimiter(
             clock, round(5 * error_events_per_s), error_events_per_s
@@ -523,7 +527,7 @@ class MqttService:
 
     def _late(self, stamp: Stamp | None) -> str | None:
         """Rule 9: why a stamped command (never a halt) is too old to carry out, or None."""
-        return None if stamp is None else stamp.judge(self._stamp_clock())
+        return None if stamp is None else stamp.judge(self._stamp_clock(), self._station)
 
     def on_message(
         self,
