@@ -4,7 +4,9 @@ an emulated Rotor-EZ and on a wall clock this test sets back, as a time server f
 does. The stamps are what a remote reckons from the heartbeats it heard before the step.
 
 What the operator would see: a target the link held up for longer than its expiry never turns
-the rotor, and one sent just now is carried out, not refused as "from the future"."""
+the rotor, and one sent just now is carried out, not refused as "from the future"; also when
+the station's bridge restarted after its wall clock was set back (heartbeat.py rule 7), where a
+real remote link reckons the station's clock from the heartbeats."""
 
 from __future__ import annotations
 
@@ -20,6 +22,9 @@ from paho.mqtt.properties import Properties
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt.heartbeat import Stamp, parse_beat
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.settings import MqttSettings
+from tests.support import wait_until
 from tests.support.rig import Rig
 
 STEP_S = 10.0  # the station's wall clock set back by this much
@@ -92,3 +97,73 @@ def test_a_station_clock_set_back_neither_lets_a_held_up_target_turn_nor_refuses
     assert not [
         m for m in probe.messages[mark:] if m.topic == "rotor/error" and b"ahead" in m.payload
     ]
+
+
+HEARTBEAT, STATE = "rotor/bridge/heartbeat", "rotor/bridge/state"
+
+
+def test_a_station_bridge_restarted_on_a_clock_set_back_refuses_what_the_old_one_stamped(
+    rig: Rig, stamper: Stamper
+) -> None:
+    """The station's wall clock set back 10 s, then its bridge restarted: the new process's
+    clock starts 10 s behind the old one's. A target the remote stamped from the old process's
+    beats, held up 12 s on the link (2 s old by the new clock), is refused and never turns the
+    rotor; the remote's next move, stamped from the new process's first beat, is carried out
+    at once (not refused as "ahead" while the old beats are remembered for a minute)."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    wall = SteppedWall()
+    rig.app = App(rig.settings, wall=wall)
+    rig.app.start()
+    rig.ready("tower")
+    heard: list[tuple[str, bytes]] = []  # the bridge's state and beats, as the link heard them
+
+    def hear(topic: str, payload: bytes, retain: bool) -> None:
+        if not retain:
+            heard.append((topic, payload))
+
+    def new_beat() -> bool:  # a beat after the old process's ``offline``: the new process's
+        gone = [i for i, m in enumerate(heard) if m == (STATE, b"offline")]
+        return bool(gone) and any(t == HEARTBEAT for t, _ in heard[gone[0] :])
+
+    link = RemoteLink(
+        MqttSettings(host="127.0.0.1", port=rig.broker.port),
+        "remote-test",
+        [HEARTBEAT, STATE],
+        hear,
+        heartbeat=HEARTBEAT,
+    )
+    link.start()
+    try:
+        wait_until(lambda: link.up and heard, 10, "the remote hearing the station's heartbeat")
+        before = link.station_clock.stamp(5)  # what the remote stamps now, before the restart
+        reckoned_at = time.monotonic()
+        assert before is not None
+        wall.behind_s = 10.0  # the time server found ...
+        rig.stop()
+        t = time.monotonic()
+        rig.app = App(rig.settings, wall=wall)  # ... and the station's bridge restarted
+        rig.app.start()
+        rig.ready("tower", after=t)
+        wait_until(new_beat, 10, "the new process's heartbeat at the remote")
+        mark = rig.probe.mark()
+        # stamped from the old process's beats, held up 12 s: 2 s old by the new process's clock
+        old_clock_now = float(before.sent) + time.monotonic() - reckoned_at
+        held = Stamp.of(old_clock_now - 12.0, 5, before.station)
+        stamper.publish("rotor/target", "200", held)
+        refused = rig.probe.wait(
+            lambda m: m.topic == "rotor/error" and b"before it restarted" in m.payload,
+            10,
+            "the new process refusing what was stamped against the old one",
+            mark,
+        )
+        assert b"200" in refused.payload
+        link.send("rotor/target", '{"azimuth":120}', "DL1ABC", 5)  # the remote's next move
+        rig.arrived("tower", 120)
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"200" in f.data]
+        assert not [
+            m
+            for m in rig.probe.messages[mark:]
+            if m.topic == "rotor/error" and b"ahead" in m.payload
+        ]
+    finally:
+        link.stop()
