@@ -166,10 +166,10 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, KEPT)
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            sent = None if halt else self.station_clock.stamp(expiry_s)  # rule 8: a halt: bare
-            if sent is None and not halt:
+            stamped = None if halt else self.station_clock.stamp(expiry_s)  # rule 8: halts bare
+            if stamped is None and not halt:
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
-            stamp = [] if sent is None else sent.properties()
+            stamp = [] if stamped is None else stamped.properties()
             props.UserProperty = [("operator", operator), *stamp]
             if check is not None:
                 check()  # rule 9
