@@ -307,10 +307,14 @@ class RemoteLink(Connection):
         ``station``, which process of the station's bridge beats (heartbeat.py rule 7); then
         every message goes on to the handler as the bridge's would."""
         if msg.topic == self._heartbeat and not msg.retain:  # only a live one says the time
-            props = getattr(msg, "properties", None)
-            station = station_of(getattr(props, "UserProperty", None) or [])
-            with contextlib.suppress(ValueError):
+            try:  # (a forged beat must not kill paho's thread: connection.py rule 5)
+                props = getattr(msg, "properties", None)
+                station = station_of(getattr(props, "UserProperty", None) or [])
                 self.station_clock.heard(parse_beat(bytes(msg.payload)), station)
+            except ValueError:
+                pass  # no time: no beat
+            except Exception:
+                log.exception("error reading the station's heartbeat")
         super()._on_message(client, userdata, msg)
 
     def _refused(self, reason: str) -> None:
