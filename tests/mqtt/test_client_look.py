@@ -4,6 +4,8 @@ lingers on the broker for a client that subscribes to the base topic later."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
@@ -40,3 +42,49 @@ def test_the_hello_is_the_first_message_and_does_not_linger(broker: Mosquitto) -
     finally:
         client.stop()
         watcher.close()
+
+
+def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its_lock(
+    broker: Mosquitto,
+) -> None:
+    """Rule 14: the lock ON an earlier run left, which the hook took (its rotator locked), is
+    left as the broker holds it; the rotator's status says OFF until that lock is saved
+    (runtime/kept.py rule 2), and such a status, published after the open, put OFF over the ON
+    (a switch shown OFF, and a crash then left the broker OFF). While the lock holds, an older
+    value is not put over it; once it no longer holds (a lock OFF), the next value goes out."""
+    seed = Probe(broker.port, "t/#")
+    seed.publish("t/r/lock/state", "ON", retain=True)
+    seed.wait_value("t/r/lock/state", "ON", 5)
+    settings = MqttSettings(port=broker.port, base_topic="t", client_id="witness-under-test")
+    client = MqttClient(
+        settings,
+        will_topic="t/bridge/state",
+        subscriptions=[],
+        on_message=lambda *a: None,
+        claim=Claim(Instance.me("witness-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
+    )
+    client.publish_retained("t/r/lock/state", "OFF")  # (the status before the start)
+    locked = [False]
+
+    def took(heard: dict[str, bytes]) -> dict[str, Callable[[], bool]]:
+        locked[0] = heard.get("t/r/lock/state") == b"ON"
+        return {"t/r/lock/state": lambda: locked[0]} if locked[0] else {}
+
+    client.watch_owned(["t/r/lock/state", "t/bridge/info"])  # (as the app: its own topics)
+    client.witness({"t/r/lock/state"}, took)
+    client.start()
+    try:
+        wait_until(lambda: client.connected.is_set() and not client.gated, 10, "the look done")
+        assert locked[0]
+        client.publish_retained("t/r/lock/state", "OFF")  # a status from before the lock's save
+        client.publish_retained("t/r/lock/state", "ON")  # the lock saved: its status
+        client.publish_retained("t/bridge/info", "marker")  # (after these, in order)
+        seed.wait_value("t/bridge/info", "marker", 5)
+        assert [m.text for m in seed.on("t/r/lock/state")] == ["ON"]
+        assert retained_snapshot(broker.port, "t/r/lock/state") == {"t/r/lock/state": b"ON"}
+        locked[0] = False  # a lock OFF: the status says so
+        client.publish_retained("t/r/lock/state", "OFF")
+        seed.wait_value("t/r/lock/state", "OFF", 5)
+    finally:
+        client.stop()
+        seed.close()

@@ -160,6 +160,9 @@ class MqttClient(Connection):
         self.refused: str | None = None
         self.yielded = False  # claim rule 4: refused while running (not at its first look)
         self._ran = False  # a look has let this bridge run
+        # rule 14: a witnessed value the hook took, left as the broker holds it: while it holds,
+        # an older value (a status from before its lock was saved) is not put over it
+        self._left: dict[str, tuple[bytes, Callable[[], bool]]] = {}
         self._heartbeat = heartbeat  # rule 2
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
@@ -213,8 +216,8 @@ class MqttClient(Connection):
         own values and ``online`` go out (paho's thread or the look's timer, the lock not
         held); before ``start()``. It returns the topics whose value it took as its own, each
         with whether it still holds: those the open leaves as the broker holds them (their
-        cached values, older, are not put over them; the cache takes the broker's, so the next
-        change goes out)."""
+        cached values, older, are not put over them, nor a value published while they hold; the
+        cache takes the broker's, so the next change goes out)."""
         if self._look is not None:
             self._look.witness(topics)
             self._on_heard = on_heard
@@ -260,6 +263,10 @@ class MqttClient(Connection):
     ) -> None:
         data = payload.encode() if isinstance(payload, str) else payload
         with self._lock:  # cache, connected check and publish: one step (see Locks)
+            left = self._left.get(topic)
+            if left is not None and data != left[0] and left[1]():
+                return  # rule 14: the broker's value holds; this one is older
+            self._left.pop(topic, None)  # (caught up with it, or it holds no more)
             held = self._retained.get(topic)
             if only_if_changed and held is not None and held[0] == data:
                 return
@@ -443,6 +450,7 @@ class MqttClient(Connection):
             holds = taken.get(topic) if taken else None
             if heard is not None and holds is not None and topic in heard and holds():
                 self._retained[topic] = (heard[topic], qos)  # the broker's: a change goes out
+                self._left[topic] = (heard[topic], holds)
                 continue
             self._owned.sent(topic, data)
             if topic != self._will_topic:

@@ -28,7 +28,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    They are handed on before ``online`` and the cached values go out, and a value the hook
    took (an ON that locked its rotator) is left as the broker holds it while it holds: the
    OFF cached before it is older (a review: put over it, the lock was shown OFF, and a crash
-   before the lock's save left neither the file nor the broker ON).
+   before the lock's save left neither the file nor the broker ON), and so is a status's OFF
+   from before the lock was saved (runtime/kept.py rule 2; a review of the merge: it came
+   after the open, 1 start in 4). A late witness (below) its hook took is not put back as a
+   stranger's value either: its rotator's ON follows.
    Not every broker sends a subscription's retained messages before what is published after
    it: aedes (Node-RED's) streams them from its store after the SUBACK, beside the messages
    that follow, so the hello can come back first and a retained ``R/lock/state`` ON after it
