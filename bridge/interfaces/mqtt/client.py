@@ -408,8 +408,8 @@ class MqttClient(Connection):
             return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
-            if late and self._on_heard is not None:
-                self._on_heard(late)
+            if late and self._on_heard is not None and self._on_heard(late):
+                return True  # its rotator's ON goes out: the OFF the open sent is not put back
         return bool(self._owned.filters) and self._foreign(topic, payload)
 
     def _fence_back(self, topic: str) -> None:
