@@ -257,10 +257,31 @@ def test_the_remote_forgets_its_reckoning_when_the_beats_name_another_station_pr
     assert float(after.sent) == pytest.approx(new_station - 0.05)
     assert after.judge(new_station, "b2") is None  # fresh, not "ahead of this station's clock"
     clock.heard(new_station + 2.0, None)  # an older bridge (no name) beats now: forgotten too
-    assert clock.stamp(5) == Stamp.of(new_station + 2.0, 5)
+    assert clock.stamp(5) == Stamp.of(new_station + 2.0, 5, "")  # named: no name
     mono.t += 2.0
     clock.heard(new_station + 4.0, None)  # the same nameless process: learnt on, not forgotten
     assert len(clock._offsets) == 2
+
+
+def test_a_move_reckoned_from_nameless_beats_is_refused_by_a_station_that_names_itself() -> None:
+    """heartbeat.py rule 7: the remote reckoned the station's clock from beats that named no
+    process (the station's bridge spoke MQTT 3.1.1, or was an older one); the station's wall
+    clock was set back 10 s and its bridge restarted, upgraded or under MQTT 5. A target sent
+    just before the restart and held up 12 s on the link (5 s expiry) reads 2 s old by the
+    new process's clock: it must not turn the rotor, as one naming the old process would not.
+    One stamped from the new process's own beats goes through."""
+    mono = FakeClock(50.0)
+    clock = StationClock(mono)
+    clock.heard(NOW_UNIX + 10.0 - 12.0, None)  # the old process's clock, 10 s ahead of the new
+    held = clock.stamp(5)
+    assert held is not None
+    svc, _, rots = service({"tower": "rotorez"}, station="b2")
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=held)
+    clock.heard(NOW_UNIX, "b2")  # the new process's first beat
+    svc.on_message("rotor/target", b"120", False, "DL1ABC", stamp=clock.stamp(5))
+    calls = rots["tower"].calls
+    assert [c[0] for c in calls] == ["refused", "submit"]
+    assert "before it restarted: not carried out; send it again" in calls[0][1]
 
 
 def test_the_link_stamps_with_the_process_the_heartbeats_name() -> None:
@@ -359,6 +380,7 @@ def test_a_command_the_broker_acknowledged_is_sent_stamped_on_the_station_clock(
         ("operator", "DL1ABC"),
         ("sent", "1700000000.000"),
         ("expiry", "5"),
+        ("station", ""),  # heartbeat.py rule 7: its beats named no process
     ]
     assert props.MessageExpiryInterval == 5 and link.up and link.resets == 0
 

@@ -102,16 +102,20 @@ def test_a_station_clock_set_back_neither_lets_a_held_up_target_turn_nor_refuses
 HEARTBEAT, STATE = "rotor/bridge/heartbeat", "rotor/bridge/state"
 
 
+@pytest.mark.parametrize("old_protocol", ["auto", "3.1.1"])
 def test_a_station_bridge_restarted_on_a_clock_set_back_refuses_what_the_old_one_stamped(
-    rig: Rig, stamper: Stamper
+    rig: Rig, stamper: Stamper, old_protocol: str
 ) -> None:
     """The station's wall clock set back 10 s, then its bridge restarted: the new process's
     clock starts 10 s behind the old one's. A target the remote stamped from the old process's
     beats, held up 12 s on the link (2 s old by the new clock), is refused and never turns the
     rotor; the remote's next move, stamped from the new process's first beat, is carried out
-    at once (not refused as "ahead" while the old beats are remembered for a minute)."""
+    at once (not refused as "ahead" while the old beats are remembered for a minute). Also
+    when the old process spoke MQTT 3.1.1 (its beats named no process, heartbeat.py rule 7)
+    and the new one MQTT 5."""
     emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
     wall = SteppedWall()
+    rig.mqtt_extra = {**rig.mqtt_extra, "protocol": old_protocol}
     rig.app = App(rig.settings, wall=wall)
     rig.app.start()
     rig.ready("tower")
@@ -141,6 +145,7 @@ def test_a_station_bridge_restarted_on_a_clock_set_back_refuses_what_the_old_one
         wall.behind_s = 10.0  # the time server found ...
         rig.stop()
         t = time.monotonic()
+        rig.mqtt_extra.pop("protocol")  # auto from now on: MQTT 5 with mosquitto
         rig.app = App(rig.settings, wall=wall)  # ... and the station's bridge restarted
         rig.app.start()
         rig.ready("tower", after=t)

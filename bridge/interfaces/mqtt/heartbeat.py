@@ -50,11 +50,13 @@ Rules:
    at start; the payload is unchanged), and the remote forgets its reckoning whenever a beat
    names another process than the beat before it (``StationClock.heard``; a beat without one,
    an older station's or one that speaks MQTT 3.1.1, is a process of no name). A command
-   stamped from a reckoning carries that process's name beside ``sent`` (``Stamp.station``),
-   and the station refuses a stamp naming another process than itself (stamped against the
-   station's bridge before it restarted); a stamp naming none (an older remote, another
-   client that stamps) is judged as rule 5 says. An older station ignores the property, an
-   older remote never sends it.
+   stamped from a reckoning carries that process's name beside ``sent`` (``Stamp.station``;
+   from beats of no name it carries NAMELESS, the empty name: a station that names itself
+   is not that process, so the bridge restarted since, upgraded or under MQTT 5), and the
+   station refuses a stamp naming another process than itself (stamped against the
+   station's bridge before it restarted); a stamp without the property (an older remote,
+   another client that stamps) is judged as rule 5 says. An older station ignores the
+   property, an older remote never sends it, a station under MQTT 3.1.1 reads no stamp.
 """
 
 from __future__ import annotations
@@ -74,6 +76,7 @@ MAX_BUCKETS = int(CLOCK_WINDOW_S / BUCKET_S) + 2
 AHEAD_S = 1.0  # rule 5
 SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
 STATION = "station"  # rule 7: the user property naming the station's process
+NAMELESS = ""  # rule 7: the name a stamp gives a process whose beats named none
 MAX_EXPIRY_S = 3600.0
 
 
@@ -166,12 +169,13 @@ class StationClock:
             return now + max(offset for _, offset in self._offsets), self._station
 
     def stamp(self, expiry_s: float) -> Stamp | None:
-        """Rules 4 and 7: a command's stamp sent now; None without a recent beat."""
+        """Rules 4 and 7: a command's stamp sent now, naming the process the reckoning came
+        from (NAMELESS for beats that named none); None without a recent beat."""
         reckoned = self.reckon()
         if reckoned is None:
             return None
         sent, station = reckoned
-        return Stamp.of(sent, expiry_s, station)
+        return Stamp.of(sent, expiry_s, NAMELESS if station is None else station)
 
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
@@ -205,7 +209,8 @@ class StationTime:
 @dataclass(frozen=True)
 class Stamp:
     """Rule 4: a command's ``sent`` and ``expiry`` user properties, as they came; rule 7: the
-    station process ``sent`` was reckoned from (``station``), None when it names none."""
+    station process ``sent`` was reckoned from (``station``: NAMELESS for a process whose beats
+    named none), None without the property."""
 
     sent: str
     expiry: str | None

@@ -40,9 +40,9 @@ Rules:
    dropped, rule 3) and the command refused.
 8. A command is stamped with its send time on the station's clock as its live heartbeats let
    the remote reckon it (heartbeat.py), and with the station process that reckoning came
-   from (the heartbeats' user property ``station``: heartbeat.py rule 7); without one heard, a
-   move is refused. A halt goes unstamped: it never asks the reckoning, so nothing about the
-   heartbeat can keep it back.
+   from (the heartbeats' user property ``station``, empty if they named none: heartbeat.py
+   rule 7); without one heard, a move is refused. A halt goes unstamped: it never asks the
+   reckoning, so nothing about the heartbeat can keep it back.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that

@@ -53,9 +53,10 @@ Rules:
    (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
    rule 6; the wall clock when none is given): a link that held it up must not turn the rotor
    late. So is one whose user property ``station`` names another process than ``station``
-   (this one's, as its heartbeats name it: heartbeat.py rule 7): its send time was reckoned
-   from a clock that ended when the station's bridge restarted. Halts: never. The same on
-   the stop lane, for the lock OFF it carries out while the main connection is down.
+   (this one's, as its heartbeats name it; an empty name too: heartbeat.py rule 7): its send
+   time was reckoned from a clock that ended when the station's bridge restarted. Halts:
+   never. The same on the stop lane, for the lock OFF it carries out while the main
+   connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
