@@ -137,16 +137,21 @@ def test_a_park_unplugged_mid_turn_is_finished_after_the_replug() -> None:
         v.close()
 
 
+def parked_then_turned_by_hand(v: VirtualRotator) -> None:
+    """A storm; the rotor parked for it, then turned at its front panel to 250, at rest."""
+    wind(v, 90.0)
+    v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+    v.manual_rotate(250.0)
+    v.run_until(lambda h: abs(h.truth().az_deg - 250.0) < 1, 60, "turned by hand")
+    v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+
+
 def test_a_park_reached_and_turned_away_by_hand_is_not_sent_again_after_an_offline() -> None:
     """wind.py rule 7 owes only a park the line took: one the rotor reached is done. An MD-01
     turned at its front panel afterwards, then 3 s of silence: the rotor stays where the hand
     left it (an attack pass: it was turned back to the park by itself once it answered)."""
     with windy() as v:
-        wind(v, 90.0)
-        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
-        v.manual_rotate(250.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 250.0) < 1, 60, "turned by hand")
-        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+        parked_then_turned_by_hand(v)
         v.set_silent(True)
         v.run_until(lambda h: not h.status.available, 10, "offline")
         v.set_silent(False)

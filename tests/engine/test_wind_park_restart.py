@@ -16,10 +16,9 @@ from bridge.protocols import REGISTRY
 from bridge.runtime.composite import merge
 from bridge.runtime.kept import Kept
 from bridge.runtime.state_store import StateStore
-from bridge.session.parts import Proposal, Scene
 from bridge.session.session import RotatorSession
-from bridge.session.wind import WindPark
-from tests.engine.test_wind import wind, windy
+from tests.engine.test_wind import a_bug_once, wind, windy
+from tests.engine.test_wind_park_offline import parked_then_turned_by_hand
 from tests.engine.virtual import VirtualRotator
 
 WIND = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 180}
@@ -66,11 +65,7 @@ def test_a_park_reached_and_turned_away_by_hand_is_not_sent_again_by_a_restart(
     the park by itself), and the storm goes on."""
     path = tmp_path / "state.json"
     with windy() as v:
-        wind(v, 90.0)
-        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
-        v.manual_rotate(250.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 250.0) < 1, 60, "turned by hand")
-        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+        parked_then_turned_by_hand(v)
         restart(v, path)
         v.run_until(lambda h: h.status.available, 20, "the controller answers again")
         v.run_for(120.0)
@@ -129,20 +124,8 @@ def test_a_wind_part_reset_after_the_park_was_reached_does_not_park_again(
     """Rule 7 through a reset (session.py rule 14): parked, turned by hand, then a bug in the
     wind's part: the reset leaves the rotor where the hand left it."""
     with windy() as v:
-        wind(v, 90.0)
-        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
-        v.manual_rotate(250.0)
-        v.run_until(lambda h: abs(h.truth().az_deg - 250.0) < 1, 60, "turned by hand")
-        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
-        real, raised = WindPark.step, []
-
-        def once(self: WindPark, scene: Scene) -> Proposal:
-            if not raised:
-                raised.append(True)
-                raise RuntimeError("a bug")
-            return real(self, scene)
-
-        monkeypatch.setattr(WindPark, "step", once)
+        parked_then_turned_by_hand(v)
+        raised = a_bug_once(monkeypatch)
         v.run_for(60.0)
         assert raised and v.errors("internal")
         assert abs(v.truth().az_deg - 250.0) < 1.0, v.truth()
