@@ -524,6 +524,21 @@ class RotatorStatus:
         return self.state is MotionState.MOVING
 
 
+def turns_rotor(command: Command) -> bool:
+    """Whether ``command`` may turn the rotor: what a stop or lock ON overtakes
+    (interfaces/mqtt/service.py rule 11)."""
+    match command:
+        case Target() | GoToPreset() | Park() | Nudge() | Toward() | TakePath():
+            return True
+        case TrackBody():
+            return not command.off
+        case FollowQso():
+            return command.on
+        case FeatureCommand():
+            return command.moves
+    return False
+
+
 def describe_command(command: Command) -> str:
     """How a command is echoed back to the user in an error event (and the audit trail) when
     its front end has no words of its own for it (what the user sent)."""

@@ -88,8 +88,6 @@ from bridge.core.model import (
     Command,
     ErrorEvent,
     ErrorKind,
-    FeatureCommand,
-    FollowQso,
     GoToPreset,
     Nudge,
     Origin,
@@ -101,8 +99,8 @@ from bridge.core.model import (
     TakePath,
     Target,
     Toward,
-    TrackBody,
     setting_text,
+    turns_rotor,
     valid_operator,
 )
 from bridge.feature import CommandTopic, StateTopic, registered
@@ -620,7 +618,7 @@ class MqttService:
         or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
         since = None
-        if isinstance(command, Called) or (command is not None and moves(command)):
+        if isinstance(command, Called) or (command is not None and turns_rotor(command)):
             since = rot.halts  # rule 11: read before the fence is asked
             if self._halts.fenced(rot.id):
                 rot.report_refusal(FENCED, what, origin=by)
@@ -668,20 +666,6 @@ class _Outbound(NamedTuple):
             tuple((s, t.feature(s.suffix)) for s in states if s.after_status),
             pl.StatusText(spec.has_elevation),
         )
-
-
-def moves(command: Command) -> bool:
-    """Rule 11: whether ``command`` may turn the rotor (what a stop or lock ON overtakes)."""
-    match command:
-        case Target() | GoToPreset() | Park() | Nudge() | Toward() | TakePath():
-            return True
-        case TrackBody():
-            return not command.off
-        case FollowQso():
-            return command.on
-        case FeatureCommand():
-            return command.moves
-    return False
 
 
 def parse_command(
