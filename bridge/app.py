@@ -420,8 +420,9 @@ class App:
             if given is not None:
                 self.mqtt.add_feature(given.subscriptions, given.on_message)
         self.discovery: DiscoveryPublisher | None = None
-        if settings.homeassistant.enabled:
-            self.discovery = self._discovery(settings)
+        if settings.homeassistant.enabled or _may_sweep(settings):
+            # (off: an earlier run's configs cleared, homeassistant/publisher.py rule 6)
+            self.discovery = self._discovery(settings, retired=not settings.homeassistant.enabled)
         self._stale(settings)  # interfaces/mqtt/stale.py: a removed rotator's retained topics
         self.client.add_subscriptions(self.mqtt.subscriptions())
         self.lane = StopLane(
@@ -596,13 +597,15 @@ class App:
         self.mqtt.add_feature(stale.subscriptions, on_message)
         self.client.spare = stale.spared  # (rule 3: judged when the look ends)
 
-    def _discovery(self, settings: Settings) -> DiscoveryPublisher:
+    def _discovery(self, settings: Settings, *, retired: bool) -> DiscoveryPublisher:
         ha = settings.homeassistant
         client = self.client
         discovery_topics = DiscoveryTopics(ha.discovery_prefix)
         infos = []
         on = self.services  # a feature of the station is on for every rotator
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
+            if retired:
+                break  # (none generated: every config of ours is cleared)
             infos.append(
                 RotatorInfo.of(
                     r.id,
@@ -626,12 +629,14 @@ class App:
             groups=tuple(  # a device each (interfaces/mqtt/groups.py)
                 GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
                 for g in settings.groups
+                if not retired
             ),
             publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
             birth_delay_s=ha.birth_delay_s,
             publish_again=partial(client.publish_retained, qos=1, only_if_changed=False),
+            retired=retired,
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
         for service in self.services.values():  # (the DX cluster's spot select)
@@ -842,6 +847,14 @@ class App:
         self.express.stop()  # (the ports are closed: it holds none)
         self.release()
         log.info("stopped")
+
+
+def _may_sweep(settings: Settings) -> bool:
+    """Discovery off: its prefix may hold an earlier run's configs (homeassistant/publisher.py
+    rule 6), unless the base topic lies under it, which a run with discovery on refuses (that
+    run published nothing there, and the bridge's own topics are not read as configs)."""
+    prefix, base = settings.homeassistant.discovery_prefix, settings.mqtt.base_topic
+    return not (prefix == base or base.startswith(prefix + "/"))
 
 
 def _heard(

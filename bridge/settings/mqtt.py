@@ -352,7 +352,10 @@ class HomeAssistantSettings(Strict):
     device with its controls, by itself."""
 
     enabled: bool = Field(
-        True, description="publish Home Assistant's discovery messages", examples=[False]
+        True,
+        description="publish Home Assistant's discovery messages (off: those an earlier run "
+        "left are cleared, and Home Assistant drops the bridge's devices)",
+        examples=[False],
     )
     discovery_prefix: str = Field(
         "homeassistant",

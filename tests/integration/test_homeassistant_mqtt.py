@@ -170,6 +170,27 @@ def test_discovery_can_be_turned_off(rig: Rig) -> None:
     assert configs(rig.broker.port) == {}
 
 
+def test_discovery_turned_off_clears_what_a_run_with_it_on_left(rig: Rig) -> None:
+    """Discovery turned off after a run with it on left every config retained: Home Assistant
+    kept the bridge's devices for good, each entity unavailable. They are cleared now; a config
+    under one of our node ids that follows another bridge's state is left alone
+    (homeassistant/publisher.py rules 4 and 6)."""
+    rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    before = configs(rig.broker.port)
+    assert len(before) > 20
+    foreign = f"{PREFIX}/sensor/rotorbridge_rotor_r_tower/theirs/config"
+    theirs = {"name": "x", "availability": [{"topic": "elsewhere/bridge/state"}]}
+    rig.probe.publish(foreign, json.dumps(theirs), retain=True)
+    rig.stop()
+    rig.sections["homeassistant"] = {"enabled": False}
+    rig.start()
+    rig.ready("tower")
+    wait_until(lambda: set(configs(rig.broker.port)) == {foreign}, slow(15), "configs cleared")
+    assert configs(rig.broker.port)[foreign] == theirs
+
+
 def test_killed_bridge_makes_every_entity_unavailable(tmp_path: Path) -> None:
     broker = Mosquitto(tmp_path / "broker").start()
     emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1)

@@ -21,6 +21,12 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    a Home Assistant that restarted meanwhile), ROUND_MIN_S after the last one's start at the
    earliest: a flood of births costs one round of configs and state, and one log line
    (counting them), per delay and at most one per ROUND_MIN_S.
+6. Discovery turned off (``homeassistant.enabled = false``, ``retired``): nothing is published
+   and Home Assistant's birth is not answered, but rule 4's clearing still runs with nothing
+   generated: every config under our node ids that follows our bridge's state, left by a run
+   with discovery on, is cleared when the broker shows it to us (they kept the bridge's devices
+   in Home Assistant for good, every entity unavailable). Configs that follow another bridge's
+   state are left alone, as in rule 4.
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
@@ -64,8 +70,10 @@ class DiscoveryPublisher:
         birth_delay_s: float = 10.0,
         publish_again: Callable[[str, str], None] | None = None,
         clock: Callable[[], float] = time.monotonic,
+        retired: bool = False,
     ) -> None:
         self.prefix = prefix
+        self._retired = retired  # rule 6: publish nothing, clear what an earlier run left
         self._disc = DiscoveryTopics(prefix)
         self.status_topic = status_topic
         self._topics = topics
@@ -88,9 +96,13 @@ class DiscoveryPublisher:
 
     @property
     def subscriptions(self) -> list[str]:
+        if self._retired:  # rule 6: Home Assistant's birth is none of ours
+            return [self._disc.config_filter]
         return [self.status_topic, self._disc.config_filter]
 
     def publish_all(self) -> None:
+        if self._retired:  # rule 6
+            return
         # under the lock (see Lock): an older snapshot published last would stay retained
         with self._lock:
             rotators = list(self._rotators.values())
@@ -125,7 +137,7 @@ class DiscoveryPublisher:
         already said is seen without the lock (every reading comes here): only this method
         changes one, on the thread of the rotator's statuses, and the dict read is whole."""
         version = status.version
-        if not version:
+        if not version or self._retired:
             return
         known = self._rotators.get(rotator_id)
         if known is None or version == known.version:
@@ -145,7 +157,7 @@ class DiscoveryPublisher:
 
     def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
         """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
-        if topic == self.status_topic:
+        if topic == self.status_topic and not self._retired:
             if payload.strip().lower() == b"online":
                 self._schedule_republish()
             return True
