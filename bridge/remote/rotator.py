@@ -41,7 +41,9 @@ Rules:
    or no heartbeat) is answered with OFFLINE once the broker has it (LOCK_UNHEARD): a bridge
    that is down never reads it (its session is clean) and starts again unlocked, and someone
    about to climb the tower must not be told it is locked (an attack pass: the console said
-   lock ON, the station's bridge restarted, the rotator was unlocked).
+   lock ON, the station's bridge restarted, the rotator was unlocked). So is a stop
+   (STOP_UNHEARD): rotctld answered ``RPRT 0`` and the page OK while the rotor, its bridge
+   down, turned on to its last target.
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
    coordinates) on ``R/target``: the station knows where it is, the remote does not.
@@ -102,6 +104,10 @@ STATION_SILENT = (
     f"the station's bridge is not heard (no heartbeat within {SILENT_S:g} s): nothing sent"
 )
 LOCKED = "the station's safety lock is ON: nothing turns until it is switched off"
+STOP_UNHEARD = (
+    "stop sent, but the station's bridge is not heard (offline, or no heartbeat): it may never "
+    "reach the rotator, which may still be turning to its last target"
+)
 LOCK_UNHEARD = (
     "lock ON sent, but the station's bridge is not heard (offline, or no heartbeat): it may "
     "never reach the rotator, and a bridge that starts again does not know of it; make sure "
@@ -297,6 +303,8 @@ class RemoteRotator:
             case Stop():
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
                 self.publish(t.stop, "stop")  # or be kept)
+                if self._bridge_unheard():  # rule 3: sent, maybe to nobody
+                    raise Refused(RefusalCode.OFFLINE, STOP_UNHEARD)
                 return
             case Lock():
                 if command.on:

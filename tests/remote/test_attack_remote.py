@@ -22,7 +22,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.core.model import Lock, RotatorStatus, Source
+from bridge.core.model import Lock, RotatorStatus, Source, Stop
 from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
 from bridge.interfaces.mqtt.remote import RemoteLink
@@ -196,6 +196,7 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
             return RECEIVED.findall(f.read())
 
     wait_until(lambda: len(published()) >= 1, 10, "the unacknowledged stop sent again")
+    wait_until(lambda: tower.current, 10, "the station's bridge heard again")  # (else RPRT -5)
     assert ask(port, b"S\n") == b"RPRT 0\n"  # a marker behind anything resent
     wait_until(lambda: len(published()) >= 2, 10, "the marker stop")
     assert published() == [b"stop", b"lock", b"stop"]  # the halts kept, the target never
@@ -270,7 +271,8 @@ def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_go
     console refused a move then; rotctld, GS-232, Easycomm and PstRotator said RPRT 0 / nothing
     and published a target nobody would take, as the station's own rotctld does not (it answers
     RPRT -5 for a rotator offline). A stop still goes: the station's bridge takes it, and with
-    the bridge's main connection gone its stop lane may still (interfaces/mqtt/lane.py)."""
+    the bridge's main connection gone its stop lane may still (interfaces/mqtt/lane.py); with
+    the bridge not heard, it is answered as not delivered (remote/rotator.py rule 3)."""
     view, link = StationView(FakeClock()), Link()
     rot = station_rotator(view, "tower", link)
     view.put(STATION.bridge_state if gone == "bridge" else rot.topics.availability, word)
@@ -278,7 +280,8 @@ def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_go
     assert Gs232Session(rot).feed(b"M120\r") == [b"?>\r\n"]  # type: ignore[arg-type]
     assert EasycommSession(rot).feed(b"AZ120.0\n") == [b""]  # type: ignore[arg-type]
     assert link.sent == []
-    assert RotctldSession(rot).feed(b"S\n") == [b"RPRT 0\n"]  # type: ignore[arg-type]
+    said = b"RPRT -5\n" if gone == "bridge" else b"RPRT 0\n"
+    assert RotctldSession(rot).feed(b"S\n") == [said]  # type: ignore[arg-type]
     assert link.sent == [(rot.topics.stop, "stop")]
 
 
@@ -626,3 +629,25 @@ def test_a_lock_on_the_stations_bridge_may_not_hear_is_sent_and_said_to_be_undel
         assert "may never reach the rotator" in refused.value.message
     assert link.sent == [(rot.topics.lock, "ON")]
     rot.submit(Lock(False, source=Source.WEB))  # an OFF that is lost unlocks nothing: OK
+
+
+@pytest.mark.parametrize("gone", ["the station's bridge offline", "its heartbeat silent"])
+def test_a_stop_the_stations_bridge_may_not_hear_is_sent_and_said_to_be_undelivered(
+    gone: str,
+) -> None:
+    """A STOP from the remote while the station's bridge is down was answered OK (rotctld's
+    ``RPRT 0``) while the rotor turned on to its last target: sent all the same (the bridge's
+    stop lane may still read it), and answered as not delivered."""
+    clock = FakeClock()
+    view, link = StationView(clock), Link()
+    rot = station_rotator(view, "tower", link)
+    rot.submit(Stop(source=Source.ROTCTLD))  # heard: OK
+    if gone == "the station's bridge offline":
+        view.put(STATION.bridge_state, b"offline")
+    else:
+        clock.t += SILENT_S + 1
+    with pytest.raises(Refused) as refused:
+        rot.submit(Stop(source=Source.ROTCTLD))
+    assert refused.value.code is RefusalCode.OFFLINE
+    assert "may still be turning" in refused.value.message
+    assert link.sent == [(rot.topics.stop, "stop")] * 2

@@ -73,7 +73,7 @@ def test_a_station_never_heard_is_offline_though_the_broker_says_online() -> Non
     assert rotctld(rot, b"p\n") == b"RPRT -5\n"
     assert rotctld(rot, b"P 200 0\n") == b"RPRT -5\n"
     assert link.sent == []
-    assert rotctld(rot, b"S\n") == b"RPRT 0\n"  # a stop goes whatever the remote thinks
+    assert rotctld(rot, b"S\n") == b"RPRT -5\n"  # a stop goes, said to be undelivered
     view.put(STATION.bridge_heartbeat, beat_payload(NOW_UNIX).encode())  # a live bridge
     assert rotctld(rot, b"p\n") == b"42.00\n0.00\n"
     assert rotctld(rot, b"P 200 0\n") == b"RPRT 0\n"

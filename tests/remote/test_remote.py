@@ -132,6 +132,7 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     station.broker.restart()
     wait_until(lambda: link.up, 30, "the remote back on the broker")
     station.ready("tower", 30)
+    wait_until(lambda: r.rotators[0].current, 10, "the station's bridge heard again")
     # a marker behind anything the remote might have resent, on its one ordered connection:
     # the kept stop went first, and nothing of the moves
     assert ask(port, b"S\n") == b"RPRT 0\n"
