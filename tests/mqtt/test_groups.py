@@ -206,6 +206,7 @@ def test_when_every_member_refuses_the_groups_error_says_none_turns() -> None:
         (b"120", True, "retained command on rotor/stack/target ignored"),
         (b"north", False, "north"),
         (b'{"azimuth": 1, "elevation": 2}', False, "turns in azimuth only"),
+        (b"360.0001", False, "0..360, not 360.0001"),  # (not "not 360": as sent)
     ],
 )
 def test_a_retained_or_bad_group_target_moves_nothing_and_says_why(

@@ -10,10 +10,10 @@ Rules:
    every member has an elevation axis: nothing moves.
 2. Each member's part is one ``Target``: the group's azimuth plus the member's offset, brought
    into 0..360; the elevation as given. The group's azimuth itself must be 0..360 (an
-   offset would make 361 a bearing the member takes). A part outside the member's group limits (true
-   bearings, after its offset; north is 0 and 360 alike) is that member's refusal, decided
-   here; a part inside them carries them, and the member's judge keeps the turn inside them
-   too (pointing.py rule 9).
+   offset would make 361 a bearing the member takes); the refusal shows it as sent. A part
+   outside the member's group limits (true bearings, after its offset; north is 0 and 360
+   alike) is that member's refusal, decided here; a part inside them carries them, and the
+   member's judge keeps the turn inside them too (pointing.py rule 9).
 3. The others still turn: a member's refusal, here or by its own judge (its limits, its lock,
    the wind, its lease, its link), is reported on the group's error topic and in the group's
    status, and costs the other members nothing (docs/groups.md says why).
@@ -75,6 +75,13 @@ def _inside(az_deg: float, lo_hi: tuple[float, float]) -> bool:
     return any(lo <= az_deg + turn <= hi for turn in (0.0, 360.0, -360.0))
 
 
+def _exact(value: float) -> str:
+    """Rule 2's refusal: the azimuth as sent, short where that is exact (an attack pass:
+    ``360.0001`` was refused as "not 360")."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
 def fan_out(
     group: Group,
     payload: bytes,
@@ -91,7 +98,7 @@ def fan_out(
         )
     az, el = aim
     if not 0 <= az <= 360:  # an offset must not turn a bearing no rotator takes into one
-        raise pl.PayloadError(f"a group's azimuth is a bearing 0..360, not {az:g}")
+        raise pl.PayloadError(f"a group's azimuth is a bearing 0..360, not {_exact(az)}")
     if el is not None:
         flat = [m.id for m in group.members if not has_elevation.get(m.id, False)]
         if flat:
