@@ -38,7 +38,10 @@ Rules:
    in the exchange: the engine asks again). An axis's line while nothing is asked is kept; a
    reading is made of it once every axis the model reads has had a line since the last reading
    (the box's own stream, or its answers to a target's frames): a well-formed line updates the
-   bearing, anything else changes nothing.
+   bearing, anything else changes nothing. A query is answered by the same count too: a line
+   of each axis since the last reading, none older than the exchange before it (a line that
+   loses the azimuth's answer to one poll and the elevation's to the next still gives a
+   reading, at the azimuth's line, and a reading is never staler than that).
 3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading.
 4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent. A new bearing while turning goes straight out.
@@ -90,6 +93,8 @@ class Rc2800Codec(Plain):
         self._want: list[int] = []  # rule 2: the axes' lines the open exchange waits for
         self._noisy = False  # junk arrived since the exchange was opened
         self._seen: set[int] = set()  # rule 2: axes heard since the last reading
+        self._heard: set[int] = set()  # rule 2: axes heard since the last exchange opened
+        self._query = False  # the open exchange is a query (one line an axis)
         self._deg: dict[int, float] = {}  # each axis's latest value
 
     # -- encoding -------------------------------------------------------------------------
@@ -112,6 +117,9 @@ class Rc2800Codec(Plain):
     def _open(self, lines_per_axis: int) -> None:
         self._want = [axis for axis in self._axes for _ in range(lines_per_axis)]
         self._noisy = False
+        self._query = lines_per_axis == 1
+        self._seen &= self._heard  # rule 2: no older than the exchange before this one
+        self._heard = set()
 
     def expire_query(self) -> None:
         self._want = []
@@ -171,11 +179,13 @@ class Rc2800Codec(Plain):
             return
         self._deg[axis] = value
         self._seen.add(axis)
+        self._heard.add(axis)
         if self._want:
             if axis == self._want[0]:
                 self._want.pop(0)
-            if self._want:
+            if self._want and not (self._query and len(self._seen) == len(self._axes)):
                 return  # the exchange's other lines are still to come (rule 2)
+            self._want = []
             if self._noisy:
                 self._seen.clear()
                 out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))

@@ -73,15 +73,21 @@ def test_a_turn_on_a_line_that_loses_replies_in_spells_goes_on_to_its_target(
     _arrived(v, target, t)
 
 
-@pytest.mark.parametrize("model", ["rotorez", "gs232b"])
+@pytest.mark.parametrize(
+    ("model", "phase_s"),
+    [("rotorez", 0.5), ("gs232b", 0.5), ("rc2800", 0.5), ("rc2800", 1.25), ("rc2800", 2.0)],
+)
 def test_a_line_that_loses_two_seconds_in_three_keeps_the_rotator_online(
-    rig: Rig, model: str
+    rig: Rig, model: str, phase_s: float
 ) -> None:
     """Every reply lost for 2 s of every 3 s, through a turn and a minute at rest after it: the
     rotator stays online (before: offline 35 s in, at rest, where a poll asked again off the
-    grid of idle polls left the last stretch of the silence unasked)."""
+    grid of idle polls left the last stretch of the silence unasked). An az/el RC2800's poll is
+    two frames 200 ms apart, and each second between the spells holds the elevation's answer to
+    one poll and the azimuth's to the next: a reading of the two (rc2800.py rule 2; before:
+    offline 3 s into the turn at every phase, and the turn stopped)."""
     v = rig(model)
-    target, t = _turn(v, 3.0, 2.0, 0.5)
+    target, t = _turn(v, 3.0, 2.0, phase_s)
     v.run_until(lambda h: h.state is MotionState.IDLE and not h.truth().is_moving, 60, "there")
     v.run_for(60)
     _arrived(v, target, t)

@@ -95,6 +95,34 @@ def test_the_stop_is_answered_by_both_axes_and_read_once() -> None:
     assert positions(feed(codec, b"E P=  10.1 S=9 ST\r")) == [(50.2, 10.1)]
 
 
+@pytest.mark.parametrize("how", HOW)
+def test_a_query_whose_elevation_came_in_the_exchange_before_is_read_at_its_azimuth(
+    how: str,
+) -> None:
+    """Rule 2: a line lost from each of two polls in a row (the azimuth's of the first, the
+    elevation's of the second: a line that drops a second in three) leaves both axes heard,
+    whole, within two exchanges: that is a reading, made at the azimuth's line. An elevation
+    older than the exchange before is not carried: a reading is never that stale."""
+    codec = Rc2800Codec()
+    codec.encode_query()  # its azimuth's answer lost
+    assert positions(feed(codec, b"E P=  20.0 S=9 MV\r", how)) == []
+    codec.expire_query()
+    codec.encode_query()  # its elevation's answer lost
+    assert positions(feed(codec, b"A P= 150.0 S=9 MV\r", how)) == [(150.0, 20.0)]
+    assert not codec.awaiting_reply()  # that answered this poll; its E line is kept
+    assert positions(feed(codec, b"E P=  21.0 S=9 MV\r", how)) == []
+
+    stale = Rc2800Codec()
+    stale.encode_query()
+    feed(stale, b"E P=  20.0 S=9 MV\r", how)
+    for _ in range(2):  # two exchanges that heard nothing
+        stale.expire_query()
+        stale.encode_query()
+    assert positions(feed(stale, b"A P= 150.0 S=9 MV\r", how)) == []
+    assert stale.awaiting_reply()  # the elevation of this poll is still owed
+    assert positions(feed(stale, b"E P=  30.0 S=9 MV\r", how)) == [(150.0, 30.0)]
+
+
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
     codec = Rc2800Codec()
     out = feed(codec, b"A P= 200.0 S=9 MV\r")
