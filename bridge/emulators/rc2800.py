@@ -5,7 +5,8 @@ on the az/el version an elevation rotor, 0..180. One axis is selected at a time:
 its axis, and ``S`` stops the one selected.
 
 Frame: ASCII lines ending in CR (a LF is taken as an end too; empty lines are ignored). Every
-command is answered by one line (`line_ending`, CR by default) of the axis it selected:
+command is answered by one line (`line_ending`, CR by default; LF CR as a box in Hamlib's
+issue 451 ends them) of the axis it selected:
 ``A P= 98.1 S=9 MV`` (position, the speed setting 1..9, ``MV`` moving or ``ST`` stopped).
   ``A``  ``E``           select the axis and answer its line
   ``A123.4`` ``E45``     select the axis and turn it to that bearing (tenths or whole degrees)

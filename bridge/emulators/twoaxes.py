@@ -11,7 +11,7 @@ Rules:
 4. A line protocol's commands (``_lines``: GS-232, Easycomm, RC2800) come as lines ended by CR
    or LF; lines of nothing but spaces are no command.
 5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
-   other than CR, LF or CR LF, or an elevation start on a box without one is a ValueError),
+   other than CR, LF, CR LF or LF CR, or an elevation start on a box without one is a ValueError),
    both axes at their start, nothing on the line.
 """
 
@@ -57,8 +57,8 @@ class TwoAxes(Recorder):
         baud, line_ending, processing_delay_s = line
         if model not in models:
             raise ValueError(f"unknown model {model!r}; known: {', '.join(sorted(models))}")
-        if line_ending not in (b"\r", b"\n", b"\r\n"):
-            raise ValueError(f"line_ending must be CR, LF or CR LF, got {line_ending!r}")
+        if line_ending not in (b"\r", b"\n", b"\r\n", b"\n\r"):
+            raise ValueError(f"line_ending must be CR, LF, CR LF or LF CR, got {line_ending!r}")
         spec = models[model]
         if not spec.elevation and start_el_deg != 0.0:
             raise ValueError(f"{model} has no elevation rotor")

@@ -24,7 +24,13 @@ from tests.support.hamlib import run_rotctl
 pytestmark = pytest.mark.hamlib
 
 Rotctl = Callable[..., list[str]]
-ECHO_AND_STREAM = [{}, {"echo": True}, {"echo": True, "stream_s": 0.5}]
+# LF CR: how a box ends its lines in Hamlib's issue 451 (``A P=-359.9 S=9 ST`` LF, then CR)
+ECHO_AND_STREAM = [
+    {},
+    {"echo": True},
+    {"echo": True, "stream_s": 0.5},
+    {"echo": True, "line_ending": b"\n\r"},
+]
 
 
 @pytest.fixture
@@ -42,7 +48,9 @@ def commands(port: EmulatedPort[Any]) -> list[tuple[bytes, str]]:
     return [(f.data, f.outcome) for f in port.log()]
 
 
-@pytest.mark.parametrize("options", ECHO_AND_STREAM, ids=["plain", "echo", "echo+stream"])
+@pytest.mark.parametrize(
+    "options", ECHO_AND_STREAM, ids=["plain", "echo", "echo+stream", "echo+lf-cr"]
+)
 def test_reads_sets_and_stops_the_box(
     rc2800_port: PortFactory, rotctl: Rotctl, options: dict[str, Any]
 ) -> None:

@@ -39,9 +39,13 @@ def axis_gaps(v: VirtualRotator, since: float = float("-inf")) -> list[float]:
     return [b.t - a.t for a, b in zip(writes, writes[1:], strict=False) if a.data[:1] != b.data[:1]]
 
 
-@pytest.mark.parametrize("echo", [False, True])
-def test_a_target_goes_out_axis_by_axis_and_is_read_back(rig: Rig, echo: bool) -> None:
-    v = ready(rig, start_az_deg=10, start_el_deg=5, echo=echo)
+@pytest.mark.parametrize(
+    "box",
+    [{}, {"echo": True}, {"echo": True, "line_ending": b"\n\r"}],
+    ids=["plain", "echo", "echo-lf-cr"],  # LF CR: a box's line end in Hamlib's issue 451
+)
+def test_a_target_goes_out_axis_by_axis_and_is_read_back(rig: Rig, box: dict[str, object]) -> None:
+    v = ready(rig, start_az_deg=10, start_el_deg=5, **box)
     t = v.now
     v.target(123.45, 45.6)
     v.run_until(settled_at(123.5, 45.6), 60, "at 123.5/45.6")
