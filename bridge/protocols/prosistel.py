@@ -40,6 +40,11 @@ Rules:
    turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
 3. The answers to ``G`` and ``S`` are chatter too, whatever their payload; an answer that says
    ``E,<code>`` is the box's refusal or error (SPOILED, its code in the detail, not harmless).
+   On a D, whose target is one ``G``, an error answering a ``G`` is the box's refusal of it
+   (REFUSED, as the GS-232's ``?>``): a target it refuses that has not moved the rotor is
+   dropped at once and said refused, not waited on until the stall check calls the rotor stuck
+   (motion.py rule 8). On the Combi-Track a target is a ``G`` per unit and the other unit's may
+   have turned its rotor: SPOILED, and the stall check judges the target.
    Any junk within an open query makes its reading UNTRUSTED (the engine asks again at once).
 4. STOP is the hard stop (999; 9999 on the Combi-Track): a user's STOP and a lock stop the
    rotor where it is. Each lies outside its own family's targets, but not outside the other's:
@@ -185,7 +190,9 @@ class ProsistelCodec(OneQuery):
         if m := _ERROR.fullmatch(body):
             code, cmd = m.group("code").decode(), m.group("cmd").decode("latin-1")
             why = f"unit {m.group('unit').decode()} answered {cmd} with error {code}"
-            self._junk(frame, JunkReason.SPOILED, why, out)
+            # rule 3: a D's target is its one G: an error to it is the box's refusal
+            refused = cmd == "G" and not self.elevation
+            self._junk(frame, JunkReason.REFUSED if refused else JunkReason.SPOILED, why, out)
         elif _ANSWER.fullmatch(body):
             out.append(JunkReply(frame, JunkReason.CHATTER, "the answer to a command"))
         elif m := _POSITION.fullmatch(body):

@@ -1,7 +1,8 @@
 """A Prosistel D and a Combi-Track in virtual time: the position output turned off first, bearings
 straight out (whole degrees, tenths), the hard stop at once, a new bearing while turning without
 a stop, a box streaming its position read right, a glitched reply never read, a bearing the box
-refuses reported, and a satellite pass followed in azimuth and elevation by the Combi-Track.
+refuses reported refused, and a satellite pass followed in azimuth and elevation by the
+Combi-Track.
 
 The box takes a new bearing at any time and brakes by itself, answers every frame (``STX A,G,R``
 to a bearing, ``STX A,?,123,B`` to a query) and reads its rotor in whole degrees (D) or tenths
@@ -111,18 +112,23 @@ def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     assert v.state is IDLE
 
 
-def test_a_bearing_the_box_refuses_is_sent_once_more_then_a_stall_and_nothing_moves(
+def test_a_bearing_the_box_refuses_is_sent_once_more_then_reported_refused_and_nothing_moves(
     rig: Rig,
 ) -> None:
     """A bearing the box cannot take (a flipped bit made 150 450) moves nothing: the same bearing
-    goes once more (controller.py rule 11), and refused again it is a stall."""
+    goes once more (controller.py rule 11), and refused again (``STX A,G,E,00001``) it is
+    reported refused at once, the rotor at rest where it was (prosistel.py rule 3; before: the
+    answer reported as junk, and 10 s later a stall blaming the brake or a stuck rotor)."""
     v = ready(rig, start_az_deg=77)
     t = v.now
     v.garble_writes(b"\x02AG150\r", b"\x02AG450\r", count=2)  # a bearing the box cannot take
     v.target(150)
-    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
-    assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
+    v.run_until(lambda h: h.errors("refused", since=t), 2, "the refusal")
+    v.run_until_state(IDLE, 1)
+    assert [e.kind for e in v.errors(since=t)] == ["refused"]
     assert [f.data for f in v.frames(Outcome.REFUSED)] == [b"\x02AG450\r"] * 2
+    v.run_for(15)
+    assert v.errors("stalled", since=t) == []
     assert v.truth().az_deg == 77 and not v.truth().is_moving
     assert {s.bearing_deg for s in v.published(since=t)} - {None} == {77.0}
 
@@ -133,7 +139,23 @@ def test_a_bearing_the_box_refused_once_goes_on_the_try_more(rig: Rig) -> None:
     v.garble_writes(b"\x02AG150\r", b"\x02AG450\r")
     v.target(150)
     v.run_until(lambda h: h.state is IDLE and v.truth().az_deg == 150, 60, "at 150")
-    assert [e.kind for e in v.errors(since=t)] == ["protocol"]  # the refusal, as junk
+    assert v.errors(since=t) == []  # the refusal is the target's, and the try more took
+    assert len(v.frames(Outcome.REFUSED)) == 1
+
+
+def test_an_elevation_the_combi_track_refuses_is_no_refusal_of_a_target_its_azimuth_turns_to(
+    rig: Rig,
+) -> None:
+    """prosistel.py rule 3: the Combi-Track's target is a ``G`` per unit, each answered for its
+    own: an error to the elevation's refuses that frame alone, and the azimuth's turns the
+    rotor; it is reported, never as the target's refusal."""
+    v = ready(rig, "prosistel-combi", start_az_deg=10)
+    v.garble_writes(b"\x02BG450\r", b"\x02BG9450\r", count=2)
+    t = v.now
+    v.target(200, 45)
+    v.run_until(lambda h: h.truth().az_deg == 200 and not h.truth().is_moving, 60, "at 200")
+    assert v.errors("refused", since=t) == [] and v.errors("protocol", since=t)
+    assert len(v.frames(Outcome.REFUSED, since=t)) == 2
 
 
 def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> None:

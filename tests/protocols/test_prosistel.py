@@ -176,6 +176,17 @@ def test_errors_are_reported_and_not_harmless() -> None:
     assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
 
 
+def test_an_error_to_a_ds_g_is_its_refusal_and_to_a_combi_tracks_unit_is_not() -> None:
+    """Rule 3: a D's target is its one G; a Combi-Track's a G per unit, the other may turn."""
+    got = ProsistelCodec(D_AZIMUTH).feed(b"\x02A,G,E,00001\r")
+    assert [j.reason for j in junk(got)] == [JunkReason.REFUSED]
+    assert "unit A answered G with error 00001" in junk(got)[0].detail
+    got = ProsistelCodec(COMBI_TRACK).feed(b"\x02B,G,E,00001\r")
+    assert [j.reason for j in junk(got)] == [JunkReason.SPOILED]
+    got = ProsistelCodec(D_AZIMUTH).feed(b"\x02A,?,E,00003\r")  # a query's error: no refusal
+    assert [j.reason for j in junk(got)] == [JunkReason.SPOILED]
+
+
 def test_out_of_range_and_torn_replies_are_no_readings() -> None:
     for reply in (b"\x02A,?,361,B\r", b"\x02A,?,12345,B\r", b"\x02A,?,12,\r", b"\x02A?\r"):
         got = asked().feed(reply)
