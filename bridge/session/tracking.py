@@ -48,6 +48,13 @@ Rules:
    dropped (a stop or ``off`` meanwhile is never undone by a late answer). An answer that says
    the sky cannot be computed (an orbit decayed, a date beyond the ephemeris) ends tracking
    with that reason. A look-up leaves what is tracked alone until its answer names a body.
+9. The side: on a rotor that can pass 360 (a 450-degree Yaesu, a SPID's overlap) the pass's
+   first target (where it waits for AOS, or the first step of a pass tracking starts in) is
+   sent on the side from which the rest of the pass turns least, the pass's track followed
+   from there as the judge picks each step (nearest); later steps take the judge's nearest
+   side. The flip (rule 4) is weighed with each way started on its best side. An attack
+   pass: a GS-232B 450 kept to 0..90 of elevation waited at W010 for a pass running west
+   through the north, and unwound to W358 mid-pass where W370 was free.
 """
 
 from __future__ import annotations
@@ -110,6 +117,7 @@ class Tracker:
         self._flip_for: float | None = None  # the AOS the flip was decided for
         self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
         self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
+        self._sided_for: float | None = None  # AOS of the pass whose first target chose a side
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
         self._info_t = -math.inf
@@ -197,10 +205,17 @@ class Tracker:
         hi = min(aim.el_max_deg, 180.0 - self.cfg.min_el_deg if self._flip else math.inf)
         return az, min(max(el, lo), hi)
 
-    def _put(self, sky: SkyTrack, target: Target, scene: Scene) -> Proposal:
-        """Rule 5: judged like any target; a refusal is reported once per pass."""
+    def _put(
+        self, sky: SkyTrack, target: Target, scene: Scene, raw: float | None = None
+    ) -> Proposal:
+        """Rule 5: judged like any target; a refusal is reported once per pass. ``raw``: the
+        side chosen for the pass (rule 9), sent as it is."""
+        aim = self._rig.aim
         try:
-            judged = self._rig.aim.judge(target, scene.motion.position_deg)
+            judged = aim.judge(target, scene.motion.position_deg)
+            if raw is not None:
+                judged = replace(judged, az_deg=raw, true_az_deg=None)
+                aim.check_raw(judged)
         except Refused as exc:
             aos = sky.pass_now.aos_s if sky.pass_now is not None else None
             if self._refused_for != aos or aos is None:
@@ -224,7 +239,10 @@ class Tracker:
         if self._waited_for == p.aos_s or scene.pending is not None:
             return Proposal(busy=True)
         az, el = self._aim(p.aos_az_deg, self.cfg.min_el_deg)
-        margin_s = self._travel_s(scene, az, el) + PREPOSITION_MARGIN_S
+        side = self._side(sky, p, az, utc, scene)
+        if side is None:
+            return Proposal(busy=True)  # rule 8: the pass's track is being computed
+        margin_s = self._travel_s(scene, az, el, side[0]) + PREPOSITION_MARGIN_S
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
         m = scene.motion
@@ -232,9 +250,9 @@ class Tracker:
             m.state in (MotionState.MOVING, MotionState.BRAKING) or mo.settling(m)
         ):
             return Proposal(busy=True)  # a park still on its way: the wait target follows it
-        self._waited_for = p.aos_s
+        self._waited_for = self._sided_for = p.aos_s
         self._last = (az, el)
-        return self._put(sky, Target(az, el, Source.TRACKING), scene)
+        return self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])
 
     def _follow(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
         """Rule 3."""
@@ -254,9 +272,16 @@ class Tracker:
         if self._last is not None and _apart(self._last, (az, el)) < self.cfg.step_deg:
             if m.target_deg is not None or self._near(scene, az, el):
                 return waiting  # on its way to the last step (its verdict decides)
-        put = self._put(sky, Target(az, el, Source.TRACKING), scene)
+        raw = None
+        if self._sided_for != p.aos_s:  # rule 9: the pass's first target (started mid-pass)
+            side = self._side(sky, p, az, utc, scene)
+            if side is None:
+                return waiting  # rule 8: the pass's track is being computed
+            raw = side[0]
+        put = self._put(sky, Target(az, el, Source.TRACKING), scene, raw)
         if put.target is not None:
             self._last = (az, el)
+            self._sided_for = p.aos_s
         return put
 
     def _turned_by_hand(self, scene: Scene) -> bool:
@@ -286,17 +311,70 @@ class Tracker:
             return MAX_LEAD_S
         return min(self.cfg.step_deg / 2.0 / rate, MAX_LEAD_S)
 
-    def _travel_s(self, scene: Scene, az: float, el: float | None) -> float:
-        """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2)."""
+    def _travel_s(self, scene: Scene, az: float, el: float | None, raw: float | None) -> float:
+        """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2),
+        to the raw azimuth ``raw`` if the side is chosen (rule 9)."""
         rig, m = self._rig, scene.motion
-        try:
-            raw = rig.aim.raw_for(az, m.position_deg)
-        except Refused:
-            return 0.0
+        if raw is None:
+            try:
+                raw = rig.aim.raw_for(az, m.position_deg)
+            except Refused:
+                return 0.0
         t = 0.0 if m.position_deg is None else abs(raw - m.position_deg) / rig.az_speed_deg_s
         if el is not None and m.el_position_deg is not None:
             t = max(t, abs(el - m.el_position_deg) / rig.el_speed_deg_s)
         return t + rig.spec.brake_delay_s
+
+    def _side(
+        self, sky: SkyTrack, p: Pass, az: float, utc: float, scene: Scene
+    ) -> tuple[float | None] | None:
+        """Rule 9: the raw azimuth for the pass's first target, on the side from which the rest
+        of the pass turns least ((None,): the judge's own, nearest side, on a scale that wraps
+        or where there is one side only); None while the pass's track is being computed."""
+        if self._rig.aim.az_wraps:
+            return (None,)
+        track = sky.flip_track(p)
+        if track is None:
+            return None
+        n, span = len(track), p.los_s - p.aos_s
+        ahead = [pt for i, pt in enumerate(track) if p.aos_s + span * i / max(1, n - 1) >= utc]
+        return (self._start(az, ahead, self._flip, scene, utc >= p.aos_s),)
+
+    def _start(
+        self,
+        az: float,
+        track: list[tuple[float, float]],
+        flip: bool,
+        scene: Scene,
+        counts_move: bool,
+    ) -> float | None:
+        """Rule 9: of the raw values that point at ``az``, the one from which following
+        ``track`` (true bearings, flown flipped or not) turns the rotor least, counting the move
+        there if ``counts_move`` (a pass under way; before AOS it is made while waiting); None
+        where there is but one."""
+        aim, here = self._rig.aim, scene.motion.position_deg
+        starts: set[float] = set()
+        for anchor in (aim.az_min_deg, aim.az_max_deg, (aim.az_min_deg + aim.az_max_deg) / 2):
+            try:
+                starts.add(aim.raw_for(az, anchor))
+            except Refused:
+                pass
+        if len(starts) < 2:
+            return None
+
+        def turned(start: float) -> float:
+            raw = start
+            total = abs(start - here) if counts_move and here is not None else 0.0
+            for az_b, _el in track:
+                try:
+                    nxt = aim.raw_for((az_b + 180.0) % 360.0 if flip else az_b, raw)
+                except Refused:
+                    continue
+                total, raw = total + abs(nxt - raw), nxt
+            return total
+
+        near = (lambda r: abs(r - here)) if here is not None else (lambda r: 0.0)
+        return min(sorted(starts), key=lambda r: (round(turned(r), 1), near(r)))
 
     def _flip_saves(self, sky: SkyTrack, p: Pass, scene: Scene) -> bool | None:
         """Rule 4: whether this pass is flown flipped (None: its track is being computed, rule
@@ -318,6 +396,9 @@ class Tracker:
             step (both axes at their real speeds): an unwind through a stop shows as a long
             step. The move to where the pass rises is left out: it is made while waiting."""
             raw: float | None = scene.motion.position_deg
+            first = (track[0][0] + 180.0) % 360.0 if flip else track[0][0]
+            start = self._start(first, track, flip, scene, False) if track else None
+            raw = raw if start is None else start  # rule 9: the side the pass is started on
             el: float | None = None
             total = 0.0
             for az_b, el_b in track:

@@ -382,3 +382,46 @@ def test_a_satellite_named_off_sun_or_moon_is_called_satellite_so_and_so(name: s
         assert tracking_state(v.status) == f"satellite {name.strip()}"
     with pytest.raises(SkyError, match="cannot be called"):
         Body("satellite", name.strip(), (line1, line2))
+
+
+def _gs232_azimuths(v: VirtualRotator) -> list[int]:
+    """The azimuths of the GS-232B set frames sent (``Waaa eee``), in order."""
+    return [int(w.data[1:4]) for w in v.writes if w.data.startswith(b"W")]
+
+
+@pytest.mark.parametrize("start", ["before AOS", "mid-pass"])
+def test_a_pass_across_the_north_takes_the_overlap_of_a_450_degree_rotor_and_never_unwinds(
+    a_pass: tuple[str, str, float, float], start: str
+) -> None:
+    """Attack pass: a GS-232B 450 whose elevation is kept to 0..90 (no flip) waited at W010
+    for a pass rising at 10 and running west through the north; at the north it unwound to
+    W358 (a minute and a half of the pass pointing up to 179 degrees off) where W370 was free."""
+    line1, line2, aos, los = a_pass
+    if start == "before AOS":
+        v, errors = fly("gs232b-450", a_pass, {"el_max_deg": 90})
+    else:  # tracking starts a minute into the pass, with the rotor at 90
+        speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+        v = VirtualRotator(
+            "gs232b-450",
+            sky=Sky(*BERLIN),
+            wall_epoch_s=aos + 60.0,
+            emulator=speeds,
+            settings={**speeds, "el_max_deg": 90},
+        )
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.aim(Target(90.0, 0.0))
+        v.run_until(lambda h: not h.truth().is_moving and h.truth().az_deg > 85, 60, "at 90")
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        errors = []
+        v.run_for(60.0)  # the way from 90 to the satellite, the other side of north
+        while v.wall() < los:
+            v.run_for(1.0)
+            sat_az, sat_el = sgp4_altaz(line1, line2, *BERLIN, v.wall())
+            errors.append((v.wall(), off_deg(v.truth().az_deg, sat_az), 0.0))
+    with v:
+        azimuths = _gs232_azimuths(v)
+        tracked = azimuths[1:] if start == "mid-pass" else azimuths  # (the move to 90 first)
+        assert max(t for t in tracked) > 360, tracked  # the overlap, past the north
+        jumps = [abs(b - a) for a, b in zip(tracked, tracked[1:], strict=False)]
+        assert max(jumps) <= 10, tracked  # never round the stop mid-pass
+        assert max(e[1] for e in errors) <= 3.5, max(errors, key=lambda e: e[1])
