@@ -16,7 +16,10 @@ Rules:
 4. A target goes to the controller only when ``motion.plan_target`` says so; a stop due goes
    first, and a held target (session rule 13) waits for its marker.
 5. A target the rotor is already on its way to, or (not tracking's: its steps may be finer
-   than the tolerance) already within tolerance of, is done without a frame.
+   than the tolerance) already within tolerance of, is done without a frame; so is a
+   tracking step the rotor, at rest, already reads exactly as the controller would hold it
+   (an attack pass: a step finer than the controller's degree sent a GS-232B ``W192 000``
+   three times over to a rotor reading 192 and 0, 132 set frames of 320 on a pass).
 6. A stream of targets waits for its pause (rule 2); a half-duplex line with a reply in flight
    is free right after it.
 7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
@@ -47,6 +50,7 @@ from bridge.session.link import Link
 log = logging.getLogger(__name__)
 
 BURST_QUIET_S = 0.5
+SAME_DEG = 1e-6  # rule 5: a reading this near what would be sent is the same value
 STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
 
 
@@ -192,6 +196,8 @@ def decide(
     if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
         if not targets.again_now:  # (rule 8: that one once more is what it is for)
             return Sending(Go.DONE, wire=wire)  # already on its way there
+    if pending.source is Source.TRACKING and _reads(m, rig, wire) and not targets.again_now:
+        return Sending(Go.DONE, wire=wire)  # rule 5: nothing the controller would turn for
     small = pending.source is not Source.TRACKING
     if small and rig.spec.can_report_position and mo.within_tolerance(m, rig.motion, wire):
         log.info("%s: already within tolerance of %s", rig.rotator_id, wire)
@@ -206,6 +212,16 @@ def decide(
     if _needs_fresh_reading(rig, link, now):
         return Sending(Go.ASK_FIRST)
     return Sending(Go.SEND, az, el, wire)
+
+
+def _reads(m: mo.Motion, rig: WorkerConfig, wire: tuple[float, float | None]) -> bool:
+    """Rule 5: at rest, reading ``wire`` itself on each axis it names."""
+    if not mo.at_rest(m) or m.position_deg is None:
+        return False
+    if mo.angle_error(m.position_deg, wire[0], rig.motion.az_wraps) > SAME_DEG:
+        return False
+    el = wire[1]
+    return el is None or (m.el_position_deg is not None and abs(m.el_position_deg - el) <= SAME_DEG)
 
 
 def _needs_fresh_reading(rig: WorkerConfig, link: Link, now: float) -> bool:

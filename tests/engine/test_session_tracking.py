@@ -425,3 +425,35 @@ def test_a_pass_across_the_north_takes_the_overlap_of_a_450_degree_rotor_and_nev
         jumps = [abs(b - a) for a, b in zip(tracked, tracked[1:], strict=False)]
         assert max(jumps) <= 10, tracked  # never round the stop mid-pass
         assert max(e[1] for e in errors) <= 3.5, max(errors, key=lambda e: e[1])
+
+
+def test_steps_finer_than_the_controllers_degree_never_send_it_what_it_already_reads(
+    a_pass_clear_of_north: tuple[str, str, float, float],
+) -> None:
+    """Attack pass, counting the frames on the wire: with ``track_step_deg = 0.1`` a GS-232B
+    (whole degrees) was sent ``W192 000`` three times over while it read 192 and 0: 132 of a
+    pass's 320 set frames were the one before again (a SatEL's slews: 175 of 353)."""
+    v, errors = fly("gs232b", a_pass_clear_of_north, {"track_step_deg": 0.1})
+    with v:
+        sets = [w.data for w in v.writes if w.data.startswith(b"W")]
+        again = [a for a, b in zip(sets, sets[1:], strict=False) if a == b]
+        assert len(sets) > 100 and again == [], (len(sets), again[:5])
+        # and it follows as closely as before: the half degree of its rounding, and its lag
+        assert max(e[1] for e in errors) <= 1.5 and max(e[2] for e in errors) <= 1.5
+
+
+def test_a_rotor_ez_on_a_fine_step_is_not_sent_its_bearing_again_and_again() -> None:
+    """The same, on a controller that stops to re-target: 37 AP1 frames in an hour of the sun
+    where 4 bearings were new."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH, 20.0, 50.0)
+    settings = {"track_step_deg": 0.1}
+    with VirtualRotator(
+        "rotorez", sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, settings=settings
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.sun())
+        v.run_for(3600.0)
+        sets = [w.data for w in v.writes if w.data.startswith(b"AP1")]
+        again = [a for a, b in zip(sets, sets[1:], strict=False) if a == b]
+        assert len(sets) >= 3 and again == [], sets
+        assert off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]) <= 1.5
