@@ -36,7 +36,10 @@ Rules:
    away from the satellite for the whole pass).
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is skipped, reported once per pass, and the rotor holds until the
-   body is back where it may go.
+   body is back where it may go. A pass that rises where the judge refuses (a keep-out
+   sector, a limit) is waited for at the first point of its track the judge takes (an attack
+   pass: the rotor stood where it was until the satellite left the sector, then turned 200
+   degrees to it).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
 7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
 8. Nothing of the sky is computed here (docs/architecture.md, "nothing slow beside a stop"):
@@ -238,10 +241,13 @@ class Tracker:
                 return park
         if self._waited_for == p.aos_s or scene.pending is not None:
             return Proposal(busy=True)
-        az, el = self._aim(p.aos_az_deg, self.cfg.min_el_deg)
-        side = self._side(sky, p, az, utc, scene)
-        if side is None:
+        first = self._first_allowed(sky, p, scene)
+        if first is None:
             return Proposal(busy=True)  # rule 8: the pass's track is being computed
+        az, el, since = first
+        side = self._side(sky, p, az, max(utc, since), scene, False)
+        if side is None:
+            return Proposal(busy=True)
         margin_s = self._travel_s(scene, az, el, side[0]) + PREPOSITION_MARGIN_S
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
@@ -274,7 +280,7 @@ class Tracker:
                 return waiting  # on its way to the last step (its verdict decides)
         raw = None
         if self._sided_for != p.aos_s:  # rule 9: the pass's first target (started mid-pass)
-            side = self._side(sky, p, az, utc, scene)
+            side = self._side(sky, p, az, utc, scene, True)
             if side is None:
                 return waiting  # rule 8: the pass's track is being computed
             raw = side[0]
@@ -325,12 +331,41 @@ class Tracker:
             t = max(t, abs(el - m.el_position_deg) / rig.el_speed_deg_s)
         return t + rig.spec.brake_delay_s
 
+    def _first_allowed(
+        self, sky: SkyTrack, p: Pass, scene: Scene
+    ) -> tuple[float, float | None, float] | None:
+        """Rule 5: where the rotor waits for the pass (aimed, rules 4 and 6) and the time the
+        body is there: where it rises, or, rising in a keep-out sector or past a limit, the
+        first point of its track the judge takes (where it rises if none); None while the
+        pass's track is being computed."""
+        rise = (*self._aim(p.aos_az_deg, self.cfg.min_el_deg), p.aos_s)
+        try:
+            self._rig.aim.judge(
+                Target(rise[0], rise[1], Source.TRACKING), scene.motion.position_deg
+            )
+            return rise
+        except Refused:
+            pass
+        track = sky.flip_track(p)
+        if track is None:
+            return None
+        n, span = len(track), p.los_s - p.aos_s
+        for i, (az_b, el_b) in enumerate(track):
+            az, el = self._aim(az_b, max(el_b, self.cfg.min_el_deg))
+            try:
+                self._rig.aim.judge(Target(az, el, Source.TRACKING), scene.motion.position_deg)
+            except Refused:
+                continue
+            return az, el, p.aos_s + span * i / max(1, n - 1)
+        return rise
+
     def _side(
-        self, sky: SkyTrack, p: Pass, az: float, utc: float, scene: Scene
+        self, sky: SkyTrack, p: Pass, az: float, utc: float, scene: Scene, under_way: bool
     ) -> tuple[float | None] | None:
         """Rule 9: the raw azimuth for the pass's first target, on the side from which the rest
-        of the pass turns least ((None,): the judge's own, nearest side, on a scale that wraps
-        or where there is one side only); None while the pass's track is being computed."""
+        of the pass from ``utc`` turns least, counting the move there if the pass is
+        ``under_way`` ((None,): the judge's own, nearest side, on a scale that wraps or where
+        there is one side only); None while the pass's track is being computed."""
         if self._rig.aim.az_wraps:
             return (None,)
         track = sky.flip_track(p)
@@ -338,7 +373,7 @@ class Tracker:
             return None
         n, span = len(track), p.los_s - p.aos_s
         ahead = [pt for i, pt in enumerate(track) if p.aos_s + span * i / max(1, n - 1) >= utc]
-        return (self._start(az, ahead, self._flip, scene, utc >= p.aos_s),)
+        return (self._start(az, ahead, self._flip, scene, under_way),)
 
     def _start(
         self,

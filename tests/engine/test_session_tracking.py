@@ -457,3 +457,37 @@ def test_a_rotor_ez_on_a_fine_step_is_not_sent_its_bearing_again_and_again() -> 
         again = [a for a, b in zip(sets, sets[1:], strict=False) if a == b]
         assert len(sets) >= 3 and again == [], sets
         assert off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]) <= 1.5
+
+
+def test_a_pass_rising_in_a_keep_out_sector_is_waited_for_where_it_leaves_the_sector(
+    a_pass_clear_of_north: tuple[str, str, float, float],
+) -> None:
+    """Attack pass: a pass rising inside a keep-out sector was not waited for at all; the rotor
+    stood where it was (at 0) until the satellite left the sector, then turned 200 degrees to
+    it: half a minute of the pass lost at 6 degrees a second."""
+    line1, line2, aos, los = a_pass_clear_of_north
+    rise_az, _ = sgp4_altaz(line1, line2, *BERLIN, aos)
+    sector = [round(rise_az - 10) % 360, round(rise_az + 10) % 360]
+    v, errors = fly("rot2prog", a_pass_clear_of_north, {"keep_out": [sector]})
+    with v:
+        exit_t = next(
+            t
+            for t in range(int(aos), int(los))
+            if not _sector_has(sgp4_altaz(line1, line2, *BERLIN, float(t))[0], sector)
+        )
+        exit_az, _ = sgp4_altaz(line1, line2, *BERLIN, float(exit_t))
+        waiting = [s for t, s in v.statuses if aos - 60 <= v.wall_epoch_s + t < aos]
+        assert waiting and all(off_deg(s.bearing_deg or 0.0, exit_az) <= 5.0 for s in waiting), (
+            exit_az,
+            [s.bearing_deg for s in waiting],
+        )
+        after = [e[1] for e in errors if exit_t + 5 <= e[0]]
+        assert after and max(after) <= 3.5, max(after)
+        refusals = [e for e in v.errors("refused") if "tracking TESTSAT" in e.message]
+        assert len(refusals) == 1, refusals
+
+
+def _sector_has(az: float, sector: list[int]) -> bool:
+    start, end = sector
+    a = az % 360
+    return start <= a <= end if start <= end else a >= start or a <= end
