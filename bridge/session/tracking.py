@@ -121,6 +121,8 @@ class Tracker:
         self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
         self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
         self._sided_for: float | None = None  # AOS of the pass whose first target chose a side
+        # where to wait for the pass of this AOS (rules 5, 9): (AOS, az, el, side)
+        self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
         self._info_t = -math.inf
@@ -241,13 +243,15 @@ class Tracker:
                 return park
         if self._waited_for == p.aos_s or scene.pending is not None:
             return Proposal(busy=True)
-        first = self._first_allowed(sky, p, scene)
-        if first is None:
-            return Proposal(busy=True)  # rule 8: the pass's track is being computed
-        az, el, since = first
-        side = self._side(sky, p, az, max(utc, since), scene, False)
-        if side is None:
-            return Proposal(busy=True)
+        if self._wait_at is None or self._wait_at[0] != p.aos_s:  # (once a pass: the
+            first = self._first_allowed(sky, p, scene)  # hours after a pass, every step)
+            if first is None:
+                return Proposal(busy=True)  # rule 8: the pass's track is being computed
+            side = self._side(sky, p, first[0], max(utc, first[2]), scene, False)
+            if side is None:
+                return Proposal(busy=True)
+            self._wait_at = (p.aos_s, first[0], first[1], side)
+        _aos, az, el, side = self._wait_at
         margin_s = self._travel_s(scene, az, el, side[0]) + PREPOSITION_MARGIN_S
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
