@@ -8,7 +8,10 @@ Rules:
    before it is needed; at most WINDOWS_KEPT are kept.
 2. A question is asked once until its answer is in (``asks`` holds those not yet handed out).
 3. The pass now or next is searched for again PASS_RETRY_S after an answer of "none in sight",
-   and once the pass in hand is over.
+   once the pass in hand is over, and when the wall clock steps back past the time the pass
+   in hand was searched from (NTP: an attack pass, a clock stepped back an hour mid-pass left
+   the rotor where the satellite had been, waiting for that same pass an hour on, and after
+   "none in sight" nothing was searched for until the clock caught up again).
 4. A new body (or a new start) is a new ``SkyTrack``: nothing asked for the old one is kept.
 """
 
@@ -25,6 +28,7 @@ SLOW_SAMPLE_S = 10.0
 WINDOW = 120
 WINDOWS_KEPT = 8  # more than one step needs: now, +10 s, +60 s, + a lead of 300 s, the next
 PASS_RETRY_S = 60.0  # no pass in sight: look again this often
+CLOCK_BACK_S = 1.0  # rule 3: a clock stepped back further than this searches again
 FLIP_SAMPLE_S = 10.0
 FLIP_SAMPLES = 120  # at most, over a pass
 
@@ -105,6 +109,8 @@ class SkyTrack:
         p = self._pass
         if p is not None and utc > p.los_s:
             self.after_pass, self._pass = True, None
+        if utc < self._pass_checked - CLOCK_BACK_S:  # the clock stepped back: what was found
+            self._pass, self._pass_checked = None, -math.inf  # from later may not come next
         if self._pass is not None or utc - self._pass_checked < PASS_RETRY_S:
             return False
         if not any(isinstance(q, PassQuestion) for q in self._asked):

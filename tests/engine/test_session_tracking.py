@@ -491,3 +491,28 @@ def _sector_has(az: float, sector: list[int]) -> bool:
     start, end = sector
     a = az % 360
     return start <= a <= end if start <= end else a >= start or a <= end
+
+
+def test_a_clock_stepped_back_mid_pass_sends_the_rotor_to_wait_where_the_next_pass_rises(
+    a_pass_clear_of_north: tuple[str, str, float, float],
+) -> None:
+    """Attack pass: NTP stepped the wall clock back an hour two and a half minutes into a pass;
+    the pass in hand (searched from later) was kept, and the rotor stood where the satellite had
+    been, waiting for that pass an hour on instead of where it rises."""
+    line1, line2, aos, los = a_pass_clear_of_north
+    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+    with VirtualRotator(
+        "md01", sky=Sky(*BERLIN), wall_epoch_s=aos - 300.0, emulator=speeds, settings=speeds
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_until(lambda h: h.wall() >= aos + 150.0, 600, "mid-pass")
+        v.wall_epoch_s -= 3600.0  # the clock steps back an hour
+        v.session.set_wall(v.now, v.wall())
+        v.run_for(120.0)
+        info = v.status.tracking
+        assert info is not None and info.phase == "waiting" and info.aos_unix is not None
+        assert info.aos_unix > v.wall()
+        rise_az, rise_el = sgp4_altaz(line1, line2, *BERLIN, info.aos_unix)
+        assert abs(rise_el) < 1.0  # (the reference agrees it rises then)
+        assert off_deg(v.truth().az_deg, rise_az) <= 3.0, (v.truth().az_deg, rise_az)
