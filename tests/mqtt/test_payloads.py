@@ -225,3 +225,10 @@ def test_a_tles_name_and_lines_are_held_to_a_bare_names_rules(lines: list[str]) 
     with pytest.raises(pl.PayloadError, match="at most 64 printable characters"):
         pl.parse_track(json.dumps({"tle": lines}).encode())
     assert pl.parse_track(json.dumps({"tle": ["N" * 64, "1 a", "2 b"]}).encode())[0] == "N" * 64
+
+
+def test_a_tle_sent_without_its_line_2_is_refused_saying_so() -> None:
+    """An attack pass: ``{"tle": ["ISS", "1 ..."]}`` came back as "a satellite needs a name"."""
+    with pytest.raises(pl.PayloadError, match='"1 ..." and "2 ...", a name first'):
+        pl.parse_track(json.dumps({"tle": ["ISS (ZARYA)", "1 25544U 98067A"]}).encode())
+    assert pl.parse_track(json.dumps({"tle": ["1 25544U", "2 25544"]}).encode())[0] == "25544"
