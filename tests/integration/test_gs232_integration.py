@@ -357,3 +357,36 @@ def test_a_gs232_client_that_sent_a_bearing_past_360_reads_it_past_360(
     # Hamlib's own, in one session: P 400 (W400 000) and p (C2) read back 400
     az = rotctl(rotctl_path, GS232, port, "P", "400", "0", "p").split()[0]
     assert float(az) == 400
+
+
+def _line(sock: socket.socket, request: bytes) -> bytes:
+    """``request`` on a connection kept open, and the one line it is answered with."""
+    sock.sendall(request)
+    buf = b""
+    while not buf.endswith(b"\n"):
+        chunk = sock.recv(64)
+        if not chunk:
+            break
+        buf += chunk
+    return buf
+
+
+def test_an_easycomm_client_that_sent_a_bearing_past_360_reads_it_past_360(rig: Rig) -> None:
+    """Package rule 4 on the Easycomm port too: a client that sent AZ400.0 to a 450-degree
+    rotor reads AZ400.0 once it is there, as a GS-232 client that sent W400 reads AZ=400 and
+    rotctld's p answers P 400; one that never named the overlap reads AZ40.0. (Read back as
+    40.0, the first client saw its rotor 360 degrees short of the target it had reached.)"""
+    start(rig, "gs232b-az-450", start_az_deg=350)
+    port = easycomm_port(rig)
+    with (
+        socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as overlap,
+        socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as compass,
+    ):
+        overlap.sendall(b"AZ400.0 EL0.0\n")  # a move: answered with nothing
+        rig.arrived("tower", 40)
+        wait_until(lambda: settled(rig, 40, 0), 10, "the bridge's status at 40")
+        assert rig.status("tower").raw_bearing_deg == pytest.approx(400, abs=1)
+        assert _line(overlap, b"AZ EL\n") == b"AZ400.0 EL0.0\n"
+        assert _line(compass, b"AZ EL\n") == b"AZ40.0 EL0.0\n"
+        overlap.sendall(b"AZ40.0\n")  # the side named no more (the rotor stays at raw 400)
+        assert _line(overlap, b"AZ\n") == b"AZ40.0\n"

@@ -60,12 +60,13 @@ Rules:
    next line, ``;AZ200.0 EL30.0`` or ``;AZ`` (a review: refused as malformed, Hamlib's own
    move did nothing and its next ``p`` failed).
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
-   ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator; a GS-232 client whose
-   last accepted bearing was past 360 (``W400``: a 450-degree controller's overlap) reads the
-   bearing unfolded, past 360 where the rotor is there (``AZ=400``), as rotctld's ``p`` answers
-   a client that named the side: read back as 040, its rotor seemed 360 degrees short of the
-   target it had reached. A position the bridge does not currently have is an error, never
-   the last value seen.
+   ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator; a GS-232 or Easycomm
+   client whose last accepted bearing was past 360 (``W400``, ``AZ400.0``: a 450-degree
+   controller's overlap) reads the bearing unfolded, past 360 where the rotor is there
+   (``AZ=400``, ``AZ400.0``), as rotctld's ``p`` answers a client that named the side: read
+   back as 040, its rotor seemed 360 degrees short of the target it had reached (a review:
+   the Easycomm port still read it back so). A position the bridge does not currently have
+   is an error, never the last value seen.
 5. Targets go through Rotator.submit with Source.GS232 / EASYCOMM / DCU1: the lock, the limits,
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
    Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one). Every

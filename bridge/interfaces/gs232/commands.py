@@ -212,9 +212,16 @@ class Gs232Session(_LineSession):
 
 
 class EasycommSession(_LineSession):
-    """One Easycomm II client."""
+    """One Easycomm II client. ``names_side``: its last accepted azimuth was past 360 (package
+    rule 4)."""
+
+    rotator: Gs232Rotator
 
     name, failed_reply, source = "easycomm", b"ALinternal error\n", Source.EASYCOMM
+
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
+        super().__init__(rotator, peer)
+        self.names_side = False
 
     def answer(self, line: str | None) -> bytes:
         req = parse_easycomm(line)
@@ -252,6 +259,9 @@ class EasycommSession(_LineSession):
                 self.rotator.submit(target, described)
             except Refused:  # Rotator.submit has reported it on R/error
                 pass
+            else:  # rule 4 (an elevation alone keeps the azimuth, and its side)
+                if req.az_deg is not None:
+                    self.names_side = not 0 <= req.az_deg <= 360
         if req.unsupported:  # rule 12 (a garbled poll's AZ ML reads as a jog asked)
             asked = ", ".join(req.unsupported)
             self._not_carried_out(f"Easycomm: {asked} not carried out by the bridge", described)
@@ -263,7 +273,8 @@ class EasycommSession(_LineSession):
 
     def _answers(self, queries: tuple[str, ...]) -> list[str] | None:
         words = []
-        where = _position(self.rotator) if set(queries) & {"AZ", "EL"} else None
+        pointing = self.rotator.pointing if self.names_side else None  # rule 4
+        where = _position(self.rotator, pointing) if set(queries) & {"AZ", "EL"} else None
         for query in queries:
             if query == "VE":
                 words.append("VErotor-bridge")
