@@ -43,9 +43,12 @@ Rules:
    second STOP, 1.5 to 7 degrees). An axis not turning when that stop went out (an
    elevation-only move's azimuth, an axis that had arrived) has no coast (a review: an
    elevation-only stop's azimuth coast was 0, learned, and such stops pulled the azimuth
-   coast's median to 0, its brake unwatched). Its speed is measured up to the stop it
-   obeyed. The arrival error is of a move that came to rest by itself: not one stopped,
-   stalled or ended by a new target while turning (it arrived nowhere).
+   coast's median to 0, its brake unwatched). The coast goes the way the axis went last
+   before the stop, not its net turn over that second (a review: a rotor turned back to a
+   new target the other way and stopped within the second read a 1.5 degree coast as 0).
+   Its speed is measured up to the stop it obeyed. The arrival error is of a move that came
+   to rest by itself: not one stopped, stalled or ended by a new target while turning (it
+   arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -345,21 +348,23 @@ def _speed_over(times: list[float], path: list[float], t0: float, t1: float) -> 
 
 def _coast(times: list[float], path: list[float], stop_t: float) -> float | None:
     """Rule 3: from where the rotor was at the stop (the last reading before it, carried on
-    at the speed of the two last) to where it came to rest, the way it was turning; None for
-    an axis that was not turning then (over the second before the stop and the last reading
-    before it)."""
+    at the speed of the two last) to where it came to rest, the way it was turning (its last
+    step before the stop); None for an axis that was not turning then (over the second before
+    the stop and the last reading before it)."""
     j = bisect_right(times, stop_t) - 1  # (rule 6: times in order)
     if j < 1:
         return None
     since = min(j - 1, max(0, bisect_right(times, stop_t - SPEED_SPAN_S) - 1))
-    came = path[j] - path[since]
-    if came == 0:
+    if path[j] == path[since]:
         return None  # an elevation-only move's azimuth, an axis that had arrived
+    last = j  # its last step: a rotor turned back within that second goes the way it went last
+    while path[last] == path[last - 1]:  # (one came after ``since``: the second's readings)
+        last -= 1
     i = j - 1
     dt = times[j] - times[i]
     speed = (path[j] - path[i]) / dt if dt > 0 else 0.0
     at_stop = path[j] + speed * (stop_t - times[j])
-    way = 1.0 if came > 0 else -1.0
+    way = 1.0 if path[last] > path[last - 1] else -1.0
     return max(0.0, (path[-1] - at_stop) * way)
 
 

@@ -693,3 +693,50 @@ def test_an_elevation_only_stop_is_no_azimuth_coast(rig: Rig) -> None:
     kept = health.memory
     assert isinstance(kept["recent"], dict) and "az_coast" not in kept["recent"]
     assert isinstance(kept["learning"], dict) and "az_coast" not in kept["learning"]
+
+
+def _coast_after_turning_back(stop_t: float) -> float | None:
+    """The coast R/health shows after a GS-232B's moves: clockwise from 20 degrees, commanded at
+    1 s; at 3 s a target the other way, which the rotor turns back to from 3.6 s
+    at 6 degrees a second; the STOP at ``stop_t``, after which it coasts 1.5 degrees on the way
+    it went. Read in whole degrees every 0.2 s; the last report, the stopped move's."""
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "gs232b", "port": "/dev/x"})
+    )
+    health, mcfg = Health(cfg), cfg.motion
+
+    def at(t: float) -> float:
+        if t <= 3.6:
+            return 20.0 + 6.0 * (min(t, 3.4) - 1.0)  # on to 34.4, its turn back from 3.4 s
+        if t <= stop_t:
+            return 34.4 - 6.0 * (t - 3.6)
+        dt = min(t - stop_t, 0.5)
+        return 34.4 - 6.0 * (stop_t - 3.6) - (6.0 * dt - 6.0 * dt * dt)  # 1.5 degrees
+
+    m = mo.link_up(mo.Motion(), mcfg, 0.0)
+    shown = None
+    for k in range(1, 60):
+        then = k / 5
+        if then - 0.2 < stop_t <= then:
+            m = mo.stop_sent(m, mcfg, stop_t)
+            health.step(m, stop_t)
+        if then in (1.0, 3.0):
+            m = mo.commanded(m, mcfg, 300.0 if then == 1.0 else 0.0, then)
+            health.step(m, then)
+        m, _events = mo.reading(m, mcfg, float(round(at(then))), then)
+        health.step(m, then)
+        shown = health.report
+    assert shown is not None and shown.moves >= 1, "the stopped move reported"
+    return shown.az.coast_deg
+
+
+@pytest.mark.parametrize("stop_t", [3.9, 4.3])
+def test_a_stop_soon_after_the_rotor_turned_back_counts_its_coast_the_way_it_went(
+    stop_t: float,
+) -> None:
+    """A review of e01d2e4: the coast's way was the net turn over the second before the stop,
+    so a STOP that came within that second of a rotor turning back to a new target the other
+    way measured its 1.5 degree coast against the way it no longer went: 0.0 shown and learned
+    (a failing brake's median pulled to 0, as the elevation-only stops did). The coast goes
+    the way the rotor went last before the stop."""
+    assert _coast_after_turning_back(stop_t) == pytest.approx(1.5, abs=0.6)
