@@ -488,6 +488,9 @@ class RotatorStatus:
     connected: bool = False  # serial port open
     available: bool = False  # port open and controller answering (or cannot answer)
     locked: bool = False
+    # runtime/kept.py rule 10: the state file does not say the lock and the broker's
+    # R/lock/state has not been read yet: motion is refused, and ``locked`` is not known
+    lock_unknown: bool = False
     version: str | None = None
     options: dict[str, SettingValue] = field(default_factory=dict)  # the controller's settings
     last_error: str | None = None

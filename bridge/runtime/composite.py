@@ -164,6 +164,7 @@ def merge(
         connected=az.connected and el.connected,
         available=az.available and el.available,
         locked=az.locked or el.locked,
+        lock_unknown=az.lock_unknown or el.lock_unknown,
         version=" / ".join(versions) or None,
         last_error=error,
         estimated=az.estimated or el.estimated,

@@ -74,8 +74,10 @@ Rules:
    Until that look has said it (the broker down, or slower to start than the bridge;
    ``await_heard_lock``), such a rotator refuses motion, as a locked one does (a review:
    rotctld, the console and the loggers run before the look, and a tracking program's target
-   turned the rotor meanwhile); a lock word ends the wait. The bridge's own moves are not
-   judged: auto-park (``park_after_idle_s``) still parks it while the broker stays away that
+   turned the rotor meanwhile); a lock word ends the wait. The status says so meanwhile
+   (``lock_unknown``): ``locked`` false is no OFF then (an attack pass: the console showed
+   "Lock OFF" while it refused every click for a lock that may be ON). The bridge's own moves
+   are not judged: auto-park (``park_after_idle_s``) still parks it while the broker stays away that
    long. A file that says the lock wins, and waits for no broker: OFF was written after the ON
    the broker holds, or the ON is a stranger's, or (not told apart) the ON's save failed after
    an OFF was saved: a lock ON whose save failed is taken from the broker only where the file

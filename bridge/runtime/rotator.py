@@ -611,8 +611,11 @@ class Rotator:
 
     def await_heard_lock(self) -> None:
         """kept.py rule 10: motion is refused while the state file has not said the lock and
-        ``heard_lock`` has not been called (before the front ends start)."""
+        ``heard_lock`` has not been called (before the front ends start); the status says the
+        lock is not known meanwhile (``lock_unknown``), a lock word or ``heard_lock`` ends it."""
         self._unheard = True
+        if self._kept.lock_unsaid:
+            self._mailbox.put_lock_unknown(True)
 
     def heard_lock(self, payload: bytes | None) -> bool:
         """kept.py rule 10: ``R/lock/state`` as the broker held it from an earlier run (MQTT's
@@ -625,6 +628,8 @@ class Rotator:
                 self.last_halt_s = time.monotonic()
                 self._mailbox.put_lock(True, wake=False)  # woken after the step
             self._unheard = False  # (after the lock: a target judged meanwhile is overtaken)
+            if not took:  # (a lock put says it is known: mailbox.py ``put_lock``)
+                self._mailbox.put_lock_unknown(False, wake=False)
         if not took:
             return False
         who = Origin(Source.MQTT, "retained R/lock/state")

@@ -122,6 +122,7 @@ class Batch:
     options: list[SetOption] = field(default_factory=list)
     lock: bool | None = None
     lock_saved: bool | None = None  # the lock the state file now holds (runtime/kept.py rule 2)
+    lock_unknown: bool | None = None  # runtime/kept.py rule 10: whether the lock is not known
     notes: list[str] = field(default_factory=list)
     track: Track | None = None  # applied after the stop and before the target (tracking.py)
     lock_on: bool = False  # rule 7: a lock ON was put, whatever ``lock`` ends as
@@ -156,6 +157,7 @@ class Batch:
             self.options
             or self.lock is not None
             or self.lock_saved is not None
+            or self.lock_unknown is not None
             or self.notes
             or self.health_reset
             or self.control_set
@@ -300,6 +302,7 @@ class Mailbox:
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
             self._batch.lock = locked
+            self._batch.lock_unknown = False  # (runtime/kept.py rule 10: a word says it)
             # rule 10a: a lock OFF takes a place too, so a motion command asked before it (while
             # the lock was ON) and put after it is not carried out (an attack pass: a DX call
             # asked while locked, looked up after the OFF, turned the rotor; a plain target at
@@ -323,6 +326,13 @@ class Mailbox:
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5
+            self._wake_once()
+
+    def put_lock_unknown(self, unknown: bool, *, wake: bool = True) -> None:
+        """runtime/kept.py rule 10: whether the status says the lock is not known yet."""
+        with self._lock:
+            self._batch.lock_unknown = unknown
+        if wake:
             self._wake_once()
 
     def put_lock_saved(self, locked: bool, *, wake: bool = True) -> None:

@@ -181,6 +181,7 @@ class RotatorSession:
         self.cfg = cfg
         self.locked = locked
         self.lock_shown = locked  # the lock saved last (runtime/kept.py rule 2)
+        self.lock_unknown = False  # runtime/kept.py rule 10: the status says it is not known
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
@@ -309,6 +310,8 @@ class RotatorSession:
             self.locked = batch.lock
         if batch.lock_saved is not None:  # (the status says what a restart would find)
             self.lock_shown = batch.lock_saved
+        if batch.lock_unknown is not None:
+            self.lock_unknown = batch.lock_unknown
         if unlocked:  # parts.py rule 7: nothing turned on while locked turns it once unlocked
             self._end_parts("lock released", now)
             if not batch.lock_on:  # (an ON then OFF in one batch: its stop is checked)
@@ -812,6 +815,7 @@ class RotatorSession:
             ctl.options.revision,
             self.targets.pending,
             self.locked and self.lock_shown,  # (runtime/kept.py rule 2)
+            self.lock_unknown,  # (runtime/kept.py rule 10)
             view.last_error,
             view.last_source,
             view.target_info,
@@ -842,6 +846,8 @@ class RotatorSession:
             shown,
         )
         status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
+        if self.lock_unknown:  # (runtime/kept.py rule 10)
+            status = replace(status, lock_unknown=True)
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
         self.status = status  # also when only the controller's clock changed (status rule 4)

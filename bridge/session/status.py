@@ -164,6 +164,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         connected=seen.connected,
         available=answering,
         locked=seen.locked,
+        lock_unknown=False,  # (the session says it: runtime/kept.py rule 10)
         version=seen.version,
         options=dict(seen.options),
         last_error=view.last_error,

@@ -132,6 +132,7 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put": lambda mb: mb.put(Target(10.0)),
         "put_lock": lambda mb: mb.put_lock(True),
         "put_lock_saved": lambda mb: mb.put_lock_saved(True),
+        "put_lock_unknown": lambda mb: mb.put_lock_unknown(True),
         "put_release": lambda mb: mb.put_release(1),
         "put_express_release": lambda mb: mb.put_express_release(1),
         "put_track": lambda mb: mb.put_track(Track(None)),

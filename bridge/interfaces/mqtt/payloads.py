@@ -480,6 +480,7 @@ _REST_FIELDS = attrgetter(
     "connected",
     "available",
     "locked",
+    "lock_unknown",
     "version",
     "last_error",
     "last_command_source",
@@ -532,6 +533,8 @@ def _status_rest(
     doc["connected"] = status.connected
     doc["available"] = status.available
     doc["locked"] = status.locked
+    if status.lock_unknown:  # (runtime/kept.py rule 10: only while it is not known)
+        doc["lock_unknown"] = True
     doc["version"] = status.version
     doc["options"] = dict(sorted(status.options.items()))
     doc["last_error"] = status.last_error

@@ -127,7 +127,7 @@ function updateTab(id, st) {
   const bearing = fmtDeg(st.bearing);
   if (tab.lastChild.textContent !== bearing) tab.lastChild.textContent = bearing;
   mark(tab, 'data-state', st.state || '');
-  flag(tab, 'locked', Boolean(st.locked));
+  flag(tab, 'locked', Boolean(st.locked || st.lock_unknown));
 }
 
 function selectRotator(id) {
@@ -260,10 +260,14 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
   hide('control-label', !control);
   hide('control', !control);
   if (control) put('control', `${control.holder} until ${String(control.until).slice(11, 16)} UTC`);
+  // not known yet (the state file does not say it, the broker's R/lock/state not read): motion
+  // is refused as if locked, and the button says neither ON nor OFF; a click locks (the safe side)
   const locked = Boolean(st.locked);
-  mark($('lock'), 'aria-pressed', String(locked));
-  put('lock', locked ? 'Lock ON' : 'Lock OFF');
-  flag(document.body, 'locked', locked);
+  const unknown = !locked && Boolean(st.lock_unknown);
+  mark($('lock'), 'aria-pressed', unknown ? 'mixed' : String(locked));
+  put('lock', unknown ? 'Lock ?' : locked ? 'Lock ON' : 'Lock OFF');
+  mark($('lock'), 'title', unknown ? 'Lock not known yet (the broker not read): motion is refused; a click locks' : '');
+  flag(document.body, 'locked', locked || unknown);
   flag(document.body, 'rotor-down', st.available === false);
   hide('path-row', !info);
   if (info) {
@@ -317,6 +321,7 @@ function renderBadges(st, tracking) {
   const badges = [];
   if (st.available === false) badges.push(['down', 'ROTATOR OFFLINE']);
   if (st.locked) badges.push(['locked', 'LOCKED']);
+  else if (st.lock_unknown) badges.push(['locked', 'LOCK NOT KNOWN YET']);
   if (st.parked) badges.push(['parked', 'PARKED']);
   if (tracking) badges.push(['tracking', `TRACKING ${tracking.body.toUpperCase()}`]);
   const key = badges.map((b) => b[1]).join('|');

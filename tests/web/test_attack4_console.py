@@ -1,0 +1,60 @@
+"""A fourth attack pass on the operator console (bridge/interfaces/web/), as a confused user: what
+the page says of the lock. Real parts: the bridge in this process on an emulated controller
+(pty), a real mosquitto, the console's own HTTP API.
+
+Each test failed on the code it was written against (a finding of the pass):
+- a rotator whose lock the state file does not say refuses motion until the broker's
+  ``R/lock/state`` is read (runtime/kept.py rule 10), but its status said ``"locked": false``:
+  the page showed "Lock OFF" while every click was refused for a lock that may be ON, and its
+  button, labelled "Lock OFF", locked the rotator when the refusal said "a lock OFF releases
+  it".
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.rig import Rig
+from tests.support.waiting import slow
+
+
+def _status_until(
+    stream: EventStream, want: Callable[[dict[str, Any]], bool], deadline_s: float
+) -> dict[str, Any]:
+    """The first status of ``hf`` on the stream for which ``want(status)`` is true."""
+    end = time.monotonic() + deadline_s
+    while time.monotonic() < end:
+        name, doc = stream.next()
+        if name == "status" and doc["rotator"] == "hf" and want(doc["status"]):
+            return dict(doc["status"])
+    raise AssertionError("no such status came")
+
+
+def test_a_lock_not_known_yet_is_said_as_such_and_no_longer_once_the_broker_is_read(
+    rig: Rig,
+) -> None:
+    """The broker down at the start, a new state file: the status the page reads says the
+    lock is not known (motion refused), not OFF; once the broker is reached and holds no lock
+    ON, it says OFF and a click turns the rotor."""
+    web = rig.sections["web"] = web_section()
+    rig.add("hf")
+    rig.broker.stop()
+    rig.start()
+    client = ConsoleClient(web["port"])
+    client.session()
+    stream = EventStream(client, timeout_s=30)
+    try:
+        shown = _status_until(stream, lambda s: s["available"], slow(15))
+        assert shown["lock_unknown"] is True and shown["locked"] is False, shown
+        refused = client.command("hf", command="target", az=150)
+        assert refused.status == 409 and "R/lock/state" in refused.doc["error"], refused
+        rig.broker.start()
+        known = _status_until(stream, lambda s: "lock_unknown" not in s, slow(30))
+        assert known["locked"] is False, known
+    finally:
+        stream.close()
+    assert client.command("hf", command="target", az=150).status == 200
+    rig.arrived("hf", 150)
