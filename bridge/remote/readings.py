@@ -199,6 +199,7 @@ def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
         connected=bool(doc.get("connected")),
         available=bool(doc.get("available")),
         locked=bool(doc.get("locked")),
+        lock_unknown=doc.get("lock_unknown") is True,  # (the station's kept.py rule 10)
         version=doc.get("version"),
         last_error=doc.get("last_error"),
         last_command_source=doc.get("last_command_source"),
