@@ -1,6 +1,6 @@
 """A fourth attack pass on the operator console (bridge/interfaces/web/), as a confused user: what
 the page says of the lock. Real parts: the bridge in this process on an emulated controller
-(pty), a real mosquitto, the console's own HTTP API.
+(pty), a real mosquitto, the console's own HTTP API and the page in Debian's Chromium.
 
 Each test failed on the code it was written against (a finding of the pass):
 - a rotator whose lock the state file does not say refuses motion until the broker's
@@ -16,9 +16,12 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from playwright.sync_api import Browser, expect
+
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
-from tests.support.waiting import slow
+from tests.support.waiting import slow, slow_ms
+from tests.web.conftest import open_console
 
 
 def _status_until(
@@ -58,3 +61,23 @@ def test_a_lock_not_known_yet_is_said_as_such_and_no_longer_once_the_broker_is_r
         stream.close()
     assert client.command("hf", command="target", az=150).status == 200
     rig.arrived("hf", 150)
+
+
+def test_the_page_shows_lock_not_known_yet_until_the_broker_is_read(
+    rig: Rig, browser: Browser
+) -> None:
+    """In Chromium: while the lock is not known the button reads "Lock ?" (not "Lock OFF")
+    beside a badge that says so; once the broker is read (it holds no lock ON), "Lock OFF"."""
+    web = rig.sections["web"] = web_section()
+    rig.add("hf")
+    rig.broker.stop()
+    rig.start()
+    page = open_console(browser, f"http://127.0.0.1:{web['port']}/")
+    try:
+        expect(page.locator("#lock")).to_have_text("Lock ?")
+        expect(page.locator("#badges")).to_contain_text("LOCK NOT KNOWN YET")
+        rig.broker.start()
+        expect(page.locator("#lock")).to_have_text("Lock OFF", timeout=slow_ms(30_000))
+        expect(page.locator("#badges")).not_to_contain_text("LOCK")
+    finally:
+        page.context.close()
