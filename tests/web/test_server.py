@@ -278,6 +278,8 @@ def test_a_halt_the_page_sends_both_ways_is_one_event_in_the_audit_trail(
     run_async(click())
     assert client.command("hf", **lock).status == 200  # its POST
     assert client.command("hf", **lock).status == 200  # the page's retry
+    # said ON once saved (kept.py rule 2): an OFF before that leaves R/lock/state unchanged
+    rig.probe.wait_value("rotor/lock/state", "ON", after=t)
     assert client.command("hf", command="lock", on=False).status == 200
     unlocked = rig.probe.wait_for("rotor/audit", lambda m: "lock OFF" in m.text, after=t)
     events = [json.loads(m.text)["command"] for m in rig.probe.on("rotor/audit") if m.t >= t]
