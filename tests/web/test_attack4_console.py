@@ -1,6 +1,7 @@
-"""A fourth attack pass on the operator console (bridge/interfaces/web/), as a confused user: what
-the page says of the lock. Real parts: the bridge in this process on an emulated controller
-(pty), a real mosquitto, the console's own HTTP API and the page in Debian's Chromium.
+"""A fourth attack pass on the operator console (bridge/interfaces/web/), as a confused user
+(what the page says of the lock) and as a neighbour with nothing but its port. Real parts: the
+bridge in this process on an emulated controller (pty), a real mosquitto, the console's own
+HTTP API and the page in Debian's Chromium.
 
 Each test failed on the code it was written against (a finding of the pass):
 - a rotator whose lock the state file does not say refuses motion until the broker's
@@ -8,14 +9,18 @@ Each test failed on the code it was written against (a finding of the pass):
   the page showed "Lock OFF" while every click was refused for a lock that may be ON, and its
   button, labelled "Lock OFF", locked the rotator when the refusal said "a lock OFF releases
   it".
+- an ``Origin`` header that is no URL (``http://[::1``, an unclosed bracket) was a 500, its
+  traceback logged at ERROR, from any client that reaches the port, token or not.
 """
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 from typing import Any
 
+import pytest
 from playwright.sync_api import Browser, expect
 
 from tests.support.console import ConsoleClient, EventStream, web_section
@@ -81,3 +86,18 @@ def test_the_page_shows_lock_not_known_yet_until_the_broker_is_read(
         expect(page.locator("#badges")).not_to_contain_text("LOCK")
     finally:
         page.context.close()
+
+
+@pytest.mark.parametrize("origin", ["http://[::1", "http://[127.0.0.1:8754"])
+def test_an_origin_that_is_no_url_is_another_sites_refused_not_a_500(
+    rig: Rig, caplog: pytest.LogCaptureFixture, origin: str
+) -> None:
+    web = rig.sections["web"] = web_section()
+    rig.add("hf")
+    rig.start()
+    caplog.set_level(logging.INFO)
+    client = ConsoleClient(web["port"])
+    answer = client.post("/api/session", {}, token=False, headers={"Origin": origin})
+    assert answer.status == 403, answer
+    assert "another site" in answer.doc["error"], answer
+    assert not [r for r in caplog.records if r.exc_info], "a traceback was logged"

@@ -28,7 +28,8 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    login that succeeds costs nothing (each new tab logs in).
 4. A POST whose ``Origin`` is not this host (the ``Host`` header, or the ``X-Forwarded-Host`` a
    reverse proxy sets) is refused: another site's page, even one holding a token. A request
-   without ``Origin`` is not a browser's and needs the token like any.
+   without ``Origin`` is not a browser's and needs the token like any. An ``Origin`` that is no
+   URL (``http://[::1``) is another site's too, refused (403), never a 500 (an attack pass).
 5. Without a password the console only listens on loopback (settings/web.py) and takes only
    requests addressed to an IP literal, ``localhost`` or a name the user listed (``host_names``,
    a reverse proxy's): a web page whose own host name has been pointed at 127.0.0.1 (DNS
@@ -243,7 +244,10 @@ def origin_allowed(origin: str | None, host: str | None, forwarded_host: str | N
         return True
     if origin.strip() == "null":
         return False
-    parts = urlsplit(origin.strip())
+    try:
+        parts = urlsplit(origin.strip())
+    except ValueError:  # (an unclosed IPv6 bracket)
+        return False
     if parts.scheme not in ("http", "https") or not parts.netloc:
         return False
     mine = {_netloc(h) for h in (host, (forwarded_host or "").split(",")[0]) if h and h.strip()}
