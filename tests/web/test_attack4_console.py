@@ -10,12 +10,15 @@ Each test failed on the code it was written against (a finding of the pass):
   button, labelled "Lock OFF", locked the rotator when the refusal said "a lock OFF releases
   it".
 - an ``Origin`` header that is no URL (``http://[::1``, an unclosed bracket) was a 500, its
-  traceback logged at ERROR, from any client that reaches the port, token or not.
+  traceback logged at ERROR, from any client that reaches the port, token or not;
+- a login (or a command) whose client closed its connection before the body came was a
+  traceback at ERROR in the log (``Connection lost``), a login's from any client.
 """
 
 from __future__ import annotations
 
 import logging
+import socket
 import time
 from collections.abc import Callable
 from typing import Any
@@ -26,7 +29,7 @@ from playwright.sync_api import Browser, expect
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms
-from tests.web.conftest import open_console
+from tests.web.conftest import PASSWORD, open_console
 
 
 def _status_until(
@@ -101,3 +104,29 @@ def test_an_origin_that_is_no_url_is_another_sites_refused_not_a_500(
     assert answer.status == 403, answer
     assert "another site" in answer.doc["error"], answer
     assert not [r for r in caplog.records if r.exc_info], "a traceback was logged"
+
+
+def test_a_login_whose_client_goes_before_its_body_logs_no_traceback(
+    guarded: tuple[Rig, ConsoleClient], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A neighbour with no token sends a login's head and half its body, then closes: nothing
+    of the bridge's is at fault, so nothing is logged as an error; the right password still
+    logs in."""
+    _rig, client = guarded
+    caplog.set_level(logging.INFO)
+    for _ in range(3):
+        with socket.create_connection(("127.0.0.1", client.port), timeout=slow(10)) as s:
+            s.sendall(
+                f"POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:{client.port}\r\n"
+                "Content-Type: application/json\r\nContent-Length: 40\r\n\r\n{".encode()
+            )
+            s.shutdown(socket.SHUT_WR)  # gone, as far as the body goes
+            said = s.recv(64)  # closed: its handler is woken before the next request is read
+            assert said == b"" or said.startswith(b"HTTP/1.1 400"), said
+    answer = client.post("/api/login", {"password": PASSWORD}, token=False)
+    assert answer.status == 200, answer
+
+    def logged() -> list[logging.LogRecord]:
+        return [r for r in caplog.records if r.exc_info or r.levelno >= logging.ERROR]
+
+    assert not logged(), [r.getMessage() for r in logged()]

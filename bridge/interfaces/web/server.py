@@ -39,10 +39,12 @@ Rules:
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
 7. What the HTTP server logs of a request it could not serve (``Quieter``) is the client's doing,
    not the bridge's: a malformed request is one line naming its sender and what was wrong, no
-   traceback; any such line (a request's error too) goes at its level NOISE_BURST at once, then
-   one every NOISE_EVERY_S, the rest at DEBUG (an attack pass: aiohttp logged every malformed
-   request at ERROR with its traceback, 22,000 lines a second from one client that needed no
-   token, and journald's rate limit then drops every line of the service, its warnings too).
+   traceback; a login or command whose client went before its body came, nothing (an attack
+   pass: each was a traceback at ERROR, a login's from any client); any such line (a request's
+   error too) goes at its level NOISE_BURST at once, then one every NOISE_EVERY_S, the rest at
+   DEBUG (an attack pass: aiohttp logged every malformed request at ERROR with its traceback,
+   22,000 lines a second from one client that needed no token, and journald's rate limit then
+   drops every line of the service, its warnings too).
 """
 
 from __future__ import annotations
@@ -398,6 +400,8 @@ class WebConsole:
             doc = await asyncio.wait_for(request.json(), BODY_S)
         except TimeoutError:
             return _json({"error": f"the login's body did not come within {BODY_S:g} s"}, 408)
+        except ConnectionError:  # rule 7: the client went before its body came
+            return _json({"error": "the connection closed before the body came"}, 400)
         except (ValueError, RecursionError):
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
@@ -513,6 +517,8 @@ class WebConsole:
             body = await asyncio.wait_for(request.read(), BODY_S)
         except TimeoutError:
             return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
+        except ConnectionError:  # rule 7: the client went before its body came
+            return _json({"error": "the connection closed before the body came"}, 400)
         by = Origin(Source.WEB, None, self._client(request))  # rule 4
         try:
             cmd = parse(body)
