@@ -54,10 +54,14 @@ Rules:
 9. The side: on a rotor that can pass 360 (a 450-degree Yaesu, a SPID's overlap) the pass's
    first target (where it waits for AOS, or the first step of a pass tracking starts in) is
    sent on the side from which the rest of the pass turns least, the pass's track followed
-   from there as the judge picks each step (nearest); later steps take the judge's nearest
-   side. The flip (rule 4) is weighed with each way started on its best side. An attack
-   pass: a GS-232B 450 kept to 0..90 of elevation waited at W010 for a pass running west
-   through the north, and unwound to W358 mid-pass where W370 was free.
+   from there as the judge picks each step (nearest); each later step takes the side nearest
+   the target before it, not the rotor's reading: a controller that takes a new bearing while
+   turning may still be on its way to the pass's side (an attack pass: a GS-232B 450 at 1
+   degree a second, started mid-pass at 182, was sent W369, then the next step W009 from
+   where it then was, and unwound at the north). The flip (rule 4) is weighed with each way
+   started on its best side. An attack pass: a GS-232B 450 kept to 0..90 of elevation waited
+   at W010 for a pass running west through the north, and unwound to W358 mid-pass where W370
+   was free.
 """
 
 from __future__ import annotations
@@ -121,6 +125,7 @@ class Tracker:
         self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
         self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
         self._sided_for: float | None = None  # AOS of the pass whose first target chose a side
+        self._last_raw: float | None = None  # rule 9: the raw azimuth of the last target put
         # where to wait for the pass of this AOS (rules 5, 9): (AOS, az, el, side)
         self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
@@ -228,6 +233,7 @@ class Tracker:
                 why = f"tracking {sky.body.name}: {exc.message}; holding"
                 return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True)
             return Proposal(busy=True)
+        self._last_raw = judged.az_deg
         return Proposal(target=judged, busy=True)
 
     def _wait_for(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
@@ -288,6 +294,11 @@ class Tracker:
             if side is None:
                 return waiting  # rule 8: the pass's track is being computed
             raw = side[0]
+        elif self._last_raw is not None and not self._rig.aim.az_wraps:
+            try:  # rule 9: the side of the step before (the rotor may be on its way there)
+                raw = self._rig.aim.raw_for(az, self._last_raw)
+            except Refused:
+                pass  # (the judge refuses it, and says why: _put)
         put = self._put(sky, Target(az, el, Source.TRACKING), scene, raw)
         if put.target is not None:
             self._last = (az, el)

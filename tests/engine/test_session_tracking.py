@@ -516,3 +516,31 @@ def test_a_clock_stepped_back_mid_pass_sends_the_rotor_to_wait_where_the_next_pa
         rise_az, rise_el = sgp4_altaz(line1, line2, *BERLIN, info.aos_unix)
         assert abs(rise_el) < 1.0  # (the reference agrees it rises then)
         assert off_deg(v.truth().az_deg, rise_az) <= 3.0, (v.truth().az_deg, rise_az)
+
+
+def test_a_rotor_still_on_its_way_to_the_passs_side_is_not_turned_back_by_the_next_step(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    """Attack pass: a GS-232B 450 (it takes a new bearing while turning) at 1 degree a second,
+    a fine step, tracking started a minute into a pass running west through the north, the
+    rotor at 182: the first target went to the overlap (W369), the next step, a second later,
+    took the side nearest where the rotor then was (W009), and at the north it unwound
+    (W000 -> W359), 179 degrees off for minutes."""
+    line1, line2, aos, los = a_pass
+    speeds = {"az_speed_deg_s": 1.0, "el_speed_deg_s": 1.0}
+    settings = {**speeds, "el_max_deg": 90, "track_step_deg": 0.1}
+    v = VirtualRotator(
+        "gs232b-450", sky=Sky(*BERLIN), wall_epoch_s=aos - 340.0, emulator=speeds, settings=settings
+    )
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.aim(Target(182.0, 0.0))
+        v.run_until(lambda h: not h.truth().is_moving and h.truth().az_deg > 180, 300, "at 182")
+        v.run_until(lambda h: h.wall() >= aos + 60.0, 400, "a minute into the pass")
+        sent_before = len(_gs232_azimuths(v))
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_until(lambda h: h.wall() >= los, 900, "LOS")
+        tracked = _gs232_azimuths(v)[sent_before:]
+        assert tracked and tracked[0] > 360, tracked  # the pass's side: the overlap
+        jumps = [abs(b - a) for a, b in zip(tracked, tracked[1:], strict=False)]
+        assert max(jumps) <= 10, tracked  # never turned back, never round the stop
