@@ -53,15 +53,17 @@ Rules:
    with that reason. A look-up leaves what is tracked alone until its answer names a body.
 9. The side: on a rotor that can pass 360 (a 450-degree Yaesu, a SPID's overlap) the pass's
    first target (where it waits for AOS, or the first step of a pass tracking starts in) is
-   sent on the side from which the rest of the pass turns least, the pass's track followed
-   from there as the judge picks each step (nearest); each later step takes the side nearest
-   the target before it, not the rotor's reading: a controller that takes a new bearing while
-   turning may still be on its way to the pass's side (an attack pass: a GS-232B 450 at 1
-   degree a second, started mid-pass at 182, was sent W369, then the next step W009 from
-   where it then was, and unwound at the north). The flip (rule 4) is weighed with each way
-   started on its best side. An attack pass: a GS-232B 450 kept to 0..90 of elevation waited
-   at W010 for a pass running west through the north, and unwound to W358 mid-pass where W370
-   was free.
+   sent on the side from which the rest of the pass turns least (of two that turn alike, the
+   one nearest the rotor, judged once a park after the pass before has left it at rest: a
+   review, the side nearest where that pass ended sent the rotor 290 degrees back from its
+   park), the pass's track followed from there as the judge picks each step (nearest); each
+   later step takes the side nearest the target before it, not the rotor's reading: a
+   controller that takes a new bearing while turning may still be on its way to the pass's
+   side (an attack pass: a GS-232B 450 at 1 degree a second, started mid-pass at 182, was
+   sent W369, then the next step W009 from where it then was, and unwound at the north). The
+   flip (rule 4) is weighed with each way started on its best side. An attack pass: a GS-232B
+   450 kept to 0..90 of elevation waited at W010 for a pass running west through the north,
+   and unwound to W358 mid-pass where W370 was free.
 """
 
 from __future__ import annotations
@@ -249,6 +251,11 @@ class Tracker:
                 return park
         if self._waited_for == p.aos_s or scene.pending is not None:
             return Proposal(busy=True)
+        m = scene.motion
+        if sky.after_pass and (
+            m.state in (MotionState.MOVING, MotionState.BRAKING) or mo.settling(m)
+        ):  # a park still on its way: the wait target follows it, and its side is judged
+            return Proposal(busy=True)  # from where the park leaves the rotor (rule 9)
         if self._wait_at is None or self._wait_at[0] != p.aos_s:  # (once a pass: the
             first = self._first_allowed(sky, p, scene)  # hours after a pass, every step)
             if first is None:
@@ -261,11 +268,6 @@ class Tracker:
         margin_s = self._travel_s(scene, az, el, side[0]) + PREPOSITION_MARGIN_S
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
-        m = scene.motion
-        if sky.after_pass and (
-            m.state in (MotionState.MOVING, MotionState.BRAKING) or mo.settling(m)
-        ):
-            return Proposal(busy=True)  # a park still on its way: the wait target follows it
         self._waited_for = self._sided_for = p.aos_s
         self._last = (az, el)
         return self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])

@@ -7,11 +7,15 @@ the library the bridge uses."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+
 import pytest
 
 from bridge.core.model import MotionState, Source, Target
 from bridge.features.tracking import tracking_state
-from bridge.sky import Body, Sky, SkyError
+from bridge.sky import Body, Pass, Sky, SkyError
+from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass
 
@@ -544,3 +548,56 @@ def test_a_rotor_still_on_its_way_to_the_passs_side_is_not_turned_back_by_the_ne
         assert tracked and tracked[0] > 360, tracked  # the pass's side: the overlap
         jumps = [abs(b - a) for a, b in zip(tracked, tracked[1:], strict=False)]
         assert max(jumps) <= 10, tracked  # never turned back, never round the stop
+
+
+def _scripted_sky(passes: list[tuple[float, float, float, float]]) -> Callable[[Question], Answer]:
+    """A sky worker whose satellite makes ``passes`` (AOS, LOS, azimuth at AOS, at LOS): its
+    azimuth runs evenly from one to the other, its elevation up to 30 and down, and it is
+    below the horizon between them. Nothing of the real sky: the geometry is the test's."""
+
+    def at(t: float) -> tuple[float, float]:
+        for aos, los, az0, az1 in passes:
+            if aos <= t <= los:
+                f = (t - aos) / (los - aos)
+                return (az0 + f * (az1 - az0)) % 360.0, 30.0 * math.sin(math.pi * f)
+        return 180.0, -20.0
+
+    def answer(q: Question) -> Answer:
+        if isinstance(q, PassQuestion):
+            for aos, los, az0, az1 in passes:
+                if q.utc <= los:
+                    return Answer(q, Pass(aos, los, (aos + los) / 2, 30.0, az0, az1))
+            return Answer(q, None)
+        assert isinstance(q, PositionsQuestion)
+        return Answer(q, [at(t) for t in q.times])
+
+    return answer
+
+
+def test_after_a_park_a_pass_is_waited_for_on_the_side_nearest_the_park(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    """Review of the wait point worked out once a pass: it was worked out as the park after a
+    pass set out, and of a pass that a 450-degree rotor follows as well from 10 as from 370 it
+    took the side nearest where the last pass had ended (150): parked at 300, the rotor turned
+    290 degrees back to W010 to wait, where W370 was 70 degrees away."""
+    line1, line2, _aos, _los = a_pass  # (a satellite to name: its sky is scripted)
+    t0 = SAT_EPOCH
+    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+    settings = {**speeds, "el_max_deg": 90, "park_az_deg": 300, "park_el_deg": 0}
+    v = VirtualRotator(
+        "gs232b-450",
+        sky=Sky(*BERLIN),
+        wall_epoch_s=t0,
+        emulator=speeds,
+        settings={**settings, "track_at_los": "park"},
+    )
+    v.answer_sky = _scripted_sky([(t0 + 100, t0 + 400, 100, 150), (t0 + 3000, t0 + 3300, 10, 60)])
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_until(lambda h: h.status.parked, 600, "parked after the first pass")
+        parked = len(_gs232_azimuths(v))
+        v.run_until(lambda h: h.wall() >= t0 + 3000, 3000, "the second pass rises")
+        waits = _gs232_azimuths(v)[parked:]
+        assert waits and waits[0] == 370, waits  # from the park at 300, not where it ended
