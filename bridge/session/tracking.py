@@ -18,7 +18,9 @@ Rules:
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
    when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
    At the end of a pass it parks (``at_los = "park"``, if a park position is configured) or
-   stays where it is.
+   stays where it is. A wall clock stepped back (NTP) has a pass that has not begun by it
+   waited for again (an attack pass: five minutes back mid-pass, the pass in hand still the
+   next one, the rotor stood where the satellite had been until AOS came round again).
 3. During a pass a new target goes out when the body has moved ``step_deg`` on either axis
    from the last one, and only when the controller may take one: any time on a controller that
    re-targets while turning (SPID); when the rotor is idle on the others (a Rotor-EZ stops to
@@ -79,7 +81,7 @@ from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
 from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
-from bridge.session.skytrack import SkyTrack
+from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack
 from bridge.sky import Body, Pass
 from bridge.sky.worker import Answer, LookupQuestion, Question
 
@@ -133,6 +135,7 @@ class Tracker:
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
         self._info_t = -math.inf
+        self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
 
     # -- rule 1 ----------------------------------------------------------------------------
     def start(self, body: Body) -> None:
@@ -189,6 +192,10 @@ class Tracker:
             self.end("turned by hand")  # rule 1: the front panel is a command too
             return Proposal(ended="turned by hand", busy=True)
         utc = scene.now + scene.wall_offset_s
+        if utc < self._utc_seen - CLOCK_BACK_S:  # rule 2: the clock stepped back (NTP)
+            self._waited_for = self._sided_for = None  # (a pass not begun by it: wait again)
+            self._utc_seen = utc
+        self._utc_seen = max(self._utc_seen, utc)
         if sky.searching(utc):
             return Proposal(busy=True)  # rule 8: the answer comes as an input
         p = sky.pass_now
