@@ -43,7 +43,10 @@ Rules:
    while it follows, or the rotor would swing between two partners at every decoding period.
    What it keeps of them is bounded (the IGNORED_KEPT heard last) and said at most once per
    IGNORED_LOG_S, with the count of others since: a flood of forged instance names costs
-   neither memory nor the disk.
+   neither memory nor the disk. A rotator with ``bands`` (rule 9) takes the first program
+   whose dial is on one of its bands: with two radios (SO2R, one WSJT-X each) the 40 m
+   antenna follows the program on 40 m, whichever spoke first (an attack pass: it took the
+   one on 20 m, heard first, and ignored the 40 m radio's for as long as it followed).
 9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
    is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
@@ -153,7 +156,8 @@ class Follower:
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
             self._heard = None
-        self._instance = self._heard.instance if self._heard is not None else None  # rule 8
+        fresh = self._heard
+        self._instance = fresh.instance if fresh is not None and self._for_me(fresh) else None
         self._ignored.clear()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
@@ -169,7 +173,8 @@ class Follower:
         """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
         if self.info is not None:
             if self._instance is None:
-                self._instance = heard.instance
+                if self._for_me(heard):  # rule 8: the first program on this antenna's band
+                    self._instance = heard.instance
             elif heard.instance != self._instance:
                 self._ignore(heard.instance, now)
                 return
@@ -210,6 +215,12 @@ class Follower:
         """Rule 1: turned away from the bearing it last turned to, by no target of the bridge's
         (before its first bearing: any such turn)."""
         return turned_by_hand(scene, self._rig.aim, self._bearing, self._rig.motion.tolerance_deg)
+
+    def _for_me(self, heard: Heard) -> bool:
+        """Rules 8 and 9: ``heard`` may choose the program followed: any, for a rotator
+        without bands; one whose dial is on one of its bands, for a rotator with bands."""
+        bands = self._rig.follow.bands
+        return not bands or (heard.dial_hz is not None and band_of_hz(heard.dial_hz) in bands)
 
     def _on_my_band(self, heard: Heard) -> bool:
         """Rule 9: ``heard``'s dial is on one of this antenna's bands, or could be (no bands,

@@ -530,6 +530,24 @@ def test_of_two_antennas_the_one_on_the_dials_band_turns_in_the_session() -> Non
         assert low.errors("refused")[-1].message.startswith("following: WSJT-X's dial 14.074 MHz")
 
 
+def test_with_two_radios_each_antenna_follows_the_program_on_its_band() -> None:
+    """SO2R: one WSJT-X per radio (``--rig-name``), rig1 on 20 m, rig2 on 40 m, both heard by
+    both rotators. Each antenna follows the program on its band, whichever spoke first (the
+    40 m antenna took rig1's, heard first, and ignored rig2 for as long as it followed)."""
+    rig1 = Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY)
+    rig2 = Heard("W1AW", "FN31", False, "WSJT-X - rig2", FORTY)
+    with spid(bands=["20m"]) as high, spid(bands=["40m"]) as low:
+        for v in (high, low):
+            v.follow(True)
+            for heard in (rig1, rig2, rig1, rig2):
+                v.mailbox.put_heard(heard)
+                v._take()
+                v.run_for(5.0)
+            v.run_for(60.0)
+        assert angle_between(high.truth().az_deg, bearing("PM95")) <= 0.5
+        assert angle_between(low.truth().az_deg, bearing("FN31")) <= 0.5
+
+
 def test_a_turn_under_way_is_not_stopped_by_a_transmission_on_another_band() -> None:
     """Rule 9: a turn under way when the band changes is not stopped (it was for the partner
     heard on its band). An attack pass: the 20 m antenna turning to PM95, WSJT-X moved to 40 m
