@@ -109,7 +109,7 @@ def operator_of(msg: paho.MQTTMessage) -> str | None:
 
 def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
     """The user properties ``sent`` and ``expiry`` of an MQTT 5 message (heartbeat.py rule 4),
-    as sent (the service judges them); None without ``sent``."""
+    as sent (the service judges them); None without either."""
     props = getattr(msg, "properties", None)
     return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
 

@@ -29,9 +29,11 @@ Rules:
    ON may go unstamped.
 5. The station refuses a command whose stamp says it is older than its expiry, or from more
    than AHEAD_S in the future (the reckoning went wrong: refused, and said), or a stamp it
-   cannot read. Stop and lock ON are never refused (docs/architecture.md rule 11): the
-   service does not ask. A command without a stamp (a dashboard, Home Assistant) is judged as
-   before: it has only the broker's expiry.
+   cannot read: an ``expiry`` without ``sent`` too (an attack pass: a Node-RED flow that set
+   only ``expiry`` had its commands carried out however late, and not a word). Stop and lock
+   ON are never refused (docs/architecture.md rule 11): the service does not ask. A command
+   without a stamp (a dashboard, Home Assistant) is judged as before: it has only the
+   broker's expiry.
 6. The station's clock, the one its heartbeats carry and the one it judges a stamp by, is its
    wall clock never set back (``StationTime``; docs/architecture.md rule 15): its steady clock
    plus the largest offset between the two this process has seen. A wall clock set back (a
@@ -226,11 +228,12 @@ class Stamp:
 
     @classmethod
     def of_properties(cls, pairs: list[tuple[str, str]]) -> Stamp | None:
-        """The stamp among a message's user properties; None without ``sent``."""
+        """The stamp among a message's user properties; None without ``sent`` and ``expiry``
+        (an ``expiry`` alone is a stamp whose send time cannot be read: rule 5)."""
         found = {str(k): str(v) for k, v in pairs if k in (SENT, EXPIRY, STATION)}
-        if SENT not in found:
+        if SENT not in found and EXPIRY not in found:
             return None
-        return cls(found[SENT], found.get(EXPIRY), found.get(STATION))
+        return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION))
 
     def judge(self, now_unix: float, station: str | None = None) -> str | None:
         """Rules 5 and 7: why the command is refused, or None (fresh); ``station``: the
