@@ -3,7 +3,8 @@ socket, through one running bridge (the App in-process) with a private mosquitto
 Rotor-EZ on real ptys, one the 20/15/10 m yagi's rotator and one the 40/80 m antenna's, both
 answering to N1MM's one Rotor Description "Tower" (settings/bands.py, interfaces/loggers/commands.py
 rule 5). The datagrams are the fact sheet's form (tests/support/udp_logger.py), the band in
-``<freqband>`` as N1MM writes it (``14``, ``7``).
+``<freqband>`` as N1MM writes it (``14``, ``7``). Last, following WSJT-X with two radios: the
+statuses of two WSJT-X instances on the bridge's WSJT-X port (tests/support/wsjtx.py).
 
 What is asserted is what a user sees: the frames each controller received (the emulators' logs:
 ``AP1xxx<CR>`` is the Rotor-EZ's "store and go"), where each rotor really stands, the retained
@@ -25,8 +26,9 @@ import pytest
 
 from bridge.app import App
 from bridge.emulators.base import LoggedFrame
-from tests.integration.test_pointing_bridge import angle_between
+from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import Probe, wait_until
+from tests.support import wsjtx as w
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import retained_snapshot
 from tests.support.rig import Rig
@@ -34,6 +36,7 @@ from tests.support.udp_logger import N1mmSender, free_udp_port, n1mm_turn
 
 HIGH, LOW = "high", "low"  # the 20/15/10 m yagi's rotator, the 40/80 m antenna's
 TOWER = "Tower"  # N1MM's Rotor Description, the same for both antennas
+BERLIN = locator_centre("JO62QM")  # the station
 EMU = {"speed_deg_s": 90.0, "brake_delay_s": 0.5, "jitter_deg": 0, "start_az_deg": 10}
 BRIDGE = {"brake_delay_s": 0.5, "settle_s": 0.3}
 
@@ -43,6 +46,7 @@ class Bench:
     rig: Rig
     n1mm: N1mmSender
     broker: Mosquitto
+    wsjtx: tuple[str, int]  # WSJT-X's UDP port
 
     @property
     def probe(self) -> Probe:
@@ -86,7 +90,11 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
         stack.callback(probe.close)
         rig = Rig(tmp, broker, probe)
         stack.callback(rig.close)
-        port = free_udp_port()
+        port, wsjtx_port = free_udp_port(), free_udp_port()
+        rig.sections = {
+            "station": {"locator": "JO62QM"},
+            "wsjtx": {"enabled": True, "port": wsjtx_port, "bind": "127.0.0.1"},
+        }
         sender = N1mmSender(port)
         stack.callback(sender.close)
         for rid, bands in ((HIGH, ["20m", "15m", "10m"]), (LOW, ["40m", "80m"])):
@@ -103,7 +111,7 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
         rig.app.start()
         rig.ready(HIGH, 15)
         rig.ready(LOW, 15)
-        yield Bench(rig, sender, broker)
+        yield Bench(rig, sender, broker, ("127.0.0.1", wsjtx_port))
 
 
 def test_an_n1mm_message_for_20m_turns_the_20m_antenna_and_one_for_40m_the_other(
@@ -153,3 +161,29 @@ def test_a_name_only_one_rotator_answers_to_is_unchanged_by_bands(bench: Bench) 
     wait_until(lambda: bench.moves(HIGH, t), 10, "the second datagram obeyed")
     assert len(bench.moves(HIGH, t)) == 1 and bench.moves(LOW, t) == []
     assert len(bench.probe.on(bench.rig.topic(HIGH, "error"))) == before
+
+
+def test_with_two_radios_each_antenna_follows_the_wsjtx_on_its_band(bench: Bench) -> None:
+    """SO2R: one WSJT-X per radio (``--rig-name``), rig1 on 20 m, rig2 on 40 m, both on the
+    bridge's WSJT-X port, following on for both rotators: each antenna turns to the partner of
+    the radio on its band (the 40 m antenna took rig1's program, heard first, and ignored
+    rig2's for as long as it followed: session/follow.py rule 8)."""
+    rig1 = w.StatusFields(
+        dx_call="JA1ABC", dx_grid="PM95VQ", instance="WSJT-X - rig1", dial_hz=14_074_000
+    )
+    rig2 = w.StatusFields(
+        dx_call="W1AW", dx_grid="FN31PR", instance="WSJT-X - rig2", dial_hz=7_074_000
+    )
+    for rid in (HIGH, LOW):
+        bench.probe.publish(bench.rig.topic(rid, "follow"), "wsjtx")
+        bench.probe.wait_value(bench.rig.topic(rid, "follow/state"), "wsjtx", 10)
+    t = time.monotonic()
+    for _ in range(3):  # every decoding period, rig1 first
+        w.send(w.status(rig1), bench.wsjtx)
+        w.send(w.status(rig2), bench.wsjtx)
+    tokyo, new_york = (reference_path(BERLIN, locator_centre(g))[0] for g in ("PM95VQ", "FN31PR"))
+    bench.settled_at(HIGH, round(tokyo), after=t)
+    bench.settled_at(LOW, round(new_york), after=t)
+    for rid in (HIGH, LOW):
+        bench.probe.publish(bench.rig.topic(rid, "follow"), "off")
+        bench.probe.wait_value(bench.rig.topic(rid, "follow/state"), "off", 10)
