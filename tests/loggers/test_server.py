@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 
 from bridge.core.model import RotatorStatus, Source, Stop, Target, Toward
-from bridge.interfaces.loggers import LoggerEndpoints
+from bridge.interfaces.loggers import LoggerEndpoints, server
 from bridge.interfaces.loggers.limiter import REPLY_BURST
 from bridge.interfaces.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
 from bridge.protocols import REGISTRY
@@ -25,6 +25,7 @@ from tests.support.clock import FakeClock
 from tests.support.udp_logger import (
     N1MM_STOPS,
     PstClient,
+    n1mm_turn,
     pst,
     reserve_pst_ports,
     tag,
@@ -438,5 +439,53 @@ def test_a_flood_over_its_senders_budget_is_dropped_and_said_once_others_are_ser
                 clock.t += 10.0
                 s.sendto(pst(tag("AZIMUTH", 8)), ("127.0.0.1", port))
                 wait_until(lambda: Target(8.0, None, Source.PST) in rot.calls, 10, "read on")
+        finally:
+            ep.stop()
+
+
+class Standing(Recording):
+    """A rotator that stands at ``bearing_deg``."""
+
+    def __init__(self, rid: str, bearing_deg: float) -> None:
+        super().__init__(rid)
+        self.bearing_deg = bearing_deg
+
+    @property
+    def status(self) -> RotatorStatus:
+        return RotatorStatus(self.id, available=True, bearing_deg=self.bearing_deg)
+
+
+def test_a_name_two_rotators_share_by_band_reports_the_heading_of_the_one_on_the_band(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """One antenna per band, both under N1MM's one Rotor Description: each rotator reported its
+    own heading under that name, and N1MM's rotor window jumped between the 20 m yagi's 100
+    and the 40 m antenna's 250. The name's heading is the antenna's the last turn chose by
+    band, and none before a turn has chosen one."""
+    monkeypatch.setattr(server, "REPORT_IDLE_S", 0.05)  # the idle reports, many a second
+    high, low = Standing("high", 100.0), Standing("low", 250.0)
+    with reports_sink() as sink:
+        ep = LoggerEndpoints()
+        for rot, bands in ((high, ("20m",)), (low, ("40m",))):
+            ep.add_n1mm(rot, "Tower", 0, "127.0.0.1", sink_address(sink), bands)  # type: ignore[arg-type]
+        ep.start()
+        try:
+            port = ep.address(next(iter(ep.n1mm.values())))[1]
+
+            def reports(n: int) -> list[bytes]:
+                got = []
+                while len(got) < n:
+                    ready, _, _ = select.select([sink], [], [], slow(5))
+                    assert ready, f"{len(got)} position report(s) of {n}"
+                    got.append(sink.recv(4096))
+                return got
+
+            send(port, n1mm_turn("Tower", 240, freqband="7"))
+            assert reports(6) == [b"Tower @ 2500"] * 6  # none before, the 40 m antenna's after
+            send(port, n1mm_turn("Tower", 90, freqband="14"))
+            wait_until(lambda: high.calls, 5, "the turn on 20 m")
+            later = reports(30)
+            at = later.index(b"Tower @ 1000")  # reported at once when the band changed
+            assert later[at:] == [b"Tower @ 1000"] * (30 - at)
         finally:
             ep.stop()

@@ -31,6 +31,12 @@ Rules:
    logged (at most once per JUNK_LOG_S, with the count since) and published on the R/error of
    each rotator it could have gone to. Where none of them has bands, it is as before: ``*``
    turns the one rotator on the port, and nothing else. Stops are not chosen by band (rule 4).
+6. A name several rotators share reports one heading to N1MM (server.py rule 6): the rotator
+   its last turn went to by band (``N1mmEndpoint.current``), the antenna on the radio's band,
+   whether or not that rotator carried the turn out (locked, offline). Until a turn has chosen
+   one, the name's heading is not reported (an attack pass: each rotator reported its own
+   heading under the one name, and N1MM's rotor window jumped between the two antennas'
+   headings every few seconds).
 """
 
 from __future__ import annotations
@@ -85,6 +91,11 @@ class N1mmEndpoint:
     bind: str
     port: int
     rotors: list[N1mmRotor] = field(default_factory=list)
+    current: dict[str, Rotator] = field(default_factory=dict)  # rule 6: a shared name's
+
+    def shared(self, name: str) -> bool:
+        """Rule 6: several rotators here answer to ``name``."""
+        return sum(r.name == name for r in self.rotors) > 1
 
 
 @dataclass(frozen=True)
@@ -256,6 +267,8 @@ class Commands:
                 self._no_band(counts, chosen, described, by)
             return
         rot = chosen.rotator
+        if e.shared(chosen.name):  # rule 6: the antenna on the radio's band
+            e.current[chosen.name] = rot
         assert req.azimuth is not None
         if req.offset and req.rotor not in self._offset_warned:
             self._offset_warned.add(req.rotor)

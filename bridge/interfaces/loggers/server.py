@@ -14,7 +14,9 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    from the configured bind address (no socket of ours listens anywhere else); one that cannot
    be sent is said once at warning level. The heading is looked at every REPORT_MOVING_S and
    reported when it has moved REPORT_MOVE_DEG since the last report (while the rotor turns,
-   and where it came to rest), else every REPORT_IDLE_S.
+   and where it came to rest), else every REPORT_IDLE_S. A name several rotators share is
+   reported for one of them, the one its last turn chose by band (commands.py rule 6), at once
+   when that changes; none before a turn has chosen one.
 7. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
    logged with its traceback at most once per FAULT_LOG_S and the next datagram is served; a
    fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
@@ -371,6 +373,10 @@ class LoggerEndpoints:
         bearing = status.bearing_deg
         sock = self._socket_of(r.endpoint)
         if bearing is None or not status.available or sock is None:
+            return
+        e = r.endpoint
+        if e.shared(r.name) and e.current.get(r.name) is not r.rotator:  # rule 6
+            r.last_deg = None  # reported at once when a turn chooses it
             return
         moved = r.last_deg is None or angle_between(bearing, r.last_deg) >= REPORT_MOVE_DEG
         if now < r.next_s and not moved:
