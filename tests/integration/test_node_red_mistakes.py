@@ -26,9 +26,24 @@ def moves(rig: Rig, since: float) -> list[bytes]:
     return [f.data for f in rig.emu.log() if f.time_s >= since and f.data.startswith(b"AP1")]
 
 
-def test_a_command_with_an_expiry_and_no_send_time_is_refused_not_carried_out_late(
-    rig: Rig,
-) -> None:
+def refusal(rig: Rig, flow: paho.Client, payload: str, *props: tuple[str, str]) -> str:
+    """Publish ``payload`` on R/target with the user properties ``props``, as Node-RED's mqtt
+    out node does with ``msg.userProperties``; the refusal's message on R/error."""
+    t = time.monotonic()
+    properties = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+    properties.UserProperty = list(props)
+    flow.publish(rig.t("target"), payload, qos=1, properties=properties).wait_for_publish(5)
+    error = json.loads(rig.probe.wait_for(rig.t("error"), after=t).payload)
+    assert error["kind"] == "refused"
+    return str(error["message"])
+
+
+def test_a_stamp_a_flow_got_wrong_is_refused_saying_what_is_wrong(rig: Rig) -> None:
+    """Node-RED sets MQTT 5 user properties from ``msg.userProperties``. A flow that gives
+    ``{"expiry": "5"}`` alone believes its targets are refused when late: without ``sent``
+    nothing could tell their age, and they were carried out however late, without a word. One
+    that stamps ``sent`` with JavaScript's ``Date.now()`` (milliseconds) was told the
+    station's clock went back. Neither moves the rotor."""
     """Node-RED sets MQTT 5 user properties from ``msg.userProperties``: a flow that gives
     ``{"expiry": "5"}`` alone believes its targets are refused when late. Without ``sent``
     nothing could tell their age: they were carried out however late, and not a word."""
@@ -40,12 +55,10 @@ def test_a_command_with_an_expiry_and_no_send_time_is_refused_not_carried_out_la
     flow.loop_start()
     try:
         t = time.monotonic()
-        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
-        props.UserProperty = ("expiry", "5")
-        flow.publish(rig.t("target"), "250", qos=1, properties=props).wait_for_publish(5)
-        error = json.loads(rig.probe.wait_for(rig.t("error"), after=t).payload)
-        assert error["kind"] == "refused"
-        assert "send time cannot be read" in error["message"], error
+        assert "send time cannot be read" in refusal(rig, flow, "250", ("expiry", "5"))
+        sent = f"{time.time() * 1000:.0f}"
+        message = refusal(rig, flow, "260", ("sent", sent), ("expiry", "5"))
+        assert f"sent='{sent}' is in milliseconds: give unix seconds" in message
         flow.publish(rig.t("target"), "120", qos=1).wait_for_publish(5)
         rig.arrived("tower", 120)
         assert moves(rig, t) == [b"AP1120\r"]

@@ -30,10 +30,11 @@ Rules:
 5. The station refuses a command whose stamp says it is older than its expiry, or from more
    than AHEAD_S in the future (the reckoning went wrong: refused, and said), or a stamp it
    cannot read: an ``expiry`` without ``sent`` too (an attack pass: a Node-RED flow that set
-   only ``expiry`` had its commands carried out however late, and not a word). Stop and lock
-   ON are never refused (docs/architecture.md rule 11): the service does not ask. A command
-   without a stamp (a dashboard, Home Assistant) is judged as before: it has only the
-   broker's expiry.
+   only ``expiry`` had its commands carried out however late, and not a word). A ``sent`` in
+   milliseconds (JavaScript's ``Date.now()``) is said to be one, not a clock that went back.
+   Stop and lock ON are never refused (docs/architecture.md rule 11): the service does not
+   ask. A command without a stamp (a dashboard, Home Assistant) is judged as before: it has
+   only the broker's expiry.
 6. The station's clock, the one its heartbeats carry and the one it judges a stamp by, is its
    wall clock never set back (``StationTime``; docs/architecture.md rule 15): its steady clock
    plus the largest offset between the two this process has seen. A wall clock set back (a
@@ -258,6 +259,11 @@ class Stamp:
             return (
                 f"sent {age:.1f} s ago, older than its {expiry:g} s expiry (a link that held it "
                 "up): not carried out"
+            )
+        if age < -AHEAD_S and sent > now_unix * 100:  # (JavaScript's Date.now(): a Node-RED flow)
+            return (
+                f"its send time {SENT}={self.sent[:24]!r} is in milliseconds: give unix seconds "
+                "on the station's clock: not carried out"
             )
         if age < -AHEAD_S:
             return (
