@@ -558,6 +558,25 @@ def test_an_unknown_table_or_key_names_the_nearest_known_one(
     assert "no rotators configured" not in out.stderr and "Field required" not in out.stderr
 
 
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        (
+            ("[[rotators]]", "[rotators]"),
+            "rotators: written [rotators], one table; write [[rotators]], with two brackets",
+        ),
+        (("[mqtt]", "[[mqtt]]"), "mqtt: written [[mqtt]], a list of tables; write [mqtt], with"),
+    ],
+)
+def test_a_table_with_the_wrong_brackets_says_which_to_write(
+    tmp_path: Path, change: tuple[str, str], said: str
+) -> None:
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL.replace(*change))))
+    assert out.returncode == 2 and out.stdout == "", out
+    assert said in out.stderr, out.stderr
+    assert "valid list" not in out.stderr and "MqttSettings" not in out.stderr
+
+
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
     path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
     with pytest.raises(ConfigError) as exc:

@@ -46,6 +46,9 @@ BRANDS = {
     "prosistel-el-a if it answers as unit A), its Combi-Track prosistel-combi",
     "combitrack": "Prosistel's Combi-Track is prosistel-combi",
 }
+# pydantic's words for a value of the wrong shape: a table where a list of tables belongs, or
+# the other way round (rule 5)
+_SHAPE_ERRORS = frozenset({"list_type", "model_type", "model_attributes_type", "dict_type"})
 
 
 def describe(
@@ -77,6 +80,11 @@ def describe(
                 suggested.add(nearest)
             continue
         msg = err["msg"].removeprefix("Value error, ")
+        brackets = None
+        if err["type"] in _SHAPE_ERRORS and err["loc"] and not isinstance(err["loc"][-1], int):
+            brackets = _brackets(root, names, _value_at(data, err["loc"]))
+        if brackets is not None:
+            msg = brackets
         if err["type"] == "missing":
             msg = "missing: it has no default"
             if where == "rotators":
@@ -145,6 +153,20 @@ def _unknown(
     elif known:
         line += " (typo?)"
     return line, nearest
+
+
+def _brackets(root: type[BaseModel], names: list[str], value: object) -> str | None:
+    """Rule 5: a table written with the other number of brackets, and how to write it."""
+    model = _model_at(root, names[:-1]) if names else None
+    if model is None or _model_at(root, names) is None:
+        return None  # not one of our tables
+    many = isinstance(_shape(model, names[-1]), list)
+    name = ".".join(names)
+    if many and isinstance(value, dict):
+        return f"written [{name}], one table; write [[{name}]], with two brackets, for each one"
+    if not many and isinstance(value, list):
+        return f"written [[{name}]], a list of tables; write [{name}], with one bracket, once"
+    return None
 
 
 def _table(name: str, value: object) -> str:
