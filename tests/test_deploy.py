@@ -23,6 +23,7 @@ from bridge.interfaces.mqtt import payloads
 from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, load_settings
+from bridge.settings.report import SERVICE_STATE_FILE
 from tests.support.waiting import slow
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -716,6 +717,8 @@ def test_unit_state_directory_is_where_the_bridge_keeps_state(
     monkeypatch.setenv("STATE_DIRECTORY", f"/var/lib/{name}")
     settings = load_settings(ROOT / "config" / "example.toml", environ={})
     assert settings.state_file == Path(f"/var/lib/{name}/state.json")
+    # what check-config, run by hand, says the unit's state file is
+    assert Path(SERVICE_STATE_FILE) == settings.state_file
 
 
 def test_unit_is_hardened_without_hiding_serial_ports(unit: dict) -> None:

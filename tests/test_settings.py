@@ -577,6 +577,23 @@ def test_a_table_with_the_wrong_brackets_says_which_to_write(
     assert "valid list" not in out.stderr and "MqttSettings" not in out.stderr
 
 
+def test_check_config_by_hand_says_the_state_file_and_client_id_the_service_will_use(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("STATE_DIRECTORY", raising=False)
+    path = str(write(tmp_path, MINIMAL))
+    by_hand = cli("check-config", "-c", path, env={"HOME": str(tmp_path)})
+    service = cli("check-config", "-c", path, env={"STATE_DIRECTORY": "/var/lib/rotor-bridge"})
+    assert by_hand.returncode == 0 and service.returncode == 0, (by_hand, service)
+    lines = {ln.split(":")[0]: ln for ln in service.stdout.splitlines()}
+    assert lines["state file"] == "state file: /var/lib/rotor-bridge/state.json"
+    service_id = lines["broker"].rsplit("client id ", 1)[1]
+    home_file = tmp_path / ".local" / "state" / "rotor-bridge" / "state.json"
+    assert f"state file: {home_file} (run by hand as " in by_hand.stdout, by_hand.stdout
+    assert "; under the systemd unit /var/lib/rotor-bridge/state.json)" in by_hand.stdout
+    assert f" (under the systemd unit {service_id})\n" in by_hand.stdout, by_hand.stdout
+
+
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
     path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
     with pytest.raises(ConfigError) as exc:

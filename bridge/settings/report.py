@@ -19,6 +19,10 @@ Rules:
    what the start would refuse whoever runs it (a directory, a FIFO, a file where a directory
    must be) is an error worded as the start's (check_state_file); a directory this user cannot
    write is a warning, since the service may run as another user.
+6. Run by hand (no STATE_DIRECTORY) with state_file left out, the summary also says the state
+   file the systemd unit would use, and the default client id that goes with it (it hashes the
+   state file): check-config run as root before the service starts must not show an id or a
+   file the service will not use.
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ from bridge.settings.loggers import is_loopback
 from bridge.settings.rotator import EMULATION_KEYS
 from bridge.settings.web import web_warnings
 
+# the state file under deploy/systemd/rotor-bridge.service (StateDirectory=rotor-bridge)
+SERVICE_STATE_FILE = "/var/lib/rotor-bridge/state.json"
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # a USB serial adapter's name the kernel gives in the order adapters appear (not by-id, no udev
 # link): which controller it reaches can change with a re-plug or a reboot
@@ -204,9 +210,13 @@ def summary(settings: Settings) -> list[str]:
         login = f"user {m.username}, " + ("a password" if m.password is not None else "no password")
     tls = "TLS" if m.tls.enabled else "no TLS"
     version = "MQTT 5, else 3.1.1" if m.protocol == "auto" else f"MQTT {m.protocol}"
-    lines.append(
-        f"broker: {m.host}:{m.port}, {version}, {tls}, {login}, client id {m.effective_client_id()}"
-    )
+    client_id = m.effective_client_id()
+    service = _service_state_file(settings)
+    if service is not None and not m.client_id:  # rule 6: the default follows the state file
+        as_service = m.model_copy()
+        as_service._state_file = service
+        client_id += f" (under the systemd unit {as_service.effective_client_id()})"
+    lines.append(f"broker: {m.host}:{m.port}, {version}, {tls}, {login}, client id {client_id}")
     ha = settings.homeassistant
     lines.append(
         f"home assistant: on (discovery prefix {ha.discovery_prefix})" if ha.enabled else
@@ -236,11 +246,21 @@ def summary(settings: Settings) -> list[str]:
         lines.append(f"dxcluster: {dx.host}:{dx.port} as {dx.login}, {dx.cty_file} ({there})")
     else:
         lines.append("dxcluster: off")
-    lines.append(f"state file: {settings.state_file}")
+    state = f"state file: {settings.state_file}"
+    if service is not None:  # rule 6
+        state += f" (run by hand as {getpass.getuser()}; under the systemd unit {service})"
+    lines.append(state)
     if settings.audit_file is not None:
         most = settings.audit_max_bytes
         lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
     return lines
+
+
+def _service_state_file(settings: Settings) -> str | None:
+    """Rule 6: the state file the systemd unit would use instead of the one shown, if another."""
+    if "state_file" in settings.model_fields_set or os.environ.get("STATE_DIRECTORY"):
+        return None
+    return SERVICE_STATE_FILE
 
 
 def _web(settings: Settings) -> str:
