@@ -237,9 +237,12 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """A Ctrl-C before a command has the signals (the bridge's, the remote's, the demo's and
     the emulators' take them once loaded; the remote's from its first step, cmd_remote) is one
-    line and exit code 2, not a traceback: loading the bridge takes a few tenths of a second."""
+    line and exit code 2, not a traceback: loading the bridge takes a few tenths of a second.
+    A pipe that closes before check-config or ports has printed all (``| head``) ends it with
+    exit code 1 and no traceback."""
     argv = sys.argv[1:] if argv is None else argv
     who = "rotor-bridge"
+    args = None
     try:
         args = build_parser(argv).parse_args(argv)
         if args.func is cmd_remote:
@@ -248,6 +251,16 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{who}: {STOPPED_EARLY}", file=sys.stderr)
         return EXIT_CONFIG
+    except BrokenPipeError:
+        if args is not None and args.func not in _PRINTERS:  # (None: --help printed)
+            raise
+        # `check-config | head`: the reader left; no traceback, and none at exit's flush either
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+# the commands whose output is only printed, which a pipe may close early (main)
+_PRINTERS = (cmd_check_config, cmd_ports)
 
 
 if __name__ == "__main__":

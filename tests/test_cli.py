@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -9,7 +10,7 @@ import pytest
 
 from bridge import __version__
 from bridge.cli import build_parser, main
-from tests.support import bridge_env, run_cli
+from tests.support import ROOT, bridge_env, run_cli, slow
 
 
 def test_ports_lists_serial_ports_or_says_there_are_none() -> None:
@@ -141,3 +142,26 @@ def test_every_option_of_every_command_says_what_it_does() -> None:
             if not action.help or len(action.help.split()) < 3:
                 bare.append(f"{name} {'/'.join(action.option_strings) or action.dest}")
     assert bare == []
+
+
+@pytest.mark.parametrize("args", [("check-config", "-c", "config/example.toml"), ("ports",)])
+def test_a_reader_that_left_early_ends_a_printing_command_without_a_traceback(
+    args: tuple[str, ...],
+) -> None:
+    # `rotor-bridge check-config -c FILE | head -3`: the pipe is closed before it prints
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        out = subprocess.run(
+            [sys.executable, "-m", "bridge", *args],
+            stdout=write,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=bridge_env(),
+            cwd=str(ROOT),
+            timeout=slow(30),
+        )
+    finally:
+        os.close(write)
+    assert out.returncode == 1, out
+    assert out.stderr == "", out.stderr
