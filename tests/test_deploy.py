@@ -702,6 +702,21 @@ def test_unit_runs_unprivileged_in_dialout(unit: dict) -> None:
     assert ["m", user, "dialout"] in sysusers
 
 
+def test_every_useradd_for_the_service_makes_the_group_the_unit_runs_in(unit: dict) -> None:
+    # Group=rotor-bridge and `chown root:rotor-bridge` need that group; plain `useradd --system`
+    # makes it only where login.defs says USERGROUPS_ENAB yes, else the user lands in `users`
+    group = _one(unit, "Service", "Group")
+    assert group == _one(unit, "Service", "User")
+    found = 0
+    for path in (ROOT / "README.md", ROOT / "docs" / "deployment.md", UNIT):
+        text = path.read_text().replace("\\\n", " ").replace("#  ", " ")
+        for line in text.splitlines():
+            if "useradd " in line and line.rstrip().endswith(f" {group}"):
+                found += 1
+                assert "--user-group" in line.split(), (path.name, line)
+    assert found == 3
+
+
 def test_unit_orders_after_the_network(unit: dict) -> None:
     assert "network-online.target" in _one(unit, "Unit", "After").split()
     assert "network-online.target" in _one(unit, "Unit", "Wants").split()
