@@ -255,7 +255,9 @@ def _shown() -> str:
         "line `config OK: FILE`; a file that is not good is one message naming the key and exit",
         "code 2. It tries `state_file` as the start does, writing nothing: a directory, a FIFO or",
         "a file where its directory must be is that error, a directory this user may not write a",
-        "warning (the service may run as another user). `--full` prints every key above with the",
+        "warning (the service may run as another user). Run by hand with `state_file` left out,",
+        "it also names the state file the systemd unit will use (`/var/lib/rotor-bridge`), and",
+        "the default client id that goes with it. `--full` prints every key above with the",
         "value in use, the password masked, and these besides:",
         "",
     ]
