@@ -594,6 +594,36 @@ def test_check_config_by_hand_says_the_state_file_and_client_id_the_service_will
     assert f" (under the systemd unit {service_id})\n" in by_hand.stdout, by_hand.stdout
 
 
+def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import getpass
+    import grp
+
+    from bridge.settings import report
+
+    port = tmp_path / "ttyUSB-by-id"
+    port.touch()
+    port.chmod(0o660)
+    group = grp.getgrgid(port.stat().st_gid).gr_name
+    real_access = os.access
+    # as a user outside the port's group would be (the tests may run as root, who may all)
+    monkeypatch.setattr(
+        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
+    )
+    text = MINIMAL.replace(
+        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
+    assert out.returncode == 0, out
+    user = getpass.getuser()
+    assert (
+        f"warning: rotators[0].port: {port} cannot be opened by {user}: run by hand, the bridge "
+        f"keeps trying and says 'no permission'; add {user} to group {group} "
+        f"(`sudo usermod -aG {group} {user}`, then log in again)"
+    ) in out.stdout, out.stdout
+
+
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
     path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
     with pytest.raises(ConfigError) as exc:

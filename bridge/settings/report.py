@@ -23,13 +23,17 @@ Rules:
    file the systemd unit would use, and the default client id that goes with it (it hashes the
    state file): check-config run as root before the service starts must not show an id or a
    file the service will not use.
+7. A port that is there but that this user may not read and write is warned about, with the
+   group that may (``os.access``: it is not opened).
 """
 
 from __future__ import annotations
 
 import getpass
+import grp
 import os
 import re
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -165,6 +169,8 @@ def config_warnings(settings: Settings) -> list[str]:
                     f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
                     "ports` lists the serial ports); the bridge keeps trying to open it"
                 )
+            elif not os.access(path, os.R_OK | os.W_OK):  # rule 7
+                found.append(f"{where}.{key}: {_no_access(path)}")
             if _NUMBERED.fullmatch(path):  # two alike controllers swapped turn the wrong antenna
                 found.append(
                     f"{where}.{key}: {path} is numbered in the order the adapters appear: after "
@@ -254,6 +260,23 @@ def summary(settings: Settings) -> list[str]:
         most = settings.audit_max_bytes
         lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
     return lines
+
+
+def _no_access(port: str) -> str:
+    """Rule 7: a port there that this user may not open, and the group that may."""
+    user = getpass.getuser()
+    said = f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
+    try:
+        st = os.stat(port)
+        group = grp.getgrgid(st.st_gid).gr_name
+    except (OSError, KeyError):
+        return said + "'no permission'"
+    if st.st_mode & (stat.S_IRGRP | stat.S_IWGRP) != stat.S_IRGRP | stat.S_IWGRP:
+        return said + f"'no permission' (mode {stat.S_IMODE(st.st_mode):04o}: not even its group)"
+    return said + (
+        f"'no permission'; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
+        "log in again). The systemd unit's user is in dialout"
+    )
 
 
 def _service_state_file(settings: Settings) -> str | None:
