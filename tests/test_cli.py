@@ -165,3 +165,12 @@ def test_a_reader_that_left_early_ends_a_printing_command_without_a_traceback(
         os.close(write)
     assert out.returncode == 1, out
     assert out.stderr == "", out.stderr
+
+
+def test_check_config_without_a_file_says_to_name_one_not_that_rotators_are_missing() -> None:
+    out = run_cli("check-config")
+    assert out.returncode == 2, out
+    assert out.stderr == (
+        "rotor-bridge: no configuration file given: pass --config FILE (see config/example.toml) "
+        "or set ROTOR_BRIDGE_CONFIG\n"
+    ), out.stderr

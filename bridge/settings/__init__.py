@@ -450,7 +450,7 @@ def settings_from(
                 "and port (docs/configuration.md)"
             )
         raise ConfigError(
-            "no rotators configured: pass --config FILE (see config/example.toml) "
+            "no configuration file given: pass --config FILE (see config/example.toml) "
             "or set ROTOR_BRIDGE_CONFIG"
         )
     try:
