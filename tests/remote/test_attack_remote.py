@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import re
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -24,6 +25,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import Lock, RotatorStatus, Source, Stop
 from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
+from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.interfaces.mqtt.topics import StationTopics
@@ -651,3 +653,31 @@ def test_a_stop_the_stations_bridge_may_not_hear_is_sent_and_said_to_be_undelive
     assert refused.value.code is RefusalCode.OFFLINE
     assert "may still be turning" in refused.value.message
     assert link.sent == [(rot.topics.stop, "stop")] * 2
+
+
+def test_an_n1mm_stop_the_stations_bridge_may_not_hear_is_sent_and_logs_no_fault(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The remote's N1MM port: a STOP while the station's bridge is not heard goes out and is
+    said undelivered (remote/rotator.py rule 3, on R/error and in the log as the remote's
+    refusals are); it was logged at ERROR with a traceback as a fault behind the datagram
+    ('the N1MM stop of rotator ... failed'), as if a bug had kept the stop from the rotator."""
+    view, link = StationView(FakeClock()), Link()
+    rot = station_rotator(view, "tower", link)
+    view.put(STATION.bridge_state, b"offline")
+    ep = LoggerEndpoints()
+    ep.add_n1mm(rot, "Tower", port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        port = ep.address(next(iter(ep.n1mm.values())))[1]
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.sendto(
+                b"<N1MMRotor><stop><rotor>Tower</rotor></stop></N1MMRotor>", ("127.0.0.1", port)
+            )
+        wait_until(lambda: link.sent, 5, "the stop sent")
+        wait_until(lambda: ep.counts["n1mm"].commands, 5, "the datagram done")
+    finally:
+        ep.stop()
+    assert link.sent == [(rot.topics.stop, "stop")]
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR], caplog.text
+    assert not [r for r in caplog.records if r.exc_info], caplog.text

@@ -19,7 +19,8 @@ Rules:
 4. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
    listens on that port (or by band: rule 5), except a stop, which stops every rotator on it;
    a stop naming several rotors stops each of them on the port, a fault behind one not keeping
-   it from the next.
+   it from the next. A stop the remote's rotator says it could not deliver (its link down, the
+   station's bridge not heard: remote/rotator.py rule 3) is no fault: the rotator reported it.
    ``bidirectional`` 1 turns to the heading or its reciprocal, whichever is nearer the bearing.
    A non-zero ``offset`` is logged once and not applied (its meaning is not documented).
 5. N1MM by band (``choose``, pure): a turn goes to the one rotator on the port that answers to
@@ -303,5 +304,7 @@ class Commands:
         for rot in rotators:
             try:
                 rot.submit(Stop(Source.N1MM, by), described)
+            except Refused:  # the remote's, sent but maybe to nobody: reported there (no fault)
+                pass
             except Exception as exc:
                 self._fault(f"the N1MM stop of rotator {rot.id!r}", exc)
