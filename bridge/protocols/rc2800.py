@@ -41,7 +41,10 @@ Rules:
    bearing, anything else changes nothing. A query is answered by the same count too: a line
    of each axis since the last reading, none older than the exchange before it (a line that
    loses the azimuth's answer to one poll and the elevation's to the next still gives a
-   reading, at the azimuth's line, and a reading is never staler than that).
+   reading, at the azimuth's line, and a reading is never staler than that). That poll's own
+   elevation line, if it comes, is read as it comes and carried no further (else each poll of
+   a clean line after it was read at its azimuth with the poll before's elevation, for good);
+   a line of an exchange that had line noise is never carried (it may be a mangled one).
 3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading.
 4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent. A new bearing while turning goes straight out.
@@ -95,6 +98,9 @@ class Rc2800Codec(Plain):
         self._seen: set[int] = set()  # rule 2: axes heard since the last reading
         self._heard: set[int] = set()  # rule 2: axes heard since the last exchange opened
         self._query = False  # the open exchange is a query (one line an axis)
+        self._owed: set[int] = (
+            set()
+        )  # rule 2: axes a query read early still owes, read as they come
         self._deg: dict[int, float] = {}  # each axis's latest value
 
     # -- encoding -------------------------------------------------------------------------
@@ -116,10 +122,12 @@ class Rc2800Codec(Plain):
 
     def _open(self, lines_per_axis: int) -> None:
         self._want = [axis for axis in self._axes for _ in range(lines_per_axis)]
-        self._noisy = False
         self._query = lines_per_axis == 1
-        self._seen &= self._heard  # rule 2: no older than the exchange before this one
+        # rule 2: no older than the exchange before this one, and none of one with line noise
+        self._seen = set() if self._noisy else self._seen & self._heard
+        self._noisy = False
         self._heard = set()
+        self._owed = set()
 
     def expire_query(self) -> None:
         self._want = []
@@ -185,11 +193,13 @@ class Rc2800Codec(Plain):
                 self._want.pop(0)
             if self._want and not (self._query and len(self._seen) == len(self._axes)):
                 return  # the exchange's other lines are still to come (rule 2)
-            self._want = []
+            self._owed, self._want = set() if self._noisy else set(self._want), []
             if self._noisy:
                 self._seen.clear()
                 out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
                 return
+        elif axis in self._owed:  # rule 2: this poll's own line, after its early reading
+            self._owed.discard(axis)
         elif len(self._seen) < len(self._axes):
             out.append(JunkReply(raw, JunkReason.CHATTER, "one axis's position, kept"))
             return
@@ -197,8 +207,9 @@ class Rc2800Codec(Plain):
         out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E"))))
 
     def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
-        if self._want:
+        if self._want or self._owed:
             self._noisy = True
+            self._owed = set()  # (a line after noise is none of the early reading's)
         out.append(JunkReply(raw, reason, why))
 
 

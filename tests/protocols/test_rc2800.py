@@ -109,8 +109,8 @@ def test_a_query_whose_elevation_came_in_the_exchange_before_is_read_at_its_azim
     codec.expire_query()
     codec.encode_query()  # its elevation's answer lost
     assert positions(feed(codec, b"A P= 150.0 S=9 MV\r", how)) == [(150.0, 20.0)]
-    assert not codec.awaiting_reply()  # that answered this poll; its E line is kept
-    assert positions(feed(codec, b"E P=  21.0 S=9 MV\r", how)) == []
+    assert not codec.awaiting_reply()  # that answered this poll; its E line, if it comes,
+    assert positions(feed(codec, b"E P=  21.0 S=9 MV\r", how)) == [(150.0, 21.0)]  # is read
 
     stale = Rc2800Codec()
     stale.encode_query()
@@ -121,6 +121,47 @@ def test_a_query_whose_elevation_came_in_the_exchange_before_is_read_at_its_azim
     assert positions(feed(stale, b"A P= 150.0 S=9 MV\r", how)) == []
     assert stale.awaiting_reply()  # the elevation of this poll is still owed
     assert positions(feed(stale, b"E P=  30.0 S=9 MV\r", how)) == [(150.0, 30.0)]
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_after_a_query_read_at_its_azimuth_a_clean_line_reads_each_polls_own_elevation(
+    how: str,
+) -> None:
+    """Rule 2, a review of 644adc4: once one azimuth line was lost, the elevation's answer to
+    the poll read early at its azimuth was kept and carried into the next poll, which was read
+    at its azimuth again: on a clean line from then on every reading's elevation was the poll
+    before's (an elevation turning at 3 degrees a second shown a poll late, for good)."""
+    codec = Rc2800Codec()
+    codec.encode_query()  # its azimuth's answer lost
+    feed(codec, b"E P=  20.0 S=9 MV\r", how)
+    codec.expire_query()
+    codec.encode_query()
+    assert positions(feed(codec, b"A P= 150.0 S=9 MV\r", how)) == [(150.0, 20.0)]
+    late = positions(feed(codec, b"E P=  21.0 S=9 MV\r", how))  # this poll's own, whole
+    for az, el in ((151.0, 22.0), (152.0, 23.0)):  # the line clean again
+        codec.encode_query()
+        read = positions(feed(codec, b"A P= %.1f S=9 MV\r" % az, how))
+        read += positions(feed(codec, b"E P=  %.1f S=9 MV\r" % el, how))
+        assert read and read[-1] == (az, el), read
+    assert late == [(150.0, 21.0)]
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_an_elevation_from_an_exchange_with_line_noise_is_never_carried_into_a_reading(
+    how: str,
+) -> None:
+    """Rules 1 and 2, a review of 644adc4: a reading of an exchange that had line noise is
+    untrusted (a line after noise may be a mangled one). An elevation heard in such an exchange
+    was carried into the next poll and read there, trusted, at its azimuth."""
+    codec = Rc2800Codec()
+    codec.encode_query()  # its azimuth's answer lost, and noise on the line
+    out = feed(codec, b"P= 1 S=9\rE P=  20.0 S=9 MV\r", how)
+    assert any(r.reason is JunkReason.NOISE for r in junk(out))
+    codec.expire_query()
+    codec.encode_query()
+    assert positions(feed(codec, b"A P= 150.0 S=9 MV\r", how)) == []
+    assert codec.awaiting_reply()  # this poll's own elevation is owed
+    assert positions(feed(codec, b"E P=  30.0 S=9 MV\r", how)) == [(150.0, 30.0)]
 
 
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
