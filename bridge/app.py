@@ -425,6 +425,8 @@ class App:
             self.discovery = self._discovery(settings, retired=not settings.homeassistant.enabled)
         self._stale(settings)  # interfaces/mqtt/stale.py: a removed rotator's retained topics
         self.client.add_subscriptions(self.mqtt.subscriptions())
+        if self.discovery is not None:
+            self.client.optional(self.discovery.optional)  # (client.py rule 17)
         self.lane = StopLane(
             settings.mqtt,
             subscriptions=self.mqtt.stop_lane_subscriptions(),

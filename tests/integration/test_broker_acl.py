@@ -4,6 +4,7 @@ answered "not authorised" (0x87) to 71 discovery publishes and the bridge logged
 from __future__ import annotations
 
 import json
+import logging
 import threading
 import time
 from collections.abc import Iterator
@@ -74,6 +75,40 @@ def test_a_denied_subscription_is_reported_naming_the_topic(
     assert [t for t, _p in seen] == ["rotor/stop"]
     assert "subscribe to rotor/stop: Not authorized" in seen[0][1]
     assert client.problems == [seen[0][1]]
+
+
+def test_with_discovery_off_a_denied_config_filter_is_said_once_and_is_no_problem(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Discovery turned off reads Home Assistant's config topics to clear an earlier run's
+    (homeassistant/publisher.py rule 6). A broker whose ACL keeps the bridge out of that prefix
+    (why its owner turned discovery off) and says so in the SUBACK put "not authorised" on
+    B/bridge/info and every rotator's last error, and the command topics did not count as
+    subscribed (express.py rule 11): said once in the log now, nothing else
+    (interfaces/mqtt/client.py rule 17)."""
+    rig.add("tower")
+    rig.sections["homeassistant"] = {"enabled": False}
+    app = App(rig.settings)
+    client = app.client
+    config_filter = "homeassistant/+/+/+/config"
+    seen: list[tuple[str, str]] = []
+    client._on_denied = lambda topic, problem: seen.append((topic, problem))
+    granted, refused = (
+        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
+        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
+    )
+    caplog.set_level(logging.INFO)
+    for mid in (7, 8):  # (a second connection's SUBACK: said once)
+        client._command_mid = mid
+        client._sub_filters[mid] = ["rotor/target", config_filter]
+        client._on_subscribe(client._client, None, mid, [granted, refused], None)
+    assert seen == [] and client.problems == []
+    assert client._subscribed_since is not None
+    said = [r.getMessage() for r in caplog.records if config_filter in r.getMessage()]
+    assert len(said) == 1 and "are not cleared" in said[0], said
+    client._sub_filters[9] = ["rotor/target", "rotor/stop"]  # (any other topic: a problem)
+    client._on_subscribe(client._client, None, 9, [granted, refused], None)
+    assert [t for t, _p in seen] == ["rotor/stop"]
 
 
 def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: Path) -> None:

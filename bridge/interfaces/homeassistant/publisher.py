@@ -26,7 +26,9 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    generated: every config under our node ids that follows our bridge's state, left by a run
    with discovery on, is cleared when the broker shows it to us (they kept the bridge's devices
    in Home Assistant for good, every entity unavailable). Configs that follow another bridge's
-   state are left alone, as in rule 4.
+   state are left alone, as in rule 4. A broker that will not let the bridge read them (an ACL
+   that keeps it out of the prefix: why its owner turned discovery off) costs only that, said
+   once in the log (``optional``, interfaces/mqtt/client.py rule 17).
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
@@ -99,6 +101,17 @@ class DiscoveryPublisher:
         if self._retired:  # rule 6: Home Assistant's birth is none of ours
             return [self._disc.config_filter]
         return [self.status_topic, self._disc.config_filter]
+
+    @property
+    def optional(self) -> dict[str, str]:
+        """Rule 6: the subscriptions whose denial is no problem, each with what it costs."""
+        if not self._retired:
+            return {}
+        return {
+            self._disc.config_filter: "with Home Assistant discovery off that only means "
+            "configs an earlier run with it on left there, if any, are not cleared (delete "
+            "the bridge's devices in Home Assistant by hand)"
+        }
 
     def publish_all(self) -> None:
         if self._retired:  # rule 6

@@ -67,6 +67,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    leaves quick-ack mode again as soon as we send, so it is set after every read, not once (a
    system call per read; paho_client.py). Command topics stay QoS 0 (rule 4): our PUBACK would
    acknowledge a command too, but brings back what rule 4 avoids.
+17. A filter subscribed as optional (``optional``: Home Assistant's config topics read with
+   discovery off, homeassistant/publisher.py rule 6) that the broker denies is said once in
+   the log, with what its denial costs, and is no problem: not on ``B/bridge/info`` nor a
+   rotator's last error, and the command topics count as subscribed all the same (an ACL that
+   keeps a bridge out of Home Assistant's prefix is why its owner turned discovery off).
 """
 
 from __future__ import annotations
@@ -256,6 +261,8 @@ class Connection:
         self._stopping = False  # a shutdown under way: a broker going away is no news
         self._last_refusal: str | None = None  # rule 6: each reason said once in a row
         self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
+        self._optional: dict[str, str] = {}  # rule 17: filter -> what its denial costs
+        self._optional_said: set[str] = set()
         self.connected = threading.Event()
         self.before_message: Callable[[], None] | None = None  # lane.py rule 4
         c = new_client(settings, client_id)
@@ -278,6 +285,11 @@ class Connection:
     def _disconnect(self) -> None:
         self._client.disconnect()
         self._client.loop_stop()  # joins paho's thread: never call this on it
+
+    def optional(self, filters: dict[str, str]) -> None:
+        """Rule 17: filters (among the subscriptions) whose denial is no problem, each with
+        what it costs; before the connection starts."""
+        self._optional.update(filters)
 
     def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> int | None:
         """SUBSCRIBE, its filters kept by message id to name what the SUBACK denies."""
@@ -508,15 +520,28 @@ class Connection:
         properties: Properties | None,
     ) -> None:
         filters = self._sub_filters.pop(mid, [])
+        named = [*filters, *[None] * (len(reason_codes) - len(filters))]
+        failed = [(t, c) for t, c in zip(named, reason_codes, strict=False) if c.is_failure]
         if mid == self._command_mid:
             self._subscribed = True  # the commands reach us from now on
-            if not any(code.is_failure for code in reason_codes):  # (a topic denied: perhaps
-                self._subscribed_since = self._clock()  # a stop's, express.py rule 11)
+            if all(t in self._optional for t, _c in failed):  # (a topic denied: perhaps a
+                self._subscribed_since = self._clock()  # stop's, express.py rule 11; rule 17)
             if self._on_subscribed is not None:  # (paho reads what comes next after this)
                 self._on_subscribed()
-        for topic, code in zip(filters, reason_codes, strict=False):
-            if code.is_failure:
-                self._denied(topic, str(code))
+        for topic, code in failed:
+            if topic is None:
+                continue
+            if topic in self._optional:  # rule 17: said once, no problem
+                if topic not in self._optional_said:
+                    self._optional_said.add(topic)
+                    log.info(
+                        "the MQTT broker does not let this bridge read %s (%s): %s",
+                        topic,
+                        code,
+                        self._optional[topic],
+                    )
+                continue
+            self._denied(topic, str(code))
 
     def _on_disconnect(
         self,

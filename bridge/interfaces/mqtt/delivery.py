@@ -9,7 +9,8 @@ its own mutex and a thread that publishes holds the client's lock and then waits
 client's lock taken in ``on_publish`` would deadlock (docs/architecture.md).
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
-11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py) or a
+11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py; an
+   optional one only in the log, rule 17) or a
    QoS 1 publish it will not take (PUBACK, MQTT 5; e.g. 0x87 "not authorised" from an ACL) is
    logged as an error once per topic (until the broker is seen to take it: ``allow``),
    naming the topic, kept in ``problems`` and handed to
