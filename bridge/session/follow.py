@@ -46,7 +46,10 @@ Rules:
    neither memory nor the disk. A rotator with ``bands`` (rule 9) takes the first program
    whose dial is on one of its bands: with two radios (SO2R, one WSJT-X each) the 40 m
    antenna follows the program on 40 m, whichever spoke first (an attack pass: it took the
-   one on 20 m, heard first, and ignored the 40 m radio's for as long as it followed).
+   one on 20 m, heard first, and ignored the 40 m radio's for as long as it followed). The
+   program followed that leaves its bands (a dial moved to 20 m) is let go: the first program
+   heard on them again is followed, it or another (a review: the 40 m antenna kept the radio
+   gone to 20 m and ignored the one that came up on 40 m).
 9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
    is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
@@ -178,6 +181,9 @@ class Follower:
             elif heard.instance != self._instance:
                 self._ignore(heard.instance, now)
                 return
+            elif not self._for_me(heard):  # rule 8: it left this antenna's bands
+                self._instance = None
+                self._ignored.clear()
         self._heard, self._heard_t = heard, now
 
     def _ignore(self, instance: str, now: float) -> None:

@@ -548,6 +548,26 @@ def test_with_two_radios_each_antenna_follows_the_program_on_its_band() -> None:
         assert angle_between(low.truth().az_deg, bearing("FN31")) <= 0.5
 
 
+def test_an_antenna_whose_program_left_its_band_follows_the_one_that_came_to_it() -> None:
+    """Rule 8 with bands: the 40 m antenna followed rig1 while it was on 40 m; rig1 moved to
+    20 m and rig2 came up on 40 m. The 40 m antenna follows rig2 (it kept rig1, now on 20 m,
+    and ignored the program on its band until following was switched off and on)."""
+    with spid(bands=["40m"]) as low:
+        low.follow(True)
+        for heard in (
+            Heard("W1AW", "FN31", False, "WSJT-X - rig1", FORTY),  # rig1 on 40 m: followed
+            Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY),  # rig1 to 20 m
+            Heard("VK2XYZ", "QF56", False, "WSJT-X - rig2", FORTY),  # rig2 on 40 m
+            Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY),
+            Heard("VK2XYZ", "QF56", False, "WSJT-X - rig2", FORTY),
+        ):
+            low.mailbox.put_heard(heard)
+            low._take()
+            low.run_for(30.0)
+        low.run_for(60.0)
+        assert angle_between(low.truth().az_deg, bearing("QF56")) <= 0.5
+
+
 def test_a_turn_under_way_is_not_stopped_by_a_transmission_on_another_band() -> None:
     """Rule 9: a turn under way when the band changes is not stopped (it was for the partner
     heard on its band). An attack pass: the 20 m antenna turning to PM95, WSJT-X moved to 40 m
