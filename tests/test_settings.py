@@ -624,6 +624,42 @@ def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group
     ) in out.stdout, out.stdout
 
 
+def test_check_config_tells_a_user_already_in_the_ports_group_to_log_in_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Added to the port's group (usermod) but not logged in again since: this login has not
+    the group yet. It told them to add themselves to the group they are already in."""
+    import getpass
+    import grp
+
+    from bridge.settings import report
+
+    port = tmp_path / "ttyUSB-by-id"
+    port.touch()
+    port.chmod(0o660)
+    gid = port.stat().st_gid  # this user's own group: the user is in it
+    group = grp.getgrgid(gid).gr_name
+    real_access = os.access
+    # a login from before the usermod: the process has not the group (nor may root all)
+    monkeypatch.setattr(
+        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
+    )
+    monkeypatch.setattr(report.os, "getgroups", lambda: [g for g in [gid + 1] if g != gid])
+    monkeypatch.setattr(report.os, "getegid", lambda: gid + 1)
+    text = MINIMAL.replace(
+        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
+    assert out.returncode == 0, out
+    user = getpass.getuser()
+    assert (
+        f"warning: rotators[0].port: {port} cannot be opened by {user}: run by hand, the bridge "
+        f"keeps trying and says 'no permission'; {user} is in group {group}, but not this "
+        f"login, from before: log out and in again (or run `newgrp {group}`)"
+    ) in out.stdout, out.stdout
+    assert "usermod" not in out.stdout
+
+
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
     path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
     with pytest.raises(ConfigError) as exc:

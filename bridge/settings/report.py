@@ -24,7 +24,9 @@ Rules:
    state file): check-config run as root before the service starts must not show an id or a
    file the service will not use.
 7. A port that is there but that this user may not read and write is warned about, with the
-   group that may (``os.access``: it is not opened).
+   group that may (``os.access``: it is not opened). A user the system's files put in that
+   group, whose login has not the group yet (added since it logged in), is told to log in
+   again, not to join the group it is in (a review).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from __future__ import annotations
 import getpass
 import grp
 import os
+import pwd
 import re
 import stat
 from pathlib import Path
@@ -273,10 +276,23 @@ def _no_access(port: str) -> str:
         return said + "'no permission'"
     if st.st_mode & (stat.S_IRGRP | stat.S_IWGRP) != stat.S_IRGRP | stat.S_IWGRP:
         return said + f"'no permission' (mode {stat.S_IMODE(st.st_mode):04o}: not even its group)"
+    if st.st_gid not in {os.getegid(), *os.getgroups()} and _member(user, st.st_gid):
+        return said + (
+            f"'no permission'; {user} is in group {group}, but not this login, from before: "
+            f"log out and in again (or run `newgrp {group}`)"
+        )
     return said + (
         f"'no permission'; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
         "log in again). The systemd unit's user is in dialout"
     )
+
+
+def _member(user: str, gid: int) -> bool:
+    """Rule 7: the system's files put ``user`` in group ``gid`` (a login may not have it yet)."""
+    try:
+        return user in grp.getgrgid(gid).gr_mem or pwd.getpwnam(user).pw_gid == gid
+    except KeyError:
+        return False
 
 
 def _service_state_file(settings: Settings) -> str | None:
