@@ -594,6 +594,23 @@ def test_check_config_by_hand_says_the_state_file_and_client_id_the_service_will
     assert f" (under the systemd unit {service_id})\n" in by_hand.stdout, by_hand.stdout
 
 
+def test_check_config_on_macos_says_nothing_of_a_systemd_unit(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rule 6 is for Linux: a Mac has no systemd, and its summary named a unit's state file and
+    client id that user will never have."""
+    import sys
+
+    from bridge.settings import report
+
+    monkeypatch.delenv("STATE_DIRECTORY", raising=False)
+    settings = load_settings(write(tmp_path, MINIMAL), environ={})
+    monkeypatch.setattr(sys, "platform", "darwin")
+    lines = "\n".join(report.summary(settings))
+    assert f"state file: {settings.state_file}\n" in lines + "\n", lines
+    assert "systemd" not in lines, lines
+
+
 def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

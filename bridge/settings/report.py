@@ -22,7 +22,7 @@ Rules:
 6. Run by hand (no STATE_DIRECTORY) with state_file left out, the summary also says the state
    file the systemd unit would use, and the default client id that goes with it (it hashes the
    state file): check-config run as root before the service starts must not show an id or a
-   file the service will not use.
+   file the service will not use. On Linux only: a Mac has no systemd unit to name (a review).
 7. A port that is there but that this user may not read and write is warned about, with the
    group that may (``os.access``: it is not opened). A user the system's files put in that
    group, whose login has not the group yet (added since it logged in), is told to log in
@@ -37,6 +37,7 @@ import os
 import pwd
 import re
 import stat
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -296,7 +297,10 @@ def _member(user: str, gid: int) -> bool:
 
 
 def _service_state_file(settings: Settings) -> str | None:
-    """Rule 6: the state file the systemd unit would use instead of the one shown, if another."""
+    """Rule 6: the state file the systemd unit would use instead of the one shown, if another
+    (on Linux: no other system has systemd)."""
+    if sys.platform != "linux":
+        return None
     if "state_file" in settings.model_fields_set or os.environ.get("STATE_DIRECTORY"):
         return None
     return SERVICE_STATE_FILE
