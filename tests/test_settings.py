@@ -580,7 +580,10 @@ def test_a_table_with_the_wrong_brackets_says_which_to_write(
 def test_check_config_by_hand_says_the_state_file_and_client_id_the_service_will_use(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    from bridge.settings import report
+
     monkeypatch.delenv("STATE_DIRECTORY", raising=False)
+    monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
     path = str(write(tmp_path, MINIMAL))
     by_hand = cli("check-config", "-c", path, env={"HOME": str(tmp_path)})
     service = cli("check-config", "-c", path, env={"STATE_DIRECTORY": "/var/lib/rotor-bridge"})
@@ -605,6 +608,7 @@ def test_check_config_on_macos_says_nothing_of_a_systemd_unit(
 
     monkeypatch.delenv("STATE_DIRECTORY", raising=False)
     settings = load_settings(write(tmp_path, MINIMAL), environ={})
+    monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
     monkeypatch.setattr(sys, "platform", "darwin")
     lines = "\n".join(report.summary(settings))
     assert f"state file: {settings.state_file}\n" in lines + "\n", lines
@@ -623,6 +627,7 @@ def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group
     port.touch()
     port.chmod(0o660)
     group = grp.getgrgid(port.stat().st_gid).gr_name
+    monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
     real_access = os.access
     # as a user outside the port's group would be (the tests may run as root, who may all)
     monkeypatch.setattr(
@@ -656,6 +661,7 @@ def test_check_config_tells_a_user_already_in_the_ports_group_to_log_in_again(
     port.chmod(0o660)
     gid = port.stat().st_gid  # this user's own group: the user is in it
     group = grp.getgrgid(gid).gr_name
+    monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
     real_access = os.access
     # a login from before the usermod: the process has not the group (nor may root all)
     monkeypatch.setattr(
@@ -675,6 +681,39 @@ def test_check_config_tells_a_user_already_in_the_ports_group_to_log_in_again(
         f"login, from before: log out and in again (or run `newgrp {group}`)"
     ) in out.stdout, out.stdout
     assert "usermod" not in out.stdout
+
+
+def test_check_config_in_a_container_names_the_ports_group_number_for_group_add(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """In Docker the port keeps the host's group number, and a container has no login nor a
+    systemd unit: it was told to usermod and log in again, and that the unit's user is in
+    dialout. What helps is that number in compose's group_add."""
+    from bridge.settings import report
+
+    monkeypatch.delenv("STATE_DIRECTORY", raising=False)  # (an image without the Dockerfile's)
+
+    port = tmp_path / "rotor"
+    port.touch()
+    port.chmod(0o660)
+    gid = port.stat().st_gid
+    mark = tmp_path / ".dockerenv"
+    mark.touch()
+    monkeypatch.setattr(report, "CONTAINER_MARKS", (str(mark),), raising=False)
+    real_access = os.access
+    monkeypatch.setattr(
+        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
+    )
+    text = MINIMAL.replace(
+        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
+    assert out.returncode == 0, out
+    assert (
+        f"'no permission'; in this container: give it the port's group, number {gid} on the "
+        f"host, in compose's group_add (docker run --group-add {gid})"
+    ) in out.stdout, out.stdout
+    assert "usermod" not in out.stdout and "systemd" not in out.stdout
 
 
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:

@@ -22,11 +22,14 @@ Rules:
 6. Run by hand (no STATE_DIRECTORY) with state_file left out, the summary also says the state
    file the systemd unit would use, and the default client id that goes with it (it hashes the
    state file): check-config run as root before the service starts must not show an id or a
-   file the service will not use. On Linux only: a Mac has no systemd unit to name (a review).
+   file the service will not use. On Linux only, and not in a container: a Mac or a container
+   has no systemd unit to name (a review).
 7. A port that is there but that this user may not read and write is warned about, with the
    group that may (``os.access``: it is not opened). A user the system's files put in that
    group, whose login has not the group yet (added since it logged in), is told to log in
-   again, not to join the group it is in (a review).
+   again, not to join the group it is in (a review). In a container the port keeps the host's
+   group number, and that number, for compose's group_add, is what is said (a review: it was
+   told to usermod, log in again, and that the systemd unit's user is in dialout).
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ from bridge.settings.loggers import is_loopback
 from bridge.settings.rotator import EMULATION_KEYS
 from bridge.settings.web import web_warnings
 
+# a container's marks (Docker's, Podman's): no systemd unit nor a login there (rules 6, 7)
+CONTAINER_MARKS = ("/.dockerenv", "/run/.containerenv")
 # the state file under deploy/systemd/rotor-bridge.service (StateDirectory=rotor-bridge)
 SERVICE_STATE_FILE = "/var/lib/rotor-bridge/state.json"
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
@@ -272,11 +277,19 @@ def _no_access(port: str) -> str:
     said = f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
     try:
         st = os.stat(port)
-        group = grp.getgrgid(st.st_gid).gr_name
-    except (OSError, KeyError):
+    except OSError:
         return said + "'no permission'"
     if st.st_mode & (stat.S_IRGRP | stat.S_IWGRP) != stat.S_IRGRP | stat.S_IWGRP:
         return said + f"'no permission' (mode {stat.S_IMODE(st.st_mode):04o}: not even its group)"
+    if _in_container():  # the host's group number; no login, no systemd unit here
+        return said + (
+            f"'no permission'; in this container: give it the port's group, number {st.st_gid} "
+            f"on the host, in compose's group_add (docker run --group-add {st.st_gid})"
+        )
+    try:
+        group = grp.getgrgid(st.st_gid).gr_name
+    except KeyError:
+        return said + "'no permission'"
     if st.st_gid not in {os.getegid(), *os.getgroups()} and _member(user, st.st_gid):
         return said + (
             f"'no permission'; {user} is in group {group}, but not this login, from before: "
@@ -286,6 +299,11 @@ def _no_access(port: str) -> str:
         f"'no permission'; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
         "log in again). The systemd unit's user is in dialout"
     )
+
+
+def _in_container() -> bool:
+    """Rules 6 and 7: run in a container (Docker's or Podman's mark is there)."""
+    return any(os.path.exists(mark) for mark in CONTAINER_MARKS)
 
 
 def _member(user: str, gid: int) -> bool:
@@ -299,7 +317,7 @@ def _member(user: str, gid: int) -> bool:
 def _service_state_file(settings: Settings) -> str | None:
     """Rule 6: the state file the systemd unit would use instead of the one shown, if another
     (on Linux: no other system has systemd)."""
-    if sys.platform != "linux":
+    if sys.platform != "linux" or _in_container():
         return None
     if "state_file" in settings.model_fields_set or os.environ.get("STATE_DIRECTORY"):
         return None
