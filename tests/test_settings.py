@@ -716,6 +716,41 @@ def test_check_config_in_a_container_names_the_ports_group_number_for_group_add(
     assert "usermod" not in out.stdout and "systemd" not in out.stdout
 
 
+def test_check_config_as_a_user_id_without_a_name_warns_and_ends_well(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``docker run --user 1000``: a user id the image's passwd does not name, no USER in the
+    environment. A port it may not open ended check-config in a KeyError traceback (getpass);
+    it names the user by its number."""
+    import pwd
+
+    from bridge.settings import report
+
+    port = tmp_path / "rotor"
+    port.touch()
+    port.chmod(0o660)
+    mark = tmp_path / ".dockerenv"
+    mark.touch()
+    monkeypatch.setattr(report, "CONTAINER_MARKS", (str(mark),))
+    for name in ("LOGNAME", "USER", "LNAME", "USERNAME"):
+        monkeypatch.delenv(name, raising=False)
+
+    def nameless(uid: int) -> Any:
+        raise KeyError(f"getpwuid(): uid not found: {uid}")
+
+    monkeypatch.setattr(pwd, "getpwuid", nameless)
+    real_access = os.access
+    monkeypatch.setattr(
+        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
+    )
+    text = MINIMAL.replace(
+        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
+    assert out.returncode == 0, out
+    assert f"{port} cannot be opened by uid {os.getuid()}: " in out.stdout, out.stdout
+
+
 def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
     path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
     with pytest.raises(ConfigError) as exc:

@@ -29,7 +29,8 @@ Rules:
    group, whose login has not the group yet (added since it logged in), is told to log in
    again, not to join the group it is in (a review). In a container the port keeps the host's
    group number, and that number, for compose's group_add, is what is said (a review: it was
-   told to usermod, log in again, and that the systemd unit's user is in dialout).
+   told to usermod, log in again, and that the systemd unit's user is in dialout). A user id
+   with no name (``docker run --user 1000``) is named by its number.
 """
 
 from __future__ import annotations
@@ -148,7 +149,7 @@ def config_warnings(settings: Settings) -> list[str]:
     closed = _unwritable_state_dir(settings.state_file)
     if closed is not None:
         found.append(
-            f"state_file: {closed} cannot be written by {getpass.getuser()}: the bridge does "
+            f"state_file: {closed} cannot be written by {_who()}: the bridge does "
             f"not start unless the user it runs as may write {settings.state_file} there"
         )
     if settings._password_in_file:  # set by load_settings, which saw the file
@@ -263,7 +264,7 @@ def summary(settings: Settings) -> list[str]:
         lines.append("dxcluster: off")
     state = f"state file: {settings.state_file}"
     if service is not None:  # rule 6
-        state += f" (run by hand as {getpass.getuser()}; under the systemd unit {service})"
+        state += f" (run by hand as {_who()}; under the systemd unit {service})"
     lines.append(state)
     if settings.audit_file is not None:
         most = settings.audit_max_bytes
@@ -273,7 +274,7 @@ def summary(settings: Settings) -> list[str]:
 
 def _no_access(port: str) -> str:
     """Rule 7: a port there that this user may not open, and the group that may."""
-    user = getpass.getuser()
+    user = _who()
     said = f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
     try:
         st = os.stat(port)
@@ -299,6 +300,15 @@ def _no_access(port: str) -> str:
         f"'no permission'; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
         "log in again). The systemd unit's user is in dialout"
     )
+
+
+def _who() -> str:
+    """This user's name, or ``uid N`` for a user id the system names not (``docker run --user
+    1000``: getpass raised, and check-config ended in a traceback)."""
+    try:
+        return getpass.getuser()
+    except (KeyError, OSError):
+        return f"uid {os.getuid()}"
 
 
 def _in_container() -> bool:
