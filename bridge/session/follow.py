@@ -29,7 +29,9 @@ Rules:
 4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
    on every change and at least at every decoding period): the rotor turns to the partner of
    the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
-   rule 7).
+   rule 7). A rotator with ``bands`` (rule 9) takes the newest fresh status whose dial is on
+   one of them when the newest of all is not (two radios: the QSO under way on its band, not
+   a refusal for the other radio's band and a wait for the next status: a review).
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is reported once for that grid and not tried again.
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
@@ -146,6 +148,8 @@ class Follower:
         self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
         self._ignored_since = 0  # rule 8: others first heard since then
         self._off_band: str | None = None  # rule 9: why the last grid was not turned to
+        self._mine: Heard | None = None  # rule 4: the newest status on one of its bands
+        self._mine_t = -math.inf
 
     @property
     def on(self) -> bool:
@@ -157,9 +161,10 @@ class Follower:
         self.ended, self._aimed, self._bearing, self._off_band = None, None, None, None
         starter = follow.origin.operator if follow.origin is not None else None
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
-        if now - self._heard_t > FRESH_S:
-            self._heard = None
-        fresh = self._heard
+        fresh = self._heard if now - self._heard_t <= FRESH_S else None
+        if (fresh is None or not self._for_me(fresh)) and now - self._mine_t <= FRESH_S:
+            fresh, self._heard_t = self._mine, self._mine_t  # rule 4: the QSO on its band
+        self._heard = fresh
         self._instance = fresh.instance if fresh is not None and self._for_me(fresh) else None
         self._ignored.clear()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
@@ -174,6 +179,8 @@ class Follower:
 
     def heard(self, heard: Heard, now: float) -> None:
         """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
+        if self._rig.follow.bands and self._for_me(heard):  # rule 4: its band's newest
+            self._mine, self._mine_t = heard, now
         if self.info is not None:
             if self._instance is None:
                 if self._for_me(heard):  # rule 8: the first program on this antenna's band

@@ -568,6 +568,24 @@ def test_an_antenna_whose_program_left_its_band_follows_the_one_that_came_to_it(
         assert angle_between(low.truth().az_deg, bearing("QF56")) <= 0.5
 
 
+def test_switched_on_the_antenna_turns_at_once_to_the_qso_under_way_on_its_band() -> None:
+    """Rule 4 with bands and two radios: rig2 on 40 m named FN31, then rig1 on 20 m spoke last.
+    Switched on, the 40 m antenna turns at once to FN31, the QSO under way on its band (it said
+    rig1's 20 m dial was not for it on R/error, and waited for rig2's next status)."""
+    with spid(bands=["40m"]) as low:
+        for heard in (
+            Heard("W1AW", "FN31", False, "WSJT-X - rig2", FORTY),
+            Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY),
+        ):
+            low.mailbox.put_heard(heard)
+            low._take()
+            low.run_for(2.0)
+        low.follow(True)
+        low.run_for(60.0)
+        assert angle_between(low.truth().az_deg, bearing("FN31")) <= 0.5
+        assert low.errors("refused") == []
+
+
 def test_a_turn_under_way_is_not_stopped_by_a_transmission_on_another_band() -> None:
     """Rule 9: a turn under way when the band changes is not stopped (it was for the partner
     heard on its band). An attack pass: the 20 m antenna turning to PM95, WSJT-X moved to 40 m
