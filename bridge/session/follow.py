@@ -49,9 +49,10 @@ Rules:
    whose dial is on one of its bands: with two radios (SO2R, one WSJT-X each) the 40 m
    antenna follows the program on 40 m, whichever spoke first (an attack pass: it took the
    one on 20 m, heard first, and ignored the 40 m radio's for as long as it followed). The
-   program followed that leaves its bands (a dial moved to 20 m) is let go: the first program
-   heard on them again is followed, it or another (a review: the 40 m antenna kept the radio
-   gone to 20 m and ignored the one that came up on 40 m).
+   program followed that leaves its bands (a dial moved to 20 m) is let go: another program
+   heard on them in the last FRESH_S is followed at once (its newest status: two radios that
+   swap bands, their statuses in one batch), else the first heard on them again, it or another
+   (a review: the 40 m antenna kept the radio gone to 20 m and ignored the one come to 40 m).
 9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
    is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
@@ -189,8 +190,14 @@ class Follower:
                 self._ignore(heard.instance, now)
                 return
             elif not self._for_me(heard):  # rule 8: it left this antenna's bands
-                self._instance = None
                 self._ignored.clear()
+                mine = self._mine  # another program's newest on its bands, heard already
+                if mine is not None and mine.instance != heard.instance:
+                    if now - self._mine_t <= FRESH_S:
+                        self._instance = mine.instance
+                        self._heard, self._heard_t = mine, self._mine_t
+                        return
+                self._instance = None
         self._heard, self._heard_t = heard, now
 
     def _ignore(self, instance: str, now: float) -> None:

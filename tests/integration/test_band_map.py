@@ -187,3 +187,49 @@ def test_with_two_radios_each_antenna_follows_the_wsjtx_on_its_band(bench: Bench
     for rid in (HIGH, LOW):
         bench.probe.publish(bench.rig.topic(rid, "follow"), "off")
         bench.probe.wait_value(bench.rig.topic(rid, "follow/state"), "off", 10)
+
+
+def test_when_the_two_radios_swap_bands_each_antenna_follows_the_one_come_to_it(
+    bench: Bench,
+) -> None:
+    """SO2R, rig1 on 20 m and rig2 on 40 m, each antenna following the WSJT-X on its band; then
+    the radios swap bands. Each antenna follows the program now on its band (each kept the one
+    it followed, gone to the other band, and neither turned again: session/follow.py rule 8)."""
+    before = {
+        "rig1": w.StatusFields(
+            dx_call="PY2ABC", dx_grid="GG66QK", instance="WSJT-X - rig1", dial_hz=14_074_000
+        ),
+        "rig2": w.StatusFields(
+            dx_call="VK2XYZ", dx_grid="QF56OD", instance="WSJT-X - rig2", dial_hz=7_074_000
+        ),
+    }
+    after = {
+        "rig1": w.StatusFields(
+            dx_call="JA1ABC", dx_grid="PM95VQ", instance="WSJT-X - rig1", dial_hz=7_074_000
+        ),
+        "rig2": w.StatusFields(
+            dx_call="W1AW", dx_grid="FN31PR", instance="WSJT-X - rig2", dial_hz=14_074_000
+        ),
+    }
+    for rid in (HIGH, LOW):
+        bench.probe.publish(bench.rig.topic(rid, "follow"), "wsjtx")
+        bench.probe.wait_value(bench.rig.topic(rid, "follow/state"), "wsjtx", 10)
+    way = {
+        g: round(reference_path(BERLIN, locator_centre(g))[0])
+        for g in ("GG66QK", "QF56OD", "PM95VQ", "FN31PR")
+    }
+    t = time.monotonic()
+    for _ in range(3):
+        for rig in ("rig1", "rig2"):
+            w.send(w.status(before[rig]), bench.wsjtx)
+    bench.settled_at(HIGH, way["GG66QK"], after=t)
+    bench.settled_at(LOW, way["QF56OD"], after=t)
+    t = time.monotonic()
+    for _ in range(3):  # every decoding period, after the swap
+        for rig in ("rig1", "rig2"):
+            w.send(w.status(after[rig]), bench.wsjtx)
+    bench.settled_at(HIGH, way["FN31PR"], after=t)  # rig2's partner, now on 20 m
+    bench.settled_at(LOW, way["PM95VQ"], after=t)  # rig1's, now on 40 m
+    for rid in (HIGH, LOW):
+        bench.probe.publish(bench.rig.topic(rid, "follow"), "off")
+        bench.probe.wait_value(bench.rig.topic(rid, "follow/state"), "off", 10)
