@@ -45,6 +45,15 @@ Rules:
    DEBUG (an attack pass: aiohttp logged every malformed request at ERROR with its traceback,
    22,000 lines a second from one client that needed no token, and journald's rate limit then
    drops every line of the service, its warnings too).
+8. An accept the system refuses for want of descriptors or memory (EMFILE, ENFILE, ENOBUFS,
+   ENOMEM: the process is at its ``ulimit -n``, its other ports' clients hold the rest) is one
+   warning per ACCEPT_SAY_S naming it and how many since, no traceback (``AcceptErrors``, the
+   loop's exception handler); asyncio pauses the listener a second and tries again. An attack
+   pass: asyncio said each at ERROR with its traceback, and its accept loop tries a hundred
+   times a wake-up, so a flood of idle connections at the descriptor limit wrote 700 tracebacks
+   a second (108,000 lines in 15 s) and journald's rate limit then drops every line of the
+   service, the state file's failed save among them. Every other error of the loop goes to
+   asyncio's own handler, as before.
 """
 
 from __future__ import annotations
@@ -82,6 +91,8 @@ BODY_S = 10.0  # a command's or a login's body arrives within this, or it is not
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
 NOISE_EVERY_S = 10.0
+ACCEPT_SAY_S = 10.0  # rule 8: an accept refused for want of descriptors, said this often at most
+_OUT_OF = (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM)  # what asyncio pauses for
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
@@ -108,6 +119,34 @@ class Quieter(logging.Filter):
             return True
         record.levelno, record.levelname = logging.DEBUG, "DEBUG"
         return logging.getLogger(record.name).isEnabledFor(logging.DEBUG)
+
+
+class AcceptErrors:
+    """Rule 8, the console loop's exception handler (only that loop's thread calls it)."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self._said_s = -ACCEPT_SAY_S
+        self._since = 0
+
+    def __call__(self, loop: asyncio.AbstractEventLoop, context: dict[str, object]) -> None:
+        exc = context.get("exception")
+        accepting = "accept" in str(context.get("message", ""))
+        if not (accepting and isinstance(exc, OSError) and exc.errno in _OUT_OF):
+            loop.default_exception_handler(context)
+            return
+        self._since += 1
+        now = self._clock()
+        if now - self._said_s < ACCEPT_SAY_S:
+            return
+        count, self._since, self._said_s = self._since, 0, now
+        log.warning(
+            "web console: cannot accept a connection: %s (%d time(s) since last said); the "
+            "process is out of descriptors or memory: are many connections held open to its "
+            "ports? (systemd: LimitNOFILE)",
+            exc.strerror or exc,
+            count,
+        )
 
 
 http_log = logging.getLogger(__name__ + ".http")  # rule 7: the HTTP server's own
@@ -212,6 +251,7 @@ class WebConsole:
         loop runs on that thread from the start: the caller's thread may have a loop of its own
         running (a script, a test driving a browser)."""
         loop = self._loop = asyncio.new_event_loop()
+        loop.set_exception_handler(AcceptErrors())  # rule 8
         self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
         self._thread.start()
         try:
