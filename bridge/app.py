@@ -18,6 +18,15 @@ Rules:
    to MQTT 3.1.1) come from several threads: each change of the list and the publish of the
    list as it then is are one step under one lock (``_say``), so two problems said or unsaid at
    once are both in the retained payload, and no stale list is published after a newer one.
+5. Connections held open to the TCP ports and the console (anyone on the LAN can hold them, and
+   each port holds up to ``most_held``) never take the descriptors the bridge needs for itself:
+   before it listens, ``_room_for_files`` raises the process's soft open-files limit to what it
+   has open, what those ports may hold and FILES_SPARE more (a serial port reopened, the
+   broker reconnected, the state file saved), up to the hard limit (systemd's default soft
+   limit is 1024, its hard one far above), and says so; if the hard limit is short, a warning
+   names it and the limit to set. An attack pass: under ``ulimit -n 256`` idle connections to
+   four ports and the console took every descriptor, an unplugged controller could not be
+   opened again ("Too many open files") for as long as they were held, and its stop with it.
 """
 
 from __future__ import annotations
@@ -26,6 +35,7 @@ import contextlib
 import errno
 import gc
 import logging
+import os
 import signal
 import sys
 import threading
@@ -89,6 +99,7 @@ STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.
 )
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 YIELDING = "the bridge is stopping: it yields its base topic to another bridge"
+FILES_SPARE = 64  # rule 5: descriptors kept beyond what the ports may hold (and 2 a rotator)
 HALT_WAIT_S = 2.0  # claim rule 4: how long a yielding bridge waits for its stops to be written
 
 
@@ -773,6 +784,9 @@ class App:
         # the sky worker computes in Python for up to a second; a thread waking for a stop waits
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)
+        ports_hold = sum(server.most_held for server in self._text_ports())  # rule 5
+        ports_hold += self.web.most_held if self.web is not None else 0
+        _room_for_files(ports_hold, FILES_SPARE + 2 * len(self.rotators))
         try:
             for server in self._text_ports():
                 server.listen()
@@ -872,6 +886,49 @@ def _heard(
 
 def _locked_still(rot: Rotator) -> Callable[[], bool]:
     return lambda: rot.locked
+
+
+def _room_for_files(ports_hold: int, spare: int) -> None:
+    """Rule 5: the soft open-files limit raised to what is open now, what the ports may hold
+    (``ports_hold``) and ``spare`` more, up to the hard limit; a warning if that is short."""
+    try:
+        import resource
+    except ImportError:  # (no such limit where there is no ``resource``)
+        return
+    try:
+        open_now = len(os.listdir("/proc/self/fd"))
+    except OSError:
+        open_now = 0
+    need = open_now + ports_hold + spare
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft == resource.RLIM_INFINITY or soft >= need:
+        return
+    room = need if hard == resource.RLIM_INFINITY else min(need, hard)
+    if room > soft:
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (room, hard))
+        except (OSError, ValueError) as exc:
+            log.warning("cannot raise the open-files limit from %d to %d: %s", soft, room, exc)
+            room = soft
+        else:
+            log.info(
+                "open-files limit raised from %d to %d: the TCP ports and the console may hold "
+                "%d connections",
+                soft,
+                room,
+                ports_hold,
+            )
+    if room < need:
+        log.warning(
+            "the process may open %d files (ulimit -n; systemd: LimitNOFILE), but its TCP ports "
+            "and the console may hold %d connections beside the %d it has open: connections "
+            "held open by anyone who can reach them could leave it none to reopen a serial "
+            "port, reconnect to the broker or save the state file; set the limit to %d or more",
+            room,
+            ports_hold,
+            open_now,
+            need,
+        )
 
 
 def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:

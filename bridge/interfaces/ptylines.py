@@ -132,6 +132,11 @@ class PtyLineServer:
         self._claim: socket.socket | None = None  # rule 1
 
     @property
+    def most_held(self) -> int:
+        """Its clients hold no descriptor: one pty, opened at ``listen`` (app.py rule 5)."""
+        return 0
+
+    @property
     def address(self) -> str:
         """Where clients open it (the link)."""
         return self.path

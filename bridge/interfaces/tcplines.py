@@ -94,6 +94,9 @@ Rules:
    client's stop is read at its first wake-up: its budget is its own.
 6. A command ends at CR or LF unless the front end names its own ends (``ends``: a DCU-1's
    ``;`` as well); rules 2, 3 and 5 look for those.
+7. What its clients may hold of the process's descriptors is bounded and said (``most_held``:
+   every slot, every waiting connection and the one beyond): the app makes room for the sum
+   of every port's under the process's open-files limit (app.py rule 5).
 """
 
 from __future__ import annotations
@@ -406,6 +409,11 @@ class LineServer:
     @property
     def port(self) -> int:
         return self.address[1]
+
+    @property
+    def most_held(self) -> int:
+        """Rule 7: the descriptors its connections may hold at once, at most."""
+        return self._max_clients + self._waiting_max + 1
 
     @property
     def client_count(self) -> int:

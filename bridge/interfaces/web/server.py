@@ -79,7 +79,7 @@ from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import BadCommand, Order, WebCommand, carry_out, parse
-from bridge.interfaces.web.connections import Connections
+from bridge.interfaces.web.connections import MAX_CONNECTIONS, Connections
 from bridge.interfaces.web.feed import Feed, Shape
 from bridge.interfaces.web.files import static_files
 from bridge.interfaces.web.live import TOKEN_HEADER, Live
@@ -240,6 +240,12 @@ class WebConsole:
         self._rotators[rot.id] = rot
         self._facts[rot.id] = facts
         self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
+
+    @property
+    def most_held(self) -> int:
+        """The descriptors its connections may hold at once, at most (connections.py rule 1:
+        a burst is judged once connected, up to twice the limit; app.py rule 5)."""
+        return 2 * MAX_CONNECTIONS
 
     @property
     def url(self) -> str:
