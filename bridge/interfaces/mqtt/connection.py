@@ -72,6 +72,14 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    the log, with what its denial costs, and is no problem: not on ``B/bridge/info`` nor a
    rotator's last error, and the command topics count as subscribed all the same (an ACL that
    keeps a bridge out of Home Assistant's prefix is why its owner turned discovery off).
+18. Under MQTT 5 every connection (the main one, the stop lane, the stop express) tells the
+   broker in its CONNECT the largest packet it takes (MAX_PACKET_BYTES: far above any payload
+   the bridge reads, its own retained ones included); the broker drops a larger message for it
+   rather than send it. An attack pass on a broker anyone may publish to: each 200 MB
+   ``R/stop`` (mosquitto takes up to 256 MB) was read whole by all three connections, and the
+   bridge and its express each kept some 160 MB of memory afterwards; a few of them at once
+   would leave a Raspberry Pi to its out-of-memory killer. MQTT 3.1.1 has no such word: there
+   the broker's own ``message_size_limit`` is the bound (docs/brokers.md).
 """
 
 from __future__ import annotations
@@ -85,6 +93,7 @@ from collections.abc import Callable
 from typing import Any, Literal, TypedDict, Unpack
 
 import paho.mqtt.client as paho
+from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
@@ -119,6 +128,7 @@ def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
     return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
 
 
+MAX_PACKET_BYTES = 1 << 20  # rule 18: the largest packet the broker may send a connection
 UNSUPPORTED_PROTOCOL = 0x84  # rule 1: CONNACK for a version the broker does not speak
 MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/brokers.md)
     "a retained command published while the bridge is connected arrives without its retain "
@@ -279,7 +289,11 @@ class Connection:
         """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
         s = self._settings
         fresh = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean session
-        self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh)
+        most = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]  # rule 18
+        most.MaximumPacketSize = MAX_PACKET_BYTES  # (sent under MQTT 5 only)
+        self._client.connect_async(
+            s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh, properties=most
+        )
         self._client.loop_start()
 
     def _disconnect(self) -> None:
