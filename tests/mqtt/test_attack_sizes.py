@@ -1,6 +1,6 @@
 """Huge messages on a broker anyone may publish to (client.py rule 18): the bridge as a service
 process, a 100 MB payload published on its command topics. What a user notices: the memory
-the bridge and its stop express take for it, and that a stop still stops.
+the bridge takes for it.
 """
 
 from __future__ import annotations
