@@ -1,6 +1,7 @@
-"""Huge messages on a broker anyone may publish to (client.py rule 18): the bridge as a service
-process, a 100 MB payload published on its command topics. What a user notices: the memory
-the bridge takes for it.
+"""What anyone may publish on an ACL-less broker, aimed at resources: huge messages (client.py
+rule 18) and a backlog of retained topics planted under the base topic (owned.py rule 10),
+against the bridge as a service process. What a user notices: the memory the bridge takes for
+a huge message; what its log says at start behind a backlog.
 """
 
 from __future__ import annotations
@@ -9,11 +10,16 @@ import json
 import time
 from pathlib import Path
 
+import paho.mqtt.client as paho
+
+from tests.support import wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 HUGE = 100_000_000
+PLANTED = 40_000  # retained topics planted under the base topic
 
 
 def _peak_kb(pid: int) -> int:
@@ -51,3 +57,36 @@ def test_a_huge_message_on_a_command_topic_is_not_read_by_the_bridge(
         assert "north" in err["message"] or "north" in json.dumps(err), err
         grown = {pid: _peak_kb(pid) - before[pid] for pid in pids}
     assert all(kb < HUGE // 1000 // 4 for kb in grown.values()), (grown, bridge.log()[-2000:])
+
+
+def test_a_backlog_of_planted_retained_topics_does_not_make_the_last_runs_offline_a_stranger(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """DEFECT (low, an attack pass; owned.py rule 10): with tens of thousands of retained
+    topics planted under the base topic (``B/<junk>/availability``, anyone may publish them),
+    the broker took more than a second to hand the bridge what it held, and the bridge's own
+    ``offline`` of its last run, among them, was said as another client's ("a second bridge on
+    this base topic?") on every start. Now nothing the broker held before the first look ended
+    is news."""
+    with Rig(tmp_path, broker, probe) as rig:
+        rig.add("hf", "gs232b")
+        rig.start_process(log_level="INFO")
+        rig.ready("hf")
+        rig.stop()  # its offline values stay retained
+        planter = paho.Client(paho.CallbackAPIVersion.VERSION2, client_id="planter")
+        planter.connect("127.0.0.1", broker.port)
+        planter.loop_start()
+        try:
+            last = None
+            for i in range(PLANTED):
+                last = planter.publish(f"{rig.base}/junk{i}/availability", "online", retain=True)
+            assert last is not None
+            last.wait_for_publish(slow(30))
+        finally:
+            planter.loop_stop()
+            planter.disconnect()
+        bridge = rig.start_process(log_level="INFO")
+        rig.ready("hf", timeout_s=slow(30))
+        wait_until(lambda: "retained topic(s)" in bridge.log(), 30, "the first look to end")
+        log = bridge.log()
+    assert "another client published" not in log, log[-3000:]

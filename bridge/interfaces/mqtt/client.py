@@ -563,7 +563,8 @@ class MqttClient(Connection):
                     self.connected.clear()  # (every publish checks it, under this lock)
             say = False
             if self.refused is None:
-                fix = self._owned.put_back(topic)
+                settling = look is not None and look.looking is not None  # (owned.py rule 10)
+                fix = self._owned.put_back(topic, settling=settling)
                 if fix.send and self.connected.is_set():
                     self._owned.sent(topic, held[0])
                     self._delivery.send(topic, held[0], held[1], retain=True)

@@ -4,22 +4,25 @@ client, no lock (the client asks under its own lock, client.py).
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 10. The bridge owns its retained topics (``watch``: state, status, lock and option states, its
-   online/offline): it subscribes to them (MQTT 5: without its own messages) and a value there
-   that it did not publish, from another client, is replaced with its own at once (at most once
-   per FOREIGN_FIX_S per topic, ``put_back``) and logged once a minute (FOREIGN_LOG_S) per
-   topic: a stray retained ``lock/state OFF`` must not tell a dashboard the lock is off while
-   it is on. What the broker held from before the connection (our own last will, a value of a
-   run that ended) arrives within SETTLE_AFTER_CONNECT_S of it and is put back without a word:
-   only a live stranger is news. Under MQTT 3.1.1 the bridge hears its own messages too, in the
-   order sent: one it sent on this connection and has not heard back yet (``sent``) is no
-   stranger, however far the connection lags behind (a flood of commands read before them):
-   every one is kept until it or a later one comes back (the broker keeps the order, so the
-   older ones were dropped), as a keyed hash of its payload (``_digest``: a stranger cannot aim
-   at one, and a backlog of long payloads costs no memory); ECHOES_KEPT only bounds memory
-   against a broker that loses our messages without end. The bridge's own last will (``will``,
-   the broker publishes it when the bridge's connection dies, and at its own shutdown, right
-   before it closes the connection) is put back, and said only if the connection outlives it
-   (client.py, WILL_OUTLIVED_S): then it was a stranger's.
+   online/offline): it subscribes to them (MQTT 5: without its own messages) and a value there that
+   it did not publish, from another client, is replaced with its own at once (at most once per
+   FOREIGN_FIX_S per topic, ``put_back``) and logged once a minute (FOREIGN_LOG_S) per topic: a
+   stray retained ``lock/state OFF`` must not tell a dashboard the lock is off while it is on. What
+   the broker held from before the connection (our own last will, a value of a run that ended)
+   arrives within SETTLE_AFTER_CONNECT_S of it, or before the connection's first look has ended
+   (``settling``: the broker sends what it held before the hello comes back, look.py rule 14), and
+   is put back without a word: only a live stranger is news. (An attack pass: with 20,000 retained
+   topics planted under the base topic, the bridge's own ``offline`` of its last run came 1.5 s
+   after the connect and was said as another client's, "a second bridge on this base topic?", on
+   every start.) Under MQTT 3.1.1 the bridge hears its own messages too, in the order sent: one it
+   sent on this connection and has not heard back yet (``sent``) is no stranger, however far the
+   connection lags behind (a flood of commands read before them): every one is kept until it or a
+   later one comes back (the broker keeps the order, so the older ones were dropped), as a keyed
+   hash of its payload (``_digest``: a stranger cannot aim at one, and a backlog of long payloads
+   costs no memory); ECHOES_KEPT only bounds memory against a broker that loses our messages without
+   end. The bridge's own last will (``will``, the broker publishes it when the bridge's connection
+   dies, and at its own shutdown, right before it closes the connection) is put back, and said only
+   if the connection outlives it (client.py, WILL_OUTLIVED_S): then it was a stranger's.
    Whether a topic is owned (``owns``) gives MQTT's answer for the filters watched (paho's
    ``topic_matches_sub``, ``$`` topics included), from a set of the exact topics and one
    pattern compiled for the wildcard filters at ``watch``: every message heard and every
@@ -120,14 +123,15 @@ class OwnedTopics:
         """Whether this is the bridge's own last will (put back without a word, rule 10)."""
         return self.hears_own and (topic, payload) == self.will
 
-    def put_back(self, topic: str) -> PutBack:
+    def put_back(self, topic: str, *, settling: bool = False) -> PutBack:
         """A stranger's value on ``topic``: ours again at most once per FOREIGN_FIX_S, said at
-        most once per FOREIGN_LOG_S, and not at all just after a connect."""
+        most once per FOREIGN_LOG_S, and not at all just after a connect or while ``settling``
+        (the first look of the connection under way)."""
         now = self._clock()
         if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
             return PutBack(send=False, say=False)
         self._fixed_at[topic] = now
-        if now - self.connected_at < SETTLE_AFTER_CONNECT_S:
+        if settling or now - self.connected_at < SETTLE_AFTER_CONNECT_S:
             return PutBack(send=True, say=False)
         if now - self._logged_at.get(topic, -FOREIGN_LOG_S) < FOREIGN_LOG_S:
             return PutBack(send=True, say=False)
