@@ -32,6 +32,7 @@ Rules:
    (``harmless``), also when the banner comes torn across reads, whatever the cuts: each piece
    that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
    reaches an idle board twice when the stop express writes one too: interfaces/mqtt/express.py.)
+   So is a banner's piece gathered with the power-on byte or a whole banner before it.
 6. ``AI1;`` with one bit flipped (``I`` 0x49, ``M`` 0x4D) is ``AM1;``: turn to the bearing kept
    from the last ``AP1``. The spec says so (``unasked_moves``): the engine stops the first turn
    nobody asked for after the rotor was left short of its target (session/controller.py
@@ -125,8 +126,8 @@ class RotorEzCodec:
         return bool(self._queries_open)
 
     def harmless(self, junk: bytes) -> bool:
-        known = _KNOWN_JUNK.sub(b"", junk) == b""
-        return known or (bool(junk) and self._banner_so_far.endswith(junk))  # rule 5
+        rest = _KNOWN_JUNK.sub(b"", junk)  # rule 5: what is left a banner under way (with a
+        return not rest or self._banner_so_far.endswith(rest)  # power-on byte beside it too)
 
     def encode_enable(self) -> None:
         return None

@@ -216,6 +216,18 @@ def test_a_banner_torn_across_reads_is_harmless_at_every_cut(cut: int) -> None:
     assert codec.harmless(first + second)
 
 
+def test_a_banner_begun_in_the_read_of_a_power_on_byte_is_harmless() -> None:
+    """Rule 5 beside the power-on byte: the line gathers the junk of one quiet spell, a
+    power-on byte and the first piece of a banner (the stop express's stop and the session's
+    reached an idle RotorCard), as ``\\xe0C20``: it was reported on R/error as "controller sent
+    4 bytes that are no valid reply" (seen in CI)."""
+    codec = RotorEzCodec()
+    first = junk_of(codec, b"\xe0" + BANNER[:3])
+    assert first == b"\xe0C20" and codec.harmless(first)
+    assert codec.harmless(junk_of(codec, BANNER[3:]))
+    assert not codec.harmless(junk_of(codec, b"\xe0XYZ"))
+
+
 def test_a_banner_fed_byte_by_byte_is_harmless_and_what_goes_on_otherwise_is_not() -> None:
     codec = RotorEzCodec()
     assert all(codec.harmless(junk_of(codec, bytes([b]))) for b in BANNER * 2)
