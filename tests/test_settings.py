@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -615,6 +616,31 @@ def test_check_config_on_macos_says_nothing_of_a_systemd_unit(
     assert "systemd" not in lines, lines
 
 
+def unopenable_port(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, name: str) -> Path:
+    """A serial port (a file, mode 0660) that check-config finds this user may not open, as a
+    user outside its group would find it (the tests may run as root, who may open all)."""
+    from bridge.settings import report
+
+    port = tmp_path / name
+    port.touch()
+    port.chmod(0o660)
+    real_access = os.access
+    monkeypatch.setattr(
+        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
+    )
+    return port
+
+
+def check_config_on(tmp_path: Path, port: Path) -> subprocess.CompletedProcess[str]:
+    """``check-config`` of a configuration whose one rotator is on ``port``: it ends well."""
+    text = MINIMAL.replace(
+        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
+    assert out.returncode == 0, out
+    return out
+
+
 def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -623,21 +649,10 @@ def test_check_config_warns_of_a_port_this_user_may_not_open_and_names_the_group
 
     from bridge.settings import report
 
-    port = tmp_path / "ttyUSB-by-id"
-    port.touch()
-    port.chmod(0o660)
+    port = unopenable_port(tmp_path, monkeypatch, "ttyUSB-by-id")
     group = grp.getgrgid(port.stat().st_gid).gr_name
     monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
-    real_access = os.access
-    # as a user outside the port's group would be (the tests may run as root, who may all)
-    monkeypatch.setattr(
-        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
-    )
-    text = MINIMAL.replace(
-        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
-    )
-    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
-    assert out.returncode == 0, out
+    out = check_config_on(tmp_path, port)
     user = getpass.getuser()
     assert (
         f"warning: rotators[0].port: {port} cannot be opened by {user}: run by hand, the bridge "
@@ -656,24 +671,13 @@ def test_check_config_tells_a_user_already_in_the_ports_group_to_log_in_again(
 
     from bridge.settings import report
 
-    port = tmp_path / "ttyUSB-by-id"
-    port.touch()
-    port.chmod(0o660)
+    port = unopenable_port(tmp_path, monkeypatch, "ttyUSB-by-id")
     gid = port.stat().st_gid  # this user's own group: the user is in it
     group = grp.getgrgid(gid).gr_name
     monkeypatch.setattr(report, "CONTAINER_MARKS", ())  # as on a host (the tests may not be)
-    real_access = os.access
-    # a login from before the usermod: the process has not the group (nor may root all)
-    monkeypatch.setattr(
-        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
-    )
     monkeypatch.setattr(report.os, "getgroups", lambda: [g for g in [gid + 1] if g != gid])
     monkeypatch.setattr(report.os, "getegid", lambda: gid + 1)
-    text = MINIMAL.replace(
-        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
-    )
-    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
-    assert out.returncode == 0, out
+    out = check_config_on(tmp_path, port)
     user = getpass.getuser()
     assert (
         f"warning: rotators[0].port: {port} cannot be opened by {user}: run by hand, the bridge "
@@ -693,22 +697,12 @@ def test_check_config_in_a_container_names_the_ports_group_number_for_group_add(
 
     monkeypatch.delenv("STATE_DIRECTORY", raising=False)  # (an image without the Dockerfile's)
 
-    port = tmp_path / "rotor"
-    port.touch()
-    port.chmod(0o660)
+    port = unopenable_port(tmp_path, monkeypatch, "rotor")
     gid = port.stat().st_gid
     mark = tmp_path / ".dockerenv"
     mark.touch()
     monkeypatch.setattr(report, "CONTAINER_MARKS", (str(mark),), raising=False)
-    real_access = os.access
-    monkeypatch.setattr(
-        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
-    )
-    text = MINIMAL.replace(
-        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
-    )
-    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
-    assert out.returncode == 0, out
+    out = check_config_on(tmp_path, port)
     assert (
         f"'no permission'; in this container: give it the port's group, number {gid} on the "
         f"host, in compose's group_add (docker run --group-add {gid})"
@@ -726,9 +720,7 @@ def test_check_config_as_a_user_id_without_a_name_warns_and_ends_well(
 
     from bridge.settings import report
 
-    port = tmp_path / "rotor"
-    port.touch()
-    port.chmod(0o660)
+    port = unopenable_port(tmp_path, monkeypatch, "rotor")
     mark = tmp_path / ".dockerenv"
     mark.touch()
     monkeypatch.setattr(report, "CONTAINER_MARKS", (str(mark),))
@@ -739,15 +731,7 @@ def test_check_config_as_a_user_id_without_a_name_warns_and_ends_well(
         raise KeyError(f"getpwuid(): uid not found: {uid}")
 
     monkeypatch.setattr(pwd, "getpwuid", nameless)
-    real_access = os.access
-    monkeypatch.setattr(
-        report.os, "access", lambda p, mode: str(p) != str(port) and real_access(p, mode)
-    )
-    text = MINIMAL.replace(
-        "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0", str(port)
-    )
-    out = cli("check-config", "-c", str(write(tmp_path, text)), env={"HOME": str(tmp_path)})
-    assert out.returncode == 0, out
+    out = check_config_on(tmp_path, port)
     assert f"{port} cannot be opened by uid {os.getuid()}: " in out.stdout, out.stdout
 
 

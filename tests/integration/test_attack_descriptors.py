@@ -9,35 +9,15 @@ from __future__ import annotations
 
 import resource
 import socket
-import subprocess
 from pathlib import Path
-from typing import Any
 
 from tests.support.console import web_section
 from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.mqtt import Probe
-from tests.support.process import ROOT, bridge_env
+from tests.support.process import fd_limited
 from tests.support.rig import Rig
 
 HELD = 2000  # connections opened to each port, held idle (the ports' caps, then the kernel's)
-
-
-def _spawner(soft: int, hard: int) -> Any:
-    def spawn(argv: list[str], log_path: Path) -> Any:
-        def limit() -> None:
-            resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
-
-        with open(log_path, "ab") as log:
-            return subprocess.Popen(
-                argv,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=bridge_env(),
-                cwd=str(ROOT),
-                preexec_fn=limit,  # noqa: PLW1509
-            )
-
-    return spawn
 
 
 def _hold(ports: list[int]) -> list[socket.socket]:
@@ -69,7 +49,7 @@ def test_connections_held_to_every_port_leave_room_to_reopen_the_controller(
     resource.setrlimit(resource.RLIMIT_NOFILE, (max(own[0], 6 * HELD + 512), own[1]))
     ports = _ports()
     try:
-        with Rig(tmp_path, broker, probe, spawn=_spawner(256, max(4096, own[0]))) as rig:
+        with Rig(tmp_path, broker, probe, spawn=fd_limited(256, max(4096, own[0]))) as rig:
             web = rig.sections["web"] = web_section()
             rig.add("hf", "gs232b", **ports)
             bridge = rig.start_process(log_level="INFO")
@@ -93,7 +73,7 @@ def test_a_hard_limit_too_low_for_the_ports_is_said_at_start(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:
     """The limit cannot be raised past the hard one: the log says what to set it to."""
-    with Rig(tmp_path, broker, probe, spawn=_spawner(256, 256)) as rig:
+    with Rig(tmp_path, broker, probe, spawn=fd_limited(256, 256)) as rig:
         rig.add("hf", "gs232b", **_ports())
         bridge = rig.start_process(log_level="INFO")
         rig.ready("hf")

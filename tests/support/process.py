@@ -148,6 +148,27 @@ def _spawn(argv: list[str], log_path: Path) -> subprocess.Popen[bytes]:
         )
 
 
+def fd_limited(soft: int, hard: int) -> Spawn:
+    """A ``Spawn`` that starts the bridge with its open-files limit set (``ulimit -n``)."""
+    import resource
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+
+    def spawn(argv: list[str], log_path: Path) -> subprocess.Popen[bytes]:
+        with open(log_path, "ab") as log:
+            return subprocess.Popen(
+                argv,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=bridge_env(),
+                cwd=str(ROOT),
+                preexec_fn=limit,  # noqa: PLW1509
+            )
+
+    return spawn
+
+
 class BridgeProcess:
     """``python -m bridge run -c FILE``: the real service process, its log kept in a file.
 

@@ -40,6 +40,7 @@ from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
+from tests.support.process import fd_limited
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms
 from tests.web.conftest import PASSWORD
@@ -520,26 +521,9 @@ def test_a_taken_port_is_a_clear_error_and_leaves_nothing_running(rig: Rig) -> N
 
 
 # -- unauthenticated connection flood (slowloris) --------------------------------------------
-def _spawn_with_systemd_fd_limit(argv: list[str], log_path: Path) -> Any:
-    """The bridge as systemd starts it: deploy/systemd/rotor-bridge.service sets no
-    LimitNOFILE, so the service has systemd's default soft limit of 1024 descriptors."""
-    import resource
-    import subprocess
-
-    from tests.support.process import ROOT, bridge_env
-
-    def limit() -> None:
-        resource.setrlimit(resource.RLIMIT_NOFILE, (1024, 1024))
-
-    with open(log_path, "ab") as log:
-        return subprocess.Popen(
-            argv,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            env=bridge_env(),
-            cwd=str(ROOT),
-            preexec_fn=limit,  # noqa: PLW1509
-        )
+#: the bridge as systemd starts it: deploy/systemd/rotor-bridge.service sets no LimitNOFILE, so
+#: the service has systemd's default soft limit of 1024 descriptors
+_spawn_with_systemd_fd_limit = fd_limited(1024, 1024)
 
 
 def _open_fds(pid: int) -> int:
@@ -615,24 +599,7 @@ def test_connections_refused_at_the_descriptor_limit_are_said_once_without_trace
     for as long as the idle sockets were held, past journald's rate limit, which then drops the
     service's every line. Now: one warning that says so, no traceback."""
 
-    def spawn(argv: list[str], log_path: Path) -> Any:
-        import resource
-        import subprocess
-
-        from tests.support.process import ROOT, bridge_env
-
-        def limit() -> None:
-            resource.setrlimit(resource.RLIMIT_NOFILE, (96, 96))
-
-        with open(log_path, "ab") as log:
-            return subprocess.Popen(
-                argv,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=bridge_env(),
-                cwd=str(ROOT),
-                preexec_fn=limit,  # noqa: PLW1509
-            )
+    spawn = fd_limited(96, 96)
 
     said = "web console: cannot accept a connection: Too many open files"
     with Rig(tmp_path, broker, probe, spawn=spawn) as rig:
