@@ -14,6 +14,9 @@ Rules:
    message, which quotes no secret.
 4. An unknown model gets the same help as a key (``unknown_model``): the nearest model name, or,
    for a maker's name, the models that fit that maker's controllers (BRANDS), on the same line.
+5. A table written with the other number of brackets (``[rotators]`` for a list of tables,
+   ``[[mqtt]]`` for one table: pydantic's shape errors, _SHAPE_ERRORS) says which to write
+   instead of pydantic's words ("Input should be a valid list") or a class of ours.
 """
 
 from __future__ import annotations
@@ -80,11 +83,8 @@ def describe(
                 suggested.add(nearest)
             continue
         msg = err["msg"].removeprefix("Value error, ")
-        brackets = None
         if err["type"] in _SHAPE_ERRORS and err["loc"] and not isinstance(err["loc"][-1], int):
-            brackets = _brackets(root, names, _value_at(data, err["loc"]))
-        if brackets is not None:
-            msg = brackets
+            msg = _brackets(root, names, _value_at(data, err["loc"])) or msg  # rule 5
         if err["type"] == "missing":
             msg = "missing: it has no default"
             if where == "rotators":
