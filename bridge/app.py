@@ -431,8 +431,10 @@ class App:
             if given is not None:
                 self.mqtt.add_feature(given.subscriptions, given.on_message)
         self.discovery: DiscoveryPublisher | None = None
-        if settings.homeassistant.enabled or _may_sweep(settings):
-            # (off: an earlier run's configs cleared, homeassistant/publisher.py rule 6)
+        if settings.homeassistant.enabled or not settings.base_under_discovery():
+            # off: an earlier run's configs cleared (homeassistant/publisher.py rule 6), unless
+            # the base topic lies under the prefix: a run with discovery on refuses that, so it
+            # published nothing there, and the bridge's own topics are not read as configs
             self.discovery = self._discovery(settings, retired=not settings.homeassistant.enabled)
         self._stale(settings)  # interfaces/mqtt/stale.py: a removed rotator's retained topics
         self.client.add_subscriptions(self.mqtt.subscriptions())
@@ -863,14 +865,6 @@ class App:
         self.express.stop()  # (the ports are closed: it holds none)
         self.release()
         log.info("stopped")
-
-
-def _may_sweep(settings: Settings) -> bool:
-    """Discovery off: its prefix may hold an earlier run's configs (homeassistant/publisher.py
-    rule 6), unless the base topic lies under it, which a run with discovery on refuses (that
-    run published nothing there, and the bridge's own topics are not read as configs)."""
-    prefix, base = settings.homeassistant.discovery_prefix, settings.mqtt.base_topic
-    return not (prefix == base or base.startswith(prefix + "/"))
 
 
 def _heard(

@@ -265,9 +265,7 @@ class Settings(BaseSettings):
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")
         prefix = self.homeassistant.discovery_prefix
-        if self.homeassistant.enabled and (
-            prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
-        ):
+        if self.homeassistant.enabled and self.base_under_discovery():
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
         # discovery's topics hold both (<prefix>/<platform>/rotorbridge_<base>_r_<id>/...)
         both = len(prefix.encode()) + len(self.mqtt.base_topic.encode())
@@ -375,6 +373,12 @@ class Settings(BaseSettings):
     def _installation(self) -> Settings:
         self.mqtt._state_file = str(self.state_file.expanduser().absolute())
         return self
+
+    def base_under_discovery(self) -> bool:
+        """The base topic is Home Assistant's discovery prefix or lies under it: refused with
+        discovery on; with it off, nothing there is read as an earlier run's configs (app.py)."""
+        prefix, base = self.homeassistant.discovery_prefix, self.mqtt.base_topic
+        return prefix == base or base.startswith(prefix + "/")
 
     def rotator_topic(self, r: RotatorSettings) -> str:
         if r.topic:
