@@ -30,6 +30,7 @@ from typing import Any
 from bridge.interfaces.web.auth import client_key
 
 MAX_CONNECTIONS = 256
+MOST_HELD = 2 * MAX_CONNECTIONS  # rule 1: a burst beyond this is closed at once (app.py rule 5)
 MAX_PER_ADDRESS = 64
 IDLE_S = 15.0
 SWEEP_S = 1.0
@@ -91,7 +92,7 @@ class Connections:
     def protocol(self) -> asyncio.Protocol:
         """The protocol factory the listening socket is served with (rule 1: a burst of
         accepts beyond twice the limit is closed at once, the rest judged when connected)."""
-        if len(self) >= 2 * MAX_CONNECTIONS:
+        if len(self) >= MOST_HELD:
             return _Refused()
         self._pending += 1
         return _Counted(self, self._factory())

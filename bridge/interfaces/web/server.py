@@ -79,7 +79,7 @@ from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import BadCommand, Order, WebCommand, carry_out, parse
-from bridge.interfaces.web.connections import MAX_CONNECTIONS, Connections
+from bridge.interfaces.web.connections import MOST_HELD, Connections
 from bridge.interfaces.web.feed import Feed, Shape
 from bridge.interfaces.web.files import static_files
 from bridge.interfaces.web.live import TOKEN_HEADER, Live
@@ -245,7 +245,7 @@ class WebConsole:
     def most_held(self) -> int:
         """The descriptors its connections may hold at once, at most (connections.py rule 1:
         a burst is judged once connected, up to twice the limit; app.py rule 5)."""
-        return 2 * MAX_CONNECTIONS
+        return MOST_HELD
 
     @property
     def url(self) -> str:
