@@ -275,29 +275,32 @@ def summary(settings: Settings) -> list[str]:
 def _no_access(port: str) -> str:
     """Rule 7: a port there that this user may not open, and the group that may."""
     user = _who()
-    said = f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
+    said = (
+        f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
+        "'no permission'"
+    )
     try:
         st = os.stat(port)
     except OSError:
-        return said + "'no permission'"
+        return said
     if st.st_mode & (stat.S_IRGRP | stat.S_IWGRP) != stat.S_IRGRP | stat.S_IWGRP:
-        return said + f"'no permission' (mode {stat.S_IMODE(st.st_mode):04o}: not even its group)"
+        return said + f" (mode {stat.S_IMODE(st.st_mode):04o}: not even its group)"
     if _in_container():  # the host's group number; no login, no systemd unit here
         return said + (
-            f"'no permission'; in this container: give it the port's group, number {st.st_gid} "
+            f"; in this container: give it the port's group, number {st.st_gid} "
             f"on the host, in compose's group_add (docker run --group-add {st.st_gid})"
         )
     try:
         group = grp.getgrgid(st.st_gid).gr_name
     except KeyError:
-        return said + "'no permission'"
+        return said
     if st.st_gid not in {os.getegid(), *os.getgroups()} and _member(user, st.st_gid):
         return said + (
-            f"'no permission'; {user} is in group {group}, but not this login, from before: "
+            f"; {user} is in group {group}, but not this login, from before: "
             f"log out and in again (or run `newgrp {group}`)"
         )
     return said + (
-        f"'no permission'; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
+        f"; add {user} to group {group} (`sudo usermod -aG {group} {user}`, then "
         "log in again). The systemd unit's user is in dialout"
     )
 
