@@ -98,9 +98,7 @@ class Rc2800Codec(Plain):
         self._seen: set[int] = set()  # rule 2: axes heard since the last reading
         self._heard: set[int] = set()  # rule 2: axes heard since the last exchange opened
         self._query = False  # the open exchange is a query (one line an axis)
-        self._owed: set[int] = (
-            set()
-        )  # rule 2: axes a query read early still owes, read as they come
+        self._owed: set[int] = set()  # rule 2: axes a query read early owes, read as they come
         self._deg: dict[int, float] = {}  # each axis's latest value
 
     # -- encoding -------------------------------------------------------------------------

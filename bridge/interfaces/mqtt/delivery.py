@@ -10,10 +10,9 @@ client's lock taken in ``on_publish`` would deadlock (docs/architecture.md).
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py; an
-   optional one only in the log, rule 17) or a
-   QoS 1 publish it will not take (PUBACK, MQTT 5; e.g. 0x87 "not authorised" from an ACL) is
-   logged as an error once per topic (until the broker is seen to take it: ``allow``),
-   naming the topic, kept in ``problems`` and handed to
+   optional one only in the log, rule 17) or a QoS 1 publish it will not take (PUBACK, MQTT 5;
+   e.g. 0x87 "not authorised" from an ACL) is logged as an error once per topic (until the
+   broker is seen to take it: ``allow``), naming the topic, kept in ``problems`` and handed to
    ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
    paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
    cannot see it.

@@ -240,8 +240,9 @@ def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
         raise PayloadError("track: the TLE lines must be strings")
     strings = [str(line).strip() for line in lines]
     if len(strings) == 2:
-        if not strings[0].startswith("1 "):  # (a name and one line: "a satellite needs a
-            # name" was all a TLE sent without its line 2 got back, an attack pass)
+        # (a name and one line: "a satellite needs a name" was all a TLE sent without its
+        # line 2 got back, an attack pass)
+        if not strings[0].startswith("1 "):
             raise PayloadError('track: two lines are a TLE\'s "1 ..." and "2 ...", a name first')
         strings.insert(0, "")
     name, line1, line2 = strings
