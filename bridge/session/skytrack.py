@@ -122,12 +122,16 @@ class SkyTrack:
         return self._pass
 
     def flip_track(self, p: Pass) -> list[tuple[float, float]] | None:
-        """The body's track over the pass, sampled for the flip decision; None while it is
-        being computed."""
-        n = min(FLIP_SAMPLES, max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1))
-        times = tuple(p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n))
-        q = PositionsQuestion(self._sky, self.body, times)
+        """The body's track over the pass, sampled for the flip decision (at ``flip_times``);
+        None while it is being computed."""
+        q = PositionsQuestion(self._sky, self.body, flip_times(p))
         track = self._flip_track.get(q)
         if track is None:
             self._ask(q)
         return track
+
+
+def flip_times(p: Pass) -> tuple[float, ...]:
+    """When ``flip_track`` samples the pass: AOS to LOS, evenly, at most FLIP_SAMPLES."""
+    n = min(FLIP_SAMPLES, max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1))
+    return tuple(p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n))

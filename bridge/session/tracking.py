@@ -81,7 +81,7 @@ from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
 from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
-from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack
+from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack, flip_times
 from bridge.sky import Body, Pass
 from bridge.sky.worker import Answer, LookupQuestion, Question
 
@@ -373,14 +373,13 @@ class Tracker:
         track = sky.flip_track(p)
         if track is None:
             return None
-        n, span = len(track), p.los_s - p.aos_s
-        for i, (az_b, el_b) in enumerate(track):
+        for t, (az_b, el_b) in zip(flip_times(p), track, strict=True):
             az, el = self._aim(az_b, max(el_b, self.cfg.min_el_deg))
             try:
                 self._rig.aim.judge(Target(az, el, Source.TRACKING), scene.motion.position_deg)
             except Refused:
                 continue
-            return az, el, p.aos_s + span * i / max(1, n - 1)
+            return az, el, t
         return rise
 
     def _side(
@@ -395,8 +394,7 @@ class Tracker:
         track = sky.flip_track(p)
         if track is None:
             return None
-        n, span = len(track), p.los_s - p.aos_s
-        ahead = [pt for i, pt in enumerate(track) if p.aos_s + span * i / max(1, n - 1) >= utc]
+        ahead = [pt for t, pt in zip(flip_times(p), track, strict=True) if t >= utc]
         return (self._start(az, ahead, self._flip, scene, under_way),)
 
     def _start(
