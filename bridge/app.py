@@ -619,8 +619,6 @@ class App:
         infos = []
         on = self.services  # a feature of the station is on for every rotator
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
-            if retired:
-                break  # (none generated: every config of ours is cleared)
             infos.append(
                 RotatorInfo.of(
                     r.id,
@@ -644,7 +642,6 @@ class App:
             groups=tuple(  # a device each (interfaces/mqtt/groups.py)
                 GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
                 for g in settings.groups
-                if not retired
             ),
             publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,

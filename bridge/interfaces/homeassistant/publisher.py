@@ -80,8 +80,9 @@ class DiscoveryPublisher:
         self.status_topic = status_topic
         self._topics = topics
         self._ident = Identity(topics.base)
-        self._rotators = {r.rotator_id: r for r in rotators}
-        self._groups = groups  # interfaces/mqtt/groups.py: a device each
+        # (retired, rule 6: none generated, so every config of ours is cleared)
+        self._rotators = {} if retired else {r.rotator_id: r for r in rotators}
+        self._groups = () if retired else groups  # interfaces/mqtt/groups.py: a device each
         self._publish = publish_retained
         self._clear = clear_retained
         self._republish_state = republish_state
@@ -150,7 +151,7 @@ class DiscoveryPublisher:
         already said is seen without the lock (every reading comes here): only this method
         changes one, on the thread of the rotator's statuses, and the dict read is whole."""
         version = status.version
-        if not version or self._retired:
+        if not version:
             return
         known = self._rotators.get(rotator_id)
         if known is None or version == known.version:
