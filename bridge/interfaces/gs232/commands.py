@@ -146,11 +146,24 @@ class Gs232Rotator(FrontRotator, Protocol):
     def pointing(self) -> Pointing: ...
 
 
-class Gs232Session(_LineSession):
-    """One GS-232 client; ``replies`` "A" or "B": the controller whose readings it gives
-    (package rule 2). ``names_side``: its last accepted bearing was past 360 (package rule 4)."""
+class _SidedSession(_LineSession):
+    """A client that reads the bearing unfolded past 360 while ``names_side``: its last
+    accepted azimuth was past 360 (package rule 4)."""
 
     rotator: Gs232Rotator
+
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
+        super().__init__(rotator, peer)
+        self.names_side = False
+
+    def _where(self) -> tuple[float, float] | None:
+        """The position this client reads (package rule 4)."""
+        return _position(self.rotator, self.rotator.pointing if self.names_side else None)
+
+
+class Gs232Session(_SidedSession):
+    """One GS-232 client; ``replies`` "A" or "B": the controller whose readings it gives
+    (package rule 2)."""
 
     name, failed_reply = "gs232", GS232_ERROR
 
@@ -159,7 +172,6 @@ class Gs232Session(_LineSession):
         if replies not in ("A", "B"):
             raise ValueError(f"GS-232 replies are A or B, not {replies!r}")
         self.replies = replies
-        self.names_side = False
 
     def answer(self, line: str | None) -> bytes:
         return self.execute(line, parse_gs232(line))
@@ -173,7 +185,7 @@ class Gs232Session(_LineSession):
                 return GS232_ERROR
             return b""
         if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
-            where = _position(self.rotator, self.rotator.pointing if self.names_side else None)
+            where = self._where()
             if where is None:
                 return GS232_ERROR
             az_text, el_text = _azimuth(where[0]), f"{round(where[1]):03d}"
@@ -211,17 +223,10 @@ class Gs232Session(_LineSession):
         return GS232_ERROR
 
 
-class EasycommSession(_LineSession):
-    """One Easycomm II client. ``names_side``: its last accepted azimuth was past 360 (package
-    rule 4)."""
-
-    rotator: Gs232Rotator
+class EasycommSession(_SidedSession):
+    """One Easycomm II client."""
 
     name, failed_reply, source = "easycomm", b"ALinternal error\n", Source.EASYCOMM
-
-    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
-        super().__init__(rotator, peer)
-        self.names_side = False
 
     def answer(self, line: str | None) -> bytes:
         req = parse_easycomm(line)
@@ -273,8 +278,7 @@ class EasycommSession(_LineSession):
 
     def _answers(self, queries: tuple[str, ...]) -> list[str] | None:
         words = []
-        pointing = self.rotator.pointing if self.names_side else None  # rule 4
-        where = _position(self.rotator, pointing) if set(queries) & {"AZ", "EL"} else None
+        where = self._where() if set(queries) & {"AZ", "EL"} else None  # (rule 4)
         for query in queries:
             if query == "VE":
                 words.append("VErotor-bridge")
