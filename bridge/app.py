@@ -21,12 +21,13 @@ Rules:
 5. Connections held open to the TCP ports and the console (anyone on the LAN can hold them, and
    each port holds up to ``most_held``) never take the descriptors the bridge needs for itself:
    before it listens, ``_room_for_files`` raises the process's soft open-files limit to what it
-   has open, what those ports may hold and FILES_SPARE more (a serial port reopened, the
-   broker reconnected, the state file saved), up to the hard limit (systemd's default soft
-   limit is 1024, its hard one far above), and says so; if the hard limit is short, a warning
-   names it and the limit to set. An attack pass: under ``ulimit -n 256`` idle connections to
-   four ports and the console took every descriptor, an unplugged controller could not be
-   opened again ("Too many open files") for as long as they were held, and its stop with it.
+   has open, what those ports may hold, and FILES_SPARE and 2 a rotator more (a serial port
+   reopened, the broker reconnected, the state file saved), up to the hard limit (systemd's
+   default soft limit is 1024, its hard one far above), and says so; if the hard limit is short,
+   a warning names it and the limit to set. An attack pass: under ``ulimit -n 256`` idle
+   connections to four ports and the console took every descriptor, an unplugged controller
+   could not be opened again ("Too many open files") for as long as they were held, and its stop
+   with it.
 """
 
 from __future__ import annotations
