@@ -23,6 +23,7 @@ from tests.support import Probe, retained_snapshot
 from tests.support.brokers import Nats, find_nats
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
+from tests.support.state import kept
 from tests.support.waiting import slow, wait_until
 
 
@@ -206,16 +207,6 @@ def test_the_first_look_leaves_a_nested_bridge_and_a_rotator_named_option_alone(
                 assert left.get(topic) == theirs[topic], f"another bridge's {topic} deleted"
 
 
-def kept_lock(state: Path) -> bool:
-    """Whether the state file says the rotator ``tower``'s lock is ON (False while it is not
-    written yet, or says nothing of it)."""
-    try:
-        doc = json.loads(state.read_text())
-    except (FileNotFoundError, ValueError):
-        return False
-    return doc.get("rotators", {}).get("tower", {}).get("locked") is True
-
-
 @pytest.mark.parametrize("protocol", ["5", "3.1.1"])
 def test_a_lock_on_outlives_a_state_file_that_lost_it(
     tmp_path: Path, broker: Mosquitto, probe: Probe, protocol: str
@@ -243,8 +234,7 @@ def test_a_lock_on_outlives_a_state_file_that_lost_it(
         probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
         said = probe.wait_for("rotor/error", lambda m: b"R/lock/state" in m.payload, after=t)
         assert b"state file" in said.payload, said.payload
-        wait_until(lambda: kept_lock(state), 10, "the lock ON saved")  # (the file may come
-        # first with another rotator's table, or none: written by the start before the lock)
+        wait_until(lambda: kept(state, "tower", "locked") is True, 10, "the lock ON saved")
         assert retained_snapshot(broker.port, "rotor/lock/state") == {"rotor/lock/state": b"ON"}
         shown = [m.text for m in probe.on("rotor/lock/state") if m.t > t]
         assert "OFF" not in shown, f"the lock shown OFF over the broker's ON: {shown}"

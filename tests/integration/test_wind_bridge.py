@@ -14,6 +14,7 @@ import pytest
 
 from tests.support import Mosquitto, Probe, wait_until
 from tests.support.rig import Rig
+from tests.support.state import kept
 
 TOPIC = "weather/station/wind"
 
@@ -161,7 +162,7 @@ def test_the_storms_park_turns_the_rotor_while_a_lease_is_held_and_the_wind_refu
 
 def in_the_state_file(rig: Rig, key: str) -> None:
     wait_until(
-        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get(key),
+        lambda: kept(rig.tmp / "state.json", "tower", key),
         10,
         f"{key} in the state file",
     )
@@ -228,9 +229,7 @@ def test_a_storm_park_the_operator_stopped_is_not_done_again_by_a_restart(rig: R
     wait_until(lambda: rig.emu.frames("set"), 10, "the park sent")
     rig.probe.publish("rotor/stop", "stop")
     wait_until(
-        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get(
-            "storm_halted"
-        ),
+        lambda: kept(rig.tmp / "state.json", "tower", "storm_halted"),
         10,
         "the stopped park in the state file",
     )
