@@ -102,11 +102,16 @@ class ConfigError(Exception):
     """A configuration problem, worded for the user; the CLI prints it and exits with 2."""
 
 
+def state_file_in(directory: str | Path) -> Path:
+    """The state file the bridge keeps in ``directory`` when ``state_file`` is left out."""
+    return Path(directory) / "state.json"
+
+
 def _default_state_file() -> Path:
     base = os.environ.get("STATE_DIRECTORY")  # systemd's StateDirectory=
     if base:
-        return Path(base.split(":")[0]) / "state.json"
-    return Path.home() / ".local" / "state" / "rotor-bridge" / "state.json"
+        return state_file_in(base.split(":")[0])
+    return state_file_in(Path.home() / ".local" / "state" / "rotor-bridge")
 
 
 class Settings(BaseSettings):

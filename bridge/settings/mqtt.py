@@ -305,7 +305,7 @@ class MqttSettings(Strict):
     # the state file of the installation these settings belong to (Settings fills it in)
     _state_file: str = PrivateAttr(default="")
 
-    def effective_client_id(self) -> str:
+    def effective_client_id(self, state_file: str | None = None) -> str:
         """``client_id``, or a default that is unique per installation and stable across restarts.
 
         The default is "rotor-", up to 10 characters of the host name, "-" and 6 hex digits of a
@@ -315,13 +315,14 @@ class MqttSettings(Strict):
         the real one) differ in state file or base topic, so they do not take each other's
         session over; one installation keeps its id. Two hosts sharing one configuration with
         an explicit client_id still collide: the client reports that (interfaces/mqtt/client.py rule
-        7).
+        7). ``state_file``: the default another state file would give (settings/report.py rule 6).
         """
         if self.client_id:
             return self.client_id
         host = socket.gethostname()
         # (a state file's path need not be UTF-8: only hashed)
-        key = f"{host}\n{self.base_topic}\n{self._state_file}".encode(errors="surrogatepass")
+        path = self._state_file if state_file is None else state_file
+        key = f"{host}\n{self.base_topic}\n{path}".encode(errors="surrogatepass")
         digest = hashlib.sha256(key).hexdigest()[:6]
         short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
         return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"

@@ -47,7 +47,7 @@ from typing import Any
 
 from bridge.protocols.axes import Axis
 from bridge.runtime.state_store import StateStore
-from bridge.settings import ConfigError, RotatorSettings, Settings
+from bridge.settings import ConfigError, RotatorSettings, Settings, state_file_in
 from bridge.settings.loggers import is_loopback
 from bridge.settings.rotator import EMULATION_KEYS
 from bridge.settings.web import web_warnings
@@ -55,7 +55,7 @@ from bridge.settings.web import web_warnings
 # a container's marks (Docker's, Podman's): no systemd unit nor a login there (rules 6, 7)
 CONTAINER_MARKS = ("/.dockerenv", "/run/.containerenv")
 # the state file under deploy/systemd/rotor-bridge.service (StateDirectory=rotor-bridge)
-SERVICE_STATE_FILE = "/var/lib/rotor-bridge/state.json"
+SERVICE_STATE_FILE = str(state_file_in("/var/lib/rotor-bridge"))
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # a USB serial adapter's name the kernel gives in the order adapters appear (not by-id, no udev
 # link): which controller it reaches can change with a re-plug or a reboot
@@ -229,9 +229,7 @@ def summary(settings: Settings) -> list[str]:
     client_id = m.effective_client_id()
     service = _service_state_file(settings)
     if service is not None and not m.client_id:  # rule 6: the default follows the state file
-        as_service = m.model_copy()
-        as_service._state_file = service
-        client_id += f" (under the systemd unit {as_service.effective_client_id()})"
+        client_id += f" (under the systemd unit {m.effective_client_id(service)})"
     lines.append(f"broker: {m.host}:{m.port}, {version}, {tls}, {login}, client id {client_id}")
     ha = settings.homeassistant
     lines.append(
