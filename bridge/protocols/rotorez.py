@@ -32,7 +32,8 @@ Rules:
    (``harmless``), also when the banner comes torn across reads, whatever the cuts: each piece
    that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
    reaches an idle board twice when the stop express writes one too: interfaces/mqtt/express.py.)
-   So is a banner's piece gathered with the power-on byte or a whole banner before it.
+   So is a banner's piece gathered with the power-on byte or whole banners before it (the two
+   stops' banners read in one quiet spell, the second torn: seen in CI).
 6. ``AI1;`` with one bit flipped (``I`` 0x49, ``M`` 0x4D) is ``AM1;``: turn to the bearing kept
    from the last ``AP1``. The spec says so (``unasked_moves``): the engine stops the first turn
    nobody asked for after the rotor was left short of its target (session/controller.py
@@ -223,10 +224,13 @@ class RotorEzCodec:
         if self._queries_open and any(b not in _BOARD_BYTES for b in junk):
             self._noisy = True
         self._junk_window += junk
-        so_far = _BANNER_SO_FAR.search(self._junk_window)
-        if so_far is not None and so_far.start() <= len(self._junk_window) - len(junk):
+        window, start = self._junk_window, len(self._junk_window) - len(junk)
+        so_far = _BANNER_SO_FAR.search(window)
+        if so_far is not None and so_far.start() <= start:
             self._banner_so_far += junk  # rule 5: all of it in a banner (or its beginning)
             del self._banner_so_far[: -2 * _JUNK_WINDOW]
+        elif so_far is not None and not _KNOWN_JUNK.sub(b"", window[start : so_far.start()]):
+            self._banner_so_far[:] = window[so_far.start() :]  # rule 5: whole ones before it
         else:
             self._banner_so_far.clear()
         match = _VERSION_RE.search(self._junk_window)

@@ -264,3 +264,18 @@ def test_a_power_on_byte_after_a_frame_begun_before_the_query_is_still_one() -> 
     got = c.feed(b";123")
     assert JunkReply(b"\xe0", JunkReason.POWER_ON, "power-on byte") in got
     assert not [r for r in got if isinstance(r, PositionReply)]
+
+
+@pytest.mark.parametrize("cut", range(1, len(BANNER)))
+def test_a_banner_torn_after_a_whole_one_in_the_same_read_is_harmless_at_every_cut(
+    cut: int,
+) -> None:
+    """Rule 5: the two stops' banners read in one quiet spell, the second torn by the read
+    (``C2000 IDIOM V1.4S C2000 IDIOM ``): seen in CI on R/error as "controller sent 30 bytes
+    that are no valid reply" when a lock ON reached an idle board (the session's stop and the
+    express's). Whole banners before the piece (a power-on byte too), and the rest after it."""
+    codec = RotorEzCodec()
+    first = junk_of(codec, b"\xe0" + BANNER * 2 + BANNER[:cut])
+    assert first == b"\xe0" + BANNER * 2 + BANNER[:cut] and codec.harmless(first)
+    assert codec.harmless(junk_of(codec, BANNER[cut:]))
+    assert not codec.harmless(junk_of(codec, BANNER + b"C2000 IDX"))
