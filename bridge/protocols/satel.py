@@ -5,10 +5,11 @@ no echo, either case; replies are text lines ending in CR LF (or LF). Sources: t
 instruction manual, Appendix A ("Running the controller using a terminal"), and Hamlib 4.5.4's
 satel backend (satel.c, its author's notes) and its traffic on the wire, seen with rotctl.
 
-Frames we send: ``s`` stop rotors and disable automatic motion; ``?`` identify (-> ``SatEL``);
-``tYYYY/MM/DD HH:MM:SS`` CR LF set the clock; ``g`` enable automatic motion; ``z`` status report;
+Frames we send: ``s`` stop rotors and disable automatic motion; ``x`` clear the stored points;
+``?`` identify (-> ``SatEL``); ``tYYYY/MM/DD HH:MM:SS`` CR LF set the clock; ``g`` enable
+automatic motion; ``z`` status report;
 ``p<az> <el>`` CR LF point (integers, no padding), answered by a status report when the move
-ends. Also ``*`` reset, ``x`` clear memory, ``2YYYY/MM/DD HH:MM:SS az el`` CR LF store a point.
+ends. Not sent: ``*`` reset, ``2YYYY/MM/DD HH:MM:SS az el`` CR LF store a point.
 
 The status report (7 lines): ``Motion ENABLED|DISABLED``, ``Mode ...``, ``Time: ...``,
 ``Azimuth = 000     Absolute = 000``, ``Elevation = 000``, an empty line,
@@ -19,8 +20,13 @@ Rules:
    slews: after ``p`` nothing but a stop may be sent until the after-move report has come
    (ModelSpec: half duplex, ``stop_interrupts``, ``reports_while_moving`` False).
 2. Connecting starts with ``s``, the one input allowed at any time: the bridge may have been
-   restarted in the middle of a slew it knows nothing about. Then identify, set the clock from
-   the host (UTC, so stored ephemeris points line up), enable motion, ask for a report.
+   restarted in the middle of a slew it knows nothing about. Then clear the stored points
+   (``x``), identify, set the clock from the host (UTC), enable motion, ask for a report.
+   Automatic motion also runs the points stored in the controller's memory, each at its time:
+   the bridge stores none, and one left there by another program (a pass loaded before the
+   bridge took the port) would turn the rotor by itself once ``g`` went out, past the lock
+   and every limit, unseen (the controller hears nothing while it slews). Cleared before the
+   clock is set and before ``g``, no stored point ever moves it.
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
    Its values are three digits, zero padded, always (the controller's printf; Hamlib reads them
@@ -99,7 +105,7 @@ class SatelCodec:
     def encode_connect(self, now_unix: float) -> list[bytes]:
         clock = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(now_unix)).encode()
         self._owed += ["ident", "report"]
-        return [b"s", b"?", b"t" + clock + b"\r\n", b"g", b"z"]
+        return [b"s", b"x", b"?", b"t" + clock + b"\r\n", b"g", b"z"]  # rule 2
 
     def encode_query(self) -> bytes:
         self._owed.append("report")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from datetime import datetime
+from datetime import UTC, datetime
 
 from bridge.core.model import MotionState
 from bridge.emulators.satel import Outcome
@@ -305,3 +305,21 @@ def test_one_lost_reply_after_a_stop_sends_no_second_stop(rig: Rig) -> None:
     v.set_silent(False)
     v.run_until(lambda h: b"p90 0\r\n" in h.sent(since=t0), 10, "the new point sent")
     assert [w.data for w in v.writes if w.t >= t0 and w.data == b"s"] == [b"s"]
+
+
+def test_a_point_stored_before_the_bridge_connected_never_turns_the_rotor(rig: Rig) -> None:
+    # another program loaded a pass into the controller's memory (manual: ``2YYYY/MM/DD ...``)
+    # before the bridge took the port; the bridge's ``g`` switches automatic motion on, and
+    # the point, due 80 s later by the clock the bridge sets, would turn a locked rotor to
+    # 200/30 by itself, unseen (the controller hears nothing while it slews)
+    v = rig("satel", connect=False, locked=True)
+    due = datetime.fromtimestamp(v.wall() + 80, UTC).strftime("%Y/%m/%d %H:%M:%S")
+    v.device.receive(due.encode() + b" 200 30\r", v.now)
+    assert len(v.device.state(v.now).stored_points) == 1
+    v.link_up()
+    v.run_until_state(IDLE, 30)
+    v.run_for(120)
+    truth = v.truth()
+    assert (truth.az_deg, truth.el_deg) == (0.0, 0.0)
+    assert v.device.state(v.now).stored_points == ()
+    assert not [e for e in v.device.events if e.kind == "move"]

@@ -82,7 +82,7 @@ def test_a_spoiled_report_is_junk_not_a_reading(spoiled: bytes) -> None:
 def test_identify_and_connect_sequence() -> None:
     c = SatelCodec()
     frames = c.encode_connect(0.0)
-    assert frames == [b"s", b"?", b"t1970/01/01 00:00:00\r\n", b"g", b"z"]
+    assert frames == [b"s", b"x", b"?", b"t1970/01/01 00:00:00\r\n", b"g", b"z"]
     out = c.feed(b"SatEL\r\n" + REPORT)
     assert VersionReply("SatEL") in out and positions(out) == [READING]
     assert not c.awaiting_reply()
