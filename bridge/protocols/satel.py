@@ -25,8 +25,9 @@ Rules:
    Automatic motion also runs the points stored in the controller's memory, each at its time:
    the bridge stores none, and one left there by another program (a pass loaded before the
    bridge took the port) would turn the rotor by itself once ``g`` went out, past the lock
-   and every limit, unseen (the controller hears nothing while it slews). Cleared before the
-   clock is set and before ``g``, no stored point ever moves it.
+   and every limit, unseen (a slew nobody asked for is answered by no report, and a poll
+   into it is input while slewing). Cleared before the clock is set and before ``g``, no
+   stored point ever moves it.
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
    Its values are three digits, zero padded, always (the controller's printf; Hamlib reads them

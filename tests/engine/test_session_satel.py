@@ -311,7 +311,7 @@ def test_a_point_stored_before_the_bridge_connected_never_turns_the_rotor(rig: R
     # another program loaded a pass into the controller's memory (manual: ``2YYYY/MM/DD ...``)
     # before the bridge took the port; the bridge's ``g`` switches automatic motion on, and
     # the point, due 80 s later by the clock the bridge sets, would turn a locked rotor to
-    # 200/30 by itself, unseen (the controller hears nothing while it slews)
+    # 200/30 by itself, unseen (it answers no poll while it slews)
     v = rig("satel", connect=False, locked=True)
     due = datetime.fromtimestamp(v.wall() + 80, UTC).strftime("%Y/%m/%d %H:%M:%S")
     v.device.receive(due.encode() + b" 200 30\r", v.now)
