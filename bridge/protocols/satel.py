@@ -23,8 +23,9 @@ Rules:
    restarted in the middle of a slew it knows nothing about. Then clear the stored points
    (``x``), identify, set the clock from the host (UTC), enable motion, ask for a report.
    Automatic motion also runs the points stored in the controller's memory, each at its time
-   (the manual's introduction: loaded once, the controller moves the rotors by itself; they
-   live in RAM, the EEPROM holds only the position, so a power cycle clears them too):
+   (the manual's introduction: loaded once, the controller moves the rotors by itself; a
+   power cycle is taken to clear them, the manual naming only the position as kept in EEPROM,
+   unverified):
    the bridge stores none, and one left there by another program (a pass loaded before the
    bridge took the port) would turn the rotor by itself once ``g`` went out, past the lock
    and every limit, unseen (a slew nobody asked for is answered by no report, and a poll
