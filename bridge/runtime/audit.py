@@ -19,6 +19,9 @@ Rules:
    succeeds again; then that is said once too, in the log with the counts, and the first line
    written says how many were lost (``dropped``). The file is opened anew for every batch, so
    a path that becomes writable again (space freed, directory made) is used without a restart.
+   It is opened non-blocking: a named pipe at the path with no reader, or one that does not
+   read, is such a failure too (an attack pass: the writer hung in its open, forever, nothing
+   was said, and every line after was lost).
 4. ``stop`` writes what is queued, then ends the thread; it waits no longer than its timeout
    (a writer hung on its disk must not hang the bridge's shutdown).
 5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
@@ -48,6 +51,9 @@ log = logging.getLogger(__name__)
 QUEUE_LINES = 10_000  # rule 1
 KEEP_FILES = 3  # rule 2: old files kept beside the current one
 _STOP = object()
+# rule 3: O_NONBLOCK changes nothing for a file; a FIFO at the path (no reader, or one that
+# never reads) fails its open or write at once instead of hanging the writer unsaid
+_FLAGS = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NONBLOCK
 
 
 _LINE_BREAKS = str.maketrans({"\x85": "\\u0085", "\u2028": "\\u2028", "\u2029": "\\u2029"})
@@ -200,7 +206,7 @@ class AuditFile:
                     if size and size + len(data) > self._max_bytes:
                         self._rotate()
                         size = 0
-                    fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+                    fd = os.open(self.path, _FLAGS, 0o644)
                 self._append_line(fd, data)
                 size += len(data)
                 done += 1

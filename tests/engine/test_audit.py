@@ -234,6 +234,28 @@ def test_a_directory_at_the_path_is_reported_and_left_where_it_is(tmp_path: Path
     assert sorted(p.name for p in tmp_path.iterdir()) == ["logs"]
 
 
+def test_a_named_pipe_at_the_path_is_reported_never_hangs_the_writer(tmp_path: Path) -> None:
+    """Rule 3: ``audit_file`` a FIFO nobody reads (made there by a neighbour, or left by a
+    tool): the open fails at once and is reported; once a plain file is there it is written."""
+    path = tmp_path / "audit.jsonl"
+    os.mkfifo(path)
+    said: list[str | None] = []
+    audit = AuditFile(path, 1_000_000, on_problem=said.append)
+    audit.start()
+    try:
+        audit.put(event(1))
+        audit.flush(slow(5))
+        assert len(said) == 1 and said[0] is not None and str(path) in said[0]
+        assert audit.lines_lost == 1 and audit.lines_written == 0
+        path.unlink()
+        audit.put(event(2))
+        audit.flush(slow(5))
+        assert said[1:] == [None]
+        assert [d["command"] for d in lines(path)] == ["P 2 0"]
+    finally:
+        audit.stop()
+
+
 def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
     tmp_path: Path,
 ) -> None:
