@@ -20,8 +20,9 @@ Rules:
    lease gets the message to refuse it with; the holder's and anyone's while free get None.
    Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11).
 6. A lease kept across a restart (the state file) is taken only if a claim could have made it:
-   an operator's name, and at most MAX_MINUTES left. One that is not (a hand-edited or damaged
-   file, a date no clock can show, the wall clock set far back) is ignored: ``restorable``.
+   an operator's name (not an interface's, rule 1), and at most MAX_MINUTES left. One that is
+   not (a hand-edited or damaged file, a date no clock can show, the wall clock set far back)
+   is ignored: ``restorable``.
 """
 
 from __future__ import annotations
@@ -51,9 +52,16 @@ def _ended(held: Control, now_unix: float) -> bool:
     return not 0.0 < held.until_unix - now_unix <= 60.0 * MAX_MINUTES
 
 
+def _interface(name: str) -> bool:
+    """Rule 1: ``name`` is how the bridge names an interface (``mqtt``, ``rotctld 127.0.0.1``)."""
+    return name.split(None, 1)[0].casefold() in INTERFACES
+
+
 def restorable(held: Control | None, now_unix: float) -> Control | None:
     """Rule 6: the kept lease ``held`` if a claim could have made it, else None."""
     if held is None or valid_operator(held.operator) != held.operator:
+        return None
+    if _interface(held.operator):  # rule 1: no claim makes it (an attack pass: restored)
         return None
     left_s = held.until_unix - now_unix
     return held if math.isfinite(left_s) and left_s <= 60.0 * MAX_MINUTES else None
@@ -86,7 +94,7 @@ class Lease:
         name = valid_operator(operator)
         if name is None:
             raise LeaseError(f"operator must be a name of 1 to {OPERATOR_CHARS} characters")
-        if name.split(None, 1)[0].casefold() in INTERFACES:  # rule 1
+        if _interface(name):  # rule 1
             raise LeaseError(
                 f"{name!r} is how the bridge names an interface, not an operator: claim the "
                 "lease with your call sign"

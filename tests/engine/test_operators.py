@@ -319,6 +319,8 @@ def test_input_refused_before_it_became_a_command_is_audited_when_its_sender_is_
         '{"operator": "DL1ABC", "until": 4070908800}',  # 2099: more than a claim can ask
         '{"operator": "DL1\\nABC", "until": 1790000600}',  # not an operator's name
         '{"operator": "", "until": 1790000600}',
+        '{"operator": "mqtt", "until": 1790000600}',  # an interface: every plain MQTT client
+        '{"operator": "rotctld 127.0.0.1", "until": 1790000600}',
     ],
 )
 def test_a_kept_lease_no_claim_could_have_made_is_ignored(tmp_path: Path, kept: str) -> None:
