@@ -32,7 +32,9 @@ Rules:
    word outlives the restart, as the lock does. Nor is one whose park the rotor was seen to
    reach (wind.py rule 7, the status's ``arrived``): someone may have turned it by hand at the
    controller since, and it is not turned back by itself; one whose park was not seen reached
-   (the bridge died mid-park; a DCU-1, which is never seen there) parks again. The wind park
+   (the bridge died mid-park; a DCU-1, which is never seen there) parks again. A storm known
+   only from a replayed reading (wind.py rule 6) is not kept: it parked nothing, and the
+   broker replays it to the next start. The wind park
    has one owner, the session on the lines thread: it alone decides a storm, the judge reads
    the session's status, and the save is queued on that same thread in the order the storms
    came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
@@ -171,7 +173,7 @@ class Kept:
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
-        storm = wind is not None and wind.storm
+        storm = wind is not None and wind.storm and not wind.replayed  # (wind.py rule 6)
         halted = storm and wind is not None and wind.halted
         arrived = storm and wind is not None and wind.arrived
         if (storm, halted, arrived) != (self.storm, self.storm_halted, self.storm_arrived):

@@ -29,7 +29,13 @@ Rules:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the
    speed shown while no new reading has come; it never starts or continues a calm, so it never
-   ends a storm, and it says nothing of silence (rule 4: the station may be long gone).
+   ends a storm, and it says nothing of silence (rule 4: the station may be long gone). A
+   storm it starts refuses motion but sends no park (``replayed`` in the status): no retained
+   or replayed message moves a rotor (an attack pass: a storm reading retained by a wind
+   station dead for a week parked the rotor at every start of the bridge). The first new
+   reading above the park level parks it, as rule 1 says; one below the release level starts
+   the calm; a storm known only from a replay is not kept across a restart (the replay comes
+   again).
 7. A park the line took from the rotator in a storm (the controller offline or its port gone:
    a turn under way stopped at the offline, session/controller.py rule 2, or a park waiting
    dropped) is owed again, proposed once the controller answers, unless a stop or lock ON
@@ -81,6 +87,7 @@ class WindPark:
         self._park_owed = storm and not halted and not arrived
         self._halted = storm and halted
         self._arrived = storm and arrived  # rule 7: the rotor was seen at this storm's park
+        self._replayed = False  # rule 6: the storm is known only from a replayed reading
         self._wall_offset_s = 0.0
 
     @property
@@ -94,6 +101,7 @@ class WindPark:
             calm_since_unix=None if calm is None else calm + self._wall_offset_s,
             silent=self._silent,
             refusal=self.refusal(),
+            replayed=self._replayed,
             halted=self._halted,
             arrived=self._arrived,
         )
@@ -107,7 +115,7 @@ class WindPark:
             if self._last_t is None:
                 self._speed = kmh
             if kmh > cfg.park_above_kmh:
-                self._stormy(kmh)
+                self._stormy(kmh, replayed=True)
             elif kmh >= cfg.release_below_kmh:
                 self._calm_since = None
             return
@@ -121,12 +129,24 @@ class WindPark:
         else:
             self._calm_since = None  # rule 2: the hold starts again
 
-    def _stormy(self, kmh: float) -> None:
-        """Rule 1: a reading above the park level; rule 2: no calm since."""
+    def _stormy(self, kmh: float, *, replayed: bool = False) -> None:
+        """Rule 1: a reading above the park level; rule 2: no calm since; rule 6: a replayed
+        one parks nothing."""
         self._calm_since = None
+        if self.storm and not (self._replayed and not replayed):
+            return
         if not self.storm:
-            self.storm, self._park_owed, self._halted, self._arrived = True, True, False, False
-            self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
+            self.storm, self._halted, self._arrived = True, False, False
+        self._replayed, self._park_owed = replayed, not (replayed or self._halted)
+        self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
+        if replayed:
+            self._why += " (the last reading the broker kept)"
+            log.warning(
+                "%s: %s: motion refused, no park until a new reading",
+                self._rig.rotator_id,
+                self._why,
+            )
+        else:
             log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
 
     @property
@@ -156,6 +176,9 @@ class WindPark:
 
     def refusal(self) -> str | None:
         """Why motion is refused now (rule 1), if it is."""
+        if self._replayed:  # rule 6
+            above = self._cfg.park_above_kmh
+            return f"{self._why}: motion refused; the park waits for a new reading above {above:g}"
         return f"{self._why}: parked for the storm" if self.storm else None
 
     def wakeup(self, now: float) -> float | None:
@@ -188,7 +211,7 @@ class WindPark:
         calm, last = self._calm_since, self._last_t
         if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
-            self._halted = False
+            self._halted = self._replayed = False
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if not (self.storm and self._park_owed) or scene.locked:
             return NOTHING if error is None else Proposal(error=error)

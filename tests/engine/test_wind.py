@@ -320,16 +320,29 @@ def test_a_replayed_calm_never_ends_a_storm_nor_says_the_station_is_back() -> No
 
 
 def test_a_replayed_reading_may_start_a_storm_or_its_hold_again_and_shows_until_a_new_one() -> None:
-    """Rule 6's safe side: the last known wind after a restart of the bridge parks the rotor if
-    it was a storm; during a calm, a replayed gust starts the hold again."""
+    """Rule 6's safe side: the last known wind after a restart of the bridge refuses motion if
+    it was a storm, and parks nothing until a new reading says so; during a calm, a replayed
+    gust starts the hold again."""
     part = park(wind_hold_min=5)
     part.reading(20.0, 0.0, replayed=True)  # the first state: shown, no storm
     part.step(scene(0.0))
     info = part.info
     assert info is not None and info.speed_kmh == 20.0 and not info.storm
     part.reading(75.0, 1.0, replayed=True)
-    proposal = part.step(scene(1.0))
-    assert part.storm and proposal.target is not None and proposal.target.az_deg == 90.0
+    assert part.step(scene(1.0)).target is None  # no retained message moves a rotor
+    assert part.refusal() == (
+        "wind 75 km/h above 60 (the last reading the broker kept): motion refused; the park "
+        "waits for a new reading above 60"
+    )
+    info = part.info
+    assert info is not None and info.storm and info.replayed
+    part.reading(55.0, 5.0)  # new, but not above the park level: still no park
+    assert part.step(scene(5.0)).target is None and part.storm
+    part.reading(72.0, 6.0)  # new, above it: the park, as rule 1 says
+    proposal = part.step(scene(6.0))
+    assert proposal.target is not None and proposal.target.az_deg == 90.0
+    assert part.refusal() == "wind 72 km/h above 60: parked for the storm"
+    assert part.info is not None and not part.info.replayed
     part.reading(10.0, 10.0)  # new: the calm begins
     part.reading(45.0, 200.0, replayed=True)  # at the release level: the hold starts again
     part.reading(10.0, 320.0)
@@ -340,3 +353,16 @@ def test_a_replayed_reading_may_start_a_storm_or_its_hold_again_and_shows_until_
     part.reading(10.0, 620.0)
     part.step(scene(620.0))
     assert not part.storm
+
+
+def test_a_stale_storm_replayed_never_parks_and_a_stop_meanwhile_holds_when_the_storm_is_new() -> (
+    None
+):
+    """Rule 6 beside rule 3: a storm known only from the broker's replay, a STOP meanwhile,
+    then the station's new storm reading: the operator's STOP still holds the park back."""
+    part = park()
+    part.reading(90.0, 0.0, replayed=True)
+    assert part.step(scene(0.0)).target is None
+    part.halted()  # the operator's STOP
+    part.reading(80.0, 30.0)
+    assert part.step(scene(30.0)).target is None and part.storm and part.park_halted

@@ -101,6 +101,32 @@ def test_a_storm_parks_refuses_motion_stop_works_and_calm_releases_after_the_hol
     rig.arrived("tower", 150.0, timeout_s=30)
 
 
+def test_a_storm_reading_the_broker_kept_refuses_motion_but_moves_nothing(rig: Rig) -> None:
+    """wind.py rule 6: a wind station dead for a week left its storm reading retained. The
+    bridge starts: the replay refuses motion (the safe side) and parks nothing (no retained
+    message moves a rotor: it turned the rotor to the park at every start); nor does a restart
+    of the bridge. The station's first new storm reading parks it."""
+    rig.probe.publish(TOPIC, "25", retain=True)  # 90 km/h, a week ago
+    start(rig)
+    wind = wind_of(rig, lambda w: w.get("storm"))
+    assert wind["replayed"] is True and wind["speed_kmh"] == 90.0
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    assert error_after(rig, mark, "refused")["message"] == (
+        "wind 90 km/h above 72 (the last reading the broker kept): motion refused; the park "
+        "waits for a new reading above 72"
+    )
+    mark, t_restart = rig.probe.mark(), time.monotonic()
+    rig.stop()
+    rig.start()
+    rig.ready("tower", after=t_restart)
+    assert wind_of(rig, lambda w: w.get("replayed"), mark)["storm"] is True
+    assert rig.emu.frames("set") == [] and rig.emu.state().az_deg == 120.0
+    rig.probe.publish(TOPIC, "24")  # the station is back: 86 km/h, new
+    rig.arrived("tower", 90.0, timeout_s=30)
+    assert wind_of(rig, lambda w: w.get("speed_kmh") == 86.4)["replayed"] is False
+
+
 def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None:
     start(rig, wind_silent_min=0.05)  # 3 s without a reading (the silence is under test)
     mark = rig.probe.mark()

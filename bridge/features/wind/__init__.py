@@ -36,6 +36,7 @@ def wind_json(info: WindInfo) -> dict[str, object]:
     return {
         "speed_kmh": info.speed_kmh,
         "storm": info.storm,
+        "replayed": info.replayed,
         "calm_since": None
         if calm is None
         else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
