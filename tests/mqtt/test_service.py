@@ -41,6 +41,7 @@ from bridge.interfaces.mqtt.halts import (
     LOCK_OFF_FENCED,
     LOCK_OFF_OLDER,
     LOCK_OFF_SUBSCRIBING,
+    LOCK_OFF_UNORDERED,
 )
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
@@ -904,6 +905,37 @@ def test_a_lane_stop_while_the_main_connection_subscribes_holds_what_it_will_rea
     assert [m for m in pub.take() if m[0] == "rotor/bridge/fence"]  # which went out
     svc.on_lane_message("rotor/lock", b"OFF", False)  # the main connection's to carry out
     assert tower.calls[1:] == [("refused", LOCK_OFF_SUBSCRIBING, "lock 'OFF'")]  # if it reads it
+
+
+def test_a_lane_lock_off_after_another_interfaces_unfenced_lock_on_is_refused() -> None:
+    """lastword.py rule 12 (an attack pass): with the main connection down the stop lane carries
+    out a lock OFF (rule 3), and the console's lock ON had no fence (nothing to send its marker
+    on): an automation's lock OFF published just before the ON, read by the lane just after it,
+    unlocked the rotator under a page that said ON. So did a lane OFF read after the main
+    connection dropped with the ON's fence still up. Refused and said; the ON stands. A new
+    main connection ends it: a lane OFF after its next drop is carried out."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    pub.up = pub.hears = False  # the main connection is down
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=True)  # the console's lock ON
+    svc.on_lane_message("rotor/lock", b"OFF", False)  # published before it, read after
+    assert tower.calls == [("refused", LOCK_OFF_UNORDERED, "lock 'OFF'")]
+    tower.calls.clear()
+    svc.main_gone()  # a new main connection (before its messages) ...
+    pub.up = pub.hears = True
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=True)  # ... fences the console's next lock ON
+    pub.take()
+    svc.main_gone()  # ... and drops before its marker came back
+    pub.up = pub.hears = False
+    svc.on_lane_message("rotor/lock", b"OFF", False)
+    assert tower.calls == [("refused", LOCK_OFF_UNORDERED, "lock 'OFF'")]
+    tower.calls.clear()
+    svc.main_gone()  # a new main connection, back in step; it drops again
+    svc.main_gone()
+    svc.on_lane_message("rotor/lock", b"OFF", False)  # the only word now: carried out
+    assert tower.calls == [("lock", False)]
 
 
 def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> None:

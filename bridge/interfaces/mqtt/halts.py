@@ -23,7 +23,9 @@ A stop or lock ON another interface carried out (the console, rotctld, a logger)
 rotator (lastword.py rule 11): counted before it is put (``fence_asked``, under a lock of its own
 that nothing holds for longer than a count), fenced after (``fence_carried``, with a marker on
 the main connection); the service asks ``fenced`` before it hands on a move, and the main
-connection's lock OFF is asked here.
+connection's lock OFF is asked here. A lock ON no fence orders (the main connection down, or
+unable to read its markers) makes the lane's lock OFF wait for a new main connection
+(lastword.py rule 12).
 """
 
 from __future__ import annotations
@@ -64,6 +66,15 @@ LOCK_OFF_FENCED = (
     "lock OFF not carried out: it was published before a lock ON that another interface (the "
     "console, a logger) carried out first; the lock stays ON (make sure nobody is working on "
     "the tower before unlocking)"
+)
+# lastword.py rule 12: the main connection down, the lane's lock OFF after another interface's
+# lock ON that no fence ordered: it may have been published before that ON
+LOCK_OFF_UNORDERED = (
+    "lock OFF on the stop connection not carried out: another interface (the console, a "
+    "logger) set the lock ON while the main connection was down or could not order it, and "
+    "this OFF may have been published before that ON; the lock stays ON (make sure nobody is "
+    "working on the tower, then send lock OFF again once the bridge is connected, or use the "
+    "console)"
 )
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
@@ -203,6 +214,8 @@ class Halts:
         with self._lock:
             heard = self._publisher.hears  # (not subscribed: nothing older will be read)
             n = self.word.fence(rotator_id, lock, self._clock()) if heard else None
+            if lock and n is None:  # (lastword.py rule 12: the lane's lock OFF is no later)
+                self.word.unfenced_lock(rotator_id)
             # counted once the fence is up (``fenced`` reads them the other way round)
             self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
         if n is not None:
@@ -396,6 +409,8 @@ class Halts:
                 if up:
                     return
                 why = late() if not hears else LOCK_OFF_SUBSCRIBING
+                if why is None and self.word.lane_lock_off_unordered(rotator_id):
+                    why = LOCK_OFF_UNORDERED  # lastword.py rule 12
                 if why is None:
                     rot.submit(
                         Lock(False, source=Source.MQTT, origin=origin), pl.describe(kind, payload)

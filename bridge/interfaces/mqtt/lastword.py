@@ -25,7 +25,8 @@ but not the order between them. So:
    (published after the word) goes out. Nothing is decided by matching payloads, and no clock
    ends a hold (rule 5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
-   rule 1), except while the main connection is down: then the lane's word is the only one.
+   rule 1), except while the main connection is down: then the lane's word is the only one
+   (but rule 12).
 4. The main connection may read a halt before the lane does (both are idle and race). The lane's
    copy, carried out late, would stop a target published after it and already on its way. So
    when the main connection carries out a halt the lane had no copy of waiting, the bridge
@@ -108,6 +109,15 @@ but not the order between them. So:
    numbers a halt when it reads it, and one published before another interface's halt may
    be read after it (an attack pass: an MQTT STOP, a target, then rotctld's S; the lane read
    the MQTT STOP late, its copy ended the S's fence, and the target turned the rotor).
+12. A fence orders the main connection alone; while the main connection is down the lane
+   carries out lock OFFs (rule 3), and nothing orders one against another interface's lock
+   ON: a lock ON carried out while the main connection could not fence it (down, or unable to
+   read its markers), or whose fence was still up when it dropped, may come after a lock OFF
+   published before it and read by the lane after it (an attack pass: the console's lock ON,
+   then an automation's older OFF read by the lane, unlocked the rotator under a page that
+   said ON). Such a rotator's lane lock OFF is refused and said (``lane_lock_off_unordered``),
+   the lock staying ON, until a new main connection (whose fences order it again, and whose
+   drop starts the count anew); a lock OFF from the console is carried out as ever.
 """
 
 from __future__ import annotations
@@ -160,6 +170,8 @@ class LastWord:
     # rule 11: rotator -> (the marker its fence waits for, whether a lock ON is among its halts)
     _fences: dict[str, tuple[int, bool]] = field(default_factory=dict)
     _fenced_since: dict[str, float] = field(default_factory=dict)  # rule 11: for the report
+    # rule 12: the rotators another interface locked with no fence on the main connection
+    _unfenced_locks: set[str] = field(default_factory=set)
 
     # -- the lane (rule 2) -------------------------------------------------------------------
     def lane_halt(self, rotator_id: str, kind: str, now: float, hold: bool = True) -> int | None:
@@ -230,6 +242,16 @@ class LastWord:
         self._fenced_since.setdefault(rotator_id, now)
         self._marker_sent_at[n] = now
         return n
+
+    def unfenced_lock(self, rotator_id: str) -> None:
+        """Rule 12: another interface's lock ON no fence orders (the main connection down, or
+        unable to read its markers)."""
+        self._unfenced_locks.add(rotator_id)
+
+    def lane_lock_off_unordered(self, rotator_id: str) -> bool:
+        """Rule 12: whether a lock OFF the lane would carry out (rule 3) may be older than
+        another interface's lock ON that nothing orders it against."""
+        return rotator_id in self._unfenced_locks
 
     def fenced(self, rotator_id: str, lock_off: bool = False) -> bool:
         """Rule 11: whether the main connection's move (``lock_off``: its lock OFF) for this
@@ -304,6 +326,8 @@ class LastWord:
         clearing; every marker out is void. Rule 9: the next main connection subscribes after
         the lane's present one did."""
         released = list(self._holds)
+        # rule 12: a lock fence the lane's lock OFFs are not ordered against from now on
+        self._unfenced_locks = {rid for rid, (_, lock) in self._fences.items() if lock}
         self._holds.clear()
         self._held_since.clear()
         self._marker_sent_at.clear()
