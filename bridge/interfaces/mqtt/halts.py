@@ -23,9 +23,8 @@ A stop or lock ON another interface carried out (the console, rotctld, a logger)
 rotator (lastword.py rule 11): counted before it is put (``fence_asked``, under a lock of its own
 that nothing holds for longer than a count), fenced after (``fence_carried``, with a marker on
 the main connection); the service asks ``fenced`` before it hands on a move, and the main
-connection's lock OFF is asked here. A lock ON no fence orders (the main connection down, or
-unable to read its markers) makes the lane's lock OFF wait for a new main connection
-(lastword.py rule 12).
+connection's lock OFF is asked here. A lock ON no fence orders (the main connection down)
+makes the lane's lock OFF wait for a new main connection (lastword.py rule 12).
 """
 
 from __future__ import annotations
@@ -214,7 +213,7 @@ class Halts:
         with self._lock:
             heard = self._publisher.hears  # (not subscribed: nothing older will be read)
             n = self.word.fence(rotator_id, lock, self._clock()) if heard else None
-            if lock and n is None:  # (lastword.py rule 12: the lane's lock OFF is no later)
+            if lock and not heard:  # (lastword.py rule 12: the lane's lock OFF is no later)
                 self.word.unfenced_lock(rotator_id)
             # counted once the fence is up (``fenced`` reads them the other way round)
             self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1

@@ -111,8 +111,8 @@ but not the order between them. So:
    the MQTT STOP late, its copy ended the S's fence, and the target turned the rotor).
 12. A fence orders the main connection alone; while the main connection is down the lane
    carries out lock OFFs (rule 3), and nothing orders one against another interface's lock
-   ON: a lock ON carried out while the main connection could not fence it (down, or unable to
-   read its markers), or whose fence was still up when it dropped, may come after a lock OFF
+   ON: a lock ON carried out while the main connection was down (no fence: nothing reads a
+   marker), or whose fence was still up when it dropped, may come after a lock OFF
    published before it and read by the lane after it (an attack pass: the console's lock ON,
    then an automation's older OFF read by the lane, unlocked the rotator under a page that
    said ON). Such a rotator's lane lock OFF is refused and said (``lane_lock_off_unordered``),
@@ -244,8 +244,7 @@ class LastWord:
         return n
 
     def unfenced_lock(self, rotator_id: str) -> None:
-        """Rule 12: another interface's lock ON no fence orders (the main connection down, or
-        unable to read its markers)."""
+        """Rule 12: another interface's lock ON no fence orders (the main connection down)."""
         self._unfenced_locks.add(rotator_id)
 
     def lane_lock_off_unordered(self, rotator_id: str) -> bool:
