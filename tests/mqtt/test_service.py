@@ -936,6 +936,10 @@ def test_a_lane_lock_off_after_another_interfaces_unfenced_lock_on_is_refused() 
     svc.main_gone()
     svc.on_lane_message("rotor/lock", b"OFF", False)  # the only word now: carried out
     assert tower.calls == [("lock", False)]
+    tower.calls.clear()
+    svc.fence_asked("tower")  # the console's lock ON under way (asked, not yet carried out)
+    svc.on_lane_message("rotor/lock", b"OFF", False)
+    assert tower.calls == [("refused", LOCK_OFF_UNORDERED, "lock 'OFF'")]
 
 
 def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> None:

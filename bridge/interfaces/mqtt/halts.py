@@ -403,17 +403,24 @@ class Halts:
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
+            # lastword.py rule 12, as main_lock_off: the halt count read before the look (a lock
+            # ON put after it refuses the OFF at the judge), and another interface's halt under way
+            since, under_way = rot.halts, self.fenced(rotator_id, lock_off=True)
             with self._lock:  # lastword.py rule 3: the only word while it is down
                 up, hears = self._publisher.up, self._publisher.hears
                 if up:
                     return
                 why = late() if not hears else LOCK_OFF_SUBSCRIBING
-                if why is None and self.word.lane_lock_off_unordered(rotator_id):
+                if why is None and (under_way or self.word.lane_lock_off_unordered(rotator_id)):
                     why = LOCK_OFF_UNORDERED  # lastword.py rule 12
                 if why is None:
-                    rot.submit(
-                        Lock(False, source=Source.MQTT, origin=origin), pl.describe(kind, payload)
-                    )
+                    what = pl.describe(kind, payload)
+                    try:
+                        rot.submit(
+                            Lock(False, source=Source.MQTT, origin=origin), what, since=since
+                        )
+                    except Refused:
+                        return  # (the judge said why: a lock ON came while it was judged)
             if why is not None:  # a link held it up: refused as the main connection would
                 rot.report_refusal(why, pl.describe(kind, payload), origin=origin)
             return
