@@ -115,9 +115,11 @@ but not the order between them. So:
    marker), or whose fence was still up when it dropped, may come after a lock OFF
    published before it and read by the lane after it (an attack pass: the console's lock ON,
    then an automation's older OFF read by the lane, unlocked the rotator under a page that
-   said ON). Such a rotator's lane lock OFF is refused and said (``lane_lock_off_unordered``),
-   the lock staying ON, until a new main connection (whose fences order it again, and whose
-   drop starts the count anew); a lock OFF from the console is carried out as ever.
+   said ON). Such a rotator's lane lock OFF is refused and said (``lane_lock_off_unordered``;
+   so is one read while another interface's halt is under way, and it goes to the judge with
+   the halt count read before that look, as the main connection's does), the lock staying
+   ON, until a new main connection (whose fences order it again, and whose drop starts the
+   count anew); a lock OFF from the console is carried out as ever.
 """
 
 from __future__ import annotations
