@@ -7,6 +7,7 @@ station's bridge on an emulator (tests/support/rig.py)."""
 from __future__ import annotations
 
 import logging
+import os
 import re
 import signal
 import socket
@@ -44,7 +45,7 @@ from bridge.remote.settings import RemoteSettings
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.mosquitto import free_port
-from tests.support.remote import Link, ask
+from tests.support.remote import Link, ask, remote_published
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -200,8 +201,51 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     wait_until(lambda: len(published()) >= 1, 10, "the unacknowledged stop sent again")
     wait_until(lambda: tower.current, 10, "the station's bridge heard again")  # (else RPRT -5)
     assert ask(port, b"S\n") == b"RPRT 0\n"  # a marker behind anything resent
-    wait_until(lambda: len(published()) >= 2, 10, "the marker stop")
-    assert published() == [b"stop", b"lock", b"stop"]  # the halts kept, the target never
+    wait_until(lambda: len(published()) >= 5, 10, "the marker stop")
+    # the halts kept, sent on connecting and again once the station's bridge is heard there
+    # (rule 6: it may come back after the remote), then the marker; the target never
+    assert published() == [b"stop", b"lock", b"stop", b"lock", b"stop"]
+
+
+def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(
+    rig: Rig, tmp_path: Path
+) -> None:
+    """The station's broker restarts during a move, and the station's bridge gets back on it
+    after the remote does (its back-off later, or it restarts too): the operator's STOP, kept
+    while the broker was away (RPRT -6: "kept and sent first on reconnect"), was sent first on
+    the remote's new connection, to a broker the station's bridge had not subscribed to yet,
+    and so to nobody; the rotor turned on to its last target. The kept stop goes again once
+    the station's bridge is heard on the new connection (interfaces/mqtt/remote.py rule 6)."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 10.0})
+    bridge = rig.start_process()
+    rig.ready("tower")
+    port = free_port()
+    r = Remote(remote_settings(rig.broker.port, port))
+    r.start()
+    try:
+        link, tower = r.link, r.rotators[0]
+        assert link is not None
+        wait_until(lambda: tower.current, 10, "the station heard")
+        assert ask(port, b"P 350 0\n") == b"RPRT 0\n"
+        emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 10)
+        os.kill(bridge.pid, signal.SIGSTOP)  # the station's bridge: back on the broker last
+        try:
+            rig.broker.kill()
+            wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+            assert ask(port, b"S\n") == b"RPRT -6\n"  # kept, sent first on reconnect
+            log_from = rig.broker.log.stat().st_size
+            rig.broker.restart()
+            wait_until(lambda: link.up, 30, "the remote back on the broker")
+            wait_until(
+                lambda: remote_published(rig.broker, log_from) == [b"stop"], 10, "the kept stop"
+            )
+        finally:
+            os.kill(bridge.pid, signal.SIGCONT)
+        wait_until(lambda: tower.current, 30, "the station's bridge heard again")
+        stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+        assert stopped.az_deg < 300, stopped  # stopped, not turned on to 350
+    finally:
+        r.stop()
 
 
 # -- clock skew between the operator and the station -------------------------------------------

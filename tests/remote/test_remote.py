@@ -134,10 +134,11 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     station.ready("tower", 30)
     wait_until(lambda: r.rotators[0].current, 10, "the station's bridge heard again")
     # a marker behind anything the remote might have resent, on its one ordered connection:
-    # the kept stop went first, and nothing of the moves
+    # the kept stop went first, and again once the station's bridge was heard (rule 6), and
+    # nothing of the moves
     assert ask(port, b"S\n") == b"RPRT 0\n"
-    wait_until(lambda: len(remote_published(station.broker, log_from)) >= 2, 10, "the marker stop")
-    assert remote_published(station.broker, log_from) == [b"stop", b"stop"]
+    wait_until(lambda: len(remote_published(station.broker, log_from)) >= 3, 10, "the marker stop")
+    assert remote_published(station.broker, log_from) == [b"stop", b"stop", b"stop"]
     assert len(emu.frames(*BEARING_OUTCOMES)) == moves
 
 

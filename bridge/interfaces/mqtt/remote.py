@@ -34,7 +34,12 @@ Rules:
    one sent while the connection is down or being reset (rule 7): ``send`` keeps it (once,
    however often it is pressed) and raises Refused(OFFLINE, KEPT), the truth for its client:
    not delivered yet (rotctld ``RPRT -6``), kept and sent first on reconnect. Any other
-   command is refused then, and never sent later (rule 3).
+   command is refused then, and never sent later (rule 3). What was kept is sent once more at
+   the first live heartbeat of the new connection (the station's bridge heard there, so
+   subscribed), and kept again if that connection drops first: the broker may come back
+   before the station's bridge does (its back-off, its own restart), and the stop sent first
+   then went to nobody (an attack pass: the rotor turned on to its last target). Nothing else
+   can go in between: every other command needs a heartbeat heard on the connection (rule 8).
 7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
    ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
    dropped, rule 3) and the command refused.
@@ -124,6 +129,8 @@ class RemoteLink(Connection):
         self.fatal = False  # rule 5: ... and trying again will not mend it
         self._last_word = last_word  # rule 6
         self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
+        # rule 6: sent again on this connection, and once more when the station is heard on it
+        self._unheard: list[tuple[str, bytes, Properties]] = []
         self.station_clock = StationClock(clock)  # rule 8
         self._ack_wait_s = ack_wait_s
         self._acks = threading.Condition()  # rule 7: PUBACKs, the connection's generation
@@ -271,9 +278,12 @@ class RemoteLink(Connection):
                 )
             else:
                 dropped += 1
+        unheard, self._unheard = self._unheard, []  # rule 6: sent before the station was heard
         again = {(topic, payload) for topic, payload, _ in unacknowledged}  # (once, however
-        kept = [h for h in self._held if (h[0], h[1]) not in again]  # often it is pressed)
-        self._held = unacknowledged + kept
+        unheard = [h for h in unheard if (h[0], h[1]) not in again]  # often it is pressed)
+        again |= {(topic, payload) for topic, payload, _ in unheard}
+        kept = [h for h in self._held if (h[0], h[1]) not in again]
+        self._held = unheard + unacknowledged + kept
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
@@ -291,15 +301,28 @@ class RemoteLink(Connection):
         )
 
     def _resend_held(self) -> None:
-        """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock)."""
+        """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock);
+        each goes once more when the station is heard on it (``_resend_unheard``)."""
         held, self._held = self._held, []
         for topic, payload, props in held:
             log.warning("%s sent again (not acknowledged on the last connection)", topic)
-            info = self._client.publish(
-                topic, payload, qos=COMMAND_QOS, retain=False, properties=props
-            )
-            with self._acks:
-                self._unawaited.add(info.mid)
+            self._publish_unawaited(topic, payload, props)
+        self._unheard = held
+
+    def _resend_unheard(self) -> None:
+        """Rule 6, paho's thread at a live heartbeat, before the station's clock is reckoned
+        from it (rule 8: no other command can be stamped before these go)."""
+        with self._send_lock:
+            unheard, self._unheard = self._unheard, []
+            for topic, payload, props in unheard:
+                log.warning("%s sent again now that the station's bridge is heard", topic)
+                self._publish_unawaited(topic, payload, props)
+
+    def _publish_unawaited(self, topic: str, payload: bytes, props: Properties) -> None:
+        """A kept halt sent (caller holds _send_lock): nobody waits for its PUBACK."""
+        info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
+        with self._acks:
+            self._unawaited.add(info.mid)
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
@@ -310,7 +333,10 @@ class RemoteLink(Connection):
             try:  # (a forged beat must not kill paho's thread: connection.py rule 5)
                 props = getattr(msg, "properties", None)
                 station = station_of(getattr(props, "UserProperty", None) or [])
-                self.station_clock.heard(parse_beat(bytes(msg.payload)), station)
+                beat = parse_beat(bytes(msg.payload))
+                if self._unheard:  # rule 6: the station's bridge is on this connection now
+                    self._resend_unheard()
+                self.station_clock.heard(beat, station)
             except ValueError:
                 pass  # no time: no beat
             except Exception:
