@@ -43,7 +43,10 @@ Rules:
    about to climb the tower must not be told it is locked (an attack pass: the console said
    lock ON, the station's bridge restarted, the rotator was unlocked). So is a stop
    (STOP_UNHEARD): rotctld answered ``RPRT 0`` and the page OK while the rotor, its bridge
-   down, turned on to its last target.
+   down, turned on to its last target. Both go again once the station's bridge is heard
+   (interfaces/mqtt/remote.py rule 6, ``until_heard``; an attack pass: a STOP while the
+   station's bridge restarted mid-move never reached the bridge that started again, and the
+   rotor turned on); nothing that moves can be sent before that.
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
    coordinates) on ``R/target``: the station knows where it is, the remote does not.
@@ -105,13 +108,14 @@ STATION_SILENT = (
 )
 LOCKED = "the station's safety lock is ON: nothing turns until it is switched off"
 STOP_UNHEARD = (
-    "stop sent, but the station's bridge is not heard (offline, or no heartbeat): it may never "
-    "reach the rotator, which may still be turning to its last target"
+    "stop sent, but the station's bridge is not heard (offline, or no heartbeat): it may not "
+    "have reached the rotator, which may still be turning to its last target; sent again once "
+    "the station's bridge is heard"
 )
 LOCK_UNHEARD = (
     "lock ON sent, but the station's bridge is not heard (offline, or no heartbeat): it may "
-    "never reach the rotator, and a bridge that starts again does not know of it; make sure "
-    "the station shows the lock ON before anyone works on the tower"
+    "never reach the rotator (sent again once the station's bridge is heard, while this remote "
+    "runs); make sure the station shows the lock ON before anyone works on the tower"
 )
 HALTED_SINCE = "a STOP or lock ON went out after it was asked: not sent (send it again)"
 
@@ -127,6 +131,8 @@ class Sender(Protocol):
         operator: str,
         expiry_s: int,
         check: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
     ) -> None: ...
 
 
@@ -301,16 +307,18 @@ class RemoteRotator:
         t = self.topics
         match command:
             case Stop():
+                unheard = self._bridge_unheard()  # rule 3: sent, maybe to nobody, and again
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
-                self.publish(t.stop, "stop")  # or be kept)
-                if self._bridge_unheard():  # rule 3: sent, maybe to nobody
+                self.publish(t.stop, "stop", until_heard=unheard)  # or be kept)
+                if unheard:  # once the station's bridge is heard
                     raise Refused(RefusalCode.OFFLINE, STOP_UNHEARD)
                 return
             case Lock():
+                unheard = command.on and self._bridge_unheard()  # rule 3, as a stop
                 if command.on:
                     self.halted(command.source)
-                self.publish(t.lock, "ON" if command.on else "OFF")
-                if command.on and self._bridge_unheard():  # rule 3: sent, maybe to nobody
+                self.publish(t.lock, "ON" if command.on else "OFF", until_heard=unheard)
+                if unheard:
                     raise Refused(RefusalCode.OFFLINE, LOCK_UNHEARD)
                 return
             case TrackBody() if command.off:
@@ -423,11 +431,22 @@ class RemoteRotator:
         with self._halts_lock:
             return self.halts - self._halts_from.get(source, 0)
 
-    def publish(self, topic: str, payload: str, guard: Callable[[], None] | None = None) -> None:
+    def publish(
+        self,
+        topic: str,
+        payload: str,
+        guard: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
+    ) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE);
         ``guard``, if given, is asked under the link's send lock, right before it is handed on
-        (it raises Refused for a move that may not go any more)."""
-        self._link.send(topic, payload, self._operator, self._expiry_s, guard)
+        (it raises Refused for a move that may not go any more); ``until_heard``: a halt sent
+        again once the station's bridge is heard (rule 3)."""
+        if until_heard:
+            self._link.send(topic, payload, self._operator, self._expiry_s, guard, until_heard=True)
+        else:
+            self._link.send(topic, payload, self._operator, self._expiry_s, guard)
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None

@@ -248,6 +248,69 @@ def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(
         r.stop()
 
 
+def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(
+    rig: Rig, tmp_path: Path
+) -> None:
+    """The station's bridge restarts during a move (a crash, an upgrade) while the controller
+    turns on: the operator's STOP went to the broker while no bridge listened (answered
+    RPRT -5, "may never reach the rotator"), and the bridge that started again never heard of
+    it: the rotor turned on to its last target. The stop goes again once the station's bridge
+    is heard (remote/rotator.py rule 3); the answer still says it had not been delivered."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 10.0})
+    bridge = rig.start_process()
+    rig.ready("tower")
+    port = free_port()
+    r = Remote(remote_settings(rig.broker.port, port))
+    r.start()
+    try:
+        tower = r.rotators[0]
+        wait_until(lambda: tower.current, 10, "the station heard")
+        assert ask(port, b"P 350 0\n") == b"RPRT 0\n"
+        emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 10)
+        bridge.kill()  # the station's bridge gone; the controller turns on
+        wait_until(lambda: not tower.current, 30, "the station's bridge gone")
+        assert ask(port, b"S\n") == b"RPRT -5\n"  # sent, not delivered
+        rig.start_process()
+        wait_until(lambda: tower.current, 30, "the station's bridge heard again")
+        stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+        assert stopped.az_deg < 300, stopped  # stopped, not turned on to 350
+    finally:
+        r.stop()
+
+
+def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(
+    rig: Rig, tmp_path: Path
+) -> None:
+    """The operator locks the rotator while the station's bridge restarts (answered offline:
+    sent again once the bridge is heard), then unlocks it: the OFF is the later word, and the
+    ON kept for the bridge's return must not go after it and lock the rotator again."""
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    bridge = rig.start_process()
+    rig.ready("tower")
+    port = free_port()
+    r = Remote(remote_settings(rig.broker.port, port))
+    r.start()
+    try:
+        tower = r.rotators[0]
+        wait_until(lambda: tower.current, 10, "the station heard")
+        bridge.kill()
+        wait_until(lambda: not tower.current, 30, "the station's bridge gone")
+        log_from = rig.broker.log.stat().st_size
+        with pytest.raises(Refused):
+            tower.submit(Lock(True, source=Source.WEB))  # sent, not delivered
+        tower.submit(Lock(False, source=Source.WEB))  # the later word
+        rig.start_process()
+        wait_until(lambda: tower.current, 30, "the station's bridge heard again")
+        assert ask(port, b"S\n") == b"RPRT 0\n"  # a marker behind anything sent again
+        wait_until(
+            lambda: remote_published(rig.broker, log_from)[-1:] == [b"stop"], 10, "the marker"
+        )
+        assert remote_published(rig.broker, log_from) == [b"lock", b"lock", b"stop"]
+        rig.probe.wait_value("rotor/lock/state", "OFF")
+    finally:
+        r.stop()
+
+
 # -- clock skew between the operator and the station -------------------------------------------
 def moving_status(station_time: str) -> bytes:
     return (

@@ -17,14 +17,14 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.interfaces.mqtt.heartbeat import parse_beat
+from bridge.interfaces.mqtt.heartbeat import beat_payload, parse_beat
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from bridge.settings import MqttSettings
 from tests.support import Probe, wait_until
-from tests.support.mosquitto import free_port
-from tests.support.remote import ask
+from tests.support.mosquitto import Mosquitto, free_port
+from tests.support.remote import ask, remote_published
 from tests.support.rig import Rig
 
 
@@ -164,3 +164,42 @@ def test_halts_unacknowledged_when_the_link_dropped_go_before_those_kept_after()
         ("rotor/tower/stop", b"stop"),
         ("rotor/tower/lock", b"ON"),
     ]
+
+
+def test_a_move_asked_after_a_halt_kept_for_the_stations_return_goes_after_it(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """interfaces/mqtt/remote.py rule 6: a STOP sent while the station's bridge was not heard
+    is sent again at its first heartbeat. The bridge, back on its broker after a flap, can
+    take a move before that heartbeat (the remote still reckons its clock from the beats
+    before the flap): the STOP, sent again at the heartbeat, went after the move it was asked
+    before, and stopped it. The halts kept go before the later command instead."""
+    beats: list[bytes] = []
+    link = RemoteLink(
+        MqttSettings(host="127.0.0.1", port=broker.port),
+        "remote-kept-test",
+        ["rotor/bridge/heartbeat"],
+        lambda topic, payload, retain: beats.append(payload),
+        last_word=lambda topic, payload: topic == "rotor/stop",
+        heartbeat="rotor/bridge/heartbeat",
+    )
+    link.start()
+    try:
+        wait_until(lambda: link.up, 10, "the link up")
+
+        def beat() -> None:
+            heard = len(beats)
+            probe.publish("rotor/bridge/heartbeat", beat_payload(time.time()), qos=0)
+            wait_until(lambda: len(beats) > heard, 10, "the beat heard")
+
+        beat()
+        log_from = broker.log.stat().st_size
+        link.send("rotor/stop", "stop", "DL1ABC", 5, until_heard=True)  # to nobody, maybe
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)  # asked after it
+        beat()  # the station's bridge heard again
+        link.send("rotor/stop", "stop", "DL1ABC", 5)  # a marker behind anything sent again
+        wait_until(lambda: len(remote_published(broker, log_from)) >= 4, 10, "the marker")
+        # the stop, again before the target; nothing of it after the target but the marker
+        assert remote_published(broker, log_from) == [b"stop", b"stop", b"target", b"stop"]
+    finally:
+        link.stop()

@@ -43,6 +43,8 @@ class Link:
         operator: str,
         expiry_s: int,
         check: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
     ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")

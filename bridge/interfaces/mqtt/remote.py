@@ -40,6 +40,13 @@ Rules:
    before the station's bridge does (its back-off, its own restart), and the stop sent first
    then went to nobody (an attack pass: the rotor turned on to its last target). Nothing else
    can go in between: every other command needs a heartbeat heard on the connection (rule 8).
+   So is a halt sent while the station's bridge is not heard (``until_heard``: its bridge
+   restarting, its own link down; remote/rotator.py rule 3), at the first live heartbeat
+   after it: a bridge that starts again, or connects again, with a clean session never got it.
+   Nothing asked after a halt kept so goes before it: a later command (a move the station's
+   bridge, back on its broker, takes before its first heartbeat came) sends the halts kept
+   first, and on the halt's own topic (a lock OFF after a lock ON) is the last word: that
+   halt is not sent again after it.
 7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
    ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
    dropped, rule 3) and the command refused.
@@ -159,10 +166,14 @@ class RemoteLink(Connection):
         operator: str,
         expiry_s: int,
         check: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
     ) -> None:
         """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
         (a stop excepted: rule 6). ``check``, if given, is asked under the send lock right
-        before the command is handed to paho, and may raise Refused (rule 9)."""
+        before the command is handed to paho, and may raise Refused (rule 9). ``until_heard``
+        (a halt sent while the station's bridge is not heard): sent again at the first live
+        heartbeat from then on (rule 6)."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
@@ -180,6 +191,8 @@ class RemoteLink(Connection):
             props.UserProperty = [("operator", operator), *stamp]
             if check is not None:
                 check()  # rule 9
+            if not halt and self._unheard:  # rule 6: the halts kept go before a later word
+                self._send_unheard_before(topic)
             info = self._client.publish(
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )
@@ -189,6 +202,9 @@ class RemoteLink(Connection):
                     self._keep(topic, payload.encode(), props)
                     raise Refused(RefusalCode.OFFLINE, KEPT)
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            if halt and until_heard:  # rule 6: maybe nobody subscribed to it yet
+                if not any(t == topic and p == payload.encode() for t, p, _ in self._unheard):
+                    self._unheard.append((topic, payload.encode(), props))
             generation = self._generation
         self._await_ack(topic, info.mid, generation, halt)
 
@@ -317,6 +333,16 @@ class RemoteLink(Connection):
             for topic, payload, props in unheard:
                 log.warning("%s sent again now that the station's bridge is heard", topic)
                 self._publish_unawaited(topic, payload, props)
+
+    def _send_unheard_before(self, topic: str) -> None:
+        """Rule 6: a command asked after the halts kept for the station's return goes after
+        them (caller holds _send_lock): they go now, those on its own topic excepted, which
+        it overrides (a lock OFF after a lock ON)."""
+        unheard, self._unheard = self._unheard, []
+        for kept_topic, payload, props in unheard:
+            if kept_topic != topic:
+                log.warning("%s sent again before a later command", kept_topic)
+                self._publish_unawaited(kept_topic, payload, props)
 
     def _publish_unawaited(self, topic: str, payload: bytes, props: Properties) -> None:
         """A kept halt sent (caller holds _send_lock): nobody waits for its PUBACK."""
