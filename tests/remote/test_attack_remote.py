@@ -207,9 +207,7 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     assert published() == [b"stop", b"lock", b"stop", b"lock", b"stop"]
 
 
-def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(
-    rig: Rig, tmp_path: Path
-) -> None:
+def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(rig: Rig) -> None:
     """The station's broker restarts during a move, and the station's bridge gets back on it
     after the remote does (its back-off later, or it restarts too): the operator's STOP, kept
     while the broker was away (RPRT -6: "kept and sent first on reconnect"), was sent first on
@@ -248,9 +246,7 @@ def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(
         r.stop()
 
 
-def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(
-    rig: Rig, tmp_path: Path
-) -> None:
+def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(rig: Rig) -> None:
     """The station's bridge restarts during a move (a crash, an upgrade) while the controller
     turns on: the operator's STOP went to the broker while no bridge listened (answered
     RPRT -5, "may never reach the rotator"), and the bridge that started again never heard of
@@ -278,9 +274,7 @@ def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(
         r.stop()
 
 
-def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(
-    rig: Rig, tmp_path: Path
-) -> None:
+def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(rig: Rig) -> None:
     """The operator locks the rotator while the station's bridge restarts (answered offline:
     sent again once the bridge is heard), then unlocks it: the OFF is the later word, and the
     ON kept for the bridge's return must not go after it and lock the rotator again."""
