@@ -77,6 +77,12 @@ def valid_operator(text: object) -> str | None:
     return name
 
 
+def same_operator(a: str, b: str) -> bool:
+    """Two operators' names (``valid_operator``'s) are one whatever their case: a call sign is
+    (an attack pass: DL1ABC held the lease and was refused as dl1abc, named as the holder)."""
+    return a.casefold() == b.casefold()
+
+
 @dataclass(frozen=True)
 class Origin:
     """Who sent a command and how (the audit log, ``last_operator``, the control lease).

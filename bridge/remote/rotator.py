@@ -90,6 +90,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
     describe_command,
+    same_operator,
 )
 from bridge.features import control, tracking
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
@@ -392,7 +393,11 @@ class RemoteRotator:
             raise Refused(RefusalCode.LOCKED, LOCKED)
         held = parse_control(self._view.get(self.topics.feature(control.STATE)))
         now = self._wall()
-        if held is not None and held.operator != self._operator and now < held.until_unix:
+        if (
+            held is not None
+            and not same_operator(held.operator, self._operator)
+            and now < held.until_unix
+        ):
             text = held.held_text(now)
             raise Refused(RefusalCode.LEASED, f"{text}: only they may turn it (control lease)")
 

@@ -9,7 +9,8 @@ Rules:
    (``mqtt``, ``rotctld 127.0.0.1``) is no operator's: it stands for everyone who sends
    without a name there, Home Assistant among them, and the lease would be theirs.
 2. A claim while another operator holds the lease is refused naming the holder and the time it
-   ends; the holder's own claim renews it (from now, for the minutes asked).
+   ends; the holder's own claim renews it (from now, for the minutes asked). A name is the
+   same operator's whatever its case (``same_operator``: DL1ABC and dl1abc are one call).
 3. The lease ends by itself at ``until``: from then on ``holder`` is None, with no call needed
    (``expired`` tells the caller once, so it can say so). It has ended too when more than
    MAX_MINUTES are left: the wall clock was set back, and must not stretch it (rule 1).
@@ -29,7 +30,7 @@ from __future__ import annotations
 
 import math
 
-from bridge.core.model import OPERATOR_CHARS, Control, Source, valid_operator
+from bridge.core.model import OPERATOR_CHARS, Control, Source, same_operator, valid_operator
 
 __all__ = ["Lease", "LeaseError", "held_text", "restorable", "valid_operator"]
 
@@ -104,7 +105,7 @@ class Lease:
         if not math.isfinite(minutes) or not MIN_MINUTES <= minutes <= MAX_MINUTES:
             raise LeaseError(f"minutes must be from {MIN_MINUTES:g} to {MAX_MINUTES:g}")
         held = self.holder(now_unix)
-        if held is not None and held.operator != name:
+        if held is not None and not same_operator(held.operator, name):
             raise LeaseError(f"not claimed: {held_text(held, now_unix)}")
         self._held = Control(name, now_unix + 60.0 * float(minutes))
         return self._held
@@ -117,6 +118,6 @@ class Lease:
     def refusal(self, who: str, now_unix: float) -> str | None:
         """Rule 5: why a motion command from ``who`` is refused, or None."""
         held = self.holder(now_unix)
-        if held is None or held.operator == who:
+        if held is None or same_operator(held.operator, who):
             return None
         return f"{held_text(held, now_unix)}: only they may turn it (control lease)"

@@ -130,3 +130,14 @@ def test_an_interfaces_name_cannot_claim_the_lease(name: str) -> None:
         lease.claim(name, 30, 1_000.0)
     assert lease.holder(1_000.0) is None
     lease.claim("DL1ABC", 30, 1_000.0)  # a call sign is a name
+
+
+def test_an_operators_call_is_one_whatever_its_case() -> None:
+    """Rules 2 and 5: a call sign typed in capitals on the console and in small letters in a
+    Node-RED flow is one operator (an attack pass: DL1ABC held the lease and dl1abc was
+    refused, named as the holder), who renews it; another call is still refused."""
+    lease = Lease()
+    lease.claim("DL1ABC", 30, T0)
+    assert lease.refusal("dl1abc", T0 + 60) is None
+    assert lease.claim("dl1abc", 60, T0 + 60).until_unix == T0 + 60 + 3600
+    assert lease.refusal("dl1abd", T0 + 120) is not None

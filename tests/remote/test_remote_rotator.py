@@ -248,8 +248,8 @@ def test_another_operators_lease_refuses_a_move_at_once_in_the_stations_words() 
     assert str(caught.value).startswith("G4XYZ holds the rotator until 08:30 UTC")
     rot.submit(Stop(Source.ROTCTLD), "rotctld S")  # a stop is never refused
     assert link.sent == [("rotor/tower/stop", "stop")]
-    rot._view.put(control, b'{"holder":"DL1ABC","until":"2027-01-15T08:30:00.000+00:00"}')
-    rot.submit(Target(120.0, None, Source.ROTCTLD), "rotctld P 120")  # our own lease
+    rot._view.put(control, b'{"holder":"dl1abc","until":"2027-01-15T08:30:00.000+00:00"}')
+    rot.submit(Target(120.0, None, Source.ROTCTLD), "rotctld P 120")  # our own, any case
     rot._view.put(control, b'{"holder":"G4XYZ","until":"2020-01-01T00:00:00.000+00:00"}')
     rot.submit(Target(130.0, None, Source.ROTCTLD), "rotctld P 130")  # ended: the station judges
     rot._view.put(control, b'{"holder":null,"until":null}')
