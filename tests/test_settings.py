@@ -1182,3 +1182,30 @@ def test_a_variable_of_the_bridge_that_names_no_key_is_refused_naming_it(
     path = str(write(tmp_path, MINIMAL))
     good = {"ROTOR_BRIDGE_MQTT__HOST": "broker.lan", "rotor_bridge_log_level": "DEBUG"}
     assert cli("check-config", env={"ROTOR_BRIDGE_CONFIG": path, **good}).returncode == 0
+
+
+@pytest.mark.parametrize(
+    ("topic", "under"),
+    [
+        ("rotor/bearing", "rotor, rotator 'tower''s"),
+        ("rotor", "rotor, rotator 'tower''s"),
+        ("shack/tower/status", "shack/tower, rotator 'tower''s"),
+    ],
+)
+def test_a_wind_topic_of_the_bridges_own_is_refused_naming_the_key(topic: str, under: str) -> None:
+    """settings/wind.py rule 3: no weather station publishes there (an attack pass: taken
+    without a word, the wind was silent for good)."""
+    wind = {"wind_topic": topic, "wind_park_above": 60, "park_az_deg": 0}
+    rotator = {**wind, "topic": "shack/tower"} if topic.startswith("shack") else wind
+    assert (
+        f"rotators[0].wind_topic: {topic} is one of the bridge's own topics (under {under}): "
+        "give the weather station's topic"
+    ) in refusal(document(rotator))
+    two = {**document(wind), "rotators": [{**document(wind)["rotators"][0]}]}
+    two["rotators"].append({"id": "dish", "model": "rotorez", "port": "/dev/ttyUSB1"})
+    two["rotators"][0]["wind_topic"] = "rotor/bridge/state"
+    assert "(under rotor/bridge, the bridge's)" in refusal(two)
+    two["rotators"][0]["wind_topic"] = "rotor/dish/status"
+    assert "(under rotor/dish, rotator 'dish''s)" in refusal(two)
+    two["rotators"][0]["wind_topic"] = "rotor/weather/wind"  # under the base topic, no one's
+    settings_from(two, {})

@@ -318,6 +318,27 @@ class Settings(BaseSettings):
         return self
 
     @model_validator(mode="after")
+    def _wind_topics(self) -> Settings:
+        """settings/wind.py rule 3: a wind topic is none of the bridge's own topics (a
+        rotator's, a group's, the bridge's ``B/bridge/...`` and the station features'), where
+        no weather station publishes: such a topic would stay silent, or carry the bridge's own
+        numbers (an attack pass: ``wind_topic = "rotor/bearing"`` was taken without a word)."""
+        ours = [(f"rotator {r.id!r}", self.rotator_topic(r)) for r in self.rotators]
+        ours += [(f"group {g.id!r}", self.group_topic(g)) for g in self.groups]
+        ours += [("the bridge", f"{self.mqtt.base_topic}/{w}") for w in sorted(station_words())]
+        for i, r in enumerate(self.rotators):
+            topic = r.wind_topic
+            if topic is None:
+                continue
+            for whose, root in ours:
+                if topic == root or topic.startswith(root + "/"):
+                    raise ValueError(
+                        f"rotators[{i}].wind_topic: {topic} is one of the bridge's own topics "
+                        f"(under {root}, {whose}'s): give the weather station's topic"
+                    )
+        return self
+
+    @model_validator(mode="after")
     def _groups(self) -> Settings:
         """settings/groups.py rule 4: members are rotators, a group's topics no other's."""
         roots = {r.id: self.rotator_topic(r) for r in self.rotators}

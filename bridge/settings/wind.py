@@ -11,7 +11,9 @@ Rules:
 2. ``wind_release_below`` is at most ``wind_park_above`` (the same value unless given): a
    gust around one threshold must not park and release the rotor again and again, and the
    hold time (``wind_hold_min``) stands between the two anyway.
-3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station.
+3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station;
+   and none of the bridge's own (a rotator's, a group's, the bridge's: settings/__init__.py
+   ``_wind_topics``), where no weather station publishes.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
