@@ -24,7 +24,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.core.model import Lock, RotatorStatus, Source, Stop
+from bridge.core.model import Lock, RotatorStatus, Source, Stop, TrackBody
 from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
@@ -266,6 +266,35 @@ def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(ri
         bridge.kill()  # the station's bridge gone; the controller turns on
         wait_until(lambda: not tower.current, 30, "the station's bridge gone")
         assert ask(port, b"S\n") == b"RPRT -5\n"  # sent, not delivered
+        rig.start_process()
+        wait_until(lambda: tower.current, 30, "the station's bridge heard again")
+        stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+        assert stopped.az_deg < 300, stopped  # stopped, not turned on to 350
+    finally:
+        r.stop()
+
+
+def test_a_stop_the_station_did_not_hear_still_goes_again_after_tracking_off(rig: Rig) -> None:
+    """The operator stops the rotor while the station's bridge restarts (RPRT -5: sent again
+    once the bridge is heard), then turns tracking off from the console, which goes whenever
+    the link is up: the tracking OFF sent the STOP once more to nobody and the bridge that
+    started again was never sent it: the rotor turned on to its last target. Only a move
+    asked later ends the STOP's wait for the station (interfaces/mqtt/remote.py rule 6)."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 10.0})
+    bridge = rig.start_process()
+    rig.ready("tower")
+    port = free_port()
+    r = Remote(remote_settings(rig.broker.port, port))
+    r.start()
+    try:
+        tower = r.rotators[0]
+        wait_until(lambda: tower.current, 10, "the station heard")
+        assert ask(port, b"P 350 0\n") == b"RPRT 0\n"
+        emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 10)
+        bridge.kill()  # the station's bridge gone; the controller turns on
+        wait_until(lambda: not tower.current, 30, "the station's bridge gone")
+        assert ask(port, b"S\n") == b"RPRT -5\n"  # sent, not delivered
+        tower.submit(TrackBody("off", source=Source.WEB))  # never moves: it goes
         rig.start_process()
         wait_until(lambda: tower.current, 30, "the station's bridge heard again")
         stopped = emu.wait_for(lambda s: not s.is_moving, 10)

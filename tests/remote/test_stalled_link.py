@@ -195,7 +195,8 @@ def test_a_move_asked_after_a_halt_kept_for_the_stations_return_goes_after_it(
         beat()
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5, until_heard=True)  # to nobody, maybe
-        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)  # asked after it
+        # asked after it, a move (its check, rule 9, as remote/rotator.py sends every move)
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5, lambda: None)
         beat()  # the station's bridge heard again
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # a marker behind anything sent again
         wait_until(lambda: len(remote_published(broker, log_from)) >= 4, 10, "the marker")

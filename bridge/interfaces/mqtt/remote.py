@@ -46,7 +46,11 @@ Rules:
    Nothing asked after a halt kept so goes before it: a later command (a move the station's
    bridge, back on its broker, takes before its first heartbeat came) sends the halts kept
    first, and on the halt's own topic (a lock OFF after a lock ON) is the last word: that
-   halt is not sent again after it.
+   halt is not sent again after it. A later move ends their wait (sent again after it, a
+   STOP would stop it); a later command that never moves (tracking off, a lock OFF: they go
+   whenever the link is up, and so to nobody too) does not: they still go again at the
+   heartbeat (a review: a tracking OFF after a STOP to a restarting bridge spent the STOP's
+   second sending, and the rotor turned on to its last target).
 7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
    ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
    dropped, rule 3) and the command refused.
@@ -171,7 +175,8 @@ class RemoteLink(Connection):
     ) -> None:
         """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
         (a stop excepted: rule 6). ``check``, if given, is asked under the send lock right
-        before the command is handed to paho, and may raise Refused (rule 9). ``until_heard``
+        before the command is handed to paho, and may raise Refused (rule 9): a command with
+        one is a move (remote/rotator.py sends every move with one). ``until_heard``
         (a halt sent while the station's bridge is not heard): sent again at the first live
         heartbeat from then on (rule 6)."""
         halt = self._last_word(topic, payload.encode())
@@ -192,7 +197,7 @@ class RemoteLink(Connection):
             if check is not None:
                 check()  # rule 9
             if not halt and self._unheard:  # rule 6: the halts kept go before a later word
-                self._send_unheard_before(topic)
+                self._send_unheard_before(topic, moves=check is not None)
             info = self._client.publish(
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )
@@ -334,15 +339,21 @@ class RemoteLink(Connection):
                 log.warning("%s sent again now that the station's bridge is heard", topic)
                 self._publish_unawaited(topic, payload, props)
 
-    def _send_unheard_before(self, topic: str) -> None:
+    def _send_unheard_before(self, topic: str, *, moves: bool) -> None:
         """Rule 6: a command asked after the halts kept for the station's return goes after
         them (caller holds _send_lock): they go now, those on its own topic excepted, which
-        it overrides (a lock OFF after a lock ON)."""
+        it overrides (a lock OFF after a lock ON). Before a move (``moves``: one sent with a
+        ``check``, rule 9) that is their last time; before what never moves (tracking off,
+        a lock OFF) they stay kept for the station's first heartbeat: that command may go to
+        nobody as they did, and it ends no halt's wait."""
         unheard, self._unheard = self._unheard, []
-        for kept_topic, payload, props in unheard:
+        for kept in unheard:
+            kept_topic, payload, props = kept
             if kept_topic != topic:
                 log.warning("%s sent again before a later command", kept_topic)
                 self._publish_unawaited(kept_topic, payload, props)
+                if not moves:
+                    self._unheard.append(kept)
 
     def _publish_unawaited(self, topic: str, payload: bytes, props: Properties) -> None:
         """A kept halt sent (caller holds _send_lock): nobody waits for its PUBACK."""
