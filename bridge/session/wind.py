@@ -35,7 +35,9 @@ Rules:
    station dead for a week parked the rotor at every start of the bridge). The first new
    reading above the park level parks it, as rule 1 says; one below the release level starts
    the calm; a storm known only from a replay is not kept across a restart (the replay comes
-   again).
+   again). Neither an offline of the controller (rule 7: it took no park from the rotator)
+   nor a reset of this part (session.py rule 14) owes it a park (a review: either sent the
+   park once the controller answered, and a replayed reading turned the rotor).
 7. A park the line took from the rotator in a storm (the controller offline or its port gone:
    a turn under way stopped at the offline, session/controller.py rule 2, or a park waiting
    dropped) is owed again, proposed once the controller answers, unless a stop or lock ON
@@ -71,7 +73,13 @@ class WindPark:
     """Without a wind topic (``rig.wind`` None) it never does anything."""
 
     def __init__(
-        self, rig: WorkerConfig, *, storm: bool = False, halted: bool = False, arrived: bool = False
+        self,
+        rig: WorkerConfig,
+        *,
+        storm: bool = False,
+        halted: bool = False,
+        arrived: bool = False,
+        replayed: bool = False,
     ) -> None:
         self._rig, self._cfg = rig, rig.wind or WindConfig(0.0, 0.0, 0.0, (0.0, None), 0.0)
         self.on = rig.wind is not None
@@ -84,10 +92,10 @@ class WindPark:
         self._silent = False
         # rules 3 and 7: a park stopped stays stopped, and one seen reached is done, across a
         # restart (kept.py rule 4) and a reset
-        self._park_owed = storm and not halted and not arrived
+        self._park_owed = storm and not halted and not arrived and not replayed  # (rule 6)
         self._halted = storm and halted
         self._arrived = storm and arrived  # rule 7: the rotor was seen at this storm's park
-        self._replayed = False  # rule 6: the storm is known only from a replayed reading
+        self._replayed = storm and replayed  # rule 6: the storm known only from a replay
         self._wall_offset_s = 0.0
 
     @property
@@ -164,9 +172,15 @@ class WindPark:
         """Rule 7: the rotor was seen at this storm's park: it is not sent again."""
         return self._arrived
 
+    @property
+    def park_replayed(self) -> bool:
+        """Rule 6: the storm is known only from a replayed reading: no park is owed."""
+        return self._replayed
+
     def lost(self) -> None:
-        """Rule 7: the line took the rotator (offline, unplugged) in this storm."""
-        if self.storm and not self._halted and not self._arrived:
+        """Rule 7: the line took the rotator (offline, unplugged) in this storm (rule 6: one
+        known only from a replay sent no park, and owes none)."""
+        if self.storm and not self._replayed and not self._halted and not self._arrived:
             self._park_owed = True
 
     def arrived(self) -> None:

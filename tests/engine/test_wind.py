@@ -366,3 +366,19 @@ def test_a_stale_storm_replayed_never_parks_and_a_stop_meanwhile_holds_when_the_
     part.halted()  # the operator's STOP
     part.reading(80.0, 30.0)
     assert part.step(scene(30.0)).target is None and part.storm and part.park_halted
+
+
+def test_a_wind_part_reset_in_a_storm_known_only_from_a_replay_parks_nothing(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 6 through a reset (session.py rule 14): the part rebuilt after a bug took the
+    replayed storm for one whose park was owed, and the rotor went to it."""
+    with windy() as v:
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        v.run_for(2.0)
+        raised = a_bug_once(monkeypatch)
+        v.run_for(60.0)
+        assert raised and v.errors("internal")
+        assert abs(v.truth().az_deg - 200.0) <= 0.5, v.truth()  # not turned to the park, 90
+        assert v.status.wind is not None and v.status.wind.storm and v.status.wind.replayed

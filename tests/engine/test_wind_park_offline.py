@@ -185,3 +185,24 @@ def test_a_dcu1_park_never_seen_is_sent_again_after_the_port_comes_back() -> Non
         assert abs(v.truth().az_deg - 180.0) < 1.0, v.truth()
     finally:
         v.close()
+
+
+def test_a_storm_known_only_from_a_replay_parks_nothing_after_an_offline() -> None:
+    """wind.py rule 6 beside rule 7: a storm the broker replayed refuses motion and parks
+    nothing; a short silence of the controller then owed "its park" (one never sent) and sent
+    it once the controller answered: a replayed reading turned the rotor."""
+    v = parking()
+    try:
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        v.run_for(2.0)
+        assert v.status.wind is not None and v.status.wind.storm and v.status.wind.replayed
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 20, "back")
+        v.run_for(60.0)
+        assert abs(v.truth().az_deg - 10.0) < 1.0, v.truth()  # not turned to the park, 180
+        assert v.status.wind is not None and v.status.wind.replayed
+    finally:
+        v.close()

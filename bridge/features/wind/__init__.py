@@ -82,9 +82,16 @@ def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
 
 def _reset(s: RotatorSession, now: float) -> None:
     # a storm goes on (refusing is the safe side); a park stopped stays stopped (wind.py rule 3),
-    # and one seen reached is not sent again (rule 7)
+    # and one seen reached is not sent again (rule 7); one known only from a replay parks
+    # nothing (rule 6)
     w = s.wind
-    s.wind = WindPark(s.cfg, storm=w.storm, halted=w.park_halted, arrived=w.park_arrived)
+    s.wind = WindPark(
+        s.cfg,
+        storm=w.storm,
+        halted=w.park_halted,
+        arrived=w.park_arrived,
+        replayed=w.park_replayed,
+    )
 
 
 # its session part (parts.py rule 4)
