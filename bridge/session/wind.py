@@ -21,7 +21,8 @@ Rules:
    ``halted``, kept by runtime/kept.py rule 4) and a reset of this part (session.py rule 14):
    neither undoes the operator's STOP.
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
-   the status; the state it had is kept. The next reading clears it.
+   the status; the state it had is kept (the report says which: a storm known only from a
+   replay, rule 6, parked nothing). The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same (a safeguard: the settings refuse such a park when they are
    read, settings/wind.py rule 1).
@@ -217,6 +218,11 @@ class WindPark:
         if not self._silent and now - quiet_from >= cfg.silent_s:  # rule 4
             self._silent = True
             kept = "parked for the storm" if self.storm else "no storm"
+            if self._replayed:  # rule 6: nothing was parked
+                kept = (
+                    "a storm known only from the reading the broker kept: motion refused, "
+                    "nothing parked"
+                )
             error = Report(
                 ErrorKind.WIND,
                 f"no wind reading on {cfg.topic} for {cfg.silent_s / 60:g} min: keeping the "

@@ -382,3 +382,18 @@ def test_a_wind_part_reset_in_a_storm_known_only_from_a_replay_parks_nothing(
         assert raised and v.errors("internal")
         assert abs(v.truth().az_deg - 200.0) <= 0.5, v.truth()  # not turned to the park, 90
         assert v.status.wind is not None and v.status.wind.storm and v.status.wind.replayed
+
+
+def test_the_silence_of_a_storm_known_only_from_a_replay_says_nothing_was_parked() -> None:
+    """Rules 4 and 6: a wind station dead with a storm reading left retained: its silence was
+    reported as "keeping the state it had (parked for the storm)" while the rotor stood where
+    it was, never parked."""
+    part = park()
+    part.reading(80.0, 0.0, replayed=True)
+    assert part.step(scene(0.0)).target is None
+    silent = part.step(scene(900.0))
+    assert silent.target is None and silent.error is not None
+    assert silent.error.message == (
+        "no wind reading on weather/wind for 15 min: keeping the state it had (a storm known "
+        "only from the reading the broker kept: motion refused, nothing parked)"
+    )
