@@ -19,7 +19,9 @@ Rules:
    storm stops the park under way, and the park is not tried again until the next storm;
    motion stays refused meanwhile. That holds across a restart in the storm (the status's
    ``halted``, kept by runtime/kept.py rule 4) and a reset of this part (session.py rule 14):
-   neither undoes the operator's STOP.
+   neither undoes the operator's STOP. A stop or lock ON in a storm known only from a replay
+   (rule 6) stops no park and holds none back: that storm is not kept across a restart, and
+   the STOP would hold the park back before one and not after it (a review).
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept (the report says which: a storm known only from a
    replay, rule 6, parked nothing). The next reading clears it.
@@ -164,7 +166,10 @@ class WindPark:
         return self._halted
 
     def halted(self) -> None:
-        """Rule 3: a stop or lock ON; the park is not tried again in this storm."""
+        """Rule 3: a stop or lock ON; the park is not tried again in this storm (rule 6: one
+        known only from a replay has no park to stop, and the STOP holds none back)."""
+        if self._replayed:
+            return
         self._park_owed = False
         self._halted = self.storm
 
