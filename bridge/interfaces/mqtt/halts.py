@@ -70,10 +70,10 @@ LOCK_OFF_FENCED = (
 # lock ON that no fence ordered: it may have been published before that ON
 LOCK_OFF_UNORDERED = (
     "lock OFF on the stop connection not carried out: another interface (the console, a "
-    "logger) set the lock ON while the main connection was down or could not order it, and "
-    "this OFF may have been published before that ON; the lock stays ON (make sure nobody is "
-    "working on the tower, then send lock OFF again once the bridge is connected, or use the "
-    "console)"
+    "logger) stopped or locked the rotator while the main connection was down or could not "
+    "order it, and this OFF may have been published before that; the lock stays as it was "
+    "(make sure nobody is working on the tower, then send lock OFF again once the bridge is "
+    "connected, or use the console)"
 )
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
