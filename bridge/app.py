@@ -28,6 +28,14 @@ Rules:
    connections to four ports and the console took every descriptor, an unplugged controller
    could not be opened again ("Too many open files") for as long as they were held, and its stop
    with it.
+6. The bridge's end (SIGTERM, SIGINT, SIGHUP, ``stop_event``) leaves no rotor turning: at once
+   every rotator takes nothing but a stop or a lock word (a move asked meanwhile is refused,
+   "the bridge is stopping"), every one that may turn (``Rotator.may_turn``: moving, tracking,
+   following, a move on its way) is stopped, and its stop written (up to HALT_WAIT_S, as
+   claim rule 4's, the controller's line rules kept), again once the front ends are closed,
+   before the ports close. A storm's park goes on (a stop would keep it from being tried
+   again after the restart). An attack pass: ``systemctl stop`` mid-turn closed the port in
+   0.2 s with no stop, and the rotor turned on, watched by nobody, to its target.
 """
 
 from __future__ import annotations
@@ -100,6 +108,7 @@ STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.
 )
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 YIELDING = "the bridge is stopping: it yields its base topic to another bridge"
+STOPPING = "the bridge is stopping"  # rule 6
 FILES_SPARE = 64  # rule 5: descriptors kept beyond what the ports may hold (and 2 a rotator)
 HALT_WAIT_S = 2.0  # claim rule 4: how long a yielding bridge waits for its stops to be written
 
@@ -728,14 +737,22 @@ class App:
         self.failure = message
         self.failed.set()
 
-    def _halt_all(self) -> None:
+    def _halt_all(
+        self, *, turning_only: bool = False, done: frozenset[str] = frozenset()
+    ) -> frozenset[str]:
         """Claim rule 4: before the bridge yields its base topic while running, every rotator
         is stopped, and the stops written (up to HALT_WAIT_S): nothing of this process is left
-        to stop one after it goes."""
+        to stop one after it goes. ``turning_only`` (rule 6, any other end): those that may
+        turn (``Rotator.may_turn``), but those in ``done`` (stopped so already: a SatEL's
+        slew shows no reading to say it took, and a second frame would add nothing). The ids
+        of the rotators stopped."""
         marks = []
+        why = "is stopping" if turning_only else "yields its base topic"
         for rot in self.rotators:
+            if turning_only and (rot.id in done or not rot.may_turn()):
+                continue
             try:
-                rot.submit(Stop(Source.MQTT), "stop: the bridge yields its base topic")
+                rot.submit(Stop(Source.MQTT), f"stop: the bridge {why}")
             except Exception:  # (a stop is never refused; a bug must not keep the others)
                 log.exception("%s: the stop before yielding failed", rot.id)
                 continue
@@ -746,6 +763,7 @@ class App:
                 if time.monotonic() >= deadline:
                     break
                 time.sleep(0.01)  # (shutting down: nothing else waits on this thread)
+        return done | {rot.id for rot, _ in marks}
 
     def check_catalog(self) -> None:
         """The TLE file re-read if it changed; Home Assistant's track select follows it."""
@@ -839,10 +857,12 @@ class App:
     def stop(self) -> None:
         self._stopped.set()
         self.client.shutting_down()
-        if self.client.yielded:  # claim rule 4: at once, before any front end takes its time
-            for rot in self.rotators:  # to close (a web console's up to 10 s: a turn went on
-                rot.leave(YIELDING)  # meanwhile), and no front end still open turns one again
-            self._halt_all()
+        yielded = self.client.yielded
+        # claim rule 4, rule 6: at once, before any front end takes its time to close (a web
+        # console's up to 10 s: a turn went on meanwhile), and no front end still open turns one
+        for rot in self.rotators:  # again
+            rot.leave(YIELDING if yielded else STOPPING)
+        halted = self._halt_all(turning_only=not yielded)
         if self.discovery is not None:
             self.discovery.stop()
         for server in self._text_ports():
@@ -852,8 +872,9 @@ class App:
             service.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (interfaces/web/server.py rule 6)
-        if self.client.yielded:  # claim rule 4: again once no front end can send a move after
-            self._halt_all()  # it (a review), while the lines still run and the lane takes stops
+        # claim rule 4, rule 6: again once no front end can send a move after it (a review),
+        # while the lines still run and the lane takes stops
+        self._halt_all(turning_only=not yielded, done=halted)
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)

@@ -69,6 +69,7 @@ from bridge.core.model import (
     FollowQso,
     GoToPreset,
     Lock,
+    MotionState,
     Nudge,
     Origin,
     Park,
@@ -413,6 +414,20 @@ class Rotator:
         end not closed yet must not turn one again: a review, a rotctld client's P after that
         stop turned the rotor until the front ends had closed)."""
         self._leaving = why
+
+    def may_turn(self) -> bool:
+        """Whether the rotor may be turning, or about to, as far as the bridge knows: its
+        status says moving, it tracks or follows, or a motion command was put that the status
+        does not show yet (app.py rule 6: what the bridge stops before it ends). A storm's park
+        is left to go on (session/wind.py: a stop would keep it from being tried again)."""
+        status = self.status
+        if status.wind is not None and status.wind.storm:
+            return False
+        if status.state is MotionState.MOVING:
+            return True
+        if status.tracking is not None or status.following is not None:
+            return True
+        return self._mailbox.motion_unseen(self._worker.newest_applied)
 
     def ticket(self) -> int:
         """A place in the order of commands (mailbox.py rule 10a): what a front end that

@@ -14,6 +14,7 @@ from bridge import emulators
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.process import bridge_env
+from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 
@@ -135,3 +136,30 @@ def test_killed_bridge_is_marked_offline_by_its_last_will(tmp_path: Path) -> Non
             proc.kill()
         broker.stop()
         emu.close()
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rot2prog"])
+def test_sigterm_mid_turn_writes_a_stop_before_the_process_ends(
+    tmp_path: Path, broker: Mosquitto, probe: Probe, model: str
+) -> None:
+    """app.py rule 6, an attack pass: ``systemctl stop`` while the rotor turned closed the port
+    in 0.2 s with no stop on the wire, and the rotor turned on, watched by nobody, to its
+    target (55 degrees at the signal, 182 three seconds after the exit, on to 300). A Rot2Prog's
+    half-duplex line owes its reply first (link.py rule 3): the stop still goes before the end."""
+    with Rig(tmp_path, broker, probe) as rig:
+        emu = rig.add("tower", model, emu={"start_az_deg": 10})
+        bridge = rig.start_process()
+        rig.ready("tower", timeout_s=slow(30))
+        start = emu.state().az_deg
+        probe.publish("rotor/target", "300")
+        emu.wait_until(
+            lambda d, now: d.state(now).az_deg, lambda az: abs(az - start) > 10, slow(10)
+        )
+        seen, at_signal = len(emu.log()), emu.state().az_deg
+        assert bridge.proc is not None
+        bridge.proc.send_signal(signal.SIGTERM)
+        assert bridge.proc.wait(slow(10)) == 0
+        stops = [f for f in emu.log()[seen:] if f.outcome == "stop"]
+        assert stops, f"no stop on the wire after SIGTERM: {emu.log()[seen:]}"
+        rest = emu.wait_until(lambda d, now: d.state(now), lambda s: not s.is_moving, slow(10))
+        assert abs(rest.az_deg - at_signal) < 30, (at_signal, rest)  # not on to its target
