@@ -787,6 +787,35 @@ def test_a_broker_host_that_can_never_connect_is_refused_naming_the_key(
 
 
 @pytest.mark.parametrize(
+    "host",
+    [
+        "mqtt://rotor:Sekr1tPW@broker.lan:1883",
+        "rotor:Sekr1tPW@broker.lan",
+        "mqtts://rotor:Sekr1tPW@broker.lan",
+        "rotor:Sekr1tPW @broker.lan",
+    ],
+)
+def test_a_broker_url_with_its_login_is_refused_without_the_password(
+    tmp_path: Path, host: str
+) -> None:
+    """An attack pass: a broker written as a URL with its login, in the file or the
+    environment, was refused with the whole value quoted ("not a URL: 'mqtt://rotor:...'"), the
+    password on the terminal and in the journal."""
+    path = write(tmp_path, MINIMAL.replace('"127.0.0.1"', f'"{host}"'))
+    out = cli("check-config", "-c", str(path))
+    assert out.returncode == 2 and "Sekr1tPW" not in out.stdout + out.stderr
+    assert "mqtt.host: a host name or address, not a URL with a login" in out.stderr
+    assert "mqtt.username and mqtt.password_file" in out.stderr
+    out = cli(
+        "check-config", "-c", str(write(tmp_path, MINIMAL)), env={"ROTOR_BRIDGE_MQTT__HOST": host}
+    )
+    assert out.returncode == 2 and "Sekr1tPW" not in out.stdout + out.stderr
+    assert (
+        "mqtt.host (from ROTOR_BRIDGE_MQTT__HOST): a host name or address, not a URL" in out.stderr
+    )
+
+
+@pytest.mark.parametrize(
     "variable",
     [
         "ROTOR_BRIDGE_WEB__HOST_NAMES=shack.example.org",

@@ -8,6 +8,9 @@ Rules:
    file that will not do is a configuration error naming the key, not a traceback at start.
 3. The client id left out is unique per installation and stable across restarts
    (effective_client_id).
+4. A host (``mqtt.host``, ``dxcluster.host``: check_host) is a name or an address alone; a
+   refusal quotes it, but never one holding '@': a URL's login (``mqtt://rotor:pw@broker``)
+   would put the password in the error, on the terminal and in the journal.
 """
 
 from __future__ import annotations
@@ -79,6 +82,40 @@ def check_length(v: str, most: int, what: str, room: str = "") -> None:
     if size > most:
         why = f"MQTT's limit is {MQTT_STRING_MAX}{', less ' + room if room else ''}"
         raise ValueError(f"{what} is at most {most} bytes in UTF-8 ({why}); this is {size}")
+
+
+# rule 4: where a URL's login goes instead, by table
+_LOGIN_KEYS = {
+    "mqtt": "mqtt.username and mqtt.password_file",
+    "dxcluster": "the call sign in dxcluster.login",
+}
+
+
+def check_host(v: str, table: str) -> str:
+    """``v`` if it is a host name or address as getaddrinfo takes it (``table``'s ``host``):
+    no URL, no port, no brackets, DNS's lengths. A value holding '@' is never quoted (rule 4)."""
+    if "@" in v:  # (an attack pass: 'mqtt://rotor:pw@broker' was quoted, the password with it)
+        raise ValueError(
+            "a host name or address, not a URL with a login: it holds '@' (not shown: what "
+            f"comes before it may be a password); the login goes in {_LOGIN_KEYS[table]}"
+        )
+    if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
+        raise ValueError(f"a host name or address, got {v!r}")
+    if "://" in v or "/" in v:  # (an attack pass: check-config said "config OK")
+        tls = ", TLS mqtt.tls" if table == "mqtt" else ""
+        raise ValueError(
+            f"a host name or address, not a URL: {v!r} (the port is {table}.port{tls})"
+        )
+    if v.startswith("["):  # (an address in brackets is a URL's: getaddrinfo takes none)
+        raise ValueError(f"an IPv6 address is written without brackets here: {v!r}")
+    if v.count(":") == 1:  # (IPv6 has two at least)
+        raise ValueError(f"a host name or address, without its port: {v!r} ({table}.port)")
+    name = v.removesuffix(".")
+    if ":" not in v and (  # a name or IPv4, as DNS takes them (an attack pass: a longer
+        len(name) > 253 or any(not 0 < len(label) <= 63 for label in name.split("."))
+    ):  # one logged a traceback at every retry)
+        raise ValueError(f"{v!r} is no host name: at most 253 characters, 1 to 63 between dots")
+    return v
 
 
 class TlsSettings(Strict):
@@ -266,22 +303,7 @@ class MqttSettings(Strict):
     @field_validator("host")
     @classmethod
     def _host(cls, v: str) -> str:
-        if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
-            raise ValueError(f"a host name or address, got {v!r}")
-        if "://" in v or "/" in v:  # (an attack pass: check-config said "config OK")
-            raise ValueError(
-                f"a host name or address, not a URL: {v!r} (the port is mqtt.port, TLS mqtt.tls)"
-            )
-        if v.startswith("["):  # (an address in brackets is a URL's: getaddrinfo takes none)
-            raise ValueError(f"an IPv6 address is written without brackets here: {v!r}")
-        if v.count(":") == 1:  # (IPv6 has two at least)
-            raise ValueError(f"a host name or address, without its port: {v!r} (mqtt.port)")
-        name = v.removesuffix(".")
-        if ":" not in v and (  # a name or IPv4, as DNS takes them (an attack pass: a longer
-            len(name) > 253 or any(not 0 < len(label) <= 63 for label in name.split("."))
-        ):  # one logged a traceback at every retry)
-            raise ValueError(f"{v!r} is no host name: at most 253 characters, 1 to 63 between dots")
-        return v
+        return check_host(v, "mqtt")
 
     @model_validator(mode="after")
     def _password_file(self) -> MqttSettings:
