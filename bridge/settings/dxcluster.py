@@ -9,6 +9,10 @@ Rules:
 3. ``bands`` names bands of core/bands.py's table (empty: every spot), the one a rotator's
    ``bands`` names: a name not there is an error that lists the known ones.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
+5. ``host`` is a host name or an address alone, as ``mqtt.host`` (settings/mqtt.py
+   check_host): a URL, a port or a login written there is an error naming the key (an attack
+   pass: ``telnet://call:pw@node:7300`` passed check-config, which printed it whole, and the
+   client retried it for ever).
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from pydantic import Field, field_validator, model_validator
 
 from bridge.core.bands import NAMES, UnknownBand, band_of_hz, canonical
 from bridge.settings.base import Strict
+from bridge.settings.mqtt import check_host
 
 DEFAULT_PORT = 7300  # DX Spider's usual telnet port (many nodes also take 23 or 8000)
 
@@ -79,6 +84,11 @@ class DxClusterSettings(Strict):
         examples=[["20m", "15m", "10m"]],
         json_schema_extra={"unset": "every band"},
     )
+
+    @field_validator("host")
+    @classmethod
+    def _host(cls, v: str | None) -> str | None:
+        return v if v is None else check_host(v, "dxcluster")  # rule 5
 
     @field_validator("login")
     @classmethod

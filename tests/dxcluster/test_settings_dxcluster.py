@@ -43,6 +43,29 @@ def test_off_by_default_and_read_when_on(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
+    ("host", "says"),
+    [
+        ("telnet://g4abc:Sekr1tPW@dxc.example.org:7300", "not a URL with a login"),
+        ("g4abc:Sekr1tPW@dxc.example.org", "not a URL with a login"),
+        ("telnet://dxc.example.org", "not a URL: 'telnet://dxc.example.org' (the port is "),
+        ("dxc.example.org:7300", "without its port: 'dxc.example.org:7300' (dxcluster.port)"),
+        ("dxc..example.org", "is no host name"),
+    ],
+)
+def test_a_host_that_is_no_host_name_is_refused_naming_the_key_and_no_password(
+    tmp_path: Path, host: str, says: str
+) -> None:
+    """An attack pass: any text passed check-config ("config OK", the URL printed whole, its
+    password with it), and the client retried it for ever."""
+    table = f'[dxcluster]\nenabled = true\nhost = "{host}"\nlogin = "G4ABC"\ncty_file = "c"\n'
+    said = refused(tmp_path, table)
+    assert "dxcluster.host: " in said and says in said
+    assert "Sekr1tPW" not in said
+    for fine in ("dxc.example.org", "192.0.2.7", "2001:db8::7"):
+        assert load(tmp_path, table.replace(host, fine)).dxcluster.host == fine
+
+
+@pytest.mark.parametrize(
     ("text", "says"),
     [
         ('[dxcluster]\nenabled = true\nlogin = "G4ABC"\ncty_file = "c"\n', "host: needed"),
