@@ -10,6 +10,10 @@ Rules:
    line of the configuration error); nothing is changed when one is raised.
 3. Secrets never appear in a message: the password is returned, never quoted; a key is never
    decrypted (an encrypted key is an error, or OpenSSL would ask on a terminal there is not).
+4. A password file is a regular file of at most PASSWORD_FILE_MAX bytes, its kind and mode
+   looked at before a byte is read (an attack pass: ``/dev/zero`` ended check-config and run in
+   a MemoryError traceback, a FIFO held them for ever, and a file every user may read was read
+   all the same before it was refused).
 """
 
 from __future__ import annotations
@@ -18,6 +22,10 @@ import os
 import ssl
 import stat
 from pathlib import Path
+
+# rule 4: the most of a password file read (MQTT's longest password is 64 KiB: a longer one is
+# still read whole, to be refused with its length)
+PASSWORD_FILE_MAX = 1024 * 1024
 
 
 def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path | None) -> None:
@@ -66,17 +74,44 @@ def _ssl_reason(exc: ssl.SSLError) -> str:
 
 
 def read_password_file(path: Path) -> str:
-    """The password in `path`; ValueError if it cannot be read or every user may read it."""
+    """The password in `path`; ValueError if it cannot be read, is no regular file (rule 4),
+    is larger than PASSWORD_FILE_MAX or every user may read it."""
+    # (O_NONBLOCK: a FIFO's open waits for a writer that never comes; O_BINARY: Windows)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     try:
-        mode = path.stat().st_mode
-        text = path.read_text()
+        fd = os.open(path, flags)
     except OSError as exc:
         raise ValueError(f"password_file {path}: {exc.strerror}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            raise ValueError(
+                f"password_file {path} is not a file (a directory, a device or a pipe): write "
+                "the password in a file of its own"
+            )
+        if mode & (stat.S_IROTH | stat.S_IWOTH):
+            raise ValueError(
+                f"password_file {path} is readable by every user; let only the user that runs "
+                "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
+                "chmod 640)"
+            )
+        data = b""
+        while len(data) <= PASSWORD_FILE_MAX:
+            chunk = os.read(fd, PASSWORD_FILE_MAX + 1 - len(data))
+            if not chunk:
+                break
+            data += chunk
+    except OSError as exc:
+        raise ValueError(f"password_file {path}: {exc.strerror}") from None
+    finally:
+        os.close(fd)
+    if len(data) > PASSWORD_FILE_MAX:
+        raise ValueError(
+            f"password_file {path} is larger than {PASSWORD_FILE_MAX // 1024} KiB: it holds one "
+            "line, the password"
+        )
+    try:
+        text = data.decode()
     except UnicodeDecodeError:
         raise ValueError(f"password_file {path} is not UTF-8 text") from None
-    if mode & (stat.S_IROTH | stat.S_IWOTH):
-        raise ValueError(
-            f"password_file {path} is readable by every user; let only the user that runs "
-            "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
-        )
     return text.strip("\r\n")

@@ -413,6 +413,36 @@ def test_a_password_file_of_no_one_line_password_is_exit_2_naming_it(
     assert (code, out) == (2, "") and f"password_file {secret} " in err and said in err, err
 
 
+@pytest.mark.parametrize("kind", ["device", "pipe", "directory"])
+def test_a_password_file_that_is_no_file_is_exit_2_naming_it(tmp_path: Path, kind: str) -> None:
+    """An attack pass: password_file = "/dev/zero" ended check-config in a MemoryError
+    traceback once it had taken every byte it could hold, and a FIFO held it for ever."""
+    secret = {"device": Path("/dev/zero"), "pipe": tmp_path / "fifo", "directory": tmp_path}[kind]
+    if kind == "pipe":
+        os.mkfifo(secret, 0o600)
+    path = tmp_path / "pw.toml"
+    path.write_text(edit(f'password = "{SECRET}"', f"password_file = {str(secret)!r}"))
+
+    def little_memory() -> None:  # (the old reading of /dev/zero filled what it was given)
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+    out = subprocess.run(
+        [sys.executable, "-m", "bridge", "check-config", "-c", str(path)],
+        capture_output=True,
+        text=True,
+        env=bridge_env(),
+        timeout=slow(20),
+        preexec_fn=little_memory,
+    )
+    assert (out.returncode, out.stdout, out.stderr) == (
+        2,
+        "",
+        "rotor-bridge: invalid configuration:\n"
+        f"  mqtt: password_file {secret} is not a file (a directory, a device or a pipe): "
+        "write the password in a file of its own\n",
+    )
+
+
 def test_tls_files_with_tls_not_enabled_are_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
 ) -> None:
