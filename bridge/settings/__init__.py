@@ -28,6 +28,10 @@ Rules:
    names no rotator's key (``ROTOR_BRIDGE_ROTATORS__TOWER_PORT``: the settings source drops
    every such variable, and only ``ROTATORS__<ID>__<KEY>`` is read; a review: the bridge
    opened the file's port).
+5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
+   attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
+   MemoryError traceback after taking all the memory it could). It may be a pipe
+   (``-c <(...)``): only its size is judged.
 """
 
 from __future__ import annotations
@@ -95,6 +99,7 @@ __all__ = [
 ]
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
+CONFIG_FILE_MAX = 16 << 20  # rule 5: the most of a configuration file read
 _ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
 
 
@@ -444,7 +449,13 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The file as a TOML document; ConfigError if it cannot be read or is no TOML."""
     try:
         with open(path, "rb") as f:
-            return tomllib.load(f)
+            data = f.read(CONFIG_FILE_MAX + 1)  # rule 5
+        if len(data) > CONFIG_FILE_MAX:
+            raise ConfigError(
+                f"config file {path} is larger than {CONFIG_FILE_MAX >> 20} MiB: no "
+                "configuration is (is it the right file?)"
+            )
+        return tomllib.loads(data.decode())
     except FileNotFoundError:
         raise ConfigError(f"config file {path} not found") from None
     except OSError as exc:

@@ -443,6 +443,44 @@ def test_a_password_file_that_is_no_file_is_exit_2_naming_it(tmp_path: Path, kin
     )
 
 
+def test_a_config_file_with_no_end_is_exit_2_and_a_pipe_still_a_config(tmp_path: Path) -> None:
+    """An attack pass: ``-c /dev/zero`` (or ``/dev/urandom``) ended check-config in a
+    MemoryError traceback once it had taken every byte it could hold."""
+
+    def little_memory() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+    out = subprocess.run(
+        [sys.executable, "-m", "bridge", "check-config", "-c", "/dev/zero"],
+        capture_output=True,
+        text=True,
+        env=bridge_env(),
+        timeout=slow(20),
+        preexec_fn=little_memory,
+    )
+    assert the_one_line(out) == (
+        "rotor-bridge: config file /dev/zero is larger than 16 MiB: no configuration is (is it "
+        "the right file?)"
+    )
+    config = tmp_path / "c.toml"
+    config.write_text(BASE)
+    read, write = os.pipe()  # as -c <(...) gives it
+    os.write(write, config.read_bytes())
+    os.close(write)
+    try:
+        out = subprocess.run(
+            [sys.executable, "-m", "bridge", "check-config", "-c", f"/proc/self/fd/{read}"],
+            capture_output=True,
+            text=True,
+            env=bridge_env(),
+            timeout=slow(20),
+            pass_fds=(read,),
+        )
+    finally:
+        os.close(read)
+    assert out.returncode == 0 and out.stdout.endswith(f"config OK: /proc/self/fd/{read}\n")
+
+
 def test_tls_files_with_tls_not_enabled_are_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
 ) -> None:
