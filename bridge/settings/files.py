@@ -10,10 +10,11 @@ Rules:
    line of the configuration error); nothing is changed when one is raised.
 3. Secrets never appear in a message: the password is returned, never quoted; a key is never
    decrypted (an encrypted key is an error, or OpenSSL would ask on a terminal there is not).
-4. A password file is a regular file of at most PASSWORD_FILE_MAX bytes, its kind and mode
-   looked at before a byte is read (an attack pass: ``/dev/zero`` ended check-config and run in
-   a MemoryError traceback, a FIFO held them for ever, and a file every user may read was read
-   all the same before it was refused).
+4. A password file is a regular file (or a pipe: ``<(pass show mqtt)``), of which at most
+   PASSWORD_FILE_MAX bytes are read, its kind and mode looked at before a byte is read (an
+   attack pass: ``/dev/zero`` ended check-config and run in a MemoryError traceback, a FIFO
+   that nothing wrote to held them for ever, and a file every user may read was read all the
+   same before it was refused).
 """
 
 from __future__ import annotations
@@ -74,8 +75,8 @@ def _ssl_reason(exc: ssl.SSLError) -> str:
 
 
 def read_password_file(path: Path) -> str:
-    """The password in `path`; ValueError if it cannot be read, is no regular file (rule 4),
-    is larger than PASSWORD_FILE_MAX or every user may read it."""
+    """The password in `path`; ValueError if it cannot be read, is no regular file or pipe
+    (rule 4), is larger than PASSWORD_FILE_MAX or every user may read it."""
     # (O_NONBLOCK: a FIFO's open waits for a writer that never comes; O_BINARY: Windows)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     try:
@@ -84,10 +85,12 @@ def read_password_file(path: Path) -> str:
         raise ValueError(f"password_file {path}: {exc.strerror}") from None
     try:
         mode = os.fstat(fd).st_mode
-        if not stat.S_ISREG(mode):
+        if stat.S_ISFIFO(mode):  # a pipe given it (<(...)): read to its end, as before
+            os.set_blocking(fd, True)  # (none writing: an end at once, "it holds nothing")
+        elif not stat.S_ISREG(mode):
             raise ValueError(
-                f"password_file {path} is not a file (a directory, a device or a pipe): write "
-                "the password in a file of its own"
+                f"password_file {path} is not a file (a directory or a device): write the "
+                "password in a file of its own"
             )
         if mode & (stat.S_IROTH | stat.S_IWOTH):
             raise ValueError(

@@ -413,10 +413,22 @@ def test_a_password_file_of_no_one_line_password_is_exit_2_naming_it(
     assert (code, out) == (2, "") and f"password_file {secret} " in err and said in err, err
 
 
-@pytest.mark.parametrize("kind", ["device", "pipe", "directory"])
-def test_a_password_file_that_is_no_file_is_exit_2_naming_it(tmp_path: Path, kind: str) -> None:
+@pytest.mark.parametrize(
+    ("kind", "said"),
+    [
+        ("device", "is not a file (a directory or a device): write the password in a file of "
+         "its own"),
+        ("directory", "is not a file (a directory or a device): write the password in a file "
+         "of its own"),
+        ("pipe", "must hold the password on one line (it holds nothing)"),
+    ],
+)  # fmt: skip
+def test_a_password_file_that_is_no_file_is_exit_2_naming_it(
+    tmp_path: Path, kind: str, said: str
+) -> None:
     """An attack pass: password_file = "/dev/zero" ended check-config in a MemoryError
-    traceback once it had taken every byte it could hold, and a FIFO held it for ever."""
+    traceback once it had taken every byte it could hold, and a FIFO nothing wrote to held it
+    for ever. A pipe that brings the password (``<(pass show mqtt)``) is still read."""
     secret = {"device": Path("/dev/zero"), "pipe": tmp_path / "fifo", "directory": tmp_path}[kind]
     if kind == "pipe":
         os.mkfifo(secret, 0o600)
@@ -437,10 +449,18 @@ def test_a_password_file_that_is_no_file_is_exit_2_naming_it(tmp_path: Path, kin
     assert (out.returncode, out.stdout, out.stderr) == (
         2,
         "",
-        "rotor-bridge: invalid configuration:\n"
-        f"  mqtt: password_file {secret} is not a file (a directory, a device or a pipe): "
-        "write the password in a file of its own\n",
+        f"rotor-bridge: invalid configuration:\n  mqtt: password_file {secret} {said}\n",
     )
+    read, write = os.pipe()
+    os.write(write, f"{SECRET}\n".encode())
+    os.close(write)
+    try:
+        text = edit(f'password = "{SECRET}"', f"password_file = '/proc/self/fd/{read}'")
+        path.write_text(text)
+        password = load_settings(path, environ={}).mqtt.password
+    finally:
+        os.close(read)
+    assert password is not None and password.get_secret_value() == SECRET
 
 
 def test_a_config_file_with_no_end_is_exit_2_and_a_pipe_still_a_config(tmp_path: Path) -> None:
