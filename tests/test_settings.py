@@ -107,6 +107,30 @@ def test_bad_values_name_the_field(tmp_path: Path, change: tuple[str, str], fiel
     assert f"{field}:" in str(exc.value) or f"{field}." in str(exc.value)
 
 
+@pytest.mark.parametrize(
+    ("variable", "said"),
+    [
+        ("ROTOR_BRIDGE_MQTT__PASSWORD", "mqtt.password (from ROTOR_BRIDGE_MQTT__PASSWORD): empty"),
+        ("ROTOR_BRIDGE_MQTT__USERNAME", "mqtt.username (from ROTOR_BRIDGE_MQTT__USERNAME): empty"),
+    ],
+)
+def test_an_empty_user_name_or_password_is_refused_naming_it(
+    tmp_path: Path, variable: str, said: str
+) -> None:
+    """An attack pass: ``ROTOR_BRIDGE_MQTT__PASSWORD=${MQTT_PASSWORD}`` with the variable unset
+    (docker compose) passed check-config as "user rotor, a password", and the bridge logged in
+    with no password; the broker's "Not authorized" named no key. The file's ``""`` alike."""
+    text = MINIMAL.replace(
+        'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "rotor"\npassword = "x"'
+    )
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env={variable: ""})
+    assert out.returncode == 2 and said in out.stderr, out.stdout + out.stderr
+    key = variable.removeprefix("ROTOR_BRIDGE_MQTT__").lower()
+    given = {"username": 'username = "rotor"', "password": 'password = "x"'}[key]
+    with pytest.raises(ConfigError, match=f"mqtt.{key}: empty"):
+        load_settings(write(tmp_path, text.replace(given, f'{key} = ""')), {})
+
+
 def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
     pw = tmp_path / "pw"
     pw.write_text("s3cret\n")

@@ -11,6 +11,10 @@ Rules:
 4. A host (``mqtt.host``, ``dxcluster.host``: check_host) is a name or an address alone; a
    refusal quotes it, but never one holding '@': a URL's login (``mqtt://rotor:pw@broker``)
    would put the password in the error, on the terminal and in the journal.
+5. An empty ``username`` or ``password`` is an error, as an empty ``password_file`` is: what
+   ``ROTOR_BRIDGE_MQTT__PASSWORD=${MQTT_PASSWORD}`` gives with the variable unset (an attack
+   pass: check-config said "user rotor, a password", and the broker's "Not authorized" named
+   neither key).
 """
 
 from __future__ import annotations
@@ -191,7 +195,8 @@ class MqttSettings(Strict):
     password: SecretStr | None = Field(
         None,
         description="the password, with username; better in password_file (this file then "
-        "holds a secret: check-config warns). Never printed.",
+        "holds a secret: check-config warns). Never printed. An empty one is refused, as an "
+        "empty username is (what a variable left unset in ${...} gives)",
         examples=["s3cret"],
         json_schema_extra={"unset": "no password"},
     )
@@ -281,6 +286,11 @@ class MqttSettings(Strict):
     @classmethod
     def _username(cls, v: str | None) -> str | None:
         if v is not None:
+            if not v.strip():  # rule 5
+                raise ValueError(
+                    "empty: the broker would be asked for a user with no name; leave "
+                    "mqtt.username out to connect without a login"
+                )
             _mqtt_text(v, "a user name")
             check_length(v, MQTT_STRING_MAX, "a user name")
         return v
@@ -290,6 +300,11 @@ class MqttSettings(Strict):
     def _password(cls, v: SecretStr | None, info: ValidationInfo) -> SecretStr | None:
         if v is not None:
             _needs_username(info)
+            if not v.get_secret_value():  # rule 5
+                raise ValueError(
+                    "empty: the bridge would log in with no password; leave mqtt.password out "
+                    "to log in with the user name alone"
+                )
             check_length(v.get_secret_value(), MQTT_STRING_MAX, "a password")
         return v
 
