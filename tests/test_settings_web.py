@@ -142,7 +142,8 @@ def test_frame_ancestors_are_origins(tmp_path: Path) -> None:
 def test_a_frame_ancestor_that_is_no_origin_is_refused_by_name(tmp_path: Path, bad: str) -> None:
     said = refused(tmp_path, f'[web]\nframe_ancestors = ["http://ok.lan", {json.dumps(bad)}]\n')
     assert said.count("\n") == 1 and "web.frame_ancestors" in said
-    assert repr(bad) in said and "scheme://host[:port]" in said
+    shown = "an entry holding '@'" if "@" in bad else repr(bad)  # (rule 5: a login is hidden)
+    assert shown in said and "scheme://host[:port]" in said
 
 
 def test_the_environment_overrides_the_web_table(
@@ -219,6 +220,19 @@ def test_host_names_are_names_alone(tmp_path: Path) -> None:
     assert ok.web.host_names == ["shack.example.org"]
     said = refused(tmp_path, '[web]\nhost_names = ["https://shack.example.org/"]\n')
     assert "web.host_names" in said and "not a host name" in said
+
+
+@pytest.mark.parametrize("key", ["frame_ancestors", "host_names"])
+def test_an_origin_or_name_with_a_login_is_refused_without_the_password(
+    tmp_path: Path, key: str
+) -> None:
+    """An attack pass: an address with its login (``https://admin:pw@ha.lan:8123``) was
+    refused with the whole value quoted, the password on the terminal and in the journal."""
+    for given in ("https://admin:Sekr1tPW@ha.lan:8123", "admin:Sekr1tPW@ha.lan"):
+        said = refused(tmp_path, f'[web]\n{key} = ["{given}"]\n')
+        assert f"web.{key}: an entry holding '@' (not shown: " in said and "Sekr1tPW" not in said
+    said = refused(tmp_path, f'[web]\n{key} = ["ha.lan/x"]\n')
+    assert f"web.{key}: 'ha.lan/x' is not " in said  # (nothing to hide: quoted)
 
 
 def test_a_trusted_proxy_network_wider_than_one_address_is_warned_about(tmp_path: Path) -> None:

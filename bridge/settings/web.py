@@ -12,6 +12,9 @@ Rules:
    Content-Security-Policy header, so a path, a space or a ';' there is refused here.
    host_names are names alone (no scheme, port or path), compared in lower case.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
+5. A refused origin or host name is quoted in the error, but never one holding '@': a URL's
+   login (``https://admin:pw@ha.local``) would put a password on the terminal and in the
+   journal (an attack pass; settings/mqtt.py rule 4 for the broker's host).
 """
 
 from __future__ import annotations
@@ -147,8 +150,8 @@ class WebSettings(Strict):
             m = _ORIGIN.fullmatch(origin)
             if m is None or (m["port"] is not None and not 1 <= int(m["port"]) <= 65535):
                 raise ValueError(
-                    f"{value!r} is not an origin: write scheme://host[:port] with http or "
-                    "https and no path, e.g. 'http://homeassistant.local:8123'"
+                    f"{_shown(value)} is not an origin: write scheme://host[:port] with http "
+                    "or https, no login and no path, e.g. 'http://homeassistant.local:8123'"
                 )
             out.append(origin)
         return out
@@ -159,8 +162,8 @@ class WebSettings(Strict):
         for value in values:
             if _NAME.fullmatch(value) is None:
                 raise ValueError(
-                    f"{value!r} is not a host name: write the name alone, without scheme, port "
-                    "or path, e.g. 'shack.example.org'"
+                    f"{_shown(value)} is not a host name: write the name alone, without "
+                    "scheme, login, port or path, e.g. 'shack.example.org'"
                 )
         return [v.casefold() for v in values]
 
@@ -187,6 +190,13 @@ class WebSettings(Strict):
                 "reverse proxy that asks for a password"
             )
         return self
+
+
+def _shown(value: str) -> str:
+    """Rule 5: ``value`` quoted, unless it holds '@'."""
+    if "@" in value:
+        return "an entry holding '@' (not shown: what comes before it may be a password)"
+    return repr(value)
 
 
 def web_warnings(web: WebSettings) -> list[str]:
