@@ -131,6 +131,34 @@ def test_an_empty_user_name_or_password_is_refused_naming_it(
         load_settings(write(tmp_path, text.replace(given, f'{key} = ""')), {})
 
 
+def test_a_file_the_bridge_writes_is_no_file_the_configuration_reads(tmp_path: Path) -> None:
+    """An attack pass: state_file naming the configuration file passed check-config, and the
+    bridge's first lock OFF replaced the configuration with its state (the next start: "not
+    valid TOML"); naming the password file, the password went the same way."""
+    pw = tmp_path / "pw"
+    pw.write_text("s3cret\n")
+    pw.chmod(0o600)
+    path = tmp_path / "c.toml"
+    logins = f'base_topic = "rotor"\nusername = "u"\npassword_file = "{pw}"'
+    text = MINIMAL.replace('base_topic = "rotor"', logins)
+    cases = [
+        (f'state_file = "{path}"', f"state_file: {path} is the configuration file itself"),
+        (f'audit_file = "{tmp_path}/./c.toml"', "audit_file: "),
+        (f'state_file = "{pw}"', f"state_file {pw} is also mqtt.password_file: the bridge"),
+        (
+            f'state_file = "{tmp_path}/s.json"\naudit_file = "{tmp_path}/s.json"',
+            f"state_file {tmp_path}/s.json is also audit_file",
+        ),
+    ]
+    for first, said in cases:
+        path.write_text(f"{first}\n{text}")
+        out = cli("check-config", "-c", str(path))
+        assert out.returncode == 2 and said in out.stderr, out.stdout + out.stderr
+        assert "give it a file of its own" in out.stderr and "s3cret" not in out.stderr
+    path.write_text(f'state_file = "{tmp_path}/s.json"\naudit_file = "{tmp_path}/a.jsonl"\n{text}')
+    assert cli("check-config", "-c", str(path)).returncode == 0
+
+
 def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
     pw = tmp_path / "pw"
     pw.write_text("s3cret\n")

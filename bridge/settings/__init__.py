@@ -32,6 +32,11 @@ Rules:
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
    (``-c <(...)``): only its size is judged.
+6. The files the bridge writes (``state_file``, ``audit_file``) are neither the configuration
+   file, nor each other, nor a file another key names for reading (a password, TLS or cty
+   file, the TLE file): an attack pass: ``state_file`` naming the configuration file passed
+   check-config, and the first lock OFF replaced the configuration with the state (the next
+   start: "not valid TOML"); a password file was overwritten likewise.
 """
 
 from __future__ import annotations
@@ -159,7 +164,8 @@ class Settings(BaseSettings):
         default_factory=_default_state_file,
         description="where the lock and the options set at run time are kept across restarts; "
         "with a console password, the console's login secret (console-secret, see the "
-        "console's page) is kept beside it",
+        "console's page) is kept beside it. A file of its own: the configuration file, the "
+        "audit file or a file another key names is refused (it would be overwritten)",
         examples=["/var/lib/rotor-bridge/state.json"],
         json_schema_extra={
             "unset": "$STATE_DIRECTORY/state.json under systemd, else "
@@ -401,6 +407,36 @@ class Settings(BaseSettings):
         return f"{self.mqtt.base_topic}/{g.id}"
 
     @model_validator(mode="after")
+    def _own_files(self) -> Settings:
+        """Rule 6: the files the bridge writes are no file the settings name otherwise."""
+        written = [("state_file", self.state_file)]
+        if self.audit_file is not None:
+            written.append(("audit_file", self.audit_file))
+        for name, path in written:
+            for other, given in [*written, *self.files_read()]:
+                if other != name and (name, other) != ("audit_file", "state_file"):
+                    if same_file(path, given):
+                        raise ValueError(
+                            f"{name} {path} is also {other}: the bridge writes there, and would "
+                            "overwrite it; give it a file of its own"
+                        )
+        return self
+
+    def files_read(self) -> list[tuple[str, Path]]:
+        """The files the settings name for the bridge to read (rule 6), by key."""
+        tls, dx = self.mqtt.tls, self.dxcluster
+        named = [
+            ("mqtt.password_file", self.mqtt.password_file),
+            ("mqtt.tls.ca_file", tls.ca_file),
+            ("mqtt.tls.cert_file", tls.cert_file),
+            ("mqtt.tls.key_file", tls.key_file),
+            ("web.password_file", self.web.password_file),
+            ("dxcluster.cty_file", dx.cty_file),
+            ("tracking.tle_file", self.tracking.tle_file),
+        ]
+        return [(name, path) for name, path in named if path is not None]
+
+    @model_validator(mode="after")
     def _installation(self) -> Settings:
         self.mqtt._state_file = str(self.state_file.expanduser().absolute())
         return self
@@ -433,6 +469,16 @@ class Settings(BaseSettings):
             for key in [k for k in env_vars if k.lower().startswith("rotor_bridge_rotators__")]:
                 del env_vars[key]
         return (env_settings, init_settings)  # environment beats the file
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether ``a`` and ``b`` are one file (rule 6): by the file itself where both are there
+    (a link, a second name), else by the path they resolve to."""
+    a, b = os.path.expanduser(a), os.path.expanduser(b)
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):  # (one not there yet)
+        return os.path.realpath(a) == os.path.realpath(b)
 
 
 def load_settings(
@@ -500,6 +546,13 @@ def settings_from(
         raise ConfigError(format_validation_error(exc, data, env)) from None
     except SettingsError as exc:  # a variable pydantic-settings reads as JSON, and cannot
         raise ConfigError(_not_json(exc, env)) from None
+    for name in ("state_file", "audit_file"):  # rule 6: nor the file itself
+        written = getattr(settings, name)
+        if path and written is not None and same_file(written, path):
+            raise ConfigError(
+                f"invalid configuration:\n  {name}: {written} is the configuration file itself: "
+                "the bridge writes there, and would overwrite it; give it a file of its own"
+            )
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
     return settings
