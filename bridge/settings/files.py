@@ -7,7 +7,8 @@ Rules:
 1. A file is read the way its user will read it: the TLS files through an ssl context as paho's
    tls_set loads them, the password file as text with its line ending stripped.
 2. Every problem is a ValueError naming the setting and the path (pydantic turns it into one
-   line of the configuration error); nothing is changed when one is raised.
+   line of the configuration error), an OSError's too (pydantic lets those through, as a
+   traceback); nothing is changed when one is raised.
 3. Secrets never appear in a message: the password is returned, never quoted; a key is never
    decrypted (an encrypted key is an error, or OpenSSL would ask on a terminal there is not).
 4. A password file is a regular file (or a pipe: ``<(pass show mqtt)``), of which at most
@@ -34,18 +35,19 @@ def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path
     if (cert_file is None) != (key_file is None):
         raise ValueError("cert_file and key_file go together")
     for name, f in (("ca_file", ca_file), ("cert_file", cert_file), ("key_file", key_file)):
-        if f is not None and not f.is_file():
-            raise ValueError(f"{name} {f} is not a readable file")
-        every = os.name == "posix" and f is not None and f.stat().st_mode & stat.S_IROTH
-        if f is not None and name == "key_file" and every:  # (Windows: no such bits, a review)
-            raise ValueError(  # (as password_file: a private key is a secret too)
-                f"key_file {f} is readable by every user; let only the user that runs "
-                "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
-                "chmod 640)"
-            )
-        try:
-            if f is not None:
-                f.open("rb").close()
+        if f is None:
+            continue
+        try:  # (is_file raises but for a missing file: a folder it may not enter, a name too
+            if not f.is_file():  # long ended check-config in a traceback, an attack pass)
+                raise ValueError(f"{name} {f} is not a readable file")
+            every = os.name == "posix" and f.stat().st_mode & stat.S_IROTH
+            if name == "key_file" and every:  # (Windows: no such bits, a review)
+                raise ValueError(  # (as password_file: a private key is a secret too)
+                    f"key_file {f} is readable by every user; let only the user that runs "
+                    "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
+                    "chmod 640)"
+                )
+            f.open("rb").close()
         except OSError as exc:
             raise ValueError(f"{name} {f}: {exc.strerror}") from None
     context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)

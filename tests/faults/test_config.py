@@ -501,6 +501,26 @@ def test_a_config_file_with_no_end_is_exit_2_and_a_pipe_still_a_config(tmp_path:
     assert out.returncode == 0 and out.stdout.endswith(f"config OK: /proc/self/fd/{read}\n")
 
 
+@pytest.mark.parametrize("key", ["ca_file", "cert_file", "key_file"])
+def test_a_tls_file_that_cannot_be_looked_at_is_exit_2_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki, key: str
+) -> None:
+    """An attack pass: a TLS file whose name is too long (or in a folder the user may not
+    enter) ended check-config in an OSError traceback: only a missing file was said."""
+    files = {k: str(pki.dir / n) for k, n in [("cert_file", "client.crt"), ("key_file",
+             "client.key"), ("ca_file", "ca.crt")]}  # fmt: skip
+    files[key] = str(tmp_path / ("x" * 300))
+    table = "".join(f"{k} = {v!r}\n" for k, v in files.items())
+    path = tmp_path / "tls.toml"
+    path.write_text(BASE + f"[mqtt.tls]\nenabled = true\n{table}")
+    code, out, err = run_main(capsys, "check-config", "-c", str(path))
+    assert (code, out) == (2, "")
+    assert err == (
+        f"rotor-bridge: invalid configuration:\n  mqtt.tls: {key} {files[key]}: File name too "
+        "long\n"
+    )
+
+
 def test_tls_files_with_tls_not_enabled_are_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
 ) -> None:
