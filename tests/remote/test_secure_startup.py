@@ -80,4 +80,7 @@ def test_once_connected_failures_are_logged_and_retried_as_the_bridge_does(
         lk._refused("Not authorized")
     assert not lk.fatal
     said = [r.getMessage() for r in caplog.records if r.levelno == logging.ERROR]
-    assert said == ["MQTT broker refused the connection: Not authorized (retrying)"]
+    assert said == [
+        "MQTT broker refused the connection: Not authorized: the broker asks for a login: set "
+        "mqtt.username and mqtt.password_file (retrying)"
+    ]

@@ -39,9 +39,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    thread of ours, paho_client.py rule 6); a refused
    connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
    reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
-   never a crash. Rule 7 only slows that loop down. A connection the broker closes before it
-   answers the CONNECT (an ACL on the client id, a connection limit, a broker without MQTT 5)
-   is said too, once, with the likely fixes (``_closed_early``): it is never silent.
+   never a crash; a login refused names the keys to check (``login_hint``: it said "Not
+   authorized" and no key, an attack pass). Rule 7 only slows that loop down. A connection
+   the broker closes before it answers the CONNECT (an ACL on the client id, a connection
+   limit, a broker without MQTT 5) is said too, once, with the likely fixes
+   (``_closed_early``): it is never silent.
 7. One client id, one connection. A broker that gets a second connection with a client id
    closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
    socket), so two processes with one id (two hosts sharing a configuration, a stale container
@@ -223,6 +225,21 @@ def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
     return "other"
 
 
+# the broker's words for a login it refused: MQTT 5's reasons 0x86 and 0x87, MQTT 3.1.1's 4 and 5
+LOGIN_REFUSED = ("Bad user name or password", "Not authorized")
+
+
+def login_hint(reason: str, settings: MqttSettings) -> str:
+    """Rule 6: what to check when the broker refused the login (``reason``), else ""."""
+    if reason not in LOGIN_REFUSED:
+        return ""
+    if settings.username is None:
+        return ": the broker asks for a login: set mqtt.username and mqtt.password_file"
+    return (
+        ": check mqtt.username and mqtt.password (or password_file), and the broker's access rules"
+    )
+
+
 class Options(TypedDict, total=False):
     """What both connections take alike, as keywords of their constructors."""
 
@@ -322,7 +339,8 @@ class Connection:
     def _refused(self, reason: str) -> None:
         """The broker refused the connection (CONNACK failure)."""
         if reason != self._last_refusal:
-            log.error("MQTT broker refused the connection: %s (retrying)", reason)
+            hint = login_hint(reason, self._settings)
+            log.error("MQTT broker refused the connection: %s%s (retrying)", reason, hint)
             self._last_refusal = reason
 
     def _failed(self) -> None:

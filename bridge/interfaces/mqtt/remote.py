@@ -86,7 +86,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.interfaces.mqtt.connection import Connection
+from bridge.interfaces.mqtt.connection import LOGIN_REFUSED, Connection
 from bridge.interfaces.mqtt.heartbeat import Stamp, StationClock, parse_beat, station_of
 from bridge.settings.mqtt import MqttSettings
 
@@ -103,7 +103,6 @@ KEPT = (
     f"{NOT_CONNECTED}: not delivered yet (the rotor may still be turning); the stop is kept "
     "and sent first on reconnect"
 )
-LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
 NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to 3.1.1 only
 
 
