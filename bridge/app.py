@@ -335,7 +335,7 @@ class App:
                 frame_ancestors=list(settings.web.frame_ancestors),
                 host_names=list(settings.web.host_names),
                 trusted_proxies=list(settings.web.trusted_proxies),
-                secret=installation_secret(settings.state_file.with_name("console-secret"))
+                secret=installation_secret(settings.console_secret())
                 if password is not None
                 else b"",
                 station=position,

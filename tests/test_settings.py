@@ -157,6 +157,21 @@ def test_a_file_the_bridge_writes_is_no_file_the_configuration_reads(tmp_path: P
         assert "give it a file of its own" in out.stderr and "s3cret" not in out.stderr
     path.write_text(f'state_file = "{tmp_path}/s.json"\naudit_file = "{tmp_path}/a.jsonl"\n{text}')
     assert cli("check-config", "-c", str(path)).returncode == 0
+    secret = tmp_path / "console-secret"  # where the console keeps its own (app.py)
+    secret.write_text("a console password\n")
+    secret.chmod(0o600)
+    path.write_text(
+        f'state_file = "{tmp_path}/s.json"\n{text}\n[web]\npassword_file = "{secret}"\n'
+    )
+    out = cli("check-config", "-c", str(path))
+    assert (
+        out.returncode == 2
+        and (
+            f"the console's secret kept beside state_file {secret} is also web.password_file: the "
+            "bridge writes there, and would overwrite it; name that file otherwise"
+        )
+        in out.stderr
+    ), out.stderr
 
 
 def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:

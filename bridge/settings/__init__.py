@@ -32,11 +32,13 @@ Rules:
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
    (``-c <(...)``): only its size is judged.
-6. The files the bridge writes (``state_file``, ``audit_file``) are neither the configuration
-   file, nor each other, nor a file another key names for reading (a password, TLS or cty
-   file, the TLE file): an attack pass: ``state_file`` naming the configuration file passed
-   check-config, and the first lock OFF replaced the configuration with the state (the next
-   start: "not valid TOML"); a password file was overwritten likewise.
+6. The files the bridge writes (``state_file``, ``audit_file``, and with a console password
+   the console's secret beside the state file, ``console-secret``) are neither the
+   configuration file, nor each other, nor a file another key names for reading (a password,
+   TLS or cty file, the TLE file): an attack pass: ``state_file`` naming the configuration
+   file passed check-config, and the first lock OFF replaced the configuration with the state
+   (the next start: "not valid TOML"); a password file was overwritten likewise, and a
+   console password file named ``console-secret`` beside the state file by random bytes.
 """
 
 from __future__ import annotations
@@ -409,18 +411,25 @@ class Settings(BaseSettings):
     @model_validator(mode="after")
     def _own_files(self) -> Settings:
         """Rule 6: the files the bridge writes are no file the settings name otherwise."""
-        written = [("state_file", self.state_file)]
+        own = "give it a file of its own"
+        written = [("state_file", self.state_file, own)]
         if self.audit_file is not None:
-            written.append(("audit_file", self.audit_file))
-        for name, path in written:
-            for other, given in [*written, *self.files_read()]:
-                if other != name and (name, other) != ("audit_file", "state_file"):
-                    if same_file(path, given):
-                        raise ValueError(
-                            f"{name} {path} is also {other}: the bridge writes there, and would "
-                            "overwrite it; give it a file of its own"
-                        )
+            written.append(("audit_file", self.audit_file, own))
+        if self.web.password_file is not None:  # (app.py: a short one is made anew)
+            secret = "the console's secret kept beside state_file"
+            written.append((secret, self.console_secret(), "name that file otherwise"))
+        for n, (name, path, fix) in enumerate(written):
+            for other, given, _ in [*written[n + 1 :], *[(*f, "") for f in self.files_read()]]:
+                if same_file(path, given):
+                    raise ValueError(
+                        f"{name} {path} is also {other}: the bridge writes there, and would "
+                        f"overwrite it; {fix}"
+                    )
         return self
+
+    def console_secret(self) -> Path:
+        """Where the console's login secret is kept (interfaces/web/auth.py rule 2)."""
+        return self.state_file.with_name("console-secret")
 
     def files_read(self) -> list[tuple[str, Path]]:
         """The files the settings name for the bridge to read (rule 6), by key."""
