@@ -174,6 +174,29 @@ def test_a_file_the_bridge_writes_is_no_file_the_configuration_reads(tmp_path: P
     ), out.stderr
 
 
+@pytest.mark.parametrize(
+    "key",
+    ["STATE_FILE", "AUDIT_FILE", "MQTT__PASSWORD_FILE", "WEB__PASSWORD_FILE", "TRACKING__TLE_FILE"],
+)
+def test_a_path_given_empty_is_refused_naming_it(tmp_path: Path, key: str) -> None:
+    """An attack pass: an empty path (``ROTOR_BRIDGE_AUDIT_FILE=${AUDIT}`` with the variable
+    unset) was read as '.', the current folder: the audit file passed check-config and lost
+    every line at run, a password file was "not a file"."""
+    variable = f"ROTOR_BRIDGE_{key}"
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={variable: ""})
+    name = key.lower().replace("__", ".")
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert f"{name} (from {variable}): empty: name a file, or leave the key out" in out.stderr
+
+
+def test_an_audit_file_that_is_a_folder_is_refused(tmp_path: Path) -> None:
+    out = cli("check-config", "-c", str(write(tmp_path, f'audit_file = "{tmp_path}"\n' + MINIMAL)))
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert f"audit_file: {tmp_path} is a folder: name a file in it ({tmp_path}/audit.jsonl)" in (
+        out.stderr
+    )
+
+
 def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
     pw = tmp_path / "pw"
     pw.write_text("s3cret\n")

@@ -191,6 +191,15 @@ class Settings(BaseSettings):
     # settings/base.py rule 2, as every table's (a BaseSettings is no Strict)
     _plain_value = field_validator("*", mode="before")(plain_value)
 
+    @field_validator("audit_file")
+    @classmethod
+    def _audit_file(cls, v: Path | None) -> Path | None:
+        if v is not None and os.path.isdir(os.path.expanduser(v)):  # (an attack pass: config
+            raise ValueError(  # OK, and every line lost at run)
+                f"{v} is a folder: name a file in it ({v / 'audit.jsonl'})"
+            )
+        return v
+
     @field_validator("log_level")
     @classmethod
     def _level(cls, v: str) -> str:

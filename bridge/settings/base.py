@@ -19,11 +19,16 @@ Rules:
    UTF-8 text (a Linux path may be other bytes: the bridge names its paths in its messages and
    on MQTT, and takes none that is not). The configuration file's own path and the home folder
    are no keys: they may be any bytes.
+4. A path given empty (``audit_file = ""``, or ``ROTOR_BRIDGE_AUDIT_FILE=`` from a variable
+   left unset) is an error: pydantic reads it as ``.``, the current folder (an attack pass: an
+   empty audit_file passed check-config, and every line was lost at run; an empty password
+   file was "not a file").
 """
 
 from __future__ import annotations
 
 import types
+from pathlib import Path
 from typing import Annotated, Any, Union, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
@@ -58,6 +63,8 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     field = cls.model_fields.get(info.field_name or "")
     if field is not None and takes_boolean_for_number(field.annotation, value):
         raise ValueError("must be a number, not true or false")
+    if field is not None and value == "" and _a_path(field.annotation):  # rule 4
+        raise ValueError("empty: name a file, or leave the key out")
     if field is None or not _a_model(field.annotation):
         fault = _text_fault(value)
         if fault is not None:
@@ -84,6 +91,13 @@ def _text_fault(value: Any) -> str | None:
     else:
         return None
     return next((fault for fault in inner if fault is not None), None)
+
+
+def _a_path(annotation: Any) -> bool:
+    """Whether ``annotation`` is a path (also with None)."""
+    if get_origin(annotation) in (Union, types.UnionType):
+        return any(_a_path(a) for a in get_args(annotation))
+    return annotation is Path
 
 
 def _a_model(annotation: Any) -> bool:
