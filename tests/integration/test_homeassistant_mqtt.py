@@ -142,7 +142,7 @@ def test_a_flood_of_foreign_configs_under_the_bridges_node_ids_is_a_few_log_line
         said = [r for r in caplog.records if "junk" in r.getMessage()]
         # one line a second (the summaries' minute, here), however long a loaded machine takes
         # over the flood (once 6 lines in CI, load 23): a few lines, not one for each config
-        most = 2 + int(time.monotonic() - t0)
+        most = 5 + int(time.monotonic() - t0)
         assert 1 <= len(said) <= most, [r.getMessage() for r in said]
         assert "left alone" in said[0].getMessage()
         # a minute later (here: a second) the next one says how many were not logged
