@@ -1328,3 +1328,17 @@ def test_a_wind_topic_of_the_bridges_own_is_refused_naming_the_key(topic: str, u
     assert "(under rotor/dish, rotator 'dish''s)" in refusal(two)
     two["rotators"][0]["wind_topic"] = "rotor/weather/wind"  # under the base topic, no one's
     settings_from(two, {})
+
+
+@pytest.mark.parametrize("topic", ["rotor/weather/wind", "rotor/wind_kmh", "shack/anemometer"])
+def test_a_wind_topic_beside_a_lone_rotators_words_is_taken(topic: str) -> None:
+    """settings/wind.py rule 3, a review: a lone rotator's topic is the base topic, and a
+    station's topic beside its words (under the base topic, no one's, as with two rotators)
+    was refused as the rotator's own; a rotator's own word there is still refused."""
+    wind = {"wind_topic": topic, "wind_park_above": 60, "park_az_deg": 0}
+    rotator = {**wind, "topic": "shack"} if topic.startswith("shack") else wind
+    settings = settings_from(document(rotator), {})
+    assert settings.rotators[0].wind_topic == topic
+    root = topic.split("/")[0]
+    rotator["wind_topic"] = f"{root}/status"
+    assert f"(under {root}, rotator 'tower''s)" in refusal(document(rotator))

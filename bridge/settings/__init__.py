@@ -344,19 +344,27 @@ class Settings(BaseSettings):
         """settings/wind.py rule 3: a wind topic is none of the bridge's own topics (a
         rotator's, a group's, the bridge's ``B/bridge/...`` and the station features'), where
         no weather station publishes: such a topic would stay silent, or carry the bridge's own
-        numbers (an attack pass: ``wind_topic = "rotor/bearing"`` was taken without a word)."""
-        ours = [(f"rotator {r.id!r}", self.rotator_topic(r)) for r in self.rotators]
-        ours += [(f"group {g.id!r}", self.group_topic(g)) for g in self.groups]
-        ours += [("the bridge", f"{self.mqtt.base_topic}/{w}") for w in sorted(station_words())]
+        numbers (an attack pass: ``wind_topic = "rotor/bearing"`` was taken without a word).
+        Under a rotator's or a group's topic only its words are its own, as for a rotator's
+        topic under another's (``_rotator_topics``): a lone rotator's topic is the base topic,
+        and a station's ``rotor/weather/wind`` beside it is no topic of the bridge's (a review:
+        it was refused with one rotator, and taken with two)."""
+        words, station = reserved(), station_words()
+        ours = [(f"rotator {r.id!r}", self.rotator_topic(r), words) for r in self.rotators]
+        ours += [(f"group {g.id!r}", self.group_topic(g), words) for g in self.groups]
         for i, r in enumerate(self.rotators):
             topic = r.wind_topic
             if topic is None:
                 continue
-            for whose, root in ours:
-                if topic == root or topic.startswith(root + "/"):
+            for whose, root, own in [*ours, ("the bridge", self.mqtt.base_topic, station)]:
+                word = topic.removeprefix(root + "/").split("/")[0]
+                if (topic == root and own is words) or (
+                    topic.startswith(root + "/") and word in own
+                ):
+                    under = f"{root}/{word}" if own is station else root
                     raise ValueError(
                         f"rotators[{i}].wind_topic: {topic} is one of the bridge's own topics "
-                        f"(under {root}, {whose}'s): give the weather station's topic"
+                        f"(under {under}, {whose}'s): give the weather station's topic"
                     )
         return self
 

@@ -13,7 +13,9 @@ Rules:
    hold time (``wind_hold_min``) stands between the two anyway.
 3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station;
    and none of the bridge's own (a rotator's, a group's, the bridge's: settings/__init__.py
-   ``_wind_topics``), where no weather station publishes.
+   ``_wind_topics``), where no weather station publishes. Under a rotator's topic only its
+   words are its own: a lone rotator's topic is the base topic, and ``rotor/weather/wind``
+   beside them is taken, as with two rotators.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
