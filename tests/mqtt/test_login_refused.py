@@ -5,6 +5,7 @@ tests/faults/test_security.py."""
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 import paho.mqtt.client as paho
 import pytest
@@ -13,9 +14,10 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.interfaces.mqtt.connection import Connection
 from bridge.settings import MqttSettings
+from tests.faults.conftest import Pki
 
 
-def refused_with(code: int, caplog: pytest.LogCaptureFixture, **login: str) -> list[str]:
+def refused_with(code: int, caplog: pytest.LogCaptureFixture, **login: object) -> list[str]:
     settings = MqttSettings(host="127.0.0.1", port=1, client_id="login-t", **login)  # type: ignore[arg-type]
     conn = Connection(settings, "login-t", subscriptions=["rotor/target"], on_message=print)
     reason = ReasonCode(PacketTypes.CONNACK, identifier=code)
@@ -49,4 +51,23 @@ def test_a_refused_connection_without_a_login_says_to_set_one(
     caplog.clear()
     assert refused_with(0x88, caplog) == [  # (no login's fault: said as before)
         "MQTT broker refused the connection: Server unavailable (retrying)"
+    ]
+
+
+def test_a_refused_certificate_login_names_the_certificate_not_a_password(
+    caplog: pytest.LogCaptureFixture, tmp_path: Path
+) -> None:
+    """A review of login_hint: a broker that takes the client certificate as the login
+    (use_identity_as_username) refused it, and the bridge said to set a user name and a
+    password file, which that broker does not ask for."""
+    pki = Pki(tmp_path / "pki")
+    tls = {
+        "enabled": True,
+        "ca_file": str(pki.path("ca.crt")),
+        "cert_file": str(pki.path("client.crt")),
+        "key_file": str(pki.path("client.key")),
+    }
+    assert refused_with(0x87, caplog, tls=tls) == [  # type: ignore[arg-type]
+        "MQTT broker refused the connection: Not authorized: check the client certificate "
+        "(mqtt.tls.cert_file) and the broker's access rules (retrying)"
     ]

@@ -40,10 +40,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
    reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
    never a crash; a login refused names the keys to check (``login_hint``: it said "Not
-   authorized" and no key, an attack pass). Rule 7 only slows that loop down. A connection
-   the broker closes before it answers the CONNECT (an ACL on the client id, a connection
-   limit, a broker without MQTT 5) is said too, once, with the likely fixes
-   (``_closed_early``): it is never silent.
+   authorized" and no key, an attack pass): with a client certificate and no user name, the
+   certificate (a broker that takes it as the login), not a password to set. Rule 7 only
+   slows that loop down. A connection the broker closes before it answers the CONNECT (an
+   ACL on the client id, a connection limit, a broker without MQTT 5) is said too, once, with
+   the likely fixes (``_closed_early``): it is never silent.
 7. One client id, one connection. A broker that gets a second connection with a client id
    closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
    socket), so two processes with one id (two hosts sharing a configuration, a stale container
@@ -233,6 +234,10 @@ def login_hint(reason: str, settings: MqttSettings) -> str:
     """Rule 6: what to check when the broker refused the login (``reason``), else ""."""
     if reason not in LOGIN_REFUSED:
         return ""
+    if settings.username is None and settings.tls.cert_file is not None:  # (a review: a
+        return (  # broker that takes the certificate as the login was told of a password)
+            ": check the client certificate (mqtt.tls.cert_file) and the broker's access rules"
+        )
     if settings.username is None:
         return ": the broker asks for a login: set mqtt.username and mqtt.password_file"
     return (
