@@ -24,7 +24,8 @@ Rules:
    the STOP would hold the park back before one and not after it (a review).
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept (the report says which: a storm known only from a
-   replay, rule 6, parked nothing). The next reading clears it.
+   replay, rule 6, parked nothing; one whose park a stop or lock ON stopped, rule 3, is not
+   "parked"). The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same (a safeguard: the settings refuse such a park when they are
    read, settings/wind.py rule 1).
@@ -223,6 +224,8 @@ class WindPark:
         if not self._silent and now - quiet_from >= cfg.silent_s:  # rule 4
             self._silent = True
             kept = "parked for the storm" if self.storm else "no storm"
+            if self._halted:  # rule 3: a STOP or lock ON stopped the park (a review)
+                kept = "a storm whose park a stop or lock ON stopped: motion refused"
             if self._replayed:  # rule 6: nothing was parked
                 kept = (
                     "a storm known only from the reading the broker kept: motion refused, "

@@ -398,3 +398,19 @@ def test_the_silence_of_a_storm_known_only_from_a_replay_says_nothing_was_parked
         "no wind reading on weather/wind for 15 min: keeping the state it had (a storm known "
         "only from the reading the broker kept: motion refused, nothing parked)"
     )
+
+
+def test_the_silence_of_a_storm_whose_park_was_stopped_says_it_was_stopped() -> None:
+    """Rules 3 and 4, a review: the operator's STOP stopped the storm's park, and the wind
+    station's silence then was reported as "keeping the state it had (parked for the storm)"
+    while the rotor stood where the STOP left it."""
+    part = park()
+    part.reading(80.0, 0.0)
+    assert part.step(scene(0.0)).target is not None
+    part.halted()  # the operator's STOP
+    silent = part.step(scene(900.0))
+    assert silent.target is None and silent.error is not None
+    assert silent.error.message == (
+        "no wind reading on weather/wind for 15 min: keeping the state it had (a storm whose "
+        "park a stop or lock ON stopped: motion refused)"
+    )
