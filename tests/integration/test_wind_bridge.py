@@ -15,6 +15,7 @@ import pytest
 from tests.support import Mosquitto, Probe, wait_until
 from tests.support.rig import Rig
 from tests.support.state import kept
+from tests.support.waiting import slow
 
 TOPIC = "weather/station/wind"
 
@@ -342,3 +343,33 @@ def test_a_calm_the_broker_replays_after_a_restart_never_ends_the_storm(
         rig.close()
         probe.close()
         broker.stop()
+
+
+def test_the_bridges_end_leaves_a_storms_park_to_go_on(rig: Rig) -> None:
+    """app.py rule 6: the end stops every rotor that may turn, but a storm's park goes on (a
+    stop would keep it from being tried again after the restart: wind.py rule 3)."""
+    start(rig, emu={"start_az_deg": 300})
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: a storm, the park 210 degrees away
+    wait_until(lambda: rig.emu.state().is_moving, slow(10), "the park under way")
+    stops = len(rig.emu.frames("stop"))
+    rig.stop()
+    assert len(rig.emu.frames("stop")) == stops  # no stop at the end
+    assert not kept(rig.tmp / "state.json", "tower", "storm_halted")
+    rest = rig.emu.wait_until(lambda d, now: d.state(now), lambda s: not s.is_moving, slow(30))
+    assert abs((rest.az_deg - 90.0 + 180.0) % 360.0 - 180.0) <= 1.0, rest  # on to the park
+
+
+def test_the_bridges_end_stops_a_turn_in_a_storm_known_only_from_a_replay(rig: Rig) -> None:
+    """app.py rule 6 and wind.py rule 6: a storm known only from a replayed reading parks
+    nothing, so a turn under way then is no storm's park: the end stops it like any."""
+    start(rig, emu={"start_az_deg": 100, "az_speed_deg_s": 3.0})
+    rig.probe.publish("rotor/target", "300")
+    wait_until(lambda: rig.emu.state().is_moving, slow(10), "the turn under way")
+    assert rig.app is not None
+    rig.app.rotators[0].wind(90.0, replayed=True)  # as the feed hands a reading replayed
+    wind_of(rig, lambda w: w.get("storm") and w.get("replayed"))
+    stops = len(rig.emu.frames("stop"))
+    rig.stop()
+    assert len(rig.emu.frames("stop")) > stops  # the turn's stop before the end
+    rest = rig.emu.wait_until(lambda d, now: d.state(now), lambda s: not s.is_moving, slow(10))
+    assert rest.az_deg < 250.0, rest  # not on to 300
