@@ -160,3 +160,34 @@ def test_hamlib_rotctl_sets_and_reads_both_axes_and_stops_both(rig: Rig, rotctl_
     az.wait_for(lambda s: not s.is_moving, 5)
     el.wait_for(lambda s: not s.is_moving, 5)
     assert az.frames("stop") and el.frames("stop")  # one S, a stop on each wire
+
+
+def test_the_bridges_end_mid_turn_stops_both_boxes(rig: Rig) -> None:
+    """app.py rule 6 for a rotator of two boxes: the end's stop goes on both wires."""
+    az, el = composite(rig)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.publish("rotor/target", "300 80")
+    az.wait_for(lambda s: s.is_moving and s.az_deg > 60, 10)
+    el.wait_for(lambda s: s.is_moving and s.el_deg > 20, 10)
+    az_stops, el_stops = len(az.frames("stop")), len(el.frames("stop"))
+    rig.stop()
+    assert len(az.frames("stop")) > az_stops and len(el.frames("stop")) > el_stops
+    assert az.wait_for(lambda s: not s.is_moving, 5).az_deg < 290
+    assert el.wait_for(lambda s: not s.is_moving, 5).el_deg < 75
+
+
+def test_the_bridges_end_stops_the_elevation_still_turning_after_the_azimuth_came(
+    rig: Rig,
+) -> None:
+    """app.py rule 6: one box still turning is a rotor turning."""
+    az, el = composite(rig)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.publish("rotor/target", "12 85")
+    az.wait_for(lambda s: s.az_deg == 12 and not s.is_moving, 10)
+    el.wait_for(lambda s: s.is_moving and s.el_deg > 10, 10)
+    el_stops = len(el.frames("stop"))
+    rig.stop()
+    assert len(el.frames("stop")) > el_stops
+    assert el.wait_for(lambda s: not s.is_moving, 5).el_deg < 80
