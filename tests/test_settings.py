@@ -1342,3 +1342,22 @@ def test_a_wind_topic_beside_a_lone_rotators_words_is_taken(topic: str) -> None:
     root = topic.split("/")[0]
     rotator["wind_topic"] = f"{root}/status"
     assert f"(under {root}, rotator 'tower''s)" in refusal(document(rotator))
+
+
+def test_a_configuration_file_where_the_console_keeps_its_secret_is_refused(
+    tmp_path: Path,
+) -> None:
+    """Settings rule 6, a review: the console's secret beside the state file is a file the
+    bridge writes, and the configuration file is none of those; a configuration file named
+    console-secret in the state file's folder passed check-config, and the console took the
+    configuration (readable by more than the service, often) as its login secret."""
+    pw = tmp_path / "console-password"
+    pw.write_text("a console password\n")
+    pw.chmod(0o600)
+    path = tmp_path / "console-secret"
+    path.write_text(f'state_file = "{tmp_path}/s.json"\n{MINIMAL}\n[web]\npassword_file = "{pw}"\n')
+    out = cli("check-config", "-c", str(path))
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert (
+        f"the console's secret kept beside state_file: {path} is the configuration file itself"
+    ) in out.stderr

@@ -572,8 +572,10 @@ def settings_from(
         raise ConfigError(format_validation_error(exc, data, env)) from None
     except SettingsError as exc:  # a variable pydantic-settings reads as JSON, and cannot
         raise ConfigError(_not_json(exc, env)) from None
-    for name in ("state_file", "audit_file"):  # rule 6: nor the file itself
-        written = getattr(settings, name)
+    own = [("state_file", settings.state_file), ("audit_file", settings.audit_file)]
+    if settings.web.password_file is not None:  # (a review: the secret was not looked at)
+        own.append(("the console's secret kept beside state_file", settings.console_secret()))
+    for name, written in own:  # rule 6: nor the file itself
         if path and written is not None and same_file(written, path):
             raise ConfigError(
                 f"invalid configuration:\n  {name}: {written} is the configuration file itself: "
