@@ -128,10 +128,10 @@ def test_a_lock_from_the_page_holds_and_a_move_is_refused_at_once_on_the_page(
                 break
         refused = client.command("tower", command="target", az=200)  # refused at once
         assert (refused.status, refused.doc["code"]) == (409, "locked")
-        while True:  # the page hears it as an error event too
-            name, data = stream.next()
-            if name == "error":
-                break
+        _, data = stream.until(  # the page hears it as an error event too (its own)
+            lambda name, data: name == "error" and "target az 200" in str(data.get("command")),
+            what="the refusal's error",
+        )
         assert data["rotator"] == "tower" and "lock" in data["message"]
     finally:
         stream.close()

@@ -7,7 +7,8 @@ import asyncio
 import concurrent.futures
 import http.client
 import json
-from collections.abc import Coroutine
+import time
+from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
@@ -114,6 +115,21 @@ class EventStream:
                 name = value
             elif field == "data":
                 data.append(value)
+
+    def until(
+        self, want: Callable[[str, Any], bool], timeout_s: float = 10.0, what: str = ""
+    ) -> tuple[str, Any]:
+        """The first event (name, data) ``want`` takes, within ``slow(timeout_s)``; the events
+        before it are passed over (a status, or another error: a wait that took the first
+        error of any kind failed on a line's junk reported meanwhile)."""
+        deadline = time.monotonic() + slow(timeout_s)
+        seen: list[str] = []
+        while time.monotonic() < deadline:
+            name, data = self.next()
+            if want(name, data):
+                return name, data
+            seen.append(name if name == "status" else f"{name} {data}")
+        raise AssertionError(f"no event {what or want} in {slow(timeout_s):g} s; saw {seen[-5:]}")
 
     def close(self) -> None:
         self.conn.close()

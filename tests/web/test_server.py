@@ -68,8 +68,10 @@ def test_a_refusal_is_answered_and_reaches_the_feed_and_r_error(
     try:
         answer = client.command("hf", command="target", az=310)
         assert answer.status == 409 and answer.doc["code"] == "keep_out"
-        while (event := stream.next())[0] != "error":
-            pass
+        event = stream.until(  # the refusal's own: another error may come first
+            lambda name, data: name == "error" and data.get("command") == "console: target az 310",
+            what="the refusal's error",
+        )
         assert event[1]["rotator"] == "hf" and "keep-out" in event[1]["message"]
         assert event[1]["command"] == "console: target az 310"
     finally:
