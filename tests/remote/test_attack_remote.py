@@ -559,6 +559,10 @@ import importlib, importlib.abc, runpy, signal, sys
 where, conf, how = sys.argv[1], sys.argv[2], sys.argv[3]
 kind, _, name = where.partition(":")
 
+# Python's own handler, as under a terminal: a suite started as a shell's background job
+# inherits SIGINT ignored, the raised signal was lost and each case waited out info_wait_s
+signal.signal(signal.SIGINT, signal.default_int_handler)
+
 def interrupt():
     signal.raise_signal(signal.SIGINT)
 
