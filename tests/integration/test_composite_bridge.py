@@ -41,10 +41,10 @@ def test_one_target_moves_both_boxes_and_one_stop_stops_both(rig: Rig) -> None:
     rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
     rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
 
+    t = time.monotonic()  # before the move: its idle may come before the emulators are asked
     rig.probe.publish("rotor/target", "123.4 30")
     az.wait_for(lambda s: s.az_deg == 123.4 and not s.is_moving, 20)
     el.wait_for(lambda s: s.el_deg == 30 and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     doc = status(rig)
     assert (doc["bearing"], doc["elevation"]) == (123.4, 30)  # each from its own box
@@ -55,6 +55,7 @@ def test_one_target_moves_both_boxes_and_one_stop_stops_both(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "300 80")
     az.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
     el.wait_for(lambda s: s.is_moving and s.el_deg > 35, 10)
+    t = time.monotonic()  # before the stop, whose idle may come before the emulators are asked
     rig.probe.publish("rotor/stop", "STOP")
     az_stopped = az.wait_for(lambda s: not s.is_moving, 5)
     el_stopped = el.wait_for(lambda s: not s.is_moving, 5)
@@ -62,7 +63,6 @@ def test_one_target_moves_both_boxes_and_one_stop_stops_both(rig: Rig) -> None:
     assert [f.data for f in az.frames("stop")][:1] == [b";"]
     assert [f.data for f in el.frames("stop")][:1] == [b"S"]
     assert az_stopped.az_deg < 290 and el_stopped.el_deg < 75
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     doc = status(rig)
     assert doc["bearing"] == round(az.state().az_deg, 1)
@@ -144,11 +144,11 @@ def test_hamlib_rotctl_sets_and_reads_both_axes_and_stops_both(rig: Rig, rotctl_
     rig.rotators[-1]["rotctld_port"] = port
     rig.start()
     rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    t = time.monotonic()  # before the move: its idle may come before the emulators are asked
     run = run_rotctl(rotctl_path, 2, port, "P", "150.5", "25")
     assert run.returncode == 0, run.stderr
     az.wait_for(lambda s: s.az_deg == 150.5 and not s.is_moving, 20)
     el.wait_for(lambda s: s.el_deg == 25 and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     run = run_rotctl(rotctl_path, 2, port, "p")
     assert [float(x) for x in run.stdout.split()] == [150.5, 25.0], run.stdout

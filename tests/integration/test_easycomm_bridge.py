@@ -31,19 +31,19 @@ def test_az_el_target_bearing_and_stop(rig: Rig, model: str) -> None:
     snap = rig.retained()
     assert snap["rotor/bearing"] == b"10" and snap["rotor/elevation"] == b"5"
 
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", '{"azimuth": 123.4, "elevation": 45}')
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (123.4, 45.0) and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert (status(rig)["bearing"], status(rig)["elevation"]) == (123.4, 45)  # tenths
     assert [f.data for f in emu.frames("move")] == [b"AZ123.4", b"EL45.0"]
 
     rig.probe.publish("rotor/target", '{"azimuth": 300, "elevation": 10}')
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()  # before the stop, whose idle may come before the emulator is asked
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     assert stopped.az_deg < 290 and [f.data for f in emu.frames("stop")][:2] == [b"SA", b"SE"]
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     # where it stopped, read back in tenths
     assert status(rig)["bearing"] == pytest.approx(emu.state().az_deg, abs=0.051)

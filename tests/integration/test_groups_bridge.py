@@ -84,12 +84,12 @@ def test_one_group_stop_while_turning_stops_both(rig: Rig) -> None:
     rig.probe.publish("rotor/stack/target", "300")  # upper 10 -> 300, lower 190 -> 120
     up.wait_for(lambda s: s.is_moving)
     low.wait_for(lambda s: s.is_moving)
+    t = time.monotonic()  # before the stop, whose idles may come before the emulators are asked
     rig.probe.publish("rotor/stack/stop", "")
     up_still = up.wait_for(lambda s: not s.is_moving, 3)
     low_still = low.wait_for(lambda s: not s.is_moving, 3)
     assert up.frames("stop") and low.frames("stop")
     assert not near(up_still.az_deg, 300, 30) and not near(low_still.az_deg, 120, 30)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/upper/state", "idle", timeout_s=10, after=t)
     rig.probe.wait_value("rotor/lower/state", "idle", timeout_s=10, after=t)
     assert [f.data for f in up.frames(*BEARING_OUTCOMES)] == [b"AP1300\r"]  # never again

@@ -42,10 +42,10 @@ def test_target_stop_while_turning_and_the_bearing_read_back(rig: Rig, model: st
     assert rig.retained()["rotor/bearing"] == b"10"
 
     combi = model == "prosistel-combi"
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", '{"azimuth": 123.4, "elevation": 45}' if combi else "123.4")
     want = (123.4, 45.0) if combi else (123.0, 0.0)  # tenths, or whole degrees on a D
     emu.wait_for(lambda s: (s.az_deg, s.el_deg or 0.0) == want and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert rig.status("tower").bearing_deg == want[0]
     moves = [b"\x02AG1234\r", b"\x02BG450\r"] if combi else [b"\x02AG123\r"]
@@ -53,13 +53,13 @@ def test_target_stop_while_turning_and_the_bearing_read_back(rig: Rig, model: st
 
     rig.probe.publish("rotor/target", "300")
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()  # before the stop, whose idle may come before the emulator is asked
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     assert stopped.az_deg < 290
     hard = each(model, b"G9999" if combi else b"G999")  # (again, if a reading in flight
     assert frames(emu, "stop")[: len(hard)] == hard  # showed the rotor still turning)
     assert set(frames(emu, "stop")) == set(hard)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     where = round(emu.state().az_deg, 1 if combi else 0)
     assert rig.status("tower").bearing_deg == pytest.approx(where, abs=0.051)
@@ -167,9 +167,9 @@ def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(
     rig.ready("mast", timeout_s=15)
     assert frames(emu, "output off") == [b"\x02%sS\r" % unit]
     assert rig.retained()["rotor/bearing"] == b"10"  # the elevation is this rotator's bearing
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", "45.4")
     emu.wait_for(lambda s: s.el_deg == 45.0 and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert rig.status("mast").bearing_deg == 45.0
     assert frames(emu, "move") == [b"\x02%sG45\r" % unit]

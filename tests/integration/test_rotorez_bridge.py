@@ -102,11 +102,11 @@ def test_stop_stops_now(rig: Rig) -> None:
     rig.ready("tower")
     rig.probe.publish("rotor/target", "300")
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 20)
+    t = time.monotonic()  # before the stop, whose idle may come before the emulator is asked
     rig.probe.publish("rotor/stop", "")
     stopped = emu.wait_for(lambda s: not s.is_moving, 2)
     assert stopped.az_deg < 100
     assert emu.frames("stop")
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert not near(float(rig.retained()["rotor/bearing"]), 300, 100)
 

@@ -25,22 +25,22 @@ def test_target_to_the_tenth_stop_while_turning_and_the_bearing_read_back(rig: R
     ready(rig)
     assert rig.retained()["rotor/bearing"] == b"10.3"
 
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", "123.4")
     emu.wait_for(lambda s: s.az_deg == 123.4 and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert status(rig)["bearing"] == 123.4
     assert [f.data for f in emu.frames("move")] == [b"AP1123.4\r;"]
 
     rig.probe.publish("rotor/target", "300")
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()  # before the stop, whose idle may come before the emulator is asked
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     # the stop lane's STOP and the main connection's copy may both go out (lastword.py: a
     # stop carried out twice stops twice); nothing but stops
     stops = [f.data for f in emu.frames("stop")]
     assert stopped.az_deg < 290 and stops and set(stops) == {b";"} and len(stops) <= 2
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert status(rig)["bearing"] == round(emu.state().az_deg, 1)  # where it stopped, read back
     assert emu.frames("refused") == []

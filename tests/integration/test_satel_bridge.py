@@ -26,10 +26,10 @@ def test_target_slews_and_nothing_is_sent_during_the_slew(rig: Rig) -> None:
     snap = rig.retained()
     assert snap["rotor/version"] == b"SatEL"
     assert emu.state().motion_enabled is True  # enabled on connect (and verified)
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", '{"azimuth": 100, "elevation": 45}')
     emu.wait_for(lambda s: s.slewing, 5)
     emu.wait_for(lambda s: near(s, 100, 45), 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     status = json.loads(rig.retained()["rotor/status"])
     assert (status["bearing"], status["elevation"], status["estimated"]) == (100, 45, False)

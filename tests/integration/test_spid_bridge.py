@@ -25,11 +25,11 @@ def test_az_el_target_then_elevation_alone(rig: Rig, model: str) -> None:
     ready(rig)
     snap = rig.retained()
     assert snap["rotor/bearing"] == b"10" and snap["rotor/elevation"] == b"5"
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", '{"azimuth": 123.5, "elevation": 45}')
     emu.wait_for(
         lambda s: abs(s.az_deg - 123.5) < 0.3 and abs(s.el_deg - 45) < 0.3 and not s.is_moving, 20
     )
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     status = json.loads(rig.retained()["rotor/status"])
     assert (status["bearing"], status["elevation"]) == (123.5, 45)
