@@ -166,8 +166,8 @@ def test_lock_refuses_motion_and_survives_a_restart(rig: Rig) -> None:
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
     assert "locked" in err["message"] and err["command"] == "target '120'"
     rig.stop()
+    t = time.monotonic()  # before the start: it may publish before this thread runs on
     rig.start()  # a restart of the bridge keeps the lock
-    t = time.monotonic()
     rig.probe.wait_value("rotor/lock/state", "ON", after=t)
     rig.probe.wait_value("rotor/availability", "online", after=t)
     rig.probe.publish("rotor/target", "120")

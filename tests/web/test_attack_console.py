@@ -560,8 +560,8 @@ def test_idle_connections_cannot_starve_the_bridge_of_descriptors(
                 "the flood to reach the bridge",
             )
             held = _open_fds(bridge.pid)
+            t = time.monotonic()  # before the restart: the bridge may be back before it returns
             broker.restart()
-            t = time.monotonic()
             back = True
             try:
                 rig.mqtt.wait_for(rig.t("availability"), lambda m: m.text == "online", 20, t)
