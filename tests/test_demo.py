@@ -28,7 +28,7 @@ from tests.demo_process import DemoProcess
 from tests.support import Probe, retained_snapshot
 from tests.support.mosquitto import answers, free_port
 from tests.support.sky import sgp4_altaz
-from tests.support.waiting import slow
+from tests.support.waiting import slow, wait_until
 
 ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
 ALL_MODELS += [
@@ -224,6 +224,57 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
         proc.close()
     assert not answers("127.0.0.1", port)
     assert _left_behind(tmpdir) == []
+
+
+def _children(pid: int) -> dict[int, str]:
+    """The live processes whose parent is ``pid`` (a zombie is no longer running), by command."""
+    found: dict[int, str] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:  # gone meanwhile
+            continue
+        state, ppid = stat.rsplit(")", 1)[1].split()[:2]
+        if int(ppid) == pid and state != "Z":
+            found[int(entry.name)] = cmd
+    return found
+
+
+def _running(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def test_a_demo_killed_outright_leaves_no_private_broker_behind(tmp_path: Path) -> None:
+    """A demo killed with SIGKILL (or by the out-of-memory killer) cleans nothing up: its
+    private mosquitto ran on for good, and the next demo on that port took it for the user's own
+    broker. The broker dies with the demo, whether the demo runs as root (mosquitto would drop to
+    its own user, which clears the kernel's death signal) or not."""
+    port = free_port()
+    proc = DemoProcess(["--mqtt-port", str(port)], tmp_path / "tmp")
+    brokers: dict[int, str] = {}
+    try:
+        base = proc.base_topic()
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/availability", "online", timeout_s=20)
+        probe.close()
+        brokers = {p: c for p, c in _children(proc.proc.pid).items() if "mosquitto" in c}
+        assert len(brokers) == 1, _children(proc.proc.pid)
+        proc.proc.kill()
+        proc.wait(slow(10))
+        wait_until(lambda: not any(_running(p) for p in brokers), 10, "the private broker to end")
+        assert not answers("127.0.0.1", port), "the next demo would take it for the user's broker"
+    finally:
+        for pid in brokers:  # (a broker left by a failed run must not outlive the test)
+            if _running(pid):
+                os.kill(pid, signal.SIGKILL)
+        proc.close()
 
 
 def test_every_model_runs_turns_and_ends_cleanly(tmp_path: Path) -> None:

@@ -17,7 +17,10 @@ Rules:
    service (its base topic, its client id) must not turn the demo into that service's twin.
 3. Everything it starts (private broker, emulators, bridge, console client) is stopped and its
    temporary folder removed on every way out: ``--duration-s`` over, ``q`` or ^D typed, ^C,
-   SIGTERM, SIGHUP (terminal closed), a failure during start-up.
+   SIGTERM, SIGHUP (terminal closed), a failure during start-up. Killed outright (SIGKILL, the
+   out-of-memory killer) it runs no clean-up, but its private broker still ends with it
+   (demo/mosquitto.py: the kernel's death signal), so the next demo never takes it for the
+   user's own.
 4. When it ends it removes what it left retained on the broker (its state topics and its Home
    Assistant configs), so runs do not pile up dead devices in Home Assistant. Not so under a
    ``--base-topic`` the user chose: that may hold someone else's retained state. A base topic
@@ -280,7 +283,7 @@ def _run(
         print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
         return 1
     else:
-        broker = Mosquitto(workdir / "broker", port=port, host=host)
+        broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
         stack.callback(broker.stop)
         try:
             broker.start()

@@ -12,15 +12,28 @@ listener is bound. Another program on the port answers too, before mosquitto has
 to bind it; mosquitto then exits ("Address already in use") and every client would reach the
 other program's broker instead (under parallel tests: another test's, which this one's
 freezing and restarting then never touch).
+
+The demo's broker dies with the demo (``dies_with_parent``), however the demo ends: a demo killed
+with SIGKILL, or by the out-of-memory killer, runs no clean-up, and its broker ran on for good,
+answering on the port, where the next demo took it for the user's own broker. The kernel sends
+it SIGTERM when the thread that started it ends (``PR_SET_PDEATHSIG``, set between fork and
+exec; the demo starts it from its main thread, before it starts any other thread). The kernel
+forgets that signal when a process changes its user, as mosquitto started by root does (to the
+user ``mosquitto``, unless told ``user root``): run as root, its configuration says ``user root``;
+run by anyone else it never changes user. It listens on the loopback address only.
 """
 
 from __future__ import annotations
 
+import ctypes
+import os
 import re
 import shutil
+import signal
 import socket
 import subprocess
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Self
 
@@ -51,11 +64,37 @@ def answers(host: str, port: int, timeout_s: float = 0.5) -> bool:
 
 _RUNNING = re.compile(rb"mosquitto version \S+ running")  # said once every listener is bound
 
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _dies_with_this_thread() -> Callable[[], None] | None:
+    """A child's step before exec: SIGTERM when the thread that forks it ends (None where the
+    system has no ``prctl``). Everything it needs is looked up here, before the fork: the child
+    only calls it."""
+    prctl = getattr(ctypes.CDLL(None, use_errno=True), "prctl", None)
+    if prctl is None:
+        return None
+    parent = os.getpid()
+
+    def before_exec() -> None:
+        prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before the signal was asked for
+            os._exit(1)
+
+    return before_exec
+
 
 class Mosquitto:
     """``start()``/``stop()``; a free port unless one is given."""
 
-    def __init__(self, workdir: Path, *, port: int | None = None, host: str = "127.0.0.1") -> None:
+    def __init__(
+        self,
+        workdir: Path,
+        *,
+        port: int | None = None,
+        host: str = "127.0.0.1",
+        dies_with_parent: bool = False,
+    ) -> None:
         exe = find_mosquitto()
         if exe is None:
             raise BrokerError(
@@ -67,19 +106,26 @@ class Mosquitto:
         self.workdir = workdir
         self.conf = workdir / "mosquitto.conf"
         self.log = workdir / "mosquitto.log"
+        self.dies_with_parent = dies_with_parent
         self.proc: subprocess.Popen[bytes] | None = None
 
     def config(self) -> str:
-        """mosquitto.conf: one listener, nothing kept, anyone may connect (the demo's own)."""
-        return f"listener {self.port} {self.host}\npersistence false\nallow_anonymous true\n"
+        """mosquitto.conf: one listener, nothing kept, anyone may connect (the demo's own); run
+        as root and dying with its parent, it stays root (the kernel's death signal would be
+        forgotten as it changed user)."""
+        root = "user root\n" if self.dies_with_parent and os.geteuid() == 0 else ""
+        return f"listener {self.port} {self.host}\npersistence false\nallow_anonymous true\n{root}"
 
     def start(self, timeout_s: float = 10.0) -> Self:
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.conf.write_text(self.config())
         with open(self.log, "ab") as log:
             logged = log.tell()  # (the log of an earlier start on the same path stays before it)
-            self.proc = subprocess.Popen(
-                [self.exe, "-c", str(self.conf), "-v"], stdout=log, stderr=subprocess.STDOUT
+            self.proc = subprocess.Popen(  # noqa: PLW1509 (no other thread runs yet: see above)
+                [self.exe, "-c", str(self.conf), "-v"],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                preexec_fn=_dies_with_this_thread() if self.dies_with_parent else None,
             )
         deadline = time.monotonic() + timeout_s
         while not (self._running(logged) and answers(self.host, self.port, 0.2)):
