@@ -857,6 +857,7 @@ class App:
     def stop(self) -> None:
         self._stopped.set()
         self.client.shutting_down()
+        self.express.shutting_down()  # (its rule 7: an end from now on is not a restart)
         yielded = self.client.yielded
         # claim rule 4, rule 6: at once, before any front end takes its time to close (a web
         # console's up to 10 s: a turn went on meanwhile), and no front end still open turns one

@@ -333,6 +333,33 @@ def test_the_express_ends_with_the_bridge(rig: Rig) -> None:
     assert child.wait(slow(5)) == 0  # its socket's end of file, not a kill
 
 
+def test_an_express_killed_while_the_bridge_stops_is_not_said_to_start_again(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A service manager's SIGKILL to the group (or the out-of-memory killer) ends the express
+    while the bridge stops its rotators: the log said "started again in 1 s" of a bridge on its
+    way out. Its end is said as one while the bridge stops, and it is not started again."""
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    flush = app.store.flush
+
+    def killed_meanwhile() -> None:  # (a step of the bridge's stop, with the express still up)
+        child.kill()
+        wait_until(app.express.ended.is_set, 10, "its end seen")
+        flush()
+
+    app.store.flush = killed_meanwhile  # type: ignore[method-assign]
+    rig.stop()
+    said = [r.getMessage() for r in caplog.records if "stop express ended" in r.getMessage()]
+    assert said and "as the bridge stops" in said[0], said
+    assert not [r for r in caplog.records if "started again" in r.getMessage()], said
+    assert app.express.starts == 1
+
+
 def test_a_broker_that_refuses_the_express_is_said_and_stops_take_the_lane(
     tmp_path: Path,
 ) -> None:

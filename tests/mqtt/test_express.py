@@ -955,6 +955,30 @@ def test_an_express_that_dies_is_said_started_again_and_given_the_ports_again() 
         e.stop()
 
 
+def test_an_express_that_dies_while_the_bridge_stops_is_not_said_to_start_again() -> None:
+    """Killed while the bridge was stopping (a service manager's SIGKILL to the group): the log
+    said it was "started again in 1 s", and it was, by a bridge on its way out. Its end is said
+    as one while the bridge stops, and nothing is started again."""
+    problems = Problems()
+    e = express([sys.executable, "-c", UP_AND_HOLDING], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    try:
+        wait_until(lambda: "a" in e.held, 10, "it holds the port")
+        e.shutting_down()
+        first = e._child
+        assert first is not None
+        first.kill()
+        said = wait_until(lambda: [p for p in problems.said if "ended" in p], 10, "its end said")
+        assert "as the bridge stops" in said[0] and "started again" not in said[0], said
+        assert e.runner is not None
+        e.runner.join(slow(10))
+        assert not e.runner.is_alive() and e.starts == 1, "started again while the bridge stops"
+    finally:
+        e.stop()
+
+
 def test_a_fight_over_its_client_id_is_said_and_unsaid_once_a_connection_lasts() -> None:
     from bridge.interfaces.mqtt.connection import STABLE_S
     from bridge.interfaces.mqtt.express import _Link

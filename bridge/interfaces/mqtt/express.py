@@ -67,7 +67,10 @@ Rules:
    (a bridge restarted at once finds them free), disconnects and exits on its end of file,
    and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
    socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
-   manager or a terminal signals the whole group; the bridge stops its rotators first).
+   manager or a terminal signals the whole group; the bridge stops its rotators first). From
+   the moment the bridge begins to stop (``shutting_down``, before it stops its rotators), an
+   express that ends (a service manager's SIGKILL to the group, the out-of-memory killer) is
+   said to have ended "as the bridge stops", and is not started again, nor said to be.
 8. A late frame never stops a newer move. The express may be descheduled between reading a
    STOP and writing its frame; meanwhile the bridge can carry the same STOP out, read a target
    published just after it and send the move, which the late frame would then stop. So every
@@ -356,7 +359,9 @@ class Express:
         self._killed: subprocess.Popen[bytes] | None = None  # the child _kill killed
         self._started = False
         self._stopping = False
-        self._wake = threading.Event()  # stop(): no restart, no wait for one
+        self._ending = False  # rule 7: the bridge stops (shutting_down): no restart
+        self._wake = threading.Event()  # stop(), shutting_down(): no restart, no wait for one
+        self.runner: threading.Thread | None = None  # the thread that starts the children
         self._said: set[str] = set()
         self._sync = 0  # rule 8: the newest sync word asked for
         self._holds: dict[str, int] = {}  # rotator -> the sync word its hold waits for
@@ -390,12 +395,20 @@ class Express:
     def start(self, mqtt311: bool) -> None:
         """Rule 1: once, never after ``stop``; the child is started off the caller's thread."""
         with self._lock:
-            if self._started or self._stopping or not self._frames:
+            if self._started or self._stopping or self._ending or not self._frames:
                 return
             self._started = True
-        threading.Thread(
+        self.runner = threading.Thread(
             target=self._run, args=(mqtt311,), name="stop express", daemon=True
-        ).start()
+        )
+        self.runner.start()
+
+    def shutting_down(self) -> None:
+        """Rule 7: the bridge begins to stop; the child runs on until ``stop``, but one that
+        ends meanwhile is not started again."""
+        with self._lock:
+            self._ending = True
+        self._wake.set()
 
     def stop(self) -> None:
         """Rule 7."""
@@ -596,6 +609,11 @@ class Express:
             why = self._life(mqtt311)
             if why is None:  # stopping
                 self.ended.set()
+                return
+            with self._lock:
+                ending = self._ending
+            if ending:  # rule 7: nothing is started again while the bridge stops
+                self._ended(f"{why} as the bridge stops")
                 return
             if time.monotonic() - t0 >= RESTART_STABLE_S:
                 wait_s = RESTART_FIRST_S
