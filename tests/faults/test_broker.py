@@ -8,8 +8,11 @@ idle, the last will.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
+import socket
+import threading
 import time
 
 import pytest
@@ -90,6 +93,98 @@ def test_broker_killed_and_restarted_repeatedly_including_during_motion(rig: Rig
     errors = [m.text for rid in rids for m in rig.probe.on(rig.topic(rid, "error"))]
     refused = [e for e in errors if "refused" in e and SYNC not in e]
     assert refused == [], refused
+
+
+class Severable:
+    """A TCP relay to the broker whose connections can be cut, and new ones refused until it is
+    mended: the broker away for the bridge alone, while the probe, connected directly, stays
+    subscribed and sees whatever the bridge sends on its return."""
+
+    def __init__(self, upstream: int) -> None:
+        self.upstream = upstream
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self.server.getsockname()[1])
+        self.severed = threading.Event()
+        self._lock = threading.Lock()
+        self._live: list[socket.socket] = []
+        self._all: list[socket.socket] = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self.server.accept()
+            except OSError:
+                return
+            if self.severed.is_set():
+                client.close()
+                continue
+            try:
+                broker = socket.create_connection(("127.0.0.1", self.upstream))
+            except OSError:
+                client.close()
+                continue
+            with self._lock:
+                self._live += [client, broker]
+                self._all += [client, broker]
+            for a, b in ((client, broker), (broker, client)):
+                threading.Thread(target=self._pump, args=(a, b), daemon=True).start()
+
+    @staticmethod
+    def _pump(a: socket.socket, b: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := a.recv(65536):
+                b.sendall(data)
+        for end in (a, b):
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+    def sever(self) -> None:
+        self.severed.set()
+        with self._lock:
+            live, self._live = self._live, []
+        for end in live:
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+    def mend(self) -> None:
+        self.severed.clear()
+
+    def close(self) -> None:
+        self.sever()
+        self.server.close()
+        with self._lock:
+            for end in self._all:
+                end.close()
+
+
+def test_an_error_from_while_the_broker_was_away_is_not_published_on_its_return(
+    rig: Rig,
+) -> None:
+    """An adapter unplugged and plugged back while the broker was away: the bridge's return
+    published "... does not exist" on R/error, of a port open again and a rotator online (the
+    user reads an error no longer true). docs/mqtt.md: errors from that time are dropped."""
+    relay = Severable(rig.broker.port)
+    rig.scope.callback(relay.close)
+    rig.mqtt_extra = {"port": relay.port}
+    emu = rig.add("ez", "rotorez")
+    app = rig.start()
+    rig.ready("ez")
+    away = time.monotonic()
+    relay.sever()
+    wait_until(lambda: not app.client.connected.is_set(), 10, "the bridge without its broker")
+    emu.unplug()
+    wait_until(lambda: "does not exist" in (rig.status("ez").last_error or ""), 10, "the port gone")
+    emu.replug()
+    wait_until(lambda: rig.status("ez").available, 15, "the port back")
+    relay.mend()
+    wait_until(app.client.connected.is_set, 20, "the bridge back on its broker")
+    hears_us(rig, "ez")  # (after whatever its return sent)
+    stale = [
+        m.text for m in rig.probe.on(rig.topic("ez", "error")) if m.t >= away and SYNC not in m.text
+    ]
+    assert stale == [], stale
+    assert rig.probe.on(rig.topic("ez", "availability"))[-1].text == "online"
 
 
 def test_commands_sent_while_the_bridge_process_was_dead_never_move_the_rotor(

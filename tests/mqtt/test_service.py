@@ -69,7 +69,7 @@ class RecordingPublisher:
         self.retained[topic] = text
         self.sent.append((topic, text, True))
 
-    def publish_event(self, topic: str, payload: str | bytes) -> None:
+    def publish_event(self, topic: str, payload: str | bytes, *, lapses: bool = False) -> None:
         text = payload.decode() if isinstance(payload, bytes) else payload
         self.sent.append((topic, text, False))
 

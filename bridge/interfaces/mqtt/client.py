@@ -26,7 +26,12 @@ each written out in the module that keeps it:
    rule 7); under MQTT 3.1.1 it cannot.
 3. On every connect: subscribe again and re-publish every retained message we own (the broker
    may have restarted without persistence and lost them). Retained messages are kept in a
-   cache; while disconnected they only update the cache; events wait (rule 13).
+   cache; while disconnected they only update the cache; events wait (rule 13), but for an
+   error (``publish_event(..., lapses=True)``: ``R/error``, ``G/error``) while the broker is
+   away (a connection was lost, none accepted since): it is dropped, counted and said once on
+   the return (it was logged when it happened), since by then it may be untrue (an attack pass:
+   "... does not exist" came out on the return of a port plugged back meanwhile, its rotator
+   online). One from before the first connection, or while a connection's look runs, waits.
 8. Retained state goes out at QoS 0 (STATE_QOS): the newest value supersedes every older one,
    so an acknowledgement buys nothing, while QoS 1 costs a PUBACK per message (half of the
    bridge's CPU with 32 rotators turning, benchmarks/) and lets paho re-send an old value over
@@ -155,6 +160,7 @@ class MqttClient(Connection):
         self._on_heard: Heard | None = None  # rule 14: the witnesses' hook
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
+        self._lapsed = 0  # rule 3: errors dropped while the broker was away, said on the return
         self._fence_topic = fence_topic  # rule 16
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
@@ -302,10 +308,13 @@ class MqttClient(Connection):
                     self._owned.sent(topic, data)
                     self._delivery.send(topic, data, qos, retain=True)
 
-    def publish_event(self, topic: str, payload: str | bytes) -> None:
+    def publish_event(self, topic: str, payload: str | bytes, *, lapses: bool = False) -> None:
+        """``lapses``: an error, dropped while the broker is away (rule 3)."""
         with self._lock:
             if self.connected.is_set():
                 self._delivery.send(topic, payload, 1, retain=False)
+            elif lapses and self._accepted_once and not self._up:
+                self._lapsed += 1  # rule 3
             else:
                 self._delivery.hold_event(topic, payload)  # rule 3
 
@@ -462,6 +471,13 @@ class MqttClient(Connection):
                 send(msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
         for topic, event in self._delivery.take_backlog():
             send(topic, event, 1, retain=False)
+        if self._lapsed:  # rule 3
+            log.info(
+                "%d error(s) from while the MQTT broker was away not published on R/error or "
+                "G/error (they may no longer be true; the log has each)",
+                self._lapsed,
+            )
+            self._lapsed = 0
         if look is not None:
             spare = self.spare  # interfaces/mqtt/stale.py rule 3: judged once all came
             if spare is not None:

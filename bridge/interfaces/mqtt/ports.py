@@ -48,14 +48,16 @@ class Publisher(Protocol):
 
     ``publish_retained`` with ``only_if_changed`` sends nothing when the payload equals the last
     one for that topic (rule 3). ``publish_offline_now`` marks retained topics ``offline`` and
-    waits until the broker has them (shutdown). ``publish_marker`` sends a message to the
+    waits until the broker has them (shutdown). ``publish_event`` with ``lapses`` (an error) is
+    dropped while the broker is away, not held for its return (client.py rule 3).
+    ``publish_marker`` sends a message to the
     bridge itself, at QoS 0, now or never (lastword.py); ``up``: a connection is accepted.
     """
 
     def publish_retained(
         self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
     ) -> None: ...
-    def publish_event(self, topic: str, payload: str | bytes) -> None: ...
+    def publish_event(self, topic: str, payload: str | bytes, *, lapses: bool = False) -> None: ...
     def publish_marker(self, topic: str, payload: str) -> None: ...
     def publish_offline_now(self, topics: list[str]) -> None: ...
 

@@ -345,7 +345,7 @@ class MqttService:
         t = self.topics.rotator(rotator_id)
         if event.kind is not ErrorKind.REFUSED:  # a stall, a stop that did not take: always
             self._publisher.publish_event(
-                t.error, json.dumps(event.as_dict(), separators=(",", ":"))
+                t.error, json.dumps(event.as_dict(), separators=(",", ":")), lapses=True
             )
             return
         left_out = self._limiter.admit(t.error)
@@ -355,7 +355,7 @@ class MqttService:
         if left_out:
             doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
             doc["suppressed"] = left_out
-        self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
+        self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")), lapses=True)
         log.info(  # rule 4: the same line for whoever reads the log (journalctl -f)
             "%s: refused %s: %s",
             rotator_id,
@@ -401,7 +401,7 @@ class MqttService:
         if left_out:
             doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
             doc["suppressed"] = left_out
-        self._publisher.publish_event(topic, json.dumps(doc, separators=(",", ":")))
+        self._publisher.publish_event(topic, json.dumps(doc, separators=(",", ":")), lapses=True)
         log.info(
             "group %s: refused %s: %s",
             group_id,
