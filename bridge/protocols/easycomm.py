@@ -67,10 +67,21 @@ Rules:
    review: the poll's answer in flight was taken for the stop's, on a controller that answers
    no stop; the poll waited out its reply time, the codec took the controller for one that
    answers stops, so the repeat of a double STOP ate the next poll's answer too, and 1 s
-   without a reading put the rotator offline.) If that query's time runs out first, its
-   answer may still come: the next whole line is still the stop's answer (harmless), but it
-   does not show that this controller answers stops (a review: a poll answered after its
-   reply time taught it so, and every later stop ate the next poll's answer).
+   without a reading put the rotator offline.)
+10. A query whose reply time ran out may still be answered: its answer's lines (one, or the
+   ``-separate`` models' two, less those that came in time) are owed late, at most
+   LATE_LINES_MAX of them. A position line with no query open while some are owed is one of
+   them, ahead of any stop's answer (the controller answers in the order it was asked):
+   UNSOLICITED, so that it still spoils a reading held in the same exchange (link.py rule 9),
+   but harmless, never told on R/error, and never a reading. While any is owed, a line taken
+   for a stop's answer does not show that this controller answers stops (it may be the late
+   one). A line that comes while the next query is open is that query's, as ever: which of
+   the two it answers no line says, and a late answer that never comes must not eat the
+   next poll's. Whatever else comes (junk, a line with junk in front, a position no query
+   owes) is told as before. (A CI run at load 23: a poll's answer came after its reply time,
+   the next poll took it, and that poll's own answer, one line later, was told on R/error as
+   bytes that are no reply; and a poll given up before a stop had its late answer taken for
+   the stop's, teaching that this controller answers stops.)
 """
 
 from __future__ import annotations
@@ -113,6 +124,7 @@ _VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
 _ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
 _CHATTER = re.compile(rb"[\r\n ]*")
 _NO_SE = re.compile(rb"[\r\n ]*\?[\r\n ]*")  # rule 7
+LATE_LINES_MAX = 4  # rule 10: a busy host that gave up a few polls in a row
 
 
 class EasycommCodec(OneQuery):
@@ -134,9 +146,9 @@ class EasycommCodec(OneQuery):
         self._el: float | None = None
         self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
         self._stop_behind = False  # rule 9: that stop went while a query was open: after it
-        self._stop_unsure = False  # rule 9: ... and that query's time ran out: its answer late?
         self._answers_stop = False  # rule 9: this controller was seen to answer one
-        self._stop_said: deque[bytes] = deque(maxlen=4)  # rule 9: those answers, for harmless
+        self._late_lines = 0  # rule 10: lines of queries given up that may still come
+        self._said: deque[bytes] = deque(maxlen=8)  # rules 9, 10: those answers, for harmless
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -151,19 +163,19 @@ class EasycommCodec(OneQuery):
     def encode_stop(self) -> bytes:
         self._stop_open = True  # rule 9
         self._stop_behind = self._query_open  # rule 9: the query's answer comes first
-        self._stop_unsure = False
         return b"SA SE\n"
 
     def expire_query(self) -> None:
-        if self._query_open and self._stop_open and self._stop_behind:  # rule 9
-            self._stop_unsure = True
+        if self._query_open:  # rule 10: its answer may still come, what is left of it
+            due = 1 if not self.separate or self._az is not None or self._el is not None else 2
+            self._late_lines = min(LATE_LINES_MAX, self._late_lines + due)
         super().expire_query()
 
     def encode_query(self) -> bytes:
         self._open_query()
         self._az = self._el = None
         self._stop_open = self._stop_open and self._answers_stop  # rule 9
-        self._stop_behind = self._stop_unsure = False  # (this query went after the stop)
+        self._stop_behind = False  # (this query went after the stop)
         return b"AZ\nEL\n" if self.separate else b"AZ EL\n"  # rule 8
 
     def encode_version(self) -> bytes | None:
@@ -173,7 +185,7 @@ class EasycommCodec(OneQuery):
         return [b"VE\n"] if self.version == 3 else []
 
     def harmless(self, junk: bytes) -> bool:
-        for said in self._stop_said:  # rule 9: a SatNOGS's answer to a stop
+        for said in self._said:  # rule 9: a SatNOGS's answer to a stop; rule 10: a late one
             junk = junk.replace(said, b"")
         if not self.elevation and _NO_SE.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
             return True
@@ -240,13 +252,18 @@ class EasycommCodec(OneQuery):
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
         whole = az is not None and (el is not None or not self.elevation)
+        clean = not pre.strip(b"\r\n ")
+        if self._late_lines and not self._query_open and clean and (whole or self.separate):
+            self._late_lines -= 1  # rule 10: a query's answer after its reply time
+            self._said.append(raw)
+            out.append(JunkReply(raw, JunkReason.UNSOLICITED, "a poll's answer after its time"))
+            return
         stop_first = self._stop_open and not (self._stop_behind and self._query_open)  # rule 9
         stop_answer = stop_first or (self._answers_stop and not self._query_open)
-        if stop_answer and whole and not pre.strip(b"\r\n "):  # rule 9
+        if stop_answer and whole and clean:  # rule 9
             self._stop_open = False
-            self._answers_stop = self._answers_stop or not self._stop_unsure  # rule 9
-            self._stop_unsure = False
-            self._stop_said.append(raw)
+            self._answers_stop = self._answers_stop or not self._late_lines  # rule 10
+            self._said.append(raw)
             out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))
             return
         if not self._query_open:

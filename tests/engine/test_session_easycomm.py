@@ -519,3 +519,36 @@ def test_a_double_stop_right_after_a_poll_loses_no_reading(rig: Rig, firmware: s
     v.run_for(3)
     assert v.errors() == [] and all(s.available for s in v.published(since=t))
     assert v.state is IDLE and v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=0.051)
+
+
+@pytest.mark.parametrize("model", ["easycomm3", "easycomm2-separate"])
+def test_a_poll_answered_after_its_reply_time_around_a_stop_is_told_nowhere(
+    rig: Rig, model: str
+) -> None:
+    """protocols/easycomm.py rule 10: a loaded host (a CI run at load 23) had the answer of the
+    poll written with a STOP after its reply time; the next poll took it, and that poll's own
+    answer, a line later, was told on R/error as bytes that are no reply. The rotor still
+    stops where it was, every reading is the controller's, and the next target arrives."""
+    settings = {"idle_poll_interval_s": 0.3, "moving_poll_interval_s": 0.1, "settle_s": 0.6}
+    v = rig(
+        model,
+        settings={**settings, "stall_timeout_s": 2.5, "silence_timeout_s": 1.0},
+        emulator={**FAST, "start_az_deg": 10},
+    )
+    v.run_until_state(IDLE, 30)
+    v.target(300, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    poll = b"AZ\nEL\n" if model.endswith("-separate") else b"AZ EL\n"
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
+    t = v.now
+    v.delay_output(0.6)  # its answer, and the next poll's, come after the reply time (0.4 s)
+    v.stop()
+    v.run_for(0.05)
+    v.stop()  # the main connection's copy of the lane's STOP
+    v.run_until(lambda h: h.state is IDLE, 10, "stopped")
+    assert [at for at, _ in v.received if at > t][:1] == [pytest.approx(t + 0.6)]  # (late)
+    truth = v.truth()
+    assert not truth.is_moving and v.status.bearing_deg == pytest.approx(truth.az_deg, abs=0.051)
+    v.target(90, 0)
+    v.run_until(settled_at(90, 0), 60, "at 90")
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))

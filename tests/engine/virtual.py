@@ -19,9 +19,9 @@ Rules:
    completely arrived. The device's output is already paced by the device.
 3. Faults act on the line, never on either side: a write can be lost or garbled on its way to
    the device (``drop_writes``, ``garble_writes``, ``set_deaf``, ``to_device``), the device's
-   output on its way to the host (``set_silent``, ``to_host``, ``glitch_once``). Lost writes
-   stay in ``writes`` (marked lost): they are what the bridge sent, the device's log is what
-   arrived.
+   output on its way to the host (``set_silent``, ``to_host``, ``glitch_once``, or held back
+   by ``delay_output``). Lost writes stay in ``writes`` (marked lost): they are what the bridge
+   sent, the device's log is what arrived.
 4. A session that asks to be woken at or before the present, again and again, spins the real
    worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
    (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
@@ -34,6 +34,7 @@ Rules:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -120,6 +121,8 @@ class VirtualRotator:
         self._write_faults: list[_WriteFault] = []
         self._silent = False
         self._deaf = False
+        self._delayed_until = -math.inf  # rule 3: the device's output held on the line until then
+        self._delayed = b""
         self._steps_at_now = 0
         self._spin_run = 0
         self.spins: list[float] = []  # when the loop turned with nothing to do (rule 4)
@@ -252,6 +255,11 @@ class VirtualRotator:
         """Everything the host writes is lost before the device hears it."""
         self._deaf = deaf
 
+    def delay_output(self, seconds: float) -> None:
+        """What the device transmits from now for ``seconds`` reaches the host then, all at
+        once and in order (a loaded host, a USB adapter that hands the bytes over late)."""
+        self._delayed_until = self.now + seconds
+
     def glitch_once(self, first: bytes, noise: bytes) -> list[float]:
         """``noise`` reaches the host once, just before the next output that is ``first`` alone
         (a reply's first byte: the device's output is paced); the list returned gets the
@@ -332,6 +340,8 @@ class VirtualRotator:
     def _wire_times(self) -> list[float]:
         """When the controller or the line next has something to do (none: nothing due)."""
         times = [self.device.next_wakeup(self.now), self._tx.next_due_s()]
+        if self._delayed:
+            times.append(self._delayed_until)
         return [t for t in times if t is not None]
 
     def next_time(self, until: float) -> float:
@@ -371,6 +381,10 @@ class VirtualRotator:
         out = self.device.due_output(t)
         if out and self.to_host is not None:
             out = self.to_host(out, t)
+        if t < self._delayed_until:  # rule 3: held on the line
+            self._delayed, out = self._delayed + out, b""
+        elif self._delayed:
+            self._delayed, out = b"", self._delayed + out
         if out and (self._silent or not self.connected):
             self.lost_to_host += len(out)
             out = b""
