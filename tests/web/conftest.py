@@ -26,7 +26,7 @@ from tests.support.console import ConsoleClient, web_section
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
-from tests.support.waiting import slow_ms
+from tests.support.waiting import slow, slow_ms
 
 CHROMIUM = "/usr/bin/chromium"
 STATION_LOCATOR = "JO62qm"
@@ -95,6 +95,13 @@ def console_bridge(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Console
                 keep_out=[list(KEEP_OUT)],
                 presets=PRESETS,
                 park_az_deg=PARK_AZ,
+                # the rig's 1 s is for the tests of silence; here a loaded host that holds the
+                # emulated controller (in this process, beside Playwright) a second took it for
+                # silent: a target waiting out the brake was dropped ("target dropped:
+                # controller not answering") or a command refused as offline, and the page
+                # kept showing the target before it (the likely cause of a CI run at load 23
+                # where "path" never showed long)
+                silence_timeout_s=slow(3.0),
             )
             rig.start_process()
             rig.ready("hf", timeout_s=20)
