@@ -244,16 +244,21 @@ def test_a_turn_on_to_the_target_it_was_stopped_short_of_is_stopped_after_a_rest
     assert emu.state().az_deg < rest + 20  # not on to 300
 
 
-def test_a_restart_of_the_bridge_mid_turn_lets_the_users_turn_go_on(rig: Rig) -> None:
-    """A review of the mend above: readings lost mid-turn (the bridge stopping) were taken for
-    a rest short of 300, the state file kept it, and the next start stopped the user's own
-    turn, blaming a garbled poll."""
-    emu, state = turning_to_300(rig)
+def test_a_restart_of_the_bridge_mid_turn_stops_the_turn_and_blames_nothing(rig: Rig) -> None:
+    """app.py rule 6: the end of the bridge (systemctl restart, mid-turn) stops the turn, which
+    nobody would watch after it. A review of an earlier mend: readings lost mid-turn (the
+    bridge stopping) were taken for a rest short of 300, and the next start stopped the turn
+    blaming a garbled poll. The next start finds the rotor at rest where the end's stop left
+    it, moves nothing, says no error, and the user's turn sent again goes on to 300."""
+    emu, _ = turning_to_300(rig)
     rig.stop()  # systemctl restart, mid-turn
-    assert b"short_of" not in state.read_bytes()
+    left = emu.wait_for(lambda s: not s.is_moving, 10)
+    assert left.az_deg < 290, left  # stopped by the end, not turned on watched by nobody
     t = time.monotonic()
     rig.start()
     rig.probe.wait_value("rotor/availability", "online", after=t)
+    assert abs(emu.state().az_deg - left.az_deg) < 1.0  # nothing moved it at the start
+    rig.probe.publish("rotor/target", "300")
     emu.wait_for(lambda s: s.az_deg > 290 and not s.is_moving, 60)  # on to 300, as asked
     assert rig.probe.on("rotor/error") == []
 
