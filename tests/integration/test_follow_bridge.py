@@ -14,6 +14,7 @@ taken (a held grid, the newest status in its follow part), and only then is the 
 from __future__ import annotations
 
 import json
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -128,8 +129,9 @@ def test_a_dx_grid_turns_the_rotor_the_same_grid_does_not_tx_holds_and_off_ends(
     assert status_doc(rig)["following"]["held"] is False
 
     # follow off: a new grid moves nothing
+    t_off = time.monotonic()  # (follow/state said off before it was on: that is no answer)
     rig.probe.publish("rotor/follow", "off")
-    rig.probe.wait_value("rotor/follow/state", "off", 10)
+    rig.probe.wait_value("rotor/follow/state", "off", 10, after=t_off)
     w.send(w.status(w.StatusFields(dx_call="W2ABC", dx_grid=NEW_YORK)), to)
     heard_by_follow_part(app, Heard("W2ABC", NEW_YORK, False, "WSJT-X", DIAL))
     assert len(emu.frames("set")) == sets + 1
