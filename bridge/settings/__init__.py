@@ -107,6 +107,8 @@ __all__ = [
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
 CONFIG_FILE_MAX = 16 << 20  # rule 5: the most of a configuration file read
+_SECRET = "the console's secret kept beside state_file"  # rule 6: a file written
+_OWN = "give it a file of its own"  # rule 6: what to do of a file written where another is
 _ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
 
 
@@ -428,21 +430,25 @@ class Settings(BaseSettings):
     @model_validator(mode="after")
     def _own_files(self) -> Settings:
         """Rule 6: the files the bridge writes are no file the settings name otherwise."""
-        own = "give it a file of its own"
-        written = [("state_file", self.state_file, own)]
-        if self.audit_file is not None:
-            written.append(("audit_file", self.audit_file, own))
-        if self.web.password_file is not None:  # (app.py: a short one is made anew)
-            secret = "the console's secret kept beside state_file"
-            written.append((secret, self.console_secret(), "name that file otherwise"))
-        for n, (name, path, fix) in enumerate(written):
-            for other, given, _ in [*written[n + 1 :], *[(*f, "") for f in self.files_read()]]:
+        written = self.files_written()
+        for n, (name, path) in enumerate(written):
+            for other, given in [*written[n + 1 :], *self.files_read()]:
                 if same_file(path, given):
+                    fix = "name that file otherwise" if name == _SECRET else _OWN
                     raise ValueError(
                         f"{name} {path} is also {other}: the bridge writes there, and would "
                         f"overwrite it; {fix}"
                     )
         return self
+
+    def files_written(self) -> list[tuple[str, Path]]:
+        """The files the bridge writes (rule 6), by key."""
+        written = [("state_file", self.state_file)]
+        if self.audit_file is not None:
+            written.append(("audit_file", self.audit_file))
+        if self.web.password_file is not None:  # (app.py: a short one is made anew)
+            written.append((_SECRET, self.console_secret()))
+        return written
 
     def console_secret(self) -> Path:
         """Where the console's login secret is kept (interfaces/web/auth.py rule 2)."""
@@ -572,14 +578,11 @@ def settings_from(
         raise ConfigError(format_validation_error(exc, data, env)) from None
     except SettingsError as exc:  # a variable pydantic-settings reads as JSON, and cannot
         raise ConfigError(_not_json(exc, env)) from None
-    own = [("state_file", settings.state_file), ("audit_file", settings.audit_file)]
-    if settings.web.password_file is not None:  # (a review: the secret was not looked at)
-        own.append(("the console's secret kept beside state_file", settings.console_secret()))
-    for name, written in own:  # rule 6: nor the file itself
-        if path and written is not None and same_file(written, path):
+    for name, written in settings.files_written():  # rule 6: nor the file itself
+        if path and same_file(written, path):
             raise ConfigError(
                 f"invalid configuration:\n  {name}: {written} is the configuration file itself: "
-                "the bridge writes there, and would overwrite it; give it a file of its own"
+                f"the bridge writes there, and would overwrite it; {_OWN}"
             )
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
