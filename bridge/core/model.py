@@ -198,6 +198,12 @@ class WindInfo:
     arrived: bool = False  # in a storm: its park was seen reached, owed no more (wind.py rule 7)
     replayed: bool = False  # in a storm known only from a replayed reading: no park yet (rule 6)
 
+    @property
+    def parks(self) -> bool:
+        """A storm the rotor is parked for, or parking: not one known only from a replayed
+        reading (session/wind.py rule 6), which parks nothing."""
+        return self.storm and not self.replayed
+
 
 @dataclass(frozen=True)
 class Target:

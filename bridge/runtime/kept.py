@@ -173,7 +173,7 @@ class Kept:
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
-        storm = wind is not None and wind.storm and not wind.replayed  # (wind.py rule 6)
+        storm = wind is not None and wind.parks  # (wind.py rule 6: a replay's is not kept)
         halted = storm and wind is not None and wind.halted
         arrived = storm and wind is not None and wind.arrived
         if (storm, halted, arrived) != (self.storm, self.storm_halted, self.storm_arrived):

@@ -421,7 +421,7 @@ class Rotator:
         does not show yet (app.py rule 6: what the bridge stops before it ends). A storm's park
         is left to go on (session/wind.py: a stop would keep it from being tried again)."""
         status = self.status
-        if status.wind is not None and status.wind.storm and not status.wind.replayed:
+        if status.wind is not None and status.wind.parks:
             return False  # (a storm known only from a replay parks nothing: wind.py rule 6)
         if status.state is MotionState.MOVING:
             return True
