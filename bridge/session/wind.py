@@ -145,8 +145,8 @@ class WindPark:
         """Rule 1: a reading above the park level; rule 2: no calm since; rule 6: a replayed
         one parks nothing."""
         self._calm_since = None
-        if self.storm and not (self._replayed and not replayed):
-            return
+        if self.storm and (replayed or not self._replayed):
+            return  # (but a live reading in a storm known only from a replay: rule 6)
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
@@ -223,14 +223,15 @@ class WindPark:
         quiet_from = self._last_t if self._last_t is not None else self._since_t
         if not self._silent and now - quiet_from >= cfg.silent_s:  # rule 4
             self._silent = True
-            kept = "parked for the storm" if self.storm else "no storm"
-            if self._halted:  # rule 3: a STOP or lock ON stopped the park (a review)
-                kept = "a storm whose park a stop or lock ON stopped: motion refused"
             if self._replayed:  # rule 6: nothing was parked
                 kept = (
                     "a storm known only from the reading the broker kept: motion refused, "
                     "nothing parked"
                 )
+            elif self._halted:  # rule 3: a STOP or lock ON stopped the park (a review)
+                kept = "a storm whose park a stop or lock ON stopped: motion refused"
+            else:
+                kept = "parked for the storm" if self.storm else "no storm"
             error = Report(
                 ErrorKind.WIND,
                 f"no wind reading on {cfg.topic} for {cfg.silent_s / 60:g} min: keeping the "
