@@ -32,10 +32,11 @@ Rules:
    every rotator takes nothing but a stop or a lock word (a move asked meanwhile is refused,
    "the bridge is stopping"), every one that may turn (``Rotator.may_turn``: moving, tracking,
    following, a move on its way) is stopped, and its stop written (up to HALT_WAIT_S, as
-   claim rule 4's, the controller's line rules kept), again once the front ends are closed,
-   before the ports close. A storm's park goes on (a stop would keep it from being tried
-   again after the restart). An attack pass: ``systemctl stop`` mid-turn closed the port in
-   0.2 s with no stop, and the rotor turned on, watched by nobody, to its target.
+   claim rule 4's, the controller's line rules kept); once the front ends are closed, and
+   before the ports close, so is every one that may turn and was not stopped so already. A
+   storm's park goes on (a stop would keep it from being tried again after the restart). An
+   attack pass: ``systemctl stop`` mid-turn closed the port in 0.2 s with no stop, and the
+   rotor turned on, watched by nobody, to its target.
 """
 
 from __future__ import annotations
@@ -754,7 +755,7 @@ class App:
             try:
                 rot.submit(Stop(Source.MQTT), f"stop: the bridge {why}")
             except Exception:  # (a stop is never refused; a bug must not keep the others)
-                log.exception("%s: the stop before yielding failed", rot.id)
+                log.exception("%s: the stop as the bridge %s failed", rot.id, why)
                 continue
             marks.append((rot, rot.halts))
         deadline = time.monotonic() + HALT_WAIT_S
