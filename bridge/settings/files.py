@@ -30,6 +30,14 @@ from pathlib import Path
 PASSWORD_FILE_MAX = 1024 * 1024
 
 
+def _every_user(key: str, path: Path) -> str:
+    """Why a secret's file (``key``'s) every user may read is refused, and the fix."""
+    return (
+        f"{key} {path} is readable by every user; let only the user that runs rotor-bridge read "
+        "it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
+    )
+
+
 def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path | None) -> None:
     """Raise ValueError unless the files exist, can be read and load as the MQTT client will."""
     if (cert_file is None) != (key_file is None):
@@ -42,11 +50,7 @@ def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path
                 raise ValueError(f"{name} {f} is not a readable file")
             every = os.name == "posix" and f.stat().st_mode & stat.S_IROTH
             if name == "key_file" and every:  # (Windows: no such bits, a review)
-                raise ValueError(  # (as password_file: a private key is a secret too)
-                    f"key_file {f} is readable by every user; let only the user that runs "
-                    "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
-                    "chmod 640)"
-                )
+                raise ValueError(_every_user("key_file", f))  # (a private key: a secret too)
             f.open("rb").close()
         except OSError as exc:
             raise ValueError(f"{name} {f}: {exc.strerror}") from None
@@ -95,11 +99,7 @@ def read_password_file(path: Path) -> str:
                 "password in a file of its own"
             )
         if mode & (stat.S_IROTH | stat.S_IWOTH):
-            raise ValueError(
-                f"password_file {path} is readable by every user; let only the user that runs "
-                "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, "
-                "chmod 640)"
-            )
+            raise ValueError(_every_user("password_file", path))
         data = b""
         while len(data) <= PASSWORD_FILE_MAX:
             chunk = os.read(fd, PASSWORD_FILE_MAX + 1 - len(data))
