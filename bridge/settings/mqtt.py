@@ -35,7 +35,7 @@ from pydantic import (
 )
 
 from bridge.core.text import NOT_TEXT, bad_char
-from bridge.settings.base import Strict
+from bridge.settings.base import NOT_SHOWN, Strict
 from bridge.settings.files import check_tls_files, read_password_file
 
 _TOPIC_BAD = re.compile(r"[+#\x00]")
@@ -100,8 +100,8 @@ def check_host(v: str, table: str) -> str:
     no URL, no port, no brackets, DNS's lengths. A value holding '@' is never quoted (rule 4)."""
     if "@" in v:  # (an attack pass: 'mqtt://rotor:pw@broker' was quoted, the password with it)
         raise ValueError(
-            "a host name or address, not a URL with a login: it holds '@' (not shown: what "
-            f"comes before it may be a password); the login goes in {_LOGIN_KEYS[table]}"
+            f"a host name or address, not a URL with a login: it holds '@' ({NOT_SHOWN}); the "
+            f"login goes in {_LOGIN_KEYS[table]}"
         )
     if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
         raise ValueError(f"a host name or address, got {v!r}")

@@ -32,7 +32,7 @@ from pydantic import (
     model_validator,
 )
 
-from bridge.settings.base import Strict
+from bridge.settings.base import NOT_SHOWN, Strict
 from bridge.settings.files import read_password_file
 from bridge.settings.loggers import is_loopback
 
@@ -195,7 +195,7 @@ class WebSettings(Strict):
 def _shown(value: str) -> str:
     """Rule 5: ``value`` quoted, unless it holds '@'."""
     if "@" in value:
-        return "an entry holding '@' (not shown: what comes before it may be a password)"
+        return f"an entry holding '@' ({NOT_SHOWN})"
     return repr(value)
 
 
