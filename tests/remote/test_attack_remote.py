@@ -15,6 +15,7 @@ import subprocess
 import sys
 import threading
 from collections.abc import Iterator
+from contextlib import contextmanager
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -146,7 +147,6 @@ def test_forged_control_presets_and_errors_nested_past_the_parsers_depth_are_no_
 
 # -- the broker dropping at the worst moment ---------------------------------------------------
 OPERATOR = "DL1ABC"
-RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
 
 
 def remote_settings(broker_port: int, port: int, **extra: Any) -> RemoteSettings:
@@ -158,13 +158,22 @@ def remote_settings(broker_port: int, port: int, **extra: Any) -> RemoteSettings
     )
 
 
+@contextmanager
+def remote_of(rig: Rig) -> Iterator[tuple[Remote, int]]:
+    """A remote on ``rig``'s broker, its rotctld port beside it, stopped at the end."""
+    port = free_port()
+    r = Remote(remote_settings(rig.broker.port, port))
+    r.start()
+    try:
+        yield r, port
+    finally:
+        r.stop()
+
+
 @pytest.fixture
 def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
-    port = free_port()
-    r = Remote(remote_settings(station.broker.port, port))
-    r.start()
-    yield r, port
-    r.stop()
+    with remote_of(station) as remote:
+        yield remote
 
 
 def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
@@ -194,9 +203,7 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     wait_until(lambda: link.up, 30, "the remote back on the broker")
 
     def published() -> list[bytes]:
-        with open(station.broker.log, "rb") as f:
-            f.seek(log_from)
-            return RECEIVED.findall(f.read())
+        return remote_published(station.broker, log_from)
 
     wait_until(lambda: len(published()) >= 1, 10, "the unacknowledged stop sent again")
     wait_until(lambda: tower.current, 10, "the station's bridge heard again")  # (else RPRT -5)
@@ -217,10 +224,7 @@ def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(r
     emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 10.0})
     bridge = rig.start_process()
     rig.ready("tower")
-    port = free_port()
-    r = Remote(remote_settings(rig.broker.port, port))
-    r.start()
-    try:
+    with remote_of(rig) as (r, port):
         link, tower = r.link, r.rotators[0]
         assert link is not None
         wait_until(lambda: tower.current, 10, "the station heard")
@@ -242,8 +246,6 @@ def test_a_kept_stop_reaches_a_station_bridge_that_comes_back_after_the_remote(r
         wait_until(lambda: tower.current, 30, "the station's bridge heard again")
         stopped = emu.wait_for(lambda s: not s.is_moving, 10)
         assert stopped.az_deg < 300, stopped  # stopped, not turned on to 350
-    finally:
-        r.stop()
 
 
 @pytest.mark.parametrize("then", ["nothing", "tracking off"])
@@ -261,10 +263,7 @@ def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(
     emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 10.0})
     bridge = rig.start_process()
     rig.ready("tower")
-    port = free_port()
-    r = Remote(remote_settings(rig.broker.port, port))
-    r.start()
-    try:
+    with remote_of(rig) as (r, port):
         tower = r.rotators[0]
         wait_until(lambda: tower.current, 10, "the station heard")
         assert ask(port, b"P 350 0\n") == b"RPRT 0\n"
@@ -278,8 +277,6 @@ def test_a_stop_while_the_stations_bridge_restarts_reaches_it_when_it_is_back(
         wait_until(lambda: tower.current, 30, "the station's bridge heard again")
         stopped = emu.wait_for(lambda s: not s.is_moving, 10)
         assert stopped.az_deg < 300, stopped  # stopped, not turned on to 350
-    finally:
-        r.stop()
 
 
 def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(rig: Rig) -> None:
@@ -289,10 +286,7 @@ def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(ri
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
     bridge = rig.start_process()
     rig.ready("tower")
-    port = free_port()
-    r = Remote(remote_settings(rig.broker.port, port))
-    r.start()
-    try:
+    with remote_of(rig) as (r, port):
         tower = r.rotators[0]
         wait_until(lambda: tower.current, 10, "the station heard")
         bridge.kill()
@@ -309,8 +303,6 @@ def test_a_lock_off_after_a_lock_on_the_station_did_not_hear_is_the_last_word(ri
         )
         assert remote_published(rig.broker, log_from) == [b"lock", b"lock", b"stop"]
         rig.probe.wait_value("rotor/lock/state", "OFF")
-    finally:
-        r.stop()
 
 
 # -- clock skew between the operator and the station -------------------------------------------
