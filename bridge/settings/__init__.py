@@ -321,8 +321,8 @@ class Settings(BaseSettings):
                 *above,
                 ("the bridge", self.mqtt.base_topic, station_words()),
             ]:
-                word = root.removeprefix(prefix + "/").split("/")[0]
-                if root.startswith(prefix + "/") and word in words:
+                word = _word_under(root, prefix, words)
+                if word is not None:
                     raise ValueError(
                         f"rotators[{i}].{'topic' if r.topic else 'id'}: its topic {root} lies "
                         f"under {prefix} (of {whose}), where {word!r} is a word of the bridge's "
@@ -351,19 +351,19 @@ class Settings(BaseSettings):
         topic under another's (``_rotator_topics``): a lone rotator's topic is the base topic,
         and a station's ``rotor/weather/wind`` beside it is no topic of the bridge's (a review:
         it was refused with one rotator, and taken with two)."""
-        words, station = reserved(), station_words()
-        ours = [(f"rotator {r.id!r}", self.rotator_topic(r), words) for r in self.rotators]
-        ours += [(f"group {g.id!r}", self.group_topic(g), words) for g in self.groups]
+        # (whose, its topic, the words under it that are its own, whether that topic is too)
+        words = reserved()
+        ours = [(f"rotator {r.id!r}", self.rotator_topic(r), words, True) for r in self.rotators]
+        ours += [(f"group {g.id!r}", self.group_topic(g), words, True) for g in self.groups]
+        ours.append(("the bridge", self.mqtt.base_topic, station_words(), False))
         for i, r in enumerate(self.rotators):
             topic = r.wind_topic
             if topic is None:
                 continue
-            for whose, root, own in [*ours, ("the bridge", self.mqtt.base_topic, station)]:
-                word = topic.removeprefix(root + "/").split("/")[0]
-                if (topic == root and own is words) or (
-                    topic.startswith(root + "/") and word in own
-                ):
-                    under = f"{root}/{word}" if own is station else root
+            for whose, root, own, itself in ours:
+                word = _word_under(topic, root, own)
+                if (itself and topic == root) or word is not None:
+                    under = root if itself else f"{root}/{word}"
                     raise ValueError(
                         f"rotators[{i}].wind_topic: {topic} is one of the bridge's own topics "
                         f"(under {under}, {whose}'s): give the weather station's topic"
@@ -501,6 +501,13 @@ class Settings(BaseSettings):
             for key in [k for k in env_vars if k.lower().startswith("rotor_bridge_rotators__")]:
                 del env_vars[key]
         return (env_settings, init_settings)  # environment beats the file
+
+
+def _word_under(topic: str, prefix: str, words: frozenset[str]) -> str | None:
+    """The word of ``words`` that ``topic`` has right under ``prefix``, if it has one (a topic
+    of ``prefix``'s own: settings/groups.py rule 5, settings/wind.py rule 3)."""
+    word = topic.removeprefix(prefix + "/").split("/")[0]
+    return word if topic.startswith(prefix + "/") and word in words else None
 
 
 def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
