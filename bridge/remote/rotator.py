@@ -448,10 +448,9 @@ class RemoteRotator:
         ``guard``, if given, is asked under the link's send lock, right before it is handed on
         (it raises Refused for a move that may not go any more); ``until_heard``: a halt sent
         again once the station's bridge is heard (rule 3)."""
-        if until_heard:
-            self._link.send(topic, payload, self._operator, self._expiry_s, guard, until_heard=True)
-        else:
-            self._link.send(topic, payload, self._operator, self._expiry_s, guard)
+        self._link.send(
+            topic, payload, self._operator, self._expiry_s, guard, until_heard=until_heard
+        )
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None

@@ -193,10 +193,12 @@ def stop_on_the_way(link: Link, stop: Callable[[], None]) -> None:
         operator: str,
         expiry_s: int,
         check: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
     ) -> None:
         if topic.endswith("/target"):
             stop()
-        hand_on(topic, payload, operator, expiry_s, check)
+        hand_on(topic, payload, operator, expiry_s, check, until_heard=until_heard)
 
     link.send = send  # type: ignore[method-assign]
 

@@ -241,6 +241,8 @@ class StalledLink:
         operator: str,
         expiry_s: int,
         check: Callable[[], None] | None = None,
+        *,
+        until_heard: bool = False,
     ) -> None:
         with self._lock:  # handed to the broker, one at a time (remote.py rule 9)
             if check is not None:
