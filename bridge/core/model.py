@@ -196,7 +196,7 @@ class WindInfo:
     refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
     halted: bool = False  # in a storm: its park was stopped, not tried again (wind.py rule 3)
     arrived: bool = False  # in a storm: its park was seen reached, owed no more (wind.py rule 7)
-    replayed: bool = False  # in a storm known only from a replayed reading: no park yet (rule 6)
+    replayed: bool = False  # a storm known only from a replayed reading (wind.py rule 6)
 
     @property
     def parks(self) -> bool:
