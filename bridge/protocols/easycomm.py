@@ -70,8 +70,8 @@ Rules:
    without a reading put the rotator offline.)
 10. A query whose reply time ran out may still be answered: its answer's lines (one, or the
    ``-separate`` models' two, less those that came in time) are owed late, at most
-   LATE_LINES_MAX of them. A position line with no query open while some are owed is one of
-   them, ahead of any stop's answer (the controller answers in the order it was asked):
+   LATE_LINES_MAX of them (base.py rule 7). A position line with no query open while some are
+   owed is one of them, ahead of any stop's answer (the controller answers in the order asked):
    UNSOLICITED, so that it still spoils a reading held in the same exchange (link.py rule 9),
    but harmless, never told on R/error, and never a reading. While any is owed, a line taken
    for a stop's answer does not show that this controller answers stops (it may be the late
@@ -87,7 +87,6 @@ Rules:
 from __future__ import annotations
 
 import re
-from collections import deque
 from typing import Any
 
 from bridge.protocols.base import (
@@ -124,7 +123,6 @@ _VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
 _ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
 _CHATTER = re.compile(rb"[\r\n ]*")
 _NO_SE = re.compile(rb"[\r\n ]*\?[\r\n ]*")  # rule 7
-LATE_LINES_MAX = 4  # rule 10: a busy host that gave up a few polls in a row
 
 
 class EasycommCodec(OneQuery):
@@ -147,8 +145,6 @@ class EasycommCodec(OneQuery):
         self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
         self._stop_behind = False  # rule 9: that stop went while a query was open: after it
         self._answers_stop = False  # rule 9: this controller was seen to answer one
-        self._late_lines = 0  # rule 10: lines of queries given up that may still come
-        self._said: deque[bytes] = deque(maxlen=8)  # rules 9, 10: those answers, for harmless
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -168,7 +164,7 @@ class EasycommCodec(OneQuery):
     def expire_query(self) -> None:
         if self._query_open:  # rule 10: its answer may still come, what is left of it
             due = 1 if not self.separate or self._az is not None or self._el is not None else 2
-            self._late_lines = min(LATE_LINES_MAX, self._late_lines + due)
+            self._owe_late(due)
         super().expire_query()
 
     def encode_query(self) -> bytes:
@@ -185,8 +181,7 @@ class EasycommCodec(OneQuery):
         return [b"VE\n"] if self.version == 3 else []
 
     def harmless(self, junk: bytes) -> bool:
-        for said in self._said:  # rule 9: a SatNOGS's answer to a stop; rule 10: a late one
-            junk = junk.replace(said, b"")
+        junk = self._unsaid(junk)  # rule 9: a SatNOGS's answer to a stop; rule 10: a late one
         if not self.elevation and _NO_SE.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
             return True
         return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
@@ -253,17 +248,14 @@ class EasycommCodec(OneQuery):
             return
         whole = az is not None and (el is not None or not self.elevation)
         clean = not pre.strip(b"\r\n ")
-        if self._late_lines and not self._query_open and clean and (whole or self.separate):
-            self._late_lines -= 1  # rule 10: a query's answer after its reply time
-            self._said.append(raw)
-            out.append(JunkReply(raw, JunkReason.UNSOLICITED, "a poll's answer after its time"))
+        if clean and (whole or self.separate) and self._late_answer(raw, out):  # rule 10
             return
         stop_first = self._stop_open and not (self._stop_behind and self._query_open)  # rule 9
         stop_answer = stop_first or (self._answers_stop and not self._query_open)
         if stop_answer and whole and clean:  # rule 9
             self._stop_open = False
             self._answers_stop = self._answers_stop or not self._late_lines  # rule 10
-            self._said.append(raw)
+            self._say(raw)
             out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))
             return
         if not self._query_open:
