@@ -35,6 +35,15 @@ Rules:
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
    0..180 (elevation) they are refused before anything is sent.
+5. A query whose reply time ran out may still be answered (base.py rule 7): its one line is
+   owed late. A reply line of this model's form, in range and clean, that comes with no query
+   open while one is owed is that answer: UNSOLICITED (it still spoils a reading held in the
+   same exchange, link.py rule 9), but harmless, never told on R/error, and never a reading.
+   A line that comes while the next query is open is that query's, as ever. Whatever else
+   comes (junk, a line with junk in front, a position no query owes) is told as before. (A
+   loaded host: the poll that went out with a STOP was answered after its reply time, the
+   next poll took that answer, and its own, a line later, was told on R/error as bytes that
+   are no reply.)
 """
 
 from __future__ import annotations
@@ -120,8 +129,13 @@ class Gs232Codec(OneQuery):
         self._open_query()
         return b"C2\r" if self.elevation else b"C\r"
 
+    def expire_query(self) -> None:
+        if self._query_open:  # rule 5: its answer may still come
+            self._owe_late(1)
+        super().expire_query()
+
     def harmless(self, junk: bytes) -> bool:
-        return _CHATTER.fullmatch(junk) is not None
+        return _CHATTER.fullmatch(self._unsaid(junk)) is not None  # rule 5: a late answer
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
@@ -173,11 +187,14 @@ class Gs232Codec(OneQuery):
         if self.elevation and el_deg is None:
             self._junk(raw, JunkReason.SPOILED, "no elevation in the reply", out)
             return
+        clean = not own.group("pre").strip(b"\r\n ")
+        if clean and self._late_answer(raw, out):  # rule 5
+            return
         if not self._query_open:
             out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
             return
         self._query_open = False
-        if own.group("pre").strip(b"\r\n ") or self._noisy:
+        if not clean or self._noisy:
             out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
             return
         if self.elevation and el_deg is not None:

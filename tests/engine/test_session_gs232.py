@@ -18,7 +18,7 @@ from bridge.emulators.gs232 import Outcome
 from bridge.session import motion as mo
 from tests.engine.test_session_passed import flicker_el
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator, moves, settled_at
+from tests.engine.virtual import Sent, VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -388,3 +388,36 @@ def test_a_target_garbled_into_a_jog_up_is_stopped_past_the_elevation_limit(rig:
     assert f"its elevation limit: {at:g}°, beyond el_max_deg 90°" in said[0].message, said[0]
     assert f"now at 100°, elevation {at:g}°" in said[0].message
     assert v.sent(since=t).count(b"S\r") == 1 and v.status.target_el_deg is None
+
+
+@pytest.mark.parametrize("model", ["gs232b", "gs232a-az"])
+def test_a_poll_answered_after_its_reply_time_around_a_stop_is_told_nowhere(
+    rig: Rig, model: str
+) -> None:
+    """protocols/gs232.py rule 5: a loaded host had the answer of the poll written with a STOP
+    after its reply time (1 s); the next poll took it, and that poll's own answer, a line
+    later, was told on R/error as bytes that are no reply. The rotor still stops where it was,
+    every reading is the box's, and the next target arrives."""
+    settings = {"idle_poll_interval_s": 0.3, "moving_poll_interval_s": 0.1, "settle_s": 0.6}
+    v = rig(
+        model,
+        settings={**settings, "stall_timeout_s": 2.5, "silence_timeout_s": 2.0},
+        emulator={**FAST, "start_az_deg": 10},
+    )
+    v.run_until_state(IDLE, 30)
+    v.target(300, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    poll = b"C\r" if model.endswith("-az") else b"C2\r"
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
+    t = v.now
+    v.delay_output(1.2)  # its answer, and the next poll's, come after the reply time (1 s)
+    v.stop()
+    v.run_for(0.05)
+    v.stop()  # the main connection's copy of the lane's STOP
+    v.run_until(lambda h: h.state is IDLE, 10, "stopped")
+    assert [at for at, _ in v.received if at > t][:1] == [pytest.approx(t + 1.2)]  # (late)
+    truth = v.truth()
+    assert not truth.is_moving and v.status.bearing_deg == round(truth.az_deg)
+    v.target(90, 0)
+    v.run_until(settled_at(90, None if model.endswith("-az") else 0), 60, "at 90")
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))

@@ -169,10 +169,69 @@ def test_a_line_without_end_is_given_up_once_too_long() -> None:
 
 
 def test_an_expired_query_takes_no_late_reply() -> None:
+    """Rule 5: no reading, and (its answer owed late) no notice either; a second is told."""
     codec = asked("b")
     codec.expire_query()
     replies = codec.feed(b"AZ=123  EL=045\r\n")
     assert positions(replies) == [] and junk(replies)[0].reason is JunkReason.UNSOLICITED
+    assert codec.harmless(b"AZ=123  EL=045\r")
+    assert not codec.harmless(b"AZ=123  EL=045\rAZ=124  EL=045\r")  # owed by no query
+
+
+# -- a poll's answer after its reply time (rule 5) -------------------------------------------
+B_LINES = (b"AZ=052  EL=000", b"AZ=053  EL=000", b"AZ=054  EL=000")
+A_LINES = (b"+0052+0000", b"+0053+0000", b"+0054+0000")
+
+
+@pytest.mark.parametrize(("variant", "lines"), [("b", B_LINES), ("a", A_LINES)])
+@pytest.mark.parametrize("stop", ["none", "behind the poll", "before the poll"])
+def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
+    variant: str, lines: tuple[bytes, bytes, bytes], stop: str
+) -> None:
+    """A loaded host: the poll's answer came after its reply time, the next poll took it, and
+    that poll's own answer, a line later, was told on R/error as bytes that are no reply. The
+    stop's CR (a blank line) between them changes nothing."""
+    codec = Gs232Codec(variant)
+    if stop == "before the poll":
+        codec.encode_stop()
+    codec.encode_query()
+    if stop == "behind the poll":
+        codec.encode_stop()
+    codec.expire_query()
+    codec.encode_query()
+    first, second, third = lines
+    assert positions(codec.feed(first + b"\r\n")) == [(52.0, 0.0)]  # (which: no line says)
+    replies = codec.feed(b"\r" + second + b"\r\n")
+    assert positions(replies) == [] and codec.harmless(b"\r" + second + b"\r")
+    assert [j.reason for j in junk(replies)] == [JunkReason.CHATTER, JunkReason.UNSOLICITED]
+    replies = codec.feed(third + b"\r\n")  # owed by no query: told
+    assert positions(replies) == [] and not codec.harmless(third + b"\r")
+    assert not codec.harmless(second + b"\r#\r")  # junk is still junk
+
+
+def test_only_a_clean_line_of_the_boxs_own_form_is_a_late_answer() -> None:
+    """Rule 5: junk in front of it, the other model's form, an azimuth alone from an az/el
+    box, a bearing out of range: each told as before, and the late answer still owed."""
+    codec = asked("b")
+    codec.expire_query()
+    for line in (b"#AZ=010  EL=005\r", b"+0010+0005\r", b"AZ=010\r", b"AZ=460  EL=005\r"):
+        replies = codec.feed(line + b"\n")
+        assert positions(replies) == [] and not codec.harmless(line), line
+    assert codec.feed(b"AZ=010  EL=005\r\n") and codec.harmless(b"AZ=010  EL=005\r")
+
+
+def test_late_answers_are_owed_for_a_few_polls_given_up_at_most() -> None:
+    """Rule 5 (base.py rule 7): four given up in a row are owed; a fifth line is told."""
+    codec = Gs232Codec("a", elevation=False)
+    for _ in range(6):
+        codec.encode_query()
+        codec.expire_query()
+    lines = [b"+0%03d\r" % az for az in range(10, 15)]
+    replies = codec.feed(b"\n".join(lines) + b"\n")
+    assert positions(replies) == [] and codec.harmless(b"".join(lines[:4]))
+    assert not codec.harmless(b"".join(lines))
+    codec.encode_query()  # the next poll's answer is a reading as ever
+    assert positions(codec.feed(b"+0015\r\n")) == [(15.0, None)]
 
 
 @settings(max_examples=200, deadline=None)
