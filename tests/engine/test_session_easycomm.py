@@ -539,14 +539,7 @@ def test_a_poll_answered_after_its_reply_time_around_a_stop_is_told_nowhere(
     v.target(300, 0)
     v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
     poll = b"AZ\nEL\n" if model.endswith("-separate") else b"AZ EL\n"
-    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
-    t = v.now
-    v.delay_output(0.6)  # its answer, and the next poll's, come after the reply time (0.4 s)
-    v.stop()
-    v.run_for(0.05)
-    v.stop()  # the main connection's copy of the lane's STOP
-    v.run_until(lambda h: h.state is IDLE, 10, "stopped")
-    assert [at for at, _ in v.received if at > t][:1] == [pytest.approx(t + 0.6)]  # (late)
+    t = v.stopped_with_late_answers(poll, 0.6)  # past the reply time (0.4 s)
     truth = v.truth()
     assert not truth.is_moving and v.status.bearing_deg == pytest.approx(truth.az_deg, abs=0.051)
     v.target(90, 0)

@@ -18,7 +18,7 @@ from bridge.emulators.gs232 import Outcome
 from bridge.session import motion as mo
 from tests.engine.test_session_passed import flicker_el
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import Sent, VirtualRotator, moves, settled_at
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -408,14 +408,7 @@ def test_a_poll_answered_after_its_reply_time_around_a_stop_is_told_nowhere(
     v.target(300, 0)
     v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
     poll = b"C\r" if model.endswith("-az") else b"C2\r"
-    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
-    t = v.now
-    v.delay_output(1.2)  # its answer, and the next poll's, come after the reply time (1 s)
-    v.stop()
-    v.run_for(0.05)
-    v.stop()  # the main connection's copy of the lane's STOP
-    v.run_until(lambda h: h.state is IDLE, 10, "stopped")
-    assert [at for at, _ in v.received if at > t][:1] == [pytest.approx(t + 1.2)]  # (late)
+    t = v.stopped_with_late_answers(poll, 1.2)  # past the reply time (1 s)
     truth = v.truth()
     assert not truth.is_moving and v.status.bearing_deg == round(truth.az_deg)
     v.target(90, 0)

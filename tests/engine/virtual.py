@@ -260,6 +260,22 @@ class VirtualRotator:
         once and in order (a loaded host, a USB adapter that hands the bytes over late)."""
         self._delayed_until = self.now + seconds
 
+    def stopped_with_late_answers(self, poll: bytes, late_s: float) -> float:
+        """A STOP (the stop lane's, and the main connection's copy 50 ms later) right after
+        ``poll`` went out, the device's output from then on held ``late_s`` (past the poll's
+        reply time: its answer, and the next poll's, come late); run until the rotor is idle.
+        The time the poll went out."""
+        self.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
+        t = self.now
+        self.delay_output(late_s)
+        self.stop()
+        self.run_for(0.05)
+        self.stop()  # the main connection's copy of the lane's STOP
+        self.run_until(lambda h: h.state is MotionState.IDLE, 10, "stopped")
+        late = [at for at, _ in self.received if at > t][:1]
+        assert late and math.isclose(late[0], t + late_s, abs_tol=1e-6), late  # (late)
+        return t
+
     def glitch_once(self, first: bytes, noise: bytes) -> list[float]:
         """``noise`` reaches the host once, just before the next output that is ``first`` alone
         (a reply's first byte: the device's output is paced); the list returned gets the
