@@ -20,6 +20,7 @@ from bridge.protocols.base import (
 )
 from bridge.protocols.easycomm import EasycommCodec
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 
 def positions(replies: list[object]) -> list[tuple[float, float | None]]:
@@ -314,18 +315,12 @@ def test_a_poll_answered_after_its_time_with_a_stop_behind_it_teaches_nothing() 
 
 
 # -- a poll's answer after its reply time (rule 10) ------------------------------------------
-@pytest.mark.parametrize("stop", ["none", "behind the poll", "before the poll"])
+@pytest.mark.parametrize("stop", STOPS)
 def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(stop: str) -> None:
     """A CI run at load 23: the poll's answer came after its reply time, the next poll took it,
     and that poll's own answer, a line later, was told on R/error as bytes that are no reply."""
     codec = EasycommCodec(3)
-    if stop == "before the poll":
-        codec.encode_stop()
-    codec.encode_query()
-    if stop == "behind the poll":
-        codec.encode_stop()
-    codec.expire_query()
-    codec.encode_query()
+    given_up(codec, stop)
     assert positions(codec.feed(b"AZ52.4 EL0.0\n")) == [(52.4, 0.0)]  # (which it is: no line says)
     replies = codec.feed(b"AZ52.5 EL0.0\n")
     assert positions(replies) == [] and codec.harmless(b"AZ52.5 EL0.0\n")

@@ -13,6 +13,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import HamlibRotType, JunkReason, JunkReply, PositionReply
 from bridge.protocols.gs232 import AXIS_STOPS, Gs232Codec
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 
 def positions(replies: list[object]) -> list[tuple[float, float | None]]:
@@ -184,7 +185,7 @@ A_LINES = (b"+0052+0000", b"+0053+0000", b"+0054+0000")
 
 
 @pytest.mark.parametrize(("variant", "lines"), [("b", B_LINES), ("a", A_LINES)])
-@pytest.mark.parametrize("stop", ["none", "behind the poll", "before the poll"])
+@pytest.mark.parametrize("stop", STOPS)
 def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
     variant: str, lines: tuple[bytes, bytes, bytes], stop: str
 ) -> None:
@@ -192,13 +193,7 @@ def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
     that poll's own answer, a line later, was told on R/error as bytes that are no reply. The
     stop's CR (a blank line) between them changes nothing."""
     codec = Gs232Codec(variant)
-    if stop == "before the poll":
-        codec.encode_stop()
-    codec.encode_query()
-    if stop == "behind the poll":
-        codec.encode_stop()
-    codec.expire_query()
-    codec.encode_query()
+    given_up(codec, stop)
     first, second, third = lines
     assert positions(codec.feed(first + b"\r\n")) == [(52.0, 0.0)]  # (which: no line says)
     replies = codec.feed(b"\r" + second + b"\r\n")

@@ -11,6 +11,25 @@ class Feedable(Protocol):
 
 
 HOW = ("whole", "bytewise", "split")
+STOPS = ("none", "behind the poll", "before the poll")  # given_up's orderings
+
+
+class Polled(Protocol):
+    def encode_query(self) -> Any: ...
+    def encode_stop(self) -> Any: ...
+    def expire_query(self) -> None: ...
+
+
+def given_up(codec: Polled, stop: str) -> None:
+    """A poll given up after its reply time (a STOP before it or behind it, or none: one of
+    STOPS), then the next poll open: protocols/base.py rule 7's orderings."""
+    if stop == "before the poll":
+        codec.encode_stop()
+    codec.encode_query()
+    if stop == "behind the poll":
+        codec.encode_stop()
+    codec.expire_query()
+    codec.encode_query()
 
 
 def feed(parser: Feedable, data: bytes, how: str = "whole") -> list[Any]:
