@@ -151,3 +151,23 @@ def test_a_retained_group_target_moves_nothing(rig: Rig) -> None:
     rig.probe.publish("rotor/stack/target", "40")  # and a live one still turns both
     rig.arrived("upper", 40)
     rig.arrived("lower", 220)
+
+
+def test_a_lock_sent_to_a_groups_topic_is_refused_on_its_error_topic(rig: Rig) -> None:
+    """An attack pass: ``rotor/stack/lock ON`` was not heard at all (a group has no lock), and
+    nothing said so: the operator went up the tower thinking the stack was locked. It is
+    refused on ``G/error``, which names each member's own lock topic, and nothing changes."""
+    stack(rig)
+    rig.start()
+    rig.ready("upper")
+    rig.ready("lower")
+    t = time.monotonic()
+    rig.probe.publish("rotor/stack/lock", "ON")
+    said = json.loads(rig.probe.wait_for("rotor/stack/error", after=t).payload)
+    assert said["kind"] == "refused" and said["command"] == "lock 'ON'"
+    assert said["message"] == (
+        "group stack has no lock: no rotator was locked; send it to each member's own topic: "
+        "rotor/upper/lock, rotor/lower/lock"
+    )
+    retained = rig.retained()
+    assert retained["rotor/upper/lock/state"] == retained["rotor/lower/lock/state"] == b"OFF"

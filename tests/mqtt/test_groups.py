@@ -223,6 +223,34 @@ def test_a_retained_or_bad_group_target_moves_nothing_and_says_why(
         assert command.endswith("(group stack)")
 
 
+@pytest.mark.parametrize(
+    ("topic", "payload", "said"),
+    [
+        ("rotor/stack/lock", b"ON", "group stack has no lock: no rotator was locked"),
+        ("rotor/stack/park", b"PARK", "group stack takes a target and a stop only"),
+        ("rotor/stack/option/jam", b"ON", "group stack takes a target and a stop only"),
+        ("rotor/stack/track", b"sun", "group stack takes a target and a stop only"),
+    ],
+)
+def test_a_rotators_command_sent_to_a_group_is_refused_on_its_error_topic_not_lost(
+    topic: str, payload: bytes, said: str
+) -> None:
+    """An attack pass: ``G/lock ON`` (an operator's ACL lets them write ``rotor/+/lock``) was
+    not even subscribed: nothing locked, nothing said, and whoever climbed the tower thought
+    the stack was locked. Refused on ``G/error``, naming each member's own topic, and in each
+    member's audit trail; nothing is carried out."""
+    svc, pub, upper, lower = group_service()
+    assert topic.rsplit("/", 1)[0] + "/+" in svc.subscriptions() or topic in svc.subscriptions()
+    svc.on_message(topic, payload, False, "alice")
+    (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
+    assert error["kind"] == "refused" and error["message"].startswith(said)
+    leaf = topic.removeprefix("rotor/stack/")
+    assert f"rotor/upper/{leaf}, rotor/lower/{leaf}" in error["message"]
+    for member in (upper, lower):
+        ((done, message, _command, who),) = member.calls
+        assert done == "audited" and message == error["message"] and who == "alice"
+
+
 def test_a_group_stop_on_the_main_connection_stops_every_member_even_retained() -> None:
     svc, pub, upper, lower = group_service()
     svc.on_message("rotor/stack/stop", b"", False)

@@ -22,6 +22,8 @@ Rules:
    member's less that member's offset (a review: an unplugged first member's last reading was
    shown while the others turned elsewhere). A group is available while any member is: a
    stop must reach whichever member can still hear one.
+5. A group takes a target and a stop, nothing else: it has no lock (each member has its own);
+   a rotator's other commands sent to a group's topics are refused (service.py rule 10).
 """
 
 from __future__ import annotations

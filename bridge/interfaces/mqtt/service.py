@@ -62,7 +62,12 @@ Rules:
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
    refused, and moving nothing), each handed to that member's own ``submit``. Refusals go on
    ``G/error`` (rule 4's limit, per group) and in ``G/status``, each member's also on its own
-   ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses.
+   ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses. A group
+   takes nothing else: a rotator's other command topics under a group's root (``G/lock``,
+   ``G/park``, ``G/option/<name>``, a feature's) are subscribed so that a command sent there
+   is refused on ``G/error``, naming each member's own topic, and in every member's audit
+   trail, and nothing is done (an attack pass: ``G/lock ON`` was not heard at all, nothing
+   said so, and the stack it was meant to lock was not locked).
 11. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
    track or follow start, a feature's command that moves, a group's target for each member)
    while another interface's stop or lock ON fences its rotator (lastword.py rule 11) was
@@ -112,7 +117,7 @@ from bridge.interfaces.mqtt.halts import FENCED, Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
-from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
+from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
@@ -385,6 +390,19 @@ class MqttService:
             if rot is not None:
                 rot.audit_refusal(message, said, origin)
 
+    def _not_for_groups(self, group: Group, topic: str, kind: str) -> str:
+        """Rule 10: why a rotator's command sent to a group's topic is refused, and where each
+        member takes it (an attack pass: ``G/lock ON`` was not heard at all, and nothing said
+        that no rotator was locked)."""
+        leaf = topic.removeprefix(self.topics.group(group.id).root + "/")
+        theirs = ", ".join(self.topics.rotator(m).feature(leaf) for m in group.member_ids)
+        head = (
+            f"group {group.id} has no lock: no rotator was locked"
+            if kind == "lock"
+            else f"group {group.id} takes a target and a stop only: nothing was done"
+        )
+        return f"{head}; send it to each member's own topic: {theirs}"
+
     def _report_group(self, group_id: str, message: str, command: str) -> None:
         """A refusal of a group's command on ``G/error`` (rule 4's limit) and in the log."""
         self._group_event(
@@ -428,7 +446,11 @@ class MqttService:
         if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
             self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
-        what = pl.describe(kind, payload)
+        name = f"option {topic.rpartition('/')[2]}" if kind == "option" else kind
+        what = pl.describe(name, payload)
+        if kind not in GROUP_KINDS:  # rule 10: a rotator's command, which no group takes
+            self._refuse_group(group, self._not_for_groups(group, topic, kind), what, origin)
+            return
         if kind == "stop":
             if retain and not self._halts.retain_is_live:
                 self._halts.replayed_group_stop(group_id, topic, payload)

@@ -32,6 +32,7 @@ from bridge.feature import Feature, registered
 CORE_KINDS = frozenset(
     ("target", "target_elevation", "stop", "lock", "preset", "park", "nudge", "option")
 )
+GROUP_KINDS = frozenset(("target", "stop"))  # the commands a group takes (groups.py)
 
 
 @dataclass(frozen=True)
@@ -206,6 +207,15 @@ class Topics:
             (rid, _core_commands(t), t.root + "/", t.root + "/option/")
             for rid, t in self._rotators.items()
         )
+        # group_route's table: a group's target and stop, and every other command topic a
+        # rotator has, under the group's root (service.py rule 10: refused there, not lost)
+        self._group_routes: dict[str, tuple[str, str]] = {}
+        for gid, g in self._groups.items():
+            as_rotator = RotatorTopics(g.root)
+            for topic, kind in _core_commands(as_rotator).items():
+                self._group_routes[topic] = gid, kind
+            for suffix, kind in self._commands.items():
+                self._group_routes[as_rotator.feature(suffix)] = gid, kind
 
     @property
     def bridge_state(self) -> str:
@@ -262,12 +272,16 @@ class Topics:
         return self._groups[group_id]
 
     def group_route(self, topic: str) -> tuple[str, str] | None:
-        """A group's command topic as (group id, "target" or "stop"), else None."""
+        """A group's command topic as (group id, "target" or "stop"); a rotator's command topic
+        under a group's root, which no group takes, as (group id, that command's name:
+        "lock", "option", ...), so that it is refused (service.py rule 10); else None."""
+        found = self._group_routes.get(topic)
+        if found is not None:
+            return found
         for gid, g in self._groups.items():
-            if topic == g.target:
-                return gid, "target"
-            if topic == g.stop:
-                return gid, "stop"
+            name = topic.removeprefix(f"{g.root}/option/")
+            if name != topic and name and "/" not in name:
+                return gid, "option"
         return None
 
     def subscriptions(self) -> list[str]:
@@ -276,6 +290,9 @@ class Topics:
         subs: list[str] = []
         for g in self._groups.values():
             subs += [g.target, g.stop]
+        # a rotator's other command topics under each group's root (service.py rule 10)
+        subs += [t for t, (_gid, kind) in self._group_routes.items() if kind not in GROUP_KINDS]
+        subs += [RotatorTopics(g.root).option_filter for g in self._groups.values()]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge]
