@@ -67,7 +67,11 @@ Rules:
    already on its way in the box that answers is stopped there: the rotator's turn is no
    longer watched whole, and a single controller gone silent mid-turn is stopped on both
    axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
-   the bridge had dropped, under an ``offline`` status). The storm's park goes on there,
+   the bridge had dropped, under an ``offline`` status). The box whose port went mid-turn
+   (a turn or a target out when it closed) owes its stop, its first frame when it is back: a
+   single controller's turn goes on after a replug, but here the other axis was stopped (an
+   attack pass: the elevation box, replugged, turned on alone to its target, 60/80 where
+   300/80 was asked). The storm's park goes on there,
    under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
    attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
    and never sent again): each box parks its own axis, as one does alone in a storm
@@ -204,8 +208,8 @@ class Composition:
             self._owe(Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH, track, follow)
             if track and self._ended is None:
                 self._ended = status.tracking_ended
-        if before.available and not status.available:  # rule 8, on the edge
-            self._dropped.add(Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH)
+        if before.available and not status.available:  # rule 8, on the edge: both boxes
+            self._dropped.update(AXES)  # (the one gone too: its turn, cut, owes a stop)
         self.boxes[axis] = status
         for mine, theirs in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
             box = self.boxes[mine]  # rule 4: one that tracks while the other does not answer

@@ -612,6 +612,12 @@ class Controller:
             and not mo.at_target(m, self.cfg.motion)
         )
 
+    def cut_mid_turn(self) -> bool:
+        """The port is closed and the rotor was turning, or had a target out, when it went
+        (rule 10's ``_still_at_close``): a turn that goes on when the port is back unless a
+        stop is owed (runtime/composite.py rule 8)."""
+        return self.link is None and self._still_at_close is False
+
     def stop(self, now: float, merge: bool = False, ends_pass: bool = False) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
         is closed, as the first frame it gets (stops.py rule 3); ``ends_pass``: a pass's last

@@ -343,6 +343,9 @@ class RotatorSession:
             if ctl.turning() and not self._storm_park():  # (its turn is the rotator's, which
                 ctl.stop(now)  # no reading watches whole: stopped, as one controller gone
                 # silent mid-turn is; but the storm's park, this box's own axis, goes on)
+            elif ctl.cut_mid_turn() and not self._storm_park():  # (the box whose port went
+                ctl.stop(now)  # mid-turn: its stop owed, its first frame when it is back;
+                # else it turned on alone, its other axis stopped above: an attack pass)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:

@@ -47,16 +47,27 @@ def test_a_turn_across_a_replug_is_not_stopped_as_unasked_after_a_few_lost_repli
         assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)  # observed: 30-36
 
 
-def test_a_composite_turn_across_a_replug_of_its_azimuth_box_is_not_cut_short() -> None:
+@pytest.mark.parametrize("lost", ["az", "el"])
+def test_a_composite_turn_cut_by_a_replug_of_one_box_is_stopped_in_both(lost: str) -> None:
+    """Composite rule 8: the box that answers is stopped when the other's port goes, and the
+    box whose port went owes a stop, its first frame back (an attack pass: it turned on alone
+    to the target, 60/80 where 300/80 was asked, or the azimuth swung on with the elevation
+    stopped); R/error says why (the port); no later turn nobody asked for is stopped as one."""
     with VirtualComposite("easycomm3", "gs232b") as v:
         v.run_until(lambda h: h.status.available, 20)
         v.run_for(1.0)
-        v.aim(Target(200.0, 30.0))
-        v.run_until(lambda h: h.az.truth().az_deg > 8, 30)
-        t = _replug_then_lose_replies(v, v.az, 1.5)
+        v.aim(Target(200.0, 60.0))
+        v.run_until(lambda h: h.az.truth().az_deg > 8 and h.el.truth().el_deg > 4, 30)
+        gone = v.az if lost == "az" else v.el
+        t = _replug_then_lose_replies(v, gone, 1.5)
+        az, el = v.az.truth().az_deg, v.el.truth().el_deg
         v.run_for(60.0)
         assert [e.message for e in v.az.errors(ErrorKind.STOP, since=t)] == []
-        assert v.az.truth().az_deg == pytest.approx(200.0, abs=1.0)
+        assert not v.az.truth().is_moving and not v.el.truth().is_moving
+        assert v.az.truth().az_deg == pytest.approx(az, abs=15.0)  # observed: 200
+        assert v.el.truth().el_deg == pytest.approx(el, abs=15.0)  # observed: 60
+        said = [e.message for e in gone.errors(ErrorKind.SERIAL, since=t)]
+        assert said[:1] == ["virtual port unplugged"], said  # why, on R/error
 
 
 @pytest.mark.parametrize("lost_s", [0.0, 1.5])
