@@ -21,15 +21,18 @@ Rules:
    and names the codec's function that turns a value into bytes. ``Setting.read`` is the one
    judge of a value: anything outside the declaration is refused with words a user can act
    on, and nothing is sent. A new setting is one encoder in its codec and one spec entry.
-7. A query given up (``expire_query``) may still be answered: ``OneQuery`` counts the lines of
-   its answer still owed (the codec says how many, ``_owe_late``; at most LATE_LINES_MAX in
-   all). A clean reply line of the controller's form with no query open while some are owed
-   is one of them (``_late_answer``): UNSOLICITED, never a reading, and harmless (the codec's
-   ``harmless`` discounts the lines it said, ``_unsaid``). A line that comes while the next
-   query is open is that query's, as ever (no line says which poll it answers, and a late
-   answer that never comes must not eat the next poll's). (easycomm.py rule 10, gs232.py
-   rule 5: a busy host gave a poll up, the next poll took its answer, and that poll's own
-   answer a line later was told on R/error as bytes that are no reply.)
+7. A query given up (``expire_query``) may still be answered: ``LateAnswers`` (OneQuery's, and
+   any codec's that says ``awaiting_reply``) counts the lines of its answer still owed (the
+   codec says how many, ``_owe_late``; at most LATE_LINES_MAX in all). A clean reply line of
+   the controller's form while no reply is awaited and some are owed is one of them
+   (``_late_answer``): UNSOLICITED (it spoils a reading held in the same exchange, link.py
+   rule 9), never a reading, and harmless (the codec's ``harmless`` discounts the lines it
+   said, ``_unsaid``, each as often as it said it: a second line of the same text that no
+   query owes is told). A line that comes while the next query is open is that query's, as
+   ever (no line says which poll it answers, and a late answer that never comes must not eat
+   the next poll's). (easycomm.py rule 10, gs232.py rule 5: a busy host gave a poll up, the
+   next poll took its answer, and that poll's own answer a line later was told on R/error as
+   bytes that are no reply.)
 """
 
 from __future__ import annotations
@@ -267,15 +270,49 @@ LATE_LINES_MAX = 4  # rule 7: a busy host that gave up a few polls in a row
 SAID_KEEP = 8  # rule 7
 
 
-class OneQuery(Plain):
+class LateAnswers:
+    """Rule 7's bookkeeping of answers owed after their reply time, for any codec that says
+    whether a reply is awaited (``awaiting_reply``): OneQuery's codecs, and those that count
+    what is owed their own way (SPID, RC2800)."""
+
+    _late_lines: int = 0  # rule 7: lines of answers to queries given up that may still come
+    _harmless_lines: tuple[bytes, ...] = ()  # rule 7: late answers (and the codec's own)
+
+    def awaiting_reply(self) -> bool:
+        raise NotImplementedError
+
+    def _owe_late(self, lines: int) -> None:
+        """Rule 7: the query open is given up; ``lines`` of its answer may still come."""
+        self._late_lines = min(LATE_LINES_MAX, self._late_lines + lines)
+
+    def _late_answer(self, raw: bytes, out: list[Reply]) -> bool:
+        """Rule 7: ``raw``, a clean reply line, is one owed by a query given up (True: said as
+        such in ``out``); False while a reply is awaited or none is owed."""
+        if self.awaiting_reply() or not self._late_lines:
+            return False
+        self._late_lines -= 1
+        self._say(raw)
+        out.append(JunkReply(raw, JunkReason.UNSOLICITED, "a poll's answer after its time"))
+        return True
+
+    def _say(self, raw: bytes) -> None:
+        """Rule 7: ``raw`` was told harmless (the last SAID_KEEP such lines are kept)."""
+        self._harmless_lines = (*self._harmless_lines, raw)[-SAID_KEEP:]
+
+    def _unsaid(self, junk: bytes) -> bytes:
+        """Rule 7: ``junk`` without the lines told harmless, each as often as it was told."""
+        for said in self._harmless_lines:
+            junk = junk.replace(said, b"", 1)
+        return junk
+
+
+class OneQuery(Plain, LateAnswers):
     """Rule 3's bookkeeping for a controller asked one question at a time (GS-232, Easycomm,
     RT-21, Prosistel): the query open and whether junk came within it. The codec calls
     ``_open_query`` from encode_query and ``_junk`` for bytes that are no reply."""
 
     _query_open: bool = False
     _noisy: bool = False  # junk arrived since the query was opened
-    _late_lines: int = 0  # rule 7: lines of answers to queries given up that may still come
-    _harmless_lines: tuple[bytes, ...] = ()  # rule 7: late answers (and the codec's own)
 
     def _open_query(self) -> None:
         self._query_open = True
@@ -291,30 +328,6 @@ class OneQuery(Plain):
         if self._query_open:
             self._noisy = True
         out.append(JunkReply(raw, reason, why))
-
-    def _owe_late(self, lines: int) -> None:
-        """Rule 7: the query open is given up; ``lines`` of its answer may still come."""
-        self._late_lines = min(LATE_LINES_MAX, self._late_lines + lines)
-
-    def _late_answer(self, raw: bytes, out: list[Reply]) -> bool:
-        """Rule 7: ``raw``, a clean reply line, is one owed by a query given up (True: said as
-        such in ``out``); False while a query is open or none is owed."""
-        if self._query_open or not self._late_lines:
-            return False
-        self._late_lines -= 1
-        self._say(raw)
-        out.append(JunkReply(raw, JunkReason.UNSOLICITED, "a poll's answer after its time"))
-        return True
-
-    def _say(self, raw: bytes) -> None:
-        """Rule 7: ``raw`` was told harmless (the last SAID_KEEP such lines are kept)."""
-        self._harmless_lines = (*self._harmless_lines, raw)[-SAID_KEEP:]
-
-    def _unsaid(self, junk: bytes) -> bytes:
-        """Rule 7: ``junk`` without the lines told harmless."""
-        for said in self._harmless_lines:
-            junk = junk.replace(said, b"")
-        return junk
 
 
 def half_up(value_deg: float, per_deg: int) -> int:

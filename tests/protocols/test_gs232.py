@@ -204,6 +204,17 @@ def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
     assert not codec.harmless(second + b"\r#\r")  # junk is still junk
 
 
+def test_a_second_line_like_a_late_answer_that_no_poll_owes_is_told() -> None:
+    """base.py rule 7: a late answer is discounted as often as it was owed, not wherever its
+    text comes again (the box repeating the late line, owed by no query, was told nowhere)."""
+    codec = asked("b")
+    codec.expire_query()
+    late = b"AZ=123  EL=045\r"
+    replies = codec.feed(late + b"\n" + late + b"\n")
+    assert [j.reason for j in junk(replies)] == [JunkReason.UNSOLICITED] * 2
+    assert codec.harmless(late) and not codec.harmless(late + late)
+
+
 def test_only_a_clean_line_of_the_boxs_own_form_is_a_late_answer() -> None:
     """Rule 5: junk in front of it, the other model's form, an azimuth alone from an az/el
     box, a bearing out of range: each told as before, and the late answer still owed."""
