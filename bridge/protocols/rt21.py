@@ -32,6 +32,13 @@ Rules:
 4. Targets are rounded half up to tenths; outside 0..360 they are refused before anything is
    sent. A new bearing while turning goes straight out: the box re-targets by itself, ramping
    down and holding its own brake as its settings say (the bridge keeps no brake time of it).
+5. A query whose reply time ran out may still be answered (base.py rule 7): its one reply is
+   owed late. A clean bearing in range that comes with no query open while one is owed is
+   that answer: UNSOLICITED (it still spoils a reading held in the same exchange), but
+   harmless, never told on R/error, and never a reading. One that comes while the next query
+   is open is that query's, as ever. (A loaded host: a poll's answer came after its reply
+   time, the next poll took it, and that poll's own answer, right behind it, was told on
+   R/error as bytes that are no valid reply.)
 """
 
 from __future__ import annotations
@@ -95,8 +102,13 @@ class Rt21Codec(OneQuery):
         self._buf.clear()
         return b"BI1;"
 
+    def expire_query(self) -> None:
+        if self._query_open:  # rule 5: its answer may still come
+            self._owe_late(1)
+        super().expire_query()
+
     def harmless(self, junk: bytes) -> bool:
-        return _CHATTER.fullmatch(junk) is not None
+        return _CHATTER.fullmatch(self._unsaid(junk)) is not None  # rule 5: a late answer
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
@@ -136,6 +148,8 @@ class Rt21Codec(OneQuery):
         reading = m.group("deg") + b";"
         if value > AZ_MAX_DEG:
             self._junk(reading, JunkReason.SPOILED, "bearing out of range", out)
+            return
+        if not m.group("pre") and self._late_answer(reading, out):  # rule 5
             return
         if not self._query_open:
             out.append(JunkReply(reading, JunkReason.UNSOLICITED, "bearing nobody asked for"))

@@ -20,6 +20,7 @@ from bridge.protocols.base import (
 )
 from bridge.protocols.rt21 import Rt21Codec
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 
 def positions(replies: list[object]) -> list[float]:
@@ -114,6 +115,27 @@ def test_an_expired_query_takes_no_late_reply() -> None:
     assert positions(codec.feed(b"42.0;")) == []
     codec.encode_query()
     assert positions(codec.feed(b"43.0;")) == [43.0]
+
+
+@pytest.mark.parametrize("stop", STOPS)
+@pytest.mark.parametrize("how", HOW)
+def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
+    stop: str, how: str
+) -> None:
+    """Rule 5: a loaded host had a poll's answer come after its reply time; the next poll took
+    it, and that poll's own answer, right behind it, was told on R/error as no reply."""
+    codec = Rt21Codec()
+    given_up(codec, stop)
+    assert positions(feed(codec, b"52.0;", how)) == [52.0]  # (which: no bearing says)
+    replies = feed(codec, b" 53.0;", how)
+    assert positions(replies) == [] and codec.harmless(b"53.0;")
+    assert [j.reason for j in junk(replies)] == [JunkReason.UNSOLICITED]
+    replies = feed(codec, b"54.0;", how)  # owed by no query: told
+    assert positions(replies) == [] and not codec.harmless(b"54.0;")
+    assert not codec.harmless(b"53.0;53.0;")  # the same again, owed by none: told
+    assert not codec.harmless(b"53.0;#")  # junk is still junk
+    codec.encode_query()
+    assert positions(feed(codec, b"55.0;", how)) == [55.0]
 
 
 def test_out_of_range_and_torn_replies_are_no_readings() -> None:

@@ -1,0 +1,83 @@
+"""A poll answered after its reply time, on the controllers asked one question at a time that
+Easycomm and GS-232 are not (their own files prove theirs): protocols/base.py rule 7.
+
+A loaded host (a USB adapter that hands the bytes over late) had a poll's answer come after its
+reply time, with the next poll's answer right behind it. What a user saw: the next poll took the
+older answer and its own was told on R/error as bytes that are no valid reply (RT-21, SPID), or
+the older answer was published as the newer reading, the rotor shown degrees behind where it
+was (RC2800, the Prosistel Combi-Track). Nothing may be told, no bearing published older than
+the poll it was taken for, and the rotor still stops where it is and turns to the next target.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.core.model import MotionState
+from tests.engine.virtual import Sent, VirtualRotator, settled_at
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+# model: (its poll's first frame, how late its answer comes: past the reply time)
+LATE = {
+    "rt21": (b"BI1;", 0.5),
+}
+SETTINGS = {
+    "idle_poll_interval_s": 0.3,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 0.6,
+    "stall_timeout_s": 5.0,
+    "silence_timeout_s": 4.0,
+}
+
+
+def turning(rig: Rig, model: str) -> tuple[VirtualRotator, list[tuple[float, float]]]:
+    """The rotor turning from 10 towards 300 (towards 80 on an elevation box), past 30; and
+    where it truly was at each frame written from then on (filled in as they go)."""
+    speed = {"az_speed_deg_s": 6.0} if model not in ("rot2prog", "rot1prog", "md01") else {}
+    v = rig(model, settings=SETTINGS, emulator={"start_az_deg": 10, **speed})
+    v.run_until_state(IDLE, 60)
+    v.target(300, 0 if v.cfg.spec.has_elevation else None)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 60, "turning")
+    written: list[tuple[float, float]] = []
+
+    def record(wire: bytes, now: float) -> bytes:
+        written.append((now, v.truth().az_deg))
+        return wire
+
+    v.to_device = record
+    return v, written
+
+
+@pytest.mark.parametrize("model", ["rt21"])
+def test_a_polls_late_answer_is_neither_told_nor_taken_over_the_next_polls(
+    rig: Rig, model: str
+) -> None:
+    poll, late_s = LATE[model]
+    v, written = turning(rig, model)
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
+    t = v.now
+    v.delay_output(late_s)
+    v.run_for(late_s + 1.0)
+    assert [at for at, _ in v.received if at > t][:1] == [pytest.approx(t + late_s)]  # (late)
+    step = 1.0  # whole degrees at the coarsest
+    for at, status in v.statuses:
+        if at > t and status.bearing_deg is not None:
+            asked = [az for w, az in written if w < at]  # where it was at the last frame
+            assert not asked or status.bearing_deg >= asked[-1] - step, (at - t, status)
+    assert v.errors() == []
+
+
+@pytest.mark.parametrize("model", ["rt21"])
+def test_a_polls_late_answer_around_a_stop_is_told_nowhere(rig: Rig, model: str) -> None:
+    poll, late_s = LATE[model]
+    v, _ = turning(rig, model)
+    t = v.stopped_with_late_answers(poll, late_s)
+    v.run_for(2.0)  # (the readings at rest)
+    truth = v.truth()
+    assert not truth.is_moving and v.status.bearing_deg == pytest.approx(truth.az_deg, abs=1.0)
+    v.target(70, 0 if v.cfg.spec.has_elevation else None)
+    v.run_until(settled_at(70, 0 if v.cfg.spec.has_elevation else None), 60, "at 70")
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))
