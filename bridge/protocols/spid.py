@@ -43,6 +43,13 @@ Rules:
    controller that rounds would read 44.3): an axis to be kept where it reads (a composite's
    box, axes.py rules 1 and 2) is asked for at the step nearest the reading, half a pulse
    above it so that rule 1's floor lands on that step, not the one below (``held``).
+7. A frame owed when the engine gave up waiting (``expire_query``: a status's, a stop's, an
+   MD-01's set's) may still come (base.py rule 7): a position frame that comes while none is
+   owed and such a one is is that late answer, UNSOLICITED (it still spoils a reading held in
+   the same exchange) but harmless, never told on R/error, and never a reading. One that comes
+   while a frame is owed again is that frame's, as ever. (A loaded host: a status's answer
+   came after its reply time, the next status or the stop after it took it, and its own
+   answer was told on R/error as 'controller sent 12 bytes that are no valid reply'.)
 """
 
 from __future__ import annotations
@@ -55,6 +62,7 @@ from bridge.protocols.base import (
     HamlibRotType,
     JunkReason,
     JunkReply,
+    LateAnswers,
     ModelSpec,
     NotReady,
     Plain,
@@ -81,7 +89,7 @@ def _pulses(per: int, deg: float) -> int:
     return math.floor(per * (360 + deg) + _GRID_SLACK)
 
 
-class SpidCodec(Plain):
+class SpidCodec(Plain, LateAnswers):
     BOX = "a SPID controller"
 
     def __init__(self, variant: str = "rot2prog") -> None:
@@ -109,13 +117,15 @@ class SpidCodec(Plain):
         return _frame(K_STOP)
 
     def expire_query(self) -> None:
+        self._owe_late(self._owed)  # rule 7: they may still come
         self._owed = 0
 
     def awaiting_reply(self) -> bool:
         return self._owed > 0
 
     def harmless(self, junk: bytes) -> bool:
-        return bool(_DEBUG_LINES.fullmatch(junk))
+        junk = self._unsaid(junk)  # rule 7: a late answer
+        return not junk or bool(_DEBUG_LINES.fullmatch(junk))
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
         if self.variant == "rot1prog":
@@ -255,6 +265,9 @@ class SpidCodec(Plain):
         self, frame: bytes, az: float, el: float | None, res: tuple[int, int] | None = None
     ) -> Reply:
         if self._owed <= 0:
+            late: list[Reply] = []
+            if self._late_answer(frame, late):  # rule 7
+                return late[0]
             return JunkReply(frame, JunkReason.UNSOLICITED, "position frame nobody asked for")
         self._owed -= 1
         if self._noisy:

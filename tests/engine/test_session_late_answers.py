@@ -21,8 +21,12 @@ from tests.engine.virtual import Sent, VirtualRotator, settled_at
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
 # model: (its poll's first frame, how late its answer comes: past the reply time)
+SPID_STATUS = bytes([0x57, *bytes(10), 0x1F, 0x20])
 LATE = {
     "rt21": (b"BI1;", 0.5),
+    "rot2prog": (SPID_STATUS, 0.95),
+    "rot1prog": (SPID_STATUS, 0.75),
+    "md01": (SPID_STATUS, 0.5),
 }
 SETTINGS = {
     "idle_poll_interval_s": 0.3,
@@ -51,7 +55,7 @@ def turning(rig: Rig, model: str) -> tuple[VirtualRotator, list[tuple[float, flo
     return v, written
 
 
-@pytest.mark.parametrize("model", ["rt21"])
+@pytest.mark.parametrize("model", sorted(LATE))
 def test_a_polls_late_answer_is_neither_told_nor_taken_over_the_next_polls(
     rig: Rig, model: str
 ) -> None:
@@ -70,7 +74,7 @@ def test_a_polls_late_answer_is_neither_told_nor_taken_over_the_next_polls(
     assert v.errors() == []
 
 
-@pytest.mark.parametrize("model", ["rt21"])
+@pytest.mark.parametrize("model", sorted(LATE))
 def test_a_polls_late_answer_around_a_stop_is_told_nowhere(rig: Rig, model: str) -> None:
     poll, late_s = LATE[model]
     v, _ = turning(rig, model)

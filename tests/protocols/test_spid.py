@@ -12,6 +12,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import JunkReason, JunkReply, NotReady, PositionReply, Reply
 from bridge.protocols.spid import SpidCodec
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 REPLY_12_5_34 = bytes.fromhex("57 03 07 02 05 02 03 09 04 00 02 20")
 
@@ -260,3 +261,31 @@ def test_a_position_the_controller_cannot_turn_to_is_no_reading() -> None:
     c.encode_query()
     (junk,) = taken(c, c.feed(status_frame([9, 9, 9, 9], [0, 0, 0, 0], 2, 2)))  # az 639.9, el -360
     assert isinstance(junk, JunkReply) and junk.reason is JunkReason.SPOILED
+
+
+AT = [([3, 7, az, 0], [3, 6, 5, 0]) for az in range(5)]  # az 10.0 .. 14.0, el 5.0
+
+
+@pytest.mark.parametrize("stop", STOPS)
+@pytest.mark.parametrize("how", HOW)
+def test_a_status_answered_after_its_time_is_told_nowhere_and_is_no_reading(
+    stop: str, how: str
+) -> None:
+    """Rule 7: a loaded host had a status's answer come after its reply time; the next status
+    took it, and its own answer was told on R/error as no reply. A stop written with the
+    status given up owes its frame late too."""
+    c = known()
+    given_up(c, stop)
+    frames = [status_frame(*at, 2, 2) for at in AT]
+    assert taken(c, feed(c, frames[0], how)) == [PositionReply(10.0, 5.0)]  # (which: none says)
+    owed = 1 if stop == "none" else 2
+    for late in frames[1 : 1 + owed]:
+        replies = feed(c, late, how)
+        assert [r.reason for r in replies if isinstance(r, JunkReply)] == [JunkReason.UNSOLICITED]
+        assert not [r for r in replies if isinstance(r, PositionReply)] and c.harmless(late)
+    told = frames[1 + owed]
+    replies = feed(c, told, how)  # owed by nothing: told
+    assert not [r for r in replies if isinstance(r, PositionReply)] and not c.harmless(told)
+    assert not c.harmless(frames[1] * (owed + 1)) and not c.harmless(frames[1] + b"#")
+    c.encode_query()
+    assert taken(c, feed(c, frames[4], how)) == [PositionReply(14.0, 5.0)]
