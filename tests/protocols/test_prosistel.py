@@ -28,6 +28,7 @@ from bridge.protocols.prosistel import (
     ProsistelCodec,
 )
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 D, COMBI = D_AZIMUTH, COMBI_TRACK
 
@@ -196,10 +197,36 @@ def test_out_of_range_and_torn_replies_are_no_readings() -> None:
 
 
 def test_an_expired_query_takes_no_late_reply() -> None:
+    """Rule 7: its answer, owed late, is no reading (and spoils one held with it); the box's
+    stream after it is chatter again (rule 2)."""
     codec = asked()
     codec.expire_query()
     got = codec.feed(b"\x02A,?,123,B\r")
+    assert positions(got) == [] and junk(got)[0].reason is JunkReason.UNSOLICITED
+    assert codec.harmless(b"\x02A,?,123,B\r")
+    got = codec.feed(b"\x02A,?,124,B\r")
     assert positions(got) == [] and junk(got)[0].reason is JunkReason.CHATTER
+
+
+@pytest.mark.parametrize("stop", STOPS)
+@pytest.mark.parametrize("how", HOW)
+def test_a_polls_answer_after_its_time_is_no_reading_nor_lets_the_older_stand(
+    stop: str, how: str
+) -> None:
+    """Rule 7: a loaded host had a poll's answer and the next poll's come together; the older
+    was taken as the newer poll's reading and the newer, chatter, spoiled nothing. Now the
+    newer is owed late: UNSOLICITED (it spoils the held reading), harmless, no reading."""
+    codec = ProsistelCodec(COMBI)
+    given_up(codec, stop)
+    older, newer = b"\x02A,?,0301,R\r\x02B,?,0000,B\r", b"\x02A,?,0331,R\r\x02B,?,0000,B\r"
+    got = feed(codec, older + newer, how)
+    assert positions(got) == [(30.1, 0.0)]  # (which: no line says)
+    assert [j.reason for j in junk(got)] == [JunkReason.UNSOLICITED] * 2
+    assert codec.harmless(newer)
+    got = feed(codec, b"\x02A,?,0340,R\r", how)  # owed by no query: the box's own chatter
+    assert positions(got) == [] and junk(got)[0].reason is JunkReason.CHATTER
+    codec.encode_query()
+    assert positions(feed(codec, b"\x02B,?,0000,B\r\x02A,?,0350,R\r", how)) == [(35.0, 0.0)]
 
 
 def test_a_line_without_end_is_given_up_once_too_long() -> None:
