@@ -31,9 +31,9 @@ Rules:
    query owes is told). A line that comes while the next query is open is that query's, as
    ever (no line says which poll it answers, and a late answer that never comes must not eat
    the next poll's). (easycomm.py rule 10, gs232.py rule 5, rt21.py rule 5, spid.py rule 7,
-   prosistel.py rule 7: a busy host gave a poll up, the next poll took its answer, and that
-   poll's own answer a line later was told on R/error as bytes that are no reply, or passed
-   as chatter that spoiled nothing, the older reading standing.)
+   prosistel.py rule 7, rc2800.py rule 6: a busy host gave a poll up, the next poll took its
+   answer, and that poll's own answer a line later was told on R/error as bytes that are no
+   reply, or passed as chatter that spoiled nothing, the older reading standing.)
 """
 
 from __future__ import annotations

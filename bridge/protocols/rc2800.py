@@ -50,6 +50,15 @@ Rules:
    they are refused before anything is sent. A new bearing while turning goes straight out.
 5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
    only splits each command into its axes' frames, in the order they must go.
+6. An exchange given up (``expire_query``) may still be answered (base.py rule 7): the lines
+   it still waited for are owed late. A well-formed line of an axis this model reads that
+   comes while nothing is asked and none of rule 2's early reading is owed, while such a
+   line is, is one of them: UNSOLICITED (it spoils a reading held in the same exchange),
+   harmless, never a reading and never kept for one (rule 2's stream). A line that comes
+   while the next exchange is open is that exchange's, as ever. (A loaded host: a poll's
+   answer and the next poll's came together, the older made the newer poll's reading and the
+   newer, kept as the box's stream, spoiled nothing: the bearing was published 6 degrees
+   behind the rotor turning at 6 degrees a second.)
 """
 
 from __future__ import annotations
@@ -61,6 +70,7 @@ from bridge.protocols.base import (
     HamlibRotType,
     JunkReason,
     JunkReply,
+    LateAnswers,
     ModelSpec,
     Plain,
     PositionReply,
@@ -83,7 +93,7 @@ _ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, 
 _LINES = re.compile(rb"[^\r\n]*[\r\n]")
 
 
-class Rc2800Codec(Plain):
+class Rc2800Codec(Plain, LateAnswers):
     """Codec for one RC2800: ``elevation`` whether an elevation rotor hangs on it."""
 
     BOX = "the RC2800"
@@ -128,6 +138,7 @@ class Rc2800Codec(Plain):
         self._owed = set()
 
     def expire_query(self) -> None:
+        self._owe_late(len(self._want))  # rule 6: they may still come
         self._want = []
 
     def awaiting_reply(self) -> bool:
@@ -182,6 +193,8 @@ class Rc2800Codec(Plain):
             return
         if axis not in self._axes:
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
+            return
+        if axis not in self._owed and self._late_answer(raw, out):  # rule 6
             return
         self._deg[axis] = value
         self._seen.add(axis)

@@ -15,6 +15,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, RetargetPolicy
 from bridge.protocols.rc2800 import Rc2800Codec
 from tests.support import HOW, feed
+from tests.support.codecs import given_up
 
 
 def positions(replies: list[object]) -> list[tuple[float, float | None]]:
@@ -162,6 +163,25 @@ def test_an_elevation_from_an_exchange_with_line_noise_is_never_carried_into_a_r
     assert positions(feed(codec, b"A P= 150.0 S=9 MV\r", how)) == []
     assert codec.awaiting_reply()  # this poll's own elevation is owed
     assert positions(feed(codec, b"E P=  30.0 S=9 MV\r", how)) == [(150.0, 30.0)]
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_a_polls_answer_after_its_time_is_no_reading_nor_lets_the_older_stand(how: str) -> None:
+    """Rule 6: a loaded host had a poll's answer and the next poll's come together; the older
+    made the newer poll's reading, and the newer, kept as the box's stream, spoiled nothing
+    (the bearing published 6 degrees behind). Now the newer is owed late: UNSOLICITED (it
+    spoils the held reading), harmless, never a reading nor kept for one."""
+    codec = Rc2800Codec()
+    given_up(codec, "none")
+    older = b"A P=  30.4 S=9 MV\rE P=   0.0 S=9 ST\r"
+    newer = b"A P=  36.4 S=9 MV\rE P=   0.0 S=9 ST\r"
+    out = feed(codec, older + newer, how)
+    assert positions(out) == [(30.4, 0.0)]  # (which: no line says)
+    assert [j.reason for j in junk(out)] == [JunkReason.UNSOLICITED] * 2
+    assert codec.harmless(newer)
+    out = feed(codec, b"A P=  37.0 S=9 MV\r", how)  # owed by none: the box's stream, kept
+    assert positions(out) == [] and junk(out)[0].reason is JunkReason.CHATTER
+    assert positions(feed(codec, b"E P=   0.0 S=9 ST\r", how)) == [(37.0, 0.0)]
 
 
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
