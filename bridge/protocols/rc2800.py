@@ -52,13 +52,13 @@ Rules:
    only splits each command into its axes' frames, in the order they must go.
 6. An exchange given up (``expire_query``) may still be answered (base.py rule 7): the lines
    it still waited for are owed late. A well-formed line of an axis this model reads that
-   comes while nothing is asked and none of rule 2's early reading is owed, while such a
-   line is, is one of them: UNSOLICITED (it spoils a reading held in the same exchange),
-   harmless, never a reading and never kept for one (rule 2's stream). A line that comes
-   while the next exchange is open is that exchange's, as ever. (A loaded host: a poll's
-   answer and the next poll's came together, the older made the newer poll's reading and the
-   newer, kept as the box's stream, spoiled nothing: the bearing was published 6 degrees
-   behind the rotor turning at 6 degrees a second.)
+   comes while nothing is asked and some are owed late (and is not the line rule 2's early
+   reading still waits for) is one of them: UNSOLICITED (it spoils a reading held in the same
+   exchange), harmless, never a reading and never kept for one (rule 2's stream). A line that
+   comes while the next exchange is open is that exchange's, as ever. (A loaded host: a
+   poll's answer and the next poll's came together, the older made the newer poll's reading
+   and the newer, kept as the box's stream, spoiled nothing: the bearing was published 6
+   degrees behind the rotor turning at 6 degrees a second.)
 """
 
 from __future__ import annotations

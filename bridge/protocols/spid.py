@@ -45,8 +45,8 @@ Rules:
    above it so that rule 1's floor lands on that step, not the one below (``held``).
 7. A frame owed when the engine gave up waiting (``expire_query``: a status's, a stop's, an
    MD-01's set's) may still come (base.py rule 7): a position frame that comes while none is
-   owed and such a one is is that late answer, UNSOLICITED (it still spoils a reading held in
-   the same exchange) but harmless, never told on R/error, and never a reading. One that comes
+   owed, but one given up is, is that late answer: UNSOLICITED (it still spoils a reading held
+   in the same exchange) but harmless, never told on R/error, and never a reading. One that comes
    while a frame is owed again is that frame's, as ever. (A loaded host: a status's answer
    came after its reply time, the next status or the stop after it took it, and its own
    answer was told on R/error as 'controller sent 12 bytes that are no valid reply'.)
