@@ -419,7 +419,10 @@ class Rotator:
         """Whether the rotor may be turning, or about to, as far as the bridge knows: its
         status says moving, it tracks or follows, or a motion command was put that the status
         does not show yet (app.py rule 6: what the bridge stops before it ends). A storm's park
-        is left to go on (session/wind.py: a stop would keep it from being tried again)."""
+        is left to go on (session/wind.py: a stop would keep it from being tried again). The
+        place first, then the status (``_seen``'s order: the lines thread writes them the other
+        way round, so a target applied between the two reads shows in one of them)."""
+        shown = self._worker.newest_applied
         status = self.status
         if status.wind is not None and status.wind.parks:
             return False  # (a storm known only from a replay parks nothing: wind.py rule 6)
@@ -427,7 +430,7 @@ class Rotator:
             return True
         if status.tracking is not None or status.following is not None:
             return True
-        return self._mailbox.motion_unseen(self._worker.newest_applied)
+        return self._mailbox.motion_unseen(shown)
 
     def ticket(self) -> int:
         """A place in the order of commands (mailbox.py rule 10a): what a front end that
