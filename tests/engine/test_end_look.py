@@ -38,4 +38,7 @@ def test_a_target_applied_while_the_end_looks_is_seen_on_its_way_or_turning(
         return status
 
     monkeypatch.setattr(Worker, "status", property(applied_after_this_read))
-    assert rot.may_turn()  # stopped by the end's first look
+    try:
+        assert rot.may_turn()  # stopped by the end's first look
+    finally:
+        rot.stop()
