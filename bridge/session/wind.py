@@ -25,7 +25,9 @@ Rules:
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept (the report says which: a storm known only from a
    replay, rule 6, parked nothing; one whose park a stop or lock ON stopped, rule 3, is not
-   "parked"). The next reading clears it.
+   "parked"; nor is one begun while the rotator was locked, whose park waits for the lock OFF:
+   a review, the rotor stood where the lock left it under a report that said it was parked).
+   The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same (a safeguard: the settings refuse such a park when they are
    read, settings/wind.py rule 1).
@@ -230,6 +232,8 @@ class WindPark:
                 )
             elif self._halted:  # rule 3: a STOP or lock ON stopped the park (a review)
                 kept = "a storm whose park a stop or lock ON stopped: motion refused"
+            elif self._park_owed and scene.locked:  # rule 4: begun under the lock, not sent
+                kept = "a storm whose park waits for the lock OFF: motion refused, nothing parked"
             else:
                 kept = "parked for the storm" if self.storm else "no storm"
             error = Report(

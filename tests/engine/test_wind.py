@@ -414,3 +414,22 @@ def test_the_silence_of_a_storm_whose_park_was_stopped_says_it_was_stopped() -> 
         "no wind reading on weather/wind for 15 min: keeping the state it had (a storm whose "
         "park a stop or lock ON stopped: motion refused)"
     )
+
+
+def test_the_silence_of_a_storm_begun_under_the_lock_says_nothing_was_parked() -> None:
+    """Rule 4: the rotator locked for tower work, a storm began (its park waits for the lock
+    OFF) and the wind station fell silent: the report said "keeping the state it had (parked
+    for the storm)" while the rotor stood where the lock left it. The park goes at the OFF."""
+    with windy() as v:
+        wind(v, 30.0)
+        v.lock(True)
+        wind(v, 90.0)
+        v.run_for(16 * 60.0)  # wind_silent_min is 15
+        assert [e.message for e in v.errors("wind")] == [
+            "no wind reading on weather/wind for 15 min: keeping the state it had (a storm whose "
+            "park waits for the lock OFF: motion refused, nothing parked)"
+        ]
+        assert abs(v.truth().az_deg - 200.0) <= 0.5, v.truth()  # where the lock left it
+        v.lock(False)
+        v.run_until(lambda h: h.status.parked, 60, "parked once the lock is OFF")
+        assert abs(v.truth().az_deg - 90.0) <= 0.5, v.truth()
