@@ -31,12 +31,14 @@ Rules:
 6. The bridge's end (SIGTERM, SIGINT, SIGHUP, ``stop_event``) leaves no rotor turning: at once
    every rotator takes nothing but a stop or a lock word (a move asked meanwhile is refused,
    "the bridge is stopping"), every one that may turn (``Rotator.may_turn``: moving, tracking,
-   following, a move on its way) is stopped, and its stop written (up to HALT_WAIT_S, as
+   following, a move on its way, a target waiting out a brake delay among them) is stopped,
+   and its stop written (up to HALT_WAIT_S, as
    claim rule 4's, the controller's line rules kept); once the front ends are closed, and
    before the ports close, so is every one that may turn and was not stopped so already. A
    storm's park goes on (a stop would keep it from being tried again after the restart). An
    attack pass: ``systemctl stop`` mid-turn closed the port in 0.2 s with no stop, and the
-   rotor turned on, watched by nobody, to its target.
+   rotor turned on, watched by nobody, to its target. (A review: a target put right after a
+   stop, waiting out the brake, was taken for no turn, and went out while a front end closed.)
 """
 
 from __future__ import annotations

@@ -417,17 +417,21 @@ class Rotator:
 
     def may_turn(self) -> bool:
         """Whether the rotor may be turning, or about to, as far as the bridge knows: its
-        status says moving, it tracks or follows, or a motion command was put that the status
-        does not show yet (app.py rule 6: what the bridge stops before it ends). A storm's park
-        is left to go on (session/wind.py: a stop would keep it from being tried again). The
-        place first, then the status (``_seen``'s order: the lines thread writes them the other
-        way round, so a target applied between the two reads shows in one of them)."""
+        status says moving, or shows a target (one that waits out a brake delay, or a reply on
+        a half-duplex line, goes out by itself once it may), it tracks or follows, or a motion
+        command was put that the status does not show yet (app.py rule 6: what the bridge
+        stops before it ends). A storm's park is left to go on (session/wind.py: a stop would
+        keep it from being tried again). The place first, then the status (``_seen``'s order:
+        the lines thread writes them the other way round, so a target applied between the two
+        reads shows in one of them)."""
         shown = self._worker.newest_applied
         status = self.status
         if status.wind is not None and status.wind.parks:
             return False  # (a storm known only from a replay parks nothing: wind.py rule 6)
         if status.state is MotionState.MOVING:
             return True
+        if status.target_az_deg is not None or status.target_el_deg is not None:
+            return True  # (a target that waits out a brake delay or a reply: on its way too)
         if status.tracking is not None or status.following is not None:
             return True
         return self._mailbox.motion_unseen(shown)

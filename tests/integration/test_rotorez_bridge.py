@@ -16,7 +16,7 @@ import pytest
 
 from bridge.emulators.pty import EmulatedPort
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 BEARING_FRAMES = (
     "executed",
@@ -583,3 +583,42 @@ def test_an_option_stored_for_another_model_does_not_break_the_rotator(rig: Rig)
     rig.start()
     rig.ready("yagi")
     assert rig.retained()["rotor/availability"] == b"online"
+
+
+def test_the_bridges_end_drops_a_target_that_waits_out_the_brake(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """app.py rule 6: a target put right after a stop waits out the brake delay (the status
+    says braking, with that target); the end's first look took the rotor for still, so the
+    target went out once the brake was off, while a front end took its time to close, and the
+    rotor turned after the signal until the second look stopped it."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "120")
+    emu.wait_for(lambda s: s.is_moving, slow(10))
+    rig.probe.publish("rotor/stop", "")
+    emu.wait_for(lambda s: s.in_brake_delay, slow(10))
+    t0 = time.monotonic()
+    rig.probe.publish("rotor/target", "300")  # waits for the brake
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: (
+            json.loads(m.payload)["state"] == "braking"
+            and json.loads(m.payload).get("target") == 300
+        ),
+        after=t0,
+    )
+    assert rig.app is not None
+    seen, app = len(emu.log()), rig.app
+    ending = app._stop_udp
+
+    def slow_to_close() -> None:  # a front end that takes its time: the brake ends meanwhile
+        rig.probe.wait_for("rotor/state", lambda m: m.payload != b"braking", after=t0)
+        ending()
+
+    monkeypatch.setattr(app, "_stop_udp", slow_to_close)
+    rig.stop()
+    turned = [f for f in emu.log()[seen:] if f.outcome in BEARING_FRAMES]
+    assert not turned, turned  # the target waiting went with the end's stop
+    assert not emu.state().is_moving
