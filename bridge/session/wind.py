@@ -7,7 +7,9 @@ Rules:
 1. A reading above ``wind_park_above`` starts a storm: the rotator is sent to the wind park
    position (source ``wind``), tracking and following end, and every motion command (a target,
    a preset, a park, a nudge, a track or follow command) is refused with the reason
-   ("wind 72 km/h above 60: parked for the storm") until the storm is over.
+   ("wind 72 km/h above 60: parked for the storm"; "... motion refused for the storm (a stop
+   or lock ON stopped its park)" once rule 3 stopped it: a review, the refusal said the rotor
+   was parked while it stood where the STOP left it) until the storm is over.
 2. The storm is over once the readings have stayed below ``wind_release_below`` for
    ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
    readings end a storm: nothing else does, not a restart of the wind station, not silence.
@@ -202,6 +204,8 @@ class WindPark:
         if self._replayed:  # rule 6
             above = self._cfg.park_above_kmh
             return f"{self._why}: motion refused; the park waits for a new reading above {above:g}"
+        if self._halted:  # rule 3: its park stopped, nothing parked (a review)
+            return f"{self._why}: motion refused for the storm (a stop or lock ON stopped its park)"
         return f"{self._why}: parked for the storm" if self.storm else None
 
     def wakeup(self, now: float) -> float | None:

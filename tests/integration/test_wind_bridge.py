@@ -268,7 +268,8 @@ def test_a_storm_park_the_operator_stopped_is_not_done_again_by_a_restart(rig: R
     assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
     before = rig.probe.mark()
     rig.probe.publish("rotor/target", "200")  # judged after the steps that would have parked
-    assert "parked for the storm" in error_after(rig, before, "refused")["message"]
+    said = error_after(rig, before, "refused")["message"]  # (it stands where the STOP left it)
+    assert said.endswith("motion refused for the storm (a stop or lock ON stopped its park)")
     assert len(rig.emu.frames("set")) == sets
     assert abs(rig.emu.state().az_deg - where) < 1.0
 
