@@ -12,10 +12,11 @@ from typing import Any
 
 import pytest
 
-from tests.support import Mosquitto, Probe, wait_until
+from tests.support import Mosquitto, Probe, retained_snapshot, wait_until
 from tests.support.rig import Rig
 from tests.support.state import kept
 from tests.support.waiting import slow
+from tests.test_homeassistant import render
 
 TOPIC = "weather/station/wind"
 
@@ -126,6 +127,32 @@ def test_a_storm_reading_the_broker_kept_refuses_motion_but_moves_nothing(rig: R
     rig.probe.publish(TOPIC, "24")  # the station is back: 86 km/h, new
     rig.arrived("tower", 90.0, timeout_s=30)
     assert wind_of(rig, lambda w: w.get("speed_kmh") == 86.4)["replayed"] is False
+
+
+def storm_shown(rig: Rig) -> str:
+    """What Home Assistant's binary sensor "Parked for the storm" shows now: its retained
+    discovery config's template on the retained R/status."""
+    config = retained_snapshot(rig.broker.port, "homeassistant/#")[
+        "homeassistant/binary_sensor/rotorbridge_rotor_r_tower/storm/config"
+    ]
+    status = retained_snapshot(rig.broker.port, "rotor/status")["rotor/status"]
+    return render(json.loads(config)["value_template"], status.decode())
+
+
+def test_home_assistant_shows_no_park_for_a_storm_known_only_from_a_replay(rig: Rig) -> None:
+    """wind.py rule 6 in Home Assistant: a storm known only from the reading the broker kept
+    parks nothing, and "Parked for the storm" said on all the same while the rotor stood where
+    it was (a review). It is on once a new reading parks it."""
+    rig.probe.publish(TOPIC, "25", retain=True)  # 90 km/h, a week ago
+    start(rig)
+    wind_of(rig, lambda w: w.get("storm") and w.get("replayed"))
+    assert storm_shown(rig) == "OFF"
+    assert rig.emu.frames("set") == []
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "24")  # the station is back: 86 km/h, new
+    rig.arrived("tower", 90.0, timeout_s=30)
+    wind_of(rig, lambda w: w.get("storm") and not w.get("replayed"), mark)
+    assert storm_shown(rig) == "ON"
 
 
 def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None:

@@ -7,7 +7,8 @@ What it is made of:
 - its session part: session/wind.py ``WindPark``, run by the session's step as ``PART`` here
   says (the registry's order is the step's);
 - its input: the user's wind topic, read by feed.py;
-- here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm)
+- here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm:
+  on only for a storm the rotor is parked or parking for, not one known only from a replay)
   and its declaration.
 """
 
@@ -58,10 +59,13 @@ def _speed(r: RotatorView) -> dict[str, object]:
 
 
 def _storm(r: RotatorView) -> dict[str, object]:
+    """On while the rotor is parked, or parking, for a storm (model.py ``WindInfo.parks``): not
+    for a storm known only from a replayed reading, which parks nothing (session/wind.py rule
+    6; a review: Home Assistant said "Parked for the storm" while the rotor stood where it was)."""
     return {
         "state_topic": r.topics.status, "icon": "mdi:weather-windy",
-        "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm "
-                          "else 'OFF' }}",
+        "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm and "
+                          "not value_json.wind.replayed else 'OFF' }}",
     }  # fmt: skip
 
 
