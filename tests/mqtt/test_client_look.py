@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
@@ -44,14 +46,18 @@ def test_the_hello_is_the_first_message_and_does_not_linger(broker: Mosquitto) -
         watcher.close()
 
 
+@pytest.mark.parametrize("cached", [True, False], ids=["a status before the open", "none"])
 def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its_lock(
-    broker: Mosquitto,
+    broker: Mosquitto, cached: bool
 ) -> None:
     """Rule 14: the lock ON an earlier run left, which the hook took (its rotator locked), is
     left as the broker holds it; the rotator's status says OFF until that lock is saved
     (runtime/kept.py rule 2), and such a status, published after the open, put OFF over the ON
     (a switch shown OFF, and a crash then left the broker OFF). While the lock holds, an older
-    value is not put over it; once it no longer holds (a lock OFF), the next value goes out."""
+    value is not put over it; once it no longer holds (a lock OFF), the next value goes out.
+    So too when the rotator's first status comes only after the open (a review, through Home
+    Assistant: its lock switch showed OFF, then ON, at 8 starts of 15 of a bridge whose new
+    state file left the lock to the broker)."""
     seed = Probe(broker.port, "t/#")
     seed.publish("t/r/lock/state", "ON", retain=True)
     seed.wait_value("t/r/lock/state", "ON", 5)
@@ -63,7 +69,8 @@ def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its
         on_message=lambda *a: None,
         claim=Claim(Instance.me("witness-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
     )
-    client.publish_retained("t/r/lock/state", "OFF")  # (the status before the start)
+    if cached:
+        client.publish_retained("t/r/lock/state", "OFF")  # (the status before the start)
     locked = [False]
 
     def took(heard: dict[str, bytes]) -> dict[str, Callable[[], bool]]:

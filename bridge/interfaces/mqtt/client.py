@@ -456,11 +456,17 @@ class MqttClient(Connection):
         self._delivery.take_dirty()  # every retained value goes out below
         send(self._will_topic, b"online", 1, retain=True)
         heard = look.heard if look is not None and taken else None
-        for topic, (data, qos) in list(self._retained.items()):
-            holds = taken.get(topic) if taken else None
-            if heard is not None and holds is not None and topic in heard and holds():
-                self._retained[topic] = (heard[topic], qos)  # the broker's: a change goes out
+        left = set()
+        for topic, holds in (taken or {}).items():
+            # the broker's, whether or not a status was cached before (its first one may come
+            # after this: a review, its OFF went out over the ON): a change goes out
+            if heard is not None and topic in heard and holds():
+                qos = self._retained.get(topic, (b"", STATE_QOS))[1]
+                self._retained[topic] = (heard[topic], qos)
                 self._left[topic] = (heard[topic], holds)
+                left.add(topic)
+        for topic, (data, qos) in list(self._retained.items()):
+            if topic in left:
                 continue
             self._owned.sent(topic, data)
             if topic != self._will_topic:

@@ -26,7 +26,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    for is free then): what an earlier run said, before this one published anything
    (runtime/kept.py rule 10). A later look's are the bridge's own: none are handed on (None).
    They are handed on before ``online`` and the cached values go out, and a value the hook
-   took (an ON that locked its rotator) is left as the broker holds it while it holds: the
+   took (an ON that locked its rotator) is left as the broker holds it while it holds,
+   whether or not its rotator's status was cached by then (a review: a first status made
+   after the open put its OFF over the ON, Home Assistant's lock switch OFF then ON): the
    OFF cached before it is older (a review: put over it, the lock was shown OFF, and a crash
    before the lock's save left neither the file nor the broker ON), and so is a status's OFF
    from before the lock was saved (runtime/kept.py rule 2; a review of the merge: it came
