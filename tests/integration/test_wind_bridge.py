@@ -155,6 +155,40 @@ def test_home_assistant_shows_no_park_for_a_storm_known_only_from_a_replay(rig: 
     assert storm_shown(rig) == "ON"
 
 
+def test_home_assistant_shows_no_park_for_a_park_the_operator_stopped_short(rig: Rig) -> None:
+    """wind.py rule 3 in Home Assistant: a STOP during the storm's park stops it where the rotor
+    is, and "Parked for the storm" said on all the same (a review: the rotor stood 140 degrees
+    from the park). A STOP once the rotor was seen at the park stops no park: it stays on."""
+    start(rig, emu={"start_az_deg": 300})  # 150 degrees from the storm's park
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: the park begins
+    wait_until(lambda: rig.emu.frames("set"), slow(10), "the park sent")
+    assert storm_shown(rig) == "ON"  # parking
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/stop", "stop")
+    wind_of(rig, lambda w: w.get("halted"), mark)
+    assert storm_shown(rig) == "OFF"
+    assert abs(rig.emu.state().az_deg - 90.0) > 20.0  # (stopped short, as the test needs)
+
+
+def test_a_stop_after_the_storms_park_was_reached_leaves_it_parked(rig: Rig) -> None:
+    start(rig)
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: the park, 30 degrees away
+    rig.arrived("tower", 90.0, timeout_s=30)
+    rig.probe.wait_for("rotor/status", lambda m: json.loads(m.payload)["parked"], 10)
+    polls = len(rig.emu.frames("status"))  # (the rotor seen at the park by the steps after it)
+    rig.emu.wait_until(lambda d, now: len(d.frames("status")), lambda k: k >= polls + 2, 10)
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/stop", "stop")
+    rig.probe.wait(
+        lambda m: m.topic == "rotor/status" and json.loads(m.payload)["last_command_source"],
+        10,
+        "the stop in the status",
+        mark,
+    )
+    assert wind_of(rig, lambda w: w.get("storm"), mark)["halted"] is False
+    assert storm_shown(rig) == "ON"
+
+
 def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None:
     start(rig, wind_silent_min=0.05)  # 3 s without a reading (the silence is under test)
     mark = rig.probe.mark()

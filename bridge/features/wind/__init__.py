@@ -8,8 +8,8 @@ What it is made of:
   says (the registry's order is the step's);
 - its input: the user's wind topic, read by feed.py;
 - here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm:
-  on only for a storm the rotor is parked or parking for, not one known only from a replay)
-  and its declaration.
+  on only for a storm the rotor is parked or parking for, not one known only from a replay
+  nor one whose park a stop cut short) and its declaration.
 """
 
 from __future__ import annotations
@@ -38,6 +38,9 @@ def wind_json(info: WindInfo) -> dict[str, object]:
         "speed_kmh": info.speed_kmh,
         "storm": info.storm,
         "replayed": info.replayed,
+        # a STOP or lock ON stopped this storm's park before the rotor was seen there (wind.py
+        # rules 3 and 7): it stands where the stop left it, and the park is not tried again
+        "halted": info.halted and not info.arrived,
         "calm_since": None
         if calm is None
         else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
@@ -59,13 +62,15 @@ def _speed(r: RotatorView) -> dict[str, object]:
 
 
 def _storm(r: RotatorView) -> dict[str, object]:
-    """On while the rotor is parked, or parking, for a storm (model.py ``WindInfo.parks``): not
-    for a storm known only from a replayed reading, which parks nothing (session/wind.py rule
-    6; a review: Home Assistant said "Parked for the storm" while the rotor stood where it was)."""
+    """On while the rotor is parked, or parking, for a storm: not for a storm known only from a
+    replayed reading, which parks nothing (session/wind.py rule 6), nor for one whose park a
+    STOP or lock ON stopped short (rule 3). A review: Home Assistant said "Parked for the storm"
+    while the rotor stood where it was, or where the stop left it."""
     return {
         "state_topic": r.topics.status, "icon": "mdi:weather-windy",
         "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm and "
-                          "not value_json.wind.replayed else 'OFF' }}",
+                          "not value_json.wind.replayed and not value_json.wind.halted "
+                          "else 'OFF' }}",
     }  # fmt: skip
 
 
