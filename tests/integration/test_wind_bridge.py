@@ -129,14 +129,20 @@ def test_a_storm_reading_the_broker_kept_refuses_motion_but_moves_nothing(rig: R
     assert wind_of(rig, lambda w: w.get("speed_kmh") == 86.4)["replayed"] is False
 
 
-def storm_shown(rig: Rig) -> str:
-    """What Home Assistant's binary sensor "Parked for the storm" shows now: its retained
+def shown(rig: Rig, entity: str) -> str:
+    """What Home Assistant's ``entity`` (``platform/object id``) shows now: its retained
     discovery config's template on the retained R/status."""
+    platform, oid = entity.split("/")
     config = retained_snapshot(rig.broker.port, "homeassistant/#")[
-        "homeassistant/binary_sensor/rotorbridge_rotor_r_tower/storm/config"
+        f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{oid}/config"
     ]
     status = retained_snapshot(rig.broker.port, "rotor/status")["rotor/status"]
     return render(json.loads(config)["value_template"], status.decode())
+
+
+def storm_shown(rig: Rig) -> str:
+    """What Home Assistant's binary sensor "Parked for the storm" shows now."""
+    return shown(rig, "binary_sensor/storm")
 
 
 def test_home_assistant_shows_no_park_for_a_storm_known_only_from_a_replay(rig: Rig) -> None:
@@ -197,12 +203,20 @@ def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None
     silent = error_after(rig, mark, "wind")
     assert TOPIC in silent["message"] and "parked for the storm" in silent["message"]
     assert wind_of(rig, lambda w: w.get("silent"))["storm"] is True
+    # Home Assistant's wind sensor: unknown while the topic is silent, not the last reading
+    # as if it were the wind now (a review: 108 km/h shown for a station dead for hours)
+    assert shown(rig, "sensor/wind") == "None"
+    assert storm_shown(rig) == "ON"
     mark = rig.probe.mark()
     rig.probe.publish("rotor/target", "200")
     assert (
         error_after(rig, mark, "refused")["message"]
         == "wind 108 km/h above 72: parked for the storm"
     )
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "29")  # the station is back
+    wind_of(rig, lambda w: w.get("speed_kmh") == 104.4 and not w.get("silent"), mark)
+    assert shown(rig, "sensor/wind") == "104.4"
 
 
 def test_an_unreadable_wind_payload_changes_nothing(rig: Rig) -> None:

@@ -7,9 +7,10 @@ What it is made of:
 - its session part: session/wind.py ``WindPark``, run by the session's step as ``PART`` here
   says (the registry's order is the step's);
 - its input: the user's wind topic, read by feed.py;
-- here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm:
-  on only for a storm the rotor is parked or parking for, not one known only from a replay
-  nor one whose park a stop cut short) and its declaration.
+- here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, unknown
+  while the topic is silent; the storm, on only for a storm the rotor is parked or parking
+  for, not one known only from a replay nor one whose park a stop cut short) and its
+  declaration.
 """
 
 from __future__ import annotations
@@ -53,11 +54,15 @@ def _wind(status: RotatorStatus) -> WindInfo | None:
 
 
 def _speed(r: RotatorView) -> dict[str, object]:
+    """The last reading; unknown while the topic is silent (session/wind.py rule 4), not that
+    reading as if it were the wind now (a review: a station dead for hours showed its last
+    108 km/h, in the statistics too)."""
     return {
         "state_topic": r.topics.status, "unit_of_measurement": "km/h",
         "device_class": "wind_speed", "state_class": "measurement",
         "value_template": "{{ value_json.wind.speed_kmh if value_json.wind is defined and "
-                          "value_json.wind.speed_kmh is not none else 'None' }}",
+                          "value_json.wind.speed_kmh is not none and not value_json.wind.silent "
+                          "else 'None' }}",
     }  # fmt: skip
 
 
