@@ -29,10 +29,11 @@ Rules:
    it (docs/mqtt.md): a Target on ``R/target`` as JSON, a Stop on ``R/stop``, the lock on
    ``R/lock``, a preset, a nudge, tracking on theirs, through the link (interfaces/mqtt/remote.py:
    QoS 1, expiry, operator); one the station takes on no topic (an elevation alone, an option, the
-   lease, following) is refused (UNSUPPORTED). While the link is down each is refused with
-   OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
-   once too while the station is not current (rule 1: its bridge or the rotator offline), as
-   the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
+   lease, following) is refused (UNSUPPORTED; an elevation alone says to send both). While the
+   link is down each is refused with OFFLINE at once. A command that moves (a target, park, a
+   place) is refused with OFFLINE at once too while the station is not current (rule 1: its
+   bridge or the rotator offline), as the station's own rotctld refuses it for a rotator
+   offline: nobody would take it. A stop is
    refused only while the link is down (the station's bridge may be offline on its main
    connection and still take a stop on its stop lane, interfaces/mqtt/lane.py), and then it is kept
    and sent first on reconnect (interfaces/mqtt/remote.py rule 6): OFFLINE tells the client it has
@@ -372,6 +373,12 @@ class RemoteRotator:
             case TrackBody() if command.tle is None:
                 self.check_move(since, source)
                 self.publish(t.feature(tracking.COMMAND), command.name, guard)
+            case Target():  # an elevation alone (rule 3)
+                raise Refused(
+                    RefusalCode.UNSUPPORTED,
+                    "an elevation alone cannot go to the station, whose target topic takes "
+                    "the azimuth with it: send both",
+                )
             case _:
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
