@@ -21,7 +21,8 @@ Rules:
    with one that is no Maidenhead locator.
 3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
    the program transmits waits, shown as ``held``, until a status says the transmission has
-   ended; then the newest grid is turned to. A transmission that begins while its own turn is
+   ended; then the newest grid is turned to (or, the dial off its bands, waits for them, no
+   longer ``held``: rule 9). A transmission that begins while its own turn is
    under way (the usual case: the grid is named a second before the transmit period) stops
    the turn (``Proposal.halt``), and the grid is turned to again once it has ended. Its own
    turn is its target waiting or out with the rotor turning; a turn with none is not its own
@@ -291,6 +292,8 @@ class Follower:
             return Proposal(busy=True)
         off_band = self._off_band_why(heard)
         if off_band is not None:  # rule 9: reported once a band, until the dial comes back
+            if info.held:  # rule 3: the transmission ended; the grid waits for the band now
+                self.info = replace(info, held=False)
             band, why = off_band
             said, self._off_band = self._off_band == band, band
             if said:

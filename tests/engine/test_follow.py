@@ -489,6 +489,27 @@ def test_a_rotator_with_bands_turns_only_while_the_dial_is_on_one_of_them() -> N
     assert angle_between(on.target.az_deg, bearing("PM95")) < 0.1
 
 
+def test_a_grid_held_for_a_transmission_that_ended_off_band_is_held_no_more() -> None:
+    """Rule 3's ``held`` says a grid waits for a transmission to end: once a status says it
+    ended, with the dial off the antenna's bands (rule 9), the grid waits for the band and the
+    status says ``held: false`` (it said ``true`` until the dial came back, with nothing on
+    the air)."""
+    part = following(rig(bands=["20m"]))
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=TWENTY), 1.0)
+    assert part.step(at(1.0)).target is not None
+    part.heard(Heard("W1AW", "FN31", True, dial_hz=TWENTY), 2.0)
+    assert part.step(at(2.0)).target is None
+    assert part.info is not None and part.info.held
+    part.heard(Heard("W1AW", "FN31", False, dial_hz=FORTY), 3.0)  # the transmission ended
+    off = part.step(at(3.0))
+    assert off.target is None and off.error is not None
+    assert part.info is not None and not part.info.held
+    part.heard(Heard("W1AW", "FN31", False, dial_hz=TWENTY), 4.0)  # back on 20 m: turned to
+    on = part.step(at(4.0))
+    assert on.target is not None and on.target.az_deg is not None
+    assert angle_between(on.target.az_deg, bearing("FN31")) < 0.1
+
+
 @pytest.mark.parametrize(
     ("dial_hz", "why"),
     [
