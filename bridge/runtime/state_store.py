@@ -15,10 +15,11 @@ Rules:
 2. A missing file means "nothing set" (a lock it does not say may be taken from the broker:
    kept.py rule 10, ``holds_lock``); an unreadable one is reported and treated as empty,
    except that every rotator whose lock state cannot be read starts locked (safety before
-   convenience) and is written down as locked, so it stays locked across restarts until someone
-   unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
-   are not on/off, a number or a name, a key given twice with two values) does the same for
-   its rotator alone, and the rotator's status says why (``problems``). A key given twice is
+   convenience), its status saying why (``problems``), and is written down as locked, so it
+   stays locked across restarts until someone unlocks it. A malformed entry (not a table, a
+   lock that is not true or false, options that are not on/off, a number or a name, a key
+   given twice with two values) does the same for its rotator alone, and the rotator's status
+   says why (``problems``). A key given twice is
    read as neither value (core/jsonkeys.py), anywhere in the file: json's own reading keeps the
    last, and a hand-edited ``"locked": true, "locked": false`` started the rotator unlocked.
 3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
@@ -209,6 +210,7 @@ class StateStore:
         self._others: dict[str, object] = {}  # rule 8: tables beside ``rotators``, kept as read
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
+        self._unreadable = ""  # rule 2: why the file could not be read, for each rotator locked
         self._dirty = False  # a malformed entry was replaced: written down at the first read
         self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
         if path is not None and (path.exists() or path.is_symlink()):
@@ -227,7 +229,10 @@ class StateStore:
             except (OSError, ValueError, RecursionError) as exc:  # (nesting past the parser's
                 # depth: a few kilobytes of brackets)
                 why = "nested too deep" if isinstance(exc, RecursionError) else exc
-                log.error("state file %s unreadable (%s): every rotator starts locked", path, why)
+                self._unreadable = (
+                    f"state file {path} unreadable ({why}): every rotator starts locked"
+                )
+                log.error("%s", self._unreadable)
                 self.corrupt = True
 
     def _entry(self, path: Path, rotator_id: str, entry: object) -> dict[str, object]:
@@ -281,6 +286,8 @@ class StateStore:
             if self.corrupt and "locked" not in entry:
                 # written down explicitly, so the next start is locked too until someone unlocks
                 self._data.setdefault(rotator_id, {})["locked"] = True
+                if self._unreadable:  # rule 2: the rotator's status says why
+                    self.problems[rotator_id] = self._unreadable
                 self._save()
                 return True
             return bool(entry.get("locked", False))

@@ -103,6 +103,20 @@ def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) ->
     assert again.locked("yagi") is True  # still locked after the restart: nobody unlocked it
 
 
+def test_an_unreadable_state_file_says_why_each_rotator_starts_locked(tmp_path: Path) -> None:
+    """state_store.py rule 2: as for a malformed entry, the rotator's status says why it is
+    locked (runtime/rotator.py puts ``problems`` as its last error); an unreadable file was
+    said in the log alone, and the status showed a lock nobody had set, with no reason."""
+    path = tmp_path / "state.json"
+    path.write_text("garbage{")
+    s = StateStore(path)
+    assert s.locked("tower") is True and s.locked("yagi") is True
+    for rid in ("tower", "yagi"):
+        assert s.problems[rid].startswith(f"state file {path} unreadable (")
+        assert s.problems[rid].endswith("): every rotator starts locked")
+    assert StateStore(path).problems == {}  # written down locked: the next start is clean
+
+
 def test_a_state_file_nested_too_deep_starts_every_rotator_locked(tmp_path: Path) -> None:
     """state_store.py rule 2 for a file of nested brackets (a few kilobytes past the parser's
     depth): the start died of a RecursionError, every 5 s under systemd (an attack pass)."""
