@@ -30,11 +30,16 @@ the rotor down over the ramp, so the rotor goes on turning after the user's STOP
 stops it where it is (rule 4).
 
 Rules:
-1. Frames end at CR; what comes on a line before its last STX is line noise. A position is
-   ``STX u,?,n,s`` with n one to four digits and s a status letter; it is read only while a
-   query is open and for a unit this model has, and the query is answered once every unit has
-   said its position (two lines on the Combi-Track, in any order). Values beyond the unit's
-   range (azimuth 0..360, elevation 0..90) are spoiled.
+1. Frames end at CR; what comes on a line before its last STX is line noise. The first line of a
+   connection may have lost its head: a box that streams its position (rule 2) was mid-line when
+   the port opened, and the open's flush (or the adapter, closed till then) took the line's STX
+   and first bytes. Such a line, with no STX and the form of a position's tail (``50,B``,
+   ``A,?,050,B``), is the box's chatter (never a reading; harmless while no junk follows it);
+   any other first line is noise, as ever, and so is a line with no STX anywhere later. A
+   position is ``STX u,?,n,s`` with n one to four digits and s a status letter; it is read only
+   while a query is open and for a unit this model has, and the query is answered once every
+   unit has said its position (two lines on the Combi-Track, in any order). Values beyond the
+   unit's range (azimuth 0..360, elevation 0..90) are spoiled.
 2. A position nobody asked for (the box's continuous output, or a unit's second line in one
    exchange) is the box's own chatter: harmless, never a reading, never a spoiler. The bridge
    turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
@@ -95,6 +100,8 @@ _ANSWER = re.compile(rb"\x02(?P<unit>[A-Z]),(?P<cmd>[^?\r]),[^\r]*")
 # what a healthy box emits besides replies (rules 2 and 3): blank lines, answers without an
 # error, positions
 _CHATTER = re.compile(rb"(?:[\r\n ]|\x02[A-Z],[^?\r],(?!E,)[^\r]*\r|\x02[A-Z],\?,\d{1,4},[A-Z]\r)*")
+# rule 1: what a position line (``STX u,?,n,s CR``) can be once its head is cut off
+_TAIL = re.compile(rb"(?:(?:(?:[A-Z]?,)?\?)?,\d{1,4}|\d{0,4}),[A-Z]\r|[A-Z]\r")
 
 
 @dataclass(frozen=True)
@@ -137,6 +144,8 @@ class ProsistelCodec(OneQuery):
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
         self._said: dict[str, float] = {}  # what this exchange's units have said so far
+        self._first = True  # rule 1: no line of this connection has ended yet
+        self._cut = b""  # rule 1: the connection's first line, a position's tail
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -170,7 +179,13 @@ class ProsistelCodec(OneQuery):
         super().expire_query()
 
     def harmless(self, junk: bytes) -> bool:
+        if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
+            junk = junk[len(self._cut) :]
         return _CHATTER.fullmatch(junk) is not None
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        self._cut = b""  # rule 1: excused only while nothing but chatter came after it
+        super()._junk(raw, reason, why, out)
 
     def _each(self, command: bytes) -> bytes:
         return b"".join(STX + unit.encode() + command + b"\r" for unit in self.family.units)
@@ -186,10 +201,16 @@ class ProsistelCodec(OneQuery):
         if len(self._buf) > _MAX_LINE:
             self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
             self._buf.clear()
+            self._first = False
         return out
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
         start = raw.rfind(STX)
+        first, self._first = self._first, False
+        if start == -1 and first and _TAIL.fullmatch(raw):  # rule 1: cut by the port's opening
+            self._cut = raw
+            out.append(JunkReply(raw, JunkReason.CHATTER, "a line the port's opening cut"))
+            return
         if start == -1:
             if raw.strip(b"\r\n "):
                 self._junk(raw, JunkReason.NOISE, "not a reply line", out)

@@ -101,6 +101,27 @@ def test_a_box_streaming_its_position_after_a_power_cycle_is_read_right(
     assert v.status.bearing_deg == 150.0 and v.errors() == []
 
 
+@pytest.mark.parametrize(
+    ("model", "line", "lost", "tail"),
+    [("prosistel", 11, 3, b"?,050,B"), ("prosistel-combi", 12, 8, b"0,B")],
+)
+def test_a_streaming_box_whose_line_the_ports_opening_cut_is_read_right_and_no_error(
+    rig: Rig, model: str, line: int, lost: int, tail: bytes
+) -> None:
+    """The port opens while a streaming box is mid-line: the bridge's first bytes are that
+    line's tail, without its STX. It is no reading and no error; the box is read right. (A
+    flake under load: an open's flush took a streamed line's head, and R/error said the bytes
+    were no valid reply.)"""
+    v = rig(model, connect=False, emulator={**FAST, "start_az_deg": 50, "streaming": True})
+    v.run_until(lambda h: h.lost_to_host > 0, 5, "streaming")  # (a line's first byte)
+    v.run_until(lambda h: h.lost_to_host % line == lost, 1, "mid-line")  # (a line a unit)
+    v.link_up()
+    v.run_until_state(IDLE, 30)
+    v.run_for(5)
+    assert b"".join(data for _t, data in v.received).split(b"\r")[0] == tail  # (no STX)
+    assert v.status.bearing_deg == 50.0 and v.errors() == []
+
+
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, "prosistel-combi", start_az_deg=100, start_el_deg=20)
     v.run_for(10)

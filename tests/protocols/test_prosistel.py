@@ -196,6 +196,23 @@ def test_out_of_range_and_torn_replies_are_no_readings() -> None:
     assert positions(got) == [] and junk(got)[-1].reason is JunkReason.SPOILED
 
 
+@pytest.mark.parametrize(("family", "tail"), [(D, b"?,050,B\r"), (COMBI, b"0,B\r")])
+def test_the_tail_of_a_line_the_ports_opening_cut_is_harmless_only_as_the_first_line(
+    family: Family, tail: bytes
+) -> None:
+    """Rule 1: a streaming box was mid-line when the port opened; its first line has no STX."""
+    codec = ProsistelCodec(family)
+    stream = tail + b"\x02A,S,B\r"
+    got = codec.feed(stream)
+    assert positions(got) == [] and {j.reason for j in junk(got)} == {JunkReason.CHATTER}
+    assert codec.harmless(stream)
+    got = codec.feed(tail)  # later, a line without its STX is noise, as ever
+    assert [j.reason for j in junk(got)] == [JunkReason.NOISE] and not codec.harmless(tail)
+    for first in (b"\xff0,B\r", b"garbage\r", b"A,?,12345,B\r"):  # no tail of a position
+        got = ProsistelCodec(family).feed(first)
+        assert [j.reason for j in junk(got)] == [JunkReason.NOISE], first
+
+
 def test_an_expired_query_takes_no_late_reply() -> None:
     """Rule 7: its answer, owed late, is no reading (and spoils one held with it); the box's
     stream after it is chatter again (rule 2)."""
