@@ -34,12 +34,12 @@ Rules:
    connection may have lost its head: a box that streams its position (rule 2) was mid-line when
    the port opened, and the open's flush (or the adapter, closed till then) took the line's STX
    and first bytes. Such a line, with no STX and the form of a position's tail (``50,B``,
-   ``A,?,050,B``), is the box's chatter (never a reading; harmless while no junk follows it);
-   any other first line is noise, as ever, and so is a line with no STX anywhere later. A
-   position is ``STX u,?,n,s`` with n one to four digits and s a status letter; it is read only
-   while a query is open and for a unit this model has, and the query is answered once every
-   unit has said its position (two lines on the Combi-Track, in any order). Values beyond the
-   unit's range (azimuth 0..360, elevation 0..90) are spoiled.
+   ``A,?,050,B``), is the box's chatter (never a reading; harmless while no junk follows it; a
+   query it came in is not trusted, rule 3); any other first line is noise, as ever, and so is a
+   line with no STX anywhere later. A position is ``STX u,?,n,s`` with n one to four digits and
+   s a status letter; it is read only while a query is open and for a unit this model has, and
+   the query is answered once every unit has said its position (two lines on the Combi-Track, in
+   any order). Values beyond the unit's range (azimuth 0..360, elevation 0..90) are spoiled.
 2. A position nobody asked for (the box's continuous output, or a unit's second line in one
    exchange) is the box's own chatter: harmless, never a reading, never a spoiler. The bridge
    turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
@@ -209,6 +209,7 @@ class ProsistelCodec(OneQuery):
         first, self._first = self._first, False
         if start == -1 and first and _TAIL.fullmatch(raw):  # rule 1: cut by the port's opening
             self._cut = raw
+            self._noisy = self._noisy or self._query_open  # (a query it came in is not trusted)
             out.append(JunkReply(raw, JunkReason.CHATTER, "a line the port's opening cut"))
             return
         if start == -1:

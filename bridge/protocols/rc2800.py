@@ -25,6 +25,12 @@ Rules:
    up to its end, is noise too, no line of its own. An exchange it came in is spoiled (rule 2);
    it ends with its answer (untrusted) or at its deadline, not with the noise: the box may
    still be answering, and a query written then would take that answer for its own.
+   The first line of a connection may have lost its head: a box that streams its position
+   was mid-line when the port opened, and the open's flush (or the adapter, closed till then)
+   took the line's first bytes. Such a line, one that an axis's head (``A=``, ``A P``, ...) in
+   front would make a position line (``0.0 S=9 ST``), is the box's chatter: never a reading,
+   harmless while no noise follows it, but an exchange it came in is spoiled as by noise (it
+   may be a mangled line). Any other line is read as below.
    A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
    chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported. On the
    azimuth box it is the box's refusal (REFUSED, as the GS-232's ``?>``): a target it answers
@@ -91,6 +97,8 @@ _POSITION = re.compile(
 _ERROR = re.compile(rb"\s*[AE] ERR=(?P<code>\d+)\s*")
 _ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, echoed
 _LINES = re.compile(rb"[^\r\n]*[\r\n]")
+# rule 1: what an axis's line may have lost at the port's opening, from its head to its end
+_HEADS = (b"A", b"A ", b"A P", b"A=", b"A=1", b"A=1 ", b"A=1 S", b"A=1 S=")
 
 
 class Rc2800Codec(Plain, LateAnswers):
@@ -110,6 +118,8 @@ class Rc2800Codec(Plain, LateAnswers):
         self._query = False  # the open exchange is a query (one line an axis)
         self._owed: set[int] = set()  # rule 2: axes a query read early owes, read as they come
         self._deg: dict[int, float] = {}  # each axis's latest value
+        self._first = True  # rule 1: no line of this connection has ended yet
+        self._cut = b""  # rule 1: the connection's first line, a position line's tail
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -146,6 +156,8 @@ class Rc2800Codec(Plain, LateAnswers):
 
     def harmless(self, junk: bytes) -> bool:
         """Echoes, blank lines and well-formed position lines (rule 1); an error is not."""
+        if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
+            junk = junk[len(self._cut) :]
         lines = re.split(rb"[\r\n]", junk)
         return all(
             not line.strip() or _ECHO.fullmatch(line) or _POSITION.fullmatch(line) for line in lines
@@ -169,10 +181,17 @@ class Rc2800Codec(Plain, LateAnswers):
             if not self._rest:
                 self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
             self._buf.clear()
-            self._rest = True
+            self._rest, self._first = True, False
         return out
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
+        first, self._first = self._first, False
+        if first and self._cut_by_opening(raw):
+            self._cut = raw
+            if self._want or self._owed:  # (it may be a mangled line: the exchange is spoiled)
+                self._noisy, self._owed = True, set()
+            out.append(JunkReply(raw, JunkReason.CHATTER, "a line the port's opening cut"))
+            return
         if not raw.strip() or _ECHO.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "echo" if raw.strip() else "blank"))
             return
@@ -217,7 +236,17 @@ class Rc2800Codec(Plain, LateAnswers):
         self._seen.clear()
         out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E"))))
 
+    @staticmethod
+    def _cut_by_opening(raw: bytes) -> bool:
+        """Rule 1: ``raw``, no line of its own, is the tail of an axis's position line."""
+        if not raw.strip() or _ECHO.fullmatch(raw) or _ERROR.fullmatch(raw):
+            return False
+        if _POSITION.fullmatch(raw):
+            return False
+        return any(_POSITION.fullmatch(head + raw) for head in _HEADS)
+
     def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        self._cut = b""  # rule 1: excused only while no noise came after it
         if self._want or self._owed:
             self._noisy = True
             self._owed = set()  # (a line after noise is none of the early reading's)

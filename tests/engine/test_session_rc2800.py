@@ -119,6 +119,27 @@ def test_a_position_streamed_unasked_moves_the_bearing_between_polls(rig: Rig) -
     assert v.status.elevation_deg == 12.0 and v.errors(since=t) == []
 
 
+@pytest.mark.parametrize(
+    ("model", "lost", "tail"),
+    [("rc2800", 6, b"50.0 S=9 ST"), ("rc2800", 12, b"=9 ST"), ("rc2800-az", 2, b"P=  50.0 S=9 ST")],
+)
+def test_a_streaming_box_whose_line_the_ports_opening_cut_is_read_right_and_no_error(
+    rig: Rig, model: str, lost: int, tail: bytes
+) -> None:
+    """The port opens while a streaming box is mid-line: the bridge's first bytes are that
+    line's tail. It is no reading and no error; the box is read right."""
+    el = {"start_el_deg": 10} if model == "rc2800" else {}
+    emulator = {**FAST, "start_az_deg": 50, "stream_s": 0.25, **el}
+    v = rig(model, connect=False, emulator=emulator)
+    v.run_until(lambda h: h.lost_to_host > 0, 5, "streaming")  # (a line's first byte)
+    v.run_until(lambda h: h.lost_to_host % 18 == lost, 1, "mid-line")  # (18: an axis's line)
+    v.link_up()
+    v.run_until_state(IDLE, 30)
+    v.run_for(5)
+    assert b"".join(data for _t, data in v.received).split(b"\r")[0] == tail
+    assert v.status.bearing_deg == 50.0 and v.errors() == []
+
+
 def test_a_torn_or_garbled_stream_line_changes_nothing(rig: Rig) -> None:
     v = ready(
         rig,

@@ -211,6 +211,11 @@ def test_the_tail_of_a_line_the_ports_opening_cut_is_harmless_only_as_the_first_
     for first in (b"\xff0,B\r", b"garbage\r", b"A,?,12345,B\r"):  # no tail of a position
         got = ProsistelCodec(family).feed(first)
         assert [j.reason for j in junk(got)] == [JunkReason.NOISE], first
+    codec = asked(family)  # a query it came in is not trusted
+    width = 4 if family is COMBI else 3
+    lines = [b"\x02%s,?,%0*d,B\r" % (u.encode(), width, 50) for u in family.units]
+    got = codec.feed(tail + b"".join(lines))
+    assert positions(got) == [] and junk(got)[-1].reason is JunkReason.UNTRUSTED
 
 
 def test_an_expired_query_takes_no_late_reply() -> None:

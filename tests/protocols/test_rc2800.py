@@ -155,6 +155,7 @@ def test_an_elevation_from_an_exchange_with_line_noise_is_never_carried_into_a_r
     untrusted (a line after noise may be a mangled one). An elevation heard in such an exchange
     was carried into the next poll and read there, trusted, at its azimuth."""
     codec = Rc2800Codec()
+    feed(codec, b"A\r")  # (not the connection's first line: that may be a cut one, rule 1)
     codec.encode_query()  # its azimuth's answer lost, and noise on the line
     out = feed(codec, b"P= 1 S=9\rE P=  20.0 S=9 MV\r", how)
     assert any(r.reason is JunkReason.NOISE for r in junk(out))
@@ -182,6 +183,27 @@ def test_a_polls_answer_after_its_time_is_no_reading_nor_lets_the_older_stand(ho
     out = feed(codec, b"A P=  37.0 S=9 MV\r", how)  # owed by none: the box's stream, kept
     assert positions(out) == [] and junk(out)[0].reason is JunkReason.CHATTER
     assert positions(feed(codec, b"E P=   0.0 S=9 ST\r", how)) == [(37.0, 0.0)]
+
+
+@pytest.mark.parametrize("tail", [b"50.0 S=9 ST\r", b"P=  50.0 S=9 MV\r", b"=9 ST\r", b"T\r"])
+def test_the_tail_of_a_line_the_ports_opening_cut_is_harmless_only_as_the_first_line(
+    tail: bytes,
+) -> None:
+    """Rule 1: a streaming box was mid-line when the port opened: no reading, no error, but a
+    query it came in is not trusted; later, the same bytes are noise."""
+    codec = Rc2800Codec()
+    stream = tail + b"E P=  10.0 S=9 ST\r"
+    out = feed(codec, stream)
+    assert positions(out) == [] and {j.reason for j in junk(out)} == {JunkReason.CHATTER}
+    assert codec.harmless(stream)
+    out = feed(codec, tail)
+    assert [j.reason for j in junk(out)] == [JunkReason.NOISE] and not codec.harmless(tail)
+    asked = Rc2800Codec(elevation=False)
+    asked.encode_query()
+    out = feed(asked, tail + b"A P=  50.0 S=9 ST\r")
+    assert positions(out) == [] and junk(out)[-1].reason is JunkReason.UNTRUSTED
+    for first in (b"\xff9 ST\r", b"garbage\r", b"9 ST X\r"):  # no tail of a position line
+        assert [j.reason for j in junk(feed(Rc2800Codec(), first))] == [JunkReason.NOISE]
 
 
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
