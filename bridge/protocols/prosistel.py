@@ -41,7 +41,10 @@ Rules:
    the query is answered once every unit has said its position (two lines on the Combi-Track, in
    any order). Values beyond the unit's range (azimuth 0..360, elevation 0..90) are spoiled.
 2. A position nobody asked for (the box's continuous output, or a unit's second line in one
-   exchange) is the box's own chatter: harmless, never a reading, never a spoiler. The bridge
+   exchange) is the box's own chatter: harmless, never a reading, never a spoiler; but only a
+   position this box can say (its unit, its width, in range): any other is told, asked for or
+   not (an attack pass: ``A,?,361,B`` or a Combi-Track's ``B,?,0950,B`` was dropped and asked
+   again, and nobody was told). The bridge
    turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
 3. The answers to ``G`` and ``S`` are chatter too, whatever their payload; an answer that says
    ``E,<code>`` is the box's refusal or error (SPOILED, its code in the detail, not harmless).
@@ -181,7 +184,12 @@ class ProsistelCodec(OneQuery):
     def harmless(self, junk: bytes) -> bool:
         if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
             junk = junk[len(self._cut) :]
-        return _CHATTER.fullmatch(junk) is not None
+        if _CHATTER.fullmatch(junk) is None:
+            return False
+        # rule 2's positions are this box's own: one out of range or of the other family's
+        # width, or of a unit it has not got, is told (rules 1 and 6)
+        lines = _POSITION.finditer(junk)
+        return all(self._misfit(m["unit"].decode(), m["value"]) is None for m in lines)
 
     def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
         self._cut = b""  # rule 1: excused only while nothing but chatter came after it
@@ -236,23 +244,27 @@ class ProsistelCodec(OneQuery):
         else:
             self._junk(frame, JunkReason.NOISE, "not a reply line", out)
 
+    def _misfit(self, unit: str, digits: bytes) -> tuple[JunkReason, str] | None:
+        """Why a position line of ``unit`` saying ``digits`` is none of this box's (rules 1 and
+        6); None if it is one."""
+        units = self.family.units
+        if unit not in units:
+            return JunkReason.NOISE, f"a position of unit {unit}: is the model right?"
+        if len(digits) not in self.family.digits:  # rule 6
+            form = "tenths (a Combi-Track)" if len(digits) == 4 else "whole degrees (a D)"
+            return JunkReason.NOISE, f"a position in {form}: is the model right?"
+        if int(digits) / self.family.scale > self.family.tops[units.index(unit)]:
+            return JunkReason.SPOILED, "position out of range"
+        return None
+
     def _position(
         self, frame: bytes, unit: str, digits: bytes, clean: bool, out: list[Reply]
     ) -> None:
         units = self.family.units
-        if unit not in units:
-            self._junk(
-                frame, JunkReason.NOISE, f"a position of unit {unit}: is the model right?", out
-            )
-            return
-        if len(digits) not in self.family.digits:  # rule 6
-            form = "tenths (a Combi-Track)" if len(digits) == 4 else "whole degrees (a D)"
-            self._junk(frame, JunkReason.NOISE, f"a position in {form}: is the model right?", out)
+        if (misfit := self._misfit(unit, digits)) is not None:
+            self._junk(frame, *misfit, out)
             return
         deg = int(digits) / self.family.scale
-        if deg > self.family.tops[units.index(unit)]:
-            self._junk(frame, JunkReason.SPOILED, "position out of range", out)
-            return
         if clean and self._late_answer(frame, out):  # rule 7
             return
         if not self._query_open or unit in self._said:  # rule 2

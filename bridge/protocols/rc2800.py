@@ -51,7 +51,8 @@ Rules:
    elevation line, if it comes, is read as it comes and carried no further (else each poll of
    a clean line after it was read at its azimuth with the poll before's elevation, for good);
    a line of an exchange that had line noise is never carried (it may be a mangled one).
-3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading.
+3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading, and never
+   harmless, asked for or not (an attack pass: ``A P= 361.0`` was dropped and nobody told).
 4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent. A new bearing while turning goes straight out.
 5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
@@ -159,9 +160,7 @@ class Rc2800Codec(Plain, LateAnswers):
         if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
             junk = junk[len(self._cut) :]
         lines = re.split(rb"[\r\n]", junk)
-        return all(
-            not line.strip() or _ECHO.fullmatch(line) or _POSITION.fullmatch(line) for line in lines
-        )
+        return all(not line.strip() or _ECHO.fullmatch(line) or _in_range(line) for line in lines)
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
@@ -206,8 +205,7 @@ class Rc2800Codec(Plain, LateAnswers):
             self._junk(raw, JunkReason.NOISE, "not a reply line", out)
             return
         axis, value = m.group("axis")[0], float(m.group("deg"))
-        low, top = (0, AZ_MAX_DEG) if axis == ord("A") else (EL_READ_MIN_DEG, EL_MAX_DEG)
-        if not low <= value <= top:
+        if not _in_range(raw):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
         if axis not in self._axes:
@@ -251,6 +249,15 @@ class Rc2800Codec(Plain, LateAnswers):
             self._noisy = True
             self._owed = set()  # (a line after noise is none of the early reading's)
         out.append(JunkReply(raw, reason, why))
+
+
+def _in_range(line: bytes) -> bool:
+    """Rules 1 and 3: ``line`` is a position line whose value is in its axis's range."""
+    m = _POSITION.fullmatch(line)
+    if m is None:
+        return False
+    low, top = (0, AZ_MAX_DEG) if m.group("axis") == b"A" else (EL_READ_MIN_DEG, EL_MAX_DEG)
+    return low <= float(m.group("deg")) <= top
 
 
 def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:

@@ -191,6 +191,32 @@ def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> N
         assert v.errors() == []
 
 
+@pytest.mark.parametrize(
+    ("model", "glitch"),
+    [
+        ("prosistel", b"\x02A,?,361,B\r"),  # out of range
+        ("prosistel", b"\x02A,?,0450,B\r"),  # a Combi-Track's width
+        ("prosistel", b"\x02E,?,045,B\r"),  # a unit this box has not got
+        ("prosistel-combi", b"\x02B,?,0950,B\r"),  # an elevation above 90
+        ("prosistel-combi", b"\x02A,?,450,B\r"),  # a D's width
+    ],
+)
+def test_a_position_the_box_cannot_say_is_told_once_and_changes_nothing(
+    rig: Rig, model: str, glitch: bytes
+) -> None:
+    """Rule 2 (an attack pass): a line shaped like a position that is out of range, of the other
+    family's width or of a unit the box has not got, just before a poll's answer: it was
+    dropped and the poll asked again, but nobody was told, as if it were the box's chatter."""
+    v = ready(rig, model, start_az_deg=77, start_el_deg=20 if model == "prosistel-combi" else 0)
+    v.run_for(3)
+    t = v.now
+    glitched = v.glitch_once(b"\x02", glitch)
+    v.run_for(10)
+    want = (77.0, 20.0 if model == "prosistel-combi" else None)
+    assert glitched and {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {want}
+    assert len(v.errors("protocol", since=t)) == 1 and v.state is IDLE and not moves(v)
+
+
 def test_a_bare_azimuth_to_a_combi_track_keeps_its_elevation(rig: Rig) -> None:
     v = ready(rig, "prosistel-combi", start_az_deg=10, start_el_deg=30)
     v.target(100)  # no elevation named: unit B must not be sent to 0

@@ -165,6 +165,31 @@ def test_a_torn_or_garbled_stream_line_changes_nothing(rig: Rig) -> None:
     assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(100.0, 10.0)}
 
 
+@pytest.mark.parametrize(
+    ("model", "glitch"),
+    [
+        ("rc2800", b"A P= 361.0 S=9 ST\r"),
+        ("rc2800", b"E P= 181.0 S=9 ST\r"),
+        ("rc2800-az", b"A P= -10.0 S=9 ST\r"),
+    ],
+)
+def test_a_position_out_of_range_is_told_once_and_changes_nothing(
+    rig: Rig, model: str, glitch: bytes
+) -> None:
+    """Rule 3 (an attack pass): a position line out of its axis's range, just before a poll's
+    answer, was dropped and the poll asked again, but nobody was told: the junk was judged
+    harmless for its shape alone."""
+    el = {"start_el_deg": 20} if model == "rc2800" else {}
+    v = ready(rig, model, start_az_deg=77, **el)
+    v.run_for(3)
+    t = v.now
+    glitched = v.glitch_once(b"A", glitch)
+    v.run_for(10)
+    want = (77.0, 20.0 if model == "rc2800" else None)
+    assert glitched and {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {want}
+    assert len(v.errors("protocol", since=t)) == 1 and v.state is IDLE and not moves(v)
+
+
 def test_an_az_el_satellite_pass_is_followed_within_3_degrees() -> None:
     """An az/el RC2800 (6 and 3 deg/s here) follows a pass clear of north as closely as the
     other az/el models (3 degrees), its two axes always 200 ms apart."""

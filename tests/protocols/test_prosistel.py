@@ -149,6 +149,21 @@ def test_positions_nobody_asked_for_are_harmless_and_never_read() -> None:
     assert positions(got) == [(201.0, None)] and junk(got)[0].reason is JunkReason.CHATTER
 
 
+def test_a_position_the_box_cannot_say_is_never_harmless() -> None:
+    """Rule 2: only the box's own positions are chatter (its unit, its width, in range)."""
+    for family, line in (
+        (D, b"\x02A,?,361,B\r"),
+        (D, b"\x02A,?,0200,B\r"),
+        (D, b"\x02B,?,045,B\r"),
+        (COMBI, b"\x02B,?,0901,B\r"),
+        (COMBI, b"\x02A,?,200,B\r"),
+        (D_ELEVATION, b"\x02E,?,091,B\r"),
+    ):
+        codec = ProsistelCodec(family)
+        assert not codec.harmless(line) and positions(codec.feed(line)) == [], line
+    assert ProsistelCodec(COMBI).harmless(b"\x02B,?,0900,B\r\x02A,?,3600,R\r")
+
+
 def test_the_combi_tracks_second_line_of_one_unit_waits_for_the_other() -> None:
     codec = asked(COMBI)
     assert positions(codec.feed(b"\x02A,?,0100,R\r\x02A,?,0101,R\r")) == []

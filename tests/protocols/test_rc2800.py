@@ -206,6 +206,14 @@ def test_the_tail_of_a_line_the_ports_opening_cut_is_harmless_only_as_the_first_
         assert [j.reason for j in junk(feed(Rc2800Codec(), first))] == [JunkReason.NOISE]
 
 
+def test_a_position_out_of_range_is_never_harmless() -> None:
+    """Rule 3: a position line is chatter only in its axis's range."""
+    codec = Rc2800Codec()
+    for line in (b"A P= 361.0 S=9 ST\r", b"A P= -0.5\r", b"E P= 180.1\r", b"E=-90.5\r"):
+        assert not codec.harmless(line), line
+    assert codec.harmless(b"A P= 360.0 S=9 ST\rE P= -90.0 S=9 ST\rE=180.0\r")
+
+
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
     codec = Rc2800Codec()
     out = feed(codec, b"A P= 200.0 S=9 MV\r")
