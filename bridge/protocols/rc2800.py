@@ -156,7 +156,8 @@ class Rc2800Codec(Plain, LateAnswers):
         return bool(self._want)
 
     def harmless(self, junk: bytes) -> bool:
-        """Echoes, blank lines and well-formed position lines (rule 1); an error is not."""
+        """Echoes, blank lines, well-formed position lines in range (rules 1 and 3) and the tail
+        of the connection's first line the opening cut (rule 1); an error is not."""
         if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
             junk = junk[len(self._cut) :]
         lines = re.split(rb"[\r\n]", junk)
