@@ -8,8 +8,10 @@ Rules:
    position (source ``wind``), tracking and following end, and every motion command (a target,
    a preset, a park, a nudge, a track or follow command) is refused with the reason
    ("wind 72 km/h above 60: parked for the storm"; "... motion refused for the storm (a stop
-   or lock ON stopped its park)" once rule 3 stopped it: a review, the refusal said the rotor
-   was parked while it stood where the STOP left it) until the storm is over.
+   or lock ON stopped its park)" once rule 3 stopped it short: a review, the refusal said the
+   rotor was parked while it stood where the STOP left it; a stop after the rotor was seen at
+   the park, rule 7's ``arrived``, stopped no park: still "parked for the storm") until the
+   storm is over.
 2. The storm is over once the readings have stayed below ``wind_release_below`` for
    ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
    readings end a storm: nothing else does, not a restart of the wind station, not silence.
@@ -26,8 +28,8 @@ Rules:
    the STOP would hold the park back before one and not after it (a review).
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept (the report says which: a storm known only from a
-   replay, rule 6, parked nothing; one whose park a stop or lock ON stopped, rule 3, is not
-   "parked"; nor is one begun while the rotator was locked, whose park waits for the lock OFF:
+   replay, rule 6, parked nothing; one whose park a stop or lock ON stopped short, rule 3, is
+   not "parked"; nor is one begun while the rotator was locked, whose park waits for the lock OFF:
    a review, the rotor stood where the lock left it under a report that said it was parked).
    The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
@@ -204,7 +206,7 @@ class WindPark:
         if self._replayed:  # rule 6
             above = self._cfg.park_above_kmh
             return f"{self._why}: motion refused; the park waits for a new reading above {above:g}"
-        if self._halted:  # rule 3: its park stopped, nothing parked (a review)
+        if self._halted and not self._arrived:  # rule 3: its park stopped short (a review)
             return f"{self._why}: motion refused for the storm (a stop or lock ON stopped its park)"
         return f"{self._why}: parked for the storm" if self.storm else None
 
@@ -234,7 +236,7 @@ class WindPark:
                     "a storm known only from the reading the broker kept: motion refused, "
                     "nothing parked"
                 )
-            elif self._halted:  # rule 3: a STOP or lock ON stopped the park (a review)
+            elif self._halted and not self._arrived:  # rule 3: the park stopped short
                 kept = "a storm whose park a stop or lock ON stopped: motion refused"
             elif self._park_owed and scene.locked:  # rule 4: begun under the lock, not sent
                 kept = "a storm whose park waits for the lock OFF: motion refused, nothing parked"

@@ -433,3 +433,26 @@ def test_the_silence_of_a_storm_begun_under_the_lock_says_nothing_was_parked() -
         v.lock(False)
         v.run_until(lambda h: h.status.parked, 60, "parked once the lock is OFF")
         assert abs(v.truth().az_deg - 90.0) <= 0.5, v.truth()
+
+
+def test_a_stop_after_the_rotor_reached_the_storms_park_leaves_it_said_parked() -> None:
+    """Rules 1, 3 and 4: a STOP or lock ON after the rotor was seen at the storm's park stops
+    no park (the status's ``halted`` is false then): the refusal and the silence still say the
+    rotor is parked, not that a stop stopped its park (a review: locked for tower work at the
+    park, every target was refused saying the park had been stopped)."""
+    with windy() as v:
+        wind(v, 75.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        v.run_for(5.0)
+        v.lock(True)  # tower work, the rotor at its park
+        v.lock(False)
+        v.stop()
+        v.target(200.0)
+        assert v.errors("refused")[-1].message == "wind 75 km/h above 60: parked for the storm"
+        assert v.status.wind is not None and v.status.wind.arrived
+        v.run_for(16 * 60.0)  # wind_silent_min is 15
+        assert [e.message for e in v.errors("wind")] == [
+            "no wind reading on weather/wind for 15 min: keeping the state it had (parked for "
+            "the storm)"
+        ]
+        assert abs(v.truth().az_deg - 90.0) <= 0.5, v.truth()
