@@ -197,6 +197,9 @@ class WindInfo:
     halted: bool = False  # in a storm: its park was stopped, not tried again (wind.py rule 3)
     arrived: bool = False  # in a storm: its park was seen reached, owed no more (wind.py rule 7)
     replayed: bool = False  # a storm known only from a replayed reading (wind.py rule 6)
+    # in a storm: its park is owed and not sent (the lock holds it back, the controller does
+    # not answer: wind.py rules 4 and 7); the rotor is not parking
+    waiting: bool = False
 
     @property
     def parks(self) -> bool:

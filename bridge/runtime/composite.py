@@ -156,9 +156,13 @@ def merge(
         order = (MotionState.STALLED, MotionState.BRAKING, MotionState.UNKNOWN)
         state = next((s for s in order if s in states), az.state)
     versions = [v for v in (az.version, el.version) if v]
-    wind = az.wind  # (its park seen reached only if both boxes' parks were)
+    wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's)
     if wind is not None and el.wind is not None:
-        wind = replace(wind, arrived=wind.arrived and el.wind.arrived)
+        wind = replace(
+            wind,
+            arrived=wind.arrived and el.wind.arrived,
+            waiting=wind.waiting or el.wind.waiting,
+        )
     return replace(
         az,
         rotator_id=rotator_id,

@@ -122,6 +122,7 @@ class WindPark:
             replayed=self._replayed,
             halted=self._halted,
             arrived=self._arrived,
+            waiting=self.storm and self._park_owed,
         )
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:

@@ -176,6 +176,30 @@ def test_home_assistant_shows_no_park_for_a_park_the_operator_stopped_short(rig:
     assert abs(rig.emu.state().az_deg - 90.0) > 20.0  # (stopped short, as the test needs)
 
 
+def test_home_assistant_shows_no_park_for_a_storm_whose_park_waits_for_the_lock_off(
+    rig: Rig,
+) -> None:
+    """wind.py rule 4 in Home Assistant: locked for tower work, a storm began; its park waits
+    for the lock OFF, and "Parked for the storm" said on all the same while the rotor stood
+    where the lock left it, 30 degrees from the park. It is on once the OFF parks it."""
+    start(rig)
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/lock", "ON")
+    rig.probe.wait(
+        lambda m: m.topic == "rotor/status" and json.loads(m.payload)["locked"], 10, "locked", mark
+    )
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: a storm, the rotor locked
+    assert wind_of(rig, lambda w: w.get("storm"), mark)["waiting"] is True
+    assert storm_shown(rig) == "OFF"
+    assert rig.emu.frames("set") == []
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/lock", "OFF")
+    rig.arrived("tower", 90.0, timeout_s=30)
+    assert wind_of(rig, lambda w: w.get("storm") and not w.get("waiting"), mark)["halted"] is False
+    assert storm_shown(rig) == "ON"
+
+
 def test_a_stop_after_the_storms_park_was_reached_leaves_it_parked(rig: Rig) -> None:
     start(rig)
     rig.probe.publish(TOPIC, "25")  # 90 km/h: the park, 30 degrees away

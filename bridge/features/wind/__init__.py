@@ -9,8 +9,8 @@ What it is made of:
 - its input: the user's wind topic, read by feed.py;
 - here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, unknown
   while the topic is silent; the storm, on only for a storm the rotor is parked or parking
-  for, not one known only from a replay nor one whose park a stop cut short) and its
-  declaration.
+  for, not one known only from a replay, one whose park a stop cut short nor one whose park
+  waits for the lock OFF) and its declaration.
 """
 
 from __future__ import annotations
@@ -42,6 +42,9 @@ def wind_json(info: WindInfo) -> dict[str, object]:
         # a STOP or lock ON stopped this storm's park before the rotor was seen there (wind.py
         # rules 3 and 7): it stands where the stop left it, and the park is not tried again
         "halted": info.halted and not info.arrived,
+        # its park is owed and not sent: the lock holds it back (wind.py rule 4), or the
+        # controller does not answer (rule 7); the rotor stands where it was
+        "waiting": info.waiting,
         "calm_since": None
         if calm is None
         else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
@@ -69,13 +72,14 @@ def _speed(r: RotatorView) -> dict[str, object]:
 def _storm(r: RotatorView) -> dict[str, object]:
     """On while the rotor is parked, or parking, for a storm: not for a storm known only from a
     replayed reading, which parks nothing (session/wind.py rule 6), nor for one whose park a
-    STOP or lock ON stopped short (rule 3). A review: Home Assistant said "Parked for the storm"
-    while the rotor stood where it was, or where the stop left it."""
+    STOP or lock ON stopped short (rule 3), nor for one whose park waits for the lock OFF (rule
+    4). A review: Home Assistant said "Parked for the storm" while the rotor stood where it
+    was, or where the stop or the lock left it."""
     return {
         "state_topic": r.topics.status, "icon": "mdi:weather-windy",
         "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm and "
-                          "not value_json.wind.replayed and not value_json.wind.halted "
-                          "else 'OFF' }}",
+                          "not value_json.wind.replayed and not value_json.wind.halted and "
+                          "not value_json.wind.waiting else 'OFF' }}",
     }  # fmt: skip
 
 
