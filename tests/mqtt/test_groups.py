@@ -227,6 +227,9 @@ def test_a_retained_or_bad_group_target_moves_nothing_and_says_why(
     ("topic", "payload", "said"),
     [
         ("rotor/stack/lock", b"ON", "group stack has no lock: no rotator was locked"),
+        # (an OFF was answered "no rotator was locked", read as: none of them is locked now)
+        ("rotor/stack/lock", b"OFF", "group stack has no lock: no rotator was unlocked"),
+        ("rotor/stack/lock", b"maybe", "group stack has no lock: no rotator changed its lock"),
         ("rotor/stack/park", b"PARK", "group stack takes a target and a stop only"),
         ("rotor/stack/option/jam", b"ON", "group stack takes a target and a stop only"),
         ("rotor/stack/track", b"sun", "group stack takes a target and a stop only"),

@@ -390,17 +390,20 @@ class MqttService:
             if rot is not None:
                 rot.audit_refusal(message, said, origin)
 
-    def _not_for_groups(self, group: Group, topic: str, kind: str) -> str:
+    def _not_for_groups(self, group: Group, topic: str, kind: str, payload: bytes) -> str:
         """Rule 10: why a rotator's command sent to a group's topic is refused, and where each
         member takes it (an attack pass: ``G/lock ON`` was not heard at all, and nothing said
-        that no rotator was locked)."""
+        that no rotator was locked; a review: an OFF was answered "no rotator was locked",
+        which reads as none of them being locked now)."""
         leaf = topic.removeprefix(self.topics.group(group.id).root + "/")
         theirs = ", ".join(self.topics.rotator(m).feature(leaf) for m in group.member_ids)
-        head = (
-            f"group {group.id} has no lock: no rotator was locked"
-            if kind == "lock"
-            else f"group {group.id} takes a target and a stop only: nothing was done"
-        )
+        head = f"group {group.id} takes a target and a stop only: nothing was done"
+        if kind == "lock":
+            try:
+                done = "was locked" if pl.parse_switch(payload) else "was unlocked"
+            except pl.PayloadError:
+                done = "changed its lock"
+            head = f"group {group.id} has no lock: no rotator {done}"
         return f"{head}; send it to each member's own topic: {theirs}"
 
     def _report_group(self, group_id: str, message: str, command: str) -> None:
@@ -449,7 +452,9 @@ class MqttService:
         name = f"option {topic.rpartition('/')[2]}" if kind == "option" else kind
         what = pl.describe(name, payload)
         if kind not in GROUP_KINDS:  # rule 10: a rotator's command, which no group takes
-            self._refuse_group(group, self._not_for_groups(group, topic, kind), what, origin)
+            self._refuse_group(
+                group, self._not_for_groups(group, topic, kind, payload), what, origin
+            )
             return
         if kind == "stop":
             if retain and not self._halts.retain_is_live:
