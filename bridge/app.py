@@ -451,6 +451,7 @@ class App:
             self.discovery = self._discovery(settings, retired=not settings.homeassistant.enabled)
         self._stale(settings)  # interfaces/mqtt/stale.py: a removed rotator's retained topics
         self.client.add_subscriptions(self.mqtt.subscriptions())
+        self.client.optional(self.mqtt.optional)  # (service.py rule 10, client.py rule 17)
         if self.discovery is not None:
             self.client.optional(self.discovery.optional)  # (client.py rule 17)
         self.lane = StopLane(

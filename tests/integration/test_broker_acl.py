@@ -111,6 +111,37 @@ def test_with_discovery_off_a_denied_config_filter_is_said_once_and_is_no_proble
     assert [t for t, _p in seen] == ["rotor/stop"]
 
 
+def test_a_denied_filter_read_only_to_refuse_a_groups_other_commands_is_no_problem(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """service.py rule 10 reads a rotator's other command topics under a group's root
+    (``G/lock``, ``G/option/+``, ...) only to refuse what comes there. An ACL that grants the
+    group its target and stop (the group's commands until then) and says so in the SUBACK put
+    "not authorised" on B/bridge/info and every rotator's last error, and the command topics
+    did not count as subscribed (express.py rule 11): said once in the log now, nothing else
+    (interfaces/mqtt/client.py rule 17)."""
+    rig.add("upper")
+    rig.add("lower")
+    rig.sections["groups"] = [{"id": "stack", "rotators": ["upper", "lower"]}]
+    client = App(rig.settings).client
+    seen: list[tuple[str, str]] = []
+    client._on_denied = lambda topic, problem: seen.append((topic, problem))
+    granted, refused = (
+        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
+        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
+    )
+    caplog.set_level(logging.INFO)
+    denied = ["rotor/stack/lock", "rotor/stack/option/+", "rotor/stack/track"]
+    assert all(t in client._subscriptions for t in denied)
+    client._command_mid = 7
+    client._sub_filters[7] = ["rotor/stack/target", "rotor/stack/stop", *denied]
+    client._on_subscribe(client._client, None, 7, [granted, granted, *[refused] * 3], None)
+    assert seen == [] and client.problems == []
+    assert client._subscribed_since is not None
+    said = [r.getMessage() for r in caplog.records if "rotor/stack/lock" in r.getMessage()]
+    assert len(said) == 1 and "not refused on rotor/stack/error" in said[0], said
+
+
 def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: Path) -> None:
     """Review finding: paho calls on_publish holding its own mutex; the report published (our
     lock), while the serial-lines thread held our lock publishing an error event and waited

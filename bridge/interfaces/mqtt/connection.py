@@ -71,10 +71,12 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    system call per read; paho_client.py). Command topics stay QoS 0 (rule 4): our PUBACK would
    acknowledge a command too, but brings back what rule 4 avoids.
 17. A filter subscribed as optional (``optional``: Home Assistant's config topics read with
-   discovery off, homeassistant/publisher.py rule 6) that the broker denies is said once in
-   the log, with what its denial costs, and is no problem: not on ``B/bridge/info`` nor a
-   rotator's last error, and the command topics count as subscribed all the same (an ACL that
-   keeps a bridge out of Home Assistant's prefix is why its owner turned discovery off).
+   discovery off, homeassistant/publisher.py rule 6; a rotator's other command topics under
+   a group's root, read only to refuse them, service.py rule 10) that the broker denies is
+   said once in the log, with what its denial costs, and is no problem: not on
+   ``B/bridge/info`` nor a rotator's last error, and the command topics count as subscribed
+   all the same (an ACL that keeps a bridge out of Home Assistant's prefix is why its owner
+   turned discovery off).
 18. Under MQTT 5 every connection (the main one, the stop lane, the stop express) tells the
    broker in its CONNECT the largest packet it takes (MAX_PACKET_BYTES: far above any payload
    the bridge reads, its own retained ones included); the broker drops a larger message for it

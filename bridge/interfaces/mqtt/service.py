@@ -67,7 +67,9 @@ Rules:
    ``G/park``, ``G/option/<name>``, a feature's) are subscribed so that a command sent there
    is refused on ``G/error``, naming each member's own topic, and in every member's audit
    trail, and nothing is done (an attack pass: ``G/lock ON`` was not heard at all, nothing
-   said so, and the stack it was meant to lock was not locked).
+   said so, and the stack it was meant to lock was not locked). Those filters are optional
+   (``optional``, client.py rule 17): an ACL that grants a group its target and stop alone
+   costs the refusal, said once in the log, not a problem on every rotator's last error.
 11. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
    track or follow start, a feature's command that moves, a group's target for each member)
    while another interface's stop or lock ON fences its rotator (lastword.py rule 11) was
@@ -236,6 +238,18 @@ class MqttService:
     def subscriptions(self) -> list[str]:
         """Every topic filter the service wants messages from: commands, then features'."""
         return [*self.topics.subscriptions(), *self._feature_subscriptions]
+
+    @property
+    def optional(self) -> dict[str, str]:
+        """Rule 10: the filters read only to refuse a rotator's command sent to a group's topic,
+        whose denial is no problem (client.py rule 17: an ACL that grants a group its target
+        and stop alone), each with what it costs."""
+        return {
+            topic: f"a rotator's command sent there is not refused on "
+            f"{self.topics.group(gid).error}: the broker keeps it from the bridge, and nothing "
+            "is done"
+            for gid, topic in self.topics.group_refusals()
+        }
 
     def stop_lane_subscriptions(self) -> list[str]:
         """Stop and lock, for the connection of their own (lane.py), also handled here; and the

@@ -290,14 +290,22 @@ class Topics:
         subs: list[str] = []
         for g in self._groups.values():
             subs += [g.target, g.stop]
-        # a rotator's other command topics under each group's root (service.py rule 10)
-        subs += [t for t, (_gid, kind) in self._group_routes.items() if kind not in GROUP_KINDS]
-        subs += [RotatorTopics(g.root).option_filter for g in self._groups.values()]
+        subs += [t for _gid, t in self.group_refusals()]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge]
             subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
         return [*subs, self.bridge_fence]
+
+    def group_refusals(self) -> list[tuple[str, str]]:
+        """A rotator's other command topics under each group's root, as (group id, filter):
+        read only to refuse what comes there (service.py rule 10)."""
+        refusals = [
+            (gid, t) for t, (gid, kind) in self._group_routes.items() if kind not in GROUP_KINDS
+        ]
+        return refusals + [
+            (gid, RotatorTopics(g.root).option_filter) for gid, g in self._groups.items()
+        ]
 
     def stop_lane(self) -> list[str]:
         """Stop and lock also on a connection of their own (lane.py), behind no flood of
