@@ -26,7 +26,8 @@ Rules:
    codec says how many, ``_owe_late``; at most LATE_LINES_MAX in all). A clean reply line of
    the controller's form while no reply is awaited and some are owed is one of them
    (``_late_answer``): UNSOLICITED (it spoils a reading held in the same exchange, link.py
-   rule 9), never a reading, and harmless (the codec's ``harmless`` discounts the lines it
+   rule 9), never a reading (but rc2800.py rule 6's, before any other exchange: that box's
+   stream), and harmless (the codec's ``harmless`` discounts the lines it
    said, ``_unsaid``, each as often as it said it: a second line of the same text that no
    query owes is told). A line that comes while the next query is open is that query's, as
    ever (no line says which poll it answers, and a late answer that never comes must not eat

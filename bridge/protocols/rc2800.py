@@ -65,7 +65,11 @@ Rules:
    comes while the next exchange is open is that exchange's, as ever. (A loaded host: a
    poll's answer and the next poll's came together, the older made the newer poll's reading
    and the newer, kept as the box's stream, spoiled nothing: the bearing was published 6
-   degrees behind the rotor turning at 6 degrees a second.)
+   degrees behind the rotor turning at 6 degrees a second.) But a line owed late that comes
+   before any other exchange is opened (a poll, a stop) is the newest the box has said: no
+   longer owed, and kept as rule 2's stream (a review: a box always a little later than its
+   reply time, polled every 2 s, gave no reading at all, and the rotator went offline, its
+   turn stopped short, while it answered every poll).
 """
 
 from __future__ import annotations
@@ -121,6 +125,7 @@ class Rc2800Codec(Plain, LateAnswers):
         self._deg: dict[int, float] = {}  # each axis's latest value
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position line's tail
+        self._late_newest = False  # rule 6: lines owed late, and no exchange opened since
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -147,9 +152,11 @@ class Rc2800Codec(Plain, LateAnswers):
         self._noisy = False
         self._heard = set()
         self._owed = set()
+        self._late_newest = False  # (rule 6: a line owed late may be this one's now)
 
     def expire_query(self) -> None:
         self._owe_late(len(self._want))  # rule 6: they may still come
+        self._late_newest = self._late_newest or bool(self._want)
         self._want = []
 
     def awaiting_reply(self) -> bool:
@@ -212,7 +219,9 @@ class Rc2800Codec(Plain, LateAnswers):
         if axis not in self._axes:
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
-        if axis not in self._owed and self._late_answer(raw, out):  # rule 6
+        if axis not in self._owed and self._late_lines and self._late_newest:
+            self._late_lines -= 1  # rule 6: the newest word, with no exchange since: the stream
+        elif axis not in self._owed and self._late_answer(raw, out):  # rule 6
             return
         self._deg[axis] = value
         self._seen.add(axis)

@@ -89,3 +89,35 @@ def test_a_polls_late_answer_around_a_stop_is_told_nowhere(rig: Rig, model: str)
     v.target(70, 0 if v.cfg.spec.has_elevation else None)
     v.run_until(settled_at(70, 0 if v.cfg.spec.has_elevation else None), 60, "at 70")
     assert v.errors() == [] and all(s.available for s in v.published(since=t))
+
+
+def test_an_rc2800_always_answering_after_its_reply_time_stays_online_and_turns(
+    rig: Rig,
+) -> None:
+    """rc2800.py rules 2 and 6: a box whose every answer comes after the reply time (a host
+    that hands the bytes over 1.2 s late), polled every 2 s: its late lines, before any other
+    exchange, are the newest it said, read as its stream. Owed late and dropped, they gave no
+    reading at all: the rotator went offline after 8 s and its turn was stopped at 64 of 100."""
+    settings = {
+        "idle_poll_interval_s": 2.0,
+        "moving_poll_interval_s": 2.0,
+        "settle_s": 4.5,
+        "stall_timeout_s": 20.0,
+        "silence_timeout_s": 8.0,
+    }
+    v = rig("rc2800", settings=settings, emulator={"start_az_deg": 10})
+    v.run_until(lambda h: h.status.available, 20, "the controller answers")
+
+    def late(wire: bytes, now: float) -> bytes:
+        if wire == b"A\r" and now >= v._delayed_until:
+            v.delay_output(1.2)  # (its reply time is 1.0 s)
+        return wire
+
+    v.to_device = late
+    t = v.now
+    v.target(100, 0)
+    v.run_for(40.0)
+    assert v.errors() == []
+    assert all(s.available for s in v.published(since=t))
+    assert v.truth().az_deg == pytest.approx(100.0, abs=1.0)
+    assert v.status.bearing_deg == pytest.approx(100.0, abs=1.0)

@@ -214,6 +214,24 @@ def test_a_position_out_of_range_is_never_harmless() -> None:
     assert codec.harmless(b"A P= 360.0 S=9 ST\rE P= -90.0 S=9 ST\rE=180.0\r")
 
 
+@pytest.mark.parametrize("how", HOW)
+def test_a_polls_answer_after_its_time_with_no_exchange_since_is_the_newest_reading(
+    how: str,
+) -> None:
+    """Rule 6: the lines of an exchange given up that come before any other is opened are the
+    newest the box has said: kept as its stream (rule 2), a reading, and no longer owed. (A
+    box always a little later than the reply time, polled every 2 s: each answer was owed
+    late and dropped, no reading came, and the rotator went offline, its turn stopped.)"""
+    codec = Rc2800Codec()
+    codec.encode_query()
+    codec.expire_query()
+    out = feed(codec, b"A P=  30.4 S=9 MV\rE P=   0.0 S=9 ST\r", how)
+    assert positions(out) == [(30.4, 0.0)] and codec.harmless(b"")
+    assert all(j.reason is JunkReason.CHATTER for j in junk(out))
+    codec.encode_query()  # the next poll's answer is its own
+    assert positions(feed(codec, b"A P=  36.4 S=9 MV\rE P=   0.0 S=9 ST\r", how)) == [(36.4, 0.0)]
+
+
 def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
     codec = Rc2800Codec()
     out = feed(codec, b"A P= 200.0 S=9 MV\r")
