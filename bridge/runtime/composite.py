@@ -71,7 +71,8 @@ Rules:
    (a turn or a target out when it closed) owes its stop, its first frame when it is back: a
    single controller's turn goes on after a replug, but here the other axis was stopped (an
    attack pass: the elevation box, replugged, turned on alone to its target, 60/80 where
-   300/80 was asked). The storm's park goes on there,
+   300/80 was asked); both boxes whose ports went together (one USB hub) owe theirs, and the
+   turn is sent again by hand. The storm's park goes on there,
    under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
    attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
    and never sent again): each box parks its own axis, as one does alone in a storm
