@@ -34,7 +34,11 @@ Rules:
    following, a move on its way, a target waiting out a brake delay among them) is stopped,
    and its stop written (up to HALT_WAIT_S, as
    claim rule 4's, the controller's line rules kept); once the front ends are closed, and
-   before the ports close, so is every one that may turn and was not stopped so already. A
+   before the ports close, so is every one that may turn and was not stopped so already. The
+   end is told to each session (``Rotator.leave``): from then on none starts a move of its own
+   (session/session.py rule 21: auto-park's park, tracking's next step, following's next
+   target; a review: an auto-park due while a front end closed turned the rotor until the
+   second look, or, after it, on unwatched once the port closed). A
    storm's park goes on (a stop would keep it from being tried again after the restart). An
    attack pass: ``systemctl stop`` mid-turn closed the port in 0.2 s with no stop, and the
    rotor turned on, watched by nobody, to its target. (A review: a target put right after a

@@ -13,11 +13,10 @@ worker for the rotator, serving both boxes' workers.
 
 Rules:
 1. A stop, a lock word, a hold and its release, options, notes, the lease, the wind, WSJT-X's
-   news and track and follow commands go to both sessions, in one batch each (a feature's own
-   command goes to one: rule 6), in the same
-   serve: one STOP writes a stop frame on both lines before either status goes to the
-   listeners, and each session keeps its own stop rules (a stop owed to an unplugged box is
-   its first frame on replug).
+   news, the bridge's end and track and follow commands go to both sessions, in one batch
+   each (a feature's own command goes to one: rule 6), in the same serve: one STOP writes a
+   stop frame on both lines before either status goes to the listeners, and each session
+   keeps its own stop rules (a stop owed to an unplugged box is its first frame on replug).
 2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
    axis it leaves out is no target for that box, but ends there what a target ends (tracking,
    following, a part's motion: ``Batch.ends``), as in the box it goes to: the operator's

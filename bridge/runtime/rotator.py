@@ -412,8 +412,10 @@ class Rotator:
         """From now on only a stop or a lock word is taken, every other command refused with
         ``why`` (app.py: a bridge that yields its base topic stops every rotor, and a front
         end not closed yet must not turn one again: a review, a rotctld client's P after that
-        stop turned the rotor until the front ends had closed)."""
+        stop turned the rotor until the front ends had closed). The session is told too: from
+        then on it starts no move of its own but the storm's park (session.py rule 21)."""
         self._leaving = why
+        self._mailbox.put_ending()
 
     def may_turn(self) -> bool:
         """Whether the rotor may be turning, or about to, as far as the bridge knows: its

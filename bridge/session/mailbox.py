@@ -86,6 +86,8 @@ Rules:
     once the lock it was given under is released, nor on a word the clearing dropped, though
     the two came in one batch (the lines thread busy); one put after the mark is the later
     word and stands.
+13. The bridge's end (``put_ending``, runtime/rotator.py ``leave``; app.py rule 6) is a
+    setting that is never taken back: the batch says it once, and the session keeps it.
 """
 
 from __future__ import annotations
@@ -138,6 +140,7 @@ class Batch:
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
+    ending: bool = False  # rule 13: the bridge's end began (session.py rule 21)
     activity: bool = False  # a command to a composite's other box (runtime/composite.py rule 7)
     ends: str | None = None  # a target to a composite's other box: what it ends here too, as
     # that target would (runtime/composite.py rule 2: tracking, following, a part's motion)
@@ -161,6 +164,7 @@ class Batch:
             or self.notes
             or self.health_reset
             or self.control_set
+            or self.ending
         )
         fence = self.hold is not None or self.release is not None
         fence = fence or self.express_hold is not None or self.express_release is not None
@@ -455,6 +459,12 @@ class Mailbox:
         """Start a new health baseline (a setting: it moves nothing)."""
         with self._lock:
             self._batch.health_reset = True
+        self._wake_once()
+
+    def put_ending(self) -> None:
+        """Rule 13: the bridge's end began (a setting: it moves nothing)."""
+        with self._lock:
+            self._batch.ending = True
         self._wake_once()
 
     def put_control(self, control: Control | None, *, wake: bool = True) -> None:

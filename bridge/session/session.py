@@ -112,6 +112,12 @@ Rules:
    runs the whole step, which judges it anew; so the tick after a poll step, or after bytes
    that ran no step, runs the whole step. Nothing the status is built from changes in the poll
    step (rule 18: the poll changes only the link's own state).
+21. Once told the bridge's end began (``Batch.ending``, app.py rule 6), no part's step gets a
+   target through but the storm's park (a storm's park goes on: wind.py), as while the rotator
+   is locked (rule 17): the end stops the rotors that may turn, and what started after its
+   looks turned on unwatched (a review: auto-park's quiet spell ended while a front end took
+   its time to close, and its park turned the rotor until the second look; or, after that
+   look, on to the park with the port closed). Stops, the lock and the rest of the step go on.
 """
 
 from __future__ import annotations
@@ -182,6 +188,7 @@ class RotatorSession:
         self.locked = locked
         self.lock_shown = locked  # the lock saved last (runtime/kept.py rule 2)
         self.lock_unknown = False  # runtime/kept.py rule 10: the status says it is not known
+        self.ending = False  # rule 21: the bridge's end began
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
@@ -305,6 +312,8 @@ class RotatorSession:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.control_set:
             self.view.control = batch.control
+        if batch.ending:
+            self.ending = True  # rule 21
         unlocked = batch.lock is False and (self.locked or batch.lock_on)
         if batch.lock is not None:
             self.locked = batch.lock
@@ -719,8 +728,11 @@ class RotatorSession:
 
     def _still(self, target: Target) -> bool:
         """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but
-        the wind's own park (auto-park waits, tracking and following are ended)."""
-        return self.locked or (self.wind.storm and target.source is not Source.WIND)
+        the wind's own park (auto-park waits, tracking and following are ended), nor once the
+        bridge's end began but the storm's park (rule 21)."""
+        if self.locked:
+            return True
+        return (self.wind.storm or self.ending) and target.source is not Source.WIND
 
     def _outside(self, target: Target) -> str | None:
         """Why the controller may not be sent a part's target (its limits, a keep-out sector:

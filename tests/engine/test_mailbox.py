@@ -138,6 +138,7 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put_track": lambda mb: mb.put_track(Track(None)),
         "put_note": lambda mb: mb.put_note("x"),
         "put_health_reset": lambda mb: mb.put_health_reset(),
+        "put_ending": lambda mb: mb.put_ending(),
         "put_control": lambda mb: mb.put_control(Control("DL1ABC", 0.0)),
         "put_follow": lambda mb: mb.put_follow(Follow(True)),
         "put_heard": lambda mb: mb.put_heard(Heard("JA1ABC", "PM95", False)),

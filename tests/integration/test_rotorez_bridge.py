@@ -622,3 +622,60 @@ def test_the_bridges_end_drops_a_target_that_waits_out_the_brake(
     turned = [f for f in emu.log()[seen:] if f.outcome in BEARING_FRAMES]
     assert not turned, turned  # the target waiting went with the end's stop
     assert not emu.state().is_moving
+
+
+@pytest.mark.parametrize("late", ["before the second look", "after the second look"])
+def test_the_bridges_end_starts_no_auto_park(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch, late: str
+) -> None:
+    """app.py rule 6: auto-park's quiet spell ended while the bridge ended (a front end took
+    its time to close): the park went out, and the rotor turned until the second look stopped
+    it, or, after that look, on to the park, watched by nobody once the port closed."""
+    emu = rig.add(
+        "tower", emu={"start_az_deg": 10, "jitter_deg": 0}, park_az_deg=200, park_after_idle_s=5
+    )
+    app = rig.start()
+    rig.ready("tower")
+    session = app.rotators[0]._worker.session
+    t = time.monotonic()
+    rig.probe.publish("rotor/stop", "")  # the quiet spell starts again now (autopark.py rule 1)
+    emu.wait_until(
+        lambda d, now: [f for f in d.log if f.data == b";" and f.time_s > t], bool, slow(10)
+    )
+    seen = len(emu.log())
+
+    def past_the_spell() -> None:
+        """Until the controller was asked for its bearing twice after auto-park's deadline:
+        the session stepped with the park due, and the line was free for it since."""
+        due = session.autopark.deadline()
+        assert due is not None
+        emu.wait_until(
+            lambda d, now: len([f for f in d.log if f.outcome == "query" and f.time_s > due]),
+            lambda n: n >= 2,
+            slow(10),
+        )
+
+    if late == "before the second look":
+        ending = app._stop_udp
+
+        def slow_to_close() -> None:
+            past_the_spell()
+            ending()
+
+        monkeypatch.setattr(app, "_stop_udp", slow_to_close)
+    else:
+        halt_all = app._halt_all
+        looks = []
+
+        def look(**kwargs: object) -> frozenset[str]:
+            done = halt_all(**kwargs)
+            looks.append(done)
+            if len(looks) == 2:
+                past_the_spell()
+            return done
+
+        monkeypatch.setattr(app, "_halt_all", look)
+    rig.stop()
+    turned = [f for f in emu.log()[seen:] if f.outcome in BEARING_FRAMES]
+    assert not turned, turned  # auto-park started nothing once the end began
+    assert not emu.state().is_moving
