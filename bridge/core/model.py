@@ -430,7 +430,7 @@ class ErrorKind(enum.StrEnum):
     STOP = "stop"  # the rotor kept turning after repeated stops, or after a stall's stop
     SERIAL = "serial"  # the port, the line or the controller's answers failed
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
-    STATE = "state"  # the lock could not be saved in the state file
+    STATE = "state"  # the lock could not be saved or read in the state file
     INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
     WIND = "wind"  # the wind topic fell silent or sent no number: the state it had is kept
     AUDIT = "audit"  # the audit file could not be written (the bridge goes on without it)

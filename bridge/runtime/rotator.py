@@ -238,9 +238,9 @@ class Rotator:
         # the last STOP or lock ON put in the mailbox (monotonic), from any front end: the
         # console refuses a command under way before it (interfaces/web/commands.py rule 5)
         self.last_halt_s = -math.inf
-        problem = store.problems.get(self.id)
-        if problem is not None:  # the lock is ON for it; the status's last error says why
-            self._mailbox.put_note(problem)
+        self._problem = store.problems.get(self.id)  # state_store.py rule 2
+        if self._problem is not None:  # the lock is ON for it; the status's last error says why
+            self._mailbox.put_note(self._problem)
 
     def _status(self, status: RotatorStatus) -> None:
         """Every status to the listeners, once rotor health's memory had a look at it."""
@@ -278,6 +278,9 @@ class Rotator:
             raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
         self._lines.add(self._worker)
         self.operators.start()
+        if self._problem is not None:  # state_store.py rule 2: said once on R/error too (an
+            # event before the broker's first connection waits for it: mqtt/client.py rule 3)
+            self._on_event(ErrorEvent(ErrorKind.STATE, self._problem, None, self._wall()))
 
     def stop(self, timeout_s: float = 3.0) -> None:
         self._stopped = True

@@ -19,7 +19,10 @@ Rules:
    stays locked across restarts until someone unlocks it. A malformed entry (not a table, a
    lock that is not true or false, options that are not on/off, a number or a name, a key
    given twice with two values) does the same for its rotator alone, and the rotator's status
-   says why (``problems``). A key given twice is
+   says why (``problems``). Each such rotator says it once on ``R/error`` too, kind ``state``,
+   when it starts (runtime/rotator.py ``start``; the log says it once when the file is read:
+   a review found the log and the status alone, and bad input is said on the error topic
+   too). A key given twice is
    read as neither value (core/jsonkeys.py), anywhere in the file: json's own reading keeps the
    last, and a hand-edited ``"locked": true, "locked": false`` started the rotator unlocked.
 3. The start proves the file can be written (``check_writable``, an OSError otherwise): the

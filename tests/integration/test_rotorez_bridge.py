@@ -585,6 +585,36 @@ def test_an_option_stored_for_another_model_does_not_break_the_rotator(rig: Rig)
     assert rig.retained()["rotor/availability"] == b"online"
 
 
+@pytest.mark.parametrize(
+    ("state", "said_by", "why"),
+    [
+        ("garbage{", ["tower", "yagi"], "unreadable"),
+        ('{"rotators": {"tower": "x", "yagi": {"locked": false}}}', ["tower"], "malformed"),
+    ],
+    ids=["an unreadable file", "a malformed entry"],
+)
+def test_a_state_file_that_cannot_be_read_is_said_on_the_error_topic(
+    rig: Rig, state: str, said_by: list[str], why: str
+) -> None:
+    """state_store.py rule 2: a rotator whose lock the state file could not say starts
+    locked; its status said why, the log said it, but R/error said nothing (the house rule:
+    bad input is said on the error topic too)."""
+    (rig.tmp / "state.json").write_text(state)
+    for rid in ("tower", "yagi"):
+        rig.add(rid)
+    rig.start()
+    for rid in ("tower", "yagi"):
+        rig.ready(rid)
+    for rid in said_by:
+        err = json.loads(rig.probe.wait_for(rig.t(rid, "error")).payload)
+        assert err["kind"] == "state" and why in err["message"], err
+        assert "state.json" in err["message"] and "locked" in err["message"], err
+        assert rig.retained()[rig.t(rid, "lock/state")] == b"ON"
+    for rid in ("tower", "yagi"):  # once, by those whose state could not be read
+        said = [m.payload for m in rig.probe.on(rig.t(rid, "error"))]
+        assert len(said) == (rid in said_by), said
+
+
 def test_the_bridges_end_drops_a_target_that_waits_out_the_brake(
     rig: Rig, monkeypatch: pytest.MonkeyPatch
 ) -> None:
