@@ -88,8 +88,8 @@ Rules:
    ends a part's own motion too (``Part.end``, parts.py rule 7: a storm that begins too, and
    the lock's release), and again after the feature commands put before a stop, a lock ON
    or OFF or a clearing release of the same batch (where mailbox.py rule 12 marks it); no
-   part's step gets a target through while the rotator is locked, nor in a storm but the
-   wind's own park.
+   part's step gets a target through while the rotator is locked, nor in a storm, nor once
+   the bridge's end began (rule 21), but the wind's own park.
    What a part shows in the status is asked of it by its ``Part`` alone (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
