@@ -682,7 +682,7 @@ def test_the_bridges_end_starts_no_auto_park(
         emu.wait_until(
             lambda d, now: len([f for f in d.log if f.outcome == "query" and f.time_s > due]),
             lambda n: n >= 2,
-            slow(10),
+            slow(20),  # (the quiet spell, 5 s, and two polls)
         )
 
     if late == "before the second look":
