@@ -17,7 +17,7 @@ import pytest
 from bridge.core.model import Stop, Target
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.gs232 import Gs232Session
-from bridge.interfaces.gs232.parser import gs232_holds_stop
+from bridge.interfaces.gs232.parser import DCU1_HARMLESS, gs232_holds_stop
 from bridge.interfaces.tcplines import (
     ACCEPTS_S,
     CHATTER_BURST,
@@ -66,6 +66,25 @@ def test_a_dcu1_command_ended_by_a_semicolon_is_released_at_once() -> None:
     assert guard.feed(b";") == b"AI1;" and guard.http is None
     assert guard.feed(b"AP1120;AM1;") == b"AP1120;AM1;"
     assert HttpGuard(b"\r\n;").feed(b";") == b";"  # a stop as the first byte goes at once
+
+
+def test_a_dcu1_version_query_alone_goes_at_once_and_its_line_is_still_judged() -> None:
+    """A DCU-1's ``V`` has no end: it goes when sent, not with the program's next command;
+    what follows it on the line is held as before, and a request line is refused whole."""
+    guard = HttpGuard(b"\r\n;", DCU1_HARMLESS)
+    assert guard.feed(b"V") == b"V" and not guard.holding
+    assert guard.feed(b"e") == b"e"
+    assert guard.feed(b"AI1") == b"" and guard.holding
+    assert guard.feed(b";AP1120;") == b"AI1;AP1120;" and guard.http is None
+    assert guard.feed(b"V") == b"V"
+    guard = HttpGuard(b"\r\n;", DCU1_HARMLESS)
+    assert guard.feed(b"O") == b"O"  # a request line cut after its first byte: O changes nothing
+    assert guard.feed(b"PTIONS /;AP1120;AM1; HTTP/1.1\r\n") == b""
+    assert guard.http == "an HTTP request line"
+    guard = HttpGuard(b"\r\n;", DCU1_HARMLESS)
+    assert guard.feed(b"OPTIONS /;AP1120;AM1;") == b""  # more than singles: all of it held
+    assert guard.feed(b" HTTP/1.1\r\n") == b"" and guard.http == "an HTTP request line"
+    assert HttpGuard(b"\r\n;").feed(b"V") == b""  # no singles named: held as any line
 
 
 @pytest.mark.parametrize(

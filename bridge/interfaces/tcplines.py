@@ -11,7 +11,10 @@ Rules:
 2. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs: its
    first line is held until complete and may not be an HTTP request line, and no line may be an
    HTTP header (``Host: ...``). A text protocol parses any bytes as commands, so a web page open
-   on the shack PC could otherwise turn the antenna through a loopback port.
+   on the shack PC could otherwise turn the antenna through a loopback port. Bytes that are a
+   whole command on their own and move nothing (``singles``: a DCU-1's ``V`` and option letters,
+   which no end follows) go at once while the first line is nothing else, so such a program is
+   answered when it asks; the line they begin is still held and judged whole.
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
@@ -347,12 +350,14 @@ class LineServer:
         max_unfinished: int = MAX_UNFINISHED,
         ends: bytes = LINE_ENDS,
         halts: Callable[[bytes], bool] | None = None,
+        singles: bytes = b"",
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
         sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
         and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6);
         ``halts``: whether a client's first complete commands hold a stop (rule 5: the
-        front end's parser says; none, and no connection goes ahead of the budget).
+        front end's parser says; none, and no connection goes ahead of the budget);
+        ``singles``: bytes that are a whole command on their own and move nothing (rule 2).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
@@ -360,6 +365,7 @@ class LineServer:
         self._max_unfinished = max_unfinished
         self._ends = ends
         self._halts = halts
+        self._singles = singles
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._http_log = RareLog()
         self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
@@ -558,7 +564,7 @@ class LineServer:
         seen = self._looked.get(conn)
         if seen is not None and seen[0] == len(data):
             return seen[1]
-        guard = HttpGuard(self._ends)
+        guard = HttpGuard(self._ends, self._singles)
         body = guard.feed(data)
         stop = bool(body) and guard.http is None and self._halts(body)
         self._looked[conn] = (len(data), stop)
@@ -799,7 +805,7 @@ class LineServer:
             conn.close()
             self._say("%s gone (dropped to make room)", who)
             return
-        guard = HttpGuard(self._ends)
+        guard = HttpGuard(self._ends, self._singles)
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
         over = False  # rule 5: over its budget now (said once each time)
@@ -928,19 +934,28 @@ class HttpGuard:
     ``ends`` are the bytes that end a command (rule 6). An end other than CR or LF (a DCU-1's
     ``;``) ends the first line too, unless what came before it begins like a request line (a
     method and a space, which no such command has): then it is held to its CR or LF as an
-    HTTP request line is, so ``GET /;AP1120;AM1; HTTP/1.1`` is refused whole."""
+    HTTP request line is, so ``GET /;AP1120;AM1; HTTP/1.1`` is refused whole.
 
-    def __init__(self, ends: bytes = LINE_ENDS) -> None:
+    ``singles`` are bytes that are a whole command on their own and move nothing (a DCU-1's
+    ``V`` and option letters: no end follows them). While everything of the first line so far
+    is such bytes, they are let through at once (a DCU-1 program's ``V`` is answered when sent,
+    not with its next command); the line they begin is still held and judged whole at its end,
+    so a request line cut after its first byte (``O`` of ``OPTIONS``) ran that byte alone,
+    which changes nothing, and is refused."""
+
+    def __init__(self, ends: bytes = LINE_ENDS, singles: bytes = b"") -> None:
         self.http: str | None = None
         self._head: bytes | None = b""  # the first line while it is incomplete; None after
         self._line = b""  # the current line's start, for the header check
         self._other_ends = bytes(e for e in ends if e not in b"\r\n")
         self._request_like = False  # the first line began as a request line: CR or LF ends it
+        self._singles = re.compile(b"[" + re.escape(singles) + b"]*") if singles else None
+        self._let = 0  # bytes of the held first line let through already (singles)
 
     @property
     def holding(self) -> bool:
-        """True while the first line is held (incomplete)."""
-        return self._head is not None
+        """True while the first line is held (incomplete) beyond what was let through."""
+        return self._head is not None and len(self._head) > self._let
 
     def feed(self, data: bytes) -> bytes:
         if self._head is not None:
@@ -950,11 +965,12 @@ class HttpGuard:
             if not ended and self._other_ends and not self._request_like:
                 ended = self._ended_by_other(len(self._head) - len(data))
             if not ended and len(self._head) < HTTP_FIRST_LINE_MAX:
-                return b""
+                return self._let_singles()
             data, self._head = self._head, None
             if _REQUEST_LINE.match(re.split(rb"[\r\n]", data, maxsplit=1)[0]):
                 self.http = "an HTTP request line"
                 return b""
+            data = data[self._let :]
         lines = (self._line + data).split(b"\n")
         self._line = lines[-1][-64:]  # enough of a partial line to see "Name: " at its start
         for line in lines:
@@ -962,6 +978,17 @@ class HttpGuard:
                 self.http = f"an HTTP header ({line.split(b':')[0].decode('ascii', 'replace')})"
                 return b""
         return data
+
+    def _let_singles(self) -> bytes:
+        """What of the held first line may go now: all of it not let through yet, when the
+        whole line so far is ``singles`` (the class's last paragraph); else nothing."""
+        assert self._head is not None
+        if self._singles is None or self._let == len(self._head):
+            return b""
+        if self._singles.fullmatch(self._head, self._let) is None:
+            return b""
+        out, self._let = self._head[self._let :], len(self._head)
+        return out
 
     def _ended_by_other(self, new_from: int) -> bool:
         """Whether an end other than CR or LF, arrived at or after ``new_from``, ends the held

@@ -71,6 +71,17 @@ class Client:
         self.got += chunk
         return chunk
 
+    def reply(self, size: int) -> bytes:
+        """The first ``size`` bytes that came back, waited for with nothing more sent."""
+        deadline = time.monotonic() + slow(10)
+        while len(self.got) < size:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self._fileno()], [], [], left)[0]:
+                raise TimeoutError(f"no reply, only {self.got!r}")
+            if not self._read():
+                raise ConnectionError("closed")
+        return self.got[:size]
+
     def answer(self) -> bytes:
         """``AI1;`` asked behind everything sent so far: its ``;ddd`` (what came before it,
         banners and all, is read and dropped). No answer is proven by the order, not a wait."""
@@ -166,6 +177,21 @@ def test_http_on_the_dcu1_port_is_refused_and_nothing_runs(rig: Rig, tmp_path: P
         sock.sendall(request)
         assert sock.recv(64) == b""  # closed, nothing answered (AI1; would have been)
     with client(port) as program:
+        assert program.answer() == b";010"
+    assert moves(rig) == []
+
+
+@pytest.mark.parametrize("transport", ["pty", "tcp"])
+def test_a_version_query_sent_first_is_answered_at_once(
+    rig: Rig, tmp_path: Path, transport: str
+) -> None:
+    """``V`` has no end: a program that opens with it and waits for the banner gets it then,
+    on the TCP port as on the pty (tcplines rule 2 holds no command that moves nothing)."""
+    port, path = start(rig, tmp_path)
+    banner = b"C2000 IDIOM V1.4S "
+    with client(path if transport == "pty" else port) as program:
+        program.send(b"V")
+        assert program.reply(len(banner)) == banner  # before anything else is sent
         assert program.answer() == b";010"
     assert moves(rig) == []
 

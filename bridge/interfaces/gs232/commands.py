@@ -22,6 +22,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import Command, Origin, Park, Source, Stop, Target
 from bridge.front import FrontRotator
 from bridge.interfaces.gs232.parser import (
+    DCU1_HARMLESS,
     Dcu1Kind,
     Dcu1Reader,
     Dcu1Request,
@@ -395,6 +396,7 @@ class Emulation:
     halts: Callable[[bytes], bool]  # whether complete commands hold a stop (tcplines rule 5)
     ends: bytes = LINE_ENDS
     options: tuple[str, ...] = ()  # each session's keyword, from the setting <key>_<option>
+    singles: bytes = b""  # whole commands of one byte that move nothing (tcplines rule 2)
 
     def options_of(self, table: object) -> dict[str, str]:
         """Its options as a settings table gives them (``gs232_replies``: replies)."""
@@ -426,6 +428,7 @@ class Emulation:
             idle_timeout_s=IDLE_TIMEOUT_S,
             ends=self.ends,
             halts=self.halts,
+            singles=self.singles,
         )
 
     def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:
@@ -446,7 +449,7 @@ EMULATIONS = {
     for e in (
         Emulation("gs232", Gs232Session, gs232_holds_stop, options=("replies",)),
         Emulation("easycomm", EasycommSession, easycomm_holds_stop),
-        Emulation("dcu1", Dcu1Session, dcu1_holds_stop, ends=b"\r\n;"),
+        Emulation("dcu1", Dcu1Session, dcu1_holds_stop, ends=b"\r\n;", singles=DCU1_HARMLESS),
     )
 }
 

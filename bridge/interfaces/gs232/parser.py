@@ -200,6 +200,8 @@ _DCU1_SINGLES = {
     ord("V"): Dcu1Kind.VERSION,
     **{letter: Dcu1Kind.OPTION for letter in b"EeJjOoSs"},
 }
+# those of them that move nothing: the TCP port lets them through at once (tcplines rule 2)
+DCU1_HARMLESS = bytes(k for k, v in _DCU1_SINGLES.items() if v is not Dcu1Kind.STOP)
 
 
 @dataclass(frozen=True)
