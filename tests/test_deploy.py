@@ -1007,6 +1007,17 @@ def test_docker_config_validates_without_the_environment(docker_settings) -> Non
     assert isinstance(rotator.port, str) and rotator.port == "/dev/rotor"
 
 
+def test_the_docker_config_reaches_a_broker_without_mqtt_5(docker_settings) -> None:
+    """The container runs against whatever broker the station has (NATS, aedes, RabbitMQ 3
+    speak MQTT 3.1.1 alone): its configuration forces no protocol, and the docs say so."""
+    assert docker_settings.mqtt.protocol == "auto"
+    assert type(docker_settings.mqtt).model_fields["protocol"].default == "auto"
+    docker = (
+        (ROOT / "docs" / "deployment.md").read_text().split("## Docker", 1)[1].split("\n## ", 1)[0]
+    )
+    assert '`mqtt.protocol` at its default, `"auto"`' in " ".join(docker.split())
+
+
 def test_compose_passes_the_serial_device_to_the_bridge(compose: dict, docker_settings) -> None:
     bridge = compose["services"]["rotor-bridge"]
     (device,) = bridge["devices"]
