@@ -51,6 +51,18 @@ OFFERS = (
 )
 
 
+class RemoteMqtt(MqttSettings):
+    """The bridge's ``[mqtt]`` table, MQTT 5 only (rule 1); a refusal names ``mqtt.protocol``
+    (rule 3)."""
+
+    @field_validator("protocol")
+    @classmethod
+    def _mqtt5(cls, v: str) -> str:
+        if v == "3.1.1":
+            raise ValueError('must be "5" here: the remote\'s commands carry a message expiry')
+        return v
+
+
 class Offer(NamedTuple):
     key: str  # rotctld_port, gs232_pty, ...
     transport: str  # tcp, udp, pty
@@ -125,7 +137,7 @@ class RemoteSettings(Strict):
         pattern=r"^\S(.*\S)?$",
         description="who operates (a call sign): carried with every command",
     )
-    mqtt: MqttSettings = Field(default_factory=MqttSettings)
+    mqtt: RemoteMqtt = Field(default_factory=RemoteMqtt)
     command_expiry_s: int = Field(
         5, ge=1, le=60, description="a command not delivered within this many seconds is dropped"
     )
@@ -172,8 +184,6 @@ class RemoteSettings(Strict):
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:
-        if self.mqtt.protocol == "3.1.1":
-            raise ValueError('mqtt.protocol must be "5": commands carry a message expiry')
         self.mqtt.protocol = "5"  # "auto" never falls back here: the remote needs MQTT 5
         if self.ack_wait_s > self.command_expiry_s:
             raise ValueError(

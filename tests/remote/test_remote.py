@@ -195,6 +195,15 @@ def test_a_configuration_error_names_the_key(tmp_path: Path) -> None:
     done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(30), check=False)
     assert done.returncode == 2
     assert "endpoints[0].rotctld_prot: unknown key: did you mean rotctld_port?" in done.stderr
+    assert '\n  mqtt.protocol: must be "5" here' in done.stderr  # its field, said beside the other
+    conf.write_text(
+        'operator = "DL1ABC"\n[mqtt]\nprotocol = "3.1.1"\n[[endpoints]]\nrotctld_port = 4533\n'
+    )
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(30), check=False)
+    assert done.returncode == 2
+    assert done.stderr.splitlines()[1:] == [
+        '  mqtt.protocol: must be "5" here: the remote\'s commands carry a message expiry'
+    ]
 
 
 def iso(t_unix: float) -> str:
