@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from bridge.core.geo import parse_locator
 from bridge.core.model import ErrorKind
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 
@@ -216,3 +217,17 @@ def test_the_module_map_names_every_module_in_bridge() -> None:
         if not any(Path(rel).match(n) for n in named if not n.endswith("/")):
             missing.append(rel)
     assert not missing, f"modules missing from docs/architecture.md's module map: {missing}"
+
+
+def test_the_mqtt_pages_field_example_says_where_the_bridge_aims() -> None:
+    """A two-letter locator's example says the place the bridge turns to, the field's centre
+    (``JA`` read like Japan, and is a field at 85 degrees south)."""
+    text = (ROOT / "docs" / "mqtt.md").read_text()
+    found = re.findall(
+        r'`\{"locator": "([A-R]{2})"\}` \(a field alone: its centre, (\d+)° ([NS]) (\d+)° ([EW])\)',
+        text,
+    )
+    assert found
+    for field, lat, north_south, lon, east_west in found:
+        centre = (float(lat) * (1 if north_south == "N" else -1), float(lon))
+        assert parse_locator(field) == (centre[0], centre[1] * (1 if east_west == "E" else -1))
