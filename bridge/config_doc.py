@@ -9,11 +9,15 @@ Rules:
    left at its defaults runs with.
 3. The output depends on nothing but the code (no host name, home directory or time), so the
    committed page can be compared with what this writes (tests/test_config_docs.py).
+4. A description's text is one line, its blanks run together, except inside a code span: what
+   is quoted there (``AZ=120  EL=000``, a GS-232B's two spaces) is what the bridge sends or
+   reads, and is written as it is.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from typing import Any
 
 from pydantic import BaseModel
@@ -286,8 +290,12 @@ def _untitled(doc: str | None) -> str:
 
 
 def _sentence(text: str | None) -> str:
-    """``text`` as one Markdown sentence: a capital, a full stop, no stray HTML."""
-    text = _markdown(" ".join((text or "").replace("``", "`").split()))
+    """``text`` as one Markdown sentence: a capital, a full stop, no stray HTML; its blanks run
+    together outside code spans only (rule 4: a reply in one is shown byte for byte)."""
+    parts = (text or "").replace("``", "`").split("`")
+    for i in range(0, len(parts), 2):
+        parts[i] = re.sub(r"\s+", " ", parts[i])
+    text = _markdown("`".join(parts).strip())
     if not text:
         return ""
     text = text[0].upper() + text[1:]

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from bridge.config_doc import render
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import Source, Stop, Target
 from bridge.interfaces.gs232 import Dcu1Session, Gs232Session
@@ -276,6 +277,18 @@ def test_gs232_a_or_b_readings(replies: str, line: bytes, reply: bytes) -> None:
     tower.spec = SimpleNamespace(has_elevation=True, can_report_position=True)
     tower.status.elevation_deg = 30.0
     assert Gs232Session(tower, replies=replies).feed(line) == [reply]  # type: ignore[arg-type]
+
+
+def test_the_configuration_reference_quotes_the_readings_byte_for_byte() -> None:
+    """docs/configuration.md's gs232_replies shows each reading as the port sends it (a
+    GS-232B's two spaces too: the page's generator ran them together)."""
+    tower = _Tower()
+    tower.spec = SimpleNamespace(has_elevation=True, can_report_position=True)
+    tower.status.elevation_deg = 0.0
+    (line,) = [ln for ln in render().splitlines() if ln.startswith("- **`gs232_replies`**")]
+    for replies in ("A", "B"):
+        (reply,) = Gs232Session(tower, replies=replies).feed(b"C2\r")  # type: ignore[arg-type]
+        assert f"`{reply.decode().rstrip()}`" in line, (replies, line)
 
 
 def test_gs232_replies_are_a_or_b() -> None:
