@@ -103,7 +103,8 @@ Rules:
     remote cannot deliver are answered with the banner; a stop itself is never answered (a
     real board prints the banner for a ``;`` while still, which only makes Hamlib flush).
 11. The protocols offered are one table, commands.EMULATIONS (key, session, the parser's
-    look for a stop that lets a connection ahead of the accept budget, ends): the
+    look for a stop that lets a connection ahead of the accept budget, ends, the one-byte
+    commands that move nothing and so go before the first line's end: tcplines rule 2): the
     station (app.py) and the remote (remote/run.py) make every port and pty from it, and
     the settings' keys (settings_rotator.EMULATION_KEYS) name the same ones.
 12. A line that is no command the bridge carries out (GS-232's ``?>``: one it does not know,
