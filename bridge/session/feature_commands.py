@@ -115,7 +115,7 @@ class FeatureCommands:
         self.tracker.end("another body")
         self.follower.end(f"tracking {track.body.name}")
         self.targets.clear()
-        self.tracker.start(track.body)
+        self.tracker.start(track.body, track.from_file)
         log.info("%s: tracking %s", self.name, track.body.name)
         return Done(taken=(track.source.value, track.origin))
 
@@ -139,7 +139,7 @@ class FeatureCommands:
             if answer.failure is not None or not isinstance(body, Body):
                 refusal = answer.failure or "no such satellite"
                 return Done(Report(ErrorKind.REFUSED, refusal, lookup.described))
-            track = Track(body, lookup.source, None, lookup.described, lookup.origin)
+            track = Track(body, lookup.source, None, lookup.described, lookup.origin, lookup.lookup)
             return self.track(track, refused)
         ends = self.tracker.answered(answer)
         if ends is not None:

@@ -66,6 +66,14 @@ Rules:
    flip (rule 4) is weighed with each way started on its best side. An attack pass: a GS-232B
    450 kept to 0..90 of elevation waited at W010 for a pass running west through the north,
    and unwound to W358 mid-pass where W370 was free.
+10. A satellite tracked by its name in the TLE file is looked up again once a pass has ended,
+   while the next is waited for (the file is read only if it changed, catalog.py rule 1): new
+   elements for it are flown from then on, from the pass they give next, as if tracking had
+   just started after that pass (parked or stayed as it was). Never mid-pass: an answer that
+   comes once the next pass has begun is left for the end of that one. One the file no longer
+   has keeps the elements in hand (said in the log). Elements sent whole are kept as sent. (An
+   attack pass: ISS tracked for days by the elements of the day it started, the file refreshed
+   by cron every morning.)
 """
 
 from __future__ import annotations
@@ -106,6 +114,7 @@ class Track:
     lookup: LookupQuestion | None = None
     described: str | None = None  # the command as the user gave it (a refusal names it)
     origin: Origin | None = None  # who asked (the status's last_operator)
+    from_file: LookupQuestion | None = None  # rule 10: how ``body`` was found in the TLE file
 
 
 class Tracker:
@@ -136,11 +145,15 @@ class Tracker:
         self._refused_for: float | None = None
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
+        self._from_file: LookupQuestion | None = None  # rule 10: to look the body up again by
+        self._looked_after: float | None = None  # rule 10: AOS of the pass waited for then
+        self._stayed = False  # rule 10: parked (or stayed) after the pass, by the old elements
 
     # -- rule 1 ----------------------------------------------------------------------------
-    def start(self, body: Body) -> None:
+    def start(self, body: Body, from_file: LookupQuestion | None = None) -> None:
         self._reset(body)
         self.body, self.ended, self.info = body, None, TrackingInfo(body.name, "waiting")
+        self._from_file = from_file
 
     def end(self, why: str) -> bool:
         """Stop following (``why`` shows as ``tracking_ended``); whether anything was tracked.
@@ -176,9 +189,37 @@ class Tracker:
 
     def answered(self, answer: Answer) -> str | None:
         """Take an answer of this generation in; why tracking must end, if it must."""
-        if isinstance(answer.question, LookupQuestion) or self._sky is None:
+        if isinstance(answer.question, LookupQuestion):
+            self._renewed(answer)
+            return None
+        if self._sky is None:
             return None
         return self._sky.answered(answer)
+
+    def _renewed(self, answer: Answer) -> None:
+        """Rule 10: the body looked up again in the TLE file after a pass."""
+        body, sky = answer.value, self._sky
+        if answer.question != self._from_file or self.body is None or sky is None:
+            return
+        if self.lookup is not None or (self.info is not None and self.info.phase == "tracking"):
+            self._looked_after = None  # (a start under way decides; mid-pass: after this one)
+            return
+        if not isinstance(body, Body) or answer.failure is not None:
+            log.warning(
+                "%s: tracking %s goes on with the elements it has: %s",
+                self._rig.rotator_id,
+                self.body.name,
+                answer.failure or "no such satellite",
+            )
+            return
+        if body == self.body:
+            return
+        log.info("%s: tracking %s by the TLE file's new elements", self._rig.rotator_id, body.name)
+        self.generation += 1  # rule 8: what was asked for the old elements is stale
+        self._sky = SkyTrack(self.cfg, body)
+        self._sky.after_pass = sky.after_pass
+        self.body, self._stayed = body, True
+        self._flip_for = self._wait_at = self._waited_for = self._sided_for = None
 
     # -- the step ----------------------------------------------------------------------------
     def step(self, scene: Scene) -> Proposal:
@@ -209,6 +250,7 @@ class Tracker:
             self._flip_for, self._flip = p.aos_s, flip
         if utc < p.aos_s:  # the pass in hand has moved on past a LOS: utc <= p.los_s
             self._inform(sky, utc, p, "waiting", scene.now)
+            self._look_again(sky, p)
             return self._wait_for(sky, p, utc, scene)
         self._inform(sky, utc, p, "tracking", scene.now)
         return self._follow(sky, p, utc, scene)
@@ -248,6 +290,8 @@ class Tracker:
     def _wait_for(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
         """Rule 2: after a pass park or stay, then go and wait where the next one rises."""
         rig = self._rig
+        if self._stayed:  # rule 10: the pass before was parked (or stayed) after already
+            self._stayed, self._parked_after = False, p.aos_s
         if sky.after_pass and self._parked_after != p.aos_s:
             self._parked_after = p.aos_s
             if self.cfg.at_los == "park" and rig.aim.park is not None:
@@ -278,6 +322,14 @@ class Tracker:
         self._waited_for = self._sided_for = p.aos_s
         self._last = (az, el)
         return self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])
+
+    def _look_again(self, sky: SkyTrack, p: Pass) -> None:
+        """Rule 10: once a pass has ended, the body looked up again (once a pass waited for)."""
+        if self._from_file is None or not sky.after_pass or self.lookup is not None:
+            return
+        if self._looked_after != p.aos_s:
+            self._looked_after = p.aos_s
+            self._lookups.append(self._from_file)
 
     def _follow(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
         """Rule 3."""

@@ -9,13 +9,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from bridge.core.model import MotionState, Source, Target
 from bridge.features.tracking import tracking_state
+from bridge.session.tracking import Track
 from bridge.sky import Body, Pass, Sky, SkyError
-from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
+from bridge.sky.catalog import TleCatalog
+from bridge.sky.worker import (
+    Answer,
+    LookupQuestion,
+    PassQuestion,
+    PositionsQuestion,
+    Question,
+    answer,
+)
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass
 
@@ -613,3 +623,45 @@ def test_after_a_park_a_pass_is_waited_for_on_the_side_nearest_the_park(
         v.run_until(lambda h: h.wall() >= t0 + 3000, 3000, "the second pass rises")
         waits = _gs232_azimuths(v)[parked:]
         assert waits and waits[0] == 370, waits  # from the park at 300, not where it ended
+
+
+def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pass(
+    tmp_path: Path,
+) -> None:
+    """An attack pass: ISS tracked by name for days, the TLE file refreshed by cron every
+    morning: the bridge flew every pass by the elements of the day tracking started, however
+    stale (a reboost moves the passes by minutes), though the file was read again for any new
+    look-up. The sky is scripted by elements: the old ones' next pass rises at 200 in 80
+    minutes, the new ones' at 10 in 45."""
+    t0 = SAT_EPOCH
+    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    path = tmp_path / "amateur.tle"
+    path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
+    by_elements = {
+        old: _scripted_sky([(t0 + 100, t0 + 400, 100, 150), (t0 + 4800, t0 + 5100, 200, 250)]),
+        new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
+    }
+
+    def sky(q: Question) -> Answer:
+        if isinstance(q, LookupQuestion):
+            return answer(q)  # the file, read as the sky worker reads it
+        assert q.body.tle is not None
+        return by_elements[q.body.tle](q)
+
+    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds)
+    v.answer_sky = sky
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.mailbox.put_track(
+            Track(None, Source.MQTT, LookupQuestion(TleCatalog(path), "iss (zarya)"))
+        )
+        v._take()
+        v.run_until(lambda h: h.wall() >= t0 + 200, 300, "the first pass is under way")
+        path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")  # cron, mid-pass
+        v.run_until(lambda h: h.wall() >= t0 + 2690, 3000, "just before the new elements' AOS")
+        info = v.status.tracking
+        assert info is not None and info.aos_unix == pytest.approx(t0 + 2700, abs=1), info
+        assert v.status.state is MotionState.IDLE
+        assert off_deg(v.truth().az_deg, 10.0) <= 2.0, v.truth()  # waiting where it rises
