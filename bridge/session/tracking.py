@@ -74,6 +74,10 @@ Rules:
    has keeps the elements in hand (said in the log). Elements sent whole are kept as sent. (An
    attack pass: ISS tracked for days by the elements of the day it started, the file refreshed
    by cron every morning.)
+11. Elements older than STALE_DAYS when tracking starts with them (or takes them, rule 10) are
+   said in the log, once for them, with their age and epoch: nothing else says that a cron job
+   stopped refreshing the file (an attack pass: elements four months old were flown without a
+   word, passes minutes off).
 """
 
 from __future__ import annotations
@@ -81,6 +85,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, replace
+from datetime import UTC, datetime
 
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, MotionState, Origin, Source, Target, TrackingInfo
@@ -90,7 +95,7 @@ from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
 from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
 from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack, flip_times
-from bridge.sky import Body, Pass
+from bridge.sky import Body, Pass, tle_epoch_unix
 from bridge.sky.worker import Answer, LookupQuestion, Question
 
 log = logging.getLogger(__name__)
@@ -102,6 +107,7 @@ INFO_EVERY_S = 5.0  # the status's tracking block is refreshed this often (and o
 NEXT_S = 60.0  # the status's "next" position: this far ahead
 MAX_LEAD_S = 300.0
 FLIP_SAVING_DEG = 30.0
+STALE_DAYS = 14.0  # rule 11
 
 
 @dataclass(frozen=True)
@@ -148,6 +154,7 @@ class Tracker:
         self._from_file: LookupQuestion | None = None  # rule 10: to look the body up again by
         self._looked_after: float | None = None  # rule 10: AOS of the pass waited for then
         self._stayed = False  # rule 10: parked (or stayed) after the pass, by the old elements
+        self._aged: Body | None = None  # rule 11: the elements whose age was judged
 
     # -- rule 1 ----------------------------------------------------------------------------
     def start(self, body: Body, from_file: LookupQuestion | None = None) -> None:
@@ -237,6 +244,7 @@ class Tracker:
             self._waited_for = self._sided_for = None  # (a pass not begun by it: wait again)
             self._utc_seen = utc
         self._utc_seen = max(self._utc_seen, utc)
+        self._say_age(sky.body, utc)
         if sky.searching(utc):
             return Proposal(busy=True)  # rule 8: the answer comes as an input
         p = sky.pass_now
@@ -322,6 +330,23 @@ class Tracker:
         self._waited_for = self._sided_for = p.aos_s
         self._last = (az, el)
         return self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])
+
+    def _say_age(self, body: Body, utc: float) -> None:
+        """Rule 11."""
+        if body.tle is None or self._aged == body:
+            return
+        self._aged = body
+        epoch = tle_epoch_unix(body.tle[0])
+        age_days = (utc - epoch) / 86400.0
+        if age_days > STALE_DAYS:
+            log.warning(
+                "%s: tracking %s by elements %.0f days old (epoch %s UTC): its passes may be "
+                "minutes off; is tle_file refreshed?",
+                self._rig.rotator_id,
+                body.name,
+                age_days,
+                datetime.fromtimestamp(epoch, UTC).strftime("%Y-%m-%d %H:%M"),
+            )
 
     def _look_again(self, sky: SkyTrack, p: Pass) -> None:
         """Rule 10: once a pass has ended, the body looked up again (once a pass waited for)."""

@@ -12,7 +12,7 @@ Computing takes from a millisecond to a second: the engine asks its sky worker
 rule 12).
 """
 
-from bridge.sky.bodies import KINDS, RESERVED, Body, SkyError, parse_tles
+from bridge.sky.bodies import KINDS, RESERVED, Body, SkyError, parse_tles, tle_epoch_unix
 from bridge.sky.passes import Pass
 from bridge.sky.positions import DAY_S, EPHEMERIS_END_S
 from bridge.sky.station import NO_PASS_KEPT_S, PASSES_KEPT, Sky
@@ -29,4 +29,5 @@ __all__ = [
     "Sky",
     "SkyError",
     "parse_tles",
+    "tle_epoch_unix",
 ]

@@ -74,6 +74,16 @@ class Body:
         return Body("satellite", name, (line1.rstrip(), line2.rstrip()))
 
 
+def tle_epoch_unix(line1: str) -> float:
+    """When a TLE's elements are for (line 1's epoch: a two-digit year, 57-99 the 1900s, and
+    the day of the year from 1.0), as unix seconds. The line is one Body has checked."""
+    from datetime import UTC, datetime
+
+    yy = int(line1[18:20])
+    year = 1900 + yy if yy >= 57 else 2000 + yy
+    return datetime(year, 1, 1, tzinfo=UTC).timestamp() + (float(line1[20:32]) - 1.0) * 86400.0
+
+
 def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
     """(which line, what is wrong) with a TLE, or None when sgp4 can use it (rule 1)."""
     from sgp4.api import SGP4_ERRORS, Satrec  # rule 5

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
@@ -665,3 +666,28 @@ def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pa
         assert info is not None and info.aos_unix == pytest.approx(t0 + 2700, abs=1), info
         assert v.status.state is MotionState.IDLE
         assert off_deg(v.truth().az_deg, 10.0) <= 2.0, v.truth()  # waiting where it rises
+
+
+@pytest.mark.parametrize(("age_days", "said"), [(123.0, True), (2.0, False)])
+def test_elements_months_old_are_said_in_the_log_when_tracking_starts(
+    age_days: float, said: bool, caplog: pytest.LogCaptureFixture
+) -> None:
+    """An attack pass: elements four months old (a cron job that stopped) were tracked
+    without a word, their passes minutes off."""
+    t0 = SAT_EPOCH
+    line1, line2 = synthetic_tle(
+        "", t0 - age_days * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0
+    )
+    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0)
+    v.answer_sky = _scripted_sky([(t0 + 100, t0 + 400, 100, 150)])
+    with v, caplog.at_level("WARNING", logger="bridge.session.tracking"):
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("AO-7", line1, line2))
+        v.run_for(30.0)
+        warned = [r.getMessage() for r in caplog.records if "days old" in r.getMessage()]
+        if said:
+            assert len(warned) == 1 and "AO-7 by elements 123 days old" in warned[0], warned
+            epoch = datetime.fromtimestamp(t0 - age_days * 86400, UTC).strftime("%Y-%m-%d")
+            assert f"(epoch {epoch} " in warned[0], warned
+        else:
+            assert warned == []
