@@ -8,6 +8,7 @@ the library the bridge uses."""
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
@@ -639,6 +640,7 @@ def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pa
     new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
     path = tmp_path / "amateur.tle"
     path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
+    os.utime(path, ns=(int((t0 - 86400) * 1e9),) * 2)  # (the catalog sees a change by it)
     by_elements = {
         old: _scripted_sky([(t0 + 100, t0 + 400, 100, 150), (t0 + 4800, t0 + 5100, 200, 250)]),
         new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
@@ -661,6 +663,7 @@ def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pa
         v._take()
         v.run_until(lambda h: h.wall() >= t0 + 200, 300, "the first pass is under way")
         path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")  # cron, mid-pass
+        os.utime(path, ns=(int(t0 * 1e9),) * 2)
         v.run_until(lambda h: h.wall() >= t0 + 2690, 3000, "just before the new elements' AOS")
         info = v.status.tracking
         assert info is not None and info.aos_unix == pytest.approx(t0 + 2700, abs=1), info
