@@ -208,7 +208,8 @@ class Tracker:
         body, sky = answer.value, self._sky
         if answer.question != self._from_file or self.body is None or sky is None:
             return
-        if self.lookup is not None or (self.info is not None and self.info.phase == "tracking"):
+        p = sky.pass_now
+        if self.lookup is not None or (p is not None and self._utc_seen >= p.aos_s):
             self._looked_after = None  # (a start under way decides; mid-pass: after this one)
             return
         if not isinstance(body, Body) or answer.failure is not None:
