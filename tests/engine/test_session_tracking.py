@@ -694,3 +694,56 @@ def test_elements_months_old_are_said_in_the_log_when_tracking_starts(
             assert f"(epoch {epoch} " in warned[0], warned
         else:
             assert warned == []
+
+
+def test_new_elements_read_while_a_pass_is_under_way_wait_for_its_end(tmp_path: Path) -> None:
+    """Rule 10: the file looked at between two passes 20 s apart, its answer 30 s late (the
+    sky worker busy): the second pass, under way by then, is flown to its end by the elements
+    it began with; the new ones take over from the pass after it."""
+    t0 = SAT_EPOCH
+    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    path = tmp_path / "amateur.tle"
+    path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
+    os.utime(path, ns=(int((t0 - 86400) * 1e9),) * 2)
+    passes = [(t0 + 100, t0 + 400, 100, 150), (t0 + 420, t0 + 720, 150, 200)]
+    by_elements = {
+        old: _scripted_sky([*passes, (t0 + 4800, t0 + 5100, 200, 250)]),
+        new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
+    }
+    lookups: list[float] = []
+
+    def sky(q: Question) -> Answer:
+        """The sky worker answers in order: what is asked after a slow look-up waits for it."""
+        slow = isinstance(q, LookupQuestion) and len(lookups) > 0
+        queued = max((due for due, _g, _a in v._answers), default=v.now)
+        v.sky_delay_s = max(queued, v.now + (30.0 if slow else 0.0)) - v.now  # (read after)
+        if isinstance(q, LookupQuestion):
+            lookups.append(v.wall())
+            return answer(q)
+        assert q.body.tle is not None
+        return by_elements[q.body.tle](q)
+
+    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds)
+    v.answer_sky = sky
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        lookup = LookupQuestion(TleCatalog(path), "iss (zarya)")
+        v.mailbox.put_track(Track(None, Source.MQTT, lookup))
+        v._take()
+        v.run_until(lambda h: h.wall() >= t0 + 200, 300, "the first pass is under way")
+        path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")
+        os.utime(path, ns=(int(t0 * 1e9),) * 2)
+        v.run_until(lambda h: h.wall() >= t0 + 440, 300, "the second pass under way")
+        assert lookups[1:] and lookups[1] < t0 + 420, lookups  # answered at 430 or so
+        worst = 0.0
+        while v.wall() < t0 + 715:
+            v.run_for(5.0)
+            body_az = 150.0 + 50.0 * (v.wall() - (t0 + 420)) / 300.0
+            worst = max(worst, off_deg(v.truth().az_deg, body_az))
+        assert worst <= 5.0, worst  # followed to its end by the old elements
+        v.run_until(lambda h: h.wall() >= t0 + 2690, 3000, "just before the new elements' AOS")
+        info = v.status.tracking
+        assert info is not None and info.aos_unix == pytest.approx(t0 + 2700, abs=1), info
+        assert off_deg(v.truth().az_deg, 10.0) <= 2.0, v.truth()
