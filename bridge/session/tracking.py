@@ -66,14 +66,15 @@ Rules:
    flip (rule 4) is weighed with each way started on its best side. An attack pass: a GS-232B
    450 kept to 0..90 of elevation waited at W010 for a pass running west through the north,
    and unwound to W358 mid-pass where W370 was free.
-10. A satellite tracked by its name in the TLE file is looked up again once a pass has ended,
-   while the next is waited for (the file is read only if it changed, catalog.py rule 1): new
+10. A satellite tracked by its name in the TLE file is looked up again every LOOK_AGAIN_S
+   while a pass is waited for (the file is read only if it changed, catalog.py rule 1): new
    elements for it are flown from then on, from the pass they give next, as if tracking had
-   just started after that pass (parked or stayed as it was). Never mid-pass: an answer that
-   comes once the next pass has begun is left for the end of that one. One the file no longer
-   has keeps the elements in hand (said in the log). Elements sent whole are kept as sent. (An
-   attack pass: ISS tracked for days by the elements of the day it started, the file refreshed
-   by cron every morning.)
+   just started (after a pass: parked or stayed as it was). Never mid-pass: an answer that
+   comes once the pass has begun is left for its end. A file that no longer has it keeps the
+   elements in hand (said in the log, once a reason). Elements sent whole are kept as sent.
+   (An attack pass: ISS tracked for days by the elements of the day it started, the file
+   refreshed by cron every morning. Looked at once a pass only, the two boxes of one rotator
+   could each read another version of the file, a moment apart, and fly a pass apart.)
 11. Elements older than STALE_DAYS when tracking starts with them (or takes them, rule 10) are
    said in the log, once for them, with their age and epoch: nothing else says that a cron job
    stopped refreshing the file (an attack pass: elements four months old were flown without a
@@ -108,6 +109,7 @@ NEXT_S = 60.0  # the status's "next" position: this far ahead
 MAX_LEAD_S = 300.0
 FLIP_SAVING_DEG = 30.0
 STALE_DAYS = 14.0  # rule 11
+LOOK_AGAIN_S = 60.0  # rule 10
 
 
 @dataclass(frozen=True)
@@ -152,7 +154,8 @@ class Tracker:
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
         self._from_file: LookupQuestion | None = None  # rule 10: to look the body up again by
-        self._looked_after: float | None = None  # rule 10: AOS of the pass waited for then
+        self._looked_at = -math.inf  # rule 10: the wall clock of the last look
+        self._kept_for: str | None = None  # rule 10: why the elements in hand were last kept
         self._stayed = False  # rule 10: parked (or stayed) after the pass, by the old elements
         self._aged: Body | None = None  # rule 11: the elements whose age was judged
 
@@ -204,22 +207,27 @@ class Tracker:
         return self._sky.answered(answer)
 
     def _renewed(self, answer: Answer) -> None:
-        """Rule 10: the body looked up again in the TLE file after a pass."""
+        """Rule 10: the body looked up again in the TLE file while a pass is waited for."""
         body, sky = answer.value, self._sky
         if answer.question != self._from_file or self.body is None or sky is None:
             return
         p = sky.pass_now
         if self.lookup is not None or (p is not None and self._utc_seen >= p.aos_s):
-            self._looked_after = None  # (a start under way decides; mid-pass: after this one)
+            self._looked_at = -math.inf  # (a start under way decides; mid-pass: after it)
             return
         if not isinstance(body, Body) or answer.failure is not None:
+            why = answer.failure or "no such satellite"
+            if why == self._kept_for:
+                return
+            self._kept_for = why
             log.warning(
                 "%s: tracking %s goes on with the elements it has: %s",
                 self._rig.rotator_id,
                 self.body.name,
-                answer.failure or "no such satellite",
+                why,
             )
             return
+        self._kept_for = None
         if body == self.body:
             return
         log.info("%s: tracking %s by the TLE file's new elements", self._rig.rotator_id, body.name)
@@ -259,7 +267,7 @@ class Tracker:
             self._flip_for, self._flip = p.aos_s, flip
         if utc < p.aos_s:  # the pass in hand has moved on past a LOS: utc <= p.los_s
             self._inform(sky, utc, p, "waiting", scene.now)
-            self._look_again(sky, p)
+            self._look_again(p, utc)
             return self._wait_for(sky, p, utc, scene)
         self._inform(sky, utc, p, "tracking", scene.now)
         return self._follow(sky, p, utc, scene)
@@ -349,12 +357,12 @@ class Tracker:
                 datetime.fromtimestamp(epoch, UTC).strftime("%Y-%m-%d %H:%M"),
             )
 
-    def _look_again(self, sky: SkyTrack, p: Pass) -> None:
-        """Rule 10: once a pass has ended, the body looked up again (once a pass waited for)."""
-        if self._from_file is None or not sky.after_pass or self.lookup is not None:
+    def _look_again(self, p: Pass, utc: float) -> None:
+        """Rule 10: the body looked up again while its pass is waited for."""
+        if self._from_file is None or self.lookup is not None:
             return
-        if self._looked_after != p.aos_s:
-            self._looked_after = p.aos_s
+        if not 0.0 <= utc - self._looked_at < LOOK_AGAIN_S:  # (a clock stepped back: at once)
+            self._looked_at = utc
             self._lookups.append(self._from_file)
 
     def _follow(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
