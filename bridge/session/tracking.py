@@ -345,7 +345,10 @@ class Tracker:
         if body.tle is None or self._aged == body:
             return
         self._aged = body
-        epoch = tle_epoch_unix(body.tle[0])
+        try:
+            epoch = tle_epoch_unix(body.tle[0])
+        except (ValueError, OverflowError):  # (sgp4 read it: a defect if it happens)
+            return
         age_days = (utc - epoch) / 86400.0
         if age_days > STALE_DAYS:
             log.warning(
