@@ -32,9 +32,11 @@ Rules:
    query owes is told). A line that comes while the next query is open is that query's, as
    ever (no line says which poll it answers, and a late answer that never comes must not eat
    the next poll's). (easycomm.py rule 10, gs232.py rule 5, rt21.py rule 5, spid.py rule 7,
-   prosistel.py rule 7, rc2800.py rule 6: a busy host gave a poll up, the next poll took its
-   answer, and that poll's own answer a line later was told on R/error as bytes that are no
-   reply, or passed as chatter that spoiled nothing, the older reading standing.)
+   prosistel.py rule 7, rc2800.py rule 6, rotorez.py rule 7: a busy host gave a poll up, the
+   next poll took its answer, and that poll's own answer a line later was told on R/error as
+   bytes that are no reply, or passed as chatter that spoiled nothing, the older reading
+   standing.) Such a line's JunkReply says so (``late``): the engine learns from it how late
+   its controller answers (session/link.py rule 12); ``owes_late`` says whether any is owed.
 """
 
 from __future__ import annotations
@@ -85,6 +87,9 @@ class JunkReason(enum.StrEnum):
     REFUSED = "refused"
 
 
+LATE_ANSWER = "a poll's answer after its time"  # rule 7: the detail of a line owed late
+
+
 @dataclass(frozen=True)
 class JunkReply:
     """Bytes that are no valid reply (power-on noise, a banner, line garbage)."""
@@ -92,6 +97,12 @@ class JunkReply:
     data: bytes
     reason: JunkReason
     detail: str = ""  # the codec's words, for a log line or a test
+
+    @property
+    def late(self) -> bool:
+        """Rule 7: a line of an answer owed by a query given up (the engine learns from it
+        how late its controller answers: link.py rule 12)."""
+        return self.reason is JunkReason.UNSOLICITED and self.detail == LATE_ANSWER
 
 
 Reply = PositionReply | VersionReply | JunkReply
@@ -283,6 +294,11 @@ class LateAnswers:
     def awaiting_reply(self) -> bool:
         raise NotImplementedError
 
+    @property
+    def owes_late(self) -> bool:
+        """Rule 7: lines of an answer to a query given up may still come."""
+        return self._late_lines > 0
+
     def _owe_late(self, lines: int) -> None:
         """Rule 7: the query open is given up; ``lines`` of its answer may still come."""
         self._late_lines = min(LATE_LINES_MAX, self._late_lines + lines)
@@ -294,7 +310,7 @@ class LateAnswers:
             return False
         self._late_lines -= 1
         self._say(raw)
-        out.append(JunkReply(raw, JunkReason.UNSOLICITED, "a poll's answer after its time"))
+        out.append(JunkReply(raw, JunkReason.UNSOLICITED, LATE_ANSWER))
         return True
 
     def _say(self, raw: bytes) -> None:

@@ -38,6 +38,11 @@ Rules:
    from the last ``AP1``. The spec says so (``unasked_moves``): the engine stops the first turn
    nobody asked for after the rotor was left short of its target (session/controller.py
    rule 10). The DCU-1 is never polled.
+7. A query given up (``expire_query``) may still be answered (base.py rule 7): a whole bearing
+   frame that comes while no query is open and its answer is owed is that late answer, said so
+   (``JunkReply.late``: the engine learns from it how late the board answers, link.py rule
+   12; before, a board that answered every poll 0.1 s late was 'not answering'). Like any
+   bearing frame nobody asked for, it is never a reading and harmless (rule 5's known junk).
 """
 
 from __future__ import annotations
@@ -52,6 +57,7 @@ from bridge.protocols.base import (
     HamlibRotType,
     JunkReason,
     JunkReply,
+    LateAnswers,
     ModelSpec,
     PositionReply,
     Reply,
@@ -100,7 +106,7 @@ def _bearing_digits(az_deg: float, *, wrap_360: bool) -> int:
     return value
 
 
-class RotorEzCodec:
+class RotorEzCodec(LateAnswers):
     """Codec for the Rotor-EZ command set. ``dcu1=True`` restricts it to the DCU-1 subset."""
 
     def __init__(self, *, dcu1: bool = False, options: bool = True) -> None:
@@ -150,6 +156,8 @@ class RotorEzCodec:
         return b"AI1;"
 
     def expire_query(self) -> None:
+        if self._queries_open:  # rule 7: its answer may still come
+            self._owe_late(1)
         self._queries_open = 0
 
     def encode_version(self) -> bytes | None:
@@ -207,6 +215,9 @@ class RotorEzCodec:
                 continue
             if digits.isdigit() and int(digits) <= 360:
                 self._flush_junk(junk, out)
+                if self._late_answer(frame, out):  # rule 7
+                    i += 4
+                    continue
                 out.append(
                     JunkReply(frame, JunkReason.UNSOLICITED, "bearing frame without a query")
                 )

@@ -10,6 +10,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import UNTRUSTED, JunkReason, JunkReply, PositionReply, VersionReply
 from bridge.protocols.rotorez import RotorEzCodec
 from tests.support import HOW, feed
+from tests.support.codecs import STOPS, given_up
 
 
 def positions(replies: list) -> list[float]:
@@ -279,3 +280,23 @@ def test_a_banner_torn_after_a_whole_one_in_the_same_read_is_harmless_at_every_c
     assert first == b"\xe0" + BANNER * 2 + BANNER[:cut] and codec.harmless(first)
     assert codec.harmless(junk_of(codec, BANNER[cut:]))
     assert not codec.harmless(junk_of(codec, BANNER + b"C2000 IDX"))
+
+
+@pytest.mark.parametrize("stop", STOPS)
+@pytest.mark.parametrize("how", HOW)
+def test_a_polls_answer_after_its_time_is_told_nowhere_and_is_no_reading(
+    stop: str, how: str
+) -> None:
+    """Rule 7: a bearing frame after its query was given up is its late answer, said so (the
+    engine learns from it how late the board answers; before, an RT-21's was, a Rotor-EZ's
+    not, and a board that answered every poll late was 'not answering'): never a reading."""
+    codec = RotorEzCodec()
+    given_up(codec, stop)
+    assert [r.az_deg for r in feed(codec, b";052", how) if isinstance(r, PositionReply)] == [52]
+    replies = feed(codec, b";053", how)
+    assert [(type(r), r.late) for r in replies if isinstance(r, JunkReply)] == [(JunkReply, True)]
+    assert len(replies) == 1 and codec.harmless(b";053")
+    replies = feed(codec, b";054", how)  # owed by no query: no late answer
+    assert len(replies) == 1 and isinstance(replies[0], JunkReply) and not replies[0].late
+    codec.encode_query()
+    assert [r.az_deg for r in feed(codec, b";055", how) if isinstance(r, PositionReply)] == [55]
