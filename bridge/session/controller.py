@@ -52,7 +52,10 @@ Rules:
    and an attack pass: the same for a jammed GS-232B whose replies went to garbage; an attack
    pass: at half a 3 s stall timeout, two lost replies took a GS-232B offline). One that never
    gave a valid reply but garbled ones is said to (the wrong baud rate looks so), not to give
-   none. (Reviews: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
+   none. A controller whose answers came, later than the bridge waits for one (link.py rule
+   12), since the last valid reply is offline all the same, and the error says it answers, how
+   late, and how long the bridge waits ('stopped answering' or 'does not answer' alone was
+   false). (Reviews: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
    stayed online 12 s and was called stalled at 10 s, an error that blamed the brake; a slow one
    whose last movement was seconds before its last valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
@@ -751,6 +754,8 @@ class Controller:
                     self._motion_events(events, now)
                     if events:
                         continue  # the answer to the target, reported as such: no junk
+                if reply.late:  # link.py rule 12: it answers, late
+                    link.answered_late(now)
                 link.add_junk(reply.data, now)
                 link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
@@ -1353,6 +1358,7 @@ class Controller:
             elif stopped:  # to its end, not a stall)
                 why += " while the rotor turned to its target"
             why += "" if by_silence else ": a noisy line?"
+            why += self._late_words(link, now - unread_s)
             self._lose_motion(mo.link_down)
             said = None
             if stopped:
@@ -1373,10 +1379,25 @@ class Controller:
                     f"controller on {cfg.port} answers only garbled replies: the wrong baud "
                     "rate or model, or a noisy line?"
                 )
+            why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))
         busy = busy or self.motion.state is mo.MOVING or now < self._watch_until
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
+
+    def _late_words(self, link: Link, heard_t: float) -> str:
+        """Rule 2: what an offline's error adds where the controller answered since ``heard_t``,
+        but later than the bridge waits (link.py rule 12)."""
+        after_s = link.late_since(heard_t)
+        if after_s is None:
+            return ""
+        reply_s, most_s = link.reply_timeout_s, 2 * link.reply_timeout_s
+        return (
+            f"; it answers, late: {after_s:.2g} s after a poll, and the bridge waits "
+            f"{reply_s:g} s for the {self.cfg.spec.display_name} (up to {most_s:g} s for one "
+            "that answers late every time): a slow USB adapter or a serial server on the "
+            "network?"
+        )
 
     @property
     def _least_silence_s(self) -> float:
@@ -1420,7 +1441,7 @@ class Controller:
         progress_t, cfg = self.motion.progress_t, self.cfg
         if progress_t is None or mo.at_target(self.motion, cfg.motion):  # (at it: no stall)
             return math.inf
-        late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
+        late_s = cfg.moving_poll_interval_s + link.reply_wait_s
         return progress_t + cfg.motion.stall_timeout_s - late_s
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:

@@ -108,6 +108,23 @@ Rules:
    half-duplex line with 80 bytes still coming, their tail closed the re-poll's exchange and
    a report from before a point ended its slew: the next ``z`` went into the slew; one noise
    byte before every GS-232B answer had it polled 44 times a second.
+12. A controller that answers late: a line of the answer to the question given up last that
+   comes before the next question (protocols/base.py rule 7: never a reading) says how long
+   after that question it came (``answered_late``); from then on every answer is waited for
+   that much past the reply time, and OVERDUE_SHARE of it more (JUNK_QUIET_S at least), up to
+   one reply time more (``reply_wait_s``: at most twice the model's reply time, so that a lost
+   reply still ends in time and, on a half-duplex line, a stop waits no longer than that for an
+   answer under way). Each answer in the reply time gives back OVERDUE_EASE of it. So that
+   such an answer can come before the next question (which would take it for its own: no line
+   says which poll it answers), a poll given up with nothing read at all, the first since a
+   valid reply, holds the next poll until twice the reply time from it, or until every line
+   it owes came (a verdict's poll, rule 2, does not wait; a poll of several frames neither
+   waits nor learns, as in rule 7). A controller later than the longest wait goes offline
+   after its silence timeout as one that gives nothing, but the error says it answers, and
+   how late (controller.py rule 2). (An RT-21 behind a serial server, 0.1 s past its 0.3 s,
+   was offline from the start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next
+   poll went as the last was given up, had each poll take the one before's answer: its bearing
+   published 5 degrees behind a turning rotor.)
 """
 
 from __future__ import annotations
@@ -116,7 +133,14 @@ import math
 from collections import deque
 from dataclasses import replace
 
-from bridge.protocols.base import Codec, JunkReason, JunkReply, ModelSpec, PositionReply
+from bridge.protocols.base import (
+    Codec,
+    JunkReason,
+    JunkReply,
+    LateAnswers,
+    ModelSpec,
+    PositionReply,
+)
 from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 
 JUNK_QUIET_S = 0.05
@@ -125,6 +149,8 @@ SETTLE_MIN_S = 0.005  # rule 9: at a high baud rate, a little longer than three 
 LATE_MAX_S = 0.05  # rule 7: a USB adapter's latency timer (16 ms by default), and more
 LATE_EASE = 1 / 256  # rule 7: of the learned lateness, given back per reply whole in time
 VERDICT_SLACK_S = 0.2  # rule 2: a verdict's reply is owed this long after it can be whole
+OVERDUE_SHARE = 0.25  # rule 12: a late answer's lateness past the reply time, waited on top
+OVERDUE_EASE = 1 / 16  # rule 12: of the learned overdue time, given back per answer in time
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
@@ -152,6 +178,10 @@ class Link:
         self._last_late = 0.0  # rule 7: how late the last polled reply was (0: in time)
         self._learns = False  # rule 7: the poll was one frame
         self.late_s = 0.0  # rule 7: how late this controller's replies have been whole
+        self.overdue_s = 0.0  # rule 12: waited past the reply time for a controller's answer
+        self._given_up_t = -math.inf  # rule 12: when the question given up last went out
+        self._late_answer: tuple[float, float] | None = None  # rule 12: when, how long after
+        self._late_hold_until = -math.inf  # rule 12: no poll before then (an answer late)
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._answered_t = now  # rule 2: when the question the last valid reply answered went out
         self._verdict = False  # rule 2: the next poll is a verdict
@@ -243,7 +273,8 @@ class Link:
         self._last_write_t = now
         self._last_axis = self._axis(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
-            self._reply_deadline = now + self.reply_timeout_s
+            self._reply_deadline = now + self.reply_wait_s
+            self._given_up_t = -math.inf  # rule 12: its late answer is this one's now
             if self._asked_t <= self._heard_from():  # rule 2
                 self._first_asked_t = now
             self._asked_t = now
@@ -475,8 +506,43 @@ class Link:
         again = self._ask_garbled(now)
         self.codec.expire_query()
         self._reply_deadline = None
+        if self._slew is None:  # rule 12: its answer may still come
+            self._given_up_t = self._asked_t
+            unread = self._read_t < self._asked_t and not again
+            first = self._first_asked_t == self._asked_t  # (the first since a valid reply)
+            if unread and first and self._learns and self._owes_late():
+                self._late_hold_until = self._asked_t + 2 * self.reply_timeout_s
         self.end_slew(now)
         return again
+
+    def _owes_late(self) -> bool:
+        """Rule 12: lines of an answer given up may still come (the codec's rule 7)."""
+        return isinstance(self.codec, LateAnswers) and self.codec.owes_late
+
+    @property
+    def reply_wait_s(self) -> float:
+        """Rule 12: how long an answer is waited for: the reply time and what was learned."""
+        return self.reply_timeout_s + self.overdue_s
+
+    def answered_late(self, now: float) -> None:
+        """Rule 12: a line of the answer to the question given up last came now (the codec's
+        late answer, protocols/base.py rule 7): the next questions wait for one as late, up to
+        one reply time more."""
+        if self._reply_deadline is not None or self._given_up_t == -math.inf:
+            return
+        after_s = now - self._given_up_t
+        self._late_answer = now, after_s
+        if not self._owes_late():  # (it came whole: the next question may go)
+            self._late_hold_until = -math.inf
+        past_s = after_s - self.reply_timeout_s
+        wait_s = past_s + max(JUNK_QUIET_S, past_s * OVERDUE_SHARE)
+        self.overdue_s = min(self.reply_timeout_s, max(self.overdue_s, wait_s))
+
+    def late_since(self, t: float) -> float | None:
+        """Rule 12: how long after its question the last late answer came, if one came after
+        ``t`` (None: none did)."""
+        late = self._late_answer
+        return late[1] if late is not None and late[0] > t else None
 
     def end_slew(self, now: float) -> bool:
         """The slew (if any) is over without a reading: silence counts from now (rule 2).
@@ -490,6 +556,8 @@ class Link:
     def got_reading(self, now: float) -> None:
         """A valid position: the slew (if any) is over and the reply is no longer owed."""
         if not self.codec.awaiting_reply():
+            if self._reply_deadline is not None and now - self._asked_t <= self.reply_timeout_s:
+                self.overdue_s -= self.overdue_s * OVERDUE_EASE  # rule 12: answered in time
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a reading, which gives a poll its
             self._repolled = False  # re-poll back (its last frame's: rule 10's two axes)
@@ -548,6 +616,8 @@ class Link:
             return False
         if now < self._refusal_until:  # rule 4
             return False
+        if now < self._late_hold_until and not self._verdict:  # rule 12
+            return False
         if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
             return False
         asked = self.codec.encode_query()
@@ -561,6 +631,7 @@ class Link:
             self._verdict = False
             last_t = now + (len(asked) - 1) * self._gap_s if isinstance(asked, list) else now
             whole_s = (len(query) + self.spec.reply_bytes + 1) * self._byte_s + self.late_s
+            whole_s += self.overdue_s  # rule 12: a controller that answers late
             by = last_t + whole_s + self._settle_s + VERDICT_SLACK_S
             self._reply_deadline = min(self._reply_deadline, by)
         self._next_poll = _grid(now, interval_s)
@@ -636,7 +707,8 @@ class Link:
         if self.spec.can_report_position:
             deadline = self._reply_deadline
             if deadline is None:
-                times.append(max(self._next_poll, self._paced_from(), self._refusal_until))
+                hold = -math.inf if self._verdict else self._late_hold_until  # rule 12
+                times.append(max(self._next_poll, self._paced_from(), self._refusal_until, hold))
             elif self._held is None:  # rule 9: not overdue while its reading is held
                 times.append(deadline)
                 over = self._garbled_over_t() if self._garbled else None

@@ -16,6 +16,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
+from bridge.protocols import REGISTRY
 from tests.engine.virtual import Sent, VirtualRotator, settled_at
 
 Rig = Callable[..., VirtualRotator]
@@ -121,3 +122,107 @@ def test_an_rc2800_always_answering_after_its_reply_time_stays_online_and_turns(
     assert all(s.available for s in v.published(since=t))
     assert v.truth().az_deg == pytest.approx(100.0, abs=1.0)
     assert v.status.bearing_deg == pytest.approx(100.0, abs=1.0)
+
+
+# link.py rule 12: a controller whose every answer comes after its model's reply time (a slow
+# USB adapter, a serial server on the network): its poll, and how much later than the reply
+# time it answers
+ALWAYS_LATE = {
+    "rt21": b"BI1;",
+    "easycomm3": b"AZ EL\n",
+    "rotorcard": b"AI1;",
+    "gs232b": b"C2\r",
+    "md01": SPID_STATUS,
+    "prosistel-combi": b"\x02A?\r\x02B?\r",
+}
+
+
+@pytest.mark.parametrize("model", sorted(ALWAYS_LATE))
+def test_a_controller_that_always_answers_late_is_online_and_shown_where_the_rotor_is(
+    rig: Rig, model: str
+) -> None:
+    """Every answer 0.1 s past the reply time. Before: offline at once ('does not answer':
+    every answer was told harmless as a late one) or, on a GS-232B, whose next poll went
+    right when one was given up, each poll took the answer to the one before: the bearing
+    published 5 degrees behind a turning rotor."""
+    own_speed = model in ("md01", "rotorcard")  # (their emulators' own: 6 deg/s and less)
+    v = rig(
+        model,
+        settings={"idle_poll_interval_s": 1.0},
+        emulator={
+            "start_az_deg": 10,
+            "processing_delay_s": reply_time_s(model) + 0.1,
+            **({} if own_speed else {"az_speed_deg_s": 6.0}),
+        },
+    )
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online at rest")
+    assert v.status.bearing_deg == pytest.approx(10, abs=1.0)
+    written: list[tuple[float, float]] = []
+
+    def record(wire: bytes, now: float) -> bytes:
+        if wire == ALWAYS_LATE[model]:
+            written.append((now, v.truth().az_deg))
+        return wire
+
+    v.to_device = record
+    el = 0 if v.cfg.spec.has_elevation else None
+    t = v.now
+    v.target(60, el)
+    v.run_until(settled_at(60, el), 120, "at 60")
+    step = 1.0  # whole degrees at the coarsest
+    for at, status in v.statuses:
+        if at > t and status.bearing_deg is not None:
+            asked = [az for w, az in written if w < at]  # where it was at the last poll
+            assert not asked or status.bearing_deg >= asked[-1] - step, (at - t, status)
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))
+
+
+def reply_time_s(model: str) -> float:
+    """The model's reply time."""
+    return REGISTRY[model].reply_timeout_s
+
+
+@pytest.mark.parametrize("late_s", [0.75, 0.9])
+def test_a_controller_that_answers_later_than_the_bridge_waits_is_offline_saying_so(
+    rig: Rig, late_s: float
+) -> None:
+    """An RT-21 (reply time 0.3 s) that answers later than twice that, from the start: the
+    error says it answers, how late, and what the bridge waits (before: 'does not answer')."""
+    v = rig("rt21", emulator={"start_az_deg": 10, "processing_delay_s": late_s})
+    v.run_until(lambda h: h.errors("serial"), 10, "the error")
+    why = v.errors("serial")[0].message
+    assert why.startswith("controller on /dev/ttyVIRTUAL does not answer; it answers, late: ")
+    assert f"late: {late_s:.2g}" in why or f"late: {late_s + 0.02:.2g}" in why, why
+    assert "the bridge waits 0.3 s for the RT-21 (up to 0.6 s" in why
+
+
+def test_a_controller_that_goes_slow_mid_session_is_offline_saying_it_answers_late(
+    rig: Rig,
+) -> None:
+    """An RT-21 answering in time, then 0.75 s after each poll: offline as ever, after its
+    silence timeout, but the error says it answers, late (before: 'stopped answering' alone,
+    which is false)."""
+    v = rig("rt21", settings={"silence_timeout_s": 4.0}, emulator={"start_az_deg": 10})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 10, "online at rest")
+    v.answer_after(0.75)
+    v.run_until(lambda h: h.errors("serial"), 10, "the error")
+    why = v.errors("serial")[0].message
+    assert why.startswith(
+        "controller on /dev/ttyVIRTUAL stopped answering (no valid reply for 4 s); it answers,"
+        " late: 0.77 s after a poll"
+    ), why
+
+
+def test_a_controller_that_goes_a_little_slow_mid_turn_stays_online(rig: Rig) -> None:
+    """An RT-21 that starts answering 0.45 s after each poll (0.15 s past its reply time)
+    halfway through a turn: online throughout, no error, no bearing older than the last poll
+    published, and it arrives (before: offline 3 s later, the turn stopped)."""
+    v, written = turning(rig, "rt21")
+    t = v.now
+    v.answer_after(0.45)
+    v.run_until(settled_at(300), 120, "at 300")
+    for at, status in v.statuses:
+        if at > t + 1.0 and status.bearing_deg is not None:  # (from the second poll on)
+            asked = [az for w, az in written if w < at]
+            assert not asked or status.bearing_deg >= asked[-1] - 1.0, (at - t, status)
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))

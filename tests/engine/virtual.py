@@ -260,6 +260,11 @@ class VirtualRotator:
         once and in order (a loaded host, a USB adapter that hands the bytes over late)."""
         self._delayed_until = self.now + seconds
 
+    def answer_after(self, seconds: float) -> None:
+        """From now on the device starts each answer ``seconds`` after the frame it answers
+        (a controller gone slow, a serial server on the network, a slow USB adapter)."""
+        self.device._tx.processing_delay_s = seconds  # type: ignore[attr-defined]
+
     def stopped_with_late_answers(self, poll: bytes, late_s: float) -> float:
         """A STOP (the stop lane's, and the main connection's copy 50 ms later) right after
         ``poll`` went out, the device's output from then on held ``late_s`` (past the poll's
