@@ -1394,7 +1394,7 @@ class Controller:
         reply_s, most_s = link.reply_timeout_s, 2 * link.reply_timeout_s
         return (
             f"; it answers, late: {after_s:.2g} s after a poll, and the bridge waits "
-            f"{reply_s:g} s for the {self.cfg.spec.display_name} (up to {most_s:g} s for one "
+            f"{reply_s:.2g} s for the {self.cfg.spec.display_name} (up to {most_s:.2g} s for one "
             "that answers late every time): a slow USB adapter or a serial server on the "
             "network?"
         )

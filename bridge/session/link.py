@@ -116,15 +116,16 @@ Rules:
    reply still ends in time and, on a half-duplex line, a stop waits no longer than that for an
    answer under way). Each answer in the reply time gives back OVERDUE_EASE of it. So that
    such an answer can come before the next question (which would take it for its own: no line
-   says which poll it answers), a poll given up with nothing read at all, the first since a
-   valid reply, holds the next poll until twice the reply time from it, or until every line
-   it owes came (a verdict's poll, rule 2, does not wait; a poll of several frames neither
-   waits nor learns, as in rule 7). A controller later than the longest wait goes offline
-   after its silence timeout as one that gives nothing, but the error says it answers, and
-   how late (controller.py rule 2). (An RT-21 behind a serial server, 0.1 s past its 0.3 s,
-   was offline from the start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next
-   poll went as the last was given up, had each poll take the one before's answer: its bearing
-   published 5 degrees behind a turning rotor.)
+   says which poll it answers), a poll (not a stop's or a target's exchange) given up with
+   nothing read at all, the first since a valid reply, holds the next poll until twice the
+   reply time from it, or until every line it owes came. A verdict's poll (rule 2) does not
+   wait, nor does a poll after one of several frames (RC2800's two axes: as in rule 7, their
+   timing is not one answer's). A controller later than the longest wait goes offline after
+   its silence timeout as one that gives nothing, but the error says it answers, and how late
+   (controller.py rule 2). (An RT-21 behind a serial server, 0.1 s past its 0.3 s, was offline
+   from the start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next poll went as
+   the last was given up, had each poll take the one before's answer: its bearing published
+   5 degrees behind a turning rotor.)
 """
 
 from __future__ import annotations
@@ -182,6 +183,7 @@ class Link:
         self._given_up_t = -math.inf  # rule 12: when the question given up last went out
         self._late_answer: tuple[float, float] | None = None  # rule 12: when, how long after
         self._late_hold_until = -math.inf  # rule 12: no poll before then (an answer late)
+        self._polled_t = -math.inf  # rule 12: when the last poll went out
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._answered_t = now  # rule 2: when the question the last valid reply answered went out
         self._verdict = False  # rule 2: the next poll is a verdict
@@ -510,7 +512,8 @@ class Link:
             self._given_up_t = self._asked_t
             unread = self._read_t < self._asked_t and not again
             first = self._first_asked_t == self._asked_t  # (the first since a valid reply)
-            if unread and first and self._learns and self._owes_late():
+            polled = self._polled_t == self._asked_t and self._learns  # (one frame's poll)
+            if unread and first and polled and self._owes_late():
                 self._late_hold_until = self._asked_t + 2 * self.reply_timeout_s
         self.end_slew(now)
         return again
@@ -638,6 +641,7 @@ class Link:
         self._repolled, self._repoll_due = self._repoll_due, False  # rule 11
         self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
         self._learns = not isinstance(asked, list) or len(asked) == 1
+        self._polled_t = self._asked_t  # rule 12: the question is a poll's
         self._hold_base = now + (len(query) + self._hold_bytes + 1) * self._byte_s
         self._hold_until = self._hold_base + (self.late_s if self._learns else 0.0)
         return True

@@ -226,3 +226,28 @@ def test_a_controller_that_goes_a_little_slow_mid_turn_stays_online(rig: Rig) ->
             asked = [az for w, az in written if w < at]
             assert not asked or status.bearing_deg >= asked[-1] - 1.0, (at - t, status)
     assert v.errors() == [] and all(s.available for s in v.published(since=t))
+
+
+def test_a_stop_to_a_spid_that_answers_late_waits_no_longer_than_twice_its_reply_time(
+    rig: Rig,
+) -> None:
+    """An MD-01's line carries one frame at a time (half duplex): a STOP right after a poll
+    waits for the answer under way, which this one sends 0.25 s past its reply time, but
+    never longer than twice the reply time from the poll (link.py rule 12's bound); and the
+    rotor stops where it is (before: offline from the start, no turn at all)."""
+    reply_s = reply_time_s("md01")
+    v = rig("md01", settings={"idle_poll_interval_s": 1.0}, emulator={"start_az_deg": 10})
+    v.answer_after(reply_s + 0.25)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online at rest")
+    v.target(60, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 15, 60, "turning")
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, SPID_STATUS), 5, "a poll just written")
+    t = v.now
+    stop = v.cfg.spec.codec_factory().encode_stop()
+    v.stop()
+    v.run_until(lambda h: any(w.t >= t and w.data == stop for w in h.writes), 5, "the stop")
+    sent = next(w.t for w in v.writes if w.t >= t and w.data == stop)
+    assert sent - t <= 2 * reply_s
+    v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 10, "stopped")
+    assert v.truth().az_deg < 60 and v.errors() == []
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1.0)
