@@ -35,6 +35,11 @@ Rules:
    would show).
 5. ``delivered(topic, payload)``: the first delivery of that exact message, waited for up to a
    timeout (the kernel stamped it on arrival; only our thread may be late to read it).
+6. Stamps live before the probe is handed out: Linux turns receive stamps on for the whole
+   system in a work item of its own after the first socket asks (``net_enable_timestamp``,
+   deferred), and until it has run, packets arrive unstamped: a message then was never
+   recorded, a miss (seen in a test on a loaded host). So the probe also subscribes to a topic
+   of its own and publishes to it until a copy comes back stamped, or says it cannot.
 """
 
 from __future__ import annotations
@@ -78,6 +83,12 @@ def subscribe_packet(packet_id: int, filters: list[str]) -> bytes:
     return b"\x82" + _length(len(body)) + body
 
 
+def publish_packet(topic: str, payload: bytes) -> bytes:
+    """A QoS 0 PUBLISH (rule 6's own copy)."""
+    body = _text(topic) + payload
+    return b"\x30" + _length(len(body)) + body
+
+
 def clock_offset_ns() -> tuple[int, int]:
     """time.time_ns() - time.monotonic_ns() as the narrowest of three bracketed readings, and
     that bracket's width (the offset is within half of it)."""
@@ -113,10 +124,12 @@ class DeliveryProbe:
             kind, body, _ = self._packet()
             if kind != 0x20 or body[1:2] != b"\x00":
                 raise ProbeError(f"the broker refused the probe: {kind:#x} {body.hex()}")
-            self._sock.sendall(subscribe_packet(1, self.filters))
+            own = f"rotor-bridge-benchmark/{client_id or id(self)}/stamped"  # rule 6
+            self._sock.sendall(subscribe_packet(1, [*self.filters, own]))
             kind, body, _ = self._packet()
             if kind != 0x90 or body[:2] != b"\x00\x01" or any(c & 0x80 for c in body[2:]):
                 raise ProbeError(f"the broker refused the probe's subscription: {body.hex()}")
+            self._stamps_live(own, timeout_s)
         except BaseException:
             self._sock.close()
             raise
@@ -125,6 +138,20 @@ class DeliveryProbe:
         self.offset_error_s = width / 2e9
         self._thread = threading.Thread(target=self._read, name="delivery-probe", daemon=True)
         self._thread.start()
+
+    def _stamps_live(self, own: str, timeout_s: float) -> None:
+        """Rule 6: a copy of our own message comes back stamped, or ProbeError."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            self._sock.sendall(publish_packet(own, b"?"))
+            while True:
+                kind, _body, stamp = self._packet()
+                if kind >> 4 == 3:
+                    break
+            if stamp is not None:
+                return
+            time.sleep(0.01)  # (the kernel's work item is no event to wait on)
+        raise ProbeError("the kernel does not stamp the probe's reads (SO_TIMESTAMPNS)")
 
     # -- reading (its own thread, once connected) -------------------------------------------
     def _exact(self, n: int) -> tuple[bytes, int | None]:
