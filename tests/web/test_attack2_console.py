@@ -4,9 +4,10 @@ on an emulated controller (pty) and a real mosquitto.
 
 Tests marked ``DEFECT`` in their docstring FAIL on the code they were written against (each is
 a finding of the review); the others are attacks that held and stay as regression guards.
-Failing (6), by severity:
+Failing (7), by severity:
 - high: test_behind_a_reverse_proxy_64_tokenless_websockets_keep_the_operators_stop_out
 - medium: test_the_operators_stop_gets_through_while_silent_sockets_fill_every_slot,
+  test_a_click_held_up_on_the_way_does_not_win_over_the_click_the_page_sent_after_it,
   test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop_by_mqtt,
   test_a_page_whose_token_ran_out_can_still_stop_a_turning_rotor
 - low: test_the_page_limit_counts_websockets_still_waiting_for_their_token,
@@ -486,6 +487,34 @@ def test_a_click_the_page_numbered_after_its_stop_is_not_refused_as_sent_before_
         client.command("hf", command="stop")
     status_line = answer.split(b"\r\n", 1)[0]
     assert status_line.endswith(b" 200 OK"), answer.decode(errors="replace")[-300:]
+
+
+def test_a_click_held_up_on_the_way_does_not_win_over_the_click_the_page_sent_after_it(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """DEFECT (medium, unexpected motion): the operator clicks one bearing, then at once a
+    second. The browser sends each click on a connection of its own; the first is held up on
+    the way (a lost packet on Wi-Fi, a slow proxy) and reaches the bridge after the second.
+    The bridge carried it out: the rotor turned to the first click, the one the operator
+    replaced, although the page numbered it (``seq``) before the second."""
+    rig, client = console
+    page = "tab-a"
+    start = rig.emu.state().az_deg
+    first, second = (200.0, 60.0) if abs(start - 200.0) > 60.0 else (60.0, 300.0)
+    body = json.dumps({"command": "target", "az": first, "page": page, "seq": 1}).encode()
+    late = socket.create_connection(("127.0.0.1", client.port))
+    head = client.command_head("hf", body)
+    try:
+        late.sendall(head + body[:10])  # the first click: begun, not all there yet
+        assert client.command("hf", command="target", az=second, page=page, seq=2).status == 200
+        late.sendall(body[10:])  # the first click's last bytes arrive
+        answer = late.recv(4096)
+    finally:
+        late.close()
+    status_line = answer.split(b"\r\n", 1)[0]
+    assert status_line.endswith(b" 409 Conflict"), answer.decode(errors="replace")[-300:]
+    assert b'"stale"' in answer
+    rig.arrived("hf", second)
 
 
 def test_a_click_from_a_new_page_after_a_stop_is_carried_out(

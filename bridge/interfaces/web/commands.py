@@ -28,6 +28,12 @@ Rules:
    before a STOP or lock ON the same page sent after it, however late it comes; but not one
    the same page numbered after its own STOP, the latest there is, that merely overtook it. A
    stop, a lock ON and tracking off are never stale.
+5a. Among a page's other commands the newest it numbered wins: one numbered before another
+   command of the same page that the console already handed to the judge is refused as stale
+   (``OVERTAKEN``), however late it comes. The browser sends each click on a connection of
+   its own, and a click held up on the way reached the bridge after the click that replaced
+   it and turned the rotor there (a review: the operator clicked 200 and then 60, the rotor
+   ended at 200).
 """
 
 from __future__ import annotations
@@ -59,6 +65,7 @@ from bridge.interfaces.web.port import ConsoleRotator
 MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
 STALE = "sent before a STOP or lock ON that came first: not carried out"
+OVERTAKEN = "sent before a newer command of the same page that came first: not carried out"
 
 
 class BadCommand(ValueError):
@@ -263,6 +270,7 @@ class Order:
         # rotator -> the console's last halt: when it was carried out, the page and its number
         self._last: dict[str, tuple[float, str | None, int | None]] = {}
         self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
+        self._took_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: the same
 
     def stale(
         self, rotator_id: str, cmd: WebCommand, started: float, halted_s: float = -math.inf
@@ -277,6 +285,9 @@ class Order:
             last_seq = self._halt_seq.get((str(cmd.page), rotator_id))
             if last_seq is not None and cmd.seq is not None and cmd.seq < last_seq:
                 return STALE
+            took = self._took_seq.get((str(cmd.page), rotator_id))
+            if took is not None and cmd.seq is not None and cmd.seq < took:
+                return OVERTAKEN  # rule 5a
         at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
         latest = max(at, halted_s)
         if started < latest:
@@ -286,6 +297,13 @@ class Order:
             if not (own and cmd.seq is not None and seq is not None and cmd.seq > seq):
                 return STALE
         return None
+
+    def took(self, rotator_id: str, cmd: WebCommand) -> None:
+        """Rule 5a: a command the page numbered, not a halt, handed to the judge (whatever the
+        judge says: what the page sent before it is older all the same)."""
+        if cmd.halts() or cmd.page is None or cmd.seq is None:
+            return
+        _keep(self._took_seq, (cmd.page, rotator_id), cmd.seq)
 
     def carried(self, rotator_id: str, cmd: WebCommand) -> bool:
         """Whether ``cmd`` is a halt the page numbered and the console carried out already, as
@@ -307,10 +325,14 @@ class Order:
         remote's, its broker away) is kept and sent first on reconnect, so what the page
         numbered before it is stale all the same (not ``carried``: its other copy still goes)."""
         if cmd.page is not None and cmd.seq is not None:
-            key = (cmd.page, rotator_id)
-            self._halt_seq[key] = max(cmd.seq, self._halt_seq.pop(key, cmd.seq))
-            while len(self._halt_seq) > PAGES_KEPT:
-                self._halt_seq.popitem(last=False)
+            _keep(self._halt_seq, (cmd.page, rotator_id), cmd.seq)
+
+
+def _keep(kept: OrderedDict[tuple[str, str], int], key: tuple[str, str], seq: int) -> None:
+    """The highest ``seq`` of ``key``, most recent last, PAGES_KEPT keys at most."""
+    kept[key] = max(seq, kept.pop(key, seq))
+    while len(kept) > PAGES_KEPT:
+        kept.popitem(last=False)
 
 
 def _no_constant(name: str) -> object:

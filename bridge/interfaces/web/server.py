@@ -591,6 +591,7 @@ class WebConsole:
             why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
+        self._order.took(rot.id, cmd)  # (commands.py rule 5a)
         try:
             if far is not None and away:  # rule 5
                 if halt:
