@@ -282,3 +282,22 @@ def test_with_a_password_the_page_asks_for_it_and_says_when_it_is_wrong(
         expect(page.locator("#stop")).to_be_visible()
     finally:
         page.context.close()
+
+
+def test_a_track_choice_that_could_not_be_sent_is_not_shown_as_chosen(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """The user picks the sun in *Track* while the bridge cannot be reached: nothing was sent,
+    so the select goes back to what the bridge tracks (nothing), as it does for a refusal; it
+    kept showing "Sun" beside a status that tracks nothing."""
+    page = console_page
+    expect(page.locator("#track-row")).to_be_visible()
+    expect(page.locator("#track")).to_have_value("off")
+    page.route("**/command", lambda route: route.abort())
+    try:
+        page.select_option("#track", "sun")
+        expect(page.locator("#message")).to_contain_text("nothing was sent")
+        expect(page.locator("#track")).to_have_value("off")
+    finally:
+        page.unroute("**/command")
+    expect(page.locator("#tracking-info")).to_be_hidden()

@@ -11,6 +11,9 @@
 //    never activates the focused button: whoever presses Space to stop must not park.
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
 //    same rotator within 2 s is one refusal, shown once.
+// 6. A control shows what the bridge's status says, never only what the user asked: the Track
+//    select, whose choice a browser shows at once, goes back to the status's when its command
+//    was refused or not sent at all (the bridge unreachable, the session ended).
 
 import { MapView, RIM_KM, norm360 } from './map.js';
 import { SkyView } from './sky.js';
@@ -414,7 +417,6 @@ async function send(command, id = app.selected) {
     }
     const answer = await res.json().catch(() => ({}));
     showMessage(id, answer.error || `refused (HTTP ${res.status})`, 'refusal');
-    if (body.command === 'track') renderStatus(id, app.status.get(id) || {});
     return false;
   }
   showMessage(id, 'no session: nothing was sent', 'error');
@@ -433,7 +435,13 @@ $('nudge-down').addEventListener('click', () => send({ command: 'nudge', d_az: 0
 $('nudge-up').addEventListener('click', () => send({ command: 'nudge', d_az: 0, d_el: step() }));
 $('path-long').addEventListener('click', () => send({ command: 'path', long_path: true }));
 $('path-short').addEventListener('click', () => send({ command: 'path', long_path: false }));
-$('track').addEventListener('change', (e) => send({ command: 'track', body: e.target.value }));
+// rule 6: a choice not carried out (refused, or never sent) goes back to what the bridge tracks
+$('track').addEventListener('change', (e) => {
+  const id = app.selected;
+  send({ command: 'track', body: e.target.value }, id).then((ok) => {
+    if (!ok && id === app.selected) renderStatus(id, app.status.get(id) || {});
+  });
+});
 $('locator-form').addEventListener('submit', (e) => {
   e.preventDefault();
   const locator = $('locator').value.replace(/\s+/g, '');
