@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from playwright.sync_api import Browser, Page, Request, expect
+from playwright.sync_api import APIResponse, Browser, Page, Request, Route, expect
 
 from bridge.core import geo
 from bridge.interfaces.web.projection import RIM_KM
@@ -301,3 +301,39 @@ def test_a_track_choice_that_could_not_be_sent_is_not_shown_as_chosen(
     finally:
         page.unroute("**/command")
     expect(page.locator("#tracking-info")).to_be_hidden()
+
+
+def test_a_late_answer_to_an_older_click_does_not_hide_why_the_newer_one_was_refused(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """On a slow network the answer to a click comes after the next click's: the operator
+    clicks a bearing (carried out, its answer slow), then a bearing in the keep-out sector
+    (refused, the page says why). The first click's late "ok" wiped the refusal off the page
+    and wrote "sent" for the first click under the map, so the page no longer said why the
+    last click did nothing."""
+    page, rig = console_page, console_bridge.rig
+    held: list[tuple[Route, APIResponse]] = []
+
+    def slow_first(route: Route) -> None:
+        if held:
+            route.continue_()
+            return
+        held.append((route, route.fetch()))  # carried out at once, its answer held back
+
+    page.route("**/command", slow_first)
+    try:
+        first = _far_from(rig.emu.state().az_deg)
+        click_map(page, first)
+        expect(page.locator("#state")).to_have_text("moving")  # (the handler ran meanwhile)
+        assert len(held) == 1
+        expect(page.locator("#pointer")).to_contain_text("sending")  # no answer yet
+        click_map(page, sum(KEEP_OUT) / 2, radius=0.6)
+        expect(page.locator("#message")).to_contain_text("keep-out")
+        expect(page.locator("#pointer")).to_contain_text("refused")
+        route, answer = held[0]
+        route.fulfill(response=answer)
+        page.wait_for_function("() => window.rotorConsole.answered === 2")  # the late one read
+        expect(page.locator("#message")).to_contain_text("keep-out")
+        expect(page.locator("#pointer")).to_contain_text("refused")
+    finally:
+        page.unroute("**/command")

@@ -10,7 +10,10 @@
 // 4. STOP is the #stop button, Escape anywhere, and Space anywhere outside a text box. Space
 //    never activates the focused button: whoever presses Space to stop must not park.
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
-//    same rotator within 2 s is one refusal, shown once.
+//    same rotator within 2 s is one refusal, shown once. Only the answer to the newest command
+//    sent to a rotator clears its message, and only the newest click on the map writes its
+//    outcome under the map: on a slow network an older click's late "ok" wiped the refusal of
+//    the click after it.
 // 6. A control shows what the bridge's status says, never only what the user asked: the Track
 //    select, whose choice a browser shows at once, goes back to the status's when its command
 //    was refused or not sent at all (the bridge unreachable, the session ended).
@@ -23,7 +26,7 @@ const LATENCIES_MAX = 10000;
 const SAME_REFUSAL_MS = 2000;
 
 const $ = (id) => document.getElementById(id);
-const metrics = { latencies_ms: [] };
+const metrics = { latencies_ms: [], answered: 0 }; // answered: commands whose answer was read
 window.rotorConsole = metrics;
 
 const app = {
@@ -379,10 +382,12 @@ function onErrorEvent(doc) {
 // numbered before a STOP or lock ON it already carried out, whichever arrives first.
 const PAGE_ID = Array.from(crypto.getRandomValues(new Uint8Array(8)), (b) => b.toString(16).padStart(2, '0')).join('');
 let sequence = 0;
+const newestSent = new Map(); // rotator id -> the seq of the newest command sent to it (rule 5)
 
 async function send(command, id = app.selected) {
   if (!id) return false;
   const body = { ...command, page: PAGE_ID, seq: ++sequence };
+  newestSent.set(id, body.seq);
   const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
   if (halts) sendLive({ ...body, rotator: id }); // and by POST: two ways, either will do
   const url = `api/rotators/${encodeURIComponent(id)}/command`;
@@ -397,8 +402,9 @@ async function send(command, id = app.selected) {
       showMessage(id, 'the bridge is not reachable: nothing was sent', 'error');
       return false;
     }
+    metrics.answered += 1;
     if (res.ok) {
-      clearMessage(id);
+      if (newestSent.get(id) === body.seq) clearMessage(id); // rule 5: not a newer one's refusal
       return true;
     }
     if (res.status === 401 && attempt === 0) {
@@ -508,11 +514,15 @@ $('map').addEventListener('click', (e) => {
     : { command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) }, describe(p, long));
 });
 
+let clicks = 0; // clicks on the map (rule 5)
+
 /** A command from the map (a click on it or on a spot), what it was said beside the map. */
 function aim(command, said) {
   pointerNote = `sending: ${said}`;
   pointer.textContent = pointerNote;
+  const click = ++clicks;
   send(command).then((ok) => {
+    if (click !== clicks) return; // rule 5: a late answer to an older click says nothing now
     pointerNote = `${ok ? 'sent' : 'refused'}: ${said}`;
     pointer.textContent = pointerNote;
   });
