@@ -54,6 +54,11 @@ Rules:
    a second (108,000 lines in 15 s) and journald's rate limit then drops every line of the
    service, the state file's failed save among them. Every other error of the loop goes to
    asyncio's own handler, as before.
+9. A command's body longer than commands.py's MAX_BODY_BYTES is refused unread when its length
+   is given, and said as a bad body is (413 with code ``invalid`` and the reason, on R/error),
+   as is one without its length over the 16 KiB the server reads at most (an attack pass:
+   from 16 KiB on it was a bare 413 "Request Entity Too Large", said nowhere, neither on
+   R/error nor in the log).
 """
 
 from __future__ import annotations
@@ -78,7 +83,14 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
-from bridge.interfaces.web.commands import BadCommand, Order, WebCommand, carry_out, parse
+from bridge.interfaces.web.commands import (
+    MAX_BODY_BYTES,
+    BadCommand,
+    Order,
+    WebCommand,
+    carry_out,
+    parse,
+)
 from bridge.interfaces.web.connections import MOST_HELD, Connections
 from bridge.interfaces.web.feed import Feed, Shape
 from bridge.interfaces.web.files import static_files
@@ -276,7 +288,7 @@ class WebConsole:
         log.info("web console on %s", self.url)
 
     async def _start(self) -> None:
-        app = web.Application(middlewares=[self._guard], client_max_size=16 * 1024)
+        app = web.Application(middlewares=[self._guard], client_max_size=16 * 1024)  # rule 9
         app.router.add_get("/", self._index)
         app.router.add_get("/api/hello", self._hello)
         app.router.add_post("/api/session", self._session)
@@ -559,13 +571,21 @@ class WebConsole:
         rot = self._rotators.get(request.match_info["rid"])
         if rot is None:
             return _json({"error": "no such rotator"}, 404)
+        by = Origin(Source.WEB, None, self._client(request))  # rule 4
+        size = request.content_length or 0
         try:
+            if size > MAX_BODY_BYTES:  # rule 9: refused unread
+                raise web.HTTPRequestEntityTooLarge(MAX_BODY_BYTES, size)
             body = await asyncio.wait_for(request.read(), BODY_S)
         except TimeoutError:
             return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
         except ConnectionError:  # rule 7: the client went before its body came
             return _json({"error": "the connection closed before the body came"}, 400)
-        by = Origin(Source.WEB, None, self._client(request))  # rule 4
+        except web.HTTPRequestEntityTooLarge:  # rule 9 (one without its length: over 16 KiB)
+            why = f"a command is at most {MAX_BODY_BYTES} bytes"
+            said = f"console: a body of {size} bytes" if size else "console: a body over 16 KiB"
+            rot.report_refusal(why, said, origin=by)
+            return _json({"error": why, "code": "invalid"}, 413)
         try:
             cmd = parse(body)
         except BadCommand as exc:
