@@ -337,3 +337,22 @@ def test_a_late_answer_to_an_older_click_does_not_hide_why_the_newer_one_was_ref
         expect(page.locator("#pointer")).to_contain_text("refused")
     finally:
         page.unroute("**/command")
+
+
+def test_a_refusal_said_again_after_a_command_went_through_is_shown_again(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """A click in the keep-out sector is refused and the page says why; the next click goes
+    through and the message goes; a second click in the sector at once is refused again, and
+    the page must say so again. The same refusal within 2 s was taken for the first one's
+    copy (its error event) and not shown: the message line stayed empty under a refused click."""
+    page, rig = console_page, console_bridge.rig
+    message = page.locator("#message")
+    click_map(page, sum(KEEP_OUT) / 2, radius=0.6)
+    expect(message).to_contain_text("keep-out")
+    click_map(page, _far_from(rig.emu.state().az_deg))
+    expect(page.locator("#pointer")).to_contain_text("sent")
+    expect(message).to_have_text("")
+    click_map(page, sum(KEEP_OUT) / 2, radius=0.6)
+    expect(page.locator("#pointer")).to_contain_text("refused")
+    expect(message).to_contain_text("keep-out")

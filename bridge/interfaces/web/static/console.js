@@ -10,7 +10,8 @@
 // 4. STOP is the #stop button, Escape anywhere, and Space anywhere outside a text box. Space
 //    never activates the focused button: whoever presses Space to stop must not park.
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
-//    same rotator within 2 s is one refusal, shown once. Only the answer to the newest command
+//    same rotator within 2 s is one refusal, shown once, unless a command went through
+//    in between (then the same refusal is news again, not the first one's copy). Only the answer to the newest command
 //    sent to a rotator clears its message, and only the newest click on the map writes its
 //    outcome under the map: on a slow network an older click's late "ok" wiped the refusal of
 //    the click after it.
@@ -368,6 +369,7 @@ function renderMessage(msg) {
 
 function clearMessage(id) {
   app.messages.delete(id);
+  if (app.lastShown && app.lastShown.id === id) app.lastShown = null; // the next is news again
   if (id === app.selected) renderMessage(null);
 }
 
