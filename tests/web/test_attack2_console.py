@@ -517,6 +517,22 @@ def test_a_click_held_up_on_the_way_does_not_win_over_the_click_the_page_sent_af
     rig.arrived("hf", second)
 
 
+def test_nudges_that_come_out_of_order_all_count_and_none_overtakes_a_newer_aim(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """Three quick clicks on a nudge reach the bridge out of order: each is a step from where
+    the rotor is, so each counts (none is refused as overtaken by another nudge); a nudge
+    numbered before a target the page sent after it still is."""
+    rig, client = console
+    page = "tab-n"
+    assert client.command("hf", command="nudge", d_az=5, page=page, seq=3).status == 200
+    assert client.command("hf", command="nudge", d_az=5, page=page, seq=2).status == 200
+    assert client.command("hf", command="target", az=90, page=page, seq=5).status == 200
+    late = client.command("hf", command="nudge", d_az=5, page=page, seq=4)
+    assert (late.status, late.doc.get("code")) == (409, "stale"), late
+    rig.arrived("hf", 90)
+
+
 def test_a_click_from_a_new_page_after_a_stop_is_carried_out(
     console: tuple[Rig, ConsoleClient],
 ) -> None:

@@ -33,7 +33,9 @@ Rules:
    (``OVERTAKEN``), however late it comes. The browser sends each click on a connection of
    its own, and a click held up on the way reached the bridge after the click that replaced
    it and turned the rotor there (a review: the operator clicked 200 and then 60, the rotor
-   ended at 200).
+   ended at 200). A nudge is a step from where the rotor is, which no later nudge replaces:
+   it is stale only when numbered before another command the page aimed with (three quick
+   clicks on +5 are +15 in whatever order they come).
 """
 
 from __future__ import annotations
@@ -271,6 +273,7 @@ class Order:
         self._last: dict[str, tuple[float, str | None, int | None]] = {}
         self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
         self._took_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: the same
+        self._took_aim: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: no nudge
 
     def stale(
         self, rotator_id: str, cmd: WebCommand, started: float, halted_s: float = -math.inf
@@ -285,7 +288,8 @@ class Order:
             last_seq = self._halt_seq.get((str(cmd.page), rotator_id))
             if last_seq is not None and cmd.seq is not None and cmd.seq < last_seq:
                 return STALE
-            took = self._took_seq.get((str(cmd.page), rotator_id))
+            newer = self._took_aim if cmd.command == "nudge" else self._took_seq
+            took = newer.get((str(cmd.page), rotator_id))
             if took is not None and cmd.seq is not None and cmd.seq < took:
                 return OVERTAKEN  # rule 5a
         at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
@@ -304,6 +308,8 @@ class Order:
         if cmd.halts() or cmd.page is None or cmd.seq is None:
             return
         _keep(self._took_seq, (cmd.page, rotator_id), cmd.seq)
+        if cmd.command != "nudge":
+            _keep(self._took_aim, (cmd.page, rotator_id), cmd.seq)
 
     def carried(self, rotator_id: str, cmd: WebCommand) -> bool:
         """Whether ``cmd`` is a halt the page numbered and the console carried out already, as
