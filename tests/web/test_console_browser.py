@@ -356,3 +356,25 @@ def test_a_refusal_said_again_after_a_command_went_through_is_shown_again(
     click_map(page, sum(KEEP_OUT) / 2, radius=0.6)
     expect(page.locator("#pointer")).to_contain_text("refused")
     expect(message).to_contain_text("keep-out")
+
+
+def test_a_stop_carried_by_the_live_feed_alone_is_not_said_to_be_unsent(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """The page sends STOP over its live feed as well as by a request: when the request fails
+    (the bridge's connections full, a proxy refusing it) the feed's copy still stops the
+    rotor, and the page must not tell the operator that nothing was sent."""
+    page, rig = console_page, console_bridge.rig
+    start = rig.emu.state().az_deg
+    target = _farthest(start)
+    click_map(page, target)
+    rig.emu.wait_for(lambda s: s.is_moving and angle_apart(s.az_deg, start) > 15.0, 10)
+    page.route("**/command", lambda route: route.abort())
+    try:
+        page.click("#stop")
+        stopped = rig.emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 10)
+        assert angle_apart(stopped.az_deg, target) > 30.0, stopped
+        expect(page.locator("#message")).to_contain_text("live connection")
+        expect(page.locator("#message")).not_to_contain_text("nothing was sent")
+    finally:
+        page.unroute("**/command")

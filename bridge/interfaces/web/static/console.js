@@ -10,14 +10,16 @@
 // 4. STOP is the #stop button, Escape anywhere, and Space anywhere outside a text box. Space
 //    never activates the focused button: whoever presses Space to stop must not park.
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
-//    same rotator within 2 s is one refusal, shown once, unless a command went through
-//    in between (then the same refusal is news again, not the first one's copy). Only the answer to the newest command
-//    sent to a rotator clears its message, and only the newest click on the map writes its
-//    outcome under the map: on a slow network an older click's late "ok" wiped the refusal of
-//    the click after it.
+//    same rotator within 2 s is one refusal, shown once, unless a command went through in
+//    between (then the same refusal is news again, not the first one's copy). Only the answer
+//    to the newest command sent to a rotator clears its message, and only the newest click on
+//    the map writes its outcome under the map: on a slow network an older click's late "ok"
+//    wiped the refusal of the click after it.
 // 6. A control shows what the bridge's status says, never only what the user asked: the Track
 //    select, whose choice a browser shows at once, goes back to the status's when its command
 //    was refused or not sent at all (the bridge unreachable, the session ended).
+// 7. A STOP or lock ON sent over the live feed is never said to be unsent when its request
+//    fails: the feed's copy is carried out (live.py rule 5), and the page says it went that way.
 
 import { MapView, RIM_KM, norm360 } from './map.js';
 import { SkyView } from './sky.js';
@@ -391,7 +393,9 @@ async function send(command, id = app.selected) {
   const body = { ...command, page: PAGE_ID, seq: ++sequence };
   newestSent.set(id, body.seq);
   const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
-  if (halts) sendLive({ ...body, rotator: id }); // and by POST: two ways, either will do
+  const live = halts && sendLive({ ...body, rotator: id }); // and by POST: either will do
+  // rule 7: a halt the live feed carried was sent, whatever becomes of its request
+  const unsent = (why) => (live ? `${why}: sent over the live connection only` : `${why}: nothing was sent`);
   const url = `api/rotators/${encodeURIComponent(id)}/command`;
   for (let attempt = 0; attempt < 2; attempt++) {
     let res;
@@ -401,8 +405,8 @@ async function send(command, id = app.selected) {
       // a STOP or lock ON is sent once more at once: the connection it went on may have been
       // closing just then (the bridge closes idle ones), and carrying either out twice is safe
       if (halts && attempt === 0) continue;
-      showMessage(id, 'the bridge is not reachable: nothing was sent', 'error');
-      return false;
+      showMessage(id, unsent('the bridge is not reachable'), 'error');
+      return live;
     }
     metrics.answered += 1;
     if (res.ok) {
@@ -427,8 +431,8 @@ async function send(command, id = app.selected) {
     showMessage(id, answer.error || `refused (HTTP ${res.status})`, 'refusal');
     return false;
   }
-  showMessage(id, 'no session: nothing was sent', 'error');
-  return false;
+  showMessage(id, unsent('no session'), 'error');
+  return live;
 }
 
 const stop = () => send({ command: 'stop' });
