@@ -199,6 +199,8 @@ def test_off_stop_lock_a_manual_target_and_a_rotctld_p_each_end_tracking(rig: Ri
     t = time.monotonic()
     rig.probe.publish("rotor/lock", "ON")
     ended(t, "lock")
+    # shown ON once saved (kept.py rule 2): a lock OFF before that save shows no change at all
+    rig.probe.wait_value("rotor/lock/state", "ON", after=t)
     # locked: tracking is refused like any motion, and nothing starts
     t = time.monotonic()
     rig.probe.publish("rotor/track", "sun")
