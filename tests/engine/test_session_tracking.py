@@ -627,6 +627,46 @@ def test_after_a_park_a_pass_is_waited_for_on_the_side_nearest_the_park(
         assert waits and waits[0] == 370, waits  # from the park at 300, not where it ended
 
 
+def _iss_elements(t0: float) -> tuple[tuple[str, str], tuple[str, str]]:
+    """Rule 10's tests: the ISS's elements a week old and of the day (another plane)."""
+    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    return old, new
+
+
+def _write_tle(path: Path, tle: tuple[str, str], mtime_s: float) -> None:
+    """The file as cron writes it, its modification time set (the catalog sees a change by it,
+    never by how fast the test ran)."""
+    path.write_text(f"ISS (ZARYA)\n{tle[0]}\n{tle[1]}\n")
+    os.utime(path, ns=(int(mtime_s * 1e9),) * 2)
+
+
+def _by_elements(by: dict[tuple[str, str], Callable[[Question], Answer]]) -> Callable[..., Answer]:
+    """The sky worker: the file read as it reads it, each body's passes scripted by elements."""
+
+    def sky(q: Question) -> Answer:
+        if isinstance(q, LookupQuestion):
+            return answer(q)
+        assert q.body.tle is not None
+        return by[q.body.tle](q)
+
+    return sky
+
+
+def _tracking_by_name(v: VirtualRotator, path: Path) -> None:
+    """The controller answers, then the ISS is tracked by its name in ``path``."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.mailbox.put_track(Track(None, Source.MQTT, LookupQuestion(TleCatalog(path), "iss (zarya)")))
+    v._take()
+
+
+def _md01_in_berlin(t0: float) -> VirtualRotator:
+    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+    return VirtualRotator(
+        "md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds
+    )
+
+
 def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pass(
     tmp_path: Path,
 ) -> None:
@@ -636,34 +676,20 @@ def test_a_satellite_tracked_by_name_takes_the_tle_files_new_elements_after_a_pa
     look-up. The sky is scripted by elements: the old ones' next pass rises at 200 in 80
     minutes, the new ones' at 10 in 45."""
     t0 = SAT_EPOCH
-    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    old, new = _iss_elements(t0)
     path = tmp_path / "amateur.tle"
-    path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
-    os.utime(path, ns=(int((t0 - 86400) * 1e9),) * 2)  # (the catalog sees a change by it)
-    by_elements = {
-        old: _scripted_sky([(t0 + 100, t0 + 400, 100, 150), (t0 + 4800, t0 + 5100, 200, 250)]),
-        new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
-    }
-
-    def sky(q: Question) -> Answer:
-        if isinstance(q, LookupQuestion):
-            return answer(q)  # the file, read as the sky worker reads it
-        assert q.body.tle is not None
-        return by_elements[q.body.tle](q)
-
-    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
-    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds)
-    v.answer_sky = sky
+    _write_tle(path, old, t0 - 86400)
+    v = _md01_in_berlin(t0)
+    v.answer_sky = _by_elements(
+        {
+            old: _scripted_sky([(t0 + 100, t0 + 400, 100, 150), (t0 + 4800, t0 + 5100, 200, 250)]),
+            new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
+        }
+    )
     with v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.mailbox.put_track(
-            Track(None, Source.MQTT, LookupQuestion(TleCatalog(path), "iss (zarya)"))
-        )
-        v._take()
+        _tracking_by_name(v, path)
         v.run_until(lambda h: h.wall() >= t0 + 200, 300, "the first pass is under way")
-        path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")  # cron, mid-pass
-        os.utime(path, ns=(int(t0 * 1e9),) * 2)
+        _write_tle(path, new, t0)  # cron, mid-pass
         v.run_until(lambda h: h.wall() >= t0 + 2690, 3000, "just before the new elements' AOS")
         info = v.status.tracking
         assert info is not None and info.aos_unix == pytest.approx(t0 + 2700, abs=1), info
@@ -701,16 +727,16 @@ def test_new_elements_read_while_a_pass_is_under_way_wait_for_its_end(tmp_path: 
     sky worker busy): the second pass, under way by then, is flown to its end by the elements
     it began with; the new ones take over from the pass after it."""
     t0 = SAT_EPOCH
-    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    old, new = _iss_elements(t0)
     path = tmp_path / "amateur.tle"
-    path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
-    os.utime(path, ns=(int((t0 - 86400) * 1e9),) * 2)
+    _write_tle(path, old, t0 - 86400)
     passes = [(t0 + 100, t0 + 400, 100, 150), (t0 + 420, t0 + 720, 150, 200)]
-    by_elements = {
-        old: _scripted_sky([*passes, (t0 + 4800, t0 + 5100, 200, 250)]),
-        new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
-    }
+    scripted = _by_elements(
+        {
+            old: _scripted_sky([*passes, (t0 + 4800, t0 + 5100, 200, 250)]),
+            new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
+        }
+    )
     lookups: list[float] = []
 
     def sky(q: Question) -> Answer:
@@ -720,21 +746,14 @@ def test_new_elements_read_while_a_pass_is_under_way_wait_for_its_end(tmp_path: 
         v.sky_delay_s = max(queued, v.now + (30.0 if slow else 0.0)) - v.now  # (read after)
         if isinstance(q, LookupQuestion):
             lookups.append(v.wall())
-            return answer(q)
-        assert q.body.tle is not None
-        return by_elements[q.body.tle](q)
+        return scripted(q)
 
-    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
-    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds)
+    v = _md01_in_berlin(t0)
     v.answer_sky = sky
     with v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        lookup = LookupQuestion(TleCatalog(path), "iss (zarya)")
-        v.mailbox.put_track(Track(None, Source.MQTT, lookup))
-        v._take()
+        _tracking_by_name(v, path)
         v.run_until(lambda h: h.wall() >= t0 + 200, 300, "the first pass is under way")
-        path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")
-        os.utime(path, ns=(int(t0 * 1e9),) * 2)
+        _write_tle(path, new, t0)
         v.run_until(lambda h: h.wall() >= t0 + 440, 300, "the second pass under way")
         assert [t for t in lookups if t0 + 400 < t < t0 + 420], lookups  # answered at 430 or so
         worst = 0.0
@@ -755,30 +774,18 @@ def test_new_elements_written_while_the_rotor_waits_for_a_pass_are_taken_before_
     """Rule 10: tracking started hours before the pass, cron's file lands meanwhile: the pass
     is waited for where the new elements say it rises, not where the old ones did."""
     t0 = SAT_EPOCH
-    old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    new = synthetic_tle("", t0, inclination_deg=51.6, raan_deg=40, mean_anomaly_deg=0)
+    old, new = _iss_elements(t0)
     path = tmp_path / "amateur.tle"
-    path.write_text(f"ISS (ZARYA)\n{old[0]}\n{old[1]}\n")
-    os.utime(path, ns=(int((t0 - 86400) * 1e9),) * 2)
-    by_elements = {
-        old: _scripted_sky([(t0 + 3000, t0 + 3300, 200, 250)]),
-        new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
-    }
-
-    def sky(q: Question) -> Answer:
-        if isinstance(q, LookupQuestion):
-            return answer(q)
-        assert q.body.tle is not None
-        return by_elements[q.body.tle](q)
-
-    speeds = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
-    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=speeds, settings=speeds)
-    v.answer_sky = sky
+    _write_tle(path, old, t0 - 86400)
+    v = _md01_in_berlin(t0)
+    v.answer_sky = _by_elements(
+        {
+            old: _scripted_sky([(t0 + 3000, t0 + 3300, 200, 250)]),
+            new: _scripted_sky([(t0 + 2700, t0 + 3000, 10, 60)]),
+        }
+    )
     with v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        lookup = LookupQuestion(TleCatalog(path), "iss (zarya)")
-        v.mailbox.put_track(Track(None, Source.MQTT, lookup))
-        v._take()
+        _tracking_by_name(v, path)
         v.run_until(
             lambda h: (
                 h.status.state is MotionState.IDLE and off_deg(h.truth().az_deg, 200.0) <= 1.0
@@ -787,8 +794,7 @@ def test_new_elements_written_while_the_rotor_waits_for_a_pass_are_taken_before_
             "waiting where the old elements' pass rises",
         )
         v.run_until(lambda h: h.wall() >= t0 + 600, 700, "a while later")
-        path.write_text(f"ISS (ZARYA)\n{new[0]}\n{new[1]}\n")
-        os.utime(path, ns=(int(t0 * 1e9),) * 2)
+        _write_tle(path, new, t0)
         v.run_until(lambda h: h.wall() >= t0 + 2690, 3000, "just before the new elements' AOS")
         assert v.status.state is MotionState.IDLE
         assert off_deg(v.truth().az_deg, 10.0) <= 2.0, v.truth()

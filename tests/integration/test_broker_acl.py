@@ -26,6 +26,16 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
+GRANTED = ReasonCode(PacketTypes.SUBACK, "Granted QoS 0")
+REFUSED = ReasonCode(PacketTypes.SUBACK, "Not authorized")
+
+
+def _denials(client: MqttClient) -> list[tuple[str, str]]:
+    """What the client says it was denied (topic, problem), as it says it."""
+    seen: list[tuple[str, str]] = []
+    client._on_denied = lambda topic, problem: seen.append((topic, problem))
+    return seen
+
 
 def test_denied_publishes_are_reported_once_each_naming_the_topic(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
@@ -64,13 +74,9 @@ def test_a_denied_subscription_is_reported_naming_the_topic(
     client = MqttClient(
         MqttSettings(), will_topic="rotor/bridge/state", subscriptions=[], on_message=print
     )
-    seen: list[tuple[str, str]] = []
-    client._on_denied = lambda topic, problem: seen.append((topic, problem))
+    seen = _denials(client)
     client._sub_filters[7] = ["rotor/target", "rotor/stop"]
-    granted, refused = (
-        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
-        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
-    )
+    granted, refused = GRANTED, REFUSED
     client._on_subscribe(client._client, None, 7, [granted, refused], None)
     assert [t for t, _p in seen] == ["rotor/stop"]
     assert "subscribe to rotor/stop: Not authorized" in seen[0][1]
@@ -91,12 +97,8 @@ def test_with_discovery_off_a_denied_config_filter_is_said_once_and_is_no_proble
     app = App(rig.settings)
     client = app.client
     config_filter = "homeassistant/+/+/+/config"
-    seen: list[tuple[str, str]] = []
-    client._on_denied = lambda topic, problem: seen.append((topic, problem))
-    granted, refused = (
-        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
-        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
-    )
+    seen = _denials(client)
+    granted, refused = GRANTED, REFUSED
     caplog.set_level(logging.INFO)
     for mid in (7, 8):  # (a second connection's SUBACK: said once)
         client._command_mid = mid
@@ -124,12 +126,8 @@ def test_a_denied_filter_read_only_to_refuse_a_groups_other_commands_is_no_probl
     rig.add("lower")
     rig.sections["groups"] = [{"id": "stack", "rotators": ["upper", "lower"]}]
     client = App(rig.settings).client
-    seen: list[tuple[str, str]] = []
-    client._on_denied = lambda topic, problem: seen.append((topic, problem))
-    granted, refused = (
-        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
-        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
-    )
+    seen = _denials(client)
+    granted, refused = GRANTED, REFUSED
     caplog.set_level(logging.INFO)
     denied = ["rotor/stack/lock", "rotor/stack/option/+", "rotor/stack/track"]
     assert all(t in client._subscriptions for t in denied)
