@@ -185,7 +185,9 @@ def test_a_move_asked_after_a_halt_kept_for_the_stations_return_goes_after_it(
     )
     link.start()
     try:
-        wait_until(lambda: link.up, 10, "the link up")
+        # subscribed, not only accepted: a beat (QoS 0) the broker takes before the link's
+        # SUBSCRIBE is lost, and a loaded machine can run the test's publish first
+        wait_until(lambda: link.subscribed_since is not None, 10, "the link subscribed")
 
         def beat() -> None:
             heard = len(beats)
