@@ -41,7 +41,10 @@ def _nodelay(client: Any, userdata: Any, sock: Any) -> None:
 
 class Probe:
     """Subscribed at QoS 1 to ``topic_filter`` (several: "a|b"; none: ""), again after every
-    reconnect; optionally with a user name/password and TLS (``tls``: paho's tls_set keywords)."""
+    reconnect; optionally with a user name/password and TLS (``tls``: paho's tls_set keywords).
+    Made once the broker has acknowledged the subscription (its SUBACK), not at the CONNACK:
+    paho's thread writes the SUBSCRIBE after that, and a message published meanwhile (a busy
+    machine runs the test first) was lost to the probe (tests/mqtt/test_probe_subscribed.py)."""
 
     #: what a wait that runs out raises (the benchmarks' recorder raises their own error)
     timeout_error: type[Exception] = AssertionError
@@ -60,7 +63,8 @@ class Probe:
     ) -> None:
         self.messages: list[Message] = []
         self._cond = threading.Condition()
-        self._connected = threading.Event()
+        self._connected = threading.Event()  # connected and, with a filter, subscribed
+        self._subscribe_mid: int | None = None
         self.filter = topic_filter
         c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id or f"probe-{id(self)}")
         if username is not None:
@@ -71,21 +75,27 @@ class Probe:
         c.max_inflight_messages_set(max_inflight)
         c.on_connect = self._on_connect
         c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
         c.reconnect_delay_set(0.1, 0.5)  # type: ignore[arg-type]
         c.connect_async("127.0.0.1", port, keepalive=keepalive_s)
         c.loop_start()
         self.client = c
         try:
-            wait_until(self._connected.is_set, 10, "probe connected", error=self.timeout_error)
+            wait_until(self._connected.is_set, 10, "probe subscribed", error=self.timeout_error)
         except Exception:
             self.close()
             raise
 
     def _on_connect(self, client, userdata, flags, rc, props) -> None:  # noqa: ANN001
         filters = [(f, 1) for f in self.filter.split("|") if f]
-        if filters:  # none: a client that only publishes
-            client.subscribe(filters)
-        self._connected.set()
+        if not filters:  # a client that only publishes
+            self._connected.set()
+            return
+        _rc, self._subscribe_mid = client.subscribe(filters)  # (its SUBACK comes after this)
+
+    def _on_subscribe(self, client, userdata, mid, reason_codes, props) -> None:  # noqa: ANN001
+        if mid == self._subscribe_mid:
+            self._connected.set()
 
     def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
         with self._cond:
