@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import enum
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
@@ -283,16 +284,16 @@ LATE_LINES_MAX = 4  # rule 7: a busy host that gave up a few polls in a row
 SAID_KEEP = 8  # rule 7
 
 
-class LateAnswers:
+class LateAnswers(ABC):
     """Rule 7's bookkeeping of answers owed after their reply time, for any codec that says
-    whether a reply is awaited (``awaiting_reply``): OneQuery's codecs, and those that count
-    what is owed their own way (SPID, RC2800)."""
+    whether a reply is awaited (``awaiting_reply``, its own): OneQuery's codecs, and those that
+    count what is owed their own way (SPID, RC2800, Rotor-EZ)."""
 
     _late_lines: int = 0  # rule 7: lines of answers to queries given up that may still come
     _harmless_lines: tuple[bytes, ...] = ()  # rule 7: late answers (and the codec's own)
 
-    def awaiting_reply(self) -> bool:
-        raise NotImplementedError
+    @abstractmethod
+    def awaiting_reply(self) -> bool: ...
 
     @property
     def owes_late(self) -> bool:
