@@ -56,8 +56,12 @@ Rules:
    seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
 6. A move is refused at once (LEASED: rotctld answers ``RPRT -9``) while the station's retained
    ``R/control`` says another operator holds the control lease, in the words the station
-   would use; the station judges it again (a lease that ended a moment ago, a clock that
-   differs): this only spares the client a silent refusal on the station's ``R/error``.
+   would use; the station judges it again (a lease that ended a moment ago): this only spares
+   the client a silent refusal on the station's ``R/error``. Its end is a time on the
+   station's clock, so it is compared with that clock as the heartbeats let the remote reckon
+   it (``wall``; heartbeat.py rule 3), never with this computer's: a station an hour behind
+   (a Raspberry Pi without a clock chip) had every lease look long over, and each move was
+   answered ``RPRT 0`` and refused at the station (an attack pass).
    Likewise (LOCKED, ``RPRT -9``) while the station's ``R/lock/state`` is ``ON``.
 7. A command is answered only once the station's broker acknowledged it (interfaces/mqtt/remote.py
    rule 7): ``RPRT 0`` means the broker has it, stamped with its send time for the station to
@@ -205,7 +209,7 @@ class RemoteRotator:
         expiry_s: int,
         moving_max_age_s: float = 10.0,
         clock: Callable[[], float] = time.monotonic,
-        wall: Callable[[], float] = time.time,  # rule 6: a lease's end is wall-clock time
+        wall: Callable[[], float] = time.time,  # rule 6: the station's clock (run.py's)
     ) -> None:
         self.id = rotator_id
         self.topics = topics

@@ -360,8 +360,17 @@ class Remote:
             s.operator,
             s.command_expiry_s,
             s.moving_max_age_s,
+            wall=self._station_now,  # remote/rotator.py rule 6: the lease's end is the station's
         )
         return made
+
+    def _station_now(self) -> float:
+        """The station's clock as its heartbeats let the link reckon it (heartbeat.py rule 3),
+        the time ``R/control``'s end is on; this computer's wall clock without a reckoning (the
+        station not heard: a move is refused for that first)."""
+        link = self.link
+        reckoned = None if link is None else link.station_clock.now_unix()
+        return time.time() if reckoned is None else reckoned
 
     def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
         """A station rotator no endpoint names, for the console alone (None: not usable)."""

@@ -18,6 +18,7 @@ import paho.mqtt.client as paho
 import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
+from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
@@ -375,3 +376,34 @@ def test_the_remote_logs_what_check_config_would_warn_of_its_console(tmp_path: P
     done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(30), check=False)
     assert done.returncode == 2 and "cannot reach the station's broker" in done.stderr
     assert "WARNING bridge.cli: web.host_names: none listed, with trusted_proxies" in done.stderr
+
+
+def test_another_operators_lease_is_refused_at_once_whatever_the_stations_clock_says(
+    rig: Rig,
+) -> None:
+    """remote/rotator.py rule 6 on a station whose wall clock is an hour behind the operator's
+    (a Raspberry Pi without a clock chip): the lease ends at the time ``R/control`` gives on the
+    station's clock. The remote compared it with its own, took G4XYZ's lease for long over and
+    answered ``RPRT 0`` to a move the station then refused on its ``R/error`` alone."""
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.app = App(rig.settings, wall=lambda: time.time() - 3600.0)
+    rig.app.start()
+    rig.ready("tower")
+    port = free_port()
+    r = Remote(settings(rig.broker, port))  # type: ignore[arg-type]
+    r.start()
+    other = paho.Client(CallbackAPIVersion.VERSION2, client_id="g4xyz", protocol=paho.MQTTv5)
+    other.connect("127.0.0.1", rig.broker.port)
+    other.loop_start()
+    try:
+        other.publish("rotor/control/claim", '{"operator": "G4XYZ", "minutes": 5}', qos=1)
+        wait_until(lambda: b"G4XYZ" in (r.view.get("rotor/control") or b""), 10, "the lease")
+        assert ask(port, b"P 100 0\n") == b"RPRT -9\n"  # refused at once, as the station does
+        other.publish("rotor/control/release", '{"operator": "G4XYZ"}', qos=1)
+        wait_until(lambda: b'"holder":null' in (r.view.get("rotor/control") or b""), 10, "free")
+        assert ask(port, b"P 100 0\n") == b"RPRT 0\n"  # free: it goes
+        rig.arrived("tower", 100)
+    finally:
+        other.loop_stop()
+        other.disconnect()
+        r.stop()
