@@ -344,3 +344,38 @@ def test_under_mqtt_311_an_empty_claim_or_release_is_refused_and_the_lease_holds
         "DL1ABC",
         None,
     ]
+
+
+def test_an_audit_entry_names_the_whole_command_however_it_was_padded(
+    rig: Rig, operators: tuple[Operator, Operator]
+) -> None:
+    """A command's words were cut to their first 40 bytes in the audit trail, and JSON may be
+    padded with spaces: a claim for G4XYZ sent by a plain MQTT client was audited as ``mqtt``
+    executing ``claim '{"minutes": 30, ...'``, and a target that turned the rotor to 200 as
+    ``target '{"azimuth": ...'``: neither who got the lease nor where the rotor went was in
+    the trail. Every payload a command is taken from (256 bytes at most) is there whole."""
+    _, other = operators
+    audit_path = rig.tmp / "audit.jsonl"
+    rig.sections["audit_file"] = str(audit_path)
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    claim = '{"minutes": 30,' + " " * 60 + '"operator": "G4XYZ"}'
+    probe.publish("rotor/control/claim", claim)
+    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "G4XYZ")
+    other.publish("rotor/target", '{"azimuth":' + " " * 60 + "200}")
+    rig.arrived("tower", 200)
+    assert emu.state().az_deg == pytest.approx(200, abs=3)
+    wait_until(lambda: len(probe.on("rotor/audit")) >= 2, 10, "R/audit")
+    published = [json.loads(m.text) for m in probe.on("rotor/audit")]
+    assert app.audit is not None
+    app.audit.flush()
+    filed = [json.loads(line) for line in audit_path.read_text().splitlines()]
+    for events in (published, filed):
+        assert [(e["operator"], e["result"]) for e in events] == [
+            ("mqtt", "executed"),
+            ("G4XYZ", "executed"),
+        ]
+        assert events[0]["command"] == f"claim {claim!r}"
+        assert events[1]["command"].endswith("200}'")

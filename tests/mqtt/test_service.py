@@ -529,7 +529,7 @@ def test_each_command_topic_reaches_its_rotator(
         # an attack pass: 4096 bytes of 0xFF parked the rotor, and so did a switch's OFF
         ("rotor/park", b"\xff" * 8, "payload is not UTF-8 text", "park '" + "\ufffd" * 8 + "'"),
         ("rotor/park", b"P" * 4096, "payload too large (4096 bytes, at most 256)",
-         "park '" + "P" * 40 + "'\u2026"),
+         "park '" + "P" * 256 + "'\u2026"),
         ("rotor/park", b"OFF", "'OFF' does not park: send PARK", "park 'OFF'"),
         ("rotor/park", b"0", "'0' does not park: send PARK", "park '0'"),
         ("rotor/health/reset", b"false",

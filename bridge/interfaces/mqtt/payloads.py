@@ -332,9 +332,12 @@ def parse_switch(payload: bytes) -> bool:
 
 
 def describe(kind: str, payload: bytes) -> str:
-    """How a refused command is echoed back on the error topic (short, printable)."""
-    shown = payload[:40].decode("utf-8", "replace")
-    more = "…" if len(payload) > 40 else ""
+    """How a command is echoed back on the error topic and in the audit trail (printable):
+    whole for any payload a command can be taken from (MAX_COMMAND_BYTES), cut short only
+    beyond (an attack pass: cut at 40 bytes, a claim or a target padded with spaces was
+    audited without whom the lease went to or where the rotor turned)."""
+    shown = payload[:MAX_COMMAND_BYTES].decode("utf-8", "replace")
+    more = "…" if len(payload) > MAX_COMMAND_BYTES else ""
     return f"{kind} {shown!r}{more}" if payload else kind
 
 
