@@ -379,3 +379,25 @@ def test_an_audit_entry_names_the_whole_command_however_it_was_padded(
         ]
         assert events[0]["command"] == f"claim {claim!r}"
         assert events[1]["command"].endswith("200}'")
+
+
+def test_a_logger_datagram_is_audited_whole_however_it_was_padded(rig: Rig) -> None:
+    """A PstRotator datagram was audited as its first 120 characters (an N1MM one, 160), and
+    PstRotator's tags the bridge does not read are let through: padded with a few, a datagram
+    that turned the rotor to 200 was audited without its <AZIMUTH>. Every datagram a command
+    is taken from (2048 bytes at most) is in the trail whole."""
+    pst_port, pst_replies = reserve_pst_ports()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, pst_udp_port=pst_port)
+    rig.start()
+    rig.ready("tower")
+    pst = PstClient(pst_port, replies=pst_replies)
+    try:
+        padding = [tag(f"PAD{n}", "x" * 60) for n in range(3)]
+        pst.command(*padding, tag("AZIMUTH", 200))
+        rig.arrived("tower", 200)
+        assert emu.state().az_deg == pytest.approx(200, abs=3)
+        [event] = [json.loads(m.text) for m in rig.probe.on("rotor/audit")]
+        assert (event["interface"], event["result"]) == ("pst", "executed")
+        assert event["command"].endswith("<AZIMUTH>200</AZIMUTH></PST>")
+    finally:
+        pst.close()

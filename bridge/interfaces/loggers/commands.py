@@ -38,6 +38,10 @@ Rules:
    one, the name's heading is not reported (an attack pass: each rotator reported its own
    heading under the one name, and N1MM's rotor window jumped between the two antennas'
    headings every few seconds).
+7. A datagram's words go to the judge whole (on ``R/error`` and in the audit trail): a datagram
+   is at most datagrams.py's MAX_DATAGRAM bytes, and tags the bridge does not read are let
+   through (an attack pass: cut at 120 characters, a datagram padded with a few such tags
+   turned the rotor and was audited without its ``<AZIMUTH>``).
 """
 
 from __future__ import annotations
@@ -201,7 +205,7 @@ class Commands:
             except OSError as exc:
                 log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
         counts.ignored += len(req.ignored)
-        described = "pst " + data.decode("ascii").strip()[:120]
+        described = "pst " + data.decode("ascii").strip()  # rule 7: whole
         # who sent it (the audit trail, the lease): on the commands themselves, which every
         # rotator these endpoints serve takes (the bridge's and the remote's)
         by = Origin(Source.PST, None, peer[0])
@@ -251,7 +255,7 @@ class Commands:
         """Rules 1 and 4 (``peer``: the sender's address)."""
         by = Origin(Source.N1MM, None, peer)
         counts = self.counts["n1mm"]
-        described = "n1mm " + data.decode("ascii").strip()[:160]
+        described = "n1mm " + data.decode("ascii").strip()  # rule 7: whole
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
             stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
