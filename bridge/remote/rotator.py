@@ -54,6 +54,8 @@ Rules:
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
    REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
    seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
+   What the sender wrote is logged escaped on one line and cut short, as the station logs it
+   (an attack pass: a PstRotator tag holding a line break wrote a line of its own).
 6. A move is refused at once (LEASED: rotctld answers ``RPRT -9``) while the station's retained
    ``R/control`` says another operator holds the control lease, in the words the station
    would use; the station judges it again (a lease that ended a moment ago): this only spares
@@ -99,6 +101,7 @@ from bridge.core.model import (
 )
 from bridge.features import control, tracking
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
+from bridge.interfaces.mqtt.payloads import one_line
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.pointing import Limits
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
@@ -477,4 +480,5 @@ class RemoteRotator:
                 return
             self._refusals[kind] = (0, now)
         more = f" ({count} more since)" if count else ""
-        log.warning("%s: %s refused: %s%s", self.id, command or "a command", message, more)
+        said = one_line(command or "a command")  # (a sender's words: never a line of its own)
+        log.warning("%s: %s refused: %s%s", self.id, said, one_line(message), more)

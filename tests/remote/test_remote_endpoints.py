@@ -271,3 +271,19 @@ def test_the_remote_dcu1_and_gs232a_endpoints_turn_read_and_stop_the_station(
     finally:
         remote.stop()
     assert not os.path.lexists(dcu1_pty)
+
+
+def test_a_refused_datagram_cannot_write_a_line_of_its_own_in_the_remotes_log(
+    station: Rig, endpoints: Endpoints, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A PstRotator tag the bridge does not read may hold a line break, and the remote logged a
+    refused datagram's words as they came: a line of the remote's log, forged by whoever can
+    send it a datagram. The station's log escapes them (service.py rule 4); so does the
+    remote's."""
+    forged = "\nWARNING bridge.remote.run: the station says: all clear"
+    with caplog.at_level(logging.WARNING, logger="bridge.remote.rotator"):
+        with endpoints.pst() as client:
+            client.command(tag("NOTE", forged), tag("AZIMUTH", 999))  # refused: out of range
+        wait_until(lambda: "azimuth 999 outside" in caplog.text, 5, "the refusal logged")
+    assert not any("\nWARNING" in r.getMessage() for r in caplog.records)
+    assert "\\nWARNING bridge.remote.run" in caplog.text
