@@ -56,6 +56,10 @@ class Source(enum.StrEnum):
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
 _HIDDEN = ("Cf", "Zl", "Zp")  # valid_operator: format characters, line and paragraph separators
 _JOINERS = ("\u200c", "\u200d")  # valid_operator: what Persian, the Indic scripts, emoji need
+# valid_operator: letters and marks that show nothing, though no format character: the Hangul
+# fillers (NFKC makes U+3164 and U+FFA0 U+1160), the blank Braille pattern, the combining
+# grapheme joiner, Khmer's and Mongolian's invisible vowels and selectors
+_BLANK = frozenset("\u034f\u115f\u1160\u17b4\u17b5\u180b\u180c\u180d\u180f\u2800\u3164\uffa0")
 
 
 def valid_operator(text: object) -> str | None:
@@ -66,7 +70,9 @@ def valid_operator(text: object) -> str | None:
     invisible format character (a zero-width space, a word joiner: two names that look alike
     were two operators) and no direction override or line separator (the name shown reversed
     the rest of the console's line, the lease's end among it); the joiners a script needs
-    (U+200C, U+200D) stay."""
+    (U+200C, U+200D) stay, between two of its characters, and nothing else that shows nothing
+    does (``_BLANK``; an attack pass: a Hangul filler was a name that reads as blank, and
+    ``DL1ABC`` with a joiner at its end another operator that looks like DL1ABC)."""
     if not isinstance(text, str):
         return None
     name = unicodedata.normalize("NFKC", text).strip()
@@ -74,7 +80,20 @@ def valid_operator(text: object) -> str | None:
         return None
     if any(unicodedata.category(c) in _HIDDEN and c not in _JOINERS for c in name):
         return None
+    if any(c in _BLANK for c in name) or _stray_joiner(name):
+        return None
     return name
+
+
+def _stray_joiner(name: str) -> bool:
+    """A joiner with nothing to join: at either end, or beside a character of ASCII (a call
+    sign's letters and digits join nothing: ``DL1ABC`` and a joiner look like ``DL1ABC``)."""
+    for i, c in enumerate(name):
+        if c in _JOINERS:
+            around = name[i - 1 : i] + name[i + 1 : i + 2]
+            if len(around) < 2 or any(a.isascii() for a in around):
+                return True
+    return False
 
 
 def same_operator(a: str, b: str) -> bool:

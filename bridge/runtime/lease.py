@@ -94,7 +94,10 @@ class Lease:
         """Rules 1, 2: the new lease, or LeaseError saying why not."""
         name = valid_operator(operator)
         if name is None:
-            raise LeaseError(f"operator must be a name of 1 to {OPERATOR_CHARS} characters")
+            raise LeaseError(
+                f"operator must be a name of 1 to {OPERATOR_CHARS} characters, none of them "
+                "invisible (core/model.py valid_operator)"
+            )
         if _interface(name):  # rule 1
             raise LeaseError(
                 f"{name!r} is how the bridge names an interface, not an operator: claim the "

@@ -401,3 +401,25 @@ def test_a_logger_datagram_is_audited_whole_however_it_was_padded(rig: Rig) -> N
         assert event["command"].endswith("<AZIMUTH>200</AZIMUTH></PST>")
     finally:
         pst.close()
+
+
+def test_a_claim_in_a_name_that_shows_nothing_or_looks_like_another_is_refused(rig: Rig) -> None:
+    """core/model.py ``valid_operator``: invisible format characters were refused, but not the
+    Hangul filler (a name of it alone reads as blank: "ㅤ holds the rotator until ...", and
+    the audit trail named an operator nobody can read) nor a zero-width joiner beside a call
+    sign's letters ("DL1ABC" and a joiner: the lease another operator's, its refusals naming
+    DL1ABC to DL1ABC himself). Both are refused on R/error; the lease stays free."""
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    names = ["\u3164", "DL1ABC\u200d", "\u2800\u2800"]
+    for name in names:
+        probe.publish("rotor/control/claim", json.dumps({"operator": name, "minutes": 30}))
+    wait_until(lambda: len(probe.on("rotor/error")) >= len(names), 10, "the refusals")
+    refusals = [json.loads(m.text)["message"] for m in probe.on("rotor/error")]
+    assert all(r.startswith("operator must be a name") for r in refusals), refusals
+    probe.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    holders = [json.loads(m.text)["holder"] for m in probe.on("rotor/control")]
+    assert set(holders) == {None, "DL1ABC"}
