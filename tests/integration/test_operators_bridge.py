@@ -423,3 +423,21 @@ def test_a_claim_in_a_name_that_shows_nothing_or_looks_like_another_is_refused(r
     probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
     holders = [json.loads(m.text)["holder"] for m in probe.on("rotor/control")]
     assert set(holders) == {None, "DL1ABC"}
+
+
+def test_a_release_naming_its_operator_twice_names_nobody_in_the_audit_trail(rig: Rig) -> None:
+    """features/control/payload.py rule 2: a release's ``operator`` given twice was read as its
+    last value, so the audit trail named DL1ABC for a release a reader of the payload takes for
+    G4XYZ's (a claim refuses a key given twice: core/jsonkeys.py). It still releases: anyone
+    may; the trail names the sender as it knows it, a plain MQTT client."""
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    probe.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    probe.publish("rotor/control/release", '{"operator": "G4XYZ", "operator": "DL1ABC"}')
+    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] is None, after=held.t)
+    wait_until(lambda: len(probe.on("rotor/audit")) >= 2, 10, "R/audit")
+    release = json.loads(probe.on("rotor/audit")[1].text)
+    assert (release["operator"], release["result"]) == ("mqtt", "executed")

@@ -7,8 +7,10 @@ Rules:
    property ``operator``, an ``operator``; any other key, or anything that is not such an
    object, is a PayloadError naming what was wrong (refused on ``R/error``, nothing changes).
 2. A release takes any payload; a JSON object's valid ``operator`` names who released it when
-   the message has no user property (Home Assistant's button sends one). (Under MQTT 3.1.1 an
-   empty one is refused before it comes here: interfaces/mqtt/service.py rule 1.)
+   the message has no user property (Home Assistant's button sends one); one that gives it
+   twice names nobody (an attack pass: its last value was the name in the audit trail).
+   (Under MQTT 3.1.1 an empty one is refused before it comes here: interfaces/mqtt/service.py
+   rule 1.)
 3. ``R/control`` says who holds the lease and until when (ISO 8601, UTC), or nobody.
 """
 
@@ -55,9 +57,9 @@ def parse_release(payload: bytes) -> str | None:
     or JSON nested past the parser's depth, an attack pass: names nobody, and still releases)."""
     if len(payload) > MAX_COMMAND_BYTES or not payload.strip().startswith(b"{"):
         return None
-    try:
-        obj = json.loads(payload.decode("utf-8"))
-    except (ValueError, RecursionError):  # (not UTF-8, not JSON)
+    try:  # a key given twice names nobody (core/jsonkeys.py: which did the sender mean?)
+        obj = json.loads(payload.decode("utf-8"), object_pairs_hook=unique_keys)
+    except (ValueError, RecursionError):  # (not UTF-8, not JSON, DuplicateKey)
         return None
     return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
 
