@@ -18,9 +18,11 @@ from contextlib import contextmanager
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.interfaces.mqtt.lastword import FENCE_MARKERS_OUT
 from tests.support import free_port
 from tests.support.console import ConsoleClient, web_section
 from tests.support.rig import Rig
+from tests.support.udp_logger import reserve_pst_ports, udp_socket
 from tests.support.waiting import slow, wait_until
 
 
@@ -98,3 +100,42 @@ def test_a_target_published_before_a_rotctld_stop_and_read_after_it_never_turns_
     # a target published after the stop is obeyed (after the fence's marker, as above)
     rig.probe.publish("rotor/target", "60")
     rig.arrived("tower", 60)
+
+
+def test_a_flood_of_logger_stops_puts_a_few_markers_behind_a_slow_main_connection(
+    rig: Rig,
+) -> None:
+    """A program floods the PstRotator port with stops (25 bytes a datagram) while the main
+    connection is behind: each stop published a fence marker of its own (an attack pass: 20,000
+    in 8 s), every one of them read back by the main connection, behind which every rotator's
+    targets waited (another rotator's target after its STOP turned it 2.3 s after the flood
+    ended, over 10 s once). At most FENCE_MARKERS_OUT go out; the stops after them wait for
+    one to come back, and are fenced all the same: the target published before them is
+    refused, the one after them obeyed."""
+    port, replies = reserve_pst_ports()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, pst_udp_port=port)
+    app = rig.start()
+    rig.ready("tower")
+    assert app.loggers is not None
+    counts = app.loggers.counts["pst"]
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    t = time.monotonic()
+    mark = rig.probe.mark()
+    with main_held_on(app, "rotor/target", b"300") as held, udp_socket() as sender, replies:
+        rig.probe.publish("rotor/target", "300")  # published first, read last
+        wait_until(held.is_set, 10, "the main connection held on the target")
+        for burst in range(1, 11):  # 300 stops, in bursts the system's buffer takes whole
+            for _ in range(30):
+                sender.sendto(b"<PST><STOP>1</STOP></PST>", ("127.0.0.1", port))
+            wait_until(lambda b=burst: counts.commands >= 30 * b, 10, "the stops carried out")
+        emu.wait_for(lambda s: not s.is_moving, 10)
+    err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+    assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
+    assert not [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+    rig.probe.publish("rotor/target", "60")  # after the last stop's marker: obeyed
+    rig.arrived("tower", 60)
+    # (held, the main connection wrote none: they went out once it was let go; a marker out
+    # for RESEND_S is sent again, and makes room for as many again)
+    fence = [m for m in rig.probe.messages[mark:] if m.topic == "rotor/bridge/fence"]
+    assert 1 <= len(fence) <= 3 * FENCE_MARKERS_OUT, f"{len(fence)} markers for 300 stops"

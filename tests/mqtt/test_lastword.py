@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, RESEND_S, Copy, LastWord
+from bridge.interfaces.mqtt.lastword import (
+    FENCE_MARKERS_OUT,
+    LONG_HOLD_S,
+    RESEND_MAX_S,
+    RESEND_S,
+    Copy,
+    LastWord,
+)
 
 HOUR_S = 3600.0
 
@@ -316,3 +323,35 @@ def test_the_copy_of_a_lane_stop_read_after_another_interfaces_halt_ends_no_fenc
     assert resent is not None
     w.marker_back(w.marker(resent).encode())
     assert not w.fenced("r")
+
+
+def test_a_flood_of_fences_puts_a_few_markers_out_and_each_fence_waits_for_one_after_it() -> None:
+    """Rule 11 (an attack pass): a marker for every stop of a flood on a logger port piled up
+    behind the main connection. At most FENCE_MARKERS_OUT are out; a halt beyond them is fenced
+    at once, its marker owed until one is back (a marker out then was published before the
+    halt, so it ends no fence of it); the owed one ends it; a resend (rule 5) makes room, and
+    the connection dropping forgets what was owed."""
+    w = LastWord(token="t")
+    out = [w.fence("a", lock=False, now=0.0) for _ in range(FENCE_MARKERS_OUT)]
+    assert out == list(range(1, FENCE_MARKERS_OUT + 1))
+    assert w.fence("b", lock=True, now=0.1) is None  # no room: owed
+    assert w.fence("a", lock=False, now=0.1) is None
+    assert w.fenced("b", lock_off=True) and w.fenced("a") and w.markers_out
+    assert w.owed_fence(0.2) is None  # (still no room)
+    w.marker_back(w.marker(FENCE_MARKERS_OUT).encode())  # every marker out is back ...
+    assert w.fenced("a") and w.fenced("b", lock_off=True)  # ... none after these halts
+    owed = w.owed_fence(0.3)
+    assert owed == FENCE_MARKERS_OUT + 1 and w.owed_fence(0.3) is None  # one for both
+    w.marker_back(w.marker(owed).encode())
+    assert not w.fenced("a") and not w.fenced("b", lock_off=True) and not w.markers_out
+    for _ in range(FENCE_MARKERS_OUT):  # a broker that drops them: rule 5's resend
+        w.fence("a", lock=False, now=HOUR_S)
+    assert w.fence("a", lock=False, now=HOUR_S) is None
+    resent = w.resend_due(HOUR_S + RESEND_S)
+    assert resent is not None and w.owed_fence(HOUR_S + RESEND_S) == resent + 1
+    w.fence("a", lock=True, now=2 * HOUR_S)  # (room again: no owed while room)
+    for _ in range(FENCE_MARKERS_OUT):
+        w.fence("b", lock=False, now=2 * HOUR_S)
+    w.main_gone()  # nothing older comes on the next connection: nothing owed
+    assert not w.fenced("a", lock_off=True) and not w.fenced("b") and not w.markers_out
+    assert w.owed_fence(3 * HOUR_S) is None

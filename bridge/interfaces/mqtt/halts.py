@@ -22,9 +22,10 @@ did would be stopped by it.
 A stop or lock ON another interface carried out (the console, rotctld, a logger) fences its
 rotator (lastword.py rule 11): counted before it is put (``fence_asked``, under a lock of its own
 that nothing holds for longer than a count), fenced after (``fence_carried``, with a marker on
-the main connection); the service asks ``fenced`` before it hands on a move, and the main
-connection's lock OFF is asked here. A lock ON no fence orders (the main connection down)
-makes the lane's lock OFF wait for a new main connection (lastword.py rule 12).
+the main connection, or owed while a few are out: lastword.py rule 11); the service asks
+``fenced`` before it hands on a move, and the main connection's lock OFF is asked here. A lock
+ON no fence orders (the main connection down) makes the lane's lock OFF wait for a new main
+connection (lastword.py rule 12).
 """
 
 from __future__ import annotations
@@ -285,13 +286,16 @@ class Halts:
         self._arm()
 
     def resend_if_due(self) -> None:
-        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
+        """lastword.py rule 5: a marker the broker dropped is sent again (a new number); rule
+        11: a fence's marker that waited for room goes once there is room."""
         with self._lock:
             n = self.word.resend_due(self._clock())
-        if n is None:
-            return
-        log.info("a marker of the stop lane did not come back yet; sending another")
-        self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+            owed = self.word.owed_fence(self._clock())
+        if n is not None:
+            log.info("a marker of the stop lane did not come back yet; sending another")
+            self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+        if owed is not None:
+            self._send_marker(owed)
 
     def say_long_holds(self) -> None:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
@@ -342,6 +346,9 @@ class Halts:
         with self._lock:
             n, released = self.word.marker_back(payload)
             self._release(released, n)
+            owed = self.word.owed_fence(self._clock()) if n else None  # lastword.py rule 11
+        if owed is not None:
+            self._send_marker(owed)
 
     def _release(self, released: list[str] | tuple[str, ...], marker: int) -> None:
         """Under the lock: the holds of ``released`` up to ``marker`` end."""

@@ -104,7 +104,13 @@ but not the order between them. So:
    (``fenced``); what it reads after the marker is taken. Like a hold, no clock ends a
    fence; the connection dropping does (rule 5: nothing older comes on the next one); one
    longer than LONG_HOLD_S is reported as a long hold is (its MQTT moves are refused). While
-   the main connection cannot read its markers (rule 7) no fence is put: none could end. A
+   the main connection cannot read its markers (rule 7) no fence is put: none could end. At
+   most FENCE_MARKERS_OUT fence markers are out at once (an attack pass: a flood of stops on
+   a logger port sent one each, 20,000 in 8 s, and every rotator's targets waited behind them
+   on the main connection, seconds after the flood): a halt beyond them is fenced at once and
+   its marker owed (``owed_fence``: one for every fence that waited, once one is back or a
+   resend stood for them; a marker out then was published before the halt, so it ends no
+   fence of it; the timer looks again while one is owed). A
    fence ends by a marker alone, never by the main copy of a lane halt (rule 9): the lane
    numbers a halt when it reads it, and one published before another interface's halt may
    be read after it (an attack pass: an MQTT STOP, a target, then rotctld's S; the lane read
@@ -136,6 +142,8 @@ RESEND_MAX_S = 30.0  # ... up to this; a marker is sent again for as long as it 
 LONG_HOLD_S = 5.0  # rule 5: a hold longer than this is reported while it lasts
 NOT_YET = sys.maxsize  # rule 9: a lane connected, not yet subscribed: nothing of it in step
 NUMBER_DIGITS = 18  # rule 10: a marker's number has at most this many (int() refuses 4,300)
+FENCE_MARKERS_OUT = 4  # rule 11: fence markers out at once; a halt beyond them waits for room
+OWED = sys.maxsize  # rule 11: a fence whose marker waits for room (no marker number reaches it)
 
 
 @dataclass(frozen=True)
@@ -172,6 +180,7 @@ class LastWord:
     # rule 11: rotator -> (the marker its fence waits for, whether a lock ON is among its halts)
     _fences: dict[str, tuple[int, bool]] = field(default_factory=dict)
     _fenced_since: dict[str, float] = field(default_factory=dict)  # rule 11: for the report
+    _fence_out: list[int] = field(default_factory=list)  # rule 11: the fence markers out
     # rule 12: the rotators another interface locked with no fence on the main connection
     _unfenced_locks: set[str] = field(default_factory=set)
 
@@ -234,15 +243,42 @@ class LastWord:
     def fence(self, rotator_id: str, lock: bool, now: float) -> int | None:
         """Rule 11: a stop (``lock``: a lock ON) another interface carried out: the number of
         the marker to publish, the fence ending when one at least as new comes back; None
-        while the main connection cannot read its markers (rule 7)."""
+        while the main connection cannot read its markers (rule 7), and while
+        FENCE_MARKERS_OUT are out (the fence then waits for ``owed_fence``)."""
         if not self.markers:
             return None
+        old = self._fences.get(rotator_id)
+        locks = lock or (old is not None and old[1])
+        self._fenced_since.setdefault(rotator_id, now)
+        if not self._fence_room():  # (no marker out now was published after this halt)
+            self._fences[rotator_id] = (OWED, locks)
+            return None
+        n = self._fence_marker(now)
+        self._fences[rotator_id] = (n, locks)
+        return n
+
+    def owed_fence(self, now: float) -> int | None:
+        """Rule 11: the marker to publish for the fences that waited for room, once a fence
+        marker is back (or void); None if none waits or there is no room yet."""
+        owed = [rid for rid, (m, _) in self._fences.items() if m == OWED]
+        if not owed or not self.markers or not self._fence_room():
+            return None
+        n = self._fence_marker(now)
+        for rid in owed:
+            self._fences[rid] = (n, self._fences[rid][1])
+        return n
+
+    def _fence_room(self) -> bool:
+        """Rule 11: fewer than FENCE_MARKERS_OUT fence markers out (one that came back, or
+        that a later one stands for, rule 5, is out no more)."""
+        self._fence_out = [m for m in self._fence_out if m in self._marker_sent_at]
+        return len(self._fence_out) < FENCE_MARKERS_OUT
+
+    def _fence_marker(self, now: float) -> int:
         self._next += 1
         n = self._next
-        old = self._fences.get(rotator_id)
-        self._fences[rotator_id] = (n, lock or (old is not None and old[1]))
-        self._fenced_since.setdefault(rotator_id, now)
         self._marker_sent_at[n] = now
+        self._fence_out.append(n)
         return n
 
     def unfenced_lock(self, rotator_id: str) -> None:
@@ -381,7 +417,8 @@ class LastWord:
 
     @property
     def markers_out(self) -> bool:
-        return bool(self._marker_sent_at)
+        """A marker is out, or a fence's waits to go (the timer looks again: rule 5)."""
+        return bool(self._marker_sent_at) or any(m == OWED for m, _ in self._fences.values())
 
     def _number(self, payload: bytes, lane: bool = False) -> int:
         """A marker's number; 0 for anything else: another process's, a forged one (rule 10).
