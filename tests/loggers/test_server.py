@@ -98,6 +98,23 @@ def test_a_pst_azimuth_beyond_hamlibs_range_is_refused_not_folded() -> None:
         ep.stop()
 
 
+def test_a_pst_locator_that_is_none_is_refused_naming_it_once() -> None:
+    """An attack pass: R/error said "pst: locator 'ZZ99ZZ': locator 'ZZ99ZZ': first character
+    must be ..." (the locator named by the refusal and again by the reason)."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        send(ep.address(ep.pst[0])[1], b"<PST><QRA>ZZ99ZZ</QRA></PST>")
+        wait_until(lambda: tower.calls, 5, "refused")
+        assert tower.calls == [
+            ("refused", "pst: locator 'ZZ99ZZ': first character must be a letter A..R, got 'Z'")
+        ]
+    finally:
+        ep.stop()
+
+
 # -- hardening: each test below failed on the loggers before they served sockets fairly, ----------
 # answered once per query kind, refused ambiguous datagrams and survived their own faults
 

@@ -220,7 +220,7 @@ class Commands:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
-                    rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
+                    rot.report_refusal(f"pst: {exc}", described)  # (it names the locator)
                     return
                 rot.submit(Toward(lat, lon, req.locator, source=Source.PST, origin=by), described)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
