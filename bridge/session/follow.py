@@ -71,6 +71,10 @@ Rules:
    not the call, is what the rotor turns to). Whoever reaches WSJT-X's port chooses the call
    (an attack pass: a line end in it forged lines in the bridge's log, and a call of 300
    characters made Home Assistant refuse the sensor's state at every status).
+11. Each turn is logged, at INFO at most once per TURN_LOG_S (the line then says how many
+   turns came since the last one), the rest at DEBUG: whoever reaches WSJT-X's port chooses
+   how often the grid changes (an attack pass: a new grid every few milliseconds, within the
+   sender's budget, was some 100 INFO lines a second). Every turn is proposed all the same.
 """
 
 from __future__ import annotations
@@ -97,6 +101,7 @@ IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said onc
 IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
 NAME_SHOWN = 40  # characters of an instance name a log line quotes (WSJT-X's Id is short)
 MAX_CALL = 32  # rule 10: WSJT-X's longest (a compound call in <>) is some 15 characters
+TURN_LOG_S = 10.0  # rule 11: a turn's INFO line at most this often
 
 
 @dataclass(frozen=True)
@@ -145,6 +150,8 @@ class Follower:
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
         self._bearing: float | None = None  # rule 1: the bearing last turned to (a hand's from)
         self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
+        self._turn_log_t = -math.inf  # rule 11: when a turn was last said at INFO
+        self._turns_unsaid = 0  # rule 11: the turns since, said at DEBUG
         self._instance: str | None = None  # rule 8: the program followed
         self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
         self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
@@ -321,5 +328,15 @@ class Follower:
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False
         )
-        log.info("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call or "?", grid, az)
+        self._say_turn(scene.now, call or "?", grid, az)
         return Proposal(target=judged, busy=True)
+
+    def _say_turn(self, now: float, call: str, grid: str, az: float) -> None:
+        """Rule 11: at INFO at most once per TURN_LOG_S, with the turns unsaid since."""
+        if now - self._turn_log_t < TURN_LOG_S:
+            self._turns_unsaid += 1
+            log.debug("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call, grid, az)
+            return
+        unsaid, self._turn_log_t, self._turns_unsaid = self._turns_unsaid, now, 0
+        more = f" ({unsaid} more turn(s) since the last such line)" if unsaid else ""
+        log.info("%s: following %s in %s: %.1f deg%s", self._rig.rotator_id, call, grid, az, more)

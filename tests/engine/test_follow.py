@@ -212,6 +212,29 @@ def test_a_second_program_on_the_port_never_swings_the_rotor_between_two_partner
     assert part.step(at(10.0)).target is None
 
 
+def test_a_flood_of_new_grids_is_logged_a_line_every_few_seconds_not_one_a_turn(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """An attack pass: a program on WSJT-X's port sent a status with a new grid every few
+    milliseconds (within its budget, 200 a second); each turn was an INFO line, some 100 log
+    lines a second. Every turn is still proposed; its INFO line comes at most once per
+    TURN_LOG_S, saying how many turns came since the last one."""
+    part = following(rig())
+    grids = ["PM95", "FN31", "QF56", "JJ00"]
+    with caplog.at_level(logging.INFO, logger=fo.log.name):
+        for i in range(400):  # two seconds of a flood
+            now = 1.0 + i * 0.005
+            part.heard(Heard("JA1ABC", grids[i % len(grids)], False), now)
+            assert part.step(at(now)).target is not None
+        said = [r for r in caplog.records if r.levelno >= logging.INFO]
+        assert len(said) == 1 and "following JA1ABC in PM95" in said[0].getMessage()
+        part.heard(Heard("JA1ABC", "FN31", False), 1.0 + fo.TURN_LOG_S)
+        assert part.step(at(1.0 + fo.TURN_LOG_S)).target is not None
+    said = [r.getMessage() for r in caplog.records if r.levelno >= logging.INFO]
+    assert len(said) == 2 and "following JA1ABC in FN31" in said[1], said
+    assert "399 more turn(s) since the last such line" in said[1], said
+
+
 def test_the_stations_own_grid_and_its_antipode_have_no_bearing_and_are_reported_once() -> None:
     """JO62QM is the station's own subsquare (distance 0); AD67QL is its antipode's (every
     bearing a great circle to it): neither turns the rotor nor breaks following."""
