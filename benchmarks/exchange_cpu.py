@@ -23,7 +23,9 @@ meet the same machine; each round starts its bridge afresh and measures, from /p
   ground truth, each answered). The MQTT and Home Assistant work a reading causes is part of
   the cost; a reading is what an exchange is for. The emulators transmit their replies as a
   real UART would: each byte when its time on the line is over, one write per byte (the
-  "bytes per reply write" note shows it).
+  "bytes per reply write" note shows it). Also kept (in the data, not the table): the wake-ups
+  of the bridge's threads per exchange (their voluntary context switches), which
+  benchmarks/floor.py sets beside a minimal engine's.
 
 The machine may be shared: every round carries the load average at its end; a ratio is of the
 medians over the rounds (this tree / the older engine).
@@ -97,6 +99,18 @@ def thread_seconds(pid: int) -> dict[str, float]:
     return out
 
 
+def wakeups(pid: int) -> int:
+    """Voluntary context switches of every live thread of ``pid`` so far: how often its threads
+    went to sleep (each a wake-up later)."""
+    total = 0
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        with contextlib.suppress(OSError), open(f"/proc/{pid}/task/{tid}/status") as f:
+            for line in f:
+                if line.startswith("voluntary_ctxt_switches:"):
+                    total += int(line.split()[1])
+    return total
+
+
 def _polls_between(rig: Rig, t0: float, t1: float) -> int:
     return sum(
         1
@@ -150,9 +164,9 @@ def one_round(
             line.emu.manual_rotate(350.0)
         rig.mqtt.wait_all(topics, "moving", 30)
         time.sleep(1.0)  # polling at the moving rate
-        c0, t0, th0 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        w0, c0, t0, th0 = wakeups(pid), cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
         time.sleep(window_s)
-        c1, t1, th1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        c1, t1, th1, w1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid), wakeups(pid)
         busiest = sorted((th1[t] - th0[t] for t in th1 if t in th0), reverse=True)[:2]
         polls = _polls_between(rig, t0, t1)
         if polls == 0:
@@ -172,6 +186,7 @@ def one_round(
         "exchanges_s": polls / (t1 - t0),
         "ms_per_exchange": (c1 - c0) / polls * 1000,
         "busiest_threads_ms": [b / polls * 1000 for b in busiest],
+        "wakeups_per_exchange": (w1 - w0) / polls,
         "bytes_per_write": sent / writes if writes else float("nan"),
         "load_avg": os.getloadavg()[0],
     }

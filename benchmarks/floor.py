@@ -43,6 +43,7 @@ from benchmarks.exchange_cpu import (
     SPEED_DEG_S,
     one_round,
     thread_seconds,
+    wakeups,
 )
 from benchmarks.harness import PYTHON, BenchError, Mqtt, Scope, check_abort, start_broker
 from benchmarks.line import FrameLog
@@ -102,9 +103,9 @@ def floor_round(scope: Scope, name: str, options: list[str], window_s: float) ->
             mqtt.wait_for(topic, after=t, timeout_s=30)
         time.sleep(1.0)  # polling, as in exchange_cpu's round
         pid = proc.pid
-        c0, t0, th0 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        w0, c0, t0, th0 = wakeups(pid), cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
         time.sleep(window_s)
-        c1, t1, th1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        c1, t1, th1, w1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid), wakeups(pid)
         if proc.poll() is not None:
             raise BenchError(f"the floor's engine exited with status {proc.returncode}")
         busiest = sorted((th1[k] - th0[k] for k in th1 if k in th0), reverse=True)[:2]
@@ -130,6 +131,7 @@ def floor_round(scope: Scope, name: str, options: list[str], window_s: float) ->
         "exchanges_s": polls / (t1 - t0),
         "ms_per_exchange": (c1 - c0) / polls * 1000,
         "busiest_threads_ms": [b / polls * 1000 for b in busiest],
+        "wakeups_per_exchange": (w1 - w0) / polls,
         "bearings_per_exchange": published / polls,
         "wakes_per_exchange": wakes,
         "reads_per_exchange": reads,
@@ -160,6 +162,7 @@ def measure(
             print(
                 f"round {i + 1} {engine}: {r['ms_per_exchange']:.3f} ms/exchange, "
                 f"{r['exchanges_s']:.1f} exchanges/s, "
+                f"threads' wake-ups/exchange {r['wakeups_per_exchange']:.2f}, "
                 f"bearings/exchange {r.get('bearings_per_exchange', float('nan')):.2f}, "
                 f"wake-ups/exchange {r.get('wakes_per_exchange', float('nan')):.2f}, "
                 f"reads/exchange {r.get('reads_per_exchange', float('nan')):.2f}, "
@@ -174,7 +177,16 @@ def report(out: dict[str, list[dict[str, Any]]], base: str | None, window_s: flo
     table = Table(
         f"The floor: CPU per poll exchange, 16 Rotor-EZ turning, {rounds} rounds each in turns, "
         f"{window_s:g} s windows",
-        ["engine", "ms/exchange (median)", "range", "1st thread", "2nd", "x of base", "load avg"],
+        [
+            "engine",
+            "ms/exchange (median)",
+            "range",
+            "1st thread",
+            "2nd",
+            "wake-ups/exchange",
+            "x of base",
+            "load avg",
+        ],
     )
     med = {e: percentile(sorted(r["ms_per_exchange"] for r in rs), 50) for e, rs in out.items()}
     for engine, rs in out.items():
@@ -187,12 +199,14 @@ def report(out: dict[str, list[dict[str, Any]]], base: str | None, window_s: flo
             f"{min(ms):.3f}-{max(ms):.3f}",
             f"{percentile(sorted(t[0] for t in threads), 50):.3f}",
             f"{percentile(sorted(t[1] for t in threads), 50):.3f}",
+            f"{percentile(sorted(r['wakeups_per_exchange'] for r in rs), 50):.2f}",
             f"x{med[engine] / med[base]:.2f}" if base in med else "",
             f"{min(loads):.2f}-{max(loads):.2f}",
         )
     table.notes.append(
         "CPU: the engine's process, every thread (/proc schedstat), over the ``AI1;`` frames the "
-        "controllers logged in the window; 1st / 2nd thread: the two busiest threads, medians."
+        "controllers logged in the window; 1st / 2nd thread: the two busiest threads, medians; "
+        "wake-ups: the voluntary context switches of all its threads in the window."
     )
     return table
 
