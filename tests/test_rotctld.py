@@ -336,6 +336,20 @@ def test_get_pos_extended_forms(station: StationFactory) -> None:
     c.ask(b"+\\get_pos\n", b"get_pos:\nAzimuth: 123.00\nElevation: 0.00\nRPRT 0\n")
 
 
+@pytest.mark.parametrize("blank", [b" ", b"\t", b"\n", b"\r\n"])
+def test_a_prefix_not_followed_at_once_by_its_command_is_forgotten(
+    station: StationFactory, blank: bytes
+) -> None:
+    """Rule 1, as rotctld 4.5.4 reads it (compared with ``rotctld -m 401`` on the same
+    emulator): the character after ``+`` or ``;`` is the command; a blank there is the
+    unknown command ' ' and the prefix is gone, so ``+ p`` is answered in the terse form."""
+    c = station().connect()
+    c.ask(b"+" + blank + b"p\n", b"123.00\n0.00\n")
+    c.ask(b";" + blank + b"S\n", b"RPRT 0\n")
+    c.ask(b"+;" + blank + b"p\n", b"123.00\n0.00\n")
+    c.ask(b"+p\n", b"get_pos:\nAzimuth: 123.00\nElevation: 0.00\nRPRT 0\n")  # still extended
+
+
 def test_get_pos_on_a_dcu1_is_not_available(station: StationFactory) -> None:
     c = station("dcu1").connect()
     c.ask(b"p\n", b"RPRT -11\n")

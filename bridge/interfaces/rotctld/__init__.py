@@ -8,7 +8,9 @@ with what rotctld 4.5.4 itself sends.
 Rules:
 1. Input is a character stream, as rotctld reads it: a one-character command or ``\\long_name``,
    optionally prefixed by ``+`` or one punctuation character (extended replies, that character
-   as separator), then whitespace-separated arguments; CR and LF are plain whitespace, so a
+   as separator) with the command's first character right after it (a blank there is, to
+   rotctld, the unknown command ' ', and the prefix is forgotten: ``+ p`` is answered terse),
+   then whitespace-separated arguments; CR and LF are plain whitespace, so a
    command still waiting for arguments takes them from the following lines. ``#`` comments out
    the rest of the line. ``q``/``Q`` closes the connection. One departure, towards the safe
    side: an argument that would be a stop as a command (``S``, ``\\stop``, ``+S``, ``;S``, ...)

@@ -144,7 +144,8 @@ class RequestParser:
         return self._command_char(ch)
 
     def _command_char(self, ch: str) -> Request | Quit | None:
-        if ch in _WHITESPACE:
+        if ch in _WHITESPACE:  # rule 1: after a prefix, rotctld's unknown command ' ': the
+            self._clear()  # prefix is forgotten (``+ p`` is answered terse)
             return None
         if ch == "+" and not self._extended:
             self._extended, self._sep = True, "\n"
