@@ -498,6 +498,28 @@ def test_move_reset_set_conf_and_get_status_are_not_available(station: StationFa
     c.ask(b"+s\n", b"get_status:\nRPRT -11\n")
 
 
+def test_move_and_reset_read_their_arguments_as_rotctld_does(station: StationFactory) -> None:
+    """As rotctld 4.5.4 (compared with ``rotctld -m 401`` on the same emulator): a direction
+    by name (LEFT, CCW, RIGHT, CW, UP, DOWN) and a number read as C's ``%d`` reads it (its
+    leading integer) are the command's; not carried out, "not available", never "invalid"."""
+    c = station().connect()
+    for words in (
+        b"LEFT 50",
+        b"CCW 50",
+        b"RIGHT 5",
+        b"CW 5",
+        b"UP 1",
+        b"DOWN 1",
+        b"8x 5",
+        b"8 5.5",
+    ):
+        c.ask(b"M " + words + b"\n", b"RPRT -11\n")
+    c.ask(b"+M CW 5\n", b"move: CW 5\nRPRT -11\n")
+    c.ask(b"R 1x\n", b"RPRT -11\n")
+    for wrong in (b"M left 50", b"M x 50", b"M 8 x", b"M 8 -", b"R x"):  # no number: invalid
+        c.ask(wrong + b"\n", b"RPRT -1\n")
+
+
 # -- get_info, dump_state, dump_caps ------------------------------------------------------------
 
 

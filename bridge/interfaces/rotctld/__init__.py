@@ -30,7 +30,10 @@ Rules:
    ``w`` send_cmd, the locator and great-circle helpers, ``\\pause``) are read as rotctld reads
    them and answered "not available": their arguments are theirs (``send_cmd`` takes the rest
    of the line up to LF, the next line if it has nothing at all on it, as rotctld's fgets), never
-   commands of their own (``w P 20 30`` once turned the rotor).
+   commands of their own (``w P 20 30`` once turned the rotor). ``M`` (move) and ``R`` (reset)
+   are not carried out either: "not available" once their arguments are what rotctld takes (a
+   direction by name, ``LEFT``, ``CCW``, ``RIGHT``, ``CW``, ``UP``, ``DOWN``, or a leading
+   integer, as C's ``%d`` reads ``8x``), else "invalid" (``M x 5``), as rotctld answers.
 4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
 5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
    currently have is an error code, never the last value seen.

@@ -49,7 +49,9 @@ _CAPS_ROT_TYPE = {
 }
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_INTEGER = re.compile(r"[+-]?\d+")
+# what rotctld's sscanf("%d") takes as a number: a leading integer ("8x" is 8)
+_LEADING_INTEGER = re.compile(r"[+-]?\d")
+_DIRECTIONS = frozenset({"LEFT", "CCW", "RIGHT", "CW", "UP", "DOWN"})  # move's names, as rotctld
 
 
 class RotctldCommands:
@@ -121,12 +123,15 @@ class RotctldCommands:
         return RIG_OK, ""
 
     def _move(self, req: Request) -> tuple[int, str]:
-        if not all(_INTEGER.fullmatch(a) for a in req.args):
+        direction, speed = req.args
+        if not (direction in _DIRECTIONS or _LEADING_INTEGER.match(direction)):
+            return -RIG_EINVAL, ""
+        if not _LEADING_INTEGER.match(speed):
             return -RIG_EINVAL, ""
         return -RIG_ENAVAIL, ""  # no supported model moves by direction and speed yet
 
     def _reset(self, req: Request) -> tuple[int, str]:
-        if not _INTEGER.fullmatch(req.args[0]):
+        if not _LEADING_INTEGER.match(req.args[0]):
             return -RIG_EINVAL, ""
         return -RIG_ENAVAIL, ""
 
