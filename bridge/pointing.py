@@ -181,14 +181,16 @@ class Pointing:
     # -- targets (rules 2-5) -------------------------------------------------------------------
     def target_range(self) -> tuple[float, float]:
         """The azimuth targets a user may name, in true bearings (rules 1, 2): the limits as
-        they are without an offset; with one, 0..360 on a scale that wraps, else the limits
-        shifted by the offset (a SPID's overlap names the side itself)."""
+        they are without an offset; with one, 0..360 on a scale that wraps, else 0..360 and
+        the limits shifted by the offset (a SPID's or a 450-degree rotor's overlap names the
+        side itself; a review: a 450-degree GS-232 with offset 180 said 180..630, and
+        Hamlib's ``rotctl -m 2``, which takes \\dump_state's range, refused ``P 90`` itself)."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not self.offset_deg:
             return lo, hi
         if self.az_wraps:
             return 0.0, 360.0
-        return lo + self.offset_deg, hi + self.offset_deg
+        return min(0.0, lo + self.offset_deg), max(360.0, hi + self.offset_deg)
 
     def keep_out_of(self, bearing_deg: float) -> tuple[float, float] | None:
         return next((s for s in self.keep_out if in_sector(bearing_deg, s)), None)

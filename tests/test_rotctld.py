@@ -25,6 +25,7 @@ from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings, Settings
 from tests.support import feed, wait_until
 from tests.support.clock import FakeClock
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import FAST_POLLING
 from tests.support.waiting import slow
 
@@ -99,13 +100,14 @@ def station(tmp_path: Path) -> Iterator[StationFactory]:
     ) -> Station:
         link = tmp_path / f"serial-{model}-{len(made)}"
         spid = model in ("rot2prog", "rot1prog", "md01")
-        faults = {} if spid else {"jitter_deg": 0, "power_on_junk": False}
+        axes = spid or model.startswith("gs232")  # an emulator of az_speed_deg_s, no brake
+        faults = {} if axes else {"jitter_deg": 0, "power_on_junk": False}
         emu = emulators.start(
             model,
             link=str(link),
             start_az_deg=start_az_deg,
-            **({"az_speed_deg_s": 40.0} if spid else {"speed_deg_s": 40.0}),
-            **({} if spid else {"brake_delay_s": 0.0 if model == "rotorcard" else 1.5}),
+            **({"az_speed_deg_s": 40.0} if axes else {"speed_deg_s": 40.0}),
+            **({} if axes else {"brake_delay_s": 0.0 if model == "rotorcard" else 1.5}),
             **faults,
         )
         cfg = RotatorSettings(
@@ -840,6 +842,25 @@ def test_dump_state_never_says_south_zero(station: StationFactory) -> None:
     c = station("rotorcard", az_offset_deg=180).connect()
     reply = c.single_recv(b"\\dump_state\n")
     assert b"min_az=0.000000\nmax_az=360.000000\n" in reply and b"south_zero=0\n" in reply
+
+
+@pytest.mark.hamlib
+@pytest.mark.parametrize(("offset", "lo", "hi"), [(180, 0, 630), (30, 0, 480), (-135, -135, 360)])
+def test_every_true_bearing_is_in_dump_states_range_on_a_rotor_past_360_with_an_offset(
+    station: StationFactory, rotctl_path: str, offset: float, lo: float, hi: float
+) -> None:
+    """pointing.py rules 1 and 2: a 450-degree GS-232 with an offset takes every true bearing
+    in 0..360 and, naming the side, its limits shifted by the offset. ``\\dump_state`` gave
+    the shifted limits alone (180..630), and Hamlib's ``rotctl -m 2`` refused ``P 90 0``
+    itself, "Invalid parameter", before it reached the bridge."""
+    st = station("gs232b-450", start_az_deg=200, az_offset_deg=offset)
+    reply = st.connect().single_recv(b"\\dump_state\n")
+    assert f"min_az={lo:f}\nmax_az={hi:f}\n".encode() in reply
+    bearing = 340 if offset == -135 else 10  # not in the shifted limits alone
+    done = run_rotctl(rotctl_path, 2, st.server.port, "P", str(bearing), "0")
+    assert done.returncode == 0, done
+    raw = (bearing - offset) % 360
+    st.emu.wait_for(lambda s: s.target_az_deg == raw)
 
 
 # -- hostile neighbours (issue 14, item 1): HTTP is not rotctld ----------------------------------
