@@ -23,7 +23,11 @@ Rules:
    on, and nothing is sent. A new setting is one encoder in its codec and one spec entry.
 7. A query given up (``expire_query``) may still be answered: ``LateAnswers`` (OneQuery's, and
    any codec's that says ``awaiting_reply``) counts the lines of its answer still owed (the
-   codec says how many, ``_owe_late``; at most LATE_LINES_MAX in all). A clean reply line of
+   codec says how many, ``_owe_late``; at most LATE_LINES_MAX in all: more than the polls a
+   link gives up in a default silence timeout, 3 s at the shortest reply time, 0.25 s, so that
+   an adapter that stalls once for 2-3 s and then hands over every answer it held is told
+   nowhere; an attack pass: with four, a 2.5 s stall mid-turn was told on R/error as
+   'controller sent 25 bytes that are no valid reply' on an RT-21). A clean reply line of
    the controller's form while no reply is awaited and some are owed is one of them
    (``_late_answer``): UNSOLICITED (it spoils a reading held in the same exchange, link.py
    rule 9), never a reading (but rc2800.py rule 6's, before any other exchange: that box's
@@ -280,8 +284,8 @@ class Plain:
         return []
 
 
-LATE_LINES_MAX = 4  # rule 7: a busy host that gave up a few polls in a row
-SAID_KEEP = 8  # rule 7
+LATE_LINES_MAX = 16  # rule 7: the polls given up in a silence timeout (a 3 s adapter stall)
+SAID_KEEP = LATE_LINES_MAX  # rule 7: every line owed late, come in one quiet spell
 
 
 class LateAnswers(ABC):

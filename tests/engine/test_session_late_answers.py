@@ -251,3 +251,40 @@ def test_a_stop_to_a_spid_that_answers_late_waits_no_longer_than_twice_its_reply
     v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 10, "stopped")
     assert v.truth().az_deg < 60 and v.errors() == []
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1.0)
+
+
+@pytest.mark.parametrize("model", ["rt21", "md01", "easycomm3"])
+def test_one_adapter_stall_mid_turn_is_told_nowhere_and_shows_no_older_bearing(
+    rig: Rig, model: str
+) -> None:
+    """A USB adapter that stalls once for 2.5 s mid-turn (under the 3 s silence timeout) and
+    then hands over every answer it held at once: each is a late answer to a poll given up,
+    told nowhere, and the rotor turns on to its target, online throughout. Before: the
+    polls given up in the stall (six or more) owed more lines than the codec counted (four),
+    and the answers were told on R/error as 'controller sent 25 bytes that are no valid
+    reply' (RT-21; 60 on an MD-01, 65 on an Easycomm)."""
+    poll = ALWAYS_LATE[model]
+    speed = {} if model == "md01" else {"az_speed_deg_s": 6.0}
+    v = rig(model, emulator={"start_az_deg": 10, **speed})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online at rest")
+    el = 0 if v.cfg.spec.has_elevation else None
+    v.target(60, el)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 20, 60, "turning")
+    written: list[tuple[float, float]] = []
+
+    def record(wire: bytes, now: float) -> bytes:
+        if wire == poll:
+            written.append((now, v.truth().az_deg))
+        return wire
+
+    v.to_device = record
+    v.run_until(lambda h: h.writes[-1] == Sent(h.now, poll), 5, "a poll just written")
+    t = v.now
+    v.delay_output(2.5)
+    v.run_until(settled_at(60, el), 120, "at 60")
+    assert len([w for w, _ in written if t <= w < t + 2.5]) > 4  # (more than a few given up)
+    for at, status in v.statuses:
+        if at > t and status.bearing_deg is not None:
+            asked = [az for w, az in written if w < at]  # where it was at the last poll
+            assert not asked or status.bearing_deg >= asked[-1] - 1.0, (at - t, status)
+    assert v.errors() == [] and all(s.available for s in v.published(since=t))

@@ -10,7 +10,13 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import HamlibRotType, JunkReason, JunkReply, PositionReply
+from bridge.protocols.base import (
+    LATE_LINES_MAX,
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    PositionReply,
+)
 from bridge.protocols.gs232 import AXIS_STOPS, Gs232Codec
 from tests.support import HOW, feed
 from tests.support.codecs import STOPS, given_up
@@ -227,17 +233,18 @@ def test_only_a_clean_line_of_the_boxs_own_form_is_a_late_answer() -> None:
 
 
 def test_late_answers_are_owed_for_a_few_polls_given_up_at_most() -> None:
-    """Rule 5 (base.py rule 7): four given up in a row are owed; a fifth line is told."""
+    """Rule 5 (base.py rule 7): LATE_LINES_MAX given up in a row are owed (a 2-3 s stall's);
+    a line more is told."""
     codec = Gs232Codec("a", elevation=False)
-    for _ in range(6):
+    for _ in range(LATE_LINES_MAX + 2):
         codec.encode_query()
         codec.expire_query()
-    lines = [b"+0%03d\r" % az for az in range(10, 15)]
+    lines = [b"+0%03d\r" % az for az in range(10, 11 + LATE_LINES_MAX)]
     replies = codec.feed(b"\n".join(lines) + b"\n")
-    assert positions(replies) == [] and codec.harmless(b"".join(lines[:4]))
+    assert positions(replies) == [] and codec.harmless(b"".join(lines[:LATE_LINES_MAX]))
     assert not codec.harmless(b"".join(lines))
     codec.encode_query()  # the next poll's answer is a reading as ever
-    assert positions(codec.feed(b"+0015\r\n")) == [(15.0, None)]
+    assert positions(codec.feed(b"+0099\r\n")) == [(99.0, None)]
 
 
 @settings(max_examples=200, deadline=None)
