@@ -113,19 +113,28 @@ Rules:
    after that question it came (``answered_late``); from then on every answer is waited for
    that much past the reply time, and OVERDUE_SHARE of it more (JUNK_QUIET_S at least), up to
    one reply time more (``reply_wait_s``: at most twice the model's reply time, so that a lost
-   reply still ends in time and, on a half-duplex line, a stop waits no longer than that for an
-   answer under way). Each answer in the reply time gives back OVERDUE_EASE of it. So that
-   such an answer can come before the next question (which would take it for its own: no line
-   says which poll it answers), a poll (not a stop's or a target's exchange) given up with
-   nothing read at all, the first since a valid reply, holds the next poll until twice the
-   reply time from it, or until every line it owes came. A verdict's poll (rule 2) does not
-   wait, nor does a poll after one of several frames (RC2800's two axes: as in rule 7, their
-   timing is not one answer's). A controller later than the longest wait goes offline after
-   its silence timeout as one that gives nothing, but the error says it answers, and how late
-   (controller.py rule 2). (An RT-21 behind a serial server, 0.1 s past its 0.3 s, was offline
-   from the start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next poll went as
-   the last was given up, had each poll take the one before's answer: its bearing published
-   5 degrees behind a turning rotor.)
+   reply still ends in time and, on a half-duplex line, a stop waits no longer than that, and
+   the rest of an answer then arriving, for an answer under way). Each answer in the reply time
+   gives back OVERDUE_EASE of it. So that such an answer can come before the next question
+   (which would take it for its own: no line says which poll it answers), a poll (not a stop's
+   or a target's exchange) given up with nothing read at all, the first since a valid reply,
+   holds the next poll until twice the reply time from it, or until every line it owes came. A
+   verdict's poll (rule 2) does not wait, nor does a poll after one of several frames (RC2800's
+   two axes: as in rule 7, their timing is not one answer's). An answer whose bytes are
+   arriving when its wait (or the hold) ends is let finish: given up (the next poll written)
+   once the line has been quiet JUNK_QUIET_S, and no later than its whole reply's time at the
+   line rate and that quiet time past the wait (``_overdue_t``, ``_late_hold_t``); on a
+   half-duplex line a stop waits that much more at most. (An attack pass: an RT-21 answering
+   0.585 s after each poll, whole just past the 0.6 s, had each answer given up with its ``;``
+   on its way, which spoiled the next poll's; told as junk, then offline as 'answers only
+   garbled replies: a noisy line?', the turn stopped short.) A controller later than the
+   longest wait goes offline after its silence timeout as one that gives nothing, but the error
+   says it answers, and how late (controller.py rule 2); where a poll went before its late
+   answer came (the moving polls), that poll takes it, and the next the one after: online, a
+   poll behind (docs/controllers.md's limit: no line says which poll it answers). (An RT-21
+   behind a serial server, 0.1 s past its 0.3 s, was offline from the start, 'does not answer';
+   a GS-232B 0.1 s past its 1 s, whose next poll went as the last was given up, had each poll
+   take the one before's answer: its bearing published 5 degrees behind a turning rotor.)
 """
 
 from __future__ import annotations
@@ -404,7 +413,20 @@ class Link:
     # -- replies ------------------------------------------------------------------------------
     def reply_overdue(self, now: float) -> bool:
         held = self._held is not None  # rule 9: the reply came
-        return not held and self._reply_deadline is not None and now >= self._reply_deadline
+        due = self._overdue_t()
+        return not held and due is not None and now >= due
+
+    def _overdue_t(self) -> float | None:
+        """Rule 12: when the owed reply is given up: at its deadline, or, if its bytes are
+        arriving then, once the line has been quiet JUNK_QUIET_S (no later than the time its
+        whole reply takes at the line rate after the deadline, and that quiet time)."""
+        deadline = self._reply_deadline
+        if deadline is None or self._slew is not None or self._garbled:
+            return deadline
+        if self._read_t < self._asked_t or not self.codec.awaiting_reply():
+            return deadline
+        most = deadline + (self.spec.reply_bytes + 1) * self._byte_s + JUNK_QUIET_S
+        return min(most, max(deadline, self._read_t + JUNK_QUIET_S))
 
     def hold_reading(self, reply: PositionReply, now: float) -> bool:
         """Rule 9: a reading, taken once the line stays quiet after it; False when another is
@@ -518,6 +540,15 @@ class Link:
         self.end_slew(now)
         return again
 
+    def _late_hold_t(self) -> float:
+        """Rule 12: no poll before then: the late hold's end, or, if a late answer's bytes are
+        arriving then, once the line has been quiet JUNK_QUIET_S (as ``_overdue_t``)."""
+        hold = self._late_hold_until
+        if hold == -math.inf or not self._owes_late():
+            return hold
+        most = hold + (self.spec.reply_bytes + 1) * self._byte_s + JUNK_QUIET_S
+        return min(most, max(hold, self._read_t + JUNK_QUIET_S))
+
     def _owes_late(self) -> bool:
         """Rule 12: lines of an answer given up may still come (the codec's rule 7)."""
         return isinstance(self.codec, LateAnswers) and self.codec.owes_late
@@ -619,7 +650,7 @@ class Link:
             return False
         if now < self._refusal_until:  # rule 4
             return False
-        if now < self._late_hold_until and not self._verdict:  # rule 12
+        if now < self._late_hold_t() and not self._verdict:  # rule 12
             return False
         if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
             return False
@@ -711,10 +742,10 @@ class Link:
         if self.spec.can_report_position:
             deadline = self._reply_deadline
             if deadline is None:
-                hold = -math.inf if self._verdict else self._late_hold_until  # rule 12
+                hold = -math.inf if self._verdict else self._late_hold_t()  # rule 12
                 times.append(max(self._next_poll, self._paced_from(), self._refusal_until, hold))
             elif self._held is None:  # rule 9: not overdue while its reading is held
-                times.append(deadline)
+                times.append(self._overdue_t() or deadline)  # (rule 12: an answer under way)
                 over = self._garbled_over_t() if self._garbled else None
                 if over is not None:  # rule 11
                     times.append(over)
