@@ -130,11 +130,12 @@ Rules:
    garbled replies: a noisy line?', the turn stopped short.) A controller later than the
    longest wait goes offline after its silence timeout as one that gives nothing, but the error
    says it answers, and how late (controller.py rule 2); where a poll went before its late
-   answer came (the moving polls), that poll takes it, and the next the one after: online, a
-   poll behind (docs/controllers.md's limit: no line says which poll it answers). (An RT-21
-   behind a serial server, 0.1 s past its 0.3 s, was offline from the start, 'does not answer';
-   a GS-232B 0.1 s past its 1 s, whose next poll went as the last was given up, had each poll
-   take the one before's answer: its bearing published 5 degrees behind a turning rotor.)
+   answer came (the moving polls, a GS-232B's idle ones), that poll takes it, and the next the
+   one after: online, a poll behind (docs/controllers.md's limit: no line says which poll it
+   answers). (An RT-21 behind a serial server, 0.1 s past its 0.3 s, was offline from the
+   start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next poll went as the last was
+   given up, had each poll take the one before's answer: its bearing published 5 degrees behind
+   a turning rotor.)
 """
 
 from __future__ import annotations
