@@ -228,20 +228,23 @@ def test_a_controller_that_goes_a_little_slow_mid_turn_stays_online(rig: Rig) ->
     assert v.errors() == [] and all(s.available for s in v.published(since=t))
 
 
+@pytest.mark.parametrize(("model", "late_s"), [("rt21", 0.585), ("rot2prog", 1.1)])
 def test_a_controller_whose_answers_end_just_past_the_longest_wait_stays_online(
-    rig: Rig,
+    rig: Rig, model: str, late_s: float
 ) -> None:
-    """An RT-21 that starts answering 0.585 s after each poll halfway through a turn: each
-    answer begins within twice its 0.3 s reply time and is whole just after it (link.py rule
-    12: an answer under way at the wait's end is let finish). Online throughout, no error,
-    no bearing older than the last poll published, and it arrives. Before: each answer was
-    given up with its last bytes on their way, and those spoiled the next poll's answer: told
-    on R/error as bytes that are no valid reply, then offline as 'answers only garbled
-    replies (no valid reply for 8 s): a noisy line?', the turn stopped at 59 of 300."""
-    v, written = turning(rig, "rt21")
+    """A controller that starts answering late halfway through a turn: each answer begins
+    within twice its reply time (RT-21 0.3 s, Rot2Prog 0.72 s) and is whole just after it
+    (link.py rule 12: an answer under way at the wait's end is let finish). Online
+    throughout, no error, no bearing older than the last poll published, and it arrives.
+    Before: each answer was given up with its last bytes on their way. Those spoiled the next
+    poll's answer on the RT-21: told on R/error as bytes that are no valid reply, then offline
+    as 'answers only garbled replies (no valid reply for 8 s): a noisy line?', the turn
+    stopped at 59 of 300; the Rot2Prog's next poll took them, its bearing a poll behind."""
+    v, written = turning(rig, model)
     t = v.now
-    v.answer_after(0.585)
-    v.run_until(settled_at(300), 120, "at 300")
+    v.answer_after(late_s)
+    el = 0 if v.cfg.spec.has_elevation else None
+    v.run_until(settled_at(300, el), 400, "at 300")
     for at, status in v.statuses:
         if at > t + 1.0 and status.bearing_deg is not None:  # (from the second poll on)
             asked = [az for w, az in written if w < at]
