@@ -746,7 +746,8 @@ class Link:
                 hold = -math.inf if self._verdict else self._late_hold_t()  # rule 12
                 times.append(max(self._next_poll, self._paced_from(), self._refusal_until, hold))
             elif self._held is None:  # rule 9: not overdue while its reading is held
-                times.append(self._overdue_t() or deadline)  # (rule 12: an answer under way)
+                due = self._overdue_t()  # (rule 12: an answer under way is let finish)
+                times.append(deadline if due is None else due)
                 over = self._garbled_over_t() if self._garbled else None
                 if over is not None:  # rule 11
                     times.append(over)
