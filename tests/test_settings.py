@@ -1193,6 +1193,16 @@ def test_a_preset_name_no_command_could_pick_is_refused_naming_it(name: str) -> 
     assert f"rotators[0]: presets: name {name!r} holds U+" in text, text
 
 
+@pytest.mark.parametrize("value", [[], [45], [45, 10, 0]])
+def test_a_preset_list_not_of_two_numbers_is_refused_naming_it(value: list[int]) -> None:
+    """An attack pass: ``presets = { EU = [] }`` ended check-config and run in an IndexError
+    traceback (the judge's terms were made of it before it was judged), and ``[45]`` on an
+    az/el model was said to need a rotator with elevation."""
+    text = refusal(document({"model": "gs232b", "presets": {"EU": value}}))
+    expected = f"rotators[0].presets: 'EU': [azimuth, elevation] is two numbers, not {len(value)}"
+    assert expected in text, text
+
+
 @pytest.mark.parametrize("name", ["شمال\u200cغرب", "my\u00a0shack", "\U0001fae8 Ham"])
 def test_a_preset_name_in_any_script_is_taken_and_picked(name: str) -> None:
     """A zero-width non-joiner (Persian), a no-break space, a character newer than Python's

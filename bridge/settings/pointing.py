@@ -195,6 +195,22 @@ class PointingFields(Strict):
             offset += 360.0
         return offset + 0.0  # never -0.0
 
+    @field_validator("presets")
+    @classmethod
+    def _two_numbers(
+        cls, presets: dict[str, float | list[float]]
+    ) -> dict[str, float | list[float]]:
+        """A preset's list is [azimuth, elevation], judged before the judge's terms are made of
+        it (pointing_for): an attack pass: ``presets = { EU = [] }`` ended check-config and run
+        in an IndexError traceback, and ``[45]`` on an az/el model was said to need one."""
+        for name, value in presets.items():
+            if isinstance(value, list) and len(value) != 2:
+                raise ValueError(
+                    f"{name!r}: [azimuth, elevation] is two numbers, not {len(value)}; "
+                    "or one number, the azimuth"
+                )
+        return presets
+
     def pointing_for(
         self, spec: ModelSpec, az_limits: tuple[float, float], el_limits: tuple[float, float]
     ) -> Pointing:
