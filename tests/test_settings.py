@@ -1203,6 +1203,13 @@ def test_a_preset_list_not_of_two_numbers_is_refused_naming_it(value: list[int])
     assert expected in text, text
 
 
+def test_a_park_elevation_out_of_the_limits_is_refused_naming_park_el_deg() -> None:
+    """An attack pass: ``park_el_deg = -1`` was refused as ``park_az_deg: elevation -1 outside
+    the limits``, naming the key that was right."""
+    text = refusal(document({"model": "gs232b", "park_az_deg": 0, "park_el_deg": -1}))
+    assert "rotators[0]: park_az_deg, park_el_deg: elevation -1 outside" in text, text
+
+
 @pytest.mark.parametrize("name", ["شمال\u200cغرب", "my\u00a0shack", "\U0001fae8 Ham"])
 def test_a_preset_name_in_any_script_is_taken_and_picked(name: str) -> None:
     """A zero-width non-joiner (Persian), a no-break space, a character newer than Python's

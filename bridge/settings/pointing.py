@@ -265,8 +265,9 @@ class PointingFields(Strict):
         if 0 < self.park_after_idle_s < 5:
             raise ValueError("park_after_idle_s must be 0 (never) or at least 5 s")
         named = [(f"presets.{n}", az, el) for n, (az, el) in pointing.presets.items()]
-        if pointing.park is not None:
-            named.append(("park_az_deg", *pointing.park))
+        if pointing.park is not None:  # (an elevation refused names the key that holds it)
+            keys = "park_az_deg" if self.park_el_deg is None else "park_az_deg, park_el_deg"
+            named.append((keys, *pointing.park))
         for field, az, el in named:
             check_position(pointing, field, az, el)
 
