@@ -1203,6 +1203,28 @@ def test_a_preset_list_not_of_two_numbers_is_refused_naming_it(value: list[int])
     assert expected in text, text
 
 
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [
+        ("Tower\\nconfig OK: forged\\u001b[31m", "rotators[0].name: holds U+000A, which MQTT"),
+        ("\\u001b[2J", "rotators[0].name: holds U+001B, which MQTT"),
+        (" ", "rotators[0].name: must be 1..64 characters without blanks at either end"),
+        ("x" * 65, "rotators[0].name: must be 1..64 characters without blanks at either end"),
+    ],
+)
+def test_a_rotator_name_no_one_could_read_is_refused_naming_it(
+    tmp_path: Path, name: str, said: str
+) -> None:
+    """settings/base.py rule 5, an attack pass: any text was taken as a rotator's name, and
+    check-config printed a name holding a line break and a terminal's escape sequence in its
+    summary, a forged line of its own and the terminal turned red; a blank one gave Home
+    Assistant a device with no name."""
+    text = MINIMAL.replace('name = "Tower"', f'name = "{name}"')
+    out = cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 2 and said in out.stderr, out.stdout + out.stderr
+    assert "forged" not in out.stdout and "\x1b" not in out.stdout + out.stderr
+
+
 def test_a_park_elevation_out_of_the_limits_is_refused_naming_park_el_deg() -> None:
     """An attack pass: ``park_el_deg = -1`` was refused as ``park_az_deg: elevation -1 outside
     the limits``, naming the key that was right."""

@@ -61,6 +61,8 @@ def test_a_rotator_may_be_in_two_groups() -> None:
         ({"offsets": {"lower": 360}}, "lower = 360: an offset is 0 to 360"),
         ({"limits": {"upper": [300, 20]}}, "upper = [300, 20]: limits are true bearings"),
         ({"limts": {}}, "groups[0].limts"),
+        ({"name": "Stack\n\x1b[31m"}, "groups[0].name: holds U+000A, which MQTT does not carry"),
+        ({"name": ""}, "groups[0].name: must be 1..64 characters without blanks at either end"),
     ],
 )
 def test_every_mistake_names_its_key(group: dict[str, Any], said: str) -> None:

@@ -23,6 +23,11 @@ Rules:
    left unset) is an error: pydantic reads it as ``.``, the current folder (an attack pass: an
    empty audit_file passed check-config, and every line was lost at run; an empty password
    file was "not a file").
+5. A name a person reads (a rotator's, a group's: ``check_name``) is 1 to NAME_MAX characters
+   MQTT carries, without blanks at either end: an attack pass gave a rotator the name
+   ``"HF\nconfig OK: ..."`` with a terminal's escape sequence, and check-config printed a forged
+   line in its summary and turned the terminal red; a blank name gave Home Assistant a device
+   with no name.
 """
 
 from __future__ import annotations
@@ -33,9 +38,24 @@ from typing import Annotated, Any, Union, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
 
+from bridge.core.text import NOT_TEXT, bad_char
+
 _NUMBERS = (int, float)
 # settings/mqtt.py rule 4, settings/web.py rule 5: why a value holding '@' is not quoted
 NOT_SHOWN = "not shown: what comes before it may be a password"
+NAME_MAX = 64  # rule 5: a rotator's or a group's name
+
+
+def check_name(v: str | None) -> str | None:
+    """Rule 5: ``v`` if it is a name to show (None: left out); ValueError naming the fault."""
+    if v is None:
+        return v
+    bad = bad_char(v)
+    if bad is not None:
+        raise ValueError(f"holds {bad}, {NOT_TEXT}")
+    if not v.strip() or v != v.strip() or len(v) > NAME_MAX:
+        raise ValueError(f"must be 1..{NAME_MAX} characters without blanks at either end")
+    return v
 
 
 def takes_boolean_for_number(annotation: Any, value: Any) -> bool:

@@ -30,7 +30,7 @@ import re
 from pydantic import Field, field_validator, model_validator
 
 from bridge.feature import registered, topic_words
-from bridge.settings.base import Strict
+from bridge.settings.base import Strict, check_name
 
 _ID = re.compile(r"^[a-z0-9_-]{1,32}$")
 
@@ -68,7 +68,8 @@ class GroupSettings(Strict):
     )
     name: str | None = Field(
         None,
-        description="what dashboards and Home Assistant call the group",
+        description="what dashboards and Home Assistant call the group (at most 64 "
+        "characters, no control character, no blank at either end)",
         examples=["Stacked 20 m yagis"],
         json_schema_extra={"unset": "the id"},
     )
@@ -91,6 +92,11 @@ class GroupSettings(Strict):
         examples=[{"upper": [20, 340]}],
         json_schema_extra={"unset": "each member's own limits only"},
     )
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str | None) -> str | None:
+        return check_name(v)  # settings/base.py rule 5
 
     @field_validator("id")
     @classmethod

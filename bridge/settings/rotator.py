@@ -33,7 +33,7 @@ from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
-from bridge.settings.base import Strict
+from bridge.settings.base import Strict, check_name
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_topic
@@ -147,7 +147,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     )
     name: str | None = Field(
         None,
-        description="the name shown in dashboards and Home Assistant",
+        description="the name shown in dashboards and Home Assistant (at most 64 characters, "
+        "no control character, no blank at either end)",
         examples=["Tower"],
         json_schema_extra={"unset": "the id"},
     )
@@ -456,6 +457,11 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "a start delay or a coast that much longer",
         examples=[25],
     )
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str | None) -> str | None:
+        return check_name(v)  # settings/base.py rule 5
 
     @field_validator("id")
     @classmethod
