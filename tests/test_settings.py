@@ -1225,6 +1225,29 @@ def test_a_rotator_name_no_one_could_read_is_refused_naming_it(
     assert "forged" not in out.stdout and "\x1b" not in out.stdout + out.stderr
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        (
+            'port = "/dev/serial',
+            'port = "/dev/ttyX\\nconfig OK: forged\\u001b[31m/dev/serial',
+            "rotators[0].port",
+        ),
+        ("[mqtt]", 'state_file = "/tmp/st\\nconfig OK: forged.json"\n[mqtt]', "state_file"),
+    ],
+)
+def test_a_path_holding_a_control_character_is_refused_naming_it(
+    tmp_path: Path, old: str, new: str, key: str
+) -> None:
+    """settings/base.py rule 6, an attack pass: a serial port named with a line break and a
+    terminal's escape sequence passed, and check-config's report and its warning that the port
+    was not found each printed a forged line 'config OK: forged', the terminal turned red."""
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL.replace(old, new, 1))))
+    said = f"{key}: holds U+000A, a control character or a non-character"
+    assert out.returncode == 2 and said in out.stderr, out.stdout + out.stderr
+    assert "\nconfig OK: forged" not in out.stdout + out.stderr
+
+
 def test_a_park_elevation_out_of_the_limits_is_refused_naming_park_el_deg() -> None:
     """An attack pass: ``park_el_deg = -1`` was refused as ``park_az_deg: elevation -1 outside
     the limits``, naming the key that was right."""

@@ -28,6 +28,9 @@ Rules:
    ``"HF\nconfig OK: ..."`` with a terminal's escape sequence, and check-config printed a forged
    line in its summary and turned the terminal red; a blank name gave Home Assistant a device
    with no name.
+6. A path (a file's, a serial port's: ``check_named_path``) holds no control character:
+   an attack pass gave a serial port the name ``"/dev/ttyX\nconfig OK: ..."`` and
+   check-config's report and its warning printed a forged line (the log at run too).
 """
 
 from __future__ import annotations
@@ -44,6 +47,18 @@ _NUMBERS = (int, float)
 # settings/mqtt.py rule 4, settings/web.py rule 5: why a value holding '@' is not quoted
 NOT_SHOWN = "not shown: what comes before it may be a password"
 NAME_MAX = 64  # rule 5: a rotator's or a group's name
+
+
+def check_named_path(v: str) -> str:
+    """Rule 6: ``v`` if it is a path the bridge can name in a line of its own; ValueError."""
+    bad = bad_char(v)
+    if bad is not None:
+        raise ValueError(
+            f"holds {bad}, a control character or a non-character: the bridge names its "
+            "files and ports in its log and check-config's report, where it would forge a "
+            "line of its own"
+        )
+    return v
 
 
 def check_name(v: str | None) -> str | None:
@@ -91,6 +106,8 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
         fault = _text_fault(value)
         if fault is not None:
             raise ValueError(fault)
+    if field is not None and isinstance(value, str) and _a_path(field.annotation):
+        check_named_path(value)  # rule 6 (after rule 3's NUL)
     return value
 
 

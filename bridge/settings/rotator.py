@@ -33,7 +33,7 @@ from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
-from bridge.settings.base import Strict, check_name
+from bridge.settings.base import Strict, check_name, check_named_path
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_topic
@@ -62,7 +62,7 @@ def check_port(v: str) -> str:
         )
     if "\0" in v:
         raise ValueError("must not hold a NUL byte (no path does)")
-    return v
+    return check_named_path(v)  # settings/base.py rule 6
 
 
 class AxisSettings(Strict):
