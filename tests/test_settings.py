@@ -1234,14 +1234,25 @@ def test_a_rotator_name_no_one_could_read_is_refused_naming_it(
             "rotators[0].port",
         ),
         ("[mqtt]", 'state_file = "/tmp/st\\nconfig OK: forged.json"\n[mqtt]', "state_file"),
+        (
+            "brake_delay_s = 5",
+            'brake_delay_s = 5\nrotctld_port = 4533\nrotctld_bind = "::1\\nconfig OK: forged"',
+            "rotators[0].rotctld_bind",
+        ),
+        (
+            "brake_delay_s = 5",
+            'brake_delay_s = 5\ngs232_pty = "/tmp/gs\\nconfig OK: forged"',
+            "rotators[0].gs232_pty",
+        ),
     ],
 )
-def test_a_path_holding_a_control_character_is_refused_naming_it(
+def test_a_path_or_an_address_holding_a_control_character_is_refused_naming_it(
     tmp_path: Path, old: str, new: str, key: str
 ) -> None:
     """settings/base.py rule 6, an attack pass: a serial port named with a line break and a
     terminal's escape sequence passed, and check-config's report and its warning that the port
-    was not found each printed a forged line 'config OK: forged', the terminal turned red."""
+    was not found each printed a forged line 'config OK: forged', the terminal turned red; a
+    pty's path and a bind address, in check-config's summary, likewise."""
     out = cli("check-config", "-c", str(write(tmp_path, MINIMAL.replace(old, new, 1))))
     said = f"{key}: holds U+000A, a control character or a non-character"
     assert out.returncode == 2 and said in out.stderr, out.stdout + out.stderr

@@ -28,9 +28,11 @@ Rules:
    ``"HF\nconfig OK: ..."`` with a terminal's escape sequence, and check-config printed a forged
    line in its summary and turned the terminal red; a blank name gave Home Assistant a device
    with no name.
-6. A path (a file's, a serial port's: ``check_named_path``) holds no control character:
-   an attack pass gave a serial port the name ``"/dev/ttyX\nconfig OK: ..."`` and
-   check-config's report and its warning printed a forged line (the log at run too).
+6. A path (a file's, a serial port's, a pty's: ``check_named_path``) and a bind address (the
+   keys ``*bind`` and ``*_pty`` are text) hold no control character: an attack pass gave a
+   serial port the name ``"/dev/ttyX\nconfig OK: ..."`` and check-config's report and its
+   warning printed a forged line (the log at run too); a pty's path and a bind address
+   likewise. (Other text keys judge their own text, with their own words.)
 """
 
 from __future__ import annotations
@@ -106,8 +108,10 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
         fault = _text_fault(value)
         if fault is not None:
             raise ValueError(fault)
-    if field is not None and isinstance(value, str) and _a_path(field.annotation):
-        check_named_path(value)  # rule 6 (after rule 3's NUL)
+    named = info.field_name or ""
+    if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
+        if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
+            check_named_path(value)
     return value
 
 
