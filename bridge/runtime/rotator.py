@@ -695,9 +695,11 @@ class Rotator:
             setting = self.spec.setting(command.name)
             if setting is None:
                 have = ", ".join(self.spec.options) or "none"
+                name = command.name  # (cut short: any name an interface took, of any length)
+                shown = repr(name) if len(name) <= 40 else f"{name[:40]!r}… ({len(name)} chars)"
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
-                    f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
+                    f"{self.spec.display_name} has no option {shown} (options: {have})",
                 )
             try:  # the declaration is the judge of a value (protocols/base.py rule 6)
                 judged = replace(command, value=setting.read(command.value))

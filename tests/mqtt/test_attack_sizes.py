@@ -90,3 +90,32 @@ def test_a_backlog_of_planted_retained_topics_does_not_make_the_last_runs_offlin
         wait_until(lambda: "retained topic(s)" in bridge.log(), 30, "the first look to end")
         log = bridge.log()
     assert "another client published" not in log, log[-3000:]
+
+
+def test_an_option_topic_of_60000_characters_is_refused_in_a_short_error(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """DEFECT (low, an attack pass): ``R/option/<60,000 characters>`` (a topic level the
+    bridge subscribes to with ``option/+``) was refused with the whole name twice on
+    ``R/error`` (the message and the command: 120 KB for each publish, to every dashboard and
+    in the audit trail), and a group's ``G/option/<...>`` with it once for each member. Now the
+    name is cut short where it is echoed."""
+    with Rig(tmp_path, broker, probe) as rig:
+        rig.add("hf", "gs232b")
+        rig.add("vhf", "gs232b")
+        rig.sections["groups"] = [{"id": "stack", "rotators": ["hf", "vhf"]}]
+        rig.start()
+        rig.ready("hf")
+        name = "x" * 60_000
+        for root in ("hf", "stack"):
+            t = time.monotonic()
+            probe.publish(f"rotor/{root}/option/{name}", "2")
+            said = probe.wait_for(f"rotor/{root}/error", after=t)
+            err = json.loads(said.payload)
+            assert len(said.payload) < 2000, (len(said.payload), err["message"][:200])
+            assert err["command"].startswith("option xxx") and err["command"].endswith("… '2'")
+            if root == "hf":
+                assert err["message"].startswith("GS-232B has no option 'xxx"), err["message"]
+                assert "(60000 chars) (options: speed)" in err["message"], err["message"]
+            else:
+                assert err["message"].startswith("group stack takes a target and a stop only")

@@ -72,6 +72,7 @@ class PayloadError(ValueError):
 
 
 LOGGED_CHARS = 200  # service.py rule 4: of a command or a reason, in a log line
+KIND_CHARS = 80  # describe: of a command's kind and argument (an option's name) echoed back
 
 
 def one_line(text: str) -> str:
@@ -335,9 +336,12 @@ def describe(kind: str, payload: bytes) -> str:
     """How a command is echoed back on the error topic and in the audit trail (printable):
     whole for any payload a command can be taken from (MAX_COMMAND_BYTES), cut short only
     beyond (an attack pass: cut at 40 bytes, a claim or a target padded with spaces was
-    audited without whom the lease went to or where the rotor turned)."""
+    audited without whom the lease went to or where the rotor turned). ``kind`` is cut short
+    too: it may hold a topic's level (``option <name>``), and an attack pass published on
+    ``R/option/<60,000 characters>``: each R/error and audit event was 120 KB."""
     shown = payload[:MAX_COMMAND_BYTES].decode("utf-8", "replace")
     more = "…" if len(payload) > MAX_COMMAND_BYTES else ""
+    kind = kind if len(kind) <= KIND_CHARS else kind[:KIND_CHARS] + "…"
     return f"{kind} {shown!r}{more}" if payload else kind
 
 

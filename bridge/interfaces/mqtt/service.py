@@ -32,7 +32,9 @@ Rules:
    logged at INFO, one line naming the rotator, the command and the reason (an operator
    reading the log sees why nothing moved): the same limit, so a flood is as few lines as
    events; what the sender wrote is shown escaped on one line and cut short (LOGGED_CHARS), so
-   no payload can forge or flood a log line.
+   no payload can forge or flood a log line. On ``R/error`` too what was sent is cut short
+   (payloads.describe), an option's name from the topic with it: an attack pass published on
+   ``R/option/<60,000 characters>``, and each refusal carried the name twice, 120 KB.
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
@@ -410,6 +412,8 @@ class MqttService:
         that no rotator was locked; a review: an OFF was answered "no rotator was locked",
         which reads as none of them being locked now)."""
         leaf = topic.removeprefix(self.topics.group(group.id).root + "/")
+        if len(leaf) > pl.KIND_CHARS:  # (an option's name is any topic level: cut short)
+            leaf = leaf[: pl.KIND_CHARS] + "…"
         theirs = ", ".join(self.topics.rotator(m).feature(leaf) for m in group.member_ids)
         head = f"group {group.id} takes a target and a stop only: nothing was done"
         if kind == "lock":
