@@ -7,6 +7,10 @@ Rules:
    this version does not know, JSON nested past the parser's depth: ``load``) raises
    ValueError (InfoError for R/info), never more, and a field that is absent or of the wrong
    kind reads as unknown.
+2. So does a name or an id (R/info's ``name``, ``id``) that is not one a station writes: one
+   holding a control character, or blank at either end (an attack pass: a forged R/info's
+   id ``"tower\nDL1ABC -> ..."`` with a terminal's escape sequence put a forged line in the
+   remote's start lines on the operator's terminal); the station's model stands for it.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from bridge.core.model import (
     TargetInfo,
     TrackingInfo,
 )
+from bridge.core.text import bad_char
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, can_drive, composite_spec
@@ -73,8 +78,13 @@ class Info:
             keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
             park=at,
         )
-        rid = doc.get("id")
-        return cls(str(doc.get("name") or model), spec, aim, rid if isinstance(rid, str) else None)
+        rid, name = doc.get("id"), doc.get("name")
+        return cls(name if _shown(name) else model, spec, aim, rid if _shown(rid) else None)
+
+
+def _shown(text: object) -> bool:
+    """Rule 2: whether ``text`` is a name the remote may show (in its start line, its log)."""
+    return isinstance(text, str) and text.strip() == text != "" and bad_char(text) is None
 
 
 def _spec(model: str) -> ModelSpec | None:

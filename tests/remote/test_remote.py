@@ -262,6 +262,37 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
         r.stop()
 
 
+def test_a_forged_info_id_or_name_puts_no_line_of_its_own_in_the_start_lines(
+    broker: Mosquitto, probe: Probe, heartbeat: Heartbeat
+) -> None:
+    """readings.py rule 2, an attack pass on a stand-in station: anyone who may publish the
+    station's R/info gave it an id holding a line break and a terminal's escape sequence, and
+    the remote printed a forged line of its own on the operator's terminal, the terminal
+    turned red. Such an id or name reads as unknown: the model stands for it."""
+    forged = "tower\\nDL1ABC -> forged\\u001b[31m"
+    info = f'{{"id":"{forged}","name":"{forged}","model":"rotorez","azimuth_range":[0,360]}}'
+    for topic, payload in (
+        ("rotor/info", info),
+        ("rotor/bridge/state", "online"),
+        ("rotor/availability", "online"),
+    ):
+        probe.publish(topic, payload, retain=True)
+    port = free_port()
+    one = RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotctld_port": port}],
+    )
+    r = Remote(one)
+    try:
+        lines = r.start()
+    finally:
+        r.stop()
+    assert lines == [
+        f"{OPERATOR} -> 127.0.0.1: rotorez (rotorez, 0..360) on rotctld 127.0.0.1:{port}"
+    ]
+
+
 def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
     broker: Mosquitto, probe: Probe, heartbeat: Heartbeat
 ) -> None:
