@@ -15,6 +15,7 @@ from bridge.core.ending import Ending
 from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
+ERROR_LINE_MAX = 1000  # _fail: the most of one line of a configuration error printed
 STOPPED_EARLY = "stopped before it started"  # Ctrl-C before a command's own handling (main)
 
 
@@ -34,7 +35,17 @@ def _load(args: argparse.Namespace) -> Settings:
 
 
 def _fail(exc: ConfigError) -> SystemExit:
-    print(f"rotor-bridge: {exc}", file=sys.stderr)
+    """The error in one line per problem, each cut short (ERROR_LINE_MAX): a validator may
+    quote the value it refuses, and an attack pass gave mqtt.host 70,000 characters: check-config
+    printed them whole, twice for a state_file as long (the terminal, the journal)."""
+    lines = []
+    head, tail = ERROR_LINE_MAX * 2 // 3, ERROR_LINE_MAX // 3  # (the reason is at the end)
+    for line in f"rotor-bridge: {exc}".splitlines():
+        if len(line) > ERROR_LINE_MAX:
+            cut = len(line) - head - tail
+            line = f"{line[:head]} ...({cut} characters not shown)... {line[-tail:]}"
+        lines.append(line)
+    print("\n".join(lines), file=sys.stderr)
     return SystemExit(getattr(exc, "exit_code", EXIT_CONFIG))  # app.NotYet: 1, to be retried
 
 

@@ -1259,6 +1259,24 @@ def test_a_path_or_an_address_holding_a_control_character_is_refused_naming_it(
     assert "\nconfig OK: forged" not in out.stdout + out.stderr
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        ('host = "127.0.0.1"', f'host = "{"x" * 70_000}"', "mqtt.host"),
+        ("[mqtt]", f'state_file = "/tmp/{"s" * 70_000}"\n[mqtt]', "state_file"),
+    ],
+)
+def test_a_value_of_70000_characters_is_refused_in_short_lines(
+    tmp_path: Path, old: str, new: str, key: str
+) -> None:
+    """An attack pass: a validator quotes the value it refuses, and check-config printed an
+    mqtt.host of 70,000 characters whole (a state_file as long twice) to the terminal and the
+    journal. Each line of the error is cut short; the key is still named."""
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL.replace(old, new, 1))))
+    assert out.returncode == 2 and f"{key}" in out.stderr, out.stderr[:300]
+    assert len(out.stderr) < 3000 and "characters not shown)..." in out.stderr, len(out.stderr)
+
+
 def test_a_park_elevation_out_of_the_limits_is_refused_naming_park_el_deg() -> None:
     """An attack pass: ``park_el_deg = -1`` was refused as ``park_az_deg: elevation -1 outside
     the limits``, naming the key that was right."""
