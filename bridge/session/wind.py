@@ -42,7 +42,10 @@ Rules:
    ends a storm, and it says nothing of silence (rule 4: the station may be long gone). A
    storm it starts refuses motion but sends no park (``replayed`` in the status): no retained
    or replayed message moves a rotor (an attack pass: a storm reading retained by a wind
-   station dead for a week parked the rotor at every start of the bridge). The first new
+   station dead for a week parked the rotor at every start of the bridge). It ends tracking
+   and following all the same, as rule 1 says (an attack pass: the status said "tracking"
+   through such a storm while the rotor stood still, and tracking turned it again by itself
+   once live calm readings ended the storm). The first new
    reading above the park level parks it, as rule 1 says; one below the release level starts
    the calm; a storm known only from a replay is not kept across a restart (the replay comes
    again). Neither an offline of the controller (rule 7: it took no park from the rotator)
@@ -106,6 +109,7 @@ class WindPark:
         self._halted = storm and halted
         self._arrived = storm and arrived  # rule 7: the rotor was seen at this storm's park
         self._replayed = storm and replayed  # rule 6: the storm known only from a replay
+        self._end_owed = False  # rule 6: tracking and following to end, with no park to carry it
         self._wall_offset_s = 0.0
 
     @property
@@ -156,6 +160,7 @@ class WindPark:
             return  # (but a live reading in a storm known only from a replay: rule 6)
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
+            self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
         self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
         if replayed:
@@ -253,9 +258,13 @@ class WindPark:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
             self._halted = self._replayed = False
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
+        if self._end_owed and not self._park_owed:  # rule 6: no park, the end all the same
+            self._end_owed = False
+            if self.storm:
+                return Proposal(error=error, ended=self._why)
         if not (self.storm and self._park_owed) or scene.locked:
             return NOTHING if error is None else Proposal(error=error)
-        self._park_owed = self._arrived = False
+        self._park_owed = self._arrived = self._end_owed = False  # (the park ends them)
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
         try:
             judged = self._rig.aim.judge(park, scene.motion.position_deg)

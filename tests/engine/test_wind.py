@@ -456,3 +456,30 @@ def test_a_stop_after_the_rotor_reached_the_storms_park_leaves_it_said_parked() 
             "the storm)"
         ]
         assert abs(v.truth().az_deg - 90.0) <= 0.5, v.truth()
+
+
+def test_a_storm_known_only_from_a_replay_ends_tracking_and_the_calm_turns_nothing() -> None:
+    """Rules 1 and 6: a storm reading the broker kept (replayed after a reconnect) refuses
+    motion; it ends tracking too. An attack pass: R/status said "tracking" through such a storm
+    while the rotor stood still, and when live calm readings ended it, tracking turned the
+    rotor again by itself."""
+    with windy(wind_hold_min=1) as v:
+        wind(v, 30.0)
+        v.track(Body.sun())
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.now > 30.0, 120, "on the sun")
+        assert v.status.tracking is not None
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        v.run_for(5.0)
+        assert v.status.tracking is None
+        assert v.status.tracking_ended == "wind 90 km/h above 60 (the last reading the broker kept)"
+        where, since = v.truth(), v.now
+        wind(v, 20.0)  # the calm, live
+        v.run_for(70.0)
+        wind(v, 20.0)
+        v.run_for(5.0)
+        assert v.status.wind is not None and not v.status.wind.storm  # the storm is over
+        v.run_for(900.0)  # the sun moves some degrees meanwhile
+        assert v.frames("set", "set: clamped", since=since) == []
+        assert (v.truth().az_deg, v.truth().el_deg) == (where.az_deg, where.el_deg)
+        assert v.status.tracking is None
