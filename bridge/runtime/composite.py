@@ -79,6 +79,13 @@ Rules:
    of 83a398d: the azimuth box's park, stopped when the elevation box fell silent for 4 s,
    was never tried again, the antenna left 140 degrees short of it for the whole storm). A
    STOP still reaches the box that answers.
+9. An event both boxes hand out, word for word (the same kind, message and command, within
+   TWIN_S of each other), is the rotator's one event: said once, by the box that said it
+   first. Both sessions take the same commands, the wind and the TLE file's answers (rule 1),
+   so each refused the same track command and said the same silence of the wind topic (an
+   attack pass: ``R/track NOSUCH`` was refused twice on R/error). What names its box (a
+   port's fault) or its axis is no twin, and one box's word is matched once: the same
+   refusal again later (a command sent again) is said again.
 """
 
 from __future__ import annotations
@@ -108,6 +115,8 @@ __all__ = ["CompositeWorker", "Composition", "merge", "share_quiet", "split"]
 
 log = logging.getLogger(__name__)
 AXES = (Axis.AZIMUTH, Axis.ELEVATION)
+TWIN_S = 5.0  # rule 9: two boxes' same event this close is one
+TWINS_KEPT = 16  # rule 9: a box's events awaiting their twin, at most
 OFFLINE = "rotator offline"  # rule 4: why tracking begun in one box alone ended there
 
 
@@ -184,8 +193,8 @@ def merge(
 
 
 class Composition:
-    """Sans-IO: the two boxes' statuses in, the rotator's out (rule 3), and what rule 4 asks of
-    the other session when one ends tracking or following."""
+    """Sans-IO: the two boxes' statuses in, the rotator's out (rule 3), what rule 4 asks of
+    the other session when one ends tracking or following, and the events said (rule 9)."""
 
     def __init__(self, rotator_id: str) -> None:
         self.rotator_id = rotator_id
@@ -196,6 +205,26 @@ class Composition:
         self._owed: dict[Axis, tuple[bool, bool]] = {}  # (tracking, following) to end
         self._dropped: set[Axis] = set()  # rule 8: a waiting target to drop there
         self._first = True
+        self._unmatched: dict[Axis, list[ErrorEvent]] = {a: [] for a in AXES}  # rule 9
+
+    def said(self, axis: Axis, event: ErrorEvent) -> bool:
+        """Rule 9: whether ``axis``'s box's event is to be said (not the twin of one the other
+        box said)."""
+
+        def near(e: ErrorEvent) -> bool:
+            return abs(e.time_unix - event.time_unix) < TWIN_S
+
+        word = (event.kind, event.message, event.command)
+        other = self._unmatched[AXES[1] if axis is AXES[0] else AXES[0]]
+        other[:] = [e for e in other if near(e)]
+        for i, e in enumerate(other):
+            if (e.kind, e.message, e.command) == word:
+                del other[i]
+                return False
+        mine = self._unmatched[axis]
+        mine[:] = [e for e in mine if near(e)][-TWINS_KEPT + 1 :]
+        mine.append(event)
+        return True
 
     def seen(self, axis: Axis, status: RotatorStatus) -> RotatorStatus | None:
         """A box's new status; the rotator's, when it is worth publishing."""
@@ -305,6 +334,7 @@ class CompositeWorker:
         self._box = mailbox.fileno()
         self._urgent = frozenset({self._box})
         self._on_status = on_status
+        self._on_event = on_event
         self._halts_applied = 0
         self._newest_applied = 0
         self.composition = Composition(cfg.rotator_id)
@@ -316,7 +346,7 @@ class CompositeWorker:
                 box,
                 own,
                 partial(self._seen, axis),
-                on_event,
+                partial(self._event, axis),
                 locked=locked,
                 health=health if axis is Axis.AZIMUTH else None,  # the azimuth's is shown
                 storm=storm,
@@ -352,6 +382,10 @@ class CompositeWorker:
         if any(box.session.target_unshown for box in self.boxes.values()):
             return 0
         return applied
+
+    def _event(self, axis: Axis, event: ErrorEvent) -> None:
+        if self.composition.said(axis, event):  # rule 9
+            self._on_event(event)
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)

@@ -17,6 +17,7 @@ import bridge.app as app
 import bridge.feature
 from bridge.core.errors import Refused
 from bridge.core.model import (
+    ErrorEvent,
     ErrorKind,
     FeatureCommand,
     MotionState,
@@ -30,7 +31,7 @@ from bridge.feature import Feature
 from bridge.features import FEATURES
 from bridge.interfaces.mqtt.groups import Group, Member, status_json
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import CompositeWorker
+from bridge.runtime.composite import TWIN_S, CompositeWorker, Composition
 from bridge.runtime.port import PortError
 from bridge.session.actions import Report
 from bridge.session.follow import Follow, Heard
@@ -715,3 +716,23 @@ def test_a_box_gone_silent_mid_turn_stops_the_other_boxs_turn_too(how: str) -> N
         v.run_for(3.0)
         assert not v.az.truth().is_moving
         assert v.az.truth().az_deg < 100.0  # (stopped short, not on at 200)
+
+
+def test_an_event_both_boxes_say_is_said_once_and_a_command_sent_again_is_said_again() -> None:
+    """composite.py rule 9, on the composition alone: twins are matched one for one, within
+    TWIN_S; an event one box alone says (its port, its axis) is always said."""
+    c = Composition("sky")
+    az, el = Axis.AZIMUTH, Axis.ELEVATION
+
+    def refused(t: float, what: str = "track X") -> ErrorEvent:
+        return ErrorEvent(ErrorKind.REFUSED, "no satellite 'X'", what, t)
+
+    # the same command twice: each box's pair, interleaved, says it twice in all
+    said = [c.said(az, refused(0.0)), c.said(az, refused(0.5)), c.said(el, refused(0.1))]
+    said += [c.said(el, refused(0.6))]
+    assert said == [True, True, False, False]
+    assert c.said(el, ErrorEvent(ErrorKind.SERIAL, "port /dev/b gone", None, 1.0))
+    assert c.said(az, ErrorEvent(ErrorKind.SERIAL, "port /dev/a gone", None, 1.0))
+    assert c.said(az, refused(2.0, "track Y"))  # another command's words: no twin
+    assert c.said(el, refused(2.0 + TWIN_S))  # one box's, long after: its own event
+    assert c.said(az, refused(2.0 + TWIN_S + 0.1)) is False  # ... whose twin this is

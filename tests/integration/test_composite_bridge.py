@@ -7,9 +7,14 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 from typing import Any
 
+from bridge.app import App
 from bridge.emulators.pty import EmulatedPort
+from bridge.settings.pointing import StationSettings, TrackingSettings
+from tests.engine.test_catalog import ISS, three_line
+from tests.engine.test_session_tracking import BERLIN
 from tests.support import free_port, retained_snapshot, wait_until
 from tests.support.hamlib import run_rotctl
 from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
@@ -191,3 +196,27 @@ def test_the_bridges_end_stops_the_elevation_still_turning_after_the_azimuth_cam
     rig.stop()
     assert len(el.frames("stop")) > el_stops
     assert el.wait_for(lambda s: not s.is_moving, 5).el_deg < 80
+
+
+def test_a_track_command_both_boxes_refuse_is_said_once(rig: Rig, tmp_path: Path) -> None:
+    """composite.py rule 9: a track command goes to both boxes (rule 1), and each looked the
+    name up in the TLE file: a name the file lacks was refused twice on R/error, word for
+    word, for one command (an attack pass)."""
+    composite(rig)
+    tle_file = tmp_path / "sats.txt"
+    tle_file.write_text(three_line(("ISS (ZARYA)", ISS)))
+    station = StationSettings(latitude_deg=BERLIN[0], longitude_deg=BERLIN[1])
+    tracking = TrackingSettings(tle_file=tle_file)
+    rig.app = App(rig.settings.model_copy(update={"station": station, "tracking": tracking}))
+    rig.app.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    t = time.monotonic()
+    rig.probe.publish("rotor/track", "NOSUCH")
+    rig.probe.wait_for("rotor/error", lambda m: b"NOSUCH" in m.payload, after=t)
+    rig.probe.publish("rotor/track", "NOTHER")  # its look-ups are answered after the first's
+    rig.probe.wait_for("rotor/error", lambda m: b"NOTHER" in m.payload, after=t)
+    said = [json.loads(m.payload) for m in rig.probe.on("rotor/error") if m.t >= t]
+    first = [e for e in said if "NOSUCH" in e["message"]]
+    assert len(first) == 1, said
+    assert first[0]["kind"] == "refused" and first[0]["command"] == "track 'NOSUCH'", said
+    assert "no satellite 'NOSUCH'" in first[0]["message"], said
