@@ -42,7 +42,9 @@ Rules:
    sector, a limit) is waited for at the first point of its track the judge takes (an attack
    pass: the rotor stood where it was until the satellite left the sector, then turned 200
    degrees to it).
-6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
+6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
+   az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
+   it is no refusal, the azimuth is followed at the limit (``_aim``).
 7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
 8. Nothing of the sky is computed here (docs/architecture.md, "nothing slow beside a stop"):
    pass searches, windows of the body's track, a pass's samples for the flip and TLE file
