@@ -56,6 +56,7 @@ class Source(enum.StrEnum):
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
 _HIDDEN = ("Cf", "Zl", "Zp")  # valid_operator: format characters, line and paragraph separators
 _JOINERS = ("\u200c", "\u200d")  # valid_operator: what Persian, the Indic scripts, emoji need
+_VIRAMA = 9  # valid_operator: the canonical combining class of the Indic scripts' virama
 # valid_operator: letters and marks that show nothing, though no format character: the Hangul
 # fillers (NFKC makes U+3164 and U+FFA0 U+1160), the blank Braille pattern, the combining
 # grapheme joiner, Khmer's and Mongolian's invisible vowels and selectors
@@ -87,8 +88,13 @@ def valid_operator(text: object) -> str | None:
 
 def _stray_joiner(name: str) -> bool:
     """A joiner with nothing to join: at either end, or beside a character of ASCII (a call
-    sign's letters and digits join nothing: ``DL1ABC`` and a joiner look like ``DL1ABC``)."""
+    sign's letters and digits join nothing: ``DL1ABC`` and a joiner look like ``DL1ABC``).
+    A zero-width joiner right after a virama is never stray: it changes the consonant's form
+    wherever it stands (Malayalam's chillu typed the older way, consonant, virama, joiner, ends
+    a word: a review found മോഹന് with it, Mohan, refused)."""
     for i, c in enumerate(name):
+        if c == "\u200d" and i and unicodedata.combining(name[i - 1]) == _VIRAMA:
+            continue
         if c in _JOINERS:
             around = name[i - 1 : i] + name[i + 1 : i + 2]
             if len(around) < 2 or any(a.isascii() for a in around):

@@ -104,6 +104,19 @@ def test_the_wall_clock_set_far_back_ends_the_lease_rather_than_stretch_it() -> 
     assert lease.claim("G4XYZ", 10, back).operator == "G4XYZ"
 
 
+def test_a_name_whose_joiner_follows_a_virama_claims_the_lease_wherever_the_joiner_stands() -> None:
+    """core/model.py ``valid_operator``: a joiner at a name's end or before a space was refused
+    as joining nothing, but after a virama it makes the consonant's other form: Malayalam's
+    chillu typed the older way (consonant, virama, joiner) ends a word, and Mohan so typed
+    could not claim the lease ("operator must be a name ..."). A joiner after a call sign's
+    letter still joins nothing."""
+    mohan = "\u0d2e\u0d4b\u0d39\u0d28\u0d4d\u200d"
+    for name in (mohan, f"{mohan} VU2ABC"):
+        assert Lease().claim(name, 30, T0).operator == name
+    with pytest.raises(LeaseError, match="operator must be a name"):
+        Lease().claim("DL1ABC\u200d", 30, T0)
+
+
 def test_an_operators_name_is_its_compatibility_form_without_invisible_characters() -> None:
     """A review: a name typed with a no-break space (a Mac's Option-Space) and the same with a
     space were two operators, the lease refusing its own holder; a zero-width space made a
