@@ -184,12 +184,16 @@ class Pointing:
         they are without an offset; with one, 0..360 on a scale that wraps, else 0..360 and
         the limits shifted by the offset (a SPID's or a 450-degree rotor's overlap names the
         side itself; a review: a 450-degree GS-232 with offset 180 said 180..630, and
-        Hamlib's ``rotctl -m 2``, which takes \\dump_state's range, refused ``P 90`` itself)."""
+        Hamlib's ``rotctl -m 2``, which takes \\dump_state's range, refused ``P 90`` itself);
+        0..360 only where every bearing has a raw value inside the limits (limits narrowed
+        under a turn, 0..300 with offset 30: 30..330, not 0..360, whose ends the judge refuses)."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not self.offset_deg:
             return lo, hi
         if self.az_wraps:
             return 0.0, 360.0
+        if hi - lo < 360.0:
+            return lo + self.offset_deg, hi + self.offset_deg
         return min(0.0, lo + self.offset_deg), max(360.0, hi + self.offset_deg)
 
     def keep_out_of(self, bearing_deg: float) -> tuple[float, float] | None:

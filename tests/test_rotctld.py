@@ -863,6 +863,19 @@ def test_every_true_bearing_is_in_dump_states_range_on_a_rotor_past_360_with_an_
     st.emu.wait_for(lambda s: s.target_az_deg == raw)
 
 
+def test_dump_states_range_on_limits_narrowed_under_a_turn_with_an_offset_is_theirs_alone(
+    station: StationFactory,
+) -> None:
+    """pointing.py ``target_range``: 0..360 and the overlap is the range only where every
+    bearing has a raw value inside the limits; a 450-degree GS-232 narrowed to 0..300 with
+    offset 30 said 0..360 since f29e7dcc, though the bridge refuses 330..360 and 0..30 (Hamlib's
+    client and Home Assistant's number offered them), where it had said 30..330."""
+    st = station("gs232b-450", start_az_deg=200, az_offset_deg=30, az_min_deg=0, az_max_deg=300)
+    reply = st.connect().single_recv(b"\\dump_state\n")
+    assert b"min_az=30.000000\nmax_az=330.000000\n" in reply
+    assert st.connect().single_recv(b"P 345 0\n") != b"RPRT 0\n"
+
+
 # -- hostile neighbours (issue 14, item 1): HTTP is not rotctld ----------------------------------
 BROWSER_GET = (
     b"GET / HTTP/1.1\r\nHost: 127.0.0.1:4533\r\nUser-Agent: Mozilla/5.0 (X11; Linux x86_64) "
