@@ -178,6 +178,18 @@ Rules:
    ever (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-
    EZ, RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
    the controller's rule (docs/architecture.md rule 7).
+12. A controller that says it restarted (a power-on byte: the Rotor-EZ's and RotorCard's
+   0xE0) while a turn of the bridge's is out has forgotten that turn, and the rotor stands: the
+   turn is abandoned (motion.py rule 11), never resumed by the bridge (no move the user did
+   not send again), tracking ends, and a ``serial`` error says so with the target it dropped
+   (the status's ``last_error`` with it; the target no longer shown). A stop goes as for a
+   refusal mid-turn (stops.py rule 4), checked: harmless to a controller at rest, and should
+   the byte have been line noise, the rotor the bridge no longer stands a turn for is stopped.
+   No stall is called then (an earlier pass: 10 s after such a restart the rotor was said
+   stalled, "brake paddle pressed or rotor stuck", and rotor health counted a stall: a climb
+   to a rotor that is not stuck). A controller that says nothing when it restarts (RT-21,
+   GS-232, SPID, Easycomm, RC2800, Prosistel: their readings of a rotor stopped by a restart
+   are those of a stall) is called stalled as before, and that error names a restart too.
 """
 
 from __future__ import annotations
@@ -748,6 +760,7 @@ class Controller:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self.options.all_due()
                     self._retune()
+                    self._restarted(now)  # rule 12
                 if reply.reason is JunkReason.REFUSED and self.target_last:  # motion.py rule 8
                     self.target_last = False
                     self.motion, events = mo.refused(self.motion, self.cfg.motion, now)
@@ -1086,9 +1099,22 @@ class Controller:
             self._retry = None
             self.notes.append(Again(target, *self._retry_raw))
 
-    def _motion_events(self, events: list[mo.Event], now: float) -> None:
+    def _restarted(self, now: float) -> None:
+        """Rule 12: the controller restarted; a turn it had is abandoned."""
+        aimed = self.motion.target_deg
+        self.motion, events = mo.restarted(self.motion, self.cfg.motion)
+        shown = None if aimed is None else self.cfg.aim.true_of(aimed)
+        self._motion_events(events, now, shown)
+
+    def _motion_events(
+        self, events: list[mo.Event], now: float, aimed: float | None = None
+    ) -> None:
+        """What each motion event asks (stops.py rule 4); ``aimed``: the target it dropped,
+        in true bearings (a restart's)."""
         for event in events:
-            verdict = self.stops.verdict(event, self.motion, self.cfg.motion, self._shown_az())
+            verdict = self.stops.verdict(
+                event, self.motion, self.cfg.motion, self._shown_az(), aimed
+            )
             if event is mo.Event.REFUSED and self._refused_once(verdict):
                 continue
             if verdict.ends_tracking is not None:

@@ -122,6 +122,10 @@ Rules:
    own way round, which may sweep past a limit); neither on a box that does not turn it (a
    composite's elevation box's azimuth). A rotor outside a limit (set narrower since, or turned
    there by hand) that a target brings back moves inward; its jitter is no movement (rule 1).
+11. A controller that says it restarted (controller.py rule 12: a power-on byte) while a target
+   is out and the rotor is taken for turning has forgotten it: ``restarted`` drops the target
+   (so no stall can come of it: rule 3) and leaves the rotor ``moving`` until readings show it
+   still (rule 2), as after any stop.
 """
 
 from __future__ import annotations
@@ -238,6 +242,7 @@ class Event(enum.StrEnum):
     PASSED = "passed"  # rule 5: turned on past its target
     TURNED_BACK = "turned back"  # rule 5: a wrapping azimuth turned back on its way
     PAST_LIMIT = "past limit"  # rule 10: turned on beyond a limit while a target was out
+    RESTARTED = "restarted"  # rule 11: the controller said it restarted while a turn was out
 
 
 class Plan(enum.StrEnum):
@@ -666,6 +671,15 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
             )
             return dropped, [Event.REFUSED]
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
+
+
+def restarted(m: Motion, cfg: MotionConfig) -> tuple[Motion, list[Event]]:
+    """Rule 11: the controller said it restarted; a turn it had is dropped."""
+    if not cfg.can_report_position or m.state is not MOVING:
+        return m, []
+    if m.target_deg is None and m.el_target_deg is None:
+        return m, []  # (no turn of the bridge's: the readings say whether it turns)
+    return _dropped(m), [Event.RESTARTED]
 
 
 def tick(

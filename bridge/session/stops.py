@@ -77,7 +77,9 @@ Rules:
    The first turn seen after it, before a target, another stop or the port closing, gets one
    more stop frame at once, written and noted as the stall's was, and a ``stop`` error says so
    (unchecked: the operator freeing the rotor by hand at the control box has that move stopped
-   once, then no more).
+   once, then no more). A controller that said it restarted mid-turn (controller.py rule
+   12) gets a stop as a refusal's mid-turn: written at once, checked as an operator's, its
+   error the restart's (a ``serial`` one naming the target dropped), never a stall's.
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -289,11 +291,17 @@ class Stops:
         return True, error
 
     def verdict(
-        self, event: mo.Event, m: mo.Motion, cfg: mo.MotionConfig, shown: float | None = None
+        self,
+        event: mo.Event,
+        m: mo.Motion,
+        cfg: mo.MotionConfig,
+        shown: float | None = None,
+        aimed: float | None = None,
     ) -> Verdict:
         """Rule 4: what ``event`` (just reported by the motion machine, now at ``m``) asks;
         ``shown``: the bearing the user sees there (pointing.py: ``m``'s is the controller's
-        own), in the error's words."""
+        own), in the error's words; ``aimed``: the target the event dropped, as the user sees
+        it (a restart's)."""
         pos = m.position_deg if shown is None else shown
         where = f"{pos:g}°"  # (an elevation's pass is told with the elevation: an attack pass)
         if m.el_position_deg is not None and cfg.spec.has_elevation:
@@ -314,9 +322,17 @@ class Stops:
         if event is mo.Event.STALLED:
             why = (
                 f"rotor stalled at {pos:g}° (no progress for {cfg.stall_timeout_s:g} s): brake "
-                "paddle pressed or rotor stuck"
+                "paddle pressed, rotor stuck, or the controller restarted (power cycled or "
+                "reset) and forgot its target; target dropped: send the target again"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "stalled")
+        if event is mo.Event.RESTARTED:  # (controller.py rule 12: the controller's)
+            turn = "its turn" if aimed is None else f"its turn to {aimed:g}°"
+            why = (
+                f"the controller restarted mid-turn (its power-on byte came) at {pos:g}°: {turn} "
+                "was not resumed: send the target again"
+            )
+            return Verdict(True, Report(ErrorKind.SERIAL, why), "the controller restarted")
         if event is mo.Event.TURNED_AWAY:
             self._at_rest = True  # a controller driving the wrong way: stop it then
             why = (
