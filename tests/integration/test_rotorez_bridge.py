@@ -263,6 +263,36 @@ def test_a_restart_of_the_bridge_mid_turn_stops_the_turn_and_blames_nothing(rig:
     assert rig.probe.on("rotor/error") == []
 
 
+def test_a_power_cycle_mid_turn_is_said_abandoned_not_stalled(rig: Rig) -> None:
+    """session/controller.py rule 12: the controller switched off and on mid-turn, its adapter
+    left plugged in, sends its power-on byte: the turn is said abandoned on R/error and in
+    R/status, its target no longer shown, never resumed. An earlier pass: 'rotor stalled ...
+    brake paddle pressed or rotor stuck' a stall timeout later."""
+    emu, _ = turning_to_300(rig)
+    t = time.monotonic()
+    emu.power_cycle()
+    at = emu.state().az_deg
+    said = rig.probe.wait_for("rotor/error", lambda m: b"restarted" in m.payload, after=t)
+    error = json.loads(said.payload)
+    assert error["kind"] == "serial"
+    assert error["message"].endswith("its turn to 300° was not resumed: send the target again")
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: (
+            json.loads(m.payload)["state"] == "idle"
+            and json.loads(m.payload)["last_error"] == error["message"]
+            and json.loads(m.payload)["target"] is None
+        ),
+        timeout_s=10,
+        after=t,
+    )
+    assert abs(emu.state().az_deg - at) < 3.0  # not resumed
+    rig.probe.publish("rotor/target", "10")  # sent again by the user: carried out
+    emu.wait_for(lambda s: near(s.az_deg, 10, 3.5) and not s.is_moving, 20)
+    assert time.monotonic() - t > 2.5  # (a stall timeout since the restart, and then some)
+    assert [m.payload for m in rig.probe.on("rotor/error") if b"stalled" in m.payload] == []
+
+
 def test_lock_on_stops_a_turning_rotor(rig: Rig) -> None:
     emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
     rig.start()
