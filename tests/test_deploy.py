@@ -1200,6 +1200,7 @@ def test_the_readme_install_commands_work_as_typed(heading: str) -> None:
         ("README.md", "## Install for real"),
         ("docs/deployment.md", "## Install into a virtual environment"),
         ("docs/deployment.md", "## systemd"),
+        ("docs/deployment.md", "## Upgrading"),
     ],
 )
 def test_installing_as_root_leaves_the_clone_to_its_user(doc: str, heading: str) -> None:
@@ -1218,6 +1219,23 @@ def test_installing_as_root_leaves_the_clone_to_its_user(doc: str, heading: str)
             if argv[:2] == ["rm", "-rf"]:
                 removed |= set(argv[2:])
         assert leftovers <= removed, (doc, heading, commands[i])
+
+
+def test_upgrading_installs_into_the_units_venv_checks_the_file_then_restarts(unit: dict) -> None:
+    """A user upgrading finds the steps: the same venv and configuration the unit runs, the
+    file checked before the restart (a refused value would end the restart with exit code 2,
+    which the unit does not retry), then the unit restarted."""
+    commands = _shell_commands(
+        _section((ROOT / "docs" / "deployment.md").read_text(), "## Upgrading")
+    )
+    venv = posixpath.dirname(posixpath.dirname(SHIPPED_EXEC))
+    service = UNIT.name.removesuffix(".service")
+    steps = [argv[1:] if argv[:1] == ["sudo"] else argv for argv in commands]
+    install = steps.index([f"{venv}/bin/pip", "install", "."])
+    check = steps.index([SHIPPED_EXEC, "check-config", "-c", SHIPPED_CONFIG])
+    restart = steps.index(["systemctl", "restart", service])
+    assert install < check < restart
+    assert shlex.split(_one(unit, "Service", "ExecStart"))[-2:] == ["-c", SHIPPED_CONFIG]
 
 
 def test_docs_name_only_files_a_clone_has() -> None:
