@@ -226,6 +226,43 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
     assert _left_behind(tmpdir) == []
 
 
+def test_a_second_demo_keeps_turning_after_the_first_and_its_private_broker_end(
+    tmp_path: Path,
+) -> None:
+    """The README: a demo never gets in the way of another. A second demo found the first's
+    private mosquitto answering, took it for the user's broker, and lost it for good when the
+    first ended: its rotator no longer answered a target. It starts a broker of its own."""
+    port = free_port()
+    first = DemoProcess(["--mqtt-port", str(port)], tmp_path / "a")
+    second = None
+    probe = None
+    try:
+        first_base = first.base_topic()
+        seen = Probe(port, f"{first_base}/#")
+        seen.wait_value(f"{first_base}/availability", "online", timeout_s=20)
+        seen.close()
+        second = DemoProcess(["--mqtt-port", str(port), "--speed-deg-s", "60"], tmp_path / "b")
+        base = second.base_topic()
+        own = int(second.wait_line(r"turn:  mosquitto_pub -h 127\.0\.0\.1 -p (\d+) -t").group(1))
+        assert own != port
+        instance = first_base.removeprefix("rotor-demo-")
+        second.wait_line(rf"private mosquitto on 127\.0\.0\.1:{own} .*demo {instance}'s")
+        first.proc.send_signal(signal.SIGINT)
+        assert first.wait(slow(20)) == 0, first.output
+        assert not answers("127.0.0.1", port)
+        probe = Probe(own, f"{base}/#")
+        probe.wait_value(f"{base}/availability", "online", timeout_s=20)
+        probe.publish(f"{base}/target", "120")
+        probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 120) <= 3, timeout_s=20)
+    finally:
+        if probe is not None:
+            probe.close()
+        if second is not None:
+            second.close()
+        first.close()
+    assert second is not None and not answers("127.0.0.1", own)
+
+
 def _children(pid: int) -> dict[int, str]:
     """The live processes whose parent is ``pid`` (a zombie is no longer running), by command."""
     found: dict[int, str] = {}

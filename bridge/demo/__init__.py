@@ -25,6 +25,10 @@ Rules:
    Assistant configs), so runs do not pile up dead devices in Home Assistant. Not so under a
    ``--base-topic`` the user chose: that may hold someone else's retained state. A base topic
    that a bridge uses (``<base>/bridge/state`` retained, online or offline) is refused.
+5. A broker that answers is used, unless it is another demo's private mosquitto (its retained
+   mark, bridge/demo/console.py rule 5): that one ends with the other demo, and this one would
+   be left without a broker, so it starts a private mosquitto of its own on a free port (the
+   commands it prints name that port). A private broker it starts carries its mark.
 """
 
 from __future__ import annotations
@@ -52,8 +56,8 @@ from bridge.app import App
 from bridge.core import geo
 from bridge.core.ending import Ending
 from bridge.demo import sky as demo_sky
-from bridge.demo.console import Console
-from bridge.demo.mosquitto import BrokerError, Mosquitto, answers
+from bridge.demo.console import Console, private_broker_of
+from bridge.demo.mosquitto import BrokerError, Mosquitto, answers, free_port
 from bridge.demo.screen import Screen
 from bridge.interfaces.homeassistant import Identity
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
@@ -276,13 +280,19 @@ def _run(
     except ValidationError as exc:
         print(f"rotor-bridge demo: {format_validation_error(exc)}", file=sys.stderr)
         return 2
-    host, port = args.mqtt_host, args.mqtt_port
-    if answers(host, port):
+    host, port = asked = args.mqtt_host, args.mqtt_port
+    there = answers(host, port)
+    other = private_broker_of(host, port) if there and not args.no_private_broker else None
+    private = not there or other is not None
+    if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
     elif args.no_private_broker:
         print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
         return 1
     else:
+        if other is not None:  # rule 5: that one ends with demo `other`
+            port = args.mqtt_port = free_port()
+            settings = demo_settings(args, models, instance, workdir)
         broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
         stack.callback(broker.stop)
         try:
@@ -290,6 +300,8 @@ def _run(
         except BrokerError as exc:
             raise BrokerError(f"no MQTT broker answers and {exc}") from None
         where = f"a private mosquitto on {host}:{port}"
+        if other is not None:
+            where += f" (the one on {host}:{asked[1]} is demo {other}'s, and ends with it)"
     roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
     topics = Topics(settings.mqtt.base_topic, roots)
     ident = Identity(topics.base)
@@ -310,6 +322,8 @@ def _run(
     # may hold someone else's retained state, which is not the demo's to delete
     stack.callback(console.close, remove_retained=args.base_topic is None)
     console.sync()
+    if private:
+        console.mark_private_broker(instance)
     # a bridge that uses this base topic, running or stopped, owns its Home Assistant devices:
     # the demo's discovery would clear them as stale
     held = console.retained(topics.bridge_state) if args.base_topic is not None else None

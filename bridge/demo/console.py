@@ -12,12 +12,16 @@ Rules:
    elevation and state of every rotator stay on one status line, redrawn in place, and
    everything else is a log line printed above it; elsewhere (a pipe, a file, a test) every
    change is a line of its own, ``  <topic> = <value>``.
+5. A demo that started a private mosquitto says so on it, retained on ``PRIVATE_BROKER_MARK``
+   (its instance name); ``private_broker_of`` reads that mark, so a second demo does not lean
+   on a broker that ends with the first (bridge.demo rule 5).
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import secrets
 import threading
 from typing import Any
 
@@ -36,6 +40,8 @@ SHOWN_LEAVES = (
     "bearing", "elevation", "state", "availability", "version", "error", "presets", "tracking"
 )  # fmt: skip
 STATUS_LEAVES = ("bearing", "elevation", "state")  # on a terminal: the status line (rule 4)
+# retained by a demo on the private mosquitto it started: the demo's instance (rule 5)
+PRIVATE_BROKER_MARK = "rotor-demo/private-broker"
 
 
 class Console:
@@ -255,6 +261,12 @@ class Console:
         self._client.publish(self._sync_topic, b"sync", qos=1)
         return self._synced.wait(timeout_s)
 
+    def mark_private_broker(self, instance: str, timeout_s: float = 5.0) -> None:
+        """Rule 5: say on the broker that it is this demo's private one, and ends with it."""
+        info = self._client.publish(PRIVATE_BROKER_MARK, instance.encode(), qos=1, retain=True)
+        with contextlib.suppress(RuntimeError, ValueError):
+            info.wait_for_publish(timeout_s)
+
     def retained(self, topic: str) -> bytes | None:
         with self._lock:
             return self._retained.get(topic)
@@ -285,6 +297,44 @@ class Console:
         finally:
             self._client.disconnect()
             self._client.loop_stop()
+
+
+def private_broker_of(host: str, port: int, timeout_s: float = 5.0) -> str | None:
+    """Rule 5: the instance of the demo whose private mosquitto answers at host:port; None for
+    any other broker, and when that cannot be told in time (a broker that wants a login)."""
+    probe = f"rotor-demo/probe/{secrets.token_hex(4)}"
+    owner: list[str] = []
+    done = threading.Event()
+
+    def on_connect(client: paho.Client, u: Any, f: Any, rc: ReasonCode, p: Any) -> None:
+        if rc.is_failure:
+            done.set()
+        else:
+            client.subscribe([(PRIVATE_BROKER_MARK, 1), (probe, 1)])
+
+    def on_subscribe(client: paho.Client, u: Any, mid: int, rcs: Any, p: Any) -> None:
+        # a retained mark comes right behind the subscription, so before this round trip
+        client.publish(probe, b"probe", qos=1)
+
+    def on_message(client: paho.Client, u: Any, msg: paho.MQTTMessage) -> None:
+        if msg.topic == probe:
+            done.set()
+        elif msg.payload:
+            owner.append(msg.payload.decode("utf-8", "replace"))
+
+    c = paho.Client(CallbackAPIVersion.VERSION2, client_id="", protocol=paho.MQTTv5)
+    c.on_connect, c.on_subscribe, c.on_message = on_connect, on_subscribe, on_message
+    try:
+        c.connect(host, port, clean_start=True)
+    except OSError:
+        return None
+    c.loop_start()
+    try:
+        done.wait(timeout_s)
+    finally:
+        c.disconnect()
+        c.loop_stop()
+    return owner[-1] if owner else None
 
 
 def _is_number(word: str) -> bool:
