@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 import os
+import pwd
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -10,7 +11,7 @@ import pytest
 
 from bridge.core.model import Target
 from bridge.protocols import REGISTRY
-from bridge.settings import ConfigError, RotatorSettings, load_settings, settings_from
+from bridge.settings import ConfigError, RotatorSettings, files, load_settings, settings_from
 from bridge.settings.report import config_warnings, masked
 from tests.support import ROOT, cli, run_cli
 
@@ -210,6 +211,34 @@ def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
     s = load_settings(write(tmp_path, text))
     assert s.mqtt.password is not None and s.mqtt.password.get_secret_value() == "s3cret"
     assert "s3cret" not in json.dumps(masked(s))
+
+
+def test_a_password_file_this_user_may_not_read_says_who_and_what_to_do(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """check-config run by hand, as oneself, on the service's file (root:rotor-bridge, 640)
+    said "Permission denied" alone. (Tests run as root, who may read any file: the refusal
+    is made by hand, as the kernel makes it for another user.)"""
+    pw = tmp_path / "pw"
+    pw.write_text("s3cret\n")
+    os.chmod(pw, 0o640)
+    text = MINIMAL.replace(
+        'base_topic = "rotor"', f'base_topic = "rotor"\nusername = "u"\npassword_file = "{pw}"'
+    )
+    real_open = os.open
+
+    def refused(path: Any, flags: int, *args: Any) -> int:
+        if str(path) == str(pw):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, flags, *args)
+
+    monkeypatch.setattr(files.os, "open", refused)
+    with pytest.raises(ConfigError) as exc:
+        load_settings(write(tmp_path, text))
+    who = pwd.getpwuid(os.getuid()).pw_name
+    said = str(exc.value)
+    assert f"password_file {pw}: Permission denied for user {who}; run rotor-bridge as" in said
+    assert "sudo" in said and "s3cret" not in said
 
 
 def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Path) -> None:

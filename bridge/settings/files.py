@@ -16,11 +16,15 @@ Rules:
    attack pass: ``/dev/zero`` ended check-config and run in a MemoryError traceback, a FIFO
    that nothing wrote to held them for ever, and a file every user may read was read all the
    same before it was refused).
+5. A password file this user may not read says who this user is and what to do: check-config
+   run by hand as oneself on the service's file (root:rotor-bridge, 640) said "Permission
+   denied" alone (a first-hour review).
 """
 
 from __future__ import annotations
 
 import os
+import pwd
 import ssl
 import stat
 from pathlib import Path
@@ -35,6 +39,19 @@ def _every_user(key: str, path: Path) -> str:
     return (
         f"{key} {path} is readable by every user; let only the user that runs rotor-bridge read "
         "it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
+    )
+
+
+def _may_not_read(path: Path, exc: OSError) -> str:
+    """Rule 5: a password file this user may not read, and what to do."""
+    try:
+        who = pwd.getpwuid(os.getuid()).pw_name
+    except KeyError:  # a uid with no name (docker run --user 1000)
+        who = f"uid {os.getuid()}"
+    return (
+        f"password_file {path}: {exc.strerror} for user {who}; run rotor-bridge as the user "
+        "that may read it (the service's file: sudo, or as rotor-bridge), or let this user "
+        "read it (chmod 600 and chown to it)"
     )
 
 
@@ -87,6 +104,8 @@ def read_password_file(path: Path) -> str:
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     try:
         fd = os.open(path, flags)
+    except PermissionError as exc:
+        raise ValueError(_may_not_read(path, exc)) from None
     except OSError as exc:
         raise ValueError(f"password_file {path}: {exc.strerror}") from None
     try:
