@@ -1130,6 +1130,21 @@ def test_the_licence_file_is_the_mit_licence_pyproject_names() -> None:
     assert "[LICENSE](LICENSE)" in README.read_text()
 
 
+@pytest.mark.parametrize("path", sorted((ROOT / "config").glob("*.toml")), ids=lambda p: p.name)
+def test_a_configuration_files_check_command_runs_as_typed(path: Path) -> None:
+    """The README's install puts the bridge in a venv whose bin/ is not on PATH: the plain
+    `rotor-bridge check-config -c rotor-bridge.toml` these files said was "command not found"
+    (and named a file in no folder the README puts one)."""
+    lines = [line.removeprefix("#").strip() for line in path.read_text().splitlines()]
+    commands = [shlex.split(line) for line in lines if "check-config" in line.split()]
+    assert commands
+    for argv in commands:
+        assert argv[0] == SHIPPED_EXEC, argv
+        args = build_parser().parse_args(argv[1:])
+        assert args.command == "check-config"
+        assert args.config == SHIPPED_CONFIG or (ROOT / args.config).resolve() == path, argv
+
+
 @pytest.mark.parametrize("path", [EXAMPLE, DOCKER / "rotor-bridge.toml"], ids=["example", "docker"])
 def test_configuration_files_name_every_model(path: Path) -> None:
     (comment,) = re.findall(r'^model = "[\w-]+"\s*#(.*)$', path.read_text(), re.M)
