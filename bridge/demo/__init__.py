@@ -112,7 +112,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--mqtt-port",
         type=int,
         default=1883,
-        help="the MQTT broker's port (default 1883), or the private mosquitto's",
+        help="the MQTT broker's port (default 1883), or the private mosquitto's (a free one "
+        "when the broker there is another demo's, which ends with it)",
     )
     p.add_argument(
         "--base-topic", help="base topic (default rotor-demo-<instance>, new for every run)"
