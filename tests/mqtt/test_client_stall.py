@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 
 import pytest
 
@@ -16,14 +17,23 @@ from tests.support.mosquitto import Mosquitto
 WILL = "t/bridge/state"
 
 
-@pytest.fixture
-def client(broker: Mosquitto) -> Iterator[MqttClient]:
-    settings = MqttSettings(port=broker.port, keepalive_s=5, client_id="stall-under-test")
+@contextmanager
+def connected(broker: Mosquitto, keepalive_s: int) -> Iterator[MqttClient]:
+    settings = MqttSettings(port=broker.port, keepalive_s=keepalive_s, client_id="stall-under-test")
     c = MqttClient(settings, will_topic=WILL, subscriptions=[], on_message=lambda *a: None)
     c.start()
-    wait_until(c.connected.is_set, 10, "connected")
-    yield c
-    c.stop()
+    try:
+        wait_until(c.connected.is_set, 10, "connected")
+        yield c
+    finally:
+        c.stop()
+
+
+@pytest.fixture
+def client(broker: Mosquitto) -> Iterator[MqttClient]:
+    """The shortest keepalive the settings take: a frozen broker is given up on soon."""
+    with connected(broker, 5) as c:
+        yield c
 
 
 def round_trip(client: MqttClient, probe: Probe) -> None:
@@ -58,23 +68,26 @@ def test_a_value_changed_during_a_stall_is_the_one_left_after_it(
 
 
 def test_a_publish_the_client_did_not_take_is_sent_when_the_broker_has_room(
-    broker: Mosquitto, client: MqttClient, probe: Probe
+    broker: Mosquitto, probe: Probe
 ) -> None:
     """Item 3: with the broker frozen, ~80,000 QoS 1 messages ran paho out of message ids
     (MQTT_ERR_QUEUE_SIZE); the bridge took the refused publishes for sent and the broker kept
     the old retained value after it was back. Now paho holds at most MAX_QUEUED; what it does
     not take is sent again once the broker acknowledges again (no reconnect here: the stall is
-    shorter than the keepalive)."""
-    client.publish_retained("t/config", "old", qos=1)
-    probe.wait_value("t/config", "old", 5)
-    broker.pause()
-    try:
-        for i in range(70_000):  # past paho's 65,535 message ids
-            client.publish_event("t/flood", str(i))
-        client.publish_retained("t/config", "new", qos=1)
-        assert client.connected.is_set()  # the same connection throughout
-    finally:
-        broker.resume()
-    assert client.failed_publishes > 0
-    wait_until(lambda: retained_snapshot(broker.port, "t/config").get("t/config") == b"new", 20)
-    assert client.connected.is_set()
+    shorter than the keepalive). The flood takes seconds of CPU, many more on a busy machine
+    (past 7.5 s in a loaded CI run: the keepalive of 5 s ran out, a reconnect, and the test
+    failed): the keepalive here is one no flood outlasts, not a deadline."""
+    with connected(broker, 600) as client:
+        client.publish_retained("t/config", "old", qos=1)
+        probe.wait_value("t/config", "old", 5)
+        broker.pause()
+        try:
+            for i in range(70_000):  # past paho's 65,535 message ids
+                client.publish_event("t/flood", str(i))
+            client.publish_retained("t/config", "new", qos=1)
+            assert client.connected.is_set()  # the same connection throughout
+        finally:
+            broker.resume()
+        assert client.failed_publishes > 0
+        wait_until(lambda: retained_snapshot(broker.port, "t/config").get("t/config") == b"new", 20)
+        assert client.connected.is_set()
