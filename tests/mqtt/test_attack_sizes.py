@@ -6,7 +6,6 @@ a huge message; what its log says at start behind a backlog.
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -53,8 +52,10 @@ def test_a_huge_message_on_a_command_topic_is_not_read_by_the_bridge(
             probe.publish(rig.t(leaf), b"7" * HUGE)
         t = time.monotonic()
         probe.publish(rig.t("target"), "north")  # after them, in order: its refusal says
-        err = json.loads(probe.wait_for(rig.t("error"), after=t).payload)  # they were read
-        assert "north" in err["message"] or "north" in json.dumps(err), err
+        # they were read; the refusal, not the first error after them: the emulator answers on
+        # a thread of this process while the probe writes 200 MB, and on a busy machine a poll
+        # went unanswered ("stopped answering") before the refusal came
+        probe.wait_for(rig.t("error"), lambda m: b"north" in m.payload, after=t)
         grown = {pid: _peak_kb(pid) - before[pid] for pid in pids}
     assert all(kb < HUGE // 1000 // 4 for kb in grown.values()), (grown, bridge.log()[-2000:])
 
