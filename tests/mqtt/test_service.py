@@ -9,6 +9,7 @@ The rotator is a recorder of RotatorPort calls.
 from __future__ import annotations
 
 import json
+import threading
 from dataclasses import replace
 
 import pytest
@@ -48,6 +49,7 @@ from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
+from tests.support import wait_until
 from tests.support.clock import FakeClock
 
 NOW_UNIX = 1_700_000_000.0
@@ -890,6 +892,31 @@ def test_a_fence_whose_marker_never_comes_back_is_said_while_it_lasts() -> None:
     svc.on_message(last[0], last[1].encode(), False)  # the main connection caught up
     svc._halts.say_long_holds()
     assert said[-1] == (said[0][0], False)
+
+
+def test_a_stopped_service_sends_no_marker_again_and_its_timer_ends() -> None:
+    """A marker out when the bridge stopped never comes back (here rotctld's S fenced the
+    rotator; so does a stop on the lane just before the end): halts.py's timer went on looking
+    every second for the rest of the process's life, sending markers on the stopped client,
+    each look a new thread. Stopped, the service sends nothing more and its timer ends."""
+    clock, _said, pub, svc = saying_service()
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=False)  # its marker out, the timer armed
+    assert [m for m in pub.sent if m[0] == "rotor/bridge/fence"]
+    svc.stop()
+    after_stop = len(pub.sent)
+    clock.t += 3600.0  # a marker to send again long due, had the timer looked
+
+    def looking() -> list[threading.Thread]:
+        return [
+            t
+            for t in threading.enumerate()
+            if getattr(t, "function", None) == svc._halts._tick and t.is_alive()
+        ]
+
+    wait_until(lambda: not looking(), 5, "the stopped service's timer to end")
+    assert [m for m in pub.sent[after_stop:] if m[0] == "rotor/bridge/fence"] == []
 
 
 def test_a_lane_stop_while_the_main_connection_subscribes_holds_what_it_will_read() -> None:

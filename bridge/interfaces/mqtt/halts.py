@@ -6,7 +6,9 @@ into the rotators, each decision and the mailbox put it lets through under one l
 One timer at a time (TICK_S, while a hold or a marker is out or a long hold is reported) sends
 a marker again and reports a long hold, or a long fence (lastword.py rule 11), on
 ``B/bridge/info`` (``on_info``, never on paho's threads); it decides nothing (lastword.py rule
-5): no hold or fence ends by it.
+5): no hold or fence ends by it. ``stop`` (the service's stop) ends it for good: a marker out
+when the bridge stopped never comes back, and its timer had looked again every second for the
+rest of the process's life, sending markers on a stopped client.
 
 A group's stop (``G/stop``, interfaces/mqtt/groups.py) is a stop of each of its members, on either
 connection: the same decisions, member by member, in one step under the same lock (a lane's
@@ -127,6 +129,7 @@ class Halts:
         # start the state writer once it has let go (kept.py rule 5)
         self._lock = Deferring()
         self._timer: threading.Timer | None = None
+        self._stopped = False  # stop(): no timer from then on
         # (rotator, "hold" or "fence") -> its long hold or fence, as said (on_info)
         self._said: dict[tuple[str, str], str] = {}
         # the stop express's hold (interfaces/mqtt/express.py rule 8), asked before each halt's put
@@ -272,11 +275,20 @@ class Halts:
         """One timer at most looks again in TICK_S while there is something to look at."""
         with self._lock:
             busy = self.word.holding or self.word.markers_out or self._said
-            if self._timer is not None or not busy:
+            if self._timer is not None or not busy or self._stopped:
                 return
             timer = self._timer = threading.Timer(TICK_S, self._tick)
+        timer.name = "halts"
         timer.daemon = True
         timer.start()
+
+    def stop(self) -> None:
+        """The timer ended and never armed again (the opening comment)."""
+        with self._lock:
+            self._stopped = True
+            timer, self._timer = self._timer, None
+        if timer is not None:
+            timer.cancel()
 
     def _tick(self) -> None:
         with self._lock:

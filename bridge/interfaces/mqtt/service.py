@@ -297,6 +297,7 @@ class MqttService:
         self._publisher.start()
 
     def stop(self) -> None:
+        self._halts.stop()  # its timer: nothing is sent again from now on (halts.py)
         self._handed.clear()  # rule 3: offline is what the client holds now
         self._publisher.publish_offline_now(
             [self.topics.rotator(rid).availability for rid in self._rotators]
