@@ -11,6 +11,7 @@ import pytest
 from hypothesis import settings
 
 from bridge.emulators.pty import EmulatedPort
+from bridge.interfaces.mqtt.service import MqttService
 from tests.support import Mosquitto, Probe
 from tests.support.cpu import register as register_cpu_recorder
 from tests.support.rig import Rig
@@ -68,6 +69,27 @@ def _emulator_waits_scaled() -> Iterator[None]:
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(EmulatedPort, "wait_until", scaled)
         yield
+
+
+@pytest.fixture(autouse=True)
+def _mqtt_timers_end_with_the_test() -> Iterator[None]:
+    """The timer of each MQTT service a test made (interfaces/mqtt/halts.py) ends with the test,
+    as the bridge's stop ends it: a unit test's service, never stopped, with a hold or a marker
+    out looked again every second for the rest of the worker's life, a new thread each time, and
+    a later test's snapshot of the threads (the console's taken-port test) took one of them for
+    a thread its failed start had left running."""
+    made: list[MqttService] = []
+    original = MqttService.__init__
+
+    def recorded(self: MqttService, *args: Any, **kwargs: Any) -> None:
+        original(self, *args, **kwargs)
+        made.append(self)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(MqttService, "__init__", recorded)
+        yield
+    for service in made:
+        service._halts.stop()
 
 
 @pytest.fixture
