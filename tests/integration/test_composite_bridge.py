@@ -176,8 +176,12 @@ def test_the_bridges_end_mid_turn_stops_both_boxes(rig: Rig) -> None:
     az.wait_for(lambda s: s.is_moving and s.az_deg > 60, 10)
     el.wait_for(lambda s: s.is_moving and s.el_deg > 20, 10)
     az_stops, el_stops = len(az.frames("stop")), len(el.frames("stop"))
-    rig.stop()
-    assert len(az.frames("stop")) > az_stops and len(el.frames("stop")) > el_stops
+    rig.stop()  # the emulators read what was written on threads of their own: waited for
+    wait_until(
+        lambda: len(az.frames("stop")) > az_stops and len(el.frames("stop")) > el_stops,
+        5,
+        "the end's stop read on both wires",
+    )
     assert az.wait_for(lambda s: not s.is_moving, 5).az_deg < 290
     assert el.wait_for(lambda s: not s.is_moving, 5).el_deg < 75
 
@@ -193,8 +197,8 @@ def test_the_bridges_end_stops_the_elevation_still_turning_after_the_azimuth_cam
     az.wait_for(lambda s: s.az_deg == 12 and not s.is_moving, 10)
     el.wait_for(lambda s: s.is_moving and s.el_deg > 10, 10)
     el_stops = len(el.frames("stop"))
-    rig.stop()
-    assert len(el.frames("stop")) > el_stops
+    rig.stop()  # the emulator reads what was written on a thread of its own: waited for
+    wait_until(lambda: len(el.frames("stop")) > el_stops, 5, "the end's stop read")
     assert el.wait_for(lambda s: not s.is_moving, 5).el_deg < 80
 
 

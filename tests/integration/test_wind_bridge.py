@@ -469,7 +469,7 @@ def test_the_bridges_end_stops_a_turn_in_a_storm_known_only_from_a_replay(rig: R
     rig.app.rotators[0].wind(90.0, replayed=True)  # as the feed hands a reading replayed
     wind_of(rig, lambda w: w.get("storm") and w.get("replayed"))
     stops = len(rig.emu.frames("stop"))
-    rig.stop()
-    assert len(rig.emu.frames("stop")) > stops  # the turn's stop before the end
+    rig.stop()  # the turn's stop before the end (read by the emulator's thread: waited for)
+    wait_until(lambda: len(rig.emu.frames("stop")) > stops, 5, "the end's stop read")
     rest = rig.emu.wait_until(lambda d, now: d.state(now), lambda s: not s.is_moving, slow(10))
     assert rest.az_deg < 250.0, rest  # not on to 300
