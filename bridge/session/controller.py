@@ -433,6 +433,11 @@ class Doubt(Enum):
 class Controller:
     def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
         self.cfg = self.base_cfg = cfg  # rule 7
+        # rule 2: ``_turn_least_s`` of the motion in effect, and the least silence, or the least
+        # time without a valid reply, that can make the controller offline (the cheap look
+        # before ``_silent_offline_t`` and ``_garbled_offline_t``): set with ``cfg``
+        self._least_s = self._least_silence_s = 0.0
+        self._limits_of(cfg)
         self.link: Link | None = None
         self.motion = mo.Motion()
         self.answering = False
@@ -1286,6 +1291,7 @@ class Controller:
         factor, base = self.options.speed_factor(), self.base_cfg
         if factor == 1.0:
             self.cfg = base
+            self._limits_of(base)
             return
         az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
         spec, was = base.spec, base.motion
@@ -1299,6 +1305,13 @@ class Controller:
             ),
         )
         self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
+        self._limits_of(self.cfg)
+
+    def _limits_of(self, cfg: WorkerConfig) -> None:
+        """Rule 2's least silences, of the configuration in effect (``cfg``, set with it): read at
+        every poll and every step's wake-up, they change only with it."""
+        self._least_s = _turn_least_s(cfg.motion)
+        self._least_silence_s = min(cfg.silence_timeout_s, self._least_s)
 
     def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
         """Write ``target`` as ``todo`` says (targets.py), try ``attempt``."""
@@ -1425,14 +1438,6 @@ class Controller:
             "network?"
         )
 
-    @property
-    def _least_silence_s(self) -> float:
-        """Rule 2: the least silence, or the least time without a valid reply, that can make
-        the controller offline (the cheap look before ``_silent_offline_t`` and
-        ``_garbled_offline_t``)."""
-        cfg = self.cfg
-        return min(cfg.silence_timeout_s, _turn_least_s(cfg.motion))
-
     def _silent_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
         after its last byte, or sooner while a target is out (``_turn_offline_t``)."""
@@ -1457,7 +1462,7 @@ class Controller:
         stall check (``_stall_check_t``), but never sooner than ``_turn_least_s`` after
         ``heard_t`` (lost replies on a noisy line are ridden out: an attack pass, at half a 3 s
         stall timeout two lost GS-232 replies went offline); inf with no target out."""
-        return max(self._stall_check_t(link), heard_t + _turn_least_s(self.cfg.motion))
+        return max(self._stall_check_t(link), heard_t + self._least_s)
 
     def _stall_check_t(self, link: Link) -> float:
         """Rule 2: the last check before the motion machine could call the turn under way
