@@ -98,6 +98,7 @@ from bridge.core.model import (
     ErrorEvent,
     ErrorKind,
     GoToPreset,
+    MotionState,
     Nudge,
     Origin,
     Park,
@@ -125,6 +126,10 @@ from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
+
+#: R/state's text of each state (a look-up: an enum's ``value`` is two Python calls, at every
+#: status)
+_STATE_TEXT: dict[MotionState, str] = {state: state.value for state in MotionState}
 
 # (the rotator, the call, long path?, the command as described, who asked, the halt count read
 # before the fence was asked: rule 11)
@@ -315,7 +320,7 @@ class MqttService:
             hand(t.bearing, pl.number(status.bearing_deg))
         if status.elevation_deg is not None:
             hand(t.elevation, pl.number(status.elevation_deg))
-        hand(t.state, status.state.value)
+        hand(t.state, _STATE_TEXT[status.state])
         hand(t.availability, "online" if status.available else "offline")
         if status.version:
             hand(t.version, status.version)
