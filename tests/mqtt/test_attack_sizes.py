@@ -6,6 +6,7 @@ a huge message; what its log says at start behind a backlog.
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
