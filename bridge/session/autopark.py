@@ -11,7 +11,12 @@ Rules:
    the lock off, the rotor idle, no target waiting, and not already at the park position.
 3. The park is an ordinary target (source ``auto-park``): any command meanwhile replaces or
    stops it, and it counts as activity itself, so a park that cannot finish (a stall) is
-   tried again only after another quiet spell.
+   tried again only after another quiet spell. A park still waiting to go out when the rotor
+   is seen turning (a hand on the front panel that the readings had not shown yet) is dropped
+   (``Proposal.drop``), never sent: the bridge does not stop a hand to park (a Rotor-EZ's
+   target goes only to a rotor at rest, so the park's stop-first wrote a stop to the hand's
+   turn, told nowhere: a loaded CI run, and a hand that began between an idle poll and the
+   spell's end). The next spell counts from the hand's last move (rule 1).
 4. A rotator of two boxes (runtime/composite.py rule 7) has one quiet spell: each box's
    auto-park is told of the other's activity (``since``, ``activity``), but not of its park
    (rule 3's, kept apart), so both axes park together once the rotator was left alone.
@@ -74,6 +79,12 @@ class AutoPark:
         m, now = scene.motion, scene.now
         if m.state is MotionState.MOVING:
             self.activity(now)  # rule 1: someone is turning it
+            pending = scene.pending
+            if pending is not None and pending.source is Source.AUTO_PARK:  # rule 3
+                log.info(
+                    "%s: turned by hand before the park went: park dropped", self._rig.rotator_id
+                )
+                return Proposal(drop=Source.AUTO_PARK)
             return NOTHING
         deadline = self.deadline()
         if deadline is None or now < deadline or self._park is None:

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 from enum import Flag, auto
 from typing import Generic, NamedTuple, TypeVar
 
-from bridge.core.model import FeatureCommand, Target
+from bridge.core.model import FeatureCommand, Source, Target
 from bridge.pointing import Pointing, angle_between
 from bridge.session import motion as mo
 from bridge.session.actions import Report
@@ -94,6 +94,8 @@ class Proposal:
     ended: str | None = None  # end tracking and following for this reason (their targets dropped)
     busy: bool = False  # activity: auto-park's quiet spell starts again (autopark.py rule 1)
     halt: bool = False  # stop the turn under way (following: a transmission began, follow.py)
+    drop: Source | None = None  # drop the waiting target if this source put it (autopark.py
+    # rule 3: a hand on the panel before the park went)
 
 
 NOTHING = Proposal()

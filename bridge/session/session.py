@@ -756,6 +756,8 @@ class RotatorSession:
         if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
             self._halt(now)
             self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
+        if proposal.drop is not None:  # (auto-park's, a hand before it went: autopark.py rule 3)
+            self.targets.clear_from(proposal.drop)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 

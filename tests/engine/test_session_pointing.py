@@ -167,3 +167,60 @@ def test_a_spid_picks_the_side_when_the_target_is_sent_not_when_it_came(rig: Rig
     v.run_until(lambda v: v.state is IDLE, 60, "arrived")
     assert v.truth().az_deg == pytest.approx(-170, abs=1)
     assert v.status.overlap == "ccw"
+
+
+def test_a_hand_at_the_panel_just_before_the_auto_park_is_not_stopped_for_it(rig: Rig) -> None:
+    """DEFECT (a loaded CI run, then here): a hand on the front panel between the last idle poll
+    and the end of the quiet spell. The park was proposed (the readings still showed the rotor
+    at rest); the reading asked before it went (targets.py rule 7) showed the rotor turning, and
+    the waiting park made the session stop the hand's turn first (a Rotor-EZ takes a target
+    only at rest), a ``;`` nothing told. Now the park is dropped when the turn is seen, and goes
+    a whole quiet spell after the hand's last move (autopark.py rules 1 and 3)."""
+    v = rotorez(rig, 90, park_az_deg=0, park_after_idle_s=10, idle_poll_interval_s=4)
+    # the idle polls at 0, 4 and 8 s; the spell, from start-up, ends at 10 s
+    v.run_until(lambda v: any(w.t >= 8 and w.data == QUERY for w in v.writes), 10, "poll at 8")
+    v.run_for(0.5)
+    t_hand = v.now
+    v.manual_rotate(200)  # unseen till the reading asked at 10 s, for the park
+    v.run_until(lambda v: v.status.parked, 120, "parked after the hand")
+    assert b";" not in v.sent(since=t_hand), v.sent(since=t_hand)
+    rests = [e for e in v.device.events if e.time_s >= t_hand and e.kind in ("arrived", "stopped")]
+    assert (rests[0].kind, rests[0].az_deg) == ("arrived", pytest.approx(200)), rests
+    park = next(f for f in v.frames(since=t_hand) if f.data == b"AP1000\r")
+    assert park.outcome == Outcome.EXECUTED
+    assert park.time_s - rests[0].time_s >= 10, "parked before a quiet spell after the hand"
+    assert v.errors() == []
+
+
+def test_a_hand_unseen_on_a_loaded_host_is_not_stopped_when_the_spell_ends(rig: Rig) -> None:
+    """The CI failure as it came (tests/integration/test_pointing_bridge.py, load 15-20): a
+    hand turns the rotor faster than its configured speed, and one poll's reply is taken late
+    (a loaded host), so the reading asked again at once disagrees with it and the readings at
+    the idle rate go on disagreeing (controller.py rule 9): the turn stays unseen, the quiet
+    spell ends under it, and the first readings that agree, asked for the park, showed it
+    turning: the park's stop-first cut the hand short at 280 with a ``;``. Now the hand ends
+    its turn at 300, and the park goes a spell later."""
+    timings = {"brake_delay_s": 0.5, "settle_s": 0.3, "idle_poll_interval_s": 0.3}
+    v = rig(
+        "rotorez",
+        settings={
+            "park_az_deg": 0,
+            "park_after_idle_s": 5,
+            **timings,
+            "moving_poll_interval_s": 0.1,
+        },
+        emulator={"start_az_deg": 100, "speed_deg_s": 40, "brake_delay_s": 0.5, "jitter_deg": 0},
+    )
+    v.run_until_state(IDLE, 30)
+    t_hand = v.now
+    v.manual_rotate(300)  # 200 degrees at 40 deg/s; the bridge takes it for a 6 deg/s rotor
+    v.run_for(0.3)
+    v.run_until(lambda v: v.writes[-1].t == v.now and v.writes[-1].data == QUERY, 1, "a poll")
+    v.delay_output(0.2)  # its reply taken late
+    v.run_until(lambda v: v.status.parked, 60, "parked after the hand")
+    assert any("readings in a row at rest disagree" in r.message for r in v.errors())  # as in CI
+    assert b";" not in v.sent(since=t_hand), v.sent(since=t_hand)
+    rests = [e for e in v.device.events if e.time_s >= t_hand and e.kind in ("arrived", "stopped")]
+    assert (rests[0].kind, rests[0].az_deg) == ("arrived", pytest.approx(300)), rests
+    park = next(f for f in v.frames(since=t_hand) if f.data == b"AP1000\r")
+    assert park.outcome == Outcome.EXECUTED and park.time_s - rests[0].time_s >= 5
