@@ -79,7 +79,10 @@ Rules:
    (unchecked: the operator freeing the rotor by hand at the control box has that move stopped
    once, then no more). A controller that said it restarted mid-turn (controller.py rule
    12) gets a stop as a refusal's mid-turn: written at once, checked as an operator's, its
-   error the restart's (a ``serial`` one naming the target dropped), never a stall's.
+   error the restart's (a ``serial`` one naming the target dropped), never a stall's. A
+   composite's elevation box names its elevation where a stall or a turn away is said, never
+   its own azimuth, which is none of the antenna's (a review: "rotor stalled at 0°", word for
+   word the azimuth box's stall at north, and runtime/composite.py rule 9 said the two once).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -307,6 +310,8 @@ class Stops:
         if m.el_position_deg is not None and cfg.spec.has_elevation:
             el = f"elevation {m.el_position_deg:g}°"
             where = f"{where}, {el}" if cfg.spec.turns_azimuth else el
+        # a composite's elevation box: its own azimuth is none of the antenna's (rule 4)
+        own = f"{pos:g}°" if cfg.spec.turns_azimuth else where
         if event is mo.Event.PAST_LIMIT:
             beyond = "a limit"
             if m.past is not None:
@@ -321,7 +326,7 @@ class Stops:
             return Verdict(True, Report(ErrorKind.STALLED, why), "past a limit")
         if event is mo.Event.STALLED:
             why = (
-                f"rotor stalled at {pos:g}° (no progress for {cfg.stall_timeout_s:g} s): brake "
+                f"rotor stalled at {own} (no progress for {cfg.stall_timeout_s:g} s): brake "
                 "paddle pressed, rotor stuck, or the controller restarted (power cycled or "
                 "reset) and forgot its target; target dropped: send the target again"
             )
@@ -336,7 +341,7 @@ class Stops:
         if event is mo.Event.TURNED_AWAY:
             self._at_rest = True  # a controller driving the wrong way: stop it then
             why = (
-                f"rotor turned away from its target at {pos:g}° (the front panel, or a "
+                f"rotor turned away from its target at {own} (the front panel, or a "
                 "controller driving the wrong way): target dropped, and a stop follows when it "
                 "comes to rest"
             )

@@ -224,3 +224,30 @@ def test_a_track_command_both_boxes_refuse_is_said_once(rig: Rig, tmp_path: Path
     assert len(first) == 1, said
     assert first[0]["kind"] == "refused" and first[0]["command"] == "track 'NOSUCH'", said
     assert "no satellite 'NOSUCH'" in first[0]["message"], said
+
+
+def test_both_boxes_stalled_at_once_are_said_each_the_elevations_by_its_elevation(
+    rig: Rig,
+) -> None:
+    """composite.py rule 9 and stops.py rule 4: two rotors frozen at north and the horizon
+    (ice), a target sent: each box stalls. The elevation box's stall named its own azimuth,
+    which it never turns ('rotor stalled at 0°'), word for word the azimuth box's stall at
+    north, so rule 9 took the two for one event and the elevation's was never said."""
+    az, el = composite(rig)
+    az.call(lambda device, now: device.manual_rotate(0.0, now))  # north
+    az.wait_for(lambda s: s.az_deg == 0 and not s.is_moving, 10)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    az.jam()
+    el.jam()
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "200 60")
+
+    def stalls() -> list[str]:
+        said = [json.loads(m.payload) for m in rig.probe.on("rotor/error") if m.t >= t]
+        return [e["message"] for e in said if e["kind"] == "stalled"]
+
+    wait_until(lambda: len(stalls()) >= 2, 15, "a stall said for each box")
+    at = sorted(s.split(" (")[0] for s in stalls())
+    assert at == ["rotor stalled at 0°", "rotor stalled at elevation 0°"], stalls()
