@@ -18,13 +18,13 @@ Rules:
    same before it was refused).
 5. A password file this user may not read says who this user is and what to do: check-config
    run by hand as oneself on the service's file (root:rotor-bridge, 640) said "Permission
-   denied" alone (a first-hour review).
+   denied" alone (a first-hour review). ``pwd`` is looked up only then: the remote runs on
+   Windows (docs/deployment.md), which has none, and every command died importing it.
 """
 
 from __future__ import annotations
 
 import os
-import pwd
 import ssl
 import stat
 from pathlib import Path
@@ -45,9 +45,14 @@ def _every_user(key: str, path: Path) -> str:
 def _may_not_read(path: Path, exc: OSError) -> str:
     """Rule 5: a password file this user may not read, and what to do."""
     try:
-        who = pwd.getpwuid(os.getuid()).pw_name
-    except KeyError:  # a uid with no name (docker run --user 1000)
-        who = f"uid {os.getuid()}"
+        import pwd  # (rule 5: not at the top, Windows has none)
+    except ImportError:  # Windows: no uid; the name its shell gives
+        who = os.environ.get("USERNAME") or "this user"
+    else:
+        try:
+            who = pwd.getpwuid(os.getuid()).pw_name
+        except KeyError:  # a uid with no name (docker run --user 1000)
+            who = f"uid {os.getuid()}"
     return (
         f"password_file {path}: {exc.strerror} for user {who}; run rotor-bridge as the user "
         "that may read it (the service's file: sudo, or as rotor-bridge), or let this user "
