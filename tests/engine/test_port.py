@@ -4,11 +4,14 @@ opened a port rotctld held and the two stole each other's replies, 27 reopen cyc
 
 from __future__ import annotations
 
+import mmap
 import os
+import struct
 import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import cast
 
 import pytest
@@ -117,41 +120,54 @@ def test_a_watch_that_fails_costs_the_port_nothing(tty: str) -> None:
 
 # as the stop express writes: short writes on a non-blocking descriptor, never a flood (a
 # blocking writer would sleep inside its write, the tty taken, whenever the reader is late; a
-# flood would fill the tty: the full-buffer test's case, not this one's)
+# flood fills the tty, and a frame a full tty takes in part can have the other writer's
+# bytes land before its rest: a full buffer is a stuck line, port.py rule 6, not this test's
+# case). A pty's TIOCOUTQ says 0 however full it is, so the writer counts instead: it writes
+# only while the bytes both writers wrote, less those the test's reader took off the wire
+# (the counts in a shared file), come to under 256, and pauses while the reader waits for a
+# core on a busy machine (pouring on, it filled the pty, and a frame was cut by its bytes)
 OTHER_WRITER = """
-import fcntl, os, sys, termios, time
+import mmap, os, struct, sys, time
 fd = os.open(sys.argv[1], os.O_WRONLY | os.O_NOCTTY | os.O_NONBLOCK)
+counts = mmap.mmap(os.open(sys.argv[2], os.O_RDWR), 32)
+mine = 0
 os.write(1, b"ready\\n")
-while True:
-    held = fcntl.ioctl(fd, termios.TIOCOUTQ, b"\\0\\0\\0\\0")
-    if int.from_bytes(held, sys.byteorder, signed=True) < 256:  # (a frame a stop, as the
-        try:  # express: it never fills the tty while the reader waits for a core)
-            os.write(fd, b"S\\r" * 10)  # inside its write a little longer
+while not struct.unpack_from("q", counts, 24)[0]:  # (until the test has written its frames)
+    drained, frames = struct.unpack_from("qq", counts)
+    if mine + frames - drained < 256:  # (a frame a stop, as the express: never a full tty)
+        try:
+            mine += os.write(fd, b"S\\r" * 10)  # inside its write a little longer
         except BlockingIOError:
             pass
+        struct.pack_into("q", counts, 16, mine)
     time.sleep(0.0001)
 """
 
 
 def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     """A non-blocking write to a tty another writer is inside of (the stop express writing its
     stop frame) is refused outright by the kernel (EAGAIN), with room to spare; the bridge took
     that for a stuck adapter and dropped the link (a stop express test failed so under load).
     Every frame reaches the wire whole, however often the other writer is in the way. (This
-    writer never pauses, unlike the express, which writes one frame a stop, and on a loaded
-    machine the reader that drains the tty here may wait for a core while the writer fills it:
-    how long the tty may be taken from the bridge is a second here, scaled. The bridge before
-    gave up at the first refusal; a CI run under load gave up after 0.05 s scaled.)"""
+    writer writes whenever the tty holds under 256 bytes, unlike the express, which writes one
+    frame a stop, and on a loaded machine it may wait for a core inside its write: how long the
+    tty may be taken from the bridge is a second here, scaled. The bridge before gave up at the
+    first refusal; a CI run under load gave up after 0.05 s scaled.)"""
     monkeypatch.setattr(port_module, "WRITE_WAIT_S", slow(1.0))
-    # the other writer here pours bytes without a pause, so the tty may hold many while the
-    # reader waits for a core: that is the test below's (a full buffer), not this one's
+    # a pty says it holds nothing to send (TIOCOUTQ 0) on this kernel; one that counts the
+    # bytes its reader has not taken must not make a late reader a full buffer here
     monkeypatch.setattr(port_module, "FULL_BYTES", 1 << 30)
     master, slave = os.openpty()
     path = os.ttyname(slave)
     os.close(slave)
     port = open_port(path, REGISTRY["rotorez"])
+    shared = tmp_path / "counts"
+    # the bytes the reader took, the frames' bytes, the other writer's; its end when not 0
+    shared.write_bytes(bytes(32))
+    with open(shared, "r+b") as file:
+        counts = mmap.mmap(file.fileno(), 32)
     wire = bytearray()
 
     def drain() -> None:
@@ -163,19 +179,37 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
             if not data:
                 return
             wire.extend(data)
+            struct.pack_into("q", counts, 0, len(wire))
+
+    def theirs() -> int:
+        return int(struct.unpack_from("q", counts, 16)[0])
+
+    def unread() -> int:  # bytes of both writers the reader has not taken yet
+        return int(struct.unpack_from("q", counts, 8)[0]) + theirs() - len(wire)
 
     reader = threading.Thread(target=drain, daemon=True)
     reader.start()
-    other = subprocess.Popen([sys.executable, "-c", OTHER_WRITER, path], stdout=subprocess.PIPE)
+    other = subprocess.Popen(
+        [sys.executable, "-c", OTHER_WRITER, path, str(shared)], stdout=subprocess.PIPE
+    )
     try:
         assert other.stdout is not None and other.stdout.readline() == b"ready\n"
-        frames = 2000
-        for _ in range(frames):
+        # 2000 frames at least, and on until the other writer wrote 200 times meanwhile
+        # (descheduled, it may miss the first 2000 on a busy machine)
+        frames, first = 0, theirs()
+        deadline = time.monotonic() + slow(60)
+        while frames < 2000 or theirs() - first < 200 * 20:
+            assert time.monotonic() < deadline, "the other writer hardly wrote"
+            if unread() > 1024:  # (the tty far from full: the reader waited for, as the
+                wait_until(lambda: unread() < 256, 10, "the reader")  # other writer waits)
             write_frame(port, b"M123\r")  # raised "the port takes no more bytes" before
+            frames += 1
+            struct.pack_into("q", counts, 8, 5 * frames)
             time.sleep(0.0002)  # frames spread over the other writer's, not one burst
-        other.kill()
-        other.wait(slow(10))
-        wait_until(lambda: wire.count(b"M123\r") == frames, 10, "every frame on the wire")
+        struct.pack_into("q", counts, 24, 1)
+        assert other.wait(slow(10)) == 0
+        wait_until(lambda: unread() == 0, 10, "every byte on the wire")
+        assert wire.count(b"M123\r") == frames  # whole, every one
     finally:
         if other.poll() is None:
             other.kill()
@@ -183,6 +217,7 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
         port.close()
         os.close(master)
         reader.join(slow(10))
+        counts.close()
 
 
 class _FullLine:
