@@ -71,7 +71,12 @@ Rules:
    single controller's turn goes on after a replug, but here the other axis was stopped (an
    attack pass: the elevation box, replugged, turned on alone to its target, 60/80 where
    300/80 was asked); both boxes whose ports went together (one USB hub) owe theirs, and the
-   turn is sent again by hand. The storm's park goes on there,
+   turn is sent again by hand. A box that says it restarted mid-turn (session/controller.py
+   rule 12: a power-on byte) abandons the rotator's turn as a whole: the other box's turn
+   under way is stopped and its target waiting dropped (session.py ``abandon``), unsaid, the
+   restart's one error saying it was not resumed (a review: the azimuth box's turn was said
+   abandoned while the elevation box turned on to the user's elevation, the antenna left half
+   moved). The storm's park goes on there,
    under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
    attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
    and never sent again): each box parks its own axis, as one does alone in a storm
@@ -339,6 +344,7 @@ class CompositeWorker:
         self._newest_applied = 0
         self.composition = Composition(cfg.rotator_id)
         self._halted = Halts()  # rule 6
+        self._restarted = {axis: Halts() for axis in AXES}  # rule 8: each box's restarts
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
         for axis, box, own in zip(AXES, axes, self._own, strict=True):
@@ -450,6 +456,10 @@ class CompositeWorker:
         if self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts):  # rule 6
             el = self.boxes[Axis.ELEVATION]
             el.guarded(lambda t: el.carry_out(t, el.session.halt(t)), now)
+        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
+            if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
+                box = self.boxes[other]  # rule 8: a restart mid-turn abandons the rotator's
+                box.guarded(lambda t, b=box: b.carry_out(t, b.session.abandon(t)), now)
 
     def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
         """Each box's session decides on its batch; then the frames go out on both lines

@@ -185,6 +185,8 @@ Rules:
    (the status's ``last_error`` with it; the target no longer shown). A stop goes as for a
    refusal mid-turn (stops.py rule 4), checked: harmless to a controller at rest, and should
    the byte have been line noise, the rotor the bridge no longer stands a turn for is stopped.
+   ``restarts`` counts such turns: a composite's other box abandons its own (runtime/
+   composite.py rule 8).
    No stall is called then (an earlier pass: 10 s after such a restart the rotor was said
    stalled, "brake paddle pressed or rotor stuck", and rotor health counted a stall: a climb
    to a rotor that is not stuck). A controller that says nothing when it restarts (RT-21,
@@ -447,6 +449,7 @@ class Controller:
         self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
         self.version: str | None = None
         self.controller_time: str | None = None  # its own clock (SatEL)
+        self.restarts = 0  # rule 12: turns a restart abandoned (runtime/composite.py rule 8)
         self._silence_reported = False
         self._afresh = False  # status.py rule 1: the next first reading is shown as it is
         self._junk_reported_t = -1e18
@@ -1108,6 +1111,7 @@ class Controller:
         """Rule 12: the controller restarted; a turn it had is abandoned."""
         aimed = self.motion.target_deg
         self.motion, events = mo.restarted(self.motion, self.cfg.motion)
+        self.restarts += bool(events)  # (a composite's other box abandons its turn too)
         shown = None if aimed is None else self.cfg.aim.true_of(aimed)
         self._motion_events(events, now, shown)
 

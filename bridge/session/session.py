@@ -487,6 +487,18 @@ class RotatorSession:
         self._halt(now)
         return self._step(now)
 
+    def abandon(self, now: float) -> list[Action]:
+        """The other box of this rotator restarted mid-turn and abandoned its turn (runtime/
+        composite.py rule 8): the rotator's turn is abandoned here too, a target waiting
+        dropped and a turn under way stopped, unsaid (the other box said it); the storm's
+        park, this box's own axis, goes on, as when the other box stops answering."""
+        ctl = self.controller
+        if not self._storm_park_waiting():
+            self._drop_pending(None)
+        if (ctl.turning() or ctl.cut_mid_turn()) and not self._storm_park():
+            ctl.stop(now)
+        return self._step(now)
+
     def _halt(self, now: float) -> None:
         """A part's halt: the turn under way stopped, a WSJT-X target waiting dropped."""
         self.targets.clear_from(Source.WSJTX)

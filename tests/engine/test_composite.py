@@ -736,3 +736,28 @@ def test_an_event_both_boxes_say_is_said_once_and_a_command_sent_again_is_said_a
     assert c.said(az, refused(2.0, "track Y"))  # another command's words: no twin
     assert c.said(el, refused(2.0 + TWIN_S))  # one box's, long after: its own event
     assert c.said(az, refused(2.0 + TWIN_S + 0.1)) is False  # ... whose twin this is
+
+
+def test_a_box_that_restarted_mid_turn_abandons_the_rotators_turn_in_both_boxes() -> None:
+    """A Rotor-EZ azimuth box power-cycled mid-turn (its 0xE0 byte: controller.py rule 12)
+    abandons its turn and says it was not resumed; the elevation box carried on to the user's
+    elevation, the antenna left half moved under that word (a review). The rotator's turn is
+    abandoned whole (composite.py rule 8), said once."""
+    emulators = {Axis.ELEVATION: FAST[Axis.ELEVATION]}
+    with VirtualComposite("rotorez", "gs232b", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda c: c.az.truth().az_deg > 30, 60, "azimuth turning")
+        t = v.now
+        v.az.power_cycle()
+        v.run_for(60.0)
+        elevation = v.el.truth().el_deg
+        assert elevation < 60.0, elevation  # observed: 80, the elevation box arrived
+        assert not v.el.truth().is_moving
+        said = [e.message for box in (v.az, v.el) for e in box.errors(since=t)]
+        restarts = [m for m in said if m.startswith("the controller restarted mid-turn")]
+        assert len(restarts) == 1 and len(said) == 1, said
+        status = v.status
+        assert status.target_az_deg is None and status.target_el_deg is None
+        assert status.state is MotionState.IDLE

@@ -51,6 +51,7 @@ class VirtualComposite:
         assert boxes is not None
         self.composition = Composition("v")
         self._halted = Halts()  # composite.py rule 6, as CompositeWorker
+        self._restarted = {axis: Halts() for axis in Axis}  # composite.py rule 8, as it
         self.mailbox = Mailbox()
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.boxes: dict[Axis, VirtualRotator] = {}
@@ -135,6 +136,11 @@ class VirtualComposite:
             el = self.boxes[Axis.ELEVATION]
             el._do(el.session.halt(el.now))
             self._absorb()
+        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
+            if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
+                box = self.boxes[other]  # composite.py rule 8: a restart mid-turn
+                box._do(box.session.abandon(box.now))
+                self._absorb()
 
     # -- time (rule 1) ----------------------------------------------------------------------------
     def run_for(self, seconds: float) -> None:

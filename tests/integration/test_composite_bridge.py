@@ -251,3 +251,40 @@ def test_both_boxes_stalled_at_once_are_said_each_the_elevations_by_its_elevatio
     wait_until(lambda: len(stalls()) >= 2, 15, "a stall said for each box")
     at = sorted(s.split(" (")[0] for s in stalls())
     assert at == ["rotor stalled at 0°", "rotor stalled at elevation 0°"], stalls()
+
+
+def test_a_box_power_cycled_mid_turn_abandons_the_whole_turn_the_other_box_stopped(
+    rig: Rig,
+) -> None:
+    """composite.py rule 8 and controller.py rule 12: a Rotor-EZ azimuth box switched off and
+    on mid-turn says it restarted (0xE0) and abandons its turn, said once on R/error ("was not
+    resumed: send the target again"). The elevation box turned on to 80 (a review): the
+    antenna left half moved under that word. It is stopped, its target dropped."""
+    line = rig.open_line(rig, "sky-az", "rotorez", {"speed_deg_s": 6.0})
+    el_line = rig.open_line(rig, "sky-el", "gs232b", {"el_speed_deg_s": 2.0})
+    rig.rotators.append(
+        {
+            "id": "sky",
+            "azimuth": {"model": "rotorez", "port": str(line.path)},
+            "elevation": {"model": "gs232b", "port": str(el_line.path)},
+            **FAST_POLLING,
+        }
+    )
+    az, el = line.emu, el_line.emu
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    rig.probe.publish("rotor/target", "300 80")
+    az.wait_for(lambda s: s.is_moving and s.az_deg > 30, 20)
+    t = time.monotonic()
+    az.power_cycle()
+    said = rig.probe.wait_for("rotor/error", lambda m: b"restarted" in m.payload, after=t)
+    assert "was not resumed: send the target again" in json.loads(said.payload)["message"]
+    stopped = el.wait_for(lambda s: not s.is_moving, 10)
+    assert stopped.el_deg < 60, stopped  # observed: on to 80
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15, after=t)
+    assert el.wait_for(lambda s: not s.is_moving, 5).el_deg == stopped.el_deg
+    doc = status(rig)
+    assert doc["target"] is None and doc.get("target_elevation") is None, doc
+    errors = [m for m in rig.probe.on("rotor/error") if m.t >= t]
+    assert len(errors) == 1, [m.payload for m in errors]
