@@ -89,7 +89,7 @@ Rules:
    first. Both sessions take the same commands, the wind and the TLE file's answers (rule 1),
    so each refused the same track command and said the same silence of the wind topic (an
    attack pass: ``R/track NOSUCH`` was refused twice on R/error). What names its box (a
-   port's fault) or its axis (a stall: session/stops.py rule 4) is no twin, and one box's
+   port's fault) or its axis (a stall, a refusal: session/stops.py rule 4) is no twin, and one box's
    word is matched once: the same refusal again later (a command sent again) is said again.
 """
 

@@ -220,7 +220,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.options import Options
 from bridge.session.slew import Slew, overdue, travel_s
-from bridge.session.stops import Stops, Verdict
+from bridge.session.stops import Stops, Verdict, standing
 from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
@@ -724,7 +724,7 @@ class Controller:
             link.write_stop(now)
             self.stops.wrote_at_rest(now, False)
             why = (
-                f"rotor turning at {self._shown_az():g}° after the stop its stall was "
+                f"rotor turning at {self._standing()} after the stop its stall was "
                 "given (freed, turned by hand, or that stop lost on the line): stopped once "
                 "more; if it still turns, stop it at the controller"
             )
@@ -1155,6 +1155,11 @@ class Controller:
             return False
         self.notes.append(Again(target, *self._retry_raw, verdict.error, verdict.ends_tracking))
         return True
+
+    def _standing(self) -> str:
+        """Where the rotor stands, in an error's words (stops.py ``standing``: a composite's
+        elevation box names its elevation)."""
+        return standing(self.motion, self.cfg.motion, self._shown_az())
 
     def _shown_az(self) -> float | None:
         """The bearing the user sees where the motion machine has the rotor (pointing.py)."""

@@ -80,9 +80,10 @@ Rules:
    once, then no more). A controller that said it restarted mid-turn (controller.py rule
    12) gets a stop as a refusal's mid-turn: written at once, checked as an operator's, its
    error the restart's (a ``serial`` one naming the target dropped), never a stall's. A
-   composite's elevation box names its elevation where a stall or a turn away is said, never
-   its own azimuth, which is none of the antenna's (a review: "rotor stalled at 0°", word for
-   word the azimuth box's stall at north, and runtime/composite.py rule 9 said the two once).
+   composite's elevation box names its elevation where a stall, a turn away, a refusal or a
+   rotor turning after its stall's stop is said (``standing``), never its own azimuth, which
+   is none of the antenna's (a review: "rotor stalled at 0°", word for word the azimuth box's
+   stall at north, and runtime/composite.py rule 9 said the two once).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -125,6 +126,14 @@ CLEARED = (
     "a stop or lock from the stop lane came before it, and the MQTT connection that would have "
     "told which was published first dropped; send it again"
 )
+
+
+def standing(m: mo.Motion, cfg: mo.MotionConfig, pos: float | None) -> str:
+    """Rule 4: where a box says its rotor stands (``pos``: the bearing the user sees there); a
+    composite's elevation box names its elevation, never its own azimuth, none of the antenna's."""
+    if cfg.spec.turns_azimuth or m.el_position_deg is None or not cfg.spec.has_elevation:
+        return f"{pos:g}°"
+    return f"elevation {m.el_position_deg:g}°"
 
 
 @dataclass(frozen=True)
@@ -310,8 +319,7 @@ class Stops:
         if m.el_position_deg is not None and cfg.spec.has_elevation:
             el = f"elevation {m.el_position_deg:g}°"
             where = f"{where}, {el}" if cfg.spec.turns_azimuth else el
-        # a composite's elevation box: its own azimuth is none of the antenna's (rule 4)
-        own = f"{pos:g}°" if cfg.spec.turns_azimuth else where
+        own = standing(m, cfg, pos)  # (a composite's elevation box: its elevation)
         if event is mo.Event.PAST_LIMIT:
             beyond = "a limit"
             if m.past is not None:
@@ -362,7 +370,7 @@ class Stops:
             return Verdict(True, Report(ErrorKind.STALLED, why), "turned back")
         if event is mo.Event.REFUSED:
             why = (
-                f"the controller refused the target (it answered with its refusal at {pos:g}°): "
+                f"the controller refused the target (it answered with its refusal at {own}): "
                 "outside the range the box is set to turn, or a bearing it cannot take"
             )
             turning = m.state is MotionState.MOVING  # still on its way to the bearing before

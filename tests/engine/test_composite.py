@@ -761,3 +761,57 @@ def test_a_box_that_restarted_mid_turn_abandons_the_rotators_turn_in_both_boxes(
         status = v.status
         assert status.target_az_deg is None and status.target_el_deg is None
         assert status.state is MotionState.IDLE
+
+
+def test_both_boxes_refusing_the_target_are_said_each_the_elevations_by_its_elevation() -> None:
+    """stops.py rule 4 and composite.py rule 9: both GS-232 boxes answer a target with their
+    refusal (``?>``), the azimuth box resting at north. The elevation box's refusal named its
+    own azimuth, which it never turns ('its refusal at 0°'), word for word the azimuth box's,
+    so rule 9 took the two for one event and the elevation box's was never said."""
+    with VirtualComposite("gs232b-az", "gs232b") as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        # (three digits beyond each box's range, and so again: one refusal is tried once more)
+        v.az.garble_writes(b"M200\r", b"M999\r", count=2)
+        v.el.garble_writes(b"W000 030\r", b"W000 999\r", count=2)
+        t = v.now
+        v.aim(Target(200.0, 30.0))
+        v.run_for(5.0)
+        told = sorted(
+            (when, axis, r)
+            for axis, box in v.boxes.items()
+            for when, r in box.events
+            if when >= t and r.kind == ErrorKind.REFUSED
+        )
+        rule_9 = Composition("v")  # (as CompositeWorker hands on the boxes' events)
+        said = [
+            r.message
+            for when, axis, r in told
+            if rule_9.said(axis, ErrorEvent(r.kind, r.message, r.command, when))
+        ]
+        at = sorted(m.split("): ")[0] for m in said)
+        assert at == [
+            "the controller refused the target (it answered with its refusal at 0°",
+            "the controller refused the target (it answered with its refusal at elevation 0°",
+        ], said
+
+
+def test_an_elevation_box_freed_after_its_stall_names_its_elevation_turning() -> None:
+    """stops.py rule 4: the elevation box stalled (iced), its stall's stop lost on the line;
+    freed, it turns on to its old elevation and is stopped once more, said. It said 'rotor
+    turning at 0°', its own azimuth, which it never turns, word for word what the azimuth box
+    at north says (composite.py rule 9 then says the two once)."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.el.jam()
+        v.el.drop_writes(b"S\r")  # (the stall's stop, lost)
+        v.aim(Target(20.0, 30.0))
+        v.run_until(lambda c: c.el.errors(ErrorKind.STALLED), 60, "the elevation's stall")
+        t = v.now
+        v.el.unjam()
+        v.run_until(lambda c: c.el.errors(ErrorKind.STOP, since=t), 10, "turning on: stopped")
+        [turning] = [r.message for r in v.el.errors(ErrorKind.STOP, since=t)]
+        assert turning.startswith("rotor turning at elevation "), turning
+        v.run_until(lambda c: not c.el.truth().is_moving, 10, "stopped once more")
+        assert v.el.truth().el_deg < 25.0
