@@ -299,7 +299,9 @@ class Composition:
 
 class Halts:
     """Rule 6, sans-IO: whether the elevation box is to halt, once for each new halt a part
-    of a feature's own commands proposed in the azimuth box's session (its ``part_halts``)."""
+    of a feature's own commands proposed in the azimuth box's session (its ``part_halts``);
+    rule 8's too: whether a box's other is to abandon its turn, once for each new turn a
+    restart abandoned in that box (its controller's ``restarts``)."""
 
     def __init__(self) -> None:
         self._seen = 0
