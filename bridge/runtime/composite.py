@@ -52,7 +52,8 @@ Rules:
 7. Auto-park's quiet spell is the rotator's (session/autopark.py rule 4): a target to one axis
    is activity in the other box's session too (``Batch.activity``), and before each box is
    served it is told of the other's latest activity (its rotor seen turning, a hand on its
-   front panel: ``share_quiet``), and a box that does not answer is activity at every serve
+   front panel: ``share_quiet``; a park under way stopped for it: autopark.py rule 4), and a
+   box that does not answer is activity at every serve
    (the rotator is offline: no box parks its axis alone, and the spell starts again when both
    answer, as autopark.py rule 1 has it for one controller); each box then parks its own axis,
    the azimuth box the park's azimuth alone (app.py ``axis_configs``, as the wind's park),
@@ -154,7 +155,7 @@ def share_quiet(sessions: list[RotatorSession], now: float) -> None:
         latest = now
     for s in sessions:
         if s.autopark.since < latest:
-            s.autopark.activity(latest)
+            s.autopark.told(latest)
 
 
 def merge(

@@ -18,8 +18,13 @@ Rules:
    turn, told nowhere: a loaded CI run, and a hand that began between an idle poll and the
    spell's end). The next spell counts from the hand's last move (rule 1).
 4. A rotator of two boxes (runtime/composite.py rule 7) has one quiet spell: each box's
-   auto-park is told of the other's activity (``since``, ``activity``), but not of its park
-   (rule 3's, kept apart), so both axes park together once the rotator was left alone.
+   auto-park is told of the other's activity (``since``, ``told``), but not of its park nor
+   of its park's turn (rule 3's, kept apart), so both axes park together once the rotator
+   was left alone. Told of the other's activity after its own park was proposed (a hand on
+   the other box's panel, seen only by the reading asked for that box's park), its park is
+   dropped if still waiting, else its turn is halted (``Scene.parking``: the last target sent
+   was the park): a GS-232B sends its park at once, and the elevation went on to its stow
+   under a hand on the azimuth, which parked a whole spell later (one axis at a time).
 """
 
 from __future__ import annotations
@@ -44,6 +49,8 @@ class AutoPark:
         self._after_s = rig.park_after_idle_s if park is not None else 0.0
         self._park = park
         self._since = -math.inf  # rule 1: the last activity
+        self._shared = -math.inf  # rule 4: the last activity but its own park's turn
+        self._told = -math.inf  # rule 4: the other box's last activity it was told of
         self._parked_t = -math.inf  # rule 3: its own last park (rule 4: not shared)
 
     @property
@@ -54,12 +61,17 @@ class AutoPark:
 
     @property
     def since(self) -> float:
-        """Rule 4: when the last activity was (not its own park)."""
-        return self._since
+        """Rule 4: when the last activity was (not its own park, nor its turn)."""
+        return self._shared
 
     def activity(self, now: float) -> None:
         """Rule 1: the quiet spell starts again."""
-        self._since = now
+        self._since = self._shared = now
+
+    def told(self, t: float) -> None:
+        """Rule 4: the other box's latest activity (a command, its rotor seen turning)."""
+        self._told = self._shared = t
+        self._since = max(self._since, t)  # (its own park's turn may be newer)
 
     def deadline(self) -> float | None:
         """When parking is due (None: never)."""
@@ -76,11 +88,21 @@ class AutoPark:
 
     def step(self, scene: Scene) -> Proposal:
         """Run by the session with its other rules, while the controller answers."""
-        m, now = scene.motion, scene.now
+        m, now, parking = scene.motion, scene.now, scene.parking
+        pending = scene.pending
+        mine = pending is not None and pending.source is Source.AUTO_PARK
+        if self._told > self._parked_t and (mine or parking and _aiming(m)):  # rule 4
+            log.info(
+                "%s: the other box was busy before the park ended: park stopped",
+                self._rig.rotator_id,
+            )
+            return Proposal(halt=not mine, drop=Source.AUTO_PARK)
         if m.state is MotionState.MOVING:
+            if parking and _aiming(m):  # rule 3: its own park's turn, activity here alone
+                self._since = now
+                return NOTHING
             self.activity(now)  # rule 1: someone is turning it
-            pending = scene.pending
-            if pending is not None and pending.source is Source.AUTO_PARK:  # rule 3
+            if mine:  # rule 3
                 log.info(
                     "%s: turned by hand before the park went: park dropped", self._rig.rotator_id
                 )
@@ -102,3 +124,8 @@ class AutoPark:
             )
         log.info("%s: parking (no command for %g s)", self._rig.rotator_id, self._after_s)
         return Proposal(target=judged)
+
+
+def _aiming(m: mo.Motion) -> bool:
+    """A target of the bridge's is still being turned to (a stop or its arrival ends it)."""
+    return m.target_deg is not None or m.el_target_deg is not None

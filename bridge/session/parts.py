@@ -83,6 +83,7 @@ class Scene(NamedTuple):
     parked: bool  # the last status said so (status.py rule 4)
     slewing: bool  # a silent controller's slew is under way (slew.py)
     wall_offset_s: float  # wall clock (unix seconds) = now + this
+    parking: bool = False  # the last target sent was auto-park's (autopark.py rule 4)
 
 
 @dataclass(frozen=True)

@@ -672,7 +672,8 @@ class RotatorSession:
         link, motion, pending = self.controller.link, self.controller.motion, self.targets.pending
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
-        scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
+        parking = self.view.last_source == Source.AUTO_PARK.value
+        scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s, parking)
         try:  # (_guarded's, without a closure: the measuring parts run at every reading)
             proposal = part.step(self, scene)
         except Exception:

@@ -93,3 +93,43 @@ def test_no_box_parks_its_axis_while_the_other_does_not_answer() -> None:
         back = v.now
         v.run_until(lambda h: there(h, 180.0, 0.0), 400, "both axes parked")
         assert v.now - back >= 120
+
+
+def test_a_hand_on_the_azimuth_as_the_spell_ends_does_not_park_the_elevation_alone() -> None:
+    """DEFECT: a hand on the azimuth box's front panel begun between its last idle poll and the
+    end of the quiet spell. The Rotor-EZ asks first and dropped its park (autopark.py rule 3);
+    the GS-232B sends its park at once, and the elevation went on to its stow under the hand,
+    the azimuth parked a whole spell later: the rotator was parked one axis at a time. Now the
+    elevation's park is stopped as soon as the hand is seen (rule 4), the azimuth's hand is not
+    cut short, and both axes park together a whole quiet spell after the hand's last move."""
+    emulators = {
+        Axis.AZIMUTH: {"speed_deg_s": 6.0, "jitter_deg": 0},
+        Axis.ELEVATION: FAST[Axis.ELEVATION],
+    }
+    settings = {"park_after_idle_s": 60, "idle_poll_interval_s": 4, **STOW}
+    with VirtualComposite("rotorez", "gs232b", settings=settings, emulators=emulators) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(100.0, 30.0))
+        v.run_until(lambda h: there(h, 100.0, 30.0), 60, "at 100/30")
+        v.run_until(lambda h: h.status.state is MotionState.IDLE, 30, "at rest")
+        deadline = v.az.session.autopark.deadline()
+        assert deadline is not None
+        v.run_for(deadline - 0.5 - v.now)  # after the azimuth box's last idle poll
+        t_hand = v.now
+        v.az.manual_rotate(250.0)  # unseen till the reading asked for the azimuth's park
+        v.run_until(lambda h: abs(h.az.truth().az_deg - 250.0) < 1.0, 60, "the hand's turn done")
+        assert v.el.truth().el_deg > 28.0  # the elevation was not parked under the hand
+        v.run_until(lambda h: there(h, 180.0, 0.0), 300, "both axes parked")
+        asked = next(w.t for w in v.az.writes if w.t >= t_hand and w.data == b"AI1;")
+        assert asked >= deadline  # (the race: no idle poll saw the hand before the spell ended)
+        assert b";" not in v.az.sent(since=t_hand), v.az.sent(since=t_hand)
+        hand = [e for e in v.az.device.events if e.time_s >= t_hand and e.kind == "arrived"][0]
+        assert hand.az_deg == 250.0  # the hand's turn ran to its end
+        el = [e for e in v.el.device.events if e.time_s >= t_hand]
+        assert [e.kind for e in el[:2]] == ["move", "stopped"], el
+        assert el[1].time_s - el[0].time_s < 1.0, el  # its park stopped at once
+        az_parks = [f.time_s for f in v.az.frames(since=t_hand) if f.data.startswith(b"AP1")]
+        el_parks = [f.time_s for f in v.el.frames("move", since=el[1].time_s)]
+        assert min(az_parks + el_parks) - hand.time_s >= 60, "parked before a quiet spell"
+        assert abs(az_parks[0] - el_parks[0]) < 1.0  # together (rule 4)
+        assert [*v.az.errors(), *v.el.errors()] == []
