@@ -46,7 +46,7 @@ Rules:
    it never turns. What it proposes is that box's to carry: a target with an elevation is
    refused there on R/error (the box turns no elevation) and neither box turns, never the
    elevation box alone. A halt that part proposes in the azimuth box (as it takes the
-   command, or in any later step) is the elevation box's too, in the same serve (``Halts``):
+   command, or in any later step) is the elevation box's too, in the same serve (``Followed``):
    the turn under way stopped, nothing ended, as the part's halt does in its own box.
    Tracking's and following's parts run in both boxes (rule 4) and halt each on their own.
 7. Auto-park's quiet spell is the rotator's (session/autopark.py rule 4): a target to one axis
@@ -298,11 +298,10 @@ class Composition:
         return batches
 
 
-class Halts:
-    """Rule 6, sans-IO: whether the elevation box is to halt, once for each new halt a part
-    of a feature's own commands proposed in the azimuth box's session (its ``part_halts``);
-    rule 8's too: whether a box's other is to abandon its turn, once for each new turn a
-    restart abandoned in that box (its controller's ``restarts``)."""
+class Followed:
+    """Sans-IO: a count a box keeps, followed from the other box: True once for each time it
+    grew. Rule 6's (the azimuth box's ``part_halts``: the elevation box halts too) and rule
+    8's (a box's controller's ``restarts``: the other box abandons its turn)."""
 
     def __init__(self) -> None:
         self._seen = 0
@@ -346,8 +345,8 @@ class CompositeWorker:
         self._halts_applied = 0
         self._newest_applied = 0
         self.composition = Composition(cfg.rotator_id)
-        self._halted = Halts()  # rule 6
-        self._restarted = {axis: Halts() for axis in AXES}  # rule 8: each box's restarts
+        self._halted = Followed()  # rule 6
+        self._restarted = {axis: Followed() for axis in AXES}  # rule 8: each box's restarts
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
         for axis, box, own in zip(AXES, axes, self._own, strict=True):

@@ -19,7 +19,7 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, Halts, share_quiet, split
+from bridge.runtime.composite import Composition, Followed, share_quiet, split
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -50,8 +50,8 @@ class VirtualComposite:
         boxes = axis_configs(rotator, sky)
         assert boxes is not None
         self.composition = Composition("v")
-        self._halted = Halts()  # composite.py rule 6, as CompositeWorker
-        self._restarted = {axis: Halts() for axis in Axis}  # composite.py rule 8, as it
+        self._halted = Followed()  # composite.py rule 6, as CompositeWorker
+        self._restarted = {axis: Followed() for axis in Axis}  # composite.py rule 8, as it
         self.mailbox = Mailbox()
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.boxes: dict[Axis, VirtualRotator] = {}
