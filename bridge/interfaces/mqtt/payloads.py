@@ -341,8 +341,14 @@ def describe(kind: str, payload: bytes) -> str:
     ``R/option/<60,000 characters>``: each R/error and audit event was 120 KB."""
     shown = payload[:MAX_COMMAND_BYTES].decode("utf-8", "replace")
     more = "…" if len(payload) > MAX_COMMAND_BYTES else ""
-    kind = kind if len(kind) <= KIND_CHARS else kind[:KIND_CHARS] + "…"
+    kind = cut_short(kind)
     return f"{kind} {shown!r}{more}" if payload else kind
+
+
+def cut_short(text: str) -> str:
+    """A command's kind or a topic's level as echoed back: at most KIND_CHARS, then '…' (an
+    option's name is any topic level: ``describe``'s attack pass)."""
+    return text if len(text) <= KIND_CHARS else text[:KIND_CHARS] + "…"
 
 
 def number(value: float) -> str:

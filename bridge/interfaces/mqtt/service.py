@@ -417,9 +417,7 @@ class MqttService:
         member takes it (an attack pass: ``G/lock ON`` was not heard at all, and nothing said
         that no rotator was locked; a review: an OFF was answered "no rotator was locked",
         which reads as none of them being locked now)."""
-        leaf = topic.removeprefix(self.topics.group(group.id).root + "/")
-        if len(leaf) > pl.KIND_CHARS:  # (an option's name is any topic level: cut short)
-            leaf = leaf[: pl.KIND_CHARS] + "…"
+        leaf = pl.cut_short(topic.removeprefix(self.topics.group(group.id).root + "/"))
         theirs = ", ".join(self.topics.rotator(m).feature(leaf) for m in group.member_ids)
         head = f"group {group.id} takes a target and a stop only: nothing was done"
         if kind == "lock":
