@@ -1,7 +1,7 @@
 """What one poll exchange costs the serial-lines thread, in virtual time: deterministic, in
 seconds, for iterating on the work of a reading (exchange_cpu measures the real thing).
 
-    python -m benchmarks.session_cost [--exchanges N] [--profile]
+    python -m benchmarks.session_cost [--exchanges N] [--profile] [--held]
 
 One Rotor-EZ turned from its front panel (no command: the bridge polls it at its moving rate and
 every reply moves the bearing), its replies byte by byte as the emulator paces them, driven in
@@ -11,7 +11,10 @@ worker does with the actions it hands back for a status: the MQTT service's ``pu
 into a publisher that keeps the retained payloads (the dedupe a real client does, no paho).
 The emulator and the line are not timed. Printed: microseconds per exchange (an ``AI1;``
 written), the session's and the publishing's shares, and the session calls per exchange;
-``--profile``: cProfile of the same, the 25 heaviest by own time.
+``--profile``: cProfile of the same, the 25 heaviest by own time. ``--held``: the replies handed
+over as the bridge's worker hands them (runtime/worker.py rule 2: left in the port until the
+session's ``hold_reads_until``, then read in one go; three session calls an exchange, where
+the default's byte by byte makes six).
 """
 
 from __future__ import annotations
@@ -64,11 +67,40 @@ class _Timed(VirtualRotator):
         super()._do(actions)
 
 
-def run(exchanges: int) -> dict[str, float]:
+class _Held(_Timed):
+    """The replies held in the port as the worker holds them, then read whole."""
+
+    def __init__(self, svc: MqttService, **kw: Any) -> None:
+        self._port = b""
+        super().__init__(svc, **kw)
+
+    def _step(self, until: float) -> None:
+        s = self.session
+        times = [until, s.next_wakeup(), *self._wire_times()]
+        hold = s.hold_reads_until()
+        if self._port or hold > self.now:
+            times.append(hold)
+        t = self.now = max(self.now, min(times))
+        arrived = self._tx.due(t)
+        if arrived:
+            self.device.receive(arrived, t)
+        self._port += self.device.due_output(t)
+        acted = False
+        if self._port and t >= s.hold_reads_until():
+            data, self._port = self._port, b""
+            actions = s.bytes_received(data, t)
+            if actions:
+                acted = True
+                self._do(actions)
+        if not acted and t >= s.next_wakeup():
+            self._do(s.tick(t))
+
+
+def run(exchanges: int, held: bool = False) -> dict[str, float]:
     pub = RecordingPublisher()
     svc = MqttService(Topics("rotor", {"v": "rotor"}), pub, wall=lambda: 1_750_000_000.0)
     svc.attach(RecordingRotator("v", "rotorez"))
-    v = _Timed(svc, emulator={"speed_deg_s": 4.0})
+    v = (_Held if held else _Timed)(svc, emulator={"speed_deg_s": 4.0})
     v.run_for(3.0)  # online, idle, options read
     v.session_s = v.publish_s = 0.0
     v.calls = 0
@@ -94,17 +126,18 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--exchanges", type=int, default=3000)
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--held", action="store_true", help="replies read whole, as the worker does")
     args = ap.parse_args()
     if args.profile:
         prof = cProfile.Profile()
         prof.enable()
-        run(args.exchanges)
+        run(args.exchanges, args.held)
         prof.disable()
         pstats.Stats(prof).sort_stats("tottime").print_stats(25)
         return
     best: dict[str, float] | None = None
     for _ in range(5):
-        r = run(args.exchanges)
+        r = run(args.exchanges, args.held)
         if best is None or r["us_per_exchange"] < best["us_per_exchange"]:
             best = r
     assert best is not None

@@ -43,6 +43,10 @@ Rules:
    attack pass: ``systemctl stop`` mid-turn closed the port in 0.2 s with no stop, and the
    rotor turned on, watched by nobody, to its target. (A review: a target put right after a
    stop, waiting out the brake, was taken for no turn, and went out while a front end closed.)
+   A lock word taken until the connections close is saved before the installation's lock is
+   let go (state_store.py rule 7): a review found one taken after the state file's flush left
+   to the writer, and on a slow disk the bridge ended before it was written, so the next start
+   read the lock OFF.
 """
 
 from __future__ import annotations
@@ -74,7 +78,7 @@ from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.interfaces.mqtt.heartbeat import StationTime
 from bridge.interfaces.mqtt.lane import StopLane
 from bridge.interfaces.mqtt.payloads import ConsoleFacts
-from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.service import MqttService, never_published
 from bridge.interfaces.mqtt.stale import StaleTopics
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 from bridge.protocols.axes import Axis
@@ -83,7 +87,7 @@ from bridge.runtime.lines import Lines
 from bridge.runtime.listeners import contained
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.rotator import Rotator
-from bridge.runtime.state_store import InUse, StateStore, held
+from bridge.runtime.state_store import Changed, InUse, StateStore, held
 from bridge.runtime.worker import WorkerConfig
 from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.session.motion import MotionConfig
@@ -230,6 +234,7 @@ def axis_configs(
                 wind=wind,
                 unasked_moves=unasked,
                 tracking=tracking,
+                box=True,
             )
         )
     return boxes[0], boxes[1]
@@ -277,6 +282,7 @@ class App:
             station=station_time.identity,  # heartbeat.py rule 7
             on_denied=self._denied,
             on_allowed=self._allowed,
+            on_markers=self._markers,
             on_connect=self._connected,
             on_new_connection=self._main_new,
             on_subscribed=lambda: self._vouch("main"),
@@ -348,7 +354,7 @@ class App:
                 station=position,
                 locator=settings.station.locator,
                 satellites=catalog.names,
-                wall=wall,
+                wall=station_time.now_unix,  # web/auth.py rule 2: never set back
             )
         satellites = tuple(catalog.names())  # for R/info, read once (interfaces/mqtt/payloads.py)
         follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
@@ -370,6 +376,7 @@ class App:
                 axes=axis_configs(r, sky, follow),  # a composite's two boxes (axis_configs)
                 port_watch=self.express.watch(r.id),
                 fence=self.mqtt,  # interfaces/mqtt/service.py rule 11
+                lease_clock=station_time.now_unix,  # runtime/operators.py rule 5
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,
@@ -614,11 +621,26 @@ class App:
         return call
 
     def _stale(self, settings: Settings) -> None:
-        """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained is
-        deleted at the first look, when the base topic was this bridge's."""
+        """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained, and
+        a rotator's state of a feature it no longer has or a topic its model never fills (rule
+        5), is deleted at the first look, when the base topic was this bridge's."""
         roots = {settings.rotator_topic(r) for r in settings.rotators}
         groups = {settings.group_topic(g) for g in settings.groups}
-        stale = StaleTopics(self.topics, roots | groups, groups)
+        # (rule 5: a feature's state a rotator no longer has, as the service skips it)
+        unpublished = {
+            self.topics.rotator(rot.id).feature(state.suffix)
+            for rot in self.rotators
+            for feature in self.topics.features
+            for state in feature.states
+            if state.needs is not None and not getattr(rot, state.needs)
+        }
+        options: dict[str, tuple[str, ...]] = {}  # (rule 5: and what its model never publishes)
+        for r, rot in zip(settings.rotators, self.rotators, strict=True):
+            t = self.topics.rotator(rot.id)
+            boxes = tuple(r.axis_spec(axis) for axis in Axis) if r.axes else ()
+            unpublished.update(never_published(t, rot.spec, boxes))
+            options[t.root] = rot.spec.options
+        stale = StaleTopics(self.topics, roots | groups, groups, unpublished, options)
         clear = self.client.clear_retained
 
         def on_message(topic: str, payload: bytes, retain: bool) -> bool:
@@ -649,7 +671,8 @@ class App:
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
                     features=frozenset(f.name for f in FEATURES if f.on_for(r) or f.name in on),
-                    two_boxes=bool(r.axes),
+                    boxes=tuple(r.axis_spec(axis) for axis in Axis) if r.axes else (),
+                    version=rot.version,  # kept (runtime/kept.py rule 11): said at once
                 )
             )
         publisher = DiscoveryPublisher(
@@ -676,9 +699,7 @@ class App:
     def _denied(self, topic: str, problem: str) -> None:
         """The broker refused a topic (client.py rule 11): the rotator's status says so, and
         ``B/bridge/info`` lists every such problem."""
-        if topic == self.topics.bridge_fence:
-            self.mqtt.markers_denied()
-        elif topic == self.topics.bridge_fence_lane:
+        if topic == self.topics.bridge_fence_lane:  # (the fence's: ``_markers``)
             self.mqtt.lane_markers_denied()
         rid = self.topics.rotator_of(topic)
         for rot in self.rotators:
@@ -688,10 +709,16 @@ class App:
 
     def _allowed(self, topic: str) -> None:
         """The broker takes a topic it refused before (client.py rule 16: the fence's probe
-        came back on a new connection): the markers go out again, ``B/bridge/info`` without it."""
-        if topic == self.topics.bridge_fence:
-            self.mqtt.markers_allowed()
+        came back on a new connection): ``B/bridge/info`` without it."""
         self._say()  # (the client took it out of the list)
+
+    def _markers(self, readable: bool) -> None:
+        """client.py rule 16: whether the main connection can read back its markers, on the
+        fence topic or the hello topic (lastword.py rule 7)."""
+        if readable:
+            self.mqtt.markers_allowed()
+        else:
+            self.mqtt.markers_denied()
 
     def _info(self, problem: str, on: bool) -> None:
         """A problem said on ``B/bridge/info`` while it lasts (a long hold:
@@ -804,6 +831,13 @@ class App:
             raise _unwritable(state_file, exc) from None
         try:
             self.store.check_writable()  # (state_store.py rule 3: once this one holds it)
+        except Changed:
+            self.release()
+            raise NotYet(  # state_store.py rule 11: the next start reads it as it is now
+                f"state_file {state_file} changed since this bridge read it (another bridge "
+                "on it was ending?): not started, so as not to run on, and write back, what "
+                "the file said before; start it again"
+            ) from None
         except OSError as exc:
             self.release()
             raise _unwritable(state_file, exc) from None
@@ -891,6 +925,7 @@ class App:
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         self.express.stop()  # (the ports are closed: it holds none)
+        self.store.flush()  # rule 6: a lock word taken since the flush above, before letting go
         self.release()
         log.info("stopped")
 

@@ -17,8 +17,13 @@ Rules:
    client that named it reads the rotor the same way (``unfolded``: raw + offset, the offset
    read from the true bearing beside the raw value, so the remote, whose pointing has none,
    reads it too). A
-   controller whose scale wraps picks its own way round: it gets the value in 0..360 (0, not
-   360, where both are legal).
+   controller whose scale wraps gets the value in 0..360 as the target names it: 360 named is
+   360 (the end of a GS-232's or an Easycomm box's travel clockwise of 350, as Hamlib sends
+   ``P 360``; 0 is the other end, a whole turn back: a rotor at 350 asked for 360 was sent
+   ``W000``, and turned 350 degrees the long way round), and 0, not 360, where the offset
+   brings a bearing there (true 180 with offset 180; true 350 with offset -10: a cold review,
+   it went out as 360 and a GS-232 at true 0 turned 350 degrees the long way round) or a
+   limit leaves only one of them.
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -31,9 +36,18 @@ Rules:
    station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
    target while one is being approached, turning or braking, else to the bearing; never to a
    target a stop put before it dropped, though the status it is made from predates that stop:
-   runtime/rotator.py ``_seen``). A nudge is less than a turn each way: a step of 360 degrees
-   or more is refused (an attack pass: ``1e308`` turned a rotor to its remainder, 296, and
-   ``720`` was taken as no step at all).
+   runtime/rotator.py ``_seen``). A nudge turns the short way it names. Where the controller's
+   0 and 360 are the ends of the travel (``az_ends_at_north``: the stop at north, a GS-232's,
+   an Easycomm's, a SatEL's), it is taken on the controller's own scale: +10 at 350 is 360,
+   10 degrees on (``Target.az_end_deg``; folded to 0 it went out as the other end, ``M000``,
+   and the rotor turned 350 degrees back through south), and a nudge past an end (+10 at 360,
+   -10 at 0) is refused, never taken the whole way round, as past a SPID's stop. Where north
+   is the middle of the travel (a Hy-Gain rotor's stop is at south: a Rotor-EZ, a DCU-1) or
+   the controller is never sent 360 and turns its own way (an RT-21), it is folded as before:
+   +10 at 355 goes out as 5 (``AP1005``), the turn across north the controller makes. A
+   nudge is less than a turn each way: a step of 360 degrees or more is refused (an attack
+   pass: ``1e308`` turned a rotor to its remainder, 296, and ``720`` was taken as no step at
+   all).
 7. A place without a direction from the station is refused: the station's own position (no
    bearing at all) and its antipode, where every direction is a great circle of the same
    length (a locator's centre has one: JO62qm's is AD67ql). Anything short of these has a
@@ -117,6 +131,7 @@ class Pointing:
     el_max_deg: float = 0.0
     has_elevation: bool = False
     az_wraps: bool = True  # the controller's 0 and 360 are the same direction
+    az_ends_at_north: bool = True  # and the two ends of the travel (rule 6)
     whole_degrees: bool = False
     tenths: bool = False
     cuts_down: bool = False
@@ -149,6 +164,7 @@ class Pointing:
             el_max_deg=el_hi,
             has_elevation=spec.has_elevation,
             az_wraps=spec.az_wraps,
+            az_ends_at_north=spec.az_ends_at_north,
             whole_degrees=spec.whole_degrees,
             tenths=spec.tenths,
             cuts_down=spec.cuts_down,
@@ -167,6 +183,12 @@ class Pointing:
 
     def true_of(self, raw_deg: float) -> float:
         return norm360(raw_deg + self.offset_deg)
+
+    def at_360(self, raw_deg: float | None) -> bool:
+        """Whether a reading of ``raw_deg`` is the true bearing 360 that a target of 360 sends
+        the rotor to on a scale that wraps (rule 2: raw + offset is 360, the clockwise end,
+        not 0), so that a client that reads it back as its target names the same end."""
+        return self.az_wraps and raw_deg is not None and raw_deg + self.offset_deg == 360.0
 
     def overlap(self, raw_deg: float | None) -> str | None:
         """Which way past the scale a rotor that can pass 360 is: "cw" above 360, "ccw" below 0."""
@@ -204,9 +226,11 @@ class Pointing:
         az_deg: float,
         current_raw_deg: float | None,
         within: tuple[float, float] | None = None,
+        end: float | None = None,
     ) -> float:
         """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal,
-        or if ``within`` (rule 9) is given and every legal one turns outside it."""
+        or if ``within`` (rule 9) is given and every legal one turns outside it. ``end``: the
+        end of a scale that wraps a nudge turns to (rule 6), taken where it is legal."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not math.isfinite(az_deg):
             raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
@@ -227,7 +251,19 @@ class Pointing:
             return self._checked(az_deg, base)  # raises, naming the raw value
         if within is not None:
             legal = self._within(az_deg, current_raw_deg, legal, within)
-        if self.az_wraps:  # the controller picks its own way round: 0 rather than 360
+        if self.az_wraps:  # rule 2: 360 named is 360 (no offset); else 0 rather than 360
+            if end is not None:  # rule 6: the end a nudge turns to, never the other one
+                if end in legal:
+                    return end
+                self._checked(az_deg, end)  # raises, naming the limits
+                arc = f"{within[0]:g}..{within[1]:g}" if within else "its limits"
+                raise Refused(
+                    RefusalCode.LIMITS,
+                    f"azimuth {az_deg:g} (controller {end:g}) is not reached without turning "
+                    f"outside {arc}",
+                )
+            if az_deg == 360.0 and not self.offset_deg and az_deg in legal:
+                return az_deg
             return base if base in legal else legal[-1]
         anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
         return min(legal, key=lambda r: (abs(r - anchor), r))
@@ -296,7 +332,9 @@ class Pointing:
                     "keep-out sector "
                     f"{sector[0]:g}..{sector[1]:g}: refused",
                 )
-            raw_az = self.raw_for(target.az_deg, current_raw_deg, target.within_deg)
+            raw_az = self.raw_for(
+                target.az_deg, current_raw_deg, target.within_deg, target.az_end_deg
+            )
             self._check_sent_keep_out(target.az_deg, raw_az)
         if target.el_deg is not None:
             if not self.has_elevation:
@@ -311,7 +349,8 @@ class Pointing:
                 raise Refused(RefusalCode.LIMITS, why)
         fixed = target.within_deg is not None and current_raw_deg is not None  # (rule 9)
         side_free = None if fixed else self._side_free(target.az_deg)
-        return replace(target, az_deg=raw_az, true_az_deg=side_free)  # (rule 9: its side)
+        # (rule 9: its side; rule 6: the end a nudge turns to is in ``raw_az`` now)
+        return replace(target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None)
 
     def check_raw(self, target: Target) -> None:
         """Rule 8: Refused if the controller may not be sent ``target`` (raw values)."""
@@ -357,11 +396,26 @@ class Pointing:
             raise Refused(RefusalCode.UNSUPPORTED, "no park position configured (park_az_deg)")
         return self.park
 
+    def nudge(
+        self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool = False
+    ) -> Target:
+        """Rule 6's nudge from ``status`` as a target to judge: true bearings, and the end of
+        the travel it turns to where 0 and 360 are ends; ``halted`` as in ``nudged``."""
+        az, el, end = self._nudge(status, d_az, d_el, halted)
+        return Target(az, el, az_end_deg=end)
+
     def nudged(
         self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool = False
     ) -> tuple[float | None, float | None]:
         """Rule 6's nudge from ``status``; ``halted``: a stop came after that status was made
         (its target dropped: the nudge is from the bearing)."""
+        az, el, _end = self._nudge(status, d_az, d_el, halted)
+        return az, el
+
+    def _nudge(
+        self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool
+    ) -> tuple[float | None, float | None, float | None]:
+        """``nudged``, and the raw end of the travel it turns to (rule 6), if it turns to one."""
         if not d_az and not d_el:
             raise Refused(RefusalCode.INVALID, "a nudge of 0 degrees moves nothing")
         for step, axis in ((d_az, "azimuth"), (d_el or 0.0, "elevation")):
@@ -386,8 +440,23 @@ class Pointing:
                 RefusalCode.OFFLINE, f"no bearing to nudge from (the {self.model_name} has none)"
             )
         new_az: float | None = None
+        end: float | None = None
         raw = status.raw_target_az_deg if moving else status.raw_bearing_deg
-        if d_az and not self.az_wraps and raw is not None:
+        if d_az and self.az_wraps and self.az_ends_at_north and raw is not None:
+            # on the controller's own scale, whose ends are 0 and 360: +10 at 350 is 360, 10
+            # on (folded to 0, it went out as the other end), +10 at 360 is past that end
+            to_raw = raw + d_az
+            new_az = norm360(to_raw + self.offset_deg)
+            if not 0.0 <= to_raw <= 360.0:
+                shown = f"{new_az:g}" + ("" if to_raw == new_az else f" (controller {to_raw:g})")
+                raise Refused(
+                    RefusalCode.LIMITS,
+                    f"a nudge of {d_az:+g} degrees turns to azimuth {shown}, past the end of "
+                    f"the {self.model_name}'s travel: a nudge is not taken the other way round",
+                )
+            if to_raw in (0.0, 360.0):
+                end = to_raw
+        elif d_az and not self.az_wraps and raw is not None:
             # past 360 a nudge stays on its side: named by a value outside 0..360 (rule 2), so
             # +10 at raw 535 is refused at the 540 stop rather than taken the other way round
             new_az = raw + self.offset_deg + d_az
@@ -401,7 +470,7 @@ class Pointing:
             if base is None:
                 raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
             el = base + d_el
-        return new_az, el
+        return new_az, el, end
 
     def _checked(self, az_deg: float, raw_deg: float) -> float:
         lo, hi = self.az_min_deg, self.az_max_deg

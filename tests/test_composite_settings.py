@@ -174,6 +174,25 @@ def test_the_newer_error_of_the_two_is_shown() -> None:
     assert shown is not None and shown.last_error == "el trouble"
 
 
+def test_the_version_is_both_boxes_once_each_box_that_reports_one_has() -> None:
+    """Rule 3: never one box's version alone as the pair's (the elevation box's ``SatEL`` read
+    as the azimuth's; at each restart the pair kept gave way to the first box's alone and came
+    back, each a round of Home Assistant discovery); a box whose model reports none is not
+    waited for."""
+    c = Composition("sky", versioned=(True, True))
+    first = c.seen(Axis.ELEVATION, RotatorStatus("e", version="SatEL"))
+    assert first is not None and first.version is None
+    c.seen(Axis.AZIMUTH, RotatorStatus("a", connected=True))
+    assert c.status.version is None
+    c.seen(Axis.AZIMUTH, RotatorStatus("a", connected=True, version="1.4S"))
+    assert c.status.version == "1.4S / SatEL"
+    alone = Composition("sky", versioned=(True, False))  # a Rotor-EZ and a GS-232B
+    alone.seen(Axis.AZIMUTH, RotatorStatus("a", version="1.4S"))
+    assert alone.status.version == "1.4S"
+    none = merge("sky", RotatorStatus("a"), RotatorStatus("e"), versioned=(False, False))
+    assert none.version is None
+
+
 def said_twice(codec: ElevationOnly, line: bytes) -> None:
     """Two readings of ``line`` taken (link.py rule 9): the box's own azimuth counts from the
     second (protocols/axes.py rule 5)."""

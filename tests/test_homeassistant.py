@@ -922,3 +922,87 @@ def test_the_target_elevation_shows_an_elevation_below_or_above_the_configured_l
     assert _number_shows(model, moving, el_min_deg=10, el_max_deg=80) == {
         "target_azimuth": 200.0, "target_elevation": 45.0
     }  # fmt: skip
+
+
+def _station_rotators(*ids: str) -> tuple[Topics, list[RotatorInfo]]:
+    """Az/el rotators of a station (each with the track select and its sensors)."""
+    topics = Topics("rotor", {rid: f"rotor/{rid}" for rid in ids})
+    spec = REGISTRY["rot2prog"]
+    infos = [
+        RotatorInfo(
+            rid,
+            rid,
+            spec,
+            topics.rotator(rid),
+            0,
+            360,
+            0,
+            90,
+            has_station=True,
+            track_options=("off", "sun", "moon"),
+        )  # fmt: skip
+        for rid in ids
+    ]
+    return topics, infos
+
+
+def test_two_rotators_never_give_two_entities_one_unique_id(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """homeassistant/ rule 8: ``sat``'s tracked elevation and ``sat_track``'s elevation were both
+    ``rotorbridge_rotor_r_sat_track_elevation``: Home Assistant dropped one of them. The one of
+    the longer id gets a form no plain id can have, said in the log; the other keeps its id."""
+    topics, infos = _station_rotators("sat_track", "sat")
+    rec = Recorder()
+    with caplog.at_level(logging.WARNING):
+        pub = DiscoveryPublisher(
+            prefix="homeassistant",
+            status_topic="homeassistant/status",
+            topics=topics,
+            rotators=infos,
+            publish_retained=lambda t, p: rec.published.append((t, p)),
+            clear_retained=rec.cleared.append,
+            republish_state=rec.republished.set,
+        )
+    pub.publish_all()
+    ids = [(t.split("/")[1], json.loads(p)["unique_id"]) for t, p in rec.published]
+    assert len(ids) == len(set(ids))
+    held = {t: json.loads(p) for t, p in rec.published}
+    node = "homeassistant/sensor/rotorbridge_rotor_r_{}/{}/config"
+    assert held[node.format("sat", "track_elevation")]["unique_id"] == (
+        "rotorbridge_rotor_r_sat_track_elevation"
+    )
+    assert held[node.format("sat_track", "elevation")]["unique_id"] == (
+        "rotorbridge_rotor_r_sat_track:elevation"
+    )
+    said = [r.getMessage() for r in caplog.records if "unique id" in r.getMessage()]
+    assert len(said) == 1 and "'sat_track'" in said[0] and "'elevation'" in said[0]
+    # a version that comes later rebuilds that rotator's configs with the same ids
+    pub.on_status("sat_track", RotatorStatus("sat_track", version="2.0"))
+    again = json.loads(dict(rec.published)[node.format("sat_track", "elevation")])
+    assert again["unique_id"] == "rotorbridge_rotor_r_sat_track:elevation"
+    # alone, a rotator of that name keeps the usual ids (Home Assistant's history with them)
+    topics, alone = _station_rotators("sat_track")
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, alone)
+    assert all(":" not in json.loads(p)["unique_id"] for p in msgs.values())
+
+
+def test_a_controller_saying_a_new_version_in_every_line_costs_a_round_a_hold() -> None:
+    """homeassistant/ rule 9: an Easycomm III's ``VE...`` is taken whenever it comes; a box
+    saying another in every line had every config of its rotator rebuilt and sent each time.
+    The first goes out at once, the rest are held, and the latest goes out when the hold
+    ends."""
+    rec = Recorder()
+    pub = publisher(rec)
+    pub.publish_all()
+    bearing = "homeassistant/sensor/rotorbridge_rotor_r_tower/bearing/config"
+
+    def versions() -> list[str | None]:
+        return [json.loads(p)["device"].get("sw_version") for t, p in rec.published if t == bearing]
+
+    for i in range(100):
+        pub.on_status("tower", RotatorStatus("tower", version=f"V{i}"))
+    assert versions() == [None, "V0"]
+    wait_until(lambda: versions()[-1] == "V99", slow(ROUND_MIN_S + 5), "the latest version sent")
+    assert versions() == [None, "V0", "V99"]
+    pub.stop()

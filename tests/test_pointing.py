@@ -32,6 +32,15 @@ def test_the_offset_turns_raw_readings_into_true_bearings_and_back() -> None:
     assert Pointing.of(SPID).shows_raw  # it can pass 360: the raw value says which side
 
 
+def test_360_named_is_360_as_hamlib_sends_it() -> None:
+    """Rule 2: ``rotctl -m 603 P 360 0`` sends ``W360``, the clockwise end of a GS-232's travel;
+    360 folded to 0 sent a rotor at 350 the whole way back round."""
+    yaesu = Pointing.of(REGISTRY["gs232b"])
+    assert yaesu.judge(Target(360), 350).az_deg == 360
+    assert yaesu.judge(Target(0), 350).az_deg == 0  # named 0: the other end, as Hamlib sends it
+    assert Pointing.of(REGISTRY["gs232b"], (0, 359)).judge(Target(360), 350).az_deg == 0
+
+
 def test_limits_stay_mechanical_and_refusals_name_both_values() -> None:
     p = Pointing.of(EZ, (20, 340), offset_deg=180)
     with pytest.raises(Refused) as exc:
@@ -131,6 +140,55 @@ def test_presets_park_and_nudges_become_true_bearings() -> None:
     assert refused(p.judge, Target(p.nudged(overlap, 10, None)[0], 0), 535) is RefusalCode.LIMITS
     near = RotatorStatus("t", MotionState.IDLE, bearing_deg=355, raw_bearing_deg=355)
     assert p.judge(Target(p.nudged(near, 10, None)[0], 0), 355).az_deg == 365
+
+
+def _at(raw: float, offset: float = 0.0) -> RotatorStatus:
+    return RotatorStatus(
+        "t", MotionState.IDLE, bearing_deg=norm360(raw + offset), raw_bearing_deg=raw
+    )
+
+
+def test_a_nudge_across_north_stops_at_the_end_where_north_is_an_end() -> None:
+    """Rule 6: on a GS-232B, whose 0 and 360 are the ends of a Yaesu rotor's travel, +10 at 350
+    goes out as 360, 10 degrees on: folded to 0 it went out as the other end, ``M000``, a turn
+    of 350 degrees back through south. A nudge past an end is refused, never taken round; so
+    with an offset (a south-centred box's raw 350 + 10 is its 360, not its 0), and from a
+    target being approached."""
+    for model in ("gs232b", "gs232a", "easycomm2", "rotorcard", "satel", "rc2800", "prosistel"):
+        p = Pointing.of(REGISTRY[model])
+        for raw, step, sent in ((350, 10, 360), (10, -10, 0), (360, -10, 350), (300, 59.5, 359.5)):
+            assert p.judge(p.nudge(_at(raw), step, None), raw).az_deg == sent, (model, raw, step)
+        for raw, step in ((360, 10), (0, -10), (350, 20), (5, -10)):
+            with pytest.raises(Refused) as exc:
+                p.nudge(_at(raw), step, None)
+            assert exc.value.code is RefusalCode.LIMITS
+            assert "past the end" in exc.value.message, (model, raw, step)
+    yaesu = Pointing.of(REGISTRY["gs232b"])
+    with pytest.raises(Refused) as exc:
+        yaesu.nudge(_at(360), 10, None)
+    assert exc.value.message.startswith("a nudge of +10 degrees turns to azimuth 10 (controller")
+    south = Pointing.of(REGISTRY["gs232b"], offset_deg=180)
+    assert south.judge(south.nudge(_at(350, 180), 10, None), 350).az_deg == 360
+    assert south.judge(south.nudge(_at(10, 180), -10, None), 10).az_deg == 0
+    going = RotatorStatus(
+        "t", MotionState.MOVING, bearing_deg=150, target_az_deg=175, raw_target_az_deg=355
+    )
+    assert south.judge(south.nudge(going, 5, None), 330).az_deg == 360  # from the target
+    # limits short of the end: refused, never sent to the other end
+    short = Pointing.of(REGISTRY["gs232b"], (0, 359))
+    assert refused(short.judge, short.nudge(_at(350), 10, None), 350) is RefusalCode.LIMITS
+
+
+def test_a_nudge_across_north_in_the_middle_of_the_travel_is_folded_as_before() -> None:
+    """Rule 6: a Hy-Gain rotor's stop is at south, so a Rotor-EZ's or a DCU-1's 0 and 360 are
+    one place, the middle of its travel, and an RT-21 is never sent 360: +10 at 355 goes out
+    as 5 (``AP1005``), the turn across north the controller makes, and is never refused."""
+    for model in ("rotorez", "dcu1", "rt21"):
+        p = Pointing.of(REGISTRY[model])
+        for raw, step, sent in ((355, 10, 5), (5, -10, 355), (360, 10, 10), (0, -10, 350)):
+            assert p.judge(p.nudge(_at(raw), step, None), raw).az_deg == sent, (model, raw, step)
+    composite = Pointing.of(composite_spec(EZ, REGISTRY["gs232b"]))
+    assert composite.judge(composite.nudge(_at(355), 10, None), 355).az_deg == 5
 
 
 @pytest.mark.parametrize("step", [(1e308, None), (-1e300, None), (720, None), (360, None),

@@ -998,16 +998,28 @@ def test_an_unknown_model_like_none_is_listed_without_a_guess(tmp_path: Path) ->
     assert "rotators[0].model: unknown model 'xyzzy'; known models: dcu1, " in str(exc.value)
 
 
-@pytest.mark.parametrize("kind", ["FIFO", "directory", "file under a file"])
+@pytest.mark.parametrize(
+    "kind", ["FIFO", "directory", "file under a file", "link for its lock", "FIFO for its lock"]
+)
 def test_check_config_refuses_a_state_file_the_start_would_refuse(
     tmp_path: Path, kind: str
 ) -> None:
     """check-config said "config OK" and run then stopped with exit 2: it tries the state
     file as the start does (tests/faults/test_config.py has the start's line), writing
-    nothing."""
+    nothing. So for the installation's lock beside it (state_store.py rule 7: a review,
+    the start refused a link or a FIFO there, check-config said "config OK")."""
     state_file = tmp_path / "state" / "state.json"
     state_file.parent.mkdir()
-    if kind == "FIFO":
+    lock = tmp_path / "state" / "state.json.lock"
+    if kind.endswith("for its lock"):
+        state_file.write_text('{"rotators": {}}')
+        if kind.startswith("link"):
+            lock.symlink_to(tmp_path / "audit.log")
+            said = f"{lock} is a symbolic link, not a file of its own"
+        else:
+            os.mkfifo(lock)
+            said = f"{lock} is not a regular file"
+    elif kind == "FIFO":
         os.mkfifo(state_file)
         said = "it is a FIFO, not a regular file"
     elif kind == "directory":
@@ -1023,9 +1035,12 @@ def test_check_config_refuses_a_state_file_the_start_would_refuse(
     out = run_cli("check-config", "-c", str(write(tmp_path, text)), timeout_s=20)
     assert out.returncode == 2 and out.stdout == "", out
     assert out.stderr == f"rotor-bridge: state_file {state_file} cannot be written: {said}\n"
+    beside = ["state.json.lock"] if kind.endswith("for its lock") else []
     assert sorted(p.name for p in (tmp_path / "state").iterdir()) == [
-        "a-file" if kind == "file under a file" else "state.json"
+        "a-file" if kind == "file under a file" else "state.json",
+        *beside,
     ]
+    assert not (tmp_path / "audit.log").exists()  # (nothing made through the link)
 
 
 def test_check_config_writes_no_state_file_and_warns_of_a_directory_it_cannot_write(

@@ -54,6 +54,9 @@ class Source(enum.StrEnum):
 
 
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
+# valid_operator: NFKC makes one character of four at most (a canonical decomposition's longest,
+# U+1F82): a text longer than this many times OPERATOR_CHARS is none before it is normalized
+_COMPOSED_MOST = 4
 _HIDDEN = ("Cf", "Zl", "Zp")  # valid_operator: format characters, line and paragraph separators
 _JOINERS = ("\u200c", "\u200d")  # valid_operator: what Persian, the Indic scripts, emoji need
 _VIRAMA = 9  # valid_operator: the canonical combining class of the Indic scripts' virama
@@ -73,8 +76,14 @@ def valid_operator(text: object) -> str | None:
     the rest of the console's line, the lease's end among it); the joiners a script needs
     (U+200C, U+200D) stay, between two of its characters, and nothing else that shows nothing
     does (``_BLANK``; an attack pass: a Hangul filler was a name that reads as blank, and
-    ``DL1ABC`` with a joiner at its end another operator that looks like DL1ABC)."""
+    ``DL1ABC`` with a joiner at its end another operator that looks like DL1ABC). A text too
+    long to be one once normalized is none before it is (``_COMPOSED_MOST``): a stop's user
+    property of 64 KiB of U+FDFA, one ligature NFKC makes 18 characters, cost the stop lane
+    and the stop express some 24 ms a stop before its frame or its put (a cold review)."""
     if not isinstance(text, str):
+        return None
+    text = text.strip()
+    if len(text) > _COMPOSED_MOST * OPERATOR_CHARS:
         return None
     name = unicodedata.normalize("NFKC", text).strip()
     if not name or len(name) > OPERATOR_CHARS or bad_char(name) is not None:
@@ -126,6 +135,12 @@ class Origin:
         return f"{self.interface.value} {self.peer}" if self.peer else self.interface.value
 
 
+def sender(origin: Origin | None, source: Source) -> str:
+    """Who sent a command, as the control lease reads it (runtime/lease.py rule 5): its
+    origin's name, else the source it came from."""
+    return origin.who if origin is not None else source.value
+
+
 @dataclass(frozen=True)
 class Control:
     """The control lease: ``operator`` holds the rotator until ``until_unix`` (runtime/lease.py)."""
@@ -150,9 +165,29 @@ class AuditEvent:
     command: str  # as the user sent it
     result: str  # "executed" or "refused: <why>"
     bearing_before: float | None
+    halt: bool = False  # an executed stop (runtime/audit.py rule 6: a flood of them is folded)
+    # runtime/audit.py rule 6: a line standing for ``count`` like events, the first of them at
+    # ``first_unix``, the last at ``time_unix`` (``mixed``: from more than one sender)
+    count: int = 1
+    first_unix: float | None = None
+    mixed: bool = False
+    # a ``mixed`` line's senders (runtime/audit.py rule 8): how many different ones it counts
+    # (``more_senders``: more than that, uncounted) and the first few of them, as ``who`` says
+    senders: int = 0
+    more_senders: bool = False
+    names: tuple[str, ...] = ()
+    # an absolute target (``Target``): the same one again from its sender, nothing executed in
+    # between, is folded (runtime/audit.py rule 9)
+    target: bool = False
+
+    @property
+    def routine(self) -> bool:
+        """A refusal or an executed stop: what a flood is made of, folded into one line per
+        sender (runtime/audit.py rule 6); a move, a lease or a lock change never is."""
+        return self.halt or self.result.startswith("refused")
 
     def as_dict(self) -> dict[str, object]:
-        return {
+        doc: dict[str, object] = {
             "time": self.time_unix,
             "rotator": self.rotator,
             "operator": self.origin.who,
@@ -162,6 +197,15 @@ class AuditEvent:
             "result": self.result,
             "bearing_before": self.bearing_before,
         }
+        if self.count > 1 or self.first_unix is not None:
+            doc.update(count=self.count, first=self.first_unix, last=self.time_unix)
+        if self.mixed:
+            doc["mixed"] = True
+            doc["senders"] = self.senders
+            if self.more_senders:
+                doc["more_senders"] = True
+            doc["names"] = list(self.names)
+        return doc
 
 
 @dataclass(frozen=True)
@@ -249,6 +293,10 @@ class Target:
     origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
     # true bearings, lower first, the turn must stay inside (pointing.py rule 9: a group's limits)
     within_deg: tuple[float, float] | None = None
+    # a nudge's raw value where it reaches an end of a scale whose 0 and 360 are the ends of the
+    # travel (pointing.py rule 6): 360 or 0, which one true bearing names both of; the judge
+    # sends it and clears it
+    az_end_deg: float | None = None
 
 
 def combine(newer: Target, older: Target | None) -> Target:
@@ -256,9 +304,14 @@ def combine(newer: Target, older: Target | None) -> Target:
     4.6's PstRotator client sends ``P 200 30`` as an azimuth and then an elevation datagram,
     and an MQTT user may send a bare azimuth and then ``R/target/elevation``: one must not
     replace the other. An axis ``newer`` names wins; so do its source, place and park mark.
-    Only targets from one source combine, and never with a park."""
+    Only targets from one source and one sender (``origin``) combine, and never with a park:
+    another operator's azimuth taken into the control lease holder's elevation went out as the
+    holder's (session/session.py rule 23; an attack pass: G4XYZ's azimuth, put before DL1ABC's
+    claim, turned the rotor with DL1ABC's elevation in the claim's own batch)."""
     if older is None or older.source is not newer.source or older.park:
         return newer  # only a sender's own two halves: never a park or a tracking step
+    if older.origin != newer.origin:
+        return newer
     if newer.az_deg is None and older.az_deg is not None:
         newer = replace(
             newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg, within_deg=older.within_deg
@@ -469,6 +522,9 @@ class ErrorEvent:
     message: str
     command: str | None = None  # what was refused, as the user sent it
     time_unix: float = 0.0
+    # who sent the command the session dropped (runtime/rotator.py: its audit line); never
+    # published, and no part of the event's identity
+    origin: Origin | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", ErrorKind(self.kind))  # ValueError for any other

@@ -30,7 +30,10 @@ Rules:
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults); it
-   reports a position only when both boxes can, and takes whole degrees when either does.
+   reports a position only when both boxes can, and takes whole degrees when either does; it
+   reports a version when either box does (runtime/composite.py rule 3: theirs, joined), so
+   Home Assistant has its version entity as a single controller's (a review: it had none,
+   though ``R/version`` and the device's firmware said the boxes' pair).
 5. What the box says of its axis that is never turned counts only when two readings taken
    in a row say so, a connection's first value too (until then no target is counted: a target
    waits one reading more after each connect; when none of KEEP_FIRST_READINGS agree, a
@@ -345,7 +348,7 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         else f"{az.manufacturer} + {el.manufacturer}",
         can_report_position=az.can_report_position and el.can_report_position,
         has_elevation=True,
-        has_version=False,
+        has_version=az.has_version or el.has_version,
         settings=(),
         el_min_deg=el.el_min_deg,
         el_max_deg=el.el_max_deg,

@@ -41,6 +41,11 @@ Rules:
    bytes that are no reply, or passed as chatter that spoiled nothing, the older reading
    standing.) Such a line's JunkReply says so (``late``): the engine learns from it how late
    its controller answers (session/link.py rule 12); ``owes_late`` says whether any is owed.
+8. A reading says whether the controller drives a motor (``PositionReply.driving``) where its
+   reply carries a flag for it (Prosistel's ``R``/``B``, an RC2800's ``MV``/``ST``): True if it
+   drives any axis it reads, False if it says of every one that it drives none, None where a
+   reply does not say. The engine ends a turn the controller gave up on that flag
+   (session/controller.py rule 12), never on a flag alone.
 """
 
 from __future__ import annotations
@@ -61,6 +66,9 @@ class PositionReply:
     el_deg: float | None = None
     motion_enabled: bool | None = None  # controllers with an automatic-motion switch (SatEL)
     controller_time: str | None = None  # the controller's own clock, as it prints it
+    # rule 8: whether the controller says it drives a motor now (Prosistel's R or B, an
+    # RC2800's MV or ST); None where its reply does not say
+    driving: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -419,6 +427,12 @@ class ModelSpec:
     el_min_deg: float = 0.0
     el_max_deg: float = 0.0
     az_wraps: bool = True  # 0 and 360 are the same direction
+    # on a scale that wraps, 0 and 360 are the two ends of the rotor's travel, its stop at north
+    # (a Yaesu rotor's, as a GS-232 or a RotorCard turns it; an Easycomm, Prosistel, RC2800 or
+    # SatEL box's 0..360): False where north is the middle of the travel (a Hy-Gain rotor's
+    # stop is at south: Rotor-EZ, DCU-1) or the box is never sent 360 and picks the way itself
+    # (RT-21, whose north is 000.0). A nudge across north stops at an end (pointing.py rule 6)
+    az_ends_at_north: bool = True
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
     # the controller needs this long between commands to its two axes (RC2800): no frame goes
@@ -434,6 +448,9 @@ class ModelSpec:
     # writes, and what the controller answers to it (nothing, a blank line, a banner) the codec
     # takes unasked: the stop express may write it ahead of the session (interfaces/mqtt/express.py)
     stop_anytime: bool = False
+    # its connect's frames begin with its stop (SatEL: satel.py rule 2): a replug stops a turn
+    # the port dropped (session/controller.py rule 13)
+    connect_stops: bool = False
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
     nominal_el_speed_deg_s: float = 1.0
     # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)
@@ -465,6 +482,10 @@ class ModelSpec:
     hamlib_rot_type: HamlibRotType = field(kw_only=True)
     # get_info's text; None where Hamlib's backend has no get_info (rotctld then says "None")
     hamlib_info: str | None = field(default=None, kw_only=True)
+    # Hamlib's backend reads the controller's 360 as 0 (the Rotor-EZ family's ``;360``, the
+    # RT-21's ``360.0;``); the others pass it on as 360 (GS-232, Easycomm, SatEL, Prosistel,
+    # RC2800): rotctld's ``p`` answers as Hamlib's would (interfaces/rotctld/commands.py)
+    hamlib_folds_360: bool = field(default=False, kw_only=True)
 
     @property
     def options(self) -> tuple[str, ...]:

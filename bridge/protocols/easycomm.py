@@ -40,7 +40,9 @@ Rules:
 4. ``VExxx`` is the controller's version whenever it comes.
 5. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent.
-6. A line longer than 80 bytes is noise, whole or not, and is never matched; a reply line is
+6. A line longer than 80 bytes (its CR or LF not counted) is noise, whole or not, and is never
+   matched, however the reads split it (an 81-byte line was read when it came in one read and
+   noise when a read ended before its LF: a box's version came or not by chance); a reply line is
    read one way only (no pattern that backtracks: an attack pass, ``AZ1`` and 32 ``UP`` words
    in one read held the serial-lines thread 3 s, its every rotator and stop with it, and 126
    bytes longer than two minutes).
@@ -203,7 +205,7 @@ class EasycommCodec(OneQuery):
             self._line(line, out)
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
-        if len(raw) > _MAX_LINE + 2:  # rule 6: (with its CR LF) never matched
+        if len(raw) > _MAX_LINE + 1:  # rule 6: raw ends in its one CR or LF, not counted
             self._junk(raw, JunkReason.NOISE, "line too long", out)
             return
         if _CHATTER.fullmatch(raw):

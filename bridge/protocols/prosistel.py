@@ -73,11 +73,18 @@ Rules:
    that query's, as ever. (A loaded host: a poll's answer and the next poll's came together,
    the older was taken as the newer poll's reading, and the newer, chatter, spoiled nothing:
    a Combi-Track turning at 6 degrees a second was shown 4 degrees behind where it was.)
+8. A position's last letter says whether that unit's motor runs (``R``) or is braked (``B``;
+   the protocol sheet; Hamlib reads past it): a reading drives a motor if any unit's says
+   ``R``, none if every unit's says ``B`` (base.py rule 8), and says nothing of it where a unit
+   gave another letter. (A box power-cycled mid-turn forgets its turn and says ``B``: read
+   past, the rotor it left standing was called stalled 10 s later, and rotor health counted a
+   stall.)
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,7 +104,8 @@ STX = b"\x02"
 AZ_MAX_DEG = 360
 EL_MAX_DEG = 90
 _MAX_LINE = 32
-_POSITION = re.compile(rb"\x02(?P<unit>[A-Z]),\?,(?P<value>\d{1,4}),[A-Z]")
+_POSITION = re.compile(rb"\x02(?P<unit>[A-Z]),\?,(?P<value>\d{1,4}),(?P<state>[A-Z])")
+_DRIVING = {b"R": True, b"B": False}  # rule 8: running, braked; any other letter says neither
 _ERROR = re.compile(rb"\x02(?P<unit>[A-Z]),(?P<cmd>.),E,(?P<code>\d*)")
 _ANSWER = re.compile(rb"\x02(?P<unit>[A-Z]),(?P<cmd>[^?\r]),[^\r]*")
 # what a healthy box emits besides replies (rules 2 and 3): blank lines, answers without an
@@ -147,6 +155,7 @@ class ProsistelCodec(OneQuery):
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
         self._said: dict[str, float] = {}  # what this exchange's units have said so far
+        self._driving: dict[str, bool | None] = {}  # rule 8: and whether each drives its motor
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position's tail
 
@@ -170,7 +179,7 @@ class ProsistelCodec(OneQuery):
 
     def encode_query(self) -> bytes:
         self._open_query()
-        self._said = {}
+        self._said, self._driving = {}, {}
         return self._each(b"?")
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
@@ -240,7 +249,7 @@ class ProsistelCodec(OneQuery):
         elif _ANSWER.fullmatch(body):
             out.append(JunkReply(frame, JunkReason.CHATTER, "the answer to a command"))
         elif m := _POSITION.fullmatch(body):
-            self._position(frame, m.group("unit").decode(), m.group("value"), clean, out)
+            self._position(frame, m, clean, out)
         else:
             self._junk(frame, JunkReason.NOISE, "not a reply line", out)
 
@@ -257,10 +266,8 @@ class ProsistelCodec(OneQuery):
             return JunkReason.SPOILED, "position out of range"
         return None
 
-    def _position(
-        self, frame: bytes, unit: str, digits: bytes, clean: bool, out: list[Reply]
-    ) -> None:
-        units = self.family.units
+    def _position(self, frame: bytes, m: re.Match[bytes], clean: bool, out: list[Reply]) -> None:
+        units, unit, digits = self.family.units, m["unit"].decode(), m["value"]
         if (misfit := self._misfit(unit, digits)) is not None:
             self._junk(frame, *misfit, out)
             return
@@ -271,6 +278,7 @@ class ProsistelCodec(OneQuery):
             out.append(JunkReply(frame, JunkReason.CHATTER, "position output nobody asked for"))
             return
         self._said[unit] = deg
+        self._driving[unit] = _DRIVING.get(m["state"])
         if len(self._said) < len(units):
             return  # the other unit's line is still to come
         self._query_open = False
@@ -279,9 +287,20 @@ class ProsistelCodec(OneQuery):
             return
         out.append(
             PositionReply(
-                self._said[units[0]], self._said.get(units[-1]) if self.elevation else None
+                self._said[units[0]],
+                self._said.get(units[-1]) if self.elevation else None,
+                driving=_driving(self._driving.values()),
             )
         )
+
+
+def _driving(flags: Iterable[bool | None]) -> bool | None:
+    """Rule 8: the box drives a motor if any unit says so, none if every unit says it is
+    braked; None if a unit says neither."""
+    said = list(flags)
+    if any(said):
+        return True
+    return None if None in said else False
 
 
 def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:

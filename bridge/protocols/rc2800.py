@@ -70,6 +70,12 @@ Rules:
    longer owed, and kept as rule 2's stream (a review: a box always a little later than its
    reply time, polled every 2 s, gave no reading at all, and the rotator went offline, its
    turn stopped short, while it answered every poll).
+7. A position line's state word says whether that axis's motor runs (``MV``, or ``M`` as in
+   Hamlib's example) or not (``ST``, or ``S``); a reading drives a motor if the latest line of
+   any axis it is made of says so, none if each says stopped (base.py rule 8), and says
+   nothing of it where a line has no state word or another. (A box power-cycled mid-turn
+   forgets its turn and says ``ST``: read past, the rotor it left standing was called stalled
+   10 s later, and rotor health counted a stall.)
 """
 
 from __future__ import annotations
@@ -97,8 +103,11 @@ AXIS_GAP_S = 0.2  # between commands to the two axes (Hamlib's rc2800.c waits as
 _MAX_LINE = 64
 _POSITION = re.compile(
     rb"\s*(?P<axis>[AE])(?: P=|=)\s*(?P<deg>-?\d{1,3}(?:\.\d+)?)"
-    rb"(?:\s+S=\d+)?(?:\s+[A-Z]{1,2})?\s*"
+    rb"(?:\s+S=\d+)?(?:\s+(?P<state>[A-Z]{1,2}))?\s*"
 )
+# rule 7: the state word, moving (the sheet's MV; Hamlib's own example says M) or stopped (ST;
+# Hamlib's example S); any other says neither
+_DRIVING = {b"MV": True, b"M": True, b"ST": False, b"S": False}
 _ERROR = re.compile(rb"\s*[AE] ERR=(?P<code>\d+)\s*")
 _ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, echoed
 _LINES = re.compile(rb"[^\r\n]*[\r\n]")
@@ -123,6 +132,7 @@ class Rc2800Codec(Plain, LateAnswers):
         self._query = False  # the open exchange is a query (one line an axis)
         self._owed: set[int] = set()  # rule 2: axes a query read early owes, read as they come
         self._deg: dict[int, float] = {}  # each axis's latest value
+        self._driving: dict[int, bool | None] = {}  # rule 7: and whether its motor runs
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position line's tail
         self._late_newest = False  # rule 6: lines owed late, and no exchange opened since
@@ -224,6 +234,7 @@ class Rc2800Codec(Plain, LateAnswers):
         elif axis not in self._owed and self._late_answer(raw, out):  # rule 6
             return
         self._deg[axis] = value
+        self._driving[axis] = _DRIVING.get(m["state"] or b"")
         self._seen.add(axis)
         self._heard.add(axis)
         if self._want:
@@ -242,7 +253,9 @@ class Rc2800Codec(Plain, LateAnswers):
             out.append(JunkReply(raw, JunkReason.CHATTER, "one axis's position, kept"))
             return
         self._seen.clear()
-        out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E"))))
+        flags = [self._driving.get(axis) for axis in self._axes]
+        driving = True if any(flags) else None if None in flags else False  # rule 7
+        out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E")), driving=driving))
 
     @staticmethod
     def _cut_by_opening(raw: bytes) -> bool:

@@ -282,6 +282,7 @@ def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
         query_bytes=4,  # AI1;
         reply_bytes=4,  # ;xxx
         hamlib_rot_type=HamlibRotType.OTHER,
+        hamlib_folds_360=True,  # rotorez.c: "if (tmp == 360) tmp = 0"
     )
     defaults.update(kw)
     return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)
@@ -297,6 +298,7 @@ MODELS: dict[str, ModelSpec] = {
         brake_delay_s=5.0,
         unasked_moves="after-stop",  # AI1; one bit from AM1; (rule 6)
         stop_anytime=True,  # ';' at any time; a second one is answered by the banner (harmless)
+        az_ends_at_north=False,  # a Hy-Gain rotor's stop is at south: north is mid-travel
         hamlib_model=401,
         hamlib_info="Rotor-EZ",
     ),
@@ -322,6 +324,7 @@ MODELS: dict[str, ModelSpec] = {
         inter_frame_gap_s=0.05,
         query_bytes=0,  # it cannot be asked
         reply_bytes=0,
+        az_ends_at_north=False,  # a Hy-Gain rotor's stop is at south: north is mid-travel
         hamlib_model=403,
         hamlib_info="DCU-1/DCU-1X",
     ),

@@ -30,8 +30,12 @@ Rules:
    then ``45.6;`` read as ``345.6``. It is dropped as NOISE, and the reply of that query is not
    trusted (asked again); spaces alone are the box's padding, dropped quietly.
 4. Targets are rounded half up to tenths; outside 0..360 they are refused before anything is
-   sent. A new bearing while turning goes straight out: the box re-targets by itself, ramping
-   down and holding its own brake as its settings say (the bridge keeps no brake time of it).
+   sent. North goes out as ``000.0``, never ``360.0``: the box takes headings in 0..359.9 (the
+   protocol sheet's range, Hamlib's caps for model 405, whose ``rotctl`` refuses ``P 360``
+   and sends ``AP1359.9`` for 359.9), so a target of 360, or one that rounds to it, is sent
+   as 0, as the DCU-1's 360 is (rotorez.py rule 3). A new bearing while turning goes straight
+   out: the box re-targets by itself, ramping down and holding its own brake as its settings
+   say (the bridge keeps no brake time of it).
 5. A query whose reply time ran out may still be answered (base.py rule 7): its one reply is
    owed late. A clean bearing in range that comes with no query open while one is owed is
    that answer: UNSOLICITED (it still spoils a reading held in the same exchange), but
@@ -70,8 +74,10 @@ _CHATTER = re.compile(rb"[ ;]*")
 
 
 def _tenths(az_deg: float) -> float:
-    """The bearing the box is sent for ``az_deg``: tenths, rounded half up (rule 4)."""
-    return tenths(az_deg, AZ_MAX_DEG, "azimuth")
+    """The bearing the box is sent for ``az_deg``: tenths, rounded half up, and 360.0 (also
+    359.95 and up, rounded) as 000.0 (rule 4)."""
+    value = tenths(az_deg, AZ_MAX_DEG, "azimuth")
+    return 0.0 if value == AZ_MAX_DEG else value
 
 
 class Rt21Codec(OneQuery):
@@ -172,6 +178,7 @@ def _spec(**kw: Any) -> ModelSpec:
         az_min_deg=0.0,
         az_max_deg=AZ_MAX_DEG,
         az_wraps=True,
+        az_ends_at_north=False,  # rule 4: never sent 360, the box turns its rotor its own way
         reply_timeout_s=0.3,
         # a potentiometer read in tenths: a still rotor's reading may wander a few tenths
         noise_deg=0.5,
@@ -183,6 +190,7 @@ def _spec(**kw: Any) -> ModelSpec:
         hamlib_model=405,
         hamlib_rot_type=HamlibRotType.OTHER,  # as Hamlib's rotorez backend calls its family
         hamlib_info=None,  # Hamlib 4.5.4's RT-21 has no get_info
+        hamlib_folds_360=True,  # rotorez.c's RT-21 reads 360.0 as 0
         **kw,
     )
 

@@ -279,6 +279,7 @@ MODELS: dict[str, ModelSpec] = {
         full_duplex=False,
         stop_interrupts=True,
         reports_while_moving=False,
+        connect_stops=True,  # rule 2
         # its own frames are each one flipped bit from a jog that runs until told otherwise
         # (z, s and p from r, t from u: an attack pass ran it past az_max_deg and el_max_deg):
         # every turn nobody asked for is stopped (set follow to turn it by its own commands)

@@ -6,7 +6,10 @@ Rules:
    what the station writes (not an object, a number that is not finite or too large, a model
    this version does not know, JSON nested past the parser's depth: ``load``) raises
    ValueError (InfoError for R/info), never more, and a field that is absent or of the wrong
-   kind reads as unknown.
+   kind reads as unknown; so does a time no UTC date can show (an attack pass: ``R/control``
+   naming another holder until ``9999-12-31T23:59:59-14:00``, year 10000 in UTC, raised
+   ValueError where the lease's words were made, and every rotctld move got ``RPRT -7``
+   with an internal error logged).
 2. So does a name or an id (R/info's ``name``, ``id``) that is not one a station writes: one
    holding a control character, or blank at either end (an attack pass: a forged R/info's
    id ``"tower\nDL1ABC -> ..."`` with a terminal's escape sequence put a forged line in the
@@ -18,7 +21,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Any
 
 from bridge.core.model import (
@@ -132,10 +135,16 @@ def _num(doc: dict[str, Any], key: str) -> float | None:
 
 
 def _unix(text: object) -> float | None:
+    """Rule 1: an ISO time as unix seconds; unknown (None) for one no UTC date can show
+    (``9999-12-31T23:59:59-14:00`` is in year 10000 once in UTC)."""
     try:
-        return datetime.fromisoformat(str(text)).timestamp() if text is not None else None
-    except ValueError:
+        if text is None:
+            return None
+        unix = datetime.fromisoformat(str(text)).timestamp()
+        datetime.fromtimestamp(unix, UTC)  # (what shows it again: the lease's words, the page)
+    except (ValueError, OverflowError, OSError):
         return None
+    return unix
 
 
 def _target_info(doc: object) -> TargetInfo | None:

@@ -36,6 +36,10 @@ Rules:
    one, said in the log: a station whose bridge is away still starts the remote. The wait is
    said when it begins; SIGINT or SIGTERM meanwhile ends it within STOP_LOOK_S, as a start
    error (rule 1).
+9. The console's tokens are issued and judged on this computer's wall clock never set back
+   (heartbeat.py's ``StationTime`` of ``wall``; interfaces/web/auth.py rule 2): set back 10
+   minutes (a laptop's time server), every page's token was "issued in the future" and each
+   click was refused as expired (an attack pass).
 """
 
 from __future__ import annotations
@@ -44,13 +48,14 @@ import logging
 import secrets
 import signal
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
 from bridge.core.ending import Ending
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
-from bridge.interfaces.mqtt.heartbeat import SILENT_S
+from bridge.interfaces.mqtt.heartbeat import SILENT_S, StationTime
 from bridge.interfaces.mqtt.payloads import one_line
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
@@ -100,6 +105,7 @@ class Remote:
     console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
     stopping: Ending = field(default_factory=Ending)  # rule 1: SIGTERM
+    wall: Callable[[], float] = time.time  # rule 9: the console's tokens' (never set back)
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
     _locks: set[str] = field(default_factory=set)
@@ -322,6 +328,7 @@ class Remote:
             station=first.station,
             locator=first.locator,
             satellites=lambda: sorted({n for r in shown for n in r.drawn.satellites}),
+            wall=StationTime(self.wall, time.monotonic).now_unix,  # rule 9
         )
         for rot in shown:
             console.attach(rot, RotatorFacts(rot.drawn.beamwidth_deg, rot.drawn.nudge_step_deg))

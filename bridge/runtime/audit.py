@@ -27,6 +27,52 @@ Rules:
 5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
    publisher (``R/audit``); both only queue. A file that fails is reported (rule 3) on every
    rotator's error topic, kind ``audit``.
+6. A flood does not erase the trail (an attack pass: 1,000 console STOPs a second rolled all
+   four files over in 25 s, and the line of who turned the rotor a minute before was gone).
+   ``AuditTrail`` folds what a flood is made of, a refusal or an executed stop
+   (``AuditEvent.routine``), per rotator, sender (``Origin``: interface, operator, address)
+   and kind (refused, stop): a run's first FREE_LINES events are written one by one, the
+   rest are counted; when the run has been quiet for QUIET_S, and every SPAN_S while it goes
+   on, one line stands for those counted: the last of them with ``count``, ``first`` and
+   ``last`` (their times; written then, so maybe after lines of later times). A move (but the
+   same target again, rule 9), a lease change, a lock change (anything else) is never folded,
+   and one sender's run never
+   folds another's events. More than MOST_RUNS runs open at once (senders without number:
+   an operator name per message) fold by interface and kind alone, the line ``mixed`` and
+   named by the interface; while that crowd's run goes on, a sender new to that interface
+   and kind joins it (a name used once each, every QUIET_S, was a line each). A sender whose
+   run was open before goes on in its own. A run is kept in memory only: the stop writes
+   every run's count; a crash loses the counts of runs still open (the first lines of each
+   are written). Both the file and ``R/audit`` get the same lines.
+7. The thread that says rule 6's summaries ("audit-runs") sleeps until the next one is due
+   (``Runs.left``: a run's QUIET_S or SPAN_S), each sleep TICK_S at least (many runs whose
+   deadlines follow each other closely, a crowd's, would wake it for each: a summary is then
+   up to TICK_S late, as it always was); and, while no run is open, without
+   a deadline: an idle bridge never wakes it (it woke once a second for nothing, 16 rotators
+   or one). The event that opens the first run wakes it; a run opened later is never due
+   sooner than those open (its deadline is QUIET_S from now, theirs at most that), so no
+   other event does. The stop wakes it too, and then says every open run's count (rule 6).
+8. A crowd's line (rule 6's ``mixed``) says whom it stands for, so that an operator reading the
+   trail after a flood learns who (it said the interface alone): ``senders``, how many
+   different senders (operator and address) sent the events it counts, counted up to
+   SENDERS_COUNTED (beyond, ``more_senders``: more, uncounted), and ``names``, the first NAMED
+   of them as they came (their ``who``; an operator and an address, both). Bounded however
+   many send: a crowd's run keeps SENDERS_COUNTED hashes and NAMED names at most (a name is 32
+   characters at most, an address a few dozen), forgotten with each summary.
+9. Nor does a program that sends the same target over and over (a Node-RED loop that
+   republishes a slider's value 50 times a second: 50 lines a second, the four files rolled
+   over in 8 minutes, in 48 s at 500 a second). An absolute target (``AuditEvent.target``)
+   that is the one its sender sent last, with nothing carried out on that rotator since
+   (anyone's other target, a stop, a lock, a setting; a refusal changes nothing and does not
+   count), is folded as rule 6 folds a run: one run per rotator, sender and target, its first
+   FREE_LINES written, then a count line, never a crowd's (beyond MOST_RUNS runs, written).
+   Such a repeat tells nothing the line before it did not: who sent the rotor where is the
+   first one's line, and a repeat after anything else is written again (it may turn the rotor
+   back: after another sender's target, a stop). A crash loses only the count. A stream of
+   different targets (a tracker computing a bearing 50 times a second) is not folded: the
+   audit sees a target when it is taken, not whether it reached the controller (the session
+   sends a stream of targets at its pauses and, while it goes on, about once a second:
+   session/targets.py rule 2).
 """
 
 from __future__ import annotations
@@ -39,17 +85,27 @@ import queue
 import re
 import stat
 import threading
+import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 from typing import Protocol
 
-from bridge.core.model import AuditEvent, ErrorKind
+from bridge.core.model import AuditEvent, ErrorKind, Origin
 
 log = logging.getLogger(__name__)
 
 QUEUE_LINES = 10_000  # rule 1
 KEEP_FILES = 3  # rule 2: old files kept beside the current one
+FREE_LINES = 5  # rule 6: like events of one sender written one by one before they are folded
+QUIET_S = 5.0  # rule 6: a run ends after this long without a like event
+SPAN_S = 60.0  # rule 6: a run that goes on is summed up this often
+MOST_RUNS = 256  # rule 6: runs open at once; beyond, one run per interface and kind
+SENDERS_COUNTED = 1000  # rule 8: a crowd's different senders counted (beyond: more_senders)
+NAMED = 5  # rule 8: a crowd's first senders named on its line
+TICK_S = 1.0  # rule 7: the ticker wakes at most this often while runs are open
+Said = tuple[str, AuditEvent]  # (rotator id, event): a line to write and publish
 _STOP = object()
 # rule 3: O_NONBLOCK changes nothing for a file; a FIFO at the path (no reader, or one that
 # never reads) fails its open or write at once instead of hanging the writer unsaid
@@ -264,6 +320,149 @@ def _cut(fd: int, size: int) -> None:
         log.debug("audit file: cutting back to %d bytes failed: %s", size, exc)
 
 
+@dataclass
+class _Run:
+    """Rule 6: the like events of one sender and kind, as they come."""
+
+    began: float  # (the monotonic clock) this run's span began
+    seen: float  # the latest like event came
+    written: int = 0  # written one by one (FREE_LINES at most)
+    folded: int = 0  # since the last summary
+    first_unix: float | None = None  # the first of those folded (its event's time)
+    last: AuditEvent | None = None  # the latest folded
+    # rule 8 (a crowd's run only): the senders of those folded, by their hash, the first named
+    senders: set[int] = field(default_factory=set)
+    more_senders: bool = False
+    names: list[str] = field(default_factory=list)
+
+    def fold_sender(self, origin: Origin, counted: int, named: int) -> None:
+        """Rule 8: one more folded event of a crowd, from ``origin``."""
+        sender = hash(
+            (origin.operator, origin.peer)
+        )  # (str hashes are keyed: none can be aimed at)
+        if sender in self.senders:
+            return
+        if len(self.senders) >= counted:
+            self.more_senders = True
+            return
+        self.senders.add(sender)
+        if len(self.names) < named:
+            both = origin.operator and origin.peer
+            self.names.append(f"{origin.operator} ({origin.peer})" if both else origin.who)
+
+
+class Runs:
+    """Rule 6, pure (the caller holds a lock and gives the clock's time): which events are
+    written and which are folded into a run's summary."""
+
+    def __init__(
+        self,
+        *,
+        free: int = FREE_LINES,
+        quiet_s: float = QUIET_S,
+        span_s: float = SPAN_S,
+        most: int = MOST_RUNS,
+        counted: int = SENDERS_COUNTED,
+        named: int = NAMED,
+    ) -> None:
+        self._free = free
+        self._counted = counted
+        self._named = named
+        self._quiet_s = quiet_s
+        self._span_s = span_s
+        self._most = most
+        self._runs: dict[tuple[str, Origin, str, bool], _Run] = {}
+        # rule 9: each rotator's latest event that was carried out: (sender, command, result)
+        # when it was an absolute target, None when anything else
+        self._latest: dict[str, tuple[Origin, str, str] | None] = {}
+
+    def offer(self, rotator_id: str, event: AuditEvent, now: float) -> list[Said]:
+        """What to write and publish now for ``event`` (the summaries of runs that ended
+        first, then the event itself unless it is folded)."""
+        out = self.due(now)
+        again = self._again(rotator_id, event)  # rule 9
+        if not event.routine and not again:  # a move, a lease or a lock change: its own line
+            return [*out, (rotator_id, event)]
+        if again:  # rule 9: one sender's one target, never a crowd's
+            key = (rotator_id, event.origin, f"again {event.command}", False)
+            if key not in self._runs and len(self._runs) >= self._most:
+                return [*out, (rotator_id, event)]
+        else:
+            kind = "stop" if event.halt else "refused"
+            key = (rotator_id, event.origin, kind, False)
+            crowd = (rotator_id, Origin(event.origin.interface), kind, True)
+            if key not in self._runs and (len(self._runs) >= self._most or crowd in self._runs):
+                key = crowd  # senders beyond counting, until their interface's crowd is quiet
+        run = self._runs.get(key)
+        if run is None:
+            run = self._runs[key] = _Run(now, now)
+        run.seen = now
+        if run.written < self._free:
+            run.written += 1
+            return [*out, (rotator_id, event)]
+        run.folded += 1
+        if key[3]:  # rule 8
+            run.fold_sender(event.origin, self._counted, self._named)
+        if run.first_unix is None:
+            run.first_unix = event.time_unix
+        run.last = event
+        return out
+
+    def _again(self, rotator_id: str, event: AuditEvent) -> bool:
+        """Rule 9: whether ``event`` is the target its sender sent last, nothing else carried out
+        on that rotator since (what was refused changed nothing); notes it as the latest."""
+        if event.result.startswith("refused"):
+            return False
+        this = (event.origin, event.command, event.result) if event.target else None
+        before = self._latest.get(rotator_id)
+        self._latest[rotator_id] = this
+        return this is not None and this == before
+
+    @property
+    def open(self) -> bool:
+        """Rule 7: whether any run is open (the ticker has something to wait for)."""
+        return bool(self._runs)
+
+    def left(self, now: float) -> float | None:
+        """How long until a run's summary is due (its QUIET_S or its SPAN_S, whichever comes
+        first; 0 when one is due now); None while no run is open (rule 7: nothing to wait for)."""
+        if not self._runs:
+            return None
+        due = min(min(r.seen + self._quiet_s, r.began + self._span_s) for r in self._runs.values())
+        return max(0.0, due - now)
+
+    def due(self, now: float, *, everything: bool = False) -> list[Said]:
+        """The summaries of runs that ended (quiet for QUIET_S) or have run SPAN_S (said, and
+        folding on); ``everything``: of all (the bridge stops)."""
+        out: list[Said] = []
+        for key, run in list(self._runs.items()):
+            # (as ``left`` reckons them, to the last bit: a run ``left`` calls due is said)
+            quiet = everything or run.seen + self._quiet_s <= now
+            if not quiet and run.began + self._span_s > now:
+                continue
+            if run.folded and run.last is not None:
+                mixed = key[3]
+                last = run.last
+                origin = Origin(last.origin.interface) if mixed else last.origin
+                said = replace(
+                    last,
+                    origin=origin,
+                    count=run.folded,
+                    first_unix=run.first_unix,
+                    mixed=mixed,
+                    senders=len(run.senders),
+                    more_senders=run.more_senders,
+                    names=tuple(run.names),
+                )
+                out.append((key[0], said))
+            if quiet:
+                del self._runs[key]
+            else:
+                run.began, run.folded, run.first_unix, run.last = now, 0, None, None
+                run.senders, run.more_senders, run.names = set(), False, []
+        return out
+
+
 class Reporter(Protocol):
     def report(self, kind: ErrorKind, message: str, command: str | None) -> None: ...
 
@@ -277,11 +476,23 @@ class AuditTrail:
         max_bytes: int,
         publish: Callable[[str, AuditEvent], None],
         rotators: Sequence[Reporter],
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        runs: Runs | None = None,
     ) -> None:
         """``publish(rotator_id, event)``; ``rotators``: those told when the file fails (the
         app's list, filled after this)."""
         self._publish = publish
         self._rotators = rotators
+        self._clock = clock
+        self._runs = Runs() if runs is None else runs  # rule 6
+        self._runs_lock = threading.Lock()
+        self._runs_changed = threading.Condition(self._runs_lock)  # rule 7: a run opened, the stop
+        self._ended = False
+        self.ticker_asleep = False  # rule 7: the ticker waits (tests read these)
+        self.ticker_timeout: float | None = None  # ... this long (None: until a run opens)
+        self.ticker_wakeups = 0  # ... and came back from its wait this often
+        self._ticker = threading.Thread(target=self._tick_on, name="audit-runs", daemon=True)
         self.file: AuditFile | None = None
         if path is not None:
             self.file = AuditFile(path.expanduser(), max_bytes, on_problem=self._failed)
@@ -295,15 +506,57 @@ class AuditTrail:
         return partial(self._audited, rotator_id)
 
     def _audited(self, rotator_id: str, event: AuditEvent) -> None:
-        if self.file is not None:
-            self.file.put(event)
-        self._publish(rotator_id, event)
+        with self._runs_changed:  # rule 6 (a few dictionary look-ups: never a wait)
+            idle = not self._runs.open
+            said = self._runs.offer(rotator_id, event, self._clock())
+            if idle and self._runs.open:  # rule 7: the first run opened wakes the ticker
+                self._runs_changed.notify()
+        self._say(said)
+
+    def _say(self, said: list[Said]) -> None:
+        for rotator_id, event in said:
+            if self.file is not None:
+                self.file.put(event)
+            self._publish(rotator_id, event)
+
+    def tick(self, *, everything: bool = False) -> None:
+        """Rule 6: the summaries of the runs that ended, said (when due, rule 7, and at the
+        stop)."""
+        with self._runs_lock:
+            said = self._runs.due(self._clock(), everything=everything)
+        self._say(said)
+
+    def _tick_on(self) -> None:
+        """Rule 7: asleep until a summary is due, or without a deadline while no run is open."""
+        while True:
+            with self._runs_changed:
+                if self._ended:
+                    return
+                timeout = self._runs.left(self._clock())
+                if timeout != 0.0:  # nothing due yet: sleep until it is, or a run opens
+                    timeout = None if timeout is None else max(timeout, TICK_S)
+                    self.ticker_timeout, self.ticker_asleep = timeout, True
+                    self._runs_changed.wait(timeout)
+                    self.ticker_asleep = False
+                    self.ticker_wakeups += 1
+                    continue  # (woken by a run that opened: its summary is not due yet)
+            try:
+                self.tick()
+            except Exception:  # (rule 3's spirit: a bug costs a summary, never the ticker)
+                log.exception("audit: a run's summary lost")
 
     def start(self) -> None:
         if self.file is not None:
             self.file.start()
+        self._ticker.start()
 
     def stop(self) -> None:
+        with self._runs_changed:
+            self._ended = True
+            self._runs_changed.notify()
+        if self._ticker.is_alive():
+            self._ticker.join(5.0)
+        self.tick(everything=True)  # rule 6: the counts of runs still open are written too
         if self.file is not None:
             self.file.stop()
 

@@ -30,7 +30,14 @@ Rules:
    on while the elevation box was unplugged was shown offline and not moving, and a group
    with that rotator said idle.) Its wind is the azimuth box's, whose storm's park is seen
    reached (session/wind.py rule 7, kept over a restart by runtime/kept.py rule 4) only when
-   both boxes' parks were: otherwise a restart in the storm parks both again.
+   both boxes' parks were: otherwise a restart in the storm parks both again. Its version is
+   its boxes' joined, azimuth first (``1.4S / SatEL``), each box whose model reports one
+   (protocols/axes.py rule 4), and none until every such box has said its own, the rotator
+   saying meanwhile the pair kept from the last run, if any (runtime/kept.py rule 11). One
+   box's alone was read as the pair's (``SatEL``, the elevation box's, shown as if it were
+   the azimuth's), and at each restart the kept pair gave way to the first box's alone and
+   came back when the other answered, each time a round of Home Assistant discovery and a
+   state-file write (a review).
 4. Tracking and following run in both sessions (each aims its own axis, never flipped:
    session/tracking.py rule 4); when one ends (an
    unplugged box, a stop, the horizon) the other is ended too, and the status says why the
@@ -67,17 +74,21 @@ Rules:
    already on its way in the box that answers is stopped there: the rotator's turn is no
    longer watched whole, and a single controller gone silent mid-turn is stopped on both
    axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
-   the bridge had dropped, under an ``offline`` status). The box whose port went mid-turn
-   (a turn or a target out when it closed) owes its stop, its first frame when it is back: a
-   single controller's turn goes on after a replug, but here the other axis was stopped (an
-   attack pass: the elevation box, replugged, turned on alone to its target, 60/80 where
-   300/80 was asked); both boxes whose ports went together (one USB hub) owe theirs, and the
-   turn is sent again by hand. A box that says it restarted mid-turn (session/controller.py
-   rule 12: a power-on byte) abandons the rotator's turn as a whole: the other box's turn
-   under way is stopped and its target waiting dropped (session.py ``abandon``), unsaid, the
-   restart's one error saying it was not resumed (a review: the azimuth box's turn was said
-   abandoned while the elevation box turned on to the user's elevation, the antenna left half
-   moved). The storm's park goes on there,
+   the bridge had dropped, under an ``offline`` status). The box whose port went mid-turn (a
+   turn or a target out when it closed) owes its stop, its first frame when it is back: a single
+   controller's turn goes on after a replug (session/controller.py rule 13), but here the other
+   axis was stopped (an attack pass: the elevation box, replugged, turned on alone to its
+   target, 60/80 where 300/80 was asked); both boxes whose ports went together (one USB hub) owe
+   theirs, and the turn is sent again by hand. The box's port error is its port's words alone
+   (``WorkerConfig.box``): a single controller's says its turn is left to it
+   (session/controller.py rule 13), which here is stopped. A box that says it restarted mid-turn
+   (session/controller.py rule 12: a power-on byte; rule 14: a SatEL's clock gone back), or
+   gave its turn up (rule 12: a
+   Prosistel or RC2800 that says its motor is off short of the target), abandons the rotator's
+   turn as a whole: the other box's turn under way is stopped and its target waiting dropped
+   (session.py ``abandon``), unsaid, the restart's one error saying it was not resumed (a
+   review: the azimuth box's turn was said abandoned while the elevation box turned on to the
+   user's elevation, the antenna left half moved). The storm's park goes on there,
    under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
    attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
    and never sent again): each box parks its own axis, as one does alone in a storm
@@ -85,6 +96,29 @@ Rules:
    of 83a398d: the azimuth box's park, stopped when the elevation box fell silent for 4 s,
    was never tried again, the antenna left 140 degrees short of it for the whole storm). A
    STOP still reaches the box that answers.
+   A target one box drops before it went out or moved the rotor (session.py rule 23: a lease
+   claimed by someone else; wind.py rule 1: a storm begun, or one that refuses the try more of
+   a frame lost on the line, controller.py rule 11: a cold review, the elevation turned on to
+   40 for a 300/40 whose azimuth the storm did not send again) is the rotator's whole target
+   dropped: the other box
+   drops its half too (session.py ``forsake``, unsaid), if it is that sender's (``sibling``:
+   a half another sender sent since, the lease holder's own, goes on; a cold review, DL1ABC's
+   elevation 10, sent before their claim, was dropped with G4XYZ's azimuth 300 and the
+   elevation turned on to G4XYZ's 40), and an axis a sender's target leaves out is that
+   sender's half before while its box waits for it or turns to it, as one controller takes
+   one sender's two halves for one target (``aimed``, core/model.py ``combine``; a cold
+   review: G4XYZ's 310 sent alone after 300/40, dropped by a claim, left the elevation
+   turning on to 40). A half a SatEL box put back after its slew's late report (session/
+   slew.py rule 4, session/targets.py rule 3) is that half still (a cold review: the put back
+   was a new target the drop did not know, and went out: the elevation turned on to 40 for
+   the claim's dropped 300/40): waiting, it is cleared; sent already
+   (a Rotor-EZ azimuth box waits out its brake, a GS-232B elevation box sends its half at
+   once), its turn is stopped, unless a newer target there names its axis (a storm's park
+   with an elevation; one without keeps that axis's target, the dropped half's). A claim
+   dropped the azimuth's half and the elevation turned on to the other's, and so did a storm
+   whose park named no elevation: the antenna left half moved for a target nobody stood for
+   (a closing note). The elevation box's half sent before the drop has moved it meanwhile;
+   the stop ends that.
 9. An event both boxes hand out, word for word (the same kind, message and command, within
    TWIN_S of each other), is the rotator's one event: said once, by the box that said it
    first. Both sessions take the same commands, the wind and the TLE file's answers (rule 1),
@@ -92,6 +126,14 @@ Rules:
    attack pass: ``R/track NOSUCH`` was refused twice on R/error). What names its box (a
    port's fault) or its axis (a stall, a refusal: session/stops.py rule 4) is no twin, and one box's
    word is matched once: the same refusal again later (a command sent again) is said again.
+   A box's word that it dropped its half of the rotator's last target (``target dropped...``,
+   or that a try more of it is not sent, ``target not sent again...``, ``target did not move
+   the rotor...``: session.py ``DROPS``, with that half as its command) names the whole
+   target, as it was sent (``target az 300 el 40``, ``whole``): the two boxes' drops of one
+   target are then twins, said once (a claim or a storm that found both halves waiting said
+   the drop twice, ``target az 300`` then ``target el 40``), and one box's drop names what
+   the user lost (a cold review: a claim's or a storm's drop of the azimuth's try more, the
+   elevation stopped for it, named ``target az 300`` alone).
 """
 
 from __future__ import annotations
@@ -104,7 +146,16 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
-from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source
+from bridge.core.model import (
+    ErrorEvent,
+    ErrorKind,
+    MotionState,
+    RotatorStatus,
+    Source,
+    Target,
+    combine,
+    describe_command,
+)
 from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.worker import Worker
@@ -113,7 +164,7 @@ from bridge.session.actions import Action, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
-from bridge.session.session import RotatorSession
+from bridge.session.session import DROPS, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
 
@@ -159,9 +210,15 @@ def share_quiet(sessions: list[RotatorSession], now: float) -> None:
 
 
 def merge(
-    rotator_id: str, az: RotatorStatus, el: RotatorStatus, *, error: str | None = None
+    rotator_id: str,
+    az: RotatorStatus,
+    el: RotatorStatus,
+    *,
+    error: str | None = None,
+    versioned: tuple[bool, bool] = (True, True),
 ) -> RotatorStatus:
-    """Rule 3: the rotator's status from its two boxes' (``error``: the newer last error)."""
+    """Rule 3: the rotator's status from its two boxes' (``error``: the newer last error;
+    ``versioned``: whether the azimuth's and the elevation's box report a version)."""
     states = {az.state, el.state}
     if MotionState.MOVING in states:  # (a box read turning while the other is out: turning)
         state = MotionState.MOVING
@@ -170,7 +227,8 @@ def merge(
     else:
         order = (MotionState.STALLED, MotionState.BRAKING, MotionState.UNKNOWN)
         state = next((s for s in order if s in states), az.state)
-    versions = [v for v in (az.version, el.version) if v]
+    said = [box.version for box, has in zip((az, el), versioned, strict=True) if has]
+    version = " / ".join(v for v in said if v) if said and all(said) else None
     wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's)
     if wind is not None and el.wind is not None:
         wind = replace(
@@ -188,7 +246,7 @@ def merge(
         available=az.available and el.available,
         locked=az.locked or el.locked,
         lock_unknown=az.lock_unknown or el.lock_unknown,
-        version=" / ".join(versions) or None,
+        version=version,
         last_error=error,
         estimated=az.estimated or el.estimated,
         controller_time=az.controller_time or el.controller_time,
@@ -202,8 +260,9 @@ class Composition:
     """Sans-IO: the two boxes' statuses in, the rotator's out (rule 3), what rule 4 asks of
     the other session when one ends tracking or following, and the events said (rule 9)."""
 
-    def __init__(self, rotator_id: str) -> None:
+    def __init__(self, rotator_id: str, versioned: tuple[bool, bool] = (True, True)) -> None:
         self.rotator_id = rotator_id
+        self.versioned = versioned  # rule 3: whether each box's model reports a version
         self.boxes: dict[Axis, RotatorStatus] = {a: RotatorStatus(rotator_id) for a in AXES}
         self.status = RotatorStatus(rotator_id)
         self._error: str | None = None
@@ -212,10 +271,52 @@ class Composition:
         self._dropped: set[Axis] = set()  # rule 8: a waiting target to drop there
         self._first = True
         self._unmatched: dict[Axis, list[ErrorEvent]] = {a: [] for a in AXES}  # rule 9
+        # rule 8: the halves of the rotator's last target, as handed to each box, and rule 9:
+        # each half's words, and the whole target's
+        self.halves: dict[Axis, Target | None] = dict.fromkeys(AXES)
+        self._halves_said: dict[Axis, str | None] = dict.fromkeys(AXES)
+        self._whole_said = ""
+        self._whole: Target | None = None  # rules 8 and 9: the rotator's target, its halves'
+
+    def aimed(
+        self, target: Target, batches: dict[Axis, Batch], held: Callable[[Axis, Target], bool]
+    ) -> None:
+        """Rules 8 and 9: the rotator's ``target``, split into ``batches``; an axis it leaves
+        out keeps the half its sender sent before while that box still ``held`` it (waiting,
+        or turning to it: session.py ``holds``), as one controller takes one sender's two
+        halves for one target (core/model.py ``combine``)."""
+        whole, self._whole = combine(target, self._whole), target
+        for axis in AXES:
+            half, before = batches[axis].target, self.halves[axis]
+            if half is None and whole is not target and before is not None and held(axis, before):
+                self._whole = whole  # (kept: taken with the new half)
+                continue
+            self.halves[axis] = half
+            self._halves_said[axis] = None if half is None else describe_command(half)
+        self._whole_said = describe_command(self._whole)
+
+    def sibling(self, other: Axis, dropped: Target | None) -> Target | None:
+        """Rule 8: ``other``'s box's half of the rotator's last target, to drop with the target
+        the other box ``dropped``, if one sender sent both (a half another sender sent since,
+        the lease holder's own, is not the dropped target's: it goes on)."""
+        half = self.halves[other]
+        if half is None or dropped is None:
+            return None
+        if half.source is not dropped.source or half.origin != dropped.origin:
+            return None
+        return half
+
+    def whole(self, axis: Axis, event: ErrorEvent) -> ErrorEvent:
+        """Rule 9: ``event`` naming the rotator's whole target where it says ``axis``'s box
+        dropped its half of it."""
+        dropped = event.kind is ErrorKind.REFUSED and event.message.startswith(DROPS)
+        if dropped and event.command is not None and event.command == self._halves_said[axis]:
+            return replace(event, command=self._whole_said)
+        return event
 
     def said(self, axis: Axis, event: ErrorEvent) -> bool:
-        """Rule 9: whether ``axis``'s box's event is to be said (not the twin of one the other
-        box said)."""
+        """Rule 9: whether ``axis``'s box's event (``whole``'s) is to be said (not the twin of
+        one the other box said)."""
 
         def near(e: ErrorEvent) -> bool:
             return abs(e.time_unix - event.time_unix) < TWIN_S
@@ -257,7 +358,7 @@ class Composition:
                 if box.tracking is not None and self._ended is None:
                     self._ended = OFFLINE
         az, el = self.boxes[Axis.AZIMUTH], self.boxes[Axis.ELEVATION]
-        merged = merge(self.rotator_id, az, el, error=self._error)
+        merged = merge(self.rotator_id, az, el, error=self._error, versioned=self.versioned)
         if self._ended is not None and merged.tracking is None:
             merged = replace(merged, tracking_ended=self._ended)
         worth = self._first or st.worth_emitting(merged, self.status)
@@ -344,9 +445,12 @@ class CompositeWorker:
         self._on_event = on_event
         self._halts_applied = 0
         self._newest_applied = 0
-        self.composition = Composition(cfg.rotator_id)
+        self.composition = Composition(
+            cfg.rotator_id, (axes[0].spec.has_version, axes[1].spec.has_version)
+        )
         self._halted = Followed()  # rule 6
         self._restarted = {axis: Followed() for axis in AXES}  # rule 8: each box's restarts
+        self._drops = {axis: Followed() for axis in AXES}  # rule 8: each box's targets dropped
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
         for axis, box, own in zip(AXES, axes, self._own, strict=True):
@@ -392,7 +496,8 @@ class CompositeWorker:
         return applied
 
     def _event(self, axis: Axis, event: ErrorEvent) -> None:
-        if self.composition.said(axis, event):  # rule 9
+        event = self.composition.whole(axis, event)  # rule 9
+        if self.composition.said(axis, event):
             self._on_event(event)
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
@@ -444,6 +549,8 @@ class CompositeWorker:
             batch = self._mailbox.take()
             if batch:
                 batches = self.composition.offline(split(batch))  # rule 8
+                if batch.target is not None:  # (rules 8 and 9: its halves)
+                    self.composition.aimed(batch.target, batches, self._holds)
                 self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
                 self._newest_applied = batch.newest
@@ -462,6 +569,14 @@ class CompositeWorker:
             if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
                 box = self.boxes[other]  # rule 8: a restart mid-turn abandons the rotator's
                 box.guarded(lambda t, b=box: b.carry_out(t, b.session.abandon(t)), now)
+            if self._drops[axis].follow(self.boxes[axis].session.drops):
+                dropped = self.boxes[axis].session.dropped  # rule 8: the same sender's half
+                box, half = self.boxes[other], self.composition.sibling(other, dropped)
+                box.guarded(lambda t, b=box, h=half: b.carry_out(t, b.session.forsake(h, t)), now)
+
+    def _holds(self, axis: Axis, half: Target) -> bool:
+        """Rule 8: whether ``axis``'s box still waits for ``half`` or turns to it."""
+        return self.boxes[axis].session.holds(half)
 
     def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
         """Each box's session decides on its batch; then the frames go out on both lines

@@ -79,11 +79,36 @@ Rules:
    turned the rotor meanwhile); a lock word ends the wait. The status says so meanwhile
    (``lock_unknown``): ``locked`` false is no OFF then (an attack pass: the console showed
    "Lock OFF" while it refused every click for a lock that may be ON). The bridge's own moves
-   are not judged: auto-park (``park_after_idle_s``) still parks it while the broker stays away that
-   long. A file that says the lock wins, and waits for no broker: OFF was written after the ON
-   the broker holds, or the ON is a stranger's, or (not told apart) the ON's save failed after
+   wait too (session/parts.py rule 7): auto-park (``park_after_idle_s``) and the park of a
+   storm kept in the file (rule 4) send nothing while the lock is not known; a lock ON heard
+   then refuses them (wind.py rule 3: that park is not tried again), nothing heard lets them go
+   (a review: auto-park parked, and a kept storm's park turned, a rotor whose lock only the
+   broker still held, while the broker stayed away, before the look said it).
+   A file that says the lock wins, and waits for no broker: OFF was written after the ON the
+   broker holds, or the ON is a stranger's, or (not told apart) the ON's save failed after
    an OFF was saved: a lock ON whose save failed is taken from the broker only where the file
    never said the rotator's lock.
+11. The version its controller reported last outlives a restart (state_store.py rule 12), kept
+   with the model's name: at the next start it is the rotator's version (``version``; in its
+   status, so ``R/version``, ``R/status`` and Home Assistant's ``sw_version`` say it) until the
+   controller reports one, and one that differs takes its place at once (and is saved). So a
+   restart with the same firmware publishes each discovery config once, with its version, also
+   while the controller is unplugged (each config went out twice: without the version, then
+   again with it, about 50 ms later, once per rotator at every start). A version kept for
+   another model (the controller swapped, the configuration's model changed) is none: nothing
+   is claimed for the new one until it answers (interfaces/mqtt/service.py clears
+   ``R/version`` meanwhile). A rotator of two boxes keeps their two versions as one (its
+   status's): its status has none until every box whose model reports one has said it
+   (runtime/composite.py rule 3), so the pair kept stands until then, and a restart with the
+   same boxes publishes each config once too.
+   ``seen_version`` looks at every status on the lines thread, as
+   ``seen_wind`` does, and hands a new version to the writer, one save queued at a time
+   (rule 7's way: it writes the latest): a box that says a new version in every line (an
+   Easycomm III's ``VE...`` is taken whenever it comes) queued a write of the state file
+   with its fsyncs for each, a lock word's save waiting behind them all (an attack pass: 200
+   such lines, 139 saves). A save that fails is not
+   reported as rule 3 has it (the log says it): it costs only a second round of discovery at
+   the next start.
 """
 
 from __future__ import annotations
@@ -170,6 +195,8 @@ class Kept:
         self.storm_arrived = self.storm and store.storm_arrived(rotator_id)
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
+        self.version = store.version(rotator_id, spec.name)  # rule 11
+        self._version_queued = False  # rule 11: a save of the latest version waits
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
@@ -191,6 +218,21 @@ class Kept:
         if raw_az != self.short_of:
             self.short_of = raw_az
             self._store.later(lambda: self._save_short_of_now(raw_az))
+
+    def seen_version(self, version: str | None) -> None:
+        """Rule 11 (lines thread: it only compares and hands over): the controller's own; one
+        save queued at a time, which writes the latest."""
+        if version and version != self.version:
+            self.version = version
+            if not self._version_queued:
+                self._version_queued = True
+                self._store.later(self._save_version_now)
+
+    def _save_version_now(self) -> None:
+        self._version_queued = False  # (before the read: a newer one queues a save of its own)
+        version = self.version
+        if version:
+            self._store.set_version(self._id, self._spec.name, version)  # (a failure: rule 11)
 
     def _save_short_of_now(self, raw_az: float | None) -> None:
         if not self._store.set_short_of(self._id, raw_az):

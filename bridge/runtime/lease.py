@@ -1,6 +1,7 @@
 """The control lease: one operator holds a rotator for a while, and motion from anyone else is
-refused. Pure: no clock, no thread, no I/O; the time (unix seconds, the wall clock: the lease
-is shown in UTC and kept across a restart) comes in with every call. Rotator (runtime/rotator.py)
+refused. Pure: no clock, no thread, no I/O; the time (unix seconds, the station's clock, the
+wall clock never set back while the bridge runs: runtime/operators.py rule 5; the lease is
+shown in UTC and kept across a restart) comes in with every call. Rotator (runtime/rotator.py)
 keeps one per rotator, judges with it and carries out what it returns.
 
 Rules:
@@ -13,13 +14,23 @@ Rules:
    same operator's whatever its case (``same_operator``: DL1ABC and dl1abc are one call).
 3. The lease ends by itself at ``until``: from then on ``holder`` is None, with no call needed
    (``expired`` tells the caller once, so it can say so). It has ended too when more than
-   MAX_MINUTES are left: the wall clock was set back, and must not stretch it (rule 1).
+   MAX_MINUTES are left: the wall clock was set back between two runs of the bridge (a kept
+   lease), and must not stretch it (rule 1).
 4. Anyone may release it: the lease is coordination between operators who can all publish
    commands, not security (the broker's ACLs are); the station owner's release button must work
    whoever holds it. The audit log says who released it.
 5. ``refusal`` is the judge's question: a motion command from ``who`` while another holds the
    lease gets the message to refuse it with; the holder's and anyone's while free get None.
-   Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11).
+   Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11). A target another
+   operator sent before a claim, still waiting in the session when the lease changes hands,
+   is dropped there by the same test of who sent it (session/session.py rule 23); one judged
+   before the claim and put in the mailbox after it is refused at its put by that test too
+   (session/mailbox.py rule 14), and so are a track or follow start and a feature's own
+   command (a setting too, as the judge takes it) judged so. A satellite tracked by name is
+   looked up on the sky worker: its answer is judged by the same test against the lease when
+   it comes (session.py rule 23), so a look-up asked before a claim and answered after it
+   starts nothing for another operator; nor does a start put before a claim and taken in
+   the claim's own batch (session.py rule 23 judges it there, as it judges a target).
 6. A lease kept across a restart (the state file) is taken only if a claim could have made it:
    an operator's name (not an interface's, rule 1), and at most MAX_MINUTES left. One that is
    not (a hand-edited or damaged file, a date no clock can show, the wall clock set far back)

@@ -7,20 +7,25 @@ Rules:
    ``R/control`` says it) and its save queued for the store's writer thread (state_store.py
    rule 5: no fsync on a front end's thread) are one step, so that the judge, the status and
    the state file name the same holder whichever claims and releases race. The lease here is
-   the judge's one copy. A save in line takes the changes made before it runs: the newest
-   is written, once (an attack pass: 1,500 renewing claims queued 1,500 writes, each with
-   its fsync, and a lock ON's save waited a minute behind them).
+   the judge's one copy. The change put is all the session needs to drop a target another
+   operator sent before a claim that still waits unsent (session/session.py rule 23), and all
+   the mailbox needs to refuse one judged before the claim and put after it (the put judges
+   the lease's generation: session/mailbox.py rule 14, ``claimed_meanwhile`` its words). A save
+   in line takes the changes made before it runs: the newest is written, once (an attack pass:
+   1,500 renewing claims queued 1,500 writes, each with its fsync, and a lock ON's save waited
+   a minute behind them).
 2. A lease ends by itself: a timer (daemon, one at a time) fires at its end, so that the status
    and ``R/control`` say it is free without anyone asking, and the audit trail has it (its
    operator the holder, interface ``lease``). A timer that fires early (the wall clock was set
    back) arms itself again. The end is a step like a release (rule 1); the timer is armed
    after the step, under a lock of its own (starting a thread waits for it: never in the
    owner's step), for the lease as it is then, so the last arming follows the last change.
-   The lease's end is the wall clock's and the timer's wait the monotonic clock's: a wall
-   clock stepped forward (NTP on a board without a clock chip, after a restart that restored
-   the lease) ended it for the judge while the status named the holder until the timer, up
-   to the whole lease later (an attack pass). So the timer waits LEASE_CHECK_S at most, and
-   the judge ends a lease it finds over (``refusal``) as the timer would, before it answers.
+   The lease's end is the station's clock's (rule 5) and the timer's wait the monotonic
+   clock's: a wall clock stepped forward (NTP on a board without a clock chip, after a
+   restart that restored the lease) ended it for the judge while the status named the
+   holder until the timer, up to the whole lease later (an attack pass). So the timer waits
+   LEASE_CHECK_S at most, and the judge ends a lease it finds over (``refusal``) as the timer
+   would, before it answers.
    A lease kept in the state file that ended while the bridge was stopped ends at the start:
    audited, and gone from the file (it stayed there, and a clock set back later revived it).
    A claim or a release that finds the lease over by the clock ends it first, said and
@@ -31,6 +36,14 @@ Rules:
    never costs a command, and a stop is put in the mailbox before its event is made.
 4. Claims and releases are commands too (core/model.py ``Claim``, ``Release``): the judge's
    ``submit`` (rotator.py) audits them, and reports a refused one on ``R/error``, as any.
+5. The lease is on the station's clock (``lease_clock``: the app's is the one its heartbeats
+   carry, interfaces/mqtt/heartbeat.py rule 6, the wall clock never set back; the wall clock
+   where none is given), the clock ``R/control``'s end is read on, here and by the remote
+   (remote/rotator.py rule 6). On the raw wall clock set back 10 minutes the lease was held
+   10 minutes past the end its heartbeats said had come (docs/architecture.md rule 15: the
+   wall clock stepped back stretched it): ``R/control`` named the holder past that end and
+   the remote answered ``RPRT 0`` to a move the station refused (an attack pass). Set
+   forward, both clocks follow at once. The audit trail's times are the wall clock's.
 """
 
 from __future__ import annotations
@@ -73,6 +86,7 @@ class Operators:
         mailbox: Mailbox,
         *,
         wall: Callable[[], float],
+        lease_clock: Callable[[], float] | None = None,
         bearing: Callable[[], float | None],
         report: Callable[[ErrorKind, str, str | None], None],
         on_audit: Callable[[AuditEvent], None] | None = None,
@@ -82,13 +96,14 @@ class Operators:
         self._id = rotator_id
         self._store = store
         self._mailbox = mailbox
-        self._wall = wall
+        self._wall = wall  # the audit trail's times
+        self._now = wall if lease_clock is None else lease_clock  # the lease's (rule 5)
         self._bearing = bearing
         self._report = report
         self._on_audit = on_audit
         kept = store.lease(rotator_id)  # state_store.py rule 6
         self._forget = False  # rule 2: a kept lease that cannot hold, gone from the file at start
-        if kept is not None and restorable(kept, wall()) is None:  # lease.py rule 6
+        if kept is not None and restorable(kept, self._now()) is None:  # lease.py rule 6
             log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
             kept, self._forget = None, True
         self._lease = Lease(kept)
@@ -103,11 +118,11 @@ class Operators:
     def start(self) -> None:
         """The lease kept across a restart shows in the status, and ends by itself."""
         with self._owner:
-            now = self._wall()
+            now = self._now()
             ended = self._ended(now)  # rule 2: one that ended while the bridge was down
             held = self._lease.holder(now)
             if held is not None:
-                self._mailbox.put_control(held, wake=False)  # woken after the step
+                self._mailbox.put_control(held, wake=False, now_unix=now)  # woken after it
             elif self._forget:
                 self._changed(None)
         self._arm()
@@ -120,15 +135,24 @@ class Operators:
 
     @property
     def holder(self) -> Control | None:
-        return self._lease.holder(self._wall())
+        return self._lease.holder(self._now())
 
     def refusal(self, who: str) -> str | None:
         """lease.py rule 5: why a motion command from ``who`` is refused, or None; a lease the
         wall clock ended before its timer fired is ended first (rule 2). Never asked in an
         owner's step (the judge asks before its step)."""
-        if self._lease.has_ended(self._wall()):
+        if self._lease.has_ended(self._now()):
             self._expire()
-        return self._lease.refusal(who, self._wall())
+        return self._lease.refusal(who, self._now())
+
+    def claimed_meanwhile(self, held: Control) -> str:
+        """Why a target judged before ``held`` was claimed is refused at its put (session/
+        mailbox.py rule 14): the refusal ``refusal`` would now give, saying when it came."""
+        text = held.held_text(self._now())
+        return (
+            f"{held.operator} claimed the control lease while it was judged: {text}: only they "
+            "may turn it (control lease)"
+        )
 
     # -- claims and releases (rule 4) -----------------------------------------------------
     def claim(self, operator: object, minutes: object, origin: Origin) -> Control:
@@ -137,8 +161,8 @@ class Operators:
         ended: Control | None = None
         try:
             with self._owner:  # rule 1
-                ended = self._ended(self._wall())  # rule 2: over by the clock: said first
-                held = self._lease.claim(operator, minutes, self._wall())
+                ended = self._ended(self._now())  # rule 2: over by the clock: said first
+                held = self._lease.claim(operator, minutes, self._now())
                 self._changed(held)
         except LeaseError as exc:
             raise Refused(RefusalCode.INVALID, str(exc)) from None
@@ -151,8 +175,8 @@ class Operators:
     def release(self, origin: Origin) -> Control | None:
         """Anyone may (lease.py rule 4); releasing a free lease changes nothing (None)."""
         with self._owner:  # rule 1
-            ended = self._ended(self._wall())  # rule 2: over by the clock (a review: the
-            held = self._lease.release(self._wall())  # release found it free, and the status
+            ended = self._ended(self._now())  # rule 2: over by the clock (a review: the
+            held = self._lease.release(self._now())  # release found it free, and the status
             if held is not None:  # named its holder for good)
                 self._changed(None)
         self._said_ended(ended)
@@ -177,7 +201,8 @@ class Operators:
 
     def _changed(self, held: Control | None) -> None:
         """In the owner's step (rule 1): to the status, and in line for the state file."""
-        self._mailbox.put_control(held, wake=False)  # woken after the step (kept.py rule 5)
+        # woken after the step (kept.py rule 5); the lease's clock with it (rule 5)
+        self._mailbox.put_control(held, wake=False, now_unix=self._now())
         with self._unsaved_guard:  # one save in line, of the newest (as kept.py rule 7)
             queued, self._unsaved = bool(self._unsaved), [held]
         if not queued:
@@ -201,7 +226,7 @@ class Operators:
             if self._timer is not None:
                 self._timer.cancel()
                 self._timer = None
-            now = self._wall()
+            now = self._now()
             held = self._lease.holder(now)
             if held is None or self._stopped:
                 return
@@ -210,16 +235,22 @@ class Operators:
 
     def _expire(self) -> None:
         with self._owner:  # rule 1: an end is a change like a release
-            ended = self._ended(self._wall())
+            ended = self._ended(self._now())
         self._arm()  # early (rule 2): a new timer for the rest; ended: none
         self._said_ended(ended)
 
     # -- the trail (rule 3) ------------------------------------------------------------------
-    def audit(self, origin: Origin, command: str, result: str) -> None:
+    def audit(
+        self, origin: Origin, command: str, result: str, *, halt: bool = False, target: bool = False
+    ) -> None:
+        """``halt``: an executed stop (audit.py rule 6); ``target``: an absolute target (rule 9)."""
         if self._on_audit is None:
             return
         try:
-            event = AuditEvent(self._wall(), self._id, origin, command, result, self._bearing())
+            bearing = self._bearing()
+            event = AuditEvent(
+                self._wall(), self._id, origin, command, result, bearing, halt, target=target
+            )
             self._on_audit(event)
         except Exception:
             log.exception("%s: audit listener failed", self._id)

@@ -12,13 +12,19 @@ reports that as a refusal too. Motion is judged in one order: the lock (and a lo
 yet: kept.py rule 10), the wind (safety), the control lease (coordination), the pointing
 judge, the link (``_check``). Each command carries
 who sent it (``origin``): the lease (operators.py) refuses a target, a controller setting, a track
-or follow start from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
-(docs/architecture.md rule 11); every command judged here, executed or refused, is an audit
-event, written in one place (``submit``, after the put; a value outside the union is refused as
-unsupported). The bridge's own moves (auto-park, the wind park, tracking's and following's
-targets) are the session's, never judged by the lease. The safety state has one owner per
-rotator (kept.py rule 5, docs/architecture.md rule 14): a lock word, and the lease's claims,
-releases and end (operators.py rule 1), are decided, put in the mailbox and their save queued in
+or follow start from anyone but its holder (and the session drops another's target judged before
+a claim that still waits unsent: session.py rule 23, said and audited through ``_session_event``;
+the mailbox refuses one judged before the claim and put after it, and so a track or follow
+start and a feature's own command, the lease's generation read before the judge and judged at
+the put: mailbox.py rule 14, refused here as ``leased``; a controller setting judged before
+another's claim is refused so in its owner's step);
+nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule 11); every
+command judged here, executed or refused, is an audit event, written in one place (``submit``,
+after the put; a value outside the union is refused as unsupported). The bridge's own moves
+(auto-park, the wind park, tracking's and following's targets) are the session's, never
+judged by the lease. The safety state has one owner per rotator (kept.py rule 5,
+docs/architecture.md rule 14): a lock word, and the lease's claims, releases and end
+(operators.py rule 1), are decided, put in the mailbox and their save queued in
 one step under the owner's lock, from every interface; the lock the judge asks is that owner's
 (kept.py rule 2). A stop takes no part in it: it never waits for the owner's lock. A motion
 command judged before a stop or lock ON never runs after it, whichever threads brought the two:
@@ -84,6 +90,8 @@ from bridge.core.model import (
     Toward,
     TrackBody,
     describe_command,
+    same_operator,
+    sender,
 )
 from bridge.feature import session_parts
 from bridge.pointing import Limits, toward
@@ -99,7 +107,7 @@ from bridge.runtime.worker import Worker, WorkerConfig
 from bridge.session.feature_commands import body_to_track, check_can_follow
 from bridge.session.follow import Follow as Following
 from bridge.session.follow import Heard
-from bridge.session.mailbox import Mailbox
+from bridge.session.mailbox import LeaseChanged, Mailbox
 from bridge.session.tracking import Track as Tracking
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion, SkyWorker
@@ -156,6 +164,7 @@ class Rotator:
         axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
         port_watch: PortWatch | None = None,
         fence: HaltFence | None = None,
+        lease_clock: Callable[[], float] | None = None,  # operators.py rule 5 (``wall``: None)
     ) -> None:
         self.id = cfg.rotator_id
         self._fence = fence  # the module's docstring: another interface's halt, to MQTT
@@ -191,7 +200,7 @@ class Rotator:
                 cfg,
                 self._mailbox,
                 self._status,
-                on_event,
+                self._session_event,
                 options=self._kept.options(),
                 locked=self._kept.locked,
                 health=store.health(self.id),
@@ -211,7 +220,7 @@ class Rotator:
                 axes,
                 self._mailbox,
                 self._status,
-                on_event,
+                self._session_event,
                 locked=self._kept.locked,
                 health=store.health(self.id),
                 storm=self._kept.storm,
@@ -229,6 +238,7 @@ class Rotator:
             store,
             self._mailbox,
             wall=wall,
+            lease_clock=lease_clock,
             bearing=lambda: self.status.bearing_deg,
             report=self.report,
             on_audit=on_audit,
@@ -248,7 +258,18 @@ class Rotator:
         self._kept.seen_wind(status.wind)
         self._kept.seen_stop(status.stop_owed)
         self._kept.seen_short_of(status.short_of_deg)
+        self._kept.seen_version(status.version)
+        if status.version is None and self._kept.version is not None:  # kept.py rule 11
+            status = replace(status, version=self._kept.version)
         self._on_status(status)
+
+    def _session_event(self, event: ErrorEvent) -> None:
+        """The session's error events to the listeners; one that names a sender (a target the
+        session dropped when the lease changed hands: session.py rule 23) is in the audit
+        trail too, as a refusal of that sender's command."""
+        self._on_event(event)
+        if event.origin is not None:
+            self.audit_refusal(event.message, event.command or "target", event.origin)
 
     def _reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""
@@ -258,6 +279,12 @@ class Rotator:
     @property
     def status(self) -> RotatorStatus:
         return self._worker.status
+
+    @property
+    def version(self) -> str | None:
+        """The controller's version as the statuses say it: its own, or until it reports one,
+        the one it reported last, kept (kept.py rule 11)."""
+        return self._kept.version
 
     @property
     def limits(self) -> Limits:
@@ -326,7 +353,8 @@ class Rotator:
             self.report_refusal(exc.message, what, origin=who)
             raise
         if result is not None and not echo:  # after the put (operators.py rule 3)
-            self.operators.audit(who, what, result)
+            stop, target = isinstance(command, Stop), isinstance(command, Target)
+            self.operators.audit(who, what, result, halt=stop, target=target)
 
     def _carry(
         self,
@@ -372,8 +400,8 @@ class Rotator:
             case Nudge():
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
-                step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
-                self._judged(Target(*step, src, origin=by), epoch, ticket=ticket)
+                step = self.pointing.nudge(status, command.d_az_deg, command.d_el_deg, halted)
+                self._judged(replace(step, source=src, origin=by), epoch, ticket=ticket)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 self._toward(command, epoch, lat, lon, ticket=ticket)
@@ -518,17 +546,41 @@ class Rotator:
         ticket: int | None = None,
     ) -> None:
         """A target, a stop or an option: judged (``_check``) and put in the mailbox (a
-        target with ``epoch``, the halt count read before it was judged: mailbox.py rule 10)."""
+        target with ``epoch``, the halt count read before it was judged: mailbox.py rule 10,
+        and the lease's generation read before it was judged: a claim by another operator put
+        since refuses it there, rule 14; an option's, in its owner's step: ``_claimed_since``)."""
+        lease = self._mailbox.lease  # (before the judge: mailbox.py rule 14)
         judged = self._check(command)
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
+                self._claimed_since(judged, lease)  # (in the step: no claim comes between)
                 self._kept.save_option(judged.name, judged.value)
                 self._mailbox.put(judged, wake=False)  # woken after the step
         elif isinstance(judged, Stop):
             self.last_halt_s = time.monotonic()
             self._mailbox.put(judged, hold=hold)
-        elif not self._mailbox.put(judged, epoch=epoch, ticket=ticket):
-            self._overtaken(newer=self._mailbox.epoch == epoch)
+        else:
+            try:
+                put = self._mailbox.put(judged, epoch=epoch, ticket=ticket, lease=lease)
+            except LeaseChanged as changed:  # (mailbox.py rule 14)
+                self._claimed(changed)
+            if not put:
+                self._overtaken(newer=self._mailbox.epoch == epoch)
+
+    def _claimed(self, changed: LeaseChanged) -> NoReturn:
+        """A motion command or a feature's own, judged before another operator's claim and
+        put after it (mailbox.py rule 14): refused as the judge refuses one (``leased``),
+        saying the claim came while it was judged."""
+        message = self.operators.claimed_meanwhile(changed.control)
+        raise Refused(RefusalCode.LEASED, message) from None
+
+    def _claimed_since(self, option: SetOption, lease: int) -> None:
+        """In the owner's step: Refused if another operator claimed the lease since ``lease``,
+        the generation read before ``option`` was judged (a setting is control too: as
+        mailbox.py rule 14 refuses a target)."""
+        held = self.operators.holder if self._mailbox.lease != lease else None
+        if held is not None and not same_operator(held.operator, self._who(option)):
+            raise Refused(RefusalCode.LEASED, self.operators.claimed_meanwhile(held))
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
@@ -554,6 +606,7 @@ class Rotator:
         if command.off:
             self._mailbox.put_track(Tracking(None, source, origin=origin))
             return
+        lease = self._mailbox.lease  # (before the judge: mailbox.py rule 14)
         body = body_to_track(self.catalog, self.spec, self._has_sky, name, command.tle)
         self._check_start(origin or Origin(source))
         if body is None:
@@ -561,7 +614,11 @@ class Rotator:
             track = Tracking(None, source, lookup, what, origin)
         else:
             track = Tracking(body, source, None, what, origin)
-        if not self._mailbox.put_track(track, epoch=epoch):
+        try:
+            put = self._mailbox.put_track(track, epoch=epoch, lease=lease)
+        except LeaseChanged as changed:
+            self._claimed(changed)
+        if not put:
             self._overtaken()
 
     @property
@@ -574,11 +631,16 @@ class Rotator:
         stop). Judged like a track start (the lease included); what the holder started goes
         on, its targets are the bridge's own (``wsjtx``)."""
         on, origin = command.on, command.origin
+        lease = self._mailbox.lease if on else None  # (before the judge: mailbox.py rule 14)
         if on:
             check_can_follow(self._follow)
             self._check_start(origin or Origin(command.source))
         follow = Following(on, command.long_path, command.source, what, origin)
-        if not self._mailbox.put_follow(follow, epoch=epoch if on else None):
+        try:
+            put = self._mailbox.put_follow(follow, epoch=epoch if on else None, lease=lease)
+        except LeaseChanged as changed:
+            self._claimed(changed)
+        if not put:
             self._overtaken()
 
     def _feature(self, command: FeatureCommand, epoch: int) -> None:
@@ -590,14 +652,22 @@ class Rotator:
             message = f"no feature {command.feature!r} takes commands on this rotator"
             raise Refused(RefusalCode.UNSUPPORTED, message)
         who = command.origin or Origin(command.source)
+        lease = self._mailbox.lease  # (before the judge, moving or not: mailbox.py rule 14)
         if not command.moves:
             leased = self.operators.refusal(who.who)
             if leased is not None:
                 raise Refused(RefusalCode.LEASED, leased)
-            self._mailbox.put_feature(command)
+            try:
+                self._mailbox.put_feature(command, lease=lease)
+            except LeaseChanged as changed:
+                self._claimed(changed)
             return
         self._check_start(who)
-        if not self._mailbox.put_feature(command, epoch=epoch):
+        try:
+            put = self._mailbox.put_feature(command, epoch=epoch, lease=lease)
+        except LeaseChanged as changed:
+            self._claimed(changed)
+        if not put:
             self._overtaken()
 
     def wind(self, speed_kmh: float, replayed: bool = False) -> None:
@@ -724,7 +794,7 @@ class Rotator:
 
     @staticmethod
     def _who(command: Target | SetOption) -> str:
-        return command.origin.who if command.origin is not None else command.source.value
+        return sender(command.origin, command.source)
 
     def check_motion(self, origin: Origin) -> None:
         """Refused if motion from ``origin`` would be refused now for the lock, the wind or the

@@ -1,7 +1,8 @@
 """What must survive a restart of the bridge: each rotator's safety lock, the options the
 user set (the controller forgets them at power-off, so the bridge re-applies them), a stop owed
 to a controller (kept.py rule 8), what rotor
-health (session/health.py) has learned of the rotor, and the control lease (runtime/lease.py).
+health (session/health.py) has learned of the rotor, the control lease (runtime/lease.py), and
+the version its controller reported last (rule 12).
 
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
@@ -52,6 +53,12 @@ Rules:
    configuration twice: the two took turns throwing each other off the broker under one client
    id, the real one backing off up to a minute each time, and a STOP that reached the one that
    could not open the port was lost without a word (and both wrote the same state file).
+   The lock's file is never opened through a symbolic link (refused, said as such): it is
+   emptied for the holder's process id, and a link there (``state.json.lock`` to the audit
+   file, a password file) had that file emptied at every start (an attack pass). Such a
+   link, or no regular file there (a FIFO, a directory), is refused by ``check_kind`` too, so
+   check-config and the build say it as the start does (a review: check-config said "config
+   OK", and the start then ended with exit code 2).
 8. What the file holds beside ``rotators`` (a newer version's tables) is written back as it
    was read, as a rotator's entry keeps the keys it does not know: an update rolled back, the
    older version's next save dropped them, and the newer one, started again, had lost them.
@@ -59,6 +66,27 @@ Rules:
    by its id): a lock ON kept for an id that no rotator of the configuration has is said in
    the log at every start (app.py, ``locked_ids``), since it locks nothing: a rotator renamed
    while locked for tower work starts as its new id was kept.
+10. A number is read as a float whatever its size: an integer too large for one (hundreds of
+   digits, a damaged or hand-edited file) is infinite, so a setting's declaration refuses it
+   (kept.py rule 1) and a ``short_of`` is none. An attack pass: ``float`` raised
+   OverflowError, and the start ended in a traceback, exit code 1, restarted by systemd every
+   5 s for ever. An integer longer than Python reads (INT_DIGITS_MAX) is infinite too, not the
+   whole file unreadable (a review: every rotator started locked for one such number).
+11. The file is read when the bridge is built, and the installation's lock (rule 7) is taken
+   when it starts, so a bridge still ending (``kill`` and a start by hand, a script) may write
+   in between: ``check_writable``, under the lock, finds the file no longer as it was read
+   (``Changed``; a file read whole, not one unreadable, rule 2) and writes nothing, and the
+   start ends (exit code 1: systemd starts it again, to read the file as it is now). An
+   attack pass: a lock ON the ending bridge saved was written back OFF by the new one, which
+   ran unlocked, and a target turned the rotor.
+12. A rotator's controller version (kept.py rule 11) is kept as ``version``: ``{"model": <its
+   model's name>, "text": ...}``. One kept for another model, or malformed (not such a table,
+   a text not printable or longer than VERSION_MAX_CHARS), is none: it is only a name shown
+   until the controller answers, so a damaged one is dropped without a word. The limit is
+   Home Assistant's longest state: a rotator of two boxes keeps their two versions joined
+   (runtime/composite.py rule 3), each up to a line of its protocol (an Easycomm III's 80
+   characters), and the 128 it was dropped a pair of two long ones at every start, whose
+   discovery then went out twice (an attack pass).
 """
 
 from __future__ import annotations
@@ -84,6 +112,7 @@ from bridge.core.ondemand import OnDemandThread
 log = logging.getLogger(__name__)
 
 TEMPORARY_BYTES = 4  # rule 1: the random part of a temporary file's name
+VERSION_MAX_CHARS = 255  # rule 12: a longer kept version is none
 
 _KINDS = (
     (stat.S_ISDIR, "directory"),
@@ -129,6 +158,26 @@ def _read(path: Path) -> str:
     raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
 
 
+INT_DIGITS_MAX = 4000  # rule 10: a longer integer is read as infinite (Python's int: 4,300)
+
+
+def _number(value: int | float) -> float:
+    """Rule 10: a kept number as a float; an integer too large for one is infinite (no value a
+    setting or a bearing takes), not the OverflowError ``float`` raises."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
+
+
+def _integer(digits: str) -> int | float:
+    """Rule 10: a JSON integer; one of more digits than Python reads as an int (4,300: its
+    ``int`` refuses more) is infinite, as a float too large for one is."""
+    if len(digits.lstrip("-")) > INT_DIGITS_MAX:
+        return -math.inf if digits.startswith("-") else math.inf
+    return int(digits)
+
+
 class _TwoValues(list[object]):
     """Rule 2: a JSON object with a key given twice, with two values, as its pairs: no table,
     so whatever holds it is malformed (its entry, its rotator's options) or ignored."""
@@ -154,12 +203,45 @@ def _alive(pid: int) -> bool:
     return True
 
 
+class Changed(Exception):
+    """Rule 11: the file is not what this start read from it."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(f"{path} changed while this bridge started")
+
+
+def _now_as(path: Path) -> str | None:
+    """Rule 11: the file's text now, None if there is none; what cannot be read is no text."""
+    try:
+        return _read(path)
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return "\0unreadable"  # (no text read from a file: NUL is no JSON)
+
+
 class InUse(Exception):
     """Rule 7: another process holds this installation's state file."""
 
     def __init__(self, lock_path: Path, holder: str) -> None:
         super().__init__(f"{lock_path} is held by {holder or 'another process'}")
         self.holder = holder
+
+
+def _lock_path(path: Path) -> Path:
+    """Rule 7: where the installation's lock of the state file ``path`` goes."""
+    if path.exists():  # rule 4: beside the file a link names (a review: two installations
+        path = Path(os.path.realpath(path))  # naming one file two ways both started)
+    return path.with_name(path.name + ".lock")
+
+
+def _check_lock_kind(lock_path: Path) -> None:
+    """Rule 7: OSError if what is at ``lock_path`` is a link, or no regular file (nothing
+    there is fine: the start makes it)."""
+    if lock_path.is_symlink():
+        raise OSError(errno.ELOOP, f"{lock_path} is a symbolic link, not a file of its own")
+    if _kind_at(lock_path) is not None:
+        raise OSError(errno.EINVAL, f"{lock_path} is not a regular file")
 
 
 @contextlib.contextmanager
@@ -169,12 +251,11 @@ def held(path: Path | None) -> Iterator[None]:
     if path is None:
         yield
         return
-    if path.exists():  # rule 4: beside the file a link names (a review: two installations
-        path = Path(os.path.realpath(path))  # naming one file two ways both started)
-    lock_path = path.with_name(path.name + ".lock")
+    lock_path = _lock_path(path)
     lock_path.parent.mkdir(parents=True, exist_ok=True)
-    flags = os.O_CLOEXEC | os.O_NONBLOCK  # (a FIFO there must not hang the start)
-    writable = True
+    flags = os.O_CLOEXEC | os.O_NONBLOCK | os.O_NOFOLLOW  # (a FIFO must not hang the start;
+    writable = True  # a link: rule 7)
+    _check_lock_kind(lock_path)
     try:
         fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | flags, 0o644)
     except PermissionError:
@@ -216,13 +297,15 @@ class StateStore:
         self._unreadable = ""  # rule 2: why the file could not be read, for each rotator locked
         self._dirty = False  # a malformed entry was replaced: written down at the first read
         self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
+        self._read_as: str | None = None  # rule 11: the text read (None: no file, or unread)
         if path is not None and (path.exists() or path.is_symlink()):
             self._kind = _kind_at(path)
             if self._kind is not None:
                 self.corrupt = True  # nothing read: every rotator locked, should it be used
                 return
             try:
-                loaded = json.loads(_read(path), object_pairs_hook=_object)
+                text = self._read_as = _read(path)  # rule 11
+                loaded = json.loads(text, object_pairs_hook=_object, parse_int=_integer)
                 if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
                     raise ValueError("no 'rotators' table")
                 self._data = {
@@ -259,18 +342,22 @@ class StateStore:
 
     def check_kind(self) -> None:
         """OSError if the path can be seen not to work without writing anything: no regular
-        file there (rule 4), or a file where a directory must be. check-config asks this."""
+        file there (rule 4), a file where a directory must be, or a link or no regular file
+        where the installation's lock goes (rule 7). check-config asks this."""
         if self._path is None:
             return
         kind = _kind_at(self._path) or self._kind
         if kind is not None:
             raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+        _check_lock_kind(_lock_path(self._path))  # rule 7: as the start refuses it
 
     def check_writable(self) -> None:
         """OSError if the file cannot be written where it is configured (rules 3, 4)."""
         if self._path is None:
             return
         self.check_kind()
+        if self._deferred and not self.corrupt and _now_as(self._path) != self._read_as:
+            raise Changed(self._path)  # rule 11: nothing of this store's written yet
         self._path.parent.mkdir(parents=True, exist_ok=True)
         _remove_leftovers(Path(os.path.realpath(self._path)))  # rule 1
         with self._lock:
@@ -312,7 +399,7 @@ class StateStore:
         if not isinstance(raw, dict):
             return {}
         return {
-            str(k): (float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
+            str(k): (_number(v) if isinstance(v, int) and not isinstance(v, bool) else v)
             for k, v in raw.items()
         }
 
@@ -422,7 +509,8 @@ class StateStore:
             value = self._data.get(rotator_id, {}).get("short_of")
         if isinstance(value, bool) or not isinstance(value, int | float):
             return None
-        return float(value) if math.isfinite(value) else None
+        number = _number(value)
+        return number if math.isfinite(number) else None
 
     def set_short_of(self, rotator_id: str, raw_az: float | None) -> bool:
         """Remember it, or that there is none; False if it could not be written."""
@@ -432,6 +520,23 @@ class StateStore:
                 entry["short_of"] = raw_az
             else:
                 entry.pop("short_of", None)
+            return self._save()
+
+    def version(self, rotator_id: str, model: str) -> str | None:
+        """Rule 12: the version the rotator's controller reported last, if it was ``model``'s."""
+        with self._lock:
+            raw = self._data.get(rotator_id, {}).get("version")
+        if not isinstance(raw, dict) or raw.get("model") != model:
+            return None
+        text = raw.get("text")
+        if not isinstance(text, str) or not text.isprintable():
+            return None
+        return text if 0 < len(text) <= VERSION_MAX_CHARS else None
+
+    def set_version(self, rotator_id: str, model: str, version: str) -> bool:
+        """Rule 12: remember it; False if it could not be written."""
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["version"] = {"model": model, "text": version}
             return self._save()
 
     def set_locked(self, rotator_id: str, locked: bool) -> bool:

@@ -313,7 +313,8 @@ class Worker:
             elif isinstance(action, Publish):
                 self._on_status(action.status)
             elif isinstance(action, Report):
-                event = ErrorEvent(action.kind, action.message, action.command, self._wall())
+                when = self._wall()
+                event = ErrorEvent(action.kind, action.message, action.command, when, action.origin)
                 self._on_event(event)
             elif isinstance(action, Ask):
                 self._sky.ask(action.question, partial(self._answered, action.generation))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bridge.core.model import ErrorKind, RotatorStatus
+from bridge.core.model import ErrorKind, Origin, RotatorStatus
 from bridge.sky.worker import Question
 
 __all__ = ["Action", "Ask", "Publish", "Report", "Write"]
@@ -27,11 +27,13 @@ class Publish:
 
 @dataclass(frozen=True)
 class Report:
-    """Hand an error event to the listeners (the worker stamps it with the wall time)."""
+    """Hand an error event to the listeners (the worker stamps it with the wall time);
+    ``origin``: the sender of a command the session dropped, for the audit trail."""
 
     kind: ErrorKind
     message: str
     command: str | None = None
+    origin: Origin | None = None
 
 
 @dataclass(frozen=True)

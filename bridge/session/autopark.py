@@ -5,10 +5,13 @@ owns the quiet spell; each step gets a read-only ``Scene`` (parts.py) and return
 Rules:
 1. The quiet spell counts from the last command (a target, a stop or the lock switched either
    way), from the last moment the rotor was seen turning (a hand on the front panel), from
-   start-up and from the controller answering again: a rotor never parks the moment someone
-   unlocks it or switches its controller back on.
+   start-up, from the controller answering again and from the end of a storm (session.py
+   ``_storm``): a rotor never parks the moment someone unlocks it, switches its controller
+   back on, or a calm reading ends a storm (wind.py rule 2; an attack pass: the spell, long
+   over in the storm, parked the rotor the instant the storm ended, moved by a reading).
 2. Parking happens only when everything else would allow a target: the controller answering,
-   the lock off, the rotor idle, no target waiting, and not already at the park position.
+   the lock off and known (``Scene.locked`` is set while it is not known yet: runtime/kept.py
+   rule 10), the rotor idle, no target waiting, and not already at the park position.
 3. The park is an ordinary target (source ``auto-park``): any command meanwhile replaces or
    stops it, and it counts as activity itself, so a park that cannot finish (a stall) is
    tried again only after another quiet spell. A park still waiting to go out when the rotor

@@ -80,6 +80,10 @@ class WorkerConfig:
     follow: FollowConfig = FollowConfig()  # follow.py
     wind: WindConfig | None = None  # wind.py; None: no wind_topic
     health: HealthConfig = HealthConfig()
+    # one box of a rotator of two (app.axis_configs): what becomes of the rotator's turn when
+    # its port is lost is runtime/composite.py rule 8's to do and say (session/controller.py
+    # rule 13 words a single controller's)
+    box: bool = False
     # the session's parts, in the order its step runs them (session.py rule 17): the registered
     # features', handed in by the app; None: the registry's (bridge/feature.py session_parts)
     parts: tuple[Part[Any], ...] | None = None

@@ -171,7 +171,12 @@ Rules:
    97 on the way to 100, lost, judged by whether it moved, was a stall that blamed the brake. It
    goes again, try 2, with the raw bearing its first try resolved (an axis it left out
    included), if the bridge still stands for it (``Again``: targets.py rule 8, no newer target,
-   stop or end of its feature since; if not, a refusal is reported as ever), with a warning in
+   stop or end of its feature since, no storm refusing motion: session/wind.py rule 1; if
+   not, a refusal is reported as ever, but for one whose sender the lease refuses by then,
+   session.py rule 23, whose drop is said alone, as a storm's; that one, or one the end of its
+   feature took, with
+   nothing newer waiting, targets.py ``forsaken`` (its try more waiting: ``forgo_owed``), is
+   given up: ``forgo``, at rest, its turn never began, no stall called), with a warning in
    the log (a refusal some codecs read as junk is still told as junk); the time is judged at the
    reading by the settings then in effect (rule 7: a speed set in the same batch as the target
    slows it); a second refusal is reported, and a turn that does not start then is a stall as
@@ -189,15 +194,95 @@ Rules:
    composite.py rule 8).
    No stall is called then (an earlier pass: 10 s after such a restart the rotor was said
    stalled, "brake paddle pressed or rotor stuck", and rotor health counted a stall: a climb
-   to a rotor that is not stuck). A controller that says nothing when it restarts (RT-21,
-   GS-232, SPID, Easycomm, RC2800, Prosistel: their readings of a rotor stopped by a restart
-   are those of a stall) is called stalled as before, and that error names a restart too.
+   to a rotor that is not stuck). A controller whose readings say whether it drives a motor
+   (protocols/base.py rule 8: Prosistel's ``B``, an RC2800's ``ST``) tells it too: a reading
+   that says it drives none, the reading before it too (HALT_READINGS: Prosistel's ``R`` is one
+   flipped bit from ``B``; a review: one such reading of a jammed rotor said the box had
+   stopped, and rotor health counted no stall), seen driving since the target went out (a
+   reading that said so later than that; not a turn about to start) and no try more of rule
+   11 open, that finds
+   the rotor still for ``settle_s`` further than ``tolerance_deg`` from its target, ends the
+   turn (motion.py rule 12): the target dropped, tracking ended, a stop as for a restart,
+   ``restarts`` counted, and a ``stalled`` error that says the controller stopped short and
+   why it may have (a restart, its panel, its own limit or protection), never a stall
+   (``stall_timeout_s`` later, and counted by rotor health: an attack pass, a Prosistel and an
+   RC2800 power-cycled mid-turn). A jammed rotor whose motor the box still drives is a stall
+   as ever, and so is one the box was seen driving while it stood still for ``settle_s``
+   before it said its motor is off (its own stall protection cutting the motor out: an
+   attack pass, such a jam was said 'stopped turning short' and rotor health counted no
+   stall): rule 3's stall tells it, ``stall_timeout_s`` after its last movement. A
+   controller that says nothing when it restarts (RT-21, GS-232, SPID, Easycomm: their
+   readings of a rotor stopped by a restart are those of a stall) is called stalled as
+   before, and that error names a restart too.
+13. A port lost (an adapter unplugged, a write the port refused, a bug in the worker) while a
+   turn of the bridge's is out (``turn_out``: a target written, no stop sent for it, the rotor
+   not at it by the last reading) drops that turn with the link (motion.py ``link_down``): it
+   is never resumed, and a controller that keeps its power (a Rotor-EZ whose USB adapter was
+   pulled) carries it out by itself. The replug does not stop it while its readings show it
+   turning: the first readings back follow it as a turn (motion.py rule 4), and it is the
+   user's own move (rule 10: a review found a stop then cut it short); a STOP sent while the
+   port is out is its first frame (stops.py rule 3), and nothing sent on a replug moves the
+   rotor. But with its target dropped no stall is judged, and a motor driving a rotor jammed
+   meanwhile drove on for good under an ``idle`` status (an attack pass: a GS-232B, an
+   Easycomm and a Rotor-EZ, unplugged mid-turn, jammed, replugged: two minutes on, still
+   driving, nothing said). So the dropped target is kept (``_lost_aim``, raw) until the first
+   rest the readings show after the port is back (``_lost_rest``): a rest further than
+   ``tolerance_deg`` + ``noise_deg`` from it on either axis (jammed, stopped at the panel, a
+   power cut meanwhile: the readings cannot tell which) gets a stop, checked as an operator's
+   (harmless to a rotor at rest), and a ``stop`` error that says why; a rest at it, a target or
+   a stop written meanwhile (an owed one at the connect, a composite box's) end it unsaid.
+   Where no reading judges it (the controller does not answer once the port is back, or goes
+   silent before the rotor rests) it is a turn no reading watches, stopped as rule 2 stops
+   one, in case the controller still hears, and the offline's error says so (a cold review:
+   'does not answer' said, the motor drove a rotor jammed meanwhile on for good). A
+   single controller's port error says what became of the turn (``lost_turn``): dropped, its
+   target in true bearings, that the controller may finish it by itself (followed, and stopped
+   if it rests short; a DCU-1's never seen), that a STOP sent meanwhile goes first, and to
+   send the target again to have it watched ("serial link ... lost (adapter unplugged?)" alone
+   left the user waiting for a turn the bridge had given up); so does each failed try to open
+   it again until it is back (session.py rule 12). A composite's box says its
+   port's words alone: there the rotator's turn is not left to the box (runtime/composite.py
+   rule 8: the other box is stopped at once, and the box whose port went owes its stop), and
+   keeps no target to judge at its rest (its owed stop is its first frame back). A controller
+   whose connect begins with its stop (``ModelSpec.connect_stops``: a SatEL, protocols/satel.py
+   rule 2) has its turn stopped by the replug: its error says so, and it keeps no target to
+   judge either (a cold review: the error promised the turn finished and followed, and the
+   rest the connect's stop made got a second stop and an error blaming a jam). A port lost
+   at rest, at a target or after a stop (one still waiting for a half-duplex line too: owed,
+   the first frame back; a cold review, a Rot2Prog's error said the turn was left to the
+   controller under the operator's STOP) says nothing of a turn, and nothing of this rule is
+   sent at the replug.
+14. A silent controller (SatEL) restarted mid-slew sends no report, as one whose report was lost
+   on the line; nothing it may be sent during the slew can tell them apart, so slew.py rule 4
+   waits, stops it, asks where it is and puts its target back (``Retry``; not in a storm:
+   wind.py rule 1); a newer target (a second user's: tracking steps a SatEL only at rest) stops
+   the slew at once, and that stop's report is as lost (slew.py rule 6: asked after the last
+   stop). The first reading after any lost report of a slew tells them (a review: the stopped
+   slew's was not judged, and a SatEL restarted before a second user's target was sent it): a
+   clock (set from the host at
+   connect) that reads earlier than at the last reading before the slew has gone back to its
+   power-on reading (Hamlib's example: ``2001/00/00 00:00:07``, unverified on a real unit):
+   the controller restarted and forgot its point. Its turn is abandoned as rule 12's: any target
+   waiting is dropped (``Forgot``: the one put back, or a newer one named as the error's command;
+   none after a stop or the lock cleared it, and then nothing is said; a storm's park waiting goes
+   on, named as no command of the error's: a cold review, the park that went on was named as the
+   target dropped), a ``serial`` error says so with where it stands and the slew's target, tracking
+   ends, ``restarts`` is counted (a composite's other box abandons its own turn: a cold review, the
+   azimuth box turned on alone), no stall (the motion machine had no target out). Its motion flag
+   cannot tell (the stop switched it off too), nor its position (a rotor slower than set stands
+   short of the point as well). A clock that ran on is a lost report, and the target goes again (a
+   review: a SatEL power-cycled mid-slew was sent its point again 70 s later, the rotor turned on
+   unasked, against rule 12). A clock not read (garbled in either reading) cannot tell: the target
+   goes again, as for a lost report; so would it on a unit whose clock outlives a power cut. A
+   flipped digit in the clock that makes it read earlier abandons the turn of a controller that did
+   not restart: said, and safe (no move).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from enum import Enum
@@ -224,6 +309,8 @@ from bridge.session.stops import Stops, Verdict, standing
 from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
+# rule 12: readings in a row that must say no motor runs (Prosistel's R is one bit from B)
+HALT_READINGS = 2
 
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
 DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agree
@@ -273,10 +360,25 @@ class Drop:
 
 @dataclass(frozen=True)
 class Retry:
-    """Put ``target`` back as the waiting one, try ``attempt`` (slew.py rule 4)."""
+    """Put ``target`` back as the waiting one, try ``attempt`` (slew.py rule 4), said with
+    ``error``; in a storm that refuses it (wind.py rule 1) it is not, and ``late`` (how late
+    the report was) is said with the storm instead."""
 
     target: Target
     attempt: int
+    error: Report | None = None
+    late: str = ""
+    of: Target | None = None  # the target sent, which ``target`` stands for (slew.py rule 4)
+
+
+@dataclass(frozen=True)
+class Forgot:
+    """Rule 14: the controller restarted during the slew to ``target`` whose report never
+    came: a target still waiting (that one, put back by ``Retry``, or a newer one) is dropped,
+    with ``error`` said, and tracking ends."""
+
+    target: Target
+    error: Report
 
 
 @dataclass(frozen=True)
@@ -292,7 +394,7 @@ class Again:
     ends: str | None = None
 
 
-Note = Report | Ends | Drop | Retry | Again
+Note = Report | Ends | Drop | Retry | Forgot | Again
 
 
 class Fed(Enum):
@@ -411,6 +513,12 @@ def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
 
 
+def _clock(text: str) -> tuple[int, ...]:
+    """Rule 14: a controller's clock as it prints it (``2001/00/00 00:01:09``: its power-on
+    reading has month and day 0), in an order that compares."""
+    return tuple(int(part) for part in re.findall(r"\d+", text))
+
+
 class _Doubted(NamedTuple):
     """Rule 9: the reading asked again, when it came, whether it was asked again at once, and
     whether the rotor was turning (its next reading is taken)."""
@@ -450,6 +558,11 @@ class Controller:
         self.version: str | None = None
         self.controller_time: str | None = None  # its own clock (SatEL)
         self.restarts = 0  # rule 12: turns a restart abandoned (runtime/composite.py rule 8)
+        # rule 14: a silent controller's slew target put back after its report did not come, and
+        # its clock as last read before that slew, until the first reading after it judges it
+        self._slew_retry: tuple[Target, str | None] | None = None
+        self._drove_t: float | None = None  # rule 12: the last reading that said a motor runs
+        self._said_off = 0  # rule 12: readings in a row that said no motor runs
         self._silence_reported = False
         self._afresh = False  # status.py rule 1: the next first reading is shown as it is
         self._junk_reported_t = -1e18
@@ -477,6 +590,8 @@ class Controller:
         self._rested_at_start = False  # rule 10: ``_rested`` is from those
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until judged
+        # rule 13: the raw target of a turn a failed port dropped, judged at the first rest after
+        self._lost_aim: tuple[float | None, float | None] | None = None
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
@@ -617,10 +732,51 @@ class Controller:
         self.stops.port_closed(failed, stop_due, self.motion, now)
         if self.stops.owed and unseen is not None and unseen == self._released_unseen_t:
             self._released_owed = True  # (the released lock's: stops.py rule 2)
+        spec = self.cfg.spec  # rule 13: judged at its rest (not where the replug stops it)
+        if failed and not self.cfg.box and not spec.connect_stops and self.turn_out():
+            self._lost_aim = (self.motion.target_deg, self.motion.el_target_deg)
         self.link = None
+        self._slew_retry = None  # rule 14: (its target waits no more: session.py)
         self.answering = self._first_unread = False
         self._lose_motion(mo.link_down)
         self._pass_ends = False  # (a last try not written: owed, checked as any)
+
+    def turn_out(self) -> bool:
+        """Rule 13: a turn of the bridge's the controller may be driving: a target written, no
+        stop sent for it nor due on the line (link.py rule 3: owed once the port is lost), the
+        rotor not at it by the last reading."""
+        m, link = self.motion, self.link
+        return (
+            (m.target_deg is not None or m.el_target_deg is not None)
+            and m.stop_sent_t is None
+            and not (link is not None and link.stop_due)
+            and not mo.at_target(m, self.cfg.motion)
+        )
+
+    def lost_turn(self) -> str:
+        """Rule 13, before ``disconnect``: what becomes of a single controller's turn out when
+        its port is lost, as the words its error ends with ("" where none is out, and on a
+        composite's box)."""
+        if self.cfg.box or not self.turn_out():
+            return ""
+        m, spec = self.motion, self.cfg.spec
+        turn = f"its turn{self._turn_to(m.target_deg, m.el_target_deg)}"
+        if spec.connect_stops:  # (a SatEL's: protocols/satel.py rule 2)
+            return (
+                f": {turn} was dropped, and the replug stops it (the controller's connect "
+                "begins with a stop); send the target again"
+            )
+        seen = (
+            "followed by its readings once the port is back, and stopped if it comes to rest "
+            "short of it"
+            if spec.can_report_position
+            else "unseen, not stopped"
+        )
+        return (
+            f": {turn} was dropped, and the controller may finish it by itself ({seen}); "
+            "a STOP sent meanwhile goes first when the port is back; send the target again "
+            "to have the turn watched"
+        )
 
     # -- stops ---------------------------------------------------------------------------------
     def turning(self) -> bool:
@@ -677,6 +833,7 @@ class Controller:
         of these lines had lost two of them)."""
         self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
         self._connect_guard = False  # (rule 10: a stop's own checks watch it from now)
+        self._lost_aim = None  # (rule 13: a stop is all its rest would get)
         self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
         if not self.cfg.spec.can_report_position:
             self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
@@ -926,6 +1083,8 @@ class Controller:
             cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:
             self.options.enable_due = True  # rule 4
+        if self._slew_retry is not None:  # rule 14: the first reading after the lost report
+            self._slew_restart(reply)
         if reply.controller_time is not None:
             self.controller_time = reply.controller_time
         owed = first = False
@@ -954,10 +1113,20 @@ class Controller:
         self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
         if events:
             self._motion_events(events, now)
+        if reply.driving is False:  # rule 12: the controller says it drives no motor
+            self._said_off += 1
+            if self._said_off >= HALT_READINGS and self._retry is None:  # (rule 11's first)
+                self._halted(now)
+        else:
+            self._said_off = 0
+            if reply.driving:
+                self._drove_t = now
         if self._retry is not None:  # rule 11
             self._retry_check(link, now)
         if self._released_stop_t is not None:
             self._release_check(now)
+        if self._lost_aim is not None and before is mo.MOVING and self.motion.state in _RESTS:
+            self._lost_rest(now)  # rule 13
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
         if was.anchor_deg is None and self._afresh:  # (``_lose_motion``)
             self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
@@ -968,6 +1137,40 @@ class Controller:
         az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, deadband_deg, False, coasting)
+
+    def _turn_to(self, az: float | None, el: float | None) -> str:
+        """Rule 13: where a turn went (raw targets), in words: " to 300°, elevation 20°"."""
+        spec, where = self.cfg.spec, []
+        if spec.turns_azimuth and az is not None:
+            where.append(f"{round(self.cfg.aim.true_of(az), 1):g}°")
+        if spec.has_elevation and el is not None:
+            where.append(f"elevation {el:g}°")
+        return f" to {', '.join(where)}" if where else ""
+
+    def _lost_rest(self, now: float) -> None:
+        """Rule 13: the rotor followed since its port came back is at rest: short of the turn
+        the port dropped, it gets a stop (its motor may still drive a jammed rotor)."""
+        (az, el), self._lost_aim = cast(tuple[float | None, float | None], self._lost_aim), None
+        m, cfg = self.motion, self.cfg.motion
+        if m.position_deg is None:
+            return
+        within = cfg.tolerance_deg + cfg.noise_deg
+        short = az is not None and mo.angle_error(m.position_deg, az, cfg.az_wraps) > within
+        el_at = m.el_position_deg
+        el_short = el is not None and el_at is not None and abs(el_at - el) > within
+        if not (short or el_short):
+            return
+        at = self._standing()  # (an azimuth's: the elevation too where it is the one short, a
+        if el_short and self.cfg.spec.turns_azimuth:  # cold review: "at rest at 10°, short of
+            at += f", elevation {el_at:g}°"  # its turn to 10°, elevation 80°")
+        message = (
+            f"rotor at rest at {at} since its port came back, short of its turn"
+            f"{self._turn_to(az, el)} dropped with the port (jammed, stopped at the panel, or "
+            "its power cut meanwhile): stopped, in case its motor still drives; send the "
+            "target again"
+        )
+        self.notes.append(Report(ErrorKind.STOP, message))
+        self.stop(now)
 
     def _answers_again(self) -> None:
         """The controller answers (again): its first reading taken, or doubted (rule 9)."""
@@ -1107,10 +1310,54 @@ class Controller:
             self._retry = None
             self.notes.append(Again(target, *self._retry_raw))
 
+    def forgo(self, now: float) -> None:
+        """Rule 11: the session sends the target that did not move the rotor no more (its
+        ``Again`` declined: session.py rule 23, targets.py rule 8): its turn, which never
+        began, is over, at rest (motion.py rule 8), not a stall ``stall_timeout_s`` later."""
+        self._retry = None
+        self.motion = mo.forgone(self.motion, self.cfg.motion, now)
+
     def _restarted(self, now: float) -> None:
         """Rule 12: the controller restarted; a turn it had is abandoned."""
         aimed = self.motion.target_deg
         self.motion, events = mo.restarted(self.motion, self.cfg.motion)
+        self.restarts += bool(events)  # (a composite's other box abandons its turn too)
+        shown = None if aimed is None else self.cfg.aim.true_of(aimed)
+        self._motion_events(events, now, shown)
+
+    def _slew_restart(self, reply: PositionReply) -> None:
+        """Rule 14: the first reading after a slew whose report never came; a clock gone back
+        (to its power-on reading) shows the controller restarted: the target put back is
+        forgotten, not sent again."""
+        (target, before), self._slew_retry = self._slew_retry or (None, None), None
+        after = reply.controller_time
+        if target is None or before is None or after is None:
+            return  # (a clock not read, before or now: a lost report, as far as it can tell)
+        if _clock(after) >= _clock(before):
+            return  # (its clock ran on: the report was lost on the line, the target goes again)
+        shown = self.cfg.aim.true_of(reply.az_deg)
+        where = f"{shown:g}°" + ("" if reply.el_deg is None else f", elevation {reply.el_deg:g}°")
+        aim = self.cfg.aim.true_of(target.az_deg) if target.az_deg is not None else None
+        turn = "its turn" if aim is None else f"its turn to {aim:g}°"
+        if aim is not None and target.el_deg is not None:
+            turn += f", elevation {target.el_deg:g}°"
+        why = (
+            f"the controller restarted mid-turn (its clock went back, to {after}) at {where}: "
+            f"{turn} was not resumed: send the target again"
+        )
+        log.warning("%s: clock %s, then %s after the slew: restarted", self.name, before, after)
+        self.notes.append(Forgot(target, Report(ErrorKind.SERIAL, why)))
+
+    def _halted(self, now: float) -> None:
+        """Rule 12: the controller says it drives no motor; a turn it was seen driving since
+        its target went out, now still short of it, is over."""
+        m = self.motion
+        if m.target_t is None or self._drove_t is None or self._drove_t <= m.target_t:
+            return  # (not seen driving this target: a turn about to start, or never begun)
+        if self._drove_t >= mo.still_from(m, self.cfg.motion):
+            return  # (seen driving a rotor still: a jam its box gave up on, rule 3's stall)
+        aimed = m.target_deg
+        self.motion, events = mo.halted(m, self.cfg.motion, now)
         self.restarts += bool(events)  # (a composite's other box abandons its turn too)
         shown = None if aimed is None else self.cfg.aim.true_of(aimed)
         self._motion_events(events, now, shown)
@@ -1178,14 +1425,22 @@ class Controller:
         self._settled(link, now)
         if link.reply_overdue(now):
             todo = overdue(self.cfg, link.slew, link.reply_timeout_s, now)
-            if todo.error is not None:
+            if todo.retry is not None:  # (its error with it: the session words it)
+                retry = Retry(todo.retry, todo.attempt, todo.error, todo.late, todo.retry_of)
+                self.notes.append(retry)
+                self._slew_retry = (todo.retry, self.controller_time)  # rule 14
+            elif todo.error is not None:
                 self.notes.append(todo.error)
-            if todo.retry is not None:
-                self.notes.append(Retry(todo.retry, todo.attempt))
             if todo.stop:
                 self.stop(now)
             else:
                 if link.slew is not None:  # its report never came: where it ended, unseen
+                    if self._slew_retry is None:  # rule 14: a stopped slew's lost report too
+                        slew = link.slew
+                        aim = Target(
+                            slew.to_az_deg, slew.to_el_deg, slew.source, origin=slew.origin
+                        )
+                        self._slew_retry = (aim, self.controller_time)
                     self._unseen()
                 self._given_up(link.give_up_reply(now))
                 if self._watching() and mo.at_rest(self.motion):  # rule 10: a poll left
@@ -1332,6 +1587,7 @@ class Controller:
         sent_az = self._sent_az  # (rule 11: the target written before this one)
         self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
         self._connect_guard = False  # (rule 10: a turn now is asked for)
+        self._lost_aim = None  # (rule 13: a new turn, the bridge's own)
         self._retry = None  # rule 11: one try more, where the controller takes one at any time
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now
@@ -1339,7 +1595,18 @@ class Controller:
             self._retry_from = _to_turn(m, cfg, az, el)
             self._retry_before = _turning_to(m, cfg.motion, sent_az)
         if not cfg.spec.reports_while_moving:
-            slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
+            slew = Slew(
+                now,
+                m.position_deg,
+                m.el_position_deg,
+                az,
+                el,
+                target.source,
+                0,
+                attempt,
+                target.origin,  # (slew.py rule 4: put back as its sender's, who may add an axis)
+                target,  # (slew.py rule 4: what is put back stands for it)
+            )
             link.begin_slew(slew, travel_s(cfg, slew))
         self.motion = mo.commanded(m, cfg.motion, az, now, el)
         self.stops.target_sent()  # (stops.py rule 3: a stop owed now would stop this move)
@@ -1389,7 +1656,7 @@ class Controller:
                     f"{quiet_s:.3g} s)"
                 )
             m = self.motion
-            turning = self.turning()
+            turning = self.turning() or self._lost_aim is not None  # (rule 13's, followed)
             if turning:  # rule 2: a turn no reading watches any more is stopped, in case it
                 self.stop(now)  # still hears (its stall and limits unseen); owed just below
             elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
@@ -1426,6 +1693,12 @@ class Controller:
                 why = (
                     f"controller on {cfg.port} answers only garbled replies: the wrong baud "
                     "rate or model, or a noisy line?"
+                )
+            if self._lost_aim is not None:  # rule 13: the turn the port dropped, which no
+                self.stop(now)  # reading watches (rule 2), stopped in case it still hears
+                why += (
+                    ": the turn dropped with the port, not seen since, a stop sent, in case it "
+                    "still hears"
                 )
             why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))

@@ -9,14 +9,19 @@ facts in, the body or nothing out, or Refused saying what is missing), then the 
 and the lease.
 
 Rules:
-1. A start the session refuses (``refused``: the lock, the link, the wind) is an error and
-   changes nothing. A start taken ends the other feature and any waiting target (one feature
-   turns the rotor at a time), and the status names who started it (``Done.taken``).
+1. A start the session refuses (``refused``: the lock, the link, the wind; ``leased``: the
+   control lease, judged by the session when a claim comes in the start's own batch or before
+   its look-up's answer, session.py rule 23, and said with its sender for the audit trail) is
+   an error and changes nothing. A start taken ends the other feature and any waiting target
+   (one feature turns the rotor at a time), and the status names who started it
+   (``Done.taken``).
 2. ``off`` ends its own feature only; ``end`` (a stop, the lock, another target, a stall, the
    link, a cleared hold) ends both unless told otherwise. A target of a feature that ended
    never goes out after it.
 3. A satellite's name answered by the sky worker starts tracking as the command would have,
-   judged when the answer comes (tracking.py rule 8).
+   judged when the answer comes (tracking.py rule 8): the lock, the link, the wind, and the
+   control lease as it is then (session.py rule 23: a look-up asked before another operator's
+   claim and answered after it is refused, naming its sender for the audit trail).
 4. A start the station cannot serve is refused by the judge as unsupported, naming the setting
    that is missing, whoever sent it: it never waits in the mailbox.
 5. A satellite's name is not looked up by the judge (a file read, docs/architecture.md rule
@@ -101,7 +106,8 @@ class FeatureCommands:
         self.tracker = Tracker(cfg)
         self.follower = Follower(cfg)
 
-    def track(self, track: Track, refused: str | None) -> Done:
+    def track(self, track: Track, refused: str | None, leased: str | None = None) -> Done:
+        """``leased``: why its sender may not start it under the lease now (rule 1)."""
         if track.body is None and track.lookup is None:
             self.tracker.end("off")  # rule 2
             self.targets.clear_from(Source.TRACKING)
@@ -109,6 +115,9 @@ class FeatureCommands:
         name = track.body.name if track.body is not None else track.lookup and track.lookup.name
         if refused is not None:
             return Done(Report(ErrorKind.REFUSED, refused, track.described or f"track {name}"))
+        if leased is not None:  # rule 1: audited with its sender
+            who = track.origin or Origin(track.source)
+            return Done(Report(ErrorKind.REFUSED, leased, track.described or f"track {name}", who))
         if track.body is None:
             self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
             return DONE
@@ -119,19 +128,26 @@ class FeatureCommands:
         log.info("%s: tracking %s", self.name, track.body.name)
         return Done(taken=(track.source.value, track.origin))
 
-    def follow(self, follow: Follow, refused: str | None, now: float) -> Done:
+    def follow(
+        self, follow: Follow, refused: str | None, now: float, leased: str | None = None
+    ) -> Done:
+        """``leased``: as ``track``'s."""
         if not follow.on:
             self.end("off", tracking=False)  # rule 2
             return DONE
         if refused is not None:
             return Done(Report(ErrorKind.REFUSED, refused, follow.described or "follow"))
+        if leased is not None:  # rule 1: audited with its sender
+            who = follow.origin or Origin(follow.source)
+            return Done(Report(ErrorKind.REFUSED, leased, follow.described or "follow", who))
         self.tracker.end("following")
         self.targets.clear()
         self.follower.start(follow, now)
         return Done(taken=(follow.source.value, follow.origin))
 
-    def answered(self, answer: Answer, refused: str | None) -> Done:
-        """The sky worker's answer: a satellite's name looked up (rule 3), or tracking's sky."""
+    def answered(self, answer: Answer, refused: str | None, leased: str | None = None) -> Done:
+        """The sky worker's answer: a satellite's name looked up (rule 3), or tracking's sky;
+        ``leased``: why the look-up's sender may not start tracking under the lease now."""
         lookup = self.tracker.lookup
         if lookup is not None and answer.question == lookup.lookup:
             self.tracker.lookup = None
@@ -140,7 +156,7 @@ class FeatureCommands:
                 refusal = answer.failure or "no such satellite"
                 return Done(Report(ErrorKind.REFUSED, refusal, lookup.described))
             track = Track(body, lookup.source, None, lookup.described, lookup.origin, lookup.lookup)
-            return self.track(track, refused)
+            return self.track(track, refused, leased)
         ends = self.tracker.answered(answer)
         if ends is not None:
             log.warning("%s: tracking ends: %s", self.name, ends)

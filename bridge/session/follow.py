@@ -57,12 +57,15 @@ Rules:
 9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
    is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
-   bands again; the grid is then turned to. With following on for each rotator of a station
-   with one antenna per band, the one whose antenna is on the radio's band turns. A turn under
-   way when the band changes is not stopped (it was for the partner heard on its band), nor
-   by a transmission on another band (rule 3's hold is for this antenna's band: an attack
-   pass, the 20 m antenna stopped half way when WSJT-X moved to 40 m and transmitted there,
-   and nothing turned it on).
+   bands again, whatever other band it goes to meanwhile (a review: said again at each change
+   of the band it was off on, two radios on two other bands, an SO2R station's, had every
+   status of each refused anew on R/error and in the log, and a status flood alternating two
+   bands some 150 log lines a second); the grid is then turned to. With following on for
+   each rotator of a station with one antenna per band, the one whose antenna is on the
+   radio's band turns. A turn under way when the band changes is not stopped (it was for the
+   partner heard on its band), nor by a transmission on another band (rule 3's hold is for
+   this antenna's band: an attack pass, the 20 m antenna stopped half way when WSJT-X moved
+   to 40 m and transmitted there, and nothing turned it on).
 10. The DX call is shown (the status's ``following.call``, Home Assistant's sensor, the log,
    a refusal on R/error) only if it could be a call sign as WSJT-X writes one: at most MAX_CALL
    characters, printable ASCII (no control character, no Unicode line separator or
@@ -156,7 +159,7 @@ class Follower:
         self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
         self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
         self._ignored_since = 0  # rule 8: others first heard since then
-        self._off_band: str | None = None  # rule 9: why the last grid was not turned to
+        self._off_band: str | None = None  # rule 9: the band a grid was refused on, said
         self._mine: Heard | None = None  # rule 4: the newest status on one of its bands
         self._mine_t = -math.inf
 
@@ -283,6 +286,8 @@ class Follower:
         if heard is None:  # rule 6: following waits for WSJT-X, the rotor is not idle
             return Proposal(busy=True)
         grid = grid_of(heard.grid)
+        if self._for_me(heard):  # rule 9: the dial is on one of its bands (again)
+            self._off_band = None
         # rule 9: a transmission on another band goes out on another antenna: this one's turn
         # under way is not stopped for it (nor is it a turn this one waits for)
         holding = heard.transmitting and self._rig.follow.hold_while_tx and self._on_my_band(heard)
@@ -298,11 +303,11 @@ class Follower:
             self.info = replace(info, held=True)
             return Proposal(busy=True)
         off_band = self._off_band_why(heard)
-        if off_band is not None:  # rule 9: reported once a band, until the dial comes back
+        if off_band is not None:  # rule 9: reported once, until the dial comes back
             if info.held:  # rule 3: the transmission ended; the grid waits for the band now
                 self.info = replace(info, held=False)
             band, why = off_band
-            said, self._off_band = self._off_band == band, band
+            said, self._off_band = self._off_band is not None, band
             if said:
                 return Proposal(busy=True)
             what = f"follow {call_of(heard.call) or '?'} {grid}"

@@ -43,9 +43,13 @@ Rules:
    second STOP, 1.5 to 7 degrees). An axis not turning when that stop went out (an
    elevation-only move's azimuth, an axis that had arrived) has no coast (a review: an
    elevation-only stop's azimuth coast was 0, learned, and such stops pulled the azimuth
-   coast's median to 0, its brake unwatched). The coast goes the way the axis went last
-   before the stop, not its net turn over that second (a review: a rotor turned back to a
-   new target the other way and stopped within the second read a 1.5 degree coast as 0).
+   coast's median to 0, its brake unwatched); nor has one whose turning was last seen
+   ``settle_s`` or more before it (the motion machine's stillness: the stop that follows a
+   turn the controller gave up, controller.py rule 12; an attack pass: a Prosistel
+   power-cycled mid-turn, stopped 1.6 s after it stood, was learned a coast of 0). The coast
+   goes the way the axis went last before the stop, not its net turn over that second (a
+   review: a rotor turned back to a new target the other way and stopped within the second
+   read a 1.5 degree coast as 0).
    Its speed is measured up to the stop it obeyed. The arrival error is of a move that came
    to rest by itself: not one stopped, stalled or ended by a new target while turning (it
    arrived nowhere).
@@ -126,6 +130,7 @@ class Health:
         self._has_el = cfg.spec.has_elevation
         self._noise_deg = cfg.motion.noise_deg  # rule 3
         self._resend_s = cfg.motion.stop_resend_s  # rule 3: a lost stop is sent again then
+        self._settle_s = cfg.motion.settle_s  # rule 3: still this long before a stop: no coast
         self._judge = Judge(cfg.health, self._has_el, memory, wraps=self._wraps)
         if off_at is not None:
             self.report = off_at
@@ -225,7 +230,7 @@ class Health:
             last_moved_t = max(last_moved_t, moved_t)
             heard_t = _heard(times, path, move.stops, self._resend_s) if move.stops else None
             self._speed(axis, times, path, heard_t, values)
-            if heard_t is not None:
+            if heard_t is not None and moved_t >= heard_t - self._settle_s:  # (rule 3)
                 coast = _coast(times, path, heard_t)
                 if coast is not None:
                     values[f"{axis}_coast"] = coast

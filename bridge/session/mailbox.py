@@ -5,7 +5,7 @@ Rules:
    and any judged before it that comes after it (rule 10).
 2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts);
    an axis the newer one leaves out is kept from the older (model.combine: an azimuth, then an
-   elevation alone, is one target).
+   elevation alone, from one sender, is one target).
    A track command (start or off) replaces a target put before it; a target put after it is
    kept, and the session lets it end the tracking (the later command wins either way).
 3. Options and the lock are settings: the latest value per name wins, order between names kept.
@@ -60,7 +60,8 @@ Rules:
     takes a ticket when it is asked, and puts it with it; every motion command, stop or lock
     ON put without one takes the next at its put, and so does a lock OFF (a command asked while
     the lock was ON is not carried out after it; one asked while another held the control
-    lease is refused when asked: interfaces/dxcluster/client.py rule 4). One put with a ticket
+    lease is refused when asked: interfaces/dxcluster/client.py rule 4; a target put before
+    a claim and not sent yet is the session's to drop: session.py rule 23). One put with a ticket
     older than the newest put is dropped (the put returns False): a target sent after the call
     was asked is the later word, however long the look-up took (an attack pass: the call,
     looked up after a plain target of 200 was put, turned the rotor back to the call's
@@ -88,6 +89,24 @@ Rules:
     word and stands.
 13. The bridge's end (``put_ending``, runtime/rotator.py ``leave``; app.py rule 6) is a
     setting that is never taken back: the batch says it once, and the session keeps it.
+14. The lease's generation (``lease``): every change of the control lease put
+    (``put_control``: a claim, a renewal, a release, its end) adds one to it and keeps the
+    lease as it is now, under the lock the put takes anyway. A target, a track or follow
+    start, and a feature's own command (rule 12, moving or not: the lease refuses both) are
+    put with the generation their judge read before judging them (runtime/rotator.py); one
+    whose generation is older was judged before a change of the lease that is in already,
+    and is judged again here, under the same lock, against the lease now: one whose sender
+    is not the holder is refused (``LeaseChanged``, naming the lease; nothing is put). So a
+    target judged before a claim never turns the rotor for another operator after it: put
+    before the claim, it is the session's to drop (session.py rule 23); put after it, it is
+    refused here (a review: G4XYZ's target judged allowed, DL1ABC's claim put and taken
+    meanwhile, and the target, put in a batch of its own, turned the rotor for someone the
+    lease refuses). Nor does a start judged so (tracking's and following's bearings are the
+    bridge's own, never judged by the lease again: a review, G4XYZ's track sun put just
+    after DL1ABC's claim, and the rotor followed the sun under DL1ABC's lease); put before
+    the claim, a start is the session's to refuse, as a target is its to drop (session.py
+    rule 23). The holder's own, and anyone's once the lease is free, go on; an OFF is put
+    with no generation and never refused.
 """
 
 from __future__ import annotations
@@ -98,7 +117,16 @@ import threading
 from dataclasses import dataclass, field
 from typing import Literal
 
-from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, combine
+from bridge.core.model import (
+    Control,
+    FeatureCommand,
+    SetOption,
+    Stop,
+    Target,
+    combine,
+    same_operator,
+    sender,
+)
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 
@@ -154,6 +182,7 @@ class Batch:
 
     control: Control | None = None  # the control lease as the judge has it now...
     control_set: bool = False  # ...when it changed (runtime/lease.py)
+    control_unix: float | None = None  # ...at this time on the lease's clock (operators.py 5)
 
     def __bool__(self) -> bool:
         settings = (
@@ -195,6 +224,21 @@ class Batch:
             self.feature_commands.append(PartsEnd(what))
 
 
+class LeaseChanged(Exception):
+    """Rule 14: a target judged before a change of the lease that its sender may not turn the
+    rotor under (``control``: the lease now, its holder another operator)."""
+
+    def __init__(self, control: Control) -> None:
+        super().__init__(control.operator)
+        self.control = control
+
+
+def _barred(command: Target | Track | Follow | FeatureCommand, control: Control) -> bool:
+    """Rule 14: the lease ``control``'s holder did not send ``command`` (the judge's test,
+    runtime/lease.py rule 5, on the sender's name as the session reads it)."""
+    return not same_operator(control.operator, sender(command.origin, command.source))
+
+
 class _Halts:
     count = 0  # rule 11
     numbers = itertools.count(1)
@@ -218,6 +262,8 @@ class Mailbox:
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
+        self._lease = 0  # rule 14: changes of the control lease put so far
+        self._control: Control | None = None  # rule 14: ... and the lease as the last one put
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -235,6 +281,12 @@ class Mailbox:
         """Rule 10: the halt count, read before judging a motion command (one attribute read:
         a count read late is only newer, never one that lets a stale command in)."""
         return self._epoch
+
+    @property
+    def lease(self) -> int:
+        """Rule 14: the lease's generation, read before judging a target (one attribute read,
+        as ``epoch``)."""
+        return self._lease
 
     def ticket(self) -> int:
         """Rule 10a: a place in the order of commands, for one asked now and put later (``next``
@@ -270,10 +322,13 @@ class Mailbox:
         wake: bool = True,
         epoch: int | None = None,
         ticket: int | None = None,
+        lease: int | None = None,
     ) -> bool:
         """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5;
         ``epoch``: the halt count a target was judged at (rule 10); ``ticket``: its place in the
-        order of commands, taken when it was asked (rule 10a). False: dropped (rules 10, 10a)."""
+        order of commands, taken when it was asked (rule 10a); ``lease``: the lease's
+        generation it was judged at (rule 14). False: dropped (rules 10, 10a); LeaseChanged:
+        refused (rule 14)."""
         with self._lock:
             if isinstance(command, Stop):
                 self._halt_placed = self._placed(None)  # rule 10a
@@ -288,7 +343,10 @@ class Mailbox:
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
-                if self._stale(epoch) or not self._placed(ticket):
+                if self._stale(epoch):
+                    return False
+                self._judge_lease(command, lease)  # rule 14 (before it takes a place)
+                if not self._placed(ticket):
                     return False
                 self._motion_placed = self._newest  # rule 10a
                 self._batch.target = combine(command, self._batch.target)
@@ -302,6 +360,15 @@ class Mailbox:
     def _stale(self, epoch: int | None) -> bool:
         """Rule 10 (under the lock): judged before a stop or lock ON that is in already."""
         return epoch is not None and epoch != self._epoch
+
+    def _judge_lease(
+        self, command: Target | Track | Follow | FeatureCommand, lease: int | None
+    ) -> None:
+        """Rule 14 (under the lock): LeaseChanged if ``command``, judged at the lease's
+        generation ``lease``, was judged before a change that now bars its sender."""
+        held = self._control if lease not in (None, self._lease) else None
+        if held is not None and _barred(command, held):
+            raise LeaseChanged(held)
 
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
@@ -383,12 +450,16 @@ class Mailbox:
             held = self._batch.hold
             self._batch.hold = marker if held is None else max(held, marker)
 
-    def put_track(self, track: Track, *, epoch: int | None = None) -> bool:
+    def put_track(
+        self, track: Track, *, epoch: int | None = None, lease: int | None = None
+    ) -> bool:
         """Start or end tracking; it replaces a target put before it (the later command wins).
-        ``epoch``: a start's halt count (rule 10); False: dropped."""
+        ``epoch``: a start's halt count (rule 10); ``lease``: its lease's generation (rule
+        14). False: dropped; LeaseChanged: refused."""
         with self._lock:
             if self._stale(epoch):
                 return False
+            self._judge_lease(track, lease)  # rule 14
             if (track.body or track.lookup) is not None:
                 self._motion_placed = self._placed(None)  # rule 10a
             self._batch.track = track
@@ -399,12 +470,16 @@ class Mailbox:
         self._wake_once()
         return True
 
-    def put_follow(self, follow: Follow, *, epoch: int | None = None) -> bool:
+    def put_follow(
+        self, follow: Follow, *, epoch: int | None = None, lease: int | None = None
+    ) -> bool:
         """Rule 9: start or end following; it replaces a target or track put before it.
-        ``epoch``: a start's halt count (rule 10); False: dropped."""
+        ``epoch``: a start's halt count (rule 10); ``lease``: its lease's generation (rule
+        14). False: dropped; LeaseChanged: refused."""
         with self._lock:
             if self._stale(epoch):
                 return False
+            self._judge_lease(follow, lease)  # rule 14
             self._batch.follow = follow
             if follow.on:  # following off ends nothing else
                 self._motion_placed = self._placed(None)  # rule 10a
@@ -415,12 +490,16 @@ class Mailbox:
         self._wake_once()
         return True
 
-    def put_feature(self, command: FeatureCommand, *, epoch: int | None = None) -> bool:
+    def put_feature(
+        self, command: FeatureCommand, *, epoch: int | None = None, lease: int | None = None
+    ) -> bool:
         """Rule 12: a feature's own command, for its part. ``epoch``: the halt count one that
-        moves was judged at (rule 10); False: dropped."""
+        moves was judged at (rule 10); ``lease``: the lease's generation it was judged at,
+        moving or not (rule 14). False: dropped; LeaseChanged: refused."""
         with self._lock:
             if self._stale(epoch):
                 return False
+            self._judge_lease(command, lease)  # rule 14
             if command.moves:
                 self._motion_placed = self._placed(None)  # rule 10a
                 self._batch.target = None  # rule 12: the later command wins
@@ -467,10 +546,17 @@ class Mailbox:
             self._batch.ending = True
         self._wake_once()
 
-    def put_control(self, control: Control | None, *, wake: bool = True) -> None:
-        """The control lease changed (the status shows its holder); ``wake``: rule 5."""
+    def put_control(
+        self, control: Control | None, *, wake: bool = True, now_unix: float | None = None
+    ) -> None:
+        """The control lease changed (the status shows its holder); ``wake``: rule 5. A target
+        judged before it is judged again at its put (rule 14). ``now_unix``: the lease's clock
+        then (session.py rule 23 counts its minutes on it)."""
         with self._lock:
             self._batch.control, self._batch.control_set = control, True
+            self._batch.control_unix = now_unix
+            self._lease += 1  # rule 14
+            self._control = control
         if wake:
             self._wake_once()
 

@@ -101,7 +101,11 @@ Rules:
    Movement since the target went out means the refusal was of something else; so does
    any command written after the target (a setting, a query: the controller asks,
    controller.py). A new bearing refused while the rotor still turns to the one before: the
-   target is dropped and the rotor stays ``moving`` (stops.py then stops it).
+   target is dropped and the rotor stays ``moving`` (stops.py then stops it). So is, at rest
+   alike, a target whose frame never moved the rotor and that the bridge no longer sends
+   once more (``forgone``: controller.py rule 11; session.py rule 23, a claim; targets.py
+   rule 8, its feature ended): its turn never began,
+   and ``stall_timeout_s`` later a stall would blame the brake and count in rotor health.
 9. Every time ``tick`` (with no reading: rule 2) or ``plan_target`` compares the clock with is
    one ``next_deadline`` looks at: a motion that ``tick`` left as it was at ``t0`` (one it made,
    ``reading``'s, which ends with ``tick``, or one a stop or a target made since at ``t0``)
@@ -126,6 +130,12 @@ Rules:
    is out and the rotor is taken for turning has forgotten it: ``restarted`` drops the target
    (so no stall can come of it: rule 3) and leaves the rotor ``moving`` until readings show it
    still (rule 2), as after any stop.
+12. A controller that says it drives no motor (controller.py rule 12: Prosistel's ``B``, an
+   RC2800's ``ST``) at a reading that finds the rotor still (rule 2) off its target (further
+   than ``tolerance_deg``) with a target out has given that turn up: ``halted`` drops the
+   target at once, no stall (rule 3) waited for, and leaves the rotor ``moving`` until readings
+   show it still after the stop that follows, as rule 11's restart (rotor health then counts
+   the turn a stopped one: no arrival error of a turn that arrived nowhere).
 """
 
 from __future__ import annotations
@@ -243,6 +253,7 @@ class Event(enum.StrEnum):
     TURNED_BACK = "turned back"  # rule 5: a wrapping azimuth turned back on its way
     PAST_LIMIT = "past limit"  # rule 10: turned on beyond a limit while a target was out
     RESTARTED = "restarted"  # rule 11: the controller said it restarted while a turn was out
+    HALTED = "halted"  # rule 12: the controller says it drives no motor, the rotor still short
 
 
 class Plan(enum.StrEnum):
@@ -673,6 +684,14 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
 
 
+def forgone(m: Motion, cfg: MotionConfig, now: float) -> Motion:
+    """Rule 8: the target out, whose frame did not move the rotor, is given up: at rest as
+    after a refusal (nothing if no target is out)."""
+    if m.state is not MOVING or (m.target_deg is None and m.el_target_deg is None):
+        return m
+    return _at_rest(m, cfg, now, BRAKING)
+
+
 def restarted(m: Motion, cfg: MotionConfig) -> tuple[Motion, list[Event]]:
     """Rule 11: the controller said it restarted; a turn it had is dropped."""
     if not cfg.can_report_position or m.state is not MOVING:
@@ -680,6 +699,17 @@ def restarted(m: Motion, cfg: MotionConfig) -> tuple[Motion, list[Event]]:
     if m.target_deg is None and m.el_target_deg is None:
         return m, []  # (no turn of the bridge's: the readings say whether it turns)
     return _dropped(m), [Event.RESTARTED]
+
+
+def halted(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
+    """Rule 12: a reading at ``now`` says the controller drives no motor; a turn it left short,
+    the rotor still, is over (its target dropped)."""
+    if m.state is not MOVING or now < still_from(m, cfg):
+        return m, []
+    err = target_error(m, cfg)
+    if err is None or err <= cfg.tolerance_deg:
+        return m, []  # (at its target: the arrival its reading tells)
+    return _dropped(m), [Event.HALTED]
 
 
 def tick(

@@ -42,9 +42,10 @@ Rules:
    lock it was turned on under is released (a command that does not move the rotor is taken
    while locked, and may have turned on a part that moves). A command that moves reaches no
    part while the session would refuse a user's target (locked, offline, a storm). And no
-   part's step target goes to a locked rotor, nor in a storm, nor once the bridge's end began
-   (session.py rule 21), but the wind's own park: the session drops it, whatever the part
-   says.
+   part's step target goes to a locked rotor, nor to one whose lock is not known yet
+   (``lock_unknown``: runtime/kept.py rule 10; the wind's park neither, and the parts see
+   ``Scene.locked`` then), nor in a storm, nor once the bridge's end began (session.py rule
+   21), but the wind's own park: the session drops it, whatever the part says.
 8. A hand on the front panel is a command too: tracking and following each end on one
    (``turned_by_hand``): the rotor turning with no target and no stop of the bridge's out, and
    already further from the part's last target than the part allows for (its tolerance, and
@@ -79,7 +80,7 @@ class Scene(NamedTuple):
     now: float
     motion: mo.Motion
     pending: Target | None  # the target waiting to go to the controller (targets.py)
-    locked: bool
+    locked: bool  # or its lock not known yet (rule 7: runtime/kept.py rule 10)
     parked: bool  # the last status said so (status.py rule 4)
     slewing: bool  # a silent controller's slew is under way (slew.py)
     wall_offset_s: float  # wall clock (unix seconds) = now + this

@@ -47,7 +47,13 @@ Rules:
     state file keeps it: kept.py rule 8): a STOP taken while the adapter was out was lost to a
     restart before it came back, and the rotor turned on to its old target (an attack pass).
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
-   that was taken: a command after it that is carried out clears it.
+   that was taken: a command after it that is carried out clears it. A port lost mid-turn
+   that fails to open again (the adapter still out) says, after that failure's own words,
+   what the lost port's error said of the turn (controller.py rule 13), until the port is
+   open: the try's error is the newest, and its words alone ("... does not exist") took the
+   last error's place, so a user who looked at it later (Home Assistant's last-error sensor),
+   the rotor at rest where the controller took it by itself, never read that the turn had been
+   dropped (a closing note).
 13. The last word (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane holds the
     rotator:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
@@ -88,8 +94,9 @@ Rules:
    ends a part's own motion too (``Part.end``, parts.py rule 7: a storm that begins too, and
    the lock's release), and again after the feature commands put before a stop, a lock ON
    or OFF or a clearing release of the same batch (where mailbox.py rule 12 marks it); no
-   part's step gets a target through while the rotator is locked, nor in a storm, nor once
-   the bridge's end began (rule 21), but the wind's own park.
+   part's step gets a target through while the rotator is locked or its lock is not known
+   yet (runtime/kept.py rule 10: the wind's park neither), nor in a storm, nor once the
+   bridge's end began (rule 21), but the wind's own park.
    What a part shows in the status is asked of it by its ``Part`` alone (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
@@ -118,6 +125,56 @@ Rules:
    looks turned on unwatched (a review: auto-park's quiet spell ended while a front end took
    its time to close, and its park turned the rotor until the second look; or, after that
    look, on to the park with the port closed). Stops, the lock and the rest of the step go on.
+22. A part's error (a grid following refuses, a body tracking cannot reach) is published as
+   any (R/error, its own limit: interfaces/mqtt/service.py rule 4, and ``last_error``), and
+   logged at warning level at most once per PART_ERROR_LOG_S for each part, the line then
+   saying how many of that part's came since the last one; the rest at debug level. Whoever
+   reaches WSJT-X's port chooses how often following refuses (an attack pass: a status a few
+   milliseconds apart, each with a new grid in a keep-out sector, was a warning line each,
+   some 190 a second, while R/error let through 79 in three seconds).
+23. A change of the control lease (``Batch.control``: a claim, a renewal, a release, its end)
+   drops a target that waits and never went to the controller (targets.py ``unsent``: a
+   Rotor-EZ's, waiting out the brake delay after the stop its new target needed) or that
+   comes in the same batch, when the lease now has a holder who did not send it: it was
+   judged before the claim, and the claimant took control to keep others off (an attack
+   pass: G4XYZ's target 300, waiting for the brake, went out after DL1ABC claimed the lease
+   and turned the rotor for someone the lease refused). Said on R/error (kind ``refused``,
+   naming the holder and the lease's end, its minutes on the lease's clock as the judge's
+   refusal counts them, runtime/operators.py rule 5: a cold review, on the raw wall clock set
+   back 10 minutes they were 10 more; the target as ``command``) and, with its sender, in the
+   audit trail (runtime/rotator.py). So is a target sent whose frame the rotor never
+   turned for (lost or refused on the line; its try more waiting is as unsent): when the
+   reading that would send it once more comes (targets.py rule 8) and the lease is then
+   another operator's, its try more is taken (``unstand``), it is said, "target not sent
+   again", alone (the controller's refusal of its first try is not said too, as a storm's
+   drop of it says one word: wind.py rule 1; a cold review: R/error got both), and its
+   turn, which never began, is over (controller.py ``forgo``: no stall called; an attack
+   pass: G4XYZ's 200, lost on a GS-232B's line, went once more 2 s after DL1ABC's claim
+   and turned the rotor to 200). It is judged against the lease at that reading, not at
+   the claim: a claim released before it takes nothing, and the try more of
+   a target judged while the lease was free goes while it is free again (before, it was
+   not sent, and R/error named a holder whose lease had ended). So is a satellite's name
+   looked up (tracking by name: the sky worker answers it, tracking.py rule 8) at its answer:
+   when the lease is then another operator's than its sender's, tracking does not start,
+   "tracking not started", said and audited as the drop is (a review: G4XYZ's track by name,
+   asked while the lease was free and answered after DL1ABC's claim, started tracking, and
+   the rotor turned to wait for the pass for someone the lease refused). A track or follow
+   start that comes in the claim's own batch (put before it) is judged as a target there is:
+   "tracking not started" ("following not started"), said and audited (a review: G4XYZ's
+   track sun taken with DL1ABC's claim turned the rotor to the sun under DL1ABC's lease). The
+   holder's own target stays (so does every target after the holder's renewal: nobody
+   else's can wait then), and so do the bridge's own moves (``OWN_MOVES``: tracking's,
+   following's, auto-park's, the wind's, never judged by the lease) and a turn under way, or
+   a SatEL's put back after its slew's lost report (targets.py rule 3: that slew turned the
+   rotor): a claim is no stop, the holder may STOP. Commands judged after the claim are
+   the judge's to refuse (runtime/lease.py rule 5), and a target judged before it but put
+   after it the mailbox's (mailbox.py rule 14): none of them reaches the session; the lease
+   takes no place in the order of commands (mailbox.py rule 10a). On a rotator of two boxes
+   a drop here (``drops``, so does a storm's: ``_storm``, and its refusal of a try more,
+   ``_heed``) drops the other box's half of that target too, its turn stopped if it went
+   (``forsake``; a SatEL's put back stands for the half it was: targets.py rule 3), and the
+   two are said once, naming the whole target (runtime/composite.py
+   rules 8 and 9).
 """
 
 from __future__ import annotations
@@ -131,6 +188,7 @@ from typing import TypeVar
 
 from bridge.core.errors import Refused
 from bridge.core.model import (
+    Control,
     ErrorKind,
     FeatureCommand,
     Origin,
@@ -139,14 +197,17 @@ from bridge.core.model import (
     Source,
     Target,
     describe_command,
+    same_operator,
+    sender,
 )
 from bridge.feature import session_parts
 from bridge.session import status as st
 from bridge.session.actions import Action, Ask, Publish, Report, Write
 from bridge.session.autopark import AutoPark
 from bridge.session.config import WorkerConfig
-from bridge.session.controller import Again, Controller, Drop, Ends, Fed, Retry
+from bridge.session.controller import Again, Controller, Drop, Ends, Fed, Forgot, Retry
 from bridge.session.feature_commands import Done, FeatureCommands
+from bridge.session.follow import Follow
 from bridge.session.health import Health
 from bridge.session.link import Link
 from bridge.session.mailbox import Batch, Halt, PartsEnd
@@ -154,15 +215,34 @@ from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.stops import EXPRESS_LOST, Fence
 from bridge.session.targets import Go, Targets, decide
+from bridge.session.tracking import Track
 from bridge.session.wind import WindPark
 from bridge.sky.worker import Answer
 
-__all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
+__all__ = ["DROPS", "Action", "Publish", "Report", "RotatorSession", "Write"]
 
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+DROPPED = "target dropped"  # how a target dropped before it went out is said (rules 4, 23)
+PART_ERROR_LOG_S = 10.0  # rule 22: a part's error in the log at most this often (a count)
+# controller.py rule 11: a try more a storm refuses (wind.py rule 1), said
+TRY_DROPPED = (
+    "target did not move the rotor, or was refused before it did (lost or garbled on the "
+    "line?), and is not sent again"
+)
+# rule 23: the bridge's own moves, never judged by the lease (rules 10, 15; autopark.py)
+OWN_MOVES = frozenset({Source.TRACKING, Source.WSJTX, Source.AUTO_PARK, Source.WIND})
+WAITING_DROPPED = "target dropped before it went out"  # rule 23's words: a target waiting...
+AGAIN_DROPPED = "target not sent again"  # ... and one whose first try never moved the rotor
+TRACK_REFUSED = "tracking not started"  # ... a track start (or its look-up's answer) so judged
+FOLLOW_REFUSED = "following not started"  # ... and a follow start
+# slew.py rule 4: a late slew's target put back, in a storm that refuses it (wind.py rule 1)
+SLEW_STOPPED = "stopping it to ask where it is; its target is not sent again"
+# how every target dropped before it moved the rotor begins (runtime/composite.py rule 9 names
+# the whole target in each: a storm's or a claim's drop of a try more named one box's half)
+DROPS = (DROPPED, AGAIN_DROPPED, TRY_DROPPED)
 # enum members the step and the reads compare with, by module names (a member looked up on its
 # enum costs some 70 ns in Python 3.11: motion.py's states)
 _BY_MOTION = Wake.MOTION
@@ -191,6 +271,7 @@ class RotatorSession:
         self.ending = False  # rule 21: the bridge's end began
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
+        self._lease_offset_s: float | None = None  # rule 23: the lease's clock = now + this
         self.controller = Controller(cfg, options)
         # rule 11: a lock kept from before (the state file) owes a stop: the lock ON that set
         # it may have come while the port was closed, its stop owed in a process now ended
@@ -237,18 +318,26 @@ class RotatorSession:
         self._wakeup = 0.0
         self._step_wakeup = 0.0  # rule 16: the last step's own wake-up
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
+        self._part_said: dict[str, tuple[float, int]] = {}  # rule 22: logged when, unsaid since
         self._status_key: tuple[object, ...] | None = None  # rule 18
         self._poll_until = -math.inf  # rule 20: a tick before it runs the poll alone
         self._status_failed: dict[str, set[type[BaseException]]] = {}  # rule 19
         # the halts proposed by parts that take their feature's own commands: on a rotator of
         # two boxes those run in the azimuth box alone (runtime/composite.py rule 6 reads it)
         self.part_halts = 0
+        # targets dropped here before they went out by a lease's change (rule 23) or a storm's
+        # start (wind.py rule 1), or their try more by either: on a rotator of two boxes the
+        # other box drops the other half of that target too (runtime/composite.py rule 8 reads
+        # it: ``forsake``, of the same sender's target: ``dropped``, the last one)
+        self.drops = 0
+        self.dropped: Target | None = None
         # mailbox.py rule 10: the halt count of the last batch applied; ``status`` shows every
         # stop and lock ON up to it (set once the step built the status: a thread that reads
         # this count and then the status sees a status at least that new)
         self.halts_applied = 0
         self._newest_taken = 0  # mailbox.py rule 10a: the newest place of the batches applied
         self.target_unshown = False  # ... and whether ``status`` cannot show the target waiting
+        self._lost_turn = ""  # rule 12: what the port error said of the turn it dropped
 
     @property
     def newest_applied(self) -> int:
@@ -271,11 +360,12 @@ class RotatorSession:
         return self._step(now)
 
     def open_failed(self, reason: str, now: float) -> list[Action]:
-        self.controller.open_failed(reason)
+        self.controller.open_failed(reason + self._lost_turn)  # (rule 12: the turn still said)
         return self._step(now)
 
     def link_up(self, now: float, wall_s: float) -> list[Action]:
         self.wall_offset_s = wall_s - now
+        self._lost_turn = ""  # (rule 12: what its port error said is the last error's now)
         self._activity(now)  # never park the moment a controller comes back
         self.controller.connect(now, wall_s)
         return self._step(now)
@@ -284,8 +374,9 @@ class RotatorSession:
         self, reason: str | None, now: float, kind: ErrorKind = ErrorKind.SERIAL
     ) -> list[Action]:
         """The port is closed (``reason`` says why; None on shutdown)."""
-        if reason is not None:
-            self._error(kind, reason)
+        if reason is not None:  # (a turn out: what becomes of it, controller.py rule 13)
+            self._lost_turn = self.controller.lost_turn()
+            self._error(kind, reason + self._lost_turn)
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         why = "serial link down" if reason is not None else "bridge stopped"
@@ -312,6 +403,8 @@ class RotatorSession:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.control_set:
             self.view.control = batch.control
+            if batch.control_unix is not None:  # rule 23: the lease's clock (operators.py 5)
+                self._lease_offset_s = batch.control_unix - now
         if batch.ending:
             self.ending = True  # rule 21
         unlocked = batch.lock is False and (self.locked or batch.lock_on)
@@ -342,10 +435,12 @@ class RotatorSession:
             self.targets.clear()
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
+        if batch.control_set:  # rule 23: a waiting target the new holder did not send
+            self._lease_taken(now)
         cleared = self._fence(batch, now)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
             what = describe_command(batch.lost_target)
-            self._error(ErrorKind.REFUSED, f"target dropped: {EXPRESS_LOST}", command=what)
+            self._error(ErrorKind.REFUSED, f"{DROPPED}: {EXPRESS_LOST}", command=what)
         if batch.offline is not None:  # (runtime/composite.py rule 8)
             if not self._storm_park_waiting():  # (the storm's park, this box's own axis,
                 self._drop_pending(batch.offline)  # waits on: nobody could send it again)
@@ -360,13 +455,19 @@ class RotatorSession:
         for opt in batch.options:
             ctl.options.set(opt.name, opt.value, ctl.link is not None)
         if batch.track is not None:
+            leased = None
             if batch.track.body is not None or batch.track.lookup is not None:
                 self._end_parts("track command", now)  # parts.py rule 7
-            self._apply(self.features.track(batch.track, self._refused()))
+                if batch.control_set:  # rule 23: judged before the claim it came with
+                    leased = self._start_leased(batch.track, now, TRACK_REFUSED)
+            self._apply(self.features.track(batch.track, self._refused(), leased))
         if batch.follow is not None:
+            leased = None
             if batch.follow.on:
                 self._end_parts("follow command", now)
-            self._apply(self.features.follow(batch.follow, self._refused(), now))
+                if batch.control_set:  # rule 23: as a track start
+                    leased = self._start_leased(batch.follow, now, FOLLOW_REFUSED)
+            self._apply(self.features.follow(batch.follow, self._refused(), now, leased))
         ends: dict[Halt, str | None] = {  # parts.py rule 7 where the mailbox marks them
             "stop": "stop",
             "lock": "lock",
@@ -378,7 +479,10 @@ class RotatorSession:
                 self._feature_command(command, now)
             elif (why := ends[command.what]) is not None:
                 self._end_parts(why, now)
-        if batch.target is not None:
+        leased = self._leased(batch.target, now) if batch.control_set else None
+        if batch.target is not None and leased is not None:  # rule 23: judged before it
+            self._refuse_leased(batch.target, leased)
+        elif batch.target is not None:
             what = describe_command(batch.target)
             self._end(f"{batch.target.source.value} target", now)  # never combined
             refused = batch.offline or self._refused()
@@ -417,10 +521,13 @@ class RotatorSession:
             link.got_bytes(0, now)
 
     def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
-        """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
+        """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8); a
+        satellite's name looked up is judged against the lease as it is now (rule 23)."""
         if generation == self.tracker.generation:
+            refused, lookup = self._refused(), self.tracker.lookup
+            leased = self._start_leased(lookup, now, TRACK_REFUSED) if lookup else None
             answered = self._guarded(
-                "tracking", lambda: self.features.answered(answer, self._refused()), now
+                "tracking", lambda: self.features.answered(answer, refused, leased), now
             )
             if answered is not None:
                 self._apply(answered)
@@ -499,6 +606,33 @@ class RotatorSession:
             ctl.stop(now)
         return self._step(now)
 
+    def forsake(self, half: Target | None, now: float) -> list[Action]:
+        """The other box of this rotator dropped a target before it went out (rule 23's lease,
+        a storm's start: runtime/composite.py rule 8): ``half``, this box's half of the same
+        target (None: none, or another sender's since), is dropped here too, unsaid (the
+        other box said it): waiting, it is cleared; sent already and under way, its turn is
+        stopped, unless a newer target waits that names this box's axis (a storm's park with
+        an elevation): one that leaves it out would keep turning it to the dropped half (the
+        antenna is never left half moved for a target the lease or the storm refused)."""
+        ctl, targets = self.controller, self.targets
+        pending = targets.pending
+        if half is not None and targets.waits_for(half):
+            targets.clear()
+        elif half is not None and targets.stands_for(half):
+            if (pending is None or _leaves_out(pending, half)) and (
+                ctl.turning() or ctl.cut_mid_turn()
+            ):
+                ctl.stop(now)
+        return self._step(now)
+
+    def holds(self, half: Target) -> bool:
+        """Whether ``half`` (a target handed to this box of a rotator of two) still waits here
+        or is the one its turn under way goes to (runtime/composite.py rule 8)."""
+        ctl, targets = self.controller, self.targets
+        if targets.waits_for(half):
+            return True
+        return targets.stands_for(half) and (ctl.turning() or ctl.cut_mid_turn())
+
     def _halt(self, now: float) -> None:
         """A part's halt: the turn under way stopped, a WSJT-X target waiting dropped."""
         self.targets.clear_from(Source.WSJTX)
@@ -549,8 +683,9 @@ class RotatorSession:
 
     def _apply(self, done: Done) -> None:
         """What a tracking or following command did (feature_commands.py), shown."""
-        if done.error is not None:
-            self._error(done.error.kind, done.error.message, done.error.command)
+        if done.error is not None:  # (a sender named: rule 23's audit)
+            error = done.error
+            self._error(error.kind, error.message, error.command, origin=error.origin)
         if done.taken is not None:
             self._taken(*done.taken)
 
@@ -560,16 +695,107 @@ class RotatorSession:
         self.view.last_operator = origin.who if origin is not None else None
         self.view.target_info, self.view.park_raw = None, None
 
+    def _leased(self, target: Target | None, now: float, said: str = WAITING_DROPPED) -> str | None:
+        """Rule 23: why ``target``, judged before the lease's holder now, may not go out, or
+        None (the holder's own, the bridge's own move, the lease free); ``said``: how the
+        words begin."""
+        if target is None or target.source in OWN_MOVES:
+            return None
+        return self._barred(target.origin, target.source, now, said)
+
+    def _start_leased(self, start: Track | Follow, now: float, said: str) -> str | None:
+        """Rule 23: why ``start`` (tracking or following), judged before the lease's holder
+        now, may not start (in the claim's own batch, or at its look-up's answer), or None;
+        ``said``: how the words begin."""
+        return self._barred(start.origin, start.source, now, said)
+
+    def _barred(self, origin: Origin | None, source: Source, now: float, said: str) -> str | None:
+        """Rule 23: why a command from ``origin`` (or ``source``, unnamed) may not turn the
+        rotor under the lease as the session has it now, or None."""
+        control: Control | None = self.view.control
+        if control is None:
+            return None
+        if same_operator(
+            control.operator, sender(origin, source)
+        ):  # (as the judge asks: lease.py rule 5)
+            return None
+        offset = self.wall_offset_s if self._lease_offset_s is None else self._lease_offset_s
+        held = control.held_text(now + offset)  # (its minutes as the judge counts them)
+        return f"{said}: {held}: only they may turn it (control lease)"
+
+    def _lease_taken(self, now: float) -> None:
+        """Rule 23: the lease changed (a claim, a release, its end): a waiting target never
+        sent that its new holder did not send is dropped, said and audited."""
+        targets = self.targets
+        waiting, again = targets.unsent, targets.again_now
+        why = self._leased(waiting, now, AGAIN_DROPPED if again else WAITING_DROPPED)
+        if waiting is not None and why is not None:
+            targets.clear()
+            if again:  # (its first try never moved the rotor: its turn is over)
+                self.controller.forgo(now)
+            self._refuse_leased(waiting, why)
+
+    def _lease_took(self, target: Target, now: float) -> bool:
+        """Rule 23: the try more of ``target``, whose first frame never moved the rotor, is not
+        sent when the lease is now another operator's (judged at the reading that would send
+        it, against the lease then: a claim released since takes nothing), said and audited;
+        its turn, which never began, is over. True if so."""
+        targets = self.targets
+        if target is not targets.standing or targets.pending is not None:
+            return False  # (it would not go anyway: targets.py rule 8)
+        why = self._leased(target, now, AGAIN_DROPPED)
+        if why is None:
+            return False
+        targets.unstand()
+        self.controller.forgo(now)  # (no stall)
+        self._refuse_leased(target, why)
+        return True
+
+    def _refuse_leased(self, target: Target, why: str) -> None:
+        """Rule 23: said on R/error, and (with its sender) in the audit trail."""
+        self._drop(target)
+        origin = target.origin or Origin(target.source)
+        self._error(ErrorKind.REFUSED, why, command=describe_command(target), origin=origin)
+
+    def _drop(self, target: Target) -> None:
+        """Rule 23, wind.py rule 1: ``target`` dropped before it moved the rotor; on a rotator of
+        two boxes the other box drops its half of that sender's target (``forsake``)."""
+        self.drops += 1
+        self.dropped = target
+
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
         if dropped is not None and why:
             what = describe_command(dropped)
-            self._error(ErrorKind.REFUSED, f"target dropped: {why}", command=what)
+            self._error(ErrorKind.REFUSED, f"{DROPPED}: {why}", command=what)
 
-    def _error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
-        log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
+    def _error(
+        self,
+        kind: ErrorKind,
+        message: str,
+        command: str | None = None,
+        *,
+        said: str | None = "",
+        origin: Origin | None = None,
+    ) -> None:
+        """An error on R/error and in the log (``said``: what the log line adds; None: the
+        line at debug level, rule 22; ``origin``: the sender of a command dropped here, for
+        the audit trail, rule 23)."""
+        what = f" ({command})" if command else ""
+        level = logging.DEBUG if said is None else logging.WARNING
+        log.log(level, "%s: %s%s%s", self.name, message, what, said or "")
         self.view.last_error = message
-        self._actions.append(Report(kind, message, command))
+        self._actions.append(Report(kind, message, command, origin))
+
+    def _say(self, part: str, now: float) -> str | None:
+        """Rule 22: whether part ``part``'s error now gets a log line (what it adds: the count
+        of its errors left out since its last one), or None (at debug level)."""
+        logged, unsaid = self._part_said.get(part, (-math.inf, 0))
+        if now - logged < PART_ERROR_LOG_S:
+            self._part_said[part] = (logged, unsaid + 1)
+            return None
+        self._part_said[part] = (now, 0)
+        return f" ({unsaid} more such error(s) since the last such line)" if unsaid else ""
 
     def _heed(self, now: float) -> None:
         """What the controller noted, applied in the order it came."""
@@ -580,17 +806,50 @@ class RotatorSession:
                 self._end(note.reason, now)
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
-            elif isinstance(note, Retry):
-                self.targets.put_back(note.target, note.attempt, now)
+            elif isinstance(note, Retry):  # slew.py rule 4
+                storm = self.wind.refusal() if note.target.source is not Source.WIND else None
+                if storm is not None:  # wind.py rule 1: not put back, said once (a review: a
+                    what = describe_command(note.target)  # storm known from a replay, and a
+                    said = f"{note.late}: {SLEW_STOPPED}: {storm}"  # SatEL's late slew's
+                    self._error(ErrorKind.REFUSED, said, command=what)  # target went again)
+                    continue
+                if note.error is not None:
+                    self._error(note.error.kind, note.error.message, note.error.command)
+                self.targets.put_back(note.target, note.attempt, now, note.of)
+            elif isinstance(note, Forgot):  # controller.py rule 14: any target waiting
+                waiting = self.targets.pending  # (none after a stop or the lock cleared it)
+                if waiting is not None:
+                    park = self._storm_park_waiting()  # (the storm's park goes on, wind.py:
+                    if not park:  # never named as dropped, a cold review)
+                        self.targets.clear()
+                    self.controller.restarts += 1  # (a composite's other box abandons its own)
+                    newer = None if waiting is note.target or park else describe_command(waiting)
+                    self._error(note.error.kind, note.error.message, note.error.command or newer)
+                    self._end("the controller restarted", now)
             elif isinstance(note, Again):  # controller.py rule 11
+                took = self._lease_took(note.target, now)  # (said: its refusal is not, below)
                 if self.targets.again(note.target, note.az_deg, note.el_deg, now):
+                    storm = self.wind.refusal() if note.target.source is not Source.WIND else None
+                    if storm is not None:  # wind.py rule 1: no frame in a storm but its park
+                        self.targets.clear()  # (a cold review: a target lost on the line just
+                        # before a replayed storm went out again in it, the rotor turned while
+                        # motion was refused)
+                        self.controller.forgo(now)  # (its turn never began: no stall)
+                        self._drop(note.target)
+                        what = describe_command(note.target)
+                        self._error(ErrorKind.REFUSED, f"{TRY_DROPPED}: {storm}", command=what)
+                        continue
                     log.warning(
                         "%s: the target did not move the rotor, or was refused before it did "
                         "(lost or garbled on the line?): sending it once more",
                         self.name,
                     )
                     continue
-                if note.refused is not None:  # (its refusal, as it would have been told)
+                if self.targets.forsaken(note.target):  # (its feature ended: targets.py rule 8)
+                    self.controller.forgo(now)  # (its turn never began: no stall)
+                if note.refused is not None and not took:  # (its refusal, as it would have
+                    # been told; not when the lease took it: one word, as a storm's, a cold
+                    # review: 'target not sent again' and the refusal, two on R/error)
                     self._error(note.refused.kind, note.refused.message, note.refused.command)
                 if note.ends is not None:
                     self._end(note.ends, now)
@@ -611,6 +870,8 @@ class RotatorSession:
     def _step(self, now: float) -> list[Action]:
         ctl = self.controller
         ctl.line_work(now)  # an overdue reply (slew.py), a due stop, the outbox, junk
+        if self.targets.forgo_owed():  # (targets.py rule 8: a try more its feature's end took)
+            ctl.forgo(now)  # (its turn never began: no stall)
         ctl.tick(now)  # the motion machine's clock, an enable owed
         if ctl.notes:
             self._heed(now)
@@ -661,10 +922,27 @@ class RotatorSession:
 
     def _storm(self, now: float) -> None:
         """parts.py rule 7: a storm that began ends every part's own motion, as it ends
-        tracking and following (rule 15)."""
+        tracking and following (rule 15). One that ended starts auto-park's quiet spell
+        again, as unlocking does (autopark.py rule 1): the reading that ended it moves
+        nothing (an attack pass: auto-park's spell, long over in the storm, parked the rotor
+        the instant a calm reading ended it)."""
         storm = self.wind.storm
         if storm and not self._storm_seen:
-            self._end_parts(self.wind.refusal() or "storm", now)
+            why = self.wind.refusal() or "storm"
+            self._end_parts(why, now)
+            for ended in (Source.TRACKING, Source.WSJTX, Source.AUTO_PARK):  # (the storm
+                self.targets.clear_from(ended)  # ends them: their own ``*_ended`` says why; a
+                # cold review, a WSJT-X target waiting for a Rotor-EZ's brake was refused on
+                # R/error as a 'target az 296.065' nobody sent, and so was auto-park's park,
+                # waiting for a fresh reading, as 'target az 0')
+            pending = self.targets.pending  # wind.py rules 1 and 6: a target not sent yet is
+            if pending is not None and pending.source is not Source.WIND:  # refused too (an
+                self._drop(pending)
+                self._drop_pending(why)  # attack pass: a storm known only from a replay
+                # parked nothing in its place, and a Rotor-EZ's target, waiting for the brake,
+                # went out 6 s into the storm)
+        elif self._storm_seen and not storm:
+            self._activity(now)
         self._storm_seen = storm
 
     def _part(self, part: Part[RotatorSession], now: float) -> None:
@@ -673,7 +951,8 @@ class RotatorSession:
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
         parking = self.view.last_source == Source.AUTO_PARK.value
-        scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s, parking)
+        held = self.locked or self.lock_unknown  # (parts.py rule 7: a lock not known yet)
+        scene = Scene(now, motion, pending, held, parked, slewing, offset_s, parking)
         try:  # (_guarded's, without a closure: the measuring parts run at every reading)
             proposal = part.step(self, scene)
         except Exception:
@@ -682,7 +961,7 @@ class RotatorSession:
         if proposal is not None and proposal.target is not None and self._still(proposal.target):
             proposal = replace(proposal, target=None)  # parts.py rule 7
         if proposal is not None:
-            self._propose(proposal, now, part.command is not None)
+            self._propose(proposal, now, part.command is not None, part.name)
 
     def _feature_command(self, command: FeatureCommand, now: float) -> None:
         """parts.py rule 5: a feature's own command to its part; what it proposes, applied."""
@@ -709,7 +988,7 @@ class RotatorSession:
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
-        self._propose(proposal, now, True)
+        self._propose(proposal, now, True, part.name)
 
     def _storm_park(self) -> bool:
         """The turn under way is the storm's park (wind.py): on a rotator of two boxes, one
@@ -740,10 +1019,11 @@ class RotatorSession:
         return self.wind.storm and pending is not None and pending.source is Source.WIND
 
     def _still(self, target: Target) -> bool:
-        """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but
-        the wind's own park (auto-park waits, tracking and following are ended), nor once the
-        bridge's end began but the storm's park (rule 21)."""
-        if self.locked:
+        """parts.py rule 7: no part's step target goes to a locked rotor, nor to one whose
+        lock is not known yet (runtime/kept.py rule 10: the wind's park neither), nor in a
+        storm but the wind's own park (auto-park waits, tracking and following are ended),
+        nor once the bridge's end began but the storm's park (rule 21)."""
+        if self.locked or self.lock_unknown:
             return True
         return (self.wind.storm or self.ending) and target.source is not Source.WIND
 
@@ -756,13 +1036,15 @@ class RotatorSession:
             return exc.message
         return None
 
-    def _propose(self, proposal: Proposal, now: float, commanded: bool) -> None:
+    def _propose(self, proposal: Proposal, now: float, commanded: bool, name: str) -> None:
         """A part's proposal, applied in this order (parts.py rule 1); ``commanded``: the part
-        takes its feature's own commands (on a rotator of two boxes it runs in one alone)."""
+        takes its feature's own commands (on a rotator of two boxes it runs in one alone);
+        ``name``: the part's."""
         if proposal.busy:
             self._activity(now)  # (tracking.py rule 7)
         if proposal.error is not None:
-            self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
+            error = proposal.error
+            self._error(error.kind, error.message, error.command, said=self._say(name, now))
         if proposal.ended is not None:
             self.features.end(proposal.ended)  # (tracking may have ended itself)
             self.targets.clear_from(Source.TRACKING)
@@ -923,3 +1205,10 @@ class RotatorSession:
                 if t is not None and t < wakeup:
                     wakeup = t
         return wakeup
+
+
+def _leaves_out(target: Target, half: Target) -> bool:
+    """Whether ``target`` names neither axis ``half`` names (it keeps that axis's target)."""
+    az = half.az_deg is not None and target.az_deg is not None
+    el = half.el_deg is not None and target.el_deg is not None
+    return not (az or el)

@@ -18,7 +18,20 @@ Rules:
    slower than configured. Either way the bridge does not poll into a slew it cannot see: it
    sends the stop (the one input allowed during a slew), asks for the position once the stopped
    controller had its chance to report, and sends the slew's target again, so the rotor still
-   ends where the last accepted command asked. An error says so, naming the speed setting.
+   ends where the last accepted command asked, as its sender's (an axis alone that sender
+   sends meanwhile is taken with it: core/model.py ``combine``; a cold review, put back as
+   nobody's, it was not, and the rotor went to an elevation short of the azimuth asked).
+   What is put back stands for the target sent (``Overdue.retry_of``): on a rotator of two
+   boxes, a drop of the other box's half drops it too (runtime/composite.py rule 8; a cold
+   review: a SatEL elevation box's 40, put back as a new target, was not known for the
+   rotator's half, and went out after a claim dropped the azimuth's).
+   An error says so, naming the speed setting. In a storm that refuses motion (session/
+   wind.py rule 1) the target is not put back (a storm's own park is): the error says the
+   stop, and that the target is not sent again, with the storm's words (the session words it:
+   ``Overdue.late``).
+   A controller restarted mid-slew sends no report either: the first reading after the stop
+   (rule 6's too) tells it by its clock gone back, and the target waiting is dropped, not sent
+   (controller.py rule 14); the error says the target goes on unless its clock says so.
 5. If the second try's report does not come either (a jammed rotor, a mechanical stop short of
    the point), the target is given up with an error: a motor is not driven against a jam again
    and again.
@@ -33,7 +46,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from bridge.core.model import ErrorKind, Source, Target, describe_command
+from bridge.core.model import ErrorKind, Origin, Source, Target, describe_command
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
 
@@ -57,6 +70,8 @@ class Slew:
     source: Source = Source.MQTT
     stops: int = 0  # stops written during the slew
     attempt: int = 1  # 2: the same target sent again after its report did not come
+    origin: Origin | None = None  # who sent it (rule 4: put back as its sender's own)
+    sent: Target | None = None  # the target sent (rule 4: the one its put back stands for)
 
     def travel_s(
         self, az_speed_deg_s: float, el_speed_deg_s: float, az_span_deg: float, el_span_deg: float
@@ -99,8 +114,10 @@ class Overdue:
     stop: bool  # write a stop (rules 4 and 6); otherwise stop waiting for the reply
     error: Report | None = None
     retry: Target | None = None  # put back as the pending target, try ``attempt`` (rule 4)
+    retry_of: Target | None = None  # ... standing for this one, the target the slew was sent
     attempt: int = 1
     track_lost: bool = False  # the slew's readings are lost (motion.track_lost)
+    late: str = ""  # rule 4: how late its report is, said alone when ``retry`` may not go
 
 
 def travel_s(rig: WorkerConfig, slew: Slew) -> float:
@@ -128,12 +145,20 @@ def overdue(rig: WorkerConfig, slew: Slew | None, reply_timeout_s: float, now: f
             command = describe_command(Target(slew.to_az_deg, slew.to_el_deg))
             return Overdue(stop=True, error=Report(ErrorKind.SERIAL, given_up, command))
         again = (
-            f"{late}: stopping it to ask where it is, then going on to the target (if "
-            "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)"
+            f"{late}: stopping it to ask where it is, then going on to the target unless "
+            "its clock shows it restarted (if the rotor is that slow, set az_speed_deg_s / "
+            "el_speed_deg_s)"
         )
-        target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
+        target = Target(slew.to_az_deg, slew.to_el_deg, slew.source, origin=slew.origin)
         error = Report(ErrorKind.SERIAL, again)
-        return Overdue(stop=True, error=error, retry=target, attempt=slew.attempt + 1)
+        return Overdue(
+            stop=True,
+            error=error,
+            retry=target,
+            retry_of=slew.sent,
+            attempt=slew.attempt + 1,
+            late=late,
+        )
     if slew is not None and slew.stops < SLEW_STOP_TRIES:  # rule 6
         log.warning(
             "%s: no report %g s after a stop during a slew; stopping again before asking",

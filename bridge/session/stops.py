@@ -79,7 +79,10 @@ Rules:
    (unchecked: the operator freeing the rotor by hand at the control box has that move stopped
    once, then no more). A controller that said it restarted mid-turn (controller.py rule
    12) gets a stop as a refusal's mid-turn: written at once, checked as an operator's, its
-   error the restart's (a ``serial`` one naming the target dropped), never a stall's. A
+   error the restart's (a ``serial`` one naming the target dropped), never a stall's. One
+   that says it drives no motor, the rotor still short of its target (controller.py rule 12),
+   gets the same stop, and a ``stalled`` error that says what it said, never a stall's (rotor
+   health counts none). A
    composite's elevation box names its elevation where a stall, a turn away, a refusal or a
    rotor turning after its stall's stop is said (``standing``), never its own azimuth, which
    is none of the antenna's (a review: "rotor stalled at 0°", word for word the azimuth box's
@@ -346,6 +349,14 @@ class Stops:
                 "was not resumed: send the target again"
             )
             return Verdict(True, Report(ErrorKind.SERIAL, why), "the controller restarted")
+        if event is mo.Event.HALTED:  # (controller.py rule 12: the controller's word)
+            turn = "its turn" if aimed is None else f"its turn to {aimed:g}°"
+            why = (
+                f"the controller stopped turning short of its target at {own} (it says its motor "
+                "is off: power cycled or reset, stopped at its panel, or its own limit or "
+                f"protection): {turn} was dropped, not resumed: send the target again"
+            )
+            return Verdict(True, Report(ErrorKind.STALLED, why), "the controller stopped")
         if event is mo.Event.TURNED_AWAY:
             self._at_rest = True  # a controller driving the wrong way: stop it then
             why = (

@@ -12,7 +12,11 @@ Rules:
    target (longer for controllers that must stop to re-target), so a continuous stream is
    followed without flooding the line. A single command is never delayed.
 3. A target put back after a silent controller's lost report (slew.py) carries its try
-   number; any newer target replaces it and starts again at the first try.
+   number; any newer target replaces it and starts again at the first try. It stands for the
+   target that was sent, waiting and once sent again (``waits_for``, ``stands_for``): on a
+   rotator of two boxes, the other box's drop of that target drops it too (runtime/
+   composite.py rule 8; a cold review: a SatEL elevation box's put back was a new target the
+   drop did not know, and the elevation turned on alone).
 4. A target goes to the controller only when ``motion.plan_target`` says so; a stop due goes
    first, and a held target (session rule 13) waits for its marker.
 5. A target the rotor is already on its way to, or (not tracking's: its steps may be finer
@@ -29,9 +33,17 @@ Rules:
    it did not move the rotor, or was refused before it did) only while the bridge still
    stands for it: no newer target, no stop, lock or link down since (``clear``), and the
    feature that sent it not ended (``clear_from``: an attack pass, tracking's first bearing
-   lost, then tracking turned off, and the try more turned the rotor to the sun). It is the
-   same target, the same bearing (an axis it leaves out resolved as at its first try), and
-   rule 5 does not take it for one on its way.
+   lost, then tracking turned off, and the try more turned the rotor to the sun), nor a
+   storm that refuses motion (session.py drops it, said: wind.py rule 1); its turn,
+   which never began, is then over when the reading that would have sent it comes, if
+   nothing waits (``forsaken``: controller.py ``forgo``, at rest; a stall was said 10 s
+   later, blaming the brake, and counted in rotor health), or at once if that reading came
+   already and its try more waited (``forgo_owed``). It is the same target, the same
+   bearing (an axis it leaves out resolved as at its first try), and rule 5 does not take it
+   for one on its way. The control lease held, when that reading comes, by another operator
+   than its sender takes its try more too (``unstand``; session.py rule 23; a claim released
+   before it takes nothing): its first try did not move the rotor, so it is as unsent, and
+   so is its try more waiting (``unsent``, dropped at the claim itself).
 """
 
 from __future__ import annotations
@@ -65,6 +77,10 @@ class Targets:
         self._attempt = 1
         self._standing: Target | None = None  # rule 8: the target sent last, while it stands
         self.again_now = False  # rule 8: the waiting target is that one, once more
+        self._forsaken: Target | None = None  # rule 8: the one sent last its feature's end took
+        self._forgo_owed = False  # rule 8: ... or its try more waiting, dropped by that end
+        self._pending_of: Target | None = None  # rule 3: what the waiting put back stands for
+        self._standing_of: Target | None = None  # ... and the one sent last
 
     def put(self, target: Target, now: float) -> None:
         recent = now - self._last_sent_t < BURST_QUIET_S
@@ -72,32 +88,86 @@ class Targets:
             self._stream_t = now
         self._replaced = self.pending is not None or recent
         self.pending, self._pending_t, self._attempt = combine(target, self.pending), now, 1
+        self._pending_of = None
         self.again_now = False  # rule 8: a newer one waits (sent, it stands instead: ``sent``)
 
-    def put_back(self, target: Target, attempt: int, now: float) -> None:
-        """Rule 3: send ``target`` again (unless a newer one waits already)."""
+    @property
+    def standing(self) -> Target | None:
+        """Rule 8: the target sent last, while the bridge stands for it (none after a stop, a
+        newer target or the end of its feature)."""
+        return self._standing
+
+    @property
+    def unsent(self) -> Target | None:
+        """The waiting target if it never moved the rotor: never sent, or its try more (rule
+        8: its first try did not move it), else None (rule 3's, whose turn was under way:
+        session.py rule 23)."""
+        if self._attempt != 1 and not self.again_now:
+            return None
+        return self.pending
+
+    def unstand(self) -> Target | None:
+        """Rule 8: the target sent last goes no more (session.py rule 23: another operator
+        claimed the lease); the one it was."""
+        standing, self._standing, self._standing_of = self._standing, None, None
+        return standing
+
+    def put_back(self, target: Target, attempt: int, now: float, of: Target | None = None) -> None:
+        """Rule 3: send ``target`` again (unless a newer one waits already), standing for
+        ``of``, the target sent (or what that one stood for)."""
         if self.pending is None:
             self.pending, self._pending_t, self._stream_t = target, now, now
             self._replaced, self._attempt = False, attempt
+            stood = self._standing_of if of is not None and of is self._standing else None
+            self._pending_of = stood or of
+
+    def waits_for(self, target: Target) -> bool:
+        """Rule 3: ``target`` waits, or a put back that stands for it."""
+        pending = self.pending
+        return pending is not None and (pending is target or self._pending_of is target)
+
+    def stands_for(self, target: Target) -> bool:
+        """Rule 3: ``target`` is the one sent last (``standing``), or was put back as it."""
+        standing = self._standing
+        return standing is not None and (standing is target or self._standing_of is target)
 
     def clear(self) -> Target | None:
         """Drop the waiting target (a stop, the lock, the link down); the one dropped."""
         dropped, self.pending = self.pending, None
-        self._standing, self.again_now = None, False  # rule 8
+        self._standing, self.again_now, self._forsaken = None, False, None  # rule 8
+        self._pending_of = self._standing_of = None  # rule 3
+        self._forgo_owed = False
         return dropped
 
     def clear_from(self, source: Source) -> None:
         """Drop the waiting target if ``source`` put it (a feature that has ended: a target of
         its own must not go out after it, nor go once more: rule 8)."""
+        standing, again = self._standing, self.again_now
         if self.pending is not None and self.pending.source is source:
             self.clear()
-        if self._standing is not None and self._standing.source is source:
-            self._standing = None
+            self._forgo_owed = again  # (its first try never moved the rotor either)
+        if standing is not None and standing.source is source:
+            self._standing, self._forsaken, self._standing_of = None, standing, None
+
+    def forsaken(self, target: Target) -> bool:
+        """Rule 8: ``target`` is the one sent last whose try more its feature's end took
+        (``clear_from``), and nothing waits since: the rotor never turned for it, and its turn
+        is the session's to give up (controller.py ``forgo``)."""
+        return target is self._forsaken and self.pending is None
+
+    def forgo_owed(self) -> bool:
+        """Rule 8: a try more waiting was dropped by its feature's end (``clear_from``), and
+        nothing waits since: the turn its first try never began is the session's to give up
+        now (controller.py ``forgo``). Told once."""
+        owed, self._forgo_owed = self._forgo_owed, False
+        return owed and self.pending is None
 
     def sent(self, now: float) -> int:
         """The waiting target went to the controller; which try it was."""
         attempt = self._attempt
-        self._standing, self.again_now = self.pending, False  # rule 8
+        self._standing, self.again_now, self._forsaken = self.pending, False, None  # rule 8
+        self._standing_of, self._pending_of = self._pending_of, None  # rule 3
+        self._forgo_owed = False
         self.pending, self._attempt, self._last_sent_t = None, 1, now
         return attempt
 
@@ -106,6 +176,7 @@ class Targets:
         one sent last still stands (rule 8: its try more, a review: a lost target said again
         by a logger lost it); the one dropped."""
         dropped, self.pending, self.again_now = self.pending, None, False
+        self._pending_of = None
         return dropped
 
     def again(self, target: Target, az_deg: float, el_deg: float | None, now: float) -> bool:
@@ -117,6 +188,7 @@ class Targets:
         again = replace(target, az_deg=az_deg, el_deg=el_deg, true_az_deg=None)
         self.pending, self._pending_t, self._stream_t = again, now, now
         self._replaced, self._attempt, self.again_now = False, 2, True
+        self._pending_of = self._standing_of or target  # (rule 3's: it stands for that one)
         return True
 
     def stream_wait(self, now: float) -> bool:

@@ -11,7 +11,21 @@ Rules:
    or lock ON stopped its park)" once rule 3 stopped it short: a review, the refusal said the
    rotor was parked while it stood where the STOP left it; a stop after the rotor was seen at
    the park, rule 7's ``arrived``, stopped no park: still "parked for the storm") until the
-   storm is over.
+   storm is over. A target taken before the storm and not sent yet is refused too: the
+   session drops it when the storm begins (session.py ``_storm``; an attack pass: a storm
+   known only from a replay, rule 6, put no park in its place, and a Rotor-EZ's target,
+   waiting for the brake, went out 6 s into the storm); tracking's or following's ends with
+   them, unsaid (their ``*_ended`` says why; a cold review: a WSJT-X target so dropped was
+   refused on R/error as a 'target az ...' nobody sent), and so does auto-park's (it parks
+   again after a quiet spell once the storm is over: autopark.py rule 1). A turn the
+   controller has goes on (rule 6's storm sends nothing, not even a stop); a target whose
+   frame did not move it (lost or garbled on the line: controller.py rule 11's try more) is not sent
+   again in the storm, said on R/error (a cold review: a target lost just before a replayed
+   storm went out again in it, the rotor turned while motion was refused); nor is a SatEL's
+   slew's target whose report came late (slew.py rule 4): the slew is stopped and the
+   controller asked where it is, as ever, but its target is not put back to go again, said
+   once on R/error with how late the report was (a review: a storm known only from a replay
+   began mid-slew, and the target went out again in it).
 2. The storm is over once the readings have stayed below ``wind_release_below`` for
    ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
    readings end a storm: nothing else does, not a restart of the wind station, not silence.

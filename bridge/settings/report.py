@@ -17,7 +17,8 @@ Rules:
    ports, the station, tracking). Looking at a port never opens it.
 5. The state file is tried as the start tries it (runtime/state_store.py), short of writing:
    what the start would refuse whoever runs it (a directory, a FIFO, a file where a directory
-   must be) is an error worded as the start's (check_state_file); a directory this user cannot
+   must be, a link or a FIFO where the installation's lock goes) is an error worded as the
+   start's (check_state_file); a directory this user cannot
    write is a warning, since the service may run as another user.
 6. Run by hand (no STATE_DIRECTORY) with state_file left out, the summary also says the state
    file the systemd unit would use, and the default client id that goes with it (it hashes the

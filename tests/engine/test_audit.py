@@ -8,11 +8,24 @@ import os
 import subprocess
 import sys
 import threading
+import time
+from dataclasses import replace
 from pathlib import Path
 
 from bridge.core.model import AuditEvent, Origin, Source
-from bridge.runtime.audit import QUEUE_LINES, AuditFile, AuditTrail
-from tests.support.waiting import slow
+from bridge.runtime.audit import (
+    FREE_LINES,
+    QUEUE_LINES,
+    QUIET_S,
+    SPAN_S,
+    TICK_S,
+    AuditFile,
+    AuditTrail,
+    Runs,
+    audit_line,
+)
+from tests.support.clock import FakeClock
+from tests.support.waiting import slow, wait_until
 
 
 def event(n: int, result: str = "executed") -> AuditEvent:
@@ -287,6 +300,7 @@ def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
 
 FULL_DISK = r"""
 import json, resource, signal, sys
+from dataclasses import replace
 from pathlib import Path
 from bridge.runtime.audit import AuditFile
 from bridge.core.model import AuditEvent, Origin, Source
@@ -359,3 +373,296 @@ def test_a_short_write_is_cut_back_and_counted(tmp_path: Path) -> None:
     ]
     assert (audit.lines_written, audit.lines_lost, audit.write_failures) == (2, 1, 1)
     assert said[0] is not None and "short write" in said[0] and said[1:] == [None]
+
+
+def _said(origin: Origin, n: int, command: str, result: str, *, halt: bool = False) -> AuditEvent:
+    return AuditEvent(1_790_000_000.0 + n, "rotor", origin, command, result, 90.0, halt)
+
+
+def test_a_flood_of_stops_cannot_roll_the_line_of_who_turned_the_rotor_out_of_the_file(
+    tmp_path: Path,
+) -> None:
+    """Rule 6 (an attack pass: console STOPs at 1,000 a second rolled all four files over in
+    25 s, and the move of a minute before was gone): a flood from one sender is its first
+    lines and one line with its count and time span; another sender's refusals are their own
+    run; the move, the lease change and the lock change are each a line of their own, in the
+    current file, however long the flood; R/audit gets what the file gets."""
+    path = tmp_path / "audit.jsonl"
+    one = len(audit_line(event(10).as_dict())) + 1
+    clock = FakeClock()
+    published: list[AuditEvent] = []
+    trail = AuditTrail(path, 40 * one, lambda _r, e: published.append(e), [], clock=clock)
+    holder = Origin(Source.MQTT, "DL1ABC")
+    neighbour = Origin(Source.WEB, None, "192.168.1.66")
+    other = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    audited = trail.of("rotor")
+    trail.start()
+    try:
+        audited(_said(holder, 0, "claim", "executed"))
+        audited(_said(holder, 1, "target az 200", "executed"))
+        for n in range(2, 2002):  # the flood: a STOP and a refused move, over and over
+            audited(_said(neighbour, n, "console: stop", "executed", halt=True))
+            audited(_said(other, n, f"P {n % 360} 0", "refused: DL1ABC holds the rotator"))
+            clock.t += 1 / 32  # 32 a second from each: a minute of it by n = 1922
+            if n == 1500:
+                audited(_said(holder, n, "lock ON", "executed"))  # amid the flood
+        clock.t += QUIET_S  # quiet again: the runs end
+        trail.tick()
+        trail.flush()
+    finally:
+        trail.stop()
+    got = [json.loads(line) for line in path.read_text().splitlines()]
+    assert not path.with_name("audit.jsonl.1").exists()  # 4,003 events, not 40 lines
+    assert [(d["command"], d["time"]) for d in got if d["operator"] == "DL1ABC"] == [
+        ("claim", 1_790_000_000.0),
+        ("target az 200", 1_790_000_001.0),
+        ("lock ON", 1_790_001_500.0),
+    ]
+    stops = [d for d in got if d["operator"] == "web 192.168.1.66"]
+    # the first five as they came, then what a minute of it was, then the rest of it
+    assert [d.get("count") for d in stops] == [None] * FREE_LINES + [1915, 80]
+    assert (stops[-2]["first"], stops[-2]["last"]) == (1_790_000_007.0, 1_790_001_921.0)
+    assert (stops[-1]["first"], stops[-1]["last"]) == (1_790_001_922.0, 1_790_002_001.0)
+    assert stops[-1]["command"] == "console: stop" and stops[-1]["result"] == "executed"
+    refusals = [d for d in got if d["operator"] == "rotctld 192.168.1.20"]
+    assert [d.get("count") for d in refusals] == [None] * FREE_LINES + [1915, 80]
+    assert refusals[-1]["command"] == "P 201 0"  # the last of them (n = 2001), whole
+    assert [e.as_dict() for e in published] == got
+
+
+def test_senders_beyond_counting_fold_by_interface(tmp_path: Path) -> None:
+    """Rule 6: an operator name per message makes no run of its own past MOST_RUNS (here 2):
+    the rest fold by interface and kind, the line ``mixed``, named by the interface; and go on
+    doing so while that crowd's run goes on, though the first names' runs ended (a name used
+    once each, ten a second: a line each after their runs' QUIET_S, without that)."""
+    clock = FakeClock()
+    published: list[AuditEvent] = []
+    trail = AuditTrail(
+        None, 0, lambda _r, e: published.append(e), [], clock=clock, runs=Runs(free=1, most=2)
+    )
+    audited = trail.of("rotor")
+    for n in range(100):
+        audited(_said(Origin(Source.MQTT, f"X{n}"), n, "target az 1", "refused: locked"))
+        clock.t += 0.125
+    clock.t += QUIET_S
+    trail.tick()
+    assert [(e.origin.who, e.count, e.mixed) for e in published] == [
+        ("X0", 1, False),
+        ("X1", 1, False),
+        ("X2", 1, False),  # the interface's run: its first line is written as it came
+        ("mqtt", 97, True),
+    ]
+    assert published[-1].as_dict()["mixed"] is True
+
+
+def test_open_runs_say_their_counts_when_the_bridge_stops(tmp_path: Path) -> None:
+    path = tmp_path / "audit.jsonl"
+    trail = AuditTrail(path, 1_000_000, lambda _r, _e: None, [], clock=FakeClock())
+    trail.start()
+    neighbour = Origin(Source.WEB, None, "192.168.1.66")
+    for n in range(FREE_LINES + 3):
+        trail.of("rotor")(_said(neighbour, n, "console: stop", "executed", halt=True))
+    trail.stop()
+    last = lines(path)[-1]
+    assert (last["count"], last["first"], last["last"]) == (3, 1_790_000_005.0, 1_790_000_007.0)
+
+
+def test_a_run_says_when_its_summary_is_due_and_no_run_nothing(tmp_path: Path) -> None:
+    """Rule 7, in virtual time: what the ticker waits for. No run open (nothing yet, or only
+    moves): nothing to wait for. A run: its QUIET_S after its latest event, or its SPAN_S
+    after it began when it goes on that long; due at that very moment, not a tick later."""
+    runs = Runs()
+    neighbour = Origin(Source.WEB, None, "192.168.1.66")
+    assert runs.left(100.0) is None
+    runs.offer("rotor", _said(neighbour, 0, "target az 10", "executed"), 100.0)
+    assert runs.left(100.0) is None  # a move opens no run
+    runs.offer("rotor", _said(neighbour, 1, "stop", "executed", halt=True), 100.0)
+    assert runs.left(100.0) == QUIET_S
+    assert runs.left(103.0) == QUIET_S - 3
+    for n in range(2, 60):  # a stop a second: the run goes on, its minute comes first
+        runs.offer("rotor", _said(neighbour, n, "stop", "executed", halt=True), 100.0 + n)
+    assert runs.left(159.0) == 1.0  # began at 100: SPAN_S
+    assert runs.due(159.5) == []  # not before...
+    assert runs.left(160.0) == 0.0
+    (summary,) = runs.due(160.0)  # ...and then at once
+    assert summary[1].count == 60 - FREE_LINES - 1
+    assert runs.left(160.0) == QUIET_S - 1  # quiet since 159
+    assert runs.left(164.0) == 0.0
+    assert runs.due(164.0) == [] and runs.left(164.0) is None  # ended, nothing left counted
+
+
+def test_an_idle_trail_never_wakes_its_ticker(tmp_path: Path) -> None:
+    """Rule 7: with no run open the ticker sleeps without a deadline (it woke once a second
+    for nothing); a move leaves it asleep; the first refusal wakes it, to sleep until that
+    run's summary is due; the stop wakes it at once and still says the open run's count."""
+    published: list[AuditEvent] = []
+    trail = AuditTrail(
+        tmp_path / "audit.jsonl",
+        1_000_000,
+        lambda _r, e: published.append(e),
+        [],
+        clock=FakeClock(),
+        runs=Runs(free=1),
+    )
+    audited = trail.of("rotor")
+    other = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    trail.start()
+    try:
+        wait_until(lambda: trail.ticker_asleep, what="the ticker asleep")
+        assert (trail.ticker_timeout, trail.ticker_wakeups) == (None, 0)  # until woken
+        audited(_said(other, 0, "P 10 0", "executed"))  # a move: no run, nothing to say
+        audited(_said(other, 1, "P 20 0", "refused: locked"))
+        wait_until(lambda: trail.ticker_wakeups == 1 and trail.ticker_asleep, what="woken once")
+        assert trail.ticker_timeout == QUIET_S  # (virtual time stands still)
+        audited(_said(other, 2, "P 30 0", "refused: locked"))  # folded
+    finally:
+        trail.stop()
+    assert not trail._ticker.is_alive()  # the stop woke it: no deadline to wait out
+    assert [(e.command, e.count) for e in published] == [
+        ("P 10 0", 1),
+        ("P 20 0", 1),
+        ("P 30 0", 1),  # the count the stop said: one folded, its first and last times
+    ]
+    assert published[-1].first_unix == 1_790_000_002.0
+
+
+def test_a_run_is_summed_up_by_the_ticker_once_it_is_quiet(tmp_path: Path) -> None:
+    """Rule 7 on the real clock: the ticker, woken by the run's first event, says its summary
+    by itself once it has been quiet for its QUIET_S, not before, and sleeps again."""
+    published: list[tuple[float, AuditEvent]] = []
+    trail = AuditTrail(
+        None,
+        0,
+        lambda _r, e: published.append((time.monotonic(), e)),
+        [],
+        runs=Runs(free=1, quiet_s=0.2),
+    )
+    audited = trail.of("rotor")
+    other = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    trail.start()
+    try:
+        for n in range(4):
+            audited(_said(other, n, f"P {n} 0", "refused: locked"))
+        last = time.monotonic()
+        wait_until(lambda: len(published) == 2, what="the run's summary")
+        wait_until(lambda: trail.ticker_asleep and trail.ticker_timeout is None, what="asleep")
+    finally:
+        trail.stop()
+    said_at, summary = published[-1]
+    assert (summary.command, summary.count) == ("P 3 0", 3)
+    assert said_at - last >= 0.2
+
+
+def test_a_crowd_line_says_how_many_senders_and_names_the_first(tmp_path: Path) -> None:
+    """Rule 8: a crowd's line (``mixed``) says how many different senders its count stands for
+    and names the first of them as they came, an operator and an address both where a sender
+    gave both; counted up to a bound, beyond which it says there were more; and each minute's
+    line counts its own minute's senders (it said the interface alone: after an attack, the
+    operator could not learn who)."""
+    clock = FakeClock()
+    published: list[AuditEvent] = []
+    runs = Runs(free=1, most=1, counted=6, named=3)
+    trail = AuditTrail(None, 0, lambda _r, e: published.append(e), [], clock=clock, runs=runs)
+    audited = trail.of("rotor")
+    web = [Origin(Source.WEB, None, f"192.168.1.{n}") for n in range(10)]
+    audited(_said(web[9], 0, "console: stop", "executed", halt=True))  # the one run there is
+    senders = [web[1], web[2], Origin(Source.WEB, "DL1ABC", "10.0.0.7"), web[2], web[3]]
+    for n, origin in enumerate(senders + senders + web[4:8], 1):  # 2 + 4 distinct more: 8
+        audited(_said(origin, n, "console: stop", "executed", halt=True))
+        clock.t += 0.5
+    clock.t += QUIET_S
+    trail.tick()
+    crowd = [e.as_dict() for e in published if e.mixed]
+    assert len(crowd) == 1
+    line = crowd[0]
+    assert (line["operator"], line["count"]) == ("web", 13)  # 14 in the crowd, the first written
+    assert line["senders"] == 6 and line["more_senders"] is True  # web 6 and 7: beyond
+    assert line["names"] == ["web 192.168.1.2", "DL1ABC (10.0.0.7)", "web 192.168.1.3"]
+    assert published[1].origin.who == "web 192.168.1.1"  # the crowd's first, written whole
+    published.clear()
+    for n in range(2 * int(SPAN_S)):  # a crowd that goes on, one sender in its second minute
+        audited(_said(web[9], n, "console: stop", "executed", halt=True))  # the run, again
+        origin = web[1 + n % 3] if n < SPAN_S else web[5]
+        audited(_said(origin, n, "console: stop", "executed", halt=True))
+        clock.t += 1.0
+        trail.tick()
+    clock.t += QUIET_S
+    trail.tick()
+    minutes = [e.as_dict() for e in published if e.mixed]
+    assert [(d["count"], d["senders"], d["names"]) for d in minutes] == [
+        (59, 3, ["web 192.168.1.2", "web 192.168.1.3", "web 192.168.1.1"]),
+        (60, 1, ["web 192.168.1.5"]),
+    ]
+    assert not any("more_senders" in d for d in minutes)
+
+
+def test_the_ticker_sleeps_a_tick_at_least_while_runs_are_open(tmp_path: Path) -> None:
+    """Rule 7: a summary due sooner than TICK_S does not wake the ticker sooner (a crowd's
+    runs, due one after the other, would wake it for each): it is up to TICK_S late."""
+    clock = FakeClock()
+    trail = AuditTrail(None, 0, lambda _r, _e: None, [], clock=clock)
+    other = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    trail.of("rotor")(_said(other, 0, "P 20 0", "refused: locked"))  # before the ticker runs
+    clock.t += QUIET_S - TICK_S / 2  # its summary due in half a tick
+    trail.start()
+    try:
+        wait_until(lambda: trail.ticker_asleep, what="the ticker asleep")
+        assert trail.ticker_timeout == TICK_S
+    finally:
+        trail.stop()
+
+
+def _target(origin: Origin, n: float, command: str) -> AuditEvent:
+    return replace(
+        _said(origin, 0, command, "executed"), time_unix=1_790_000_000.0 + n, target=True
+    )
+
+
+def test_the_same_target_sent_over_and_over_cannot_roll_the_trail_over(tmp_path: Path) -> None:
+    """Rule 9 (measured: a loop republishing a target 50 times a second wrote 50 lines a
+    second, 8 KB, and the four files of the default size rolled over in 8 minutes): the same
+    target from the same sender, nothing else carried out in between, is its first lines and a
+    count; the target sent again after another's target or a stop is written (it turns the
+    rotor back), a refusal between two changes nothing; different targets are each a line."""
+    path = tmp_path / "audit.jsonl"
+    one = len(audit_line(event(10).as_dict())) + 1
+    clock = FakeClock()
+    trail = AuditTrail(path, 60 * one, lambda _r, _e: None, [], clock=clock)
+    loop = Origin(Source.MQTT, "node-red")
+    holder = Origin(Source.MQTT, "DL1ABC")
+    other = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    audited = trail.of("rotor")
+    trail.start()
+    try:
+        for n in range(3000):  # a minute at 50 a second, the same target...
+            audited(_target(loop, n / 50, "target '200'"))
+            if n == 1000:  # ...a refusal amid it changes nothing...
+                audited(_said(other, 20, "P 10 0", "refused: DL1ABC holds the rotator"))
+            if n == 2000:  # ...another's target does: the next one turns the rotor back
+                audited(_target(holder, 40, "target '100'"))
+            clock.t += 1 / 50
+        audited(_said(holder, 60, "stop", "executed", halt=True))
+        audited(_target(loop, 61, "target '200'"))  # after a stop: turns it again
+        for n in range(3):  # a sweep: every target a line
+            audited(_target(loop, 62 + n, f"target '{210 + n}'"))
+        clock.t += QUIET_S
+        trail.tick()
+        trail.flush()
+    finally:
+        trail.stop()
+    assert not path.with_name("audit.jsonl.1").exists()  # 3,006 events, not 60 lines
+    written = lines(path)
+    loop = ("node-red", "target '200'", None)
+    assert [(d["operator"], d["command"], d.get("count")) for d in written] == [
+        *[loop] * (1 + FREE_LINES),  # the first, then the first of its repeats
+        ("rotctld 192.168.1.20", "P 10 0", None),
+        ("DL1ABC", "target '100'", None),
+        loop,  # it turned the rotor back
+        ("DL1ABC", "stop", None),
+        loop,  # it turned the rotor again
+        ("node-red", "target '210'", None),
+        ("node-red", "target '211'", None),
+        ("node-red", "target '212'", None),
+        ("node-red", "target '200'", 3000 - FREE_LINES - 2),  # the rest, counted
+    ]
+    assert (written[-1]["first"], written[-1]["last"]) == (1_790_000_000.12, 1_790_000_059.98)

@@ -17,10 +17,12 @@ import bridge.app as app
 import bridge.feature
 from bridge.core.errors import Refused
 from bridge.core.model import (
+    Control,
     ErrorEvent,
     ErrorKind,
     FeatureCommand,
     MotionState,
+    Origin,
     RotatorStatus,
     Source,
     Stop,
@@ -763,6 +765,56 @@ def test_a_box_that_restarted_mid_turn_abandons_the_rotators_turn_in_both_boxes(
         assert status.state is MotionState.IDLE
 
 
+def test_a_satel_box_restarted_mid_slew_abandons_the_rotators_turn_in_both_boxes() -> None:
+    """A SatEL elevation box power-cycled mid-slew: its clock gone back at the first reading
+    after the lost report tells the restart (controller.py rule 14), its turn is not resumed;
+    the azimuth box turned on to the user's azimuth under that word, the antenna left half
+    moved (a cold review), where a restart told by a power-on byte abandons both (rule 8)."""
+    emulators = {Axis.AZIMUTH: {"az_speed_deg_s": 1.0}}
+    with VirtualComposite("gs232b-az", "satel", emulators=emulators) as v:
+        v.run_until(online, 30, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 60.0))
+        v.run_for(10.0)
+        t = v.now
+        v.el.power_cycle()
+        v.run_until(
+            lambda c: any("restarted mid-turn" in e.message for e in c.el.errors(since=t)),
+            200,
+            "the restart said",
+        )
+        v.run_for(10.0)
+        assert not v.az.truth().is_moving
+        assert v.az.truth().az_deg < 250.0, v.az.truth()  # stopped short, not on at 300
+        said = [e.message for box in (v.az, v.el) for e in box.errors(since=t)]
+        assert len([m for m in said if "restarted mid-turn" in m]) == 1, said
+        assert v.status.target_az_deg is None and v.status.target_el_deg is None
+
+
+def test_a_box_that_says_it_gave_its_turn_up_abandons_the_rotators_turn_in_both_boxes() -> None:
+    """A Prosistel D azimuth box power-cycled mid-turn says its motor is braked (controller.py
+    rule 12): its turn is dropped at once, and the elevation box's with it (composite.py rule
+    8), said once, not the elevation turned on to the user's elevation under that word."""
+    emulators = {Axis.ELEVATION: FAST[Axis.ELEVATION]}
+    with VirtualComposite("prosistel", "gs232b", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda c: c.az.truth().az_deg > 30, 60, "azimuth turning")
+        t = v.now
+        v.az.power_cycle()
+        v.run_for(60.0)
+        elevation = v.el.truth().el_deg
+        assert elevation < 60.0, elevation
+        assert not v.el.truth().is_moving
+        said = [e.message for box in (v.az, v.el) for e in box.errors(since=t)]
+        gave_up = [m for m in said if m.startswith("the controller stopped turning short")]
+        assert len(gave_up) == 1 and len(said) == 1, said
+        status = v.status
+        assert status.target_az_deg is None and status.target_el_deg is None
+        assert status.state is MotionState.IDLE
+
+
 def test_both_boxes_refusing_the_target_are_said_each_the_elevations_by_its_elevation() -> None:
     """stops.py rule 4 and composite.py rule 9: both GS-232 boxes answer a target with their
     refusal (``?>``), the azimuth box resting at north. The elevation box's refusal named its
@@ -815,3 +867,226 @@ def test_an_elevation_box_freed_after_its_stall_names_its_elevation_turning() ->
         assert turning.startswith("rotor turning at elevation "), turning
         v.run_until(lambda c: not c.el.truth().is_moving, 10, "stopped once more")
         assert v.el.truth().el_deg < 25.0
+
+
+def _lost_azimuth_elevation_turning(v: VirtualComposite) -> float:
+    """G4XYZ's 300/40: the RT-21 azimuth box's frame lost on its line, the GS-232B elevation
+    box's half sent and turning. The time it was sent."""
+    v.run_until(online, 10, "both boxes answer")
+    v.run_for(3.0)
+    v.az.drop_writes(b"AP1300.0\r;")  # the azimuth's frame lost on the line
+    t = v.now
+    v.aim(Target(300.0, 40.0, origin=Origin(Source.MQTT, "G4XYZ")))
+    v.run_until(lambda h: h.el.truth().is_moving, 5, "the elevation turning")
+    return t
+
+
+def _the_drop_said(v: VirtualComposite, since: float) -> str | None:
+    """composite.py rule 9: the command the azimuth box's one drop is said with on R/error."""
+    [drop] = v.az.errors("refused", since=since)
+    event = ErrorEvent(drop.kind, drop.message, drop.command, v.wall())
+    return v.composition.whole(Axis.AZIMUTH, event).command
+
+
+def test_a_storm_that_drops_the_azimuths_try_more_drops_the_elevations_half_too() -> None:
+    """composite.py rules 8 and 9, wind.py rule 1, controller.py rule 11: a storm known only
+    from a replay begins before the reading that would send 300/40's lost azimuth once more.
+    The azimuth box drops its try more (the storm refuses motion), but the elevation box
+    turned on to 40 for the target the storm had dropped, the antenna left half moved, and
+    R/error named 'target az 300' alone (a cold review); a waiting azimuth's drop stops the
+    elevation and names the whole target."""
+    wind = {"wind_topic": "weather/wind", "wind_park_above": 60, "wind_park_az_deg": 180}
+    with VirtualComposite("rt21", "gs232b", settings=wind, emulators=FAST) as v:
+        t = _lost_azimuth_elevation_turning(v)
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        assert v.status.wind is not None and v.status.wind.storm
+        v.run_for(30.0)
+        assert [d for d in v.az.sent(since=t) if d.startswith(b"AP1")] == [b"AP1300.0\r;"]
+        assert v.el.truth().el_deg < 30.0, v.el.truth()  # observed: on to 40
+        assert _the_drop_said(v, t) == "target az 300 el 40"  # observed: 'target az 300'
+
+
+def test_a_claim_that_takes_the_azimuths_try_more_names_the_whole_target() -> None:
+    """composite.py rule 9, session.py rule 23: DL1ABC claims the lease before the reading that
+    would send G4XYZ's lost azimuth once more. The azimuth box takes the try more and the
+    elevation box is stopped (rule 8), but R/error's 'target not sent again' named 'target az
+    300' alone, where the user lost 300/40 (a cold review)."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        t = _lost_azimuth_elevation_turning(v)
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_for(30.0)
+        assert [d for d in v.az.sent(since=t) if d.startswith(b"AP1")] == [b"AP1300.0\r;"]
+        assert v.el.truth().el_deg < 30.0, v.el.truth()
+        assert _the_drop_said(v, t) == "target az 300 el 40"  # observed: 'target az 300'
+
+
+def test_a_claim_that_drops_one_senders_azimuth_leaves_the_holders_own_elevation() -> None:
+    """composite.py rule 8, session.py rule 23: G4XYZ's 300/40 mid-turn: the Rotor-EZ azimuth
+    box holds 300 for its brake, the GS-232B elevation box turns to 40. DL1ABC sends an
+    elevation of 10 alone, then claims the lease: G4XYZ's azimuth is dropped, and the other box
+    dropped its half of the rotator's last target, DL1ABC's own 10, unsaid, so the elevation
+    went on to G4XYZ's 40, half of the target the claim refused (a cold review). The other
+    box drops only the half of the same sender's target."""
+    emulators = {
+        Axis.AZIMUTH: {"speed_deg_s": 6.0, "jitter_deg": 0},
+        Axis.ELEVATION: {**FAST[Axis.ELEVATION], "el_speed_deg_s": 2.0},
+    }
+    g4xyz, dl1abc = Origin(Source.MQTT, "G4XYZ"), Origin(Source.MQTT, "DL1ABC")
+    with VirtualComposite("rotorez", "gs232b", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(120.0, 20.0, origin=g4xyz))
+        v.run_until(lambda h: h.az.truth().az_deg > 30, 30, "turning")
+        v.aim(Target(300.0, 40.0, origin=g4xyz))  # (a stop, and 300 waits for the brake)
+        v.run_for(0.3)
+        assert v.az.truth().in_brake_delay and v.el.truth().is_moving
+        t = v.now
+        v.aim(Target(None, 10.0, origin=dl1abc))
+        v.run_for(0.3)
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_until(lambda h: not h.el.truth().is_moving, 60, "the elevation at rest")
+        v.run_for(5.0)
+        assert v.el.truth().el_deg == pytest.approx(10.0, abs=1.0)  # observed: 40
+        assert b"W000 010\r" in v.el.sent(since=t)
+        assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
+        said = [(r.command, r.origin) for box in (v.az, v.el) for r in box.errors(since=t)]
+        assert said == [("target az 300", g4xyz)]
+
+
+def test_a_claim_that_drops_an_azimuth_sent_alone_drops_its_senders_elevation_too() -> None:
+    """composite.py rules 8 and 9, core/model.py ``combine``: G4XYZ's 300/40 mid-turn, the
+    Rotor-EZ azimuth box holds 300 for its brake and the GS-232B elevation box turns to 40;
+    G4XYZ then sends an azimuth of 310 alone, taken with that 40 (one sender's two halves
+    combine). DL1ABC's claim drops 310, but the elevation turned on to 40, the antenna left
+    half moved for a target the lease refused, and R/error named 'target az 310' alone (a
+    cold review): the rotator's target was the last one's halves, and 310 has none there."""
+    emulators = {
+        Axis.AZIMUTH: {"speed_deg_s": 6.0, "jitter_deg": 0},
+        Axis.ELEVATION: {**FAST[Axis.ELEVATION], "el_speed_deg_s": 2.0},
+    }
+    g4xyz = Origin(Source.MQTT, "G4XYZ")
+    with VirtualComposite("rotorez", "gs232b", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(120.0, 20.0, origin=g4xyz))
+        v.run_until(lambda h: h.az.truth().az_deg > 30, 30, "turning")
+        v.aim(Target(300.0, 40.0, origin=g4xyz))  # (a stop, and 300 waits for the brake)
+        v.run_for(0.3)
+        t = v.now
+        v.aim(Target(310.0, None, origin=g4xyz))
+        v.run_for(0.3)
+        assert v.az.truth().in_brake_delay and v.el.truth().is_moving
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_until(lambda h: not h.el.truth().is_moving, 60, "the elevation at rest")
+        v.run_for(5.0)
+        assert v.el.truth().el_deg < 30.0, v.el.truth()  # observed: on to 40
+        assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
+        assert _the_drop_said(v, t) == "target az 310 el 40"  # observed: 'target az 310'
+
+
+def test_a_claim_that_drops_the_azimuth_drops_a_satel_elevations_half_put_back_too() -> None:
+    """composite.py rule 8, slew.py rule 4, session.py rule 23: G4XYZ's elevation 40 goes to
+    the SatEL elevation box, slower than configured, then their azimuth 300 alone (taken with
+    40: one sender's two halves), which the Rotor-EZ azimuth box holds for its brake. The
+    SatEL's report is late: it is stopped and 40 put back. DL1ABC's claim drops the azimuth's
+    300, but the put-back 40 was a new target the elevation box's ``forsake`` did not know
+    for the rotator's half (a cold review): it went out and the elevation turned on to 40,
+    the antenna left half moved for a target the lease refused."""
+    g4xyz = Origin(Source.MQTT, "G4XYZ")
+    emulators = {
+        Axis.AZIMUTH: {"speed_deg_s": 6.0, "jitter_deg": 0},
+        Axis.ELEVATION: {"el_speed_deg_s": 3.0},  # (the bridge is told 20: its report late)
+    }
+    settings = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 20.0}
+    with VirtualComposite("rotorez", "satel", settings=settings, emulators=emulators) as v:
+        v.run_until(online, 30, "both boxes answer")
+        v.run_until(lambda h: h.status.state is MotionState.IDLE, 30, "out of its brake delay")
+        v.aim(Target(120.0, None, origin=g4xyz))
+        v.run_until(lambda h: h.az.truth().az_deg > 30, 30, "turning")
+        t = v.now
+        v.aim(Target(None, 40.0, origin=g4xyz))
+        v.run_until(lambda h: h.el.truth().el_deg > 15, 30, "the elevation slewing")
+        v.aim(Target(300.0, None, origin=g4xyz))  # (a stop, and 300 waits for the brake)
+        v.run_until(
+            lambda h: any(e.message.startswith("no report from") for e in h.el.errors(since=t)),
+            30,
+            "the elevation's late report: its 40 put back",
+        )
+        assert v.az.truth().in_brake_delay
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_until(lambda h: not h.el.truth().is_moving, 60, "the elevation at rest")
+        v.run_for(10.0)
+        assert not v.el.truth().is_moving
+        assert v.el.truth().el_deg < 35.0, v.el.truth()  # observed: on to 40
+        assert v.el.sent(since=t).count(b"p0 40\r\n") == 1  # observed: sent again
+        assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
+        assert _the_drop_said(v, t) == "target az 300 el 40"
+
+
+def test_a_claim_that_takes_a_refused_azimuths_try_more_says_it_once_naming_the_whole() -> None:
+    """session.py rule 23, controller.py rule 11, composite.py rule 9: G4XYZ's 300/40, the
+    GS-232B azimuth box's frame garbled on its line into one it refuses (``?>``), and DL1ABC's
+    claim before that refusal is read. The try more is not sent and the elevation is stopped,
+    but R/error said two things: 'target not sent again' and the refusal (the try more's
+    words, as if it were not tried again), where a storm that refuses the same try more says
+    one (a cold review). One message, naming the whole target."""
+    g4xyz = Origin(Source.MQTT, "G4XYZ")
+    with VirtualComposite("gs232b-az", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(3.0)
+        v.az.garble_writes(b"M300\r", b"M999\r")  # (three digits beyond the box's range)
+        t = v.now
+        v.aim(Target(300.0, 40.0, origin=g4xyz))
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_for(30.0)
+        assert [d for d in v.az.sent(since=t) if d.startswith(b"M")] == [b"M300\r"]
+        assert v.el.truth().el_deg < 30.0, v.el.truth()
+        said = [
+            v.composition.whole(axis, ErrorEvent(r.kind, r.message, r.command, v.wall()))
+            for axis, box in v.boxes.items()
+            for r in box.errors(since=t)
+        ]
+        assert [(e.kind, e.command) for e in said] == [("refused", "target az 300 el 40")], said
+        assert said[0].message.startswith("target not sent again: DL1ABC holds the rotator")
+
+
+def test_a_claim_that_drops_the_azimuth_stops_a_satel_elevations_half_sent_again() -> None:
+    """composite.py rule 8, slew.py rule 4: as above, but G4XYZ's azimuth 300 alone comes once
+    the SatEL's 40 was put back, and DL1ABC's claim once that 40 went out again, the azimuth's
+    300 still held for its brake. The put back, a new target, was neither kept as the
+    sender's elevation with 300 nor known for the rotator's half when the claim dropped 300:
+    the elevation slewed on to 40 alone."""
+    g4xyz = Origin(Source.MQTT, "G4XYZ")
+    emulators = {
+        Axis.AZIMUTH: {"speed_deg_s": 6.0, "jitter_deg": 0},
+        Axis.ELEVATION: {"el_speed_deg_s": 3.0},  # (the bridge is told 20: its report late)
+    }
+    settings = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 20.0}
+    with VirtualComposite("rotorez", "satel", settings=settings, emulators=emulators) as v:
+        v.run_until(online, 30, "both boxes answer")
+        v.run_until(lambda h: h.status.state is MotionState.IDLE, 30, "out of its brake delay")
+        v.aim(Target(120.0, None, origin=g4xyz))
+        v.run_until(lambda h: h.az.truth().az_deg > 30, 30, "turning")
+        t = v.now
+        v.aim(Target(None, 40.0, origin=g4xyz))
+        v.run_until(
+            lambda h: any(e.message.startswith("no report from") for e in h.el.errors(since=t)),
+            30,
+            "the elevation's late report: its 40 put back",
+        )
+        v.aim(Target(300.0, None, origin=g4xyz))  # (a stop, and 300 waits for the brake)
+        v.run_until(lambda h: h.el.sent(since=t).count(b"p0 40\r\n") == 2, 30, "40 again")
+        v.run_until(lambda h: h.el.truth().is_moving, 30, "the elevation slewing again")
+        assert v.az.truth().in_brake_delay
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_until(lambda h: not h.el.truth().is_moving, 60, "the elevation at rest")
+        v.run_for(10.0)
+        assert not v.el.truth().is_moving
+        assert v.el.truth().el_deg < 35.0, v.el.truth()  # observed: on to 40
+        assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
+        assert _the_drop_said(v, t) == "target az 300 el 40"  # observed: 'target az 300'

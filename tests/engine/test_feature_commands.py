@@ -618,3 +618,46 @@ def test_a_part_turned_on_by_a_command_a_clearing_release_came_after_stays_still
     bench.v._take()
     bench.rest()
     assert_still(bench)
+
+
+@pytest.mark.parametrize("payload", [b"aim 200", b"label mine"], ids=["moving", "not moving"])
+def test_one_judged_before_another_operators_claim_and_put_after_it_is_refused(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch, payload: bytes
+) -> None:
+    """mailbox.py rule 14: G4XYZ's command judged while the lease was free, DL1ABC's claim
+    put and taken meanwhile, then the command put: it reached its part under DL1ABC's lease
+    (``aim`` turned the rotor to 200, ``label`` changed what the part shows: the lease
+    refuses both from another operator). Refused at its put, said and audited."""
+    rot = bench.rot
+
+    def claimed() -> None:
+        rot.submit(Claim("DL1ABC", 30, origin=WHO), "claim")
+        bench.v._take()
+
+    if payload.startswith(b"aim"):
+        between_judge_and_put(monkeypatch, rot, claimed)
+    else:  # (judged by the lease alone: the claim comes right after it said yes)
+        real = rot.operators.refusal
+
+        def refusal(who: str) -> str | None:
+            said = real(who)
+            monkeypatch.setattr(rot.operators, "refusal", real)
+            claimed()
+            return said
+
+        monkeypatch.setattr(rot.operators, "refusal", refusal)
+    refused: Refused | None = None
+    try:
+        bench.submit(payload, OTHER)
+    except Refused as exc:
+        refused = exc
+    bench.v._take()
+    bench.rest()
+    assert bench.sets() == []
+    assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+    assert bench.v.status.features["beam"] == {"label": None, "aimed": 0}  # never reached it
+    assert refused is not None and refused.code == "leased"
+    assert refused.message.startswith("DL1ABC claimed the control lease while it was judged")
+    assert bench.events[-1].message == refused.message
+    last = bench.audit[-1]
+    assert (last.origin, last.result) == (OTHER, f"refused: {refused.message}")

@@ -15,6 +15,7 @@ from bridge.app import worker_config
 from bridge.core.model import ErrorKind, MotionState, Source
 from bridge.features.follow import follow_state
 from bridge.session import follow as fo
+from bridge.session import session as fs
 from bridge.session.config import FollowConfig, WorkerConfig
 from bridge.session.follow import Follow, Follower, Heard
 from bridge.session.parts import NOTHING, Scene
@@ -233,6 +234,32 @@ def test_a_flood_of_new_grids_is_logged_a_line_every_few_seconds_not_one_a_turn(
     said = [r.getMessage() for r in caplog.records if r.levelno >= logging.INFO]
     assert len(said) == 2 and "following JA1ABC in FN31" in said[1], said
     assert "399 more turn(s) since the last such line" in said[1], said
+
+
+def test_a_flood_of_refused_grids_is_on_r_error_each_and_in_the_log_a_line_every_few_seconds(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """An attack pass: a status every 5 ms, each with a new grid in a keep-out sector (the
+    whole compass but 359..360 here): each refusal was a warning line of the session's, some
+    190 a second in the bridge. Each refusal is still published (R/error's own limit thins
+    it there); the log says one every PART_ERROR_LOG_S with the count since (session.py rule
+    22), and the rotor never turns."""
+    grids = [f"{a}{b}{n}{m}" for a in "AJR" for b in "ACEGIKMOQ" for n in "0369" for m in "0369"]
+    with spid(keep_out=[[0.0, 359.0]]) as v:
+        v.follow(True)
+        with caplog.at_level(logging.DEBUG, "bridge.session.session"):
+            for grid in grids[:400]:  # two seconds of a flood
+                v.heard("JA1ABC", grid)
+                v.run_for(0.005)
+            v.run_for(fs.PART_ERROR_LOG_S)
+            v.heard("JA1ABC", grids[400])
+            v.run_for(0.1)
+        refused = [e for e in v.errors("refused") if e.message.startswith("following: ")]
+        assert len(refused) == 401
+        said = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+        assert len(said) == 2 and "keep-out sector" in said[0], said
+        assert said[1].endswith("(399 more such error(s) since the last such line)"), said
+        assert sets(v) == 0
 
 
 def test_the_stations_own_grid_and_its_antipode_have_no_bearing_and_are_reported_once() -> None:
@@ -572,6 +599,38 @@ def test_of_two_antennas_the_one_on_the_dials_band_turns_in_the_session() -> Non
         assert angle_between(high.truth().az_deg, bearing("QF56")) <= 0.5
         assert angle_between(low.truth().az_deg, bearing("PM95")) <= 0.5  # still on PM95
         assert low.errors("refused")[-1].message.startswith("following: WSJT-X's dial 14.074 MHz")
+
+
+def test_an_antenna_off_both_radios_bands_says_so_once_not_at_every_status() -> None:
+    """SO2R, rig1 on 20 m and rig2 on 40 m, and the 80 m antenna following too: neither radio
+    is on its band, and R/error says so once, until a dial comes to 80 m (it said it again at
+    every status of each radio, each on another band than the one before: rule 9)."""
+    rig1 = Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY)
+    rig2 = Heard("W1AW", "FN31", False, "WSJT-X - rig2", FORTY)
+    with spid(bands=["80m"]) as low:
+        low.follow(True)
+        for _ in range(4):  # four decoding periods, each radio's status in each
+            for heard in (rig1, rig2):
+                low.mailbox.put_heard(heard)
+                low._take()
+                low.run_for(5.0)
+        assert [e.message for e in low.errors("refused")] == [
+            "following: WSJT-X's dial 14.074 MHz is on 20m, and this antenna is for 80m"
+        ]
+        assert sets(low) == 0
+        on_80 = replace(rig2, dial_hz=3_573_000)  # rig2 comes to 80 m: turned to, and then
+        low.mailbox.put_heard(on_80)  # a dial off its band is said again, once
+        low._take()
+        low.run_for(60.0)
+        assert angle_between(low.truth().az_deg, bearing("FN31")) <= 0.5
+        for heard in (replace(rig1, grid="QF56"), replace(rig1, grid="QF56", dial_hz=FORTY)):
+            low.mailbox.put_heard(replace(heard, instance="WSJT-X - rig2"))
+            low._take()
+            low.run_for(5.0)
+        assert [e.message for e in low.errors("refused")][1:] == [
+            "following: WSJT-X's dial 14.074 MHz is on 20m, and this antenna is for 80m"
+        ]
+        assert angle_between(low.truth().az_deg, bearing("FN31")) <= 0.5
 
 
 def test_with_two_radios_each_antenna_follows_the_program_on_its_band() -> None:

@@ -2,8 +2,13 @@ from __future__ import annotations
 
 import select
 
-from bridge.core.model import SetOption, Stop, Target
-from bridge.session.mailbox import Mailbox
+import pytest
+
+from bridge.core.model import Control, FeatureCommand, Origin, SetOption, Source, Stop, Target
+from bridge.session.follow import Follow
+from bridge.session.mailbox import LeaseChanged, Mailbox
+from bridge.session.tracking import Track
+from bridge.sky import Body
 from tests.support.waiting import slow
 
 
@@ -198,3 +203,52 @@ def test_a_motion_judged_before_a_stop_or_lock_on_put_since_is_dropped() -> None
         assert box.take().target == Target(30.0)
     finally:
         box.close()
+
+
+def test_a_target_judged_before_another_operators_claim_is_refused_at_its_put() -> None:
+    """Rule 14: the generation read before the judge, a claim put since: G4XYZ's target is
+    refused naming the lease, and nothing waits; the holder's own, and one judged at the
+    claim's generation, are put."""
+    mb = Mailbox()
+    g4xyz, dl1abc = Origin(Source.MQTT, "G4XYZ"), Origin(Source.MQTT, "dl1abc")
+    judged = mb.lease
+    held = Control("DL1ABC", 1e9)
+    mb.put_control(held)
+    with pytest.raises(LeaseChanged) as refused:
+        mb.put(Target(200.0, origin=g4xyz), epoch=mb.epoch, lease=judged)
+    assert refused.value.control == held and mb.take().target is None
+    assert mb.put(Target(200.0, origin=dl1abc), epoch=mb.epoch, lease=judged)
+    assert mb.take().target == Target(200.0, origin=dl1abc)
+    mb.put_control(None)  # released: anyone's judged before it goes
+    assert mb.put(Target(100.0, origin=g4xyz), lease=judged)
+    assert mb.take().target == Target(100.0, origin=g4xyz)
+
+
+def test_a_start_judged_before_another_operators_claim_is_refused_at_its_put() -> None:
+    """Rule 14 for a track or follow start and a feature's own command (moving or not): put
+    with the generation read before the judge, a claim by DL1ABC put since, G4XYZ's is
+    refused and nothing waits; the holder's own goes, and an OFF is never judged."""
+    mb = Mailbox()
+    g4xyz, dl1abc = Origin(Source.MQTT, "G4XYZ"), Origin(Source.MQTT, "DL1ABC")
+    judged = mb.lease
+    mb.put_control(Control("DL1ABC", 1e9))
+    mb.take()
+    puts = {
+        "track": lambda who: mb.put_track(Track(Body.sun(), origin=who), lease=judged),
+        "follow": lambda who: mb.put_follow(Follow(True, origin=who), lease=judged),
+        "aim": lambda who: mb.put_feature(
+            FeatureCommand(feature="beam", name="aim", value=1.0, origin=who), lease=judged
+        ),
+        "label": lambda who: mb.put_feature(
+            FeatureCommand(feature="beam", name="label", moves=False, origin=who), lease=judged
+        ),
+    }
+    for name, put in puts.items():
+        with pytest.raises(LeaseChanged):
+            put(g4xyz)
+        assert not mb.take(), name
+        assert put(dl1abc), name
+        assert mb.take(), name
+    assert mb.put_track(Track(None, origin=g4xyz)) and mb.put_follow(Follow(False, origin=g4xyz))
+    batch = mb.take()
+    assert batch.track == Track(None, origin=g4xyz) and batch.follow == Follow(False, origin=g4xyz)

@@ -224,3 +224,19 @@ def test_a_hand_unseen_on_a_loaded_host_is_not_stopped_when_the_spell_ends(rig: 
     assert (rests[0].kind, rests[0].az_deg) == ("arrived", pytest.approx(300)), rests
     park = next(f for f in v.frames(since=t_hand) if f.data == b"AP1000\r")
     assert park.outcome == Outcome.EXECUTED and park.time_s - rests[0].time_s >= 5
+
+
+def test_a_gs232_with_an_offset_takes_the_near_end_for_the_bearing_at_its_stop(rig: Rig) -> None:
+    """pointing.py rule 2: 360 named is 360, but a bearing the offset brings to the stop goes
+    out as 0. A GS-232B mounted 10 degrees off (raw 0 points at true 350), resting at true 0,
+    asked for true 350: it was sent ``W360 000``, the clockwise end, and turned 350 degrees
+    the long way round to point 10 degrees from where it was (a cold review of 360's rule)."""
+    v = rig("gs232b", settings={"az_offset_deg": -10}, emulator={"start_az_deg": 10})
+    v.run_until_state(IDLE, 30)
+    assert v.status.bearing_deg == 0
+    t = v.now
+    v.aim(Target(350))
+    v.run_until(lambda v: v.state is IDLE and not v.truth().is_moving, 120, "at rest")
+    assert [d for d in v.sent(since=t) if d.startswith(b"W")] == [b"W000 000\r"]
+    assert v.truth().az_deg == pytest.approx(0, abs=1)
+    assert v.status.bearing_deg == pytest.approx(350, abs=v.cfg.deadband_deg)

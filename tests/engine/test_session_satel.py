@@ -4,8 +4,9 @@ The SatEL answers nothing while it moves and prints a status report when the mov
 (protocols/satel.md). Input while it slews can wedge it (the emulator logs every such byte as
 "misuse: input while slewing"), so the session sends only ``s`` then (session rule 8). A report
 that does not come is handled by slew.py: stop, ask, send the target again; the second time,
-give it up. Its own clock ticks every second and rides along in the status without causing one
-(status.py rule 4).
+give it up; a controller whose clock went back meanwhile restarted, and is sent nothing
+(controller.py rule 14). Its own clock ticks every second and rides along in the status
+without causing one (status.py rule 4).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import re
 from collections.abc import Callable
 from datetime import UTC, datetime
 
-from bridge.core.model import MotionState
+from bridge.core.model import MotionState, Origin, Source, Target
 from bridge.emulators.satel import Outcome
 from bridge.session.slew import SLEW_STOP_TRIES
 from tests.engine.virtual import VirtualRotator
@@ -323,3 +324,174 @@ def test_a_point_stored_before_the_bridge_connected_never_turns_the_rotor(rig: R
     assert (truth.az_deg, truth.el_deg) == (0.0, 0.0)
     assert v.device.state(v.now).stored_points == ()
     assert not [e for e in v.device.events if e.kind == "move"]
+
+
+def test_a_satel_power_cycled_mid_slew_is_not_sent_its_target_again(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_for(10)
+    assert slewing(v)
+    cut = v.now
+    v.power_cycle()  # its report never comes; its clock starts again at 2001/00/00
+    stood = v.truth()
+    v.run_for(200)
+
+    # the wait for the report, the stops, one question: then nothing that moves it
+    after = [f.data for f in v.frames(since=cut) if f.data != b"z"]
+    assert after[:SLEW_STOP_TRIES] == [b"s"] * SLEW_STOP_TRIES
+    assert set(after[SLEW_STOP_TRIES:]) <= {b"g"}  # motion on again (it restarted with it off)
+    assert points(v) == [b"p200 40\r"]  # not sent again
+    assert (v.truth().az_deg, v.truth().el_deg) == (stood.az_deg, stood.el_deg)
+    *_, restarted = v.errors()
+    az, el = round(stood.az_deg), round(stood.el_deg)
+    assert restarted.kind == "serial"
+    assert re.fullmatch(
+        rf"the controller restarted mid-turn \(its clock went back, to 2001/00/00 00:\d\d:\d\d\) "
+        rf"at {az}°, elevation {el}°: its turn to 200°, elevation 40° was not resumed: send the "
+        "target again",
+        restarted.message,
+    ), restarted.message
+    assert [e for e in v.errors() if "restarted mid-turn" in e.message] == [restarted]
+    s = v.status
+    assert s.state is IDLE and s.target_az_deg is None and s.health.stalls == 0
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_satel_restarted_mid_slew_whose_clock_line_is_garbled_is_sent_its_target_again(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_for(10)
+    v.power_cycle()
+    seen = bytearray()
+
+    def garble_the_clock(data: bytes, now: float) -> bytes:  # its first report's clock, once
+        seen.extend(data)
+        if seen.endswith(b"Time: 2") and seen.count(b"Time: ") == 1:
+            return data[:-1] + b"x"
+        return data
+
+    v.to_host = garble_the_clock
+    v.run_until(lambda v: len(points(v)) == 2, 200, "sent again")
+
+    # nothing it said could tell a restart: a lost report, as the docs say
+    assert points(v) == [b"p200 40\r", b"p200 40\r"]
+    assert not [e for e in v.errors() if "restarted mid-turn" in e.message]
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_satel_power_cycled_mid_slew_then_redirected_is_not_sent_the_new_point(
+    rig: Rig,
+) -> None:
+    # a newer target (a tracking step, a second user) stops the slew: its report never comes
+    # either, and the first reading after the stops must judge the clock as a lost report's
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_for(10)
+    v.power_cycle()
+    stood = v.truth()
+    cut = v.now
+    v.target(100, 20)
+    v.run_for(200)
+
+    after = [f.data for f in v.frames(since=cut) if f.data != b"z"]
+    assert after[:SLEW_STOP_TRIES] == [b"s"] * SLEW_STOP_TRIES
+    assert set(after[SLEW_STOP_TRIES:]) <= {b"g"}
+    assert points(v) == [b"p200 40\r"]  # the newer point is not sent to the restarted unit
+    assert (v.truth().az_deg, v.truth().el_deg) == (stood.az_deg, stood.el_deg)
+    [said] = [e for e in v.errors() if "restarted mid-turn" in e.message]
+    assert said.kind == "serial" and said.command == "target az 100 el 20"
+    assert re.fullmatch(
+        r"the controller restarted mid-turn \(its clock went back, to 2001/00/00 00:\d\d:\d\d\) "
+        r"at \d+°, elevation \d+°: its turn to 200°, elevation 40° was not resumed: send the "
+        "target again",
+        said.message,
+    ), said.message
+    s = v.status
+    assert s.state is IDLE and s.target_az_deg is None and s.health.stalls == 0
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_target_sent_while_a_restarted_satel_is_asked_where_it_is_is_dropped_and_said(
+    rig: Rig,
+) -> None:
+    # the report is late, the target put back to go again; a newer one replaces it before the
+    # first reading comes: the restart is still said, and neither goes to the restarted unit
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_for(10)
+    v.power_cycle()
+    stood = v.truth()
+    v.run_until(
+        lambda v: any(e.message.startswith("no report from the controller") for e in v.errors()),
+        200,
+        "the report is late",
+    )
+    v.target(100, 20)
+    v.run_for(200)
+
+    assert points(v) == [b"p200 40\r"]
+    assert (v.truth().az_deg, v.truth().el_deg) == (stood.az_deg, stood.el_deg)
+    [said] = [e for e in v.errors() if "restarted mid-turn" in e.message]
+    assert said.kind == "serial" and said.command == "target az 100 el 20"
+    assert "its turn to 200°, elevation 40° was not resumed" in said.message
+    s = v.status
+    assert s.state is IDLE and s.target_az_deg is None and s.health.stalls == 0
+    assert_nothing_but_stops_while_slewing(v)
+
+
+# a storm (wind.py): its park goes out whatever else waits
+STORM = {"wind_topic": "weather/wind", "wind_park_above": 60, "wind_release_below": 40}
+STORM |= {"wind_park_az_deg": 90}
+
+
+def wind_kmh(v: VirtualRotator, kmh: float) -> None:
+    v.mailbox.put_wind(kmh)
+    v._take()
+
+
+def test_a_storms_park_waiting_when_a_restarted_satel_is_read_still_goes(rig: Rig) -> None:
+    # the storm begins mid-slew: its park stops the slew and waits; the restart is said, yet
+    # the park is no user's turn to abandon (wind.py: the storm's park goes on)
+    v = ready(rig, settings=STORM)
+    wind_kmh(v, 30.0)
+    v.target(200, 40)
+    v.run_for(10)
+    v.power_cycle()
+    wind_kmh(v, 75.0)
+    v.run_until(lambda v: v.status.parked, 300, "parked for the storm")
+
+    assert points(v)[0] == b"p200 40\r" and points(v)[-1].startswith(b"p90 ")
+    [said] = [e for e in v.errors() if "restarted mid-turn" in e.message]
+    # the park goes on, so the error names no command as dropped (a cold review: it named
+    # the park, 'target az 90', as the restart's dropped target while the rotor parked)
+    assert said.command is None
+    assert abs(v.truth().az_deg - 90.0) <= 0.5
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_an_elevation_alone_sent_while_a_late_slews_target_waits_keeps_its_azimuth(
+    rig: Rig,
+) -> None:
+    """mailbox.py rule 2, core/model.py ``combine``: an azimuth, then an elevation alone, from
+    one sender, is one target. DL1ABC's 200/20 outlasts its report's bound (a rotor slower
+    than set, no restart): stopped, asked, put back to go again (slew.py rule 4); DL1ABC's
+    elevation 40 meanwhile was not taken with the azimuth put back (that one named no
+    sender, since the check that only one sender's halves combine), and the rotor went to
+    where the stop left it, at elevation 40, short of the 200 DL1ABC asked (a cold review)."""
+    v = ready(rig, settings=TOO_FAST)
+    who = Origin(Source.MQTT, "DL1ABC")
+    v.command(Target(200, 20, origin=who))
+    v.run_until(
+        lambda v: any("then going on to the target" in e.message for e in v.errors()),
+        120,
+        "the report is late",
+    )
+    assert v.session.targets.pending is not None  # put back, to go again
+    v.command(Target(None, 40, origin=who))
+    v.run_until(lambda v: len(points(v)) == 2, 120, "sent again")
+    v.run_until(lambda v: v.state is IDLE and not v.truth().is_moving, 120, "at rest")
+    assert points(v)[-1] == b"p200 40\r"
+    assert (v.truth().az_deg, v.truth().el_deg) == (200, 40)
+    assert_nothing_but_stops_while_slewing(v)

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState, SetOption, Target
+from bridge.core.model import Control, MotionState, Origin, SetOption, Source, Target
 from bridge.session.config import FollowConfig
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
@@ -89,6 +89,81 @@ def test_a_lost_follow_target_is_not_sent_after_following_was_turned_off() -> No
         v.run_for(20)
         assert v.frames("set", since=t) == []
         assert v.truth().az_deg == 0.0
+
+
+def _no_stall_called(v: VirtualRotator, since: float) -> None:
+    """The turn that never began is over: no stall said (blaming the brake), none counted in
+    rotor health, the rotor at rest."""
+    assert [(r.kind, r.message) for r in v.errors(since=since)] == []
+    health = v.status.health
+    assert health is not None and health.stalls == 0
+    assert v.state is IDLE
+
+
+def test_turning_tracking_off_before_its_lost_bearings_try_more_calls_no_stall(rig: Rig) -> None:
+    """Tracking's first bearing lost, tracking turned off before the reading that would send
+    it once more: the try more is not sent (above), and 10 s later a stall was said ("brake
+    paddle pressed, rotor stuck...") and counted in rotor health, for a turn that never
+    began (controller.py rule 11: given up, ``forgo``)."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    v = rig("easycomm2", sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, emulator=FAST)
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    lost = _lose_first_bearing(v)
+    v.track(Body.sun())
+    v.run_until(lambda h: lost, 10, "tracking's first bearing, lost")
+    v.run_for(0.5)
+    t = v.now
+    v.track(None)
+    v.run_for(40)  # (past the stall timeout from the lost try)
+    assert [w.data for w in v.writes if w.t >= t and _bearing_frame(w.data)] == []
+    _no_stall_called(v, t)
+
+
+def test_turning_tracking_off_while_its_try_more_waits_calls_no_stall(rig: Rig) -> None:
+    """Tracking's first bearing lost, its try more waiting (the stop express's hold keeps
+    every target back) when tracking is turned off: dropped, not sent; and 10 s later a
+    stall was said and counted in rotor health for the turn that never began."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    v = rig("easycomm2", sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, emulator=FAST)
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    lost = _lose_first_bearing(v)
+    t = v.now
+    v.track(Body.sun())
+    v.run_until(lambda h: lost, 10, "tracking's first bearing, lost")
+    v.mailbox.put_express_hold(5)
+    v._take()
+    v.run_until(lambda h: h.session.targets.again_now, 10, "its try more waiting")
+    v.track(None)
+    v.mailbox.put_express_release(5)
+    v._take()
+    v.run_for(40)
+    assert [w.data for w in v.writes if w.t >= t and _bearing_frame(w.data)] == [lost[0]]
+    _no_stall_called(v, t)
+
+
+def test_turning_following_off_before_its_lost_bearings_try_more_calls_no_stall() -> None:
+    """The same with following WSJT-X's first bearing, lost on an MD-01's line."""
+    with VirtualRotator(
+        "md01",
+        settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        follow=FollowConfig((52.52, 13.29), wsjtx=True),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "answers")
+        v.run_for(3)
+        v.set_deaf(True)  # WSJT-X's bearing lost on the line
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(0.05)
+        v.set_deaf(False)
+        v.run_for(0.5)
+        t = v.now
+        v.follow(False)
+        v.run_for(40)
+        assert v.frames("set", since=t) == []
+        _no_stall_called(v, t)
 
 
 def test_the_try_more_sends_the_bearing_the_first_try_sent(rig: Rig) -> None:
@@ -405,3 +480,35 @@ def test_a_target_lost_after_a_stop_short_of_the_one_before_goes_again(rig: Rig)
 
     assert v.errors(since=t) == []
     assert [w.t - t for w in v.writes if w.t >= t and w.data == lost][1] < 4.0  # (twice)
+
+
+@pytest.mark.parametrize("moved_before", [False, True], ids=["never moved", "moved before"])
+def test_a_try_more_a_claim_took_holds_back_no_target_for_a_brake_delay(
+    rig: Rig, moved_before: bool
+) -> None:
+    """controller.py rule 11 ``forgo``, motion.py rule 8: an Easycomm box set with a brake delay
+    (a Hy-Gain rotor behind it), G4XYZ's 200 lost on the line, DL1ABC's claim taking its try
+    more: the turn that never began is over at rest, braking as after a refusal. DL1ABC's own
+    target then goes out at once, not a brake delay later (a cold review's question: a box
+    that takes a new bearing at any time waits out no brake; a Rotor-EZ, which does, never
+    gets a try more)."""
+    g4xyz, dl1abc = Origin(Source.MQTT, "G4XYZ"), Origin(Source.MQTT, "DL1ABC")
+    v = resting(rig, "easycomm2", {"brake_delay_s": 5.0}, **FAST)
+    if moved_before:
+        v.aim(Target(140.0, 10.0, origin=g4xyz))
+        v.run_until(lambda h: h.state is IDLE and h.truth().az_deg > 139, 60, "at 140")
+    lost = _lose_first_bearing(v)
+    v.aim(Target(200.0, 10.0, origin=g4xyz))
+    v.run_until(lambda h: lost, 10, "G4XYZ's bearing, lost")
+    t = v.now
+    v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+    v._take()
+    v.run_until(lambda h: h.errors(since=t), 30, "the try more taken, said")
+    [said] = v.errors(since=t)
+    assert said.message.startswith("target not sent again: DL1ABC holds the rotator")
+    aimed = v.now
+    v.aim(Target(150.0, 10.0, origin=dl1abc))
+    v.run_for(1.0)
+    sent = [w for w in v.writes if w.t >= t and _bearing_frame(w.data) and not w.lost]
+    assert [w.data[:5] for w in sent] == [b"AZ150"], sent  # (no try more of 200)
+    assert sent[0].t == aimed  # (at once: no brake delay waited out)

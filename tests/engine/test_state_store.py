@@ -4,6 +4,7 @@ import errno
 import json
 import logging
 import os
+import threading
 from pathlib import Path
 
 import pytest
@@ -11,6 +12,7 @@ import pytest
 from bridge.app import App
 from bridge.runtime.state_store import InUse, StateStore, held
 from bridge.settings import Settings
+from tests.support.waiting import slow
 
 
 def test_lock_and_options_survive_a_restart(tmp_path: Path) -> None:
@@ -54,6 +56,32 @@ def test_the_target_a_rotor_rests_short_of_survives_a_restart(tmp_path: Path) ->
         assert StateStore(path).short_of("tower") is None
 
 
+def test_the_controllers_version_survives_a_restart_for_its_model_alone(tmp_path: Path) -> None:
+    """state_store.py rule 12: kept with the model's name; another model's (the controller
+    swapped), or a damaged one, is none."""
+    path = tmp_path / "state.json"
+    s = StateStore(path)
+    assert s.version("tower", "rotorez") is None
+    assert s.set_version("tower", "rotorez", "1.4S") is True
+    assert StateStore(path).version("tower", "rotorez") == "1.4S"
+    assert StateStore(path).version("tower", "rotorcard") is None
+    pair = "V" * 78 + " / " + "W" * 78  # (two boxes' versions joined, each a whole line's)
+    assert s.set_version("sky", "easycomm3-az+easycomm3", pair) is True
+    assert StateStore(path).version("sky", "easycomm3-az+easycomm3") == pair
+    assert StateStore(path).locked("tower") is False  # (no lock said: kept.py rule 10 holds)
+    assert StateStore(path).holds_lock("tower") is False
+    for damaged in (
+        '"1.4S"',
+        '{"model": "rotorez"}',
+        '{"model": "rotorez", "text": 14}',
+        '{"model": "rotorez", "text": "1.4S\\u001b[2J"}',
+        '{"model": "rotorez", "text": "' + "9" * 256 + '"}',
+    ):
+        path.write_text('{"rotators": {"tower": {"version": ' + damaged + "}}}")
+        assert StateStore(path).version("tower", "rotorez") is None, damaged
+        assert StateStore(path).problems == {}
+
+
 def test_a_state_file_behind_a_link_is_written_through_it(tmp_path: Path) -> None:
     """Rule 4, an attack pass: the first save replaced the link with a file of its own, and
     the file it pointed to (on another volume, say) was never read again."""
@@ -81,6 +109,21 @@ def test_the_installations_lock_follows_the_file_a_link_names(tmp_path: Path) ->
     with held(link), pytest.raises(InUse):
         with held(real):
             pass
+
+
+def test_a_link_where_the_installations_lock_goes_is_refused_and_its_file_left_alone(
+    tmp_path: Path,
+) -> None:
+    """Rule 7, an attack pass: the lock's file is emptied for the holder's process id, and
+    opened through a link (``state.json.lock`` naming the audit file) it emptied that file at
+    every start."""
+    audit = tmp_path / "audit.log"
+    audit.write_text("2026-12-02 lock ON by DL1ABC\n")
+    (tmp_path / "state.json.lock").symlink_to(audit)
+    with pytest.raises(OSError, match=r"state\.json\.lock is a symbolic link"):
+        with held(tmp_path / "state.json"):
+            pass
+    assert audit.read_text() == "2026-12-02 lock ON by DL1ABC\n"
 
 
 def test_a_state_file_link_that_loops_is_refused_by_its_kind(tmp_path: Path) -> None:
@@ -373,3 +416,58 @@ def test_the_start_leaves_the_writes_of_a_state_file_named_after_its_own_alone(
     with held(path):
         StateStore(path).check_writable()
     assert all(other.exists() for other in theirs)
+
+
+@pytest.mark.parametrize("digits", [400, 5000])
+def test_a_number_too_large_for_a_float_is_left_out_and_the_bridge_still_builds(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, digits: int
+) -> None:
+    """state_store.py rule 10, an attack pass: an integer of hundreds of digits in the file (a
+    damaged or hand-edited one) ended the start in an OverflowError traceback, exit code 1,
+    which systemd restarts every 5 s for ever. Now it is a number no setting takes: the
+    option is logged and left out, the place the rotor rested short of is none. One of more
+    digits than Python's ``int`` reads (4,300) made the whole file unreadable, every rotator
+    locked (a review): the same now."""
+    huge = "9" * digits  # (as text: Python writes no int of 5,000 digits either)
+    path = tmp_path / "state.json"
+    entry = f'{{"locked": false, "short_of": {huge}, "options": {{"jam": {huge}}}}}'
+    path.write_text(f'{{"rotators": {{"tower": {entry}}}}}')
+    settings = Settings(
+        state_file=path,
+        rotators=[{"id": "tower", "model": "rotorez", "port": str(tmp_path / "tty")}],
+    )
+    with caplog.at_level(logging.WARNING, logger="bridge"):
+        App(settings)  # built, never started: no broker, no serial port
+    assert "stored option 'jam' ignored" in caplog.text
+    assert StateStore(path).short_of("tower") is None
+
+
+def test_a_controller_saying_a_new_version_in_every_line_costs_the_card_a_write_or_two(
+    tmp_path: Path,
+) -> None:
+    """kept.py rule 11: an Easycomm III's ``VE...`` is taken whenever it comes, and each new
+    one queued a write of the state file with its fsyncs, a lock word's save waiting behind
+    them all. The versions waiting for the writer are saved as one, the latest."""
+    from bridge.protocols import REGISTRY
+    from bridge.runtime.kept import Kept
+
+    path = tmp_path / "state.json"
+    store = StateStore(path)
+    writes: list[object] = []
+    save = store._save
+
+    def counted() -> bool:
+        writes.append(json.loads(json.dumps(store._data)))
+        return save()
+
+    store._save = counted  # type: ignore[method-assign]
+    kept = Kept(store, "tower", REGISTRY["easycomm3"], report=lambda *a: None)
+    busy, free = threading.Event(), threading.Event()
+    store.later(lambda: (busy.set(), free.wait(slow(10))))  # the writer busy meanwhile
+    assert busy.wait(slow(10))
+    for i in range(1000):  # the lines thread's statuses, each with another version
+        kept.seen_version(f"V{i}")
+    free.set()
+    store.flush()
+    assert len(writes) <= 2, len(writes)
+    assert StateStore(path).version("tower", "easycomm3") == "V999"

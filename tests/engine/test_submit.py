@@ -233,3 +233,26 @@ def test_a_value_outside_the_union_is_refused_clearly_and_moves_nothing(
     assert f"not a command the bridge knows: {type(value).__name__}" in bench.events[-1].message
     assert bench.events[-1].command == "bad"
     assert not bench.rot._mailbox.take().target
+
+
+def test_only_an_absolute_target_is_audited_as_one(bench: Bench) -> None:
+    """runtime/audit.py rule 9 folds a sender's same target sent again: the judge marks the
+    absolute targets alone; a nudge, a preset or a park sent again each turn the rotor anew
+    (a nudge again turns it further) and are never folded as the same target."""
+    bench.audit.clear()
+    for command, described in [
+        (Target(120.0, 10.0, origin=WHO), "target 120 10"),
+        (Nudge(5.0, None, origin=WHO), "nudge +5"),
+        (GoToPreset("EU", origin=WHO), "preset EU"),
+        (Park(origin=WHO), "park"),
+        (Stop(Source.MQTT, WHO), "stop"),
+    ]:
+        bench.submit(command, described)
+        bench.rest()
+    assert [(e.command, e.target) for e in bench.audit] == [
+        ("target 120 10", True),
+        ("nudge +5", False),
+        ("preset EU", False),
+        ("park", False),
+        ("stop", False),
+    ]

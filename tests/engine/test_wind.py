@@ -14,6 +14,7 @@ from bridge.session.parts import NOTHING, Proposal, Scene
 from bridge.session.wind import WindPark
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
+from tests.engine.test_follow import STATION
 from tests.engine.test_parts import rig, scene
 from tests.engine.virtual import VirtualRotator
 
@@ -258,6 +259,30 @@ def test_auto_park_leaves_the_storms_park_alone() -> None:
         assert abs(v.truth().az_deg - 90.0) <= 0.5  # not turned to park_az_deg 0
 
 
+def test_the_calm_reading_that_ends_the_storm_does_not_auto_park_at_once() -> None:
+    """feed.py rule 2, autopark.py rule 1: a reading never moves the rotor anywhere but to the
+    storm's park. The calm reading that ended a storm whose park a STOP had stopped short let
+    auto-park's quiet spell, long over, park the rotor that instant (an attack pass: 200 to 0
+    at the storm's end, no command): the storm's end starts a new spell, as unlocking does."""
+    with windy(park_after_idle_s=30, wind_hold_min=1) as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.truth().is_moving, 10, "the park starts")
+        v.stop()
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "stopped")
+        where = v.truth().az_deg
+        v.run_for(120.0)  # auto-park's spell is long over: the storm holds it back
+        wind(v, 10.0)
+        v.run_for(61.0)
+        wind(v, 12.0)  # the hold is over: the storm ends with this reading
+        assert v.status.wind is not None and not v.status.wind.storm
+        ended = v.now
+        v.run_for(25.0)
+        assert abs(v.truth().az_deg - where) <= 0.5  # not turned by the reading
+        assert v.status.last_command_source == "mqtt"
+        v.run_until(lambda h: h.status.last_command_source == "auto-park", 30, "auto-park")
+        assert v.now - ended >= 30.0  # a whole quiet spell after the storm's end
+
+
 def test_a_wind_part_that_raises_keeps_the_storm(monkeypatch: pytest.MonkeyPatch) -> None:
     with windy() as v:
         wind(v, 90.0)
@@ -483,3 +508,147 @@ def test_a_storm_known_only_from_a_replay_ends_tracking_and_the_calm_turns_nothi
         assert v.frames("set", "set: clamped", since=since) == []
         assert (v.truth().az_deg, v.truth().el_deg) == (where.az_deg, where.el_deg)
         assert v.status.tracking is None
+
+
+def test_a_target_still_waiting_when_a_storm_begins_never_goes_out() -> None:
+    """Rules 1 and 6: every motion command is refused from the storm's start, one accepted
+    before it but not sent yet too. A Rotor-EZ's new target waits for the brake after the stop
+    that ends the turn before; a storm known only from a replay (a reconnect of the broker)
+    sends no park to replace it, and the target went out 6 s into the storm, while the status
+    said motion was refused (an attack pass: AP1300 written, the rotor turned to 300)."""
+    with VirtualRotator(
+        "rotorez", settings=WIND, emulator={"start_az_deg": 200.0}, sky=Sky(52.5, 13.4)
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.target(30.0)
+        v.run_until(lambda h: h.truth().is_moving, 10, "turning to 30")
+        v.target(300.0)  # the turn is stopped first; 300 waits for the brake
+        assert v.session.targets.pending is not None
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        assert v.status.wind is not None and v.status.wind.storm
+        v.run_for(60.0)
+        assert not v.frames("executed", since=v.now - 60.0)  # no target reached the controller
+        assert v.truth().az_deg > 150.0  # where the stop left it, not on to 300 (nor 30)
+        dropped = v.errors("refused")[-1]
+        assert dropped.message.startswith("target dropped: wind 90 km/h above 60 (the last")
+        assert dropped.command == "target az 300"
+
+
+@pytest.mark.parametrize("replayed", [False, True])
+def test_a_following_target_waiting_when_a_storm_begins_is_ended_unsaid(replayed: bool) -> None:
+    """Rule 1: the storm ends following, and the target it was waiting to send with it: its
+    ``following_ended`` says why. Only a target someone sent is refused on R/error (a cold
+    review: a WSJT-X target waiting for a Rotor-EZ's brake was refused there as 'target az
+    296.065', a command nobody sent)."""
+    with VirtualRotator(
+        "rotorez",
+        settings=WIND,
+        emulator={"start_az_deg": 200.0},
+        sky=Sky(52.5, 13.4),
+        follow=STATION,
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_until(lambda h: h.truth().is_moving, 10, "following JA1ABC")
+        v.heard("W1AW", "FN31")  # the turn is stopped first; FN31's bearing waits for the brake
+        assert v.session.targets.pending is not None
+        t = v.now
+        v.mailbox.put_wind(90.0, replayed=replayed)
+        v._take()
+        v.run_for(60.0)
+        assert v.errors("refused", since=t) == []
+        assert v.status.following is None
+        assert (v.status.following_ended or "").startswith("wind 90 km/h above 60")
+        assert not any(b"296" in f.data for f in v.frames(since=t))  # FN31 never went out
+
+
+def test_a_target_lost_on_the_line_is_not_tried_again_in_a_storm() -> None:
+    """Rule 1: from the storm's start every motion command is refused, and rule 6's storm
+    sends nothing. A user's target whose frame was lost on the line gets one try more
+    (controller.py rule 11) once a reading shows it did not move the rotor; a storm known
+    only from a replay (a broker's reconnect) began meanwhile, so nothing waited for
+    ``_storm`` to drop, and the try more went out in the storm: the rotor turned to 300 while
+    the status said motion was refused for it (a cold review)."""
+    with VirtualRotator(
+        "easycomm2",
+        settings={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0, **WIND},
+        emulator={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0, "start_az_deg": 200},
+        sky=Sky(52.5, 13.4),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_for(3.0)
+        v.drop_writes(b"AZ300.0 EL0.0\n")  # the target's frame lost on the line
+        v.target(300.0, 0.0)
+        v.run_for(0.3)
+        assert v.session.targets.pending is None  # it went out (and was lost)
+        t = v.now
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        assert v.status.wind is not None and v.status.wind.storm
+        v.run_for(30.0)
+        assert [w.data for w in v.writes if w.t >= t and w.data.startswith(b"AZ3")] == []
+        assert abs(v.truth().az_deg - 200.0) <= 0.5  # not turned in the storm
+        dropped = v.errors("refused", since=t)
+        assert [e.command for e in dropped] == ["target az 300 el 0"]
+        assert "not sent again: wind 90 km/h above 60" in dropped[0].message
+
+
+def test_a_satels_late_slew_is_stopped_and_not_sent_again_in_a_storm() -> None:
+    """Rule 1: a SatEL's slew whose report is late is stopped, and its target put back to go
+    again (slew.py rule 4). A storm known only from a replay began during the slew: it sends
+    nothing, so nothing waited for ``_storm`` to drop, and the target put back went out in
+    the storm: the rotor turned on to 200 while the status said motion was refused (a
+    review). It is not sent again, and R/error says so once, naming the storm."""
+    fast = {"az_speed_deg_s": 30, "el_speed_deg_s": 15}  # its slews outlast their report bound
+    with VirtualRotator("satel", settings={**fast, **WIND}) as v:
+        v.run_until_state(MotionState.IDLE, 30)
+        t = v.now
+        v.target(200.0, 20.0)
+        v.run_until(lambda h: h.truth().slewing, 5, "slewing to 200/20")
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        assert v.status.wind is not None and v.status.wind.storm and v.status.wind.replayed
+        v.run_until(lambda h: any(e.kind == "stopped" for e in h.device.events), 120, "stopped")
+        stood = v.truth()
+        v.run_for(120.0)
+        slews = [f.data for f in v.frames("slew", since=t)]
+        assert slews == [b"p200 20\r"]  # not a second time, in the storm
+        assert (v.truth().az_deg, v.truth().el_deg) == (stood.az_deg, stood.el_deg)
+        assert 0 < stood.az_deg < 200  # where the stop left it
+        said = v.errors(since=t)
+        assert [(e.kind, e.command) for e in said] == [("refused", "target az 200 el 20")]
+        assert said[0].message.startswith("no report from the controller")
+        storm = "wind 90 km/h above 60 (the last reading the broker kept)"
+        assert f"stopping it to ask where it is; its target is not sent again: {storm}" in (
+            said[0].message
+        )
+        assert v.state is MotionState.IDLE and v.status.target_az_deg is None
+
+
+def test_auto_parks_target_waiting_when_a_storm_begins_is_dropped_unsaid() -> None:
+    """Rule 1: a target the bridge itself was about to send when a storm begins ends with the
+    storm unsaid, as tracking's and following's do; only a command someone sent is refused on
+    R/error. Auto-park's park, waiting for a Rotor-EZ's fresh reading (targets.py rule 7), was
+    refused there as 'target az 0', a command nobody sent (a cold review)."""
+    with VirtualRotator(
+        "rotorez",
+        settings={**WIND, "park_after_idle_s": 30},
+        emulator={"start_az_deg": 200.0},
+        sky=Sky(52.5, 13.4),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+
+        def parking(h: VirtualRotator) -> bool:
+            pending = h.session.targets.pending
+            return pending is not None and pending.source is Source.AUTO_PARK
+
+        v.run_until(parking, 60, "auto-park's park waits for a reading")
+        t = v.now
+        v.mailbox.put_wind(90.0, replayed=True)
+        v._take()
+        v.run_for(30.0)
+        assert v.errors("refused", since=t) == []
+        assert not any(b"AP1" in f.data or b"AP0" in f.data for f in v.frames(since=t))
+        assert abs(v.truth().az_deg - 200.0) <= 0.5

@@ -52,6 +52,7 @@ class VirtualComposite:
         self.composition = Composition("v")
         self._halted = Followed()  # composite.py rule 6, as CompositeWorker
         self._restarted = {axis: Followed() for axis in Axis}  # composite.py rule 8, as it
+        self._drops = {axis: Followed() for axis in Axis}  # (its targets dropped, as it)
         self.mailbox = Mailbox()
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.boxes: dict[Axis, VirtualRotator] = {}
@@ -113,7 +114,13 @@ class VirtualComposite:
     def _take(self) -> None:
         batch = self.mailbox.take()
         if batch:
-            self._hand(self.composition.offline(split(batch)))  # (rules 1 and 8)
+            batches = self.composition.offline(split(batch))  # (rules 1 and 8)
+            if batch.target is not None:
+                self.composition.aimed(batch.target, batches, self._holds)
+            self._hand(batches)
+
+    def _holds(self, axis: Axis, half: Target) -> bool:
+        return self.boxes[axis].session.holds(half)  # (as CompositeWorker)
 
     def _hand(self, batches: dict[Axis, Batch]) -> None:
         for axis, batch in batches.items():
@@ -140,6 +147,11 @@ class VirtualComposite:
             if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
                 box = self.boxes[other]  # composite.py rule 8: a restart mid-turn
                 box._do(box.session.abandon(box.now))
+                self._absorb()
+            if self._drops[axis].follow(self.boxes[axis].session.drops):
+                box = self.boxes[other]  # composite.py rule 8: a target dropped
+                half = self.composition.sibling(other, self.boxes[axis].session.dropped)
+                box._do(box.session.forsake(half, box.now))
                 self._absorb()
 
     # -- time (rule 1) ----------------------------------------------------------------------------

@@ -12,10 +12,12 @@ import signal
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import paho.mqtt.client as mqtt
 import pytest
 
+from bridge.app import App, NotYet
 from bridge.core.errors import Refused
 from bridge.core.model import Source, Target
 from bridge.runtime.rotator import Rotator
@@ -74,7 +76,9 @@ def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
                 watcher.disconnect()
             assert bridge.proc is not None
             bridge.proc.wait(slow(10))
-            t = time.monotonic()
+            # (the killed bridge's ON, said as it died, may reach the probe after a clock read
+            # and pass for the restarted one's)
+            t = probe.caught_up()
             bridge = rig.start_process()
             probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
             lock = probe.wait_for("rotor/lock/state", after=t, timeout_s=10).payload
@@ -199,7 +203,7 @@ def test_the_first_look_leaves_a_nested_bridge_and_a_rotator_named_option_alone(
             rig.ready("option", timeout_s=40)
             probe.wait_value("rotor/option/lock/state", "OFF", timeout_s=20)
             rig.stop()  # a restart: the second first look reads it all retained
-            t = time.monotonic()
+            t = probe.caught_up()
             rig.start()
             rig.ready("option", timeout_s=40, after=t)
             probe.wait_value("rotor/bridge/state", "online", timeout_s=20, after=t)
@@ -233,7 +237,7 @@ def test_a_lock_on_outlives_a_state_file_that_lost_it(
         probe.wait_value("rotor/lock/state", "ON", after=t)
         bridge.terminate()
         state.unlink()  # (another state file: it holds nothing of this rotator)
-        t = time.monotonic()
+        t = probe.caught_up()
         rig.start_process()
         probe.wait_value("rotor/availability", "online", timeout_s=30, after=t)
         said = probe.wait_for("rotor/error", lambda m: b"R/lock/state" in m.payload, after=t)
@@ -285,3 +289,76 @@ def _accepted(rot: Rotator, target: Target) -> bool:
     except Refused:
         return False
     return True
+
+
+def test_a_start_that_read_the_state_file_before_an_ending_bridge_saved_a_lock_on_keeps_it(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """state_store.py rule 11, an attack pass: a bridge started while one on the same state
+    file was ending (``kill`` and a start by hand) read the file when it was built and took
+    the installation's lock only when it started. The lock ON the ending one saved between
+    the two was written back OFF by the new one, which ran unlocked: a target turned the
+    rotor. Now that start writes nothing and ends (exit code 1, to be started again), and the
+    next start comes back locked."""
+    with Rig(tmp_path, broker, probe) as rig:
+        emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+        state = rig.settings.state_file
+        state.parent.mkdir(parents=True, exist_ok=True)
+        state.write_text(json.dumps({"rotators": {"tower": {"locked": False}}}))
+        rig.start()
+        rig.ready("tower")
+        second = App(rig.settings)  # built (the file read) while the first one runs
+        t = time.monotonic()
+        probe.publish("rotor/lock", "ON")
+        probe.wait_value("rotor/lock/state", "ON", timeout_s=10, after=t)  # saved: kept.py rule 2
+        rig.stop()  # the first one ends: the installation's lock is free
+        with pytest.raises(NotYet, match="changed since this bridge read it") as ended:
+            second.start()
+        assert ended.value.exit_code == 1  # systemd starts it again
+        assert kept(state, "tower", "locked") is True
+        t = probe.caught_up()
+        rig.start()  # started again: the file as it is now
+        rig.ready("tower", after=t)
+        assert "locked" in rig.refused("tower", "100")
+        assert kept(state, "tower", "locked") is True
+        assert abs(emu.state().az_deg - 10) < 3, "a locked rotor turned"
+
+
+def test_a_lock_on_taken_while_the_bridge_ends_is_on_the_disk_before_it_lets_go(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """app.py rule 6, a review of state_store.py rule 11: a bridge that is ending takes lock
+    words to the last (its connections are closed after the state file's last flush), and the
+    save of one that came after that flush was left to the writer: on a slow disk (an SD card
+    under load) the bridge let go of the installation's lock, and ended, before it was
+    written. The next start read the lock OFF and ran unlocked (as its own process, with 2 s
+    an fsync, the file said OFF after the end). Now the end waits for it before it lets go."""
+    with Rig(tmp_path, broker, probe) as rig:
+        emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+        state = rig.settings.state_file
+        state.parent.mkdir(parents=True, exist_ok=True)
+        state.write_text(json.dumps({"rotators": {"tower": {"locked": False}}}))
+        app = rig.start()
+        rig.ready("tower")
+        rot, store, audit_stop = app.rotators[0], app.store, app.audit.stop
+        write = store._write
+        disk = threading.Event()  # never set: the slowness of the disk, not a synchronisation
+
+        def slow_disk(*args: Any, **kwargs: Any) -> None:
+            disk.wait(0.5)  # not a deadline: an fsync of an SD card under load (under flush's 5 s)
+            write(*args, **kwargs)
+
+        def lock_on_now() -> None:  # (the stop's next step after the state file's flush)
+            store._write = slow_disk  # type: ignore[method-assign]
+            probe.publish("rotor/lock", "ON")
+            wait_until(lambda: rot.locked, timeout_s=10)
+            audit_stop()
+
+        app.audit.stop = lock_on_now  # type: ignore[method-assign]
+        rig.stop()
+        assert kept(state, "tower", "locked") is True, "let go before the lock ON was kept"
+        t = probe.caught_up()
+        rig.start()
+        rig.ready("tower", after=t)
+        assert "locked" in rig.refused("tower", "100")
+        assert abs(emu.state().az_deg - 10) < 3, "a locked rotor turned"

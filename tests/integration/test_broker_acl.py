@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import logging
+import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -21,7 +22,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.integration.test_last_word import main_held_at
-from tests.support import Probe
+from tests.support import Probe, free_port
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -232,27 +233,130 @@ def test_markers_the_acl_drops_are_known_from_the_first_connection_and_a_stop_st
 
 
 @pytest.mark.parametrize("protocol", ["5", "3.1.1"])
-def test_markers_come_back_when_the_acl_lets_them_on_a_later_connect(
+def test_the_fence_problem_leaves_bridge_info_when_the_acl_lets_it_on_a_later_connect(
     tmp_path: Path, protocol: str
 ) -> None:
-    """lastword.py rule 7, client.py rule 16: one denied probe turned the markers off for the
-    life of the process, and B/bridge/info said so for ever. The probe is judged on every
-    connect: once the broker's ACL lets the fence through, the next connection's probe comes
-    back, the problem is gone from B/bridge/info and the markers go out again."""
+    """client.py rule 16: one denied probe was said on B/bridge/info for ever. The probe is
+    judged on every connect: once the broker's ACL lets the fence through, the next
+    connection's probe comes back and the problem is gone. The markers go out all along: they
+    come back on the hello topic (lastword.py rule 7)."""
     acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
     with acl_rig(tmp_path, acl) as (rig, probe):
         rig.mqtt_extra = {"protocol": protocol}
         rig.add("tower", "rotorez", emu={"start_az_deg": 20})
         app = rig.start()
         probe.wait_for("rotor/bridge/info", lambda m: b"rotor/bridge/fence" in m.payload)
-        wait_until(lambda: not app.mqtt._word.markers, 10, "the markers off")
+        assert app.mqtt._word.markers
         (tmp_path / "acl").write_text("topic readwrite rotor/#\n")
         before = time.monotonic()
         rig.broker.restart()
         probe.wait_for(
             "rotor/bridge/info", lambda m: b"rotor/bridge/fence" not in m.payload, 30, before
         )
-        wait_until(lambda: app.mqtt._word.markers, 10, "the markers on again")
+        assert app.mqtt._word.markers
+
+
+def test_markers_stop_only_when_neither_copy_can_come_back_and_go_out_again_once_one_can(
+    tmp_path: Path,
+) -> None:
+    """lastword.py rule 7, client.py rule 16 (MQTT 5: the probe's PUBACK says the fence is
+    denied; under MQTT 3.1.1 only the hello, here denied too, could say it): with the fence
+    and the hello topic both denied no marker could come back, and none goes out once the
+    first look's time is up; a later connection whose hello comes back sends them again."""
+    acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\ntopic deny rotor/bridge/hello\n"
+    with acl_rig(tmp_path, acl) as (rig, _probe):
+        rig.mqtt_extra = {"protocol": "5"}
+        rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+        app = rig.start()
+        wait_until(lambda: not app.mqtt._word.markers, 20, "the markers off")
+        (tmp_path / "acl").write_text("topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n")
+        rig.broker.restart()
+        wait_until(lambda: app.mqtt._word.markers, 30, "the markers on again")
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_with_the_fence_topic_denied_a_target_published_before_a_rotctld_stop_never_turns_it(
+    tmp_path: Path, protocol: str
+) -> None:
+    """lastword.py rule 7 (an attack pass): with B/bridge/fence denied by the broker's ACL the
+    bridge sent no marker, so rotctld's S fenced nothing, and a target published on MQTT just
+    before it, read by the main connection after it, turned the rotor after the STOP. The
+    markers' copies on B/bridge/hello come back: that target is refused, the next one obeyed."""
+    acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
+    with acl_rig(tmp_path, acl) as (rig, probe):
+        rig.mqtt_extra = {"protocol": protocol}
+        port = free_port()
+        emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, rotctld_port=port)
+        app = rig.start()
+        probe.wait_for("rotor/bridge/info", lambda m: b"rotor/bridge/fence" in m.payload)
+        rig.ready("tower")
+        probe.publish("rotor/target", "200")
+        emu.wait_for(lambda s: s.is_moving, 10)
+        t = time.monotonic()
+        with main_held_at(app, "rotor/target", b"300") as held:
+            probe.publish("rotor/target", "300")  # published first, read last
+            wait_until(held.is_set, 10, "the main connection held on the target")
+            with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+                s.sendall(b"S\n")
+                assert s.recv(100) == b"RPRT 0\n"
+            emu.wait_for(lambda s: not s.is_moving, 10)
+        err = probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
+        probe.publish("rotor/target", "60")  # (after the S's marker, queued before that error)
+        rig.arrived("tower", 60)
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+
+
+def denies_fence_now(probe: Probe) -> bool:
+    """Whether the broker drops what is published on rotor/bridge/fence now: a word published
+    there, then one on rotor/bridge/hello (one client, one QoS: one order), and the second
+    comes back without the first (the probe is under the same ACL as the bridge)."""
+    word = f"acl-{time.monotonic_ns()}".encode()
+    mark = probe.mark()
+    probe.publish("rotor/bridge/fence", word)
+    probe.publish("rotor/bridge/hello", word)
+    probe.wait_for("rotor/bridge/hello", lambda m: m.payload == word)
+    return not [m for m in probe.messages[mark:] if m.payload == word and "fence" in m.topic]
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_fence_acl_reloaded_mid_connection_leaves_mqtt_targets_obeyed_after_a_rotctld_stop(
+    tmp_path: Path, protocol: str
+) -> None:
+    """lastword.py rule 7: mosquitto reloads its ACL file on SIGHUP and keeps the connections,
+    so the bridge's probe (on connecting) never learns that B/bridge/fence is now denied. After
+    rotctld's S, every MQTT target was refused as "published before a STOP ... that another
+    interface carried out first" for as long as the connection lasted: no marker came back to
+    end the fence. Every marker also goes on B/bridge/hello, which the main connection reads
+    back: the target published before the S is still refused, the one after it turns the
+    rotor."""
+    with acl_rig(tmp_path, "topic readwrite rotor/#\n") as (rig, probe):
+        rig.mqtt_extra = {"protocol": protocol}
+        port = free_port()
+        emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, rotctld_port=port)
+        app = rig.start()
+        rig.ready("tower")
+        (tmp_path / "acl").write_text("topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n")
+        rig.broker.reload()
+        wait_until(lambda: denies_fence_now(probe), 10, "the broker drops the fence topic")
+        probe.publish("rotor/target", "200")
+        emu.wait_for(lambda s: s.is_moving, 10)
+        t = time.monotonic()
+        with main_held_at(app, "rotor/target", b"300") as held:
+            probe.publish("rotor/target", "300")  # published first, read last
+            wait_until(held.is_set, 10, "the main connection held on the target")
+            with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+                s.sendall(b"S\n")
+                assert s.recv(100) == b"RPRT 0\n"
+            emu.wait_for(lambda s: not s.is_moving, 10)
+        err = probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
+        # (the S's marker was queued before that error on the bridge's connection: this
+        # target comes after it)
+        probe.publish("rotor/target", "60")
+        rig.arrived("tower", 60)
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+        assert not [m for m in probe.messages if m.topic == "rotor/bridge/fence" and m.t >= t]
 
 
 class Watched:
@@ -306,3 +410,46 @@ def test_two_problems_said_at_once_from_two_threads_are_both_on_bridge_info(rig:
             start,
         )
     assert json.loads(rig.retained()[info])["problems"] == [first, second]
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_hello_back_after_the_look_s_time_lets_a_rotctld_stop_fence_with_the_fence_denied(
+    tmp_path: Path, protocol: str
+) -> None:
+    """client.py rule 16, lastword.py rule 7 (an attack pass): the main connection's hello
+    came back after the first look's 5 s (a broker slow to send the retained messages that
+    come before it; here the main connection held at one of them), the fence topic denied:
+    the markers were said lost for the connection, although their copies on B/bridge/hello
+    come back, and rotctld's S fenced nothing: a target published on MQTT before it and read
+    after it turned the rotor. The late hello says the markers come back: that target is
+    refused. (Under MQTT 3.1.1 the markers stayed on, but B/bridge/info never named the
+    denied fence topic: only the hello back before the probe says it there.)"""
+    acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
+    with acl_rig(tmp_path, acl) as (rig, probe):
+        rig.mqtt_extra = {"protocol": protocol}
+        port = free_port()
+        emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0}, rotctld_port=port)
+        probe.publish("rotor/target", "slow broker", retain=True)  # (bad input: moves nothing)
+        app = rig.app = App(rig.settings)
+        with main_held_at(app, "rotor/target", b"slow broker") as held:
+            app.start()
+            wait_until(held.is_set, 10, "the main connection held before its hello")
+            wait_until(lambda: app.client._look_lost, 20, "the first look's time up")
+        probe.publish("rotor/target", "", retain=True)
+        probe.wait_for("rotor/bridge/info", lambda m: b"rotor/bridge/fence" in m.payload)
+        rig.ready("tower")
+        probe.publish("rotor/target", "200")
+        emu.wait_for(lambda s: s.is_moving, 10)
+        t = time.monotonic()
+        with main_held_at(app, "rotor/target", b"300") as held:
+            probe.publish("rotor/target", "300")  # published first, read last
+            wait_until(held.is_set, 10, "the main connection held on the target")
+            with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+                s.sendall(b"S\n")
+                assert s.recv(100) == b"RPRT 0\n"
+            emu.wait_for(lambda s: not s.is_moving, 10)
+        err = probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
+        probe.publish("rotor/target", "60")
+        rig.arrived("tower", 60)
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]

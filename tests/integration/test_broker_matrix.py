@@ -374,7 +374,7 @@ def test_a_restart_on_a_new_state_file_keeps_the_lock_the_broker_holds(
     station.probe.wait_value("rotor/lock/state", "ON", after=t)
     station.stop()
     (tmp_path / "state.json").unlink()  # (a new state file: nothing of this rotator)
-    t = time.monotonic()
+    t = station.probe.caught_up()
     app = station.start()
     station.ready("tower", after=t)
     wait_until(lambda: app.rotators[0].locked, 10, "the rotator locked after the restart")

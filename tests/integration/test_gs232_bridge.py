@@ -9,6 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from bridge.emulators.gs232 import Gs232
+from bridge.emulators.pty import EmulatedPort
+from tests.support import free_port
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import FAST_POLLING, Rig
 
 
@@ -74,6 +78,95 @@ def test_the_450_degree_rotor_takes_the_overlap(rig: Rig) -> None:
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     doc = status(rig)
     assert (doc["bearing"], doc["raw_bearing"], doc["overlap"]) == (20, 380, "cw")
+
+
+@pytest.mark.hamlib
+def test_p_360_turns_the_rotor_the_way_hamlib_sends_it(
+    rig: Rig, rotctl_path: str, tmp_path: Path
+) -> None:
+    """Hamlib's judge: ``rotctl -m 603 P 360 0`` sends a GS-232B ``W360 000``, the clockwise end
+    of its 0..360, 10 degrees on from 350. The bridge's rotctld port sent ``W000 000`` for the
+    same ``P 360 0`` from Hamlib's client: the other end, the rotor sent 350 degrees back
+    through south (a minute at 6 degrees a second) to point where it nearly was."""
+    judge = EmulatedPort(
+        Gs232("gs232b", start_az_deg=350.0, now=time.monotonic()), link=tmp_path / "judge"
+    )
+    try:
+        done = run_rotctl(rotctl_path, 603, str(judge.link), "-s", "9600", "P", "360", "0")
+        assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+        hamlibs = [f.data for f in judge.log() if f.outcome == "move"]
+    finally:
+        judge.close()
+    assert hamlibs == [b"W360 000"]
+
+    port = free_port()
+    emu = rig.add("sat", model="gs232b", emu={"start_az_deg": 350}, rotctld_port=port)
+    rig.start()
+    ready(rig)
+    done = run_rotctl(rotctl_path, 2, port, "P", "360", "0")
+    assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+    emu.wait_for(lambda s: s.is_moving, 10)
+    assert [f.data for f in emu.frames("move")] == hamlibs
+    arrived = emu.wait_for(lambda s: not s.is_moving, 20)
+    assert arrived.az_deg == 360.0
+    rig.probe.wait_for("rotor/status", lambda m: json.loads(m.payload)["bearing"] == 0)
+
+
+@pytest.mark.hamlib
+@pytest.mark.parametrize("model", ["gs232a", "gs232b"])
+def test_p_reads_360_at_the_clockwise_end_as_hamlib_does(
+    rig: Rig, rotctl_path: str, tmp_path: Path, model: str
+) -> None:
+    """Hamlib's judge: ``rotctl -m 601``/``603`` reads a box at the clockwise end of its 0..360
+    as ``360.00``, the value ``P`` takes to keep it there. The bridge's rotctld port said
+    ``0.00``: a client that sent ``P 360`` read the rotor short of it by a whole turn, and one
+    that sends back what it read (a logger's "hold here", a step from the reading) named the
+    other end, 360 degrees back."""
+    hamlib_model = {"gs232a": 601, "gs232b": 603}[model]
+    judge = EmulatedPort(
+        Gs232(model, start_az_deg=360.0, now=time.monotonic()), link=tmp_path / "judge"
+    )
+    try:
+        done = run_rotctl(rotctl_path, hamlib_model, str(judge.link), "-s", "9600", "p")
+        assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+    finally:
+        judge.close()
+    hamlibs = done.stdout.split()
+    assert hamlibs[0] == "360.00"
+
+    port = free_port()
+    rig.add("sat", model=model, emu={"start_az_deg": 360}, rotctld_port=port)
+    rig.start()
+    ready(rig)
+    done = run_rotctl(rotctl_path, 2, port, "p")
+    assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+    assert done.stdout.split() == hamlibs
+    assert status(rig)["bearing"] == 0  # R/bearing stays a compass bearing, 0..360
+
+
+def test_a_nudge_across_north_turns_the_short_way_and_stops_at_the_end(rig: Rig) -> None:
+    """Pointing rule 6: the 0 and 360 of a GS-232B are the ends of a Yaesu rotor's travel, so
+    ``+10`` from 350 is 10 degrees on, to 360 (``M360``): it went out as ``M000``, the other
+    end, and turned the rotor 350 degrees back through south. A nudge past that end is refused
+    on R/error and moves nothing; one back from it turns back."""
+    emu = rig.add("tower", model="gs232b-az", emu={"start_az_deg": 350})
+    rig.start()
+    ready(rig)
+    rig.probe.publish("rotor/nudge", "+10")
+    emu.wait_for(lambda s: s.is_moving)
+    assert [f.data for f in emu.frames("move")] == [b"M360"]
+    arrived = emu.wait_for(lambda s: not s.is_moving, timeout_s=20)
+    assert arrived.az_deg == 360.0
+    rig.probe.wait_for("rotor/status", lambda m: json.loads(m.payload)["bearing"] == 0)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10)
+
+    t = time.monotonic()
+    rig.probe.publish("rotor/nudge", "+10")  # past the end: 350 degrees back is no nudge
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert "turns to azimuth 10 (controller 370), past the end" in err["message"]
+    rig.probe.publish("rotor/nudge", "-20")  # back the way it came
+    emu.wait_for(lambda s: s.az_deg == 340.0 and not s.is_moving, timeout_s=20)
+    assert [f.data for f in emu.frames("move")] == [b"M360", b"M340"]
 
 
 def test_junk_and_refusals_give_an_error_and_change_nothing(rig: Rig) -> None:

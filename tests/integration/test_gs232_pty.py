@@ -48,6 +48,25 @@ def test_rotctl_on_the_gs232_and_easycomm_ptys_turns_the_rotor_and_reads_it(
     assert not os.path.lexists(gs232) and not os.path.lexists(easycomm)
 
 
+def test_the_clockwise_end_reads_360_on_the_gs232_and_easycomm_ptys(
+    rig: Rig, rotctl_path: str, tmp_path: Path
+) -> None:
+    """Package rule 4: a GS-232B at the clockwise end of its 0..360 answers ``AZ=360``, and
+    Hamlib's ``-m 603`` reads ``360.00`` (test_gs232_bridge.py judges that on the box itself);
+    through the bridge's GS-232 and Easycomm ptys the same rotor read ``000`` and ``0.0``, the
+    other end, where ``W360`` and ``AZ360.0`` send it."""
+    gs232, easycomm = str(tmp_path / "rotor-gs232"), str(tmp_path / "rotor-easycomm")
+    rig.add(
+        "tower", model="gs232b-az", emu={"start_az_deg": 360}, gs232_pty=gs232,
+        easycomm_pty=easycomm,
+    )  # fmt: skip
+    rig.start()
+    rig.ready("tower")
+    for model, path in ((GS232, gs232), (EASYCOMM, easycomm)):
+        assert rotctl(rotctl_path, model, path, "p").split() == ["360.00", "0.00"]
+    assert rig.status("tower").bearing_deg == 0  # R/bearing stays a compass bearing
+
+
 def test_a_gs232_pty_path_held_by_a_file_is_a_start_error(rig: Rig, tmp_path: Path) -> None:
     path = tmp_path / "ttyUSB9"
     path.write_text("")

@@ -73,7 +73,7 @@ def test_health_reports_real_speeds_keeps_them_across_a_restart_and_feeds_ha(rig
     rig.probe.publish(rig.t("health"), "", retain=True)  # the broker forgets it
     stored = json.loads((rig.tmp / "state.json").read_text())
     assert stored["rotators"]["tower"]["health"]["moves"] == 6
-    t_restart = time.monotonic()
+    t_restart = rig.probe.caught_up()
     rig.start()
     rig.ready("tower", after=t_restart)
     back = rig.probe.wait_for(rig.t("health"), lambda m: bool(m.payload), after=t_restart)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import re
 import time
 from pathlib import Path
@@ -11,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from bridge import emulators
+from bridge.interfaces.homeassistant.publisher import ROUND_MIN_S
 from bridge.interfaces.mqtt import client as mqtt_client
 from bridge.interfaces.mqtt.look import CLEARS_SAID_AT_ONCE
 from tests.ha_rules import validate
@@ -225,3 +227,117 @@ def test_killed_bridge_makes_every_entity_unavailable(tmp_path: Path) -> None:
             proc.kill()
         broker.stop()
         emu.close()
+
+
+def _rounds(ha: Probe) -> dict[str, list[object]]:
+    """Each discovery config sent live (not a replay) since the probe subscribed: the device's
+    ``sw_version`` in each, in order."""
+    sent: dict[str, list[object]] = {}
+    for m in ha.messages:
+        if m.topic.startswith(f"{PREFIX}/") and m.topic.endswith("/config") and not m.retain:
+            sent.setdefault(m.topic, []).append(json.loads(m.payload)["device"].get("sw_version"))
+    return sent
+
+
+def _restarted(rig: Rig, ha: Probe) -> None:
+    """The bridge started again and ready; every config it published for the controller's
+    answer has reached ``ha``: a refusal it published after (QoS 1, as the configs are) came.
+    What the last run sent is taken first: none of it passes for this run's."""
+    t = rig.probe.caught_up()
+    ha.caught_up()
+    ha.messages.clear()
+    rig.start()
+    rig.ready("tower", after=t)
+    rig.probe.publish("rotor/target", "999")
+    ha.wait_for("rotor/error")
+
+
+def test_a_restart_with_the_same_firmware_sends_each_config_once(rig: Rig) -> None:
+    """The version the controller reported last is kept (runtime/kept.py rule 11): a restart
+    sent each config twice, first without ``sw_version``, then again when the controller
+    answered; now once, with it. Another firmware sends them again at once, with the new one."""
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    bearing = f"{PREFIX}/sensor/rotorbridge_rotor_r_tower/bearing/config"
+    wait_until(lambda: configs(rig.broker.port)[bearing]["device"].get("sw_version") == "1.4S", 10)
+    rig.stop()
+    ha = Probe(rig.broker.port, f"{PREFIX}/#|rotor/error|rotor/version")
+    try:
+        _restarted(rig, ha)
+        sent = _rounds(ha)
+        assert sent[bearing] == ["1.4S"]
+        assert all(len(versions) == 1 for versions in sent.values()), sent
+        assert [m.text for m in ha.on("rotor/version") if not m.retain] == ["1.4S"]
+        rig.stop()
+        with emu.lock:  # the controller's firmware updated while the bridge was down
+            emu.device.version, emu.device.banner = "1.5S", b"C2000 IDIOM V1.5S "
+        _restarted(rig, ha)
+        sent = _rounds(ha)
+        ours = {t: v for t, v in sent.items() if "_r_tower/" in t}
+        assert ours and all(v == ["1.4S", "1.5S"] for v in ours.values()), ours
+        assert all(len(v) == 1 for t, v in sent.items() if t not in ours), sent
+        assert configs(rig.broker.port)[bearing]["device"]["sw_version"] == "1.5S"
+    finally:
+        ha.close()
+
+
+def test_the_kept_version_is_said_while_the_controller_is_unplugged_and_never_another_models(
+    rig: Rig,
+) -> None:
+    """Unplugged at the start, the controller cannot say its version: the configs and
+    ``R/version`` say the one it reported last. Its model changed in the configuration (the
+    controller swapped), nothing is claimed for it: ``R/version`` is cleared, no ``sw_version``."""
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    bearing = f"{PREFIX}/sensor/rotorbridge_rotor_r_tower/bearing/config"
+    wait_until(lambda: configs(rig.broker.port)[bearing]["device"].get("sw_version") == "1.4S", 10)
+    rig.stop()
+    emu.unplug()
+    ha = Probe(rig.broker.port, f"{PREFIX}/#|rotor/version")
+    try:
+        rig.start()
+        ha.wait_for(bearing, lambda m: not m.retain)
+        assert _rounds(ha)[bearing] == ["1.4S"]
+        assert rig.retained()["rotor/version"] == b"1.4S"
+        rig.stop()
+        rig.rotators[0]["model"] = "rotorcard"  # another controller, not plugged in yet
+        ha.caught_up()  # (the first run's configs, all of them, before the clear)
+        ha.messages.clear()
+        rig.start()
+        ha.wait_for("rotor/version", lambda m: not m.retain and m.payload == b"")
+        assert "rotor/version" not in rig.retained()
+        m = ha.wait_for(bearing, lambda m: not m.retain)
+        assert "sw_version" not in json.loads(m.payload)["device"]
+    finally:
+        ha.close()
+
+
+def test_a_controller_flooding_versions_costs_home_assistant_a_round_a_hold(rig: Rig) -> None:
+    """homeassistant/ rule 9 through the broker: an Easycomm III box sending ``VE<n>`` lines
+    on its own (its version is taken whenever it comes) had its rotator's every config sent
+    again for each (200 lines, over 4000 configs); now a round at once and the latest when
+    the hold ends, and the state file keeps the latest (runtime/kept.py rule 11)."""
+    emu = rig.add("tower", model="easycomm3", emu={"version": "1.0"})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.wait_value("rotor/version", "1.0")
+    bearing = f"{PREFIX}/sensor/rotorbridge_rotor_r_tower/bearing/config"
+    ha = Probe(rig.broker.port, f"{PREFIX}/#")
+    try:
+        t = time.monotonic()
+        for i in range(60):  # each one taken (its R/version came) before the next is sent
+            emu.inject(f"VE{i}\n".encode())
+            rig.probe.wait_value("rotor/version", str(i))
+        # a round at once (the start's, then the first of the flood's) and one a hold at most
+        most = 2 + math.ceil((time.monotonic() - t) / ROUND_MIN_S)
+        ha.wait_for(bearing, lambda m: not m.retain and b'"59"' in m.payload, timeout_s=10)
+        sent = _rounds(ha)
+        assert len(sent[bearing]) <= most and sent[bearing][-1] == "59", sent[bearing]
+        assert all(len(v) <= most for v in sent.values()), {t: len(v) for t, v in sent.items()}
+        rig.stop()  # (its writer done: every save queued is written)
+        kept = json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"]
+        assert kept["version"] == {"model": "easycomm3", "text": "59"}
+    finally:
+        ha.close()

@@ -6,12 +6,14 @@ frames, its replies, its faults) stays in its own test_<family>_bridge.py."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
 
 from tests.support.rig import Rig
+from tests.support.waiting import wait_until
 
 
 @dataclass(frozen=True)
@@ -86,3 +88,44 @@ def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(rig: Rig,
     rig.probe.publish("rotor/stop", "STOP")  # never refused: on the wire even when locked
     emu.wait_for_frame(m.stop_frame, "stop", 10)
     assert emu.frames("move") == [] and emu.state().az_deg == m.start[0]
+
+
+def test_a_controller_swapped_leaves_none_of_the_old_model_s_topics_retained(rig: Rig) -> None:
+    """interfaces/mqtt/stale.py rule 5, a review: a user who swapped controllers (a Rot2Prog
+    for a Rotor-EZ, a Rotor-EZ for a DCU-1) kept the old model's ``R/elevation``,
+    ``R/version``, ``R/bearing`` and option states retained for ever, read by Node-RED flows and
+    Home Assistant automations as the rotator's. The next start deletes them, and nothing the
+    new models publish."""
+    rig.add("dish", model="rot2prog", emu={"start_el_deg": 12})
+    rig.add("mast", model="rotorez", emu={"version": "9.9"})
+    rig.start()
+    rig.ready("dish")
+    rig.ready("mast")
+    rig.probe.publish("rotor/mast/option/jam", "ON")
+    rig.probe.wait_value("rotor/mast/option/jam/state", "ON")
+    rig.probe.wait_value("rotor/mast/version", "9.9")
+    old = {"rotor/dish/elevation", "rotor/mast/version", "rotor/mast/bearing"}
+    old.add("rotor/mast/option/jam/state")
+    assert old <= set(rig.retained())
+    rig.stop()
+
+    rig.rotators, rig.lines = [], {}  # the same rotators, each on another controller
+    rig.add("dish", model="rotorez", emu={"version": "1.4S"})
+    rig.add("mast", model="dcu1")
+    t = rig.probe.caught_up()  # (the old models' last readings may come after a clock read)
+    rig.start()
+    rig.ready("dish", after=t)
+    rig.ready("mast", after=t)
+    rig.probe.wait_value("rotor/dish/version", "1.4S", after=t)
+    wait_until(
+        lambda: not old & set(rig.retained()),
+        timeout_s=10,
+        what="the old models' elevation, version, bearing and option state deleted",
+    )
+    rig.refused("dish", "north")  # (its error goes out after the deletions: they have come)
+    for topic in old:  # each deleted once (an option state reads through two filters)
+        assert [m.payload for m in rig.probe.on(topic) if m.t >= t] == [b""], topic
+    left = rig.retained()
+    assert left["rotor/dish/version"] == b"1.4S" and "rotor/dish/bearing" in left
+    assert (left["rotor/mast/availability"], left["rotor/mast/state"]) == (b"online", b"unknown")
+    assert json.loads(left["rotor/mast/info"])["model"] == "dcu1"

@@ -13,12 +13,14 @@ file survives a full disk.
 
 from __future__ import annotations
 
+import http.client
 import json
 import logging
 import socket
 import time
 from collections.abc import Iterator
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import paho.mqtt.client as paho
@@ -27,6 +29,7 @@ from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
+from bridge.runtime.audit import FREE_LINES
 from tests.support import free_port, wait_until
 from tests.support.console import ConsoleClient, web_section
 from tests.support.mqtt import retained_snapshot
@@ -280,7 +283,8 @@ def test_every_other_interface_names_its_peer_in_the_audit_trail(
     audited(3)
     assert line(easycomm_port, b"PARK\nVE\n") == b"VErotor-bridge\n"
     audited(4)
-    assert console.command("tower", command="target", az=200).status == 409
+    refused = console.command("tower", command="target", az=200)
+    assert (refused.status, refused.doc["code"]) == (409, "leased")  # docs/console.md's code
     audited(5)
     pst.command(tag("PARK", 1))
     audited(6)
@@ -441,3 +445,71 @@ def test_a_release_naming_its_operator_twice_names_nobody_in_the_audit_trail(rig
     wait_until(lambda: len(probe.on("rotor/audit")) >= 2, 10, "R/audit")
     release = json.loads(probe.on("rotor/audit")[1].text)
     assert (release["operator"], release["result"]) == ("mqtt", "executed")
+
+
+def _audit_files(path: Path) -> list[dict[str, Any]]:
+    """Every line of the audit file and of its rotated ones, oldest first."""
+    olds = [p for p in path.parent.glob(path.name + ".*") if p.suffix[1:].isdigit()]
+    ordered = [*sorted(olds, key=lambda p: -int(p.suffix[1:])), path]
+    return [json.loads(line) for p in ordered if p.exists() for line in p.read_text().splitlines()]
+
+
+def test_a_flood_of_stops_and_refusals_cannot_erase_who_turned_the_rotor(
+    rig: Rig, operators: tuple[Operator, Operator]
+) -> None:
+    """runtime/audit.py rule 6, mqtt/service.py rule 8, the bridge its own process (an attack
+    pass: console STOPs at 1,000 a second rolled all four audit files over in 25 s, the line
+    of who turned the rotor a minute before gone; 50 refused commands left the lease holder's
+    move out of R/audit). Here 1,000 STOPs over one console connection and 60 refused targets,
+    each from another MQTT operator name, after the holder's claim and move: the audit files
+    (four of 10,000 bytes) still have the claim and the move, the STOPs are five lines and one
+    that counts the rest, with their first and last times; R/audit has the holder's next move
+    as it came, no ``suppressed`` count on it, and that count line too."""
+    holder, _other = operators
+    audit_path = rig.tmp / "audit.jsonl"
+    rig.sections["audit_file"] = str(audit_path)
+    rig.sections["audit_max_bytes"] = 10_000
+    web = rig.sections["web"] = web_section()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start_process()
+    rig.ready("tower")
+    probe = rig.probe
+    audit = lambda m: json.loads(m.text)  # noqa: E731
+    holder.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    holder.publish("rotor/target", "100")
+    probe.wait_for("rotor/audit", lambda m: audit(m)["command"] == "target '100'")
+    emu.wait_for(lambda s: abs(s.az_deg - 100) <= 3 and not s.is_moving, slow(20))
+
+    console = ConsoleClient(web["port"])
+    console.session()
+    conn = http.client.HTTPConnection("127.0.0.1", web["port"], timeout=slow(10))
+    head = {"Content-Type": "application/json", "X-Rotor-Token": str(console.token),
+            "Origin": f"http://127.0.0.1:{web['port']}"}  # fmt: skip
+    for _ in range(1000):  # one keep-alive connection, as fast as the console answers
+        conn.request("POST", "/api/rotators/tower/command", b'{"command": "stop"}', head)
+        assert conn.getresponse().read() == b'{"ok": true}'
+    conn.close()
+    crowd = Operator(rig.broker.port, "N0")
+    for n in range(60):  # refused (the lease): each from a name of its own, one run each
+        crowd.name = f"N{n}"
+        crowd.publish("rotor/target", "300")
+    crowd.close()
+    holder.publish("rotor/target", "120")
+    moved = probe.wait_for("rotor/audit", lambda m: audit(m)["command"] == "target '120'")
+    assert audit(moved)["operator"] == "DL1ABC" and "suppressed" not in audit(moved)
+
+    def stops() -> list[dict[str, Any]]:
+        return [d for d in _audit_files(audit_path) if d["operator"] == "web 127.0.0.1"]
+
+    # every STOP is in the file, most of them counted (a count line is said QUIET_S after the
+    # last; a machine that stalls for seconds mid-flood may make two runs of it, no more)
+    wait_until(lambda: sum(d.get("count", 1) for d in stops()) == 1000, 30, "the STOPs' count")
+    lines = stops()
+    counts = [d for d in lines if "count" in d]
+    assert counts and len(lines) <= 2 * (FREE_LINES + 1)  # not 1,000
+    assert all(d["command"] == "console: stop" and d["result"] == "executed" for d in lines)
+    assert lines[0]["time"] < counts[0]["first"] < counts[0]["last"]
+    held = [(d["command"].split()[0], d["result"]) for d in _audit_files(audit_path)
+            if d["operator"] == "DL1ABC"]  # fmt: skip
+    assert held == [("claim", "executed"), ("target", "executed"), ("target", "executed")]
+    probe.wait_for("rotor/audit", lambda m: audit(m).get("count") == counts[0]["count"])

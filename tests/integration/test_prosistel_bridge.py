@@ -14,10 +14,16 @@ from typing import Any
 import pytest
 
 from bridge.emulators.pty import EmulatedPort
+from tests.support.mqtt import Message
 from tests.support.rig import Rig
 
 AZIMUTH_MODELS = ("prosistel", "prosistel-combi")
 azimuth_models = pytest.mark.parametrize("model", AZIMUTH_MODELS)
+
+
+def not_junk(message: Message) -> bool:
+    """An error that is not a line the power cycle cut short, told as junk (what it is)."""
+    return bool(json.loads(message.payload)["kind"] != "protocol")
 
 
 def frames(emu: EmulatedPort[object], *outcomes: str) -> list[bytes]:
@@ -183,3 +189,34 @@ def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(
     # the hard stop (again, if a reading in flight showed the rotor still turning)
     assert set(frames(emu, "stop")) == {b"\x02%sG999\r" % unit} and frames(emu, "refused") == []
     assert emu.state().az_deg == 0.0  # the box has no azimuth
+
+
+@azimuth_models
+def test_a_box_power_cycled_mid_turn_is_said_to_have_stopped_short_not_stalled(
+    rig: Rig, model: str
+) -> None:
+    """The box forgets its turn at a power cycle and says its motor is braked (``B``): the turn
+    is said dropped, no stall (observed: 'rotor stalled at 80° ... brake paddle pressed', and
+    rotor health counted a stall), and nothing turns the rotor on."""
+    emu = rig.add("tower", model=model, emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower", timeout_s=15)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 60, 10)
+    moves = frames(emu, "move")
+    t = time.monotonic()
+    emu.power_cycle()
+    at = emu.state().az_deg
+    err = json.loads(rig.probe.wait_for("rotor/error", not_junk, after=t).payload)
+    assert err["kind"] == "stalled", err
+    assert err["message"].startswith("the controller stopped turning short of its target at ")
+    assert err["message"].endswith(
+        "its turn to 300° was dropped, not resumed: send the target again"
+    )
+    said = rig.probe.wait_for("rotor/status", lambda m: b"stopped turning short" in m.payload)
+    doc = json.loads(said.payload)
+    assert doc["last_error"] == err["message"] and doc["target"] is None
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    health = json.loads(rig.retained()["rotor/status"])["health"]
+    assert health["stalls"] == 0  # observed: 1
+    assert frames(emu, "move") == moves and emu.state().az_deg == at  # not turned on

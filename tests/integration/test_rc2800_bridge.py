@@ -12,9 +12,15 @@ from typing import Any
 
 import pytest
 
+from tests.support.mqtt import Message
 from tests.support.rig import Rig
 
 KINDS = [{}, {"echo": True, "stream_s": 0.25}]  # a plain box; one that echoes and streams
+
+
+def not_junk(message: Message) -> bool:
+    """An error that is not a line the power cycle cut short, told as junk (what it is)."""
+    return bool(json.loads(message.payload)["kind"] != "protocol")
 
 
 def status(rig: Rig) -> dict[str, object]:
@@ -76,3 +82,33 @@ def test_junk_gives_an_error_and_changes_nothing(rig: Rig, kind: dict[str, Any])
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77.7"}
     assert {m.text for m in rig.probe.on("rotor/elevation")} == {"7"}
     assert emu.frames("move") == [] and emu.state().az_deg == 77.7
+
+
+@pytest.mark.parametrize("model", ["rc2800", "rc2800-az"])
+def test_a_box_power_cycled_mid_turn_is_said_to_have_stopped_short_not_stalled(
+    rig: Rig, model: str
+) -> None:
+    """The box forgets its turn at a power cycle and says its motors are stopped (``ST``): the
+    turn is said dropped, no stall (observed: 'rotor stalled at 80.2° ... brake paddle
+    pressed', and rotor health counted a stall), and nothing turns the rotor on."""
+    emu = rig.add("sat", model=model, emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("sat", timeout_s=15)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 60, 10)
+    t = time.monotonic()
+    emu.power_cycle()
+    at = emu.state().az_deg
+    err = json.loads(rig.probe.wait_for("rotor/error", not_junk, after=t).payload)
+    assert err["kind"] == "stalled", err
+    assert err["message"].startswith("the controller stopped turning short of its target at ")
+    assert err["message"].endswith(
+        "its turn to 300° was dropped, not resumed: send the target again"
+    )
+    said = rig.probe.wait_for("rotor/status", lambda m: b"stopped turning short" in m.payload)
+    doc = json.loads(said.payload)
+    assert doc["last_error"] == err["message"] and doc["target"] is None
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    health = status(rig)["health"]
+    assert isinstance(health, dict) and health["stalls"] == 0  # observed: 1
+    assert emu.state().az_deg == at and not emu.state().is_moving  # not turned on

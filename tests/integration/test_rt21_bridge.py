@@ -5,7 +5,14 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 
+import pytest
+
+from bridge.emulators.pty import EmulatedPort
+from bridge.emulators.rt21 import Rt21
+from tests.support import free_port
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import Rig
 
 
@@ -65,3 +72,57 @@ def test_a_new_bearing_while_turning_goes_straight_out(rig: Rig) -> None:
     emu.wait_for(lambda s: s.az_deg == 20.5 and not s.is_moving, 20)
     assert [f.data for f in emu.frames("move")] == [b"AP1200.0\r;", b"AP1020.5\r;"]
     assert emu.frames("stop") == []
+
+
+@pytest.mark.hamlib
+def test_north_goes_out_as_the_box_takes_it_never_360(
+    rig: Rig, rotctl_path: str, tmp_path: Path
+) -> None:
+    """Hamlib's judge: ``rotctl -m 405`` takes 0..359.9 (its caps; ``P 360`` is refused before
+    a byte goes out, ``P 359.9`` is ``AP1359.9``), as the protocol sheet gives the RT-21's
+    range. The bridge sent ``AP1360.0``, a heading the box is not known to take, for a target
+    of 360 (pointing.py rule 2's 360, a GS-232's end of travel); north now goes out as the box
+    takes it, ``AP1000.0``."""
+    judge = EmulatedPort(Rt21(start_az_deg=10.0, now=time.monotonic()), link=tmp_path / "judge")
+    try:
+        refused = run_rotctl(rotctl_path, 405, str(judge.link), "P", "360", "0")
+        taken = run_rotctl(rotctl_path, 405, str(judge.link), "P", "359.9", "0")
+        assert taken.returncode == 0, f"rotctl failed: {taken.stderr[-800:]!r}"
+        hamlibs = [f.data for f in judge.log() if f.outcome == "move"]
+    finally:
+        judge.close()
+    assert refused.returncode != 0 and hamlibs == [b"AP1359.9\r;"]
+
+    emu = rig.add("tower", model="rt21", emu={"start_az_deg": 10})
+    rig.start()
+    ready(rig)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "360")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    assert [f.data for f in emu.frames("move")] == [b"AP1000.0\r;"]
+    emu.wait_for(lambda s: s.az_deg == 0.0 and not s.is_moving, 20)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert status(rig)["bearing"] == 0
+
+
+@pytest.mark.hamlib
+def test_rotctld_reads_360_as_hamlibs_rt21_does(rig: Rig, rotctl_path: str, tmp_path: Path) -> None:
+    """rotctld rule 5: Hamlib's ``-m 405`` reads the box's ``360.0;`` as ``0.00`` (rotorez.c),
+    where its GS-232 backends read 360 as ``360.00``; the bridge's rotctld answers as the
+    model's own backend would."""
+    judge = EmulatedPort(Rt21(start_az_deg=360.0, now=time.monotonic()), link=tmp_path / "judge")
+    try:
+        done = run_rotctl(rotctl_path, 405, str(judge.link), "p")
+        assert done.returncode == 0, f"rotctl failed: {done.stderr[-800:]!r}"
+    finally:
+        judge.close()
+    hamlibs = done.stdout.split()
+    assert hamlibs[0] == "0.00"
+
+    port = free_port()
+    rig.add("tower", model="rt21", emu={"start_az_deg": 360}, rotctld_port=port)
+    rig.start()
+    ready(rig)
+    done = run_rotctl(rotctl_path, 2, port, "p")
+    assert done.returncode == 0, f"rotctl failed: {done.stderr[-800:]!r}"
+    assert done.stdout.split() == hamlibs

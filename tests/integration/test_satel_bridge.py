@@ -4,9 +4,11 @@ the manual) with corrupt_on_misuse=True: any input but a stop during a slew woul
 from __future__ import annotations
 
 import json
+import re
 import time
 from datetime import UTC, datetime
 
+from bridge.session.slew import SLEW_STOP_TRIES
 from tests.support.rig import Rig
 
 
@@ -125,4 +127,42 @@ def test_unplug_and_replug(rig: Rig) -> None:
     rig.unplug_and_replug("sat")
     rig.probe.publish("rotor/target", "60 30")
     emu.wait_for(lambda s: near(s, 60, 30), 20)
+    assert emu.device.misuse_frames() == []
+
+
+def test_a_satel_power_cycled_mid_slew_is_told_and_not_sent_its_point_again(rig: Rig) -> None:
+    # the bridge takes the rotor for 8 times faster than it is: the wait for the report is short
+    emu = rig.add(
+        "sat",
+        model="satel",
+        emu={"start_az_deg": 0, "start_el_deg": 0, "az_speed_deg_s": 8, "el_speed_deg_s": 4},
+        az_speed_deg_s=64,
+        el_speed_deg_s=32,
+    )
+    rig.start()
+    ready(rig)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "40 10")
+    emu.wait_for(lambda s: s.slewing and s.az_deg > 4, 10)
+    emu.power_cycle()  # its report never comes, and its clock starts again at 2001/00/00
+    stood = emu.state()
+    err = rig.probe.wait_for("rotor/error", lambda m: b"mid-turn" in m.payload, 30, after=t)
+    message = json.loads(err.payload)["message"]
+    said = re.fullmatch(
+        r"the controller restarted mid-turn \(its clock went back, to 2001/00/00 00:00:\d\d\) "
+        r"at (\d+)°, elevation (\d+)°: its turn to 40°, elevation 10° was not resumed: send the "
+        "target again",
+        message,
+    )
+    assert said, message
+    assert abs(int(said[1]) - stood.az_deg) <= 1 and abs(int(said[2]) - stood.el_deg) <= 1
+    emu.wait_for(lambda s: s.motion_enabled, 10)  # (switched on again: nothing more is owed)
+    status = rig.probe.wait_for(
+        "rotor/status", lambda m: json.loads(m.payload)["last_error"] == message, 10, after=t
+    )
+    assert json.loads(status.payload)["target"] is None
+    sent = [f.data for f in emu.frames() if f.time_s > stood.time_s and f.data != b"z"]
+    assert sent == [b"s"] * SLEW_STOP_TRIES + [b"g"]  # stopped, asked: never the point again
+    assert [f.data for f in emu.frames("slew")] == [b"p40 10\r"]
+    assert near(emu.state(), stood.az_deg, stood.el_deg)
     assert emu.device.misuse_frames() == []

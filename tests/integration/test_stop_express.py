@@ -26,7 +26,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import paho.mqtt.client as paho
 import pytest
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
 
 from bridge.app import App
 from bridge.core.errors import Refused
@@ -36,6 +40,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt import lane as lane_module
 from bridge.runtime.rotator import Rotator
 from tests.faults.conftest import mosquitto_password_file
+from tests.integration.test_last_word import bearings, main_held_at, marker_back
 from tests.support import free_port
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
@@ -688,3 +693,72 @@ def test_a_stop_the_express_read_late_after_a_broker_restart_still_drops_the_hel
     sent = [f.data for f in emu.frames(*BEARING_OUTCOMES) if f.time_s >= stop_t]
     assert sent == [] and not emu.state().is_moving
     assert rotator.status.target_az_deg is None
+
+
+def test_a_stop_naming_an_operator_of_64_kib_leaves_the_next_target_free_to_go(rig: Rig) -> None:
+    """An attack pass (its rule 11): a STOP whose MQTT 5 user property ``operator`` held 21,845
+    non-ASCII characters (65,535 bytes, the most an MQTT string holds), from anyone who may
+    send a stop, was said back by the express in a word of 131 KB; the bridge read it cut at
+    64 KiB, its reader died on the JSON, and every target after a stop waited for an answer
+    that never came: the rotor stopped, and never turned again. The operator is no name, so
+    the word names none, and the next target turns the rotor."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    sender = paho.Client(CallbackAPIVersion.VERSION2, client_id="long-name", protocol=paho.MQTTv5)
+    sender.connect("127.0.0.1", rig.broker.port)
+    sender.loop_start()
+    try:
+        rig.probe.publish("rotor/target", "200")
+        emu.wait_for(lambda s: s.is_moving, 10)
+        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+        props.UserProperty = [("operator", "\ufb00" * 21_845)]
+        sender.publish("rotor/stop", "STOP", qos=1, properties=props).wait_for_publish(5)
+        emu.wait_for(lambda s: not s.is_moving, 10)
+        rig.probe.publish("rotor/target", "100")
+        rig.arrived("tower", 100)
+        assert app.express.runner.is_alive()  # (its reader: the words of the next stops)
+    finally:
+        sender.loop_stop()
+        sender.disconnect()
+
+
+def test_a_target_published_before_a_stop_stays_held_when_the_express_dies_meanwhile(
+    rig: Rig,
+) -> None:
+    """express.py rule 8, lastword.py rules 2 and 5: the express's end ends its own hold,
+    never the last word's. The main connection is behind (held on a target of 300 published
+    just before a STOP the lane carried out, the express's hold on it waiting for an express
+    that reads nothing); the express is killed and started again meanwhile; then the main
+    connection reads the 300 and is held again before its copy of the STOP: the 300 waits
+    (the last word's hold) and that copy drops it, never sent after the STOP."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    wait_until(app.lane.connected.is_set, 10, "the lane is up")
+    session = app._by_id["tower"]._worker.session  # (read only: what waits in it)
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    with main_held_at(app, "rotor/stop", b"STOP") as copy_held:
+        with main_held_at(app, "rotor/target", b"300") as held:
+            rig.probe.publish("rotor/target", "300")
+            wait_until(held.is_set, 10, "the main connection is held on 300")
+            child = app.express._child
+            assert child is not None
+            os.kill(child.pid, signal.SIGSTOP)  # (it reads nothing: its hold waits)
+            rig.probe.publish("rotor/stop", "STOP")
+            emu.wait_for(lambda s: not s.is_moving, 10)  # (the lane's stop)
+            wait_until(lambda: "tower" in app.express._holds, 10, "the express's hold waits")
+            child.kill()  # its end ends its own hold
+            wait_until(lambda: app.express.starts == 2, 15, "started again")
+            express_ready(app)
+        wait_until(copy_held.is_set, 10, "the main connection read 300, held on the STOP")
+        wait_until(lambda: session.targets.pending is not None, 10, "the 300 waits")
+        time.sleep(2.0)  # a quiet period, not a deadline: the brake delay is long over
+        assert not [d for d in bearings(emu) if b"300" in d]
+    marker_back(rig, app)
+    assert not [d for d in bearings(emu) if b"300" in d]  # never went out
+    rig.probe.publish("rotor/target", "250")  # and the next one is obeyed
+    emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 250) <= 3, 30)

@@ -39,6 +39,7 @@ from tests.support import free_port
 from tests.support.mqtt import Message, retained_snapshot
 from tests.support.rig import Rig
 from tests.support.sky import sgp4_altaz, sgp4_altaz_array, sun_altaz, synthetic_tle, tle_with_pass
+from tests.support.waiting import wait_until
 
 # a quick MD-01 (115200 baud, re-targets while turning): a turn to the sun takes a second or
 # two, a flipped one (elevation past 90) too. The bridge is told the same speeds, and settles
@@ -385,6 +386,30 @@ def test_without_a_station_tracking_is_refused_naming_the_station(rig: Rig) -> N
     err = error_after(rig, "dish", t)
     assert err["kind"] == "refused" and "[station]" in err["message"], err
     assert emu.frames("set", "set: clamped") == []
+
+
+def test_a_station_taken_out_leaves_no_retained_tracking_behind(rig: Rig) -> None:
+    """A rotator that could track and follow WSJT-X left ``R/tracking`` and ``R/follow/state``
+    retained; started again without ``[station]`` it can do neither, publishes neither, and
+    they stayed for ever: the Node-RED page, which offers Sun, Moon and a satellite once
+    ``R/tracking`` arrives (docs/node-red.md), offered what the bridge then refused
+    (interfaces/mqtt/stale.py rule 5). Deleted at the next start's first look."""
+    rig.add("dish", model="md01", emu=QUICK_EMU, **QUICK_BRIDGE)
+    rig.sections = {"wsjtx": {"enabled": True, "port": free_port()}}
+    start(rig, SUN_STATION)
+    before = rig.retained()
+    assert (before["rotor/tracking"], before["rotor/follow/state"]) == (b"off", b"off")
+    rig.stop()
+    start(rig, None)
+    wait_until(
+        lambda: not {"rotor/tracking", "rotor/follow/state"} & set(rig.retained()),
+        timeout_s=10,
+        what="the tracking and following states deleted",
+    )
+    assert json.loads(rig.retained()["rotor/info"])["can_track"] is False
+    t = time.monotonic()
+    rig.probe.publish("rotor/track", "sun")
+    assert "[station]" in error_after(rig, "dish", t)["message"]
 
 
 def test_a_tle_with_a_digit_that_is_not_ascii_is_refused_and_tracking_still_works(

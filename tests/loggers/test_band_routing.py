@@ -144,3 +144,30 @@ def test_a_stop_to_the_shared_name_stops_both_whatever_the_band() -> None:
     e, high, low = endpoint()
     carry(e, b"<N1MMRotor><stop><rotor>Tower</rotor><freqband>1.8</freqband></stop></N1MMRotor>")
     assert high.calls == low.calls == [Stop(Source.N1MM)]
+
+
+@pytest.mark.parametrize("freqband", ["abc", "1e308", "nan", "14,074"])
+def test_a_band_field_that_is_no_number_moves_nothing_and_the_refusal_quotes_it(
+    freqband: str,
+) -> None:
+    """A review: ``<freqband>abc</freqband>`` was refused as "the message has no <freqband>",
+    which sends the operator looking for a field that is there."""
+    e, high, low = endpoint()
+    carry(e, n1mm_turn("Tower", 90, freqband=freqband))
+    refusal = (
+        "refused",
+        f"n1mm: rotor 'Tower' is chosen by band, and <freqband> {freqband!r} is no number of "
+        "MHz: nothing turned",
+    )
+    assert high.calls == [refusal] and low.calls == [refusal]
+
+
+def test_a_turn_without_a_band_field_says_it_has_none() -> None:
+    e, high, low = endpoint()
+    data = b"<N1MMRotor><rotor>Tower</rotor><goazi>90</goazi></N1MMRotor>"
+    carry(e, data)
+    refusal = (
+        "refused",
+        "n1mm: rotor 'Tower' is chosen by band, and the message has no <freqband>: nothing turned",
+    )
+    assert high.calls == [refusal] and low.calls == [refusal]

@@ -2,7 +2,8 @@
 availability read *before* its ``bridge/state`` (filters subscribed in that order: MQTT promises
 no order) is spared by ``spare`` at the look's end; a removed rotator's topics are still deleted.
 Without the client's ``spare`` (or the app's wiring) nothing else protects it: the fault test
-in tests/faults relies on mosquitto's filter order (``bridge/state`` subscribed first)."""
+in tests/faults relies on mosquitto's filter order (``bridge/state`` subscribed first). And a
+deletion the look asked for is not sent over a value published after it was asked."""
 
 from __future__ import annotations
 
@@ -59,3 +60,42 @@ def test_a_nested_bridge_read_before_its_bridge_state_is_spared(broker: Mosquitt
         assert left.get("t/site2/availability") == b"online"
     finally:
         client.stop()
+
+
+def test_a_deletion_asked_in_the_look_is_not_sent_over_a_value_published_since(
+    broker: Mosquitto,
+) -> None:
+    """Rule 14: the first look asks to delete what it reads (stale.py), and sends the
+    deletions once it ends, after the values cached meanwhile. A topic the bridge published
+    after asking (a controller's version read while the look ran) was deleted over its new
+    value, for good: its next status hands on the same payload, and nothing goes out again."""
+    seed = Probe(broker.port, "t/#")
+    seed.publish("t/a/version", "old", retain=True)
+    seed.wait_value("t/a/version", "old", 5)
+    seed.close()
+    settings = MqttSettings(port=broker.port, base_topic="t", client_id="newer-under-test")
+    client: MqttClient
+
+    def on_message(topic: str, payload: bytes, retain: bool, *_: object) -> None:
+        if topic == "t/a/version" and retain and payload == b"old":
+            client.clear_retained(topic)  # (the look's: sent at its end)
+            client.publish_retained(topic, "new")  # (and the version read right after)
+
+    client = MqttClient(
+        settings,
+        will_topic="t/bridge/state",
+        subscriptions=["t/a/version"],
+        on_message=on_message,
+        claim=Claim(Instance.me("newer-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
+    )
+    probe = Probe(broker.port, "t/#")
+    client.start()
+    try:
+        wait_until(lambda: client.connected.is_set() and not client.gated, 10, "the look done")
+        client.publish_event("t/a/error", "after the look")  # (what the look sent came first)
+        probe.wait_value("t/a/error", "after the look", 10)
+        assert [m.payload for m in probe.on("t/a/version")][-1:] == [b"new"]
+        assert retained_snapshot(broker.port, "t/a/version") == {"t/a/version": b"new"}
+    finally:
+        client.stop()
+        probe.close()

@@ -421,6 +421,40 @@ def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
     assert {rig.word()["rotator"], rig.word()["rotator"]} == {"a", "b"}
 
 
+def test_a_group_stop_from_a_long_operator_costs_no_member_its_frames_wait(
+    rig: ChildRig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rule 11: who sent a stop is named as an operator's name, and a user property that can be
+    none is dropped before it costs the stop's thread anything. A STOP to a group whose
+    ``operator`` held 21,845 U+FDFA (64 KiB, one ligature NFKC makes 18 characters) had all of
+    it normalized, 393,210 characters, some 24 ms between one member's frame and the next's (a
+    cold review: five members, the last one's stop ~0.1 s late, from anyone who may stop)."""
+    import bridge.core.model as model
+
+    worked: list[int] = []  # the length of each text normalized on the stop's path
+    real = model.unicodedata
+
+    class Counting:
+        def __getattr__(self, name: str) -> Any:
+            return getattr(real, name)
+
+        @staticmethod
+        def normalize(form: str, text: str) -> str:
+            worked.append(len(text))
+            return real.normalize(form, text)
+
+    monkeypatch.setattr(model, "unicodedata", Counting())
+    a, b = Port(), Port()
+    rig.hand("a", 1, a)
+    rig.hand("b", 2, b)
+    rig.child.on_message("rotor/stack/stop", b"STOP", False, "\ufdfa" * 21845, None)
+    assert (a.written(), b.written()) == (b";", b"S\r")
+    words = [rig.word(), rig.word()]
+    assert {w["rotator"] for w in words} == {"a", "b"}
+    assert all("operator" not in w for w in words)  # no name of an operator
+    assert max(worked, default=0) <= 4 * model.OPERATOR_CHARS
+
+
 # -- rule 9: a frame is never left half-written ------------------------------------------------
 def test_a_write_cut_short_by_a_full_buffer_is_finished(monkeypatch: pytest.MonkeyPatch) -> None:
     port, calls, write = Port(), [], os.write
@@ -1270,3 +1304,37 @@ def test_an_express_whose_socket_has_a_high_descriptor_number_is_read() -> None:
         for fd in [*taken, r, w]:
             os.close(fd)
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+
+
+def test_a_word_the_bridge_cannot_read_ends_that_express_said_and_it_starts_again() -> None:
+    """Rule 6 (an attack pass): a word cut at the socket's read (or no JSON at all) killed
+    the express's reader with it: no hold was answered again, no target after a stop went
+    out, and nothing said so. The child is killed and said to have ended, and started again."""
+    problems = Problems()
+    words = [json.dumps({"op": "up"}), '{"op": "wrote", "rotator": "a", "operator": "\\ufb']
+    e = express([sys.executable, "-c", SAYS, *words], problems)
+    e.start(mqtt311=False)
+    try:
+        wait_until(lambda: any("ended" in t for t in problems.on()), 10, "its end said")
+        # started again (RESTART_FIRST_S later), and the reader goes on: its words are read
+        wait_until(lambda: e.starts >= 2, 10, "the next child started")
+        assert e.runner.is_alive()
+    finally:
+        e.stop()
+
+
+def test_a_word_of_another_shape_ends_that_express_said_and_it_starts_again() -> None:
+    """Rule 6 (a review): a word of JSON whose fields are not its ``op``'s (a child started
+    from a package upgraded under the running bridge names them otherwise) raised in the
+    reader, which died as it did on a cut word: no hold answered again, no target after a
+    stop went out, nothing said. The child is killed, said to have ended, and started again."""
+    problems = Problems()
+    words = [json.dumps({"op": "up"}), json.dumps({"op": "wrote", "rotator": "a", "at": 5.0})]
+    e = express([sys.executable, "-c", SAYS, *words], problems)
+    e.start(mqtt311=False)
+    try:
+        wait_until(lambda: any("ended" in t for t in problems.on()), 10, "its end said")
+        wait_until(lambda: e.starts >= 2, 10, "the next child started")
+        assert e.runner.is_alive()
+    finally:
+        e.stop()

@@ -82,6 +82,8 @@ def test_an_elevation_needs_every_member_to_have_one_else_nothing_moves() -> Non
     ]
     with pytest.raises(pl.PayloadError, match="lower turns in azimuth only"):
         fan_out(STACK, b'{"azimuth": 10, "elevation": 30}', {"upper": True, "lower": False})
+    with pytest.raises(pl.PayloadError, match="upper, lower turn in azimuth only"):
+        fan_out(STACK, b'{"azimuth": 10, "elevation": 30}', {})
 
 
 @pytest.mark.parametrize(
@@ -205,7 +207,7 @@ def test_when_every_member_refuses_the_groups_error_says_none_turns() -> None:
     [
         (b"120", True, "retained command on rotor/stack/target ignored"),
         (b"north", False, "north"),
-        (b'{"azimuth": 1, "elevation": 2}', False, "turns in azimuth only"),
+        (b'{"azimuth": 1, "elevation": 2}', False, "turn in azimuth only"),
         (b"360.0001", False, "0..360, not 360.0001"),  # (not "not 360": as sent)
     ],
 )

@@ -140,3 +140,16 @@ def test_the_first_look_that_opens_says_so_when_the_broker_held_nothing() -> Non
     assert lk.end(timed_out=False).heard == {}
     lk.begin()
     assert lk.end(timed_out=False).heard is None
+
+
+def test_a_deletion_asked_twice_in_one_look_is_sent_and_named_once() -> None:
+    """A topic two overlapping filters read (a configured rotator's option state: rule 1's
+    ``B/+/option/+/state`` and the owned-topic watch, interfaces/mqtt/stale.py rule 5) is
+    asked to be deleted twice: it was sent and named twice."""
+    lk = look()
+    lk.begin()
+    lk.saw(INFO, ME.info([]).encode())
+    jam = "t/a/option/jam/state"
+    for topic in (jam, STALE, jam):
+        assert lk.defer_clear(topic)
+    assert lk.end(timed_out=False).clears == [jam, STALE]

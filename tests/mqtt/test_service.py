@@ -278,7 +278,8 @@ def test_an_az_el_status_adds_elevation_topic_and_fields() -> None:
     assert pub.retained["rotor/bearing"] == "-10.5"
     assert pub.retained["rotor/elevation"] == "45.25"
     assert pub.retained["rotor/lock/state"] == "ON"
-    assert "rotor/version" not in pub.retained  # no version known: nothing published
+    # no version known: cleared (another controller's may be there, runtime/kept.py rule 11)
+    assert pub.retained["rotor/version"] == ""
     doc = json.loads(pub.retained["rotor/status"])
     assert (doc["elevation"], doc["target_elevation"], doc["locked"]) == (45.25, 45.0, True)
 
@@ -294,6 +295,7 @@ def test_a_controller_without_position_publishes_no_bearing() -> None:
         "rotor/lock/state",
         "rotor/state",
         "rotor/status",
+        "rotor/version",  # cleared: it has none (runtime/kept.py rule 11)
     ]
     assert pub.retained["rotor/state"] == "unknown"
     doc = json.loads(pub.retained["rotor/status"])
@@ -316,7 +318,7 @@ def test_only_what_changed_is_published_again() -> None:
         "tower", state=MotionState.IDLE, bearing_deg=90.0, available=True, connected=True
     )
     svc.publish_status("tower", still)
-    assert len(pub.take()) == 6  # bearing, state, availability, lock, status, control
+    assert len(pub.take()) == 7  # bearing, state, availability, version, lock, status, control
     svc.publish_status("tower", still)
     assert pub.take() == []
     svc.publish_status(
@@ -352,7 +354,7 @@ def test_a_reading_hands_the_client_only_what_changed_and_stop_forgets_what_was_
                 connected=True,
             ),
         )
-    assert calls[6:] == ["rotor/bearing", "rotor/status"]
+    assert calls[7:] == ["rotor/bearing", "rotor/status"]
     svc.stop()
     calls.clear()
     svc.publish_status(
@@ -745,6 +747,35 @@ def test_a_target_behind_the_copy_of_a_lane_stop_read_late_stays_fenced() -> Non
     tower.calls.clear()
     svc.on_message("rotor/target", b"120", False)
     assert tower.calls == [("refused", FENCED, "target '120'")]
+
+
+def test_a_fence_ends_by_its_markers_copy_on_the_hello_topic_when_the_fence_topic_drops_it() -> (
+    None
+):
+    """lastword.py rule 7 (an attack pass): the broker began dropping B/bridge/fence under a
+    live connection (mosquitto reloads its ACL on SIGHUP), and after rotctld's S every MQTT
+    target was refused as older until the connection dropped. Each marker goes on the hello
+    topic too, and that copy ends the fence; a hello that is no marker of this process ends
+    nothing."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.fence_asked("tower")
+    svc.fence_carried("tower", lock=False)  # rotctld's S
+    sent = pub.take()
+    (fence,) = [p for t, p, _ in sent if t == "rotor/bridge/fence"]
+    assert [p for t, p, _ in sent if t == "rotor/bridge/hello"] == [fence]
+    svc.on_message("rotor/target", b"120", False)  # published before the S
+    token, number, _seal = fence.split()
+    svc.on_message("rotor/bridge/hello", f"{token} {number} {'0' * 16}".encode(), False)
+    svc.on_message("rotor/bridge/hello", b"another-bridge 1", False)  # a hello, no marker
+    svc.on_message("rotor/target", b"130", False)  # still before the S's marker
+    svc.on_message("rotor/bridge/hello", fence.encode(), False)  # its copy: caught up
+    svc.on_message("rotor/target", b"140", False)
+    assert [c[:2] for c in tower.calls] == [
+        ("refused", FENCED),
+        ("refused", FENCED),
+        ("submit", tower.calls[-1][1]),
+    ]
 
 
 def test_a_move_read_while_another_interfaces_halt_is_asked_and_not_fenced_yet_is_refused() -> None:

@@ -92,3 +92,31 @@ def test_the_lease_is_published_retained_from_the_status_and_audit_events_as_the
     for _ in range(200):
         still.publish_audit("tower", event)
     assert len(pub.take()) == 50  # 5 x mqtt.error_events_per_s; the next says how many left
+
+
+def test_refusals_and_stops_on_r_audit_never_leave_a_move_or_a_lease_change_out() -> None:
+    """Rule 8 (an attack pass: some 50 refused commands, anyone's, took the rotator's whole
+    budget, and the lease holder's own claim and move were left out, a ``suppressed`` count
+    in their place): refusals and stops have a budget of their own."""
+    svc, pub, _ = service({"tower": "rotorez"})
+    still = MqttService(Topics("rotor", {"tower": "rotor"}), pub, clock=lambda: 0.0)
+    still.attach(RecordingRotator("tower", "rotorez"))
+    pub.take()
+    neighbour = Origin(Source.ROTCTLD, None, "192.168.1.66")
+    for n in range(60):
+        refused = AuditEvent(1_700_000_000.0 + n, "tower", neighbour, "P 10 0", "refused: x", 1.0)
+        still.publish_audit("tower", refused)
+        stop = AuditEvent(1_700_000_000.0 + n, "tower", neighbour, "S", "executed", 1.0, True)
+        still.publish_audit("tower", stop)
+    holder = Origin(Source.MQTT, "DL1ABC")
+    for command in ("claim", "target az 200", "lock ON"):
+        still.publish_audit(
+            "tower", AuditEvent(1_700_000_100.0, "tower", holder, command, "executed", 1.0)
+        )
+    published = [json.loads(payload) for _topic, payload, _retained in pub.take()]
+    assert len(published) == 50 + 3  # the routine budget's burst, then the holder's three
+    assert [(d["command"], d.get("suppressed")) for d in published[-3:]] == [
+        ("claim", None),
+        ("target az 200", None),
+        ("lock ON", None),
+    ]

@@ -3,8 +3,11 @@ name a root no longer configured, and which topics are then deleted. Pure."""
 
 from __future__ import annotations
 
+from bridge.interfaces.mqtt.service import never_published
 from bridge.interfaces.mqtt.stale import StaleTopics
-from bridge.interfaces.mqtt.topics import Topics
+from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
+from bridge.protocols import REGISTRY
+from bridge.protocols.axes import Axis, axis_spec, composite_spec
 
 
 def several() -> StaleTopics:
@@ -114,3 +117,62 @@ def test_another_bridge_s_base_topic_is_spared_whichever_came_first() -> None:
     assert stale.stale("rotor/site2/bridge/state") == []
     assert all(stale.spared(t) for t in doomed)
     assert not stale.spared("rotor/c/bearing")
+
+
+def test_a_state_a_configured_rotator_no_longer_publishes_is_deleted_by_itself() -> None:
+    """Rule 5: ``R/tracking`` of a rotator whose station was taken out; its other topics and
+    another rotator's tracking are left."""
+    topics = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"})
+    stale = StaleTopics(topics, {"rotor/a", "rotor/b"}, unpublished={"rotor/a/tracking"})
+    assert not [s for s in stale.subscriptions if s.endswith("/tracking")]  # (rule 10 reads it)
+    assert stale.stale("rotor/a/tracking") == ["rotor/a/tracking"]
+    assert stale.stale("rotor/b/tracking") == []
+    assert stale.stale("rotor/a/availability") == []
+
+
+def test_a_status_topic_a_configured_rotator_s_model_never_fills_is_deleted_by_itself() -> None:
+    """Rule 5, a review: a controller swapped for another model left the old one's
+    ``R/elevation``, ``R/version`` and ``R/bearing`` retained for ever; read through the owned-
+    topic watch (no filter of its own), each is deleted by itself, and nothing else is."""
+    topics = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"})
+    gone = {"rotor/a/elevation", "rotor/a/version", "rotor/a/bearing"}
+    stale = StaleTopics(topics, {"rotor/a", "rotor/b"}, unpublished=gone)
+    assert not gone & set(stale.subscriptions)  # (client.py rule 10 reads them)
+    for topic in gone:
+        assert stale.stale(topic) == [topic]
+    for topic in ("rotor/b/elevation", "rotor/b/version", "rotor/a/state", "rotor/a/status"):
+        assert stale.stale(topic) == [], topic
+
+
+def test_an_option_state_a_configured_rotator_s_model_has_not_is_deleted_by_itself() -> None:
+    """Rule 5: a Rotor-EZ's ``R/option/jam/state`` once the rotator is a GS-232B (whose one
+    option is ``speed``); its speed, a rotator that still has jam, and its lock are left."""
+    topics = Topics("rotor", {"a": "rotor/a", "option": "rotor/option"})
+    options = {"rotor/a": ("speed",), "rotor/option": ("jam",)}
+    stale = StaleTopics(topics, {"rotor/a", "rotor/option"}, options=options)
+    assert stale.stale("rotor/a/option/jam/state") == ["rotor/a/option/jam/state"]
+    assert stale.stale("rotor/a/option/speed/state") == []
+    assert stale.stale("rotor/option/option/jam/state") == []
+    assert stale.stale("rotor/option/lock/state") == []  # (its own lock: rule 3)
+    assert stale.stale("rotor/a/option/jam") == []  # (a command topic)
+    one = StaleTopics(Topics("rotor", {"tower": "rotor"}), {"rotor"}, options={"rotor": ()})
+    assert one.stale("rotor/option/jam/state") == ["rotor/option/jam/state"]  # (on the base)
+
+
+def test_what_a_model_publishes_is_never_among_the_topics_it_never_fills() -> None:
+    """Rule 5's other edge (interfaces/mqtt/service.py ``never_published``): an MD-01's and a
+    composite rotator's elevation, a composite's version joined from its boxes', a Rotor-EZ's
+    version (however late it comes) stay; a DCU-1 fills neither bearing, elevation nor version."""
+    t = RotatorTopics("rotor/a")
+    assert never_published(t, REGISTRY["md01"]) == [t.version]
+    assert never_published(t, REGISTRY["rotorez"]) == [t.elevation]
+    assert never_published(t, REGISTRY["dcu1"]) == [t.bearing, t.elevation, t.version]
+    az, el = REGISTRY["rotorez"], REGISTRY["easycomm3"]
+    both = composite_spec(az, el)
+    assert (
+        never_published(t, both, (axis_spec(az, Axis.AZIMUTH), axis_spec(el, Axis.ELEVATION))) == []
+    )
+    quiet = (axis_spec(REGISTRY["rt21"], Axis.AZIMUTH), axis_spec(REGISTRY["md01"], Axis.ELEVATION))
+    assert never_published(t, composite_spec(REGISTRY["rt21"], REGISTRY["md01"]), quiet) == [
+        t.version
+    ]

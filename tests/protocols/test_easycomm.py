@@ -125,6 +125,23 @@ def test_the_version_answer(how: str) -> None:
     assert [r for r in replies if isinstance(r, VersionReply)] == [VersionReply("SatNOGS v2.1")]
 
 
+@pytest.mark.parametrize("end", [b"\n", b"\r\n", b"\r"])
+@pytest.mark.parametrize("how", [*HOW, "all but its end"])
+def test_a_version_line_fills_80_bytes_at_most_however_it_is_read(how: str, end: bytes) -> None:
+    """Rule 6: 80 bytes before the line end are a version; 81 are noise, whole or not (an
+    81-byte line was read when whole and noise when a read stopped before its end)."""
+    for text, want in (("v" * 78, [VersionReply("v" * 78)]), ("v" * 79, [])):
+        line = b"VE" + text.encode() + end
+        codec = EasycommCodec(3)
+        if how == "all but its end":
+            replies = [*codec.feed(line[: -len(end)]), *codec.feed(end)]
+        else:
+            replies = feed(codec, line, how)
+        assert [r for r in replies if isinstance(r, VersionReply)] == want, len(line)
+        if not want:
+            assert [j.detail for j in junk(replies)][:1] == ["line too long"]
+
+
 @pytest.mark.parametrize("how", HOW)
 def test_junk_in_front_of_a_reply_on_its_line_makes_it_untrusted(how: str) -> None:
     codec = asked(2)

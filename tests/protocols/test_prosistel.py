@@ -320,3 +320,24 @@ def test_the_model_table() -> None:
     assert d.retarget is RetargetPolicy.DIRECT and d.brake_delay_s == 0.0
     assert (d.query_bytes, d.reply_bytes) == (len(b"\x02A?\r"), len(b"\x02A,?,123,B\r"))
     assert (combi.query_bytes, combi.reply_bytes) == (8, 2 * len(b"\x02A,?,1234,B\r"))
+
+
+@pytest.mark.parametrize(
+    ("family", "answer", "driving"),
+    [
+        (D, b"\x02A,?,120,R\r", True),
+        (D, b"\x02A,?,120,B\r", False),
+        (D, b"\x02A,?,120,X\r", None),  # (a letter the sheet does not name says nothing)
+        (COMBI, b"\x02A,?,1200,B\r\x02B,?,0300,R\r", True),  # (one unit's motor runs)
+        (COMBI, b"\x02B,?,0300,B\r\x02A,?,1200,B\r", False),
+        (COMBI, b"\x02A,?,1200,B\r\x02B,?,0300,X\r", None),
+    ],
+)
+def test_a_reading_says_whether_the_box_drives_a_motor(
+    family: Family, answer: bytes, driving: bool | None
+) -> None:
+    """Rule 8: the position's last letter, running or braked (base.py rule 8)."""
+    codec = ProsistelCodec(family)
+    codec.encode_query()
+    [reading] = [r for r in codec.feed(answer) if isinstance(r, PositionReply)]
+    assert reading.driving is driving

@@ -370,3 +370,26 @@ def test_any_stream_gives_the_same_readings_however_sliced_and_none_it_did_not_c
         assert (b"A", az) in lines and 0 <= az <= 360
         assert (elev is None) is (not el) and (elev is None or (b"E", elev) in lines)
         assert elev is None or -90 <= elev <= 180
+
+
+@pytest.mark.parametrize(
+    ("elevation", "lines", "driving"),
+    [
+        (False, b"A P= 120.0 S=9 MV\r", True),
+        (False, b"A P= 120.0 S=9 ST\r", False),
+        (False, b"A=120.0 S=9 M\r", True),  # (Hamlib's examples: M and S)
+        (False, b"A=120.0 S=9 S\r", False),
+        (False, b"A P= 120.0\r", None),  # (no state word: it says nothing)
+        (True, b"A P= 120.0 S=9 ST\rE P=  30.0 S=9 MV\r", True),  # (one axis's motor runs)
+        (True, b"A P= 120.0 S=9 ST\rE P=  30.0 S=9 ST\r", False),
+        (True, b"A P= 120.0 S=9 ST\rE P=  30.0 S=9\r", None),
+    ],
+)
+def test_a_reading_says_whether_the_box_drives_a_motor(
+    elevation: bool, lines: bytes, driving: bool | None
+) -> None:
+    """Rule 7: each axis's state word (base.py rule 8)."""
+    codec = Rc2800Codec(elevation=elevation)
+    codec.encode_query()
+    [reading] = [r for r in codec.feed(lines) if isinstance(r, PositionReply)]
+    assert reading.driving is driving

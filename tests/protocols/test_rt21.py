@@ -42,7 +42,8 @@ def test_commands_on_the_wire() -> None:
     assert codec.encode_target(123.4) == [b"AP1123.4\r;"]  # one frame: the CR runs it
     assert codec.encode_target(5) == [b"AP1005.0\r;"]  # zero-padded, as Hamlib sends it
     assert codec.encode_target(12.35) == [b"AP1012.4\r;"]  # tenths, half up
-    assert codec.encode_target(359.96) == [b"AP1360.0\r;"]
+    # north as the box takes it (rule 4: 0..359.9, Hamlib's caps), never 360.0
+    assert codec.encode_target(359.96) == codec.encode_target(360) == [b"AP1000.0\r;"]
     assert codec.encode_stop() == b";"
     assert (codec.encode_version(), codec.encode_connect(0.0), codec.encode_enable()) == (
         None,
@@ -58,7 +59,7 @@ def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None
     for az in (360.1, -0.1, 400):
         with pytest.raises(ValueError, match="outside"):
             codec.encode_target(az)
-    assert codec.wire_target(359.95) == (360.0, None)
+    assert codec.wire_target(359.95) == (0.0, None)  # rule 4: north is 000.0
     assert codec.wire_target(-0.04) == (0.0, None)
     assert codec.wire_target(77.77, 30) == (77.8, None)  # one axis: an elevation is not its
 

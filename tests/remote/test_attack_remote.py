@@ -145,6 +145,21 @@ def test_forged_control_presets_and_errors_nested_past_the_parsers_depth_are_no_
     assert parse_event(deep) is None
 
 
+@pytest.mark.parametrize("until", ["9999-12-31T23:59:59-14:00", "0001-01-01T00:00:00+14:00"])
+def test_a_forged_controls_end_no_clock_can_show_is_no_crash(until: str) -> None:
+    """An attack pass: ``R/control`` naming another holder until a time past year 9999 once
+    in UTC (a valid ISO time with its offset) raised ValueError where the lease's words were
+    made, at every move a client asked for: rotctld answered ``RPRT -7`` and logged an
+    internal error. Such a time is no station's: it reads as unknown, and the move goes."""
+    view, link = StationView(FakeClock()), Link()
+    rot = station_rotator(view, "tower", link)
+    view.put(rot.topics.status, idle_status("10.0"))
+    forged = f'{{"holder": "G4XYZ", "until": "{until}"}}'.encode()
+    view.put(rot.topics.feature("control"), forged)
+    assert RotctldSession(rot).feed(b"P 120 0\n") == [b"RPRT 0\n"]  # type: ignore[arg-type]
+    assert [topic for topic, _ in link.sent] == ["rotor/tower/target"]
+
+
 # -- the broker dropping at the worst moment ---------------------------------------------------
 OPERATOR = "DL1ABC"
 

@@ -6,6 +6,7 @@ told, where the station's rotor ends up, what the live feed says, the answer to 
 from __future__ import annotations
 
 import socket
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -232,3 +233,24 @@ def test_with_the_station_bridge_gone_a_turn_is_refused_at_once(
     assert "station's rotator is offline" in answer.doc["error"]
     stop = client.command("tower", command="stop")  # a stop still goes out, said undelivered
     assert stop.status == 409 and "may still be turning" in stop.doc["error"], stop
+
+
+def test_a_pages_token_still_turns_the_rotor_after_this_computers_clock_went_back(
+    station: Rig,
+) -> None:
+    """An attack pass (remote/run.py rule 9): the operator's computer's wall clock set back 10
+    minutes (its time server found) made every token the console had handed out "issued in the
+    future", and each click was refused "the token has expired: log in again"."""
+    behind = [0.0]
+    port = free_port()
+    r = Remote(remote_settings(station, port), wall=lambda: time.time() - behind[0])
+    r.start()
+    try:
+        client = ConsoleClient(port)
+        client.session()
+        behind[0] = 600.0  # the clock goes back 10 minutes
+        answer = client.command("tower", command="target", az=120)
+        assert answer.status == 200, answer
+        station.arrived("tower", 120)
+    finally:
+        r.stop()

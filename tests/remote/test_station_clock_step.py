@@ -6,10 +6,12 @@ does. The stamps are what a remote reckons from the heartbeats it heard before t
 What the operator would see: a target the link held up for longer than its expiry never turns
 the rotor, and one sent just now is carried out, not refused as "from the future"; also when
 the station's bridge restarted after its wall clock was set back (heartbeat.py rule 7), where a
-real remote link reckons the station's clock from the heartbeats."""
+real remote link reckons the station's clock from the heartbeats; and the control lease ends
+at the time R/control says on that clock, not 10 minutes later (runtime/operators.py rule 5)."""
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Iterator
 
@@ -26,6 +28,7 @@ from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings import MqttSettings
 from tests.support import wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 STEP_S = 10.0  # the station's wall clock set back by this much
 
@@ -172,3 +175,39 @@ def test_a_station_bridge_restarted_on_a_clock_set_back_refuses_what_the_old_one
         ]
     finally:
         link.stop()
+
+
+def test_a_lease_ends_at_its_time_on_the_stations_clock_though_its_wall_clock_went_back(
+    rig: Rig,
+) -> None:
+    """The control lease ends at the time ``R/control`` gives, on the clock the station's
+    heartbeats carry (never set back), as the remote reads it (remote/rotator.py rule 6). On
+    the raw wall clock, set back 10 minutes, the station held it 10 minutes past that end while
+    its heartbeats said the end had passed: the remote answered another operator's move
+    ``RPRT 0`` and the station refused it, naming a holder whose time was up."""
+    # a kept lease (claims are a minute at least) ending soon, though not before the bridge
+    # has started and said it (that takes longer on a busy machine: a lease over at the
+    # start is ended there, and its holder never shown)
+    ends_unix = time.time() + slow(4)
+    lease = {"operator": "DL1ABC", "until": ends_unix}
+    (rig.tmp / "state.json").write_text(json.dumps({"rotators": {"tower": {"lease": lease}}}))
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    wall = SteppedWall()
+    rig.app = App(rig.settings, wall=wall)
+    rig.app.start()
+    rig.ready("tower")
+    probe = rig.probe
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    wall.behind_s = 600.0  # the time server found: the wall clock goes back 10 minutes
+    mark = probe.mark()
+    beat = probe.wait(
+        lambda m: m.topic == HEARTBEAT and parse_beat(m.payload) > ends_unix,
+        15,
+        "a heartbeat past the lease's end",
+        mark,
+    )
+    assert parse_beat(beat.payload) > ends_unix  # the station's clock says it is over ...
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    probe.wait_for("rotor/control", free, 10, after=held.t)  # ... and so does R/control
+    probe.publish("rotor/target", "120")  # anyone's move turns it
+    rig.arrived("tower", 120)

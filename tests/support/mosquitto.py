@@ -121,6 +121,12 @@ class Mosquitto(DemoMosquitto):
         if self.proc is not None:
             self.proc.send_signal(signal.SIGCONT)
 
+    def reload(self) -> None:
+        """Read the configuration's files again (SIGHUP: mosquitto reloads its ACL file and
+        keeps every connection)."""
+        if self.proc is not None:
+            self.proc.send_signal(signal.SIGHUP)
+
     def restart(self) -> None:
         """Same port: clients reconnect to where it was."""
         self.stop()

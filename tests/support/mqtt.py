@@ -8,6 +8,7 @@ so the probe sets TCP_NODELAY; brokers that must be as quick say ``set_tcp_nodel
 from __future__ import annotations
 
 import contextlib
+import os
 import socket
 import threading
 import time
@@ -19,6 +20,8 @@ import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
 
 from tests.support.waiting import slow, wait_until
+
+SYNC_PREFIX = "probe-sync/"  # Probe.caught_up's round trips
 
 
 @dataclass
@@ -66,6 +69,10 @@ class Probe:
         self._connected = threading.Event()  # connected and, with a filter, subscribed
         self._subscribe_mid: int | None = None
         self.filter = topic_filter
+        # caught_up's round trips: a topic of this probe's own, never recorded
+        self._sync_topic = f"{SYNC_PREFIX}{os.getpid()}-{id(self)}"
+        self._sync_n = 0  # the last one sent
+        self._synced = 0  # the last one back
         c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id or f"probe-{id(self)}")
         if username is not None:
             c.username_pw_set(username, password)
@@ -91,6 +98,7 @@ class Probe:
         if not filters:  # a client that only publishes
             self._connected.set()
             return
+        filters.append((self._sync_topic, 1))
         _rc, self._subscribe_mid = client.subscribe(filters)  # (its SUBACK comes after this)
 
     def _on_subscribe(self, client, userdata, mid, reason_codes, props) -> None:  # noqa: ANN001
@@ -99,6 +107,11 @@ class Probe:
 
     def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
         with self._cond:
+            if msg.topic.startswith(SYNC_PREFIX):  # (another probe's, under "#": not recorded)
+                if msg.topic == self._sync_topic:
+                    self._synced = max(self._synced, int(msg.payload))
+                    self._cond.notify_all()
+                return
             self.messages.append(
                 Message(msg.topic, bytes(msg.payload), bool(msg.retain), time.monotonic(), msg.qos)
             )
@@ -108,6 +121,27 @@ class Probe:
         """Sent, and acknowledged by the broker (QoS 1) before this returns."""
         info = self.client.publish(topic, payload, qos=qos, retain=retain)
         info.wait_for_publish(5)
+
+    def caught_up(self, timeout_s: float = 10.0) -> float:
+        """A round trip through the broker: once it returns, every message the broker sent
+        this probe before has arrived and been stamped. Returns the clock then, for a wait's
+        ``after``: a message stamped later was sent after the call. (A message published just
+        before a bridge stopped could otherwise arrive, on a busy machine, after a ``t`` read
+        right after the stop, and pass for the next run's: a CI run saw a restarted rotator's
+        ``online`` that was the first run's, and its target went to no bridge.)"""
+        if not self.filter:
+            raise ValueError("caught_up needs a probe that subscribes")
+        with self._cond:
+            self._sync_n = n = self._sync_n + 1
+        self.publish(self._sync_topic, str(n).encode())
+        deadline = time.monotonic() + slow(timeout_s)
+        with self._cond:
+            while self._synced < n:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise self.timeout_error(f"the probe's round trip {n} did not come back")
+                self._cond.wait(left)
+        return time.monotonic()
 
     def mark(self) -> int:
         """Where the messages received from now on start (``wait(..., start=mark)``)."""

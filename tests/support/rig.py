@@ -45,6 +45,10 @@ from tests.support.process import _spawn as _default_spawn
 from tests.support.tap import bogus_bearings, near_deg, start_emulator
 from tests.support.waiting import slow
 
+# R/error's kinds that are the controller's line speaking (bytes that are no reply, the port
+# lost or not there): never the answer to a command, and free to come at any moment
+LINE_WORDS = ("protocol", "serial")
+
 # Timings scaled down so a test takes seconds, with the same ratios as real hardware:
 # the controller's brake delay is still much longer than a poll, a settle window, a reply.
 FAST_ROTOR = {"speed_deg_s": 40.0, "brake_delay_s": 1.5, "jitter_deg": 1}
@@ -366,7 +370,13 @@ class Rig:
         reports for it on the error topic."""
         t = time.monotonic()
         self.probe.publish(self.topic(rid, leaf), payload)
-        err = json.loads(self.probe.wait_for(self.topic(rid, "error"), after=t).payload)
+        err = json.loads(  # the first R/error after it that is no word of the line's (junk
+            self.probe.wait_for(  # a restart found on the wire, a reopen's failure: they
+                self.topic(rid, "error"),  # answer no command, and a loaded host may put
+                lambda m: json.loads(m.payload)["kind"] not in LINE_WORDS,  # one first)
+                after=t,
+            ).payload
+        )
         assert err["kind"] == "refused", err
         return str(err["message"])
 

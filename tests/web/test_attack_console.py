@@ -21,6 +21,8 @@ Failing (12), by severity:
 from __future__ import annotations
 
 import json
+import logging
+import os
 import socket
 import threading
 import time
@@ -918,3 +920,27 @@ def test_a_bind_name_that_does_not_resolve_names_web_bind() -> None:
         "machine can resolve (Name or service not known)"
     )
     assert named.errno == socket.EAI_NONAME  # (not EADDRNOTAVAIL: no "not yet" at boot)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_console_secret_that_is_no_regular_file_is_said_and_never_waited_for(
+    tmp_path: Path, kind: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    """files.py rule 1, an attack pass: a FIFO at ``console-secret`` beside the state file held
+    the bridge's start for ever, without a word (its opening waited for a writer); a link to a
+    device was read (``/dev/zero``: until the memory ran out). Now either is said, and the
+    secret is this run's own."""
+    path = tmp_path / "console-secret"
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to("/dev/null")
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(installation_secret(path)), daemon=True)
+    with caplog.at_level(logging.WARNING, logger="bridge"):
+        reader.start()
+        reader.join(slow(5))
+    assert got, "the start waited on the console's secret"
+    assert len(got[0]) == 32
+    assert "console-secret cannot be read (" in caplog.text
+    assert "not a regular file" in caplog.text

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.interfaces.web.commands import BadCommand, WebCommand, parse
+from bridge.interfaces.web.commands import MAX_AGE_S, BadCommand, WebCommand, aged, parse
 
 
 @pytest.mark.parametrize(
@@ -77,3 +77,24 @@ def test_bad_bodies_are_refused_by_name(body: bytes, says: str) -> None:
 def test_a_stop_with_its_command_key_twice_is_still_a_stop() -> None:
     """A review: a key given twice is refused only with two values (core/jsonkeys.py)."""
     assert parse(b'{"command":"stop","command":"stop"}').halts()
+
+
+def test_a_move_sent_too_long_ago_or_ahead_of_the_clock_is_refused_a_halt_never() -> None:
+    """commands.py rule 6: ``sent`` is the bridge's steady clock as the page reckoned it."""
+    click = parse(b'{"command":"target","az":120,"sent":100.0}')
+    assert click.sent == 100.0
+    assert aged(click, 100.0 + MAX_AGE_S - 0.5) is None
+    assert aged(click, 112.4) == "not carried out: sent 12 s ago (a move older than 5 s is refused)"
+    assert "ahead of the bridge's clock" in str(aged(click, 98.0))
+    unlock = parse(b'{"command":"lock","on":false,"sent":100.0}')
+    assert aged(unlock, 200.0) is not None  # a lock OFF held up is as late as a move
+    for halt in (
+        b'{"command":"stop"',
+        b'{"command":"lock","on":true',
+        b'{"command":"track","body":"off"',
+    ):
+        assert aged(parse(halt + b',"sent":100.0}'), 1000.0) is None
+    assert aged(parse(b'{"command":"park"}'), 1000.0) is None  # a script's, unstamped
+    for bad in (b'"x"', b"-1", b"true", b"1e999"):
+        with pytest.raises(BadCommand, match='"sent"'):
+            parse(b'{"command":"park","sent":' + bad + b"}")

@@ -11,18 +11,29 @@ import json
 import math
 import os
 import re
+import signal
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
-from playwright.sync_api import APIResponse, Browser, Page, Request, Route, expect
+from playwright.sync_api import (
+    APIResponse,
+    Browser,
+    Page,
+    Request,
+    Route,
+    WebSocketRoute,
+    expect,
+)
 
 from bridge.core import geo
+from bridge.interfaces.web.commands import MAX_AGE_S
 from bridge.interfaces.web.projection import RIM_KM
+from tests.support import wait_until
 from tests.support.console import web_section
 from tests.support.rig import Rig, arrival_tol
-from tests.support.waiting import slow_ms
+from tests.support.waiting import slow, slow_ms
 from tests.web.conftest import (
     KEEP_OUT,
     PRESETS,
@@ -162,7 +173,8 @@ def test_the_lock_refuses_a_click_and_the_page_says_why(
     expect(page.locator("#message")).to_contain_text("locked")
     after = rig.emu.state()
     assert not after.is_moving and after.az_deg == before.az_deg
-    page.click("#lock")
+    page.click("#lock")  # offers Release (console.js rule 10), which releases it
+    page.click("#unlock")
     expect(page.locator("#lock")).to_have_attribute("aria-pressed", "false")
 
 
@@ -220,7 +232,7 @@ def test_the_page_shows_the_bridge_going_away_and_coming_back(
     rig.bridge.terminate()
     expect(page.locator("body")).to_have_class(OFFLINE, timeout=slow_ms(5_000))
     expect(page.locator("#connection")).to_contain_text("connection lost")
-    restarted = time.monotonic()
+    restarted = rig.probe.caught_up()
     rig.start_process()
     rig.ready("hf", timeout_s=20, after=restarted)
     expect(page.locator("body")).not_to_have_class(OFFLINE, timeout=slow_ms(15_000))
@@ -378,3 +390,270 @@ def test_a_stop_carried_by_the_live_feed_alone_is_not_said_to_be_unsent(
         expect(page.locator("#message")).not_to_contain_text("nothing was sent")
     finally:
         page.unroute("**/command")
+
+
+def test_arrow_keys_on_the_track_select_track_nothing_until_enter(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """A keyboard user arrows through *Track* from "off" to "Moon": Chromium changes a closed
+    select's choice at each key, and each change was a track command, so the sun was tracked
+    on the way and the rotor turned toward it. The keys choose; Enter sends the choice; a
+    choice left unsent goes back to what the bridge tracks when the select loses the focus."""
+    page, rig = console_page, console_bridge.rig
+    sent: list[dict[str, Any]] = []
+
+    def record(request: Request) -> None:
+        if request.method == "POST" and request.url.endswith("/command"):
+            sent.append(json.loads(request.post_data or "{}"))
+
+    page.on("request", record)
+    select = page.locator("#track")
+    expect(select).to_have_value("off")
+    select.focus()
+    page.keyboard.press("ArrowDown")
+    page.keyboard.press("ArrowDown")
+    expect(select).to_have_value("moon")
+    expect(page.locator("#message")).to_contain_text("Enter tracks moon")
+    page.locator("#nudge-cw").focus()  # the choice left unsent: back to what is tracked
+    expect(select).to_have_value("off")
+    expect(page.locator("#message")).to_have_text("")
+    assert sent == []
+    assert not rig.emu.state().is_moving
+    expect(page.locator("#tracking-info")).to_be_hidden()
+    select.focus()
+    page.keyboard.press("ArrowDown")
+    page.keyboard.press("ArrowDown")
+    page.keyboard.press("Enter")
+    page.wait_for_function("() => window.rotorConsole.answered === 1")
+    assert [(c["command"], c["body"]) for c in sent] == [("track", "moon")]
+
+
+def test_enter_held_on_the_lock_button_locks_once_and_stays_locked(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """Enter held a moment too long on the focused Lock button: Chromium repeats the key, and
+    each repeat clicked the button again, which toggles, so the lock went ON, then OFF at the
+    next repeat. A key held down is one press."""
+    page = console_page
+    sent: list[dict[str, Any]] = []
+
+    def record(request: Request) -> None:
+        if request.method == "POST" and request.url.endswith("/command"):
+            sent.append(json.loads(request.post_data or "{}"))
+
+    page.on("request", record)
+    cdp = page.context.new_cdp_session(page)
+
+    def enter(kind: str, repeat: bool = False) -> None:
+        cdp.send(
+            "Input.dispatchKeyEvent",
+            {
+                "type": kind,
+                "key": "Enter",
+                "code": "Enter",
+                "windowsVirtualKeyCode": 13,
+                "text": "" if kind == "keyUp" else "\r",
+                "autoRepeat": repeat,
+            },
+        )
+
+    lock = page.locator("#lock")
+    expect(lock).to_have_text("Lock OFF")
+    lock.focus()
+    enter("keyDown")
+    expect(lock).to_have_text("Lock ON")  # the press carried out; the key still down
+    enter("keyDown", repeat=True)
+    enter("keyDown", repeat=True)
+    enter("keyDown", repeat=True)
+    enter("keyUp")
+    page.click("#stop")  # sent after whatever the repeats sent
+    wait_until(lambda: any(c["command"] == "stop" for c in sent), slow(10))
+    assert [(c["command"], c.get("on")) for c in sent] == [("lock", True), ("stop", None)]
+    expect(lock).to_have_text("Lock ON")
+
+
+def test_a_bridge_gone_silent_is_said_at_once_after_the_silence_not_a_minute_later(
+    console_bridge: ConsoleBridge, browser: Browser
+) -> None:
+    """The bridge hangs (a stalled host, a network that drops packets without a word): no
+    ping for 25 s and the page gives the live feed up. It closed the socket and waited for
+    the close to be answered, which a silent bridge never does, and Chromium waits a minute
+    for it: the page said "live" over the old bearing for 85 s. It is lost at once now."""
+    rig = console_bridge.rig
+    assert rig.bridge is not None
+    context = browser.new_context(viewport={"width": 1100, "height": 800})
+    page = context.new_page()
+    page.clock.install()  # the page's timers: the 25 s of silence are fast-forwarded
+    paused = False
+    try:
+        page.goto(console_bridge.url)
+        expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
+        os.kill(rig.bridge.pid, signal.SIGSTOP)
+        paused = True
+        page.clock.fast_forward(26_000)
+        expect(page.locator("#connection")).to_contain_text("connection lost")
+        expect(page.locator("body")).to_have_class(OFFLINE)
+        os.kill(rig.bridge.pid, signal.SIGCONT)
+        paused = False
+        expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
+    finally:
+        if paused:
+            os.kill(rig.bridge.pid, signal.SIGCONT)
+        context.close()
+
+
+def _posted(page: Page) -> list[dict[str, Any]]:
+    """Every command the page posts, as it posted it (its body)."""
+    sent: list[dict[str, Any]] = []
+
+    def record(request: Request) -> None:
+        if request.method == "POST" and request.url.endswith("/command"):
+            sent.append(json.loads(request.post_data or "{}"))
+
+    page.on("request", record)
+    return sent
+
+
+def test_a_click_held_up_on_a_bad_link_past_its_age_limit_turns_nothing(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """A phone on a bad mobile link: the operator clicks a bearing, the request is held up on
+    the way for seconds, then delivered. Nothing came after it (no STOP, no newer click), so
+    the bridge carried it out whenever it came. Each move carries its send time on the
+    bridge's clock as the page reckons it from its live feed (commands.py rule 6): one older
+    than MAX_AGE_S turns nothing, and the page says why."""
+    page, rig = console_page, console_bridge.rig
+    held: list[Route] = []
+    page.route("**/command", lambda route: held.append(route))
+    try:
+        before = rig.emu.state()
+        target = _far_from(before.az_deg)
+        clicked = time.monotonic()  # the bridge's steady clock is this host's
+        click_map(page, target)
+        wait_until(lambda: page.evaluate("1") == 1 and bool(held), slow(10))  # (evaluate: the
+        # handler's turn to run) held up on the way until the click is too old
+        wait_until(lambda: time.monotonic() > clicked + MAX_AGE_S + 1.0, slow(20))
+        held[0].continue_()
+        message = page.locator("#message")
+        expect(message).to_contain_text(re.compile(r"not carried out: sent \d+ s ago"))
+        expect(page.locator("#pointer")).to_contain_text("refused")
+    finally:
+        page.unroute("**/command")
+    after = rig.emu.state()
+    assert not after.is_moving and after.az_deg == before.az_deg, (before, after)
+    # its send time: the page's reckoning of the bridge's clock, never ahead of the truth
+    sent = json.loads(held[0].request.post_data or "{}")["sent"]
+    assert clicked - slow(1.0) <= sent <= time.monotonic()
+    click_map(page, target)  # the same click made now is carried out
+    rig.arrived("hf", target)
+
+
+def test_a_double_click_on_lock_locks_and_does_not_release_it(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """Lock toggled: a double click (the second click 300 ms after the first, the bridge's
+    status in between) locked and released at once. A click on Lock while it is ON offers
+    Release, usable only after a second: releasing is a deliberate act (console.js rule 10)."""
+    page = console_page
+    sent = _posted(page)
+    lock, release = page.locator("#lock"), page.locator("#unlock")
+    lock.click()
+    expect(lock).to_have_attribute("aria-pressed", "true")
+    lock.click()  # the double click's second
+    expect(release).to_be_visible()
+    expect(release).to_be_disabled()
+    expect(release).to_be_enabled()  # a second later: anything the clicks sent has come
+    assert [(c["command"], c.get("on")) for c in sent] == [("lock", True)]
+    expect(lock).to_have_text("Lock ON")
+    assert console_bridge.client().command("hf", command="target", az=10).status == 409
+    release.click()
+    expect(lock).to_have_attribute("aria-pressed", "false")
+    expect(release).to_be_hidden()
+    assert [(c["command"], c.get("on")) for c in sent] == [("lock", True), ("lock", False)]
+    assert "sent" in sent[1] and "sent" not in sent[0]  # a lock ON goes unstamped, always
+
+
+def test_stop_stays_usable_and_ungreyed_on_a_phone_while_the_live_feed_is_lost(
+    console_bridge: ConsoleBridge, browser: Browser
+) -> None:
+    """Offline (the live feed lost, the bridge still reachable by POST) the whole console was
+    greyed, STOP with it, as if it could not be used. STOP stays as it was, pinned where it
+    is, and stops the rotor by its POST."""
+    rig = console_bridge.rig
+    feeds: list[WebSocketRoute] = []
+    cut = False
+
+    def feed(ws: WebSocketRoute) -> None:  # the page's live feed, passed on until it is cut
+        if cut:
+            return  # opened, never answered: no hello (its close would wait in this handler)
+        feeds.append(ws)
+        ws.connect_to_server()
+
+    page = browser.new_context(viewport={"width": 390, "height": 700}).new_page()
+    try:
+        page.route_web_socket("**/api/live", feed)
+        page.goto(console_bridge.url)
+        expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
+        page.locator("#locator").scroll_into_view_if_needed()  # far down the panel
+        start = rig.emu.state().az_deg
+        target = _farthest(start)
+        assert console_bridge.client().command("hf", command="target", az=target).status == 200
+        rig.emu.wait_for(lambda s: s.is_moving and angle_apart(s.az_deg, start) > 15.0, 10)
+        cut = True  # the mobile link loses the feed (and every reconnect); POSTs still pass
+        feeds[-1].close()
+        expect(page.locator("body")).to_have_class(OFFLINE)
+        stop = page.locator("#stop")
+        expect(stop).to_be_in_viewport(ratio=1)
+        greyed = page.evaluate(
+            """() => {
+              const out = [];
+              for (let e = document.querySelector('#stop'); e; e = e.parentElement) {
+                const s = getComputedStyle(e);
+                if (s.filter !== 'none' || s.opacity !== '1') out.push(e.id || e.className);
+              }
+              return out;
+            }"""
+        )
+        assert greyed == [], greyed
+        expect(page.locator(".controls")).to_have_css("opacity", "0.5")  # the rest is greyed
+        stop.click()
+        stopped = rig.emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 10)
+        assert angle_apart(stopped.az_deg, target) > 30.0, stopped
+    finally:
+        page.context.close()
+
+
+# the page's steady clock (performance.now) held back by window.sleptMs: what a phone's or a
+# laptop's suspend does to it (Chromium's steady clock stands still while the system sleeps,
+# on Linux, Android and macOS), while the bridge's clock and the wall clock go on
+_SUSPENDABLE = """(() => {
+  const real = performance.now.bind(performance);
+  window.sleptMs = 0;
+  Object.defineProperty(performance, 'now', { value: () => real() - window.sleptMs });
+})();"""
+
+
+def test_a_click_made_as_soon_as_the_page_wakes_from_sleep_turns_the_rotor(
+    console_bridge: ConsoleBridge, browser: Browser
+) -> None:
+    """A phone put away a minute with the console open, then woken: the page's steady clock
+    stood still while it slept, so its reckoning of the bridge's clock (live.js rule 3) was a
+    minute behind, and every click until the next ping or reconnect was refused, 'not carried
+    out: sent 60 s ago', a click just made. The page sees that its steady clock fell behind
+    the wall clock since it last heard the bridge's, and hears the clock again before it
+    stamps the move (live.js rule 3)."""
+    rig = console_bridge.rig
+    context = browser.new_context(viewport={"width": 1100, "height": 800})
+    context.add_init_script(_SUSPENDABLE)
+    page = context.new_page()
+    try:
+        page.goto(console_bridge.url)
+        expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
+        expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(15_000))
+        target = _far_from(rig.emu.state().az_deg)
+        page.evaluate("window.sleptMs = 60000")  # woken after a minute asleep
+        click_map(page, target)
+        rig.arrived("hf", target)
+        expect(page.locator("#message")).not_to_contain_text("not carried out")
+    finally:
+        context.close()

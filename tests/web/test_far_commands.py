@@ -5,6 +5,7 @@ page's stream and other requests go on while one waits."""
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable, Iterator
 
 import pytest
@@ -322,3 +323,28 @@ def test_a_console_stop_then_its_target_both_go_far_away(
         ("target", '{"azimuth":140.0}'),
     ]
     assert answers == {"first": 200, "stop": 200, "then": 200}
+
+
+def test_a_stamped_move_that_grew_too_old_waiting_its_turn_is_not_sent(
+    far: tuple[FarRotator, WebConsole], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """commands.py rule 6 on the remote's console: a move young when it came, then queued
+    behind one the stalled link holds, is judged again when its turn comes: past the age
+    limit it is not handed to the broker (it would turn the rotor long after the click)."""
+    from bridge.interfaces.web import commands
+
+    monkeypatch.setattr(commands, "MAX_AGE_S", 0.5)
+    rot, console = far
+    answers: dict[str, int] = {}
+    posts = [_post(console, "far", answers, "first", command="target", az=120)]
+    assert rot.waiting.wait(slow(10)), "the first target never reached the rotator"
+    sent = time.monotonic()  # the console's steady clock is this process's
+    posts.append(_post(console, "far", answers, "late", command="target", az=130, sent=sent))
+    far_thread = console._far["far"]
+    wait_until(lambda: far_thread._work_queue.qsize() == 1, 10, "the stamped move queued")
+    wait_until(lambda: time.monotonic() > sent + 1.0, 10, "the stamped move too old")
+    rot.link.set()
+    for t in posts:
+        t.join(slow(10))
+    assert rot.carried == ["target 120"]
+    assert answers == {"first": 200, "late": 409}

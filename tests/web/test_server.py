@@ -211,7 +211,7 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
         async with aiohttp.ClientSession() as session:
             async with session.ws_connect(url, headers=origin) as ws:
                 await ws.send_str(json.dumps({"token": token}))
-                while len(got) < 2:
+                while len(got) < 3:
                     message = await ws.receive(timeout=slow(10))
                     if message.type != aiohttp.WSMsgType.TEXT:
                         break
@@ -222,8 +222,10 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
     assert code == 4401 and got == []  # not the page's token: closed, nothing told
     code, got = run_async(read(client.token or ""))
     assert got[0] == {"event": "hello"}
-    assert got[1]["event"] == "status" and got[1]["data"]["rotator"] == "hf"
-    assert got[1]["data"]["status"]["available"] is True
+    # the bridge's steady clock for the page's send times (live.py rule 8): this host's
+    assert got[1]["event"] == "clock" and got[1]["now"] <= time.monotonic()
+    assert got[2]["event"] == "status" and got[2]["data"]["rotator"] == "hf"
+    assert got[2]["data"]["status"]["available"] is True
 
 
 def test_a_stop_over_the_live_feed_and_a_bad_body_are_audited_with_the_browsers_address(

@@ -65,8 +65,10 @@ Rules:
    controller's overlap) reads the bearing unfolded, past 360 where the rotor is there
    (``AZ=400``, ``AZ400.0``), as rotctld's ``p`` answers a client that named the side: read
    back as 040, its rotor seemed 360 degrees short of the target it had reached (a review:
-   the Easycomm port still read it back so). A position the bridge does not currently have
-   is an error, never the last value seen.
+   the Easycomm port still read it back so). The clockwise end of a scale that wraps reads
+   360 (``AZ=360``, ``AZ360.0``), as a GS-232B or an Easycomm box there answers and as
+   ``W360`` sends it there (pointing.py rule 2); it read ``000``, the other end. A position
+   the bridge does not currently have is an error, never the last value seen.
 5. Targets go through Rotator.submit with Source.GS232 / EASYCOMM / DCU1: the lock, the limits,
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
    Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one). Every

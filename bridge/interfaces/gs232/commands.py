@@ -58,16 +58,30 @@ _STOPS = (Gs232Kind.STOP, Gs232Kind.STOP_AZ, Gs232Kind.STOP_EL)
 Item = TypeVar("Item")
 
 
-def _position(rotator: Rotator, pointing: Pointing | None = None) -> tuple[float, float] | None:
+def _position(
+    rotator: Rotator,
+    pointing: Pointing | None = None,
+    *,
+    at_360: Callable[[float], bool] | None = None,
+) -> tuple[float, float] | None:
     """The true bearing and elevation now (0 without an elevation axis), None when the bridge
     does not currently have them: never the last value seen (rotctld's rule 5). With the
     rotator's ``pointing`` (a client that named the side, package rule 4), the true bearing
-    unfolded past 360 on a rotor that does not wrap, as rotctld's ``p`` answers such a client."""
+    unfolded past 360 on a rotor that does not wrap, as rotctld's ``p`` answers such a client.
+    With ``at_360`` (the rotator's ``Pointing.at_360``, asked only of a raw reading of the
+    true bearing 0), the clockwise end of a scale that wraps is 360, not 0 (package rule 4)."""
     status = rotator.status
     el = status.elevation_deg if rotator.spec.has_elevation else 0.0
     az = status.bearing_deg
     if pointing is not None and not pointing.az_wraps and status.raw_bearing_deg is not None:
         az = unfolded(az, status.raw_bearing_deg)
+    elif (
+        at_360 is not None
+        and az == 0.0
+        and status.raw_bearing_deg
+        and at_360(status.raw_bearing_deg)
+    ):
+        az = 360.0
     if not rotator.spec.can_report_position or not status.available or az is None or el is None:
         return None
     return az, el
@@ -159,7 +173,11 @@ class _SidedSession(_LineSession):
 
     def _where(self) -> tuple[float, float] | None:
         """The position this client reads (package rule 4)."""
-        return _position(self.rotator, self.rotator.pointing if self.names_side else None)
+        pointing = self.rotator.pointing if self.names_side else None
+        return _position(self.rotator, pointing, at_360=self._at_360)
+
+    def _at_360(self, raw_deg: float) -> bool:
+        return self.rotator.pointing.at_360(raw_deg)
 
 
 class Gs232Session(_SidedSession):

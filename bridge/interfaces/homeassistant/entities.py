@@ -9,7 +9,8 @@ places: bridge/feature.py rule 5), each naming what it needs: a ModelSpec capabi
 configured feature (presets, park, the station, a registered feature's name); every topic,
 discovery topics included, comes from bridge.interfaces.mqtt.topics.
 
-Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
+Rules (numbered for all of homeassistant/; 4, 5 and 9 are publisher.py's, whose 6 is
+another):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
    as ``sw_version``, ``via_device`` the bridge), one per group (GROUP_ENTITIES: its
    target, its stop, its bearing and state from ``G/status``) and one bridge device. An
@@ -29,13 +30,27 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
    bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
    select (its names); all on R/option/<name> with R/option/<name>/state, in the config
    category.
+7. A rotator of two boxes (runtime/composite.py) is one device: its ``sw_version`` and its
+   version entity are its ``R/version``, its boxes' versions joined, azimuth first, and the
+   entity's name says whose they are ("Controller versions (azimuth / elevation)", or the one
+   box's that reports one: "Elevation controller version"). No box is a device or an entity
+   of its own: a box has no topic of its own to show.
+8. Every entity's unique id is its device's node id and its object id, ``<node>_<object>``,
+   both of ``[a-zA-Z0-9_-]``: two rotators can make one of them (``sat``'s
+   ``track_elevation`` and ``sat_track``'s ``elevation``, both
+   ``rotorbridge_rotor_r_sat_track_elevation``), and Home Assistant took whichever came first
+   and dropped the other with a line in its own log, the bridge saying nothing (an attack
+   pass). Of two such entities the one of the rotator with the longer id gets
+   ``<node>:<object>``, which no plain one can be (``unshared``, said in the log at start);
+   the other, and every entity of a configuration without such a pair, keeps its id, so
+   Home Assistant's history and settings stay with it.
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Protocol
 
@@ -122,9 +137,12 @@ class Entity:
     config: Callable[[RotatorInfo], dict[str, object]]
     needs: str | None = None  # RotatorInfo.has (rule 1): without it, no entity
     bridge_only: bool = False  # rule 2: available while the rotator is unreachable
+    named: Callable[[RotatorInfo], str] | None = None  # a name that depends on the rotator
 
     def expand(self, info: RotatorInfo) -> list[Entity]:
-        return [self] if self.needs is None or info.has(self.needs) else []
+        if self.needs is not None and not info.has(self.needs):
+            return []
+        return [self if self.named is None else replace(self, name=self.named(info))]
 
 
 def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
@@ -245,6 +263,15 @@ DISTANCE = (
 # the release button names Home Assistant as who released (it sends no MQTT 5 user property)
 
 
+def _version_name(info: RotatorInfo) -> str:
+    """Rule 7: the version entity's name; a rotator of two boxes names the box or boxes whose
+    versions it shows, in their order (``1.4S / SatEL``)."""
+    boxes = info.versioned_boxes
+    if len(boxes) == 1:
+        return f"{boxes[0].capitalize()} controller version"
+    return f"Controller versions ({' / '.join(boxes)})" if boxes else "Controller version"
+
+
 DEGREES = {"unit_of_measurement": "°"}
 # rule 3: every elevation a status may show (protocols/easycomm.py and rc2800.py read from -90;
 # a model's own range, a SPID's -20..210, widens it)
@@ -317,7 +344,8 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
            config=lambda r: {
         "state_topic": r.topics.availability, "payload_on": "online", "payload_off": "offline",
         "device_class": "connectivity", **DIAGNOSTIC}),
-    Entity("sensor", "version", "Controller version", needs="has_version", config=lambda r: {
+    Entity("sensor", "version", "Controller version", needs="has_version", named=_version_name,
+           config=lambda r: {
         "state_topic": r.topics.version, **DIAGNOSTIC, "icon": "mdi:chip"}),
     EachOption(config=_setting_config),  # rule 6
     Entity("switch", "lock", "Safety lock", bridge_only=True, config=lambda r: {
@@ -355,7 +383,35 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
             where, payload = _entity(
                 e.platform, node, e.object_id, r.rotator_id, e.name, device, avail, **e.config(r)
             )
+            if e.object_id in r.shared_ids:  # rule 8
+                payload["unique_id"] = f"{node}:{e.object_id}"
             out[where] = payload
+    return out
+
+
+def unshared(ident: Identity, rotators: list[RotatorInfo]) -> list[RotatorInfo]:
+    """Rule 8: the rotators, each with the object ids of its entities whose plain unique id
+    an entity of the same platform of a rotator with a shorter id has (their lengths differ:
+    ``<node>_<object>`` of two ids of one length is one only for one id)."""
+    first: dict[tuple[str, str], tuple[int, str]] = {}  # (platform, unique id) -> its owner
+    for r in rotators:
+        node = ident.rotator_node(r.rotator_id)
+        for row in rows():
+            for e in row.expand(r):
+                key = (e.platform, f"{node}_{e.object_id}")
+                owner = first.get(key)
+                if owner is None or owner[0] > len(r.rotator_id):
+                    first[key] = (len(r.rotator_id), r.rotator_id)
+    out = []
+    for r in rotators:
+        node = ident.rotator_node(r.rotator_id)
+        shared = frozenset(
+            e.object_id
+            for row in rows()
+            for e in row.expand(r)
+            if first[(e.platform, f"{node}_{e.object_id}")][1] != r.rotator_id
+        )
+        out.append(replace(r, shared_ids=shared) if shared else r)
     return out
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass, replace
 from bridge.feature import registered
 from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics
 from bridge.pointing import Pointing
+from bridge.protocols.axes import Axis
 from bridge.protocols.base import ModelSpec
 
 _UNSAFE = re.compile(r"[^a-zA-Z0-9_-]")
@@ -54,6 +55,12 @@ class RotatorInfo:
     # its health measures an elevation: an az/el model's own (a rotator of two boxes shows its
     # azimuth box's health alone, runtime/composite.py)
     el_health: bool = False
+    # a rotator of two boxes: the axes whose box reports a version, in the order its version
+    # joins theirs (runtime/composite.py rule 3); the version entity's name says which
+    versioned_boxes: tuple[str, ...] = ()
+    # its entities' object ids whose plain unique id another rotator's entity has (entities.py
+    # rule 8, ``unshared``): given another form of their own
+    shared_ids: frozenset[str] = frozenset()
 
     @classmethod
     def of(
@@ -69,9 +76,11 @@ class RotatorInfo:
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
         features: frozenset[str] = frozenset(),
-        two_boxes: bool = False,
+        boxes: tuple[ModelSpec, ...] = (),
+        version: str | None = None,
     ) -> RotatorInfo:
-        """From the rotator's pointing (limits, offset, presets, park) and the settings."""
+        """From the rotator's pointing (limits, offset, presets, park) and the settings;
+        ``boxes``: a rotator of two boxes, its azimuth's and its elevation's box."""
         az_min, az_max = pointing.target_range()
         return cls(
             rotator_id,
@@ -82,6 +91,7 @@ class RotatorInfo:
             az_max,
             pointing.el_min_deg,
             pointing.el_max_deg,
+            version,
             presets=tuple(pointing.presets),
             has_park=pointing.park is not None,
             has_station=has_station,
@@ -92,7 +102,10 @@ class RotatorInfo:
             can_follow=can_follow,
             features=features,
             spot_options=spot_options(()) if DXCLUSTER in features and has_station else (),
-            el_health=spec.has_elevation and not two_boxes,
+            el_health=spec.has_elevation and not boxes,
+            versioned_boxes=tuple(
+                axis.value for axis, box in zip(Axis, boxes, strict=False) if box.has_version
+            ),
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:

@@ -3,7 +3,8 @@
 sends the state again when Home Assistant comes back. The only part of homeassistant/ with a
 thread (a timer) and a lock.
 
-Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
+Rules (numbered for all of homeassistant/; 1 to 3, 7 and 8 are entities.py's, whose 6 is
+another):
 4. Configs are published only when they changed. Configs under our node ids that we no longer
    generate (a rotator removed from the configuration), and that follow our bridge's state (a
    node id alone may be another bridge's), are cleared with an empty retained payload when the
@@ -29,6 +30,12 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    state are left alone, as in rule 4. A broker that will not let the bridge read them (an ACL
    that keeps it out of the prefix: why its owner turned discovery off) costs only that, said
    once in the log (``optional``, interfaces/mqtt/client.py rule 17).
+9. A rotator's configs go out for a new version of its controller at most once every
+   ROUND_MIN_S; a version that comes within that is held, and the latest goes out when the
+   time is up (a timer). A controller may say a version in every line (an Easycomm III's
+   ``VE...`` is taken whenever it comes, a Rotor-EZ's banner after every stop at rest): an
+   attack pass sent 200 ``VE`` lines in a second and Home Assistant was sent 4105 configs,
+   each one rebuilt on the serial-lines thread.
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
@@ -40,13 +47,14 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
 
 from bridge.core.model import RotatorStatus
-from bridge.interfaces.homeassistant.entities import all_configs, rotator_messages
+from bridge.interfaces.homeassistant.entities import all_configs, rotator_messages, unshared
 from bridge.interfaces.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 
@@ -80,6 +88,21 @@ class DiscoveryPublisher:
         self.status_topic = status_topic
         self._topics = topics
         self._ident = Identity(topics.base)
+        if not retired:
+            rotators = unshared(self._ident, rotators)  # rule 8, said once
+            for r in rotators:
+                for object_id in sorted(r.shared_ids):
+                    log.warning(
+                        "rotator %r: its Home Assistant entity %r would have the unique id of "
+                        "another rotator's (%s_%s), which Home Assistant drops; it is given "
+                        "%s:%s (rename the rotator to keep the usual form)",
+                        r.rotator_id,
+                        object_id,
+                        self._ident.rotator_node(r.rotator_id),
+                        object_id,
+                        self._ident.rotator_node(r.rotator_id),
+                        object_id,
+                    )
         # (retired, rule 6: none generated, so every config of ours is cleared)
         self._rotators = {} if retired else {r.rotator_id: r for r in rotators}
         self._groups = () if retired else groups  # interfaces/mqtt/groups.py: a device each
@@ -96,6 +119,10 @@ class DiscoveryPublisher:
         self._stopped = False
         self._current: dict[str, str] = {}
         self._said_twin = False  # rule 4: another bridge on our node ids, said once
+        # rule 9: when each rotator's configs last went out for a version, those held since
+        self._version_t: dict[str, float] = {}
+        self._held: set[str] = set()
+        self._version_timer: threading.Timer | None = None
 
     @property
     def subscriptions(self) -> list[str]:
@@ -149,7 +176,9 @@ class DiscoveryPublisher:
         """A controller's version came: its rotator's configs say it (only they change; all of
         them for 16 rotators took a tenth of the start-up's CPU, once per rotator). A version
         already said is seen without the lock (every reading comes here): only this method
-        changes one, on the thread of the rotator's statuses, and the dict read is whole."""
+        changes one, on the thread of the rotator's statuses, and the dict read is whole. The
+        configs at the start say the version kept from the last run (runtime/kept.py rule 11):
+        a restart with the same firmware publishes nothing here."""
         version = status.version
         if not version:
             return
@@ -162,12 +191,50 @@ class DiscoveryPublisher:
                 return
             r = self._rotators[rotator_id] = replace(r, version=version)
             if self._current:  # (else every config goes out below, as at the start)
-                configs = rotator_messages(self.prefix, self._ident, self._topics, r)
-                self._current.update(configs)
-                for topic, payload in configs.items():
-                    self._publish(topic, payload)
+                now = self._clock()
+                wait = self._version_t.get(rotator_id, -math.inf) + ROUND_MIN_S - now
+                if wait > 0 or rotator_id in self._held:  # rule 9: its latest, when it ends
+                    self._held.add(rotator_id)
+                    self._hold(max(wait, 0.0))
+                    return
+                self._version_t[rotator_id] = now
+                self._send_rotator(r)
                 return
         self.publish_all()
+
+    def _send_rotator(self, r: RotatorInfo) -> None:
+        """One rotator's configs as they are now (under the lock: see Lock)."""
+        configs = rotator_messages(self.prefix, self._ident, self._topics, r)
+        self._current.update(configs)
+        for topic, payload in configs.items():
+            self._publish(topic, payload)
+
+    def _hold(self, wait: float) -> None:
+        """Rule 9: the held rotators' configs go out ``wait`` from now (under the lock)."""
+        if self._stopped or (self._version_timer is not None and self._version_timer.is_alive()):
+            return  # (the one that runs sends them, or arms itself again for the rest)
+        self._version_timer = threading.Timer(wait, self._release)
+        self._version_timer.daemon = True
+        self._version_timer.start()
+
+    def _release(self) -> None:
+        """Rule 9: each held rotator whose hold has ended gets its configs, its latest version."""
+        with self._lock:
+            self._version_timer = None  # (this thread: a hold may arm another)
+            if self._stopped:
+                return
+            now = self._clock()
+            later = []
+            for rid in sorted(self._held):
+                wait = self._version_t.get(rid, -math.inf) + ROUND_MIN_S - now
+                if wait > 0:
+                    later.append(wait)
+                    continue
+                self._held.discard(rid)
+                self._version_t[rid] = now
+                self._send_rotator(self._rotators[rid])
+            if later:
+                self._hold(min(later))
 
     def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
         """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
@@ -271,3 +338,5 @@ class DiscoveryPublisher:
             self._stopped = True
             if self._timer is not None:
                 self._timer.cancel()
+            if self._version_timer is not None:
+                self._version_timer.cancel()

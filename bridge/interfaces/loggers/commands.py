@@ -28,7 +28,8 @@ Rules:
    picks the antenna for the band, or the operator turned this one by hand). A name several
    rotators share, or ``*``, is chosen by band among those of them that have ``bands``: the one
    whose bands hold the message's ``<freqband>`` (core/bands.py). A message with no band, a band
-   that is no amateur band, or one no rotator there is for moves nothing: the refusal is
+   field that is no number (the refusal quotes it), a band that is no amateur band, or one no
+   rotator there is for moves nothing: the refusal is
    logged (at most once per JUNK_LOG_S, with the count since) and published on the R/error of
    each rotator it could have gone to. Where none of them has bands, it is as before: ``*``
    turns the one rotator on the port, and nothing else. Stops are not chosen by band (rule 4).
@@ -113,9 +114,13 @@ class NoRotor:
 
 
 def choose(
-    rotors: Iterable[N1mmRotor], name: str, freqband_mhz: float | None
+    rotors: Iterable[N1mmRotor],
+    name: str,
+    freqband_mhz: float | None,
+    freqband_unread: str | None = None,
 ) -> N1mmRotor | NoRotor:
-    """Rule 5: the rotator a turn to ``name`` on ``freqband_mhz`` goes to, or why none does."""
+    """Rule 5: the rotator a turn to ``name`` on ``freqband_mhz`` goes to, or why none does
+    (``freqband_unread``: a band field given that is no number, as sent)."""
     on_port = list(rotors)
     named = [r for r in on_port if r.name == name]
     if len(named) == 1:
@@ -125,9 +130,12 @@ def choose(
     if not banded:  # as before bands: "*" turns the one rotator on the port
         return pool[0] if len(pool) == 1 else NoRotor()
     if freqband_mhz is None:
-        return NoRotor(
-            f"rotor {name!r} is chosen by band, and the message has no <freqband>", banded
+        has = (
+            "the message has no <freqband>"
+            if freqband_unread is None
+            else f"<freqband> {freqband_unread!r} is no number of MHz"
         )
+        return NoRotor(f"rotor {name!r} is chosen by band, and {has}", banded)
     band = band_of_mhz(freqband_mhz)
     if band is None:
         return NoRotor(f"<freqband> {freqband_mhz:g} MHz is no amateur band", banded)
@@ -263,7 +271,7 @@ class Commands:
                 self._stop_each(stopped, described, by)
                 counts.commands += 1
                 return
-        chosen = choose(e.rotors, req.rotor, req.freqband_mhz)  # rule 5
+        chosen = choose(e.rotors, req.rotor, req.freqband_mhz, req.freqband_unread)  # rule 5
         if isinstance(chosen, NoRotor):
             if chosen.why is None:
                 counts.ignored += 1

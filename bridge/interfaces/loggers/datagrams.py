@@ -26,7 +26,8 @@ Rules:
    names it gives (a second ``<rotor>``, ``<stop>``'s text beside ``<rotor>``) are in ``also``.
    ``<freqband>`` (MHz, ``14``, ``21.0``) is kept as a number; one that is none is kept as
    absent (before it chose a rotator it was never read: a sender whose band field is odd still
-   turns a rotator it names).
+   turns a rotator it names), its text kept for the refusal of a turn chosen by band (a
+   review: ``abc`` or ``1e308`` was refused as "the message has no <freqband>").
 5. N1MM position report: ``name @ heading*10`` as plain text (``Tower @ 650`` is 65.0).
 6. Whether a datagram may be a stop is told by one byte search, before any parsing: ``<STOP>``
    (PST, any case) or ``<stop`` (N1MM, any case), the forms rules 2 and 4 read as a stop, so
@@ -75,6 +76,7 @@ class N1mmRequest:
     bidirectional: bool = False
     also: tuple[str, ...] = ()  # a stop's other names (rule 4)
     freqband_mhz: float | None = None  # the radio's band as N1MM writes it (rule 4)
+    freqband_unread: str | None = None  # rule 4: a <freqband> given that is no number, as sent
 
 
 def may_stop_pst(datagram: bytes) -> bool:
@@ -214,12 +216,21 @@ def parse_n1mm(datagram: bytes) -> N1mmRequest:
     if flag not in ("", "0", "1"):  # (an attack pass: "abc" was a yes: the reciprocal bearing)
         raise Malformed(f"bidirectional {flag[:16]!r} is neither 0 nor 1")
     bidirectional = flag == "1"
+    band: float | None = None  # rule 4: kept as absent, but for what a refusal says
+    unread = None
     try:
-        band: float | None = _number(values["freqband"], "freqband")
-    except (KeyError, Malformed):
-        band = None  # rule 4: kept as absent
+        band = _number(values["freqband"], "freqband")
+    except KeyError:
+        pass
+    except Malformed:
+        unread = values["freqband"]
     return N1mmRequest(
-        names[0], azimuth=az, offset=offset, bidirectional=bidirectional, freqband_mhz=band
+        names[0],
+        azimuth=az,
+        offset=offset,
+        bidirectional=bidirectional,
+        freqband_mhz=band,
+        freqband_unread=unread,
     )
 
 

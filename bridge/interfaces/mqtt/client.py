@@ -48,10 +48,22 @@ each written out in the module that keeps it:
    too). That is
    said as rule 11 says, naming the topic, from the first connection on. It is judged again
    on every connect: a probe that comes back clears the problem (``on_allowed``, never on
-   paho's thread), and the markers go out again. Each verdict is reported on a thread of its
-   own, so one may come late: under ``_fence_lock`` a report is made only if its verdict is
-   still the last one (an older connection's "allowed" never turns the markers on after a
-   newer one's "denied", nor the other way round).
+   paho's thread). Each verdict is reported on a thread of its own, so one may come late:
+   under ``_fence_lock`` a report is made only if its verdict is still the last one (an older
+   connection's "allowed" never clears the problem after a newer one's "denied", nor the
+   other way round). The markers come back on the hello topic too (lastword.py rule 7), so
+   whether they can come back at all (``on_markers``) is another verdict: yes as soon as this
+   connection's hello or probe comes back (on paho's thread, in the connection's order); no
+   only when the fence topic is denied and this connection's hello has not come back within
+   the look's time (whichever of the two is known last says it, under ``_fence_lock``; a new
+   connection judges anew). That hello coming back later still says yes (and, its probe not
+   back before it, that the fence topic is denied, as in time: under MQTT 3.1.1 nothing else
+   says so, and B/bridge/info never named it for that connection), and once back it
+   (or the probe) is the last word for its connection, the look's timer firing beside it or
+   not (an attack pass: a broker slow to send its retained messages, each before the hello,
+   and the fence denied: the markers stayed off for the connection and rotctld's S fenced
+   nothing; the timer, firing as the hello or the probe came, said them lost after it said
+   them back).
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
@@ -120,6 +132,7 @@ class MqttClient(Connection):
         on_connection_lost: Callable[[], None] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
         on_allowed: Callable[[str], None] | None = None,
+        on_markers: Callable[[bool], None] | None = None,
         claim: Claim | None = None,
         on_refused: Callable[[str], None] | None = None,
         fence_topic: str | None = None,
@@ -142,6 +155,7 @@ class MqttClient(Connection):
         self._on_connection_lost = on_connection_lost
         self._on_denied = on_denied
         self._on_allowed = on_allowed  # rule 16: the fence topic works again
+        self._on_markers = on_markers  # rule 16: whether the markers can come back at all
         self._retained: dict[str, tuple[bytes, int]] = {will_topic: (b"online", 1)}  # rule 3
         self._lock = threading.Lock()
         c = self._client
@@ -164,6 +178,9 @@ class MqttClient(Connection):
         self._fence_topic = fence_topic  # rule 16
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
+        self._look_lost = False  # rule 16: this connection's look timed out
+        self._hello_out: bytes | None = None  # rule 16: this connection's hello
+        self._hello_back = False  # rule 16: it, or the probe, came back (in time or later)
         self.refused: str | None = None
         self.yielded = False  # claim rule 4: refused while running (not at its first look)
         self._ran = False  # a look has let this bridge run
@@ -364,8 +381,10 @@ class MqttClient(Connection):
             self._held.extend(held)  # a look that never ended leaves its own
             self._owned.connected()
             look = self._look
+            self._look_lost = False  # rule 16: judged anew
+            self._hello_out, self._hello_back = None, False
             if look is not None:  # rule 14: look first
-                hello = look.begin()
+                hello = self._hello_out = look.begin()
                 self._subscribe(client, [(look.claim.hello_topic, 0)])
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
@@ -412,6 +431,7 @@ class MqttClient(Connection):
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None
+                self._markers_back()
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None and self._look_saw(self._look, topic, payload):
@@ -427,6 +447,12 @@ class MqttClient(Connection):
         a thread of its own: paho's holds its mutex here, and the report publishes)."""
         if self._delivery.allow(topic) and self._on_allowed is not None:
             threading.Thread(target=self._report_allowed, args=(topic,), daemon=True).start()
+
+    def _markers_readable(self, readable: bool) -> None:
+        """Rule 16: the markers can come back (on the fence topic or the hello topic), or
+        cannot (neither: the fence topic denied and this connection's hello never back)."""
+        if self._on_markers is not None:
+            self._on_markers(readable)
 
     def _report_allowed(self, topic: str) -> None:
         """Rule 16 (its own thread): said only if the topic is still allowed."""
@@ -445,13 +471,15 @@ class MqttClient(Connection):
         with self._fence_lock:
             if self._delivery.denied(topic):
                 self._on_denied(topic, problem)
+                if self._look_lost:  # rule 16: and the hello did not come back either
+                    self._markers_lost()
 
     def _open(
         self, look: Outcome | None, taken: dict[str, Callable[[], bool]] | None = None
     ) -> None:
         """Under the lock: the state goes out (rules 3 and 12; but ``taken``, rule 14: the
-        broker's value is the newer one), then the deletions a look let through (rule 14),
-        then ``connected``."""
+        broker's value is the newer one), then the deletions a look let through (rule 14; not
+        one of a topic published since it was asked), then ``connected``."""
         send = self._delivery.send
         self._delivery.take_dirty()  # every retained value goes out below
         send(self._will_topic, b"online", 1, retain=True)
@@ -486,8 +514,10 @@ class MqttClient(Connection):
             self._lapsed = 0
         if look is not None:
             spare = self.spare  # interfaces/mqtt/stale.py rule 3: judged once all came
-            if spare is not None:
-                look = replace(look, clears=[t for t in look.clears if not spare(t)])
+            # rule 14: a topic published since its deletion was asked (``clear_retained`` took
+            # it out of the cache) holds the newer value: it went out above, and stays
+            clears = [t for t in look.clears if t not in self._retained]
+            look = replace(look, clears=[t for t in clears if spare is None or not spare(t)])
             if look.clear:
                 for topic in look.clears:
                     send(topic, b"", 1, retain=True)
@@ -530,6 +560,11 @@ class MqttClient(Connection):
         with self._lock:
             if look.looking != n:
                 return
+            self._look_lost = True  # rule 16
+        if self._fence_topic is not None:
+            with self._fence_lock:  # (as ``_report_denied``: one of the two sees the other)
+                if self._delivery.denied(self._fence_topic):
+                    self._markers_lost()
         look.say_timed_out(LOOK_TIMEOUT_S)
         self._end_look(n, timed_out=True)
 
@@ -547,11 +582,37 @@ class MqttClient(Connection):
             with self._lock:
                 n = look.ended_by(payload)
             if n is not None:
+                self._markers_back()
                 self._judge_probe()
                 self._end_look(n)
-            return True  # another bridge's hello, or one of ours come late
+                return True
+            if payload == self._hello_out:  # rule 16: back after the look's time
+                self._markers_back()
+                self._judge_probe()  # (its probe not back before it: the fence dropped)
+                return True
+            # another bridge's hello, one of ours come late, or a marker's copy (lastword.py
+            # rule 7): the handler tells this process's markers from the rest
+            return False
         with self._lock:
             return look.saw(topic, payload)
+
+    def _markers_back(self) -> None:
+        """Rule 16 (paho's thread): this connection's hello or probe is back: the markers come
+        back there, the last word on them for this connection (``_markers_lost``). No lock: a
+        thread that reports under ``_fence_lock`` publishes."""
+        self._hello_back = True
+        self._markers_readable(True)
+
+    def _markers_lost(self) -> None:
+        """Rule 16, under ``_fence_lock``: the markers cannot come back, unless this
+        connection's hello or probe came back (the look's timer, or the fence's denial, may be
+        known as it comes: its "readable" may have gone just before this "lost", and is said
+        again after it)."""
+        if self._hello_back:
+            return
+        self._markers_readable(False)
+        if self._hello_back:
+            self._markers_readable(True)
 
     def _judge_probe(self) -> None:
         """Rule 16: the hello is back; the probe published before it is not: dropped."""
@@ -561,8 +622,8 @@ class MqttClient(Connection):
                 self._fence_topic,
                 "read back what it publishes on",
                 "a probe published there did not come back before the message published after "
-                "it (the broker's ACL denies reading or writing it?); a stop from the stop lane "
-                "then holds targets until the main connection reads its own copy of the stop",
+                "it (the broker's ACL denies reading or writing it?); the bridge's markers then "
+                "come back on its hello topic alone",
             )
 
     # -- rule 10: the bridge's own topics (owned.py judges) ---------------------------------

@@ -62,7 +62,14 @@ Rules:
    8) are said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
    bridge's process, as without it. An express that ended is started again, RESTART_FIRST_S
    later, the wait doubling for each end in a row up to RESTART_MAX_S (back to the first once
-   one ran for RESTART_STABLE_S); the ports open then are handed to it again.
+   one ran for RESTART_STABLE_S); the ports open then are handed to it again. A word from
+   it that the bridge cannot read (not JSON, or cut at _PACKET) ends that child (killed,
+   said, started again): the reader that died on one left every hold unanswered, and no
+   target after a stop went out again, without a word (an attack pass; rule 11). So does a
+   word of JSON whose fields are not the ones its ``op`` has (one missing, or of another
+   kind): a child is started from the package as it is on disk then, so one started again
+   after an upgrade under a running bridge may speak another version's words, and the
+   reader died on the first such one as it did on a cut one (a review).
 7. Shutdown: ``stop`` closes the control socket; the express closes its copies of the ports
    (a bridge restarted at once finds them free), disconnects and exits on its end of file,
    and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
@@ -167,7 +174,14 @@ Rules:
    Rotor-EZ while its SPID turned on to the group's target). A
    lock ON a connection heard too, just after its SUBACK (before the express answered for
    it), is set twice, and a lock OFF carried out between the two is undone: the safe side,
-   said in docs/mqtt.md.
+   said in docs/mqtt.md. Who sent it is named in these words only as an operator's name
+   (core/model.py ``valid_operator``, what the bridge takes of it anyway), never as the user
+   property came: a STOP whose ``operator`` held 21,845 non-ASCII characters (the 64 KiB an
+   MQTT string may hold) made a word of 131 KB that the bridge read cut at 64 KiB, its reader
+   died on the JSON, and no target after a stop went out again (an attack pass). Its name
+   is judged after the frame is written, but before a group's next member's frame: a
+   property too long to be a name is none at once (a cold review: 64 KiB of a ligature
+   NFKC makes 18 characters were normalized whole, some 24 ms before each next member).
 """
 
 from __future__ import annotations
@@ -197,6 +211,7 @@ from typing import Any
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.afterlock import later
+from bridge.core.model import valid_operator
 from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import STABLE_S, Connection, Ending, takeover_message
 from bridge.interfaces.mqtt.heartbeat import Stamp
@@ -701,71 +716,75 @@ class Express:
             if not data:
                 break
             self._heard.set()
-            word = json.loads(data)
-            op = word.get("op")
-            if op == "up":
-                up = True
-                ended = [t for t in self._said if t.startswith("the stop express ")]
-                for text in (late, *passing, *ended):
-                    self._problem(text, False)
-                passing.clear()
-                log.info(
-                    "stop express up as %s (pid %d, %.2f s)",
-                    self.client_id,
-                    child.pid,
-                    time.monotonic() - t0,
-                )
-                self.up.set()
-            elif op == "down":  # its connection ended: up again when it is back (rule 8)
-                up = False
-                self._started_at = time.monotonic()
-                self.up.clear()
-            elif op == "synced":
-                self._answered(word["n"], bool(word.get("lost")))
-            elif op == "held":
-                self._held(word["rotator"], True)
-            elif op == "dropped":
-                self._held(word["rotator"], False)
-                with self._lock:
-                    event = self._dropped.get(word["n"])
-                if event is not None:
-                    event.set()
-            elif op == "wrote":
-                self.wrote.append((word["rotator"], word["t"]))
-                self._problem(self._half(word["rotator"]), False)
-                log.debug("stop express: %s's stop frame written", word["rotator"])
-                self._carry_alone(
-                    "a stop it wrote",
-                    self._on_wrote,
-                    word["rotator"],
-                    word["t"],
-                    word.get("operator"),
-                )
-            elif op == "heard":
-                log.debug("stop express: %s's stop read, no frame written", word["rotator"])
-                self._carry_alone(
-                    "a stop it heard",
-                    self._on_wrote,
-                    word["rotator"],
-                    word["t"],
-                    word.get("operator"),
-                )
-            elif op == "locked":
-                log.debug("stop express: %s's lock ON read", word["rotator"])
-                self._carry_alone(
-                    "a lock ON it read",
-                    self._on_locked,
-                    word["rotator"],
-                    word["t"],
-                    word["operator"],
-                )
-            elif op == "half":
-                self._problem(self._half(word["rotator"]), True)
-            elif op == "problem":
-                text = f"stop express: {word['text']}"
-                self._problem(text, not word.get("off"))
-                if word.get("until_up"):  # a connection refused: said until one is accepted
-                    passing.add(text)
+            try:  # rule 6: a word it cannot read ends this child, said, never this reader
+                word = json.loads(data)
+                op = word.get("op")
+                if op == "up":
+                    up = True
+                    ended = [t for t in self._said if t.startswith("the stop express ")]
+                    for text in (late, *passing, *ended):
+                        self._problem(text, False)
+                    passing.clear()
+                    log.info(
+                        "stop express up as %s (pid %d, %.2f s)",
+                        self.client_id,
+                        child.pid,
+                        time.monotonic() - t0,
+                    )
+                    self.up.set()
+                elif op == "down":  # its connection ended: up again when it is back (rule 8)
+                    up = False
+                    self._started_at = time.monotonic()
+                    self.up.clear()
+                elif op == "synced":
+                    self._answered(word["n"], bool(word.get("lost")))
+                elif op == "held":
+                    self._held(word["rotator"], True)
+                elif op == "dropped":
+                    self._held(word["rotator"], False)
+                    with self._lock:
+                        event = self._dropped.get(word["n"])
+                    if event is not None:
+                        event.set()
+                elif op == "wrote":
+                    self.wrote.append((word["rotator"], word["t"]))
+                    self._problem(self._half(word["rotator"]), False)
+                    log.debug("stop express: %s's stop frame written", word["rotator"])
+                    self._carry_alone(
+                        "a stop it wrote",
+                        self._on_wrote,
+                        word["rotator"],
+                        word["t"],
+                        word.get("operator"),
+                    )
+                elif op == "heard":
+                    log.debug("stop express: %s's stop read, no frame written", word["rotator"])
+                    self._carry_alone(
+                        "a stop it heard",
+                        self._on_wrote,
+                        word["rotator"],
+                        word["t"],
+                        word.get("operator"),
+                    )
+                elif op == "locked":
+                    log.debug("stop express: %s's lock ON read", word["rotator"])
+                    self._carry_alone(
+                        "a lock ON it read",
+                        self._on_locked,
+                        word["rotator"],
+                        word["t"],
+                        word["operator"],
+                    )
+                elif op == "half":
+                    self._problem(self._half(word["rotator"]), True)
+                elif op == "problem":
+                    text = f"stop express: {word['text']}"
+                    self._problem(text, not word.get("off"))
+                    if word.get("until_up"):  # a connection refused: said until one is accepted
+                        passing.add(text)
+            except (ValueError, AttributeError, KeyError, TypeError):
+                self._kill("said a word the bridge cannot read")
+                break
         try:
             code = child.wait(STOP_WAIT_S)
         except subprocess.TimeoutExpired:
@@ -1131,7 +1150,7 @@ class _Child:
         if locks:  # rule 11: the lock itself, its frame gone or not, and who sent it
             if read_t >= self._locked_next.get(rids[0], read_t):  # (a flood: said once)
                 self._locked_next[rids[0]] = read_t + GAP_S
-                self.say(op="locked", rotator=rids[0], t=read_t, operator=operator)
+                self.say(op="locked", rotator=rids[0], t=read_t, operator=_named(operator))
             return
         for rid in unwritten:  # rule 11: a stop with no frame of this express's, said
             if read_t >= self._heard_next.get(rid, read_t):  # (a flood: once in GAP_S)
@@ -1285,10 +1304,17 @@ def main(argv: list[str]) -> int:
     return 0
 
 
+def _named(operator: str | None) -> str | None:
+    """Rule 11: who sent it as a word may carry it, an operator's name or none (a word is
+    read whole only up to _PACKET bytes)."""
+    return None if operator is None else valid_operator(operator)
+
+
 def _sender(operator: str | None) -> dict[str, str]:
     """Rule 11: who sent a stop, in the word that says it was written or heard (none: no
     key, as before operators were named)."""
-    return {} if operator is None else {"operator": operator}
+    name = _named(operator)
+    return {} if name is None else {"operator": name}
 
 
 if __name__ == "__main__":

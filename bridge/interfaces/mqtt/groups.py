@@ -105,7 +105,8 @@ def fan_out(
         flat = [m.id for m in group.members if not has_elevation.get(m.id, False)]
         if flat:
             raise pl.PayloadError(
-                f"an elevation for group {group.id}, but {', '.join(flat)} turns in azimuth only"
+                f"an elevation for group {group.id}, but {', '.join(flat)} "
+                f"{'turns' if len(flat) == 1 else 'turn'} in azimuth only"
             )
     parts = []
     for m in group.members:

@@ -10,6 +10,10 @@ a marker again and reports a long hold, or a long fence (lastword.py rule 11), o
 when the bridge stopped never comes back, and its timer had looked again every second for the
 rest of the process's life, sending markers on a stopped client.
 
+Each marker of the main connection goes on the fence topic and on the hello topic
+(lastword.py rule 7): a broker that drops one of them (its ACL) leaves no hold or fence
+without its end.
+
 A group's stop (``G/stop``, interfaces/mqtt/groups.py) is a stop of each of its members, on either
 connection: the same decisions, member by member, in one step under the same lock (a lane's
 group stop holds every member; the main connection's copy is each member's copy), and one
@@ -193,7 +197,8 @@ class Halts:
             self.word.markers_denied()
 
     def markers_allowed(self) -> None:
-        """A probe came back on a new connection: markers go out again (lastword.py rule 7)."""
+        """The hello or the probe came back on a new connection: markers go out again
+        (lastword.py rule 7)."""
         with self._lock:
             self.word.markers_allowed()
 
@@ -268,8 +273,15 @@ class Halts:
         rot.submit(halt, what, hold=hold, echo=echo)
 
     def _send_marker(self, n: int) -> None:
-        self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+        self._publish_marker(n)
         self._arm()
+
+    def _publish_marker(self, n: int) -> None:
+        """Marker ``n`` on the fence topic and on the hello topic (lastword.py rule 7: the
+        first one back ends what it ends; the second, nothing more)."""
+        marker = self.word.marker(n)
+        self._publisher.publish_marker(self.topics.bridge_fence, marker)
+        self._publisher.publish_marker(self.topics.bridge_hello, marker)
 
     def _arm(self) -> None:
         """One timer at most looks again in TICK_S while there is something to look at."""
@@ -305,7 +317,7 @@ class Halts:
             owed = self.word.owed_fence(self._clock())
         if n is not None:
             log.info("a marker of the stop lane did not come back yet; sending another")
-            self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+            self._publish_marker(n)
         if owed is not None:
             self._send_marker(owed)
 
@@ -338,12 +350,12 @@ class Halts:
                 f"{rid}: a STOP or lock ON from another interface (the console, rotctld, a "
                 f"logger) has fenced this rotator's MQTT moves for more than {LONG_HOLD_S:g} s: "
                 "the main connection has not yet read the marker sent after it on "
-                f"{self.topics.bridge_fence} (a flood of targets, a slow link, a broker that "
-                "drops the bridge's messages?). Until it does, MQTT targets are refused as "
-                "older; stops and locks go through"
+                f"{self.topics.bridge_fence} and {self.topics.bridge_hello} (a flood of targets, "
+                "a slow link, a broker that drops the bridge's messages?). Until it does, MQTT "
+                "targets are refused as older; stops and locks go through"
             )
         caught_up = (
-            f"its marker on {self.topics.bridge_fence} comes back"
+            f"its marker on {self.topics.bridge_fence} or {self.topics.bridge_hello} comes back"
             if markers
             else "it reads its own copy of the stop or lock"
         )

@@ -61,16 +61,25 @@ but not the order between them. So:
    the replay of a retained STOP it had obeyed when it was published, NATS and mosquitto
    keeping it across the restart). A replay of the same payload published while the bridge
    was away is then not carried out either, as under MQTT 5, which replays none.
-7. Whether the main connection can read its markers is learnt from the broker, never from a
-   marker that is late: a subscription it denies (SUBACK), a marker publish it refuses (MQTT 5
-   PUBACK), or the probe the main connection publishes on the marker topic right before its
-   first look's hello on every connect: the hello back first, the probe not, is the broker
-   dropping it (client.py rule 16). Then no marker is sent, and a lane's halt holds until the
-   main connection reads its own copy (rule 9), or drops: holding is the safe direction. (No
-   marker can then tell when a new lane connection is in step, rule 9: its halts are taken as
-   in step; a halt published while the lane was down could then stand for a newer one.) It is
-   judged again on every connect: a probe that comes back (the ACL fixed) turns the markers on
-   again (``markers_allowed``).
+7. Every marker of the main connection goes on two topics, the fence topic
+   (``B/bridge/fence``) and the hello topic (``B/bridge/hello``, which the main connection
+   reads back for its first look), the same payload (halts.py): whichever copy comes back first
+   ends what the marker ends, the other nothing more; a copy read on either topic was published
+   after its marker's halt, so it proves as much (rule 10). So an ACL that denies the fence
+   topic costs no marker while the hello comes back (an attack pass: with the fence topic
+   denied, rotctld's S fenced nothing, and a target published before it and read after it
+   turned the rotor; and mosquitto reloads its ACL file on SIGHUP and keeps the connection,
+   which no probe sees: after rotctld's S every MQTT target was refused as older for as long as
+   the connection lasted, no marker coming back to end the fence). Whether the main connection
+   can read its markers is learnt from the broker, never from a marker that is late, on every
+   connect (client.py rule 16): the hello back, or the probe published on the fence topic right
+   before it, says yes (``markers_allowed``); the fence topic denied (its SUBACK, MQTT 5's PUBACK
+   of the probe, the hello back before the probe) and this connection's hello not back within
+   the first look's time, no (``markers_denied``), until that hello comes back after all.
+   Then no marker is sent, and a lane's halt holds until the main connection reads its own
+   copy (rule 9), or drops: holding is the safe direction. (No marker can then tell when a
+   new lane connection is in step, rule 9: its halts are taken as in step; a halt published
+   while the lane was down could then stand for a newer one.)
 8. A lock OFF the main connection reads while a lane lock ON for that rotator still waits for
    its main copy was published before that ON: it is not carried out (the ON is the last word,
    even if the main connection then drops before its copy comes), and R/error says so
@@ -385,8 +394,9 @@ class LastWord:
         self._fenced_since.clear()
 
     def markers_allowed(self) -> None:
-        """Rule 7: a probe came back on a new connection: markers go out again (for the halts
-        from now on; one held before this waits for its main copy, or for the next marker)."""
+        """Rule 7: the hello or the probe came back on a new connection: markers go out again
+        (for the halts from now on; one held before this waits for its main copy, or for the
+        next marker)."""
         self.markers = True
 
     def resend_due(self, now: float) -> int | None:

@@ -14,11 +14,15 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    back are all the broker held (``saw``).
    Its coming back ends the look (``end``): claim.py's verdict on what was seen. REFUSE: the
    bridge refuses to run, publishing nothing. OURS: the deletions of retained configs asked
-   for during the look (``defer_clear``: Home Assistant's stale discovery) are sent. TAKE_OVER
-   (said once, in the log), or a look that timed out (an ACL that denies the hello), or any
-   look after one of those in this process: nothing is deleted, and the configs are named in
-   the log as left alone (claim rule 3). Another instance's info arriving while the bridge runs
-   is judged by claim rule 4 (``live_info``).
+   for during the look (``defer_clear``: Home Assistant's stale discovery) are sent, each once
+   (a topic two overlapping filters read, a rotator's option state, is asked for twice: it
+   was sent and named twice, interfaces/mqtt/stale.py rule 5), and none of a topic the bridge
+   published after asking (client.py ``_open``: a controller's version read while the look
+   ran; the deletion went out after it, and the version, unchanged, was never published
+   again). TAKE_OVER (said once, in the log), or a look that timed out (an ACL that denies the
+   hello), or any look after one of those in this process: nothing is deleted, and the
+   configs are named in the log as left alone (claim rule 3). Another instance's info
+   arriving while the bridge runs is judged by claim rule 4 (``live_info``).
    The values the broker held on the topics handed to ``witness`` (each rotator's
    ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
    owned-topic judge all the same), and the first look of the process that lets the bridge run
@@ -83,7 +87,7 @@ class FirstLook:
         self._looks = 0
         self.looking: int | None = None  # the look under way: its number
         self._seen: dict[str, bytes] = {}  # retained info/state seen during the look
-        self._clears: list[str] = []
+        self._clears: dict[str, None] = {}  # (in the order asked; one asked twice: once)
         self._took_over = False  # for the life of the process (claim rule 3)
         self._witnesses: frozenset[str] = frozenset()  # rule 14: their retained values kept
         self._heard: dict[str, bytes] = {}
@@ -102,7 +106,7 @@ class FirstLook:
         self._looks += 1
         n = self.looking = self._looks
         self._seen = {}
-        self._clears = []
+        self._clears = {}
         self._heard = {}
         return self._hello(n)
 
@@ -127,7 +131,7 @@ class FirstLook:
         """Whether a deletion waits for the look's verdict."""
         if self.looking is None:
             return False
-        self._clears.append(topic)
+        self._clears[topic] = None
         return True
 
     def end(self, *, timed_out: bool) -> Outcome:
@@ -137,7 +141,7 @@ class FirstLook:
         verdict = first_look(self.claim.me, info, state)
         if verdict is Verdict.OURS and (timed_out or self._took_over):
             verdict = Verdict.TAKE_OVER  # not known to be ours: delete nothing (claim rule 3)
-        clears, self._clears = self._clears, []
+        clears, self._clears = list(self._clears), {}
         other = Instance.parse(info or b"")
         if verdict is Verdict.REFUSE:
             assert other is not None

@@ -23,7 +23,9 @@ Rules:
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
    A status's topics whose payload is the one this service last handed on for them are not
    handed on again (the client would drop it: a reading changes two of a dozen); what the
-   service stops with (offline, ``stop``) forgets them.
+   service stops with (offline, ``stop``) forgets them. ``R/version`` with no version known
+   (none kept for the model, runtime/kept.py rule 11, and none reported yet) is cleared: the
+   value an earlier run left there may be another controller's.
 4. Refusals on ``R/error`` are rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``,
    10 by default, after a burst of five times as many); the next one published says how many
    were left out. Every other kind (a stall, a stop that did not take, the serial line) is
@@ -49,7 +51,10 @@ Rules:
    are commands like any (never retained, never while gated); ``R/control`` follows the status.
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
-   says how many were left out. The audit file has them all.
+   says how many were left out. The audit file has them all (folded alike). Refusals and
+   stops (the events runtime/audit.py rule 6 folds) have one budget, the rest (moves, lease
+   and lock changes) another: 50 refused commands left the lease holder's own move out (an
+   attack pass).
 9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
@@ -322,8 +327,7 @@ class MqttService:
             hand(t.elevation, pl.number(status.elevation_deg))
         hand(t.state, _STATE_TEXT[status.state])
         hand(t.availability, "online" if status.available else "offline")
-        if status.version:
-            hand(t.version, status.version)
+        hand(t.version, status.version or "")  # none: cleared (runtime/kept.py rule 11)
         options = status.options
         for name, topic in t.options:  # ON/OFF, a number, a choice's name (model.setting_text)
             if name in options:
@@ -538,7 +542,9 @@ class MqttService:
         if rotator_id not in self._rotators:
             return
         t = self.topics.rotator(rotator_id)
-        left_out = self._audit_limiter.admit(t.audit)
+        # rule 8: refusals and stops, already folded per sender (runtime/audit.py rule 6),
+        # have a budget of their own: however many there are, a move's event is not left out
+        left_out = self._audit_limiter.admit(t.audit + ("\0routine" if event.routine else ""))
         if left_out is None:
             return
         doc = event.as_dict()
@@ -596,8 +602,8 @@ class MqttService:
                 origin = self.origin(operator)
                 self._group_message(gid, kind, topic, payload, retain, origin, gated, stamp)
                 return
-            if topic == self.topics.bridge_fence:
-                self._halts.marker_back(payload)
+            if topic in (self.topics.bridge_fence, self.topics.bridge_hello):
+                self._halts.marker_back(payload)  # (lastword.py rule 5: a resent one on both)
                 return
             for handler in self._handlers:
                 if handler(topic, payload, retain):
@@ -715,6 +721,19 @@ class _Outbound(NamedTuple):
             tuple((s, t.feature(s.suffix)) for s in states if s.after_status),
             pl.StatusText(spec.has_elevation),
         )
+
+
+def never_published(
+    t: RotatorTopics, spec: ModelSpec, boxes: tuple[ModelSpec, ...] = ()
+) -> list[str]:
+    """The status topics ``publish_status`` never fills for a rotator of ``spec`` (``boxes``: a
+    composite's two, whose versions its status joins; runtime/composite.py): ``R/bearing`` where
+    it cannot report where it points, ``R/elevation`` where it has no elevation, ``R/version``
+    where no controller of it reports one (session/status.py). Deleted if an earlier model left
+    them (interfaces/mqtt/stale.py rule 5)."""
+    never = [] if spec.can_report_position else [t.bearing]
+    never += [] if spec.has_elevation else [t.elevation]
+    return never + ([] if any(s.has_version for s in (spec, *boxes)) else [t.version])
 
 
 def parse_command(

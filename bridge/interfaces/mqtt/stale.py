@@ -33,6 +33,22 @@ Rules:
    remote finds rotators) stayed for ever, a ghost rotator (a review). A group's ``G/info`` (a
    group publishes none) tells a rotator was there: its topics that a group does not publish
    are deleted; an option state under a group's root is deleted by itself.
+5. A rotator still configured keeps its root, but not every state topic a feature published
+   there: one it no longer has (a station taken out: ``R/tracking``; ``[wsjtx]`` or the station:
+   ``R/follow/state``; bridge/feature.py ``StateTopic.needs``) is published no more, and its
+   last value stayed for ever (a review: the Node-RED page, which offers tracking once
+   ``R/tracking`` arrives, offered it to a rotator that then refused it). Those topics
+   (``unpublished``, each rotator's, exactly) are read too (through the owned-topic watch,
+   client.py rule 10, which reads every feature's state), and a retained value there is
+   deleted as rule 2 says. So are the status topics its model never fills (a review: the user
+   swapped controllers, and Node-RED flows and Home Assistant automations kept reading the
+   old one's last values): ``R/elevation`` of an azimuth-only model, ``R/bearing`` of one that
+   cannot report where it points (DCU-1), ``R/version`` of one that reports none (neither box
+   of a composite rotator); its option states are read as rule 1's (and through the same
+   watch), and one whose name is none of its model's options (``options``: each configured
+   rotator's root and the names it publishes) is deleted by itself. What it does publish (an
+   MD-01's or a composite's elevation, a version that comes late, an option of its model) is
+   never among them.
 """
 
 from __future__ import annotations
@@ -44,13 +60,22 @@ from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics, Topics
 class StaleTopics:
     """Rule 1: the filters to read, and what a message read on them leaves to delete."""
 
-    def __init__(self, topics: Topics, roots: set[str], groups: set[str] | None = None) -> None:
+    def __init__(
+        self,
+        topics: Topics,
+        roots: set[str],
+        groups: set[str] | None = None,
+        unpublished: set[str] | None = None,
+        options: dict[str, tuple[str, ...]] | None = None,
+    ) -> None:
         self._base = topics.base
         self._roots = roots  # every configured rotator's and group's root
         self._groups = set(groups or ())  # rule 4: the groups' roots (never a rotator's)
         self._owned = set(topics.owned())  # (never one of these, whatever its root)
         self._states = [s.suffix for f in registered() for s in f.states]
         self._bridges: set[str] = {f"{topics.base}/bridge"}  # rule 3: another bridge's base
+        self._unpublished = set(unpublished or ())  # rule 5: configured rotators' states
+        self._options = dict(options or {})  # rule 5: a configured root, its options' names
 
     @property
     def subscriptions(self) -> list[str]:
@@ -59,12 +84,18 @@ class StaleTopics:
             f"{b}/+/option/+/state",
             f"{b}/option/+/state",
             *(f"{g}/info" for g in sorted(self._groups)),  # rule 4
+            # rule 5 (one the owned-topic watch reads, client.py rule 10, comes through it: read
+            # twice, it was deleted and said twice)
+            *sorted(self._unpublished - self._owned),
         ]
 
     def stale(self, topic: str) -> list[str]:
         """Rule 1: what ``topic`` (read on ``subscriptions``) leaves to delete: every retained
         topic a rotator or a group publishes under a root no longer configured, for its
-        availability; the option state itself, for one of its options' states."""
+        availability; the option state itself, for one of its options' states; a configured
+        rotator's state topic itself, for one it no longer publishes (rule 5)."""
+        if topic in self._unpublished or self._not_its_option(topic):  # rule 5
+            return [topic]
         head, _, under = topic.rpartition("/bridge/")
         if under == "state" and head.rpartition("/")[0] == self._base:
             self._bridges.add(head)  # rule 3
@@ -94,6 +125,16 @@ class StaleTopics:
         found = [r.bearing, r.elevation, r.state, r.version, r.presets, r.info]
         found += [r.lock_state, *(r.feature(suffix) for suffix in self._states)]
         return [t for t in found if t not in self._owned]
+
+    def _not_its_option(self, topic: str) -> bool:
+        """Rule 5: ``topic`` is a configured rotator's ``R/option/<name>/state`` for a name that
+        is none of its model's options (never one of the bridge's own topics: rule 3)."""
+        head, _, leaf = topic.rpartition("/")
+        root, under, name = head.rpartition("/option/")
+        names = self._options.get(root)
+        if leaf != "state" or not under or "/" in name or names is None:
+            return False
+        return name not in names and topic not in self._owned
 
     def _root(self, topic: str) -> tuple[str | None, str]:
         """The root ``topic`` is under (the base topic or ``B/<id>``) and what it is there:

@@ -13,7 +13,8 @@ Two topics under ``B/bridge/`` are the bridge's messages to itself, not for othe
   come back: the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before it are
   what the broker held. So a client watching ``B/#`` while the bridge (re)connects sees it as
   the bridge's first message; one that subscribes later never does (nothing of it stays on the
-  broker). Other clients ignore it; a hello that is not the bridge's own look ends nothing. The
+  broker). Other clients ignore it; a hello that is not the bridge's own look ends nothing.
+  Each marker on ``B/bridge/fence`` is published there too (lastword.py rule 7). The
   broker's ACL must let the bridge publish and subscribe there: without it every connect
   waits LOOK_TIMEOUT_S (5 s) and deletes no stale discovery.
 - ``B/bridge/fence`` and ``B/bridge/fence/lane``: the markers of the last word

@@ -36,7 +36,11 @@ Rules:
    integer, as C's ``%d`` reads ``8x``), else "invalid" (``M x 5``), as rotctld answers.
 4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
 5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
-   currently have is an error code, never the last value seen.
+   currently have is an error code, never the last value seen. The clockwise end of a scale
+   that wraps is ``360.00`` (the true bearing ``P 360`` sends it to, pointing.py rule 2), as
+   Hamlib's GS-232, Easycomm, SatEL, Prosistel and RC2800 backends read it; ``0.00`` named the
+   other end, a whole turn back. The models whose Hamlib backend reads 360 as 0 (the Rotor-EZ
+   family, the RT-21: ``ModelSpec.hamlib_folds_360``) answer ``0.00`` there, as it does.
 6. Motion goes through Rotator.submit with Source.ROTCTLD, so the lock, the limits and the link
    state are judged in one place and MQTT shows the refusal or the move. A ``P`` whose
    arguments are no numbers (``nan``, ``inf``, ``12x``) is answered ``RPRT -1`` and said on

@@ -92,6 +92,11 @@ class RotctldCommands:
             # bearing unfolded, as P takes it (pointing.py rule 2); one that sent P 40 reads 40
             # even where the bridge took it on to raw 400, the shorter way
             az = unfolded(az, status.raw_bearing_deg)
+        elif az == 0.0 and aim.at_360(status.raw_bearing_deg) and not spec.hamlib_folds_360:
+            # the clockwise end of a scale that wraps reads 360.00, as Hamlib's GS-232 or
+            # Easycomm backend reads it and as P takes it (pointing.py rule 2: P 360 is that
+            # end, P 0 the other): 0.00 named the other end, a whole turn back
+            az = 360.0
         el = status.elevation_deg if spec.has_elevation else 0.0
         if not status.available or az is None or el is None:
             return _link_code(status.connected), ""

@@ -14,6 +14,15 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    the password from, and another bridge with the same password takes none of these tokens),
    so tokens outlive a restart and die with a changed password. A token past its life is still
    genuine: it carries a STOP or a lock ON (docs/architecture.md rule 11), nothing else.
+   The time a token is issued and judged by is the station's clock (app.py hands the one its
+   heartbeats carry: the wall clock, never set back while the bridge runs, interfaces/mqtt/
+   heartbeat.py rule 6): on the raw wall clock set back 10 minutes every token handed out
+   before was "issued in the future", and each click of every page was refused as expired,
+   a login again on every page (an attack pass).
+   A token is ASCII (hex and dots): anything else offered as one is no token, looked at no
+   further (an attack pass: a header or subprotocol holding a byte that is not UTF-8, or a
+   first message's lone surrogate, raised encoding it for the MAC, a 500 and a traceback at
+   ERROR for anyone who reaches the port, no token needed).
 3. A password is compared in constant time (digests of equal length). Failed logins are
    limited per client address (an IPv6 address by its /64, which one client has plenty of) and
    kind of name asked for (``login_key``); a client over its limit is answered without the
@@ -92,7 +101,7 @@ class Tokens:
     def issued(self, token: str | None) -> float | None:
         """When a genuine token (this key's) was issued, whether or not it has expired; None
         for anything else (rule 2)."""
-        if not token or len(token) > 200:
+        if not token or len(token) > 200 or not token.isascii():  # (rule 2: ours are ASCII)
             return None
         body, _, mac = token.rpartition(".")
         issued_hex, _, nonce = body.partition(".")

@@ -36,6 +36,18 @@ Rules:
    ended at 200). A nudge is a step from where the rotor is, which no later nudge replaces:
    it is stale only when numbered before another command the page aimed with (three quick
    clicks on +5 are +15 in whatever order they come).
+6. A move may carry its send time, ``sent``: the bridge's steady clock (live.py rule 8) as the
+   page reckons it when the click is made (the clock the page last heard on its live feed plus
+   the page's own steady time since: the phone's wall clock is never asked). ``aged`` refuses,
+   as stale, one older than MAX_AGE_S when the console takes it ("not carried out: sent 12 s
+   ago"), or more than AHEAD_S ahead of the bridge's clock (a reckoning from before the
+   bridge's host restarted): a click a bad mobile link held up for seconds, with no STOP or
+   newer click after it, was carried out whenever it came (an attack pass). The reckoning
+   errs on the old side only (a message arrives after it left), by the fastest trip down the
+   feed. A stop, a lock ON and tracking off are never refused for their age; a body without
+   ``sent`` (a script's) is judged as before. Why a clock and not a sequence the feed
+   acknowledges: a sequence says the order, which rules 5 and 5a judge already, not how long a
+   click was on its way; the feed's clock says that with one number and no round trip.
 """
 
 from __future__ import annotations
@@ -68,6 +80,8 @@ MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
 STALE = "sent before a STOP or lock ON that came first: not carried out"
 OVERTAKEN = "sent before a newer command of the same page that came first: not carried out"
+MAX_AGE_S = 5.0  # rule 6: a move older than this when the console takes it is not carried out
+AHEAD_S = 1.0  # rule 6: a send time this far ahead of the bridge's clock is no reckoning of it
 
 
 class BadCommand(ValueError):
@@ -87,6 +101,7 @@ class WebCommand:
     on: bool = False  # lock
     page: str | None = None  # rule 5: the page that sent it, and its number there
     seq: int | None = None
+    sent: float | None = None  # rule 6: the bridge's steady clock as the page reckoned it
 
     def halts(self) -> bool:
         """Stop, lock ON, tracking off: never refused, never stale (rules 3, 5)."""
@@ -172,6 +187,8 @@ def parse(body: bytes) -> WebCommand:
     if not isinstance(kind, str) or kind not in _KEYS:
         raise BadCommand(f"unknown command {str(kind)[:40]!r}; one of: {', '.join(_KEYS)}")
     page, seq = doc.pop("page", None), doc.pop("seq", None)
+    sent = _number(doc, "sent", None)  # rule 6
+    doc.pop("sent", None)
     unknown = set(doc) - _KEYS[kind]
     if unknown:
         raise BadCommand(f"unknown key(s) for {kind}: {', '.join(sorted(unknown)[:5])}")
@@ -181,7 +198,23 @@ def parse(body: bytes) -> WebCommand:
         raise BadCommand('"page" must be text (1 to 40 characters)')
     if seq is not None and (isinstance(seq, bool) or not isinstance(seq, int) or seq < 0):
         raise BadCommand('"seq" must be a whole number, 0 or more')
-    return replace(_parsed(kind, doc), page=page, seq=seq)
+    if sent is not None and sent < 0:
+        raise BadCommand('"sent" must be 0 or more (the bridge\'s clock, in seconds)')
+    return replace(_parsed(kind, doc), page=page, seq=seq, sent=sent)
+
+
+def aged(cmd: WebCommand, now: float) -> str | None:
+    """Rule 6: why ``cmd`` is too old (or stamped ahead) at ``now``, the bridge's steady clock;
+    None when it is not, has no send time, or halts."""
+    if cmd.sent is None or cmd.halts():
+        return None
+    age = now - cmd.sent
+    if age > MAX_AGE_S:
+        limit = f"a move older than {MAX_AGE_S:g} s is refused"
+        return f"not carried out: sent {age:.0f} s ago ({limit})"
+    if age < -AHEAD_S:
+        return "not carried out: its send time is ahead of the bridge's clock (reload the page)"
+    return None
 
 
 def _parsed(kind: str, doc: dict[str, object]) -> WebCommand:
@@ -271,6 +304,7 @@ class Order:
     def __init__(self) -> None:
         # rotator -> the console's last halt: when it was carried out, the page and its number
         self._last: dict[str, tuple[float, str | None, int | None]] = {}
+        self._last_kind: dict[str, str] = {}  # rotator -> what that halt was (``_kind``)
         self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
         self._took_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: the same
         self._took_aim: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: no nudge
@@ -312,18 +346,28 @@ class Order:
             _keep(self._took_aim, (cmd.page, rotator_id), cmd.seq)
 
     def carried(self, rotator_id: str, cmd: WebCommand) -> bool:
-        """Whether ``cmd`` is a halt the page numbered and the console carried out already, as
-        the rotator's latest: the page sends each halt both over its WebSocket and by POST
-        (console.js), and one click was two events in the audit trail (an attack pass). The
-        second copy is not carried out again (the first was); any other halt in between, and
-        the copy goes again (stopping twice is harmless)."""
+        """Whether ``cmd`` is a halt the page numbered and the console carried out already, or
+        one it numbered before that, as the rotator's latest: the page sends each halt both
+        over its WebSocket and by POST (console.js), and one click was two events in the audit
+        trail (an attack pass). The second copy is not carried out again (the first was), nor
+        an older halt's copy coming after the page's newer one that does all it does (its
+        socket's copies wait past its budget, live.py rule 7: carried out after the click the
+        page made next, they stopped it): a STOP's after a STOP or a lock ON, a lock ON's
+        after a lock ON, tracking off's after any; any other halt in between, and the copy
+        goes again (stopping twice is harmless)."""
         if not cmd.halts() or cmd.page is None or cmd.seq is None:
             return False
         _at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
-        return page == cmd.page and seq == cmd.seq
+        if page != cmd.page or seq is None or cmd.seq > seq:
+            return False
+        # an older halt only where the newer one does all it does: a STOP does not lock, and
+        # tracking off does not stop a turn (a review: a lock ON whose copies came after the
+        # page's next click, a STOP, was never carried out, and its POST answered "ok")
+        return cmd.seq == seq or self._last_kind.get(rotator_id) in _OUTDONE_BY[_kind(cmd)]
 
     def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
         self._last[rotator_id] = (now, cmd.page, cmd.seq)
+        self._last_kind[rotator_id] = _kind(cmd)
         self.pressed(rotator_id, cmd)
 
     def pressed(self, rotator_id: str, cmd: WebCommand) -> None:
@@ -332,6 +376,16 @@ class Order:
         numbered before it is stale all the same (not ``carried``: its other copy still goes)."""
         if cmd.page is not None and cmd.seq is not None:
             _keep(self._halt_seq, (cmd.page, rotator_id), cmd.seq)
+
+
+def _kind(cmd: WebCommand) -> str:
+    """A halt's kind for ``Order.carried``: ``stop``, ``lock`` (ON) or ``off`` (tracking)."""
+    return "lock" if cmd.command == "lock" else "off" if cmd.command == "track" else "stop"
+
+
+# a halt's kind -> the kinds of a newer halt that do all it does (``Order.carried``): a lock ON
+# stops and locks, a STOP stops and ends tracking, tracking off ends tracking only
+_OUTDONE_BY = {"stop": {"stop", "lock"}, "lock": {"lock"}, "off": {"stop", "lock", "off"}}
 
 
 def _keep(kept: OrderedDict[tuple[str, str], int], key: tuple[str, str], seq: int) -> None:

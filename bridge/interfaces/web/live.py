@@ -32,6 +32,21 @@ Rules:
 6. ``on_spots`` runs on the DX cluster's thread (the spot list as ``B/spots`` carries it): it
    keeps the newest and hands it to the event loop while a page is open, as rule 1; a page that
    joins gets it (feed.py rule 6). ``with_console`` puts it beside the MQTT publish, contained.
+7. What a page's WebSocket sends is read within a budget of its own (``ratelimit.Budget``,
+   READ_BYTES_S, each message charged MESSAGE_COST on top of its bytes), one message a turn of
+   the event loop: over its budget the socket is not read (its bytes wait in aiohttp's buffer,
+   then TCP's, and hold the sender back), as a TCP port's client is not (docs/architecture.md,
+   "Why no front end can starve a stop"). A page sends a STOP or a lock ON a click, far below
+   it. An attack pass: one socket sent STOPs back to back, the console carried out every
+   message a read brought (thousands) before it served anything else, and the operator's STOP
+   of another rotator waited 3 to 8 s while that rotor turned on.
+8. The page's WebSocket tells it the bridge's clock: ``{"event":"clock","now":...}`` right after
+   ``hello``, and ``now`` in every ping (every PING_S), the bridge's steady clock
+   (``time.monotonic``, seconds) as the message leaves. The page reckons from them when it sends
+   each move, on the bridge's clock (commands.py rule 6): never later than the truth, since a
+   message arrives after it left. The steady clock, not the wall clock: neither a time server
+   stepping the bridge's clock nor the phone's own clock (often wrong) can make a held-up click
+   look young.
 """
 
 from __future__ import annotations
@@ -39,12 +54,14 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import time
 from collections import OrderedDict
 from collections.abc import Callable
 
 from aiohttp import WSMsgType, web
 
 from bridge.core.model import ErrorEvent, RotatorStatus
+from bridge.core.ratelimit import Budget
 from bridge.interfaces.web.auth import Tokens
 from bridge.interfaces.web.feed import Feed, Page, sse, websocket
 from bridge.runtime.listeners import contained
@@ -58,6 +75,8 @@ TOKEN_HEADER = "X-Rotor-Token"
 ROOM_MADE = 1013  # rule 4: a socket still waiting for its token, closed for one (try again later)
 TOKEN_PROTOCOL = "rotor-bridge"  # rule 4: the subprotocol echoed to a page giving its token so
 TOKEN_OFFER = "token."  # rule 4: the subprotocol that carries the token
+READ_BYTES_S = 1024.0  # rule 7: what one page's socket may send a second, a burst of as many
+MESSAGE_COST = 64  # rule 7: each message costs this many bytes of it besides its own
 
 
 class Live:
@@ -204,11 +223,12 @@ class Live:
         reader = asyncio.get_running_loop().create_task(self._read(ws, page, self._client(request)))
         try:
             await ws.send_str('{"event":"hello"}')
+            await ws.send_str(_clock("clock"))  # rule 8
             while await _next(page):
                 messages = list(page.take())
                 if page.ping:
                     page.ping = False
-                    await ws.send_str('{"event":"ping"}')
+                    await ws.send_str(_clock("ping"))
                 for message in messages:
                     await ws.send_str(websocket(message))
         except (ConnectionError, asyncio.CancelledError):
@@ -240,10 +260,15 @@ class Live:
 
     async def _read(self, ws: web.WebSocketResponse, page: Page, peer: str | None) -> None:
         """What the page sends: a STOP or a lock ON, sent here as well as by POST (rule 5);
-        anything else is ignored. Its close is seen at once."""
+        anything else is ignored. Its close is seen at once; what it sends, within its budget
+        (rule 7)."""
+        budget = Budget(READ_BYTES_S, time.monotonic())
         async for message in ws:
             if message.type == WSMsgType.TEXT:
                 self._halt_from(message.data, peer)
+            size = len(message.data) if isinstance(message.data, str | bytes) else 0
+            budget.spend(MESSAGE_COST + size, time.monotonic())
+            await asyncio.sleep(budget.wait_s(time.monotonic()))  # (0: the loop's next turn)
         page.closed = True
         page.wake.set()
 
@@ -284,6 +309,11 @@ def with_console(
         publish(doc)
 
     return both
+
+
+def _clock(event: str) -> str:
+    """Rule 8: the bridge's steady clock as the message leaves, for the page's send times."""
+    return f'{{"event":"{event}","now":{time.monotonic():.3f}}}'
 
 
 def _offered_token(request: web.Request) -> str | None:

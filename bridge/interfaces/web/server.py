@@ -33,7 +33,8 @@ Rules:
    rotator's one command under way at most: those queued before it that have not started are
    not sent (refused ``stale``: the stop came first), so it is neither overtaken nor does it
    overtake. Nor is one sent after a STOP that another front end of the rotator's (the
-   remote's rotctld) sent since it was posted (port.py rule 2b). At most ``FAR_MOVES``
+   remote's rotctld) sent since it was posted (port.py rule 2b), nor one whose send time
+   is older than commands.py rule 6 allows when its turn comes. At most ``FAR_MOVES``
    moves wait per rotator (the one under way included); one more is refused at once (409,
    code ``busy``), never queued. A STOP or lock ON is never refused so.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
@@ -88,6 +89,7 @@ from bridge.interfaces.web.commands import (
     BadCommand,
     Order,
     WebCommand,
+    aged,
     carry_out,
     parse,
 )
@@ -534,11 +536,16 @@ class WebConsole:
         self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, since: int
     ) -> None:
         """Rule 5, on the commands' thread: not sent if a halt was posted since it came, nor
-        (``since``, port.py rule 2b: the judge says so) if another front end's went out."""
+        (``since``, port.py rule 2b: the judge says so) if another front end's went out, nor
+        if it has grown too old waiting (commands.py rule 6)."""
         if self._far_halts.get(rot.id, 0) != posted:
             why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
             rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
             raise Refused(RefusalCode.STALE, why)
+        old = aged(cmd, time.monotonic())  # commands.py rule 6: its wait here counts too
+        if old is not None:
+            rot.report_refusal(old, cmd.described(), origin=Origin(Source.WEB, None, peer))
+            raise Refused(RefusalCode.STALE, old)
         carry_out(rot, cmd, peer, since)
 
     def _far_moved(self, rotator_id: str) -> None:
@@ -603,6 +610,7 @@ class WebConsole:
         away = far is not None and rot.commands_block
         since = rot.halts
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
+        stale = stale or aged(cmd, time.monotonic())  # commands.py rule 6
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)

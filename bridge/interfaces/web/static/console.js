@@ -9,6 +9,9 @@
 //    10000) for the benchmark.
 // 4. STOP is the #stop button, Escape anywhere, and Space anywhere outside a text box. Space
 //    never activates the focused button: whoever presses Space to stop must not park.
+//    A key held down is one press: Enter's repeats activate nothing (an attack pass: Enter held
+//    on the focused Lock button toggled the lock at each repeat, and it ended OFF as often as
+//    ON; held on a nudge, 30 nudges a second).
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
 //    same rotator within 2 s is one refusal, shown once, unless a command went through in
 //    between (then the same refusal is news again, not the first one's copy). Only the answer
@@ -20,13 +23,39 @@
 //    was refused or not sent at all (the bridge unreachable, the session ended).
 // 7. A STOP or lock ON sent over the live feed is never said to be unsent when its request
 //    fails: the feed's copy is carried out (live.py rule 5), and the page says it went that way.
+// 8. A key on the Track select chooses without sending: Chromium on Linux and Windows changes
+//    a closed select's choice at each arrow or letter key, and each change was a track command
+//    (an attack pass: arrowing from "off" to "Moon" tracked the sun on the way, the rotor
+//    turned). Enter sends the choice shown; a choice left unsent goes back to the status's
+//    when the select loses the focus. A choice picked from its list (a click, or Enter in the
+//    open list) is sent at once, as before.
+// 9. Every move (anything but a STOP, a lock ON and tracking off) carries its send time on the
+//    bridge's clock as the live feed lets the page reckon it (live.js rule 3; commands.py
+//    rule 6), and the bridge refuses one that took too long on its way ("not carried out:
+//    sent 12 s ago"), shown as any refusal (rule 5). A page that never heard the bridge's clock
+//    sends no move (it says so); one woken from sleep hears it anew first (live.js rule 3);
+//    a STOP and a lock ON go unstamped, always.
+// 10. Releasing the lock is a deliberate act: a click on Lock while it is ON sends nothing, it
+//    shows a Release button beside it, usable only after RELEASE_AFTER_MS and gone after
+//    RELEASE_FOR_MS (or once the lock is OFF, or another rotator is chosen). An attack pass:
+//    Lock toggled, so a double click (two clicks 300 ms apart) locked and at once released.
+// 11. Offline, the page is greyed but STOP is not: it stays as it is and where it is (a POST may
+//    still get through while the live feed is lost). An attack pass: the filter that greys
+//    the console greyed STOP with it, as if it could not be used. (The filter sits on STOP's
+//    neighbours, not on an element around it: a filter is the containing block of the fixed
+//    STOP bar a phone pins to the bottom of the screen.)
 
 import { MapView, RIM_KM, norm360 } from './map.js';
 import { SkyView } from './sky.js';
-import { authHeaders, connect, dropToken, getToken, postJSON, sendLive, session } from './live.js';
+import { authHeaders, bridgeClock, connect, dropToken, getToken, postJSON, sendLive, session } from './live.js';
 
 const LATENCIES_MAX = 10000;
+const SELECTED_KEY = 'rotor-bridge-rotator'; // the rotator shown, for STOP after a reload (live.js rule 1)
+// before any configuration, the rotator this tab showed before a reload (live.js rule 1)
+const shownBefore = (() => { try { return sessionStorage.getItem(SELECTED_KEY); } catch { return null; } })();
 const SAME_REFUSAL_MS = 2000;
+const RELEASE_AFTER_MS = 1000; // rule 10: the Release button is usable this long after Lock's click
+const RELEASE_FOR_MS = 8000; // rule 10: and shown this long
 
 const $ = (id) => document.getElementById(id);
 const metrics = { latencies_ms: [], answered: 0 }; // answered: commands whose answer was read
@@ -44,9 +73,13 @@ const app = {
   tabs: new Map(), // rotator id -> its tab button
 };
 
+let trackKey = null; // the key down on the Track select in the task now running (rule 8)
+let trackKeyed = false; // a Track choice the keys made, not sent yet (rule 8)
+
 const map = new MapView($('map'));
 const sky = new SkyView($('sky'), (az, el) => send({ command: 'target', az: round1(az), el: round1(el) }));
 
+const shown = () => app.selected || shownBefore; // the rotator STOP and the message line are for
 const round1 = (v) => Math.round(v * 10) / 10;
 const fmtDeg = (v) => (typeof v === 'number' && Number.isFinite(v) ? `${round1(v)}\u00B0` : '\u2014');
 const fmtKm = (v) => `${Math.round(v).toLocaleString('en-US')} km`;
@@ -142,7 +175,9 @@ function updateTab(id, st) {
 function selectRotator(id) {
   const cfg = app.rotators.get(id);
   if (!cfg) return;
+  if (app.selected !== id) disarmRelease(); // rule 10: a Release offered for another rotator
   app.selected = id;
+  try { sessionStorage.setItem(SELECTED_KEY, id); } catch { /* this page only */ }
   if (app.rotators.size > 1 && location.hash.slice(1) !== id) history.replaceState(null, '', `#${encodeURIComponent(id)}`);
   for (const tab of document.querySelectorAll('.tab')) tab.setAttribute('aria-selected', String(tab.dataset.rotator === id));
   $('title').textContent = cfg.name || cfg.id;
@@ -277,6 +312,7 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
   put('lock', unknown ? 'Lock ?' : locked ? 'Lock ON' : 'Lock OFF');
   mark($('lock'), 'title', unknown ? 'Lock not known yet (the broker not read): motion is refused; a click locks' : '');
   flag(document.body, 'locked', locked || unknown);
+  if (!locked && !$('unlock').hidden) disarmRelease(); // rule 10: nothing left to release
   flag(document.body, 'rotor-down', st.available === false);
   hide('path-row', !info);
   if (info) {
@@ -287,7 +323,7 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
   }
   const body = tracking ? tracking.body : 'off';
   const select = $('track');
-  if (select.value !== body) {
+  if (select.value !== body && !trackKeyed) { // rule 8: not over a choice the keys made
     if (![...select.options].some((o) => o.value === body)) {
       select.add(new Option(body, body)); // a satellite the TLE file no longer names
     }
@@ -352,7 +388,7 @@ function showMessage(id, text, kind) {
   app.lastShown = { id, text, at: now };
   const msg = { text, kind, time: new Date() };
   app.messages.set(id, msg);
-  if (id === app.selected) renderMessage(msg);
+  if (id === shown()) renderMessage(msg);
   else app.tabs.get(id)?.classList.add('has-message');
 }
 
@@ -372,7 +408,7 @@ function renderMessage(msg) {
 function clearMessage(id) {
   app.messages.delete(id);
   if (app.lastShown && app.lastShown.id === id) app.lastShown = null; // the next is news again
-  if (id === app.selected) renderMessage(null);
+  if (id === shown()) renderMessage(null);
 }
 
 function onErrorEvent(doc) {
@@ -393,6 +429,14 @@ async function send(command, id = app.selected) {
   const body = { ...command, page: PAGE_ID, seq: ++sequence };
   newestSent.set(id, body.seq);
   const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
+  if (!halts && !(body.command === 'track' && body.body === 'off')) {
+    const now = await bridgeClock(); // rule 9 (heard anew first after a sleep: live.js rule 3)
+    if (now === null) {
+      showMessage(id, 'not sent: the live connection has not told the bridge\'s clock yet', 'error');
+      return false;
+    }
+    body.sent = Math.round(now * 1000) / 1000;
+  }
   const live = halts && sendLive({ ...body, rotator: id }); // and by POST: either will do
   // rule 7: a halt the live feed carried was sent, whatever becomes of its request
   const unsent = (why) => (live ? `${why}: sent over the live connection only` : `${why}: nothing was sent`);
@@ -435,11 +479,35 @@ async function send(command, id = app.selected) {
   return live;
 }
 
-const stop = () => send({ command: 'stop' });
+const stop = () => send({ command: 'stop' }, shown());
 
 $('stop').addEventListener('click', stop);
 $('park').addEventListener('click', () => send({ command: 'park' }));
-$('lock').addEventListener('click', () => send({ command: 'lock', on: $('lock').getAttribute('aria-pressed') !== 'true' }));
+// rule 10: Lock locks (from OFF or not known yet); while ON it only offers Release
+let releaseTimers = [];
+function disarmRelease() {
+  releaseTimers.forEach(clearTimeout);
+  releaseTimers = [];
+  hide('unlock', true);
+}
+$('lock').addEventListener('click', () => {
+  if ($('lock').getAttribute('aria-pressed') !== 'true') {
+    disarmRelease();
+    send({ command: 'lock', on: true });
+    return;
+  }
+  if (!$('unlock').hidden) return; // offered already: another click on Lock does nothing more
+  $('unlock').disabled = true;
+  hide('unlock', false);
+  releaseTimers = [
+    setTimeout(() => { $('unlock').disabled = false; }, RELEASE_AFTER_MS),
+    setTimeout(disarmRelease, RELEASE_FOR_MS),
+  ];
+});
+$('unlock').addEventListener('click', () => {
+  disarmRelease();
+  send({ command: 'lock', on: false });
+});
 const step = () => app.rotators.get(app.selected)?.nudge_step_deg || 5;
 $('nudge-ccw').addEventListener('click', () => send({ command: 'nudge', d_az: -step(), d_el: 0 }));
 $('nudge-cw').addEventListener('click', () => send({ command: 'nudge', d_az: step(), d_el: 0 }));
@@ -448,11 +516,38 @@ $('nudge-up').addEventListener('click', () => send({ command: 'nudge', d_az: 0, 
 $('path-long').addEventListener('click', () => send({ command: 'path', long_path: true }));
 $('path-short').addEventListener('click', () => send({ command: 'path', long_path: false }));
 // rule 6: a choice not carried out (refused, or never sent) goes back to what the bridge tracks
-$('track').addEventListener('change', (e) => {
+function sendTrack() {
   const id = app.selected;
-  send({ command: 'track', body: e.target.value }, id).then((ok) => {
+  trackKeyed = false;
+  send({ command: 'track', body: $('track').value }, id).then((ok) => {
     if (!ok && id === app.selected) renderStatus(id, app.status.get(id) || {});
   });
+}
+// rule 8: a change in the same task as a key (not Enter) on the select is that key's doing (the
+// key's default action changes it); a choice committed in the open list comes in a later task
+$('track').addEventListener('keydown', (e) => {
+  trackKey = e.key;
+  setTimeout(() => { trackKey = null; }, 0); // (a task after the key's own)
+  if (e.key === 'Enter' && trackKeyed) {
+    e.preventDefault();
+    sendTrack();
+  }
+});
+$('track').addEventListener('change', () => {
+  if (trackKey === null || trackKey === 'Enter') {
+    sendTrack();
+    return;
+  }
+  trackKeyed = true;
+  const msg = { text: `Enter tracks ${$('track').value}; nothing is sent before`, kind: 'note', time: new Date() };
+  renderMessage(msg);
+});
+$('track').addEventListener('blur', () => {
+  if (!trackKeyed) return;
+  trackKeyed = false;
+  const id = app.selected;
+  if (id) renderStatus(id, app.status.get(id) || {});
+  renderMessage(app.messages.get(id));
 });
 $('locator-form').addEventListener('submit', (e) => {
   e.preventDefault();
@@ -469,6 +564,8 @@ window.addEventListener('keydown', (e) => {
     e.preventDefault();
     e.stopPropagation();
     if (!e.repeat) stop();
+  } else if (e.key === 'Enter' && e.repeat) {
+    e.preventDefault(); // one press, one command
   }
 }, true);
 window.addEventListener('keyup', (e) => {

@@ -3,7 +3,13 @@
 // Rules:
 // 1. Every URL is relative (the page runs behind a path prefix and in an iframe); every api/
 //    request but hello/session/login carries X-Rotor-Token. A 401 drops the token: without a
-//    password a new one is fetched at once, with one the login form is shown.
+//    password a new one is fetched at once, with one the login form is shown. A page that had
+//    a session keeps STOP (and the line saying what became of it) on screen beside the form:
+//    the token it dropped still carries a STOP or a lock ON (an attack pass: the form hid the
+//    whole console, STOP with it, and a phone or a wall display left open past its token's
+//    life had no way to stop a turning rotor). The tab keeps that token (sessionStorage) and
+//    console.js the rotator it showed, so a reload keeps STOP too (a review: a phone's browser
+//    reloads a tab it put away, and the page came back with the form alone).
 // 2. The live feed is api/live, a WebSocket (a browser keeps a few HTTP connections per host,
 //    six over HTTP/1.1: an event stream per tab held one each, and six tabs left none for a
 //    STOP; WebSockets are counted apart), its token a subprotocol of its opening request
@@ -11,8 +17,22 @@
 //    or is silent for 25 s, the page is told at once (onOnline(false)) and it reconnects: every
 //    1 s, then backing off to 5 s; each connect reads api/config first (onConfig), since the
 //    bridge may have restarted with another one.
+// 3. The bridge's clock (live.py rule 8): each 'clock' and 'ping' message says the bridge's
+//    steady clock as it left; bridgeNow() is the largest (bridge's clock - this page's
+//    performance.now()) heard since the feed last said hello (its 'clock'), plus performance.now(): never
+//    later than the bridge's clock (a message arrives after it left), whatever the phone's own
+//    clock says. null before the first hello. Each move carries it as its send time
+//    (commands.py rule 6); a new hello starts the reckoning again (the bridge may be another).
+//    A page that slept (a phone put away, a laptop's lid shut) finds its steady clock stood
+//    still meanwhile (Chromium's does, on Linux, Android and macOS) while the bridge's went on:
+//    the reckoning was as far behind as the sleep was long, and every click until the next
+//    ping was refused, 'sent 60 s ago' (a review). When the page's steady clock has fallen
+//    SLEPT_MS behind its wall clock since it last heard the bridge's (the wall clock only
+//    tells that it slept, never the time), the reckoning is dropped and the feed opened anew;
+//    bridgeClock() waits for its clock (AGAIN_MS at most) before a move is stamped.
 
 const TOKEN_KEY = 'rotor-bridge-token';
+const HALT_KEY = 'rotor-bridge-halt-token'; // rule 1: the token dropped, for a STOP after a reload
 const SILENCE_MS = 25000;
 const ASK_MS = 15000; // a request the bridge has not answered by then is lost
 const RETRY_MS = [1000, 1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000];
@@ -20,13 +40,15 @@ const $ = (id) => document.getElementById(id);
 const delay = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
 // sessionStorage may be refused in a third-party iframe: the token then lives in this page only
-const store = {
-  get: () => { try { return sessionStorage.getItem(TOKEN_KEY); } catch { return null; } },
-  set: (v) => { try { sessionStorage.setItem(TOKEN_KEY, v); } catch { /* this page only */ } },
-  drop: () => { try { sessionStorage.removeItem(TOKEN_KEY); } catch { /* this page only */ } },
-};
+const kept = (key) => ({
+  get: () => { try { return sessionStorage.getItem(key); } catch { return null; } },
+  set: (v) => { try { sessionStorage.setItem(key, v); } catch { /* this page only */ } },
+  drop: () => { try { sessionStorage.removeItem(key); } catch { /* this page only */ } },
+});
+const store = kept(TOKEN_KEY);
+const haltStore = kept(HALT_KEY);
 
-export const session = { token: store.get(), password: false };
+export const session = { token: store.get(), password: false, lastToken: haltStore.get() };
 
 export function dropToken() {
   // kept for a STOP or lock ON only: the bridge still takes those with a token whose life has
@@ -34,9 +56,51 @@ export function dropToken() {
   session.lastToken = session.token || session.lastToken;
   session.token = null;
   store.drop();
+  if (session.lastToken) haltStore.set(session.lastToken); // rule 1: a reload keeps it
 }
 
 let openSocket = null; // the live feed's WebSocket once the bridge said hello
+let clockOffset = null; // rule 3: the bridge's clock minus performance.now(), in seconds
+const SLEPT_MS = 1000; // rule 3: the steady clock this far behind the wall clock: the page slept
+const AGAIN_MS = 4000; // rule 3: how long a move waits for the clock heard anew after a sleep
+let clockWall = null; // rule 3: Date.now() - performance.now() when the clock was last heard
+let again = null; // rule 3: the clock heard anew after a sleep (a promise), while awaited
+let heardAgain = null;
+let endFeed = null; // ends the live feed that is open (it reconnects)
+
+/** Rule 3: the bridge's steady clock now, as this page reckons it (seconds), or null. */
+export function bridgeNow() {
+  return clockOffset === null ? null : clockOffset + performance.now() / 1000;
+}
+
+/** Rule 3: bridgeNow(), the clock heard anew first if the page slept since it was heard. */
+export async function bridgeClock() {
+  if (slept()) forgetClock();
+  if (again) await Promise.race([again, delay(AGAIN_MS)]);
+  return bridgeNow();
+}
+
+function slept() {
+  return clockWall !== null && Date.now() - performance.now() - clockWall > SLEPT_MS;
+}
+
+function forgetClock() {
+  clockOffset = null;
+  clockWall = null;
+  if (!again) again = new Promise((resolve) => { heardAgain = resolve; });
+  if (endFeed) endFeed(); // a new feed says the clock right after its hello
+}
+
+function heardClock(now, fresh) {
+  if (typeof now !== 'number' || !Number.isFinite(now)) return;
+  if (!fresh && slept()) { forgetClock(); return; } // (a ping sent while it slept lags too)
+  const offset = now - performance.now() / 1000;
+  clockOffset = fresh || clockOffset === null ? offset : Math.max(clockOffset, offset);
+  clockWall = Date.now() - performance.now();
+  if (heardAgain) { heardAgain(); heardAgain = null; again = null; }
+}
+
+setInterval(() => { if (slept()) forgetClock(); }, SLEPT_MS); // rule 3: at once on waking
 
 /** A STOP or lock ON over the live feed too (the bridge takes nothing else there): when a
  *  flood holds every connection a POST could take, the socket the page has still carries it. */
@@ -71,6 +135,7 @@ async function sessionToken() {
 let loginWaiters = [];
 function askPassword() {
   document.body.classList.add('login-needed');
+  document.body.classList.toggle('keeps-stop', Boolean(session.lastToken)); // rule 1
   $('login').hidden = false;
   $('connection').textContent = 'log in to control the rotators';
   $('connection').className = 'connection asks-login';
@@ -97,7 +162,7 @@ $('login').addEventListener('submit', async (e) => {
   }
   $('password').value = '';
   $('login').hidden = true;
-  document.body.classList.remove('login-needed');
+  document.body.classList.remove('login-needed', 'keeps-stop');
   const waiters = loginWaiters;
   loginWaiters = [];
   waiters.forEach((resolve) => resolve(body.token));
@@ -164,12 +229,24 @@ function readLive(onEvent, onOpen) {
     url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
     const ws = new WebSocket(url, ['rotor-bridge', 'token.' + (session.token || 'none')]);
     let watchdog = 0;
+    let ended = false;
+    const end = (code) => {
+      if (ended) return;
+      ended = true;
+      if (openSocket === ws) { openSocket = null; endFeed = null; }
+      clearTimeout(watchdog);
+      resolve(code);
+    };
     const kick = (ms) => {
       clearTimeout(watchdog);
-      watchdog = setTimeout(() => ws.close(), ms);
+      // rule 2: lost at once, not when the close is answered: a bridge or a network that went
+      // silent never answers it, and the browser waits a minute for it (an attack pass: the
+      // page said "live" over a hung bridge's last bearing for 85 s, not 25)
+      watchdog = setTimeout(() => { end(1006); ws.close(); }, ms);
     };
     kick(ASK_MS); // an opening the bridge never answers is lost
     ws.onmessage = (m) => {
+      if (ended) return; // (a socket given up for silence tells nothing more)
       kick(SILENCE_MS);
       let doc;
       try {
@@ -179,14 +256,14 @@ function readLive(onEvent, onOpen) {
       }
       if (doc.event === 'hello') {
         openSocket = ws;
+        endFeed = () => { end(1000); ws.close(); }; // rule 3
         onOpen();
       }
-      else if (doc.event !== 'ping') onEvent(doc.event, doc.data);
+      else if (doc.event === 'clock' || doc.event === 'ping') {
+        heardClock(doc.now, doc.event === 'clock'); // rule 3: the clock right after hello
+      }
+      else onEvent(doc.event, doc.data);
     };
-    ws.onclose = (e) => {
-      if (openSocket === ws) openSocket = null;
-      clearTimeout(watchdog);
-      resolve(e.code);
-    };
+    ws.onclose = (e) => end(e.code);
   });
 }
