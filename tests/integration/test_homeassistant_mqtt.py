@@ -255,7 +255,8 @@ def _restarted(rig: Rig, ha: Probe) -> None:
 def test_a_restart_with_the_same_firmware_sends_each_config_once(rig: Rig) -> None:
     """The version the controller reported last is kept (runtime/kept.py rule 11): a restart
     sent each config twice, first without ``sw_version``, then again when the controller
-    answered; now once, with it. Another firmware sends them again at once, with the new one."""
+    answered; now once, with it. Another firmware sends them again at once, with the new one
+    (never the kept one after it)."""
     emu = rig.add("tower")
     rig.start()
     rig.ready("tower")
@@ -275,7 +276,9 @@ def test_a_restart_with_the_same_firmware_sends_each_config_once(rig: Rig) -> No
         _restarted(rig, ha)
         sent = _rounds(ha)
         ours = {t: v for t, v in sent.items() if "_r_tower/" in t}
-        assert ours and all(v == ["1.4S", "1.5S"] for v in ours.values()), ours
+        # the kept version's round, then the new one's; or the new one's alone when the
+        # controller answered before the bridge reached the broker (a loaded host)
+        assert ours and all(v in (["1.4S", "1.5S"], ["1.5S"]) for v in ours.values()), ours
         assert all(len(v) == 1 for t, v in sent.items() if t not in ours), sent
         assert configs(rig.broker.port)[bearing]["device"]["sw_version"] == "1.5S"
     finally:
