@@ -12,6 +12,7 @@ import shlex
 import shutil
 import subprocess
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -304,8 +305,9 @@ def test_web_page_starts_and_ends_tracking_and_shows_it(flow: list[dict]) -> Non
     # the status's tracking block as the bridge writes it (every key, a pass included) and
     # tracking_ended: the page reads each of them
     info = TrackingInfo("ISS", "waiting", 1.0, 2.0, 3.0, 4.0, 1e9, 1e9 + 600, 50.0, 180.0, True)
+    info = replace(info, elements_epoch_unix=1e9 - 86400 * 30, elements_stale=True)
     keys = set(tracking.tracking_json(info)) - {"next"}  # where the body is in a minute
-    assert keys >= {"body", "phase", "azimuth", "elevation", "aos", "los", "flip"}
+    assert keys >= {"body", "phase", "azimuth", "elevation", "aos", "los", "flip", "elements_stale"}
     for key in keys:
         assert f"t.{key}" in page, f"the page ignores tracking.{key}"
     assert "s.tracking, s.tracking_ended" in page

@@ -238,6 +238,8 @@ class TrackingInfo:
     flip: bool = False  # this pass is flown with elevation past 90 and azimuth + 180
     # the body's predicted (azimuth, elevation) over that pass, AOS to LOS, once computed
     pass_track: tuple[tuple[float, float], ...] = ()
+    elements_epoch_unix: float | None = None  # a satellite's: when its elements are for
+    elements_stale: bool = False  # they are older than session/tracking.py's STALE_DAYS
 
 
 @dataclass(frozen=True)

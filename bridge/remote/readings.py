@@ -185,6 +185,8 @@ def _tracking(doc: object) -> TrackingInfo | None:
         _num(doc, "aos_azimuth"),
         bool(doc.get("flip")),
         tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
+        _unix(doc.get("elements_epoch")),
+        doc.get("elements_stale") is True,
     )
 
 

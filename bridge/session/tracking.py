@@ -80,7 +80,9 @@ Rules:
 11. Elements older than STALE_DAYS when tracking starts with them (or takes them, rule 10) are
    said in the log, once for them, with their age and epoch: nothing else says that a cron job
    stopped refreshing the file (an attack pass: elements four months old were flown without a
-   word, passes minutes off).
+   word, passes minutes off). The status's tracking block carries their epoch and whether they
+   are older than STALE_DAYS now, so a page shows it where the pass is shown (the log alone
+   reached nobody at the radio).
 """
 
 from __future__ import annotations
@@ -160,6 +162,7 @@ class Tracker:
         self._kept_for: str | None = None  # rule 10: why the elements in hand were last kept
         self._stayed = False  # rule 10: parked (or stayed) after the pass, by the old elements
         self._aged: Body | None = None  # rule 11: the elements whose age was judged
+        self._epoch: float | None = None  # rule 11: their epoch (unix), if they have one
 
     # -- rule 1 ----------------------------------------------------------------------------
     def start(self, body: Body, from_file: LookupQuestion | None = None) -> None:
@@ -344,13 +347,16 @@ class Tracker:
 
     def _say_age(self, body: Body, utc: float) -> None:
         """Rule 11."""
-        if body.tle is None or self._aged == body:
+        if self._aged == body:
             return
-        self._aged = body
+        self._aged, self._epoch = body, None
+        if body.tle is None:
+            return
         try:
             epoch = tle_epoch_unix(body.tle[0])
         except (ValueError, OverflowError):  # (sgp4 read it: a defect if it happens)
             return
+        self._epoch = epoch
         age_days = (utc - epoch) / 86400.0
         if age_days > STALE_DAYS:
             log.warning(
@@ -578,6 +584,9 @@ class Tracker:
         info = TrackingInfo(
             name, phase, round(az, 1), round(el, 1), round(naz, 1), round(nel, 1), flip=self._flip
         )
+        if self._epoch is not None:  # rule 11
+            stale = utc - self._epoch > STALE_DAYS * 86400.0
+            info = replace(info, elements_epoch_unix=self._epoch, elements_stale=stale)
         if p is not None:
             info = replace(
                 info,

@@ -17,7 +17,7 @@ import pytest
 
 from bridge.core.model import MotionState, Source, Target
 from bridge.features.tracking import tracking_state
-from bridge.session.tracking import Track
+from bridge.session.tracking import STALE_DAYS, Track
 from bridge.sky import Body, Pass, Sky, SkyError
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import (
@@ -702,7 +702,8 @@ def test_elements_months_old_are_said_in_the_log_when_tracking_starts(
     age_days: float, said: bool, caplog: pytest.LogCaptureFixture
 ) -> None:
     """An attack pass: elements four months old (a cron job that stopped) were tracked
-    without a word, their passes minutes off."""
+    without a word, their passes minutes off. The log says it, and so does the status's
+    tracking block, where a page shows the pass (rule 11)."""
     t0 = SAT_EPOCH
     line1, line2 = synthetic_tle(
         "", t0 - age_days * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0
@@ -720,6 +721,35 @@ def test_elements_months_old_are_said_in_the_log_when_tracking_starts(
             assert f"(epoch {epoch} " in warned[0], warned
         else:
             assert warned == []
+        info = v.status.tracking
+        assert info is not None and info.elements_stale is said, info
+        assert info.elements_epoch_unix == pytest.approx(t0 - age_days * 86400, abs=0.01)
+
+
+def test_elements_that_age_past_stale_while_tracked_are_shown_stale() -> None:
+    """Rule 11: the status judges the elements' age at each refresh, not once at the start:
+    a file that stops being refreshed shows it on the page while the rotator tracks on."""
+    t0 = SAT_EPOCH
+    line1, line2 = synthetic_tle(
+        "", t0 - STALE_DAYS * 86400 + 60, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0
+    )
+    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0)
+    v.answer_sky = _scripted_sky([(t0 + 100, t0 + 400, 100, 150)])
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("AO-7", line1, line2))
+        v.run_until(
+            lambda h: h.status.tracking is not None and h.status.tracking.azimuth_deg is not None,
+            30,
+            "shown",
+        )
+        assert v.status.tracking is not None and not v.status.tracking.elements_stale
+        v.run_until(
+            lambda h: h.status.tracking is not None and h.status.tracking.elements_stale,
+            120,
+            "a minute on, older than STALE_DAYS",
+        )
+        assert v.wall() >= t0 + 60
 
 
 def test_new_elements_read_while_a_pass_is_under_way_wait_for_its_end(tmp_path: Path) -> None:

@@ -218,6 +218,12 @@ def test_a_status_reads_back_as_the_station_rendered_it() -> None:
     rendered = pl.status_json(status, 1_000_000.0, False)
     again = parse_status("tower", rendered.encode())
     assert pl.status_json(again, 1_000_000.0, False) == rendered
+    # a satellite's elements, stale (session/tracking.py rule 11): the remote shows it too
+    sat = TrackingInfo("AO-7", "waiting", elements_epoch_unix=990_000.0, elements_stale=True)
+    rendered = pl.status_json(replace(status, tracking=sat), 1_000_000.0, False)
+    assert json.loads(rendered)["tracking"]["elements_stale"] is True
+    again = parse_status("tower", rendered.encode())
+    assert again.tracking == sat
 
 
 def test_an_error_event_reads_back() -> None:

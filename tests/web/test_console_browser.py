@@ -33,6 +33,7 @@ from bridge.interfaces.web.projection import RIM_KM
 from tests.support import wait_until
 from tests.support.console import web_section
 from tests.support.rig import Rig, arrival_tol
+from tests.support.sky import synthetic_tle
 from tests.support.waiting import slow, slow_ms
 from tests.web.conftest import (
     KEEP_OUT,
@@ -657,3 +658,25 @@ def test_a_click_made_as_soon_as_the_page_wakes_from_sleep_turns_the_rotor(
         expect(page.locator("#message")).not_to_contain_text("not carried out")
     finally:
         context.close()
+
+
+def test_a_satellite_tracked_by_stale_elements_is_said_stale_beside_its_pass(
+    console_bridge: ConsoleBridge, console_page: Page
+) -> None:
+    """session/tracking.py rule 11: elements two months old (a TLE file no cron job refreshes
+    any more) were said only in the bridge's log, where nobody at the radio looks; the page
+    says it where it shows the pass."""
+    page, rig = console_page, console_bridge.rig
+    epoch = time.time() - 60 * 86400  # (the bridge judges their age on its own clock)
+    line1, line2 = synthetic_tle("", epoch, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    rig.probe.publish(rig.topic("hf", "track"), json.dumps({"tle": ["OLDSAT", line1, line2]}))
+    try:
+        info = page.locator("#tracking-info")
+        expect(info).to_contain_text("OLDSAT", timeout=slow_ms(20_000))
+        day = time.strftime("%Y-%m-%d", time.gmtime(epoch))
+        expect(info).to_contain_text(f"elements of {day}: stale", timeout=slow_ms(20_000))
+    finally:
+        rig.probe.publish(rig.topic("hf", "track"), "off")
+        rig.probe.publish(rig.topic("hf", "stop"), "")
+        expect(page.locator("#tracking-info")).to_be_hidden(timeout=slow_ms(10_000))
+        rig.probe.wait_value(rig.topic("hf", "state"), "idle", slow(30))

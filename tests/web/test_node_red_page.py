@@ -51,9 +51,10 @@ process.stdout.write(JSON.stringify({ sent: sent, hello: hello }));
 """
 
 
-def through_the_flow(mqtt: list[tuple[str, str]]) -> tuple[list[str], list[str]]:
-    """What the flow sends the open pages for each MQTT message (topic, payload as text, as
-    its mqtt in nodes give it), and what it then answers a page opened later."""
+def through_the_flow(mqtt: list[tuple[str, object]]) -> tuple[list[str], list[str]]:
+    """What the flow sends the open pages for each MQTT message (topic, payload as its mqtt in
+    nodes give it: text, or the parsed document where the node reads JSON), and what it then
+    answers a page opened later."""
     flow = json.loads(FLOW.read_text(encoding="utf-8"))
     (to_page,) = [n for n in flow if n["type"] == "function" and n["name"] == "to the web page"]
     relay = _relay(flow)
@@ -135,3 +136,27 @@ def test_a_deleted_state_shows_as_not_known(browser: Browser) -> None:
         show(page, after[len(sent) :])
         assert page.locator("#state").text_content() == "?"
         assert page.locator("#availability").text_content() == "rotator ?"
+
+
+def test_stale_elements_are_shown_beside_the_pass(browser: Browser) -> None:
+    """session/tracking.py rule 11: elements older than two weeks (a TLE file no cron job
+    refreshes any more) were said only in the bridge's log; the page says it under the pass."""
+    block = {
+        "body": "AO-7",
+        "phase": "waiting",
+        "azimuth": 10.0,
+        "elevation": -5.0,
+        "aos": "2026-03-01T10:00:00.000+00:00",
+        "los": "2026-03-01T10:10:00.000+00:00",
+        "flip": False,
+    }
+    fresh = {**block, "elements_epoch": "2026-02-27T06:00:00.000+00:00", "elements_stale": False}
+    stale = {**fresh, "elements_epoch": "2025-11-01T06:00:00.000+00:00", "elements_stale": True}
+    sent, _ = through_the_flow([("rotor/status", {"tracking": doc}) for doc in (fresh, stale)])
+    with opened(browser) as page:
+        show(page, sent[:1])
+        assert "AOS" in (page.locator("#track-info").text_content() or "")
+        assert "stale" not in (page.locator("#track-info").text_content() or "")
+        show(page, sent[1:])
+        shown = page.locator("#track-info").text_content() or ""
+        assert "elements of 2025-11-01: stale, is the TLE file refreshed?" in shown, shown

@@ -41,7 +41,8 @@ def _iso(time_unix: float) -> str:
 
 
 def tracking_json(info: TrackingInfo) -> dict[str, object]:
-    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
+    """The status's ``tracking`` block: the body now and in a minute, its pass, and a
+    satellite's elements: their epoch, and whether they are stale."""
     doc: dict[str, object] = {
         "body": info.body,
         "phase": info.phase,
@@ -59,6 +60,10 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
     if info.pass_track:
         doc["pass_track"] = [list(point) for point in info.pass_track]
     doc["flip"] = info.flip
+    if info.elements_epoch_unix is not None:  # session/tracking.py rule 11
+        doc.update(
+            elements_epoch=_iso(info.elements_epoch_unix), elements_stale=info.elements_stale
+        )
     return doc
 
 

@@ -256,6 +256,8 @@ function trackingOf(st) {
     aos: t.aos,
     los: t.los,
     pass: Array.isArray(t.pass_track) ? t.pass_track : [],
+    // a satellite's elements older than two weeks (session/tracking.py rule 11)
+    staleSince: t.elements_stale === true && typeof t.elements_epoch === 'string' ? t.elements_epoch.slice(0, 10) : null,
   };
 }
 
@@ -336,6 +338,7 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     if (typeof tracking.az === 'number') text += ` \u00B7 az ${fmtDeg(tracking.az)} el ${fmtDeg(tracking.el)}`;
     if (tracking.aos) text += ` \u00B7 AOS ${fmtTime(tracking.aos)} LOS ${fmtTime(tracking.los)}`;
     if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
+    if (tracking.staleSince) text += ` \u00B7 elements of ${tracking.staleSince}: stale, is the TLE file refreshed?`;
     put('tracking-info', text);
   }
   renderHealth(st.health);
