@@ -13,6 +13,9 @@ Rules:
 5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
    other than CR, LF, CR LF or LF CR, or an elevation start on a box without one is a ValueError),
    both axes at their start, nothing on the line.
+6. A line the box sends on its own (``transmit``: an Easycomm III box's ``VE`` lines) goes on
+   the line behind what it is sending already, as a UART sends it: never inside a reply (the
+   pty's ``inject`` writes at once, the junk of a broken line).
 """
 
 from __future__ import annotations
@@ -113,6 +116,11 @@ class TwoAxes(Recorder):
         self._az.unjam(now)
         self._el.unjam(now)
         self._event(now, "unjammed")
+
+    def transmit(self, data: bytes, now: float) -> None:
+        """Rule 6: ``data``, sent on the box's own, after whatever is on the line."""
+        self._update(now)
+        self._tx.send(data, now)
 
     def due_output(self, now: float) -> bytes:
         self._update(now)

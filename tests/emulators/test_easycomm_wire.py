@@ -121,3 +121,14 @@ def test_k3ng_firmware_answers_each_word_with_its_value_and_its_ending_byte() ->
     az_only = EasycommController("easycomm2-az", firmware="k3ng", start_az_deg=200)
     assert ask(az_only, b"AZ EL\n", 0) == b"+200.0 ?\n"
     assert ask(az_only, b"SA SE\n", 0) == b" ?\n"
+
+
+def test_a_line_sent_on_its_own_goes_behind_the_reply_on_the_line() -> None:
+    """twoaxes.py rule 6: an Easycomm III box's own ``VE`` line, sent while a reply is on its
+    way at 9600 baud, comes whole after it; neither is cut into the other."""
+    device = EasycommController("easycomm3", start_az_deg=12.34, start_el_deg=34.56)
+    device.receive(b"AZ EL\n", 0.0)
+    first = device.due_output(0.005)  # a few bytes of the reply out, the rest still coming
+    assert 0 < len(first) < len(b"AZ12.3 EL34.6\n"), first
+    device.transmit(b"VE7\n", 0.005)
+    assert first + device.due_output(1.0) == b"AZ12.3 EL34.6\nVE7\n"

@@ -331,7 +331,8 @@ def test_a_controller_flooding_versions_costs_home_assistant_a_round_a_hold(rig:
     try:
         t = time.monotonic()
         for i in range(60):  # each one taken (its R/version came) before the next is sent
-            emu.inject(f"VE{i}\n".encode())
+            line = f"VE{i}\n".encode()  # (behind a reply on the line: inject broke into one)
+            emu.call(lambda device, now, line=line: device.transmit(line, now))
             rig.probe.wait_value("rotor/version", str(i))
         # a round at once (the start's, then the first of the flood's) and one a hold at most
         most = 2 + math.ceil((time.monotonic() - t) / ROUND_MIN_S)
