@@ -133,7 +133,12 @@ def test_a_flood_of_logger_stops_puts_a_few_markers_behind_a_slow_main_connectio
     err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
     assert "published before a STOP or lock ON" in json.loads(err.payload)["message"]
     assert not [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
-    rig.probe.publish("rotor/target", "60")  # after the last stop's marker: obeyed
+    # the last stops' marker was owed until one of the first came back, and a target published
+    # before it went out is refused as older than them, as it should be (a CI run published
+    # 60 once the 300 was refused, 50 ms before that marker, and waited for 60 in vain): the
+    # fence ends (a marker, no clock), and a target after it is obeyed
+    wait_until(lambda: not app.mqtt._halts.fenced("tower"), 10, "the last stops' fence ended")
+    rig.probe.publish("rotor/target", "60")
     rig.arrived("tower", 60)
     # (held, the main connection wrote none: they went out once it was let go; a marker out
     # for RESEND_S is sent again, and makes room for as many again)
