@@ -114,7 +114,9 @@ Rules:
    the claim's dropped 300/40): waiting, it is cleared; sent already
    (a Rotor-EZ azimuth box waits out its brake, a GS-232B elevation box sends its half at
    once), its turn is stopped, unless a newer target there names its axis (a storm's park
-   with an elevation; one without keeps that axis's target, the dropped half's). A claim
+   with an elevation; one without holds that axis where it reads, session/targets.py rule 9:
+   it kept that axis's target, the dropped half's, when the storm began late in the azimuth
+   box's brake, and the elevation turned on to 40). A claim
    dropped the azimuth's half and the elevation turned on to the other's, and so did a storm
    whose park named no elevation: the antenna left half moved for a target nobody stood for
    (a closing note). The elevation box's half sent before the drop has moved it meanwhile;

@@ -44,6 +44,14 @@ Rules:
    than its sender takes its try more too (``unstand``; session.py rule 23; a claim released
    before it takes nothing): its first try did not move the rotor, so it is as unsent, and
    so is its try more waiting (``unsent``, dropped at the claim itself).
+9. An axis a target leaves out keeps its current target (a bare azimuth leaves the elevation
+   turning on to where it was sent), except in a park (``Target.park``: the storm's, auto-park's,
+   ``R/park``), which takes the place of the turn under way: there it holds where it reads (its
+   position). A storm's park names no elevation where only ``wind_park_az_deg`` is set; it
+   kept the elevation's current target, the half of a target the storm had just dropped, and
+   a GS-232B elevation box of a composite, sent ``W000 040`` for it, turned on to 40 while the
+   azimuth went to the park (a closing note: a storm begun late in a Rotor-EZ azimuth box's
+   brake, the whole 300/40 dropped and said so).
 """
 
 from __future__ import annotations
@@ -208,18 +216,21 @@ def resolve(
     target: Target, m: mo.Motion, aim: Pointing, codec: object = None
 ) -> tuple[float | None, float | None]:
     """The raw values to send now: a target whose side is free takes the side nearest to where
-    the rotor is now (pointing.py rule 2); an axis left out keeps its current target, else its
-    position, as ``codec`` must be asked for it to stay on the step it read (a Rot2Prog at 0.25
-    degrees reads 44.25 as 44.2, and 44.2 asked for is 44.0: protocols/base.py HoldsOnGrid)."""
+    the rotor is now (pointing.py rule 2); an axis left out keeps its current target (a park's
+    holds where it reads: rule 9), else its position, as ``codec`` must be asked for it to stay
+    on the step it read (a Rot2Prog at 0.25 degrees reads 44.25 as 44.2, and 44.2 asked for is
+    44.0: protocols/base.py HoldsOnGrid)."""
     az = target.az_deg
     if target.true_az_deg is not None and m.position_deg is not None:
         az = aim.raw_for(target.true_az_deg, m.position_deg)
     has_elevation = aim.has_elevation
     if az is None:
-        az = m.target_deg if m.target_deg is not None else _kept(codec, m.position_deg, "azimuth")
+        az = m.target_deg if m.target_deg is not None and not target.park else None  # rule 9
+        if az is None:
+            az = _kept(codec, m.position_deg, "azimuth")
     el = target.el_deg
     if has_elevation and el is None:
-        el = m.el_target_deg
+        el = None if target.park else m.el_target_deg  # rule 9
         if el is None:
             el = _kept(codec, m.el_position_deg, "elevation")
         if el is None:

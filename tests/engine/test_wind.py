@@ -652,3 +652,28 @@ def test_auto_parks_target_waiting_when_a_storm_begins_is_dropped_unsaid() -> No
         assert v.errors("refused", since=t) == []
         assert not any(b"AP1" in f.data or b"AP0" in f.data for f in v.frames(since=t))
         assert abs(v.truth().az_deg - 200.0) <= 0.5
+
+
+def test_a_storms_park_without_an_elevation_holds_the_elevation_where_it_reads() -> None:
+    """session/targets.py rule 9: the storm's park names the azimuth alone (no park
+    elevation set); a turn to 300/40 under way when the storm began kept its elevation
+    target, the half of a target the storm refused motion for, and the elevation turned on to
+    40 beside the park (a GS-232B sent ``W090 040``; in a composite, the elevation box alone:
+    a closing note). It now stops where the park found it."""
+    slow_el = {"az_speed_deg_s": 10.0, "el_speed_deg_s": 2.0}
+    with VirtualRotator(
+        "gs232b",
+        settings={**slow_el, **WIND},
+        emulator={**slow_el, "start_az_deg": 200},
+        sky=Sky(52.5, 13.4),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.target(300.0, 40.0)
+        v.run_until(lambda h: h.truth().el_deg >= 10.0, 30, "the elevation under way")
+        t = v.now
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        parks = [w for w in v.sent(since=t) if w.startswith(b"W")]
+        assert parks and all(not w.endswith(b" 040\r") for w in parks), parks
+        assert 10.0 <= v.truth().el_deg <= 14.0, v.truth()
+        assert abs(v.truth().az_deg - 90.0) <= 1.0
