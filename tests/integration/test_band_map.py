@@ -31,8 +31,9 @@ from tests.support import Probe, wait_until
 from tests.support import wsjtx as w
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import retained_snapshot
+from tests.support.ports import free_udp_port
 from tests.support.rig import Rig
-from tests.support.udp_logger import N1mmSender, free_udp_port, n1mm_turn
+from tests.support.udp_logger import N1mmSender, n1mm_turn
 
 HIGH, LOW = "high", "low"  # the 20/15/10 m yagi's rotator, the 40/80 m antenna's
 TOWER = "Tower"  # N1MM's Rotor Description, the same for both antennas

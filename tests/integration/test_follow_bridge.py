@@ -26,8 +26,8 @@ from bridge.session.follow import Heard
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import wait_until
 from tests.support import wsjtx as w
+from tests.support.ports import free_udp_port
 from tests.support.rig import Rig
-from tests.support.udp_logger import free_udp_port
 
 STATION = "JO62QM"  # Berlin
 TOKYO = "PM95VQ"

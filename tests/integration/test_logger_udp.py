@@ -42,13 +42,13 @@ from bridge.settings.pointing import StationSettings
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
+from tests.support.ports import free_udp_port
 from tests.support.rig import Rig
 from tests.support.udp_logger import (
     N1MM_STOPS,
     N1mmListener,
     N1mmSender,
     PstClient,
-    free_udp_port,
     hamlib,
     minos_reply,
     n1mm_turn,

@@ -6,6 +6,8 @@
 - process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``; ``cli`` in this
   process, for check-config), its TOML files;
   the one BridgeProcess of the tests, the fault suite, the soak and the benchmarks
+- ports.py: ``free_port``, ``free_udp_port``: loopback ports no other test's sender can take
+  before the listener they are handed to binds them
 - codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
 - rig.py: a broker, emulated controllers on real ptys and the bridge, in-process or as its own
   process (``Rig``): the one rig of the tests, the fault suite (tapped, faster) and the
@@ -21,8 +23,9 @@ with a configuration of its own, a crash, a freeze and a restart); the pytest fi
 """
 
 from tests.support.codecs import HOW, feed
-from tests.support.mosquitto import Mosquitto, free_port
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Message, Probe, retained_snapshot
+from tests.support.ports import free_port
 from tests.support.process import ROOT, BridgeProcess, bridge_env, cli, run_cli, to_toml
 from tests.support.waiting import slow, wait_until
 

@@ -5,70 +5,16 @@ port. Its start's deadline scales with the machine (waiting.py rule 1)."""
 
 from __future__ import annotations
 
-import os
-import random
 import signal
-import socket
 from pathlib import Path
 from typing import Self
 
 from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto
 from bridge.demo.mosquitto import Mosquitto as DemoMosquitto
+from tests.support.ports import free_port
 from tests.support.waiting import slow
 
 __all__ = ["BrokerError", "Mosquitto", "answers", "find_mosquitto", "free_port"]
-
-_PICK = random.SystemRandom()
-
-
-def _ephemeral_low() -> int:
-    try:
-        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
-            return int(f.read().split()[0])
-    except (OSError, ValueError, IndexError):
-        return 32768
-
-
-def _own_range() -> range:
-    """This process's share of the ports below the kernel's range for outgoing connections:
-    one slice per parallel worker (``PYTEST_XDIST_WORKER`` gwN of
-    ``PYTEST_XDIST_WORKER_COUNT``), so that two workers never pick the same port (they did:
-    both found it free, and the second to listen failed, once in eight CI runs)."""
-    low, top = 10_000, _ephemeral_low()
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
-    try:
-        index, count = int(worker.removeprefix("gw")), int(os.environ["PYTEST_XDIST_WORKER_COUNT"])
-    except (KeyError, ValueError):
-        return range(low, top)
-    if not 0 <= index < count or top - low < 100 * count:
-        return range(low, top)
-    share = (top - low) // count
-    return range(low + index * share, low + (index + 1) * share)
-
-
-_HANDED: set[int] = set()  # the ports this process picked: not picked twice, bound or not
-
-
-def free_port() -> int:
-    """A loopback port free now, below the kernel's range for outgoing connections (a port the
-    kernel hands out, bind to 0, is one any test's outgoing connection may take before the test
-    listens on it, which a busy parallel suite does; one below that range only a listener can
-    take), from this worker's own share (``_own_range``) and never one it picked before."""
-    ports = _own_range()
-    for _ in range(200):
-        port = _PICK.choice(ports)
-        if port in _HANDED:
-            continue
-        with socket.socket() as s:
-            try:
-                s.bind(("127.0.0.1", port))
-            except OSError:
-                continue
-        _HANDED.add(port)
-        return port
-    with socket.socket() as s:  # a crowded range: the kernel's choice
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 class Mosquitto(DemoMosquitto):

@@ -28,6 +28,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from tests.support.ports import free_udp_pair
 from tests.support.waiting import slow
 
 HOST = "127.0.0.1"
@@ -45,25 +46,13 @@ def udp_socket(host: str = HOST, port: int = 0) -> socket.socket:
     return sock
 
 
-def free_udp_port(host: str = HOST) -> int:
-    """A UDP port nobody holds right now (the system's choice)."""
-    with udp_socket(host) as sock:
-        return int(sock.getsockname()[1])
-
-
 def reserve_pst_ports(host: str = HOST) -> tuple[int, socket.socket]:
     """A free UDP port for a PST server, and a socket already bound to port + 1 where its
-    replies will arrive (held from now on, so nobody else takes it)."""
-    for _ in range(100):
-        with udp_socket(host) as probe:
-            port = int(probe.getsockname()[1])
-            if port >= 65535:
-                continue
-            try:
-                return port, udp_socket(host, port + 1)
-            except OSError:
-                continue
-    raise RuntimeError("no free pair of UDP ports (n, n + 1)")
+    replies will arrive (held from now on, so nobody else takes it). Both below the kernel's
+    range for outgoing sockets (ports.py), where no test's sender can take the server's port
+    before the bridge binds it."""
+    port = free_udp_pair(host)
+    return port, udp_socket(host, port + 1)
 
 
 def _receive(sock: socket.socket, timeout_s: float) -> tuple[bytes, tuple[str, int]] | None:

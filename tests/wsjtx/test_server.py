@@ -17,7 +17,7 @@ from bridge.session.follow import Heard
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
-from tests.support.udp_logger import free_udp_port
+from tests.support.ports import free_udp_port
 from tests.support.waiting import slow
 
 

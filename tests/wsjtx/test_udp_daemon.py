@@ -22,7 +22,7 @@ from bridge.interfaces.wsjtx.messages import Heartbeat, decode
 from bridge.session.follow import Heard
 from tests.support import wait_until
 from tests.support import wsjtx as w
-from tests.support.udp_logger import free_udp_port
+from tests.support.ports import free_udp_port
 from tests.support.waiting import slow
 
 GROUP = "239.255.0.1"
