@@ -3,9 +3,30 @@ name."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import time
+from typing import Any
+
 import pytest
 
-from bridge.interfaces.web.commands import MAX_AGE_S, BadCommand, WebCommand, aged, parse
+from bridge.interfaces.web.commands import (
+    MAX_AGE_S,
+    BadCommand,
+    WebCommand,
+    aged,
+    feed_clock,
+    parse,
+)
+from tests.support import ROOT
+
+RUN: dict[str, Any] = {
+    "capture_output": True,
+    "text": True,
+    "check": True,
+    "cwd": ROOT,
+    "timeout": 60,
+}
 
 
 @pytest.mark.parametrize(
@@ -98,3 +119,19 @@ def test_a_move_sent_too_long_ago_or_ahead_of_the_clock_is_refused_a_halt_never(
     for bad in (b'"x"', b"-1", b"true", b"1e999"):
         with pytest.raises(BadCommand, match='"sent"'):
             parse(b'{"command":"park","sent":' + bad + b"}")
+
+
+def test_the_feed_clock_is_not_the_hosts_uptime_and_holds_across_a_bridge_restart() -> None:
+    """Rule 6: the clock every page is told is the host's steady clock moved by the boot's own
+    offset. The steady clock alone said how long the host had been up; and two processes of
+    one boot (a bridge restarted) agree, so a click reckoned against the one before is judged
+    by its true age."""
+    told = "from bridge.interfaces.web.commands import feed_clock; import time; "
+    told += "print(repr(feed_clock() - time.monotonic()))"
+    offsets = {
+        round(float(subprocess.run([sys.executable, "-c", told], **RUN).stdout), 3)
+        for _ in range(2)
+    }
+    assert len(offsets) == 1, offsets  # one offset for every process of this boot
+    (offset,) = offsets
+    assert offset > 1.0 and round(feed_clock() - time.monotonic(), 3) == offset

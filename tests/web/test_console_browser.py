@@ -28,7 +28,7 @@ from playwright.sync_api import (
 )
 
 from bridge.core import geo
-from bridge.interfaces.web.commands import MAX_AGE_S
+from bridge.interfaces.web.commands import MAX_AGE_S, feed_clock
 from bridge.interfaces.web.projection import RIM_KM
 from tests.support import wait_until
 from tests.support.console import web_section
@@ -529,11 +529,11 @@ def test_a_click_held_up_on_a_bad_link_past_its_age_limit_turns_nothing(
     try:
         before = rig.emu.state()
         target = _far_from(before.az_deg)
-        clicked = time.monotonic()  # the bridge's steady clock is this host's
+        clicked = feed_clock()  # the bridge's steady clock (commands.py rule 6)
         click_map(page, target)
         wait_until(lambda: page.evaluate("1") == 1 and bool(held), slow(10))  # (evaluate: the
         # handler's turn to run) held up on the way until the click is too old
-        wait_until(lambda: time.monotonic() > clicked + MAX_AGE_S + 1.0, slow(20))
+        wait_until(lambda: feed_clock() > clicked + MAX_AGE_S + 1.0, slow(20))
         held[0].continue_()
         message = page.locator("#message")
         expect(message).to_contain_text(re.compile(r"not carried out: sent \d+ s ago"))
@@ -544,7 +544,7 @@ def test_a_click_held_up_on_a_bad_link_past_its_age_limit_turns_nothing(
     assert not after.is_moving and after.az_deg == before.az_deg, (before, after)
     # its send time: the page's reckoning of the bridge's clock, never ahead of the truth
     sent = json.loads(held[0].request.post_data or "{}")["sent"]
-    assert clicked - slow(1.0) <= sent <= time.monotonic()
+    assert clicked - slow(1.0) <= sent <= feed_clock()
     click_map(page, target)  # the same click made now is carried out
     rig.arrived("hf", target)
 

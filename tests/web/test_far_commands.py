@@ -5,13 +5,13 @@ page's stream and other requests go on while one waits."""
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable, Iterator
 
 import pytest
 
 from bridge.core.model import Command, Source, Stop
 from bridge.interfaces.mqtt.topics import StationTopics
+from bridge.interfaces.web.commands import feed_clock
 from bridge.interfaces.web.server import FAR_MOVES, WebConsole
 from bridge.interfaces.web.view import RotatorFacts
 from bridge.pointing import Pointing
@@ -338,11 +338,11 @@ def test_a_stamped_move_that_grew_too_old_waiting_its_turn_is_not_sent(
     answers: dict[str, int] = {}
     posts = [_post(console, "far", answers, "first", command="target", az=120)]
     assert rot.waiting.wait(slow(10)), "the first target never reached the rotator"
-    sent = time.monotonic()  # the console's steady clock is this process's
+    sent = feed_clock()  # the console's steady clock (commands.py rule 6)
     posts.append(_post(console, "far", answers, "late", command="target", az=130, sent=sent))
     far_thread = console._far["far"]
     wait_until(lambda: far_thread._work_queue.qsize() == 1, 10, "the stamped move queued")
-    wait_until(lambda: time.monotonic() > sent + 1.0, 10, "the stamped move too old")
+    wait_until(lambda: feed_clock() > sent + 1.0, 10, "the stamped move too old")
     rot.link.set()
     for t in posts:
         t.join(slow(10))

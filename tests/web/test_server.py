@@ -17,6 +17,7 @@ import pytest
 from bridge.core.model import Source, Stop
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.web import live
+from bridge.interfaces.web.commands import feed_clock
 from tests.support.console import ConsoleClient, EventStream, run_async, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -222,8 +223,10 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
     assert code == 4401 and got == []  # not the page's token: closed, nothing told
     code, got = run_async(read(client.token or ""))
     assert got[0] == {"event": "hello"}
-    # the bridge's steady clock for the page's send times (live.py rule 8): this host's
-    assert got[1]["event"] == "clock" and got[1]["now"] <= time.monotonic()
+    # the bridge's steady clock for the page's send times (live.py rule 8), never the host's
+    # own, which says how long it has been up (commands.py rule 6)
+    assert got[1]["event"] == "clock" and got[1]["now"] <= feed_clock()
+    assert abs(got[1]["now"] - time.monotonic()) > 1.0
     assert got[2]["event"] == "status" and got[2]["data"]["rotator"] == "hf"
     assert got[2]["data"]["status"]["available"] is True
 

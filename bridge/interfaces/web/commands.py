@@ -41,19 +41,29 @@ Rules:
    the page's own steady time since: the phone's wall clock is never asked). ``aged`` refuses,
    as stale, one older than MAX_AGE_S when the console takes it ("not carried out: sent 12 s
    ago"), or more than AHEAD_S ahead of the bridge's clock (a reckoning from before the
-   bridge's host restarted): a click a bad mobile link held up for seconds, with no STOP or
-   newer click after it, was carried out whenever it came (an attack pass). The reckoning
+   bridge's host restarted, whose clock is another: one or the other): a click a bad mobile
+   link held up for seconds, with no STOP or newer click after it, was carried out whenever
+   it came (an attack pass). The reckoning
    errs on the old side only (a message arrives after it left), by the fastest trip down the
    feed. A stop, a lock ON and tracking off are never refused for their age; a body without
    ``sent`` (a script's) is judged as before. Why a clock and not a sequence the feed
    acknowledges: a sequence says the order, which rules 5 and 5a judge already, not how long a
    click was on its way; the feed's clock says that with one number and no round trip.
+   The clock is ``feed_clock``: the host's steady clock moved by an offset drawn from the
+   boot's own random id (the same for every process until the host reboots, so a bridge
+   restarted goes on judging the reckonings made against the one before; nobody can work it
+   out without that id). The steady clock alone counts from the boot: it told every page how
+   long the host had been up (when it was last rebooted, so whether its kernel was patched
+   since). Without the boot's id, an offset of this process's own.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import os
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 
@@ -201,6 +211,26 @@ def parse(body: bytes) -> WebCommand:
     if sent is not None and sent < 0:
         raise BadCommand('"sent" must be 0 or more (the bridge\'s clock, in seconds)')
     return replace(_parsed(kind, doc), page=page, seq=seq, sent=sent)
+
+
+def _boot_offset() -> float:
+    """Rule 6: whole seconds below 2**30, the same for every process of one boot."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id", "rb") as f:
+            seed = f.read()
+    except OSError:
+        seed = os.urandom(16)
+    digest = hashlib.sha256(b"rotor-bridge feed clock\0" + seed).digest()
+    return float(int.from_bytes(digest[:4], "big") >> 2)
+
+
+_OFFSET_S = _boot_offset()
+
+
+def feed_clock() -> float:
+    """Rule 6: the bridge's steady clock as the pages are told it and their send times are
+    judged on: the host's steady clock moved by the boot's offset."""
+    return time.monotonic() + _OFFSET_S
 
 
 def aged(cmd: WebCommand, now: float) -> str | None:

@@ -42,11 +42,11 @@ Rules:
    of another rotator waited 3 to 8 s while that rotor turned on.
 8. The page's WebSocket tells it the bridge's clock: ``{"event":"clock","now":...}`` right after
    ``hello``, and ``now`` in every ping (every PING_S), the bridge's steady clock
-   (``time.monotonic``, seconds) as the message leaves. The page reckons from them when it sends
-   each move, on the bridge's clock (commands.py rule 6): never later than the truth, since a
-   message arrives after it left. The steady clock, not the wall clock: neither a time server
-   stepping the bridge's clock nor the phone's own clock (often wrong) can make a held-up click
-   look young.
+   (commands.py ``feed_clock``, seconds; not the host's uptime) as the message leaves. The
+   page reckons from them when it sends each move, on the bridge's clock (commands.py rule
+   6): never later than the truth, since a message arrives after it left. The steady clock,
+   not the wall clock: neither a time server stepping the bridge's clock nor the phone's own
+   clock (often wrong) can make a held-up click look young.
 """
 
 from __future__ import annotations
@@ -63,6 +63,7 @@ from aiohttp import WSMsgType, web
 from bridge.core.model import ErrorEvent, RotatorStatus
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.web.auth import Tokens
+from bridge.interfaces.web.commands import feed_clock
 from bridge.interfaces.web.feed import Feed, Page, sse, websocket
 from bridge.runtime.listeners import contained
 
@@ -313,7 +314,7 @@ def with_console(
 
 def _clock(event: str) -> str:
     """Rule 8: the bridge's steady clock as the message leaves, for the page's send times."""
-    return f'{{"event":"{event}","now":{time.monotonic():.3f}}}'
+    return f'{{"event":"{event}","now":{feed_clock():.3f}}}'
 
 
 def _offered_token(request: web.Request) -> str | None:

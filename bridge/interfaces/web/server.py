@@ -91,6 +91,7 @@ from bridge.interfaces.web.commands import (
     WebCommand,
     aged,
     carry_out,
+    feed_clock,
     parse,
 )
 from bridge.interfaces.web.connections import MOST_HELD, Connections
@@ -542,7 +543,7 @@ class WebConsole:
             why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
             rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
             raise Refused(RefusalCode.STALE, why)
-        old = aged(cmd, time.monotonic())  # commands.py rule 6: its wait here counts too
+        old = aged(cmd, feed_clock())  # commands.py rule 6: its wait here counts too
         if old is not None:
             rot.report_refusal(old, cmd.described(), origin=Origin(Source.WEB, None, peer))
             raise Refused(RefusalCode.STALE, old)
@@ -610,7 +611,7 @@ class WebConsole:
         away = far is not None and rot.commands_block
         since = rot.halts
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
-        stale = stale or aged(cmd, time.monotonic())  # commands.py rule 6
+        stale = stale or aged(cmd, feed_clock())  # commands.py rule 6
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
