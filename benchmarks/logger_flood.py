@@ -66,11 +66,11 @@ from benchmarks.harness import ABORT, PYTHON, BenchError, Scope, check_abort  # 
 from benchmarks.procfs import cpu_seconds  # noqa: E402
 from benchmarks.report import ItemResult, Table, Verdict, percentile  # noqa: E402
 from benchmarks.rig import Rig, single_rotator  # noqa: E402
+from tests.support.ports import free_udp_port  # noqa: E402
 from tests.support.udp_logger import (  # noqa: E402
     N1MM_STOPS,
     N1mmListener,
     N1mmSender,
-    free_udp_port,
     n1mm_turn,
     pst,
     tag,

@@ -868,7 +868,7 @@ def _tle(path: Path) -> list[str]:
 def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     from tests.dxcluster.cty_sample import CTY_DAT
     from tests.support.console import web_section
-    from tests.support.udp_logger import free_udp_port
+    from tests.support.ports import free_udp_port
 
     hop = PtyHop(scope)  # hardware's priority, as the controllers (harness rule 5)
     broker_port = start_broker(scope, "max_queued_messages 0\n")  # the whole backlog delivered
