@@ -12,7 +12,8 @@ Rules:
    or LF; lines of nothing but spaces are no command.
 5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
    other than CR, LF, CR LF or LF CR, or an elevation start on a box without one is a ValueError),
-   both axes at their start, nothing on the line.
+   both axes at their start, nothing on the line. An elevation started below 0 (a pot set a
+   little below the horizon: Easycomm and RC2800 boxes read so) can turn back down to it.
 6. A line the box sends on its own (``transmit``: an Easycomm III box's ``VE`` lines) goes on
    the line behind what it is sending already, as a UART sends it: never inside a reply (the
    pty's ``inject`` writes at once, the junk of a broken line).
@@ -69,7 +70,10 @@ class TwoAxes(Recorder):
         self.line_ending = line_ending
         self._az_speed, self._el_speed = float(az_speed_deg_s), float(el_speed_deg_s)
         self._az = Axis(start_az_deg, max_deg=az_top_deg, speed_deg_s=self._az_speed, now=now)
-        self._el = Axis(start_el_deg, max_deg=EL_TOP_DEG, speed_deg_s=self._el_speed, now=now)
+        low = min(0.0, start_el_deg)  # rule 5: a pot set a little below the horizon reads so
+        self._el = Axis(
+            start_el_deg, min_deg=low, max_deg=EL_TOP_DEG, speed_deg_s=self._el_speed, now=now
+        )
         self.baud = int(baud)
         self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
         self._now_s = now

@@ -51,7 +51,9 @@ Rules:
    kept the elevation's current target, the half of a target the storm had just dropped, and
    a GS-232B elevation box of a composite, sent ``W000 040`` for it, turned on to 40 while the
    azimuth went to the park (a closing note: a storm begun late in a Rotor-EZ azimuth box's
-   brake, the whole 300/40 dropped and said so).
+   brake, the whole 300/40 dropped and said so). An elevation held where it reads is held
+   inside the limits: an Easycomm or RC2800 box reads a little below the horizon (-0.5) and
+   cannot be sent it, and the storm's park never went out (the step failed at every try).
 """
 
 from __future__ import annotations
@@ -233,8 +235,9 @@ def resolve(
         el = None if target.park else m.el_target_deg  # rule 9
         if el is None:
             el = _kept(codec, m.el_position_deg, "elevation")
-        if el is None:
-            return None, None
+            if el is None:
+                return None, None
+            el = min(max(el, aim.el_min_deg), aim.el_max_deg)  # rule 9: one it can be sent
     return az, el
 
 

@@ -677,3 +677,24 @@ def test_a_storms_park_without_an_elevation_holds_the_elevation_where_it_reads()
         assert parks and all(not w.endswith(b" 040\r") for w in parks), parks
         assert 10.0 <= v.truth().el_deg <= 14.0, v.truth()
         assert abs(v.truth().az_deg - 90.0) <= 1.0
+
+
+def test_a_storms_park_without_an_elevation_parks_a_rotor_reading_below_the_horizon() -> None:
+    """session/targets.py rule 9 beside an Easycomm box whose elevation reads -0.5 (a reading
+    below the horizon is a reading there): the park holds the elevation where it reads, and
+    -0.5 is nothing the box can be sent, so the park never went out: the session's step
+    failed at every try while the storm blew. It holds the nearest the box can be sent."""
+    with VirtualRotator(
+        "easycomm2",
+        settings={**WIND},
+        emulator={"start_az_deg": 200, "start_el_deg": -0.5},
+        sky=Sky(52.5, 13.4),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        t = v.now
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 120, "parked for the storm")
+        assert v.errors("internal", since=t) == []
+        sent = [w for w in v.sent(since=t) if w.startswith(b"AZ") and w != b"AZ EL\n"]
+        assert sent == [b"AZ90.0 EL0.0\n"]  # (not the queries)
+        assert abs(v.truth().az_deg - 90.0) <= 1.0 and v.truth().el_deg <= 0.5
