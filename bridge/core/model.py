@@ -305,12 +305,16 @@ def combine(newer: Target, older: Target | None) -> Target:
     """``newer`` with the axis it leaves out (None) taken from ``older`` still pending: Hamlib
     4.6's PstRotator client sends ``P 200 30`` as an azimuth and then an elevation datagram,
     and an MQTT user may send a bare azimuth and then ``R/target/elevation``: one must not
-    replace the other. An axis ``newer`` names wins; so do its source, place and park mark.
+    replace the other. An axis ``newer`` names wins; so do its source and place.
     Only targets from one source and one sender (``origin``) combine, and never with a park:
     another operator's azimuth taken into the control lease holder's elevation went out as the
     holder's (session/session.py rule 23; an attack pass: G4XYZ's azimuth, put before DL1ABC's
-    claim, turned the rotor with DL1ABC's elevation in the claim's own batch)."""
-    if older is None or older.source is not newer.source or older.park:
+    claim, turned the rotor with DL1ABC's elevation in the claim's own batch). A newer park
+    takes nothing from what waits either (session/targets.py rule 9: it takes the place of the
+    turn, an axis it leaves out held where it reads; an attack pass: R/park after the same
+    sender's 300/40, still waiting, went out as a GS-232B ``W000 040``, and the elevation turned
+    to 40 for a park that leaves it as it is)."""
+    if older is None or older.source is not newer.source or older.park or newer.park:
         return newer  # only a sender's own two halves: never a park or a tracking step
     if older.origin != newer.origin:
         return newer

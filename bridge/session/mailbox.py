@@ -5,7 +5,7 @@ Rules:
    and any judged before it that comes after it (rule 10).
 2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts);
    an axis the newer one leaves out is kept from the older (model.combine: an azimuth, then an
-   elevation alone, from one sender, is one target).
+   elevation alone, from one sender, is one target; a park takes nothing: targets.py rule 9).
    A track command (start or off) replaces a target put before it; a target put after it is
    kept, and the session lets it end the tracking (the later command wins either way).
 3. Options and the lock are settings: the latest value per name wins, order between names kept.

@@ -51,9 +51,12 @@ Rules:
    kept the elevation's current target, the half of a target the storm had just dropped, and
    a GS-232B elevation box of a composite, sent ``W000 040`` for it, turned on to 40 while the
    azimuth went to the park (a closing note: a storm begun late in a Rotor-EZ azimuth box's
-   brake, the whole 300/40 dropped and said so). An elevation held where it reads is held
-   inside the limits: an Easycomm or RC2800 box reads a little below the horizon (-0.5) and
-   cannot be sent it, and the storm's park never went out (the step failed at every try).
+   brake, the whole 300/40 dropped and said so). Nor does a park take such an axis from a
+   target still waiting when it comes (rule 1's ``combine``, and the mailbox's: an attack
+   pass, R/park after the same sender's 300/40 went out as ``W000 040``). An elevation held
+   where it reads is held inside the limits: an Easycomm or RC2800 box reads a little below
+   the horizon (-0.5) and cannot be sent it, and the storm's park never went out (the step
+   failed at every try).
 """
 
 from __future__ import annotations
