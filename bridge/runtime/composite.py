@@ -18,8 +18,12 @@ Rules:
    stop frame on both lines before either status goes to the listeners, and each session
    keeps its own stop rules (a stop owed to an unplugged box is its first frame on replug).
 2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
-   axis it leaves out is no target for that box, but ends there what a target ends (tracking,
-   following, a part's motion: ``Batch.ends``), as in the box it goes to: the operator's
+   axis it leaves out is no target for that box (but a park's: it goes to both boxes, the
+   elevation box holding its axis where it reads, session/targets.py rule 9, as in a storm;
+   an attack pass: R/park with no ``park_el_deg`` left the elevation box turning on from 10 to
+   the 40 of the 100/40 it interrupted, and the rotator never said parked), but ends there
+   what a target ends (tracking, following, a part's motion: ``Batch.ends``), as in the box
+   it goes to: the operator's
    bearing is the last word on the whole rotator (an attack pass: an azimuth after a track
    command ended tracking in the azimuth box alone, and the elevation box went on tracking
    by itself, the status saying nothing was tracked).
@@ -187,6 +191,8 @@ def split(batch: Batch) -> dict[Axis, Batch]:
         az = replace(target, el_deg=None)
     if target is not None and target.el_deg is not None:
         el = replace(target, az_deg=None, true_az_deg=None, within_deg=None)
+    elif target is not None and target.park:  # rule 2: a park's is one (targets.py rule 9)
+        el = target  # (the shape of the storm's park in that box: app.py ``axis_configs``)
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
     moved = target is not None  # rule 7: the quiet spell starts again in both
     # rule 2: a target leaving an axis out ends in that box what it ends in the other

@@ -5,7 +5,7 @@ them. In virtual time, an RT-21 on the azimuth and a GS-232B used for its elevat
 
 from __future__ import annotations
 
-from bridge.core.model import MotionState, Target
+from bridge.core.model import MotionState, Source, Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -133,3 +133,23 @@ def test_a_hand_on_the_azimuth_as_the_spell_ends_does_not_park_the_elevation_alo
         assert min(az_parks + el_parks) - hand.time_s >= 60, "parked before a quiet spell"
         assert abs(az_parks[0] - el_parks[0]) < 1.0  # together (rule 4)
         assert [*v.az.errors(), *v.el.errors()] == []
+
+
+def test_a_park_naming_no_elevation_holds_the_elevation_box_where_it_reads() -> None:
+    """session/targets.py rule 9 for R/park (no ``park_el_deg``): the park takes the place of
+    the turn it finds, an axis it leaves out held where it reads, as one GS-232B does alone.
+    An attack pass: the elevation box got no half of the park (``split``: an axis a target
+    leaves out is no target for that box) and turned on from 10 to the 40 of the 100/40 the
+    park interrupted, and the rotator never said parked (both boxes' ``parked``)."""
+    with VirtualComposite("rt21", "gs232b", settings={"park_az_deg": 180}, emulators=FAST) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(100.0, 40.0))
+        v.run_until(lambda h: h.el.truth().el_deg >= 10.0, 60, "the elevation under way")
+        t = v.now
+        v.aim(Target(180.0, None, Source.MQTT, park=True))  # R/park, judged (pointing.py)
+        v.run_until(lambda h: abs(h.az.truth().az_deg - 180.0) < 1.0, 200, "the azimuth parked")
+        v.run_for(30.0)
+        assert not any(w.endswith(b" 040\r") for w in v.el.sent(since=t)), v.el.sent(since=t)
+        assert 10.0 <= v.el.truth().el_deg <= 14.0, v.el.truth()
+        assert abs(v.az.truth().az_deg - 180.0) < 1.0
+        assert v.status.parked
