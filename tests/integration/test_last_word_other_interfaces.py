@@ -10,11 +10,13 @@ until the test lets it go: that message was published before the other interface
 from __future__ import annotations
 
 import json
+import select
 import socket
 import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
@@ -144,3 +146,75 @@ def test_a_flood_of_logger_stops_puts_a_few_markers_behind_a_slow_main_connectio
     # for RESEND_S is sent again, and makes room for as many again)
     fence = [m for m in rig.probe.messages[mark:] if m.topic == "rotor/bridge/fence"]
     assert 1 <= len(fence) <= 3 * FENCE_MARKERS_OUT, f"{len(fence)} markers for 300 stops"
+
+
+@contextmanager
+def loggers_held_on(app: App, data: bytes) -> Iterator[threading.Event]:
+    """The loggers' thread stuck on the datagram ``data`` (set once it is) until the block
+    ends: a stand-in for a flood it is behind with (what came meanwhile waits in the system's
+    buffer, read after)."""
+    assert app.loggers is not None
+    release, held = threading.Event(), threading.Event()
+    carry_out = app.loggers._carry_out
+
+    def stuck(sock: socket.socket, endpoint: object, got: bytes, *rest: Any) -> None:
+        if got == data:
+            held.set()
+            release.wait(slow(30))
+        carry_out(sock, endpoint, got, *rest)  # type: ignore[arg-type]
+
+    app.loggers._carry_out = stuck  # type: ignore[method-assign]
+    try:
+        yield held
+    finally:
+        release.set()
+
+
+def test_a_logger_target_sent_before_a_rotctld_stop_and_read_after_it_never_turns_the_rotor(
+    rig: Rig,
+) -> None:
+    """A logger turns the rotor to 300 on the PstRotator port; the operator, seeing the wrong
+    call, stops it with Hamlib's S on rotctld. The loggers' thread was behind (a neighbour's
+    flood on the port): the datagram, in the system's buffer before the stop, was read after
+    it and turned the rotor again (an attack pass)."""
+    port, replies = reserve_pst_ports()
+    rotctld = free_port()
+    emu = rig.add(
+        "tower",
+        emu={"start_az_deg": 10, "speed_deg_s": 20.0},
+        pst_udp_port=port,
+        rotctld_port=rotctld,
+    )
+    app = rig.start()
+    rig.ready("tower")
+    assert app.loggers is not None
+    counts = app.loggers.counts["pst"]
+    blocker = b"<PST>MODE?</PST>"
+    t = time.monotonic()
+    with udp_socket() as neighbour, udp_socket() as logger, replies:
+        with loggers_held_on(app, blocker) as held:
+            neighbour.sendto(blocker, ("127.0.0.1", port))
+            wait_until(held.is_set, 10, "the loggers' thread behind")
+            logger.sendto(b"<PST><AZIMUTH>300</AZIMUTH></PST>", ("127.0.0.1", port))
+            with socket.create_connection(("127.0.0.1", rotctld), timeout=slow(5)) as s:
+                s.sendall(b"S\n")
+                assert s.recv(100) == b"RPRT 0\n"
+        # the logger's next datagram is answered once the one before it was carried out
+        logger.sendto(b"<PST>AZ?</PST>", ("127.0.0.1", port))
+        assert select.select([replies], [], [], slow(10))[0], "no reply to AZ?"
+        assert replies.recv(100).startswith(b"AZ:")
+
+        def turned() -> list[bytes]:
+            return [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+
+        def refused() -> bool:
+            return any(m.topic == "rotor/error" and b"300" in m.payload for m in rig.probe.messages)
+
+        wait_until(lambda: turned() or refused(), 10, "the 300 carried out or refused")
+        assert not turned() and counts.commands == 0, (turned(), counts)
+        err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert "before a STOP or lock ON" in json.loads(err.payload)["message"]
+        assert not emu.state().is_moving
+        # a turn the logger sends after the stop is obeyed
+        logger.sendto(b"<PST><AZIMUTH>60</AZIMUTH></PST>", ("127.0.0.1", port))
+        rig.arrived("tower", 60)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import select
 import socket
@@ -40,6 +41,7 @@ class Recording:
         self.calls: list[Any] = []
         self.peers: list[str | None] = []  # the address each command came from
         self._lock = threading.Lock()
+        self.last_halt_s = -math.inf  # when it last carried out a STOP (commands.py rule 8)
 
     @property
     def status(self) -> RotatorStatus:
@@ -506,3 +508,39 @@ def test_a_name_two_rotators_share_by_band_reports_the_heading_of_the_one_on_the
             assert later[at:] == [b"Tower @ 1000"] * (30 - at)
         finally:
             ep.stop()
+
+
+def test_a_turn_that_reached_the_system_before_the_rotators_last_stop_is_not_carried_out() -> None:
+    """commands.py rule 8: the thread was behind (here: not reading yet), and a logger's turn
+    and park, in the system's buffer before the rotator carried out a STOP from another
+    interface, were read after it and turned the rotor (an attack pass). They are refused as
+    stale; a stop read with them is carried out, and a turn sent after the stop is too."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, 0)  # type: ignore[arg-type]
+    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
+    ep.listen()  # bound, not read yet
+    try:
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        send(pst_port, pst(tag("AZIMUTH", 300)))
+        send(pst_port, pst(tag("PARK", 1)))
+        send(n1mm_port, n1mm_turn("Tower", 120))
+        send(pst_port, pst(tag("STOP", 1)))
+        tower.last_halt_s = time.monotonic()  # a STOP another interface carried out
+        ep.start()
+        wait_until(lambda: len(tower.calls) >= 4, 5, "the four datagrams taken")
+        send(pst_port, pst(tag("AZIMUTH", 60)))
+        wait_until(lambda: len(tower.calls) >= 5, 5, "the turn after the stop taken")
+        assert sorted(tower.calls[:4], key=str) == sorted(
+            [
+                ("refused", "pst: sent before a STOP or lock ON that came first: not carried out"),
+                ("refused", "pst: sent before a STOP or lock ON that came first: not carried out"),
+                ("refused", "n1mm: sent before a STOP or lock ON that came first: not carried out"),
+                Stop(Source.PST),
+            ],
+            key=str,
+        )
+        assert tower.calls[4] == Target(60.0, None, Source.PST)
+    finally:
+        ep.stop()

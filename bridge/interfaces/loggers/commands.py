@@ -43,6 +43,15 @@ Rules:
    is at most datagrams.py's MAX_DATAGRAM bytes, and tags the bridge does not read are let
    through (an attack pass: cut at 120 characters, a datagram padded with a few such tags
    turned the rotor and was audited without its ``<AZIMUTH>``).
+8. A STOP or lock ON is the last word over everything sent before it (docs/architecture.md
+   rule 11), whichever interface brought it: a datagram that moves a rotator and reached the
+   system before that rotator last carried out a STOP or lock ON (``last_halt_s``, from any
+   interface; its arrival is the system's own stamp, server.py rule 9) is not carried out,
+   read however late: refused as stale on ``R/error`` (as the console's, interfaces/web/
+   commands.py rule 5). An attack pass: the loggers' thread behind a neighbour's flood, a
+   logger's 300 sent before the operator's rotctld S was read after it and turned the rotor
+   again. A stop is never stale; a datagram with no stamp (a system that gives none) is
+   judged as before.
 """
 
 from __future__ import annotations
@@ -52,6 +61,7 @@ import math
 import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from bridge.core import geo
 from bridge.core.bands import band_of_mhz
@@ -62,12 +72,19 @@ from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, pst_rep
 from bridge.interfaces.loggers.limiter import ReplyLimiter
 from bridge.pointing import angle_between, norm360
 
-# what these commands use of a rotator: the bridge's own or the remote's (front.py)
-Rotator = FrontRotator
+
+class Rotator(FrontRotator, Protocol):
+    """What these commands use of a rotator: the bridge's own or the remote's (front.py rule
+    3): when it last carried out a STOP or lock ON (rule 8; monotonic)."""
+
+    @property
+    def last_halt_s(self) -> float: ...
+
 
 log = logging.getLogger(__name__)
 
 JUNK_LOG_S = 10.0  # malformed datagrams, replies dropped: logged at most this often, a count
+STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 8
 AZ_FOLDED = (-180.0, 450.0)  # Hamlib's azimuth range: folded into 0..360; beyond, refused
 
 Fault = Callable[[str, Exception], None]  # logs a fault behind a datagram and goes on
@@ -196,8 +213,10 @@ class Commands:
         req: PstRequest,
         peer: tuple[str, int],
         data: bytes,
+        arrived: float | None = None,
     ) -> None:
-        """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies."""
+        """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies; ``arrived``: when
+        the system took the datagram (rule 8, monotonic), if it said."""
         counts, rot = self.counts["pst"], e.rotator
         for query in req.queries:  # rule 2, before the command: the position it had
             status = rot.status
@@ -222,6 +241,9 @@ class Commands:
         try:
             if req.stop:
                 rot.submit(Stop(Source.PST, by), described)
+            elif _stale(rot, arrived, req.park or req.locator is not None, req.azimuth, el):
+                rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
+                return
             elif req.park:
                 rot.submit(Park(source=Source.PST, origin=by), described)
             elif req.locator is not None:
@@ -259,8 +281,15 @@ class Commands:
             )
 
     # -- N1MM -----------------------------------------------------------------------------
-    def n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes, peer: str | None = None) -> None:
-        """Rules 1 and 4 (``peer``: the sender's address)."""
+    def n1mm(
+        self,
+        e: N1mmEndpoint,
+        req: N1mmRequest,
+        data: bytes,
+        peer: str | None = None,
+        arrived: float | None = None,
+    ) -> None:
+        """Rules 1 and 4 (``peer``: the sender's address; ``arrived``: rule 8)."""
         by = Origin(Source.N1MM, None, peer)
         counts = self.counts["n1mm"]
         described = "n1mm " + data.decode("ascii").strip()  # rule 7: whole
@@ -286,6 +315,9 @@ class Commands:
         if req.offset and req.rotor not in self._offset_warned:
             self._offset_warned.add(req.rotor)
             log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
+        if _stale(rot, arrived, True):  # rule 8
+            rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
+            return
         az = req.azimuth
         bearing = rot.status.bearing_deg
         if req.bidirectional and bearing is not None:
@@ -320,3 +352,11 @@ class Commands:
                 pass
             except Exception as exc:
                 self._fault(f"the N1MM stop of rotator {rot.id!r}", exc)
+
+
+def _stale(rot: Rotator, arrived: float | None, moves: bool, *axes: float | None) -> bool:
+    """Rule 8: a datagram that would move ``rot`` (``moves``, or an axis given) reached the
+    system before its last STOP or lock ON."""
+    if arrived is None or not (moves or any(a is not None for a in axes)):
+        return False
+    return arrived < rot.last_halt_s

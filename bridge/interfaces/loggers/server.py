@@ -37,6 +37,13 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    counted (``over_budget``), said at warning level at most once per FLOOD_LOG_S with the
    count since and the last sender. A flood so costs a read and a search a datagram, and
    each socket asks the system for a receive buffer of RECV_BUFFER bytes to ride out bursts.
+9. Each datagram is read with the time the system took it (``SO_TIMESTAMPNS``, where the
+   system has it: Linux), on the wall clock, made monotonic by its age when read (never
+   below 0: a wall clock set back meanwhile makes it as new as its read). What a datagram
+   that reached the system before its rotator's last STOP or lock ON would move is not
+   carried out (commands.py rule 8): a flood this thread is behind with no longer carries a
+   logger's turn past a stop from another interface. A wall clock stepped forward between
+   the arrival and the read ages the datagram: refused, the safe side, and said.
 """
 
 from __future__ import annotations
@@ -45,8 +52,11 @@ import contextlib
 import errno
 import logging
 import os
+import platform
 import selectors
 import socket
+import struct
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -281,7 +291,7 @@ class LoggerEndpoints:
         may_stop = may_stop_pst if isinstance(endpoint, PstEndpoint) else may_stop_n1mm
         for _ in range(PER_WAKEUP):
             try:
-                data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
+                data, peer, arrived = _received(sock)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:
@@ -295,7 +305,7 @@ class LoggerEndpoints:
             if not may_stop(data) and not self._budgets.allow(source, now):
                 self._flooded(now, source)
                 continue
-            self._carry_out(sock, endpoint, data, peer)
+            self._carry_out(sock, endpoint, data, peer, arrived)
             self._budgets.spend(source, 1 + len(data) / 1024, now)
 
     def _carry_out(
@@ -304,13 +314,15 @@ class LoggerEndpoints:
         endpoint: PstEndpoint | N1mmEndpoint,
         data: bytes,
         peer: tuple[str, int],
+        arrived: float | None = None,
     ) -> None:
         try:
             if isinstance(endpoint, PstEndpoint):
                 port = self._addresses[sock][1]
-                self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
+                req = parse_pst(data)
+                self._commands.pst(endpoint, sock, port, req, peer, data, arrived)
             else:
-                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
+                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0], arrived)
         except Malformed as exc:
             self._junk(_kind(endpoint), peer, exc)
         except Exception as exc:
@@ -408,6 +420,9 @@ def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
         sock.setblocking(False)
         with contextlib.suppress(OSError):  # rule 8: the system may give less, or refuse
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECV_BUFFER)
+        if _STAMPS:  # rule 9
+            with contextlib.suppress(OSError):
+                sock.setsockopt(socket.SOL_SOCKET, _STAMPS, 1)
     except OSError as exc:
         sock.close()
         code = exc.errno or 0
@@ -417,3 +432,31 @@ def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
             f"{what}: cannot listen on {host}:{port}: {reason}{_BIND_HINTS.get(code, '')}",
         ) from None
     return sock
+
+
+# rule 9: Linux's SO_TIMESTAMPNS (SO_TIMESTAMPNS_OLD, its cmsg type the same number), which
+# Python does not name: 35 in asm-generic and on x86, the machines below; others, none
+_STAMP_MACHINES = ("x86_64", "amd64", "i386", "i686", "aarch64", "arm64", "riscv64", "ppc64le")
+_STAMPS = (
+    35
+    if sys.platform == "linux"
+    and platform.machine().lower().startswith(_STAMP_MACHINES + ("armv",))
+    else 0
+)
+_STAMP = struct.Struct("@ll")  # the old struct timespec: a long's seconds, a long's nanoseconds
+_STAMP_SPACE = socket.CMSG_SPACE(_STAMP.size) if hasattr(socket, "CMSG_SPACE") else 0
+
+
+def _received(sock: socket.socket) -> tuple[bytes, tuple[str, int], float | None]:
+    """One datagram, its sender, and (rule 9) when the system took it, on the monotonic
+    clock: None where the system does not say."""
+    if not (_STAMPS and _STAMP_SPACE):
+        data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
+        return data, peer, None
+    data, ancillary, _flags, peer = sock.recvmsg(MAX_DATAGRAM + 1, _STAMP_SPACE)
+    for level, kind, payload in ancillary:
+        if level == socket.SOL_SOCKET and kind == _STAMPS and len(payload) >= _STAMP.size:
+            seconds, nanoseconds = _STAMP.unpack_from(payload)
+            age = max(0.0, time.time() - (seconds + nanoseconds * 1e-9))
+            return data, peer, time.monotonic() - age
+    return data, peer, None
