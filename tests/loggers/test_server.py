@@ -19,6 +19,7 @@ import pytest
 
 from bridge.core.model import RotatorStatus, Source, Stop, Target, Toward
 from bridge.interfaces.loggers import LoggerEndpoints, server
+from bridge.interfaces.loggers.commands import STALE
 from bridge.interfaces.loggers.limiter import REPLY_BURST
 from bridge.interfaces.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
 from bridge.protocols import REGISTRY
@@ -49,6 +50,8 @@ class Recording:
 
     def submit(self, command: Any, described: str | None = None) -> None:
         with self._lock:
+            if isinstance(command, Stop):  # carried out now (runtime/rotator.py)
+                self.last_halt_s = time.monotonic()
             self.peers.append(command.origin.peer if command.origin is not None else None)
             if isinstance(command, Toward):
                 self.calls.append(("toward", command.latitude_deg, command.longitude_deg))
@@ -203,7 +206,8 @@ def test_a_pst_flood_delays_an_n1mm_stop_by_a_few_datagrams_at_most() -> None:
     """One socket was drained to empty before the next: a PST flood kept an N1MM STOP waiting
     behind every datagram of it. The flood is queued before the loggers' thread starts, the
     stop after it; each flood datagram is a numbered target, so the rotator's commands show
-    how many of them went before the stop."""
+    how many of them went before the stop (those read after it are refused: they were sent
+    before it, commands.py rule 8)."""
     flood = 150
     rot = Recording("tower")
     ep = LoggerEndpoints()
@@ -223,7 +227,10 @@ def test_a_pst_flood_delays_an_n1mm_stop_by_a_few_datagrams_at_most() -> None:
             stop_at = rot.calls.index(Stop(Source.N1MM))
             assert stop_at <= PER_WAKEUP, f"the stop came after {stop_at} flood datagrams"
             targets = [c.az_deg for c in rot.calls if isinstance(c, Target)]
-            assert targets == [float(i) for i in range(flood)]  # in order, none lost
+            assert targets == [float(i) for i in range(stop_at)]  # in order, none lost
+            # the rest reached the system before the stop: none turns the rotor after it
+            # (commands.py rule 8)
+            assert rot.calls[stop_at + 1 :] == [("refused", f"pst: {STALE}")] * (flood - stop_at)
         finally:
             ep.stop()
 
@@ -542,5 +549,32 @@ def test_a_turn_that_reached_the_system_before_the_rotators_last_stop_is_not_car
             key=str,
         )
         assert tower.calls[4] == Target(60.0, None, Source.PST)
+    finally:
+        ep.stop()
+
+
+def test_a_loggers_own_stop_read_late_refuses_only_what_reached_the_system_before_it() -> None:
+    """commands.py rule 8 for a stop the loggers' thread reads late itself: the stop's time is
+    when it reached the system. A logger's turn sent after its own STOP, both read late, is
+    carried out (the stop, read later than the turn reached the system, is no later word), and
+    one on the N1MM port that reached the system before the PST stop is refused."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, 0)  # type: ignore[arg-type]
+    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
+    ep.listen()  # bound, not read yet
+    try:
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        send(n1mm_port, n1mm_turn("Tower", 120))
+        send(pst_port, pst(tag("STOP", 1)))
+        send(pst_port, pst(tag("AZIMUTH", 60)))
+        ep.start()
+        wait_until(lambda: len(tower.calls) >= 3, 5, "the three datagrams taken")
+        calls = tower.calls
+        assert calls.index(Stop(Source.PST)) < calls.index(Target(60.0, None, Source.PST))
+        assert ("refused", f"n1mm: {STALE}") in calls or calls.index(
+            Target(120.0, None, Source.N1MM)
+        ) < calls.index(Stop(Source.PST)), calls
     finally:
         ep.stop()

@@ -51,7 +51,9 @@ Rules:
    commands.py rule 5). An attack pass: the loggers' thread behind a neighbour's flood, a
    logger's 300 sent before the operator's rotctld S was read after it and turned the rotor
    again. A stop is never stale; a datagram with no stamp (a system that gives none) is
-   judged as before.
+   judged as before. A stop these ports carried out counts from when it reached the system
+   (``Halted``), not from when it was read, while no other STOP or lock ON came after it: a
+   logger's turn sent after its own STOP, both read late, was refused as sent before it.
 """
 
 from __future__ import annotations
@@ -192,12 +194,40 @@ class Rarely:
         return count
 
 
+class Halted:
+    """Rule 8: the STOPs these ports carried out, by rotator: the rotator's ``last_halt_s``
+    right after one, and when it counts from (the stop's arrival, or a STOP or lock ON from
+    another interface carried out before it was read, whichever was later)."""
+
+    def __init__(self) -> None:
+        self._after: dict[int, tuple[float, float]] = {}
+
+    def stop(self, rot: Rotator, stop: Stop, described: str, arrived: float | None) -> None:
+        """``stop`` carried out on ``rot`` (``submit``), noted if it ``arrived`` stamped."""
+        if arrived is None:  # (nothing to note: the stop first, whatever else)
+            rot.submit(stop, described)
+            return
+        before = rot.last_halt_s
+        try:
+            rot.submit(stop, described)
+        finally:
+            if rot.last_halt_s != before:
+                self._after[id(rot)] = rot.last_halt_s, max(before, arrived)
+
+    def since(self, rot: Rotator) -> float:
+        """When ``rot`` last halted, as rule 8 judges a datagram by."""
+        last = rot.last_halt_s
+        after = self._after.get(id(rot))
+        return after[1] if after is not None and after[0] == last else last
+
+
 class Commands:
     """Called on the loggers' thread only; ``counts`` may be read from any."""
 
     def __init__(self, clock: Callable[[], float], fault: Fault) -> None:
         self._clock = clock
         self._fault = fault
+        self._halted = Halted()  # rule 8
         self.counts = {"pst": Counts(), "n1mm": Counts()}
         self._replies = ReplyLimiter(clock)
         self._limited_log = Rarely(JUNK_LOG_S)
@@ -240,8 +270,8 @@ class Commands:
         el = req.elevation if has_el else None
         try:
             if req.stop:
-                rot.submit(Stop(Source.PST, by), described)
-            elif _stale(rot, arrived, req.park or req.locator is not None, req.azimuth, el):
+                self._halted.stop(rot, Stop(Source.PST, by), described, arrived)  # rule 8
+            elif self._stale(rot, arrived, req.park or req.locator is not None, req.azimuth, el):
                 rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
                 return
             elif req.park:
@@ -267,6 +297,13 @@ class Commands:
             counts.commands += 1
         except Refused:
             pass  # the rotator has published it on R/error
+
+    def _stale(self, rot: Rotator, arrived: float | None, moves: bool, *axes: float | None) -> bool:
+        """Rule 8: a datagram that would move ``rot`` (``moves``, or an axis given) reached the
+        system before its last STOP or lock ON."""
+        if arrived is None or not (moves or any(a is not None for a in axes)):
+            return False
+        return arrived < self._halted.since(rot)
 
     def _limited(self, counts: Counts, address: str) -> None:
         """Rule 2: a reply over the address's rate is dropped, counted, logged rarely."""
@@ -297,7 +334,7 @@ class Commands:
             names = {req.rotor, *req.also}
             stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
             if stopped:
-                self._stop_each(stopped, described, by)
+                self._stop_each(stopped, described, by, arrived)
                 counts.commands += 1
                 return
         chosen = choose(e.rotors, req.rotor, req.freqband_mhz, req.freqband_unread)  # rule 5
@@ -315,7 +352,7 @@ class Commands:
         if req.offset and req.rotor not in self._offset_warned:
             self._offset_warned.add(req.rotor)
             log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
-        if _stale(rot, arrived, True):  # rule 8
+        if self._stale(rot, arrived, True):  # rule 8
             rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
             return
         az = req.azimuth
@@ -342,21 +379,18 @@ class Commands:
                 self._fault(f"reporting an N1MM refusal on rotator {r.rotator.id!r}", exc)
 
     def _stop_each(
-        self, rotators: Iterable[Rotator], described: str, by: Origin | None = None
+        self,
+        rotators: Iterable[Rotator],
+        described: str,
+        by: Origin | None = None,
+        arrived: float | None = None,
     ) -> None:
         """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
+        stop = Stop(Source.N1MM, by)
         for rot in rotators:
             try:
-                rot.submit(Stop(Source.N1MM, by), described)
+                self._halted.stop(rot, stop, described, arrived)  # rule 8
             except Refused:  # the remote's, sent but maybe to nobody: reported there (no fault)
                 pass
             except Exception as exc:
                 self._fault(f"the N1MM stop of rotator {rot.id!r}", exc)
-
-
-def _stale(rot: Rotator, arrived: float | None, moves: bool, *axes: float | None) -> bool:
-    """Rule 8: a datagram that would move ``rot`` (``moves``, or an axis given) reached the
-    system before its last STOP or lock ON."""
-    if arrived is None or not (moves or any(a is not None for a in axes)):
-        return False
-    return arrived < rot.last_halt_s
