@@ -551,6 +551,9 @@ TWO = (
         ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
         ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
         ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),
+        # an attack pass: every N1MM datagram naming it is not ASCII, dropped unread
+        # (loggers/datagrams.py rule 1), its STOP too: N1MM's stop never stopped that rotator
+        ('n1mm_rotor_name = "Süd"', "", r"rotators\[0\].*n1mm_rotor_name.*ASCII"),
         ("pst_udp_port = 65535", "", r"rotators\[0\].*pst_udp_port"),  # its reply port is +1
     ],
 )

@@ -69,6 +69,11 @@ class LoggerFields(Strict):
     def _printable(cls, name: str | None) -> str | None:
         if name is not None and (not name.isprintable() or name != name.strip() or "<" in name):
             raise ValueError("printable, no leading or trailing blanks, no '<'")
+        if name is not None and not name.isascii():
+            # the loggers' datagrams are ASCII (interfaces/loggers/datagrams.py rule 1): N1MM's
+            # every word naming it, its STOP too, was dropped unread, and each position
+            # report failed to encode (an attack pass)
+            raise ValueError(f"{name!r} is not ASCII: N1MM's datagrams naming it are dropped")
         return name
 
     @field_validator("n1mm_report_to")
