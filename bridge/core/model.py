@@ -240,6 +240,7 @@ class TrackingInfo:
     pass_track: tuple[tuple[float, float], ...] = ()
     elements_epoch_unix: float | None = None  # a satellite's: when its elements are for
     elements_stale: bool = False  # they are older than session/tracking.py's STALE_DAYS
+    elements_ahead: bool = False  # dated after the station's clock by more than its AHEAD_DAYS
 
 
 @dataclass(frozen=True)

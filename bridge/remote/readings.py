@@ -187,6 +187,7 @@ def _tracking(doc: object) -> TrackingInfo | None:
         tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
         _unix(doc.get("elements_epoch")),
         doc.get("elements_stale") is True,
+        doc.get("elements_ahead") is True,
     )
 
 

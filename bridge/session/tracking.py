@@ -82,7 +82,10 @@ Rules:
    stopped refreshing the file (an attack pass: elements four months old were flown without a
    word, passes minutes off). The status's tracking block carries their epoch and whether they
    are older than STALE_DAYS now, so a page shows it where the pass is shown (the log alone
-   reached nobody at the radio).
+   reached nobody at the radio). Elements dated more than AHEAD_DAYS after the station's clock
+   are said the same way (``elements_ahead``): no TLE is made for a time that far on, so the
+   clock is wrong (a Raspberry Pi without a real-time clock, started before its time was set,
+   runs days or years behind), and every position flown is for the wrong time.
 """
 
 from __future__ import annotations
@@ -113,6 +116,7 @@ NEXT_S = 60.0  # the status's "next" position: this far ahead
 MAX_LEAD_S = 300.0
 FLIP_SAVING_DEG = 30.0
 STALE_DAYS = 14.0  # rule 11
+AHEAD_DAYS = 3.0  # rule 11: an operator's predicted elements may be dated a day or two on
 LOOK_AGAIN_S = 60.0  # rule 10
 
 
@@ -367,6 +371,17 @@ class Tracker:
                 age_days,
                 datetime.fromtimestamp(epoch, UTC).strftime("%Y-%m-%d %H:%M"),
             )
+        elif -age_days > AHEAD_DAYS:
+            log.warning(
+                "%s: tracking %s by elements dated %.0f days after this station's clock "
+                "(epoch %s UTC, the clock says %s): every position is for the wrong time; is "
+                "the clock set?",
+                self._rig.rotator_id,
+                body.name,
+                -age_days,
+                datetime.fromtimestamp(epoch, UTC).strftime("%Y-%m-%d %H:%M"),
+                datetime.fromtimestamp(utc, UTC).strftime("%Y-%m-%d %H:%M"),
+            )
 
     def _look_again(self, p: Pass, utc: float) -> None:
         """Rule 10: the body looked up again while its pass is waited for."""
@@ -586,7 +601,10 @@ class Tracker:
         )
         if self._epoch is not None:  # rule 11
             stale = utc - self._epoch > STALE_DAYS * 86400.0
-            info = replace(info, elements_epoch_unix=self._epoch, elements_stale=stale)
+            ahead = self._epoch - utc > AHEAD_DAYS * 86400.0
+            info = replace(
+                info, elements_epoch_unix=self._epoch, elements_stale=stale, elements_ahead=ahead
+            )
         if p is not None:
             info = replace(
                 info,

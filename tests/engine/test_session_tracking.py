@@ -726,6 +726,38 @@ def test_elements_months_old_are_said_in_the_log_when_tracking_starts(
         assert info.elements_epoch_unix == pytest.approx(t0 - age_days * 86400, abs=0.01)
 
 
+@pytest.mark.parametrize(("ahead_days", "said"), [(40.0, True), (1.0, False)])
+def test_elements_dated_after_the_stations_clock_say_the_clock_is_wrong(
+    ahead_days: float, said: bool, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Rule 11: a station whose clock runs weeks behind (a Raspberry Pi without a real-time
+    clock, started before its time was set) flew elements dated after its clock without a
+    word, every position for the wrong time. The log says it once and the status's tracking
+    block carries it; elements a day ahead (an operator's predicted ones) are not flagged."""
+    t0 = SAT_EPOCH
+    epoch = t0 + ahead_days * 86400
+    line1, line2 = synthetic_tle("", epoch, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    v = VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=t0)
+    v.answer_sky = _scripted_sky([(t0 + 100, t0 + 400, 100, 150)])
+    with v, caplog.at_level("WARNING", logger="bridge.session.tracking"):
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("AO-7", line1, line2))
+        v.run_for(30.0)
+        warned = [r.getMessage() for r in caplog.records if "clock" in r.getMessage()]
+        if said:
+            assert len(warned) == 1, warned
+            assert "AO-7 by elements dated 40 days after this station's clock" in warned[0]
+            day = datetime.fromtimestamp(epoch, UTC).strftime("%Y-%m-%d")
+            assert f"(epoch {day} " in warned[0] and "is the clock set?" in warned[0], warned
+        else:
+            assert warned == []
+        info = v.status.tracking
+        assert info is not None and info.elements_ahead is said, info
+        assert not info.elements_stale
+        assert info.elements_epoch_unix == pytest.approx(epoch, abs=0.01)
+        assert tracking_state(v.status) != "off"
+
+
 def test_elements_that_age_past_stale_while_tracked_are_shown_stale() -> None:
     """Rule 11: the status judges the elements' age at each refresh, not once at the start:
     a file that stops being refreshed shows it on the page while the rotator tracks on."""

@@ -224,6 +224,11 @@ def test_a_status_reads_back_as_the_station_rendered_it() -> None:
     assert json.loads(rendered)["tracking"]["elements_stale"] is True
     again = parse_status("tower", rendered.encode())
     assert again.tracking == sat
+    # ... and elements dated after the station's clock (the same rule)
+    sat = replace(sat, elements_stale=False, elements_ahead=True)
+    rendered = pl.status_json(replace(status, tracking=sat), 1_000_000.0, False)
+    assert json.loads(rendered)["tracking"]["elements_ahead"] is True
+    assert parse_status("tower", rendered.encode()).tracking == sat
 
 
 def test_an_error_event_reads_back() -> None:

@@ -160,3 +160,29 @@ def test_stale_elements_are_shown_beside_the_pass(browser: Browser) -> None:
         show(page, sent[1:])
         shown = page.locator("#track-info").text_content() or ""
         assert "elements of 2025-11-01: stale, is the TLE file refreshed?" in shown, shown
+        assert "clock" not in shown, shown
+
+
+def test_elements_dated_after_the_bridges_clock_are_shown_beside_the_pass(
+    browser: Browser,
+) -> None:
+    """session/tracking.py rule 11: elements dated weeks after the bridge's clock (a clock
+    that runs behind) were flown without a word; the page says it under the pass."""
+    block = {
+        "body": "AO-7",
+        "phase": "waiting",
+        "azimuth": 10.0,
+        "elevation": -5.0,
+        "aos": "2026-03-01T10:00:00.000+00:00",
+        "los": "2026-03-01T10:10:00.000+00:00",
+        "flip": False,
+        "elements_epoch": "2026-04-20T06:00:00.000+00:00",
+        "elements_stale": False,
+        "elements_ahead": True,
+    }
+    sent, _ = through_the_flow([("rotor/status", {"tracking": block})])
+    with opened(browser) as page:
+        show(page, sent)
+        shown = page.locator("#track-info").text_content() or ""
+        assert "elements of 2026-04-20, after the bridge's clock: is its clock set?" in shown
+        assert "stale" not in shown, shown

@@ -62,7 +62,9 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
     doc["flip"] = info.flip
     if info.elements_epoch_unix is not None:  # session/tracking.py rule 11
         doc.update(
-            elements_epoch=_iso(info.elements_epoch_unix), elements_stale=info.elements_stale
+            elements_epoch=_iso(info.elements_epoch_unix),
+            elements_stale=info.elements_stale,
+            elements_ahead=info.elements_ahead,
         )
     return doc
 

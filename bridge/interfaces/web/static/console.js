@@ -258,6 +258,8 @@ function trackingOf(st) {
     pass: Array.isArray(t.pass_track) ? t.pass_track : [],
     // a satellite's elements older than two weeks (session/tracking.py rule 11)
     staleSince: t.elements_stale === true && typeof t.elements_epoch === 'string' ? t.elements_epoch.slice(0, 10) : null,
+    // ... or dated days after this station's clock: the clock is wrong (the same rule)
+    aheadOf: t.elements_ahead === true && typeof t.elements_epoch === 'string' ? t.elements_epoch.slice(0, 10) : null,
   };
 }
 
@@ -339,6 +341,7 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     if (tracking.aos) text += ` \u00B7 AOS ${fmtTime(tracking.aos)} LOS ${fmtTime(tracking.los)}`;
     if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
     if (tracking.staleSince) text += ` \u00B7 elements of ${tracking.staleSince}: stale, is the TLE file refreshed?`;
+    if (tracking.aheadOf) text += ` \u00B7 elements of ${tracking.aheadOf}, after the bridge's clock: is its clock set?`;
     put('tracking-info', text);
   }
   renderHealth(st.health);
