@@ -517,19 +517,28 @@ def test_a_name_two_rotators_share_by_band_reports_the_heading_of_the_one_on_the
             ep.stop()
 
 
+@contextlib.contextmanager
+def bound_not_read() -> Iterator[tuple[Recording, LoggerEndpoints, int, int]]:
+    """A rotator on a PST and an N1MM port, bound but not read until ``start``: datagrams
+    sent now wait in the system's buffers, as behind a thread that is late (rule 8's tests).
+    Yields the rotator, the endpoints, the PST port and the N1MM port."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, 0)  # type: ignore[arg-type]
+    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
+    ep.listen()
+    try:
+        yield tower, ep, ep.address(ep.pst[0])[1], ep.address(next(iter(ep.n1mm.values())))[1]
+    finally:
+        ep.stop()
+
+
 def test_a_turn_that_reached_the_system_before_the_rotators_last_stop_is_not_carried_out() -> None:
     """commands.py rule 8: the thread was behind (here: not reading yet), and a logger's turn
     and park, in the system's buffer before the rotator carried out a STOP from another
     interface, were read after it and turned the rotor (an attack pass). They are refused as
     stale; a stop read with them is carried out, and a turn sent after the stop is too."""
-    tower = Recording("tower")
-    ep = LoggerEndpoints()
-    ep.add_pst(tower, 0)  # type: ignore[arg-type]
-    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
-    ep.listen()  # bound, not read yet
-    try:
-        pst_port = ep.address(ep.pst[0])[1]
-        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+    with bound_not_read() as (tower, ep, pst_port, n1mm_port):
         send(pst_port, pst(tag("AZIMUTH", 300)))
         send(pst_port, pst(tag("PARK", 1)))
         send(n1mm_port, n1mm_turn("Tower", 120))
@@ -549,8 +558,6 @@ def test_a_turn_that_reached_the_system_before_the_rotators_last_stop_is_not_car
             key=str,
         )
         assert tower.calls[4] == Target(60.0, None, Source.PST)
-    finally:
-        ep.stop()
 
 
 def test_a_loggers_own_stop_read_late_refuses_only_what_reached_the_system_before_it() -> None:
@@ -558,14 +565,7 @@ def test_a_loggers_own_stop_read_late_refuses_only_what_reached_the_system_befor
     when it reached the system. A logger's turn sent after its own STOP, both read late, is
     carried out (the stop, read later than the turn reached the system, is no later word), and
     one on the N1MM port that reached the system before the PST stop is refused."""
-    tower = Recording("tower")
-    ep = LoggerEndpoints()
-    ep.add_pst(tower, 0)  # type: ignore[arg-type]
-    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
-    ep.listen()  # bound, not read yet
-    try:
-        pst_port = ep.address(ep.pst[0])[1]
-        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+    with bound_not_read() as (tower, ep, pst_port, n1mm_port):
         send(n1mm_port, n1mm_turn("Tower", 120))
         send(pst_port, pst(tag("STOP", 1)))
         send(pst_port, pst(tag("AZIMUTH", 60)))
@@ -576,5 +576,3 @@ def test_a_loggers_own_stop_read_late_refuses_only_what_reached_the_system_befor
         assert ("refused", f"n1mm: {STALE}") in calls or calls.index(
             Target(120.0, None, Source.N1MM)
         ) < calls.index(Stop(Source.PST)), calls
-    finally:
-        ep.stop()
