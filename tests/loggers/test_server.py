@@ -576,3 +576,84 @@ def test_a_loggers_own_stop_read_late_refuses_only_what_reached_the_system_befor
         assert ("refused", f"n1mm: {STALE}") in calls or calls.index(
             Target(120.0, None, Source.N1MM)
         ) < calls.index(Stop(Source.PST)), calls
+
+
+class SwitchedAway:
+    """server.py's clocks on a loaded host: right after the ``after``th reading of either
+    clock, another thread holds the interpreter for GAP_S (the very thread that carries out a
+    STOP may be the one that takes it), and both clocks have moved on by then."""
+
+    GAP_S = 30.0
+
+    def __init__(self, after: int = 1) -> None:
+        self._shift = 0.0
+        self._read = 0
+        self._after = after
+
+    def _reading(self, real: float) -> float:
+        value = real + self._shift
+        self._read += 1
+        if self._read == self._after:
+            self._shift = self.GAP_S
+        return value
+
+    def time(self) -> float:
+        return self._reading(time.time())
+
+    def monotonic(self) -> float:
+        return self._reading(time.monotonic())
+
+
+def test_a_turn_read_across_a_thread_switch_is_dated_no_later_than_it_reached_the_system(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """commands.py rule 8, server.py rule 9: the arrival is the wall clock's stamp made
+    monotonic by its age, and the loggers' thread may lose the interpreter between its two
+    readings of the clocks. With the monotonic clock read only after the wall clock's, a turn
+    in the system's buffer before a STOP from another interface was dated as late as the
+    switch lasted, after the STOP, and went to the judge (the rotor turned after the STOP)."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, 0)  # type: ignore[arg-type]
+    ep.listen()  # bound, not read yet
+    monkeypatch.setattr(server, "time", SwitchedAway())
+    try:
+        port = ep.address(ep.pst[0])[1]
+        send(port, pst(tag("AZIMUTH", 300)))
+        tower.last_halt_s = time.monotonic()  # a STOP another interface carried out
+        ep.start()
+        wait_until(lambda: tower.calls, 5, "the turn taken")
+        assert tower.calls == [("refused", f"pst: {STALE}")]
+    finally:
+        ep.stop()
+
+
+@pytest.mark.skipif(not server._STAMPS, reason="the system stamps no datagram (rule 9)")
+@pytest.mark.parametrize("switch_after", [1, 2])
+def test_a_datagrams_arrival_is_bounded_on_both_sides_whatever_a_thread_switch_does(
+    monkeypatch: pytest.MonkeyPatch, switch_after: int
+) -> None:
+    """server.py rule 9: a move is judged by the earliest its datagram can have reached the
+    system, a stop by the latest (commands.py ``Halted``: what came before it is refused).
+    A thread switch between the clocks' readings widens the bounds, never moves both past the
+    truth: a stop dated early would let a turn sent just before it through."""
+    with (
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender,
+    ):
+        listener.bind(("127.0.0.1", 0))
+        listener.setsockopt(socket.SOL_SOCKET, server._STAMPS, 1)
+        before = time.monotonic()
+        sender.sendto(b"<PST><STOP>1</STOP></PST>", listener.getsockname())
+        after = time.monotonic()
+        assert select.select([listener], [], [], slow(5))[0]
+        monkeypatch.setattr(server, "time", SwitchedAway(after=switch_after))
+        data, _peer, arrived = server._received(listener)
+    assert data == b"<PST><STOP>1</STOP></PST>"
+    assert arrived is not None
+    tick = 1e-3  # (the wall clock's and the monotonic clock's own steps)
+    assert arrived.earliest <= after + tick and arrived.latest >= before - tick, (
+        before,
+        arrived,
+        after,
+    )

@@ -54,6 +54,12 @@ Rules:
    judged as before. A stop these ports carried out counts from when it reached the system
    (``Halted``), not from when it was read, while no other STOP or lock ON came after it: a
    logger's turn sent after its own STOP, both read late, was refused as sent before it.
+   The arrival is known between two bounds (``Arrival``: the monotonic clock read on either
+   side of the wall clock, server.py rule 9), and each side takes the bound that errs its
+   safe way: a move its earliest, a stop its latest. One reading after the wall clock's made
+   the arrival of a turn read as a STOP landed (another thread took the interpreter between
+   the two readings) look as late as that thread's turn, and the turn went to the judge
+   after the stop.
 """
 
 from __future__ import annotations
@@ -194,6 +200,15 @@ class Rarely:
         return count
 
 
+@dataclass(frozen=True)
+class Arrival:
+    """Rule 8: when the system took a datagram, on the monotonic clock, no earlier than
+    ``earliest`` and no later than ``latest``."""
+
+    earliest: float
+    latest: float
+
+
 class Halted:
     """Rule 8: the STOPs these ports carried out, by rotator: the rotator's ``last_halt_s``
     right after one, and when it counts from (the stop's arrival, or a STOP or lock ON from
@@ -202,8 +217,9 @@ class Halted:
     def __init__(self) -> None:
         self._after: dict[int, tuple[float, float]] = {}
 
-    def stop(self, rot: Rotator, stop: Stop, described: str, arrived: float | None) -> None:
-        """``stop`` carried out on ``rot`` (``submit``), noted if it ``arrived`` stamped."""
+    def stop(self, rot: Rotator, stop: Stop, described: str, arrived: Arrival | None) -> None:
+        """``stop`` carried out on ``rot`` (``submit``), noted if it ``arrived`` stamped (its
+        latest bound: what came before it is refused, never some of it carried out)."""
         if arrived is None:  # (nothing to note: the stop first, whatever else)
             rot.submit(stop, described)
             return
@@ -212,7 +228,7 @@ class Halted:
             rot.submit(stop, described)
         finally:
             if rot.last_halt_s != before:
-                self._after[id(rot)] = rot.last_halt_s, max(before, arrived)
+                self._after[id(rot)] = rot.last_halt_s, max(before, arrived.latest)
 
     def since(self, rot: Rotator) -> float:
         """When ``rot`` last halted, as rule 8 judges a datagram by."""
@@ -243,7 +259,7 @@ class Commands:
         req: PstRequest,
         peer: tuple[str, int],
         data: bytes,
-        arrived: float | None = None,
+        arrived: Arrival | None = None,
     ) -> None:
         """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies; ``arrived``: when
         the system took the datagram (rule 8, monotonic), if it said."""
@@ -298,12 +314,14 @@ class Commands:
         except Refused:
             pass  # the rotator has published it on R/error
 
-    def _stale(self, rot: Rotator, arrived: float | None, moves: bool, *axes: float | None) -> bool:
-        """Rule 8: a datagram that would move ``rot`` (``moves``, or an axis given) reached the
-        system before its last STOP or lock ON."""
+    def _stale(
+        self, rot: Rotator, arrived: Arrival | None, moves: bool, *axes: float | None
+    ) -> bool:
+        """Rule 8: a datagram that would move ``rot`` (``moves``, or an axis given) may have
+        reached the system before its last STOP or lock ON (its earliest bound)."""
         if arrived is None or not (moves or any(a is not None for a in axes)):
             return False
-        return arrived < self._halted.since(rot)
+        return arrived.earliest < self._halted.since(rot)
 
     def _limited(self, counts: Counts, address: str) -> None:
         """Rule 2: a reply over the address's rate is dropped, counted, logged rarely."""
@@ -324,7 +342,7 @@ class Commands:
         req: N1mmRequest,
         data: bytes,
         peer: str | None = None,
-        arrived: float | None = None,
+        arrived: Arrival | None = None,
     ) -> None:
         """Rules 1 and 4 (``peer``: the sender's address; ``arrived``: rule 8)."""
         by = Origin(Source.N1MM, None, peer)
@@ -383,7 +401,7 @@ class Commands:
         rotators: Iterable[Rotator],
         described: str,
         by: Origin | None = None,
-        arrived: float | None = None,
+        arrived: Arrival | None = None,
     ) -> None:
         """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
         stop = Stop(Source.N1MM, by)

@@ -43,7 +43,11 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    that reached the system before its rotator's last STOP or lock ON would move is not
    carried out (commands.py rule 8): a flood this thread is behind with no longer carries a
    logger's turn past a stop from another interface. A wall clock stepped forward between
-   the arrival and the read ages the datagram: refused, the safe side, and said.
+   the arrival and the read ages the datagram: refused, the safe side, and said. The
+   monotonic clock is read on both sides of the wall clock (commands.py ``Arrival``): the
+   thread may lose the interpreter between any two readings, to the very thread that
+   carries out a STOP, and one reading after the wall clock's dated a turn read as the STOP
+   landed after it.
 """
 
 from __future__ import annotations
@@ -66,6 +70,7 @@ from bridge.core.ratelimit import SourceBudgets
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.loggers.commands import (
     JUNK_LOG_S,
+    Arrival,
     Commands,
     N1mmEndpoint,
     N1mmRotor,
@@ -314,7 +319,7 @@ class LoggerEndpoints:
         endpoint: PstEndpoint | N1mmEndpoint,
         data: bytes,
         peer: tuple[str, int],
-        arrived: float | None = None,
+        arrived: Arrival | None = None,
     ) -> None:
         try:
             if isinstance(endpoint, PstEndpoint):
@@ -447,9 +452,9 @@ _STAMP = struct.Struct("@ll")  # the old struct timespec: a long's seconds, a lo
 _STAMP_SPACE = socket.CMSG_SPACE(_STAMP.size) if hasattr(socket, "CMSG_SPACE") else 0
 
 
-def _received(sock: socket.socket) -> tuple[bytes, tuple[str, int], float | None]:
+def _received(sock: socket.socket) -> tuple[bytes, tuple[str, int], Arrival | None]:
     """One datagram, its sender, and (rule 9) when the system took it, on the monotonic
-    clock: None where the system does not say."""
+    clock, between two bounds: None where the system does not say."""
     if not (_STAMPS and _STAMP_SPACE):
         data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
         return data, peer, None
@@ -457,6 +462,9 @@ def _received(sock: socket.socket) -> tuple[bytes, tuple[str, int], float | None
     for level, kind, payload in ancillary:
         if level == socket.SOL_SOCKET and kind == _STAMPS and len(payload) >= _STAMP.size:
             seconds, nanoseconds = _STAMP.unpack_from(payload)
-            age = max(0.0, time.time() - (seconds + nanoseconds * 1e-9))
-            return data, peer, time.monotonic() - age
+            before = time.monotonic()  # rule 9: on both sides of the wall clock's reading
+            wall = time.time()
+            after = time.monotonic()
+            age = max(0.0, wall - (seconds + nanoseconds * 1e-9))
+            return data, peer, Arrival(before - age, after - age)
     return data, peer, None
