@@ -43,7 +43,7 @@ def _own_range() -> range:
     if not 0 <= index < count or top - low < 100 * count:
         return range(low, top)
     share = (top - low) // count
-    return range(low + index * share, low + (index + 1) * share - 1)  # n + 1 stays in the share
+    return range(low + index * share, low + (index + 1) * share)
 
 
 def _binds(kind: int, port: int, host: str) -> bool:
@@ -56,8 +56,10 @@ def _binds(kind: int, port: int, host: str) -> bool:
 
 
 def _pick(kind: int, host: str, fits: int = 1) -> int:
-    """A port p free now for ``kind`` with p .. p + fits - 1 all free and never handed out."""
-    ports = _own_range()
+    """A port p free now for ``kind`` with p .. p + fits - 1 all free and never handed out,
+    all of them in this process's share (``_own_range``)."""
+    share = _own_range()
+    ports = range(share.start, share.stop - (fits - 1))
     for _ in range(200):
         port = _PICK.choice(ports)
         span = range(port, port + fits)
