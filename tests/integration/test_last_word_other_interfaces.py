@@ -218,3 +218,54 @@ def test_a_logger_target_sent_before_a_rotctld_stop_and_read_after_it_never_turn
         # a turn the logger sends after the stop is obeyed
         logger.sendto(b"<PST><AZIMUTH>60</AZIMUTH></PST>", ("127.0.0.1", port))
         rig.arrived("tower", 60)
+
+
+def test_a_logger_target_looked_at_just_before_a_rotctld_stop_never_turns_the_rotor(
+    rig: Rig,
+) -> None:
+    """loggers/commands.py rule 8 at its edge: the loggers' thread looked at the rotator's
+    last halt for a logger's 300 (none since it came), and the operator's rotctld S was carried
+    out right then, before the 300 reached the judge. The judge read the halt count only when
+    the 300 came to it, after the S, and the rotor turned to 300 after the STOP (an attack
+    pass: under a neighbour's flood the loggers' thread loses the interpreter anywhere in its
+    loop, to the very thread that carries out the S)."""
+    port, replies = reserve_pst_ports()
+    rotctld = free_port()
+    emu = rig.add(
+        "tower",
+        emu={"start_az_deg": 10, "speed_deg_s": 20.0},
+        pst_udp_port=port,
+        rotctld_port=rotctld,
+    )
+    app = rig.start()
+    rig.ready("tower")
+    assert app.loggers is not None
+    commands = app.loggers._commands
+    looked = commands._stale
+    operator = socket.create_connection(("127.0.0.1", rotctld), timeout=slow(5))
+
+    def stop_right_after(*args: Any) -> bool:
+        stale = looked(*args)
+        operator.sendall(b"S\n")  # the operator's S, carried out before the look returns
+        assert operator.recv(100) == b"RPRT 0\n"
+        return stale
+
+    commands._stale = stop_right_after  # type: ignore[method-assign]
+    t = time.monotonic()
+    with operator, udp_socket() as logger, replies:
+        logger.sendto(b"<PST><AZIMUTH>300</AZIMUTH></PST>", ("127.0.0.1", port))
+
+        def turned() -> list[bytes]:
+            return [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"300" in f.data]
+
+        def refused() -> bool:
+            return any(m.topic == "rotor/error" and b"300" in m.payload for m in rig.probe.messages)
+
+        wait_until(lambda: turned() or refused(), 10, "the 300 carried out or refused")
+        assert not turned(), turned()
+        err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert json.loads(err.payload)["kind"] == "refused", err.payload
+        assert not emu.state().is_moving
+        commands._stale = looked  # type: ignore[method-assign]
+        logger.sendto(b"<PST><AZIMUTH>60</AZIMUTH></PST>", ("127.0.0.1", port))
+        rig.arrived("tower", 60)  # a turn after the stop is obeyed

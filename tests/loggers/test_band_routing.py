@@ -27,7 +27,10 @@ class Recording:
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id, available=True, bearing_deg=10.0)
 
-    def submit(self, command: Any, described: str | None = None) -> None:
+    def halts_for(self, source: Any) -> int:
+        return 0
+
+    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
         self.calls.append(replace(command, origin=None))
 
     def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:

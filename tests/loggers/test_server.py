@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 
+from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import RotatorStatus, Source, Stop, Target, Toward
 from bridge.interfaces.loggers import LoggerEndpoints, server
 from bridge.interfaces.loggers.commands import STALE
@@ -43,15 +44,23 @@ class Recording:
         self.peers: list[str | None] = []  # the address each command came from
         self._lock = threading.Lock()
         self.last_halt_s = -math.inf  # when it last carried out a STOP (commands.py rule 8)
+        self.halts = 0  # how many (runtime/rotator.py ``halts``)
 
     @property
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id, available=True, bearing_deg=10.0)
 
-    def submit(self, command: Any, described: str | None = None) -> None:
+    def halts_for(self, source: Source) -> int:
+        return self.halts
+
+    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
         with self._lock:
             if isinstance(command, Stop):  # carried out now (runtime/rotator.py)
                 self.last_halt_s = time.monotonic()
+                self.halts += 1
+            elif since is not None and since != self.halts:  # (mailbox.py rule 10)
+                self.calls.append(("refused", "overtaken"))
+                raise Refused(RefusalCode.STALE, "overtaken")
             self.peers.append(command.origin.peer if command.origin is not None else None)
             if isinstance(command, Toward):
                 self.calls.append(("toward", command.latitude_deg, command.longitude_deg))
@@ -131,10 +140,10 @@ class Faulty(Recording):
         super().__init__(rid)
         self.fails_at_deg = fails_at_deg
 
-    def submit(self, command: Any, described: str | None = None) -> None:
+    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
         if isinstance(command, Target) and command.az_deg == self.fails_at_deg:
             raise RuntimeError("a bug behind the rotator")
-        super().submit(command, described)
+        super().submit(command, described, since=since)
 
 
 class AzEl(Recording):

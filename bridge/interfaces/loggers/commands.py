@@ -59,7 +59,11 @@ Rules:
    safe way: a move its earliest, a stop its latest. One reading after the wall clock's made
    the arrival of a turn read as a STOP landed (another thread took the interpreter between
    the two readings) look as late as that thread's turn, and the turn went to the judge
-   after the stop.
+   after the stop. The halt count is read before the look at the last halt and handed with
+   the move to ``submit`` (``since``, runtime/rotator.py; mailbox.py rule 10): a STOP carried
+   out between the look and the judge refuses the move too (an attack pass: the operator's
+   rotctld S, carried out right after the look, and the logger's 300 turned the rotor after
+   it).
 """
 
 from __future__ import annotations
@@ -74,7 +78,7 @@ from typing import Protocol
 from bridge.core import geo
 from bridge.core.bands import band_of_mhz
 from bridge.core.errors import Refused
-from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
+from bridge.core.model import Command, Origin, Park, Source, Stop, Target, Toward
 from bridge.front import FrontRotator
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
@@ -83,10 +87,15 @@ from bridge.pointing import angle_between, norm360
 
 class Rotator(FrontRotator, Protocol):
     """What these commands use of a rotator: the bridge's own or the remote's (front.py rule
-    3): when it last carried out a STOP or lock ON (rule 8; monotonic)."""
+    3): when it last carried out a STOP or lock ON (rule 8; monotonic), and its count of them
+    as a move of ``source`` hands it to ``submit`` (``since``: rule 8)."""
 
     @property
     def last_halt_s(self) -> float: ...
+    def halts_for(self, source: Source) -> int: ...
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None: ...
 
 
 log = logging.getLogger(__name__)
@@ -284,6 +293,7 @@ class Commands:
         by = Origin(Source.PST, None, peer[0])
         has_el = rot.spec.has_elevation
         el = req.elevation if has_el else None
+        since = rot.halts_for(Source.PST)  # rule 8: before the look at the last halt
         try:
             if req.stop:
                 self._halted.stop(rot, Stop(Source.PST, by), described, arrived)  # rule 8
@@ -291,14 +301,15 @@ class Commands:
                 rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
                 return
             elif req.park:
-                rot.submit(Park(source=Source.PST, origin=by), described)
+                rot.submit(Park(source=Source.PST, origin=by), described, since=since)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
                     rot.report_refusal(f"pst: {exc}", described)  # (it names the locator)
                     return
-                rot.submit(Toward(lat, lon, req.locator, source=Source.PST, origin=by), described)
+                toward = Toward(lat, lon, req.locator, source=Source.PST, origin=by)
+                rot.submit(toward, described, since=since)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
@@ -307,7 +318,7 @@ class Commands:
                 return
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else norm360(req.azimuth)  # rule 3
-                rot.submit(Target(az, el, Source.PST, origin=by), described)
+                rot.submit(Target(az, el, Source.PST, origin=by), described, since=since)
             else:
                 return
             counts.commands += 1
@@ -370,6 +381,7 @@ class Commands:
         if req.offset and req.rotor not in self._offset_warned:
             self._offset_warned.add(req.rotor)
             log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
+        since = rot.halts_for(Source.N1MM)  # rule 8: before the look at the last halt
         if self._stale(rot, arrived, True):  # rule 8
             rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
             return
@@ -378,7 +390,8 @@ class Commands:
         if req.bidirectional and bearing is not None:
             az = min((az, norm360(az + 180.0)), key=lambda a: angle_between(a, bearing))
         try:
-            rot.submit(Target(norm360(az), None, Source.N1MM, origin=by), described)
+            target = Target(norm360(az), None, Source.N1MM, origin=by)
+            rot.submit(target, described, since=since)
             counts.commands += 1
         except Refused:
             pass
