@@ -666,3 +666,38 @@ def test_a_datagrams_arrival_is_bounded_on_both_sides_whatever_a_thread_switch_d
         arrived,
         after,
     )
+
+
+class HaltedMeanwhile(Recording):
+    """A rotator on which another interface's STOP is carried out while the loggers' own STOP
+    goes to the judge (after the loggers looked at the last halt, before this one is put)."""
+
+    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+        if isinstance(command, Stop) and command.source is Source.PST and not self.halts:
+            super().submit(Stop(Source.MQTT))  # the operator's, from the stop lane
+        super().submit(command, described, since=since)
+
+
+def test_a_stop_from_another_interface_carried_out_beside_a_loggers_stop_is_not_lost() -> None:
+    """commands.py rule 8 (``Halted``): a logger's STOP read late counts from when it reached
+    the system, unless another interface halted the rotator after that. The operator's STOP,
+    carried out while the logger's went to the judge, was lost: the rotator's last halt was
+    the logger's, counted from its arrival, and a logger's turn that reached the system before
+    the operator's STOP, read after both, turned the rotor after it."""
+    tower = HaltedMeanwhile("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, 0)  # type: ignore[arg-type]
+    ep.listen()  # bound, not read yet
+    try:
+        port = ep.address(ep.pst[0])[1]
+        send(port, pst(tag("STOP", 1)))
+        send(port, pst(tag("AZIMUTH", 300)))  # before the operator's STOP, carried out below
+        ep.start()
+        wait_until(lambda: len(tower.calls) >= 3, 5, "the two datagrams taken")
+        assert tower.calls == [
+            Stop(Source.MQTT),
+            Stop(Source.PST),
+            ("refused", f"pst: {STALE}"),
+        ], tower.calls
+    finally:
+        ep.stop()

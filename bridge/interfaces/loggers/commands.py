@@ -92,6 +92,8 @@ class Rotator(FrontRotator, Protocol):
 
     @property
     def last_halt_s(self) -> float: ...
+    @property
+    def halts(self) -> int: ...
     def halts_for(self, source: Source) -> int: ...
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
@@ -221,7 +223,9 @@ class Arrival:
 class Halted:
     """Rule 8: the STOPs these ports carried out, by rotator: the rotator's ``last_halt_s``
     right after one, and when it counts from (the stop's arrival, or a STOP or lock ON from
-    another interface carried out before it was read, whichever was later)."""
+    another interface carried out before it was read, whichever was later). One carried out
+    while this one went to the judge is not lost: this one is not noted then (the rotator's
+    own ``last_halt_s`` counts, the safe side)."""
 
     def __init__(self) -> None:
         self._after: dict[int, tuple[float, float]] = {}
@@ -232,11 +236,14 @@ class Halted:
         if arrived is None:  # (nothing to note: the stop first, whatever else)
             rot.submit(stop, described)
             return
-        before = rot.last_halt_s
+        count, before = rot.halts, rot.last_halt_s
         try:
             rot.submit(stop, described)
         finally:
-            if rot.last_halt_s != before:
+            # noted only if it was the one halt since the look: a STOP or lock ON from another
+            # interface carried out between the look and this one is when the rotator halted
+            alone = rot.halts == count + 1
+            if rot.last_halt_s != before and alone:
                 self._after[id(rot)] = rot.last_halt_s, max(before, arrived.latest)
 
     def since(self, rot: Rotator) -> float:
