@@ -622,7 +622,10 @@ class Controller:
         """What the status view needs (status.py), the controller's part from here."""
         link, wire, motion = self.link, None, self.motion
         if pending is not None and link is not None:
-            az, el = resolve(pending, motion, self.cfg.aim, link.codec)
+            spec = self.cfg.spec
+            az, el = resolve(
+                pending, motion, self.cfg.aim, link.codec, (spec.el_min_deg, spec.el_max_deg)
+            )
             try:
                 wire = link.codec.wire_target(az, el) if az is not None else None
             except NotReady:  # (protocols/base.py: it goes once the codec can count it)

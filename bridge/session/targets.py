@@ -54,9 +54,12 @@ Rules:
    brake, the whole 300/40 dropped and said so). Nor does a park take such an axis from a
    target still waiting when it comes (rule 1's ``combine``, and the mailbox's: an attack
    pass, R/park after the same sender's 300/40 went out as ``W000 040``). An elevation held
-   where it reads is held inside the limits: an Easycomm or RC2800 box reads a little below
-   the horizon (-0.5) and cannot be sent it, and the storm's park never went out (the step
-   failed at every try).
+   where it reads is held inside what the controller can be sent (its model's range): an
+   Easycomm or RC2800 box reads a little below the horizon (-0.5) and cannot be sent it, and
+   the storm's park never went out (the step failed at every try). Not inside the user's
+   ``el_min_deg``..``el_max_deg``, which judge the targets asked for: a dish resting at 0
+   below a limit of 10 was lifted to 10 by a storm's park and by every bare azimuth (an
+   N1MM turn), an axis nobody asked to turn.
 """
 
 from __future__ import annotations
@@ -218,13 +221,18 @@ class Targets:
 
 
 def resolve(
-    target: Target, m: mo.Motion, aim: Pointing, codec: object = None
+    target: Target,
+    m: mo.Motion,
+    aim: Pointing,
+    codec: object = None,
+    el_range: tuple[float, float] | None = None,
 ) -> tuple[float | None, float | None]:
     """The raw values to send now: a target whose side is free takes the side nearest to where
     the rotor is now (pointing.py rule 2); an axis left out keeps its current target (a park's
     holds where it reads: rule 9), else its position, as ``codec`` must be asked for it to stay
     on the step it read (a Rot2Prog at 0.25 degrees reads 44.25 as 44.2, and 44.2 asked for is
-    44.0: protocols/base.py HoldsOnGrid)."""
+    44.0: protocols/base.py HoldsOnGrid), an elevation inside ``el_range`` (the model's: rule
+    9; None: as it reads)."""
     az = target.az_deg
     if target.true_az_deg is not None and m.position_deg is not None:
         az = aim.raw_for(target.true_az_deg, m.position_deg)
@@ -240,7 +248,8 @@ def resolve(
             el = _kept(codec, m.el_position_deg, "elevation")
             if el is None:
                 return None, None
-            el = min(max(el, aim.el_min_deg), aim.el_max_deg)  # rule 9: one it can be sent
+            if el_range is not None:  # rule 9: one it can be sent, not the user's limits
+                el = min(max(el, el_range[0]), el_range[1])
     return az, el
 
 
@@ -275,7 +284,7 @@ def decide(
     assert pending is not None
     if link.stop_due or held:
         return Sending(Go.WAIT)  # rule 4
-    az, el = resolve(pending, m, rig.aim, link.codec)
+    az, el = resolve(pending, m, rig.aim, link.codec, (rig.spec.el_min_deg, rig.spec.el_max_deg))
     if az is None:
         return Sending(Go.WAIT)  # no reading yet to keep the other axis where it is
     try:

@@ -698,3 +698,24 @@ def test_a_storms_park_without_an_elevation_parks_a_rotor_reading_below_the_hori
         sent = [w for w in v.sent(since=t) if w.startswith(b"AZ") and w != b"AZ EL\n"]
         assert sent == [b"AZ90.0 EL0.0\n"]  # (not the queries)
         assert abs(v.truth().az_deg - 90.0) <= 1.0 and v.truth().el_deg <= 0.5
+
+
+def test_a_storms_park_without_an_elevation_leaves_a_dish_resting_below_its_limit_at_rest() -> None:
+    """session/targets.py rule 9: the elevation held where it reads is held inside what the
+    controller can be sent, not inside the user's el_min_deg: a dish resting at 0 below a
+    limit of 10 (docs/homeassistant.md names the case) was lifted to 10 by the storm's park,
+    an axis the park leaves as it is, off its rest in the storm."""
+    with VirtualRotator(
+        "gs232b",
+        settings={**WIND, "el_min_deg": 10},
+        emulator={"start_az_deg": 200, "start_el_deg": 0},
+        sky=Sky(52.5, 13.4),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        t = v.now
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 120, "parked for the storm")
+        v.run_for(30)
+        sets = [w for w in v.sent(since=t) if w.startswith(b"W")]
+        assert sets == [b"W090 000\r"], sets
+        assert v.truth().el_deg == 0.0 and abs(v.truth().az_deg - 90.0) <= 1.0, v.truth()
