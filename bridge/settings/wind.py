@@ -11,6 +11,10 @@ Rules:
 2. ``wind_release_below`` is at most ``wind_park_above`` (the same value unless given): a
    gust around one threshold must not park and release the rotor again and again, and the
    hold time (``wind_hold_min``) stands between the two anyway.
+   Both are at most MAX_LEVEL_KMH in km/h, whatever ``wind_unit``: the feed drops every
+   reading over features/wind/feed.py's WIND_MAX_KMH as a sensor's fault (its rule 3), and a
+   level of 300 m/s (1,080 km/h), which the bound of 500 taken in the user's unit let
+   through, parked for no storm at all (an attack pass).
 3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station;
    and none of the bridge's own (a rotator's, a group's, the bridge's: settings/__init__.py
    ``_wind_topics``), where no weather station publishes. Under a rotator's topic only its
@@ -21,6 +25,7 @@ Rules:
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import Field, model_validator
@@ -29,6 +34,7 @@ from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings.base import Strict
 
 KMH_PER_MS = 3.6
+MAX_LEVEL_KMH = 500.0  # rule 2: below the feed's WIND_MAX_KMH, in km/h whatever the unit
 
 
 class WindFields(Strict):
@@ -52,7 +58,8 @@ class WindFields(Strict):
         None,
         gt=0,
         le=500,
-        description="park for the storm when a reading is above this speed (needs wind_topic)",
+        description="park for the storm when a reading is above this speed (needs wind_topic; "
+        "at most 500 km/h, 138.8 m/s)",
         examples=[60],
         json_schema_extra={"unset": "none: needed with wind_topic"},
     )
@@ -105,6 +112,14 @@ class WindFields(Strict):
             raise ValueError("wind_topic needs wind_park_above (the speed to park above)")
         if self.wind_release_below is not None and self.wind_release_below > self.wind_park_above:
             raise ValueError("wind_release_below must be at most wind_park_above")
+        kmh = self.wind_kmh(self.wind_park_above)
+        if kmh is not None and kmh > MAX_LEVEL_KMH:  # rule 2 (wind_release_below is below it)
+            raise ValueError(
+                f"wind_park_above: {self.wind_park_above:g} {self.wind_unit} is {kmh:g} km/h; "
+                f"it is at most {MAX_LEVEL_KMH:g} km/h "
+                f"({math.floor(MAX_LEVEL_KMH / KMH_PER_MS * 10) / 10:g} m/s): no wind measured "
+                "came near, and a reading over 1000 km/h is dropped as a sensor's fault"
+            )
         if self.wind_park_az_deg is None and getattr(self, "park_az_deg", None) is None:
             raise ValueError("wind_topic needs wind_park_az_deg or park_az_deg (where to park)")
         return self

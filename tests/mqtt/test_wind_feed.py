@@ -94,3 +94,18 @@ def test_a_wind_topic_is_subscribed_so_that_the_retain_flag_says_replayed() -> N
     assert filters["r/stop"].retainHandling == 2
     assert not filters["w"].retainAsPublished and filters["w"].retainHandling == 0
     assert command_filters(["w"], frozenset(), False, frozenset({"w"})) == [("w", 0)]
+
+
+def test_a_park_level_in_m_s_that_no_reading_can_pass_is_refused() -> None:
+    """An attack pass: ``wind_park_above`` was bounded at 500 in the rotator's own unit, so
+    ``wind_unit = "m/s"`` and ``wind_park_above = 300`` (1,080 km/h) loaded, and check-config
+    said nothing; but every reading above it is over WIND_MAX_KMH and dropped as a sensor's
+    fault (feed.py rule 3): that rotator never parked for any storm. The bound is 500 km/h
+    in either unit (``wind_release_below`` is at most the park level, so it holds too)."""
+    _, handle = wind_feed([("w", "m/s", lambda v, r: None)], FakeClock())
+    assert handle("w", b"301", False)  # (dropped: no reading above 300 m/s reaches a rotator)
+    with pytest.raises(ValidationError, match=r"wind_park_above: 300 m/s is 1080 km/h"):
+        rotator(wind_topic="w", wind_unit="m/s", wind_park_above=300, park_az_deg=0)
+    ok = rotator(wind_topic="w", wind_unit="m/s", wind_park_above=25, park_az_deg=0)
+    assert ok.wind_kmh(ok.wind_park_above) == 90.0
+    assert rotator(wind_topic="w", wind_park_above=500, park_az_deg=0).wind_park_above == 500
