@@ -67,7 +67,13 @@ Rules:
    rotor is. A review: a group's
    ``upper = [20, 340]`` on a 450-degree rotor at 300, sent 30, went to 390, through the
    340..20 the group keeps it out of; an attack pass: a south-centred DCU-1 at true 300, sent
-   the group's 30, turned through north on its scale (120 to 210).
+   the group's 30, turned through north on its scale (120 to 210). A scale that wraps with
+   its ends not known to be at its 0 and 360 (``az_ends_at_north`` False: a Rotor-EZ's or
+   DCU-1's Hy-Gain rotor has its stop at south, raw 180, north mid-travel; an RT-21 turns its
+   own way) is judged both ways round, the turn taken only if it stays inside either way, and
+   with no reading an arc must be clear of south too (an attack pass: a Rotor-EZ at 300 in a
+   group with ``[20, 340]`` was sent the group's 30 as ``AP1030``, judged as a turn through
+   south, which its rotor cannot pass: it turns through north, out of the group's limits).
 """
 
 from __future__ import annotations
@@ -270,12 +276,31 @@ class Pointing:
 
     def _outside_deg(self, from_raw: float, to_raw: float, within: tuple[float, float]) -> float:
         """Rule 9: how many degrees of the turn from ``from_raw`` to ``to_raw`` lie outside
-        ``within`` (true bearings, lower first)."""
-        lo, hi = within
-        t0 = min(from_raw, to_raw) + self.offset_deg
-        t1 = max(from_raw, to_raw) + self.offset_deg
-        if hi - lo >= 360.0:
+        ``within`` (true bearings, lower first): on the raw scale, and on a scale that wraps
+        with its ends not known to be at its 0 and 360 (``az_ends_at_north`` False: a Hy-Gain
+        rotor's stop is at its south, raw 180; an RT-21 turns its own way) the other way round
+        too, the more of the two."""
+        if within[1] - within[0] >= 360.0:
             return 0.0
+        outside = self._swept_outside(min(from_raw, to_raw), max(from_raw, to_raw), within)
+        if not self.az_wraps or self.az_ends_at_north:
+            return outside
+
+        def mid(raw: float) -> float:  # the scale with its ends at raw 180 (180..540)
+            return raw + 360.0 if raw < 180.0 else raw
+
+        u0s = (180.0, 540.0) if from_raw == 180.0 else (mid(from_raw),)  # (at the stop: either)
+        for u0 in u0s:
+            u1 = mid(to_raw)
+            if to_raw == 180.0:  # (a target at the stop: the end nearer)
+                u1 = min((180.0, 540.0), key=lambda u: abs(u - u0))
+            outside = max(outside, self._swept_outside(min(u0, u1), max(u0, u1), within))
+        return outside
+
+    def _swept_outside(self, r0: float, r1: float, within: tuple[float, float]) -> float:
+        """Rule 9: the degrees of a sweep over raw ``r0``..``r1`` outside ``within``."""
+        lo, hi = within
+        t0, t1 = r0 + self.offset_deg, r1 + self.offset_deg
         inside = 0.0
         for k in range(math.floor((t0 - hi) / 360.0), math.ceil((t1 - lo) / 360.0) + 1):
             inside += max(0.0, min(t1, hi + 360.0 * k) - max(t0, lo + 360.0 * k))
@@ -300,6 +325,8 @@ class Pointing:
             # and from there the next 310 went round again); elsewhere the way depends on
             # where the rotor is
             clear = 0.0 < lo and hi < 360.0
+            if not self.az_ends_at_north:  # (nor its south: a Hy-Gain's stop, raw 180)
+                clear = clear and not lo < 180.0 < hi
             if hi - lo >= 360.0 or (clear and self.az_wraps and self.offset_deg % 360.0 == 0.0):
                 return legal
             raise Refused(

@@ -99,7 +99,15 @@ def test_a_turn_kept_inside_an_arc_takes_the_side_that_stays_in_it() -> None:
     # no reading: the way is not known (rule 9), but on a scale of true bearings that wraps
     assert refused(over.judge, Target(30, within_deg=(20, 340)), None) is RefusalCode.LIMITS
     assert refused(south.judge, Target(200, within_deg=(20, 340)), None) is RefusalCode.LIMITS
-    assert Pointing.of(EZ).judge(Target(30, within_deg=(20, 340)), None).az_deg == 30
+    assert Pointing.of(EZ).judge(Target(200, within_deg=(190, 340)), None).az_deg == 200
+    # ... clear of north and of south, where a Hy-Gain rotor's stop is (an attack pass)
+    assert (
+        refused(Pointing.of(EZ).judge, Target(30, within_deg=(20, 340)), None) is RefusalCode.LIMITS
+    )
+    assert (
+        refused(Pointing.of(EZ).judge, Target(30, within_deg=(20, 340)), 300) is RefusalCode.LIMITS
+    )
+    assert Pointing.of(EZ).judge(Target(200, within_deg=(20, 340)), 300).az_deg == 200
     assert over.judge(Target(30, within_deg=(0, 360)), None).true_az_deg == 30  # (rule 2)
 
 

@@ -59,14 +59,21 @@ def test_an_arc_that_ends_at_north_is_refused_where_no_reading_shows_the_way(
     assert v.truth().az_deg == start_raw
 
 
-def test_an_arc_clear_of_north_is_kept_where_no_reading_shows_the_way(rig: Rig) -> None:
-    # the same DCU-1 with limits 20..340: from inside the arc, no turn on its scale leaves it
+def test_an_arc_clear_of_north_and_south_is_kept_where_no_reading_shows_the_way(
+    rig: Rig,
+) -> None:
+    # the same DCU-1 with limits 190..340: from inside the arc, no turn leaves it, whether its
+    # scale's ends are at north or (a Hy-Gain rotor's stop) at south; 20..340 holds south,
+    # where its stop is (protocols/rotorez.py), and 300 -> 30 may go through north
     v = rig("dcu1", emulator={"start_az_deg": 300})
     cfg = v.cfg.motion
     v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
-    v.aim(Target(30.0, within_deg=(20.0, 340.0)))
+    with pytest.raises(Refused) as refused:
+        v.aim(Target(30.0, within_deg=(20.0, 340.0)))
+    assert refused.value.code is RefusalCode.LIMITS
+    v.aim(Target(200.0, within_deg=(190.0, 340.0)))
     v.run_for(60)
-    assert v.truth().az_deg == pytest.approx(30.0, abs=1.0)
+    assert v.truth().az_deg == pytest.approx(200.0, abs=1.0)
 
 
 def test_an_unplugged_member_s_part_is_refused_as_offline_not_as_its_limits(
@@ -93,3 +100,24 @@ def test_an_unplugged_member_s_part_is_refused_as_offline_not_as_its_limits(
         ]
     finally:
         rot.operators.stop()
+
+
+def test_a_hy_gain_rotors_way_across_north_is_held_to_the_groups_limits(rig: Rig) -> None:
+    """An attack pass: a Rotor-EZ's Hy-Gain rotor has its stop at south (protocols/rotorez.py
+    ``az_ends_at_north=False``, docs/pointing.md: north is mid-travel, ``+10`` from 355 goes
+    out as 5, the turn across north). In a group with ``limits = { upper = [20, 340] }`` at 300,
+    the group's 30 was taken as 300 -> 30 through south and sent (``AP1030``): the rotor, which
+    cannot pass south, turns through north, the 340..20 the group keeps it out of. A scale whose
+    ends are not known to be at north is judged both ways round (pointing.py rule 9)."""
+    v = rig("rotorez", emulator={"start_az_deg": 300})
+    v.run_until(lambda h: h.status.available and h.status.bearing_deg is not None, 10, "reads")
+    t = v.now
+    with pytest.raises(Refused) as refused:  # the group's part, judged as the Rotator does
+        v.aim(Target(30.0, within_deg=(20.0, 340.0)))
+    assert refused.value.code is RefusalCode.LIMITS
+    assert "not reached from 300 without turning outside 20..340" in refused.value.message
+    v.run_for(20)
+    assert [f.data for f in v.frames(since=t) if f.data.startswith(b"AP1")] == []
+    v.aim(Target(200.0, within_deg=(20.0, 340.0)))  # 300 -> 200: inside either way round
+    v.run_until(lambda h: abs(h.truth().az_deg - 200.0) <= 1.0, 60, "turned to 200")
+    assert [f.data for f in v.frames(since=t) if f.data.startswith(b"AP1")] == [b"AP1200\r"]
