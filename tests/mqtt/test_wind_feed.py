@@ -109,3 +109,25 @@ def test_a_park_level_in_m_s_that_no_reading_can_pass_is_refused() -> None:
     ok = rotator(wind_topic="w", wind_unit="m/s", wind_park_above=25, park_az_deg=0)
     assert ok.wind_kmh(ok.wind_park_above) == 90.0
     assert rotator(wind_topic="w", wind_park_above=500, park_az_deg=0).wind_park_above == 500
+
+
+def test_a_reading_too_high_in_one_rotators_unit_still_reaches_the_others(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """An attack pass: two rotators on one wind topic, one in km/h, one in m/s (one of the two
+    set wrong). 300 is a storm in km/h, and 1,080 km/h in m/s, over WIND_MAX_KMH: the reading
+    was dropped for both, and the rotator whose unit was right never parked for a 300 km/h
+    wind. Feed.py rule 3 holds per rotator: each one's unit decides whether it is a reading."""
+    got: list[tuple[str, float]] = []
+    _, handle = wind_feed(
+        [
+            ("w", "km/h", lambda v, r: got.append(("a", v))),
+            ("w", "m/s", lambda v, r: got.append(("b", v))),
+        ],
+        FakeClock(),
+    )
+    caplog.set_level(logging.WARNING, "bridge.features.wind.feed")
+    assert handle("w", b"300", False)
+    assert got == [("a", 300.0)]  # (b's 1,080 km/h is a sensor's fault: dropped, logged)
+    assert "over 1000 km/h" in caplog.text
+    assert handle("w", b"20", False) and got[1:] == [("a", 20.0), ("b", 72.0)]

@@ -14,6 +14,9 @@ Rules:
    in m/s, which became infinite km/h, parked the rotor and put ``Infinity`` in R/status,
    which is no JSON) is dropped and logged at most once per BAD_LOG_S per topic; the wind
    park's silence report (wind.py rule 4) tells the user when nothing readable comes at all.
+   Over WIND_MAX_KMH is judged in each rotator's own unit, for that rotator alone (an attack
+   pass: a topic read in km/h by one rotator and in m/s by another dropped a 300 km/h storm
+   for both, 1,080 km/h in the other's unit, and the first never parked).
 """
 
 from __future__ import annotations
@@ -50,17 +53,22 @@ def wind_feed(
             value = parse_number(payload, "wind speed")
             if value < 0 or not math.isfinite(value):
                 raise PayloadError("wind speed must be 0 or more")
-            kmh = [value * KMH_PER_MS if unit == "m/s" else value for unit, _ in mine]  # rule 1
-            if max(kmh) > WIND_MAX_KMH:
-                raise PayloadError(f"{value:g} is over {WIND_MAX_KMH:g} km/h: a sensor's fault?")
         except PayloadError as exc:
-            now = clock()
-            if now - logged.get(topic, -math.inf) >= BAD_LOG_S:
-                logged[topic] = now
-                log.warning("wind topic %s: reading dropped: %s", topic, exc)
+            dropped(topic, exc)
             return True
-        for speed, (_, to) in zip(kmh, mine, strict=True):
+        for unit, to in mine:  # rule 3: each rotator's own unit decides
+            speed = value * KMH_PER_MS if unit == "m/s" else value  # rule 1
+            if speed > WIND_MAX_KMH:
+                why = f"{value:g} {unit} is over {WIND_MAX_KMH:g} km/h: a sensor's fault?"
+                dropped(topic, PayloadError(why))
+                continue
             to(speed, retain)  # rule 2
         return True
+
+    def dropped(topic: str, exc: PayloadError) -> None:
+        now = clock()
+        if now - logged.get(topic, -math.inf) >= BAD_LOG_S:
+            logged[topic] = now
+            log.warning("wind topic %s: reading dropped: %s", topic, exc)
 
     return sorted({t for t, _, _ in entries}), on_message
