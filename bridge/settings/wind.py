@@ -14,7 +14,7 @@ Rules:
    Both are at most MAX_LEVEL_KMH in km/h, whatever ``wind_unit``: the feed drops every
    reading over features/wind/feed.py's WIND_MAX_KMH as a sensor's fault (its rule 3), and a
    level of 300 m/s (1,080 km/h), which the bound of 500 taken in the user's unit let
-   through, parked for no storm at all (an attack pass).
+   through, never parked: no reading that is kept can pass it (an attack pass).
 3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station;
    and none of the bridge's own (a rotator's, a group's, the bridge's: settings/__init__.py
    ``_wind_topics``), where no weather station publishes. Under a rotator's topic only its
