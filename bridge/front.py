@@ -12,14 +12,18 @@ Rules:
    does not parse): reported where the rotator's refusals go; with ``origin`` (who sent it) it
    is in the audit trail too, where the rotator keeps one.
 3. A front end that needs more of a rotator (rotctld's limits, the console's last halt) says so
-   in a Protocol of its own that extends this one.
+   in a Protocol of its own that extends this one. One that submits a move a while after it
+   was asked, or after a look at the last halt, extends ``HaltCounted``: the count of the
+   rotator's STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
+   remote's, of its own front ends, remote/rotator.py), the count a command of ``source``
+   asked now hands to ``submit`` as ``since`` (``halts_for``), and ``submit`` taking it.
 """
 
 from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.core.model import Command, Origin, RotatorStatus
+from bridge.core.model import Command, Origin, RotatorStatus, Source
 from bridge.protocols.base import ModelSpec
 
 
@@ -33,4 +37,15 @@ class FrontRotator(Protocol):
     def submit(self, command: Command, described: str | None = None) -> None: ...
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None: ...
+
+
+class HaltCounted(FrontRotator, Protocol):
+    """Rule 3: a rotator that counts its halts for a front end's ``since``."""
+
+    @property
+    def halts(self) -> int: ...
+    def halts_for(self, source: Source) -> int: ...
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None: ...

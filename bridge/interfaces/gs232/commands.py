@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from bridge.core.errors import Refused
-from bridge.core.model import Command, Origin, Park, Source, Stop, Target
-from bridge.front import FrontRotator
+from bridge.core.model import Origin, Park, Source, Stop, Target
+from bridge.front import FrontRotator, HaltCounted
 from bridge.interfaces.gs232.parser import (
     DCU1_HARMLESS,
     Dcu1Kind,
@@ -308,20 +308,9 @@ class EasycommSession(_SidedSession):
         return words
 
 
-class Dcu1Rotator(FrontRotator, Protocol):
-    """What the DCU-1 session asks of a rotator besides a front end's (package rule 10): the
-    count of its STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
-    remote's, of its own front ends, remote/rotator.py), the count a command of ``source``
-    asked now hands to ``submit`` as ``since`` (``halts_for``), and ``submit`` taking it."""
-
-    @property
-    def halts(self) -> int: ...
-
-    def halts_for(self, source: Source) -> int: ...
-
-    def submit(
-        self, command: Command, described: str | None = None, *, since: int | None = None
-    ) -> None: ...
+class Dcu1Rotator(HaltCounted, Protocol):
+    """What the DCU-1 session asks of a rotator besides a front end's (package rule 10): its
+    halts counted for ``since`` (front.py rule 3)."""
 
 
 class Dcu1Session(_Session[Dcu1Request]):

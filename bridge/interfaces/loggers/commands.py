@@ -78,26 +78,20 @@ from typing import Protocol
 from bridge.core import geo
 from bridge.core.bands import band_of_mhz
 from bridge.core.errors import Refused
-from bridge.core.model import Command, Origin, Park, Source, Stop, Target, Toward
-from bridge.front import FrontRotator
+from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
+from bridge.front import HaltCounted
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
 from bridge.pointing import angle_between, norm360
 
 
-class Rotator(FrontRotator, Protocol):
+class Rotator(HaltCounted, Protocol):
     """What these commands use of a rotator: the bridge's own or the remote's (front.py rule
     3): when it last carried out a STOP or lock ON (rule 8; monotonic), and its count of them
     as a move of ``source`` hands it to ``submit`` (``since``: rule 8)."""
 
     @property
     def last_halt_s(self) -> float: ...
-    @property
-    def halts(self) -> int: ...
-    def halts_for(self, source: Source) -> int: ...
-    def submit(
-        self, command: Command, described: str | None = None, *, since: int | None = None
-    ) -> None: ...
 
 
 log = logging.getLogger(__name__)
