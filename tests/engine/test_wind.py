@@ -679,36 +679,24 @@ def test_a_storms_park_without_an_elevation_holds_the_elevation_where_it_reads()
         assert abs(v.truth().az_deg - 90.0) <= 1.0
 
 
-def test_a_storms_park_without_an_elevation_parks_a_rotor_reading_below_the_horizon() -> None:
-    """session/targets.py rule 9 beside an Easycomm box whose elevation reads -0.5 (a reading
-    below the horizon is a reading there): the park holds the elevation where it reads, and
-    -0.5 is nothing the box can be sent, so the park never went out: the session's step
-    failed at every try while the storm blew. It holds the nearest the box can be sent."""
+@pytest.mark.parametrize(
+    ("model", "el_min", "start_el", "sent_as"),
+    [("easycomm2", None, -0.5, b"AZ90.0 EL0.0\n"), ("gs232b", 10.0, 0.0, b"W090 000\r")],
+)
+def test_a_storms_park_without_an_elevation_holds_it_where_the_box_can_be_sent(
+    model: str, el_min: float | None, start_el: float, sent_as: bytes
+) -> None:
+    """session/targets.py rule 9: the elevation a storm's park leaves out is held where it
+    reads, inside what the controller can be sent, not inside the user's el_min_deg. An
+    Easycomm box reading -0.5 (a reading below the horizon is a reading there) was sent
+    nothing, -0.5 being nothing it can be sent: the session's step failed at every try while
+    the storm blew. A dish resting at 0 below a limit of 10 (docs/homeassistant.md names the
+    case) was lifted to 10, an axis the park leaves as it is, off its rest in the storm."""
+    extra = {} if el_min is None else {"el_min_deg": el_min}
     with VirtualRotator(
-        "easycomm2",
-        settings={**WIND},
-        emulator={"start_az_deg": 200, "start_el_deg": -0.5},
-        sky=Sky(52.5, 13.4),
-    ) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        t = v.now
-        wind(v, 90.0)
-        v.run_until(lambda h: h.status.parked, 120, "parked for the storm")
-        assert v.errors("internal", since=t) == []
-        sent = [w for w in v.sent(since=t) if w.startswith(b"AZ") and w != b"AZ EL\n"]
-        assert sent == [b"AZ90.0 EL0.0\n"]  # (not the queries)
-        assert abs(v.truth().az_deg - 90.0) <= 1.0 and v.truth().el_deg <= 0.5
-
-
-def test_a_storms_park_without_an_elevation_leaves_a_dish_resting_below_its_limit_at_rest() -> None:
-    """session/targets.py rule 9: the elevation held where it reads is held inside what the
-    controller can be sent, not inside the user's el_min_deg: a dish resting at 0 below a
-    limit of 10 (docs/homeassistant.md names the case) was lifted to 10 by the storm's park,
-    an axis the park leaves as it is, off its rest in the storm."""
-    with VirtualRotator(
-        "gs232b",
-        settings={**WIND, "el_min_deg": 10},
-        emulator={"start_az_deg": 200, "start_el_deg": 0},
+        model,
+        settings={**WIND, **extra},
+        emulator={"start_az_deg": 200, "start_el_deg": start_el},
         sky=Sky(52.5, 13.4),
     ) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
@@ -716,6 +704,9 @@ def test_a_storms_park_without_an_elevation_leaves_a_dish_resting_below_its_limi
         wind(v, 90.0)
         v.run_until(lambda h: h.status.parked, 120, "parked for the storm")
         v.run_for(30)
-        sets = [w for w in v.sent(since=t) if w.startswith(b"W")]
-        assert sets == [b"W090 000\r"], sets
-        assert v.truth().el_deg == 0.0 and abs(v.truth().az_deg - 90.0) <= 1.0, v.truth()
+        assert v.errors("internal", since=t) == []
+        sets = [w for w in v.sent(since=t) if w[:1] in b"AW" and w != b"AZ EL\n"]
+        assert sets == [sent_as], sets  # (not the queries)
+        assert abs(v.truth().az_deg - 90.0) <= 1.0, v.truth()
+        assert v.truth().el_deg <= 0.5, v.truth()
+        assert el_min is None or v.truth().el_deg == start_el, v.truth()  # at rest, untouched

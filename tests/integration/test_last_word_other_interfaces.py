@@ -170,13 +170,10 @@ def loggers_held_on(app: App, data: bytes) -> Iterator[threading.Event]:
         release.set()
 
 
-def test_a_logger_target_sent_before_a_rotctld_stop_and_read_after_it_never_turns_the_rotor(
-    rig: Rig,
-) -> None:
-    """A logger turns the rotor to 300 on the PstRotator port; the operator, seeing the wrong
-    call, stops it with Hamlib's S on rotctld. The loggers' thread was behind (a neighbour's
-    flood on the port): the datagram, in the system's buffer before the stop, was read after
-    it and turned the rotor again (an attack pass)."""
+def _tower_on_pst_and_rotctld(rig: Rig) -> tuple[Any, Any, int, socket.socket, int]:
+    """A turning-capable Rotor-EZ ``tower`` with a PstRotator port and a rotctld port, its
+    bridge started and ready: the emulator, the app, the PST port, the socket its replies come
+    to, and the rotctld port."""
     port, replies = reserve_pst_ports()
     rotctld = free_port()
     emu = rig.add(
@@ -187,6 +184,17 @@ def test_a_logger_target_sent_before_a_rotctld_stop_and_read_after_it_never_turn
     )
     app = rig.start()
     rig.ready("tower")
+    return emu, app, port, replies, rotctld
+
+
+def test_a_logger_target_sent_before_a_rotctld_stop_and_read_after_it_never_turns_the_rotor(
+    rig: Rig,
+) -> None:
+    """A logger turns the rotor to 300 on the PstRotator port; the operator, seeing the wrong
+    call, stops it with Hamlib's S on rotctld. The loggers' thread was behind (a neighbour's
+    flood on the port): the datagram, in the system's buffer before the stop, was read after
+    it and turned the rotor again (an attack pass)."""
+    emu, app, port, replies, rotctld = _tower_on_pst_and_rotctld(rig)
     assert app.loggers is not None
     counts = app.loggers.counts["pst"]
     blocker = b"<PST>MODE?</PST>"
@@ -229,16 +237,7 @@ def test_a_logger_target_looked_at_just_before_a_rotctld_stop_never_turns_the_ro
     the 300 came to it, after the S, and the rotor turned to 300 after the STOP (an attack
     pass: under a neighbour's flood the loggers' thread loses the interpreter anywhere in its
     loop, to the very thread that carries out the S)."""
-    port, replies = reserve_pst_ports()
-    rotctld = free_port()
-    emu = rig.add(
-        "tower",
-        emu={"start_az_deg": 10, "speed_deg_s": 20.0},
-        pst_udp_port=port,
-        rotctld_port=rotctld,
-    )
-    app = rig.start()
-    rig.ready("tower")
+    emu, app, port, replies, rotctld = _tower_on_pst_and_rotctld(rig)
     assert app.loggers is not None
     commands = app.loggers._commands
     looked = commands._stale
