@@ -126,6 +126,10 @@ class WindFields(Strict):
 
     def wind_kmh(self, value: float | None) -> float | None:
         """A threshold of this rotator's unit in km/h."""
-        if value is None:
-            return None
-        return value * KMH_PER_MS if self.wind_unit == "m/s" else value
+        return None if value is None else to_kmh(value, self.wind_unit)
+
+
+def to_kmh(value: float, unit: str) -> float:
+    """A speed in ``unit`` (a ``wind_unit``: km/h or m/s) in km/h: a threshold here, a reading
+    in the feed (features/wind/feed.py rule 1)."""
+    return value * KMH_PER_MS if unit == "m/s" else value

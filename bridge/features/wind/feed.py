@@ -27,11 +27,11 @@ import time
 from collections.abc import Callable
 
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_number
+from bridge.settings.wind import to_kmh
 
 log = logging.getLogger(__name__)
 
 BAD_LOG_S = 60.0
-KMH_PER_MS = 3.6
 WIND_MAX_KMH = 1000.0  # rule 3: a sensor's fault above this (the highest gust measured: 408)
 
 Handler = Callable[[str, bytes, bool], bool]
@@ -57,7 +57,7 @@ def wind_feed(
             dropped(topic, exc)
             return True
         for unit, to in mine:  # rule 3: each rotator's own unit decides
-            speed = value * KMH_PER_MS if unit == "m/s" else value  # rule 1
+            speed = to_kmh(value, unit)  # rule 1
             if speed > WIND_MAX_KMH:
                 why = f"{value:g} {unit} is over {WIND_MAX_KMH:g} km/h: a sensor's fault?"
                 dropped(topic, PayloadError(why))
