@@ -145,6 +145,16 @@ def test_the_groups_bearing_is_its_first_available_members() -> None:
     assert json.loads(status_json(STACK, alone, {}))["bearing"] == 10.0
 
 
+def test_the_groups_bearing_a_hair_short_of_north_is_north_not_360() -> None:
+    """A member reading 179.97 less its offset of 180 is 359.97: rounded to a tenth, that is
+    north, shown as 0.0 (it was 360.0, a bearing the group's scale of 0 to 360 never shows)."""
+    statuses = {
+        "upper": None,
+        "lower": RotatorStatus("lower", MotionState.IDLE, 179.97, available=True),
+    }
+    assert json.loads(status_json(STACK, statuses, {}))["bearing"] == 0.0
+
+
 # -- the service -------------------------------------------------------------------------------
 def group_service(
     refuse_lower: Refused | None = None,

@@ -169,7 +169,7 @@ def group_bearing(group: Group, statuses: Mapping[str, RotatorStatus | None]) ->
         for m in group.members:
             s = statuses.get(m.id)
             if s is not None and s.bearing_deg is not None and (s.available or not available):
-                return round((s.bearing_deg - m.offset_deg) % 360.0, 1)
+                return round((s.bearing_deg - m.offset_deg) % 360.0, 1) % 360.0  # 359.97: 0.0
     return None
 
 
