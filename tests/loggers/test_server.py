@@ -94,6 +94,41 @@ def test_an_n1mm_stop_for_every_rotor_stops_every_rotator_on_the_port() -> None:
         ep.stop()
 
 
+def test_a_stop_with_a_byte_that_is_not_ascii_still_stops_and_a_turn_with_one_moves_nothing() -> (
+    None
+):
+    """A stop is never refused (datagrams.py rule 1): a PST STOP from a logger that put a degree
+    sign beside it, and an N1MM stop to every rotor whose band field held a Latin-1 byte, were
+    dropped whole as not ASCII, and the rotors turned on. A turn with such a byte still moves
+    nothing."""
+    tower, yagi = Recording("tower"), Recording("yagi")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, port=0)  # type: ignore[arg-type]
+    ep.add_n1mm(yagi, "Yagi", port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        send(pst_port, "<PST><AZIMUTH>85°</AZIMUTH></PST>".encode("latin-1"))
+        send(
+            n1mm_port,
+            "<N1MMRotor><rotor>Yagi</rotor><goazi>90</goazi><freqband>14°</freqband></N1MMRotor>".encode(
+                "latin-1"
+            ),
+        )
+        send(pst_port, "<PST><STOP>1</STOP> °</PST>".encode())
+        send(
+            n1mm_port,
+            "<N1MMRotor><stop><rotor>*</rotor><freqband>14°</freqband></stop></N1MMRotor>".encode(
+                "latin-1"
+            ),
+        )
+        wait_until(lambda: tower.calls and yagi.calls, 5, "both stopped")
+        assert tower.calls == [Stop(Source.PST)] and yagi.calls == [Stop(Source.N1MM)]
+    finally:
+        ep.stop()
+
+
 def test_a_pst_azimuth_beyond_hamlibs_range_is_refused_not_folded() -> None:
     """Cold review: any finite azimuth was folded, 99999 became 279."""
     tower = Recording("tower")

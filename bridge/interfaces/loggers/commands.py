@@ -80,7 +80,7 @@ from bridge.core.bands import band_of_mhz
 from bridge.core.errors import Refused
 from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
 from bridge.front import HaltCounted
-from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
+from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, ascii_text, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
 from bridge.pointing import angle_between, norm360
 
@@ -288,7 +288,7 @@ class Commands:
             except OSError as exc:
                 log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
         counts.ignored += len(req.ignored)
-        described = "pst " + data.decode("ascii").strip()  # rule 7: whole
+        described = "pst " + ascii_text(data).strip()  # rule 7: whole
         # who sent it (the audit trail, the lease): on the commands themselves, which every
         # rotator these endpoints serve takes (the bridge's and the remote's)
         by = Origin(Source.PST, None, peer[0])
@@ -359,7 +359,7 @@ class Commands:
         """Rules 1 and 4 (``peer``: the sender's address; ``arrived``: rule 8)."""
         by = Origin(Source.N1MM, None, peer)
         counts = self.counts["n1mm"]
-        described = "n1mm " + data.decode("ascii").strip()  # rule 7: whole
+        described = "n1mm " + ascii_text(data).strip()  # rule 7: whole
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
             stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]

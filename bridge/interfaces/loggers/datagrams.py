@@ -2,7 +2,9 @@
 and rendered. Pure. Written from ../shared/protocols/logger-udp.md.
 
 Rules:
-1. A datagram is at most MAX_DATAGRAM bytes of ASCII; anything else is Malformed, and so is
+1. A datagram is at most MAX_DATAGRAM bytes of ASCII; anything else is Malformed (but for one
+   that may be a stop, rule 6, whose bytes that are not ASCII are read as ``?``: a stop is
+   never refused, and a degree sign or a Latin-1 byte beside one dropped it whole), and so is
    every datagram that is not wholly understood: a number that is not one (NaN, inf, empty,
    ``12x``), text outside the tags, a tag left open, a ``PARK`` that is neither ``1`` nor ``0``
    (an attack pass: ``0.0``, ``false`` or ``no`` parked the rotor), a ``QRA`` that is no 4, 6
@@ -38,6 +40,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 MAX_DATAGRAM = 2048
@@ -79,6 +82,11 @@ class N1mmRequest:
     freqband_unread: str | None = None  # rule 4: a <freqband> given that is no number, as sent
 
 
+def ascii_text(datagram: bytes) -> str:
+    """A datagram as text, each byte that is not ASCII read as ``?`` (rule 1)."""
+    return datagram.decode("ascii", "replace").replace("\ufffd", "?")
+
+
 def may_stop_pst(datagram: bytes) -> bool:
     """Rule 6."""
     return b"<stop>" in datagram.lower()
@@ -89,11 +97,16 @@ def may_stop_n1mm(datagram: bytes) -> bool:
     return b"<stop" in datagram.lower()
 
 
-def _text(datagram: bytes, pattern: re.Pattern[bytes], what: str) -> str:
+def _text(
+    datagram: bytes, pattern: re.Pattern[bytes], what: str, may_stop: Callable[[bytes], bool]
+) -> str:
     if len(datagram) > MAX_DATAGRAM:
         raise Malformed(f"{len(datagram)} bytes, over {MAX_DATAGRAM}")
     if not datagram.isascii():
-        raise Malformed("not ASCII")
+        if not may_stop(datagram):
+            raise Malformed("not ASCII")
+        datagram = ascii_text(datagram).encode("ascii")  # rule 1: a stop's other bytes, '?'
+
     m = pattern.match(datagram)
     if m is None:
         raise Malformed(f"not a {what} datagram")
@@ -112,7 +125,7 @@ def _number(text: str, tag: str) -> float:
 
 def parse_pst(datagram: bytes) -> PstRequest:
     """Rule 2 (Malformed for anything not wholly understood, or ambiguous; a stop never)."""
-    body = _text(datagram, _PST, "<PST>")
+    body = _text(datagram, _PST, "<PST>", may_stop_pst)
     try:
         return _pst(body)
     except Malformed:
@@ -186,7 +199,7 @@ _STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 
 def parse_n1mm(datagram: bytes) -> N1mmRequest:
     """Rule 4 (Malformed for anything not understood, or ambiguous)."""
-    body = _text(datagram, _N1MM, "<N1MMRotor>")
+    body = _text(datagram, _N1MM, "<N1MMRotor>", may_stop_n1mm)
     stop = "<stop" in body.lower()
     rest = _STOP_WRAP.sub("", _N1MM_TAG.sub("", body))
     if rest.strip() and not stop:  # (beside a stop, what cannot be read is moot)
