@@ -44,7 +44,11 @@ Rules:
    -10 at 0) is refused, never taken the whole way round, as past a SPID's stop. Where north
    is the middle of the travel (a Hy-Gain rotor's stop is at south: a Rotor-EZ, a DCU-1) or
    the controller is never sent 360 and turns its own way (an RT-21), it is folded as before:
-   +10 at 355 goes out as 5 (``AP1005``), the turn across north the controller makes. A
+   +10 at 355 goes out as 5 (``AP1005``), the turn across north the controller makes; but a
+   nudge across raw 180 is refused, and any nudge from raw 180 itself (a Hy-Gain rotor cannot
+   pass its stop there: +10 at 175 went out as ``AP1185``, a turn of 350 degrees through
+   north, and at the stop no reading says which end the rotor is at; an RT-21 may turn a
+   Hy-Gain rotor too). A
    nudge is less than a turn each way: a step of 360 degrees or more is refused (an attack
    pass: ``1e308`` turned a rotor to its remainder, 296, and ``720`` was taken as no step at
    all).
@@ -423,6 +427,20 @@ class Pointing:
             raise Refused(RefusalCode.UNSUPPORTED, "no park position configured (park_az_deg)")
         return self.park
 
+    def _clear_of_south(self, raw: float, d_az: float) -> None:
+        """Rule 6: a nudge of ``d_az`` from ``raw`` on a scale whose stop may be at raw 180 (a
+        Hy-Gain rotor's) stays on its side of it, or is refused."""
+        past = (raw - 180.0) % 360.0  # clockwise from the stop
+        if past != 0.0 and 0.0 <= past + d_az <= 360.0:
+            return
+        where = "starts at" if past == 0.0 else "crosses"
+        raise Refused(
+            RefusalCode.LIMITS,
+            f"a nudge of {d_az:+g} degrees {where} south on the {self.model_name}'s scale "
+            f"(controller {raw:g}), where a Hy-Gain rotor has its stop: it would turn the whole "
+            "way round; send a target",
+        )
+
     def nudge(
         self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool = False
     ) -> Target:
@@ -490,6 +508,8 @@ class Pointing:
             if 0.0 <= new_az <= 360.0:  # on the scale: the least travel is this side anyway
                 new_az = norm360(new_az)
         elif d_az:
+            if self.az_wraps and raw is not None:  # (not az_ends_at_north: its stop at raw 180?)
+                self._clear_of_south(raw, d_az)
             new_az = norm360(az + d_az)
         el: float | None = None
         if d_el is not None and d_el != 0.0:

@@ -199,6 +199,29 @@ def test_a_nudge_across_north_in_the_middle_of_the_travel_is_folded_as_before() 
     assert composite.judge(composite.nudge(_at(355), 10, None), 355).az_deg == 5
 
 
+def test_a_nudge_across_a_hy_gain_rotors_stop_at_south_is_refused_not_taken_round() -> None:
+    """Rule 6: a Hy-Gain rotor cannot pass its stop at south, so ``+10`` at 175 sent as
+    ``AP1185`` turned it 350 degrees back through north for a nudge (an RT-21, which may turn a
+    Hy-Gain rotor too, goes its own way there). Refused, as a nudge past a Yaesu's end is: at
+    the stop itself either way, since which end the rotor is at no reading says; up to it and
+    across north as before; so with an offset, and from a target being approached."""
+    for model in ("rotorez", "dcu1", "rt21"):
+        p = Pointing.of(REGISTRY[model])
+        for raw, step, sent in ((170, 10, 180), (190, -10, 180), (100, 79, 179), (355, 10, 5)):
+            assert p.judge(p.nudge(_at(raw), step, None), raw).az_deg == sent, (model, raw, step)
+        for raw, step in ((175, 10), (185, -10), (180, 10), (180, -10), (0, 200), (90, -300)):
+            with pytest.raises(Refused) as exc:
+                p.nudge(_at(raw), step, None)
+            assert exc.value.code is RefusalCode.LIMITS, (model, raw, step)
+            assert "south" in exc.value.message, (model, raw, step)
+    mounted = Pointing.of(REGISTRY["rotorez"], offset_deg=90)  # raw 175 points at 265
+    assert refused(mounted.nudge, _at(175, 90), 10, None) is RefusalCode.LIMITS
+    going = RotatorStatus(
+        "t", MotionState.MOVING, bearing_deg=100, target_az_deg=175, raw_target_az_deg=175
+    )
+    assert refused(mounted.nudge, going, 10, None) is RefusalCode.LIMITS  # from the target
+
+
 @pytest.mark.parametrize("step", [(1e308, None), (-1e300, None), (720, None), (360, None),
                                   (-360, None), (10, 1e308), (0, -400)])  # fmt: skip
 def test_a_nudge_of_a_turn_or_more_is_refused(step: tuple[float, float | None]) -> None:

@@ -85,6 +85,21 @@ def test_a_nudge_across_north_goes_out_as_the_rotor_turns_there(
     assert [f.data for f in emu.frames(*BEARING_FRAMES)] == [sent]
 
 
+def test_a_nudge_across_the_stop_at_south_is_refused_and_nothing_is_sent(rig: Rig) -> None:
+    """Pointing rule 6: ``+10`` from 175 went out as ``AP1185``: the Hy-Gain rotor, which
+    cannot pass its stop at south, turned 350 degrees through north for a nudge."""
+    emu = rig.add("tower", emu={"start_az_deg": 175, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    rig.probe.publish("rotor/nudge", "+10")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "where a Hy-Gain rotor has its stop" in err["message"]
+    rig.probe.publish("rotor/nudge", "-10")  # the other way: taken
+    emu.wait_for(lambda s: s.is_moving)
+    assert [f.data for f in emu.frames(*BEARING_FRAMES)] == [b"AP1165\r"]
+
+
 def test_retarget_while_turning_ends_at_the_last_target_and_never_hits_the_brake_delay(
     rig: Rig,
 ) -> None:
