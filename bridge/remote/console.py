@@ -181,6 +181,11 @@ class RemoteConsoleRotator:
         ends (the console's own are ordered by its queue of commands)."""
         return self.remote.halts_besides(Source.WEB)
 
+    def on_its_way(self) -> bool:
+        """The station's judge says what is on its way there (server.py rule 10 is not for a
+        rotator whose commands block)."""
+        return False
+
     @property
     def commands_block(self) -> bool:
         # a command waits for the broker's acknowledgement (interfaces/mqtt/remote.py rule 7)

@@ -469,6 +469,13 @@ class Rotator:
             return True
         return self._mailbox.motion_unseen(shown)
 
+    def on_its_way(self) -> bool:
+        """A motion command put that the status does not show yet (mailbox.py rule 10a): a
+        command made from the status (a nudge, the other path) is refused as ``_seen`` says
+        until it shows; the console waits for that before it judges one (interfaces/web/
+        server.py rule 10)."""
+        return self._mailbox.motion_unseen(self._worker.newest_applied)
+
     def ticket(self) -> int:
         """A place in the order of commands (mailbox.py rule 10a): what a front end that
         submits a motion command a while after it was asked takes when it is asked, and hands

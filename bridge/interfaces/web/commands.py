@@ -119,6 +119,11 @@ class WebCommand:
             return (self.name or "").strip().casefold() == "off"
         return self.command == "stop" or (self.command == "lock" and self.on)
 
+    def from_status(self) -> bool:
+        """Made from the rotator's status by its judge (a nudge, the other path): judged once
+        what is on its way shows there (server.py rule 10)."""
+        return self.command in ("nudge", "path")
+
     def command_for(self, by: Origin) -> Command:
         """The command for the judge (core/model.py's union), sent by ``by`` (rule 4)."""
         src = Source.WEB

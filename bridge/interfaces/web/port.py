@@ -50,6 +50,11 @@ class ConsoleRotator(FrontRotator, Protocol):
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None: ...
+    def on_its_way(self) -> bool:
+        """A motion command taken that the status does not show yet: a command made from the
+        status waits for it (server.py rule 10); never, where ``commands_block``."""
+        ...
+
     @property
     def commands_block(self) -> bool:
         """Carrying out a command may wait for a round trip far away (the remote's rotator

@@ -60,6 +60,15 @@ Rules:
    as is one without its length over the 16 KiB the server reads at most (an attack pass:
    from 16 KiB on it was a bare 413 "Request Entity Too Large", said nowhere, neither on
    R/error nor in the log).
+10. A command the judge makes from the rotator's status (a nudge, the other path: commands.py
+   ``from_status``) while a motion command taken before it is not in that status yet
+   (runtime/rotator.py ``on_its_way``) waits for it on the loop, SHOWN_S at most, then is
+   judged as it came (rule 5's look again: a STOP meanwhile, or a newer click of the page's,
+   makes it stale): three quick clicks on +5 are +15 (commands.py rule 5a). The judge refuses
+   one made from a status that does not show what is on its way ("send it again"), and a
+   second click came within a millisecond of the first, before the lines thread took it (a
+   failed CI run). Still on its way after SHOWN_S (a line that owes a long reply), the judge
+   refuses it so.
 """
 
 from __future__ import annotations
@@ -103,6 +112,8 @@ from bridge.interfaces.web.port import ConsoleRotator
 log = logging.getLogger(__name__)
 
 BODY_S = 10.0  # a command's or a login's body arrives within this, or it is not waited for
+SHOWN_S = 3.0  # rule 10: a nudge waits this long at most for the command before it to show
+SHOWN_POLL_S = 0.005  # rule 10: how often it looks
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
 NOISE_EVERY_S = 10.0
@@ -620,6 +631,11 @@ class WebConsole:
             why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
+        if not away and not halt and cmd.from_status() and rot.on_its_way():  # rule 10
+            stale = await self._shown(rot, cmd, self._started[id(request)])
+            if stale is not None:
+                rot.report_refusal(stale, cmd.described(), origin=by)
+                return _json({"error": stale, "code": "stale"}, 409)
         self._order.took(rot.id, cmd)  # (commands.py rule 5a)
         try:
             if far is not None and away:  # rule 5
@@ -643,6 +659,15 @@ class WebConsole:
         if halt:
             self._order.halted(rot.id, cmd, time.monotonic())
         return _json({"ok": True})
+
+    async def _shown(self, rot: ConsoleRotator, cmd: WebCommand, started: float) -> str | None:
+        """Rule 10: once what is on its way shows (or SHOWN_S went by), why ``cmd`` is stale
+        now (rule 5), if it is; nothing awaits between the last look and the judge."""
+        end = time.monotonic() + SHOWN_S
+        while rot.on_its_way() and time.monotonic() < end:
+            await asyncio.sleep(SHOWN_POLL_S)
+        stale = self._order.stale(rot.id, cmd, started, rot.last_halt_s)
+        return stale or aged(cmd, feed_clock())
 
 
 def _land_gzip(station: tuple[float, float]) -> bytes:
