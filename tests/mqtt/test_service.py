@@ -430,6 +430,9 @@ M = Source.MQTT
         ),
         ("rotor/b/preset", b" EU ", ("preset", "EU", M, "preset ' EU '")),
         ("rotor/b/park", b"PRESS", ("park", M, "park 'PRESS'")),  # any payload but empty
+        # a Node-RED inject node's timestamp, and a JSON string that says park
+        ("rotor/b/park", b"1764806400000", ("park", M, "park '1764806400000'")),
+        ("rotor/b/park", b'"PARK"', ("park", M, "park '\"PARK\"'")),
         ("rotor/b/nudge", b"+10", ("nudge", 10.0, None, M, "nudge '+10'")),
         ("rotor/b/nudge", b"-2.5", ("nudge", -2.5, None, M, "nudge '-2.5'")),
         (
@@ -536,6 +539,13 @@ def test_each_command_topic_reaches_its_rotator(
          "park '" + "P" * 256 + "'\u2026"),
         ("rotor/park", b"OFF", "'OFF' does not park: send PARK", "park 'OFF'"),
         ("rotor/park", b"0", "'0' does not park: send PARK", "park '0'"),
+        # an attack pass: each of these parked the rotor
+        ("rotor/park", b"no", "'no' does not park: send PARK", "park 'no'"),
+        ("rotor/park", b"null", "'null' does not park: send PARK", "park 'null'"),
+        ("rotor/park", b"0.0", "'0.0' does not park: send PARK", "park '0.0'"),
+        ("rotor/park", b'"off"', "'\"off\"' does not park: send PARK", "park '\"off\"'"),
+        ("rotor/park", b'{"park": false}', "'{\"park\": false}' does not park: send PARK",
+         "park '{\"park\": false}'"),
         ("rotor/health/reset", b"false",
          "'false' does not reset rotor health: send RESET", "health_reset 'false'"),
     ],

@@ -65,6 +65,8 @@ def _status_encoder() -> Callable[[object], str]:
 _STATUS_ENCODE = _status_encoder()
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
+# words that never press a button (parse_press): a switch's off and what else says "no"
+_NOT_A_PRESS = _FALSE | {"no", "n", "f", "none", "null", "nil", "undefined", "stop", "cancel"}
 
 
 class PayloadError(ValueError):
@@ -315,11 +317,35 @@ def parse_press(payload: bytes, what: str, word: str) -> str:
     """A button's press (``R/park``, ``R/health/reset``): any text but a word that says no
     (OFF, 0, false: a dashboard's switch turned off must not park a rotor) and none of what
     any payload may not be (not UTF-8, too large: rule 2; an attack pass parked a rotor on
-    4096 bytes of 0xFF)."""
+    4096 bytes of 0xFF).
+
+    A word that says no is any spelling of one a sender may mean as "not now" (an attack pass
+    parked a rotor on ``no``, ``null`` and ``{"park": false}``): the words of ``_NOT_A_PRESS``,
+    also as a JSON string, JSON's false and null, a zero in any spelling, and any JSON object
+    or array (a press carries no document, and one that says ``false`` inside must not move a
+    rotor). A number other than zero is a press: Node-RED's inject node sends a timestamp."""
     text = _text(payload)
-    if text.lower() in _FALSE:
+    if _not_a_press(text):
         raise PayloadError(f"{text[:20]!r} does not {what}: send {word}")
     return text
+
+
+def _not_a_press(text: str) -> bool:
+    word = text.lower()
+    if word in _NOT_A_PRESS:
+        return True
+    if text[0] in "{[":
+        return True  # a document, whatever it holds (see parse_press)
+    if text[0] == '"':
+        try:
+            inner = json.loads(text)
+        except ValueError:
+            return False
+        return not isinstance(inner, str) or _not_a_press(inner.strip() or "0")
+    try:
+        return float(word) == 0  # 0.0, -0, 00, 0e0; nan and inf are no number a switch sends
+    except ValueError:
+        return False
 
 
 def parse_switch(payload: bytes) -> bool:
