@@ -129,6 +129,29 @@ def test_a_stop_with_a_byte_that_is_not_ascii_still_stops_and_a_turn_with_one_mo
         ep.stop()
 
 
+def test_a_stop_padded_past_2_kib_still_stops_and_a_turn_so_padded_moves_nothing() -> None:
+    """A stop is never refused (datagrams.py rule 7): a PST STOP and an N1MM stop padded past
+    MAX_DATAGRAM (the socket gives the first 2 KiB and a byte, the rest is lost) were dropped
+    whole as over-long, and the rotors turned on. A turn so padded still moves nothing."""
+    tower, yagi = Recording("tower"), Recording("yagi")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, port=0)  # type: ignore[arg-type]
+    ep.add_n1mm(yagi, "Yagi", port=0)  # type: ignore[arg-type]
+    ep.start()
+    pad = b" " * 3000
+    try:
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        send(pst_port, b"<PST><AZIMUTH>85</AZIMUTH>" + pad + b"</PST>")
+        send(n1mm_port, b"<N1MMRotor><rotor>Yagi</rotor><goazi>90</goazi>" + pad + b"</N1MMRotor>")
+        send(pst_port, b"<PST><STOP>1</STOP>" + pad + b"</PST>")
+        send(n1mm_port, b"<N1MMRotor><stop><rotor>Yagi</rotor></stop>" + pad + b"</N1MMRotor>")
+        wait_until(lambda: tower.calls and yagi.calls, 5, "both stopped")
+        assert tower.calls == [Stop(Source.PST)] and yagi.calls == [Stop(Source.N1MM)]
+    finally:
+        ep.stop()
+
+
 def test_a_pst_azimuth_beyond_hamlibs_range_is_refused_not_folded() -> None:
     """Cold review: any finite azimuth was folded, 99999 became 279."""
     tower = Recording("tower")

@@ -3,7 +3,7 @@ and rendered. Pure. Written from ../shared/protocols/logger-udp.md.
 
 Rules:
 1. A datagram is at most MAX_DATAGRAM bytes of ASCII; anything else is Malformed (but for one
-   that may be a stop, rule 6, whose bytes that are not ASCII are read as ``?``: a stop is
+   that may be a stop, rules 6 and 7, whose bytes that are not ASCII are read as ``?``: a stop is
    never refused, and a degree sign or a Latin-1 byte beside one dropped it whole), and so is
    every datagram that is not wholly understood: a number that is not one (NaN, inf, empty,
    ``12x``), text outside the tags, a tag left open, a ``PARK`` that is neither ``1`` nor ``0``
@@ -34,6 +34,11 @@ Rules:
 6. Whether a datagram may be a stop is told by one byte search, before any parsing: ``<STOP>``
    (PST, any case) or ``<stop`` (N1MM, any case), the forms rules 2 and 4 read as a stop, so
    every datagram the parsers call a stop is one of them (and some junk too).
+7. A datagram over MAX_DATAGRAM bytes (the socket gives the first MAX_DATAGRAM + 1 of it, the
+   rest is lost) is Malformed, but for a stop: one that begins as its form does (``<PST>``,
+   ``<N1MMRotor>``) and holds its stop (``<STOP>``; ``<stop`` and a rotor's name, from
+   ``<rotor>`` or ``<stop>``'s text) in what was read is that stop (a stop is never refused:
+   one padded past 2 KiB was dropped, and the rotor turned on). Anything else in it is moot.
 """
 
 from __future__ import annotations
@@ -123,8 +128,21 @@ def _number(text: str, tag: str) -> float:
     return value
 
 
+def _over_long_stop(datagram: bytes, head: bytes, may_stop: Callable[[bytes], bool]) -> str | None:
+    """Rule 7: an over-long datagram of this form that may be a stop: its text as read (the
+    socket gives at most MAX_DATAGRAM + 1 bytes, the rest is lost), else None."""
+    if len(datagram) <= MAX_DATAGRAM or not may_stop(datagram):
+        return None
+    if not datagram.lstrip()[: len(head)].lower() == head:
+        return None
+    return ascii_text(datagram)
+
+
 def parse_pst(datagram: bytes) -> PstRequest:
     """Rule 2 (Malformed for anything not wholly understood, or ambiguous; a stop never)."""
+    long = _over_long_stop(datagram, b"<pst>", may_stop_pst)
+    if long is not None and "<STOP>" in long.upper():  # rule 7
+        return PstRequest(stop=True)
     body = _text(datagram, _PST, "<PST>", may_stop_pst)
     try:
         return _pst(body)
@@ -197,8 +215,18 @@ _ONCE = ("rotor", "goazi", "offset", "bidirectional", "freqband")  # a turn's, e
 _STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 
 
+def _stop_names(text: str) -> list[str]:
+    """Rule 7: the rotors' names an over-long stop gives in what was read, ``<rotor>``'s first."""
+    tags = [(m.group("tag").lower(), m.group("value").strip()) for m in _N1MM_TAG.finditer(text)]
+    names = [v for t, v in tags if t == "rotor"] + [v for t, v in tags if t == "stop"]
+    return [n for n in dict.fromkeys(names) if n and len(n) <= MAX_NAME and n.isprintable()]
+
+
 def parse_n1mm(datagram: bytes) -> N1mmRequest:
     """Rule 4 (Malformed for anything not understood, or ambiguous)."""
+    long = _over_long_stop(datagram, b"<n1mmrotor>", may_stop_n1mm)
+    if long is not None and (names := _stop_names(long)):  # rule 7
+        return N1mmRequest(names[0], stop=True, also=tuple(names[1:]))
     body = _text(datagram, _N1MM, "<N1MMRotor>", may_stop_n1mm)
     stop = "<stop" in body.lower()
     rest = _STOP_WRAP.sub("", _N1MM_TAG.sub("", body))
