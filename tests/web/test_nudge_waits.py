@@ -158,3 +158,24 @@ def test_a_nudge_whose_command_before_never_shows_is_refused_as_the_judge_says(
     assert (answer.status, answer.doc.get("code")) == (409, "stale")
     assert answer.doc["error"] == ON_ITS_WAY_MESSAGE
     assert rot.carried == []
+
+
+def test_a_nudge_beyond_the_waiters_bound_is_refused_at_once_and_the_waiting_one_still_goes(
+    near: tuple[NearRotator, ConsoleClient], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each waiting nudge looks every SHOWN_POLL_S: a client posting hundreds at a line that
+    owes a long reply kept the loop busy with their looks. Beyond SHOWN_WAITERS, one is
+    refused at once, said as busy; the one waiting is judged as before."""
+    rot, client = near
+    monkeypatch.setattr(server, "SHOWN_WAITERS", 1)
+    rot.way.set()
+    answers: list[Answer] = []
+    first = _posted(client, answers, command="nudge", d_az=5, page="p", seq=2)
+    _waiting(rot)
+    second = client.command("near", command="nudge", d_az=5, page="p", seq=3)
+    assert (second.status, second.doc.get("code")) == (409, "busy")
+    assert "1 commands already wait for this rotator" in second.doc["error"]
+    rot.way.clear()
+    first.join(slow(10))
+    assert [a.status for a in answers] == [200]
+    assert rot.carried == ["nudge +5"]

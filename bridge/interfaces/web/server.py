@@ -68,7 +68,10 @@ Rules:
    one made from a status that does not show what is on its way ("send it again"), and a
    second click came within a millisecond of the first, before the lines thread took it (a
    failed CI run). Still on its way after SHOWN_S (a line that owes a long reply), the judge
-   refuses it so.
+   refuses it so. At most SHOWN_WAITERS wait per rotator; one more is refused at once (409,
+   code ``busy``, on R/error): each waiter looks every SHOWN_POLL_S, and a client posting
+   hundreds at a line that owes a long reply kept the loop, and the interpreter the serial
+   lines share, busy with their looks.
 """
 
 from __future__ import annotations
@@ -114,6 +117,7 @@ log = logging.getLogger(__name__)
 BODY_S = 10.0  # a command's or a login's body arrives within this, or it is not waited for
 SHOWN_S = 3.0  # rule 10: a nudge waits this long at most for the command before it to show
 SHOWN_POLL_S = 0.005  # rule 10: how often it looks
+SHOWN_WAITERS = 8  # rule 10: commands waiting so per rotator, no more
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
 NOISE_EVERY_S = 10.0
@@ -258,6 +262,7 @@ class WebConsole:
         self._far: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # rule 5, per rotator
         self._far_halts: dict[str, int] = {}  # rule 5: halts posted per rotator (the loop's)
         self._far_moves: dict[str, int] = {}  # rule 5: moves not yet done per rotator (the loop's)
+        self._waiting: dict[str, int] = {}  # rule 10: commands waiting per rotator (the loop's)
 
     # -- wiring (the main thread) ------------------------------------------------------------
     def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
@@ -631,8 +636,18 @@ class WebConsole:
             why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
+        waiting = self._waiting.get(rot.id, 0)
         if not away and not halt and cmd.from_status() and rot.on_its_way():  # rule 10
-            stale = await self._shown(rot, cmd, self._started[id(request)])
+            if waiting >= SHOWN_WAITERS:  # (refused at once)
+                why = f"{SHOWN_WAITERS} commands already wait for this rotator: not sent"
+                why += " (send it later)"
+                rot.report_refusal(why, cmd.described(), origin=by)
+                return _json({"error": why, "code": "busy"}, 409)
+            self._waiting[rot.id] = waiting + 1
+            try:
+                stale = await self._shown(rot, cmd, self._started[id(request)])
+            finally:
+                self._waiting[rot.id] -= 1
             if stale is not None:
                 rot.report_refusal(stale, cmd.described(), origin=by)
                 return _json({"error": stale, "code": "stale"}, 409)
