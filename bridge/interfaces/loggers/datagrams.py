@@ -133,7 +133,7 @@ def _over_long_stop(datagram: bytes, head: bytes, may_stop: Callable[[bytes], bo
     socket gives at most MAX_DATAGRAM + 1 bytes, the rest is lost), else None."""
     if len(datagram) <= MAX_DATAGRAM or not may_stop(datagram):
         return None
-    if not datagram.lstrip()[: len(head)].lower() == head:
+    if datagram.lstrip()[: len(head)].lower() != head:
         return None
     return ascii_text(datagram)
 

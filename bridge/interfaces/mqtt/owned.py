@@ -9,8 +9,8 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    FOREIGN_FIX_S per topic, ``put_back``; one that comes sooner is put back when that interval
    is over, ``owed``: a review found a second stray ``lock/state OFF`` within 2 s of the first
    left on the broker for as long as the lock stayed on) and logged once a minute
-   (FOREIGN_LOG_S) per topic: a
-   stray retained ``lock/state OFF`` must not tell a dashboard the lock is off while it is on. What
+   (FOREIGN_LOG_S) per topic: a stray retained ``lock/state OFF`` must not tell a dashboard the
+   lock is off while it is on. What
    the broker held from before the connection (our own last will, a value of a run that ended)
    arrives within SETTLE_AFTER_CONNECT_S of it, or before the connection's first look has ended
    (``settling``: the broker sends what it held before the hello comes back, look.py rule 14), and

@@ -633,14 +633,13 @@ class WebConsole:
             return _json({"error": stale, "code": "stale"}, 409)
         busy = self._far_moves.get(rot.id, 0) >= FAR_MOVES
         if away and not halt and busy:  # rule 5: a bound
-            why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
+            why = _busy(FAR_MOVES)
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
         waiting = self._waiting.get(rot.id, 0)
         if not away and not halt and cmd.from_status() and rot.on_its_way():  # rule 10
             if waiting >= SHOWN_WAITERS:  # (refused at once)
-                why = f"{SHOWN_WAITERS} commands already wait for this rotator: not sent"
-                why += " (send it later)"
+                why = _busy(SHOWN_WAITERS)
                 rot.report_refusal(why, cmd.described(), origin=by)
                 return _json({"error": why, "code": "busy"}, 409)
             self._waiting[rot.id] = waiting + 1
@@ -683,6 +682,11 @@ class WebConsole:
             await asyncio.sleep(SHOWN_POLL_S)
         stale = self._order.stale(rot.id, cmd, started, rot.last_halt_s)
         return stale or aged(cmd, feed_clock())
+
+
+def _busy(waiting: int) -> str:
+    """Why a command is refused when ``waiting`` already wait for its rotator (rules 5, 10)."""
+    return f"{waiting} commands already wait for this rotator: not sent (send it later)"
 
 
 def _land_gzip(station: tuple[float, float]) -> bytes:
