@@ -168,19 +168,3 @@ def test_owned_topics_are_those_mqtt_matches_for_every_kind_of_filter() -> None:
             assert owned.owns(topic) == expected, (topic, chosen[:3])
     owned.watch(own)
     assert owned.owns("rotor/r2/option/brake/state") and not owned.owns("rotor/r2/target")
-
-
-def test_a_stranger_within_the_fix_interval_is_put_back_once_it_is_over() -> None:
-    """A review: a second stray ``lock/state OFF`` within FOREIGN_FIX_S of the first was never
-    put back, and stayed on the broker for as long as the lock stayed on."""
-    owned, clock = judge()
-    clock.now += SETTLE_AFTER_CONNECT_S + 1
-    assert owned.put_back(STATE).send
-    clock.now += FOREIGN_FIX_S / 2
-    assert not owned.put_back(STATE).send
-    assert owned.owing and owned.owed() == []  # not yet: the interval is not over
-    clock.now += FOREIGN_FIX_S / 2
-    assert owned.owed() == [STATE]
-    assert not owned.owing and owned.owed() == []  # once
-    clock.now += FOREIGN_FIX_S / 2
-    assert not owned.put_back(STATE).send  # the owed put-back counts as one

@@ -416,7 +416,6 @@ class MqttClient(Connection):
         if heard is not None and self._clock() - heard[0] >= WILL_OUTLIVED_S:
             self._will_heard = None
             self._say_foreign(self._will_topic, heard[1], b"online")
-        self._put_back_owed()
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
@@ -660,20 +659,6 @@ class MqttClient(Connection):
         elif say:
             self._say_foreign(topic, payload, held[0])
         return True
-
-    def _put_back_owed(self) -> None:
-        """Rule 10: a stranger's value that came too soon after the last put-back is put back
-        once that interval is over (paho's thread, after a round of its loop: 1 s at most)."""
-        if not self._owned.owing:  # (the usual case: no lock taken, each round)
-            return
-        with self._lock:
-            if self._stopping or self.refused is not None or not self.connected.is_set():
-                return
-            for topic in self._owned.owed():
-                held = self._retained.get(topic)
-                if held is not None:
-                    self._owned.sent(topic, held[0])
-                    self._delivery.send(topic, held[0], held[1], retain=True)
 
     def _say_foreign(self, topic: str, payload: bytes, ours: bytes) -> None:
         log.warning(
