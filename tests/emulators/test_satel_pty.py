@@ -153,6 +153,9 @@ def test_silent_line_and_injected_junk(
     client.write(b"?")
     port.wait_for_frame(b"?", "identify")
     assert client.read(1) == b""
+    # the identify's reply wholly sent into the silence (a loaded machine: its tail, "tEL", went
+    # out after the line spoke again, and was read as the second line)
+    port.wait_until(lambda device, now: device.next_wakeup(now), lambda due: due is None)
     port.set_silent(False)
     client.timeout = 3.0
     port.inject(b"\x00junk\r\n", to="host")
