@@ -140,8 +140,7 @@ def _over_long_stop(datagram: bytes, head: bytes, may_stop: Callable[[bytes], bo
 
 def parse_pst(datagram: bytes) -> PstRequest:
     """Rule 2 (Malformed for anything not wholly understood, or ambiguous; a stop never)."""
-    long = _over_long_stop(datagram, b"<pst>", may_stop_pst)
-    if long is not None and "<STOP>" in long.upper():  # rule 7
+    if _over_long_stop(datagram, b"<pst>", may_stop_pst) is not None:  # rule 7
         return PstRequest(stop=True)
     body = _text(datagram, _PST, "<PST>", may_stop_pst)
     try:

@@ -636,8 +636,8 @@ class WebConsole:
             why = _busy(FAR_MOVES)
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
-        waiting = self._waiting.get(rot.id, 0)
         if not away and not halt and cmd.from_status() and rot.on_its_way():  # rule 10
+            waiting = self._waiting.get(rot.id, 0)
             if waiting >= SHOWN_WAITERS:  # (refused at once)
                 why = _busy(SHOWN_WAITERS)
                 rot.report_refusal(why, cmd.described(), origin=by)
