@@ -99,3 +99,52 @@ def test_a_deletion_asked_in_the_look_is_not_sent_over_a_value_published_since(
     finally:
         client.stop()
         probe.close()
+
+
+def test_a_topic_the_look_deleted_is_not_deleted_again_when_it_is_published_empty(
+    broker: Mosquitto,
+) -> None:
+    """Rule 14 (``_deleted``): a DCU-1 has no version, and hands its ``R/version`` on empty. When
+    its first status came after the look had ended, the old Rotor-EZ's version the look had
+    deleted was deleted a second time (every subscriber told twice). Once another client has
+    published there since, the empty value is a deletion again, and goes out."""
+    seed = Probe(broker.port, "t/#")
+    for topic in ("t/a/version", "t/b/version"):
+        seed.publish(topic, "9.9", retain=True)
+        seed.wait_value(topic, "9.9", 5)
+    settings = MqttSettings(port=broker.port, base_topic="t", client_id="deleted-under-test")
+    client: MqttClient
+    heard: list[bytes] = []
+
+    def on_message(topic: str, payload: bytes, retain: bool, *_: object) -> None:
+        heard.append(payload)
+        if retain and payload == b"9.9":
+            client.clear_retained(topic)  # (the look's: sent at its end)
+
+    client = MqttClient(
+        settings,
+        will_topic="t/bridge/state",
+        subscriptions=["t/+/version", "t/mark"],
+        on_message=on_message,
+        claim=Claim(Instance.me("deleted-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
+    )
+    client.watch_owned(["t/a/version", "t/b/version"])
+    probe = Probe(broker.port, "t/#")
+    client.start()
+    try:
+        wait_until(lambda: client.connected.is_set() and not client.gated, 10, "the look done")
+        client.publish_retained("t/a/version", "")  # (the first status, after the look)
+        client.publish_event("t/a/error", "one")  # (what was sent before it came first)
+        probe.wait_value("t/a/error", "one", 10)
+        assert [m.payload for m in probe.on("t/a/version")] == [b"9.9", b""]
+        seed.publish("t/b/version", "stray", retain=True)  # another client's, since the look
+        seed.publish("t/mark", "after the stray")  # (one client's messages keep their order)
+        wait_until(lambda: b"after the stray" in heard, 10, "the stray heard")
+        client.publish_retained("t/b/version", "")
+        wait_until(
+            lambda: retained_snapshot(broker.port, "t/b/version") == {}, 10, "the stray deleted"
+        )
+    finally:
+        client.stop()
+        probe.close()
+        seed.close()

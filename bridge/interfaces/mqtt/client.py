@@ -187,6 +187,8 @@ class MqttClient(Connection):
         # rule 14: a witnessed value the hook took, left as the broker holds it: while it holds,
         # an older value (a status from before its lock was saved) is not put over it
         self._left: dict[str, tuple[bytes, Callable[[], bool]]] = {}
+        # rule 14: the owned topics this connection's look deleted and nobody published on since
+        self._deleted: set[str] = set()
         self._heartbeat = heartbeat  # rule 2
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
@@ -295,6 +297,8 @@ class MqttClient(Connection):
             if only_if_changed and held is not None and held[0] == data:
                 return
             self._retained[topic] = (data, qos)
+            if not data and topic in self._deleted:
+                return  # rule 14: the look deleted it, and it is still empty on the broker
             if self.connected.is_set():
                 owned = self._owned
                 if owned.hears_own:  # rule 10 (MQTT 5 hears none of its own: nothing to note)
@@ -512,6 +516,7 @@ class MqttClient(Connection):
                 self._lapsed,
             )
             self._lapsed = 0
+        self._deleted = set()
         if look is not None:
             spare = self.spare  # interfaces/mqtt/stale.py rule 3: judged once all came
             # rule 14: a topic published since its deletion was asked (``clear_retained`` took
@@ -521,6 +526,7 @@ class MqttClient(Connection):
             if look.clear:
                 for topic in look.clears:
                     send(topic, b"", 1, retain=True)
+                self._deleted = {t for t in look.clears if self._owned.owns(t)}
             say_clears(look)
         self.connected.set()
 
@@ -631,6 +637,8 @@ class MqttClient(Connection):
         """True if ``topic`` is one of ours (handled here, whatever its value)."""
         with self._lock:
             held = self._retained.get(topic)
+            if payload:
+                self._deleted.discard(topic)  # rule 14: not empty on the broker now
             if held is None or not self._owned.owns(topic):
                 return False
             if self._stopping:

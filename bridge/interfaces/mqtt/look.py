@@ -19,7 +19,12 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    was sent and named twice, interfaces/mqtt/stale.py rule 5), and none of a topic the bridge
    published after asking (client.py ``_open``: a controller's version read while the look
    ran; the deletion went out after it, and the version, unchanged, was never published
-   again). TAKE_OVER (said once, in the log), or a look that timed out (an ACL that denies the
+   again); nor is an owned topic the look deleted deleted again when the bridge then
+   publishes it empty, unless another client has published on it since (``_deleted``: a
+   DCU-1, which has no version, deleted the Rotor-EZ's ``R/version`` it replaced a second
+   time when its first status came after the look had ended: 2 or 3 test runs in 48 under
+   load).
+   TAKE_OVER (said once, in the log), or a look that timed out (an ACL that denies the
    hello), or any look after one of those in this process: nothing is deleted, and the
    configs are named in the log as left alone (claim rule 3). Another instance's info
    arriving while the bridge runs is judged by claim rule 4 (``live_info``).
