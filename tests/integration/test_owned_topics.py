@@ -10,9 +10,10 @@ import time
 import pytest
 
 from bridge.interfaces.mqtt.client import SETTLE_AFTER_CONNECT_S
+from bridge.interfaces.mqtt.owned import FOREIGN_FIX_S
 from tests.support import retained_snapshot
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 @pytest.mark.parametrize("protocol", ["5", "3.1.1"])
@@ -58,6 +59,33 @@ def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
     # (under 3.1.1 an ``offline`` on bridge/state may be the bridge's own last will, sent by a
     # broker shutting down: it is said once the connection has outlived it, owned.py rule 10)
     wait_until(lambda: warned() == set(strays), 5, f"every stray said, not only {warned()}")
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_second_stray_value_soon_after_the_first_is_put_back_too(rig: Rig, protocol: str) -> None:
+    """A review: the bridge puts its own value back at most once per FOREIGN_FIX_S per topic, and
+    a second stray ``lock/state OFF`` within that interval was left on the broker: dashboards
+    showed the lock off for as long as it stayed on. It is put back when the interval is over."""
+    rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+    rig.mqtt_extra["protocol"] = protocol
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/lock", "ON")
+    rig.probe.wait_value("rotor/lock/state", "ON", 5)
+    client = rig.app.client if rig.app is not None else None
+    assert client is not None
+    wait_until(
+        lambda: time.monotonic() - client.connected_at > SETTLE_AFTER_CONNECT_S, 5, "settled"
+    )
+
+    def held() -> bytes | None:
+        return retained_snapshot(rig.broker.port, "rotor/lock/#").get("rotor/lock/state")
+
+    rig.probe.publish("rotor/lock/state", "OFF", retain=True)
+    wait_until(lambda: held() == b"ON", 5, "the first stray put back")
+    rig.probe.publish("rotor/lock/state", "OFF", retain=True)  # within the interval
+    rig.probe.caught_up()
+    wait_until(lambda: held() == b"ON", slow(FOREIGN_FIX_S + 4), "the second stray put back")
 
 
 def test_the_bridge_does_not_take_its_own_messages_for_a_strangers_while_it_turns(

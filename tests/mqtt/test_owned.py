@@ -4,6 +4,7 @@ values on the bridge's own topics are its own, when its value is put back, and w
 from __future__ import annotations
 
 from paho.mqtt.client import topic_matches_sub
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.interfaces.mqtt.owned import (
     FOREIGN_FIX_S,
@@ -48,31 +49,31 @@ def test_a_stranger_just_after_a_connect_is_put_back_without_a_word() -> None:
     """What the broker held from before (our own last will) is no news."""
     owned, clock = judge()
     clock.now += SETTLE_AFTER_CONNECT_S / 2
-    fix = owned.put_back(STATE)
+    fix = owned.put_back(STATE, live=True)
     assert fix.send and not fix.say
 
 
 def test_a_live_stranger_is_put_back_at_most_every_fix_interval_and_said_once_a_minute() -> None:
     owned, clock = judge()
     clock.now += SETTLE_AFTER_CONNECT_S + 1
-    first = owned.put_back(STATE)
+    first = owned.put_back(STATE, live=True)
     assert first.send and first.say
     clock.now += FOREIGN_FIX_S / 2
-    soon = owned.put_back(STATE)
+    soon = owned.put_back(STATE, live=True)
     assert not soon.send and not soon.say  # a fight with a flow is not a flood from us
     clock.now += FOREIGN_FIX_S
-    again = owned.put_back(STATE)
+    again = owned.put_back(STATE, live=True)
     assert again.send and not again.say  # put back, but the log heard it this minute
     clock.now += FOREIGN_LOG_S
-    later = owned.put_back(STATE)
+    later = owned.put_back(STATE, live=True)
     assert later.send and later.say
 
 
 def test_each_topic_has_its_own_intervals() -> None:
     owned, clock = judge()
     clock.now += SETTLE_AFTER_CONNECT_S + 1
-    assert owned.put_back(STATE).say
-    assert owned.put_back("rotor/option/brake/state").say
+    assert owned.put_back(STATE, live=True).say
+    assert owned.put_back("rotor/option/brake/state", live=True).say
 
 
 def test_under_mqtt_3_1_1_what_the_bridge_sent_comes_back_as_its_own_in_order() -> None:
@@ -168,3 +169,41 @@ def test_owned_topics_are_those_mqtt_matches_for_every_kind_of_filter() -> None:
             assert owned.owns(topic) == expected, (topic, chosen[:3])
     owned.watch(own)
     assert owned.owns("rotor/r2/option/brake/state") and not owned.owns("rotor/r2/target")
+
+
+def test_a_stranger_within_the_fix_interval_is_put_back_once_it_is_over() -> None:
+    """A review: a second stray ``lock/state OFF`` within FOREIGN_FIX_S of the first was never
+    put back, and stayed on the broker for as long as the lock stayed on."""
+    owned, clock = judge()
+    clock.now += SETTLE_AFTER_CONNECT_S + 1
+    assert owned.put_back(STATE, live=True).send
+    clock.now += FOREIGN_FIX_S / 2
+    assert not owned.put_back(STATE, live=True).send
+    assert owned.owing and owned.owed() == []  # not yet: the interval is not over
+    clock.now += FOREIGN_FIX_S / 2
+    assert owned.owed() == [STATE]
+    assert not owned.owing and owned.owed() == []  # once
+    clock.now += FOREIGN_FIX_S / 2
+    assert not owned.put_back(STATE, live=True).send  # the owed put-back counts as one
+
+
+def test_a_value_the_broker_held_within_the_fix_interval_is_not_owed() -> None:
+    """A held value (its retain flag set: the broker answered a subscription with it) that comes
+    within FOREIGN_FIX_S is older than the put-back already sent: putting it back again deleted
+    a removed model's ``R/version`` a second time, 2 s after the first."""
+    owned, clock = judge()
+    assert owned.put_back(STATE, live=False, settling=True).send
+    clock.now += FOREIGN_FIX_S / 2
+    assert not owned.put_back(STATE, live=False).send
+    assert not owned.owing
+    clock.now += FOREIGN_FIX_S
+    assert owned.owed() == []
+
+
+def test_mqtt5_hears_its_own_topics_with_the_retain_flag_of_the_delivery() -> None:
+    """Live from held (owned.py rule 10): MQTT 5 subscribes without retain-as-published, so a
+    value another client publishes while the bridge listens comes with the retain flag clear."""
+    owned, _clock = judge()
+    for _topic, opts in owned.subscriptions():
+        assert isinstance(opts, SubscribeOptions)
+        assert opts.noLocal and not opts.retainAsPublished

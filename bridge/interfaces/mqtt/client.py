@@ -420,6 +420,7 @@ class MqttClient(Connection):
         if heard is not None and self._clock() - heard[0] >= WILL_OUTLIVED_S:
             self._will_heard = None
             self._say_foreign(self._will_topic, heard[1], b"online")
+        self._put_back_owed()
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
@@ -444,7 +445,7 @@ class MqttClient(Connection):
             late = self._look.late(topic, payload, retained)
             if late and self._on_heard is not None and self._on_heard(late):
                 return True  # its rotator's ON goes out: the OFF the open sent is not put back
-        return bool(self._owned.filters) and self._foreign(topic, payload)
+        return bool(self._owned.filters) and self._foreign(topic, payload, live=not retained)
 
     def _fence_back(self, topic: str) -> None:
         """Rule 16: the probe came back; if the topic was denied before, it is not now (said on
@@ -633,7 +634,7 @@ class MqttClient(Connection):
             )
 
     # -- rule 10: the bridge's own topics (owned.py judges) ---------------------------------
-    def _foreign(self, topic: str, payload: bytes) -> bool:
+    def _foreign(self, topic: str, payload: bytes, *, live: bool) -> bool:
         """True if ``topic`` is one of ours (handled here, whatever its value)."""
         with self._lock:
             held = self._retained.get(topic)
@@ -655,7 +656,7 @@ class MqttClient(Connection):
             say = False
             if self.refused is None:
                 settling = look is not None and look.looking is not None  # (owned.py rule 10)
-                fix = self._owned.put_back(topic, settling=settling)
+                fix = self._owned.put_back(topic, live=live, settling=settling)
                 if fix.send and self.connected.is_set():
                     self._owned.sent(topic, held[0])
                     self._delivery.send(topic, held[0], held[1], retain=True)
@@ -667,6 +668,20 @@ class MqttClient(Connection):
         elif say:
             self._say_foreign(topic, payload, held[0])
         return True
+
+    def _put_back_owed(self) -> None:
+        """Rule 10: a stranger's value that came too soon after the last put-back is put back
+        once that interval is over (paho's thread, after a round of its loop: 1 s at most)."""
+        if not self._owned.owing:  # (the usual case: no lock taken, each round)
+            return
+        with self._lock:
+            if self._stopping or self.refused is not None or not self.connected.is_set():
+                return
+            for topic in self._owned.owed():
+                held = self._retained.get(topic)
+                if held is not None:
+                    self._owned.sent(topic, held[0])
+                    self._delivery.send(topic, held[0], held[1], retain=True)
 
     def _say_foreign(self, topic: str, payload: bytes, ours: bytes) -> None:
         log.warning(

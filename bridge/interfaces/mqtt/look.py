@@ -50,9 +50,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    comes with the retain flag is such a replay (the broker clears the flag of a live one), of
    what the broker held when the bridge subscribed, before it published anything: so on the
    connection whose look handed the witnesses on, and until it ends (``connection_ended``), a
-   witness that comes retained after the look is handed on too (``late``). Not under MQTT 5,
-   where the bridge keeps the flag of a live message (retain-as-published): there a stranger's
-   live retained value would pass for an earlier run's.
+   witness that comes retained after the look is handed on too (``late``). Not under MQTT 5:
+   the owned topics, the witnesses among them, are subscribed there without
+   retain-as-published (owned.py rule 10), so the flag tells a held value from a live one
+   there too, but no broker the bridge meets streams them late under MQTT 5 (aedes speaks
+   MQTT 3.1.1 only), and none was tried.
 15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
    (thousands of configs published under the bridge's node ids) is a few lines: a few at once
    (CLEARS_SAID_AT_ONCE), then one a minute (client.py's FOREIGN_LOG_S, the limiter it hands

@@ -6,8 +6,17 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 10. The bridge owns its retained topics (``watch``: state, status, lock and option states, its
    online/offline): it subscribes to them (MQTT 5: without its own messages) and a value there that
    it did not publish, from another client, is replaced with its own at once (at most once per
-   FOREIGN_FIX_S per topic, ``put_back``) and logged once a minute (FOREIGN_LOG_S) per topic: a
-   stray retained ``lock/state OFF`` must not tell a dashboard the lock is off while it is on. What
+   FOREIGN_FIX_S per topic, ``put_back``; a live one that comes sooner is put back when that
+   interval is over, ``owed``: a review found a second stray ``lock/state OFF`` within 2 s of
+   the first left on the broker for as long as the lock stayed on) and logged once a minute
+   (FOREIGN_LOG_S) per topic: a stray retained ``lock/state OFF`` must not tell a dashboard the
+   lock is off while it is on. Live is what another client publishes while the bridge listens:
+   MQTT sends it with the retain flag clear (MQTT 3.1.1 always; MQTT 5 because the bridge
+   subscribes without retain-as-published), and a value the broker held with it set, for a
+   subscription it answers. A held value that comes within the interval is not owed: it is
+   what the broker held when it answered a subscription, older than the put-back already sent
+   (a first owed put-back, for every stranger, deleted a removed model's ``R/version`` a second
+   time 2 s after the first, when the broker answered a second subscription late). What
    the broker held from before the connection (our own last will, a value of a run that ended)
    arrives within SETTLE_AFTER_CONNECT_S of it, or before the connection's first look has ended
    (``settling``: the broker sends what it held before the hello comes back, look.py rule 14), and
@@ -74,6 +83,7 @@ class OwnedTopics:
         self._echoes: dict[str, deque[bytes]] = {}  # digests sent, not heard back (hears_own)
         self.will: tuple[str, bytes] | None = None  # the bridge's own last will
         self._fixed_at: dict[str, float] = {}
+        self._owed: set[str] = set()  # strangers' values come within FOREIGN_FIX_S (``owed``)
         self._logged_at: dict[str, float] = {}
         self.connected_at = -1e18  # the clock at the last accepted connection
 
@@ -88,7 +98,7 @@ class OwnedTopics:
         (no-local); MQTT 3.1.1 hears them, and ``ours`` knows them."""
         if self.hears_own:
             return [(f, 0) for f in self.filters]
-        mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
+        mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=False)  # (live or held)
         return [(f, mine) for f in self.filters]
 
     def owns(self, topic: str) -> bool:
@@ -123,20 +133,41 @@ class OwnedTopics:
         """Whether this is the bridge's own last will (put back without a word, rule 10)."""
         return self.hears_own and (topic, payload) == self.will
 
-    def put_back(self, topic: str, *, settling: bool = False) -> PutBack:
-        """A stranger's value on ``topic``: ours again at most once per FOREIGN_FIX_S, said at
-        most once per FOREIGN_LOG_S, and not at all just after a connect or while ``settling``
-        (the first look of the connection under way)."""
+    def put_back(self, topic: str, *, live: bool, settling: bool = False) -> PutBack:
+        """A stranger's value on ``topic``, ``live`` or one the broker held (its retain flag
+        set): ours again at most once per FOREIGN_FIX_S (a live one sooner: when the interval is
+        over, ``owed``), said at most once per FOREIGN_LOG_S, and not at all just after a
+        connect or while ``settling`` (the first look of the connection under way)."""
         now = self._clock()
         if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
+            if live:
+                self._owed.add(topic)  # put back when the interval is over (``owed``)
             return PutBack(send=False, say=False)
         self._fixed_at[topic] = now
+        self._owed.discard(topic)
         if settling or now - self.connected_at < SETTLE_AFTER_CONNECT_S:
             return PutBack(send=True, say=False)
         if now - self._logged_at.get(topic, -FOREIGN_LOG_S) < FOREIGN_LOG_S:
             return PutBack(send=True, say=False)
         self._logged_at[topic] = now
         return PutBack(send=True, say=True)
+
+    @property
+    def owing(self) -> bool:
+        """Whether a put-back is owed (``owed``), read without the client's lock."""
+        return bool(self._owed)
+
+    def owed(self) -> list[str]:
+        """The topics whose stranger's value came within FOREIGN_FIX_S of the last put-back and
+        whose interval is over now: to be put back now (rule 10; each counts as a put-back)."""
+        if not self._owed:
+            return []
+        now = self._clock()
+        due = [t for t in self._owed if now - self._fixed_at[t] >= FOREIGN_FIX_S]
+        for topic in due:
+            self._owed.discard(topic)
+            self._fixed_at[topic] = now
+        return due
 
 
 def _is_wild(topic_filter: str) -> bool:
