@@ -207,3 +207,21 @@ def test_mqtt5_hears_its_own_topics_with_the_retain_flag_of_the_delivery() -> No
     for _topic, opts in owned.subscriptions():
         assert isinstance(opts, SubscribeOptions)
         assert opts.noLocal and not opts.retainAsPublished
+
+
+def test_nothing_is_owed_once_the_bridge_has_sent_its_value_again() -> None:
+    """A review: an owed put-back outlived a reconnect (which sends every value again) and the
+    bridge's own new value (the lock released meanwhile): every subscriber was told twice."""
+    owned, clock = judge()
+    clock.now += SETTLE_AFTER_CONNECT_S + 1
+    assert owned.put_back(STATE, live=True).send
+    assert not owned.put_back(STATE, live=True).send and owned.owing
+    owned.connected()  # a new connection
+    clock.now += FOREIGN_FIX_S
+    assert owned.owed() == []
+    clock.now += SETTLE_AFTER_CONNECT_S + FOREIGN_FIX_S
+    assert owned.put_back(STATE, live=True).send
+    assert not owned.put_back(STATE, live=True).send and owned.owing
+    owned.sent(STATE, b"idle")  # the bridge's own new value
+    clock.now += FOREIGN_FIX_S
+    assert owned.owed() == []

@@ -6,10 +6,11 @@ first look's books and claim.py gives its verdicts.
 
 The bridge's MQTT rules, numbered once for all of mqtt/ (code and docs cite "client.py rule N"),
 each written out in the module that keeps it:
-- connection.py: 1 protocol, clean start, retain-as-published; 4 commands at QoS 0; 5 short
-  callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one connection
-  (the takeover back-off); 9 TCP quick-ack after every read; 17 an optional subscription's
-  denial said once, no problem; 18 the largest packet the broker may send, said in CONNECT.
+- connection.py: 1 protocol, clean start, retain-as-published (for commands); 4 commands at
+  QoS 0; 5 short callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one
+  connection (the takeover back-off); 9 TCP quick-ack after every read; 17 an optional
+  subscription's denial said once, no problem; 18 the largest packet the broker may send,
+  said in CONNECT.
 - owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
@@ -297,11 +298,13 @@ class MqttClient(Connection):
             if only_if_changed and held is not None and held[0] == data:
                 return
             self._retained[topic] = (data, qos)
-            if not data and topic in self._deleted:
+            if data:
+                self._deleted.discard(topic)  # rule 14 (a review: MQTT 5 never hears it back)
+            elif topic in self._deleted:
                 return  # rule 14: the look deleted it, and it is still empty on the broker
             if self.connected.is_set():
                 owned = self._owned
-                if owned.hears_own:  # rule 10 (MQTT 5 hears none of its own: nothing to note)
+                if owned.hears_own or owned.owing:  # rule 10 (MQTT 5: none back, no-local)
                     owned.sent(topic, data)
                 self._delivery.send(topic, data, qos, retain=True)
 

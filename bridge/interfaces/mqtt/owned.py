@@ -16,7 +16,12 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    subscription it answers. A held value that comes within the interval is not owed: it is
    what the broker held when it answered a subscription, older than the put-back already sent
    (a first owed put-back, for every stranger, deleted a removed model's ``R/version`` a second
-   time 2 s after the first, when the broker answered a second subscription late). What
+   time 2 s after the first, when the broker answered a second subscription late). The
+   availability and option-state topics are read by stale.py's filters too, with
+   retain-as-published: under MQTT 5 a stray there comes twice, the owned copy first from
+   mosquitto (a review); in the other order it is put back twice, 2 s apart, and a broker that
+   merges the two copies with the flag set owes nothing, as before: never a wrong value. Nothing
+   is owed once the bridge has sent its own value again (``sent``, a new connection). What
    the broker held from before the connection (our own last will, a value of a run that ended)
    arrives within SETTLE_AFTER_CONNECT_S of it, or before the connection's first look has ended
    (``settling``: the broker sends what it held before the hello comes back, look.py rule 14), and
@@ -107,12 +112,17 @@ class OwnedTopics:
         return self._wild is not None and self._wild.fullmatch(topic) is not None
 
     def connected(self) -> None:
-        """A new connection: what was in flight before is gone with the old one."""
+        """A new connection: what was in flight before is gone with the old one, and every
+        value of ours goes out again (nothing is owed)."""
         self.connected_at = self._clock()
         self._echoes.clear()
+        self._owed.clear()
 
     def sent(self, topic: str, data: bytes) -> None:
-        """The bridge published ``data`` on ``topic``: when it comes back, it is ours."""
+        """The bridge published ``data`` on ``topic``: when it comes back, it is ours; and no
+        put-back is owed there any more (a review: the lock released meanwhile, the owed
+        put-back told every subscriber the new value a second time)."""
+        self._owed.discard(topic)
         if self.hears_own and self.filters and self.owns(topic):
             self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(_digest(data))
 
