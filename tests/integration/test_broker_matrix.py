@@ -7,8 +7,9 @@ Each case: the protocol said at start, a target turns the rotor, a STOP while tu
 the retained state for a subscriber that comes late, the last will, the fence markers
 (lastword.py rule 7), an MQTT target after rotctld's stop (the fence of lastword.py rule 11
 ends on this broker), a lock ON the broker keeps across a restart on a new state file
-(runtime/kept.py rule 10), and under 3.1.1 a flood of targets without a false "another client
-published" while a real stranger is still put back and said.
+(runtime/kept.py rule 10), under 3.1.1 a flood of targets without a false "another client
+published" while a real stranger is still put back and said, and a second stray soon after
+the first put back too.
 
 Real parts: the broker, the bridge (App, or its own process for the last will) and an emulated
 Rotor-EZ on a pty (tests/support/rig.py); the probe speaks MQTT 3.1.1, as every broker does.
@@ -26,6 +27,8 @@ from pathlib import Path
 
 import pytest
 
+from bridge.interfaces.mqtt.client import SETTLE_AFTER_CONNECT_S
+from bridge.interfaces.mqtt.owned import FOREIGN_FIX_S
 from tests.support import Probe, free_port, retained_snapshot, wait_until
 from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
 from tests.support.console import ConsoleClient, web_section
@@ -214,6 +217,28 @@ def test_a_flood_raises_no_false_alarm_and_a_real_stranger_is_still_put_back(
     station.probe.wait_for("rotor/lock/state", lambda m: m.text == "OFF", 10, after=t)
     wait_until(lambda: said(caplog, STRANGER), 60, "the stranger said")  # behind the echoes
     assert len(said(caplog, STRANGER)) == 1
+
+
+def test_a_second_stray_soon_after_the_first_is_put_back_too(kind: str, station: Rig) -> None:
+    """owned.py rule 10: a live stray within FOREIGN_FIX_S of a put-back is put back when the
+    interval is over, and a value the broker held is not owed; the retain flag tells them apart,
+    which needs each broker to clear it on a live message (MQTT 3.1.1) or to honour
+    retain-as-published off (MQTT 5)."""
+    station.add("tower", emu={"start_az_deg": 20})
+    app = station.start()
+    station.ready("tower")
+    wait_until(
+        lambda: time.monotonic() - app.client.connected_at > SETTLE_AFTER_CONNECT_S, 5, "settled"
+    )
+
+    def held() -> bytes | None:
+        return retained_snapshot(station.broker.port, "rotor/lock/#").get("rotor/lock/state")
+
+    station.probe.publish("rotor/lock/state", "ON", retain=True)
+    wait_until(lambda: held() == b"OFF", 10, "the first stray put back")
+    station.probe.publish("rotor/lock/state", "ON", retain=True)  # within the interval
+    station.probe.caught_up()
+    wait_until(lambda: held() == b"OFF", slow(FOREIGN_FIX_S + 4), "the second stray put back")
 
 
 def test_its_own_last_will_at_a_broker_shutdown_is_no_strangers(
