@@ -62,10 +62,18 @@ def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
 
 
 @pytest.mark.parametrize("protocol", ["5", "3.1.1"])
-def test_a_second_stray_value_soon_after_the_first_is_put_back_too(rig: Rig, protocol: str) -> None:
+@pytest.mark.parametrize(
+    ("topic", "stray", "ours"),
+    [("rotor/lock/state", b"OFF", b"ON"), ("rotor/availability", b"offline", b"online")],
+)
+def test_a_second_stray_value_soon_after_the_first_is_put_back_too(
+    rig: Rig, protocol: str, topic: str, stray: bytes, ours: bytes
+) -> None:
     """A review: the bridge puts its own value back at most once per FOREIGN_FIX_S per topic, and
     a second stray ``lock/state OFF`` within that interval was left on the broker: dashboards
-    showed the lock off for as long as it stayed on. It is put back when the interval is over."""
+    showed the lock off for as long as it stayed on. It is put back when the interval is over.
+    An attack pass: with one rotator, whose ``R/availability`` stale.py reads too, a second
+    ``offline`` stayed under MQTT 5 (the rotator shown unavailable while it was online)."""
     rig.add("tower", "rotorez", emu={"start_az_deg": 20})
     rig.mqtt_extra["protocol"] = protocol
     rig.start()
@@ -79,13 +87,13 @@ def test_a_second_stray_value_soon_after_the_first_is_put_back_too(rig: Rig, pro
     )
 
     def held() -> bytes | None:
-        return retained_snapshot(rig.broker.port, "rotor/lock/#").get("rotor/lock/state")
+        return retained_snapshot(rig.broker.port, "rotor/#").get(topic)
 
-    rig.probe.publish("rotor/lock/state", "OFF", retain=True)
-    wait_until(lambda: held() == b"ON", 5, "the first stray put back")
-    rig.probe.publish("rotor/lock/state", "OFF", retain=True)  # within the interval
+    rig.probe.publish(topic, stray, retain=True)
+    wait_until(lambda: held() == ours, 5, "the first stray put back")
+    rig.probe.publish(topic, stray, retain=True)  # within the interval
     rig.probe.caught_up()
-    wait_until(lambda: held() == b"ON", slow(FOREIGN_FIX_S + 4), "the second stray put back")
+    wait_until(lambda: held() == ours, slow(FOREIGN_FIX_S + 4), "the second stray put back")
 
 
 def test_the_bridge_does_not_take_its_own_messages_for_a_strangers_while_it_turns(

@@ -86,7 +86,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Unpack
+from typing import Any, Unpack
 
 import paho.mqtt.client as paho
 from paho.mqtt.packettypes import PacketTypes
@@ -377,6 +377,16 @@ class MqttClient(Connection):
     def _fell_back(self, what: str) -> None:
         super()._fell_back(what)  # said, with MQTT311_LOSES
         self._owned.hears_own = True  # rule 10: our own messages come back from now on
+
+    def _filters(self) -> list[tuple[str, Any]]:
+        """Rule 10: a filter the owned-topic watch subscribes is left to it (stale.py's
+        ``B/availability`` and ``B/option/+/state`` with one rotator on the base topic):
+        mosquitto keeps the options a filter was first subscribed with, so the command
+        subscription's held (retain-as-published, no no-local), and a live stray there passed
+        for a value the broker held, never put back twice in 2 s (an attack pass). Its messages
+        reach the handler all the same: they are routed by topic."""
+        owned = set(self._owned.filters)
+        return [(f, opts) for f, opts in super()._filters() if f not in owned]
 
     def _opened(self, client: paho.Client) -> None:
         """Commands subscribed before ``online`` (the broker handles our packets in order: a

@@ -20,7 +20,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    availability and option-state topics are read by stale.py's filters too, with
    retain-as-published: under MQTT 5 a stray there comes twice, the owned copy first from
    mosquitto (a review); in the other order it is put back twice, 2 s apart, and a broker that
-   merges the two copies with the flag set owes nothing, as before: never a wrong value. Nothing
+   merges the two copies with the flag set owes nothing, as before. A stale filter that is an
+   owned one (one rotator on the base topic) is not subscribed twice (client.py
+   ``_filters``): mosquitto keeps a filter's first options, and the stray was never owed. Nothing
    is owed once the bridge has sent its own value again (``sent``, a new connection). What
    the broker held from before the connection (our own last will, a value of a run that ended)
    arrives within SETTLE_AFTER_CONNECT_S of it, or before the connection's first look has ended
