@@ -129,3 +129,33 @@ def test_a_controller_swapped_leaves_none_of_the_old_model_s_topics_retained(rig
     assert left["rotor/dish/version"] == b"1.4S" and "rotor/dish/bearing" in left
     assert (left["rotor/mast/availability"], left["rotor/mast/state"]) == (b"online", b"unknown")
     assert json.loads(left["rotor/mast/info"])["model"] == "dcu1"
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_one_rotator_on_the_base_topic_swapped_leaves_none_of_the_old_model_s_topics(
+    rig: Rig, protocol: str
+) -> None:
+    """The same with one rotator, whose topics are the base topic's: its option states and
+    availability are read through the owned-topic watch alone (client.py ``_filters``: a
+    filter is subscribed once), and the old model's option state, version and bearing still go."""
+    rig.add("mast", model="rotorez", emu={"version": "9.9"})
+    rig.mqtt_extra["protocol"] = protocol
+    rig.start()
+    rig.ready("mast")
+    rig.probe.publish("rotor/option/jam", "ON")
+    rig.probe.wait_value("rotor/option/jam/state", "ON")
+    rig.probe.wait_value("rotor/version", "9.9")
+    old = {"rotor/option/jam/state", "rotor/version", "rotor/bearing"}
+    assert old <= set(rig.retained())
+    rig.stop()
+
+    rig.rotators, rig.lines = [], {}
+    rig.add("mast", model="dcu1")
+    t = rig.probe.caught_up()
+    rig.start()
+    rig.ready("mast", after=t)
+    wait_until(
+        lambda: not old & set(rig.retained()),
+        timeout_s=10,
+        what="the old model's option state, version and bearing deleted",
+    )
