@@ -16,10 +16,10 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 
-@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
-def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
-    rig: Rig, protocol: str, caplog: pytest.LogCaptureFixture
-) -> None:
+def locked_and_settled(rig: Rig, protocol: str) -> None:
+    """One Rotor-EZ on the base topic, its lock ON, the connection past the time after a connect
+    in which what comes is taken for old retained state and put right without a warning: the
+    strays after it are live, a stranger's."""
     rig.add("tower", "rotorez", emu={"start_az_deg": 20})
     rig.mqtt_extra["protocol"] = protocol
     rig.start()
@@ -28,11 +28,16 @@ def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
     rig.probe.wait_value("rotor/lock/state", "ON", 5)
     client = rig.app.client if rig.app is not None else None
     assert client is not None
-    # what comes in the first second after a connect is taken for old retained state and put
-    # right without a warning: the strays below are live, a stranger's
     wait_until(
         lambda: time.monotonic() - client.connected_at > SETTLE_AFTER_CONNECT_S, 5, "settled"
     )
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
+    rig: Rig, protocol: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    locked_and_settled(rig, protocol)
     ours = rig.retained()
     strays = {
         "rotor/lock/state": b"OFF",
@@ -74,17 +79,7 @@ def test_a_second_stray_value_soon_after_the_first_is_put_back_too(
     showed the lock off for as long as it stayed on. It is put back when the interval is over.
     An attack pass: with one rotator, whose ``R/availability`` stale.py reads too, a second
     ``offline`` stayed under MQTT 5 (the rotator shown unavailable while it was online)."""
-    rig.add("tower", "rotorez", emu={"start_az_deg": 20})
-    rig.mqtt_extra["protocol"] = protocol
-    rig.start()
-    rig.ready("tower")
-    rig.probe.publish("rotor/lock", "ON")
-    rig.probe.wait_value("rotor/lock/state", "ON", 5)
-    client = rig.app.client if rig.app is not None else None
-    assert client is not None
-    wait_until(
-        lambda: time.monotonic() - client.connected_at > SETTLE_AFTER_CONNECT_S, 5, "settled"
-    )
+    locked_and_settled(rig, protocol)
 
     def held() -> bytes | None:
         return retained_snapshot(rig.broker.port, "rotor/#").get(topic)
