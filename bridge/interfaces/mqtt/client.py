@@ -382,7 +382,7 @@ class MqttClient(Connection):
         """Rule 10: a filter the owned-topic watch subscribes is left to it (stale.py's
         ``B/availability`` and ``B/option/+/state`` with one rotator on the base topic):
         mosquitto keeps the options a filter was first subscribed with, so the command
-        subscription's held (retain-as-published, no no-local), and a live stray there passed
+        subscription's options held (retain-as-published, no no-local), and a live stray passed
         for a value the broker held, never put back twice in 2 s (an attack pass). Its messages
         reach the handler all the same: they are routed by topic."""
         owned = set(self._owned.filters)

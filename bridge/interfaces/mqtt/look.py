@@ -19,8 +19,8 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    was sent and named twice, interfaces/mqtt/stale.py rule 5), and none of a topic the bridge
    published after asking (client.py ``_open``: a controller's version read while the look
    ran; the deletion went out after it, and the version, unchanged, was never published
-   again); nor is an owned topic the look deleted deleted again when the bridge then
-   publishes it empty, unless another client has published on it since (``_deleted``: a
+   again); nor does an owned topic the look deleted get a second deletion when the bridge
+   then publishes it empty, unless another client has published on it since (``_deleted``: a
    DCU-1, which has no version, deleted the Rotor-EZ's ``R/version`` it replaced a second
    time when its first status came after the look had ended: 2 or 3 test runs in 48 under
    load).
