@@ -189,8 +189,8 @@ def test_a_stranger_within_the_fix_interval_is_put_back_once_it_is_over() -> Non
 
 def test_a_value_the_broker_held_within_the_fix_interval_is_not_owed() -> None:
     """A held value (its retain flag set: the broker answered a subscription with it) that comes
-    within FOREIGN_FIX_S is older than the put-back already sent: putting it back again deleted
-    a removed model's ``R/version`` a second time, 2 s after the first."""
+    within FOREIGN_FIX_S is older than the put-back already sent: putting it back again would
+    tell every subscriber the bridge's value a second time."""
     owned, clock = judge()
     assert owned.put_back(STATE, live=False, settling=True).send
     clock.now += FOREIGN_FIX_S / 2

@@ -671,8 +671,7 @@ class MqttClient(Connection):
                 settling = look is not None and look.looking is not None  # (owned.py rule 10)
                 fix = self._owned.put_back(topic, live=live, settling=settling)
                 if fix.send and self.connected.is_set():
-                    self._owned.sent(topic, held[0])
-                    self._delivery.send(topic, held[0], held[1], retain=True)
+                    self._put_back(topic, held)
                 say = fix.say
                 if say and self._owned.is_will(topic, payload):  # said later, if at all (_tick)
                     self._will_heard, say = (self._clock(), payload), False
@@ -693,8 +692,12 @@ class MqttClient(Connection):
             for topic in self._owned.owed():
                 held = self._retained.get(topic)
                 if held is not None:
-                    self._owned.sent(topic, held[0])
-                    self._delivery.send(topic, held[0], held[1], retain=True)
+                    self._put_back(topic, held)
+
+    def _put_back(self, topic: str, held: tuple[bytes, int]) -> None:
+        """Rule 10, under ``_lock``: our value on ``topic`` again, over a stranger's."""
+        self._owned.sent(topic, held[0])
+        self._delivery.send(topic, held[0], held[1], retain=True)
 
     def _say_foreign(self, topic: str, payload: bytes, ours: bytes) -> None:
         log.warning(

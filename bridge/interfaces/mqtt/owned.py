@@ -15,8 +15,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    subscribes without retain-as-published), and a value the broker held with it set, for a
    subscription it answers. A held value that comes within the interval is not owed: it is
    what the broker held when it answered a subscription, older than the put-back already sent
-   (a first owed put-back, for every stranger, deleted a removed model's ``R/version`` a second
-   time 2 s after the first, when the broker answered a second subscription late). The
+   (a broker that answers a second subscription late sends it again). The
    availability and option-state topics are read by stale.py's filters too, with
    retain-as-published: under MQTT 5 a stray there comes twice, the owned copy first from
    mosquitto (a review); in the other order it is put back twice, 2 s apart, and a broker that
