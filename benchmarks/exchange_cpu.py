@@ -62,6 +62,9 @@ STARTUP_BASE = "4825dd5"  # main when the goals were set: the start-up goal is s
 AGAINST = f"{EXCHANGE_BASE},{STARTUP_BASE}"
 NEW = "this tree"
 ROUNDS = 3  # per engine
+#: start-ups per engine, taking turns: the ROUNDS rounds' own and as many more starts alone (a
+#: start-up is a second's CPU, and three of them moved the ratio by a tenth from run to run)
+STARTS = 7
 EXCHANGE_GOAL = 0.5  # of the old engine's CPU per exchange, at most
 STARTUP_GOAL = 0.5  # of the old engine's start-up CPU, at most
 IDLE_GOAL_PCT = 0.5  # of a core, 16 at rest
@@ -193,6 +196,14 @@ def one_round(
     }
 
 
+def one_start(scope: Scope, name: str, spawn: Callable[[Scope], Spawn] | None) -> float:
+    """One engine started afresh and ended once all 16 are ``online``: its start-up CPU."""
+    specs = [(f"r{i}", MODEL, {"speed_deg_s": SPEED_DEG_S}, {}) for i in range(COUNT)]
+    with many_rotators(scope, name, specs, wait_online_s=60, spawn=spawn) as rig:
+        assert rig.bridge is not None
+        return cpu_seconds(rig.bridge.pid)
+
+
 def run(
     scope: Scope, quick: bool, against: str | None = None, without: str | None = None
 ) -> ItemResult:
@@ -220,6 +231,11 @@ def run(
         for k, (engine, spawn) in enumerate(engines.items()):
             check_abort()
             rounds[engine].append(one_round(scope, f"e{k}-{i}", spawn, window_s))
+    starts = {e: [r["startup_cpu_s"] for r in rs] for e, rs in rounds.items()}
+    for i in range(ROUNDS, STARTS):
+        for k, (engine, spawn) in enumerate(engines.items()):
+            check_abort()
+            starts[engine].append(one_start(scope, f"s{k}-{i}", spawn))
     table = Table(
         f"{result.title}: 16 Rotor-EZ, {ROUNDS} rounds each, taking turns, {window_s:g} s windows",
         [
@@ -257,6 +273,9 @@ def run(
         e: {k: (min(r[k] for r in rs), max(r[k] for r in rs)) for k in keys}
         for e, rs in rounds.items()
     }
+    for e, cpu in starts.items():  # STARTS: the start-up's median of them all
+        med[e]["startup_cpu_s"] = percentile(sorted(cpu), 50)
+        spread[e]["startup_cpu_s"] = (min(cpu), max(cpu))
     new = med[NEW]
     ratios = {
         c: {k: new[k] / med[c][k] if med[c][k] else float("nan") for k in keys} for c in commits
@@ -279,7 +298,13 @@ def run(
     table.notes += [
         "CPU: the bridge process, every thread (/proc schedstat); exchanges: `AI1;` frames the "
         "controllers logged. Start-up: from the process's start to all 16 `online` (discovery "
-        "on; each engine from bytecode, as installed); settled: to all 16 `idle` and a second "
+        f"on; each engine from bytecode, as installed), the median of {STARTS} starts each in "
+        "turns (the rounds' and more alone: "
+        + ", ".join(
+            f"{e} {spread[e]['startup_cpu_s'][0]:.2f}-{spread[e]['startup_cpu_s'][1]:.2f} s"
+            for e in engines
+        )
+        + "); settled: to all 16 `idle` and a second "
         "more (discovery's own configs read back). "
         "1st / 2nd thread: the two busiest threads' share while turning, ms per exchange.",
         "Replies as a UART sends them: "
@@ -294,6 +319,7 @@ def run(
         "medians": med,
         "ratios": ratios,
         "spread": spread,
+        "starts": starts,
         "window_s": window_s,
     }
     if EXCHANGE_BASE in ratios:
