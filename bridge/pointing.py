@@ -447,7 +447,7 @@ class Pointing:
         """Rule 6's nudge from ``status`` as a target to judge: true bearings, and the end of
         the travel it turns to where 0 and 360 are ends; ``halted`` as in ``nudged``."""
         az, el, end = self._nudge(status, d_az, d_el, halted)
-        return Target(az, el, az_end_deg=end)
+        return Target(az, el, az_end_deg=end, nudge=True)
 
     def nudged(
         self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool = False

@@ -300,6 +300,9 @@ class Target:
     # travel (pointing.py rule 6): 360 or 0, which one true bearing names both of; the judge
     # sends it and clears it
     az_end_deg: float | None = None
+    # a nudge (pointing.py rule 6): its step goes out even where it ends within the tolerance of
+    # where the rotor rests (session/targets.py rule 5), as the user asked for that step
+    nudge: bool = False
 
 
 def combine(newer: Target, older: Target | None) -> Target:

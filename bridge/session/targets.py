@@ -20,9 +20,12 @@ Rules:
 4. A target goes to the controller only when ``motion.plan_target`` says so; a stop due goes
    first, and a held target (session rule 13) waits for its marker.
 5. A target the rotor is already on its way to, or (not tracking's: its steps may be finer
-   than the tolerance) already within tolerance of, is done without a frame; so is a
-   tracking step the rotor, at rest, already reads exactly as the controller would hold it
-   (an attack pass: a step finer than the controller's degree sent a GS-232B ``W192 000``
+   than the tolerance; nor a nudge's, ``Target.nudge``: an attack pass, a Rotor-EZ at rest
+   with the tolerance of 3 degrees was nudged +2 five times, each said carried out, and
+   nothing turned; a GS-232B took the first and none after it, as each counted from where
+   the one before had left the rotor) already within tolerance of, is done without a frame;
+   so is a tracking step the rotor, at rest, already reads exactly as the controller would
+   hold it (an attack pass: a step finer than the controller's degree sent a GS-232B ``W192 000``
    three times over to a rotor reading 192 and 0, 132 set frames of 320 on a pass).
 6. A stream of targets waits for its pause (rule 2); a half-duplex line with a reply in flight
    is free right after it.
@@ -296,7 +299,7 @@ def decide(
             return Sending(Go.DONE, wire=wire)  # already on its way there
     if pending.source is Source.TRACKING and _reads(m, rig, wire) and not targets.again_now:
         return Sending(Go.DONE, wire=wire)  # rule 5: nothing the controller would turn for
-    small = pending.source is not Source.TRACKING
+    small = pending.source is not Source.TRACKING and not pending.nudge  # (rule 5)
     if small and rig.spec.can_report_position and mo.within_tolerance(m, rig.motion, wire):
         log.info("%s: already within tolerance of %s", rig.rotator_id, wire)
         return Sending(Go.DONE, wire=wire)
