@@ -23,7 +23,12 @@ Rules:
    says why (``problems``). Each such rotator says it once on ``R/error`` too, kind ``state``,
    when it starts (runtime/rotator.py ``start``; the log says it once when the file is read:
    a review found the log and the status alone, and bad input is said on the error topic
-   too). A key given twice is
+   too). Before the bridge first writes over an unreadable file, the file is kept aside, as
+   the first free one of ``<name>.unreadable``, ``<name>.unreadable.2`` ... up to
+   KEPT_ASIDE_MAX (a hard link, or a copy where the file system has none; the write fails,
+   and the file stays, if neither can be made), said in the log: an attack pass pointed
+   ``state_file`` at an ADIF logbook, and the start replaced it with the locks, the logbook
+   gone. A key given twice is
    read as neither value (core/jsonkeys.py), anywhere in the file: json's own reading keeps the
    last, and a hand-edited ``"locked": true, "locked": false`` started the rotator unlocked.
 3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
@@ -112,6 +117,7 @@ from bridge.core.ondemand import OnDemandThread
 log = logging.getLogger(__name__)
 
 TEMPORARY_BYTES = 4  # rule 1: the random part of a temporary file's name
+KEPT_ASIDE_MAX = 100  # rule 2: unreadable files kept aside beside one state file, at most
 VERSION_MAX_CHARS = 255  # rule 12: a longer kept version is none
 
 _KINDS = (
@@ -295,6 +301,7 @@ class StateStore:
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
         self._unreadable = ""  # rule 2: why the file could not be read, for each rotator locked
+        self._aside = False  # rule 2: an unreadable file to keep aside before it is written over
         self._dirty = False  # a malformed entry was replaced: written down at the first read
         self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
         self._read_as: str | None = None  # rule 11: the text read (None: no file, or unread)
@@ -318,8 +325,12 @@ class StateStore:
                 self._unreadable = (
                     f"state file {path} unreadable ({why}): every rotator starts locked"
                 )
-                log.error("%s", self._unreadable)
-                self.corrupt = True
+                log.error(
+                    "%s; the file is kept as %s.unreadable before the bridge writes it anew",
+                    self._unreadable,
+                    path.name,
+                )
+                self.corrupt = self._aside = True
 
     def _entry(self, path: Path, rotator_id: str, entry: object) -> dict[str, object]:
         """One rotator's entry as it must be; one that is not starts that rotator locked."""
@@ -582,14 +593,53 @@ class StateStore:
                 f.flush()
                 os.fsync(f.fileno())
             if put_in_place:
+                if self._aside:  # rule 2: never the only copy of what was there
+                    aside = _keep_aside(path)
+                    if aside is not None:
+                        log.warning(
+                            "state file %s was unreadable: kept as %s, and written anew",
+                            path,
+                            aside.name,
+                        )
                 os.replace(tmp, path)
                 renamed = True
+                self._aside = False
         finally:
             if not renamed:
                 with contextlib.suppress(OSError):
                     os.unlink(tmp)
         if renamed:
             _sync_directory(path.parent)
+
+
+def _keep_aside(path: Path) -> Path | None:
+    """Rule 2: the file at ``path`` under the first free name of its own kept aside (None: no
+    file there any more); OSError if none can be made."""
+    for n in range(1, KEPT_ASIDE_MAX + 1):
+        aside = path.with_name(f"{path.name}.unreadable" + (f".{n}" if n > 1 else ""))
+        try:
+            os.link(path, aside)
+            return aside
+        except FileExistsError:
+            continue
+        except FileNotFoundError:
+            return None
+        except OSError:  # a file system without hard links (vfat): a copy
+            pass
+        try:
+            content = path.read_bytes()
+        except FileNotFoundError:
+            return None
+        try:
+            fd = os.open(aside, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o600)
+        except FileExistsError:
+            continue
+        with os.fdopen(fd, "wb") as f:
+            f.write(content)
+            f.flush()
+            os.fsync(f.fileno())
+        return aside
+    raise OSError(errno.EEXIST, f"{KEPT_ASIDE_MAX} unreadable files kept aside already")
 
 
 def _temporary(path: Path, random: str) -> str:

@@ -169,7 +169,9 @@ class Settings(BaseSettings):
         description="where the lock and the options set at run time are kept across restarts; "
         "with a console password, the console's login secret (console-secret, see the "
         "console's page) is kept beside it. A file of its own: the configuration file, the "
-        "audit file or a file another key names is refused (it would be overwritten)",
+        "audit file or a file another key names is refused (it would be overwritten). A file "
+        "there that is no state file (unreadable) starts every rotator locked, and is kept as "
+        "<name>.unreadable before the bridge first writes it anew",
         examples=["/var/lib/rotor-bridge/state.json"],
         json_schema_extra={
             "unset": "$STATE_DIRECTORY/state.json under systemd, else "

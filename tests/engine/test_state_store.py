@@ -217,8 +217,10 @@ def test_the_start_writes_the_real_content_but_never_over_an_unreadable_file(
     assert json.loads(path.read_text())["rotators"]["tower"]["locked"] is True  # kept as it was
     path.write_text("{not json")
     StateStore(path).check_writable()  # the directory takes a file; the one there stays
-    assert path.read_text() == "{not json" and StateStore(path).locked("tower") is True
+    assert path.read_text() == "{not json"
     assert [p.name for p in tmp_path.iterdir()] == ["state.json"]
+    assert StateStore(path).locked("tower") is True  # (written down locked: kept aside first)
+    assert (tmp_path / "state.json.unreadable").read_text() == "{not json"
 
 
 def test_a_write_that_fails_keeps_the_old_file_and_leaves_no_temporary_file(
@@ -471,3 +473,76 @@ def test_a_controller_saying_a_new_version_in_every_line_costs_the_card_a_write_
     store.flush()
     assert len(writes) <= 2, len(writes)
     assert StateStore(path).version("tower", "easycomm3") == "V999"
+
+
+ADIF = "ADIF export\n<adif_ver:5>3.1.4 <eoh>\n<call:5>G4XYZ <band:3>20m <mode:2>CW <eor>\n"
+
+
+def test_a_file_that_is_no_state_file_is_kept_aside_before_the_start_writes_the_locks(
+    tmp_path: Path,
+) -> None:
+    """state_store.py rule 2: an attack pass pointed ``state_file`` at an ADIF logbook; the
+    start wrote the locks over it, and the logbook was gone."""
+    path = tmp_path / "logbook.adi"
+    path.write_text(ADIF)
+    s = StateStore(path, deferred=True)  # as the bridge builds it
+    assert s.locked("tower") is True  # (its lock cannot be read: locked, rule 2)
+    s.check_writable()
+    assert (tmp_path / "logbook.adi.unreadable").read_text() == ADIF
+    assert json.loads(path.read_text())["rotators"]["tower"]["locked"] is True
+    assert s.set_locked("tower", False) is True  # the next writes keep nothing aside again
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "logbook.adi",
+        "logbook.adi.unreadable",
+    ]
+    assert StateStore(path).locked("tower") is False
+
+
+def test_an_unreadable_file_found_again_is_kept_beside_the_first_one_kept(tmp_path: Path) -> None:
+    path = tmp_path / "state.json"
+    path.write_text(ADIF)
+    assert StateStore(path).locked("tower") is True
+    path.write_text("{damaged")
+    assert StateStore(path).locked("tower") is True
+    assert (tmp_path / "state.json.unreadable").read_text() == ADIF
+    assert (tmp_path / "state.json.unreadable.2").read_text() == "{damaged"
+
+
+def test_an_unreadable_file_is_copied_aside_where_no_hard_link_can_be_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_links(src: object, dst: object) -> None:
+        raise PermissionError(errno.EPERM, "Operation not permitted")
+
+    path = tmp_path / "state.json"
+    path.write_text(ADIF)
+    s = StateStore(path)
+    monkeypatch.setattr(os, "link", no_links)
+    assert s.set_locked("tower", False) is True
+    assert (tmp_path / "state.json.unreadable").read_text() == ADIF
+
+
+def test_an_unreadable_file_that_cannot_be_kept_aside_is_not_written_over(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Neither a link nor a copy (a full disk): the lock is not saved, said as any write that
+    fails (the rotator stays locked at the next start), and the file stays as it was."""
+
+    def refused(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    path = tmp_path / "state.json"
+    path.write_text(ADIF)
+    s = StateStore(path)
+    monkeypatch.setattr(os, "link", refused)
+    real_open = os.open
+
+    def no_new_files(name: object, flags: int, *args: object) -> int:
+        if str(name).endswith(".unreadable"):
+            refused()
+        return real_open(name, flags, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(os, "open", no_new_files)
+    assert s.set_locked("tower", False) is False
+    assert path.read_text() == ADIF
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["state.json"]
