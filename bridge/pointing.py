@@ -436,7 +436,7 @@ class Pointing:
         where = "starts at" if past == 0.0 else "crosses"
         raise Refused(
             RefusalCode.LIMITS,
-            f"a nudge of {d_az:+g} degrees {where} south on the {self.model_name}'s scale "
+            f"a nudge of {d_az:+.10g} degrees {where} south on the {self.model_name}'s scale "
             f"(controller {raw:g}), where a Hy-Gain rotor has its stop: it would turn the whole "
             "way round; send a target",
         )
@@ -467,7 +467,7 @@ class Pointing:
             if not -MAX_NUDGE_DEG < step < MAX_NUDGE_DEG:
                 raise Refused(
                     RefusalCode.INVALID,
-                    f"a nudge of {step:g} degrees in {axis} is a turn or more: a nudge is less "
+                    f"a nudge of {step:.10g} degrees in {axis} is a turn or more: a nudge is less "
                     f"than {MAX_NUDGE_DEG:g} degrees either way",
                 )
         # from the target while the rotor is on its way (turning, braking before it turns, or
@@ -496,7 +496,7 @@ class Pointing:
                 shown = f"{new_az:g}" + ("" if to_raw == new_az else f" (controller {to_raw:g})")
                 raise Refused(
                     RefusalCode.LIMITS,
-                    f"a nudge of {d_az:+g} degrees turns to azimuth {shown}, past the end of "
+                    f"a nudge of {d_az:+.10g} degrees turns to azimuth {shown}, past the end of "
                     f"the {self.model_name}'s travel: a nudge is not taken the other way round",
                 )
             if to_raw in (0.0, 360.0):

@@ -383,3 +383,12 @@ def test_a_reading_unfolds_to_raw_plus_the_offset_read_from_its_true_bearing(
     aim = Pointing.of(REGISTRY["gs232b-az-450"], offset_deg=offset_deg)
     assert unfolded(aim.true_of(raw_deg), raw_deg) == pytest.approx(raw_deg + offset_deg)
     assert unfolded(None, raw_deg) is None and unfolded(40.0, None) is None
+
+
+def test_a_refused_nudge_just_short_of_a_turn_is_named_as_sent() -> None:
+    """An attack pass: a nudge of 359.9999 across a Hy-Gain's stop at south was refused as
+    ``+360``, which reads as the turn a nudge may not be."""
+    p = Pointing.of(EZ)
+    still = RotatorStatus("t", MotionState.IDLE, bearing_deg=100, raw_bearing_deg=100)
+    with pytest.raises(Refused, match=r"a nudge of \+359\.9999 degrees"):
+        p.nudge(still, 359.9999, None)
