@@ -122,13 +122,16 @@ COMMAND_QOS = 0  # rule 4
 
 def operator_of(msg: paho.MQTTMessage) -> str | None:
     """The user property ``operator`` of an MQTT 5 message, as sent (the service judges it);
-    None without one (and always under MQTT 3.1.1, which has no properties)."""
+    None without one (and always under MQTT 3.1.1, which has no properties). Two that differ
+    name nobody: the text of both, which no operator's name is (model.valid_operator refuses
+    a line break), so the service ignores it as any name it cannot take (an attack pass: the
+    first of two was taken, where the last of two ``sent`` was)."""
     props = getattr(msg, "properties", None)
     pairs = getattr(props, "UserProperty", None) or []
-    for key, value in pairs:
-        if key == "operator":
-            return str(value)
-    return None
+    names = list(dict.fromkeys(str(value) for key, value in pairs if key == "operator"))
+    if not names:
+        return None
+    return "\n".join(names)
 
 
 def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:

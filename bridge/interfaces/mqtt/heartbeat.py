@@ -30,7 +30,9 @@ Rules:
 5. The station refuses a command whose stamp says it is older than its expiry, or from more
    than AHEAD_S in the future (the reckoning went wrong: refused, and said), or a stamp it
    cannot read: an ``expiry`` without ``sent`` too (an attack pass: a Node-RED flow that set
-   only ``expiry`` had its commands carried out however late, and not a word). A ``sent`` in
+   only ``expiry`` had its commands carried out however late, and not a word), such as a
+   property given twice with two values or digits other than ASCII's (an attack pass: of two
+   ``sent`` the last was taken, and ``１２３`` was read as 123). A ``sent`` in
    milliseconds (JavaScript's ``Date.now()``) is said to be one, not a clock that went back.
    Stop and lock ON are never refused (docs/architecture.md rule 11): the service does not
    ask. A command without a stamp (a dashboard, Home Assistant) is judged as before: it has
@@ -231,7 +233,11 @@ class Stamp:
     def of_properties(cls, pairs: list[tuple[str, str]]) -> Stamp | None:
         """The stamp among a message's user properties; None without ``sent`` and ``expiry``
         (an ``expiry`` alone is a stamp whose send time cannot be read: rule 5)."""
-        found = {str(k): str(v) for k, v in pairs if k in (SENT, EXPIRY, STATION)}
+        found: dict[str, str] = {}
+        for key, value in pairs:
+            key, value = str(key), str(value)
+            if key in (SENT, EXPIRY, STATION):  # one given twice, two ways: read as neither
+                found[key] = value if found.get(key, value) == value else "\0twice"
         if SENT not in found and EXPIRY not in found:
             return None
         return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION))
@@ -245,6 +251,8 @@ class Stamp:
                 "send it again"
             )
         try:
+            if not (self.sent + (self.expiry or "")).isascii():  # (float reads ``１２３``)
+                raise ValueError("not ASCII digits")
             sent = float(self.sent)
             expiry = float(self.expiry if self.expiry is not None else "nan")
         except ValueError:
