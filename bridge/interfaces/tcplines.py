@@ -100,6 +100,15 @@ Rules:
 7. What its clients may hold of the process's descriptors is bounded and said (``most_held``:
    every slot, every waiting connection and the one beyond): the app makes room for the sum
    of every port's under the process's open-files limit (app.py rule 5).
+8. A client that asks a question before the command it was run for, and waits for the answer
+   first (Hamlib's network client, ``rotctl -m 2``: ``\\dump_state``, then ``S``), is answered
+   while it waits over its address's budget (rule 5), by the accept loop, once a connection:
+   the front end's ``greets`` says the answer when the bytes are that question alone (a
+   question that moves nothing and reads nothing of the rotator's state as it changes). Its
+   command then decides, as a newcomer's first bytes do: a stop goes at once. An attack pass:
+   one thread on the host connecting, sending ``p`` and resetting, as fast as it could, kept
+   every ``rotctl -m 2 S`` out, 6 of 6 (it waited for its answer behind the budget, its
+   connection the oldest without a stop, reset to make room).
 """
 
 from __future__ import annotations
@@ -351,13 +360,16 @@ class LineServer:
         ends: bytes = LINE_ENDS,
         halts: Callable[[bytes], bool] | None = None,
         singles: bytes = b"",
+        greets: Callable[[bytes], bytes | None] | None = None,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
         sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
         and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6);
         ``halts``: whether a client's first complete commands hold a stop (rule 5: the
         front end's parser says; none, and no connection goes ahead of the budget);
-        ``singles``: bytes that are a whole command on their own and move nothing (rule 2).
+        ``singles``: bytes that are a whole command on their own and move nothing (rule 2);
+        ``greets``: the answer to a waiting connection's first bytes when they are only the
+        question a client asks before its command (rule 8), else None.
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
@@ -366,6 +378,8 @@ class LineServer:
         self._ends = ends
         self._halts = halts
         self._singles = singles
+        self._greets = greets  # rule 8
+        self._greeted: weakref.WeakSet[socket.socket] = weakref.WeakSet()  # rule 8: once each
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._http_log = RareLog()
         self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
@@ -552,6 +566,8 @@ class LineServer:
                 conn.close()
             elif self._stop_in(conn):  # a stop: ahead of the budget (_stop_now)
                 self._stop_now(conn, waiting.pop(conn), waiting)
+            else:
+                self._greet(conn, sel)
         return False
 
     def _stop_in(self, conn: socket.socket) -> bool:
@@ -585,6 +601,28 @@ class LineServer:
             self._let_in(conn, peer)
         else:
             self._queue(conn, peer, waiting)
+
+    def _greet(self, conn: socket.socket, sel: selectors.BaseSelector) -> bool:
+        """Rule 8: a waiting connection whose bytes are only a client's question before its
+        command (``greets``) is answered, once, the bytes taken, and it waits on, woken by the
+        next ones (its command: a stop goes ahead of the budget); True if it was."""
+        if self._greets is None or conn in self._greeted:
+            return False
+        data = _peek(conn, self._read_bytes)
+        answer = self._greets(data) if data else None
+        if answer is None:
+            return False
+        self._greeted.add(conn)
+        self._looked.pop(conn, None)
+        try:
+            conn.recv(len(data), socket.MSG_DONTWAIT)  # (the bytes peeked, all there)
+            if conn.send(answer, socket.MSG_DONTWAIT) != len(answer):
+                return False  # (a fresh connection's buffer takes it whole: not, no answer)
+        except OSError:
+            return False  # (gone: the loop finds it so, or lets it in to end)
+        if conn not in sel.get_map():
+            sel.register(conn, selectors.EVENT_READ)
+        return True
 
     def _let_in(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         """Rule 5: a thread for ``conn``, out of the accept loop's books and its selector."""
@@ -670,6 +708,8 @@ class LineServer:
             self._queue(conn, peer, waiting)
         if conn in waiting and not _peek(conn, 1):  # silent: woken by its first bytes (those
             sel.register(conn, selectors.EVENT_READ)  # that sent some: _admit_waiting looks)
+        elif conn in waiting:
+            self._greet(conn, sel)
         return True
 
     def _admit_waiting(
@@ -686,6 +726,8 @@ class LineServer:
                 if self._stop_in(conn):
                     del waiting[conn]
                     self._stop_now(conn, peer, waiting)
+                elif self._greet(conn, sel):
+                    continue  # (woken by its next bytes)
                 if conn in waiting:
                     next_s = PARTIAL_POLL_S
         for conn, peer in list(waiting.items()):

@@ -6,13 +6,17 @@ rotctl must be installed (libhamlib-utils): a missing judge is a failure, never 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import socket
+import struct
 import subprocess
+import threading
 import time
 
 import pytest
 
+from bridge.emulators.rotorez_models import Outcome
 from bridge.interfaces.rotctld import RotctldServer
 from tests.support import free_port, wait_until
 from tests.support.hamlib import run_rotctl
@@ -195,3 +199,42 @@ def test_hamlib_with_an_offset_of_180_points_where_it_is_told(rig: Rig, rotctl_p
     assert bearing_frames(rig) == [b"AP1210\r"]  # raw 210 = true 30
     assert abs(rig.emus["tower"].state().az_deg - 210) <= 3
     assert ok(rotctl(rotctl_path, port, "p")).startswith(("29.", "30.", "31."))
+
+
+def test_rotctls_stop_gets_through_a_thread_connecting_and_resetting_as_fast_as_it_can(
+    rig: Rig, rotctl_path: str
+) -> None:
+    """tcplines.py rule 8 (an attack pass): one thread on the host connecting, sending ``p``
+    and resetting its connection as fast as it could kept every ``rotctl -m 2 S`` out, 6 of 6.
+    Hamlib's network client sends ``\\dump_state`` first and waits for its answer: it waited
+    behind the address's budget, the oldest connection without a stop, and was reset to make
+    room. Its question is now answered while it waits, and its S then goes ahead."""
+    port, server = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    done = threading.Event()
+    floods = [0]
+
+    def flood() -> None:
+        while not done.is_set():  # not a deadline: bounded by the test's end
+            with contextlib.suppress(OSError):
+                sock = socket.create_connection(("127.0.0.1", port), timeout=1)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+                sock.sendall(b"p\n")
+                sock.close()  # (a reset: SO_LINGER 0)
+                floods[0] += 1
+
+    flooder = threading.Thread(target=flood, daemon=True)
+    flooder.start()
+    try:
+        wait_until(lambda: len(server.waiting) >= 8, 30, "connections waiting over the budget")
+        for target in ("300", "10"):
+            rig.probe.publish("rotor/target", target)  # (a new connection's would wait: S alone
+            emu.wait_for(lambda s: s.is_moving, 30)  # goes ahead of the budget)
+            stops = len(emu.frames(Outcome.STOP))
+            ok(rotctl(rotctl_path, port, "S"))
+            emu.wait_for(lambda s: not s.is_moving, 5)
+            assert len(emu.frames(Outcome.STOP)) == stops + 1
+    finally:
+        done.set()
+        flooder.join()
+    assert floods[0] > 100  # (it flooded all along)

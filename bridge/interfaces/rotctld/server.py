@@ -33,6 +33,19 @@ class RotctldSession:
         return out
 
 
+#: tcplines.py rule 8: what Hamlib's network client (``rotctl -m 2``) sends when it opens, and
+#: waits for the answer to before the command it was run for
+HANDSHAKES = (b"\\dump_state\n", b"\\dump_state\r\n")
+
+
+def _greeting(rotator: Rotator, data: bytes) -> bytes | None:
+    """tcplines.py rule 8: the answer to ``data`` when it is the handshake alone (what the
+    rotator's limits say: nothing of its motion), else None."""
+    if data not in HANDSHAKES:
+        return None
+    return b"".join(out for out in RotctldSession(rotator).feed(data) if isinstance(out, bytes))
+
+
 class RotctldServer(LineServer):
     """One TCP listener for one rotator; one thread per client."""
 
@@ -60,5 +73,6 @@ class RotctldServer(LineServer):
             clock=clock,
             peer_session=lambda peer: RotctldSession(rotator, peer),
             halts=holds_stop,
+            greets=lambda data: _greeting(rotator, data),
         )
         self.rotator = rotator
