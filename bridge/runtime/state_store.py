@@ -326,9 +326,10 @@ class StateStore:
                     f"state file {path} unreadable ({why}): every rotator starts locked"
                 )
                 log.error(
-                    "%s; the file is kept as %s.unreadable before the bridge writes it anew",
+                    "%s; the file is kept as %s.unreadable (or .unreadable.2 ...) before the "
+                    "bridge writes it anew",
                     self._unreadable,
-                    path.name,
+                    os.path.realpath(path),
                 )
                 self.corrupt = self._aside = True
 
@@ -634,10 +635,15 @@ def _keep_aside(path: Path) -> Path | None:
             fd = os.open(aside, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o600)
         except FileExistsError:
             continue
-        with os.fdopen(fd, "wb") as f:
-            f.write(content)
-            f.flush()
-            os.fsync(f.fileno())
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(content)
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError:  # (a full disk: no part of a copy left to take the name at each try)
+            with contextlib.suppress(OSError):
+                os.unlink(aside)
+            raise
         return aside
     raise OSError(errno.EEXIST, f"{KEPT_ASIDE_MAX} unreadable files kept aside already")
 

@@ -546,3 +546,33 @@ def test_an_unreadable_file_that_cannot_be_kept_aside_is_not_written_over(
     assert s.set_locked("tower", False) is False
     assert path.read_text() == ADIF
     assert sorted(p.name for p in tmp_path.iterdir()) == ["state.json"]
+
+
+def test_a_copy_aside_that_fails_leaves_no_part_of_it_to_take_the_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A cold review: a copy that failed after its file was made (a full disk at the fsync)
+    left the part behind, and every later save made another, ``.unreadable`` to ``.5``."""
+
+    def no_links(src: object, dst: object) -> None:
+        raise PermissionError(errno.EPERM, "Operation not permitted")
+
+    real_fsync = os.fsync
+
+    def full(fd: int) -> None:
+        if os.readlink(f"/proc/self/fd/{fd}").endswith(".unreadable"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_fsync(fd)
+
+    path = tmp_path / "state.json"
+    path.write_text(ADIF)
+    s = StateStore(path)
+    monkeypatch.setattr(os, "link", no_links)
+    monkeypatch.setattr(os, "fsync", full)
+    for _ in range(3):
+        assert s.set_locked("tower", False) is False
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["state.json"]
+    assert path.read_text() == ADIF
+    monkeypatch.setattr(os, "fsync", real_fsync)  # room again: kept aside, then written
+    assert s.set_locked("tower", False) is True
+    assert (tmp_path / "state.json.unreadable").read_text() == ADIF

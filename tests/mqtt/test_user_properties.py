@@ -12,6 +12,7 @@ from paho.mqtt.properties import Properties
 
 from bridge.core.model import Origin, Source
 from bridge.interfaces.mqtt.connection import operator_of, stamp_of
+from bridge.interfaces.mqtt.heartbeat import station_of
 from tests.mqtt.test_service import service
 
 
@@ -55,3 +56,8 @@ def test_a_stamp_given_twice_two_ways_or_not_in_ascii_digits_cannot_be_read(
 def test_a_stamp_given_twice_the_same_way_is_one_stamp() -> None:
     stamp = stamp_of(message(("sent", "1000"), ("expiry", "5"), ("sent", "1000")))
     assert stamp is not None and stamp.judge(1001.0) is None
+
+
+def test_a_heartbeat_naming_two_stations_names_none() -> None:
+    assert station_of([("station", "a1"), ("station", "a1")]) == "a1"
+    assert station_of([("station", "a1"), ("station", "b2")]) is None

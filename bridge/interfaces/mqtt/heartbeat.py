@@ -97,11 +97,9 @@ def beat_properties(identity: str) -> list[tuple[str, str]]:
 
 def station_of(pairs: list[tuple[str, str]]) -> str | None:
     """Rule 7: the station process a heartbeat's or a stamp's user properties name; None
-    without one."""
-    for key, value in pairs:
-        if key == STATION:
-            return str(value)
-    return None
+    without one, or with two that differ (read as neither, as a stamp's: rule 5)."""
+    named = {str(value) for key, value in pairs if key == STATION}
+    return named.pop() if len(named) == 1 else None
 
 
 def parse_beat(payload: bytes) -> float:
