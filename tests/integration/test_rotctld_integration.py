@@ -217,7 +217,7 @@ def test_rotctls_stop_gets_through_a_thread_connecting_and_resetting_as_fast_as_
     def flood() -> None:
         while not done.is_set():  # not a deadline: bounded by the test's end
             with contextlib.suppress(OSError):
-                sock = socket.create_connection(("127.0.0.1", port), timeout=1)
+                sock = socket.create_connection(("127.0.0.1", port), timeout=slow(1))
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
                 sock.sendall(b"p\n")
                 sock.close()  # (a reset: SO_LINGER 0)
