@@ -114,6 +114,23 @@ Rules:
    every other without a stop is gone: answered, its command comes a round trip later, while
    a flood's connections came by the dozen (the first form of this rule still lost one
    ``S`` in three on a loaded machine, reset in that round trip).
+9. A STOP or lock ON is the last word over everything sent before it (docs/architecture.md
+   rule 11), whichever interface brought it: a move a client sent before a rotator carried out
+   a STOP or lock ON is not carried out, however late it is read (the budget, rule 5, leaves a
+   flooding client's commands in the kernel for seconds): refused as the judge refuses a
+   command a halt overtook (``since``, runtime/rotator.py; mailbox.py rule 10). A stream says
+   nothing of when its bytes came, so the server looks: at the accept and after every read it
+   reads the rotator's halt count (``halt_count``: the front end's, before the look, so that a
+   halt between the two errs toward refusing) and then how much the connection has sent, read
+   or not (what is read, plus FIONREAD). The bytes a command ends in were in the kernel at the
+   first look that counted them; a halt counted after that look overtakes the command
+   (``Fence``: its session's moves go to the judge with that count as ``since``). The halts
+   the connection's own session carried out meanwhile do not (a client's ``P 300 0``, ``S``,
+   ``P 200 0`` read in one go turn the rotor to 200: the halt count each of its stops added is
+   its own, ``Fence.halting``). Counted per read: a move in the read that also holds the
+   first bytes sent after a halt is taken as sent after it. An attack pass: one client sent
+   24 KB of targets in one burst; an MQTT STOP stopped the rotor and the targets still in the
+   kernel turned it on 5 s later, and after a lock ON and OFF one went out 0.08 s after the OFF.
 """
 
 from __future__ import annotations
@@ -131,10 +148,13 @@ import struct
 import threading
 import time
 import weakref
+from collections import deque
 from collections.abc import Callable, Sequence
-from typing import Protocol
+from typing import Protocol, cast
 
+from bridge.core.model import Command, Source
 from bridge.core.ratelimit import Budget, TokenBucket
+from bridge.front import FrontRotator, HaltCounted
 
 log = logging.getLogger(__name__)
 
@@ -157,6 +177,7 @@ IDLE_S = 30.0  # rule 3: an established client that finished no command for this
 ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 SWEEP_S = 0.01  # rule 8: waiting connections whose peer left are looked for at most this often
+SEEN_KEPT = 4096  # rule 9: a connection's looks at what it has sent, at most (the oldest go)
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
 ACCEPT_BATCH = 256  # rule 5: connections taken from it a wake-up, at most
@@ -333,6 +354,80 @@ class LineSession(Protocol):
     def feed(self, data: bytes) -> Sequence[bytes | Close]: ...
 
 
+try:  # rule 9 (not on Windows, where the remote runs too: tests/remote/test_remote_portable.py)
+    import fcntl
+    import termios
+
+    def _unread(fd: int) -> int:
+        """The bytes waiting unread in the kernel on ``fd``."""
+        waiting: int = struct.unpack("i", fcntl.ioctl(fd, termios.FIONREAD, b"\0" * 4))[0]
+        return waiting
+
+except ImportError:
+
+    def _unread(fd: int) -> int:
+        raise OSError(errno.ENOSYS, "no FIONREAD here")
+
+
+def _sent_so_far(conn: socket.socket, read: int) -> int:
+    """Rule 9: the bytes ``conn``'s peer has sent so far: ``read``, and those waiting unread in
+    the kernel (FIONREAD); ``read`` alone if the kernel cannot say (Windows, where the remote
+    runs too: no fcntl, tests/remote/test_remote_portable.py)."""
+    try:
+        return read + _unread(conn.fileno())
+    except OSError:
+        return read
+
+
+def halt_count(rotator: FrontRotator, source: Source) -> Callable[[], int] | None:
+    """Rule 9: ``rotator``'s halt count for ``source``'s commands, if it counts its halts
+    (bridge/front.py ``HaltCounted``); None if not."""
+    count = getattr(rotator, "halts_for", None)
+    return None if count is None else functools.partial(count, source)
+
+
+class Fence:
+    """Rule 9: a connection's moves overtaken by a halt counted after their bytes came. The
+    server tells it, before each read is fed to the session, the halt count of the first look
+    at the connection that counted those bytes (``arrived``); the session's commands hand a
+    move to the judge through ``move`` and carry out their own stops through ``halting``."""
+
+    def __init__(self, rotator: FrontRotator, source: Source) -> None:
+        self.rotator = rotator
+        self.count = halt_count(rotator, source)  # (None: a rotator that counts no halts)
+        self.arrived: tuple[int, int] | None = None  # the halt count, and ``own`` at that look
+        self.own = 0  # the halts this connection's own stops added
+
+    def since(self) -> int | None:
+        """The halt count a move of the bytes being fed hands to the judge (None: none known)."""
+        if self.arrived is None:
+            return None
+        count, own = self.arrived
+        return count + self.own - own
+
+    def move(self, command: Command, described: str, since: int | None = None) -> None:
+        """``command`` (a move) to the judge: overtaken by a halt counted after its bytes came
+        (or after ``since``, the front end's own count, whichever is older)."""
+        arrived = self.since()
+        if arrived is not None:
+            since = arrived if since is None else min(since, arrived)
+        if since is None:
+            self.rotator.submit(command, described)
+        else:  # (known only where the rotator counts its halts)
+            cast(HaltCounted, self.rotator).submit(command, described, since=since)
+
+    def halting(self, halt: Callable[[], None]) -> None:
+        """``halt()`` (a stop submitted), the halts it adds counted as the connection's own."""
+        if self.count is None:
+            halt()
+            return
+        before = self.count()
+        try:
+            halt()
+        finally:
+            self.own += self.count() - before
+
+
 def _bind_hints(key: str) -> dict[int, str]:
     return {
         errno.EADDRINUSE: f" (another program on this port? give this rotator another {key}_port)",
@@ -367,6 +462,7 @@ class LineServer:
         halts: Callable[[bytes], bool] | None = None,
         singles: bytes = b"",
         greets: Callable[[bytes], bytes | None] | None = None,
+        halt_count: Callable[[], int] | None = None,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
         sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
@@ -375,7 +471,9 @@ class LineServer:
         front end's parser says; none, and no connection goes ahead of the budget);
         ``singles``: bytes that are a whole command on their own and move nothing (rule 2);
         ``greets``: the answer to a waiting connection's first bytes when they are only the
-        question a client asks before its command (rule 8), else None.
+        question a client asks before its command (rule 8), else None; ``halt_count``: the
+        rotator's halt count for this front end (rule 9: its sessions' ``fence`` is told when
+        their bytes came).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
@@ -387,6 +485,11 @@ class LineServer:
         self._greets = greets  # rule 8
         self._greeted: weakref.WeakSet[socket.socket] = weakref.WeakSet()  # rule 8: once each
         self._swept_t = -math.inf  # rule 8: the last look for waiting connections whose peer left
+        self._halt_count = halt_count  # rule 9
+        # rule 9: the first look at a connection, at its accept: (halt count, bytes sent)
+        self._accepted: weakref.WeakKeyDictionary[socket.socket, tuple[int, int]] = (
+            weakref.WeakKeyDictionary()
+        )
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._http_log = RareLog()
         self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
@@ -725,6 +828,9 @@ class LineServer:
         if not _alive(conn):  # its peer already left: no thread, no budget
             conn.close()
             return True
+        if self._halt_count is not None:  # rule 9: the count first, then what was sent
+            count = self._halt_count()
+            self._accepted[conn] = (count, _sent_so_far(conn, 0))
         now = self._clock()
         key = _peer_key(peer[0])
         if self._stop_in(conn):
@@ -877,6 +983,13 @@ class LineServer:
             self._say("%s gone (dropped to make room)", who)
             return
         guard = HttpGuard(self._ends, self._singles)
+        fence: Fence | None = getattr(session, "fence", None)  # rule 9
+        counting = self._halt_count if fence is not None else None
+        seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)  # (sent, count, own)
+        first = self._accepted.pop(conn, None)
+        if first is not None and fence is not None:
+            seen.append((first[1], first[0], 0))
+        read = 0  # rule 9: the bytes read so far
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
         over = False  # rule 5: over its budget now (said once each time)
@@ -923,6 +1036,13 @@ class LineServer:
                 if not data:
                     break
                 last_bytes, raw = self._clock(), len(data)
+                read += raw
+                if counting is not None and fence is not None:  # rule 9: the count first
+                    count = counting()
+                    seen.append((_sent_so_far(conn, read), count, fence.own))
+                    while seen[0][0] < read:  # (it counted bytes read before these alone)
+                        seen.popleft()
+                    fence.arrived = seen[0][1], seen[0][2]
                 data = guard.feed(data)
                 if guard.http:  # (rare: a flood of them is one line at most once per LOG_S)
                     self._http_log.warn(

@@ -238,3 +238,46 @@ def test_rotctls_stop_gets_through_a_thread_connecting_and_resetting_as_fast_as_
         done.set()
         flooder.join()
     assert floods[0] > 100  # (it flooded all along)
+
+
+def _replies(sock: socket.socket, count: int) -> list[bytes]:
+    """The next ``count`` reply lines of a client that sent only ``P`` and ``S`` (``RPRT n``)."""
+    buf = b""
+    while buf.count(b"\n") < count:
+        chunk = sock.recv(65536)
+        assert chunk, f"closed after {len(buf.splitlines())} replies of {count}"
+        buf += chunk
+    return buf.splitlines()
+
+
+def test_targets_a_client_sent_before_a_stop_are_not_carried_out_after_it(rig: Rig) -> None:
+    """tcplines.py rule 9 (an attack pass): one client sent its targets in one burst; the
+    budget left most of them in the kernel for seconds, an MQTT STOP stopped the rotor, and the
+    ones read after it turned it on again (5 s later). The client's replies say what the judge
+    did with each, in order: every target read after the STOP is refused (RPRT -9)."""
+    port, _ = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    burst = 400
+    with connect(port) as sock:
+        ask(sock, b"P 300 0\n", b"RPRT 0\n")
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        sock.sendall(b"P 300 0\n" * burst)  # (on its way there: each changes nothing)
+        rig.probe.publish("rotor/stop", "")  # (3 KB: seconds of the client's budget)
+        replies = _replies(sock, burst)  # every one read and judged
+    assert replies[0] == b"RPRT 0" and replies[-1] == b"RPRT -9", replies
+    first_refused = replies.index(b"RPRT -9")
+    assert set(replies[first_refused:]) == {b"RPRT -9"}, replies  # none after the STOP
+    assert json.loads(rig.retained()["rotor/status"])["target"] is None
+
+
+def test_a_clients_own_stop_in_its_burst_does_not_refuse_its_target_after_it(rig: Rig) -> None:
+    """Rule 9's own halts: ``P 300 0`` many times, ``S``, ``P 100 0`` in one burst read over
+    seconds: the last target was sent after the client's own STOP, and goes out."""
+    port, _ = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    burst = 300
+    with connect(port) as sock:
+        sock.sendall(b"P 300 0\n" * burst + b"S\n" + b"P 100 0\n")
+        replies = _replies(sock, burst + 2)
+    assert replies[-2:] == [b"RPRT 0", b"RPRT 0"]
+    emu.wait_for_frame(b"AP1100\r", Outcome.EXECUTED, slow(15))

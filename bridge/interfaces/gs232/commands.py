@@ -36,7 +36,7 @@ from bridge.interfaces.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.interfaces.tcplines import LINE_ENDS, LineServer, LineSession
+from bridge.interfaces.tcplines import LINE_ENDS, Fence, LineServer, LineSession, halt_count
 from bridge.pointing import unfolded
 
 if TYPE_CHECKING:
@@ -113,6 +113,7 @@ class _Session(ABC, Generic[Item]):
         self.rotator = rotator
         self.origin = Origin(self.source, None, peer)  # peer: the TCP client's address
         self._reader = self.reader()
+        self.fence = Fence(rotator, self.source)  # tcplines.py rule 9: when its bytes came
 
     @abstractmethod
     def reader(self) -> _Reader[Item]:
@@ -198,8 +199,9 @@ class Gs232Session(_SidedSession):
     def execute(self, line: str | None, req: Gs232Request) -> bytes:
         described = f"gs232 {line}"
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
+            stop = Stop(Source.GS232, self.origin)
             try:
-                self.rotator.submit(Stop(Source.GS232, self.origin), described)
+                self.fence.halting(lambda: self.rotator.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return GS232_ERROR
             return b""
@@ -228,7 +230,7 @@ class Gs232Session(_SidedSession):
                 el = None  # Hamlib sends W with elevation 000 to an azimuth-only rotator
             try:
                 target = Target(req.az_deg, el, Source.GS232, origin=self.origin)
-                self.rotator.submit(target, described)
+                self.fence.move(target, described)
             except Refused:
                 return GS232_ERROR  # Rotator.submit has reported it on R/error
             self.names_side = req.az_deg is not None and not 0 <= req.az_deg <= 360  # rule 4
@@ -261,8 +263,9 @@ class EasycommSession(_SidedSession):
         described = f"easycomm {line}"
         if req.stop:  # a line that stops does nothing else, and a malformed word beside it
             # keeps it from nothing (package rules 3 and 6)
+            stop = Stop(Source.EASYCOMM, self.origin)
             try:
-                self.rotator.submit(Stop(Source.EASYCOMM, self.origin), described)
+                self.fence.halting(lambda: self.rotator.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 pass
         if req.invalid is not None:  # nothing else runs (package rule 3)
@@ -271,7 +274,7 @@ class EasycommSession(_SidedSession):
             return f"ALinvalid {req.invalid}\n".encode("latin-1") if req.queries else b""
         if req.park and not req.stop:
             try:
-                self.rotator.submit(Park(source=Source.EASYCOMM, origin=self.origin), described)
+                self.fence.move(Park(source=Source.EASYCOMM, origin=self.origin), described)
             except Refused:  # Rotator.submit has reported it on R/error
                 pass
         elif not req.stop and (req.az_deg is not None or req.el_deg is not None):
@@ -280,7 +283,7 @@ class EasycommSession(_SidedSession):
                 el = None  # Hamlib sends EL0.0 to an azimuth-only rotator
             try:
                 target = Target(req.az_deg, el, Source.EASYCOMM, origin=self.origin)
-                self.rotator.submit(target, described)
+                self.fence.move(target, described)
             except Refused:  # Rotator.submit has reported it on R/error
                 pass
             else:  # rule 4 (an elevation alone keeps the azimuth, and its side)
@@ -339,8 +342,9 @@ class Dcu1Session(_Session[Dcu1Request]):
     def answer(self, item: Dcu1Request) -> bytes:
         described = f"dcu1 {item.text}"
         if item.kind is Dcu1Kind.STOP or item.stops:  # first, whatever else the frame was
+            stop = Stop(Source.DCU1, self.origin)
             try:
-                self.rotator.submit(Stop(Source.DCU1, self.origin), described)
+                self.fence.halting(lambda: self.rotator.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return DCU1_ERROR
             if item.kind is Dcu1Kind.STOP:
@@ -387,7 +391,7 @@ class Dcu1Session(_Session[Dcu1Request]):
             az_deg, since = stored[0], stored[3]  # rule 10 (a review: it went out after it)
         try:
             target = Target(az_deg, None, Source.DCU1, origin=self.origin)
-            self.rotator.submit(target, described, since=since)
+            self.fence.move(target, described, since=since)
         except Refused:
             return DCU1_ERROR  # Rotator.submit has reported it on R/error
         return b""
@@ -436,6 +440,7 @@ class Emulation:
             ends=self.ends,
             halts=self.halts,
             singles=self.singles,
+            halt_count=halt_count(rotator, self.session.source),  # type: ignore[attr-defined]
         )
 
     def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:

@@ -11,6 +11,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import Origin, Source, Stop, Target
 from bridge.front import FrontRotator
 from bridge.interfaces.rotctld.parser import Request
+from bridge.interfaces.tcplines import Fence
 from bridge.pointing import unfolded
 from bridge.protocols.base import HamlibRotType
 
@@ -60,6 +61,7 @@ class RotctldCommands:
     def __init__(self, rotator: Rotator, origin: Origin | None = None) -> None:
         self.rotator = rotator
         self._origin = origin  # who this client is (the audit trail, the control lease)
+        self.fence = Fence(rotator, Source.ROTCTLD)  # tcplines.py rule 9
         # Hamlib's facts about the model are on its spec (protocols/)
         spec = rotator.spec
         self.hamlib_model = spec.hamlib_model
@@ -121,8 +123,9 @@ class RotctldCommands:
         return self._submit_target(park[0], park[1], req, park=True)
 
     def _stop(self, req: Request) -> tuple[int, str]:
+        stop = Stop(Source.ROTCTLD, self._origin)
         try:
-            self.rotator.submit(Stop(Source.ROTCTLD, self._origin), _describe(req))
+            self.fence.halting(lambda: self.rotator.submit(stop, _describe(req)))
         except Refused as exc:  # the station's own never refuses a stop; the remote's (remote/)
             return _refusal_code(exc, self.rotator.status.connected), ""  # can't deliver one
         return RIG_OK, ""
@@ -211,7 +214,7 @@ class RotctldCommands:
         """``az`` is a true bearing (Gpredict and loggers think in true bearings): pointing.py."""
         try:
             target = Target(az, el, Source.ROTCTLD, park=park, origin=self._origin)
-            self.rotator.submit(target, _describe(req))
+            self.fence.move(target, _describe(req))  # tcplines.py rule 9
         except Refused as exc:
             return _refusal_code(exc, self.rotator.status.connected), ""
         return RIG_OK, ""

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from bridge.core.model import Origin, Source
 from bridge.interfaces.rotctld.commands import Rotator, RotctldCommands
 from bridge.interfaces.rotctld.parser import Quit, RequestParser, holds_stop
-from bridge.interfaces.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
+from bridge.interfaces.tcplines import CLOSE, USEFUL_WITHIN_S, Close, Fence, LineServer, halt_count
 
 
 class RotctldSession:
@@ -22,6 +22,11 @@ class RotctldSession:
     @property
     def idle(self) -> bool:
         return self._parser.idle
+
+    @property
+    def fence(self) -> Fence:
+        """tcplines.py rule 9: when this client's bytes came, for its moves."""
+        return self._commands.fence
 
     def feed(self, data: bytes) -> list[bytes | Close]:
         out: list[bytes | Close] = []
@@ -74,5 +79,6 @@ class RotctldServer(LineServer):
             peer_session=lambda peer: RotctldSession(rotator, peer),
             halts=holds_stop,
             greets=lambda data: _greeting(rotator, data),
+            halt_count=halt_count(rotator, Source.ROTCTLD),
         )
         self.rotator = rotator
