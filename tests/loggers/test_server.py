@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import logging
 import math
 import os
@@ -757,5 +758,31 @@ def test_a_stop_from_another_interface_carried_out_beside_a_loggers_stop_is_not_
             Stop(Source.PST),
             ("refused", f"pst: {STALE}"),
         ], tower.calls
+    finally:
+        ep.stop()
+
+
+@pytest.mark.parametrize(
+    "option", [socket.SO_REUSEADDR, socket.SO_REUSEPORT], ids=["SO_REUSEADDR", "SO_REUSEPORT"]
+)
+def test_no_other_program_can_bind_the_n1mm_port_beside_the_bridge(option: int) -> None:
+    """server.py rule 10 (an attack pass): the N1MM port was bound with SO_REUSEADDR, as N1MM
+    advises; another user bound it the same way and, on Linux, every datagram sent to it went
+    to that socket, the operator's STOPs among them (5 of 5). It is the bridge's alone now: the
+    other bind is refused, and the STOP still stops."""
+    tower = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_n1mm(tower, "Tower", port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        port = ep.address(next(iter(ep.n1mm.values())))[1]
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as thief:
+            thief.setsockopt(socket.SOL_SOCKET, option, 1)
+            with pytest.raises(OSError) as refused:
+                thief.bind(("127.0.0.1", port))
+            assert refused.value.errno == errno.EADDRINUSE
+        send(port, b"<N1MMRotor><stop><rotor>Tower</rotor></stop></N1MMRotor>")
+        wait_until(lambda: tower.calls, 5, "stopped")
+        assert tower.calls == [Stop(Source.N1MM)]
     finally:
         ep.stop()

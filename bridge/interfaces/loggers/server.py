@@ -48,6 +48,13 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    thread may lose the interpreter between any two readings, to the very thread that
    carries out a STOP, and one reading after the wall clock's dated a turn read as the STOP
    landed after it.
+10. Every port is the bridge's alone: no socket option lets another program bind it too, so
+   one that tries is told the address is in use (and a bridge that finds it taken says so at
+   its start). N1MM advises programs to share its ports (SO_REUSEADDR), but on Linux a
+   datagram sent to one address goes to the socket bound there last: an attack pass bound the
+   N1MM port as another user (``nobody``), with SO_REUSEADDR, and took every STOP sent to it,
+   5 of 5, without a word; a second bridge on the same port took them from the first. Two
+   programs that both obey one port's rotor commands are a conflict all the same.
 """
 
 from __future__ import annotations
@@ -169,15 +176,15 @@ class LoggerEndpoints:
         had, and none kept)."""
         if self._sockets:
             return
-        # a PST port has one owner (a PstRotator still running must show as "in use"); N1MM's
-        # advice is to share its port (SO_REUSEADDR), as its loggers and rotor programs do
-        wanted: list[tuple[PstEndpoint | N1mmEndpoint, str, bool]] = [
-            (e, f"PstRotator UDP for rotator {e.rotator.id!r}", False) for e in self.pst
+        # rule 10: every port has one owner (a PstRotator or another bridge still running must
+        # show as "in use"), N1MM's too
+        wanted: list[tuple[PstEndpoint | N1mmEndpoint, str]] = [
+            (e, f"PstRotator UDP for rotator {e.rotator.id!r}") for e in self.pst
         ]
-        wanted += [(e, f"N1MM rotor UDP for {_named(e)}", True) for e in self.n1mm.values()]
+        wanted += [(e, f"N1MM rotor UDP for {_named(e)}") for e in self.n1mm.values()]
         try:
-            for endpoint, what, shared in wanted:
-                sock = _bound(endpoint.bind, endpoint.port, what, shared)
+            for endpoint, what in wanted:
+                sock = _bound(endpoint.bind, endpoint.port, what)
                 self._sockets[sock] = endpoint
                 host, port = sock.getsockname()[:2]
                 self._addresses[sock] = host, port
@@ -416,11 +423,10 @@ def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
     return "pst" if isinstance(endpoint, PstEndpoint) else "n1mm"
 
 
-def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
+def _bound(host: str, port: int, what: str) -> socket.socket:
+    """Rule 10: ``host``:``port`` for this socket alone (no SO_REUSEADDR, no SO_REUSEPORT)."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
-        if shared:
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))
         sock.setblocking(False)
         with contextlib.suppress(OSError):  # rule 8: the system may give less, or refuse
