@@ -786,3 +786,30 @@ def test_no_other_program_can_bind_the_n1mm_port_beside_the_bridge(option: int) 
         assert tower.calls == [Stop(Source.N1MM)]
     finally:
         ep.stop()
+
+
+def test_stops_for_a_name_nobody_has_go_over_the_budget_and_a_real_stop_still_stops() -> None:
+    """Rule 8 (an attack pass): 2 KiB datagrams of ``<stop><rotor>x</rotor></stop>`` went past
+    every budget as stops and were each parsed whole, and the operator's N1MM stop waited up to
+    1.3 s behind them. In virtual time (the clock stands still, the budget never refills): the
+    flood's stops name no rotor of the port, go over their sender's budget unparsed, and the
+    real one, for Tower, is carried out."""
+    clock = FakeClock()
+    tower = Recording("tower")
+    ep = LoggerEndpoints(clock=clock)
+    ep.add_n1mm(tower, "Tower", port=0, report_to=("127.0.0.1", 9))  # type: ignore[arg-type]
+    ep.start()
+    try:
+        port = ep.address(next(iter(ep.n1mm.values())))[1]
+        junk = b"<N1MMRotor>" + b"<stop><rotor>x</rotor></stop>" * 60 + b"</N1MMRotor>"
+        with udp_socket() as s:
+            for _ in range(int(RATE_DATAGRAMS_S) // 4 + 50):  # (each costs 1 + 1.7 KiB)
+                s.sendto(junk, ("127.0.0.1", port))
+            wait_until(lambda: ep.over_budget > 0, slow(10), "the stops for x over the budget")
+            s.sendto(
+                b"<N1MMRotor><stop><rotor>Tower</rotor></stop></N1MMRotor>", ("127.0.0.1", port)
+            )
+            wait_until(lambda: tower.calls, slow(10), "the STOP for Tower carried out")
+        assert tower.calls == [Stop(Source.N1MM)]
+    finally:
+        ep.stop()

@@ -29,7 +29,10 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    flood, and a stop sent then is dropped or queued behind it), so every wake-up reads what
    waits, PER_WAKEUP a socket (rule 3), and comes straight back for more. Each datagram is
    first searched for a stop (datagrams.py rule 6, one byte search); one that may be a stop is
-   parsed and carried out at once, whatever any budget says. Everything else is parsed and
+   parsed and carried out at once, whatever any budget says, on the N1MM port if it may also
+   name a rotor there (a byte search for each of its names, or ``*``: ``_may_name``; an attack
+   pass flooded 2 KiB datagrams of stops for a name nobody has, each parsed whole, and an
+   operator's stop waited up to 1.3 s behind them). Everything else is parsed and
    carried out only within its sender's budget (ratelimit.SourceBudgets, per address and port:
    RATE_DATAGRAMS_S a second each, a second's worth at once, each datagram costing 1 + its size
    in KiB, at most MAX_SOURCES senders remembered; RATE_ALL_S for all of them together); a
@@ -88,6 +91,7 @@ from bridge.interfaces.loggers.commands import (
 from bridge.interfaces.loggers.datagrams import (
     MAX_DATAGRAM,
     Malformed,
+    ascii_text,
     may_stop_n1mm,
     may_stop_pst,
     n1mm_report,
@@ -300,7 +304,8 @@ class LoggerEndpoints:
     def _serve(self, sock: socket.socket) -> None:
         """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first."""
         endpoint = self._sockets[sock]
-        may_stop = may_stop_pst if isinstance(endpoint, PstEndpoint) else may_stop_n1mm
+        named = endpoint if isinstance(endpoint, N1mmEndpoint) else None  # (rule 8's names)
+        may_stop = may_stop_pst if named is None else may_stop_n1mm
         for _ in range(PER_WAKEUP):
             try:
                 data, peer, arrived = _received(sock)
@@ -314,7 +319,8 @@ class LoggerEndpoints:
                 continue
             now = self._clock()
             source = peer[0], peer[1]
-            if not may_stop(data) and not self._budgets.allow(source, now):
+            stop = may_stop(data) and (named is None or _may_name(named, data))
+            if not stop and not self._budgets.allow(source, now):
                 self._flooded(now, source)
                 continue
             self._carry_out(sock, endpoint, data, peer, arrived)
@@ -417,6 +423,19 @@ class LoggerEndpoints:
 def _named(e: N1mmEndpoint) -> str:
     """``rotator 'tower' (N1MM's "Yagi")``, for every rotator on the endpoint."""
     return ", ".join(f"rotator {r.rotator.id!r} (N1MM's {r.name!r})" for r in e.rotors)
+
+
+def _may_name(endpoint: N1mmEndpoint, data: bytes) -> bool:
+    """Rule 8: whether a stop-like N1MM datagram may name a rotor of ``endpoint`` (or every
+    rotor, ``*``): the name's bytes are in it somewhere (parse_n1mm reads a name as sent,
+    datagrams.py rule 4). A name not all ASCII is not looked for: the datagram is parsed."""
+    text = data if data.isascii() else ascii_text(data).encode("ascii")
+    if b"*" in text:
+        return True
+    for rotor in endpoint.rotors:
+        if not rotor.name.isascii() or rotor.name.encode("ascii") in text:
+            return True
+    return False
 
 
 def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
