@@ -944,3 +944,31 @@ def test_a_console_secret_that_is_no_regular_file_is_said_and_never_waited_for(
     assert len(got[0]) == 32
     assert "console-secret cannot be read (" in caplog.text
     assert "not a regular file" in caplog.text
+
+
+def test_behind_a_trusted_proxy_on_loopback_forged_clients_do_not_get_unlimited_tries(
+    rig: Rig, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """auth.py rule 6 (an attack pass): with ``trusted_proxies = ["127.0.0.1"]`` any program on
+    the host reaches the console from the proxy's address and writes its own X-Forwarded-For:
+    each try named a new client, 3,000 wrong passwords in about a second were all looked at,
+    and each was a warning line. A proxy vouches for PROXIED_NEW_BURST new clients; the rest
+    share its tries. The operator, known before the flood, keeps theirs."""
+    secret = tmp_path / "web-password"
+    secret.write_text(PASSWORD + "\n")
+    secret.chmod(0o600)
+    web = rig.sections["web"] = web_section(
+        password_file=str(secret), trusted_proxies=["127.0.0.1"]
+    )
+    rig.add("hf")
+    rig.start()
+    rig.ready("hf")
+    client = ConsoleClient(web["port"])
+    assert _login(client, "typo", X_Forwarded_For="192.0.2.10") == 401  # the operator, once
+    answers = [_login(client, "guess", X_Forwarded_For=f"198.51.100.{n}") for n in range(60)]
+    looked_at = answers.count(401)  # (the rest: 429, the password not looked at)
+    assert looked_at <= auth.PROXIED_NEW_BURST + auth.LOGIN_BURST_PER_CLIENT, answers
+    assert answers[-1] == 429
+    assert _login(client, PASSWORD, X_Forwarded_For="192.0.2.10") == 200
+    said = [r for r in caplog.records if "a wrong password from" in r.getMessage()]
+    assert len(said) <= 2, [r.getMessage() for r in said]

@@ -52,6 +52,14 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    held back the operator's right one for as long as they went on). An entry with the port
    some proxies add is read as its address (it was taken for junk, and every browser counted
    as the proxy); a listed network wider than one address is check-config's warning.
+   Whoever reaches the console directly from a trusted proxy's address writes the
+   ``X-Forwarded-For`` it likes, so each failed login named a new client with tries of its
+   own (an attack pass: with ``trusted_proxies = ["127.0.0.1"]``, the docs' own example, any
+   program on the host tried 3,000 passwords in about a second, none held back). A proxy
+   vouches for PROXIED_NEW_BURST clients new to the limiter (they get tries of their own),
+   then for one every PROXIED_NEW_EVERY_S; the rest share one client's tries, the proxy's. A
+   client known before (one that failed once) keeps its own; under such a flood a client new
+   to the console waits with the flood's.
 """
 
 from __future__ import annotations
@@ -70,6 +78,10 @@ TOKEN_LIFETIME_S = 7 * 24 * 3600.0
 PBKDF2_ROUNDS = 100_000
 LOGIN_BURST_PER_CLIENT = 5  # rule 3: failed tries, then one per LOGIN_EVERY_S per address
 LOGIN_EVERY_S = 30.0
+# rule 6: clients new to the limiter a trusted proxy may vouch for (each then gets tries of its
+# own), then one per PROXIED_NEW_EVERY_S; past that they share the proxy's own tries
+PROXIED_NEW_BURST = 16
+PROXIED_NEW_EVERY_S = 60.0
 CLIENTS_KEPT = 4096
 
 
@@ -128,21 +140,30 @@ def password_matches(given: str, password: str) -> bool:
 
 @dataclass
 class LoginLimiter:
-    """Rule 3: ``wait`` says whether ``client`` (an address) may try now; ``failed`` spends."""
+    """Rule 3: ``wait`` says whether ``client`` (an address) may try now; ``failed`` spends.
+    ``proxy``: the trusted proxy that vouched for ``client`` (rule 6), if one did."""
 
     _clients: OrderedDict[str, TokenBucket] = field(default_factory=OrderedDict)
+    _vouched: OrderedDict[str, TokenBucket] = field(default_factory=OrderedDict)  # rule 6
 
-    def wait(self, client: str, now_s: float) -> float | None:
+    def wait(self, client: str, now_s: float, proxy: str | None = None) -> float | None:
         """None: the try may go ahead; else the seconds until one may."""
         bucket = self._clients.get(client_key(client))
         if bucket is None:
-            return None
+            if proxy is None or self._new_allowed(proxy, now_s):
+                return None
+            return self.wait(_proxied(proxy), now_s)  # rule 6: the proxy's own tries
         bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
         bucket.t = now_s
         return None if bucket.tokens >= 1.0 else _wait(bucket)
 
-    def failed(self, client: str, now_s: float) -> None:
+    def failed(self, client: str, now_s: float, proxy: str | None = None) -> None:
         key = client_key(client)
+        if key not in self._clients and proxy is not None:  # rule 6: new, vouched for
+            if self._new_allowed(proxy, now_s):
+                self._vouched[proxy].take(now_s)
+            else:
+                key = _proxied(proxy)
         bucket = self._clients.pop(key, None)
         if bucket is None:
             bucket = TokenBucket.full(LOGIN_BURST_PER_CLIENT, 1.0 / LOGIN_EVERY_S, now_s)
@@ -150,6 +171,23 @@ class LoginLimiter:
         while len(self._clients) > CLIENTS_KEPT:
             self._clients.popitem(last=False)
         bucket.take(now_s)
+
+    def _new_allowed(self, proxy: str, now_s: float) -> bool:
+        """Rule 6: whether ``proxy`` may still vouch for a client new to the limiter."""
+        bucket = self._vouched.pop(proxy, None)
+        if bucket is None:
+            bucket = TokenBucket.full(PROXIED_NEW_BURST, 1.0 / PROXIED_NEW_EVERY_S, now_s)
+        self._vouched[proxy] = bucket  # most recent last
+        while len(self._vouched) > CLIENTS_KEPT:
+            self._vouched.popitem(last=False)
+        bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
+        bucket.t = now_s
+        return bucket.tokens >= 1.0
+
+
+def _proxied(proxy: str) -> str:
+    """Rule 6: the tries the clients a proxy vouched for past its share have between them."""
+    return f"through {client_key(proxy)}"
 
 
 Networks = tuple[ipaddress.IPv4Network | ipaddress.IPv6Network, ...]  # rule 6: the proxies

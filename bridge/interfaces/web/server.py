@@ -115,6 +115,7 @@ from bridge.interfaces.web.port import ConsoleRotator
 log = logging.getLogger(__name__)
 
 BODY_S = 10.0  # a command's or a login's body arrives within this, or it is not waited for
+WRONG_LOG_S = 10.0  # a wrong password is said at most this often, with a count
 SHOWN_S = 3.0  # rule 10: a nudge waits this long at most for the command before it to show
 SHOWN_POLL_S = 0.005  # rule 10: how often it looks
 SHOWN_WAITERS = 8  # rule 10: commands waiting so per rotator, no more
@@ -222,6 +223,9 @@ class WebConsole:
         self._proxies = tuple(ipaddress.ip_network(p, strict=False) for p in trusted_proxies or ())
         self._tokens = auth.Tokens(auth.key_for(password, secret))
         self._logins = auth.LoginLimiter()
+        # a wrong password is said at most once per WRONG_LOG_S, with a count (an attack pass:
+        # 3,000 lines in a second, one per try)
+        self._wrong_said_s, self._wrong_since = -1e18, 0
         self._station, self._locator = station, locator
         self._satellites = satellites
         self._wall = wall
@@ -469,7 +473,8 @@ class WebConsole:
         key = auth.login_key(
             client, request.headers.get("Host"), self._host_names, forwarded=forwarded
         )
-        wait_s = self._logins.wait(key, now)
+        proxy = request.remote if client != request.remote else None  # (auth.py rule 6)
+        wait_s = self._logins.wait(key, now, proxy)
         if wait_s is not None:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
             return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
@@ -483,8 +488,15 @@ class WebConsole:
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
         if not isinstance(given, str) or not auth.password_matches(given, self._password):
-            self._logins.failed(key, now)
-            log.warning("web console: a wrong password from %s", client)
+            self._logins.failed(key, now, proxy)
+            self._wrong_since += 1
+            if now - self._wrong_said_s >= WRONG_LOG_S:
+                log.warning(
+                    "web console: a wrong password from %s (%d since the last said)",
+                    client,
+                    self._wrong_since,
+                )
+                self._wrong_said_s, self._wrong_since = now, 0
             return _json({"error": "wrong password"}, 401)
         return _json({"token": self._tokens.issue(self._wall())})
 
