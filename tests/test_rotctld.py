@@ -16,10 +16,12 @@ from pydantic import ValidationError
 
 from bridge import emulators
 from bridge.app import worker_config
-from bridge.core.model import ErrorEvent, Lock, MotionState
+from bridge.core.model import ErrorEvent, Lock, MotionState, Source, Stop
 from bridge.emulators import EmulatedPort
+from bridge.interfaces import tcplines
 from bridge.interfaces.rotctld import QUIT, Request, RequestParser, RotctldServer
 from bridge.interfaces.rotctld.parser import OVERLONG, holds_stop
+from bridge.interfaces.rotctld.server import RotctldSession
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings, Settings
@@ -1005,3 +1007,23 @@ def test_a_stop_among_the_first_commands_is_told_for_the_accept_loop(
     """interfaces/tcplines.py rule 5: a connection whose first commands hold a stop goes
     ahead of its address's budget."""
     assert holds_stop(data) is stop
+
+
+def test_a_move_sent_after_a_stop_by_a_client_whose_handshake_was_answered_is_carried_out(
+    station: StationFactory, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """tcplines.py rules 8 and 9 (a cold review): a connection waiting over its address's
+    budget had its ``\\dump_state`` answered by the accept loop, and the bytes that question
+    took were counted again as the first the client's thread read: its ``P 100 0``, sent after
+    an operator's STOP elsewhere, was refused as sent before it."""
+    monkeypatch.setattr(tcplines, "ACCEPTS_S", 1.0)  # one thread a second for an address
+    st = station()
+    first = st.connect()  # (the address's thread for this second)
+    first.ask(b"p\n", b"123.00\n0.00\n")
+    waiting = st.connect()  # over the budget: it waits, no thread
+    answer = b"".join(
+        out for out in RotctldSession(st.rotator).feed(b"\\dump_state\n") if isinstance(out, bytes)
+    )
+    waiting.ask(b"\\dump_state\n", answer)  # answered while it waits
+    st.rotator.submit(Stop(Source.MQTT), "stop")  # an operator's STOP, elsewhere, now
+    waiting.ask(b"P 100 0\n", b"RPRT 0\n")  # sent after it: carried out once let in

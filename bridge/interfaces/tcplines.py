@@ -124,13 +124,21 @@ Rules:
    halt between the two errs toward refusing) and then how much the connection has sent, read
    or not (what is read, plus FIONREAD). The bytes a command ends in were in the kernel at the
    first look that counted them; a halt counted after that look overtakes the command
-   (``Fence``: its session's moves go to the judge with that count as ``since``). The halts
+   (``Fence``: its session hands its moves to the judge through it). The halts
    the connection's own session carried out meanwhile do not (a client's ``P 300 0``, ``S``,
    ``P 200 0`` read in one go turn the rotor to 200: the halt count each of its stops added is
    its own, ``Fence.halting``). Counted per read: a move in the read that also holds the
-   first bytes sent after a halt is taken as sent after it. An attack pass: one client sent
-   24 KB of targets in one burst; an MQTT STOP stopped the rotor and the targets still in the
-   kernel turned it on 5 s later, and after a lock ON and OFF one went out 0.08 s after the OFF.
+   first bytes sent after a halt is taken as sent after it. The count is every front end's,
+   another client's of the same port among them (``halts``: the remote's ``halts_for`` leaves
+   out its own front end's, and a STOP from one rotctld client there did not fence another's
+   move, a cold review), so the move is judged against it here, right before the judge, and
+   refused as the judge refuses one (``STALE``). A look that finds the count as the look
+   before it did only reaches further (one entry: SEEN_KEPT bounds halts, not reads), and
+   the bytes a greeting took (rule 8) are not counted again (a cold review: rotctl's P after
+   a STOP, its handshake answered while it waited, was refused as sent before the STOP). An
+   attack pass: one client sent 24 KB of targets in one burst; an MQTT STOP stopped the rotor
+   and the targets still in the kernel turned it on 5 s later, and after a lock ON and OFF one
+   went out 0.08 s after the OFF.
 """
 
 from __future__ import annotations
@@ -152,7 +160,8 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Protocol, cast
 
-from bridge.core.model import Command, Source
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Command
 from bridge.core.ratelimit import Budget, TokenBucket
 from bridge.front import FrontRotator, HaltCounted
 
@@ -178,6 +187,7 @@ ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 SWEEP_S = 0.01  # rule 8: waiting connections whose peer left are looked for at most this often
 SEEN_KEPT = 4096  # rule 9: a connection's looks at what it has sent, at most (the oldest go)
+STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 9
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
 ACCEPT_BATCH = 256  # rule 5: connections taken from it a wake-up, at most
@@ -379,11 +389,13 @@ def _sent_so_far(conn: socket.socket, read: int) -> int:
         return read
 
 
-def halt_count(rotator: FrontRotator, source: Source) -> Callable[[], int] | None:
-    """Rule 9: ``rotator``'s halt count for ``source``'s commands, if it counts its halts
-    (bridge/front.py ``HaltCounted``); None if not."""
-    count = getattr(rotator, "halts_for", None)
-    return None if count is None else functools.partial(count, source)
+def halt_count(rotator: FrontRotator) -> Callable[[], int] | None:
+    """Rule 9: ``rotator``'s count of every front end's halts (bridge/front.py
+    ``HaltCounted.halts``: another client's of the same port among them), if it counts them;
+    None if not."""
+    if getattr(rotator, "halts", None) is None:
+        return None
+    return lambda: cast(HaltCounted, rotator).halts
 
 
 class Fence:
@@ -392,9 +404,9 @@ class Fence:
     at the connection that counted those bytes (``arrived``); the session's commands hand a
     move to the judge through ``move`` and carry out their own stops through ``halting``."""
 
-    def __init__(self, rotator: FrontRotator, source: Source) -> None:
+    def __init__(self, rotator: FrontRotator) -> None:
         self.rotator = rotator
-        self.count = halt_count(rotator, source)  # (None: a rotator that counts no halts)
+        self.count = halt_count(rotator)  # (None: a rotator that counts no halts)
         self.arrived: tuple[int, int] | None = None  # the halt count, and ``own`` at that look
         self.own = 0  # the halts this connection's own stops added
 
@@ -406,14 +418,18 @@ class Fence:
         return count + self.own - own
 
     def move(self, command: Command, described: str, since: int | None = None) -> None:
-        """``command`` (a move) to the judge: overtaken by a halt counted after its bytes came
-        (or after ``since``, the front end's own count, whichever is older)."""
+        """``command`` (a move) to the judge, unless a halt was counted after its bytes came
+        (Refused, reported as the judge reports one); ``since``: the front end's own, handed
+        on (the DCU-1's AM1: the count when its bearing came). The count is every front end's
+        (``halts``), not the one ``since`` is in (``halts_for``: the remote's leaves out its
+        own front end's), so it is judged here, right before the judge's own look."""
         arrived = self.since()
-        if arrived is not None:
-            since = arrived if since is None else min(since, arrived)
+        if arrived is not None and self.count is not None and self.count() != arrived:
+            self.rotator.report_refusal(STALE, described, origin=command.origin)
+            raise Refused(RefusalCode.STALE, STALE)
         if since is None:
             self.rotator.submit(command, described)
-        else:  # (known only where the rotator counts its halts)
+        else:
             cast(HaltCounted, self.rotator).submit(command, described, since=since)
 
     def halting(self, halt: Callable[[], None]) -> None:
@@ -724,6 +740,9 @@ class LineServer:
             return False
         self._greeted.add(conn)
         self._looked.pop(conn, None)
+        first = self._accepted.get(conn)
+        if first is not None:  # rule 9: its thread counts from the bytes after the question
+            self._accepted[conn] = first[0], max(0, first[1] - len(data))
         try:
             conn.recv(len(data), socket.MSG_DONTWAIT)  # (the bytes peeked, all there)
             if conn.send(answer, socket.MSG_DONTWAIT) != len(answer):
@@ -1039,7 +1058,11 @@ class LineServer:
                 read += raw
                 if counting is not None and fence is not None:  # rule 9: the count first
                     count = counting()
-                    seen.append((_sent_so_far(conn, read), count, fence.own))
+                    sent = _sent_so_far(conn, read)
+                    if seen and seen[-1][1:] == (count, fence.own):  # (no halt since: one
+                        seen[-1] = sent, count, fence.own  # look, kept as far as it reaches)
+                    else:
+                        seen.append((sent, count, fence.own))
                     while seen[0][0] < read:  # (it counted bytes read before these alone)
                         seen.popleft()
                     fence.arrived = seen[0][1], seen[0][2]

@@ -382,3 +382,23 @@ def test_a_far_client_that_named_the_side_reads_its_bearing_past_360_off_north_t
     assert rotctld.feed(b"P 400 0\n") == [b"RPRT 0\n"]
     assert rotctld.feed(b"p\n") == [b"400.00\n0.00\n"]
     assert Gs232Session(rot).feed(b"C\r") == [b"AZ=040\r\n"]  # (one that named no side)
+
+
+@pytest.mark.parametrize("stopper", ["rotctld", "gs232"])
+def test_a_stop_from_another_client_fences_a_move_sent_before_it_on_the_remote(
+    stopper: str,
+) -> None:
+    """tcplines.py rule 9 (a cold review): on the remote, a client's count of halts left out
+    its own front end's (``halts_for``), so one rotctld client's STOP did not fence another
+    rotctld client's move that had come before it and was read after it. The server's look at
+    the second client, taken before the STOP, is set here as the server sets it."""
+    link = Link()
+    rot = rotator(link, FakeClock())
+    late = RotctldSession(rot)
+    late.fence.arrived = (rot.halts, late.fence.own)  # its "P 100 0" is in the kernel
+    if stopper == "rotctld":
+        RotctldSession(rot).feed(b"S\n")
+    else:
+        Gs232Session(rot).feed(b"S\r")
+    assert late.feed(b"P 100 0\n") == [b"RPRT -9\n"]
+    assert [topic.rsplit("/", 1)[-1] for topic, _ in link.sent] == ["stop"]

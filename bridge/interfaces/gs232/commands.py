@@ -113,7 +113,7 @@ class _Session(ABC, Generic[Item]):
         self.rotator = rotator
         self.origin = Origin(self.source, None, peer)  # peer: the TCP client's address
         self._reader = self.reader()
-        self.fence = Fence(rotator, self.source)  # tcplines.py rule 9: when its bytes came
+        self.fence = Fence(rotator)  # tcplines.py rule 9: when its bytes came
 
     @abstractmethod
     def reader(self) -> _Reader[Item]:
@@ -440,7 +440,7 @@ class Emulation:
             ends=self.ends,
             halts=self.halts,
             singles=self.singles,
-            halt_count=halt_count(rotator, self.session.source),  # type: ignore[attr-defined]
+            halt_count=halt_count(rotator),
         )
 
     def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:

@@ -61,7 +61,7 @@ class RotctldCommands:
     def __init__(self, rotator: Rotator, origin: Origin | None = None) -> None:
         self.rotator = rotator
         self._origin = origin  # who this client is (the audit trail, the control lease)
-        self.fence = Fence(rotator, Source.ROTCTLD)  # tcplines.py rule 9
+        self.fence = Fence(rotator)  # tcplines.py rule 9
         # Hamlib's facts about the model are on its spec (protocols/)
         spec = rotator.spec
         self.hamlib_model = spec.hamlib_model

@@ -79,6 +79,6 @@ class RotctldServer(LineServer):
             peer_session=lambda peer: RotctldSession(rotator, peer),
             halts=holds_stop,
             greets=lambda data: _greeting(rotator, data),
-            halt_count=halt_count(rotator, Source.ROTCTLD),
+            halt_count=halt_count(rotator),
         )
         self.rotator = rotator
