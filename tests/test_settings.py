@@ -1499,3 +1499,14 @@ def test_a_configuration_file_where_the_console_keeps_its_secret_is_refused(
     assert (
         f"the console's secret kept beside state_file: {path} is the configuration file itself"
     ) in out.stderr
+
+
+def test_one_n1mm_port_bound_to_two_addresses_is_refused_naming_the_field(tmp_path: Path) -> None:
+    """interfaces/loggers/server.py rule 10 (a cold review): with the port the bridge's alone,
+    one rotator on 0.0.0.0:12040 and another on 127.0.0.1:12040 passed check-config and the
+    start then failed, blaming another program."""
+    text = TWO.format(
+        a='n1mm_rotor_name = "Tower"\nn1mm_udp_bind = "0.0.0.0"', b='n1mm_rotor_name = "Sky"'
+    )
+    with pytest.raises(ConfigError, match="n1mm_udp_port 12040 is bound to 0.0.0.0 and 127.0.0.1"):
+        load_settings(write(tmp_path, text), environ={})

@@ -276,6 +276,16 @@ class Settings(BaseSettings):
                 f"wsjtx.port {self.wsjtx.port} is also {what}: one UDP port, one program"
             )
         named = [r for r in self.rotators if r.n1mm_rotor_name is not None]
+        binds: dict[int, set[str]] = {}
+        for r in named:  # interfaces/loggers/server.py rule 10: a port is one socket's alone
+            binds.setdefault(r.n1mm_udp_port, set()).add(r.n1mm_udp_bind)
+        for port, where in binds.items():
+            if len(where) > 1:
+                raise ValueError(
+                    f"n1mm_udp_port {port} is bound to {' and '.join(sorted(where))} by "
+                    "different rotators: give them one n1mm_udp_bind (every rotator named on "
+                    "one N1MM port shares its address), or each its own port"
+                )
         names = [(r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name) for r in named]
         for key in {n for n in names if names.count(n) > 1}:  # one name, chosen by band
             if any(n == key and not r.bands for n, r in zip(names, named, strict=True)):

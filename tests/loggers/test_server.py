@@ -21,7 +21,7 @@ import pytest
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import RotatorStatus, Source, Stop, Target, Toward
 from bridge.interfaces.loggers import LoggerEndpoints, server
-from bridge.interfaces.loggers.commands import STALE
+from bridge.interfaces.loggers.commands import STALE, N1mmEndpoint, N1mmRotor
 from bridge.interfaces.loggers.limiter import REPLY_BURST
 from bridge.interfaces.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
 from bridge.protocols import REGISTRY
@@ -788,7 +788,17 @@ def test_no_other_program_can_bind_the_n1mm_port_beside_the_bridge(option: int) 
         ep.stop()
 
 
-def test_stops_for_a_name_nobody_has_go_over_the_budget_and_a_real_stop_still_stops() -> None:
+@pytest.mark.parametrize(
+    "junk",
+    [
+        b"<N1MMRotor>" + b"<stop><rotor>x</rotor></stop>" * 60 + b"</N1MMRotor>",
+        b"<N1MMRotor><stop>nobody</stop>" + b"*" * 1700 + b"</N1MMRotor>",  # (a cold review)
+    ],
+    ids=["stops-for-x", "stars-beside-a-stop"],
+)
+def test_stops_for_a_name_nobody_has_go_over_the_budget_and_a_real_stop_still_stops(
+    junk: bytes,
+) -> None:
     """Rule 8 (an attack pass): 2 KiB datagrams of ``<stop><rotor>x</rotor></stop>`` went past
     every budget as stops and were each parsed whole, and the operator's N1MM stop waited up to
     1.3 s behind them. In virtual time (the clock stands still, the budget never refills): the
@@ -801,7 +811,6 @@ def test_stops_for_a_name_nobody_has_go_over_the_budget_and_a_real_stop_still_st
     ep.start()
     try:
         port = ep.address(next(iter(ep.n1mm.values())))[1]
-        junk = b"<N1MMRotor>" + b"<stop><rotor>x</rotor></stop>" * 60 + b"</N1MMRotor>"
         with udp_socket() as s:
             for _ in range(int(RATE_DATAGRAMS_S) // 4 + 50):  # (each costs 1 + 1.7 KiB)
                 s.sendto(junk, ("127.0.0.1", port))
@@ -813,3 +822,20 @@ def test_stops_for_a_name_nobody_has_go_over_the_budget_and_a_real_stop_still_st
         assert tower.calls == [Stop(Source.N1MM)]
     finally:
         ep.stop()
+
+
+@pytest.mark.parametrize(
+    "stop",
+    [
+        b"<N1MMRotor><stop><rotor>Tower</rotor></stop></N1MMRotor>",
+        b"<N1MMRotor><stop>Tower</stop></N1MMRotor>",
+        b"<N1MMRotor><stop> Tower </stop></N1MMRotor>",
+        b"<N1MMRotor><stop><rotor>*</rotor></stop></N1MMRotor>",
+        b"<N1MMRotor><Stop><Rotor>Tower</Rotor></Stop>\xb0</N1MMRotor>",
+    ],
+)
+def test_every_form_of_a_stop_for_the_ports_rotor_goes_past_a_spent_budget(stop: bytes) -> None:
+    """Rule 8: what ``_may_name`` lets past the budget is every stop parse_n1mm reads as one
+    for a rotor of the port (its name as a tag's whole text, or ``*``), a byte not ASCII
+    beside it too."""
+    assert server._may_name(N1mmEndpoint("127.0.0.1", 12040, [N1mmRotor("Tower", None)]), stop)  # type: ignore[arg-type]

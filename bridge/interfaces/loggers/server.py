@@ -67,6 +67,7 @@ import errno
 import logging
 import os
 import platform
+import re
 import selectors
 import socket
 import struct
@@ -427,15 +428,16 @@ def _named(e: N1mmEndpoint) -> str:
 
 def _may_name(endpoint: N1mmEndpoint, data: bytes) -> bool:
     """Rule 8: whether a stop-like N1MM datagram may name a rotor of ``endpoint`` (or every
-    rotor, ``*``): the name's bytes are in it somewhere (parse_n1mm reads a name as sent,
-    datagrams.py rule 4). A name not all ASCII is not looked for: the datagram is parsed."""
-    text = data if data.isascii() else ascii_text(data).encode("ascii")
-    if b"*" in text:
+    rotor, ``*``): a tag's whole text, spaces around it aside, is one of them (parse_n1mm
+    reads a name so, datagrams.py rule 4; a cold review: any ``*`` byte anywhere let a flood
+    of stops for nobody past the budget). A name not all ASCII is not looked for: the datagram
+    is parsed."""
+    names = [rotor.name for rotor in endpoint.rotors]
+    if not all(name.isascii() for name in names):
         return True
-    for rotor in endpoint.rotors:
-        if not rotor.name.isascii() or rotor.name.encode("ascii") in text:
-            return True
-    return False
+    text = data if data.isascii() else ascii_text(data).encode("ascii")
+    alternatives = b"|".join(re.escape(name.encode("ascii")) for name in [*names, "*"])
+    return re.search(rb">\s*(?:" + alternatives + rb")\s*<", text) is not None
 
 
 def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
