@@ -153,9 +153,7 @@ class LoginLimiter:
             if proxy is None or self._new_allowed(proxy, now_s):
                 return None
             return self.wait(_proxied(proxy), now_s)  # rule 6: the proxy's own tries
-        bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
-        bucket.t = now_s
-        return None if bucket.tokens >= 1.0 else _wait(bucket)
+        return None if _refilled(bucket, now_s).tokens >= 1.0 else _wait(bucket)
 
     def failed(self, client: str, now_s: float, proxy: str | None = None) -> None:
         key = client_key(client)
@@ -164,25 +162,34 @@ class LoginLimiter:
                 self._vouched[proxy].take(now_s)
             else:
                 key = _proxied(proxy)
-        bucket = self._clients.pop(key, None)
-        if bucket is None:
-            bucket = TokenBucket.full(LOGIN_BURST_PER_CLIENT, 1.0 / LOGIN_EVERY_S, now_s)
-        self._clients[key] = bucket  # most recent last
-        while len(self._clients) > CLIENTS_KEPT:
-            self._clients.popitem(last=False)
-        bucket.take(now_s)
+        tries = _touched(self._clients, key, LOGIN_BURST_PER_CLIENT, LOGIN_EVERY_S, now_s)
+        tries.take(now_s)
 
     def _new_allowed(self, proxy: str, now_s: float) -> bool:
         """Rule 6: whether ``proxy`` may still vouch for a client new to the limiter."""
-        bucket = self._vouched.pop(proxy, None)
-        if bucket is None:
-            bucket = TokenBucket.full(PROXIED_NEW_BURST, 1.0 / PROXIED_NEW_EVERY_S, now_s)
-        self._vouched[proxy] = bucket  # most recent last
-        while len(self._vouched) > CLIENTS_KEPT:
-            self._vouched.popitem(last=False)
-        bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
-        bucket.t = now_s
-        return bucket.tokens >= 1.0
+        vouched = _touched(self._vouched, proxy, PROXIED_NEW_BURST, PROXIED_NEW_EVERY_S, now_s)
+        return _refilled(vouched, now_s).tokens >= 1.0
+
+
+def _touched(
+    buckets: OrderedDict[str, TokenBucket], key: str, burst: int, every_s: float, now_s: float
+) -> TokenBucket:
+    """``key``'s bucket (full if new: ``burst``, then one per ``every_s``), made the most
+    recent; the least recent go past CLIENTS_KEPT."""
+    bucket = buckets.pop(key, None)
+    if bucket is None:
+        bucket = TokenBucket.full(burst, 1.0 / every_s, now_s)
+    buckets[key] = bucket  # most recent last
+    while len(buckets) > CLIENTS_KEPT:
+        buckets.popitem(last=False)
+    return bucket
+
+
+def _refilled(bucket: TokenBucket, now_s: float) -> TokenBucket:
+    """``bucket`` with what it earned up to ``now_s`` (looked at, nothing taken)."""
+    bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
+    bucket.t = now_s
+    return bucket
 
 
 def _proxied(proxy: str) -> str:
