@@ -411,7 +411,8 @@ class Fence:
         self.own = 0  # the halts this connection's own stops added
 
     def since(self) -> int | None:
-        """The halt count a move of the bytes being fed hands to the judge (None: none known)."""
+        """The halt count a move of the bytes being fed is judged against: the count when they
+        were first seen, with the connection's own halts since added (None: none known)."""
         if self.arrived is None:
             return None
         count, own = self.arrived
@@ -488,8 +489,8 @@ class LineServer:
         ``singles``: bytes that are a whole command on their own and move nothing (rule 2);
         ``greets``: the answer to a waiting connection's first bytes when they are only the
         question a client asks before its command (rule 8), else None; ``halt_count``: the
-        rotator's halt count for this front end (rule 9: its sessions' ``fence`` is told when
-        their bytes came).
+        rotator's count of every front end's halts (rule 9, ``halt_count()``: its sessions'
+        ``fence`` is told when their bytes came).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s

@@ -30,9 +30,9 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    waits, PER_WAKEUP a socket (rule 3), and comes straight back for more. Each datagram is
    first searched for a stop (datagrams.py rule 6, one byte search); one that may be a stop is
    parsed and carried out at once, whatever any budget says, on the N1MM port if it may also
-   name a rotor there (a byte search for each of its names, or ``*``: ``_may_name``; an attack
-   pass flooded 2 KiB datagrams of stops for a name nobody has, each parsed whole, and an
-   operator's stop waited up to 1.3 s behind them). Everything else is parsed and
+   name a rotor there (a tag whose whole text is one of its names, or ``*``: ``_may_name``;
+   an attack pass flooded 2 KiB datagrams of stops for a name nobody has, each parsed whole,
+   and an operator's stop waited up to 1.3 s behind them). Everything else is parsed and
    carried out only within its sender's budget (ratelimit.SourceBudgets, per address and port:
    RATE_DATAGRAMS_S a second each, a second's worth at once, each datagram costing 1 + its size
    in KiB, at most MAX_SOURCES senders remembered; RATE_ALL_S for all of them together); a
