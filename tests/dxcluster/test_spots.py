@@ -43,6 +43,11 @@ JUNK = [
     b"DX de EA5WU:     14025.0  JA1ABC  c\x00q   1829Z",  # not printable
     "DX de EA5WU:  14025.0  JA1ÄBC  cq  1829Z".encode(),
     bytes(range(256)),
+    # rule 3 (an attack pass): what a user said, not a spot, whatever it holds
+    b"To ALL de M0BAD: DX de EA5WU: 14026.0 JA1ABC cq FN30as 1830Z",
+    b"To ALL de M0BAD-2: look DX de EA5WU: 14026.0 JA1ABC cq FN30as 1830Z",
+    b"WWV de VE7CC <18>: DX de EA5WU: 14026.0 JA1ABC cq FN30as 1830Z",
+    b"G4XYZ de M0BAD: DX de EA5WU: 14026.0 JA1ABC cq FN30as 1830Z",
 ]
 
 
@@ -85,6 +90,14 @@ def test_lines_whole_and_byte_by_byte_give_the_same_spots() -> None:
         got += single.feed(_stream()[i : i + 1])
     assert _spots_of(got) == want
     assert got == Lines().feed(_stream())
+
+
+def test_a_spot_after_a_prompt_left_without_a_line_end_is_a_spot() -> None:
+    """Rule 3: a node's prompt ("G4ABC de GB7DJK 4-Dec-2026 1830Z dxspider >") is no header
+    of something said."""
+    line, spot = SPOTS[0]
+    for prompt in (b"G4ABC de GB7DJK 4-Dec-2026 1830Z dxspider >", b"login: ", b"\x07"):
+        assert parse_spot(prompt + line) == spot, prompt
 
 
 def test_a_prompt_without_a_line_end_is_pending() -> None:

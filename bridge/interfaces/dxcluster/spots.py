@@ -11,8 +11,12 @@ Rules:
    of it so far and the rest up to its end of line are thrown away, so a node that never sends
    a line end costs at most that much memory.
 3. ``parse_spot`` returns a Spot or None; a spot may follow other text on its line (a prompt
-   the node left without a line end); what is not a spot (a greeting, a prompt, an
-   announcement, junk) is None, never an exception. The client counts what it drops. Bytes
+   the node left without a line end), but not a header a node puts before what a user wrote
+   (``To ALL de M0BAD:``, ``WWV de VE7CC <18>:``, a talk's ``G4XYZ de M0BAD:``: ``_SAID``):
+   an attack pass announced ``DX de EA5WU: 14026.0 JA1ABC cq FN30as 1830Z``, which took the
+   place of EA5WU's real spot of JA1ABC, and a turn to the call would have gone to New York,
+   not Japan. What is not a spot (a greeting, a prompt, an announcement, junk) is None, never
+   an exception. The client counts what it drops. Bytes
    that are not UTF-8 are read as Latin-1 (a comment typed on an old node); the call, spotter
    and frequency are ASCII whatever the decoding.
 4. A spot's call and spotter are upper case letters, digits and ``/`` (3 to 20 characters);
@@ -40,6 +44,9 @@ _HEAD = re.compile(
     re.ASCII | re.IGNORECASE,
 )
 _DIGITS = frozenset("0123456789")
+# rule 3: the header before what a user said (an announcement, a talk, WWV and WCY): a call
+# after "de", then a colon, an SSID and a <hour> between them at most
+_SAID = re.compile(r"\bde +[A-Z0-9/#-]{3,24}(?: *<[^>]{0,8}>)? *:", re.ASCII | re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -62,6 +69,8 @@ def parse_spot(line: bytes | str) -> Spot | None:
         text = line
     start = text.find("DX de ")  # after a prompt or junk too
     if start < 0 or len(text) > MAX_LINE_BYTES:  # rule 5
+        return None
+    if start > 0 and _SAID.search(text, 0, start):  # rule 3: what someone said, not a spot
         return None
     text = text[start:].strip("\r\n\x07 ")
     if not text.isprintable():  # so the only white space left is the space
