@@ -179,3 +179,41 @@ def test_a_flood_over_its_senders_budget_is_dropped_said_once_and_others_are_hea
             wait_until(lambda: len(ears.got) > heard, 10, "heard again")
     finally:
         listener.stop()
+
+
+def test_wsjtx_is_heard_through_a_flood_of_heartbeats_from_many_local_sockets() -> None:
+    """Rule 5 (an attack pass): eight local sockets flooding the port with well-formed
+    heartbeats took the cap for all senders together, and 8 of WSJT-X's 10 statuses were
+    dropped, the transmission's hold among them. In virtual time (the clock stands still,
+    nothing refills): the flood spends the cap for all, and WSJT-X, whose status was heard
+    before it, is still heard, within its own budget."""
+    clock = FakeClock()
+    ears = Ears("a")
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        beat = w.heartbeat("GridTracker")
+        with contextlib.ExitStack() as stack:
+            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
+            sent = 0
+            for _ in range(8):  # each up to its own budget: the cap for all spent between them
+                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                for _ in range(6):  # in batches the reader keeps up with
+                    for _ in range(40):
+                        s.sendto(beat, listener.address)
+                    sent += 40
+                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
+            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            for call in ("JA1ABC", "VK2XYZ"):
+                wsjtx.sendto(w.status(w.StatusFields(dx_call=call)), listener.address)
+            wait_until(lambda: len(ears.got) == 3, slow(10), "WSJT-X heard through the flood")
+        assert [h.call for h in ears.got] == ["K1ABC", "JA1ABC", "VK2XYZ"]
+    finally:
+        listener.stop()
+
+
+def _read(listener: WsjtxListener) -> int:
+    """The datagrams the listener has read that were no status: ignored or dropped."""
+    return listener.counts.ignored + listener.counts.over_budget
