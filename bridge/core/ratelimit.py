@@ -99,7 +99,6 @@ class SourceBudgets:
     def allow_own(self, source: Hashable, now: float) -> bool:
         """Whether ``source`` may have its work done now within its own budget alone, whatever
         the others' together have spent (a sender a caller keeps room for: spent as any)."""
-        self._total.refill(self.total_per_s, now)
         return self._account(source, now).tokens > 0
 
     def spend(self, source: Hashable, cost: float, now: float) -> None:

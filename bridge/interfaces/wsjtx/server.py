@@ -206,8 +206,8 @@ class WsjtxListener:
                 continue
             try:
                 if self.datagram(datagram, source[0]):
-                    self._status_senders.pop(sender, None)
-                    self._status_senders[sender] = None  # the latest last
+                    self._status_senders[sender] = None
+                    self._status_senders.move_to_end(sender)  # the latest last
                     while len(self._status_senders) > STATUS_SENDERS:
                         self._status_senders.popitem(last=False)
             except Exception as exc:  # rule 3: a bug behind it, not the end
