@@ -31,10 +31,11 @@ Rules:
    ``ALxxx`` is the controller's alarm (a refusal, a fault): never a reading and no spoiler of
    one (CHATTER, its text in the detail), but not harmless either, so the user is told.
 2. A position is read only while a query is open, from lines of the form ``AZ<n>``, ``EL<n>``
-   or ``AZ<n> EL<n>`` (spaces optional, decimals optional, a sign allowed, radio words after
-   ignored). The query is answered once every axis the model reads has a value, whether they
-   came on one line or two; an azimuth model ignores an elevation on the line. Values outside
-   azimuth 0..360 or elevation -90..180 are spoiled.
+   or ``AZ<n> EL<n>`` (spaces optional, and only spaces: a tab or a form feed is junk, rule 3;
+   decimals optional, a sign allowed, radio words after ignored). The query is answered once
+   every axis the model reads has a value, whether they came on one line or two; an azimuth
+   model ignores an elevation on the line. Values outside azimuth 0..360 or elevation -90..180
+   are spoiled.
 3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
    UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED.
 4. ``VExxx`` is the controller's version whenever it comes.
@@ -110,21 +111,24 @@ EL_READ_MIN_DEG = -90  # a reading below the horizon is a reading (a rotor parke
 _MAX_LINE = 80
 _NUM = rb"[-+]?\d{1,3}(?:\.\d*)?"  # 123.4, 123, 5.
 # a reply at the end of its line, with whatever came before it on that line in "pre"
+_SP = rb"[\r\n ]"  # what parts a line: a space (and its own line end), never a tab or a form feed
 _RADIO = rb"(?:UP|DN|UM|DM|UR|DR)"
 # (a radio word's mode is no radio word: ``UP UP`` reads one way only, rule 6)
 _REPLY = re.compile(
-    rb"(?P<pre>.*?)(?:AZ\s*(?P<az>" + _NUM + rb"))?\s*(?:EL\s*(?P<el>" + _NUM + rb"))?"
-    rb"(?P<radio>(?:\s+" + _RADIO + rb"\S*(?:\s+(?!" + _RADIO + rb")[A-Z]{2,3})?)*)\s*",
+    rb"(?P<pre>.*?)(?:AZ%(sp)s*(?P<az>%(num)s))?%(sp)s*(?:EL%(sp)s*(?P<el>%(num)s))?"
+    rb"(?P<radio>(?:%(sp)s+%(radio)s\S*(?:%(sp)s+(?!%(radio)s)[A-Z]{2,3})?)*)%(sp)s*"
+    % {b"sp": _SP, b"num": _NUM, b"radio": _RADIO},
     re.DOTALL,
 )
 # K3NG's default build (rule 7): +123.4, +123.4 +45.0, +123.4 -1.5, on an azimuth build +123.4 ?
 _K3NG = re.compile(
-    rb"\s*(?P<a>[-+]\d{1,3}(?:\.\d*)?)(?: +(?:(?P<b>[-+]\d{1,3}(?:\.\d*)?)|(?P<q>\?)))?\s*"
+    rb"%(sp)s*(?P<a>[-+]\d{1,3}(?:\.\d*)?)(?: +(?:(?P<b>[-+]\d{1,3}(?:\.\d*)?)|(?P<q>\?)))?%(sp)s*"
+    % {b"sp": _SP}
 )
-_VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
-_ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
-_CHATTER = re.compile(rb"[\r\n ]*")
-_NO_SE = re.compile(rb"[\r\n ]*\?[\r\n ]*")  # rule 7
+_VERSION = re.compile(rb"%(sp)s*VE(?P<v>[ -~]*?)%(sp)s*" % {b"sp": _SP})
+_ALARM = re.compile(rb"%(sp)s*AL(?P<a>[ -~]*?)%(sp)s*" % {b"sp": _SP})
+_CHATTER = re.compile(_SP + rb"*")
+_NO_SE = re.compile(rb"%(sp)s*\?%(sp)s*" % {b"sp": _SP})  # rule 7
 
 
 class EasycommCodec(OneQuery):

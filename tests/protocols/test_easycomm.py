@@ -223,6 +223,32 @@ def test_noise_before_a_reply_never_yields_another_bearing(
     assert got in ([], [(az, el)])
 
 
+@pytest.mark.parametrize("ws", [b"\t", b"\x0b", b"\x0c"])
+@pytest.mark.parametrize(
+    "reply",
+    [
+        b"AZ123.4 EL%s5.0\n",  # the 4 of EL45.0 a control byte: never read as EL5.0
+        b"AZ123.4%sEL45.0\n",
+        b"AZ%s123.4 EL45.0\n",
+        b"%sAZ123.4 EL45.0\n",
+        b"+123.4%s\n",
+    ],
+)
+def test_a_tab_or_form_feed_in_a_reply_is_noise_not_a_space(reply: bytes, ws: bytes) -> None:
+    """Rule 3: only a space parts a reply's words; a tab, a vertical tab or a form feed (a
+    digit or a space the line corrupted) is junk in the exchange (an attack pass: a form feed
+    in place of the 4 of ``EL45.0`` was read as elevation 5.0)."""
+    codec = asked(2)
+    replies = codec.feed(reply % ws)
+    if not replies:  # an axis read after the junk: the exchange waits for the other one
+        replies = codec.feed(b"AZ123.4 EL45.0\n")
+    assert positions(replies) == []
+    assert [j.reason for j in junk(replies)] in (
+        [JunkReason.NOISE],
+        [JunkReason.UNTRUSTED],
+    )
+
+
 def test_the_model_table() -> None:
     facts = {
         name: (spec.hamlib_model, spec.has_elevation, spec.has_version, spec.baud)
