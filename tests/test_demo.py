@@ -449,7 +449,10 @@ def test_each_model_gets_its_speed_in_its_emulators_own_words() -> None:
     for model in ALL_MODELS:
         device = emulators.create(model, **demo.emulator_options(model, 30.0))
         assert device is not None
-    assert demo.emulator_options("rotorez", 30.0) == {"speed_deg_s": 30.0}
+    # a Hy-Gain rotor as built, its stop at south (rotorez.py rule 12); a Yaesu's at north
+    assert demo.emulator_options("rotorez", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": True}
+    assert demo.emulator_options("dcu1", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": True}
+    assert demo.emulator_options("rotorcard", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": False}
     assert demo.emulator_options("satel", 30.0) == {"az_speed_deg_s": 30.0, "el_speed_deg_s": 30.0}
     assert demo.emulator_options("rot1prog", 30.0) == {
         "az_speed_deg_s": 30.0,

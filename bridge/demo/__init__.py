@@ -230,12 +230,14 @@ def _free_port(wanted: int) -> int:
 
 
 def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
-    """The demo's one speed in the words of this model's emulator (families name it apart): the
+    """The demo's one speed in the words of this model's emulator (families name it apart), and
+    its rotor as built (emulators rule 3: a Rotor-EZ's Hy-Gain rotor stops at south): the
     keyword arguments for emulators.start, whose options are typed Any."""
     params = inspect.signature(emulators.EMULATORS[model]).parameters
     if "speed_deg_s" in params:
-        return {"speed_deg_s": speed_deg_s}
-    return {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
+        return {"speed_deg_s": speed_deg_s, **emulators.as_built(model)}
+    speeds = {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
+    return {**speeds, **emulators.as_built(model)}
 
 
 def run(args: argparse.Namespace) -> int:

@@ -10,6 +10,9 @@ Rules:
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
    (SPID, SatEL, GS-232, Easycomm, RT-21, RC2800, Prosistel) adds entries here and reuses
    physics.Axis, base.PacedLine and pty.EmulatedPort.
+3. ``as_built(model)``: the options that make a model's emulator turn as the real device's rotor
+   does where its default does not (a Hy-Gain rotor's stop at south, rotorez.py rule 12); the
+   demo and `rotor-bridge emulate` start every emulator with them.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rc2800 import MODELS as _RC2800_MODELS
 from bridge.emulators.rc2800 import Rc2800
 from bridge.emulators.rotorez import RotorEZ
+from bridge.emulators.rotorez_models import MODELS as _ROTOREZ_MODELS
 from bridge.emulators.rt21 import Rt21
 from bridge.emulators.satel import SatEL
 from bridge.emulators.spid import Spid
@@ -50,6 +54,12 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     **{name: partial(Rc2800, name) for name in _RC2800_MODELS},
     **{name: partial(Prosistel, name) for name in _PROSISTEL_MODELS},
 }
+
+
+def as_built(model: str) -> dict[str, Any]:
+    """Rule 3: the options that make ``model``'s emulator turn as its real rotor does."""
+    spec = _ROTOREZ_MODELS.get(model)
+    return {"stop_at_south": spec.stop_at_south} if spec is not None else {}
 
 
 def create(model: str, *, now: float = 0.0, **options: Any) -> Responder:
@@ -85,6 +95,7 @@ def start(
 
 __all__ = [
     "EMULATORS",
+    "as_built",
     "EasycommController",
     "EmulatedPort",
     "Gs232",

@@ -19,7 +19,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from bridge.emulators import EMULATORS, LoggedFrame, start
+from bridge.emulators import EMULATORS, LoggedFrame, as_built, start
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -102,7 +102,11 @@ _SPID_FAMILY = {"rot2prog", "rot1prog", "md01"}
 
 def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
     """The options this model's emulator takes, from the ones given (the rest stay default)."""
-    opts: dict[str, Any] = {"baud": args.baud, "start_az_deg": args.start_az_deg}
+    opts: dict[str, Any] = {
+        "baud": args.baud,
+        "start_az_deg": args.start_az_deg,
+        **as_built(args.model),  # (rule 3 of bridge/emulators: its rotor as built)
+    }
     if args.model in _ROTOREZ_FAMILY:
         opts.update(
             speed_deg_s=args.speed_deg_s,

@@ -42,6 +42,12 @@ Rules:
 10. The DCU-1 transmits nothing at all: no answer, no banner, no version, no power-on byte.
 11. Every complete frame is logged once with its outcome (`Outcome`); motion is logged as
     `MotionEvent`s. These are the ground truth tests assert on.
+12. The rotor turns inside its travel and never past its stop. With `stop_at_south` (a Hy-Gain
+    rotor's, rotorez_models.py rule 4: the demo and the command line ask for the model's own) a
+    target turns the way that does not cross south, and 180, which names both ends, goes to the
+    end nearer the rotor; without it (the default, which the test suite's long turns from 0 were
+    written for) the travel ends at north and a turn never crosses it. Bearings in and out
+    (commands, readings, `state`, motion events, the panel) are compass bearings 0..360 either way.
 """
 
 from __future__ import annotations
@@ -95,6 +101,7 @@ class RotorEZ(Recorder):
         jumpers: Mapping[str, bool] | None = None,
         power_on_junk: bool = True,
         processing_delay_s: float = 0.002,
+        stop_at_south: bool = False,
         now: float = 0.0,
     ) -> None:
         if model not in MODELS:
@@ -115,8 +122,16 @@ class RotorEZ(Recorder):
         self.banner: bytes = f"C2000 IDIOM V{version} ".encode("ascii")
         self.power_on_junk: bool = power_on_junk
         self.jumpers: dict[str, bool] = {**DEFAULT_JUMPERS, **(jumpers or {})}
+        if not 0.0 <= start_az_deg <= 360.0:
+            raise ValueError(f"start_az_deg must be within 0..360, got {start_az_deg}")
+        self._south: bool = stop_at_south  # rule 12
+        low = 180.0 if self._south else 0.0
         self._axis = Axis(
-            start_az_deg, min_deg=0.0, max_deg=360.0, speed_deg_s=speed_deg_s, now=now
+            self._travel(start_az_deg, low),
+            min_deg=low,
+            max_deg=low + 360.0,
+            speed_deg_s=speed_deg_s,
+            now=now,
         )
         self._tx = PacedLine(baud, processing_delay_s=processing_delay_s)
         self._now_s: float = now
@@ -154,13 +169,14 @@ class RotorEZ(Recorder):
 
     def state(self, now: float) -> RotatorState:
         now = self._update(now)
+        target = self._axis.target_deg
         return RotatorState(
             time_s=now,
-            az_deg=self._axis.position_deg,
+            az_deg=self._bearing(self._axis.position_deg),
             is_moving=self._axis.is_moving,
             is_jammed=self._axis.is_jammed,
             in_brake_delay=self._brake_until_s is not None,
-            target_az_deg=self._axis.target_deg,
+            target_az_deg=None if target is None else self._bearing(target),
             stored_target_az_deg=(
                 None if self._stored_target_deg is None else float(self._stored_target_deg)
             ),
@@ -171,7 +187,7 @@ class RotorEZ(Recorder):
 
     def true_az_deg(self, now: float) -> float:
         self._update(now)
-        return self._axis.position_deg
+        return self._bearing(self._axis.position_deg)
 
     def is_moving(self, now: float) -> bool:
         self._update(now)
@@ -203,7 +219,7 @@ class RotorEZ(Recorder):
         now = self._update(now)
         was_moving = self._axis.is_moving
         self._brake_until_s = None  # the brake comes off to turn
-        if self._axis.manual_move(az_deg, now):
+        if self._axis.manual_move(self._travel(az_deg, self._axis.position_deg), now):
             self._event(now, "move", f"panel to {az_deg:g}")
         elif was_moving:
             self._event(now, "stopped", "panel override")
@@ -254,7 +270,8 @@ class RotorEZ(Recorder):
         return now
 
     def _event(self, time_s: float, kind: str, detail: str = "") -> None:
-        self._events.append(MotionEvent(time_s, kind, self._axis.position_deg_at(time_s), detail))
+        position = self._bearing(self._axis.position_deg_at(time_s))
+        self._events.append(MotionEvent(time_s, kind, position, detail))
 
     def _begin_brake_delay(self, time_s: float) -> None:
         if self.brake_delay_s > 0:
@@ -350,10 +367,24 @@ class RotorEZ(Recorder):
         if self._stored_target_deg is None:
             self._record(frame, Outcome.IGNORED_NO_TARGET, now)
             return
-        if self._axis.start_move(self._stored_target_deg, now, driver=DRIVER_COMMAND):
+        to = self._travel(self._stored_target_deg, self._axis.position_deg)
+        if self._axis.start_move(to, now, driver=DRIVER_COMMAND):
             self._jitter_phase = 0
             self._event(now, "move", f"to {self._stored_target_deg:03d}")
         self._record(frame, Outcome.EXECUTED, now)
+
+    def _travel(self, bearing_deg: float, near_deg: float) -> float:
+        """Rule 12: where on the rotor's travel a compass bearing is; on a Hy-Gain rotor, 180 is
+        either end: the one nearer ``near_deg`` (a place on the travel)."""
+        if not self._south:
+            return bearing_deg
+        if bearing_deg == 180.0:
+            return 180.0 if near_deg < 360.0 else 540.0
+        return bearing_deg if bearing_deg > 180.0 else bearing_deg + 360.0
+
+    def _bearing(self, travel_deg: float) -> float:
+        """Rule 12: the compass bearing of a place on the rotor's travel."""
+        return travel_deg - 360.0 if self._south and travel_deg >= 360.0 else travel_deg
 
     def _invalid(self, frame: bytes, now: float) -> None:
         self._send(self.banner, now)
@@ -361,7 +392,7 @@ class RotorEZ(Recorder):
 
     def _reading_deg(self) -> int:
         """The bearing as the controller reads its potentiometer (rule 8)."""
-        true_deg = math.floor(self._axis.position_deg + 0.5)
+        true_deg = math.floor(self._bearing(self._axis.position_deg) + 0.5)
         still = not self._axis.is_moving or self._axis.is_jammed
         if not still or self.jitter_deg == 0:
             self._jitter_phase = 0

@@ -15,6 +15,10 @@ Rules:
 2. Outcome strings are part of the emulator's public ground truth: tests of the bridge match on
    them, so they change only together with those tests.
 3. Jumper defaults are not documented; the values here are a stated assumption.
+4. Where the rotor's travel ends (``stop_at_south``): a Hy-Gain rotor (Rotor-EZ, DCU-1) has its
+   mechanical stop at south, so north is the middle of its travel and 350 -> 010 turns 20
+   degrees across north; a Yaesu rotor (RotorCard) stops at north, so the same turn goes 340
+   degrees round through south. The emulator turns so when asked to (rotorez.py rule 12).
 """
 
 from __future__ import annotations
@@ -88,6 +92,7 @@ class ModelSpec:
     has_calibration: bool
     has_version: bool
     brake_delay_s: float
+    stop_at_south: bool  # the rotor's travel ends at south (rule 4): a Hy-Gain's; else at north
 
 
 MODELS: Mapping[str, ModelSpec] = {
@@ -103,6 +108,7 @@ MODELS: Mapping[str, ModelSpec] = {
         has_calibration=False,
         has_version=True,
         brake_delay_s=5.0,
+        stop_at_south=True,
     ),
     "rotorcard": ModelSpec(
         name="rotorcard",
@@ -116,6 +122,7 @@ MODELS: Mapping[str, ModelSpec] = {
         has_calibration=True,
         has_version=True,
         brake_delay_s=0.0,
+        stop_at_south=False,  # a Yaesu rotor's stop is at north
     ),
     "dcu1": ModelSpec(
         name="dcu1",
@@ -129,5 +136,6 @@ MODELS: Mapping[str, ModelSpec] = {
         has_calibration=False,
         has_version=False,
         brake_delay_s=5.0,
+        stop_at_south=True,
     ),
 }

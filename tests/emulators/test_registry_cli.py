@@ -53,10 +53,18 @@ def test_arguments_and_their_defaults() -> None:
     add_arguments(parser)
     args = parser.parse_args(["dcu1"])
     assert args.model == "dcu1" and not args.no_power_on_junk
-    # unset options stay the model's own defaults
-    assert _controller_options(args) == {}
+    # unset options stay the model's own defaults; its rotor is as built (a Hy-Gain's stop at
+    # south: rotorez.py rule 12)
+    assert _controller_options(args) == {"stop_at_south": True}
     args = parser.parse_args(["dcu1", "--speed-deg-s", "3", "--no-power-on-junk", "--baud", "9600"])
-    assert _controller_options(args) == {"baud": 9600, "speed_deg_s": 3.0, "power_on_junk": False}
+    assert _controller_options(args) == {
+        "baud": 9600,
+        "speed_deg_s": 3.0,
+        "power_on_junk": False,
+        "stop_at_south": True,
+    }
+    args = parser.parse_args(["rotorcard"])  # a Yaesu rotor: its stop at north
+    assert _controller_options(args) == {"stop_at_south": False}
     args = parser.parse_args(["rot2prog", "--speed-deg-s", "2", "--resolution", "4"])
     assert _controller_options(args) == {"az_speed_deg_s": 2.0, "resolution_ppd": 4}
     with pytest.raises(SystemExit):

@@ -69,6 +69,55 @@ def test_ten_to_350_goes_the_long_way_through_south() -> None:
     assert reading(device, 17.0) == b";180"
 
 
+# -- a Hy-Gain rotor's travel, its stop at south (rule 12) --
+
+
+@pytest.mark.parametrize("model", ["rotorez", "dcu1"])
+def test_a_hy_gain_rotor_turns_350_to_10_across_north(model: str) -> None:
+    device = make(model, start_az_deg=350, speed_deg_s=10.0, stop_at_south=True)
+    device.receive(b"AP1010;AM1;", 0.0)  # (the DCU-1's one way to turn it)
+    assert device.true_az_deg(1.0) == pytest.approx(0.0)  # 20 degrees, through north
+    assert device.true_az_deg(1.5) == pytest.approx(5.0)
+    assert device.true_az_deg(3.0) == 10.0 and not device.is_moving(3.0)
+    assert [e.kind for e in device.events][-2:] == ["move", "arrived"]
+
+
+def test_a_hy_gain_rotor_turns_170_to_190_the_long_way_through_north() -> None:
+    device = make(start_az_deg=170, speed_deg_s=10.0, stop_at_south=True)
+    device.receive(b"AP1190\r", 0.0)
+    assert reading(device, 17.0) == b";000"  # never through south, where its stop is
+    assert device.true_az_deg(40.0) == 190.0
+
+
+def test_readings_of_a_hy_gain_rotor_cross_north_as_a_compass_reads() -> None:
+    device = make(start_az_deg=10, speed_deg_s=1.0, stop_at_south=True)
+    device.receive(b"AP1350\r", 0.0)
+    assert [reading(device, t) for t in (9.0, 10.0, 11.0)] == [b";001", b";000", b";359"]
+    assert device.state(12.0).az_deg == pytest.approx(358.0)
+    assert device.state(12.0).target_az_deg == 350.0
+
+
+@pytest.mark.parametrize(("start", "via"), [(90.0, 135.0), (270.0, 225.0)])
+def test_180_on_a_hy_gain_rotor_is_the_end_nearer_the_rotor(start: float, via: float) -> None:
+    device = make(start_az_deg=start, speed_deg_s=10.0, stop_at_south=True)
+    device.receive(b"AP1180\r", 0.0)
+    assert device.true_az_deg(4.5) == pytest.approx(via)  # 90 degrees to the stop, not 270
+    assert device.true_az_deg(10.0) == 180.0 and not device.is_moving(10.0)
+
+
+def test_the_panel_turns_a_hy_gain_rotor_across_north() -> None:
+    device = make(start_az_deg=5, speed_deg_s=10.0, stop_at_south=True)
+    device.manual_rotate(355.0, 0.0)
+    assert device.true_az_deg(0.5) == pytest.approx(0.0)
+    assert device.true_az_deg(2.0) == 355.0
+
+
+def test_a_yaesu_rotor_on_a_rotorcard_turns_350_to_10_through_south() -> None:
+    device = make("rotorcard", start_az_deg=350, speed_deg_s=10.0, stop_at_south=False)
+    device.receive(b"AP1010\r", 0.0)
+    assert reading(device, 17.0) == b";180"
+
+
 def test_turning_reading_follows_the_true_position_even_with_jitter() -> None:
     device = make(jitter_deg=3, speed_deg_s=1.0)
     device.receive(b"AP1100\r", 0.0)

@@ -1107,3 +1107,25 @@ def test_with_slow_polls_at_rest_a_garbled_execute_is_stopped_within_a_few_degre
     v.run_until(lambda h: unasked(h) != [], 60, "the turn seen and stopped")
     v.run_for(15)
     assert not v.truth().is_moving and v.truth().az_deg < rest + 15
+
+
+# -- a Hy-Gain rotor as built: its stop at south, north mid-travel (emulator rule 12) ----------
+@pytest.mark.parametrize(("start", "to"), [(350.0, 10.0), (10.0, 350.0)])
+def test_a_hy_gain_rotor_turns_across_north_the_short_way_and_is_followed(
+    rig: Rig, start: float, to: float
+) -> None:
+    """The bridge's reading of a turn across north (359 then 000, or back) on the rotor a
+    Rotor-EZ drives: a turn of 20 degrees, seen as one move, no stall, no turn nobody asked
+    for, and the rotor at rest at the target."""
+    v = ready(rig, emulator={"start_az_deg": start, "stop_at_south": True})
+    t = v.now
+    v.target(to)
+    v.run_until(at(v, to), 30, f"at {to:g}")
+    assert commands(v, t) == [(b"AP1%03d\r" % to, Outcome.EXECUTED)]
+    moved = [e for e in v.device.events if e.time_s >= t and e.kind in ("move", "arrived")]
+    assert [e.kind for e in moved] == ["move", "arrived"]
+    assert moved[1].time_s - moved[0].time_s == pytest.approx(20 / 6.0)  # 20 degrees at 6/s
+    shown = [s.bearing_deg for _, s in v.statuses if _ >= t and s.bearing_deg is not None]
+    assert all(b >= 349 or b <= 11 for b in shown)  # never through south
+    assert v.errors() == [] and v.state is IDLE
+    assert_never_disobeyed(v)
