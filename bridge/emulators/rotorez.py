@@ -391,15 +391,17 @@ class RotorEZ(Recorder):
         self._record(frame, Outcome.INVALID, now)
 
     def _reading_deg(self) -> int:
-        """The bearing as the controller reads its potentiometer (rule 8)."""
-        true_deg = math.floor(self._bearing(self._axis.position_deg) + 0.5)
-        still = not self._axis.is_moving or self._axis.is_jammed
+        """The bearing as the controller reads its potentiometer (rule 8), its jitter inside the
+        travel (at an end, towards the other: rule 12)."""
+        axis = self._axis
+        true_deg = math.floor(axis.position_deg + 0.5)  # (on the travel)
+        still = not axis.is_moving or axis.is_jammed
         if not still or self.jitter_deg == 0:
             self._jitter_phase = 0
-            return true_deg % 360
+            return int(self._bearing(true_deg)) % 360
         other_deg = true_deg + self.jitter_deg
-        if other_deg > 360:
+        if other_deg > axis.max_deg:
             other_deg = true_deg - self.jitter_deg
         reading = true_deg if self._jitter_phase == 0 else other_deg
         self._jitter_phase ^= 1
-        return min(360, max(0, reading)) % 360
+        return int(self._bearing(min(axis.max_deg, max(axis.min_deg, reading)))) % 360

@@ -112,6 +112,17 @@ def test_the_panel_turns_a_hy_gain_rotor_across_north() -> None:
     assert device.true_az_deg(2.0) == 355.0
 
 
+@pytest.mark.parametrize(("start", "readings"), [(170.0, b";180;179"), (190.0, b";180;181")])
+def test_a_hy_gain_rotor_at_its_stop_jitters_inside_its_travel(
+    start: float, readings: bytes
+) -> None:
+    """At either end (come to 180 from the east, 170, or from the west, 190) the second reading
+    of the pair is a degree inside the travel, never past the stop on the other end's side."""
+    device = make(start_az_deg=start, speed_deg_s=10.0, jitter_deg=1, stop_at_south=True)
+    device.receive(b"AP1180\r", 0.0)
+    assert reading(device, 5.0) + reading(device, 6.0) == readings
+
+
 def test_a_yaesu_rotor_on_a_rotorcard_turns_350_to_10_through_south() -> None:
     device = make("rotorcard", start_az_deg=350, speed_deg_s=10.0, stop_at_south=False)
     device.receive(b"AP1010\r", 0.0)
