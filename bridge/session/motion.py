@@ -73,10 +73,12 @@ Rules:
    movement on it (more than ``noise_deg`` from where that axis last moved since the target
    went out: rule 1's anchor moves with either axis) closed in on its target to within
    ``tolerance_deg``, or went over it (the target between that axis's last movement and this
-   one), or the axis was within ``noise_deg`` of it along the scale when the target went out
-   (the axis an elevation-only move leaves where it is), and the next movement on it went on
-   the same way (one that turns back says the arrival was none: a corrupt reading close
-   to the last, or a hand turning the rotor back), two movements away on that axis, the
+   one), or the axis was within ``noise_deg`` of it along the rotor's travel when the target
+   went out (the axis an elevation-only move leaves where it is; ``_along_travel``: where the
+   stop is not known to be at north, both ways, so 181 and 183 on a Hy-Gain rotor may be a
+   whole turn apart), and the next movement on it went on the same way (one that turns back
+   says the arrival was none: a corrupt reading close to the last, or a hand turning the rotor
+   back), two movements away on that axis, the
    second further than the first, both more than ``tolerance_deg + noise_deg`` +
    AWAY_MARGIN_DEG further than the closest it came, say the rotor ``passed`` its target, on
    either scale. A reading further from the one before than three times the larger of the
@@ -618,7 +620,7 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
-        az_pass=_there(m.position_deg, target_deg, cfg),
+        az_pass=_there(m.position_deg, target_deg, cfg, azimuth=True),
         el_pass=_there(m.el_position_deg, el_target_deg, cfg),
         az_from_deg=m.position_deg,
         el_from_deg=m.el_position_deg,
@@ -631,15 +633,43 @@ def commanded(
     )
 
 
-def _there(pos: float | None, target: float | None, cfg: MotionConfig) -> Watch | None:
+def _there(
+    pos: float | None, target: float | None, cfg: MotionConfig, *, azimuth: bool = False
+) -> Watch | None:
     """Rule 5: an axis already at its target when it goes out (within ``noise_deg``: the axis a
     target leaves as it is, an elevation-only move's azimuth) has come to it. Measured along
-    the scale, not round the circle: 359 sent 0 may go the long way round a stop at north (a
-    review: that turn was stopped as a pass)."""
+    the rotor's travel, not round the circle: 359 sent 0 may go the long way round a stop at
+    north (a review: that turn was stopped as a pass), and 181 sent 183 may go the long way
+    round a Hy-Gain rotor's stop at south (``_along_travel``: a reading within ``noise_deg`` of
+    180 may be either end)."""
     if pos is None or target is None:
         return None
-    err = abs(pos - target)
+    err = _along_travel(pos, target, cfg, cfg.noise_deg) if azimuth else abs(pos - target)
     return (err, None, 0) if err <= cfg.noise_deg else None
+
+
+def _along_travel(a_deg: float, b_deg: float, cfg: MotionConfig, a_slack_deg: float = 0.0) -> float:
+    """Rule 5: how far apart two raw azimuths are along the rotor's travel. On the scale, where
+    its 0 and 360 are the travel's ends; where they are not known to be (``az_ends_at_north``
+    False: a Hy-Gain rotor's stop is at south, an RT-21 turns its own way), the farther of that
+    and the way along a travel whose ends are at south, raw 180 (either end: counted as the
+    farther one; ``a_deg`` within ``a_slack_deg`` of it too, a reading that may have jittered
+    past the end). Two readings close on the scale may be a whole turn apart: 179 and 181 on a
+    Hy-Gain rotor (an investigation: a sun tracked across south was sent 183 at 181, the rotor
+    at its stop went the long way round, as it must, and its turn was stopped as a pass)."""
+    straight = abs(a_deg - b_deg)
+    if not cfg.az_wraps or cfg.spec.az_ends_at_north:
+        return straight
+    ways = (abs(x - y) for x in _on_south(a_deg, a_slack_deg) for y in _on_south(b_deg, 0.0))
+    return max(straight, *ways)
+
+
+def _on_south(raw_deg: float, slack_deg: float) -> tuple[float, ...]:
+    """Where a raw azimuth is on a travel from south to south (180..540): within ``slack_deg``
+    of 180, either end."""
+    if abs(raw_deg - 180.0) <= slack_deg:
+        return (raw_deg, raw_deg + 360.0)
+    return (raw_deg + 360.0,) if raw_deg < 180.0 else (raw_deg,)
 
 
 def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:

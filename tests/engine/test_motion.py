@@ -717,3 +717,23 @@ def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
         for t in (t0 + (end - t0) * f for f in (0.25, 0.5, 0.999)):
             assert mo.tick(made, cfg, t) == (made, []), (made, t)
             assert mo.plan_target(made, cfg, t) is plan, (made, t)
+
+
+@pytest.mark.parametrize("at", [181.0, 182.0])
+def test_a_hy_gain_rotor_at_its_stop_sent_just_past_it_turns_the_whole_way_round(at: float) -> None:
+    """Rule 5 (``_along_travel``): a Rotor-EZ's rotor stops at south, so a reading within
+    ``noise_deg`` of 180 may be at either end (its jitter past the stop), and 183 a whole turn
+    away: the turn there, away from 183 on the scale for 350 degrees, is no pass (an
+    investigation: a sun tracked across south was stopped a few degrees into that turn). A
+    GS-232's rotor stops at north: 181 sent 183 is there when it goes out, and a turn on away
+    from it is one."""
+    m = mo.commanded(ready(az=at), CFG, 183, 10.0)
+    m, events = feed(m, [(10.2 + 0.2 * i, at - 1.2 * (i + 1)) for i in range(20)])
+    assert mo.Event.PASSED not in events and m.target_deg == 183
+    gs = mo.MotionConfig(REGISTRY["gs232b"], tolerance_deg=3, settle_s=1.5, noise_deg=2)
+    m = mo.link_up(mo.Motion(), gs, 0.0)
+    m, _ = mo.reading(m, gs, 181.0, 0.0)
+    m, _ = mo.tick(m, gs, 5.0)
+    m = mo.commanded(m, gs, 183, 10.0)
+    m, events = feed(m, [(10.2 + 0.2 * i, 181 - 1.2 * (i + 1)) for i in range(20)], gs)
+    assert mo.Event.PASSED in events

@@ -1129,3 +1129,23 @@ def test_a_hy_gain_rotor_turns_across_north_the_short_way_and_is_followed(
     assert all(b >= 349 or b <= 11 for b in shown)  # never through south
     assert v.errors() == [] and v.state is IDLE
     assert_never_disobeyed(v)
+
+
+@pytest.mark.parametrize(("start", "to"), [(177.0, 183.0), (183.0, 177.0)])
+def test_a_hy_gain_rotor_sent_across_its_stop_goes_the_whole_way_round_unstopped(
+    rig: Rig, start: float, to: float
+) -> None:
+    """177 and 183 are six degrees apart on the scale and 354 along a Hy-Gain rotor's travel, the
+    long way round it must turn, away from the target first: no pass, never stopped, followed
+    to the target (motion.py rule 5). (Within the tolerance a target goes nowhere: the antenna
+    points there already; tracking's steps, which do go, are tried in test_session_tracking.)"""
+    v = ready(rig, emulator={"start_az_deg": start, "stop_at_south": True})
+    t = v.now
+    v.target(to)
+    v.run_until(at(v, to), 120, f"at {to:g}")
+    assert commands(v, t) == [(b"AP1%03d\r" % to, Outcome.EXECUTED)]
+    moved = [e for e in v.device.events if e.time_s >= t and e.kind in ("move", "arrived")]
+    assert [e.kind for e in moved] == ["move", "arrived"]
+    assert moved[1].time_s - moved[0].time_s == pytest.approx(354 / 6.0)
+    assert v.errors() == [] and v.state is IDLE
+    assert_never_disobeyed(v)

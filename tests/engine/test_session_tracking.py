@@ -236,6 +236,34 @@ def test_a_rotor_ez_follows_the_sun_in_azimuth_without_ever_retargeting_while_tu
         assert v.frames(*never) == []
 
 
+@pytest.mark.parametrize("lon", [20.0, 21.0, 23.0])
+def test_a_hy_gain_rotor_swings_once_round_its_stop_as_the_sun_crosses_south(lon: float) -> None:
+    """A Rotor-EZ's Hy-Gain rotor, its stop at south (emulator rule 12), follows the sun across
+    its transit: once the sun is past 180, the one way there is the whole way round through
+    north, a turn the motion machine must not take for a pass (motion.py rule 5,
+    ``along_travel``: 179 and 181 are a whole turn apart). An investigation: at most such
+    stations the turn was stopped a few degrees in as 'turned on past its target', tracking
+    ended, and the rotor was left 20-40 degrees off the sun."""
+    lat, wall = 50.0, SUN_EPOCH  # the sun crosses south 10 to 20 minutes in
+    emulator = {"start_az_deg": 165.0, "stop_at_south": True}
+    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        t0 = v.now
+        v.track(Body.sun())
+        v.run_until(lambda h: sun_altaz(lat, lon, h.wall())[0] > 185.0, 3600, "the sun past 185")
+        v.run_for(120.0)  # the swing (some 60 s at 6 degrees a second) and a step or two after
+        assert v.status.tracking is not None and v.status.tracking_ended is None
+        assert v.errors() == []
+        assert off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]) <= 1.5 + 3.0
+        turns = [e for e in v.device.events if e.time_s > t0 and e.kind in ("move", "arrived")]
+        took = [b.time_s - a.time_s for a, b in zip(turns, turns[1:], strict=False)]
+        swings = [s for s, a in zip(took, turns, strict=False) if a.kind == "move" and s > 30]
+        assert len(swings) == 1  # the crossing's one, some 350 degrees; no second one back
+        assert all(a.kind != b.kind for a, b in zip(turns, turns[1:], strict=False))  # none cut
+        never = ("ignored: brake delay", "ignored: re-target while turning (stopped)")
+        assert v.frames(*never) == []
+
+
 @pytest.mark.parametrize("how", ["off", "stop", "lock", "manual target"])
 def test_tracking_ends_on_off_stop_lock_and_a_manual_target(how: str) -> None:
     wall = SUN_EPOCH
