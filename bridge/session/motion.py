@@ -75,8 +75,8 @@ Rules:
    ``tolerance_deg``, or went over it (the target between that axis's last movement and this
    one), or the axis was within ``noise_deg`` of it along the rotor's travel when the target
    went out (the axis an elevation-only move leaves where it is; ``_along_travel``: where the
-   stop is not known to be at north, both ways, so 181 and 183 on a Hy-Gain rotor may be a
-   whole turn apart), and the next movement on it went on the same way (one that turns back
+   stop is not known to be at north, both ways, so 179 and 181 on a Hy-Gain rotor are a whole
+   turn apart), and the next movement on it went on the same way (one that turns back
    says the arrival was none: a corrupt reading close to the last, or a hand turning the rotor
    back), two movements away on that axis, the
    second further than the first, both more than ``tolerance_deg + noise_deg`` +
@@ -95,7 +95,10 @@ Rules:
    come to: that turn runs on until a stall tells (a protocol limit: no controller of these
    says which target it heads for).
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
-   last the travel time at the nominal speed (the whole range when the start is unknown).
+   last the travel time at the nominal speed (the whole range when the start is unknown), its
+   way measured as rule 5's ``_along_travel``: 170 to 190 on a DCU-1's Hy-Gain rotor is 340
+   degrees round its stop at south, not 20 (a review: taken as over in 7 s, the next target went
+   into the turn, which the box ignores, stopping the rotor 105 degrees off, unsaid).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -595,11 +598,8 @@ def commanded(
 ) -> Motion:
     if not cfg.can_report_position:
         start = m.assumed_deg
-        travel = (
-            cfg.az_span_deg
-            if start is None
-            else angle_error(start, target_deg, False)  # linear travel, no wrap past the stop
-        )
+        # (no wrap past the stop; the farther way where the stop is not known to be at north)
+        travel = cfg.az_span_deg if start is None else _along_travel(start, target_deg, cfg)
         # generous: 50 % slower than nominal plus two seconds to get going
         busy = 1.5 * travel / cfg.nominal_speed_deg_s + 2.0
         return replace(
@@ -639,36 +639,34 @@ def _there(
     """Rule 5: an axis already at its target when it goes out (within ``noise_deg``: the axis a
     target leaves as it is, an elevation-only move's azimuth) has come to it. Measured along
     the rotor's travel, not round the circle: 359 sent 0 may go the long way round a stop at
-    north (a review: that turn was stopped as a pass), and 181 sent 183 may go the long way
-    round a Hy-Gain rotor's stop at south (``_along_travel``: a reading within ``noise_deg`` of
-    180 may be either end)."""
+    north (a review: that turn was stopped as a pass), and 179 sent 181 goes the long way round
+    a Hy-Gain rotor's stop at south (``_along_travel``). (Not the straight way within
+    ``noise_deg`` of it either: a reading there that may be past the stop makes a blind spot in
+    which a turn away from a near target, a garbled one, goes unseen until it stalls: a review.)"""
     if pos is None or target is None:
         return None
-    err = _along_travel(pos, target, cfg, cfg.noise_deg) if azimuth else abs(pos - target)
+    err = _along_travel(pos, target, cfg) if azimuth else abs(pos - target)
     return (err, None, 0) if err <= cfg.noise_deg else None
 
 
-def _along_travel(a_deg: float, b_deg: float, cfg: MotionConfig, a_slack_deg: float = 0.0) -> float:
-    """Rule 5: how far apart two raw azimuths are along the rotor's travel. On the scale, where
+def _along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
+    """Rules 5-6: how far apart two raw azimuths are along the rotor's travel. On the scale, where
     its 0 and 360 are the travel's ends; where they are not known to be (``az_ends_at_north``
     False: a Hy-Gain rotor's stop is at south, an RT-21 turns its own way), the farther of that
-    and the way along a travel whose ends are at south, raw 180 (either end: counted as the
-    farther one; ``a_deg`` within ``a_slack_deg`` of it too, a reading that may have jittered
-    past the end). Two readings close on the scale may be a whole turn apart: 179 and 181 on a
-    Hy-Gain rotor (an investigation: a sun tracked across south was sent 183 at 181, the rotor
-    at its stop went the long way round, as it must, and its turn was stopped as a pass)."""
+    and the way along a travel whose ends are at south (raw 180: either end, counted as the
+    farther one). Two readings close on the scale may be a whole turn apart: 179 and 181 on a
+    Hy-Gain rotor (an investigation: a sun tracked across south was sent 181 at 179, the rotor
+    went the long way round, as it must, and its turn was stopped as a pass)."""
     straight = abs(a_deg - b_deg)
     if not cfg.az_wraps or cfg.spec.az_ends_at_north:
         return straight
-    ways = (abs(x - y) for x in _on_south(a_deg, a_slack_deg) for y in _on_south(b_deg, 0.0))
-    return max(straight, *ways)
+    return max(straight, *(abs(x - y) for x in _on_south(a_deg) for y in _on_south(b_deg)))
 
 
-def _on_south(raw_deg: float, slack_deg: float) -> tuple[float, ...]:
-    """Where a raw azimuth is on a travel from south to south (180..540): within ``slack_deg``
-    of 180, either end."""
-    if abs(raw_deg - 180.0) <= slack_deg:
-        return (raw_deg, raw_deg + 360.0)
+def _on_south(raw_deg: float) -> tuple[float, ...]:
+    """Where a raw azimuth is on a travel from south to south (180..540): 180 is either end."""
+    if raw_deg == 180.0:
+        return (180.0, 540.0)
     return (raw_deg + 360.0,) if raw_deg < 180.0 else (raw_deg,)
 
 

@@ -719,21 +719,47 @@ def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
             assert mo.plan_target(made, cfg, t) is plan, (made, t)
 
 
-@pytest.mark.parametrize("at", [181.0, 182.0])
-def test_a_hy_gain_rotor_at_its_stop_sent_just_past_it_turns_the_whole_way_round(at: float) -> None:
-    """Rule 5 (``_along_travel``): a Rotor-EZ's rotor stops at south, so a reading within
-    ``noise_deg`` of 180 may be at either end (its jitter past the stop), and 183 a whole turn
-    away: the turn there, away from 183 on the scale for 350 degrees, is no pass (an
-    investigation: a sun tracked across south was stopped a few degrees into that turn). A
-    GS-232's rotor stops at north: 181 sent 183 is there when it goes out, and a turn on away
-    from it is one."""
-    m = mo.commanded(ready(az=at), CFG, 183, 10.0)
-    m, events = feed(m, [(10.2 + 0.2 * i, at - 1.2 * (i + 1)) for i in range(20)])
-    assert mo.Event.PASSED not in events and m.target_deg == 183
+@pytest.mark.parametrize(("at", "to"), [(179.0, 181.0), (181.0, 179.0), (180.0, 182.0)])
+def test_a_hy_gain_rotor_sent_just_past_its_stop_turns_the_whole_way_round(
+    at: float, to: float
+) -> None:
+    """Rule 5 (``_along_travel``): a Rotor-EZ's rotor stops at south, so 179 and 181 are a whole
+    turn apart, and a reading of 180 may be at either end: the turn there, away from the target
+    on the scale for some 350 degrees, is no pass (an investigation: a sun tracked across south
+    was stopped a few degrees into that turn). A GS-232's rotor stops at north: 179 sent 181 is
+    there when it goes out, and a turn on away from it is one."""
+    way = 1.0 if to < at else -1.0  # (the long way round: away from the target first)
+    m = mo.commanded(ready(az=at), CFG, to, 10.0)
+    m, events = feed(m, [(10.2 + 0.2 * i, at + way * 1.2 * (i + 1)) for i in range(20)])
+    assert mo.Event.PASSED not in events and m.target_deg == to
     gs = mo.MotionConfig(REGISTRY["gs232b"], tolerance_deg=3, settle_s=1.5, noise_deg=2)
     m = mo.link_up(mo.Motion(), gs, 0.0)
-    m, _ = mo.reading(m, gs, 181.0, 0.0)
+    m, _ = mo.reading(m, gs, at, 0.0)
     m, _ = mo.tick(m, gs, 5.0)
-    m = mo.commanded(m, gs, 183, 10.0)
-    m, events = feed(m, [(10.2 + 0.2 * i, 181 - 1.2 * (i + 1)) for i in range(20)], gs)
+    m = mo.commanded(m, gs, to, 10.0)
+    m, events = feed(m, [(10.2 + 0.2 * i, at + way * 1.2 * (i + 1)) for i in range(20)], gs)
     assert mo.Event.PASSED in events
+
+
+def test_a_reading_near_a_hy_gain_rotors_stop_is_where_it_reads() -> None:
+    """Rule 5: 181 sent 183 on a Hy-Gain rotor is two degrees along its travel (a reading past
+    the stop is not assumed: a review found the blind spot that made), so a turn away from it,
+    a garbled target's, is a pass as anywhere else."""
+    m = mo.commanded(ready(az=181.0), CFG, 183, 10.0)
+    m, events = feed(m, [(10.2 + 0.2 * i, 181 - 1.2 * (i + 1)) for i in range(20)])
+    assert mo.Event.PASSED in events
+
+
+def test_a_dcu1_turn_round_its_stop_is_timed_the_whole_way() -> None:
+    """Rule 6: a DCU-1 is timed; 170 to 190 on its Hy-Gain rotor is 340 degrees round its stop
+    at south, not 20 (a review: taken as over in 7 s, the next target went into the turn); the
+    other way across north, 350 to 10, is timed the longer way too (the stop is only assumed to
+    be at south: a stop first, never a target into a turn)."""
+    m = mo.link_up(mo.Motion(), DCU, 0.0)
+    m = mo.commanded(m, DCU, 170, 0.0)
+    m, _ = mo.tick(m, DCU, 200.0)
+    m = mo.commanded(m, DCU, 190, 200.0)
+    assert m.busy_until_t is not None and m.busy_until_t - 200.0 >= 340 / 6.0
+    m, _ = mo.tick(m, DCU, 400.0)
+    m = mo.commanded(mo.commanded(m, DCU, 350, 400.0), DCU, 10, 400.0)
+    assert m.busy_until_t is not None and m.busy_until_t - 400.0 >= 340 / 6.0

@@ -1141,3 +1141,21 @@ def test_a_hy_gain_rotor_turns_inside_its_travel_and_is_followed(
     assert all(low - 1 <= _on_hy_gain_travel(b) <= high + 1 for b in shown)  # never past south
     assert v.errors() == [] and v.state is IDLE
     assert_never_disobeyed(v)
+
+
+def test_a_dcu1_turning_round_its_stop_is_stopped_before_the_next_target(rig: Rig) -> None:
+    """motion.py rule 6: a DCU-1 never answers, so its turn is timed: 170 to 190 on its Hy-Gain
+    rotor is 340 degrees round its stop, some 57 s, not 20 (a review: taken as over in 7 s, the
+    next target went out into the turn, which the box ignores, stopping: the rotor was left 105
+    degrees off the target, and nothing said so)."""
+    v = rig("dcu1", emulator={"start_az_deg": 30.0, "stop_at_south": True})
+    v.target(170)
+    v.run_for(200)
+    v.target(190)
+    v.run_for(12.5)
+    assert v.truth().is_moving
+    t = v.now
+    v.target(200)
+    v.run_until(lambda v: abs(v.truth().az_deg - 200) < 1e-6, 120, "at 200")
+    assert v.frames(*DISOBEYED) == []
+    assert [f.data for f in v.frames(since=t)][0] == b"AS1;"  # the turn stopped first
