@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from bridge.emulators import as_built
 from bridge.emulators.rotorez import BEARING_OUTCOMES, Outcome, RotorEZ
 
 
@@ -123,10 +124,13 @@ def test_a_hy_gain_rotor_at_its_stop_jitters_inside_its_travel(
     assert reading(device, 5.0) + reading(device, 6.0) == readings
 
 
-def test_a_yaesu_rotor_on_a_rotorcard_turns_350_to_10_through_south() -> None:
-    device = make("rotorcard", start_az_deg=350, speed_deg_s=10.0, stop_at_south=False)
+@pytest.mark.parametrize(("model", "reads"), [("rotorcard", b";180"), ("rotorez", b";010")])
+def test_each_model_as_built_turns_350_to_10_its_own_way(model: str, reads: bytes) -> None:
+    """emulators rule 3: a RotorCard's Yaesu rotor stops at north, so 350 to 10 goes round
+    through south; a Rotor-EZ's Hy-Gain rotor turns 20 degrees across north."""
+    device = make(model, start_az_deg=350, speed_deg_s=10.0, **as_built(model))
     device.receive(b"AP1010\r", 0.0)
-    assert reading(device, 17.0) == b";180"
+    assert reading(device, 17.0) == reads
 
 
 def test_turning_reading_follows_the_true_position_even_with_jitter() -> None:
