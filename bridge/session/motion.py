@@ -76,15 +76,14 @@ Rules:
    one), or the axis was within ``noise_deg`` of it along the rotor's travel when the target
    went out (the axis an elevation-only move leaves where it is; ``_along_travel``: where the
    stop is not known to be at north, both ways, so 179 and 181 on a Hy-Gain rotor are a whole
-   turn apart), and the next movement on it went on the same way (one that turns back
-   says the arrival was none: a corrupt reading close to the last, or a hand turning the rotor
-   back), two movements away on that axis, the
-   second further than the first, both more than ``tolerance_deg + noise_deg`` +
-   AWAY_MARGIN_DEG further than the closest it came, say the rotor ``passed`` its target, on
-   either scale. A reading further from the one before than three times the larger of the
-   two nominal speeds (``nominal_speed_deg_s``, the model's elevation's) over the time since
-   the later of the last reading that changed and the target, plus that sum, is corrupt: no
-   arrival, and no reading away.
+   turn apart), and the next movement on it went on the same way (one that turns back says
+   the arrival was none: a corrupt reading close to the last, or a hand turning the rotor
+   back), two movements away on that axis, the second further than the first, both more than
+   ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG further than the closest it came, say the
+   rotor ``passed`` its target, on either scale. A reading further from the one before than
+   three times the larger of the two nominal speeds (``nominal_speed_deg_s``, the model's
+   elevation's) over the time since the later of the last reading that changed and the
+   target, plus that sum, is corrupt: no arrival, and no reading away.
    That is most likely a controller heading elsewhere: the target never reached it (the line
    lost the frame; a review: a STOP and the target after it eaten by one noise burst, and the
    rotor turned on through the new bearing to the one the operator had stopped). The target
