@@ -289,15 +289,8 @@ class Pointing:
         outside = self._swept_outside(min(from_raw, to_raw), max(from_raw, to_raw), within)
         if not self.az_wraps or self.az_ends_at_north:
             return outside
-
-        def mid(raw: float) -> float:  # the scale with its ends at raw 180 (180..540)
-            return raw + 360.0 if raw < 180.0 else raw
-
-        u0s = (180.0, 540.0) if from_raw == 180.0 else (mid(from_raw),)  # (at the stop: either)
-        for u0 in u0s:
-            u1 = mid(to_raw)
-            if to_raw == 180.0:  # (a target at the stop: the end nearer)
-                u1 = min((180.0, 540.0), key=lambda u: abs(u - u0))
+        for u0 in geo.on_south_travel(from_raw):  # (at the stop: either end)
+            u1 = min(geo.on_south_travel(to_raw), key=lambda u: abs(u - u0))  # (the end nearer)
             outside = max(outside, self._swept_outside(min(u0, u1), max(u0, u1), within))
         return outside
 

@@ -158,6 +158,14 @@ def apart_deg(a_deg: float, b_deg: float, wraps: bool) -> float:
     return d
 
 
+def on_south_travel(raw_deg: float) -> tuple[float, ...]:
+    """Where a raw azimuth (0..360) is on a travel whose ends are at south, raw 180, as a
+    Hy-Gain rotor's are: 180..540, north mid-travel at 360; 180 itself is either end."""
+    if raw_deg == 180.0:
+        return (180.0, 540.0)
+    return (raw_deg + 360.0,) if raw_deg < 180.0 else (raw_deg,)
+
+
 def check_range(value: float, name: str, limit: float) -> None:
     """ValueError naming ``name`` unless ``value`` is finite and within -limit..limit."""
     if not math.isfinite(value) or not -limit <= value <= limit:

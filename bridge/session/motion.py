@@ -149,7 +149,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
-from bridge.core.geo import apart_deg
+from bridge.core.geo import apart_deg, on_south_travel
 from bridge.core.model import MotionState
 from bridge.protocols.base import ModelSpec, RetargetPolicy
 
@@ -659,14 +659,8 @@ def _along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
     straight = abs(a_deg - b_deg)
     if not cfg.az_wraps or cfg.spec.az_ends_at_north:
         return straight
-    return max(straight, *(abs(x - y) for x in _on_south(a_deg) for y in _on_south(b_deg)))
-
-
-def _on_south(raw_deg: float) -> tuple[float, ...]:
-    """Where a raw azimuth is on a travel from south to south (180..540): 180 is either end."""
-    if raw_deg == 180.0:
-        return (180.0, 540.0)
-    return (raw_deg + 360.0,) if raw_deg < 180.0 else (raw_deg,)
+    ways = (abs(x - y) for x in on_south_travel(a_deg) for y in on_south_travel(b_deg))
+    return max(straight, *ways)
 
 
 def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
