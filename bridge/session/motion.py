@@ -74,7 +74,7 @@ Rules:
    went out: rule 1's anchor moves with either axis) closed in on its target to within
    ``tolerance_deg``, or went over it (the target between that axis's last movement and this
    one), or the axis was within ``noise_deg`` of it along the rotor's travel when the target
-   went out (the axis an elevation-only move leaves where it is; ``_along_travel``: where the
+   went out (the axis an elevation-only move leaves where it is; ``along_travel``: where the
    stop is not known to be at north, both ways, so 179 and 181 on a Hy-Gain rotor are a whole
    turn apart), and the next movement on it went on the same way (one that turns back says
    the arrival was none: a corrupt reading close to the last, or a hand turning the rotor
@@ -95,7 +95,7 @@ Rules:
    says which target it heads for).
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown), its
-   way measured as rule 5's ``_along_travel``: 170 to 190 on a DCU-1's Hy-Gain rotor is 340
+   way measured as rule 5's ``along_travel``: 170 to 190 on a DCU-1's Hy-Gain rotor is 340
    degrees round its stop at south, not 20 (a review: taken as over in 7 s, the next target went
    into the turn, which the box ignores, stopping the rotor 105 degrees off, unsaid).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -598,7 +598,7 @@ def commanded(
     if not cfg.can_report_position:
         start = m.assumed_deg
         # (no wrap past the stop; the farther way where the stop is not known to be at north)
-        travel = cfg.az_span_deg if start is None else _along_travel(start, target_deg, cfg)
+        travel = cfg.az_span_deg if start is None else along_travel(start, target_deg, cfg)
         # generous: 50 % slower than nominal plus two seconds to get going
         busy = 1.5 * travel / cfg.nominal_speed_deg_s + 2.0
         return replace(
@@ -639,16 +639,16 @@ def _there(
     target leaves as it is, an elevation-only move's azimuth) has come to it. Measured along
     the rotor's travel, not round the circle: 359 sent 0 may go the long way round a stop at
     north (a review: that turn was stopped as a pass), and 179 sent 181 goes the long way round
-    a Hy-Gain rotor's stop at south (``_along_travel``). (Not the straight way within
+    a Hy-Gain rotor's stop at south (``along_travel``). (Not the straight way within
     ``noise_deg`` of it either: a reading there that may be past the stop makes a blind spot in
     which a turn away from a near target, a garbled one, goes unseen until it stalls: a review.)"""
     if pos is None or target is None:
         return None
-    err = _along_travel(pos, target, cfg) if azimuth else abs(pos - target)
+    err = along_travel(pos, target, cfg) if azimuth else abs(pos - target)
     return (err, None, 0) if err <= cfg.noise_deg else None
 
 
-def _along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
+def along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
     """Rules 5-6: how far apart two raw azimuths are along the rotor's travel. On the scale, where
     its 0 and 360 are the travel's ends; where they are not known to be (``az_ends_at_north``
     False: a Hy-Gain rotor's stop is at south, an RT-21 turns its own way), the farther of that

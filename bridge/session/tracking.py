@@ -16,7 +16,9 @@ Rules:
    tracking), never pulled back.
 2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
-   when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
+   when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S
+   (its way measured along its travel, motion.py rule 5: a review, a Hy-Gain rotor left at
+   170 by one pass came to the next, rising at 190, 35 s late: 340 degrees timed as 20).
    At the end of a pass it parks (``at_los = "park"``, if a park position is configured) or
    stays where it is. A wall clock stepped back (NTP) has a pass that has not begun by it
    waited for again (an attack pass: five minutes back mid-pass, the pass in hand still the
@@ -455,14 +457,16 @@ class Tracker:
 
     def _travel_s(self, scene: Scene, az: float, el: float | None, raw: float | None) -> float:
         """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2),
-        to the raw azimuth ``raw`` if the side is chosen (rule 9)."""
+        to the raw azimuth ``raw`` if the side is chosen (rule 9), the azimuth's way measured
+        along its travel (motion.py rule 5)."""
         rig, m = self._rig, scene.motion
         if raw is None:
             try:
                 raw = rig.aim.raw_for(az, m.position_deg)
             except Refused:
                 return 0.0
-        t = 0.0 if m.position_deg is None else abs(raw - m.position_deg) / rig.az_speed_deg_s
+        pos = m.position_deg
+        t = 0.0 if pos is None else mo.along_travel(pos, raw, rig.motion) / rig.az_speed_deg_s
         if el is not None and m.el_position_deg is not None:
             t = max(t, abs(el - m.el_position_deg) / rig.el_speed_deg_s)
         return t + rig.spec.brake_delay_s

@@ -723,7 +723,7 @@ def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
 def test_a_hy_gain_rotor_sent_just_past_its_stop_turns_the_whole_way_round(
     at: float, to: float
 ) -> None:
-    """Rule 5 (``_along_travel``): a Rotor-EZ's rotor stops at south, so 179 and 181 are a whole
+    """Rule 5 (``along_travel``): a Rotor-EZ's rotor stops at south, so 179 and 181 are a whole
     turn apart, and a reading of 180 may be at either end: the turn there, away from the target
     on the scale for some 350 degrees, is no pass (an investigation: a sun tracked across south
     was stopped a few degrees into that turn). A GS-232's rotor stops at north: 179 sent 181 is

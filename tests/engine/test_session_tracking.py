@@ -655,6 +655,30 @@ def test_after_a_park_a_pass_is_waited_for_on_the_side_nearest_the_park(
         assert waits and waits[0] == 370, waits  # from the park at 300, not where it ended
 
 
+def test_a_hy_gain_rotor_is_at_a_pass_across_its_stop_when_it_rises(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    """Rule 2, on a Hy-Gain rotor (stop at south, emulator rule 12): the last pass ended at 170,
+    the next rises at 190. Those are 20 degrees apart on the scale and 340 along the rotor's
+    travel (motion.py rule 5). A review: the wait was timed by the scale, about 28 s for about
+    60 s of turning, and the rotor came to the pass some 35 s after it rose."""
+    line1, line2, _aos, _los = a_pass  # (a satellite to name: its sky is scripted)
+    t0 = SAT_EPOCH
+    emulator = {"start_az_deg": 100.0, "stop_at_south": True}
+    v = VirtualRotator("rotorez", sky=Sky(*BERLIN), wall_epoch_s=t0, emulator=emulator)
+    aos = t0 + 3000
+    v.answer_sky = _scripted_sky([(t0 + 100, t0 + 400, 100, 170), (aos, aos + 300, 190, 250)])
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_until(lambda h: h.wall() >= t0 + 500, 600, "the first pass over")
+        assert off_deg(v.truth().az_deg, 170.0) <= 4.0  # it stayed where that pass ended
+        v.run_until(lambda h: h.wall() >= aos, 3000, "the second pass rises")
+        assert off_deg(v.truth().az_deg, 190.0) <= 4.0, v.truth()
+        assert not v.truth().is_moving
+        assert v.errors() == []
+
+
 def _iss_elements(t0: float) -> tuple[tuple[str, str], tuple[str, str]]:
     """Rule 10's tests: the ISS's elements a week old and of the day (another plane)."""
     old = synthetic_tle("", t0 - 7 * 86400, inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
