@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bridge.emulators import as_built
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.faults.conftest import (
     ROTOREZ_FAMILY,
@@ -261,7 +262,8 @@ class Soak:
         rotators = []
         for rid, (model, emu_opts, bridge_opts) in ROTATORS.items():
             start = {"start_az_deg": 90.0} | ({"start_el_deg": 10.0} if model in AZEL else {})
-            emu = start_emulator(model, self.dir / f"tty-{rid}", **start, **emu_opts)
+            built = as_built(model)  # a Hy-Gain rotor's stop at south (emulators rule 3)
+            emu = start_emulator(model, self.dir / f"tty-{rid}", **start, **built, **emu_opts)
             speed = float(emu_opts.get("speed_deg_s", emu_opts.get("az_speed_deg_s", 10.0)))
             self.rots[rid] = Rot(rid, model, emu, speed)
             rotators.append(
