@@ -453,7 +453,8 @@ def test_each_model_gets_its_speed_in_its_emulators_own_words() -> None:
     assert demo.emulator_options("rotorez", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": True}
     assert demo.emulator_options("dcu1", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": True}
     assert demo.emulator_options("rotorcard", 30.0) == {"speed_deg_s": 30.0, "stop_at_south": False}
-    assert demo.emulator_options("satel", 30.0) == {"az_speed_deg_s": 30.0, "el_speed_deg_s": 30.0}
+    satel = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 30.0, "step_deg": 10}  # satel.py rule 10
+    assert demo.emulator_options("satel", 30.0) == satel
     assert demo.emulator_options("rot1prog", 30.0) == {
         "az_speed_deg_s": 30.0,
         "el_speed_deg_s": 30.0,

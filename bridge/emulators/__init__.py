@@ -11,8 +11,9 @@ Rules:
    (SPID, SatEL, GS-232, Easycomm, RT-21, RC2800, Prosistel) adds entries here and reuses
    physics.Axis, base.PacedLine and pty.EmulatedPort.
 3. ``as_built(model)``: the options that make a model's emulator turn as the real device's rotor
-   does where its default does not (a Hy-Gain rotor's stop at south, rotorez.py rule 12); the
-   demo and `rotor-bridge emulate` start every emulator with them.
+   does where its default does not (a Hy-Gain rotor's stop at south, rotorez.py rule 12; a
+   SatEL's ten-degree steps, satel.py rule 10); the demo and `rotor-bridge emulate` start
+   every emulator with them.
 """
 
 from __future__ import annotations
@@ -58,6 +59,8 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
 
 def as_built(model: str) -> dict[str, Any]:
     """Rule 3: the options that make ``model``'s emulator turn as its real rotor does."""
+    if model == "satel":
+        return {"step_deg": 10}
     spec = _ROTOREZ_MODELS.get(model)
     return {"stop_at_south": spec.stop_at_south} if spec is not None else {}
 

@@ -51,6 +51,11 @@ Rules:
    flushes (Hamlib) may find them in front of its next reply: Hamlib 4.5.4 running `P az el p`
    in one session then reads 0.00 now and then (measured ~1 run in 10). That is the device as
    documented, kept on purpose; trailing_blank_lines=0 takes the race away.
+10. step_deg: the rotors stop only at multiples of it: a `p` (or stored point) between them goes
+   down to the one below (the manual: ``P0 34`` "would move to ... an elevation of 30 degrees
+   because it moves in ten degree steps"; its one example cannot tell down from nearest, and
+   `cx` drives each axis down to a 10-degree point). 1, the default, is every degree; the
+   device as built (``as_built``) is 10.
 """
 
 from __future__ import annotations
@@ -97,8 +102,11 @@ class SatEL(Recorder):
         trailing_blank_lines: int = 2,
         memory_limit: int = MEMORY_LIMIT,
         processing_delay_s: float = 0.002,
+        step_deg: int = 1,
         now: float = 0.0,
     ) -> None:
+        if step_deg < 1:
+            raise ValueError(f"step_deg must be >= 1, got {step_deg}")
         if line_ending not in (b"\r\n", b"\n"):
             raise ValueError(f"line_ending must be b'\\r\\n' or b'\\n', got {line_ending!r}")
         if trailing_blank_lines < 0:
@@ -111,6 +119,7 @@ class SatEL(Recorder):
         self.trailing_blank_lines: int = trailing_blank_lines
         self.memory_limit: int = memory_limit
         self._rotors = Rotors(start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s, now)
+        self._step_deg = step_deg  # rule 10
         self._tx = PacedLine(baud, processing_delay_s=processing_delay_s)
         self._clock = ControllerClock(now)
         self._now_s: float = now
@@ -247,6 +256,9 @@ class SatEL(Recorder):
     # -- motion ---------------------------------------------------------------------------------
 
     def _start_slew(self, kind: str, az_deg: float, el_deg: float, now: float) -> None:
+        step = self._step_deg  # rule 10: down to a step
+        if step > 1:
+            az_deg, el_deg = az_deg // step * step, el_deg // step * step
         slew = self._rotors.start_slew(kind, az_deg, el_deg, now)
         self._event(now, "move", f"{kind} to {slew.az_deg:g} {slew.el_deg:g}")
         if not self._rotors.is_moving:
