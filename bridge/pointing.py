@@ -143,9 +143,10 @@ class Pointing:
     az_wraps: bool = True  # the controller's 0 and 360 are the same direction
     az_ends_at_north: bool = True  # and the two ends of the travel (rule 6)
     whole_degrees: bool = False
+    steps_deg: int = 1  # (whole degrees in steps of this many: a SatEL's ten)
     tenths: bool = False
     cuts_down: bool = False
-    el_rounding: tuple[bool, bool, bool] | None = None  # a composite's elevation box's
+    el_rounding: tuple[bool, bool, bool, int] | None = None  # a composite's elevation box's
     offset_deg: float = 0.0
     keep_out: tuple[tuple[float, float], ...] = ()
     presets: dict[str, tuple[float, float | None]] = field(default_factory=dict)
@@ -176,6 +177,7 @@ class Pointing:
             az_wraps=spec.az_wraps,
             az_ends_at_north=spec.az_ends_at_north,
             whole_degrees=spec.whole_degrees,
+            steps_deg=spec.steps_deg,
             tenths=spec.tenths,
             cuts_down=spec.cuts_down,
             el_rounding=spec.el_rounding,
@@ -523,23 +525,24 @@ class Pointing:
             raise Refused(RefusalCode.LIMITS, self._rounding(shown, raw_deg, lo, hi))
         return raw_deg
 
-    def _rounds(self, el: bool) -> tuple[bool, bool, bool]:
-        """(whole degrees, tenths, cut down) of the box that turns the axis (rule 4)."""
+    def _rounds(self, el: bool) -> tuple[bool, bool, bool, int]:
+        """(whole degrees, tenths, cut down, steps) of the box that turns the axis (rule 4)."""
         if el and self.el_rounding is not None:
             return self.el_rounding
-        return self.whole_degrees, self.tenths, self.cuts_down
+        return self.whole_degrees, self.tenths, self.cuts_down, self.steps_deg
 
     def _sent(self, value: float, el: bool = False) -> tuple[float, float]:
         """The lowest and highest value the controller can be sent for ``value`` (rule 4): the
         Rotor-EZ family and the SatEL round half up to whole degrees, the Easycomm family, the
         RC2800, the RT-21 and the Combi-Track to tenths; the SPID family cuts down to its
-        resolution, learned only from its replies: one pulse per degree at the coarsest. A
+        resolution, learned only from its replies: one pulse per degree at the coarsest; the
+        SatEL's rotors go in ten-degree steps, so it is sent the nearest of them. A
         composite's azimuth by its azimuth box, its elevation (``el``) by the other (an attack
         pass: judged by both boxes' ways, a SPID's cut was lost beside a box of tenths, and a
         box of tenths refused what only the other box would have rounded)."""
-        whole, tenths, cuts = self._rounds(el)
+        whole, tenths, cuts, steps = self._rounds(el)
         if whole:  # (the codecs' own rounding: ``half_up``)
-            r = float(half_up(value, 1))
+            r = float(half_up(value / steps, 1) * steps)
             return r, r
         if tenths:
             r = half_up(value, 10) / 10
@@ -550,9 +553,9 @@ class Pointing:
 
     def _resolution(self, el: bool = False) -> str:
         """Why ``_sent`` moved a value, for the refusal's message."""
-        whole, tenths, _cuts = self._rounds(el)
+        whole, tenths, _cuts, steps = self._rounds(el)
         if whole:
-            return "it takes whole degrees"
+            return "it takes whole degrees" if steps == 1 else f"it turns in {steps}-degree steps"
         if tenths:
             return "it takes tenths of a degree"
         return "it may cut to whole degrees, its coarsest resolution"

@@ -38,7 +38,7 @@ def test_a_composite_rotator_is_az_from_one_box_and_el_from_the_other() -> None:
     assert r.model == "rt21+gs232b" and r.ports == ["/dev/ttyAZ", "/dev/ttyEL"]
     spec = r.spec
     assert spec.has_elevation and spec.options == ()
-    assert spec.tenths and spec.el_rounding == (True, False, False)  # RT-21's az, GS-232B's el
+    assert spec.tenths and spec.el_rounding == (True, False, False, 1)  # RT-21's az, GS-232B's el
     assert (spec.az_min_deg, spec.az_max_deg) == (0.0, 360.0)  # the RT-21's
     assert (spec.el_min_deg, spec.el_max_deg) == (0.0, 180.0)  # the GS-232B's
     assert r.pointing.el_max_deg == 90  # the rotator's keys apply to the whole

@@ -276,6 +276,25 @@ def test_limits_hold_for_what_a_controller_of_tenths_is_sent() -> None:
     assert "becomes 360 on the" in exc.value.message and "tenths" in exc.value.message
 
 
+def test_limits_and_sectors_hold_for_the_satels_ten_degree_step() -> None:
+    """protocols/satel.py rule 7: a SatEL is sent the nearest of its rotors' ten-degree steps,
+    and the judge checks that (rule 4): 86 of elevation is 90, past a limit of 88; 24 of
+    azimuth is 20, a sector's edge; as the elevation box of a composite, the same."""
+    satel = REGISTRY["satel"]
+    with pytest.raises(Refused) as exc:
+        Pointing.of(satel, el_limits=(0.0, 88.0)).judge(Target(100, 86), None)
+    assert exc.value.code is RefusalCode.LIMITS
+    assert "becomes 90 on the SatEL (it turns in 10-degree steps)" in exc.value.message
+    assert Pointing.of(satel, el_limits=(0.0, 88.0)).judge(Target(100, 84), None).el_deg == 84
+    aim = Pointing.of(satel, keep_out=((10, 20),))
+    assert refused(aim.judge, Target(24, 10), None) is RefusalCode.KEEP_OUT
+    assert aim.judge(Target(25, 10), None).az_deg == 25  # goes out as 30
+    boxes = composite_spec(REGISTRY["rt21"], satel)
+    with pytest.raises(Refused) as exc:
+        Pointing.of(boxes, el_limits=(0.0, 88.0)).judge(Target(100.3, 86), None)
+    assert "becomes 90" in exc.value.message
+
+
 @pytest.mark.parametrize("el_box", ["rt21", "easycomm2", "rc2800", "prosistel-combi", "gs232b"])
 def test_a_composite_holds_every_rounding_of_its_boxes(el_box: str) -> None:
     """An attack pass: a SPID azimuth box beside an elevation box of tenths (or whole degrees)

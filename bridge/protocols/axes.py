@@ -356,8 +356,9 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         reports_while_moving=az.reports_while_moving and el.reports_while_moving,
         # the judge's limits after rounding (pointing.py rule 4): each axis by its own box
         whole_degrees=az.whole_degrees,
+        steps_deg=az.steps_deg,
         tenths=az.tenths,
         cuts_down=az.cuts_down,
-        el_rounding=(el.whole_degrees, el.tenths, el.cuts_down),
+        el_rounding=(el.whole_degrees, el.tenths, el.cuts_down, el.steps_deg),
         hamlib_rot_type=HamlibRotType.AZEL,
     )

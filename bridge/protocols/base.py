@@ -455,11 +455,14 @@ class ModelSpec:
     nominal_el_speed_deg_s: float = 1.0
     # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)
     whole_degrees: bool = False
+    # ... and turns to a multiple of this many degrees, the nearest to the value sent (a SatEL's
+    # rotors move in ten-degree steps: its codec sends what it reaches, satel.py rule 7)
+    steps_deg: int = 1
     tenths: bool = False  # it takes tenths of a degree, rounded half up (``tenths``)
     cuts_down: bool = False  # it cuts a value down to its resolution, learned from its replies
-    # a composite's elevation box's (whole_degrees, tenths, cuts_down); None: as the three above,
-    # which are then the azimuth box's (pointing.py rule 4: each axis by the box that turns it)
-    el_rounding: tuple[bool, bool, bool] | None = None
+    # a composite's elevation box's (whole_degrees, tenths, cuts_down, steps_deg); None: as the
+    # four above, which are then the azimuth box's (pointing.py rule 4: each axis by its box)
+    el_rounding: tuple[bool, bool, bool, int] | None = None
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     # what becomes of a turn nobody asked for by default (session/controller.py rule 10):
     # "follow"; "stop" where a poll one flipped bit makes a command that turns the rotor

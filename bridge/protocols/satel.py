@@ -52,6 +52,14 @@ Rules:
    its way before the point (an answer the engine had given up on): junk, and the slew is
    still owed. Taking it for the end would let the next poll into the slew. (A report whose
    position cannot be read cannot be checked: it ends the slew, and the engine asks again.)
+7. Its rotors move in ten-degree steps (the manual, on aiming at Polaris: ``P0 34`` "would move
+   to an azimuth of zero and an elevation of 30 degrees because it moves in ten degree steps"):
+   a point is sent as the nearest multiple of STEP_DEG on each axis, the one place of the
+   step it reaches whichever way it takes a value between (the manual's one example cannot
+   tell down from nearest). The bridge then waits for, shows and judges the place the rotor
+   really goes to. (An emulator turned as built: ``p126 36`` stopped the rotor at 120/30, its
+   report was taken for an old one, 6 degrees from the point, the slew was stopped as
+   overdue, tried again and the target given up; 124/34 ended in a stall 4 degrees short.)
 """
 
 from __future__ import annotations
@@ -81,6 +89,7 @@ _STORED = re.compile(r"Number of stored positions:\s*(\d+)\s*$")
 _BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
 _MAX_LINE = 160
 SLEW_END_TOLERANCE_DEG = 5  # relays coast a little past the point (rule 6)
+STEP_DEG = 10  # rule 7: where the rotors can stop
 # a status report as the manual and Hamlib show it: the size of the reply to a poll
 _TYPICAL_REPORT = (
     b"Motion ENABLED\r\n"
@@ -134,8 +143,8 @@ class SatelCodec:
         return [b"g", b"p%d %d\r\n" % (az, el)]
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az = half_up(az_deg, 1)
-        el = half_up(el_deg or 0.0, 1)
+        az = half_up(az_deg / STEP_DEG, 1) * STEP_DEG  # rule 7 (pointing.py's rule 4 alike)
+        el = half_up((el_deg or 0.0) / STEP_DEG, 1) * STEP_DEG
         if not (0 <= az <= 360 and 0 <= el <= 90):
             raise ValueError(f"target {az_deg}/{el_deg} outside 0..360 / 0..90")
         return float(az), float(el)
@@ -291,6 +300,7 @@ MODELS: dict[str, ModelSpec] = {
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=2.5,
         whole_degrees=True,
+        steps_deg=STEP_DEG,  # rule 7
         query_bytes=1,  # z
         reply_bytes=len(_TYPICAL_REPORT),
         hamlib_model=2101,

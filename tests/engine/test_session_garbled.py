@@ -128,7 +128,8 @@ def test_a_satel_report_garbled_in_its_second_line_is_asked_again_only_once_it_i
 def test_a_small_target_right_after_a_garbled_satel_report_is_not_ended_by_a_stale_report(
     rig: Rig,
 ) -> None:
-    """The same, and a target 4 degrees on comes while the re-poll's report is on its way: the
+    """The same, and a target a step on (satel.py rule 7) comes while the re-poll's report is on
+    its way: the
     point waits for that report and the after-move report ends the slew; nothing goes into the
     slewing SatEL (a review: the garbled report's tail closed the re-poll's exchange, answers
     were paired one off, the re-poll's report, from before the point but within
@@ -139,12 +140,12 @@ def test_a_small_target_right_after_a_garbled_satel_report_is_not_ended_by_a_sta
     garbled = garble_lines(v, b"Mode ", b"Mo\xe4e ", 1)
     v.run_until(lambda h: len(garbled) == 1, 30, "a garbled report")
     v.run_for(0.2)  # the re-poll's report under way
-    v.target(104.0, 0.0)
+    v.target(110.0, 0.0)
     v.run_for(10)
 
     assert v.frames("misuse: input while slewing") == []
-    assert not v.truth().corrupted and v.truth().az_deg == 104.0
-    assert v.status.bearing_deg == 104.0 and v.state is IDLE
+    assert not v.truth().corrupted and v.truth().az_deg == 110.0
+    assert v.status.bearing_deg == 110.0 and v.state is IDLE
 
 
 def test_a_garbled_satel_report_whose_rest_waits_in_the_port_is_read_before_the_repoll() -> None:

@@ -15,6 +15,8 @@ import re
 from collections.abc import Callable
 from datetime import UTC, datetime
 
+import pytest
+
 from bridge.core.model import MotionState, Origin, Source, Target
 from bridge.emulators.satel import Outcome
 from bridge.session.slew import SLEW_STOP_TRIES
@@ -66,6 +68,28 @@ def assert_nothing_but_stops_while_slewing(v: VirtualRotator) -> None:
 
 def points(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
     return [f.data for f in v.frames(Outcome.SLEW, since=since)]
+
+
+@pytest.mark.parametrize("asked", [(126.0, 36.0), (124.0, 34.0)])
+def test_a_satel_turned_as_built_reaches_the_step_nearest_a_target(
+    rig: Rig, asked: tuple[float, float]
+) -> None:
+    """protocols/satel.py rule 7: its rotors move in ten-degree steps, so a target between them
+    goes out as the nearest step and ends there, said by no error. An emulator turned as built
+    (rule 10 there): sent as asked, 126/36 stopped at 120/30, its report was taken for an old
+    one, the slew was stopped as overdue, sent again and the target given up (six errors);
+    124/34 ended in a stall 4 degrees short."""
+    v = ready(rig, emulator={"step_deg": 10})
+    v.target(*asked)
+    step = (130.0, 40.0) if asked[0] > 125 else (120.0, 30.0)
+    v.run_until(settled_at(*step), 120, f"at {step}")
+    v.run_for(60)  # as long again as any slew's bound: nothing more comes of it
+    assert points(v) == [b"p%d %d\r" % step]
+    assert v.errors() == []
+    assert [f for f in v.frames("stop") if f.time_s > 1.0] == []  # (the one at connect)
+    assert (v.status.bearing_deg, v.status.elevation_deg) == step
+    assert (v.status.target_az_deg, v.status.target_el_deg) == (None, None)
+    assert v.state is IDLE and not v.status.estimated
 
 
 def test_a_redirect_stops_the_slew_and_sends_the_new_point_once_still(rig: Rig) -> None:
@@ -193,9 +217,9 @@ def test_a_stream_of_targets_ends_at_the_last_without_input_into_a_slew(rig: Rig
     for az in range(100, 200):  # 100 targets, 10 ms apart
         v.target(az, 10)
         v.run_for(0.01)
-    v.run_until(settled_at(199, 10), 300, "at 199/10")
+    v.run_until(settled_at(200, 10), 300, "at 200/10")  # 199's step (satel.py rule 7)
 
-    assert 1 <= len(points(v)) <= 3 and points(v)[-1] == b"p199 10\r"
+    assert 1 <= len(points(v)) <= 3 and points(v)[-1] == b"p200 10\r"
     assert_nothing_but_stops_while_slewing(v)
 
 
@@ -233,11 +257,10 @@ def test_a_second_report_in_the_same_exchange_is_no_reading(rig: Rig) -> None:
 
 
 def test_a_report_that_lost_a_digit_on_the_line_is_never_published(rig: Rig) -> None:
-    """protocols/satel.py rule 3: ``Azimuth = 123`` with its 3 lost read as a bearing of 12."""
-    v = rig("satel")
+    """protocols/satel.py rule 3: ``Azimuth = 123`` with its 3 lost read as a bearing of 12 (the
+    rotor at 123: turned there by hand, r and s on a terminal)."""
+    v = rig("satel", emulator={"start_az_deg": 123})
     v.run_until_state(IDLE, 30)
-    v.target(123, 45)
-    v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 123, 200, "at 123")
     v.run_for(5)
     pattern, seen = b"Azimuth = 123", {"tail": b"", "lost": False}
 

@@ -188,9 +188,11 @@ def test_a_satel_is_never_sent_input_while_it_slews_during_a_pass(
         assert [f for f in v.frames("stop") if f.time_s > 1.0] == []
         slews = v.frames("slew")
         assert len(slews) >= 5, slews  # it did follow, a step at a time
-        # step-wise, with the default step (its tolerance, 3) and its speeds: within 6 degrees
-        # (a pass across the north costs a 0..360 rotor whose elevation ends at 90 one unwind)
-        assert max(e[1] for e in errors) <= 6.0 and max(e[2] for e in errors) <= 6.0
+        # step-wise, with the default step (its tolerance, 3) and its speeds, each target the
+        # nearest of its rotors' ten-degree steps (satel.py rule 7): within half a step and
+        # its lag, 7 degrees (a pass across the north costs a 0..360 rotor whose elevation ends
+        # at 90 one unwind)
+        assert max(e[1] for e in errors) <= 7.0 and max(e[2] for e in errors) <= 7.0
 
 
 def test_a_pass_across_the_north_is_flown_flipped_on_a_0_to_360_rotor(

@@ -22,19 +22,25 @@ def near(state, az: float, el: float) -> bool:  # noqa: ANN001
 
 
 def test_target_slews_and_nothing_is_sent_during_the_slew(rig: Rig) -> None:
-    emu = rig.add("sat", model="satel", emu={"start_az_deg": 10, "start_el_deg": 5})
+    """As built, the rotors going in ten-degree steps (satel.py rule 7): 104/46 is sent as the
+    step it reaches, 100/50, and the slew ends there with no error (sent as asked, the rotor
+    stopped at 100/40, the report was taken for an old one and the target given up)."""
+    built = {"step_deg": 10}
+    emu = rig.add("sat", model="satel", emu={"start_az_deg": 10, "start_el_deg": 5, **built})
     rig.start()
     ready(rig)
     snap = rig.retained()
     assert snap["rotor/version"] == b"SatEL"
     assert emu.state().motion_enabled is True  # enabled on connect (and verified)
     t = time.monotonic()  # before the move: its idle may come before the emulator is asked
-    rig.probe.publish("rotor/target", '{"azimuth": 100, "elevation": 45}')
+    rig.probe.publish("rotor/target", '{"azimuth": 104, "elevation": 46}')
     emu.wait_for(lambda s: s.slewing, 5)
-    emu.wait_for(lambda s: near(s, 100, 45), 20)
+    emu.wait_for(lambda s: near(s, 100, 50), 20)
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     status = json.loads(rig.retained()["rotor/status"])
-    assert (status["bearing"], status["elevation"], status["estimated"]) == (100, 45, False)
+    assert (status["bearing"], status["elevation"], status["estimated"]) == (100, 50, False)
+    assert [f.data for f in emu.frames() if f.data.startswith(b"p")] == [b"p100 50\r"]
+    assert status["last_error"] is None
     assert emu.device.misuse_frames() == [] and not emu.state().corrupted
 
 
@@ -87,8 +93,8 @@ def test_motion_is_enabled_again_after_a_controller_reset(rig: Rig) -> None:
     emu.power_cycle()  # like '*': automatic motion off
     emu.wait_for(lambda s: s.motion_enabled is False, 5)
     emu.wait_for(lambda s: s.motion_enabled is True, 10)
-    rig.probe.publish("rotor/target", "45 10")
-    emu.wait_for(lambda s: near(s, 45, 10), 20)
+    rig.probe.publish("rotor/target", "50 10")
+    emu.wait_for(lambda s: near(s, 50, 10), 20)
 
 
 def test_the_controller_clock_is_set_from_the_host(rig: Rig) -> None:

@@ -90,7 +90,7 @@ def test_identify_and_connect_sequence() -> None:
 
 def test_point_is_preceded_by_enable_and_owes_the_after_move_report() -> None:
     c = SatelCodec()
-    assert c.encode_target(100.4, 45.6) == [b"g", b"p100 46\r\n"]
+    assert c.encode_target(100.4, 45.6) == [b"g", b"p100 50\r\n"]  # rule 7: its steps
     assert c.encode_target(10, 20)[1] == b"p10 20\r\n"  # not zero-padded, as Hamlib sends
     c.encode_stop()  # the first slew is cut short: its report may show any position
     assert positions(c.feed(REPORT)) == [READING]
@@ -147,9 +147,10 @@ def test_a_headless_report_that_does_not_show_the_point_does_not_end_its_slew() 
     [
         ((360, 10), b"000", True),  # the north stop, either way round
         ((0, 10), b"360", True),
-        ((359, 10), b"000", True),  # coasted onto the stop
-        ((358, 10), b"002", False),  # a whole turn away: an old report
-        ((3, 10), b"358", False),
+        ((359, 10), b"000", True),  # sent as 360 (rule 7), coasted onto the stop
+        ((350, 10), b"354", True),  # short of the point, within the tolerance
+        ((350, 10), b"002", False),  # 12 degrees across north: an old report
+        ((10, 10), b"358", False),
     ],
 )
 def test_000_and_360_are_one_place_and_nothing_else_wraps(
@@ -160,6 +161,22 @@ def test_000_and_360_are_one_place_and_nothing_else_wraps(
     report = REPORT.replace(b"Azimuth = 123", b"Azimuth = " + shown).replace(b"= 045", b"= 010")
     assert len(positions(c.feed(report))) == (1 if ends else 0)
     assert c.awaiting_reply() is not ends
+
+
+@pytest.mark.parametrize(
+    ("asked", "sent"),
+    [((126, 36), b"p130 40"), ((124.9, 34.9), b"p120 30"), ((125, 35), b"p130 40"),
+     ((356, 86), b"p360 90"), ((4.9, 0.4), b"p0 0")],
+)  # fmt: skip
+def test_a_point_goes_out_as_the_nearest_of_the_rotors_ten_degree_steps(
+    asked: tuple[float, float], sent: bytes
+) -> None:
+    """Rule 7: the rotors stop only at ten-degree steps, so each axis is sent the nearest one
+    (half up): the place it reaches, which the slew's end and the arrival are judged by."""
+    c = SatelCodec()
+    assert c.encode_target(*asked) == [b"g", sent + b"\r\n"]
+    az, el = (float(v) for v in sent[1:].split())
+    assert c.wire_target(*asked) == (az, el)
 
 
 def test_other_frames() -> None:
