@@ -233,6 +233,16 @@ class Pointing:
     def keep_out_of(self, bearing_deg: float) -> tuple[float, float] | None:
         return next((s for s in self.keep_out if in_sector(bearing_deg, s)), None)
 
+    def turn_deg(self, az_deg: float, current_raw_deg: float) -> float:
+        """How far the rotor at ``current_raw_deg`` turns for a target of ``az_deg`` (the raw
+        value rules 1, 2 and 4 take), along its travel (core/geo.py ``travel_deg``); inf if no
+        raw value is legal."""
+        try:
+            raw = self.raw_for(az_deg, current_raw_deg)
+        except Refused:
+            return math.inf
+        return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
+
     def raw_for(
         self,
         az_deg: float,

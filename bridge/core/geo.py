@@ -166,6 +166,19 @@ def on_south_travel(raw_deg: float) -> tuple[float, ...]:
     return (raw_deg + 360.0,) if raw_deg < 180.0 else (raw_deg,)
 
 
+def travel_deg(a_raw: float, b_raw: float, wraps: bool, ends_at_north: bool) -> float:
+    """How far apart two raw azimuths are along a rotor's travel: on the scale where its ends
+    are the scale's (a SPID's overlap, a Yaesu's stop at north); where they are not known to be
+    (a Hy-Gain rotor's stop at south, an RT-21 that turns its own way) the farther of that and
+    the way along a travel whose ends are at south (``on_south_travel``). 179 and 181 on a
+    Hy-Gain rotor are a whole turn apart (session/motion.py rule 5)."""
+    straight = abs(a_raw - b_raw)
+    if not wraps or ends_at_north:
+        return straight
+    ways = (abs(x - y) for x in on_south_travel(a_raw) for y in on_south_travel(b_raw))
+    return max(straight, *ways)
+
+
 def check_range(value: float, name: str, limit: float) -> None:
     """ValueError naming ``name`` unless ``value`` is finite and within -limit..limit."""
     if not math.isfinite(value) or not -limit <= value <= limit:

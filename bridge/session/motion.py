@@ -149,7 +149,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
-from bridge.core.geo import apart_deg, on_south_travel
+from bridge.core.geo import apart_deg, travel_deg
 from bridge.core.model import MotionState
 from bridge.protocols.base import ModelSpec, RetargetPolicy
 
@@ -656,11 +656,7 @@ def along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
     farther one). Two readings close on the scale may be a whole turn apart: 179 and 181 on a
     Hy-Gain rotor (an investigation: a sun tracked across south was sent 181 at 179, the rotor
     went the long way round, as it must, and its turn was stopped as a pass)."""
-    straight = abs(a_deg - b_deg)
-    if not cfg.az_wraps or cfg.spec.az_ends_at_north:
-        return straight
-    ways = (abs(x - y) for x in on_south_travel(a_deg) for y in on_south_travel(b_deg))
-    return max(straight, *ways)
+    return travel_deg(a_deg, b_deg, cfg.az_wraps, cfg.spec.az_ends_at_north)
 
 
 def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:

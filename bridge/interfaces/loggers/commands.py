@@ -21,7 +21,9 @@ Rules:
    a stop naming several rotors stops each of them on the port, a fault behind one not keeping
    it from the next. A stop the remote's rotator says it could not deliver (its link down, the
    station's bridge not heard: remote/rotator.py rule 3) is no fault: the rotator reported it.
-   ``bidirectional`` 1 turns to the heading or its reciprocal, whichever is nearer the bearing.
+   ``bidirectional`` 1 turns to the heading or its reciprocal, whichever the rotor turns less
+   to, along its travel (a review: nearer on the compass, a Hy-Gain rotor at 170 sent 5 took
+   185, 345 degrees round through north, where 5 was 165 the other way).
    A non-zero ``offset`` is logged once and not applied (its meaning is not documented).
 5. N1MM by band (``choose``, pure): a turn goes to the one rotator on the port that answers to
    its name, whatever the band: a name is the sender's own choice (N1MM's Antennas tab already
@@ -82,16 +84,19 @@ from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
 from bridge.front import HaltCounted
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, ascii_text, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
-from bridge.pointing import angle_between, norm360
+from bridge.pointing import Pointing, norm360
 
 
 class Rotator(HaltCounted, Protocol):
     """What these commands use of a rotator: the bridge's own or the remote's (front.py rule
     3): when it last carried out a STOP or lock ON (rule 8; monotonic), and its count of them
-    as a move of ``source`` hands it to ``submit`` (``since``: rule 8)."""
+    as a move of ``source`` hands it to ``submit`` (``since``: rule 8); and its judge's terms
+    (rule 4: which way it turns less)."""
 
     @property
     def last_halt_s(self) -> float: ...
+    @property
+    def pointing(self) -> Pointing: ...
 
 
 log = logging.getLogger(__name__)
@@ -387,9 +392,10 @@ class Commands:
             rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
             return
         az = req.azimuth
-        bearing = rot.status.bearing_deg
-        if req.bidirectional and bearing is not None:
-            az = min((az, norm360(az + 180.0)), key=lambda a: angle_between(a, bearing))
+        raw = rot.status.raw_bearing_deg
+        if req.bidirectional and raw is not None:  # rule 4: the nearer along the travel
+            aim = rot.pointing
+            az = min((az, norm360(az + 180.0)), key=lambda a: aim.turn_deg(norm360(a), raw))
         try:
             target = Target(norm360(az), None, Source.N1MM, origin=by)
             rot.submit(target, described, since=since)

@@ -1,0 +1,81 @@
+"""N1MM's ``bidirectional`` (interfaces/loggers/commands.py rule 4) in virtual time: the real
+command handler, a rotator whose status and mailbox are a virtual rotator's, an emulated
+controller on the rotor's own travel (a Hy-Gain rotor's stop at south, a Yaesu's at north)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import pytest
+
+from bridge.core.model import RotatorStatus, Source, Target
+from bridge.interfaces.loggers.commands import Commands, N1mmEndpoint, N1mmRotor
+from bridge.interfaces.loggers.datagrams import N1mmRequest
+from bridge.pointing import Pointing
+from tests.engine.virtual import VirtualRotator
+
+
+class _Through:
+    """The loggers' view of a rotator (commands.py ``Rotator``): the virtual rotator's status
+    and judge; a target handed to it is judged and put in its mailbox, as Rotator.submit does."""
+
+    def __init__(self, v: VirtualRotator) -> None:
+        self.v, self.id = v, "v"
+        self.last_halt_s = -math.inf
+        self.sent: list[Target] = []
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self.v.status
+
+    @property
+    def pointing(self) -> Pointing:
+        return self.v.cfg.aim
+
+    @property
+    def halts(self) -> int:
+        return 0
+
+    def halts_for(self, source: Source) -> int:
+        return 0
+
+    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+        self.sent.append(command)
+        self.v.aim(command)
+
+    def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:
+        raise AssertionError(message)
+
+
+@pytest.mark.parametrize(
+    ("model", "emulator", "start", "heading", "goes"),
+    [
+        # a Hy-Gain rotor at 170: 185 is 15 degrees away on the compass but 345 along its
+        # travel, round through north; 5 is 165 the other way
+        ("rotorez", {"stop_at_south": True}, 170.0, 5.0, 5.0),
+        ("rotorez", {"stop_at_south": True}, 190.0, 355.0, 355.0),  # ... and the other side
+        ("rotorez", {"stop_at_south": True}, 100.0, 280.0, 100.0),  # there already
+        # a Yaesu rotor (stop at north) at 350: 5 is 15 on the compass and 345 back round south
+        ("rotorcard", {}, 350.0, 185.0, 185.0),
+        ("rotorcard", {}, 10.0, 5.0, 5.0),
+    ],
+)
+def test_a_bidirectional_heading_turns_the_rotor_the_lesser_way_along_its_travel(
+    model: str, emulator: dict[str, Any], start: float, heading: float, goes: float
+) -> None:
+    """A review: the heading or its reciprocal was the one nearer the bearing on the compass,
+    and a Hy-Gain rotor at 170 sent 5 turned to 185: 345 degrees, a minute, for a beam that
+    170 to 5 (165) points the same two ways."""
+    v = VirtualRotator(model, emulator={**emulator, "start_az_deg": start})
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_for(8.0)  # (its brake window over: idle)
+        rot = _Through(v)
+        endpoint = N1mmEndpoint("127.0.0.1", 12040, [N1mmRotor("Tower", rot)])  # type: ignore[arg-type]
+        req = N1mmRequest("Tower", azimuth=heading, bidirectional=True, freqband_mhz=14.0)
+        Commands(lambda: v.now, lambda what, exc: None).n1mm(endpoint, req, b"<N1MMRotor/>")
+        assert [t.az_deg for t in rot.sent] == [goes]
+        travel = abs(goes - start) if abs(goes - start) <= 180 else 360 - abs(goes - start)
+        v.run_for(travel / 6.0 + 15.0)  # the lesser way at 6 degrees a second, and the brake
+        assert abs(v.truth().az_deg - goes) <= 3.0 and not v.truth().is_moving
