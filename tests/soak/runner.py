@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import random
 import statistics
 import sys
@@ -82,6 +83,16 @@ AZEL = ("rot2prog", "md01", "satel")
 IDLE_POLL_S = 1.0  # the idle poll every rotator here has: "within one poll"
 SATEL_STOP_REPORT_S = 2.0  # after a stop the SatEL reports within its reply time, or never
 RECOVERY_SLACK_S = 1.0  # a fresh retained snapshot is itself a broker round trip or two
+
+
+def reaches(model: str, az: float, el: float | None) -> tuple[float, float | None]:
+    """Where a target takes the rotor: a SatEL's rotors stop at ten-degree steps as built, and
+    it is sent the nearest (protocols/satel.py rule 7: 125/35 goes out as 130/40)."""
+    if model != "satel":
+        return az, el
+    return math.floor(az / 10 + 0.5) * 10.0, None if el is None else math.floor(
+        el / 10 + 0.5
+    ) * 10.0
 
 
 def is_poison(az: float) -> bool:
@@ -603,6 +614,7 @@ class Soak:
         t = time.monotonic()
         self.monitor.publish(f"rotor/{rot.rid}/target", text)
         self.cmds["sent"] += 1
+        az, el = reaches(rot.model, az, el)
         rot.accepted.append((t, az, el))
         dist = abs(az - rot.emu.state().az_deg) + (0 if el is None else 0)
         travel = dist / rot.speed
