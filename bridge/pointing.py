@@ -235,11 +235,14 @@ class Pointing:
 
     def turn_deg(self, az_deg: float, current_raw_deg: float) -> float:
         """How far the rotor at ``current_raw_deg`` turns for a target of ``az_deg`` (the raw
-        value rules 1, 2 and 4 take), along its travel (core/geo.py ``travel_deg``); inf if no
-        raw value is legal."""
+        value the judge takes), along its travel (core/geo.py ``travel_deg``); inf if the judge
+        refuses it (a limit, a keep-out sector: an attack pass, N1MM's heading in a sector was
+        chosen for the shorter turn and refused, where its reciprocal was free)."""
         try:
-            raw = self.raw_for(az_deg, current_raw_deg)
+            raw = self.judge(Target(az_deg), current_raw_deg).az_deg
         except Refused:
+            return math.inf
+        if raw is None:
             return math.inf
         return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
 

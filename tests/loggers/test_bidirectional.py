@@ -49,6 +49,36 @@ class _Through:
 
 
 @pytest.mark.parametrize(
+    ("model", "emulator", "keep_out", "heading"),
+    [
+        ("rotorcard", {}, [[80, 95]], 90.0),
+        ("rot2prog", {}, [[80, 95]], 90.0),
+        ("satel", {"step_deg": 10}, [[80, 95]], 90.0),
+        ("satel", {"step_deg": 10}, [[88, 92]], 86.0),  # 86 goes out as 90, in the sector
+    ],
+)
+def test_a_bidirectional_heading_the_judge_refuses_turns_to_its_reciprocal(
+    model: str, emulator: dict[str, Any], keep_out: list[list[float]], heading: float
+) -> None:
+    """An attack pass: the heading the rotor turned less to was chosen though the judge
+    refused it (a keep-out sector), and nothing turned, where its reciprocal was free."""
+    settings = {"keep_out": keep_out}
+    v = VirtualRotator(model, emulator={**emulator, "start_az_deg": 100.0}, settings=settings)
+    with v:
+        v.run_until(lambda h: h.status.available, 20, "the controller answers")
+        v.run_for(8.0)
+        rot = _Through(v)
+        endpoint = N1mmEndpoint("127.0.0.1", 12040, [N1mmRotor("Tower", rot)])  # type: ignore[arg-type]
+        req = N1mmRequest("Tower", azimuth=heading, bidirectional=True, freqband_mhz=14.0)
+        Commands(lambda: v.now, lambda what, exc: None).n1mm(endpoint, req, b"<N1MMRotor/>")
+        assert [t.az_deg for t in rot.sent] == [heading + 180.0]
+        there = heading + 180.0
+        v.run_until(
+            lambda h: not h.truth().is_moving and abs(h.truth().az_deg - there) <= 5.0, 300, "there"
+        )
+
+
+@pytest.mark.parametrize(
     ("model", "emulator", "start", "heading", "goes"),
     [
         # a Hy-Gain rotor at 170: 185 is 15 degrees away on the compass but 345 along its
