@@ -246,6 +246,22 @@ class Pointing:
             return math.inf
         return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
 
+    def el_sendable(self) -> tuple[float, float]:
+        """The elevation limits, each moved in to the nearest value the controller is sent as
+        itself (rule 4): a SatEL's 75 goes out as 80, so its highest is 70; the limits as they
+        are where none is between them. What tracking holds an elevation to (an attack pass:
+        held to 75, every target was refused and the rotor never moved)."""
+        lo, hi = self.el_min_deg, self.el_max_deg
+        whole, tenths, _cuts, steps = self._rounds(True)
+        q = float(steps) if whole else 0.1 if tenths else None
+        if q is None:
+            return lo, hi
+        top = hi if self._sent_within(hi, lo, hi, True) else math.floor(hi / q + 1e-9) * q
+        bottom = lo if self._sent_within(lo, lo, hi, True) else math.ceil(lo / q - 1e-9) * q
+        if bottom > top or not self._sent_within(top, lo, hi, True):
+            return lo, hi
+        return bottom, top
+
     def raw_for(
         self,
         az_deg: float,

@@ -46,7 +46,8 @@ Rules:
    degrees to it).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
-   it is no refusal, the azimuth is followed at the limit (``_aim``).
+   it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the
+   controller is sent it (a SatEL's 75 is 70: its ten-degree steps, pointing.py).
 7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
 8. Nothing of the sky is computed here (docs/architecture.md, "nothing slow beside a stop"):
    pass searches, windows of the body's track, a pass's samples for the flip and TLE file
@@ -290,8 +291,9 @@ class Tracker:
         aim = self._rig.aim
         if not aim.has_elevation:
             return az, None
-        lo = max(aim.el_min_deg, self.cfg.min_el_deg if not self._flip else -math.inf)
-        hi = min(aim.el_max_deg, 180.0 - self.cfg.min_el_deg if self._flip else math.inf)
+        el_min, el_max = aim.el_sendable()  # (a SatEL's limit of 75 is 70: pointing.py)
+        lo = max(el_min, self.cfg.min_el_deg if not self._flip else -math.inf)
+        hi = min(el_max, 180.0 - self.cfg.min_el_deg if self._flip else math.inf)
         return az, min(max(el, lo), hi)
 
     def _put(

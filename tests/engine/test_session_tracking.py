@@ -195,6 +195,27 @@ def test_a_satel_is_never_sent_input_while_it_slews_during_a_pass(
         assert max(e[1] for e in errors) <= 7.0 and max(e[2] for e in errors) <= 7.0
 
 
+def test_a_satel_whose_elevation_limit_is_between_its_steps_tracks_at_the_highest_step() -> None:
+    """Rule 6 on a SatEL turned as built (ten-degree steps: protocols/satel.py rule 7) with
+    ``el_max_deg = 75`` and the sun at some 79 degrees: the elevation is held at 70, the
+    highest step inside the limit. An attack pass: held at 75, which goes out as 80, past the
+    limit, every target was refused, and the rotor never moved, in azimuth either."""
+    lat, lon, wall = 23.0, 14.0, SUN_EPOCH  # the sun at about 88 / 79
+    assert sun_altaz(lat, lon, wall)[1] > 75
+    emulator, settings = {"step_deg": 10}, {"el_max_deg": 75.0}
+    sky = Sky(lat, lon)
+    with VirtualRotator(
+        "satel", sky=sky, wall_epoch_s=wall, emulator=emulator, settings=settings
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.sun())
+        v.run_until(lambda h: not h.truth().is_moving and h.truth().el_deg == 70.0, 120, "at 70")
+        v.run_for(60)
+        assert v.status.tracking is not None and v.status.tracking.phase == "tracking"
+        assert v.errors() == []
+        assert off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]) <= 5.0 + 3.0
+
+
 def test_a_pass_across_the_north_is_flown_flipped_on_a_0_to_360_rotor(
     a_pass: tuple[str, str, float, float],
 ) -> None:
