@@ -246,6 +246,19 @@ class Pointing:
             return math.inf
         return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
 
+    def _north_step(self, raw_deg: float, current_raw_deg: float | None) -> float | None:
+        """Rule 2 on a controller of steps (a SatEL's ten degrees, rule 4) whose 0 and 360 are
+        the ends: a value that goes out as north, named as neither end (356 goes out as 360,
+        4 as 0), is the end nearer the rotor (an attack pass: at 10, 356 went out as 360 and
+        the rotor turned 350 degrees to the north it stood 10 from). None where it is not."""
+        _whole, _tenths, _cuts, steps = self._rounds(False)
+        if steps == 1 or not self.az_ends_at_north or current_raw_deg is None:
+            return None
+        if raw_deg in (0.0, 360.0) or self._sent(raw_deg)[0] not in (0.0, 360.0):
+            return None
+        end = 360.0 if current_raw_deg > 180.0 else 0.0
+        return end if self._sent_within(end, self.az_min_deg, self.az_max_deg) else None
+
     def el_sendable(self) -> tuple[float, float]:
         """The elevation limits, each moved in to the nearest value the controller is sent as
         itself (rule 4): a SatEL's 75 goes out as 80, so its highest is 70; the limits as they
@@ -305,6 +318,9 @@ class Pointing:
                 )
             if az_deg == 360.0 and not self.offset_deg and az_deg in legal:
                 return az_deg
+            north = self._north_step(base, current_raw_deg)
+            if north is not None:
+                return north
             return base if base in legal else legal[-1]
         anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
         return min(legal, key=lambda r: (abs(r - anchor), r))

@@ -165,6 +165,8 @@ def test_a_nudge_across_north_stops_at_the_end_where_north_is_an_end() -> None:
     for model in ("gs232b", "gs232a", "easycomm2", "rotorcard", "satel", "rc2800", "prosistel"):
         p = Pointing.of(REGISTRY[model])
         for raw, step, sent in ((350, 10, 360), (10, -10, 0), (360, -10, 350), (300, 59.5, 359.5)):
+            if model == "satel" and sent == 359.5:
+                sent = 360  # its step (protocols/satel.py rule 7): the end nearer, rule 2
             assert p.judge(p.nudge(_at(raw), step, None), raw).az_deg == sent, (model, raw, step)
         for raw, step in ((360, 10), (0, -10), (350, 20), (5, -10)):
             with pytest.raises(Refused) as exc:
@@ -293,6 +295,20 @@ def test_limits_and_sectors_hold_for_the_satels_ten_degree_step() -> None:
     with pytest.raises(Refused) as exc:
         Pointing.of(boxes, el_limits=(0.0, 88.0)).judge(Target(100.3, 86), None)
     assert "becomes 90" in exc.value.message
+
+
+@pytest.mark.parametrize(
+    ("asked", "at", "raw"),
+    [(356.0, 10.0, 0.0), (359.0, 10.0, 0.0), (4.0, 350.0, 360.0), (356.0, 300.0, 360.0),
+     (4.0, 100.0, 0.0), (354.0, 10.0, 354.0), (360.0, 10.0, 360.0), (0.0, 350.0, 0.0)],
+)  # fmt: skip
+def test_a_satel_target_whose_step_is_north_takes_the_end_nearer_the_rotor(
+    asked: float, at: float, raw: float
+) -> None:
+    """Rule 2 with a SatEL's ten-degree steps: 356 and 4 both go out as north, either end of
+    its travel, and are sent as the end nearer the rotor; 360 and 0 named stay the ends they
+    name. An attack pass: at 10, 356 went out as 360 and the rotor turned 350 degrees."""
+    assert Pointing.of(REGISTRY["satel"]).judge(Target(asked, 10), at).az_deg == raw
 
 
 @pytest.mark.parametrize("el_box", ["rt21", "easycomm2", "rc2800", "prosistel-combi", "gs232b"])
