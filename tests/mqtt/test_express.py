@@ -635,16 +635,26 @@ def test_client_id_is_the_lanes_rule_with_its_own_mark() -> None:
 
 # -- the parent's side: failures are said (rule 6) ----------------------------------------------
 class Problems:
+    """What the express says of its problems, from its threads; read from the test's (a lock:
+    a CI run read the dictionary while the watchdog's thread added to it)."""
+
     def __init__(self) -> None:
         self.said: dict[str, bool] = {}
         self.changed = threading.Event()
+        self._lock = threading.Lock()
 
     def __call__(self, text: str, on: bool) -> None:
-        self.said[text] = on
+        with self._lock:
+            self.said[text] = on
         self.changed.set()
 
     def on(self) -> list[str]:
-        return [t for t, on in self.said.items() if on]
+        with self._lock:
+            return [t for t, on in self.said.items() if on]
+
+    def texts(self) -> list[str]:
+        with self._lock:
+            return list(self.said)
 
 
 def express(
@@ -980,7 +990,7 @@ def test_an_express_that_dies_is_said_started_again_and_given_the_ports_again() 
         first = e._child
         assert first is not None
         first.kill()
-        said = wait_until(lambda: [p for p in problems.said if "ended" in p], 10, "its end said")
+        said = wait_until(lambda: [p for p in problems.texts() if "ended" in p], 10, "its end said")
         assert "started again in" in said[0] and "stop lane" in said[0]
         wait_until(lambda: e.starts == 2 and "a" in e.held, 10, "started again, the port handed")
         assert e._child is not first
@@ -1004,7 +1014,7 @@ def test_an_express_that_dies_while_the_bridge_stops_is_not_said_to_start_again(
         first = e._child
         assert first is not None
         first.kill()
-        said = wait_until(lambda: [p for p in problems.said if "ended" in p], 10, "its end said")
+        said = wait_until(lambda: [p for p in problems.texts() if "ended" in p], 10, "its end said")
         assert "as the bridge stops" in said[0] and "started again" not in said[0], said
         assert e.runner is not None
         e.runner.join(slow(10))
