@@ -318,10 +318,13 @@ class Pointing:
                 )
             if az_deg == 360.0 and not self.offset_deg and az_deg in legal:
                 return az_deg
-            north = self._north_step(base, current_raw_deg)
-            if north is not None:
+            north = None if within is not None else self._north_step(base, current_raw_deg)
+            if north is not None:  # (not for an arc: rule 9 judged the value named)
                 return north
-            return base if base in legal else legal[-1]
+            raw = base if base in legal else legal[-1]
+            if not lo <= raw <= hi and self._rounds(False)[3] > 1:
+                raw = self._sent(raw)[0]  # a SatEL's -4 goes out as 0: check_raw's terms too
+            return raw
         anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
         return min(legal, key=lambda r: (abs(r - anchor), r))
 

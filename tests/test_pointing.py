@@ -311,6 +311,25 @@ def test_a_satel_target_whose_step_is_north_takes_the_end_nearer_the_rotor(
     assert Pointing.of(REGISTRY["satel"]).judge(Target(asked, 10), at).az_deg == raw
 
 
+def test_a_satel_step_at_north_keeps_a_groups_arc_and_narrowed_limits() -> None:
+    """A review of the rule above: a group member at 190 kept to 0..200 and sent 4 was given
+    360, a turn through 200..360 outside the arc (the end nearer the rotor is not taken for a
+    target with an arc: it goes out as 0, its own way); and under limits 0..355 the judge took
+    raw -4 for 356 (it goes out as 0), which check_raw, the session's check of every part's
+    target, refused: the raw value is now the step itself."""
+    aim = Pointing.of(REGISTRY["satel"])
+    raw = aim.judge(Target(4.0, 10.0, within_deg=(0.0, 200.0)), 190.0).az_deg
+    assert raw is not None and aim._sent(raw)[0] == 0.0
+    for limits, az, at, step in (
+        ((0.0, 355.0), 356.0, 300.0, 0.0),
+        ((5.0, 360.0), 2.0, 10.0, 360.0),
+    ):
+        narrowed = Pointing.of(REGISTRY["satel"], az_limits=limits)
+        judged = narrowed.judge(Target(az, 10.0), at)
+        assert judged.az_deg == step
+        narrowed.check_raw(judged)  # raises if it disagrees
+
+
 @pytest.mark.parametrize("el_box", ["rt21", "easycomm2", "rc2800", "prosistel-combi", "gs232b"])
 def test_a_composite_holds_every_rounding_of_its_boxes(el_box: str) -> None:
     """An attack pass: a SPID azimuth box beside an elevation box of tenths (or whole degrees)
