@@ -88,7 +88,7 @@ from dataclasses import dataclass, field, replace
 from bridge.core import geo
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
-from bridge.protocols.base import ModelSpec, half_up
+from bridge.protocols.base import ModelSpec, half_up, half_up_step
 
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
 WITHIN_SLACK_DEG = 0.5  # rule 9: a reading's step at an edge is not a turn outside
@@ -581,16 +581,16 @@ class Pointing:
 
     def _sent(self, value: float, el: bool = False) -> tuple[float, float]:
         """The lowest and highest value the controller can be sent for ``value`` (rule 4): the
-        Rotor-EZ family and the SatEL round half up to whole degrees, the Easycomm family, the
-        RC2800, the RT-21 and the Combi-Track to tenths; the SPID family cuts down to its
-        resolution, learned only from its replies: one pulse per degree at the coarsest; the
-        SatEL's rotors go in ten-degree steps, so it is sent the nearest of them. A
+        Rotor-EZ family rounds half up to whole degrees, the SatEL to its rotors' ten-degree
+        steps, the Easycomm family, the RC2800, the RT-21 and the Combi-Track to tenths; the
+        SPID family cuts down to its resolution, learned only from its replies: one pulse per
+        degree at the coarsest. A
         composite's azimuth by its azimuth box, its elevation (``el``) by the other (an attack
         pass: judged by both boxes' ways, a SPID's cut was lost beside a box of tenths, and a
         box of tenths refused what only the other box would have rounded)."""
         whole, tenths, cuts, steps = self._rounds(el)
         if whole:  # (the codecs' own rounding: ``half_up``)
-            r = float(half_up(value / steps, 1) * steps)
+            r = float(half_up_step(value, steps))
             return r, r
         if tenths:
             r = half_up(value, 10) / 10

@@ -368,6 +368,13 @@ def half_up(value_deg: float, per_deg: int) -> int:
     return math.floor(value_deg * per_deg + 0.5)
 
 
+def half_up_step(value_deg: float, step_deg: int) -> int:
+    """``value_deg`` rounded half up to a multiple of ``step_deg`` whole degrees: what a
+    controller whose rotors stop only at such steps is sent (a SatEL's ten, satel.py rule 7),
+    the same for its codec and the judge (pointing.py rule 4)."""
+    return half_up(value_deg / step_deg, 1) * step_deg
+
+
 def tenths(value_deg: float, top_deg: float, axis: str) -> float:
     """``value_deg`` rounded half up to tenths of a degree; outside 0..``top_deg`` a ValueError
     that names the ``axis``."""

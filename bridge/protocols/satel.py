@@ -76,7 +76,7 @@ from bridge.protocols.base import (
     Reply,
     RetargetPolicy,
     VersionReply,
-    half_up,
+    half_up_step,
 )
 
 # labels are searched anywhere in a line (noise before them is tolerated); a number must be
@@ -143,8 +143,8 @@ class SatelCodec:
         return [b"g", b"p%d %d\r\n" % (az, el)]
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az = half_up(az_deg / STEP_DEG, 1) * STEP_DEG  # rule 7 (pointing.py's rule 4 alike)
-        el = half_up((el_deg or 0.0) / STEP_DEG, 1) * STEP_DEG
+        az = half_up_step(az_deg, STEP_DEG)  # rule 7
+        el = half_up_step(el_deg or 0.0, STEP_DEG)
         if not (0 <= az <= 360 and 0 <= el <= 90):
             raise ValueError(f"target {az_deg}/{el_deg} outside 0..360 / 0..90")
         return float(az), float(el)
