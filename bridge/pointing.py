@@ -29,7 +29,11 @@ Rules:
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
 4. Limits are mechanical: checked on the raw value, after rounding on controllers that take
    whole degrees or tenths (never rounded past a limit, nor into a keep-out sector: rule 3 holds
-   for what the controller is sent).
+   for what the controller is sent). Where the travel runs through the scale's 0 and 360 (a
+   Hy-Gain rotor's stop is at south, north mid-travel) limits that leave part of the scale out
+   are held along the turn as a group's arc is (rule 9), from the rotor's reading: a helper,
+   limits 20..340 on a Rotor-EZ at 30 sent 330 swept through north, 27 readings outside them.
+   With no reading (a DCU-1, which never answers) the way is not known: its end is checked.
 5. A refusal raises Refused with a message naming the true and the raw value when they differ.
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
@@ -305,6 +309,9 @@ class Pointing:
             return self._checked(az_deg, base)  # raises, naming the raw value
         if within is not None:
             legal = self._within(az_deg, current_raw_deg, legal, within)
+        limits = self._limits_arc(current_raw_deg)
+        if limits is not None:  # rule 4: the turn, not its end alone, on a travel through north
+            legal = self._within(az_deg, current_raw_deg, legal, limits, self._limits_text())
         if self.az_wraps:  # rule 2: 360 named is 360 (no offset); else 0 rather than 360
             if end is not None:  # rule 6: the end a nudge turns to, never the other one
                 if end in legal:
@@ -327,6 +334,23 @@ class Pointing:
             return raw
         anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
         return min(legal, key=lambda r: (abs(r - anchor), r))
+
+    def _limits_arc(self, current_raw: float | None) -> tuple[float, float] | None:
+        """Rule 4: the limits as an arc of true bearings a turn must stay inside, where the
+        travel runs through the scale's 0 and 360 (a Hy-Gain rotor's stop at south: a turn from
+        30 to 330 sweeps through north) and the limits leave some of it out; None elsewhere (a
+        turn between two values inside limits stays inside them) and with no reading (which way
+        a turn goes is not known: its end is checked, as on every scale)."""
+        lo, hi = self.az_min_deg, self.az_max_deg
+        if current_raw is None or not self.az_wraps or self.az_ends_at_north:
+            return None
+        if lo <= 0.0 and hi >= 360.0:
+            return None
+        return lo + self.offset_deg, hi + self.offset_deg
+
+    def _limits_text(self) -> str:
+        text = f"the limits {self.az_min_deg:g}..{self.az_max_deg:g}"
+        return text + (" (controller)" if self.offset_deg else "")
 
     def _outside_deg(self, from_raw: float, to_raw: float, within: tuple[float, float]) -> float:
         """Rule 9: how many degrees of the turn from ``from_raw`` to ``to_raw`` lie outside
@@ -359,11 +383,15 @@ class Pointing:
         current_raw: float | None,
         legal: list[float],
         within: tuple[float, float],
+        arc: str | None = None,
     ) -> list[float]:
         """Rule 9: the legal raw values whose turn from ``current_raw`` stays inside ``within``
         (from a rotor outside it: those that turn least outside it); Refused if none, and
-        where no reading shows the way (``current_raw`` None) unless no turn can leave it."""
+        where no reading shows the way (``current_raw`` None) unless no turn can leave it. The
+        turn is judged to the value the controller is sent (rule 4: a SatEL's 335 goes out as
+        340, outside a group's 20..335). ``arc``: what the refusal calls ``within``."""
         lo, hi = within
+        arc = arc or f"{lo:g}..{hi:g}"
         if current_raw is None:
             # a scale of true bearings that wraps (no offset) turns between two bearings of an
             # arc clear of its stop without leaving it; an arc that ends at north (0..90,
@@ -381,14 +409,17 @@ class Pointing:
                 f"azimuth {az_deg:g}: the {self.model_name} has no reading of where it points, "
                 f"so a turn that stays inside {lo:g}..{hi:g} cannot be chosen",
             )
-        outside = [self._outside_deg(current_raw, r, within) for r in legal]
+        outside = [
+            max(self._outside_deg(current_raw, sent, within) for sent in self._sent(r))
+            for r in legal
+        ]
         least = min(outside)
         at = self.true_of(current_raw)
-        if (lo <= at <= hi or lo <= at + 360.0 <= hi) and least > WITHIN_SLACK_DEG:
+        if any(lo <= at + k <= hi for k in (-360.0, 0.0, 360.0)) and least > WITHIN_SLACK_DEG:
             raise Refused(
                 RefusalCode.LIMITS,
                 f"azimuth {az_deg:g} is not reached from {self.true_of(current_raw):g} without "
-                f"turning outside {lo:g}..{hi:g}",
+                f"turning outside {arc}",
             )
         return [r for r, out in zip(legal, outside, strict=True) if out <= least]
 

@@ -446,3 +446,33 @@ def test_a_refused_nudge_just_short_of_a_turn_is_named_as_sent() -> None:
     still = RotatorStatus("t", MotionState.IDLE, bearing_deg=100, raw_bearing_deg=100)
     with pytest.raises(Refused, match=r"a nudge of \+359\.9999 degrees"):
         p.nudge(still, 359.9999, None)
+
+
+def test_narrowed_limits_on_a_travel_through_north_hold_along_the_turn() -> None:
+    """Rule 4: a Hy-Gain rotor's stop is at south (raw 180), so its turns between east and west
+    cross north; limits that leave part of the scale out hold along the turn, not at its end
+    alone. Without a reading, its end is checked as before (the way is not known)."""
+    ez = Pointing.of(EZ, az_limits=(20.0, 340.0))
+    assert refused(ez.judge, Target(330), 30) is RefusalCode.LIMITS  # 30 -> 330 via north
+    assert refused(ez.judge, Target(200), 100) is RefusalCode.LIMITS  # 100 -> 200 via north
+    assert ez.judge(Target(170), 30).az_deg == 170
+    assert ez.judge(Target(330), 200).az_deg == 330  # the west side
+    assert ez.judge(Target(330), None).az_deg == 330  # no reading: its end
+    assert ez.judge(Target(100), 5).az_deg == 100  # turned outside by hand: back in, the least out
+    near = Pointing.of(EZ, az_limits=(0.0, 350.0))
+    assert refused(near.judge, Target(10), 340) is RefusalCode.LIMITS  # through 350..360
+    assert near.judge(Target(10), 100).az_deg == 10
+    shifted = Pointing.of(EZ, az_limits=(20.0, 340.0), offset_deg=-10.0)  # raw 20 is true 10
+    assert refused(shifted.judge, Target(320), 30) is RefusalCode.LIMITS  # raw 30 -> 330
+    assert shifted.judge(Target(160), 30).az_deg == 170
+    yaesu = Pointing.of(REGISTRY["gs232b"], az_limits=(20.0, 340.0))  # its ends are at north
+    assert yaesu.judge(Target(330), 30).az_deg == 330
+
+
+def test_a_group_s_arc_is_judged_on_the_step_a_satel_is_sent() -> None:
+    """Rule 9 with rule 4: a SatEL's 335 goes out as 340, outside a group's 20..335; judged on
+    the value named, it was taken (an attack pass)."""
+    satel = Pointing.of(REGISTRY["satel"])
+    assert refused(satel.judge, Target(335, 10, within_deg=(20, 335)), 100) is RefusalCode.LIMITS
+    assert satel.judge(Target(334, 10, within_deg=(20, 335)), 100).az_deg == 334  # sent as 330
+    assert satel.judge(Target(335, 10, within_deg=(20, 340)), 100).az_deg == 335

@@ -240,3 +240,29 @@ def test_a_gs232_with_an_offset_takes_the_near_end_for_the_bearing_at_its_stop(r
     assert [d for d in v.sent(since=t) if d.startswith(b"W")] == [b"W000 000\r"]
     assert v.truth().az_deg == pytest.approx(0, abs=1)
     assert v.status.bearing_deg == pytest.approx(350, abs=v.cfg.deadband_deg)
+
+
+def test_a_hy_gain_rotor_s_limits_hold_along_its_turn_through_north(rig: Rig) -> None:
+    """pointing.py rule 4: a Rotor-EZ's Hy-Gain rotor has its stop at south, so a turn between
+    east and west goes through north. With limits 20..340 at 30, a target of 330 passed the
+    end-point check and swept through 340..20 (a helper counted 27 readings outside). It is
+    refused now, nothing sent; a turn that stays inside them is taken."""
+    v = rig(
+        "rotorez",
+        settings={"az_min_deg": 20, "az_max_deg": 340},
+        emulator={"start_az_deg": 30, "stop_at_south": True},
+    )
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    with pytest.raises(Refused) as refused:
+        v.aim(Target(330))
+    assert refused.value.code is RefusalCode.LIMITS
+    assert "outside the limits 20..340" in str(refused.value)
+    v.run_for(30)
+    assert sets(v, since=t) == []
+    assert v.truth().az_deg == pytest.approx(30)
+    v.aim(Target(170))  # east of the stop, inside the limits all the way
+    v.run_until(settled(170), 60, "at 170")
+    assert sets(v, since=t) == [b"AP1170\r"]
+    readings = [s.bearing_deg for s in v.published(since=t) if s.bearing_deg is not None]
+    assert readings and all(20 <= b <= 340 for b in readings), readings
