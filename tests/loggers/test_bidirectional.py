@@ -5,13 +5,14 @@ controller on the rotor's own travel (a Hy-Gain rotor's stop at south, a Yaesu's
 from __future__ import annotations
 
 import math
+import socket
 from typing import Any
 
 import pytest
 
 from bridge.core.model import RotatorStatus, Source, Target
-from bridge.interfaces.loggers.commands import Commands, N1mmEndpoint, N1mmRotor
-from bridge.interfaces.loggers.datagrams import N1mmRequest
+from bridge.interfaces.loggers.commands import Commands, N1mmEndpoint, N1mmRotor, PstEndpoint
+from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest
 from bridge.pointing import Pointing
 from tests.engine.virtual import VirtualRotator
 
@@ -32,6 +33,10 @@ class _Through:
     @property
     def pointing(self) -> Pointing:
         return self.v.cfg.aim
+
+    @property
+    def spec(self) -> Any:
+        return self.v.cfg.spec
 
     @property
     def halts(self) -> int:
@@ -109,3 +114,48 @@ def test_a_bidirectional_heading_turns_the_rotor_the_lesser_way_along_its_travel
         travel = abs(goes - start) if abs(goes - start) <= 180 else 360 - abs(goes - start)
         v.run_for(travel / 6.0 + 15.0)  # the lesser way at 6 degrees a second, and the brake
         assert abs(v.truth().az_deg - goes) <= 3.0 and not v.truth().is_moving
+
+
+@pytest.mark.parametrize("bidirectional", [False, True])
+@pytest.mark.parametrize(
+    ("model", "start", "goes"), [("rotorcard", 355.0, 360.0), ("gs232b", 5.0, 0.0)]
+)
+def test_a_logger_s_north_is_the_end_of_a_yaesu_s_travel_nearer_the_rotor(
+    model: str, start: float, goes: float, bidirectional: bool
+) -> None:
+    """commands.py rule 3: a logger folds its heading into 0..360, so its north was 0, the
+    anticlockwise end of a Yaesu's travel: at 355 the rotor turned 355 degrees back through
+    south, and bidirectional took 180 instead (an attack pass). North goes to the nearer end."""
+    v = VirtualRotator(model, emulator={"start_az_deg": start})
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_for(8.0)
+        rot = _Through(v)
+        endpoint = N1mmEndpoint("127.0.0.1", 12040, [N1mmRotor("Tower", rot)])  # type: ignore[arg-type]
+        req = N1mmRequest("Tower", azimuth=0.0, bidirectional=bidirectional, freqband_mhz=14.0)
+        Commands(lambda: v.now, lambda what, exc: None).n1mm(endpoint, req, b"<N1MMRotor/>")
+        assert [t.az_deg for t in rot.sent] == [goes]
+        v.run_for(15.0)  # 5 degrees, and the brake
+        assert abs(v.truth().az_deg - goes) <= 2.0 and not v.truth().is_moving
+
+
+def test_pstrotator_s_north_is_the_end_of_a_yaesu_s_travel_nearer_the_rotor() -> None:
+    """The same for PstRotator's ``<AZIMUTH>0``: a Yaesu at 355 goes to 360, not round to 0."""
+    v = VirtualRotator("rotorcard", emulator={"start_az_deg": 355.0})
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_for(8.0)
+        rot = _Through(v)
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        with sock:
+            Commands(lambda: v.now, lambda what, exc: None).pst(
+                PstEndpoint(rot, "127.0.0.1", 12000),  # type: ignore[arg-type]
+                sock,
+                12000,
+                PstRequest(azimuth=0.0),
+                ("127.0.0.1", 12001),
+                b"<PST><AZIMUTH>0</AZIMUTH></PST>",
+            )
+        assert [t.az_deg for t in rot.sent] == [360.0]
+        v.run_for(15.0)
+        assert abs(v.truth().az_deg - 360.0) <= 2.0 and not v.truth().is_moving

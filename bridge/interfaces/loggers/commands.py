@@ -15,7 +15,9 @@ Rules:
    a made-up one); an azimuth-only rotator does not answer ``EL?``.
 3. An azimuth outside 0..360 but inside Hamlib's -180..450 is folded into 0..360 (the
    rotator's own rules pick the way round); one beyond that is refused (a mis-scaled value,
-   99999, must not become 279). An elevation sent to an azimuth-only rotator is ignored.
+   99999, must not become 279). A logger's north names a direction, not an end of the travel:
+   where 0 and 360 are the ends (a Yaesu's stop at north) it goes to the one the rotor turns
+   less to (``heading``). An elevation sent to an azimuth-only rotator is ignored.
 4. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
    listens on that port (or by band: rule 5), except a stop, which stops every rotator on it;
    a stop naming several rotors stops each of them on the port, a fault behind one not keeping
@@ -181,6 +183,20 @@ def choose(
     return NoRotor(f"no rotator is for {band} ({have})", banded)
 
 
+def heading(rot: Rotator, ways: Iterable[float]) -> float:
+    """Rules 3 and 4: the target for a logger's heading (or either of ``ways``, N1MM's
+    bidirectional), folded into 0..360, that the rotor turns least to along its travel; north
+    is a direction, not an end: 0 or 360, whichever is nearer where the two are the ends of the
+    travel (an attack pass: a Yaesu at 355 sent 0 turned 355 degrees back through south, and
+    bidirectional took 180 for it). The first of equals; as named without a reading."""
+    named = [n for w in ways for n in ((0.0, 360.0) if norm360(w) == 0.0 else (norm360(w),))]
+    raw = rot.status.raw_bearing_deg
+    if raw is None:
+        return named[0]
+    aim = rot.pointing
+    return min(named, key=lambda a: aim.turn_deg(a, raw))
+
+
 @dataclass
 class Counts:
     """What came in, per protocol (the benchmark and the tests read them)."""
@@ -323,7 +339,7 @@ class Commands:
                 )
                 return
             elif req.azimuth is not None or el is not None:
-                az = None if req.azimuth is None else norm360(req.azimuth)  # rule 3
+                az = None if req.azimuth is None else heading(rot, (req.azimuth,))  # rule 3
                 rot.submit(Target(az, el, Source.PST, origin=by), described, since=since)
             else:
                 return
@@ -391,13 +407,10 @@ class Commands:
         if self._stale(rot, arrived, True):  # rule 8
             rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
             return
-        az = req.azimuth
-        raw = rot.status.raw_bearing_deg
-        if req.bidirectional and raw is not None:  # rule 4: the nearer along the travel
-            aim = rot.pointing
-            az = min((az, norm360(az + 180.0)), key=lambda a: aim.turn_deg(norm360(a), raw))
+        ways = (req.azimuth, req.azimuth + 180.0) if req.bidirectional else (req.azimuth,)
+        az = heading(rot, ways)  # rule 4: the nearer along the travel; rule 3: north
         try:
-            target = Target(norm360(az), None, Source.N1MM, origin=by)
+            target = Target(az, None, Source.N1MM, origin=by)
             rot.submit(target, described, since=since)
             counts.commands += 1
         except Refused:
