@@ -95,8 +95,12 @@ def reaches(model: str, az: float, el: float | None) -> tuple[float, float | Non
     ) * 10.0
 
 
-def is_poison(az: float) -> bool:
-    """Refused commands carry azimuths = 2 (mod 5); accepted ones multiples of 5."""
+def is_poison(model: str, az: float, el: float | None) -> bool:
+    """Refused commands carry azimuths = 2 (mod 5); accepted ones multiples of 5. A SatEL is
+    sent its ten-degree steps whatever it is asked, so there its elevation tells them apart:
+    refused commands carry 30, accepted ones multiples of 20."""
+    if model == "satel":
+        return el is not None and abs((el % 20.0) - 10.0) < 0.6
     return abs((az % 5) - 2) < 0.6
 
 
@@ -594,6 +598,8 @@ class Soak:
             if abs(az - truth.az_deg) >= 15:
                 break
         el = 5.0 * self.rng.randint(0, 17) if rot.model in AZEL else None
+        if rot.model == "satel":  # (is_poison: never a refused command's elevation)
+            el = 20.0 * self.rng.randint(0, 4)
         return az, el
 
     def payload(self, rot: Rot, az: float, el: float | None) -> str:
@@ -626,7 +632,7 @@ class Soak:
         """A command the bridge must refuse; its azimuth is a poison value (never allowed to move
         anything)."""
         az = 5.0 * self.rng.randint(0, 70) + 2.0
-        el = 12.0 if rot.model in AZEL else None
+        el = (30.0 if rot.model == "satel" else 12.0) if rot.model in AZEL else None
         text = f"{az:g}" if el is None else f"{az:g} {el:g}"
         topic = f"rotor/{rot.rid}/target"
         t = time.monotonic()
@@ -738,7 +744,7 @@ class Soak:
                     self.violation(f"{rot.rid}: unreadable target frame {frame.data!r}")
                     continue
                 az, el = got
-                if is_poison(az):
+                if is_poison(rot.model, az, el):
                     self.violation(f"{rot.rid}: motion from a refused command {frame.data!r}")
                     continue
                 since = max((t for t in rot.stale_at if t < frame.time_s), default=-1e9)
