@@ -31,7 +31,10 @@ from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
 MAX_COMMAND_BYTES = 256
 MAX_NAME_CHARS = 64  # a preset's or a satellite's name
-_SPLIT = re.compile(r"[\s,;]+")
+#: a target's two fields: apart by spaces, or by one comma or semicolon with spaces round it
+#: or not; an empty field (",30", "120,,30") is no value left out but a refusal (an attack
+#: pass: ",30", meant as elevation 30, turned the rotor to azimuth 30)
+_SPLIT = re.compile(r"\s*[,;]\s*|\s+")
 # ASCII digits only: Python's float() also takes "１３３" and "١٤٤"
 _NUMBER = re.compile(r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$")
 #: json.dumps(doc, separators=(",", ":")), the encoder made once (dumps makes one each call)
@@ -295,8 +298,8 @@ def parse_target(payload: bytes) -> tuple[float, float | None]:
             raise PayloadError('JSON target needs "azimuth"')
         az = _number(az_raw, "azimuth")
         return az, None if el_raw is None else _number(el_raw, "elevation")
-    parts = [p for p in _SPLIT.split(text) if p]
-    if not parts or len(parts) > 2:
+    parts = _SPLIT.split(text)
+    if len(parts) > 2 or "" in parts:
         raise PayloadError(f"target must be 'azimuth' or 'azimuth elevation', got {text[:40]!r}")
     az = _number(parts[0], "azimuth")
     el = _number(parts[1], "elevation") if len(parts) == 2 else None
