@@ -909,6 +909,31 @@ def test_a_broker_host_that_can_never_connect_is_refused_naming_the_key(
 
 
 @pytest.mark.parametrize(
+    ("key", "value", "said"),
+    [
+        ("rotctld_bind", "shack-pc.lan:Sekr1tPW@127.0.0.1", "not a URL with a login"),
+        ("gs232_bind", "x y", "a host name or address, got 'x y'"),
+        ("easycomm_bind", "127.0.0.1:4536", "without its port: '127.0.0.1:4536' (easycomm_port)"),
+        ("dcu1_bind", "tcp://0.0.0.0", "not a URL"),
+        ("pst_udp_bind", "not an address", "a host name or address, got"),
+        ("n1mm_udp_bind", "[::1]", "without brackets"),
+    ],
+)
+def test_an_address_to_listen_on_that_can_never_be_is_refused_naming_the_key(
+    tmp_path: Path, key: str, value: str, said: str
+) -> None:
+    """An attack pass: check-config said "config OK" for these, and ``run`` then stopped with
+    "cannot listen on shack-pc.lan:Sekr1tPW@127.0.0.1:14600: Name or service not known", a line
+    that named no key and quoted what came before the '@'."""
+    path = write(tmp_path, MINIMAL + f'{key} = "{value}"\n')
+    out = cli("check-config", "-c", str(path))
+    assert out.returncode == 2 and "Sekr1tPW" not in out.stdout + out.stderr
+    assert f"rotators[0].{key}: " in out.stderr and said in out.stderr, out.stderr
+    for fine in ("", "0.0.0.0", "::", "::1", "localhost", "shack-pc.lan"):
+        load_settings(write(tmp_path, MINIMAL + f'{key} = "{fine}"\n'))
+
+
+@pytest.mark.parametrize(
     "host",
     [
         "mqtt://rotor:Sekr1tPW@broker.lan:1883",

@@ -235,6 +235,21 @@ def test_an_origin_or_name_with_a_login_is_refused_without_the_password(
     assert f"web.{key}: 'ha.lan/x' is not " in said  # (nothing to hide: quoted)
 
 
+def test_a_proxy_with_a_login_and_a_bad_bind_are_refused_without_the_password(
+    tmp_path: Path,
+) -> None:
+    """An attack pass: ``trusted_proxies = ["admin:pw@10.0.0.1"]`` was refused quoting the
+    whole value, and ``web.bind`` took any text until the console failed to listen."""
+    said = refused(tmp_path, '[web]\ntrusted_proxies = ["admin:Sekr1tPW@10.0.0.1"]\n')
+    assert "web.trusted_proxies: an entry holding '@' (not shown: " in said
+    assert "Sekr1tPW" not in said
+    said = refused(tmp_path, '[web]\nbind = "admin:Sekr1tPW@0.0.0.0"\n')
+    assert "web.bind: a host name or address, not a URL with a login" in said
+    assert "Sekr1tPW" not in said
+    said = refused(tmp_path, '[web]\nbind = "localhost:8080"\n')
+    assert "web.bind: a host name or address, without its port: 'localhost:8080' (web.port)" in said
+
+
 def test_a_trusted_proxy_network_wider_than_one_address_is_warned_about(tmp_path: Path) -> None:
     """An attack pass: the docs say to list only the proxies, but a LAN listed (any host on it
     may then write X-Forwarded-For and be limited and audited as another browser) passed

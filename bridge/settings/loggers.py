@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import ipaddress
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from bridge.settings.base import Strict
+from bridge.settings.mqtt import check_bind
 
 
 class LoggerFields(Strict):
@@ -63,6 +64,11 @@ class LoggerFields(Strict):
         "n1mm_udp_bind that can reach it",
         examples=["192.168.1.20:13010"],
     )
+
+    @field_validator("pst_udp_bind", "n1mm_udp_bind")
+    @classmethod
+    def _logger_bind(cls, v: str, info: ValidationInfo) -> str:
+        return check_bind(v, str(info.field_name).replace("_bind", "_port"))
 
     @field_validator("n1mm_rotor_name")
     @classmethod

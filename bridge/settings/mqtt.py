@@ -8,7 +8,8 @@ Rules:
    file that will not do is a configuration error naming the key, not a traceback at start.
 3. The client id left out is unique per installation and stable across restarts
    (effective_client_id).
-4. A host (``mqtt.host``, ``dxcluster.host``: check_host) is a name or an address alone; a
+4. A host (``mqtt.host``, ``dxcluster.host``: check_host; an address a port listens on:
+   check_bind) is a name or an address alone; a
    refusal quotes it, but never one holding '@': a URL's login (``mqtt://rotor:pw@broker``)
    would put the password in the error, on the terminal and in the journal.
 5. An empty ``username`` or ``password`` is an error, as an empty ``password_file`` is: what
@@ -95,13 +96,15 @@ _LOGIN_KEYS = {
 }
 
 
-def check_host(v: str, table: str) -> str:
-    """``v`` if it is a host name or address as getaddrinfo takes it (``table``'s ``host``):
-    no URL, no port, no brackets, DNS's lengths. A value holding '@' is never quoted (rule 4)."""
+def check_host(v: str, table: str, port_key: str | None = None) -> str:
+    """``v`` if it is a host name or address as getaddrinfo takes it (``table``'s ``host``, or
+    an address to listen on: check_bind): no URL, no port (``port_key``'s, else the table's),
+    no brackets, DNS's lengths. A value holding '@' is never quoted (rule 4)."""
     if "@" in v:  # (an attack pass: 'mqtt://rotor:pw@broker' was quoted, the password with it)
+        login = _LOGIN_KEYS.get(table)
         raise ValueError(
-            f"a host name or address, not a URL with a login: it holds '@' ({NOT_SHOWN}); the "
-            f"login goes in {_LOGIN_KEYS[table]}"
+            f"a host name or address, not a URL with a login: it holds '@' ({NOT_SHOWN})"
+            + (f"; the login goes in {login}" if login else "")
         )
     if not v.strip() or any(c.isspace() or not c.isprintable() for c in v):
         raise ValueError(f"a host name or address, got {v!r}")
@@ -113,13 +116,22 @@ def check_host(v: str, table: str) -> str:
     if v.startswith("["):  # (an address in brackets is a URL's: getaddrinfo takes none)
         raise ValueError(f"an IPv6 address is written without brackets here: {v!r}")
     if v.count(":") == 1:  # (IPv6 has two at least)
-        raise ValueError(f"a host name or address, without its port: {v!r} ({table}.port)")
+        port = port_key or f"{table}.port"
+        raise ValueError(f"a host name or address, without its port: {v!r} ({port})")
     name = v.removesuffix(".")
     if ":" not in v and (  # a name or IPv4, as DNS takes them (an attack pass: a longer
         len(name) > 253 or any(not 0 < len(label) <= 63 for label in name.split("."))
     ):  # one logged a traceback at every retry)
         raise ValueError(f"{v!r} is no host name: at most 253 characters, 1 to 63 between dots")
     return v
+
+
+def check_bind(v: str, port_key: str) -> str:
+    """An address to listen on (a ``*_bind``, ``web.bind``): empty for every address, else a
+    host name or address alone, as check_host takes them (an attack pass: check-config passed
+    ``shack-pc.lan:pw@127.0.0.1`` and ``x y``, and ``run`` then stopped on a line that named no
+    key and quoted the part before the '@')."""
+    return v if v == "" else check_host(v, "bind", port_key)
 
 
 class TlsSettings(Strict):

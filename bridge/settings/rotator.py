@@ -25,7 +25,7 @@ from __future__ import annotations
 import re
 from typing import Any, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
@@ -36,7 +36,7 @@ from bridge.settings.bands import BandFields
 from bridge.settings.base import Strict, check_name, check_named_path
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
-from bridge.settings.mqtt import check_topic
+from bridge.settings.mqtt import check_bind, check_topic
 from bridge.settings.pointing import PointingFields, check_position
 from bridge.settings.wind import WindFields
 
@@ -462,6 +462,11 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     @classmethod
     def _name(cls, v: str | None) -> str | None:
         return check_name(v)  # settings/base.py rule 5
+
+    @field_validator("rotctld_bind", "gs232_bind", "easycomm_bind", "dcu1_bind")
+    @classmethod
+    def _port_bind(cls, v: str, info: ValidationInfo) -> str:
+        return check_bind(v, str(info.field_name).replace("_bind", "_port"))
 
     @field_validator("id")
     @classmethod

@@ -35,6 +35,7 @@ from pydantic import (
 from bridge.settings.base import NOT_SHOWN, Strict
 from bridge.settings.files import read_password_file
 from bridge.settings.loggers import is_loopback
+from bridge.settings.mqtt import check_bind
 
 PASSWORD_MIN_CHARS = 8
 # scheme://host[:port]: a DNS name or an IPv4 address, or an IPv6 address in brackets
@@ -111,6 +112,11 @@ class WebSettings(Strict):
     )
     _password: SecretStr | None = PrivateAttr(default=None)
 
+    @field_validator("bind")
+    @classmethod
+    def _bind(cls, v: str) -> str:
+        return check_bind(v, "web.port")
+
     @field_validator("trusted_proxies")
     @classmethod
     def _proxies(cls, values: list[str]) -> list[str]:
@@ -119,7 +125,7 @@ class WebSettings(Strict):
                 ipaddress.ip_network(value, strict=False)
             except ValueError:
                 raise ValueError(
-                    f"{value!r} is no address or network (127.0.0.1, ::1, 10.0.0.0/8)"
+                    f"{_shown(value)} is no address or network (127.0.0.1, ::1, 10.0.0.0/8)"
                 ) from None
         return values
 
