@@ -437,6 +437,49 @@ def test_body_satellite_refuses_each_fault_by_name() -> None:
     assert Body.satellite("SAT", l1 + "  ", l2 + "\r").tle == (l1, l2)
 
 
+def forged(line: str, start: int, text: str) -> str:
+    """``line`` with ``text`` from column ``start`` (0-based), its checksum made good."""
+    from sgp4.io import compute_checksum
+
+    body = line[:start] + text + line[start + len(text) : 68]
+    return body + str(compute_checksum(body))
+
+
+@pytest.mark.parametrize(
+    ("line", "start", "text", "message"),
+    [
+        (1, 20, "999.00000000", "line 1: epoch day 999.00000000 is no day of a year"),
+        (1, 20, "000.50000000", "line 1: epoch day 0.50000000 is no day of a year"),
+        (2, 8, "999.9999", "line 2: inclination 999.9999 is outside 0..180 degrees"),
+        (2, 8, "180.5000", "line 2: inclination 180.5000 is outside 0..180 degrees"),
+        (2, 17, "400.0000", "line 2: right ascension of the ascending node 400.0000 is outside"),
+        (2, 34, "361.0000", "line 2: argument of perigee 361.0000 is outside"),
+        (2, 43, "999.0000", "line 2: mean anomaly 999.0000 is outside"),
+        (2, 52, "99.00000000", "line 2: mean motion 99.00000000 revolutions a day is no orbit"),
+        (2, 52, " 0.00000000", "line 2: mean motion 0.00000000 revolutions a day is no orbit"),
+    ],
+)
+def test_a_tle_with_an_element_no_orbit_has_is_refused_naming_it(
+    line: int, start: int, text: str, message: str
+) -> None:
+    """An attack pass: sgp4 reads and propagates these, and the rotor turned for a TLE dated day
+    999 of its year and for an inclination of 999.9999 degrees; check-config passed a file of
+    them. Each is refused naming its line and the element, in a command and in a file."""
+    l1, l2 = tle(25544)
+    if line == 1:
+        l1 = forged(l1, start, text)
+    else:
+        l2 = forged(l2, start, text)
+    with pytest.raises(SkyError, match=f"^SAT: TLE {message}"):
+        Body.satellite("SAT", l1, l2)
+    sets, problems = parse_tles(f"SAT\n{l1}\n{l2}\n")
+    at = 2 if line == 1 else 3  # (the file's lines: the name first)
+    assert sets == {} and len(problems) == 1, problems
+    assert problems[0].startswith(f"line {at}: SAT: {message.split(': ', 1)[1]}"), problems
+    fine = forged(tle(25544)[1], 52, "16.90000000")  # a decaying object's mean motion
+    assert Body.satellite("SAT", tle(25544)[0], fine).tle[1] == fine
+
+
 def test_parse_tles_reads_a_celestrak_file() -> None:
     (a1, a2), (b1, b2) = tle(1), tle(2)
     text = f"ISS (ZARYA)\n{a1}\n{a2}\nNOAA 19   \n{b1}\n{b2}\n"

@@ -5,9 +5,11 @@ Rules:
 1. A TLE is two lines of 69 characters (trailing blanks dropped), starting "1 " and "2 ", each
    ending in its checksum (sgp4's own: the sum of its digits, a minus sign counting 1, modulo
    10), with one catalog number on both lines, and elements that sgp4 accepts and propagates at
-   their epoch. Anything else is SkyError naming the line and what is wrong. A TLE is ASCII:
-   a line holding any other character is refused first (``str.isdigit`` takes ``²`` and ``٣``,
-   which ``int`` refuses or reads: the checksum's sum, sgp4's too, raised ValueError).
+   their epoch, each inside the range an orbit has (an epoch's day of its year, the angles, a
+   mean motion above 0 and at most MOST_REVS_PER_DAY). Anything else is SkyError naming the
+   line and what is wrong. A TLE is ASCII: a line holding any other character is refused first
+   (``str.isdigit`` takes ``²`` and ``٣``, which ``int`` refuses or reads: the checksum's sum,
+   sgp4's too, raised ValueError).
 2. A TLE file (parse_tles) is 3-line sets (a name line, Space-Track's "0 " prefix dropped) or
    bare 2-line sets (named by their catalog number); blank lines and CRLF are fine; a bad set is
    reported, naming its line, and skipped; a name seen again is reported and the later set used.
@@ -21,9 +23,15 @@ Rules:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 KINDS = ("sun", "moon", "satellite")
+MINUTES_PER_DAY = 1440.0
+#: an orbit's most (rule 1): one at the surface goes round some 17.1 times a day; decaying
+#: objects' TLEs reach 16.5
+MOST_REVS_PER_DAY = 18.0
 RESERVED = ("off", "sun", "moon")  # what R/track and R/tracking mean by these (rule 3)
 
 
@@ -106,9 +114,37 @@ def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
         sat = Satrec.twoline2rv(line1, line2)
     except (ValueError, IndexError) as e:
         return 1, f"sgp4 cannot read the elements: {e}"
+    impossible = _out_of_range(sat)
+    if impossible is not None:
+        return impossible
     error, _, _ = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
     if error:
         return 2, f"sgp4 cannot propagate the elements: {SGP4_ERRORS[error]}"
+    return None
+
+
+def _out_of_range(sat: Any) -> tuple[int, str] | None:
+    """Rule 1: (which line, what is wrong) with an element no orbit has, that sgp4 reads and
+    propagates all the same (an attack pass: an epoch on day 999 of its year, 660 days on, and
+    an inclination of 999.9999 degrees were taken, and the rotor turned for them)."""
+    day = sat.epochdays
+    if not 1.0 <= day < 367.0:
+        return 1, f"epoch day {day:.8f} is no day of a year (1 to 366)"
+    for name, rad, top in (
+        ("inclination", sat.inclo, 180.0),
+        ("right ascension of the ascending node", sat.nodeo, 360.0),
+        ("argument of perigee", sat.argpo, 360.0),
+        ("mean anomaly", sat.mo, 360.0),
+    ):
+        deg = math.degrees(rad)
+        if not 0.0 <= deg <= top:
+            return 2, f"{name} {deg:.4f} is outside 0..{top:g} degrees"
+    revs = sat.no_kozai * MINUTES_PER_DAY / (2.0 * math.pi)
+    if not 0.0 < revs <= MOST_REVS_PER_DAY:
+        return 2, (
+            f"mean motion {revs:.8f} revolutions a day is no orbit of the Earth (0 to "
+            f"{MOST_REVS_PER_DAY:g})"
+        )
     return None
 
 
