@@ -822,7 +822,9 @@ def test_two_rotators_cannot_share_a_rotctld_port() -> None:
         {"id": "a", "model": "rotorez", "port": "/dev/ttyUSB0", "rotctld_port": 4533},
         {"id": "b", "model": "rotorcard", "port": "/dev/ttyUSB1", "rotctld_port": 4533},
     ]
-    with pytest.raises(ValidationError, match="share one rotctld_port"):
+    with pytest.raises(
+        ValidationError, match=r"rotators\[1\].rotctld_port 4533 is also rotators\[0\]"
+    ):
         Settings(rotators=rotators)
 
 

@@ -546,9 +546,27 @@ TWO = (
 @pytest.mark.parametrize(
     ("a", "b", "message"),
     [
-        ("pst_udp_port = 12000", "pst_udp_port = 12000", "share one pst_udp_port"),
+        (
+            "pst_udp_port = 12000",
+            "pst_udp_port = 12000",
+            r"rotators\[1\].pst_udp_port 12000 is also rotators\[0\].pst_udp_port",
+        ),
         ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "n1mm_rotor_name 'T' on one N1MM"),
-        ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
+        (
+            "pst_udp_port = 12040",
+            'n1mm_rotor_name = "T"',
+            r"rotators\[1\].n1mm_udp_port 12040 is also rotators\[0\].pst_udp_port",
+        ),
+        (  # one rotator's own two ports (an attack pass: "two rotators share one ...")
+            'pst_udp_port = 12040\nn1mm_rotor_name = "T"',
+            "",
+            r"rotators\[0\].n1mm_udp_port 12040 is also rotators\[0\].pst_udp_port",
+        ),
+        (
+            'topic = "rotor/x"',
+            'topic = "rotor/x"',
+            "rotators 'a' and 'b' share the topic 'rotor/x'",
+        ),
         ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
         ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),
         # an attack pass: every N1MM datagram naming it is not ASCII, dropped unread

@@ -235,9 +235,9 @@ class Settings(BaseSettings):
                     "ttyUSB number may go to another adapter at the next boot)"
                 )
             device[real] = p
-        rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
-        if len(set(rotctld)) != len(rotctld):
-            raise ValueError("two rotators share one rotctld_port")
+        _one_each(
+            [(f"rotators[{i}].rotctld_port", r.rotctld_port) for i, r in enumerate(self.rotators)]
+        )
         for i, r in enumerate(self.rotators):  # both TCP: the second listener could not start
             if self.web.enabled and r.rotctld_port == self.web.port:
                 raise ValueError(
@@ -268,8 +268,14 @@ class Settings(BaseSettings):
                 raise ValueError(f"{name} {path} is also {clash[0]}: give it another path")
         pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
-        if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
-            raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
+        n1mm_first: dict[int, str] = {}  # (rotators named on one N1MM port share it: below)
+        for i, r in enumerate(self.rotators):
+            if r.n1mm_rotor_name is not None:
+                n1mm_first.setdefault(r.n1mm_udp_port, f"rotators[{i}].n1mm_udp_port")
+        _one_each(
+            [(f"rotators[{i}].pst_udp_port", r.pst_udp_port) for i, r in enumerate(self.rotators)]
+            + [(name, port) for port, name in n1mm_first.items()]
+        )
         if self.wsjtx.enabled and self.wsjtx.port in {*pst, *n1mm_ports}:  # (an attack pass)
             what = "a pst_udp_port" if self.wsjtx.port in pst else "an n1mm_udp_port"
             raise ValueError(
@@ -302,9 +308,16 @@ class Settings(BaseSettings):
                         "a band turns one antenna"
                     )
                 owner[band] = r.id
-        topics = [self.rotator_topic(r) for r in self.rotators]
-        if len(set(topics)) != len(topics):
-            raise ValueError("two rotators share one topic")
+        topic_of: dict[str, str] = {}
+        for r in self.rotators:
+            topic = self.rotator_topic(r)
+            if topic in topic_of:
+                raise ValueError(
+                    f"rotators {topic_of[topic]!r} and {r.id!r} share the topic {topic!r} "
+                    "(a rotator's topic is its topic key, else mqtt.base_topic/<id>): "
+                    "give one of them another topic"
+                )
+            topic_of[topic] = r.id
         prefix = self.homeassistant.discovery_prefix
         if self.homeassistant.enabled and self.base_under_discovery():
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
@@ -513,6 +526,19 @@ class Settings(BaseSettings):
             for key in [k for k in env_vars if k.lower().startswith("rotor_bridge_rotators__")]:
                 del env_vars[key]
         return (env_settings, init_settings)  # environment beats the file
+
+
+def _one_each(ports: list[tuple[str, int | None]]) -> None:
+    """ValueError naming the two keys that give one port (None: not given). An attack pass: a
+    single rotator's pst_udp_port that was also its n1mm_udp_port was "two rotators share one
+    pst_udp_port", naming neither key."""
+    first: dict[int, str] = {}
+    for key, port in ports:
+        if port is None:
+            continue
+        if port in first:
+            raise ValueError(f"{key} {port} is also {first[port]}: give it another port")
+        first[port] = key
 
 
 def _word_under(topic: str, prefix: str, words: frozenset[str]) -> str | None:
