@@ -735,6 +735,14 @@ class Rotator:
             if not took:  # (a lock put says it is known: mailbox.py ``put_lock``)
                 self._mailbox.put_lock_unknown(False, wake=False)
         if not took:
+            if payload not in (None, b"", b"ON", b"OFF"):  # (an attack pass: not a word said)
+                log.warning(
+                    "%s: the broker held R/lock/state %r from before this start, neither ON nor "
+                    "OFF: not read as a lock%s",
+                    self.id,
+                    payload[:40],
+                    "; the rotator starts unlocked" if self._kept.lock_unsaid else "",
+                )
             return False
         who = Origin(Source.MQTT, "retained R/lock/state")
         self.operators.audit(who, describe_command(Lock(on=True)), EXECUTED)

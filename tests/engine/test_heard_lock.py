@@ -60,10 +60,22 @@ def test_a_lock_word_since_the_start_is_newer(tmp_path: Path) -> None:
     assert not st.rot.locked and not StateStore(st.path).locked("tower") and events == []
 
 
-def test_anything_but_on_changes_nothing(tmp_path: Path) -> None:
+def test_anything_but_on_changes_nothing(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """... and what is neither ON nor OFF is said in the log (an attack pass: a retained
+    ``garbage`` there started the rotator unlocked without a word, where the same payload while
+    the bridge runs is logged)."""
     st, events = _with_file(tmp_path, None)
     for payload in (b"OFF", b"", b"on", b"ON\x00", b"1", None):
+        caplog.clear()
         assert not st.rot.heard_lock(payload)
+        said = [r.getMessage() for r in caplog.records if "R/lock/state" in r.getMessage()]
+        if payload in (b"OFF", b"", None):
+            assert said == []
+        else:
+            assert said == [
+                f"tower: the broker held R/lock/state {payload!r} from before this start, "
+                "neither ON nor OFF: not read as a lock; the rotator starts unlocked"
+            ]
     st.settle()
     assert not st.rot.locked and events == []
 
