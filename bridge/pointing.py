@@ -40,7 +40,12 @@ Rules:
    station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
    target while one is being approached, turning or braking, else to the bearing; never to a
    target a stop put before it dropped, though the status it is made from predates that stop:
-   runtime/rotator.py ``_seen``). A nudge turns the short way it names. Where the controller's
+   runtime/rotator.py ``_seen``). On a controller of steps (rule 4: a SatEL's ten degrees) a
+   nudge, in azimuth or elevation, goes to the nearest step of the value it names and at
+   least the first step past where it starts its own way (``_stepped``): -5 at 120 is 110 as
+   +5 is 130 (rounded alone, 115 went out as 120 and nothing turned), and a second press
+   counts from the step the status shows as the target, so two of +5 end at 140. A nudge
+   turns the short way it names. Where the controller's
    0 and 360 are the ends of the travel (``az_ends_at_north``: the stop at north, a GS-232's,
    an Easycomm's, a SatEL's), it is taken on the controller's own scale: +10 at 350 is 360,
    10 degrees on (``Target.az_end_deg``; folded to 0 it went out as the other end, ``M000``,
@@ -97,6 +102,7 @@ from bridge.protocols.base import ModelSpec, half_up, half_up_step
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
 WITHIN_SLACK_DEG = 0.5  # rule 9: a reading's step at an edge is not a turn outside
 UNFOLD_TIE_DEG = 1e-6  # rule 2: an offset read this near -180 is 180 (``unfolded``)
+STEP_SLACK = 1e-9  # rule 6: a value this near a step (in steps) is on it (``_stepped``)
 
 
 def norm360(deg: float) -> float:
@@ -561,16 +567,22 @@ class Pointing:
         new_az: float | None = None
         end: float | None = None
         raw = status.raw_target_az_deg if moving else status.raw_bearing_deg
+        named = d_az
+        if d_az and raw is not None:  # a controller of steps: the turn to the step it takes
+            d_az = self._stepped(raw, d_az, el=False) - raw
         if d_az and self.az_wraps and self.az_ends_at_north and raw is not None:
             # on the controller's own scale, whose ends are 0 and 360: +10 at 350 is 360, 10
             # on (folded to 0, it went out as the other end), +10 at 360 is past that end
+            # (the value named: -10 at 5 is refused though a SatEL's step of -5 is 0)
             to_raw = raw + d_az
             new_az = norm360(to_raw + self.offset_deg)
-            if not 0.0 <= to_raw <= 360.0:
-                shown = f"{new_az:g}" + ("" if to_raw == new_az else f" (controller {to_raw:g})")
+            past = next((r for r in (raw + named, to_raw) if not 0.0 <= r <= 360.0), None)
+            if past is not None:
+                at = norm360(past + self.offset_deg)
+                shown = f"{at:g}" + ("" if past == at else f" (controller {past:g})")
                 raise Refused(
                     RefusalCode.LIMITS,
-                    f"a nudge of {d_az:+.10g} degrees turns to azimuth {shown}, past the end of "
+                    f"a nudge of {named:+.10g} degrees turns to azimuth {shown}, past the end of "
                     f"the {self.model_name}'s travel: a nudge is not taken the other way round",
                 )
             if to_raw in (0.0, 360.0):
@@ -590,8 +602,23 @@ class Pointing:
             base = status.target_el_deg if moving else status.elevation_deg
             if base is None:
                 raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
-            el = base + d_el
+            el = self._stepped(base, d_el, el=True)
         return new_az, el, end
+
+    def _stepped(self, start: float, d: float, el: bool) -> float:
+        """Rule 6 on a controller of steps (rule 4: a SatEL's ten degrees): where a nudge of
+        ``d`` from ``start`` (the axis's raw value) goes, the nearest step of ``start + d``
+        and at least the first step past ``start`` its own way (-5 at 120 is 110 as +5 is
+        130; rounded half up alone, 115 went out as 120 and nothing turned); ``start + d``
+        on any other controller."""
+        whole, _tenths, _cuts, steps = self._rounds(el)
+        if not whole or steps == 1:
+            return start + d
+        nearest = float(half_up_step(start + d, steps))
+        at = start / steps
+        if d > 0:
+            return max(nearest, float((math.floor(at + STEP_SLACK) + 1) * steps))
+        return min(nearest, float((math.ceil(at - STEP_SLACK) - 1) * steps))
 
     def _checked(self, az_deg: float, raw_deg: float) -> float:
         lo, hi = self.az_min_deg, self.az_max_deg

@@ -189,6 +189,69 @@ def test_a_nudge_across_north_stops_at_the_end_where_north_is_an_end() -> None:
     assert refused(short.judge, short.nudge(_at(350), 10, None), 350) is RefusalCode.LIMITS
 
 
+def _sat(raw: float, el: float = 20.0, *, going_to: float | None = None) -> RotatorStatus:
+    if going_to is None:
+        return RotatorStatus(
+            "t", MotionState.IDLE, bearing_deg=raw, raw_bearing_deg=raw, elevation_deg=el
+        )
+    return RotatorStatus(
+        "t",
+        MotionState.MOVING,
+        bearing_deg=raw,
+        raw_bearing_deg=raw,
+        elevation_deg=el,
+        target_az_deg=going_to,
+        raw_target_az_deg=going_to,
+        target_el_deg=el,
+    )
+
+
+@pytest.mark.parametrize(
+    ("d_az", "sent"),
+    [(5, 130), (-5, 110), (3, 130), (-3, 110), (12, 130), (-12, 110), (16, 140), (-16, 100)],
+)
+def test_a_satel_nudge_goes_at_least_one_step_its_own_way(d_az: float, sent: float) -> None:
+    """Rule 6 on a controller of steps (a SatEL's ten degrees, rule 4): the nearest step of the
+    value named, and at least one step on the way it names. Rounded half up alone, -5 at 120
+    was 115, sent as 120 (nothing turned), and +5 was 125, sent as 130: lopsided."""
+    p = Pointing.of(REGISTRY["satel"])
+    assert p.judge(p.nudge(_sat(120), d_az, None), 120).az_deg == sent
+
+
+def test_satel_nudges_add_up_from_the_step_being_approached_and_in_elevation() -> None:
+    """Rule 6: a second press while the first's step is approached counts from that step (the
+    status's target, as sent): two presses of +5 or -5 at 120 end two steps on. Elevation
+    nudges are stepped the same way; the ends of the travel and the limits still refuse."""
+    p = Pointing.of(REGISTRY["satel"])
+    first = p.judge(p.nudge(_sat(120), 5, None), 120).az_deg
+    assert first == 130
+    assert p.judge(p.nudge(_sat(124, going_to=first), 5, None), 124).az_deg == 140
+    back = p.judge(p.nudge(_sat(120), -5, None), 120).az_deg
+    assert back == 110
+    assert p.judge(p.nudge(_sat(117, going_to=back), -5, None), 117).az_deg == 100
+    assert p.nudged(_sat(120, 20), 0, 5) == (None, 30)
+    assert p.nudged(_sat(120, 20), 0, -5) == (None, 10)
+    assert p.nudged(_sat(120, 20), 0, 12) == (None, 30)
+    assert p.nudged(_sat(120, 20), 0, 16) == (None, 40)
+    assert p.judge(p.nudge(_sat(350), 3, None), 350).az_deg == 360  # the end, not 0
+    assert p.judge(p.nudge(_sat(10), -3, None), 10).az_deg == 0
+    for raw, d_az in ((360, 5), (0, -5), (0, -3)):
+        with pytest.raises(Refused) as exc:
+            p.nudge(_sat(raw), d_az, None)
+        assert "past the end" in exc.value.message, (raw, d_az)
+    low = Pointing.of(REGISTRY["satel"], el_limits=(0.0, 88.0))
+    assert refused(low.judge, low.nudge(_sat(120, 80), 0, 3), 120) is RefusalCode.LIMITS
+    assert refused(low.judge, low.nudge(_sat(120, 0), 0, -3), 120) is RefusalCode.LIMITS
+    fenced = Pointing.of(REGISTRY["satel"], keep_out=((105, 112),))
+    assert refused(fenced.judge, fenced.nudge(_sat(120), -5, None), 120) is RefusalCode.KEEP_OUT
+    narrowed = Pointing.of(REGISTRY["satel"], az_limits=(0.0, 125.0))
+    assert refused(narrowed.judge, narrowed.nudge(_sat(120), 3, None), 120) is RefusalCode.LIMITS
+    # a rotor of whole degrees is nudged by the degrees named, as before
+    yaesu = Pointing.of(REGISTRY["gs232b"])
+    assert yaesu.judge(yaesu.nudge(_sat(120), -5, None), 120).az_deg == 115
+    assert yaesu.judge(yaesu.nudge(_sat(120), 3, None), 120).az_deg == 123
+
+
 def test_a_nudge_across_north_in_the_middle_of_the_travel_is_folded_as_before() -> None:
     """Rule 6: a Hy-Gain rotor's stop is at south, so a Rotor-EZ's or a DCU-1's 0 and 360 are
     one place, the middle of its travel, and an RT-21 is never sent 360: +10 at 355 goes out
