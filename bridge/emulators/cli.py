@@ -50,6 +50,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--resolution", type=int, help="pulses per degree (SPID: 1, 2, 4; MD-01 also 10)"
     )
     parser.add_argument(
+        "--coast-deg",
+        type=float,
+        help="how far a stopped rotor runs on, decelerating (SPID family; default 0: stops dead)",
+    )
+    parser.add_argument(
         "--blank-lines-after-w",
         type=int,
         help="blank lines after the answer to W, as K3NG's firmware sends (GS-232 family)",
@@ -121,6 +126,7 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
             el_speed_deg_s=args.el_speed_deg_s,
             start_el_deg=args.start_el_deg,
             resolution_ppd=args.resolution,
+            coast_deg=args.coast_deg,
         )
     elif args.model == "rt21":  # one box, one rotor: no elevation options
         opts.update(az_speed_deg_s=args.speed_deg_s, reply_padding=args.reply_padding)

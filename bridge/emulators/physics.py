@@ -15,14 +15,21 @@ Rules:
    A `now` earlier than the last one seen is treated as the last one seen.
 2. Travel is linear between `min_deg` and `max_deg` and never wraps: 10 -> 350 on a 0..360 rotor
    goes the long way through 180. A target outside the range is clamped to the nearest stop.
-3. Constant speed, no acceleration or coasting. `arrival_time_s()` is exact and `advance()`
-   returns the instant of arrival, so a controller can start a brake delay at the true arrival
-   time however late it looks.
+3. Constant speed, no acceleration. `arrival_time_s()` is exact and `advance()` returns the
+   instant of arrival, so a controller can start a brake delay at the true arrival time however
+   late it looks. The only deceleration is a coast a controller asks for (rule 6).
 4. A jammed axis keeps its motor running (`is_moving` stays True) but its position does not
    change, and it never arrives. Unjamming resumes the move from where it stuck.
 5. Every move records who drives it (`driver`): a controller command or the front panel
    ("panel"). A new move replaces the current one at once; the axis has no opinion on whether
    that is wise (controllers decide, e.g. the Rotor-EZ refuses to re-target while turning).
+6. `stop(now, coast_deg=, coast_s=)` may let the rotor run on after its motor is cut (momentum,
+   a motor's ramp): up to `coast_deg` further in the direction it was turning, never past a
+   limit, decelerating uniformly to rest in `coast_s` (x(t) = D * (1 - (1 - t/T)^2)). The motor
+   is off meanwhile (`is_moving` False, no target, no arrival) but `is_coasting` is True and
+   the position changes; `coast_end_s()` says when it rests. A new move, a jam or
+   `set_position` ends a coast where it is; a stop during one changes nothing. A jammed axis
+   does not coast.
 """
 
 from __future__ import annotations
@@ -59,6 +66,7 @@ class Axis:
         self._target_deg: float | None = None
         self._driver: str | None = None
         self._jammed: bool = False
+        self._coast: tuple[float, float, float, float] | None = None  # from, to, start, length
 
     # -- read-only view -------------------------------------------------------------------------
 
@@ -84,11 +92,26 @@ class Axis:
     def is_jammed(self) -> bool:
         return self._jammed
 
+    @property
+    def is_coasting(self) -> bool:
+        """Running on with the motor off (rule 6). Call advance(now) first."""
+        return self._coast is not None
+
+    def coast_end_s(self) -> float | None:
+        """When the current coast comes to rest, or None."""
+        coast = self._coast
+        return None if coast is None else coast[2] + coast[3]
+
     def clamp(self, az_deg: float) -> float:
         return min(self.max_deg, max(self.min_deg, float(az_deg)))
 
     def position_deg_at(self, now: float) -> float:
         """Where the axis is at `now`, without committing anything."""
+        coast = self._coast
+        if coast is not None:
+            start_deg, end_deg, start_s, length_s = coast
+            left = 1.0 - min(1.0, max(0.0, now - start_s) / length_s)
+            return start_deg + (end_deg - start_deg) * (1.0 - left * left)
         target = self._target_deg
         if target is None or self._jammed:
             return self._position_deg
@@ -113,6 +136,10 @@ class Axis:
         arrival_s = self.arrival_time_s()
         self._position_deg = self.position_deg_at(now)
         self._anchor_s = now
+        coast = self._coast
+        if coast is not None and coast[2] + coast[3] <= now:
+            self._position_deg = coast[1]  # at rest exactly where the coast ends
+            self._coast = None
         if arrival_s is not None and arrival_s <= now:
             assert self._target_deg is not None
             self._position_deg = self._target_deg  # exactly there, whatever the float rounding
@@ -126,6 +153,7 @@ class Axis:
     def start_move(self, target_deg: float, now: float, *, driver: str = DRIVER_COMMAND) -> bool:
         """Head for `target_deg` (clamped). Return False, and stay idle, if already there."""
         self.advance(now)
+        self._coast = None
         target = self.clamp(target_deg)
         if target == self._position_deg:
             self._target_deg = None
@@ -139,17 +167,26 @@ class Axis:
         """The front panel's pointing control: an ordinary move driven by the panel."""
         return self.start_move(target_deg, now, driver=DRIVER_PANEL)
 
-    def stop(self, now: float) -> bool:
-        """Cut the motor. Return True if it was running."""
+    def stop(self, now: float, *, coast_deg: float = 0.0, coast_s: float = 0.0) -> bool:
+        """Cut the motor, and let the rotor coast (rule 6). Return True if it was running."""
         self.advance(now)
-        was_moving = self._target_deg is not None
+        target = self._target_deg
         self._target_deg = None
         self._driver = None
-        return was_moving
+        if target is None:
+            return False
+        if coast_deg > 0 and coast_s > 0 and not self._jammed:
+            end_deg = self.clamp(
+                self._position_deg + math.copysign(coast_deg, target - self._position_deg)
+            )
+            if end_deg != self._position_deg:
+                self._coast = (self._position_deg, end_deg, now, float(coast_s))
+        return True
 
     def jam(self, now: float) -> None:
         """From `now` on the motor may run but the position stays (rule 4)."""
         self.advance(now)
+        self._coast = None
         self._jammed = True
 
     def unjam(self, now: float) -> None:
@@ -159,6 +196,7 @@ class Axis:
     def set_position(self, az_deg: float, now: float) -> None:
         """Put the axis somewhere, motor off (test set-up, not physics)."""
         self.advance(now)
+        self._coast = None
         self._position_deg = self.clamp(az_deg)
         self._target_deg = None
         self._driver = None

@@ -35,7 +35,8 @@ Rules:
    switch, physics.Axis rule 2) and logged "set: clamped"; Hamlib and the PyPI client never send
    one, so seeing that outcome means the client skipped its own range check.
 6. Az and el move together at `az_speed_deg_s` / `el_speed_deg_s`. A set while moving re-targets
-   at once (SPID has no brake-delay rule). Stop halts both axes and reports the exact position.
+   at once (SPID has no brake-delay rule). Stop halts both axes and reports the exact position
+   (with `coast_deg`, rule 11, the position at the instant the stop came).
 7. Move (MD-01/02, H1 = direction bits 0x01 left, 0x02 right, 0x04 up, 0x08 down, combinations
    of one az and one el bit allowed) runs the named axes towards their limits until a stop or a
    new set; an axis not named stops (the controller replaces its motion; Hamlib 4.6 ORs the
@@ -50,6 +51,15 @@ Rules:
 10. Every complete frame (and every junk run) is logged once with its Outcome; motion is logged as
     MotionEvents. power_cycle() stops the motors, drops a half-received frame and anything not
     yet transmitted; the rotor stays where it is.
+11. Coasting (`coast_deg`, default 0: stops dead): spid.txt says the stop reply is the current
+    position, "often off by a degree or two", because the rotor is still coming to rest. With
+    coast_deg > 0 an axis whose motor is cut while turning (a serial stop, the panel stop, a
+    move that leaves the axis out, power off) runs on up to coast_deg further the way it was
+    turning, never past a limit, decelerating to rest in `coast_s` (physics.Axis rule 6). The
+    stop reply carries the position at the instant the stop frame completed; status replies
+    during the coast show it going on; truth's is_moving is True until it rests ("coasted"
+    event). A set or a move during a coast starts from where the rotor is then. Both axes use
+    the same coast_deg (a stop of a jammed axis does not coast).
 """
 
 from __future__ import annotations
@@ -111,6 +121,8 @@ class Spid(Recorder):
         el_min_deg: float | None = None,
         el_max_deg: float | None = None,
         debug_lines: str = "off",
+        coast_deg: float = 0.0,
+        coast_s: float = 0.8,
         processing_delay_s: float = 0.002,
         now: float = 0.0,
     ) -> None:
@@ -122,6 +134,8 @@ class Spid(Recorder):
             raise ValueError(f"{model} resolution_ppd must be one of {spec.resolutions_ppd}")
         if debug_lines not in DEBUG_LINE_MODES:
             raise ValueError(f"debug_lines must be one of {DEBUG_LINE_MODES}, got {debug_lines!r}")
+        if not (coast_deg >= 0 and coast_s > 0):
+            raise ValueError(f"coast_deg must be >= 0 and coast_s > 0, got {coast_deg}, {coast_s}")
         if debug_lines != "off" and not spec.has_debug_lines:
             raise ValueError(f"{model} prints no debug lines (only the MD-01/02 does)")
         az_min = spec.az_min_deg if az_min_deg is None else float(az_min_deg)
@@ -141,6 +155,8 @@ class Spid(Recorder):
         self.spec: ModelSpec = spec
         self.resolution_ppd: int = ppd
         self.debug_lines: str = debug_lines
+        self.coast_deg: float = float(coast_deg)
+        self.coast_s: float = float(coast_s)
         self._az = Axis(
             start_az_deg, min_deg=az_min, max_deg=az_max, speed_deg_s=az_speed_deg_s, now=now
         )
@@ -198,7 +214,9 @@ class Spid(Recorder):
     def next_wakeup(self, now: float) -> float | None:
         """The next instant something happens by itself (a byte due, an axis arriving)."""
         self._update(now)
-        times = [self._tx.next_due_s(), *(axis.arrival_time_s() for axis in self._axes())]
+        times = [self._tx.next_due_s()]
+        for axis in self._axes():
+            times += [axis.arrival_time_s(), axis.coast_end_s()]
         pending = [t for t in times if t is not None]
         return min(pending) if pending else None
 
@@ -212,7 +230,7 @@ class Spid(Recorder):
             time_s=now,
             az_deg=self._az.position_deg,
             el_deg=None if el is None else el.position_deg,
-            is_moving=any(axis.is_moving for axis in self._axes()),
+            is_moving=any(axis.is_moving or axis.is_coasting for axis in self._axes()),
             is_jammed=any(axis.is_jammed for axis in self._axes()),
             in_brake_delay=False,
             target_az_deg=self._az.target_deg,
@@ -293,16 +311,23 @@ class Spid(Recorder):
         self._now_s = now
         for axis, name in ((self._az, "az"), (self._el, "el")):
             if axis is not None:
+                coast_end_s = axis.coast_end_s()
                 arrival_s = axis.advance(now)
                 if arrival_s is not None:
                     self._event(arrival_s, "arrived", f"{name} at {axis.position_deg:g}")
+                if coast_end_s is not None and not axis.is_coasting:
+                    self._event(coast_end_s, "coasted", f"{name} at rest at {axis.position_deg:g}")
         return now
 
     def _event(self, time_s: float, kind: str, detail: str = "") -> None:
         self._events.append(MotionEvent(time_s, kind, self._az.position_deg_at(time_s), detail))
 
+    def _stop_axis(self, axis: Axis, now: float) -> bool:
+        """Cut one axis's motor, coasting as rule 11 says; True if it was running."""
+        return axis.stop(now, coast_deg=self.coast_deg, coast_s=self.coast_s)
+
     def _halt(self, now: float, reason: str) -> bool:
-        stopped = [axis.stop(now) for axis in self._axes()]
+        stopped = [self._stop_axis(axis, now) for axis in self._axes()]
         if any(stopped):
             self._event(now, "stopped", reason)
         return any(stopped)
@@ -361,7 +386,7 @@ class Spid(Recorder):
             plan.append((self._el, el_bits, DIR_DOWN, "el"))
         for axis, bits, down_bit, name in plan:
             if not bits:
-                if axis.stop(now):
+                if self._stop_axis(axis, now):
                     self._event(now, "stopped", f"{name}: not in the move direction")
                 continue
             limit_deg = axis.min_deg if bits == down_bit else axis.max_deg

@@ -124,3 +124,50 @@ def test_position_stays_between_start_and_target(
         gap = abs(goal - axis.position_deg)
         assert gap <= previous_gap + 1e-9
         previous_gap = gap
+
+
+# -- coasting (rule 6) --
+
+
+def test_a_coast_runs_on_the_way_it_turned_and_decelerates_to_rest() -> None:
+    axis = Axis(0.0, speed_deg_s=2.0)
+    axis.start_move(100.0, now=0.0)
+    assert axis.stop(10.0, coast_deg=2.0, coast_s=1.0)  # at 20, turning up
+    assert not axis.is_moving and axis.is_coasting and axis.target_deg is None
+    assert axis.coast_end_s() == pytest.approx(11.0) and axis.arrival_time_s() is None
+    assert axis.position_deg_at(10.0) == pytest.approx(20.0)
+    assert axis.position_deg_at(10.5) == pytest.approx(21.5)  # 3/4 of it in the first half
+    assert axis.advance(10.75) is None and axis.is_coasting
+    assert axis.advance(12.0) is None  # resting is no arrival
+    assert not axis.is_coasting and axis.position_deg == 22.0
+
+
+def test_a_coast_goes_down_when_turning_down_and_stops_at_a_limit() -> None:
+    axis = Axis(100.0, speed_deg_s=10.0)
+    axis.start_move(0.0, now=0.0)
+    axis.stop(1.0, coast_deg=2.0, coast_s=1.0)
+    axis.advance(5.0)
+    assert axis.position_deg == 88.0
+    axis.start_move(0.0, now=5.0)
+    axis.stop(13.95, coast_deg=2.0, coast_s=1.0)  # 0.5 from the end stop
+    axis.advance(20.0)
+    assert axis.position_deg == 0.0
+
+
+def test_no_coast_when_idle_jammed_or_unasked_and_a_new_move_starts_from_the_coast() -> None:
+    axis = Axis(0.0, speed_deg_s=1.0)
+    assert not axis.stop(0.0, coast_deg=2.0, coast_s=1.0) and not axis.is_coasting
+    axis.start_move(50.0, now=0.0)
+    axis.stop(5.0)
+    assert not axis.is_coasting
+    axis.start_move(50.0, now=5.0)
+    axis.jam(6.0)
+    axis.stop(7.0, coast_deg=2.0, coast_s=1.0)
+    assert not axis.is_coasting and axis.position_deg_at(9.0) == pytest.approx(6.0)
+    axis.unjam(9.0)
+    axis.start_move(50.0, now=9.0)
+    axis.stop(10.0, coast_deg=2.0, coast_s=1.0)  # at 7
+    assert not axis.stop(10.5, coast_deg=2.0, coast_s=1.0)  # a stop in a coast changes nothing
+    assert axis.position_deg_at(10.5) == pytest.approx(8.5)
+    axis.start_move(0.0, now=10.5)  # turns back from where the coast had it
+    assert not axis.is_coasting and axis.position_deg_at(11.5) == pytest.approx(7.5)

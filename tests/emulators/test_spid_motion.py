@@ -113,6 +113,74 @@ def test_rot1prog_moves_azimuth_only() -> None:
     assert state.target_el_deg is None
 
 
+# -- coasting (rule 11) --
+
+
+def test_a_coasting_rotor_answers_the_stop_with_where_it_was_then_and_rests_further_on() -> None:
+    device = make(az_speed_deg_s=2.0, el_speed_deg_s=1.0, coast_deg=1.5, coast_s=1.0)
+    device.receive(set_frame(2 * 460, 2 * 410), 0.0)  # az 100, el 50
+    device.receive(STOP, 5.0)  # at az 10, el 5
+    assert position(device, 5.5) == (pytest.approx(11.125), pytest.approx(6.125))
+    assert device.state(5.5).is_moving and device.state(5.5).target_az_deg is None
+    device.receive(STATUS, 5.5)  # mid-coast: 11.125 / 6.125 on the half-degree grid
+    assert device.due_output(6.5) == bytes.fromhex(
+        "57 03 07 00 00 02 03 06 05 00 02 20"  # the stop's: az 10, el 5
+        "57 03 07 01 00 02 03 06 06 00 02 20"  # the status's: az 11, el 6
+    )
+    assert position(device, 6.0) == (11.5, 6.5) and not device.state(6.0).is_moving
+    device.receive(STATUS, 100.0)
+    assert device.due_output(101.0) == bytes.fromhex("57 03 07 01 05 02 03 06 06 05 02 20")
+    coasted = [(e.time_s, e.detail) for e in device.events if e.kind == "coasted"]
+    assert coasted == [(6.0, "az at rest at 11.5"), (6.0, "el at rest at 6.5")]
+    assert device.next_wakeup(100.0) is None
+
+
+def test_a_coast_follows_the_turn_down_and_a_second_stop_answers_the_coast_position() -> None:
+    device = make(az_speed_deg_s=2.0, start_az_deg=50.0, start_el_deg=20.0, coast_deg=2.0)
+    device.receive(set_frame(2 * 360, 2 * 370), 0.0)  # az 0, el 10: both turn down
+    device.receive(STOP, 5.0)  # az 40, el 17.5
+    assert len(device.due_output(5.3)) == 12
+    assert device.next_wakeup(5.3) == pytest.approx(5.8)  # at rest then: coast_s is 0.8
+    device.receive(STOP, 5.4)  # half-way in time, 3/4 of the way
+    assert device.reported_position(5.4) == (38.5, 16.0)
+    assert device.due_output(7.0) == bytes.fromhex("57 03 09 08 05 02 03 07 06 00 02 20")
+    assert position(device, 10.0) == (38.0, 15.5)
+    assert [f.outcome for f in device.log] == ["set", "stop", "stop"]
+
+
+def test_a_set_during_a_coast_starts_from_where_the_rotor_is() -> None:
+    device = make(az_speed_deg_s=2.0, coast_deg=2.0, coast_s=1.0)
+    device.receive(set_frame(2 * 460, 720), 0.0)  # az 100
+    device.receive(STOP, 5.0)  # az 10
+    device.receive(set_frame(2 * 360, 720), 5.5)  # az 0: from 11.5, back down
+    assert position(device, 6.5) == (pytest.approx(9.5), 0.0)
+    assert position(device, 20.0) == (0.0, 0.0)
+    assert not [e for e in device.events if e.kind == "coasted"]
+
+
+def test_the_panel_stop_and_an_md01_move_leaving_an_axis_out_coast_too() -> None:
+    device = make(coast_deg=1.0, coast_s=0.5)
+    device.receive(set_frame(2 * 460, 720), 0.0)
+    device.press_brake(4.0)
+    assert position(device, 10.0) == (5.0, 0.0)
+    md01 = make("md01", start_az_deg=100.0, start_el_deg=45.0, coast_deg=1.0, coast_s=0.5)
+    md01.receive(move_frame(0x06), 0.0)  # right and up
+    md01.receive(move_frame(0x04), 10.0)  # up only: the azimuth's motor is cut
+    assert position(md01, 20.0) == (pytest.approx(111.0), pytest.approx(55.0))
+
+
+def test_without_coast_deg_a_stop_is_dead_and_a_jammed_rotor_never_coasts() -> None:
+    device = make(az_speed_deg_s=2.0)
+    device.receive(set_frame(2 * 460, 720), 0.0)
+    device.receive(STOP, 5.0)
+    assert not device.state(5.0).is_moving and position(device, 10.0) == (10.0, 0.0)
+    jammed = make(az_speed_deg_s=2.0, coast_deg=2.0)
+    jammed.receive(set_frame(2 * 460, 720), 0.0)
+    jammed.jam(5.0)
+    jammed.receive(STOP, 6.0)
+    assert not jammed.state(6.0).is_moving and position(jammed, 10.0) == (10.0, 0.0)
+
+
 # -- limits --
 
 
@@ -144,6 +212,8 @@ def test_limits_can_be_narrowed() -> None:
         {"model": "nope"},
         {"debug_lines": "sometimes"},
         {"debug_lines": "before"},  # a Rot2Prog prints no debug lines
+        {"coast_deg": -1.0},
+        {"coast_deg": 1.0, "coast_s": 0.0},
     ],
 )
 def test_bad_configuration_is_refused(kwargs: dict[str, Any]) -> None:
