@@ -376,3 +376,50 @@ def test_an_azimuth_or_an_elevation_alone_keeps_the_other_axis_on_its_step(rig: 
     v.target(None, 40.75)
     v.run_until(settled_at(130, 40.75), 60, "at 40.75 of elevation, the azimuth where it was")
     assert sets(v, t) == [(4 * 490, 4 * 404 + 1), (4 * 490, 4 * 400 + 3)]
+
+
+@pytest.mark.parametrize("model", ["rot2prog", "rot1prog", "md01"])
+def test_a_rotor_coasting_after_a_stop_is_shown_at_rest_where_it_came_to_rest(
+    rig: Rig, model: str
+) -> None:
+    """emulators/spid.py rule 11 (spid.txt: the stop's answer "often off by a degree or two"):
+    the rotor runs on 2 degrees over a second after an operator's STOP. The readings show it
+    turning after the stop, so stops.py rule 2 may send the stop once more (harmless: its motor
+    is already off), but nothing else changes for the user: no error on R/error, ``moving``
+    then ``idle`` once, no target, the bearing where it came to rest."""
+    v = rig(model, emulator={"coast_deg": 2.0, "coast_s": 1.0})
+    v.run_until_state(IDLE, 30)
+    v.target(100)
+    v.run_until(lambda h: h.truth().is_moving and h.truth().az_deg > 20, 60, "turning")
+    t = v.now
+    v.stop()
+    v.run_until(lambda h: h.frames(Outcome.STOP, since=t), 5, "the stop at the box")
+    stopped_at = v.frames(Outcome.STOP, since=t)[0].time_s
+    v.run_for(30)
+
+    coasted = [e for e in v.device.events if e.kind == "coasted" and e.time_s >= stopped_at]
+    assert coasted and coasted[0].time_s == pytest.approx(stopped_at + 1.0)
+    rest = v.truth().az_deg
+    assert not v.truth().is_moving and rest > 20
+    assert v.errors(since=t) == []
+    assert _states_since(v, t) == [MOVING, IDLE]
+    assert v.status.target_az_deg is None and v.status.bearing_deg == pytest.approx(rest, abs=1)
+    assert len(v.frames(Outcome.STOP, since=t)) <= 2 and not v.frames(Outcome.SET, since=t)
+
+    t = v.now  # a target right after a stop goes out at once, coast or not
+    v.target(50)
+    v.run_for(0.2)
+    v.stop()
+    v.run_for(0.5)
+    v.target(10)
+    v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 120, "at 10")
+    assert round(v.truth().az_deg) == 10 and v.errors(since=t) == []
+    assert v.status.target_az_deg is None
+
+
+def _states_since(v: VirtualRotator, since: float) -> list[MotionState]:
+    out: list[MotionState] = []
+    for t, status in v.statuses:
+        if t >= since and (not out or status.state is not out[-1]):
+            out.append(status.state)
+    return out
