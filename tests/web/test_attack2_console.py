@@ -31,6 +31,7 @@ import aiohttp
 import pytest
 from playwright.sync_api import Browser, expect
 
+from bridge.interfaces.web.commands import feed_clock
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, run_async, web_section
 from tests.support.rig import Rig
@@ -781,3 +782,45 @@ def test_the_bridge_stopping_closes_an_open_websocket_at_once(
 
     code, took = run_async(watch())
     assert code == 1001, (code, took)  # going away: the bridge closed it, no client timeout
+
+
+def test_a_console_command_sent_before_a_halt_by_mqtt_is_refused_however_late_it_comes(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """An attack pass (commands.py rules 5 and 6): a click the page stamped before a STOP by
+    MQTT, held up before its request reached the console, was carried out after that STOP and
+    turned the rotor to 300; a lock OFF the page sent before a lock ON by MQTT undid it."""
+    rig, client = console
+    t = time.monotonic()
+    rig.mqtt.publish(rig.t("target"), "100")
+    rig.mqtt.wait_for(rig.t("status"), lambda m: json.loads(m.payload)["moving"], 5.0, t)
+    clicked = feed_clock()  # the page's click, stamped: held up on the way
+    t = time.monotonic()
+    rig.mqtt.publish(rig.t("stop"), "STOP")
+    rig.mqtt.wait_for(rig.t("status"), lambda m: json.loads(m.payload)["state"] == "idle", 10.0, t)
+    t = time.monotonic()
+    late = client.command("hf", command="target", az=300, page="p1", seq=2, sent=clicked)
+    assert late.status == 409 and "sent before a STOP" in str(late.doc), late
+    moved = True
+    try:
+        rig.mqtt.wait_for(  # a quiet period: the test expects the timeout (waiting.py rule 2)
+            rig.t("status"),
+            lambda m: json.loads(m.payload)["state"] == "moving",
+            3.0,
+            t,
+            quiet=True,
+        )
+    except AssertionError:
+        moved = False
+    assert not moved
+    assert client.command("hf", command="lock", on=True, page="p1", seq=3).status == 200
+    unlocking = feed_clock()  # the page's lock OFF, stamped: held up on the way
+    t = time.monotonic()
+    rig.mqtt.publish(rig.t("lock"), "ON")  # the climber's mate, by Home Assistant's switch
+    rig.mqtt.wait_for(rig.t("lock/state"), lambda m: m.payload == b"ON", 5.0, t)
+    assert rig.app is not None
+    rot = rig.app.rotators[0]
+    wait_until(lambda: rot.last_halt_s > unlocking - (feed_clock() - time.monotonic()), 5, "ON")
+    late = client.command("hf", command="lock", on=False, page="p1", seq=4, sent=unlocking)
+    assert late.status == 409, late
+    assert rot.locked

@@ -6,13 +6,17 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from typing import Any
 
 import pytest
 
 from bridge.interfaces.web.commands import (
+    _OFFSET_S,
     MAX_AGE_S,
+    STALE,
     BadCommand,
+    Order,
     WebCommand,
     aged,
     feed_clock,
@@ -119,6 +123,28 @@ def test_a_move_sent_too_long_ago_or_ahead_of_the_clock_is_refused_a_halt_never(
     for bad in (b'"x"', b"-1", b"true", b"1e999"):
         with pytest.raises(BadCommand, match='"sent"'):
             parse(b'{"command":"park","sent":' + bad + b"}")
+
+
+def test_a_move_the_page_sent_before_a_halt_is_stale_however_late_its_request_began() -> None:
+    """Rule 5 with rule 6's send time: an attack pass, a click (or a lock OFF) held up before
+    its request reached the console, after a STOP (a lock ON) by MQTT was carried out, was
+    carried out: only when its request began was compared with the halt."""
+    order, halted = Order(), 1000.0  # (the steady clock: monotonic)
+    before, after = halted - 0.3 + _OFFSET_S, halted + 0.3 + _OFFSET_S  # (the feed's clock)
+    for cmd in (
+        WebCommand("target", az_deg=300.0, page="p1", seq=2, sent=before),
+        WebCommand("lock", on=False, page="p1", seq=2, sent=before),
+        WebCommand("target", az_deg=300.0, sent=before),  # a script's, not numbered
+    ):
+        assert order.stale("hf", cmd, halted + 2.0, halted) == STALE, cmd
+        assert order.stale("hf", replace(cmd, sent=after), halted + 2.0, halted) is None, cmd
+    assert order.stale("hf", WebCommand("target", az_deg=1.0), halted + 2.0, halted) is None
+    # the page's own STOP, numbered before the click: the page sent the click after it,
+    # though its reckoning of the time errs on the old side (rule 6)
+    order.halted("hf", WebCommand("stop", page="p1", seq=5), halted)
+    mine = WebCommand("target", az_deg=30.0, page="p1", seq=6, sent=halted - 0.01 + _OFFSET_S)
+    assert order.stale("hf", mine, halted + 0.5, halted) is None
+    assert order.stale("hf", replace(mine, seq=4), halted + 0.5, halted) == STALE
 
 
 def test_the_feed_clock_is_not_the_hosts_uptime_and_holds_across_a_bridge_restart() -> None:

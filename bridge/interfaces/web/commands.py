@@ -24,8 +24,11 @@ Rules:
    rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
    stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
    rotctld, the console) was carried out while it was still arriving (its body held up on the
-   way), and a command a page numbered (``page`` and ``seq``, which the console's page sends)
-   before a STOP or lock ON the same page sent after it, however late it comes; but not one
+   way) or that the page stamped as sent before it (``sent``, rule 6: an attack pass, a click
+   held up before its request reached the console, after a STOP by MQTT, turned the rotor; a
+   lock OFF sent before a lock ON by MQTT undid it), and a command a page numbered (``page``
+   and ``seq``, which the console's page sends) before a STOP or lock ON the same page sent
+   after it, however late it comes; but not one
    the same page numbered after its own STOP, the latest there is, that merely overtook it. A
    stop, a lock ON and tracking off are never stale.
 5a. Among a page's other commands the newest it numbered wins: one numbered before another
@@ -363,7 +366,10 @@ class Order:
                 return OVERTAKEN  # rule 5a
         at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
         latest = max(at, halted_s)
-        if started < latest:
+        # sent before the halt, by the page's reckoning (rule 6), is sent before it however
+        # late its request began: a click held up on the way before it reached the console
+        born = started if cmd.sent is None else min(started, cmd.sent - _OFFSET_S)
+        if born < latest:
             # the page's own halt, numbered before this command and the latest there is: the
             # page sent this after it, whichever arrived first
             own = numbered and page == cmd.page and seq is not None and at >= halted_s
