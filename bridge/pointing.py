@@ -34,6 +34,11 @@ Rules:
    are held along the turn as a group's arc is (rule 9), from the rotor's reading: a helper,
    limits 20..340 on a Rotor-EZ at 30 sent 330 swept through north, 27 readings outside them.
    With no reading (a DCU-1, which never answers) the way is not known: its end is checked.
+   Only where the stop is known to be at south (``stop_at_south``: not an RT-21's, which may
+   turn a Yaesu through south; a review: with limits 2..358 it could no longer leave its half).
+   A target at the stop itself (raw 180) is refused under such limits, named or with no
+   reading: there no reading tells which end the rotor is at, and from one of them every turn
+   passes north (a review: parked at 180, every target after was refused).
 5. A refusal raises Refused with a message naming the true and the raw value when they differ.
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
@@ -44,7 +49,8 @@ Rules:
    nudge, in azimuth or elevation, goes to the nearest step of the value it names and at
    least the first step past where it starts its own way (``_stepped``): -5 at 120 is 110 as
    +5 is 130 (rounded alone, 115 went out as 120 and nothing turned), and a second press
-   counts from the step the status shows as the target, so two of +5 end at 140. A nudge
+   counts from the step the status shows as the target, so two of +5 end at 140; one of less
+   than half a step is refused (it names far less than the least the controller turns). A nudge
    turns the short way it names. Where the controller's
    0 and 360 are the ends of the travel (``az_ends_at_north``: the stop at north, a GS-232's,
    an Easycomm's, a SatEL's), it is taken on the controller's own scale: +10 at 350 is 360,
@@ -152,6 +158,7 @@ class Pointing:
     has_elevation: bool = False
     az_wraps: bool = True  # the controller's 0 and 360 are the same direction
     az_ends_at_north: bool = True  # and the two ends of the travel (rule 6)
+    stop_at_south: bool = False  # a Hy-Gain rotor's: north mid-travel, known (rule 4)
     whole_degrees: bool = False
     steps_deg: int = 1  # (whole degrees in steps of this many: a SatEL's ten)
     tenths: bool = False
@@ -186,6 +193,7 @@ class Pointing:
             has_elevation=spec.has_elevation,
             az_wraps=spec.az_wraps,
             az_ends_at_north=spec.az_ends_at_north,
+            stop_at_south=spec.stop_at_south,
             whole_degrees=spec.whole_degrees,
             steps_deg=spec.steps_deg,
             tenths=spec.tenths,
@@ -315,9 +323,21 @@ class Pointing:
             return self._checked(az_deg, base)  # raises, naming the raw value
         if within is not None:
             legal = self._within(az_deg, current_raw_deg, legal, within)
+        self._at_the_stop(az_deg, legal)
         limits = self._limits_arc(current_raw_deg)
         if limits is not None:  # rule 4: the turn, not its end alone, on a travel through north
-            legal = self._within(az_deg, current_raw_deg, legal, limits, self._limits_text())
+            try:
+                legal = self._within(az_deg, current_raw_deg, legal, limits, self._limits_text())
+            except Refused:
+                if current_raw_deg is not None and current_raw_deg % 360.0 == 180.0:
+                    raise Refused(
+                        RefusalCode.LIMITS,
+                        f"azimuth {az_deg:g}: the {self.model_name} is at its stop (controller "
+                        "180), where no reading tells which end of its travel it is at; from "
+                        f"one of them the turn leaves {self._limits_text()}: turn it off the "
+                        "stop at the controller",
+                    ) from None
+                raise
         if self.az_wraps:  # rule 2: 360 named is 360 (no offset); else 0 rather than 360
             if end is not None:  # rule 6: the end a nudge turns to, never the other one
                 if end in legal:
@@ -347,12 +367,28 @@ class Pointing:
         30 to 330 sweeps through north) and the limits leave some of it out; None elsewhere (a
         turn between two values inside limits stays inside them) and with no reading (which way
         a turn goes is not known: its end is checked, as on every scale)."""
-        lo, hi = self.az_min_deg, self.az_max_deg
-        if current_raw is None or not self.az_wraps or self.az_ends_at_north:
+        if current_raw is None or not self._narrowed_through_north():
             return None
-        if lo <= 0.0 and hi >= 360.0:
-            return None
-        return lo + self.offset_deg, hi + self.offset_deg
+        return self.az_min_deg + self.offset_deg, self.az_max_deg + self.offset_deg
+
+    def _narrowed_through_north(self) -> bool:
+        """Rule 4: a Hy-Gain rotor's travel (its stop at south, north mid-travel) whose limits
+        leave part of the scale out."""
+        whole = self.az_min_deg <= 0.0 and self.az_max_deg >= 360.0
+        return self.stop_at_south and self.az_wraps and not whole
+
+    def _at_the_stop(self, az_deg: float, legal: list[float]) -> None:
+        """Rule 4: Refused for a target that leaves a Hy-Gain rotor at its stop under narrowed
+        limits: there no reading tells which end of its travel it is at, and from one of them
+        any turn passes north (a review: at 180, every target was refused)."""
+        if self._narrowed_through_north() and any(r % 360.0 == 180.0 for r in legal):
+            raise Refused(
+                RefusalCode.LIMITS,
+                f"azimuth {az_deg:g} is the {self.model_name}'s stop (controller 180): there no "
+                "reading tells which end of its travel the rotor is at, and the limits "
+                f"{self.az_min_deg:g}..{self.az_max_deg:g} need it to judge a turn from there; "
+                "send 179 or 181",
+            )
 
     def _limits_text(self) -> str:
         text = f"the limits {self.az_min_deg:g}..{self.az_max_deg:g}"
@@ -610,10 +646,17 @@ class Pointing:
         ``d`` from ``start`` (the axis's raw value) goes, the nearest step of ``start + d``
         and at least the first step past ``start`` its own way (-5 at 120 is 110 as +5 is
         130; rounded half up alone, 115 went out as 120 and nothing turned); ``start + d``
-        on any other controller."""
+        on any other controller. Refused for a nudge of less than half a step, which names a
+        turn far shorter than the least the controller makes (a review: 0.001 turned it 10)."""
         whole, _tenths, _cuts, steps = self._rounds(el)
         if not whole or steps == 1:
             return start + d
+        if abs(d) < steps / 2:
+            raise Refused(
+                RefusalCode.INVALID,
+                f"a nudge of {d:+.10g} degrees is less than half of the {self.model_name}'s "
+                f"{steps}-degree step, the least it turns: nudge by {steps / 2:g} or more",
+            )
         nearest = float(half_up_step(start + d, steps))
         at = start / steps
         if d > 0:

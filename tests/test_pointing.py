@@ -208,7 +208,7 @@ def _sat(raw: float, el: float = 20.0, *, going_to: float | None = None) -> Rota
 
 @pytest.mark.parametrize(
     ("d_az", "sent"),
-    [(5, 130), (-5, 110), (3, 130), (-3, 110), (12, 130), (-12, 110), (16, 140), (-16, 100)],
+    [(5, 130), (-5, 110), (7, 130), (-7, 110), (12, 130), (-12, 110), (16, 140), (-16, 100)],
 )
 def test_a_satel_nudge_goes_at_least_one_step_its_own_way(d_az: float, sent: float) -> None:
     """Rule 6 on a controller of steps (a SatEL's ten degrees, rule 4): the nearest step of the
@@ -233,19 +233,19 @@ def test_satel_nudges_add_up_from_the_step_being_approached_and_in_elevation() -
     assert p.nudged(_sat(120, 20), 0, -5) == (None, 10)
     assert p.nudged(_sat(120, 20), 0, 12) == (None, 30)
     assert p.nudged(_sat(120, 20), 0, 16) == (None, 40)
-    assert p.judge(p.nudge(_sat(350), 3, None), 350).az_deg == 360  # the end, not 0
-    assert p.judge(p.nudge(_sat(10), -3, None), 10).az_deg == 0
-    for raw, d_az in ((360, 5), (0, -5), (0, -3)):
+    assert p.judge(p.nudge(_sat(350), 5, None), 350).az_deg == 360  # the end, not 0
+    assert p.judge(p.nudge(_sat(10), -5, None), 10).az_deg == 0
+    for raw, d_az in ((360, 5), (0, -5), (0, -6)):
         with pytest.raises(Refused) as exc:
             p.nudge(_sat(raw), d_az, None)
         assert "past the end" in exc.value.message, (raw, d_az)
     low = Pointing.of(REGISTRY["satel"], el_limits=(0.0, 88.0))
-    assert refused(low.judge, low.nudge(_sat(120, 80), 0, 3), 120) is RefusalCode.LIMITS
-    assert refused(low.judge, low.nudge(_sat(120, 0), 0, -3), 120) is RefusalCode.LIMITS
+    assert refused(low.judge, low.nudge(_sat(120, 80), 0, 5), 120) is RefusalCode.LIMITS
+    assert refused(low.judge, low.nudge(_sat(120, 0), 0, -5), 120) is RefusalCode.LIMITS
     fenced = Pointing.of(REGISTRY["satel"], keep_out=((105, 112),))
     assert refused(fenced.judge, fenced.nudge(_sat(120), -5, None), 120) is RefusalCode.KEEP_OUT
     narrowed = Pointing.of(REGISTRY["satel"], az_limits=(0.0, 125.0))
-    assert refused(narrowed.judge, narrowed.nudge(_sat(120), 3, None), 120) is RefusalCode.LIMITS
+    assert refused(narrowed.judge, narrowed.nudge(_sat(120), 5, None), 120) is RefusalCode.LIMITS
     # a rotor of whole degrees is nudged by the degrees named, as before
     yaesu = Pointing.of(REGISTRY["gs232b"])
     assert yaesu.judge(yaesu.nudge(_sat(120), -5, None), 120).az_deg == 115
@@ -530,6 +530,33 @@ def test_narrowed_limits_on_a_travel_through_north_hold_along_the_turn() -> None
     assert shifted.judge(Target(160), 30).az_deg == 170
     yaesu = Pointing.of(REGISTRY["gs232b"], az_limits=(20.0, 340.0))  # its ends are at north
     assert yaesu.judge(Target(330), 30).az_deg == 330
+
+
+def test_narrowed_limits_leave_an_rt21_its_way_and_a_hy_gain_rotor_off_its_stop() -> None:
+    """Rule 4, a review: an RT-21 may turn a Yaesu through south, so its limits are judged at
+    the end as before (with 2..358 it could no longer leave its half); a Hy-Gain rotor is not
+    sent to its stop under narrowed limits (there no reading tells which end it is at), and
+    one found there is told why nothing goes, not refused in silence."""
+    rt21 = Pointing.of(REGISTRY["rt21"], az_limits=(2.0, 358.0))
+    assert rt21.judge(Target(270), 90).az_deg == 270
+    assert rt21.judge(Target(200), 10).az_deg == 200
+    ez = Pointing.of(EZ, az_limits=(20.0, 340.0))
+    for at in (30.0, None):  # (None: presets and the park position, checked at load)
+        with pytest.raises(Refused, match="the Rotor-EZ's stop .controller 180.*send 179 or 181"):
+            ez.judge(Target(180), at)
+    assert ez.judge(Target(179), 30).az_deg == 179
+    with pytest.raises(Refused, match="is at its stop .controller 180.*off the stop"):
+        ez.judge(Target(90), 180)
+    assert Pointing.of(EZ).judge(Target(180), 30).az_deg == 180  # whole limits: as before
+
+
+def test_a_satel_nudge_of_less_than_half_a_step_is_refused() -> None:
+    """Rule 6, a review: a nudge of 0.001 turned a SatEL a whole ten-degree step."""
+    satel = Pointing.of(REGISTRY["satel"])
+    for d_az, d_el in ((0.001, None), (-4.9, None), (0.0, 1.0)):
+        with pytest.raises(Refused, match="less than half of the SatEL's 10-degree step"):
+            satel.nudge(_sat(120, 20), d_az, d_el)
+    assert satel.nudge(_sat(120, 20), 5.0, None).az_deg == 130
 
 
 def test_a_group_s_arc_is_judged_on_the_step_a_satel_is_sent() -> None:

@@ -440,6 +440,10 @@ class ModelSpec:
     # stop is at south: Rotor-EZ, DCU-1) or the box is never sent 360 and picks the way itself
     # (RT-21, whose north is 000.0). A nudge across north stops at an end (pointing.py rule 6)
     az_ends_at_north: bool = True
+    # the rotor's stop is at south, raw 180, and the box turns it the one way its travel allows
+    # (a Hy-Gain rotor behind a Rotor-EZ or a DCU-1): every turn between east and west passes
+    # north (pointing.py rule 4); not an RT-21's, which may drive either kind of rotor
+    stop_at_south: bool = False
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
     # the controller needs this long between commands to its two axes (RC2800): no frame goes

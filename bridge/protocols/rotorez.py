@@ -299,6 +299,7 @@ MODELS: dict[str, ModelSpec] = {
         unasked_moves="after-stop",  # AI1; one bit from AM1; (rule 6)
         stop_anytime=True,  # ';' at any time; a second one is answered by the banner (harmless)
         az_ends_at_north=False,  # a Hy-Gain rotor's stop is at south: north is mid-travel
+        stop_at_south=True,
         hamlib_model=401,
         hamlib_info="Rotor-EZ",
     ),
@@ -325,6 +326,7 @@ MODELS: dict[str, ModelSpec] = {
         query_bytes=0,  # it cannot be asked
         reply_bytes=0,
         az_ends_at_north=False,  # a Hy-Gain rotor's stop is at south: north is mid-travel
+        stop_at_south=True,
         hamlib_model=403,
         hamlib_info="DCU-1/DCU-1X",
     ),
