@@ -108,7 +108,6 @@ from bridge.protocols.base import ModelSpec, half_up, half_up_step
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
 WITHIN_SLACK_DEG = 0.5  # rule 9: a reading's step at an edge is not a turn outside
 UNFOLD_TIE_DEG = 1e-6  # rule 2: an offset read this near -180 is 180 (``unfolded``)
-STEP_SLACK = 1e-9  # rule 6: a value this near a step (in steps) is on it (``_stepped``)
 
 
 def norm360(deg: float) -> float:
@@ -381,13 +380,17 @@ class Pointing:
         """Rule 4: Refused for a target that leaves a Hy-Gain rotor at its stop under narrowed
         limits: there no reading tells which end of its travel it is at, and from one of them
         any turn passes north (a review: at 180, every target was refused)."""
-        if self._narrowed_through_north() and any(r % 360.0 == 180.0 for r in legal):
+        if not self._narrowed_through_north():
+            return
+        if any(sent % 360.0 == 180.0 for r in legal for sent in self._sent(r)):  # (as sent:
+            # an attack pass, 179.6 went out as AP1180 and the rotor was left at its stop)
+            east, west = self.true_of(179.0), self.true_of(181.0)
             raise Refused(
                 RefusalCode.LIMITS,
-                f"azimuth {az_deg:g} is the {self.model_name}'s stop (controller 180): there no "
-                "reading tells which end of its travel the rotor is at, and the limits "
-                f"{self.az_min_deg:g}..{self.az_max_deg:g} need it to judge a turn from there; "
-                "send 179 or 181",
+                f"azimuth {az_deg:g} is sent to the {self.model_name} as its stop (controller "
+                "180): there no reading tells which end of its travel the rotor is at, and the "
+                f"limits {self.az_min_deg:g}..{self.az_max_deg:g} need it to judge a turn from "
+                f"there; send {east:g} or {west:g}",
             )
 
     def _limits_text(self) -> str:
@@ -658,10 +661,11 @@ class Pointing:
                 f"{steps}-degree step, the least it turns: nudge by {steps / 2:g} or more",
             )
         nearest = float(half_up_step(start + d, steps))
-        at = start / steps
+        at = half_up_step(start, steps) // steps  # (the step it stands on: a reading of 121 is
+        # the rotor at 120, and -5 went to 120, nothing: an attack pass)
         if d > 0:
-            return max(nearest, float((math.floor(at + STEP_SLACK) + 1) * steps))
-        return min(nearest, float((math.ceil(at - STEP_SLACK) - 1) * steps))
+            return max(nearest, float((at + 1) * steps))
+        return min(nearest, float((at - 1) * steps))
 
     def _checked(self, az_deg: float, raw_deg: float) -> float:
         lo, hi = self.az_min_deg, self.az_max_deg

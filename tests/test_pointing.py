@@ -542,8 +542,13 @@ def test_narrowed_limits_leave_an_rt21_its_way_and_a_hy_gain_rotor_off_its_stop(
     assert rt21.judge(Target(200), 10).az_deg == 200
     ez = Pointing.of(EZ, az_limits=(20.0, 340.0))
     for at in (30.0, None):  # (None: presets and the park position, checked at load)
-        with pytest.raises(Refused, match="the Rotor-EZ's stop .controller 180.*send 179 or 181"):
-            ez.judge(Target(180), at)
+        for az in (180.0, 179.6, 180.4):  # (an attack pass: 179.6 went out as AP1180)
+            with pytest.raises(Refused, match="as its stop .controller 180.*send 179 or 181"):
+                ez.judge(Target(az), at)
+    south = Pointing.of(EZ, az_limits=(20.0, 340.0), offset_deg=180.0)  # (true bearings: the
+    with pytest.raises(Refused, match="send 359 or 1$"):  # advice too, an attack pass)
+        south.judge(Target(0), 30)
+    assert south.judge(Target(359), 100).az_deg == 179
     assert ez.judge(Target(179), 30).az_deg == 179
     with pytest.raises(Refused, match="is at its stop .controller 180.*off the stop"):
         ez.judge(Target(90), 180)
@@ -557,6 +562,10 @@ def test_a_satel_nudge_of_less_than_half_a_step_is_refused() -> None:
         with pytest.raises(Refused, match="less than half of the SatEL's 10-degree step"):
             satel.nudge(_sat(120, 20), d_az, d_el)
     assert satel.nudge(_sat(120, 20), 5.0, None).az_deg == 130
+    # a reading off its step is the rotor on the step nearest (an attack pass: at 121, -5 went
+    # out as 120, where it stood)
+    assert satel.judge(satel.nudge(_sat(121, 20), -5.0, None), 121).az_deg == 110
+    assert satel.judge(satel.nudge(_sat(119, 20), 5.0, None), 119).az_deg == 130
 
 
 def test_a_group_s_arc_is_judged_on_the_step_a_satel_is_sent() -> None:
