@@ -13,33 +13,21 @@ from pathlib import Path
 
 import pytest
 
-from bridge.core.model import ErrorEvent, MotionState, Nudge, Origin, Source
+from bridge.core.model import MotionState, Nudge, Origin, Source
 from bridge.emulators.satel import Outcome
-from bridge.runtime.rotator import Rotator
-from bridge.runtime.state_store import StateStore
-from tests.engine.virtual import VirtualRotator, settled_at
+from tests.engine import test_small_nudges as small
+from tests.engine.virtual import settled_at
 
 WHO = Origin(Source.MQTT)
 START = {"step_deg": 10, "start_az_deg": 120, "start_el_deg": 20}
 
 
-class Judged:
+class Judged(small.Judged):
     """A Rotator on a virtual SatEL at rest at 120/20; the Rotator takes the mailbox."""
 
     def __init__(self, tmp_path: Path) -> None:
-        self.v = VirtualRotator("satel", emulator=START)
+        super().__init__(tmp_path, "satel", START)
         self.v.run_until_state(MotionState.IDLE, 30)
-        self.events: list[ErrorEvent] = []
-        self.rot = Rotator(
-            self.v.cfg, StateStore(tmp_path / "state.json"), lambda s: None, self.events.append
-        )
-        self.v.mailbox.close()
-        self.v.mailbox = self.rot._mailbox
-        self.rot._worker.session = self.v.session
-
-    def close(self) -> None:
-        self.rot.operators.stop()
-        self.v.close()
 
     def nudge(self, d_az: float, d_el: float | None = None) -> None:
         self.rot.submit(Nudge(d_az, d_el, source=Source.MQTT, origin=WHO), f"nudge {d_az:+g}")

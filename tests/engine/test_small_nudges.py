@@ -31,8 +31,8 @@ MODELS: dict[str, dict[str, Any]] = {
 class Judged:
     """A Rotator on a virtual controller at rest at START; the test takes its mailbox."""
 
-    def __init__(self, tmp_path: Path, model: str) -> None:
-        self.v = VirtualRotator(model, emulator=MODELS[model])
+    def __init__(self, tmp_path: Path, model: str, emulator: dict[str, Any] | None = None) -> None:
+        self.v = VirtualRotator(model, emulator=MODELS[model] if emulator is None else emulator)
         self.v.run_until(lambda h: h.status.available, 10, "the controller answers")
         self.events: list[ErrorEvent] = []
         self.rot = Rotator(

@@ -51,6 +51,22 @@ def console(rig: Rig) -> Iterator[tuple[Rig, ConsoleClient]]:
     yield rig, client
 
 
+def _moves_within(rig: Rig, since: float, seconds: float) -> bool:
+    """Whether R/status says ``moving`` within ``seconds`` of ``since`` (a quiet period: the
+    caller expects it not to, waiting.py rule 2)."""
+    try:
+        rig.mqtt.wait_for(
+            rig.t("status"),
+            lambda m: json.loads(m.payload)["state"] == "moving",
+            seconds,
+            since,
+            quiet=True,
+        )
+    except AssertionError:
+        return False
+    return True
+
+
 def _origin(client: ConsoleClient) -> dict[str, str]:
     return {"Origin": f"http://127.0.0.1:{client.port}"}
 
@@ -693,17 +709,7 @@ def test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop
         answer = delayed.recv(4096).split(b"\r\n", 1)[0]
     finally:
         delayed.close()
-    moved = True
-    try:
-        rig.mqtt.wait_for(  # a quiet period: the test expects the timeout (waiting.py rule 2)
-            rig.t("status"),
-            lambda m: json.loads(m.payload)["state"] == "moving",
-            3.0,
-            t,
-            quiet=True,
-        )
-    except AssertionError:
-        moved = False
+    moved = _moves_within(rig, t, 3.0)
     client.command("hf", command="stop")
     assert not moved, f"the rotor turned after the MQTT STOP (the late click: {answer!r})"
 
@@ -801,17 +807,7 @@ def test_a_console_command_sent_before_a_halt_by_mqtt_is_refused_however_late_it
     t = time.monotonic()
     late = client.command("hf", command="target", az=300, page="p1", seq=2, sent=clicked)
     assert late.status == 409 and "sent before a STOP" in str(late.doc), late
-    moved = True
-    try:
-        rig.mqtt.wait_for(  # a quiet period: the test expects the timeout (waiting.py rule 2)
-            rig.t("status"),
-            lambda m: json.loads(m.payload)["state"] == "moving",
-            3.0,
-            t,
-            quiet=True,
-        )
-    except AssertionError:
-        moved = False
+    moved = _moves_within(rig, t, 3.0)
     assert not moved
     assert client.command("hf", command="lock", on=True, page="p1", seq=3).status == 200
     unlocking = feed_clock()  # the page's lock OFF, stamped: held up on the way
