@@ -131,6 +131,12 @@ def unfolded(bearing_deg: float | None, raw_deg: float | None) -> float | None:
     return raw_deg + offset
 
 
+def at_south_stop(raw_deg: float) -> bool:
+    """Whether ``raw_deg`` is a Hy-Gain rotor's stop, raw 180, where no reading tells which end
+    of its travel it is at (rules 4 and 6)."""
+    return raw_deg % 360.0 == 180.0
+
+
 def angle_between(a_deg: float, b_deg: float) -> float:
     """The smaller angle between two bearings, 0..180, whatever turns either names."""
     return abs((a_deg - b_deg + 180.0) % 360.0 - 180.0)
@@ -328,7 +334,7 @@ class Pointing:
             try:
                 legal = self._within(az_deg, current_raw_deg, legal, limits, self._limits_text())
             except Refused:
-                if current_raw_deg is not None and current_raw_deg % 360.0 == 180.0:
+                if current_raw_deg is not None and at_south_stop(current_raw_deg):
                     raise Refused(
                         RefusalCode.LIMITS,
                         f"azimuth {az_deg:g}: the {self.model_name} is at its stop (controller "
@@ -382,7 +388,7 @@ class Pointing:
         any turn passes north (a review: at 180, every target was refused)."""
         if not self._narrowed_through_north():
             return
-        if any(sent % 360.0 == 180.0 for r in legal for sent in self._sent(r)):  # (as sent:
+        if any(at_south_stop(sent) for r in legal for sent in self._sent(r)):  # (as sent:
             # an attack pass, 179.6 went out as AP1180 and the rotor was left at its stop)
             east, west = self.true_of(179.0), self.true_of(181.0)
             raise Refused(

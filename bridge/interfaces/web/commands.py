@@ -28,9 +28,9 @@ Rules:
    held up before its request reached the console, after a STOP by MQTT, turned the rotor; a
    lock OFF sent before a lock ON by MQTT undid it), and a command a page numbered (``page``
    and ``seq``, which the console's page sends) before a STOP or lock ON the same page sent
-   after it, however late it comes; but not one
-   the same page numbered after its own STOP, the latest there is, that merely overtook it. A
-   stop, a lock ON and tracking off are never stale.
+   after it, however late it comes; but not one the same page numbered after its own STOP,
+   the latest there is, that merely overtook it. A stop, a lock ON and tracking off are never
+   stale.
 5a. Among a page's other commands the newest it numbered wins: one numbered before another
    command of the same page that the console already handed to the judge is refused as stale
    (``OVERTAKEN``), however late it comes. The browser sends each click on a connection of
