@@ -160,6 +160,7 @@ OFFLINE, UNKNOWN, MOVING = MotionState.OFFLINE, MotionState.UNKNOWN, MotionState
 BRAKING, STALLED, IDLE = MotionState.BRAKING, MotionState.STALLED, MotionState.IDLE
 AWAY_MARGIN_DEG = 5.0  # rule 5
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
+COAST_S = 1.0  # ``coast_end``: a rotor's run-on after its motor is cut
 
 
 @dataclass(frozen=True)
@@ -915,17 +916,29 @@ def still_from(m: Motion, cfg: MotionConfig) -> float:
 
 def stop_again(m: Motion, cfg: MotionConfig, now: float) -> bool:
     """Whether a stop that went out is to go again (stops.py rule 2): from ``stop_resend_s`` on,
-    a movement seen after the first reading after the stop, less than ``settle_s`` old. The
-    first reading shows where the rotor was when the stop came, not that it turned on since
-    (an attack pass: replies lost across a stop that took, the first after them moved the
-    rotor by the way it came, and a second stop went to a rotor at rest); past ``settle_s``,
-    the next reading may find it still (rule 2), and none is owed."""
+    a movement seen after the first reading after the stop and after its coast (``coast_end``),
+    less than ``settle_s`` old. The first reading shows where the rotor was when the stop came,
+    not that it turned on since (an attack pass: replies lost across a stop that took, the
+    first after them moved the rotor by the way it came, and a second stop went to a rotor at
+    rest); past ``settle_s``, the next reading may find it still (rule 2), and none is owed."""
     sent_t, read_t, moved_t = m.stop_sent_t, m.stop_read_t, m.last_move_t
     if m.state is not MOVING or sent_t is None or read_t is None or moved_t is None:
         return False
     if read_t <= sent_t or moved_t <= read_t:  # (no reading since it, or no movement after)
         return False
+    if moved_t < coast_end(cfg, sent_t):  # (its run-on: the motor is off)
+        return False
     return sent_t + cfg.stop_resend_s <= now < still_from(m, cfg)
+
+
+def coast_end(cfg: MotionConfig, stop_t: float) -> float:
+    """Until when a movement read after a stop written at ``stop_t`` may be the rotor running
+    on with its motor off (momentum, a controller's soft stop: a SPID's "often off by a degree
+    or two"): COAST_S and a moving poll for the reading that shows it, never past
+    ``stop_resend_s`` (a stop lost on the line is sent again when it always was: a rotor
+    turning on at speed is read moving after the coast too). Before, a SPID that coasted a
+    second had every ordinary stop sent twice, with a warning in the log each time."""
+    return stop_t + min(COAST_S + cfg.poll_margin_s, cfg.stop_resend_s)
 
 
 def _moved_ref(m: Motion) -> float:

@@ -26,7 +26,8 @@ Rules:
    after its last). A controller that reports no position while it turns (a SatEL's slew) is
    never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later (a movement
-   after the first reading after the stop, less than ``settle_s`` old: ``motion.stop_again``),
+   after the first reading after the stop and after the rotor's coast, less than ``settle_s``
+   old: ``motion.stop_again``; a SPID running on a degree or two is not stopped twice),
    it is sent again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed,
    rule 1, is written when its gap ends, before anything else of that step, and is no try). Lock
    ON always sends a stop, whatever the bridge believes the rotor is doing. An operator's STOP

@@ -137,6 +137,25 @@ def test_a_stop_goes_again_only_while_readings_show_the_rotor_turning() -> None:
     assert m.stop_read_t == 0.2
 
 
+def test_a_rotor_running_on_after_a_stop_is_not_stopped_again() -> None:
+    """stops.py rule 2 (``coast_end``): readings that show the rotor run on with its motor
+    off, up to a second and a moving poll after the stop, send no second stop; a movement
+    read after that, at ``stop_resend_s``, does, as it always did."""
+    m = mo.stop_sent(mo.commanded(ready(), CFG, 200, 10.0), CFG, 10.5)
+    coasted, _ = feed(m, [(10.6, 104), (10.8, 105), (11.0, 105.5), (11.2, 106), (11.4, 106)])
+    end = mo.coast_end(CFG, 10.5)
+    assert 11.2 < end <= 10.5 + CFG.stop_resend_s
+    for now in (10.5 + CFG.stop_resend_s, 11.2 + CFG.settle_s - 0.01):
+        assert not mo.stop_again(coasted, CFG, now)
+        assert mo.plan_target(coasted, CFG, now) is mo.Plan.WAIT
+    # the same readings and one more, read after the coast: still turning, stopped again
+    turning, _ = feed(coasted, [(end, 107)])
+    assert mo.stop_again(turning, CFG, 10.5 + CFG.stop_resend_s)
+    # a moving poll so slow that the coast would reach past the resend: the resend's time
+    slow = replace(CFG, poll_margin_s=3.0)
+    assert mo.coast_end(slow, 10.5) == 10.5 + CFG.stop_resend_s
+
+
 def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:
     """A preset pressed 1.2 s after the arrival: the brake delay runs from the stop itself."""
     m = mo.commanded(ready(), CFG, 110, 10.0)

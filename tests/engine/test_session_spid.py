@@ -10,6 +10,7 @@ The line is 600 baud and half duplex: one poll exchange takes about 0.4 s.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 
 import pytest
@@ -380,13 +381,14 @@ def test_an_azimuth_or_an_elevation_alone_keeps_the_other_axis_on_its_step(rig: 
 
 @pytest.mark.parametrize("model", ["rot2prog", "rot1prog", "md01"])
 def test_a_rotor_coasting_after_a_stop_is_shown_at_rest_where_it_came_to_rest(
-    rig: Rig, model: str
+    rig: Rig, model: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     """emulators/spid.py rule 11 (spid.txt: the stop's answer "often off by a degree or two"):
     the rotor runs on 2 degrees over a second after an operator's STOP. The readings show it
-    turning after the stop, so stops.py rule 2 may send the stop once more (harmless: its motor
-    is already off), but nothing else changes for the user: no error on R/error, ``moving``
-    then ``idle`` once, no target, the bearing where it came to rest."""
+    turning after the stop, but with its motor off (motion.py ``coast_end``): one stop frame,
+    no warning in the log (there was one, and a second stop, after every stop), no error on
+    R/error, ``moving`` then ``idle`` once, no target, the bearing where it came to rest."""
+    caplog.set_level(logging.WARNING, logger="bridge")
     v = rig(model, emulator={"coast_deg": 2.0, "coast_s": 1.0})
     v.run_until_state(IDLE, 30)
     v.target(100)
@@ -404,7 +406,8 @@ def test_a_rotor_coasting_after_a_stop_is_shown_at_rest_where_it_came_to_rest(
     assert v.errors(since=t) == []
     assert _states_since(v, t) == [MOVING, IDLE]
     assert v.status.target_az_deg is None and v.status.bearing_deg == pytest.approx(rest, abs=1)
-    assert len(v.frames(Outcome.STOP, since=t)) <= 2 and not v.frames(Outcome.SET, since=t)
+    assert len(v.frames(Outcome.STOP, since=t)) == 1 and not v.frames(Outcome.SET, since=t)
+    assert not [r for r in caplog.records if "still turning" in r.getMessage()]
 
     t = v.now  # a target right after a stop goes out at once, coast or not
     v.target(50)
