@@ -335,6 +335,10 @@ def combine(newer: Target, older: Target | None) -> Target:
 class Stop:
     source: Source = Source.MQTT
     origin: Origin | None = None
+    # when its sender sent it, on the steady clock (a stamp it carried: interfaces/mqtt/
+    # heartbeat.py); None: when it came. A move stamped before it is stale (runtime/rotator.py
+    # ``halted_s``)
+    sent_s: float | None = None
 
 
 # A controller setting's value (protocols/base.py ``Setting``): a bool option's on or off, a
@@ -381,9 +385,11 @@ class Asked:
 
 @dataclass(frozen=True)
 class Lock(Asked):
-    """The safety lock: ON is never refused and never delayed (docs/architecture.md rule 11)."""
+    """The safety lock: ON is never refused and never delayed (docs/architecture.md rule 11).
+    ``sent_s``: as a Stop's."""
 
     on: bool
+    sent_s: float | None = None
 
 
 @dataclass(frozen=True)

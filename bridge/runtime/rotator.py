@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -248,6 +249,10 @@ class Rotator:
         # the last STOP or lock ON put in the mailbox (monotonic), from any front end: the
         # console refuses a command under way before it (interfaces/web/commands.py rule 5)
         self.last_halt_s = -math.inf
+        # the latest of the halts' send times, each the earlier of when it came and when its
+        # sender stamped it (monotonic): a move stamped before it is stale (``halted``)
+        self.halted_s = -math.inf
+        self._halted_lock = threading.Lock()
         self._problem = store.problems.get(self.id)  # state_store.py rule 2
         if self._problem is not None:  # the lock is ON for it; the status's last error says why
             self._mailbox.put_note(self._problem)
@@ -378,11 +383,11 @@ class Rotator:
             case Stop() if src is not Source.MQTT:  # (a stop is judged by nothing)
                 self._fenced(False, lambda: self._judged(command, epoch, hold))
             case Lock() if command.on and src is not Source.MQTT:
-                self._fenced(True, lambda: self._lock(True, hold))
+                self._fenced(True, lambda: self._lock(True, hold, sent_s=command.sent_s))
             case Target() | Stop() | SetOption():
                 self._judged(command, epoch, hold)
             case Lock():
-                self._lock(command.on, hold, since)
+                self._lock(command.on, hold, since, command.sent_s)
             case Claim():
                 self.operators.claim(command.operator, command.minutes, who)
             case Release():
@@ -564,7 +569,7 @@ class Rotator:
                 self._kept.save_option(judged.name, judged.value)
                 self._mailbox.put(judged, wake=False)  # woken after the step
         elif isinstance(judged, Stop):
-            self.last_halt_s = time.monotonic()
+            self._halted(judged.sent_s)
             self._mailbox.put(judged, hold=hold)
         else:
             try:
@@ -698,7 +703,21 @@ class Rotator:
         if not self.status.available:
             raise Refused(RefusalCode.OFFLINE, OFFLINE_MESSAGE)
 
-    def _lock(self, locked: bool, hold: int | None, since: int | None = None) -> None:
+    def _halted(self, sent_s: float | None) -> None:
+        """A STOP or lock ON is put now (``sent_s``: its sender's stamp, on the steady clock):
+        ``last_halt_s`` is now, ``halted_s`` the latest of the halts' send times, a stamped
+        one's never later than it came (a sender's clock ahead cannot make older moves look
+        stale for ever, nor a stamp in the past make the halts before it count less)."""
+        now = time.monotonic()
+        self.last_halt_s = now
+        sent = now if sent_s is None or not sent_s < now else sent_s
+        with self._halted_lock:
+            if sent > self.halted_s:
+                self.halted_s = sent
+
+    def _lock(
+        self, locked: bool, hold: int | None, since: int | None = None, sent_s: float | None = None
+    ) -> None:
         """Never refused, but a lock OFF put with a halt count (``since``, as for ``submit``)
         that a stop or lock ON put since has made old while the lock is ON: it may be older
         than that lock ON (interfaces/mqtt/lastword.py rule 11), and the lock stays ON.
@@ -710,7 +729,7 @@ class Rotator:
                     raise Refused(RefusalCode.STALE, LOCK_OFF_STALE_MESSAGE)
             self._kept.set_lock(locked)
             if locked:
-                self.last_halt_s = time.monotonic()
+                self._halted(sent_s)
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
 
     def await_heard_lock(self) -> None:
@@ -729,7 +748,7 @@ class Rotator:
             took = payload == b"ON" and self._kept.lock_unsaid and not self._kept.locked
             if took:
                 self._kept.set_lock(True)
-                self.last_halt_s = time.monotonic()
+                self._halted(None)
                 self._mailbox.put_lock(True, wake=False)  # woken after the step
             self._unheard = False  # (after the lock: a target judged meanwhile is overtaken)
             if not took:  # (a lock put says it is known: mailbox.py ``put_lock``)

@@ -8,6 +8,8 @@ so what a user would notice is what the emulated controller did.
 
 from __future__ import annotations
 
+import math
+import time
 from pathlib import Path
 
 import pytest
@@ -256,3 +258,26 @@ def test_only_an_absolute_target_is_audited_as_one(bench: Bench) -> None:
         ("park", False),
         ("stop", False),
     ]
+
+
+def test_a_halt_is_timed_by_its_stamp_when_that_is_earlier_and_never_moves_back(
+    bench: Bench,
+) -> None:
+    """runtime/rotator.py ``halted_s`` (interfaces/mqtt/heartbeat.py rule 8): a STOP or lock ON
+    is timed when it came, or by the stamp it carries if that is earlier; a stamp later than
+    it came, or one older than the halts before it, moves the time neither ahead nor back."""
+    rot = bench.rot
+    assert rot.halted_s == -math.inf
+    before = time.monotonic()
+    bench.submit(Stop(origin=WHO), "stop")
+    came = rot.halted_s
+    assert before <= came <= time.monotonic() and came == rot.last_halt_s
+    bench.submit(Stop(origin=WHO, sent_s=came + 3600), "stop")  # a clock ahead: when it came
+    assert came < rot.halted_s <= rot.last_halt_s
+    latest = rot.halted_s
+    bench.submit(Lock(True, origin=WHO, sent_s=latest - 60), "lock ON")  # before the last
+    assert rot.halted_s == latest and rot.last_halt_s > latest
+    bench.submit(Lock(False, origin=WHO), "lock OFF")
+    now = time.monotonic()
+    bench.submit(Stop(origin=WHO, sent_s=now), "stop")  # stamped as it left, came later
+    assert rot.halted_s == now

@@ -7,6 +7,7 @@ it runs after it), refusals on the group's error topic, the group's status."""
 from __future__ import annotations
 
 import json
+import time
 
 import pytest
 
@@ -16,6 +17,7 @@ from bridge.feature import registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
 from bridge.interfaces.mqtt.halts import FENCED
+from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 from bridge.settings.groups import CORE_WORDS, reserved
@@ -200,6 +202,22 @@ def test_a_members_refusal_is_on_the_groups_error_and_status_and_the_other_turns
     assert error["kind"] == "refused" and "the others turn" in error["message"]
     status = json.loads(pub.retained["rotor/stack/status"])
     assert status["refused"] == {"lower": "locked: unlock it first"}
+
+
+def test_a_group_target_stamped_before_a_members_stop_turns_only_the_others() -> None:
+    """service.py rule 9 (heartbeat.py rule 8) per member: a group target a link held up,
+    stamped before the lower rotor's STOP, is refused for that member alone (on the group's
+    error), the upper still turns; one stamped after it turns both."""
+    svc, pub, upper, lower = group_service()
+    lower.halted_s = time.monotonic() - 1.0  # its STOP came a second ago
+    svc.on_message("rotor/stack/target", b"120", False, stamp=Stamp.of(NOW_UNIX - 2.0, 5))
+    assert [c[0] for c in upper.calls] == ["submit"]
+    assert [c[0] for c in lower.calls] == ["refused"]
+    assert "before the last STOP or lock ON" in str(lower.calls[0][1])
+    (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
+    assert "before the last STOP" in error["members"]["lower"]
+    svc.on_message("rotor/stack/target", b"130", False, stamp=Stamp.of(NOW_UNIX - 0.5, 5))
+    assert [c[0] for c in lower.calls] == ["refused", "submit"]
 
 
 def test_when_every_member_refuses_the_groups_error_says_none_turns() -> None:

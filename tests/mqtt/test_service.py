@@ -9,6 +9,7 @@ The rotator is a recorder of RotatorPort calls.
 from __future__ import annotations
 
 import json
+import math
 import threading
 from dataclasses import replace
 
@@ -106,6 +107,7 @@ class RecordingRotator:
         self.origins: list[Origin | None] = []  # who sent each command that names one
         self._refuse = refuse
         self.can_track = False
+        self.halted_s = -math.inf  # (no halt is timed here: the judge's, runtime/rotator.py)
         self.can_follow = False
 
     @property

@@ -10,6 +10,8 @@ from __future__ import annotations
 import socket
 import sys
 import threading
+import time
+from dataclasses import replace
 from typing import Any
 
 import paho.mqtt.client as paho_client
@@ -154,7 +156,27 @@ def test_a_command_a_link_held_up_is_refused_by_the_station_and_a_stop_is_not() 
     calls = rots["tower"].calls
     assert [c[0] for c in calls] == ["refused", "refused", "submit", "lock"]
     assert "sent 15.0 s ago, older than its 5 s expiry" in calls[0][1]
-    assert calls[2][1] == Stop()
+    stop = calls[2][1]
+    assert isinstance(stop, Stop) and replace(stop, sent_s=None) == Stop()
+    # heartbeat.py rule 8: the stop is timed by its stamp, on the steady clock
+    assert stop.sent_s == pytest.approx(time.monotonic() - 15.0, abs=1.0)
+
+
+def test_a_move_stamped_before_the_rotators_last_halt_is_refused_and_one_after_is_not() -> None:
+    """heartbeat.py rule 8: the rotator's last STOP or lock ON came a second ago (from any
+    interface); a target stamped two seconds ago, inside its expiry, is refused, one stamped
+    half a second ago and one without a stamp are carried out; a halt is never refused."""
+    svc, _, rots = service({"tower": "rotorez"})
+    rots["tower"].halted_s = time.monotonic() - 1.0
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 2.0, 5))
+    svc.on_message("rotor/lock", b"OFF", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 2.0, 5))
+    svc.on_message("rotor/target", b"120", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 0.5, 5))
+    svc.on_message("rotor/target", b"90", False, "DL1ABC")
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 2.0, 5))
+    calls = rots["tower"].calls
+    assert [c[0] for c in calls] == ["refused", "refused", "submit", "submit", "submit"]
+    for refused in calls[:2]:
+        assert "sent before the last STOP or lock ON" in str(refused[1])
 
 
 @pytest.mark.parametrize(
@@ -383,6 +405,42 @@ def test_a_command_the_broker_acknowledged_is_sent_stamped_on_the_station_clock(
         ("station", ""),  # heartbeat.py rule 7: its beats named no process
     ]
     assert props.MessageExpiryInterval == 5 and link.up and link.resets == 0
+
+
+def test_a_stop_is_stamped_when_the_station_clock_is_reckoned() -> None:
+    """interfaces/mqtt/remote.py rule 8 (heartbeat.py rule 8): with a reckoning, a STOP carries
+    its send time, so that the station times it by that, not by its arrival: a move sent right
+    after it is not older than it however long the link's trip. Its expiry as any command's."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.send("rotor/stop", "stop", "DL1ABC", 5)
+    ((topic, props),) = paho.published
+    assert topic == "rotor/stop" and props.UserProperty == [
+        ("operator", "DL1ABC"),
+        ("sent", "1700000000.000"),
+        ("expiry", "5"),
+        ("station", ""),
+    ]
+
+
+def test_a_stop_kept_for_the_stations_return_is_stamped_with_the_beat_that_heard_it() -> None:
+    """Rule 6 and rule 8: a STOP sent while the station's bridge was not heard goes again at
+    its first live beat, stamped with that beat's time (the station's clock has passed it; no
+    reckoning is made from the beat before the halts kept go), its operator and expiry kept."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.station_clock.forget()
+    link.send("rotor/stop", "stop", "DL1ABC", 5, until_heard=True)
+    assert paho.published[-1][1].UserProperty == [("operator", "DL1ABC")]  # no reckoning
+    beat = paho_message("rotor/bridge/heartbeat", b"1700000123.500", [("station", "b2")])
+    link._on_message(None, None, beat)
+    topic, props = paho.published[-1]
+    assert topic == "rotor/stop" and len(paho.published) == 2
+    assert props.UserProperty == [
+        ("operator", "DL1ABC"),
+        ("sent", "1700000123.500"),
+        ("expiry", "5"),
+        ("station", "b2"),
+    ]
+    assert props.MessageExpiryInterval == 5
 
 
 def test_no_puback_in_time_refuses_the_command_and_resets_the_stalled_connection() -> None:

@@ -256,14 +256,16 @@ class Halts:
         hold: int | None = None,
         origin: Origin | None = None,
         echo: bool = False,
+        sent_s: float | None = None,
     ) -> None:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
         and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
-        copy of one the lane carried out (the audit trail has it once)."""
+        copy of one the lane carried out (the audit trail has it once); ``sent_s``: its stamp
+        on the steady clock (service.py rule 9)."""
         halt = (
-            Stop(Source.MQTT, origin)
+            Stop(Source.MQTT, origin, sent_s)
             if kind == "stop"
-            else Lock(True, source=Source.MQTT, origin=origin)
+            else Lock(True, source=Source.MQTT, origin=origin, sent_s=sent_s)
         )
         if self.express is not None:  # its hold before the halt (interfaces/mqtt/express.py rule 8)
             try:
@@ -410,10 +412,11 @@ class Halts:
         retain: bool,
         origin: Origin | None = None,
         late: Callable[[], str | None] = lambda: None,
+        sent_s: float | None = None,
     ) -> None:
         """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6). ``late``: why a
         stamped lock OFF is too old to carry out (service.py rule 9), asked only of the OFF it
-        would carry out; a stop or lock ON is never asked."""
+        would carry out; a stop or lock ON is never asked. ``sent_s``: a halt's stamp (carry)."""
         if topic == self.topics.bridge_fence_lane:
             self.on_lane_marker(payload)
             return
@@ -421,7 +424,7 @@ class Halts:
         if route is None and not (retain and not payload):
             group = self.topics.group_route(topic)
             if group is not None and group[1] == "stop":
-                self.lane_group_stop(group[0], topic, payload, retain, origin)
+                self.lane_group_stop(group[0], topic, payload, retain, origin, sent_s)
             return
         if route is None or (retain and not payload):
             return
@@ -465,7 +468,7 @@ class Halts:
             if marker is None:
                 log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
                 return  # lastword.py rule 4: the echo of the main connection's copy
-            self.carry(rot, kind, what, hold=marker or None, origin=origin)
+            self.carry(rot, kind, what, hold=marker or None, origin=origin, sent_s=sent_s)
         if marker and self.word.markers:
             self._send_marker(marker)
         elif marker:
@@ -479,14 +482,15 @@ class Halts:
         what: str,
         retain: bool,
         origin: Origin | None = None,
+        sent_s: float | None = None,
     ) -> None:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
-        for rule 4."""
+        for rule 4; ``sent_s``: its stamp (carry)."""
         if not retain:
             self._noted("main", rot.id, kind)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
-            self.carry(rot, kind, what, origin=origin, echo=copy.echo)
+            self.carry(rot, kind, what, origin=origin, echo=copy.echo, sent_s=sent_s)
             self._release(copy.released, copy.upto)  # lastword.py rule 9
         if copy.lane_marker is not None:
             marker = self.word.marker(copy.lane_marker, lane=True)
@@ -529,16 +533,28 @@ class Halts:
         return [rot for mid in group.member_ids if (rot := self._rotators.get(mid)) is not None]
 
     def _stop_member(
-        self, rot: RotatorPort, what: str, hold: int | None, origin: Origin | None, echo: bool
+        self,
+        rot: RotatorPort,
+        what: str,
+        hold: int | None,
+        origin: Origin | None,
+        echo: bool,
+        sent_s: float | None = None,
     ) -> None:
         """Under the lock: one member's stop; a failure is this member's alone."""
         try:
-            self.carry(rot, "stop", what, hold=hold, origin=origin, echo=echo)
+            self.carry(rot, "stop", what, hold=hold, origin=origin, echo=echo, sent_s=sent_s)
         except Exception:
             log.exception("%s: the group's stop failed for this member", rot.id)
 
     def lane_group_stop(
-        self, group_id: str, topic: str, payload: bytes, retain: bool, origin: Origin | None
+        self,
+        group_id: str,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        origin: Origin | None,
+        sent_s: float | None = None,
     ) -> None:
         """A group's stop read on the lane: each member's stop carried out at once, each on
         hold (lastword.py rule 2), one marker (the newest) for them all."""
@@ -558,7 +574,7 @@ class Halts:
                 marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
                 if marker is None:
                     continue  # lastword.py rule 4: this member's echo
-                self._stop_member(rot, what, marker or None, origin, False)
+                self._stop_member(rot, what, marker or None, origin, False, sent_s)
                 newest, held = max(newest, marker), held + 1
         if newest and self.word.markers:
             self._send_marker(newest)
@@ -567,7 +583,13 @@ class Halts:
         log.debug("%s: stop on the stop lane for %d member(s)", group_id, held)
 
     def main_group_stop(
-        self, group_id: str, topic: str, what: str, retain: bool, origin: Origin | None = None
+        self,
+        group_id: str,
+        topic: str,
+        what: str,
+        retain: bool,
+        origin: Origin | None = None,
+        sent_s: float | None = None,
     ) -> None:
         """A group's stop read on the main connection: each member's, in order (rule 1); one
         lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
@@ -577,7 +599,7 @@ class Halts:
                 if not retain:  # (a review: as a member's own stop is)
                     self._noted("main", rot.id, "stop")
                 copy = self.word.main_halt(rot.id, "stop")
-                self._stop_member(rot, what, None, origin, copy.echo)
+                self._stop_member(rot, what, None, origin, copy.echo, sent_s)
                 self._release(copy.released, copy.upto)  # lastword.py rule 9
                 if copy.lane_marker is not None:
                     lane_marker = copy.lane_marker

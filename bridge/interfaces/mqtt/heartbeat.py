@@ -62,6 +62,14 @@ Rules:
    station's bridge before it restarted); a stamp without the property (an older remote,
    another client that stamps) is judged as rule 5 says. An older station ignores the
    property, an older remote never sends it, a station under MQTT 3.1.1 reads no stamp.
+8. A move stamped before the rotator's last STOP or lock ON is refused, however fresh
+   (service.py rule 9; an attack pass: a remote's target held up by its link for 3 s, a STOP
+   from Home Assistant meanwhile, and the target turned the rotor when it came). A halt's
+   time is when it came, or the stamp it carries if that is earlier (``Stop.sent_s``): so
+   the remote stamps its halts too, when it has a reckoning (a halt never waits for one),
+   and a move its operator sends right after a STOP is not taken for older than the STOP
+   however long the link's trip. A client that stamps its moves by its own clock should
+   stamp its stops too.
 """
 
 from __future__ import annotations
@@ -239,6 +247,19 @@ class Stamp:
         if SENT not in found and EXPIRY not in found:
             return None
         return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION))
+
+    def sent_unix(self, station: str | None = None) -> float | None:
+        """Rule 8: the send time, if it can be read and was reckoned against this station
+        process (``station``, as ``judge`` asks); None otherwise."""
+        if self.station is not None and station is not None and self.station != station:
+            return None
+        if not self.sent.isascii():
+            return None
+        try:
+            sent = float(self.sent)
+        except ValueError:
+            return None
+        return sent if math.isfinite(sent) else None
 
     def judge(self, now_unix: float, station: str | None = None) -> str | None:
         """Rules 5 and 7: why the command is refused, or None (fresh); ``station``: the

@@ -57,8 +57,10 @@ Rules:
 8. A command is stamped with its send time on the station's clock as its live heartbeats let
    the remote reckon it (heartbeat.py), and with the station process that reckoning came
    from (the heartbeats' user property ``station``, empty if they named none: heartbeat.py
-   rule 7); without one heard, a move is refused. A halt goes unstamped: it never asks the
-   reckoning, so nothing about the heartbeat can keep it back.
+   rule 7); without one heard, a move is refused. A halt is stamped too when there is a
+   reckoning (the station takes a move stamped before a halt for stale: heartbeat.py rule 8,
+   and a move sent right after this remote's own STOP must not be), and goes unstamped when
+   there is none: nothing about the heartbeat can keep it back.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -87,7 +89,16 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.connection import LOGIN_REFUSED, Connection
-from bridge.interfaces.mqtt.heartbeat import Stamp, StationClock, parse_beat, station_of
+from bridge.interfaces.mqtt.heartbeat import EXPIRY as STAMP_EXPIRY
+from bridge.interfaces.mqtt.heartbeat import (
+    NAMELESS,
+    SENT,
+    STATION,
+    Stamp,
+    StationClock,
+    parse_beat,
+    station_of,
+)
 from bridge.settings.mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -188,7 +199,7 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, KEPT)
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            stamped = None if halt else self.station_clock.stamp(expiry_s)  # rule 8: halts bare
+            stamped = self.station_clock.stamp(expiry_s)  # rule 8 (a halt's if it has one)
             if stamped is None and not halt:
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
             stamp = [] if stamped is None else stamped.properties()
@@ -329,14 +340,15 @@ class RemoteLink(Connection):
             self._publish_unawaited(topic, payload, props)
         self._unheard = held
 
-    def _resend_unheard(self) -> None:
+    def _resend_unheard(self, beat: tuple[float, str | None] | None = None) -> None:
         """Rule 6, paho's thread at a live heartbeat, before the station's clock is reckoned
-        from it (rule 8: no other command can be stamped before these go)."""
+        from it (rule 8: no other command can be stamped before these go); ``beat``: its time,
+        which the station's clock has passed, and the process it names (rule 8)."""
         with self._send_lock:
             unheard, self._unheard = self._unheard, []
             for topic, payload, props in unheard:
                 log.warning("%s sent again now that the station's bridge is heard", topic)
-                self._publish_unawaited(topic, payload, props)
+                self._publish_unawaited(topic, payload, _stamped(props, beat))
 
     def _send_unheard_before(self, topic: str, *, moves: bool) -> None:
         """Rule 6: a command asked after the halts kept for the station's return goes after
@@ -346,11 +358,12 @@ class RemoteLink(Connection):
         a lock OFF) they stay kept for the station's first heartbeat: that command may go to
         nobody as they did, and it ends no halt's wait."""
         unheard, self._unheard = self._unheard, []
+        stamp = self.station_clock.reckon()  # (rule 8: as the command after them is)
         for kept in unheard:
             kept_topic, payload, props = kept
             if kept_topic != topic:
                 log.warning("%s sent again before a later command", kept_topic)
-                self._publish_unawaited(kept_topic, payload, props)
+                self._publish_unawaited(kept_topic, payload, _stamped(props, stamp))
                 if not moves:
                     self._unheard.append(kept)
 
@@ -371,7 +384,7 @@ class RemoteLink(Connection):
                 station = station_of(getattr(props, "UserProperty", None) or [])
                 beat = parse_beat(bytes(msg.payload))
                 if self._unheard:  # rule 6: the station's bridge is on this connection now
-                    self._resend_unheard()
+                    self._resend_unheard((beat, station))
                 self.station_clock.heard(beat, station)
             except ValueError:
                 pass  # no time: no beat
@@ -461,3 +474,20 @@ def abort(sock: object) -> None:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
     with contextlib.suppress(OSError):
         socket.socket.shutdown(sock, socket.SHUT_RDWR)  # the descriptor's, TLS or not
+
+
+def _stamped(props: Properties, sent: tuple[float, str | None] | None) -> Properties:
+    """Rule 8: a kept halt's properties stamped as sent at ``sent`` (the station's time and
+    the process its beats named), in place of the stamp it had; None: as they are. Its
+    expiry and operator as they were."""
+    if sent is None:
+        return props
+    t, station = sent
+    expiry = int(getattr(props, "MessageExpiryInterval", 0))  # (paho's: set dynamically)
+    stamp = Stamp.of(t, expiry, NAMELESS if station is None else station)
+    stamp_keys = (SENT, STAMP_EXPIRY, STATION)
+    kept = [(k, v) for k, v in getattr(props, "UserProperty", None) or [] if k not in stamp_keys]
+    fresh = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
+    fresh.MessageExpiryInterval = expiry
+    fresh.UserProperty = [*kept, *stamp.properties()]
+    return fresh

@@ -61,9 +61,11 @@ Rules:
    rule 6; the wall clock when none is given): a link that held it up must not turn the rotor
    late. So is one whose user property ``station`` names another process than ``station``
    (this one's, as its heartbeats name it; an empty name too: heartbeat.py rule 7): its send
-   time was reckoned from a clock that ended when the station's bridge restarted. Halts:
-   never. The same on the stop lane, for the lock OFF it carries out while the main
-   connection is down.
+   time was reckoned from a clock that ended when the station's bridge restarted. So is a move
+   stamped before the rotator's last STOP or lock ON from any interface (``halted_s``,
+   heartbeat.py rule 8); a halt's own stamp, read here, may put that time earlier than it
+   came. Halts: never refused. The same on the stop lane, for the lock OFF it carries out
+   while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -487,7 +489,8 @@ class MqttService:
                 self._halts.replayed_group_stop(group_id, topic, payload)
             else:
                 self._halts.live_halt(topic, payload)  # (3.1.1: lastword.py rule 6)
-                self._halts.main_group_stop(group_id, topic, what, retain, origin)
+                sent_s = self._sent_s(stamp)
+                self._halts.main_group_stop(group_id, topic, what, retain, origin, sent_s)
             return
         why = None
         if retain:
@@ -526,6 +529,11 @@ class MqttService:
             if self._halts.fenced(rot.id):
                 refused[part.member] = FENCED
                 rot.report_refusal(FENCED, said, origin=origin)
+                continue
+            late = self._late(stamp, rot)  # rule 9: sent before this member's last halt
+            if late is not None:
+                refused[part.member] = late
+                rot.report_refusal(late, said, origin=origin)
                 continue
             try:
                 rot.submit(part.target, said, since=since)
@@ -576,12 +584,36 @@ class MqttService:
         """The stop lane's messages (rule 5: halts.py); its halts are never refused, a lock OFF
         it carries out is judged by its stamp as the main connection's would be (rule 9)."""
         self._halts.on_lane(
-            topic, payload, retain, self.origin(operator), late=lambda: self._late(stamp)
+            topic,
+            payload,
+            retain,
+            self.origin(operator),
+            late=lambda: self._late(stamp),
+            sent_s=self._sent_s(stamp),
         )
 
-    def _late(self, stamp: Stamp | None) -> str | None:
-        """Rule 9: why a stamped command (never a halt) is too old to carry out, or None."""
-        return None if stamp is None else stamp.judge(self._stamp_clock(), self._station)
+    def _late(self, stamp: Stamp | None, *rots: RotatorPort) -> str | None:
+        """Rule 9: why a stamped command (never a halt) for ``rots`` is too old to carry out,
+        or None."""
+        if stamp is None:
+            return None
+        why = stamp.judge(self._stamp_clock(), self._station)
+        if why is not None or not rots:
+            return why
+        sent_s = self._sent_s(stamp)
+        if sent_s is not None and any(sent_s < rot.halted_s for rot in rots):
+            return (
+                "sent before the last STOP or lock ON (a link that held it up): not carried "
+                "out; send it again"
+            )
+        return None
+
+    def _sent_s(self, stamp: Stamp | None) -> float | None:
+        """Rule 9: a stamp's send time on the steady clock (``halted_s``'s), or None."""
+        sent = None if stamp is None else stamp.sent_unix(self._station)
+        if sent is None:
+            return None
+        return time.monotonic() - (self._stamp_clock() - sent)
 
     def on_message(
         self,
@@ -635,7 +667,7 @@ class MqttService:
                 origin=origin,
             )
             return
-        late = None if halt else self._late(stamp)  # rule 9
+        late = None if halt else self._late(stamp, rot)  # rule 9
         if late is not None:
             rot.report_refusal(late, what, origin=origin)
             return
@@ -649,7 +681,7 @@ class MqttService:
             return
         if halt:
             self._halts.live_halt(topic, payload)  # (3.1.1: perhaps retained; lastword rule 6)
-            self._halts.main_halt(rot, topic, kind, what, retain, origin)
+            self._halts.main_halt(rot, topic, kind, what, retain, origin, self._sent_s(stamp))
             return
         if kind == "lock":
             try:
