@@ -7,12 +7,15 @@ import errno
 import os
 import termios
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.gs232 import gs232_pty
+from bridge.interfaces.gs232 import Gs232Session, gs232_pty
 from bridge.interfaces.ptylines import PtyLineServer
+from tests.support import wait_until
+from tests.support.clock import FakeClock
 from tests.test_ptylines import Client, StandIn
 
 
@@ -77,4 +80,47 @@ def test_a_leftover_link_of_a_server_that_died_is_still_replaced(tmp_path: Path)
     try:
         assert os.readlink(path) == server.slave_name
     finally:
+        server.stop()
+
+
+@dataclass
+class Counted(StandIn):
+    """A stand-in that counts halts (front.py ``HaltCounted.halts``) and hears refusals."""
+
+    halts: int = 0
+    refused: list[str] = field(default_factory=list)
+
+    def report_refusal(self, message: str, command: str | None, **_: object) -> None:
+        self.refused.append(message)
+
+
+def test_moves_a_client_wrote_before_a_stop_are_not_carried_out_after_it(tmp_path: Path) -> None:
+    """tcplines.py rule 9 on a pty (an attack pass): a program wrote its targets in one burst,
+    the budget left most of them in the pty, a STOP from MQTT came (the halt count rose), and
+    every target read after it turned the rotor again. Virtual time: the clock stands still
+    until the STOP, so the rest is read only after it."""
+    clock = FakeClock()
+    rot = Counted()
+    path = str(tmp_path / "rotor-gs232")
+    server = PtyLineServer(
+        rot.id, path, lambda: Gs232Session(rot), label="gs232", key="gs232", clock=clock
+    )
+    server.start()
+    client = Client(path)
+    burst = 400
+    try:
+        os.write(client.fd, b"M200\r" * burst)
+        wait_until(lambda: server.paused > 0, 10, "the server paused")
+        before = len(rot.submitted)
+        assert 0 < before < burst
+        rot.halts += 1  # an MQTT STOP, carried out while the rest waits in the pty
+
+        def all_read() -> bool:
+            clock.t += 1.0  # (a second's budget at each look)
+            return len(rot.submitted) + len(rot.refused) == burst
+
+        wait_until(all_read, 10, "every target read")
+        assert len(rot.submitted) == before  # none of those sent before the STOP went out
+    finally:
+        client.close()
         server.stop()

@@ -50,6 +50,13 @@ Rules:
    tcplines.REPLY_COST more and each wake-up tcplines.READ_COST more; over it, the thread
    sleeps on the stop pipe (in the kernel) and the client's bytes wait in the pty (its writes
    block or fail, as on a serial line), counted in ``paused``.
+10. A STOP or lock ON is the last word over every move the client wrote before it, as on the
+   TCP ports (interfaces/tcplines.py rule 9, whose Fence the session carries): after each
+   read the rotator's halt count is read, then what the client has written so far (read,
+   plus FIONREAD on the master); a move is judged against the count of the first look that
+   held its bytes. An attack pass: a program wrote 400 targets in one burst, the budget
+   (rule 9) left most in the pty, an MQTT STOP stopped the rotor, and the 285 read after it
+   were each carried out.
 """
 
 from __future__ import annotations
@@ -66,12 +73,21 @@ import termios
 import threading
 import time
 import tty
+from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.fdwait import readable
-from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, READ_COST, REPLY_COST
+from bridge.interfaces.tcplines import (
+    RATE_BYTES_S,
+    READ_BYTES,
+    READ_COST,
+    REPLY_COST,
+    SEEN_KEPT,
+    Fence,
+    _unread,
+)
 
 log = logging.getLogger(__name__)
 
@@ -130,6 +146,7 @@ class PtyLineServer:
         self._dropped_logged_s = -DROP_LOG_S
         self._echo_said = False  # rule 7
         self._claim: socket.socket | None = None  # rule 1
+        self._read = 0  # rule 10: the bytes the clients have written and the thread took
 
     @property
     def most_held(self) -> int:
@@ -244,6 +261,8 @@ class PtyLineServer:
 
     def _serve_until_stopped(self) -> None:
         session = self._session()
+        seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)  # rule 10
+        self._read = 0
         budget = Budget(RATE_BYTES_S, self._clock())
         pending_since: float | None = None
         while True:
@@ -271,7 +290,9 @@ class PtyLineServer:
                     log.info(
                         "%s for %s: an unfinished command dropped", self.label, self.rotator_id
                     )
+                    fence = getattr(session, "fence", None)
                     session, pending_since = self._session(), None  # rule 4
+                    seen = self._carried(fence, seen)
                 continue
             try:
                 data = os.read(self._master, READ_BYTES)
@@ -285,10 +306,12 @@ class PtyLineServer:
                 continue
             if not data:
                 continue
+            fence = self._look(session, seen, len(data))  # rule 10
             replies = session.feed(data)
             for reply in replies:
                 if not isinstance(reply, bytes):  # a session's end (tcplines.Close)
                     session = self._session()
+                    seen = self._carried(fence, seen)
                 elif reply:
                     self._write(reply)
             budget.spend(READ_COST + len(data) + REPLY_COST * len(replies), self._clock())
@@ -296,6 +319,39 @@ class PtyLineServer:
                 pending_since = None
             elif pending_since is None:
                 pending_since = self._clock()
+
+    def _look(
+        self, session: PtySession, seen: deque[tuple[int, int, int]], raw: int
+    ) -> Fence | None:
+        """Rule 10: after a read of ``raw`` bytes, the rotator's halt count and then what the
+        client has written so far (read, plus what waits in the pty); the session's fence told
+        the count of the first look that held the bytes just read. Its fence (None: none)."""
+        self._read += raw
+        fence: Fence | None = getattr(session, "fence", None)
+        if fence is None or fence.count is None:
+            return fence
+        count = fence.count()  # (the count first: a halt between the two errs toward refusing)
+        try:
+            sent = self._read + _unread(self._master)
+        except OSError:
+            sent = self._read
+        if seen and seen[-1][1:] == (count, fence.own):
+            seen[-1] = sent, count, fence.own
+        else:
+            seen.append((sent, count, fence.own))
+        while seen[0][0] < self._read:
+            seen.popleft()
+        fence.arrived = seen[0][1], seen[0][2]
+        return fence
+
+    @staticmethod
+    def _carried(
+        fence: Fence | None, seen: deque[tuple[int, int, int]]
+    ) -> deque[tuple[int, int, int]]:
+        """Rule 10: the looks so far, for a fresh session (own halts 0): the halts the old
+        session's own stops added after a look stay the client's own."""
+        own = 0 if fence is None else fence.own
+        return deque(((sent, count + own - was, 0) for sent, count, was in seen), seen.maxlen)
 
     def _discard_unread(self) -> None:
         """Rule 6."""
