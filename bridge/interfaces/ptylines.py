@@ -86,7 +86,7 @@ from bridge.interfaces.tcplines import (
     REPLY_COST,
     SEEN_KEPT,
     Fence,
-    _unread,
+    unread,
 )
 
 log = logging.getLogger(__name__)
@@ -332,7 +332,7 @@ class PtyLineServer:
             return fence
         count = fence.count()  # (the count first: a halt between the two errs toward refusing)
         try:
-            sent = self._read + _unread(self._master)
+            sent = self._read + unread(self._master)
         except OSError:
             sent = self._read
         if seen and seen[-1][1:] == (count, fence.own):

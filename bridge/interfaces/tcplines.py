@@ -368,14 +368,14 @@ try:  # rule 9 (not on Windows, where the remote runs too: tests/remote/test_rem
     import fcntl
     import termios
 
-    def _unread(fd: int) -> int:
+    def unread(fd: int) -> int:
         """The bytes waiting unread in the kernel on ``fd``."""
         waiting: int = struct.unpack("i", fcntl.ioctl(fd, termios.FIONREAD, b"\0" * 4))[0]
         return waiting
 
 except ImportError:
 
-    def _unread(fd: int) -> int:
+    def unread(fd: int) -> int:
         raise OSError(errno.ENOSYS, "no FIONREAD here")
 
 
@@ -384,7 +384,7 @@ def _sent_so_far(conn: socket.socket, read: int) -> int:
     the kernel (FIONREAD); ``read`` alone if the kernel cannot say (Windows, where the remote
     runs too: no fcntl, tests/remote/test_remote_portable.py)."""
     try:
-        return read + _unread(conn.fileno())
+        return read + unread(conn.fileno())
     except OSError:
         return read
 
