@@ -613,3 +613,29 @@ def test_a_move_whose_check_fails_under_the_send_lock_never_reaches_paho() -> No
     assert held == [True] and paho.published == []
     link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5, lambda: None)
     assert [topic for topic, _ in paho.published] == ["rotor/target"]
+
+
+def test_a_move_stamped_in_the_same_millisecond_as_the_stop_before_it_is_carried_out(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """heartbeat.py rule 8: a logger on the remote's rotctld sends ``S`` then ``P`` at once;
+    both are stamped ``.3f`` in the same millisecond. The station maps each stamp onto its
+    steady clock when it comes, through its wall clock; the wall clock drifting a microsecond
+    from the steady one between the two (NTP's slew, a float's last bit at 1.7e9 s: about
+    half of all such pairs, measured) must not make the target look older than its STOP."""
+    import bridge.interfaces.mqtt.service as service_module
+
+    mono, wall = FakeClock(100.0), FakeClock(NOW_UNIX)
+    fake_time = type("T", (), {"monotonic": staticmethod(mono), "time": staticmethod(wall)})
+    monkeypatch.setattr(service_module, "time", fake_time)
+    svc, _, rots = service({"tower": "rotorez"})
+    svc._stamp_clock = wall  # (the station's wall clock, as ``wall=`` gives it)
+    sent = Stamp.of(NOW_UNIX - 0.05, 5)  # the one millisecond both were sent in
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=sent)
+    stop = rots["tower"].calls[-1][1]
+    assert isinstance(stop, Stop) and stop.sent_s is not None
+    rots["tower"].halted_s = min(mono(), stop.sent_s)  # runtime/rotator.py ``_halted``
+    mono.t += 0.001
+    wall.t += 0.001 + 1e-6  # the wall clock a microsecond ahead over that millisecond
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=sent)
+    assert [c[0] for c in rots["tower"].calls] == ["submit", "submit"]

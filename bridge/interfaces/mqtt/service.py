@@ -132,6 +132,11 @@ from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
+# rule 9: a stamp's grain: a millisecond (heartbeat.py ``Stamp.of``) and the noise of putting
+# it on the steady clock through the wall clock; a move stamped within it of the halt before
+# it (a logger's ``S`` then ``P``, the same millisecond) is not older than that halt
+STAMP_GRAIN_S = 0.002
+
 log = logging.getLogger(__name__)
 
 #: R/state's text of each state (a look-up: an enum's ``value`` is two Python calls, at every
@@ -601,7 +606,7 @@ class MqttService:
         if why is not None or not rots:
             return why
         sent_s = self._sent_s(stamp)
-        if sent_s is not None and any(sent_s < rot.halted_s for rot in rots):
+        if sent_s is not None and any(sent_s + STAMP_GRAIN_S < rot.halted_s for rot in rots):
             return (
                 "sent before the last STOP or lock ON (a link that held it up): not carried "
                 "out; send it again"
