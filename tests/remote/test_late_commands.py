@@ -639,3 +639,26 @@ def test_a_move_stamped_in_the_same_millisecond_as_the_stop_before_it_is_carried
     wall.t += 0.001 + 1e-6  # the wall clock a microsecond ahead over that millisecond
     svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=sent)
     assert [c[0] for c in rots["tower"].calls] == ["submit", "submit"]
+
+
+def test_a_stamp_is_never_earlier_than_the_one_before_when_the_best_beat_leaves_the_window() -> (
+    None
+):
+    """heartbeat.py rule 8: the reckoning is the best (fastest) beat's in CLOCK_WINDOW_S; when
+    that beat leaves the window it drops by the trips' spread (20 ms then, 500 ms now: a link
+    grown busy). A STOP stamped just before and a target 0.1 s later just after: the target
+    stamped 0.38 s before the STOP, and the station refused it as sent before that STOP."""
+    mono = FakeClock(50.0)
+    station_clock = StationClock(mono)
+    station_now = 1_700_000_000.0
+    station_clock.heard(station_now - 0.02)  # a fast beat
+    for _ in range(int(CLOCK_WINDOW_S) - 1):
+        mono.t += 1.0
+        station_now += 1.0
+        station_clock.heard(station_now - 0.5)  # slow ones since
+    mono.t += 0.95
+    stop = station_clock.stamp(5)
+    mono.t += 0.1  # the fast beat leaves the window
+    target = station_clock.stamp(5)
+    assert stop is not None and target is not None
+    assert float(target.sent) >= float(stop.sent)

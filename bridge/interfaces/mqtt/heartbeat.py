@@ -144,6 +144,10 @@ class StationClock:
         # (first arrival, the largest station - arrival among the beats from then on)
         self._offsets: deque[tuple[float, float]] = deque(maxlen=MAX_BUCKETS)
         self._station: str | None = None  # rule 7: the process the offsets came from
+        # rule 8: the last reckoning given (the station's time, its process): the next is never
+        # earlier by up to AHEAD_S (the best beat leaving the window drops the reckoning by the
+        # trips' spread, and a move sent after this remote's STOP was stamped before it)
+        self._given: tuple[float, str | None] | None = None
 
     def heard(self, station_unix: float, station: str | None = None) -> None:
         """A live beat; ``station``: the process it names (rule 7), None for none."""
@@ -177,7 +181,13 @@ class StationClock:
             self._trim(now)
             if not self._offsets:
                 return None
-            return now + max(offset for _, offset in self._offsets), self._station
+            reckoned = now + max(offset for _, offset in self._offsets)
+            given = self._given
+            if given is not None and given[1] == self._station:
+                if reckoned < given[0] <= reckoned + AHEAD_S:
+                    reckoned = given[0]
+            self._given = reckoned, self._station
+            return reckoned, self._station
 
     def stamp(self, expiry_s: float) -> Stamp | None:
         """Rules 4 and 7: a command's stamp sent now, naming the process the reckoning came
