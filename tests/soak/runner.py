@@ -502,10 +502,13 @@ class Soak:
         elif kind == "report lost":
             rot.emu.set_silent(True)  # the line is silent anyway while it slews
         # the link is down for the bridge: what was pending must never be sent afterwards (a
-        # silent controller is declared offline silence_timeout_s = 3 s after its last reply)
+        # silent controller is declared offline silence_timeout_s = 3 s after its last reply;
+        # not a slewing SatEL's: its line is silent while it slews, and a stop to it waits for
+        # the report three times 2 s, then asks: a silence that ended by then is no link
+        # down, and the target waiting is still the newest word, sent once it answers)
         if kind == "unplug":
             rot.stale_at.append(now)
-        elif kind == "silent" and fault.t_end - now > 4:
+        elif kind == "silent" and fault.t_end - now > 4 and not (rot.model == "satel" and moving):
             rot.stale_at.append(now + 4.0)
         # the rotor may be stopped or the command dropped: a move is not owed any more
         if kind in ("unplug", "power cycle") or (kind == "silent" and fault.t_end - now > 4):
@@ -695,6 +698,11 @@ class Soak:
             elif rot.last_interrupt_t > e.t0:
                 e.outcome = "interrupted by a serial fault"
                 self.cmds["interrupted by a serial fault"] += 1
+            elif self.restart_said(rot, e):
+                # a power cycle just before it was asked, found by the exchange after: the
+                # bridge drops what waits and says so, naming it (a SatEL's clock went back)
+                e.outcome = "interrupted by a serial fault"
+                self.cmds["interrupted by a serial fault"] += 1
             elif now > e.deadline:
                 e.outcome = "lost"
                 self.cmds["lost"] += 1
@@ -704,6 +712,14 @@ class Soak:
                     f"{rot.rid}: command {e.payload!r} lost: rotor at {s.az_deg:.1f}"
                     f"{'' if s.el_deg is None else f'/{s.el_deg:.1f}'}; errors {errors[-3:]}"
                 )
+
+    def restart_said(self, rot: Rot, e: Expectation) -> bool:
+        """A controller restart the bridge reported after ``e`` was asked, naming its target."""
+        for error in self.monitor.errors_after(rot.rid, e.t0):
+            command = str(error.get("command", ""))
+            if "restarted" in str(error.get("message", "")) and command.startswith("target"):
+                return True
+        return False
 
     def frame_target(self, rot: Rot, data: bytes) -> tuple[float, float | None] | None:
         try:
