@@ -203,6 +203,17 @@ class StationClock:
             self._offsets.popleft()
 
 
+def _seconds(text: str | None) -> float:
+    """A stamp's number (rule 5), NaN for none or one that cannot be read: ASCII digits only
+    (``float`` reads ``１２３``)."""
+    if text is None or not text.isascii():
+        return math.nan
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
 class StationTime:
     """Rule 6 on the station: ``now_unix`` is the station's clock (its heartbeats carry it, its
     stamps are judged by it); ``wall`` and ``clock`` (the steady one) are read under a lock,
@@ -261,31 +272,23 @@ class Stamp:
     def sent_unix(self, station: str | None = None) -> float | None:
         """Rule 8: the send time, if it can be read and was reckoned against this station
         process (``station``, as ``judge`` asks); None otherwise."""
-        if self.station is not None and station is not None and self.station != station:
-            return None
-        if not self.sent.isascii():
-            return None
-        try:
-            sent = float(self.sent)
-        except ValueError:
-            return None
-        return sent if math.isfinite(sent) else None
+        sent = _seconds(self.sent)
+        return None if self._another(station) or not math.isfinite(sent) else sent
+
+    def _another(self, station: str | None) -> bool:
+        """Rule 7: reckoned against another station process than ``station``."""
+        return self.station is not None and station is not None and self.station != station
 
     def judge(self, now_unix: float, station: str | None = None) -> str | None:
         """Rules 5 and 7: why the command is refused, or None (fresh); ``station``: the
         judging process's identity (None: no stamp's name is asked)."""
-        if self.station is not None and station is not None and self.station != station:
+        if self._another(station):
             return (
                 "stamped against this station's bridge before it restarted: not carried out; "
                 "send it again"
             )
-        try:
-            if not (self.sent + (self.expiry or "")).isascii():  # (float reads ``１２３``)
-                raise ValueError("not ASCII digits")
-            sent = float(self.sent)
-            expiry = float(self.expiry if self.expiry is not None else "nan")
-        except ValueError:
-            sent = expiry = math.nan
+        sent = _seconds(self.sent)
+        expiry = _seconds(self.expiry) if math.isfinite(sent) else math.nan
         if not (math.isfinite(sent) and math.isfinite(expiry) and 0 < expiry <= MAX_EXPIRY_S):
             return (
                 f"its send time cannot be read (user properties {SENT}={self.sent[:24]!r}, "
