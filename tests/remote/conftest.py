@@ -3,8 +3,11 @@ answering (a module with a station of its own defines its own ``station``)."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import pytest
 
+from tests.support.remote import StallingLink
 from tests.support.rig import Rig
 
 
@@ -14,3 +17,10 @@ def station(rig: Rig) -> Rig:
     rig.start()
     rig.ready("tower")
     return rig
+
+
+@pytest.fixture
+def link(station: Rig) -> Iterator[StallingLink]:
+    stalling = StallingLink(station.broker.port)
+    yield stalling
+    stalling.close()

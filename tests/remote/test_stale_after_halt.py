@@ -1,30 +1,19 @@
 """interfaces/mqtt/heartbeat.py rule 8: a move stamped before the rotator's last STOP or lock ON
 is refused however fresh, and a move the remote's operator sends right after their own STOP is
 not. Real mosquitto, the station's bridge on an emulated Rotor-EZ, the remote in this process
-(through a link this test stalls, as tests/remote/test_stalled_link.py's)."""
+(through a link this test stalls: tests/support/remote.py's StallingLink)."""
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
-
-import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
-from tests.remote.test_stalled_link import StallingLink
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import free_port
-from tests.support.remote import ask
+from tests.support.remote import StallingLink, ask
 from tests.support.rig import Rig
-
-
-@pytest.fixture
-def link(station: Rig) -> Iterator[StallingLink]:
-    stalling = StallingLink(station.broker.port)
-    yield stalling
-    stalling.close()
 
 
 def _remote(port: int, broker_port: int) -> Remote:

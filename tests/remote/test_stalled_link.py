@@ -5,11 +5,7 @@ are in tests/remote/test_late_commands.py; this proves the wiring."""
 
 from __future__ import annotations
 
-import contextlib
-import socket
-import threading
 import time
-from collections.abc import Iterator
 
 import paho.mqtt.client as paho
 import pytest
@@ -24,65 +20,8 @@ from bridge.remote.settings import RemoteSettings
 from bridge.settings import MqttSettings
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto, free_port
-from tests.support.remote import ask, remote_published
+from tests.support.remote import StallingLink, ask, remote_published
 from tests.support.rig import Rig
-
-
-class StallingLink:
-    """A TCP link on a loopback port to ``target`` that can stall: stalled, what either side
-    sends is taken and held (as a Wi-Fi link's buffers hold it) and a new connection gets no
-    further than the link; recovered, what it held is delivered, the old connection's first."""
-
-    def __init__(self, target: int) -> None:
-        self.target = target
-        self.flowing = threading.Event()
-        self.flowing.set()
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port = int(self._server.getsockname()[1])
-        self._socks: list[socket.socket] = []
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def stall(self) -> None:
-        self.flowing.clear()
-
-    def recover(self) -> None:
-        self.flowing.set()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                conn, _ = self._server.accept()
-            except OSError:
-                return
-            if not self.flowing.is_set():  # no connection is made across a stalled link
-                conn.close()
-                continue
-            upstream = socket.create_connection(("127.0.0.1", self.target))
-            self._socks += [conn, upstream]
-            for a, b in ((conn, upstream), (upstream, conn)):
-                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
-
-    def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
-        with contextlib.suppress(OSError):
-            while data := src.recv(65536):
-                self.flowing.wait()  # held while the link stalls, delivered when it recovers
-                dst.sendall(data)
-        with contextlib.suppress(OSError):
-            dst.shutdown(socket.SHUT_WR)
-
-    def close(self) -> None:
-        self.flowing.set()
-        self._server.close()
-        for s in self._socks:
-            with contextlib.suppress(OSError):
-                s.close()
-
-
-@pytest.fixture
-def link(station: Rig) -> Iterator[StallingLink]:
-    stalling = StallingLink(station.broker.port)
-    yield stalling
-    stalling.close()
 
 
 def test_a_move_across_a_stalled_link_is_refused_and_never_turns_the_rotor_later(

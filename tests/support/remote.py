@@ -1,7 +1,9 @@
-"""What the remote (bridge/remote/) sent, as the station's broker saw it."""
+"""What the remote (bridge/remote/) sent, as the station's broker saw it, and a link to the
+station's broker that can stall."""
 
 from __future__ import annotations
 
+import contextlib
 import re
 import socket
 import threading
@@ -92,3 +94,53 @@ def ask(port: int, line: bytes) -> bytes:
             if buf.startswith(b"RPRT") and buf.endswith(b"\n"):
                 break
     return buf
+
+
+class StallingLink:
+    """A TCP link on a loopback port to ``target`` that can stall: stalled, what either side
+    sends is taken and held (as a Wi-Fi link's buffers hold it) and a new connection gets no
+    further than the link; recovered, what it held is delivered, the old connection's first."""
+
+    def __init__(self, target: int) -> None:
+        self.target = target
+        self.flowing = threading.Event()
+        self.flowing.set()
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self._server.getsockname()[1])
+        self._socks: list[socket.socket] = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def stall(self) -> None:
+        self.flowing.clear()
+
+    def recover(self) -> None:
+        self.flowing.set()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                conn, _ = self._server.accept()
+            except OSError:
+                return
+            if not self.flowing.is_set():  # no connection is made across a stalled link
+                conn.close()
+                continue
+            upstream = socket.create_connection(("127.0.0.1", self.target))
+            self._socks += [conn, upstream]
+            for a, b in ((conn, upstream), (upstream, conn)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                self.flowing.wait()  # held while the link stalls, delivered when it recovers
+                dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+    def close(self) -> None:
+        self.flowing.set()
+        self._server.close()
+        for s in self._socks:
+            with contextlib.suppress(OSError):
+                s.close()
