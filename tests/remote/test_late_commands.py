@@ -11,7 +11,6 @@ import socket
 import sys
 import threading
 import time
-from dataclasses import replace
 from typing import Any
 
 import paho.mqtt.client as paho_client
@@ -157,9 +156,32 @@ def test_a_command_a_link_held_up_is_refused_by_the_station_and_a_stop_is_not() 
     assert [c[0] for c in calls] == ["refused", "refused", "submit", "lock"]
     assert "sent 15.0 s ago, older than its 5 s expiry" in calls[0][1]
     stop = calls[2][1]
-    assert isinstance(stop, Stop) and replace(stop, sent_s=None) == Stop()
-    # heartbeat.py rule 8: the stop is timed by its stamp, on the steady clock
-    assert stop.sent_s == pytest.approx(time.monotonic() - 15.0, abs=1.0)
+    # heartbeat.py rule 8: a stamp older than its expiry times nothing: when it came counts
+    assert isinstance(stop, Stop) and stop == Stop()
+
+
+def test_a_halt_is_timed_by_its_stamp_only_when_the_stamp_would_pass_on_a_move() -> None:
+    """heartbeat.py rule 8: a STOP two seconds old, inside its expiry, is timed by its stamp;
+    one stamped by a clock five minutes slow, unreadable or against another station process is
+    carried out and timed when it came (its ``sent_s`` none), so that a target a held-up link
+    lets go a second later, stamped a second before it came, is refused as older."""
+    svc, _, rots = service({"tower": "rotorez"}, station="abc")
+    fresh = Stamp.of(NOW_UNIX - 2.0, 5, "abc")
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=fresh)
+    for stamp in (
+        Stamp.of(NOW_UNIX - 300.0, 5, "abc"),
+        Stamp("yesterday", "5", "abc"),
+        Stamp.of(NOW_UNIX - 2.0, 5, "old"),
+    ):
+        svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=stamp)
+    stops = [c[1] for c in rots["tower"].calls]
+    assert all(isinstance(stop, Stop) for stop in stops) and len(stops) == 4
+    assert stops[0].sent_s == pytest.approx(time.monotonic() - 2.0, abs=1.0)
+    assert [stop.sent_s for stop in stops[1:]] == [None, None, None]
+    rots["tower"].halted_s = time.monotonic()  # runtime/rotator.py ``_halted``: when it came
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 1, 5, "abc"))
+    assert rots["tower"].calls[-1][0] == "refused"
+    assert "sent before the last STOP" in rots["tower"].calls[-1][1]
 
 
 def test_a_move_stamped_before_the_rotators_last_halt_is_refused_and_one_after_is_not() -> None:

@@ -65,7 +65,9 @@ Rules:
 8. A move stamped before the rotator's last STOP or lock ON is refused, however fresh
    (service.py rule 9; an attack pass: a remote's target held up by its link for 3 s, a STOP
    from Home Assistant meanwhile, and the target turned the rotor when it came). A halt's
-   time is when it came, or the stamp it carries if that is earlier (``Stop.sent_s``): so
+   time is when it came, or the stamp it carries if that is earlier and would pass as a
+   move's (rule 5: within its expiry; ``Stop.sent_s``; a clock minutes slow must not open a
+   window for the moves stamped between its stamp and its arrival, a review): so
    the remote stamps its halts too, when it has a reckoning (a halt never waits for one),
    and a move its operator sends right after a STOP is not taken for older than the STOP
    however long the link's trip. A client that stamps its moves by its own clock should

@@ -64,8 +64,8 @@ Rules:
    time was reckoned from a clock that ended when the station's bridge restarted. So is a move
    stamped before the rotator's last STOP or lock ON from any interface (``halted_s``,
    heartbeat.py rule 8); a halt's own stamp, read here, may put that time earlier than it
-   came. Halts: never refused. The same on the stop lane, for the lock OFF it carries out
-   while the main connection is down.
+   came, when it would pass as a move's (``_halt_sent_s``). Halts: never refused. The same
+   on the stop lane, for the lock OFF it carries out while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -494,7 +494,7 @@ class MqttService:
                 self._halts.replayed_group_stop(group_id, topic, payload)
             else:
                 self._halts.live_halt(topic, payload)  # (3.1.1: lastword.py rule 6)
-                sent_s = self._sent_s(stamp)
+                sent_s = self._halt_sent_s(stamp)
                 self._halts.main_group_stop(group_id, topic, what, retain, origin, sent_s)
             return
         why = None
@@ -594,7 +594,7 @@ class MqttService:
             retain,
             self.origin(operator),
             late=lambda: self._late(stamp),
-            sent_s=self._sent_s(stamp),
+            sent_s=self._halt_sent_s(stamp),
         )
 
     def _late(self, stamp: Stamp | None, *rots: RotatorPort) -> str | None:
@@ -612,6 +612,15 @@ class MqttService:
                 "out; send it again"
             )
         return None
+
+    def _halt_sent_s(self, stamp: Stamp | None) -> float | None:
+        """Rule 9: a halt's send time, when its stamp would pass as a move's (``_late``'s
+        judge); None for one older than its expiry, unreadable or another process's: the halt
+        is carried out and counts from when it came (a clock minutes slow must not let the
+        moves stamped between its stamp and its arrival through, heartbeat.py rule 8)."""
+        if stamp is None or stamp.judge(self._stamp_clock(), self._station) is not None:
+            return None
+        return self._sent_s(stamp)
 
     def _sent_s(self, stamp: Stamp | None) -> float | None:
         """Rule 9: a stamp's send time on the steady clock (``halted_s``'s), or None."""
@@ -686,7 +695,8 @@ class MqttService:
             return
         if halt:
             self._halts.live_halt(topic, payload)  # (3.1.1: perhaps retained; lastword rule 6)
-            self._halts.main_halt(rot, topic, kind, what, retain, origin, self._sent_s(stamp))
+            sent_s = self._halt_sent_s(stamp)
+            self._halts.main_halt(rot, topic, kind, what, retain, origin, sent_s)
             return
         if kind == "lock":
             try:
