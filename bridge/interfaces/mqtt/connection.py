@@ -58,7 +58,12 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    each followed by a connection accepted at the first try (the broker never went away), count
    as a takeover too; the side that holds the connection longer sees exactly that. A drop after
    a keepalive timeout or with another reason from the broker is no evidence. (A link that
-   keeps breaking the same way earns the same back-off; the error says "most likely".) The
+   keeps breaking the same way earns the same back-off; the error says "most likely".) A
+   connection that carries stops (the stop lane, the stop express: ``SLOWS_FOR_A_FIGHT``)
+   says a fight the same way and does not back off: a broker that crashes and is restarted
+   at once (systemd's 100 ms) three times in a row looks exactly like one, and its back-off
+   kept every STOP out for up to a minute after the broker was back (an attack pass); two
+   bridges' lanes fighting take turns at paho's reconnect delay, as backed-off ones would. The
    default client id is unique per installation (MqttSettings.effective_client_id): only an
    explicit one, or a copied state file on a host of the same name, can collide.
 9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
@@ -188,8 +193,9 @@ class TakeoverGuard:
         return True
 
 
-def takeover_message(client_id: str, ending: Ending) -> str:
-    """Rule 7: what the main connection says, once an episode."""
+def takeover_message(client_id: str, ending: Ending, backs_off: bool = True) -> str:
+    """Rule 7: what a connection says, once an episode; ``backs_off``: the main connection's
+    words, else a connection that carries stops (``SLOWS_FOR_A_FIGHT``)."""
     if ending == "taken over":
         what = f"MQTT session taken over: another client connected with client id {client_id!r}"
     else:
@@ -201,8 +207,14 @@ def takeover_message(client_id: str, ending: Ending) -> str:
     return (
         f"{what}. Two processes with one client id (two hosts sharing one configuration, a "
         f"stale container still running) keep kicking each other off: stop the other one or "
-        f"give each its own mqtt.client_id. Backing off: {TAKEOVER_FIRST_S} s, doubling up to "
-        f"{TAKEOVER_MAX_S} s between reconnects, until a connection lasts {STABLE_S} s"
+        f"give each its own mqtt.client_id. "
+        + (
+            f"Backing off: {TAKEOVER_FIRST_S} s, doubling up to {TAKEOVER_MAX_S} s between "
+            f"reconnects, until a connection lasts {STABLE_S} s"
+            if backs_off
+            else "Not backing off: it carries stops (a broker restarted again and again looks "
+            "the same)"
+        )
     )
 
 
@@ -265,6 +277,8 @@ class Options(TypedDict, total=False):
 class Connection:
     """A paho client and what both connections do with it. Subclasses say what the rest means
     through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
+
+    SLOWS_FOR_A_FIGHT = True  # rule 7: False for a connection that carries stops
 
     def __init__(
         self,
@@ -608,7 +622,7 @@ class Connection:
             return
         ending = ending_of(flags, reason_code)
         fight = self._guard.disconnected(self._clock(), ending)
-        if fight:
+        if fight and self.SLOWS_FOR_A_FIGHT:
             # paho forgets its back-off on every accepted connection and starts again at the
             # minimum delay: the minimum is what slows a fight down (rule 7)
             backoff = self._guard.backoff_s

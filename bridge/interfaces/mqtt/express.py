@@ -58,18 +58,18 @@ Rules:
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies, one whose client id another client keeps taking over (said until a connection of it
-   lasts connection.py's STABLE_S), a frame left half-written (rule 9) and a long hold (rule
-   8) are said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
-   bridge's process, as without it. An express that ended is started again, RESTART_FIRST_S
-   later, the wait doubling for each end in a row up to RESTART_MAX_S (back to the first once
-   one ran for RESTART_STABLE_S); the ports open then are handed to it again. A word from
-   it that the bridge cannot read (not JSON, or cut at _PACKET) ends that child (killed,
-   said, started again): the reader that died on one left every hold unanswered, and no
-   target after a stop went out again, without a word (an attack pass; rule 11). So does a
-   word of JSON whose fields are not the ones its ``op`` has (one missing, or of another
-   kind): a child is started from the package as it is on disk then, so one started again
-   after an upgrade under a running bridge may speak another version's words, and the
-   reader died on the first such one as it did on a cut one (a review).
+   lasts connection.py's STABLE_S; it does not back off for one: connection.py rule 7), a frame
+   left half-written (rule 9) and a long hold (rule 8) are said on ``B/bridge/info``
+   (``on_problem``); stops then take the stop lane in the bridge's process, as without it. An
+   express that ended is started again, RESTART_FIRST_S later, the wait doubling for each end in
+   a row up to RESTART_MAX_S (back to the first once one ran for RESTART_STABLE_S); the ports
+   open then are handed to it again. A word from it that the bridge cannot read (not JSON, or
+   cut at _PACKET) ends that child (killed, said, started again): the reader that died on one
+   left every hold unanswered, and no target after a stop went out again, without a word (an
+   attack pass; rule 11). So does a word of JSON whose fields are not the ones its ``op`` has
+   (one missing, or of another kind): a child is started from the package as it is on disk then,
+   so one started again after an upgrade under a running bridge may speak another version's
+   words, and the reader died on the first such one as it did on a cut one (a review).
 7. Shutdown: ``stop`` closes the control socket; the express closes its copies of the ports
    (a bridge restarted at once finds them free), disconnects and exits on its end of file,
    and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
@@ -951,6 +951,8 @@ class Sync:
 class _Link(Connection):
     """The express's connection (rule 2): the lane's hooks, its words to the bridge."""
 
+    SLOWS_FOR_A_FIGHT = False  # rule 6: it carries stops (connection.py rule 7)
+
     def __init__(
         self,
         settings: MqttSettings,
@@ -998,7 +1000,7 @@ class _Link(Connection):
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop express disconnected (%s)", reason_code)
         if fight and self._fight is None:  # rule 6: said, not only slowed down
-            self._fight = takeover_message(self._client_id, ending)
+            self._fight = takeover_message(self._client_id, ending, backs_off=False)
             self._say(op="problem", text=self._fight)  # (the bridge logs it)
 
     def _tick(self) -> None:

@@ -28,9 +28,10 @@ Rules:
    over its client id (another client connecting with it: an attack pass found it said
    nowhere, while stops quietly lost their connection) is logged and said on B/bridge/info
    (``on_info``) once an episode, and unsaid once a connection lasts STABLE_S (a review). Its
-   other disconnects are logged at debug level (the main connection says the same). Its
-   takeover back-off is client.py rule 7's (connection.py), counting only connections that
-   were accepted.
+   other disconnects are logged at debug level (the main connection says the same). It
+   judges a takeover as connection.py rule 7 does, counting only connections that were
+   accepted, and does not back off for one (``SLOWS_FOR_A_FIGHT``: a crash-looping broker
+   looks the same, and stops must come the moment it is back).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
@@ -87,6 +88,8 @@ def lane_client_id(settings: MqttSettings) -> str:
 
 
 class StopLane(Connection):
+    SLOWS_FOR_A_FIGHT = False  # rule 3
+
     def __init__(
         self,
         settings: MqttSettings,
@@ -196,8 +199,9 @@ class StopLane(Connection):
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
         if fight and self._fight is None:  # rule 3: a fight over its client id is its own (an
-            self._fight = f"stop lane: {takeover_message(self.client_id, ending)}"  # attack
-            log.error("%s", self._fight)  # pass: nothing said it)
+            said = takeover_message(self.client_id, ending, backs_off=False)  # attack pass:
+            self._fight = f"stop lane: {said}"  # nothing said it)
+            log.error("%s", self._fight)
             if self._on_info is not None:
                 self._on_info(self._fight, True)
 
