@@ -190,6 +190,9 @@ class MqttClient(Connection):
         self._left: dict[str, tuple[bytes, Callable[[], bool]]] = {}
         # rule 14: the owned topics this connection's look deleted and nobody published on since
         self._deleted: set[str] = set()
+        # delivery.py rule 13: the deletions this connection owes (the look's, clear_retained's):
+        # one paho's full queue refused is sent again
+        self._clearing: set[str] = set()
         self._heartbeat = heartbeat  # rule 2
         self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
@@ -313,8 +316,9 @@ class MqttClient(Connection):
         with self._lock:
             self._retained.pop(topic, None)
             if self._look is None:
-                if self.connected.is_set():
-                    self._client.publish(topic, b"", qos=1, retain=True)
+                if self.connected.is_set():  # (delivery.py rule 13: sent again if refused)
+                    self._clearing.add(topic)
+                    self._delivery.send(topic, b"", 1, retain=True)
                 cleared = True
             elif self._look.defer_clear(topic):  # rule 14: held by the broker before we came
                 return
@@ -366,10 +370,18 @@ class MqttClient(Connection):
         with self._lock:
             if not self.connected.is_set():
                 return  # the connect sends everything
-            for topic in self._delivery.take_dirty():
+            dirty = list(self._delivery.take_dirty())
+            for i, topic in enumerate(dirty):
                 held = self._retained.get(topic)
                 if held is not None:
-                    self._delivery.send(topic, held[0], held[1], retain=True)
+                    sent = self._delivery.send(topic, held[0], held[1], retain=True)
+                elif topic in self._clearing:  # a deletion the full queue refused
+                    sent = self._delivery.send(topic, b"", 1, retain=True)
+                else:
+                    continue
+                if not sent:  # the queue is full again: the rest wait for the next room
+                    self._delivery.keep_dirty(dirty[i + 1 :])
+                    return
             for topic, event in self._delivery.take_backlog():
                 self._delivery.send(topic, event, 1, retain=False)
 
@@ -531,6 +543,7 @@ class MqttClient(Connection):
             )
             self._lapsed = 0
         self._deleted = set()
+        self._clearing = set()
         if look is not None:
             spare = self.spare  # interfaces/mqtt/stale.py rule 3: judged once all came
             # rule 14: a topic published since its deletion was asked (``clear_retained`` took
@@ -538,6 +551,7 @@ class MqttClient(Connection):
             clears = [t for t in look.clears if t not in self._retained]
             look = replace(look, clears=[t for t in clears if spare is None or not spare(t)])
             if look.clear:
+                self._clearing = set(look.clears)
                 for topic in look.clears:
                     send(topic, b"", 1, retain=True)
                 self._deleted = {t for t in look.clears if self._owned.owns(t)}

@@ -19,7 +19,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 13. A publish paho does not take (its QoS 1 queue full: at most MAX_QUEUED messages, so a
    stalled broker cannot grow the bridge's memory without bound; no connection) is not taken
    for sent: a retained topic is marked dirty and sent again as soon as the broker
-   acknowledges anything (room again) and on every connect; an event waits in the bounded
+   acknowledges anything (room again) and on every connect, its newest value or, for a
+   deletion the client still owes (``MqttClient._clearing``: 2,000 removed rotators' state,
+   the first look's deletions past MAX_QUEUED, stayed on the broker for good, an attack
+   pass), the deletion; a round of those stops at the first paho refuses again (the rest
+   wait for the next room, not tried under the client's lock to fail); an event waits in the bounded
    backlog (EVENT_BACKLOG, the oldest dropped first). Said once a minute at most
    (FAILED_LOG_S), with the count so far.
 """
@@ -75,28 +79,31 @@ class Delivery:
         self.failed_publishes = 0
 
     # -- under the client's lock ----------------------------------------------------------
-    def send(self, topic: str, data: str | bytes, qos: int, *, retain: bool) -> None:
-        """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
+    def send(self, topic: str, data: str | bytes, qos: int, *, retain: bool) -> bool:
+        """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11).
+        Whether paho took it (rule 13: else it is marked for the retry)."""
         fast = self._publish_qos0
         if not qos and fast is not None and isinstance(data, bytes):
             rc = fast(topic, data, retain)
             if rc != _SUCCESS:
                 self._failed(topic, data, retain, rc)
-            return
+                return False
+            return True
         info = self._client.publish(topic, data, qos=qos, retain=retain)
         if info.rc != _SUCCESS and not (
             qos and info.rc == MQTTErrorCode.MQTT_ERR_NO_CONN  # paho keeps it for the connect
         ):
             self._failed(topic, data, retain, info.rc)
-            return
+            return False
         if not qos:
-            return
+            return True
         with self._ids_lock:
             early = self._acked_early.pop(info.mid, None)
             if early is None and len(self._pub_topics) < MAX_UNACKED:
                 self._pub_topics[info.mid] = topic
         if early is not None:  # refused before we noted its id
             self.deny(topic, "publish to", str(early))
+        return True
 
     def hold_event(self, topic: str, payload: str | bytes) -> None:
         """Rule 13: an event while disconnected waits in the backlog."""
@@ -106,6 +113,10 @@ class Delivery:
         backlog = list(self._backlog)
         self._backlog.clear()
         return backlog
+
+    def keep_dirty(self, topics: list[str]) -> None:
+        """Rule 13: retained topics not tried this round (paho's queue full again)."""
+        self._dirty.update(topics)
 
     def take_dirty(self) -> set[str]:
         dirty, self._dirty = self._dirty, set()
