@@ -69,62 +69,65 @@ Rules:
    answer, as autopark.py rule 1 has it for one controller); each box then parks its own axis,
    the azimuth box the park's azimuth alone (app.py ``axis_configs``, as the wind's park),
    together once the rotator was left alone that long.
-8. No axis turns alone to a target while the rotator is offline: when a box stops answering,
-   a target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first)
-   is dropped there, as a single controller's is when its line goes (said on R/error), and a
-   target handed out while either box does not answer is refused in both (a review: the
-   azimuth box's target, held back by its brake delay, went out after the elevation box was
-   unplugged, and the azimuth turned alone under an ``offline`` status). A turn to a target
-   already on its way in the box that answers is stopped there: the rotator's turn is no
-   longer watched whole, and a single controller gone silent mid-turn is stopped on both
-   axes (session/controller.py rule 2; a review: the azimuth box ran on alone to the target
-   the bridge had dropped, under an ``offline`` status). The box whose port went mid-turn (a
-   turn or a target out when it closed) owes its stop, its first frame when it is back: a single
-   controller's turn goes on after a replug (session/controller.py rule 13), but here the other
-   axis was stopped (an attack pass: the elevation box, replugged, turned on alone to its
-   target, 60/80 where 300/80 was asked); both boxes whose ports went together (one USB hub) owe
-   theirs, and the turn is sent again by hand. The box's port error is its port's words alone
-   (``WorkerConfig.box``): a single controller's says its turn is left to it
-   (session/controller.py rule 13), which here is stopped. A box that says it restarted mid-turn
-   (session/controller.py rule 12: a power-on byte; rule 14: a SatEL's clock gone back), or
-   gave its turn up (rule 12: a
-   Prosistel or RC2800 that says its motor is off short of the target), abandons the rotator's
-   turn as a whole: the other box's turn under way is stopped and its target waiting dropped
-   (session.py ``abandon``), unsaid, the restart's one error saying it was not resumed (a
-   review: the azimuth box's turn was said abandoned while the elevation box turned on to the
-   user's elevation, the antenna left half moved). The storm's park goes on there,
-   under way or still waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an
-   attack pass: a Rotor-EZ azimuth box's park, held back by its brake delay, was dropped
-   and never sent again): each box parks its own axis, as one does alone in a storm
-   begun while the other did not answer, and nobody can send it again in the storm (a review
-   of 83a398d: the azimuth box's park, stopped when the elevation box fell silent for 4 s,
-   was never tried again, the antenna left 140 degrees short of it for the whole storm). A
-   STOP still reaches the box that answers.
-   A target one box drops before it went out or moved the rotor (session.py rule 23: a lease
-   claimed by someone else; wind.py rule 1: a storm begun, or one that refuses the try more of
-   a frame lost on the line, controller.py rule 11: a cold review, the elevation turned on to
-   40 for a 300/40 whose azimuth the storm did not send again) is the rotator's whole target
-   dropped: the other box
-   drops its half too (session.py ``forsake``, unsaid), if it is that sender's (``sibling``:
+8. No axis turns alone to a target while the rotator is offline: when a box stops answering, a
+   target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first) is
+   dropped there, as a single controller's is when its line goes (said on R/error), and a target
+   handed out while either box does not answer is refused in both (a review: the azimuth box's
+   target, held back by its brake delay, went out after the elevation box was unplugged, and the
+   azimuth turned alone under an ``offline`` status). A turn to a target already on its way in
+   the box that answers is stopped there: the rotator's turn is no longer watched whole, and a
+   single controller gone silent mid-turn is stopped on both axes (session/controller.py rule 2;
+   a review: the azimuth box ran on alone to the target the bridge had dropped, under an
+   ``offline`` status). The box whose port went mid-turn (a turn or a target out when it closed)
+   owes its stop, its first frame when it is back: a single controller's turn goes on after a
+   replug (session/controller.py rule 13), but here the other axis was stopped (an attack pass:
+   the elevation box, replugged, turned on alone to its target, 60/80 where 300/80 was asked);
+   both boxes whose ports went together (one USB hub) owe theirs, and the turn is sent again by
+   hand. The box's port error is its port's words alone (``WorkerConfig.box``): a single
+   controller's says its turn is left to it (session/controller.py rule 13), which here is
+   stopped. A box that says it restarted mid-turn (session/controller.py rule 12: a power-on
+   byte; rule 14: a SatEL's clock gone back), or gave its turn up (rule 12: a Prosistel or
+   RC2800 that says its motor is off short of the target), abandons the rotator's turn as a
+   whole: the other box's turn under way is stopped and its target waiting dropped (session.py
+   ``abandon``), unsaid, the restart's one error saying it was not resumed (a review: the
+   azimuth box's turn was said abandoned while the elevation box turned on to the user's
+   elevation, the antenna left half moved). So does a box that drops its turn with an error of
+   its own (controller.py ``dropped_turns``: a stall, which is all an RT-21's restart shows, a
+   limit passed, a turn away or back, a pass, a refusal; an attack pass: the elevation turned on
+   alone to the 80 of a target said dropped), as soon as the other box's rotor moves: one that
+   stands (not moved since its target went out, or for ``settle_s``: session.py ``stands``) is
+   left to say its own stall or refusal, so that two iced rotors say two stalls, and is
+   abandoned if it moves after all; commands that come meanwhile are newer than the turn
+   dropped, and end the wait (``Siblings``). The storm's park goes on there, under way or still
+   waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an attack pass: a Rotor-EZ
+   azimuth box's park, held back by its brake delay, was dropped and never sent again): each box
+   parks its own axis, as one does alone in a storm begun while the other did not answer, and
+   nobody can send it again in the storm (a review of 83a398d: the azimuth box's park, stopped
+   when the elevation box fell silent for 4 s, was never tried again, the antenna left 140
+   degrees short of it for the whole storm). A STOP still reaches the box that answers. A target
+   one box drops before it went out or moved the rotor (session.py rule 23: a lease claimed by
+   someone else; wind.py rule 1: a storm begun, or one that refuses the try more of a frame lost
+   on the line, controller.py rule 11: a cold review, the elevation turned on to 40 for a 300/40
+   whose azimuth the storm did not send again) is the rotator's whole target dropped: the other
+   box drops its half too (session.py ``forsake``, unsaid), if it is that sender's (``sibling``:
    a half another sender sent since, the lease holder's own, goes on; a cold review, DL1ABC's
-   elevation 10, sent before their claim, was dropped with G4XYZ's azimuth 300 and the
-   elevation turned on to G4XYZ's 40), and an axis a sender's target leaves out is that
-   sender's half before while its box waits for it or turns to it, as one controller takes
-   one sender's two halves for one target (``aimed``, core/model.py ``combine``; a cold
-   review: G4XYZ's 310 sent alone after 300/40, dropped by a claim, left the elevation
-   turning on to 40). A half a SatEL box put back after its slew's late report (session/
-   slew.py rule 4, session/targets.py rule 3) is that half still (a cold review: the put back
-   was a new target the drop did not know, and went out: the elevation turned on to 40 for
-   the claim's dropped 300/40): waiting, it is cleared; sent already
-   (a Rotor-EZ azimuth box waits out its brake, a GS-232B elevation box sends its half at
-   once), its turn is stopped, unless a newer target there names its axis (a storm's park
-   with an elevation; one without holds that axis where it reads, session/targets.py rule 9:
-   it kept that axis's target, the dropped half's, when the storm began late in the azimuth
-   box's brake, and the elevation turned on to 40). A claim
-   dropped the azimuth's half and the elevation turned on to the other's, and so did a storm
-   whose park named no elevation: the antenna left half moved for a target nobody stood for
-   (a closing note). The elevation box's half sent before the drop has moved it meanwhile;
-   the stop ends that.
+   elevation 10, sent before their claim, was dropped with G4XYZ's azimuth 300 and the elevation
+   turned on to G4XYZ's 40), and an axis a sender's target leaves out is that sender's half
+   before while its box waits for it or turns to it, as one controller takes one sender's two
+   halves for one target (``aimed``, core/model.py ``combine``; a cold review: G4XYZ's 310 sent
+   alone after 300/40, dropped by a claim, left the elevation turning on to 40). A half a SatEL
+   box put back after its slew's late report (session/ slew.py rule 4, session/targets.py rule
+   3) is that half still (a cold review: the put back was a new target the drop did not know,
+   and went out: the elevation turned on to 40 for the claim's dropped 300/40): waiting, it is
+   cleared; sent already (a Rotor-EZ azimuth box waits out its brake, a GS-232B elevation box
+   sends its half at once), its turn is stopped, unless a newer target there names its axis (a
+   storm's park with an elevation; one without holds that axis where it reads,
+   session/targets.py rule 9: it kept that axis's target, the dropped half's, when the storm
+   began late in the azimuth box's brake, and the elevation turned on to 40). A claim dropped
+   the azimuth's half and the elevation turned on to the other's, and so did a storm whose park
+   named no elevation: the antenna left half moved for a target nobody stood for (a closing
+   note). The elevation box's half sent before the drop has moved it meanwhile; the stop ends
+   that.
 9. An event both boxes hand out, word for word (the same kind, message and command, within
    TWIN_S of each other), is the rotator's one event: said once, by the box that said it
    first. Both sessions take the same commands, the wind and the TLE file's answers (rule 1),
@@ -147,7 +150,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from functools import partial
 from typing import Any
@@ -422,6 +425,45 @@ class Followed:
         return True
 
 
+class Siblings:
+    """Sans-IO: what one box's session did that the other box follows, in order: rule 6's
+    halt (the azimuth box's ``part_halts``), rule 8's abandoned turn (a box's controller's
+    ``restarts``; its ``dropped_turns``, once the other box's rotor moves or its turn is
+    over: one that stands is left to its own stall), and rule 8's dropped half (``drops``)."""
+
+    def __init__(self) -> None:
+        self._halted = Followed()
+        self._restarted = {axis: Followed() for axis in AXES}
+        self._dropped = {axis: Followed() for axis in AXES}
+        self._drops = {axis: Followed() for axis in AXES}
+        self._forsaken: set[Axis] = set()  # to abandon once their rotor does not stand
+
+    def newer(self) -> None:
+        """Commands came: a turn dropped before them abandons nothing they ask."""
+        self._forsaken.clear()
+
+    def follow(
+        self, sessions: dict[Axis, RotatorSession], composition: Composition, now: float
+    ) -> Iterator[tuple[Axis, Callable[[float], list[Action]]]]:
+        """Each step due, for the box it is for: carry each out before asking for the next."""
+        if self._halted.follow(sessions[Axis.AZIMUTH].part_halts):  # rule 6
+            yield Axis.ELEVATION, sessions[Axis.ELEVATION].halt
+        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
+            session = sessions[axis]
+            if self._restarted[axis].follow(session.controller.restarts):
+                yield other, sessions[other].abandon  # rule 8: a restart mid-turn abandons it
+            if self._dropped[axis].follow(session.controller.dropped_turns):
+                self._forsaken.add(other)  # rule 8: so does a turn dropped (a stall), said
+            if self._drops[axis].follow(session.drops):
+                half = composition.sibling(other, session.dropped)  # rule 8: the same half
+                yield other, partial(sessions[other].forsake, half)
+        for axis in tuple(self._forsaken):
+            if axis not in self._forsaken or sessions[axis].stands(now):
+                continue  # (both rotors iced: its own stall is said and counted)
+            self._forsaken.discard(axis)
+            yield axis, sessions[axis].abandon
+
+
 class CompositeWorker:
     """The serial-lines thread's worker for a composite rotator (lines.py): the rotator's
     mailbox, and the two boxes' workers, each with its port, back-off and session."""
@@ -456,9 +498,7 @@ class CompositeWorker:
         self.composition = Composition(
             cfg.rotator_id, (axes[0].spec.has_version, axes[1].spec.has_version)
         )
-        self._halted = Followed()  # rule 6
-        self._restarted = {axis: Followed() for axis in AXES}  # rule 8: each box's restarts
-        self._drops = {axis: Followed() for axis in AXES}  # rule 8: each box's targets dropped
+        self._siblings = Siblings()  # rules 6 and 8
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
         for axis, box, own in zip(AXES, axes, self._own, strict=True):
@@ -559,6 +599,7 @@ class CompositeWorker:
                 batches = self.composition.offline(split(batch))  # rule 8
                 if batch.target is not None:  # (rules 8 and 9: its halves)
                     self.composition.aimed(batch.target, batches, self._holds)
+                self._siblings.newer()  # rule 8: what comes now is newer than a turn dropped
                 self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
                 self._newest_applied = batch.newest
@@ -570,17 +611,10 @@ class CompositeWorker:
         ends = self.composition.ends()  # rule 4
         if ends:
             self._hand(ends, now)
-        if self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts):  # rule 6
-            el = self.boxes[Axis.ELEVATION]
-            el.guarded(lambda t: el.carry_out(t, el.session.halt(t)), now)
-        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
-            if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
-                box = self.boxes[other]  # rule 8: a restart mid-turn abandons the rotator's
-                box.guarded(lambda t, b=box: b.carry_out(t, b.session.abandon(t)), now)
-            if self._drops[axis].follow(self.boxes[axis].session.drops):
-                dropped = self.boxes[axis].session.dropped  # rule 8: the same sender's half
-                box, half = self.boxes[other], self.composition.sibling(other, dropped)
-                box.guarded(lambda t, b=box, h=half: b.carry_out(t, b.session.forsake(h, t)), now)
+        sessions = {axis: box.session for axis, box in self.boxes.items()}
+        for axis, step in self._siblings.follow(sessions, self.composition, now):
+            box = self.boxes[axis]
+            box.guarded(lambda t, b=box, s=step: b.carry_out(t, s(t)), now)
 
     def _holds(self, axis: Axis, half: Target) -> bool:
         """Rule 8: whether ``axis``'s box still waits for ``half`` or turns to it."""

@@ -322,6 +322,16 @@ TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_ti
 ASKED_MARGIN_S = 1e-6  # rule 2: the questions reach the silence's end (rounding)
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 _RESTS = (mo.IDLE, mo.BRAKING, mo.STALLED)  # rule 10: where ``_short_of`` judges
+_DROPS_TURN = frozenset(  # ``dropped_turns``: the events whose error says the target dropped
+    {
+        mo.Event.STALLED,
+        mo.Event.PAST_LIMIT,
+        mo.Event.TURNED_AWAY,
+        mo.Event.PASSED,
+        mo.Event.TURNED_BACK,
+        mo.Event.REFUSED,
+    }
+)
 #: stops.py rule 4: a bounded stop series
 _PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK, mo.Event.PAST_LIMIT)
 
@@ -558,6 +568,9 @@ class Controller:
         self.version: str | None = None
         self.controller_time: str | None = None  # its own clock (SatEL)
         self.restarts = 0  # rule 12: turns a restart abandoned (runtime/composite.py rule 8)
+        # turns a motion event dropped, said (a stall, a limit, a turn away or back, a pass, a
+        # refusal): a composite's other box abandons its own (runtime/composite.py rule 8)
+        self.dropped_turns = 0
         # rule 14: a silent controller's slew target put back after its report did not come, and
         # its clock as last read before that slew, until the first reading after it judges it
         self._slew_retry: tuple[Target, str | None] | None = None
@@ -1376,6 +1389,8 @@ class Controller:
             )
             if event is mo.Event.REFUSED and self._refused_once(verdict):
                 continue
+            if verdict.error is not None and event in _DROPS_TURN:
+                self.dropped_turns += 1
             if verdict.ends_tracking is not None:
                 self.notes.append(Ends(verdict.ends_tracking))
             if verdict.error is not None:

@@ -191,6 +191,7 @@ from bridge.core.model import (
     Control,
     ErrorKind,
     FeatureCommand,
+    MotionState,
     Origin,
     RotatorStatus,
     SettingValue,
@@ -605,6 +606,22 @@ class RotatorSession:
         if (ctl.turning() or ctl.cut_mid_turn()) and not self._storm_park():
             ctl.stop(now)
         return self._step(now)
+
+    def stands(self, now: float) -> bool:
+        """A turn under way whose rotor has not moved since its target went out, or for
+        ``settle_s`` (in which one turning at its speed shows movement): jammed too, or
+        refusing it, its own stall or refusal comes (motion.py rules 3 and 8), said and
+        counted, not abandoned unsaid (runtime/composite.py rule 8: abandoned once it moves)."""
+        m = self.controller.motion
+        progress_t, target_t = m.progress_t, m.target_t
+        return (
+            m.state is MotionState.MOVING
+            and m.target_deg is not None
+            and m.stop_sent_t is None
+            and progress_t is not None
+            and target_t is not None
+            and (progress_t <= target_t or now - progress_t >= self.controller.cfg.motion.settle_s)
+        )
 
     def forsake(self, half: Target | None, now: float) -> list[Action]:
         """The other box of this rotator dropped a target before it went out (rule 23's lease,

@@ -765,6 +765,50 @@ def test_a_box_that_restarted_mid_turn_abandons_the_rotators_turn_in_both_boxes(
         assert status.state is MotionState.IDLE
 
 
+@pytest.mark.parametrize("fault", ["jam", "power_cycle"])
+def test_a_box_that_stalls_mid_turn_abandons_the_rotators_turn_in_both_boxes(fault: str) -> None:
+    """composite.py rule 8 (an attack pass): an RT-21 azimuth box whose rotor jams mid-turn,
+    or that is power-cycled (its readings a stall's: controller.py rule 12), is said stalled,
+    its target dropped; the elevation box turned on alone to the dropped target's 80."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda c: c.az.truth().az_deg > 30, 60, "azimuth turning")
+        t = v.now
+        getattr(v.az, fault)()
+        v.run_until(lambda c: bool(c.az.errors(since=t)), 60, "the stall said")
+        at_stall = v.el.truth().el_deg
+        v.run_for(60.0)
+        assert v.el.truth().el_deg < at_stall + 2.0, (at_stall, v.el.truth())  # observed: 80
+        assert not v.el.truth().is_moving
+        said = [e.message for box in (v.az, v.el) for e in box.errors(since=t)]
+        assert len(said) == 1 and said[0].startswith("rotor stalled at"), said
+        status = v.status
+        assert status.target_az_deg is None and status.target_el_deg is None
+        assert status.state is not MotionState.MOVING
+
+
+def test_both_boxes_jammed_mid_turn_each_say_their_stall() -> None:
+    """composite.py rule 8: the azimuth box's stall abandons the elevation's turn, but an
+    elevation rotor that stands too (ice on both) is left to its own stall, said and counted
+    by rotor health, not abandoned unsaid."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda c: c.el.truth().el_deg > 5, 60, "both turning")
+        t = v.now
+        v.az.jam()
+        v.el.jam()
+        v.run_for(60.0)
+        stalls = sorted(
+            e.message.split(" (")[0] for box in (v.az, v.el) for e in box.errors(since=t)
+        )
+        assert len(stalls) == 2 and all(m.startswith("rotor stalled at") for m in stalls), stalls
+        assert "elevation" in stalls[1], stalls
+
+
 def test_a_satel_box_restarted_mid_slew_abandons_the_rotators_turn_in_both_boxes() -> None:
     """A SatEL elevation box power-cycled mid-slew: its clock gone back at the first reading
     after the lost report tells the restart (controller.py rule 14), its turn is not resumed;

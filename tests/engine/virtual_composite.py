@@ -19,7 +19,7 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, Followed, share_quiet, split
+from bridge.runtime.composite import Composition, Siblings, share_quiet, split
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -50,9 +50,7 @@ class VirtualComposite:
         boxes = axis_configs(rotator, sky)
         assert boxes is not None
         self.composition = Composition("v")
-        self._halted = Followed()  # composite.py rule 6, as CompositeWorker
-        self._restarted = {axis: Followed() for axis in Axis}  # composite.py rule 8, as it
-        self._drops = {axis: Followed() for axis in Axis}  # (its targets dropped, as it)
+        self._siblings = Siblings()  # composite.py rules 6 and 8, as CompositeWorker
         self.mailbox = Mailbox()
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.boxes: dict[Axis, VirtualRotator] = {}
@@ -117,6 +115,7 @@ class VirtualComposite:
             batches = self.composition.offline(split(batch))  # (rules 1 and 8)
             if batch.target is not None:
                 self.composition.aimed(batch.target, batches, self._holds)
+            self._siblings.newer()
             self._hand(batches)
 
     def _holds(self, axis: Axis, half: Target) -> bool:
@@ -139,20 +138,11 @@ class VirtualComposite:
         ends = self.composition.ends()
         if ends:
             self._hand(ends)
-        if self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts):  # rule 6
-            el = self.boxes[Axis.ELEVATION]
-            el._do(el.session.halt(el.now))
+        sessions = {axis: box.session for axis, box in self.boxes.items()}
+        for axis, step in self._siblings.follow(sessions, self.composition, self.now):
+            box = self.boxes[axis]
+            box._do(step(box.now))
             self._absorb()
-        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
-            if self._restarted[axis].follow(self.boxes[axis].session.controller.restarts):
-                box = self.boxes[other]  # composite.py rule 8: a restart mid-turn
-                box._do(box.session.abandon(box.now))
-                self._absorb()
-            if self._drops[axis].follow(self.boxes[axis].session.drops):
-                box = self.boxes[other]  # composite.py rule 8: a target dropped
-                half = self.composition.sibling(other, self.boxes[axis].session.dropped)
-                box._do(box.session.forsake(half, box.now))
-                self._absorb()
 
     # -- time (rule 1) ----------------------------------------------------------------------------
     def run_for(self, seconds: float) -> None:

@@ -308,6 +308,46 @@ def test_a_box_power_cycled_mid_turn_abandons_the_whole_turn_the_other_box_stopp
     assert len(errors) == 1, errors
 
 
+@pytest.mark.parametrize("fault", ["jam", "power_cycle"])
+def test_an_azimuth_box_that_stalls_mid_turn_abandons_the_whole_turn(rig: Rig, fault: str) -> None:
+    """composite.py rule 8 (an attack pass): an RT-21 azimuth box whose rotor jams mid-turn, or
+    that is power-cycled (an RT-21 says nothing when it restarts: its readings are a stall's,
+    controller.py rule 12), is said stalled, "target dropped"; the elevation box turned on
+    alone to the dropped target's 80 and the status kept its ``target_elevation``."""
+    az_line = rig.open_line(rig, "sky-az", "rt21", {"az_speed_deg_s": 8.0, "start_az_deg": 10.0})
+    el_line = rig.open_line(
+        rig, "sky-el", "gs232b", {"az_speed_deg_s": 20.0, "el_speed_deg_s": 4.0}
+    )
+    rig.rotators.append(
+        {
+            "id": "sky",
+            "azimuth": {"model": "rt21", "port": str(az_line.path)},
+            "elevation": {"model": "gs232b", "port": str(el_line.path)},
+            **FAST_POLLING,
+        }
+    )
+    az, el = az_line.emu, el_line.emu
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    rig.probe.publish("rotor/target", "300 80")
+    az.wait_for(lambda s: s.is_moving and s.az_deg > 15, 10)
+    el.wait_for(lambda s: s.is_moving and s.el_deg > 2, 10)
+    t = time.monotonic()
+    getattr(az, fault)()
+    said = rig.probe.wait_for(
+        "rotor/error", lambda m: json.loads(m.payload)["kind"] == "stalled", 15, after=t
+    )
+    assert "target dropped" in json.loads(said.payload)["message"]
+    at_stall = el.state().el_deg
+    assert at_stall < 60, at_stall  # (well short of 80 when the drop is said)
+    stood = el.wait_for(lambda s: not s.is_moving, 3)  # observed: on to 80
+    assert stood.el_deg < at_stall + 5, stood
+    wait_until(lambda: status(rig)["state"] != "moving", 10, "the rotator said still")
+    doc = status(rig)
+    assert doc["target"] is None and doc.get("target_elevation") is None, doc
+
+
 def test_a_restart_deletes_neither_the_version_its_boxes_report_nor_its_elevation(
     rig: Rig,
 ) -> None:
