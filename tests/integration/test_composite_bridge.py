@@ -40,6 +40,28 @@ def composite(rig: Rig) -> tuple[EmulatedPort[Any], EmulatedPort[Any]]:
     return az.emu, el.emu
 
 
+def turning_to_300_80(
+    rig: Rig, az_model: str, az_emu: dict[str, Any], el_emu: dict[str, Any]
+) -> tuple[Any, Any]:
+    """The sky rotator (an ``az_model`` azimuth box, a GS-232B elevation box), online and
+    idle, then sent 300/80: its boxes' emulators."""
+    az = rig.open_line(rig, "sky-az", az_model, az_emu)
+    el = rig.open_line(rig, "sky-el", "gs232b", el_emu)
+    rig.rotators.append(
+        {
+            "id": "sky",
+            "azimuth": {"model": az_model, "port": str(az.path)},
+            "elevation": {"model": "gs232b", "port": str(el.path)},
+            **FAST_POLLING,
+        }
+    )
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    rig.probe.publish("rotor/target", "300 80")
+    return az.emu, el.emu
+
+
 def status(rig: Rig) -> dict[str, Any]:
     doc: dict[str, Any] = json.loads(rig.retained()["rotor/status"])
     return doc
@@ -274,21 +296,7 @@ def test_a_box_power_cycled_mid_turn_abandons_the_whole_turn_the_other_box_stopp
     on mid-turn says it restarted (0xE0) and abandons its turn, said once on R/error ("was not
     resumed: send the target again"). The elevation box turned on to 80 (a review): the
     antenna left half moved under that word. It is stopped, its target dropped."""
-    line = rig.open_line(rig, "sky-az", "rotorez", {"speed_deg_s": 6.0})
-    el_line = rig.open_line(rig, "sky-el", "gs232b", {"el_speed_deg_s": 2.0})
-    rig.rotators.append(
-        {
-            "id": "sky",
-            "azimuth": {"model": "rotorez", "port": str(line.path)},
-            "elevation": {"model": "gs232b", "port": str(el_line.path)},
-            **FAST_POLLING,
-        }
-    )
-    az, el = line.emu, el_line.emu
-    rig.start()
-    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
-    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
-    rig.probe.publish("rotor/target", "300 80")
+    az, el = turning_to_300_80(rig, "rotorez", {"speed_deg_s": 6.0}, {"el_speed_deg_s": 2.0})
     az.wait_for(lambda s: s.is_moving and s.az_deg > 30, 20)
     t = time.monotonic()
     az.power_cycle()
@@ -314,23 +322,9 @@ def test_an_azimuth_box_that_stalls_mid_turn_abandons_the_whole_turn(rig: Rig, f
     that is power-cycled (an RT-21 says nothing when it restarts: its readings are a stall's,
     controller.py rule 12), is said stalled, "target dropped"; the elevation box turned on
     alone to the dropped target's 80 and the status kept its ``target_elevation``."""
-    az_line = rig.open_line(rig, "sky-az", "rt21", {"az_speed_deg_s": 8.0, "start_az_deg": 10.0})
-    el_line = rig.open_line(
-        rig, "sky-el", "gs232b", {"az_speed_deg_s": 20.0, "el_speed_deg_s": 4.0}
-    )
-    rig.rotators.append(
-        {
-            "id": "sky",
-            "azimuth": {"model": "rt21", "port": str(az_line.path)},
-            "elevation": {"model": "gs232b", "port": str(el_line.path)},
-            **FAST_POLLING,
-        }
-    )
-    az, el = az_line.emu, el_line.emu
-    rig.start()
-    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
-    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
-    rig.probe.publish("rotor/target", "300 80")
+    az_emu = {"az_speed_deg_s": 8.0, "start_az_deg": 10.0}
+    el_emu = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 4.0}
+    az, el = turning_to_300_80(rig, "rt21", az_emu, el_emu)
     az.wait_for(lambda s: s.is_moving and s.az_deg > 15, 10)
     el.wait_for(lambda s: s.is_moving and s.el_deg > 2, 10)
     t = time.monotonic()
