@@ -20,6 +20,7 @@ from bridge.interfaces.mqtt.connection import (
     TAKEOVER_FIRST_S,
     TAKEOVER_MAX_S,
     TakeoverGuard,
+    listening,
 )
 from bridge.settings import MqttSettings
 from tests.support import slow, wait_until
@@ -79,6 +80,37 @@ def test_a_broker_that_goes_away_in_between_is_no_takeover() -> None:
         g.connect_failed()  # refused or unreachable: the broker restarts
         now += 2.0
     assert g.backoff_s == 0
+
+
+def test_a_broker_whose_port_is_closed_after_each_drop_is_no_takeover_even_mid_episode() -> None:
+    """connection.py rule 7: a broker killed and started again at once (systemd's 100 ms) is
+    back by the next reconnect, so its drops look like a fight's; the port it closed with
+    them tells them apart ("gone"), and no back-off follows, even after an episode began."""
+    g = TakeoverGuard()
+    now = 0.0
+    for _ in range(3 * FLAP_COUNT):
+        g.connected(now)
+        now += 1.0
+        assert not g.disconnected(now, "gone")
+        now += 1.0
+    assert g.backoff_s == 0
+    for _ in range(FLAP_COUNT):  # a fight: the back-off is set ...
+        g.connected(now)
+        now += 1.0
+        fight = g.disconnected(now, "dropped")
+    assert fight and g.backoff_s == TAKEOVER_FIRST_S
+    g.connected(now)
+    assert not g.disconnected(now + 1.0, "gone")  # ... and a crash then slows nothing
+
+
+def test_the_look_at_the_brokers_port_tells_a_listening_one_from_a_closed_one() -> None:
+    """connection.py rule 7's ``listening``: a TCP connection taken, or refused (nothing
+    listens on the port any more)."""
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    assert listening("127.0.0.1", port)
+    server.close()
+    assert not listening("127.0.0.1", port)
 
 
 def test_keepalive_timeouts_and_other_reasons_are_no_evidence() -> None:
@@ -224,3 +256,66 @@ def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
     assert "session taken over" in errors[0] and "'tower-bridge'" in errors[0]
     warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
     assert warnings == []  # the error says it all; no warning per kick
+
+
+class CrashingBroker:
+    """A broker that crashes once each client has subscribed: the connection and its port
+    close together, and the port opens again RESTART_S later (connection.py rule 7's "gone":
+    what a broker systemd restarts looks like, with time to spare for a busy machine)."""
+
+    RESTART_S = 0.5
+
+    def __init__(self) -> None:
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = self._server.getsockname()[1]
+        self.accepted: list[float] = []
+        self._closed = False
+        self._thread = threading.Thread(target=self._serve, daemon=True)
+        self._thread.start()
+
+    def _serve(self) -> None:
+        while not self._closed:
+            try:
+                conn, _ = self._server.accept()
+            except OSError:
+                return
+            with conn:
+                while (kind := TakeoverBroker._packet(conn)) is not None:
+                    if kind == 0x10:
+                        conn.sendall(b"\x20\x03\x00\x00\x00")
+                        self.accepted.append(time.monotonic())
+                    elif kind == 0x80:  # settled in: the broker dies, its port with it
+                        self._server.close()
+                        break
+            if self._closed:
+                return
+            time.sleep(self.RESTART_S)
+            self._server = socket.create_server(("127.0.0.1", self.port))
+
+    def close(self) -> None:
+        self._closed = True
+        self._server.close()
+
+
+def test_a_broker_restarted_again_and_again_is_no_fight_and_slows_no_reconnect(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """connection.py rule 7: each drop comes with the broker's port closed (a crash); paho's
+    1 s later it is back. FLAP_COUNT such drops and more were taken for a fight over the
+    client id, and the bridge waited 5 s, 10 s, ... up to a minute between reconnects."""
+    broker = CrashingBroker()
+    settings = MqttSettings(port=broker.port, client_id="tower-bridge", protocol="5")
+    client = MqttClient(
+        settings, will_topic="rotor/bridge/state", subscriptions=["rotor/target"], on_message=print
+    )
+    caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.connection")
+    client.start()
+    try:
+        wait_until(lambda: len(broker.accepted) >= FLAP_COUNT + 2, 30, "a crash loop")
+    finally:
+        client.stop()
+        broker.close()
+    gaps = [b - a for a, b in zip(broker.accepted, broker.accepted[1:], strict=False)]
+    assert all(gap < TAKEOVER_FIRST_S for gap in gaps), gaps  # (each about 1.5 s here)
+    errors = [r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR]
+    assert errors == []

@@ -46,24 +46,32 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    slows that loop down. A connection the broker closes before it answers the CONNECT (an
    ACL on the client id, a connection limit, a broker without MQTT 5) is said too, once, with
    the likely fixes (``_closed_early``): it is never silent.
-7. One client id, one connection. A broker that gets a second connection with a client id
-   closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
-   socket), so two processes with one id (two hosts sharing a configuration, a stale container
-   beside a new one) would take each other over in a loop, each reconnect kicking the other.
-   The main connection logs that ONCE, naming the client id and the likely cause, and both
-   back off instead of fighting: TAKEOVER_FIRST_S, doubling per reconnect up to TAKEOVER_MAX_S
-   (so at most one reconnect a minute), until a connection lasts STABLE_S. Brokers that say
-   nothing (MQTT 3.1.1; mosquitto 2.0.11 even with MQTT 5) just drop the connection, so
-   FLAP_COUNT drops in a row, each less than STABLE_S after the connection was accepted and
-   each followed by a connection accepted at the first try (the broker never went away), count
-   as a takeover too; the side that holds the connection longer sees exactly that. A drop after
-   a keepalive timeout or with another reason from the broker is no evidence. (A link that
-   keeps breaking the same way earns the same back-off; the error says "most likely".) A
-   connection that carries stops (the stop lane, the stop express: ``SLOWS_FOR_A_FIGHT``)
-   says a fight the same way and does not back off: a broker that crashes and is restarted
-   at once (systemd's 100 ms) three times in a row looks exactly like one, and its back-off
+7. One client id, one connection. A broker that gets a second connection with a client id closes
+   the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the socket), so
+   two processes with one id (two hosts sharing a configuration, a stale container beside a new
+   one) would take each other over in a loop, each reconnect kicking the other. The main
+   connection logs that ONCE, naming the client id and the likely cause, and both back off
+   instead of fighting: TAKEOVER_FIRST_S, doubling per reconnect up to TAKEOVER_MAX_S (so at
+   most one reconnect a minute), until a connection lasts STABLE_S. Brokers that say nothing
+   (MQTT 3.1.1; mosquitto 2.0.11 even with MQTT 5) just drop the connection, so FLAP_COUNT drops
+   in a row, each less than STABLE_S after the connection was accepted and each followed by a
+   connection accepted at the first try (the broker never went away), count as a takeover too;
+   the side that holds the connection longer sees exactly that. A drop right after which the
+   broker's port takes no TCP connection (``listening``, within PROBE_S: a broker killed or
+   crashed closes its port with its connections, and systemd starts it again 100 ms later at the
+   earliest) is the broker going away ("gone"), no evidence: a broker that crashed and was
+   restarted at once three times in a row was taken for a fight, and the bridge stayed away up
+   to a minute after it was back (an attack pass). (A port kept open in front of a dead broker,
+   Docker's proxy, says nothing: evidence.) A drop after a keepalive timeout or with another
+   reason from the broker is no evidence. (A link that keeps breaking the same way earns the
+   same back-off; the error says "most likely".) A connection that carries stops (the stop lane,
+   the stop express: ``FIGHT_BACKOFF_MAX_S``) says a fight the same way and backs off
+   TAKEOVER_FIRST_S at most: a broker that crashes and is restarted at once (systemd's 100 ms)
+   three times in a row looked exactly like one, before the look at its port (and still does
+   behind a port kept open, or to a bridge too busy to look within 100 ms), and the back-off
    kept every STOP out for up to a minute after the broker was back (an attack pass); two
-   bridges' lanes fighting take turns at paho's reconnect delay, as backed-off ones would. The
+   bridges' lanes fighting take turns every few seconds, fewer connections a minute than a
+   broker's flapping detection bans (EMQX: 30), as the main connections' would at first. The
    default client id is unique per installation (MqttSettings.effective_client_id): only an
    explicit one, or a copied state file on a host of the same name, can collide.
 9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
@@ -100,6 +108,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 from __future__ import annotations
 
 import logging
+import socket
 import ssl
 import sys
 import threading
@@ -161,7 +170,8 @@ TAKEOVER_FIRST_S = 5
 TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
-Ending = Literal["taken over", "dropped", "other"]
+Ending = Literal["taken over", "dropped", "gone", "other"]
+PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 
 
 class TakeoverGuard:
@@ -187,15 +197,26 @@ class TakeoverGuard:
         if lasted >= STABLE_S:
             self._drops, self.backoff_s, self.reported = 0, 0, False
         self._drops = self._drops + 1 if ending == "dropped" else 0
+        if ending == "gone":  # the broker went away: no evidence, however the episode stands
+            return False
         if not (ending == "taken over" or self._drops >= FLAP_COUNT or self.backoff_s):
             return False
         self.backoff_s = min(TAKEOVER_MAX_S, self.backoff_s * 2 or TAKEOVER_FIRST_S)
         return True
 
 
-def takeover_message(client_id: str, ending: Ending, backs_off: bool = True) -> str:
-    """Rule 7: what a connection says, once an episode; ``backs_off``: the main connection's
-    words, else a connection that carries stops (``SLOWS_FOR_A_FIGHT``)."""
+def listening(host: str, port: int, timeout_s: float = PROBE_S) -> bool:
+    """Rule 7: whether the broker takes a TCP connection now (closed at once, nothing sent)."""
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            return True
+    except (OSError, ValueError):  # refused, unreachable, a name that does not resolve
+        return False
+
+
+def takeover_message(client_id: str, ending: Ending, most_s: int = TAKEOVER_MAX_S) -> str:
+    """Rule 7: what a connection says, once an episode; ``most_s``: the longest it backs off
+    (``FIGHT_BACKOFF_MAX_S``: shorter for a connection that carries stops)."""
     if ending == "taken over":
         what = f"MQTT session taken over: another client connected with client id {client_id!r}"
     else:
@@ -209,11 +230,11 @@ def takeover_message(client_id: str, ending: Ending, backs_off: bool = True) -> 
         f"stale container still running) keep kicking each other off: stop the other one or "
         f"give each its own mqtt.client_id. "
         + (
-            f"Backing off: {TAKEOVER_FIRST_S} s, doubling up to {TAKEOVER_MAX_S} s between "
+            f"Backing off: {TAKEOVER_FIRST_S} s, doubling up to {most_s} s between "
             f"reconnects, until a connection lasts {STABLE_S} s"
-            if backs_off
-            else "Not backing off: it carries stops (a broker restarted again and again looks "
-            "the same)"
+            if most_s > TAKEOVER_FIRST_S
+            else f"Backing off {most_s} s between reconnects at most: it carries stops (a "
+            "broker restarted again and again can look the same)"
         )
     )
 
@@ -272,13 +293,14 @@ class Options(TypedDict, total=False):
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int
+    listening: Callable[[str, int], bool] | None  # rule 7: the look at the broker's port
 
 
 class Connection:
     """A paho client and what both connections do with it. Subclasses say what the rest means
     through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
 
-    SLOWS_FOR_A_FIGHT = True  # rule 7: False for a connection that carries stops
+    FIGHT_BACKOFF_MAX_S = TAKEOVER_MAX_S  # rule 7: TAKEOVER_FIRST_S for one that carries stops
 
     def __init__(
         self,
@@ -308,6 +330,7 @@ class Connection:
         self._clock = clock
         self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
         self._guard = TakeoverGuard()
+        self._listening = options.get("listening") or listening  # rule 7: the broker's port
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
         self._subscribed = False  # ... and the SUBACK of its command topics came
@@ -621,11 +644,13 @@ class Connection:
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)
+        if ending == "dropped" and not self._listening(self._settings.host, self._settings.port):
+            ending = "gone"  # rule 7: a broker killed or restarted, not a takeover
         fight = self._guard.disconnected(self._clock(), ending)
-        if fight and self.SLOWS_FOR_A_FIGHT:
+        if fight:
             # paho forgets its back-off on every accepted connection and starts again at the
             # minimum delay: the minimum is what slows a fight down (rule 7)
-            backoff = self._guard.backoff_s
+            backoff = min(self._guard.backoff_s, self.FIGHT_BACKOFF_MAX_S)
             client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))
             self._slowed = True
         elif self._slowed:  # a connection lasted: paho's own delays again

@@ -58,8 +58,8 @@ Rules:
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies, one whose client id another client keeps taking over (said until a connection of it
-   lasts connection.py's STABLE_S; it does not back off for one: connection.py rule 7), a frame
-   left half-written (rule 9) and a long hold (rule 8) are said on ``B/bridge/info``
+   lasts connection.py's STABLE_S; it backs off TAKEOVER_FIRST_S at most: connection.py rule 7),
+   a frame left half-written (rule 9) and a long hold (rule 8) are said on ``B/bridge/info``
    (``on_problem``); stops then take the stop lane in the bridge's process, as without it. An
    express that ended is started again, RESTART_FIRST_S later, the wait doubling for each end in
    a row up to RESTART_MAX_S (back to the first once one ran for RESTART_STABLE_S); the ports
@@ -213,7 +213,13 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.core.afterlock import later
 from bridge.core.model import valid_operator
 from bridge.interfaces.fdwait import writable
-from bridge.interfaces.mqtt.connection import STABLE_S, Connection, Ending, takeover_message
+from bridge.interfaces.mqtt.connection import (
+    STABLE_S,
+    TAKEOVER_FIRST_S,
+    Connection,
+    Ending,
+    takeover_message,
+)
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
 from bridge.settings import MqttSettings
@@ -951,7 +957,7 @@ class Sync:
 class _Link(Connection):
     """The express's connection (rule 2): the lane's hooks, its words to the bridge."""
 
-    SLOWS_FOR_A_FIGHT = False  # rule 6: it carries stops (connection.py rule 7)
+    FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 6: it carries stops (connection.py rule 7)
 
     def __init__(
         self,
@@ -1000,7 +1006,7 @@ class _Link(Connection):
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop express disconnected (%s)", reason_code)
         if fight and self._fight is None:  # rule 6: said, not only slowed down
-            self._fight = takeover_message(self._client_id, ending, backs_off=False)
+            self._fight = takeover_message(self._client_id, ending, TAKEOVER_FIRST_S)
             self._say(op="problem", text=self._fight)  # (the bridge logs it)
 
     def _tick(self) -> None:

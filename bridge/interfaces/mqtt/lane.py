@@ -30,8 +30,8 @@ Rules:
    (``on_info``) once an episode, and unsaid once a connection lasts STABLE_S (a review). Its
    other disconnects are logged at debug level (the main connection says the same). It
    judges a takeover as connection.py rule 7 does, counting only connections that were
-   accepted, and does not back off for one (``SLOWS_FOR_A_FIGHT``: a crash-looping broker
-   looks the same, and stops must come the moment it is back).
+   accepted, and backs off for one TAKEOVER_FIRST_S at most (``FIGHT_BACKOFF_MAX_S``: a
+   crash-looping broker can look the same, and stops must come soon after it is back).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
@@ -60,6 +60,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
+    TAKEOVER_FIRST_S,
     Connection,
     Ending,
     MessageHandler,
@@ -88,7 +89,7 @@ def lane_client_id(settings: MqttSettings) -> str:
 
 
 class StopLane(Connection):
-    SLOWS_FOR_A_FIGHT = False  # rule 3
+    FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 3
 
     def __init__(
         self,
@@ -199,7 +200,7 @@ class StopLane(Connection):
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
         log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
         if fight and self._fight is None:  # rule 3: a fight over its client id is its own (an
-            said = takeover_message(self.client_id, ending, backs_off=False)  # attack pass:
+            said = takeover_message(self.client_id, ending, TAKEOVER_FIRST_S)  # attack pass:
             self._fight = f"stop lane: {said}"  # nothing said it)
             log.error("%s", self._fight)
             if self._on_info is not None:
