@@ -370,8 +370,9 @@ class MqttClient(Connection):
         with self._lock:
             if not self.connected.is_set():
                 return  # the connect sends everything
-            dirty = list(self._delivery.take_dirty())
-            for i, topic in enumerate(dirty):
+            dirty = self._delivery.take_dirty()
+            while dirty:
+                topic = dirty.pop()
                 held = self._retained.get(topic)
                 if held is not None:
                     sent = self._delivery.send(topic, held[0], held[1], retain=True)
@@ -379,8 +380,8 @@ class MqttClient(Connection):
                     sent = self._delivery.send(topic, b"", 1, retain=True)
                 else:
                     continue
-                if not sent:  # the queue is full again: the rest wait for the next room
-                    self._delivery.keep_dirty(dirty[i + 1 :])
+                if not sent:  # the queue is full again (it is marked again): the rest wait
+                    self._delivery.keep_dirty(dirty)  # for the next room
                     return
             for topic, event in self._delivery.take_backlog():
                 self._delivery.send(topic, event, 1, retain=False)

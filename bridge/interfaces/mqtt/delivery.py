@@ -114,9 +114,14 @@ class Delivery:
         self._backlog.clear()
         return backlog
 
-    def keep_dirty(self, topics: list[str]) -> None:
-        """Rule 13: retained topics not tried this round (paho's queue full again)."""
-        self._dirty.update(topics)
+    def keep_dirty(self, topics: set[str]) -> None:
+        """Rule 13: retained topics not tried this round (paho's queue full again): the smaller
+        set joined into the larger (a retry round sends a few of thousands)."""
+        if len(topics) > len(self._dirty):
+            topics.update(self._dirty)
+            self._dirty = topics
+        else:
+            self._dirty.update(topics)
 
     def take_dirty(self) -> set[str]:
         dirty, self._dirty = self._dirty, set()
