@@ -97,20 +97,22 @@ Rules:
    alone to the 80 of a target said dropped), as soon as the other box's rotor moves: one that
    stands (not moved since its target went out, or for ``settle_s``: session.py ``stands``) is
    left to say its own stall or refusal, so that two iced rotors say two stalls, and is
-   abandoned if it moves after all; commands that come meanwhile are newer than the turn
-   dropped, and end the wait (``Siblings``). The storm's park goes on there, under way or still
-   waiting (session.py ``_storm_park``, ``_storm_park_waiting``; an attack pass: a Rotor-EZ
-   azimuth box's park, held back by its brake delay, was dropped and never sent again): each box
-   parks its own axis, as one does alone in a storm begun while the other did not answer, and
-   nobody can send it again in the storm (a review of 83a398d: the azimuth box's park, stopped
-   when the elevation box fell silent for 4 s, was never tried again, the antenna left 140
-   degrees short of it for the whole storm). A STOP still reaches the box that answers. A target
-   one box drops before it went out or moved the rotor (session.py rule 23: a lease claimed by
-   someone else; wind.py rule 1: a storm begun, or one that refuses the try more of a frame lost
-   on the line, controller.py rule 11: a cold review, the elevation turned on to 40 for a 300/40
-   whose azimuth the storm did not send again) is the rotator's whole target dropped: the other
-   box drops its half too (session.py ``forsake``, unsaid), if it is that sender's (``sibling``:
-   a half another sender sent since, the lease holder's own, goes on; a cold review, DL1ABC's
+   abandoned if it moves after all (a SatEL in its slew, which reports nothing, never stands: a
+   review); motion sent to it meanwhile (a target's half, a track, a follow) is newer than the
+   turn dropped, and ends the wait, and nothing else does (``Siblings``; a review: a wind
+   reading ended it). The storm's park goes on there, under way or still waiting (session.py
+   ``_storm_park``, ``_storm_park_waiting``; an attack pass: a Rotor-EZ azimuth box's park, held
+   back by its brake delay, was dropped and never sent again): each box parks its own axis, as
+   one does alone in a storm begun while the other did not answer, and nobody can send it again
+   in the storm (a review of 83a398d: the azimuth box's park, stopped when the elevation box
+   fell silent for 4 s, was never tried again, the antenna left 140 degrees short of it for the
+   whole storm). A STOP still reaches the box that answers. A target one box drops before it
+   went out or moved the rotor (session.py rule 23: a lease claimed by someone else; wind.py
+   rule 1: a storm begun, or one that refuses the try more of a frame lost on the line,
+   controller.py rule 11: a cold review, the elevation turned on to 40 for a 300/40 whose
+   azimuth the storm did not send again) is the rotator's whole target dropped: the other box
+   drops its half too (session.py ``forsake``, unsaid), if it is that sender's (``sibling``: a
+   half another sender sent since, the lease holder's own, goes on; a cold review, DL1ABC's
    elevation 10, sent before their claim, was dropped with G4XYZ's azimuth 300 and the elevation
    turned on to G4XYZ's 40), and an axis a sender's target leaves out is that sender's half
    before while its box waits for it or turns to it, as one controller takes one sender's two
@@ -438,9 +440,14 @@ class Siblings:
         self._drops = {axis: Followed() for axis in AXES}
         self._forsaken: set[Axis] = set()  # to abandon once their rotor does not stand
 
-    def newer(self) -> None:
-        """Commands came: a turn dropped before them abandons nothing they ask."""
-        self._forsaken.clear()
+    def newer(self, batches: dict[Axis, Batch]) -> None:
+        """Commands came: a box sent motion of its own since (a target's half, a track, a
+        follow, a feature's command) abandons nothing for a turn dropped before it; anything
+        else (a wind reading, a program's status, a lease) leaves the abandon due (a review:
+        a wind reading let the elevation turn on to the target said dropped)."""
+        for axis, batch in batches.items():
+            if batch.target or batch.track or batch.follow or batch.feature_commands:
+                self._forsaken.discard(axis)
 
     def follow(
         self, sessions: dict[Axis, RotatorSession], composition: Composition, now: float
@@ -599,7 +606,7 @@ class CompositeWorker:
                 batches = self.composition.offline(split(batch))  # rule 8
                 if batch.target is not None:  # (rules 8 and 9: its halves)
                     self.composition.aimed(batch.target, batches, self._holds)
-                self._siblings.newer()  # rule 8: what comes now is newer than a turn dropped
+                self._siblings.newer(batches)  # rule 8: newer than a turn dropped
                 self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
                 self._newest_applied = batch.newest

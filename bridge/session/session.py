@@ -611,16 +611,20 @@ class RotatorSession:
         """A turn under way whose rotor has not moved since its target went out, or for
         ``settle_s`` (in which one turning at its speed shows movement): jammed too, or
         refusing it, its own stall or refusal comes (motion.py rules 3 and 8), said and
-        counted, not abandoned unsaid (runtime/composite.py rule 8: abandoned once it moves)."""
-        m = self.controller.motion
+        counted, not abandoned unsaid (runtime/composite.py rule 8: abandoned once it moves).
+        Never a box in a slew (a SatEL reports nothing while it slews) nor one offline."""
+        ctl = self.controller
+        m, link = ctl.motion, ctl.link
         progress_t, target_t = m.progress_t, m.target_t
         return (
-            m.state is MotionState.MOVING
+            link is not None
+            and link.slew is None  # (a SatEL says nothing while it slews: a review)
+            and m.state is MotionState.MOVING
             and m.target_deg is not None
             and m.stop_sent_t is None
             and progress_t is not None
             and target_t is not None
-            and (progress_t <= target_t or now - progress_t >= self.controller.cfg.motion.settle_s)
+            and (progress_t <= target_t or now - progress_t >= ctl.cfg.motion.settle_s)
         )
 
     def forsake(self, half: Target | None, now: float) -> list[Action]:

@@ -809,6 +809,48 @@ def test_both_boxes_jammed_mid_turn_each_say_their_stall() -> None:
         assert "elevation" in stalls[1], stalls
 
 
+def test_a_standing_box_is_abandoned_when_it_moves_after_a_wind_reading_came_between() -> None:
+    """composite.py rule 8 (a review): the azimuth box stalls while the elevation box stands
+    (jammed too, not yet said); a wind reading comes; the elevation's rotor comes free. A
+    wind reading asks no motion of its own: the elevation is abandoned as it moves, not
+    left to turn on to the 80 of the target said dropped."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda c: c.el.truth().el_deg > 5, 60, "both turning")
+        t = v.now
+        v.az.jam()
+        v.run_for(6.0)
+        v.el.jam()
+        v.run_until(lambda c: bool(c.az.errors(since=t)), 60, "the azimuth's stall said")
+        v.mailbox.put_wind(12.0)
+        v._take()
+        v.el.unjam()
+        v.run_for(60.0)
+        assert v.el.truth().el_deg < 50.0, v.el.truth()  # observed: on to 80
+        assert v.status.target_el_deg is None
+
+
+def test_a_satel_box_slewing_when_the_other_box_stalls_is_stopped() -> None:
+    """composite.py rule 8 (a review): a SatEL says nothing while it slews, so its rotor looked
+    as if it stood (no movement since its target went out) and was left to a stall of its own
+    that never comes; it slewed on to the 60 of the target the azimuth box's stall dropped."""
+    emulators = {Axis.AZIMUTH: {"az_speed_deg_s": 6.0}}
+    with VirtualComposite("gs232b-az", "satel", emulators=emulators) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(1.0)
+        v.aim(Target(300.0, 60.0))
+        v.run_for(3.0)
+        t = v.now
+        v.az.jam()
+        v.run_until(lambda c: bool(c.az.errors(since=t)), 60, "the azimuth's stall said")
+        at_stall = v.el.truth().el_deg
+        v.run_for(60.0)
+        assert v.el.truth().el_deg < at_stall + 5.0, (at_stall, v.el.truth())  # observed: 60
+        assert v.status.target_el_deg is None
+
+
 def test_a_satel_box_restarted_mid_slew_abandons_the_rotators_turn_in_both_boxes() -> None:
     """A SatEL elevation box power-cycled mid-slew: its clock gone back at the first reading
     after the lost report tells the restart (controller.py rule 14), its turn is not resumed;
