@@ -162,22 +162,24 @@ def test_a_command_a_link_held_up_is_refused_by_the_station_and_a_stop_is_not() 
 
 def test_a_halt_is_timed_by_its_stamp_only_when_the_stamp_would_pass_on_a_move() -> None:
     """heartbeat.py rule 8: a STOP two seconds old, inside its expiry, is timed by its stamp;
-    one stamped by a clock five minutes slow, unreadable or against another station process is
-    carried out and timed when it came (its ``sent_s`` none), so that a target a held-up link
-    lets go a second later, stamped a second before it came, is refused as older."""
+    one stamped by a clock five minutes slow (however long its expiry), unreadable or against
+    another station process is carried out and timed when it came (its ``sent_s`` none), so
+    that a target a held-up link lets go a second later, stamped a second before it came, is
+    refused as older."""
     svc, _, rots = service({"tower": "rotorez"}, station="abc")
     fresh = Stamp.of(NOW_UNIX - 2.0, 5, "abc")
     svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=fresh)
     for stamp in (
         Stamp.of(NOW_UNIX - 300.0, 5, "abc"),
+        Stamp.of(NOW_UNIX - 300.0, 3600, "abc"),  # (fresh by its expiry: past the most)
         Stamp("yesterday", "5", "abc"),
         Stamp.of(NOW_UNIX - 2.0, 5, "old"),
     ):
         svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=stamp)
     stops = [c[1] for c in rots["tower"].calls]
-    assert all(isinstance(stop, Stop) for stop in stops) and len(stops) == 4
+    assert all(isinstance(stop, Stop) for stop in stops) and len(stops) == 5
     assert stops[0].sent_s == pytest.approx(time.monotonic() - 2.0, abs=1.0)
-    assert [stop.sent_s for stop in stops[1:]] == [None, None, None]
+    assert [stop.sent_s for stop in stops[1:]] == [None, None, None, None]
     rots["tower"].halted_s = time.monotonic()  # runtime/rotator.py ``_halted``: when it came
     svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=Stamp.of(NOW_UNIX - 1, 5, "abc"))
     assert rots["tower"].calls[-1][0] == "refused"

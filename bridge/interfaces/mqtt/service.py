@@ -59,13 +59,13 @@ Rules:
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
    rule 6; the wall clock when none is given): a link that held it up must not turn the rotor
-   late. So is one whose user property ``station`` names another process than ``station``
-   (this one's, as its heartbeats name it; an empty name too: heartbeat.py rule 7): its send
-   time was reckoned from a clock that ended when the station's bridge restarted. So is a move
-   stamped before the rotator's last STOP or lock ON from any interface (``halted_s``,
-   heartbeat.py rule 8); a halt's own stamp, read here, may put that time earlier than it
-   came, when it would pass as a move's (``_halt_sent_s``). Halts: never refused. The same
-   on the stop lane, for the lock OFF it carries out while the main connection is down.
+   late. So is one whose user property ``station`` names another process than ``station`` (this
+   one's, as its heartbeats name it; an empty name too: heartbeat.py rule 7): its send time was
+   reckoned from a clock that ended when the station's bridge restarted. So is a move stamped
+   before the rotator's last STOP or lock ON from any interface (``halted_s``, heartbeat.py rule
+   8); a halt's own stamp, read here, may put that time earlier than it came, when it would pass
+   as a move's and by HALT_STAMP_MAX_S at most (``_halt_sent_s``). Halts: never refused. The
+   same on the stop lane, for the lock OFF it carries out while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -136,6 +136,8 @@ from bridge.protocols.base import ModelSpec, SettingKind
 # it on the steady clock through the wall clock; a move stamped within it of the halt before
 # it (a logger's ``S`` then ``P``, the same millisecond) is not older than that halt
 STAMP_GRAIN_S = 0.002
+HALT_STAMP_MAX_S = 60.0  # rule 9: the most a halt's stamp puts its time earlier (the remote's
+# longest expiry, bridge/remote/settings.py; a review)
 
 log = logging.getLogger(__name__)
 
@@ -618,9 +620,13 @@ class MqttService:
         judge); None for one older than its expiry, unreadable or another process's: the halt
         is carried out and counts from when it came (a clock minutes slow must not let the
         moves stamped between its stamp and its arrival through, heartbeat.py rule 8)."""
-        if stamp is None or stamp.judge(self._stamp_clock(), self._station) is not None:
+        now_unix = self._stamp_clock()
+        if stamp is None or stamp.judge(now_unix, self._station) is not None:
             return None
-        return self._sent_s(stamp)
+        sent = stamp.sent_unix(self._station)
+        if sent is None or now_unix - sent > HALT_STAMP_MAX_S:
+            return None  # (an expiry of up to an hour would let a clock that slow through)
+        return time.monotonic() - (now_unix - sent)
 
     def _sent_s(self, stamp: Stamp | None) -> float | None:
         """Rule 9: a stamp's send time on the steady clock (``halted_s``'s), or None."""
