@@ -160,6 +160,7 @@ from typing import Any
 from bridge.core.model import (
     ErrorEvent,
     ErrorKind,
+    FeatureCommand,
     MotionState,
     RotatorStatus,
     Source,
@@ -446,7 +447,12 @@ class Siblings:
         else (a wind reading, a program's status, a lease) leaves the abandon due (a review:
         a wind reading let the elevation turn on to the target said dropped)."""
         for axis, batch in batches.items():
-            if batch.target or batch.track or batch.follow or batch.feature_commands:
+            if (
+                batch.target is not None
+                or (batch.track is not None and (batch.track.body or batch.track.lookup))
+                or (batch.follow is not None and batch.follow.on)
+                or any(isinstance(c, FeatureCommand) and c.moves for c in batch.feature_commands)
+            ):  # (a track or follow off, a feature's setting, moves nothing: a review)
                 self._forsaken.discard(axis)
 
     def follow(

@@ -809,11 +809,14 @@ def test_both_boxes_jammed_mid_turn_each_say_their_stall() -> None:
         assert "elevation" in stalls[1], stalls
 
 
-def test_a_standing_box_is_abandoned_when_it_moves_after_a_wind_reading_came_between() -> None:
-    """composite.py rule 8 (a review): the azimuth box stalls while the elevation box stands
-    (jammed too, not yet said); a wind reading comes; the elevation's rotor comes free. A
-    wind reading asks no motion of its own: the elevation is abandoned as it moves, not
-    left to turn on to the 80 of the target said dropped."""
+@pytest.mark.parametrize("between", ["wind", "track off"])
+def test_a_standing_box_is_abandoned_when_it_moves_after_a_wind_reading_came_between(
+    between: str,
+) -> None:
+    """composite.py rule 8 (two reviews): the azimuth box stalls while the elevation box stands
+    (jammed too, not yet said); a wind reading comes, or tracking is switched off; the
+    elevation's rotor comes free. Neither asks motion of its own: the elevation is abandoned
+    as it moves, not left to turn on to the 80 of the target said dropped."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(online, 10, "both boxes answer")
         v.run_for(1.0)
@@ -824,8 +827,11 @@ def test_a_standing_box_is_abandoned_when_it_moves_after_a_wind_reading_came_bet
         v.run_for(6.0)
         v.el.jam()
         v.run_until(lambda c: bool(c.az.errors(since=t)), 60, "the azimuth's stall said")
-        v.mailbox.put_wind(12.0)
-        v._take()
+        if between == "wind":
+            v.mailbox.put_wind(12.0)
+            v._take()
+        else:
+            v.track(None)
         v.el.unjam()
         v.run_for(60.0)
         assert v.el.truth().el_deg < 50.0, v.el.truth()  # observed: on to 80
