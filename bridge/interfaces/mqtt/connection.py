@@ -57,7 +57,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    in a row, each less than STABLE_S after the connection was accepted and each followed by a
    connection accepted at the first try (the broker never went away), count as a takeover too;
    the side that holds the connection longer sees exactly that. A drop right after which the
-   broker's port takes no TCP connection (``listening``, within PROBE_S: a broker killed or
+   broker's port refuses a TCP connection (``listening``, within PROBE_S: a broker killed or
    crashed closes its port with its connections, and systemd starts it again 100 ms later at the
    earliest) is the broker going away ("gone"), no evidence: a broker that crashed and was
    restarted at once three times in a row was taken for a fight, and the bridge stayed away up
@@ -66,14 +66,15 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    reason from the broker is no evidence. (A link that keeps breaking the same way earns the
    same back-off; the error says "most likely".) A connection that carries stops (the stop lane,
    the stop express: ``FIGHT_BACKOFF_MAX_S``) says a fight the same way and backs off
-   TAKEOVER_FIRST_S at most: a broker that crashes and is restarted at once (systemd's 100 ms)
-   three times in a row looked exactly like one, before the look at its port (and still does
-   behind a port kept open, or to a bridge too busy to look within 100 ms), and the back-off
-   kept every STOP out for up to a minute after the broker was back (an attack pass); two
-   bridges' lanes fighting take turns every few seconds, fewer connections a minute than a
-   broker's flapping detection bans (EMQX: 30), as the main connections' would at first. The
-   default client id is unique per installation (MqttSettings.effective_client_id): only an
-   explicit one, or a copied state file on a host of the same name, can collide.
+   TAKEOVER_FIRST_S at most (and the remote's link, which carries its stops), paho's delay after
+   a failed connect too: a broker that crashes and is restarted at once (systemd's 100 ms) three
+   times in a row looked exactly like one, before the look at its port (and still does behind a
+   port kept open, or to a bridge too busy to look within 100 ms), and the back-off kept every
+   STOP out for up to a minute after the broker was back (an attack pass); two bridges' lanes
+   fighting take turns every few seconds, fewer connections a minute than a broker's flapping
+   detection bans (EMQX: 30), as the main connections' would at first. The default client id is
+   unique per installation (MqttSettings.effective_client_id): only an explicit one, or a copied
+   state file on a host of the same name, can collide.
 9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
    socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on
    (mosquitto's default, set_tcp_nodelay false) holds a second small packet until the first is
@@ -107,6 +108,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 
 from __future__ import annotations
 
+import errno
 import logging
 import socket
 import ssl
@@ -172,6 +174,7 @@ STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight 
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
+_GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
 
 class TakeoverGuard:
@@ -206,12 +209,25 @@ class TakeoverGuard:
 
 
 def listening(host: str, port: int, timeout_s: float = PROBE_S) -> bool:
-    """Rule 7: whether the broker takes a TCP connection now (closed at once, nothing sent)."""
-    try:
-        with socket.create_connection((host, port), timeout=timeout_s):
-            return True
-    except (OSError, ValueError):  # refused, unreachable, a name that does not resolve
-        return False
+    """Rule 7: whether the broker's port takes a TCP connection now (closed at once, nothing
+    sent): False only when it is refused or the host unreachable within ``timeout_s``; a look
+    that cannot tell by then (a lost SYN, a name that does not resolve yet: ``getaddrinfo``
+    takes no timeout, so the look runs on a thread of its own) leaves the drop as it looked."""
+    answer: list[bool] = []
+
+    def look() -> None:
+        try:
+            with socket.create_connection((host, port), timeout=timeout_s):
+                answer.append(True)
+        except OSError as exc:
+            answer.append(exc.errno not in _GONE_ERRNOS)
+        except ValueError:
+            answer.append(True)
+
+    thread = threading.Thread(target=look, name="mqtt-port-look", daemon=True)
+    thread.start()
+    thread.join(timeout_s)
+    return not answer or answer[0]
 
 
 def takeover_message(client_id: str, ending: Ending, most_s: int = TAKEOVER_MAX_S) -> str:
@@ -650,8 +666,11 @@ class Connection:
         if fight:
             # paho forgets its back-off on every accepted connection and starts again at the
             # minimum delay: the minimum is what slows a fight down (rule 7)
-            backoff = min(self._guard.backoff_s, self.FIGHT_BACKOFF_MAX_S)
-            client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))
+            most = self.FIGHT_BACKOFF_MAX_S  # (a stop carrier's: its back-off, never doubled
+            backoff = min(self._guard.backoff_s, most)  # by paho's failed connects: a review)
+            client.reconnect_delay_set(
+                backoff, backoff if most < TAKEOVER_MAX_S else max(backoff, self._reconnect_s[1])
+            )
             self._slowed = True
         elif self._slowed:  # a connection lasted: paho's own delays again
             client.reconnect_delay_set(*self._reconnect_s)

@@ -88,7 +88,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.interfaces.mqtt.connection import LOGIN_REFUSED, Connection
+from bridge.interfaces.mqtt.connection import LOGIN_REFUSED, TAKEOVER_FIRST_S, Connection
 from bridge.interfaces.mqtt.heartbeat import EXPIRY as STAMP_EXPIRY
 from bridge.interfaces.mqtt.heartbeat import (
     NAMELESS,
@@ -120,6 +120,8 @@ NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to
 class RemoteLink(Connection):
     """Subscribes ``filters``; hands every message to ``on_message`` (paho's thread);
     ``on_change`` is called whenever the connection comes up or goes down."""
+
+    FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # (connection.py rule 7: it carries the stops, rule 6)
 
     def __init__(
         self,
