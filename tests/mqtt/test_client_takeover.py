@@ -231,10 +231,14 @@ class TakeoverBroker:
         self._server.close()
 
 
-def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
+def connect_until(
+    broker: TakeoverBroker | CrashingBroker,
+    count: int,
+    timeout_s: float,
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    broker = TakeoverBroker()
+    """The bridge's main connection to ``broker`` until it was accepted ``count`` times (the
+    connection's log in ``caplog``); the broker closed after."""
     settings = MqttSettings(port=broker.port, client_id="tower-bridge", protocol="5")
     client = MqttClient(
         settings, will_topic="rotor/bridge/state", subscriptions=["rotor/target"], on_message=print
@@ -242,10 +246,17 @@ def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
     caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.connection")
     client.start()
     try:
-        wait_until(lambda: len(broker.accepted) >= 3, 3 * TAKEOVER_FIRST_S + 10, "3 connections")
+        wait_until(lambda: len(broker.accepted) >= count, timeout_s, f"{count} connections")
     finally:
         client.stop()
         broker.close()
+
+
+def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    broker = TakeoverBroker()
+    connect_until(broker, 3, 3 * TAKEOVER_FIRST_S + 10, caplog)
     first, second, third = broker.accepted[:3]
     # paho alone would be back after 1 s every time; a connection taken late (a busy machine)
     # shortens the gap after it by as much: that allowance is a deadline, scaled
@@ -304,17 +315,7 @@ def test_a_broker_restarted_again_and_again_is_no_fight_and_slows_no_reconnect(
     1 s later it is back. FLAP_COUNT such drops and more were taken for a fight over the
     client id, and the bridge waited 5 s, 10 s, ... up to a minute between reconnects."""
     broker = CrashingBroker()
-    settings = MqttSettings(port=broker.port, client_id="tower-bridge", protocol="5")
-    client = MqttClient(
-        settings, will_topic="rotor/bridge/state", subscriptions=["rotor/target"], on_message=print
-    )
-    caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.connection")
-    client.start()
-    try:
-        wait_until(lambda: len(broker.accepted) >= FLAP_COUNT + 2, 30, "a crash loop")
-    finally:
-        client.stop()
-        broker.close()
+    connect_until(broker, FLAP_COUNT + 2, 30, caplog)
     gaps = [b - a for a, b in zip(broker.accepted, broker.accepted[1:], strict=False)]
     assert all(gap < TAKEOVER_FIRST_S for gap in gaps), gaps  # (each about 1.5 s here)
     errors = [r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR]
