@@ -57,24 +57,24 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    in a row, each less than STABLE_S after the connection was accepted and each followed by a
    connection accepted at the first try (the broker never went away), count as a takeover too;
    the side that holds the connection longer sees exactly that. A drop right after which the
-   broker's port refuses a TCP connection (``listening``, within PROBE_S: a broker killed or
-   crashed closes its port with its connections, and systemd starts it again 100 ms later at the
-   earliest) is the broker going away ("gone"), no evidence: a broker that crashed and was
-   restarted at once three times in a row was taken for a fight, and the bridge stayed away up
-   to a minute after it was back (an attack pass). (A port kept open in front of a dead broker,
-   Docker's proxy, says nothing: evidence.) A drop after a keepalive timeout or with another
-   reason from the broker is no evidence. (A link that keeps breaking the same way earns the
-   same back-off; the error says "most likely".) A connection that carries stops (the stop lane,
-   the stop express: ``FIGHT_BACKOFF_MAX_S``) says a fight the same way and backs off
-   TAKEOVER_FIRST_S at most (and the remote's link, which carries its stops), paho's delay after
-   a failed connect too: a broker that crashes and is restarted at once (systemd's 100 ms) three
-   times in a row looked exactly like one, before the look at its port (and still does behind a
-   port kept open, or to a bridge too busy to look within 100 ms), and the back-off kept every
-   STOP out for up to a minute after the broker was back (an attack pass); two bridges' lanes
-   fighting take turns every few seconds, fewer connections a minute than a broker's flapping
-   detection bans (EMQX: 30), as the main connections' would at first. The default client id is
-   unique per installation (MqttSettings.effective_client_id): only an explicit one, or a copied
-   state file on a host of the same name, can collide.
+   broker's address (the connection's own) refuses a TCP connection (``listening``, within
+   PROBE_S: a broker killed or crashed closes its port with its connections, and systemd starts
+   it again 100 ms later at the earliest) is the broker going away ("gone"), no evidence: a
+   broker that crashed and was restarted at once three times in a row was taken for a fight, and
+   the bridge stayed away up to a minute after it was back (an attack pass). (A port kept open
+   in front of a dead broker, Docker's proxy, says nothing: evidence.) A drop after a keepalive
+   timeout or with another reason from the broker is no evidence. (A link that keeps breaking
+   the same way earns the same back-off; the error says "most likely".) A connection that
+   carries stops (the stop lane, the stop express: ``FIGHT_BACKOFF_MAX_S``) says a fight the
+   same way and backs off TAKEOVER_FIRST_S at most (and the remote's link, which carries its
+   stops), paho's delay after a failed connect too: a broker that crashes and is restarted at
+   once (systemd's 100 ms) three times in a row looked exactly like one, before the look at its
+   port (and still does behind a port kept open, or to a bridge too busy to look within 100 ms),
+   and the back-off kept every STOP out for up to a minute after the broker was back (an attack
+   pass); two bridges' lanes fighting take turns every few seconds, fewer connections a minute
+   than a broker's flapping detection bans (EMQX: 30), as the main connections' would at first.
+   The default client id is unique per installation (MqttSettings.effective_client_id): only an
+   explicit one, or a copied state file on a host of the same name, can collide.
 9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
    socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on
    (mosquitto's default, set_tcp_nodelay false) holds a second small packet until the first is
@@ -209,25 +209,27 @@ class TakeoverGuard:
 
 
 def listening(host: str, port: int, timeout_s: float = PROBE_S) -> bool:
-    """Rule 7: whether the broker's port takes a TCP connection now (closed at once, nothing
-    sent): False only when it is refused or the host unreachable within ``timeout_s``; a look
-    that cannot tell by then (a lost SYN, a name that does not resolve yet: ``getaddrinfo``
-    takes no timeout, so the look runs on a thread of its own) leaves the drop as it looked."""
-    answer: list[bool] = []
+    """Rule 7: whether the broker's address (the one the connection had: no name to resolve)
+    takes a TCP connection now (closed at once, nothing sent): False only when it is refused
+    or the host unreachable within ``timeout_s``; a look that cannot tell by then (a lost SYN)
+    leaves the drop as it looked."""
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            return True
+    except OSError as exc:
+        return exc.errno not in _GONE_ERRNOS
+    except ValueError:
+        return True
 
-    def look() -> None:
-        try:
-            with socket.create_connection((host, port), timeout=timeout_s):
-                answer.append(True)
-        except OSError as exc:
-            answer.append(exc.errno not in _GONE_ERRNOS)
-        except ValueError:
-            answer.append(True)
 
-    thread = threading.Thread(target=look, name="mqtt-port-look", daemon=True)
-    thread.start()
-    thread.join(timeout_s)
-    return not answer or answer[0]
+def peer_of(client: paho.Client) -> tuple[str, int] | None:
+    """Rule 7: the broker's address and port of the connection just accepted, or None (a
+    socket that cannot say: a unix socket, a websocket paho wraps)."""
+    try:
+        peer = client.socket().getpeername()  # type: ignore[union-attr]
+    except (AttributeError, OSError):
+        return None
+    return (peer[0], peer[1]) if isinstance(peer, tuple) and len(peer) >= 2 else None
 
 
 def takeover_message(client_id: str, ending: Ending, most_s: int = TAKEOVER_MAX_S) -> str:
@@ -347,6 +349,7 @@ class Connection:
         self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
         self._guard = TakeoverGuard()
         self._listening = options.get("listening") or listening  # rule 7: the broker's port
+        self._peer: tuple[str, int] | None = None  # ... the address the connection had
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
         self._subscribed = False  # ... and the SUBACK of its command topics came
@@ -579,6 +582,7 @@ class Connection:
         self._up = True
         self._accepted_once = True
         self._guard.connected(self._clock())
+        self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
         self._subscribed_since = None
         self._accepted()
@@ -660,7 +664,8 @@ class Connection:
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)
-        if ending == "dropped" and not self._listening(self._settings.host, self._settings.port):
+        peer, self._peer = self._peer, None
+        if ending == "dropped" and peer is not None and not self._listening(*peer):
             ending = "gone"  # rule 7: a broker killed or restarted, not a takeover
         fight = self._guard.disconnected(self._clock(), ending)
         if fight:
