@@ -4,14 +4,13 @@ The station's bridge keeps no session (clean start: interfaces/mqtt/connection.p
 nothing waits for it in the station's broker. The queue a command really waits in is a relay's: a
 broker on the operator's side, bridged to the station's (mosquitto's ``connection`` bridge, MQTT 5,
 ``topic rotor/# out 1``), whose link to the station is down while the command waits. The link
-here goes through a gate this test opens when it wants: shut, it takes each connection and
-closes it at once, so the relay keeps its queue; open, it forwards bytes both ways.
+here goes through a gate this test opens when it wants (tests/support/remote.py's stalling
+link, stalled from the start): shut, it takes each connection and closes it at once, so the
+relay keeps its queue; open, it forwards bytes both ways.
 """
 
 from __future__ import annotations
 
-import contextlib
-import socket
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -27,57 +26,11 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support import wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import end_paho
+from tests.support.remote import StallingLink
 from tests.support.rig import Rig
 
 
-class Gate:
-    """A TCP gate on a loopback port in front of ``target``: shut until ``open()``."""
-
-    def __init__(self, target: int) -> None:
-        self.target = target
-        self.opened = threading.Event()
-        self.turned_away = 0  # connections closed while shut
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port = int(self._server.getsockname()[1])
-        self._socks: list[socket.socket] = []
-        self._closing = False
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def open(self) -> None:
-        self.opened.set()
-
-    def _accept(self) -> None:
-        while not self._closing:
-            try:
-                conn, _ = self._server.accept()
-            except OSError:
-                return
-            if not self.opened.is_set():
-                self.turned_away += 1
-                conn.close()
-                continue
-            upstream = socket.create_connection(("127.0.0.1", self.target))
-            self._socks += [conn, upstream]
-            for a, b in ((conn, upstream), (upstream, conn)):
-                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
-
-    @staticmethod
-    def _pipe(src: socket.socket, dst: socket.socket) -> None:
-        with contextlib.suppress(OSError):
-            while data := src.recv(65536):
-                dst.sendall(data)
-        with contextlib.suppress(OSError):
-            dst.shutdown(socket.SHUT_WR)
-
-    def close(self) -> None:
-        self._closing = True
-        self._server.close()
-        for s in self._socks:
-            with contextlib.suppress(OSError):
-                s.close()
-
-
-def relay_conf(gate: Gate) -> str:
+def relay_conf(gate: StallingLink) -> str:
     """The operator's broker, bridged to the station's through the gate."""
     return (
         "allow_anonymous true\n"
@@ -92,8 +45,8 @@ def relay_conf(gate: Gate) -> str:
 
 
 @pytest.fixture
-def relay(tmp_path: Path, station: Rig) -> Iterator[tuple[Mosquitto, Gate]]:
-    gate = Gate(station.broker.port)
+def relay(tmp_path: Path, station: Rig) -> Iterator[tuple[Mosquitto, StallingLink]]:
+    gate = StallingLink(station.broker.port, flowing=False)
     broker = Mosquitto(tmp_path / "relay", extra_conf=relay_conf(gate)).start()
     yield broker, gate
     broker.stop()
@@ -122,7 +75,7 @@ def publish(port: int, topic: str, payload: str, expiry_s: int | None) -> None:
     ids=["expired in the queue: never moves", "control, still alive: moves"],
 )
 def test_a_command_whose_expiry_passes_in_a_relay_queue_never_moves_the_rotor(
-    station: Rig, relay: tuple[Mosquitto, Gate], expiry_s: int, moves: bool
+    station: Rig, relay: tuple[Mosquitto, StallingLink], expiry_s: int, moves: bool
 ) -> None:
     broker, gate = relay
     emu = station.emus["tower"]
@@ -137,7 +90,7 @@ def test_a_command_whose_expiry_passes_in_a_relay_queue_never_moves_the_rotor(
     # station's broker, the target would have been before it
     publish(broker.port, "rotor/relay/marker", "m", None)
     start = station.probe.mark()
-    gate.open()
+    gate.recover()
     station.probe.wait(lambda m: m.topic == "rotor/relay/marker", 15, "the marker", start)
     targets = [m for m in station.probe.messages[start:] if m.topic == "rotor/target"]
     if moves:

@@ -99,12 +99,15 @@ def ask(port: int, line: bytes) -> bytes:
 class StallingLink:
     """A TCP link on a loopback port to ``target`` that can stall: stalled, what either side
     sends is taken and held (as a Wi-Fi link's buffers hold it) and a new connection gets no
-    further than the link; recovered, what it held is delivered, the old connection's first."""
+    further than the link (``turned_away`` counts them); recovered, what it held is delivered,
+    the old connection's first. ``flowing``: False for a link stalled from the start."""
 
-    def __init__(self, target: int) -> None:
+    def __init__(self, target: int, flowing: bool = True) -> None:
         self.target = target
         self.flowing = threading.Event()
-        self.flowing.set()
+        if flowing:
+            self.flowing.set()
+        self.turned_away = 0  # connections closed while it stalled
         self._server = socket.create_server(("127.0.0.1", 0))
         self.port = int(self._server.getsockname()[1])
         self._socks: list[socket.socket] = []
@@ -123,6 +126,7 @@ class StallingLink:
             except OSError:
                 return
             if not self.flowing.is_set():  # no connection is made across a stalled link
+                self.turned_away += 1
                 conn.close()
                 continue
             upstream = socket.create_connection(("127.0.0.1", self.target))
