@@ -311,7 +311,6 @@ class Options(TypedDict, total=False):
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int
-    listening: Callable[[str, int], bool] | None  # rule 7: the look at the broker's port
 
 
 class Connection:
@@ -348,8 +347,7 @@ class Connection:
         self._clock = clock
         self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
         self._guard = TakeoverGuard()
-        self._listening = options.get("listening") or listening  # rule 7: the broker's port
-        self._peer: tuple[str, int] | None = None  # ... the address the connection had
+        self._peer: tuple[str, int] | None = None  # rule 7: the address the connection had
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
         self._subscribed = False  # ... and the SUBACK of its command topics came
@@ -665,7 +663,7 @@ class Connection:
             return
         ending = ending_of(flags, reason_code)
         peer, self._peer = self._peer, None
-        if ending == "dropped" and peer is not None and not self._listening(*peer):
+        if ending == "dropped" and peer is not None and not listening(*peer):
             ending = "gone"  # rule 7: a broker killed or restarted, not a takeover
         fight = self._guard.disconnected(self._clock(), ending)
         if fight:
