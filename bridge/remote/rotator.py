@@ -261,7 +261,7 @@ class RemoteRotator:
             return STATION_AWAY
         return None
 
-    def _bridge_unheard(self) -> bool:
+    def bridge_unheard(self) -> bool:
         """Rule 3: the station's bridge itself is offline or silent (a rotator offline under
         a bridge that runs still takes its lock)."""
         view = self._view
@@ -316,14 +316,14 @@ class RemoteRotator:
         t = self.topics
         match command:
             case Stop():
-                unheard = self._bridge_unheard()  # rule 3: sent, maybe to nobody, and again
+                unheard = self.bridge_unheard()  # rule 3: sent, maybe to nobody, and again
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
                 self.publish(t.stop, "stop", until_heard=unheard)  # or be kept)
                 if unheard:  # once the station's bridge is heard
                     raise Refused(RefusalCode.OFFLINE, STOP_UNHEARD)
                 return
             case Lock():
-                unheard = command.on and self._bridge_unheard()  # rule 3, as a stop
+                unheard = command.on and self.bridge_unheard()  # rule 3, as a stop
                 if command.on:
                     self.halted(command.source)
                 self.publish(t.lock, "ON" if command.on else "OFF", until_heard=unheard)

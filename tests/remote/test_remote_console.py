@@ -226,8 +226,10 @@ def test_with_the_station_bridge_gone_a_turn_is_refused_at_once(
     station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
 ) -> None:
     r, client, _ = remote
-    station.stop()  # the bridge says offline on its way out
-    wait_until(lambda: not r.rotators[0].current, 10, "the remote sees the station go")
+    station.stop()  # the bridge says offline on its way out (its rotator first, then itself)
+    # (the bridge's own offline, not the rotator's: a stop is heard while the bridge is, and
+    # waiting for the rotator's alone let the stop go out heard, 200, in one run of the suite)
+    wait_until(r.rotators[0].bridge_unheard, 10, "the remote sees the station's bridge go")
     answer = client.command("tower", command="target", az=250)
     assert answer.status == 409 and answer.doc["code"] == "offline", answer
     assert "station's rotator is offline" in answer.doc["error"]
