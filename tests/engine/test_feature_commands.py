@@ -265,6 +265,16 @@ def test_a_bad_payload_is_refused_before_the_judge() -> None:
         parse_command("beam", None, b"aim north", WHO, features={"beam": topic})
 
 
+def test_a_feature_parser_that_breaks_its_contract_is_a_refusal_naming_it() -> None:
+    """The toy's parser decodes without a care (as a new feature's might): bytes that are not
+    UTF-8 raise UnicodeDecodeError, not PayloadError. That is a refusal on ``R/error`` naming the
+    feature and what went wrong, not a traceback in the log and nothing said (a run of the
+    suite with 16 workers logged two such tracebacks for ``R/beam``)."""
+    topic = TOY.commands[0]
+    with pytest.raises(pl.PayloadError, match=r"^beam could not read it \(UnicodeDecodeError: "):
+        parse_command("beam", None, b"a\xff 10", WHO, features={"beam": topic})
+
+
 def test_a_storm_refuses_its_motion_at_the_judge_and_in_the_session(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

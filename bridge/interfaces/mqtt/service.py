@@ -19,7 +19,10 @@ Rules:
    the lease's claim and release) it is refused, "empty payload", and changes nothing: it can
    be neither carried out, being perhaps a deletion, nor dropped without a word.)
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
-   nothing moves. A stop takes any payload: stopping is never refused.
+   nothing moves. A stop takes any payload: stopping is never refused. A feature's parser
+   that raises anything but PayloadError (bridge/feature.py ``CommandTopic``: a new feature's
+   bug, bytes that are not UTF-8) is refused the same way, naming the feature and the error;
+   before, it was a traceback in the log and nothing on ``R/error``.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
    A status's topics whose payload is the one this service last handed on for them are not
    handed on again (the client would drop it: a reading changes two of a dozen); what the
@@ -810,7 +813,14 @@ def parse_command(
     if feature is not None:
         if not payload and not feature.takes_empty:
             raise pl.PayloadError("empty payload")  # rule 2
-        return feature.parse(payload, by)
+        try:
+            return feature.parse(payload, by)
+        except pl.PayloadError:
+            raise
+        except Exception as exc:  # rule 2: a parser that breaks its contract is still a refusal
+            log.debug("%s's parser raised", feature.kind, exc_info=True)
+            why = pl.one_line(f"{type(exc).__name__}: {exc}")[:120]
+            raise pl.PayloadError(f"{feature.kind} could not read it ({why})") from exc
     if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
         raise pl.PayloadError("empty payload")
     if kind == "target":
