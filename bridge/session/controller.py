@@ -213,7 +213,8 @@ Rules:
    stall): rule 3's stall tells it, ``stall_timeout_s`` after its last movement. A
    controller that says nothing when it restarts (RT-21, GS-232, SPID, Easycomm: their
    readings of a rotor stopped by a restart are those of a stall) is called stalled as
-   before, and that error names a restart too.
+   before, and that error names a restart too. A stall's error or a stop short owes the
+   settings the controller forgets again (options.py rule 1: a GS-232 back at X4).
 13. A port lost (an adapter unplugged, a write the port refused, a bug in the worker) while a
    turn of the bridge's is out (``turn_out``: a target written, no stop sent for it, the rotor
    not at it by the last reading) drops that turn with the link (motion.py ``link_down``): it
@@ -332,6 +333,9 @@ _DROPS_TURN = frozenset(  # ``dropped_turns``: the events whose error says the t
         mo.Event.REFUSED,
     }
 )
+# rule 12: the events whose error names a restart the controller did not tell: the settings it
+# forgets are owed again (options.py rule 1)
+_MAY_HAVE_RESTARTED = frozenset({mo.Event.STALLED, mo.Event.HALTED})
 #: stops.py rule 4: a bounded stop series
 _PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK, mo.Event.PAST_LIMIT)
 
@@ -1099,6 +1103,8 @@ class Controller:
             cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:
             self.options.enable_due = True  # rule 4
+        if self.options.unanswered:
+            self.options.answered()  # (options.py rule 1)
         if self._slew_retry is not None:  # rule 14: the first reading after the lost report
             self._slew_restart(reply)
         if reply.controller_time is not None:
@@ -1391,6 +1397,9 @@ class Controller:
                 continue
             if verdict.error is not None and event in _DROPS_TURN:
                 self.dropped_turns += 1
+            if verdict.error is not None and event in _MAY_HAVE_RESTARTED:  # rule 12
+                self.options.all_due()  # (the box may be back at its own speed: an attack
+                self._retune()  # pass, a GS-232 set to X1 turned at X4 after a power cycle)
             if verdict.ends_tracking is not None:
                 self.notes.append(Ends(verdict.ends_tracking))
             if verdict.error is not None:
@@ -1460,6 +1469,8 @@ class Controller:
                         )
                         self._slew_retry = (aim, self.controller_time)
                     self._unseen()
+                if self.options.values and link.asking_since is not None:  # options.py
+                    self.options.unanswered = True  # rule 1: nothing came: was it off?
                 self._given_up(link.give_up_reply(now))
                 if self._watching() and mo.at_rest(self.motion):  # rule 10: a poll left
                     self._watch_until = now + self.cfg.motion.settle_s  # unanswered may have

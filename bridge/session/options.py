@@ -11,7 +11,13 @@ Rules:
    every (re)connect, after a power-on byte and every OPTIONS_REFRESH_S while idle; the others
    (the controller keeps them) when they are set (set while the port is closed or the
    controller silent: once it answers), and once after the bridge starts (whether the
-   controller has the kept value is not known).
+   controller has the kept value is not known). A controller may restart without saying so (a
+   GS-232 back at its fastest speed): a stall that names a restart owes the ``resend`` ones
+   again (controller.py rule 12), and so does a reply that never came (``unanswered``: was
+   the box off?), at the first reading after it (``answered``); until then a target waits
+   for that reading (session.py ``_try_target``), and a setting that may go while a target
+   waits is written ahead of it (an attack pass: a GS-232 set to X1, power-cycled, turned at
+   X4 until the refresh, up to a minute later).
 2. A report that says automatic motion is off owes an enable, sent once the line is free and
    no slew or stop is under way.
 3. What the controller was last sent is ``in_effect``; its speed factor (the product of the
@@ -49,6 +55,7 @@ class Options:
         self._written_t: dict[str, float] = {}  # rule 4: when each was last written
         self.revision = 0  # one more for every value set: the status shows them (session.py)
         self._factor: float | None = None  # rule 3: speed_factor's, until in_effect changes
+        self.unanswered = False  # rule 1: a reply never came; owed again at the next reading
 
     def _resent(self) -> set[str]:
         """The values the controller forgets, and those not sent since the start (rule 1)."""
@@ -71,6 +78,12 @@ class Options:
         """The controller answers again, or said it was powered on (rule 1)."""
         self._forgotten()
         self._due = self._resent()
+
+    def answered(self) -> None:
+        """Rule 1: the first reading after a reply that never came (``unanswered``): the
+        settings the controller forgets are owed again, still taken as in effect."""
+        self.unanswered = False
+        self._due |= self._resent()
 
     def set(self, name: str, value: SettingValue, connected: bool) -> None:
         self.values[name] = value

@@ -906,9 +906,10 @@ class RotatorSession:
             if ctl.notes:
                 self._heed(now)
             self._parts(self._deciding, now)  # rule 17: the parts that decide
-            if self.targets.pending is not None:
+            waits = self.targets.pending is not None
+            ctl.send_options(now, waits)  # (one that may go while a target waits goes first:
+            if waits:  # the turn starts at the speed set, not the box's own: an attack pass)
                 self._try_target(ctl.link, now)
-            ctl.send_options(now, self.targets.pending is not None)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
@@ -1099,6 +1100,10 @@ class RotatorSession:
     def _try_target(self, link: Link, now: float) -> None:
         ctl, pending = self.controller, self.targets.pending
         assert pending is not None
+        if ctl.options.unanswered:  # options.py rule 1: a reply never came (was the box off?):
+            if link.free():  # the target follows an answer, and the settings it owes first
+                link.poll_now(now)
+            return
         # (the controller's configuration: a speed setting's settle time, controller.py rule 7,
         # the one its stop's repeat, stops.py rule 2, counts with too: a cold review)
         todo = decide(ctl.cfg, link, ctl.motion, self.targets, self.fence.held, now)

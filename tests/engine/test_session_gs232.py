@@ -199,10 +199,27 @@ def test_a_refusal_after_a_setting_is_not_the_targets(rig: Rig) -> None:
     v = ready(rig, start_az_deg=10, start_el_deg=0)
     v.garble_writes(b"X4\r", b"X9\r")  # the box gets a speed it refuses: ?>
     t = v.now
-    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.command(Target(200, 0))
+    v.run_until(lambda h: b"W200 000\r" in h.sent(since=t), 2, "the target written")
+    v.command(SetOption("speed", "4"))
     v.run_until(lambda h: h.frames(Outcome.REFUSED, since=t), 2, "the setting refused")
     assert [f.data for f in v.frames(since=t)][:2] == [b"W200 000", b"X9"]
     v.run_until(settled_at(200, 0), 120, "at 200 all the same")
+    assert v.errors("refused", since=t) == []
+
+
+def test_a_setting_set_with_a_target_goes_first_and_its_refusal_is_not_the_targets(
+    rig: Rig,
+) -> None:
+    """A speed set together with a target is written ahead of it (the turn starts at the
+    speed set); the box's ``?>`` to it refuses the setting, and the target goes all the same."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    v.garble_writes(b"X4\r", b"X9\r")
+    t = v.now
+    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.run_until(lambda h: h.frames(Outcome.REFUSED, since=t), 2, "the setting refused")
+    v.run_until(settled_at(200, 0), 120, "at 200 all the same")
+    assert [f.data for f in v.frames(since=t) if f.data != b"C2"][:2] == [b"X9", b"W200 000"]
     assert v.errors("refused", since=t) == []
 
 
