@@ -214,6 +214,8 @@ def test_a_move_stamped_before_the_rotators_last_halt_is_refused_and_one_after_i
         (Stamp(str(NOW_UNIX), None), "cannot be read"),
         (Stamp(str(NOW_UNIX), "nan"), "cannot be read"),
         (Stamp(str(NOW_UNIX), "-1"), "cannot be read"),
+        (Stamp("-1e308", "5"), "sent 1e+308 s ago, older than its 5 s expiry"),  # (no 300 digits)
+        (Stamp(str(NOW_UNIX + 2e6), "5"), "stamped 2e+06 s ahead of"),
         (None, None),  # a dashboard's command: the broker's expiry only
     ],
 )
@@ -686,3 +688,28 @@ def test_a_stamp_is_never_earlier_than_the_one_before_when_the_best_beat_leaves_
     target = station_clock.stamp(5)
     assert stop is not None and target is not None
     assert float(target.sent) >= float(stop.sent)
+
+
+@pytest.mark.parametrize(
+    "pairs",
+    [
+        [("SENT", str(NOW_UNIX - 600)), ("EXPIRY", "5")],
+        [("Sent", str(NOW_UNIX - 600)), ("expiry", "5")],
+        [("sent", str(NOW_UNIX)), ("Expiry", "5")],  # (its expiry unread: refused all the same)
+    ],
+)
+def test_a_stamp_named_in_other_letters_refuses_a_move_and_says_how_to_name_it(
+    pairs: list[tuple[str, str]],
+) -> None:
+    """heartbeat.py rule 5: MQTT's names are case-sensitive; a flow that meant a stamp (here
+    ten minutes old) had its target carried out however late, and nothing said. A STOP so
+    stamped is carried out as ever."""
+    stamp = Stamp.of_properties(pairs)
+    assert stamp is not None
+    svc, _, rots = service({"tower": "rotorez"})
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=stamp)
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=stamp)
+    refusal, stop = rots["tower"].calls
+    assert refusal[0] == "refused", refusal
+    assert "is no stamp: the names are 'sent' and 'expiry', in small letters" in refusal[1]
+    assert stop[0] == "submit" and isinstance(stop[1], Stop)

@@ -32,7 +32,9 @@ Rules:
    cannot read: an ``expiry`` without ``sent`` too (an attack pass: a Node-RED flow that set
    only ``expiry`` had its commands carried out however late, and not a word), such as a
    property given twice with two values or digits other than ASCII's (an attack pass: of two
-   ``sent`` the last was taken, and ``１２３`` was read as 123). A ``sent`` in
+   ``sent`` the last was taken, and ``１２３`` was read as 123), or with a stamp's name in other
+   letters (``SENT``, ``Expiry``: MQTT's names are case-sensitive, and a flow that meant a
+   stamp had its commands carried out however late). A ``sent`` in
    milliseconds (JavaScript's ``Date.now()``) is said to be one, not a clock that went back.
    Stop and lock ON are never refused (docs/architecture.md rule 11): the service does not
    ask. A command without a stamp (a dashboard, Home Assistant) is judged as before: it has
@@ -205,6 +207,12 @@ class StationClock:
             self._offsets.popleft()
 
 
+def _span(seconds: float) -> str:
+    """An age in an error's words: tenths of a second, or three digits and the power of ten
+    where there are more (an attack pass: ``sent=-1e308`` was told in a 300-digit number)."""
+    return f"{seconds:.1f} s" if abs(seconds) < 1e6 else f"{seconds:.3g} s"
+
+
 def _seconds(text: str | None) -> float:
     """A stamp's number (rule 5), NaN for none or one that cannot be read: ASCII digits only
     (``float`` reads ``１２３``)."""
@@ -249,6 +257,7 @@ class Stamp:
     sent: str
     expiry: str | None
     station: str | None = None
+    miscased: str | None = None  # rule 5: a stamp's name in other letters (``SENT``), as it came
 
     @classmethod
     def of(cls, sent_unix: float, expiry_s: float, station: str | None = None) -> Stamp:
@@ -263,13 +272,16 @@ class Stamp:
         """The stamp among a message's user properties; None without ``sent`` and ``expiry``
         (an ``expiry`` alone is a stamp whose send time cannot be read: rule 5)."""
         found: dict[str, str] = {}
+        miscased = None
         for key, value in pairs:
             key, value = str(key), str(value)
             if key in (SENT, EXPIRY, STATION):  # one given twice, two ways: read as neither
                 found[key] = value if found.get(key, value) == value else "\0twice"
-        if SENT not in found and EXPIRY not in found:
+            elif key.casefold() in (SENT, EXPIRY) and miscased is None:  # rule 5
+                miscased = key
+        if SENT not in found and EXPIRY not in found and miscased is None:
             return None
-        return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION))
+        return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION), miscased)
 
     def sent_unix(self, station: str | None = None) -> float | None:
         """Rule 8: the send time, if it can be read and was reckoned against this station
@@ -289,6 +301,12 @@ class Stamp:
                 "stamped against this station's bridge before it restarted: not carried out; "
                 "send it again"
             )
+        if self.miscased is not None:
+            return (
+                f"its user property {self.miscased[:24]!r} is no stamp: the names are "
+                f"{SENT!r} and {EXPIRY!r}, in small letters (MQTT's names are case-sensitive): "
+                "not carried out"
+            )
         sent = _seconds(self.sent)
         expiry = _seconds(self.expiry) if math.isfinite(sent) else math.nan
         if not (math.isfinite(sent) and math.isfinite(expiry) and 0 < expiry <= MAX_EXPIRY_S):
@@ -299,7 +317,7 @@ class Stamp:
         age = now_unix - sent
         if age > expiry:
             return (
-                f"sent {age:.1f} s ago, older than its {expiry:g} s expiry (a link that held it "
+                f"sent {_span(age)} ago, older than its {expiry:g} s expiry (a link that held it "
                 "up): not carried out"
             )
         if age < -AHEAD_S and sent > now_unix * 100:  # (JavaScript's Date.now(): a Node-RED flow)
@@ -309,7 +327,7 @@ class Stamp:
             )
         if age < -AHEAD_S:
             return (
-                f"stamped {-age:.1f} s ahead of this station's clock (the station's clock went "
+                f"stamped {_span(-age)} ahead of this station's clock (the station's clock went "
                 "back?): not carried out; send it again in a minute"
             )
         return None
