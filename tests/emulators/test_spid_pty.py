@@ -106,6 +106,7 @@ def test_silent_controller_obeys_but_never_answers(
     assert port.wait_for(lambda s: s.az_deg == 10.0).az_deg == 10.0
     assert client.read(12) == b""
     port.set_silent(False)
+    client.timeout = 10  # (the answer ends the read)
     client.write(STATUS)
     assert client.read(12)[1:5] == bytes([3, 7, 0, 0])
 
