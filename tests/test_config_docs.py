@@ -135,7 +135,6 @@ COMPANIONS: dict[str, dict[str, Any]] = {
     "mqtt.password": {"username": "rotor"},  # (a password goes with a user name)
     "mqtt.password_file": {"username": "rotor"},
     "park_el_deg": {"park_az_deg": 0},
-    "rotators.brake_delay_s": {"model": "rotorez"},  # (one that stops on a new target)
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},
     "wind_topic": {"wind_park_above": 60, "park_az_deg": 0},

@@ -30,12 +30,6 @@ brake_delay_s = 5
 """
 
 
-SPID_MINIMAL = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"').replace(
-    "brake_delay_s = 5\n",
-    "",  # (a SPID takes a new bearing at any time: no brake delay)
-)
-
-
 def write(tmp_path: Path, text: str) -> Path:
     p = tmp_path / "c.toml"
     p.write_text(text)
@@ -471,7 +465,9 @@ def test_the_slow_lines_poll_rarely_and_wait_longer_before_calling_it_silence(
 
 
 def test_idle_poll_and_silence_set_by_the_user_are_kept(tmp_path: Path) -> None:
-    text = SPID_MINIMAL + ("idle_poll_interval_s = 2\nsilence_timeout_s = 4\n")
+    text = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"') + (
+        "idle_poll_interval_s = 2\nsilence_timeout_s = 4\n"
+    )
     r = load_settings(write(tmp_path, text), environ={}).rotators[0]
     assert (r.effective_idle_poll_interval_s, r.effective_silence_timeout_s) == (2, 4)
     text = MINIMAL + "idle_poll_interval_s = 5\n"
@@ -489,7 +485,7 @@ def test_idle_poll_and_silence_set_by_the_user_are_kept(tmp_path: Path) -> None:
 def test_a_silence_timeout_shorter_than_the_idle_poll_is_refused(
     tmp_path: Path, extra: str
 ) -> None:
-    text = SPID_MINIMAL + extra
+    text = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"') + extra
     with pytest.raises(ConfigError, match=r"rotators\[0\].*silence_timeout_s .* idle poll"):
         load_settings(write(tmp_path, text), environ={})
 

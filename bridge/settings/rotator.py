@@ -30,7 +30,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
-from bridge.protocols.base import ModelSpec, RetargetPolicy
+from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
 from bridge.settings.base import Strict, check_name, check_named_path
@@ -231,9 +231,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         ge=0,
         le=60,
         description="the controller's brake delay: no new target is sent until it has passed "
-        "(Rotor-EZ and DCU-1: a jumper, 5 s by default). Only for a controller that stops on "
-        "a new target (Rotor-EZ, RotorCard, DCU-1, SatEL); one that takes a new bearing at any "
-        "time works its brake itself (set the delay on it) and refuses a delay here",
+        "(Rotor-EZ and DCU-1: a jumper, 5 s by default)",
         examples=[5],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
@@ -524,16 +522,6 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
             raise ValueError(f"the {spec.display_name} has no elevation axis (el_min/max_deg)")
         elif self.el_speed_deg_s is not None:
             raise ValueError(f"the {spec.display_name} has no elevation axis (el_speed_deg_s)")
-        if (
-            self.brake_delay_s
-            and spec.retarget is RetargetPolicy.DIRECT
-            and spec.can_report_position
-        ):
-            raise ValueError(  # (an attack pass: accepted, and no target waited for it)
-                f"brake_delay_s {self.brake_delay_s:g}: the {spec.display_name} takes a new "
-                "bearing at any time and works its brake itself (set the delay on the "
-                "controller); the bridge holds none for it: leave brake_delay_s unset"
-            )
         idle_s = self.effective_idle_poll_interval_s
         if self.moving_poll_interval_s > idle_s:
             raise ValueError(

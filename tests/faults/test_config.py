@@ -70,11 +70,6 @@ CASES: list[tuple[str, str | bytes, str]] = [
     ("settle too short", BASE + "settle_s = 0.1\n", "settle_s"),
     ("poll order", BASE + "moving_poll_interval_s = 5\n", "moving_poll_interval_s"),
     ("negative brake", BASE + "brake_delay_s = -1\n", "rotators[0].brake_delay_s"),
-    (  # a box that takes a new bearing at any time works its own brake: none held for it
-        "brake on a gs232",
-        BASE.replace('"rotorez"', '"gs232b-az"') + "brake_delay_s = 5\n",
-        "brake_delay_s 5: the GS-232B azimuth takes a new bearing at any time",
-    ),
     ("park el without az", BASE.replace("rotorez", "rot2prog") + "park_el_deg = 10\n", "park_el"),
     ("rotctld twice", BASE + "rotctld_port = 4533\n" + SPID + "rotctld_port = 4533\n", "rotctld"),
     (
