@@ -230,8 +230,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,
         ge=0,
         le=60,
-        description="the controller's brake delay: no new target is sent until it has passed "
-        "(Rotor-EZ and DCU-1: a jumper, 5 s by default)",
+        description="the controller's brake delay: after a stop the rotor is braking this "
+        "long. A controller that stops on a new target gets none until it has passed (Rotor-EZ "
+        "and DCU-1: a jumper, 5 s by default); one that takes a new bearing at any time (GS-232, "
+        "Easycomm, SPID, RT-21, Prosistel, RC2800) works its brake itself and is sent it at once",
         examples=[5],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
