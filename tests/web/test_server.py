@@ -225,7 +225,8 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
     assert got[0] == {"event": "hello"}
     # the bridge's steady clock for the page's send times (live.py rule 8), never the host's
     # own, which says how long it has been up (commands.py rule 6)
-    assert got[1]["event"] == "clock" and got[1]["now"] <= feed_clock()
+    # (told in milliseconds, rounded: up to half of one ahead; failed once in CI by 0.05 ms)
+    assert got[1]["event"] == "clock" and got[1]["now"] <= feed_clock() + 0.0005
     assert abs(got[1]["now"] - time.monotonic()) > 1.0
     assert got[2]["event"] == "status" and got[2]["data"]["rotator"] == "hf"
     assert got[2]["data"]["status"]["available"] is True
