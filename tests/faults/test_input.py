@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from tests.faults.conftest import FAST_BROKER_CONF, Rig, fault_rig, motion_frames, send_target
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt import mqtt5_publish, raw_mqtt5
 
 ROTATORS = {"ez": "rotorez", "spid": "rot2prog", "sat": "satel"}
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
@@ -304,6 +305,37 @@ def test_oversized_payloads_are_refused_and_move_nothing(bench: Bench, size: int
     bench.nothing_moved()
     for rid in ROTATORS:
         assert bench.rotator(rid).locked is True
+
+
+# -- too many MQTT 5 properties ------------------------------------------------------------------
+def test_a_command_with_properties_too_long_to_read_is_refused_at_once_and_a_stop_goes(
+    bench: Bench,
+) -> None:
+    """heartbeat.py rule 9: 60,000 empty user properties (300 KB; paho read 120,000 in minutes,
+    while the connection's thread did nothing else). A move so sent is refused saying why, and
+    the STOP behind it with as many is carried out: the Rotor-EZ stops."""
+    rid = "ez"
+    crowd = [("", "")] * 60_000
+    bench.lock(rid, False)
+    try:
+        far = 90 if bench.rig.emus[rid].state().az_deg > 180 else 270
+        send_target(bench.rig, rid, far, 0)
+        wait_until(lambda: bench.rig.emus[rid].state().is_moving, 10, "turning")
+        with raw_mqtt5(bench.rig.broker.port, "crowd") as send:
+            send(
+                mqtt5_publish(bench.rig.topic(rid, "target"), crowd, b"120"),
+                mqtt5_publish(bench.rig.topic(rid, "stop"), crowd, b""),
+            )
+            wait_until(lambda: not bench.rig.emus[rid].state().is_moving, 10, "stopped")
+        errors = bench.errors_after(rid)
+        assert [e["message"] for e in errors if e["kind"] == "refused"] == [
+            "its MQTT 5 properties take 300000 bytes, more than the 4096 the bridge reads (a "
+            "stamp and an operator's name take some hundred): not carried out"
+        ], errors
+        assert bench.rig.emus[rid].state().target_az_deg != 120
+    finally:
+        bench.frames[rid] = motion_frames(bench.rig, rid)
+        bench.lock(rid, True)
 
 
 # -- a rotator that does not exist ---------------------------------------------------------------

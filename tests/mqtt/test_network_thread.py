@@ -17,13 +17,15 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
-from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
+from paho.mqtt._packet import decode_publish
+from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode, MQTTProtocolVersion
 
 from bridge.core import handoff
-from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
+from bridge.interfaces.mqtt.heartbeat import MAX_PROPERTIES_BYTES, UNREAD_PROPERTIES
+from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client, unread_properties
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
-from tests.support.mqtt import retained_snapshot
+from tests.support.mqtt import mqtt5_publish, mqtt5_string, raw_mqtt5, retained_snapshot
 from tests.support.waiting import slow
 
 
@@ -597,3 +599,73 @@ def test_statuses_queued_when_the_connection_drops_do_not_stop_the_reconnect(
         wait_until(lambda: c.socket() not in (None, old) and c.is_connected(), 15, "reconnected")
         assert c.publish_qos0("net/lost", b"after", True) == MQTTErrorCode.MQTT_ERR_SUCCESS
         probe.wait(lambda m: m.topic == "net/lost" and m.text == "after", start=mark)
+
+
+# -- rule 10: a PUBLISH's properties beyond MAX_PROPERTIES_BYTES are not read -------------------
+def _decoded(header: int, packet: bytes) -> Any:
+    return decode_publish(header, packet, MQTTProtocolVersion.MQTTv5)
+
+
+@pytest.mark.parametrize("qos", [0, 1])
+def test_properties_beyond_the_bound_reach_paho_as_their_size_and_the_rest_as_it_came(
+    qos: int,
+) -> None:
+    content_type = b"\x03" + mqtt5_string("text/plain")  # 13 bytes
+    header, packet = mqtt5_publish("rotor/target", [("", "")] * 20_000, b"90", qos, content_type)
+    assert len(_decoded(header, packet).properties.UserProperty) == 20_000  # (read: a second)
+    cut = unread_properties(header, packet)
+    assert cut is not None
+    got = _decoded(header, cut)
+    assert (got.topic, got.qos, got.mid, got.payload) == (b"rotor/target", qos, 7 * qos, b"90")
+    assert got.properties.UserProperty == [(UNREAD_PROPERTIES, "100013")]
+    assert not hasattr(got.properties, "ContentType")
+
+
+def test_properties_up_to_the_bound_are_read_as_paho_reads_them() -> None:
+    header, packet = mqtt5_publish("rotor/target", [("k", "v" * (MAX_PROPERTIES_BYTES - 6))], b"1")
+    assert _decoded(header, packet).properties.UserProperty[0][1] == "v" * 4090
+    assert len(packet) == 2 + len("rotor/target") + 2 + MAX_PROPERTIES_BYTES + 1
+    assert unread_properties(header, packet) is None
+    header, packet = mqtt5_publish("rotor/target", [("k", "v" * (MAX_PROPERTIES_BYTES - 5))], b"1")
+    assert unread_properties(header, packet) is not None
+
+
+def test_a_section_whose_length_cannot_be_read_is_left_to_paho() -> None:
+    header, packet = mqtt5_publish("rotor/target", [("", "")] * 2000, b"1")
+    assert unread_properties(header, packet[:-100]) is None  # longer than the packet
+    head = packet[: 2 + len("rotor/target")]
+    assert unread_properties(header, head + b"\xff\xff\xff\xff\x7f") is None  # 5 bytes long
+    assert unread_properties(header, head) is None  # no length at all
+    assert unread_properties(header, b"") is None
+
+
+def test_a_message_with_too_many_user_properties_arrives_at_once_as_their_size(
+    client: Client, broker: Mosquitto
+) -> None:
+    """Through a real broker: 120,000 user properties (3.7 MB; paho's reading of them took
+    minutes, then the broker dropped the connection and sent the message again), between two
+    plain messages: all three arrive, in order, the middle one with its size in place of its
+    properties."""
+    got: list[tuple[str, bytes, Any]] = []
+    subscribed = threading.Event()
+    client.on_message = lambda _c, _u, m: got.append(
+        (m.topic, m.payload, getattr(m.properties, "UserProperty", None))
+    )
+    client.on_subscribe = lambda *_a: subscribed.set()
+    client.subscribe("rotor/#")
+    assert subscribed.wait(slow(10))
+    pairs = [(f"k{i}", "v" * 20) for i in range(120_000)]
+    messages = [
+        mqtt5_publish("rotor/target", pairs[:1], b"80"),
+        mqtt5_publish("rotor/target", pairs, b"90"),
+        mqtt5_publish("rotor/stop", [], b""),
+    ]
+    size = sum(5 + len(k) + len(v) for k, v in pairs)  # 3,728,890 bytes
+    with raw_mqtt5(broker.port, "net-raw") as send:  # a client of the test's own
+        send(*messages)
+        wait_until(lambda: len(got) == 3, timeout_s=slow(30))
+    assert got == [
+        ("rotor/target", b"80", [("k0", "v" * 20)]),
+        ("rotor/target", b"90", [(UNREAD_PROPERTIES, str(size))]),
+        ("rotor/stop", b"", None),
+    ]

@@ -26,7 +26,9 @@ from bridge.interfaces.mqtt.heartbeat import (
     AHEAD_S,
     CLOCK_WINDOW_S,
     MAX_BUCKETS,
+    MAX_PROPERTIES_BYTES,
     SILENT_S,
+    UNREAD_PROPERTIES,
     Beat,
     Stamp,
     StationClock,
@@ -713,3 +715,32 @@ def test_a_stamp_named_in_other_letters_refuses_a_move_and_says_how_to_name_it(
     assert refusal[0] == "refused", refusal
     assert "is no stamp: the names are 'sent' and 'expiry', in small letters" in refusal[1]
     assert stop[0] == "submit" and isinstance(stop[1], Stop)
+
+
+@pytest.mark.parametrize(
+    "pairs",
+    [
+        [(UNREAD_PROPERTIES, "100013")],
+        [("sent", str(NOW_UNIX)), ("expiry", "5"), (UNREAD_PROPERTIES, "100013")],
+    ],
+)
+def test_properties_the_bridge_did_not_read_refuse_a_move_and_leave_a_stop_as_ever(
+    pairs: list[tuple[str, str]],
+) -> None:
+    """heartbeat.py rule 9: a message whose properties were too long to read (paho_client.py
+    rule 10) comes with their size alone; a move so sent is refused saying why, a STOP and a
+    lock ON are carried out."""
+    stamp = Stamp.of_properties(pairs)
+    assert stamp is not None
+    svc, _, rots = service({"tower": "rotorez"})
+    svc.on_message("rotor/target", b"200", False, None, stamp=stamp)
+    svc.on_message("rotor/stop", b"stop", False, None, stamp=stamp)
+    svc.on_message("rotor/lock", b"ON", False, None, stamp=stamp)
+    refusal, stop, lock = rots["tower"].calls
+    assert refusal[0] == "refused", refusal
+    assert refusal[1] == (
+        f"its MQTT 5 properties take 100013 bytes, more than the {MAX_PROPERTIES_BYTES} the "
+        "bridge reads (a stamp and an operator's name take some hundred): not carried out"
+    )
+    assert stop[0] == "submit" and isinstance(stop[1], Stop)
+    assert lock[:2] == ("lock", True), lock

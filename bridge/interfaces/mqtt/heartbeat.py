@@ -74,6 +74,15 @@ Rules:
    and a move its operator sends right after a STOP is not taken for older than the STOP
    however long the link's trip. A client that stamps its moves by its own clock should
    stamp its stops too.
+9. A message's MQTT 5 properties are read only up to MAX_PROPERTIES_BYTES (a stamp and an
+   operator's name take some hundred bytes): paho reads user properties in time that grows
+   with the square of their number, and one PUBLISH of 120,000 short ones (3.7 MB, under the
+   4 MiB the bridge takes: connection.py rule 18) held the main connection's thread for four
+   minutes, until the broker gave the connection up and sent the message again (an attack
+   pass). A longer section is not read (paho_client.py rule 10): the message comes with the
+   user property UNREAD_PROPERTIES alone, naming the section's size, and a stamp that says
+   so (``Stamp.unread``): a move so sent is refused, saying why; a stop and a lock ON are
+   carried out as any unreadable stamp's (rule 5).
 """
 
 from __future__ import annotations
@@ -95,6 +104,8 @@ SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
 STATION = "station"  # rule 7: the user property naming the station's process
 NAMELESS = ""  # rule 7: the name a stamp gives a process whose beats named none
 MAX_EXPIRY_S = 3600.0
+MAX_PROPERTIES_BYTES = 4096  # rule 9: a PUBLISH's properties read, at most
+UNREAD_PROPERTIES = "rotor-bridge unread properties"  # rule 9: in their place, their size
 
 
 def beat_payload(now_unix: float) -> str:
@@ -258,6 +269,7 @@ class Stamp:
     expiry: str | None
     station: str | None = None
     miscased: str | None = None  # rule 5: a stamp's name in other letters (``SENT``), as it came
+    unread: str | None = None  # rule 9: the size of the properties not read, as paho_client said
 
     @classmethod
     def of(cls, sent_unix: float, expiry_s: float, station: str | None = None) -> Stamp:
@@ -270,18 +282,21 @@ class Stamp:
     @classmethod
     def of_properties(cls, pairs: list[tuple[str, str]]) -> Stamp | None:
         """The stamp among a message's user properties; None without ``sent`` and ``expiry``
-        (an ``expiry`` alone is a stamp whose send time cannot be read: rule 5)."""
+        (an ``expiry`` alone is a stamp whose send time cannot be read: rule 5) and with its
+        properties read (rule 9)."""
         found: dict[str, str] = {}
-        miscased = None
+        miscased = unread = None
         for key, value in pairs:
             key, value = str(key), str(value)
             if key in (SENT, EXPIRY, STATION):  # one given twice, two ways: read as neither
                 found[key] = value if found.get(key, value) == value else "\0twice"
             elif key.casefold() in (SENT, EXPIRY) and miscased is None:  # rule 5
                 miscased = key
-        if SENT not in found and EXPIRY not in found and miscased is None:
+            elif key == UNREAD_PROPERTIES:  # rule 9
+                unread = value
+        if SENT not in found and EXPIRY not in found and miscased is None and unread is None:
             return None
-        return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION), miscased)
+        return cls(found.get(SENT, ""), found.get(EXPIRY), found.get(STATION), miscased, unread)
 
     def sent_unix(self, station: str | None = None) -> float | None:
         """Rule 8: the send time, if it can be read and was reckoned against this station
@@ -296,6 +311,12 @@ class Stamp:
     def judge(self, now_unix: float, station: str | None = None) -> str | None:
         """Rules 5 and 7: why the command is refused, or None (fresh); ``station``: the
         judging process's identity (None: no stamp's name is asked)."""
+        if self.unread is not None:
+            return (
+                f"its MQTT 5 properties take {self.unread[:12]} bytes, more than the "
+                f"{MAX_PROPERTIES_BYTES} the bridge reads (a stamp and an operator's name take "
+                "some hundred): not carried out"
+            )
         if self._another(station):
             return (
                 "stamped against this station's bridge before it restarted: not carried out; "

@@ -65,6 +65,12 @@ Rules:
    send each cost the network thread about as much again). Only our own connections' QoS 0
    bytes go this way (delivery.py's: the main connection's retained statuses); paho's own
    debug log (``enable_logger``, which the bridge does not turn on) does not show them.
+10. An MQTT 5 PUBLISH whose properties take more than MAX_PROPERTIES_BYTES reaches paho with
+   them replaced by one user property, UNREAD_PROPERTIES with their size (heartbeat.py rule
+   9, where the attack that found it is told): paho reads user properties in time that grows
+   with the square of their number, on the connection's only thread, and a stop carrier reads
+   every message on a stop topic. Topic, payload, QoS, retain and message id are as they
+   came; a section whose size cannot be read is left to paho, which refuses it.
 """
 
 from __future__ import annotations
@@ -85,6 +91,7 @@ from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
 from bridge.core import handoff
 from bridge.core.polling import POLLERR, POLLHUP, POLLIN, POLLNVAL, POLLOUT, POLLPRI, new_poller
+from bridge.interfaces.mqtt.heartbeat import MAX_PROPERTIES_BYTES, UNREAD_PROPERTIES
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -184,6 +191,32 @@ class _LeanInfo:
 _LEAN_INFO = cast(paho.MQTTMessageInfo, _LeanInfo())
 
 
+def unread_properties(header: int, packet: bytes | bytearray) -> bytearray | None:
+    """Rule 10: a PUBLISH's variable header and payload (``packet``, after the fixed header whose
+    first byte is ``header``) with properties longer than MAX_PROPERTIES_BYTES replaced by
+    UNREAD_PROPERTIES; None to leave it as it is (short enough, or malformed: paho says so)."""
+    at = 2 + int.from_bytes(packet[:2], "big") + (2 if header & 0x06 else 0)  # topic, id
+    size = shift = 0
+    for i in range(at, min(at + 4, len(packet))):  # the section's length: a variable integer
+        size |= (packet[i] & 0x7F) << shift
+        shift += 7
+        if not packet[i] & 0x80:
+            break
+    else:
+        return None
+    start = i + 1
+    if size <= MAX_PROPERTIES_BYTES or start + size > len(packet):
+        return None
+    name, value = UNREAD_PROPERTIES.encode(), str(size).encode()
+    prop = b"\x26%b%b%b%b" % (
+        len(name).to_bytes(2, "big"),
+        name,
+        len(value).to_bytes(2, "big"),
+        value,
+    )
+    return bytearray(packet[:at]) + bytes([len(prop)]) + prop + packet[start + size :]
+
+
 class Client(paho.Client):
     """paho's client with connection.py rule 9 (every read goes through loop_read), rule 2
     (``tick``), rule 6 (``loop_start``: the network thread) and rule 9 (``publish_qos0``)."""
@@ -221,6 +254,16 @@ class Client(paho.Client):
         packet += body  # cannot say: "Packet too large")
         packet += payload
         return self._packet_queue(paho.PUBLISH, packet, 0, 0, _LEAN_INFO)
+
+    def _handle_publish(self) -> MQTTErrorCode:
+        """Rule 10, then paho's own."""
+        if self._protocol == paho.MQTTv5:
+            incoming = self._in_packet
+            if len(incoming["packet"]) > MAX_PROPERTIES_BYTES:
+                cut = unread_properties(incoming["command"], incoming["packet"])
+                if cut is not None:
+                    incoming["packet"] = cut
+        return super()._handle_publish()
 
     def _topic_part(self, topic: str) -> bytes:
         """Rule 9: a PUBLISH's topic and (MQTT 5) its empty properties, checked as paho's
