@@ -246,6 +246,10 @@ def test_stale_configs_of_ours_are_cleared_and_others_left_alone() -> None:
         assert pub.on_message(topic, ours.encode(), True) is True
     assert pub.on_message(under_ours, theirs.encode(), True) is True
     assert pub.on_message(under_ours, b"not json", True) is True
+    # JSON nested past the parser's depth, retained by anyone: no config of ours, and no
+    # RecursionError's traceback in the log at every connect
+    assert pub.on_message(under_ours, b"[" * 100_000, True) is True
+    assert pub.on_message(current, b'{"a":' * 100_000, True) is True
     # the bridge device's own config follows the bridge's state by its state topic
     old_bridge = "homeassistant/binary_sensor/rotorbridge_rotor/old/config"
     assert pub.on_message(old_bridge, b'{"state_topic": "rotor/bridge/state"}', True) is True

@@ -275,7 +275,7 @@ class DiscoveryPublisher:
         took its entities out of Home Assistant, again each time it published them."""
         try:
             config = json.loads(payload)
-        except (ValueError, UnicodeDecodeError):
+        except (ValueError, RecursionError):  # (junk, or nested past the parser's depth)
             return False
         if not isinstance(config, dict):
             return False
