@@ -16,7 +16,10 @@ lines). One sample is target_flood's: the rotor turned from its front panel, R/s
 Phases: no load; 16 TCP clients in a process of their own, each streaming bytes with no line
 end into the GS-232 port as fast as the port takes them (a client the bridge closes connects
 again at once); the node sending ``DX de`` lines of spaces with no time (511 bytes) as fast as
-the bridge reads them; the node sending ordinary spots as fast as the bridge reads them.
+the bridge reads them; the node sending ordinary spots as fast as the bridge reads them; a
+client of MQTT 5 publishing to ``R/lock``, once a second, a word that is no lock word carrying
+120,000 user properties (3.7 MB: paho's reading of them held a connection for minutes, and
+``R/lock`` is read by the connections that carry stops; interfaces/mqtt/paho_client.py rule 10).
 """
 
 from __future__ import annotations
@@ -39,10 +42,12 @@ from benchmarks.rig import open_line
 from benchmarks.target_flood import BRIDGE, EMU, one_stop
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support.mosquitto import free_port
+from tests.support.mqtt import mqtt5_publish, raw_mqtt5
 
 HOSTILE = b"DX de K1ABC: 14000 DL1ABC " + b" " * 480 + b"x\r\n"
 SPOT = b"DX de EA5WU:     14025.0  JA1ABC       cq up 2                        1829Z\r\n"
 CLIENTS = 16
+CROWD = 120_000  # user properties in one message of the crowded phase
 
 
 # -- the loads (processes of their own) -----------------------------------------------------------
@@ -64,6 +69,17 @@ def tcp_flood_main(port: int) -> int:
     print("started", flush=True)
     sys.stdin.readline()
     return 0
+
+
+def crowd_main(port: int, topic: str) -> int:
+    """An MQTT 5 client publishing ``topic`` a junk word with CROWD user properties, once a
+    second (a packet made once, sent raw: paho's own packing of them takes minutes)."""
+    packet = mqtt5_publish(topic, [(f"k{i}", "v" * 20) for i in range(CROWD)], b"junk")
+    with raw_mqtt5(port, "crowd") as send:
+        print("started", flush=True)
+        while True:
+            send(packet)
+            time.sleep(1.0)
 
 
 def node_main(port: int, mode_file: str) -> int:
@@ -147,6 +163,10 @@ def measure(scope: Scope, n: int) -> dict[str, Any]:
         time.sleep(2.0)
         phase(f"DX node: {load} lines")
     mode.write_text("quiet")
+    crowd = _spawn(scope, ["--crowd", str(broker_port), "rotor/lock"], "crowd.log")
+    time.sleep(2.0)
+    phase("MQTT 5: R/lock, 120,000 user properties/s")
+    crowd.kill()
     bridge.check()
     return results
 
@@ -156,9 +176,12 @@ def main() -> int:
     parser.add_argument("--stops", type=int, default=30)
     parser.add_argument("--tcp-flood", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--node", nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument("--crowd", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.tcp_flood is not None:
         return tcp_flood_main(args.tcp_flood)
+    if args.crowd is not None:
+        return crowd_main(int(args.crowd[0]), args.crowd[1])
     if args.node is not None:
         return node_main(int(args.node[0]), args.node[1])
     with Scope(Path(tempfile.mkdtemp(prefix="stop-beside-floods-"))) as scope:
