@@ -49,6 +49,8 @@ import struct
 import threading
 import time
 
+from tests.support.mqtt import variable_length
+
 SO_TIMESTAMPNS = 35  # = SCM_TIMESTAMPNS, Linux (asm-generic/socket.h); Python names neither
 _TIMESPEC = struct.Struct("@qq")  # the old struct timespec: 64-bit seconds and nanoseconds
 _CMSG_SPACE = socket.CMSG_SPACE(_TIMESPEC.size)
@@ -58,16 +60,6 @@ class ProbeError(RuntimeError):
     pass
 
 
-def _length(n: int) -> bytes:
-    """MQTT's remaining length: 7 bits a byte, low first."""
-    out = bytearray()
-    while True:
-        n, digit = n >> 7, n & 0x7F
-        out.append(digit | (0x80 if n else 0))
-        if not n:
-            return bytes(out)
-
-
 def _text(s: str) -> bytes:
     data = s.encode()
     return struct.pack("!H", len(data)) + data
@@ -75,18 +67,18 @@ def _text(s: str) -> bytes:
 
 def connect_packet(client_id: str) -> bytes:
     body = _text("MQTT") + bytes([4, 0x02]) + struct.pack("!H", 0) + _text(client_id)
-    return b"\x10" + _length(len(body)) + body
+    return b"\x10" + variable_length(len(body)) + body
 
 
 def subscribe_packet(packet_id: int, filters: list[str]) -> bytes:
     body = struct.pack("!H", packet_id) + b"".join(_text(f) + b"\x00" for f in filters)
-    return b"\x82" + _length(len(body)) + body
+    return b"\x82" + variable_length(len(body)) + body
 
 
 def publish_packet(topic: str, payload: bytes) -> bytes:
     """A QoS 0 PUBLISH (rule 6's own copy)."""
     body = _text(topic) + payload
-    return b"\x30" + _length(len(body)) + body
+    return b"\x30" + variable_length(len(body)) + body
 
 
 def clock_offset_ns() -> tuple[int, int]:

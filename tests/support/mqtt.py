@@ -251,8 +251,9 @@ def _string(text: str) -> bytes:
     return len(data).to_bytes(2, "big") + data
 
 
-def _length(n: int) -> bytes:
-    """MQTT's variable byte integer."""
+def variable_length(n: int) -> bytes:
+    """MQTT's variable byte integer (a remaining length, a property section's): 7 bits a byte,
+    low first."""
     out = bytearray()
     while True:
         n, byte = n >> 7, n & 0x7F
@@ -269,7 +270,7 @@ def mqtt5_publish(
     for each one); ``more``: other properties, encoded, ahead of them; message id 7 at QoS 1."""
     props = more + b"".join(b"\x26" + _string(k) + _string(v) for k, v in pairs)
     mid = b"\x00\x07" if qos else b""
-    return 0x30 | qos << 1, _string(topic) + mid + _length(len(props)) + props + payload
+    return 0x30 | qos << 1, _string(topic) + mid + variable_length(len(props)) + props + payload
 
 
 def mqtt5_string(text: str) -> bytes:
@@ -284,11 +285,11 @@ def raw_mqtt5(port: int, client_id: str) -> Any:
     DISCONNECT."""
     with socket.create_connection(("127.0.0.1", port)) as raw:
         connect = b"\x00\x04MQTT\x05\x02\x00\x0a\x00" + _string(client_id)
-        raw.sendall(b"\x10" + _length(len(connect)) + connect)
+        raw.sendall(b"\x10" + variable_length(len(connect)) + connect)
         assert raw.recv(64)[0] == 0x20, "no CONNACK"
 
         def send(*packets: tuple[int, bytes]) -> None:
-            raw.sendall(b"".join(bytes([h]) + _length(len(p)) + p for h, p in packets))
+            raw.sendall(b"".join(bytes([h]) + variable_length(len(p)) + p for h, p in packets))
 
         yield send
         raw.sendall(b"\xe0\x00")
