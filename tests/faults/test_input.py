@@ -327,6 +327,7 @@ def test_a_command_with_properties_too_long_to_read_is_refused_at_once_and_a_sto
                 mqtt5_publish(bench.rig.topic(rid, "stop"), crowd, b""),
             )
             wait_until(lambda: not bench.rig.emus[rid].state().is_moving, 10, "stopped")
+        assert abs(bench.rig.emus[rid].state().az_deg - far) > 20  # stopped, not arrived
         errors = bench.errors_after(rid)
         assert [e["message"] for e in errors if e["kind"] == "refused"] == [
             "its MQTT 5 properties take 300000 bytes, more than the 4096 the bridge reads (a "
