@@ -1563,6 +1563,8 @@ class Controller:
             return  # (the step of nearly every reading: the line not looked at)
         free = link.free()
         line_free = free and link.slew is None and not link.stop_due
+        if link.spec.refusal_bytes and not link.quiet:  # link.py rule 4: its refusal, if any,
+            line_free = free = False  # within a known time after it
         taken = self.options.take(idle, not target_waits and free, now, line_free=line_free)
         for name, value in taken:
             setting = self.cfg.spec.setting(name)
@@ -1574,7 +1576,7 @@ class Controller:
                 log.warning("%s: option %r not supported; skipped", self.name, name)
                 continue
             log.info("%s: setting %s sent (%r)", self.name, name, frame)
-            link.write(frame, now)
+            link.write_setting(frame, now)
             self.target_last = False  # a refusal now may be the setting's
         if taken:
             self._retune()
@@ -1823,6 +1825,8 @@ class Controller:
                     latest = t
             if link.slew is not None:  # refresh the estimate
                 latest = min(latest, now + self.cfg.moving_poll_interval_s)
+            if now < link.setting_until < latest:  # link.py rule 4: a target may wait for it
+                latest = link.setting_until
         m, cfg = self.motion, self.cfg.motion
         repeat = self.stops.repeat_at(m)  # stops.py rule 1: a stop repeat owed (line_work's)
         if repeat is not None and now < repeat < latest and link is not None:

@@ -31,6 +31,12 @@ Rules:
    the target and the refusal at the line rate, a byte time to turn round, and how late its
    replies are, rule 7): a refusal then answers the target, not a poll written after it
    (motion.py rule 8 gives a refusal to a target only when nothing was written after it).
+   Likewise neither a poll nor a target is written before the refusal of the setting written
+   last can have come (``write_setting``, ``setting_until``; session.py asks for the target),
+   and such a setting is written only on a quiet line (``quiet``: no reply owed, nothing
+   waiting to go), so that its refusal comes within that time: a GS-232's ``?>`` to a speed
+   written in the same step as a new target was taken for the target's, and the rotor,
+   turning to the one before, was stopped and the new target dropped (a cold review).
 5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
@@ -200,6 +206,7 @@ class Link:
         self._reply_deadline: float | None = None
         self._next_poll = now
         self._refusal_until = -math.inf  # rule 4: a target's refusal can come until then
+        self.setting_until = -math.inf  # rule 4: a setting's refusal can come until then
         self._last_reply_t: float | None = None
         self._heard_t = -math.inf  # ``heard``: the last reply whose reading was doubted
         self._stop_due = False
@@ -293,6 +300,19 @@ class Link:
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
             self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
+
+    @property
+    def quiet(self) -> bool:
+        """Rule 4: no reply owed and nothing waiting to be written."""
+        return self._reply_deadline is None and not self._outbox
+
+    def write_setting(self, frame: bytes, now: float) -> None:
+        """A setting (a GS-232's speed): written now; rule 4: no target before its refusal can
+        have come."""
+        self.write(frame, now)
+        if self.spec.refusal_bytes:
+            sent = len(frame) + self.spec.refusal_bytes + 1
+            self.setting_until = now + sent * self._byte_s + self.late_s
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -649,7 +669,7 @@ class Link:
         """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
             return False
-        if now < self._refusal_until:  # rule 4
+        if now < self._refusal_until or now < self.setting_until:  # rule 4
             return False
         if now < self._late_hold_t() and not self._verdict:  # rule 12
             return False
@@ -744,7 +764,8 @@ class Link:
             deadline = self._reply_deadline
             if deadline is None:
                 hold = -math.inf if self._verdict else self._late_hold_t()  # rule 12
-                times.append(max(self._next_poll, self._paced_from(), self._refusal_until, hold))
+                refusal = max(self._refusal_until, self.setting_until)  # rule 4
+                times.append(max(self._next_poll, self._paced_from(), refusal, hold))
             elif self._held is None:  # rule 9: not overdue while its reading is held
                 due = self._overdue_t()  # (rule 12: an answer under way is let finish)
                 times.append(deadline if due is None else due)

@@ -1104,6 +1104,8 @@ class RotatorSession:
             if link.free():  # the target follows an answer, and the settings it owes first
                 link.poll_now(now)
             return
+        if now < link.setting_until:  # link.py rule 4: a refusal now is the setting's
+            return
         # (the controller's configuration: a speed setting's settle time, controller.py rule 7,
         # the one its stop's repeat, stops.py rule 2, counts with too: a cold review)
         todo = decide(ctl.cfg, link, ctl.motion, self.targets, self.fence.held, now)

@@ -431,3 +431,36 @@ def test_a_poll_answered_after_its_reply_time_around_a_stop_is_told_nowhere(
     v.target(90, 0)
     v.run_until(settled_at(90, None if model.endswith("-az") else 0), 60, "at 90")
     assert v.errors() == [] and all(s.available for s in v.published(since=t))
+
+
+def test_a_setting_refused_with_a_new_target_mid_turn_neither_stops_nor_drops_the_target(
+    rig: Rig,
+) -> None:
+    """BUG (reported, a cold review): a speed set together with a new target goes first, and
+    the target went in the same step, so it was the last command written when the box's ``?>``
+    to the setting came back: taken as the target's refusal, the rotor was stopped mid-turn
+    and the new target dropped with a ``refused`` error. The target now waits until the
+    setting's refusal can have come (link.py rule 4)."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    v.garble_writes(b"X4\r", b"X9\r")  # the box gets a speed it refuses: ?>
+    v.target(300, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 60, 60, "turning")
+    t = v.now
+    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.run_until(lambda h: h.frames(Outcome.REFUSED, since=t), 2, "the setting refused")
+    v.run_for(30)
+    assert v.errors("refused", since=t) == []
+    assert b"S\r" not in v.sent(since=t)
+    v.run_until(settled_at(200, 0), 120, "at 200 all the same")
+    assert [f.data for f in v.frames(since=t)].count(b"W200 000") == 1
+
+
+def test_a_setting_refused_with_a_target_at_rest_sends_the_target_once(rig: Rig) -> None:
+    """BUG (reported, a cold review): at rest, the setting's ``?>`` was taken as the target's
+    refusal ("the target did not move the rotor, or was refused": sent once more)."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    v.garble_writes(b"X4\r", b"X9\r")
+    t = v.now
+    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.run_until(settled_at(200, 0), 120, "at 200")
+    assert [f.data for f in v.frames(since=t)].count(b"W200 000") == 1
