@@ -19,13 +19,20 @@ from typing import Any
 import pytest
 from paho.mqtt._packet import decode_publish
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode, MQTTProtocolVersion
+from paho.mqtt.exception import MalformedPacket
 
 from bridge.core import handoff
 from bridge.interfaces.mqtt.heartbeat import MAX_PROPERTIES_BYTES, UNREAD_PROPERTIES
 from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client, unread_properties
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
-from tests.support.mqtt import mqtt5_publish, mqtt5_string, raw_mqtt5, retained_snapshot
+from tests.support.mqtt import (
+    mqtt5_publish,
+    mqtt5_string,
+    raw_mqtt5,
+    retained_snapshot,
+    variable_length,
+)
 from tests.support.waiting import slow
 
 
@@ -632,7 +639,6 @@ def test_properties_up_to_the_bound_are_read_as_paho_reads_them() -> None:
 
 def test_a_section_whose_length_cannot_be_read_is_left_to_paho() -> None:
     header, packet = mqtt5_publish("rotor/target", [("", "")] * 2000, b"1")
-    assert unread_properties(header, packet[:-100]) is None  # longer than the packet
     head = packet[: 2 + len("rotor/target")]
     assert unread_properties(header, head + b"\xff\xff\xff\xff\x7f") is None  # 5 bytes long
     assert unread_properties(header, head) is None  # no length at all
@@ -669,3 +675,17 @@ def test_a_message_with_too_many_user_properties_arrives_at_once_as_their_size(
         ("rotor/target", b"90", [(UNREAD_PROPERTIES, str(size))]),
         ("rotor/stop", b"", None),
     ]
+
+
+def test_a_section_longer_than_its_packet_is_refused_without_reading_its_properties() -> None:
+    """BUG (reported, a cold review): a section whose declared length runs one byte past the
+    packet was left to paho, which read every user property in it, in square time, before it
+    found the packet short: 4 s for 40,000."""
+    header, packet = mqtt5_publish("rotor/stop", [("k", "v" * 20)] * 40_000, b"")
+    at = 2 + len("rotor/stop")
+    size = len(packet) - at - 3  # the section's length takes 3 bytes here
+    bad = packet[:at] + variable_length(size + 1) + packet[at + 3 :]
+    cut = unread_properties(header, bad)
+    assert cut is not None and len(cut) < at + 8  # no property of it is left for paho to read
+    with pytest.raises(MalformedPacket):
+        _decoded(header, bytes(cut))

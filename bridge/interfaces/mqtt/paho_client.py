@@ -70,7 +70,9 @@ Rules:
    9, where the attack that found it is told): paho reads user properties in time that grows
    with the square of their number, on the connection's only thread, and a stop carrier reads
    every message on a stop topic. Topic, payload, QoS, retain and message id are as they
-   came; a section whose size cannot be read is left to paho, which refuses it.
+   came; a section whose size cannot be read is left to paho, which refuses it, and one that
+   runs past its packet is made one paho refuses at its first property (a cold review: paho
+   read all of it first).
 """
 
 from __future__ import annotations
@@ -191,6 +193,10 @@ class _LeanInfo:
 _LEAN_INFO = cast(paho.MQTTMessageInfo, _LeanInfo())
 
 
+#: rule 10: a property section paho refuses at its first property (a string longer than the section)
+_MALFORMED = b"\x03\x26\xff\xff"
+
+
 def unread_properties(header: int, packet: bytes | bytearray) -> bytearray | None:
     """Rule 10: a PUBLISH's variable header and payload (``packet``, after the fixed header whose
     first byte is ``header``) with properties longer than MAX_PROPERTIES_BYTES replaced by
@@ -205,8 +211,10 @@ def unread_properties(header: int, packet: bytes | bytearray) -> bytearray | Non
     else:
         return None
     start = i + 1
-    if size <= MAX_PROPERTIES_BYTES or start + size > len(packet):
+    if size <= MAX_PROPERTIES_BYTES:
         return None
+    if start + size > len(packet):  # longer than its packet: refused by paho at once (its own
+        return bytearray(packet[:at]) + _MALFORMED  # reading would take the square time first)
     name, value = UNREAD_PROPERTIES.encode(), str(size).encode()
     prop = b"\x26%b%b%b%b" % (
         len(name).to_bytes(2, "big"),
