@@ -200,7 +200,8 @@ _MALFORMED = b"\x03\x26\xff\xff"
 def unread_properties(header: int, packet: bytes | bytearray) -> bytearray | None:
     """Rule 10: a PUBLISH's variable header and payload (``packet``, after the fixed header whose
     first byte is ``header``) with properties longer than MAX_PROPERTIES_BYTES replaced by
-    UNREAD_PROPERTIES; None to leave it as it is (short enough, or malformed: paho says so)."""
+    UNREAD_PROPERTIES, or, when the section runs past the packet, by one paho refuses at once;
+    None to leave it as it is (short enough, or a length that cannot be read: paho says so)."""
     at = 2 + int.from_bytes(packet[:2], "big") + (2 if header & 0x06 else 0)  # topic, id
     size = shift = 0
     for i in range(at, min(at + 4, len(packet))):  # the section's length: a variable integer
