@@ -246,7 +246,8 @@ def retained_snapshot(port: int, topic_filter: str) -> dict[str, bytes]:
 
 
 # -- MQTT 5 PUBLISH packets made here (paho's packing copies its buffer for every property) ------
-def _string(text: str) -> bytes:
+def mqtt5_string(text: str) -> bytes:
+    """A UTF-8 string as MQTT encodes it: its length in two bytes, then the bytes."""
     data = text.encode()
     return len(data).to_bytes(2, "big") + data
 
@@ -268,14 +269,11 @@ def mqtt5_publish(
     """An MQTT 5 PUBLISH's first byte and what follows its remaining length, its user properties
     ``pairs`` (120,000 of them take paho's ``publish`` minutes: its packing copies the buffer
     for each one); ``more``: other properties, encoded, ahead of them; message id 7 at QoS 1."""
-    props = more + b"".join(b"\x26" + _string(k) + _string(v) for k, v in pairs)
+    props = more + b"".join(b"\x26" + mqtt5_string(k) + mqtt5_string(v) for k, v in pairs)
     mid = b"\x00\x07" if qos else b""
-    return 0x30 | qos << 1, _string(topic) + mid + variable_length(len(props)) + props + payload
-
-
-def mqtt5_string(text: str) -> bytes:
-    """A UTF-8 string as MQTT encodes it: its length in two bytes, then the bytes."""
-    return _string(text)
+    return 0x30 | qos << 1, mqtt5_string(topic) + mid + variable_length(
+        len(props)
+    ) + props + payload
 
 
 @contextlib.contextmanager
@@ -284,7 +282,7 @@ def raw_mqtt5(port: int, client_id: str) -> Any:
     login) and had its CONNACK; ``send`` it packets of ``mqtt5_publish`` (QoS 0); ended with a
     DISCONNECT."""
     with socket.create_connection(("127.0.0.1", port)) as raw:
-        connect = b"\x00\x04MQTT\x05\x02\x00\x0a\x00" + _string(client_id)
+        connect = b"\x00\x04MQTT\x05\x02\x00\x0a\x00" + mqtt5_string(client_id)
         raw.sendall(b"\x10" + variable_length(len(connect)) + connect)
         assert raw.recv(64)[0] == 0x20, "no CONNACK"
 
