@@ -138,7 +138,15 @@ Rules:
    a STOP, its handshake answered while it waited, was refused as sent before the STOP). An
    attack pass: one client sent 24 KB of targets in one burst; an MQTT STOP stopped the rotor
    and the targets still in the kernel turned it on 5 s later, and after a lock ON and OFF one
-   went out 0.08 s after the OFF.
+   went out 0.08 s after the OFF. The rotator also tells the server right before it counts
+   each halt (``halt_watchers``, core/haltwatch.py), and every connection is looked at then,
+   at the count before it: a client's thread that sleeps over its budget (rule 5) and a
+   connection waiting its turn in the accept loop make no look of their own meanwhile, and
+   what they had sent by the halt was taken as sent after it (a second attack pass: a
+   rotctld ``P`` sent 20 ms before an MQTT STOP, from a client paused over its budget or one
+   waiting behind a flood of connections, turned the rotor 0.2 s after the stop). A look and
+   the thread's read are one step under the connection's lock (a read waits for the bytes
+   with a peek, then takes them at once), so no look counts bytes as both read and unread.
 """
 
 from __future__ import annotations
@@ -161,6 +169,7 @@ from collections.abc import Callable, Sequence
 from typing import Protocol, cast
 
 from bridge.core.errors import RefusalCode, Refused
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import Command
 from bridge.core.ratelimit import Budget, TokenBucket
 from bridge.front import FrontRotator, HaltCounted
@@ -398,6 +407,37 @@ def halt_count(rotator: FrontRotator) -> Callable[[], int] | None:
     return lambda: cast(HaltCounted, rotator).halts
 
 
+def halt_watchers(rotator: FrontRotator) -> HaltWatchers | None:
+    """Rule 9: those ``rotator`` tells right before it counts a halt (core/haltwatch.py), if it
+    tells any."""
+    watchers = getattr(rotator, "halt_watchers", None)
+    return watchers if isinstance(watchers, HaltWatchers) else None
+
+
+class _Looks:
+    """Rule 9: the looks at what one connection has sent, oldest first: (bytes sent, the halt
+    count, the connection's own halts) at each look; under ``lock``, as the connection's thread
+    reads and as a halt is about to be counted (``LineServer._halt_coming``)."""
+
+    __slots__ = ("fence", "lock", "read", "seen")
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)
+        self.read = 0  # the bytes its thread has read (a greeting's not counted: rule 8)
+        self.fence: Fence | None = None  # its session's, once its thread runs
+
+    def look(self, conn: socket.socket, count: int) -> None:
+        """One look (under ``lock``), at ``count`` read first: what ``conn`` has sent so far."""
+        own = self.fence.own if self.fence is not None else 0
+        sent = _sent_so_far(conn, self.read)
+        seen = self.seen
+        if seen and seen[-1][1:] == (count, own):  # (no halt since: one look, kept as far
+            seen[-1] = sent, count, own  # as it reaches)
+        else:
+            seen.append((sent, count, own))
+
+
 class Fence:
     """Rule 9: a connection's moves overtaken by a halt counted after their bytes came. The
     server tells it, before each read is fed to the session, the halt count of the first look
@@ -480,6 +520,7 @@ class LineServer:
         singles: bytes = b"",
         greets: Callable[[bytes], bytes | None] | None = None,
         halt_count: Callable[[], int] | None = None,
+        halt_watchers: HaltWatchers | None = None,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
         sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
@@ -490,7 +531,8 @@ class LineServer:
         ``greets``: the answer to a waiting connection's first bytes when they are only the
         question a client asks before its command (rule 8), else None; ``halt_count``: the
         rotator's count of every front end's halts (rule 9, ``halt_count()``: its sessions'
-        ``fence`` is told when their bytes came).
+        ``fence`` is told when their bytes came); ``halt_watchers``: the rotator's, told
+        before each halt is counted (rule 9: every connection is looked at then).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
@@ -503,10 +545,11 @@ class LineServer:
         self._greeted: weakref.WeakSet[socket.socket] = weakref.WeakSet()  # rule 8: once each
         self._swept_t = -math.inf  # rule 8: the last look for waiting connections whose peer left
         self._halt_count = halt_count  # rule 9
-        # rule 9: the first look at a connection, at its accept: (halt count, bytes sent)
-        self._accepted: weakref.WeakKeyDictionary[socket.socket, tuple[int, int]] = (
-            weakref.WeakKeyDictionary()
-        )
+        # rule 9: every connection's looks at what it has sent, from its accept
+        self._looks: weakref.WeakKeyDictionary[socket.socket, _Looks] = weakref.WeakKeyDictionary()
+        self._looks_lock = threading.Lock()
+        self._halt_watchers = halt_watchers if halt_count is not None else None
+        self._watcher = self._halt_coming  # (one bound method: removed as it was added)
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._http_log = RareLog()
         self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
@@ -605,6 +648,8 @@ class LineServer:
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = False
         self._ended.clear()
+        if self._halt_watchers is not None:  # rule 9
+            self._halt_watchers.add(self._watcher)
         self._accept_thread = threading.Thread(
             target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
@@ -622,6 +667,8 @@ class LineServer:
         with self._lock:
             self._stopping = True
             clients = list(self._clients.items())
+        if self._halt_watchers is not None:
+            self._halt_watchers.remove(self._watcher)
         self._ended.set()
         os.write(self._wake_w, b"x")
         self._accept_thread.join(timeout_s)
@@ -741,11 +788,17 @@ class LineServer:
             return False
         self._greeted.add(conn)
         self._looked.pop(conn, None)
-        first = self._accepted.get(conn)
-        if first is not None:  # rule 9: its thread counts from the bytes after the question
-            self._accepted[conn] = first[0], max(0, first[1] - len(data))
         try:
-            conn.recv(len(data), socket.MSG_DONTWAIT)  # (the bytes peeked, all there)
+            looks = self._looks.get(conn)
+            if looks is None:
+                conn.recv(len(data), socket.MSG_DONTWAIT)  # (the bytes peeked, all there)
+            else:  # rule 9: its thread counts from the bytes after the question
+                with looks.lock:  # (a look in between would count the question's bytes)
+                    conn.recv(len(data), socket.MSG_DONTWAIT)
+                    looks.seen = deque(
+                        ((max(0, sent - len(data)), count, own) for sent, count, own in looks.seen),
+                        maxlen=SEEN_KEPT,
+                    )
             if conn.send(answer, socket.MSG_DONTWAIT) != len(answer):
                 return False  # (a fresh connection's buffer takes it whole: not, no answer)
         except OSError:
@@ -848,9 +901,12 @@ class LineServer:
         if not _alive(conn):  # its peer already left: no thread, no budget
             conn.close()
             return True
-        if self._halt_count is not None:  # rule 9: the count first, then what was sent
-            count = self._halt_count()
-            self._accepted[conn] = (count, _sent_so_far(conn, 0))
+        if self._halt_count is not None:  # rule 9: looked at before each halt from now on,
+            looks = _Looks()  # and now: the count first, then what was sent
+            with self._looks_lock:
+                self._looks[conn] = looks
+            with looks.lock:
+                looks.look(conn, self._halt_count())
         now = self._clock()
         key = _peer_key(peer[0])
         if self._stop_in(conn):
@@ -866,6 +922,20 @@ class LineServer:
         elif conn in waiting:
             self._greet(conn, sel)
         return True
+
+    def _halt_coming(self) -> None:
+        """Rule 9: a halt is about to be counted (core/haltwatch.py): every connection, a
+        waiting one's or a client's whose thread sleeps over its budget among them, is looked at
+        now, at the count before it, so that what each had sent by then is not taken as sent
+        after it, however late it is read."""
+        assert self._halt_count is not None
+        count = self._halt_count()
+        with self._looks_lock:
+            each = list(self._looks.items())
+        for conn, looks in each:
+            with looks.lock:
+                if conn.fileno() >= 0:
+                    looks.look(conn, count)
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
@@ -1005,10 +1075,13 @@ class LineServer:
         guard = HttpGuard(self._ends, self._singles)
         fence: Fence | None = getattr(session, "fence", None)  # rule 9
         counting = self._halt_count if fence is not None else None
-        seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)  # (sent, count, own)
-        first = self._accepted.pop(conn, None)
-        if first is not None and fence is not None:
-            seen.append((first[1], first[0], 0))
+        with self._looks_lock:
+            looks = self._looks.get(conn) if counting is not None else self._looks.pop(conn, None)
+        if looks is not None and fence is not None:
+            with looks.lock:
+                looks.fence = fence
+        else:
+            looks = None
         read = 0  # rule 9: the bytes read so far
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
@@ -1047,8 +1120,22 @@ class LineServer:
                     return
                 conn.settimeout(deadline - now)
                 try:
-                    data = conn.recv(self._read_bytes)
-                except TimeoutError:
+                    if looks is None:
+                        data = conn.recv(self._read_bytes)
+                    elif conn.recv(1, socket.MSG_PEEK):  # rule 9: read and looked at in one
+                        with looks.lock:  # go (a halt's look between the two miscounts)
+                            data = conn.recv(self._read_bytes, socket.MSG_DONTWAIT)
+                            read += len(data)
+                            looks.read = read
+                            assert counting is not None and fence is not None
+                            looks.look(conn, counting())  # the count first, then what was sent
+                            seen = looks.seen
+                            while seen[0][0] < read:  # (it counted bytes read before these)
+                                seen.popleft()
+                            fence.arrived = seen[0][1], seen[0][2]
+                    else:
+                        data = b""
+                except (TimeoutError, BlockingIOError):
                     continue
                 me.reading = True  # rule 3: its lines out of the kernel, not carried out yet
                 if self._clients.get(conn) is not me:  # rule 3: dropped to make room: what it
@@ -1056,17 +1143,8 @@ class LineServer:
                 if not data:
                     break
                 last_bytes, raw = self._clock(), len(data)
-                read += raw
-                if counting is not None and fence is not None:  # rule 9: the count first
-                    count = counting()
-                    sent = _sent_so_far(conn, read)
-                    if seen and seen[-1][1:] == (count, fence.own):  # (no halt since: one
-                        seen[-1] = sent, count, fence.own  # look, kept as far as it reaches)
-                    else:
-                        seen.append((sent, count, fence.own))
-                    while seen[0][0] < read:  # (it counted bytes read before these alone)
-                        seen.popleft()
-                    fence.arrived = seen[0][1], seen[0][2]
+                if looks is None:
+                    read += raw
                 data = guard.feed(data)
                 if guard.http:  # (rare: a flood of them is one line at most once per LOG_S)
                     self._http_log.warn(
@@ -1120,7 +1198,13 @@ class LineServer:
         finally:
             with self._lock:
                 self._clients.pop(conn, None)
-            conn.close()
+            with self._looks_lock:
+                self._looks.pop(conn, None)
+            if looks is not None:
+                with looks.lock:  # (no halt's look at a descriptor being closed)
+                    conn.close()
+            else:
+                conn.close()
             dropped = "" if session.idle else " (an unfinished command was dropped)"
             self._say("%s gone%s", who, dropped)
 

@@ -81,6 +81,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from bridge.core.errors import RefusalCode, Refused
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import (
     Command,
     GoToPreset,
@@ -229,6 +230,7 @@ class RemoteRotator:
         # of them how many each front end sent (rule 2b): counted together, under one lock
         self.last_halt_s = -math.inf
         self.halts = 0
+        self.halt_watchers = HaltWatchers()  # told before each halt is counted (halted)
         self._halts_from: dict[Source, int] = {}
         self._halts_lock = threading.Lock()
         self._clock = clock
@@ -434,6 +436,7 @@ class RemoteRotator:
         (interfaces/web/port.py rule 2), and ``halts`` counts it (rule 2a), as the front end's
         own count does (rule 2b), before it is published (a move asked before it is refused
         from then on, while it waits for its acknowledgement or is kept)."""
+        self.halt_watchers()  # (tcplines.py rule 9: before it is counted)
         with self._halts_lock:  # (two threads' halts: two numbers, and both counts agree)
             self.last_halt_s = self._clock()
             self.halts += 1

@@ -64,6 +64,7 @@ from typing import NoReturn, Protocol
 import serial
 
 from bridge.core.errors import RefusalCode, Refused
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import (
     COMMANDS,
     AuditEvent,
@@ -492,6 +493,12 @@ class Rotator:
         """The halt count now (mailbox.py rule 10): what a front end that submits a command a
         while after it was asked reads when it is asked, and hands to ``submit`` (``since``)."""
         return self._mailbox.epoch
+
+    @property
+    def halt_watchers(self) -> HaltWatchers:
+        """Told right before each halt is counted (mailbox.py rule 10; interfaces/tcplines.py
+        rule 9)."""
+        return self._mailbox.halt_watchers
 
     def halts_for(self, source: Source) -> int:
         """The count a command of ``source`` asked now hands to ``submit`` as ``since``: the

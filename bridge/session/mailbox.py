@@ -54,7 +54,10 @@ Rules:
     carries the count (``Batch.epoch``): the session's status after applying it shows every
     stop and lock ON up to it (session.py ``halts_applied``), so a judge that reads a larger
     count knows the status it sees predates a halt (a nudge is then from the bearing, not from
-    the target the stop dropped: runtime/rotator.py).
+    the target the stop dropped: runtime/rotator.py). Right before a stop or lock ON is
+    counted, ``halt_watchers`` are told (core/haltwatch.py), on the putting thread and outside
+    the lock: the TCP front ends look at what each connection has sent by then
+    (interfaces/tcplines.py rule 9).
 10a. A place in the order of commands (``ticket``): a front end that asks a motion command
     now and puts it a while later (the DX cluster's call, looked up on a thread of its own)
     takes a ticket when it is asked, and puts it with it; every motion command, stop or lock
@@ -117,6 +120,7 @@ import threading
 from dataclasses import dataclass, field
 from typing import Literal
 
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import (
     Control,
     FeatureCommand,
@@ -264,6 +268,7 @@ class Mailbox:
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
         self._lease = 0  # rule 14: changes of the control lease put so far
         self._control: Control | None = None  # rule 14: ... and the lease as the last one put
+        self.halt_watchers = HaltWatchers()  # rule 10: told before each halt is counted
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -329,6 +334,8 @@ class Mailbox:
         order of commands, taken when it was asked (rule 10a); ``lease``: the lease's
         generation it was judged at (rule 14). False: dropped (rules 10, 10a); LeaseChanged:
         refused (rule 14)."""
+        if isinstance(command, Stop):
+            self.halt_watchers()  # rule 10: before it is counted
         with self._lock:
             if isinstance(command, Stop):
                 self._halt_placed = self._placed(None)  # rule 10a
@@ -371,6 +378,8 @@ class Mailbox:
             raise LeaseChanged(held)
 
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
+        if locked:
+            self.halt_watchers()  # rule 10: before it is counted
         with self._lock:
             self._batch.lock = locked
             self._batch.lock_unknown = False  # (runtime/kept.py rule 10: a word says it)

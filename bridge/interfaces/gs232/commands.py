@@ -36,7 +36,14 @@ from bridge.interfaces.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.interfaces.tcplines import LINE_ENDS, Fence, LineServer, LineSession, halt_count
+from bridge.interfaces.tcplines import (
+    LINE_ENDS,
+    Fence,
+    LineServer,
+    LineSession,
+    halt_count,
+    halt_watchers,
+)
 from bridge.pointing import unfolded
 
 if TYPE_CHECKING:
@@ -441,6 +448,7 @@ class Emulation:
             halts=self.halts,
             singles=self.singles,
             halt_count=halt_count(rotator),
+            halt_watchers=halt_watchers(rotator),
         )
 
     def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:

@@ -9,7 +9,15 @@ from collections.abc import Callable
 from bridge.core.model import Origin, Source
 from bridge.interfaces.rotctld.commands import Rotator, RotctldCommands
 from bridge.interfaces.rotctld.parser import Quit, RequestParser, holds_stop
-from bridge.interfaces.tcplines import CLOSE, USEFUL_WITHIN_S, Close, Fence, LineServer, halt_count
+from bridge.interfaces.tcplines import (
+    CLOSE,
+    USEFUL_WITHIN_S,
+    Close,
+    Fence,
+    LineServer,
+    halt_count,
+    halt_watchers,
+)
 
 
 class RotctldSession:
@@ -80,5 +88,6 @@ class RotctldServer(LineServer):
             halts=holds_stop,
             greets=lambda data: _greeting(rotator, data),
             halt_count=halt_count(rotator),
+            halt_watchers=halt_watchers(rotator),
         )
         self.rotator = rotator
