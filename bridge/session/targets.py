@@ -63,12 +63,17 @@ Rules:
    ``el_min_deg``..``el_max_deg``, which judge the targets asked for: a dish resting at 0
    below a limit of 10 was lifted to 10 by a storm's park and by every bare azimuth (an
    N1MM turn), an axis nobody asked to turn.
+10. A target the rotor is already within tolerance of is said at INFO at most once per
+   WITHIN_LOG_S, the rest at DEBUG (an attack pass: 16 TCP clients and a UDP flood sending
+   the bearing the rotor was at wrote 650-800 lines a second, past journald's default limit,
+   which then drops every line of the service, its safety warnings too).
 """
 
 from __future__ import annotations
 
 import enum
 import logging
+import math
 from dataclasses import dataclass, replace
 
 from bridge.core.model import Source, Target, combine
@@ -83,6 +88,7 @@ log = logging.getLogger(__name__)
 BURST_QUIET_S = 0.5
 SAME_DEG = 1e-6  # rule 5: a reading this near what would be sent is the same value
 STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
+WITHIN_LOG_S = 10.0  # rule 10
 
 
 class Targets:
@@ -98,6 +104,7 @@ class Targets:
         self.again_now = False  # rule 8: the waiting target is that one, once more
         self._forsaken: Target | None = None  # rule 8: the one sent last its feature's end took
         self._forgo_owed = False  # rule 8: ... or its try more waiting, dropped by that end
+        self.within_said_t = -math.inf  # rule 10: "already within tolerance" said at INFO
         self._pending_of: Target | None = None  # rule 3: what the waiting put back stands for
         self._standing_of: Target | None = None  # ... and the one sent last
 
@@ -301,7 +308,15 @@ def decide(
         return Sending(Go.DONE, wire=wire)  # rule 5: nothing the controller would turn for
     small = pending.source is not Source.TRACKING and not pending.nudge  # (rule 5)
     if small and rig.spec.can_report_position and mo.within_tolerance(m, rig.motion, wire):
-        log.info("%s: already within tolerance of %s", rig.rotator_id, wire)
+        loud = now - targets.within_said_t >= WITHIN_LOG_S  # rule 10
+        if loud:
+            targets.within_said_t = now
+        log.log(
+            logging.INFO if loud else logging.DEBUG,
+            "%s: already within tolerance of %s",
+            rig.rotator_id,
+            wire,
+        )
         return Sending(Go.DONE, wire=wire)
     plan = mo.plan_target(m, rig.motion, now)
     if plan is mo.Plan.STOP_FIRST:
