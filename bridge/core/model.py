@@ -176,9 +176,10 @@ class AuditEvent:
     senders: int = 0
     more_senders: bool = False
     names: tuple[str, ...] = ()
-    # an absolute target (``Target``): the same one again from its sender, nothing executed in
-    # between, is folded (runtime/audit.py rule 9)
-    target: bool = False
+    # a command that, sent again by its sender with nothing executed in between, changes nothing
+    # (an absolute target, a claim, a release, a lock OFF, a setting): folded (runtime/audit.py
+    # rule 9); not a nudge, a preset or a park, which may turn the rotor anew
+    same_again: bool = False
 
     @property
     def routine(self) -> bool:

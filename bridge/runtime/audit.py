@@ -61,7 +61,7 @@ Rules:
    characters at most, an address a few dozen), forgotten with each summary.
 9. Nor does a program that sends the same target over and over (a Node-RED loop that
    republishes a slider's value 50 times a second: 50 lines a second, the four files rolled
-   over in 8 minutes, in 48 s at 500 a second). An absolute target (``AuditEvent.target``)
+   over in 8 minutes, in 48 s at 500 a second). An absolute target (``AuditEvent.same_again``)
    that is the one its sender sent last, with nothing carried out on that rotator since
    (anyone's other target, a stop, a lock, a setting; a refusal changes nothing and does not
    count), is folded as rule 6 folds a run: one run per rotator, sender and target, its first
@@ -72,7 +72,12 @@ Rules:
    different targets (a tracker computing a bearing 50 times a second) is not folded: the
    audit sees a target when it is taken, not whether it reached the controller (the session
    sends a stream of targets at its pauses and, while it goes on, about once a second:
-   session/targets.py rule 2).
+   session/targets.py rule 2). The same holds for the other commands that change nothing when
+   sent again (``same_again``): the holder's claim renewed again and again, a lock OFF while
+   unlocked, a release of a lease nobody holds, a setting to the value it has (a second attack
+   pass: 32,000 releases from one client rolled the four files over in 6.2 s, and the line of
+   who turned the rotor was gone). Not a nudge, a preset or a park: each again may turn the
+   rotor anew.
 """
 
 from __future__ import annotations
@@ -383,7 +388,7 @@ class Runs:
         again = self._again(rotator_id, event)  # rule 9
         if not event.routine and not again:  # a move, a lease or a lock change: its own line
             return [*out, (rotator_id, event)]
-        if again:  # rule 9: one sender's one target, never a crowd's
+        if again:  # rule 9: one sender's one command, never a crowd's
             key = (rotator_id, event.origin, f"again {event.command}", False)
             if key not in self._runs and len(self._runs) >= self._most:
                 return [*out, (rotator_id, event)]
@@ -409,11 +414,12 @@ class Runs:
         return out
 
     def _again(self, rotator_id: str, event: AuditEvent) -> bool:
-        """Rule 9: whether ``event`` is the target its sender sent last, nothing else carried out
-        on that rotator since (what was refused changed nothing); notes it as the latest."""
+        """Rule 9: whether ``event`` is the command its sender had carried out last, nothing else
+        carried out on that rotator since (what was refused changed nothing); notes it as the
+        latest."""
         if event.result.startswith("refused"):
             return False
-        this = (event.origin, event.command, event.result) if event.target else None
+        this = (event.origin, event.command, event.result) if event.same_again else None
         before = self._latest.get(rotator_id)
         self._latest[rotator_id] = this
         return this is not None and this == before

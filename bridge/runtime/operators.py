@@ -241,15 +241,29 @@ class Operators:
 
     # -- the trail (rule 3) ------------------------------------------------------------------
     def audit(
-        self, origin: Origin, command: str, result: str, *, halt: bool = False, target: bool = False
+        self,
+        origin: Origin,
+        command: str,
+        result: str,
+        *,
+        halt: bool = False,
+        same_again: bool = False,
     ) -> None:
-        """``halt``: an executed stop (audit.py rule 6); ``target``: an absolute target (rule 9)."""
+        """``halt``: an executed stop (audit.py rule 6); ``same_again``: a command that changes
+        nothing when sent again (rule 9)."""
         if self._on_audit is None:
             return
         try:
             bearing = self._bearing()
             event = AuditEvent(
-                self._wall(), self._id, origin, command, result, bearing, halt, target=target
+                self._wall(),
+                self._id,
+                origin,
+                command,
+                result,
+                bearing,
+                halt,
+                same_again=same_again,
             )
             self._on_audit(event)
         except Exception:

@@ -359,8 +359,11 @@ class Rotator:
             self.report_refusal(exc.message, what, origin=who)
             raise
         if result is not None and not echo:  # after the put (operators.py rule 3)
-            stop, target = isinstance(command, Stop), isinstance(command, Target)
-            self.operators.audit(who, what, result, halt=stop, target=target)
+            stop = isinstance(command, Stop)
+            same = isinstance(command, Target | Claim | Release | SetOption) or (
+                isinstance(command, Lock) and not command.on
+            )
+            self.operators.audit(who, what, result, halt=stop, same_again=same)
 
     def _carry(
         self,

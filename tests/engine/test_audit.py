@@ -614,7 +614,7 @@ def test_the_ticker_sleeps_a_tick_at_least_while_runs_are_open(tmp_path: Path) -
 
 def _target(origin: Origin, n: float, command: str) -> AuditEvent:
     return replace(
-        _said(origin, 0, command, "executed"), time_unix=1_790_000_000.0 + n, target=True
+        _said(origin, 0, command, "executed"), time_unix=1_790_000_000.0 + n, same_again=True
     )
 
 

@@ -237,10 +237,10 @@ def test_a_value_outside_the_union_is_refused_clearly_and_moves_nothing(
     assert not bench.rot._mailbox.take().target
 
 
-def test_only_an_absolute_target_is_audited_as_one(bench: Bench) -> None:
-    """runtime/audit.py rule 9 folds a sender's same target sent again: the judge marks the
-    absolute targets alone; a nudge, a preset or a park sent again each turn the rotor anew
-    (a nudge again turns it further) and are never folded as the same target."""
+def test_a_nudge_a_preset_and_a_park_are_never_audited_as_the_same_again(bench: Bench) -> None:
+    """runtime/audit.py rule 9 folds a sender's same command sent again when it changes
+    nothing (an absolute target among them); a nudge, a preset or a park sent again each turn
+    the rotor anew (a nudge again turns it further) and are never folded."""
     bench.audit.clear()
     for command, described in [
         (Target(120.0, 10.0, origin=WHO), "target 120 10"),
@@ -251,7 +251,7 @@ def test_only_an_absolute_target_is_audited_as_one(bench: Bench) -> None:
     ]:
         bench.submit(command, described)
         bench.rest()
-    assert [(e.command, e.target) for e in bench.audit] == [
+    assert [(e.command, e.same_again) for e in bench.audit] == [
         ("target 120 10", True),
         ("nudge +5", False),
         ("preset EU", False),
