@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 
 import paho.mqtt.client as paho
+import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
 from bridge.runtime.audit import FREE_LINES
@@ -33,52 +34,39 @@ def _lines(rig: Rig, app: object) -> list[dict[str, object]]:
     return [json.loads(x) for x in path.read_text().splitlines()]
 
 
-def test_a_flood_of_releases_of_a_free_lease_is_folded_like_any_flood(rig: Rig) -> None:
+@pytest.mark.parametrize(
+    ("topic", "payload", "word", "what"),
+    [
+        # a release names whoever its payload says: nobody holds the lease
+        (
+            "rotor/control/release",
+            json.dumps({"operator": "X"}),
+            "release",
+            "releases that changed nothing",
+        ),
+        (
+            "rotor/control/claim",
+            json.dumps({"operator": "DL1ABC", "minutes": 30}),
+            "claim",
+            "identical renewals",
+        ),
+        ("rotor/lock", "OFF", "lock", "lock OFFs while unlocked"),
+    ],
+    ids=["release-free", "renew", "lock-off-unlocked"],
+)
+def test_a_flood_of_commands_that_change_nothing_is_folded_like_any_flood(
+    rig: Rig, topic: str, payload: str, word: str, what: str
+) -> None:
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
     app = rig.start()
     rig.ready("tower")
     c = _client(rig.broker.port)
-    for _ in range(N):  # a release names whoever its payload says: nobody holds the lease
-        c.publish("rotor/control/release", json.dumps({"operator": "X"}), qos=1).wait_for_publish(5)
+    for _ in range(N):
+        c.publish(topic, payload, qos=1).wait_for_publish(5)
     c.publish("rotor/target", "20", qos=1).wait_for_publish(5)  # marker: after the flood
     wait_until(lambda: any(e["command"] == "target '20'" for e in _lines(rig, app)), 10, "marker")
-    releases = [e for e in _lines(rig, app) if "release" in str(e["command"])]
+    lines = [e for e in _lines(rig, app) if word in str(e["command"])]
     c.loop_stop()
     c.disconnect()
-    assert len(releases) <= FREE_LINES + 1, (
-        f"{len(releases)} lines for {N} releases that changed nothing"
-    )
-
-
-def test_a_flood_of_the_holders_renewals_is_folded_like_any_flood(rig: Rig) -> None:
-    rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    app = rig.start()
-    rig.ready("tower")
-    c = _client(rig.broker.port)
-    claim = json.dumps({"operator": "DL1ABC", "minutes": 30})
-    for _ in range(N):
-        c.publish("rotor/control/claim", claim, qos=1).wait_for_publish(5)
-    c.publish("rotor/target", "20", qos=1).wait_for_publish(5)
-    wait_until(lambda: any(e["command"] == "target '20'" for e in _lines(rig, app)), 10, "marker")
-    claims = [e for e in _lines(rig, app) if "claim" in str(e["command"])]
-    c.loop_stop()
-    c.disconnect()
-    assert len(claims) <= FREE_LINES + 1, f"{len(claims)} lines for {N} identical renewals"
-
-
-def test_a_flood_of_lock_off_while_unlocked_is_folded_like_any_flood(rig: Rig) -> None:
-    rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    app = rig.start()
-    rig.ready("tower")
-    c = _client(rig.broker.port)
-    for _ in range(N):
-        c.publish("rotor/lock", "OFF", qos=1).wait_for_publish(5)
-    c.publish("rotor/target", "20", qos=1).wait_for_publish(5)
-    wait_until(lambda: any(e["command"] == "target '20'" for e in _lines(rig, app)), 10, "marker")
-    offs = [e for e in _lines(rig, app) if "lock" in str(e["command"])]
-    c.loop_stop()
-    c.disconnect()
-    assert len(offs) <= FREE_LINES + 1, f"{len(offs)} lines for {N} lock OFFs while unlocked"
+    assert len(lines) <= FREE_LINES + 1, f"{len(lines)} lines for {N} {what}"
