@@ -261,7 +261,7 @@ class PtyLineServer:
 
     def _serve_until_stopped(self) -> None:
         session = self._session()
-        seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)  # rule 10
+        seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)  # rule 10
         self._read = 0
         budget = Budget(RATE_BYTES_S, self._clock())
         pending_since: float | None = None
@@ -292,7 +292,7 @@ class PtyLineServer:
                     )
                     fence = getattr(session, "fence", None)
                     session, pending_since = self._session(), None  # rule 4
-                    seen = self._carried(fence, seen)
+                    self._carry(fence, session)
                 continue
             try:
                 data = os.read(self._master, READ_BYTES)
@@ -311,7 +311,7 @@ class PtyLineServer:
             for reply in replies:
                 if not isinstance(reply, bytes):  # a session's end (tcplines.Close)
                     session = self._session()
-                    seen = self._carried(fence, seen)
+                    self._carry(fence, session)
                 elif reply:
                     self._write(reply)
             budget.spend(READ_COST + len(data) + REPLY_COST * len(replies), self._clock())
@@ -320,9 +320,7 @@ class PtyLineServer:
             elif pending_since is None:
                 pending_since = self._clock()
 
-    def _look(
-        self, session: PtySession, seen: deque[tuple[int, int, int]], raw: int
-    ) -> Fence | None:
+    def _look(self, session: PtySession, seen: deque[tuple[int, int]], raw: int) -> Fence | None:
         """Rule 10: after a read of ``raw`` bytes, the rotator's halt count and then what the
         client has written so far (read, plus what waits in the pty); the session's fence told
         the count of the first look that held the bytes just read. Its fence (None: none)."""
@@ -335,23 +333,22 @@ class PtyLineServer:
             sent = self._read + unread(self._master)
         except OSError:
             sent = self._read
-        if seen and seen[-1][1:] == (count, fence.own):
-            seen[-1] = sent, count, fence.own
+        if seen and seen[-1][1] == count:
+            seen[-1] = sent, count
         else:
-            seen.append((sent, count, fence.own))
+            seen.append((sent, count))
         while seen[0][0] < self._read:
             seen.popleft()
-        fence.arrived = seen[0][1], seen[0][2]
+        fence.arrived = seen[0][1]
         return fence
 
     @staticmethod
-    def _carried(
-        fence: Fence | None, seen: deque[tuple[int, int, int]]
-    ) -> deque[tuple[int, int, int]]:
-        """Rule 10: the looks so far, for a fresh session (own halts 0): the halts the old
-        session's own stops added after a look stay the client's own."""
-        own = 0 if fence is None else fence.own
-        return deque(((sent, count + own - was, 0) for sent, count, was in seen), seen.maxlen)
+    def _carry(fence: Fence | None, session: PtySession) -> None:
+        """Rule 10: a fresh session's fence: the halts the old session's own stops made stay
+        the client's own."""
+        to: Fence | None = getattr(session, "fence", None)
+        if fence is not None and to is not None:
+            fence.carry(to)
 
     def _discard_unread(self) -> None:
         """Rule 6."""

@@ -119,7 +119,7 @@ Rules:
    a STOP or lock ON is not carried out, however late it is read (the budget, rule 5, leaves a
    flooding client's commands in the kernel for seconds): refused as the judge refuses a
    command a halt overtook (``since``, runtime/rotator.py; mailbox.py rule 10). A stream says
-   nothing of when its bytes came, so the server looks: at the accept and after every read it
+   nothing of when its bytes came, so the server looks: at the accept and at every read it
    reads the rotator's halt count (``halt_count``: the front end's, before the look, so that a
    halt between the two errs toward refusing) and then how much the connection has sent, read
    or not (what is read, plus FIONREAD). The bytes a command ends in were in the kernel at the
@@ -127,8 +127,12 @@ Rules:
    (``Fence``: its session hands its moves to the judge through it). The halts
    the connection's own session carried out meanwhile do not (a client's ``P 300 0``, ``S``,
    ``P 200 0`` read in one go turn the rotor to 200: the halt count each of its stops added is
-   its own, ``Fence.halting``). Counted per read: a move in the read that also holds the
-   first bytes sent after a halt is taken as sent after it. The count is every front end's,
+   its own, ``Fence.halting``), each known by the count it made, told on the session's own
+   thread (a cold review: an MQTT STOP counted while the client's own ``S`` was on its way was
+   taken for its own, and a target sent before it was carried out). No read takes bytes past
+   those the oldest look it has not read counted, so no read holds bytes from both sides of a
+   halt (the same review: a target sent before a STOP, read with the poll sent after it, was
+   carried out). The count is every front end's,
    another client's of the same port among them (``halts``: the remote's ``halts_for`` leaves
    out its own front end's, and a STOP from one rotctld client there did not fence another's
    move, a cold review), so the move is judged against it here, right before the judge, and
@@ -146,7 +150,12 @@ Rules:
    rotctld ``P`` sent 20 ms before an MQTT STOP, from a client paused over its budget or one
    waiting behind a flood of connections, turned the rotor 0.2 s after the stop). A look and
    the thread's read are one step under the connection's lock (a read waits for the bytes
-   with a peek, then takes them at once), so no look counts bytes as both read and unread.
+   with a peek, then takes them at once), so no look counts bytes as both read and unread. A
+   connection still in the kernel's queue has no look of its own until it is accepted: it is
+   looked at then at the count when the queue was last found empty, by the accept loop or by
+   the look before each halt (the same review: a target sent from the queue before a STOP was
+   carried out); one that came after a halt the loop has not yet caught up with is refused
+   too, which errs the safe way.
 """
 
 from __future__ import annotations
@@ -158,6 +167,7 @@ import logging
 import math
 import os
 import re
+import select
 import selectors
 import socket
 import struct
@@ -196,6 +206,7 @@ ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug
 PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 SWEEP_S = 0.01  # rule 8: waiting connections whose peer left are looked for at most this often
 SEEN_KEPT = 4096  # rule 9: a connection's looks at what it has sent, at most (the oldest go)
+MINE_KEPT = 64  # rule 9: the numbers of a connection's own halts kept (the oldest go: refusing)
 STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 9
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
@@ -342,6 +353,19 @@ def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
     return any(bytes([end]) in data for end in ends)
 
 
+def _readable(sock: socket.socket) -> bool:
+    """Whether ``sock`` is readable now (a listener: a connection waits in its queue); True
+    if it cannot be said (closed meanwhile)."""
+    try:
+        if hasattr(select, "poll"):
+            poller = select.poll()
+            poller.register(sock, select.POLLIN)
+            return bool(poller.poll(0))
+        return bool(select.select([sock], [], [], 0)[0])  # (Windows: no poll)
+    except (OSError, ValueError):
+        return True
+
+
 def _peek(conn: socket.socket, size: int) -> bytes:
     """What waits unread in the kernel, up to ``size`` bytes, at once (b"" if nothing)."""
     try:
@@ -416,47 +440,59 @@ def halt_watchers(rotator: FrontRotator) -> HaltWatchers | None:
 
 class _Looks:
     """Rule 9: the looks at what one connection has sent, oldest first: (bytes sent, the halt
-    count, the connection's own halts) at each look; under ``lock``, as the connection's thread
-    reads and as a halt is about to be counted (``LineServer._halt_coming``)."""
+    count) at each look; under ``lock``, as the connection's thread reads and as a halt is
+    about to be counted (``LineServer._halt_coming``)."""
 
-    __slots__ = ("fence", "lock", "read", "seen")
+    __slots__ = ("lock", "read", "seen")
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
-        self.seen: deque[tuple[int, int, int]] = deque(maxlen=SEEN_KEPT)
+        self.seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)
         self.read = 0  # the bytes its thread has read (a greeting's not counted: rule 8)
-        self.fence: Fence | None = None  # its session's, once its thread runs
 
     def look(self, conn: socket.socket, count: int) -> None:
         """One look (under ``lock``), at ``count`` read first: what ``conn`` has sent so far."""
-        own = self.fence.own if self.fence is not None else 0
         sent = _sent_so_far(conn, self.read)
         seen = self.seen
-        if seen and seen[-1][1:] == (count, own):  # (no halt since: one look, kept as far
-            seen[-1] = sent, count, own  # as it reaches)
+        if seen and seen[-1][1] == count:  # (no halt since: one look, kept as far as it
+            seen[-1] = sent, count  # reaches)
         else:
-            seen.append((sent, count, own))
+            seen.append((sent, count))
+
+    def next_read(self) -> tuple[int, int]:
+        """(under ``lock``, right after a look) How many bytes the next read may take, and the
+        halt count of the look that first counted them: no read goes past the bytes one look
+        counted, so none holds bytes from both sides of a halt (the kernel cannot say what
+        waits, Windows: as many as come, at the count now)."""
+        seen = self.seen
+        while len(seen) > 1 and seen[0][0] <= self.read:  # (looks at bytes read already)
+            seen.popleft()
+        sent, count = seen[0]
+        return (sent - self.read if sent > self.read else MAX_UNFINISHED), count
 
 
 class Fence:
     """Rule 9: a connection's moves overtaken by a halt counted after their bytes came. The
     server tells it, before each read is fed to the session, the halt count of the first look
     at the connection that counted those bytes (``arrived``); the session's commands hand a
-    move to the judge through ``move`` and carry out their own stops through ``halting``."""
+    move to the judge through ``move`` and carry out their own stops through ``halting``,
+    whose halts are known by their numbers (``mine``: the count each made), so that another's
+    halt counted while the connection's own stop is on its way is not taken for its own."""
 
     def __init__(self, rotator: FrontRotator) -> None:
         self.rotator = rotator
         self.count = halt_count(rotator)  # (None: a rotator that counts no halts)
-        self.arrived: tuple[int, int] | None = None  # the halt count, and ``own`` at that look
-        self.own = 0  # the halts this connection's own stops added
+        self.arrived: int | None = None  # the halt count at that look
+        self.mine: deque[int] = deque(maxlen=MINE_KEPT)  # the numbers of its own halts
 
-    def since(self) -> int | None:
-        """The halt count a move of the bytes being fed is judged against: the count when they
-        were first seen, with the connection's own halts since added (None: none known)."""
-        if self.arrived is None:
-            return None
-        count, own = self.arrived
-        return count + self.own - own
+    def overtaken(self) -> bool:
+        """Whether a halt not the connection's own was counted after the bytes being fed came
+        (False: none known)."""
+        if self.arrived is None or self.count is None:
+            return False
+        arrived, now = self.arrived, self.count()
+        own = sum(1 for n in self.mine if arrived < n <= now)
+        return now - arrived > own
 
     def move(self, command: Command, described: str, since: int | None = None) -> None:
         """``command`` (a move) to the judge, unless a halt was counted after its bytes came
@@ -464,8 +500,7 @@ class Fence:
         on (the DCU-1's AM1: the count when its bearing came). The count is every front end's
         (``halts``), not the one ``since`` is in (``halts_for``: the remote's leaves out its
         own front end's), so it is judged here, right before the judge's own look."""
-        arrived = self.since()
-        if arrived is not None and self.count is not None and self.count() != arrived:
+        if self.overtaken():
             self.rotator.report_refusal(STALE, described, origin=command.origin)
             raise Refused(RefusalCode.STALE, STALE)
         if since is None:
@@ -474,15 +509,40 @@ class Fence:
             cast(HaltCounted, self.rotator).submit(command, described, since=since)
 
     def halting(self, halt: Callable[[], None]) -> None:
-        """``halt()`` (a stop submitted), the halts it adds counted as the connection's own."""
-        if self.count is None:
+        """``halt()`` (a stop submitted), the halts it adds counted as the connection's own:
+        each that the rotator's watchers are told of on this thread, numbered by the count
+        before it (one counted by another thread between the two leaves a number below its
+        real one: that errs toward refusing); with no watchers, every halt counted meanwhile."""
+        count = self.count
+        if count is None:
             halt()
             return
-        before = self.count()
+        watchers = halt_watchers(self.rotator)
+        if watchers is None:
+            before = count()
+            try:
+                halt()
+            finally:
+                self.mine.extend(range(before + 1, count() + 1))
+            return
+        me = threading.get_ident()
+        made: list[int] = []
+
+        def mine() -> None:
+            if threading.get_ident() == me:
+                made.append(count() + 1)
+
+        watchers.add(mine)
         try:
             halt()
         finally:
-            self.own += self.count() - before
+            watchers.remove(mine)
+        self.mine.extend(made)  # (not if it raised: a number it may not have made errs so)
+
+    def carry(self, to: Fence) -> None:
+        """A fresh session's fence on the same stream (ptylines.py): the halts this one's
+        stops made stay the stream's own."""
+        to.mine.extend(self.mine)
 
 
 def _bind_hints(key: str) -> dict[int, str]:
@@ -550,6 +610,9 @@ class LineServer:
         self._looks_lock = threading.Lock()
         self._halt_watchers = halt_watchers if halt_count is not None else None
         self._watcher = self._halt_coming  # (one bound method: removed as it was added)
+        # rule 9: at most the count when a connection in the kernel's queue came
+        self._queue_floor = 0
+        self._queue_lock = threading.Lock()  # (its reading and writing, and an accept between)
         self._stop_accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._http_log = RareLog()
         self._looked: weakref.WeakKeyDictionary[socket.socket, tuple[int, bool]] = (
@@ -630,6 +693,8 @@ class LineServer:
                 f"{self.label} for rotator {self.rotator_id!r}: cannot listen on {host}:{port}: "
                 f"{reason}{_bind_hints(self._key).get(code, '')}",
             ) from None
+        if self._halt_count is not None:  # rule 9: any connection from now came after this
+            self._queue_floor = self._halt_count()
 
     def start(self) -> None:
         """Listen (OSError if the address cannot be had) and accept clients in a thread."""
@@ -650,6 +715,7 @@ class LineServer:
         self._ended.clear()
         if self._halt_watchers is not None:  # rule 9
             self._halt_watchers.add(self._watcher)
+            self._queue_looked(0)
         self._accept_thread = threading.Thread(
             target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
@@ -796,7 +862,7 @@ class LineServer:
                 with looks.lock:  # (a look in between would count the question's bytes)
                     conn.recv(len(data), socket.MSG_DONTWAIT)
                     looks.seen = deque(
-                        ((max(0, sent - len(data)), count, own) for sent, count, own in looks.seen),
+                        ((max(0, sent - len(data)), count) for sent, count in looks.seen),
                         maxlen=SEEN_KEPT,
                     )
             if conn.send(answer, socket.MSG_DONTWAIT) != len(answer):
@@ -888,9 +954,14 @@ class LineServer:
         ``_stop_now``), else it waits here (no thread); False when the queue had none (or
         accept failed)."""
         try:
-            conn, peer = listener.accept()
-        except BlockingIOError:
-            return False
+            with self._queue_lock:  # rule 9: the queue found empty at this count (read first)
+                count = self._halt_count() if self._halt_count is not None else 0
+                try:
+                    conn, peer = listener.accept()
+                except BlockingIOError:
+                    self._queue_floor = count
+                    return False
+                floor = self._queue_floor
         except OSError as exc:
             self._accept_log.warn(
                 self._clock(), "%s for %s: accept failed: %s", self.label, self.rotator_id, exc
@@ -905,8 +976,11 @@ class LineServer:
             looks = _Looks()  # and now: the count first, then what was sent
             with self._looks_lock:
                 self._looks[conn] = looks
+            count = self._halt_count()
+            if self._halt_watchers is not None:  # (it came when the count was at least the
+                count = min(count, floor)  # floor: no watcher looked at it in the queue)
             with looks.lock:
-                looks.look(conn, self._halt_count())
+                looks.look(conn, count)
         now = self._clock()
         key = _peer_key(peer[0])
         if self._stop_in(conn):
@@ -936,6 +1010,18 @@ class LineServer:
             with looks.lock:
                 if conn.fileno() >= 0:
                     looks.look(conn, count)
+        self._queue_looked(1)
+
+    def _queue_looked(self, ahead: int) -> None:
+        """Rule 9: a connection still in the kernel's queue is looked at when it is accepted,
+        at the floor: the count when the queue was last found empty (by the accept loop, or
+        here, before each halt: then ``ahead`` of the count, the halt about to be counted)."""
+        listener = self._listener
+        assert self._halt_count is not None
+        with self._queue_lock:
+            count = self._halt_count()
+            if listener is not None and not _readable(listener):
+                self._queue_floor = count + ahead
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
@@ -1077,10 +1163,7 @@ class LineServer:
         counting = self._halt_count if fence is not None else None
         with self._looks_lock:
             looks = self._looks.get(conn) if counting is not None else self._looks.pop(conn, None)
-        if looks is not None and fence is not None:
-            with looks.lock:
-                looks.fence = fence
-        else:
+        if looks is None or fence is None:
             looks = None
         read = 0  # rule 9: the bytes read so far
         budget = Budget(self._rate_bytes_s, self._clock())
@@ -1122,17 +1205,14 @@ class LineServer:
                 try:
                     if looks is None:
                         data = conn.recv(self._read_bytes)
-                    elif conn.recv(1, socket.MSG_PEEK):  # rule 9: read and looked at in one
+                    elif conn.recv(1, socket.MSG_PEEK):  # rule 9: looked at and read in one
                         with looks.lock:  # go (a halt's look between the two miscounts)
-                            data = conn.recv(self._read_bytes, socket.MSG_DONTWAIT)
-                            read += len(data)
-                            looks.read = read
                             assert counting is not None and fence is not None
                             looks.look(conn, counting())  # the count first, then what was sent
-                            seen = looks.seen
-                            while seen[0][0] < read:  # (it counted bytes read before these)
-                                seen.popleft()
-                            fence.arrived = seen[0][1], seen[0][2]
+                            most, fence.arrived = looks.next_read()
+                            data = conn.recv(min(most, self._read_bytes), socket.MSG_DONTWAIT)
+                            read += len(data)
+                            looks.read = read
                     else:
                         data = b""
                 except (TimeoutError, BlockingIOError):

@@ -395,7 +395,7 @@ def test_a_stop_from_another_client_fences_a_move_sent_before_it_on_the_remote(
     link = Link()
     rot = rotator(link, FakeClock())
     late = RotctldSession(rot)
-    late.fence.arrived = (rot.halts, late.fence.own)  # its "P 100 0" is in the kernel
+    late.fence.arrived = rot.halts  # its "P 100 0" is in the kernel
     if stopper == "rotctld":
         RotctldSession(rot).feed(b"S\n")
     else:
