@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from bridge.core.haltwatch import HaltWatchers
+from bridge.core.model import Target
 from bridge.interfaces.gs232 import Gs232Session, gs232_pty
 from bridge.interfaces.ptylines import PtyLineServer
 from tests.support import wait_until
@@ -121,6 +123,48 @@ def test_moves_a_client_wrote_before_a_stop_are_not_carried_out_after_it(tmp_pat
 
         wait_until(all_read, 10, "every target read")
         assert len(rot.submitted) == before  # none of those sent before the STOP went out
+    finally:
+        client.close()
+        server.stop()
+
+
+def test_a_move_written_while_the_server_sleeps_over_its_budget_is_refused_after_a_stop(
+    tmp_path: Path,
+) -> None:
+    """tcplines.py rule 9 on a pty (a cold review of the TCP fence): the thread sleeps over
+    its budget, makes no look of its own, and the client writes ``M100`` then; an MQTT STOP
+    comes. Without the look before the halt (the watchers) its bytes were first counted after
+    the STOP, and the rotor turned to 100. Virtual time: the clock stands still until then."""
+    clock = FakeClock()
+    rot = Counted()
+    watchers = HaltWatchers()
+    path = str(tmp_path / "rotor-gs232")
+    server = PtyLineServer(
+        rot.id,
+        path,
+        lambda: Gs232Session(rot),
+        label="gs232",
+        key="gs232",
+        clock=clock,
+        halt_count=lambda: rot.halts,
+        halt_watchers=watchers,
+    )
+    server.start()
+    client = Client(path)
+    burst = 400
+    try:
+        os.write(client.fd, b"M200\r" * burst)
+        wait_until(lambda: server.paused > 0, 10, "the server paused")
+        os.write(client.fd, b"M100\r")  # while it sleeps: no look of its own
+        watchers()  # an MQTT STOP: told first (mailbox.py rule 10), then counted
+        rot.halts += 1
+
+        def all_read() -> bool:
+            clock.t += 1.0  # (a second's budget at each look)
+            return len(rot.submitted) + len(rot.refused) == burst + 1
+
+        wait_until(all_read, 10, "every target read")
+        assert not [t for t in rot.submitted if isinstance(t, Target) and t.az_deg == 100.0]
     finally:
         client.close()
         server.stop()

@@ -14,7 +14,7 @@ import pytest
 from bridge.core.errors import Refused
 from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import Command, Origin, Source, Stop, Target
-from bridge.interfaces.tcplines import Fence, _Looks
+from bridge.interfaces.tcplines import Fence, Looks
 
 
 class Counter:
@@ -124,7 +124,7 @@ def test_a_stop_that_raises_before_it_is_counted_leaves_no_number_to_be_taken_fo
 def test_no_read_takes_bytes_past_what_the_oldest_unread_look_counted() -> None:
     """Looks: 10 bytes at count 0 (the halt's watcher), then 18 at count 1 (after it): a read
     from 8 takes 2 bytes, judged at 0; the next the other 8, judged at 1."""
-    looks = _Looks()
+    looks = Looks()
     looks.read = 8
     looks.seen = deque([(4, 0), (10, 0), (18, 1)])
     assert looks.next_read() == (2, 0)

@@ -51,12 +51,14 @@ Rules:
    sleeps on the stop pipe (in the kernel) and the client's bytes wait in the pty (its writes
    block or fail, as on a serial line), counted in ``paused``.
 10. A STOP or lock ON is the last word over every move the client wrote before it, as on the
-   TCP ports (interfaces/tcplines.py rule 9, whose Fence the session carries): after each
-   read the rotator's halt count is read, then what the client has written so far (read,
-   plus FIONREAD on the master); a move is judged against the count of the first look that
-   held its bytes. An attack pass: a program wrote 400 targets in one burst, the budget
-   (rule 9) left most in the pty, an MQTT STOP stopped the rotor, and the 285 read after it
-   were each carried out.
+   TCP ports (interfaces/tcplines.py rule 9, whose Fence and Looks it uses): at each read,
+   and right before the rotator counts each halt (its ``halt_watchers``), the rotator's halt
+   count is read, then what the client has written so far (read, plus FIONREAD on the
+   master); a move is judged against the count of the first look that held its bytes, and
+   no read goes past the bytes one look counted. An attack pass: a program wrote 400 targets
+   in one burst, the budget (rule 9) left most in the pty, an MQTT STOP stopped the rotor,
+   and the 285 read after it were each carried out; a cold review: a target written while
+   the thread slept over its budget, before an MQTT STOP, was carried out after it.
 """
 
 from __future__ import annotations
@@ -73,10 +75,10 @@ import termios
 import threading
 import time
 import tty
-from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.tcplines import (
@@ -84,9 +86,8 @@ from bridge.interfaces.tcplines import (
     READ_BYTES,
     READ_COST,
     REPLY_COST,
-    SEEN_KEPT,
     Fence,
-    unread,
+    Looks,
 )
 
 log = logging.getLogger(__name__)
@@ -123,7 +124,11 @@ class PtyLineServer:
         useful_within_s: float = USEFUL_WITHIN_S,
         stale_s: float = STALE_S,
         clock: Callable[[], float] = time.monotonic,
+        halt_count: Callable[[], int] | None = None,
+        halt_watchers: HaltWatchers | None = None,
     ) -> None:
+        """``halt_count`` and ``halt_watchers``: the rotator's (rule 10: the pty is looked at
+        right before each halt is counted)."""
         self.rotator_id = rotator_id
         self.label = label
         self.path = os.path.abspath(os.path.expanduser(os.fspath(path)))
@@ -146,7 +151,10 @@ class PtyLineServer:
         self._dropped_logged_s = -DROP_LOG_S
         self._echo_said = False  # rule 7
         self._claim: socket.socket | None = None  # rule 1
-        self._read = 0  # rule 10: the bytes the clients have written and the thread took
+        self._looks = Looks()  # rule 10: what the clients have written, read or not
+        self._halt_count = halt_count
+        self._halt_watchers = halt_watchers if halt_count is not None else None
+        self._watcher = self._halt_coming  # (one bound method: removed as it was added)
 
     @property
     def most_held(self) -> int:
@@ -216,6 +224,8 @@ class PtyLineServer:
         """Link (OSError as ``listen``) and serve in a thread."""
         self.listen()
         self._wake_r, self._wake_w = os.pipe()
+        if self._halt_watchers is not None:  # rule 10
+            self._halt_watchers.add(self._watcher)
         self._thread = threading.Thread(
             target=self._serve, name=f"{self._key}-pty-{self.rotator_id}", daemon=True
         )
@@ -226,6 +236,8 @@ class PtyLineServer:
         """Rule 2."""
         if self._master < 0:
             return
+        if self._halt_watchers is not None:
+            self._halt_watchers.remove(self._watcher)
         if self._thread is not None:
             os.write(self._wake_w, b"x")
             self._thread.join(timeout_s)
@@ -237,9 +249,10 @@ class PtyLineServer:
                 os.unlink(self.path)
         except OSError:
             pass  # gone already, or not a link any more: not ours to touch
-        os.close(self._master)
-        os.close(self._slave)
-        self._master = self._slave = -1
+        with self._looks.lock:  # (no halt's look at a descriptor being closed)
+            os.close(self._master)
+            os.close(self._slave)
+            self._master = self._slave = -1
         self._unclaim()
 
     # -- the thread -------------------------------------------------------------------------
@@ -261,8 +274,9 @@ class PtyLineServer:
 
     def _serve_until_stopped(self) -> None:
         session = self._session()
-        seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)  # rule 10
-        self._read = 0
+        with self._looks.lock:
+            self._looks.seen.clear()  # rule 10: counted afresh from what waits now
+            self._looks.read = 0
         budget = Budget(RATE_BYTES_S, self._clock())
         pending_since: float | None = None
         while True:
@@ -295,7 +309,7 @@ class PtyLineServer:
                     self._carry(fence, session)
                 continue
             try:
-                data = os.read(self._master, READ_BYTES)
+                fence, data = self._read_looked(session)
             except BlockingIOError:
                 continue
             except OSError as exc:
@@ -306,7 +320,6 @@ class PtyLineServer:
                 continue
             if not data:
                 continue
-            fence = self._look(session, seen, len(data))  # rule 10
             replies = session.feed(data)
             for reply in replies:
                 if not isinstance(reply, bytes):  # a session's end (tcplines.Close)
@@ -320,27 +333,35 @@ class PtyLineServer:
             elif pending_since is None:
                 pending_since = self._clock()
 
-    def _look(self, session: PtySession, seen: deque[tuple[int, int]], raw: int) -> Fence | None:
-        """Rule 10: after a read of ``raw`` bytes, the rotator's halt count and then what the
-        client has written so far (read, plus what waits in the pty); the session's fence told
-        the count of the first look that held the bytes just read. Its fence (None: none)."""
-        self._read += raw
+    def _read_looked(self, session: PtySession) -> tuple[Fence | None, bytes]:
+        """Rule 10: a read, looked at first: the rotator's halt count, then
+        what the client has written so far (read, plus what waits in the pty), as one step
+        with the read; the read stops at the bytes the oldest look it has not read counted,
+        and the session's fence is told that look's count. Its fence (None: none) and the
+        bytes."""
         fence: Fence | None = getattr(session, "fence", None)
-        if fence is None or fence.count is None:
-            return fence
-        count = fence.count()  # (the count first: a halt between the two errs toward refusing)
-        try:
-            sent = self._read + unread(self._master)
-        except OSError:
-            sent = self._read
-        if seen and seen[-1][1] == count:
-            seen[-1] = sent, count
-        else:
-            seen.append((sent, count))
-        while seen[0][0] < self._read:
-            seen.popleft()
-        fence.arrived = seen[0][1]
-        return fence
+        looks = self._looks
+        with looks.lock:
+            if fence is None or fence.count is None:
+                data = os.read(self._master, READ_BYTES)
+                looks.read += len(data)
+                return fence, data
+            looks.look(self._master, fence.count())  # (the count first: a halt between the
+            most, arrived = looks.next_read()  # two errs toward refusing)
+            data = os.read(self._master, min(most, READ_BYTES))
+            looks.read += len(data)
+        fence.arrived = arrived
+        return fence, data
+
+    def _halt_coming(self) -> None:
+        """Rule 10: a halt is about to be counted (core/haltwatch.py): the pty is looked at now,
+        at the count before it, so that what the client wrote by then, while the thread sleeps
+        over its budget (rule 9), is not taken as written after it."""
+        assert self._halt_count is not None
+        count = self._halt_count()
+        with self._looks.lock:
+            if self._master >= 0:
+                self._looks.look(self._master, count)
 
     @staticmethod
     def _carry(fence: Fence | None, session: PtySession) -> None:

@@ -412,12 +412,12 @@ except ImportError:
         raise OSError(errno.ENOSYS, "no FIONREAD here")
 
 
-def _sent_so_far(conn: socket.socket, read: int) -> int:
-    """Rule 9: the bytes ``conn``'s peer has sent so far: ``read``, and those waiting unread in
+def _sent_so_far(fd: int, read: int) -> int:
+    """Rule 9: the bytes ``fd``'s peer has sent so far: ``read``, and those waiting unread in
     the kernel (FIONREAD); ``read`` alone if the kernel cannot say (Windows, where the remote
     runs too: no fcntl, tests/remote/test_remote_portable.py)."""
     try:
-        return read + unread(conn.fileno())
+        return read + unread(fd)
     except OSError:
         return read
 
@@ -438,10 +438,10 @@ def halt_watchers(rotator: FrontRotator) -> HaltWatchers | None:
     return watchers if isinstance(watchers, HaltWatchers) else None
 
 
-class _Looks:
-    """Rule 9: the looks at what one connection has sent, oldest first: (bytes sent, the halt
-    count) at each look; under ``lock``, as the connection's thread reads and as a halt is
-    about to be counted (``LineServer._halt_coming``)."""
+class Looks:
+    """Rule 9: the looks at what one connection (or pty: ptylines.py) has sent, oldest first:
+    (bytes sent, the halt count) at each look; under ``lock``, as the connection's thread reads
+    and as a halt is about to be counted (``LineServer._halt_coming``)."""
 
     __slots__ = ("lock", "read", "seen")
 
@@ -450,9 +450,9 @@ class _Looks:
         self.seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)
         self.read = 0  # the bytes its thread has read (a greeting's not counted: rule 8)
 
-    def look(self, conn: socket.socket, count: int) -> None:
-        """One look (under ``lock``), at ``count`` read first: what ``conn`` has sent so far."""
-        sent = _sent_so_far(conn, self.read)
+    def look(self, fd: int, count: int) -> None:
+        """One look (under ``lock``), at ``count`` read first: what ``fd`` has sent so far."""
+        sent = _sent_so_far(fd, self.read)
         seen = self.seen
         if seen and seen[-1][1] == count:  # (no halt since: one look, kept as far as it
             seen[-1] = sent, count  # reaches)
@@ -606,7 +606,7 @@ class LineServer:
         self._swept_t = -math.inf  # rule 8: the last look for waiting connections whose peer left
         self._halt_count = halt_count  # rule 9
         # rule 9: every connection's looks at what it has sent, from its accept
-        self._looks: weakref.WeakKeyDictionary[socket.socket, _Looks] = weakref.WeakKeyDictionary()
+        self._looks: weakref.WeakKeyDictionary[socket.socket, Looks] = weakref.WeakKeyDictionary()
         self._looks_lock = threading.Lock()
         self._halt_watchers = halt_watchers if halt_count is not None else None
         self._watcher = self._halt_coming  # (one bound method: removed as it was added)
@@ -973,14 +973,14 @@ class LineServer:
             conn.close()
             return True
         if self._halt_count is not None:  # rule 9: looked at before each halt from now on,
-            looks = _Looks()  # and now: the count first, then what was sent
+            looks = Looks()  # and now: the count first, then what was sent
             with self._looks_lock:
                 self._looks[conn] = looks
             count = self._halt_count()
             if self._halt_watchers is not None:  # (it came when the count was at least the
                 count = min(count, floor)  # floor: no watcher looked at it in the queue)
             with looks.lock:
-                looks.look(conn, count)
+                looks.look(conn.fileno(), count)
         now = self._clock()
         key = _peer_key(peer[0])
         if self._stop_in(conn):
@@ -1009,7 +1009,7 @@ class LineServer:
         for conn, looks in each:
             with looks.lock:
                 if conn.fileno() >= 0:
-                    looks.look(conn, count)
+                    looks.look(conn.fileno(), count)
         self._queue_looked(1)
 
     def _queue_looked(self, ahead: int) -> None:
@@ -1208,7 +1208,9 @@ class LineServer:
                     elif conn.recv(1, socket.MSG_PEEK):  # rule 9: looked at and read in one
                         with looks.lock:  # go (a halt's look between the two miscounts)
                             assert counting is not None and fence is not None
-                            looks.look(conn, counting())  # the count first, then what was sent
+                            looks.look(
+                                conn.fileno(), counting()
+                            )  # the count first, then what was sent
                             most, fence.arrived = looks.next_read()
                             data = conn.recv(min(most, self._read_bytes), socket.MSG_DONTWAIT)
                             read += len(data)

@@ -461,6 +461,8 @@ class Emulation:
             lambda: self.session(rotator, None, **options),
             label=self.key,
             key=self.key,
+            halt_count=halt_count(rotator),
+            halt_watchers=halt_watchers(rotator),
         )
 
 
