@@ -89,14 +89,15 @@ class Live:
         headers: dict[str, str],
         *,
         trust: Callable[[asyncio.BaseTransport | None], None],
-        halt: Callable[[str, bytes, str | None], None],
+        halt: Callable[[str, bytes, str | None, str], None],
         client: Callable[[web.Request], str | None] = lambda request: request.remote,
     ) -> None:
         self.feed, self._tokens, self._wall = feed, tokens, wall
         self._client = client  # who a request is from (auth.py rule 6)
         self._headers = headers  # the console's safety headers (server.py rule 3)
         self._trust = trust  # connections.py rule 1
-        # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address
+        # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address and
+        # its token
         self._halt = halt
         # rule 4: the WebSockets whose token is not in yet, oldest first; each one's future is
         # set when it is to make room
@@ -221,7 +222,9 @@ class Live:
             return ws
         self._trust(request.transport)
         page = self.join(token)
-        reader = asyncio.get_running_loop().create_task(self._read(ws, page, self._client(request)))
+        reader = asyncio.get_running_loop().create_task(
+            self._read(ws, page, self._client(request), token)
+        )
         try:
             await ws.send_str('{"event":"hello"}')
             await ws.send_str(_clock("clock"))  # rule 8
@@ -259,21 +262,23 @@ class Live:
         except (ValueError, AttributeError, RecursionError, TypeError):
             return None
 
-    async def _read(self, ws: web.WebSocketResponse, page: Page, peer: str | None) -> None:
+    async def _read(
+        self, ws: web.WebSocketResponse, page: Page, peer: str | None, token: str
+    ) -> None:
         """What the page sends: a STOP or a lock ON, sent here as well as by POST (rule 5);
         anything else is ignored. Its close is seen at once; what it sends, within its budget
         (rule 7)."""
         budget = Budget(READ_BYTES_S, time.monotonic())
         async for message in ws:
             if message.type == WSMsgType.TEXT:
-                self._halt_from(message.data, peer)
+                self._halt_from(message.data, peer, token)
             size = len(message.data) if isinstance(message.data, str | bytes) else 0
             budget.spend(MESSAGE_COST + size, time.monotonic())
             await asyncio.sleep(budget.wait_s(time.monotonic()))  # (0: the loop's next turn)
         page.closed = True
         page.wake.set()
 
-    def _halt_from(self, text: str, peer: str | None) -> None:
+    def _halt_from(self, text: str, peer: str | None, token: str) -> None:
         try:
             doc = json.loads(text)
         except (ValueError, RecursionError):
@@ -281,7 +286,7 @@ class Live:
         rid = doc.pop("rotator", None) if isinstance(doc, dict) else None
         if isinstance(rid, str):
             try:
-                self._halt(rid, json.dumps(doc).encode(), peer)
+                self._halt(rid, json.dumps(doc).encode(), peer, token)
             except Exception:  # the page's socket goes on: its POST carries the same STOP
                 log.exception("web console: a STOP over the live feed failed")
 

@@ -97,7 +97,9 @@ from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import (
+    LIVE,
     MAX_BODY_BYTES,
+    POST,
     BadCommand,
     Order,
     WebCommand,
@@ -105,6 +107,7 @@ from bridge.interfaces.web.commands import (
     carry_out,
     feed_clock,
     parse,
+    scoped,
 )
 from bridge.interfaces.web.connections import MOST_HELD, Connections
 from bridge.interfaces.web.feed import Feed, Shape
@@ -539,27 +542,28 @@ class WebConsole:
         return response
 
     # -- commands (rule 4) -------------------------------------------------------------------
-    def _halt(self, rotator_id: str, body: bytes, peer: str | None = None) -> None:
-        """A STOP or lock ON over a page's WebSocket (live.py rule 5); nothing else."""
+    def _halt(self, rotator_id: str, body: bytes, peer: str | None, token: str) -> None:
+        """A STOP or lock ON over a page's WebSocket (live.py rule 5), the page's ``token``
+        given with it; nothing else."""
         rot = self._rotators.get(rotator_id)
         try:
-            cmd = parse(body)
+            cmd = scoped(parse(body), token)  # (commands.py rule 5)
         except BadCommand:
             return
-        if rot is None or not cmd.halts() or self._order.carried(rot.id, cmd):
+        if rot is None or not cmd.halts() or self._order.carried(rot.id, cmd, LIVE):
             return  # (a halt its POST carried out: commands.py ``Order.carried``)
         far = self._far.get(rot.id)
         if far is not None and rot.commands_block:  # rule 5
             self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
             done = asyncio.wrap_future(far.submit(carry_out, rot, cmd, peer))
-            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
+            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f, LIVE))
             return
         try:
             carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             self._order.pressed(rot.id, cmd)
             return
-        self._order.halted(rot.id, cmd, time.monotonic())
+        self._order.halted(rot.id, cmd, time.monotonic(), LIVE)
 
     def _far_move(
         self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, since: int
@@ -590,10 +594,12 @@ class WebConsole:
     def _far_unqueue(self, rotator_id: str) -> None:
         self._far_moves[rotator_id] = self._far_moves.get(rotator_id, 1) - 1
 
-    def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
+    def _halted(
+        self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None], via: str
+    ) -> None:
         """A halt carried out off the loop (rule 5), back on the loop."""
         if not done.cancelled() and done.exception() is None:
-            self._order.halted(rotator_id, cmd, time.monotonic())
+            self._order.halted(rotator_id, cmd, time.monotonic(), via)
         else:  # (kept far away and sent first on reconnect: commands.py ``pressed``)
             self._order.pressed(rotator_id, cmd)
 
@@ -623,13 +629,13 @@ class WebConsole:
             rot.report_refusal(why, said, origin=by)
             return _json({"error": why, "code": "invalid"}, 413)
         try:
-            cmd = parse(body)
+            cmd = scoped(parse(body), token)  # (commands.py rule 5)
         except BadCommand as exc:
             said = "console: " + body[:80].decode("utf-8", "replace")
             rot.report_refusal(str(exc), said, origin=by)
             return _json({"error": str(exc), "code": "invalid"}, 400)
         halt = cmd.halts()
-        if halt and self._order.carried(rot.id, cmd):  # (its WebSocket's copy carried it out)
+        if halt and self._order.carried(rot.id, cmd, POST):  # (its WebSocket's copy carried it)
             return _json({"ok": True})
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
@@ -683,7 +689,7 @@ class WebConsole:
                 self._order.pressed(rot.id, cmd)
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:
-            self._order.halted(rot.id, cmd, time.monotonic())
+            self._order.halted(rot.id, cmd, time.monotonic(), POST)
         return _json({"ok": True})
 
     async def _shown(self, rot: ConsoleRotator, cmd: WebCommand, started: float) -> str | None:
