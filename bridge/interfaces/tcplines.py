@@ -167,7 +167,6 @@ import logging
 import math
 import os
 import re
-import select
 import selectors
 import socket
 import struct
@@ -183,6 +182,7 @@ from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import Command
 from bridge.core.ratelimit import Budget, TokenBucket
 from bridge.front import FrontRotator, HaltCounted
+from bridge.interfaces.fdwait import readable
 
 log = logging.getLogger(__name__)
 
@@ -355,13 +355,10 @@ def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
 
 def _readable(sock: socket.socket) -> bool:
     """Whether ``sock`` is readable now (a listener: a connection waits in its queue); True
-    if it cannot be said (closed meanwhile)."""
+    if it cannot be said (closed meanwhile: errs toward refusing, rule 9)."""
     try:
-        if hasattr(select, "poll"):
-            poller = select.poll()
-            poller.register(sock, select.POLLIN)
-            return bool(poller.poll(0))
-        return bool(select.select([sock], [], [], 0)[0])  # (Windows: no poll)
+        fd = sock.fileno()
+        return fd < 0 or bool(readable((fd,), 0))
     except (OSError, ValueError):
         return True
 
