@@ -207,6 +207,9 @@ PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is loo
 SWEEP_S = 0.01  # rule 8: waiting connections whose peer left are looked for at most this often
 SEEN_KEPT = 4096  # rule 9: a connection's looks at what it has sent, at most (the oldest go)
 MINE_KEPT = 64  # rule 9: the numbers of a connection's own halts kept (the oldest go: refusing)
+# Windows has no MSG_DONTWAIT (the remote runs there: tests/remote/test_remote_portable.py):
+# every use is a read of bytes known to wait, or a small send to a fresh connection
+_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
 STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 9
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
@@ -366,10 +369,12 @@ def _readable(sock: socket.socket) -> bool:
 def _peek(conn: socket.socket, size: int) -> bytes:
     """What waits unread in the kernel, up to ``size`` bytes, at once (b"" if nothing)."""
     try:
+        if not _DONTWAIT:  # (Windows: a peek at bytes known to be there returns at once)
+            return conn.recv(size, socket.MSG_PEEK) if readable((conn.fileno(),), 0) else b""
         if conn.gettimeout():  # a client's thread set one: recv() would poll for it first
             with socket.socket(fileno=os.dup(conn.fileno())) as peek:  # no timeout: at once
-                return peek.recv(size, socket.MSG_PEEK | socket.MSG_DONTWAIT)
-        return conn.recv(size, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+                return peek.recv(size, socket.MSG_PEEK | _DONTWAIT)
+        return conn.recv(size, socket.MSG_PEEK | _DONTWAIT)
     except OSError:
         return b""
 
@@ -854,15 +859,15 @@ class LineServer:
         try:
             looks = self._looks.get(conn)
             if looks is None:
-                conn.recv(len(data), socket.MSG_DONTWAIT)  # (the bytes peeked, all there)
+                conn.recv(len(data), _DONTWAIT)  # (the bytes peeked, all there)
             else:  # rule 9: its thread counts from the bytes after the question
                 with looks.lock:  # (a look in between would count the question's bytes)
-                    conn.recv(len(data), socket.MSG_DONTWAIT)
+                    conn.recv(len(data), _DONTWAIT)
                     looks.seen = deque(
                         ((max(0, sent - len(data)), count) for sent, count in looks.seen),
                         maxlen=SEEN_KEPT,
                     )
-            if conn.send(answer, socket.MSG_DONTWAIT) != len(answer):
+            if conn.send(answer, _DONTWAIT) != len(answer):
                 return False  # (a fresh connection's buffer takes it whole: not, no answer)
         except OSError:
             return False  # (gone: the loop finds it so, or lets it in to end)
@@ -1209,7 +1214,7 @@ class LineServer:
                                 conn.fileno(), counting()
                             )  # the count first, then what was sent
                             most, fence.arrived = looks.next_read()
-                            data = conn.recv(min(most, self._read_bytes), socket.MSG_DONTWAIT)
+                            data = conn.recv(min(most, self._read_bytes), _DONTWAIT)
                             read += len(data)
                             looks.read = read
                     else:
