@@ -960,8 +960,8 @@ class LineServer:
                 count = self._halt_count() if self._halt_count is not None else 0
                 try:
                     conn, peer = listener.accept()
-                except BlockingIOError:
-                    self._queue_floor = count
+                except BlockingIOError:  # (never lowered: a look before a halt may have
+                    self._queue_floor = max(self._queue_floor, count)  # raised it already)
                     return False
                 floor = self._queue_floor
         except OSError as exc:
@@ -1017,13 +1017,16 @@ class LineServer:
     def _queue_looked(self, ahead: int) -> None:
         """Rule 9: a connection still in the kernel's queue is looked at when it is accepted,
         at the floor: the count when the queue was last found empty (by the accept loop, or
-        here, before each halt: then ``ahead`` of the count, the halt about to be counted)."""
+        here, before each halt: then ``ahead`` of the count, the halt about to be counted).
+        Each is a bound for every connection that comes after it, so the floor only rises (a
+        cold review: the loop, finding the queue empty between a halt's look and its count,
+        set it back below the halt, and a target sent long after the STOP was refused)."""
         listener = self._listener
         assert self._halt_count is not None
         with self._queue_lock:
             count = self._halt_count()
             if listener is not None and not _readable(listener):
-                self._queue_floor = count + ahead
+                self._queue_floor = max(self._queue_floor, count + ahead)
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector

@@ -16,7 +16,7 @@ import pytest
 from bridge.core.ratelimit import Budget
 from bridge.interfaces import ptylines, tcplines
 from bridge.interfaces.ptylines import PtyLineServer
-from tests.integration.test_rotctld_integration import _replies, connect, start
+from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 from tests.test_ptylines import Client
@@ -139,3 +139,65 @@ def test_windows_a_rotctld_client_is_answered_without_msg_dontwait_and_fionread(
         except (ConnectionError, AssertionError, TimeoutError) as exc:
             reply = repr(exc).encode()
     assert reply.startswith(b"0.00\n"), f"the client was not answered: {reply!r}"
+
+
+def test_a_target_sent_well_after_a_stop_from_a_new_connection_is_not_refused(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The accept loop's empty-queue floor can go back below a halt: the look before the halt
+    sets the floor to the count after it, then (before the halt is counted) the accept loop,
+    draining after a program's connection (a script's ``rotctl -m 2 p``, once a second),
+    finds the queue empty and sets it to the count read then, the one before the halt. The
+    floor stays there until the next drain: the next program's target, sent long after the
+    STOP and in the kernel when it is accepted, is refused as sent before it."""
+    port, server = start(rig, start_az_deg=0)
+    watchers = server._halt_watchers
+    assert watchers is not None
+    gate, entered = threading.Event(), threading.Event()
+    gate.set()
+
+    def between() -> None:  # after the server's look, before the count: another watcher
+        if not gate.is_set():
+            entered.set()
+            gate.wait(slow(10))
+
+    watchers.add(between)
+    took, drained = threading.Event(), threading.Event()
+    plain_take = tcplines.LineServer._take
+
+    def watched_take(self, listener, waiting, sel):  # type: ignore[no-untyped-def]
+        got = plain_take(self, listener, waiting, sel)
+        if got and not gate.is_set():
+            took.set()  # (the script's connection)
+        elif took.is_set():
+            drained.set()  # the queue found empty after it
+        return got
+
+    monkeypatch.setattr(tcplines.LineServer, "_take", watched_take)
+    with connect(port) as stopper:  # the operator's program, connected before
+        ask(stopper, b"p\n", b"0.00\n0.00\n")
+        gate.clear()
+        stopper.sendall(b"S\n")  # (one halt: an MQTT STOP counts its lane copy again later)
+        assert entered.wait(slow(5)), "the STOP never reached the watchers"
+        with connect(port) as poller:  # a script's connection, accepted meanwhile
+            assert drained.wait(slow(5)), "the queue never found empty after it"
+            gate.set()
+            ask(stopper, b"", b"RPRT 0\n")  # the STOP counted and carried out
+            poller.sendall(b"p\n")
+            _replies(poller, 2)
+    watchers.remove(between)
+    take, held, go = plain_take, threading.Event(), threading.Event()
+
+    def busy_take(self, listener, waiting, sel):  # type: ignore[no-untyped-def]
+        if not go.is_set():
+            held.set()
+            go.wait(slow(10))
+        return take(self, listener, waiting, sel)
+
+    monkeypatch.setattr(tcplines.LineServer, "_take", busy_take)
+    with connect(port) as sock:  # long after the STOP: Gpredict connects and sends its target
+        assert held.wait(slow(5))
+        sock.sendall(b"P 100 0\n")
+        go.set()
+        reply = _replies(sock, 1)
+    assert reply == b"RPRT 0\n", f"a target sent after the STOP was refused: {reply!r}"
