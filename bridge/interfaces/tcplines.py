@@ -155,7 +155,9 @@ Rules:
    looked at then at the count when the queue was last found empty, by the accept loop or by
    the look before each halt (the same review: a target sent from the queue before a STOP was
    carried out); one that came after a halt the loop has not yet caught up with is refused
-   too, which errs the safe way.
+   too, which errs the safe way. Where the kernel cannot say what waits unread (Windows, no
+   FIONREAD: the remote runs there) a look counts only what was read, so a move is judged at
+   the count its own read's look read: this rule holds there only for what a read has taken.
 """
 
 from __future__ import annotations
