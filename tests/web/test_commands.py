@@ -141,7 +141,7 @@ def test_a_move_the_page_sent_before_a_halt_is_stale_however_late_its_request_be
     assert order.stale("hf", WebCommand("target", az_deg=1.0), halted + 2.0, halted) is None
     # the page's own STOP, numbered before the click: the page sent the click after it,
     # though its reckoning of the time errs on the old side (rule 6)
-    order.halted("hf", WebCommand("stop", page="p1", seq=5), halted, "post")
+    order.halted("hf", WebCommand("stop", page="p1", seq=5), halted)
     mine = WebCommand("target", az_deg=30.0, page="p1", seq=6, sent=halted - 0.01 + _OFFSET_S)
     assert order.stale("hf", mine, halted + 0.5, halted) is None
     assert order.stale("hf", replace(mine, seq=4), halted + 0.5, halted) == STALE

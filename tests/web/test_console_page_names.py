@@ -26,20 +26,6 @@ def console(rig: Rig) -> Iterator[tuple[Rig, ConsoleClient]]:
     yield rig, client
 
 
-def test_a_script_restarted_under_its_page_name_and_token_has_its_stop_carried_out(
-    console: tuple[Rig, ConsoleClient],
-) -> None:
-    rig, client = console
-    emu = rig.emus["hf"]
-    assert client.command("hf", command="stop", page="logger", seq=7).status == 200
-    assert client.command("hf", command="target", az=300, page="logger", seq=8).status == 200
-    emu.wait_for(lambda s: s.is_moving, slow(10))
-    # the script restarts, keeps its page name and its token, and numbers from 1 again
-    assert client.command("hf", command="stop", page="logger", seq=1).status == 200
-    emu.wait_for(lambda s: not s.is_moving, slow(10))
-    assert emu.state().az_deg < 290, "the STOP was answered ok and not carried out"
-
-
 def test_a_fresh_login_under_the_same_page_name_is_a_fresh_page(
     console: tuple[Rig, ConsoleClient],
 ) -> None:

@@ -338,9 +338,6 @@ def _text(doc: dict[str, object], key: str) -> str:
     return value
 
 
-LIVE, POST = "live", "post"  # rule 5: the two ways a page's halt comes (``Order.carried``)
-
-
 def scoped(cmd: WebCommand, token: str) -> WebCommand:
     """Rule 5: ``cmd`` with its page named within the session of ``token``: pages count
     within one session each, so another session's commands under the same page name (a
@@ -356,9 +353,8 @@ class Order:
     """Rule 5, for one console (the server's event loop alone calls it)."""
 
     def __init__(self) -> None:
-        # rotator -> the console's last halt: when it was carried out, the page and its number,
-        # and the way it came (``carried``)
-        self._last: dict[str, tuple[float, str | None, int | None, str]] = {}
+        # rotator -> the console's last halt: when it was carried out, the page and its number
+        self._last: dict[str, tuple[float, str | None, int | None]] = {}
         self._last_kind: dict[str, str] = {}  # rotator -> what that halt was (``_kind``)
         self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
         self._took_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # rule 5a: the same
@@ -381,7 +377,7 @@ class Order:
             took = newer.get((str(cmd.page), rotator_id))
             if took is not None and cmd.seq is not None and cmd.seq < took:
                 return OVERTAKEN  # rule 5a
-        at, page, seq, _via = self._last.get(rotator_id, (-math.inf, None, None, ""))
+        at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
         latest = max(at, halted_s)
         # sent before the halt, by the page's reckoning (rule 6), is sent before it however
         # late its request began: a click held up on the way before it reached the console
@@ -403,33 +399,32 @@ class Order:
         if cmd.command != "nudge":
             _keep(self._took_aim, (cmd.page, rotator_id), cmd.seq)
 
-    def carried(self, rotator_id: str, cmd: WebCommand, via: str) -> bool:
-        """Whether ``cmd``, come by ``via`` (the page's WebSocket or a POST), is a halt the page
-        numbered and the console carried out already, come the other way, or one it numbered
-        before that, as the rotator's latest: the page sends each halt both over its WebSocket
-        and by POST (console.js), and one click was two events in the audit trail (an attack
-        pass). The second copy is not carried out again (the first was), nor an older halt's
-        copy coming after the page's newer one that does all it does (its socket's copies wait
-        past its budget, live.py rule 7: carried out after the click the page made next, they
-        stopped it): a STOP's after a STOP or a lock ON, a lock ON's after a lock ON, tracking
-        off's after any; any other halt in between, and the copy goes again (stopping twice is
-        harmless). One come the same way as that halt is no copy of it: a WebSocket never
-        reorders a page's halts, and a script restarted under the same page name and token
-        numbers from 1 again, by POST (a cold review: its STOP was answered ok and not carried
-        out; a fresh login is a fresh page anyway: ``scoped``)."""
+    def carried(self, rotator_id: str, cmd: WebCommand) -> bool:
+        """Whether ``cmd`` is a halt the page numbered and the console carried out already, or
+        one it numbered before that, as the rotator's latest: the page sends each halt both over
+        its WebSocket and by POST (console.js), and one click was two events in the audit
+        trail (an attack pass). The second copy is not carried out again (the first was),
+        nor an older halt's copy coming after the page's newer one that does all it does
+        (its socket's copies wait past its budget, live.py rule 7: carried out after the
+        click the page made next, they stopped it): a STOP's after a STOP or a lock ON, a
+        lock ON's after a lock ON, tracking off's after any; any other halt in between, and
+        the copy goes again (stopping twice is harmless). So a page's numbers must never
+        start again under the same name within one login (``scoped``): a script restarted so
+        had its STOP answered ok and not carried out (a cold review; telling copies by the
+        way they came instead let an older STOP's late POST stop the page's next click, the
+        next review)."""
         if not cmd.halts() or cmd.page is None or cmd.seq is None:
             return False
-        _at, page, seq, came = self._last.get(rotator_id, (-math.inf, None, None, ""))
-        if page != cmd.page or seq is None or cmd.seq > seq or came == via:
+        _at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
+        if page != cmd.page or seq is None or cmd.seq > seq:
             return False
         # an older halt only where the newer one does all it does: a STOP does not lock, and
         # tracking off does not stop a turn (a review: a lock ON whose copies came after the
         # page's next click, a STOP, was never carried out, and its POST answered "ok")
         return cmd.seq == seq or self._last_kind.get(rotator_id) in _OUTDONE_BY[_kind(cmd)]
 
-    def halted(self, rotator_id: str, cmd: WebCommand, now: float, via: str) -> None:
-        """A halt carried out, come by ``via`` (``carried``)."""
-        self._last[rotator_id] = (now, cmd.page, cmd.seq, via)
+    def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
+        self._last[rotator_id] = (now, cmd.page, cmd.seq)
         self._last_kind[rotator_id] = _kind(cmd)
         self.pressed(rotator_id, cmd)
 

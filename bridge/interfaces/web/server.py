@@ -97,9 +97,7 @@ from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import (
-    LIVE,
     MAX_BODY_BYTES,
-    POST,
     BadCommand,
     Order,
     WebCommand,
@@ -550,20 +548,20 @@ class WebConsole:
             cmd = scoped(parse(body), token)  # (commands.py rule 5)
         except BadCommand:
             return
-        if rot is None or not cmd.halts() or self._order.carried(rot.id, cmd, LIVE):
+        if rot is None or not cmd.halts() or self._order.carried(rot.id, cmd):
             return  # (a halt its POST carried out: commands.py ``Order.carried``)
         far = self._far.get(rot.id)
         if far is not None and rot.commands_block:  # rule 5
             self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
             done = asyncio.wrap_future(far.submit(carry_out, rot, cmd, peer))
-            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f, LIVE))
+            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
             return
         try:
             carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             self._order.pressed(rot.id, cmd)
             return
-        self._order.halted(rot.id, cmd, time.monotonic(), LIVE)
+        self._order.halted(rot.id, cmd, time.monotonic())
 
     def _far_move(
         self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, since: int
@@ -594,12 +592,10 @@ class WebConsole:
     def _far_unqueue(self, rotator_id: str) -> None:
         self._far_moves[rotator_id] = self._far_moves.get(rotator_id, 1) - 1
 
-    def _halted(
-        self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None], via: str
-    ) -> None:
+    def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
         """A halt carried out off the loop (rule 5), back on the loop."""
         if not done.cancelled() and done.exception() is None:
-            self._order.halted(rotator_id, cmd, time.monotonic(), via)
+            self._order.halted(rotator_id, cmd, time.monotonic())
         else:  # (kept far away and sent first on reconnect: commands.py ``pressed``)
             self._order.pressed(rotator_id, cmd)
 
@@ -635,7 +631,7 @@ class WebConsole:
             rot.report_refusal(str(exc), said, origin=by)
             return _json({"error": str(exc), "code": "invalid"}, 400)
         halt = cmd.halts()
-        if halt and self._order.carried(rot.id, cmd, POST):  # (its WebSocket's copy carried it)
+        if halt and self._order.carried(rot.id, cmd):  # (its WebSocket's copy carried it out)
             return _json({"ok": True})
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
@@ -689,7 +685,7 @@ class WebConsole:
                 self._order.pressed(rot.id, cmd)
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:
-            self._order.halted(rot.id, cmd, time.monotonic(), POST)
+            self._order.halted(rot.id, cmd, time.monotonic())
         return _json({"ok": True})
 
     async def _shown(self, rot: ConsoleRotator, cmd: WebCommand, started: float) -> str | None:
