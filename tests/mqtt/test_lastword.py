@@ -266,8 +266,10 @@ def test_no_echo_is_noted_while_the_lanes_subscription_is_not_acknowledged() -> 
     w = LastWord(token="t")
     w.lane_connected()
     assert w.main_halt("a", "stop") == Copy()  # nothing noted, no lane marker
-    w.lane_subscribed(1.0)
+    sync = w.lane_subscribed(1.0)
     assert w.lane_halt("a", "stop", 2.0)  # carried out at once, with a hold
+    assert w.main_halt("b", "stop") == Copy()  # its marker not back: maybe from before it
+    w.marker_back(w.marker(sync or 0).encode())
     copy = w.main_halt("b", "stop")  # in step now: noted as before
     assert copy.lane_marker is not None and w.lane_halt("b", "stop", 3.0) is None
 

@@ -35,11 +35,17 @@ but not the order between them. So:
    marker; a copy of that kind for that rotator read on the lane before then is the echo and
    is dropped, and the note ends when the lane marker comes back (within the lane's own round
    trip). A note is also forgotten when the lane reconnects (an older copy cannot come on the
-   new connection), and none is made while the lane's subscription is not acknowledged (rule
-   9: the halt and the lane marker may both have been published before the broker took it, so
-   neither comes, and the note would stand: the lane's next real stop of that kind, taken for
-   the echo, then waited for the main connection's copy, behind whatever it is reading). A
-   late copy is then carried out (an extra stop: the safe direction). No clock decides it.
+   new connection), and none is made while the lane's subscription is not acknowledged, nor
+   after, until the main connection has read past the marker its acknowledgement sent (rule
+   9, asked the same way: the halt may have been published before the broker took the lane's
+   SUBSCRIBE, so no copy comes on the lane, and the note would stand: the lane's next real
+   stop of that kind, taken for the echo, then waited for the main connection's copy, behind
+   whatever it is reading; two reviews: the main connection, behind a backlog when the lane
+   alone reconnected, read a STOP from while the lane was down, and the operator's next STOP
+   on the lane was dropped as its echo). A late copy is then carried out (an extra stop, its
+   hold ended by its marker: the safe direction). No clock decides it. While the main
+   connection cannot read its markers (rule 7) nothing tells when it is past, and the note
+   is made as before.
 5. A hold ends with clearing when the main connection drops (nothing older can come any more;
    a target or tracking that waited is dropped and reported: its place in line is lost) and
    when it connects again. While the main connection lives, no clock ends a hold: however
@@ -321,6 +327,8 @@ class LastWord:
             return Copy(echo=True, upto=n, released=released)
         if not self.echoes or self._lane_sub == NOT_YET:  # (rule 4: nothing to note against)
             return Copy()
+        if self._lane_sub > self._main_past and self.markers:  # rule 4 as rule 9: this halt
+            return Copy()  # may be older than the lane's subscription, which has no copy of it
         self._lane_next += 1
         self._echoes.setdefault(key, deque()).append(self._lane_next)
         return Copy(lane_marker=self._lane_next)
