@@ -7,7 +7,8 @@ reads the backlog (every target published before the STOP) for seconds. Before, 
 decided after three unanswered markers (about 6 s) that the broker's ACL denied its marker
 topic, ended the hold, and the backlog's targets went to the controller: the rotor started
 again, several times, after the STOP. The hold ends only when the main connection has read
-its own copy of the STOP (or the marker behind it): nothing published before it goes out.
+its own copy of the STOP (or the marker behind it): nothing published before it goes out (the
+backlog's targets, read while the hold lasts, are refused as older: lastword.py rule 2).
 
 With the marker topic denied by the broker's ACL the same holds, and ``B/bridge/info`` says so
 from the first connection on (the bridge's probe on ``B/bridge/fence`` did not come back before
@@ -27,7 +28,6 @@ from __future__ import annotations
 import json
 import socket
 import threading
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -127,6 +127,7 @@ def stop_after_backlog(rig: Rig, probe: Probe, emu: Any, app: App, targets: int)
     app._info = info  # type: ignore[method-assign]
     behind: list[bool] = []  # the main connection was kept behind until the hold was said
     main_stop = threading.Event()  # the main connection read its own copy of the STOP
+    synced = threading.Event()  # ... and the target published after everything before
     on_main = app.client._handler
 
     def main(
@@ -137,16 +138,18 @@ def stop_after_backlog(rig: Rig, probe: Probe, emu: Any, app: App, targets: int)
         elif lane_stop.is_set() and not main_stop.is_set() and not behind:
             behind.append(hold_said.wait(slow(30)))  # paho's thread: reads nothing meanwhile
         on_main(topic, payload, retain, operator, stamp)
+        if topic == "rotor/target" and payload == b"sync":
+            synced.set()
 
     app.client._handler = main
     slide_then_stop(rig.broker.port, targets)
     assert lane_stop.wait(slow(30)), "the stop lane never read the STOP"
     slider = Probe(rig.broker.port, "")
     try:
-        t = time.monotonic()
         slider.publish("rotor/target", b"sync")
-        # the main connection has read everything published before (its refusal is newest)
-        probe.wait_for("rotor/error", lambda m: b"sync" in m.payload, 120, after=t)
+        # the main connection has read everything published before (read, not said on
+        # R/error: the backlog's refusals, read while the hold lasted, used up its budget)
+        wait_until(synced.is_set, 120, "the main connection read the sync")
         assert behind == [True], "the bridge did not say the long hold while it lasted"
         wait_until(lambda: not app.mqtt._word.holding, 10, "the hold ended")
         slider.publish("rotor/target", b"330")

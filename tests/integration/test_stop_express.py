@@ -731,8 +731,9 @@ def test_a_target_published_before_a_stop_stays_held_when_the_express_dies_meanw
     never the last word's. The main connection is behind (held on a target of 300 published
     just before a STOP the lane carried out, the express's hold on it waiting for an express
     that reads nothing); the express is killed and started again meanwhile; then the main
-    connection reads the 300 and is held again before its copy of the STOP: the 300 waits
-    (the last word's hold) and that copy drops it, never sent after the STOP."""
+    connection reads the 300 and is held again before its copy of the STOP: the 300, read
+    while the last word's hold lasts, is refused as older (lastword.py rule 2), never sent
+    after the STOP."""
     emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
     app = rig.start()
     rig.ready("tower")
@@ -741,6 +742,7 @@ def test_a_target_published_before_a_stop_stays_held_when_the_express_dies_meanw
     session = app._by_id["tower"]._worker.session  # (read only: what waits in it)
     rig.probe.publish("rotor/target", "200")
     emu.wait_for(lambda s: s.is_moving, 10)
+    t = time.monotonic()
     with main_held_at(app, "rotor/stop", b"STOP") as copy_held:
         with main_held_at(app, "rotor/target", b"300") as held:
             rig.probe.publish("rotor/target", "300")
@@ -755,8 +757,9 @@ def test_a_target_published_before_a_stop_stays_held_when_the_express_dies_meanw
             wait_until(lambda: app.express.starts == 2, 15, "started again")
             express_ready(app)
         wait_until(copy_held.is_set, 10, "the main connection read 300, held on the STOP")
-        wait_until(lambda: session.targets.pending is not None, 10, "the 300 waits")
-        time.sleep(2.0)  # a quiet period, not a deadline: the brake delay is long over
+        err = rig.probe.wait_for("rotor/error", lambda m: b"300" in m.payload, 10, after=t)
+        assert b"that the stop connection carried out first" in err.payload
+        assert session.targets.pending is None  # (refused: nothing of it waits to go out)
         assert not [d for d in bearings(emu) if b"300" in d]
     marker_back(rig, app)
     assert not [d for d in bearings(emu) if b"300" in d]  # never went out

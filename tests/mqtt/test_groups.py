@@ -16,7 +16,7 @@ from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Stop, 
 from bridge.feature import registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
-from bridge.interfaces.mqtt.halts import FENCED
+from bridge.interfaces.mqtt.halts import FENCED, HELD
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
@@ -297,10 +297,11 @@ def test_a_group_stop_on_the_main_connection_stops_every_member_even_retained() 
 
 def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() -> None:
     """lastword.py rules 2 and 9 for each member: the lane's group stop is carried out at once
-    and holds both members (the judge keeps every target on hold); the flood of group targets
-    published before it, read after it on the main connection, stays held; the main
-    connection's copy drops them (it is carried out after them) and ends both holds; only the
-    target published after the stop goes out. One marker for the group."""
+    and holds both members; the flood of group targets published before it, read after it on
+    the main connection while the hold lasts, is refused for each member (review 18: held,
+    they waited for the copy to drop them, and a copy lost let them through); the main
+    connection's copy ends both holds; only the target published after the stop goes out.
+    One marker for the group."""
     svc, pub, upper, lower = group_service()
     svc.on_lane_message("rotor/stack/stop", b"", False)
     markers = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
@@ -314,9 +315,11 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
         hold = rot.calls[0][-1]
         assert rot.calls[0] == ("submit", stop, "stop", hold) and hold >= 1
         flood = rot.calls[1:11]
-        assert [c[1].az_deg for c in flood] == [(az + offset) % 360 for az in range(100, 110)]
+        assert flood == [
+            ("refused", HELD, f"target '{az}' (group stack)") for az in range(100, 110)
+        ]
         assert rot.calls[11:] == [
-            ("submit", stop, "stop"),  # after the flood: it drops every one of them
+            ("submit", stop, "stop"),
             ("release", hold),
             ("submit", Target((50.0 + offset) % 360, None, M), "target '50' (group stack)"),
         ]

@@ -29,9 +29,10 @@ A stop or lock ON another interface carried out (the console, rotctld, a logger)
 rotator (lastword.py rule 11): counted before it is put (``fence_asked``, under a lock of its own
 that nothing holds for longer than a count), fenced after (``fence_carried``, with a marker on
 the main connection, or owed while a few are out: lastword.py rule 11); the service asks
-``fenced`` before it hands on a move, and the main connection's lock OFF is asked here. A lock
-ON no fence orders (the main connection down) makes the lane's lock OFF wait for a new main
-connection (lastword.py rule 12).
+``stale_move`` before it hands on a move (fenced, or held by a lane halt: lastword.py rule 2),
+and the main connection's lock OFF is asked here. A lock ON no fence orders (the main
+connection down) makes the lane's lock OFF wait for a new main connection (lastword.py rule
+12).
 """
 
 from __future__ import annotations
@@ -67,6 +68,12 @@ LOCK_OFF_SUBSCRIBING = (
 FENCED = (
     "published before a STOP or lock ON that another interface (the console, rotctld, a "
     "logger) carried out first: not carried out"
+)
+# lastword.py rule 2: read on the main connection while a halt from the stop lane holds the
+# rotator, so published before that halt (or not known to be after it: its copy lost)
+HELD = (
+    "published before a STOP or lock ON that the stop connection carried out first (or not "
+    "known to be after it): not carried out; send it again"
 )
 LOCK_OFF_FENCED = (
     "lock OFF not carried out: it was published before a lock ON that another interface (the "
@@ -242,6 +249,16 @@ class Halts:
         up = self.word.fenced(rotator_id, lock_off)
         return up or self._asked.get(rotator_id, 0) > fenced
 
+    def stale_move(self, rotator_id: str) -> str | None:
+        """Why a move the main connection reads now for this rotator is refused as older (its
+        R/error), or None: another interface's halt fences it (``fenced``: FENCED), or a lane
+        halt holds it (lastword.py rule 2: HELD; its copy, or the marker, is not read yet).
+        Read without a lock, as ``fenced`` is (one dict look-up more): a lane halt put after
+        the look is put after the move's halt count was read, and drops it in the mailbox."""
+        if self.fenced(rotator_id):
+            return FENCED
+        return HELD if self.word.held(rotator_id) else None
+
     def _holds_possible(self) -> bool:
         """Whether the main connection will read what was published before a lane halt (and
         its marker after it): from its SUBSCRIBE on, not only from its SUBACK (a target
@@ -364,8 +381,8 @@ class Halts:
         return (
             f"{rid}: a stop or lock from the stop lane has held this rotator's targets for more "
             f"than {LONG_HOLD_S:g} s: the main connection has not yet read everything published "
-            f"before it (a flood of targets, a slow link?). Targets wait until {caught_up}; "
-            "stops and locks go through"
+            f"before it (a flood of targets, a slow link?). Until {caught_up}, MQTT targets are "
+            "refused as older and other interfaces' wait; stops and locks go through"
         )
 
     def marker_back(self, payload: bytes) -> None:

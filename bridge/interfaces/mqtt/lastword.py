@@ -16,14 +16,17 @@ but not the order between them. So:
    **hold**: no target goes to the controller until the main connection has caught up with
    that word. To know when, the bridge publishes a **marker** of its own on the main connection
    (``B/bridge/fence``, this process's token and a number). The broker had the stop before the
-   marker, so every message the main connection brings before the marker was published at or
-   before the lane's word: a target among them waits (held, not sent), and the main
-   connection's own copy of the stop or lock, which comes among them too, drops every target
-   older than it, as rule 1 says. The hold ends when the marker comes back, or when that copy
-   is read (everything published before the lane's word has been read by then: rule 9 says
-   when a copy is known for one), whichever comes first; then what is still pending
-   (published after the word) goes out. Nothing is decided by matching payloads, and no clock
-   ends a hold (rule 5).
+   marker, and the main connection's own copy of the stop or lock comes before the marker
+   too. The hold ends when that copy is read (everything published before the lane's word has
+   been read by then: rule 9 says when a copy is known for one), or when the marker comes
+   back, whichever comes first; then what is still pending goes out. So a move the main
+   connection reads while the hold lasts (``held``) came before the copy, published before
+   the lane's word, or its copy was lost on the way (QoS 0: a broker that drops messages for a
+   reader that fell behind, an ACL) and nothing tells whether it was published before the
+   word or after: it is refused as older (halts.py), never held. (A review: held, it waited
+   for the copy to drop it as rule 1 says; with the copy lost, the marker ended the hold and
+   a target published before the STOP turned the rotor after it.) Nothing is decided by
+   matching payloads, and no clock ends a hold (rule 5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
    (but rule 12).
@@ -332,6 +335,12 @@ class LastWord:
         self._lane_next += 1
         self._echoes.setdefault(key, deque()).append(self._lane_next)
         return Copy(lane_marker=self._lane_next)
+
+    def held(self, rotator_id: str) -> bool:
+        """Rule 2: whether a move the main connection reads now for this rotator is refused:
+        read while a lane halt holds it, so published before that halt, or not known to be
+        after it (its main copy lost, or not counted: rule 9)."""
+        return rotator_id in self._holds
 
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""

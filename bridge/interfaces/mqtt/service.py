@@ -84,10 +84,12 @@ Rules:
    costs the refusal, said once in the log, not a problem on every rotator's last error.
 11. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
    track or follow start, a feature's command that moves, a group's target for each member)
-   while another interface's stop or lock ON fences its rotator (lastword.py rule 11) was
-   published before that halt: refused on ``R/error`` as stale, and its halt count is read
-   before the fence is asked, so a halt put after that drops it in the mailbox (a call's goes
-   to the DX cluster's aimer with it). A lock OFF read then, after a lock ON, is refused as
+   while another interface's stop or lock ON fences its rotator (lastword.py rule 11), or a
+   stop or lock ON from the stop lane holds it (lastword.py rule 2: its copy not read yet),
+   was published before that halt (or is not known to be after it): refused on ``R/error`` as
+   stale (halts.py ``stale_move``), and its halt count is read before the fence is asked, so
+   a halt put after that drops it in the mailbox (a call's goes to the DX cluster's aimer
+   with it). A lock OFF read then, after a lock ON, is refused as
    halts.py says; its halt count goes with it too, and the judge refuses it if a lock ON
    came between (runtime/rotator.py).
 """
@@ -128,7 +130,7 @@ from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
-from bridge.interfaces.mqtt.halts import FENCED, Halts, switch_on
+from bridge.interfaces.mqtt.halts import Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
@@ -536,9 +538,10 @@ class MqttService:
                 rot.report_refusal(refused[part.member], said, origin=origin)
                 continue
             since = rot.halts  # rule 11: read before the fence is asked
-            if self._halts.fenced(rot.id):
-                refused[part.member] = FENCED
-                rot.report_refusal(FENCED, said, origin=origin)
+            stale = self._halts.stale_move(rot.id)
+            if stale is not None:
+                refused[part.member] = stale
+                rot.report_refusal(stale, said, origin=origin)
                 continue
             late = self._late(stamp, rot)  # rule 9: sent before this member's last halt
             if late is not None:
@@ -731,8 +734,9 @@ class MqttService:
         since = None
         if isinstance(command, Called) or (command is not None and turns_rotor(command)):
             since = rot.halts  # rule 11: read before the fence is asked
-            if self._halts.fenced(rot.id):
-                rot.report_refusal(FENCED, what, origin=by)
+            stale = self._halts.stale_move(rot.id)
+            if stale is not None:
+                rot.report_refusal(stale, what, origin=by)
                 return
         if isinstance(command, Called):
             if self._by_call is None:
