@@ -328,6 +328,7 @@ class Rotator:
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
         since: int | None = None,
         ticket: int | None = None,
     ) -> None:
@@ -336,7 +337,8 @@ class Rotator:
         R/error and in the audit trail. ``described``: the words the user sent (the error
         event's and the audit trail's). Stop and lock ON are never refused; ``hold`` (a stop or
         lock ON from the stop lane): no target goes out until ``release`` reaches that marker
-        (session rule 13); ``since``: the halt count (``halts``)
+        (session rule 13); ``echo``: a halt the stop lane carried out already
+        (interfaces/mqtt/halts.py), not audited twice; ``since``: the halt count (``halts``)
         when the command was asked, for a front end that submits it a while later (the DX
         cluster's look-up): a stop or lock ON put since then overtakes it, however late it is
         judged (mailbox.py rule 10); ``ticket``: for such a command, its place in the order of
@@ -356,7 +358,7 @@ class Rotator:
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=who)
             raise
-        if result is not None:  # after the put (operators.py rule 3)
+        if result is not None and not echo:  # after the put (operators.py rule 3)
             stop = isinstance(command, Stop)
             same = isinstance(command, Target | Claim | Release | SetOption) or (
                 isinstance(command, Lock) and not command.on

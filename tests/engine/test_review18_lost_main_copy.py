@@ -37,9 +37,10 @@ class Bridged(RecordingRotator):
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
         since: int | None = None,
     ) -> None:
-        super().submit(command, described, hold=hold, since=since)
+        super().submit(command, described, hold=hold, echo=echo, since=since)
         if isinstance(command, Stop):
             self.v.mailbox.put(command, hold=hold)
         elif isinstance(command, Lock):

@@ -125,6 +125,7 @@ class RecordingRotator:
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
         since: int | None = None,
     ) -> None:
         """Every command the service sends, recorded as what it asks for (who sent it: in

@@ -12,7 +12,7 @@ from bridge.protocols.base import ModelSpec
 
 class RotatorPort(FrontRotator, Protocol):
     """A rotator as the service sees it: every command through ``submit`` (front.py rule 1),
-    with the stop lane's hold (halts.py)."""
+    with the stop lane's hold and echo (halts.py)."""
 
     id: str
     name: str  # as dashboards show it
@@ -34,6 +34,7 @@ class RotatorPort(FrontRotator, Protocol):
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
         since: int | None = None,
         ticket: int | None = None,
     ) -> None: ...
