@@ -45,7 +45,6 @@ class Bridged(RecordingRotator):
             self.v.mailbox.put(command, hold=hold)
         elif isinstance(command, Lock):
             self.v.mailbox.put_lock(command.on, hold=hold)
-            self.v.mailbox.put_lock_saved(command.on)  # (the state writer's: kept.py rule 2)
         elif isinstance(command, Target):
             self.v.mailbox.put(command)
         self.v._take()

@@ -300,8 +300,8 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
     and holds both members; the flood of group targets published before it, read after it on
     the main connection while the hold lasts, is refused for each member (review 18: held,
     they waited for the copy to drop them, and a copy lost let them through); the main
-    connection's copy ends both holds, carried out already, not again; only the target
-    published after the stop goes out. One marker for the group."""
+    connection's copy ends both holds; only the target published after the stop goes out.
+    One marker for the group."""
     svc, pub, upper, lower = group_service()
     svc.on_lane_message("rotor/stack/stop", b"", False)
     markers = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
@@ -319,6 +319,7 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
             ("refused", HELD, f"target '{az}' (group stack)") for az in range(100, 110)
         ]
         assert rot.calls[11:] == [
+            ("submit", stop, "stop"),
             ("release", hold),
             ("submit", Target((50.0 + offset) % 360, None, M), "target '50' (group stack)"),
         ]

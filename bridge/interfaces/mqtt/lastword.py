@@ -9,11 +9,8 @@ but not the order between them. So:
 1. The main connection is the order. Every stop and lock word it brings (ON and OFF) is carried
    out where it stands among the targets: a target before a stop is dropped by that stop, one
    after it is obeyed, and the lock ends on the last word published. Nothing is matched away
-   or dropped as a duplicate on that side by its payload: a stop carried out twice stops twice
-   (the session merges it on the wire), a lock ON twice is still ON. The one exception is the
-   main copy of a halt the lane carried out, known by its place in the order (rule 9), never
-   by its payload: that word was carried out already, and its copy ends the hold (rule 2),
-   nothing more.
+   or dropped as a duplicate on that side: a stop carried out twice stops twice (the session
+   merges it on the wire), a lock ON twice is still ON.
 2. The lane is the speed. A stop or a lock ON it brings is carried out at once, in full (the
    rotor stops, its target and tracking are dropped, the lock is set), and puts the rotator on
    **hold**: no target goes to the controller until the main connection has caught up with
@@ -28,14 +25,8 @@ but not the order between them. So:
    reader that fell behind, an ACL) and nothing tells whether it was published before the
    word or after: it is refused as older (halts.py), never held. (A review: held, it waited
    for the copy to drop it as rule 1 says; with the copy lost, the marker ended the hold and
-   a target published before the STOP turned the rotor after it.) So nothing of the main
-   connection's waits for the copy to drop it, and the copy is not carried out again: what
-   waits in the session meanwhile is another interface's (rotctld's, the console's, a
-   logger's target, the console's lock OFF), put after the lane's word was carried out,
-   newer than the word the copy stands for; it goes out when the hold ends. (A review: the
-   copy, carried out as a full STOP or lock ON, dropped a rotctld target sent after the STOP,
-   and locked again a rotator the console had unlocked after the lane's lock ON.) Nothing is
-   decided by matching payloads, and no clock ends a hold (rule 5).
+   a target published before the STOP turned the rotor after it.) Nothing is decided by
+   matching payloads, and no clock ends a hold (rule 5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
    (but rule 12).
@@ -177,7 +168,7 @@ OWED = sys.maxsize  # rule 11: a fence whose marker waits for room (no marker nu
 class Copy:
     """What a halt read on the main connection means (rules 1, 4 and 9)."""
 
-    echo: bool = False  # the copy of a halt the lane carried out first: not carried out again
+    echo: bool = False  # the copy of a halt the lane carried out first
     lane_marker: int | None = None  # rule 4: the lane marker to publish
     upto: int = 0  # rule 9: the holds up to this marker end ...
     released: tuple[str, ...] = ()  # ... these rotators'
