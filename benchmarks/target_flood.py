@@ -34,6 +34,7 @@ import select
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -128,9 +129,17 @@ class Phase:
     cpu_s: float
 
 
-def one_stop(emu: Any, frames: FrameLog, mqtt: Mqtt, topic: str, bridge: Any) -> float:
+def one_stop(
+    emu: Any,
+    frames: FrameLog,
+    mqtt: Mqtt,
+    topic: str,
+    bridge: Any,
+    send: Callable[[], object] | None = None,
+) -> float:
     """Turned far from the front panel (no MQTT: the targets' connection is the flooded one),
-    stopped while turning: seconds from R/stop's publish to ``;`` at the controller."""
+    stopped while turning: seconds from R/stop's publish to ``;`` at the controller.
+    ``send``: how the stop is sent instead (a TCP front end's, say), timed from its call."""
     check_abort()
     wait_until(  # the last sample's (or target's) brake over
         lambda: (m := mqtt.last(f"{topic}/state")) is not None and m.text == "idle", 60, "idle"
@@ -142,7 +151,10 @@ def one_stop(emu: Any, frames: FrameLog, mqtt: Mqtt, topic: str, bridge: Any) ->
     mqtt.wait_for(f"{topic}/state", lambda m: m.text == "moving", timeout_s=10, after=t)
     mark = frames.mark()
     t0 = time.monotonic()
-    mqtt.publish(f"{topic}/stop", "STOP")
+    if send is None:
+        mqtt.publish(f"{topic}/stop", "STOP")
+    else:
+        send()
     frame = frames.wait(lambda f: f.data == STOP_FRAME, mark, 20)
     if frame is None:
         bridge.check()
