@@ -625,6 +625,7 @@ class LineServer:
         self._waiting_max = 4 * max_clients  # rule 5
         self.waiting: dict[socket.socket, tuple[str, int]] = {}  # the accept loop's, once run
         self._sel: selectors.BaseSelector | None = None  # the accept loop's, while it runs
+        self._watched: set[socket.socket] = set()  # the waiting ones in ``_sel`` (``_watch``)
         self._chatter = TokenBucket.full(CHATTER_BURST, CHATTER_S, clock())  # rule 5
         self._paused_log = RareLog()
         self._dropped_log = RareLog()
@@ -762,7 +763,7 @@ class LineServer:
         waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
         self.waiting = waiting  # (read by the tests: how many wait)
         with selectors.DefaultSelector() as sel:
-            self._sel = sel  # (the accept loop's alone)
+            self._sel, self._watched = sel, set()  # (the accept loop's alone)
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
             try:
@@ -802,8 +803,7 @@ class LineServer:
             conn = key.fileobj  # a waiting one: its bytes came, or it left
             if not isinstance(conn, socket.socket) or conn not in waiting:
                 continue  # reset by _take earlier in this same pass
-            if conn in sel.get_map():
-                sel.unregister(conn)
+            self._unwatch(conn)
             if not _alive(conn):
                 del waiting[conn]
                 self._looked.pop(conn, None)
@@ -873,18 +873,33 @@ class LineServer:
                 return False  # (a fresh connection's buffer takes it whole: not, no answer)
         except OSError:
             return False  # (gone: the loop finds it so, or lets it in to end)
-        if conn not in sel.get_map():
-            sel.register(conn, selectors.EVENT_READ)
+        self._watch(conn)
         return True
 
     def _let_in(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         """Rule 5: a thread for ``conn``, out of the accept loop's books and its selector."""
         self._looked.pop(conn, None)
-        sel = self._sel
-        if sel is not None and conn in sel.get_map():
-            sel.unregister(conn)
+        self._unwatch(conn)
         conn.setblocking(True)
         self._admit(conn, peer)
+
+    def _watch(self, conn: socket.socket) -> None:
+        """Rule 5: a waiting connection woken by its next bytes (or its peer's leaving): in the
+        accept loop's selector, once."""
+        if self._sel is not None and conn not in self._watched:
+            self._sel.register(conn, selectors.EVENT_READ)
+            self._watched.add(conn)
+
+    def _unwatch(self, conn: socket.socket) -> None:
+        """Rule 5: ``conn`` out of the accept loop's selector, if it is there; before it is
+        closed (its number is a new one's once closed: registered again, a KeyError in the
+        loop). Asked of ``_watched``, not the selector's map, which formats a KeyError's message
+        (the socket's repr, two system calls) for every connection not in it: a reset a
+        newcomer, and every waiting one at every wake-up (an attack pass)."""
+        if conn in self._watched:
+            self._watched.discard(conn)
+            if self._sel is not None:
+                self._sel.unregister(conn)
 
     def _queue(
         self,
@@ -915,9 +930,7 @@ class LineServer:
                 gone = next(iter(waiting)) if self._stop_in(conn) else conn
             waiting.pop(gone, None)
             self._looked.pop(gone, None)
-            sel = self._sel
-            if sel is not None and gone in sel.get_map():  # (its number is a new one's once
-                sel.unregister(gone)  # closed: registered again, a KeyError in the loop)
+            self._unwatch(gone)
             _reset(gone)
             self._over_log.warn(
                 self._clock(),
@@ -939,12 +952,10 @@ class LineServer:
         if now - self._swept_t < SWEEP_S:
             return
         self._swept_t = now
-        sel = self._sel
         for conn in [c for c in waiting if not _alive(c) and not self._stop_in(c)]:
             del waiting[conn]
             self._looked.pop(conn, None)
-            if sel is not None and conn in sel.get_map():
-                sel.unregister(conn)
+            self._unwatch(conn)
             conn.close()
 
     def _take(
@@ -996,7 +1007,7 @@ class LineServer:
         else:
             self._queue(conn, peer, waiting)
         if conn in waiting and not _peek(conn, 1):  # silent: woken by its first bytes (those
-            sel.register(conn, selectors.EVENT_READ)  # that sent some: _admit_waiting looks)
+            self._watch(conn)  # that sent some: _admit_waiting looks)
         elif conn in waiting:
             self._greet(conn, sel)
         return True
@@ -1040,7 +1051,7 @@ class LineServer:
         next_s: float | None = None
         held: set[str] = set()
         for conn, peer in list(waiting.items()):
-            if conn in waiting and conn not in sel.get_map():  # it sent bytes: a stop now?
+            if conn in waiting and conn not in self._watched:  # it sent bytes: a stop now?
                 if self._stop_in(conn):
                     del waiting[conn]
                     self._stop_now(conn, peer, waiting)
