@@ -608,6 +608,8 @@ class LineServer:
         self._greets = greets  # rule 8
         self._greeted: weakref.WeakSet[socket.socket] = weakref.WeakSet()  # rule 8: once each
         self._swept_t = -math.inf  # rule 8: the last look for waiting connections whose peer left
+        self._polled_t = -math.inf  # rule 5: the last look at those that sent part of a line
+        self._waited_out = True  # rule 5: the accept loop's last wait ended with nothing come
         self._halt_count = halt_count  # rule 9
         # rule 9: every connection's looks at what it has sent, from its accept
         self._looks: weakref.WeakKeyDictionary[socket.socket, Looks] = weakref.WeakKeyDictionary()
@@ -792,6 +794,7 @@ class LineServer:
     ) -> bool:
         """One pass of the accept loop; True when stop() asked it to end."""
         events = sel.select(self._admit_waiting(waiting, sel))
+        self._waited_out = not events
         if any(key.fileobj == self._wake_r for key, _ in events):
             return True
         for key, _ in events:
@@ -1046,12 +1049,22 @@ class LineServer:
     ) -> float | None:
         """Rule 5: each waiting connection whose first commands hold a stop (``_stop_now``),
         then a thread for each whose peer is back in credit, oldest first; returns how long
-        until the next may go (None: none waits)."""
+        until the next may go (None: none waits). Those that sent part of a line (not in the
+        selector: their bytes unread wake it at once) are read again PARTIAL_POLL_S apart, or
+        when the loop's wait for that ran out, not at every wake-up (an attack pass: a flood of
+        half-command connections woke the loop for each, and every one waiting was read again
+        each time)."""
         now = self._clock()
         next_s: float | None = None
         held: set[str] = set()
+        poll = self._waited_out or now - self._polled_t >= PARTIAL_POLL_S
+        if poll:
+            self._polled_t = now
         for conn, peer in list(waiting.items()):
             if conn in waiting and conn not in self._watched:  # it sent bytes: a stop now?
+                if not poll:  # (the loop's wait runs out by their next look)
+                    next_s = max(0.001, self._polled_t + PARTIAL_POLL_S - now)
+                    continue
                 if self._stop_in(conn):
                     del waiting[conn]
                     self._stop_now(conn, peer, waiting)
