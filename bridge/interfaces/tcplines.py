@@ -351,6 +351,20 @@ def _alive(conn: socket.socket) -> bool:
         return False
 
 
+def _arrived(conn: socket.socket, size: int) -> bytes | None:
+    """Rule 5: what a connection just accepted has sent, up to ``size`` bytes, left unread (b""
+    if nothing yet); None if its peer already left with nothing unread. One read where
+    ``_alive``, ``_peek`` and ``_stop_in`` made one each (an attack pass: beside a flood of
+    connections, every system call a newcomer costs is one the flood's connect need not)."""
+    conn.setblocking(False)
+    try:
+        return conn.recv(size, socket.MSG_PEEK) or None
+    except BlockingIOError:
+        return b""
+    except OSError:
+        return None
+
+
 def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
     """Rules 3 and 5: True if a complete command (ended by one of ``ends``) waits unread in
     the kernel."""
@@ -817,13 +831,15 @@ class LineServer:
                 self._greet(conn, sel)
         return False
 
-    def _stop_in(self, conn: socket.socket) -> bool:
+    def _stop_in(self, conn: socket.socket, data: bytes | None = None) -> bool:
         """Rule 5: whether ``conn``'s first commands (READ_BYTES of them, what its first read
         takes) hold a stop its session would carry out: what HttpGuard lets through, read by
-        the front end's parser (``halts``). Asked again only when more bytes came."""
+        the front end's parser (``halts``). Asked again only when more bytes came. ``data``:
+        those bytes, peeked by the caller a moment ago (else they are peeked here)."""
         if self._halts is None:
             return False
-        data = _peek(conn, self._read_bytes)
+        if data is None:
+            data = _peek(conn, self._read_bytes)
         seen = self._looked.get(conn)
         if seen is not None and seen[0] == len(data):
             return seen[1]
@@ -987,7 +1003,8 @@ class LineServer:
             if exc.errno in (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM):
                 self._ended.wait(ERROR_PAUSE_S)  # the listener stays readable: no spin
             return False
-        if not _alive(conn):  # its peer already left: no thread, no budget
+        first = _arrived(conn, self._read_bytes)
+        if first is None:  # its peer already left: no thread, no budget
             conn.close()
             return True
         if self._halt_count is not None:  # rule 9: looked at before each halt from now on,
@@ -1001,7 +1018,7 @@ class LineServer:
                 looks.look(conn.fileno(), count)
         now = self._clock()
         key = _peer_key(peer[0])
-        if self._stop_in(conn):
+        if self._stop_in(conn, first):
             self._stop_now(conn, peer, waiting)
         elif not any(_peer_key(p[0]) == key for p in waiting.values()) and self._accept_budget(
             key, now
@@ -1009,8 +1026,8 @@ class LineServer:
             self._let_in(conn, peer)
         else:
             self._queue(conn, peer, waiting)
-        if conn in waiting and not _peek(conn, 1):  # silent: woken by its first bytes (those
-            self._watch(conn)  # that sent some: _admit_waiting looks)
+        if conn in waiting and not first:  # silent: woken by its first bytes (those that sent
+            self._watch(conn)  # some: _admit_waiting looks; any come since wake it at once)
         elif conn in waiting:
             self._greet(conn, sel)
         return True
