@@ -617,6 +617,9 @@ class LineServer:
         self._read_bytes = read_bytes
         self._max_unfinished = max_unfinished
         self._ends = ends
+        # rule 5: a byte of these in a newcomer's bytes, or no command is complete there (no
+        # stop: HttpGuard lets nothing through before an end but ``singles``, none of them)
+        self._end_bytes = () if singles else tuple(bytes([end]) for end in ends)
         self._halts = halts
         self._singles = singles
         self._greets = greets  # rule 8
@@ -840,6 +843,9 @@ class LineServer:
             return False
         if data is None:
             data = _peek(conn, self._read_bytes)
+        if self._end_bytes and not any(end in data for end in self._end_bytes):
+            return False  # no command complete (an attack pass: half a command a newcomer,
+            # parsed for nothing, by the thousand)
         seen = self._looked.get(conn)
         if seen is not None and seen[0] == len(data):
             return seen[1]
