@@ -8,11 +8,13 @@ program on the same host opens and closes connections to it as fast as it can.
 DIR``) is measured instead of this checkout's, for a side-by-side run.
 
 The set-up: the port's line server (interfaces/tcplines.py) for a rotator that records what it is
-given, in this process; a flooding process of its own with two threads, each connecting
-(non-blocking) and closing at once, without end. Each sample: the operator connects, sends
-``S`` (stop) and ``C`` (where is it), and reads the answer: from the connect to the answer, which
-comes after the stop was carried out. A stop the kernel kept out of a full queue of connections
-comes after its handshake's retry (1 s, then 2 s, 4 s later): the count over 0.9 s says it.
+given, in this process, made as the bridge makes it for the stops (``halts``: a connection whose
+first commands hold a stop goes ahead of its address's budget); a flooding process of its own
+with two threads, each connecting (non-blocking) and closing at once, without end. Each sample:
+the operator connects, sends ``S`` (stop) and ``C`` (where is it), and reads the answer: from
+the connect to the answer, which comes after the stop was carried out. A stop the kernel kept
+out of a full queue of connections comes after its handshake's retry (1 s, then 2 s, 4 s
+later): the count over 0.9 s says it.
 """
 
 from __future__ import annotations
@@ -79,10 +81,17 @@ def main(argv: list[str] | None = None) -> int:
     if args.root:
         sys.path.insert(0, args.root)
     gs232 = importlib.import_module("bridge.interfaces.gs232")
+    parser = importlib.import_module("bridge.interfaces.gs232.parser")
     tcplines = importlib.import_module("bridge.interfaces.tcplines")
     tower = Tower()
     server = tcplines.LineServer(
-        "tower", 0, "127.0.0.1", lambda: gs232.Gs232Session(tower), label="gs232", key="gs232"
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: gs232.Gs232Session(tower),
+        label="gs232",
+        key="gs232",
+        halts=parser.gs232_holds_stop,  # as the bridge makes the port: a stop goes first
     )
     server.start()
     flood = subprocess.Popen([sys.executable, "-c", FLOOD, str(server.port)], stdin=subprocess.PIPE)
