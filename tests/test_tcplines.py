@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import selectors
 import socket
 import threading
 import time
@@ -16,6 +17,7 @@ import pytest
 
 from bridge.core.model import Stop, Target
 from bridge.core.ratelimit import Budget
+from bridge.interfaces import tcplines
 from bridge.interfaces.gs232 import Gs232Session
 from bridge.interfaces.gs232.parser import DCU1_HARMLESS, gs232_holds_stop
 from bridge.interfaces.tcplines import (
@@ -1159,3 +1161,80 @@ def test_a_client_sending_a_byte_a_segment_is_paused_by_its_reads_not_only_its_b
             if server.paused:
                 break
         assert server.paused == 1
+
+
+def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is_found(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An attack pass: a local program held 100 connections, each with half a command sent, and
+    opened new ones as fast as it could; the accept loop read every waiting connection again at
+    each wake-up and parsed each newcomer's half command, fell behind the kernel's queue, and
+    an operator's STOP on a new connection waited there up to 0.2 s. The loop's passes are run
+    here by hand (no thread; the clock stands still, the budgets spent): a newcomer costs a few
+    reads of the kernel's buffers however many wait, its half command is not parsed, and the
+    STOP behind them is found in the first bytes of its own connection."""
+    clock = FakeClock()
+    halts = [0]
+
+    def counting(data: bytes) -> bool:
+        halts[0] += 1
+        return gs232_holds_stop(data)
+
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=clock,
+        halts=counting,
+        max_clients=16,  # (64 may wait)
+    )
+    server.listen()
+    listener = server._listener
+    assert listener is not None
+    listener.setblocking(False)
+    sel = selectors.DefaultSelector()
+    sel.register(listener, selectors.EVENT_READ)
+    server._sel, server._watched = sel, set()  # (as the accept loop starts)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    budget = server._accept_budget("loopback", clock.t)
+    while budget.take(clock.t):  # spent: no thread for any of them
+        pass
+    went: list[int] = []  # the peer ports let in at once (a stop), no thread started here
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: went.append(peer[1]))
+    reads = [0]
+    for name in ("_peek", "_alive", "_arrived"):
+        real = getattr(tcplines, name)
+
+        def read(*args: Any, _real: Any = real) -> Any:
+            reads[0] += 1
+            return _real(*args)
+
+        monkeypatch.setattr(tcplines, name, read)
+    held = [_connect(server.port, b"M1") for _ in range(64)]
+    try:
+        server._accept_once(listener, waiting, sel)
+        assert len(waiting) == 64
+        reads[0] = halts[0] = 0
+        for _ in range(20):  # 200 newcomers, 10 a wake-up of the loop: each resets the oldest
+            held += [_connect(server.port, b"M1") for _ in range(10)]
+            server._accept_once(listener, waiting, sel)
+        assert len(waiting) == 64 and not went
+        assert reads[0] <= 3 * 200, reads[0]  # (each waiting one read again at every wake-up,
+        # and four reads a newcomer: 2,144)
+        assert halts[0] == 0
+        operator = _connect(server.port, b"S\rC\r")
+        held.append(operator)
+        server._accept_once(listener, waiting, sel)
+        if not went:  # (its bytes came after its accept: the selector wakes the loop for them)
+            server._accept_once(listener, waiting, sel)
+        assert went == [operator.getsockname()[1]] and halts[0] == 1
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
