@@ -33,7 +33,7 @@ def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carri
             return 0.01 if not gate.is_set() else super().wait_s(now)
 
     monkeypatch.setattr(tcplines, "Budget", Gated)
-    port, _ = start(rig, start_az_deg=0)
+    port, server = start(rig, start_az_deg=0)
     emu = rig.emus["tower"]
     with connect(port) as sock:
         ask(sock, b"P 300 0\n", b"RPRT 0\n")
@@ -42,8 +42,14 @@ def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carri
         sock.sendall(b"p\n")
         _replies(sock, 2)  # read, looked at and answered: its thread now sleeps, nothing unread
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP: in the kernel, unread
+        halts = server._halt_count()  # type: ignore[misc]
         rig.probe.publish("rotor/stop", "")
         emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
+        wait_until(  # (the express may stop the rotor before the halt is counted)
+            lambda: server._halt_count() > halts,  # type: ignore[misc]
+            slow(5),
+            "the STOP counted",
+        )
         gate.set()
         reply = _replies(sock, 1)
     assert reply == b"RPRT -9\n", f"a target sent before the STOP was carried out: {reply!r}"
@@ -82,8 +88,14 @@ def test_a_target_sent_while_its_connection_waits_its_turn_and_before_a_stop_is_
     with connect(port) as sock:
         wait_until(lambda: len(server.waiting) == 1, slow(5), "the connection waits its turn")
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP
+        halts = server._halt_count()  # type: ignore[misc]
         rig.probe.publish("rotor/stop", "")
         emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
+        wait_until(  # (the express may stop the rotor before the halt is counted)
+            lambda: server._halt_count() > halts,  # type: ignore[misc]
+            slow(5),
+            "the STOP counted",
+        )
         gate.set()
         reply = _replies(sock, 1)
     assert reply == b"RPRT -9\n", f"a target sent before the STOP was carried out: {reply!r}"

@@ -64,8 +64,14 @@ def test_pty_a_target_written_while_the_thread_is_paused_before_a_stop_is_refuse
         gate.clear()
         assert client.ask(b"C\r").startswith(b"AZ=")  # read; its thread now paused
         os.write(client.fd, b"M100\r")  # before the STOP
+        halts = server._halt_count()  # type: ignore[misc]
         rig.probe.publish("rotor/stop", "")
         emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
+        wait_until(  # (the express may stop the rotor before the halt is counted)
+            lambda: server._halt_count() > halts,  # type: ignore[misc]
+            slow(5),
+            "the STOP counted",
+        )
         gate.set()
         wait_until(lambda: tcplines.unread(server._master) == 0, slow(5), "the M100 read")
         reply = client.ask(b"C\r")
@@ -98,8 +104,14 @@ def test_pty_a_target_written_before_a_stop_and_read_with_a_poll_after_it_is_ref
             assert more, f"replies stopped: {got!r}"
             got += more
         assert tcplines.unread(server._master) == 5  # the M100 unread, its thread paused
+        halts = server._halt_count()  # type: ignore[misc]
         rig.probe.publish("rotor/stop", "")
         emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
+        wait_until(  # (the express may stop the rotor before the halt is counted)
+            lambda: server._halt_count() > halts,  # type: ignore[misc]
+            slow(5),
+            "the STOP counted",
+        )
         os.write(client.fd, b"C\r")  # after the STOP: a poll, moves nothing
         gate.set()
         reply = client.read(b"\n", slow(5))
