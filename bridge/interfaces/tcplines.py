@@ -72,9 +72,11 @@ Rules:
    connection is read for a stop once per bytes it sent (the same pass: read again for every
    newcomer, 18 s of the accept thread's CPU in 20), one that sent part of a line again
    PARTIAL_POLL_S apart, not at every wake-up, and a newcomer's bytes are read once and parsed
-   only if a command ends in them (an attack pass: a program holding 100 half-command
-   connections and opening new ones as fast as it could kept the kernel's queue full, and a
-   stop on a new connection waited behind it up to 0.2 s). At most 4 ``max_clients`` wait; past
+   only if a command ends in them (an attack pass: beside a program holding 100 half-command
+   connections and opening new ones as fast as it could, the kernel's queue full, a stop on a
+   new connection waited behind it up to 0.2 s; a newcomer cost the loop 46 us of CPU, 33 now,
+   and such a program's connect some 44 of its own, which its threads spread over the cores:
+   docs/performance.md, not solved). At most 4 ``max_clients`` wait; past
    that the oldest without a stop unread is reset (the newest is the one an operator opened
    for a stop, maybe sent in two segments: an attack pass found it the first reset), and if
    every one holds a stop, their oldest for a newcomer that holds one too, the newcomer if
