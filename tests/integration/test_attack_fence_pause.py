@@ -10,6 +10,7 @@ its thread is paused with nothing unread; the target and then the STOP come; the
 from __future__ import annotations
 
 import threading
+from typing import Any
 
 import pytest
 
@@ -20,6 +21,15 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 pytestmark = pytest.mark.hamlib
+
+
+def mqtt_stop_carried(rig: Rig, emu: Any, server: Any) -> None:
+    """An MQTT STOP published, and waited for until the rotor stopped and ``server`` (a TCP or
+    pty line server) counted the halt: the stop express may stop the rotor before then."""
+    halts = server._halt_count()
+    rig.probe.publish("rotor/stop", "")
+    emu.wait_for(lambda s: not s.is_moving, slow(10))
+    wait_until(lambda: server._halt_count() > halts, slow(5), "the STOP counted")
 
 
 def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carried_out(
@@ -42,14 +52,7 @@ def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carri
         sock.sendall(b"p\n")
         _replies(sock, 2)  # read, looked at and answered: its thread now sleeps, nothing unread
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP: in the kernel, unread
-        halts = server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         gate.set()
         reply = _replies(sock, 1)
     assert reply == b"RPRT -9\n", f"a target sent before the STOP was carried out: {reply!r}"
@@ -88,14 +91,7 @@ def test_a_target_sent_while_its_connection_waits_its_turn_and_before_a_stop_is_
     with connect(port) as sock:
         wait_until(lambda: len(server.waiting) == 1, slow(5), "the connection waits its turn")
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP
-        halts = server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         gate.set()
         reply = _replies(sock, 1)
     assert reply == b"RPRT -9\n", f"a target sent before the STOP was carried out: {reply!r}"

@@ -16,6 +16,7 @@ import pytest
 from bridge.core.ratelimit import Budget
 from bridge.interfaces import ptylines, tcplines
 from bridge.interfaces.ptylines import PtyLineServer
+from tests.integration.test_attack_fence_pause import mqtt_stop_carried
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -64,14 +65,7 @@ def test_pty_a_target_written_while_the_thread_is_paused_before_a_stop_is_refuse
         gate.clear()
         assert client.ask(b"C\r").startswith(b"AZ=")  # read; its thread now paused
         os.write(client.fd, b"M100\r")  # before the STOP
-        halts = server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         gate.set()
         wait_until(lambda: tcplines.unread(server._master) == 0, slow(5), "the M100 read")
         reply = client.ask(b"C\r")
@@ -104,14 +98,7 @@ def test_pty_a_target_written_before_a_stop_and_read_with_a_poll_after_it_is_ref
             assert more, f"replies stopped: {got!r}"
             got += more
         assert tcplines.unread(server._master) == 5  # the M100 unread, its thread paused
-        halts = server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         os.write(client.fd, b"C\r")  # after the STOP: a poll, moves nothing
         gate.set()
         reply = client.read(b"\n", slow(5))

@@ -23,6 +23,7 @@ import pytest
 from bridge.core import haltwatch
 from bridge.core.ratelimit import Budget
 from bridge.interfaces import tcplines
+from tests.integration.test_attack_fence_pause import mqtt_stop_carried
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -54,14 +55,7 @@ def test_a_target_sent_before_a_stop_and_read_with_a_poll_sent_after_it_is_not_c
         _replies(sock, 2)  # its thread now sleeps over its budget, nothing unread
         (theirs,) = list(server._clients)  # the server's end of this connection
         sock.sendall(b"P 100 0\n")  # before the STOP
-        halts = server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         sock.sendall(b"p\n")  # after the STOP: a poll, moves nothing
         wait_until(lambda: tcplines.unread(theirs.fileno()) == 10, slow(5), "both in the kernel")
         gate.set()
@@ -94,14 +88,7 @@ def test_a_target_sent_while_its_connection_is_in_the_accept_queue_before_a_stop
     with connect(port) as sock:  # in the kernel's queue: the handshake is the kernel's
         held.wait(slow(5))
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP
-        halts = _server._halt_count()  # type: ignore[misc]
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_for(lambda s: not s.is_moving, slow(10))  # the STOP carried out
-        wait_until(  # (the express may stop the rotor before the halt is counted)
-            lambda: _server._halt_count() > halts,  # type: ignore[misc]
-            slow(5),
-            "the STOP counted",
-        )
+        mqtt_stop_carried(rig, emu, _server)  # the STOP carried out
         gate.set()
         reply = _replies(sock, 1)
     assert reply == b"RPRT -9\n", f"a target sent before the STOP was carried out: {reply!r}"
