@@ -32,9 +32,9 @@ def mqtt_stop_carried(rig: Rig, emu: Any, server: Any) -> None:
     wait_until(lambda: server._halt_count() > halts, slow(5), "the STOP counted")
 
 
-def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carried_out(
-    rig: Rig, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def budget_gate(monkeypatch: pytest.MonkeyPatch, module: object) -> threading.Event:
+    """``module``'s Budget (tcplines or ptylines) paused while the returned gate is clear: a
+    client over its budget, its thread asleep, its bytes unread."""
     gate = threading.Event()
     gate.set()
 
@@ -42,7 +42,14 @@ def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carri
         def wait_s(self, now: float) -> float:
             return 0.01 if not gate.is_set() else super().wait_s(now)
 
-    monkeypatch.setattr(tcplines, "Budget", Gated)
+    monkeypatch.setattr(module, "Budget", Gated)
+    return gate
+
+
+def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carried_out(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    gate = budget_gate(monkeypatch, tcplines)
     port, server = start(rig, start_az_deg=0)
     emu = rig.emus["tower"]
     with connect(port) as sock:

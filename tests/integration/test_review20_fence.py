@@ -13,29 +13,15 @@ from pathlib import Path
 
 import pytest
 
-from bridge.core.ratelimit import Budget
 from bridge.interfaces import ptylines, tcplines
 from bridge.interfaces.ptylines import PtyLineServer
-from tests.integration.test_attack_fence_pause import mqtt_stop_carried
+from tests.integration.test_attack_fence_pause import budget_gate, mqtt_stop_carried
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 from tests.test_ptylines import Client
 
 pytestmark = pytest.mark.hamlib
-
-
-def _gated(monkeypatch: pytest.MonkeyPatch, module: object) -> threading.Event:
-    """``module``'s Budget paused while the gate is clear (a client over its budget)."""
-    gate = threading.Event()
-    gate.set()
-
-    class Gated(Budget):
-        def wait_s(self, now: float) -> float:
-            return 0.01 if not gate.is_set() else super().wait_s(now)
-
-    monkeypatch.setattr(module, "Budget", Gated)
-    return gate
 
 
 def _pty(rig: Rig, tmp_path: Path) -> tuple[str, PtyLineServer]:
@@ -55,7 +41,7 @@ def test_pty_a_target_written_while_the_thread_is_paused_before_a_stop_is_refuse
     attack pass, never carried to the pty): a program's M100 written while the thread sleeps
     over its budget, then an MQTT STOP, then the thread wakes: its first look at the M100 is
     after the STOP and the target is carried out."""
-    gate = _gated(monkeypatch, ptylines)
+    gate = budget_gate(monkeypatch, ptylines)
     path, server = _pty(rig, tmp_path)
     emu = rig.emus["tower"]
     client = Client(path)
@@ -80,7 +66,7 @@ def test_pty_a_target_written_before_a_stop_and_read_with_a_poll_after_it_is_ref
     """Hole (1) of the commit, on the pty: one read holds the M100 written before the STOP
     (looked at before it: a burst's first read counted it) and the C written after it; the
     read is judged at the look that counted its last byte, after the STOP."""
-    gate = _gated(monkeypatch, ptylines)
+    gate = budget_gate(monkeypatch, ptylines)
     path, server = _pty(rig, tmp_path)
     emu = rig.emus["tower"]
     client = Client(path)

@@ -21,9 +21,8 @@ import threading
 import pytest
 
 from bridge.core import haltwatch
-from bridge.core.ratelimit import Budget
 from bridge.interfaces import tcplines
-from tests.integration.test_attack_fence_pause import mqtt_stop_carried
+from tests.integration.test_attack_fence_pause import budget_gate, mqtt_stop_carried
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -36,14 +35,7 @@ def test_a_target_sent_before_a_stop_and_read_with_a_poll_sent_after_it_is_not_c
 ) -> None:
     """The commit's own paused-client scenario, with one ``p`` (a poll: Gpredict sends one a
     second) sent after the STOP and before the client's thread wakes: one read takes both."""
-    gate = threading.Event()
-    gate.set()
-
-    class Gated(Budget):
-        def wait_s(self, now: float) -> float:
-            return 0.01 if not gate.is_set() else super().wait_s(now)
-
-    monkeypatch.setattr(tcplines, "Budget", Gated)
+    gate = budget_gate(monkeypatch, tcplines)
     port, server = start(rig, start_az_deg=0)
     emu = rig.emus["tower"]
     with connect(port) as sock:
