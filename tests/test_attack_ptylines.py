@@ -16,6 +16,7 @@ from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import Target
 from bridge.interfaces.gs232 import Gs232Session, gs232_pty
 from bridge.interfaces.ptylines import PtyLineServer
+from bridge.interfaces.tcplines import unread
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.test_ptylines import Client, StandIn
@@ -155,7 +156,10 @@ def test_a_move_written_while_the_server_sleeps_over_its_budget_is_refused_after
     try:
         os.write(client.fd, b"M200\r" * burst)
         wait_until(lambda: server.paused > 0, 10, "the server paused")
+        before = unread(server._master)
         os.write(client.fd, b"M100\r")  # while it sleeps: no look of its own
+        # (a pty hands what its slave wrote to the master a moment later, off the writer's call)
+        wait_until(lambda: unread(server._master) == before + 5, 10, "the M100 in the pty")
         watchers()  # an MQTT STOP: told first (mailbox.py rule 10), then counted
         rot.halts += 1
 

@@ -51,6 +51,7 @@ def test_pty_a_target_written_while_the_thread_is_paused_before_a_stop_is_refuse
         gate.clear()
         assert client.ask(b"C\r").startswith(b"AZ=")  # read; its thread now paused
         os.write(client.fd, b"M100\r")  # before the STOP
+        wait_until(lambda: tcplines.unread(server._master) == 5, slow(5), "the M100 in the pty")
         mqtt_stop_carried(rig, emu, server)  # the STOP carried out
         gate.set()
         wait_until(lambda: tcplines.unread(server._master) == 0, slow(5), "the M100 read")
