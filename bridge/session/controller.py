@@ -555,66 +555,6 @@ class Doubt(Enum):
 
 
 class Controller:
-    # every attribute in a slot: over 30 in an instance dictionary, Python 3.11 specialises no
-    # method call on it (docs/performance.md, 'reads Python 3.11 never specialised';
-    # tests/engine/test_slots.py); ``__dict__`` kept so that a test can wrap a method
-    __slots__ = (
-        "_afresh",
-        "_connect_guard",
-        "_deadline",
-        "_doubted",
-        "_doubts_in_row",
-        "_drove_t",
-        "_first_unread",
-        "_guard_at_start",
-        "_guarded",
-        "_junk_reported_t",
-        "_known_since_loss",
-        "_least_s",
-        "_least_silence_s",
-        "_lost_aim",
-        "_pass_ends",
-        "_passing",
-        "_port_error",
-        "_released_owed",
-        "_released_stop_t",
-        "_released_unseen_t",
-        "_rested",
-        "_rested_at_start",
-        "_retry",
-        "_retry_before",
-        "_retry_from",
-        "_retry_raw",
-        "_retry_t",
-        "_said_off",
-        "_sent_az",
-        "_short_latched",
-        "_silence_reported",
-        "_slew_retry",
-        "_still_at_close",
-        "_takes_readings",
-        "_turn_trusted",
-        "_watch_until",
-        "answering",
-        "az_shown",
-        "base_cfg",
-        "cfg",
-        "controller_time",
-        "dropped_turns",
-        "el_shown",
-        "link",
-        "motion",
-        "notes",
-        "options",
-        "pending_unshown",
-        "restarts",
-        "stops",
-        "target_last",
-        "version",
-        "__dict__",
-        "__weakref__",
-    )
-
     def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
         self.cfg = self.base_cfg = cfg  # rule 7
         # rule 2: ``_turn_least_s`` of the motion in effect, and the least silence, or the least

@@ -179,60 +179,6 @@ def _grid(now: float, interval_s: float) -> float:
 
 
 class Link:
-    # every attribute in a slot: over 30 in an instance dictionary, Python 3.11 specialises no
-    # method call on it (docs/performance.md, 'reads Python 3.11 never specialised';
-    # tests/engine/test_slots.py); ``__dict__`` kept so that a test can wrap a method
-    __slots__ = (
-        "_answered_t",
-        "_asked_t",
-        "_byte_s",
-        "_first_asked_t",
-        "_garbled",
-        "_garbled_t",
-        "_given_up_t",
-        "_heard_t",
-        "_held",
-        "_held_after",
-        "_held_cap",
-        "_held_until",
-        "_hold_base",
-        "_hold_bytes",
-        "_hold_reads",
-        "_hold_until",
-        "_junk",
-        "_junk_t",
-        "_last_axis",
-        "_last_late",
-        "_last_reply_t",
-        "_last_write_t",
-        "_late_answer",
-        "_late_hold_until",
-        "_late_seen",
-        "_learns",
-        "_next_poll",
-        "_outbox",
-        "_output",
-        "_polled_t",
-        "_quiet_from_t",
-        "_read_t",
-        "_refusal_until",
-        "_reply_deadline",
-        "_repoll_due",
-        "_repolled",
-        "_settle_s",
-        "_slew",
-        "_stop_due",
-        "_verdict",
-        "codec",
-        "late_s",
-        "overdue_s",
-        "reply_timeout_s",
-        "setting_until",
-        "spec",
-        "__dict__",
-        "__weakref__",
-    )
-
     def __init__(self, codec: Codec, spec: ModelSpec, now: float, baud: int) -> None:
         self.codec = codec
         self.spec = spec

@@ -252,57 +252,6 @@ _SHOWN = len(st.Features._fields)  # rule 18: the status key ends with what the 
 
 
 class RotatorSession:
-    # every attribute in a slot: over 30 in an instance dictionary, Python 3.11 specialises no
-    # method call on it (docs/performance.md, 'reads Python 3.11 never specialised';
-    # tests/engine/test_slots.py); ``__dict__`` kept so that a test can wrap a method
-    __slots__ = (
-        "_actions",
-        "_answered",
-        "_deciding",
-        "_ending",
-        "_lease_offset_s",
-        "_lost_turn",
-        "_measuring",
-        "_newest_taken",
-        "_part_said",
-        "_parts_named",
-        "_poll_until",
-        "_seen_motion",
-        "_showing",
-        "_status_failed",
-        "_status_key",
-        "_step_wakeup",
-        "_storm_seen",
-        "_wakeup",
-        "_waking",
-        "_waking_measuring",
-        "autopark",
-        "cfg",
-        "controller",
-        "dropped",
-        "drops",
-        "ending",
-        "features",
-        "fence",
-        "follower",
-        "halts_applied",
-        "health",
-        "lock_shown",
-        "lock_unknown",
-        "locked",
-        "own",
-        "part_halts",
-        "status",
-        "target_unshown",
-        "targets",
-        "tracker",
-        "view",
-        "wall_offset_s",
-        "wind",
-        "__dict__",
-        "__weakref__",
-    )
-
     def __init__(
         self,
         cfg: WorkerConfig,
