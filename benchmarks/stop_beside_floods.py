@@ -3,6 +3,7 @@ node sending hostile lines, and with none (the control), on one bridge in one ru
 
     .venv/bin/python -m benchmarks.stop_beside_floods            # 30 stops a phase
     .venv/bin/python -m benchmarks.stop_beside_floods --stops 60
+    .venv/bin/python -m benchmarks.stop_beside_floods --only half   # the half-command rows alone
 
 Run from another checkout (``cd OTHER && /path/.venv/bin/python -m benchmarks.stop_beside_floods``)
 it measures that checkout's bridge: the bridge process takes the current directory's code first.
@@ -183,7 +184,7 @@ def _spawn(scope: Scope, args: list[str], log_name: str) -> subprocess.Popen[byt
 
 
 # -- the measurement ------------------------------------------------------------------------------
-def measure(scope: Scope, n: int) -> dict[str, Any]:
+def measure(scope: Scope, n: int, only: tuple[str, ...] = ()) -> dict[str, Any]:
     broker_port = start_broker(scope)
     gs232_port, rotctld_port, node_port = free_port(), free_port(), free_port()
     mode = scope.workdir / "node-mode"
@@ -207,7 +208,12 @@ def measure(scope: Scope, n: int) -> dict[str, Any]:
     for each in stops.values():
         scope.callback(each.close)
 
+    def wanted(name: str) -> bool:
+        return not only or any(word in name for word in only)
+
     def phase(name: str, send: TcpStop | None = None) -> None:
+        if not wanted(name):
+            return
         c0, t0 = cpu_seconds(bridge.pid), time.monotonic()
         resets = send.resets if send is not None else 0
         lat = sorted(one_stop(emu, frames, mqtt, "rotor", bridge, send) for _ in range(n))
@@ -228,23 +234,29 @@ def measure(scope: Scope, n: int) -> dict[str, Any]:
     phase("no load")
     for port, send in stops.items():
         phase(f"no load: {port} S, new connection", send)
-    flood = _spawn(scope, ["--tcp-flood", str(gs232_port)], "tcp-flood.log")
-    time.sleep(2.0)  # the flood under way
-    phase(f"{CLIENTS} TCP clients flooding GS-232")
-    assert flood.stdin is not None
-    flood.stdin.close()
-    flood.wait(10)
+    if wanted(f"{CLIENTS} TCP clients flooding GS-232"):
+        flood = _spawn(scope, ["--tcp-flood", str(gs232_port)], "tcp-flood.log")
+        time.sleep(2.0)  # the flood under way
+        phase(f"{CLIENTS} TCP clients flooding GS-232")
+        assert flood.stdin is not None
+        flood.stdin.close()
+        flood.wait(10)
     for load in ("spots", "hostile"):  # hostile last: the old parser never caught up with it
+        if not wanted(f"DX node: {load} lines"):
+            continue
         mode.write_text(load)
         time.sleep(2.0)
         phase(f"DX node: {load} lines")
     mode.write_text("quiet")
-    crowd = _spawn(scope, ["--crowd", str(broker_port), "rotor/lock"], "crowd.log")
-    time.sleep(2.0)
-    phase("MQTT 5: R/lock, 120,000 user properties/s")
-    crowd.kill()
+    if wanted("MQTT 5: R/lock, 120,000 user properties/s"):
+        crowd = _spawn(scope, ["--crowd", str(broker_port), "rotor/lock"], "crowd.log")
+        time.sleep(2.0)
+        phase("MQTT 5: R/lock, 120,000 user properties/s")
+        crowd.kill()
     halves = {"rotctld": (rotctld_port, b"P 1"), "GS-232": (gs232_port, b"M1")}
     for port, (number, half) in halves.items():
+        if not wanted(f"{HALF_HELD} half commands: {port} S"):
+            continue
         load = _spawn(scope, ["--half", str(number), half.decode()], f"half-{number}.log")
         time.sleep(2.0)
         phase(f"{HALF_HELD} half commands: {port} S", stops[port])
@@ -258,6 +270,13 @@ def measure(scope: Scope, n: int) -> dict[str, Any]:
 def main() -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.stop_beside_floods")
     parser.add_argument("--stops", type=int, default=30)
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        default=(),
+        metavar="WORD",
+        help="run only the loads whose name holds one of these words (e.g. --only half 'no load')",
+    )
     parser.add_argument("--tcp-flood", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--node", nargs=2, help=argparse.SUPPRESS)
     parser.add_argument("--crowd", nargs=2, help=argparse.SUPPRESS)
@@ -272,7 +291,7 @@ def main() -> int:
     if args.node is not None:
         return node_main(int(args.node[0]), args.node[1])
     with Scope(Path(tempfile.mkdtemp(prefix="stop-beside-floods-"))) as scope:
-        results = measure(scope, args.stops)
+        results = measure(scope, args.stops, tuple(args.only))
     print(f"{'load':40} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'CPU %':>6} {'resets':>6}")
     for name, r in results.items():
         print(
