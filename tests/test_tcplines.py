@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import selectors
 import socket
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -21,6 +23,7 @@ from bridge.interfaces import tcplines
 from bridge.interfaces.gs232 import Gs232Session
 from bridge.interfaces.gs232.parser import DCU1_HARMLESS, gs232_holds_stop
 from bridge.interfaces.tcplines import (
+    ACCEPT_RAISE,
     ACCEPTS_S,
     CHATTER_BURST,
     HTTP_FIRST_LINE_MAX,
@@ -1238,3 +1241,44 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
             sock.close()
         sel.close()
         listener.close()
+
+
+def test_the_accept_thread_runs_ahead_of_busy_programs_and_its_clients_at_the_bridges(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 10 (docs/performance.md, a stop on a new connection beside half-command
+    connections): the accept thread, the one way in for a stop on a new connection, runs
+    ACCEPT_RAISE nice steps above the bridge where the system lets it (here: root, or the
+    systemd unit's LimitNICE); a client's thread, which it starts, at the bridge's own."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("a thread has a nice of its own on Linux alone")
+    base = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    allowed: list[bool] = []
+
+    def probe() -> None:  # (a thread of its own: this one keeps its priority)
+        try:
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), base - ACCEPT_RAISE)
+            allowed.append(True)
+        except OSError:
+            allowed.append(False)
+
+    prober = threading.Thread(target=probe)
+    prober.start()
+    prober.join()
+    seen: list[int] = []
+
+    class Session(Gs232Session):
+        def feed(self, data: bytes) -> Any:
+            seen.append(os.getpriority(os.PRIO_PROCESS, threading.get_native_id()))
+            return super().feed(data)
+
+    tower = _Tower()
+    _tower, server = gs232()
+    server._session = lambda: Session(tower)
+    with _connect(server.port, b"C\r") as client:
+        assert _read(client, 8).startswith(b"AZ=")
+    if not allowed[0]:
+        assert server.accept_nice is None  # (no privilege: it runs as the rest, said at debug)
+    else:
+        assert server.accept_nice == max(-20, base - ACCEPT_RAISE)
+    assert seen and set(seen) == {base}

@@ -76,15 +76,16 @@ Rules:
    connections and opening new ones as fast as it could, the kernel's queue full, a stop on a
    new connection waited behind it up to 0.2 s; a newcomer cost the loop 46 us of CPU, 33 now,
    and such a program's connect some 44 of its own, which its threads spread over the cores:
-   docs/performance.md, not solved). At most 4 ``max_clients`` wait; past
-   that the oldest without a stop unread is reset (the newest is the one an operator opened
-   for a stop, maybe sent in two segments: an attack pass found it the first reset), and if
-   every one holds a stop, their oldest for a newcomer that holds one too, the newcomer if
-   its bytes hold none, and one that has sent nothing yet waits beyond the limit (one at
-   most) for its bytes to decide (said at most once per LOG_S). A client's coming and
-   going is logged at INFO CHATTER_S a second at most (a burst of CHATTER_BURST), the rest at
-   DEBUG (an attack pass: 1,863 lines a second, past journald's limit, which then drops the
-   service's warnings too), and a connection refused as HTTP at most once per LOG_S. accept()
+   the loop runs ahead of them, rule 10). At most 4
+   ``max_clients`` wait; past that the oldest without a stop unread is reset (the newest is
+   the one an operator opened for a stop, maybe sent in two segments: an attack pass found it
+   the first reset), and if every one holds a stop, their oldest for a newcomer that holds
+   one too, the newcomer if its bytes hold none, and one that has sent nothing yet waits
+   beyond the limit (one at most) for its bytes to decide (said at most once per LOG_S). A
+   client's coming and going is logged at INFO CHATTER_S a second at most (a burst of
+   CHATTER_BURST), the rest at DEBUG (an attack pass: 1,863 lines a second, past journald's
+   limit, which then drops the service's warnings too), and a connection refused as HTTP at
+   most once per LOG_S. accept()
    out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said at most once per
    LOG_S); any error in the loop is logged so and the loop carries on. Over budget
    is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
@@ -164,6 +165,18 @@ Rules:
    too, which errs the safe way. Where the kernel cannot say what waits unread (Windows, no
    FIONREAD: the remote runs there) a look counts only what was read, so a move is judged at
    the count its own read's look read: this rule holds there only for what a read has taken.
+10. The accept thread, the one way in for a stop on a new connection, runs ACCEPT_RAISE nice
+   steps above the bridge where the system lets it (as root, with CAP_SYS_NICE, or under the
+   systemd unit's ``LimitNICE=-10``; elsewhere at the bridge's priority, said at debug), on
+   Linux alone (there a thread has a nice of its own). A program on the host connecting from
+   more threads than the port has was otherwise scheduled ahead of it thread for thread (an
+   attack pass: four threads opening half-command connections; the accept thread ran 0.2 s a
+   second and waited 0.5 s for a core, the kernel's queue full; raised, it ran about 0.5 s).
+   What it does is bounded per connection (rule 5) and it takes no lock its clients' threads
+   hold long; the stop express stays ahead of it (mqtt/express.py rule 10: EXPRESS_RAISE
+   steps, more). The clients' threads it starts go back to the bridge's priority first thing:
+   what they run is what clients send (rule 5's budgets), and raised they would take cores
+   from the broker that carries the MQTT stops. Nothing of rule 9 depends on it.
 """
 
 from __future__ import annotations
@@ -178,6 +191,7 @@ import re
 import selectors
 import socket
 import struct
+import sys
 import threading
 import time
 import weakref
@@ -226,6 +240,32 @@ STOP_ACCEPTS_S = 50.0  # rule 5: connections with a stop unread let in a second,
 YOUNG_KEPT = 2  # rule 3: of one address's connections just come, the newest kept so many
 CHATTER_S = 1.0  # rule 5: connections said connected and gone at INFO a second (a burst of
 CHATTER_BURST = 10.0  # as many), the rest at DEBUG
+ACCEPT_RAISE = 5  # rule 10: nice steps the accept thread runs above the bridge, where allowed
+
+
+def _nice_of_this_thread() -> int | None:
+    """Rule 10: the calling thread's nice; None off Linux (only there has a thread a nice of
+    its own, named by its native id: elsewhere that id could name another process)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    except OSError:
+        return None
+
+
+def _nice_this_thread(nice: int) -> bool:
+    """Rule 10: the calling thread at ``nice`` (Linux alone), where the system lets it (root,
+    CAP_SYS_NICE, or a nice limit: the systemd unit's ``LimitNICE=-10``; a lower priority,
+    always); False where it keeps its own (said at debug)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), max(-20, min(19, nice)))
+        return True
+    except OSError as exc:  # EACCES/EPERM: no privilege, or above the nice limit
+        log.debug("the accept thread runs at the bridge's priority: %s", exc)
+        return False
 
 
 class RareLog:
@@ -656,6 +696,8 @@ class LineServer:
         self._dropped_log = RareLog()
         self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
         self.paused = 0  # rule 5: times a client was over its budget, for the tests
+        self.accept_nice: int | None = None  # rule 10: the accept thread's, once raised
+        self._client_nice: int | None = None  # rule 10: its clients' threads' (the bridge's)
         self._peer_session = peer_session
         self.rotator_id = rotator_id
         self.label = label
@@ -785,6 +827,9 @@ class LineServer:
         listener = self._listener
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
+        base = _nice_of_this_thread()  # rule 10: the accept thread ahead of busy programs
+        if base is not None and _nice_this_thread(base - ACCEPT_RAISE):
+            self.accept_nice, self._client_nice = _nice_of_this_thread(), base
         waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
         self.waiting = waiting  # (read by the tests: how many wait)
         with selectors.DefaultSelector() as sel:
@@ -1209,6 +1254,8 @@ class LineServer:
         client.thread.start()
 
     def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        if self._client_nice is not None:  # rule 10: started by the raised accept thread
+            _nice_this_thread(self._client_nice)
         who = f"{self.label} for {self.rotator_id}: client {peer[0]}:{peer[1]}"
         self._say("%s connected", who)
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
