@@ -7,11 +7,14 @@ import contextlib
 import logging
 import os
 import selectors
+import shutil
 import socket
+import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -25,6 +28,7 @@ from bridge.interfaces.gs232.parser import DCU1_HARMLESS, gs232_holds_stop
 from bridge.interfaces.tcplines import (
     ACCEPT_RAISE,
     ACCEPTS_S,
+    BACKLOG,
     CHATTER_BURST,
     HTTP_FIRST_LINE_MAX,
     STOP_ACCEPTS_S,
@@ -1282,3 +1286,19 @@ def test_the_accept_thread_runs_ahead_of_busy_programs_and_its_clients_at_the_br
     else:
         assert server.accept_nice == max(-20, base - ACCEPT_RAISE)
     assert seen and set(seen) == {base}
+
+
+def test_the_listen_backlog_is_the_one_the_rules_name(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Rule 5: the kernel's queue of connections is BACKLOG long (``ss`` shows a listener's
+    backlog as its Send-Q): short enough that a stop behind a full one is read within some
+    tens of milliseconds, long enough that a connect-and-close flood does not fill it."""
+    ss = shutil.which("ss")
+    if ss is None or not sys.platform.startswith("linux"):
+        pytest.skip("ss (iproute2) shows a listener's backlog")
+    _tower, server = gs232()
+    out = subprocess.run(
+        [ss, "-ltnH", f"sport = :{server.port}"], capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert int(out[2]) == min(BACKLOG, int(Path("/proc/sys/net/core/somaxconn").read_text()))

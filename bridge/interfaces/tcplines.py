@@ -57,8 +57,14 @@ Rules:
    client waiting, or dropped it): a wake-up drains the kernel's queue (ACCEPT_BATCH at most),
    which is BACKLOG long, not Python's 128 (two threads connecting and closing as fast as they
    could kept 128 full: the kernel dropped the operator's handshake, and its retries got the
-   stop in 1, 2 or 4 s later, 8 stops of 40; now 0 of 40 took over 0.2 s,
-   benchmarks/operator_stop_flood.py); one its peer already closed is closed with no thread
+   stop in 1, 2 or 4 s later, 8 stops of 40; with 1,024 none of 160 took over 0.05 s,
+   benchmarks/operator_stop_flood.py, 256 let 1 or 2 of 80 through a second late), nor the
+   kernel's cap of 4,096: a program that connects from more threads than the loop can keep up
+   with fills any queue, and a stop on a new connection waits behind all of it (an attack pass:
+   four threads opening half-command connections, 4,096 of them ahead of the stop, up to 0.6 s;
+   a queue full also drops their own handshakes, a second each, which is what holds such a
+   program back, the sooner the shorter the queue: docs/performance.md); one its peer already
+   closed is closed with no thread
    and no budget; one over its peer's budget waits in the accept loop, no thread, until the budget
    allows (oldest first), and is closed as soon as its peer leaves (one that sent bytes: when
    it is let in). One whose first commands (READ_BYTES of them, what its first read takes)
@@ -76,7 +82,7 @@ Rules:
    connections and opening new ones as fast as it could, the kernel's queue full, a stop on a
    new connection waited behind it up to 0.2 s; a newcomer cost the loop 46 us of CPU, 33 now,
    and such a program's connect some 44 of its own, which its threads spread over the cores:
-   the loop runs ahead of them, rule 10). At most 4
+   the loop runs ahead of them, rule 10, and the queue is shorter, above). At most 4
    ``max_clients`` wait; past that the oldest without a stop unread is reset (the newest is
    the one an operator opened for a stop, maybe sent in two segments: an attack pass found it
    the first reset), and if every one holds a stop, their oldest for a newcomer that holds
@@ -234,7 +240,7 @@ MINE_KEPT = 64  # rule 9: the numbers of a connection's own halts kept (the olde
 _DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
 STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 9
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
-BACKLOG = socket.SOMAXCONN  # rule 5: the kernel's queue of connections (its own cap, 4096)
+BACKLOG = 1024  # rule 5: the kernel's queue of connections (short: the text says why)
 ACCEPT_BATCH = 256  # rule 5: connections taken from it a wake-up, at most
 STOP_ACCEPTS_S = 50.0  # rule 5: connections with a stop unread let in a second, per peer
 YOUNG_KEPT = 2  # rule 3: of one address's connections just come, the newest kept so many
