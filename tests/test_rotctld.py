@@ -6,6 +6,8 @@ the real rotctld driving the same emulator).
 from __future__ import annotations
 
 import socket
+import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -1029,3 +1031,56 @@ def test_a_move_sent_after_a_stop_by_a_client_whose_handshake_was_answered_is_ca
     waiting.ask(b"\\dump_state\n", answer)  # answered while it waits
     st.rotator.submit(Stop(Source.MQTT), "stop")  # an operator's STOP, elsewhere, now
     waiting.ask(b"P 100 0\n", b"RPRT 0\n")  # sent after it: carried out once let in
+
+
+HALF_FLOOD = """
+import collections, socket, sys, threading
+port = int(sys.argv[1]); held = collections.deque(); lock = threading.Lock()
+def flood():
+    while True:
+        try:
+            s = socket.create_connection(("127.0.0.1", port), timeout=2)
+            s.sendall(b"P 1")  # half a command, never finished
+        except OSError:
+            continue
+        with lock:
+            held.append(s)
+            old = held.popleft() if len(held) > 100 else None
+        if old is not None:
+            old.close()
+for _ in range(4):
+    threading.Thread(target=flood, daemon=True).start()
+print("started", flush=True)
+sys.stdin.read()
+"""
+
+
+def test_a_stop_on_a_new_connection_beside_a_half_command_flood_is_carried_out(
+    station: StationFactory,
+) -> None:
+    """An attack pass (docs/performance.md, a stop on a new connection beside half-command
+    connections): a program on the host holds 100 connections to the port, each with ``P 1``
+    sent and no line end, its four threads opening new ones as fast as they connect. The
+    operator's ``S`` on a new connection, as ``rotctl -m 2`` sends it, is answered ``RPRT 0``
+    and the rotor stops on its way. How soon is the benchmark's to say (stop_beside_floods):
+    here the kernel may drop its handshake once or twice, the first retry a second later."""
+    st = station(start_az_deg=10)  # 290 degrees to go: over 7 s at 40 degrees a second
+    c = st.connect()
+    c.ask(b"P 300 0\n", b"RPRT 0\n")
+    st.emu.wait_for(lambda s: s.is_moving, slow(10))
+    flood = subprocess.Popen(
+        [sys.executable, "-c", HALF_FLOOD, str(st.server.port)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
+    try:
+        assert flood.stdout is not None and flood.stdout.readline() == b"started\n"
+        wait_until(lambda: len(st.server.waiting) >= 32, slow(10), "the flood under way")
+        with socket.create_connection(("127.0.0.1", st.server.port), timeout=slow(30)) as op:
+            op.sendall(b"S\n")
+            assert op.recv(64) == b"RPRT 0\n"
+        st.emu.wait_for(lambda s: not s.is_moving, slow(10))
+    finally:
+        flood.kill()
+        flood.wait()
+    assert st.emu.state().az_deg < 290  # stopped on its way, not arrived
