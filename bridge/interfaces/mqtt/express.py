@@ -137,7 +137,8 @@ Rules:
    waits for no one of them. It holds no lock a thread of the bridge waits for, so no stop
    carried in the bridge waits behind it for that; what it does is bounded by what it reads
    (rule 3: a frame per stop or lock ON, per rotator). The bridge's own threads keep its
-   priority: a stop read by any of them (rotctld's, a logger's, the console's) is carried
+   priority (but a TCP port's accept thread, fewer steps above it: tcplines.py rule 10): a
+   stop read by any of them (rotctld's, a logger's, the console's) is carried
    under the interpreter lock, and a lowered thread holding that lock while the kernel runs
    another program would keep such a stop waiting (docs/architecture.md).
 11. A stop only the express heard is the bridge's too. Each frame it writes it says (``wrote``,
