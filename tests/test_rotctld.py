@@ -1039,7 +1039,7 @@ port = int(sys.argv[1]); held = collections.deque(); lock = threading.Lock()
 def flood():
     while True:
         try:
-            s = socket.create_connection(("127.0.0.1", port), timeout=2)
+            s = socket.create_connection(("127.0.0.1", port), timeout=2)  # not a deadline
             s.sendall(b"P 1")  # half a command, never finished
         except OSError:
             continue
