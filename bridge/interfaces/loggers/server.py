@@ -50,7 +50,15 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    monotonic clock is read on both sides of the wall clock (commands.py ``Arrival``): the
    thread may lose the interpreter between any two readings, to the very thread that
    carries out a STOP, and one reading after the wall clock's dated a turn read as the STOP
-   landed after it.
+   landed after it. The stamps are live before a port is bound (``_stamping_on``): Linux
+   turns its stamping on for the first socket that asks a moment later, on a worker thread
+   (milliseconds; longer on a loaded host), and a datagram that comes meanwhile is stamped
+   when it is read, not when it came, with nothing to tell the two apart. A turn sent before
+   a STOP from another interface, come in that moment and read after the STOP, was dated
+   after it and carried out (a flaky test on a loaded 2-core CI machine, a real hole at every
+   start). So a socket of its own asks first and sends itself datagrams until one comes back
+   stamped before it was read; the ports asked while it holds the stamping on are stamped at
+   once. Not live within STAMPS_LIVE_S: said, and the ports listen all the same.
 10. Every port is the bridge's alone: no socket option lets another program bind it too, so
    one that tries is told the address is in use (and a bridge that finds it taken says so at
    its start). N1MM advises programs to share its ports (SO_REUSEADDR), but on Linux a
@@ -110,6 +118,7 @@ RATE_ALL_S = 1000.0  # rule 8: every sender's together, a second
 MAX_SOURCES = 256  # rule 8: senders whose budget is remembered
 RECV_BUFFER = 1 << 20  # rule 8: asked of the system (which may give less: net.core.rmem_max)
 FLOOD_LOG_S = 30.0  # rule 8
+STAMPS_LIVE_S = 2.0  # rule 9: the most listen() waits for the system's stamps to come on
 REPORT_LOOK_S = 0.1  # a flood's wake-ups look at the reports no more often than this
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
@@ -187,6 +196,7 @@ class LoggerEndpoints:
             (e, f"PstRotator UDP for rotator {e.rotator.id!r}") for e in self.pst
         ]
         wanted += [(e, f"N1MM rotor UDP for {_named(e)}") for e in self.n1mm.values()]
+        holder = _stamping_on()  # rule 9: live before the first datagram can come
         try:
             for endpoint, what in wanted:
                 sock = _bound(endpoint.bind, endpoint.port, what)
@@ -196,6 +206,9 @@ class LoggerEndpoints:
         except OSError:
             self._close_sockets()
             raise
+        finally:
+            if holder is not None:  # (the ports hold the stamping on now)
+                holder.close()
 
     def start(self) -> None:
         self.listen()
@@ -477,6 +490,44 @@ _STAMPS = (
 )
 _STAMP = struct.Struct("@ll")  # the old struct timespec: a long's seconds, a long's nanoseconds
 _STAMP_SPACE = socket.CMSG_SPACE(_STAMP.size) if hasattr(socket, "CMSG_SPACE") else 0
+
+
+def _stamping_on(wait_s: float = STAMPS_LIVE_S) -> socket.socket | None:
+    """Rule 9: a socket that holds the system's datagram stamps on, returned once they are
+    live (a datagram it sent itself came back stamped before it was read); None where the
+    system gives none, or when they did not come on within ``wait_s`` (said)."""
+    if not (_STAMPS and _STAMP_SPACE):
+        return None
+    holder = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        holder.bind(("127.0.0.1", 0))
+        holder.setblocking(False)
+        holder.setsockopt(socket.SOL_SOCKET, _STAMPS, 1)
+        deadline = time.monotonic() + wait_s
+        while True:
+            holder.sendto(b"", holder.getsockname())
+            if readable((holder.fileno(),), max(0.0, deadline - time.monotonic())):
+                before = time.time()
+                _data, ancillary, _flags, _peer = holder.recvmsg(1, _STAMP_SPACE)
+                for level, kind, payload in ancillary:
+                    if level == socket.SOL_SOCKET and kind == _STAMPS:
+                        seconds, nanoseconds = _STAMP.unpack_from(payload)
+                        if seconds + nanoseconds * 1e-9 < before:  # stamped as it came
+                            return holder
+            if time.monotonic() >= deadline:
+                break
+            time.sleep(0.001)  # (the system's worker turns them on: let it run)
+    except OSError as exc:
+        log.warning("logger UDP: the system's datagram stamps could not be checked: %s", exc)
+        holder.close()
+        return None
+    log.warning(
+        "logger UDP: the system's datagram stamps did not come on within %g s: a datagram "
+        "that comes in the first moments may be judged by when it is read (server.py rule 9)",
+        wait_s,
+    )
+    holder.close()
+    return None
 
 
 def _received(sock: socket.socket) -> tuple[bytes, tuple[str, int], Arrival | None]:
