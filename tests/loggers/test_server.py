@@ -696,6 +696,22 @@ def test_a_turn_read_across_a_thread_switch_is_dated_no_later_than_it_reached_th
         ep.stop()
 
 
+@contextlib.contextmanager
+def _stamped_port() -> Iterator[tuple[socket.socket, socket.socket]]:
+    """A port asking for the system's stamps, bound while ``_stamping_on`` holds them live
+    (rule 9), and a socket to send to it from."""
+    holder = server._stamping_on()
+    assert holder is not None
+    with (
+        holder,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender,
+    ):
+        listener.bind(("127.0.0.1", 0))
+        listener.setsockopt(socket.SOL_SOCKET, server._STAMPS, 1)
+        yield listener, sender
+
+
 @pytest.mark.parametrize("switch_after", [1, 2])
 def test_a_datagrams_arrival_is_bounded_on_both_sides_whatever_a_thread_switch_does(
     monkeypatch: pytest.MonkeyPatch, switch_after: int
@@ -705,15 +721,7 @@ def test_a_datagrams_arrival_is_bounded_on_both_sides_whatever_a_thread_switch_d
     A thread switch between the clocks' readings widens the bounds, never moves both past the
     truth: a stop dated early would let a turn sent just before it through."""
     assert server._STAMPS, "the suite runs on Linux, whose sockets stamp datagrams (rule 9)"
-    holder = server._stamping_on()  # (rule 9: the stamps live before the datagram comes)
-    assert holder is not None
-    with (
-        holder,
-        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener,
-        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender,
-    ):
-        listener.bind(("127.0.0.1", 0))
-        listener.setsockopt(socket.SOL_SOCKET, server._STAMPS, 1)
+    with _stamped_port() as (listener, sender):
         before = time.monotonic()
         sender.sendto(b"<PST><STOP>1</STOP></PST>", listener.getsockname())
         after = time.monotonic()
@@ -740,15 +748,7 @@ def test_the_stamps_are_live_before_a_port_is_bound_and_said_when_they_never_com
     datagram sent to a port it bound then comes back stamped before it is read. One that never
     sees them live (here every stamp looks later than its read) says so and lets the ports
     listen all the same."""
-    holder = server._stamping_on()
-    assert holder is not None
-    with (
-        holder,
-        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener,
-        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender,
-    ):
-        listener.bind(("127.0.0.1", 0))
-        listener.setsockopt(socket.SOL_SOCKET, server._STAMPS, 1)
+    with _stamped_port() as (listener, sender):
         sender.sendto(b"<PST><AZIMUTH>300</AZIMUTH></PST>", listener.getsockname())
         assert select.select([listener], [], [], slow(5))[0]
         looked = time.monotonic()
