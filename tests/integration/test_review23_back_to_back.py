@@ -31,3 +31,22 @@ def test_stop_then_a_target_back_to_back_turns_to_the_target(rig: Rig) -> None:
     )
     emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 100) <= 3, 30)
 
+
+def test_lock_on_then_off_back_to_back_ends_unlocked(rig: Rig) -> None:
+    """Three rounds (the two connections race for the ON when both are idle: the round the
+    main connection reads it first, lastword.py rule 4, the lane's copy is its echo and holds
+    nothing)."""
+    _emu, app = tower(rig)
+    left_locked = []
+    for _round in range(3):
+        t = time.monotonic()
+        rig.probe.publish("rotor/lock", "ON", qos=0)  # a test of the lock, or a script's toggle
+        rig.probe.publish("rotor/lock", "OFF", qos=0)  # the last word
+        time.sleep(1.0)
+        if app.rotators[0].status.locked:
+            left_locked.append([m.payload for m in rig.probe.on("rotor/error") if m.t >= t])
+            rig.probe.publish("rotor/lock", "OFF")  # (sent again, long after the marker)
+            rig.probe.wait_value("rotor/lock/state", "OFF", 10)
+    assert not left_locked, (
+        f"lock ON then OFF, published in that order, left the rotator locked: {left_locked}"
+    )
