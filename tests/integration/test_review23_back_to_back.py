@@ -22,7 +22,7 @@ def test_stop_then_a_target_back_to_back_turns_to_the_target(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "200")
     emu.wait_for(lambda s: s.is_moving, 10)
     t = time.monotonic()
-    rig.probe.publish("rotor/stop", "", qos=0)  # the script (QoS 0: Home Assistant's default): stop ...
+    rig.probe.publish("rotor/stop", "", qos=0)  # the script (QoS 0, HA's default): stop
     rig.probe.publish("rotor/target", "100", qos=0)  # ... then go to 100 instead
     time.sleep(1.0)
     errors = [m.payload for m in rig.probe.on("rotor/error") if m.t >= t]
