@@ -20,20 +20,18 @@ but not the order between them. So:
    back: the hold ends then, and only then (or when the main connection drops, rule 5); what
    is still pending goes out. A move the main connection reads while the hold lasts
    (``held``) was published before the marker, so before the lane's word or too close after
-   it to tell: it is refused as older (halts.py, "send it again"), never held. That window
-   is the marker's way out and back: a few milliseconds on an idle connection, longer while
-   the main connection's thread, which writes the marker, reads a backlog. (A review: held,
-   it waited for the main copy of the STOP to drop it as rule 1 says; with the copy lost, the
-   marker ended the hold and a target published before the STOP turned the rotor after it.)
-   A halt the main connection reads never ends a hold, even one it takes for the lane word's
-   copy (rule 9): with QoS 0 on both connections (lane.py rule 2) the lane may have lost an
-   older halt of that rotator and kind, and the main connection's copy of *that* one, read
-   first, is no sign that what was published before the lane's word has been read (review 22:
-   STOP 1, a target, STOP 2 published; the lane lost STOP 1 and carried out STOP 2; the main
-   connection's STOP 1, taken by count for STOP 2's copy, ended the hold, and the target turned
-   the rotor after STOP 2; a group stop the lane's ACL never let it read did the same to every
-   member's lane stop). Nothing is decided by matching payloads, and no clock ends a hold (rule
-   5). A hold holds only while the main connection can read its markers (rule 7).
+   it to tell: it is refused as older (halts.py), never held. (A review: held, it waited for
+   the main copy of the STOP to drop it as rule 1 says; with the copy lost, the marker ended
+   the hold and a target published before the STOP turned the rotor after it.) A halt the
+   main connection reads never ends a hold, even one it takes for the lane word's copy (rule
+   9): with QoS 0 on both connections (lane.py rule 2) the lane may have lost an older halt
+   of that rotator and kind, and the main connection's copy of *that* one, read first, is no
+   sign that what was published before the lane's word has been read (review 22: STOP 1, a
+   target, STOP 2 published; the lane lost STOP 1 and carried out STOP 2; the main
+   connection's STOP 1, taken by count for STOP 2's copy, ended the hold, and the target
+   turned the rotor after STOP 2; a group stop the lane's ACL never let it read did the same
+   to every member's lane stop). Nothing is decided by matching payloads, and no clock ends a
+   hold (rule 5). A hold holds only while the main connection can read its markers (rule 7).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
    (but rule 12).
