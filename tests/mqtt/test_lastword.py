@@ -70,8 +70,8 @@ def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_
 ):
     w = LastWord(token="t")
     assert w.lane_halt("a", "stop", 0.0) == 1
-    copy = w.main_halt("a", "stop")  # by count the copy of the lane's: no note ...
-    assert copy == Copy(echo=True) and w.holding  # ... and no hold ends by it (rule 2)
+    copy = w.main_halt("a", "stop")  # the copy of the lane's: no note, its hold ends
+    assert copy == Copy(echo=True, upto=1, released=("a",))
     assert w.main_halt("a", "stop") == Copy(lane_marker=1)  # read first on the main one
     assert w.lane_halt("a", "stop", 0.3) is None  # its echo on the lane
     assert w.lane_halt("a", "stop", 0.4) == 2  # a new stop: carried out at once
@@ -87,26 +87,23 @@ def test_notes_end_with_their_lane_marker_and_when_the_lane_reconnects() -> None
     w.lane_connected()  # so its note is forgotten
     w.marker_back(w.marker(w.lane_subscribed(0.4) or 0).encode())  # (in step: rule 9)
     assert w.lane_halt("a", "stop", 0.5) == 2
-    assert w.main_halt("a", "stop") == Copy(echo=True)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=2, released=("a",))
     n = w.main_halt("a", "stop").lane_marker  # read first on the main connection
     w.lane_marker_back(w.marker(n or 0, lane=True).encode())  # the lane has no copy of it
     assert w.lane_halt("a", "stop", 0.6) == 3  # a new stop, not taken for an echo
     w.lane_marker_back(b"other 99")  # not ours: nothing
     w.echoes = False  # the lane cannot read its markers: nothing noted
-    assert w.main_halt("a", "stop") == Copy(echo=True)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=3, released=("a",))
     assert w.main_halt("a", "stop") == Copy()
     assert w.lane_halt("a", "stop", 0.7) == 4
 
 
-def test_a_lock_off_is_not_known_to_be_newer_than_a_lane_lock_on_until_its_marker() -> None:
-    """Rule 8: a main halt read meanwhile (a copy by count, or an older ON) says nothing."""
+def test_a_lock_off_is_older_than_a_lane_lock_on_waiting_for_its_copy() -> None:
     w = LastWord(token="t")
     assert w.main_lock_off("a")
-    n = w.lane_halt("a", "lock", 0.0)
+    w.lane_halt("a", "lock", 0.0)
     assert not w.main_lock_off("a") and w.main_lock_off("b")
-    w.main_halt("a", "lock")  # its copy, or an older ON the lane lost (review 22)
-    assert not w.main_lock_off("a")
-    w.marker_back(w.marker(n or 0).encode())
+    w.main_halt("a", "lock")  # its copy
     assert w.main_lock_off("a")
 
 
@@ -152,8 +149,8 @@ def test_a_marker_out_too_long_is_sent_again_with_a_back_off_and_never_given_up(
 
 def test_no_clock_ends_a_hold_while_the_main_connection_lives() -> None:
     """Rule 5: hours of a main connection that reads nothing: held; then each way a hold
-    ends: the marker, the main connection gone (never its copy: rule 2)."""
-    for end in ("marker", "gone"):
+    ends: the marker, the main connection's own copy, the main connection gone."""
+    for end in ("marker", "copy", "gone"):
         w = LastWord(token="t")
         n = w.lane_halt("a", "stop", 0.0)
         for t in range(1, 5 * int(HOUR_S)):
@@ -161,26 +158,24 @@ def test_no_clock_ends_a_hold_while_the_main_connection_lives() -> None:
         assert w.holding and w.long_holds(5 * HOUR_S) == {"a": 0.0}
         if end == "marker":
             assert w.marker_back(w.marker(n or 0).encode()) == (n, ["a"])
+        elif end == "copy":
+            assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=("a",))
         else:
             assert w.main_gone() == ["a"]  # (the caller releases with clearing)
         assert not w.holding and w.long_holds(5 * HOUR_S) == {}
 
 
-def test_a_main_halt_ends_no_hold_and_a_marker_every_hold_up_to_it() -> None:
-    """Rules 2 and 9 (review 22): a halt the main connection reads may be an older one the
-    lane lost, not the copy it is counted as; only a marker says what was read before."""
+def test_a_copy_ends_every_hold_up_to_its_own_and_no_later_one() -> None:
+    """Rule 9: the copy of lane halt n says as much as marker n would."""
     w = LastWord(token="t")
     w.lane_halt("a", "stop", 0.0)  # 1
     w.lane_halt("b", "stop", 0.0)  # 2
     w.lane_halt("a", "lock", 0.0)  # 3: a is held until 3 now
-    assert w.main_halt("a", "stop") == Copy(echo=True)
-    assert w.main_halt("b", "stop") == Copy(echo=True)
-    assert w.main_halt("a", "lock") == Copy(echo=True)
-    assert w.held("a") and w.held("b") and w.main_lock_off("a") is False  # rule 8
-    assert w.marker_back(w.marker(2).encode()) == (2, ["b"])
-    assert w.held("a") and not w.main_lock_off("a")  # a's newest halt is 3
-    assert w.marker_back(w.marker(3).encode()) == (3, ["a"])
-    assert not w.holding and not w.markers_out and w.main_lock_off("a")
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=())
+    assert w.main_halt("b", "stop") == Copy(echo=True, upto=2, released=("b",))
+    assert w.holding and w.main_lock_off("a") is False  # rule 8: the ON waits for its copy
+    assert w.main_halt("a", "lock") == Copy(echo=True, upto=3, released=("a",))
+    assert not w.holding and not w.markers_out  # the markers out are done with too
 
 
 def test_a_long_hold_is_known_while_it_lasts() -> None:
@@ -194,18 +189,20 @@ def test_a_long_hold_is_known_while_it_lasts() -> None:
     assert w.long_holds(20.0) == {}
 
 
-def test_with_the_markers_denied_a_lane_halt_holds_nothing() -> None:
-    """Rule 7 (review 22): learnt from the broker; no marker could end a hold, so none is
-    kept: the one up ends when they are found denied, and the lane's halts hold nothing."""
+def test_with_the_markers_denied_a_lane_halt_holds_until_its_main_copy() -> None:
+    """Rule 7: learnt from the broker; nothing goes out to wait for, the hold stays."""
     w = LastWord(token="t")
     held = w.lane_halt("a", "stop", 0.0)
-    assert held == 1 and w.holding
-    assert w.markers_denied() == (1, ["a"])
-    assert not w.holding and not w.markers_out and w.main_lock_off("a")
-    assert w.lane_halt("b", "lock", 1.0) == 0  # carried out, no hold
-    assert not w.holding and not w.markers_out and w.resend_due(HOUR_S) is None
-    assert w.main_lock_off("b") and w.long_holds(HOUR_S) == {}
-    assert w.main_halt("b", "lock") == Copy(lane_marker=1)  # (rule 4 as before)
+    w.markers_denied()
+    assert w.holding and not w.markers_out
+    assert w.lane_halt("b", "lock", 1.0) == 2  # still a hold, no marker out
+    assert not w.markers_out and w.resend_due(HOUR_S) is None
+    assert w.holding and w.long_holds(HOUR_S) == {"a": 0.0, "b": 1.0}
+    w.lane_connected()  # (without markers, a new lane connection is taken as in step)
+    w.lane_subscribed(2.0)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=held or 0, released=("a",))
+    assert w.main_halt("b", "lock").released == ("b",)
+    assert not w.holding
 
 
 def test_a_halt_published_while_the_lane_was_down_is_not_taken_for_a_newer_ones_copy() -> None:
@@ -215,16 +212,15 @@ def test_a_halt_published_while_the_lane_was_down_is_not_taken_for_a_newer_ones_
     w.lane_connected()
     sync = w.lane_subscribed(0.0)
     assert sync == 1 and w.markers_out  # goes out on the main connection
-    w.lane_halt("a", "stop", 0.1)  # on the new connection
+    held = w.lane_halt("a", "stop", 0.1)  # on the new connection
     assert w.main_halt("a", "stop") == Copy()  # the stop the lane never had: nothing ends
     assert w.holding
     w.marker_back(w.marker(sync).encode())  # the main connection is past the lane's start
     assert w.holding
-    assert w.main_halt("a", "stop") == Copy(echo=True)  # (audited once; the hold stays)
-    assert w.holding
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=held or 0, released=("a",))
     w.main_gone()  # a new main connection subscribes after the lane did: in step at once
-    w.lane_halt("a", "stop", 1.0)
-    assert w.main_halt("a", "stop") == Copy(echo=True)
+    n = w.lane_halt("a", "stop", 1.0)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=n or 0, released=("a",))
 
 
 def test_a_retained_stop_live_always_replayed_once_per_message() -> None:
@@ -254,8 +250,8 @@ def test_markers_allowed_again_go_out_for_the_next_lane_halt() -> None:
     """Rule 7: judged on every connect: a probe back on a later connection turns them on."""
     w = LastWord(token="t")
     w.markers_denied()
-    assert w.lane_halt("a", "stop", 0.0) == 0
-    assert not w.markers_out and not w.holding
+    w.lane_halt("a", "stop", 0.0)
+    assert not w.markers_out
     w.main_gone()  # the new connection
     w.markers_allowed()
     n = w.lane_halt("a", "stop", 1.0)
@@ -317,15 +313,14 @@ def test_the_copy_of_a_lane_stop_read_after_another_interfaces_halt_ends_no_fenc
     order; the lane reads the MQTT STOP only after the console's was fenced, so its number is
     the newer. Its copy on the main connection says nothing of what was published before the
     console's STOP (the target, read next): it ended the fence and forgot its marker, and the
-    target turned the rotor after the console's STOP. Only a marker ends a fence (and, since
-    review 22, a hold)."""
+    target turned the rotor after the console's STOP. Only a marker ends a fence."""
     w = LastWord(token="t")
     fence = w.fence("r", False, 0.0)  # the console's STOP
     assert fence is not None
     assert w.lane_halt("r", "stop", 0.0) == fence + 1  # the older MQTT STOP, read late
-    assert w.main_halt("r", "stop").echo  # its copy: neither the lane's hold ends ...
-    assert w.holding
-    assert w.fenced("r")  # ... nor the fence: the target read next was published before
+    assert w.main_halt("r", "stop").echo  # its copy: the lane's hold ends ...
+    assert not w.holding
+    assert w.fenced("r")  # ... the fence does not: the target read next was published before
     resent = w.resend_due(RESEND_S)  # its marker is still waited for (sent again if lost)
     assert resent is not None
     w.marker_back(w.marker(resent).encode())

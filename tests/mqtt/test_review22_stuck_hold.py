@@ -19,7 +19,9 @@ from bridge.interfaces.mqtt.halts import HELD
 from tests.mqtt.test_service import service
 
 
-def test_a_target_long_after_a_stop_the_main_connection_read_first_is_not_refused() -> None:
+def test_a_target_published_long_after_a_stop_is_not_refused_when_the_main_connection_won_the_race() -> (
+    None
+):
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.markers_denied()  # the fence topic denied, the hello not back (rule 7)

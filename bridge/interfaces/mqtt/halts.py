@@ -16,8 +16,8 @@ without its end.
 
 A group's stop (``G/stop``, interfaces/mqtt/groups.py) is a stop of each of its members, on either
 connection: the same decisions, member by member, in one step under the same lock (a lane's
-group stop holds every member; the main connection's is carried out for each member), and
-one marker for them all, the newest. A member whose stop raises costs the others nothing: the
+group stop holds every member; the main connection's copy is each member's copy), and one
+marker for them all, the newest. A member whose stop raises costs the others nothing: the
 failure is logged and the next member is stopped.
 
 Every stop and lock ON carried out here is first shown to the stop express (``express``,
@@ -70,7 +70,7 @@ FENCED = (
     "logger) carried out first: not carried out"
 )
 # lastword.py rule 2: read on the main connection while a halt from the stop lane holds the
-# rotator (its marker not back), so published before that halt, or not known to be after it
+# rotator, so published before that halt (or not known to be after it: its copy lost)
 HELD = (
     "published before a STOP or lock ON that the stop connection carried out first (or not "
     "known to be after it): not carried out; send it again"
@@ -199,11 +199,9 @@ class Halts:
 
     def markers_denied(self) -> None:
         """The broker does not let the main connection read its markers (lastword.py rule 7):
-        none goes out, and a lane's halt holds nothing (no marker could end it): the holds
-        up now end, what waited under them (put after their halts) going on."""
+        none goes out; a lane's halt holds until its main copy. The holds stay."""
         with self._lock:
-            upto, released = self.word.markers_denied()
-            self._release(released, upto)
+            self.word.markers_denied()
 
     def markers_allowed(self) -> None:
         """The hello or the probe came back on a new connection: markers go out again
@@ -254,7 +252,7 @@ class Halts:
     def stale_move(self, rotator_id: str) -> str | None:
         """Why a move the main connection reads now for this rotator is refused as older (its
         R/error), or None: another interface's halt fences it (``fenced``: FENCED), or a lane
-        halt holds it (lastword.py rule 2: HELD; its marker is not back yet).
+        halt holds it (lastword.py rule 2: HELD; its copy, or the marker, is not read yet).
         Read without a lock, as ``fenced`` is (one dict look-up more): a lane halt put after
         the look is put after the move's halt count was read, and drops it in the mailbox."""
         if self.fenced(rotator_id):
@@ -279,8 +277,7 @@ class Halts:
     ) -> None:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
         and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
-        copy, by count, of one the lane carried out (the audit trail has it once: lastword.py
-        rule 9); ``sent_s``: its stamp
+        copy of one the lane carried out (the audit trail has it once); ``sent_s``: its stamp
         on the steady clock (service.py rule 9)."""
         halt = (
             Stop(Source.MQTT, origin, sent_s)
@@ -348,10 +345,11 @@ class Halts:
         when it ends; it holds all the same."""
         with self._lock:
             now = self._clock()
+            markers = self.word.markers
             held = {(rid, "hold") for rid in self.word.long_holds(now)}
             held |= {(rid, "fence") for rid in self.word.long_fences(now)}  # lastword rule 11
             ended = {key: said for key, said in self._said.items() if key not in held}
-            new = {key: self._long_hold(*key) for key in held if key not in self._said}
+            new = {key: self._long_hold(*key, markers) for key in held if key not in self._said}
             for key in ended:
                 del self._said[key]
             self._said.update(new)
@@ -365,10 +363,8 @@ class Halts:
             if self._on_info is not None:
                 self._on_info(problem, False)
 
-    def _long_hold(self, rid: str, kind: str) -> str:
-        """Said while a long hold or fence lasts (both only while the markers can be read:
-        lastword.py rules 7 and 11)."""
-        if kind == "fence":  # lastword.py rule 11
+    def _long_hold(self, rid: str, kind: str, markers: bool) -> str:
+        if kind == "fence":  # lastword.py rule 11 (only while the markers can be read)
             return (
                 f"{rid}: a STOP or lock ON from another interface (the console, rotctld, a "
                 f"logger) has fenced this rotator's MQTT moves for more than {LONG_HOLD_S:g} s: "
@@ -377,12 +373,16 @@ class Halts:
                 "a slow link, a broker that drops the bridge's messages?). Until it does, MQTT "
                 "targets are refused as older; stops and locks go through"
             )
+        caught_up = (
+            f"its marker on {self.topics.bridge_fence} or {self.topics.bridge_hello} comes back"
+            if markers
+            else "it reads its own copy of the stop or lock"
+        )
         return (
             f"{rid}: a stop or lock from the stop lane has held this rotator's targets for more "
             f"than {LONG_HOLD_S:g} s: the main connection has not yet read everything published "
-            f"before it (a flood of targets, a slow link?). Until its marker on "
-            f"{self.topics.bridge_fence} or {self.topics.bridge_hello} comes back, MQTT targets "
-            "are refused as older and other interfaces' wait; stops and locks go through"
+            f"before it (a flood of targets, a slow link?). Until {caught_up}, MQTT targets are "
+            "refused as older and other interfaces' wait; stops and locks go through"
         )
 
     def marker_back(self, payload: bytes) -> None:
@@ -486,8 +486,10 @@ class Halts:
                 log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
                 return  # lastword.py rule 4: the echo of the main connection's copy
             self.carry(rot, kind, what, hold=marker or None, origin=origin, sent_s=sent_s)
-        if marker:
+        if marker and self.word.markers:
             self._send_marker(marker)
+        elif marker:
+            self._arm()  # (a long hold is said)
 
     def main_halt(
         self,
@@ -499,14 +501,14 @@ class Halts:
         origin: Origin | None = None,
         sent_s: float | None = None,
     ) -> None:
-        """A stop or lock ON read on the main connection: carried out in order (rule 1), a
-        lane hold ending by its marker alone (lastword.py rule 2), noted for rule 4;
-        ``sent_s``: its stamp (carry)."""
+        """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
+        for rule 4; ``sent_s``: its stamp (carry)."""
         if not retain:
             self._noted("main", rot.id, kind)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind)
             self.carry(rot, kind, what, origin=origin, echo=copy.echo, sent_s=sent_s)
+            self._release(copy.released, copy.upto)  # lastword.py rule 9
         if copy.lane_marker is not None:
             marker = self.word.marker(copy.lane_marker, lane=True)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
@@ -591,8 +593,10 @@ class Halts:
                     continue  # lastword.py rule 4: this member's echo
                 self._stop_member(rot, what, marker or None, origin, False, sent_s)
                 newest, held = max(newest, marker), held + 1
-        if newest:
+        if newest and self.word.markers:
             self._send_marker(newest)
+        elif newest:
+            self._arm()
         log.debug("%s: stop on the stop lane for %d member(s)", group_id, held)
 
     def main_group_stop(
@@ -613,6 +617,7 @@ class Halts:
                     self._noted("main", rot.id, "stop")
                 copy = self.word.main_halt(rot.id, "stop")
                 self._stop_member(rot, what, None, origin, copy.echo, sent_s)
+                self._release(copy.released, copy.upto)  # lastword.py rule 9
                 if copy.lane_marker is not None:
                     lane_marker = copy.lane_marker
         if lane_marker is not None:

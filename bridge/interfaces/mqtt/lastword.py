@@ -16,29 +16,23 @@ but not the order between them. So:
    **hold**: no target goes to the controller until the main connection has caught up with
    that word. To know when, the bridge publishes a **marker** of its own on the main connection
    (``B/bridge/fence``, this process's token and a number). The broker had the stop before the
-   marker, so everything published before the lane's word has been read once the marker is
-   back: the hold ends then, and only then (or when the main connection drops, rule 5); what
-   is still pending goes out. A move the main connection reads while the hold lasts
-   (``held``) was published before the marker, so before the lane's word or too close after
-   it to tell: it is refused as older (halts.py), never held. (A review: held, it waited for
-   the main copy of the STOP to drop it as rule 1 says; with the copy lost, the marker ended
-   the hold and a target published before the STOP turned the rotor after it.) A halt the
-   main connection reads never ends a hold, even one it takes for the lane word's copy (rule
-   9): with QoS 0 on both connections (lane.py rule 2) the lane may have lost an older halt
-   of that rotator and kind, and the main connection's copy of *that* one, read first, is no
-   sign that what was published before the lane's word has been read (review 22: STOP 1, a
-   target, STOP 2 published; the lane lost STOP 1 and carried out STOP 2; the main
-   connection's STOP 1, taken by count for STOP 2's copy, ended the hold, and the target
-   turned the rotor after STOP 2; a group stop the lane's ACL never let it read did the same
-   to every member's lane stop). Nothing is decided by matching payloads, and no clock ends a
-   hold (rule 5). A hold holds only while the main connection can read its markers (rule 7).
+   marker, and the main connection's own copy of the stop or lock comes before the marker
+   too. The hold ends when that copy is read (everything published before the lane's word has
+   been read by then: rule 9 says when a copy is known for one), or when the marker comes
+   back, whichever comes first; then what is still pending goes out. So a move the main
+   connection reads while the hold lasts (``held``) came before the copy, published before
+   the lane's word, or its copy was lost on the way (QoS 0: a broker that drops messages for a
+   reader that fell behind, an ACL) and nothing tells whether it was published before the
+   word or after: it is refused as older (halts.py), never held. (A review: held, it waited
+   for the copy to drop it as rule 1 says; with the copy lost, the marker ended the hold and
+   a target published before the STOP turned the rotor after it.) Nothing is decided by
+   matching payloads, and no clock ends a hold (rule 5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
    (but rule 12).
 4. The main connection may read a halt before the lane does (both are idle and race). The lane's
    copy, carried out late, would stop a target published after it and already on its way. So
-   when the main connection carries out a halt the lane had no copy of waiting (by count,
-   rule 9), the bridge
+   when the main connection carries out a halt the lane had no copy of waiting, the bridge
    publishes a **lane marker** (``B/bridge/fence/lane``, read by the lane only): the broker
    had the halt before it, so the lane's copy, if the lane has one, comes before the lane
    marker; a copy of that kind for that rotator read on the lane before then is the echo and
@@ -52,11 +46,9 @@ but not the order between them. So:
    whatever it is reading; two reviews: the main connection, behind a backlog when the lane
    alone reconnected, read a STOP from while the lane was down, and the operator's next STOP
    on the lane was dropped as its echo). A late copy is then carried out (an extra stop, its
-   hold ended by its marker: the safe direction). A note the count got wrong (a copy lost on
-   the lane) costs the lane's next halt of that kind its speed until the lane marker is
-   back, never the halt: the main connection carries it out (rule 1). No clock decides it.
-   While the main connection cannot read its markers (rule 7) nothing tells when it is
-   past, and the note is made as before.
+   hold ended by its marker: the safe direction). No clock decides it. While the main
+   connection cannot read its markers (rule 7) nothing tells when it is past, and the note
+   is made as before.
 5. A hold ends with clearing when the main connection drops (nothing older can come any more;
    a target or tracking that waited is dropped and reported: its place in line is lost) and
    when it connects again. While the main connection lives, no clock ends a hold: however
@@ -93,44 +85,23 @@ but not the order between them. So:
    before it, says yes (``markers_allowed``); the fence topic denied (its SUBACK, MQTT 5's PUBACK
    of the probe, the hello back before the probe) and this connection's hello not back within
    the first look's time, no (``markers_denied``), until that hello comes back after all.
-   Then no marker is sent, and nothing could end a hold (rule 2: a copy cannot), so none is
-   kept: the holds up then end (released, not cleared: what waited was put after the halt),
-   and a lane's halt is carried out at once and holds nothing, as a fence is not put (rule
-   11). (Review 22: the hold waited for the main connection's copy, which is a count, wrong
-   once a halt is lost on either connection; and with the lane's markers denied too, rule 4
-   notes no echo, so a lane copy of a halt the main connection had read first held the
-   rotator, and refused every MQTT target, until the main connection dropped.) The lane is
-   then speed alone: the main connection carries out every word in its order (rule 1), its
-   copy of the lane's halt too, so what it reads is what it alone would have done, a halt
-   earlier: a target published before a STOP and read after the lane carried the STOP out
-   turns the rotor until the main connection's copy of the STOP stops it again (with that
-   copy lost, as that STOP lost on the main connection alone), and a lock OFF published
-   before a lock ON unlocks until the ON's copy. B/bridge/info says the markers are denied
-   (client.py rule 16) for as long as it lasts. An ACL changed under a live connection to
-   deny both topics is seen by no probe: a lane hold up then lasts until the connection
-   drops, said as a long hold (rule 5), as a fence does (rule 11).
-8. A lock OFF the main connection reads while a lane lock ON holds the rotator (rule 2: its
-   marker not back) was published before that ON, or too close after it to tell: it is not
-   carried out (the ON is the last word, even if the main connection then drops before the
-   marker comes), and R/error says so (halts.py: it may have been published after the ON;
-   send it again). A lock ON the main connection reads meanwhile ends nothing (review 22:
-   lock ON 1, OFF, lock ON 2 published, the lane lost ON 1: the main connection's ON 1,
-   counted as ON 2's copy, let the OFF through, and the rotator was unlocked under ON 2).
-9. Which lane halt a main connection's halt is the copy of is counted: the oldest one the lane
-   read of that rotator and kind still waiting (``Copy.echo``), once the lane's connection is
-   known to be in step: a halt published while the lane was not subscribed comes on the main
-   connection only. So when the lane's subscription is acknowledged, a marker goes out on the
-   main connection (``lane_subscribed``); until one at least as new comes back (or the main
-   connection is new, subscribed after the lane), a halt the main connection reads counts as
-   no copy. A count is wrong as soon as a halt is lost on either connection (QoS 0), so it
-   decides only what a wrong guess costs nothing by: the audit line (a copy is not audited
-   twice) and whether rule 4 notes an echo (a copy needs none). It never ends a hold (rule
-   2), never lets a lock OFF through (rule 8), and never keeps a halt from being carried out
-   (rule 1: a lock ON the lane lost and the main connection took for the copy of another
-   was carried out by neither, when copies were not carried out again). A halt the main
-   connection carries out again may drop a target another interface sent after the lane's
-   halt, or lock again a rotator the console unlocked since (review 18): no order tells a copy
-   from a newer halt the lane lost, and the halt is the safe direction.
+   Then no marker is sent, and a lane's halt holds until the main connection reads its own
+   copy (rule 9), or drops: holding is the safe direction. (No marker can then tell when a
+   new lane connection is in step, rule 9: its halts are taken as in step; a halt published
+   while the lane was down could then stand for a newer one.)
+8. A lock OFF the main connection reads while a lane lock ON for that rotator still waits for
+   its main copy was published before that ON: it is not carried out (the ON is the last word,
+   even if the main connection then drops before its copy comes), and R/error says so
+   (halts.py: it may have been published after the ON, when rule 9 could not count the copy).
+9. The main connection's copy of a lane halt is the oldest one the lane read of that rotator and
+   kind still waiting (the broker keeps one order for both connections), once the lane's
+   connection is known to be in step: a halt published while the lane was not subscribed
+   comes on the main connection only, and must not be taken for the copy of a newer one. So
+   when the lane's subscription is acknowledged, a marker goes out on the main connection
+   (``lane_subscribed``); until one at least as new comes back (or the main connection is new,
+   subscribed after the lane), a halt the main connection reads does not count as the copy of
+   the lane's halts read on that connection: carried out all the same (rule 1), noting and
+   ending nothing. A copy ends every hold up to its lane halt's number, as that marker would.
 10. A marker is this process's token, its number and its seal: a keyed hash of the number
    and of its kind (the main connection's or the lane's: counted apart, so a copy moved to
    the other topic could otherwise pass), whose key never leaves the process. A marker is
@@ -158,9 +129,10 @@ but not the order between them. So:
    its marker owed (``owed_fence``: one for every fence that waited, once one is back or a
    resend stood for them; a marker out then was published before the halt, so it ends no
    fence of it; the timer looks again while one is owed). A
-   fence ends by a marker alone, as a hold does (rule 2; an attack pass, when a copy still
-   ended holds: an MQTT STOP, a target, then rotctld's S; the lane read the MQTT STOP late,
-   its copy ended the S's fence, and the target turned the rotor).
+   fence ends by a marker alone, never by the main copy of a lane halt (rule 9): the lane
+   numbers a halt when it reads it, and one published before another interface's halt may
+   be read after it (an attack pass: an MQTT STOP, a target, then rotctld's S; the lane read
+   the MQTT STOP late, its copy ended the S's fence, and the target turned the rotor).
 12. A fence orders the main connection alone; while the main connection is down the lane
    carries out lock OFFs (rule 3), and nothing orders one against another interface's lock
    ON: a lock ON carried out while the main connection was down (no fence: nothing reads a
@@ -196,8 +168,10 @@ OWED = sys.maxsize  # rule 11: a fence whose marker waits for room (no marker nu
 class Copy:
     """What a halt read on the main connection means (rules 1, 4 and 9)."""
 
-    echo: bool = False  # rule 9: by count, the copy of a halt the lane carried out first
+    echo: bool = False  # the copy of a halt the lane carried out first
     lane_marker: int | None = None  # rule 4: the lane marker to publish
+    upto: int = 0  # rule 9: the holds up to this marker end ...
+    released: tuple[str, ...] = ()  # ... these rotators'
 
 
 @dataclass
@@ -206,7 +180,6 @@ class LastWord:
     _key: bytes = field(default_factory=lambda: secrets.token_bytes(16), repr=False)  # rule 10
     _next: int = 0
     _holds: dict[str, int] = field(default_factory=dict)  # rotator -> marker it waits for
-    _lock_holds: set[str] = field(default_factory=set)  # rule 8: held by a lock ON among them
     _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
     _marker_sent_at: dict[int, float] = field(
         default_factory=dict
@@ -240,15 +213,14 @@ class LastWord:
         if echoes:
             echoes.popleft()
             return None
-        if not hold or not self.markers:  # (rule 7: no marker could end a hold)
+        if not hold:
             return 0
         self._next += 1
         n = self._next
         self._holds[rotator_id] = n
-        if kind == "lock":
-            self._lock_holds.add(rotator_id)  # rule 8
         self._held_since.setdefault(rotator_id, now)
-        self._marker_sent_at[n] = now
+        if self.markers:
+            self._marker_sent_at[n] = now
         self._lane_waiting.setdefault(key, deque()).append((n, self._lane_sub))
         return n
 
@@ -344,17 +316,18 @@ class LastWord:
 
     # -- the main connection (rule 1) ----------------------------------------------------------
     def main_halt(self, rotator_id: str, kind: str) -> Copy:
-        """A stop or lock ON read on the main connection (it is carried out whatever this says,
-        rule 1, and ends no hold, rule 2): by count, the copy of the lane's, if one came first
-        (rule 9: audited once, no lane marker); if not, the lane marker to publish (rule 4)."""
+        """A stop or lock ON read on the main connection (it is carried out whatever this says):
+        the copy of the lane's, if it came first (rule 9: the holds it ends); if not, the lane
+        marker to publish (rule 4)."""
         key = (rotator_id, kind)
         waiting = self._lane_waiting.get(key)
         if waiting:
-            _n, after = waiting[0]
+            n, after = waiting[0]
             if after > self._main_past and self.markers:
                 return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
-            return Copy(echo=True)
+            released = tuple(self._passed(n, fences=False))  # (rule 11: a marker alone)
+            return Copy(echo=True, upto=n, released=released)
         if not self.echoes or self._lane_sub == NOT_YET:  # (rule 4: nothing to note against)
             return Copy()
         if self._lane_sub > self._main_past and self.markers:  # rule 4 as rule 9: this halt
@@ -365,13 +338,13 @@ class LastWord:
 
     def held(self, rotator_id: str) -> bool:
         """Rule 2: whether a move the main connection reads now for this rotator is refused:
-        read while a lane halt holds it (its marker not back), so published before that halt,
-        or not known to be after it."""
+        read while a lane halt holds it, so published before that halt, or not known to be
+        after it (its main copy lost, or not counted: rule 9)."""
         return rotator_id in self._holds
 
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""
-        return rotator_id not in self._lock_holds
+        return not self._lane_waiting.get((rotator_id, "lock"))
 
     def marker_back(self, payload: bytes) -> tuple[int, list[str]]:
         """A marker read on the main connection: its number (0 if it is not this process's)
@@ -382,26 +355,33 @@ class LastWord:
         self._main_past = max(self._main_past, n)
         return n, self._passed(n)
 
-    def _passed(self, n: int) -> list[str]:
-        """The main connection has read everything published before marker ``n``: the holds
-        and fences up to it end, and what waited for it is done."""
+    def _passed(self, n: int, fences: bool = True) -> list[str]:
+        """The main connection has read everything published before marker or lane halt
+        ``n``: the holds up to it end, and what waited for it is done. Not ``fences``: ``n``
+        is a lane halt's, numbered when the lane read it, which may be after another
+        interface's halt that came later (rule 11): the fences stay, and so do the markers
+        out that would end one."""
         sent_at = self._marker_sent_at  # (numbered in order: the oldest first)
-        # (from the front: a marker back costs what it ends, not all that are out)
-        while sent_at and (oldest := next(iter(sent_at))) <= n:
-            del sent_at[oldest]
+        if fences:  # (from the front: a marker back costs what it ends, not all that are out)
+            while sent_at and (oldest := next(iter(sent_at))) <= n:
+                del sent_at[oldest]
+        else:
+            waited = [m for m, _ in self._fences.values()]
+            for sent in [m for m in sent_at if m <= n]:
+                if not any(f <= sent for f in waited):
+                    del sent_at[sent]
         if not self._marker_sent_at:
             self._resend_s = RESEND_S
         for waiting in self._lane_waiting.values():
             while waiting and waiting[0][0] <= n:  # its main copy came before, or was
                 waiting.popleft()  # lost: either way none is to come (rule 1)
-        for rid in [rid for rid, (m, _) in self._fences.items() if m <= n]:
+        for rid in [rid for rid, (m, _) in self._fences.items() if fences and m <= n]:
             del self._fences[rid]  # rule 11
             self._fenced_since.pop(rid, None)
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
             del self._holds[rid]
             self._held_since.pop(rid, None)
-            self._lock_holds.discard(rid)
         return released
 
     def main_gone(self) -> list[str]:
@@ -413,7 +393,6 @@ class LastWord:
         self._unfenced_locks = {rid for rid, (_, lock) in self._fences.items() if lock}
         self._holds.clear()
         self._held_since.clear()
-        self._lock_holds.clear()
         self._marker_sent_at.clear()
         self._lane_waiting.clear()
         self._fences.clear()  # rule 11: nothing older comes on the next connection
@@ -423,25 +402,18 @@ class LastWord:
             self._main_past = self._next
         return released
 
-    def markers_denied(self) -> tuple[int, list[str]]:
+    def markers_denied(self) -> None:
         """Rule 7: the broker does not let the main connection read its markers: none goes out
-        any more, and no hold or fence is kept (no marker could end it): the number up to
-        which the holds end (released, not cleared: what waited came after the halt) and the
-        rotators whose hold ends."""
+        any more; the holds stay, each until its main copy."""
         self.markers = False
         self._marker_sent_at.clear()
         self._fences.clear()  # rule 11: no marker could end them
         self._fenced_since.clear()
-        self._lane_waiting.clear()  # (rule 9: none is counted while they are denied)
-        released = list(self._holds)
-        self._holds.clear()
-        self._held_since.clear()
-        self._lock_holds.clear()
-        return self._next, released
 
     def markers_allowed(self) -> None:
-        """Rule 7: the hello or the probe came back on a new connection: markers go out again,
-        and the lane's halts hold again (from now on)."""
+        """Rule 7: the hello or the probe came back on a new connection: markers go out again
+        (for the halts from now on; one held before this waits for its main copy, or for the
+        next marker)."""
         self.markers = True
 
     def resend_due(self, now: float) -> int | None:

@@ -43,10 +43,9 @@ Rules:
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
-   the rotator's targets until the main connection has caught up with it (its marker read on
-   the main connection; not its own copy of the halt, which may be an older one the lane
-   lost; no clock ends a hold; no hold while the main connection cannot read its markers).
-   The decision and the mailbox put it lets through are one step, under one lock.
+   the rotator's targets until the main connection has caught up with it (its marker, or its
+   own copy of the halt, read on the main connection; no clock ends a hold). The decision
+   and the mailbox put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
 7. Who sent a command: the MQTT 5 user property ``operator`` when it is short printable text
@@ -86,7 +85,7 @@ Rules:
 11. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
    track or follow start, a feature's command that moves, a group's target for each member)
    while another interface's stop or lock ON fences its rotator (lastword.py rule 11), or a
-   stop or lock ON from the stop lane holds it (lastword.py rule 2: its marker not back yet),
+   stop or lock ON from the stop lane holds it (lastword.py rule 2: its copy not read yet),
    was published before that halt (or is not known to be after it): refused on ``R/error`` as
    stale (halts.py ``stale_move``), and its halt count is read before the fence is asked, so
    a halt put after that drops it in the mailbox (a call's goes to the DX cluster's aimer
