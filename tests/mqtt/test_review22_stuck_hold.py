@@ -14,14 +14,19 @@ before a STOP ... send it again", and sending it again is refused the same way.
 
 from __future__ import annotations
 
+import pytest
+
 from bridge.core.model import Target
 from bridge.interfaces.mqtt.halts import HELD
 from tests.mqtt.test_service import service
 
 
-def test_a_target_published_long_after_a_stop_is_not_refused_when_the_main_connection_won_the_race() -> (
-    None
-):
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 22 F3, open: with the markers denied to both connections, a lane copy read "
+    "after the main connection's holds until the main connection drops (lastword.py rule 7)",
+)
+def test_a_target_long_after_a_stop_is_not_refused_when_the_main_connection_won_the_race() -> None:
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.markers_denied()  # the fence topic denied, the hello not back (rule 7)
