@@ -32,18 +32,40 @@ def mqtt_stop_carried(rig: Rig, emu: Any, server: Any) -> None:
     wait_until(lambda: server._halt_count() > halts, slow(5), "the STOP counted")
 
 
-def budget_gate(monkeypatch: pytest.MonkeyPatch, module: object) -> threading.Event:
-    """``module``'s Budget (tcplines or ptylines) paused while the returned gate is clear: a
-    client over its budget, its thread asleep, its bytes unread."""
-    gate = threading.Event()
+def read_gate(
+    monkeypatch: pytest.MonkeyPatch, module: object = tcplines
+) -> tuple[threading.Event, threading.Event]:
+    """``module``'s Budget (tcplines or ptylines) gated at the end of each read, nothing
+    timed: a client's thread that finishes a read (its ``spend``) while ``gate`` is clear is
+    over its budget, asleep, its bytes unread, until the gate is set; ``spent`` is set at every
+    read finished. (Gated before a read instead, a gate cleared while the thread was still
+    past its last reply, before its next look at the budget, held up the very read a test
+    wanted: on a loaded CI machine a pty test's polls were never answered.)"""
+    gate, spent = threading.Event(), threading.Event()
     gate.set()
 
     class Gated(Budget):
+        over = False
+
+        def spend(self, cost: float, now: float) -> None:
+            super().spend(cost, now)
+            self.over = not gate.is_set()
+            spent.set()
+
         def wait_s(self, now: float) -> float:
-            return 0.01 if not gate.is_set() else super().wait_s(now)
+            if self.over and not gate.is_set():
+                return 0.01
+            self.over = False
+            return super().wait_s(now)
 
     monkeypatch.setattr(module, "Budget", Gated)
-    return gate
+    return gate, spent
+
+
+def budget_gate(monkeypatch: pytest.MonkeyPatch, module: object) -> threading.Event:
+    """``read_gate``'s gate alone: cleared, a client's thread sleeps from the end of its next
+    read, the bytes after it unread."""
+    return read_gate(monkeypatch, module)[0]
 
 
 def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carried_out(

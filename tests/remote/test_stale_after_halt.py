@@ -5,48 +5,20 @@ not. Real mosquitto, the station's bridge on an emulated Rotor-EZ, the remote in
 
 from __future__ import annotations
 
-import threading
 import time
 
 import pytest
 
-from bridge.core.ratelimit import Budget
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.interfaces import tcplines
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
+from tests.integration.test_attack_fence_pause import read_gate
 from tests.integration.test_rotctld_integration import _replies, connect
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import free_port
 from tests.support.remote import StallingLink, ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
-
-
-def read_gate(monkeypatch: pytest.MonkeyPatch) -> tuple[threading.Event, threading.Event]:
-    """tcplines' Budget gated at the end of each read, nothing timed: a client's thread that
-    finishes a read (its ``spend``) while ``gate`` is clear is over its budget, asleep, its
-    bytes unread, until the gate is set; ``spent`` is set at every read finished (the test
-    knows its thread is past it: a gate cleared before that would hold up the read before)."""
-    gate, spent = threading.Event(), threading.Event()
-    gate.set()
-
-    class Gated(Budget):
-        over = False
-
-        def spend(self, cost: float, now: float) -> None:
-            super().spend(cost, now)
-            self.over = not gate.is_set()
-            spent.set()
-
-        def wait_s(self, now: float) -> float:
-            if self.over and not gate.is_set():
-                return 0.01
-            self.over = False
-            return super().wait_s(now)
-
-    monkeypatch.setattr(tcplines, "Budget", Gated)
-    return gate, spent
 
 
 def _remote(port: int, broker_port: int) -> Remote:
