@@ -963,7 +963,6 @@ class LineServer:
         next ones (its command: a stop goes ahead of the budget); True if it was."""
         if self._greets is None or conn in self._greeted:
             return False
-        peeked_s = time.monotonic()  # rule 9: what comes after the question came after this
         data = _peek(conn, self._read_bytes)
         answer = self._greets(data) if data else None
         if answer is None:
@@ -981,7 +980,6 @@ class LineServer:
                         ((max(0, sent - len(data)), count, s) for sent, count, s in looks.seen),
                         maxlen=SEEN_KEPT,
                     )
-                    looks.looked_s = peeked_s  # (the question alone waited then)
             if conn.send(answer, _DONTWAIT) != len(answer):
                 return False  # (a fresh connection's buffer takes it whole: not, no answer)
         except OSError:
