@@ -17,18 +17,11 @@ Rules:
    rotator's STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
    remote's, of its own front ends, remote/rotator.py), the count a command of ``source``
    asked now hands to ``submit`` as ``since`` (``halts_for``), and ``submit`` taking it.
-4. A rotator that stamps each move it sends on with a send time (the remote's: its stamp is
-   what the station judges it by, interfaces/mqtt/remote.py rule 8) extends ``SeenStamped``:
-   a front end that knows since when a move's bytes may have been there (a TCP port's look,
-   interfaces/tcplines.py rule 9; a datagram's arrival, interfaces/loggers/server.py rule 9)
-   hands that to ``submit`` as ``seen_s`` (the monotonic clock), and the move is stamped with
-   it instead of when it is sent (``stamps_seen`` says whether a rotator takes it). One that
-   cannot say (the console, a pty) hands nothing: stamped when sent.
 """
 
 from __future__ import annotations
 
-from typing import Protocol, cast
+from typing import Protocol
 
 from bridge.core.model import Command, Origin, RotatorStatus, Source
 from bridge.protocols.base import ModelSpec
@@ -56,38 +49,3 @@ class HaltCounted(FrontRotator, Protocol):
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None: ...
-
-
-class SeenStamped(HaltCounted, Protocol):
-    """Rule 4: a rotator that stamps a move with since when its bytes may have been there."""
-
-    stamps_seen: bool
-
-    def submit(
-        self,
-        command: Command,
-        described: str | None = None,
-        *,
-        since: int | None = None,
-        seen_s: float | None = None,
-    ) -> None: ...
-
-
-def stamps_seen(rotator: FrontRotator) -> bool:
-    """Rule 4: whether ``rotator`` takes ``seen_s``."""
-    return getattr(rotator, "stamps_seen", False) is True
-
-
-def submit_seen(
-    rotator: HaltCounted,
-    command: Command,
-    described: str | None,
-    since: int | None,
-    seen_s: float | None,
-) -> None:
-    """Rule 4: ``command`` submitted with ``since``, and with ``seen_s`` if ``rotator`` takes
-    it (and it is known)."""
-    if seen_s is not None and stamps_seen(rotator):
-        cast(SeenStamped, rotator).submit(command, described, since=since, seen_s=seen_s)
-    else:
-        rotator.submit(command, described, since=since)

@@ -126,43 +126,12 @@ def test_no_read_takes_bytes_past_what_the_oldest_unread_look_counted() -> None:
     from 8 takes 2 bytes, judged at 0; the next the other 8, judged at 1."""
     looks = Looks()
     looks.read = 8
-    looks.seen = deque([(4, 0, 1.0), (10, 0, 2.0), (18, 1, 3.0)])
-    assert looks.next_read() == (2, 0, 2.0)
+    looks.seen = deque([(4, 0), (10, 0), (18, 1)])
+    assert looks.next_read() == (2, 0)
     looks.read = 10
-    assert looks.next_read() == (8, 1, 3.0)
-    assert list(looks.seen) == [(18, 1, 3.0)]
+    assert looks.next_read() == (8, 1)
+    assert list(looks.seen) == [(18, 1)]
     looks.read = 18
-    looks.seen.append((18, 1, 4.0))  # (the kernel could not say: Windows)
-    most, count, _ = looks.next_read()
+    looks.seen.append((18, 1))  # (the kernel could not say: Windows)
+    most, count = looks.next_read()
     assert count == 1 and most > 18
-
-
-def test_bytes_a_read_takes_are_dated_from_the_look_before_unless_their_thread_waited() -> None:
-    """Looks (rule 9, since when): bytes its thread waited for came at the look that found
-    them; bytes that came while it did not watch (over its budget, busy) came at any time
-    since the look before, and a look that only reaches further keeps that earlier time for
-    the bytes it holds unread."""
-    import socket
-
-    ours, peer = socket.socketpair()
-    with ours, peer:
-        looks = Looks()
-        peer.sendall(b"p\n")
-        looks.look(ours.fileno(), 0, waited=True)  # its thread waited: they came now
-        waited_s = looks.looked_s
-        assert looks.next_read() == (2, 0, waited_s)
-        looks.read = len(ours.recv(2))
-        peer.sendall(b"P 200 0\n")  # while its thread slept over its budget
-        looks.look(ours.fileno(), 0)
-        later_s = looks.looked_s
-        assert later_s >= waited_s
-        assert looks.next_read() == (8, 0, waited_s)  # since the look before, not this one
-        peer.sendall(b"P 10 0\n")
-        looks.look(ours.fileno(), 0, waited=True)  # (reaches further: 8 unread kept)
-        assert looks.next_read() == (15, 0, waited_s)
-        looks.read += len(ours.recv(15))
-        looks.look(ours.fileno(), 0)  # all read: what comes next came after this look
-        peer.sendall(b"p\n")
-        last_s = looks.looked_s
-        looks.look(ours.fileno(), 0)
-        assert looks.next_read() == (2, 0, last_s)

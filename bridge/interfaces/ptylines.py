@@ -347,8 +347,7 @@ class PtyLineServer:
                 looks.read += len(data)
                 return fence, data
             looks.look(self._master, fence.count())  # (the count first: a halt between the
-            most, arrived, _ = looks.next_read()  # two errs toward refusing; since when:
-            # not said, a pty's moves are stamped when sent, tcplines.py rule 9)
+            most, arrived = looks.next_read()  # two errs toward refusing)
             data = os.read(self._master, min(most, READ_BYTES))
             looks.read += len(data)
         fence.arrived = arrived

@@ -171,17 +171,6 @@ Rules:
    too, which errs the safe way. Where the kernel cannot say what waits unread (Windows, no
    FIONREAD: the remote runs there) a look counts only what was read, so a move is judged at
    the count its own read's look read: this rule holds there only for what a read has taken.
-   Each look also keeps since when the bytes it counted first may have been there (``Looks``,
-   the monotonic clock): the look's own time for bytes the thread was waiting for (it found
-   nothing unread before its peek, and the peek woke for them), else the look before it's
-   (bytes that came while the thread slept over its budget or was busy came at any time
-   since; a look that only reaches further keeps the earlier time for what it holds unread),
-   and the accept's for a new connection's first bytes. The fence hands it with the move to
-   a rotator that stamps moves with it (``arrived_s``; front.py rule 4: the remote, whose own
-   halt count leaves out a STOP the station took another way, a review: a ``P`` sent before a
-   STOP from Home Assistant, read late over its client's budget, was stamped after it and
-   turned the rotor; heartbeat.py rule 10). A thread not run for a while after its peek woke
-   (a busy computer) dates the bytes from when it ran: later than they came.
 10. The accept thread, the one way in for a stop on a new connection, runs ACCEPT_RAISE nice
    steps above the bridge where the system lets it (as root, with CAP_SYS_NICE, or under the
    systemd unit's ``LimitNICE=-10``; elsewhere at the bridge's priority, said at debug), on
@@ -220,7 +209,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import Command
 from bridge.core.ratelimit import Budget, TokenBucket
-from bridge.front import FrontRotator, HaltCounted, SeenStamped, stamps_seen
+from bridge.front import FrontRotator, HaltCounted
 from bridge.interfaces.fdwait import readable
 
 log = logging.getLogger(__name__)
@@ -521,47 +510,35 @@ def halt_watchers(rotator: FrontRotator) -> HaltWatchers | None:
 
 class Looks:
     """Rule 9: the looks at what one connection (or pty: ptylines.py) has sent, oldest first:
-    (bytes sent, the halt count, since when) at each look; under ``lock``, as the connection's
-    thread reads and as a halt is about to be counted (``LineServer._halt_coming``). Since
-    when: a time on the monotonic clock before which none of the entry's bytes not yet read
-    came (rule 9's look time: the look's own for bytes its thread was waiting for, else the
-    look before it)."""
+    (bytes sent, the halt count) at each look; under ``lock``, as the connection's thread reads
+    and as a halt is about to be counted (``LineServer._halt_coming``)."""
 
-    __slots__ = ("lock", "looked_s", "read", "seen")
+    __slots__ = ("lock", "read", "seen")
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
-        self.seen: deque[tuple[int, int, float]] = deque(maxlen=SEEN_KEPT)
+        self.seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)
         self.read = 0  # the bytes its thread has read (a greeting's not counted: rule 8)
-        self.looked_s = time.monotonic()  # the last look (made, or about to be: its accept)
 
-    def look(self, fd: int, count: int, *, waited: bool = False) -> None:
-        """One look (under ``lock``), at ``count`` read first: what ``fd`` has sent so far.
-        ``waited``: its thread found nothing unread and waited for these bytes (they came
-        now); else they came at any time since the look before."""
+    def look(self, fd: int, count: int) -> None:
+        """One look (under ``lock``), at ``count`` read first: what ``fd`` has sent so far."""
         sent = _sent_so_far(fd, self.read)
-        now = time.monotonic()
-        since = now if waited else self.looked_s
-        self.looked_s = now
         seen = self.seen
         if seen and seen[-1][1] == count:  # (no halt since: one look, kept as far as it
-            if seen[-1][0] > self.read:  # reaches; what it holds unread came earlier still)
-                since = seen[-1][2]
-            seen[-1] = sent, count, since
+            seen[-1] = sent, count  # reaches)
         else:
-            seen.append((sent, count, since))
+            seen.append((sent, count))
 
-    def next_read(self) -> tuple[int, int, float]:
+    def next_read(self) -> tuple[int, int]:
         """(under ``lock``, right after a look) How many bytes the next read may take, and the
-        halt count of the look that first counted them and since when they may have been
-        there: no read goes past the bytes one look counted, so none holds bytes from both
-        sides of a halt (the kernel cannot say what waits, Windows: as many as come, at the
-        count now)."""
+        halt count of the look that first counted them: no read goes past the bytes one look
+        counted, so none holds bytes from both sides of a halt (the kernel cannot say what
+        waits, Windows: as many as come, at the count now)."""
         seen = self.seen
         while len(seen) > 1 and seen[0][0] <= self.read:  # (looks at bytes read already)
             seen.popleft()
-        sent, count, since = seen[0]
-        return (sent - self.read if sent > self.read else MAX_UNFINISHED), count, since
+        sent, count = seen[0]
+        return (sent - self.read if sent > self.read else MAX_UNFINISHED), count
 
 
 class Fence:
@@ -576,7 +553,6 @@ class Fence:
         self.rotator = rotator
         self.count = halt_count(rotator)  # (None: a rotator that counts no halts)
         self.arrived: int | None = None  # the halt count at that look
-        self.arrived_s: float | None = None  # since when those bytes may have been there
         self.mine: deque[int] = deque(maxlen=MINE_KEPT)  # the numbers of its own halts
 
     def overtaken(self) -> bool:
@@ -593,16 +569,11 @@ class Fence:
         (Refused, reported as the judge reports one); ``since``: the front end's own, handed
         on (the DCU-1's AM1: the count when its bearing came). The count is every front end's
         (``halts``), not the one ``since`` is in (``halts_for``: the remote's leaves out its
-        own front end's), so it is judged here, right before the judge's own look. A rotator
-        that stamps a move with when its bytes came (the remote's: front.py rule 4) is told
-        that too (``arrived_s``)."""
+        own front end's), so it is judged here, right before the judge's own look."""
         if self.overtaken():
             self.rotator.report_refusal(STALE, described, origin=command.origin)
             raise Refused(RefusalCode.STALE, STALE)
-        seen_s = self.arrived_s if stamps_seen(self.rotator) else None
-        if seen_s is not None:
-            cast(SeenStamped, self.rotator).submit(command, described, since=since, seen_s=seen_s)
-        elif since is None:
+        if since is None:
             self.rotator.submit(command, described)
         else:
             cast(HaltCounted, self.rotator).submit(command, described, since=since)
@@ -977,7 +948,7 @@ class LineServer:
                 with looks.lock:  # (a look in between would count the question's bytes)
                     conn.recv(len(data), _DONTWAIT)
                     looks.seen = deque(
-                        ((max(0, sent - len(data)), count, s) for sent, count, s in looks.seen),
+                        ((max(0, sent - len(data)), count) for sent, count in looks.seen),
                         maxlen=SEEN_KEPT,
                     )
             if conn.send(answer, _DONTWAIT) != len(answer):
@@ -1307,7 +1278,6 @@ class LineServer:
             looks = self._looks.get(conn) if counting is not None else self._looks.pop(conn, None)
         if looks is None or fence is None:
             looks = None
-        dated = fence is not None and stamps_seen(fence.rotator)  # rule 9: since when, asked
         read = 0  # rule 9: the bytes read so far
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
@@ -1348,21 +1318,18 @@ class LineServer:
                 try:
                     if looks is None:
                         data = conn.recv(self._read_bytes)
+                    elif conn.recv(1, socket.MSG_PEEK):  # rule 9: looked at and read in one
+                        with looks.lock:  # go (a halt's look between the two miscounts)
+                            assert counting is not None and fence is not None
+                            looks.look(
+                                conn.fileno(), counting()
+                            )  # the count first, then what was sent
+                            most, fence.arrived = looks.next_read()
+                            data = conn.recv(min(most, self._read_bytes), _DONTWAIT)
+                            read += len(data)
+                            looks.read = read
                     else:
-                        waited = dated and not _readable(conn)  # rule 9: what comes now,
-                        # it waits for (asked only where it is told: the remote's moves)
-                        if conn.recv(1, socket.MSG_PEEK):  # looked at and read in one go (a
-                            with looks.lock:  # halt's look between the two miscounts)
-                                assert counting is not None and fence is not None
-                                looks.look(
-                                    conn.fileno(), counting(), waited=waited
-                                )  # the count first, then what was sent
-                                most, fence.arrived, fence.arrived_s = looks.next_read()
-                                data = conn.recv(min(most, self._read_bytes), _DONTWAIT)
-                                read += len(data)
-                                looks.read = read
-                        else:
-                            data = b""
+                        data = b""
                 except (TimeoutError, BlockingIOError):
                     continue
                 me.reading = True  # rule 3: its lines out of the kernel, not carried out yet

@@ -67,13 +67,7 @@ Rules:
    Likewise (LOCKED, ``RPRT -9``) while the station's ``R/lock/state`` is ``ON``.
 7. A command is answered only once the station's broker acknowledged it (interfaces/mqtt/remote.py
    rule 7): ``RPRT 0`` means the broker has it, stamped with its send time for the station to
-   refuse it if a link held it up (heartbeat.py). A move a front end says since when it was
-   here (``seen_s``: a TCP port's look, tcplines.py rule 9; a datagram's arrival, the loggers'
-   rule 8; front.py rule 4) is stamped with that time instead, never before the stamp of the
-   last STOP or lock ON the link sent for this rotator (its ``after``: its stop and lock
-   topics): a STOP the station took another way after it came refuses it, however late it was
-   read (heartbeat.py rule 10), and the client's own ``S`` read with it does not. The console
-   says none: its moves are stamped when sent.
+   refuse it if a link held it up (heartbeat.py).
 """
 
 from __future__ import annotations
@@ -149,8 +143,6 @@ class Sender(Protocol):
         check: Callable[[], None] | None = None,
         *,
         until_heard: bool = False,
-        seen_s: float | None = None,
-        after: tuple[str, ...] = (),
     ) -> None: ...
 
 
@@ -208,8 +200,6 @@ class StationView:
 
 class RemoteRotator:
     """Rule 1-3: one station rotator, its topics under ``B`` or ``B/<id>`` (``topics``)."""
-
-    stamps_seen = True  # rule 7: a move is stamped with since when its bytes came (front.py)
 
     def __init__(
         self,
@@ -298,20 +288,13 @@ class RemoteRotator:
         return status
 
     def submit(
-        self,
-        command: Command,
-        described: str | None = None,
-        *,
-        since: int | None = None,
-        seen_s: float | None = None,
+        self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None:
         """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
         the count of the stops and lock ONs of every front end but the command's own
         (``halts_besides`` its source) read when it was asked (interfaces/web/port.py rules 2a
         and 2b): a move is refused if one went out since, up to the moment it is handed to
-        the link, under the link's send lock (the order the broker takes them in).
-        ``seen_s``: since when a move's bytes may have been here (the monotonic clock, the
-        link's; front.py rule 4): it is stamped so (rule 7)."""
+        the link, under the link's send lock (the order the broker takes them in)."""
         # a front end that asks and submits at once (rotctld, GS-232, the loggers): its move is
         # asked now, and a stop or lock ON of any front end counted from here on refuses it up
         # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
@@ -323,22 +306,15 @@ class RemoteRotator:
         # asked before that stop, went to the broker after it)
         asked = self.halts
         try:
-            self._send(command, since, asked, seen_s)
+            self._send(command, since, asked)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
 
-    def _send(
-        self,
-        command: Command,
-        since: int | None = None,
-        asked: int | None = None,
-        seen_s: float | None = None,
-    ) -> None:
+    def _send(self, command: Command, since: int | None = None, asked: int | None = None) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
         a place goes as the place, park as park. ``asked``: the count of every front end's
-        stops and lock ONs when the move was handed to ``submit``, ``since`` or not;
-        ``seen_s``: as ``submit``'s (rule 7)."""
+        stops and lock ONs when the move was handed to ``submit``, ``since`` or not."""
         t = self.topics
         match command:
             case Stop():
@@ -375,39 +351,37 @@ class RemoteRotator:
                 self.check_move(since, source)
                 self.pointing.judge(command, None)  # early word; the station judges again
                 if command.park:  # the station's park position, so that it shows "parked"
-                    self.publish(t.park, "park", guard, seen_s=seen_s)
+                    self.publish(t.park, "park", guard)
                 else:
                     doc: dict[str, float] = {"azimuth": command.az_deg}
                     if command.el_deg is not None:
                         doc["elevation"] = command.el_deg
-                    self._send_json(t.target, doc, guard, seen_s)
+                    self._send_json(t.target, doc, guard)
             case Park():  # rule 3 first: the link's word, then the station's park position
                 self.check_move(since, source)
-                park = Target(*self.pointing.parking(), source, park=True)
-                self._send(park, since, asked, seen_s)
+                self._send(Target(*self.pointing.parking(), source, park=True), since, asked)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 place = place_doc(lat, lon, command.locator)
                 if command.long_path:
                     place["path"] = "long"
                 self.check_move(since, source)
-                self._send_json(t.target, place, guard, seen_s)
+                self._send_json(t.target, place, guard)
             case TakePath():
                 self.check_move(since, source)
-                path = {"path": "long" if command.long_path else "short"}
-                self._send_json(t.target, path, guard, seen_s)
+                self._send_json(t.target, {"path": "long" if command.long_path else "short"}, guard)
             case GoToPreset():
                 self.check_move(since, source)
-                self.publish(t.preset, command.name, guard, seen_s=seen_s)
+                self.publish(t.preset, command.name, guard)
             case Nudge():
                 step = {"azimuth": command.d_az_deg}
                 if command.d_el_deg is not None:
                     step["elevation"] = command.d_el_deg
                 self.check_move(since, source)
-                self._send_json(t.nudge, step, guard, seen_s)
+                self._send_json(t.nudge, step, guard)
             case TrackBody() if command.tle is None:
                 self.check_move(since, source)
-                self.publish(t.feature(tracking.COMMAND), command.name, guard, seen_s=seen_s)
+                self.publish(t.feature(tracking.COMMAND), command.name, guard)
             case Target():  # an elevation alone (rule 3)
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
@@ -453,13 +427,9 @@ class RemoteRotator:
             raise Refused(RefusalCode.STALE, HALTED_SINCE)
 
     def _send_json(
-        self,
-        topic: str,
-        doc: dict[str, Any],
-        guard: Callable[[], None] | None = None,
-        seen_s: float | None = None,
+        self, topic: str, doc: dict[str, Any], guard: Callable[[], None] | None = None
     ) -> None:
-        self.publish(topic, json.dumps(doc, separators=(",", ":")), guard, seen_s=seen_s)
+        self.publish(topic, json.dumps(doc, separators=(",", ":")), guard)
 
     def halted(self, source: Source) -> None:
         """A stop or a lock ON from ``source``'s front end goes out: ``last_halt_s`` is now
@@ -490,28 +460,13 @@ class RemoteRotator:
         guard: Callable[[], None] | None = None,
         *,
         until_heard: bool = False,
-        seen_s: float | None = None,
     ) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE);
         ``guard``, if given, is asked under the link's send lock, right before it is handed on
         (it raises Refused for a move that may not go any more); ``until_heard``: a halt sent
-        again once the station's bridge is heard (rule 3); ``seen_s``: a move stamped with
-        since when its bytes came, never before this rotator's last halt sent (rule 7)."""
-        if seen_s is None:
-            self._link.send(
-                topic, payload, self._operator, self._expiry_s, guard, until_heard=until_heard
-            )
-            return
-        t = self.topics
+        again once the station's bridge is heard (rule 3)."""
         self._link.send(
-            topic,
-            payload,
-            self._operator,
-            self._expiry_s,
-            guard,
-            until_heard=until_heard,
-            seen_s=seen_s,
-            after=(t.stop, t.lock),
+            topic, payload, self._operator, self._expiry_s, guard, until_heard=until_heard
         )
 
     def report_refusal(

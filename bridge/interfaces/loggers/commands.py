@@ -67,9 +67,7 @@ Rules:
    the move to ``submit`` (``since``, runtime/rotator.py; mailbox.py rule 10): a STOP carried
    out between the look and the judge refuses the move too (an attack pass: the operator's
    rotctld S, carried out right after the look, and the logger's 300 turned the rotor after
-   it). A rotator that stamps its moves (the remote's, front.py rule 4) is handed the
-   arrival's earliest bound with the move (``seen_s``): the remote stamps it so, and a STOP
-   the station took another way after it came refuses it there (heartbeat.py rule 10).
+   it).
 """
 
 from __future__ import annotations
@@ -85,7 +83,7 @@ from bridge.core import geo
 from bridge.core.bands import band_of_mhz
 from bridge.core.errors import Refused
 from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
-from bridge.front import HaltCounted, submit_seen
+from bridge.front import HaltCounted
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, ascii_text, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
 from bridge.pointing import Pointing, norm360
@@ -318,7 +316,6 @@ class Commands:
         has_el = rot.spec.has_elevation
         el = req.elevation if has_el else None
         since = rot.halts_for(Source.PST)  # rule 8: before the look at the last halt
-        seen_s = None if arrived is None else arrived.earliest  # rule 8: the remote's stamp
         try:
             if req.stop:
                 self._halted.stop(rot, Stop(Source.PST, by), described, arrived)  # rule 8
@@ -326,7 +323,7 @@ class Commands:
                 rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
                 return
             elif req.park:
-                submit_seen(rot, Park(source=Source.PST, origin=by), described, since, seen_s)
+                rot.submit(Park(source=Source.PST, origin=by), described, since=since)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
@@ -334,7 +331,7 @@ class Commands:
                     rot.report_refusal(f"pst: {exc}", described)  # (it names the locator)
                     return
                 toward = Toward(lat, lon, req.locator, source=Source.PST, origin=by)
-                submit_seen(rot, toward, described, since, seen_s)
+                rot.submit(toward, described, since=since)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
@@ -343,7 +340,7 @@ class Commands:
                 return
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else heading(rot, (req.azimuth,))  # rule 3
-                submit_seen(rot, Target(az, el, Source.PST, origin=by), described, since, seen_s)
+                rot.submit(Target(az, el, Source.PST, origin=by), described, since=since)
             else:
                 return
             counts.commands += 1
@@ -407,7 +404,6 @@ class Commands:
             self._offset_warned.add(req.rotor)
             log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
         since = rot.halts_for(Source.N1MM)  # rule 8: before the look at the last halt
-        seen_s = None if arrived is None else arrived.earliest  # rule 8: the remote's stamp
         if self._stale(rot, arrived, True):  # rule 8
             rot.report_refusal(f"n1mm: {STALE}", described, origin=by)
             return
@@ -415,7 +411,7 @@ class Commands:
         az = heading(rot, ways)  # rule 4: the nearer along the travel; rule 3: north
         try:
             target = Target(az, None, Source.N1MM, origin=by)
-            submit_seen(rot, target, described, since, seen_s)
+            rot.submit(target, described, since=since)
             counts.commands += 1
         except Refused:
             pass
