@@ -67,9 +67,7 @@ Rules:
    reckoned from a clock that ended when the station's bridge restarted. So is a move stamped
    before the rotator's last STOP or lock ON from any interface (``halted_s``, heartbeat.py rule
    8); a halt's own stamp, read here, may put that time earlier than it came, when it would pass
-   as a move's and by HALT_STAMP_MAX_S at most (``_halt_sent_s``); a move stamped as that halt
-   is not older than it (STAMP_GRAIN_S: the noise of the clocks alone, no more: a move stamped
-   a millisecond before a STOP is refused). Halts: never refused. The
+   as a move's and by HALT_STAMP_MAX_S at most (``_halt_sent_s``). Halts: never refused. The
    same on the stop lane, for the lock OFF it carries out while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
@@ -139,12 +137,10 @@ from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
-# rule 9: the noise of putting a stamp on the steady clock through the wall clock (both
-# ``_sent_s``, the steady clock read first: microseconds); a move stamped as the halt before it
-# (the remote's ``P`` read with its ``S``, heartbeat.py rule 10) is not older than that halt,
-# one stamped a millisecond before it is (a review: 2 ms let a target the remote saw 1.2 ms
-# before a STOP from Home Assistant through, and the rotor turned)
-STAMP_GRAIN_S = 0.0005
+# rule 9: a stamp's grain: a millisecond (heartbeat.py ``Stamp.of``) and the noise of putting
+# it on the steady clock through the wall clock; a move stamped within it of the halt before
+# it (a logger's ``S`` then ``P``, the same millisecond) is not older than that halt
+STAMP_GRAIN_S = 0.002
 HALT_STAMP_MAX_S = 60.0  # rule 9: the most a halt's stamp puts its time earlier (the remote's
 # longest expiry, bridge/remote/settings.py; a review)
 
@@ -636,7 +632,7 @@ class MqttService:
         sent = stamp.sent_unix(self._station)
         if sent is None or now_unix - sent > HALT_STAMP_MAX_S:
             return None  # (an expiry of up to an hour would let a clock that slow through)
-        return self._sent_s(stamp)  # (as a move's: one stamped alike is not older)
+        return time.monotonic() - (now_unix - sent)
 
     def _sent_s(self, stamp: Stamp | None) -> float | None:
         """Rule 9: a stamp's send time on the steady clock (``halted_s``'s), or None."""
