@@ -744,23 +744,3 @@ def test_properties_the_bridge_did_not_read_refuse_a_move_and_leave_a_stop_as_ev
     )
     assert stop[0] == "submit" and isinstance(stop[1], Stop)
     assert lock[:2] == ("lock", True), lock
-
-
-def test_a_move_is_stamped_when_it_was_seen_never_before_its_rotators_last_halt() -> None:
-    """heartbeat.py rule 10: ``seen_s`` backdates the stamp by the time since (the station's
-    clock then, as the beats reckon it now); ``after``, a halt's stamp of the same station
-    process, is the earliest it may say; the next stamp sent now is not set back by it."""
-    mono = FakeClock(100.0)
-    station_clock = StationClock(mono)
-    station_clock.heard(1_700_000_000.0, "A")
-    mono.t += 2.0
-    now = station_clock.stamp(5)
-    assert now == Stamp.of(1_700_000_002.0, 5, "A")
-    seen = station_clock.stamp(5, seen_s=mono.t - 1.5)
-    assert seen == Stamp.of(1_700_000_000.5, 5, "A")
-    halt = (1_700_000_001.0, "A")
-    assert station_clock.stamp(5, mono.t - 1.5, halt) == Stamp.of(1_700_000_001.0, 5, "A")
-    other = (1_700_000_001.0, "B")  # (another process's halt says nothing of this one's time)
-    assert station_clock.stamp(5, mono.t - 1.5, other) == Stamp.of(1_700_000_000.5, 5, "A")
-    assert station_clock.stamp(5, seen_s=mono.t + 1.0) == now  # (no later than when sent)
-    assert station_clock.stamp(5) == now  # rule 8: not earlier than the last send time

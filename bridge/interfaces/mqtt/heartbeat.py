@@ -83,20 +83,6 @@ Rules:
    user property UNREAD_PROPERTIES alone, naming the section's size, and a stamp that says
    so (``Stamp.unread``): a move so sent is refused, saying why; a stop and a lock ON are
    carried out as any unreadable stamp's (rule 5).
-10. A move is stamped with since when its bytes were at the remote, not when it is sent
-   (``StationClock.stamp``'s ``seen_s``, front.py rule 4: for a TCP port the look that first
-   counted them or the one before, interfaces/tcplines.py rule 9; for a logger's datagram its
-   arrival, interfaces/loggers/server.py rule 9): the station's clock then, reckoned now (rule
-   3: never later than the truth; every stamp is its millisecond's start, never rounded up).
-   A STOP the station took another way (Home Assistant, its console) after the bytes came
-   refuses it (rule 8), however late the remote read it (a review: a rotctld ``P`` sent before
-   a STOP from Home Assistant, its client paused over its budget, was read after it, stamped
-   with its send time and turned the rotor). It is never stamped before the remote's own last
-   halt sent for that rotator (``after``: a client's ``P 300 0``, ``S``, ``P 200 0`` read in
-   one go ends at 200; the station refuses a move stamped before a halt, not one stamped as
-   it, service.py's STAMP_GRAIN_S), and it ages from then: it expires that much sooner at the
-   station (rule 5), as it is older. The reckoning rule 8 keeps from going back is the send
-   time's. A move whose front end cannot say (the console, a pty) is stamped when sent.
 """
 
 from __future__ import annotations
@@ -203,10 +189,8 @@ class StationClock:
         reckoned = self.reckon()
         return None if reckoned is None else reckoned[0]
 
-    def reckon(self, seen_s: float | None = None) -> tuple[float, str | None] | None:
-        """``now_unix`` and the station process its beats came from (rule 7), read together;
-        ``seen_s`` (rule 10): the station's clock then instead, reckoned now (the next
-        reckoning is never earlier than this one's now, rule 8, whatever ``seen_s``)."""
+    def reckon(self) -> tuple[float, str | None] | None:
+        """``now_unix`` and the station process its beats came from (rule 7), read together."""
         with self._lock:
             now = self._clock()
             self._trim(now)
@@ -218,29 +202,16 @@ class StationClock:
                 if reckoned < given[0] <= reckoned + AHEAD_S:
                     reckoned = given[0]
             self._given = reckoned, self._station
-            if seen_s is not None and seen_s < now:  # rule 10: backdated
-                reckoned -= now - seen_s
             return reckoned, self._station
 
-    def stamp(
-        self,
-        expiry_s: float,
-        seen_s: float | None = None,
-        after: tuple[float, str] | None = None,
-    ) -> Stamp | None:
+    def stamp(self, expiry_s: float) -> Stamp | None:
         """Rules 4 and 7: a command's stamp sent now, naming the process the reckoning came
-        from (NAMELESS for beats that named none); None without a recent beat. Rule 10:
-        ``seen_s``, since when the command was there (this clock's), stamped then instead,
-        but never before ``after``, a halt's stamp (its send time, the process it names)."""
-        reckoned = self.reckon(seen_s)
+        from (NAMELESS for beats that named none); None without a recent beat."""
+        reckoned = self.reckon()
         if reckoned is None:
             return None
         sent, station = reckoned
-        sent = math.floor(sent * 1000.0) / 1000.0  # (the stamp's millisecond: never later)
-        name = NAMELESS if station is None else station
-        if after is not None and after[1] == name and after[0] > sent:
-            sent = after[0]
-        return Stamp.of(sent, expiry_s, name)
+        return Stamp.of(sent, expiry_s, NAMELESS if station is None else station)
 
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
