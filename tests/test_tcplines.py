@@ -1254,8 +1254,7 @@ def test_the_accept_thread_runs_ahead_of_busy_programs_and_its_clients_at_the_br
     connections): the accept thread, the one way in for a stop on a new connection, runs
     ACCEPT_RAISE nice steps above the bridge where the system lets it (here: root, or the
     systemd unit's LimitNICE); a client's thread, which it starts, at the bridge's own."""
-    if not sys.platform.startswith("linux"):
-        pytest.skip("a thread has a nice of its own on Linux alone")
+    assert sys.platform.startswith("linux"), "the suite runs on Linux (a thread's own nice)"
     base = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
     allowed: list[bool] = []
 
@@ -1295,8 +1294,7 @@ def test_the_listen_backlog_is_the_one_the_rules_name(
     backlog as its Send-Q): short enough that a stop behind a full one is read within some
     tens of milliseconds, long enough that a connect-and-close flood does not fill it."""
     ss = shutil.which("ss")
-    if ss is None or not sys.platform.startswith("linux"):
-        pytest.skip("ss (iproute2) shows a listener's backlog")
+    assert ss is not None, "ss shows a listener's backlog: tests/run installs iproute2"
     _tower, server = gs232()
     out = subprocess.run(
         [ss, "-ltnH", f"sport = :{server.port}"], capture_output=True, text=True, check=True
