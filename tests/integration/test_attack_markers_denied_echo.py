@@ -1,4 +1,6 @@
-"""An attack pass on lastword.py rules 4 and 7 (0785d896): with the main connection's markers
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+An attack pass on lastword.py rules 4 and 7 (0785d896): with the main connection's markers
 denied (the broker's ACL drops B/bridge/fence and B/bridge/hello) a lane halt is carried out
 with no hold and is no longer counted as waiting for its main copy, so the main connection's
 copy of a halt the lane carried out first is taken for a halt the main connection read first:

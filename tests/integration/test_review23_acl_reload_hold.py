@@ -1,4 +1,6 @@
-"""Cold review 23: lastword.py rule 7 says it: "An ACL changed under a live connection to deny
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+Cold review 23: lastword.py rule 7 says it: "An ACL changed under a live connection to deny
 both topics is seen by no probe: a lane hold up then lasts until the connection drops". Since
 0785d896 nothing else ends it (the main connection's copy of the STOP no longer does, rule 2).
 mosquitto reloads its ACL file on SIGHUP and keeps the connections: an administrator who

@@ -1,4 +1,6 @@
-"""Cold review 23: ordinary use, an idle bridge, nothing lost. A Home Assistant script or a
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+Cold review 23: ordinary use, an idle bridge, nothing lost. A Home Assistant script or a
 Node-RED flow publishes two words back to back from one client: STOP then a new target ("stop,
 then go there instead"), or lock ON then lock OFF. Each is published after the other, the
 broker has them in that order, and nothing is behind on either connection. Since 0785d896 the

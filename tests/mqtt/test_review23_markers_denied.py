@@ -1,4 +1,6 @@
-"""Cold review 23: lastword.py rule 7 since 0785d896. While the main connection cannot read its
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+Cold review 23: lastword.py rule 7 since 0785d896. While the main connection cannot read its
 markers (the fence topic denied and its hello never back: an ACL on B/bridge/#), a lane halt is
 carried out at once and holds nothing. Whatever the main connection then reads for that
 rotator is carried out in its order, so what was published before the STOP (or the lock ON)

@@ -1,4 +1,6 @@
-"""Cold review 23: since 0785d896 a lane hold ends by its marker alone (lastword.py rule 2); the
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+Cold review 23: since 0785d896 a lane hold ends by its marker alone (lastword.py rule 2); the
 main connection's copy of the STOP, read in its order, no longer ends it. A marker the broker
 dropped (QoS 0, a reader behind a flood: rule 5's own example) is sent again after RESEND_S,
 the wait doubling up to RESEND_MAX_S (30 s). So once the flood is over and the main connection

@@ -1,4 +1,6 @@
-"""Cold review 23: the remote (``rotor-bridge remote``, remote.py) publishes every command
+"""A guard: 0785d896 did what is said below, and was reverted (6129c849).
+
+Cold review 23: the remote (``rotor-bridge remote``, remote.py) publishes every command
 stamped with its send time (heartbeat.py rule 4); a hamlib client behind it (a logger, a
 rotator panel) sends ``S`` then ``P`` back to back, so the station reads a STOP stamped t and
 a target stamped t + 5 ms from the same sender. Since 0785d896 the lane's hold ends by its
