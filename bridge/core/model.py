@@ -332,6 +332,23 @@ def combine(newer: Target, older: Target | None) -> Target:
     return newer
 
 
+class SentAt(float):
+    """A halt's send time on the steady clock (``Stop.sent_s``, ``Lock.sent_s``) that keeps
+    the stamp it was read from: ``unix``, the station's clock as its sender reckoned it
+    (interfaces/mqtt/heartbeat.py rule 10). The judge keeps ``unix`` beside ``halted_s`` when
+    this halt sets it (runtime/rotator.py ``halted``), and a move's stamp is compared with it
+    directly, on one clock (interfaces/mqtt/service.py rule 9): put on the steady clock, two
+    equal stamps could differ by the time the thread lost between two clock readings (a
+    review: a millisecond lost so refused the remote's ``P`` stamped as its ``S``)."""
+
+    unix: float
+
+    def __new__(cls, steady_s: float, unix: float) -> SentAt:
+        made = super().__new__(cls, steady_s)
+        made.unix = unix
+        return made
+
+
 @dataclass(frozen=True)
 class Stop:
     source: Source = Source.MQTT

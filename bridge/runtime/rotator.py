@@ -84,6 +84,7 @@ from bridge.core.model import (
     Release,
     ResetHealth,
     RotatorStatus,
+    SentAt,
     SetOption,
     Source,
     Stop,
@@ -251,8 +252,9 @@ class Rotator:
         # console refuses a command under way before it (interfaces/web/commands.py rule 5)
         self.last_halt_s = -math.inf
         # the latest of the halts' send times, each the earlier of when it came and when its
-        # sender stamped it (monotonic): a move stamped before it is stale (``halted``)
-        self.halted_s = -math.inf
+        # sender stamped it (monotonic), and that halt's stamp on the station's clock if it
+        # had one (core/model.py ``SentAt``): a move stamped before it is stale (``_halted``)
+        self.halted: tuple[float, float | None] = (-math.inf, None)
         self._halted_lock = threading.Lock()
         self._problem = store.problems.get(self.id)  # state_store.py rule 2
         if self._problem is not None:  # the lock is ON for it; the status's last error says why
@@ -331,6 +333,7 @@ class Rotator:
         echo: bool = False,
         since: int | None = None,
         ticket: int | None = None,
+        seen_s: float | None = None,
     ) -> None:
         """The one way a front end reaches the judge (rules in the module header): queue
         ``command`` (a value of core/model.py's ``Command`` union) or raise Refused, reported on
@@ -343,7 +346,9 @@ class Rotator:
         cluster's look-up): a stop or lock ON put since then overtakes it, however late it is
         judged (mailbox.py rule 10); ``ticket``: for such a command, its place in the order of
         commands taken when it was asked (``ticket()``): any motion command put since then
-        overtakes it too (mailbox.py rule 10a)."""
+        overtakes it too (mailbox.py rule 10a). ``seen_s`` (front.py rule 3): not used here,
+        the halt count says what came before a halt."""
+        del seen_s  # (the remote's stamp, front.py rule 3)
         if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
             message = f"not a command the bridge knows: {type(command).__name__}"
             self.report(ErrorKind.REFUSED, message, described)
@@ -721,9 +726,15 @@ class Rotator:
         now = time.monotonic()
         self.last_halt_s = now
         sent = now if sent_s is None or not sent_s < now else sent_s
+        unix = sent_s.unix if isinstance(sent_s, SentAt) else None  # (its stamp: one clock)
         with self._halted_lock:
-            if sent > self.halted_s:
-                self.halted_s = sent
+            if sent > self.halted[0]:
+                self.halted = sent, unix  # (one value: read whole, never half of two halts)
+
+    @property
+    def halted_s(self) -> float:
+        """The latest of the halts' send times (``_halted``), monotonic."""
+        return self.halted[0]
 
     def _lock(
         self, locked: bool, hold: int | None, since: int | None = None, sent_s: float | None = None

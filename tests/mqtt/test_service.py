@@ -109,6 +109,7 @@ class RecordingRotator:
         self._refuse = refuse
         self.can_track = False
         self.halted_s = -math.inf  # (no halt is timed here: the judge's, runtime/rotator.py)
+        self.halted_unix: float | None = None  # (its stamp, when a test sets one)
         self.can_follow = False
 
     @property
@@ -118,6 +119,10 @@ class RecordingRotator:
     @property
     def halts(self) -> int:
         return 0  # (no halt is counted here: the judge's, runtime/rotator.py)
+
+    @property
+    def halted(self) -> tuple[float, float | None]:
+        return self.halted_s, self.halted_unix  # (runtime/rotator.py's, as a test sets it)
 
     def submit(
         self,

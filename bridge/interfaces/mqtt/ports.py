@@ -19,7 +19,12 @@ class RotatorPort(FrontRotator, Protocol):
     spec: ModelSpec
     pointing: Pointing
     can_track: bool  # a station and a controller that reports where it points
-    halted_s: float  # the last halt's send time, monotonic (runtime/rotator.py; rule 9)
+
+    @property
+    def halted(self) -> tuple[float, float | None]: ...  # the last halt's send time,
+
+    # monotonic, and its stamp on the station's clock if it had one (runtime/rotator.py;
+    # service.py rule 9)
 
     @property
     def halts(self) -> int: ...  # the halt count now (runtime/rotator.py; mailbox.py rule 10)

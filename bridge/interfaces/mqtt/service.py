@@ -67,7 +67,14 @@ Rules:
    reckoned from a clock that ended when the station's bridge restarted. So is a move stamped
    before the rotator's last STOP or lock ON from any interface (``halted_s``, heartbeat.py rule
    8); a halt's own stamp, read here, may put that time earlier than it came, when it would pass
-   as a move's and by HALT_STAMP_MAX_S at most (``_halt_sent_s``). Halts: never refused. The
+   as a move's and by HALT_STAMP_MAX_S at most (``_halt_sent_s``). When that last halt carried
+   a stamp (``halted``'s second half, core/model.py ``SentAt``), the move's stamp is compared
+   with it directly, one clock as its senders reckoned it: older only if stamped before it (a
+   review: put on the steady clock, the two differed by whatever the thread lost between two
+   clock readings, and the remote's ``P`` stamped as its ``S`` was refused while its client
+   got RPRT 0); else the move's stamp is put on the steady clock (the steady clock read before
+   the station's, so a lost moment makes it earlier: refused, the safe side) and compared with
+   when the halt came, with no grain. Halts: never refused. The
    same on the stop lane, for the lock OFF it carries out while the main connection is down.
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
@@ -115,6 +122,7 @@ from bridge.core.model import (
     Origin,
     Park,
     RotatorStatus,
+    SentAt,
     SetOption,
     SettingValue,
     Source,
@@ -137,10 +145,6 @@ from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
-# rule 9: a stamp's grain: a millisecond (heartbeat.py ``Stamp.of``) and the noise of putting
-# it on the steady clock through the wall clock; a move stamped within it of the halt before
-# it (a logger's ``S`` then ``P``, the same millisecond) is not older than that halt
-STAMP_GRAIN_S = 0.002
 HALT_STAMP_MAX_S = 60.0  # rule 9: the most a halt's stamp puts its time earlier (the remote's
 # longest expiry, bridge/remote/settings.py; a review)
 
@@ -613,15 +617,23 @@ class MqttService:
         why = stamp.judge(self._stamp_clock(), self._station)
         if why is not None or not rots:
             return why
-        sent_s = self._sent_s(stamp)
-        if sent_s is not None and any(sent_s + STAMP_GRAIN_S < rot.halted_s for rot in rots):
+        sent = stamp.sent_unix(self._station)
+        if sent is not None and any(self._before_halt(sent, rot) for rot in rots):
             return (
                 "sent before the last STOP or lock ON (a link that held it up): not carried "
                 "out; send it again"
             )
         return None
 
-    def _halt_sent_s(self, stamp: Stamp | None) -> float | None:
+    def _before_halt(self, sent_unix: float, rot: RotatorPort) -> bool:
+        """Rule 9: whether a move stamped ``sent_unix`` was sent before ``rot``'s last halt:
+        by the halt's own stamp when it had one (one clock), else on the steady clock."""
+        halted_s, halted_unix = rot.halted
+        if halted_unix is not None:
+            return sent_unix < halted_unix
+        return time.monotonic() - (self._stamp_clock() - sent_unix) < halted_s
+
+    def _halt_sent_s(self, stamp: Stamp | None) -> SentAt | None:
         """Rule 9: a halt's send time, when its stamp would pass as a move's (``_late``'s
         judge); None for one older than its expiry, unreadable or another process's: the halt
         is carried out and counts from when it came (a clock minutes slow must not let the
@@ -632,14 +644,7 @@ class MqttService:
         sent = stamp.sent_unix(self._station)
         if sent is None or now_unix - sent > HALT_STAMP_MAX_S:
             return None  # (an expiry of up to an hour would let a clock that slow through)
-        return time.monotonic() - (now_unix - sent)
-
-    def _sent_s(self, stamp: Stamp | None) -> float | None:
-        """Rule 9: a stamp's send time on the steady clock (``halted_s``'s), or None."""
-        sent = None if stamp is None else stamp.sent_unix(self._station)
-        if sent is None:
-            return None
-        return time.monotonic() - (self._stamp_clock() - sent)
+        return SentAt(time.monotonic() - (now_unix - sent), sent)  # (and its stamp: rule 9)
 
     def on_message(
         self,
