@@ -17,6 +17,12 @@ Rules:
    rotator's STOPs and lock ONs (the station's judge's, runtime/rotator.py ``halts``; the
    remote's, of its own front ends, remote/rotator.py), the count a command of ``source``
    asked now hands to ``submit`` as ``since`` (``halts_for``), and ``submit`` taking it.
+   ``submit`` takes ``seen_s`` too: when the command's bytes were seen (the monotonic clock),
+   where the front end can say (a TCP port's or a pty's look, interfaces/tcplines.py rule 9;
+   a datagram's arrival, interfaces/loggers/server.py rule 9), a stop's as a move's. The
+   remote stamps what it sends with it (remote/rotator.py rule 7: a STOP the station took
+   another way after the bytes came refuses the move there); the station's judge needs no
+   time (its halt count says what came before a halt: mailbox.py rule 10) and ignores it.
 """
 
 from __future__ import annotations
@@ -47,5 +53,10 @@ class HaltCounted(FrontRotator, Protocol):
     def halts(self) -> int: ...
     def halts_for(self, source: Source) -> int: ...
     def submit(
-        self, command: Command, described: str | None = None, *, since: int | None = None
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        since: int | None = None,
+        seen_s: float | None = None,
     ) -> None: ...

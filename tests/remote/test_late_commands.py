@@ -20,7 +20,7 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.errors import RefusalCode, Refused
-from bridge.core.model import Source, Stop, Target
+from bridge.core.model import SentAt, Source, Stop, Target
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.interfaces.mqtt.heartbeat import (
     AHEAD_S,
@@ -661,8 +661,9 @@ def test_a_move_stamped_in_the_same_millisecond_as_the_stop_before_it_is_carried
     sent = Stamp.of(NOW_UNIX - 0.05, 5)  # the one millisecond both were sent in
     svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=sent)
     stop = rots["tower"].calls[-1][1]
-    assert isinstance(stop, Stop) and stop.sent_s is not None
-    rots["tower"].halted_s = min(mono(), stop.sent_s)  # runtime/rotator.py ``_halted``
+    assert isinstance(stop, Stop) and isinstance(stop.sent_s, SentAt)
+    rots["tower"].halted_s = min(mono(), stop.sent_s)  # runtime/rotator.py ``_halted``,
+    rots["tower"].halted_unix = stop.sent_s.unix  # and the stamp it kept (service.py rule 9)
     mono.t += 0.001
     wall.t += 0.001 + 1e-6  # the wall clock a microsecond ahead over that millisecond
     svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=sent)
@@ -744,3 +745,68 @@ def test_properties_the_bridge_did_not_read_refuse_a_move_and_leave_a_stop_as_ev
     )
     assert stop[0] == "submit" and isinstance(stop[1], Stop)
     assert lock[:2] == ("lock", True), lock
+
+
+def test_a_move_stamped_as_the_stop_before_it_is_carried_out_when_its_thread_loses_the_cpu(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Review 24: the remote stamps ``P`` read with its own ``S`` exactly as that ``S``
+    (heartbeat.py rule 10), and the station put both stamps on its steady clock with two
+    clock readings each: one millisecond lost between the readings for the target (a GIL
+    switch, a loaded Raspberry Pi) made it a millisecond older than its STOP, past the grain:
+    refused while the client got RPRT 0 for both. The station now compares the move's stamp
+    with the stamp the halt kept (core/model.py ``SentAt``) directly, on one clock: taken."""
+    import bridge.interfaces.mqtt.service as service_module
+
+    mono, wall = FakeClock(100.0), FakeClock(NOW_UNIX)
+    fake_time = type("T", (), {"monotonic": staticmethod(mono), "time": staticmethod(wall)})
+    monkeypatch.setattr(service_module, "time", fake_time)
+    svc, _, rots = service({"tower": "rotorez"})
+    svc._stamp_clock = wall  # (the station's wall clock, as ``wall=`` gives it)
+    sent = Stamp.of(NOW_UNIX - 0.05, 5)  # the S's stamp, and the P's, clamped to it (``after``)
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=sent)
+    stop = rots["tower"].calls[-1][1]
+    assert isinstance(stop, Stop) and isinstance(stop.sent_s, SentAt)
+    rots["tower"].halted_s = min(mono(), stop.sent_s)  # runtime/rotator.py ``_halted``,
+    rots["tower"].halted_unix = stop.sent_s.unix  # and the stamp it kept
+    mono.t += 0.003
+    wall.t += 0.003
+    reads = {"n": 0}
+
+    def wall_after_a_lost_millisecond() -> float:
+        reads["n"] += 1
+        if reads["n"] == 2:  # a second reading for the target: 1 ms off the CPU before it
+            mono.t += 0.001
+            wall.t += 0.001
+        return wall()
+
+    svc._stamp_clock = wall_after_a_lost_millisecond
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=sent)
+    assert [c[0] for c in rots["tower"].calls] == ["submit", "submit"], rots["tower"].calls[-1]
+    older = Stamp.of(NOW_UNIX - 0.051, 5)  # (a millisecond before the STOP's stamp: older)
+    svc.on_message("rotor/target", b"210", False, "DL1ABC", stamp=older)
+    assert rots["tower"].calls[-1][0] == "refused"
+    assert "sent before the last STOP" in str(rots["tower"].calls[-1][1])
+
+
+def test_a_move_is_stamped_when_it_was_seen_never_before_its_rotators_last_halt() -> None:
+    """heartbeat.py rule 10: ``seen_s`` backdates the stamp by the time since (the station's
+    clock then, as the beats reckon it now), floored to its millisecond; ``after``, a halt's
+    stamp of the same station process, is the earliest it may say; the next stamp sent now
+    is not set back by it."""
+    mono = FakeClock(100.0)
+    station_clock = StationClock(mono)
+    station_clock.heard(1_700_000_000.0, "A")
+    mono.t += 2.0
+    now = station_clock.stamp(5)
+    assert now == Stamp.of(1_700_000_002.0, 5, "A")
+    seen = station_clock.stamp(5, seen_s=mono.t - 1.5)
+    assert seen == Stamp.of(1_700_000_000.5, 5, "A")
+    halt = (1_700_000_001.0, "A")
+    assert station_clock.stamp(5, mono.t - 1.5, halt) == Stamp.of(1_700_000_001.0, 5, "A")
+    other = (1_700_000_001.0, "B")  # (another process's halt says nothing of this one's time)
+    assert station_clock.stamp(5, mono.t - 1.5, other) == Stamp.of(1_700_000_000.5, 5, "A")
+    assert station_clock.stamp(5, seen_s=mono.t + 1.0) == now  # (no later than when sent)
+    assert station_clock.stamp(5) == now  # rule 8: not earlier than the last send time
+    mono.t += 0.0007  # (0.7 ms on: the stamp stays in its millisecond, never rounded up)
+    assert station_clock.stamp(5) == now

@@ -195,6 +195,8 @@ def stop_on_the_way(link: Link, stop: Callable[[], None]) -> None:
         check: Callable[[], None] | None = None,
         *,
         until_heard: bool = False,
+        seen_s: float | None = None,
+        after: tuple[str, ...] = (),
     ) -> None:
         if topic.endswith("/target"):
             stop()

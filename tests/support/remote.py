@@ -47,6 +47,8 @@ class Link:
         check: Callable[[], None] | None = None,
         *,
         until_heard: bool = False,
+        seen_s: float | None = None,
+        after: tuple[str, ...] = (),
     ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")

@@ -244,6 +244,8 @@ class StalledLink:
         check: Callable[[], None] | None = None,
         *,
         until_heard: bool = False,
+        seen_s: float | None = None,
+        after: tuple[str, ...] = (),
     ) -> None:
         with self._lock:  # handed to the broker, one at a time (remote.py rule 9)
             if check is not None:

@@ -83,6 +83,18 @@ Rules:
    user property UNREAD_PROPERTIES alone, naming the section's size, and a stamp that says
    so (``Stamp.unread``): a move so sent is refused, saying why; a stop and a lock ON are
    carried out as any unreadable stamp's (rule 5).
+10. A command may be stamped with when its bytes were seen at the remote, not when it is sent
+   (``StationClock.stamp``'s ``seen_s``, on the remote's monotonic clock: front.py rule 3):
+   the station's clock then, reckoned now (rule 3: never later than the truth), floored to its
+   millisecond (never rounded up past the truth). A STOP the station took another way (Home
+   Assistant, its console) after the bytes came refuses it there (rule 8), however late the
+   remote read it (a review: a rotctld ``P`` sent before a STOP from Home Assistant, its
+   client paused over its budget, was read after it, stamped when sent and turned the rotor).
+   A halt is stamped with when it was seen too, so a move is never lifted past its own halt's
+   seen time; a move is never stamped before ``after``, the stamp of the last halt the remote
+   sent for its rotator (the client's own ``S`` then ``P``, read in one go: the ``P`` is
+   stamped as the ``S``, and the station, comparing the two stamps directly, takes it for not
+   older: service.py rule 9). The reckoning rule 8 keeps from going back is the send time's.
 """
 
 from __future__ import annotations
@@ -189,8 +201,10 @@ class StationClock:
         reckoned = self.reckon()
         return None if reckoned is None else reckoned[0]
 
-    def reckon(self) -> tuple[float, str | None] | None:
-        """``now_unix`` and the station process its beats came from (rule 7), read together."""
+    def reckon(self, seen_s: float | None = None) -> tuple[float, str | None] | None:
+        """``now_unix`` and the station process its beats came from (rule 7), read together;
+        ``seen_s`` (rule 10): the station's clock then instead, reckoned now (the next
+        reckoning is never earlier than this one's now, rule 8, whatever ``seen_s``)."""
         with self._lock:
             now = self._clock()
             self._trim(now)
@@ -202,16 +216,30 @@ class StationClock:
                 if reckoned < given[0] <= reckoned + AHEAD_S:
                     reckoned = given[0]
             self._given = reckoned, self._station
+            if seen_s is not None and seen_s < now:  # rule 10: backdated
+                reckoned -= now - seen_s
             return reckoned, self._station
 
-    def stamp(self, expiry_s: float) -> Stamp | None:
+    def stamp(
+        self,
+        expiry_s: float,
+        seen_s: float | None = None,
+        after: tuple[float, str] | None = None,
+    ) -> Stamp | None:
         """Rules 4 and 7: a command's stamp sent now, naming the process the reckoning came
-        from (NAMELESS for beats that named none); None without a recent beat."""
-        reckoned = self.reckon()
+        from (NAMELESS for beats that named none); None without a recent beat. Rule 10:
+        ``seen_s``, when the command was seen (this clock's), stamped then instead, but never
+        before ``after``, a halt's stamp (its time, the process it names); every stamp is its
+        millisecond's start."""
+        reckoned = self.reckon(seen_s)
         if reckoned is None:
             return None
         sent, station = reckoned
-        return Stamp.of(sent, expiry_s, NAMELESS if station is None else station)
+        sent = math.floor(sent * 1000.0) / 1000.0  # (the stamp's millisecond: never later)
+        name = NAMELESS if station is None else station
+        if after is not None and after[1] == name and after[0] > sent:
+            sent = after[0]
+        return Stamp.of(sent, expiry_s, name)
 
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
