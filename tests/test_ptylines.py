@@ -38,7 +38,14 @@ class StandIn:
             self.id, MotionState.IDLE, self.bearing_deg, connected=True, available=True
         )
 
-    def submit(self, command: Target | Stop, described: str | None = None) -> None:
+    def submit(
+        self,
+        command: Target | Stop,
+        described: str | None = None,
+        *,
+        since: int | None = None,
+        seen_s: float | None = None,
+    ) -> None:  # (since, seen_s: a subclass that counts halts is handed them, front.py rule 3)
         self.submitted.append(command)
 
 

@@ -28,6 +28,7 @@ class Counter:
         self.between: Callable[[], None] | None = None
         self.moved: list[Command] = []
         self.refused: list[str] = []
+        self.seen: list[float | None] = []
 
     def halt(self) -> None:
         if self.halt_watchers is not None:
@@ -37,7 +38,15 @@ class Counter:
             between()
         self.halts += 1
 
-    def submit(self, command: Command, described: str | None = None) -> None:
+    def submit(
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        since: int | None = None,
+        seen_s: float | None = None,
+    ) -> None:
+        self.seen.append(seen_s)  # (front.py rule 3: when its bytes were seen)
         if isinstance(command, Stop):
             self.halt()
         else:
@@ -123,15 +132,64 @@ def test_a_stop_that_raises_before_it_is_counted_leaves_no_number_to_be_taken_fo
 
 def test_no_read_takes_bytes_past_what_the_oldest_unread_look_counted() -> None:
     """Looks: 10 bytes at count 0 (the halt's watcher), then 18 at count 1 (after it): a read
-    from 8 takes 2 bytes, judged at 0; the next the other 8, judged at 1."""
-    looks = Looks()
+    from 8 takes 2 bytes, judged at 0; the next the other 8, judged at 1; each with its
+    look's since when."""
+    looks = Looks(since_s=0.5)
     looks.read = 8
-    looks.seen = deque([(4, 0), (10, 0), (18, 1)])
-    assert looks.next_read() == (2, 0)
+    looks.seen = deque([(4, 0, 1.0), (10, 0, 2.0), (18, 1, 3.0)])
+    assert looks.next_read() == (2, 0, 2.0)
     looks.read = 10
-    assert looks.next_read() == (8, 1)
-    assert list(looks.seen) == [(18, 1)]
+    assert looks.next_read() == (8, 1, 3.0)
+    assert list(looks.seen) == [(18, 1, 3.0)]
     looks.read = 18
-    looks.seen.append((18, 1))  # (the kernel could not say: Windows)
-    most, count = looks.next_read()
+    looks.seen.append((18, 1, 4.0))  # (the kernel could not say: Windows)
+    most, count, since = looks.next_read()
     assert count == 1 and most > 18
+    assert since == 0.5  # (bytes no look counted: since the connection was last found empty)
+
+
+@pytest.mark.parametrize("fionread", [True, False], ids=["linux", "windows"])
+def test_bytes_are_dated_from_when_the_connection_was_last_found_empty(
+    monkeypatch: pytest.MonkeyPatch, fionread: bool
+) -> None:
+    """Looks (tcplines.py rule 9, since when): bytes its thread waited for came at the look
+    that found them; bytes that came while it did not watch (over its budget, busy) came at
+    any time since the connection was last known to hold nothing unread: the kernel's count
+    at a look, or (Windows, no FIONREAD) a read that took less than it asked for. A read
+    that filled what it asked for leaves the rest dated as they were (review 24: on Windows
+    they were dated by that read's look, after a STOP they came before)."""
+    import socket
+
+    from bridge.interfaces import tcplines
+
+    if not fionread:
+
+        def no_fionread(fd: int) -> int:
+            raise OSError("no FIONREAD here")
+
+        monkeypatch.setattr(tcplines, "unread", no_fionread)
+    ours, peer = socket.socketpair()
+    with ours, peer:
+        looks = Looks(since_s=0.0)
+
+        def read(looked_s: float) -> bytes:  # (as LineServer's thread reads, after a look)
+            most, _, _ = looks.next_read()
+            asked = min(most, 64)
+            data = ours.recv(asked)
+            looks.read += len(data)
+            if len(data) < asked:
+                looks.drained(looked_s)
+            return data
+
+        peer.sendall(b"p\n")
+        waited_s = looks.look(ours.fileno(), 0, waited=True)  # its thread waited: came now
+        assert looks.next_read()[2] == waited_s
+        assert read(waited_s) == b"p\n"
+        peer.sendall(b"p\n" * 40 + b"P 200 0\n")  # while its thread slept over its budget
+        later_s = looks.look(ours.fileno(), 0)
+        assert looks.next_read()[2] == waited_s < later_s  # since last found empty
+        assert len(read(later_s)) == 64  # (filled: more may wait)
+        last_s = looks.look(ours.fileno(), 0)
+        assert looks.next_read()[2] == waited_s, "the bytes past the first read keep their date"
+        rest = read(last_s)
+        assert rest.endswith(b"P 200 0\n")

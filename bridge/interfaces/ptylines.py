@@ -292,6 +292,7 @@ class PtyLineServer:
             if self._written_s is not None:
                 deadlines.append(self._written_s + self._stale_s)
             timeout = max(0.0, min(deadlines) - self._clock()) if deadlines else None
+            waited = not readable((self._master,), 0)  # rule 10: what comes is seen then
             ready = readable((self._master, self._wake_r), timeout)
             self.wakeups += 1
             if self._wake_r in ready:
@@ -309,7 +310,7 @@ class PtyLineServer:
                     self._carry(fence, session)
                 continue
             try:
-                fence, data = self._read_looked(session)
+                fence, data = self._read_looked(session, waited)
             except BlockingIOError:
                 continue
             except OSError as exc:
@@ -333,12 +334,13 @@ class PtyLineServer:
             elif pending_since is None:
                 pending_since = self._clock()
 
-    def _read_looked(self, session: PtySession) -> tuple[Fence | None, bytes]:
+    def _read_looked(self, session: PtySession, waited: bool = False) -> tuple[Fence | None, bytes]:
         """Rule 10: a read, looked at first: the rotator's halt count, then
         what the client has written so far (read, plus what waits in the pty), as one step
         with the read; the read stops at the bytes the oldest look it has not read counted,
-        and the session's fence is told that look's count. Its fence (None: none) and the
-        bytes."""
+        and the session's fence is told that look's count and since when those bytes were
+        there (``waited``: nothing was unread before the wait that ended with them; tcplines.py
+        ``Looks``). Its fence (None: none) and the bytes."""
         fence: Fence | None = getattr(session, "fence", None)
         looks = self._looks
         with looks.lock:
@@ -346,11 +348,16 @@ class PtyLineServer:
                 data = os.read(self._master, READ_BYTES)
                 looks.read += len(data)
                 return fence, data
-            looks.look(self._master, fence.count())  # (the count first: a halt between the
-            most, arrived = looks.next_read()  # two errs toward refusing)
-            data = os.read(self._master, min(most, READ_BYTES))
+            looked_s = looks.look(
+                self._master, fence.count(), waited=waited
+            )  # (the count first: a halt between the two errs toward refusing)
+            most, arrived, arrived_s = looks.next_read()
+            asked = min(most, READ_BYTES)
+            data = os.read(self._master, asked)
+            if len(data) < asked:
+                looks.drained(looked_s)
             looks.read += len(data)
-        fence.arrived = arrived
+        fence.arrived, fence.arrived_s = arrived, arrived_s
         return fence, data
 
     def _halt_coming(self) -> None:

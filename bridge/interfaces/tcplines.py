@@ -486,10 +486,15 @@ def _sent_so_far(fd: int, read: int) -> int:
     """Rule 9: the bytes ``fd``'s peer has sent so far: ``read``, and those waiting unread in
     the kernel (FIONREAD); ``read`` alone if the kernel cannot say (Windows, where the remote
     runs too: no fcntl, tests/remote/test_remote_portable.py)."""
+    return _counted(fd, read)[0]
+
+
+def _counted(fd: int, read: int) -> tuple[int, bool]:
+    """``_sent_so_far``, and whether the kernel said (False: ``read`` alone)."""
     try:
-        return read + unread(fd)
+        return read + unread(fd), True
     except OSError:
-        return read
+        return read, False
 
 
 def halt_count(rotator: FrontRotator) -> Callable[[], int] | None:
@@ -510,35 +515,61 @@ def halt_watchers(rotator: FrontRotator) -> HaltWatchers | None:
 
 class Looks:
     """Rule 9: the looks at what one connection (or pty: ptylines.py) has sent, oldest first:
-    (bytes sent, the halt count) at each look; under ``lock``, as the connection's thread reads
-    and as a halt is about to be counted (``LineServer._halt_coming``)."""
+    (bytes sent, the halt count, since when) at each look; under ``lock``, as the connection's
+    thread reads and as a halt is about to be counted (``LineServer._halt_coming``). Since
+    when (rule 9's seen time, the monotonic clock): no byte of the entry not yet read came
+    before it. ``since_s`` is that bound for the bytes no look has counted yet: a look the
+    thread waited for (it found nothing unread, then its peek woke: ``waited``) moves it to
+    now; a look the kernel counted at (FIONREAD) moves it to that look, after the entry is
+    dated; where the kernel cannot say (Windows), only a read that took less than it asked
+    for (``drained``: nothing was left) moves it. A connection's first bytes: its accept's."""
 
-    __slots__ = ("lock", "read", "seen")
+    __slots__ = ("lock", "read", "seen", "since_s")
 
-    def __init__(self) -> None:
+    def __init__(self, since_s: float | None = None) -> None:
         self.lock = threading.Lock()
-        self.seen: deque[tuple[int, int]] = deque(maxlen=SEEN_KEPT)
+        self.seen: deque[tuple[int, int, float]] = deque(maxlen=SEEN_KEPT)
         self.read = 0  # the bytes its thread has read (a greeting's not counted: rule 8)
+        self.since_s = time.monotonic() if since_s is None else since_s
 
-    def look(self, fd: int, count: int) -> None:
-        """One look (under ``lock``), at ``count`` read first: what ``fd`` has sent so far."""
-        sent = _sent_so_far(fd, self.read)
+    def look(self, fd: int, count: int, *, waited: bool = False) -> float:
+        """One look (under ``lock``), at ``count`` read first: what ``fd`` has sent so far;
+        ``waited``: its thread found nothing unread and its peek woke for these bytes (they
+        came now, up to the time the thread took to run). Returns the look's time."""
+        now = time.monotonic()
+        if waited:
+            self.since_s = now
+        sent, counted = _counted(fd, self.read)
+        since = self.since_s
         seen = self.seen
         if seen and seen[-1][1] == count:  # (no halt since: one look, kept as far as it
-            seen[-1] = sent, count  # reaches)
+            if seen[-1][0] > self.read:  # reaches; what it holds unread came earlier still)
+                since = min(since, seen[-1][2])
+            seen[-1] = sent, count, since
         else:
-            seen.append((sent, count))
+            seen.append((sent, count, since))
+        if counted:  # (what comes after these bytes came after this look)
+            self.since_s = now
+        return now
 
-    def next_read(self) -> tuple[int, int]:
-        """(under ``lock``, right after a look) How many bytes the next read may take, and the
-        halt count of the look that first counted them: no read goes past the bytes one look
-        counted, so none holds bytes from both sides of a halt (the kernel cannot say what
-        waits, Windows: as many as come, at the count now)."""
+    def drained(self, looked_s: float) -> None:
+        """(under ``lock``) A read right after the look at ``looked_s`` took less than it asked
+        for: nothing was left unread, so what comes next came after that look."""
+        self.since_s = max(self.since_s, looked_s)
+
+    def next_read(self) -> tuple[int, int, float]:
+        """(under ``lock``, right after a look) How many bytes the next read may take, the
+        halt count of the look that first counted them and since when they may have been
+        there: no read goes past the bytes one look counted, so none holds bytes from both
+        sides of a halt (the kernel cannot say what waits, Windows: as many as come, at the
+        count now, since the bytes not counted may have come)."""
         seen = self.seen
         while len(seen) > 1 and seen[0][0] <= self.read:  # (looks at bytes read already)
             seen.popleft()
-        sent, count = seen[0]
-        return (sent - self.read if sent > self.read else MAX_UNFINISHED), count
+        sent, count, since = seen[0]
+        if sent > self.read:
+            return sent - self.read, count, since
+        return MAX_UNFINISHED, count, min(since, self.since_s)
 
 
 class Fence:
@@ -553,6 +584,7 @@ class Fence:
         self.rotator = rotator
         self.count = halt_count(rotator)  # (None: a rotator that counts no halts)
         self.arrived: int | None = None  # the halt count at that look
+        self.arrived_s: float | None = None  # since when those bytes may have been there
         self.mine: deque[int] = deque(maxlen=MINE_KEPT)  # the numbers of its own halts
 
     def overtaken(self) -> bool:
@@ -573,10 +605,17 @@ class Fence:
         if self.overtaken():
             self.rotator.report_refusal(STALE, described, origin=command.origin)
             raise Refused(RefusalCode.STALE, STALE)
-        if since is None:
+        self.submit(command, described, since)
+
+    def submit(self, command: Command, described: str, since: int | None = None) -> None:
+        """``command`` to the rotator, with ``since`` and when its bytes were seen
+        (``arrived_s``: front.py rule 3) where it counts halts: a stop's as a move's (the
+        remote stamps both so, remote/rotator.py rule 7)."""
+        if self.count is None and since is None:
             self.rotator.submit(command, described)
-        else:
-            cast(HaltCounted, self.rotator).submit(command, described, since=since)
+            return
+        rotator = cast(HaltCounted, self.rotator)
+        rotator.submit(command, described, since=since, seen_s=self.arrived_s)
 
     def halting(self, halt: Callable[[], None]) -> None:
         """``halt()`` (a stop submitted), the halts it adds counted as the connection's own:
@@ -948,7 +987,7 @@ class LineServer:
                 with looks.lock:  # (a look in between would count the question's bytes)
                     conn.recv(len(data), _DONTWAIT)
                     looks.seen = deque(
-                        ((max(0, sent - len(data)), count) for sent, count in looks.seen),
+                        ((max(0, sent - len(data)), count, s) for sent, count, s in looks.seen),
                         maxlen=SEEN_KEPT,
                     )
             if conn.send(answer, _DONTWAIT) != len(answer):
@@ -1318,18 +1357,23 @@ class LineServer:
                 try:
                     if looks is None:
                         data = conn.recv(self._read_bytes)
-                    elif conn.recv(1, socket.MSG_PEEK):  # rule 9: looked at and read in one
-                        with looks.lock:  # go (a halt's look between the two miscounts)
-                            assert counting is not None and fence is not None
-                            looks.look(
-                                conn.fileno(), counting()
-                            )  # the count first, then what was sent
-                            most, fence.arrived = looks.next_read()
-                            data = conn.recv(min(most, self._read_bytes), _DONTWAIT)
-                            read += len(data)
-                            looks.read = read
-                    else:
-                        data = b""
+                    else:  # rule 9: nothing unread now, what comes is waited for (seen then)
+                        waited = not _readable(conn)
+                        if conn.recv(1, socket.MSG_PEEK):  # looked at and read in one go (a
+                            with looks.lock:  # halt's look between the two miscounts)
+                                assert counting is not None and fence is not None
+                                looked_s = looks.look(
+                                    conn.fileno(), counting(), waited=waited
+                                )  # the count first, then what was sent
+                                most, fence.arrived, fence.arrived_s = looks.next_read()
+                                asked = min(most, self._read_bytes)
+                                data = conn.recv(asked, _DONTWAIT)
+                                if len(data) < asked:
+                                    looks.drained(looked_s)
+                                read += len(data)
+                                looks.read = read
+                        else:
+                            data = b""
                 except (TimeoutError, BlockingIOError):
                     continue
                 me.reading = True  # rule 3: its lines out of the kernel, not carried out yet

@@ -139,7 +139,12 @@ class _Tower:
         return self.halts
 
     def submit(
-        self, command: Target | Stop, described: str | None = None, *, since: int | None = None
+        self,
+        command: Target | Stop,
+        described: str | None = None,
+        *,
+        since: int | None = None,
+        seen_s: float | None = None,
     ) -> None:
         if since is not None and since != self.halts:  # (mailbox.py rule 10, as the judge)
             raise Refused(RefusalCode.STALE, "a STOP came after it")

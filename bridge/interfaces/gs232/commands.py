@@ -208,7 +208,7 @@ class Gs232Session(_SidedSession):
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
             stop = Stop(Source.GS232, self.origin)
             try:
-                self.fence.halting(lambda: self.rotator.submit(stop, described))
+                self.fence.halting(lambda: self.fence.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return GS232_ERROR
             return b""
@@ -272,7 +272,7 @@ class EasycommSession(_SidedSession):
             # keeps it from nothing (package rules 3 and 6)
             stop = Stop(Source.EASYCOMM, self.origin)
             try:
-                self.fence.halting(lambda: self.rotator.submit(stop, described))
+                self.fence.halting(lambda: self.fence.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 pass
         if req.invalid is not None:  # nothing else runs (package rule 3)
@@ -351,7 +351,7 @@ class Dcu1Session(_Session[Dcu1Request]):
         if item.kind is Dcu1Kind.STOP or item.stops:  # first, whatever else the frame was
             stop = Stop(Source.DCU1, self.origin)
             try:
-                self.fence.halting(lambda: self.rotator.submit(stop, described))
+                self.fence.halting(lambda: self.fence.submit(stop, described))
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return DCU1_ERROR
             if item.kind is Dcu1Kind.STOP:

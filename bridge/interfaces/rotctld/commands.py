@@ -125,7 +125,7 @@ class RotctldCommands:
     def _stop(self, req: Request) -> tuple[int, str]:
         stop = Stop(Source.ROTCTLD, self._origin)
         try:
-            self.fence.halting(lambda: self.rotator.submit(stop, _describe(req)))
+            self.fence.halting(lambda: self.fence.submit(stop, _describe(req)))
         except Refused as exc:  # the station's own never refuses a stop; the remote's (remote/)
             return _refusal_code(exc, self.rotator.status.connected), ""  # can't deliver one
         return RIG_OK, ""
