@@ -30,7 +30,9 @@ class Recording:
     def halts_for(self, source: Any) -> int:
         return 0
 
-    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+    def submit(
+        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+    ) -> None:
         self.calls.append(replace(command, origin=None))
 
     def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:

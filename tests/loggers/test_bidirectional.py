@@ -45,7 +45,9 @@ class _Through:
     def halts_for(self, source: Source) -> int:
         return 0
 
-    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+    def submit(
+        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+    ) -> None:
         self.sent.append(command)
         self.v.aim(command)
 

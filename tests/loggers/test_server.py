@@ -54,7 +54,9 @@ class Recording:
     def halts_for(self, source: Source) -> int:
         return self.halts
 
-    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+    def submit(
+        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+    ) -> None:
         with self._lock:
             if isinstance(command, Stop):  # carried out now (runtime/rotator.py)
                 self.last_halt_s = time.monotonic()
@@ -199,7 +201,9 @@ class Faulty(Recording):
         super().__init__(rid)
         self.fails_at_deg = fails_at_deg
 
-    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+    def submit(
+        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+    ) -> None:
         if isinstance(command, Target) and command.az_deg == self.fails_at_deg:
             raise RuntimeError("a bug behind the rotator")
         super().submit(command, described, since=since)
@@ -773,7 +777,9 @@ class HaltedMeanwhile(Recording):
     """A rotator on which another interface's STOP is carried out while the loggers' own STOP
     goes to the judge (after the loggers looked at the last halt, before this one is put)."""
 
-    def submit(self, command: Any, described: str | None = None, *, since: Any = None) -> None:
+    def submit(
+        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+    ) -> None:
         if isinstance(command, Stop) and command.source is Source.PST and not self.halts:
             super().submit(Stop(Source.MQTT))  # the operator's, from the stop lane
         super().submit(command, described, since=since)

@@ -245,15 +245,23 @@ class Halted:
     def __init__(self) -> None:
         self._after: dict[int, tuple[float, float]] = {}
 
-    def stop(self, rot: Rotator, stop: Stop, described: str, arrived: Arrival | None) -> None:
-        """``stop`` carried out on ``rot`` (``submit``), noted if it ``arrived`` stamped (its
-        latest bound: what came before it is refused, never some of it carried out)."""
+    def stop(
+        self,
+        rot: Rotator,
+        stop: Stop,
+        described: str,
+        arrived: Arrival | None,
+        seen_s: float | None = None,
+    ) -> None:
+        """``stop`` carried out on ``rot`` (``submit``, with when it was seen: ``seen_s``,
+        front.py rule 3), noted if it ``arrived`` stamped (its latest bound: what came before
+        it is refused, never some of it carried out)."""
         if arrived is None:  # (nothing to note: the stop first, whatever else)
-            rot.submit(stop, described)
+            rot.submit(stop, described, seen_s=seen_s)
             return
         count, before = rot.halts, rot.last_halt_s
         try:
-            rot.submit(stop, described)
+            rot.submit(stop, described, seen_s=seen_s)
         finally:
             # noted only if it was the one halt since the look: a STOP or lock ON from another
             # interface carried out between the look and this one is when the rotator halted
@@ -291,8 +299,10 @@ class Commands:
         peer: tuple[str, int],
         data: bytes,
         arrived: Arrival | None = None,
+        seen_s: float | None = None,
     ) -> None:
-        """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies; ``arrived``: when
+        """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies; ``seen_s``: when
+        it was seen where the system does not stamp datagrams (server.py rule 9); ``arrived``: when
         the system took the datagram (rule 8, monotonic), if it said."""
         counts, rot = self.counts["pst"], e.rotator
         for query in req.queries:  # rule 2, before the command: the position it had
@@ -316,14 +326,16 @@ class Commands:
         has_el = rot.spec.has_elevation
         el = req.elevation if has_el else None
         since = rot.halts_for(Source.PST)  # rule 8: before the look at the last halt
+        seen_s = arrived.earliest if arrived is not None else seen_s  # (front.py rule 3)
         try:
             if req.stop:
-                self._halted.stop(rot, Stop(Source.PST, by), described, arrived)  # rule 8
+                self._halted.stop(rot, Stop(Source.PST, by), described, arrived, seen_s)
             elif self._stale(rot, arrived, req.park or req.locator is not None, req.azimuth, el):
                 rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
                 return
             elif req.park:
-                rot.submit(Park(source=Source.PST, origin=by), described, since=since)
+                park = Park(source=Source.PST, origin=by)
+                rot.submit(park, described, since=since, seen_s=seen_s)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
@@ -331,7 +343,7 @@ class Commands:
                     rot.report_refusal(f"pst: {exc}", described)  # (it names the locator)
                     return
                 toward = Toward(lat, lon, req.locator, source=Source.PST, origin=by)
-                rot.submit(toward, described, since=since)
+                rot.submit(toward, described, since=since, seen_s=seen_s)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
@@ -340,7 +352,8 @@ class Commands:
                 return
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else heading(rot, (req.azimuth,))  # rule 3
-                rot.submit(Target(az, el, Source.PST, origin=by), described, since=since)
+                target = Target(az, el, Source.PST, origin=by)
+                rot.submit(target, described, since=since, seen_s=seen_s)
             else:
                 return
             counts.commands += 1
@@ -376,16 +389,19 @@ class Commands:
         data: bytes,
         peer: str | None = None,
         arrived: Arrival | None = None,
+        seen_s: float | None = None,
     ) -> None:
-        """Rules 1 and 4 (``peer``: the sender's address; ``arrived``: rule 8)."""
+        """Rules 1 and 4 (``peer``: the sender's address; ``arrived``: rule 8; ``seen_s``: as
+        ``pst``'s)."""
         by = Origin(Source.N1MM, None, peer)
+        seen_s = arrived.earliest if arrived is not None else seen_s  # (front.py rule 3)
         counts = self.counts["n1mm"]
         described = "n1mm " + ascii_text(data).strip()  # rule 7: whole
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
             stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
             if stopped:
-                self._stop_each(stopped, described, by, arrived)
+                self._stop_each(stopped, described, by, arrived, seen_s)
                 counts.commands += 1
                 return
         chosen = choose(e.rotors, req.rotor, req.freqband_mhz, req.freqband_unread)  # rule 5
@@ -411,7 +427,7 @@ class Commands:
         az = heading(rot, ways)  # rule 4: the nearer along the travel; rule 3: north
         try:
             target = Target(az, None, Source.N1MM, origin=by)
-            rot.submit(target, described, since=since)
+            rot.submit(target, described, since=since, seen_s=seen_s)
             counts.commands += 1
         except Refused:
             pass
@@ -435,12 +451,13 @@ class Commands:
         described: str,
         by: Origin | None = None,
         arrived: Arrival | None = None,
+        seen_s: float | None = None,
     ) -> None:
         """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
         stop = Stop(Source.N1MM, by)
         for rot in rotators:
             try:
-                self._halted.stop(rot, stop, described, arrived)  # rule 8
+                self._halted.stop(rot, stop, described, arrived, seen_s)  # rule 8
             except Refused:  # the remote's, sent but maybe to nobody: reported there (no fault)
                 pass
             except Exception as exc:

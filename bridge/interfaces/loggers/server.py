@@ -153,6 +153,10 @@ class LoggerEndpoints:
         self._sockets: dict[socket.socket, PstEndpoint | N1mmEndpoint] = {}
         self._addresses: dict[socket.socket, tuple[str, int]] = {}  # where each really listens
         self._dropped: set[socket.socket] = set()  # went bad: no longer selected (rule 7)
+        # rule 9, where the system does not stamp datagrams: when each socket was last found
+        # empty (monotonic), and a time before any could be (for one not read yet)
+        self._drained_s: dict[socket.socket, float] = {}
+        self._started_s = time.monotonic()
         self._selector: selectors.BaseSelector | None = None
         self._thread: threading.Thread | None = None
         self._wake_r, self._wake_w = -1, -1
@@ -300,13 +304,22 @@ class LoggerEndpoints:
         if self._reporters:  # look at the rotors often enough to see a move begin or end
             due = min(due, now + REPORT_MOVING_S)
         ready: list[socket.socket] = []
+        waiting: set[object] | None = None  # rule 9: no stamps: what waits before the wait
+        polled = time.monotonic()
+        if not (_STAMPS and _STAMP_SPACE):
+            waiting = {key.fileobj for key, _mask in sel.select(0)}
         for key, _mask in sel.select(max(0.0, due - now)):
             if key.fileobj == self._wake_r:
                 return False
             assert isinstance(key.fileobj, socket.socket)
             ready.append(key.fileobj)
         for sock in ready:
-            self._serve(sock)
+            if waiting is None:
+                self._serve(sock)
+            elif sock in waiting:  # rule 9: it came after the socket was last found empty
+                self._serve(sock, self._drained_s.get(sock, self._started_s))
+            else:  # it came during the wait: after the look before it
+                self._serve(sock, polled)
         if any(sock in self._dropped for sock in ready):
             self._close_selector()  # rule 7: a selector that never hears of it again
         now = self._clock()
@@ -315,15 +328,19 @@ class LoggerEndpoints:
             self._report(now)
         return True
 
-    def _serve(self, sock: socket.socket) -> None:
-        """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first."""
+    def _serve(self, sock: socket.socket, since_s: float | None = None) -> None:
+        """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first; rule
+        9: ``since_s``, where the system does not stamp datagrams, a time none that waits
+        came before."""
         endpoint = self._sockets[sock]
         named = endpoint if isinstance(endpoint, N1mmEndpoint) else None  # (rule 8's names)
         may_stop = may_stop_pst if named is None else may_stop_n1mm
         for _ in range(PER_WAKEUP):
+            before = time.monotonic()  # rule 9: found empty from then on, if so
             try:
                 data, peer, arrived = _received(sock)
             except (BlockingIOError, InterruptedError):
+                self._drained_s[sock] = before
                 return
             except OSError as exc:
                 if exc.errno in (errno.EBADF, errno.ENOTSOCK):
@@ -337,7 +354,7 @@ class LoggerEndpoints:
             if not stop and not self._budgets.allow(source, now):
                 self._flooded(now, source)
                 continue
-            self._carry_out(sock, endpoint, data, peer, arrived)
+            self._carry_out(sock, endpoint, data, peer, arrived, since_s)
             self._budgets.spend(source, 1 + len(data) / 1024, now)
 
     def _carry_out(
@@ -347,14 +364,15 @@ class LoggerEndpoints:
         data: bytes,
         peer: tuple[str, int],
         arrived: Arrival | None = None,
+        seen_s: float | None = None,
     ) -> None:
         try:
             if isinstance(endpoint, PstEndpoint):
                 port = self._addresses[sock][1]
                 req = parse_pst(data)
-                self._commands.pst(endpoint, sock, port, req, peer, data, arrived)
+                self._commands.pst(endpoint, sock, port, req, peer, data, arrived, seen_s)
             else:
-                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0], arrived)
+                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0], arrived, seen_s)
         except Malformed as exc:
             self._junk(_kind(endpoint), peer, exc)
         except Exception as exc:
