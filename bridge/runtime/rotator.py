@@ -722,14 +722,22 @@ class Rotator:
         """A STOP or lock ON is put now (``sent_s``: its sender's stamp, on the steady clock):
         ``last_halt_s`` is now, ``halted_s`` the latest of the halts' send times, a stamped
         one's never later than it came (a sender's clock ahead cannot make older moves look
-        stale for ever, nor a stamp in the past make the halts before it count less)."""
+        stale for ever, nor a stamp in the past make the halts before it count less); with
+        it, that halt's stamp (``SentAt.unix``), which a move's stamp is compared with
+        (interfaces/mqtt/service.py rule 9). Of two stamped halts the later is the later
+        stamp (on the steady clock the two could swap by a moment the thread lost)."""
         now = time.monotonic()
         self.last_halt_s = now
         sent = now if sent_s is None or not sent_s < now else sent_s
         unix = sent_s.unix if isinstance(sent_s, SentAt) else None  # (its stamp: one clock)
         with self._halted_lock:
-            if sent > self.halted[0]:
-                self.halted = sent, unix  # (one value: read whole, never half of two halts)
+            halted_s, halted_unix = self.halted
+            if unix is not None and halted_unix is not None:  # (two stamps: by their clock)
+                later = unix > halted_unix
+            else:
+                later = sent > halted_s
+            if later:  # (one value: read whole, never half of two halts)
+                self.halted = max(sent, halted_s), unix
 
     @property
     def halted_s(self) -> float:

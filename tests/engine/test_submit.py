@@ -29,6 +29,7 @@ from bridge.core.model import (
     Park,
     Release,
     ResetHealth,
+    SentAt,
     SetOption,
     Source,
     Stop,
@@ -281,3 +282,22 @@ def test_a_halt_is_timed_by_its_stamp_when_that_is_earlier_and_never_moves_back(
     now = time.monotonic()
     bench.submit(Stop(origin=WHO, sent_s=now), "stop")  # stamped as it left, came later
     assert rot.halted_s == now
+
+
+def test_a_halt_keeps_its_stamp_and_of_two_stamped_halts_the_later_stamp_is_the_last(
+    bench: Bench,
+) -> None:
+    """runtime/rotator.py ``halted`` (interfaces/mqtt/service.py rule 9): the last halt's
+    stamp is kept with its time; of two stamped halts the later stamp counts, though a
+    moment lost putting it on the steady clock made its time a little earlier; an unstamped
+    halt later than both ends it (its time, no stamp)."""
+    rot = bench.rot
+    now = time.monotonic()
+    bench.submit(Stop(origin=WHO, sent_s=SentAt(now - 1.0, 1_700_000_000.0)), "stop")
+    assert rot.halted == (now - 1.0, 1_700_000_000.0)
+    bench.submit(Stop(origin=WHO, sent_s=SentAt(now - 1.0005, 1_700_000_000.001)), "stop")
+    assert rot.halted == (now - 1.0, 1_700_000_000.001)
+    bench.submit(Stop(origin=WHO, sent_s=SentAt(now - 2.0, 1_699_999_999.0)), "stop")
+    assert rot.halted == (now - 1.0, 1_700_000_000.001)  # (an older stamp: not the last)
+    bench.submit(Stop(origin=WHO), "stop")  # Home Assistant's: when it came
+    assert rot.halted[0] >= now and rot.halted[1] is None
