@@ -58,7 +58,11 @@ Rules:
    no read goes past the bytes one look counted. An attack pass: a program wrote 400 targets
    in one burst, the budget (rule 9) left most in the pty, an MQTT STOP stopped the rotor,
    and the 285 read after it were each carried out; a cold review: a target written while
-   the thread slept over its budget, before an MQTT STOP, was carried out after it.
+   the thread slept over its budget, before an MQTT STOP, was carried out after it. The looks
+   date the bytes as the TCP ports' do (``waited``: the pty held nothing unread before the
+   wait its bytes ended), and the fence hands that with each move and stop (front.py rule 3:
+   the remote stamps with it; review 24: the remote's GS-232 pty dated nothing, and a move
+   written before a STOP from Home Assistant, read after it, turned the rotor).
 """
 
 from __future__ import annotations

@@ -171,6 +171,17 @@ Rules:
    too, which errs the safe way. Where the kernel cannot say what waits unread (Windows, no
    FIONREAD: the remote runs there) a look counts only what was read, so a move is judged at
    the count its own read's look read: this rule holds there only for what a read has taken.
+   Each look also dates the bytes it counts (``Looks``: since when they may have been there,
+   on the monotonic clock), and the fence hands that with each move and stop to the rotator
+   (``Fence.submit``, ``seen_s``: front.py rule 3; the remote stamps with it, the station's
+   judge ignores it): bytes the thread waited for (it found nothing unread before its peek)
+   came when the peek woke; bytes that came while it did not watch (asleep over its budget,
+   busy) came at any time since the connection was last known to hold nothing unread, the
+   kernel's count at a look or, without FIONREAD, a read that took less than it asked for
+   (review 24: on Windows the bytes past a read's first 64 were dated by that read's look,
+   after a STOP they came before). A thread not run for a while after its peek woke (a busy
+   computer) dates the bytes from when it ran; a connection's first bytes are dated from its
+   accept (those sent while it waited in the kernel's queue: later than they came).
 10. The accept thread, the one way in for a stop on a new connection, runs ACCEPT_RAISE nice
    steps above the bridge where the system lets it (as root, with CAP_SYS_NICE, or under the
    systemd unit's ``LimitNICE=-10``; elsewhere at the bridge's priority, said at debug), on

@@ -50,7 +50,14 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    monotonic clock is read on both sides of the wall clock (commands.py ``Arrival``): the
    thread may lose the interpreter between any two readings, to the very thread that
    carries out a STOP, and one reading after the wall clock's dated a turn read as the STOP
-   landed after it. The stamps are live before a port is bound (``_stamping_on``): Linux
+   landed after it. Where the system does not stamp (Windows, macOS: where the remote runs),
+   the thread dates a datagram itself for the seen time a rotator that stamps its commands
+   takes (front.py rule 3; the remote's, a review: a logger's turn read late went out stamped
+   when sent, across a STOP from Home Assistant): each wake-up first looks at what already
+   waits (a select that does not wait); a datagram on a socket that held nothing then came
+   after that look, one already waiting after the socket was last found empty (the read that
+   found it so). The stale check above is the system's stamp's alone. The stamps are live
+   before a port is bound (``_stamping_on``): Linux
    turns its stamping on for the first socket that asks a moment later, on a worker thread
    (milliseconds; longer on a loaded host), and a datagram that comes meanwhile is stamped
    when it is read, not when it came, with nothing to tell the two apart. A turn sent before
