@@ -23,10 +23,14 @@ Rules:
    remote stamps what it sends with it (remote/rotator.py rule 7: a STOP the station took
    another way after the bytes came refuses the move there); the station's judge needs no
    time (its halt count says what came before a halt: mailbox.py rule 10) and ignores it.
+   With it goes ``reader``: the connection, pty or port that read the bytes (it orders its
+   own): the remote lifts a move's stamp to the stamp of a halt read by the same reader
+   alone, never to another front end's (remote/rotator.py rule 7).
 """
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from typing import Protocol
 
 from bridge.core.model import Command, Origin, RotatorStatus, Source
@@ -59,4 +63,5 @@ class HaltCounted(FrontRotator, Protocol):
         *,
         since: int | None = None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None: ...

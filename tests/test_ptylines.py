@@ -45,7 +45,10 @@ class StandIn:
         *,
         since: int | None = None,
         seen_s: float | None = None,
-    ) -> None:  # (since, seen_s: a subclass that counts halts is handed them, front.py rule 3)
+        reader: object = None,
+    ) -> (
+        None
+    ):  # (since, seen_s, reader: a subclass that counts halts is handed them, front.py rule 3)
         self.submitted.append(command)
 
 

@@ -45,6 +45,7 @@ class Counter:
         *,
         since: int | None = None,
         seen_s: float | None = None,
+        reader: object = None,
     ) -> None:
         self.seen.append(seen_s)  # (front.py rule 3: when its bytes were seen)
         if isinstance(command, Stop):

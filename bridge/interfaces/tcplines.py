@@ -621,12 +621,13 @@ class Fence:
     def submit(self, command: Command, described: str, since: int | None = None) -> None:
         """``command`` to the rotator, with ``since`` and when its bytes were seen
         (``arrived_s``: front.py rule 3) where it counts halts: a stop's as a move's (the
-        remote stamps both so, remote/rotator.py rule 7)."""
+        remote stamps both so, remote/rotator.py rule 7), read by this fence's connection (or
+        pty): ``reader``, whose own halts alone lift its moves' stamps there."""
         if self.count is None and since is None:
             self.rotator.submit(command, described)
             return
         rotator = cast(HaltCounted, self.rotator)
-        rotator.submit(command, described, since=since, seen_s=self.arrived_s)
+        rotator.submit(command, described, since=since, seen_s=self.arrived_s, reader=self)
 
     def halting(self, halt: Callable[[], None]) -> None:
         """``halt()`` (a stop submitted), the halts it adds counted as the connection's own:

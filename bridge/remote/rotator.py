@@ -71,10 +71,14 @@ Rules:
    seen (``seen_s``, front.py rule 3: a TCP port's or a pty's look, tcplines.py rule 9; a
    datagram's arrival, loggers/server.py rule 9) is stamped with that time instead, a stop
    and a lock ON too; a move never before the stamp of the last STOP or lock ON the link sent
-   for this rotator (its ``after``: its stop and lock topics), which is that halt's own seen
-   time: a STOP the station took another way after the move came refuses it, however late it
-   was read, and the client's own ``S`` read with it does not (heartbeat.py rule 10). The
-   console says nothing: its commands are stamped when sent.
+   for this rotator (its ``after``: its stop and lock topics) from the move's own source
+   (``reader``: the connection or port that read it, which orders its own bytes), which is that
+   halt's own seen time: a STOP the station took another way after the move came refuses
+   it, however late it was read, and the client's own ``S`` read with it does not
+   (heartbeat.py rule 10); another front end's STOP seen after the move came does not lift
+   it either (an attack pass: Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen
+   at 9 s, went out stamped 9 s and turned the rotor). The console says nothing: its
+   commands are stamped when sent.
 """
 
 from __future__ import annotations
@@ -84,7 +88,7 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from typing import Any, Protocol
 
 from bridge.core.errors import RefusalCode, Refused
@@ -152,6 +156,7 @@ class Sender(Protocol):
         until_heard: bool = False,
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
+        reader: Hashable | None = None,
     ) -> None: ...
 
 
@@ -303,6 +308,7 @@ class RemoteRotator:
         *,
         since: int | None = None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None:
         """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
         the count of the stops and lock ONs of every front end but the command's own
@@ -310,7 +316,8 @@ class RemoteRotator:
         and 2b): a move is refused if one went out since, up to the moment it is handed to
         the link, under the link's send lock (the order the broker takes them in).
         ``seen_s``: when the command was seen (the monotonic clock, the link's; front.py rule
-        3): it is stamped so (rule 7)."""
+        3): it is stamped so (rule 7). ``reader``: its source (the connection or port that read
+        it: front.py rule 3), whose own last halt alone may lift a move's stamp (rule 7)."""
         # a front end that asks and submits at once (rotctld, GS-232, the loggers): its move is
         # asked now, and a stop or lock ON of any front end counted from here on refuses it up
         # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
@@ -322,7 +329,7 @@ class RemoteRotator:
         # asked before that stop, went to the broker after it)
         asked = self.halts
         try:
-            self._send(command, since, asked, seen_s)
+            self._send(command, since, asked, seen_s, reader)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
@@ -333,17 +340,20 @@ class RemoteRotator:
         since: int | None = None,
         asked: int | None = None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
         a place goes as the place, park as park. ``asked``: the count of every front end's
         stops and lock ONs when the move was handed to ``submit``, ``since`` or not;
-        ``seen_s``: as ``submit``'s (rule 7)."""
+        ``seen_s``, ``reader``: as ``submit``'s (rule 7)."""
         t = self.topics
         match command:
             case Stop():
                 unheard = self.bridge_unheard()  # rule 3: sent, maybe to nobody, and again
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
-                self.publish(t.stop, "stop", until_heard=unheard, seen_s=seen_s)  # or be kept)
+                self.publish(
+                    t.stop, "stop", until_heard=unheard, seen_s=seen_s, reader=reader
+                )  # or be kept)
                 if unheard:  # once the station's bridge is heard
                     raise Refused(RefusalCode.OFFLINE, STOP_UNHEARD)
                 return
@@ -353,7 +363,11 @@ class RemoteRotator:
                     self.halted(command.source)
                 on_seen = seen_s if command.on else None  # (rule 7: a halt's)
                 self.publish(
-                    t.lock, "ON" if command.on else "OFF", until_heard=unheard, seen_s=on_seen
+                    t.lock,
+                    "ON" if command.on else "OFF",
+                    until_heard=unheard,
+                    seen_s=on_seen,
+                    reader=reader,
                 )
                 if unheard:
                     raise Refused(RefusalCode.OFFLINE, LOCK_UNHEARD)
@@ -377,40 +391,45 @@ class RemoteRotator:
                 self.check_move(since, source)
                 self.pointing.judge(command, None)  # early word; the station judges again
                 if command.park:  # the station's park position, so that it shows "parked"
-                    self.publish(t.park, "park", guard, seen_s=seen_s, move=True)
+                    self.publish(t.park, "park", guard, seen_s=seen_s, reader=reader, move=True)
                 else:
                     doc: dict[str, float] = {"azimuth": command.az_deg}
                     if command.el_deg is not None:
                         doc["elevation"] = command.el_deg
-                    self._send_json(t.target, doc, guard, seen_s)
+                    self._send_json(t.target, doc, guard, seen_s, reader)
             case Park():  # rule 3 first: the link's word, then the station's park position
                 self.check_move(since, source)
                 park = Target(*self.pointing.parking(), source, park=True)
-                self._send(park, since, asked, seen_s)
+                self._send(park, since, asked, seen_s, reader)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 place = place_doc(lat, lon, command.locator)
                 if command.long_path:
                     place["path"] = "long"
                 self.check_move(since, source)
-                self._send_json(t.target, place, guard, seen_s)
+                self._send_json(t.target, place, guard, seen_s, reader)
             case TakePath():
                 self.check_move(since, source)
                 path = {"path": "long" if command.long_path else "short"}
-                self._send_json(t.target, path, guard, seen_s)
+                self._send_json(t.target, path, guard, seen_s, reader)
             case GoToPreset():
                 self.check_move(since, source)
-                self.publish(t.preset, command.name, guard, seen_s=seen_s, move=True)
+                self.publish(t.preset, command.name, guard, seen_s=seen_s, reader=reader, move=True)
             case Nudge():
                 step = {"azimuth": command.d_az_deg}
                 if command.d_el_deg is not None:
                     step["elevation"] = command.d_el_deg
                 self.check_move(since, source)
-                self._send_json(t.nudge, step, guard, seen_s)
+                self._send_json(t.nudge, step, guard, seen_s, reader)
             case TrackBody() if command.tle is None:
                 self.check_move(since, source)
                 self.publish(
-                    t.feature(tracking.COMMAND), command.name, guard, seen_s=seen_s, move=True
+                    t.feature(tracking.COMMAND),
+                    command.name,
+                    guard,
+                    seen_s=seen_s,
+                    reader=reader,
+                    move=True,
                 )
             case Target():  # an elevation alone (rule 3)
                 raise Refused(
@@ -462,8 +481,16 @@ class RemoteRotator:
         doc: dict[str, Any],
         guard: Callable[[], None] | None = None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None:
-        self.publish(topic, json.dumps(doc, separators=(",", ":")), guard, seen_s=seen_s, move=True)
+        self.publish(
+            topic,
+            json.dumps(doc, separators=(",", ":")),
+            guard,
+            seen_s=seen_s,
+            reader=reader,
+            move=True,
+        )
 
     def halted(self, source: Source) -> None:
         """A stop or a lock ON from ``source``'s front end goes out: ``last_halt_s`` is now
@@ -495,13 +522,15 @@ class RemoteRotator:
         *,
         until_heard: bool = False,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
         move: bool = False,
     ) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE);
         ``guard``, if given, is asked under the link's send lock, right before it is handed on
         (it raises Refused for a move that may not go any more); ``until_heard``: a halt sent
         again once the station's bridge is heard (rule 3); ``seen_s``: stamped with when it
-        was seen, a ``move`` never before this rotator's last halt's stamp (rule 7)."""
+        was seen, a ``move`` never before the stamp of this rotator's last halt from the same
+        source, ``reader`` (rule 7)."""
         t = self.topics
         self._link.send(
             topic,
@@ -511,6 +540,7 @@ class RemoteRotator:
             guard,
             until_heard=until_heard,
             seen_s=seen_s,
+            reader=reader,
             after=(t.stop, t.lock) if move else (),
         )
 

@@ -145,6 +145,7 @@ class _Tower:
         *,
         since: int | None = None,
         seen_s: float | None = None,
+        reader: object = None,
     ) -> None:
         if since is not None and since != self.halts:  # (mailbox.py rule 10, as the judge)
             raise Refused(RefusalCode.STALE, "a STOP came after it")

@@ -31,7 +31,13 @@ class Recording:
         return 0
 
     def submit(
-        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+        self,
+        command: Any,
+        described: str | None = None,
+        *,
+        since: Any = None,
+        seen_s: Any = None,
+        reader: Any = None,
     ) -> None:
         self.calls.append(replace(command, origin=None))
 

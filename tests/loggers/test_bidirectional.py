@@ -46,7 +46,13 @@ class _Through:
         return 0
 
     def submit(
-        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+        self,
+        command: Any,
+        described: str | None = None,
+        *,
+        since: Any = None,
+        seen_s: Any = None,
+        reader: Any = None,
     ) -> None:
         self.sent.append(command)
         self.v.aim(command)

@@ -55,7 +55,13 @@ class Recording:
         return self.halts
 
     def submit(
-        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+        self,
+        command: Any,
+        described: str | None = None,
+        *,
+        since: Any = None,
+        seen_s: Any = None,
+        reader: Any = None,
     ) -> None:
         with self._lock:
             if isinstance(command, Stop):  # carried out now (runtime/rotator.py)
@@ -202,7 +208,13 @@ class Faulty(Recording):
         self.fails_at_deg = fails_at_deg
 
     def submit(
-        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+        self,
+        command: Any,
+        described: str | None = None,
+        *,
+        since: Any = None,
+        seen_s: Any = None,
+        reader: Any = None,
     ) -> None:
         if isinstance(command, Target) and command.az_deg == self.fails_at_deg:
             raise RuntimeError("a bug behind the rotator")
@@ -778,7 +790,13 @@ class HaltedMeanwhile(Recording):
     goes to the judge (after the loggers looked at the last halt, before this one is put)."""
 
     def submit(
-        self, command: Any, described: str | None = None, *, since: Any = None, seen_s: Any = None
+        self,
+        command: Any,
+        described: str | None = None,
+        *,
+        since: Any = None,
+        seen_s: Any = None,
+        reader: Any = None,
     ) -> None:
         if isinstance(command, Stop) and command.source is Source.PST and not self.halts:
             super().submit(Stop(Source.MQTT))  # the operator's, from the stop lane

@@ -197,6 +197,7 @@ def stop_on_the_way(link: Link, stop: Callable[[], None]) -> None:
         until_heard: bool = False,
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
+        reader: object = None,
     ) -> None:
         if topic.endswith("/target"):
             stop()

@@ -49,6 +49,7 @@ class Link:
         until_heard: bool = False,
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
+        reader: object = None,
     ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")

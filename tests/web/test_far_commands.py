@@ -246,6 +246,7 @@ class StalledLink:
         until_heard: bool = False,
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
+        reader: object = None,
     ) -> None:
         with self._lock:  # handed to the broker, one at a time (remote.py rule 9)
             if check is not None:

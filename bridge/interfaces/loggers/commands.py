@@ -75,7 +75,7 @@ from __future__ import annotations
 import logging
 import math
 import socket
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -252,16 +252,18 @@ class Halted:
         described: str,
         arrived: Arrival | None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None:
         """``stop`` carried out on ``rot`` (``submit``, with when it was seen: ``seen_s``,
-        front.py rule 3), noted if it ``arrived`` stamped (its latest bound: what came before
-        it is refused, never some of it carried out)."""
+        and the sender and port that read it: ``reader``, front.py rule 3), noted if it
+        ``arrived`` stamped (its latest bound: what came before it is refused, never some of
+        it carried out)."""
         if arrived is None:  # (nothing to note: the stop first, whatever else)
-            rot.submit(stop, described, seen_s=seen_s)
+            rot.submit(stop, described, seen_s=seen_s, reader=reader)
             return
         count, before = rot.halts, rot.last_halt_s
         try:
-            rot.submit(stop, described, seen_s=seen_s)
+            rot.submit(stop, described, seen_s=seen_s, reader=reader)
         finally:
             # noted only if it was the one halt since the look: a STOP or lock ON from another
             # interface carried out between the look and this one is when the rotator halted
@@ -327,15 +329,16 @@ class Commands:
         el = req.elevation if has_el else None
         since = rot.halts_for(Source.PST)  # rule 8: before the look at the last halt
         seen_s = arrived.earliest if arrived is not None else seen_s  # (front.py rule 3)
+        reader = ("pst", e.bind, e.port, peer)  # (front.py rule 3: the sender, on its port)
         try:
             if req.stop:
-                self._halted.stop(rot, Stop(Source.PST, by), described, arrived, seen_s)
+                self._halted.stop(rot, Stop(Source.PST, by), described, arrived, seen_s, reader)
             elif self._stale(rot, arrived, req.park or req.locator is not None, req.azimuth, el):
                 rot.report_refusal(f"pst: {STALE}", described, origin=by)  # rule 8
                 return
             elif req.park:
                 park = Park(source=Source.PST, origin=by)
-                rot.submit(park, described, since=since, seen_s=seen_s)
+                rot.submit(park, described, since=since, seen_s=seen_s, reader=reader)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
@@ -343,7 +346,7 @@ class Commands:
                     rot.report_refusal(f"pst: {exc}", described)  # (it names the locator)
                     return
                 toward = Toward(lat, lon, req.locator, source=Source.PST, origin=by)
-                rot.submit(toward, described, since=since, seen_s=seen_s)
+                rot.submit(toward, described, since=since, seen_s=seen_s, reader=reader)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
@@ -353,7 +356,7 @@ class Commands:
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else heading(rot, (req.azimuth,))  # rule 3
                 target = Target(az, el, Source.PST, origin=by)
-                rot.submit(target, described, since=since, seen_s=seen_s)
+                rot.submit(target, described, since=since, seen_s=seen_s, reader=reader)
             else:
                 return
             counts.commands += 1
@@ -395,13 +398,14 @@ class Commands:
         ``pst``'s)."""
         by = Origin(Source.N1MM, None, peer)
         seen_s = arrived.earliest if arrived is not None else seen_s  # (front.py rule 3)
+        reader = ("n1mm", e.bind, e.port, peer)  # (front.py rule 3: the sender, on its port)
         counts = self.counts["n1mm"]
         described = "n1mm " + ascii_text(data).strip()  # rule 7: whole
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
             stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
             if stopped:
-                self._stop_each(stopped, described, by, arrived, seen_s)
+                self._stop_each(stopped, described, by, arrived, seen_s, reader)
                 counts.commands += 1
                 return
         chosen = choose(e.rotors, req.rotor, req.freqband_mhz, req.freqband_unread)  # rule 5
@@ -427,7 +431,7 @@ class Commands:
         az = heading(rot, ways)  # rule 4: the nearer along the travel; rule 3: north
         try:
             target = Target(az, None, Source.N1MM, origin=by)
-            rot.submit(target, described, since=since, seen_s=seen_s)
+            rot.submit(target, described, since=since, seen_s=seen_s, reader=reader)
             counts.commands += 1
         except Refused:
             pass
@@ -452,12 +456,13 @@ class Commands:
         by: Origin | None = None,
         arrived: Arrival | None = None,
         seen_s: float | None = None,
+        reader: Hashable | None = None,
     ) -> None:
         """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
         stop = Stop(Source.N1MM, by)
         for rot in rotators:
             try:
-                self._halted.stop(rot, stop, described, arrived, seen_s)  # rule 8
+                self._halted.stop(rot, stop, described, arrived, seen_s, reader)  # rule 8
             except Refused:  # the remote's, sent but maybe to nobody: reported there (no fault)
                 pass
             except Exception as exc:

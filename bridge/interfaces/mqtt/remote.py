@@ -62,12 +62,17 @@ Rules:
    and a move sent right after this remote's own STOP must not be), and goes unstamped when
    there is none: nothing about the heartbeat can keep it back. A command sent with
    ``seen_s`` (when it was seen at the remote: remote/rotator.py rule 7) is stamped then
-   instead (heartbeat.py rule 10), a halt too; a move never before the latest stamp a halt on
-   one of its ``after`` topics (its rotator's stop and lock) went out with, a halt kept or
-   sent again included: so a move is lifted at most to its own last halt's seen time, never
-   to that halt's send time (a review: ``S`` then ``P`` read late behind a STOP from Home
-   Assistant, the ``P`` lifted to the ``S``'s send time, turned the rotor). Every stamp is its
-   millisecond's start.
+   instead (heartbeat.py rule 10), a halt too; a move never before the latest stamp a halt
+   on one of its ``after`` topics (its rotator's stop and lock) went out with from the move's
+   own source (``reader``: its connection or port, which orders its own bytes: ``P 300``,
+   ``S``, ``P 200`` read in one go ends at 200; none said, none: a command stamped when it
+   is sent, the console's, needs none, that stamp never goes back), or that went out again
+   (a kept halt, stamped when sent again: asked before any move after it): so a move is
+   lifted at most to its own source's last halt's seen time, never to that halt's send time
+   (a review: ``S`` then ``P`` read late behind a STOP from Home Assistant, the ``P`` lifted
+   to the ``S``'s send time, turned the rotor), and never to another source's halt (an
+   attack pass: Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen at 9 s, was
+   lifted to 9 s and turned the rotor after it). Every stamp is its millisecond's start.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -85,7 +90,7 @@ import struct
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from typing import Any
 
 from paho.mqtt.enums import MQTTErrorCode
@@ -112,6 +117,7 @@ log = logging.getLogger(__name__)
 
 COMMAND_QOS = 1  # rule 2
 ACK_WAIT_S = 1.0  # rule 7
+_AGAIN: Hashable = object()  # rule 8: the source a kept halt sent again is noted as
 NOT_CONNECTED = "not connected to the station's broker"
 NOT_HEARD = (
     "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
@@ -162,7 +168,7 @@ class RemoteLink(Connection):
         # rule 6: sent again on this connection, and once more when the station is heard on it
         self._unheard: list[tuple[str, bytes, Properties]] = []
         # rule 8: the latest stamp a halt went out with, by topic (its time, its station)
-        self._halt_stamps: dict[str, tuple[float, str]] = {}
+        self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
         self.station_clock = StationClock(clock)  # rule 8
         self._ack_wait_s = ack_wait_s
         self._acks = threading.Condition()  # rule 7: PUBACKs, the connection's generation
@@ -195,6 +201,7 @@ class RemoteLink(Connection):
         until_heard: bool = False,
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
+        reader: Hashable | None = None,
     ) -> None:
         """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
         (a stop excepted: rule 6). ``check``, if given, is asked under the send lock right
@@ -203,7 +210,8 @@ class RemoteLink(Connection):
         (a halt sent while the station's bridge is not heard): sent again at the first live
         heartbeat from then on (rule 6). ``seen_s`` (when it was seen, on this link's clock):
         stamped then; a move never before the latest stamp a halt on one of ``after`` (its
-        rotator's halt topics) went out with (rule 8)."""
+        rotator's halt topics) went out with from the same source, ``reader`` (its connection or
+        port; None: not known, no halt but one sent again lifts it), or sent again (rule 8)."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
@@ -216,7 +224,9 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
             # rule 8: a halt's if it has one; when it was seen, if that is said; a move's
             # never before its rotator's last halt's
-            latest = [self._halt_stamps[t] for t in after if t in self._halt_stamps]
+            readers = (_AGAIN,) if reader is None else (reader, _AGAIN)  # (None: unknown)
+            keys = [(t, k) for t in after for k in readers]
+            latest = [self._halt_stamps[k] for k in keys if k in self._halt_stamps]
             floor = None if halt else max(latest, default=None)
             stamped = self.station_clock.stamp(expiry_s, seen_s, floor)
             if stamped is None and not halt:
@@ -236,8 +246,8 @@ class RemoteLink(Connection):
                     self._keep(topic, payload.encode(), props)
                     raise Refused(RefusalCode.OFFLINE, KEPT)
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            if halt:  # rule 8: no move seen after it is stamped before it
-                self._note_halt(topic, props)
+            if halt and reader is not None:  # rule 8: no move its reader read after it is
+                self._note_halt(topic, props, reader)  # stamped before it
             if halt and until_heard:  # rule 6: maybe nobody subscribed to it yet
                 if not any(t == topic and p == payload.encode() for t, p, _ in self._unheard):
                     self._unheard.append((topic, payload.encode(), props))
@@ -391,21 +401,22 @@ class RemoteLink(Connection):
     def _publish_unawaited(self, topic: str, payload: bytes, props: Properties) -> None:
         """A kept halt sent (caller holds _send_lock): nobody waits for its PUBACK."""
         info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
-        self._note_halt(topic, props)
+        self._note_halt(topic, props, _AGAIN)  # (stamped when sent again: every move after it)
         with self._acks:
             self._unawaited.add(info.mid)
 
-    def _note_halt(self, topic: str, props: Properties) -> None:
-        """Rule 8: the latest stamp a halt on ``topic`` went out with, if any (caller holds
-        _send_lock): no move is stamped before it (``send``'s ``after``)."""
+    def _note_halt(self, topic: str, props: Properties, reader: Hashable | None) -> None:
+        """Rule 8: the latest stamp a halt on ``topic`` from ``reader`` (its source; _AGAIN: a
+        kept halt sent again) went out with, if any (caller holds _send_lock): no move of that
+        source (of any, for _AGAIN) is stamped before it (``send``'s ``after``)."""
         stamp = Stamp.of_properties(list(getattr(props, "UserProperty", None) or []))
         sent = None if stamp is None else stamp.sent_unix()
         if stamp is None or sent is None:
             return
         station = stamp.station or NAMELESS
-        noted = self._halt_stamps.get(topic)
+        noted = self._halt_stamps.get((topic, reader))
         if noted is None or noted[1] != station or noted[0] < sent:
-            self._halt_stamps[topic] = sent, station
+            self._halt_stamps[topic, reader] = sent, station
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
