@@ -55,8 +55,14 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    takes (front.py rule 3; the remote's, a review: a logger's turn read late went out stamped
    when sent, across a STOP from Home Assistant): each wake-up first looks at what already
    waits (a select that does not wait); a datagram on a socket that held nothing then came
-   after that look, one already waiting after the socket was last found empty (the read that
-   found it so). The stale check above is the system's stamp's alone. The stamps are live
+   after that look, one already waiting after the socket was last found empty. Every check
+   proves that of each socket it finds with nothing waiting, not only the read that got
+   nothing (an attack pass: after a quiet spell, its waits timed out many times, a turn was
+   dated from the read after the turn before it, hours back, and refused as expired): a
+   check that waits for nothing, the clock read before it, notes each socket it finds empty
+   as empty since that reading (``_look``: empty at some moment after it, so never dated
+   late); the wait itself is followed by one such check, since the time its return saw is
+   only known after it. The stale check above is the system's stamp's alone. The stamps are live
    before a port is bound (``_stamping_on``): Linux
    turns its stamping on for the first socket that asks a moment later, on a worker thread
    (milliseconds; longer on a loaded host), and a datagram that comes meanwhile is stamped
@@ -314,12 +320,14 @@ class LoggerEndpoints:
         waiting: set[object] | None = None  # rule 9: no stamps: what waits before the wait
         polled = time.monotonic()
         if not (_STAMPS and _STAMP_SPACE):
-            waiting = {key.fileobj for key, _mask in sel.select(0)}
+            waiting = self._look(sel)
         for key, _mask in sel.select(max(0.0, due - now)):
             if key.fileobj == self._wake_r:
                 return False
             assert isinstance(key.fileobj, socket.socket)
             ready.append(key.fileobj)
+        if waiting is not None:  # rule 9: and what the wait left empty, found so again now
+            self._look(sel, ready)
         for sock in ready:
             if waiting is None:
                 self._serve(sock)
@@ -334,6 +342,21 @@ class LoggerEndpoints:
             self._looked_s = now
             self._report(now)
         return True
+
+    def _look(
+        self, sel: selectors.BaseSelector, ready: list[socket.socket] | None = None
+    ) -> set[object]:
+        """Rule 9, where the system does not stamp datagrams: a check that waits for nothing,
+        the clock read before it; every socket it finds with nothing waiting (and not in
+        ``ready``, which the caller reads) was empty at some moment after that reading, so is
+        noted empty since then. What waits is returned."""
+        before = time.monotonic()
+        waiting: set[object] = {key.fileobj for key, _mask in sel.select(0)}
+        for sock in self._sockets:
+            if sock not in waiting and sock not in self._dropped:
+                if ready is None or sock not in ready:
+                    self._drained_s[sock] = max(before, self._drained_s.get(sock, before))
+        return waiting
 
     def _serve(self, sock: socket.socket, since_s: float | None = None) -> None:
         """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first; rule
