@@ -1,0 +1,67 @@
+"""Attack pass 5 on interfaces/mqtt/remote.py rule 8 / heartbeat.py rule 10 (the floor): "a
+move never before the latest stamp a halt on one of its ``after`` topics (its rotator's stop
+and lock) went out with". The floor is there for the client's own ``S`` then ``P`` read in
+one go; but it is kept per rotator, not per front end or connection, so it lifts *any* move
+over *any* halt the remote sent for that rotator, whoever sent it.
+
+Sequence: Gpredict's rotctld ``P 200 0`` reaches the remote at t=8 s, its connection's thread
+asleep over its budget (or the computer busy), so no look counts it yet; at t=9 s the
+operator presses STOP in PstRotator (the remote's logger port), which goes out stamped 9 s;
+the rotctld thread wakes, its look (after the STOP: the halt count includes it, the fence
+does not refuse) dates the P's bytes at 8 s (tcplines.py rule 9: right), and the link lifts
+its stamp to the STOP's, 9 s. The station compares the two stamps directly (service.py rule
+9: older only if stamped *before* the halt): the P turns the rotor after the operator's STOP,
+though it was seen before it. Stamped at its seen time, it would be refused.
+"""
+
+from __future__ import annotations
+
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.settings.mqtt import MqttSettings
+from tests.remote.test_late_commands import Paho
+from tests.support.clock import FakeClock
+
+
+def _sent(props: object) -> float:
+    stamp = Stamp.of_properties(list(getattr(props, "UserProperty", None) or []))
+    assert stamp is not None
+    sent = stamp.sent_unix()
+    assert sent is not None
+    return sent
+
+
+def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp() -> None:
+    clock = FakeClock()
+    link = RemoteLink(
+        MqttSettings(),
+        "remote-test",
+        [],
+        lambda topic, payload, retain: None,
+        last_word=lambda topic, payload: topic.endswith("/stop"),
+        heartbeat="rotor/bridge/heartbeat",
+        clock=clock,
+        ack_wait_s=0.0,
+    )
+    fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link._client = fake  # type: ignore[assignment]  # noqa: SLF001
+    link.connected.set()
+    link.station_clock.heard(1_700_000_000.0 + clock.t)
+    t0 = clock.t
+    clock.t = t0 + 10.0
+    link.station_clock.heard(1_700_000_000.0 + clock.t)  # (a live beat now)
+    # PstRotator's STOP, seen at t0 + 9
+    link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0)
+    # Gpredict's P, seen at t0 + 8 (before the STOP), read after it
+    after = ("rotor/stop", "rotor/lock")
+    link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after)
+    (stop_topic, stop_props), (move_topic, move_props) = fake.published
+    assert stop_topic == "rotor/stop" and move_topic == "rotor/target"
+    assert _sent(move_props) < _sent(stop_props), (
+        f"the move seen 1 s before the STOP went out stamped {_sent(move_props):.3f}, the "
+        f"STOP's own {_sent(stop_props):.3f}: the station takes it for not older and turns "
+        "the rotor after the STOP (the floor lifts a move over any front end's halt)"
+    )
