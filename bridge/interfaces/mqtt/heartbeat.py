@@ -92,9 +92,11 @@ Rules:
    client paused over its budget, was read after it, stamped when sent and turned the rotor).
    A halt is stamped with when it was seen too, so a move is never lifted past its own halt's
    seen time; a move is never stamped before ``after``, the stamp of the last halt the remote
-   sent for its rotator (the client's own ``S`` then ``P``, read in one go: the ``P`` is
-   stamped as the ``S``, and the station, comparing the two stamps directly, takes it for not
-   older: service.py rule 9). The reckoning rule 8 keeps from going back is the send time's.
+   sent for its rotator that the move's own reader read (remote.py rule 8; the client's own
+   ``S`` then ``P``, read in one go: the ``P`` is stamped as the ``S``, and the station,
+   comparing the two stamps directly, takes it for not older: service.py rule 9), never
+   another front end's (an attack pass: lifted to PstRotator's STOP, Gpredict's ``P`` seen
+   before it turned the rotor). The reckoning rule 8 keeps from going back is the send time's.
 """
 
 from __future__ import annotations
