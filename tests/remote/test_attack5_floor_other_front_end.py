@@ -65,3 +65,44 @@ def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp()
         f"STOP's own {_sent(stop_props):.3f}: the station takes it for not older and turns "
         "the rotor after the STOP (the floor lifts a move over any front end's halt)"
     )
+
+
+def test_a_move_is_lifted_to_its_own_readers_halt_alone() -> None:
+    """The fix (remote.py rule 8): the floor is the last halt the move's own reader (its
+    connection, pty or logger port and sender) read: that reader's move is never stamped
+    before it, another reader's move keeps its own seen time."""
+    clock = FakeClock()
+    link = RemoteLink(
+        MqttSettings(),
+        "remote-test",
+        [],
+        lambda topic, payload, retain: None,
+        last_word=lambda topic, payload: topic.endswith("/stop"),
+        heartbeat="rotor/bridge/heartbeat",
+        clock=clock,
+        ack_wait_s=0.0,
+    )
+    fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link._client = fake  # type: ignore[assignment]  # noqa: SLF001
+    link.connected.set()
+    t0 = clock.t
+    clock.t = t0 + 10.0
+    link.station_clock.heard(1_700_000_000.0 + clock.t)
+    after = ("rotor/stop", "rotor/lock")
+    link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0, reader="rotctld 1")
+    link.send("rotor/target", '{"azimuth":1}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after)
+    link.send(
+        "rotor/target", '{"azimuth":2}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after, reader="pst"
+    )
+    link.send(
+        "rotor/target",
+        '{"azimuth":3}',
+        "DL1ABC",
+        5,
+        seen_s=t0 + 8.0,
+        after=after,
+        reader="rotctld 1",
+    )
+    stop, unknown, other, own = (_sent(props) for _topic, props in fake.published)
+    assert unknown < stop and other < stop, "lifted to another reader's STOP"
+    assert own >= stop, "the reader's own STOP left its move stamped before it"
