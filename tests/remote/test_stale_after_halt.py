@@ -342,7 +342,7 @@ def test_a_pty_move_read_late_across_a_stop_the_station_took_another_way_is_not_
     from bridge.interfaces import ptylines
     from tests.test_ptylines import Client
 
-    gate, _ = read_gate(monkeypatch, ptylines)
+    gate, spent = read_gate(monkeypatch, ptylines)
     port = free_port()
     path = str(tmp_path / "rotor-gs232")
     settings = RemoteSettings(
@@ -358,7 +358,11 @@ def test_a_pty_move_read_late_across_a_stop_the_station_took_another_way_is_not_
         moves = len(station.emus["tower"].frames(*BEARING_OUTCOMES))
         client = Client(path)
         try:
+            spent.clear()
             assert client.ask(b"C\r").startswith(b"AZ=")
+            # (the reply is written before the read's spend: a gate cleared before that spend
+            # paused the thread ahead of the next C, answered never: review 26, 3 runs in 6)
+            assert spent.wait(slow(10)), "the pty's thread past its first read"
             gate.clear()
             assert client.ask(b"C\r").startswith(b"AZ=")  # read; its thread now paused
             os.write(client.fd, b"M200\r")  # before the STOP: in the pty, unread
