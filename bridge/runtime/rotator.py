@@ -731,6 +731,8 @@ class Rotator:
         self.last_halt_s = now
         sent = now if sent_s is None or not sent_s < now else sent_s
         unix = sent_s.unix if isinstance(sent_s, SentAt) else None  # (its stamp: one clock)
+        if unix is not None and sent_s is not None and sent_s > now:  # (stamped ahead: its
+            unix -= sent_s - now  # stamp no later than it came, as its steady time; review 26)
         with self._halted_lock:
             halted_s, halted_unix = self.halted
             if unix is not None and halted_unix is not None:  # (two stamps: by their clock)
