@@ -301,3 +301,27 @@ def test_a_halt_keeps_its_stamp_and_of_two_stamped_halts_the_later_stamp_is_the_
     assert rot.halted == (now - 1.0, 1_700_000_000.001)  # (an older stamp: not the last)
     bench.submit(Stop(origin=WHO), "stop")  # Home Assistant's: when it came
     assert rot.halted[0] >= now and rot.halted[1] is None
+
+
+def test_a_halt_stamped_ahead_keeps_no_stamp_later_than_when_it_came(bench: Bench) -> None:
+    """Review 26: ``_halted`` puts a halt stamped later than it came at when it came on the
+    steady clock (a sender's clock ahead: heartbeat.py rule 8, the test above), but keeps its
+    stamp (``SentAt.unix``) as sent, and a move is compared with that stamp alone
+    (service.py rule 9). A Node-RED flow whose clock runs 0.8 s fast (inside AHEAD_S, so
+    its stamp is read) sends STOP at station time T, stamped T + 0.8; the remote's operator
+    sends ``P 200`` at T + 0.5, stamped T + 0.5 (the station's clock, well reckoned): refused
+    as sent before the last STOP, though sent after it. Before this change the halt counted
+    from when it came, and the move passed. The kept stamp must be no later than the
+    station's time when the halt came (as its steady time is)."""
+    rot = bench.rot
+    now = time.monotonic()
+    station_now = 1_700_000_000.0  # (the station's clock when the STOP came)
+    bench.submit(Stop(origin=WHO, sent_s=SentAt(now + 0.8, station_now + 0.8)), "stop")
+    came_s, stamp = rot.halted
+    assert came_s <= time.monotonic()  # (its steady time: when it came, as before)
+    assert stamp is not None
+    move_stamp = station_now + 0.5  # sent after the STOP came, by a clock that is right
+    assert not move_stamp < stamp, (
+        "a move sent 0.5 s after a STOP stamped 0.8 s ahead is taken for older: kept stamp "
+        f"{stamp - station_now:+.3f} s from when it came"
+    )
