@@ -62,8 +62,12 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    check that waits for nothing, the clock read before it, notes each socket it finds empty
    as empty since that reading (``_look``: empty at some moment after it, so never dated
    late); the wait itself is followed by one such check, since the time its return saw is
-   only known after it. The stale check above is the system's stamp's alone. The stamps are live
-   before a port is bound (``_stamping_on``): Linux
+   only known after it. A datagram that ends a wait is dated from the look before it, so no
+   wait lasts longer than UNSTAMPED_WAIT_S there (review 26: a wait of up to REPORT_IDLE_S
+   dated a turn after an idle spell 10 s back, refused as expired; one sent half a second
+   after a STOP, before it): early by a quarter second at most, four wake-ups a second. The
+   stale check above is the system's stamp's alone. The stamps are live before a port is
+   bound (``_stamping_on``): Linux
    turns its stamping on for the first socket that asks a moment later, on a worker thread
    (milliseconds; longer on a loaded host), and a datagram that comes meanwhile is stamped
    when it is read, not when it came, with nothing to tell the two apart. A turn sent before
@@ -135,6 +139,10 @@ STAMPS_LIVE_S = 2.0  # rule 9: the most listen() waits for the system's stamps t
 REPORT_LOOK_S = 0.1  # a flood's wake-ups look at the reports no more often than this
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
+# rule 9, where the system does not stamp datagrams: the longest wait, so a datagram that ends
+# one is dated at most this much before it came (a review: dated from the start of a 15 s wait,
+# a turn after an idle spell was refused as expired, one 0.5 s after a STOP as before it)
+UNSTAMPED_WAIT_S = 0.25
 REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
 
 _BIND_HINTS = {
@@ -321,7 +329,10 @@ class LoggerEndpoints:
         polled = time.monotonic()
         if not (_STAMPS and _STAMP_SPACE):
             waiting = self._look(sel)
-        for key, _mask in sel.select(max(0.0, due - now)):
+        wait_s = max(0.0, due - now)
+        if waiting is not None:  # rule 9: a datagram that ends the wait is dated from before it
+            wait_s = min(wait_s, UNSTAMPED_WAIT_S)
+        for key, _mask in sel.select(wait_s):
             if key.fileobj == self._wake_r:
                 return False
             assert isinstance(key.fileobj, socket.socket)
