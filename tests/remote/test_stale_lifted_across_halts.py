@@ -139,3 +139,111 @@ def test_a_rotctld_move_seen_before_a_stop_is_not_lifted_past_it_by_another_conn
         assert not turned(), f"a move sent before two STOPs turned the rotor after them: {reply!r}"
     finally:
         remote.stop()
+
+
+def test_a_logger_turn_sent_after_a_home_assistant_stop_is_carried_out_when_it_comes_between_waits(
+    station: Rig, probe: Probe, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Everyday use on the operator's Windows computer (no kernel datagram stamps,
+    loggers/server.py rule 9): Home Assistant's STOP at the station; a while later PstRotator
+    sends a turn to 200, which comes while the loggers' thread is between two waits (here:
+    in its reports, as it is every REPORT_MOVING_S while a rotor moves). The next wake-up
+    finds it waiting already and dates it from when that socket was last found empty: a
+    socket never read yet, the loggers' start (``_started_s``), an hour ago for a socket last
+    read an hour ago, though every wait since found it empty. The turn goes out stamped before
+    Home Assistant's STOP (or older than its expiry) and is refused at the station, the
+    rotor left where it was."""
+    from bridge.interfaces.loggers import server
+    from tests.support.udp_logger import PstClient, reserve_pst_ports
+
+    monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
+    gate, inside = threading.Event(), threading.Event()
+    gate.set()
+    report = server.LoggerEndpoints._report
+
+    def held(self: server.LoggerEndpoints, now: float) -> None:
+        if not gate.is_set():
+            inside.set()
+            gate.wait(slow(30))
+        report(self, now)
+
+    monkeypatch.setattr(server.LoggerEndpoints, "_report", held)
+    port = free_port()
+    pst_port, replies = reserve_pst_ports()
+    settings = RemoteSettings(
+        operator="DL1ABC",
+        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
+    )
+    remote = Remote(settings)
+    remote.start()
+    try:
+        wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
+        station.arrived("tower", 30)
+        t = time.monotonic()
+        probe.publish("rotor/stop", "stop", qos=1)  # Home Assistant's STOP, at the station
+        probe.wait_for("rotor/audit", lambda m: b"stop" in m.payload, after=t)
+        time.sleep(0.5)  # (the turn sent well after the STOP)
+        moves = len(station.emus["tower"].frames(*BEARING_OUTCOMES))
+        errors = probe.mark()
+        with PstClient(pst_port, replies=replies) as client:
+            gate.clear()
+            assert inside.wait(slow(10)), "the loggers' thread between two waits"
+            client.command("<AZIMUTH>200</AZIMUTH>")  # after the STOP, between two waits
+            time.sleep(0.05)  # (in the socket)
+            gate.set()
+            turned = _decided(station, probe, moves, errors, b"RPRT 0")
+            assert turned(), "a logger's turn sent after the STOP was refused: " + str(
+                [m.payload for m in probe.messages[errors:] if m.topic == "rotor/error"]
+            )
+    finally:
+        remote.stop()
+        replies.close()
+
+
+@pytest.mark.parametrize("home_assistant", [True, False], ids=["after-ha-stop", "idle"])
+def test_a_logger_turn_on_a_computer_without_datagram_stamps_is_dated_when_it_came(
+    station: Rig, probe: Probe, monkeypatch: pytest.MonkeyPatch, home_assistant: bool
+) -> None:
+    """Everyday use on the operator's Windows computer, nothing held, nothing loaded: the
+    loggers' thread dates a datagram that came during a wait by its look just before that
+    wait (loggers/server.py rule 9), and a wait lasts until the next report is due: up to
+    REPORT_MOVING_S (1.5 s), REPORT_IDLE_S (15 s) with nobody to report to. ``after-ha-stop``:
+    a PstRotator turn sent half a second after a STOP from Home Assistant is dated before it
+    (the wait began before the STOP) and refused. ``idle``: the remote idle a few seconds
+    more than its 5 s expiry, a PstRotator turn is dated when the wait began and refused as
+    older than its expiry. Both should turn the rotor."""
+    from bridge.interfaces.loggers import server
+    from tests.support.udp_logger import PstClient, reserve_pst_ports
+
+    monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
+    port = free_port()
+    pst_port, replies = reserve_pst_ports()
+    settings = RemoteSettings(
+        operator="DL1ABC",
+        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
+    )
+    remote = Remote(settings)
+    remote.start()
+    try:
+        wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
+        station.arrived("tower", 30)
+        if home_assistant:
+            t = time.monotonic()
+            probe.publish("rotor/stop", "stop", qos=1)  # Home Assistant's STOP, at the station
+            probe.wait_for("rotor/audit", lambda m: b"stop" in m.payload, after=t)
+            time.sleep(0.5)  # (the turn sent well after the STOP)
+        else:
+            time.sleep(8)  # the operator between two QSOs
+        moves = len(station.emus["tower"].frames(*BEARING_OUTCOMES))
+        errors = probe.mark()
+        with PstClient(pst_port, replies=replies) as client:
+            client.command("<AZIMUTH>200</AZIMUTH>")
+            turned = _decided(station, probe, moves, errors, b"RPRT 0")
+            assert turned(), "a logger's turn was refused: " + str(
+                [m.payload for m in probe.messages[errors:] if m.topic == "rotor/error"]
+            )
+    finally:
+        remote.stop()
+        replies.close()
