@@ -180,6 +180,18 @@ def _operator_stop(server: LineServer) -> None:
         assert _read(operator, 8) == b"AZ=120\r\n"
 
 
+def _at_rest(server: LineServer) -> None:
+    """Until every client's thread is done with what it last read: its replies sent and on
+    record so (rule 3's ``sending_s`` and ``reading``, set by the thread after its send
+    returns). A reply read here comes a moment before that, and under a fake clock moved on in
+    that moment a client that read every reply counted as reading none: dropped for room."""
+    wait_until(
+        lambda: all(c.sending_s is None and not c.reading for c in list(server._clients.values())),
+        10,
+        "every client's reply sent and its record at rest",
+    )
+
+
 def _wait_mid_command(server: LineServer, n: int, what: str) -> None:
     """Until ``n`` of the server's clients have a command half received (rule 3)."""
     wait_until(
@@ -463,6 +475,7 @@ def test_clients_always_mid_command_under_their_budgets_are_dropped_before_a_qui
     quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
     quiet.sendall(b"C\r")
     assert _read(quiet, 8) == b"AZ=120\r\n"  # an established program, at rest from now on
+    _at_rest(server)  # (its reply on record as sent before the clock moves)
     streams = []
     for _ in range(3):
         sock = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
@@ -497,6 +510,7 @@ def test_clients_mid_command_but_for_a_moment_every_two_seconds_go_before_a_quie
     quiet = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
     quiet.sendall(b"C\r")
     assert _read(quiet, 8) == b"AZ=120\r\n"  # an established program, at rest from now on
+    _at_rest(server)  # (its reply on record as sent before the clock moves)
     hogs = [socket.create_connection(("127.0.0.1", server.port), timeout=slow(30)) for _ in "ab"]
     try:
         wait_until(lambda: server.client_count == 3, 10, "every slot taken")
@@ -551,6 +565,7 @@ def test_a_client_quiet_for_a_while_then_mid_stop_is_not_taken_for_a_stream(
     try:
         a.sendall(b"S")  # a stop's first byte, its CR still to come
         _wait_mid_command(server, 1, "a mid-command")
+        _at_rest(server)  # (b's C carried out: its line not one being read, a stop maybe)
         with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
             late.sendall(b"C\r")
             assert _read(late, 8) == b"AZ=120\r\n"
@@ -782,6 +797,7 @@ def test_an_established_program_is_dropped_after_a_connection_that_never_sent_a_
     try:
         logger.sendall(b"C\r")
         assert _read(logger, 8) == b"AZ=120\r\n"
+        _at_rest(server)  # (its reply on record as sent before a minute passes)
         clock.t += 60.0
         silent = socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
         wait_until(lambda: server.client_count == 2, 10, "both connected")
