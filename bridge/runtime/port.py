@@ -12,6 +12,9 @@ Rules:
    sleeps: the worker owns back-off.
 5. A port that poll() calls readable but that has no bytes while its device is still there
    has a second reader (one that opened it first, without a lock): "busy", not "unplugged".
+   A port gone (a hung-up tty: a read's end of file, or EIO, ENXIO or ENODEV from a read or a
+   write) says "(adapter unplugged?)" whichever of them finds it first (``_gone``: a loaded
+   CI run's unplug found by the next poll's write said "[Errno 5] Input/output error" alone).
 6. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
    layer that imports pyserial.
 6. Reads never wait: a read takes what is there. A write is one short frame or a lost link (a
@@ -239,6 +242,17 @@ class PendingOpen:
         return None
 
 
+_GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO, errno.ENODEV})  # rule 5: a hung-up tty
+
+
+def _gone(exc: OSError, what: str) -> OSError:
+    """Rule 5: a read's or write's error on a port that is gone, as one that says so (else
+    ``exc`` as it was)."""
+    if exc.errno not in _GONE_ERRNOS:
+        return exc
+    return serial.SerialException(f"port {what} failed: {exc.strerror} (adapter unplugged?)")
+
+
 def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
     """Everything the port has now. ``readable``: poll said so (else a reply is due: worker.py
     rule 2). A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after
@@ -248,6 +262,8 @@ def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
         data = os.read(fd, 4096)
     except BlockingIOError:
         return b""
+    except OSError as exc:
+        raise _gone(exc, "read") from exc
     if not data and readable:
         if path is not None and os.path.exists(path):
             raise serial.SerialException(
@@ -280,6 +296,8 @@ def write_frame(port: serial.Serial, data: bytes) -> None:
             rest = rest[os.write(fd, rest) :]
         except BlockingIOError:
             pass
+        except OSError as exc:
+            raise _gone(exc, "write") from exc
         if not rest:
             return
         if deadline is None and queued(fd) >= FULL_BYTES:

@@ -72,6 +72,27 @@ def test_a_port_whose_bytes_another_reader_took_is_busy_not_unplugged(tty: str) 
         port.close()
 
 
+def test_a_port_pulled_out_says_unplugged_whether_a_write_or_a_read_finds_it() -> None:
+    """Rule 5: the adapter pulled (the pty's other end closed: its tty hung up), the next
+    write fails with EIO and the next read finds the end of the file. Both say "(adapter
+    unplugged?)": a loaded CI run's unplug mid-turn was found by the next poll's write, and
+    the error the user got said "[Errno 5] Input/output error" alone."""
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    os.close(slave)
+    port = open_port(path, REGISTRY["rotorez"])
+    try:
+        os.close(master)
+        with pytest.raises(serial.SerialException) as written:
+            write_frame(port, b"AI1;")
+        assert str(written.value).endswith("(adapter unplugged?)"), str(written.value)
+        with pytest.raises(serial.SerialException) as read:
+            read_available(port.fileno(), True, path)
+        assert str(read.value).endswith("(adapter unplugged?)"), str(read.value)
+    finally:
+        port.close()
+
+
 class Watch:
     """What the stop express is told (port.py rule 7), and whether the port was open then."""
 
