@@ -20,7 +20,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.interfaces.mqtt.heartbeat import Stamp
-from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.interfaces.mqtt.remote import HALT_READERS, RemoteLink
 from bridge.settings.mqtt import MqttSettings
 from tests.remote.test_late_commands import Paho
 from tests.support.clock import FakeClock
@@ -106,3 +106,46 @@ def test_a_move_is_lifted_to_its_own_readers_halt_alone() -> None:
     stop, unknown, other, own = (_sent(props) for _topic, props in fake.published)
     assert unknown < stop and other < stop, "lifted to another reader's STOP"
     assert own >= stop, "the reader's own STOP left its move stamped before it"
+
+
+def test_the_sources_whose_halts_lift_their_moves_are_bounded() -> None:
+    """Rule 8's bound: a program that opens a connection per STOP (each its own reader) does
+    not grow the link's record without end; the newest readers' halts still lift their own
+    moves, and a forgotten reader's move keeps its seen time (refused at worst, never lifted
+    over a halt that is not its own)."""
+    clock = FakeClock()
+    link = RemoteLink(
+        MqttSettings(),
+        "remote-test",
+        [],
+        lambda topic, payload, retain: None,
+        last_word=lambda topic, payload: topic.endswith("/stop"),
+        heartbeat="rotor/bridge/heartbeat",
+        clock=clock,
+        ack_wait_s=0.0,
+    )
+    fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link._client = fake  # type: ignore[assignment]  # noqa: SLF001
+    link.connected.set()
+    t0 = clock.t
+    clock.t = t0 + 10.0
+    link.station_clock.heard(1_700_000_000.0 + clock.t)
+    after = ("rotor/stop", "rotor/lock")
+    for n in range(HALT_READERS * 4):
+        link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0, reader=f"flood {n}")
+    assert len(link._halt_stamps) <= HALT_READERS  # noqa: SLF001
+    fake.published.clear()
+    newest, first = f"flood {HALT_READERS * 4 - 1}", "flood 0"
+    for reader in (newest, first):
+        link.send(
+            "rotor/target",
+            '{"azimuth":1}',
+            "DL1ABC",
+            5,
+            seen_s=t0 + 8.0,
+            after=after,
+            reader=reader,
+        )
+    own, forgotten = (_sent(props) for _topic, props in fake.published)
+    assert own >= 1_700_000_000.0 + 9.0 - 0.001, "the newest reader's STOP no longer lifts its move"
+    assert forgotten < own, "a forgotten reader's move was lifted"

@@ -72,7 +72,10 @@ Rules:
    (a review: ``S`` then ``P`` read late behind a STOP from Home Assistant, the ``P`` lifted
    to the ``S``'s send time, turned the rotor), and never to another source's halt (an
    attack pass: Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen at 9 s, was
-   lifted to 9 s and turned the rotor after it). Every stamp is its millisecond's start.
+   lifted to 9 s and turned the rotor after it). Every stamp is its millisecond's start. The
+   sources noted are the last HALT_READERS (a program opening a connection per STOP would
+   else grow them without end, each keeping its connection); a source forgotten lifts
+   nothing, so its next move may at worst be refused, never let through.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -118,6 +121,7 @@ log = logging.getLogger(__name__)
 COMMAND_QOS = 1  # rule 2
 ACK_WAIT_S = 1.0  # rule 7
 _AGAIN: Hashable = object()  # rule 8: the source a kept halt sent again is noted as
+HALT_READERS = 256  # rule 8: the sources whose last halt's stamp is kept
 NOT_CONNECTED = "not connected to the station's broker"
 NOT_HEARD = (
     "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
@@ -416,7 +420,12 @@ class RemoteLink(Connection):
         station = stamp.station or NAMELESS
         noted = self._halt_stamps.get((topic, reader))
         if noted is None or noted[1] != station or noted[0] < sent:
+            self._halt_stamps.pop((topic, reader), None)  # (the newest last: rule 8's bound)
             self._halt_stamps[topic, reader] = sent, station
+            if len(self._halt_stamps) > HALT_READERS:
+                oldest = next((k for k in self._halt_stamps if k[1] is not _AGAIN), None)
+                if oldest is not None:
+                    del self._halt_stamps[oldest]
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
