@@ -34,7 +34,8 @@ def _sent(props: object) -> float:
     return sent
 
 
-def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp() -> None:
+def _link() -> tuple[FakeClock, RemoteLink, Paho]:
+    """A remote's link on a fake clock, connected, its broker a recorder that acknowledges."""
     clock = FakeClock()
     link = RemoteLink(
         MqttSettings(),
@@ -49,6 +50,11 @@ def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp()
     fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
     link._client = fake  # type: ignore[assignment]  # noqa: SLF001
     link.connected.set()
+    return clock, link, fake
+
+
+def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp() -> None:
+    clock, link, fake = _link()
     link.station_clock.heard(1_700_000_000.0 + clock.t)
     t0 = clock.t
     clock.t = t0 + 10.0
@@ -71,20 +77,7 @@ def test_a_move_is_lifted_to_its_own_readers_halt_alone() -> None:
     """The fix (remote.py rule 8): the floor is the last halt the move's own reader (its
     connection, pty or logger port and sender) read: that reader's move is never stamped
     before it, another reader's move keeps its own seen time."""
-    clock = FakeClock()
-    link = RemoteLink(
-        MqttSettings(),
-        "remote-test",
-        [],
-        lambda topic, payload, retain: None,
-        last_word=lambda topic, payload: topic.endswith("/stop"),
-        heartbeat="rotor/bridge/heartbeat",
-        clock=clock,
-        ack_wait_s=0.0,
-    )
-    fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
-    link._client = fake  # type: ignore[assignment]  # noqa: SLF001
-    link.connected.set()
+    clock, link, fake = _link()
     t0 = clock.t
     clock.t = t0 + 10.0
     link.station_clock.heard(1_700_000_000.0 + clock.t)
@@ -113,20 +106,7 @@ def test_the_sources_whose_halts_lift_their_moves_are_bounded() -> None:
     not grow the link's record without end; the newest readers' halts still lift their own
     moves, and a forgotten reader's move keeps its seen time (refused at worst, never lifted
     over a halt that is not its own)."""
-    clock = FakeClock()
-    link = RemoteLink(
-        MqttSettings(),
-        "remote-test",
-        [],
-        lambda topic, payload, retain: None,
-        last_word=lambda topic, payload: topic.endswith("/stop"),
-        heartbeat="rotor/bridge/heartbeat",
-        clock=clock,
-        ack_wait_s=0.0,
-    )
-    fake = Paho(link, ReasonCode(PacketTypes.PUBACK, identifier=0))
-    link._client = fake  # type: ignore[assignment]  # noqa: SLF001
-    link.connected.set()
+    clock, link, fake = _link()
     t0 = clock.t
     clock.t = t0 + 10.0
     link.station_clock.heard(1_700_000_000.0 + clock.t)
