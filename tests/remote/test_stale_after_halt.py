@@ -27,11 +27,12 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 
-def _remote(port: int, broker_port: int) -> Remote:
+def _remote(port: int, broker_port: int, **endpoint: object) -> Remote:
+    """The remote, started: rotator ``tower`` on a rotctld port, and ``endpoint``'s ports."""
     settings = RemoteSettings(
         operator="DL1ABC",
         mqtt={"host": "127.0.0.1", "port": broker_port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        endpoints=[{"rotator": "tower", "rotctld_port": port, **endpoint}],
     )
     remote = Remote(settings)
     remote.start()
@@ -302,13 +303,7 @@ def test_a_logger_turn_read_late_across_a_stop_the_station_took_another_way_is_n
     monkeypatch.setattr(server, "_received", gated)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)
@@ -345,13 +340,7 @@ def test_a_pty_move_read_late_across_a_stop_the_station_took_another_way_is_not_
     gate, spent = read_gate(monkeypatch, ptylines)
     port = free_port()
     path = str(tmp_path / "rotor-gs232")
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port, "gs232_pty": path}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port, gs232_pty=path)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)

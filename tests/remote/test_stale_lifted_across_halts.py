@@ -13,11 +13,9 @@ import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces import tcplines
-from bridge.remote.run import Remote
-from bridge.remote.settings import RemoteSettings
 from tests.integration.test_attack_fence_pause import read_gate
 from tests.integration.test_rotctld_integration import _replies, connect
-from tests.remote.test_stale_after_halt import _decided
+from tests.remote.test_stale_after_halt import _decided, _remote
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import free_port
 from tests.support.remote import ask
@@ -55,13 +53,7 @@ def test_a_logger_turn_seen_before_a_stop_is_not_lifted_past_it_by_the_remotes_n
     monkeypatch.setattr(server, "_received", gated)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)
@@ -102,13 +94,7 @@ def test_a_rotctld_move_seen_before_a_stop_is_not_lifted_past_it_by_another_conn
     monkeypatch.setattr(tcplines, "unread", no_fionread)
     gate, spent = read_gate(monkeypatch, tcplines)
     port = free_port()
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)
@@ -170,13 +156,7 @@ def test_a_logger_turn_sent_after_a_home_assistant_stop_is_carried_out_when_it_c
     monkeypatch.setattr(server.LoggerEndpoints, "_report", held)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)
@@ -219,13 +199,7 @@ def test_a_logger_turn_on_a_computer_without_datagram_stamps_is_dated_when_it_ca
     monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
-    settings = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotator": "tower", "rotctld_port": port, "pst_udp_port": pst_port}],
-    )
-    remote = Remote(settings)
-    remote.start()
+    remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
     try:
         wait_until(lambda: ask(port, b"P 30 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 30)
