@@ -493,15 +493,10 @@ except ImportError:
         raise OSError(errno.ENOSYS, "no FIONREAD here")
 
 
-def _sent_so_far(fd: int, read: int) -> int:
+def _counted(fd: int, read: int) -> tuple[int, bool]:
     """Rule 9: the bytes ``fd``'s peer has sent so far: ``read``, and those waiting unread in
     the kernel (FIONREAD); ``read`` alone if the kernel cannot say (Windows, where the remote
-    runs too: no fcntl, tests/remote/test_remote_portable.py)."""
-    return _counted(fd, read)[0]
-
-
-def _counted(fd: int, read: int) -> tuple[int, bool]:
-    """``_sent_so_far``, and whether the kernel said (False: ``read`` alone)."""
+    runs too: no fcntl, tests/remote/test_remote_portable.py). And whether the kernel said."""
     try:
         return read + unread(fd), True
     except OSError:
