@@ -299,9 +299,9 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
     """lastword.py rules 2 and 9 for each member: the lane's group stop is carried out at once
     and holds both members; the flood of group targets published before it, read after it on
     the main connection while the hold lasts, is refused for each member (review 18: held,
-    they waited for the copy to drop them, and a copy lost let them through); the main
-    connection's copy ends both holds; only the target published after the stop goes out.
-    One marker for the group."""
+    they waited for the copy to drop them, and a copy lost let them through); the target read
+    after the main connection's copy waits under both holds (lastword.py rule 13) and goes out
+    when the marker comes back. One marker for the group, one fresh one after its copy."""
     svc, pub, upper, lower = group_service()
     svc.on_lane_message("rotor/stack/stop", b"", False)
     markers = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
@@ -310,6 +310,9 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
         svc.on_message("rotor/stack/target", str(az).encode(), False)
     svc.on_message("rotor/stack/stop", b"", False)  # the main connection's copy
     svc.on_message("rotor/stack/target", b"50", False)  # published after it
+    fresh = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
+    assert len(fresh) == 1
+    svc.on_message(fresh[0][0], fresh[0][1].encode(), False)  # back: both holds end
     stop = Stop(Source.MQTT)
     for rot, offset in ((upper, 0), (lower, 180)):
         hold = rot.calls[0][-1]
@@ -320,11 +323,11 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
         ]
         assert rot.calls[11:] == [
             ("submit", stop, "stop"),
-            ("release", hold),
             ("submit", Target((50.0 + offset) % 360, None, M), "target '50' (group stack)"),
+            ("release", int(fresh[0][1].split()[1])),
         ]
     # the lane's group stop held both members with the marker that went out: its return
-    # would end both holds (already ended by the copy)
+    # would end both holds (as the fresh one did)
     assert markers[0][1].split()[1] == str(max(upper.calls[0][-1], lower.calls[0][-1]))
 
 

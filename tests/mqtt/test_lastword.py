@@ -70,14 +70,16 @@ def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_
 ):
     w = LastWord(token="t")
     assert w.lane_halt("a", "stop", 0.0) == 1
-    copy = w.main_halt("a", "stop")  # the copy of the lane's: no note, its hold ends
-    assert copy == Copy(echo=True, upto=1, released=("a",))
+    copy = w.main_halt("a", "stop")  # the copy of the lane's: no note; a fresh marker
+    assert copy == Copy(echo=True, upto=1, marker=2)
+    assert not w.held("a") and w.waits("a")  # rule 13: moves wait for a marker, not refused
+    assert w.marker_back(w.marker(2).encode()) == (2, ["a"])
     assert w.main_halt("a", "stop") == Copy(lane_marker=1)  # read first on the main one
     assert w.lane_halt("a", "stop", 0.3) is None  # its echo on the lane
-    assert w.lane_halt("a", "stop", 0.4) == 2  # a new stop: carried out at once
+    assert w.lane_halt("a", "stop", 0.4) == 3  # a new stop: carried out at once
     assert w.main_halt("a", "lock").lane_marker == 2
-    assert w.lane_halt("a", "stop", 1.1) == 3  # notes are per kind
-    assert w.lane_halt("b", "lock", 1.2) == 4  # and per rotator
+    assert w.lane_halt("a", "stop", 1.1) == 4  # notes are per kind
+    assert w.lane_halt("b", "lock", 1.2) == 5  # and per rotator
 
 
 def test_notes_end_with_their_lane_marker_and_when_the_lane_reconnects() -> None:
@@ -87,15 +89,15 @@ def test_notes_end_with_their_lane_marker_and_when_the_lane_reconnects() -> None
     w.lane_connected()  # so its note is forgotten
     w.marker_back(w.marker(w.lane_subscribed(0.4) or 0).encode())  # (in step: rule 9)
     assert w.lane_halt("a", "stop", 0.5) == 2
-    assert w.main_halt("a", "stop") == Copy(echo=True, upto=2, released=("a",))
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=2, marker=3)
     n = w.main_halt("a", "stop").lane_marker  # read first on the main connection
     w.lane_marker_back(w.marker(n or 0, lane=True).encode())  # the lane has no copy of it
-    assert w.lane_halt("a", "stop", 0.6) == 3  # a new stop, not taken for an echo
+    assert w.lane_halt("a", "stop", 0.6) == 4  # a new stop, not taken for an echo
     w.lane_marker_back(b"other 99")  # not ours: nothing
     w.echoes = False  # the lane cannot read its markers: nothing noted
-    assert w.main_halt("a", "stop") == Copy(echo=True, upto=3, released=("a",))
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=4, marker=5)
     assert w.main_halt("a", "stop") == Copy()
-    assert w.lane_halt("a", "stop", 0.7) == 4
+    assert w.lane_halt("a", "stop", 0.7) == 6
 
 
 def test_a_lock_off_is_older_than_a_lane_lock_on_waiting_for_its_copy() -> None:
@@ -158,23 +160,30 @@ def test_no_clock_ends_a_hold_while_the_main_connection_lives() -> None:
         assert w.holding and w.long_holds(5 * HOUR_S) == {"a": 0.0}
         if end == "marker":
             assert w.marker_back(w.marker(n or 0).encode()) == (n, ["a"])
-        elif end == "copy":
-            assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=("a",))
+        elif end == "copy":  # rule 13: the copy sends a fresh marker at once; it ends the hold
+            copy = w.main_halt("a", "stop")
+            assert copy.echo and copy.marker is not None and w.holding
+            assert w.marker_back(w.marker(copy.marker).encode()) == (copy.marker, ["a"])
         else:
             assert w.main_gone() == ["a"]  # (the caller releases with clearing)
         assert not w.holding and w.long_holds(5 * HOUR_S) == {}
 
 
 def test_a_copy_ends_every_hold_up_to_its_own_and_no_later_one() -> None:
-    """Rule 9: the copy of lane halt n says as much as marker n would."""
+    """Rule 9: the copy of lane halt n says as much as marker n would; rule 13: the holds up
+    to it no longer refuse moves (they wait under the hold), a later one still does."""
     w = LastWord(token="t")
     w.lane_halt("a", "stop", 0.0)  # 1
     w.lane_halt("b", "stop", 0.0)  # 2
     w.lane_halt("a", "lock", 0.0)  # 3: a is held until 3 now
-    assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=())
-    assert w.main_halt("b", "stop") == Copy(echo=True, upto=2, released=("b",))
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, marker=4)
+    assert w.held("a") and w.held("b")
+    assert w.main_halt("b", "stop") == Copy(echo=True, upto=2, marker=5)
+    assert w.held("a") and not w.held("b") and w.waits("b")
     assert w.holding and w.main_lock_off("a") is False  # rule 8: the ON waits for its copy
-    assert w.main_halt("a", "lock") == Copy(echo=True, upto=3, released=("a",))
+    assert w.main_halt("a", "lock") == Copy(echo=True, upto=3, marker=6)
+    assert not w.held("a") and w.holding
+    assert w.marker_back(w.marker(6).encode()) == (6, ["a", "b"])
     assert not w.holding and not w.markers_out  # the markers out are done with too
 
 
@@ -217,10 +226,12 @@ def test_a_halt_published_while_the_lane_was_down_is_not_taken_for_a_newer_ones_
     assert w.holding
     w.marker_back(w.marker(sync).encode())  # the main connection is past the lane's start
     assert w.holding
-    assert w.main_halt("a", "stop") == Copy(echo=True, upto=held or 0, released=("a",))
+    copy = w.main_halt("a", "stop")
+    assert copy.echo and copy.upto == held and not w.held("a")
     w.main_gone()  # a new main connection subscribes after the lane did: in step at once
     n = w.lane_halt("a", "stop", 1.0)
-    assert w.main_halt("a", "stop") == Copy(echo=True, upto=n or 0, released=("a",))
+    copy = w.main_halt("a", "stop")
+    assert copy.echo and copy.upto == n and not w.held("a")
 
 
 def test_a_retained_stop_live_always_replayed_once_per_message() -> None:
@@ -318,13 +329,13 @@ def test_the_copy_of_a_lane_stop_read_after_another_interfaces_halt_ends_no_fenc
     fence = w.fence("r", False, 0.0)  # the console's STOP
     assert fence is not None
     assert w.lane_halt("r", "stop", 0.0) == fence + 1  # the older MQTT STOP, read late
-    assert w.main_halt("r", "stop").echo  # its copy: the lane's hold ends ...
-    assert not w.holding
-    assert w.fenced("r")  # ... the fence does not: the target read next was published before
+    assert w.main_halt("r", "stop").echo  # its copy: the lane's hold refuses no more ...
+    assert not w.held("r")
+    assert w.fenced("r")  # ... the fence does: the target read next was published before
     resent = w.resend_due(RESEND_S)  # its marker is still waited for (sent again if lost)
     assert resent is not None
     w.marker_back(w.marker(resent).encode())
-    assert not w.fenced("r")
+    assert not w.fenced("r") and not w.holding
 
 
 def test_a_flood_of_fences_puts_a_few_markers_out_and_each_fence_waits_for_one_after_it() -> None:

@@ -89,6 +89,12 @@ LOCK_OFF_UNORDERED = (
     "(make sure nobody is working on the tower, then send lock OFF again once the bridge is "
     "connected, or use the console)"
 )
+# lastword.py rule 13: a lock OFF waiting under a lane hold when the main connection dropped
+LOCK_OFF_LOST = (
+    "lock OFF not carried out: it waited for the main connection to catch up with a STOP or "
+    "lock ON from the stop connection, and that connection dropped; the lock stays ON (send "
+    "lock OFF again)"
+)
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
     "stop connection; the lock stays ON (make sure nobody is working on the tower before "
@@ -152,6 +158,12 @@ class Halts:
         self._asked_lock = threading.Lock()
         self._asked: dict[str, int] = {}
         self._fenced: dict[str, int] = {}
+        # lastword.py rule 13: a lock OFF read after the count copy of a lane halt, waiting
+        # under its hold for the marker: rotator -> (who sent it, the halt count read before
+        # it, the lock ONs carried out here when it was read)
+        self._waiting_off: dict[str, tuple[Origin | None, int, int]] = {}
+        self._lock_ons: dict[str, int] = {}  # lastword.py rule 13: lock ONs carried out here
+        self._blind_said = False  # lastword.py rule 14: logged once
 
     def read_since(
         self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
@@ -184,6 +196,12 @@ class Halts:
                 rot = self._rotators.get(rid)
                 if rot is not None:
                     rot.release(0, clear=True)
+            dropped = [(rid, w[0]) for rid, w in self._waiting_off.items()]
+            self._waiting_off.clear()  # (lastword.py rule 13: its place in line is lost)
+        for rid, origin in dropped:
+            rot = self._rotators.get(rid)
+            if rot is not None:
+                rot.report_refusal(LOCK_OFF_LOST, "lock OFF", origin=origin)
 
     def lane_connected(self) -> None:
         with self._lock:
@@ -201,7 +219,9 @@ class Halts:
         """The broker does not let the main connection read its markers (lastword.py rule 7):
         none goes out; a lane's halt holds until its main copy. The holds stay."""
         with self._lock:
-            self.word.markers_denied()
+            ended = self.word.markers_denied()
+            said = [said for rid, m in ended.items() for said in self._release((rid,), m)]
+        self._say(said)
 
     def markers_allowed(self) -> None:
         """The hello or the probe came back on a new connection: markers go out again
@@ -259,6 +279,23 @@ class Halts:
             return FENCED
         return HELD if self.word.held(rotator_id) else None
 
+    def _lane_blind(self) -> bool:
+        """lastword.py rule 14: neither connection can read the bridge's markers while the main
+        connection reads its commands: a lane halt could be neither told from the echo of one
+        the main connection carried out nor ever ended, so the lane carries out nothing (the
+        main connection carries out every halt, in order: stops lose the lane's speed only)."""
+        blind = not self.word.markers and not self.word.echoes and self._holds_possible()
+        if blind and not self._blind_said:
+            self._blind_said = True
+            log.warning(
+                "neither MQTT connection can read the bridge's markers (%s, %s denied?): stops "
+                "and locks are carried out from the main connection only, in order, without "
+                "the stop lane's speed",
+                self.topics.bridge_fence,
+                self.topics.bridge_fence_lane,
+            )
+        return blind
+
     def _holds_possible(self) -> bool:
         """Whether the main connection will read what was published before a lane halt (and
         its marker after it): from its SUBSCRIBE on, not only from its SUBACK (a target
@@ -279,6 +316,8 @@ class Halts:
         and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
         copy of one the lane carried out (the audit trail has it once); ``sent_s``: its stamp
         on the steady clock (service.py rule 9)."""
+        if kind == "lock":  # lastword.py rule 13: a lock OFF waiting before it is older
+            self._lock_ons[rot.id] = self._lock_ons.get(rot.id, 0) + 1
         halt = (
             Stop(Source.MQTT, origin, sent_s)
             if kind == "stop"
@@ -388,17 +427,43 @@ class Halts:
     def marker_back(self, payload: bytes) -> None:
         with self._lock:
             n, released = self.word.marker_back(payload)
-            self._release(released, n)
+            said = self._release(released, n)
             owed = self.word.owed_fence(self._clock()) if n else None  # lastword.py rule 11
+        self._say(said)
         if owed is not None:
             self._send_marker(owed)
 
-    def _release(self, released: list[str] | tuple[str, ...], marker: int) -> None:
-        """Under the lock: the holds of ``released`` up to ``marker`` end."""
+    def _release(
+        self, released: list[str] | tuple[str, ...], marker: int
+    ) -> list[tuple[RotatorPort, str, Origin | None]]:
+        """Under the lock: the holds of ``released`` up to ``marker`` end, and a lock OFF that
+        waited under one is carried out (lastword.py rule 13; not if a lock ON was carried out
+        after it was read: it was published before that ON). What to say once the lock is let
+        go is returned (``_say``)."""
+        said: list[tuple[RotatorPort, str, Origin | None]] = []
         for rid in released:
             rot = self._rotators.get(rid)
-            if rot is not None:
-                rot.release(marker)
+            if rot is None:
+                continue
+            rot.release(marker)
+            off = self._waiting_off.pop(rid, None)
+            if off is None:
+                continue
+            origin, since, lock_ons = off
+            if lock_ons != self._lock_ons.get(rid, 0):
+                said.append((rot, LOCK_OFF_OLDER, origin))
+                continue
+            try:
+                rot.submit(Lock(False, source=Source.MQTT, origin=origin), since=since)
+            except Refused:
+                pass  # (the judge said why: a lock ON came while it waited)
+        return said
+
+    @staticmethod
+    def _say(said: list[tuple[RotatorPort, str, Origin | None]]) -> None:
+        """A lock OFF that waited and was not carried out, said once the lock is let go."""
+        for rot, why, origin in said:
+            rot.report_refusal(why, "lock OFF", origin=origin)
 
     def on_lane_marker(self, payload: bytes) -> None:
         """The lane read its marker (lastword.py rule 4)."""
@@ -478,6 +543,8 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_halt(rot, topic, kind, payload)
             return
+        if self._lane_blind():
+            return
         self.live_halt(topic, payload)
         what = pl.describe(kind, payload)
         with self._lock:
@@ -506,9 +573,12 @@ class Halts:
         if not retain:
             self._noted("main", rot.id, kind)
         with self._lock:
-            copy = self.word.main_halt(rot.id, kind)
+            copy = self.word.main_halt(rot.id, kind, self._clock())
             self.carry(rot, kind, what, origin=origin, echo=copy.echo, sent_s=sent_s)
-            self._release(copy.released, copy.upto)  # lastword.py rule 9
+            said = self._release(copy.released, copy.upto)  # lastword.py rule 9
+        self._say(said)
+        if copy.marker is not None:  # lastword.py rule 13: the holds' moves wait for it
+            self._send_marker(copy.marker)
         if copy.lane_marker is not None:
             marker = self.word.marker(copy.lane_marker, lane=True)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
@@ -521,6 +591,9 @@ class Halts:
         fenced = self.fenced(rot.id, lock_off=True)  # lock ON put after that refuses it
         with self._lock:
             carried = not fenced and self.word.main_lock_off(rot.id)
+            if carried and self.word.waits(rot.id):  # lastword.py rule 13: for the marker
+                self._waiting_off[rot.id] = (origin, since, self._lock_ons.get(rot.id, 0))
+                return
             if carried:
                 try:
                     rot.submit(Lock(False, source=Source.MQTT, origin=origin), since=since)
@@ -581,6 +654,8 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_group_stop(group_id, topic, payload)
             return
+        if self._lane_blind():
+            return
         self.live_halt(topic, payload)
         what = pl.describe("stop", payload)
         newest = held = 0
@@ -611,15 +686,22 @@ class Halts:
         """A group's stop read on the main connection: each member's, in order (rule 1); one
         lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
         lane_marker: int | None = None
+        fresh: int | None = None  # lastword.py rule 13: the newest fresh marker, one for all
+        said: list[tuple[RotatorPort, str, Origin | None]] = []
         with self._lock:
             for rot in self._members(group_id):
                 if not retain:  # (a review: as a member's own stop is)
                     self._noted("main", rot.id, "stop")
-                copy = self.word.main_halt(rot.id, "stop")
+                copy = self.word.main_halt(rot.id, "stop", self._clock())
                 self._stop_member(rot, what, None, origin, copy.echo, sent_s)
-                self._release(copy.released, copy.upto)  # lastword.py rule 9
+                said += self._release(copy.released, copy.upto)  # lastword.py rule 9
                 if copy.lane_marker is not None:
                     lane_marker = copy.lane_marker
+                if copy.marker is not None:
+                    fresh = copy.marker
+        self._say(said)
+        if fresh is not None:
+            self._send_marker(fresh)
         if lane_marker is not None:
             marker = self.word.marker(lane_marker, lane=True)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)

@@ -171,7 +171,8 @@ class Copy:
     echo: bool = False  # the copy of a halt the lane carried out first
     lane_marker: int | None = None  # rule 4: the lane marker to publish
     upto: int = 0  # rule 9: the holds up to this marker end ...
-    released: tuple[str, ...] = ()  # ... these rotators'
+    released: tuple[str, ...] = ()  # ... these rotators' (only while no marker can come)
+    marker: int | None = None  # rule 13: a fresh marker to publish (the holds wait for it)
 
 
 @dataclass
@@ -180,6 +181,9 @@ class LastWord:
     _key: bytes = field(default_factory=lambda: secrets.token_bytes(16), repr=False)  # rule 10
     _next: int = 0
     _holds: dict[str, int] = field(default_factory=dict)  # rotator -> marker it waits for
+    # rule 13: the held rotators whose hold's own lane halt has had its main copy counted: their
+    # moves wait under the hold (for its marker) instead of being refused
+    _copied: set[str] = field(default_factory=set)
     _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
     _marker_sent_at: dict[int, float] = field(
         default_factory=dict
@@ -218,6 +222,7 @@ class LastWord:
         self._next += 1
         n = self._next
         self._holds[rotator_id] = n
+        self._copied.discard(rotator_id)  # rule 13: a new halt, its copy not read yet
         self._held_since.setdefault(rotator_id, now)
         if self.markers:
             self._marker_sent_at[n] = now
@@ -315,10 +320,11 @@ class LastWord:
         return fence is not None and (fence[1] or not lock_off)
 
     # -- the main connection (rule 1) ----------------------------------------------------------
-    def main_halt(self, rotator_id: str, kind: str) -> Copy:
+    def main_halt(self, rotator_id: str, kind: str, now: float = 0.0) -> Copy:
         """A stop or lock ON read on the main connection (it is carried out whatever this says):
-        the copy of the lane's, if it came first (rule 9: the holds it ends); if not, the lane
-        marker to publish (rule 4)."""
+        the copy of the lane's, if it came first (rule 9; rule 13: the holds whose moves wait
+        from now on, and the fresh marker to publish; the holds it ends while no marker can
+        come); if not, the lane marker to publish (rule 4)."""
         key = (rotator_id, kind)
         waiting = self._lane_waiting.get(key)
         if waiting:
@@ -326,8 +332,14 @@ class LastWord:
             if after > self._main_past and self.markers:
                 return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
-            released = tuple(self._passed(n, fences=False))  # (rule 11: a marker alone)
-            return Copy(echo=True, upto=n, released=released)
+            if not self.markers:  # rule 13: no marker can come; the count copy ends the holds
+                released = tuple(self._passed(n, fences=False))  # (rule 11: a marker alone)
+                return Copy(echo=True, upto=n, released=released)
+            self._copied.update(rid for rid, m in self._holds.items() if m <= n)
+            self._next += 1  # rule 13: a fresh marker now, the back-off started anew
+            self._marker_sent_at[self._next] = now
+            self._resend_s = RESEND_S
+            return Copy(echo=True, upto=n, marker=self._next)
         if not self.echoes or self._lane_sub == NOT_YET:  # (rule 4: nothing to note against)
             return Copy()
         if self._lane_sub > self._main_past and self.markers:  # rule 4 as rule 9: this halt
@@ -338,8 +350,14 @@ class LastWord:
 
     def held(self, rotator_id: str) -> bool:
         """Rule 2: whether a move the main connection reads now for this rotator is refused:
-        read while a lane halt holds it, so published before that halt, or not known to be
-        after it (its main copy lost, or not counted: rule 9)."""
+        read while a lane halt holds it, before the main copy of that halt was counted (rule
+        9), so published before that halt, or not known to be after it (its copy lost). Read
+        after the count copy, it waits under the hold instead (rule 13: ``waits``)."""
+        return rotator_id in self._holds and rotator_id not in self._copied
+
+    def waits(self, rotator_id: str) -> bool:
+        """Rule 13: whether a move (a lock OFF) the main connection reads now for this rotator
+        waits under a hold for its marker, rather than going now."""
         return rotator_id in self._holds
 
     def main_lock_off(self, rotator_id: str) -> bool:
@@ -381,6 +399,7 @@ class LastWord:
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
             del self._holds[rid]
+            self._copied.discard(rid)
             self._held_since.pop(rid, None)
         return released
 
@@ -389,6 +408,7 @@ class LastWord:
         clearing; every marker out is void. Rule 9: the next main connection subscribes after
         the lane's present one did."""
         released = list(self._holds)
+        self._copied.clear()
         # rule 12: a lock fence the lane's lock OFFs are not ordered against from now on
         self._unfenced_locks = {rid for rid, (_, lock) in self._fences.items() if lock}
         self._holds.clear()
@@ -402,13 +422,20 @@ class LastWord:
             self._main_past = self._next
         return released
 
-    def markers_denied(self) -> None:
+    def markers_denied(self) -> dict[str, int]:
         """Rule 7: the broker does not let the main connection read its markers: none goes out
-        any more; the holds stay, each until its main copy."""
+        any more; the holds stay, each until its main copy. Rule 13: those whose copy was
+        counted already end now (no marker will come for them): returned, with their marker."""
         self.markers = False
         self._marker_sent_at.clear()
         self._fences.clear()  # rule 11: no marker could end them
         self._fenced_since.clear()
+        ended = {rid: m for rid, m in self._holds.items() if rid in self._copied}
+        for rid in ended:
+            del self._holds[rid]
+            self._held_since.pop(rid, None)
+        self._copied.clear()
+        return ended
 
     def markers_allowed(self) -> None:
         """Rule 7: the hello or the probe came back on a new connection: markers go out again
