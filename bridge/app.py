@@ -316,6 +316,10 @@ class App:
             stamp_clock=station_time.now_unix,  # heartbeat.py rule 6
             station=station_time.identity,  # heartbeat.py rule 7
         )
+        # lastword.py rule 15: a marker sent again at QoS 1; its refusal on both topics said
+        self.mqtt.confirm_markers_with(
+            self.client.publish_marker_confirmed, self.client.markers_refused
+        )
         store = self.store = StateStore(settings.state_file, deferred=True)  # (written by start)
         try:
             store.check_kind()  # (a FIFO, a directory: refused now, nothing written: rule 4)

@@ -353,6 +353,18 @@ class MqttClient(Connection):
         if self._up:
             self._client.publish(topic, payload.encode(), qos=0)
 
+    def publish_marker_confirmed(self, topic: str, payload: str) -> None:
+        """A marker sent again (lastword.py rule 15) at QoS 1: under MQTT 5 the broker's
+        PUBACK says whether its ACL refuses the topic now (rule 16: an ACL changed under a
+        live connection, which no probe at connect sees); ``markers_refused`` reads it."""
+        if self._up:
+            self._delivery.send(topic, payload.encode(), 1, retain=False)
+
+    def markers_refused(self, topics: tuple[str, ...]) -> bool:
+        """lastword.py rule 15: whether the broker refused each of ``topics`` (a marker's
+        PUBACK, or the probe) since they were last seen allowed."""
+        return all(self._delivery.denied(topic) for topic in topics)
+
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
         """At shutdown: mark these retained topics offline and wait until the broker has them."""
         infos = []
@@ -636,6 +648,9 @@ class MqttClient(Connection):
         back there, the last word on them for this connection (``_markers_lost``). No lock: a
         thread that reports under ``_fence_lock`` publishes."""
         self._hello_back = True
+        look = self._look
+        if look is not None:  # (lastword.py rule 15: a refusal a marker's PUBACK said is over)
+            self._delivery.allow(look.claim.hello_topic)
         self._markers_readable(True)
 
     def _markers_lost(self) -> None:

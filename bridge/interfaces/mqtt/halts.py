@@ -164,6 +164,10 @@ class Halts:
         self._waiting_off: dict[str, tuple[Origin | None, int, int]] = {}
         self._lock_ons: dict[str, int] = {}  # lastword.py rule 13: lock ONs carried out here
         self._blind_said = False  # lastword.py rule 14: logged once
+        # lastword.py rule 15: a marker sent again at QoS 1, and whether the broker refused
+        # both marker topics (the client's, set by the app; None: neither is known)
+        self.publish_confirmed: Callable[[str, str], None] | None = None
+        self.markers_refused: Callable[[tuple[str, ...]], bool] | None = None
 
     def read_since(
         self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
@@ -334,12 +338,16 @@ class Halts:
         self._publish_marker(n)
         self._arm()
 
-    def _publish_marker(self, n: int) -> None:
+    def _publish_marker(self, n: int, confirmed: bool = False) -> None:
         """Marker ``n`` on the fence topic and on the hello topic (lastword.py rule 7: the
-        first one back ends what it ends; the second, nothing more)."""
+        first one back ends what it ends; the second, nothing more); ``confirmed``: sent
+        again, at QoS 1 where the client can (lastword.py rule 15)."""
         marker = self.word.marker(n)
-        self._publisher.publish_marker(self.topics.bridge_fence, marker)
-        self._publisher.publish_marker(self.topics.bridge_hello, marker)
+        publish = self.publish_confirmed if confirmed else None
+        if publish is None:
+            publish = self._publisher.publish_marker
+        publish(self.topics.bridge_fence, marker)
+        publish(self.topics.bridge_hello, marker)
 
     def _arm(self) -> None:
         """One timer at most looks again in TICK_S while there is something to look at."""
@@ -364,6 +372,7 @@ class Halts:
         with self._lock:
             self._timer = None
         self.resend_if_due()
+        self._refused_now()
         self.say_long_holds()
         self._arm()
 
@@ -375,9 +384,23 @@ class Halts:
             owed = self.word.owed_fence(self._clock())
         if n is not None:
             log.info("a marker of the stop lane did not come back yet; sending another")
-            self._publish_marker(n)
+            self._publish_marker(n, confirmed=True)
         if owed is not None:
             self._send_marker(owed)
+
+    def _refused_now(self) -> None:
+        """lastword.py rule 15 (the timer): the broker refused a marker sent again on both
+        topics (its ACL changed under the live connection): the markers cannot come back."""
+        refused = self.markers_refused
+        topics = (self.topics.bridge_fence, self.topics.bridge_hello)
+        if refused is None or not self.word.markers or not refused(topics):
+            return
+        log.warning(
+            "the MQTT broker refuses the bridge's markers on %s and %s (its ACL changed?): a "
+            "stop lane's hold ends with the main connection's copy of its halt from now on",
+            *topics,
+        )
+        self.markers_denied()
 
     def say_long_holds(self) -> None:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid

@@ -316,6 +316,16 @@ class MqttService:
         """interfaces/mqtt/express.py rule 11 (halts.py ``read_since``)."""
         return self._halts.read_since(rotator_id, kind, heard_since)
 
+    def confirm_markers_with(
+        self,
+        publish: Callable[[str, str], None],
+        refused: Callable[[tuple[str, ...]], bool],
+    ) -> None:
+        """lastword.py rule 15: a marker sent again goes at QoS 1 (``publish``), and the
+        broker's refusal of both marker topics (``refused``) says the markers cannot come."""
+        self._halts.publish_confirmed = publish
+        self._halts.markers_refused = refused
+
     def hold_for_express(self, hold: Callable[[str], None]) -> None:
         """Every MQTT stop and lock ON is shown to the stop express first
         (interfaces/mqtt/express.py rule 8: its hold), in the step that carries it out."""
