@@ -276,7 +276,8 @@ class Halts:
     def stale_move(self, rotator_id: str) -> str | None:
         """Why a move the main connection reads now for this rotator is refused as older (its
         R/error), or None: another interface's halt fences it (``fenced``: FENCED), or a lane
-        halt holds it (lastword.py rule 2: HELD; its copy, or the marker, is not read yet).
+        halt holds it (lastword.py rule 2: HELD; its copy, or the marker, is not read yet; read
+        after the copy, it goes into the mailbox and waits there under the hold: rule 13).
         Read without a lock, as ``fenced`` is (one dict look-up more): a lane halt put after
         the look is put after the move's halt count was read, and drops it in the mailbox."""
         if self.fenced(rotator_id):
@@ -443,8 +444,9 @@ class Halts:
         return (
             f"{rid}: a stop or lock from the stop lane has held this rotator's targets for more "
             f"than {LONG_HOLD_S:g} s: the main connection has not yet read everything published "
-            f"before it (a flood of targets, a slow link?). Until {caught_up}, MQTT targets are "
-            "refused as older and other interfaces' wait; stops and locks go through"
+            f"before it (a flood of targets, a slow link?). Until {caught_up}, MQTT targets "
+            "read before its own copy of the stop or lock are refused as older, the others "
+            "wait (lastword.py rule 13); stops and locks go through"
         )
 
     def marker_back(self, payload: bytes) -> None:

@@ -17,16 +17,16 @@ but not the order between them. So:
    that word. To know when, the bridge publishes a **marker** of its own on the main connection
    (``B/bridge/fence``, this process's token and a number). The broker had the stop before the
    marker, and the main connection's own copy of the stop or lock comes before the marker
-   too. The hold ends when that copy is read (everything published before the lane's word has
-   been read by then: rule 9 says when a copy is known for one), or when the marker comes
-   back, whichever comes first; then what is still pending goes out. So a move the main
-   connection reads while the hold lasts (``held``) came before the copy, published before
+   too. The hold ends when the marker comes back (rule 13: the copy, counted, ends it only
+   while no marker can come); then what is still pending goes out. A move the main
+   connection reads while the hold lasts and before the copy (``held``) was published before
    the lane's word, or its copy was lost on the way (QoS 0: a broker that drops messages for a
    reader that fell behind, an ACL) and nothing tells whether it was published before the
    word or after: it is refused as older (halts.py), never held. (A review: held, it waited
    for the copy to drop it as rule 1 says; with the copy lost, the marker ended the hold and
-   a target published before the STOP turned the rotor after it.) Nothing is decided by
-   matching payloads, and no clock ends a hold (rule 5).
+   a target published before the STOP turned the rotor after it.) One read after the copy
+   waits (rule 13). Nothing is decided by matching payloads, and no clock ends a hold (rule
+   5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
    (but rule 12).
@@ -94,14 +94,16 @@ but not the order between them. So:
    even if the main connection then drops before its copy comes), and R/error says so
    (halts.py: it may have been published after the ON, when rule 9 could not count the copy).
 9. The main connection's copy of a lane halt is the oldest one the lane read of that rotator and
-   kind still waiting (the broker keeps one order for both connections), once the lane's
+   kind still waiting (the broker keeps one order for both connections; at QoS 0 either may
+   have lost a halt, so the count may be off: rule 13 says what it may decide), once the lane's
    connection is known to be in step: a halt published while the lane was not subscribed
    comes on the main connection only, and must not be taken for the copy of a newer one. So
    when the lane's subscription is acknowledged, a marker goes out on the main connection
    (``lane_subscribed``); until one at least as new comes back (or the main connection is new,
    subscribed after the lane), a halt the main connection reads does not count as the copy of
    the lane's halts read on that connection: carried out all the same (rule 1), noting and
-   ending nothing. A copy ends every hold up to its lane halt's number, as that marker would.
+   ending nothing. A copy lets the moves of every hold up to its lane halt's number wait
+   instead of being refused (rule 13).
 10. A marker is this process's token, its number and its seal: a keyed hash of the number
    and of its kind (the main connection's or the lane's: counted apart, so a copy moved to
    the other topic could otherwise pass), whose key never leaves the process. A marker is
@@ -144,6 +146,38 @@ but not the order between them. So:
    the halt count read before that look, as the main connection's does), the lock staying
    ON, until a new main connection (whose fences order it again, and whose drop starts the
    count anew); a lock OFF from the console is carried out as ever.
+13. The count decides what waits, never what goes (cold review 22). The lane may lose a halt
+   (QoS 0) that the main connection reads: then the main connection's older halt is counted
+   as the copy of the lane's newer one (or a group's stop, which a lane user may not read, as
+   a member's). Had the copy ended the hold, a target or lock OFF published between the two
+   would have gone out after the newer STOP or lock ON. So a copy, counted, ends no hold while
+   markers can come: a move read before it is refused (``held``), a move read after it
+   (``waits``) is put under the hold (a target in the mailbox, which the session holds; a lock
+   OFF kept by halts.py, the lock staying ON meanwhile) and goes out when the marker comes
+   back. The broker had the lane's halt before the marker, so the halt's real copy, when the
+   count was off, is read before it and drops what waits, as any stop or lock ON drops what
+   was put before it (a lock OFF waiting is dropped by a lock ON carried out after it was
+   read, and said). A copy read while a hold is up sends a fresh marker at once, the back-off
+   started anew (``Copy.marker``): a STOP then a target back to back end at the target within
+   a broker round trip, and a hold after a flood lasts no longer than the main connection
+   takes to read it (review 23: a marker lost in the flood, its resend 30 s away). What is
+   left: a real copy lost on the main connection too (two losses) lets what waited go at the
+   marker; and while the markers cannot be read (rule 7) the count copy ends the hold as
+   before, the gap open.
+14. While neither connection can read its markers (rule 7, and rule 4's ``echoes`` off), the
+   lane carries out nothing (halts.py ``_lane_blind``): its halt could not be told from the
+   echo of one the main connection carried out first, and its hold would wait for a copy
+   already read, for as long as the main connection lives (review 22 F3: every target after
+   a STOP refused, for hours). The main connection carries out every halt in order (rule 1):
+   stops lose the lane's speed, nothing else. A lane halt carried out before both were known
+   denied holds as rule 7 says.
+15. A marker sent again (rule 5) goes at QoS 1 (halts.py ``publish_confirmed``): an ACL that
+   denies both marker topics, reloaded under a live connection (mosquitto's SIGHUP keeps the
+   connections, and no probe sees it), is then told by the broker itself, under MQTT 5, in
+   the PUBACK; both topics refused, the markers are known denied (rule 7), and a hold whose
+   copy was counted ends (``markers_denied``). The clock only sends again; the broker's
+   answer decides. Under MQTT 3.1.1 no answer says it: such a hold lasts until the main
+   connection drops, said on ``B/bridge/info`` while it lasts (holding is the safe way).
 """
 
 from __future__ import annotations

@@ -43,8 +43,9 @@ Rules:
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
-   the rotator's targets until the main connection has caught up with it (its marker, or its
-   own copy of the halt, read on the main connection; no clock ends a hold). The decision
+   the rotator's targets until the main connection has caught up with it (its marker, read on
+   the main connection; its own copy of the halt, counted, lets what is read after it wait
+   instead of being refused: lastword.py rule 13; no clock ends a hold). The decision
    and the mailbox put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
