@@ -11,7 +11,8 @@ client's lock taken in ``on_publish`` would deadlock (docs/architecture.md).
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py; an
    optional one only in the log, rule 17) or a QoS 1 publish it will not take (PUBACK, MQTT 5;
-   e.g. 0x87 "not authorised" from an ACL) is logged as an error once per topic (until the
+   0x87 "not authorised" from an ACL; any other reason, a quota, loses that message and
+   denies nothing: logged as a warning) is logged as an error once per topic (until the
    broker is seen to take it: ``allow``), naming the topic, kept in ``problems`` and handed to
    ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
    paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
@@ -44,6 +45,7 @@ log = logging.getLogger(__name__)
 
 EVENT_BACKLOG = 50  # rule 13
 MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
+NOT_AUTHORIZED = 0x87  # rule 11: the one PUBACK reason that says the topic is denied
 MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 FAILED_LOG_S = 60.0  # rule 13
 _SUCCESS = MQTTErrorCode.MQTT_ERR_SUCCESS  # (looked up once: every publish compares with it)
@@ -102,7 +104,7 @@ class Delivery:
             if early is None and len(self._pub_topics) < MAX_UNACKED:
                 self._pub_topics[info.mid] = topic
         if early is not None:  # refused before we noted its id
-            self.deny(topic, "publish to", str(early))
+            self._refused(topic, early)
         return True
 
     def hold_event(self, topic: str, payload: str | bytes) -> None:
@@ -167,9 +169,19 @@ class Delivery:
                 self._acked_early[mid] = reason_code  # send has not noted the id yet
                 # (only a refusal: paho calls this for every QoS 0 message too, with success)
         if topic is not None and reason_code.is_failure:
-            self.deny(topic, "publish to", str(reason_code))
+            self._refused(topic, reason_code)
         if self._dirty or self._backlog:  # rule 13: the broker took one, so there is room again
             self._retry.set()  # (read without the lock: a stale answer costs one wake-up)
+
+    def _refused(self, topic: str, reason: ReasonCode) -> None:
+        """Rule 11: a PUBACK that refused a message: the topic is denied on the ACL's answer
+        alone (0x87); any other (0x97 a quota, 0x80 a busy broker) lost this message and says
+        nothing of the topic (an attack pass: two 0x97 on the resent markers were taken for
+        the ACL denying them, lastword.py rule 15)."""
+        if reason.value == NOT_AUTHORIZED:
+            self.deny(topic, "publish to", str(reason))
+        else:
+            log.warning("the MQTT broker refused a message on %s: %s", topic, reason)
 
     def deny(self, topic: str, what: str, reason: str) -> None:
         """Rule 11: once per topic."""

@@ -43,7 +43,7 @@ from collections.abc import Callable
 
 from bridge.core.afterlock import Deferring
 from bridge.core.errors import Refused
-from bridge.core.model import Lock, Origin, Source, Stop
+from bridge.core.model import Command, Lock, Origin, Source, Stop
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group
 from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, LastWord
@@ -51,6 +51,9 @@ from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import Topics
 
 log = logging.getLogger(__name__)
+
+# what to say on R/error once the lock is let go: (the rotator, why, the words refused, who)
+Said = list[tuple[RotatorPort, str, str, Origin | None]]
 
 TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
 # lastword.py rule 8's refusal, on R/error (the lock stays ON against the OFF: said, not only
@@ -94,6 +97,27 @@ LOCK_OFF_LOST = (
     "lock OFF not carried out: it waited for the main connection to catch up with a STOP or "
     "lock ON from the stop connection, and that connection dropped; the lock stays ON (send "
     "lock OFF again)"
+)
+# lastword.py rule 13: a target by call read while a lock OFF before it waits for the marker
+# (its look-up takes a place of its own: not kept behind the OFF), refused as the lock would
+AFTER_WAITING_OFF = (
+    "not carried out: the lock OFF before it waits for the main connection to catch up with a "
+    "STOP or lock ON from the stop connection, and the rotator stays locked until then; send "
+    "it again once the lock state says OFF"
+)
+# lastword.py rule 13: a move kept behind a waiting lock OFF that was not carried out
+AFTER_OFF_REFUSED = (
+    "not carried out: the lock OFF before it was not carried out (a lock ON came after it), "
+    "and the rotator is locked"
+)
+MOVE_LOST = (
+    "not carried out: it waited behind a lock OFF for the main connection to catch up with a "
+    "STOP or lock ON from the stop connection, and that connection dropped; send it again"
+)
+LOCK_OFF_SUPERSEDED = (
+    "lock OFF not carried out: it waited for the main connection to catch up with a STOP or "
+    "lock ON from the stop connection, and a lock ON published after it came meanwhile; the "
+    "lock stays ON"
 )
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
@@ -159,10 +183,17 @@ class Halts:
         self._asked: dict[str, int] = {}
         self._fenced: dict[str, int] = {}
         # lastword.py rule 13: a lock OFF read after the count copy of a lane halt, waiting
-        # under its hold for the marker: rotator -> (who sent it, the halt count read before
-        # it, the lock ONs carried out here when it was read)
-        self._waiting_off: dict[str, tuple[Origin | None, int, int]] = {}
-        self._lock_ons: dict[str, int] = {}  # lastword.py rule 13: lock ONs carried out here
+        # under its hold for the marker: rotator -> (who sent it, the lock ONs carried out
+        # when it was read); one per rotator, the newest (a setting: the last word counts)
+        self._waiting_off: dict[str, tuple[Origin | None, int]] = {}
+        # lastword.py rule 13: the lock ONs carried out, from either connection and from every
+        # other interface (``fence_carried``): one after a waiting OFF was read makes it older
+        self._lock_ons: dict[str, int] = {}
+        # lastword.py rule 13: the newest move (a target, a track or follow word) the main
+        # connection read after a waiting lock OFF, put after it at the marker: one per rotator
+        # (an attack pass: a list of every one read grew with a flood, all judged at the marker
+        # under this lock, the one a lane STOP needs)
+        self._after_off: dict[str, tuple[Command, str, Origin | None]] = {}
         self._blind_said = False  # lastword.py rule 14: logged once
         # lastword.py rule 15: a marker sent again at QoS 1, and whether the broker refused
         # both marker topics (the client's, set by the app; None: neither is known)
@@ -200,12 +231,14 @@ class Halts:
                 rot = self._rotators.get(rid)
                 if rot is not None:
                     rot.release(0, clear=True)
-            dropped = [(rid, w[0]) for rid, w in self._waiting_off.items()]
-            self._waiting_off.clear()  # (lastword.py rule 13: its place in line is lost)
-        for rid, origin in dropped:
-            rot = self._rotators.get(rid)
-            if rot is not None:
-                rot.report_refusal(LOCK_OFF_LOST, "lock OFF", origin=origin)
+            said: Said = []
+            for rid, (origin, _) in self._waiting_off.items():
+                rot = self._rotators.get(rid)
+                if rot is not None:  # (lastword.py rule 13: its place in line is lost)
+                    said.append((rot, LOCK_OFF_LOST, "lock OFF", origin))
+                    said.extend(self._after_off_said(rid, rot, MOVE_LOST))
+            self._waiting_off.clear()
+        self._say(said)
 
     def lane_connected(self) -> None:
         with self._lock:
@@ -224,7 +257,7 @@ class Halts:
         none goes out; a lane's halt holds until its main copy. The holds stay."""
         with self._lock:
             ended = self.word.markers_denied()
-            said = [said for rid, m in ended.items() for said in self._release((rid,), m)]
+            said = [one for rid, m in ended.items() for one in self._release((rid,), m)]
         self._say(said)
 
     def markers_allowed(self) -> None:
@@ -257,6 +290,10 @@ class Halts:
                 self.word.unfenced_lock(rotator_id)
             # counted once the fence is up (``fenced`` reads them the other way round)
             self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
+            if lock:  # (lastword.py rule 13: a lock OFF waiting now is older than this ON)
+                self._lock_ons[rotator_id] = self._lock_ons.get(rotator_id, 0) + 1
+            else:  # (and a move kept behind it older than this stop, dropped as a stop drops)
+                self._after_off.pop(rotator_id, None)
         if n is not None:
             self._send_marker(n)
 
@@ -282,7 +319,11 @@ class Halts:
         the look is put after the move's halt count was read, and drops it in the mailbox."""
         if self.fenced(rotator_id):
             return FENCED
-        return HELD if self.word.held(rotator_id) else None
+        if self.word.held(rotator_id):
+            return HELD
+        if rotator_id in self._waiting_off:  # lastword.py rule 13: locked until it goes
+            return AFTER_WAITING_OFF
+        return None
 
     def _lane_blind(self) -> bool:
         """lastword.py rule 14: neither connection can read the bridge's markers while the main
@@ -323,6 +364,8 @@ class Halts:
         on the steady clock (service.py rule 9)."""
         if kind == "lock":  # lastword.py rule 13: a lock OFF waiting before it is older
             self._lock_ons[rot.id] = self._lock_ons.get(rot.id, 0) + 1
+        else:  # (a move kept behind that OFF is older than this stop: dropped, as a stop drops)
+            self._after_off.pop(rot.id, None)
         halt = (
             Stop(Source.MQTT, origin, sent_s)
             if kind == "stop"
@@ -458,14 +501,17 @@ class Halts:
         if owed is not None:
             self._send_marker(owed)
 
-    def _release(
-        self, released: list[str] | tuple[str, ...], marker: int
-    ) -> list[tuple[RotatorPort, str, Origin | None]]:
+    def _release(self, released: list[str] | tuple[str, ...], marker: int) -> Said:
         """Under the lock: the holds of ``released`` up to ``marker`` end, and a lock OFF that
-        waited under one is carried out (lastword.py rule 13; not if a lock ON was carried out
-        after it was read: it was published before that ON). What to say once the lock is let
-        go is returned (``_say``)."""
-        said: list[tuple[RotatorPort, str, Origin | None]] = []
+        waited under one is carried out, then the move kept behind it (lastword.py rule 13).
+        Not the OFF if a lock ON was carried out after it was read, from anywhere, or another
+        interface's halt is under way: it may be a lock ON, and the OFF was published before
+        it (the move kept behind is then refused: the rotator stays locked). Their halt count
+        is read here, not when they were read: a STOP carried out meanwhile dropped the move
+        already and is no reason to keep the lock ON (an attack pass: a STOP published after
+        the OFF left the rotator locked), and a halt put after this look refuses them at the
+        judge. What to say once the lock is let go is returned (``_say``)."""
+        said: Said = []
         for rid in released:
             rot = self._rotators.get(rid)
             if rot is None:
@@ -474,21 +520,57 @@ class Halts:
             off = self._waiting_off.pop(rid, None)
             if off is None:
                 continue
-            origin, since, lock_ons = off
-            if lock_ons != self._lock_ons.get(rid, 0):
-                said.append((rot, LOCK_OFF_OLDER, origin))
+            origin, lock_ons = off
+            since = rot.halts  # (before the look at another interface's halt under way)
+            if lock_ons != self._lock_ons.get(rid, 0) or self.fenced(rid, lock_off=True):
+                said.append((rot, LOCK_OFF_OLDER, "lock OFF", origin))
+                said.extend(self._after_off_said(rid, rot, AFTER_OFF_REFUSED))
                 continue
             try:
                 rot.submit(Lock(False, source=Source.MQTT, origin=origin), since=since)
+            except Refused:  # (the judge said why: a lock ON came while it waited)
+                said.extend(self._after_off_said(rid, rot, AFTER_OFF_REFUSED))
+                continue
+            kept = self._after_off.pop(rid, None)
+            if kept is None:
+                continue
+            command, what, by = kept
+            if self.fenced(rid):  # (another interface's halt under way: lastword.py rule 11)
+                said.append((rot, FENCED, what, by))
+                continue
+            try:
+                rot.submit(command, what, since=since)
             except Refused:
-                pass  # (the judge said why: a lock ON came while it waited)
+                pass  # (the judge said why)
         return said
 
+    def _after_off_said(self, rid: str, rot: RotatorPort, why: str) -> Said:
+        """Under the lock: the move kept behind a lock OFF that will not go, dropped and said."""
+        kept = self._after_off.pop(rid, None)
+        return [] if kept is None else [(rot, why, kept[1], kept[2])]
+
+    def keep_after_off(
+        self, rot: RotatorPort, command: Command, what: str, origin: Origin | None
+    ) -> bool:
+        """lastword.py rule 13: a move (a target, a track or follow word) the main connection
+        reads while a lock OFF before it waits for the marker is kept, the newest only (as the
+        mailbox keeps the newest target), and put after the OFF at the marker: True. False
+        when no OFF waits (one dict look-up, without the lock: most messages), or another
+        interface's halt fences the rotator, or a newer lane halt holds it whose copy is not
+        read yet (the caller refuses it: ``stale_move``)."""
+        if rot.id not in self._waiting_off:
+            return False
+        with self._lock:
+            if rot.id not in self._waiting_off or self.stale_move(rot.id) != AFTER_WAITING_OFF:
+                return False  # (fenced, or held by a newer lane halt: refused as such)
+            self._after_off[rot.id] = (command, what, origin)
+            return True
+
     @staticmethod
-    def _say(said: list[tuple[RotatorPort, str, Origin | None]]) -> None:
-        """A lock OFF that waited and was not carried out, said once the lock is let go."""
-        for rot, why, origin in said:
-            rot.report_refusal(why, "lock OFF", origin=origin)
+    def _say(said: Said) -> None:
+        """What waited and was not carried out, said once the lock is let go."""
+        for rot, why, what, origin in said:
+            rot.report_refusal(why, what, origin=origin)
 
     def on_lane_marker(self, payload: bytes) -> None:
         """The lane read its marker (lastword.py rule 4)."""
@@ -599,8 +681,15 @@ class Halts:
             self._noted("main", rot.id, kind)
         with self._lock:
             copy = self.word.main_halt(rot.id, kind, self._clock())
+            # lastword.py rule 13: a waiting OFF read before this ON, on the same connection,
+            # is done: this ON is the later word (or the copy of the lane's, carried out first)
+            off = self._waiting_off.pop(rot.id, None) if kind == "lock" else None
             self.carry(rot, kind, what, origin=origin, echo=copy.echo, sent_s=sent_s)
             said = self._release(copy.released, copy.upto)  # lastword.py rule 9
+            if off is not None:
+                why = LOCK_OFF_OLDER if copy.echo else LOCK_OFF_SUPERSEDED
+                said.append((rot, why, "lock OFF", off[0]))
+                said.extend(self._after_off_said(rot.id, rot, AFTER_OFF_REFUSED))
         self._say(said)
         if copy.marker is not None:  # lastword.py rule 13: the holds' moves wait for it
             self._send_marker(copy.marker)
@@ -616,8 +705,8 @@ class Halts:
         fenced = self.fenced(rot.id, lock_off=True)  # lock ON put after that refuses it
         with self._lock:
             carried = not fenced and self.word.main_lock_off(rot.id)
-            if carried and self.word.waits(rot.id):  # lastword.py rule 13: for the marker
-                self._waiting_off[rot.id] = (origin, since, self._lock_ons.get(rot.id, 0))
+            if carried and self.word.off_waits(rot.id):  # lastword.py rule 13: for the marker
+                self._waiting_off[rot.id] = (origin, self._lock_ons.get(rot.id, 0))
                 return
             if carried:
                 try:
@@ -712,7 +801,7 @@ class Halts:
         lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
         lane_marker: int | None = None
         fresh: int | None = None  # lastword.py rule 13: the newest fresh marker, one for all
-        said: list[tuple[RotatorPort, str, Origin | None]] = []
+        said: Said = []
         with self._lock:
             for rot in self._members(group_id):
                 if not retain:  # (a review: as a member's own stop is)

@@ -152,18 +152,26 @@ but not the order between them. So:
    a member's). Had the copy ended the hold, a target or lock OFF published between the two
    would have gone out after the newer STOP or lock ON. So a copy, counted, ends no hold while
    markers can come: a move read before it is refused (``held``), a move read after it
-   (``waits``) is put under the hold (a target in the mailbox, which the session holds; a lock
-   OFF kept by halts.py, the lock staying ON meanwhile) and goes out when the marker comes
-   back. The broker had the lane's halt before the marker, so the halt's real copy, when the
-   count was off, is read before it and drops what waits, as any stop or lock ON drops what
-   was put before it (a lock OFF waiting is dropped by a lock ON carried out after it was
-   read, and said). A copy read while a hold is up sends a fresh marker at once, the back-off
-   started anew (``Copy.marker``): a STOP then a target back to back end at the target within
-   a broker round trip, and a hold after a flood lasts no longer than the main connection
-   takes to read it (review 23: a marker lost in the flood, its resend 30 s away). What is
-   left: a real copy lost on the main connection too (two losses) lets what waited go at the
-   marker; and while the markers cannot be read (rule 7) the count copy ends the hold as
-   before, the gap open.
+   (``waits``) is put under the hold (a target in the mailbox, which the session holds) and
+   goes out when the marker comes back. The broker had the lane's halt before the marker, so
+   the halt's real copy, when the count was off, is read before it and drops what waits, as
+   any stop or lock ON drops what was put before it. A lock OFF read under a hold with a lane
+   lock ON among its halts (``off_waits``; under a STOP's alone it goes at once) is kept by
+   halts.py, one per rotator, the lock staying ON meanwhile, and so is the newest move read
+   after it (one: a flood behind the OFF keeps nothing more, and the marker puts two
+   commands, not thousands, under the lock a lane halt needs: an attack pass); at the marker
+   the OFF goes, then that move, each judged against the halts put since the marker's look
+   (a STOP read after the OFF drops the move, never the OFF: an attack pass). A lock ON
+   carried out after the OFF was read, from anywhere, drops both, said on R/error (one read
+   on the main connection is the later word; the lane's may be). A copy read while a hold
+   is up sends a fresh marker at once, the back-off started anew (``Copy.marker``): a STOP
+   then a target back to back end at the target within a broker round trip, and a hold after
+   a flood lasts no longer than the main connection takes to read it (review 23: a marker
+   lost in the flood, its resend 30 s away). What is left: a real copy lost on the main
+   connection too (two losses) lets what waited go at the marker; while the markers cannot
+   be read (rule 7) the count copy ends the hold as before, the gap open; and a stamped move
+   (service.py rule 9) is judged against its expiry when it is read, not again when it goes
+   (review 25: with every marker lost it goes at a resend's return).
 14. While neither connection can read its markers (rule 7, and rule 4's ``echoes`` off), the
    lane carries out nothing (halts.py ``_lane_blind``): its halt could not be told from the
    echo of one the main connection carried out first, and its hold would wait for a copy
@@ -174,10 +182,15 @@ but not the order between them. So:
 15. A marker sent again (rule 5) goes at QoS 1 (halts.py ``publish_confirmed``): an ACL that
    denies both marker topics, reloaded under a live connection (mosquitto's SIGHUP keeps the
    connections, and no probe sees it), is then told by the broker itself, under MQTT 5, in
-   the PUBACK; both topics refused, the markers are known denied (rule 7), and a hold whose
-   copy was counted ends (``markers_denied``). The clock only sends again; the broker's
-   answer decides. Under MQTT 3.1.1 no answer says it: such a hold lasts until the main
-   connection drops, said on ``B/bridge/info`` while it lasts (holding is the safe way).
+   the PUBACK: 0x87, "not authorized", and no other code (delivery.py rule 11; an attack
+   pass: a quota's 0x97 on the two resent markers was taken for the ACL, which reopened rule
+   13's gap for the connection's life); both topics refused, the markers are known denied
+   (rule 7), and a hold whose copy was counted ends (``markers_denied``). The clock only
+   sends again; the broker's answer decides. Under MQTT 3.1.1 no answer says it, nor under
+   MQTT 5 when the ACL denies reading the marker topics only (the broker takes the PUBACK and
+   the SUBSCRIBE, and delivers nothing: review 25): such a hold lasts until the main
+   connection drops, said on ``B/bridge/info`` while it lasts (holding is the safe way), and
+   what waits under it waits that long.
 """
 
 from __future__ import annotations
@@ -218,6 +231,9 @@ class LastWord:
     # rule 13: the held rotators whose hold's own lane halt has had its main copy counted: their
     # moves wait under the hold (for its marker) instead of being refused
     _copied: set[str] = field(default_factory=set)
+    # rule 13: the held rotators whose hold has a lane lock ON among its halts: a lock OFF the
+    # main connection reads under it waits for the marker (under a STOP's alone, it goes)
+    _hold_locks: set[str] = field(default_factory=set)
     _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
     _marker_sent_at: dict[int, float] = field(
         default_factory=dict
@@ -257,6 +273,8 @@ class LastWord:
         n = self._next
         self._holds[rotator_id] = n
         self._copied.discard(rotator_id)  # rule 13: a new halt, its copy not read yet
+        if kind == "lock":
+            self._hold_locks.add(rotator_id)
         self._held_since.setdefault(rotator_id, now)
         if self.markers:
             self._marker_sent_at[n] = now
@@ -390,9 +408,16 @@ class LastWord:
         return rotator_id in self._holds and rotator_id not in self._copied
 
     def waits(self, rotator_id: str) -> bool:
-        """Rule 13: whether a move (a lock OFF) the main connection reads now for this rotator
-        waits under a hold for its marker, rather than going now."""
+        """Rule 13: whether a move the main connection reads now for this rotator waits under
+        a hold for its marker, rather than going now."""
         return rotator_id in self._holds
+
+    def off_waits(self, rotator_id: str) -> bool:
+        """Rule 13: whether a lock OFF the main connection reads now for this rotator waits
+        for the marker: under a hold with a lane lock ON among its halts (the lane may have
+        lost an older ON that the main connection counted as this one's copy, and this OFF
+        was published before the lane's ON). Under a STOP's hold alone it goes at once."""
+        return rotator_id in self._holds and rotator_id in self._hold_locks
 
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""
@@ -434,6 +459,7 @@ class LastWord:
         for rid in released:
             del self._holds[rid]
             self._copied.discard(rid)
+            self._hold_locks.discard(rid)
             self._held_since.pop(rid, None)
         return released
 
@@ -443,6 +469,7 @@ class LastWord:
         the lane's present one did."""
         released = list(self._holds)
         self._copied.clear()
+        self._hold_locks.clear()
         # rule 12: a lock fence the lane's lock OFFs are not ordered against from now on
         self._unfenced_locks = {rid for rid, (_, lock) in self._fences.items() if lock}
         self._holds.clear()
@@ -467,6 +494,7 @@ class LastWord:
         ended = {rid: m for rid, m in self._holds.items() if rid in self._copied}
         for rid in ended:
             del self._holds[rid]
+            self._hold_locks.discard(rid)
             self._held_since.pop(rid, None)
         self._copied.clear()
         return ended

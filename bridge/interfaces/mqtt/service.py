@@ -117,6 +117,7 @@ from bridge.core.model import (
     Command,
     ErrorEvent,
     ErrorKind,
+    FollowQso,
     GoToPreset,
     MotionState,
     Nudge,
@@ -130,6 +131,7 @@ from bridge.core.model import (
     TakePath,
     Target,
     Toward,
+    TrackBody,
     setting_text,
     turns_rotor,
     valid_operator,
@@ -747,6 +749,13 @@ class MqttService:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
+        if (
+            command is not None
+            and not isinstance(command, Called)
+            and (isinstance(command, TrackBody | FollowQso) or turns_rotor(command))
+            and self._halts.keep_after_off(rot, command, what, by)
+        ):
+            return  # lastword.py rule 13: behind a lock OFF that waits for its marker
         since = None
         if isinstance(command, Called) or (command is not None and turns_rotor(command)):
             since = rot.halts  # rule 11: read before the fence is asked
