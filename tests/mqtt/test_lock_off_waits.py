@@ -7,8 +7,8 @@ from bridge.core.model import Lock, Source, Stop, Target
 from bridge.interfaces.mqtt.halts import (
     AFTER_OFF_REFUSED,
     FENCED,
+    LOCK_OFF_FENCED,
     LOCK_OFF_LOST,
-    LOCK_OFF_OLDER,
     MOVE_LOST,
 )
 from tests.mqtt.test_review22_lost_lane_copy import controller, markers_back
@@ -58,7 +58,7 @@ def test_another_interfaces_lock_on_while_the_off_waits_keeps_the_lock_on() -> N
     moved = [c for c in tower.calls if c[0] == "submit" and isinstance(c[1], Target)]
     assert not moved and controller(tower.calls)[1] is True, tower.calls
     assert _refused(tower.calls) == [
-        (LOCK_OFF_OLDER, "lock OFF"),
+        (LOCK_OFF_FENCED, "lock OFF"),
         (AFTER_OFF_REFUSED, "target '250'"),
     ]
 
@@ -85,7 +85,7 @@ def test_another_interfaces_halt_under_way_at_the_marker_keeps_the_lock_on() -> 
     svc.fence_asked("tower")  # asked, not yet put: it may be a lock ON
     markers_back(svc, pub)
     assert controller(tower.calls) == ([], True), tower.calls
-    assert _refused(tower.calls)[0] == (LOCK_OFF_OLDER, "lock OFF")
+    assert _refused(tower.calls)[0] == (LOCK_OFF_FENCED, "lock OFF")
 
 
 def test_the_main_connection_dropping_says_both_lost() -> None:

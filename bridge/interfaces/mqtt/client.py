@@ -650,7 +650,7 @@ class MqttClient(Connection):
         self._hello_back = True
         look = self._look
         if look is not None:  # (lastword.py rule 15: a refusal a marker's PUBACK said is over)
-            self._delivery.allow(look.claim.hello_topic)
+            self._fence_back(look.claim.hello_topic)  # (and said over: a review)
         self._markers_readable(True)
 
     def _markers_lost(self) -> None:

@@ -12,8 +12,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py; an
    optional one only in the log, rule 17) or a QoS 1 publish it will not take (PUBACK, MQTT 5;
    0x87 "not authorised" from an ACL; any other reason, a quota, loses that message and
-   denies nothing: logged as a warning) is logged as an error once per topic (until the
-   broker is seen to take it: ``allow``), naming the topic, kept in ``problems`` and handed to
+   denies nothing: logged as a warning at most once in FAILED_LOG_S) is logged as an error
+   once per topic (until the broker is seen to take it: ``allow``), naming the topic, kept
+   in ``problems`` and handed to
    ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
    paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
    cannot see it.
@@ -79,6 +80,8 @@ class Delivery:
         self._retry = threading.Event()  # rule 13: set when the broker has room again
         self._failed_said_at = -FAILED_LOG_S
         self.failed_publishes = 0
+        self._refused_said_at = -FAILED_LOG_S  # rule 11: a refusal that denies nothing
+        self.refused_publishes = 0
 
     # -- under the client's lock ----------------------------------------------------------
     def send(self, topic: str, data: str | bytes, qos: int, *, retain: bool) -> bool:
@@ -180,8 +183,17 @@ class Delivery:
         the ACL denying them, lastword.py rule 15)."""
         if reason.value == NOT_AUTHORIZED:
             self.deny(topic, "publish to", str(reason))
-        else:
-            log.warning("the MQTT broker refused a message on %s: %s", topic, reason)
+            return
+        self.refused_publishes += 1  # (said once in FAILED_LOG_S, as rule 13's: a quota
+        now = self._clock()  # refuses every message while it lasts; a review)
+        if now - self._refused_said_at >= FAILED_LOG_S:
+            self._refused_said_at = now
+            log.warning(
+                "the MQTT broker refused a message on %s: %s (%d refused so far)",
+                topic,
+                reason,
+                self.refused_publishes,
+            )
 
     def deny(self, topic: str, what: str, reason: str) -> None:
         """Rule 11: once per topic."""

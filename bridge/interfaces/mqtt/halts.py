@@ -43,7 +43,17 @@ from collections.abc import Callable
 
 from bridge.core.afterlock import Deferring
 from bridge.core.errors import Refused
-from bridge.core.model import Command, Lock, Origin, Source, Stop
+from bridge.core.model import (
+    Command,
+    FollowQso,
+    Lock,
+    Origin,
+    Source,
+    Stop,
+    Target,
+    TrackBody,
+    turns_rotor,
+)
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group
 from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, LastWord
@@ -126,6 +136,14 @@ LOCK_OFF_OLDER = (
 )
 
 
+def _ends(off: Command, kept: Command) -> bool:
+    """lastword.py rule 13: whether a tracking or following OFF ends the move kept behind a
+    waiting lock OFF, as the mailbox's order would (mailbox.py rules 2 and 9)."""
+    if isinstance(off, TrackBody):
+        return isinstance(kept, TrackBody | Target)
+    return isinstance(off, FollowQso) and isinstance(kept, FollowQso)
+
+
 def switch_on(payload: bytes) -> bool:
     try:
         return pl.parse_switch(payload)
@@ -184,11 +202,14 @@ class Halts:
         self._fenced: dict[str, int] = {}
         # lastword.py rule 13: a lock OFF read after the count copy of a lane halt, waiting
         # under its hold for the marker: rotator -> (who sent it, the lock ONs carried out
-        # when it was read); one per rotator, the newest (a setting: the last word counts)
-        self._waiting_off: dict[str, tuple[Origin | None, int]] = {}
+        # before it was read: ``_lock_ons``, ``_other_lock_ons``); one per rotator, the newest
+        # (a setting: the last word counts)
+        self._waiting_off: dict[str, tuple[Origin | None, int, int]] = {}
         # lastword.py rule 13: the lock ONs carried out, from either connection and from every
-        # other interface (``fence_carried``): one after a waiting OFF was read makes it older
+        # other interface (``fence_carried``, counted apart too, for the words that say it):
+        # one after a waiting OFF was read makes it older
         self._lock_ons: dict[str, int] = {}
+        self._other_lock_ons: dict[str, int] = {}
         # lastword.py rule 13: the newest move (a target, a track or follow word) the main
         # connection read after a waiting lock OFF, put after it at the marker: one per rotator
         # (an attack pass: a list of every one read grew with a flood, all judged at the marker
@@ -232,7 +253,7 @@ class Halts:
                 if rot is not None:
                     rot.release(0, clear=True)
             said: Said = []
-            for rid, (origin, _) in self._waiting_off.items():
+            for rid, (origin, _, _) in self._waiting_off.items():
                 rot = self._rotators.get(rid)
                 if rot is not None:  # (lastword.py rule 13: its place in line is lost)
                     said.append((rot, LOCK_OFF_LOST, "lock OFF", origin))
@@ -292,6 +313,7 @@ class Halts:
             self._fenced[rotator_id] = self._fenced.get(rotator_id, 0) + 1
             if lock:  # (lastword.py rule 13: a lock OFF waiting now is older than this ON)
                 self._lock_ons[rotator_id] = self._lock_ons.get(rotator_id, 0) + 1
+                self._other_lock_ons[rotator_id] = self._other_lock_ons.get(rotator_id, 0) + 1
             else:  # (and a move kept behind it older than this stop, dropped as a stop drops)
                 self._after_off.pop(rotator_id, None)
         if n is not None:
@@ -520,10 +542,12 @@ class Halts:
             off = self._waiting_off.pop(rid, None)
             if off is None:
                 continue
-            origin, lock_ons = off
+            origin, lock_ons, others = off
             since = rot.halts  # (before the look at another interface's halt under way)
-            if lock_ons != self._lock_ons.get(rid, 0) or self.fenced(rid, lock_off=True):
-                said.append((rot, LOCK_OFF_OLDER, "lock OFF", origin))
+            other = others != self._other_lock_ons.get(rid, 0) or self.fenced(rid, lock_off=True)
+            if other or lock_ons != self._lock_ons.get(rid, 0):
+                why = LOCK_OFF_FENCED if other else LOCK_OFF_OLDER  # (the words: a review)
+                said.append((rot, why, "lock OFF", origin))
                 said.extend(self._after_off_said(rid, rot, AFTER_OFF_REFUSED))
                 continue
             try:
@@ -552,9 +576,12 @@ class Halts:
     def keep_after_off(
         self, rot: RotatorPort, command: Command, what: str, origin: Origin | None
     ) -> bool:
-        """lastword.py rule 13: a move (a target, a track or follow word) the main connection
+        """lastword.py rule 13: a move (a target, a track or follow start) the main connection
         reads while a lock OFF before it waits for the marker is kept, the newest only (as the
-        mailbox keeps the newest target), and put after the OFF at the marker: True. False
+        mailbox keeps the newest target), and put after the OFF at the marker: True. A
+        tracking or following OFF is not kept (False: it goes now) and drops a kept start
+        it ends, as the mailbox would (a track OFF a target or track start; a follow OFF a
+        follow start: a review, a follow OFF took the kept target's place). False
         when no OFF waits (one dict look-up, without the lock: most messages), or another
         interface's halt fences the rotator, or a newer lane halt holds it whose copy is not
         read yet (the caller refuses it: ``stale_move``)."""
@@ -563,6 +590,11 @@ class Halts:
         with self._lock:
             if rot.id not in self._waiting_off or self.stale_move(rot.id) != AFTER_WAITING_OFF:
                 return False  # (fenced, or held by a newer lane halt: refused as such)
+            if not turns_rotor(command):  # tracking or following OFF: it goes now (nothing
+                kept = self._after_off.get(rot.id)  # tracks under the lock), and ends a
+                if kept is not None and _ends(command, kept[0]):  # start kept of its kind
+                    del self._after_off[rot.id]  # (mailbox.py rules 2 and 9; a review)
+                return False
             self._after_off[rot.id] = (command, what, origin)
             return True
 
@@ -702,11 +734,14 @@ class Halts:
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
         since = rot.halts  # lastword.py rule 11: read before the fence is asked, so that a
-        fenced = self.fenced(rot.id, lock_off=True)  # lock ON put after that refuses it
+        # lock ON put after that refuses it; and the lock ONs counted before it too (rule 13:
+        # one carried out between the look and the lock is after the snapshot; a review)
+        lock_ons = self._lock_ons.get(rot.id, 0), self._other_lock_ons.get(rot.id, 0)
+        fenced = self.fenced(rot.id, lock_off=True)
         with self._lock:
             carried = not fenced and self.word.main_lock_off(rot.id)
             if carried and self.word.off_waits(rot.id):  # lastword.py rule 13: for the marker
-                self._waiting_off[rot.id] = (origin, self._lock_ons.get(rot.id, 0))
+                self._waiting_off[rot.id] = (origin, *lock_ons)
                 return
             if carried:
                 try:
