@@ -163,7 +163,11 @@ class MqttClient(Connection):
         c.will_set(will_topic, b"offline", qos=1, retain=True)  # rule 2
         c.max_queued_messages_set(MAX_QUEUED)  # rule 13
         self._delivery = Delivery(
-            c, username=settings.username, report=self._report_denied, clock=clock
+            c,
+            username=settings.username,
+            report=self._report_denied,
+            clock=clock,
+            allowed=self._report_allowed,  # (its own thread: rule 16's words)
         )
         c.on_publish = self._delivery.on_publish
         self._owned = OwnedTopics(clock, hears_own=not self._v5)  # rule 10

@@ -13,7 +13,8 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    optional one only in the log, rule 17) or a QoS 1 publish it will not take (PUBACK, MQTT 5;
    0x87 "not authorised" from an ACL; any other reason, a quota, loses that message and
    denies nothing: logged as a warning at most once in FAILED_LOG_S) is logged as an error
-   once per topic (until the broker is seen to take it: ``allow``), naming the topic, kept
+   once per topic (until the broker is seen to take it: ``allow``, a probe back or a PUBACK
+   that took a QoS 1 message on it, then said through ``allowed``), naming the topic, kept
    in ``problems`` and handed to
    ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
    paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
@@ -60,8 +61,11 @@ class Delivery:
         username: str | None,
         report: Callable[[str, str], None],
         clock: Callable[[], float],
+        allowed: Callable[[str], None] | None = None,
     ) -> None:
-        """``report(topic, problem)``: rule 11's hand-off, called on a thread of its own."""
+        """``report(topic, problem)``: rule 11's hand-off, called on a thread of its own;
+        ``allowed(topic)``: a denied topic the broker took again (a PUBACK), the same way."""
+        self._allowed = allowed
         self._client = client
         # paho_client.py rule 9, where the client has it (our own connections' do)
         self._publish_qos0: Callable[[str, bytes, bool], MQTTErrorCode] | None = getattr(
@@ -173,6 +177,9 @@ class Delivery:
                 # (only a refusal: paho calls this for every QoS 0 message too, with success)
         if topic is not None and reason_code.is_failure:
             self._refused(topic, reason_code)
+        elif topic is not None and topic in self._denied and self.allow(topic):  # (rule 11:
+            if self._allowed is not None:  # taken after all, its ACL changed back; said on a
+                threading.Thread(target=self._allowed, args=(topic,), daemon=True).start()
         if self._dirty or self._backlog:  # rule 13: the broker took one, so there is room again
             self._retry.set()  # (read without the lock: a stale answer costs one wake-up)
 

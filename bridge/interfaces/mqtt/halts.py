@@ -56,7 +56,7 @@ from bridge.core.model import (
 )
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group
-from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, LastWord
+from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, LastWord
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import Topics
 
@@ -216,6 +216,9 @@ class Halts:
         # under this lock, the one a lane STOP needs)
         self._after_off: dict[str, tuple[Command, str, Origin | None]] = {}
         self._blind_said = False  # lastword.py rule 14: logged once
+        # lastword.py rule 15: when a marker sent again was last asked of the broker while it
+        # refuses them on a live connection (None: not refused so)
+        self._refused_at: float | None = None
         # lastword.py rule 15: a marker sent again at QoS 1, and whether the broker refused
         # both marker topics (the client's, set by the app; None: neither is known)
         self.publish_confirmed: Callable[[str, str], None] | None = None
@@ -248,6 +251,7 @@ class Halts:
         """The main connection dropped, or is new (before its first message): holds end with
         clearing (lastword.py rule 5)."""
         with self._lock:
+            self._refused_at = None  # (lastword.py rule 15: the next connection's look asks)
             for rid in self.word.main_gone():
                 rot = self._rotators.get(rid)
                 if rot is not None:
@@ -285,7 +289,10 @@ class Halts:
         """The hello or the probe came back on a new connection: markers go out again
         (lastword.py rule 7)."""
         with self._lock:
-            self.word.markers_allowed()
+            self._refused_at = None  # (lastword.py rule 15: asked no more)
+            n = self.word.markers_allowed(self._clock())
+        if n is not None:  # (a hold put while they were off, or the lane's: rule 9)
+            self._send_marker(n)
 
     def lane_markers_denied(self) -> None:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
@@ -418,7 +425,7 @@ class Halts:
     def _arm(self) -> None:
         """One timer at most looks again in TICK_S while there is something to look at."""
         with self._lock:
-            busy = self.word.holding or self.word.markers_out or self._said
+            busy = self.word.holding or self.word.markers_out or self._said or self._refused_at
             if self._timer is not None or not busy or self._stopped:
                 return
             timer = self._timer = threading.Timer(TICK_S, self._tick)
@@ -446,8 +453,12 @@ class Halts:
         """lastword.py rule 5: a marker the broker dropped is sent again (a new number); rule
         11: a fence's marker that waited for room goes once there is room."""
         with self._lock:
-            n = self.word.resend_due(self._clock())
-            owed = self.word.owed_fence(self._clock())
+            now = self._clock()
+            n = self.word.resend_due(now)
+            owed = self.word.owed_fence(now)
+            if self._refused_at is not None and now - self._refused_at >= RESEND_MAX_S:
+                self._refused_at = now  # (lastword.py rule 15: asked again while refused)
+                n = self.word.probe()
         if n is not None:
             log.info("a marker of the stop lane did not come back yet; sending another")
             self._publish_marker(n, confirmed=True)
@@ -459,7 +470,14 @@ class Halts:
         topics (its ACL changed under the live connection): the markers cannot come back."""
         refused = self.markers_refused
         topics = (self.topics.bridge_fence, self.topics.bridge_hello)
-        if refused is None or not self.word.markers or not refused(topics):
+        if refused is None:
+            return
+        if self._refused_at is not None:  # known refused: a marker sent again since, taken
+            if not refused(topics):  # on a topic, says the ACL changed back (an attack pass)
+                log.warning("the MQTT broker takes the bridge's markers again")
+                self.markers_allowed()
+            return
+        if not self.word.markers or not refused(topics):
             return
         log.warning(
             "the MQTT broker refuses the bridge's markers on %s and %s (its ACL changed?): a "
@@ -467,6 +485,8 @@ class Halts:
             *topics,
         )
         self.markers_denied()
+        with self._lock:
+            self._refused_at = self._clock()
 
     def say_long_holds(self) -> None:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
@@ -668,6 +688,8 @@ class Halts:
                 why = late() if not hears else LOCK_OFF_SUBSCRIBING
                 if why is None and (under_way or self.word.lane_lock_off_unordered(rotator_id)):
                     why = LOCK_OFF_UNORDERED  # lastword.py rule 12
+                if why is None and self.word.lane_behind(rotator_id, "lock"):
+                    why = LOCK_OFF_OLDER  # lastword.py rule 3: the lane has a main ON to read
                 if why is None:
                     what = pl.describe(kind, payload)
                     try:

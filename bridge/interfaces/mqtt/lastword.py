@@ -29,7 +29,8 @@ but not the order between them. So:
    5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one
-   (but rule 12).
+   (but rule 12; and not while the lane has yet to read its copy of a lock ON the main
+   connection carried out, rule 4's note, ``lane_behind``: the OFF was published before it).
 4. The main connection may read a halt before the lane does (both are idle and race). The lane's
    copy, carried out late, would stop a target published after it and already on its way. So
    when the main connection carries out a halt the lane had no copy of waiting, the bridge
@@ -360,6 +361,15 @@ class LastWord:
         """Rule 12: another interface's lock ON no fence orders (the main connection down)."""
         self._unfenced_locks.add(rotator_id)
 
+    def lane_behind(self, rotator_id: str, kind: str) -> bool:
+        """Rule 3: whether the lane has yet to read its copy of a halt of this ``kind`` the main
+        connection carried out (rule 4's note): what it reads before that copy was published
+        before that halt, so a lock OFF it reads now is older than the main connection's lock
+        ON (an attack pass: the lane behind a flood of stops, the main connection carried OFF
+        then ON and dropped; the lane's OFF, read then as the only word, unlocked the rotator
+        under a climber, and its ON was dropped as the echo)."""
+        return bool(self._echoes.get((rotator_id, kind)))
+
     def lane_lock_off_unordered(self, rotator_id: str) -> bool:
         """Rule 12: whether a lock OFF the lane would carry out (rule 3) may be older than
         another interface's lock ON that nothing orders it against."""
@@ -499,11 +509,24 @@ class LastWord:
         self._copied.clear()
         return ended
 
-    def markers_allowed(self) -> None:
-        """Rule 7: the hello or the probe came back on a new connection: markers go out again
-        (for the halts from now on; one held before this waits for its main copy, or for the
-        next marker)."""
+    def markers_allowed(self, now: float) -> int | None:
+        """Rule 7: the hello or the probe came back on a new connection: markers go out again,
+        and one now (its number returned, to publish) when a hold is up or the lane's
+        subscription waits for one (rule 9): a hold put while they were off had no marker,
+        and its copy, not counted before the lane's marker, would never end it (an attack
+        pass: every target refused for the connection's life)."""
         self.markers = True
+        if not self._holds and not (NOT_YET != self._lane_sub > self._main_past):
+            return None
+        self._next += 1
+        self._marker_sent_at[self._next] = now
+        return self._next
+
+    def probe(self) -> int:
+        """Rule 15: a marker's number to ask the broker with while it refuses them (none is
+        out: its PUBACK, not its return, says whether the ACL changed back)."""
+        self._next += 1
+        return self._next
 
     def resend_due(self, now: float) -> int | None:
         """Rule 5: a new marker to publish when the oldest out has waited its turn (RESEND_S,
