@@ -724,15 +724,17 @@ class Rotator:
         ``last_halt_s`` is now, ``halted_s`` the latest of the halts' send times, a stamped
         one's never later than it came (a sender's clock ahead cannot make older moves look
         stale for ever, nor a stamp in the past make the halts before it count less); with
-        it, that halt's stamp (``SentAt.unix``), which a move's stamp is compared with
-        (interfaces/mqtt/service.py rule 9). Of two stamped halts the later is the later
-        stamp (on the steady clock the two could swap by a moment the thread lost)."""
+        it, that halt's stamp (``SentAt.unix``) as it came, which a move's stamp is compared
+        with (interfaces/mqtt/service.py rule 9). A stamp ahead of when it came (a fast clock,
+        up to heartbeat.py's AHEAD_S) is not clamped: that clock's move sent before this STOP
+        is stamped before it and refused (review 28), and a right clock's move sent in the
+        moment after is refused too, the safe side: the two cannot be told apart (review 26
+        asked the other way). Of two stamped halts the later is the later stamp (on the
+        steady clock the two could swap by a moment the thread lost)."""
         now = time.monotonic()
         self.last_halt_s = now
         sent = now if sent_s is None or not sent_s < now else sent_s
         unix = sent_s.unix if isinstance(sent_s, SentAt) else None  # (its stamp: one clock)
-        if unix is not None and sent_s is not None and sent_s > now:  # (stamped ahead: its
-            unix -= sent_s - now  # stamp no later than it came, as its steady time; review 26)
         with self._halted_lock:
             halted_s, halted_unix = self.halted
             if unix is not None and halted_unix is not None:  # (two stamps: by their clock)

@@ -303,6 +303,12 @@ def test_a_halt_keeps_its_stamp_and_of_two_stamped_halts_the_later_stamp_is_the_
     assert rot.halted[0] >= now and rot.halted[1] is None
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 28's policy: a halt stamped ahead refuses moves from a right clock for up "
+    "to 1 s; the station cannot tell it from a fast-clocked sender's older move; refusing is "
+    "the safe side (tests/mqtt/test_review28_halt_ahead.py)",
+)
 def test_a_halt_stamped_ahead_keeps_no_stamp_later_than_when_it_came(bench: Bench) -> None:
     """Review 26: ``_halted`` puts a halt stamped later than it came at when it came on the
     steady clock (a sender's clock ahead: heartbeat.py rule 8, the test above), but keeps its

@@ -17,11 +17,19 @@ import threading
 import time
 from types import SimpleNamespace
 
+import pytest
+
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.runtime.rotator import Rotator
 from tests.mqtt.test_service import NOW_UNIX, service
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 28's policy: a halt stamped ahead refuses moves from a right clock for up "
+    "to 1 s; the station cannot tell it from a fast-clocked sender's older move; refusing is "
+    "the safe side (tests/mqtt/test_review28_halt_ahead.py)",
+)
 def test_a_move_sent_after_a_stop_stamped_ahead_is_not_refused_as_before_it() -> None:
     svc, _pub, _rots = service({"tower": "rotorez"}, station="st1")
     judge = SimpleNamespace(

@@ -19,18 +19,11 @@ import math
 import threading
 from types import SimpleNamespace
 
-import pytest
-
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.runtime.rotator import Rotator
 from tests.mqtt.test_service import NOW_UNIX, service
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 28: _halted clamps a halt's stamp ahead to its arrival; a move its fast "
-    "clock stamped before that STOP passes as after it",
-)
 def test_a_move_sent_before_a_stop_by_the_same_fast_clock_is_refused_after_it() -> None:
     svc, _pub, _rots = service({"tower": "rotorez"}, station="st1")
     judge = SimpleNamespace(
