@@ -11,19 +11,12 @@ rule 6 says it goes after the STOP.
 
 from __future__ import annotations
 
-import pytest
-
 from tests.remote.test_attack5_floor_other_front_end import _link, _sent
 
 BASE = 1_700_000_000.0
 AFTER = ("rotor/stop", "rotor/lock")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 28: the halts kept are sent again stamped after the move's stamp was made: "
-    "the move that goes right after them is stamped before them, refused at the station",
-)
 def test_a_move_sent_right_after_a_kept_stop_is_not_stamped_before_it() -> None:
     clock, link, fake = _link()
     t0 = clock.t

@@ -66,13 +66,25 @@ Rules:
    on one of its ``after`` topics (its rotator's stop and lock) went out with from the move's
    own source (``reader``: its connection or port, which orders its own bytes: ``P 300``,
    ``S``, ``P 200`` read in one go ends at 200; none said, none: a command stamped when it
-   is sent, the console's, needs none, that stamp never goes back), or that went out again
-   (a kept halt, stamped when sent again: asked before any move after it): so a move is
-   lifted at most to its own source's last halt's seen time, never to that halt's send time
-   (a review: ``S`` then ``P`` read late behind a STOP from Home Assistant, the ``P`` lifted
-   to the ``S``'s send time, turned the rotor), and never to another source's halt (an
-   attack pass: Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen at 9 s, was
-   lifted to 9 s and turned the rotor after it). Every stamp is its millisecond's start. The
+   is sent, the console's, needs none, that stamp never goes back): so a move is lifted at
+   most to its own source's last halt's seen time, never to that halt's send time (a review:
+   ``S`` then ``P`` read late behind a STOP from Home Assistant, the ``P`` lifted to the
+   ``S``'s send time, turned the rotor), and never to another source's halt (an attack pass:
+   Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen at 9 s, was lifted to 9 s
+   and turned the rotor after it). A kept halt sent again (rule 6) is stamped with when it
+   was last asked (``_halt_seen``: its seen time, or its send time for one sent without;
+   the same halt pressed again while kept counts from the last press), by the reckoning of
+   the moment it goes again (at a beat, that beat's, heard first under the send lock), and
+   its stamp's ``expiry`` lengthened by the time it was kept, for the station to take it as
+   sent then (service.py's HALT_STAMP_MAX_S); so a move seen before it stays before it and
+   one seen after it, read before or after it goes again, does not (review 28: stamped when
+   sent again and lifting every source's moves to that, it lifted Gpredict's ``P`` seen
+   before PstRotator's STOP past that STOP and a Home Assistant STOP; and a move sent right
+   after the kept halts went ahead of it was stamped before them). Kept over
+   AGAIN_SEEN_MAX_S (the station would count its stamp from when it came) it is stamped
+   when sent again, and a move seen before that is refused, the safe side; with no
+   reckoning yet (on reconnect, before a beat), it goes as it was. It is noted for its own
+   source as when first sent. Every stamp is its millisecond's start. The
    sources noted are the last HALT_READERS (a program opening a connection per STOP would
    else grow them without end, each keeping its connection); a source forgotten lifts
    nothing, so its next move may at worst be refused, never let through.
@@ -87,6 +99,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import socket
 import ssl
 import struct
@@ -106,6 +119,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.connection import LOGIN_REFUSED, TAKEOVER_FIRST_S, Connection
 from bridge.interfaces.mqtt.heartbeat import EXPIRY as STAMP_EXPIRY
 from bridge.interfaces.mqtt.heartbeat import (
+    MAX_EXPIRY_S,
     NAMELESS,
     SENT,
     STATION,
@@ -120,7 +134,7 @@ log = logging.getLogger(__name__)
 
 COMMAND_QOS = 1  # rule 2
 ACK_WAIT_S = 1.0  # rule 7
-_AGAIN: Hashable = object()  # rule 8: the source a kept halt sent again is noted as
+AGAIN_SEEN_MAX_S = 30.0  # rule 8: a halt kept longer is stamped when sent again
 HALT_READERS = 256  # rule 8: the sources whose last halt's stamp is kept
 NOT_CONNECTED = "not connected to the station's broker"
 NOT_HEARD = (
@@ -173,6 +187,9 @@ class RemoteLink(Connection):
         self._unheard: list[tuple[str, bytes, Properties]] = []
         # rule 8: the latest stamp a halt went out with, by topic (its time, its station)
         self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
+        # rule 8: each halt's latest asking (its topic, payload): when it was seen, its source
+        self._halt_seen: dict[tuple[str, bytes], tuple[float, Hashable | None]] = {}
+        self._clock = clock
         self.station_clock = StationClock(clock)  # rule 8
         self._ack_wait_s = ack_wait_s
         self._acks = threading.Condition()  # rule 7: PUBACKs, the connection's generation
@@ -220,6 +237,9 @@ class RemoteLink(Connection):
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
         with self._send_lock:
+            if halt:  # rule 8: sent again, stamped with when it was (last) seen
+                seen = self._clock() if seen_s is None else seen_s
+                self._halt_seen[topic, payload.encode()] = seen, reader
             if not self.up and halt:  # down, or being reset: rule 6
                 props.UserProperty = [("operator", operator)]
                 self._keep(topic, payload.encode(), props)
@@ -228,8 +248,7 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
             # rule 8: a halt's if it has one; when it was seen, if that is said; a move's
             # never before its rotator's last halt's
-            readers = (_AGAIN,) if reader is None else (reader, _AGAIN)  # (None: unknown)
-            keys = [(t, k) for t in after for k in readers]
+            keys = [] if reader is None else [(t, reader) for t in after]  # (None: unknown)
             latest = [self._halt_stamps[k] for k in keys if k in self._halt_stamps]
             floor = None if halt else max(latest, default=None)
             stamped = self.station_clock.stamp(expiry_s, seen_s, floor)
@@ -375,15 +394,16 @@ class RemoteLink(Connection):
             self._publish_unawaited(topic, payload, props)
         self._unheard = held
 
-    def _resend_unheard(self, beat: tuple[float, str | None] | None = None) -> None:
-        """Rule 6, paho's thread at a live heartbeat, before the station's clock is reckoned
-        from it (rule 8: no other command can be stamped before these go); ``beat``: its time,
-        which the station's clock has passed, and the process it names (rule 8)."""
+    def _resend_unheard(self, beat: float, station: str | None) -> None:
+        """Rule 6, paho's thread at a live heartbeat (``beat``: its time; ``station``: the
+        process it names), the station's clock reckoned from it first, under the send lock
+        (rule 8: no other command can be stamped before these go)."""
         with self._send_lock:
+            self.station_clock.heard(beat, station)
             unheard, self._unheard = self._unheard, []
             for topic, payload, props in unheard:
                 log.warning("%s sent again now that the station's bridge is heard", topic)
-                self._publish_unawaited(topic, payload, _stamped(props, beat))
+                self._publish_unawaited(topic, payload, props)
 
     def _send_unheard_before(self, topic: str, *, moves: bool) -> None:
         """Rule 6: a command asked after the halts kept for the station's return goes after
@@ -393,26 +413,39 @@ class RemoteLink(Connection):
         a lock OFF) they stay kept for the station's first heartbeat: that command may go to
         nobody as they did, and it ends no halt's wait."""
         unheard, self._unheard = self._unheard, []
-        stamp = self.station_clock.reckon()  # (rule 8: as the command after them is)
         for kept in unheard:
             kept_topic, payload, props = kept
             if kept_topic != topic:
                 log.warning("%s sent again before a later command", kept_topic)
-                self._publish_unawaited(kept_topic, payload, _stamped(props, stamp))
+                self._publish_unawaited(kept_topic, payload, props)
                 if not moves:
                     self._unheard.append(kept)
 
     def _publish_unawaited(self, topic: str, payload: bytes, props: Properties) -> None:
-        """A kept halt sent (caller holds _send_lock): nobody waits for its PUBACK."""
+        """A kept halt sent again (caller holds _send_lock): nobody waits for its PUBACK.
+        Rule 8: stamped with when it was last asked (seen), as its source's moves are, by the
+        reckoning now; its stamp's ``expiry`` lengthened by the time it was kept, so that the
+        station takes it as sent then (up to its HALT_STAMP_MAX_S); kept longer than
+        AGAIN_SEEN_MAX_S, stamped now; with no reckoning, as it was. Noted for its source."""
+        seen, reader = self._halt_seen.get((topic, payload), (None, None))
+        now = self._clock()
+        if seen is not None and not 0.0 <= now - seen <= AGAIN_SEEN_MAX_S:
+            seen = None  # (the station would count it from when it came: stamped now)
+        expiry = int(getattr(props, "MessageExpiryInterval", 0))  # (paho's: set dynamically)
+        kept_s = 0 if seen is None else math.ceil(now - seen)
+        stamp = self.station_clock.stamp(min(expiry + kept_s, MAX_EXPIRY_S), seen)
+        if stamp is not None:
+            props = _stamped(props, stamp)
         info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
-        self._note_halt(topic, props, _AGAIN)  # (stamped when sent again: every move after it)
+        if reader is not None:
+            self._note_halt(topic, props, reader)
         with self._acks:
             self._unawaited.add(info.mid)
 
     def _note_halt(self, topic: str, props: Properties, reader: Hashable | None) -> None:
-        """Rule 8: the latest stamp a halt on ``topic`` from ``reader`` (its source; _AGAIN: a
-        kept halt sent again) went out with, if any (caller holds _send_lock): no move of that
-        source (of any, for _AGAIN) is stamped before it (``send``'s ``after``)."""
+        """Rule 8: the latest stamp a halt on ``topic`` from ``reader`` (its source) went out
+        with, if any (caller holds _send_lock): no move of that source is stamped before it
+        (``send``'s ``after``)."""
         stamp = Stamp.of_properties(list(getattr(props, "UserProperty", None) or []))
         sent = None if stamp is None else stamp.sent_unix()
         if stamp is None or sent is None:
@@ -423,9 +456,7 @@ class RemoteLink(Connection):
             self._halt_stamps.pop((topic, reader), None)  # (the newest last: rule 8's bound)
             self._halt_stamps[topic, reader] = sent, station
             if len(self._halt_stamps) > HALT_READERS:
-                oldest = next((k for k in self._halt_stamps if k[1] is not _AGAIN), None)
-                if oldest is not None:
-                    del self._halt_stamps[oldest]
+                del self._halt_stamps[next(iter(self._halt_stamps))]
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
@@ -438,8 +469,9 @@ class RemoteLink(Connection):
                 station = station_of(getattr(props, "UserProperty", None) or [])
                 beat = parse_beat(bytes(msg.payload))
                 if self._unheard:  # rule 6: the station's bridge is on this connection now
-                    self._resend_unheard((beat, station))
-                self.station_clock.heard(beat, station)
+                    self._resend_unheard(beat, station)
+                else:
+                    self.station_clock.heard(beat, station)
             except ValueError:
                 pass  # no time: no beat
             except Exception:
@@ -530,15 +562,10 @@ def abort(sock: object) -> None:
         socket.socket.shutdown(sock, socket.SHUT_RDWR)  # the descriptor's, TLS or not
 
 
-def _stamped(props: Properties, sent: tuple[float, str | None] | None) -> Properties:
-    """Rule 8: a kept halt's properties stamped as sent at ``sent`` (the station's time and
-    the process its beats named), in place of the stamp it had; None: as they are. Its
-    expiry and operator as they were."""
-    if sent is None:
-        return props
-    t, station = sent
+def _stamped(props: Properties, stamp: Stamp) -> Properties:
+    """Rule 8: a kept halt's properties with ``stamp`` in place of the stamp it had; its
+    message expiry and operator as they were."""
     expiry = int(getattr(props, "MessageExpiryInterval", 0))  # (paho's: set dynamically)
-    stamp = Stamp.of(t, expiry, NAMELESS if station is None else station)
     stamp_keys = (SENT, STAMP_EXPIRY, STATION)
     kept = [(k, v) for k, v in getattr(props, "UserProperty", None) or [] if k not in stamp_keys]
     fresh = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
