@@ -24,8 +24,9 @@ from tests.mqtt.test_service import RecordingRotator, saying_service
 
 @pytest.mark.xfail(
     strict=True,
-    reason="review 31: markers said lost by a new connection's look are never asked again "
-    "(main_gone clears _refused_at; the look's verdict sets none): fences off for its life",
+    reason="review 31, open: markers said lost by a new connection's look are judged again "
+    "on the next connect only (lastword.py rule 7), not asked again under the connection "
+    "when the ACL is mended by a SIGHUP: fences off until the main connection reconnects",
 )
 def test_markers_denied_across_a_reconnect_are_asked_again_once_the_acl_is_mended() -> None:
     clock, _said, pub, svc = saying_service()

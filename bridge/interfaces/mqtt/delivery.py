@@ -13,12 +13,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    optional one only in the log, rule 17) or a QoS 1 publish it will not take (PUBACK, MQTT 5;
    0x87 "not authorised" from an ACL; any other reason, a quota, loses that message and
    denies nothing: logged as a warning at most once in FAILED_LOG_S) is logged as an error
-   once per topic (until the broker is seen to take it: ``allow``, a probe back or a PUBACK
-   that took a QoS 1 message on it, then said through ``allowed``), naming the topic, kept
-   in ``problems`` and handed to
-   ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
-   paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
-   cannot see it.
+   once per topic (until the broker is seen to take it: ``allow``, a probe back, or, for a
+   publish it refused, a PUBACK that took a QoS 1 message on it, said through ``allowed``),
+   naming the topic, kept in ``problems`` and handed to ``on_denied`` (the app shows it in
+   the rotator's status and on ``B/bridge/info``), never on paho's thread. A denied QoS 0
+   publish (state) gets no answer from any broker: the bridge cannot see it.
 13. A publish paho does not take (its QoS 1 queue full: at most MAX_QUEUED messages, so a
    stalled broker cannot grow the bridge's memory without bound; no connection) is not taken
    for sent: a retained topic is marked dirty and sent again as soon as the broker
@@ -78,6 +77,10 @@ class Delivery:
         self._acked_early: dict[int, ReasonCode] = {}  # acknowledged before its id was noted
         self._ids_lock = threading.Lock()
         self._denied: dict[str, str] = {}  # rule 11: each denied topic reported once, its problem
+        # rule 11: the denials a PUBACK said (a refused publish), which a PUBACK that takes a
+        # message on the topic ends; a refused SUBSCRIBE or a probe not read back it does not
+        # (a review: a publish taken says nothing of reading)
+        self._refused_by_puback: set[str] = set()
         self.problems: list[str] = []  # rule 11, for the bridge's own diagnostics
         self._dirty: set[str] = set()  # rule 13: retained topics whose last publish failed
         self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
@@ -177,8 +180,8 @@ class Delivery:
                 # (only a refusal: paho calls this for every QoS 0 message too, with success)
         if topic is not None and reason_code.is_failure:
             self._refused(topic, reason_code)
-        elif topic is not None and topic in self._denied and self.allow(topic):  # (rule 11:
-            if self._allowed is not None:  # taken after all, its ACL changed back; said on a
+        elif topic is not None and topic in self._refused_by_puback and self.allow(topic):
+            if self._allowed is not None:  # (rule 11: a publish refused before is taken: its
                 threading.Thread(target=self._allowed, args=(topic,), daemon=True).start()
         if self._dirty or self._backlog:  # rule 13: the broker took one, so there is room again
             self._retry.set()  # (read without the lock: a stale answer costs one wake-up)
@@ -209,6 +212,8 @@ class Delivery:
                 return
             problem = f"the MQTT broker does not let the bridge {what} {topic}: {reason}"
             self._denied[topic] = problem
+            if what == "publish to" and len(self._refused_by_puback) < MAX_UNACKED:
+                self._refused_by_puback.add(topic)  # (a PUBACK that takes one ends this one)
             self.problems.append(problem)
         log.error("%s (check the broker's ACL for user %r)", problem, self._username)
         # never on paho's thread: it holds paho's own mutex here, and the report publishes
@@ -225,6 +230,7 @@ class Delivery:
         problem is gone, and a new refusal is said again. True if it had been denied."""
         with self._ids_lock:
             problem = self._denied.pop(topic, None)
+            self._refused_by_puback.discard(topic)
             if problem is not None and problem in self.problems:
                 self.problems.remove(problem)
         if problem is not None:

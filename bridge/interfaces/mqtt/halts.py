@@ -45,12 +45,12 @@ from bridge.core.afterlock import Deferring
 from bridge.core.errors import Refused
 from bridge.core.model import (
     Command,
+    FeatureCommand,
     FollowQso,
     Lock,
     Origin,
     Source,
     Stop,
-    Target,
     TrackBody,
     turns_rotor,
 )
@@ -139,8 +139,8 @@ LOCK_OFF_OLDER = (
 def _ends(off: Command, kept: Command) -> bool:
     """lastword.py rule 13: whether a tracking or following OFF ends the move kept behind a
     waiting lock OFF, as the mailbox's order would (mailbox.py rules 2 and 9)."""
-    if isinstance(off, TrackBody):
-        return isinstance(kept, TrackBody | Target)
+    if isinstance(off, TrackBody):  # (everything but a feature's own moves is a target, a
+        return not isinstance(kept, FeatureCommand)  # track or follow start there: a review)
     return isinstance(off, FollowQso) and isinstance(kept, FollowQso)
 
 
@@ -600,8 +600,8 @@ class Halts:
         reads while a lock OFF before it waits for the marker is kept, the newest only (as the
         mailbox keeps the newest target), and put after the OFF at the marker: True. A
         tracking or following OFF is not kept (False: it goes now) and drops a kept start
-        it ends, as the mailbox would (a track OFF a target or track start; a follow OFF a
-        follow start: a review, a follow OFF took the kept target's place). False
+        it ends, as the mailbox would (a track OFF any but a feature's own move; a follow OFF
+        a follow start: a review, a follow OFF took the kept target's place). False
         when no OFF waits (one dict look-up, without the lock: most messages), or another
         interface's halt fences the rotator, or a newer lane halt holds it whose copy is not
         read yet (the caller refuses it: ``stale_move``)."""
