@@ -1156,7 +1156,9 @@ class Controller:
         moving = m.state is mo.MOVING
         coasting = not moving and (before is mo.MOVING or m.state is mo.BRAKING)
         az_shown, deadband_deg = self.az_shown, cfg.deadband_deg
-        az_shown.feed(reply.az_deg, moving, deadband_deg, cfg.motion.spec.az_wraps, coasting)
+        spec = cfg.motion.spec  # (a travel that ends at north turns along the scale)
+        toward = m.target_deg if spec.az_ends_at_north else None
+        az_shown.feed(reply.az_deg, moving, deadband_deg, spec.az_wraps, coasting, toward)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, deadband_deg, False, coasting)
 

@@ -58,10 +58,16 @@ class Hysteresis:
     direction: int = 0
 
     def feed(
-        self, reading: float, moving: bool, deadband_deg: float, wraps: bool, coasting: bool
+        self,
+        reading: float,
+        moving: bool,
+        deadband_deg: float,
+        wraps: bool,
+        coasting: bool,
+        toward: float | None = None,
     ) -> None:
         new, self.direction = publishable_bearing(
-            self.value, self.direction, reading, moving, deadband_deg, wraps, coasting
+            self.value, self.direction, reading, moving, deadband_deg, wraps, coasting, toward
         )
         if new is not None:
             self.value = new
@@ -229,6 +235,7 @@ def publishable_bearing(
     deadband_deg: float,
     wraps: bool,
     coasting: bool = False,
+    toward: float | None = None,
 ) -> tuple[float | None, int]:
     """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
 
@@ -239,6 +246,13 @@ def publishable_bearing(
     direction of travel is published too, however small: the last degrees of a turn are the
     bearing it ends at, not jitter (a CI run: a rotor called arrived 2 degrees short, at the
     reading that found it still, was shown there for good).
+
+    The direction a step beyond the deadband sets is the shorter way round on a wrapping
+    scale, but for a step of more than half a turn on the scale towards ``toward`` (the raw
+    target of a rotor whose travel ends at north, which turns only along the scale): it went
+    that way (a busy machine: a RotorCard parked from 290 was read at 290 then at its park, 0,
+    the shorter way called +70, and its jitter at rest, 1, was then shown as the turn's last
+    degree for good).
     """
     if published_deg is None:
         return reading_deg, 0
@@ -246,7 +260,11 @@ def publishable_bearing(
     if delta == 0:
         return None, direction
     step = 1 if delta > 0 else -1
-    if abs(delta) > deadband_deg or ((moving or coasting) and step == direction):
+    jump = abs(delta) > deadband_deg
+    if jump and toward is not None and wraps and abs(reading_deg - published_deg) > 180.0:
+        way = toward - published_deg  # (the scale's way to the target: the rotor's)
+        step = step if way == 0 else (1 if way > 0 else -1)
+    if jump or ((moving or coasting) and step == direction):
         return reading_deg, step
     if moving and direction == 0:
         return reading_deg, step

@@ -286,6 +286,22 @@ def test_the_last_degrees_of_a_turn_are_published_as_it_comes_to_rest() -> None:
     assert pb(359, 1, 1, False, 2, True, coasting=True) == (1, 1)  # on across north
 
 
+def test_a_long_turn_read_at_its_ends_alone_keeps_the_way_it_went() -> None:
+    """status.py rule 1 on a busy machine (the demo's park ended at 1, not 0): a RotorCard
+    (its travel ends at north) parked from 290 was read at 290, then at its park, 0 (its polls
+    late); the shorter way round called that +70, and the jitter at rest, 1, was shown as the
+    turn's last degree for good. Towards its target it went down the scale: 1 is jitter back."""
+    pb = publishable_bearing
+    published, direction = pb(290, -1, 0, True, 2, True, toward=0)
+    assert (published, direction) == (0, -1)
+    assert pb(0, -1, 1, True, 2, True, toward=0) == (None, -1)  # jitter back, moving or not
+    assert pb(0, -1, 1, False, 2, True, coasting=True) == (None, -1)
+    assert pb(290, -1, 0, True, 2, True) == (0, 1)  # (no target known: the shorter way)
+    # its other end: the 360 a Rotor-EZ family board reads as 000, reached from 350
+    assert pb(350, 1, 0, True, 2, True, toward=360) == (0, 1)
+    assert pb(0, 1, 359, True, 2, True, toward=360) == (None, 1)
+
+
 def test_next_deadline_is_in_the_future() -> None:
     m = mo.commanded(ready(), CFG, 200, 10.0)  # (an arrival comes with a reading: rule 2)
     assert mo.next_deadline(m, CFG, 10.0) == 10.0 + CFG.stall_timeout_s
