@@ -15,8 +15,12 @@ each written out in the module that keeps it:
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
   only halts are taken while it runs, ``gated``; what an earlier run left on the witnessed
-  topics handed to ``witness``'s hook once it ends, before ``online``); 15 deletions said in
-  a few lines.
+  topics handed to ``witness``'s hook once it ends, before ``online``; it times out after
+  LOOK_TIMEOUT_S in which nothing came from the broker, LOOK_MAX_S at most: a broker still
+  handing over what it held answers, and a slow machine reading a backlog of tens of
+  thousands of retained topics took more than 5 s, its look timed out and was judged on half
+  of them, the bridge's own ``offline`` of its last run then said as another client's); 15
+  deletions said in a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
@@ -118,7 +122,8 @@ STATE_QOS = 0  # rule 8
 # rule 10 (MQTT 3.1.1): a broker shutting down sends the bridge its own last will and closes the
 # connection right after; an ``offline`` the connection outlives by this long was a stranger's
 WILL_OUTLIVED_S = 1.0
-LOOK_TIMEOUT_S = 5.0  # rule 14
+LOOK_TIMEOUT_S = 5.0  # rule 14: nothing from the broker this long ends the look...
+LOOK_MAX_S = 60.0  # ... and this long whatever comes (a flood of messages ends it all the same)
 
 
 class MqttClient(Connection):
@@ -184,6 +189,7 @@ class MqttClient(Connection):
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self._look_lost = False  # rule 16: this connection's look timed out
+        self._look_heard = 0.0  # rule 14: when the broker last sent anything (monotonic)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
         self._hello_back = False  # rule 16: it, or the probe, came back (in time or later)
         self.refused: str | None = None
@@ -436,9 +442,8 @@ class MqttClient(Connection):
                     self._probe = b"probe " + hello
                     self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
                 client.publish(look.claim.hello_topic, hello, qos=1)  # rule 16: as the probe
-                timer = threading.Timer(LOOK_TIMEOUT_S, self._look_timed_out, args=(look.looking,))
-                timer.daemon = True
-                timer.start()
+                self._look_heard = 0.0
+                self._arm_look(look.looking, time.monotonic(), LOOK_TIMEOUT_S)
                 return
             self._open(None)
         if self._on_connect_hook is not None:
@@ -481,8 +486,10 @@ class MqttClient(Connection):
                 self._markers_back()
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
-        if self._look is not None and self._look_saw(self._look, topic, payload):
-            return True
+        if self._look is not None:
+            self._look_heard = time.monotonic()  # rule 14: the broker answers
+            if self._look_saw(self._look, topic, payload):
+                return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
             if late and self._on_heard is not None and self._on_heard(late):
@@ -605,7 +612,29 @@ class MqttClient(Connection):
         if self._on_connect_hook is not None:
             self._on_connect_hook()
 
-    def _look_timed_out(self, n: int) -> None:
+    def _arm_look(self, n: int | None, began: float, delay_s: float) -> None:
+        timer = threading.Timer(delay_s, self._look_due, args=(n, began))
+        timer.daemon = True
+        timer.start()
+
+    def _look_due(self, n: int | None, began: float) -> None:
+        """Rule 14, the look's timer: it times out once nothing came from the broker for
+        LOOK_TIMEOUT_S (the hello denied: the held values come at once, then silence), or
+        LOOK_MAX_S after it began; else it looks again when that may be so."""
+        look = self._look
+        assert look is not None
+        now = time.monotonic()
+        with self._lock:
+            if n is None or look.looking != n:
+                return
+        quiet_from = max(began, self._look_heard)
+        left = min(quiet_from + LOOK_TIMEOUT_S, began + LOOK_MAX_S) - now
+        if left > 0:
+            self._arm_look(n, began, left)
+            return
+        self._look_timed_out(n, now - began)
+
+    def _look_timed_out(self, n: int, waited_s: float = LOOK_TIMEOUT_S) -> None:
         look = self._look
         assert look is not None
         with self._lock:
@@ -616,7 +645,7 @@ class MqttClient(Connection):
             with self._fence_lock:  # (as ``_report_denied``: one of the two sees the other)
                 if self._delivery.denied(self._fence_topic):
                     self._markers_lost()
-        look.say_timed_out(LOOK_TIMEOUT_S)
+        look.say_timed_out(round(waited_s, 1))
         self._end_look(n, timed_out=True)
 
     def _refuse(self) -> None:

@@ -16,7 +16,7 @@ Two topics under ``B/bridge/`` are the bridge's messages to itself, not for othe
   broker). Other clients ignore it; a hello that is not the bridge's own look ends nothing.
   Each marker on ``B/bridge/fence`` is published there too (lastword.py rule 7). The
   broker's ACL must let the bridge publish and subscribe there: without it every connect
-  waits LOOK_TIMEOUT_S (5 s) and deletes no stale discovery.
+  waits LOOK_TIMEOUT_S (5 s) after the broker's last message and deletes no stale discovery.
 - ``B/bridge/fence`` and ``B/bridge/fence/lane``: the markers of the last word
   (interfaces/mqtt/lastword.py), ``B/bridge/fence/express`` the stop express's sync words (its rule
   8), QoS 0, not retained, seen only while stops and locks come in.
