@@ -602,6 +602,12 @@ class Express:
         # not reading its socket yet is a start (importing Python on a slow machine), no hang
         wait_s = DROP_WAIT_S
         if not self._heard.is_set():
+            with self._lock:
+                ending = self._ending
+            if ending:  # rule 7: its end closes its copies (``stop``), soon, and no reopen comes
+                with self._lock:  # (a shutdown on a busy machine waited up to START_WAIT_S
+                    self._dropped.pop(number, None)  # for a child still starting, and said
+                return  # the port "still closing after 3 s (a wedged adapter?)")
             wait_s = max(wait_s, self._started_at + START_WAIT_S - time.monotonic())
         if not dropped.wait(wait_s):
             self._kill(f"did not give {rotator_id}'s port back within {wait_s:.1f} s")
