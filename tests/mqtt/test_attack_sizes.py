@@ -49,8 +49,10 @@ def test_a_huge_message_on_a_command_topic_is_not_read_by_the_bridge(
         assert bridge.proc is not None
         pids = [bridge.proc.pid, *_children(bridge.proc.pid)]
         before = {pid: _peak_kb(pid) for pid in pids}
-        for leaf in ("target", "stop"):
-            probe.publish(rig.t(leaf), b"7" * HUGE)
+        for leaf in ("target", "stop"):  # read by the broker before the clock below starts
+            # (a busy machine's probe took 33 s to write one: the wait for the refusal ran out
+            # while the second was still on its way, the refusal queued behind it)
+            assert probe.publish(rig.t(leaf), b"7" * HUGE, timeout_s=60), f"{leaf}: no PUBACK"
         t = time.monotonic()
         probe.publish(rig.t("target"), "north")  # after them, in order: its refusal says
         # they were read; the refusal, not the first error after them: the emulator answers on

@@ -117,10 +117,20 @@ class Probe:
             )
             self._cond.notify_all()
 
-    def publish(self, topic: str, payload: str | bytes, retain: bool = False, qos: int = 1) -> None:
-        """Sent, and acknowledged by the broker (QoS 1) before this returns."""
+    def publish(
+        self,
+        topic: str,
+        payload: str | bytes,
+        retain: bool = False,
+        qos: int = 1,
+        timeout_s: float = 5.0,
+    ) -> bool:
+        """Sent, and acknowledged by the broker (QoS 1), waited for ``slow(timeout_s)``: whether
+        it was (paho's wait ends silently at its deadline; a caller that needs the broker to
+        have read the message first asserts it)."""
         info = self.client.publish(topic, payload, qos=qos, retain=retain)
-        info.wait_for_publish(5)
+        info.wait_for_publish(slow(timeout_s))
+        return info.is_published()
 
     def caught_up(self, timeout_s: float = 10.0) -> float:
         """A round trip through the broker: once it returns, every message the broker sent
