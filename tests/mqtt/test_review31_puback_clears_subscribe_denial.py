@@ -22,9 +22,8 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 import bridge.interfaces.mqtt.client as client_module
 import bridge.interfaces.mqtt.delivery as delivery_module
-from tests.mqtt.test_attack5_refused_markers import _delivery
+from tests.mqtt.test_attack5_refused_markers import ConfirmedRig, _delivery
 from tests.mqtt.test_client_fence import FENCE, HeldThreads, looking_client
-from tests.mqtt.test_service import RecordingRotator, saying_service
 
 
 def test_a_puback_on_the_fence_topic_does_not_clear_its_subscribe_denial() -> None:
@@ -42,28 +41,17 @@ def test_a_puback_on_the_fence_topic_does_not_clear_its_subscribe_denial() -> No
 
 
 def test_a_hold_ends_when_the_markers_can_come_back_nowhere() -> None:
-    clock, _said, _pub, svc = saying_service()
-    tower = RecordingRotator("tower", "rotorez")
-    svc.attach(tower)
-    delivery, paho_client = _delivery()
-    svc.confirm_markers_with(
-        lambda topic, payload: delivery.send(topic, payload.encode(), 1, retain=False),
-        lambda topics: all(delivery.denied(t) for t in topics),
-    )
+    rig = ConfirmedRig()
+    svc, delivery = rig.svc, rig.delivery
     # at connect: the broker refused the SUBSCRIBE to B/bridge/fence; the hello came back, so
     # the markers come back on the hello topic (lastword.py rule 7)
     delivery.deny("rotor/bridge/fence", "subscribe to", "Not authorized")
     # an ACL reload (SIGHUP) then denies B/bridge/hello too, under the live connection
     svc.on_lane_message("rotor/stop", b"", False)  # a STOP on the lane: carried out, holds
     svc.on_message("rotor/stop", b"", False)  # its copy on the main one, counted
-    for _ in range(600):  # ten minutes of a live connection: markers sent again at QoS 1
-        clock.t += 1.0
-        svc._halts.resend_if_due()  # noqa: SLF001 (the timer's work, halts._tick)
-        svc._halts._refused_now()  # noqa: SLF001
-        for mid, topic, _data in paho_client.sent:
-            code = "Not authorized" if topic == "rotor/bridge/hello" else "Success"
-            delivery.on_publish(None, None, mid, ReasonCode(PacketTypes.PUBACK, code), None)  # type: ignore[arg-type]
-        paho_client.sent.clear()
+    rig.run(  # ten minutes of a live connection: markers sent again at QoS 1
+        600, lambda topic: "Not authorized" if topic == "rotor/bridge/hello" else "Success"
+    )
     assert not svc._halts.word.holding, (  # noqa: SLF001
         "neither marker topic can be read back (the fence's SUBSCRIBE denied, the hello's "
         "publish refused 0x87), yet the markers are still taken for readable and the lane "
