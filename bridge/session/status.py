@@ -227,6 +227,11 @@ def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
     return d
 
 
+# publishable_bearing's direction of travel when it is not known (neither way, nor at rest:
+# a step within the deadband is then jitter, whether the rotor is called moving or not)
+WAY_UNKNOWN = 2
+
+
 def publishable_bearing(
     published_deg: float | None,
     direction: int,
@@ -248,11 +253,13 @@ def publishable_bearing(
     reading that found it still, was shown there for good).
 
     The direction a step beyond the deadband sets is the shorter way round on a wrapping
-    scale, but for a step of more than half a turn on the scale towards ``toward`` (the raw
-    target of a rotor whose travel ends at north, which turns only along the scale): it went
-    that way (a busy machine: a RotorCard parked from 290 was read at 290 then at its park, 0,
-    the shorter way called +70, and its jitter at rest, 1, was then shown as the turn's last
-    degree for good).
+    scale, but for a step of more than half a turn on the scale of a rotor whose travel ends
+    at north (``toward``: its raw target; it turns only along the scale): the way on from the
+    reading to the target, or, once there, WAY_UNKNOWN (a busy machine: a RotorCard parked
+    from 290 was read at 290 then at its park, 0, the shorter way called +70, and its jitter
+    at rest, 1, was then shown as the turn's last degree for good; the way from the bearing
+    shown before cannot be told, its 360 end reading 000 as its 0 does: a review, a turn down
+    from 360 to 200 was taken for up, and its jitter, 201, shown for good).
     """
     if published_deg is None:
         return reading_deg, 0
@@ -262,8 +269,8 @@ def publishable_bearing(
     step = 1 if delta > 0 else -1
     jump = abs(delta) > deadband_deg
     if jump and toward is not None and wraps and abs(reading_deg - published_deg) > 180.0:
-        way = toward - published_deg  # (the scale's way to the target: the rotor's)
-        step = step if way == 0 else (1 if way > 0 else -1)
+        way = toward - reading_deg  # (the scale's way on to the target: the rotor's; not
+        return reading_deg, (way > 0) - (way < 0) if way else WAY_UNKNOWN  # known once there)
     if jump or ((moving or coasting) and step == direction):
         return reading_deg, step
     if moving and direction == 0:

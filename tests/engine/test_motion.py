@@ -12,7 +12,7 @@ from bridge.core.model import MotionState as S
 from bridge.core.model import RotatorStatus
 from bridge.protocols import REGISTRY
 from bridge.session import motion as mo
-from bridge.session.status import publishable_bearing, worth_emitting
+from bridge.session.status import WAY_UNKNOWN, publishable_bearing, worth_emitting
 
 CFG = mo.MotionConfig(
     REGISTRY["rotorez"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5,
@@ -293,7 +293,9 @@ def test_a_long_turn_read_at_its_ends_alone_keeps_the_way_it_went() -> None:
     turn's last degree for good. Towards its target it went down the scale: 1 is jitter back."""
     pb = publishable_bearing
     published, direction = pb(290, -1, 0, True, 2, True, toward=0)
-    assert (published, direction) == (0, -1)
+    assert (published, direction) == (0, WAY_UNKNOWN)  # (there: the way it came is not known)
+    for moving, coasting in ((True, False), (False, True)):  # jitter, not its last degree
+        assert pb(0, WAY_UNKNOWN, 1, moving, 2, True, coasting) == (None, WAY_UNKNOWN)
     assert pb(0, -1, 1, True, 2, True, toward=0) == (None, -1)  # jitter back, moving or not
     assert pb(0, -1, 1, False, 2, True, coasting=True) == (None, -1)
     assert pb(290, -1, 0, True, 2, True) == (0, 1)  # (no target known: the shorter way)
