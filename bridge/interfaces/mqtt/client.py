@@ -16,11 +16,12 @@ each written out in the module that keeps it:
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
   only halts are taken while it runs, ``gated``; what an earlier run left on the witnessed
   topics handed to ``witness``'s hook once it ends, before ``online``; it times out after
-  LOOK_TIMEOUT_S in which nothing came from the broker, LOOK_MAX_S at most: a broker still
-  handing over what it held answers, and a slow machine reading a backlog of tens of
-  thousands of retained topics took more than 5 s, its look timed out and was judged on half
-  of them, the bridge's own ``offline`` of its last run then said as another client's); 15
-  deletions said in a few lines.
+  LOOK_TIMEOUT_S in which nothing retained came from the broker, LOOK_MAX_S at most: a broker
+  still handing over what it held answers (a live message does not: a review, a tracker's
+  targets kept a look whose hello was denied open for a minute), and a slow machine reading
+  a backlog of tens of thousands of retained topics took more than 5 s, its look timed out
+  and was judged on half of them, the bridge's own ``offline`` of its last run then said as
+  another client's); 15 deletions said in a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
@@ -487,7 +488,8 @@ class MqttClient(Connection):
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None:
-            self._look_heard = time.monotonic()  # rule 14: the broker answers
+            if retained:  # rule 14: the broker hands over what it held (a live message, a
+                self._look_heard = time.monotonic()  # tracker's target, says nothing of that)
             if self._look_saw(self._look, topic, payload):
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
