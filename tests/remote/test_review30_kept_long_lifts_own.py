@@ -28,11 +28,6 @@ BASE = 1_700_000_000.0
 AFTER = ("rotor/stop", "rotor/lock")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 30: a halt kept over AGAIN_SEEN_MAX_S is noted for its reader with its "
-    "resend stamp, lifting that reader's moves seen before the resend to its send time",
-)
 def test_a_stop_kept_long_does_not_lift_its_readers_move_to_when_it_goes_again() -> None:
     clock, link, fake = _link()
     t0 = clock.t

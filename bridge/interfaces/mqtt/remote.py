@@ -84,10 +84,14 @@ Rules:
    AGAIN_SEEN_MAX_S (the station would count its stamp from when it came) it is stamped
    when sent again, and a move seen before that is refused, the safe side; with no
    reckoning yet (on reconnect, before a beat), it goes as it was. It is noted for its own
-   source as when first sent. Every stamp is its millisecond's start. The
-   sources noted are the last HALT_READERS (a program opening a connection per STOP would
-   else grow them without end, each keeping its connection); a source forgotten lifts
-   nothing, so its next move may at worst be refused, never let through.
+   source as when first sent, unless stamped when sent again: then nothing is noted, and
+   that source's moves keep their own seen time, one seen before the resend refused, the
+   safe side (review 30: noted, the resend's stamp lifted that source's ``P`` seen before
+   a Home Assistant STOP, read after the resend, to its send time). Every stamp is its
+   millisecond's start. The sources noted are the last HALT_READERS (a program opening a
+   connection per STOP would else grow them without end, each keeping its connection); a
+   source forgotten lifts nothing, so its next move may at worst be refused, never let
+   through.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -232,7 +236,7 @@ class RemoteLink(Connection):
         heartbeat from then on (rule 6). ``seen_s`` (when it was seen, on this link's clock):
         stamped then; a move never before the latest stamp a halt on one of ``after`` (its
         rotator's halt topics) went out with from the same source, ``reader`` (its connection or
-        port; None: not known, no halt but one sent again lifts it), or sent again (rule 8)."""
+        port; None: not known, no halt lifts it) (rule 8)."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
@@ -426,7 +430,8 @@ class RemoteLink(Connection):
         Rule 8: stamped with when it was last asked (seen), as its source's moves are, by the
         reckoning now; its stamp's ``expiry`` lengthened by the time it was kept, so that the
         station takes it as sent then (up to its HALT_STAMP_MAX_S); kept longer than
-        AGAIN_SEEN_MAX_S, stamped now; with no reckoning, as it was. Noted for its source."""
+        AGAIN_SEEN_MAX_S, stamped now; with no reckoning, as it was. Noted for its source,
+        unless stamped now."""
         seen, reader = self._halt_seen.get((topic, payload), (None, None))
         now = self._clock()
         if seen is not None and not 0.0 <= now - seen <= AGAIN_SEEN_MAX_S:
@@ -437,8 +442,8 @@ class RemoteLink(Connection):
         if stamp is not None:
             props = _stamped(props, stamp)
         info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
-        if reader is not None:
-            self._note_halt(topic, props, reader)
+        if reader is not None and seen is not None:  # (stamped now: its reader's floor not
+            self._note_halt(topic, props, reader)  # lifted to that, review 30)
         with self._acks:
             self._unawaited.add(info.mid)
 
