@@ -16,9 +16,11 @@ though it was seen before it. Stamped at its seen time, it would be refused.
 
 from __future__ import annotations
 
+import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
+from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.remote import HALT_READERS, RemoteLink
 from bridge.settings.mqtt import MqttSettings
@@ -53,6 +55,12 @@ def _link() -> tuple[FakeClock, RemoteLink, Paho]:
     return clock, link, fake
 
 
+def _floor_alone(link: RemoteLink) -> None:
+    """The remote's own refusal of a move seen before a halt it sent (rule 8, review 30) set
+    aside until the next halt: the stamp the floor alone gives, what the station judges."""
+    link._halt_latest.clear()  # noqa: SLF001
+
+
 def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp() -> None:
     clock, link, fake = _link()
     link.station_clock.heard(1_700_000_000.0 + clock.t)
@@ -63,6 +71,11 @@ def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp()
     link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0)
     # Gpredict's P, seen at t0 + 8 (before the STOP), read after it
     after = ("rotor/stop", "rotor/lock")
+    with pytest.raises(Refused) as refused:  # (review 30: refused here, seen before it)
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after)
+    assert refused.value.code is RefusalCode.STALE
+    assert len(fake.published) == 1
+    _floor_alone(link)
     link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after)
     (stop_topic, stop_props), (move_topic, move_props) = fake.published
     assert stop_topic == "rotor/stop" and move_topic == "rotor/target"
@@ -83,6 +96,7 @@ def test_a_move_is_lifted_to_its_own_readers_halt_alone() -> None:
     link.station_clock.heard(1_700_000_000.0 + clock.t)
     after = ("rotor/stop", "rotor/lock")
     link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0, reader="rotctld 1")
+    _floor_alone(link)
     link.send("rotor/target", '{"azimuth":1}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after)
     link.send(
         "rotor/target", '{"azimuth":2}', "DL1ABC", 5, seen_s=t0 + 8.0, after=after, reader="pst"
@@ -115,6 +129,7 @@ def test_the_sources_whose_halts_lift_their_moves_are_bounded() -> None:
         link.send("rotor/stop", "stop", "DL1ABC", 5, seen_s=t0 + 9.0, reader=f"flood {n}")
     assert len(link._halt_stamps) <= HALT_READERS  # noqa: SLF001
     fake.published.clear()
+    _floor_alone(link)
     newest, first = f"flood {HALT_READERS * 4 - 1}", "flood 0"
     for reader in (newest, first):
         link.send(

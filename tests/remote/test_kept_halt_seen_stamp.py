@@ -10,7 +10,7 @@ import pytest
 
 from bridge.core.errors import Refused
 from bridge.interfaces.mqtt.remote import AGAIN_SEEN_MAX_S
-from tests.remote.test_attack5_floor_other_front_end import _link, _sent
+from tests.remote.test_attack5_floor_other_front_end import _floor_alone, _link, _sent
 from tests.remote.test_late_commands import paho_message
 
 BASE = 1_700_000_000.0
@@ -34,7 +34,7 @@ def test_a_move_asked_after_a_kept_stop_goes_after_it_however_late_read(
     """The STOP seen at 9 s goes again at the beat at 12 s (from the same run of the station's
     bridge, or a new one: the reckoning learnt anew); the P another front end's reader saw at
     10 s (after the STOP), read after the beat, and the P seen at 13 s are not stamped before
-    the STOP sent again; a P seen at 8 s is."""
+    the STOP sent again; a P seen at 8 s is refused here (review 30), stamped before it."""
     clock, link, fake = _link()
     t0 = clock.t
     clock.t = t0 + 9.0
@@ -43,6 +43,12 @@ def test_a_move_asked_after_a_kept_stop_goes_after_it_however_late_read(
     clock.t = t0 + 12.0
     _beat(link, BASE + clock.t + 0.25, station)  # (the new run's clock a little ahead)
     again = _stops(fake)[-1]
+    with pytest.raises(Refused):  # (review 30: seen before the STOP)
+        link.send(
+            "rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 8.0, after=AFTER,
+            reader="rotctld gpredict",
+        )  # fmt: skip
+    _floor_alone(link)
     for seen, before in ((8.0, True), (10.0, False)):
         link.send(
             "rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + seen, after=AFTER,
@@ -88,7 +94,8 @@ def test_a_stop_kept_while_the_link_was_down_counts_from_when_it_was_asked() -> 
 
 def test_the_same_stop_pressed_again_while_kept_counts_from_the_last_press() -> None:
     """Kept once however often it is pressed (rule 6), but stamped with the last press: a move
-    seen between the two presses is stamped before the STOP sent again."""
+    seen between the two presses is refused here (review 30), and stamped before the STOP
+    sent again."""
     clock, link, fake = _link()
     t0 = clock.t
     link.station_clock.heard(BASE + t0)
@@ -103,6 +110,12 @@ def test_the_same_stop_pressed_again_while_kept_counts_from_the_last_press() -> 
     _beat(link, BASE + clock.t)
     again = _stops(fake)[-1]
     assert _sent(again) == BASE + t0 + 11.0
+    with pytest.raises(Refused):
+        link.send(
+            "rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 10.0, after=AFTER,
+            reader="gpredict",
+        )  # fmt: skip
+    _floor_alone(link)
     link.send(
         "rotor/target", '{"azimuth":200}', "DL1ABC", 5, seen_s=t0 + 10.0, after=AFTER,
         reader="gpredict",

@@ -22,7 +22,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.errors import Refused
-from tests.remote.test_attack5_floor_other_front_end import _link, _sent
+from tests.remote.test_attack5_floor_other_front_end import _floor_alone, _link, _sent
 from tests.remote.test_late_commands import paho_message
 
 BASE = 1_700_000_000.0
@@ -54,17 +54,25 @@ def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_by_its_sending
     again = [props for topic, props in fake.published if topic == "rotor/stop"][-1]
     assert _sent(again) == first_stop  # (the resend keeps its first seen time: rule 8)
     fake.published.clear()
+
     # Gpredict's P, seen at t0 + 8 on another reader (before PstRotator's STOP, before a Home
     # Assistant STOP at t0 + 8.5 at the station), read only now
-    link.send(
-        "rotor/target",
-        '{"azimuth":200}',
-        "DL1ABC",
-        5,
-        seen_s=t0 + 8.0,
-        after=AFTER,
-        reader="rotctld gpredict",
-    )
+    def p_200() -> None:
+        link.send(
+            "rotor/target",
+            '{"azimuth":200}',
+            "DL1ABC",
+            5,
+            seen_s=t0 + 8.0,
+            after=AFTER,
+            reader="rotctld gpredict",
+        )
+
+    with pytest.raises(Refused):  # (review 30: refused here, seen before the STOP)
+        p_200()
+    assert not fake.published
+    _floor_alone(link)
+    p_200()
     ((topic, props),) = fake.published
     assert topic == "rotor/target"
     assert _sent(props) < first_stop, (

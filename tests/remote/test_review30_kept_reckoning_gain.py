@@ -33,11 +33,6 @@ def _beat(link: object, left_station: float) -> None:
     link._on_message(None, None, beat)  # type: ignore[attr-defined]  # noqa: SLF001
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 30: a (kept) halt stamped from one beat's reckoning alone; another "
-    "front end's move seen before it, read after a beat with a shorter trip, is stamped after it",
-)
 @pytest.mark.parametrize("kept", [True, False])
 def test_a_move_seen_before_a_kept_stop_stays_before_it_when_the_reckoning_improves(
     kept: bool,

@@ -175,10 +175,16 @@ def _late_across_a_home_assistant_stop(
 
 
 def _decided(
-    station: Rig, probe: Probe, moves: int, errors: int, reply: bytes
+    station: Rig,
+    probe: Probe,
+    moves: int,
+    errors: int,
+    reply: bytes,
+    refused_here: Callable[[], bool] = lambda: False,
 ) -> Callable[[], bool]:
-    """Waits until the ``200`` move is decided (refused by the remote, turned or refused at
-    the station); returns whether it turned the rotor."""
+    """Waits until the ``200`` move is decided (refused by the remote: its reply, or
+    ``refused_here`` for a front end that has none; turned or refused at the station);
+    returns whether it turned the rotor."""
     emu = station.emus["tower"]
 
     def turned() -> bool:
@@ -189,7 +195,9 @@ def _decided(
             m.topic == "rotor/error" and b"200" in m.payload for m in probe.messages[errors:]
         )
 
-    wait_until(lambda: reply != b"RPRT 0" or turned() or refused(), 20, "the P decided")
+    wait_until(
+        lambda: reply != b"RPRT 0" or refused_here() or turned() or refused(), 20, "the P decided"
+    )
     return turned
 
 

@@ -25,7 +25,11 @@ from tests.support.waiting import slow
 
 @pytest.mark.parametrize("home_assistant", [True, False], ids=["ha-stop-too", "remote-stop"])
 def test_a_logger_turn_seen_before_a_stop_is_not_lifted_past_it_by_the_remotes_next_stop(
-    station: Rig, probe: Probe, monkeypatch: pytest.MonkeyPatch, home_assistant: bool
+    station: Rig,
+    probe: Probe,
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+    home_assistant: bool,
 ) -> None:
     """The remote on the operator's Windows computer (no kernel datagram stamps): a
     PstRotator turn to 200 reaches the remote's logger port and waits unread (the loggers'
@@ -35,7 +39,8 @@ def test_a_logger_turn_seen_before_a_stop_is_not_lifted_past_it_by_the_remotes_n
     STOPs), then lifted to the ``S``'s stamp (the rotator's last halt the remote sent): the
     station takes it for not older than its last halt and turns the rotor, after two STOPs
     that both came after the turn was sent. Without the ``S`` it is refused (the review-24
-    test): a second STOP makes the stale move pass."""
+    test): a second STOP makes the stale move pass. (Since review 30 the remote refuses it
+    itself: seen before the ``S`` it sent.)"""
     from bridge.interfaces.loggers import server
     from tests.support.udp_logger import PstClient, reserve_pst_ports
 
@@ -72,7 +77,11 @@ def test_a_logger_turn_seen_before_a_stop_is_not_lifted_past_it_by_the_remotes_n
             probe.wait_for("rotor/audit", lambda m: b"stop" in m.payload, after=t)
             errors = probe.mark()
             gate.set()
-            turned = _decided(station, probe, moves, errors, b"RPRT 0")
+
+            def here() -> bool:
+                return any("seen before a STOP" in r.getMessage() for r in caplog.records)
+
+            turned = _decided(station, probe, moves, errors, b"RPRT 0", here)
             assert not turned(), "a logger's turn sent before two STOPs turned the rotor after them"
     finally:
         remote.stop()

@@ -87,11 +87,20 @@ Rules:
    source as when first sent, unless stamped when sent again: then nothing is noted, and
    that source's moves keep their own seen time, one seen before the resend refused, the
    safe side (review 30: noted, the resend's stamp lifted that source's ``P`` seen before
-   a Home Assistant STOP, read after the resend, to its send time). Every stamp is its
-   millisecond's start. The sources noted are the last HALT_READERS (a program opening a
-   connection per STOP would else grow them without end, each keeping its connection); a
-   source forgotten lifts nothing, so its next move may at worst be refused, never let
-   through.
+   a Home Assistant STOP, read after the resend, to its send time). And the remote compares
+   seen times on its own clock first: a move sent with ``seen_s`` before the latest seen
+   time of a halt on one of its ``after`` topics that it sent or kept (``_halt_latest``,
+   any source's, the console's too) is refused here (STALE, SEEN_BEFORE_HALT), whatever
+   the stamps say: a stamp rests on the reckoning of the moment it is made, after a fresh
+   connection one beat's, short by its trip, so a halt stamped then can land after a move
+   another source saw before it, stamped after a beat with a shorter trip (review 30:
+   Gpredict's ``P`` seen at 8.9 s, read late, went out stamped after PstRotator's STOP seen
+   at 9 s). Equal seen times are not refused (one read: ``P 300``, ``S``, ``P 200`` ends at
+   200); a move without ``seen_s`` (the console's, stamped when sent) is not checked. The
+   floor above stays for the station's judging. Every stamp is its millisecond's start. The
+   sources noted are the last HALT_READERS (a program opening a connection per STOP would
+   else grow them without end, each keeping its connection); a source forgotten lifts
+   nothing, so its next move may at worst be refused, never let through.
 9. One command is handed to paho at a time (the send lock), in the order the broker then takes
    them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
@@ -145,6 +154,10 @@ NOT_HEARD = (
     "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
     "remote sends none)"
 )
+SEEN_BEFORE_HALT = (
+    "seen before a STOP or lock ON sent from here that came first (a client, or a computer, "
+    "that held it up): not carried out; send it again"
+)
 KEPT = (
     f"{NOT_CONNECTED}: not delivered yet (the rotor may still be turning); the stop is kept "
     "and sent first on reconnect"
@@ -193,6 +206,8 @@ class RemoteLink(Connection):
         self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
         # rule 8: each halt's latest asking (its topic, payload): when it was seen, its source
         self._halt_seen: dict[tuple[str, bytes], tuple[float, Hashable | None]] = {}
+        # rule 8: the latest seen time of a halt sent or kept, by topic, from any source
+        self._halt_latest: dict[str, float] = {}
         self._clock = clock
         self.station_clock = StationClock(clock)  # rule 8
         self._ack_wait_s = ack_wait_s
@@ -236,7 +251,8 @@ class RemoteLink(Connection):
         heartbeat from then on (rule 6). ``seen_s`` (when it was seen, on this link's clock):
         stamped then; a move never before the latest stamp a halt on one of ``after`` (its
         rotator's halt topics) went out with from the same source, ``reader`` (its connection or
-        port; None: not known, no halt lifts it) (rule 8)."""
+        port; None: not known, no halt lifts it), and refused if seen before a halt on one of
+        ``after`` that this remote sent or kept (rule 8)."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
@@ -244,12 +260,16 @@ class RemoteLink(Connection):
             if halt:  # rule 8: sent again, stamped with when it was (last) seen
                 seen = self._clock() if seen_s is None else seen_s
                 self._halt_seen[topic, payload.encode()] = seen, reader
+                self._halt_latest[topic] = max(seen, self._halt_latest.get(topic, seen))
             if not self.up and halt:  # down, or being reset: rule 6
                 props.UserProperty = [("operator", operator)]
                 self._keep(topic, payload.encode(), props)
                 raise Refused(RefusalCode.OFFLINE, KEPT)
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            if not halt and seen_s is not None:  # rule 8: seen before a halt sent from here
+                if any(seen_s < self._halt_latest.get(t, seen_s) for t in after):
+                    raise Refused(RefusalCode.STALE, SEEN_BEFORE_HALT)
             # rule 8: a halt's if it has one; when it was seen, if that is said; a move's
             # never before its rotator's last halt's
             keys = [] if reader is None else [(t, reader) for t in after]  # (None: unknown)
