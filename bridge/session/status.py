@@ -254,8 +254,12 @@ def publishable_bearing(
 
     The direction a step beyond the deadband sets is the shorter way round on a wrapping
     scale, but for a step of more than half a turn on the scale of a rotor whose travel ends
-    at north (``toward``: its raw target; it turns only along the scale): the way on from the
-    reading to the target, or, once there, WAY_UNKNOWN (a busy machine: a RotorCard parked
+    at north (``toward``: its raw target; it turns only along the scale): the way along the
+    scale, unless the bearing shown or the reading is at the end that reads 000 (its 0 and its
+    360 read alike): then the way on from the reading to the target, or, once there,
+    WAY_UNKNOWN (a review: the way on to the target alone took an overshoot read late, 301 on
+    the way from 10 to 300, for down, and its last degree, 302, for jitter; a busy machine: a
+    RotorCard parked
     from 290 was read at 290 then at its park, 0, the shorter way called +70, and its jitter
     at rest, 1, was then shown as the turn's last degree for good; the way from the bearing
     shown before cannot be told, its 360 end reading 000 as its 0 does: a review, a turn down
@@ -269,6 +273,8 @@ def publishable_bearing(
     step = 1 if delta > 0 else -1
     jump = abs(delta) > deadband_deg
     if jump and toward is not None and wraps and abs(reading_deg - published_deg) > 180.0:
+        if published_deg % 360.0 and reading_deg % 360.0:  # (neither at the end 000 reads)
+            return reading_deg, 1 if reading_deg > published_deg else -1  # along the scale
         way = toward - reading_deg  # (the scale's way on to the target: the rotor's; not
         return reading_deg, (way > 0) - (way < 0) if way else WAY_UNKNOWN  # known once there)
     if jump or ((moving or coasting) and step == direction):
