@@ -48,49 +48,62 @@ class Timers:
         return Noted()
 
 
+class LookRig:
+    """A client whose first look has begun, its clock and its timers the test's: ``fire`` runs
+    the timer armed last."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch, subscriptions: list[str]) -> None:
+        self.clock, self.timers = Clock(), Timers()
+        monkeypatch.setattr(client_module, "time", self.clock)
+        monkeypatch.setattr(client_module, "threading", self.timers)
+        self.client = MqttClient(
+            MqttSettings(port=1, base_topic="t", client_id="look-under-test"),
+            will_topic="t/bridge/state",
+            subscriptions=subscriptions,
+            on_message=lambda *a: None,
+            claim=Claim(Instance.me("look-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
+        )
+        look = self.client._look  # noqa: SLF001
+        assert look is not None
+        self.look = look
+        self.begin()
+
+    def begin(self) -> None:
+        """The look begins (as a connect does), its timer armed."""
+        self.n = int(self.look.begin().split()[-1])
+        self.began = self.clock.now
+        self.client._look_heard, self.client._look_lost = 0.0, False  # noqa: SLF001
+        self.client._arm_look(self.n, self.began, LOOK_TIMEOUT_S)  # noqa: SLF001
+
+    def fire(self) -> None:
+        _delay, fn, args = self.timers.armed[-1]
+        fn(*args)
+
+
 def test_a_look_times_out_on_the_broker_s_silence_not_while_it_hands_over_what_it_held(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    clock, timers = Clock(), Timers()
-    monkeypatch.setattr(client_module, "time", clock)
-    monkeypatch.setattr(client_module, "threading", timers)
-    client = MqttClient(
-        MqttSettings(port=1, base_topic="t", client_id="look-under-test"),
-        will_topic="t/bridge/state",
-        subscriptions=[],
-        on_message=lambda *a: None,
-        claim=Claim(Instance.me("look-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
-    )
-    look = client._look
-    assert look is not None
-    n = int(look.begin().split()[-1])
-    began = clock.now
-    client._arm_look(n, began, LOOK_TIMEOUT_S)
-
-    def fire() -> None:  # the timer armed last, run now
-        _delay, fn, args = timers.armed[-1]
-        fn(*args)
-
+    rig = LookRig(monkeypatch, [])
+    client, clock, timers = rig.client, rig.clock, rig.timers
+    began = rig.began
     # the retained backlog still coming 4.9 s in: the timer, due at 5 s, looks again
     clock.now = began + 4.9
     client._intercepted("t/junk1/availability", b"online", True)
     clock.now = began + LOOK_TIMEOUT_S
-    fire()
+    rig.fire()
     assert not client._look_lost
     assert timers.armed[-1][0] == pytest.approx(4.9)  # 5 s after the last message
     # then silence for LOOK_TIMEOUT_S (an ACL that denies the hello): timed out
     clock.now = began + 4.9 + LOOK_TIMEOUT_S
-    fire()
+    rig.fire()
     assert client._look_lost  # (not connected here: nothing more to end)
 
     # a flood that never ends: LOOK_MAX_S at most
-    n = int(look.begin().split()[-1])
-    began = clock.now
-    client._look_heard, client._look_lost = 0.0, False  # (as a connect does)
-    client._arm_look(n, began, LOOK_TIMEOUT_S)
+    rig.begin()
+    began = rig.began
     while not client._look_lost:
         assert clock.now - began <= LOOK_MAX_S
         clock.now = began + min(LOOK_MAX_S, clock.now - began + LOOK_TIMEOUT_S)
         client._intercepted("t/junk2/availability", b"online", True)  # just before it looks
-        fire()
+        rig.fire()
     assert clock.now - began == pytest.approx(LOOK_MAX_S) and client._look_lost

@@ -8,71 +8,21 @@ connect: the bridge gated, every target refused. The clock and the timers are th
 
 from __future__ import annotations
 
-import threading
-from collections.abc import Callable
-from typing import Any
-
 import pytest
 
-import bridge.interfaces.mqtt.client as client_module
-from bridge.interfaces.mqtt.claim import Claim, Instance
-from bridge.interfaces.mqtt.client import LOOK_TIMEOUT_S, MqttClient
-from bridge.settings import MqttSettings
-
-
-class Clock:
-    def __init__(self) -> None:
-        self.now = 100.0
-
-    def monotonic(self) -> float:
-        return self.now
-
-
-class Timers:
-    """``threading`` as the client sees it, but a Timer is only noted (delay, function, args)."""
-
-    def __init__(self) -> None:
-        self.armed: list[tuple[float, Callable[..., None], tuple[Any, ...]]] = []
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(threading, name)
-
-    def Timer(self, delay: float, fn: Callable[..., None], args: tuple[Any, ...] = ()) -> Any:  # noqa: N802
-        armed = self.armed
-
-        class Noted:
-            daemon = False
-
-            def start(self) -> None:
-                armed.append((delay, fn, args))
-
-        return Noted()
+from bridge.interfaces.mqtt.client import LOOK_TIMEOUT_S
+from tests.mqtt.test_client_look_timeout import LookRig
 
 
 def test_live_traffic_does_not_keep_a_look_whose_hello_is_denied_open(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    clock, timers = Clock(), Timers()
-    monkeypatch.setattr(client_module, "time", clock)
-    monkeypatch.setattr(client_module, "threading", timers)
-    client = MqttClient(
-        MqttSettings(port=1, base_topic="t", client_id="look-under-test"),
-        will_topic="t/bridge/state",
-        subscriptions=[],
-        on_message=lambda *a: None,
-        claim=Claim(Instance.me("look-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
-    )
-    look = client._look
-    assert look is not None
-    n = int(look.begin().split()[-1])
-    began = clock.now
-    client._look_heard = 0.0  # (as a connect does)
-    client._arm_look(n, began, LOOK_TIMEOUT_S)
+    rig = LookRig(monkeypatch, [])
+    client, clock, began = rig.client, rig.clock, rig.began
     # the broker held nothing; the hello never comes back (its ACL); a tracker's live target
     # (not retained: under MQTT 3.1.1 the broker clears the flag of a live message) at 4 s
     clock.now = began + 4.0
     client._intercepted("t/rot1/target", b"120", False)
     clock.now = began + LOOK_TIMEOUT_S
-    _delay, fn, args = timers.armed[-1]
-    fn(*args)
+    rig.fire()
     assert client._look_lost  # nothing the broker held came for LOOK_TIMEOUT_S: timed out
