@@ -427,7 +427,7 @@ class LastWord:
         for the marker: under a hold with a lane lock ON among its halts (the lane may have
         lost an older ON that the main connection counted as this one's copy, and this OFF
         was published before the lane's ON). Under a STOP's hold alone it goes at once."""
-        return rotator_id in self._holds and rotator_id in self._hold_locks
+        return self.waits(rotator_id) and rotator_id in self._hold_locks
 
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""
