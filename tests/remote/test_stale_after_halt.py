@@ -293,22 +293,9 @@ def test_a_logger_turn_read_late_across_a_stop_the_station_took_another_way_is_n
     (its loggers' thread held here right before its read: no clock, no sleep), turned the
     rotor. Without kernel stamps the thread dates a datagram itself: one that woke it came
     after its look just before the wait. ``kernel_stamps=False`` is that computer."""
-    from bridge.interfaces.loggers import server
     from tests.support.udp_logger import PstClient, reserve_pst_ports
 
-    if not kernel_stamps:
-        monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
-    gate, waiting = threading.Event(), threading.Event()
-    gate.set()
-    received = server._received
-
-    def gated(sock: object) -> object:
-        if not gate.is_set():
-            waiting.set()
-            gate.wait(slow(30))
-        return received(sock)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(server, "_received", gated)
+    gate, waiting = gate_the_loggers(monkeypatch, kernel_stamps)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
     remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
@@ -374,3 +361,27 @@ def test_a_pty_move_read_late_across_a_stop_the_station_took_another_way_is_not_
             client.close()
     finally:
         remote.stop()
+
+
+def gate_the_loggers(
+    monkeypatch: pytest.MonkeyPatch, kernel_stamps: bool
+) -> tuple[threading.Event, threading.Event]:
+    """The loggers' thread held at its read while ``gate`` is clear (``waiting`` set once it
+    is), as a busy computer holds it; ``kernel_stamps=False``: a system that gives no datagram
+    stamps (Windows, macOS). Returns (gate, waiting); the gate starts open."""
+    from bridge.interfaces.loggers import server
+
+    if not kernel_stamps:
+        monkeypatch.setattr(server, "_STAMPS", 0)
+    gate, waiting = threading.Event(), threading.Event()
+    gate.set()
+    received = server._received
+
+    def gated(sock: object) -> object:
+        if not gate.is_set():
+            waiting.set()
+            gate.wait(slow(30))
+        return received(sock)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(server, "_received", gated)
+    return gate, waiting

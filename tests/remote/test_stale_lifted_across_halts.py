@@ -15,7 +15,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces import tcplines
 from tests.integration.test_attack_fence_pause import read_gate
 from tests.integration.test_rotctld_integration import _replies, connect
-from tests.remote.test_stale_after_halt import _decided, _remote
+from tests.remote.test_stale_after_halt import _decided, _remote, gate_the_loggers
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import free_port
 from tests.support.remote import ask
@@ -41,21 +41,9 @@ def test_a_logger_turn_seen_before_a_stop_is_not_lifted_past_it_by_the_remotes_n
     that both came after the turn was sent. Without the ``S`` it is refused (the review-24
     test): a second STOP makes the stale move pass. (Since review 30 the remote refuses it
     itself: seen before the ``S`` it sent.)"""
-    from bridge.interfaces.loggers import server
     from tests.support.udp_logger import PstClient, reserve_pst_ports
 
-    monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
-    gate, waiting = threading.Event(), threading.Event()
-    gate.set()
-    received = server._received
-
-    def gated(sock: object) -> object:
-        if not gate.is_set():
-            waiting.set()
-            gate.wait(slow(30))
-        return received(sock)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(server, "_received", gated)
+    gate, waiting = gate_the_loggers(monkeypatch, kernel_stamps=False)
     port = free_port()
     pst_port, replies = reserve_pst_ports()
     remote = _remote(port, station.broker.port, pst_udp_port=pst_port)
