@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from bridge.core.model import ErrorEvent, ErrorKind
+from bridge.core.model import ErrorEvent, ErrorKind, Target, combine
 
 PUBLISHED_KINDS = {
     "refused",
@@ -37,3 +37,19 @@ def test_a_kind_given_as_text_is_the_kind_and_published_as_text() -> None:
     assert json.dumps(event.as_dict()) == (
         '{"kind": "serial", "message": "port gone", "time": 12.5}'
     )
+
+
+# combine with stamped targets (Target.not_after_s, session.py rule 13): two halves of one
+# sender's target expire with the sooner of the two; a newer one that takes nothing keeps its own
+def test_an_axis_taken_from_an_older_stamped_target_brings_its_sooner_expiry() -> None:
+    older = Target(200.0, None, not_after_s=10.0)
+    assert combine(Target(None, 30.0, not_after_s=15.0), older).not_after_s == 10.0
+    assert combine(Target(None, 30.0), older).not_after_s == 10.0
+    assert combine(Target(None, 30.0, not_after_s=5.0), older).not_after_s == 5.0
+
+
+def test_a_newer_target_that_takes_nothing_keeps_its_own_expiry() -> None:
+    older = Target(200.0, 10.0, not_after_s=10.0)
+    assert combine(Target(100.0, 20.0), older).not_after_s is None
+    assert combine(Target(100.0, 20.0, not_after_s=15.0), older).not_after_s == 15.0
+    assert combine(Target(None, 30.0, not_after_s=15.0), Target(200.0)).not_after_s == 15.0

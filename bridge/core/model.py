@@ -304,6 +304,9 @@ class Target:
     # a nudge (pointing.py rule 6): its step goes out even where it ends within the tolerance of
     # where the rotor rests (session/targets.py rule 5), as the user asked for that step
     nudge: bool = False
+    # a stamped command's expiry (interfaces/mqtt/service.py rule 9) on the steady clock the
+    # sessions keep: a target that waited for a stop's order (session.py rule 13) goes no later
+    not_after_s: float | None = None
 
 
 def combine(newer: Target, older: Target | None) -> Target:
@@ -318,17 +321,25 @@ def combine(newer: Target, older: Target | None) -> Target:
     takes nothing from what waits either (session/targets.py rule 9: it takes the place of the
     turn, an axis it leaves out held where it reads; an attack pass: R/park after the same
     sender's 300/40, still waiting, went out as a GS-232B ``W000 040``, and the elevation turned
-    to 40 for a park that leaves it as it is)."""
+    to 40 for a park that leaves it as it is). The two together expire with the sooner of the
+    two's expiries (``not_after_s``)."""
     if older is None or older.source is not newer.source or older.park or newer.park:
         return newer  # only a sender's own two halves: never a park or a tracking step
     if older.origin != newer.origin:
         return newer
+    took = False
     if newer.az_deg is None and older.az_deg is not None:
         newer = replace(
             newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg, within_deg=older.within_deg
         )
+        took = True
     if newer.el_deg is None and older.el_deg is not None:
         newer = replace(newer, el_deg=older.el_deg)
+        took = True
+    ends = older.not_after_s
+    if took and ends is not None:  # (an axis of the older goes no later than it would have)
+        if newer.not_after_s is None or ends < newer.not_after_s:
+            newer = replace(newer, not_after_s=ends)
     return newer
 
 
@@ -445,18 +456,26 @@ class FollowQso(Asked):
     long_path: bool = False
 
 
+@dataclass(frozen=True, kw_only=True)
+class Move(Asked):
+    """A command that names a target in another way (the judge makes the Target): its stamped
+    expiry on the steady clock, as ``Target.not_after_s``."""
+
+    not_after_s: float | None = None
+
+
 @dataclass(frozen=True)
-class GoToPreset(Asked):
+class GoToPreset(Move):
     name: str
 
 
 @dataclass(frozen=True)
-class Park(Asked):
+class Park(Move):
     """Go to the configured park position (``parked`` once there)."""
 
 
 @dataclass(frozen=True)
-class Nudge(Asked):
+class Nudge(Move):
     """Turn by a step from where the rotor points (or is going)."""
 
     d_az_deg: float
@@ -464,7 +483,7 @@ class Nudge(Asked):
 
 
 @dataclass(frozen=True)
-class Toward(Asked):
+class Toward(Move):
     """Turn toward a place (a locator or coordinates) by the short or the long path."""
 
     latitude_deg: float
@@ -474,7 +493,7 @@ class Toward(Asked):
 
 
 @dataclass(frozen=True)
-class TakePath(Asked):
+class TakePath(Move):
     """The place of the current locator or coordinate target, by the path asked for."""
 
     long_path: bool

@@ -409,14 +409,20 @@ class Rotator:
                 self._start_follow(command, what, epoch)
             # the other ways of naming a target (pointing.py rule 6), judged like any
             case GoToPreset():
-                self._judged(Target(*self.pointing.preset(command.name), src, origin=by), epoch)
+                late = command.not_after_s  # (its stamp's expiry: Target.not_after_s)
+                target = Target(*self.pointing.preset(command.name), src, origin=by)
+                self._judged(replace(target, not_after_s=late), epoch)
             case Park():
-                self._judged(Target(*self.pointing.parking(), src, park=True, origin=by), epoch)
+                target = Target(*self.pointing.parking(), src, park=True, origin=by)
+                self._judged(replace(target, not_after_s=command.not_after_s), epoch)
             case Nudge():
                 ticket = self._mailbox.ticket()  # (before the look: rule 10a)
                 status, halted = self._seen()
                 step = self.pointing.nudge(status, command.d_az_deg, command.d_el_deg, halted)
-                self._judged(replace(step, source=src, origin=by), epoch, ticket=ticket)
+                late = command.not_after_s
+                self._judged(
+                    replace(step, source=src, origin=by, not_after_s=late), epoch, ticket=ticket
+                )
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 self._toward(command, epoch, lat, lon, ticket=ticket)
@@ -563,6 +569,7 @@ class Rotator:
             locator=locator,
         )
         target = Target(az, None, command.source, info=info, origin=command.origin)
+        target = replace(target, not_after_s=command.not_after_s)
         self._judged(target, epoch, ticket=ticket)
 
     def _judged(

@@ -58,7 +58,12 @@ Rules:
     rotator:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
-   drops whatever target or tracking waits.
+   drops whatever target or tracking waits. A stamped target (``Target.not_after_s``: its
+   expiry, interfaces/mqtt/service.py rule 9) whose expiry has passed when a hold it waited
+   under ends, or when it is taken from the mailbox (a move the stop lane's marker kept behind
+   a lock OFF, lastword.py rule 13), is dropped, said (EXPIRED): the order of a STOP held it up
+   as a slow link would (review 25, R25-3). Not once it is taken and waits for the
+   controller's own rules (a brake delay, a stop first): the bridge took it in time.
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -235,6 +240,8 @@ TRY_DROPPED = (
 )
 # rule 23: the bridge's own moves, never judged by the lease (rules 10, 15; autopark.py)
 OWN_MOVES = frozenset({Source.TRACKING, Source.WSJTX, Source.AUTO_PARK, Source.WIND})
+# rule 13: a stamped target whose expiry passed while the last word's order held it up
+EXPIRED = "its expiry passed while it waited for the order of a STOP or lock; send it again"
 WAITING_DROPPED = "target dropped before it went out"  # rule 23's words: a target waiting...
 AGAIN_DROPPED = "target not sent again"  # ... and one whose first try never moved the rotor
 TRACK_REFUSED = "tracking not started"  # ... a track start (or its look-up's answer) so judged
@@ -438,7 +445,12 @@ class RotatorSession:
             ctl.stop(now, merge=True)
         if batch.control_set:  # rule 23: a waiting target the new holder did not send
             self._lease_taken(now)
+        held = self.fence.held
         cleared = self._fence(batch, now)
+        if held and not self.fence.held and not cleared:  # rule 13: what waited for it
+            pending = self.targets.pending
+            if pending is not None and _expired(pending, now):
+                self._drop_pending(EXPIRED)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
             what = describe_command(batch.lost_target)
             self._error(ErrorKind.REFUSED, f"{DROPPED}: {EXPRESS_LOST}", command=what)
@@ -487,6 +499,8 @@ class RotatorSession:
             what = describe_command(batch.target)
             self._end(f"{batch.target.source.value} target", now)  # never combined
             refused = batch.offline or self._refused()
+            if refused is None and _expired(batch.target, now):  # rule 13
+                refused = f"{DROPPED}: {EXPIRED}"
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:
@@ -1240,3 +1254,8 @@ def _leaves_out(target: Target, half: Target) -> bool:
     az = half.az_deg is not None and target.az_deg is not None
     el = half.el_deg is not None and target.el_deg is not None
     return not (az or el)
+
+
+def _expired(target: Target, now: float) -> bool:
+    """Rule 13: a stamped target past its expiry."""
+    return target.not_after_s is not None and now > target.not_after_s

@@ -642,3 +642,68 @@ def test_a_lock_on_while_found_silent_is_checked_as_the_new_locks(rig: Rig) -> N
     v.run_for(60.0)
     assert v.status.locked
     assert b"S\r" in v.sent(since=t) and abs(v.truth().az_deg - 300.0) > 5, v.truth()
+
+
+def stamped_behind_a_lane_stop(v: VirtualRotator, expiry_s: float) -> float:
+    """The lane's stop with its hold 1, then a stamped target to 300 read after its copy
+    (interfaces/mqtt/service.py rule 9: its expiry ``expiry_s`` from now, on the steady clock):
+    it waits for the marker (session.py rule 13). The time it was put."""
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=1)
+    v.mailbox.put(Target(300.0, not_after_s=t + expiry_s))
+    v._take()
+    return t
+
+
+@pytest.mark.parametrize(("back_s", "goes"), [(8.0, False), (2.0, True)])
+def test_a_stamped_target_held_past_its_expiry_is_dropped_when_the_hold_ends(
+    rig: Rig, back_s: float, goes: bool
+) -> None:
+    """Review 25, R25-3: the marker back after the target's 5 s expiry: dropped, said; back
+    within it: it goes."""
+    v = ready(rig)
+    t = stamped_behind_a_lane_stop(v, 5.0)
+    v.run_for(back_s)
+    assert bearings(v, since=t) == []
+    v.mailbox.put_release(1)
+    v._take()
+    if goes:
+        v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 300) < 4, 120, "at 300")
+        assert bearings(v, since=t) == [b"AP1300\r"]
+        assert not [e for e in v.errors(since=t) if "expiry" in e.message]
+    else:
+        v.run_for(30)
+        assert bearings(v, since=t) == [] and not v.truth().is_moving
+        said = [e.message for e in v.errors(since=t)]
+        assert any("expiry passed while it waited" in m for m in said), said
+
+
+def test_a_stamped_target_taken_after_its_expiry_is_dropped(rig: Rig) -> None:
+    """One taken from the mailbox already past its expiry (a move lastword.py rule 13 kept
+    behind a lock OFF and put at the marker) never goes."""
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put(Target(300.0, not_after_s=t - 0.5))
+    v._take()
+    v.run_for(30)
+    assert bearings(v, since=t) == []
+    said = [e.message for e in v.errors(since=t)]
+    assert any("expiry passed" in m for m in said), said
+
+
+def test_a_stamped_target_taken_in_time_still_waits_out_the_controllers_own_rules(
+    rig: Rig,
+) -> None:
+    """Taken in time, a stamped target is the bridge's to carry out: a Rotor-EZ turning must
+    stop and brake first (motion.py), longer than its expiry, and it still goes."""
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    t = v.now
+    v.mailbox.put(Target(60.0, not_after_s=t + 0.5))
+    v._take()
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 60) < 4, 120, "at 60")
+    assert bearings(v, since=t)[-1:] == [b"AP1060\r"]
+    assert not [e for e in v.errors(since=t) if "expiry" in e.message]
+    sent = [f.time_s for f in v.frames(*BEARING_OUTCOMES, since=t)][-1]
+    assert sent - t > 0.5  # (it went after its expiry: the stop and brake came first)

@@ -25,7 +25,8 @@ def controller(calls: list[tuple[object, ...]]) -> tuple[list[float], bool | Non
     """What reaches the controller from what the service handed the rotator, in order, as the
     mailbox and the session do it (mailbox.py rules 1 and 6, session/stops.py rule 5): a stop
     or lock ON drops the target waiting; a target waits while a hold is up, and goes when a
-    release reaches it (a clearing one drops it). The targets' azimuths, and the lock last."""
+    release reaches it (a clearing one drops it; one after a stamped target's expiry, a release
+    recorded with its time, drops it too). The targets' azimuths, and the lock last."""
     hold: int | None = None
     waiting: Target | None = None
     reached: list[float] = []
@@ -47,11 +48,15 @@ def controller(calls: list[tuple[object, ...]]) -> tuple[list[float], bool | Non
                     waiting = None
                     if rest:
                         hold = max(hold or 0, int(str(rest[0])))
-            case ("release", marker, *clear):
-                if clear:
+            case ("release", marker, *rest):
+                at = next((r for r in rest if isinstance(r, float)), None)  # (when, if known)
+                if "clear" in rest:
                     hold = waiting = None
                 elif hold is not None and hold <= int(str(marker)):
                     hold = None
+                    late = waiting is not None and waiting.not_after_s is not None
+                    if late and at is not None and at > waiting.not_after_s:  # type: ignore[union-attr,operator]
+                        waiting = None  # (session.py rule 13: past its stamp's expiry)
                     if waiting is not None:
                         reached.append(waiting.az_deg)
                         waiting = None

@@ -334,6 +334,13 @@ class Stamp:
         sent = _seconds(self.sent)
         return None if self._another(station) or not math.isfinite(sent) else sent
 
+    def expires_unix(self, station: str | None = None) -> float | None:
+        """When the command expires (its send time and expiry, as ``sent_unix`` reads the
+        first), or None where either cannot be read."""
+        sent = self.sent_unix(station)
+        ends = math.nan if sent is None else sent + _seconds(self.expiry)
+        return ends if math.isfinite(ends) else None
+
     def _another(self, station: str | None) -> bool:
         """Rule 7: reckoned against another station process than ``station``."""
         return self.station is not None and station is not None and self.station != station

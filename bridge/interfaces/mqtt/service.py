@@ -77,6 +77,12 @@ Rules:
    the station's, so a lost moment makes it earlier: refused, the safe side) and compared with
    when the halt came, with no grain. Halts: never refused. The
    same on the stop lane, for the lock OFF it carries out while the main connection is down.
+   A stamped move taken goes with its expiry on the steady clock (``Target.not_after_s``, a
+   ``Move``'s): one that waits in the bridge for the order of a STOP or lock ON (a lane hold
+   and its marker, lastword.py rule 13; a lock OFF's marker) is dropped there once that has
+   passed, said on R/error (session.py rule 13): waiting for the last word is a link holding
+   it up too (review 25: a P sent right after an S turned the rotor 14 s later, its markers
+   lost in a flood).
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
@@ -109,6 +115,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 from bridge.core.errors import Refused
@@ -120,6 +127,7 @@ from bridge.core.model import (
     FollowQso,
     GoToPreset,
     MotionState,
+    Move,
     Nudge,
     Origin,
     Park,
@@ -565,8 +573,11 @@ class MqttService:
                 refused[part.member] = late
                 rot.report_refusal(late, said, origin=origin)
                 continue
+            target = part.target
+            if stamp is not None:  # rule 9: its expiry goes with it
+                target = replace(target, not_after_s=self._not_after(stamp))
             try:
-                rot.submit(part.target, said, since=since)
+                rot.submit(target, said, since=since)
             except Refused as exc:
                 refused[part.member] = exc.message
         if refused:
@@ -645,6 +656,12 @@ class MqttService:
         if halted_unix is not None:
             return sent_unix < halted_unix
         return time.monotonic() - (self._stamp_clock() - sent_unix) < halted_s
+
+    def _not_after(self, stamp: Stamp | None) -> float | None:
+        """Rule 9: when a stamped move expires, on the steady clock the sessions keep (None:
+        no stamp, or none that can be read; such a one was refused)."""
+        ends = None if stamp is None else stamp.expires_unix(self._station)
+        return None if ends is None else self._clock() + (ends - self._stamp_clock())
 
     def _halt_sent_s(self, stamp: Stamp | None) -> SentAt | None:
         """Rule 9: a halt's send time, when its stamp would pass as a move's (``_late``'s
@@ -737,18 +754,27 @@ class MqttService:
             self._halts.main_lock_off(rot, origin)
             return
         try:
-            self._command(rot, kind, arg, payload, what, origin)
+            self._command(rot, kind, arg, payload, what, origin, self._not_after(stamp))
         except pl.PayloadError as exc:
             rot.report_refusal(str(exc), what, origin=origin)
         except Refused:
             pass  # the rotator has reported it
 
     def _command(
-        self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
+        self,
+        rot: RotatorPort,
+        kind: str,
+        arg: str | None,
+        payload: bytes,
+        what: str,
+        by: Origin,
+        not_after_s: float | None = None,
     ) -> None:
-        """Everything but stop and lock, parsed into one command for the judge; PayloadError
-        or Refused."""
+        """Everything but stop and lock, parsed into one command for the judge (a move with
+        its stamp's expiry, ``not_after_s``: rule 9); PayloadError or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
+        if not_after_s is not None and isinstance(command, Target | Move):
+            command = replace(command, not_after_s=not_after_s)
         if (
             command is not None
             and not isinstance(command, Called)
