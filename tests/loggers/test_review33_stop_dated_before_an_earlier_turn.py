@@ -24,11 +24,6 @@ from bridge.interfaces.loggers.server import LoggerEndpoints
 from tests.support.mosquitto import free_port
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 33: without kernel stamps a STOP read in a busy serve loop is dated before "
-    "a turn that came before it on another port",
-)
 def test_a_turn_that_came_before_a_stop_on_another_port_is_not_dated_after_it(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -65,17 +65,32 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    only known after it. A datagram that ends a wait is dated from the look before it, so no
    wait lasts longer than UNSTAMPED_WAIT_S there (review 26: a wait of up to REPORT_IDLE_S
    dated a turn after an idle spell 10 s back, refused as expired; one sent half a second
-   after a STOP, before it): early by a quarter second at most, four wake-ups a second. The
-   stale check above is the system's stamp's alone. The stamps are live before a port is
-   bound (``_stamping_on``): Linux
-   turns its stamping on for the first socket that asks a moment later, on a worker thread
-   (milliseconds; longer on a loaded host), and a datagram that comes meanwhile is stamped
-   when it is read, not when it came, with nothing to tell the two apart. A turn sent before
-   a STOP from another interface, come in that moment and read after the STOP, was dated
-   after it and carried out (a flaky test on a loaded 2-core CI machine, a real hole at every
-   start). So a socket of its own asks first and sends itself datagrams until one comes back
-   stamped before it was read; the ports asked while it holds the stamping on are stamped at
-   once. Not live within STAMPS_LIVE_S: said, and the ports listen all the same.
+   after a STOP, before it): early by a quarter second at most, four wake-ups a second. These
+   bounds do not order two sockets' datagrams (review 33: a serve dates every datagram it reads
+   by the bound its wake-up began with, though they came while it carried out the first, and
+   another socket was found empty after that: a STOP so read was dated before a turn that came
+   before it on another port, read at the next wake-up, and the turn went out dated after the
+   STOP). So a datagram that may be a stop (rule 8's search) is noted with the time after its
+   read, an upper bound, and one that is no stop, read later from another socket with a bound
+   before that time (it may have come before the stop), is dated BEFORE_HALT_S before the
+   stop's date: the remote refuses it as seen before the STOP (remote.py rule 8). A stop keeps
+   its own bound (dated later, a turn its own sender sent after it would be lifted with it past
+   a STOP from Home Assistant: remote.py rule 8's floor), and a datagram read after a stop from
+   the same socket keeps its date: one socket's datagrams are read in the order they came
+   (``AZIMUTH 300``, ``STOP``, ``AZIMUTH 200`` ends at 200). What comes to a socket the loop
+   found empty after the stop was read is dated as before: PstRotator tracks on after a STOP.
+   Each socket's stops are kept HALTS_KEPT at most, the oldest two then one: the later read,
+   the earlier date (the safe side: more is dated before it). With the system's stamps none of
+   this is needed. The stale check above is the system's stamp's alone. The stamps are live
+   before a port is bound (``_stamping_on``): Linux turns its stamping on for the first socket
+   that asks a moment later, on a worker thread (milliseconds; longer on a loaded host), and a
+   datagram that comes meanwhile is stamped when it is read, not when it came, with nothing to
+   tell the two apart. A turn sent before a STOP from another interface, come in that moment
+   and read after the STOP, was dated after it and carried out (a flaky test on a loaded 2-core
+   CI machine, a real hole at every start). So a socket of its own asks first and sends itself
+   datagrams until one comes back stamped before it was read; the ports asked while it holds
+   the stamping on are stamped at once. Not live within STAMPS_LIVE_S: said, and the ports
+   listen all the same.
 10. Every port is the bridge's alone: no socket option lets another program bind it too, so
    one that tries is told the address is in use (and a bridge that finds it taken says so at
    its start). N1MM advises programs to share its ports (SO_REUSEADDR), but on Linux a
@@ -99,6 +114,7 @@ import struct
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -143,6 +159,10 @@ REPORT_IDLE_S = 15.0
 # one is dated at most this much before it came (a review: dated from the start of a 15 s wait,
 # a turn after an idle spell was refused as expired, one 0.5 s after a STOP as before it)
 UNSTAMPED_WAIT_S = 0.25
+# rule 9, where the system does not stamp datagrams: how far before a stop read on another
+# socket a datagram not proven to have come after it is dated (one stamp's millisecond)
+BEFORE_HALT_S = 0.001
+HALTS_KEPT = 8  # rule 9: the stops read on one socket remembered for that, at most
 REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
 
 _BIND_HINTS = {
@@ -177,6 +197,8 @@ class LoggerEndpoints:
         # rule 9, where the system does not stamp datagrams: when each socket was last found
         # empty (monotonic), and a time before any could be (for one not read yet)
         self._drained_s: dict[socket.socket, float] = {}
+        # ... and the stops read on each: (the time after the read, the date given), oldest first
+        self._halts_read: dict[socket.socket, deque[tuple[float, float]]] = {}
         self._started_s = time.monotonic()
         self._selector: selectors.BaseSelector | None = None
         self._thread: threading.Thread | None = None
@@ -278,6 +300,7 @@ class LoggerEndpoints:
         self._sockets.clear()
         self._addresses.clear()
         self._dropped.clear()
+        self._halts_read.clear()
 
     # -- the thread -----------------------------------------------------------------------
     def _loop(self) -> None:
@@ -380,6 +403,7 @@ class LoggerEndpoints:
             before = time.monotonic()  # rule 9: found empty from then on, if so
             try:
                 data, peer, arrived = _received(sock)
+                read_s = time.monotonic()  # rule 9: what was read came before this
             except (BlockingIOError, InterruptedError):
                 self._drained_s[sock] = before
                 return
@@ -395,8 +419,42 @@ class LoggerEndpoints:
             if not stop and not self._budgets.allow(source, now):
                 self._flooded(now, source)
                 continue
-            self._carry_out(sock, endpoint, data, peer, arrived, since_s)
+            seen_s = since_s
+            if since_s is not None and arrived is None:  # rule 9: no stamp, a bound
+                if stop:
+                    self._halt_read(sock, read_s, since_s)
+                else:
+                    seen_s = self._before_halts(sock, since_s)
+            self._carry_out(sock, endpoint, data, peer, arrived, seen_s)
             self._budgets.spend(source, 1 + len(data) / 1024, now)
+
+    def _halt_read(self, sock: socket.socket, read_s: float, since_s: float) -> None:
+        """Rule 9, where the system does not stamp datagrams: a datagram that may be a stop,
+        dated ``since_s``, read before ``read_s``: noted, for what another socket gives after
+        it. The stops one serve reads share a date: one entry, the last read's time; past
+        HALTS_KEPT the oldest two become one, the later time and the earlier date (the safe
+        side: more is dated before them)."""
+        halts = self._halts_read.setdefault(sock, deque())
+        if halts and halts[-1][1] == since_s:
+            halts[-1] = read_s, since_s
+            return
+        halts.append((read_s, since_s))
+        if len(halts) > HALTS_KEPT:
+            (_, first), (last_s, second) = halts.popleft(), halts.popleft()
+            halts.appendleft((last_s, min(first, second)))
+
+    def _before_halts(self, sock: socket.socket, since_s: float) -> float:
+        """Rule 9, where the system does not stamp datagrams: the date of a datagram that is
+        no stop, read from ``sock`` and come after ``since_s``: that, unless a stop another
+        socket gave was read after ``since_s`` (it may then have come after that stop): just
+        before that stop's date, then."""
+        seen_s = since_s
+        for other, halts in self._halts_read.items():
+            if other is not sock:
+                for read_s, dated_s in halts:
+                    if read_s > since_s:
+                        seen_s = min(seen_s, dated_s - BEFORE_HALT_S)
+        return seen_s
 
     def _carry_out(
         self,
