@@ -159,8 +159,9 @@ but not the order between them. So:
    any stop or lock ON drops what was put before it. A lock OFF read under a hold with a lane
    lock ON among its halts (``off_waits``; under a STOP's alone it goes at once) is kept by
    halts.py, one per rotator, the lock staying ON meanwhile, and so is the newest move read
-   after it (one: a flood behind the OFF keeps nothing more, and the marker puts two
-   commands, not thousands, under the lock a lane halt needs: an attack pass); at the marker
+   after it (a group's target's part for that member too, in the same slot: cold review 29;
+   one: a flood behind the OFF keeps nothing more, and the marker puts two commands, not
+   thousands, under the lock a lane halt needs: an attack pass); at the marker
    the OFF goes, then that move, each judged against the halts put since the marker's look
    (a STOP read after the OFF drops the move, never the OFF: an attack pass). A lock ON
    carried out after the OFF was read, from anywhere, drops both, said on R/error (one read

@@ -86,7 +86,10 @@ Rules:
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
-   refused, and moving nothing), each handed to that member's own ``submit``. Refusals go on
+   refused, and moving nothing), each handed to that member's own ``submit``; a member's part
+   read while that member's lock OFF waits for its marker is kept behind the OFF as the
+   member's own target would be (lastword.py rule 13: its one slot, replaced by a newer move,
+   dropped by a STOP or lock ON; cold review 29: it was refused, "send it again"). Refusals go on
    ``G/error`` (rule 4's limit, per group) and in ``G/status``, each member's also on its own
    ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses. A group
    takes nothing else: a rotator's other command topics under a group's root (``G/lock``,
@@ -149,7 +152,7 @@ from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
-from bridge.interfaces.mqtt.halts import Halts, switch_on
+from bridge.interfaces.mqtt.halts import AFTER_WAITING_OFF, Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
@@ -564,6 +567,13 @@ class MqttService:
                 continue
             since = rot.halts  # rule 11: read before the fence is asked
             stale = self._halts.stale_move(rot.id)
+            if stale == AFTER_WAITING_OFF:  # lastword.py rule 13: as the member's own target
+                stale = self._late(stamp, rot)  # (rule 9 judged first, as for its own)
+                if stale is None and self._halts.keep_after_off(rot, part.target, said, origin):
+                    continue  # kept in the member's slot, put after its OFF at the marker
+                if stale is None:  # (the OFF went meanwhile, or a halt came: asked again)
+                    since = rot.halts
+                    stale = self._halts.stale_move(rot.id)
             if stale is not None:
                 refused[part.member] = stale
                 rot.report_refusal(stale, said, origin=origin)
