@@ -141,3 +141,22 @@ def test_a_member_part_stamped_before_its_last_halt_is_refused_not_kept() -> Non
     markers_back(svc, pub)
     assert controller(upper.calls) == ([], False), upper.calls
     assert controller(lower.calls)[0] == [300.0]
+
+
+def test_a_stamped_group_target_kept_behind_the_off_keeps_its_expiry() -> None:
+    """service.py rule 9, session.py rule 13: the member's part kept in its slot carries the
+    group target's expiry on the steady clock, as the part put at once does; the session
+    drops it if the marker comes back past it."""
+    svc, pub, upper, lower = group_service()
+    svc.on_lane_message("rotor/upper/lock", b"ON", False)
+    svc.on_message("rotor/upper/lock", b"ON", False)
+    svc.on_message("rotor/upper/lock", b"OFF", False)
+    before = time.monotonic()
+    svc.on_message("rotor/stack/target", b"120", False, stamp=Stamp.of(NOW_UNIX, 5.0))
+    after = time.monotonic()
+    markers_back(svc, pub)
+    for rot in (upper, lower):
+        sent = [c[1] for c in rot.calls if c[0] == "submit" and isinstance(c[1], Target)]
+        assert len(sent) == 1, rot.calls
+        ends = sent[0].not_after_s
+        assert ends is not None and before + 5.0 <= ends <= after + 5.0, (rot.id, ends)

@@ -565,11 +565,14 @@ class MqttService:
                 refused[part.member] = part.refused or "refused"
                 rot.report_refusal(refused[part.member], said, origin=origin)
                 continue
+            target = part.target
+            if stamp is not None:  # rule 9: its expiry goes with it (kept behind an OFF too)
+                target = replace(target, not_after_s=self._not_after(stamp))
             since = rot.halts  # rule 11: read before the fence is asked
             stale = self._halts.stale_move(rot.id)
             if stale == AFTER_WAITING_OFF:  # lastword.py rule 13: as the member's own target
                 stale = self._late(stamp, rot)  # (rule 9 judged first, as for its own)
-                if stale is None and self._halts.keep_after_off(rot, part.target, said, origin):
+                if stale is None and self._halts.keep_after_off(rot, target, said, origin):
                     continue  # kept in the member's slot, put after its OFF at the marker
                 if stale is None:  # (the OFF went meanwhile, or a halt came: asked again)
                     since = rot.halts
@@ -583,9 +586,6 @@ class MqttService:
                 refused[part.member] = late
                 rot.report_refusal(late, said, origin=origin)
                 continue
-            target = part.target
-            if stamp is not None:  # rule 9: its expiry goes with it
-                target = replace(target, not_after_s=self._not_after(stamp))
             try:
                 rot.submit(target, said, since=since)
             except Refused as exc:
