@@ -12,17 +12,9 @@ a target published before rotctld's S and read after it turns the rotor again.
 
 from __future__ import annotations
 
-import pytest
-
 from tests.mqtt.test_attack5_refused_markers import ConfirmedRig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 31, open: markers said lost by a new connection's look are judged again "
-    "on the next connect only (lastword.py rule 7), not asked again under the connection "
-    "when the ACL is mended by a SIGHUP: fences off until the main connection reconnects",
-)
 def test_markers_denied_across_a_reconnect_are_asked_again_once_the_acl_is_mended() -> None:
     rig = ConfirmedRig()
     svc = rig.svc

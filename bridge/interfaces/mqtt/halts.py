@@ -279,11 +279,21 @@ class Halts:
 
     def markers_denied(self) -> None:
         """The broker does not let the main connection read its markers (lastword.py rule 7):
-        none goes out; a lane's halt holds until its main copy. The holds stay."""
+        none goes out; a lane's halt holds until its main copy. The holds stay. Where a
+        PUBACK said so (both topics refused, rule 15), the broker is asked again every
+        RESEND_MAX_S, whoever found it (a new connection's look too: review 31, an ACL mended
+        by a SIGHUP a minute after a reconnect left the markers off for that connection's
+        life)."""
+        refused = self.markers_refused
+        topics = (self.topics.bridge_fence, self.topics.bridge_hello)
+        by_puback = refused is not None and refused(topics)  # (the client's lock: not under ours)
         with self._lock:
             ended = self.word.markers_denied()
             said = [one for rid, m in ended.items() for one in self._release((rid,), m)]
+            if by_puback and self._refused_at is None:
+                self._refused_at = self._clock()
         self._say(said)
+        self._arm()
 
     def markers_allowed(self) -> None:
         """The hello or the probe came back on a new connection: markers go out again
@@ -484,9 +494,7 @@ class Halts:
             "stop lane's hold ends with the main connection's copy of its halt from now on",
             *topics,
         )
-        self.markers_denied()
-        with self._lock:
-            self._refused_at = self._clock()
+        self.markers_denied()  # (asked again from now: ``_refused_at``)
 
     def say_long_holds(self) -> None:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
