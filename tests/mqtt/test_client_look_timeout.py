@@ -107,3 +107,28 @@ def test_a_look_times_out_on_the_broker_s_silence_not_while_it_hands_over_what_i
         client._intercepted("t/junk2/availability", b"online", True)  # just before it looks
         rig.fire()
     assert clock.now - began == pytest.approx(LOOK_MAX_S) and client._look_lost
+
+
+def test_a_retained_command_counts_as_the_broker_s_replay_until_the_look_s_subscribe_is_answered(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Review 33: under MQTT 5 a command topic, subscribed with retain-as-published, hands a
+    live command published retained on with the flag set, as the broker's replay of what it
+    held (a backlog planted on a filter the bridge reads, stale.py's ``B/+/availability``,
+    comes there too). The broker sends a subscription's retained messages as it answers it,
+    before it answers the next one: until the SUBACK of the look's SUBSCRIBE, the connect's
+    last, they are its replay and keep the look open; after it they say nothing of that."""
+    rig = LookRig(monkeypatch, ["t/+/availability"])
+    client, clock, began = rig.client, rig.clock, rig.began
+    client._look_sub = 7  # the look's SUBSCRIBE, as a connect sends it (``_opened``)
+    clock.now = began + 4.9
+    client._intercepted("t/junk1/availability", b"online", True)  # the replay, read slowly
+    clock.now = began + LOOK_TIMEOUT_S
+    rig.fire()
+    assert not client._look_lost
+    client._on_subscribe(client._client, None, 7, [], None)  # its SUBACK: the replay is over
+    clock.now = began + 9.0
+    client._intercepted("t/junk2/availability", b"online", True)  # published live, retained
+    clock.now = began + 4.9 + LOOK_TIMEOUT_S
+    rig.fire()
+    assert client._look_lost

@@ -16,10 +16,6 @@ from bridge.interfaces.mqtt.client import LOOK_TIMEOUT_S
 from tests.mqtt.test_client_look_timeout import LookRig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 33: a live command published retained (retain-as-published) keeps the look open",
-)
 def test_a_live_command_published_retained_does_not_keep_a_look_whose_hello_is_denied_open(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

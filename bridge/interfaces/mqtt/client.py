@@ -21,7 +21,15 @@ each written out in the module that keeps it:
   targets kept a look whose hello was denied open for a minute), and a slow machine reading
   a backlog of tens of thousands of retained topics took more than 5 s, its look timed out
   and was judged on half of them, the bridge's own ``offline`` of its last run then said as
-  another client's); 15 deletions said in a few lines.
+  another client's. Under MQTT 5 a filter subscribed with retain-as-published (connection.py
+  rule 1: the commands, and stale.py's filters, ``B/+/availability`` among them) hands a live
+  message published retained on with the flag set, as the broker's replay (review 33: a
+  tracker set to retain kept the look open a minute again): there the flag counts only until
+  the SUBACK of the look's SUBSCRIBE, the connect's last (``_broker_held``: the broker sends
+  a subscription's retained messages as it answers it, mosquitto 2.0 right after its SUBACK
+  and before the next, however many; a broker that sends them later has them count on the
+  bridge's own topics and the states it reads, subscribed without it, alone); 15 deletions
+  said in a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
@@ -97,6 +105,7 @@ import paho.mqtt.client as paho
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
@@ -110,7 +119,7 @@ from bridge.interfaces.mqtt.look import (
     say_clear,
     say_clears,
 )
-from bridge.interfaces.mqtt.owned import FOREIGN_LOG_S, OwnedTopics
+from bridge.interfaces.mqtt.owned import FOREIGN_LOG_S, OwnedTopics, matcher
 from bridge.interfaces.mqtt.owned import SETTLE_AFTER_CONNECT_S as SETTLE_AFTER_CONNECT_S
 from bridge.settings import MqttSettings
 
@@ -191,6 +200,8 @@ class MqttClient(Connection):
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self._look_lost = False  # rule 16: this connection's look timed out
         self._look_heard = 0.0  # rule 14: when the broker last sent anything (monotonic)
+        self._look_sub: int | None = None  # rule 14: the look's SUBSCRIBE, until its SUBACK
+        self._as_published: Callable[[str], bool] | None = None  # rule 14 (``_broker_held``)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
         self._hello_back = False  # rule 16: it, or the probe, came back (in time or later)
         self.refused: str | None = None
@@ -438,7 +449,8 @@ class MqttClient(Connection):
             self._hello_out, self._hello_back = None, False
             if look is not None:  # rule 14: look first
                 hello = self._hello_out = look.begin()
-                self._subscribe(client, [(look.claim.hello_topic, 0)])
+                self._as_published = None  # rule 14: this connection's (``_broker_held``)
+                self._look_sub = self._subscribe(client, [(look.claim.hello_topic, 0)])
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
                     self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
@@ -488,8 +500,8 @@ class MqttClient(Connection):
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None:
-            if retained:  # rule 14: the broker hands over what it held (a live message, a
-                self._look_heard = time.monotonic()  # tracker's target, says nothing of that)
+            if retained and self._broker_held(topic):  # rule 14: the broker hands over what
+                self._look_heard = time.monotonic()  # it held (a tracker's target does not)
             if self._look_saw(self._look, topic, payload):
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
@@ -497,6 +509,38 @@ class MqttClient(Connection):
             if late and self._on_heard is not None and self._on_heard(late):
                 return True  # its rotator's ON goes out: the OFF the open sent is not put back
         return bool(self._owned.filters) and self._foreign(topic, payload, live=not retained)
+
+    def _on_subscribe(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_codes: list[ReasonCode],
+        properties: Properties | None,
+    ) -> None:
+        if mid == self._look_sub:  # rule 14: the replays of this connect's subscriptions came
+            self._look_sub = None
+        super()._on_subscribe(client, userdata, mid, reason_codes, properties)
+
+    def _broker_held(self, topic: str) -> bool:
+        """Rule 14: whether a message that came retained on ``topic`` is the broker handing over
+        what it held. Under MQTT 3.1.1 it is (the broker clears the flag of a live one), and
+        under MQTT 5 on a topic no filter subscribed with retain-as-published reads (the
+        bridge's own, a state read: the flag is cleared there too). On one that does (the
+        commands, stale.py's), a live message keeps the flag it was published with: it is only
+        until the SUBACK of the look's SUBSCRIBE, the connect's last, comes (the broker sends a
+        subscription's retained messages as it answers it; mosquitto 2.0: each SUBACK, then
+        that subscription's replay, then the next SUBACK)."""
+        if not self._v5 or self._look_sub is not None:
+            return True
+        matches = self._as_published
+        if matches is None:
+            filters = self._filters()
+            live = [
+                f for f, o in filters if isinstance(o, SubscribeOptions) and o.retainAsPublished
+            ]
+            matches = self._as_published = matcher(live)
+        return not matches(topic)
 
     def _fence_back(self, topic: str) -> None:
         """Rule 16: the probe came back; if the topic was denied before, it is not now (said on

@@ -8,9 +8,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
    commands sent while the bridge was away are not replayed to it; subscriptions ask for
    retain-as-published, so a command published with the retain flag is recognised as such even
-   while the bridge is connected (MQTT 3.1.1 clears the flag then); not the state topics read
-   (``replayed``: the wind) nor the bridge's own (owned.py rule 10), whose flag then says
-   "replayed" or "held", as under MQTT 3.1.1. ``protocol =
+   while the bridge is connected (MQTT 3.1.1 clears the flag then; so under MQTT 5 the flag
+   does not tell the broker's replay from a live message there: client.py rule 14); not the
+   state topics read (``replayed``: the wind) nor the bridge's own (owned.py rule 10), whose
+   flag then says "replayed" or "held", as under MQTT 3.1.1. ``protocol =
    "3.1.1"`` is for brokers without MQTT 5 (clean session, same rules otherwise). ``"auto"``, the
    default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
    answers "Unsupported protocol version" (NATS, aedes), as long as no MQTT 5 connection was

@@ -84,8 +84,7 @@ class OwnedTopics:
         self._clock = clock
         self.hears_own = hears_own  # (set again when mqtt.protocol "auto" steps down)
         self.filters: list[str] = []
-        self._exact: frozenset[str] = frozenset()
-        self._wild: re.Pattern[str] | None = None
+        self._owns = matcher([])
         self._echoes: dict[str, deque[bytes]] = {}  # digests sent, not heard back (hears_own)
         self.will: tuple[str, bytes] | None = None  # the bridge's own last will
         self._fixed_at: dict[str, float] = {}
@@ -95,9 +94,7 @@ class OwnedTopics:
 
     def watch(self, filters: list[str]) -> None:
         self.filters = list(filters)
-        wild = [f for f in filters if _is_wild(f)]
-        self._exact = frozenset(f for f in filters if not _is_wild(f))
-        self._wild = re.compile("|".join(map(_pattern, wild)), re.DOTALL) if wild else None
+        self._owns = matcher(self.filters)
 
     def subscriptions(self) -> list[tuple[str, int | SubscribeOptions]]:
         """What to subscribe to on every connect: MQTT 5 without our own messages back
@@ -108,9 +105,7 @@ class OwnedTopics:
         return [(f, mine) for f in self.filters]
 
     def owns(self, topic: str) -> bool:
-        if topic in self._exact:
-            return True
-        return self._wild is not None and self._wild.fullmatch(topic) is not None
+        return self._owns(topic)
 
     def connected(self) -> None:
         """A new connection: what was in flight before is gone with the old one, and every
@@ -179,6 +174,20 @@ class OwnedTopics:
             self._owed.discard(topic)
             self._fixed_at[topic] = now
         return due
+
+
+def matcher(filters: list[str]) -> Callable[[str], bool]:
+    """Whether a topic is one ``filters`` match, as MQTT matches them (rule 10's ``owns``;
+    client.py rule 14's filters subscribed with retain-as-published): a set of the exact
+    filters and one pattern compiled for the wildcard ones."""
+    exact = frozenset(f for f in filters if not _is_wild(f))
+    wild = [f for f in filters if _is_wild(f)]
+    pattern = re.compile("|".join(map(_pattern, wild)), re.DOTALL) if wild else None
+
+    def matches(topic: str) -> bool:
+        return topic in exact or (pattern is not None and pattern.fullmatch(topic) is not None)
+
+    return matches
 
 
 def _is_wild(topic_filter: str) -> bool:
