@@ -4,12 +4,15 @@ lingers on the broker for a client that subscribes to the base topic later."""
 
 from __future__ import annotations
 
+import logging
+import threading
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from bridge.interfaces.mqtt.claim import Claim, Instance
-from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.client import LOOK_MAX_S, MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
@@ -95,3 +98,55 @@ def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its
     finally:
         client.stop()
         seed.close()
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_tracker_publishing_retained_does_not_keep_a_look_whose_hello_is_denied_open(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, protocol: str
+) -> None:
+    """Rule 14 (review 33): the broker's ACL denies the hello, so the look ends on its timer;
+    a tracker set to retain publishes its target twice a second, and under MQTT 5 the command
+    topic, subscribed with retain-as-published, hands each on with the retain flag set, as
+    the broker's replay of what it held. The look timed out LOOK_MAX_S, a minute, after the
+    connect, the bridge gated all along; now LOOK_TIMEOUT_S after it. (Under MQTT 3.1.1 the
+    broker clears the flag of a live message: the same.)"""
+    acl = tmp_path / "acl"
+    acl.write_text("topic readwrite t/#\ntopic deny t/bridge/hello\n")
+    # started as root, mosquitto would become user "mosquitto", who cannot read pytest's tmp
+    broker = Mosquitto(
+        tmp_path / "broker", extra_conf=f"allow_anonymous true\nacl_file {acl}\nuser root"
+    )
+    broker.start()
+    tracker = Probe(broker.port, "")
+    quit_tracking = threading.Event()
+
+    def track() -> None:
+        while not quit_tracking.is_set():
+            tracker.publish("t/rot1/target", "120", retain=True)
+            quit_tracking.wait(0.5)  # (the tracker's own pace)
+
+    tracking = threading.Thread(target=track, daemon=True)
+    tracking.start()
+    settings = MqttSettings(
+        port=broker.port, base_topic="t", client_id="look-under-test", protocol=protocol
+    )
+    client = MqttClient(
+        settings,
+        will_topic="t/bridge/state",
+        subscriptions=["t/rot1/target"],
+        on_message=lambda *a: None,
+        claim=Claim(Instance.me("look-under-test"), "t", "t/bridge/info", "t/bridge/hello"),
+    )
+    try:
+        with caplog.at_level(logging.WARNING, logger="bridge.interfaces.mqtt.look"):
+            client.start()
+            wait_until(lambda: client.connected.is_set(), LOOK_MAX_S + 10, "the look's end")
+        (said,) = [r.getMessage() for r in caplog.records if "no answer" in r.getMessage()]
+        waited_s = float(said.split(" in ")[1].split(" s ")[0])
+        assert waited_s < LOOK_MAX_S / 2  # (LOOK_TIMEOUT_S on a quiet machine)
+    finally:
+        quit_tracking.set()
+        tracking.join()
+        client.stop()
+        tracker.close()
+        broker.stop()
