@@ -61,9 +61,11 @@ Rules:
    drops whatever target or tracking waits. A stamped target (``Target.not_after_s``: its
    expiry, interfaces/mqtt/service.py rule 9) whose expiry has passed when a hold it waited
    under ends, or when it is taken from the mailbox (a move the stop lane's marker kept behind
-   a lock OFF, lastword.py rule 13), is dropped, said (EXPIRED): the order of a STOP held it up
-   as a slow link would (review 25, R25-3). Not once it is taken and waits for the
-   controller's own rules (a brake delay, a stop first): the bridge took it in time.
+   a lock OFF, lastword.py rule 13, or a slow link's), is dropped, said (EXPIRED, and
+   EXPIRED_TAKEN for one taken past it, which names no STOP: none may have come; review 34):
+   the order of a STOP held it up as a slow link would (review 25, R25-3). Not once it is
+   taken and waits for the controller's own rules (a brake delay, a stop first): the bridge
+   took it in time.
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -240,8 +242,10 @@ TRY_DROPPED = (
 )
 # rule 23: the bridge's own moves, never judged by the lease (rules 10, 15; autopark.py)
 OWN_MOVES = frozenset({Source.TRACKING, Source.WSJTX, Source.AUTO_PARK, Source.WIND})
-# rule 13: a stamped target whose expiry passed while the last word's order held it up
+# rule 13: a stamped target whose expiry passed while the last word's order held it up...
 EXPIRED = "its expiry passed while it waited for the order of a STOP or lock; send it again"
+# ... or before it was taken at all (a slow link, a busy machine; or kept behind a lock OFF)
+EXPIRED_TAKEN = "its expiry passed before the bridge could carry it out; send it again"
 WAITING_DROPPED = "target dropped before it went out"  # rule 23's words: a target waiting...
 AGAIN_DROPPED = "target not sent again"  # ... and one whose first try never moved the rotor
 TRACK_REFUSED = "tracking not started"  # ... a track start (or its look-up's answer) so judged
@@ -500,7 +504,7 @@ class RotatorSession:
             self._end(f"{batch.target.source.value} target", now)  # never combined
             refused = batch.offline or self._refused()
             if refused is None and _expired(batch.target, now):  # rule 13
-                refused = f"{DROPPED}: {EXPIRED}"
+                refused = f"{DROPPED}: {EXPIRED_TAKEN}"
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:

@@ -1,17 +1,15 @@
-"""COLD REVIEW 34 (7d371f02): session.py rule 13 drops a stamped target taken from the mailbox
-past its expiry, whatever held it up, and always says "its expiry passed while it waited for
-the order of a STOP or lock". A target judged fresh by service.py rule 9 at 4.99 s of its 5 s
-expiry (a slow link: what the stamps are for), taken by the lines thread a few milliseconds
-later, with no STOP or lock anywhere, is dropped (past its expiry: rightly) with words that
-blame a STOP or lock that never came; the operator looks for a STOP in the audit trail and on
-the other front ends, and finds none (docs/mqtt.md speaks only of one that waited for a STOP).
+"""COLD REVIEW 34 (7d371f02), fixed since (EXPIRED_TAKEN): session.py rule 13 drops a
+stamped target taken from the mailbox past its expiry, whatever held it up, and always said
+"its expiry passed while it waited for the order of a STOP or lock". A target judged fresh by
+service.py rule 9 at 4.99 s of its 5 s expiry (a slow link: what the stamps are for), taken by
+the lines thread a few milliseconds later, with no STOP or lock anywhere, is dropped (past its
+expiry: rightly) with words that blamed a STOP or lock that never came; the operator looks for
+a STOP in the audit trail and on the other front ends, and finds none.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-
-import pytest
 
 from bridge.core.model import MotionState, Target
 from tests.engine.virtual import VirtualRotator
@@ -19,11 +17,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 34: a stamped target taken just past its expiry with no STOP or lock at all "
-    "is said to have waited for the order of a STOP or lock",
-)
 def test_a_target_taken_past_its_expiry_with_no_halt_does_not_blame_a_stop(rig: Rig) -> None:
     v = rig("rotorez")
     v.run_until_state(MotionState.IDLE, 30)

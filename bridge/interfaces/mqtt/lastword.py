@@ -171,9 +171,10 @@ but not the order between them. So:
    a flood lasts no longer than the main connection takes to read it (review 23: a marker
    lost in the flood, its resend 30 s away). What is left: a real copy lost on the main
    connection too (two losses) lets what waited go at the marker; while the markers cannot
-   be read (rule 7) the count copy ends the hold as before, the gap open; and a stamped move
-   (service.py rule 9) is judged against its expiry when it is read, not again when it goes
-   (review 25: with every marker lost it goes at a resend's return).
+   be read (rule 7) the count copy ends the hold as before, the gap open. A stamped move
+   (service.py rule 9) that waits goes only while its expiry lasts: the session drops it
+   past it (session.py rule 13; review 25: with every marker lost it went at a resend's
+   return, long after it).
 14. While neither connection can read its markers (rule 7, and rule 4's ``echoes`` off), the
    lane carries out nothing (halts.py ``_lane_blind``): its halt could not be told from the
    echo of one the main connection carried out first, and its hold would wait for a copy
