@@ -1118,7 +1118,10 @@ class Controller:
         self._first_unread = False  # a stop lost at the reconnect taken, and it was owed no more)
         cfg, was = self.cfg, self.motion
         before = was.state
-        self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        asked = link.first_asked_t  # (the question it answers, the first since the last reading)
+        self.motion, events = mo.reading(
+            self.motion, cfg.motion, reply.az_deg, now, reply.el_deg, asked
+        )
         if self.motion.state is mo.MOVING or mo.at_rest(self.motion):
             self._known_since_loss = True  # (rule 10: what a loss of readings then finds)
         if self._watching() or self._rested is not None:  # rule 10

@@ -731,6 +731,12 @@ class Link:
         return self._asked_t > self._heard_from()
 
     @property
+    def first_asked_t(self) -> float:
+        """Rule 2: when the first question since the last valid reply before it went out
+        (-inf: none since the link came up): the earliest the reply read now can answer."""
+        return self._first_asked_t
+
+    @property
     def asking_since(self) -> float | None:
         """Rule 2: when the first question since the last valid reply went out, while nothing
         has come since the last one (a reply held, rule 9, or garbled, rule 11, is no

@@ -29,7 +29,14 @@ Rules:
    (``stall_due``, controller.py ``tick``): its reading decides a reply time later, not a
    moving poll later (a review: the motor drove on against a jam for one more moving poll).
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
-   end stop first moves away from a target across the stop.)
+   end stop first moves away from a target across the stop.) A reading tells a stall only
+   when the question it answers went out at the stall's time or later (``reading``'s
+   ``asked_t``): the reply to one asked before it shows the rotor as it was when answered,
+   any time from the question on, and a reply read late (the bridge's process held with a
+   poll out, SIGSTOP, a host that stalls, a starved thread) was taken for no progress in all
+   that time: the turn was called stalled and stopped short (review 102 left it open; seen
+   under load in a broker-restart test). That reading decides nothing; the controller is
+   asked at once (``stall_due``) and its answer does.
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
    rotor stopped: the last reading that changed at all (a move smaller than ``noise_deg`` is
    still a move: the rotor creeps up to its stop) plus one poll interval (``poll_margin_s``:
@@ -348,8 +355,16 @@ def target_error(m: Motion, cfg: MotionConfig) -> float | None:
 
 
 def reading(
-    m: Motion, cfg: MotionConfig, az_deg: float, now: float, el_deg: float | None = None
+    m: Motion,
+    cfg: MotionConfig,
+    az_deg: float,
+    now: float,
+    el_deg: float | None = None,
+    asked_t: float | None = None,
 ) -> tuple[Motion, list[Event]]:
+    """A reading taken at ``now``, answering a question that went out at ``asked_t`` (None:
+    at ``now``; rule 3)."""
+    asked = now if asked_t is None else asked_t
     if m.anchor_deg is None:
         # first reading since the link came up: the brake window may still be running; where
         # the rotor turned when its readings were lost, it turns from this reading until
@@ -367,7 +382,7 @@ def reading(
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
         )
-        return tick(m, cfg, now, read=True)
+        return tick(m, cfg, now, read=True, asking_since=None, asked_t=asked)
     anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
     before = m  # (rule 5 compares this reading with the one before)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
@@ -396,12 +411,19 @@ def reading(
     if moved and m.target_deg is not None:  # rule 10
         past = _past_limit(before, m, cfg)
         if past is not None:
-            m, events = tick(_dropped(replace(m, past=past)), cfg, now, read=True)
+            m, events = tick(
+                _dropped(replace(m, past=past)),
+                cfg,
+                now,
+                read=True,
+                asking_since=None,
+                asked_t=asked,
+            )
             return m, [Event.PAST_LIMIT, *events]
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
         if passed is not None:  # rule 5
-            m, events = tick(_dropped(m), cfg, now, read=True)
+            m, events = tick(_dropped(m), cfg, now, read=True, asking_since=None, asked_t=asked)
             return m, [passed, *events]
     if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
@@ -415,9 +437,9 @@ def reading(
             elif m.away_err is None or err <= m.away_err:
                 m = replace(m, away_err=err)  # the first reading away: one more must follow
             else:
-                m, events = tick(_dropped(m), cfg, now, read=True)
+                m, events = tick(_dropped(m), cfg, now, read=True, asking_since=None, asked_t=asked)
                 return m, [Event.TURNED_AWAY, *events]
-    return tick(m, cfg, now, read=True)
+    return tick(m, cfg, now, read=True, asking_since=None, asked_t=asked)
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
@@ -736,12 +758,14 @@ def tick(
     now: float,
     read: bool = False,
     asking_since: float | None = -math.inf,
+    asked_t: float = -math.inf,
 ) -> tuple[Motion, list[Event]]:
     """Time-driven transitions: settling, stall, end of the brake window; the rotor found
     arrived or stopped (``Event.ARRIVED``, ``Event.STOPPED``) only at a reading (``read``:
-    rule 2); a stall (rule 3) only at a reading, or by time while the controller is asked and
-    does not answer: ``asking_since`` the first question since its last reply (link.py),
-    at the stall's time at the latest; None: nothing asked since (controller.py rule 2)."""
+    rule 2); a stall (rule 3) only at a reading whose question went out at the stall's time
+    or later (``asked_t``), or by time while the controller is asked and does not answer:
+    ``asking_since`` the first question since its last reply (link.py), at the stall's time
+    at the latest; None: nothing asked since (controller.py rule 2)."""
     events: list[Event] = []
     if not cfg.spec.can_report_position:  # (the spec's: no property call at every step)
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
@@ -759,7 +783,10 @@ def tick(
                 events.append(Event.ARRIVED)
                 m = _at_rest(m, cfg, now, BRAKING)
             elif (  # (off target: one at it waits for the reading that shows it still)
-                (read or (asking_since is not None and asking_since <= stall_t))  # (rule 3)
+                (  # (rule 3)
+                    (read and asked_t >= stall_t)
+                    or (asking_since is not None and asking_since <= stall_t)
+                )
                 and err is not None
                 and err > cfg.tolerance_deg
                 and now >= stall_t

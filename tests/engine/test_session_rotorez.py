@@ -75,21 +75,30 @@ def test_a_new_target_while_turning_stops_waits_out_the_brake_then_goes(rig: Rig
     assert v.errors() == []
 
 
+@pytest.mark.parametrize("poll_out", [False, True])
 @pytest.mark.parametrize("pause_s", [2.0, 12.0])
-def test_a_turn_goes_on_to_its_target_after_the_bridge_was_held(rig: Rig, pause_s: float) -> None:
+def test_a_turn_goes_on_to_its_target_after_the_bridge_was_held(
+    rig: Rig, pause_s: float, poll_out: bool
+) -> None:
     """docs/architecture.md rule 15 (review 102): the bridge's process held mid-turn (SIGSTOP,
     a host that stalls) longer than the silence timeout or the stall timeout, while the rotor
     turned on: at the first step after it the session called the controller silent (no reply
     to a question it never asked) and the rotor stalled (no reading to show its progress),
     stopped it short of its target, said it stalled (rotor health counts that), and flapped
-    offline. Neither is the controller's doing: the readings asked for afterwards decide."""
+    offline. Neither is the controller's doing: the readings asked for afterwards decide.
+    ``poll_out``: held with a poll out, whose reply waits in the port and is read late, the
+    rotor a degree on from the reading before: that reading showed no progress in all the
+    time held, and the turn was called stalled and stopped short at 19 (motion.py rule 3: a
+    reading whose question went out before the stall's time decides no stall)."""
     v = ready(rig)
     v.target(300)
     v.run_for(3)
     link = v.session.controller.link
-    assert link is not None  # held right after a reply, nothing asked (held with a poll out,
-    # its reply is read late and stamped then: a stall, still; review 102 left it open)
-    v.run_until(lambda v: link.last_reply_t == v.now and not link.reply_owed, 5)
+    assert link is not None
+    if poll_out:  # (the poll written, its reply still to come)
+        v.run_until(lambda v: link.reply_owed and v.sent()[-1:] == [b"AI1;"], 5)
+    else:  # held right after a reply, nothing asked
+        v.run_until(lambda v: link.last_reply_t == v.now and not link.reply_owed, 5)
     assert v.truth().is_moving and v.state is MOVING
     t = v.now
     v.pause(pause_s)
