@@ -8,9 +8,15 @@ move, and wait for the same order: kept behind a member's lock OFF that waits fo
 are put at the marker however late, with nothing that knows their expiry. The remote's
 ``R/track sun`` (5 s expiry), sent right after its lock OFF, its markers lost in a flood, starts
 tracking and turns the rotor 14 s after it was sent, when the operator has given up on it:
-the harm R25-3 named, for a tracking start instead of a target."""
+the harm R25-3 named, for a tracking start instead of a target. The same behind a lane STOP
+(R25-3's own case): the start is taken at once, tracking's first target waits for the marker
+(session.py rule 13) and goes however late; on a virtual MD-01 the rotor turns to the sun
+15 s after a 5 s expiry, where a target would have been dropped."""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -18,6 +24,7 @@ from bridge.core.model import Command, FollowQso, TrackBody
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
+from tests.engine.test_halt_epoch import START_AZ, Bench
 from tests.mqtt.test_review22_lost_lane_copy import markers_back
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
@@ -73,4 +80,54 @@ def test_a_stamped_tracking_start_kept_behind_a_lock_off_does_not_start_after_it
     assert starts == [], (
         f"a {topic} start stamped with a 5 s expiry was handed on 14 s after it was sent, "
         f"with nothing to drop it: {tower.calls}"
+    )
+
+
+@pytest.fixture
+def bench(tmp_path: Path) -> Iterator[Bench]:
+    made = Bench(tmp_path)
+    yield made
+    made.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 7: a stamped track start read behind a lane STOP carries no expiry: "
+    "tracking turns the rotor at a marker long after it",
+)
+def test_a_stamped_track_start_behind_a_lane_stop_does_not_turn_the_rotor_after_its_expiry(
+    bench: Bench,
+) -> None:
+    """The service, the judge and the session are the real ones (tests/engine/test_halt_epoch.py's
+    bench); the markers lost in a flood as in R25-3's test."""
+    v = bench.v
+    pub = RecordingPublisher()
+    svc = MqttService(
+        Topics("rotor", {"v": "rotor"}),
+        pub,
+        wall=lambda: NOW_UNIX + v.now,
+        clock=lambda: v.now,  # (the session's clock: the bench's virtual one)
+    )
+    svc.attach(bench.rot)
+    pub.take()
+    svc.on_lane_message("rotor/stop", b"", False)  # the remote's S, the lane first: on hold
+    svc.on_message("rotor/stop", b"", False)  # its copy on the main connection
+    sent = NOW_UNIX + v.now + 0.002  # (its clock 2 ms ahead: not taken for one before the S)
+    svc.on_message("rotor/track", b"sun", False, stamp=Stamp.of(sent, 5.0))  # 5 s expiry
+    v._take()  # noqa: SLF001
+    v.run_for(1.0)
+    assert bench.sets() == []  # (tracking's target waits for the marker)
+    pub.take()  # the marker, and the fresh one sent at the copy, lost in a flood
+    for wait_s, back in ((2.0, False), (4.0, False), (8.0, True)):  # lastword.py rule 5
+        v.run_for(wait_s)
+        svc._halts.resend_if_due()  # noqa: SLF001  (the timer: a marker sent again)
+        if back:
+            markers_back(svc, pub)
+        else:
+            pub.take()  # lost again
+    v._take()  # noqa: SLF001
+    v.run_for(40.0)
+    assert bench.sets() == [] and abs(v.truth().az_deg - START_AZ) < 4, (
+        "a track start stamped with a 5 s expiry turned the rotor 15 s after it was sent: now "
+        f"at {v.truth().az_deg:.0f}, sent {bench.sets()}"
     )
