@@ -64,11 +64,6 @@ def two(monkeypatch: pytest.MonkeyPatch) -> Iterator[Rig]:
         os.close(ep._wake_w)  # noqa: SLF001
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 34: a turn read after its own port's STOP is dated before another "
-    "rotator's STOP read in the same wake-up, so before its own STOP: the remote refuses it",
-)
 def test_a_turn_after_its_own_ports_stop_is_not_dated_before_it_for_another_rotators_stop(
     two: Rig,
 ) -> None:

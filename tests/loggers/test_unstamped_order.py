@@ -1,10 +1,11 @@
 """interfaces/loggers/server.py rule 9, where the system does not stamp datagrams (Windows,
 macOS: where the remote runs): each socket's dates are lower bounds, which do not order two
-sockets' datagrams. A datagram that is no stop, read after a stop from another socket and not
-proven to have come after it (its socket found empty after that stop was read), is dated just
-before that stop, so the remote refuses it as seen before the STOP (remote.py rule 8); one
-socket's datagrams come in the order they were sent, so a turn read after a stop from the same
-port keeps its date (``AZIMUTH 300``, ``STOP``, ``AZIMUTH 200`` ends at 200), and a turn sent
+sockets' datagrams. A datagram that is no stop, read after a stop from another socket for the
+same rotator and not proven to have come after it (its socket found empty after that stop was
+read), is dated just before that stop, so the remote refuses it as seen before the STOP
+(remote.py rule 8), even where that is before a stop on its own port too; one socket's
+datagrams come in the order they were sent, so a turn read after a stop from the same port
+keeps its date (``AZIMUTH 300``, ``STOP``, ``AZIMUTH 200`` ends at 200), and a turn sent
 after the stop was read goes on as dated (PstRotator tracking on after a STOP)."""
 
 from __future__ import annotations
@@ -137,3 +138,20 @@ def test_a_turn_not_proven_after_a_run_of_stops_is_dated_before_the_first(rig: R
     first = rig.dated(pst, STOP)
     assert rig.dated(other, turn(80)) < first
     assert len(rig.ep._halts_read[rig.sock(pst)]) <= HALTS_KEPT  # noqa: SLF001
+
+
+def test_for_one_rotator_a_stop_on_the_other_port_still_dates_the_turn_before_it(
+    rig: Rig,
+) -> None:
+    """The same wake-up with both ports one rotator's (PstRotator's and another program's):
+    the other port's STOP may have come after the ``AZIMUTH 200`` (review 33), so the turn is
+    dated before it, and refused as seen before a STOP, though that is before its own port's
+    STOP too: the safe side, a STOP the last word."""
+    pst, other = rig.ports
+    rig.send(other, STOP)
+    for data in (turn(300), STOP, turn(200)):
+        rig.send(pst, data)
+    looked = time.monotonic()
+    rig.ep._serve(rig.sock(other), looked)  # noqa: SLF001  (the other port served first)
+    rig.ep._serve(rig.sock(pst), looked)  # noqa: SLF001
+    assert rig.dated(pst, turn(200)) < rig.dated(other, STOP)

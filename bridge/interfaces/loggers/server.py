@@ -71,14 +71,21 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    another socket was found empty after that: a STOP so read was dated before a turn that came
    before it on another port, read at the next wake-up, and the turn went out dated after the
    STOP). So a datagram that may be a stop (rule 8's search) is noted with the time after its
-   read, an upper bound, and one that is no stop, read later from another socket with a bound
-   before that time (it may have come before the stop), is dated BEFORE_HALT_S before the
-   stop's date: the remote refuses it as seen before the STOP (remote.py rule 8). A stop keeps
-   its own bound (dated later, a turn its own sender sent after it would be lifted with it past
-   a STOP from Home Assistant: remote.py rule 8's floor), and a datagram read after a stop from
-   the same socket keeps its date: one socket's datagrams are read in the order they came
-   (``AZIMUTH 300``, ``STOP``, ``AZIMUTH 200`` ends at 200). What comes to a socket the loop
-   found empty after the stop was read is dated as before: PstRotator tracks on after a STOP.
+   read, an upper bound, and one that is no stop, read later from another socket for one of
+   the same rotators (a PST port's, every one named on an N1MM port) with a bound before that
+   time (it may have come before the stop), is dated BEFORE_HALT_S before the stop's date: the
+   remote refuses it as seen before the STOP (remote.py rule 8). A stop for other rotators only
+   says nothing of it: the remote orders a move against its own rotator's halts alone (review
+   34: rotator X's STOP, read first in a wake-up, dated rotator Y's turn, read after Y's own
+   STOP on Y's port, before Y's STOP too, and the remote refused the operator's turn). A stop
+   keeps its own bound (dated later, a turn its own sender sent after it would be lifted with it
+   past a STOP from Home Assistant: remote.py rule 8's floor), and a datagram read after a stop
+   from the same socket is never dated before it (its bound is the later of its own and that
+   stop's date): one socket's datagrams are read in the order they came (``AZIMUTH 300``,
+   ``STOP``, ``AZIMUTH 200`` ends at 200). Only a stop for the same rotator from another socket,
+   read after that bound, dates it earlier (it may have come after the turn: the safe side).
+   What comes to a socket the loop found empty after the stop was read is dated as before:
+   PstRotator tracks on after a STOP.
    Each socket's stops are kept HALTS_KEPT at most, the oldest two then one: the later read,
    the earlier date (the safe side: more is dated before it). With the system's stamps none of
    this is needed. The stale check above is the system's stamp's alone. The stamps are live
@@ -445,16 +452,30 @@ class LoggerEndpoints:
 
     def _before_halts(self, sock: socket.socket, since_s: float) -> float:
         """Rule 9, where the system does not stamp datagrams: the date of a datagram that is
-        no stop, read from ``sock`` and come after ``since_s``: that, unless a stop another
-        socket gave was read after ``since_s`` (it may then have come after that stop): just
-        before that stop's date, then."""
-        seen_s = since_s
+        no stop, read from ``sock`` and come after ``since_s``: that, or the latest date of a
+        stop ``sock`` gave before it if later (it came after that stop); unless a stop another
+        socket for one of the same rotators gave was read after that bound (it may then have
+        come after that stop): just before that stop's date, then (the safe side, even before
+        its own port's stop)."""
+        own = self._halts_read.get(sock, ())
+        seen_s = bound_s = max([since_s, *(dated_s for _, dated_s in own)])
+        ours = self._rotator_ids(sock)
         for other, halts in self._halts_read.items():
-            if other is not sock:
+            if other is not sock and not ours.isdisjoint(self._rotator_ids(other)):
                 for read_s, dated_s in halts:
-                    if read_s > since_s:
+                    if read_s > bound_s:
                         seen_s = min(seen_s, dated_s - BEFORE_HALT_S)
         return seen_s
+
+    def _rotator_ids(self, sock: socket.socket) -> frozenset[str]:
+        """Rule 9: the rotators a datagram on ``sock`` may stop or turn (a PST port's one; an
+        N1MM port's, every one named on it)."""
+        endpoint = self._sockets.get(sock)
+        if isinstance(endpoint, PstEndpoint):
+            return frozenset((endpoint.rotator.id,))
+        if isinstance(endpoint, N1mmEndpoint):
+            return frozenset(r.rotator.id for r in endpoint.rotors)
+        return frozenset()
 
     def _carry_out(
         self,
