@@ -129,7 +129,13 @@ Rules:
    the azimuth's half and the elevation turned on to the other's, and so did a storm whose park
    named no elevation: the antenna left half moved for a target nobody stood for (a closing
    note). The elevation box's half sent before the drop has moved it meanwhile; the stop ends
-   that.
+   that. A stamped sender's two halves so expire as one: a half waiting in its box when a hold
+   ends there (session.py rule 13) is judged by the whole target's expiry, the sooner of its
+   two halves' (``expires_as``, each session told by ``joined``), so both boxes drop it at
+   that hold's end, in the same serve, before either sends its half, and say it once (rule
+   9); a cold review: each half kept its own, the azimuth box dropped its half at the hold's
+   end past its expiry, and the elevation box turned alone to the 40 of a target one
+   controller drops whole.
 9. An event both boxes hand out, word for word (the same kind, message and command, within
    TWIN_S of each other), is the rotator's one event: said once, by the box that said it
    first. Both sessions take the same commands, the wind and the TLE file's answers (rule 1),
@@ -180,7 +186,7 @@ from bridge.session.session import DROPS, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
 
-__all__ = ["CompositeWorker", "Composition", "merge", "share_quiet", "split"]
+__all__ = ["CompositeWorker", "Composition", "joined", "merge", "share_quiet", "split"]
 
 log = logging.getLogger(__name__)
 AXES = (Axis.AZIMUTH, Axis.ELEVATION)
@@ -210,6 +216,13 @@ def split(batch: Batch) -> dict[Axis, Batch]:
         Axis.AZIMUTH: replace(batch, target=az, activity=moved, ends=None if az else ends),
         Axis.ELEVATION: alone,
     }
+
+
+def joined(composition: Composition, sessions: dict[Axis, RotatorSession]) -> None:
+    """Rule 8: each box's session told what a half waiting there expires as (session.py rule
+    13: ``Composition.expires_as``)."""
+    for axis, session in sessions.items():
+        session.expires_as = partial(composition.expires_as, axis)
 
 
 def share_quiet(sessions: list[RotatorSession], now: float) -> None:
@@ -308,6 +321,15 @@ class Composition:
             self.halves[axis] = half
             self._halves_said[axis] = None if half is None else describe_command(half)
         self._whole_said = describe_command(self._whole)
+
+    def expires_as(self, axis: Axis, waiting: Target) -> Target:
+        """Rule 8 (session.py rule 13): what ``waiting``, the target waiting in ``axis``'s box
+        when a hold ends there, expires as: the rotator's whole target where it is that box's
+        half of it (``aimed``: one sender's two halves expire with the sooner of the two, as
+        one controller keeps them, core/model.py ``combine``), else itself."""
+        if self._whole is not None and waiting is self.halves[axis]:
+            return self._whole
+        return waiting
 
     def sibling(self, other: Axis, dropped: Target | None) -> Target | None:
         """Rule 8: ``other``'s box's half of the rotator's last target, to drop with the target
@@ -531,6 +553,7 @@ class CompositeWorker:
                 port_opener=port_opener,
                 sky=sky,
             )
+        joined(self.composition, {axis: box.session for axis, box in self.boxes.items()})
 
     @property
     def status(self) -> RotatorStatus:

@@ -343,6 +343,9 @@ class RotatorSession:
         # it: ``forsake``, of the same sender's target: ``dropped``, the last one)
         self.drops = 0
         self.dropped: Target | None = None
+        # rule 13: the target a waiting one expires as when a hold ends (on a rotator of two
+        # boxes, the whole one it is a half of: runtime/composite.py rule 8 sets it)
+        self.expires_as: Callable[[Target], Target] = lambda target: target
         # mailbox.py rule 10: the halt count of the last batch applied; ``status`` shows every
         # stop and lock ON up to it (set once the step built the status: a thread that reads
         # this count and then the status sees a status at least that new)
@@ -453,7 +456,7 @@ class RotatorSession:
         cleared = self._fence(batch, now)
         if held and not self.fence.held and not cleared:  # rule 13: what waited for it
             pending = self.targets.pending
-            if pending is not None and _expired(pending, now):
+            if pending is not None and _expired(self.expires_as(pending), now):
                 self._drop_pending(EXPIRED)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
             what = describe_command(batch.lost_target)
