@@ -25,11 +25,6 @@ from tests.support.mosquitto import Mosquitto
 HELLO, ERROR = "rotor/bridge/hello", "rotor/tower/error"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 35: the refused hello's PUBACK is kept under its message id for the "
-    "connection's life; the send given that id after paho's ids wrap is said refused",
-)
 def test_a_refused_hello_is_never_taken_for_a_later_message_s_refusal(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -16,7 +16,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import paho.mqtt.client as paho
-import pytest
 
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.client import LOOK_MAX_S, MqttClient
@@ -31,13 +30,6 @@ DENIED = f"topic readwrite rotor/#\ntopic deny {FENCE}\ntopic deny {HELLO}\n"
 MENDED = "topic readwrite rotor/#\n"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 35: markers a first look finds refused are asked again only if the hello "
-    "topic was refused on an earlier connection: the look's own hello refusal (paho's "
-    "publish, not delivery.send) is never noted, so an ACL mended by SIGHUP after a start "
-    "or a broker restart under a typo leaves the markers off for the connection's life",
-)
 def test_markers_a_first_look_finds_refused_come_back_once_a_sighup_mends_the_acl(
     tmp_path: Path,
 ) -> None:

@@ -59,12 +59,17 @@ each written out in the module that keeps it:
    QoS 0 message before the QoS 1 one sent right before it), so if the hello comes back and
    the probe has not, the broker drops it (mosquitto 2.0 grants the subscription and drops
    the messages, without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5
-   too). That is
-   said as rule 11 says, naming the topic, from the first connection on. It is judged again
-   on every connect: a probe that comes back clears the problem (``on_allowed``, never on
-   paho's thread). Each verdict is reported on a thread of its own, so one may come late:
-   under ``_fence_lock`` a report is made only if its verdict is still the last one (an older
-   connection's "allowed" never clears the problem after a newer one's "denied", nor the
+   too). That is said as rule 11 says, naming the topic, from the first connection on. Both
+   go out through delivery.py's ``send``, so a PUBACK that refuses either (0x87) is its own
+   topic's, said and known (``markers_refused``) as any refused publish (review 35: the
+   hello went out with paho's own publish, its refusal tied to no topic, so a look never
+   knew both marker topics refused and the markers were never asked again, lastword.py rule
+   15; and the refusal was kept under its message id, for the publish given that id hours
+   later to be said refused). It is judged again on every connect: a probe that comes back
+   clears the problem (``on_allowed``, never on paho's thread). Each verdict is reported on
+   a thread of its own, so one may come late: under ``_fence_lock`` a report is made only if
+   its verdict is still the last one (an older connection's "allowed" never clears the
+   problem after a newer one's "denied", nor the
    other way round). The markers come back on the hello topic too (lastword.py rule 7), so
    whether they can come back at all (``on_markers``) is another verdict: yes as soon as this
    connection's hello or probe comes back (on paho's thread, in the connection's order); no
@@ -454,7 +459,11 @@ class MqttClient(Connection):
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
                     self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
-                client.publish(look.claim.hello_topic, hello, qos=1)  # rule 16: as the probe
+                # rule 16: at QoS 1 as the probe, and through ``send`` as it goes: its PUBACK
+                # is the hello topic's (review 35: paho's own publish left a refusal, 0x87,
+                # tied to no topic, so the look never knew the hello refused, and kept it
+                # under its message id for the next publish given that id to claim)
+                self._delivery.send(look.claim.hello_topic, hello, 1, retain=False)
                 self._look_heard = 0.0
                 self._arm_look(look.looking, time.monotonic(), LOOK_TIMEOUT_S)
                 return

@@ -189,7 +189,8 @@ but not the order between them. So:
    pass: a quota's 0x97 on the two resent markers was taken for the ACL, which reopened rule
    13's gap for the connection's life); both topics refused, the markers are known denied
    (rule 7), and a hold whose copy was counted ends (``markers_denied``). So known denied,
-   on a live connection or by a new connection's look (its probe refused so), they are asked
+   on a live connection or by a new connection's look (its probe and its hello refused so:
+   client.py rule 16), they are asked
    again every RESEND_MAX_S for as long as the connection lasts, and come back on once a
    PUBACK takes one (review 31). The clock only sends again; the broker's answer decides.
    Under MQTT 3.1.1 no answer says it, nor under MQTT 5 when the ACL denies reading the
