@@ -49,7 +49,7 @@ class ConfirmedRig:
     15), the broker's PUBACKs answered by the test, the halts timer's work run by hand."""
 
     def __init__(self) -> None:
-        self.clock, _said, self.pub, self.svc = saying_service()
+        self.clock, self.said, self.pub, self.svc = saying_service()
         self.tower = RecordingRotator("tower", "rotorez")
         self.svc.attach(self.tower)
         self.delivery, self.paho = _delivery()
@@ -61,18 +61,25 @@ class ConfirmedRig:
     def run(self, seconds: int, code: str | Callable[[str], str], back: bool = False) -> None:
         """``seconds`` of the timer (halts._tick), each marker sent at QoS 1 answered ``code``
         (or ``code(topic)``); ``back``: the markers published come back on the main
-        connection."""
+        connection (those sent at QoS 1 that the broker took too)."""
         halts = self.svc._halts  # noqa: SLF001
         for _ in range(seconds):
             self.clock.t += 1.0
             halts.resend_if_due()
             halts._refused_now()  # noqa: SLF001
-            for mid, topic, _data in self.paho.sent:
+            taken: list[tuple[str, bytes | str]] = []
+            for mid, topic, data in self.paho.sent:
                 reason = code if isinstance(code, str) else code(topic)
                 ack = ReasonCode(PacketTypes.PUBACK, reason)
                 self.delivery.on_publish(None, None, mid, ack, None)  # type: ignore[arg-type]
+                if not ack.is_failure:
+                    taken.append((topic, data))
             self.paho.sent.clear()
             if back:
+                for topic, data in taken:
+                    if topic in ("rotor/bridge/fence", "rotor/bridge/hello"):
+                        payload = data if isinstance(data, bytes) else data.encode()
+                        self.svc.on_message(topic, payload, False)
                 for topic, payload, _retain in self.pub.take():
                     if topic in ("rotor/bridge/fence", "rotor/bridge/hello"):
                         self.svc.on_message(topic, payload.encode(), False)

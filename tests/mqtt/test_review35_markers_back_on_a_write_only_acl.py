@@ -17,7 +17,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import paho.mqtt.client as paho
-import pytest
 
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.client import LOOK_MAX_S, MqttClient
@@ -39,12 +38,6 @@ WRITE_ONLY = "".join(
 ) + (f"topic write {FENCE}\ntopic write {HELLO}\n")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 35: markers a look found unreadable (its hello never back) are turned on "
-    "again by a PUBACK alone: an ACL mended to write-only leaves every lane STOP's hold up for "
-    "the connection's life",
-)
 def test_markers_a_look_found_unreadable_stay_off_when_the_acl_lets_them_be_published_only(
     tmp_path: Path,
 ) -> None:

@@ -217,8 +217,15 @@ class Halts:
         self._after_off: dict[str, tuple[Command, str, Origin | None]] = {}
         self._blind_said = False  # lastword.py rule 14: logged once
         # lastword.py rule 15: when a marker sent again was last asked of the broker while it
-        # refuses them on a live connection (None: not refused so)
+        # refuses them (a PUBACK said so, on a live connection or at a look; None: not so)
         self._refused_at: float | None = None
+        # lastword.py rule 15: the markers were said lost by this connection's look (its hello
+        # never back: reading them denied too), so a PUBACK that takes one says nothing of
+        # reading them: only one back turns them on again (review 35)
+        self._unread = False
+        # lastword.py rule 15: said on B/bridge/info while the broker takes the markers this
+        # connection's look found unreadable and none has come back (None: not said)
+        self._taken_said: str | None = None
         # lastword.py rule 15: a marker sent again at QoS 1, and whether the broker refused
         # both marker topics (the client's, set by the app; None: neither is known)
         self.publish_confirmed: Callable[[str, str], None] | None = None
@@ -252,6 +259,7 @@ class Halts:
         clearing (lastword.py rule 5)."""
         with self._lock:
             self._refused_at = None  # (lastword.py rule 15: the next connection's look asks)
+            self._unread = False
             for rid in self.word.main_gone():
                 rot = self._rotators.get(rid)
                 if rot is not None:
@@ -264,6 +272,7 @@ class Halts:
                     said.extend(self._after_off_said(rid, rot, MOVE_LOST))
             self._waiting_off.clear()
         self._say(said)
+        self._say_taken(False)
 
     def lane_connected(self) -> None:
         with self._lock:
@@ -277,13 +286,15 @@ class Halts:
         if n is not None:
             self._send_marker(n)
 
-    def markers_denied(self) -> None:
+    def markers_denied(self, unread: bool = True) -> None:
         """The broker does not let the main connection read its markers (lastword.py rule 7):
         none goes out; a lane's halt holds until its main copy. The holds stay. Where a
         PUBACK said so (both topics refused, rule 15), the broker is asked again every
         RESEND_MAX_S, whoever found it (a new connection's look too: review 31, an ACL mended
         by a SIGHUP a minute after a reconnect left the markers off for that connection's
-        life)."""
+        life). ``unread``: the look said so, its hello never back (the client's verdict): a
+        PUBACK that takes a marker then turns them on no more, a marker back does (rule 15;
+        not ``unread``, the PUBACKs of a live connection that read its markers said so)."""
         refused = self.markers_refused
         topics = (self.topics.bridge_fence, self.topics.bridge_hello)
         by_puback = refused is not None and refused(topics)  # (the client's lock: not under ours)
@@ -292,6 +303,7 @@ class Halts:
             said = [one for rid, m in ended.items() for one in self._release((rid,), m)]
             if by_puback and self._refused_at is None:
                 self._refused_at = self._clock()
+            self._unread = self._unread or unread
         self._say(said)
         self._arm()
 
@@ -300,7 +312,9 @@ class Halts:
         (lastword.py rule 7)."""
         with self._lock:
             self._refused_at = None  # (lastword.py rule 15: asked no more)
+            self._unread = False
             n = self.word.markers_allowed(self._clock())
+        self._say_taken(False)
         if n is not None:  # (a hold put while they were off, or the lane's: rule 9)
             self._send_marker(n)
 
@@ -435,7 +449,8 @@ class Halts:
     def _arm(self) -> None:
         """One timer at most looks again in TICK_S while there is something to look at."""
         with self._lock:
-            busy = self.word.holding or self.word.markers_out or self._said or self._refused_at
+            asking = self._refused_at is not None  # (lastword.py rule 15; a clock may say 0.0)
+            busy = self.word.holding or self.word.markers_out or self._said or asking
             if self._timer is not None or not busy or self._stopped:
                 return
             timer = self._timer = threading.Timer(TICK_S, self._tick)
@@ -483,9 +498,12 @@ class Halts:
         if refused is None:
             return
         if self._refused_at is not None:  # known refused: a marker sent again since, taken
-            if not refused(topics):  # on a topic, says the ACL changed back (an attack pass)
+            taken = not refused(topics)  # on a topic, says the ACL changed back (an attack
+            if taken and not self._unread:  # pass), where this connection read them before
                 log.warning("the MQTT broker takes the bridge's markers again")
                 self.markers_allowed()
+            elif self._unread:  # (its look found them unreadable: a publish taken says
+                self._say_taken(taken)  # nothing of reading; one back turns them on)
             return
         if not self.word.markers or not refused(topics):
             return
@@ -494,7 +512,29 @@ class Halts:
             "stop lane's hold ends with the main connection's copy of its halt from now on",
             *topics,
         )
-        self.markers_denied()  # (asked again from now: ``_refused_at``)
+        self.markers_denied(unread=False)  # (asked again from now: ``_refused_at``)
+
+    def _say_taken(self, taken: bool) -> None:
+        """lastword.py rule 15: while the broker takes the markers this connection's look
+        found unreadable and none has come back, said on B/bridge/info (the PUBACK cleared the
+        topics' refusals there, delivery.py rule 11), and unsaid when that ends."""
+        with self._lock:
+            said = self._taken_said
+            if taken == (said is not None):
+                return
+            problem = said or (
+                f"the MQTT broker takes the bridge's markers on {self.topics.bridge_fence} "
+                f"and {self.topics.bridge_hello} again, but the main connection has read "
+                "none back since its first look found them unreadable: they stay off (a "
+                "stop or lock ON from another interface fences nothing; a stop lane's hold "
+                "ends with the main connection's copy of its halt) until one comes back "
+                "(give the bridge's user read and write on them)"
+            )
+            self._taken_said = problem if taken else None
+        if taken:
+            log.warning("%s", problem)
+        if self._on_info is not None:
+            self._on_info(problem, taken)
 
     def say_long_holds(self) -> None:
         """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
@@ -545,9 +585,16 @@ class Halts:
     def marker_back(self, payload: bytes) -> None:
         with self._lock:
             n, released = self.word.marker_back(payload)
+            asked = self.word.asked_back(n)  # (lastword.py rule 15)
             said = self._release(released, n)
             owed = self.word.owed_fence(self._clock()) if n else None  # lastword.py rule 11
         self._say(said)
+        if asked:  # lastword.py rule 15: one asked while they were known denied came back
+            log.warning(
+                "a marker the bridge sent to ask the MQTT broker came back: the main "
+                "connection reads its markers again"
+            )
+            self.markers_allowed()
         if owed is not None:
             self._send_marker(owed)
 

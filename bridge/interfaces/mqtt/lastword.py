@@ -190,9 +190,16 @@ but not the order between them. So:
    13's gap for the connection's life); both topics refused, the markers are known denied
    (rule 7), and a hold whose copy was counted ends (``markers_denied``). So known denied,
    on a live connection or by a new connection's look (its probe and its hello refused so:
-   client.py rule 16), they are asked
-   again every RESEND_MAX_S for as long as the connection lasts, and come back on once a
-   PUBACK takes one (review 31). The clock only sends again; the broker's answer decides.
+   client.py rule 16), they are asked again every RESEND_MAX_S for as long as the connection
+   lasts (a marker at QoS 1, ``probe``), and one of those read back on the main connection
+   turns them on again (``asked_back``). Refused on a live connection that read them before,
+   a PUBACK that takes one turns them on too (review 31). Not so when a look said them lost:
+   its hello never came back, so reading them was denied as well, and a publish taken says
+   nothing of reading (review 35: an ACL mended to let the bridge publish its markers but not
+   read them turned them on, and every lane STOP's hold then waited, for the connection's
+   life, for a marker that could not come): while the broker takes them and none comes back,
+   they stay off, said on ``B/bridge/info``. The clock only sends again; the broker's answer
+   decides.
    Under MQTT 3.1.1 no answer says it, nor under MQTT 5 when the ACL denies reading the
    marker topics only (the broker takes the PUBACK and the SUBSCRIBE, and delivers nothing:
    review 25): such a hold lasts until the main connection drops, said on ``B/bridge/info``
@@ -261,6 +268,7 @@ class LastWord:
     _fence_out: list[int] = field(default_factory=list)  # rule 11: the fence markers out
     # rule 12: the rotators another interface locked with no fence on the main connection
     _unfenced_locks: set[str] = field(default_factory=set)
+    _denied_past: int = 0  # rule 15: the newest number when the markers were said denied
 
     # -- the lane (rule 2) -------------------------------------------------------------------
     def lane_halt(self, rotator_id: str, kind: str, now: float, hold: bool = True) -> int | None:
@@ -503,6 +511,7 @@ class LastWord:
         any more; the holds stay, each until its main copy. Rule 13: those whose copy was
         counted already end now (no marker will come for them): returned, with their marker."""
         self.markers = False
+        self._denied_past = self._next  # (rule 15: one numbered after is asked)
         self._marker_sent_at.clear()
         self._fences.clear()  # rule 11: no marker could end them
         self._fenced_since.clear()
@@ -526,6 +535,12 @@ class LastWord:
         self._next += 1
         self._marker_sent_at[self._next] = now
         return self._next
+
+    def asked_back(self, n: int) -> bool:
+        """Rule 15: whether marker ``n``, read back on the main connection (0: none of this
+        process's), was published while the markers were known denied (none goes out then but
+        the broker's asking, ``probe``): the main connection reads them again."""
+        return not self.markers and n > self._denied_past
 
     def probe(self) -> int:
         """Rule 15: a marker's number to ask the broker with while it refuses them (none is
