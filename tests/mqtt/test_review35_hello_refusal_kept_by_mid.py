@@ -57,6 +57,11 @@ def test_a_refused_hello_is_never_taken_for_a_later_message_s_refusal(
     try:
         client.start()
         wait_until(client.connected.is_set, slow(LOOK_MAX_S), "the look's end")
+        # every PUBACK of what the open sent has come (``online`` takes the id after the
+        # hello's: still out, paho refuses the id to the next message, ERR_QUEUE_SIZE)
+        opened = paho_client.publish("rotor/sync", b"", qos=1)
+        opened.wait_for_publish(slow(5))
+        assert opened.is_published()
         # 65,535 publishes later (a turning rotor's statuses, a day's events): paho's next id is
         # the hello's again
         paho_client._last_mid = ids[HELLO] - 1  # noqa: SLF001
