@@ -15,11 +15,6 @@ import pytest
 from tests.mqtt.test_attack5_refused_markers import ConfirmedRig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 35: asking a broker that refuses the markers is logged every 30 s as a "
-    "stop lane's marker not back, with no STOP and no hold",
-)
 def test_asking_the_broker_again_is_not_said_as_a_stop_lane_s_marker_not_back(
     caplog: pytest.LogCaptureFixture,
 ) -> None:

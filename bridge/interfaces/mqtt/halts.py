@@ -226,6 +226,7 @@ class Halts:
         # lastword.py rule 15: said on B/bridge/info while the broker takes the markers this
         # connection's look found unreadable and none has come back (None: not said)
         self._taken_said: str | None = None
+        self._asking_said = False  # lastword.py rule 15: the asking logged (once while refused)
         # lastword.py rule 15: a marker sent again at QoS 1, and whether the broker refused
         # both marker topics (the client's, set by the app; None: neither is known)
         self.publish_confirmed: Callable[[str, str], None] | None = None
@@ -259,7 +260,7 @@ class Halts:
         clearing (lastword.py rule 5)."""
         with self._lock:
             self._refused_at = None  # (lastword.py rule 15: the next connection's look asks)
-            self._unread = False
+            self._unread = self._asking_said = False
             for rid in self.word.main_gone():
                 rot = self._rotators.get(rid)
                 if rot is not None:
@@ -312,7 +313,7 @@ class Halts:
         (lastword.py rule 7)."""
         with self._lock:
             self._refused_at = None  # (lastword.py rule 15: asked no more)
-            self._unread = False
+            self._unread = self._asking_said = False
             n = self.word.markers_allowed(self._clock())
         self._say_taken(False)
         if n is not None:  # (a hold put while they were off, or the lane's: rule 9)
@@ -476,16 +477,29 @@ class Halts:
 
     def resend_if_due(self) -> None:
         """lastword.py rule 5: a marker the broker dropped is sent again (a new number); rule
-        11: a fence's marker that waited for room goes once there is room."""
+        11: a fence's marker that waited for room goes once there is room; rule 15: the broker
+        asked again while it refuses the markers (logged once while it does, then at debug)."""
+        asked = said = False
         with self._lock:
             now = self._clock()
             n = self.word.resend_due(now)
             owed = self.word.owed_fence(now)
             if self._refused_at is not None and now - self._refused_at >= RESEND_MAX_S:
                 self._refused_at = now  # (lastword.py rule 15: asked again while refused)
-                n = self.word.probe()
-        if n is not None:
+                n, asked = self.word.probe(), True
+                said, self._asking_said = self._asking_said, True
+        if asked:  # lastword.py rule 15: no marker is out, no hold waits for this one (review
+            say = log.debug if said else log.info  # 35: each asking, every 30 s, was logged as
+            say(  # a stop lane's marker not back, with no STOP sent): once, then at debug
+                "the MQTT broker refused the bridge's markers: asking it again every %g s "
+                "whether it takes them on %s and %s (a marker sent at QoS 1)",
+                RESEND_MAX_S,
+                self.topics.bridge_fence,
+                self.topics.bridge_hello,
+            )
+        elif n is not None:
             log.info("a marker of the stop lane did not come back yet; sending another")
+        if n is not None:
             self._publish_marker(n, confirmed=True)
         if owed is not None:
             self._send_marker(owed)

@@ -191,7 +191,8 @@ but not the order between them. So:
    (rule 7), and a hold whose copy was counted ends (``markers_denied``). So known denied,
    on a live connection or by a new connection's look (its probe and its hello refused so:
    client.py rule 16), they are asked again every RESEND_MAX_S for as long as the connection
-   lasts (a marker at QoS 1, ``probe``), and one of those read back on the main connection
+   lasts (a marker at QoS 1, ``probe``: logged once while they are refused, and not as a
+   marker late, none being out: review 35), and one of those read back on the main connection
    turns them on again (``asked_back``). Refused on a live connection that read them before,
    a PUBACK that takes one turns them on too (review 31). Not so when a look said them lost:
    its hello never came back, so reading them was denied as well, and a publish taken says
