@@ -123,7 +123,7 @@ def test_a_tracker_publishing_retained_does_not_keep_a_look_whose_hello_is_denie
     def track() -> None:
         while not quit_tracking.is_set():
             tracker.publish("t/rot1/target", "120", retain=True)
-            quit_tracking.wait(0.5)  # (the tracker's own pace)
+            quit_tracking.wait(0.5)  # the tracker's own pace: not a deadline
 
     tracking = threading.Thread(target=track, daemon=True)
     tracking.start()
