@@ -52,13 +52,14 @@ def test_without_the_dx_cluster_a_call_is_refused() -> None:
 
 def test_a_call_goes_to_the_aimer_with_who_asked() -> None:
     svc, _, rots = service({"tower": "rotorez"})
-    asked: list[tuple[RotatorPort, str, bool, str, Origin, int]] = []
+    asked: list[tuple[RotatorPort, str, bool, str, Origin, int, float | None]] = []
     svc.aim_calls_with(lambda *a: asked.append(a))
     svc.on_message("rotor/target", b'{"call": "ja1abc", "path": "long"}', False, "G4ABC")
-    ((rot, call, long_path, what, origin, since),) = asked
+    ((rot, call, long_path, what, origin, since, not_after_s),) = asked
     assert since == rots["tower"].halts  # (service.py rule 11)
     assert rot is rots["tower"] and (call, long_path) == ("JA1ABC", True)
     assert what == 'target \'{"call": "ja1abc", "path": "long"}\''
     assert origin == Origin(Source.MQTT, "G4ABC")
+    assert not_after_s is None  # (unstamped: no expiry of its own; service.py rule 9)
     svc.on_message("rotor/target", b'{"call": "JA1ABC"}', True)  # retained: never a command
     assert len(asked) == 1

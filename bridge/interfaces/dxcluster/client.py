@@ -40,7 +40,10 @@ Rules:
    The lock, the wind and the lease are judged when it is asked too (``check_motion``), and
    again when it is put: a call asked while another held the lease, or the lock was ON, is
    refused then, not turned to once the lease was released (an attack pass: it was); a lock
-   OFF takes a place in the order as well (mailbox.py rule 10a).
+   OFF takes a place in the order as well (mailbox.py rule 10a). A stamped call's expiry
+   (interfaces/mqtt/service.py rule 9, ``not_after_s``) goes with the ``Toward`` it makes, as
+   a stamped target's does: one that waits for the order of a STOP or lock past it is
+   dropped (session.py rule 13).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
    session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more,
@@ -115,6 +118,7 @@ class _Aim:
     origin: Origin
     halts: int  # rule 4: the rotator's halt count when it was asked
     ticket: int  # rule 4: its place in the order of the rotator's commands, taken then
+    not_after_s: float | None = None  # rule 4: its stamp's expiry, for the Toward it makes
 
 
 @dataclass
@@ -331,11 +335,13 @@ class DxCluster:
         described: str,
         origin: Origin,
         since: int | None = None,
+        not_after_s: float | None = None,
     ) -> None:
         """From paho's thread: queued for the aim thread; a full queue is refused at once, and
         so is a call the lock, the wind or the lease refuses now (rule 4). ``since``: the halt
         count the asker read before it asked the MQTT fence (interfaces/mqtt/service.py rule
-        11); read here when not given."""
+        11); read here when not given. ``not_after_s``: the asker's stamp's expiry on the
+        steady clock (service.py rule 9), handed on with the ``Toward``."""
         try:
             rotator.check_motion(origin)
         except Refused as exc:
@@ -343,7 +349,8 @@ class DxCluster:
             return
         try:
             halts = rotator.halts if since is None else since
-            aim = _Aim(rotator, call, long_path, described, origin, halts, rotator.ticket())
+            ticket = rotator.ticket()
+            aim = _Aim(rotator, call, long_path, described, origin, halts, ticket, not_after_s)
             self._aims.put_nowait(aim)
         except queue.Full:
             rotator.report_refusal(
@@ -385,6 +392,7 @@ class DxCluster:
             aim.long_path,
             source=Source.DXCLUSTER,
             origin=aim.origin,
+            not_after_s=aim.not_after_s,
         )
         aim.rotator.submit(toward, aim.described, since=aim.halts, ticket=aim.ticket)  # rule 4
 

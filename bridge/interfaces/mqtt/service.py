@@ -78,7 +78,8 @@ Rules:
    when the halt came, with no grain. Halts: never refused. The
    same on the stop lane, for the lock OFF it carries out while the main connection is down.
    A stamped move taken goes with its expiry on the steady clock (``Target.not_after_s``, a
-   ``Move``'s): one that waits in the bridge for the order of a STOP or lock ON (a lane hold
+   ``Move``'s; a call's goes to the DX cluster's aimer, and with the ``Toward`` it makes):
+   one that waits in the bridge for the order of a STOP or lock ON (a lane hold
    and its marker, lastword.py rule 13; a lock OFF's marker) is dropped there once that has
    passed, said on R/error (session.py rule 13): waiting for the last word is a link holding
    it up too (review 25: a P sent right after an S turned the rotor 14 s later, its markers
@@ -169,8 +170,8 @@ log = logging.getLogger(__name__)
 _STATE_TEXT: dict[MotionState, str] = {state: state.value for state in MotionState}
 
 # (the rotator, the call, long path?, the command as described, who asked, the halt count read
-# before the fence was asked: rule 11)
-CallAimer = Callable[[RotatorPort, str, bool, str, Origin, int], None]
+# before the fence was asked: rule 11; its stamp's expiry on the steady clock: rule 9)
+CallAimer = Callable[[RotatorPort, str, bool, str, Origin, int, float | None], None]
 
 
 class MqttService:
@@ -803,7 +804,7 @@ class MqttService:
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
             assert since is not None  # (read above, before the fence was asked)
-            self._by_call(rot, command.call, command.long_path, what, by, since)
+            self._by_call(rot, command.call, command.long_path, what, by, since, not_after_s)
         elif command is not None:
             rot.submit(command, what, since=since)
 
