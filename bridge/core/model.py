@@ -435,8 +435,19 @@ class Release(Asked):
     """End the control lease, whoever holds it (runtime/lease.py rule 4)."""
 
 
+@dataclass(frozen=True, kw_only=True)
+class Move(Asked):
+    """A command that may turn the rotor and is no Target: one that names a target in another
+    way (the judge makes the Target), a track or follow start, a feature's own command. Its
+    stamped expiry on the steady clock, as ``Target.not_after_s`` (interfaces/mqtt/service.py
+    rule 9): a start that waited for the order of a STOP or lock goes no later (session.py
+    rule 13)."""
+
+    not_after_s: float | None = None
+
+
 @dataclass(frozen=True)
-class TrackBody(Asked):
+class TrackBody(Move):
     """Follow the sun, the moon or a satellite (by name, or ``tle``: name and two lines);
     ``off`` ends it and is never refused."""
 
@@ -449,19 +460,11 @@ class TrackBody(Asked):
 
 
 @dataclass(frozen=True)
-class FollowQso(Asked):
+class FollowQso(Move):
     """Follow the QSO partner WSJT-X names; off ends it and is never refused."""
 
     on: bool
     long_path: bool = False
-
-
-@dataclass(frozen=True, kw_only=True)
-class Move(Asked):
-    """A command that names a target in another way (the judge makes the Target): its stamped
-    expiry on the steady clock, as ``Target.not_after_s``."""
-
-    not_after_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -518,7 +521,7 @@ def feature_value_text(value: FeatureValue) -> str:
 
 
 @dataclass(frozen=True)
-class FeatureCommand(Asked):
+class FeatureCommand(Move):
     """A registered feature's own command (bridge/feature.py ``CommandTopic``), for its
     session part (session/parts.py ``Part.command``), named by the feature's name: the judge
     judges it like a target when it ``moves`` the rotor (the lock, the wind, the lease, the

@@ -649,6 +649,7 @@ class Rotator:
             track = Tracking(None, source, lookup, what, origin)
         else:
             track = Tracking(body, source, None, what, origin)
+        track = replace(track, not_after_s=command.not_after_s)  # (its stamp's, as a Target's)
         try:
             put = self._mailbox.put_track(track, epoch=epoch, lease=lease)
         except LeaseChanged as changed:
@@ -671,6 +672,7 @@ class Rotator:
             check_can_follow(self._follow)
             self._check_start(origin or Origin(command.source))
         follow = Following(on, command.long_path, command.source, what, origin)
+        follow = replace(follow, not_after_s=command.not_after_s)  # (as a track start's)
         try:
             put = self._mailbox.put_follow(follow, epoch=epoch if on else None, lease=lease)
         except LeaseChanged as changed:

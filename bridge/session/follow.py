@@ -127,6 +127,8 @@ class Follow:
     source: Source = Source.MQTT  # who asked
     described: str | None = None  # the command as the user gave it (a refusal names it)
     origin: Origin | None = None  # who asked (the status's last_operator)
+    not_after_s: float | None = None  # a stamped start's expiry, as ``Track``'s (session.py
+    # rule 13)
 
 
 def call_of(text: str) -> str | None:

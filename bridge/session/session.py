@@ -65,7 +65,15 @@ Rules:
    EXPIRED_TAKEN for one taken past it, which names no STOP: none may have come; review 34):
    the order of a STOP held it up as a slow link would (review 25, R25-3). Not once it is
    taken and waits for the controller's own rules (a brake delay, a stop first): the bridge
-   took it in time.
+   took it in time. So is a stamped start (``not_after_s`` on a track or follow start, a
+   feature's command that moves: core/model.py ``Move``): taken past its expiry it is
+   refused ("tracking not started", ...: EXPIRED_TAKEN); taken under a hold that then ends
+   past it, what it began (tracking, a look-up, following, its part's motion and the target
+   that part proposed) ends, said once (review 34: a track start read after a lane STOP's
+   copy began to turn the rotor at the marker's return, 14 s after it was sent). The newest
+   start taken under the hold is the one judged: it ended what the one before it began, and
+   so does anything that ends tracking (a stop, a target); one that ended already is not
+   said.
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -191,7 +199,7 @@ import math
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 from bridge.core.errors import Refused
 from bridge.core.model import (
@@ -353,6 +361,7 @@ class RotatorSession:
         self._newest_taken = 0  # mailbox.py rule 10a: the newest place of the batches applied
         self.target_unshown = False  # ... and whether ``status`` cannot show the target waiting
         self._lost_turn = ""  # rule 12: what the port error said of the turn it dropped
+        self._waiting: _Waiting | None = None  # rule 13: a stamped start taken under a hold
 
     @property
     def newest_applied(self) -> int:
@@ -458,6 +467,7 @@ class RotatorSession:
             pending = self.targets.pending
             if pending is not None and _expired(self.expires_as(pending), now):
                 self._drop_pending(EXPIRED)
+            self._waited(now)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
             what = describe_command(batch.lost_target)
             self._error(ErrorKind.REFUSED, f"{DROPPED}: {EXPRESS_LOST}", command=what)
@@ -474,20 +484,28 @@ class RotatorSession:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.value, ctl.link is not None)
-        if batch.track is not None:
+        if (track := batch.track) is not None:
             leased = None
-            if batch.track.body is not None or batch.track.lookup is not None:
+            if start := track.body is not None or track.lookup is not None:
                 self._end_parts("track command", now)  # parts.py rule 7
                 if batch.control_set:  # rule 23: judged before the claim it came with
-                    leased = self._start_leased(batch.track, now, TRACK_REFUSED)
-            self._apply(self.features.track(batch.track, self._refused(), leased))
-        if batch.follow is not None:
+                    leased = self._start_leased(track, now, TRACK_REFUSED)
+            late = _late(track.not_after_s, now, TRACK_REFUSED)  # rule 13
+            done = self.features.track(track, self._refused() or late, leased)
+            self._apply(done)
+            if start and done.error is None:
+                self._wait(track.not_after_s, track.described or "track", "tracking ended")
+        if (follow := batch.follow) is not None:
             leased = None
-            if batch.follow.on:
+            if follow.on:
                 self._end_parts("follow command", now)
                 if batch.control_set:  # rule 23: as a track start
-                    leased = self._start_leased(batch.follow, now, FOLLOW_REFUSED)
-            self._apply(self.features.follow(batch.follow, self._refused(), now, leased))
+                    leased = self._start_leased(follow, now, FOLLOW_REFUSED)
+            late = _late(follow.not_after_s, now, FOLLOW_REFUSED)
+            done = self.features.follow(follow, self._refused() or late, now, leased)
+            self._apply(done)
+            if follow.on and done.error is None:
+                self._wait(follow.not_after_s, follow.described or "follow", "following ended")
         ends: dict[Halt, str | None] = {  # parts.py rule 7 where the mailbox marks them
             "stop": "stop",
             "lock": "lock",
@@ -712,7 +730,8 @@ class RotatorSession:
 
     def _end(self, why: str, now: float) -> None:
         """Tracking and following end (feature_commands.py), and every part's motion
-        (parts.py rule 7)."""
+        (parts.py rule 7): whatever a start that waits under a hold began (rule 13)."""
+        self._waiting = None
         self.features.end(why)
         self._end_parts(why, now)
 
@@ -804,6 +823,30 @@ class RotatorSession:
         two boxes the other box drops its half of that sender's target (``forsake``)."""
         self.drops += 1
         self.dropped = target
+
+    def _wait(self, not_after_s: float | None, what: str, said: str, part: bool = False) -> None:
+        """Rule 13: a start taken (``what``): under a hold, with an expiry, what it began ends
+        if the hold ends past it (``_waited``; ``said``: how that is said); it takes the place
+        of the start before it, whose tracking, following or part's motion it ended."""
+        held = not_after_s is not None and self.fence.held
+        self._waiting = _Waiting(not_after_s, what, said, part) if held else None
+
+    def _waited(self, now: float) -> None:
+        """Rule 13: the hold ended: what a stamped start taken under it began ends if its
+        expiry passed (tracking, following, a part's own motion and the target it proposed),
+        said once."""
+        waiting, self._waiting = self._waiting, None
+        if waiting is None or waiting.not_after_s is None or now <= waiting.not_after_s:
+            return
+        tracker = self.tracker
+        if not waiting.part and tracker.body is None and tracker.lookup is None:
+            if self.follower.info is None:
+                return  # (over already: nothing to end)
+        self._end(EXPIRED, now)
+        pending = self.targets.pending
+        if waiting.part and pending is not None and pending.source not in OWN_MOVES:
+            self.targets.clear()  # (the target its part proposed, said once: below)
+        self._error(ErrorKind.REFUSED, f"{waiting.said}: {EXPIRED}", command=waiting.what)
 
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
@@ -1018,9 +1061,12 @@ class RotatorSession:
         if command.moves:  # the later command wins: it ends tracking and following, as a
             self._end(f"{command.feature} command", now)  # target does (rules 10, 15)
             refused = self._refused()  # and, refused, it reaches no part, as a track start
+            late = _late(command.not_after_s, now, f"{command.feature} command not carried out")
+            refused = refused or late  # (rule 13)
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 return
+            self._wait(command.not_after_s, what, f"{command.feature} command ended", part=True)
         proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return
@@ -1266,3 +1312,18 @@ def _leaves_out(target: Target, half: Target) -> bool:
 def _expired(target: Target, now: float) -> bool:
     """Rule 13: a stamped target past its expiry."""
     return target.not_after_s is not None and now > target.not_after_s
+
+
+def _late(not_after_s: float | None, now: float, said: str) -> str | None:
+    """Rule 13: why a stamped start taken past its expiry is refused (``said``: how the words
+    begin), or None."""
+    return f"{said}: {EXPIRED_TAKEN}" if not_after_s is not None and now > not_after_s else None
+
+
+class _Waiting(NamedTuple):
+    """Rule 13: a stamped start taken under a hold (``RotatorSession._wait``)."""
+
+    not_after_s: float | None
+    what: str  # the command, as the error names it
+    said: str  # how its end is said
+    part: bool  # a feature's own command (its part's motion), not a track or follow start

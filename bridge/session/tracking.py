@@ -134,6 +134,9 @@ class Track:
     described: str | None = None  # the command as the user gave it (a refusal names it)
     origin: Origin | None = None  # who asked (the status's last_operator)
     from_file: LookupQuestion | None = None  # rule 10: how ``body`` was found in the TLE file
+    # a stamped start's expiry (core/model.py ``Move``): one that waits for the order of a STOP
+    # or lock goes no later (session.py rule 13)
+    not_after_s: float | None = None
 
 
 class Tracker:

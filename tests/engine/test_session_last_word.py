@@ -12,9 +12,17 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState, Source, Stop, Target, TargetInfo
+import bridge.feature
+from bridge.core.model import FeatureCommand, MotionState, Source, Stop, Target, TargetInfo
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.features import FEATURES
+from bridge.session.follow import Follow, Heard
 from bridge.session.stops import EXPRESS_LOST
+from bridge.session.tracking import Track
+from bridge.sky import Body, Sky
+from tests.engine.test_feature_commands import TOY
+from tests.engine.test_follow import STATION as FOLLOWING
+from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -707,3 +715,97 @@ def test_a_stamped_target_taken_in_time_still_waits_out_the_controllers_own_rule
     assert not [e for e in v.errors(since=t) if "expiry" in e.message]
     sent = [f.time_s for f in v.frames(*BEARING_OUTCOMES, since=t)][-1]
     assert sent - t > 0.5  # (it went after its expiry: the stop and brake came first)
+
+
+# Rule 13 for a stamped start (core/model.py ``Move``): a track or follow start and a feature's
+# own command that moves carry their expiry as a target does (review 34: a track start read
+# after a lane STOP's copy waited for the marker, back 14 s later, and tracking turned the
+# rotor). A station where the sun is up for tracking, WSJT-X heard for following, and the toy
+# feature of test_feature_commands.py whose ``aim`` turns the rotor.
+STARTS = ("track", "follow", "beam")
+
+
+def starts_rig(rig: Rig, monkeypatch: pytest.MonkeyPatch) -> VirtualRotator:
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    return ready(rig, sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, follow=FOLLOWING)
+
+
+def put_start(v: VirtualRotator, kind: str, not_after_s: float) -> None:
+    """A stamped start of ``kind`` put as the judge puts it (runtime/rotator.py), with what makes
+    it turn the rotor (WSJT-X naming a partner far from where the rotor points)."""
+    if kind == "track":
+        v.mailbox.put_track(Track(Body.sun(), described="track sun", not_after_s=not_after_s))
+    elif kind == "follow":
+        v.mailbox.put_follow(Follow(True, described="follow", not_after_s=not_after_s))
+        v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
+    else:
+        aim = FeatureCommand(feature="beam", name="aim", value=200.0, not_after_s=not_after_s)
+        v.mailbox.put_feature(aim)
+
+
+@pytest.mark.parametrize("kind", STARTS)
+@pytest.mark.parametrize(("back_s", "goes"), [(8.0, False), (2.0, True)])
+def test_a_stamped_start_held_past_its_expiry_turns_nothing_when_the_hold_ends(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch, kind: str, back_s: float, goes: bool
+) -> None:
+    """Review 34: the marker back after the start's 5 s expiry: what it began (tracking,
+    following, the part's motion) ends, said, and the rotor stays where it is; back within it:
+    the rotor turns."""
+    v = starts_rig(rig, monkeypatch)
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=1)
+    put_start(v, kind, t + 5.0)
+    v._take()
+    v.run_for(back_s)
+    assert bearings(v, since=t) == []
+    v.mailbox.put_release(1)
+    v._take()
+    v.run_for(30)
+    said = [e.message for e in v.errors(since=t)]
+    if goes:
+        assert bearings(v, since=t) != [], said
+        assert not [m for m in said if "expiry" in m], said
+    else:
+        assert bearings(v, since=t) == [] and not v.truth().is_moving, said
+        assert any("expiry passed" in m for m in said), said
+        assert v.status.tracking is None and v.status.following is None
+
+
+@pytest.mark.parametrize("kind", STARTS)
+def test_a_stamped_start_taken_after_its_expiry_is_refused(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch, kind: str
+) -> None:
+    """One taken from the mailbox already past its expiry (kept behind a lock OFF and put at
+    its marker: lastword.py rule 13) starts nothing."""
+    v = starts_rig(rig, monkeypatch)
+    t = v.now
+    put_start(v, kind, t - 0.5)
+    v._take()
+    v.run_for(30)
+    assert bearings(v, since=t) == [] and not v.truth().is_moving
+    said = [e.message for e in v.errors(since=t)]
+    assert any("expiry passed" in m for m in said), said
+    assert v.status.tracking is None and v.status.following is None
+
+
+def test_a_later_start_under_the_hold_takes_the_place_of_a_stamped_one(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A stamped track start, then an unstamped follow start under the same hold (it ends
+    tracking): the marker back past the track's expiry ends nothing of the follow's."""
+    v = starts_rig(rig, monkeypatch)
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=1)
+    put_start(v, "track", t + 5.0)
+    v._take()
+    v.mailbox.put_follow(Follow(True, described="follow"))
+    v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
+    v._take()
+    v.run_for(8.0)
+    v.mailbox.put_release(1)
+    v._take()
+    v.run_for(30)
+    said = [e.message for e in v.errors(since=t)]
+    assert bearings(v, since=t) != [] and not [m for m in said if "expiry" in m], said
+    assert v.status.following is not None

@@ -78,12 +78,13 @@ Rules:
    when the halt came, with no grain. Halts: never refused. The
    same on the stop lane, for the lock OFF it carries out while the main connection is down.
    A stamped move taken goes with its expiry on the steady clock (``Target.not_after_s``, a
-   ``Move``'s; a call's goes to the DX cluster's aimer, and with the ``Toward`` it makes):
-   one that waits in the bridge for the order of a STOP or lock ON (a lane hold
-   and its marker, lastword.py rule 13; a lock OFF's marker) is dropped there once that has
-   passed, said on R/error (session.py rule 13): waiting for the last word is a link holding
+   ``Move``'s: a preset, park, nudge or place, a track or follow start, a feature's command;
+   a call's goes to the DX cluster's aimer, and with the ``Toward`` it makes): one that waits
+   in the bridge for the order of a STOP or lock ON (a lane hold and its marker, lastword.py
+   rule 13; a lock OFF's marker) is dropped there once that has passed, a start with what it
+   began, said on R/error (session.py rule 13): waiting for the last word is a link holding
    it up too (review 25: a P sent right after an S turned the rotor 14 s later, its markers
-   lost in a flood).
+   lost in a flood; review 34: so did a track start).
 10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
     member
    (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
