@@ -35,14 +35,7 @@ def bench(tmp_path: Path) -> Iterator[Bench]:
     "payload",
     [
         b"230",  # a bearing: dropped at the marker, past its expiry (R25-3's fix)
-        pytest.param(
-            b'{"call": "PY1ABC"}',  # Rio, about 230 degrees from Berlin
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="attack 7: a stamped target by call sign loses its expiry at the aimer "
-                "and turns the rotor at a marker long after it",
-            ),
-        ),
+        b'{"call": "PY1ABC"}',  # Rio, about 230 degrees from Berlin (fixed since c201e676)
     ],
 )
 def test_a_stamped_target_held_behind_a_lane_stop_does_not_turn_the_rotor_after_its_expiry(

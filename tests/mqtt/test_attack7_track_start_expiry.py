@@ -29,11 +29,6 @@ from tests.mqtt.test_review22_lost_lane_copy import markers_back
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 7: a stamped track or follow start kept behind a waiting lock OFF carries "
-    "no expiry and starts at the marker however late",
-)
 @pytest.mark.parametrize(("topic", "payload"), [("track", b"sun"), ("follow", b"wsjtx")])
 def test_a_stamped_tracking_start_kept_behind_a_lock_off_does_not_start_after_its_expiry(
     topic: str, payload: bytes
@@ -90,11 +85,6 @@ def bench(tmp_path: Path) -> Iterator[Bench]:
     made.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 7: a stamped track start read behind a lane STOP carries no expiry: "
-    "tracking turns the rotor at a marker long after it",
-)
 def test_a_stamped_track_start_behind_a_lane_stop_does_not_turn_the_rotor_after_its_expiry(
     bench: Bench,
 ) -> None:
