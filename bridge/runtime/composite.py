@@ -306,16 +306,22 @@ class Composition:
         self._whole: Target | None = None  # rules 8 and 9: the rotator's target, its halves'
 
     def aimed(
-        self, target: Target, batches: dict[Axis, Batch], held: Callable[[Axis, Target], bool]
+        self, batch: Batch, batches: dict[Axis, Batch], held: Callable[[Axis, Target], bool]
     ) -> None:
-        """Rules 8 and 9: the rotator's ``target``, split into ``batches``; an axis it leaves
-        out keeps the half its sender sent before while that box still ``held`` it (waiting,
-        or turning to it: session.py ``holds``), as one controller takes one sender's two
-        halves for one target (core/model.py ``combine``)."""
+        """Rules 8 and 9: the rotator's target (``batch``'s), split into ``batches``; an axis
+        it leaves out keeps the half its sender sent before while that box still ``held`` it
+        (waiting, or turning to it: session.py ``holds``), as one controller takes one
+        sender's two halves for one target (core/model.py ``combine``); none where the batch
+        stops the rotor first (a stop or lock ON in it ends that turn: review 36, its whole
+        target's sooner expiry dropped a fresh elevation half)."""
+        target = batch.target
+        assert target is not None
+        stops = batch.stop is not None or batch.lock_on
         whole, self._whole = combine(target, self._whole), target
         for axis in AXES:
             half, before = batches[axis].target, self.halves[axis]
-            if half is None and whole is not target and before is not None and held(axis, before):
+            kept = before is not None and not stops and held(axis, before)
+            if half is None and whole is not target and kept:
                 self._whole = whole  # (kept: taken with the new half)
                 continue
             self.halves[axis] = half
@@ -634,7 +640,7 @@ class CompositeWorker:
             if batch:
                 batches = self.composition.offline(split(batch))  # rule 8
                 if batch.target is not None:  # (rules 8 and 9: its halves)
-                    self.composition.aimed(batch.target, batches, self._holds)
+                    self.composition.aimed(batch, batches, self._holds)
                 self._siblings.newer(batches)  # rule 8: newer than a turn dropped
                 self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch

@@ -42,11 +42,6 @@ def test_one_controller_turns_the_elevation_sent_after_a_stop_of_a_stamped_turn(
         assert not [e for e in v.errors(since=t) if "expiry" in e.message]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 36: a composite's elevation half sent with a STOP is judged by the expiry "
-    "of the azimuth turn that STOP ends (aimed saw it turning) and dropped (87595d8e)",
-)
 def test_a_composite_turns_the_elevation_sent_after_a_stop_of_a_stamped_turn() -> None:
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(online, 10, "both boxes answer")

@@ -115,7 +115,7 @@ class VirtualComposite:
         if batch:
             batches = self.composition.offline(split(batch))  # (rules 1 and 8)
             if batch.target is not None:
-                self.composition.aimed(batch.target, batches, self._holds)
+                self.composition.aimed(batch, batches, self._holds)
             self._siblings.newer(batches)
             self._hand(batches)
 
