@@ -1122,6 +1122,9 @@ class Controller:
         self.motion, events = mo.reading(
             self.motion, cfg.motion, reply.az_deg, now, reply.el_deg, asked
         )
+        if self.motion.state is mo.MOVING and mo.stall_due(self.motion, cfg.motion, now):
+            link.poll_now(now)  # (motion.py rule 3: asked before the stall's time, it decided
+            # nothing; the answer to a question asked now does, a reply time later, review 36)
         if self.motion.state is mo.MOVING or mo.at_rest(self.motion):
             self._known_since_loss = True  # (rule 10: what a loss of readings then finds)
         if self._watching() or self._rested is not None:  # rule 10

@@ -36,7 +36,8 @@ Rules:
    poll out, SIGSTOP, a host that stalls, a starved thread) was taken for no progress in all
    that time: the turn was called stalled and stopped short (review 102 left it open; seen
    under load in a broker-restart test). That reading decides nothing; the controller is
-   asked at once (``stall_due``) and its answer does.
+   asked at once (``stall_due``, from the reading itself: controller.py ``_reading``; review
+   36: left to the tick, it waited a moving poll) and its answer does.
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
    rotor stopped: the last reading that changed at all (a move smaller than ``noise_deg`` is
    still a move: the rotor creeps up to its stop) plus one poll interval (``poll_margin_s``:

@@ -22,11 +22,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 36: a reading at the stall deadline answering a poll sent just before it "
-    "decides nothing and nothing asks at once: the stall waits a moving poll (eb203674)",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard", "rt21"])
 def test_a_jammed_rotor_is_stopped_at_its_stall_deadline_when_a_reply_lands_on_it(
     rig: Rig, model: str
