@@ -25,7 +25,14 @@ Rules:
    time (its halt count says what came before a halt: mailbox.py rule 10) and ignores it.
    With it goes ``reader``: the connection, pty or port that read the bytes (it orders its
    own): the remote lifts a move's stamp to the stamp of a halt read by the same reader
-   alone, never to another front end's (remote/rotator.py rule 7).
+   alone, never to another front end's (remote/rotator.py rule 7). ``seen_s`` is a lower
+   bound (the reader's last look that found nothing waiting), and two readers' lower bounds
+   do not order their bytes; so a stop (or lock ON) takes ``read_s`` too: the latest its
+   bytes can have come, where the front end knows it better than the moment it hands the
+   stop over (the kernel's datagram stamp, interfaces/loggers/commands.py rule 8; None: that
+   moment). The remote sends a move after another reader's halt only if the move was seen
+   after the halt's ``read_s`` (interfaces/mqtt/remote.py rule 8); after its own reader's,
+   if seen no earlier than the halt.
 """
 
 from __future__ import annotations
@@ -64,4 +71,5 @@ class HaltCounted(FrontRotator, Protocol):
         since: int | None = None,
         seen_s: float | None = None,
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None: ...

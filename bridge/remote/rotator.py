@@ -77,7 +77,9 @@ Rules:
    it, however late it was read, and the client's own ``S`` read with it does not
    (heartbeat.py rule 10); another front end's STOP seen after the move came does not lift
    it either (an attack pass: Gpredict's ``P`` seen at 8 s, read after PstRotator's STOP seen
-   at 9 s, went out stamped 9 s and turned the rotor). The console says nothing: its
+   at 9 s, went out stamped 9 s and turned the rotor). A stop and a lock ON carry ``read_s``
+   too (front.py rule 3: their latest arrival): another source's move seen before it is
+   refused by the link (interfaces/mqtt/remote.py rule 8). The console says nothing: its
    commands are stamped when sent.
 """
 
@@ -157,6 +159,7 @@ class Sender(Protocol):
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None: ...
 
 
@@ -309,6 +312,7 @@ class RemoteRotator:
         since: int | None = None,
         seen_s: float | None = None,
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None:
         """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
         the count of the stops and lock ONs of every front end but the command's own
@@ -317,7 +321,9 @@ class RemoteRotator:
         the link, under the link's send lock (the order the broker takes them in).
         ``seen_s``: when the command was seen (the monotonic clock, the link's; front.py rule
         3): it is stamped so (rule 7). ``reader``: its source (the connection or port that read
-        it: front.py rule 3), whose own last halt alone may lift a move's stamp (rule 7)."""
+        it: front.py rule 3), whose own last halt alone may lift a move's stamp (rule 7).
+        ``read_s``: a halt's latest arrival, where the front end knows it (front.py rule 3;
+        None: when it is sent), before which another source's move is refused (rule 7)."""
         # a front end that asks and submits at once (rotctld, GS-232, the loggers): its move is
         # asked now, and a stop or lock ON of any front end counted from here on refuses it up
         # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
@@ -329,7 +335,7 @@ class RemoteRotator:
         # asked before that stop, went to the broker after it)
         asked = self.halts
         try:
-            self._send(command, since, asked, seen_s, reader)
+            self._send(command, since, asked, seen_s, reader, read_s)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
@@ -341,18 +347,24 @@ class RemoteRotator:
         asked: int | None = None,
         seen_s: float | None = None,
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
         a place goes as the place, park as park. ``asked``: the count of every front end's
         stops and lock ONs when the move was handed to ``submit``, ``since`` or not;
-        ``seen_s``, ``reader``: as ``submit``'s (rule 7)."""
+        ``seen_s``, ``reader``, ``read_s``: as ``submit``'s (rule 7)."""
         t = self.topics
         match command:
             case Stop():
                 unheard = self.bridge_unheard()  # rule 3: sent, maybe to nobody, and again
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
                 self.publish(
-                    t.stop, "stop", until_heard=unheard, seen_s=seen_s, reader=reader
+                    t.stop,
+                    "stop",
+                    until_heard=unheard,
+                    seen_s=seen_s,
+                    reader=reader,
+                    read_s=read_s,
                 )  # or be kept)
                 if unheard:  # once the station's bridge is heard
                     raise Refused(RefusalCode.OFFLINE, STOP_UNHEARD)
@@ -368,6 +380,7 @@ class RemoteRotator:
                     until_heard=unheard,
                     seen_s=on_seen,
                     reader=reader,
+                    read_s=read_s if command.on else None,
                 )
                 if unheard:
                     raise Refused(RefusalCode.OFFLINE, LOCK_UNHEARD)
@@ -523,6 +536,7 @@ class RemoteRotator:
         until_heard: bool = False,
         seen_s: float | None = None,
         reader: Hashable | None = None,
+        read_s: float | None = None,
         move: bool = False,
     ) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE);
@@ -530,7 +544,7 @@ class RemoteRotator:
         (it raises Refused for a move that may not go any more); ``until_heard``: a halt sent
         again once the station's bridge is heard (rule 3); ``seen_s``: stamped with when it
         was seen, a ``move`` never before the stamp of this rotator's last halt from the same
-        source, ``reader`` (rule 7)."""
+        source, ``reader``; ``read_s``: a halt's latest arrival (rule 7)."""
         t = self.topics
         self._link.send(
             topic,
@@ -542,6 +556,7 @@ class RemoteRotator:
             seen_s=seen_s,
             reader=reader,
             after=(t.stop, t.lock) if move else (),
+            read_s=read_s,
         )
 
     def report_refusal(

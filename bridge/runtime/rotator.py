@@ -335,6 +335,7 @@ class Rotator:
         ticket: int | None = None,
         seen_s: float | None = None,
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None:
         """The one way a front end reaches the judge (rules in the module header): queue
         ``command`` (a value of core/model.py's ``Command`` union) or raise Refused, reported on
@@ -347,9 +348,9 @@ class Rotator:
         cluster's look-up): a stop or lock ON put since then overtakes it, however late it is
         judged (mailbox.py rule 10); ``ticket``: for such a command, its place in the order of
         commands taken when it was asked (``ticket()``): any motion command put since then
-        overtakes it too (mailbox.py rule 10a). ``seen_s``, ``reader`` (front.py rule 3): not
-        used here, the halt count says what came before a halt."""
-        del seen_s, reader  # (the remote's stamp, front.py rule 3)
+        overtakes it too (mailbox.py rule 10a). ``seen_s``, ``reader``, ``read_s`` (front.py
+        rule 3): not used here, the halt count says what came before a halt."""
+        del seen_s, reader, read_s  # (the remote's stamp, front.py rule 3)
         if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
             message = f"not a command the bridge knows: {type(command).__name__}"
             self.report(ErrorKind.REFUSED, message, described)

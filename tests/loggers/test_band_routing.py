@@ -38,6 +38,7 @@ class Recording:
         since: Any = None,
         seen_s: Any = None,
         reader: Any = None,
+        read_s: Any = None,
     ) -> None:
         self.calls.append(replace(command, origin=None))
 

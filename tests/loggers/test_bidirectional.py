@@ -53,6 +53,7 @@ class _Through:
         since: Any = None,
         seen_s: Any = None,
         reader: Any = None,
+        read_s: Any = None,
     ) -> None:
         self.sent.append(command)
         self.v.aim(command)

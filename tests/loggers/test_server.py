@@ -62,6 +62,7 @@ class Recording:
         since: Any = None,
         seen_s: Any = None,
         reader: Any = None,
+        read_s: Any = None,
     ) -> None:
         with self._lock:
             if isinstance(command, Stop):  # carried out now (runtime/rotator.py)
@@ -215,6 +216,7 @@ class Faulty(Recording):
         since: Any = None,
         seen_s: Any = None,
         reader: Any = None,
+        read_s: Any = None,
     ) -> None:
         if isinstance(command, Target) and command.az_deg == self.fails_at_deg:
             raise RuntimeError("a bug behind the rotator")
@@ -797,6 +799,7 @@ class HaltedMeanwhile(Recording):
         since: Any = None,
         seen_s: Any = None,
         reader: Any = None,
+        read_s: Any = None,
     ) -> None:
         if isinstance(command, Stop) and command.source is Source.PST and not self.halts:
             super().submit(Stop(Source.MQTT))  # the operator's, from the stop lane

@@ -56,9 +56,11 @@ def _link() -> tuple[FakeClock, RemoteLink, Paho]:
 
 
 def _floor_alone(link: RemoteLink) -> None:
-    """The remote's own refusal of a move seen before a halt it sent (rule 8, review 30) set
-    aside until the next halt: the stamp the floor alone gives, what the station judges."""
+    """The remote's own refusal of a move seen before a halt it sent, or before another
+    reader's halt was read (rule 8, review 30), set aside until the next halt: the stamp the
+    floor alone gives, what the station judges."""
     link._halt_latest.clear()  # noqa: SLF001
+    link._halt_read.clear()  # noqa: SLF001
 
 
 def test_a_move_seen_before_another_front_ends_stop_is_not_lifted_to_its_stamp() -> None:

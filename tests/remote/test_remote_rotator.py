@@ -198,6 +198,7 @@ def stop_on_the_way(link: Link, stop: Callable[[], None]) -> None:
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
         reader: object = None,
+        read_s: float | None = None,
     ) -> None:
         if topic.endswith("/target"):
             stop()

@@ -73,13 +73,24 @@ def test_gpredict_tracks_on_after_a_stop_from_another_front_end() -> None:
         assert _sent(fake.published[-1][1]) > _sent(stop)
 
 
-def test_a_move_seen_with_another_sources_stop_at_one_moment_is_not_refused() -> None:
-    """Equal seen times are not ordered: not refused (the station's stamps judge them)."""
+def test_a_move_seen_when_another_sources_stop_came_is_not_refused() -> None:
+    """Another source's STOP with an exact arrival (a kernel's datagram stamp: its seen and
+    read times one): a move seen at that moment is not refused (the station's stamps judge
+    them). Without one, the STOP came at some time up to its read: a move seen at its seen
+    time may have come before it, refused (the cross-reader case:
+    tests/remote/test_cross_reader_halt.py); one seen at its read time is not."""
     clock, link, fake = _link()
     clock.t += 10.0
     link.station_clock.heard(BASE + clock.t)
-    _stop(link, clock.t - 1.0, "pst")
+    link.send(
+        "rotor/stop", "stop", "DL1ABC", 5, seen_s=clock.t - 1.0, reader="pst", read_s=clock.t - 1.0
+    )
     _move(link, 200, clock.t - 1.0, "rotctld gpredict")
+    assert fake.published[-1][0] == "rotor/target"
+    _stop(link, clock.t - 0.5, "pst")  # (no stamp: read now)
+    with pytest.raises(Refused):
+        _move(link, 201, clock.t - 0.5, "rotctld gpredict")
+    _move(link, 202, clock.t, "rotctld gpredict")
     assert fake.published[-1][0] == "rotor/target"
 
 

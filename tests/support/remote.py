@@ -50,6 +50,7 @@ class Link:
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
         reader: object = None,
+        read_s: float | None = None,
     ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")

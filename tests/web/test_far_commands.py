@@ -247,6 +247,7 @@ class StalledLink:
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
         reader: object = None,
+        read_s: float | None = None,
     ) -> None:
         with self._lock:  # handed to the broker, one at a time (remote.py rule 9)
             if check is not None:

@@ -67,7 +67,10 @@ Rules:
    the move to ``submit`` (``since``, runtime/rotator.py; mailbox.py rule 10): a STOP carried
    out between the look and the judge refuses the move too (an attack pass: the operator's
    rotctld S, carried out right after the look, and the logger's 300 turned the rotor after
-   it).
+   it). The stop goes to ``submit`` with its arrival's latest bound (``read_s``, front.py
+   rule 3): the remote refuses a move another of its front ends saw before it (remote.py
+   rule 8), and a system stamp makes that window the stamp's few microseconds, not the time
+   until the stop was read.
 """
 
 from __future__ import annotations
@@ -257,13 +260,13 @@ class Halted:
         """``stop`` carried out on ``rot`` (``submit``, with when it was seen: ``seen_s``,
         and the sender and port that read it: ``reader``, front.py rule 3), noted if it
         ``arrived`` stamped (its latest bound: what came before it is refused, never some of
-        it carried out)."""
+        it carried out; and handed on as ``read_s``, rule 8)."""
         if arrived is None:  # (nothing to note: the stop first, whatever else)
             rot.submit(stop, described, seen_s=seen_s, reader=reader)
             return
         count, before = rot.halts, rot.last_halt_s
         try:
-            rot.submit(stop, described, seen_s=seen_s, reader=reader)
+            rot.submit(stop, described, seen_s=seen_s, reader=reader, read_s=arrived.latest)
         finally:
             # noted only if it was the one halt since the look: a STOP or lock ON from another
             # interface carried out between the look and this one is when the rotator halted

@@ -86,6 +86,9 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    read after that bound, dates it earlier (it may have come after the turn: the safe side).
    What comes to a socket the loop found empty after the stop was read is dated as before:
    PstRotator tracks on after a STOP.
+   Across interfaces (a rotctld ``S``, a logger's turn) the remote orders them itself: a
+   move goes after another reader's stop only if seen after that stop was read (remote.py
+   rule 8; a stop's ``read_s``, front.py rule 3).
    Each socket's stops are kept HALTS_KEPT at most, the oldest two then one: the later read,
    the earlier date (the safe side: more is dated before it). With the system's stamps none of
    this is needed. The stale check above is the system's stamp's alone. The stamps are live

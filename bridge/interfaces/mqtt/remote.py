@@ -96,8 +96,23 @@ Rules:
    another source saw before it, stamped after a beat with a shorter trip (review 30:
    Gpredict's ``P`` seen at 8.9 s, read late, went out stamped after PstRotator's STOP seen
    at 9 s). Equal seen times are not refused (one read: ``P 300``, ``S``, ``P 200`` ends at
-   200); a move without ``seen_s`` (the console's, stamped when sent) is not checked. The
-   floor above stays for the station's judging. Every stamp is its millisecond's start. The
+   200); a move without ``seen_s`` (the console's, stamped when sent) is not checked. But a
+   seen time is its reader's lower bound (the last look that found nothing waiting), and two
+   readers' lower bounds do not order what they read: PstRotator's turn came before a
+   rotctld ``S``, the loggers' last look at its port (no datagram stamps) was after the
+   rotctld connection's, the turn was dated after the ``S``, let through and stamped after
+   the STOP, and the rotor turned after it (review 33's case across interfaces). So each
+   halt is noted with its read time too (``read_s``: the latest it can have come, a kernel's
+   datagram stamp where the reader has one, else when it is sent here; ``_halt_read``: by
+   topic, the two sources with the latest reads, so every source's latest halt but its own
+   is there), and a move is refused if seen before the read time of a halt from another
+   source than its own (none said: any halt's) (STALE, MAYBE_BEFORE_HALT): it goes after
+   such a halt only if its earliest arrival is after the halt's latest. Against its own
+   source's halts (one connection, one port and sender, read in the order they came) seen
+   times alone order them, as above. The cost: a move another program sent right after a
+   STOP, seen before that STOP was read, is refused too (send it again: Gpredict's next
+   ``P`` goes); with the kernel's stamps the window is the stamp's microseconds. The floor
+   above stays for the station's judging. Every stamp is its millisecond's start. The
    sources noted are the last HALT_READERS (a program opening a connection per STOP would
    else grow them without end, each keeping its connection); a source forgotten lifts
    nothing, so its next move may at worst be refused, never let through.
@@ -158,6 +173,11 @@ SEEN_BEFORE_HALT = (
     "seen before a STOP or lock ON sent from here that came first (a client, or a computer, "
     "that held it up): not carried out; send it again"
 )
+MAYBE_BEFORE_HALT = (
+    "it may have come before a STOP or lock ON another program sent from here a moment "
+    "earlier (the two were read apart, so their order is not known): not carried out; send it "
+    "again"
+)
 KEPT = (
     f"{NOT_CONNECTED}: not delivered yet (the rotor may still be turning); the stop is kept "
     "and sent first on reconnect"
@@ -208,6 +228,9 @@ class RemoteLink(Connection):
         self._halt_seen: dict[tuple[str, bytes], tuple[float, Hashable | None]] = {}
         # rule 8: the latest seen time of a halt sent or kept, by topic, from any source
         self._halt_latest: dict[str, float] = {}
+        # rule 8: the latest read times of halts sent or kept, by topic: (read, its source),
+        # two sources at most (the latest read, and the latest of any other source's)
+        self._halt_read: dict[str, list[tuple[float, object]]] = {}
         self._clock = clock
         self.station_clock = StationClock(clock)  # rule 8
         self._ack_wait_s = ack_wait_s
@@ -242,6 +265,7 @@ class RemoteLink(Connection):
         seen_s: float | None = None,
         after: tuple[str, ...] = (),
         reader: Hashable | None = None,
+        read_s: float | None = None,
     ) -> None:
         """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
         (a stop excepted: rule 6). ``check``, if given, is asked under the send lock right
@@ -252,15 +276,19 @@ class RemoteLink(Connection):
         stamped then; a move never before the latest stamp a halt on one of ``after`` (its
         rotator's halt topics) went out with from the same source, ``reader`` (its connection or
         port; None: not known, no halt lifts it), and refused if seen before a halt on one of
-        ``after`` that this remote sent or kept (rule 8)."""
+        ``after`` that this remote sent or kept, or, if that halt is another reader's, before
+        it was read (rule 8). ``read_s`` (a halt's): the latest its bytes can have come, where
+        the reader knows it (a kernel's datagram stamp); None: now, when it is sent."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
+        now = self._clock()  # (a halt handed over now was read by now: rule 8)
         with self._send_lock:
             if halt:  # rule 8: sent again, stamped with when it was (last) seen
-                seen = self._clock() if seen_s is None else seen_s
+                seen = now if seen_s is None else seen_s
                 self._halt_seen[topic, payload.encode()] = seen, reader
                 self._halt_latest[topic] = max(seen, self._halt_latest.get(topic, seen))
+                self._note_read(topic, max(seen, now if read_s is None else read_s), reader)
             if not self.up and halt:  # down, or being reset: rule 6
                 props.UserProperty = [("operator", operator)]
                 self._keep(topic, payload.encode(), props)
@@ -270,6 +298,8 @@ class RemoteLink(Connection):
             if not halt and seen_s is not None:  # rule 8: seen before a halt sent from here
                 if any(seen_s < self._halt_latest.get(t, seen_s) for t in after):
                     raise Refused(RefusalCode.STALE, SEEN_BEFORE_HALT)
+                if any(seen_s < self._read_besides(t, reader) for t in after):
+                    raise Refused(RefusalCode.STALE, MAYBE_BEFORE_HALT)  # (another reader's)
             # rule 8: a halt's if it has one; when it was seen, if that is said; a move's
             # never before its rotator's last halt's
             keys = [] if reader is None else [(t, reader) for t in after]  # (None: unknown)
@@ -466,6 +496,24 @@ class RemoteLink(Connection):
             self._note_halt(topic, props, reader)  # lifted to that, review 30)
         with self._acks:
             self._unawaited.add(info.mid)
+
+    def _note_read(self, topic: str, read: float, reader: Hashable | None) -> None:
+        """Rule 8: a halt on ``topic`` from ``reader`` read by ``read`` (caller holds
+        _send_lock). Two sources are kept, the latest read first: the latest of every source
+        but any one is among them. An unknown source (None) is none other's: its own."""
+        who: object = object() if reader is None else reader
+        kept = self._halt_read.get(topic, [])
+        read = max([read] + [r for r, w in kept if w == who])
+        kept = sorted([(r, w) for r, w in kept if w != who] + [(read, who)], key=lambda k: -k[0])
+        self._halt_read[topic] = kept[:2]
+
+    def _read_besides(self, topic: str, reader: Hashable | None) -> float:
+        """Rule 8: the latest read time of a halt on ``topic`` from a source other than
+        ``reader`` (None: every halt's), -inf if none (caller holds _send_lock)."""
+        for read, who in self._halt_read.get(topic, ()):
+            if reader is None or who != reader:
+                return read
+        return -math.inf
 
     def _note_halt(self, topic: str, props: Properties, reader: Hashable | None) -> None:
         """Rule 8: the latest stamp a halt on ``topic`` from ``reader`` (its source) went out
