@@ -12,7 +12,8 @@ Sequence: a STOP holds the rotator for its marker; a remote's ``beam aim 200`` (
 expiry) is taken under the hold, its part proposing 200; then an unstamped ``track nosuch``
 (a name the TLE file does not have: "no satellite", nothing changes); the marker comes back
 8 s later. Without the look-up the 200 is dropped, said (test_session_last_word.py); with it,
-the rotor turns to 200 after the STOP, 8 s after it was sent with a 5 s expiry."""
+the rotor turns to 200 after the STOP, 8 s after it was sent with a 5 s expiry. So does
+tracking a late stamped ``track sun`` began (second test: built-in features alone)."""
 
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ import pytest
 
 from bridge.core.model import FeatureCommand, Source, Stop
 from bridge.session.tracking import Track
+from bridge.sky import Body
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
 from tests.engine.test_session_last_word import bearings, starts_rig
@@ -61,3 +63,38 @@ def test_a_look_up_under_the_hold_does_not_let_a_late_commands_target_go(
     v.run_for(30)
     said = [e.message for e in v.errors(since=t)]
     assert bearings(v, since=t) == [] and not v.truth().is_moving, said
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 37: an unstamped look-up track start under the same hold forgets a late "
+        "stamped track start, and tracking it began turns the rotor (session.py _wait)"
+    ),
+)
+def test_a_look_up_under_the_hold_does_not_let_a_late_track_start_turn_the_rotor(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """The same with no feature of a test's own: a remote's ``track sun`` (stamped, 5 s expiry)
+    taken under the hold, then an unstamped ``track nosuch``; the look-up leaves the sun
+    tracked ("until the answer"; it fails) and takes the late start's place, so the marker back
+    8 s later ends nothing and tracking turns the rotor to the sun."""
+    v = starts_rig(rig, monkeypatch)
+    t = v.now
+    path = tmp_path / "amateur.tle"
+    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    v.mailbox.put(Stop(Source.MQTT), hold=1)
+    v.mailbox.put_track(Track(Body.sun(), described="track sun", not_after_s=t + 5.0))
+    v._take()
+    lookup = LookupQuestion(TleCatalog(path), "nosuch")
+    v.mailbox.put_track(Track(None, Source.MQTT, lookup, described="track nosuch"))
+    v._take()
+    v.run_for(8.0)
+    assert bearings(v, since=t) == []  # (held)
+    v.mailbox.put_release(1)  # the marker back, past the track start's expiry
+    v._take()
+    v.run_for(30)
+    said = [e.message for e in v.errors(since=t)]
+    assert bearings(v, since=t) == [] and not v.truth().is_moving, said
+    assert v.status.tracking is None, said
