@@ -73,7 +73,9 @@ Rules:
    copy began to turn the rotor at the marker's return, 14 s after it was sent). The newest
    start taken under the hold is the one judged: it ended what the one before it began, and
    so does anything that ends tracking (a stop, a target); one that ended already is not
-   said.
+   said. A satellite's look-up ends nothing until its answer, so it takes no start's place:
+   the two are judged as one, by the sooner expiry (review 37; the safe side: a late look-up
+   also ends following begun in time under that hold, a known failure).
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -494,7 +496,9 @@ class RotatorSession:
             done = self.features.track(track, self._refused() or late, leased)
             self._apply(done)
             if start and done.error is None:
-                self._wait(track.not_after_s, track.described or "track", "tracking ended")
+                began = track.body is not None  # (a look-up ends nothing until its answer)
+                what = track.described or "track"
+                self._wait(track.not_after_s, what, "tracking ended", ends=began)
         if (follow := batch.follow) is not None:
             leased = None
             if follow.on:
@@ -824,12 +828,29 @@ class RotatorSession:
         self.drops += 1
         self.dropped = target
 
-    def _wait(self, not_after_s: float | None, what: str, said: str, part: bool = False) -> None:
+    def _wait(
+        self,
+        not_after_s: float | None,
+        what: str,
+        said: str,
+        part: bool = False,
+        ends: bool = True,
+    ) -> None:
         """Rule 13: a start taken (``what``): under a hold, with an expiry, what it began ends
         if the hold ends past it (``_waited``; ``said``: how that is said); it takes the place
-        of the start before it, whose tracking, following or part's motion it ended."""
+        of the start before it, whose tracking, following or part's motion it ended
+        (``ends``). A satellite's look-up ends nothing until its answer (review 37: an
+        unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
+        at the marker): the two are judged as one, by the sooner expiry (the safe side: a
+        late look-up also ends following begun in time under the same hold)."""
         held = not_after_s is not None and self.fence.held
-        self._waiting = _Waiting(not_after_s, what, said, part) if held else None
+        new = _Waiting(not_after_s, what, said, part) if held else None
+        before = None if ends else self._waiting
+        if new is None or before is None:
+            self._waiting = new if ends or before is None else before
+            return
+        first = new if (new.not_after_s or 0.0) < (before.not_after_s or 0.0) else before
+        self._waiting = first._replace(part=new.part or before.part)
 
     def _waited(self, now: float) -> None:
         """Rule 13: the hold ended: what a stamped start taken under it began ends if its

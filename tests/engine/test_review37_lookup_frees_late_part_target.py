@@ -34,13 +34,6 @@ from tests.support.sky import synthetic_tle
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 37: an unstamped look-up track start under the same hold forgets a late "
-        "feature command, and the target its part proposed goes out (session.py _wait)"
-    ),
-)
 def test_a_look_up_under_the_hold_does_not_let_a_late_commands_target_go(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
@@ -65,13 +58,6 @@ def test_a_look_up_under_the_hold_does_not_let_a_late_commands_target_go(
     assert bearings(v, since=t) == [] and not v.truth().is_moving, said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 37: an unstamped look-up track start under the same hold forgets a late "
-        "stamped track start, and tracking it began turns the rotor (session.py _wait)"
-    ),
-)
 def test_a_look_up_under_the_hold_does_not_let_a_late_track_start_turn_the_rotor(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
