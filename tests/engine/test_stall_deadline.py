@@ -2,7 +2,10 @@
 3, controller.py rule 2; a review of 1ed8e54: a stall told only by a reading, or by time while
 a question is out unanswered, waited at the deadline for the next moving poll's reading, and
 the motor drove against the jam up to ``moving_poll_interval_s`` longer than before: 2 s more
-for a GS-232B polled every 2 s while turning)."""
+for a GS-232B polled every 2 s while turning). Review 36 (of eb203674, motion.py rule 3's
+question time): a reply landing on the deadline itself, answering the poll sent just before
+it, decides nothing, and nothing asked at once: a Rotor-EZ, a RotorCard or an RT-21 polled
+every 2 s stalled 2 s late; the reading now asks at once (controller.py ``_reading``)."""
 
 from __future__ import annotations
 
@@ -16,7 +19,9 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.parametrize("model", ["gs232b", "easycomm3", "prosistel"])
+@pytest.mark.parametrize(
+    "model", ["gs232b", "easycomm3", "prosistel", "rotorez", "rotorcard", "rt21"]
+)
 @pytest.mark.parametrize("poll_s", [0.2, 2.0])
 def test_a_jammed_rotor_is_stopped_at_its_stall_deadline(
     rig: Rig, model: str, poll_s: float
