@@ -72,35 +72,41 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    before it on another port, read at the next wake-up, and the turn went out dated after the
    STOP). So a datagram that may be a stop (rule 8's search) is noted with the time after its
    read, an upper bound, and one that is no stop, read later from another socket for one of
-   the same rotators (a PST port's, every one named on an N1MM port) with a bound before that
-   time (it may have come before the stop), is dated BEFORE_HALT_S before the stop's date: the
-   remote refuses it as seen before the STOP (remote.py rule 8). A stop for other rotators only
-   says nothing of it: the remote orders a move against its own rotator's halts alone (review
-   34: rotator X's STOP, read first in a wake-up, dated rotator Y's turn, read after Y's own
-   STOP on Y's port, before Y's STOP too, and the remote refused the operator's turn). A stop
-   keeps its own bound (dated later, a turn its own sender sent after it would be lifted with it
-   past a STOP from Home Assistant: remote.py rule 8's floor), and a datagram read after a stop
-   from the same socket is never dated before it (its bound is the later of its own and that
-   stop's date): one socket's datagrams are read in the order they came (``AZIMUTH 300``,
-   ``STOP``, ``AZIMUTH 200`` ends at 200). Only a stop for the same rotator from another socket,
-   read after that bound, dates it earlier (it may have come after the turn: the safe side).
+   the same rotators (a PST port's; on an N1MM port those the datagram names, ``_rotator_ids``:
+   every one there for ``*`` or for a name several share, a turn to it being chosen by band,
+   and every one named on the port for a datagram not understood, the safe side) with a bound
+   before that time (it may have come before the stop), is dated BEFORE_HALT_S before the
+   stop's date: the remote refuses it as seen before the STOP (remote.py rule 8). A stop for
+   other rotators only says nothing of it: the remote orders a move against its own rotator's
+   halts alone (review 34: rotator X's STOP, read first in a wake-up, dated rotator Y's turn,
+   read after Y's own STOP on Y's port, before Y's STOP too, and the remote refused the
+   operator's turn; review 36: the same through one N1MM port for a tower X and a yagi Y, as
+   N1MM is usually set up, beside X's PstRotator port, while an N1MM port's rotators were
+   every one named on it: the yagi's turn after the yagi's STOP was dated before X's STOP).
+   A stop keeps its own bound (dated later, a turn its own sender sent after it would be lifted
+   with it past a STOP from Home Assistant: remote.py rule 8's floor), and a datagram read
+   after a stop from the same socket, whichever rotator that stop was for, is never dated
+   before it (its bound is the later of its own and that stop's date): one socket's datagrams
+   are read in the order they came (``AZIMUTH 300``, ``STOP``, ``AZIMUTH 200`` ends at 200).
+   Only a stop for the same rotator from another socket, read after that bound, dates it
+   earlier (it may have come after the turn: the safe side).
    What comes to a socket the loop found empty after the stop was read is dated as before:
    PstRotator tracks on after a STOP.
    Across interfaces (a rotctld ``S``, a logger's turn) the remote orders them itself: a
    move goes after another reader's stop only if seen after that stop was read (remote.py
    rule 8; a stop's ``read_s``, front.py rule 3).
    Each socket's stops are kept HALTS_KEPT at most, the oldest two then one: the later read,
-   the earlier date (the safe side: more is dated before it). With the system's stamps none of
-   this is needed. The stale check above is the system's stamp's alone. The stamps are live
-   before a port is bound (``_stamping_on``): Linux turns its stamping on for the first socket
-   that asks a moment later, on a worker thread (milliseconds; longer on a loaded host), and a
-   datagram that comes meanwhile is stamped when it is read, not when it came, with nothing to
-   tell the two apart. A turn sent before a STOP from another interface, come in that moment
-   and read after the STOP, was dated after it and carried out (a flaky test on a loaded 2-core
-   CI machine, a real hole at every start). So a socket of its own asks first and sends itself
-   datagrams until one comes back stamped before it was read; the ports asked while it holds
-   the stamping on are stamped at once. Not live within STAMPS_LIVE_S: said, and the ports
-   listen all the same.
+   the earlier date, the rotators of both (the safe side: more is dated before it). With the
+   system's stamps none of this is needed. The stale check above is the system's stamp's alone.
+   The stamps are live before a port is bound (``_stamping_on``): Linux turns its stamping on
+   for the first socket that asks a moment later, on a worker thread (milliseconds; longer on a
+   loaded host), and a datagram that comes meanwhile is stamped when it is read, not when it
+   came, with nothing to tell the two apart. A turn sent before a STOP from another interface,
+   come in that moment and read after the STOP, was dated after it and carried out (a flaky
+   test on a loaded 2-core CI machine, a real hole at every start). So a socket of its own asks
+   first and sends itself datagrams until one comes back stamped before it was read; the ports
+   asked while it holds the stamping on are stamped at once. Not live within STAMPS_LIVE_S:
+   said, and the ports listen all the same.
 10. Every port is the bridge's alone: no socket option lets another program bind it too, so
    one that tries is told the address is in use (and a bridge that finds it taken says so at
    its start). N1MM advises programs to share its ports (SO_REUSEADDR), but on Linux a
@@ -143,6 +149,7 @@ from bridge.interfaces.loggers.commands import (
 from bridge.interfaces.loggers.datagrams import (
     MAX_DATAGRAM,
     Malformed,
+    N1mmRequest,
     ascii_text,
     may_stop_n1mm,
     may_stop_pst,
@@ -207,8 +214,9 @@ class LoggerEndpoints:
         # rule 9, where the system does not stamp datagrams: when each socket was last found
         # empty (monotonic), and a time before any could be (for one not read yet)
         self._drained_s: dict[socket.socket, float] = {}
-        # ... and the stops read on each: (the time after the read, the date given), oldest first
-        self._halts_read: dict[socket.socket, deque[tuple[float, float]]] = {}
+        # ... and the stops read on each: (the time after the read, the date given, the ids of
+        # the rotators they were for), oldest first
+        self._halts_read: dict[socket.socket, deque[tuple[float, float, frozenset[str]]]] = {}
         self._started_s = time.monotonic()
         self._selector: selectors.BaseSelector | None = None
         self._thread: threading.Thread | None = None
@@ -430,55 +438,71 @@ class LoggerEndpoints:
                 self._flooded(now, source)
                 continue
             seen_s = since_s
+            parsed: N1mmRequest | Malformed | None = None  # (an N1MM datagram's, parsed once)
             if since_s is not None and arrived is None:  # rule 9: no stamp, a bound
+                if named is not None:
+                    parsed = _parse_n1mm(data)
+                ids = self._rotator_ids(sock, parsed)
                 if stop:
-                    self._halt_read(sock, read_s, since_s)
+                    self._halt_read(sock, read_s, since_s, ids)
                 else:
-                    seen_s = self._before_halts(sock, since_s)
-            self._carry_out(sock, endpoint, data, peer, arrived, seen_s)
+                    seen_s = self._before_halts(sock, since_s, ids)
+            self._carry_out(sock, endpoint, data, peer, arrived, seen_s, parsed)
             self._budgets.spend(source, 1 + len(data) / 1024, now)
 
-    def _halt_read(self, sock: socket.socket, read_s: float, since_s: float) -> None:
-        """Rule 9, where the system does not stamp datagrams: a datagram that may be a stop,
-        dated ``since_s``, read before ``read_s``: noted, for what another socket gives after
-        it. The stops one serve reads share a date: one entry, the last read's time; past
-        HALTS_KEPT the oldest two become one, the later time and the earlier date (the safe
-        side: more is dated before them)."""
+    def _halt_read(
+        self, sock: socket.socket, read_s: float, since_s: float, ids: frozenset[str]
+    ) -> None:
+        """Rule 9, where the system does not stamp datagrams: a datagram that may be a stop for
+        the rotators ``ids``, dated ``since_s``, read before ``read_s``: noted, for what another
+        socket gives after it. The stops one serve reads share a date: one entry, the last
+        read's time, every rotator they were for; past HALTS_KEPT the oldest two become one,
+        the later time, the earlier date and both's rotators (the safe side: more is dated
+        before them)."""
         halts = self._halts_read.setdefault(sock, deque())
         if halts and halts[-1][1] == since_s:
-            halts[-1] = read_s, since_s
+            halts[-1] = read_s, since_s, halts[-1][2] | ids
             return
-        halts.append((read_s, since_s))
+        halts.append((read_s, since_s, ids))
         if len(halts) > HALTS_KEPT:
-            (_, first), (last_s, second) = halts.popleft(), halts.popleft()
-            halts.appendleft((last_s, min(first, second)))
+            (_, first, some), (last_s, second, more) = halts.popleft(), halts.popleft()
+            halts.appendleft((last_s, min(first, second), some | more))
 
-    def _before_halts(self, sock: socket.socket, since_s: float) -> float:
+    def _before_halts(self, sock: socket.socket, since_s: float, ids: frozenset[str]) -> float:
         """Rule 9, where the system does not stamp datagrams: the date of a datagram that is
-        no stop, read from ``sock`` and come after ``since_s``: that, or the latest date of a
-        stop ``sock`` gave before it if later (it came after that stop); unless a stop another
-        socket for one of the same rotators gave was read after that bound (it may then have
-        come after that stop): just before that stop's date, then (the safe side, even before
-        its own port's stop)."""
+        no stop, read from ``sock``, come after ``since_s`` and for the rotators ``ids``: that,
+        or the latest date of a stop ``sock`` gave before it if later (it came after that stop,
+        whichever rotator the stop was for); unless a stop for one of the same rotators another
+        socket gave was read after that bound (it may then have come after that stop): just
+        before that stop's date, then (the safe side, even before its own port's stop)."""
         own = self._halts_read.get(sock, ())
-        seen_s = bound_s = max([since_s, *(dated_s for _, dated_s in own)])
-        ours = self._rotator_ids(sock)
+        seen_s = bound_s = max([since_s, *(dated_s for _, dated_s, _ in own)])
         for other, halts in self._halts_read.items():
-            if other is not sock and not ours.isdisjoint(self._rotator_ids(other)):
-                for read_s, dated_s in halts:
-                    if read_s > bound_s:
+            if other is not sock:
+                for read_s, dated_s, stopped in halts:
+                    if read_s > bound_s and not ids.isdisjoint(stopped):
                         seen_s = min(seen_s, dated_s - BEFORE_HALT_S)
         return seen_s
 
-    def _rotator_ids(self, sock: socket.socket) -> frozenset[str]:
-        """Rule 9: the rotators a datagram on ``sock`` may stop or turn (a PST port's one; an
-        N1MM port's, every one named on it)."""
+    def _rotator_ids(
+        self, sock: socket.socket, parsed: N1mmRequest | Malformed | None = None
+    ) -> frozenset[str]:
+        """Rule 9: the rotators a datagram on ``sock`` may stop or turn: a PST port's one; on
+        an N1MM port those the datagram (``parsed``) names, every one on the port for ``*``
+        and every one that shares a name (a turn to it is chosen by band: commands.py rule 5),
+        none for a name nobody there has (the datagram moves and stops nothing); every one
+        named on the port when the datagram is not understood (the safe side)."""
         endpoint = self._sockets.get(sock)
         if isinstance(endpoint, PstEndpoint):
             return frozenset((endpoint.rotator.id,))
-        if isinstance(endpoint, N1mmEndpoint):
-            return frozenset(r.rotator.id for r in endpoint.rotors)
-        return frozenset()
+        if not isinstance(endpoint, N1mmEndpoint):
+            return frozenset()
+        rotors = endpoint.rotors
+        if isinstance(parsed, N1mmRequest):
+            names = {parsed.rotor, *parsed.also} if parsed.stop else {parsed.rotor}
+            if "*" not in names:
+                rotors = [r for r in rotors if r.name in names]
+        return frozenset(r.rotator.id for r in rotors)
 
     def _carry_out(
         self,
@@ -488,14 +512,19 @@ class LoggerEndpoints:
         peer: tuple[str, int],
         arrived: Arrival | None = None,
         seen_s: float | None = None,
+        parsed: N1mmRequest | Malformed | None = None,
     ) -> None:
+        """``parsed``: an N1MM datagram's parse, if rule 9 took it already."""
         try:
             if isinstance(endpoint, PstEndpoint):
                 port = self._addresses[sock][1]
                 req = parse_pst(data)
                 self._commands.pst(endpoint, sock, port, req, peer, data, arrived, seen_s)
             else:
-                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0], arrived, seen_s)
+                n1mm = parse_n1mm(data) if parsed is None else parsed
+                if isinstance(n1mm, Malformed):
+                    raise n1mm
+                self._commands.n1mm(endpoint, n1mm, data, peer[0], arrived, seen_s)
         except Malformed as exc:
             self._junk(_kind(endpoint), peer, exc)
         except Exception as exc:
@@ -592,6 +621,14 @@ def _may_name(endpoint: N1mmEndpoint, data: bytes) -> bool:
     text = data if data.isascii() else ascii_text(data).encode("ascii")
     alternatives = b"|".join(re.escape(name.encode("ascii")) for name in [*names, "*"])
     return re.search(rb">\s*(?:" + alternatives + rb")\s*<", text) is not None
+
+
+def _parse_n1mm(data: bytes) -> N1mmRequest | Malformed:
+    """Rule 9: an N1MM datagram parsed, or why it is not understood (said when carried out)."""
+    try:
+        return parse_n1mm(data)
+    except Malformed as exc:
+        return exc
 
 
 def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
