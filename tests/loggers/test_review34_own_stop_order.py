@@ -16,52 +16,19 @@ STOP says nothing of Y's turns.
 
 from __future__ import annotations
 
-import os
-import socket
 import time
 from collections.abc import Iterator
-from typing import Any
 
 import pytest
 
-from bridge.interfaces.loggers import server
-from bridge.interfaces.loggers.server import LoggerEndpoints
-from tests.loggers.test_unstamped_order import STOP, Rig, turn
-from tests.support.mosquitto import free_port
+from tests.loggers.test_unstamped_order import STOP, Rig, pst_ports, turn
 
 
 @pytest.fixture
 def two(monkeypatch: pytest.MonkeyPatch) -> Iterator[Rig]:
     """As test_unstamped_order.py's rig, each port another rotator's (X's, then Y's)."""
-    monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
-
-    class X:
-        id = "x"
-
-    class Y:
-        id = "y"
-
-    ep = LoggerEndpoints()
-    ports = free_port(), free_port()
-    ep.add_pst(X(), ports[0])  # type: ignore[arg-type]
-    ep.add_pst(Y(), ports[1])  # type: ignore[arg-type]
-    ep.listen()
-    out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    ep._wake_r, ep._wake_w = os.pipe()  # noqa: SLF001
-    r = Rig(ep, ports, out, ep._new_selector())  # noqa: SLF001
-
-    def pst(e: Any, _sock: Any, _port: Any, _req: Any, _peer: Any, data: bytes, *rest: Any) -> None:
-        r.seen[e.port, data] = rest[-1]  # (seen_s: what the remote judges and stamps it by)
-
-    monkeypatch.setattr(ep._commands, "pst", pst)  # noqa: SLF001
-    try:
+    with pst_ports(monkeypatch, ("x", "y")) as r:
         yield r
-    finally:
-        out.close()
-        ep._close_selector()  # noqa: SLF001
-        ep._close_sockets()  # noqa: SLF001
-        os.close(ep._wake_r)  # noqa: SLF001
-        os.close(ep._wake_w)  # noqa: SLF001
 
 
 def test_a_turn_after_its_own_ports_stop_is_not_dated_before_it_for_another_rotators_stop(

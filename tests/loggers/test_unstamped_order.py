@@ -10,6 +10,7 @@ after the stop was read goes on as dated (PstRotator tracking on after a STOP)."
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 import time
@@ -53,17 +54,21 @@ class Rig:
         return seen_s
 
 
-@pytest.fixture
-def rig(monkeypatch: pytest.MonkeyPatch) -> Iterator[Rig]:
-    monkeypatch.setattr(server, "_STAMPS", 0)  # (Windows, macOS: no datagram stamps)
+@contextlib.contextmanager
+def pst_ports(monkeypatch: pytest.MonkeyPatch, ids: tuple[str, str]) -> Iterator[Rig]:
+    """Two PstRotator ports, for the rotators ``ids`` (one rotator's twice, or two), with no
+    datagram stamps (Windows, macOS); what each datagram is dated by noted in ``seen``."""
+    monkeypatch.setattr(server, "_STAMPS", 0)
 
+    @dataclass
     class Rot:
-        id = "tower"
+        id: str
 
     ep = LoggerEndpoints()
     ports = free_port(), free_port()
-    for port in ports:
-        ep.add_pst(Rot(), port)  # type: ignore[arg-type]
+    rots = {rid: Rot(rid) for rid in ids}  # (one object where both ports are one rotator's)
+    for port, rid in zip(ports, ids, strict=True):
+        ep.add_pst(rots[rid], port)  # type: ignore[arg-type]
     ep.listen()
     out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     ep._wake_r, ep._wake_w = os.pipe()  # noqa: SLF001
@@ -81,6 +86,12 @@ def rig(monkeypatch: pytest.MonkeyPatch) -> Iterator[Rig]:
         ep._close_sockets()  # noqa: SLF001
         os.close(ep._wake_r)  # noqa: SLF001
         os.close(ep._wake_w)  # noqa: SLF001
+
+
+@pytest.fixture
+def rig(monkeypatch: pytest.MonkeyPatch) -> Iterator[Rig]:
+    with pst_ports(monkeypatch, ("tower", "tower")) as r:
+        yield r
 
 
 def test_a_turn_read_after_another_ports_stop_in_the_same_wake_up_is_dated_before_it(
