@@ -843,13 +843,14 @@ class RotatorSession:
         unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
         at the marker): the two are judged as one, by the sooner expiry (the safe side: a
         late look-up also ends following begun in time under the same hold)."""
-        held = not_after_s is not None and self.fence.held
-        new = _Waiting(not_after_s, what, said, part) if held else None
+        new = None
+        if not_after_s is not None and self.fence.held:
+            new = _Waiting(not_after_s, what, said, part)
         before = None if ends else self._waiting
         if new is None or before is None:
             self._waiting = new if ends or before is None else before
             return
-        first = new if (new.not_after_s or 0.0) < (before.not_after_s or 0.0) else before
+        first = new if new.not_after_s < before.not_after_s else before
         self._waiting = first._replace(part=new.part or before.part)
 
     def _waited(self, now: float) -> None:
@@ -857,7 +858,7 @@ class RotatorSession:
         expiry passed (tracking, following, a part's own motion and the target it proposed),
         said once."""
         waiting, self._waiting = self._waiting, None
-        if waiting is None or waiting.not_after_s is None or now <= waiting.not_after_s:
+        if waiting is None or not _past(waiting.not_after_s, now):
             return
         tracker = self.tracker
         if not waiting.part and tracker.body is None and tracker.lookup is None:
@@ -1330,21 +1331,26 @@ def _leaves_out(target: Target, half: Target) -> bool:
     return not (az or el)
 
 
+def _past(not_after_s: float | None, now: float) -> bool:
+    """Rule 13: a stamped command's expiry (None: none) passed."""
+    return not_after_s is not None and now > not_after_s
+
+
 def _expired(target: Target, now: float) -> bool:
     """Rule 13: a stamped target past its expiry."""
-    return target.not_after_s is not None and now > target.not_after_s
+    return _past(target.not_after_s, now)
 
 
 def _late(not_after_s: float | None, now: float, said: str) -> str | None:
     """Rule 13: why a stamped start taken past its expiry is refused (``said``: how the words
     begin), or None."""
-    return f"{said}: {EXPIRED_TAKEN}" if not_after_s is not None and now > not_after_s else None
+    return f"{said}: {EXPIRED_TAKEN}" if _past(not_after_s, now) else None
 
 
 class _Waiting(NamedTuple):
     """Rule 13: a stamped start taken under a hold (``RotatorSession._wait``)."""
 
-    not_after_s: float | None
+    not_after_s: float
     what: str  # the command, as the error names it
     said: str  # how its end is said
     part: bool  # a feature's own command (its part's motion), not a track or follow start
