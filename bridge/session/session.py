@@ -73,9 +73,12 @@ Rules:
    copy began to turn the rotor at the marker's return, 14 s after it was sent). The newest
    start taken under the hold is the one judged: it ended what the one before it began, and
    so does anything that ends tracking (a stop, a target); one that ended already is not
-   said. A satellite's look-up ends nothing until its answer, so it takes no start's place:
-   the two are judged as one, by the sooner expiry (review 37; the safe side: a late look-up
-   also ends following begun in time under that hold, a known failure).
+   said. A target a stamped feature command's part proposes carries that command's expiry,
+   so a later command that ends in no target leaves it to be judged as any target (attack 8:
+   it went at the marker past its expiry). A satellite's look-up ends nothing until its
+   answer, so it takes no start's place: the two are judged as one, by the sooner expiry
+   (review 37; the safe side: a late look-up also ends following begun in time under that
+   hold, a known failure).
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -1092,13 +1095,16 @@ class RotatorSession:
         proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return
-        if proposal.target is not None:
+        if (proposed := proposal.target) is not None:
             refused = self._refused() if command.moves else "the command does not move the rotor"
             if refused is None:
-                refused = self._outside(proposal.target)
+                refused = self._outside(proposed)
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
+            elif command.not_after_s is not None:  # rule 13: the target goes by its expiry
+                ends = replace(proposed, not_after_s=command.not_after_s)  # (attack 8: left by
+                proposal = replace(proposal, target=ends)  # a later command, it went at once)
         self._propose(proposal, now, True, part.name)
 
     def _storm_park(self) -> bool:

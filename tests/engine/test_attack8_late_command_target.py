@@ -69,11 +69,6 @@ DISH_FEATURE = Feature(
 )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 8: a later command that ends in no target takes a late stamped command's "
-    "place under the hold, and the late command's target goes at the marker",
-)
 @pytest.mark.parametrize("second_s", [None, 60.0])
 @pytest.mark.parametrize("feature", ["dish", "beam"])
 def test_a_later_command_ending_in_no_target_does_not_let_a_late_commands_target_go(
