@@ -75,10 +75,13 @@ Rules:
    so does anything that ends tracking (a stop, a target); one that ended already is not
    said. A target a stamped feature command's part proposes carries that command's expiry,
    so a later command that ends in no target leaves it to be judged as any target (attack 8:
-   it went at the marker past its expiry). A satellite's look-up ends nothing until its
-   answer, so it takes no start's place: the two are judged as one, by the sooner expiry
-   (review 37; the safe side: a late look-up also ends following begun in time under that
-   hold, a known failure).
+   it went at the marker past its expiry). A satellite's look-up ends no tracking or
+   following until its answer, so it takes no start's place: the two are judged as one, by
+   the sooner expiry (review 37; the safe side: a late look-up also ends following begun in
+   time under that hold, a known failure); once its answer begins tracking under the hold,
+   it is judged alone (review 38: an earlier late start's expiry ended the tracking of a
+   satellite asked for in time). (A look-up taken ends each part's motion at once, as any
+   track start does; tracking and following wait for its answer.)
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -367,6 +370,10 @@ class RotatorSession:
         self.target_unshown = False  # ... and whether ``status`` cannot show the target waiting
         self._lost_turn = ""  # rule 12: what the port error said of the turn it dropped
         self._waiting: _Waiting | None = None  # rule 13: a stamped start taken under a hold
+        # rule 13: a look-up taken under a hold, and its own start (None: unstamped), which is
+        # the one judged once its answer begins tracking
+        self._lookup_held = False
+        self._lookup_waiting: _Waiting | None = None
 
     @property
     def newest_applied(self) -> int:
@@ -499,7 +506,7 @@ class RotatorSession:
             done = self.features.track(track, self._refused() or late, leased)
             self._apply(done)
             if start and done.error is None:
-                began = track.body is not None  # (a look-up ends nothing until its answer)
+                began = track.body is not None  # (a look-up: no tracking until its answer)
                 what = track.described or "track"
                 self._wait(track.not_after_s, what, "tracking ended", ends=began)
         if (follow := batch.follow) is not None:
@@ -571,13 +578,18 @@ class RotatorSession:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8); a
         satellite's name looked up is judged against the lease as it is now (rule 23)."""
         if generation == self.tracker.generation:
-            refused, lookup = self._refused(), self.tracker.lookup
+            refused, lookup, body = self._refused(), self.tracker.lookup, self.tracker.body
             leased = self._start_leased(lookup, now, TRACK_REFUSED) if lookup else None
             answered = self._guarded(
                 "tracking", lambda: self.features.answered(answer, refused, leased), now
             )
             if answered is not None:
                 self._apply(answered)
+                if lookup is not None and self.tracker.lookup is None:  # (its answer)
+                    began = self.tracker.body not in (None, body)  # (tracking it began)
+                    if began and self._lookup_held and self.fence.held:  # rule 13: what
+                        self._waiting = self._lookup_waiting  # waits is what it began
+                    self._lookup_held, self._lookup_waiting = False, None
         return self._step(now)
 
     def set_wall(self, now: float, wall_s: float) -> None:
@@ -739,6 +751,7 @@ class RotatorSession:
         """Tracking and following end (feature_commands.py), and every part's motion
         (parts.py rule 7): whatever a start that waits under a hold began (rule 13)."""
         self._waiting = None
+        self._lookup_held, self._lookup_waiting = False, None
         self.features.end(why)
         self._end_parts(why, now)
 
@@ -842,13 +855,16 @@ class RotatorSession:
         """Rule 13: a start taken (``what``): under a hold, with an expiry, what it began ends
         if the hold ends past it (``_waited``; ``said``: how that is said); it takes the place
         of the start before it, whose tracking, following or part's motion it ended
-        (``ends``). A satellite's look-up ends nothing until its answer (review 37: an
+        (``ends``). A satellite's look-up ends no tracking or following until its answer
+        (review 37: an
         unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
         at the marker): the two are judged as one, by the sooner expiry (the safe side: a
         late look-up also ends following begun in time under the same hold)."""
         new = None
         if not_after_s is not None and self.fence.held:
             new = _Waiting(not_after_s, what, said, part)
+        if not ends:  # (a look-up: its own, for when its answer begins tracking)
+            self._lookup_held, self._lookup_waiting = self.fence.held, new
         before = None if ends else self._waiting
         if new is None or before is None:
             self._waiting = new if ends or before is None else before
@@ -861,6 +877,7 @@ class RotatorSession:
         expiry passed (tracking, following, a part's own motion and the target it proposed),
         said once."""
         waiting, self._waiting = self._waiting, None
+        self._lookup_held, self._lookup_waiting = False, None
         if waiting is None or not _past(waiting.not_after_s, now):
             return
         tracker = self.tracker

@@ -32,10 +32,6 @@ from tests.support.sky import synthetic_tle
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 38: a look-up answered under the hold is judged by the late start's expiry",
-)
 def test_a_satellite_asked_for_in_time_is_not_ended_for_a_late_start_before_it(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
