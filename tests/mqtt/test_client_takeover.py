@@ -208,7 +208,10 @@ class TakeoverBroker:
 
     @staticmethod
     def _packet(conn: socket.socket) -> int | None:
-        head = conn.recv(1)
+        try:
+            head = conn.recv(1)
+        except ConnectionResetError:  # (the client left with bytes unread: its connection's end)
+            return None
         if not head:
             return None
         length, shift = 0, 0
