@@ -26,9 +26,8 @@ from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
-from tests.engine.test_session_last_word import bearings, starts_rig
+from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
-from tests.support.sky import synthetic_tle
 
 Rig = Callable[..., VirtualRotator]
 
@@ -45,9 +44,7 @@ def test_a_late_look_up_under_a_hold_leaves_following_begun_before_it_alone(
 ) -> None:
     v = starts_rig(rig, monkeypatch)
     t = v.now
-    path = tmp_path / "amateur.tle"
-    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    path = iss_tle(v, tmp_path)
     v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
     v._take()
     v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold

@@ -27,9 +27,8 @@ from bridge.session.tracking import Track
 from bridge.sky import Body
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
-from tests.engine.test_session_last_word import bearings, starts_rig
+from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
-from tests.support.sky import synthetic_tle
 
 Rig = Callable[..., VirtualRotator]
 
@@ -39,9 +38,7 @@ def test_a_look_up_under_the_hold_does_not_let_a_late_commands_target_go(
 ) -> None:
     v = starts_rig(rig, monkeypatch)
     t = v.now
-    path = tmp_path / "amateur.tle"
-    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    path = iss_tle(v, tmp_path)
     v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
     aim = FeatureCommand(feature="beam", name="aim", value=200.0, not_after_s=t + 5.0)
     v.mailbox.put_feature(aim)  # stamped, taken under the hold
@@ -67,9 +64,7 @@ def test_a_look_up_under_the_hold_does_not_let_a_late_track_start_turn_the_rotor
     8 s later ends nothing and tracking turns the rotor to the sun."""
     v = starts_rig(rig, monkeypatch)
     t = v.now
-    path = tmp_path / "amateur.tle"
-    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    path = iss_tle(v, tmp_path)
     v.mailbox.put(Stop(Source.MQTT), hold=1)
     v.mailbox.put_track(Track(Body.sun(), described="track sun", not_after_s=t + 5.0))
     v._take()

@@ -25,9 +25,8 @@ from bridge.session.tracking import Track
 from bridge.sky import Body
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
-from tests.engine.test_session_last_word import starts_rig
+from tests.engine.test_session_last_word import iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
-from tests.support.sky import synthetic_tle
 
 Rig = Callable[..., VirtualRotator]
 
@@ -37,9 +36,7 @@ def test_a_satellite_asked_for_in_time_is_not_ended_for_a_late_start_before_it(
 ) -> None:
     v = starts_rig(rig, monkeypatch)
     t = v.now
-    path = tmp_path / "amateur.tle"
-    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
-    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    path = iss_tle(v, tmp_path)
     v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
     v.mailbox.put_track(Track(Body.sun(), described="track sun", not_after_s=t + 5.0))
     v._take()

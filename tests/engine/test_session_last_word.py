@@ -9,6 +9,7 @@ stop with its hold, the main connection's copies in order, and the release its m
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -24,6 +25,7 @@ from tests.engine.test_feature_commands import TOY
 from tests.engine.test_follow import STATION as FOLLOWING
 from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
+from tests.support.sky import synthetic_tle
 
 Rig = Callable[..., VirtualRotator]
 IDLE = MotionState.IDLE
@@ -729,6 +731,14 @@ def starts_rig(rig: Rig, monkeypatch: pytest.MonkeyPatch) -> VirtualRotator:
     monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
     lat, lon = sun_up_somewhere(SUN_EPOCH)
     return ready(rig, sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, follow=FOLLOWING)
+
+
+def iss_tle(v: VirtualRotator, tmp_path: Path) -> Path:
+    """A TLE file naming one satellite, ISS (ZARYA), for a look-up by name."""
+    path = tmp_path / "amateur.tle"
+    line1, line2 = synthetic_tle("", v.wall(), inclination_deg=51.6, raan_deg=0, mean_anomaly_deg=0)
+    path.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    return path
 
 
 def put_start(v: VirtualRotator, kind: str, not_after_s: float) -> None:
