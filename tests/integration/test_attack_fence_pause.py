@@ -62,22 +62,27 @@ def read_gate(
     return gate, spent
 
 
-def budget_gate(monkeypatch: pytest.MonkeyPatch, module: object) -> threading.Event:
-    """``read_gate``'s gate alone: cleared, a client's thread sleeps from the end of its next
-    read, the bytes after it unread."""
-    return read_gate(monkeypatch, module)[0]
+def shut_after_read(gate: threading.Event, spent: threading.Event) -> None:
+    """``read_gate``'s gate cleared once the read of the command before it (``spent`` cleared
+    before that command was sent) has spent its budget: a client's thread then sleeps from the
+    end of its next read, the bytes after it unread. (Cleared as soon as the controller moved,
+    the gate was sometimes shut before that command's own read, its budget spent after its
+    reply: on a loaded CI machine the thread slept before it read the next command.)"""
+    assert spent.wait(slow(10)), "the command's read never finished"
+    gate.clear()
 
 
 def test_a_target_sent_while_its_client_is_paused_and_before_a_stop_is_not_carried_out(
     rig: Rig, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    gate = budget_gate(monkeypatch, tcplines)
+    gate, spent = read_gate(monkeypatch, tcplines)
     port, server = start(rig, start_az_deg=0)
     emu = rig.emus["tower"]
     with connect(port) as sock:
+        spent.clear()
         ask(sock, b"P 300 0\n", b"RPRT 0\n")
         emu.wait_for(lambda s: s.is_moving, slow(10))
-        gate.clear()  # over its budget from its next read on (a fast poller's is spent so)
+        shut_after_read(gate, spent)  # over its budget from its next read on (a fast poller's)
         sock.sendall(b"p\n")
         _replies(sock, 2)  # read, looked at and answered: its thread now sleeps, nothing unread
         sock.sendall(b"P 100 0\n")  # sent now, before the STOP: in the kernel, unread

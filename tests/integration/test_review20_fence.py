@@ -15,7 +15,11 @@ import pytest
 
 from bridge.interfaces import ptylines, tcplines
 from bridge.interfaces.ptylines import PtyLineServer
-from tests.integration.test_attack_fence_pause import budget_gate, mqtt_stop_carried
+from tests.integration.test_attack_fence_pause import (
+    mqtt_stop_carried,
+    read_gate,
+    shut_after_read,
+)
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -41,14 +45,15 @@ def test_pty_a_target_written_while_the_thread_is_paused_before_a_stop_is_refuse
     attack pass, never carried to the pty): a program's M100 written while the thread sleeps
     over its budget, then an MQTT STOP, then the thread wakes: its first look at the M100 is
     after the STOP and the target is carried out."""
-    gate = budget_gate(monkeypatch, ptylines)
+    gate, spent = read_gate(monkeypatch, ptylines)
     path, server = _pty(rig, tmp_path)
     emu = rig.emus["tower"]
     client = Client(path)
     try:
+        spent.clear()
         os.write(client.fd, b"M300\r")  # (M answers nothing)
         emu.wait_for(lambda s: s.is_moving, slow(10))
-        gate.clear()
+        shut_after_read(gate, spent)
         assert client.ask(b"C\r").startswith(b"AZ=")  # read; its thread now paused
         os.write(client.fd, b"M100\r")  # before the STOP
         wait_until(lambda: tcplines.unread(server._master) == 5, slow(5), "the M100 in the pty")
@@ -67,14 +72,15 @@ def test_pty_a_target_written_before_a_stop_and_read_with_a_poll_after_it_is_ref
     """Hole (1) of the commit, on the pty: one read holds the M100 written before the STOP
     (looked at before it: a burst's first read counted it) and the C written after it; the
     read is judged at the look that counted its last byte, after the STOP."""
-    gate = budget_gate(monkeypatch, ptylines)
+    gate, spent = read_gate(monkeypatch, ptylines)
     path, server = _pty(rig, tmp_path)
     emu = rig.emus["tower"]
     client = Client(path)
     try:
+        spent.clear()
         os.write(client.fd, b"M300\r")
         emu.wait_for(lambda s: s.is_moving, slow(10))
-        gate.clear()
+        shut_after_read(gate, spent)
         # one write: 64 bytes of polls (the first read's READ_BYTES) and the M100 behind them;
         # the look after that first read counts the M100 (before the STOP)
         polls = b"C\r" * (ptylines.READ_BYTES // 2)

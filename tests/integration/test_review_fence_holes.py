@@ -22,7 +22,11 @@ import pytest
 
 from bridge.core import haltwatch
 from bridge.interfaces import tcplines
-from tests.integration.test_attack_fence_pause import budget_gate, mqtt_stop_carried
+from tests.integration.test_attack_fence_pause import (
+    mqtt_stop_carried,
+    read_gate,
+    shut_after_read,
+)
 from tests.integration.test_rotctld_integration import _replies, ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -35,14 +39,15 @@ def test_a_target_sent_before_a_stop_and_read_with_a_poll_sent_after_it_is_not_c
 ) -> None:
     """The commit's own paused-client scenario, with one ``p`` (a poll: Gpredict sends one a
     second) sent after the STOP and before the client's thread wakes: one read takes both."""
-    gate = budget_gate(monkeypatch, tcplines)
+    gate, spent = read_gate(monkeypatch, tcplines)
     port, server = start(rig, start_az_deg=0)
     emu = rig.emus["tower"]
     with connect(port) as sock:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # (as Hamlib's client)
+        spent.clear()
         ask(sock, b"P 300 0\n", b"RPRT 0\n")
         emu.wait_for(lambda s: s.is_moving, slow(10))
-        gate.clear()
+        shut_after_read(gate, spent)
         sock.sendall(b"p\n")
         _replies(sock, 2)  # its thread now sleeps over its budget, nothing unread
         (theirs,) = list(server._clients)  # the server's end of this connection
