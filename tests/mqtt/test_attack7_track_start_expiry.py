@@ -25,7 +25,7 @@ from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
 from tests.engine.test_halt_epoch import START_AZ, Bench
-from tests.mqtt.test_review22_lost_lane_copy import markers_back
+from tests.mqtt.test_review22_lost_lane_copy import markers_back, markers_back_late
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 
@@ -107,14 +107,7 @@ def test_a_stamped_track_start_behind_a_lane_stop_does_not_turn_the_rotor_after_
     v._take()  # noqa: SLF001
     v.run_for(1.0)
     assert bench.sets() == []  # (tracking's target waits for the marker)
-    pub.take()  # the marker, and the fresh one sent at the copy, lost in a flood
-    for wait_s, back in ((2.0, False), (4.0, False), (8.0, True)):  # lastword.py rule 5
-        v.run_for(wait_s)
-        svc._halts.resend_if_due()  # noqa: SLF001  (the timer: a marker sent again)
-        if back:
-            markers_back(svc, pub)
-        else:
-            pub.take()  # lost again
+    markers_back_late(svc, pub, v.run_for)  # (lost in a flood; one back 14 s on)
     v._take()  # noqa: SLF001
     v.run_for(40.0)
     assert bench.sets() == [] and abs(v.truth().az_deg - START_AZ) < 4, (

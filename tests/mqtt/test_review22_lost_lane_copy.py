@@ -15,6 +15,8 @@ controller (the mailbox and the session's hold, modelled by ``controller``) and 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from bridge.core.model import Stop, Target
 from bridge.interfaces.mqtt.halts import LOCK_OFF_OLDER, LOCK_OFF_SUPERSEDED
 from bridge.interfaces.mqtt.service import MqttService
@@ -68,6 +70,22 @@ def markers_back(svc: MqttService, pub: RecordingPublisher) -> None:
     for topic, payload, _retain in pub.take():
         if topic in ("rotor/bridge/fence", "rotor/bridge/hello"):
             svc.on_message(topic, payload.encode(), False)
+
+
+def markers_back_late(
+    svc: MqttService, pub: RecordingPublisher, wait: Callable[[float], None]
+) -> None:
+    """The marker, the fresh one sent at a copy and the first two resends lost in a flood
+    (lastword.py rule 5's back-off, 2 s then 4 s: ``wait`` lets the time pass), the third,
+    14 s on, read back by the main connection."""
+    pub.take()
+    for wait_s, back in ((2.0, False), (4.0, False), (8.0, True)):
+        wait(wait_s)
+        svc._halts.resend_if_due()  # noqa: SLF001  (the timer: a marker sent again)
+        if back:
+            markers_back(svc, pub)
+        else:
+            pub.take()  # lost again
 
 
 def test_a_lock_on_lost_on_the_lane_is_carried_out_by_the_main_connection() -> None:
