@@ -27,7 +27,8 @@ Rules:
    are the controller's chatter, never a reading.
 2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
    while a query is open, and only with values in range (azimuth 0..450, elevation 0..180;
-   K3NG's form of an elevation 1 to 3 degrees below 0, ``EL=00-1``, reads as 0: the horizon).
+   K3NG's forms of an elevation up to 3 degrees below 0, ``EL=00-1`` in the B form and
+   ``-0000`` or ``-000-1`` in the A form, read as 0: the horizon; review 39).
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
@@ -74,10 +75,12 @@ AXIS_STOPS = {"az": b"A\r", "el": b"E\r"}
 _MAX_LINE = 64
 _NUM = rb"(\d{3})"  # three digits, zero-padded, as the documents and every box send them
 # a reply at the end of its line; group "pre" is whatever came before it on that line
-_A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*\+0" + _NUM + rb")?\s*$", re.DOTALL)
-# K3NG pads an elevation a little below the horizon (calibration drift) as EL=00-1; further
-# below is no horizon but a pot that is broken or far off: no reading
+# K3NG pads an elevation a little below the horizon (calibration drift) as EL=00-1 in the B
+# form and -000-1 in the A form (-0000 for less than half a degree below); further below is no
+# horizon but a pot that is broken or far off: no reading
 _B_EL = rb"(\d{3}|0{0,2}-[1-3])"
+_A_EL = rb"(?:\+0(?=\d{3})|-0(?=000|0{0,2}-[1-3]))" + _B_EL
+_A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*" + _A_EL + rb")?\s*$", re.DOTALL)
 _B_FORM = re.compile(
     rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _B_EL + rb")?\s*$", re.DOTALL
 )
@@ -179,7 +182,8 @@ class Gs232Codec(OneQuery):
             self._junk(raw, JunkReason.NOISE, why, out)
             return
         az, el = int(own.group(2)), own.group(3)
-        # K3NG's "00-1": the antenna at the horizon with its pot a degree off reads as the horizon
+        # K3NG's "00-1" (and the A form's "-0000"): the antenna at the horizon with its pot a
+        # degree off reads as the horizon
         el_deg = None if el is None else max(0, int(el.lstrip(b"0") or b"0"))
         if az > AZ_MAX_DEG or (el_deg is not None and el_deg > EL_MAX_DEG):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)

@@ -24,11 +24,6 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import PositionReply
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 39: K3NG's GS-232A answer for an elevation a little below the horizon "
-    "(+0123-0000, +0123-000-1) is noise, never a reading; its GS-232B form EL=00-1 is read",
-)
 @pytest.mark.parametrize("el", [b"-0000", b"-000-1", b"-000-3"])
 def test_k3ng_gs232a_a_little_below_the_horizon_is_the_horizon(el: bytes) -> None:
     codec = REGISTRY["gs232a"].codec_factory()
@@ -36,3 +31,11 @@ def test_k3ng_gs232a_a_little_below_the_horizon_is_the_horizon(el: bytes) -> Non
     replies = codec.feed(b"+0123" + el + b"\r\n")
     readings = [(r.az_deg, r.el_deg) for r in replies if isinstance(r, PositionReply)]
     assert readings == [(123.0, 0.0)], replies
+
+
+@pytest.mark.parametrize("el", [b"-000-4", b"-0123", b"-0001", b"+000-1"])
+def test_gs232a_further_below_the_horizon_or_an_unknown_sign_form_is_no_reading(el: bytes) -> None:
+    codec = REGISTRY["gs232a"].codec_factory()
+    codec.encode_query()
+    replies = codec.feed(b"+0123" + el + b"\r\n")
+    assert not [r for r in replies if isinstance(r, PositionReply)], replies
