@@ -35,7 +35,9 @@ Rules:
    decimals optional, a sign allowed, radio words after ignored). The query is answered once
    every axis the model reads has a value, whether they came on one line or two; an azimuth
    model ignores an elevation on the line. Values outside azimuth 0..360 or elevation -90..180
-   are spoiled.
+   are spoiled, but for an azimuth within half a degree beyond either end, read as that end: a
+   SatNOGS controller's encoder is zeroed at its home switch and its PID rests anywhere within
+   0.2 of the target, so turned to north it may say ``AZ-0.1`` (review 39; Hamlib reads it).
 3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
    UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED.
 4. ``VExxx`` is the controller's version whenever it comes.
@@ -108,6 +110,7 @@ from bridge.protocols.base import (
 AZ_MAX_DEG = 360
 EL_MAX_DEG = 180
 EL_READ_MIN_DEG = -90  # a reading below the horizon is a reading (a rotor parked at -0.5)
+AZ_READ_SLACK_DEG = 0.5  # rule 2: a SatNOGS at rest within its dead zone either side of 0 or 360
 _MAX_LINE = 80
 _NUM = rb"[-+]?\d{1,3}(?:\.\d*)?"  # 123.4, 123, 5.
 # a reply at the end of its line, with whatever came before it on that line in "pre"
@@ -244,11 +247,13 @@ class EasycommCodec(OneQuery):
             el = None if m.group("el") is None else float(m.group("el"))
         if not self.elevation and az is not None:
             el = None  # rule 2: an azimuth model ignores it, out of range or not
-        if (az is not None and not 0 <= az <= AZ_MAX_DEG) or (
+        if (az is not None and not -AZ_READ_SLACK_DEG <= az <= AZ_MAX_DEG + AZ_READ_SLACK_DEG) or (
             el is not None and not EL_READ_MIN_DEG <= el <= EL_MAX_DEG
         ):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
+        if az is not None:
+            az = min(max(az, 0.0), float(AZ_MAX_DEG))  # rule 2: the slack is read as its end
         if not self.elevation and az is None:
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return

@@ -30,11 +30,6 @@ def _north_apart(az: float) -> float:
     return min(a, 360.0 - a)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 39: an Easycomm azimuth a hair below north (AZ-0.1, a SatNOGS at rest "
-    "within its 0.2 dead zone) is spoiled, never a reading",
-)
 @pytest.mark.parametrize("elevation", [True, False], ids=["azel", "az"])
 def test_a_satnogs_at_rest_just_below_north_is_read_at_north(elevation: bool) -> None:
     codec = EasycommCodec(3, elevation=elevation)
@@ -45,3 +40,10 @@ def test_a_satnogs_at_rest_just_below_north_is_read_at_north(elevation: bool) ->
     assert _north_apart(readings[0].az_deg) <= 0.1 + 1e-9
     if elevation:
         assert readings[0].el_deg == 0.0
+
+
+def test_a_satnogs_at_rest_just_past_360_is_read_at_360() -> None:
+    codec = EasycommCodec(3)
+    codec.encode_query()
+    readings = [r for r in codec.feed(b"AZ360.1 EL0.0\n") if isinstance(r, PositionReply)]
+    assert [(r.az_deg, r.el_deg) for r in readings] == [(360.0, 0.0)]
