@@ -46,7 +46,8 @@ def _minutes_of_resends(svc: MqttService, pub: RecordingPublisher, steady: list[
     reason="review 25 R25-1, open: markers the broker takes but never delivers back (a read "
     "ACL reloaded under a live connection; nothing from the broker says it) end no hold whose "
     "copy was counted: it lasts until the main connection drops, said on B/bridge/info "
-    "(lastword.py rule 15); ending it on a timer is what rule 5 forbids",
+    "(lastword.py rule 15; mosquitto grants a SUBSCRIBE to them again, so asking again says "
+    "nothing either); ending it on a timer is what rule 5 forbids",
 )
 def test_r25_1_lock_on_then_off_back_to_back_ends_off_though_no_marker_is_delivered() -> None:
     svc, pub, tower, steady = _rig()
@@ -66,7 +67,8 @@ def test_r25_1_lock_on_then_off_back_to_back_ends_off_though_no_marker_is_delive
     reason="review 25 R25-1, open: markers the broker takes but never delivers back (a read "
     "ACL reloaded under a live connection; nothing from the broker says it) end no hold whose "
     "copy was counted: it lasts until the main connection drops, said on B/bridge/info "
-    "(lastword.py rule 15); ending it on a timer is what rule 5 forbids",
+    "(lastword.py rule 15; mosquitto grants a SUBSCRIBE to them again, so asking again says "
+    "nothing either); ending it on a timer is what rule 5 forbids",
 )
 def test_r25_1_stop_then_target_back_to_back_reaches_the_target_though_no_marker_comes() -> None:
     svc, pub, tower, steady = _rig()

@@ -204,7 +204,12 @@ but not the order between them. So:
    Under MQTT 3.1.1 no answer says it, nor under MQTT 5 when the ACL denies reading the
    marker topics only (the broker takes the PUBACK and the SUBSCRIBE, and delivers nothing:
    review 25): such a hold lasts until the main connection drops, said on ``B/bridge/info``
-   while it lasts (holding is the safe way), and what waits under it waits that long.
+   while it lasts (holding is the safe way), and what waits under it waits that long. Asking
+   again by subscribing to the marker topics again answers nothing either: mosquitto 2.0
+   never checks its ACL file on SUBSCRIBE, and grants it (QoS 1, under MQTT 5 and 3.1.1, on
+   the live connection as on a new one) whatever the file says of reading (measured:
+   tests/integration/test_review25_read_denied_markers.py, which keeps review 25's R25-1
+   open, as tests/mqtt/test_review25_markers_unread.py does).
 """
 
 from __future__ import annotations
