@@ -7,9 +7,10 @@ marker (its PUBACK a success) and delivers none back: it checks a read ACL when 
 A STOP the stop lane carries out first then holds its rotator; the main connection's copy of
 the STOP is counted, and the target published right after it waits for a marker that never
 comes, for as long as the main connection lives (lastword.py rule 15). (A lock ON then OFF,
-left locked as long in the service-level twin, is not tested here: with a real broker it
-ended unlocked in two of five runs, for a reason not found yet: a strict known failure
-cannot flake.)
+left locked as long in the service-level twin, is not tested here: its first form passed in
+two of five runs, read before the lane's lock ON was shown at all (the status says ON once
+the state writer saved it, kept.py rule 2, 5-17 ms after the hold began); traced, the rotator
+stayed locked 30 s in every run, no hold ending but by its marker.)
 
 Asking the broker again does not help (measured with mosquitto 2.0.11, MQTT 5 and 3.1.1, the
 last test below): its ACL file is never checked on SUBSCRIBE, so a SUBSCRIBE to the marker
