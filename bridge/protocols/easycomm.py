@@ -55,7 +55,13 @@ Rules:
    ``+123.4 ?`` (it has no ``EL``). Such a line's values fill the open query's axes in order,
    the azimuth first; the ``?`` is read only by an azimuth model, to which a ``?`` alone is
    harmless too (its answer to the stop's ``SE``: the stop stays ``SA SE``, the one stop the
-   SatNOGS firmware knows). Without its sign a bare number is never a reply.
+   SatNOGS firmware knows), and so are up to STOP_FRAMES such lines in one quiet spell, each
+   ``?`` on a line of its own: one STOP may put that many ``SA SE`` on the wire (the stop
+   express's, the stop lane's and the main connection's copy, or a stop and its repeat:
+   session/stops.py rule 1), each refused. More are refusals of something else, and told. (An
+   attack pass: a STOP's two refusals came in one quiet spell, judged together, and STOPs to
+   such a box were told on R/error as 'controller sent 6 bytes that are no valid reply'.)
+   Without its sign a bare number is never a reply.
 8. Every model asks ``AZ EL`` on one line but the ``-separate`` ones, an azimuth model too:
    the SatNOGS firmware reads any other line that begins ``AZ`` as a target, a bare ``AZ`` as
    "turn to 0" (and answers nothing), so a bare ``AZ`` is never sent to a controller of
@@ -132,6 +138,9 @@ _VERSION = re.compile(rb"%(sp)s*VE(?P<v>[ -~]*?)%(sp)s*" % {b"sp": _SP})
 _ALARM = re.compile(rb"%(sp)s*AL(?P<a>[ -~]*?)%(sp)s*" % {b"sp": _SP})
 _CHATTER = re.compile(_SP + rb"*")
 _NO_SE = re.compile(rb"%(sp)s*\?%(sp)s*" % {b"sp": _SP})  # rule 7
+STOP_FRAMES = 3  # rule 7: the SA SE one STOP puts on the wire: the express's, the session's two
+# rule 7: up to STOP_FRAMES refusals, one to a line (read one way only, rule 6)
+_NO_SES = re.compile(rb"(?:[\r\n ]*\? *[\r\n]){1,%d}[\r\n ]*" % STOP_FRAMES)
 
 
 class EasycommCodec(OneQuery):
@@ -191,7 +200,7 @@ class EasycommCodec(OneQuery):
 
     def harmless(self, junk: bytes) -> bool:
         junk = self._unsaid(junk)  # rule 9: a SatNOGS's answer to a stop; rule 10: a late one
-        if not self.elevation and _NO_SE.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
+        if not self.elevation and _NO_SES.fullmatch(junk):  # rule 7: K3NG's ``SE`` refused
             return True
         return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
 

@@ -17,12 +17,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 9: the two ' ?' a K3NG azimuth build answers a STOP's two SA SE with are "
-    "judged together, and easycomm.py's harmless takes one '?' alone: told on R/error as "
-    "'controller sent 6 bytes that are no valid reply'",
-)
 @pytest.mark.parametrize("model", ["easycomm2-az", "easycomm3-az"])
 def test_a_k3ng_azimuth_builds_refusals_of_a_stops_se_are_told_nowhere(
     rig: Rig, model: str

@@ -303,6 +303,21 @@ def test_k3ngs_refused_se_is_harmless_to_an_azimuth_model_alone() -> None:
     assert positions(az.feed(b"+10.0 ?\n")) == [(10.0, None)]
 
 
+def test_a_stops_refusals_judged_together_are_harmless_up_to_a_stops_frames() -> None:
+    """Rule 7 (attack 9): a STOP reaches the box two or three times (the express's SA SE, the
+    stop lane's, the main connection's copy), a K3NG azimuth build refuses each SE with ' ?',
+    and two in one quiet spell were told on R/error. More are refusals of something else."""
+    az, azel = EasycommCodec(2, elevation=False), EasycommCodec(2)
+    for _ in range(3):
+        az.encode_stop()
+        assert [j.reason for j in junk(az.feed(b" ?\n"))] == [JunkReason.CHATTER]
+    assert az.harmless(b" ?\n ?\n") and az.harmless(b" ?\n ?\n ?\n") and az.harmless(b"?\r\n?\r\n")
+    assert not az.harmless(b" ?\n ?\n ?\n ?\n")  # a fourth: no STOP's
+    assert not az.harmless(b" ?\n#\n") and not az.harmless(b" ?\nAZ10.0\n")  # junk is junk
+    assert not az.harmless(b" ??\n") and not az.harmless(b" ? ?\n")  # one to a line
+    assert not azel.harmless(b" ?\n ?\n")  # an az/el box has an SE to take
+
+
 # -- a SatNOGS's answer to a stop (rule 9) ----------------------------------------------------
 def test_a_position_after_a_stop_is_its_answer_not_a_reading_nor_junk_told() -> None:
     codec = EasycommCodec(2)
