@@ -72,13 +72,21 @@ Rules:
    controller was seen to answer a stop, is that answer: harmless chatter, never a reading
    (nor a reply nobody asked for, told on R/error at every stop). Once it was seen to, a
    whole position line with no query open is taken for the answer to a stop this codec did
-   not send (the stop express writes its own copy, ``ModelSpec.stop_anytime``). A stop
-   written while a query is open (the line is full duplex) is answered after it: the query's
-   answer comes first and is the query's, and only a line after it can be the stop's. (A
-   review: the poll's answer in flight was taken for the stop's, on a controller that answers
-   no stop; the poll waited out its reply time, the codec took the controller for one that
-   answers stops, so the repeat of a double STOP ate the next poll's answer too, and 1 s
-   without a reading put the rotator offline.)
+   not send (the stop express writes its own copy, ``ModelSpec.stop_anytime``). Before, such
+   a line is a reply nobody asked for (UNSOLICITED: it spoils a reading held, as a second
+   reply must; nothing yet tells it from one), but when the controller is first seen to
+   answer a stop of the codec's own, the whole lines that came so within the last
+   UNASKED_POLLS polls (UNASKED_KEEP at most) are taken for the express's answers to the same
+   STOP (its frame goes first): harmless, not told (but where the line was quiet for
+   link.py's JUNK_QUIET_S between the two answers: that junk was judged, and told, before).
+   (An attack pass: the first STOP of every connection to a SatNOGS was told on R/error as
+   'controller sent 28 bytes that are no valid reply', the express's answer with the
+   codec's own.) A stop written while a query is open (the line is full duplex) is answered
+   after it: the query's answer comes first and is the query's, and only a line after it can
+   be the stop's. (A review: the poll's answer in flight was taken for the stop's, on a
+   controller that answers no stop; the poll waited out its reply time, the codec took the
+   controller for one that answers stops, so the repeat of a double STOP ate the next poll's
+   answer too, and 1 s without a reading put the rotator offline.)
 10. A query whose reply time ran out may still be answered: its answer's lines (one, or the
    ``-separate`` models' two, less those that came in time) are owed late, at most
    LATE_LINES_MAX of them (base.py rule 7). A position line with no query open while some are
@@ -141,6 +149,8 @@ _NO_SE = re.compile(rb"%(sp)s*\?%(sp)s*" % {b"sp": _SP})  # rule 7
 STOP_FRAMES = 3  # rule 7: the SA SE one STOP puts on the wire: the express's, the session's two
 # rule 7: up to STOP_FRAMES refusals, one to a line (read one way only, rule 6)
 _NO_SES = re.compile(rb"(?:[\r\n ]*\? *[\r\n]){1,%d}[\r\n ]*" % STOP_FRAMES)
+UNASKED_POLLS = 2  # rule 9: the poll the express's stop's answer came in, the re-poll it asked
+UNASKED_KEEP = 2  # rule 9: whole lines nobody asked for kept as maybe the express's stop's answers
 
 
 class EasycommCodec(OneQuery):
@@ -163,6 +173,8 @@ class EasycommCodec(OneQuery):
         self._stop_open = False  # rule 9: a stop sent, its answer (if it has one) still due
         self._stop_behind = False  # rule 9: that stop went while a query was open: after it
         self._answers_stop = False  # rule 9: this controller was seen to answer one
+        self._polls = 0  # rule 9: queries opened, to age ``_unasked``
+        self._unasked: list[tuple[int, bytes]] = []  # rule 9: lines maybe the express's stop's
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -187,6 +199,7 @@ class EasycommCodec(OneQuery):
 
     def encode_query(self) -> bytes:
         self._open_query()
+        self._polls += 1
         self._az = self._el = None
         self._stop_open = self._stop_open and self._answers_stop  # rule 9
         self._stop_behind = False  # (this query went after the stop)
@@ -274,11 +287,18 @@ class EasycommCodec(OneQuery):
         stop_answer = stop_first or (self._answers_stop and not self._query_open)
         if stop_answer and whole and clean:  # rule 9
             self._stop_open = False
-            self._answers_stop = self._answers_stop or not self._late_lines  # rule 10
+            if not self._answers_stop and not self._late_lines:  # rule 10: else it may be late
+                self._answers_stop = True
+                for n, said in self._unasked:  # rule 9: the express's answers to this STOP
+                    if self._polls - n <= UNASKED_POLLS:
+                        self._say(said)
+            self._unasked.clear()
             self._say(raw)
             out.append(JunkReply(raw, JunkReason.CHATTER, "the controller's answer to SA SE"))
             return
         if not self._query_open:
+            if whole and clean and not self._answers_stop:  # rule 9: the express's stop's?
+                self._unasked = [*self._unasked, (self._polls, raw)][-UNASKED_KEEP:]
             out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
             return
         if pre.strip(b"\r\n "):

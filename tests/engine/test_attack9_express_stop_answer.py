@@ -26,14 +26,6 @@ def express_stop(v: VirtualRotator) -> None:
     v._tx.send(frame, v.now)  # (the express's os.write on its copy of the port's descriptor)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 9: the SatNOGS's answer to the express's SA SE, the first stop of a "
-    "connection, is taken for a position nobody asked for (easycomm.py rule 9 knows the "
-    "express only once the controller was seen to answer a stop of the codec's own): told on "
-    "R/error as 'controller sent 28 bytes that are no valid reply' (the answer, and the "
-    "poll's answer it spoiled)",
-)
 def test_a_satnogs_answer_to_the_express_stop_is_no_junk(rig: Rig) -> None:
     v = rig(
         "easycomm2",

@@ -18,7 +18,7 @@ from bridge.protocols.base import (
     PositionReply,
     VersionReply,
 )
-from bridge.protocols.easycomm import EasycommCodec
+from bridge.protocols.easycomm import UNASKED_POLLS, EasycommCodec
 from tests.support import HOW, feed
 from tests.support.codecs import STOPS, given_up
 
@@ -465,3 +465,45 @@ def test_once_it_answered_a_stop_a_whole_line_unasked_is_a_stop_express_copys_an
     assert codec.harmless(b"AZ12.0 EL5.0\nAZ13.0 EL5.0\n")
     half = junk(codec.feed(b"AZ13.0\n"))  # not a whole answer: no stop's
     assert [j.reason for j in half] == [JunkReason.UNSOLICITED]
+
+
+@pytest.mark.parametrize("first", ["express", "poll"])
+def test_the_express_stops_answer_before_the_codecs_own_stop_is_told_nowhere(first: str) -> None:
+    """Rule 9 (attack 9): the express's SA SE goes ahead of the codec's own, at the first STOP
+    of a connection, before this SatNOGS was seen to answer a stop: its answer (after the
+    poll's, or ahead of it) came with no query open and was told on R/error. It still spoils
+    the reading held (nothing tells it from a second reply then); once the codec's own stop is
+    answered, it is that STOP's answer, told nowhere."""
+    codec = EasycommCodec(2)
+    codec.encode_query()
+    assert positions(codec.feed(b"AZ10.0 EL5.0\n")) == [(10.0, 5.0)]
+    unasked = b"AZ10.1 EL5.0\n" if first == "poll" else b"AZ10.0 EL5.0\n"
+    assert [j.reason for j in junk(codec.feed(unasked))] == [JunkReason.UNSOLICITED]
+    assert not codec.harmless(unasked)  # (no stop seen answered yet)
+    codec.encode_query()  # the re-poll the spoiled reading asked
+    assert positions(codec.feed(b"AZ10.2 EL5.0\n")) == [(10.2, 5.0)]
+    codec.encode_stop()  # the session's own stop
+    assert [j.reason for j in junk(codec.feed(b"AZ10.2 EL5.0\n"))] == [JunkReason.CHATTER]
+    assert codec.harmless(unasked + b"AZ10.2 EL5.0\n")
+    assert not codec.harmless(unasked * 2 + b"AZ10.2 EL5.0\n")  # (as often as it came)
+
+
+def test_a_position_nobody_asked_for_long_before_a_stop_or_never_answered_is_still_told() -> None:
+    """Rule 9: only the lines of the last UNASKED_POLLS polls before the first stop answered
+    are the express's; a controller that answers no stop learns nothing."""
+    old = EasycommCodec(2)
+    old.encode_query()
+    old.feed(b"AZ10.0 EL5.0\nAZ11.0 EL5.0\n")  # the second: nobody asked for it
+    for _ in range(UNASKED_POLLS + 1):
+        old.encode_query()
+        assert positions(old.feed(b"AZ12.0 EL5.0\n")) == [(12.0, 5.0)]
+    old.encode_stop()
+    assert [j.reason for j in junk(old.feed(b"AZ12.0 EL5.0\n"))] == [JunkReason.CHATTER]
+    assert old.harmless(b"AZ12.0 EL5.0\n") and not old.harmless(b"AZ11.0 EL5.0\n")
+    k3ng = EasycommCodec(2)
+    k3ng.encode_query()
+    k3ng.feed(b"+10.0 +5.0\n+11.0 +5.0\n")
+    k3ng.encode_stop()  # answered by nothing
+    k3ng.encode_query()
+    assert positions(k3ng.feed(b"+12.0 +5.0\n")) == [(12.0, 5.0)]
+    assert not k3ng.harmless(b"+11.0 +5.0\n")
