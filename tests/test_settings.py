@@ -318,9 +318,10 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
     assert r["unasked_moves"] == used.unasked_moves == spec.unasked_moves
     easycomm = model.startswith("easycomm")  # every one asks AZ EL (easycomm.py rule 8)
     rotorez = model in ("rotorez", "rotorcard")
-    assert used.unasked_moves == (  # (controller.py rule 10; a SatEL: its frames near jogs)
-        "stop" if easycomm or model == "satel" else "after-stop" if rotorez else "follow"
-    )
+    stops = easycomm or model in ("satel", "rc2800", "rc2800-az")  # (the SatEL's frames near
+    assert used.unasked_moves == (  # jogs, the RC2800's poll a stray digit from a target)
+        "stop" if stops else "after-stop" if rotorez else "follow"
+    )  # (controller.py rule 10)
     assert used.tracking.step_deg == r["track_step_deg"] == r["tolerance_deg"]  # the default
     if spec.has_elevation:
         assert used.el_speed_deg_s == r["el_speed_deg_s"]

@@ -477,8 +477,9 @@ class ModelSpec:
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     # what becomes of a turn nobody asked for by default (session/controller.py rule 10):
     # "follow"; "stop" where a poll one flipped bit makes a command that turns the rotor
-    # (Easycomm's EL, ML); "after-stop" where it makes one that turns it to its last target's
-    # bearing (a Rotor-EZ's AI1; read as AM1;)
+    # (Easycomm's EL, ML), or one stray byte does (an RC2800's A CR, A5 CR); "after-stop"
+    # where it makes one that turns it to its last target's bearing (a Rotor-EZ's AI1; read
+    # as AM1;)
     unasked_moves: str = "follow"
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)

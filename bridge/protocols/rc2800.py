@@ -78,6 +78,18 @@ Rules:
    nothing of it where a line has no state word or another. (A box power-cycled mid-turn
    forgets its turn and says ``ST``: read past, the rotor it left standing was called stalled
    10 s later, and rotor health counted a stall.)
+8. A turn nobody asked for is stopped by default (``unasked_moves = "stop"``, as on an
+   Easycomm box and the SatEL: session/controller.py rule 10). A poll is the axis letter alone
+   (``A`` CR) and a target the letter and a bearing (``A5`` CR): one stray byte on the line (a
+   digit) makes a poll a target the box takes at once (an attack pass: an azimuth at rest at
+   150, ``az_min_deg`` 30, ran to 5 past its limit, followed, nothing said: the motion watches a
+   limit on the way only while a target of the bridge's is out, and a wrapping azimuth's not
+   at all, motion.py rule 10). The cost: a turn from the box's front panel (its buttons, its
+   presets) is stopped too, 5 degrees from where the rotor rested, four times at most for a
+   button held on, and a bridge started while the rotor turns stops it; an owner who turns it
+   there sets ``unasked_moves = "follow"``. Holding the limits for every turn nobody asked for
+   instead, on every model, was not taken: a hand at a panel turning past a soft limit on
+   purpose would be fought, and the limits of an azimuth that wraps are not watched on the way.
 """
 
 from __future__ import annotations
@@ -304,6 +316,8 @@ def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
         el_min_deg=0.0,
         el_max_deg=float(EL_MAX_DEG) if elevation else 0.0,
         az_wraps=True,
+        # a poll (A CR) is one stray digit from a target (A5 CR): rule 8
+        unasked_moves="stop",
         # Hamlib waits up to a second; the elevation's answer comes 200 ms after the azimuth's
         reply_timeout_s=1.0,
         noise_deg=0.5,  # potentiometers read in tenths

@@ -132,8 +132,11 @@ Rules:
    button is let be), and a ``stop`` error says why (in true bearings), where
    - ``unasked_moves`` is "stop" (an Easycomm box's default, whose poll is one flipped bit
      from a jog, ``EL`` read as ``ML``, and its space from a ``0``, ``AZ0EL``, which a lenient
-     parser reads as a move to 0: an attack soak ran a rotor to its end stop that way): every
-     such turn, a hand at the panel's too;
+     parser reads as a move to 0: an attack soak ran a rotor to its end stop that way; the
+     SatEL's, whose frames are each one flipped bit from a jog; the RC2800's, whose poll, ``A``
+     CR, is one stray digit from a target, ``A5`` CR: an attack pass ran it from 150 to 5, past
+     ``az_min_deg`` 30, followed and unsaid, the limits on the way being held only for the
+     bridge's own targets, motion.py rule 10): every such turn, a hand at the panel's too;
    - it is "after-stop" (the Rotor-EZ's and RotorCard's: the controller keeps the bearing of its
      last target, and one flipped bit makes a poll the command to turn to it, ``AI1;`` read as
      ``AM1;``, a probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said

@@ -278,8 +278,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "the rotor rested and say so on R/error; or after-stop: only the first after a STOP, a "
         "lock or a pass left the rotor short of its target. By default stop on an Easycomm "
         "box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
-        "panel; a composite's elevation box follows), and on the SatEL, whose every frame is "
-        "one from a jog, after-stop on the Rotor-EZ and "
+        "panel; a composite's elevation box follows), on the SatEL, whose every frame is "
+        "one from a jog, and on the RC2800, whose poll is one stray digit from a target (set "
+        "follow if you turn it at its panel or by its presets), after-stop on the Rotor-EZ and "
         "RotorCard, whose poll is one from 'turn to the last target', follow on the others",
         examples=["follow"],
         json_schema_extra={"unset": MODEL_DEFAULT},

@@ -102,10 +102,12 @@ def test_the_azimuth_box_is_asked_and_sent_its_azimuth_only(rig: Rig) -> None:
 def test_a_position_streamed_unasked_moves_the_bearing_between_polls(rig: Rig) -> None:
     """Polled every 30 s, a box that streams its lines every half second: a turn by hand shows
     from its stream, long before the next poll (the first line that moves is asked about once,
-    controller.py rule 9; once seen, the turn is polled at the moving rate, as any: rule 3)."""
+    controller.py rule 9; once seen, the turn is polled at the moving rate, as any: rule 3).
+    An owner who turns the box at its panel lets such turns be (``unasked_moves``: the model
+    stops them by default, rc2800.py rule 8)."""
     v = ready(
         rig,
-        settings={"idle_poll_interval_s": 30.0},
+        settings={"idle_poll_interval_s": 30.0, "unasked_moves": "follow"},
         stream_s=0.5,
         echo=True,
         start_az_deg=100,
