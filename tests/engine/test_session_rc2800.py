@@ -123,6 +123,29 @@ def test_a_position_streamed_unasked_moves_the_bearing_between_polls(rig: Rig) -
 
 
 @pytest.mark.parametrize(
+    ("unasked", "ends_deg"), [(None, (100.0, 112.0)), ("follow", (160.0, 160.0))]
+)
+def test_a_turn_at_the_panel_is_stopped_and_told_unless_its_owner_lets_such_turns_be(
+    rig: Rig, unasked: str | None, ends_deg: tuple[float, float]
+) -> None:
+    """The cost of stopping a poll a stray digit made a target (rc2800.py rule 8): a hand at
+    the box's panel is stopped too, a few degrees on, and ``R/error`` says how to let such
+    turns be; with ``unasked_moves = "follow"`` the turn is followed to its end, nothing said."""
+    v = ready(rig, settings={} if unasked is None else {"unasked_moves": unasked}, start_az_deg=100)
+    v.run_for(5)
+    t = v.now
+    v.manual_rotate(160.0)
+    v.run_for(30)
+    low, high = ends_deg
+    assert low <= v.truth().az_deg <= high and not v.truth().is_moving
+    told = [e.message for e in v.errors(since=t)]
+    if unasked is None:
+        assert any('set unasked_moves = "follow"' in m for m in told), told
+    else:
+        assert told == [] and v.status.bearing_deg == 160.0
+
+
+@pytest.mark.parametrize(
     ("model", "lost", "tail"),
     [("rc2800", 6, b"50.0 S=9 ST"), ("rc2800", 12, b"=9 ST"), ("rc2800-az", 2, b"P=  50.0 S=9 ST")],
 )
