@@ -341,6 +341,30 @@ def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() ->
     assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "stop"]
 
 
+def test_an_rc2800_elevation_box_stops_turns_nobody_asked_for() -> None:
+    """rc2800.py rule 8: an RC2800's elevation poll, ``E`` CR, is one stray byte from a target
+    (``E5`` CR), so an RC2800 that turns a composite's elevation stops a turn nobody asked for,
+    where other elevation boxes follow; ``unasked_moves = "follow"`` lets it be."""
+    from bridge.settings.report import masked
+
+    doc = {
+        "rotators": [
+            {
+                "id": "sky",
+                "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+                "elevation": {"model": "rc2800", "port": "/dev/ttyEL"},
+            }
+        ]
+    }
+    s = settings_from(doc, environ={})
+    boxes = axis_configs(s.rotators[0])
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "stop"]
+    assert masked(s)["rotators"][0]["unasked_moves"] == "azimuth box: follow, elevation box: stop"
+    doc["rotators"][0]["unasked_moves"] = "follow"
+    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "follow"]
+
+
 @pytest.mark.parametrize(("speed", "settle_s"), [("1", 5.0), ("3", 1.8), ("4", 1.5)])
 def test_a_slowed_elevation_box_settles_by_its_own_speed_not_the_azimuths(
     speed: str, settle_s: float

@@ -481,6 +481,10 @@ class ModelSpec:
     # where it makes one that turns it to its last target's bearing (a Rotor-EZ's AI1; read
     # as AM1;)
     unasked_moves: str = "follow"
+    # the same on a composite's elevation box of this model (its azimuth channel turns nothing):
+    # "follow", but "stop" where a poll of the elevation one stray byte makes a target (an
+    # RC2800's E CR, E5 CR)
+    el_unasked_moves: str = "follow"
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
     nominal_speed_deg_s: float = 6.0

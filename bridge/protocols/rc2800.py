@@ -90,6 +90,8 @@ Rules:
    there sets ``unasked_moves = "follow"``. Holding the limits for every turn nobody asked for
    instead, on every model, was not taken: a hand at a panel turning past a soft limit on
    purpose would be fought, and the limits of an azimuth that wraps are not watched on the way.
+   The same holds for an RC2800 that turns a composite's elevation (``E`` CR, ``E5`` CR), where
+   other models' elevation boxes follow (settings ``unasked_moves_of``).
 """
 
 from __future__ import annotations
@@ -318,6 +320,7 @@ def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
         az_wraps=True,
         # a poll (A CR) is one stray digit from a target (A5 CR): rule 8
         unasked_moves="stop",
+        el_unasked_moves="stop",  # rule 8: E CR, E5 CR, on a composite's elevation box
         # Hamlib waits up to a second; the elevation's answer comes 200 ms after the azimuth's
         reply_timeout_s=1.0,
         noise_deg=0.5,  # potentiometers read in tenths

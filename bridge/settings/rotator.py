@@ -280,7 +280,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
         "panel; a composite's elevation box follows), on the SatEL, whose every frame is "
         "one from a jog, and on the RC2800, whose poll is one stray digit from a target (set "
-        "follow if you turn it at its panel or by its presets), after-stop on the Rotor-EZ and "
+        "follow if you turn it at its panel or by its presets; as a composite's elevation box "
+        "too), after-stop on the Rotor-EZ and "
         "RotorCard, whose poll is one from 'turn to the last target', follow on the others",
         examples=["follow"],
         json_schema_extra={"unset": MODEL_DEFAULT},
@@ -608,11 +609,14 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         return self.spec.unasked_moves if self.unasked_moves is None else self.unasked_moves
 
     def unasked_moves_of(self, axis: Axis) -> str:
-        """A composite box's: the user's, else the azimuth box's model's, and follow for the
-        elevation box (no flipped bit of a poll turns an elevation, and that box's own
-        azimuth channel turns nothing: session/controller.py rule 10)."""
-        if self.unasked_moves is not None or axis is Axis.ELEVATION:
-            return self.unasked_moves or "follow"
+        """A composite box's: the user's, else the azimuth box's model's, and for the
+        elevation box its model's ``el_unasked_moves``: follow (no flipped bit of a poll turns
+        an elevation, and that box's own azimuth channel turns nothing: session/controller.py
+        rule 10) but on an RC2800, whose elevation poll is one stray byte from a target."""
+        if self.unasked_moves is not None:
+            return self.unasked_moves
+        if axis is Axis.ELEVATION:
+            return REGISTRY[self.axes[1].model].el_unasked_moves
         return self.axis_settings(axis).effective_unasked_moves
 
     @property
