@@ -100,9 +100,12 @@ Rules:
    first, but for the first back where the rotor stood still when its readings were lost (a
    port replugged, a controller answering again after a silence): that one is doubted against
    where it stood (an attack pass: believed unchecked, one flipped bit was shown as the bearing
-   at rest, and a nudge from it turned the rotor 190 degrees). A doubted reading is no reading
-   for anything: not the motion's, not a target's fresh one (targets.py rule 7: a target waits
-   for the answer), not one a stop cuts short (rule 5); but the controller answered (no
+   at rest, and a nudge from it turned the rotor 190 degrees), a stop sent to it or not (a stop
+   leaves a rotor at rest as still as it was; attack 9: a STOP at rest, the port replugged
+   before a reading showed it taken, and 150 read as 350 was published and taken as a turn).
+   A doubted reading is no reading for anything: not the motion's, not a target's fresh one
+   (targets.py rule 7: a target waits for the answer), not one a stop cuts short (rule 5); but
+   the controller answered (no
    silence), and the first back after a loss makes it answering again as a reading would (its
    options, its connect guard, a stop owed written at once), shown at the bearing it stood at
    (a review: a line that went on disagreeing after a replug kept the rotator offline, where
@@ -603,6 +606,8 @@ class Controller:
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self._still_at_close: bool | None = None  # rule 10: still, no target out, when the
         # readings were last lost (the port closed, the controller silent; None: never had any)
+        self._rest_at_close = False  # rule 9: ... not turning, a stop sent or not (its first
+        # reading back is doubted against where it stood)
         self._connect_guard = False  # rule 10: a turn from the first readings back is judged
         self.pending_unshown = False  # ``seen``: the status built last shows no target waiting
         self._guard_at_start = False  # rule 10: ... and they are this session's first
@@ -1009,7 +1014,7 @@ class Controller:
         self._doubted = NOT_DOUBTED
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         el_stands = m.el_anchor_deg
-        if stands is None and self._still_at_close and m.state is not mo.MOVING:
+        if stands is None and self._rest_at_close and m.state is not mo.MOVING:
             stands, el_stands = m.position_deg, m.el_position_deg  # (the first back: where it
             # stood still when the readings were lost, an attack pass)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
@@ -1232,6 +1237,9 @@ class Controller:
             # port that flaps, a silence then the port lost), what the loss before found (an
             # attack pass: the rebuilt motion read as still, the user's turn was stopped; a
             # review: one braking after a turn seen is known, its stillness too)
+            self._rest_at_close = not turning  # rule 9: a stop to a rotor at rest leaves it as
+            # still as it was (an attack pass: after a STOP at rest and a replug before a
+            # reading showed it taken, 150 read as 350 was published and taken as a turn)
         self._known_since_loss = False
         self._connect_guard = False  # (armed again by the first reading back)
         if turning:

@@ -1,8 +1,8 @@
 """Attack 9: a STOP pressed at rest, then the readings lost before one showed it taken (the
-port replugged, the line gone silent): the first reading back is no longer doubted against
-where the rotor stood (session/controller.py rule 9), and one flipped bit in it is published
-as the bearing and taken as a turn. (``_lose_motion`` keeps the rotor's stillness only where no
-stop was sent: ``m.stop_sent_t is None``; a stop to a rotor at rest leaves it as still as it was.)
+port replugged, the line gone silent): the first reading back was not doubted against where
+the rotor stood (session/controller.py rule 9), and one flipped bit in it was published as the
+bearing and taken as a turn. (``_lose_motion`` kept the rotor's stillness only where no stop was
+sent: ``m.stop_sent_t is None``; a stop to a rotor at rest leaves it as still as it was.)
 An RT-21 is left out: its replies have no head the flip can find (``flip_next_hundreds``)."""
 
 from __future__ import annotations
@@ -18,12 +18,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 9: after a STOP at rest and a replug before a reading showed it taken, the "
-    "first reading back is taken unchecked (controller.py rule 9: _still_at_close is False "
-    "once a stop was sent): 150 flipped to 350 is published and taken as a turn",
-)
 @pytest.mark.parametrize("model", [m for m in MODELS if m != "rt21"])
 def test_a_flipped_first_reading_after_a_stop_at_rest_and_a_replug_is_never_taken(
     rig: Rig, model: str
