@@ -122,3 +122,42 @@ def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled
     assert len(garbled) >= 2 * C.DOUBT_LOST_MOST
     assert v.truth().az_deg < rest + 40
     assert MotionState.MOVING in {s.state for s in v.published(since=t)}
+
+
+def test_a_flipped_bit_at_rest_whose_ask_comes_garbled_twice_then_another_is_never_shown(
+    rig: Rig,
+) -> None:
+    """The other side of the same rule: line noise, not a hand. The reading at rest (1xx) is
+    read 3xx, the ask at once and its re-poll come garbled, the poll after (at the moving rate)
+    is read 2xx: disagreeing with the doubted one, it is asked again at once, and the true
+    reading then shows both were noise. Only the bearing at rest is ever published."""
+    v = at_rest(rig, "rotorez")
+    rest = v.status.bearing_deg
+    assert rest is not None
+    plan = iter(["3", "#", "#", "2"])
+    done: list[str] = []
+    head = [False]
+
+    def noisy(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:
+            if head[0] and chr(b).isdigit():
+                head[0] = False
+                what = next(plan, None)
+                if what is not None:
+                    done.append(what)
+                    if what == "#":
+                        out += b"#"
+                    else:
+                        b = ord(what)
+            elif b == ord(";"):
+                head[0] = True
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = noisy
+    t = v.now
+    v.run_until(lambda h: len(done) == 4, 60, "the four noisy replies")
+    v.run_for(20)
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} == {rest}
+    assert {s.state for s in v.published(since=t)} == {MotionState.IDLE}
