@@ -310,59 +310,52 @@ def test_a_box_unplugged_as_a_stop_is_written_is_a_lost_link_and_owes_that_stop(
     assert back.drain().startswith(b"S\r")  # the stop it was owed, first
 
 
-def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() -> None:
-    """controller.py rule 10: an Easycomm az/el box that turns only the elevation follows such
-    turns (no flipped bit of its poll turns an elevation; a review: its own azimuth channel,
-    jogged, turns nothing, and a hand at the elevation panel was stopped); beside it an Easycomm
-    azimuth box stops them; check-config says so per box."""
+def _unasked(az_model: str, el_model: str, **rotator: object) -> tuple[list[str], str]:
+    """What each box of a composite does with a turn nobody asked for, and what check-config
+    says of it."""
     from bridge.settings.report import masked
 
     doc = {
         "rotators": [
             {
                 "id": "sky",
-                "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
-                "elevation": {"model": "easycomm2", "port": "/dev/ttyEL"},
+                "azimuth": {"model": az_model, "port": "/dev/ttyAZ"},
+                "elevation": {"model": el_model, "port": "/dev/ttyEL"},
+                **rotator,
             }
         ]
     }
     s = settings_from(doc, environ={})
     boxes = axis_configs(s.rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "follow"]
-    shown = masked(s)["rotators"][0]["unasked_moves"]
-    assert shown == "azimuth box: follow, elevation box: follow"
-    doc["rotators"][0]["azimuth"] = {"model": "easycomm2", "port": "/dev/ttyAZ"}
-    s = settings_from(doc, environ={})
-    boxes = axis_configs(s.rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "follow"]
-    assert masked(s)["rotators"][0]["unasked_moves"] == "azimuth box: stop, elevation box: follow"
-    doc["rotators"][0]["unasked_moves"] = "stop"
-    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "stop"]
+    assert boxes is not None
+    return [b.unasked_moves for b in boxes], masked(s)["rotators"][0]["unasked_moves"]
+
+
+def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() -> None:
+    """controller.py rule 10: an Easycomm az/el box that turns only the elevation follows such
+    turns (no flipped bit of its poll turns an elevation; a review: its own azimuth channel,
+    jogged, turns nothing, and a hand at the elevation panel was stopped); beside it an Easycomm
+    azimuth box stops them; check-config says so per box."""
+    assert _unasked("rt21", "easycomm2") == (
+        ["follow", "follow"],
+        "azimuth box: follow, elevation box: follow",
+    )
+    assert _unasked("easycomm2", "easycomm2") == (
+        ["stop", "follow"],
+        "azimuth box: stop, elevation box: follow",
+    )
+    assert _unasked("easycomm2", "easycomm2", unasked_moves="stop")[0] == ["stop", "stop"]
 
 
 def test_an_rc2800_elevation_box_stops_turns_nobody_asked_for() -> None:
     """rc2800.py rule 8: an RC2800's elevation poll, ``E`` CR, is one stray byte from a target
     (``E5`` CR), so an RC2800 that turns a composite's elevation stops a turn nobody asked for,
     where other elevation boxes follow; ``unasked_moves = "follow"`` lets it be."""
-    from bridge.settings.report import masked
-
-    doc = {
-        "rotators": [
-            {
-                "id": "sky",
-                "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
-                "elevation": {"model": "rc2800", "port": "/dev/ttyEL"},
-            }
-        ]
-    }
-    s = settings_from(doc, environ={})
-    boxes = axis_configs(s.rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "stop"]
-    assert masked(s)["rotators"][0]["unasked_moves"] == "azimuth box: follow, elevation box: stop"
-    doc["rotators"][0]["unasked_moves"] = "follow"
-    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "follow"]
+    assert _unasked("rt21", "rc2800") == (
+        ["follow", "stop"],
+        "azimuth box: follow, elevation box: stop",
+    )
+    assert _unasked("rt21", "rc2800", unasked_moves="follow")[0] == ["follow", "follow"]
 
 
 @pytest.mark.parametrize(("speed", "settle_s"), [("1", 5.0), ("3", 1.8), ("4", 1.5)])
