@@ -12,8 +12,9 @@ Rules:
    stop), and without a reading the one nearest the middle of the range. The judge checks
    that one exists and marks the target (Target.true_az_deg); the engine picks the side when
    it sends, from the position it has then (a target that waited, e.g. for a brake, is not
-   sent to the side that was nearest when it came). A target outside 0..360 on such a rotor
-   names the side itself: 400 is "40, past north clockwise" (raw = value - offset), and a
+   sent to the side that was nearest when it came; a nudge's side is its own: rule 6). A
+   target outside 0..360 on such a rotor names the side itself: 400 is "40, past north
+   clockwise" (raw = value - offset), and a
    client that named it reads the rotor the same way (``unfolded``: raw + offset, the offset
    read from the true bearing beside the raw value, so the remote, whose pointing has none,
    reads it too). A
@@ -56,7 +57,13 @@ Rules:
    an Easycomm's, a SatEL's), it is taken on the controller's own scale: +10 at 350 is 360,
    10 degrees on (``Target.az_end_deg``; folded to 0 it went out as the other end, ``M000``,
    and the rotor turned 350 degrees back through south), and a nudge past an end (+10 at 360,
-   -10 at 0) is refused, never taken the whole way round, as past a SPID's stop. Where north
+   -10 at 0) is refused, never taken the whole way round, as past a SPID's stop. On a scale
+   that does not wrap (a SPID, a 450-degree Yaesu) a nudge is a move along the travel: its raw
+   value is the one it counts from plus the step, refused past a limit and sent as it is
+   (``Target.az_end_deg``), never taken as a bearing (attack 10: a 450-degree GS-232B with
+   limits 20..440 at 30, nudged -15, named 15, whose one raw value inside them is 375: it was
+   sent ``W375`` and turned 345 degrees clockwise), nor its side left to the engine (rule 2:
+   a SPID turning from 100 to 300, nudged +10, went to -50, 150 degrees back). Where north
    is the middle of the travel (a Hy-Gain rotor's stop is at south: a Rotor-EZ, a DCU-1) or
    the controller is never sent 360 and turns its own way (an RT-21), it is folded as before:
    +10 at 355 goes out as 5 (``AP1005``), the turn across north the controller makes; but a
@@ -307,10 +314,16 @@ class Pointing:
     ) -> float:
         """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal,
         or if ``within`` (rule 9) is given and every legal one turns outside it. ``end``: the
-        end of a scale that wraps a nudge turns to (rule 6), taken where it is legal."""
+        end of a scale that wraps a nudge turns to (rule 6), taken where it is legal; on a
+        scale that does not wrap, the raw value a nudge turns to, checked and taken as it is."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not math.isfinite(az_deg):
             raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
+        if not self.az_wraps and end is not None:  # rule 6: where a nudge turns to, as it is
+            raw = self._checked(az_deg, end)
+            if within is not None:
+                self._within(az_deg, current_raw_deg, [raw], within)
+            return raw
         if not 0.0 <= az_deg <= 360.0:
             if self.az_wraps:
                 raise Refused(RefusalCode.LIMITS, f"azimuth {az_deg:g} outside 0..360")
@@ -504,8 +517,9 @@ class Pointing:
                 why = self._rounding(f"elevation {el:g}", el, lo, hi, el=True)
                 raise Refused(RefusalCode.LIMITS, why)
         fixed = target.within_deg is not None and current_raw_deg is not None  # (rule 9)
+        fixed = fixed or target.az_end_deg is not None  # (rule 6: a nudge's raw value)
         side_free = None if fixed else self._side_free(target.az_deg)
-        # (rule 9: its side; rule 6: the end a nudge turns to is in ``raw_az`` now)
+        # (rule 9: its side; rule 6: the raw value a nudge turns to is in ``raw_az`` now)
         return replace(target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None)
 
     def check_raw(self, target: Target) -> None:
@@ -633,11 +647,24 @@ class Pointing:
             if to_raw in (0.0, 360.0):
                 end = to_raw
         elif d_az and not self.az_wraps and raw is not None:
-            # past 360 a nudge stays on its side: named by a value outside 0..360 (rule 2), so
-            # +10 at raw 535 is refused at the 540 stop rather than taken the other way round
-            new_az = raw + self.offset_deg + d_az
-            if 0.0 <= new_az <= 360.0:  # on the scale: the least travel is this side anyway
+            # a move along the travel from where the rotor is (or is going): its raw value is
+            # that one plus the step, judged against the limits and sent as it is (``end``),
+            # never taken as a bearing whose other raw value lies inside them: +10 at raw 535
+            # is refused at the 540 stop, -15 at raw 30 under limits 20..440 at the limit 20
+            # (as a bearing, 15 was the 375 inside them: 345 degrees the other way round)
+            end = raw + d_az
+            new_az = end + self.offset_deg
+            if 0.0 <= new_az <= 360.0:  # (the true bearing it shows: 400 names its side)
                 new_az = norm360(new_az)
+            if not self.az_min_deg <= end <= self.az_max_deg:
+                at = norm360(end + self.offset_deg)
+                shown = f"{at:g}" + ("" if end == at else f" (controller {end:g})")
+                raise Refused(
+                    RefusalCode.LIMITS,
+                    f"a nudge of {named:+.10g} degrees turns to azimuth {shown}, past "
+                    f"{self._limits_text()} of the {self.model_name}'s travel: a nudge is not "
+                    "taken the other way round",
+                )
         elif d_az:
             if self.az_wraps and raw is not None:  # (not az_ends_at_north: its stop at raw 180?)
                 self._clear_of_south(raw, d_az)

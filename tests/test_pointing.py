@@ -145,7 +145,7 @@ def test_presets_park_and_nudges_become_true_bearings() -> None:
     # past 360 a nudge stays on its side (review finding: +10 at 535 went 350 degrees back)
     overlap = RotatorStatus("t", MotionState.IDLE, bearing_deg=175, raw_bearing_deg=535)
     assert p.nudged(overlap, -10, None) == (525, None) and p.raw_for(525, 535) == 525
-    assert refused(p.judge, Target(p.nudged(overlap, 10, None)[0], 0), 535) is RefusalCode.LIMITS
+    assert refused(p.nudged, overlap, 10, None) is RefusalCode.LIMITS  # the 540 stop
     near = RotatorStatus("t", MotionState.IDLE, bearing_deg=355, raw_bearing_deg=355)
     assert p.judge(Target(p.nudged(near, 10, None)[0], 0), 355).az_deg == 365
 
@@ -187,6 +187,60 @@ def test_a_nudge_across_north_stops_at_the_end_where_north_is_an_end() -> None:
     # limits short of the end: refused, never sent to the other end
     short = Pointing.of(REGISTRY["gs232b"], (0, 359))
     assert refused(short.judge, short.nudge(_at(350), 10, None), 350) is RefusalCode.LIMITS
+
+
+@pytest.mark.parametrize(
+    ("model", "limits", "offset", "raw", "step", "shown"),
+    [
+        ("gs232b-450", (20, 440), 0, 30, -15, "15, past the limits 20..440 of"),
+        ("md01", (10, 530), 0, 15, -10, "5, past the limits 10..530 of"),
+        ("gs232b-450", None, 90, 10, -20, "80 (controller -10), past the limits 0..450 ("),
+        ("rot2prog", (-180, 400), 0, 395, 10, "45 (controller 405), past the limits -180..400"),
+    ],
+)
+def test_a_nudge_past_a_limit_of_a_scale_that_does_not_wrap_is_refused_not_taken_round(
+    model: str,
+    limits: tuple[float, float] | None,
+    offset: float,
+    raw: float,
+    step: float,
+    shown: str,
+) -> None:
+    """Rule 6, attack 10: on a scale that does not wrap a nudge goes along the travel from
+    where the rotor is, and is refused past a limit. A 450-degree GS-232B with limits 20..440
+    at 30, nudged -15, named bearing 15, whose one raw value inside the limits is 375: it was
+    sent ``W375`` and turned 345 degrees clockwise. So on an MD-01 (limits 10..530 at 15, -10:
+    365) and with an offset at the model's own end (offset 90 at raw 10, -20: raw 350)."""
+    p = Pointing.of(REGISTRY[model], limits, offset_deg=offset)
+    with pytest.raises(Refused) as exc:
+        p.nudge(_at(raw, offset), step, None)
+    assert exc.value.code is RefusalCode.LIMITS
+    assert exc.value.message.startswith(f"a nudge of {step:+g} degrees turns to azimuth {shown}")
+    # up to the limit it goes, the way it names
+    short = step / 3
+    assert p.judge(p.nudge(_at(raw, offset), short, None), raw).az_deg == raw + short
+
+
+def test_a_nudge_on_a_scale_that_does_not_wrap_keeps_its_side_of_the_travel() -> None:
+    """Rule 6: a nudge's raw value is fixed when it is judged, never left to the side nearest
+    the rotor when it is sent (rule 2): a SPID turning from raw 100 to 300, nudged +10, goes
+    on to 310 (not -50, 150 degrees from 100 where 310 is 210: the rotor turned back), and at
+    rest beside 360 a nudge across it goes on past it on either side."""
+    p = Pointing.of(SPID)
+    going = RotatorStatus(
+        "t",
+        MotionState.MOVING,
+        bearing_deg=100,
+        raw_bearing_deg=100,
+        target_az_deg=300,
+        raw_target_az_deg=300,
+    )
+    judged = p.judge(p.nudge(going, 10, None), 100)
+    assert (judged.az_deg, judged.true_az_deg) == (310, None)
+    assert p.judge(p.nudge(_at(355), 10, None), 355).az_deg == 365
+    assert p.judge(p.nudge(_at(365), -10, None), 365).az_deg == 355
+    assert p.judge(p.nudge(_at(5), -10, None), 5).az_deg == -5
+    assert p.judge(p.nudge(_at(-5), 10, None), -5).az_deg == 5
 
 
 def _sat(raw: float, el: float = 20.0, *, going_to: float | None = None) -> RotatorStatus:

@@ -297,9 +297,10 @@ class Target:
     origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
     # true bearings, lower first, the turn must stay inside (pointing.py rule 9: a group's limits)
     within_deg: tuple[float, float] | None = None
-    # a nudge's raw value where it reaches an end of a scale whose 0 and 360 are the ends of the
-    # travel (pointing.py rule 6): 360 or 0, which one true bearing names both of; the judge
-    # sends it and clears it
+    # a nudge's raw value where its true bearing does not say it (pointing.py rule 6): an end
+    # of a scale whose 0 and 360 are the ends of the travel, 360 or 0, which one true bearing
+    # names both of; on a scale that does not wrap, where the nudge ends along the travel (a
+    # bearing there names a raw value each side of 360); the judge sends it and clears it
     az_end_deg: float | None = None
     # a nudge (pointing.py rule 6): its step goes out even where it ends within the tolerance of
     # where the rotor rests (session/targets.py rule 5), as the user asked for that step

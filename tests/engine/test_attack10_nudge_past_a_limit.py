@@ -30,14 +30,6 @@ def yaesu(tmp_path: Path) -> Iterator[Bench]:
     made.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 10: a nudge past a narrowed limit of a rotor that does not wrap (a 450-degree "
-        "Yaesu, limits 20..440, at 30, nudge -15) is taken as the same bearing on the far side "
-        "(raw 375): the rotor turns 345 degrees clockwise instead of being refused"
-    ),
-)
 def test_a_nudge_past_a_narrowed_limit_never_turns_the_rotor_the_other_way(yaesu: Bench) -> None:
     yaesu.v.run_for(2.0)
     assert yaesu.rot.status.bearing_deg == pytest.approx(START_AZ, abs=1.0)
