@@ -24,7 +24,11 @@ Rules:
    ``W000``, and turned 350 degrees the long way round), and 0, not 360, where the offset
    brings a bearing there (true 180 with offset 180; true 350 with offset -10: a cold review,
    it went out as 360 and a GS-232 at true 0 turned 350 degrees the long way round) or a
-   limit leaves only one of them.
+   limit leaves only one of them. A target that names neither end (``Target.az_either_end``:
+   a group member's bearing after its group offset, interfaces/mqtt/groups.py rule 2) goes,
+   where both ends are legal (after its arc, rule 9) and 0 and 360 are the ends of the travel,
+   to the end nearer the rotor's reading (equals, or no reading: 0; attack 10: the group's 180
+   was north for a member with offset 180, and a GS-232 at 355 was sent ``M000``).
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -311,11 +315,13 @@ class Pointing:
         current_raw_deg: float | None,
         within: tuple[float, float] | None = None,
         end: float | None = None,
+        either_end: bool = False,
     ) -> float:
         """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal,
         or if ``within`` (rule 9) is given and every legal one turns outside it. ``end``: the
         end of a scale that wraps a nudge turns to (rule 6), taken where it is legal; on a
-        scale that does not wrap, the raw value a nudge turns to, checked and taken as it is."""
+        scale that does not wrap, the raw value a nudge turns to, checked and taken as it is;
+        ``either_end``: ``az_deg`` names no end of it (rule 2: a group member's bearing)."""
         lo, hi = self.az_min_deg, self.az_max_deg
         if not math.isfinite(az_deg):
             raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
@@ -367,6 +373,10 @@ class Pointing:
                     f"azimuth {az_deg:g} (controller {end:g}) is not reached without turning "
                     f"outside {arc}",
                 )
+            if either_end and self.az_ends_at_north and current_raw_deg is not None:
+                at, ends = current_raw_deg, [r for r in legal if r in (0.0, 360.0)]
+                if len(ends) == 2:  # rule 2: named as neither end, the nearer (equals: 0)
+                    return min(ends, key=lambda r: abs(r - at))
             if az_deg == 360.0 and not self.offset_deg and az_deg in legal:
                 return az_deg
             north = None if within is not None else self._north_step(base, current_raw_deg)
@@ -502,7 +512,11 @@ class Pointing:
                     f"{sector[0]:g}..{sector[1]:g}: refused",
                 )
             raw_az = self.raw_for(
-                target.az_deg, current_raw_deg, target.within_deg, target.az_end_deg
+                target.az_deg,
+                current_raw_deg,
+                target.within_deg,
+                target.az_end_deg,
+                target.az_either_end,
             )
             self._check_sent_keep_out(target.az_deg, raw_az)
         if target.el_deg is not None:
@@ -520,7 +534,9 @@ class Pointing:
         fixed = fixed or target.az_end_deg is not None  # (rule 6: a nudge's raw value)
         side_free = None if fixed else self._side_free(target.az_deg)
         # (rule 9: its side; rule 6: the raw value a nudge turns to is in ``raw_az`` now)
-        return replace(target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None)
+        return replace(
+            target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None, az_either_end=False
+        )
 
     def check_raw(self, target: Target) -> None:
         """Rule 8: Refused if the controller may not be sent ``target`` (raw values)."""

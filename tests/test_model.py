@@ -53,3 +53,12 @@ def test_a_newer_target_that_takes_nothing_keeps_its_own_expiry() -> None:
     assert combine(Target(100.0, 20.0), older).not_after_s is None
     assert combine(Target(100.0, 20.0, not_after_s=15.0), older).not_after_s == 15.0
     assert combine(Target(None, 30.0, not_after_s=15.0), Target(200.0)).not_after_s == 15.0
+
+
+def test_an_azimuth_taken_from_an_older_target_names_the_end_it_named() -> None:
+    """A group member's azimuth names neither end of its travel (Target.az_either_end,
+    pointing.py rule 2): a later elevation alone from the same sender keeps it so, and an
+    azimuth of the newer's own is as it names it."""
+    older = Target(0.0, None, az_either_end=True)
+    assert combine(Target(None, 30.0), older).az_either_end
+    assert not combine(Target(0.0, 30.0), older).az_either_end

@@ -3,6 +3,8 @@ values out, and every way of naming a target. Pure: no rotator, no clock."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from bridge.core import geo
@@ -426,6 +428,32 @@ def test_a_satel_target_whose_step_is_north_takes_the_end_nearer_the_rotor(
     its travel, and are sent as the end nearer the rotor; 360 and 0 named stay the ends they
     name. An attack pass: at 10, 356 went out as 360 and the rotor turned 350 degrees."""
     assert Pointing.of(REGISTRY["satel"]).judge(Target(asked, 10), at).az_deg == raw
+
+
+@pytest.mark.parametrize(
+    "model", ["gs232b-az", "rotorcard", "satel", "easycomm2-az", "prosistel", "rc2800-az"]
+)
+def test_a_north_that_names_neither_end_takes_the_end_nearer_the_rotor(model: str) -> None:
+    """Rule 2, attack 10: a group member's bearing that its offset brings to north names
+    neither end of a travel whose ends are 0 and 360 (``az_either_end``): the end nearer the
+    rotor is sent, 360 from 355 and 0 from 5 (folded to 0, it went out as the far end from
+    355, a turn through south); so is the raw north an offset of the rotator's own brings a
+    bearing to; the ends the limits, or a group's arc, leave it, as before; 0 and 360 named
+    stay the ends they name."""
+    aim = Pointing.of(REGISTRY[model])
+    north = Target(0.0, az_either_end=True)
+    assert [aim.judge(north, at).az_deg for at in (355.0, 5.0, 180.0)] == [360.0, 0.0, 0.0]
+    assert aim.judge(north, None).az_deg == 0.0  # no reading: as before
+    assert aim.judge(Target(0.0), 355.0).az_deg == 0.0  # named: the end it names
+    assert aim.judge(Target(360.0), 5.0).az_deg == 360.0
+    south = Pointing.of(REGISTRY[model], offset_deg=180.0)
+    assert south.judge(Target(180.0, az_either_end=True), 355.0).az_deg == 360.0
+    narrowed = Pointing.of(REGISTRY[model], az_limits=(0.0, 355.0))
+    assert narrowed.judge(north, 355.0).az_deg == 0.0  # the only end inside the limits
+    kept = replace(north, within_deg=(0.0, 200.0))
+    assert aim.judge(kept, 190.0).az_deg == 0.0  # 360 turns through 200..360
+    assert aim.judge(replace(north, within_deg=(0.0, 360.0)), 355.0).az_deg == 360.0
+    assert not aim.judge(north, 355.0).az_either_end
 
 
 def test_a_satel_step_at_north_keeps_a_groups_arc_and_narrowed_limits() -> None:

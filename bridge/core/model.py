@@ -302,6 +302,11 @@ class Target:
     # names both of; on a scale that does not wrap, where the nudge ends along the travel (a
     # bearing there names a raw value each side of 360); the judge sends it and clears it
     az_end_deg: float | None = None
+    # the azimuth names a direction, not an end of the travel (a group member's bearing after
+    # its offset: interfaces/mqtt/groups.py rule 2): where its raw value is 0 and 360, the two
+    # ends of the travel, the judge takes the one nearer the rotor (pointing.py rule 2); the
+    # judge clears it
+    az_either_end: bool = False
     # a nudge (pointing.py rule 6): its step goes out even where it ends within the tolerance of
     # where the rotor rests (session/targets.py rule 5), as the user asked for that step
     nudge: bool = False
@@ -331,7 +336,11 @@ def combine(newer: Target, older: Target | None) -> Target:
     took = False
     if newer.az_deg is None and older.az_deg is not None:
         newer = replace(
-            newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg, within_deg=older.within_deg
+            newer,
+            az_deg=older.az_deg,
+            true_az_deg=older.true_az_deg,
+            within_deg=older.within_deg,
+            az_either_end=older.az_either_end,
         )
         took = True
     if newer.el_deg is None and older.el_deg is not None:

@@ -9,19 +9,9 @@ north, is sent ``M000`` and turns the whole way back through south; no group bea
 
 from __future__ import annotations
 
-import pytest
-
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 10: a group's bearing that a member's offset brings to north is folded to 0 "
-        "(groups.py member_bearing), the far end of a GS-232's travel: the member at 355 turns "
-        "355 degrees back through south instead of 5 on to 360"
-    ),
-)
 def test_a_members_offset_to_north_turns_a_gs232_the_short_way(rig: Rig) -> None:
     rig.add("upper", model="gs232b-az", emu={"start_az_deg": 175})
     low = rig.add("lower", model="gs232b-az", emu={"start_az_deg": 355})

@@ -20,6 +20,8 @@ from bridge.interfaces.mqtt.halts import FENCED, HELD
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
 from bridge.settings.groups import CORE_WORDS, reserved
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
@@ -47,6 +49,22 @@ def test_each_member_turns_to_the_groups_bearing_plus_its_offset_within_0_to_360
     ]
     assert member_bearing(360.0, 0.0) == 360.0  # as sent: the rotator's range decides
     assert member_bearing(180.0, 180.0) == 0.0
+
+
+def test_a_members_offset_to_north_is_judged_to_the_end_of_its_travel_nearer_it() -> None:
+    """Attack 10: the group's 180 is north for a member with offset 180; on a GS-232, whose 0
+    and 360 are the two ends of its travel, it went out as 0 wherever the rotor stood (at 355,
+    a turn of 355 degrees back through south). Its part names no end: the member's judge takes
+    the nearer. A member without an offset takes the group's bearing as sent, an end named as
+    its own target names it."""
+    aim = Pointing.of(REGISTRY["gs232b-az"])
+    upper, lower = (p.target for p in fan_out(STACK, b"180", AZ_ONLY))
+    assert lower is not None and lower.az_deg == 0.0 and lower.az_either_end
+    assert [aim.judge(lower, at).az_deg for at in (355.0, 5.0, 180.0)] == [360.0, 0.0, 0.0]
+    for named in (0.0, 360.0):
+        own = next(p.target for p in fan_out(STACK, f"{named:g}".encode(), AZ_ONLY))
+        assert own is not None and not own.az_either_end
+        assert aim.judge(own, 355.0).az_deg == aim.judge(Target(named), 355.0).az_deg == named
 
 
 def test_a_member_outside_its_group_limits_is_refused_and_the_others_still_turn() -> None:
@@ -186,7 +204,8 @@ def test_a_group_target_is_a_target_for_each_member_through_its_own_submit() -> 
     svc, _pub, upper, lower = group_service()
     svc.on_message("rotor/stack/target", b"120", False, "alice")
     assert upper.calls == [("submit", Target(120.0, None, M), "target '120' (group stack)")]
-    assert lower.calls == [("submit", Target(300.0, None, M), "target '120' (group stack)")]
+    lowered = Target(300.0, None, M, az_either_end=True)  # (its offset: it names no end)
+    assert lower.calls == [("submit", lowered, "target '120' (group stack)")]
     assert upper.origins == [Origin(Source.MQTT, "alice")]
 
 
@@ -314,6 +333,7 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
     assert len(fresh) == 1
     svc.on_message(fresh[0][0], fresh[0][1].encode(), False)  # back: both holds end
     stop = Stop(Source.MQTT)
+    said = "target '50' (group stack)"
     for rot, offset in ((upper, 0), (lower, 180)):
         hold = rot.calls[0][-1]
         assert rot.calls[0] == ("submit", stop, "stop", hold) and hold >= 1
@@ -323,7 +343,7 @@ def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() 
         ]
         assert rot.calls[11:] == [
             ("submit", stop, "stop"),
-            ("submit", Target((50.0 + offset) % 360, None, M), "target '50' (group stack)"),
+            ("submit", Target((50.0 + offset) % 360, None, M, az_either_end=offset != 0), said),
             ("release", int(fresh[0][1].split()[1])),
         ]
     # the lane's group stop held both members with the marker that went out: its return
@@ -341,7 +361,10 @@ def test_the_lanes_late_copy_of_a_group_stop_the_main_connection_carried_out_is_
     svc.on_lane_message("rotor/stack/stop", b"", False)  # the echo, for both
     stop = Stop(Source.MQTT)
     assert [c[:2] for c in upper.calls] == [("submit", stop), ("submit", Target(10.0, None, M))]
-    assert [c[:2] for c in lower.calls] == [("submit", stop), ("submit", Target(190.0, None, M))]
+    assert [c[:2] for c in lower.calls] == [
+        ("submit", stop),
+        ("submit", Target(190.0, None, M, az_either_end=True)),
+    ]
     svc.on_lane_message(lane_marker[0], lane_marker[1].encode(), False)
     svc.on_lane_message("rotor/stack/stop", b"", False)  # a new one: carried out at once
     assert upper.calls[-1][:2] == ("submit", stop) and lower.calls[-1][:2] == ("submit", stop)

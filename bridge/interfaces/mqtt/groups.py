@@ -9,7 +9,14 @@ Rules:
    stands, not with the group's offsets). An elevation is refused, for the whole group, unless
    every member has an elevation axis: nothing moves.
 2. Each member's part is one ``Target``: the group's azimuth plus the member's offset, brought
-   into 0..360; the elevation as given. The group's azimuth itself must be 0..360 (an
+   into 0..360; the elevation as given. A member with an offset is sent a bearing that names
+   no end of its travel (``Target.az_either_end``): where its raw value is 0 and 360, the two
+   ends of the travel (a GS-232's, a RotorCard's, a SatEL's, an Easycomm's, a Prosistel's, an
+   RC2800's), its judge takes the end nearer the rotor (pointing.py rule 2; attack 10: the
+   group's 180 with offset 180, folded to 0, went to a GS-232 at 355 as ``M000``, a turn of
+   355 degrees back through south, and no group bearing named 360 for it). A member without an
+   offset gets the group's bearing as its own target names it: 360 is 360, 0 the other end.
+   The group's azimuth itself must be 0..360 (an
    offset would make 361 a bearing the member takes); the refusal shows it as sent. A part
    outside the member's group limits (true bearings, after its offset; north is 0 and 360
    alike) is that member's refusal, decided here; a part inside them carries them, and the
@@ -65,7 +72,8 @@ class Part:
 
 def member_bearing(az_deg: float, offset_deg: float) -> float:
     """Rule 2: a member's azimuth for the group's ``az_deg``, brought into 0..360 (a member
-    without an offset gets the group's bearing as sent: 360 stays 360)."""
+    without an offset gets the group's bearing as sent: 360 stays 360; with one, north is 0
+    here and its part names neither end, which its judge picks)."""
     return az_deg if offset_deg == 0 else (az_deg + offset_deg) % 360.0
 
 
@@ -122,7 +130,10 @@ def fan_out(
                 )
             )
             continue
-        target = Target(member_az, el, Source.MQTT, origin=origin, within_deg=lo_hi)
+        either = m.offset_deg != 0  # rule 2: its bearing names no end of its travel
+        target = Target(
+            member_az, el, Source.MQTT, origin=origin, within_deg=lo_hi, az_either_end=either
+        )
         parts.append(Part(m.id, target))
     return parts
 
