@@ -12,7 +12,7 @@ its reply forms ``A P= 98.1 S=9 MV``, ``E=43.7 S=9 M`` and ``A ERR=5``, its echo
 with rotctl -m 1001.
 
 Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms on az/el):
-  ``A123.4\\r`` then ``E45\\r``        turn to azimuth (tenths) and elevation (whole degrees)
+  ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
   ``A\\r`` then ``E\\r``               ask each axis; answered by its line
   ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the first at once)
 The azimuth model sends only the azimuth's frames.
@@ -53,10 +53,8 @@ Rules:
    a line of an exchange that had line noise is never carried (it may be a mangled one).
 3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading, and never
    harmless, asked for or not (an attack pass: ``A P= 361.0`` was dropped and nobody told).
-4. Targets are tenths of a degree for the azimuth and whole degrees for the elevation, rounded
-   half up (the protocol sheet's ``E45``, and Hamlib's ``E%.0f``: no source shows the elevation
-   taking decimals; review 39); outside azimuth 0..360 or elevation 0..180 they are refused
-   before anything is sent. A new bearing while turning goes straight out.
+4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
+   they are refused before anything is sent. A new bearing while turning goes straight out.
 5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
    only splits each command into its axes' frames, in the order they must go.
 6. An exchange given up (``expire_query``) may still be answered (base.py rule 7): the lines
@@ -109,7 +107,6 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     RetargetPolicy,
-    half_up,
     tenths_pair,
 )
 
@@ -156,13 +153,12 @@ class Rc2800Codec(Plain, LateAnswers):
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az, el = tenths_pair(az_deg, el_deg, AZ_MAX_DEG, EL_MAX_DEG if self.elevation else None)
-        return az, None if el is None else float(half_up(el_deg or 0.0, 1))  # rule 4: whole
+        return tenths_pair(az_deg, el_deg, AZ_MAX_DEG, EL_MAX_DEG if self.elevation else None)
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         az, el = self.wire_target(az_deg, el_deg)
         frames = [b"A%.1f\r" % az]
-        return frames if el is None else [*frames, b"E%d\r" % el]
+        return frames if el is None else [*frames, b"E%.1f\r" % el]
 
     def encode_stop(self) -> list[bytes]:
         self._open(2)  # each axis answers its selection and its stop

@@ -377,7 +377,7 @@ def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None
 
     link.send(link.codec.encode_target(100, 20), 0.0)
     link.poll_now(0.0)
-    assert wire(0.0, 0.5) == [(0.0, b"A100.0\r"), (0.2, b"E20\r"), (0.4, b"A\r")]
+    assert wire(0.0, 0.5) == [(0.0, b"A100.0\r"), (0.2, b"E20.0\r"), (0.4, b"A\r")]
     assert link.wakeups()[0] == pytest.approx(0.6)  # the poll's E
     link.want_stop()
     assert link.flush_stop(0.5)  # at once, 100 ms after the last frame: a stop never waits
@@ -386,7 +386,7 @@ def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None
     assert link.output() == []  # after the stop's elevation frame, then 200 ms apart
     assert wire(0.55, 1.15, poll=False) == [
         (0.7, b"E\rS\r"),
-        (0.7, b"E30\r"),  # the axis last addressed first: no gap needed
+        (0.7, b"E30.0\r"),  # the axis last addressed first: no gap needed
         (0.9, b"A200.0\r"),
     ]
 
@@ -413,8 +413,8 @@ def test_an_rc2800_target_takes_the_place_of_a_polls_waiting_frame_and_the_axis_
     assert link.output() == [b"A100.0\r"]
     assert link.wakeups()[0] == pytest.approx(0.25)
     link.flush_outbox(0.25)
-    assert link.output() == [b"E20\r"]  # and no E\r of the poll's
+    assert link.output() == [b"E20.0\r"]  # and no E\r of the poll's
     link.send(link.codec.encode_target(110, 25), 0.3)
-    assert link.output() == [b"E25\r"]
+    assert link.output() == [b"E25.0\r"]
     link.flush_outbox(0.5)
     assert link.output() == [b"A110.0\r"]

@@ -48,15 +48,14 @@ def test_a_target_goes_out_axis_by_axis_and_is_read_back(rig: Rig, box: dict[str
     v = ready(rig, start_az_deg=10, start_el_deg=5, **box)
     t = v.now
     v.target(123.45, 45.6)
-    v.run_until(settled_at(123.5, 46.0), 60, "at 123.5/46")
-    assert sorted(moves(v)) == [b"A123.5", b"E46"]  # the axis last asked goes first (rule 4:
-    # the elevation in whole degrees)
+    v.run_until(settled_at(123.5, 45.6), 60, "at 123.5/45.6")
+    assert sorted(moves(v)) == [b"A123.5", b"E45.6"]  # the axis last asked goes first
     (a_t,) = [w.t for w in v.writes if w.data == b"A123.5\r"]
-    (e_t,) = [w.t for w in v.writes if w.data == b"E46\r"]
+    (e_t,) = [w.t for w in v.writes if w.data == b"E45.6\r"]
     assert abs(e_t - a_t) == pytest.approx(0.2) and min(a_t, e_t) == t  # the first at once
     assert min(axis_gaps(v, t)) >= 0.2 - 1e-9  # nothing sooner after the other axis
     assert v.truth().too_soon == 0  # the box never saw its axes closer than 200 ms
-    assert (v.status.bearing_deg, v.status.elevation_deg) == (123.5, 46.0)
+    assert (v.status.bearing_deg, v.status.elevation_deg) == (123.5, 45.6)
     assert v.errors() == []
 
 
@@ -85,7 +84,7 @@ def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -
     t = v.now
     v.target(20, 10)
     v.run_until(lambda h: len(moves(h, t)) == 2, 2, "the new bearing")
-    assert v.truth().is_moving and sorted(moves(v, t)) == [b"A20.0", b"E10"]
+    assert v.truth().is_moving and sorted(moves(v, t)) == [b"A20.0", b"E10.0"]
     v.run_until(settled_at(20, 10), 120, "at 20/10")
     assert v.frames(Outcome.STOP) == [] and v.truth().too_soon == 0
 
@@ -260,7 +259,7 @@ def test_an_elevation_the_az_el_box_refuses_is_no_refusal_of_a_target_its_azimut
     rotor. Taken for the target's refusal (a review), the bridge said "the controller refused
     the target" and showed no target while the azimuth turned 190 degrees to it."""
     v = ready(rig, "rc2800", start_az_deg=10, start_el_deg=5)
-    v.garble_writes(b"E45\r", b"E999\r", count=2)  # (or a box set up for less than 180)
+    v.garble_writes(b"E45.0\r", b"E999\r", count=2)  # (or a box set up for less than 180)
     t = v.now
     v.target(200, 45)
     v.run_until(lambda h: h.truth().az_deg == 200 and not h.truth().is_moving, 60, "at 200")

@@ -257,10 +257,10 @@ def test_an_elevation_frame_lost_while_the_azimuth_went_is_tried_again(rig: Rig)
     v.run_until_state(IDLE, 30)
     v.run_for(3)
     t = v.now
-    v.drop_writes(b"E70\r")
+    v.drop_writes(b"E70.0\r")
     v.target(180, 70)
     v.run_for(60)
-    assert v.sent(since=t).count(b"E70\r") == 2 and v.errors(since=t) == []
+    assert v.sent(since=t).count(b"E70.0\r") == 2 and v.errors(since=t) == []
     assert (v.truth().az_deg, v.truth().el_deg) == (180.0, 70.0)
 
 
@@ -415,7 +415,7 @@ def test_a_rotor_stuck_short_of_the_turn_before_is_no_lost_target(rig: Rig) -> N
 @pytest.mark.parametrize(
     ("model", "lose", "as_"),
     [
-        ("rc2800", b"E40\r", None),  # its elevation frame lost, its azimuth's came
+        ("rc2800", b"E40.0\r", None),  # its elevation frame lost, its azimuth's came
         ("rc2800", b"A200.0\r", None),  # and the other way round
         ("easycomm2", b"AZ200.0 EL40.0\n", b"AZ200.0 DL40.0\n"),  # a word the box ignores
         ("easycomm2", b"AZ200.0 EL40.0\n", b"AY200.0 EL40.0\n"),

@@ -41,7 +41,7 @@ def test_az_el_target_bearing_and_stop(rig: Rig, kind: dict[str, Any]) -> None:
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (123.4, 45.0) and not s.is_moving, 20)
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert (status(rig)["bearing"], status(rig)["elevation"]) == (123.4, 45.0)
-    assert sorted(f.data for f in emu.frames("move")) == [b"A123.4", b"E45"]
+    assert sorted(f.data for f in emu.frames("move")) == [b"A123.4", b"E45.0"]
 
     rig.probe.publish("rotor/target", '{"azimuth": 300, "elevation": 10}')
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
@@ -69,7 +69,7 @@ def test_a_new_bearing_while_turning_goes_straight_out(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "20.5 10")  # no stop first
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (20.5, 10.0) and not s.is_moving, 20)
     moves = [f.data for f in emu.frames("move")]
-    assert sorted(moves[:2]) == [b"A200.0", b"E40"] and sorted(moves[2:]) == [b"A20.5", b"E10"]
+    assert sorted(moves[:2]) == [b"A200.0", b"E40.0"] and sorted(moves[2:]) == [b"A20.5", b"E10.0"]
     assert emu.frames("stop") == []
 
 
