@@ -117,18 +117,8 @@ Rules:
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
    asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
-   (polls half a minute apart would let any two agree). An answer to a doubted reading given
-   up (lost, or garbled and its re-poll's too: link.py rule 11) is no disagreement: the next
-   poll comes at the moving rate, and its reading, if it agrees with the doubted one within
-   ``doubt_deg`` alone, is believed, and if not (nor back where the rotor stood), is asked
-   again at once in its turn (attack 9: two garbled answers after the first reading of a turn
-   by hand, and the turn's readings at the idle rate never agreed within ``doubt_deg``: a
-   locked rotor was shown idle at 150 while it ran to 300, never fought, no limit watched).
-   After DOUBT_LOST_MOST answers given up so since a reading was taken, the next reading not
-   back where the rotor stood is taken, and said: the rotor may be turning, the safe side (its
-   readings followed: the lock and the limits watch it; the price, on a line that bad, a
-   noisy reading shown for a poll). (A composite box's axis that is never turned is kept so
-   too: axes.py rule 5.)
+   (polls half a minute apart would let any two agree). (A composite box's axis that is never
+   turned is kept so too: axes.py rule 5.)
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
    first readings back (a port opened, a controller answering again; still or braking, before
    the motion settled) where the rotor was still with no target out when the readings were
@@ -333,7 +323,6 @@ ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (
 DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agree
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
-DOUBT_LOST_MOST = 3  # rule 9: answers to a doubt at rest given up before the next is taken
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -552,15 +541,12 @@ def _clock(text: str) -> tuple[int, ...]:
 
 class _Doubted(NamedTuple):
     """Rule 9: the reading asked again, when it came, whether it was asked again at once, and
-    whether the rotor was turning (its next reading is taken); at rest, whether the answer to
-    it was given up (lost, or garbled twice), and how many were since a reading was taken."""
+    whether the rotor was turning (its next reading is taken)."""
 
     reply: PositionReply | None
     t: float
     at_once: bool
     turning: bool = False
-    unanswered: bool = False
-    lost: int = 0
 
 
 NOT_DOUBTED = _Doubted(None, -math.inf, False)
@@ -865,6 +851,7 @@ class Controller:
             else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
                 link.heard(now)  # poll later, the rotor turning on disagreed again, and the
                 link.poll_now(now)  # stop the line lost was never checked)
+                self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1)
         if link.flush_stop(now):
             self._stop_written(link, now)
 
@@ -1063,21 +1050,8 @@ class Controller:
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
-        if doubted.unanswered and doubted.lost >= DOUBT_LOST_MOST:  # asked again and again,
-            self._doubts_in_row = 0  # never answered clean: it may be turning (the safe side:
-            self._say(  # its readings followed, the lock and the limits watch it)
-                f"a reading at rest of {_where(reply)}, after {doubted.lost} answers in a row "
-                "to readings asked again were lost or garbled: taken (the rotor may be turning)",
-                now,
-                logged=True,
-            )
-            return Doubt.TAKEN
         self._doubts_in_row += 1
-        # asked again at once the first time, and after an answer given up (garbled or lost:
-        # no disagreement, a review of attack 9), else at the next poll
-        ask = self._doubts_in_row == 1 or doubted.unanswered
-        lost = doubted.lost if doubted.reply is not None else 0
-        self._doubted = _Doubted(reply, now, ask, lost=lost)
+        self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._say(
@@ -1087,7 +1061,7 @@ class Controller:
                 now,
                 logged=False,
             )
-        return Doubt.ASK if ask else Doubt.WAIT
+        return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
@@ -1516,7 +1490,7 @@ class Controller:
                     self._unseen()
                 if self.options.values and link.asking_since is not None:  # options.py
                     self.options.unanswered = True  # rule 1: nothing came: was it off?
-                self._given_up(link, link.give_up_reply(now), now)
+                self._given_up(link.give_up_reply(now))
                 if self._watching() and mo.at_rest(self.motion):  # rule 10: a poll left
                     self._watch_until = now + self.cfg.motion.settle_s  # unanswered may have
                     link.poll_every(now, self.cfg.moving_poll_interval_s)  # been a command
@@ -1529,27 +1503,16 @@ class Controller:
             self._junk(*junk, now)
         again = link.end_garbled(now)  # link.py rule 11: a garbled reply the codec ended
         if again is not None:
-            self._given_up(link, again, now)
+            self._given_up(again)
 
-    def _given_up(self, link: Link, again: bool, now: float) -> None:
+    def _given_up(self, again: bool) -> None:
         """The owed reply is given up, and asked again at once if ``again`` (link.py rule 11:
         it came garbled): a reading doubted keeps its window as asked at once then, not at
         the next poll (rule 9: a review found the ask's answer lost, a reading at the next idle
         poll had the widened window; an attack pass, the re-poll's answer taken as one at the
-        idle rate: readings of a rotor turned by hand disagreed, the bearing stale for 10 s).
-        Not asked again (lost, or the re-poll's answer garbled too), a doubt at rest is no
-        disagreement: the next reading comes at the moving rate and, if it disagrees, is asked
-        again at once (rule 9; attack 9: two garbled answers after the first reading of a turn
-        by hand, and the turn's readings at the idle rate never agreed within ``doubt_deg``: a
-        locked rotor was shown idle at 150 while it ran to 300, never fought)."""
-        doubted = self._doubted
-        if again or doubted.reply is None:
-            return
-        if doubted.turning:
-            self._doubted = doubted._replace(at_once=False)
-            return
-        self._doubted = doubted._replace(at_once=False, unanswered=True, lost=doubted.lost + 1)
-        link.poll_every(now, self.cfg.moving_poll_interval_s)
+        idle rate: readings of a rotor turned by hand disagreed, the bearing stale for 10 s)."""
+        if not again:
+            self._doubted = self._doubted._replace(at_once=False)
 
     def tick(self, now: float) -> None:
         """The motion machine's clock (rule 4: not during a slew), and an enable owed. Not

@@ -3,12 +3,11 @@ is doubted on its first reading that shows the move and asked again at once
 (session/controller.py rule 9); a reading asked again agrees 'within doubt_deg plus twice what
 the rotor turns between them'. When the answer to that ask comes garbled and so does the
 re-poll's (link.py rule 11: a garbled answer to a re-poll waits for the next poll), the doubt
-lost its window (``_given_up``: ``at_once`` False), and every reading after it, at the idle
-rate, had to agree with the one before within ``doubt_deg`` alone: a rotor turning at 6 degrees
-a second never does. Two noisy replies in a row, and the whole turn went unseen: the bearing
-showed the rotor idle where it stood until it rested again, a lock ON did not fight the turn,
-and no limit was watched on the way. An answer given up is no disagreement now: the next
-reading comes at the moving rate and, disagreeing, is asked again at once."""
+loses its window (``_given_up``: ``at_once`` False), and every reading after it, at the idle
+rate, must agree with the one before within ``doubt_deg`` alone: a rotor turning at 6 degrees
+a second never does. Two noisy replies in a row, and the whole turn goes unseen: the bearing
+shows the rotor idle where it stood until it rests again, a lock ON does not fight the turn,
+and no limit is watched on the way."""
 
 from __future__ import annotations
 
@@ -17,7 +16,6 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
-from bridge.session import controller as C
 from tests.engine.test_session_doubt import at_rest
 from tests.engine.virtual import VirtualRotator
 
@@ -51,6 +49,13 @@ def garble_after_the_first_move(v: VirtualRotator, rest: float, count: int = 2) 
     return when
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 9: two garbled replies in a row after the first reading of a turn by hand "
+    "(the ask at once, and its re-poll) end the doubt's window (controller.py _given_up: "
+    "at_once False); the readings of the turn at the idle rate never agree within doubt_deg, "
+    "and a locked rotor turned from 150 to 300 is shown idle at 150 and never stopped",
+)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_two_garbled_replies(
     rig: Rig, model: str
@@ -101,15 +106,19 @@ def garble_all_but_every(v: VirtualRotator, rest: float, every: int) -> list[flo
     return when
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 9: five replies in six garbled after the first reading of a turn by hand; "
+    "the doubt never settles and a locked rotor is not fought (the fix that bounded it, "
+    "d6ca6572, was taken back after review 40)",
+)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled(
     rig: Rig, model: str
 ) -> None:
-    """controller.py rule 9's bound: five replies in six come garbled, so each reading between
-    them is further on than ``doubt_deg`` from the one before (the rotor turns) and is asked
-    again at once, and that ask comes garbled, its re-poll and the polls after too. After
-    DOUBT_LOST_MOST answers given up so, the next reading is taken: the rotor may be turning,
-    and the lock fights it (without the bound: asked again for good, and run on to 300 unseen)."""
+    """Five replies in six come garbled, so each reading between them is further on than
+    ``doubt_deg`` from the one before (the rotor turns) and is asked again, and that ask comes
+    garbled, its re-poll and the polls after too: the lock must still fight the turn."""
     v = at_rest(rig, model)
     rest = v.status.bearing_deg
     assert rest is not None
@@ -119,7 +128,7 @@ def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled
     garbled = garble_all_but_every(v, rest, 6)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
     v.run_for(40)
-    assert len(garbled) >= 2 * C.DOUBT_LOST_MOST
+    assert len(garbled) >= 6
     assert v.truth().az_deg < rest + 40
     assert MotionState.MOVING in {s.state for s in v.published(since=t)}
 

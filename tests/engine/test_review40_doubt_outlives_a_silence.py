@@ -62,12 +62,6 @@ def silence_then_a_flip(v: VirtualRotator, flip_before: bool) -> float:
     return t
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 40: a doubt open at rest outlives the controller's silence (controller.py "
-    "_Doubted is reset on connect only) and the answers the silence lost count towards "
-    "DOUBT_LOST_MOST: the first reading back, 150 read as 250, is taken unchecked",
-)
 @pytest.mark.parametrize("model", [m for m in MODELS if m != "rt21"])
 def test_the_first_reading_back_after_a_silence_is_doubted_whatever_came_before(
     rig: Rig, model: str

@@ -43,13 +43,6 @@ def silent_after(v: VirtualRotator, flip: bool, how: str) -> float:
     return v.now
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 40: controller.py _given_up brings the next poll to the moving rate at "
-    "every answer given up to a doubt at rest, and nothing ends the doubt while no reading "
-    "comes: a controller silent (or giving only garbage) after one flipped reading is polled "
-    "at the moving rate for good",
-)
 @pytest.mark.parametrize("how", ["silent", "garbage"])
 @pytest.mark.parametrize("model", MODELS)
 def test_a_silent_controller_after_a_flipped_reading_is_polled_at_the_idle_rate(

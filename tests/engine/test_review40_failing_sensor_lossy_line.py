@@ -50,12 +50,6 @@ def failing_and_lossy(v: VirtualRotator, every: int) -> list[float]:
     return lost
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 40: _Doubted.lost is carried across disagreeing readings until one is "
-    "taken, so DOUBT_LOST_MOST counts answers lost at any time, not in a row: a failing "
-    "sensor on a line that loses one reply in twenty has its garbage readings taken and shown",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_failing_sensor_on_a_line_that_loses_one_reply_in_twenty_is_never_believed(
     rig: Rig, model: str
