@@ -4,7 +4,9 @@ be asked for it to stay on the step it read"), and an az/el RC2800 that turns a 
 azimuth never turns its own (axes.py rule 1). Its elevation goes out in whole degrees now
 (rc2800.py rule 4) while it reads in tenths, and the codec has no ``held`` for it (base.py
 HoldsOnGrid): read at 30.4 it was sent ``E30`` and turned 0.4 degrees down (30.6: ``E31``,
-up), with every azimuth a logger or a composite sends. In tenths, before 49dcd2c7, it stayed."""
+up), with every azimuth a logger or a composite sends. In tenths, before 49dcd2c7, it stayed.
+(Found in 49dcd2c7, which was taken back: the elevation goes out in tenths again, and this
+test holds it there.)"""
 
 from __future__ import annotations
 
@@ -20,11 +22,6 @@ from tests.engine.virtual_composite import VirtualComposite
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 41: an azimuth-only target to an RC2800 sends the elevation it reads in "
-    "whole degrees: read at 30.4 it is turned to 30 (30.6 to 31)",
-)
 @pytest.mark.parametrize("el_deg", [30.4, 30.6])
 def test_an_azimuth_only_target_leaves_an_rc2800s_elevation_where_it_stood(
     rig: Rig, el_deg: float
@@ -39,11 +36,6 @@ def test_an_azimuth_only_target_leaves_an_rc2800s_elevation_where_it_stood(
     assert v.truth().el_deg == el_deg  # observed: 30.0, 31.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 41: an RC2800 azimuth box's elevation, never to be turned, is sent in whole "
-    "degrees with every azimuth target: read at 30.4 it is turned to 30 (30.6 to 31)",
-)
 @pytest.mark.parametrize("el_deg", [30.4, 30.6])
 def test_an_rc2800_azimuth_boxs_own_elevation_stays_where_it_stood(el_deg: float) -> None:
     box = {"start_az_deg": 10.0, "start_el_deg": el_deg}
