@@ -79,7 +79,7 @@ _NUM = rb"(\d{3})"  # three digits, zero-padded, as the documents and every box 
 # form and -000-1 in the A form (-0000 for less than half a degree below); further below is no
 # horizon but a pot that is broken or far off: no reading
 _B_EL = rb"(\d{3}|0{0,2}-[1-3])"
-_A_EL = rb"(?:\+0(?=\d{3})|-0(?=000|0{0,2}-[1-3]))" + _B_EL
+_A_EL = rb"(?:\+0(?=\d{3})|-0(?=000|00-[1-3]))" + _B_EL  # K3NG: -0000, -000-1 only
 _A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*" + _A_EL + rb")?\s*$", re.DOTALL)
 _B_FORM = re.compile(
     rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _B_EL + rb")?\s*$", re.DOTALL

@@ -14,11 +14,6 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import PositionReply
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 41: GS-232A elevations in forms K3NG never sends (+0123-0-1, +0123-00-1) "
-    "are read as the horizon",
-)
 @pytest.mark.parametrize("el", [b"-0-1", b"-00-1", b"-00-3", b"-0-3"])
 def test_a_gs232a_elevation_below_the_horizon_in_no_k3ng_form_is_no_reading(el: bytes) -> None:
     codec = REGISTRY["gs232a"].codec_factory()
