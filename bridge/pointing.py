@@ -21,14 +21,16 @@ Rules:
    controller whose scale wraps gets the value in 0..360 as the target names it: 360 named is
    360 (the end of a GS-232's or an Easycomm box's travel clockwise of 350, as Hamlib sends
    ``P 360``; 0 is the other end, a whole turn back: a rotor at 350 asked for 360 was sent
-   ``W000``, and turned 350 degrees the long way round), and 0, not 360, where the offset
-   brings a bearing there (true 180 with offset 180; true 350 with offset -10: a cold review,
-   it went out as 360 and a GS-232 at true 0 turned 350 degrees the long way round) or a
-   limit leaves only one of them. A target that names neither end (``Target.az_either_end``:
-   a group member's bearing after its group offset, interfaces/mqtt/groups.py rule 2) goes,
+   ``W000``, and turned 350 degrees the long way round). A bearing the offset brings to north
+   (true 180 with offset 180; true 350 with offset -10) names neither end, and a target that
+   names neither end (``Target.az_either_end``: a group member's bearing after its group
+   offset, interfaces/mqtt/groups.py rule 2) goes,
    where both ends are legal (after its arc, rule 9) and 0 and 360 are the ends of the travel,
-   to the end nearer the rotor's reading (equals, or no reading: 0; attack 10: the group's 180
-   was north for a member with offset 180, and a GS-232 at 355 was sent ``M000``).
+   to the end nearer the rotor's reading (equals, or no reading: 0; a cold review: true 350
+   with offset -10 went out as 360, and a GS-232 at true 0 turned 350 degrees the long way
+   round; attack 10: the group's 180 was north for a member with offset 180, and a GS-232 at
+   355 was sent ``M000``, as was the rotator's own target of 180 with that offset); where a
+   limit leaves only one end, that one.
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -373,6 +375,8 @@ class Pointing:
                     f"azimuth {az_deg:g} (controller {end:g}) is not reached without turning "
                     f"outside {arc}",
                 )
+            # (rule 2: a bearing the offset brings to north names neither end either)
+            either_end = either_end or (bool(self.offset_deg) and base == 0.0)
             if either_end and self.az_ends_at_north and current_raw_deg is not None:
                 at, ends = current_raw_deg, [r for r in legal if r in (0.0, 360.0)]
                 if len(ends) == 2:  # rule 2: named as neither end, the nearer (equals: 0)

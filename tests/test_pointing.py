@@ -448,6 +448,10 @@ def test_a_north_that_names_neither_end_takes_the_end_nearer_the_rotor(model: st
     assert aim.judge(Target(360.0), 5.0).az_deg == 360.0
     south = Pointing.of(REGISTRY[model], offset_deg=180.0)
     assert south.judge(Target(180.0, az_either_end=True), 355.0).az_deg == 360.0
+    # the rotator's own target the offset brings to north (helper-521's note on attack 10)
+    assert [south.judge(Target(180.0), at).az_deg for at in (355.0, 5.0, None)] == [360.0, 0, 0]
+    west = Pointing.of(REGISTRY[model], offset_deg=-10.0)  # the cold review's case: at true 0
+    assert west.judge(Target(350.0), 10.0).az_deg == 0.0
     narrowed = Pointing.of(REGISTRY[model], az_limits=(0.0, 355.0))
     assert narrowed.judge(north, 355.0).az_deg == 0.0  # the only end inside the limits
     kept = replace(north, within_deg=(0.0, 200.0))
