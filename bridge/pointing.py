@@ -30,7 +30,9 @@ Rules:
    with offset -10 went out as 360, and a GS-232 at true 0 turned 350 degrees the long way
    round; attack 10: the group's 180 was north for a member with offset 180, and a GS-232 at
    355 was sent ``M000``, as was the rotator's own target of 180 with that offset); where a
-   limit leaves only one end, that one.
+   limit leaves only one end, that one. So does a value the controller is sent as north after
+   its rounding (rule 4: 0.4 on a GS-232, 356 on a SatEL; ``_north_step``, not inside a
+   group's arc; review 42: a member's 0.4 from 355 went out as ``M000``).
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -283,12 +285,13 @@ class Pointing:
         return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
 
     def _north_step(self, raw_deg: float, current_raw_deg: float | None) -> float | None:
-        """Rule 2 on a controller of steps (a SatEL's ten degrees, rule 4) whose 0 and 360 are
-        the ends: a value that goes out as north, named as neither end (356 goes out as 360,
-        4 as 0), is the end nearer the rotor (an attack pass: at 10, 356 went out as 360 and
-        the rotor turned 350 degrees to the north it stood 10 from). None where it is not."""
-        _whole, _tenths, _cuts, steps = self._rounds(False)
-        if steps == 1 or not self.az_ends_at_north or current_raw_deg is None:
+        """Rule 2 on a controller that rounds (a SatEL's ten degrees, a GS-232's whole degrees,
+        tenths: rule 4) whose 0 and 360 are the ends: a value that goes out as north, named as
+        neither end (356 goes out as 360 on a SatEL, 4 as 0; 0.4 as 0 on a GS-232), is the end
+        nearer the rotor (an attack pass: at 10, 356 went out as 360 and the rotor turned 350
+        degrees to the north it stood 10 from; review 42: a group member's 0.4 from 355 went
+        out as M000, the same on a GS-232). None where it is not."""
+        if not self.az_ends_at_north or current_raw_deg is None:
             return None
         if raw_deg in (0.0, 360.0) or self._sent(raw_deg)[0] not in (0.0, 360.0):
             return None

@@ -7,7 +7,9 @@ GS-232 takes whole degrees, half up) goes out as the end rule 2 gives the value 
 member in group ``stack`` with ``offsets = { lower = 180 }`` at 355 is sent the group's
 180.4 as ``M000``, and one with ``lower = 179.6`` at 5 the group's 180 as ``M360``: each turns
 the whole way round, 355 degrees, for a bearing 5 degrees away. What a user notices: the
-antenna sweeps through south."""
+antenna sweeps through south.
+(Fixed: pointing.py ``_north_step`` takes the nearer end for any value sent as north after
+its rounding, not on a SatEL alone.)"""
 
 from __future__ import annotations
 
@@ -39,14 +41,6 @@ def _part(offset: float, payload: bytes) -> Target:
     return part
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 42: az_either_end takes the nearer end only where the raw value is exactly 0 "
-        "or 360; a member bearing the GS-232 is sent as an end after rounding (0.4 -> M000, "
-        "359.6 -> M360) goes to the far end and the rotor turns 355 degrees through south"
-    ),
-)
 @pytest.mark.parametrize(
     ("offset", "payload", "start"),
     [(180.0, b"180.4", 355), (179.6, b"180", 5)],

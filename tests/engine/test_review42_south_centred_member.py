@@ -7,7 +7,8 @@ true south) with no group offset gets the group's 180 unmarked, and rule 2 sends
 ("0, not 360, where the offset brings a bearing there") wherever the rotor is: at raw 355
 (true 175) it is sent ``M000`` and turns 355 degrees back through true north for a bearing 5
 degrees away, attack 10's turn by the rotator's offset instead of the group's. (So does the
-rotator's own ``R/target`` 180: rule 2 as written; the group's part names no end at all.)"""
+rotator's own ``R/target`` 180: rule 2 as written; the group's part names no end at all.)
+(Fixed by abfe1b13: a bearing the rotator's own offset brings to north names neither end.)"""
 
 from __future__ import annotations
 
@@ -21,14 +22,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 42: a group member without a group offset on a south-centred GS-232 "
-        "(az_offset_deg 180) is sent the group's 180 as raw 0, the far end from raw 355: "
-        "az_either_end is set only for a group offset, and rule 2 takes 0 for the rotator's own"
-    ),
-)
 def test_a_south_centred_members_north_of_scale_turns_a_gs232_the_short_way(rig: Rig) -> None:
     v = rig("gs232b-az", settings={"az_offset_deg": 180}, emulator={"start_az_deg": 355})
     v.run_until(lambda h: h.status.raw_bearing_deg is not None, 10, "a reading")
