@@ -667,8 +667,8 @@ class Pointing:
                     f"a nudge of {named:+.10g} degrees turns to azimuth {shown}, past the end of "
                     f"the {self.model_name}'s travel: a nudge is not taken the other way round",
                 )
-            if to_raw in (0.0, 360.0):
-                end = to_raw
+            if self._sent(to_raw)[0] in (0.0, 360.0):  # (one sent as an end after its
+                end = to_raw  # rounding too: its own end, not the nearer; review 44)
         elif d_az and not self.az_wraps and raw is not None:
             # a move along the travel from where the rotor is (or is going): its raw value is
             # that one plus the step, judged against the limits and sent as it is (``end``),

@@ -8,7 +8,9 @@ nearer where it started. A GS-232B at raw 100 nudged +259.6 (359.6, sent as 360 
 e8e37c52) goes out as ``M000``: the rotor turns 100 degrees back, against the nudge, to the
 other end of its travel, where a nudge of -10 after it is refused as past the end; at raw 260,
 -259.6 (0.4) goes out as 360. A box of tenths, at 100 nudged +259.96, the same. What a user
-notices: the rotor turns the other way from the nudge and ends at the other end."""
+notices: the rotor turns the other way from the nudge and ends at the other end.
+(Fixed: a nudge whose raw value is sent as an end after its rounding keeps it as its own
+end, ``end``, pointing.py rule 6.)"""
 
 from __future__ import annotations
 
@@ -23,11 +25,6 @@ def _at(raw: float) -> RotatorStatus:
     return RotatorStatus("t", MotionState.IDLE, bearing_deg=norm360(raw), raw_bearing_deg=raw)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 44: _north_step takes a nudge that lands a fraction short of an end as a "
-    "bearing named as neither end: +259.6 at 100 goes out as 0, against the nudge",
-)
 @pytest.mark.parametrize(
     ("model", "fraction"),
     [("gs232b", 0.4), ("gs232a", 0.4), ("rotorcard", 0.4), ("prosistel", 0.4)]
