@@ -32,7 +32,10 @@ Rules:
    355 was sent ``M000``, as was the rotator's own target of 180 with that offset); where a
    limit leaves only one end, that one. So does a value the controller is sent as north after
    its rounding (rule 4: 0.4 on a GS-232, 356 on a SatEL; ``_north_step``, not inside a
-   group's arc; review 42: a member's 0.4 from 355 went out as ``M000``).
+   group's arc; review 42: a member's 0.4 from 355 went out as ``M000``). The nearer end is
+   picked again from where the rotor is when the target is sent (``_end_free``: a target that
+   waited, a SatEL that stops before it takes one; review 44), but a group member's, judged
+   once within its arc.
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -540,6 +543,8 @@ class Pointing:
         fixed = target.within_deg is not None and current_raw_deg is not None  # (rule 9)
         fixed = fixed or target.az_end_deg is not None  # (rule 6: a nudge's raw value)
         side_free = None if fixed else self._side_free(target.az_deg)
+        if side_free is None and not fixed and self._end_free(target, raw_az):
+            side_free = target.az_deg  # rule 2: its end picked again when it is sent
         # (rule 9: its side; rule 6: the raw value a nudge turns to is in ``raw_az`` now)
         return replace(
             target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None, az_either_end=False
@@ -570,6 +575,20 @@ class Pointing:
                 raise Refused(
                     RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
                 )
+
+    def _end_free(self, target: Target, raw_az: float | None) -> bool:
+        """Rule 2: ``target`` was sent to an end (``raw_az``) it does not name, the nearer one,
+        so the end is picked again from where the rotor is when it is sent (a bearing the
+        offset or the rounding brings to north; review 44: a south-centred SatEL asked for
+        true 180 mid-slew was judged by its slew's estimate, 199, sent ``360`` and turned 212
+        degrees through its south from 148). Not a group member's ``az_either_end`` (its
+        bearing is judged by its arc and the nearer end, once)."""
+        az = target.az_deg
+        if az is None or raw_az not in (0.0, 360.0) or target.az_either_end:
+            return False
+        if not (self.az_wraps and self.az_ends_at_north):
+            return False
+        return not (az in (0.0, 360.0) and not self.offset_deg)  # (an end named: that end)
 
     def _side_free(self, az_deg: float | None) -> float | None:
         """``az_deg`` if the rotor may take it on either side (rule 2), else None."""

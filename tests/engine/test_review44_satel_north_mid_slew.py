@@ -10,7 +10,8 @@ before it takes a new point (``STOP_AND_WAIT``): its status shows the slew's est
 after the stop and turned 212 degrees clockwise through its south to the end it stood 148
 degrees from; before abfe1b13 it went to 0. What a user notices: the antenna swings the long
 way round for a bearing it was heading towards. (The end is not re-picked from where the rotor
-is when the target is sent, as rule 2 picks a side on a scale that can pass 360.)"""
+is when the target is sent, as rule 2 picks a side on a scale that can pass 360.)
+(Fixed: such a target's end is picked again when it is sent, pointing.py ``_end_free``.)"""
 
 from __future__ import annotations
 
@@ -24,11 +25,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 44: the end of a north the offset names is picked from the SatEL's slew "
-    "estimate at judge time, not from where the rotor stopped when it is sent: p360 from 148",
-)
 def test_a_satel_asked_for_its_north_mid_slew_turns_to_the_nearer_end(rig: Rig) -> None:
     v = rig("satel", settings={"az_offset_deg": 180}, emulator={"start_az_deg": 350})
     v.run_until(lambda h: h.status.raw_bearing_deg is not None, 10, "a reading")
