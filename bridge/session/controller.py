@@ -119,6 +119,14 @@ Rules:
    asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
    (polls half a minute apart would let any two agree). (A composite box's axis that is never
    turned is kept so too: axes.py rule 5.)
+   Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
+   handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
+   (stops.py rule 7; review 40: a turn by hand whose readings the doubt never took, two garbled
+   answers or one flipped one after its first, ran a locked rotor from 150 to 300 unfought).
+   The doubt and the bearing it shows are left as they are (a fix that bent them was taken
+   back for three regressions it made, review 40). So is the controller answering again (a
+   port opened, the end of a silence; a blind controller at its connect): the lock's stop,
+   which the motion rebuilt then forgets, goes again.
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
    first readings back (a port opened, a controller answering again; still or braking, before
    the motion settled) where the rotor was still with no target out when the readings were
@@ -155,7 +163,8 @@ Rules:
    While such a turn would be stopped, a poll left unanswered or answered in part at rest (what
    a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
    polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
-   lock's, an operator's) stays checked as any: the lock's is not let go after four.
+   lock's, an operator's) stays checked as any: the lock's is not let go after four, and goes
+   again at each reading at rest doubted while the lock holds (stops.py rule 7).
 11. A target gets one try more where the controller takes a new bearing at any time
    (``RetargetPolicy.DIRECT``: the same bearing again changes nothing of a turn under way) and
    reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
@@ -734,6 +743,8 @@ class Controller:
         # first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
+        if self.answering:  # (stops.py rule 7: a blind controller answers from its connect)
+            self.stops.lock_sign(now)
         self._silence_reported = False
         self.options.connected(self.answering)
         self._retune()
@@ -901,9 +912,10 @@ class Controller:
             self.motion = mo.stop_checked(m)
             self._released_stop_t = None
 
-    def check_stop(self, now: float, target_going: bool) -> None:
+    def check_stop(self, now: float, target_going: bool, locked: bool = False) -> None:
         """stops.py rule 2: a stop that did not take is sent again (rule 4: a stall's too,
-        once, if the rotor broke free)."""
+        once, if the rotor broke free); rule 7: the lock's (``locked``: the session's lock
+        holds) at a sign the rotor may be turning."""
         link = self.link
         if link is not None and self.stops.broke_free(self.motion, target_going):
             link.write_stop(now)
@@ -924,6 +936,20 @@ class Controller:
             last = passing and error is not None  # stops.py rule 4: a pass's last try
             self.stop(now, ends_pass=last)
             self._passing = passing and not last  # (the same series)
+        cfg = self.cfg
+        lock, said, why = self.stops.lock_check(
+            locked,
+            self.motion,
+            now,
+            target_going,
+            cfg.moving_poll_interval_s,
+            cfg.junk_report_interval_s,
+        )
+        if said is not None:
+            self.notes.append(said)
+        if lock:
+            log.warning("%s: %s", self.name, why)
+            self.stop(now, merge=True)  # (stops.py rule 1: one a brake window, no flood)
 
     # -- what comes in ---------------------------------------------------------------------------
     def feed(self, data: bytes, now: float) -> Fed:
@@ -996,7 +1022,7 @@ class Controller:
             if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
                 self._ask_again(link, now, once=False)
             if not self.answering:  # rule 9: the first back, doubted, is an answer all the same
-                self._answers_again()
+                self._answers_again(now)
                 self._first_unread = True  # (the first taken is still the connection's first)
                 if self.stops.owed:  # stops.py rule 3: the stop it went silent with, at once
                     log.info(
@@ -1052,6 +1078,7 @@ class Controller:
             return Doubt.TAKEN
         self._doubts_in_row += 1
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
+        self.stops.lock_sign(now, _where(reply))  # (stops.py rule 7: the lock's stop again)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._say(
@@ -1120,7 +1147,7 @@ class Controller:
         owed = first = False
         if not self.answering:
             owed, first = self.stops.owed, True
-            self._answers_again()
+            self._answers_again(now)
         elif self._first_unread:  # rule 9: a doubted one made it answering; this is the first
             first = True  # taken, a guess as any first is (stops.py rule 3; a review: it showed
         self._first_unread = False  # a stop lost at the reconnect taken, and it was owed no more)
@@ -1133,6 +1160,8 @@ class Controller:
         if self.motion.state is mo.MOVING and mo.stall_due(self.motion, cfg.motion, now):
             link.poll_now(now)  # (motion.py rule 3: asked before the stall's time, it decided
             # nothing; the answer to a question asked now does, a reply time later, review 36)
+        if self.motion.state is not mo.MOVING:  # (stops.py rule 7: an episode's end)
+            self.stops.lock_calm()
         if self.motion.state is mo.MOVING or mo.at_rest(self.motion):
             self._known_since_loss = True  # (rule 10: what a loss of readings then finds)
         if self._watching() or self._rested is not None:  # rule 10
@@ -1210,9 +1239,10 @@ class Controller:
         self.notes.append(Report(ErrorKind.STOP, message))
         self.stop(now)
 
-    def _answers_again(self) -> None:
+    def _answers_again(self, now: float) -> None:
         """The controller answers (again): its first reading taken, or doubted (rule 9)."""
         self.answering = True
+        self.stops.lock_sign(now)  # (stops.py rule 7: the lock's stop, lost with the readings)
         still = self._still_at_close  # rule 10: a turn from these first readings judged?
         guard = still if still is not None else self._watching()  # (a kept short_of)
         self._connect_guard = guard and self.motion.stop_sent_t is None
@@ -1561,6 +1591,8 @@ class Controller:
         if not self.answering or self.notes or m.stop_sent_t is not None:
             return -math.inf
         if self.stops.counting:  # check_stop has its count of stops to start again
+            return -math.inf
+        if self.stops.lock_signed:  # or the lock's stop to write again (stops.py rule 7)
             return -math.inf
         if self.stops.stall_watched and m.state is mo.MOVING:  # or a stall's stop to watch
             return -math.inf

@@ -1008,7 +1008,8 @@ class RotatorSession:
             self.wind.arrived()  # (wind.py rule 7: the last status saw it at the storm's park)
         self._answered = ctl.link is not None and ctl.answering
         if ctl.link is not None and ctl.answering:
-            ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
+            going = self.targets.pending is not None and not self.fence.held
+            ctl.check_stop(now, going, self.locked)  # (stops.py rule 7: the lock's own check)
             if ctl.notes:
                 self._heed(now)
             self._parts(self._deciding, now)  # rule 17: the parts that decide

@@ -37,7 +37,9 @@ Rules:
    must not leave the rotor turning. The price: a move by hand long after such a stop is stopped
    once too; not after the lock is released (controller.py ``lock_released``: the lock's stop is
    checked while it holds, and its release says the tower work is over; a lock kept across a
-   restart owes its stop on the first connect, session.py rule 11).
+   restart owes its stop on the first connect, session.py rule 11). Readings the doubt does
+   not take (controller.py rule 9) show no turn to this check, and a replug or a silence
+   rebuilds the motion without the lock's stop: rule 7 sends it again then.
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
@@ -104,11 +106,32 @@ Rules:
    leaves the second unwritten: it would stop that move. The second is all the check such a
    stop gets: none is owed to a port that fails later (rule 3's ``unseen_t``: no reading would
    ever clear it, and a turn by hand an hour after a released lock was stopped).
+7. The lock fights a turn by itself, whatever the doubt (controller.py rule 9) believes: while
+   it holds, any sign the rotor may be turning brings its stop again (``lock_sign``, checked at
+   the step's stop check, ``lock_check``): a reading at rest doubted (further from where the
+   rotor stands than ``noise_deg``: a hand at the panel, or a flipped bit, to which a stop
+   costs nothing), and the controller answering again (a port opened, a controller back from
+   a silence: the motion is rebuilt without the lock's stop, motion.py ``link_down``, and
+   rule 2 would check none). Rule 2's check watches only readings taken; a turn by hand
+   whose readings the doubt never takes (two garbled answers after its first reading, five in
+   six, one flipped bit in the answer asked at once: review 40, attack 9) ran a locked rotor
+   from 150 to 300 unfought, and after a replug the lock's stop was checked no more. Such a
+   stop merges as any (rule 1: one a brake window, a second at least, after the last, while no
+   reading showed the rotor turning; never within ``moving_poll_interval_s`` of the last
+   stop: at most one a poll, no flood on a noisy line) and is checked as any (rule 2). A
+   doubted reading's is said on R/error once an episode (``stop``: until a reading taken shows
+   the rotor not turning, or the lock is released), and ``junk_report_interval_s`` apart at
+   least (a line that flips every other reading); the controller answering again's is only
+   logged. A stop frame to a still rotor is harmless on every controller the bridge drives
+   (the lock ON sends one whatever the rotor does, rule 2): a SatEL's ``s`` also switches its
+   automatic motion off, which its next report has switched on again (controller.py rule 4);
+   a Rotor-EZ answers an idle ``;`` with its banner, which the merge keeps rare.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 
 from bridge.core.model import ErrorKind, MotionState
@@ -163,6 +186,9 @@ class Stops:
         self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while watched
         self.blind_at: float | None = None  # rule 6: when a blind controller's second stop goes
         self._blind_second = False  # rule 6: the stop asked for now is that second one
+        self._lock_sign: tuple[float, str | None] | None = None  # rule 7: when, and the words
+        self._lock_told = False  # rule 7: this episode's was said on R/error
+        self._lock_told_t = -math.inf  # rule 7: when one was said last
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -280,6 +306,57 @@ class Stops:
         recent = bool(written) and now - max(written) < STOP_UNSURE_S
         if failed and (stop_due or recent or self.unseen_t is not None):
             self.owed = True
+
+    def lock_sign(self, now: float, reading: str | None = None) -> None:
+        """Rule 7: a sign at ``now`` that the rotor may be turning: a reading at rest doubted
+        (``reading``: its words), or the controller answering again (None)."""
+        sign = self._lock_sign
+        if sign is None or sign[1] is None:  # (a doubted reading's words win: they are said)
+            self._lock_sign = (now, reading)
+
+    @property
+    def lock_signed(self) -> bool:
+        """Rule 7: a sign waits for ``lock_check``."""
+        return self._lock_sign is not None
+
+    def lock_calm(self) -> None:
+        """Rule 7: a reading taken shows the rotor not turning: the episode is over."""
+        self._lock_told = False
+
+    def lock_check(
+        self,
+        locked: bool,
+        m: mo.Motion,
+        now: float,
+        target_going: bool,
+        gap_s: float,
+        tell_every_s: float,
+    ) -> tuple[bool, Report | None, str]:
+        """Rule 7: whether the lock's stop goes again now (``locked``: the session's lock holds;
+        ``gap_s``: the moving poll interval), the error to say with it (``tell_every_s`` apart
+        at least), and its words for the log. A stop written since the sign, or within
+        ``gap_s`` before now, is the one."""
+        sign, self._lock_sign = self._lock_sign, None
+        if not locked:
+            self._lock_told = False
+            return False, None, ""
+        if sign is None or target_going:  # (a target stops the rotor by itself; never locked)
+            return False, None, ""
+        at, reading = sign
+        last = m.stop_sent_t
+        if last is not None and (last >= at or now - last < gap_s):
+            return False, None, ""
+        if reading is None:
+            return True, None, "the controller answers again while the lock holds: its stop again"
+        why = (
+            f"a reading at rest of {reading} disagrees with where the locked rotor stands (a "
+            "hand at the panel, or line noise): the lock's stop sent again, and at each such "
+            "reading while the lock holds"
+        )
+        if self._lock_told or now - self._lock_told_t < tell_every_s:
+            return True, None, why
+        self._lock_told, self._lock_told_t = True, now
+        return True, Report(ErrorKind.STOP, why), why
 
     @property
     def counting(self) -> bool:

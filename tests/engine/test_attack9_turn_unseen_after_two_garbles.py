@@ -7,7 +7,9 @@ loses its window (``_given_up``: ``at_once`` False), and every reading after it,
 rate, must agree with the one before within ``doubt_deg`` alone: a rotor turning at 6 degrees
 a second never does. Two noisy replies in a row, and the whole turn goes unseen: the bearing
 shows the rotor idle where it stood until it rests again, a lock ON does not fight the turn,
-and no limit is watched on the way."""
+and no limit is watched on the way. The lock now fights such a turn by itself, whatever the
+doubt believes: a reading at rest doubted under the lock sends its stop again (stops.py rule
+7)."""
 
 from __future__ import annotations
 
@@ -49,13 +51,6 @@ def garble_after_the_first_move(v: VirtualRotator, rest: float, count: int = 2) 
     return when
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 9: two garbled replies in a row after the first reading of a turn by hand "
-    "(the ask at once, and its re-poll) end the doubt's window (controller.py _given_up: "
-    "at_once False); the readings of the turn at the idle rate never agree within doubt_deg, "
-    "and a locked rotor turned from 150 to 300 is shown idle at 150 and never stopped",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_two_garbled_replies(
     rig: Rig, model: str
@@ -106,12 +101,6 @@ def garble_all_but_every(v: VirtualRotator, rest: float, every: int) -> list[flo
     return when
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 9: five replies in six garbled after the first reading of a turn by hand; "
-    "the doubt never settles and a locked rotor is not fought (the fix that bounded it, "
-    "d6ca6572, was taken back after review 40)",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled(
     rig: Rig, model: str

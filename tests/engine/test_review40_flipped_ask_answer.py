@@ -7,7 +7,8 @@ second, polled every second, never does. One flipped bit, and the whole turn goe
 bearing shows the rotor idle where it stood until it rests again, and the lock never fights it.
 (Attack 9's fix, an answer given up is no disagreement, covers two garbled answers; a flipped
 one is a disagreement still.) An RT-21 is left out: its replies have no head the flip can find
-(``flip_next_hundreds``); a SatEL's turn is seen all the same."""
+(``flip_next_hundreds``); a SatEL's turn is seen all the same. The lock now fights such a turn
+by itself: a reading at rest doubted under the lock sends its stop again (stops.py rule 7)."""
 
 from __future__ import annotations
 
@@ -37,13 +38,6 @@ def flip_the_answer_to_the_ask(v: VirtualRotator, since: int) -> list[float]:
     return flip_next_hundreds(v)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 40: one flipped bit in the answer to the ask at once after the first "
-    "reading of a turn by hand makes two disagreements in a row (controller.py _doubts: "
-    "ask False, Doubt.WAIT): the turn's readings at the idle rate never agree within "
-    "doubt_deg, and a locked rotor is shown idle at 150 while it runs to 300, never fought",
-)
 @pytest.mark.parametrize(
     "model", ["rotorez", "rotorcard", "gs232b", "gs232a", "easycomm2", "prosistel", "rc2800"]
 )

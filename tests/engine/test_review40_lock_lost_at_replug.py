@@ -5,7 +5,8 @@ answers again after a silence, the lock still holds, but nothing checks its stop
 motion is rebuilt without it (motion.py ``link_down``: no ``stop_sent_t``), no stop is owed for
 it (stops.py ``port_closed``: it was seen taken, long ago), and none is written again. A hand
 at the panel then, tower work under way, turns the rotor from 150 to 300, the lock on all the
-while and never fighting it."""
+while and never fighting it. Now the controller answering again under the lock has its stop
+written again, and checked as ever (stops.py rule 7)."""
 
 from __future__ import annotations
 
@@ -33,12 +34,6 @@ def lose_the_readings(v: VirtualRotator, how: str) -> None:
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 40: motion.link_down rebuilds the motion without the lock's stop_sent_t and "
-    "nothing writes or checks the lock's stop again: after a replug or a silence a locked "
-    "rotor turned by hand runs from 150 to 300, never fought",
-)
 @pytest.mark.parametrize("how", ["replug", "silence"])
 @pytest.mark.parametrize("model", ["rotorez", "gs232b", "easycomm2", "rc2800"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_the_readings_were_lost(
