@@ -34,8 +34,8 @@ Rules:
    its rounding (rule 4: 0.4 on a GS-232, 356 on a SatEL; ``_north_step``, not inside a
    group's arc; review 42: a member's 0.4 from 355 went out as ``M000``). The nearer end is
    picked again from where the rotor is when the target is sent (``_end_free``: a target that
-   waited, a SatEL that stops before it takes one; review 44), but a group member's, judged
-   once within its arc.
+   waited, a SatEL that stops before it takes one; review 44; a group member's too, review
+   45), but where a group's arc that leaves part of the circle out decided it: judged once.
 3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
@@ -540,14 +540,17 @@ class Pointing:
             if not self._sent_within(el, lo, hi, el=True):
                 why = self._rounding(f"elevation {el:g}", el, lo, hi, el=True)
                 raise Refused(RefusalCode.LIMITS, why)
-        fixed = target.within_deg is not None and current_raw_deg is not None  # (rule 9)
-        fixed = fixed or target.az_end_deg is not None  # (rule 6: a nudge's raw value)
+        arc = target.within_deg
+        fixed = arc is not None and current_raw_deg is not None and arc[1] - arc[0] < 360.0
+        fixed = fixed or target.az_end_deg is not None  # (rule 9: an arc; rule 6: a nudge's)
         side_free = None if fixed else self._side_free(target.az_deg)
+        either = False
         if side_free is None and not fixed and self._end_free(target, raw_az):
             side_free = target.az_deg  # rule 2: its end picked again when it is sent
+            either = target.az_either_end  # (as named: neither end)
         # (rule 9: its side; rule 6: the raw value a nudge turns to is in ``raw_az`` now)
         return replace(
-            target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None, az_either_end=False
+            target, az_deg=raw_az, true_az_deg=side_free, az_end_deg=None, az_either_end=either
         )
 
     def check_raw(self, target: Target) -> None:
@@ -581,13 +584,16 @@ class Pointing:
         so the end is picked again from where the rotor is when it is sent (a bearing the
         offset or the rounding brings to north; review 44: a south-centred SatEL asked for
         true 180 mid-slew was judged by its slew's estimate, 199, sent ``360`` and turned 212
-        degrees through its south from 148). Not a group member's ``az_either_end`` (its
-        bearing is judged by its arc and the nearer end, once)."""
+        degrees through its south from 148); a group member's ``az_either_end`` too, where no
+        arc that leaves part of the circle out decides it (review 45: the same swing for a
+        stack's member with no limits of its own), its flag kept for ``resolve``."""
         az = target.az_deg
-        if az is None or raw_az not in (0.0, 360.0) or target.az_either_end:
+        if az is None or raw_az not in (0.0, 360.0):
             return False
         if not (self.az_wraps and self.az_ends_at_north):
             return False
+        if target.az_either_end:
+            return True
         return not (az in (0.0, 360.0) and not self.offset_deg)  # (an end named: that end)
 
     def _side_free(self, az_deg: float | None) -> float | None:

@@ -457,7 +457,9 @@ def test_a_north_that_names_neither_end_takes_the_end_nearer_the_rotor(model: st
     kept = replace(north, within_deg=(0.0, 200.0))
     assert aim.judge(kept, 190.0).az_deg == 0.0  # 360 turns through 200..360
     assert aim.judge(replace(north, within_deg=(0.0, 360.0)), 355.0).az_deg == 360.0
-    assert not aim.judge(north, 355.0).az_either_end
+    judged = aim.judge(north, 355.0)  # kept, to be picked again when sent (review 45)
+    assert judged.az_either_end and judged.true_az_deg == 0.0
+    assert not aim.judge(kept, 190.0).az_either_end  # (an arc decides it: judged once)
 
 
 def test_a_satel_step_at_north_keeps_a_groups_arc_and_narrowed_limits() -> None:

@@ -245,7 +245,7 @@ def resolve(
     9; None: as it reads)."""
     az = target.az_deg
     if target.true_az_deg is not None and m.position_deg is not None:
-        az = aim.raw_for(target.true_az_deg, m.position_deg)
+        az = aim.raw_for(target.true_az_deg, m.position_deg, either_end=target.az_either_end)
     has_elevation = aim.has_elevation
     if az is None:
         az = m.target_deg if m.target_deg is not None and not target.park else None  # rule 9

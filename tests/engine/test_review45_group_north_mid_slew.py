@@ -12,7 +12,8 @@ while the estimate still says about 199 and the rotor is at about 148: it is sen
 after the stop and turns some 212 degrees through its south to the far end, where the same
 bearing sent to the rotator itself (review 44's fix) goes to 0, 148 degrees back. What a user
 notices: one antenna of the stack swings the long way round while the other turns the short
-way."""
+way.
+(Fixed: such a member's end is picked again when it is sent, pointing.py ``_end_free``.)"""
 
 from __future__ import annotations
 
@@ -27,11 +28,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 45: a group member's north (az_either_end) is not re-picked when sent where "
-    "no arc decides its end: a SatEL judged mid-slew by its estimate turns 212 degrees",
-)
 @pytest.mark.parametrize("limits", [None, (0.0, 360.0)], ids=["no-limits", "limits-0-360"])
 def test_a_satel_members_north_mid_slew_turns_to_the_nearer_end(
     rig: Rig, limits: tuple[float, float] | None
