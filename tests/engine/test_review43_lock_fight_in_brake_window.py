@@ -1,0 +1,45 @@
+"""Review 43: the lock's own check (stops.py rule 7) hands its stop to the merge (rule 1),
+which keeps a brake window (five seconds on a Rotor-EZ) after the last stop while no reading
+taken showed the rotor turning. Readings the doubt does not take never show it, and they are
+all rule 7 has. So a turn by hand at the panel of a locked Rotor-EZ whose first readings come
+garbled (attack 9's two noise bytes) is fought at once when it starts five seconds or more
+after the lock ON (158 from 150), but when it starts a second after it, the stop waits out the
+window: 176 (180 when it starts at once; 190 with five replies in six garbled). The lock's
+stop is worth more than the banners the window spares."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.core.model import MotionState
+from tests.engine.test_attack9_turn_unseen_after_two_garbles import garble_after_the_first_move
+from tests.engine.test_session_doubt import at_rest
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 43: a turn by hand a second after the lock ON, its readings doubted, is fought "
+        "only once the lock stop's brake window (rule 1's merge) has passed: 26 degrees, not 8"
+    ),
+)
+def test_a_turn_by_hand_right_after_the_lock_on_is_fought_at_once(rig: Rig) -> None:
+    v = at_rest(rig, "rotorez")
+    rest = v.status.bearing_deg
+    assert rest is not None
+    v.lock(True)
+    v.run_for(1.0)  # (inside the Rotor-EZ's brake window after the lock's stop)
+    t = v.now
+    garbled = garble_after_the_first_move(v, rest)
+    v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
+    v.run_for(40)
+    assert len(garbled) == 2
+    assert v.status.locked
+    assert MotionState.MOVING in {s.state for s in v.published(since=t)}
+    # as the same turn begun five seconds or more after the lock ON: fought at 158
+    assert v.truth().az_deg < rest + 20
