@@ -444,6 +444,18 @@ def _apart(
     return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
 
 
+def _turned_axis(
+    reply: PositionReply, az_deg: float, el_deg: float | None, cfg: mo.MotionConfig, wraps: bool
+) -> bool:
+    """Rule 9, stops.py rule 7: whether ``reply`` is further than ``noise_deg`` from where the
+    rotor stands on an axis it turns (a composite's elevation box never turns its azimuth:
+    protocols/axes.py rules 2 and 5)."""
+    if cfg.spec.turns_azimuth and mo.angle_error(reply.az_deg, az_deg, wraps) > cfg.noise_deg:
+        return True
+    el = reply.el_deg
+    return el is not None and el_deg is not None and abs(el - el_deg) > cfg.noise_deg
+
+
 def _to_turn(
     m: mo.Motion, cfg: WorkerConfig, az: float, el: float | None
 ) -> tuple[float | None, float | None]:
@@ -944,6 +956,7 @@ class Controller:
             target_going,
             cfg.moving_poll_interval_s,
             cfg.junk_report_interval_s,
+            lambda: self.stops.merges(self.motion, cfg.motion, now),
         )
         if said is not None:
             self.notes.append(said)
@@ -1078,7 +1091,9 @@ class Controller:
             return Doubt.TAKEN
         self._doubts_in_row += 1
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
-        self.stops.lock_sign(now, _where(reply))  # (stops.py rule 7: the lock's stop again)
+        if _turned_axis(reply, stands, el_stands, cfg, wraps):  # (stops.py rule 7: the lock's
+            self.stops.lock_sign(now, _where(reply))  # stop again; not for an axis the box
+            # never turns, whose jitter is no turn: review 43, a composite's elevation box)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._say(

@@ -121,8 +121,12 @@ Rules:
    stop: at most one a poll, no flood on a noisy line) and is checked as any (rule 2). A
    doubted reading's is said on R/error once an episode (``stop``: until a reading taken shows
    the rotor not turning, or the lock is released), and ``junk_report_interval_s`` apart at
-   least (a line that flips every other reading); the controller answering again's is only
-   logged. A stop frame to a still rotor is harmless on every controller the bridge drives
+   least (a line that flips every other reading), and only with a stop written (one a merge
+   takes in is none: review 43); the controller answering again's is only logged. A reading
+   away only on an axis the box never turns (a composite's elevation box's azimuth, axes.py
+   rule 5) is no sign (review 43: a floating pot there had the lock's stop written a second).
+   Known left (review 43): right after a lock ON, its stop's brake window (rule 1) holds the
+   fight back for up to a brake window. A stop frame to a still rotor is harmless on every controller the bridge drives
    (the lock ON sends one whatever the rotor does, rule 2): a SatEL's ``s`` also switches its
    automatic motion off, which its next report has switched on again (controller.py rule 4);
    a Rotor-EZ answers an idle ``;`` with its banner, which the merge keeps rare.
@@ -132,6 +136,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from bridge.core.model import ErrorKind, MotionState
@@ -331,11 +336,14 @@ class Stops:
         target_going: bool,
         gap_s: float,
         tell_every_s: float,
+        merges: Callable[[], bool] = lambda: False,
     ) -> tuple[bool, Report | None, str]:
         """Rule 7: whether the lock's stop goes again now (``locked``: the session's lock holds;
         ``gap_s``: the moving poll interval), the error to say with it (``tell_every_s`` apart
         at least), and its words for the log. A stop written since the sign, or within
-        ``gap_s`` before now, is the one."""
+        ``gap_s`` before now, is the one; so is one a stop now would merge into (``merges``,
+        rule 1: nothing goes, nothing is said; review 43: 'sent again' was said 3 s before a
+        frame went)."""
         sign, self._lock_sign = self._lock_sign, None
         if not locked:
             self._lock_told = False
@@ -345,6 +353,8 @@ class Stops:
         at, reading = sign
         last = m.stop_sent_t
         if last is not None and (last >= at or now - last < gap_s):
+            return False, None, ""
+        if merges():  # (asked last: rule 1's look notes a stop it merges into as owed)
             return False, None, ""
         if reading is None:
             return True, None, "the controller answers again while the lock holds: its stop again"

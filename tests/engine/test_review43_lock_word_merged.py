@@ -4,13 +4,12 @@ from the last stop; the merge keeps a whole brake window (five seconds on a Roto
 by hand that a locked Rotor-EZ's readings show a second after the lock ON, the replies after
 its first garbled (attack 9), gets the word on R/error at once, while no frame goes: the
 stop it names merged into the lock ON's, and the next one is written three seconds later.
-The user reads that the bridge fought what it did not."""
+The user reads that the bridge fought what it did not.
+(Fixed: no stop and no word where the stop would merge, stops.py ``lock_check``'s ``merges``.)"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-
-import pytest
 
 from tests.engine.test_attack9_turn_unseen_after_two_garbles import garble_after_the_first_move
 from tests.engine.test_session_doubt import at_rest
@@ -20,13 +19,6 @@ Rig = Callable[..., VirtualRotator]
 LOCKS = "the lock's stop sent again"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 43: rule 7's word is said when its stop merges into the lock ON's brake "
-        "window: R/error says the stop was sent again, and none was for seconds"
-    ),
-)
 def test_the_locks_word_is_said_only_with_a_stop_written(rig: Rig) -> None:
     v = at_rest(rig, "rotorez")
     rest = v.status.bearing_deg

@@ -8,13 +8,12 @@ holds, its polls half as many again, and R/error says every junk interval that a
 "disagrees with where the locked rotor stands (a hand at the panel, or line noise)": nothing
 turns, and no hand can turn an axis the rotator does not have. Before rule 7 the lock wrote
 no stop there. The stop belongs to a sign the rotor may be turning; a jitter of the axis the
-box never turns is none."""
+box never turns is none.
+(Fixed: only a reading away on an axis the box turns is a sign, controller.py ``_turned_axis``.)"""
 
 from __future__ import annotations
 
 import itertools
-
-import pytest
 
 from bridge.protocols.axes import Axis
 from tests.engine.test_composite import online
@@ -23,14 +22,6 @@ from tests.engine.virtual_composite import VirtualComposite
 LOCKS = "the lock's stop sent again"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 43: the lock's own check (stops.py rule 7) fights the jitter of a composite "
-        "box's unused axis, a stop a second and a 'hand at the panel' error, for as long as "
-        "the lock holds"
-    ),
-)
 def test_a_locked_composite_writes_no_stop_for_its_elevation_boxs_unused_azimuth() -> None:
     gs232b = {"start_az_deg": 100.0, "start_el_deg": 10.0}
     with VirtualComposite("rt21", "gs232b", emulators={Axis.ELEVATION: gs232b}) as v:
