@@ -24,13 +24,16 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-def garble_after_the_first_move(v: VirtualRotator, rest: float, count: int = 2) -> list[float]:
+def garble_after_the_first_move(
+    v: VirtualRotator, rest: float, count: int = 2, every: int = 0
+) -> list[float]:
     """One noise byte at the head of each of the ``count`` Rotor-EZ replies (``;ddd``) that
-    follow the first one more than 3 degrees from ``rest``; returns the list each instant goes
-    into."""
+    follow the first one more than 3 degrees from ``rest`` (with ``every``: of all of them, for
+    good, all but every ``every``-th); returns the list each instant goes into."""
     when: list[float] = []
     digits = bytearray()
     armed = [False]
+    seen = [0]
 
     def garble(data: bytes, now: float) -> bytes:
         out = bytearray()
@@ -38,9 +41,11 @@ def garble_after_the_first_move(v: VirtualRotator, rest: float, count: int = 2) 
             out.append(b)
             if b == ord(";"):
                 digits.clear()
-                if armed[0] and len(when) < count:
-                    when.append(now)
-                    out += b"#"  # (a byte no board sends: the reply is not trusted)
+                if armed[0]:
+                    seen[0] += 1
+                    if (seen[0] % every != 0) if every else len(when) < count:
+                        when.append(now)
+                        out += b"#"  # (a byte no board sends: the reply is not trusted)
             elif chr(b).isdigit() and len(digits) < 3:
                 digits.append(b)
                 if len(digits) == 3 and abs(int(digits) - rest) > 3:
@@ -71,36 +76,6 @@ def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_two_garbled_replies(
     assert MotionState.MOVING in {s.state for s in v.published(since=t)}
 
 
-def garble_all_but_every(v: VirtualRotator, rest: float, every: int) -> list[float]:
-    """As ``garble_after_the_first_move``, but for good: of the replies that follow the first
-    one more than 3 degrees from ``rest``, all but every ``every``-th come garbled; returns the
-    garbled ones' instants."""
-    when: list[float] = []
-    digits = bytearray()
-    armed = [False]
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        out = bytearray()
-        for b in data:
-            out.append(b)
-            if b == ord(";"):
-                digits.clear()
-                if armed[0]:
-                    count[0] += 1
-                    if count[0] % every != 0:
-                        when.append(now)
-                        out += b"#"
-            elif chr(b).isdigit() and len(digits) < 3:
-                digits.append(b)
-                if len(digits) == 3 and abs(int(digits) - rest) > 3:
-                    armed[0] = True
-        return bytes(out)
-
-    v.to_host = garble
-    return when
-
-
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled(
     rig: Rig, model: str
@@ -114,7 +89,7 @@ def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled
     v.lock(True)
     v.run_for(5)
     t = v.now
-    garbled = garble_all_but_every(v, rest, 6)
+    garbled = garble_after_the_first_move(v, rest, every=6)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
     v.run_for(40)
     assert len(garbled) >= 6
