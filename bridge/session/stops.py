@@ -126,10 +126,11 @@ Rules:
    away only on an axis the box never turns (a composite's elevation box's azimuth, axes.py
    rule 5) is no sign (review 43: a floating pot there had the lock's stop written a second).
    Known left (review 43): right after a lock ON, its stop's brake window (rule 1) holds the
-   fight back for up to a brake window. A stop frame to a still rotor is harmless on every controller the bridge drives
-   (the lock ON sends one whatever the rotor does, rule 2): a SatEL's ``s`` also switches its
-   automatic motion off, which its next report has switched on again (controller.py rule 4);
-   a Rotor-EZ answers an idle ``;`` with its banner, which the merge keeps rare.
+   fight back for up to a brake window. A stop frame to a still rotor is harmless on every
+   controller the bridge drives (the lock ON sends one whatever the rotor does, rule 2): a
+   SatEL's ``s`` also switches its automatic motion off, which its next report has switched on
+   again (controller.py rule 4); a Rotor-EZ answers an idle ``;`` with its banner, which the
+   merge keeps rare.
 """
 
 from __future__ import annotations
