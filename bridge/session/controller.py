@@ -435,25 +435,19 @@ class Fed(Enum):
 
 
 def _apart(
-    reply: PositionReply, az_deg: float, el_deg: float | None, limit: float, wraps: bool
+    reply: PositionReply,
+    az_deg: float,
+    el_deg: float | None,
+    limit: float,
+    wraps: bool,
+    azimuth: bool = True,
 ) -> bool:
     """Rule 9: whether ``reply`` is more than ``limit`` from ``az_deg``/``el_deg`` on either
-    axis."""
-    if mo.angle_error(reply.az_deg, az_deg, wraps) > limit:
+    axis (``azimuth`` False: the elevation alone, a composite's elevation box's, which never
+    turns its azimuth: protocols/axes.py rules 2 and 5)."""
+    if azimuth and mo.angle_error(reply.az_deg, az_deg, wraps) > limit:
         return True
     return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
-
-
-def _turned_axis(
-    reply: PositionReply, az_deg: float, el_deg: float | None, cfg: mo.MotionConfig, wraps: bool
-) -> bool:
-    """Rule 9, stops.py rule 7: whether ``reply`` is further than ``noise_deg`` from where the
-    rotor stands on an axis it turns (a composite's elevation box never turns its azimuth:
-    protocols/axes.py rules 2 and 5)."""
-    if cfg.spec.turns_azimuth and mo.angle_error(reply.az_deg, az_deg, wraps) > cfg.noise_deg:
-        return True
-    el = reply.el_deg
-    return el is not None and el_deg is not None and abs(el - el_deg) > cfg.noise_deg
 
 
 def _to_turn(
@@ -1091,9 +1085,9 @@ class Controller:
             return Doubt.TAKEN
         self._doubts_in_row += 1
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
-        if _turned_axis(reply, stands, el_stands, cfg, wraps):  # (stops.py rule 7: the lock's
-            self.stops.lock_sign(now, _where(reply))  # stop again; not for an axis the box
-            # never turns, whose jitter is no turn: review 43, a composite's elevation box)
+        turns_az = cfg.spec.turns_azimuth  # (stops.py rule 7: the lock's stop again; not for
+        if _apart(reply, stands, el_stands, cfg.noise_deg, wraps, turns_az):  # an axis the box
+            self.stops.lock_sign(now, _where(reply))  # never turns: review 43)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._say(
