@@ -18,7 +18,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
-from tests.engine.test_session_doubt import at_rest
+from tests.engine.test_session_doubt import at_rest, locked_at_rest
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -60,11 +60,7 @@ def garble_after_the_first_move(
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_two_garbled_replies(
     rig: Rig, model: str
 ) -> None:
-    v = at_rest(rig, model)
-    rest = v.status.bearing_deg
-    assert rest is not None
-    v.lock(True)
-    v.run_for(5)
+    v, rest = locked_at_rest(rig, model)
     t = v.now
     garbled = garble_after_the_first_move(v, rest)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
@@ -83,11 +79,7 @@ def test_a_turn_by_hand_on_a_locked_rotor_is_fought_when_every_ask_comes_garbled
     """Five replies in six come garbled, so each reading between them is further on than
     ``doubt_deg`` from the one before (the rotor turns) and is asked again, and that ask comes
     garbled, its re-poll and the polls after too: the lock must still fight the turn."""
-    v = at_rest(rig, model)
-    rest = v.status.bearing_deg
-    assert rest is not None
-    v.lock(True)
-    v.run_for(5)
+    v, rest = locked_at_rest(rig, model)
     t = v.now
     garbled = garble_after_the_first_move(v, rest, every=6)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked

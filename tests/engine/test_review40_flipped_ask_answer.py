@@ -17,7 +17,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
-from tests.engine.test_session_doubt import at_rest, flip_next_hundreds
+from tests.engine.test_session_doubt import flip_next_hundreds, locked_at_rest
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -44,11 +44,7 @@ def flip_the_answer_to_the_ask(v: VirtualRotator, since: int) -> list[float]:
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_a_flipped_answer(
     rig: Rig, model: str
 ) -> None:
-    v = at_rest(rig, model)
-    rest = v.status.bearing_deg
-    assert rest is not None
-    v.lock(True)
-    v.run_for(5)
+    v, rest = locked_at_rest(rig, model)
     t = v.now
     since = len(v.writes)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked

@@ -15,7 +15,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
-from tests.engine.test_session_doubt import at_rest
+from tests.engine.test_session_doubt import locked_at_rest
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -39,11 +39,7 @@ def lose_the_readings(v: VirtualRotator, how: str) -> None:
 def test_a_turn_by_hand_on_a_locked_rotor_is_fought_after_the_readings_were_lost(
     rig: Rig, model: str, how: str
 ) -> None:
-    v = at_rest(rig, model)
-    rest = v.status.bearing_deg
-    assert rest is not None
-    v.lock(True)
-    v.run_for(5)
+    v, rest = locked_at_rest(rig, model)
     lose_the_readings(v, how)
     v.run_for(20)
     t = v.now

@@ -37,6 +37,17 @@ def at_rest(rig: Rig, model: str) -> VirtualRotator:
     return v
 
 
+def locked_at_rest(rig: Rig, model: str) -> tuple[VirtualRotator, float]:
+    """``at_rest``, then locked and 5 s on (the lock's stop written and checked); returns the
+    rotator and the bearing it rests at."""
+    v = at_rest(rig, model)
+    rest = v.status.bearing_deg
+    assert rest is not None
+    v.lock(True)
+    v.run_for(5)
+    return v, rest
+
+
 def flip_next_hundreds(v: VirtualRotator) -> list[float]:
     """One bit flipped on the line in the next reply: its bearing's hundreds digit, 1 -> 3
     (0x31 -> 0x33): 150 reads 350. Returns the list the instant goes into."""
