@@ -773,15 +773,29 @@ def test_a_one_byte_connection_flood_neither_kills_the_accept_loop_nor_keeps_a_s
         for _ in flooders:
             assert started.acquire(timeout=slow(60))
         for _ in range(3):
-            with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as op:
-                op.sendall(b"S\rC\r")
-                assert _read(op, 8) == b"AZ=120\r\n"
+            assert _stop_answered(server.port) == b"AZ=120\r\n"
         assert server._accept_thread is not None and server._accept_thread.is_alive()
     finally:
         done.set()
         for thread in flooders:
             thread.join()
-    assert [type(c) for c in tower.submitted] == [Stop, Stop, Stop]
+    submitted = [type(c) for c in tower.submitted]
+    assert len(submitted) >= 3 and set(submitted) == {Stop}, submitted
+
+
+def _stop_answered(port: int) -> bytes:
+    """The operator's ``S`` and ``C`` on a new connection, and the answer; a connection reset
+    before its bytes came (rule 5: the oldest waiting without a stop goes when one more comes,
+    and on a busy machine a flood's connections come faster than a program's first bytes) is
+    opened again, as a program does, ten times at most."""
+    for _ in range(10):
+        with contextlib.suppress(ConnectionResetError, BrokenPipeError):
+            with socket.create_connection(("127.0.0.1", port), timeout=slow(10)) as operator:
+                operator.sendall(b"S\rC\r")
+                answer = _read(operator, 8)
+                if answer:
+                    return answer
+    raise AssertionError("the operator's connection was reset ten times")
 
 
 def test_an_established_program_is_dropped_after_a_connection_that_never_sent_a_command(
