@@ -956,7 +956,7 @@ class Controller:
             self.notes.append(said)
         if lock:
             log.warning("%s: %s", self.name, why)
-            self.stop(now, merge=True)  # (stops.py rule 1: one a brake window, no flood)
+            self.stop(now)  # (stops.py rule 7: lock_check has merged it where rule 1 would)
 
     # -- what comes in ---------------------------------------------------------------------------
     def feed(self, data: bytes, now: float) -> Fed:

@@ -116,21 +116,22 @@ Rules:
    whose readings the doubt never takes (two garbled answers after its first reading, five in
    six, one flipped bit in the answer asked at once: review 40, attack 9) ran a locked rotor
    from 150 to 300 unfought, and after a replug the lock's stop was checked no more. Such a
-   stop merges as any (rule 1: one a brake window, a second at least, after the last, while no
-   reading showed the rotor turning; never within ``moving_poll_interval_s`` of the last
-   stop: at most one a poll, no flood on a noisy line) and is checked as any (rule 2). A
+   stop is never written within ``moving_poll_interval_s`` of the last stop (at most one a
+   poll, no flood on a noisy line); the first after a stop of another kind (the lock ON's)
+   goes through that stop's brake window, and the next merge as any (rule 1: one a brake
+   window, a second at least, after the last, while no reading showed the rotor turning;
+   review 43: merged from the first, a turn by hand a second after the lock ON, its readings
+   garbled, ran 26 degrees before it was fought, 8 now); each is checked as any (rule 2). A
    doubted reading's is said on R/error once an episode (``stop``: until a reading taken shows
    the rotor not turning, or the lock is released), and ``junk_report_interval_s`` apart at
    least (a line that flips every other reading), and only with a stop written (one a merge
    takes in is none: review 43); the controller answering again's is only logged. A reading
    away only on an axis the box never turns (a composite's elevation box's azimuth, axes.py
    rule 5) is no sign (review 43: a floating pot there had the lock's stop written a second).
-   Known left (review 43): right after a lock ON, its stop's brake window (rule 1) holds the
-   fight back for up to a brake window. A stop frame to a still rotor is harmless on every
-   controller the bridge drives (the lock ON sends one whatever the rotor does, rule 2): a
-   SatEL's ``s`` also switches its automatic motion off, which its next report has switched on
-   again (controller.py rule 4); a Rotor-EZ answers an idle ``;`` with its banner, which the
-   merge keeps rare.
+   A stop frame to a still rotor is harmless on every controller the bridge drives (the lock
+   ON sends one whatever the rotor does, rule 2): a SatEL's ``s`` also switches its automatic
+   motion off, which its next report has switched on again (controller.py rule 4); a Rotor-EZ
+   answers an idle ``;`` with its banner, which the merge keeps rare.
 """
 
 from __future__ import annotations
@@ -195,6 +196,8 @@ class Stops:
         self._lock_sign: tuple[float, str | None] | None = None  # rule 7: when, and the words
         self._lock_told = False  # rule 7: this episode's was said on R/error
         self._lock_told_t = -math.inf  # rule 7: when one was said last
+        self._fighting = False  # rule 7: the stop asked for now is the lock's fight
+        self._fought_t: float | None = None  # rule 7: when the last stop, the lock's fight, went
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -238,6 +241,8 @@ class Stops:
         self.unseen_t, self._after_target = at, 0  # rule 3
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
+        self._fought_t = at if self._fighting else None  # rule 7
+        self._fighting = False
         self._stall_stop_t = None  # rule 4: rule 2 checks this one
 
     def blind_sent(self, at: float) -> None:
@@ -344,7 +349,9 @@ class Stops:
         at least), and its words for the log. A stop written since the sign, or within
         ``gap_s`` before now, is the one; so is one a stop now would merge into (``merges``,
         rule 1: nothing goes, nothing is said; review 43: 'sent again' was said 3 s before a
-        frame went)."""
+        frame went), unless the last stop was not the fight's own: the first goes through that
+        stop's brake window (review 43: a turn by hand a second after the lock ON ran 26
+        degrees before it was fought). The stop asked for is to be written unmerged."""
         sign, self._lock_sign = self._lock_sign, None
         if not locked:
             self._lock_told = False
@@ -355,8 +362,10 @@ class Stops:
         last = m.stop_sent_t
         if last is not None and (last >= at or now - last < gap_s):
             return False, None, ""
-        if merges():  # (asked last: rule 1's look notes a stop it merges into as owed)
+        first = last is None or last != self._fought_t  # (the last stop not the fight's own)
+        if not first and merges():  # (asked last: rule 1's look notes one it merges into as owed)
             return False, None, ""
+        self._fighting = True
         if reading is None:
             return True, None, "the controller answers again while the lock holds: its stop again"
         why = (
