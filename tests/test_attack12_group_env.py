@@ -1,0 +1,41 @@
+"""Attack 12: a group's key set from the environment as a rotator's is
+(``ROTOR_BRIDGE_ROTATORS__TOWER__PORT`` works; ``ROTOR_BRIDGE_GROUPS__STACK__OFFSETS`` or
+``ROTOR_BRIDGE_GROUPS__0__ID`` looks the same) is read by pydantic-settings as a table that
+replaces the file's ``[[groups]]`` list, and refused as "groups: Input should be a valid list":
+no variable named (settings/__init__.py rule 4 names one for a rotator's key; errors name
+the variable that set a value), so the operator looks at the file's [[groups]], which is a
+valid list, and the bridge does not start."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from bridge.settings import ConfigError, settings_from
+
+FILE = {
+    "rotators": [
+        {"id": "upper", "model": "rotorez", "port": "/dev/ttyUSB0"},
+        {"id": "lower", "model": "rotorez", "port": "/dev/ttyUSB1"},
+    ],
+    "groups": [{"id": "stack", "rotators": ["upper", "lower"]}],
+}
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 12: ROTOR_BRIDGE_GROUPS__STACK__OFFSETS is refused as 'groups: Input should "
+    "be a valid list', naming no variable",
+)
+def test_a_groups_key_from_the_environment_is_taken_or_refused_naming_the_variable(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    variable = "ROTOR_BRIDGE_GROUPS__STACK__OFFSETS"
+    monkeypatch.setenv(variable, '{"lower": 180}')
+    try:
+        s = settings_from({k: list(v) for k, v in FILE.items()}, os.environ)
+    except ConfigError as refused:
+        assert variable in str(refused), str(refused)  # said where the value came from
+    else:
+        assert s.groups[0].offsets == {"lower": 180.0}  # or taken, as a rotator's key is
