@@ -950,13 +950,15 @@ class Controller:
             target_going,
             cfg.moving_poll_interval_s,
             cfg.junk_report_interval_s,
-            lambda: self.stops.merges(self.motion, cfg.motion, now),
         )
         if said is not None:
             self.notes.append(said)
         if lock:
-            log.warning("%s: %s", self.name, why)
-            self.stop(now)  # (stops.py rule 7: lock_check has merged it where rule 1 would)
+            if why:
+                log.warning("%s: %s", self.name, why)
+            else:
+                log.debug("%s: the lock's stop again (a reading at rest doubted)", self.name)
+            self.stop(now)  # (stops.py rule 7: lock_check keeps them a second apart at least)
 
     # -- what comes in ---------------------------------------------------------------------------
     def feed(self, data: bytes, now: float) -> Fed:

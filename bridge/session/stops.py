@@ -116,12 +116,13 @@ Rules:
    whose readings the doubt never takes (two garbled answers after its first reading, five in
    six, one flipped bit in the answer asked at once: review 40, attack 9) ran a locked rotor
    from 150 to 300 unfought, and after a replug the lock's stop was checked no more. Such a
-   stop is never written within ``moving_poll_interval_s`` of the last stop (at most one a
-   poll, no flood on a noisy line); the first after a stop of another kind (the lock ON's)
-   goes through that stop's brake window, and the next merge as any (rule 1: one a brake
-   window, a second at least, after the last, while no reading showed the rotor turning;
-   review 43: merged from the first, a turn by hand a second after the lock ON, its readings
-   garbled, ran 26 degrees before it was fought, 8 now); each is checked as any (rule 2). A
+   stop goes ``moving_poll_interval_s``, and STOP_MERGE_MIN_S at least, after the last stop
+   (at most one a poll and one a second: no flood on a noisy line), whatever rule 1's brake
+   window says, and is checked as any (rule 2). Merged as rule 1 merges (one a brake window),
+   a turn by hand a second after the lock ON, its readings garbled, ran 26 degrees before it
+   was fought (review 43), and letting only the first through that window let one flipped
+   bit before such a turn spend it: 28 degrees (review 47); 8 now. The price on a line that
+   flips every other reading: a stop a second, which a Rotor-EZ answers with its banner. A
    doubted reading's is said on R/error once an episode (``stop``: until a reading taken shows
    the rotor not turning, or the lock is released), and ``junk_report_interval_s`` apart at
    least (a line that flips every other reading), and only with a stop written (one a merge
@@ -138,7 +139,6 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from bridge.core.model import ErrorKind, MotionState
@@ -196,8 +196,6 @@ class Stops:
         self._lock_sign: tuple[float, str | None] | None = None  # rule 7: when, and the words
         self._lock_told = False  # rule 7: this episode's was said on R/error
         self._lock_told_t = -math.inf  # rule 7: when one was said last
-        self._fighting = False  # rule 7: the stop asked for now is the lock's fight
-        self._fought_t: float | None = None  # rule 7: when the last stop, the lock's fight, went
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -241,8 +239,6 @@ class Stops:
         self.unseen_t, self._after_target = at, 0  # rule 3
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
-        self._fought_t = at if self._fighting else None  # rule 7
-        self._fighting = False
         self._stall_stop_t = None  # rule 4: rule 2 checks this one
 
     def blind_sent(self, at: float) -> None:
@@ -342,16 +338,14 @@ class Stops:
         target_going: bool,
         gap_s: float,
         tell_every_s: float,
-        merges: Callable[[], bool] = lambda: False,
     ) -> tuple[bool, Report | None, str]:
         """Rule 7: whether the lock's stop goes again now (``locked``: the session's lock holds;
         ``gap_s``: the moving poll interval), the error to say with it (``tell_every_s`` apart
-        at least), and its words for the log. A stop written since the sign, or within
-        ``gap_s`` before now, is the one; so is one a stop now would merge into (``merges``,
-        rule 1: nothing goes, nothing is said; review 43: 'sent again' was said 3 s before a
-        frame went), unless the last stop was not the fight's own: the first goes through that
-        stop's brake window (review 43: a turn by hand a second after the lock ON ran 26
-        degrees before it was fought). The stop asked for is to be written unmerged."""
+        at least), and its words for the log (none for a doubted reading's after the episode's
+        first: logged at debug). A stop written since the sign, or within
+        ``gap_s`` (STOP_MERGE_MIN_S at least) before now, is the one: nothing goes, nothing is
+        said. The stop asked for is written unmerged (rule 1's brake window is not this one's:
+        review 43 and 47)."""
         sign, self._lock_sign = self._lock_sign, None
         if not locked:
             self._lock_told = False
@@ -360,12 +354,8 @@ class Stops:
             return False, None, ""
         at, reading = sign
         last = m.stop_sent_t
-        if last is not None and (last >= at or now - last < gap_s):
+        if last is not None and (last >= at or now - last < max(gap_s, STOP_MERGE_MIN_S)):
             return False, None, ""
-        first = last is None or last != self._fought_t  # (the last stop not the fight's own)
-        if not first and merges():  # (asked last: rule 1's look notes one it merges into as owed)
-            return False, None, ""
-        self._fighting = True
         if reading is None:
             return True, None, "the controller answers again while the lock holds: its stop again"
         why = (
@@ -374,7 +364,8 @@ class Stops:
             "reading while the lock holds"
         )
         if self._lock_told or now - self._lock_told_t < tell_every_s:
-            return True, None, why
+            return True, None, ""  # (said once an episode, and logged so: a noisy line's is
+            # a stop a second)
         self._lock_told, self._lock_told_t = True, now
         return True, Report(ErrorKind.STOP, why), why
 

@@ -5,13 +5,12 @@ the lock ON brings a fight stop at once, and a turn by hand at the panel that st
 later, its first replies garbled (attack 9), is held for a whole brake window from that stop
 (five seconds on a Rotor-EZ): fought at 6.4 s, 28 degrees from rest, where before the change it
 was fought when the lock ON's window ended (5.4 s, 22 degrees) and review 43's turn without the
-flip is fought at 8. The line that garbles the turn's replies is the line that flips a bit."""
+flip is fought at 8. The line that garbles the turn's replies is the line that flips a bit.
+The fight's stops keep a second from the last stop now, whatever rule 1's brake window."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-
-import pytest
 
 from bridge.core.model import MotionState
 from tests.engine.test_attack9_turn_unseen_after_two_garbles import garble_after_the_first_move
@@ -21,14 +20,6 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 47: one flipped reading after the lock ON spends the fight's first stop (rule 7): "
-        "a turn by hand a moment later, its replies garbled, waits a brake window from that "
-        "stop: 28 degrees, not 8"
-    ),
-)
 def test_a_flipped_reading_before_a_turn_by_hand_does_not_hold_back_its_fight(rig: Rig) -> None:
     v = at_rest(rig, "rotorez")
     rest = v.status.bearing_deg
