@@ -382,3 +382,16 @@ def test_a_slowed_elevation_box_settles_by_its_own_speed_not_the_azimuths(
     assert box.options.take(True, True, 0.0) == [("speed", speed)]  # written: in effect
     box._retune()  # (what the step does after writing a setting: controller.py rule 7)
     assert box.cfg.motion.settle_s == pytest.approx(settle_s)
+
+
+def test_a_stall_timeout_the_elevation_box_cannot_show_a_turn_in_is_refused() -> None:
+    """settings/rotator.py rule 2 (attack 12): the RT-21's azimuth, noise 0.5 at 6 degrees a
+    second, shows a turn within 0.48 s; the GS-232B elevation box's own noise, 2 degrees at
+    its 2.5 a second, needs 1.2 s: stall_timeout_s 1 would call every elevation turn stalled.
+    Refused naming the key, the axis and the time it needs; 1.3 is taken."""
+    with pytest.raises(ConfigError) as refused:
+        load(azimuth=AZ, elevation=EL, stall_timeout_s=1.0)
+    said = str(refused.value)
+    assert "stall_timeout_s 1 must be longer" in said and "in elevation (1.2 s" in said, said
+    assert "el_speed_deg_s 2.5" in said, said
+    assert load(azimuth=AZ, elevation=EL, stall_timeout_s=1.3).stall_timeout_s == 1.3

@@ -10,7 +10,10 @@ Rules:
    with ``unset`` (docs/configuration.md is generated from these, bridge/config_doc.py).
 2. Limits, poll intervals and the silence timeout are judged together against the model, so a
    rotator that could not work is a configuration error naming the key; so is a line rate no
-   controller is set to (BAUD_MIN..BAUD_MAX).
+   controller is set to (BAUD_MIN..BAUD_MAX). ``stall_timeout_s`` is longer than it takes a
+   reading to show the rotor turning on each axis it turns: two moving polls and its noise at
+   that axis's speed (az_speed_deg_s; el_speed_deg_s, a composite's elevation box's noise by
+   its own model), the error naming the axis and the time it needs.
 3. The port is a name, never opened here: loading a configuration touches no hardware
    (check-config reports a port that does not exist as a warning). An empty name, or one
    with a NUL byte, names no port and is refused (check_port).
@@ -241,7 +244,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         10.0,
         gt=0,
         le=600,
-        description='no progress this long while off target: the rotator is "stalled"',
+        description='no progress this long while off target: the rotator is "stalled". Longer '
+        "than it takes a reading to show a turn on each axis: two moving polls and noise_deg "
+        "at az_speed_deg_s (and at el_speed_deg_s)",
         examples=[20],
     )
     settle_s: float = Field(
@@ -543,20 +548,39 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
         # a movement is more than the noise band, seen by two readings (an attack pass: 0.1 s
-        # stalled every target before it turned; a review: settle_s has nothing to do with it)
-        az_speed = max(self.effective_speeds_deg_s[0], 1e-9)
-        least_stall_s = 2 * self.moving_poll_interval_s + self.effective_noise_deg / az_speed
-        if spec.can_report_position and self.stall_timeout_s <= least_stall_s:
-            raise ValueError(
-                f"stall_timeout_s {self.stall_timeout_s:g} must be longer than it takes a "
-                f"reading to show the rotor turning ({least_stall_s:.3g} s: two moving polls "
-                "and noise_deg at its speed)"
-            )
+        # stalled every target before it turned; a review: settle_s has nothing to do with it),
+        # on each axis the rotor turns (attack 12: held at the azimuth's speed alone, a GS-232B's
+        # stall_timeout_s 1 was taken and every elevation turn was called stalled)
+        if spec.can_report_position:
+            for axis, noise_deg, speed_deg_s, speed_key in self._axes_shown():
+                least_stall_s = 2 * self.moving_poll_interval_s + noise_deg / max(speed_deg_s, 1e-9)
+                if self.stall_timeout_s <= least_stall_s:
+                    raise ValueError(
+                        f"stall_timeout_s {self.stall_timeout_s:g} must be longer than it takes "
+                        f"a reading to show the rotor turning in {axis.value} "
+                        f"({least_stall_s:.3g} s: two moving polls and noise_deg {noise_deg:g} "
+                        f"at {speed_key} {speed_deg_s:g})"
+                    )
         self.check_pointing(self.pointing)
         if self.wind_topic is not None and self.wind_park_az_deg is not None:  # wind.py rule 1
             az, el = self.wind_park_az_deg, self.park_el_deg
             check_position(self.pointing, "wind_park_az_deg", az, el)
         return self
+
+    def _axes_shown(self) -> list[tuple[Axis, float, float, str]]:
+        """Rule 2: each axis the rotator turns, with the noise its readings must move beyond to
+        show a turn (a composite's elevation box's own model's, unless noise_deg is set) and its
+        speed, named by its key."""
+        az_speed, el_speed = self.effective_speeds_deg_s
+        shown = [(Axis.AZIMUTH, self.effective_noise_deg, az_speed, "az_speed_deg_s")]
+        if self.spec.has_elevation:
+            el_noise = (
+                self.axis_settings(Axis.ELEVATION).effective_noise_deg
+                if self.axes
+                else self.effective_noise_deg
+            )
+            shown.append((Axis.ELEVATION, el_noise, el_speed, "el_speed_deg_s"))
+        return shown
 
     @property
     def spec(self) -> ModelSpec:

@@ -20,11 +20,6 @@ from bridge.settings import ConfigError, settings_from
 from tests.engine.virtual import VirtualRotator
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 12: stall_timeout_s shorter than an elevation turn takes to show is taken, "
-    "and every elevation turn is called stalled and stopped short",
-)
 @pytest.mark.parametrize(
     ("settings", "emulator"),
     [
