@@ -15,11 +15,16 @@ Rules:
    place with no direction (the station's own, its antipode).
 4. Thread-safe: the client's thread adds and prunes, the aim thread reads (one lock, held
    for dictionary work only: the cty lookup is done before taking it).
+5. One spot never takes the list down: a spot whose entry cannot be made (a place the cty
+   file's reader should have refused, cty.py rule 5; a bug) is left out of ``B/spots``, said
+   once in the log while it is kept, and the list is made of the rest (attack 12: one spot
+   at latitude 357 made every ``B/spots`` raise, and none was published until it aged out).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import re
 import threading
 import time
@@ -31,6 +36,8 @@ from bridge.core import geo
 from bridge.interfaces.dxcluster.cty import Cty
 from bridge.interfaces.dxcluster.spots import Spot
 from bridge.settings.dxcluster import band_of
+
+log = logging.getLogger(__name__)
 
 MAX_CALLS = 20  # Home Assistant's spot select lists this many calls at most
 _LOCATORS = re.compile(r"(?<![A-Z0-9])[A-R]{2}[0-9]{2}(?:[A-X]{2}(?:[0-9]{2})?)?(?![A-Z0-9])")
@@ -85,6 +92,7 @@ class Book:
         self._wall = wall
         self._lock = threading.Lock()
         self._spots: list[Kept] = []  # newest first
+        self._unlisted: set[Kept] = set()  # rule 5: left out of B/spots, said once
 
     def place(self, spot: Spot) -> Place | None:
         """Rule 1 (no lock: the cty data is read-only once loaded)."""
@@ -109,6 +117,7 @@ class Book:
         with self._lock:
             rest = [k for k in self._spots if (k.spot.call, k.band) != (spot.call, band)]
             self._spots = [kept, *rest][: self._max]
+            self._unlisted &= set(self._spots)
         return True
 
     def prune(self) -> bool:
@@ -117,6 +126,7 @@ class Book:
         with self._lock:
             before = len(self._spots)
             self._spots = [k for k in self._spots if k.heard_s >= oldest]
+            self._unlisted &= set(self._spots)
             return len(self._spots) != before
 
     def newest(self, call: str) -> Kept | None:
@@ -135,8 +145,21 @@ class Book:
         """``B/spots``: ``{"spots": [...]}``, newest first."""
         with self._lock:
             spots = list(self._spots)
-        doc = {"spots": [self._one(k) for k in spots]}
-        return json.dumps(doc, separators=(",", ":"))
+        listed = []
+        for k in spots:
+            try:
+                listed.append(self._one(k))
+            except (ValueError, ArithmeticError) as exc:  # rule 5: the rest is listed
+                self._left_out(k, exc)
+        return json.dumps({"spots": listed}, separators=(",", ":"))
+
+    def _left_out(self, k: Kept, exc: Exception) -> None:
+        """Rule 5: ``k`` said in the log the first time it is left out."""
+        with self._lock:
+            if k in self._unlisted or k not in self._spots:
+                return
+            self._unlisted.add(k)
+        log.warning("DX cluster: the spot of %s left out of the spots list: %s", k.spot.call, exc)
 
     def _one(self, k: Kept) -> dict[str, object]:
         s = k.spot

@@ -19,12 +19,19 @@ Rules:
 4. A file that cannot be read or holds no entity raises CtyError naming the file and line;
    an odd line inside a good file is skipped and counted (``skipped``): AD1C's files are
    trusted, a hand-edited one should not stop the bridge.
+5. A position no place has (a latitude outside -90..90, a longitude outside -180..180, or no
+   number: a hand edit's slip, ``357.0`` for ``35.70``) is refused where it is read: an
+   entity's header with its prefixes, a prefix's ``<lat/lon>`` override alone. Each is
+   skipped and counted (rule 4) and said in ``refused``, naming the line and the entity or
+   prefix, for the loader to log once (interfaces/dxcluster/setup.py); taken, it made every
+   ``B/spots`` with a call of it raise in geo.great_circle (attack 12).
 """
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
@@ -35,6 +42,20 @@ _NOWHERE = frozenset({"MM", "AM"})
 
 class CtyError(ValueError):
     pass
+
+
+class _Nowhere(ValueError):
+    """Rule 5: a position no place has; its text says which and why."""
+
+
+def _position(lat_text: str, lon_text: str) -> tuple[float, float]:
+    """Rule 5: (latitude, longitude) as the file gives them (west-positive), or _Nowhere."""
+    lat, lon = float(lat_text), float(lon_text)
+    if not (math.isfinite(lat) and -90.0 <= lat <= 90.0):
+        raise _Nowhere(f"latitude {lat_text.strip()} is no place's (-90..90)")
+    if not (math.isfinite(lon) and -180.0 <= lon <= 180.0):
+        raise _Nowhere(f"longitude {lon_text.strip()} is no place's (-180..180)")
+    return lat, lon
 
 
 @dataclass(frozen=True)
@@ -53,6 +74,7 @@ class Cty:
     prefixes: dict[str, Entity]
     exact: dict[str, Entity]
     skipped: int = 0
+    refused: list[str] = field(default_factory=list)  # rule 5: what was refused, and why
 
     def lookup(self, call: str) -> Entity | None:
         """Rule 3."""
@@ -86,8 +108,9 @@ def _override(base: Entity, token: str) -> tuple[str, Entity]:
         elif itu:
             changes["itu_zone"] = int(itu)
         elif lat and lon:
-            changes["latitude_deg"] = float(lat)
-            changes["longitude_deg"] = -float(lon)
+            north, west = _position(lat, lon)  # rule 5
+            changes["latitude_deg"] = north
+            changes["longitude_deg"] = -west
         elif cont:
             changes["continent"] = cont.upper()
     plain = _OVERRIDE.sub("", token).strip().upper()
@@ -96,13 +119,17 @@ def _override(base: Entity, token: str) -> tuple[str, Entity]:
     return plain, replace(base, **changes) if changes else base  # type: ignore[arg-type]
 
 
-def _add(cty: Cty, base: Entity, tokens: list[str]) -> None:
+def _add(cty: Cty, base: Entity, tokens: list[str], where: str) -> None:
     for token in tokens:
         token = token.strip()
         if not token:
             continue
         try:
             plain, entity = _override(base, token)
+        except _Nowhere as exc:  # rule 5
+            cty.skipped += 1
+            cty.refused.append(f"{where}: {base.name}'s {token}: {exc}; that prefix skipped")
+            continue
         except ValueError:
             cty.skipped += 1
             continue
@@ -113,37 +140,46 @@ def _add(cty: Cty, base: Entity, tokens: list[str]) -> None:
 
 
 def _entity(name: str, cq: str, itu: str, cont: str, lat: str, lon: str, prefix: str) -> Entity:
+    north, west = _position(lat, lon)  # rule 5
     return Entity(
         name.strip(),
         cont.strip().upper(),
         int(cq),
         int(itu),
-        float(lat),
-        -float(lon),  # rule 1
+        north,
+        -west,  # rule 1
         prefix.strip().lstrip("*").upper(),
     )
+
+
+def _refuse(cty: Cty, where: str, name: str, exc: _Nowhere) -> None:
+    """Rule 5: an entity refused, said once."""
+    cty.skipped += 1
+    cty.refused.append(f"{where}: {name.strip()}: {exc}; the entity and its prefixes skipped")
 
 
 def parse_dat(text: str) -> Cty:
     """cty.dat: a header line of 8 ``:``-ended fields, then prefixes up to ``;``."""
     cty = Cty({}, {})
     base: Entity | None = None
-    for line in text.splitlines():
+    for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         if not line[0].isspace():  # a header
             fields = line.split(":")
+            base = None
             try:
                 name, cq, itu, cont, lat, lon, _utc, prefix = fields[:8]
                 base = _entity(name, cq, itu, cont, lat, lon, prefix)
+            except _Nowhere as exc:
+                _refuse(cty, f"line {number}", fields[0], exc)
             except ValueError:
-                base = None
                 cty.skipped += 1
             continue
         if base is None:
             cty.skipped += 1
             continue
-        _add(cty, base, line.strip().rstrip(";").split(","))
+        _add(cty, base, line.strip().rstrip(";").split(","), f"line {number}")
         if line.rstrip().endswith(";"):
             base = None
     return cty
@@ -152,17 +188,20 @@ def parse_dat(text: str) -> Cty:
 def parse_csv(text: str) -> Cty:
     """cty.csv: ``prefix,name,dxcc,continent,cq,itu,lat,lon,utc,prefixes;`` one entity a line."""
     cty = Cty({}, {})
-    for line in text.splitlines():
+    for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         fields = line.split(",", 9)
         try:
             prefix, name, _dxcc, cont, cq, itu, lat, lon, _utc, rest = fields
             base = _entity(name, cq, itu, cont, lat, lon, prefix)
+        except _Nowhere as exc:
+            _refuse(cty, f"line {number}", fields[1], exc)
+            continue
         except ValueError:
             cty.skipped += 1
             continue
-        _add(cty, base, rest.strip().rstrip(";").split())
+        _add(cty, base, rest.strip().rstrip(";").split(), f"line {number}")
     return cty
 
 

@@ -1,10 +1,12 @@
 """The DX cluster's service, made from ``[dxcluster]`` (features/dxcluster: its declaration
 points here; the app imports this module only when ``[dxcluster] enabled``): the cty file read
 once, at start-up (settings/dxcluster.py rule 2: a ConfigError names the file), the spots'
-book, the client publishing ``B/spots`` and taking the MQTT service's targets by call."""
+book, the client publishing ``B/spots`` and taking the MQTT service's targets by call. What
+the cty file's reader refused (cty.py rule 5) is logged here, once, at start-up."""
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 
@@ -14,6 +16,8 @@ from bridge.interfaces.dxcluster.client import DxCluster
 from bridge.interfaces.dxcluster.cty import CtyError, load
 from bridge.settings import ConfigError
 from bridge.settings.dxcluster import DxClusterSettings
+
+log = logging.getLogger(__name__)
 
 
 def service(view: AppView) -> DxCluster:
@@ -39,8 +43,11 @@ def dxcluster(
     """CtyError if the cty file cannot be read or holds nothing."""
     assert settings.host is not None and settings.login is not None  # enabled: validated
     assert settings.cty_file is not None
+    cty = load(settings.cty_file)
+    for why in cty.refused:  # cty.py rule 5: said once
+        log.warning("DX cluster: cty_file %s %s", settings.cty_file, why)
     book = Book(
-        load(settings.cty_file),
+        cty,
         station,
         max_spots=settings.max_spots,
         max_age_s=settings.max_age_min * 60.0,
