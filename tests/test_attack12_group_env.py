@@ -23,16 +23,20 @@ FILE = {
 }
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 12: ROTOR_BRIDGE_GROUPS__STACK__OFFSETS is refused as 'groups: Input should "
-    "be a valid list', naming no variable",
+@pytest.mark.parametrize(
+    ("variable", "value"),
+    [
+        ("ROTOR_BRIDGE_GROUPS__STACK__OFFSETS", '{"lower": 180}'),
+        ("ROTOR_BRIDGE_GROUPS__0__ID", "stack"),
+        ("ROTOR_BRIDGE_GROUPS", '[{"id": "stack", "rotators": ["upper", "lower"]}]'),
+    ],
 )
 def test_a_groups_key_from_the_environment_is_taken_or_refused_naming_the_variable(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, variable: str, value: str
 ) -> None:
-    variable = "ROTOR_BRIDGE_GROUPS__STACK__OFFSETS"
-    monkeypatch.setenv(variable, '{"lower": 180}')
+    """settings/__init__.py rule 4: groups are the file's alone (docs/configuration.md), so
+    such a variable is refused naming it."""
+    monkeypatch.setenv(variable, value)
     try:
         s = settings_from({k: list(v) for k, v in FILE.items()}, os.environ)
     except ConfigError as refused:

@@ -27,7 +27,10 @@ Rules:
    left the bridge on the file's broker). So is a ``ROTOR_BRIDGE_ROTATORS__`` variable that
    names no rotator's key (``ROTOR_BRIDGE_ROTATORS__TOWER_PORT``: the settings source drops
    every such variable, and only ``ROTATORS__<ID>__<KEY>`` is read; a review: the bridge
-   opened the file's port).
+   opened the file's port). So is any ``ROTOR_BRIDGE_GROUPS`` variable: groups are set in the
+   file only (docs/configuration.md says so); read, ``GROUPS__STACK__OFFSETS`` replaced the
+   file's ``[[groups]]`` with a table and was refused as "groups: Input should be a valid
+   list", naming no variable (attack 12).
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
@@ -601,6 +604,7 @@ def settings_from(
     """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
     env = os.environ if environ is None else environ
     _check_variables(env)
+    _no_group_variables(env)
     _apply_rotator_env(data, env)
     unknown = [k for k in data if k not in Settings.model_fields]
     if (
@@ -702,6 +706,16 @@ def _check_variables(env: Any) -> None:
             f"{key}: unknown key {first!r} (the keys at the top: "
             f"{', '.join(Settings.model_fields)}; a table's keys are joined with __){hint}"
         )
+
+
+def _no_group_variables(env: Any) -> None:
+    """Rule 4: ConfigError naming the first variable that would set a group."""
+    for key in sorted(env):
+        if key.upper() == f"{ENV_PREFIX}GROUPS" or key.upper().startswith(f"{ENV_PREFIX}GROUPS__"):
+            raise ConfigError(
+                f"{key}: groups are set in the configuration file only ([[groups]]), not from "
+                f"the environment (a rotator's keys are: {ENV_PREFIX}ROTATORS__<ID>__<KEY>)"
+            )
 
 
 def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
