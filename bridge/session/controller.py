@@ -83,15 +83,17 @@ Rules:
    composite's elevation box) is told each reading taken, and only those (rule 5).
 9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking, stalled,
    also after a stop) further from where it stands than ``noise_deg`` on either axis (what the
-   motion machine would take for a move: motion.py rule 1) is believed when the next says so
-   too, within ``doubt_deg``: the controller is asked again at once, and a reading back where
-   the rotor stood shows the first was line noise (logged, and told on R/error as junk is: rule
-   6). One flipped bit in an ASCII reply makes a well-formed bearing (``AZ=150`` read as
-   ``AZ=350``): it was published and taken as a move, and a nudge made from that bearing turned
-   the rotor 200 degrees. A rotor not turning changes its bearing only by a hand at the
-   controller's panel, which the reading asked a moment later confirms (a move by hand is seen
-   one exchange later; a stop that did not take is checked one exchange later, within stops.py
-   rule 2's resend time). A turning rotor's readings change at every poll: one is doubted only
+   motion machine would take for a move: motion.py rule 1) is believed when the next says so too,
+   within ``doubt_deg``: the controller is asked again at once, and a reading back where the rotor
+   stood shows the first was line noise (logged, and told on R/error as junk is: rule 6, saying how
+   far off it was on the axis that was off, both when both were: attack 12, the azimuth's alone
+   told an elevation glitch as 0 degrees off). One flipped bit in an ASCII reply makes a
+   well-formed bearing (``AZ=150`` read as ``AZ=350``): it was published and taken as a move, and a
+   nudge made from that bearing turned the rotor 200 degrees. A rotor not turning changes its
+   bearing only by a hand at the controller's panel, which the reading asked a moment later
+   confirms (a move by hand is seen one exchange later; a stop that did not take is checked one
+   exchange later, within stops.py rule 2's resend time).
+   A turning rotor's readings change at every poll: one is doubted only
    if it is further from the last taken than the rotor can have turned since (motion.py
    ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
@@ -542,6 +544,22 @@ def _left_behind(
             open_ = True
             lost = lost or (rests and pos is not None and mo.angle_error(pos, was, wraps) <= near)
     return open_, lost
+
+
+def _how_far(
+    reply: PositionReply, az_deg: float, el_deg: float | None, noise_deg: float, wraps: bool
+) -> str:
+    """Rule 9: how far ``reply`` is from ``az_deg``/``el_deg``, in an error's words: on the
+    axis that is off (more than ``noise_deg``), both when both are (attack 12: the azimuth's
+    alone told an elevation glitch, 45 read as 145, as 0 degrees off); a bearing alone as a
+    number of degrees."""
+    az_off = mo.angle_error(reply.az_deg, az_deg, wraps)
+    if reply.el_deg is None or el_deg is None:
+        return f"{az_off:g}°"
+    el_off = abs(reply.el_deg - el_deg)
+    parts = [(off, axis) for off, axis in ((az_off, "azimuth"), (el_off, "elevation"))]
+    off_axes = [(off, axis) for off, axis in parts if off > noise_deg] or parts
+    return " and ".join(f"{off:g}° off in {axis}" for off, axis in off_axes)
 
 
 def _where(reply: PositionReply) -> str:
@@ -1064,9 +1082,9 @@ class Controller:
         # motion to MOVING, and a second glitch in its settle time was published as a move)
         if not _apart(reply, stands, el_stands, cfg.noise_deg, wraps):
             if doubted.reply is not None:  # back where it stood: the one before was noise
-                away = mo.angle_error(doubted.reply.az_deg, stands, wraps)
+                away = _how_far(doubted.reply, stands, el_stands, cfg.noise_deg, wraps)
                 self._say(
-                    f"a reading at rest of {_where(doubted.reply)}, {away:g}° from where the "
+                    f"a reading at rest of {_where(doubted.reply)}, {away} from where the "
                     "rotor stands, was not said again: ignored (line noise?)",
                     now,
                     logged=True,

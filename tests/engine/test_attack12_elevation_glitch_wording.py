@@ -9,16 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 12: an elevation glitch at rest (45 read as 145) is told on R/error as "
-    "'0° from where the rotor stands'",
-)
 def test_an_elevation_glitch_at_rest_is_told_with_how_far_off_it_was(
     rig: Callable[..., VirtualRotator],
 ) -> None:
@@ -33,3 +26,32 @@ def test_an_elevation_glitch_at_rest_is_told_with_how_far_off_it_was(
     [said] = [e.message for e in v.errors(since=t)]
     assert "150/145" in said
     assert ", 0° from where the rotor stands" not in said, said
+    assert "150/145, 100° off in elevation from where the rotor stands" in said, said
+
+
+def test_a_glitch_on_both_axes_at_rest_is_told_on_both(
+    rig: Callable[..., VirtualRotator],
+) -> None:
+    """Rule 9's wording: a GS-232B reading at 150/45 glitched to 350/145 (a flipped bit in
+    each axis's hundreds) is told off on both axes, each by its own distance (the azimuth's
+    on the circle)."""
+    v = rig("gs232b", emulator={"start_az_deg": 150.0, "start_el_deg": 45.0})
+    v.run_until(lambda r: r.statuses and r.status.available, 30, "online")
+    v.run_for(5)
+    t = v.now
+    glitched: list[bytes] = []  # the next reply, a byte at a time, read as the glitch's
+
+    def in_place(data: bytes, now: float) -> bytes:
+        if len(glitched) > 1 and glitched[-1] == b"\n":
+            return data
+        if glitched or data == b"A":
+            glitched.append(data)
+            return b"AZ=350  EL=145\r\n" if len(glitched) == 1 else b""
+        return data
+
+    v.to_host = in_place
+    v.run_for(20)
+    assert b"".join(glitched).startswith(b"AZ=150"), glitched
+    assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(150.0, 45.0)}
+    [said] = [e.message for e in v.errors(since=t)]
+    assert "350/145, 160° off in azimuth and 100° off in elevation from where" in said, said
