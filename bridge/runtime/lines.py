@@ -45,8 +45,12 @@ Rules:
 8. Rule 5's look for a stop among the workers not served yet is made before the first of a
    round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
    11) or that look found one (there may be another): not one question to every worker after
-   each one served. (Not kept across rounds: a look after the first of a round skips the
-   workers served before it, one of which may have a stop put meanwhile.)
+   each one served. The look before a round's first is kept across rounds only when it asked
+   every worker: a round starts without one when nothing was put since such a whole look
+   found none (no worker joined since, and none of its looks found one), so a turning round
+   of 16 asks 16 mailboxes only after a stop or lock ON. (A look after the first of a round
+   skips the workers served before it, one of which may have a stop put meanwhile: it is
+   never kept across rounds, and the next round looks at them all again.)
 9. The wake-ups a round owes other threads (the MQTT network thread's, for the statuses it
    was handed) are given once, when the round ends (core/handoff.py): one wake-up for the
    statuses of 16 rotators, not 16. A stop's frame is not among them: it is written to its
@@ -126,6 +130,7 @@ class Lines:
         self._poller = select.poll()  # rule 10: the thread's, made afresh when it starts
         self._polled: dict[int, int] = {}  # descriptor -> how many workers wait on it
         self._watching: dict[Worker, list[int]] = {}  # what each waits on, as registered
+        self._looked: int | None = None  # rule 8: mailbox.halts() at a whole look that found none
 
     # -- any thread (rule 4) --------------------------------------------------------------------
     def add(self, worker: Worker) -> None:
@@ -195,6 +200,8 @@ class Lines:
             joining, self._joining = self._joining, []
             leaving, self._leaving = self._leaving, {}
             self._workers.extend(joining)
+            if joining:  # rule 8: a mailbox no look has asked yet
+                self._looked = None
             for worker in leaving:
                 self._workers.remove(worker)
                 self._watch(worker, [])  # rule 10
@@ -269,8 +276,9 @@ class Lines:
         self._watching[worker] = now
 
     def _serve_round(self, due: list[Worker], ready: set[int]) -> None:
-        workers, served = self._workers, set()
-        looked: int | None = None  # rule 8: mailbox.halts() at a look that found none
+        workers = self._workers
+        served: set[Worker] = set()
+        looked = self._looked  # rule 8: mailbox.halts() at a look that found none
         while due:
             # rule 5: a stop that came while this round served others goes next
             worker, urgent = due[0], _NOTHING
@@ -283,6 +291,8 @@ class Lines:
                             worker = other
                             break
                 looked = None if urgent else halts  # one found: there may be another
+                if not served:  # (a whole look: kept for the next round's)
+                    self._looked = looked
             if worker is due[0]:
                 del due[0]
             elif worker in due:

@@ -406,9 +406,10 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
 
-def test_with_no_stop_put_each_worker_is_asked_once_a_round_not_after_each_one_served() -> None:
-    """Rule 8: with four workers always due and nothing put, a round asks each of them once
-    whether a stop waits (its look before the first), not the ones left after each served."""
+def test_with_no_stop_put_no_worker_is_asked_again_after_a_look_that_found_none() -> None:
+    """Rule 8: with four workers always due and nothing put, the rounds after a look at them
+    all that found no stop ask none of them whether one waits (not 4 a round, nor 4 + 3 + 2 + 1
+    after each served)."""
     clock = [100.0]
     lines = Lines(lambda: clock[0])
     done = threading.Event()
@@ -433,7 +434,7 @@ def test_with_no_stop_put_each_worker_is_asked_once_a_round_not_after_each_one_s
     served_until(lines, workers, done)
     (k0, a0), (k1, a1) = marks
     assert [w for w, _ in log[k1 - 4 : k1]] == workers[1:] + workers[:1]  # rounds in order
-    assert a1 - a0 == 4 * 5  # 4 a round (each looked at once), not 4 + 3 + 2 + 1
+    assert a1 - a0 == 0  # nothing put since a look that found none: no look at all
 
 
 def test_a_stop_for_a_worker_served_earlier_in_the_round_goes_first_in_the_next() -> None:
@@ -462,6 +463,47 @@ def test_a_stop_for_a_worker_served_earlier_in_the_round_goes_first_in_the_next(
     served_until(lines, workers, done)
     k = put[0]
     assert [w for w, _ in log[k : k + 2]] == [workers[3], workers[1]]
+
+
+def test_a_worker_that_joins_with_a_stop_waiting_goes_first_in_its_first_round() -> None:
+    """Rule 8: a look that found no stop is kept across rounds only for the workers it asked;
+    one that joins later, with a stop put in its mailbox before (and after that look), is
+    looked at before the first of the next round and served first."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+    rounds_after: list[int] = []  # where in the log the put came
+
+    workers: list[Urgent] = [Urgent(clock, 0.0, threading.Event(), log) for _ in range(3)]
+    late = Urgent(clock, 0.0, threading.Event(), log)
+
+    class Putter(Urgent):
+        def serve(self, now: float, ready: set[int]) -> None:
+            super().serve(now, ready)
+            if not rounds_after and len(log) > 6:
+                late.box.put(Stop(), wake=False)  # before it joins, in this round
+                rounds_after.append(len(log))
+            elif rounds_after and len(log) == rounds_after[0] + 6:
+                lines.add(late)  # type: ignore[arg-type]  # two rounds after: looked since
+            elif late in lines._workers and len(log) > rounds_after[0] + 12:
+                done.set()
+
+    workers[0] = Putter(clock, 0.0, threading.Event(), log)
+    starts: list[int] = []  # where in the log each round began
+    serve_round = lines._serve_round
+
+    def marked(due: list[Any], ready: set[int]) -> None:
+        starts.append(len(log))
+        serve_round(due, ready)
+
+    lines._serve_round = marked  # type: ignore[method-assign]
+    try:
+        served_until(lines, workers, done)
+    finally:
+        lines.remove(late)  # type: ignore[arg-type]
+    first = next(i for i, (w, _) in enumerate(log) if w is late)
+    assert first in starts  # the first served of its round (it joined last: it came last)
 
 
 def _pipe_inodes() -> set[int]:
