@@ -13,8 +13,9 @@ Rules:
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
-   a JunkReason (UNTRUSTED: ask again; POWER_ON: the controller forgot its options), never on
-   the bytes themselves.
+   a JunkReason (UNTRUSTED: ask again; POWER_ON: the controller forgot its options; MISFIT:
+   the box set up otherwise than configured, its detail told to the user), never on the bytes
+   themselves.
 6. A controller setting (an option, a speed) is data: a ``Setting`` in the spec's ``settings``
    says its kind (bool, number with range/step/unit, choice of named values), when it may be
    sent, whether the controller forgets it at power-off, what it does to the rotor's speed,
@@ -84,7 +85,8 @@ class NotReady(ValueError):
 
 
 class JunkReason(enum.StrEnum):
-    """Why bytes are no reading. The engine acts on UNTRUSTED and POWER_ON; the rest it logs."""
+    """Why bytes are no reading. The engine acts on UNTRUSTED and POWER_ON, tells MISFIT's
+    detail; the rest it logs."""
 
     NOISE = "noise"  # bytes that form no reply: line garbage, a torn frame, a banner
     CHATTER = "chatter"  # text a healthy controller prints besides replies (a debug line)
@@ -98,6 +100,11 @@ class JunkReason(enum.StrEnum):
     # the controller answered a command with its refusal (GS-232's ``?>``): a target that went
     # out and has not moved the rotor is dropped and reported, not waited on until a stall
     REFUSED = "refused"
+    # a well-formed reply the box as configured cannot give, one set up otherwise can (a
+    # GS-232 at P45 configured as a 360-degree model; an elevation box reading past an
+    # elevation's scale): never a reading, and its detail, words a user acts on (what to
+    # configure or set on the box), is told on R/error (session/controller.py rule 6)
+    MISFIT = "misfit"
 
 
 LATE_ANSWER = "a poll's answer after its time"  # rule 7: the detail of a line owed late

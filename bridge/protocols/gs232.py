@@ -32,6 +32,14 @@ Rules:
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
+   An azimuth past the top of this model's scale (360 on the 360-degree models) is the box set
+   to the other range, P45 (a 450-degree rotor's G-800DXA, G-1000DXA, G-2800DXA): MISFIT,
+   never a reading, and its words (told on R/error) name the model to configure or the box's
+   P36. Up to AZ_DRIFT_DEG past it is a pot calibrated a little short of its end, read as the
+   end, as K3NG's elevation below the horizon is read as the horizon. (Attack 12: ``AZ=400``
+   was read on a gs232b-az as 40, nothing said, and a target of 50 went out as ``M050``: the
+   rotor ran 350 degrees the long way round.) A 450-degree model whose box says only 0..360
+   (K3NG's, which reports its azimuth modulo 360) reads as ever.
 3. ``?>`` (the box refused a command) is junk of its own reason (REFUSED), whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
@@ -69,6 +77,8 @@ from bridge.protocols.base import (
 )
 
 AZ_MAX_DEG = 450  # the widest range the commands carry (the 450-degree models)
+AZ_SCALE_DEG = 360  # the 360-degree models' scale: the box at P36
+AZ_DRIFT_DEG = 3  # rule 2: past the top of the scale by a pot's calibration, read as the top
 EL_MAX_DEG = 180
 REFUSED = b"?>"
 AXIS_STOPS = {"az": b"A\r", "el": b"E\r"}
@@ -97,15 +107,21 @@ def _degrees(value: float, top: int, axis: str) -> int:
 
 class Gs232Codec(OneQuery):
     """Codec for one GS-232 box: ``variant`` "a" or "b" (its reply form), ``elevation`` whether
-    an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``)."""
+    an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``), ``az_top_deg`` the top of
+    its model's azimuth scale (360, or AZ_MAX_DEG for the 450-degree models: rule 2)."""
 
     BOX = "the GS-232"
 
-    def __init__(self, variant: str = "b", *, elevation: bool = True) -> None:
+    def __init__(
+        self, variant: str = "b", *, elevation: bool = True, az_top_deg: int = AZ_MAX_DEG
+    ) -> None:
         if variant not in ("a", "b"):
             raise ValueError(f"unknown GS-232 variant {variant!r}")
+        if az_top_deg not in (AZ_SCALE_DEG, AZ_MAX_DEG):
+            raise ValueError(f"a GS-232 box's scale is 360 or 450 degrees, not {az_top_deg}")
         self.variant = variant
         self.elevation = elevation
+        self.az_top_deg = az_top_deg
         self._own, self._other = (_A_FORM, _B_FORM) if variant == "a" else (_B_FORM, _A_FORM)
         self._buf = bytearray()
         self._after_cr = False  # rule 1: the last line ended with a CR (its LF may follow)
@@ -191,6 +207,10 @@ class Gs232Codec(OneQuery):
         if self.elevation and el_deg is None:
             self._junk(raw, JunkReason.SPOILED, "no elevation in the reply", out)
             return
+        if az > self.az_top_deg + AZ_DRIFT_DEG:  # rule 2: the box set to the other range
+            self._junk(raw, JunkReason.MISFIT, self._misfit(az), out)
+            return
+        az = min(az, self.az_top_deg)  # (a pot a little past its end: the end)
         clean = not own.group("pre").strip(b"\r\n ")
         if clean and self._late_answer(raw, out):  # rule 5
             return
@@ -205,6 +225,15 @@ class Gs232Codec(OneQuery):
             out.append(PositionReply(float(az), float(el_deg)))
         else:
             out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
+
+    def _misfit(self, az: int) -> str:
+        """Rule 2's words: what a reading of ``az`` past this model's scale says."""
+        model = f"gs232{self.variant}{'' if self.elevation else '-az'}-450"
+        return (
+            f"the GS-232 box reads azimuth {az}, past {self.az_top_deg}, the top of this "
+            f"model's scale: the box seems set up as the 450-degree model (P45); configure "
+            f'model = "{model}", or set the box to 360 degrees (P36); not read as a bearing'
+        )
 
 
 def encode_speed(level: SettingValue) -> bytes:
@@ -234,9 +263,10 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         reply = b"+0123+0045\r\n" if a else b"AZ=123  EL=045\r\n"
     else:
         reply = b"+0123\r\n" if a else b"AZ=123\r\n"
+    az_top = int(kw.get("az_max_deg", AZ_SCALE_DEG))  # rule 2: the scale the box is set to
     defaults: dict[str, Any] = dict(
         manufacturer="Yaesu",
-        codec_factory=lambda: Gs232Codec(variant, elevation=elevation),
+        codec_factory=lambda: Gs232Codec(variant, elevation=elevation, az_top_deg=az_top),
         baud=9600,
         has_elevation=elevation,
         retarget=RetargetPolicy.DIRECT,  # the box takes a new bearing while turning

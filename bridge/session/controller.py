@@ -75,6 +75,11 @@ Rules:
    reading is held ends its exchange: the reading is taken just before the stop is written
    (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
+   A reply the codec calls a MISFIT (protocols/base.py: the box set up otherwise than
+   configured, a GS-232 at P45 configured as a 360-degree model) is told in the codec's own
+   words, which say what to configure, as soon as it comes, and not again as bytes that are
+   no valid reply (attack 12: a box whose every reply is such was told only as bytes that are
+   no valid reply, or not at all).
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed), and the settle time they need
    (motion.py rule 2: from the slower axis it turns, a composite's elevation box's own);
@@ -1015,7 +1020,10 @@ class Controller:
                         continue  # the answer to the target, reported as such: no junk
                 if reply.late:  # link.py rule 12: it answers, late
                     link.answered_late(now)
-                link.add_junk(reply.data, now)
+                if reply.reason is JunkReason.MISFIT:  # rule 6: in the codec's words
+                    self._say(reply.detail, now, logged=False)
+                else:  # (told, and logged, once the line is quiet)
+                    link.add_junk(reply.data, now)
                 link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now, once=True)

@@ -21,11 +21,6 @@ from tests.engine.virtual import VirtualRotator
 FAST = {"az_speed_deg_s": 6.0}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 12: a GS-232 set up as a 360-degree model reading AZ=400 (its box at P45) is "
-    "shown at 40 with nothing said, and a target of 50 turns it 350 degrees the long way",
-)
 @pytest.mark.parametrize(
     ("model", "box"), [("gs232b-az", "gs232b-az-450"), ("gs232a", "gs232a-450")]
 )
@@ -44,6 +39,8 @@ def test_a_reading_past_the_models_scale_is_said_and_never_turns_the_rotor_the_l
         v.run_for(1.0)
         lowest = min(lowest, v.truth().az_deg)
     assert said, "a reading of 400 from a 0..360 model was taken without a word"
+    words = [r.message for r in said]
+    assert any(f'model = "{box}"' in w and "P36" in w for w in words), words
     assert lowest >= 360.0, (
         f"the rotor at 400 ran down to {lowest:g} after a target of 50: "
         f"{[w for w in v.sent(since=t) if w[:1] in (b'M', b'W')]} (350 degrees the long way round)"

@@ -299,3 +299,33 @@ def test_k3ng_a_little_below_the_horizon_is_the_horizon_and_further_is_no_readin
     replies = codec.feed(b"AZ=123EL=" + el + b"\r\n")
     positions = [r for r in replies if isinstance(r, PositionReply)]
     assert [p.el_deg for p in positions] == ([] if reading is None else [reading])
+
+
+@pytest.mark.parametrize("how", HOW)
+@pytest.mark.parametrize(
+    ("model", "reply", "reading"),
+    [
+        ("gs232b-az", b"AZ=400\r\n", None),  # a 450-degree rotor's box at P45
+        ("gs232a", b"+0400+0010\r\n", None),
+        ("gs232b", b"AZ=364  EL=010\r\n", None),
+        ("gs232b-az", b"AZ=360\r\n", 360.0),  # the end of the scale
+        ("gs232b-az", b"AZ=363\r\n", 360.0),  # a pot calibrated a little short: the end
+        ("gs232a-az", b"+0362\r\n", 360.0),
+        ("gs232b-az-450", b"AZ=400\r\n", 400.0),  # the overlap, on the model set to P45
+        ("gs232b-az-450", b"AZ=359\r\n", 359.0),  # a 450 box that says 0..360 (K3NG)
+        ("gs232a-450", b"+0450+0010\r\n", 450.0),
+    ],
+)
+def test_an_azimuth_past_the_models_scale_is_a_box_set_up_otherwise_and_says_what_to_configure(
+    how: str, model: str, reply: bytes, reading: float | None
+) -> None:
+    codec = REGISTRY[model].codec_factory()
+    codec.encode_query()
+    replies = feed(codec, reply, how)
+    assert [p[0] for p in positions(replies)] == ([] if reading is None else [reading])
+    if reading is None:
+        (misfit,) = junk(replies)
+        assert misfit.reason is JunkReason.MISFIT
+        assert f'model = "{model}-450"' in misfit.detail and "P36" in misfit.detail
+    else:
+        assert junk(replies) == []
