@@ -27,6 +27,15 @@ Rules:
    once and judges the elevation alone.
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
+   A one-axis box's bearing outside the elevation axis's scale (0..180 of its range, up to
+   EL_READ_SLACK_DEG past an end read as that end, as easycomm.py rule 2 reads an azimuth) is
+   no elevation: a MISFIT (protocols/base.py: told on R/error in words that say so), never a
+   reading, and the elevation it last said is forgotten: no target goes to that box (NotReady:
+   the engine asks, and sends once it reads an elevation again, a reading taken), as the box
+   would turn from a bearing nobody knows. (Attack 12: an RT-21 reading 300, a pot past its
+   end or a box calibrated for an azimuth rotor, was published as elevation 300 with
+   el_max_deg 90, nothing said, and the next target's elevation 30 turned the box 270
+   degrees down from there.)
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults); it
@@ -57,6 +66,8 @@ from bridge.protocols.base import (
     Codec,
     HamlibRotType,
     HoldsOnGrid,
+    JunkReason,
+    JunkReply,
     ModelSpec,
     NotReady,
     PositionReply,
@@ -79,6 +90,7 @@ class Axis(enum.StrEnum):
 # (prosistel-el: a D box, unit E; prosistel-el-a: one answering as unit A)
 ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el", "prosistel-el-a"})
 ONE_AXIS_EL_MAX_DEG = 180.0
+EL_READ_SLACK_DEG = 0.5  # rule 2: a one-axis box's bearing this far past an end reads as the end
 # ... and of those, the models made for the elevation alone: as a rotator of its own, what such a
 # box calls its bearing is an elevation (a group's azimuth would tilt it)
 BEARING_IS_ELEVATION = frozenset({"prosistel-el", "prosistel-el-a"})
@@ -261,18 +273,33 @@ class ElevationOnly(_KeepsOwn):
 
 
 class OneAxisElevation(_KeepsOwn):
-    """Rule 2: a one-axis box whose one rotor is the elevation."""
+    """Rule 2: a one-axis box whose one rotor is the elevation, read in ``el_range`` (the
+    elevation axis's scale); ``box`` names it in what is said of a bearing outside it."""
 
-    def __init__(self, inner: Codec) -> None:
+    def __init__(
+        self,
+        inner: Codec,
+        el_range: tuple[float, float] = (0.0, ONE_AXIS_EL_MAX_DEG),
+        box: str = "the elevation box",
+    ) -> None:
         super().__init__(inner)
+        self._el_range = el_range
+        self._box = box
         self._own_el: float | None = None  # what the box last said of its one axis, taken
         self._asked_az: float | None = None  # what the session last asked for
+        self._misfit = False  # rule 2: its last bearing was no elevation (none taken since)
+
+    def _ready(self) -> None:
+        if self._misfit:  # rule 2
+            raise NotReady("the elevation box's last bearing was no elevation")
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        self._ready()
         el = self._own_el if el_deg is None else el_deg
         return az_deg, None if el is None else self._inner.wire_target(el, None)[0]
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        self._ready()
         if el_deg is None and self._own_el is not None:  # (kept where it reads)
             el_deg = _held(self._inner, self._own_el, Axis.AZIMUTH)  # (its one axis)
         el = el_deg
@@ -285,16 +312,33 @@ class OneAxisElevation(_KeepsOwn):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
+                low, high = self._el_range
+                if not low - EL_READ_SLACK_DEG <= r.az_deg <= high + EL_READ_SLACK_DEG:
+                    replies.append(self._not_elevation(r.az_deg))
+                    continue
                 az = 0.0 if self._asked_az is None else self._asked_az
-                inner, r = r, replace(r, az_deg=az, el_deg=r.az_deg)
-                self._fed(r, inner.az_deg, inner)
+                el = min(max(r.az_deg, low), high)
+                inner, r = r, replace(r, az_deg=az, el_deg=el)
+                self._fed(r, el, inner)
             replies.append(r)
         return replies
+
+    def _not_elevation(self, deg: float) -> JunkReply:
+        """Rule 2: a bearing outside the elevation's scale, said, and the last one forgotten."""
+        self._own_el, self._misfit = None, True
+        low, high = self._el_range
+        return JunkReply(
+            b"%g" % deg,
+            JunkReason.MISFIT,
+            f"{self._box}, turning the elevation, reads {deg:g}, outside {low:g}..{high:g}, "
+            "the elevation's scale: no elevation (a pot past its end, or a box calibrated for "
+            "an azimuth rotor?); not read as one, and no target is counted from it",
+        )
 
     def taken(self, reply: PositionReply) -> None:
         found, own = self._taken(reply)
         if found:
-            self._own_el = own
+            self._own_el, self._misfit = own, False
 
 
 def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
@@ -314,13 +358,15 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
     inner = spec.codec_factory
     if spec.has_elevation:
         return replace(spec, codec_factory=lambda: ElevationOnly(inner()), turns_azimuth=False)
+    scale = (max(0.0, spec.az_min_deg), min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg))
+    box = f"the {spec.display_name} ({spec.name})"
     return replace(  # a one-axis box turning the elevation
         spec,
-        codec_factory=lambda: OneAxisElevation(inner()),
+        codec_factory=lambda: OneAxisElevation(inner(), scale, box),
         has_elevation=True,
         turns_azimuth=False,
-        el_min_deg=max(0.0, spec.az_min_deg),
-        el_max_deg=min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg),
+        el_min_deg=scale[0],
+        el_max_deg=scale[1],
         nominal_el_speed_deg_s=spec.nominal_speed_deg_s,
     )
 

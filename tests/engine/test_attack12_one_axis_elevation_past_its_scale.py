@@ -11,15 +11,13 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.protocols.axes import ONE_AXIS_EL_MAX_DEG, Axis
+from bridge.core.model import Target
+from bridge.protocols import REGISTRY
+from bridge.protocols.axes import ONE_AXIS_EL_MAX_DEG, Axis, axis_spec
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 12: an RT-21 elevation box reading 300 is shown as elevation 300 with "
-    "nothing said, and the next target turns it 270 degrees from there",
-)
 def test_an_elevation_box_reading_past_the_axis_scale_is_said_and_never_shown() -> None:
     with VirtualComposite(
         "rt21",
@@ -31,3 +29,52 @@ def test_an_elevation_box_reading_past_the_axis_scale_is_said_and_never_shown() 
         shown = {s.elevation_deg for _, s in v.statuses if s.elevation_deg is not None}
         assert all(0.0 <= el <= ONE_AXIS_EL_MAX_DEG for el in shown), shown
         assert v.el.errors(), "the elevation box's reading of 300 was taken without a word"
+        words = [r.message for r in v.el.errors()]
+        assert any("reads 300" in w and "0..180" in w for w in words), words
+        t = v.now
+        v.aim(Target(10.0, 30.0))
+        v.run_for(60)
+        turns = [w for w in v.el.sent(since=t) if w.startswith(b"AP1")]
+        assert turns == [] and v.el.truth().az_deg == 300.0, turns
+
+
+@pytest.mark.parametrize(
+    ("said", "reading"),
+    [
+        (b"45.0;", 45.0),
+        (b"180.0;", 180.0),
+        (b"180.4;", 180.0),
+        (b"180.6;", None),
+        (b"300.0;", None),
+    ],
+)
+def test_an_elevation_boxs_bearing_is_read_within_the_axis_scale_and_half_a_degree_past_its_end(
+    said: bytes, reading: float | None
+) -> None:
+    codec = axis_spec(REGISTRY["rt21"], Axis.ELEVATION).codec_factory()
+    codec.encode_query()
+    replies = codec.feed(said)
+    assert [r.el_deg for r in replies if isinstance(r, PositionReply)] == (
+        [] if reading is None else [reading]
+    )
+    misfits = [r for r in replies if isinstance(r, JunkReply) and r.reason is JunkReason.MISFIT]
+    assert len(misfits) == (reading is None)
+
+
+def test_a_target_waits_while_the_elevation_box_reads_past_the_axis_scale() -> None:
+    """Online at 45, the box starts to read 300 (its pot gone past its end): a target's
+    elevation given then is never sent to it while it reads so: the box would turn from a
+    bearing nobody knows."""
+    with VirtualComposite("rt21", "rt21", emulators={Axis.ELEVATION: {"start_az_deg": 45.0}}) as v:
+        v.run_for(10)
+        assert v.status.elevation_deg == 45.0 and v.status.available
+        v.el.to_host = lambda data, now: b"300.0;" if data.strip(b" ;") else data
+        v.run_for(3)
+        t = v.now
+        v.aim(Target(10.0, 30.0))
+        v.run_for(30)
+        turns = [w for w in v.el.sent(since=t) if w.startswith(b"AP1")]
+        assert turns == [] and v.el.truth().az_deg == 45.0, turns
+        assert any("reads 300" in r.message for r in v.el.errors()), v.el.errors()
+        shown = {s.elevation_deg for _, s in v.statuses if s.elevation_deg is not None}
+        assert shown <= {45.0}, shown
