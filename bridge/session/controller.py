@@ -1663,7 +1663,10 @@ class Controller:
             except (KeyError, ValueError):
                 log.warning("%s: option %r not supported; skipped", self.name, name)
                 continue
-            log.info("%s: setting %s sent (%r)", self.name, name, frame)
+            if self.options.news(name, value):  # (options.py rule 5: a refresh is no news)
+                log.info("%s: setting %s sent (%r)", self.name, name, frame)
+            else:
+                log.debug("%s: setting %s sent again (%r)", self.name, name, frame)
             link.write_setting(frame, now)
             self.target_last = False  # a refusal now may be the setting's
         if taken:

@@ -28,6 +28,9 @@ Rules:
    waits, and only the last one set goes. Anyone who may publish
    ``R/option/<name>`` can send hundreds a second, and each went out as its own frame (a
    GS-232's line full of X commands, its polls crowded out, a target left unturned).
+5. A value written is told in the log once (``news``): the same value written again (rule 1's
+   refresh, a reconnect's) is not news (review 46: ``setting jam sent`` at INFO every minute
+   for a letter typed once, 1,440 journal lines a day for each).
 """
 
 from __future__ import annotations
@@ -56,6 +59,7 @@ class Options:
         self.revision = 0  # one more for every value set: the status shows them (session.py)
         self._factor: float | None = None  # rule 3: speed_factor's, until in_effect changes
         self.unanswered = False  # rule 1: a reply never came; owed again at the next reading
+        self._told: dict[str, SettingValue] = {}  # rule 5: the value last told in the log
 
     def _resent(self) -> set[str]:
         """The values the controller forgets, and those not sent since the start (rule 1)."""
@@ -122,6 +126,14 @@ class Options:
         self.in_effect.update(taken)
         self._factor = None
         return taken
+
+    def news(self, name: str, value: SettingValue) -> bool:
+        """Rule 5: whether writing ``value`` to ``name`` is news for the log (not the value
+        told last)."""
+        if name in self._told and self._told[name] == value:
+            return False
+        self._told[name] = value
+        return True
 
     def speed_factor(self) -> float:
         """Rule 3: 1.0 when nothing in effect changes the rotor's speed (made again only once

@@ -17,11 +17,6 @@ from bridge.session.options import OPTIONS_REFRESH_S
 from tests.engine.virtual import VirtualRotator
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 46: the refresh of a Rotor-EZ option every minute while idle is logged at "
-    "INFO each time (setting jam sent), as if the user had set it again",
-)
 def test_an_option_set_once_is_said_once_in_the_log(caplog: pytest.LogCaptureFixture) -> None:
     with VirtualRotator("rotorez") as v:
         v.run_until_state(MotionState.IDLE, 30)
