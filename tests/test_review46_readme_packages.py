@@ -10,8 +10,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -31,11 +29,6 @@ def _readme_try_it() -> str:
     return text[start : text.index("\n## ", start + 1)]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 46: README's Try it names the Debian packages ./tests/run installs, "
-    "but not iproute2 nor npm",
-)
 def test_the_readme_names_every_debian_package_the_test_command_installs() -> None:
     named = set(re.findall(r"`([a-z0-9][a-z0-9.+-]*)`", _readme_try_it()))
     for script in ("demo", "tests/run"):
