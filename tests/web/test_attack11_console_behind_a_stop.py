@@ -106,3 +106,43 @@ def stale_said(rig: Rig, after: float) -> bool:
     """R/error said, since ``after``, that a command sent before a STOP was not carried out."""
     m = rig.probe.last("rotor/error")
     return m is not None and m.t >= after and b"before a STOP" in m.payload
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 11: a console lock OFF sent before an MQTT lock ON, read after it while the "
+    "console's loop was busy, unlocks the rotator",
+)
+def test_a_console_lock_off_sent_before_an_mqtt_lock_on_and_read_after_it_leaves_it_locked(
+    rig: Rig,
+) -> None:
+    """The same hole's worse face: a script unlocks the rotator on the console; before the
+    console's busy loop reads it, someone about to climb the tower locks it from Home
+    Assistant (R/lock ON). The OFF, sent first, was carried out after the ON: unlocked."""
+    web = rig.sections["web"] = web_section()
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    console = ConsoleClient(web["port"])
+    console.session()
+    rot = app.rotators[0]
+    assert app.web is not None
+    body = json.dumps({"command": "lock", "on": False}).encode()
+    after = time.monotonic()
+    with socket.create_connection(("127.0.0.1", web["port"]), timeout=slow(10)) as script:
+        with console_loop_held(app.web) as held:
+            wait_until(held.is_set, slow(10), "the console's loop busy")
+            script.sendall(console.command_head("tower", body) + body)  # whole, in the kernel
+            rig.probe.publish("rotor/lock", "ON")  # after the OFF was sent
+            wait_until(lambda: rot.status.locked, slow(10), "locked")
+        response = http.client.HTTPResponse(script)
+        response.begin()
+        answer = response.status, response.read()
+    wait_until(
+        lambda: not rot.status.locked or stale_said(rig, after),
+        slow(10),
+        "the console's lock OFF carried out or refused",
+    )
+    assert rot.status.locked, f"unlocked after the lock ON, by the console's {answer}"
+    assert rig.probe.wait_value("rotor/lock/state", "ON", slow(10), after=after)
+    assert answer[0] == 409 and b"stale" in answer[1], answer
