@@ -1,0 +1,79 @@
+"""An eleventh attack pass, on the front ends together: WSJT-X's own statuses drowned by a
+flood of statuses of another program's name (bridge/interfaces/wsjtx/server.py rule 5).
+
+Rule 5 keeps room for WSJT-X (an earlier attack pass: eight local sockets flooding the port
+with heartbeats took the cap for all senders together, and 8 of WSJT-X's 10 statuses were
+dropped, the transmission's hold among them): the senders of the last STATUS_SENDERS (2)
+statuses are held to their own budget alone. Any status makes its sender one of them, a
+status of an instance nobody follows too (follow.py rule 8 ignores those later, in the
+session), so a flood of statuses from three local sockets pushes WSJT-X's own out of that
+room, spends the cap for all, and WSJT-X's next statuses are dropped undecoded again: the
+follow part never hears that the transmission began (the rotor turns while the station
+transmits, follow.py rule 3) nor the next partner. Real UDP sockets, virtual time (the clock
+stands still, nothing refills), as tests/wsjtx/test_server.py's flood tests.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+
+import pytest
+
+from bridge.interfaces.wsjtx import WsjtxListener
+from bridge.session.follow import Heard
+from tests.support import wait_until
+from tests.support import wsjtx as w
+from tests.support.clock import FakeClock
+from tests.support.waiting import slow
+
+
+class Ears:
+    def __init__(self) -> None:
+        self.id = "a"
+        self.got: list[Heard] = []
+
+    def heard(self, heard: Heard) -> None:
+        self.got.append(heard)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 11: a flood of statuses under another program's name from three local "
+    "sockets drops WSJT-X's own statuses (its transmission's hold among them)",
+)
+def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
+    clock = FakeClock()
+    ears = Ears()
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
+        with contextlib.ExitStack() as stack:
+            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
+            sent = 1
+            for _ in range(8):  # each up to its own budget: the cap for all spent between them
+                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                for _ in range(6):  # in batches the reader keeps up with
+                    for _ in range(40):
+                        s.sendto(forged, listener.address)
+                    sent += 40
+                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
+            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            for call in ("JA1ABC", "VK2XYZ"):
+                wsjtx.sendto(
+                    w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address
+                )
+            sent += 2
+            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's statuses read")
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+    finally:
+        listener.stop()
+
+
+def _read(listener: WsjtxListener) -> int:
+    """The datagrams the listener has read: handed on as statuses, or dropped undecoded."""
+    return listener.counts.statuses + listener.counts.over_budget
