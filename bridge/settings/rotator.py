@@ -404,17 +404,18 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,
         min_length=1,
         description="Yaesu GS-232B on a pseudo-terminal, for programs that want a serial port "
-        "(`rotctl -m 603 -r /tmp/rotor-gs232`): the path of a link to it, made at start and "
-        "removed at the end; anything but a link already there is refused",
-        examples=["/tmp/rotor-gs232"],
+        "(`rotctl -m 603 -r /run/rotor-bridge/gs232`): the path of a link to it, made at start "
+        "and removed at the end; anything but a link already there is refused. Under the "
+        "systemd unit /tmp is the service's own (PrivateTmp): put links under /run/rotor-bridge",
+        examples=["/run/rotor-bridge/gs232"],
         json_schema_extra={"unset": "no GS-232 pty"},
     )
     easycomm_pty: str | None = Field(
         None,
         min_length=1,
-        description="Easycomm II on a pseudo-terminal (`rotctl -m 202 -r /tmp/rotor-easycomm`), "
-        "linked at this path like gs232_pty",
-        examples=["/tmp/rotor-easycomm"],
+        description="Easycomm II on a pseudo-terminal (`rotctl -m 202 -r "
+        "/run/rotor-bridge/easycomm`), linked at this path like gs232_pty",
+        examples=["/run/rotor-bridge/easycomm"],
         json_schema_extra={"unset": "no Easycomm pty"},
     )
     gs232_replies: Literal["A", "B"] = Field(
@@ -443,9 +444,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     dcu1_pty: str | None = Field(
         None,
         min_length=1,
-        description="DCU-1 / Rotor-EZ on a pseudo-terminal (`rotctl -m 401 -r /tmp/rotor-dcu1`, "
-        "a logger under Wine), linked at this path like gs232_pty",
-        examples=["/tmp/rotor-dcu1"],
+        description="DCU-1 / Rotor-EZ on a pseudo-terminal (`rotctl -m 401 -r "
+        "/run/rotor-bridge/dcu1`, a logger under Wine), linked at this path like gs232_pty",
+        examples=["/run/rotor-bridge/dcu1"],
         json_schema_extra={"unset": "no DCU-1 pty"},
     )
     health_baseline_moves: int = Field(
