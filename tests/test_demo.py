@@ -231,7 +231,8 @@ def test_a_second_demo_keeps_turning_after_the_first_and_its_private_broker_end(
 ) -> None:
     """The README: a demo never gets in the way of another. A second demo found the first's
     private mosquitto answering, took it for the user's broker, and lost it for good when the
-    first ended: its rotator no longer answered a target. It starts a broker of its own."""
+    first ended: its rotator no longer answered a target. It starts a broker of its own, and
+    promises no Home Assistant devices there (review 46: none can see a broker on a free port)."""
     port = free_port()
     first = DemoProcess(["--mqtt-port", str(port)], tmp_path / "a")
     second = None
@@ -247,6 +248,9 @@ def test_a_second_demo_keeps_turning_after_the_first_and_its_private_broker_end(
         assert own != port
         instance = first_base.removeprefix("rotor-demo-")
         second.wait_line(rf"private mosquitto on 127\.0\.0\.1:{own} .*demo {instance}'s")
+        second.wait_line(r"A made-up satellite")  # (the line after the banner's)
+        assert "Home Assistant" not in second.output
+        assert "Home Assistant: the devices" in first.output  # (at the port asked for)
         first.proc.send_signal(signal.SIGINT)
         assert first.wait(slow(20)) == 0, first.output
         assert not answers("127.0.0.1", port)

@@ -347,7 +347,8 @@ def _run(
     app = App(settings)
     stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
     app.start()
-    _print_banner(args, settings, topics, where, instance, app.web.url if app.web else None)
+    web_url = app.web.url if app.web else None
+    _print_banner(args, settings, topics, where, instance, web_url, port == asked[1])
     print(
         f"  A made-up satellite, {demo_sky.NAME}, rises over the station around "
         f"{time.strftime('%H:%M:%S', time.gmtime(rise))} UTC (in {args.satellite_rises_in_s:g} s):"
@@ -376,7 +377,10 @@ def _print_banner(
     where: str,
     instance: str,
     app_url: str | None,
+    seen: bool = True,
 ) -> None:
+    """``seen``: the broker is at the address asked for, where a Home Assistant may listen (not
+    a private one on a free port, rule 5: none can see that)."""
     hp = (
         ""
         if (args.mqtt_host, args.mqtt_port) == ("127.0.0.1", 1883)
@@ -396,8 +400,14 @@ def _print_banner(
         f"  turn:  mosquitto_pub {hp}-t {first.target} -m 120",
         f"  stop:  mosquitto_pub {hp}-t {first.stop} -m STOP",
         *([f"  console: {app_url}  (the beam on a map, in any browser)"] if app_url else []),
-        f'  Home Assistant: the devices "Demo ... ({instance})"'
-        + (", removed again when the demo ends" if args.base_topic is None else ""),
+        *(
+            [
+                f'  Home Assistant: the devices "Demo ... ({instance})"'
+                + (", removed again when the demo ends" if args.base_topic is None else "")
+            ]
+            if seen
+            else []
+        ),
         "",
     ]
     print("\n".join(lines), flush=True)
