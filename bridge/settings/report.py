@@ -366,6 +366,8 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     found = "found" if os.path.exists(r.port) else "NOT FOUND"
     name = f"{r.id} ({r.name})" if r.name and r.name != r.id else r.id
     on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
+    if r.pointing.has_elevation:  # (review 46: an az/el rotator's elevations were never said)
+        on.append(f"elevations {r.pointing.el_min_deg:g}..{r.pointing.el_max_deg:g}")
     if r.rotctld_port is not None:
         on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
     titles = {"gs232": f"GS-232{r.gs232_replies}", "easycomm": "Easycomm II", "dcu1": "DCU-1"}
