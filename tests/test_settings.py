@@ -630,7 +630,7 @@ def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) 
     assert f"sky: Rot2Prog (rot2prog) on {missing} (NOT FOUND)" in said
     assert "rotctld on 127.0.0.1:4533" in said and "PstRotator UDP on 127.0.0.1:12000" in said
     assert "N1MM 'Tower' on 127.0.0.1:12040" in said and "takes bearings -90..630" in said
-    assert "takes bearings -90..630; elevations 0..90" in said  # (the Rot2Prog's)
+    assert "takes bearings -90..630; elevations -20..210" in said  # (the Rot2Prog's own)
     assert said.count("elevations") == 1  # (the Rotor-EZ has none)
     assert "broker: broker.lan:1883, MQTT 5, else 3.1.1, no TLS, user u, a password" in said
     assert "home assistant: on (discovery prefix homeassistant)" in said
