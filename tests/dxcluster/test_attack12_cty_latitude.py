@@ -40,22 +40,23 @@ def test_a_cty_entity_at_no_latitude_never_takes_the_spots_list_down() -> None:
 
 
 def test_the_entity_is_refused_where_it_is_read_and_said_naming_its_line() -> None:
-    """cty.py rule 5: the header and its prefixes skipped, the one reason kept for the log;
-    the same in cty.csv, and for a prefix's own <lat/lon> (that prefix alone)."""
+    """cty.py rule 5: the header refused, its calls placed nowhere (review 48), the one reason
+    kept for the log; the same in cty.csv, and for a prefix's own <lat/lon> (that prefix alone,
+    at its entity's place)."""
     cty = parse_dat(CTY_DAT + SLIP)
     assert cty.lookup("T88AB") is None and cty.lookup("JA1ABC") is not None
     assert cty.refused == [
-        "line 12: Palau: latitude 357.0 is no place's (-90..90); the entity and its prefixes "
-        "skipped"
+        "line 12: Palau: latitude 357.0 is no place's (-90..90); its calls are placed nowhere"
     ]
     csv = parse_csv(CTY_CSV + "T8,Palau,22,OC,27,64,7.45,-534.53,-9.0,T8;\n")
     assert csv.lookup("T88AB") is None and csv.lookup("VK2ABC") is not None
     assert csv.refused == [
-        "line 6: Palau: longitude -534.53 is no place's (-180..180); the entity and its "
-        "prefixes skipped"
+        "line 6: Palau: longitude -534.53 is no place's (-180..180); its calls are placed "
+        "nowhere"
     ]
     odd = parse_dat(CTY_DAT.replace("<27.10/-142.20>", "<127.10/-142.20>"))
-    assert odd.lookup("JA1XYZ/JD1") is None and odd.lookup("JA1ABC") is not None
+    japan = odd.lookup("JA1ABC")
+    assert japan is not None and odd.lookup("JA1XYZ/JD1") == japan  # (Japan's own place)
     assert len(odd.refused) == 1 and odd.refused[0].startswith("line 3: Japan's =JA1XYZ/JD1<")
 
 

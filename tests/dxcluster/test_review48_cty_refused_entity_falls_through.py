@@ -47,14 +47,6 @@ def listed(cty: Cty, call: str) -> dict[str, object]:
     return entry  # type: ignore[no-any-return]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 48: a cty entity refused for a position no place has (cty.py rule 5) leaves its "
-        "calls to the longest prefix left, another entity's: a slip in Hawaii's line places "
-        "KH6ABC in the United States, its bearing the mainland's, said nowhere but a start-up log"
-    ),
-)
 @pytest.mark.parametrize(
     "cty",
     [parse_dat(CTY_DAT + HAWAII_SLIP_DAT), parse_csv(CTY_CSV + HAWAII_SLIP_CSV)],
@@ -69,14 +61,6 @@ def test_a_call_of_a_refused_entity_is_not_placed_in_another(cty: Cty) -> None:
     assert entry.get("bearing_deg") is None, entry  # no bearing the rotor would be turned to
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 48: a prefix whose own <lat/lon> is refused (cty.py rule 5) is skipped, and its "
-        "calls go to the longest prefix left, another entity's: KH6ABC placed in the United "
-        "States though Hawaii's header is good"
-    ),
-)
 def test_a_prefix_whose_override_is_refused_stays_its_entitys() -> None:
     cty = parse_dat(CTY_DAT + HAWAII_PREFIX_SLIP_DAT)
     assert cty.refused

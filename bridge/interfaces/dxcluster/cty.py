@@ -24,7 +24,11 @@ Rules:
    entity's header with its prefixes, a prefix's ``<lat/lon>`` override alone. Each is
    skipped and counted (rule 4) and said in ``refused``, naming the line and the entity or
    prefix, for the loader to log once (interfaces/dxcluster/setup.py); taken, it made every
-   ``B/spots`` with a call of it raise in geo.great_circle (attack 12).
+   ``B/spots`` with a call of it raise in geo.great_circle (attack 12). A refused entity's
+   prefixes and calls are kept, as no place (``lookup`` gives None for them): skipped, its
+   calls went to the longest prefix left, another entity's (review 48: a slip in Hawaii's
+   line placed every KH6 in the United States, its bearing the mainland's); a prefix whose
+   override is refused is its entity's, at the entity's place.
 """
 
 from __future__ import annotations
@@ -71,8 +75,8 @@ class Entity:
 
 @dataclass
 class Cty:
-    prefixes: dict[str, Entity]
-    exact: dict[str, Entity]
+    prefixes: dict[str, Entity | None]  # (None: a refused entity's, no place: rule 5)
+    exact: dict[str, Entity | None]
     skipped: int = 0
     refused: list[str] = field(default_factory=list)  # rule 5: what was refused, and why
 
@@ -80,7 +84,7 @@ class Cty:
         """Rule 3."""
         whole = call.strip().upper()
         if whole in self.exact:
-            return self.exact[whole]
+            return self.exact[whole]  # (None: a refused entity's, rule 5)
         parts = [p for p in whole.split("/") if p]
         if not parts or any(p in _NOWHERE for p in parts[1:]):
             return None
@@ -92,9 +96,8 @@ class Cty:
         else:
             base = min(parts[:2], key=len)  # the first of equals: min keeps it
         for end in range(len(base), 0, -1):
-            entity = self.prefixes.get(base[:end])
-            if entity is not None:
-                return entity
+            if base[:end] in self.prefixes:
+                return self.prefixes[base[:end]]  # (None: a refused entity's, rule 5)
         return None
 
 
@@ -119,17 +122,27 @@ def _override(base: Entity, token: str) -> tuple[str, Entity]:
     return plain, replace(base, **changes) if changes else base  # type: ignore[arg-type]
 
 
-def _add(cty: Cty, base: Entity, tokens: list[str], where: str) -> None:
+def _add(cty: Cty, base: Entity | None, tokens: list[str], where: str) -> None:
+    """The prefixes and calls of ``base`` (None: an entity refused, rule 5: kept as no place)."""
     for token in tokens:
         token = token.strip()
         if not token:
             continue
+        entity: Entity | None
         try:
-            plain, entity = _override(base, token)
-        except _Nowhere as exc:  # rule 5
+            if base is None:
+                plain, entity = _OVERRIDE.sub("", token).strip().upper(), None
+                if not _PLAIN.fullmatch(plain):
+                    raise ValueError(token)
+            else:
+                plain, entity = _override(base, token)
+        except _Nowhere as exc:  # rule 5: the prefix stays its entity's, at its place
+            assert base is not None
             cty.skipped += 1
-            cty.refused.append(f"{where}: {base.name}'s {token}: {exc}; that prefix skipped")
-            continue
+            cty.refused.append(f"{where}: {base.name}'s {token}: {exc}; the entity's place taken")
+            plain, entity = _OVERRIDE.sub("", token).strip().upper(), base
+            if not _PLAIN.fullmatch(plain):
+                continue
         except ValueError:
             cty.skipped += 1
             continue
@@ -155,33 +168,35 @@ def _entity(name: str, cq: str, itu: str, cont: str, lat: str, lon: str, prefix:
 def _refuse(cty: Cty, where: str, name: str, exc: _Nowhere) -> None:
     """Rule 5: an entity refused, said once."""
     cty.skipped += 1
-    cty.refused.append(f"{where}: {name.strip()}: {exc}; the entity and its prefixes skipped")
+    cty.refused.append(f"{where}: {name.strip()}: {exc}; its calls are placed nowhere")
 
 
 def parse_dat(text: str) -> Cty:
     """cty.dat: a header line of 8 ``:``-ended fields, then prefixes up to ``;``."""
     cty = Cty({}, {})
     base: Entity | None = None
+    nowhere = False  # rule 5: the header was refused: its prefixes are kept as no place
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         if not line[0].isspace():  # a header
             fields = line.split(":")
-            base = None
+            base, nowhere = None, False
             try:
                 name, cq, itu, cont, lat, lon, _utc, prefix = fields[:8]
                 base = _entity(name, cq, itu, cont, lat, lon, prefix)
             except _Nowhere as exc:
                 _refuse(cty, f"line {number}", fields[0], exc)
+                nowhere = True
             except ValueError:
                 cty.skipped += 1
             continue
-        if base is None:
+        if base is None and not nowhere:
             cty.skipped += 1
             continue
         _add(cty, base, line.strip().rstrip(";").split(","), f"line {number}")
         if line.rstrip().endswith(";"):
-            base = None
+            base, nowhere = None, False
     return cty
 
 
@@ -192,12 +207,13 @@ def parse_csv(text: str) -> Cty:
         if not line.strip():
             continue
         fields = line.split(",", 9)
+        base: Entity | None
         try:
             prefix, name, _dxcc, cont, cq, itu, lat, lon, _utc, rest = fields
             base = _entity(name, cq, itu, cont, lat, lon, prefix)
         except _Nowhere as exc:
             _refuse(cty, f"line {number}", fields[1], exc)
-            continue
+            base = None  # rule 5: its prefixes kept as no place
         except ValueError:
             cty.skipped += 1
             continue
@@ -214,6 +230,6 @@ def load(path: Path) -> Cty:
     first = next((line for line in text.splitlines() if line.strip()), "")
     csv = first.count(",") >= 9 and ":" not in first.split(",")[0]
     cty = parse_csv(text) if csv else parse_dat(text)
-    if not cty.prefixes and not cty.exact:
+    if not any(e is not None for e in (*cty.prefixes.values(), *cty.exact.values())):
         raise CtyError(f"cty_file {path}: no entity in it (is it AD1C's cty.dat or cty.csv?)")
     return cty
