@@ -552,17 +552,25 @@ def _left_behind(
 
 
 def _how_far(
-    reply: PositionReply, az_deg: float, el_deg: float | None, noise_deg: float, wraps: bool
+    reply: PositionReply,
+    az_deg: float,
+    el_deg: float | None,
+    noise_deg: float,
+    wraps: bool,
+    turns_az: bool = True,
 ) -> str:
     """Rule 9: how far ``reply`` is from ``az_deg``/``el_deg``, in an error's words: on the
     axis that is off (more than ``noise_deg``), both when both are (attack 12: the azimuth's
     alone told an elevation glitch, 45 read as 145, as 0 degrees off); a bearing alone as a
-    number of degrees."""
+    number of degrees. A box that never turns its azimuth (``turns_az``: a composite's
+    elevation box) names that channel as its own, none of the rotator's (review 48: "160° off
+    in azimuth" while the antenna's azimuth, the other box's, never moved)."""
     az_off = mo.angle_error(reply.az_deg, az_deg, wraps)
     if reply.el_deg is None or el_deg is None:
         return f"{az_off:g}°"
     el_off = abs(reply.el_deg - el_deg)
-    parts = [(off, axis) for off, axis in ((az_off, "azimuth"), (el_off, "elevation"))]
+    azimuth = "azimuth" if turns_az else "the box's own azimuth channel (none of the antenna's)"
+    parts = [(off, axis) for off, axis in ((az_off, azimuth), (el_off, "elevation"))]
     off_axes = [(off, axis) for off, axis in parts if off > noise_deg] or parts
     return " and ".join(f"{off:g}° off in {axis}" for off, axis in off_axes)
 
@@ -1090,7 +1098,9 @@ class Controller:
         # motion to MOVING, and a second glitch in its settle time was published as a move)
         if not _apart(reply, stands, el_stands, cfg.noise_deg, wraps):
             if doubted.reply is not None:  # back where it stood: the one before was noise
-                away = _how_far(doubted.reply, stands, el_stands, cfg.noise_deg, wraps)
+                away = _how_far(
+                    doubted.reply, stands, el_stands, cfg.noise_deg, wraps, cfg.spec.turns_azimuth
+                )
                 self._say(
                     f"a reading at rest of {_where(doubted.reply)}, {away} from where the "
                     "rotor stands, was not said again: ignored (line noise?)",

@@ -51,8 +51,7 @@ def test_the_entity_is_refused_where_it_is_read_and_said_naming_its_line() -> No
     csv = parse_csv(CTY_CSV + "T8,Palau,22,OC,27,64,7.45,-534.53,-9.0,T8;\n")
     assert csv.lookup("T88AB") is None and csv.lookup("VK2ABC") is not None
     assert csv.refused == [
-        "line 6: Palau: longitude -534.53 is no place's (-180..180); its calls are placed "
-        "nowhere"
+        "line 6: Palau: longitude -534.53 is no place's (-180..180); its calls are placed nowhere"
     ]
     odd = parse_dat(CTY_DAT.replace("<27.10/-142.20>", "<127.10/-142.20>"))
     japan = odd.lookup("JA1ABC")

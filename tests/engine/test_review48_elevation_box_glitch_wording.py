@@ -11,19 +11,10 @@ two emulated GS-232B boxes."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 48: a flipped bit in a composite elevation box's own azimuth channel is told as "
-        "'160° off in azimuth' on the rotator's R/error (f45bac04), an axis that box never turns"
-    ),
-)
 def test_an_elevation_box_own_azimuth_glitch_is_not_told_as_the_rotators_azimuth() -> None:
     with VirtualComposite(
         "gs232b",
