@@ -25,6 +25,13 @@ def test_a_turn_by_hand_right_after_the_lock_on_is_fought_at_once(rig: Rig) -> N
     assert rest is not None
     v.lock(True)
     v.run_for(1.0)  # (inside the Rotor-EZ's brake window after the lock's stop)
+    turned_by_hand_and_fought(v, rest)
+
+
+def turned_by_hand_and_fought(v: VirtualRotator, rest: float) -> None:
+    """A hand at the panel turns the locked rotor from ``rest`` toward 300, the replies after
+    its first reading garbled (attack 9): fought within 20 degrees, as the same turn begun five
+    seconds or more after the lock ON is (at 158)."""
     t = v.now
     garbled = garble_after_the_first_move(v, rest)
     v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
@@ -32,5 +39,4 @@ def test_a_turn_by_hand_right_after_the_lock_on_is_fought_at_once(rig: Rig) -> N
     assert len(garbled) == 2
     assert v.status.locked
     assert MotionState.MOVING in {s.state for s in v.published(since=t)}
-    # as the same turn begun five seconds or more after the lock ON: fought at 158
     assert v.truth().az_deg < rest + 20

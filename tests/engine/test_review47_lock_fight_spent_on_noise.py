@@ -12,8 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from bridge.core.model import MotionState
-from tests.engine.test_attack9_turn_unseen_after_two_garbles import garble_after_the_first_move
+from tests.engine.test_review43_lock_fight_in_brake_window import turned_by_hand_and_fought
 from tests.engine.test_session_doubt import at_rest, flip_next_hundreds
 from tests.engine.virtual import VirtualRotator
 
@@ -29,12 +28,4 @@ def test_a_flipped_reading_before_a_turn_by_hand_does_not_hold_back_its_fight(ri
     flipped = flip_next_hundreds(v)  # line noise: one reading of 350
     v.run_for(1.0)
     assert len(flipped) == 1
-    t = v.now
-    garbled = garble_after_the_first_move(v, rest)
-    v.manual_rotate(300.0)  # a hand at the panel, the rotor locked
-    v.run_for(40)
-    assert len(garbled) == 2
-    assert v.status.locked
-    assert MotionState.MOVING in {s.state for s in v.published(since=t)}
-    # as the same turn without the flipped reading before it (review 43's test): fought at 158
-    assert v.truth().az_deg < rest + 20
+    turned_by_hand_and_fought(v, rest)  # (as without the flipped reading: review 43's test)
