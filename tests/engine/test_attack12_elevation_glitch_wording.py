@@ -39,17 +39,7 @@ def test_a_glitch_on_both_axes_at_rest_is_told_on_both(
     v.run_until(lambda r: r.statuses and r.status.available, 30, "online")
     v.run_for(5)
     t = v.now
-    glitched: list[bytes] = []  # the next reply, a byte at a time, read as the glitch's
-
-    def in_place(data: bytes, now: float) -> bytes:
-        if len(glitched) > 1 and glitched[-1] == b"\n":
-            return data
-        if glitched or data == b"A":
-            glitched.append(data)
-            return b"AZ=350  EL=145\r\n" if len(glitched) == 1 else b""
-        return data
-
-    v.to_host = in_place
+    glitched = v.read_once_as(b"A", b"AZ=350  EL=145\r\n")  # the next reply
     v.run_for(20)
     assert b"".join(glitched).startswith(b"AZ=150"), glitched
     assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(150.0, 45.0)}

@@ -27,17 +27,7 @@ def test_an_elevation_box_own_azimuth_glitch_is_not_told_as_the_rotators_azimuth
         v.run_for(20)
         assert (v.status.bearing_deg, v.status.elevation_deg) == (120.0, 45.0)
         t = v.now
-        glitched: list[bytes] = []  # the elevation box's next reply, read as the glitch's
-
-        def in_place(data: bytes, now: float) -> bytes:
-            if len(glitched) > 1 and glitched[-1] == b"\n":
-                return data
-            if glitched or data == b"A":
-                glitched.append(data)
-                return b"AZ=350  EL=045\r\n" if len(glitched) == 1 else b""
-            return data
-
-        v.el.to_host = in_place
+        glitched = v.el.read_once_as(b"A", b"AZ=350  EL=045\r\n")  # the box's next reply
         v.run_for(20)
         assert b"".join(glitched).startswith(b"AZ=150"), glitched
         shown = {(s.bearing_deg, s.elevation_deg) for at, s in v.statuses if at >= t}

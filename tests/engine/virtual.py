@@ -296,6 +296,23 @@ class VirtualRotator:
         self.to_host = glitch
         return when
 
+    def read_once_as(self, first: bytes, reply: bytes) -> list[bytes]:
+        """The next reply that begins with ``first`` alone (the device's output is paced, a
+        byte at a time) reaches the host as ``reply``, once, through its LF; the list returned
+        gets the bytes the device sent meanwhile (a flipped bit in one answer)."""
+        sent: list[bytes] = []
+
+        def in_place(data: bytes, now: float) -> bytes:
+            if len(sent) > 1 and sent[-1] == b"\n":
+                return data
+            if sent or data == first:
+                sent.append(data)
+                return reply if len(sent) == 1 else b""
+            return data
+
+        self.to_host = in_place
+        return sent
+
     # -- front panel ----------------------------------------------------------------------------
     def jam(self) -> None:
         self.device.jam(self.now)
