@@ -62,7 +62,11 @@ Rules:
    date the bytes as the TCP ports' do (``waited``: the pty held nothing unread before the
    wait its bytes ended), and the fence hands that with each move and stop (front.py rule 3:
    the remote stamps with it; review 24: the remote's GS-232 pty dated nothing, and a move
-   written before a STOP from Home Assistant, read after it, turned the rotor).
+   written before a STOP from Home Assistant, read after it, turned the rotor). A command
+   that keeps a bearing for a later one (the DCU-1's ``AP1``, gs232/ package rule 10) keeps
+   with it what the fence says of its own bytes' look, not the count when it is read (attack
+   11: ``AP1200;`` written before an MQTT STOP, read after it over the budget, was turned to
+   by the ``AM1;`` written after the STOP).
 """
 
 from __future__ import annotations

@@ -16,16 +16,21 @@ The budget is gated as in test_attack_fence_pause.py (no clock, no sleep).
 from __future__ import annotations
 
 import json
+import os
+import select
 import socket
 import time
+from pathlib import Path
 
 import pytest
 
-from bridge.interfaces import tcplines
+from bridge.interfaces import ptylines, tcplines
+from bridge.interfaces.ptylines import PtyLineServer
 from tests.integration.test_attack_fence_pause import mqtt_stop_carried, read_gate, shut_after_read
 from tests.support import free_port
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
+from tests.test_ptylines import Client
 
 
 def _read(sock: socket.socket, size: int) -> bytes:
@@ -37,11 +42,6 @@ def _read(sock: socket.socket, size: int) -> bytes:
     return got
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 11: a DCU-1 AP1 bearing sent before an MQTT STOP, read after it, is turned "
-    "to by the AM1; sent after the STOP",
-)
 def test_an_ap1_bearing_sent_before_an_mqtt_stop_is_not_turned_to_after_it(
     rig: Rig, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -77,3 +77,53 @@ def refused(rig: Rig, after: float) -> bool:
     """R/error said, since ``after``, that the AM1; came after a STOP."""
     m = rig.probe.last("rotor/error")
     return m is not None and m.t >= after and "AM1" in json.loads(m.payload).get("message", "")
+
+
+def test_an_ap1_bearing_written_to_the_pty_before_an_mqtt_stop_is_not_turned_to_after_it(
+    rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same on the DCU-1 pty (ptylines.py rule 10: the same session, its fence told the
+    look that held the bytes): AP1200; written while the thread sleeps over its budget, an MQTT
+    STOP, then AM1;. The rotor stays still."""
+    gate, spent = read_gate(monkeypatch, ptylines)
+    path = str(tmp_path / "rotor-dcu1")
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, dcu1_pty=path)
+    app = rig.start()
+    rig.ready("tower")
+    (server,) = [e for e in app.emulations if isinstance(e, PtyLineServer) and e.path == path]
+    client = Client(path)
+    try:
+        spent.clear()
+        assert _answer(client, b"AI1;") == b";010"
+        shut_after_read(gate, spent)  # over its budget from its next read on
+        assert _answer(client, b"AI1;") == b";010"  # read and answered: its thread now sleeps
+        os.write(client.fd, b"AP1200;")  # before the STOP: in the pty, unread
+        wait_until(lambda: tcplines.unread(server._master) == 7, slow(5), "the AP1 in the pty")
+        mqtt_stop_carried(rig, emu, server)  # the STOP carried out
+        t = time.monotonic()
+        os.write(client.fd, b"AM1;")  # after the STOP
+        gate.set()
+        wait_until(
+            lambda: emu.state().is_moving or refused(rig, t),
+            slow(10),
+            "the AM1; carried out or refused",
+        )
+    finally:
+        client.close()
+    assert not emu.state().is_moving, "turned to the AP1 bearing given before the STOP"
+
+
+def _answer(client: Client, command: bytes) -> bytes:
+    """``command`` written to the pty and its four-byte answer read."""
+    os.write(client.fd, command)
+    got = b""
+    while len(got) < 4:
+        chunk = _read_some(client)
+        assert chunk, f"the DCU-1 pty answered {got!r} only"
+        got += chunk
+    return got
+
+
+def _read_some(client: Client) -> bytes:
+    ready = select.select([client.fd], [], [], slow(5))[0]
+    return os.read(client.fd, 4) if ready else b""

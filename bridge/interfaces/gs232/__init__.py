@@ -96,7 +96,12 @@ Rules:
     next one's), and if no STOP or lock ON (from any interface, this client's ``;`` too) came
     after it: a bearing given before a STOP is never turned to after it (docs/architecture.md
     rule 11; review 102: the clock alone let an ``AM1;`` after an operator's STOP turn the
-    rotor to the ``AP1``'s bearing); else it is refused on ``R/error`` and turns nothing;
+    rotor to the ``AP1``'s bearing). "After it" is after its bytes came, not after it was
+    read: the halts are those of the look that held its bytes (tcplines.py rule 9, ``Fence``;
+    ptylines.py for a pty), and a halt not this client's own counted between that look and
+    the ``AP1``'s read overtook it (attack 11: a client paused over its byte budget had its
+    ``AP1200;`` read after an MQTT STOP sent after it, and its ``AM1;`` turned the rotor to
+    200); else it is refused on ``R/error`` and turns nothing;
     ``AP1ddd`` CR
     turns at once; ``AI1;`` (or ``AI1`` CR) answers ``;ddd``, the true bearing rounded to a
     whole degree, 360 as 000, and nothing while the bridge does not have it (Hamlib's

@@ -340,8 +340,9 @@ class Dcu1Session(_Session[Dcu1Request]):
     ) -> None:
         super().__init__(rotator, peer)
         self._clock = clock
-        # AP1's bearing, when, the halts then, and the count its move hands to submit (since)
-        self._stored: tuple[int, float, int, int] | None = None
+        # AP1's bearing, when, the halts when its bytes came (None: a halt not its own came
+        # after them, before it was read), and the count its move hands to submit (since)
+        self._stored: tuple[int, float, int | None, int] | None = None
 
     def reader(self) -> Dcu1Reader:
         return Dcu1Reader()
@@ -365,10 +366,14 @@ class Dcu1Session(_Session[Dcu1Request]):
         if item.kind is Dcu1Kind.STORE:
             assert item.az_deg is not None
             rotator = self.rotator
+            # package rule 10: the halts when its bytes came (the look that held them,
+            # tcplines.py rule 9), not when it is read: a halt counted between the two,
+            # not this client's own, overtook it (None: an AM1 will not turn to it)
+            halts = None if self.fence.overtaken() else rotator.halts
             self._stored = (
                 item.az_deg,
                 self._clock(),
-                rotator.halts,
+                halts,
                 rotator.halts_for(Source.DCU1),
             )
             return b""
@@ -390,7 +395,8 @@ class Dcu1Session(_Session[Dcu1Request]):
                 why = f"AM1; with no bearing stored by AP1 in the last {DCU1_STORED_S:g} s"
                 self.rotator.report_refusal(why, described, origin=self.origin)
                 return DCU1_ERROR
-            if self.rotator.halts != stored[2]:  # package rule 10: a STOP came after it
+            if stored[2] is None or self.rotator.halts != stored[2]:  # rule 10: a STOP came
+                # after it (stored[2] None: before it was read, a client paused over its budget)
                 why = "AM1; after a STOP or lock ON that came after the AP1's bearing"
                 self.rotator.report_refusal(why, described, origin=self.origin)
                 return DCU1_ERROR
