@@ -3,12 +3,12 @@ flood of statuses of another program's name (bridge/interfaces/wsjtx/server.py r
 
 Rule 5 keeps room for WSJT-X (an earlier attack pass: eight local sockets flooding the port
 with heartbeats took the cap for all senders together, and 8 of WSJT-X's 10 statuses were
-dropped, the transmission's hold among them): the senders of the last STATUS_SENDERS (2)
-statuses are held to their own budget alone. Any status makes its sender one of them, a
+dropped, the transmission's hold among them): the senders of the last two statuses were
+held to their own budget alone. Any status made its sender one of them, a
 status of an instance nobody follows too (follow.py rule 8 ignores those later, in the
-session), so a flood of statuses from three local sockets pushes WSJT-X's own out of that
-room, spends the cap for all, and WSJT-X's next statuses are dropped undecoded again: the
-follow part never hears that the transmission began (the rotor turns while the station
+session), so a flood of statuses from three local sockets pushed WSJT-X's own out of that
+room, spent the cap for all, and WSJT-X's next statuses were dropped undecoded again: the
+follow part never heard that the transmission began (the rotor turns while the station
 transmits, follow.py rule 3) nor the next partner. Real UDP sockets, virtual time (the clock
 stands still, nothing refills), as tests/wsjtx/test_server.py's flood tests.
 """
@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import socket
-
-import pytest
 
 from bridge.interfaces.wsjtx import WsjtxListener
 from bridge.session.follow import Heard
@@ -37,11 +35,6 @@ class Ears:
         self.got.append(heard)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 11: a flood of statuses under another program's name from three local "
-    "sockets drops WSJT-X's own statuses (its transmission's hold among them)",
-)
 def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
     clock = FakeClock()
     ears = Ears()
@@ -77,3 +70,40 @@ def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
 def _read(listener: WsjtxListener) -> int:
     """The datagrams the listener has read: handed on as statuses, or dropped undecoded."""
     return listener.counts.statuses + listener.counts.over_budget
+
+
+def test_wsjtx_restarted_on_a_new_socket_keeps_its_room_through_the_flood() -> None:
+    """The room is WSJT-X's instance's latest sender: WSJT-X restarted (a new socket, the same
+    Id) is heard through the same flood, its first status after the restart taken within
+    the shared cap before the flood spends it."""
+    clock = FakeClock()
+    ears = Ears()
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
+        with contextlib.ExitStack() as stack:
+            first = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            first.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
+            again = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            again.sendto(w.status(w.StatusFields(dx_call="G4XYZ")), listener.address)
+            wait_until(lambda: len(ears.got) == 2, slow(10), "WSJT-X heard again")
+            sent = 2
+            for _ in range(8):
+                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                for _ in range(6):
+                    for _ in range(40):
+                        s.sendto(forged, listener.address)
+                    sent += 40
+                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
+            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            again.sendto(
+                w.status(w.StatusFields(dx_call="JA1ABC", transmitting=True)), listener.address
+            )
+            sent += 1
+            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's status read")
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "G4XYZ", "JA1ABC"], f"WSJT-X's statuses handed on: {ours}"
+    finally:
+        listener.stop()

@@ -25,13 +25,20 @@ Rules:
    a second each, a second's worth at once, each one costing 1 + its size in KiB, MAX_SOURCES
    remembered, RATE_ALL_S for all together), far above WSJT-X's few a second. Over it a
    datagram is dropped undecoded and counted (``counts.over_budget``), said at most once per
-   JUNK_LOG_S. Each datagram's decoding is linear in its size. The senders of the last
-   STATUS_SENDERS statuses handed on (WSJT-X's own sockets: other programs on the port send
-   heartbeats, replies and the like) are held to their own budget alone, not to what all
-   senders together may spend: an attack pass flooded the port with well-formed heartbeats
-   from eight local sockets, the cap for all together went to them, and 8 of WSJT-X's 10
-   statuses were dropped, the transmission's hold of the beam among them. (A program that
-   sends statuses as WSJT-X does can be followed as it is: the port is the shack's.)
+   JUNK_LOG_S. Each datagram's decoding is linear in its size. WSJT-X's own socket is held
+   to its own budget alone, not to what all senders together may spend: an attack pass
+   flooded the port with well-formed heartbeats from eight local sockets, the cap for all
+   together went to them, and 8 of WSJT-X's 10 statuses were dropped, the transmission's hold
+   of the beam among them. WSJT-X's socket is the latest sender of a status of a program
+   following listens to: the first STATUS_INSTANCES instances (WSJT-X's Id) heard since the
+   start, one sender kept for each, so one program's statuses never push another's sender
+   out (two radios, one WSJT-X each: session/follow.py rule 8 follows the first heard, or the
+   first on an antenna's bands). The room went first to the senders of the last two statuses
+   of any instance (attack 11: three local sockets flooding statuses of another program's
+   name, which following ignores, took both places, spent the cap for all, and WSJT-X's next
+   statuses were dropped undecoded again). Statuses of any later instance, and every other
+   message, share the cap for all. (A program that sends statuses under a name heard first,
+   or as WSJT-X does, can be followed as it is: the port is the shack's.)
 """
 
 from __future__ import annotations
@@ -45,7 +52,6 @@ import struct
 import sys
 import threading
 import time
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -71,7 +77,7 @@ def _loopback(address: str) -> bool:
 RATE_DATAGRAMS_S = 200.0  # rule 5: a sender's budget, a second
 RATE_ALL_S = 1000.0  # rule 5: every sender's together
 MAX_SOURCES = 64  # rule 5
-STATUS_SENDERS = 2  # rule 5: the latest senders of a status, held to their own budget alone
+STATUS_INSTANCES = 2  # rule 5: the programs heard first, their senders held to their own budget
 PER_WAKEUP = 32  # rule 5: datagrams read at one wake-up
 
 
@@ -117,7 +123,7 @@ class WsjtxListener:
         self._junk_log = _Rarely(JUNK_LOG_S)
         self._fault_log = _Rarely(JUNK_LOG_S)
         self._foreign_log = _Rarely(JUNK_LOG_S)
-        self._status_senders: OrderedDict[tuple[str, int], None] = OrderedDict()  # rule 5
+        self._status_senders: dict[str, tuple[str, int]] = {}  # rule 5: instance -> sender
         self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
@@ -200,23 +206,24 @@ class WsjtxListener:
                 continue
             now = self.clock()
             sender = source[0], source[1]
-            own = sender in self._status_senders  # rule 5: WSJT-X's, its room kept
+            own = sender in self._status_senders.values()  # rule 5: WSJT-X's, its room kept
             if not (budgets.allow_own(sender, now) if own else budgets.allow(sender, now)):
                 self._flooded(source[0])
                 continue
             try:
-                if self.datagram(datagram, source[0]):
-                    self._status_senders[sender] = None
-                    self._status_senders.move_to_end(sender)  # the latest last
-                    while len(self._status_senders) > STATUS_SENDERS:
-                        self._status_senders.popitem(last=False)
+                instance = self.datagram(datagram, source[0])
+                senders = self._status_senders
+                if instance is not None and (
+                    instance in senders or len(senders) < STATUS_INSTANCES
+                ):
+                    senders[instance] = sender  # rule 5: its latest sender
             except Exception as exc:  # rule 3: a bug behind it, not the end
                 self._fault("a WSJT-X datagram", exc)
             budgets.spend(sender, 1 + len(datagram) / 1024, now)
 
-    def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> bool:
-        """One datagram from the address ``source``, decoded and handed on (rules 1-4); True
-        if it was a status, handed on."""
+    def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> str | None:
+        """One datagram from the address ``source``, decoded and handed on (rules 1-4); the
+        status's instance (WSJT-X's Id) if it was a status, handed on, else None."""
         if _loopback(self.bind) and not _loopback(source):  # rule 1
             self.counts.foreign += 1
             count = self._foreign_log.due(self.clock())
@@ -228,7 +235,7 @@ class WsjtxListener:
                     self.bind,
                     source,
                 )
-            return False
+            return None
         try:
             message = decode(datagram)
         except Malformed as exc:
@@ -236,10 +243,10 @@ class WsjtxListener:
             count = self._junk_log.due(self.clock())
             if count is not None:
                 log.info("WSJT-X port: %d malformed datagram(s) dropped, the last: %s", count, exc)
-            return False
+            return None
         if not isinstance(message, Status):
             self.counts.ignored += 1
-            return False
+            return None
         self.counts.statuses += 1
         heard = Heard(
             message.dx_call,
@@ -253,7 +260,7 @@ class WsjtxListener:
                 rotator.heard(heard)
             except Exception as exc:  # rule 3
                 self._fault(f"handing WSJT-X's status to {rotator.id}", exc)
-        return True
+        return message.instance
 
     def _flooded(self, source: str) -> None:
         """Rule 5."""
