@@ -1,19 +1,17 @@
 """An eleventh attack pass, on the front ends together: a junk flood on the PstRotator port
 drops N1MM's turns on its own port (bridge/interfaces/loggers/server.py rule 8).
 
-One thread and one ``SourceBudgets`` serve every logger socket: each sender has its own
+One thread and one ``SourceBudgets`` served every logger socket: each sender had its own
 budget, and all senders together RATE_ALL_S a second. A local program flooding the PST port
-from six sockets, each within its own budget, spends the cap for all, and every datagram
-that is no stop is then dropped unparsed whoever sent it: N1MM Logger+'s turn of its antenna,
-on another port, for another rotator, is lost while the flood lasts (stops still go). The
+from six sockets, each within its own budget, spent the cap for all, and every datagram
+that was no stop was then dropped unparsed whoever sent it: N1MM Logger+'s turn of its antenna,
+on another port, for another rotator, was lost while the flood lasted (stops still went). The
 WSJT-X listener keeps room for its program after an attack pass (wsjtx/server.py rule 5); the
 loggers keep none. Real UDP sockets, virtual time (the clock stands still, nothing refills),
 as tests/loggers/test_server.py's flood tests.
 """
 
 from __future__ import annotations
-
-import pytest
 
 from bridge.core.model import Source, Target
 from bridge.interfaces.loggers import LoggerEndpoints
@@ -26,11 +24,6 @@ from tests.support.waiting import slow, wait_until
 FLOODERS = 6  # senders, each within its own budget: more than the cap for all together
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 11: a junk flood on the PST port from six local sockets drops N1MM's "
-    "turns on its own port",
-)
 def test_n1mm_turns_its_antenna_through_a_junk_flood_on_the_pst_port() -> None:
     clock = FakeClock()
     tower, yagi = Recording("tower"), Recording("yagi")

@@ -36,7 +36,13 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    carried out only within its sender's budget (ratelimit.SourceBudgets, per address and port:
    RATE_DATAGRAMS_S a second each, a second's worth at once, each datagram costing 1 + its size
    in KiB, at most MAX_SOURCES senders remembered; RATE_ALL_S for all of them together); a
-   stop is charged to it too, never refused. Over budget a datagram is dropped unparsed and
+   stop is charged to it too, never refused. Each port has budgets of its own, the cap for all
+   senders together among them (the ports are the configuration's, so the work is still
+   bounded: RATE_ALL_S a port): one budget set served every socket, and an attack pass (11)
+   flooded the PstRotator port with junk from six local sockets, each within its own budget,
+   spent the cap for all, and N1MM's turns for another rotator on its own port were dropped
+   while it lasted. A flood on a port now drops what comes to that port alone (an N1MM port's
+   rotators share it, as they share the port). Over budget a datagram is dropped unparsed and
    counted (``over_budget``), said at warning level at most once per FLOOD_LOG_S with the
    count since and the last sender. A flood so costs a read and a search a datagram, and
    each socket asks the system for a receive buffer of RECV_BUFFER bytes to ride out bursts.
@@ -224,7 +230,7 @@ class LoggerEndpoints:
         self._junk_log = Rarely(JUNK_LOG_S)
         self._fault_log = Rarely(FAULT_LOG_S)
         self._flood_log = Rarely(FLOOD_LOG_S)
-        self._budgets = SourceBudgets(RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, clock())
+        self._budgets: dict[socket.socket, SourceBudgets] = {}  # rule 8: each port's own
         self._looked_s = -REPORT_LOOK_S
         self.over_budget = 0  # rule 8: datagrams dropped unparsed
 
@@ -266,6 +272,9 @@ class LoggerEndpoints:
             for endpoint, what in wanted:
                 sock = _bound(endpoint.bind, endpoint.port, what)
                 self._sockets[sock] = endpoint
+                self._budgets[sock] = SourceBudgets(
+                    RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, self._clock()
+                )
                 host, port = sock.getsockname()[:2]
                 self._addresses[sock] = host, port
         except OSError:
@@ -317,6 +326,7 @@ class LoggerEndpoints:
             sock.close()
         self._sockets.clear()
         self._addresses.clear()
+        self._budgets.clear()
         self._dropped.clear()
         self._halts_read.clear()
 
@@ -414,7 +424,7 @@ class LoggerEndpoints:
         """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first; rule
         9: ``since_s``, where the system does not stamp datagrams, a time none that waits
         came before."""
-        endpoint = self._sockets[sock]
+        endpoint, budgets = self._sockets[sock], self._budgets[sock]
         named = endpoint if isinstance(endpoint, N1mmEndpoint) else None  # (rule 8's names)
         may_stop = may_stop_pst if named is None else may_stop_n1mm
         for _ in range(PER_WAKEUP):
@@ -434,7 +444,7 @@ class LoggerEndpoints:
             now = self._clock()
             source = peer[0], peer[1]
             stop = may_stop(data) and (named is None or _may_name(named, data))
-            if not stop and not self._budgets.allow(source, now):
+            if not stop and not budgets.allow(source, now):
                 self._flooded(now, source)
                 continue
             seen_s = since_s
@@ -448,7 +458,7 @@ class LoggerEndpoints:
                 else:
                     seen_s = self._before_halts(sock, since_s, ids)
             self._carry_out(sock, endpoint, data, peer, arrived, seen_s, parsed)
-            self._budgets.spend(source, 1 + len(data) / 1024, now)
+            budgets.spend(source, 1 + len(data) / 1024, now)
 
     def _halt_read(
         self, sock: socket.socket, read_s: float, since_s: float, ids: frozenset[str]
@@ -547,7 +557,8 @@ class LoggerEndpoints:
         if count is not None:
             log.warning(
                 "logger UDP: %d datagram(s) dropped unread, over the budget of their sender "
-                "(%g a second each, %g in all), the last from %s:%d; stops are still obeyed",
+                "(%g a second each, %g in all on a port), the last from %s:%d; stops are still "
+                "obeyed",
                 count,
                 RATE_DATAGRAMS_S,
                 RATE_ALL_S,
