@@ -206,6 +206,27 @@ def test_a_bearing_kept_before_a_stop_turns_nothing_after_it() -> None:
     assert [t.az_deg for t in tower.submitted[1:]] == [220]  # type: ignore[union-attr]
 
 
+def test_a_bearing_whose_bytes_came_before_a_stop_turns_nothing_though_read_after_it() -> None:
+    """Package rule 10 (attack 11): the halts that count are those of the look that held the
+    AP1's bytes (tcplines.py rule 9, the fence), not those when it is read: a client paused
+    over its budget has it read after a STOP that came after it. The client's own ``;``
+    before it, in the same read, leaves it standing."""
+    tower = _Tower()
+    dcu = session(tower)
+    dcu.fence.arrived = tower.halts  # the look that held AP1200;
+    tower.halts += 1  # an operator's STOP, on MQTT, before the read
+    assert dcu.feed(b"AP1200;") == [b""]
+    dcu.fence.arrived = tower.halts  # AM1; came after the STOP
+    assert dcu.feed(b"AM1;") == [DCU1_ERROR] and tower.submitted == []
+    assert tower.refusals[-1] == (
+        "AM1; after a STOP or lock ON that came after the AP1's bearing",
+        "dcu1 AM1;",
+    )
+    assert dcu.feed(b";AP1220;AM1;") == [b"", b"", b""]  # its own stop first: taken
+    assert [type(c) for c in tower.submitted] == [Stop, Target]
+    assert tower.submitted[1].az_deg == 220  # type: ignore[union-attr]
+
+
 def test_ap1_with_cr_turns_at_once() -> None:
     tower = _Tower()
     assert session(tower).feed(b"AP1359\r") == [b""]
