@@ -14,6 +14,7 @@ from bridge.emulators.pty import EmulatedPort
 from tests.support import free_port
 from tests.support.hamlib import run_rotctl
 from tests.support.rig import FAST_POLLING, Rig
+from tests.support.waiting import wait_until
 
 
 def ready(rig: Rig) -> None:
@@ -94,6 +95,9 @@ def test_p_360_turns_the_rotor_the_way_hamlib_sends_it(
     try:
         done = run_rotctl(rotctl_path, 603, str(judge.link), "-s", "9600", "P", "360", "0")
         assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+        # (rotctl ends once its frame is written; the emulator's thread reads it after: CI saw
+        # the log read before it)
+        wait_until(lambda: any(f.outcome == "move" for f in judge.log()), 10, "Hamlib's move")
         hamlibs = [f.data for f in judge.log() if f.outcome == "move"]
     finally:
         judge.close()

@@ -14,6 +14,7 @@ from bridge.emulators.rt21 import Rt21
 from tests.support import free_port
 from tests.support.hamlib import run_rotctl
 from tests.support.rig import Rig
+from tests.support.waiting import wait_until
 
 
 def ready(rig: Rig) -> None:
@@ -88,6 +89,8 @@ def test_north_goes_out_as_the_box_takes_it_never_360(
         refused = run_rotctl(rotctl_path, 405, str(judge.link), "P", "360", "0")
         taken = run_rotctl(rotctl_path, 405, str(judge.link), "P", "359.9", "0")
         assert taken.returncode == 0, f"rotctl failed: {taken.stderr[-800:]!r}"
+        # (rotctl ends once its frame is written; the emulator's thread reads it after)
+        wait_until(lambda: any(f.outcome == "move" for f in judge.log()), 10, "Hamlib's move")
         hamlibs = [f.data for f in judge.log() if f.outcome == "move"]
     finally:
         judge.close()
