@@ -10,19 +10,12 @@ turning away from the body, as far as the old target, and then all the way back.
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 46: a tracking start on a Rotor-EZ turning to an older target waits for "
-    "that turn to end (rule 3's idle wait) instead of stopping it and turning to the body",
-)
 def test_a_tracking_start_stops_a_rotor_ez_turning_away_from_the_body() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
@@ -43,3 +36,6 @@ def test_a_tracking_start_stops_a_rotor_ez_turning_away_from_the_body() -> None:
             farthest = max(farthest, off_deg(v.truth().az_deg, sun))
         assert farthest <= 30.0, f"turned on {farthest:.0f} degrees from the sun after track"
         assert off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]) <= 1.5 + 3.0
+        # stopped, then sent after its brake delay: never a bearing it ignores
+        never = ("ignored: brake delay", "ignored: re-target while turning (stopped)")
+        assert v.frames(*never) == []
