@@ -18,7 +18,10 @@ Rules:
 2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
    from the station (the long path if asked). The same grid again moves nothing (the
    deadband), whatever else the program's status says; so does a status without a grid, or
-   with one that is no Maidenhead locator.
+   with one that is no Maidenhead locator. Its target is put at once, as any newest target
+   (targets.py): a turn under way to an older one (the target before following started) is
+   stopped first where the controller stops to re-target (a Rotor-EZ: then its brake delay),
+   never waited for (tracking.py rule 3 has the same for a tracking start: review 46).
 3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
    the program transmits waits, shown as ``held``, until a status says the transmission has
    ended; then the newest grid is turned to (or, the dial off its bands, waits for them, no
