@@ -30,11 +30,13 @@ Rules:
    step, so the rotor straddles it: within half a step either side, plus what the rotor lags.
    Not the first target of a start (where the rotor waits for the pass, rule 2, or the first
    step of a pass under way): the track command is the user's newest, and that target is put
-   at once, as any newest target is (targets.py: a Rotor-EZ's turn to an older target is
-   stopped and the step sent after the brake delay, a SatEL's slew stopped and the step sent
-   once still, a SPID or GS-232 re-targeted on the fly). Review 46: ``track sun`` typed while a
-   Rotor-EZ turned to a target 120 degrees from the sun waited for that turn to end, the rotor
-   turning away from the sun for some 20 s, and only then turned all the way back.
+   while the rotor turns or slews, as any newest target is (targets.py: a Rotor-EZ's turn to
+   an older target is stopped and the step sent after the brake delay, a SatEL's slew stopped
+   and the step sent once still, a SPID or GS-232 re-targeted on the fly); only a brake window
+   (a stop's, a stall's) and the settle time after the first reading (motion.py rule 4) are
+   waited out, as for every step. Review 46: ``track sun`` typed while a Rotor-EZ turned to a
+   target 120 degrees from the sun waited for that turn to end, the rotor turning away from
+   the sun for some 20 s, and only then turned all the way back.
 4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a
    satellite's pass with elevation 180 - el and azimuth + 180 when that saves turning time
    during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
@@ -416,8 +418,8 @@ class Tracker:
                 return waiting
             if not self._rig.motion.direct_retarget and m.state is not MotionState.IDLE:
                 return waiting
-            if m.state in (MotionState.BRAKING, MotionState.STALLED) or mo.settling(m):
-                return waiting  # (settling: no brake, but maybe still turning, motion.py 4)
+        if m.state in (MotionState.BRAKING, MotionState.STALLED) or mo.settling(m):
+            return waiting  # (settling: no brake, but maybe still turning, motion.py rule 4)
         lead = self._half_step_s(sky, utc)
         body = sky.at(min(utc + lead, p.los_s)) if lead is not None else None
         if body is None:
