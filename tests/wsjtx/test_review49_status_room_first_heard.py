@@ -1,0 +1,76 @@
+"""Review 49: wsjtx/server.py rule 5 (dfb087e4) keeps budget room for the senders of the first
+STATUS_INSTANCES (two) instances heard since the bridge started, for as long as it runs. The
+programs following listens to are another set (follow.py rule 8: the first heard since
+following was switched on, or the first on the antenna's bands): a bridge up for weeks heard
+JTDX one evening and WSJT-X under a rig name (``WSJT-X - IC7300``, ``-r``) the next, and both
+keep the room; the WSJT-X running today (Id ``WSJT-X``, another rig's configuration) has none,
+and a flood of statuses of another name from local sockets (the attack 11 pass dfb087e4
+answers) spends the cap for all and drops its statuses undecoded again: the transmission's
+hold and the next partner missed. Before WSJT-X starts, two forged names take the room the same
+way for good. Real UDP sockets, virtual time, as tests/wsjtx/test_attack11_status_flood.py."""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+
+import pytest
+
+from bridge.interfaces.wsjtx import WsjtxListener
+from tests.support import wait_until
+from tests.support import wsjtx as w
+from tests.support.clock import FakeClock
+from tests.support.waiting import slow
+from tests.wsjtx.test_attack11_status_flood import Ears, _read
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 49: the WSJT-X status room is the first two instances heard since the start, "
+    "for good: programs heard once long ago keep it and today's WSJT-X is drowned by a flood",
+)
+@pytest.mark.parametrize(
+    "before", [("JTDX", "WSJT-X - IC7300"), ("forged-1", "forged-2")], ids=["earlier", "forged"]
+)
+def test_wsjtx_is_heard_through_a_flood_after_two_other_programs_were_heard_first(
+    before: tuple[str, str],
+) -> None:
+    clock = FakeClock()
+    ears = Ears()
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
+        with contextlib.ExitStack() as stack:
+            sent = 0
+            for instance in before:  # heard once, their sockets gone
+                with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as other:
+                    other.sendto(
+                        w.status(w.StatusFields(dx_call="W1AW", instance=instance)),
+                        listener.address,
+                    )
+                sent += 1
+                wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
+            clock.t += 3600.0  # hours later (every budget full again)
+            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            sent += 1
+            wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X heard")
+            for _ in range(8):  # each up to its own budget: the cap for all spent between them
+                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                for _ in range(6):
+                    for _ in range(40):
+                        s.sendto(forged, listener.address)
+                    sent += 40
+                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
+            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            for call in ("JA1ABC", "VK2XYZ"):
+                wsjtx.sendto(
+                    w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address
+                )
+            sent += 2
+            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's statuses read")
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+    finally:
+        listener.stop()
