@@ -1,0 +1,51 @@
+"""Review 50 (cold review of the tracking start mid-turn, d2067f87..f87b1948): f87b1948 keeps
+the start's first target waiting "only [for] a brake window (a stop's, a stall's)", tracking.py
+rule 3, by ``m.state in (BRAKING, STALLED)``. A stall is no window: the motion stays
+``stalled`` until a target goes out (session/motion.py rule 3), so a tracking start taken after
+a stall waits for itself. The rotor jammed on its way, freed, and then ``track sun``: the
+status says tracking sun for good, and nothing is ever sent (ten minutes here); the same bearing
+on ``R/target`` at that moment goes out after the brake delay (or at once on a GS-232B). What a
+user notices: tracking shown on, the rotor standing 15 degrees off the sun, forever."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.core.model import MotionState
+from bridge.sky import Body, Sky
+from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
+from tests.engine.virtual import VirtualRotator
+from tests.support.sky import sun_altaz
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 50: a tracking start taken while the motion is stalled (a jam freed since) "
+        "waits for ever: tracking.py rule 3 waits on STALLED, which only a target ends"
+    ),
+)
+@pytest.mark.parametrize("model", ["rotorez", "gs232b-az"])
+def test_a_tracking_start_after_a_stall_turns_the_rotor_to_the_body(model: str) -> None:
+    wall = SUN_EPOCH
+    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
+    sun_az = sun_altaz(lat, lon, wall)[0]
+    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
+    emulator = {"start_az_deg": round(sun_az)}
+    with VirtualRotator(model, sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # a Rotor-EZ's brake delay after its start is over
+        v.target(round(away))
+        v.run_until(lambda h: off_deg(h.truth().az_deg, sun_az) >= 15.0, 30, "turning away")
+        v.jam()
+        v.run_until(lambda h: h.state is MotionState.STALLED, 60, "the stall said")
+        v.unjam()
+        v.run_for(1.0)  # (freed: not a deadline)
+        t = v.now
+        v.track(Body.sun())
+        v.run_for(120.0)  # (some 15 degrees back, and a brake delay: not a deadline)
+        assert v.status.tracking is not None and v.status.tracking.phase == "tracking"
+        assert v.frames("executed", "move", since=t)  # observed: nothing sent, for good
+        sun = sun_altaz(lat, lon, v.wall())[0]
+        assert off_deg(v.truth().az_deg, sun) <= 1.5 + 3.0
