@@ -20,11 +20,13 @@ Rules:
    Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
    azimuth box) is no elevation box. An az/el box's azimuth is never turned: every target it
    is sent carries the azimuth the box last reported for itself (at its step, as in rule
-   1), whatever azimuth the session asked for. A one-axis box is sent the elevation as its
-   one bearing, and its bearing is read as the elevation (0..180 of its range). Either
-   reports back as its azimuth the one the session last asked for (before any: an az/el box
-   its own, a one-axis box 0), so that the session's motion machine sees that axis arrive at
-   once and judges the elevation alone.
+   1), whatever azimuth the session asked for, and is read whatever its codec would judge of
+   it as a model's scale (base.py ScalesAzimuth: a GS-232 at P45 configured as gs232b, its
+   azimuth resting at 400, was a MISFIT at every reply, review 49). A one-axis box is sent
+   the elevation as its one bearing, and its bearing is read as the elevation (0..180 of its
+   range). Either reports back as its azimuth the one the session last asked for (before
+   any: an az/el box its own, a one-axis box 0), so that the session's motion machine sees
+   that axis arrive at once and judges the elevation alone.
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
    A one-axis box's bearing outside the elevation axis's scale (0..180 of its range, up to
@@ -72,6 +74,7 @@ from bridge.protocols.base import (
     NotReady,
     PositionReply,
     Reply,
+    ScalesAzimuth,
     TakesReadings,
 )
 
@@ -241,6 +244,8 @@ class ElevationOnly(_KeepsOwn):
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
+        if isinstance(inner, ScalesAzimuth):  # rule 2: its azimuth is judged by no scale
+            inner.azimuth_unturned()
         self._own_az: float | None = None  # what the box last said of its azimuth, taken
         self._asked_az: float | None = None  # what the session last asked for
 

@@ -179,6 +179,16 @@ class TakesReadings(Protocol):
 
 
 @runtime_checkable
+class ScalesAzimuth(Protocol):
+    """A codec that judges its azimuth against the scale of the model configured (gs232.py
+    rule 2: past it, a MISFIT), told when its box's azimuth is never turned (a composite's
+    elevation box, axes.py rules 2 and 5: that channel reads whatever it reads, within what
+    the codec can read at all, and is never the antenna's)."""
+
+    def azimuth_unturned(self) -> None: ...
+
+
+@runtime_checkable
 class HoldsOnGrid(Protocol):
     """A codec whose targets snap to a grid its readings do not show exactly (a Rot2Prog at
     0.25 degrees reads 44.25 as 44.2, and a target 44.2 snaps down to 44.0): what to ask for

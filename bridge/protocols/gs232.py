@@ -39,7 +39,11 @@ Rules:
    end, as K3NG's elevation below the horizon is read as the horizon. (Attack 12: ``AZ=400``
    was read on a gs232b-az as 40, nothing said, and a target of 50 went out as ``M050``: the
    rotor ran 350 degrees the long way round.) A 450-degree model whose box says only 0..360
-   (K3NG's, which reports its azimuth modulo 360) reads as ever.
+   (K3NG's, which reports its azimuth modulo 360) reads as ever. A box whose azimuth is never
+   turned (a composite's elevation box, axes.py rules 2 and 5) is judged by no scale but the
+   widest (``azimuth_unturned``): that channel is no antenna's (review 49: a G-5500's box at
+   P45 whose azimuth rested at 400 was a MISFIT at every reply, the rotator offline and its
+   elevation never turned).
 3. ``?>`` (the box refused a command) is junk of its own reason (REFUSED), whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
@@ -225,6 +229,11 @@ class Gs232Codec(OneQuery):
             out.append(PositionReply(float(az), float(el_deg)))
         else:
             out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
+
+    def azimuth_unturned(self) -> None:
+        """Rule 2: the box's azimuth is never turned (a composite's elevation box): its scale
+        is no model's to judge, and a reading past 360 is no misfit (base.ScalesAzimuth)."""
+        self.az_top_deg = AZ_MAX_DEG
 
     def _misfit(self, az: int) -> str:
         """Rule 2's words: what a reading of ``az`` past this model's scale says."""

@@ -11,20 +11,12 @@ virtual time: the elevation box a GS-232B emulator at P45, configured as ``gs232
 
 from __future__ import annotations
 
-import pytest
-
 from bridge import emulators
 from bridge.core.model import Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 49: a composite's GS-232 elevation box whose own azimuth channel reads 400 "
-    "(a box at P45, configured gs232b) is a MISFIT at every reply: the rotator goes offline "
-    "and the elevation never turns, over a channel the composite never uses",
-)
 def test_an_elevation_box_own_azimuth_past_360_leaves_its_elevation_read_and_turned() -> None:
     with VirtualComposite(
         "gs232b", "gs232b", emulators={Axis.AZIMUTH: {"start_az_deg": 120.0}}

@@ -10,6 +10,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
+from bridge.protocols.axes import Axis, axis_spec
 from bridge.protocols.base import (
     LATE_LINES_MAX,
     HamlibRotType,
@@ -329,3 +330,15 @@ def test_an_azimuth_past_the_models_scale_is_a_box_set_up_otherwise_and_says_wha
         assert f'model = "{model}-450"' in misfit.detail and "P36" in misfit.detail
     else:
         assert junk(replies) == []
+
+
+@pytest.mark.parametrize("model", ["gs232a", "gs232b"])
+def test_a_composite_elevation_boxs_own_azimuth_is_judged_by_no_models_scale(model: str) -> None:
+    """Rule 2 (review 49): the elevation box's azimuth is never turned (axes.py rules 2 and 5):
+    at 400 on a box at P45 configured as a 360 model it is read, and its elevation with it."""
+    codec = axis_spec(REGISTRY[model], Axis.ELEVATION).codec_factory()
+    codec.encode_query()
+    reply = b"+0400+0045\r\n" if model == "gs232a" else b"AZ=400  EL=045\r\n"
+    replies = codec.feed(reply)
+    assert [r.el_deg for r in replies if isinstance(r, PositionReply)] == [45.0], replies
+    assert not [r for r in replies if isinstance(r, JunkReply)], replies
