@@ -30,7 +30,11 @@ Rules:
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
    A one-axis box's bearing outside the elevation axis's scale (0..180 of its range, up to
-   EL_READ_SLACK_DEG past an end read as that end, as easycomm.py rule 2 reads an azimuth) is
+   EL_READ_SLACK_DEG past an end read as that end, as gs232.py rule 2 reads an azimuth past
+   its top: a pot a degree or two off with the weather, a coast past the end; below 0 on a
+   box whose bearings wrap, as the RT-21's do, 0.0..359.9, whose horizon a little low reads
+   359.x: that too is the bottom end, read as 0; review 49: with half a degree, an RT-21
+   reading 181 at its end was offline for good, no target ever turning it back) is
    no elevation: a MISFIT (protocols/base.py: told on R/error in words that say so), never a
    reading, and the elevation it last said is forgotten: no target goes to that box (NotReady:
    the engine asks, and sends once it reads an elevation again, a reading taken), as the box
@@ -93,7 +97,7 @@ class Axis(enum.StrEnum):
 # (prosistel-el: a D box, unit E; prosistel-el-a: one answering as unit A)
 ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el", "prosistel-el-a"})
 ONE_AXIS_EL_MAX_DEG = 180.0
-EL_READ_SLACK_DEG = 0.5  # rule 2: a one-axis box's bearing this far past an end reads as the end
+EL_READ_SLACK_DEG = 3.0  # rule 2: a one-axis box's bearing this far past an end reads as the end
 # ... and of those, the models made for the elevation alone: as a rotator of its own, what such a
 # box calls its bearing is an elevation (a group's azimuth would tilt it)
 BEARING_IS_ELEVATION = frozenset({"prosistel-el", "prosistel-el-a"})
@@ -279,17 +283,20 @@ class ElevationOnly(_KeepsOwn):
 
 class OneAxisElevation(_KeepsOwn):
     """Rule 2: a one-axis box whose one rotor is the elevation, read in ``el_range`` (the
-    elevation axis's scale); ``box`` names it in what is said of a bearing outside it."""
+    elevation axis's scale); ``box`` names it in what is said of a bearing outside it;
+    ``wraps`` the top of a box whose bearings wrap (360: 359.x is a little below 0)."""
 
     def __init__(
         self,
         inner: Codec,
         el_range: tuple[float, float] = (0.0, ONE_AXIS_EL_MAX_DEG),
         box: str = "the elevation box",
+        wraps: float | None = None,
     ) -> None:
         super().__init__(inner)
         self._el_range = el_range
         self._box = box
+        self._wraps = wraps  # rule 2: the bearing a wrapping box says again as 0 (360)
         self._own_el: float | None = None  # what the box last said of its one axis, taken
         self._asked_az: float | None = None  # what the session last asked for
         self._misfit = False  # rule 2: its last bearing was no elevation (none taken since)
@@ -318,11 +325,14 @@ class OneAxisElevation(_KeepsOwn):
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
                 low, high = self._el_range
-                if not low - EL_READ_SLACK_DEG <= r.az_deg <= high + EL_READ_SLACK_DEG:
+                said = r.az_deg
+                if self._wraps is not None and said >= self._wraps - EL_READ_SLACK_DEG:
+                    said -= self._wraps  # (a wrapping box a little below its 0: 359.x)
+                if not low - EL_READ_SLACK_DEG <= said <= high + EL_READ_SLACK_DEG:
                     replies.append(self._not_elevation(r.az_deg))
                     continue
                 az = 0.0 if self._asked_az is None else self._asked_az
-                el = min(max(r.az_deg, low), high)
+                el = min(max(said, low), high)
                 inner, r = r, replace(r, az_deg=az, el_deg=el)
                 self._fed(r, el, inner)
             replies.append(r)
@@ -365,9 +375,10 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
         return replace(spec, codec_factory=lambda: ElevationOnly(inner()), turns_azimuth=False)
     scale = (max(0.0, spec.az_min_deg), min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg))
     box = f"the {spec.display_name} ({spec.name})"
+    wraps = spec.az_max_deg if spec.az_wraps else None
     return replace(  # a one-axis box turning the elevation
         spec,
-        codec_factory=lambda: OneAxisElevation(inner(), scale, box),
+        codec_factory=lambda: OneAxisElevation(inner(), scale, box, wraps),
         has_elevation=True,
         turns_azimuth=False,
         el_min_deg=scale[0],

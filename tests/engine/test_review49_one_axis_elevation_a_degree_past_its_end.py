@@ -1,5 +1,5 @@
 """Review 49: axes.py rule 2 (43b6e7b5) reads a one-axis elevation box's bearing up to
-EL_READ_SLACK_DEG (half a degree) past an end as that end; further is a MISFIT, the last
+EL_READ_SLACK_DEG (then half a degree) past an end as that end; further is a MISFIT, the last
 elevation forgotten, and no target goes to that box until it reads in scale again. An RT-21
 turning a 0..180 (flip) elevation that rests at its end and reads a degree past it (181: a pot
 that drifted a degree with the weather, a coast past the end; gs232.py rule 2 reads 3 degrees
@@ -10,18 +10,11 @@ target of 90 turned it there. In virtual time, two emulated RT-21s."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 49: a one-axis elevation box reading a degree past its end (181) is a MISFIT "
-    "at every reply: the rotator offline for good, no target ever turns it back",
-)
 def test_an_elevation_box_a_degree_past_its_end_is_still_turned_back() -> None:
     with VirtualComposite("rt21", "rt21", emulators={Axis.ELEVATION: {"start_az_deg": 170.0}}) as v:
         v.run_for(10)
