@@ -35,7 +35,8 @@ Rules:
    box whose bearings wrap, as the RT-21's do, 0.0..359.9, whose horizon a little low reads
    359.x: that too is the bottom end, read as 0; review 49: with half a degree, an RT-21
    reading 181 at its end was offline for good, no target ever turning it back) is
-   no elevation: a MISFIT (protocols/base.py: told on R/error in words that say so), never a
+   no elevation: a MISFIT (protocols/base.py: told on R/error in words that say so, once
+   such replies persist, controller.py rule 6), never a
    reading, and the elevation it last said is forgotten: no target goes to that box (NotReady:
    the engine asks, and sends once it reads an elevation again, a reading taken), as the box
    would turn from a bearing nobody knows. (Attack 12: an RT-21 reading 300, a pot past its

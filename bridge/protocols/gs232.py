@@ -34,7 +34,8 @@ Rules:
    asks again at once).
    An azimuth past the top of this model's scale (360 on the 360-degree models) is the box set
    to the other range, P45 (a 450-degree rotor's G-800DXA, G-1000DXA, G-2800DXA): MISFIT,
-   never a reading, and its words (told on R/error) name the model to configure or the box's
+   never a reading, and its words (told on R/error once such replies persist: a lone one is
+   doubted as line noise, controller.py rule 6) name the model to configure or the box's
    P36. Up to AZ_DRIFT_DEG past it is a pot calibrated a little short of its end, read as the
    end, as K3NG's elevation below the horizon is read as the horizon. (Attack 12: ``AZ=400``
    was read on a gs232b-az as 40, nothing said, and a target of 50 went out as ``M050``: the

@@ -77,9 +77,14 @@ Rules:
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
    A reply the codec calls a MISFIT (protocols/base.py: the box set up otherwise than
    configured, a GS-232 at P45 configured as a 360-degree model) is told in the codec's own
-   words, which say what to configure, as soon as it comes, and not again as bytes that are
-   no valid reply (attack 12: a box whose every reply is such was told only as bytes that are
-   no valid reply, or not at all).
+   words, which say what to configure, once MISFITS_TOLD come in a row (no reading settled
+   between them), and not as bytes that are no valid reply (attack 12: a box whose every
+   reply is such was told only as bytes that are no valid reply, or not at all). A lone one
+   is doubted as rule 9 doubts a reading: asked again at once, and if the reading that comes
+   then is taken, told as line noise (review 49: one flipped bit, ``AZ=030`` read as
+   ``AZ=430``, was told at once as a box set to P45, and a failing sensor's wander past 360
+   as a model to change before its own words); a box really set otherwise says so again at
+   once.
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed), and the settle time they need
    (motion.py rule 2: from the slower axis it turns, a composite's elevation box's own);
@@ -338,6 +343,7 @@ HALT_READINGS = 2
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
 DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agree
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
+MISFITS_TOLD = 2  # rule 6: this many MISFIT replies in a row are told in the codec's words
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
@@ -639,6 +645,8 @@ class Controller:
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self._doubted = NOT_DOUBTED  # rule 9: a reading of a rotor not turning asked again
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
+        self._misfits = 0  # rule 6: MISFIT replies since the last reading settled
+        self._misfit_said = ""  # ... the last one's bytes, for the words of a lone one
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -778,6 +786,7 @@ class Controller:
         self._first_unread = False
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed
+        self._misfits = 0  # rule 6: counted anew
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         if self.answering:  # (stops.py rule 7: a blind controller answers from its connect)
@@ -1028,8 +1037,8 @@ class Controller:
                         continue  # the answer to the target, reported as such: no junk
                 if reply.late:  # link.py rule 12: it answers, late
                     link.answered_late(now)
-                if reply.reason is JunkReason.MISFIT:  # rule 6: in the codec's words
-                    self._say(reply.detail, now, logged=False)
+                if reply.reason is JunkReason.MISFIT:  # rule 6: in the codec's words, if
+                    self._misfit(link, reply, now)  # it persists
                 else:  # (told, and logged, once the line is quiet)
                     link.add_junk(reply.data, now)
                 link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
@@ -1060,6 +1069,14 @@ class Controller:
         if reply is None:
             return False
         doubt = self._doubts(reply, now)
+        if self._misfits == 1 and doubt is Doubt.TAKEN:  # rule 6: a lone misfit, line noise
+            self._say(
+                f"a reply of {self._misfit_said}, outside the scale the controller is "
+                "configured for, was not said again: ignored (line noise?)",
+                now,
+                logged=True,
+            )
+        self._misfits = 0
         if doubt is not Doubt.TAKEN:
             link.heard(now)  # (the controller answers: its value is what is doubted)
             if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
@@ -1075,6 +1092,18 @@ class Controller:
             return False
         self._reading(link, reply, now)
         return True
+
+    def _misfit(self, link: Link, reply: JunkReply, now: float) -> None:
+        """Rule 6: a MISFIT reply is told in the codec's words from the MISFITS_TOLD-th in a
+        row on (no reading settled between); the first is asked again at once, as a reading
+        rule 9 doubts."""
+        self._misfits += 1
+        self._misfit_said = reply.data.strip(b"\r\n ").decode("ascii", "replace")
+        if self._misfits >= MISFITS_TOLD:
+            self._say(reply.detail, now, logged=False)
+            return
+        log.info("%s: %s; asking again", self.name, reply.detail)
+        self._ask_again(link, now, once=True)
 
     def _doubts(self, reply: PositionReply, now: float) -> Doubt:
         """Rule 9: whether ``reply`` is believed (TAKEN), or asked again (at once: ASK; at the

@@ -15,17 +15,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import Target
 from bridge.session.motion import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-REASON = (
-    "review 49: a lone GS-232 reply past 360 (a flipped bit, a failing sensor's wander) is told "
-    "at once as the box set to P45, 'configure model gs232b-...-450', never as line noise"
-)
 
 
 def _at_rest(rig: Rig, model: str, az: float) -> VirtualRotator:
@@ -38,7 +32,6 @@ def _at_rest(rig: Rig, model: str, az: float) -> VirtualRotator:
     return v
 
 
-@pytest.mark.xfail(strict=True, reason=REASON)
 def test_one_flipped_bit_past_360_at_rest_is_told_as_line_noise_not_as_a_box_set_to_p45(
     rig: Rig,
 ) -> None:
@@ -53,7 +46,6 @@ def test_one_flipped_bit_past_360_at_rest_is_told_as_line_noise_not_as_a_box_set
     assert any("line noise" in m for m in told), told
 
 
-@pytest.mark.xfail(strict=True, reason=REASON)
 def test_a_failing_sensor_wandering_past_360_is_told_as_a_failing_sensor_first(
     rig: Rig,
 ) -> None:

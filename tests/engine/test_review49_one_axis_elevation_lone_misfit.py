@@ -8,8 +8,6 @@ operator is sent to the pot or the box's calibration. In virtual time, two emula
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.protocols.axes import Axis
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
@@ -33,11 +31,6 @@ def _next_reply_read_as(box: VirtualRotator, reply: bytes) -> None:
     box.to_host = once
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 49: one flipped bit in a one-axis elevation box's reply (120.0 read as "
-    "320.0) is told at once as a pot past its end or a box calibrated for an azimuth rotor",
-)
 def test_one_flipped_bit_past_the_elevation_scale_is_told_as_line_noise() -> None:
     with VirtualComposite("rt21", "rt21", emulators={Axis.ELEVATION: {"start_az_deg": 120.0}}) as v:
         v.run_for(10)

@@ -233,7 +233,7 @@ def test_readings_at_rest_that_go_on_disagreeing_are_reported_and_polled_as_ever
     t0 = v.now
     v.run_for(30)
     polls_before = v.sent(since=t0).count(query)
-    digits = iter(b"230" * 1000)  # 150 reads 250, 350, 50, 250... (450: gs232.py rule 2)
+    digits = iter(b"2340" * 1000)  # 150 reads 250, 350, 450 (past 360: a lone misfit), 50...
 
     def failing(data: bytes, now: float) -> bytes:
         return data.replace(b"1", bytes([next(digits)])) if b"1" in data else data
@@ -259,7 +259,7 @@ def test_a_failing_sensor_after_a_replug_leaves_the_rotator_online_where_it_stoo
     rest = v.status.bearing_deg
     v.link_down()
     v.run_for(2.0)
-    digits = iter(b"230" * 1000)  # 150 reads 250, 350, 50, 250... (450: gs232.py rule 2)
+    digits = iter(b"2340" * 1000)  # 150 reads 250, 350, 450 (past 360: a lone misfit), 50...
     v.to_host = lambda data, now: (
         data.replace(b"1", bytes([next(digits)])) if b"1" in data else data
     )
