@@ -558,6 +558,11 @@ class Looks:
             self.since_s = now
         return now
 
+    def reaches(self, fd: int) -> int:
+        """(under ``lock``) What ``fd`` has sent so far, as a look would count it (the
+        console's looks, interfaces/web/looks.py, skip one that would count nothing new)."""
+        return _counted(fd, self.read)[0]
+
     def drained(self, looked_s: float) -> None:
         """(under ``lock``) A read right after the look at ``looked_s`` took less than it asked
         for: nothing was left unread, so what comes next came after that look."""

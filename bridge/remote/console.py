@@ -41,6 +41,7 @@ from dataclasses import dataclass, replace
 from typing import Protocol
 
 from bridge.core.errors import RefusalCode, Refused
+from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import (
     Command,
     ErrorEvent,
@@ -180,6 +181,12 @@ class RemoteConsoleRotator:
         """interfaces/web/port.py rule 2b: the stops and lock ONs of the remote's other front
         ends (the console's own are ordered by its queue of commands)."""
         return self.remote.halts_besides(Source.WEB)
+
+    @property
+    def halt_watchers(self) -> HaltWatchers:
+        """Told before each halt of the remote's front ends is counted (remote/rotator.py
+        ``halted``): the console looks at its connections then (interfaces/web/looks.py)."""
+        return self.remote.halt_watchers
 
     def on_its_way(self) -> bool:
         """The station's judge says what is on its way there (server.py rule 10 is not for a

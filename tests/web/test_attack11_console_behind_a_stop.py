@@ -27,8 +27,6 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-import pytest
-
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.web.server import WebConsole
 from tests.support import free_port
@@ -55,11 +53,6 @@ def console_loop_held(web: WebConsole) -> Iterator[threading.Event]:
         release.set()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 11: a console command sent before a rotctld STOP, read after it while the "
-    "console's loop was busy, turns the rotor after the STOP",
-)
 def test_a_console_target_sent_before_a_rotctld_stop_and_read_after_it_never_turns_the_rotor(
     rig: Rig,
 ) -> None:
@@ -108,11 +101,6 @@ def stale_said(rig: Rig, after: float) -> bool:
     return m is not None and m.t >= after and b"before a STOP" in m.payload
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 11: a console lock OFF sent before an MQTT lock ON, read after it while the "
-    "console's loop was busy, unlocks the rotator",
-)
 def test_a_console_lock_off_sent_before_an_mqtt_lock_on_and_read_after_it_leaves_it_locked(
     rig: Rig,
 ) -> None:

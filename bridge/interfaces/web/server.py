@@ -86,7 +86,7 @@ import logging
 import socket
 import threading
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Hashable
 
 from aiohttp import web
 from aiohttp.http_exceptions import HttpProcessingError
@@ -95,9 +95,11 @@ from bridge import __version__
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.core.ratelimit import TokenBucket
+from bridge.interfaces.tcplines import halt_watchers
 from bridge.interfaces.web import auth, view
 from bridge.interfaces.web.commands import (
     MAX_BODY_BYTES,
+    STALE,
     BadCommand,
     Order,
     WebCommand,
@@ -111,6 +113,7 @@ from bridge.interfaces.web.connections import MOST_HELD, Connections
 from bridge.interfaces.web.feed import Feed, Shape
 from bridge.interfaces.web.files import static_files
 from bridge.interfaces.web.live import TOKEN_HEADER, Live
+from bridge.interfaces.web.looks import Conn, HaltLooks
 from bridge.interfaces.web.port import ConsoleRotator
 
 log = logging.getLogger(__name__)
@@ -121,6 +124,7 @@ SHOWN_S = 3.0  # rule 10: a nudge waits this long at most for the command before
 SHOWN_POLL_S = 0.005  # rule 10: how often it looks
 SHOWN_WAITERS = 8  # rule 10: commands waiting so per rotator, no more
 FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
+OWN_KEPT = 64  # rule 11: the numbers of the console's own halts kept per rotator (the oldest go)
 NOISE_BURST = 10  # rule 7: lines at their level at once, then one every NOISE_EVERY_S
 NOISE_EVERY_S = 10.0
 ACCEPT_SAY_S = 10.0  # rule 8: an accept refused for want of descriptors, said this often at most
@@ -257,7 +261,8 @@ class WebConsole:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
         self._conns = Connections(lambda: None)
-        self._listener: asyncio.Server | None = None
+        self._listeners: list[asyncio.Server] = []
+        self._looks = HaltLooks()  # rule 11
         self._sweeper: asyncio.Task[None] | None = None
         self._ticker: asyncio.Task[None] | None = None
         self._order = Order()
@@ -275,6 +280,9 @@ class WebConsole:
             self._far[rot.id] = concurrent.futures.ThreadPoolExecutor(1, f"console-{rot.id}")
         self._rotators[rot.id] = rot
         self._facts[rot.id] = facts
+        watchers = halt_watchers(rot)
+        if watchers is not None:  # rule 11: its connections looked at before each halt
+            self._looks.attach(rot.id, lambda: rot.halts, watchers)
         self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
 
     @property
@@ -333,9 +341,11 @@ class WebConsole:
         assert server is not None  # set up above
         self._conns = Connections(server)
         loop = asyncio.get_running_loop()
-        self._listener = await loop.create_server(
-            self._conns.protocol, self.bind or None, self.port, reuse_address=True
-        )
+        # rule 11: the listeners and what they accept are looks.py's, served by asyncio
+        self._looks.start()
+        for sock in self._looks.listeners(self.bind, self.port):
+            listening = await loop.create_server(self._conns.protocol, sock=sock)
+            self._listeners.append(listening)
         self._sweeper = loop.create_task(self._conns.sweeping())
         self._ticker = loop.create_task(self.live.ticking())
 
@@ -355,14 +365,15 @@ class WebConsole:
             loop.close()
         for far in self._far.values():
             far.shutdown(wait=False, cancel_futures=True)
+        self._looks.stop()
 
     async def _shutdown(self) -> None:
         self.live.feed.close()
         for task in (self._sweeper, self._ticker):
             if task is not None:
                 task.cancel()
-        if self._listener is not None:
-            self._listener.close()
+        for listener in self._listeners:
+            listener.close()
         if self._runner is not None:
             await self._runner.cleanup()
 
@@ -380,6 +391,18 @@ class WebConsole:
     # -- every request (rules 2, 3) ----------------------------------------------------------
     @web.middleware
     async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        conn = self._looks.of(request.transport)  # rule 11: dated from its first byte
+        if conn is not None:
+            conn.begin()
+        try:
+            response = await self._guarded(request, handler)
+        finally:
+            if conn is not None:
+                conn.end()
+        response.headers.update(self._headers)
+        return response
+
+    async def _guarded(self, request: web.Request, handler: Handler) -> web.StreamResponse:
         refusal = self._refusal(request)
         if refusal is not None:
             response: web.StreamResponse = _json({"error": refusal}, 403)
@@ -393,7 +416,6 @@ class WebConsole:
             finally:
                 self._conns.finished(request.transport)
                 del self._started[id(request)]
-        response.headers.update(self._headers)
         return response
 
     def _refusal(self, request: web.Request) -> str | None:
@@ -556,8 +578,8 @@ class WebConsole:
             done = asyncio.wrap_future(far.submit(carry_out, rot, cmd, peer))
             done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
             return
-        try:
-            carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
+        try:  # never refused by a judge (commands.py rule 3)
+            self._own_halt(rot, cmd, peer, None, by=("ws", token))
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             self._order.pressed(rot.id, cmd)
             return
@@ -642,6 +664,8 @@ class WebConsole:
         since = rot.halts
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         stale = stale or aged(cmd, feed_clock())  # commands.py rule 6
+        conn = self._looks.of(request.transport)
+        stale = stale or self._looked(rot, cmd, conn, since)  # rule 11
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
@@ -661,6 +685,7 @@ class WebConsole:
                 stale = await self._shown(rot, cmd, self._started[id(request)])
             finally:
                 self._waiting[rot.id] -= 1
+            stale = stale or self._looked(rot, cmd, conn, rot.halts)  # rule 11, again
             if stale is not None:
                 rot.report_refusal(stale, cmd.described(), origin=by)
                 return _json({"error": stale, "code": "stale"}, 409)
@@ -678,6 +703,8 @@ class WebConsole:
                     self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
                     done.add_done_callback(lambda _: self._far_moved(rot.id))
                 await asyncio.wrap_future(done)
+            elif halt:  # rule 11: its number the console's own
+                self._own_halt(rot, cmd, self._client(request), since, by=conn)
             else:
                 carry_out(rot, cmd, self._client(request), since)
         except Refused as exc:
@@ -687,6 +714,67 @@ class WebConsole:
         if halt:
             self._order.halted(rot.id, cmd, time.monotonic())
         return _json({"ok": True})
+
+    def _looked(
+        self, rot: ConsoleRotator, cmd: WebCommand, conn: Conn | None, now: int
+    ) -> str | None:
+        """Rule 11: why ``cmd``, come on ``conn`` (looks.py, None: not looked at), is stale
+        at the halt count ``now``: a halt was counted after its request's first byte came
+        that is neither the connection's own nor one its page numbered before it."""
+        arrived = conn.arrived(rot.id) if conn is not None else None
+        if cmd.halts() or arrived is None or now <= arrived:
+            return None
+        own = self._looks.own.get(rot.id, {})
+        if now - arrived > len(own):
+            return STALE  # (not all of them the console's own)
+        for number in range(arrived + 1, now + 1):
+            made = own.get(number)
+            if made is None:
+                return STALE
+            by, page, seq = made
+            mine = by is conn or (
+                page is not None
+                and page == cmd.page
+                and seq is not None
+                and cmd.seq is not None
+                and seq < cmd.seq
+            )
+            if not mine:
+                return STALE
+        return None
+
+    def _own_halt(
+        self,
+        rot: ConsoleRotator,
+        cmd: WebCommand,
+        peer: str | None,
+        since: int | None,
+        by: Hashable,
+    ) -> None:
+        """A halt the console carries out on its loop (never refused by a judge), the numbers
+        it adds to the count kept as the console's own, made ``by`` (a connection, or a page's
+        WebSocket) for its page (rule 11), as a TCP port's are (tcplines.py ``Fence.halting``)."""
+        watchers = halt_watchers(rot)
+        own = self._looks.own.get(rot.id)
+        if watchers is None or own is None:
+            carry_out(rot, cmd, peer, since)
+            return
+        me = threading.get_ident()
+        made: list[int] = []
+
+        def mine() -> None:
+            if threading.get_ident() == me:
+                made.append(rot.halts + 1)
+
+        watchers.add(mine)
+        try:
+            carry_out(rot, cmd, peer, since)
+        finally:
+            watchers.remove(mine)
+        for number in made:
+            own[number] = (by, cmd.page, cmd.seq)
+        while len(own) > OWN_KEPT:  # (the oldest go: refusing)
+            del own[next(iter(own))]
 
     async def _shown(self, rot: ConsoleRotator, cmd: WebCommand, started: float) -> str | None:
         """Rule 10: once what is on its way shows (or SHOWN_S went by), why ``cmd`` is stale
