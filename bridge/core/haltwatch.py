@@ -1,6 +1,6 @@
 """Those told just before a rotator counts a halt (a STOP or a lock ON), from whichever thread
-brought it: the TCP front ends' look at what each connection has sent by then
-(interfaces/tcplines.py rule 9).
+brought it: the TCP front ends' and the console's look at what each connection has sent by
+then (interfaces/tcplines.py rule 9, interfaces/web/looks.py).
 
 Rules:
 1. ``HaltWatchers()`` is called by the owner of a halt count (session/mailbox.py, the remote's

@@ -134,3 +134,36 @@ def test_a_console_lock_off_sent_before_an_mqtt_lock_on_and_read_after_it_leaves
     assert rot.status.locked, f"unlocked after the lock ON, by the console's {answer}"
     assert rig.probe.wait_value("rotor/lock/state", "ON", slow(10), after=after)
     assert answer[0] == 409 and b"stale" in answer[1], answer
+
+
+def test_the_same_connection_s_next_command_sent_after_the_stop_is_carried_out(rig: Rig) -> None:
+    """The look dates each request from its own first byte (looks.py rule 3), not from its
+    connection's: on the script's keep-alive connection whose target the STOP overtook, the
+    target it sends after the STOP (and after the refusal came back) turns the rotor."""
+    web = rig.sections["web"] = web_section()
+    port = free_port()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
+    app = rig.start()
+    rig.ready("tower")
+    console = ConsoleClient(web["port"])
+    console.session()
+    assert app.web is not None
+    first = json.dumps({"command": "target", "az": 200}).encode()
+    then = json.dumps({"command": "target", "az": 60}).encode()
+    with socket.create_connection(("127.0.0.1", web["port"]), timeout=slow(10)) as script:
+        with console_loop_held(app.web) as held:
+            wait_until(held.is_set, slow(10), "the console's loop busy")
+            script.sendall(console.command_head("tower", first) + first)
+            with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
+                s.sendall(b"S\n")
+                assert s.recv(100) == b"RPRT 0\n"
+        response = http.client.HTTPResponse(script)
+        response.begin()
+        assert (response.status, b"stale" in response.read()) == (409, True)
+        script.sendall(console.command_head("tower", then) + then)  # after the STOP
+        response = http.client.HTTPResponse(script)
+        response.begin()
+        answer = response.status, response.read()
+    assert answer[0] == 200, answer
+    rig.arrived("tower", 60)
+    assert not [f.data for f in emu.frames(*BEARING_OUTCOMES) if b"200" in f.data]

@@ -24,15 +24,16 @@ Rules:
    rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
    stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
    rotctld, the console) was carried out while it was still arriving (its body held up on the
-   way) or that the page stamped as sent before it (``sent``, rule 6: an attack pass, a click
-   held up before its request reached the console, after a STOP by MQTT, turned the rotor; a
-   lock OFF sent before a lock ON by MQTT undid it), and a command a page numbered (``page``
-   and ``seq``, which the console's page sends) before a STOP or lock ON the same page sent
-   after it, however late it comes; but not one the same page numbered after its own STOP,
-   the latest there is, that merely overtook it. A stop, a lock ON and tracking off are never
-   stale. A page's numbers count within its login (``scoped``: the token's): a script
-   restarted with a fresh login under the same page name numbers from 1 again (a cold
-   review: its targets were refused and its STOP taken for a copy already carried out).
+   way; one whose bytes came before it and were read after it, the loop busy: server.py rule
+   11, looks.py) or that the page stamped as sent before it (``sent``, rule 6: an attack pass,
+   a click held up before its request reached the console, after a STOP by MQTT, turned the
+   rotor; a lock OFF sent before a lock ON by MQTT undid it), and a command a page numbered
+   (``page`` and ``seq``, which the console's page sends) before a STOP or lock ON the same
+   page sent after it, however late it comes; but not one the same page numbered after its own
+   STOP, the latest there is, that merely overtook it. A stop, a lock ON and tracking off are
+   never stale. A page's numbers count within its login (``scoped``: the token's): a script
+   restarted with a fresh login under the same page name numbers from 1 again (a cold review:
+   its targets were refused and its STOP taken for a copy already carried out).
 5a. Among a page's other commands the newest it numbered wins: one numbered before another
    command of the same page that the console already handed to the judge is refused as stale
    (``OVERTAKEN``), however late it comes. The browser sends each click on a connection of

@@ -49,7 +49,7 @@ from bridge.interfaces.tcplines import Looks
 
 __all__ = ["Conn", "HaltLooks", "Listener"]
 
-BACKLOG = 128  # the kernel's queue of connections (asyncio's own default is 100)
+BACKLOG = 100  # the kernel's queue of connections (asyncio's own default)
 
 
 class Conn(socket.socket):
@@ -185,7 +185,10 @@ class HaltLooks:
                 bind or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
             )
             for family, kind, proto, _name, address in dict.fromkeys(infos):
-                sock = Listener(family, kind, proto)
+                try:
+                    sock = Listener(family, kind, proto)
+                except OSError:  # (a family this host has not: skipped, as asyncio does)
+                    continue
                 made.append(sock)
                 sock.halt_looks = self
                 if hasattr(socket, "SO_REUSEADDR") and not hasattr(socket, "SO_EXCLUSIVEADDRUSE"):
@@ -195,6 +198,8 @@ class HaltLooks:
                 sock.bind(address)
                 sock.listen(BACKLOG)
                 sock.setblocking(False)
+            if not made:
+                raise OSError(f"no socket for {bind or '(every address)'}:{port}")
         except BaseException:
             for sock in made:
                 sock.close()

@@ -72,6 +72,21 @@ Rules:
    code ``busy``, on R/error): each waiter looks every SHOWN_POLL_S, and a client posting
    hundreds at a line that owes a long reply kept the loop, and the interpreter the serial
    lines share, busy with their looks.
+11. A command is dated by when its bytes reached the bridge, not by when the loop began its
+   request (rule 5's start): every rotator's halt watchers (core/haltwatch.py) have the
+   console look at its connections right before each STOP or lock ON is counted, whichever
+   front end brought it (looks.py, the TCP ports' construction: interfaces/tcplines.py rule
+   9), and a command whose request's first byte a look counted before a halt is refused as
+   stale (409, code ``stale``, on R/error), as the judge refuses one a halt overtook
+   (runtime/rotator.py ``since``), however late the loop read it: a script's POST (no
+   ``sent``, no numbers) that waited in the kernel while the loop was busy was dated after a
+   rotctld STOP or a Home Assistant lock ON counted meanwhile, and turned the rotor or
+   unlocked it (an attack pass). The halts the console carried out itself are numbered as
+   they are counted (``_own_halt``, as tcplines.py ``Fence.halting``): one that came on the
+   same connection, or that the same page numbered before the command (commands.py rule 5:
+   its later click merely overtook its STOP), does not make it stale. On the remote the
+   count is that of the remote's other front ends (port.py rule 2b), told before each
+   (remote/rotator.py ``halted``).
 """
 
 from __future__ import annotations
