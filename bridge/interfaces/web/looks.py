@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import socket
 import threading
+import weakref
 from collections.abc import Callable, Hashable, Iterable
 from typing import Any
 
@@ -160,7 +161,8 @@ class HaltLooks:
         self._watchers: dict[str, tuple[HaltWatchers, Callable[[], None]]] = {}
         self.floors: dict[str, int] = {}  # rule 2: under ``queue_lock``
         self.queue_lock = threading.Lock()
-        self._conns: dict[int, Conn] = {}  # by descriptor, from the accept
+        # by descriptor, from the accept until asyncio lets the socket go
+        self._conns: weakref.WeakValueDictionary[int, Conn] = weakref.WeakValueDictionary()
         self._conns_lock = threading.Lock()
         self._listeners: list[Listener] = []
         # server.py ``_looked``: the halts the console itself carried out here, by number
@@ -231,8 +233,6 @@ class HaltLooks:
         floor if lower (it came when the count was at least the floor)."""
         fd = conn.fileno()
         with self._conns_lock:
-            for old in [k for k, c in self._conns.items() if c.fileno() < 0]:
-                del self._conns[old]  # (closed since)
             self._conns[fd] = conn
         for rid, count in self.counts().items():
             conn.look(rid, min(count, floors.get(rid, count)))

@@ -357,8 +357,9 @@ class WebConsole:
         self._conns = Connections(server)
         loop = asyncio.get_running_loop()
         # rule 11: the listeners and what they accept are looks.py's, served by asyncio
+        socks = self._looks.listeners(self.bind, self.port)
         self._looks.start()
-        for sock in self._looks.listeners(self.bind, self.port):
+        for sock in socks:
             listening = await loop.create_server(self._conns.protocol, sock=sock)
             self._listeners.append(listening)
         self._sweeper = loop.create_task(self._conns.sweeping())
