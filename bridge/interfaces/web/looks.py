@@ -24,13 +24,14 @@ Rules:
    pipelining: it came with the one before), that one's own bound. The count of the first
    look that counted a byte past it is when it arrived (``arrived``); a halt counted after
    that, other than the connection's own or its page's own numbered before it
-   (server.py ``_looked``), overtakes its command, refused as stale. What is read before a
-   request's first byte (a request refused, a body left unread) only moves the bound earlier:
-   toward refusing. Bytes read in one go with the request before them and only part of a
-   request (its first bytes pipelined, the rest after a halt) are dated from that request's
-   answer: a client that sends half a request behind another one's.
+   (server.py ``_looked``), overtakes its command, refused as stale. A body its handler left
+   unread only moves the bound earlier: toward refusing. The one case that errs the other way:
+   a request whose first bytes came in one read with the request before it and the rest
+   after that one was answered is dated from that answer (a client that sends half a request
+   behind another one's, pipelined).
 4. Only the console's event loop reads a connection; a look runs on the halting thread and
-   takes only the connection's lock, held for a system call or two.
+   takes only the connection's lock, held for a system call or two (an ioctl per connection
+   a halt: the console holds connections.py's MOST_HELD at most).
 5. Where the kernel cannot say what waits unread (Windows, no FIONREAD: the remote runs there),
    or asyncio does not accept and read through these sockets (its proactor loop), nothing is
    looked at: commands.py rule 5's start of the request dates it, as before.
