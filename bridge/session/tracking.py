@@ -32,11 +32,15 @@ Rules:
    step of a pass under way): the track command is the user's newest, and that target is put
    while the rotor turns or slews, as any newest target is (targets.py: a Rotor-EZ's turn to
    an older target is stopped and the step sent after the brake delay, a SatEL's slew stopped
-   and the step sent once still, a SPID or GS-232 re-targeted on the fly); only a brake window
-   (a stop's, a stall's) and the settle time after the first reading (motion.py rule 4) are
-   waited out, as for every step. Review 46: ``track sun`` typed while a Rotor-EZ turned to a
-   target 120 degrees from the sun waited for that turn to end, the rotor turning away from
-   the sun for some 20 s, and only then turned all the way back.
+   and the step sent once still, a SPID or GS-232 re-targeted on the fly); only a stop's brake
+   window and the settle time after the first reading (motion.py rule 4) are waited out, as
+   for every step. Review 46: ``track sun`` typed while a Rotor-EZ turned to a target 120
+   degrees from the sun waited for that turn to end, the rotor turning away from the sun for
+   some 20 s, and only then turned all the way back. A stall is no window: the motion stays
+   stalled until a target goes out (motion.py rule 3), so a start's first target is put then
+   as well and goes as an ``R/target`` would (targets.py, motion.py ``plan_target``: once the
+   stall's brake delay is over; at once on a controller that re-targets while turning).
+   Review 50: a start taken after a jam freed waited on the stall for ever, nothing sent.
 4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a
    satellite's pass with elevation 180 - el and azimuth + 180 when that saves turning time
    during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
@@ -418,8 +422,10 @@ class Tracker:
                 return waiting
             if not self._rig.motion.direct_retarget and m.state is not MotionState.IDLE:
                 return waiting
-        if m.state in (MotionState.BRAKING, MotionState.STALLED) or mo.settling(m):
+        if m.state is MotionState.BRAKING or mo.settling(m):
             return waiting  # (settling: no brake, but maybe still turning, motion.py rule 4)
+        if m.state is MotionState.STALLED and self._last is not None:
+            return waiting  # (the stall ends tracking: rule 1; a start's target goes, below)
         lead = self._half_step_s(sky, utc)
         body = sky.at(min(utc + lead, p.los_s)) if lead is not None else None
         if body is None:

@@ -18,13 +18,6 @@ from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 50: a tracking start taken while the motion is stalled (a jam freed since) "
-        "waits for ever: tracking.py rule 3 waits on STALLED, which only a target ends"
-    ),
-)
 @pytest.mark.parametrize("model", ["rotorez", "gs232b-az"])
 def test_a_tracking_start_after_a_stall_turns_the_rotor_to_the_body(model: str) -> None:
     wall = SUN_EPOCH
