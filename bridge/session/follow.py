@@ -14,7 +14,9 @@ Rules:
    rotor turning with no target and no stop of the bridge's out, further than the tolerance
    from the bearing it last turned to, or at all before it has turned to one (nothing heard
    yet, no grid, a grid refused or off band): the operator took the antenna by hand, and the
-   next grid must not turn it away from where the hand left it (a review: it did).
+   next grid must not turn it away from where the hand left it (a review: it did). Not the
+   turn its start found under way with no target (a replug mid-turn, the controller finishing
+   its old turn by itself: parts.py rule 8; review 50): its first grid takes that turn's place.
 2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
    from the station (the long path if asked). The same grid again moves nothing (the
    deadband), whatever else the program's status says; so does a status without a grid, or
@@ -97,7 +99,7 @@ from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Sou
 from bridge.pointing import toward
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
+from bridge.session.parts import NOTHING, Before, Proposal, Scene, turned_by_hand
 
 log = logging.getLogger(__name__)
 
@@ -167,6 +169,7 @@ class Follower:
         self._off_band: str | None = None  # rule 9: the band a grid was refused on, said
         self._mine: Heard | None = None  # rule 4: the newest status on one of its bands
         self._mine_t = -math.inf
+        self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
 
     @property
     def on(self) -> bool:
@@ -184,6 +187,7 @@ class Follower:
         self._heard = fresh
         self._instance = fresh.instance if fresh is not None and self._for_me(fresh) else None
         self._ignored.clear()
+        self._before.start()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
     def end(self, why: str) -> bool:
@@ -249,8 +253,10 @@ class Follower:
 
     def _turned_by_hand(self, scene: Scene) -> bool:
         """Rule 1: turned away from the bearing it last turned to, by no target of the bridge's
-        (before its first bearing: any such turn)."""
-        return turned_by_hand(scene, self._rig.aim, self._bearing, self._rig.motion.tolerance_deg)
+        (before its first bearing: any such turn but the one its start found under way)."""
+        before = self._before.look(scene)
+        aim, tolerance = self._rig.aim, self._rig.motion.tolerance_deg
+        return turned_by_hand(scene, aim, self._bearing, tolerance, before)
 
     def _for_me(self, heard: Heard) -> bool:
         """Rules 8 and 9: ``heard`` may choose the program followed: any, for a rotator

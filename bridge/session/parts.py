@@ -49,7 +49,12 @@ Rules:
 8. A hand on the front panel is a command too: tracking and following each end on one
    (``turned_by_hand``): the rotor turning with no target and no stop of the bridge's out, and
    already further from the part's last target than the part allows for (its tolerance, and
-   tracking's step): not jitter, coasting or a late start.
+   tracking's step): not jitter, coasting or a late start. Nor the turn its start found under
+   way (``before``: the part's first step saw it, and it has gone on since with no target and
+   no stop out): the controller finishing a turn by itself, its target dropped with the port
+   (motion.py rule 4: a replug mid-turn), is nobody's hand; the start's first target stops it
+   or re-targets it as an ``R/target`` would (review 50: ``track sun`` right after a replug
+   ended at once as "turned by hand", and the rotor turned on to the old target).
 """
 
 from __future__ import annotations
@@ -103,12 +108,37 @@ class Proposal:
 NOTHING = Proposal()
 
 
-def turned_by_hand(scene: Scene, aim: Pointing, last_deg: float | None, far_deg: float) -> bool:
+def turning_alone(m: mo.Motion) -> bool:
+    """Rule 8: turning with no target and no stop of the bridge's out."""
+    return m.state is mo.MOVING and m.target_deg is None and m.stop_sent_t is None
+
+
+class Before:
+    """Rule 8: whether the turn with no target a part's start found under way goes on (not a
+    hand): judged at the part's first step after its start, and kept while that turn does."""
+
+    def __init__(self) -> None:
+        self._seen: bool | None = None  # None: no step since the start
+
+    def start(self) -> None:
+        self._seen = None
+
+    def look(self, scene: Scene) -> bool:
+        """The turn under way is the one the start found (at every step, before judging)."""
+        alone = turning_alone(scene.motion)
+        self._seen = alone if self._seen is None else self._seen and alone
+        return self._seen
+
+
+def turned_by_hand(
+    scene: Scene, aim: Pointing, last_deg: float | None, far_deg: float, before: bool = False
+) -> bool:
     """Rule 8: turning with no target and no stop of the bridge's out, and more than
     ``far_deg`` from ``last_deg`` (the part's last target, a true bearing): a hand on the front
-    panel. With nothing to measure by (no last target, no reading), any such turn."""
+    panel. With nothing to measure by (no last target, no reading), any such turn; but never
+    the turn the part's start found under way (``before``: ``Before.look``)."""
     m = scene.motion
-    if m.state is not mo.MOVING or m.target_deg is not None or m.stop_sent_t is not None:
+    if before or not turning_alone(m):
         return False
     if last_deg is None or m.position_deg is None:
         return True

@@ -117,7 +117,7 @@ from bridge.pointing import angle_between
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene, turned_by_hand
+from bridge.session.parts import NOTHING, Before, Proposal, Scene, turned_by_hand
 from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack, flip_times
 from bridge.sky import Body, Pass, tle_epoch_unix
 from bridge.sky.worker import Answer, LookupQuestion, Question
@@ -178,6 +178,7 @@ class Tracker:
         self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
+        self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
         self._from_file: LookupQuestion | None = None  # rule 10: to look the body up again by
@@ -271,9 +272,10 @@ class Tracker:
         sky = self._sky
         if self.body is None or sky is None:
             return NOTHING
+        before = self._before.look(scene)
         if scene.locked:
             return Proposal(busy=True)  # rule 7
-        if self._turned_by_hand(scene):
+        if self._turned_by_hand(scene, before):
             self.end("turned by hand")  # rule 1: the front panel is a command too
             return Proposal(ended="turned by hand", busy=True)
         utc = scene.now + scene.wall_offset_s
@@ -451,12 +453,13 @@ class Tracker:
             self._sided_for = p.aos_s
         return put
 
-    def _turned_by_hand(self, scene: Scene) -> bool:
+    def _turned_by_hand(self, scene: Scene, before: bool) -> bool:
         """Rule 1 (parts.py rule 8): a hand on the front panel, further from the last tracking
-        target than a step and the tolerance (a late start on a small step is not one)."""
+        target than a step and the tolerance (a late start on a small step is not one); not the
+        turn the start found under way (``before``: its first target takes its place)."""
         last = self._last[0] if self._last is not None else None
         far_deg = self.cfg.step_deg + self._rig.motion.tolerance_deg
-        return turned_by_hand(scene, self._rig.aim, last, far_deg)
+        return turned_by_hand(scene, self._rig.aim, last, far_deg, before)
 
     def _near(self, scene: Scene, az: float, el: float | None) -> bool:
         """The rotor really is within a step (and its tolerance) of (az, el): the last target

@@ -12,22 +12,12 @@ to a target nobody stands for any more, and stays there; tracking is off, blamed
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 50: a track start right after a replug, the controller finishing its old turn "
-        "by itself, ends at once as 'turned by hand' (parts.py turned_by_hand: no tracking "
-        "target yet, so any turn with no target is a hand) and the rotor turns on away"
-    ),
-)
 def test_a_tracking_start_right_after_a_replug_mid_turn_turns_the_rotor_to_the_body() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
