@@ -56,7 +56,11 @@ Rules:
    body is back where it may go. A pass that rises where the judge refuses (a keep-out
    sector, a limit) is waited for at the first point of its track the judge takes (an attack
    pass: the rotor stood where it was until the satellite left the sector, then turned 200
-   degrees to it).
+   degrees to it). A start whose first target is refused holds the rotor where it is: a turn
+   under way (to an older target, or one the start found going on by itself, parts.py rule
+   8) is stopped (``Proposal.halt``), as the start's own target would have stopped it (rule
+   3). Review 50: ``track sun`` with the sun in a keep-out sector said "holding" while a
+   Rotor-EZ turned on to the older target, 120 degrees from the sun.
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
    it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the
@@ -327,11 +331,12 @@ class Tracker:
                 aim.check_raw(judged)
         except Refused as exc:
             aos = sky.pass_now.aos_s if sky.pass_now is not None else None
+            halt = self._last is None and _turning(scene)  # (the turn the start found)
             if self._refused_for != aos or aos is None:
                 self._refused_for = aos
                 why = f"tracking {sky.body.name}: {exc.message}; holding"
-                return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True)
-            return Proposal(busy=True)
+                return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True, halt=halt)
+            return Proposal(busy=True, halt=halt)
         self._last_raw = judged.az_deg
         return Proposal(target=judged, busy=True)
 
@@ -656,6 +661,14 @@ def _thinned(track: list[tuple[float, float]] | None) -> tuple[tuple[float, floa
     step = max(1, math.ceil((n - 1) / (PASS_TRACK_POINTS - 1)))
     picked = [*track[: n - 1 : step], track[-1]]
     return tuple((round(az % 360.0, 1), round(el, 1)) for az, el in picked)
+
+
+def _turning(scene: Scene) -> bool:
+    """Rule 5: a turn or a slew under way with no stop of the bridge's out (one whose port was
+    out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it)."""
+    m = scene.motion
+    moving = m.state is MotionState.MOVING and m.stop_sent_t is None and not m.lost_turning
+    return moving or scene.slewing
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:

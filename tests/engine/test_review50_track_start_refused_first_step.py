@@ -10,8 +10,6 @@ takes the turn's place (docs/tracking.md, "Starting": "whatever the rotor was do
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
@@ -19,13 +17,6 @@ from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 50: a tracking start whose first step is refused (keep-out) leaves the turn to "
-        "the older target running, 120 degrees away from the body, while R/error says holding"
-    ),
-)
 def test_a_tracking_start_whose_first_step_is_refused_holds_the_rotor_where_it_is() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
