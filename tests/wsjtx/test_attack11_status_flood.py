@@ -41,20 +41,12 @@ def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
     listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
     listener.start()
     try:
-        forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
         with contextlib.ExitStack() as stack:
             wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
             wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
             wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
             sent = 1
-            for _ in range(8):  # each up to its own budget: the cap for all spent between them
-                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                for _ in range(6):  # in batches the reader keeps up with
-                    for _ in range(40):
-                        s.sendto(forged, listener.address)
-                    sent += 40
-                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
-            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            sent = flood_of_another_name(stack, listener, sent)
             for call in ("JA1ABC", "VK2XYZ"):
                 wsjtx.sendto(
                     w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address
@@ -65,6 +57,22 @@ def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
     finally:
         listener.stop()
+
+
+def flood_of_another_name(stack: contextlib.ExitStack, listener: WsjtxListener, sent: int) -> int:
+    """Statuses of another program's name (``JTDX-other``) from eight local sockets, each up
+    to its own budget, in batches the reader keeps up with: the cap for all spent between
+    them; ``sent`` counted on (what the listener has read by then)."""
+    forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
+    for _ in range(8):
+        s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        for _ in range(6):
+            for _ in range(40):
+                s.sendto(forged, listener.address)
+            sent += 40
+            wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
+    assert listener.counts.over_budget > 0  # (the cap for all spent)
+    return sent
 
 
 def _read(listener: WsjtxListener) -> int:
@@ -81,7 +89,6 @@ def test_wsjtx_restarted_on_a_new_socket_keeps_its_room_through_the_flood() -> N
     listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
     listener.start()
     try:
-        forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
         with contextlib.ExitStack() as stack:
             first = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
             first.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
@@ -90,14 +97,7 @@ def test_wsjtx_restarted_on_a_new_socket_keeps_its_room_through_the_flood() -> N
             again.sendto(w.status(w.StatusFields(dx_call="G4XYZ")), listener.address)
             wait_until(lambda: len(ears.got) == 2, slow(10), "WSJT-X heard again")
             sent = 2
-            for _ in range(8):
-                s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                for _ in range(6):
-                    for _ in range(40):
-                        s.sendto(forged, listener.address)
-                    sent += 40
-                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
-            assert listener.counts.over_budget > 0  # (the cap for all spent)
+            sent = flood_of_another_name(stack, listener, sent)
             again.sendto(
                 w.status(w.StatusFields(dx_call="JA1ABC", transmitting=True)), listener.address
             )
