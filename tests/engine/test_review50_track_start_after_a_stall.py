@@ -12,25 +12,15 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import MotionState
-from bridge.sky import Body, Sky
-from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
-from tests.engine.virtual import VirtualRotator
+from bridge.sky import Body
+from tests.engine.test_review46_track_start_mid_turn import turning_away_from_the_sun
+from tests.engine.test_session_tracking import off_deg
 from tests.support.sky import sun_altaz
 
 
 @pytest.mark.parametrize("model", ["rotorez", "gs232b-az"])
 def test_a_tracking_start_after_a_stall_turns_the_rotor_to_the_body(model: str) -> None:
-    wall = SUN_EPOCH
-    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
-    sun_az = sun_altaz(lat, lon, wall)[0]
-    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
-    emulator = {"start_az_deg": round(sun_az)}
-    with VirtualRotator(model, sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # a Rotor-EZ's brake delay after its start is over
-        v.target(round(away))
-        v.run_until(lambda h: off_deg(h.truth().az_deg, sun_az) >= 15.0, 30, "turning away")
+    with turning_away_from_the_sun(model) as (v, lat, lon):
         v.jam()
         v.run_until(lambda h: h.state is MotionState.STALLED, 60, "the stall said")
         v.unjam()
