@@ -1,0 +1,54 @@
+"""Review 52 (cold review of d49f9a16, parts.py rule 8's ``Before``): a hand at the front panel
+while tracking ends tracking (tracking.py rule 1), and the rotor stays where the hand leaves it.
+``Before`` was meant for the turn a controller finishes by itself after a replug mid-turn (its
+target dropped with the port, motion.py rule 4), but it takes any turn with no target and no
+stop out that the part's first step sees: a hand's turn too, one the bridge watched begin at
+rest with the link up and no target of its own anywhere. The operator at the panel turning the
+beam when ``track sun`` arrives (another console, a script) is no longer a hand: tracking stays
+on, and its first target stops the hand's turn and turns the antenna back to the sun (before
+d49f9a16: "turned by hand", the rotor left where the hand took it). With the sun refused (a
+keep-out sector), tracking's refused-first-step halt (7447112e) stops the hand's turn instead.
+What a user notices: the antenna he is turning by hand is stopped, and turned away from him."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.sky import Body, Sky
+from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
+from tests.engine.virtual import VirtualRotator
+from tests.support.sky import sun_altaz
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 52: parts.py Before takes a hand's turn seen under way at a tracking start for "
+    "the turn a replug left going: tracking stays on and stops the hand (d49f9a16)",
+)
+@pytest.mark.parametrize("sun", ["allowed", "in a keep-out sector"])
+def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_stopped(
+    sun: str,
+) -> None:
+    wall = SUN_EPOCH
+    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
+    sun_az = sun_altaz(lat, lon, wall)[0]
+    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
+    toward = 20.0 if away > sun_az else -20.0  # (never through the sector)
+    emulator = {"start_az_deg": round(sun_az + toward)}
+    settings = {"keep_out": [[round(sun_az) - 10, round(sun_az) + 10]]} if sun != "allowed" else {}
+    with VirtualRotator(
+        "rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator, settings=settings
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        v.manual_rotate(round(away))  # a hand at the panel
+        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
+        hand = v.now
+        v.track(Body.sun())
+        v.run_until(lambda h: not h.truth().is_moving, 60, "the rotor at rest")
+        v.run_for(30.0)
+        sent = {f.outcome for f in v.frames(since=hand)}
+        assert sent == {"query"}, sent  # polls only; observed: a stop, and the sun's bearing
+        assert off_deg(v.truth().az_deg, round(away)) <= 1.0  # where the hand left it
+        assert v.status.tracking is None and v.status.tracking_ended == "turned by hand"
