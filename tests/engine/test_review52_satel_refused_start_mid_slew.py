@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import pytest
 
+from bridge.core.model import Target
 from bridge.sky import Body, Sky
+from tests.engine.test_composite import FAST
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual_composite import VirtualComposite
 from tests.support.sky import sun_altaz
 
 
@@ -50,3 +53,39 @@ def test_a_satel_slewing_when_a_refused_tracking_start_comes_is_stopped_once_and
         assert len(stops) <= 2, len(stops)  # observed: some 300
         assert v.frames("status", since=t) != []  # observed: never asked again
         assert not v.status.moving  # observed: "moving" for good
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 52: a refused tracking start halts a composite's SatEL elevation box at every "
+    "step while that box waits out the slew it stopped: a stop 5 times a second, no status",
+)
+def test_a_composites_satel_box_slewing_when_a_refused_tracking_start_comes_is_stopped_once() -> (
+    None
+):
+    """The same on a rotator of two boxes: an RT-21 azimuth box and a SatEL elevation box,
+    both turning to an older target when ``track sun`` comes, the sun in a keep-out sector.
+    Each box's tracking refuses and halts; the RT-21 takes one stop, the SatEL some 300."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH, 20.0, 50.0)
+    sun_az = sun_altaz(lat, lon, SUN_EPOCH)[0]
+    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
+    settings = {"keep_out": [[round(sun_az) - 10, round(sun_az) + 10]]}  # the sun in it
+    with VirtualComposite(
+        "rt21",
+        "satel",
+        settings=settings,
+        emulators=FAST,
+        sky=Sky(lat, lon),
+        wall_epoch_s=SUN_EPOCH,
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(round(away), 80.0))
+        v.run_until(lambda h: h.el.truth().is_moving, 10, "the elevation box slewing")
+        t = v.now
+        v.track(Body.sun())
+        v.run_for(60.0)  # (a slew's longest is some 40 s: not a deadline)
+        assert v.status.tracking is not None  # taken, and holding
+        assert len(v.az.frames("stop", since=t)) <= 2  # (the RT-21: one)
+        stops = v.el.frames("stop", since=t)
+        assert len(stops) <= 2, len(stops)  # observed: some 300
+        assert v.el.frames("status", since=t) != []  # observed: never asked again
