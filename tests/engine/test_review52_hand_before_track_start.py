@@ -15,8 +15,10 @@ from __future__ import annotations
 import pytest
 
 from bridge.sky import Body, Sky
+from tests.engine.test_follow import spid
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
@@ -52,3 +54,27 @@ def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_
         assert sent == {"query"}, sent  # polls only; observed: a stop, and the sun's bearing
         assert off_deg(v.truth().az_deg, round(away)) <= 1.0  # where the hand left it
         assert v.status.tracking is None and v.status.tracking_ended == "turned by hand"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 52: parts.py Before takes a hand's turn seen under way at a follow start for "
+    "the turn a replug left going: following stays on and turns the rotor away from the hand",
+)
+def test_a_hand_turning_the_rotor_when_following_starts_ends_following() -> None:
+    """Following (follow.py rule 1) takes the same ``Before``: ``R/follow`` on while the
+    operator turns the beam by hand at the panel, then WSJT-X names a partner: the rotor is
+    stopped and turned to the partner (before d49f9a16: "turned by hand", nothing sent)."""
+    with spid() as v:
+        v.run_for(5.0)
+        v.manual_rotate(300.0)  # a hand at the panel
+        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
+        hand = v.now
+        v.follow(True)
+        v.run_for(2.0)  # (the hand's turn goes on: not a deadline)
+        v.heard("JA1ABC", "PM95")  # WSJT-X names a partner
+        v.run_until(lambda h: not h.truth().is_moving, 60, "the rotor at rest")
+        v.run_for(30.0)
+        assert v.frames("set", since=hand) == []  # observed: the partner's bearing
+        assert angle_between(v.truth().az_deg, 300.0) < 1  # where the hand left it
+        assert v.status.following is None and v.status.following_ended == "turned by hand"
