@@ -60,7 +60,9 @@ Rules:
    under way (to an older target, or one the start found going on by itself, parts.py rule
    8) is stopped (``Proposal.halt``), as the start's own target would have stopped it (rule
    3). Review 50: ``track sun`` with the sun in a keep-out sector said "holding" while a
-   Rotor-EZ turned on to the older target, 120 degrees from the sun.
+   Rotor-EZ turned on to the older target, 120 degrees from the sun. Once per start: the stop
+   then takes its course (review 52: a SatEL's slew, stopped and waited out silently, was
+   halted again at every step, a stop five times a second and the status "moving" for good).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
    it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the
@@ -182,6 +184,7 @@ class Tracker:
         self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
+        self._halted = False  # rule 5: the start's one halt of the turn it found has gone
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
@@ -331,7 +334,10 @@ class Tracker:
                 aim.check_raw(judged)
         except Refused as exc:
             aos = sky.pass_now.aos_s if sky.pass_now is not None else None
-            halt = self._last is None and _turning(scene)  # (the turn the start found)
+            # (the turn the start found: stopped once, as the start's own target would; then
+            # the rotor is polled and seen at rest as after any stop: review 52)
+            halt = self._last is None and not self._halted and _turning(scene)
+            self._halted = self._halted or halt
             if self._refused_for != aos or aos is None:
                 self._refused_for = aos
                 why = f"tracking {sky.body.name}: {exc.message}; holding"

@@ -12,8 +12,6 @@ frozen on "moving" and the line full of stops."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Target
 from bridge.sky import Body, Sky
 from tests.engine.test_composite import FAST
@@ -23,11 +21,6 @@ from tests.engine.virtual_composite import VirtualComposite
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 52: a refused tracking start halts a SatEL's slew at every step while the "
-    "bridge waits out the slew it stopped: a stop 5 times a second, no status, 'moving' for good",
-)
 def test_a_satel_slewing_when_a_refused_tracking_start_comes_is_stopped_once_and_seen_at_rest() -> (
     None
 ):
@@ -55,11 +48,6 @@ def test_a_satel_slewing_when_a_refused_tracking_start_comes_is_stopped_once_and
         assert not v.status.moving  # observed: "moving" for good
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 52: a refused tracking start halts a composite's SatEL elevation box at every "
-    "step while that box waits out the slew it stopped: a stop 5 times a second, no status",
-)
 def test_a_composites_satel_box_slewing_when_a_refused_tracking_start_comes_is_stopped_once() -> (
     None
 ):
