@@ -15,8 +15,9 @@ Rules:
    from the bearing it last turned to, or at all before it has turned to one (nothing heard
    yet, no grid, a grid refused or off band): the operator took the antenna by hand, and the
    next grid must not turn it away from where the hand left it (a review: it did). Not the
-   turn its start found under way with no target (a replug mid-turn, the controller finishing
-   its old turn by itself: parts.py rule 8; review 50): its first grid takes that turn's place.
+   turn its start found carried over a lost link with no target (a replug mid-turn, the
+   controller finishing its old turn by itself: parts.py rule 8; review 50): its first grid
+   takes that turn's place. A hand already turning at the start is a hand (review 52).
 2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
    from the station (the long path if asked). The same grid again moves nothing (the
    deadband), whatever else the program's status says; so does a status without a grid, or

@@ -57,7 +57,8 @@ Rules:
    while it turned, and an Easycomm's turn was then stopped as one nobody asked for). Until a
    reading shows it move, a target for a controller stopped first waits (no stop to a rotor
    that came to rest while its port was out: a review), and that reading is no change of
-   bearing (rotor health counts no move from it).
+   bearing (rotor health counts no move from it). That turn is ``carried`` until it comes to
+   rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -254,6 +255,9 @@ class Motion:
     el_from_deg: float | None = None
     past: Past | None = None  # rule 10: the limit the last target's turn went past, if it did
     lost_turning: bool = False  # rule 4: its readings were lost while it turned (link_down)
+    # rule 4: the turn under way is the one taken for turning when the readings came back (the
+    # controller finishing a turn by itself, its target dropped with the port), till it rests
+    carried: bool = False
 
 
 class Event(enum.StrEnum):
@@ -379,6 +383,7 @@ def reading(
             el_position_deg=el_deg,
             el_anchor_deg=el_deg,
             last_move_t=now if turning else m.last_move_t,
+            carried=turning,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -830,6 +835,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         state=state,
         still_since_t=stopped_t,
         lost_turning=False,
+        carried=False,
         target_deg=None,
         el_target_deg=None,
         target_t=None,

@@ -50,11 +50,14 @@ Rules:
    (``turned_by_hand``): the rotor turning with no target and no stop of the bridge's out, and
    already further from the part's last target than the part allows for (its tolerance, and
    tracking's step): not jitter, coasting or a late start. Nor the turn its start found under
-   way (``before``: the part's first step saw it, and it has gone on since with no target and
-   no stop out): the controller finishing a turn by itself, its target dropped with the port
-   (motion.py rule 4: a replug mid-turn), is nobody's hand; the start's first target stops it
-   or re-targets it as an ``R/target`` would (review 50: ``track sun`` right after a replug
-   ended at once as "turned by hand", and the rotor turned on to the old target).
+   way that the readings came back to (``before``: the part's first step saw it ``carried``
+   over a lost link, motion.py rule 4, and it has gone on since with no target and no stop
+   out): the controller finishing a turn by itself, its target dropped with the port (a
+   replug mid-turn), is nobody's hand; a turn the bridge saw begin from rest with the link up
+   is a hand as ever. The start's first target stops the carried turn or re-targets it as an
+   ``R/target`` would (review 50: ``track sun`` right after a replug ended at once as "turned
+   by hand", and the rotor turned on to the old target; review 52: a hand already at the panel
+   when tracking started was taken for such a turn, stopped and overridden).
 """
 
 from __future__ import annotations
@@ -114,8 +117,9 @@ def turning_alone(m: mo.Motion) -> bool:
 
 
 class Before:
-    """Rule 8: whether the turn with no target a part's start found under way goes on (not a
-    hand): judged at the part's first step after its start, and kept while that turn does."""
+    """Rule 8: whether the turn with no target a part's start found under way, carried over a
+    lost link (motion.py rule 4), goes on (not a hand): judged at the part's first step after
+    its start, and kept while that turn does."""
 
     def __init__(self) -> None:
         self._seen: bool | None = None  # None: no step since the start
@@ -125,7 +129,8 @@ class Before:
 
     def look(self, scene: Scene) -> bool:
         """The turn under way is the one the start found (at every step, before judging)."""
-        alone = turning_alone(scene.motion)
+        m = scene.motion
+        alone = turning_alone(m) and m.carried  # (not a turn seen begin with the link up)
         self._seen = alone if self._seen is None else self._seen and alone
         return self._seen
 

@@ -22,11 +22,6 @@ from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 52: parts.py Before takes a hand's turn seen under way at a tracking start for "
-    "the turn a replug left going: tracking stays on and stops the hand (d49f9a16)",
-)
 @pytest.mark.parametrize("sun", ["allowed", "in a keep-out sector"])
 def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_stopped(
     sun: str,
@@ -56,11 +51,6 @@ def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_
         assert v.status.tracking is None and v.status.tracking_ended == "turned by hand"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 52: parts.py Before takes a hand's turn seen under way at a follow start for "
-    "the turn a replug left going: following stays on and turns the rotor away from the hand",
-)
 def test_a_hand_turning_the_rotor_when_following_starts_ends_following() -> None:
     """Following (follow.py rule 1) takes the same ``Before``: ``R/follow`` on while the
     operator turns the beam by hand at the panel, then WSJT-X names a partner: the rotor is
