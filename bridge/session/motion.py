@@ -893,6 +893,19 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     return Plan.WAIT  # braking (or no reading yet)
 
 
+def may_turn_blind(m: Motion, now: float) -> bool:
+    """Rule 6: no feedback, and its own target out with no stop since, within the time its turn
+    is assumed to take: it may be turning (``plan_target`` stops it first then)."""
+    busy = m.busy_until_t
+    return (
+        m.state is UNKNOWN
+        and m.target_deg is not None
+        and m.stop_sent_t is None
+        and busy is not None
+        and now < busy
+    )
+
+
 def stall_due(m: Motion, cfg: MotionConfig, now: float) -> bool:
     """Rule 3: turning off target with no movement for ``stall_timeout_s``, the stall not
     called for want of a reading since (``tick``'s): the controller is to be asked at once,

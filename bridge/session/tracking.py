@@ -59,7 +59,8 @@ Rules:
    degrees to it). A start whose first target is refused holds the rotor where it is: a turn
    under way (to an older target, or one the start found going on by itself, parts.py rule
    8) is stopped (``Proposal.halt``), as the start's own target would have stopped it (rule
-   3). Review 50: ``track sun`` with the sun in a keep-out sector said "holding" while a
+   3); on a DCU-1 (no readings) the turn its own target may still be making (review 52).
+   Review 50: ``track sun`` with the sun in a keep-out sector said "holding" while a
    Rotor-EZ turned on to the older target, 120 degrees from the sun. Once per start: the stop
    then takes its course (review 52: a SatEL's slew, stopped and waited out silently, was
    halted again at every step, a stop five times a second and the status "moving" for good).
@@ -671,10 +672,12 @@ def _thinned(track: list[tuple[float, float]] | None) -> tuple[tuple[float, floa
 
 def _turning(scene: Scene) -> bool:
     """Rule 5: a turn or a slew under way with no stop of the bridge's out (one whose port was
-    out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it)."""
+    out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it); on a
+    controller with no readings (a DCU-1), its own target out with no stop since, within its
+    assumed travel time (motion.py rule 6: it may be turning)."""
     m = scene.motion
     moving = m.state is MotionState.MOVING and m.stop_sent_t is None and not m.lost_turning
-    return moving or scene.slewing
+    return moving or scene.slewing or mo.may_turn_blind(m, scene.now)
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:

@@ -8,8 +8,6 @@ The DCU-1 takes a stop (``;``) mid-turn, as the Rotor-EZ the fix was proven on d
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
@@ -17,11 +15,6 @@ from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 52: a refused tracking start halts no turn on a DCU-1 (motion unknown, not "
-    "MOVING): it turns on to the older target",
-)
 def test_a_dcu1_turning_when_a_refused_tracking_start_comes_is_stopped() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
