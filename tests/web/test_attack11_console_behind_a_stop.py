@@ -26,13 +26,38 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any, NamedTuple
 
+from bridge.app import App
+from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.web.server import WebConsole
 from tests.support import free_port
 from tests.support.console import ConsoleClient, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
+
+
+class ConsoleBesideRotctld(NamedTuple):
+    app: App
+    emu: EmulatedPort[Any]
+    console: ConsoleClient
+    web_port: int
+    rotctld_port: int
+
+
+def console_beside_rotctld(rig: Rig) -> ConsoleBesideRotctld:
+    """The bridge in this process on an emulated Rotor-EZ at 10 with a rotctld port, its console
+    up and a session open on it."""
+    web = rig.sections["web"] = web_section()
+    port = free_port()
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
+    app = rig.start()
+    rig.ready("tower")
+    console = ConsoleClient(web["port"])
+    console.session()
+    assert app.web is not None
+    return ConsoleBesideRotctld(app, emu, console, web["port"], port)
 
 
 @contextmanager
@@ -59,17 +84,10 @@ def test_a_console_target_sent_before_a_rotctld_stop_and_read_after_it_never_tur
     """A script posts a target of 200 to the console; before the console's busy loop reads
     it, the operator stops the rotor with Hamlib's S. The target, sent first, was carried out
     after the stop: the rotor turned to 200."""
-    web = rig.sections["web"] = web_section()
-    port = free_port()
-    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
-    app = rig.start()
-    rig.ready("tower")
-    console = ConsoleClient(web["port"])
-    console.session()
-    assert app.web is not None
+    app, emu, console, web_port, port = console_beside_rotctld(rig)
     body = json.dumps({"command": "target", "az": 200}).encode()
     after = time.monotonic()
-    with socket.create_connection(("127.0.0.1", web["port"]), timeout=slow(10)) as script:
+    with socket.create_connection(("127.0.0.1", web_port), timeout=slow(10)) as script:
         with console_loop_held(app.web) as held:
             wait_until(held.is_set, slow(10), "the console's loop busy")
             script.sendall(console.command_head("tower", body) + body)  # whole, in the kernel
@@ -140,17 +158,10 @@ def test_the_same_connection_s_next_command_sent_after_the_stop_is_carried_out(r
     """The look dates each request from its own first byte (looks.py rule 3), not from its
     connection's: on the script's keep-alive connection whose target the STOP overtook, the
     target it sends after the STOP (and after the refusal came back) turns the rotor."""
-    web = rig.sections["web"] = web_section()
-    port = free_port()
-    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
-    app = rig.start()
-    rig.ready("tower")
-    console = ConsoleClient(web["port"])
-    console.session()
-    assert app.web is not None
+    app, emu, console, web_port, port = console_beside_rotctld(rig)
     first = json.dumps({"command": "target", "az": 200}).encode()
     then = json.dumps({"command": "target", "az": 60}).encode()
-    with socket.create_connection(("127.0.0.1", web["port"]), timeout=slow(10)) as script:
+    with socket.create_connection(("127.0.0.1", web_port), timeout=slow(10)) as script:
         with console_loop_held(app.web) as held:
             wait_until(held.is_set, slow(10), "the console's loop busy")
             script.sendall(console.command_head("tower", first) + first)

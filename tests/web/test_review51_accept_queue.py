@@ -14,11 +14,9 @@ import socket
 
 import pytest
 
-from tests.support import free_port
-from tests.support.console import ConsoleClient, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
-from tests.web.test_attack11_console_behind_a_stop import console_loop_held
+from tests.web.test_attack11_console_behind_a_stop import console_beside_rotctld, console_loop_held
 
 
 def _answer(sock: socket.socket) -> tuple[int, bytes]:
@@ -46,16 +44,9 @@ def test_a_target_sent_on_a_new_connection_after_the_stop_goes_though_another_wa
     """The console's loop busy; a connection (another page's, a proxy's) waits in the
     accept queue; the operator stops the rotor with Hamlib's S and gets RPRT 0; then a
     script opens a new connection and posts a target of 60. Sent after the STOP, it goes."""
-    web = rig.sections["web"] = web_section()
-    port = free_port()
-    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
-    app = rig.start()
-    rig.ready("tower")
-    console = ConsoleClient(web["port"])
-    console.session()
-    assert app.web is not None
+    app, emu, console, web_port, port = console_beside_rotctld(rig)
     body = json.dumps({"command": "target", "az": 60}).encode()
-    address = ("127.0.0.1", web["port"])
+    address = ("127.0.0.1", web_port)
     with console_loop_held(app.web) as held:
         wait_until(held.is_set, slow(10), "the console's loop busy")
         other = socket.create_connection(address, timeout=slow(10))  # waits in the queue

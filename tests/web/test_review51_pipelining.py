@@ -11,11 +11,9 @@ import socket
 
 import pytest
 
-from tests.support import free_port
-from tests.support.console import ConsoleClient, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
-from tests.web.test_attack11_console_behind_a_stop import console_loop_held
+from tests.web.test_attack11_console_behind_a_stop import console_beside_rotctld, console_loop_held
 
 
 @pytest.mark.xfail(
@@ -29,16 +27,9 @@ def test_a_target_pipelined_after_the_stop_behind_an_earlier_request_goes(rig: R
     """A script's keep-alive connection: GET api/hello sent, the console's loop busy; the
     operator stops the rotor with Hamlib's S and gets RPRT 0; the script then pipelines a
     target of 60 behind its unanswered GET. Sent after the STOP, it goes."""
-    web = rig.sections["web"] = web_section()
-    port = free_port()
-    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=port)
-    app = rig.start()
-    rig.ready("tower")
-    console = ConsoleClient(web["port"])
-    console.session()
-    assert app.web is not None
+    app, emu, console, web_port, port = console_beside_rotctld(rig)
     body = json.dumps({"command": "target", "az": 60}).encode()
-    with socket.create_connection(("127.0.0.1", web["port"]), timeout=slow(10)) as script:
+    with socket.create_connection(("127.0.0.1", web_port), timeout=slow(10)) as script:
         with console_loop_held(app.web) as held:
             wait_until(held.is_set, slow(10), "the console's loop busy")
             script.sendall(b"GET /api/hello HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
