@@ -68,3 +68,37 @@ def test_a_hand_turning_the_rotor_when_following_starts_ends_following() -> None
         assert v.frames("set", since=hand) == []  # observed: the partner's bearing
         assert angle_between(v.truth().az_deg, 300.0) < 1  # where the hand left it
         assert v.status.following is None and v.status.following_ended == "turned by hand"
+
+
+def test_a_hand_after_a_replugged_turn_came_to_rest_is_a_hand_at_a_tracking_start() -> None:
+    """The turn carried over a lost link (motion.py rule 4) is no hand only until it rests: a
+    replug mid-turn, the rotor at rest at its target, then a hand at the panel and ``track
+    sun``: tracking ends "turned by hand", nothing but polls goes out, and the rotor stays where
+    the hand left it (review 53's first question of ``Motion.carried``)."""
+    wall = SUN_EPOCH
+    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
+    sun_az = sun_altaz(lat, lon, wall)[0]
+    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
+    toward = 20.0 if away > sun_az else -20.0
+    emulator = {"start_az_deg": round(sun_az + toward)}
+    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        v.target(round(sun_az + 2 * toward))  # a short turn
+        v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+        v.link_down()
+        v.run_for(1.0)  # (the adapter out: not a deadline)
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        v.run_until(lambda h: not h.truth().is_moving and not h.status.moving, 60, "at rest")
+        v.run_for(10.0)  # (its brake delay over: not a deadline)
+        v.manual_rotate(round(away))  # a hand at the panel
+        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
+        hand = v.now
+        v.track(Body.sun())
+        v.run_until(lambda h: not h.truth().is_moving, 90, "the rotor at rest")
+        v.run_for(30.0)
+        assert {f.outcome for f in v.frames(since=hand)} == {"query"}
+        assert off_deg(v.truth().az_deg, round(away)) <= 1.0  # where the hand left it
+        assert v.status.tracking is None and v.status.tracking_ended == "turned by hand"
