@@ -47,12 +47,7 @@ def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
             wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
             sent = 1
             sent = flood_of_another_name(stack, listener, sent)
-            for call in ("JA1ABC", "VK2XYZ"):
-                wsjtx.sendto(
-                    w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address
-                )
-            sent += 2
-            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's statuses read")
+            transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
     finally:
@@ -73,6 +68,14 @@ def flood_of_another_name(stack: contextlib.ExitStack, listener: WsjtxListener, 
             wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
     assert listener.counts.over_budget > 0  # (the cap for all spent)
     return sent
+
+
+def transmits_through(wsjtx: socket.socket, listener: WsjtxListener, sent: int) -> None:
+    """WSJT-X's next two statuses (JA1ABC, then VK2XYZ, each transmitting), until the listener
+    has read them (``sent``: what it had to read before them)."""
+    for call in ("JA1ABC", "VK2XYZ"):
+        wsjtx.sendto(w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address)
+    wait_until(lambda: _read(listener) >= sent + 2, slow(10), "WSJT-X's statuses read")
 
 
 def _read(listener: WsjtxListener) -> int:

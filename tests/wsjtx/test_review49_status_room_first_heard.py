@@ -21,7 +21,12 @@ from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow
-from tests.wsjtx.test_attack11_status_flood import Ears, _read, flood_of_another_name
+from tests.wsjtx.test_attack11_status_flood import (
+    Ears,
+    _read,
+    flood_of_another_name,
+    transmits_through,
+)
 
 
 @pytest.mark.xfail(
@@ -56,12 +61,7 @@ def test_wsjtx_is_heard_through_a_flood_after_two_other_programs_were_heard_firs
             sent += 1
             wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X heard")
             sent = flood_of_another_name(stack, listener, sent)
-            for call in ("JA1ABC", "VK2XYZ"):
-                wsjtx.sendto(
-                    w.status(w.StatusFields(dx_call=call, transmitting=True)), listener.address
-                )
-            sent += 2
-            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's statuses read")
+            transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
     finally:
