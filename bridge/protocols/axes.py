@@ -25,8 +25,10 @@ Rules:
    azimuth resting at 400, was a MISFIT at every reply, review 49). A one-axis box is sent
    the elevation as its one bearing, and its bearing is read as the elevation (0..180 of its
    range). Either reports back as its azimuth the one the session last asked for (before
-   any: an az/el box its own, a one-axis box 0), so that the session's motion machine sees
-   that axis arrive at once and judges the elevation alone.
+   any: an az/el box the first it said of itself, kept, a one-axis box 0), so that the
+   session's motion machine sees that axis arrive at once and judges the elevation alone
+   (review 49: an az/el box's own azimuth shown as it read, turned by hand from its panel,
+   was told as the rotor turning, or shown MOVING, the antenna standing still).
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
    A one-axis box's bearing outside the elevation axis's scale (0..180 of its range, up to
@@ -253,6 +255,7 @@ class ElevationOnly(_KeepsOwn):
             inner.azimuth_unturned()
         self._own_az: float | None = None  # what the box last said of its azimuth, taken
         self._asked_az: float | None = None  # what the session last asked for
+        self._first_az: float | None = None  # rule 2: shown until the session asks for one
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         if self._own_az is None:  # rule 5: said twice first (the engine asks: targets.py)
@@ -271,7 +274,10 @@ class ElevationOnly(_KeepsOwn):
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
                 inner, own = r, r.az_deg
-                r = replace(r, az_deg=own if self._asked_az is None else self._asked_az)
+                if self._first_az is None:
+                    self._first_az = own
+                shown = self._first_az if self._asked_az is None else self._asked_az
+                r = replace(r, az_deg=shown)
                 self._fed(r, own, inner)
             replies.append(r)
         return replies
