@@ -1,0 +1,44 @@
+"""Review 53 (cold review of d2618151, ``Motion.carried``): parts.py rule 8 now takes only a
+turn "carried over a lost link" for the turn a tracking start found; "a turn the bridge saw
+begin from rest with the link up is a hand as ever". A turn the bridge never saw begin is
+neither: the bridge restarted (a crash, a host that rebooted: the end's own stop never went)
+while a Rotor-EZ turned, and the controller finishes the old turn by itself, its target gone
+with the process, as after a replug (review 50). The new session's first reading finds the
+rotor where it is (motion.py rule 4's start-up, no ``lost_turning`` to carry), the next shows
+it move, and ``carried`` is never set: ``track sun`` then ends at once "turned by hand" and the
+rotor turns on to the old target. At 635b0cd5 (before d2618151) the same start stopped the turn
+and turned the rotor to the sun, as after a replug.
+What a user notices: after ``track sun`` the antenna turns on some 120 degrees away from the
+sun and stays there; tracking is off, blamed on a hand nobody put on the panel."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.session.session import RotatorSession
+from bridge.sky import Body
+from tests.engine.test_review46_track_start_mid_turn import turning_away_from_the_sun
+from tests.engine.test_session_tracking import off_deg
+from tests.support.sky import sun_altaz
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 53: a turn seen by a restarted bridge's first readings is never 'carried' "
+    "(d2618151): a tracking start then ends 'turned by hand' and the rotor turns on",
+)
+def test_a_tracking_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_body() -> None:
+    with turning_away_from_the_sun() as (v, lat, lon):
+        v.link_down(None)  # the bridge's process gone: no end, no stop
+        v.run_for(1.0)  # (not a deadline)
+        v.session = RotatorSession(v.cfg)  # the bridge started again
+        v._do(v.session.start(v.now))
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        v.run_until(lambda h: h.status.moving, 10, "the old turn seen going on")
+        assert v.truth().is_moving  # (it finishes its old turn by itself)
+        v.track(Body.sun())
+        v.run_for(60.0)  # (the old target is some 15 s on; the sun's some 25 s back)
+        sun = sun_altaz(lat, lon, v.wall())[0]
+        assert v.status.tracking_ended is None  # observed: "turned by hand"
+        assert off_deg(v.truth().az_deg, sun) <= 1.5 + 3.0  # observed: 120 degrees off
