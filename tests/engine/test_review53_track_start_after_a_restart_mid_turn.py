@@ -17,8 +17,11 @@ import pytest
 
 from bridge.session.session import RotatorSession
 from bridge.sky import Body
+from tests.engine.test_follow import STATION, bearing
 from tests.engine.test_review46_track_start_mid_turn import turning_away_from_the_sun
 from tests.engine.test_session_tracking import off_deg
+from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
@@ -42,3 +45,34 @@ def test_a_tracking_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_
         sun = sun_altaz(lat, lon, v.wall())[0]
         assert v.status.tracking_ended is None  # observed: "turned by hand"
         assert off_deg(v.truth().az_deg, sun) <= 1.5 + 3.0  # observed: 120 degrees off
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 53: a turn seen by a restarted bridge's first readings is never 'carried' "
+    "(d2618151): a follow start then ends 'turned by hand' and the rotor turns on",
+)
+def test_a_follow_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_partner() -> None:
+    """Following takes the same ``Before`` (follow.py rule 1): the partner's grid takes the
+    old turn's place after a replug (review 50), not after a restart."""
+    partner = bearing("PM95")
+    away = partner - 120.0 if partner > 180.0 else partner + 120.0  # never across north
+    with VirtualRotator("rotorez", emulator={"start_az_deg": round(partner)}, follow=STATION) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        v.target(round(away))
+        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 15.0, 30, "turning")
+        v.run_for(0.1)  # (between two polls: a query torn by the unplug is another story)
+        v.link_down(None)  # the bridge's process gone: no end, no stop
+        v.run_for(1.0)  # (not a deadline)
+        v.session = RotatorSession(v.cfg)  # the bridge started again
+        v._do(v.session.start(v.now))
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        v.run_until(lambda h: h.status.moving, 10, "the old turn seen going on")
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)
+        assert v.status.following_ended is None  # observed: "turned by hand"
+        assert angle_between(v.truth().az_deg, partner) <= 3.0  # observed: 120 degrees off
