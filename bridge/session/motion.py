@@ -58,7 +58,11 @@ Rules:
    reading shows it move, a target for a controller stopped first waits (no stop to a rotor
    that came to rest while its port was out: a review), and that reading is no change of
    bearing (rotor health counts no move from it). That turn is ``carried`` until it comes to
-   rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8).
+   rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8);
+   so is a turn the first readings of a bridge just started find (a restart mid-turn: the
+   controller finishing the turn the bridge before it sent), until the rotor is seen at rest
+   or settled; not a hand's turn the bridge saw begin before the link went (``lost_hand``),
+   nor once the bridge sends a target of its own into it (review 53).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -258,6 +262,7 @@ class Motion:
     # rule 4: the turn under way is the one taken for turning when the readings came back (the
     # controller finishing a turn by itself, its target dropped with the port), till it rests
     carried: bool = False
+    lost_hand: bool = False  # rule 4: the turn lost was a hand's, seen begin with the link up
 
 
 class Event(enum.StrEnum):
@@ -309,6 +314,7 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         position_deg=m.position_deg,
         el_position_deg=m.el_position_deg,
         lost_turning=m.lost_turning,
+        lost_hand=m.lost_hand,
     )
 
 
@@ -316,11 +322,13 @@ def link_down(m: Motion) -> Motion:
     """The readings lost (the port closed, the controller silent): whether it was turning, or
     had a target out, is kept for the first reading back (rule 4)."""
     turning = m.state is MOVING or m.target_deg is not None or m.el_target_deg is not None
+    hand = m.state is MOVING and m.target_deg is None and m.stop_sent_t is None and not m.carried
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,
         el_position_deg=m.el_position_deg,
         lost_turning=turning or m.lost_turning,
+        lost_hand=hand or (m.lost_hand and m.state is OFFLINE),
     )
 
 
@@ -375,6 +383,9 @@ def reading(
         # the rotor turned when its readings were lost, it turns from this reading until
         # readings show it still (rule 2), not still by the clock (rule 4)
         turning = m.lost_turning  # (kept till a reading shows it move, or rest: plan_target)
+        # (a turn found going on with nothing known of before it, the bridge restarted, is the
+        # controller's too, until the rotor is seen at rest; a hand's turn lost is a hand's)
+        fresh = m.position_deg is None
         m = replace(
             m,
             state=MOVING if turning else BRAKING if cfg.brake_delay_s > 0 else IDLE,
@@ -383,7 +394,8 @@ def reading(
             el_position_deg=el_deg,
             el_anchor_deg=el_deg,
             last_move_t=now if turning else m.last_move_t,
-            carried=turning,
+            carried=(turning and not m.lost_hand) or fresh,
+            lost_hand=False,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -647,6 +659,7 @@ def commanded(
         progress_t=now,
         stop_sent_t=None,
         still_since_t=None,
+        carried=False,  # (the bridge's own turn now: a review)
         closest_err=None,
         az_pass=_there(m.position_deg, target_deg, cfg, azimuth=True),
         el_pass=_there(m.el_position_deg, el_target_deg, cfg),
@@ -804,10 +817,10 @@ def tick(
             m = _at_rest(m, cfg, now, BRAKING)
     if m.state is BRAKING and m.still_since_t is not None:
         if now >= m.still_since_t + cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
-            m = replace(m, state=IDLE, idle_not_before_t=None)
+            m = replace(m, state=IDLE, idle_not_before_t=None, carried=False)
     elif m.state is IDLE and m.idle_not_before_t is not None:
         if now >= m.idle_not_before_t:
-            m = replace(m, idle_not_before_t=None)  # rule 4: settled
+            m = replace(m, idle_not_before_t=None, carried=False)  # rule 4: settled
     return m, events
 
 

@@ -12,19 +12,12 @@ What a user notices: the beam he is turning at the panel is turned back to the s
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 53: Motion.carried survives a target sent into the replugged turn (commanded): "
-    "a SPID turned away by hand after it is taken for the carried turn at a tracking start",
-)
 def test_a_hand_turning_a_spid_away_from_a_target_sent_after_a_replug_ends_tracking() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)

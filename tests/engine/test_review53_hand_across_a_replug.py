@@ -9,19 +9,12 @@ What a user notices: the beam he is turning at the panel is stopped and turned a
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 53: a hand's turn seen begin with the link up is 'carried' after a replug "
-    "(link_down keeps no whose-turn): a tracking start stops and overrides it",
-)
 def test_a_hand_turning_the_rotor_across_a_replug_ends_a_tracking_start() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)

@@ -13,8 +13,6 @@ sun and stays there; tracking is off, blamed on a hand nobody put on the panel."
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.session.session import RotatorSession
 from bridge.sky import Body
 from tests.engine.test_follow import STATION, bearing
@@ -25,11 +23,6 @@ from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 53: a turn seen by a restarted bridge's first readings is never 'carried' "
-    "(d2618151): a tracking start then ends 'turned by hand' and the rotor turns on",
-)
 def test_a_tracking_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_body() -> None:
     with turning_away_from_the_sun() as (v, lat, lon):
         v.link_down(None)  # the bridge's process gone: no end, no stop
@@ -47,11 +40,6 @@ def test_a_tracking_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_
         assert off_deg(v.truth().az_deg, sun) <= 1.5 + 3.0  # observed: 120 degrees off
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 53: a turn seen by a restarted bridge's first readings is never 'carried' "
-    "(d2618151): a follow start then ends 'turned by hand' and the rotor turns on",
-)
 def test_a_follow_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_partner() -> None:
     """Following takes the same ``Before`` (follow.py rule 1): the partner's grid takes the
     old turn's place after a replug (review 50), not after a restart."""
