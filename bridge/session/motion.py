@@ -59,10 +59,13 @@ Rules:
    that came to rest while its port was out: a review), and that reading is no change of
    bearing (rotor health counts no move from it). That turn is ``carried`` until it comes to
    rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8);
-   so is a turn the first readings of a bridge just started find (a restart mid-turn: the
-   controller finishing the turn the bridge before it sent), until the rotor is seen at rest
-   or settled; not a hand's turn the bridge saw begin before the link went (``lost_hand``),
-   nor once the bridge sends a target of its own into it (review 53).
+   so is a turn the second reading of a bridge just started finds (a restart mid-turn: the
+   controller finishing the turn the bridge before it sent), until the rotor comes to rest;
+   a second reading that shows no move says a turn after it is seen to begin (not the
+   clock: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
+   reading, and a hand in a Rotor-EZ's first brake window was taken for the old turn); not a
+   hand's turn the bridge saw begin before the link went (``lost_hand``), nor once the
+   bridge sends a target of its own into it (review 53).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -424,6 +427,8 @@ def reading(
             changes["lost_turning"] = False
         if m.target_deg is not None:
             changes["progress_t"] = now
+    elif m.carried and m.state is not MOVING:  # rule 4: a start's second reading saw no turn
+        changes["carried"] = False
     if changes:
         m = _with(m, changes)
     if moved and m.target_deg is not None:  # rule 10
@@ -817,10 +822,10 @@ def tick(
             m = _at_rest(m, cfg, now, BRAKING)
     if m.state is BRAKING and m.still_since_t is not None:
         if now >= m.still_since_t + cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
-            m = replace(m, state=IDLE, idle_not_before_t=None, carried=False)
+            m = replace(m, state=IDLE, idle_not_before_t=None)
     elif m.state is IDLE and m.idle_not_before_t is not None:
         if now >= m.idle_not_before_t:
-            m = replace(m, idle_not_before_t=None, carried=False)  # rule 4: settled
+            m = replace(m, idle_not_before_t=None)  # rule 4: settled
     return m, events
 
 

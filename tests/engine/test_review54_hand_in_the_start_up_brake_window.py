@@ -13,20 +13,12 @@ that starts tracking when the bridge comes back)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 54: Motion.carried set for a fresh session's first reading lasts the whole "
-    "start-up brake window: a hand begun there, the rotor read at rest before it, is taken for "
-    "a restart's turn, and a tracking start stops it and turns the rotor to the sun",
-)
 def test_a_hand_begun_at_rest_in_the_start_up_brake_window_ends_a_tracking_start() -> None:
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)

@@ -22,12 +22,6 @@ from tests.engine.test_session_tracking import off_deg
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 54: on a SPID polled slower than settle_s at rest (Rot2Prog, Rot1Prog) the "
-    "start-up settle clears Motion.carried before the second reading shows the old turn: a "
-    "tracking start after a restart mid-turn ends 'turned by hand', the rotor turning on",
-)
 @pytest.mark.parametrize("model", ["rot2prog", "rot1prog"])
 def test_a_tracking_start_after_a_restart_mid_turn_of_a_slowly_polled_spid_turns_to_the_body(
     model: str,
