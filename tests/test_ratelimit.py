@@ -40,3 +40,14 @@ def test_at_most_max_sources_are_remembered_the_oldest_forgotten() -> None:
     assert len(budgets) == 3
     assert budgets.allow("a", 0.0)  # forgotten: a second's worth again
     assert not budgets.allow("d", 0.0)
+
+
+def test_in_credit_asks_and_changes_nothing() -> None:
+    budgets = SourceBudgets(10.0, 1000.0, 2, now=0.0)
+    budgets.spend("flood", 15.0, 0.0)  # half a second into debt
+    budgets.spend("other", 1.0, 0.0)
+    assert not budgets.in_credit("flood", 0.4)
+    assert budgets.in_credit("flood", 0.6)
+    assert budgets.in_credit("never heard", 0.0)  # (it would start with a second's worth)
+    assert len(budgets) == 2  # nothing remembered for it, nothing forgotten
+    assert not budgets.allow("flood", 0.4)  # the debt left as it was by the questions

@@ -14,6 +14,7 @@ Rules:
    all of them together must both be in credit: a flood spread over many source ports buys
    no more than ``total_per_s``. At most ``max_sources`` are remembered, the least recently
    heard forgotten first (a source that comes back starts with a second's worth again).
+   ``in_credit`` asks whether a source's own budget is in credit, and changes nothing.
 """
 
 from __future__ import annotations
@@ -100,6 +101,15 @@ class SourceBudgets:
         """Whether ``source`` may have its work done now within its own budget alone, whatever
         the others' together have spent (a sender a caller keeps room for: spent as any)."""
         return self._account(source, now).tokens > 0
+
+    def in_credit(self, source: Hashable, now: float) -> bool:
+        """Whether ``source``'s own budget is in credit now (one not remembered is: it would
+        start with a second's worth); asks only, remembers and forgets nothing."""
+        account = self._sources.get(source)
+        if account is None:
+            return True
+        gained = max(0.0, now - account.t) * self.per_source_s
+        return min(self.per_source_s, account.tokens + gained) > 0
 
     def spend(self, source: Hashable, cost: float, now: float) -> None:
         """Charge the work done for ``source`` (its debt held to a second's worth)."""
