@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import socket
+from collections.abc import Callable
 
 from bridge.interfaces.wsjtx import WsjtxListener
 from bridge.session.follow import Heard
@@ -54,16 +55,28 @@ def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
         listener.stop()
 
 
-def flood_of_another_name(stack: contextlib.ExitStack, listener: WsjtxListener, sent: int) -> int:
-    """Statuses of another program's name (``JTDX-other``) from eight local sockets, each up
-    to its own budget, in batches the reader keeps up with: the cap for all spent between
-    them; ``sent`` counted on (what the listener has read by then)."""
-    forged = w.status(w.StatusFields(dx_call="N0BODY", instance="JTDX-other"))
+def flood_of_another_name(
+    stack: contextlib.ExitStack,
+    listener: WsjtxListener,
+    sent: int,
+    name: Callable[[int], str] = lambda _n: "JTDX-other",
+) -> int:
+    """Statuses of another program's name (``JTDX-other``; ``name`` of the n-th datagram if
+    given) from eight local sockets, each up to its own budget, in batches the reader keeps
+    up with: the cap for all spent between them; ``sent`` counted on (what the listener has
+    read by then)."""
+    forged: dict[str, bytes] = {}
+    k = 0
     for _ in range(8):
         s = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
         for _ in range(6):
             for _ in range(40):
-                s.sendto(forged, listener.address)
+                instance = name(k)
+                if instance not in forged:
+                    fields = w.StatusFields(dx_call="N0BODY", instance=instance)
+                    forged[instance] = w.status(fields)
+                s.sendto(forged[instance], listener.address)
+                k += 1
             sent += 40
             wait_until(lambda n=sent: _read(listener) >= n, slow(10), "read")
     assert listener.counts.over_budget > 0  # (the cap for all spent)
