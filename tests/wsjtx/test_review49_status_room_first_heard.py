@@ -7,12 +7,14 @@ keep the room; the WSJT-X running today (Id ``WSJT-X``, another rig's configurat
 and a flood of statuses of another name from local sockets (the attack 11 pass dfb087e4
 answers) spends the cap for all and drops its statuses undecoded again: the transmission's
 hold and the next partner missed. Before WSJT-X starts, two forged names take the room the same
-way for good. Real UDP sockets, virtual time, as tests/wsjtx/test_attack11_status_flood.py."""
+way for good. The room is now the programs heard most recently (server.py rules 5, 6). Real
+UDP sockets, virtual time, as tests/wsjtx/test_attack11_status_flood.py."""
 
 from __future__ import annotations
 
 import contextlib
 import socket
+from collections.abc import Callable
 
 import pytest
 
@@ -29,11 +31,6 @@ from tests.wsjtx.test_attack11_status_flood import (
 )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 49: the WSJT-X status room is the first two instances heard since the start, "
-    "for good: programs heard once long ago keep it and today's WSJT-X is drowned by a flood",
-)
 @pytest.mark.parametrize(
     "before", [("JTDX", "WSJT-X - IC7300"), ("forged-1", "forged-2")], ids=["earlier", "forged"]
 )
@@ -64,5 +61,35 @@ def test_wsjtx_is_heard_through_a_flood_after_two_other_programs_were_heard_firs
             transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+    finally:
+        listener.stop()
+
+
+@pytest.mark.parametrize(
+    "name",
+    [lambda n: ("forged-1", "forged-2")[n % 2], lambda n: f"forged-{n}"],
+    ids=["two-names-in-turn", "a-new-name-each"],
+)
+def test_wsjtx_keeps_its_room_through_a_flood_of_names_heard_after_it(
+    name: Callable[[int], str],
+) -> None:
+    """The room is the programs heard last (server.py rules 5, 6), not any names heard last: a
+    flood of statuses of two names in turn (each flooded far past a program's pace), or of a
+    new name in every datagram (from senders flooding past their own budget), takes none of
+    it, and WSJT-X, heard before the flood, is heard through it."""
+    clock = FakeClock()
+    ears = Ears()
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        with contextlib.ExitStack() as stack:
+            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
+            sent = flood_of_another_name(stack, listener, 1, name)
+            transmits_through(wsjtx, listener, sent)
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+        assert {h.instance for h in ears.got} - {"WSJT-X"}  # (the flood was heard, in part)
     finally:
         listener.stop()

@@ -29,16 +29,34 @@ Rules:
    to its own budget alone, not to what all senders together may spend: an attack pass
    flooded the port with well-formed heartbeats from eight local sockets, the cap for all
    together went to them, and 8 of WSJT-X's 10 statuses were dropped, the transmission's hold
-   of the beam among them. WSJT-X's socket is the latest sender of a status of a program
-   following listens to: the first STATUS_INSTANCES instances (WSJT-X's Id) heard since the
-   start, one sender kept for each, so one program's statuses never push another's sender
-   out (two radios, one WSJT-X each: session/follow.py rule 8 follows the first heard, or the
-   first on an antenna's bands). The room went first to the senders of the last two statuses
-   of any instance (attack 11: three local sockets flooding statuses of another program's
-   name, which following ignores, took both places, spent the cap for all, and WSJT-X's next
-   statuses were dropped undecoded again). Statuses of any later instance, and every other
-   message, share the cap for all. (A program that sends statuses under a name heard first,
-   or as WSJT-X does, can be followed as it is: the port is the shack's.)
+   of the beam among them. That room is for the programs following listens to. No key names
+   one: every rotator follows any program (session/follow.py rule 8: the first heard once it
+   is switched on, or the first on an antenna's bands, the newest fresh one it starts with
+   included). So the room is the latest sender of each of the STATUS_INSTANCES programs
+   (WSJT-X's Id) heard most recently that are programs (rule 6), one sender kept for each, so
+   one program's statuses never push another's sender out (two radios, one WSJT-X each) and a
+   restarted WSJT-X (a new socket, the same Id) keeps it. Statuses of any other instance, and
+   every other message, share the cap for all. The room went first to the senders of the last
+   two statuses (attack 11: three local sockets flooding statuses of another name took both
+   places and WSJT-X's next statuses were dropped undecoded again), then to the first two
+   instances heard since the start, for good (review 49: JTDX and a WSJT-X under a rig name
+   heard once weeks ago, or two names forged before WSJT-X started, kept it, and today's
+   WSJT-X was drowned by the same flood). (A program that sends statuses under the name of
+   one followed, or as WSJT-X does, can be followed as it is: the port is the shack's.)
+6. A program is an instance whose statuses come as a program's do: at a program's pace,
+   PROGRAM_STATUSES_S a second, as many at once, its debt held to PROGRAM_DEBT_S of that pace
+   (WSJT-X sends one on each change and at every decoding period, a few a second at most),
+   and its latest sender within its own budget (rule 5's). Each status handed on is charged
+   to its instance; one in debt (a flood of statuses under its name, as much as the cap for
+   all let through), or whose sender floods the port, is no program until the debt is paid,
+   and the room goes to the programs heard before it, which are remembered for that
+   (PROGRAMS_KEPT, the least recently heard forgotten first, one in debt before any other). A
+   name first heard while new names come faster than programs start (NEW_PROGRAMS at once,
+   one more each NEW_PROGRAM_S) is handed on as any status but not remembered: a flood of a
+   new name in every datagram takes no room and forgets no program. (What a forger on this
+   computer can still do: send statuses under two names at a program's pace from sockets of
+   their own, after WSJT-X's latest, and flood the port from others: those two names are the
+   programs heard last. Or send under WSJT-X's own name: its sender is WSJT-X's then.)
 """
 
 from __future__ import annotations
@@ -52,11 +70,12 @@ import struct
 import sys
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from bridge.core.ratelimit import SourceBudgets
+from bridge.core.ratelimit import SourceBudgets, TokenBucket
 from bridge.interfaces.wsjtx.messages import Malformed, Status, decode
 from bridge.session.follow import Heard
 
@@ -77,7 +96,12 @@ def _loopback(address: str) -> bool:
 RATE_DATAGRAMS_S = 200.0  # rule 5: a sender's budget, a second
 RATE_ALL_S = 1000.0  # rule 5: every sender's together
 MAX_SOURCES = 64  # rule 5
-STATUS_INSTANCES = 2  # rule 5: the programs heard first, their senders held to their own budget
+STATUS_INSTANCES = 2  # rule 5: the programs heard last, their senders held to their own budget
+PROGRAM_STATUSES_S = 10.0  # rule 6: a program's pace of statuses, a second (as many at once)
+PROGRAM_DEBT_S = 60.0  # rule 6: a flooded name's debt, held to this long at a program's pace
+PROGRAMS_KEPT = 32  # rule 6: the programs remembered
+NEW_PROGRAMS = 4  # rule 6: names first heard at once (as many programs as start together) ...
+NEW_PROGRAM_S = 10.0  # ... then one more this often
 PER_WAKEUP = 32  # rule 5: datagrams read at one wake-up
 
 
@@ -108,6 +132,35 @@ class _Rarely:
 
 
 @dataclass
+class _Pace:
+    """Rule 6: an instance's statuses against a program's pace; in debt, it is no program."""
+
+    tokens: float
+    t: float
+
+    def _refill(self, now: float) -> None:
+        gained = max(0.0, now - self.t) * PROGRAM_STATUSES_S
+        self.tokens = min(PROGRAM_STATUSES_S, self.tokens + gained)
+        self.t = max(self.t, now)
+
+    def spend(self, now: float) -> None:
+        self._refill(now)
+        self.tokens = max(-PROGRAM_STATUSES_S * PROGRAM_DEBT_S, self.tokens - 1.0)
+
+    def program(self, now: float) -> bool:
+        self._refill(now)
+        return self.tokens > 0
+
+
+@dataclass
+class _Program:
+    """Rule 5: an instance heard (WSJT-X's Id): its latest sender and its pace (rule 6)."""
+
+    sender: tuple[str, int]
+    pace: _Pace
+
+
+@dataclass
 class WsjtxListener:
     port: int
     bind: str = "127.0.0.1"
@@ -123,7 +176,9 @@ class WsjtxListener:
         self._junk_log = _Rarely(JUNK_LOG_S)
         self._fault_log = _Rarely(JUNK_LOG_S)
         self._foreign_log = _Rarely(JUNK_LOG_S)
-        self._status_senders: dict[str, tuple[str, int]] = {}  # rule 5: instance -> sender
+        self._programs: OrderedDict[str, _Program] = OrderedDict()  # rules 5, 6: latest last
+        self._new_names = TokenBucket.full(NEW_PROGRAMS, 1.0 / NEW_PROGRAM_S, self.clock())
+        self._room: frozenset[tuple[str, int]] = frozenset()  # rule 5: the programs' senders
         self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
@@ -196,6 +251,7 @@ class WsjtxListener:
 
     def _serve(self, sock: socket.socket, budgets: SourceBudgets) -> None:
         """Rule 5: what waits, PER_WAKEUP at most, each within its sender's budget."""
+        self._room = self._room_at(self.clock(), budgets)  # (debts paid meanwhile)
         for _ in range(PER_WAKEUP):
             try:
                 datagram, source = sock.recvfrom(RECV_BYTES)
@@ -206,20 +262,49 @@ class WsjtxListener:
                 continue
             now = self.clock()
             sender = source[0], source[1]
-            own = sender in self._status_senders.values()  # rule 5: WSJT-X's, its room kept
+            own = sender in self._room  # rule 5: WSJT-X's, its room kept
             if not (budgets.allow_own(sender, now) if own else budgets.allow(sender, now)):
                 self._flooded(source[0])
                 continue
+            instance: str | None = None
             try:
                 instance = self.datagram(datagram, source[0])
-                senders = self._status_senders
-                if instance is not None and (
-                    instance in senders or len(senders) < STATUS_INSTANCES
-                ):
-                    senders[instance] = sender  # rule 5: its latest sender
+                if instance is not None:
+                    self._program_heard(instance, sender, now)
             except Exception as exc:  # rule 3: a bug behind it, not the end
                 self._fault("a WSJT-X datagram", exc)
             budgets.spend(sender, 1 + len(datagram) / 1024, now)
+            if instance is not None:
+                self._room = self._room_at(now, budgets)
+
+    def _program_heard(self, instance: str, sender: tuple[str, int], now: float) -> None:
+        """Rules 5, 6: a status of ``instance`` from ``sender``, handed on."""
+        programs = self._programs
+        program = programs.get(instance)
+        if program is None:
+            if not self._new_names.take(now):
+                return  # rule 6: names come faster than programs start
+            if len(programs) >= PROGRAMS_KEPT:
+                gone = next(
+                    (name for name, p in programs.items() if not p.pace.program(now)),
+                    next(iter(programs)),
+                )
+                del programs[gone]
+            program = programs[instance] = _Program(sender, _Pace(PROGRAM_STATUSES_S, now))
+        else:
+            programs.move_to_end(instance)
+            program.sender = sender  # rule 5: its latest sender
+        program.pace.spend(now)
+
+    def _room_at(self, now: float, budgets: SourceBudgets) -> frozenset[tuple[str, int]]:
+        """Rule 5: the senders of the STATUS_INSTANCES programs heard last (rule 6)."""
+        room: list[tuple[str, int]] = []
+        for program in reversed(self._programs.values()):
+            if len(room) == STATUS_INSTANCES:
+                break
+            if program.pace.program(now) and budgets.in_credit(program.sender, now):
+                room.append(program.sender)
+        return frozenset(room)
 
     def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> str | None:
         """One datagram from the address ``source``, decoded and handed on (rules 1-4); the
