@@ -256,6 +256,8 @@ class FollowingInfo:
     bearing_deg: float | None = None  # the true bearing turned to for ``grid``
     distance_km: float | None = None  # along the path taken
     held: bool = False  # a new grid waits for the transmission to end (follow_hold_while_tx)
+    instance: str | None = None  # the program listened to (WSJT-X's Id; None: the first
+    # heard, follow.py rule 8); not published: the WSJT-X listener keeps room for it
 
 
 @dataclass(frozen=True)

@@ -186,7 +186,7 @@ class Follower:
         if (fresh is None or not self._for_me(fresh)) and now - self._mine_t <= FRESH_S:
             fresh, self._heard_t = self._mine, self._mine_t  # rule 4: the QSO on its band
         self._heard = fresh
-        self._instance = fresh.instance if fresh is not None and self._for_me(fresh) else None
+        self._listen(fresh.instance if fresh is not None and self._for_me(fresh) else None)
         self._ignored.clear()
         self._before.start()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
@@ -206,7 +206,7 @@ class Follower:
         if self.info is not None:
             if self._instance is None:
                 if self._for_me(heard):  # rule 8: the first program on this antenna's band
-                    self._instance = heard.instance
+                    self._listen(heard.instance)
             elif heard.instance != self._instance:
                 self._ignore(heard.instance, now)
                 return
@@ -215,11 +215,18 @@ class Follower:
                 mine = self._mine  # another program's newest on its bands, heard already
                 if mine is not None and mine.instance != heard.instance:
                     if now - self._mine_t <= FRESH_S:
-                        self._instance = mine.instance
+                        self._listen(mine.instance)
                         self._heard, self._heard_t = mine, self._mine_t
                         return
-                self._instance = None
+                self._listen(None)
         self._heard, self._heard_t = heard, now
+
+    def _listen(self, instance: str | None) -> None:
+        """Rule 8: the program followed (None: the first heard), shown in the status's info
+        (not published: interfaces/wsjtx/server.py rule 5 keeps room for its statuses)."""
+        self._instance = instance
+        if self.info is not None and self.info.instance != instance:
+            self.info = replace(self.info, instance=instance)
 
     def _ignore(self, instance: str, now: float) -> None:
         """Rule 8: another program's status; remembered (bounded) and said rarely."""

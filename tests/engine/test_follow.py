@@ -671,6 +671,34 @@ def test_an_antenna_whose_program_left_its_band_follows_the_one_that_came_to_it(
         assert angle_between(low.truth().az_deg, bearing("QF56")) <= 0.5
 
 
+def test_the_status_names_the_program_it_listens_to_and_none_while_it_takes_the_first() -> None:
+    """Rule 8 as the status says it (``following.instance``, not published: the WSJT-X
+    listener keeps budget room for that program's statuses, interfaces/wsjtx/server.py rule
+    5): none before a program is heard on its band, the first heard on it, none again when it
+    left the band (the first heard on it next is followed), the one come to it, none once
+    following ends."""
+    with spid(bands=["40m"]) as low:
+        low.follow(True)
+        low.run_for(2.0)
+        said: list[str | None] = []
+        for heard in (
+            Heard("W1AW", "FN31", False, "WSJT-X - rig1", FORTY),  # rig1 on 40 m: followed
+            Heard("JA1ABC", "PM95", False, "WSJT-X - rig1", TWENTY),  # rig1 to 20 m
+            Heard("VK2XYZ", "QF56", False, "WSJT-X - rig2", FORTY),  # rig2 on 40 m
+        ):
+            assert low.status.following is not None
+            said.append(low.status.following.instance)
+            low.mailbox.put_heard(heard)
+            low._take()
+            low.run_for(5.0)
+        assert low.status.following is not None
+        said.append(low.status.following.instance)
+        assert said == [None, "WSJT-X - rig1", None, "WSJT-X - rig2"]
+        low.follow(False)
+        low.run_for(2.0)
+        assert low.status.following is None
+
+
 def test_switched_on_the_antenna_turns_at_once_to_the_qso_under_way_on_its_band() -> None:
     """Rule 4 with bands and two radios: rig2 on 40 m named FN31, then rig1 on 20 m spoke last.
     Switched on, the 40 m antenna turns at once to FN31, the QSO under way on its band (it said
