@@ -663,6 +663,14 @@ class Rotator:
         """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
         return self._follow.wsjtx and self._follow.station is not None
 
+    @property
+    def followed(self) -> str | None:
+        """The program (WSJT-X's Id) its follow part listens to, as its latest status says
+        (follow.py rule 8); None: not following, or following the first heard (any thread:
+        the WSJT-X listener keeps room for its statuses, interfaces/wsjtx/server.py rule 5)."""
+        following = self.status.following
+        return None if following is None else following.instance
+
     def _start_follow(self, command: FollowQso, what: str, epoch: int) -> None:
         """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
         stop). Judged like a track start (the lease included); what the holder started goes

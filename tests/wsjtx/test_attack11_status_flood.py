@@ -28,9 +28,10 @@ from tests.support.waiting import slow
 
 
 class Ears:
-    def __init__(self) -> None:
+    def __init__(self, followed: str | None = None) -> None:
         self.id = "a"
         self.got: list[Heard] = []
+        self.followed = followed  # the program its follow part listens to (None: any)
 
     def heard(self, heard: Heard) -> None:
         self.got.append(heard)

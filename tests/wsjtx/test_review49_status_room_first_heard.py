@@ -93,3 +93,34 @@ def test_wsjtx_keeps_its_room_through_a_flood_of_names_heard_after_it(
         assert {h.instance for h in ears.got} - {"WSJT-X"}  # (the flood was heard, in part)
     finally:
         listener.stop()
+
+
+def test_wsjtx_followed_keeps_its_room_after_two_names_heard_at_a_programs_pace() -> None:
+    """The room is the program the follow part listens to (server.py rule 5), whatever was
+    heard after it: two names sent at a program's pace from sockets of their own after WSJT-X's
+    status are the programs heard last and take the room for programs followed by none; a
+    rotator following WSJT-X keeps its statuses' room, and they are heard through the flood."""
+    clock = FakeClock()
+    ears = Ears(followed="WSJT-X")
+    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    try:
+        with contextlib.ExitStack() as stack:
+            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+            sent = 1
+            wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
+            for instance in ("paced-1", "paced-2"):
+                paced = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                for _ in range(3):
+                    fields = w.StatusFields(dx_call="W1AW", instance=instance)
+                    paced.sendto(w.status(fields), listener.address)
+                    sent += 1
+                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
+                    clock.t += 1.0  # a program's pace
+            sent = flood_of_another_name(stack, listener, sent)
+            transmits_through(wsjtx, listener, sent)
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+    finally:
+        listener.stop()

@@ -26,6 +26,7 @@ class Ears:
         self.id = rid
         self.got: list[Heard] = []
         self.fail = fail
+        self.followed: str | None = None  # following nothing, or the first heard
 
     def heard(self, heard: Heard) -> None:
         if self.fail:

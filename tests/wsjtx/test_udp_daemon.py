@@ -111,6 +111,7 @@ def test_the_bridges_listener_shares_a_multicast_group_with_udp_daemon() -> None
 
     class Rotator:
         id = "shared"
+        followed = None  # following nothing, or the first heard
 
         def heard(self, heard: Heard) -> None:
             got.append(heard)

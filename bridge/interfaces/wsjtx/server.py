@@ -30,19 +30,22 @@ Rules:
    flooded the port with well-formed heartbeats from eight local sockets, the cap for all
    together went to them, and 8 of WSJT-X's 10 statuses were dropped, the transmission's hold
    of the beam among them. That room is for the programs following listens to. No key names
-   one: every rotator follows any program (session/follow.py rule 8: the first heard once it
-   is switched on, or the first on an antenna's bands, the newest fresh one it starts with
-   included). So the room is the latest sender of each of the STATUS_INSTANCES programs
-   (WSJT-X's Id) heard most recently that are programs (rule 6), one sender kept for each, so
-   one program's statuses never push another's sender out (two radios, one WSJT-X each) and a
-   restarted WSJT-X (a new socket, the same Id) keeps it. Statuses of any other instance, and
-   every other message, share the cap for all. The room went first to the senders of the last
-   two statuses (attack 11: three local sockets flooding statuses of another name took both
-   places and WSJT-X's next statuses were dropped undecoded again), then to the first two
-   instances heard since the start, for good (review 49: JTDX and a WSJT-X under a rig name
-   heard once weeks ago, or two names forged before WSJT-X started, kept it, and today's
-   WSJT-X was drowned by the same flood). (A program that sends statuses under the name of
-   one followed, or as WSJT-X does, can be followed as it is: the port is the shack's.)
+   one: a rotator follows any program until its follow part has chosen one (session/follow.py
+   rule 8: the first heard once it is switched on, or the first on an antenna's bands, the
+   newest fresh one it starts with included), and its status names that one from then on
+   (``Rotator.followed``, read at each wake-up, never waited on). So the room is the latest
+   sender of each program (WSJT-X's Id) a rotator follows, and of each of the
+   STATUS_INSTANCES others heard most recently that are programs (rule 6): one sender kept for
+   each, so one program's statuses never push another's sender out (two radios, one WSJT-X
+   each) and a restarted WSJT-X (a new socket, the same Id) keeps it. Statuses of any other
+   instance, and every other message, share the cap for all. The room went first to the
+   senders of the last two statuses (attack 11: three local sockets flooding statuses of
+   another name took both places and WSJT-X's next statuses were dropped undecoded again),
+   then to the first two instances heard since the start, for good (review 49: JTDX and a
+   WSJT-X under a rig name heard once weeks ago, or two names forged before WSJT-X started,
+   kept it, and today's WSJT-X was drowned by the same flood). (A program that sends
+   statuses under the name of one followed, or as WSJT-X does, can be followed as it is: the
+   port is the shack's.)
 6. A program is an instance whose statuses come as a program's do: at a program's pace,
    PROGRAM_STATUSES_S a second, as many at once, its debt held to PROGRAM_DEBT_S of that pace
    (WSJT-X sends one on each change and at every decoding period, a few a second at most),
@@ -50,13 +53,15 @@ Rules:
    to its instance; one in debt (a flood of statuses under its name, as much as the cap for
    all let through), or whose sender floods the port, is no program until the debt is paid,
    and the room goes to the programs heard before it, which are remembered for that
-   (PROGRAMS_KEPT, the least recently heard forgotten first, one in debt before any other). A
-   name first heard while new names come faster than programs start (NEW_PROGRAMS at once,
-   one more each NEW_PROGRAM_S) is handed on as any status but not remembered: a flood of a
-   new name in every datagram takes no room and forgets no program. (What a forger on this
-   computer can still do: send statuses under two names at a program's pace from sockets of
-   their own, after WSJT-X's latest, and flood the port from others: those two names are the
-   programs heard last. Or send under WSJT-X's own name: its sender is WSJT-X's then.)
+   (PROGRAMS_KEPT, the least recently heard forgotten first, one in debt before any other, a
+   program followed never). A name first heard while new names come faster than programs
+   start (NEW_PROGRAMS at once, one more each NEW_PROGRAM_S) is handed on as any status but
+   not remembered, unless a rotator follows it: a flood of a new name in every datagram takes
+   no room and forgets no program. A program followed keeps its room whatever its pace. (What
+   a forger on this computer can still do, while no rotator has chosen WSJT-X: send statuses
+   under two names at a program's pace from sockets of their own, after WSJT-X's latest, and
+   flood the port from others: those two are the programs heard last. At any time: send under
+   WSJT-X's own name, its sender then WSJT-X's, or be heard first once following is on.)
 """
 
 from __future__ import annotations
@@ -179,6 +184,7 @@ class WsjtxListener:
         self._programs: OrderedDict[str, _Program] = OrderedDict()  # rules 5, 6: latest last
         self._new_names = TokenBucket.full(NEW_PROGRAMS, 1.0 / NEW_PROGRAM_S, self.clock())
         self._room: frozenset[tuple[str, int]] = frozenset()  # rule 5: the programs' senders
+        self._followed: frozenset[str] = frozenset()  # rule 5: the programs rotators follow
         self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
@@ -251,6 +257,7 @@ class WsjtxListener:
 
     def _serve(self, sock: socket.socket, budgets: SourceBudgets) -> None:
         """Rule 5: what waits, PER_WAKEUP at most, each within its sender's budget."""
+        self._followed = self._followed_now()
         self._room = self._room_at(self.clock(), budgets)  # (debts paid meanwhile)
         for _ in range(PER_WAKEUP):
             try:
@@ -282,12 +289,14 @@ class WsjtxListener:
         programs = self._programs
         program = programs.get(instance)
         if program is None:
-            if not self._new_names.take(now):
+            followed = self._followed
+            if instance not in followed and not self._new_names.take(now):
                 return  # rule 6: names come faster than programs start
             if len(programs) >= PROGRAMS_KEPT:
+                others = [name for name in programs if name not in followed]
                 gone = next(
-                    (name for name, p in programs.items() if not p.pace.program(now)),
-                    next(iter(programs)),
+                    (name for name in others if not programs[name].pace.program(now)),
+                    others[0] if others else next(iter(programs)),
                 )
                 del programs[gone]
             program = programs[instance] = _Program(sender, _Pace(PROGRAM_STATUSES_S, now))
@@ -297,14 +306,34 @@ class WsjtxListener:
         program.pace.spend(now)
 
     def _room_at(self, now: float, budgets: SourceBudgets) -> frozenset[tuple[str, int]]:
-        """Rule 5: the senders of the STATUS_INSTANCES programs heard last (rule 6)."""
-        room: list[tuple[str, int]] = []
-        for program in reversed(self._programs.values()):
-            if len(room) == STATUS_INSTANCES:
+        """Rule 5: the senders of the programs followed and of the STATUS_INSTANCES programs
+        heard last (rule 6)."""
+        followed = self._followed
+        room = {p.sender for name, p in self._programs.items() if name in followed}
+        last = 0
+        for name, program in reversed(self._programs.items()):
+            if last == STATUS_INSTANCES:
                 break
+            if name in followed:
+                continue
             if program.pace.program(now) and budgets.in_credit(program.sender, now):
-                room.append(program.sender)
+                room.add(program.sender)
+                last += 1
         return frozenset(room)
+
+    def _followed_now(self) -> frozenset[str]:
+        """Rule 5: the programs the rotators' follow parts listen to now, as their latest
+        statuses say (``Rotator.followed``: read, never waited on)."""
+        names: set[str] = set()
+        for rotator in self.rotators:
+            try:
+                name = rotator.followed
+            except Exception as exc:  # rule 3
+                self._fault(f"asking {rotator.id} which program it follows", exc)
+                continue
+            if name is not None:
+                names.add(name)
+        return frozenset(names)
 
     def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> str | None:
         """One datagram from the address ``source``, decoded and handed on (rules 1-4); the
