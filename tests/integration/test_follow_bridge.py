@@ -102,6 +102,9 @@ def test_a_dx_grid_turns_the_rotor_the_same_grid_does_not_tx_holds_and_off_ends(
     assert following["call"] == "JA1ABC" and following["source"] == "wsjtx"
     assert abs(following["bearing"] - want) <= 1.0
     assert abs(following["distance_km"] - distance_to(TOKYO)) <= 0.01 * distance_to(TOKYO)
+    assert "instance" not in following  # (not published: the WSJT-X listener reads it)
+    assert rotator(app).followed == "WSJT-X"  # its budget room kept (wsjtx/server.py rule 5)
+    assert app.wsjtx is not None and app.wsjtx.counts.faults == 0  # (asked at each wake-up)
     sets = len(emu.frames("set"))
 
     # the same grid again (WSJT-X sends a status on every change: decoding, Rx DF...)
