@@ -17,6 +17,7 @@ from bridge.interfaces.wsjtx.messages import (
     Other,
     Status,
     decode,
+    status_instance,
 )
 from tests.support import wsjtx as w
 
@@ -126,3 +127,20 @@ def test_a_valid_status_with_its_tail_replaced_by_junk_never_raises_otherwise(
 
 def test_the_size_limit_is_far_above_any_status() -> None:
     assert len(w.status(replace(QSO, tx_message="CQ DX JA1ABC PM95" * 2))) < MAX_DATAGRAM // 20
+
+
+def test_a_status_header_names_its_instance_and_nothing_else_does() -> None:
+    """server.py rule 5 reads whose status it is before decoding it: a status's Id, and None
+    for a heartbeat, another message, junk or a header cut short."""
+    status = w.status(replace(QSO, instance="WSJT-X - IC7300"))
+    assert status_instance(status) == "WSJT-X - IC7300"
+    assert status_instance(w.heartbeat("WSJT-X")) is None
+    assert status_instance(w.qso_logged("JA1ABC", "PM95")) is None
+    assert status_instance(b"\x00" * 40) is None
+    assert status_instance(status[:14]) is None
+    assert status_instance(status + b"x" * MAX_DATAGRAM) is None
+
+
+@given(st.binary(max_size=200))
+def test_any_bytes_name_an_instance_or_none_never_anything_else(data: bytes) -> None:
+    assert status_instance(data) is None or isinstance(status_instance(data), str)

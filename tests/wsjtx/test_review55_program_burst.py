@@ -28,15 +28,7 @@ AT_ONCE = int(PROGRAM_STATUSES_S)  # rule 6: "as many at once"
     "burst",
     [
         AT_ONCE - 1,
-        pytest.param(
-            AT_ONCE,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="review 55: a program sending PROGRAM_STATUSES_S statuses at once, as "
-                "rule 6 allows, is no program (its tokens 0, program() asks > 0): a flood then "
-                "drops its statuses undecoded (Low)",
-            ),
-        ),
+        AT_ONCE,
     ],
     ids=["nine-at-once", "ten-at-once"],
 )

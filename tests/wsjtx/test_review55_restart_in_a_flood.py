@@ -50,15 +50,7 @@ def _burst(flooders: list[socket.socket], listener: WsjtxListener, sent: int) ->
     "restarted",
     [
         False,
-        pytest.param(
-            True,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="review 55: WSJT-X restarted (a new socket) while a flood runs is held "
-                "to the spent cap for all though a rotator follows it by name: its statuses "
-                "are dropped undecoded for as long as the flood lasts (Medium)",
-            ),
-        ),
+        True,
     ],
     ids=["same-socket", "restarted-in-the-flood"],
 )

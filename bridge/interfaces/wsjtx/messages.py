@@ -137,6 +137,21 @@ class _Reader:
             raise Malformed(f"{what}: not UTF-8") from None
 
 
+def status_instance(datagram: bytes) -> str | None:
+    """The Id of a datagram whose header says it is a Status, read from its header alone
+    (server.py rule 5: whose room it may take before it is decoded); None for anything else,
+    a malformed header included."""
+    if len(datagram) > MAX_DATAGRAM:
+        return None
+    r = _Reader(datagram)
+    try:
+        if r.u32("magic") != MAGIC or r.u32("schema") not in SCHEMAS or r.u32("type") != STATUS:
+            return None
+        return r.utf8("id")
+    except Malformed:
+        return None
+
+
 def decode(datagram: bytes) -> Message:
     """One datagram as a message, or Malformed (rule 1)."""
     if len(datagram) > MAX_DATAGRAM:

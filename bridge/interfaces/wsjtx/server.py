@@ -37,7 +37,11 @@ Rules:
    sender of each program (WSJT-X's Id) a rotator follows, and of each of the
    STATUS_INSTANCES others heard most recently that are programs (rule 6): one sender kept for
    each, so one program's statuses never push another's sender out (two radios, one WSJT-X
-   each) and a restarted WSJT-X (a new socket, the same Id) keeps it. Statuses of any other
+   each) and a restarted WSJT-X (a new socket, the same Id) keeps it: a status of a program
+   followed from a sender outside the room (WSJT-X restarted during a flood, review 55: held to
+   the spent cap for all, it was never heard again while the flood lasted) is let through
+   within its sender's own budget and a program's pace (PROGRAM_STATUSES_S, for all such
+   together), its header read to know whose it is. Statuses of any other
    instance, and every other message, share the cap for all. The room went first to the
    senders of the last two statuses (attack 11: three local sockets flooding statuses of
    another name took both places and WSJT-X's next statuses were dropped undecoded again),
@@ -81,7 +85,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bridge.core.ratelimit import SourceBudgets, TokenBucket
-from bridge.interfaces.wsjtx.messages import Malformed, Status, decode
+from bridge.interfaces.wsjtx.messages import Malformed, Status, decode, status_instance
 from bridge.session.follow import Heard
 
 if TYPE_CHECKING:
@@ -154,7 +158,7 @@ class _Pace:
 
     def program(self, now: float) -> bool:
         self._refill(now)
-        return self.tokens > 0
+        return self.tokens >= 0.0  # (as many at once: review 55, the last of them counted)
 
 
 @dataclass
@@ -185,6 +189,8 @@ class WsjtxListener:
         self._new_names = TokenBucket.full(NEW_PROGRAMS, 1.0 / NEW_PROGRAM_S, self.clock())
         self._room: frozenset[tuple[str, int]] = frozenset()  # rule 5: the programs' senders
         self._followed: frozenset[str] = frozenset()  # rule 5: the programs rotators follow
+        # rule 5: statuses of a program followed from a sender not (yet) its own, at its pace
+        self._moved = TokenBucket.full(PROGRAM_STATUSES_S, PROGRAM_STATUSES_S, self.clock())
         self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
@@ -270,7 +276,11 @@ class WsjtxListener:
             now = self.clock()
             sender = source[0], source[1]
             own = sender in self._room  # rule 5: WSJT-X's, its room kept
-            if not (budgets.allow_own(sender, now) if own else budgets.allow(sender, now)):
+            if not (
+                budgets.allow_own(sender, now)
+                if own
+                else self._allow(datagram, sender, now, budgets)
+            ):
                 self._flooded(source[0])
                 continue
             instance: str | None = None
@@ -283,6 +293,18 @@ class WsjtxListener:
             budgets.spend(sender, 1 + len(datagram) / 1024, now)
             if instance is not None:
                 self._room = self._room_at(now, budgets)
+
+    def _allow(
+        self, datagram: bytes, sender: tuple[str, int], now: float, budgets: SourceBudgets
+    ) -> bool:
+        """Rule 5: a datagram from a sender outside the room, within the cap for all, or a
+        status of a program followed (its header read) from a new sender of its own, at a
+        program's pace (``_moved``)."""
+        if budgets.allow(sender, now):
+            return True
+        if not self._followed or not budgets.allow_own(sender, now):
+            return False
+        return status_instance(datagram) in self._followed and self._moved.take(now)
 
     def _program_heard(self, instance: str, sender: tuple[str, int], now: float) -> None:
         """Rules 5, 6: a status of ``instance`` from ``sender``, handed on."""
