@@ -75,7 +75,8 @@ class DxClusterSettings(Strict):
         30.0,
         gt=0,
         le=1440,
-        description="a spot older than this (minutes since it was heard) leaves B/spots",
+        description="a spot older than this (by the spot's own time) leaves B/spots, and "
+        "one the node sends older than this is not taken",
         examples=[15],
     )
     bands: list[str] = Field(

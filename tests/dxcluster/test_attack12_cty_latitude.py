@@ -21,7 +21,7 @@ from bridge.interfaces.dxcluster.spots import Spot
 from bridge.settings.dxcluster import DxClusterSettings
 from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
 from tests.integration.test_pointing_bridge import locator_centre
-from tests.support.clock import FakeClock
+from tests.support.clock import FakeClock, wall_at
 
 SLIP = "Palau:                    27:  64:  OC:   357.0:  -134.53:    -9.0:  T8:\n    T8;\n"
 
@@ -32,7 +32,7 @@ def spot(call: str) -> Spot:
 
 def test_a_cty_entity_at_no_latitude_never_takes_the_spots_list_down() -> None:
     cty = parse_dat(CTY_DAT + SLIP)
-    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: 0.0)
+    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: wall_at("1234"))
     assert book.add(spot("JA1ABC"))
     assert book.add(spot("T88AB"))  # the entity the slip is in
     doc = json.loads(book.as_json())
@@ -80,7 +80,7 @@ def test_one_spot_whose_entry_cannot_be_made_is_left_out_and_the_rest_listed(
     nowhere = Entity("Palau", "OC", 27, 64, 357.0, 134.53, "T8")
     cty = parse_dat(CTY_DAT)
     cty = Cty({**cty.prefixes, "T8": nowhere}, cty.exact)
-    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: 0.0)
+    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: wall_at("1234"))
     assert book.add(spot("T88AB")) and book.add(spot("JA1ABC"))
     with caplog.at_level(logging.WARNING):
         first, second = json.loads(book.as_json()), json.loads(book.as_json())

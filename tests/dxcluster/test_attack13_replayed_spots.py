@@ -2,8 +2,9 @@
 spots they had to every login (CC Cluster, AR-Cluster's login spots), so each reconnect of the
 client brings spots it has already read, older than the ones it read since. The book keeps
 "the newest spot of a call" by the order the lines came (book.py rule 2), so the replayed,
-older spot of a call takes the place of the newer one: B/spots shows the call where it was
-spotted before, and ``R/target {"call": ...}`` turns the rotor there.
+older spot of a call took the place of the newer one: B/spots showed the call where it was
+spotted before, and ``R/target {"call": ...}`` turned the rotor there (22 degrees off). Fixed:
+the book keeps the newer spot of a call by the spot's own time (book.py rule 2).
 
 Real parts: the client's telnet session against the fake node on loopback (two logins: the
 line dropped in between), its book and its aim thread, a recording rotator."""
@@ -23,6 +24,7 @@ from bridge.interfaces.dxcluster.cty import parse_dat
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.dxcluster.test_client import Asked
 from tests.support import wait_until
+from tests.support.clock import RunningWall
 from tests.support.cluster import FakeCluster, Session
 from tests.support.waiting import slow
 
@@ -45,11 +47,6 @@ def spot_of(published: list[str], call: str) -> dict[str, object] | None:
     return next((s for s in spots if s["call"] == call), None)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 13: a spot the node replays at a new login replaces the newer spot of that "
-    "call: B/spots and a call target point at where it was spotted before",
-)
 def test_a_spot_replayed_at_a_new_login_does_not_replace_the_newer_one(
     published: list[str],
 ) -> None:
@@ -65,7 +62,7 @@ def test_a_spot_replayed_at_a_new_login_does_not_replace_the_newer_one(
         cluster.done.wait(slow(30))
 
     cluster = FakeCluster([first, again])
-    book = Book(parse_dat(CTY_DAT), (52.5, 13.4))
+    book = Book(parse_dat(CTY_DAT), (52.5, 13.4), wall=RunningWall("1837"))  # (LIVE: 1836Z)
     dx = DxCluster("127.0.0.1", cluster.port, "G4ABC", book, published.append, backoff_s=0.01)
     dx.start()
     try:

@@ -12,7 +12,7 @@ from bridge.interfaces.dxcluster.spots import Spot
 from bridge.settings.dxcluster import DxClusterSettings
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import locator_centre, reference_path
-from tests.support.clock import FakeClock
+from tests.support.clock import FakeClock, wall_at
 
 STATION = "JO62QM"
 
@@ -23,7 +23,7 @@ def spot(call: str, freq_khz: float = 14025.0, comment: str = "") -> Spot:
 
 def book(clock: FakeClock, **kw: object) -> Book:
     station = locator_centre(STATION)
-    return Book(parse_dat(CTY_DAT), station, clock=clock, wall=lambda: 0.0, **kw)  # type: ignore[arg-type]
+    return Book(parse_dat(CTY_DAT), station, clock=clock, wall=lambda: wall_at("1234"), **kw)  # type: ignore[arg-type]
 
 
 def test_locators_in_comments() -> None:
@@ -55,12 +55,12 @@ def test_positions_bearings_and_the_json() -> None:
         assert abs((s["bearing_deg"] - want + 180) % 360 - 180) <= 0.1
         assert abs((s["long_path_deg"] - want - 180 + 180) % 360 - 180) <= 0.1
         assert abs(s["distance_km"] - km) <= 0.01 * km
-    assert ja["time"] == "1234Z" and ja["heard"] == "1970-01-01T00:00:00Z"
+    assert ja["time"] == "1234Z" and ja["heard"] == "2026-01-01T12:34:00Z"
     assert ja["frequency_khz"] == 14025.0 and ja["spotter"] == "G4ABC"
 
 
 def test_without_a_station_there_is_no_bearing() -> None:
-    b = Book(parse_dat(CTY_DAT), None)
+    b = Book(parse_dat(CTY_DAT), None, wall=lambda: wall_at("1234"))
     b.add(spot("JA1ABC"))
     (only,) = json.loads(b.as_json())["spots"]
     assert only["position"] == "cty" and "bearing_deg" not in only
@@ -116,12 +116,76 @@ def test_a_spot_with_no_direction_has_no_bearing() -> None:
     showed it as one; null, as without a station."""
     here = geo.parse_locator("JO62QM")
     there = (-here[0], here[1] - 180.0)  # the antipode
-    book = Book(None, here)
+    book = Book(None, here, wall=lambda: wall_at("1830"))
     book.add(Spot("DL1ABC", 14025.0, "EA5WU", "1829", "JO62QM"))
     book.add(Spot("ZL1ABC", 7025.0, "EA5WU", "1830", "RE78"))
     spots = {s["call"]: s for s in json.loads(book.as_json())["spots"]}
     assert spots["DL1ABC"]["bearing_deg"] is None
     assert spots["DL1ABC"]["distance_km"] == 0
-    book = Book(None, there)
+    book = Book(None, there, wall=lambda: wall_at("1830"))
     book.add(Spot("DL1ABC", 14025.0, "EA5WU", "1829", "JO62QM"))
     assert json.loads(book.as_json())["spots"][0]["bearing_deg"] is None
+
+
+def at(call: str, hhmm: str, comment: str = "", freq_khz: float = 14025.0) -> Spot:
+    return Spot(call, freq_khz, "EA5WU", hhmm, comment)
+
+
+def test_the_newer_spot_of_a_call_by_its_own_time_is_kept_whatever_came_last() -> None:
+    """Rule 2, attack 13: a node replays its last spots at a login; the older spot of a call,
+    coming after the newer one, neither takes its place nor moves ahead of newer spots."""
+    clock, now = FakeClock(), [wall_at("1837")]
+    b = Book(parse_dat(CTY_DAT), locator_centre(STATION), clock=clock, wall=lambda: now[0])
+    assert b.add(at("W6XYZ", "1829"))  # no locator: the cty entity
+    assert b.add(at("W6XYZ", "1835", "FT8 CM87"))
+    assert b.add(at("JA1ABC", "1836"))
+    assert not b.add(at("W6XYZ", "1829"))  # the login's replay
+    assert not b.add(at("W6XYZ", "1830", "FN31"))  # an older one never seen before: no better
+    kept = b.newest("W6XYZ")
+    assert kept is not None and kept.place is not None and kept.place.locator == "CM87"
+    assert b.add(at("G4XYZ", "1820"))  # a replayed spot of another call: behind the newer
+    doc = json.loads(b.as_json())["spots"]
+    assert [(s["call"], s["time"]) for s in doc] == [
+        ("JA1ABC", "1836Z"),
+        ("W6XYZ", "1835Z"),
+        ("G4XYZ", "1820Z"),
+    ]
+    assert b.add(at("W6XYZ", "1835", "cq"))  # the same minute, heard later: the later word
+    assert json.loads(b.as_json())["spots"][1]["comment"] == "cq"
+
+
+def test_a_spot_is_as_old_as_its_own_time_says() -> None:
+    """Rule 2, attack 13: a spot replayed after it aged out came back for another
+    max_age_min; one older than max_age_s by its own time is not taken, and a younger one
+    leaves when its own time is max_age_s old."""
+    clock = FakeClock(0.0)
+    b = Book(None, None, max_age_s=1800.0, clock=clock, wall=lambda: wall_at("1910") + clock.t)
+    assert not b.add(at("JA1ABC", "1839"))  # 31 minutes old: gone already
+    assert b.too_old == 1
+    assert b.add(at("JA1ABC", "1841"))  # 29 minutes old: one minute left
+    assert b.add(at("VK2XYZ", "1910"))
+    clock.t += 60.0
+    assert not b.prune()
+    clock.t += 1.0
+    assert b.prune()
+    assert b.calls() == ("VK2XYZ",)
+    assert not b.add(at("JA1ABC", "1841"))  # replayed again: it does not come back
+
+
+def test_midnight() -> None:
+    """Rule 2: a spot's day is the bridge's, the day before for a time ahead of the bridge's
+    clock by more than SKEW_S; a node's clock a little ahead across midnight is of the next."""
+    clock, now = FakeClock(), [wall_at("0002")]
+    b = Book(None, None, max_age_s=1800.0, clock=clock, wall=lambda: now[0])
+    assert b.add(at("JA1ABC", "2358"))  # four minutes ago, yesterday
+    assert b.add(at("JA1ABC", "0001"))  # newer, today
+    assert not b.add(at("JA1ABC", "2359"))  # replayed: older
+    assert not b.add(at("VK2XYZ", "0010"))  # eight minutes ahead: yesterday's, 23h52 old
+    assert b.add(at("VK2XYZ", "0006"))  # four minutes ahead: the node's clock, today
+    now[0] = wall_at("2358")
+    b = Book(None, None, max_age_s=1800.0, clock=clock, wall=lambda: now[0])
+    assert b.add(at("JA1ABC", "2357"))
+    assert b.add(at("JA1ABC", "0001"))  # the node's clock past midnight: tomorrow's, newer
+    assert not b.add(at("JA1ABC", "2356"))
+    kept = b.newest("JA1ABC")
+    assert kept is not None and kept.spot.time == "0001"

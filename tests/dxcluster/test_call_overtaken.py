@@ -23,6 +23,7 @@ from bridge.interfaces.mqtt.topics import Topics
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.engine.test_halt_epoch import Bench
 from tests.mqtt.test_service import RecordingPublisher
+from tests.support.clock import wall_at
 from tests.support.waiting import slow
 
 WHO = Origin(Source.MQTT, "G4ABC")
@@ -37,7 +38,7 @@ def bench(tmp_path: Path) -> Iterator[Bench]:
 
 def held_cluster() -> tuple[DxCluster, threading.Event]:
     """A cluster whose look-ups wait for the Event (a busy aim queue, a big cty file)."""
-    book = Book(parse_dat(CTY_DAT), (52.52, 13.40))
+    book = Book(parse_dat(CTY_DAT), (52.52, 13.40), wall=lambda: wall_at("1234"))
     book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))  # Tokyo: about 40 deg
     book.add(Spot("PY1ABC", 14025.0, "G4ABC", "1234", "FT8 GG87"))  # Rio: about 230 deg
     go = threading.Event()

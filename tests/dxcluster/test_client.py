@@ -29,7 +29,7 @@ from bridge.runtime.rotator import STALE_MESSAGE
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.engine.test_halt_epoch import START_AZ, Bench, on_a_thread
 from tests.support import wait_until
-from tests.support.clock import FakeClock
+from tests.support.clock import FakeClock, RunningWall, wall_at
 from tests.support.cluster import FakeCluster, Session
 from tests.support.waiting import slow
 
@@ -54,7 +54,7 @@ def published() -> Iterator[list[str]]:
 
 
 def client(port: int, published: list[str], clock: JumpingClock | None = None) -> DxCluster:
-    book = Book(parse_dat(CTY_DAT), (52.5, 13.4))
+    book = Book(parse_dat(CTY_DAT), (52.5, 13.4), wall=RunningWall("1830"))  # SPOT's time
     dx = DxCluster("127.0.0.1", port, "G4ABC", book, published.append, backoff_s=0.01)
     if clock is not None:
         dx.clock = clock
@@ -170,7 +170,7 @@ def test_the_aim_thread_turns_to_the_newest_spot_else_the_entity_else_refuses(
     published: list[str],
 ) -> None:
     dx = client(9, published)  # never started as a telnet client: the book is filled here
-    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1829", "FT8 PM95vq"))
     rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
     thread = threading.Thread(target=dx._aim_loop, daemon=True)
     thread.start()
@@ -229,7 +229,13 @@ def test_spots_age_out_of_b_spots_while_the_node_cannot_be_reached(
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     now = [0.0]
-    book = Book(parse_dat(CTY_DAT), (52.5, 13.4), max_age_s=1800.0, clock=lambda: now[0])
+    book = Book(
+        parse_dat(CTY_DAT),
+        (52.5, 13.4),
+        max_age_s=1800.0,
+        clock=lambda: now[0],
+        wall=lambda: wall_at("1830"),
+    )
     book.add(Spot("JA1ABC", 14025.0, "EA5WU", "1829", "cq"))
     dx = DxCluster("127.0.0.1", port, "G4ABC", book, published.append, backoff_s=1.0)
     dx._publish()  # the spot on B/spots, as a session before the node went down left it
@@ -243,7 +249,7 @@ def test_spots_age_out_of_b_spots_while_the_node_cannot_be_reached(
 def test_a_stop_after_the_call_was_asked_overtakes_it(published: list[str]) -> None:
     """Rule 4: a call queued before a STOP is never turned to after it."""
     dx = client(9, published)
-    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1829", "FT8 PM95vq"))
     rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
     dx.aim(rot, "JA1ABC", False, "target JA1ABC", who)  # type: ignore[arg-type]
     rot.halts += 1  # the STOP, before the aim thread took the call
@@ -296,7 +302,7 @@ def test_a_stop_during_the_look_up_overtakes_the_call(tmp_path: Path) -> None:
     was overtaken: the call asked before it went to the controller after it."""
     bench = Bench(tmp_path)
     try:
-        book = Book(parse_dat(CTY_DAT), (52.52, 13.40))
+        book = Book(parse_dat(CTY_DAT), (52.52, 13.40), wall=lambda: wall_at("1234"))
         book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
         dx = DxCluster("127.0.0.1", 9, "G4ABC", book, lambda doc: None)
         who = Origin(Source.MQTT, "G4ABC")

@@ -21,7 +21,7 @@ from bridge.interfaces.dxcluster.cty import Cty, parse_csv, parse_dat
 from bridge.interfaces.dxcluster.spots import Spot
 from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
 from tests.integration.test_pointing_bridge import locator_centre
-from tests.support.clock import FakeClock
+from tests.support.clock import FakeClock, wall_at
 
 # Hawaii as AD1C's files give it (west-positive longitude), its latitude slipped: 211.12
 HAWAII_SLIP_DAT = (
@@ -41,7 +41,7 @@ def spot(call: str) -> Spot:
 
 
 def listed(cty: Cty, call: str) -> dict[str, object]:
-    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: 0.0)
+    book = Book(cty, locator_centre("JO62QM"), clock=FakeClock(), wall=lambda: wall_at("1234"))
     assert book.add(spot(call))
     [entry] = json.loads(book.as_json())["spots"]
     return entry  # type: ignore[no-any-return]

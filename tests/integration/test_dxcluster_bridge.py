@@ -23,6 +23,7 @@ from bridge.interfaces.dxcluster import DxCluster
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import retained_snapshot, wait_until
+from tests.support.clock import RunningWall
 from tests.support.cluster import FakeCluster, Session
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -66,7 +67,7 @@ def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
     def second(s: Session) -> None:
         s.send(b"Please enter your call: ")
         cluster.logins.append(s.read_line())
-        s.send(b"DX de K1TTT:    7012.5  VK2XYZ/P     CW 21 dB 28 WPM CQ       0102Z\r\n")
+        s.send(b"DX de K1TTT:    7012.5  VK2XYZ/P     CW 21 dB 28 WPM CQ       1833Z\r\n")
         cluster.done.wait(slow(60))
 
     cluster = FakeCluster([first, second])
@@ -84,6 +85,7 @@ def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
             "bands": ["6m", "20m", "40m"],
         },
     }
+    rig.wall = RunningWall("1834")  # the spots' times are live (book.py rule 2)
     app = rig.start()
     rig.ready("tower")
     try:

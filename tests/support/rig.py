@@ -218,6 +218,9 @@ class Rig:
         self.base = "rotor"
         self.mqtt_extra: dict[str, Any] = {}  # e.g. TLS or credentials
         self.sections: dict[str, Any] = {}  # more of the configuration (homeassistant, station)
+        # the in-process bridge's wall clock (App's ``wall``): a DX cluster test's spots are of
+        # a fixed time (tests/support/clock.py RunningWall); None: the host's
+        self.wall: Callable[[], float] | None = None
 
     def add(
         self, rid: str, model: str = "rotorez", emu: dict[str, Any] | None = None, **bridge: Any
@@ -267,7 +270,7 @@ class Rig:
 
     def start(self) -> App:
         """The bridge in this process."""
-        self.app = App(self.settings)
+        self.app = App(self.settings, wall=self.wall or time.time)
         self.app.start()
         return self.app
 

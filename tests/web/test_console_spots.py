@@ -21,6 +21,7 @@ from bridge.interfaces.web.projection import RIM_KM
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_dxcluster_bridge import JAPAN, W1XYZ_GRID, bearing_to
 from tests.integration.test_pointing_bridge import angle_between, locator_centre
+from tests.support.clock import RunningWall
 from tests.support.cluster import FakeCluster, Session
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
@@ -62,6 +63,7 @@ def spotted(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, int, list[dict[str,
             "bands": ["6m", "20m"],
         },
     }
+    rig.wall = RunningWall("1831")  # the spots' times are live (book.py rule 2)
     rig.start()
     rig.ready("tower")
     try:

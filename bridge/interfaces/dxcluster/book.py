@@ -7,9 +7,20 @@ Rules:
    locator), else its call's entity from the cty file (cty.py rule 3), else none (still
    listed, without a bearing). ``position`` says which: ``locator``, ``cty`` or null.
 2. Kept: spots on the configured bands, the newest ``max_spots``, none older than
-   ``max_age_s`` (by the monotonic clock of when it was heard, so a wrong wall clock or a
-   node's odd ``HHMM`` never ages a spot). The newest spot of a call replaces an older one
-   of the same call on the same band.
+   ``max_age_s``. A spot's age is by its own time (the node's ``HHMM``, ``spot_time``: on the
+   day of the bridge's wall clock, or the day before for a time more than SKEW_S ahead of it,
+   midnight's wrap), so a spot a node replays at a new login (DX Spider's and AR-Cluster's
+   last spots, attack 13) is as old as it says: one older than ``max_age_s`` is not taken,
+   one younger leaves when its own time is ``max_age_s`` old, not ``max_age_s`` after it came
+   again. The newer spot of a call on a band, by its own time, replaces the older one; an
+   older one that comes after it is not taken (attack 13: a replayed 18:29 spot took the
+   18:35 one's place, and a turn to the call went 22 degrees off, to where it was before);
+   of two with the same minute, the one that came last. The list is newest first by the
+   spots' own times. The wall clock only ever drops a spot sooner (house rule 7's safe
+   side): the age is counted down on the monotonic clock from when it came (a wall clock
+   set back keeps no spot longer than ``max_age_s`` after it was heard); a wall clock wrong
+   by more than ``max_age_s`` drops every spot, said in the log (client.py rule 3), never
+   keeps an old one.
 3. Bearings and distances are geo.great_circle's from [station] (the same function the
    pointing judge uses); without a station they are null, and so are the bearings of a
    place with no direction (the station's own, its antipode).
@@ -40,6 +51,8 @@ from bridge.settings.dxcluster import band_of
 log = logging.getLogger(__name__)
 
 MAX_CALLS = 20  # Home Assistant's spot select lists this many calls at most
+DAY_S = 86400.0
+SKEW_S = 300.0  # rule 2: a spot this far ahead of the bridge's clock is of today (clocks differ)
 _LOCATORS = re.compile(r"(?<![A-Z0-9])[A-R]{2}[0-9]{2}(?:[A-X]{2}(?:[0-9]{2})?)?(?![A-Z0-9])")
 
 
@@ -59,6 +72,18 @@ class Kept:
     place: Place | None
     heard_s: float  # monotonic
     heard_wall: float
+    spotted_wall: float  # rule 2: its own time (unix seconds), the day the bridge's
+    until_s: float  # rule 2: monotonic, when it is max_age_s old by its own time
+
+
+def spot_time(hhmm: str, now_wall: float) -> float:
+    """Rule 2: the unix time of a spot's ``HHMM`` (UTC) heard at ``now_wall``: the latest of
+    the day before, the day and the day after at that time that is at most SKEW_S ahead."""
+    day = now_wall - now_wall % DAY_S
+    t = day + int(hhmm[:2]) * 3600.0 + int(hhmm[2:]) * 60.0
+    if t + DAY_S <= now_wall + SKEW_S:  # (just before midnight, a node whose clock is ahead)
+        return t + DAY_S
+    return t - DAY_S if t > now_wall + SKEW_S else t
 
 
 def locator_in(comment: str) -> str | None:
@@ -93,6 +118,8 @@ class Book:
         self._lock = threading.Lock()
         self._spots: list[Kept] = []  # newest first
         self._unlisted: set[Kept] = set()  # rule 5: left out of B/spots, said once
+        self.too_old = 0  # rule 2: spots not taken for their own time (client.py logs them)
+        self.last_too_old: tuple[str, float] | None = None  # (its HHMM, the wall clock then)
 
     def place(self, spot: Spot) -> Place | None:
         """Rule 1 (no lock: the cty data is read-only once loaded)."""
@@ -109,23 +136,43 @@ class Book:
         return Place(entity.latitude_deg, entity.longitude_deg, "cty", entity=entity.name)
 
     def add(self, spot: Spot) -> bool:
-        """Rule 2: whether it was kept (False: not on a configured band)."""
+        """Rule 2: whether it is kept (False: not on a configured band, older than
+        ``max_age_s`` by its own time, or older than the call's kept spot on its band)."""
         band = band_of(spot.freq_khz)
         if self._bands and band not in self._bands:
             return False
-        kept = Kept(spot, band, self.place(spot), self._clock(), self._wall())
+        now_s, now_wall = self._clock(), self._wall()
+        spotted = spot_time(spot.time, now_wall)
+        age_s = max(0.0, now_wall - spotted)
+        if age_s > self._max_age_s:  # rule 2: a replay of a spot already gone
+            self.too_old += 1
+            self.last_too_old = (spot.time, now_wall)
+            return False
+        place = self.place(spot)
         with self._lock:
-            rest = [k for k in self._spots if (k.spot.call, k.band) != (spot.call, band)]
-            self._spots = [kept, *rest][: self._max]
+            same = next(
+                (k for k in self._spots if (k.spot.call, k.band) == (spot.call, band)), None
+            )
+            if same is not None and same.spot == spot and same.spotted_wall == spotted:
+                return True  # the same spot again (a replay): kept as it was
+            if same is not None and same.spotted_wall > spotted:
+                return False  # rule 2: older than the one kept
+            until_s = now_s + self._max_age_s - age_s
+            kept = Kept(spot, band, place, now_s, now_wall, spotted, until_s)
+            rest = [k for k in self._spots if k is not same]
+            # newest first by their own times; of the same minute, the one heard last first
+            at = next((i for i, k in enumerate(rest) if k.spotted_wall <= spotted), len(rest))
+            rest.insert(at, kept)
+            self._spots = rest[: self._max]
             self._unlisted &= set(self._spots)
-        return True
+            return kept in self._spots
 
     def prune(self) -> bool:
         """Rule 2: the spots too old dropped; whether any was."""
-        oldest = self._clock() - self._max_age_s
+        now_s = self._clock()
         with self._lock:
             before = len(self._spots)
-            self._spots = [k for k in self._spots if k.heard_s >= oldest]
+            self._spots = [k for k in self._spots if k.until_s >= now_s]
             self._unlisted &= set(self._spots)
             return len(self._spots) != before
 

@@ -22,7 +22,10 @@ Rules:
    at the latest PUBLISH_EVERY_S + TICK_S after its spot; while the node is down, after each
    attempt to connect (the aged spots leave within a back-off and a connect timeout).
    ``on_calls`` (Home Assistant's select) gets the calls of the newest spots when they
-   changed, at most once per CALLS_EVERY_S (the first at once).
+   changed, at most once per CALLS_EVERY_S (the first at once). Spots the book does not take
+   for their own time (older than ``max_age_min``: a node's replay at a login, or this host's
+   wall clock wrong; book.py rule 2) are said in the log at most once per LOG_EVERY_S, with
+   how many, the last one's time and the host's.
 4. ``aim`` only queues (paho's thread returns at once; a full queue is a refusal). The aim
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (a ``Toward`` command: limits, keep-out, lock, lease), with the source
@@ -147,6 +150,8 @@ class DxCluster:
         self._published_s = -math.inf
         self._calls: tuple[str, ...] | None = None
         self._calls_s = -math.inf
+        self._old_said_s = -math.inf  # rule 3: when spots too old were last said
+        self._old_since = 0
 
     # -- life ---------------------------------------------------------------------------------
     def start(self) -> None:
@@ -282,7 +287,29 @@ class DxCluster:
             self.counts.other_lines += 1
             return
         self.counts.spots += 1
+        before = self.book.too_old
         self.book.add(spot)  # the cty lookup: here, on this thread
+        if self.book.too_old != before:
+            self._too_old()
+
+    def _too_old(self) -> None:
+        """Rule 3: spots older than max_age_min by their own time, said now and then."""
+        self._old_since += 1
+        now = self.clock()
+        last = self.book.last_too_old
+        if now - self._old_said_s < LOG_EVERY_S or last is None:
+            return
+        count, self._old_since, self._old_said_s = self._old_since, 0, now
+        hhmm, wall = last
+        here = time.strftime("%H%MZ", time.gmtime(wall))
+        log.info(
+            "DX cluster: %d spot(s) older than max_age_min by their own time not taken (the "
+            "last of %sZ, at %s by this host's clock): a node's replay at login; if every "
+            "spot is, this host's clock is wrong",
+            count,
+            hhmm,
+            here,
+        )
 
     def _tick(self) -> None:
         """Rule 3: the aged spots dropped; B/spots and the select's calls when they changed."""
