@@ -625,9 +625,10 @@ class App:
         return call
 
     def _stale(self, settings: Settings) -> None:
-        """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained, and
-        a rotator's state of a feature it no longer has or a topic its model never fills (rule
-        5), is deleted at the first look, when the base topic was this bridge's."""
+        """interfaces/mqtt/stale.py rule 2: what a removed rotator or group left retained, a
+        rotator's state of a feature it no longer has or a topic its model never fills (rule
+        5), and a station feature's topic while the feature is off (rule 6: ``B/spots``), is
+        deleted at the first look, when the base topic was this bridge's."""
         roots = {settings.rotator_topic(r) for r in settings.rotators}
         groups = {settings.group_topic(g) for g in settings.groups}
         # (rule 5: a feature's state a rotator no longer has, as the service skips it)
@@ -644,6 +645,13 @@ class App:
             boxes = tuple(r.axis_spec(axis) for axis in Axis) if r.axes else ()
             unpublished.update(never_published(t, rot.spec, boxes))
             options[t.root] = rot.spec.options
+        # (rule 6: a station feature's topics under the base topic while its service is off)
+        unpublished.update(
+            self.topics.under_base(suffix)
+            for feature in FEATURES
+            if feature.name not in self.services
+            for suffix in feature.base_topics
+        )
         stale = StaleTopics(self.topics, roots | groups, groups, unpublished, options)
         clear = self.client.clear_retained
 

@@ -49,6 +49,16 @@ Rules:
    rotator's root and the names it publishes) is deleted by itself. What it does publish (an
    MD-01's or a composite's elevation, a version that comes late, an option of its model) is
    never among them.
+6. A feature of the station (bridge/feature.py ``base_topics``) keeps its topics under the
+   base topic only while its service runs: with the feature taken out of the configuration
+   they are published no more (attack 13: a run with ``[dxcluster]`` left its spots on
+   ``B/spots``, retained, and every dashboard showed them as current for good). Those topics
+   (the app's, in ``unpublished``: its service is none of the running ones) are read and
+   deleted as rule 5's. Checked for the same gap (attack 13): the wind, the band map, auto-park
+   and following WSJT-X keep no retained topic of their own beyond rule 5's (``R/follow/state``)
+   and ``R/status``'s blocks; rotor health's ``R/health`` is published for every model (one
+   that reports no position says so); a removed group's are rule 1's and 4's; Home
+   Assistant's configs are its publisher's (homeassistant/publisher.py rule 6).
 """
 
 from __future__ import annotations
@@ -74,7 +84,7 @@ class StaleTopics:
         self._owned = set(topics.owned())  # (never one of these, whatever its root)
         self._states = [s.suffix for f in registered() for s in f.states]
         self._bridges: set[str] = {f"{topics.base}/bridge"}  # rule 3: another bridge's base
-        self._unpublished = set(unpublished or ())  # rule 5: configured rotators' states
+        self._unpublished = set(unpublished or ())  # rules 5, 6: states, a feature's off
         self._options = dict(options or {})  # rule 5: a configured root, its options' names
 
     @property
