@@ -83,6 +83,18 @@ each written out in the module that keeps it:
    and the fence denied: the markers stayed off for the connection and rotctld's S fenced
    nothing; the timer, firing as the hello or the probe came, said them lost after it said
    them back).
+19. The main connection reads its own heartbeats back (heartbeat.py rule 11, ``Echo``): it
+   subscribes to the heartbeat topic (QoS 0, like the beats), takes each beat it sent
+   (``_tick``) as it comes back (``_intercepted``, known by its exact payload, this process's
+   clock to the millisecond when it was sent; another's is dropped, as is a retained one), and
+   ``broker_late`` says whether the broker is late now (service.py rule 12 asks, on paho's
+   thread, as the message is handled). A new connection starts with nothing out. After a late
+   beat came back, the next beat goes at once. Being late, and no longer, is said on
+   ``B/bridge/info`` (``on_late``, on a thread of its own; the last verdict is the one said,
+   under ``_late_lock``). A connection none of whose beats came back within UNREAD_S (an ACL
+   that denies reading the topic: mosquitto grants the subscription and drops the beats) is
+   never called late, and that is said as rule 11 says, once, naming the topic; a beat that
+   comes back clears it (as rule 16's probe). It costs one message read every HEARTBEAT_S.
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
@@ -115,7 +127,13 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
-from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload, beat_properties
+from bridge.interfaces.mqtt.heartbeat import (
+    LATE_S,
+    Beat,
+    Echo,
+    beat_payload,
+    beat_properties,
+)
 from bridge.interfaces.mqtt.limiter import EventLimiter
 from bridge.interfaces.mqtt.look import (
     CLEARS_SAID_AT_ONCE,
@@ -161,12 +179,13 @@ class MqttClient(Connection):
         heartbeat: str | None = None,
         wall: Callable[[], float] = time.time,
         station: str | None = None,
+        on_late: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
             settings,
             settings.effective_client_id(),
-            subscriptions=subscriptions,
+            subscriptions=[*subscriptions, *([heartbeat] if heartbeat is not None else [])],
             on_message=on_message,
             clock=clock,
             **options,
@@ -225,6 +244,11 @@ class MqttClient(Connection):
         self._beat = Beat()
         self._wall = wall
         self._station = station  # rule 2: the process the beats name (heartbeat.py rule 7)
+        self._echo = Echo()  # rule 19 (paho's thread only)
+        self._on_late = on_late  # rule 19: said on B/bridge/info while it lasts
+        self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
+        self._late_now = False  # rule 19: the verdict (paho's thread writes it)
+        self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
 
     @property
     def problems(self) -> list[str]:
@@ -262,6 +286,11 @@ class MqttClient(Connection):
         a marker it publishes from now on comes back after those (the stop lane's holds wait
         for it: halts.py)."""
         return self._up and self._subscribing
+
+    def broker_late(self) -> float | None:
+        """Rule 19: how long the broker held the bridge's beats up, while it is late now; None
+        when it is not (or when no beat of this connection came back). Paho's thread."""
+        return self._echo.late(self._clock())
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -448,6 +477,7 @@ class MqttClient(Connection):
         with self._lock:
             self._delivery.new_connection()
             self._held.extend(held)  # a look that never ended leaves its own
+            self._echo.connected()  # rule 19
             self._owned.connected()
             look = self._look
             self._look_lost = False  # rule 16: judged anew
@@ -493,15 +523,54 @@ class MqttClient(Connection):
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
-        if self._beat.due(self._clock()):
+        now = self._clock()
+        if self._beat.due(now) or self._echo.returning:  # (rule 19: at once after a late one)
             props = None
             if self._station is not None and self._v5:  # (3.1.1 has no properties)
                 props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
                 props.UserProperty = beat_properties(self._station)
             payload = beat_payload(self._wall()).encode()
+            self._echo.sent(payload, now)  # rule 19 (before it can come back)
             self._client.publish(topic, payload, qos=0, properties=props)
+        late = self._echo.late(now) is not None  # rule 19: said while it lasts
+        if late != self._late_now:
+            self._late_now = late
+            threading.Thread(target=self._say_late, daemon=True).start()
+        if self._echo.unread(now) and not self._delivery.denied(topic):
+            self._delivery.deny(
+                topic,
+                "read back what it publishes on",
+                "none of the heartbeats this connection published there came back (the "
+                "broker's ACL denies reading it?): a move the broker holds up (a broker that "
+                "stalls) is then not known late, and is carried out when it comes",
+            )
+
+    def _say_late(self) -> None:
+        """Rule 19 (its own thread): the last verdict on the broker's lateness, said."""
+        with self._late_lock:
+            late, said = self._late_now, self._late_said
+            if late == (said is not None) or self._on_late is None:
+                return
+            if late:
+                self._late_said = (
+                    f"the MQTT broker holds up what the bridge publishes (a heartbeat on "
+                    f"{self._heartbeat} not back within {LATE_S:g} s): until one sent after it "
+                    "comes back, MQTT moves sent without a stamp (`sent`) are refused; stops "
+                    "and locks go through"
+                )
+                log.warning("%s", self._late_said)
+                self._on_late(self._late_said, True)
+            else:
+                self._late_said = None
+                log.info("the MQTT broker is quick again: its heartbeats come back in time")
+                assert said is not None
+                self._on_late(said, False)
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
+        if topic == self._heartbeat:  # rule 19: ours back (another's, a retained one: dropped)
+            if not retained and self._echo.back(payload, self._clock()):
+                self._fence_back(topic)  # (a denial said before is over)
+            return True
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None
