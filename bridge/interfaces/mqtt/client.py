@@ -244,7 +244,8 @@ class MqttClient(Connection):
         self._beat = Beat()
         self._wall = wall
         self._station = station  # rule 2: the process the beats name (heartbeat.py rule 7)
-        self._echo = Echo()  # rule 19 (paho's thread only)
+        self._echo = Echo()  # rule 19 (under ``_echo_lock``)
+        self._echo_lock = threading.Lock()  # rule 19: paho's thread, and ``broker_late``'s
         self._on_late = on_late  # rule 19: said on B/bridge/info while it lasts
         self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
         self._late_now = False  # rule 19: the verdict (paho's thread writes it)
@@ -289,8 +290,9 @@ class MqttClient(Connection):
 
     def broker_late(self) -> float | None:
         """Rule 19: how long the broker held the bridge's beats up, while it is late now; None
-        when it is not (or when no beat of this connection came back). Paho's thread."""
-        return self._echo.late(self._clock())
+        when it is not (or when no beat of this connection came back). Any thread."""
+        with self._echo_lock:
+            return self._echo.late(self._clock())
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -477,7 +479,8 @@ class MqttClient(Connection):
         with self._lock:
             self._delivery.new_connection()
             self._held.extend(held)  # a look that never ended leaves its own
-            self._echo.connected()  # rule 19
+            with self._echo_lock:
+                self._echo.connected()  # rule 19
             self._owned.connected()
             look = self._look
             self._look_lost = False  # rule 16: judged anew
@@ -524,19 +527,23 @@ class MqttClient(Connection):
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
         now = self._clock()
-        if self._beat.due(now) or self._echo.returning:  # (rule 19: at once after a late one)
+        echo = self._echo
+        with self._echo_lock:  # (rule 19: uncontended but for a test that asks)
+            due = self._beat.due(now) or echo.returning  # (rule 19: at once after a late one)
+            payload = beat_payload(self._wall()).encode() if due else b""
+            if due:
+                echo.sent(payload, now)  # rule 19 (before it can come back)
+            late, unread = echo.late(now) is not None, echo.unread(now)
+        if due:
             props = None
             if self._station is not None and self._v5:  # (3.1.1 has no properties)
                 props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
                 props.UserProperty = beat_properties(self._station)
-            payload = beat_payload(self._wall()).encode()
-            self._echo.sent(payload, now)  # rule 19 (before it can come back)
             self._client.publish(topic, payload, qos=0, properties=props)
-        late = self._echo.late(now) is not None  # rule 19: said while it lasts
-        if late != self._late_now:
+        if late != self._late_now:  # rule 19: said while it lasts
             self._late_now = late
             threading.Thread(target=self._say_late, daemon=True).start()
-        if self._echo.unread(now) and not self._delivery.denied(topic):
+        if unread and not self._delivery.denied(topic):
             self._delivery.deny(
                 topic,
                 "read back what it publishes on",
@@ -568,8 +575,11 @@ class MqttClient(Connection):
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
         if topic == self._heartbeat:  # rule 19: ours back (another's, a retained one: dropped)
-            if not retained and self._echo.back(payload, self._clock()):
-                self._fence_back(topic)  # (a denial said before is over)
+            if not retained:
+                with self._echo_lock:
+                    ours = self._echo.back(payload, self._clock())
+                if ours:
+                    self._fence_back(topic)  # (a denial said before is over)
             return True
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
