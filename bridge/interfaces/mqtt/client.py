@@ -83,23 +83,24 @@ each written out in the module that keeps it:
    and the fence denied: the markers stayed off for the connection and rotctld's S fenced
    nothing; the timer, firing as the hello or the probe came, said them lost after it said
    them back).
-19. The main connection reads its own heartbeats back (heartbeat.py rule 11, ``Echo``): it
-   subscribes to the heartbeat topic (QoS 0, like the beats), takes each beat it sent
-   (``_tick``) as it comes back (``_intercepted``, known by its exact payload, this process's
-   clock to the millisecond when it was sent; another's is dropped, as is a retained one), and
-   ``broker_late`` says whether the broker is late now (service.py rule 12 asks, on paho's
-   thread, as the message is handled). A new connection starts with nothing out. After a late
-   beat came back, the next beat goes at once. Being late, and no longer, is said on
-   ``B/bridge/info`` (``on_late``, on a thread of its own; the last verdict is the one said,
-   under ``_late_lock``). A connection none of whose beats came back within UNREAD_S (an ACL
-   that denies reading the topic: mosquitto grants the subscription and drops the beats) is
-   never called late, and that is said as rule 11 says, once, naming the topic; a beat that
-   comes back clears it (as rule 16's probe). It costs one message read every HEARTBEAT_S.
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
    stayed). So ``on_connect`` takes them from paho: one whose retained topic is in the cache
    is superseded by the value just sent; the others (events, deletions) go again, after it.
+19. The main connection reads its own heartbeats back (heartbeat.py rule 11, ``Echo``): it
+   subscribes to the heartbeat topic (QoS 0, like the beats), takes each beat it sent
+   (``_tick``) as it comes back (``_intercepted``, known by its exact payload, this process's
+   clock to the millisecond when it was sent; another's is dropped, as is a retained one), and
+   ``broker_late`` says whether the broker is late now (service.py rule 12 asks, on paho's
+   thread, as the message is handled; any thread may: the echo is kept under ``_echo_lock``,
+   which is taken with no other lock held inside it). A new connection starts with nothing out.
+   After a late beat came back, the next beat goes at once. Being late, and no longer, is said
+   on ``B/bridge/info`` (``on_late``, on a thread of its own; the last verdict is the one said,
+   under ``_late_lock``). A connection none of whose beats came back within UNREAD_S (an ACL
+   that denies reading the topic: mosquitto grants the subscription and drops the beats) is
+   never called late, and that is said as rule 11 says, once, naming the topic; a beat that
+   comes back clears it (as rule 16's probe). It costs one message read every HEARTBEAT_S.
 
 Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
 cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
