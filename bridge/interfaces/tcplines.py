@@ -546,6 +546,13 @@ class Looks:
         if waited:
             self.since_s = now
         sent, counted = _counted(fd, self.read)
+        self.record(sent, count, counted, now)
+        return now
+
+    def record(self, sent: int, count: int, counted: bool, now: float) -> None:
+        """(under ``lock``) A look's finding: ``sent`` bytes so far, at ``count``, at ``now``;
+        ``counted``: the kernel said what waits unread (the console's looks, interfaces/web/
+        looks.py, count it themselves: one poll for all its connections)."""
         since = self.since_s
         seen = self.seen
         if seen and seen[-1][1] == count:  # (no halt since: one look, kept as far as it
@@ -556,12 +563,6 @@ class Looks:
             seen.append((sent, count, since))
         if counted:  # (what comes after these bytes came after this look)
             self.since_s = now
-        return now
-
-    def reaches(self, fd: int) -> int:
-        """(under ``lock``) What ``fd`` has sent so far, as a look would count it (the
-        console's looks, interfaces/web/looks.py, skip one that would count nothing new)."""
-        return _counted(fd, self.read)[0]
 
     def drained(self, looked_s: float) -> None:
         """(under ``lock``) A read right after the look at ``looked_s`` took less than it asked

@@ -30,28 +30,80 @@ Rules:
    after that one was answered is dated from that answer (a client that sends half a request
    behind another one's, pipelined).
 4. Only the console's event loop reads a connection; a look runs on the halting thread and
-   takes only the connection's lock, held for a system call or two (an ioctl per connection
-   a halt: the console holds connections.py's MOST_HELD at most).
+   takes only the connection's lock. What a halt's look costs is bounded and small, whatever
+   the console holds (connections.py's MOST_HELD at most) and whatever another thread runs:
+   one ``poll`` over every connection (and, apart, the listeners, rule 2) says which have bytes
+   unread in the kernel, and only those are asked how many (FIONREAD), by a call that keeps the
+   interpreter lock (``unread_held``: a few microseconds in the kernel; where it cannot be had,
+   fcntl's, which lets the lock go); the others are counted as what the loop has read. The
+   look used to ask each connection in turn, each ioctl letting the interpreter lock go: with
+   250 connections held half-way through a request (connections.py's caps) a rotctld STOP's
+   round trip went from 0.1-2 ms to 6-35 ms, and beside a thread running Python (it takes the
+   lock back for up to its switch interval, 5 ms, at each) a look over 500 took 0.3 s at p95.
 5. Where the kernel cannot say what waits unread (Windows, no FIONREAD: the remote runs there),
    or asyncio does not accept and read through these sockets (its proactor loop), nothing is
    looked at: commands.py rule 5's start of the request dates it, as before.
+6. A connection keeps only the looks a request can still be dated by (rule 3): the first past
+   the bound of the request being served (``low``), the first past the bytes read when the
+   last request was answered (``fin``: the next request's bound), and those at bytes the loop
+   has not read yet (any later request begins there or further); a look at bytes already read
+   that is neither dates nothing any more. At most LOOKS_KEPT are kept: past that two
+   neighbours at bytes not read yet become one, dated by the earlier (toward refusing; only a
+   connection paused over its budget, connections.py rule 4, through that many halts gets
+   there). A page's WebSocket or event stream is one request for hours, and kept up to the
+   TCP ports' SEEN_KEPT (4,096) looks a rotator, one per halt that found it had sent more.
 """
 
 from __future__ import annotations
 
+import itertools
 import socket
+import sys
 import threading
+import time
 import weakref
 from collections.abc import Callable, Hashable, Iterable
 from typing import Any
 
 from bridge.core.haltwatch import HaltWatchers
 from bridge.interfaces.fdwait import readable
-from bridge.interfaces.tcplines import Looks
+from bridge.interfaces.tcplines import Looks, unread
 
-__all__ = ["Conn", "HaltLooks", "Listener"]
+__all__ = ["Conn", "HaltLooks", "Listener", "unread_held"]
 
 BACKLOG = 100  # the kernel's queue of connections (asyncio's own default)
+LOOKS_KEPT = 16  # rule 6: a connection's looks kept per rotator, at most
+
+
+def _unread_holding() -> Callable[[int], int]:
+    """Rule 4: FIONREAD by a call that keeps the interpreter lock (ctypes' PyDLL: the lock is
+    not let go around it), on Linux; elsewhere ``unread``'s (fcntl), which lets it go (an
+    ioctl takes variadic arguments, whose calling convention ctypes is trusted with on Linux
+    alone here)."""
+    if sys.platform != "linux":
+        return unread
+    try:
+        import ctypes
+        import termios
+
+        ioctl = ctypes.PyDLL(None, use_errno=True).ioctl
+        ioctl.argtypes = (ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p)
+        ioctl.restype = ctypes.c_int
+        request = termios.FIONREAD
+    except (ImportError, OSError, AttributeError):
+        return unread
+
+    def held(fd: int) -> int:
+        waiting = ctypes.c_int(0)
+        if ioctl(fd, request, ctypes.byref(waiting)) < 0:
+            code = ctypes.get_errno()
+            raise OSError(code, "FIONREAD failed")
+        return waiting.value
+
+    return held
+
+
+unread_held = _unread_holding()
 
 
 class Conn(socket.socket):
@@ -87,18 +139,45 @@ class Conn(socket.socket):
                 looks.read += got
         return got
 
-    def look(self, rotator_id: str, count: int) -> None:
+    def look(self, rotator_id: str, count: int, unread: bool = True) -> None:
         """Rule 2: one look, at ``count``, if the connection holds bytes past ``low`` that no
-        look has counted yet."""
+        look has counted yet; ``unread``: the kernel may hold bytes unread (False: a poll
+        since ``count`` was read found none, rule 4: what the loop has read is all)."""
         with self.lock:
             looks = self.looks.get(rotator_id)
             fd = self.fileno()
             if looks is None or fd < 0:
                 return
-            sent = looks.reaches(fd)
+            sent, counted = looks.read, True
+            if unread:
+                try:
+                    sent += unread_held(fd)
+                except OSError:  # (the kernel cannot say: rule 5)
+                    counted = False
             if sent <= self.low or (looks.seen and looks.seen[-1][0] >= sent):
                 return
-            looks.look(fd, count)
+            looks.record(sent, count, counted, time.monotonic())
+            self._trim(looks)
+
+    def _trim(self, looks: Looks) -> None:
+        """(under ``lock``) Rule 6: the looks no request can be dated by any more forgotten,
+        and at most LOOKS_KEPT kept."""
+        seen = looks.seen
+        if len(seen) <= 2:
+            return
+        fin, read = self.fin, looks.read
+        kept = [seen[0]]
+        before = seen[0][0]
+        for entry in itertools.islice(seen, 1, None):
+            if entry[0] > read or (fin is not None and before <= fin < entry[0]):
+                kept.append(entry)
+            before = entry[0]
+        while len(kept) > LOOKS_KEPT:  # (the oldest two past the first become one, dated
+            first, second = kept[1], kept[2]  # by the earlier: toward refusing)
+            kept[1:3] = [(second[0], first[1], first[2])]
+        if len(kept) < len(seen):
+            seen.clear()
+            seen.extend(kept)
 
     def begin(self) -> None:
         """Rule 3: a request begins (the event loop's): its ``low``, and the looks at bytes
@@ -250,16 +329,27 @@ class HaltLooks:
 
     def _coming(self, rotator_id: str) -> None:
         """Rule 2 (the halting thread): every connection looked at, at the count before the
-        halt, then the queue's floor raised past it if the queue is empty."""
+        halt, then the queue's floor raised past it if the queue is empty; rule 4: one poll
+        says which connections hold bytes unread, and only those are asked how many."""
         count = self._counts[rotator_id]()
         with self._conns_lock:
             each = list(self._conns.values())
-        for conn in each:
-            conn.look(rotator_id, count)
+        fds = [_fd(conn) for conn in each]
+        waiting = set(readable(fds, 0))  # (after the count was read: rule 4)
+        for conn, fd in zip(each, fds, strict=True):
+            conn.look(rotator_id, count, unread=fd in waiting)
         with self.queue_lock:
             now = self._counts[rotator_id]()
             if not any(_waiting(sock) for sock in self._listeners):
                 self.floors[rotator_id] = max(self.floors.get(rotator_id, now), now + 1)
+
+
+def _fd(sock: socket.socket) -> int:
+    """``sock``'s descriptor, -1 once closed (never polled: fdwait.py rule 2)."""
+    try:
+        return sock.fileno()
+    except (OSError, ValueError):
+        return -1
 
 
 def _waiting(sock: socket.socket) -> bool:
