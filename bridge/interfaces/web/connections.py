@@ -17,31 +17,88 @@ Rules:
    and silent, holds it no longer. A request being served (an event stream, a command) is never
    cut by this; its body must arrive within BODY_S (server.py).
 3. Only the event loop calls in here (the protocol factory, the server's middleware, the sweep).
+4. Each connection has a budget (ratelimit.Budget) of RATE_BYTES_S bytes a second, each read
+   costing READ_COST more and each request REQUEST_COST more (``turn``: a page's few requests a
+   second, its loading among them, are far inside it), as the TCP ports' clients have
+   (tcplines.py rule 5, docs/architecture.md "Why no front end can starve a stop"). Over it,
+   the connection is paused: its socket is not read (its bytes wait in the kernel, and TCP
+   holds the sender back) and a request already read waits for its turn before it is served,
+   until the budget is in credit again; it is never closed for it, and its paused time is not
+   idle (rule 2). Said at most once per SAY_S, with a count. The pause is the budget's own:
+   aiohttp's pauses of the same socket (a queue of pipelined requests, a WebSocket's buffer)
+   are kept apart (``_Gate``), so neither lifts the other's. Another connection, the
+   operator's STOP among them, is served meanwhile: each budget is its own. A page's
+   WebSocket reads its messages within live.py rule 7's budget besides. An attack pass: 60
+   local connections pipelining ``GET api/hello`` (it needs no token) held the bridge at
+   60-85 % of a core.
 """
 
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
+from bridge.core.ratelimit import Budget
 from bridge.interfaces.web.auth import client_key
+
+log = logging.getLogger(__name__)
 
 MAX_CONNECTIONS = 256
 MOST_HELD = 2 * MAX_CONNECTIONS  # rule 1: a burst beyond this is closed at once (app.py rule 5)
 MAX_PER_ADDRESS = 64
 IDLE_S = 15.0
 SWEEP_S = 1.0
+RATE_BYTES_S = 16384.0  # rule 4: a connection's budget, bytes a second (a burst of as many)
+REQUEST_COST = 2048  # rule 4: each request costs this many bytes of it: 8 a second
+READ_COST = 64  # rule 4: each read of its socket costs this many
+SAY_S = 10.0  # rule 4: a connection paused over its budget is said this often at most
+
+
+class _Gate:
+    """Rule 4: the transport the server is handed, whose reading is paused while the budget or
+    aiohttp holds it (either), resumed when neither does; the rest is the transport's."""
+
+    def __init__(self, transport: Any) -> None:
+        self._transport = transport
+        self._theirs = False  # aiohttp paused it
+        self._ours = False  # over its budget (rule 4)
+
+    def pause_reading(self) -> None:
+        self._theirs = True
+        self._transport.pause_reading()
+
+    def resume_reading(self) -> None:
+        self._theirs = False
+        if not self._ours:
+            self._transport.resume_reading()
+
+    def hold(self) -> None:
+        self._ours = True
+        self._transport.pause_reading()  # (nothing, once closing: asyncio's own check)
+
+    def release(self) -> None:
+        self._ours = False
+        if not self._theirs:
+            self._transport.resume_reading()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._transport, name)
 
 
 @dataclass
 class _Held:
     address: str
     since: float  # when it connected or last finished a request
+    budget: Budget  # rule 4
+    gate: _Gate | None = None
     busy: int = 0  # requests being served
     trusted: bool = False  # a request on it showed a valid token (rule 1)
+    paused: bool = False  # over its budget, not read (rule 4)
+    waiters: list[asyncio.Future[None]] = field(default_factory=list)  # requests waiting
 
 
 class _Refused(asyncio.Protocol):
@@ -58,8 +115,9 @@ class _Counted(asyncio.Protocol):
         self._keeper, self._inner = keeper, inner
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self._keeper.made(self, transport)
-        self._inner.connection_made(transport)
+        gate: Any = _Gate(transport)  # rule 4: what the server sees of it
+        self._keeper.made(self, gate)
+        self._inner.connection_made(gate)
 
     def connection_lost(self, exc: Exception | None) -> None:
         self._keeper.lost(self)
@@ -67,6 +125,7 @@ class _Counted(asyncio.Protocol):
 
     def data_received(self, data: bytes) -> None:
         self._inner.data_received(data)
+        self._keeper.spend(self, len(data) + READ_COST)  # rule 4: charged after it ran
 
     def eof_received(self) -> bool | None:
         result: bool | None = self._inner.eof_received()
@@ -85,6 +144,8 @@ class Connections:
         self._held: dict[asyncio.BaseTransport, _Held] = {}
         self._made: dict[_Counted, asyncio.BaseTransport] = {}
         self._pending = 0  # made by the factory, not connected yet
+        self.paused = 0  # rule 4: times a connection was paused over its budget
+        self._unsaid, self._said_s = 0, -SAY_S  # rule 4: pauses not said yet, when last said
 
     def __len__(self) -> int:
         return len(self._held) + self._pending
@@ -106,7 +167,9 @@ class Connections:
             if len(crowd) >= limit and not self._make_room(crowd):
                 transport.close()  # connection_lost follows and finds nothing held
                 return
-        self._held[transport] = _Held(address, self._clock())
+        now = self._clock()
+        gate = transport if isinstance(transport, _Gate) else None
+        self._held[transport] = _Held(address, now, Budget(RATE_BYTES_S, now), gate)
         self._made[proto] = transport
 
     def _make_room(self, crowd: list[asyncio.BaseTransport]) -> bool:
@@ -115,7 +178,7 @@ class Connections:
         if not untrusted:
             return False
         oldest = min(untrusted, key=lambda t: self._held[t].since)
-        del self._held[oldest]
+        self._drop(oldest)
         oldest.close()
         return True
 
@@ -124,10 +187,89 @@ class Connections:
         if held is not None:
             held.trusted = True
 
+    def spend(self, proto: _Counted, cost: float) -> None:
+        """Rule 4: ``cost`` charged to the connection; over its budget, paused."""
+        transport = self._made.get(proto)
+        held = self._held.get(transport) if transport is not None else None
+        if held is not None:
+            self._charge(held, cost)
+
+    async def turn(self, transport: asyncio.BaseTransport | None) -> None:
+        """Rule 4: a request's turn on its connection: once the budget is in credit, charged
+        REQUEST_COST (over it then: paused)."""
+        if transport is None:
+            return
+        held = self._held.get(transport)
+        if held is None:
+            return
+        while held.budget.wait_s(self._clock()) > 0:
+            self._pause(held)
+            waiter = asyncio.get_running_loop().create_future()
+            held.waiters.append(waiter)
+            await waiter  # (woken when it refills, or when it is closed)
+            if self._held.get(transport) is not held:
+                return  # (gone meanwhile)
+        self._charge(held, REQUEST_COST)
+
+    def _charge(self, held: _Held, cost: float) -> None:
+        now = self._clock()
+        held.budget.spend(cost, now)
+        if held.budget.wait_s(now) > 0:
+            self._pause(held)
+
+    def _pause(self, held: _Held) -> None:
+        if held.paused:
+            return
+        held.paused = True
+        self.paused += 1
+        if held.gate is not None:
+            held.gate.hold()
+        self._unsaid += 1
+        now = self._clock()
+        if now - self._said_s >= SAY_S:
+            log.warning(
+                "web console: a connection from %s sent more than its budget (%d requests a "
+                "second): paused until it refills, its bytes left unread (%d time(s) since last "
+                "said); the other connections are served",
+                held.address,
+                int(RATE_BYTES_S // REQUEST_COST),
+                self._unsaid,
+            )
+            self._unsaid, self._said_s = 0, now
+        asyncio.get_running_loop().call_later(held.budget.wait_s(now), self._refilled, held)
+
+    def _refilled(self, held: _Held) -> None:
+        """Rule 4: its pause over, once in credit (a paused connection is not idle: rule 2)."""
+        if not held.paused:
+            return
+        now = self._clock()
+        wait_s = held.budget.wait_s(now)
+        if wait_s > 0:
+            asyncio.get_running_loop().call_later(wait_s, self._refilled, held)
+            return
+        held.paused = False
+        held.since = now
+        if held.gate is not None:
+            held.gate.release()
+        self._wake(held)
+
+    def _wake(self, held: _Held) -> None:
+        waiters, held.waiters = held.waiters, []
+        for waiter in waiters:
+            if not waiter.done():
+                waiter.set_result(None)
+
     def lost(self, proto: _Counted) -> None:
         transport = self._made.pop(proto, None)
         if transport is not None:
-            self._held.pop(transport, None)
+            self._drop(transport)
+
+    def _drop(self, transport: asyncio.BaseTransport) -> None:
+        """No longer held: any request waiting for its turn (rule 4) let go."""
+        held = self._held.pop(transport, None)
+        if held is not None:
+            held.paused = False
+            self._wake(held)
 
     def started(self, transport: asyncio.BaseTransport | None) -> None:
         held = self._held.get(transport) if transport is not None else None
@@ -144,9 +286,13 @@ class Connections:
         """Rule 2: close what has been idle too long; how many were closed."""
         now = self._clock()
         self._pending = 0  # every protocol made before this sweep has connected (or failed)
-        idle = [t for t, h in self._held.items() if h.busy == 0 and now - h.since > IDLE_S]
+        idle = [
+            t
+            for t, h in self._held.items()
+            if h.busy == 0 and not h.paused and now - h.since > IDLE_S
+        ]
         for transport in idle:
-            del self._held[transport]
+            self._drop(transport)
             transport.close()
         return len(idle)
 

@@ -419,20 +419,20 @@ class WebConsole:
         return response
 
     async def _guarded(self, request: web.Request, handler: Handler) -> web.StreamResponse:
-        refusal = self._refusal(request)
-        if refusal is not None:
-            response: web.StreamResponse = _json({"error": refusal}, 403)
-        else:
-            self._started[id(request)] = time.monotonic()  # commands.py rule 5
-            self._conns.started(request.transport)
+        self._started[id(request)] = time.monotonic()  # commands.py rule 5
+        self._conns.started(request.transport)
+        try:
+            await self._conns.turn(request.transport)  # connections.py rule 4: its budget
+            refusal = self._refusal(request)
+            if refusal is not None:
+                return _json({"error": refusal}, 403)
             try:
-                response = await handler(request)
+                return await handler(request)
             except web.HTTPException as exc:
-                response = _json({"error": exc.reason}, exc.status)
-            finally:
-                self._conns.finished(request.transport)
-                del self._started[id(request)]
-        return response
+                return _json({"error": exc.reason}, exc.status)
+        finally:
+            self._conns.finished(request.transport)
+            del self._started[id(request)]
 
     def _refusal(self, request: web.Request) -> str | None:
         host = request.headers.get("Host")
