@@ -146,7 +146,7 @@ def test_a_stop_goes_through_and_a_target_sent_before_it_is_refused_beside_a_flo
             wait_until(lambda: not emu.state().is_moving, slow(10), "stopped")
             answer = _answer(script)
             assert answer[0] == 409 and b"stale" in answer[1], answer
-            assert stale_said(rig, after)
+            wait_until(lambda: stale_said(rig, after), slow(10), "the refusal said on R/error")
             _flood(flood, 50)
             assert console.command("tower", command="stop").status == 200
             assert console.command("tower", command="target", az=60).status == 200

@@ -32,10 +32,11 @@ Rules:
 4. Only the console's event loop reads a connection; a look runs on the halting thread and
    takes only the connection's lock. What a halt's look costs is bounded and small, whatever
    the console holds (connections.py's MOST_HELD at most) and whatever another thread runs:
-   one ``poll`` over every connection (and, apart, the listeners, rule 2) says which have bytes
-   unread in the kernel, and only those are asked how many (FIONREAD), by a call that keeps the
-   interpreter lock (``unread_held``: a few microseconds in the kernel; where it cannot be had,
-   fcntl's, which lets the lock go); the others are counted as what the loop has read. The
+   one ``poll`` over every connection and the listeners (whose queue rule 2 asks about) says
+   which have bytes unread in the kernel, and only those are asked how many (FIONREAD), by a
+   call that keeps the interpreter lock (``unread_held``: a few microseconds in the kernel;
+   where it cannot be had, fcntl's, which lets the lock go); the others are counted as what
+   the loop has read. The
    look used to ask each connection in turn, each ioctl letting the interpreter lock go: with
    250 connections held half-way through a request (connections.py's caps) a rotctld STOP's
    round trip went from 0.1-2 ms to 6-35 ms, and beside a thread running Python (it takes the
@@ -335,28 +336,20 @@ class HaltLooks:
         with self._conns_lock:
             each = list(self._conns.values())
         fds = [_fd(conn) for conn in each]
-        waiting = set(readable(fds, 0))  # (after the count was read: rule 4)
+        with self.queue_lock:  # (one poll for both, after both counts were read: rule 4)
+            now = self._counts[rotator_id]()
+            listening = [_fd(sock) for sock in self._listeners]
+            waiting = set(readable(fds + listening, 0))
+            if not any(fd < 0 or fd in waiting for fd in listening):
+                self.floors[rotator_id] = max(self.floors.get(rotator_id, now), now + 1)
         for conn, fd in zip(each, fds, strict=True):
             conn.look(rotator_id, count, unread=fd in waiting)
-        with self.queue_lock:
-            now = self._counts[rotator_id]()
-            if not any(_waiting(sock) for sock in self._listeners):
-                self.floors[rotator_id] = max(self.floors.get(rotator_id, now), now + 1)
 
 
 def _fd(sock: socket.socket) -> int:
-    """``sock``'s descriptor, -1 once closed (never polled: fdwait.py rule 2)."""
+    """``sock``'s descriptor, -1 once closed (never polled: fdwait.py rule 2; a listener's:
+    a connection may wait in its queue, rule 2 errs toward refusing)."""
     try:
         return sock.fileno()
     except (OSError, ValueError):
         return -1
-
-
-def _waiting(sock: socket.socket) -> bool:
-    """Whether a connection waits in ``sock``'s queue; True if it cannot be said (closed
-    meanwhile: errs toward refusing)."""
-    try:
-        fd = sock.fileno()
-        return fd < 0 or bool(readable((fd,), 0))
-    except (OSError, ValueError):
-        return True
