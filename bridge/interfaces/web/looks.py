@@ -36,11 +36,11 @@ Rules:
    which have bytes unread in the kernel, and only those are asked how many (FIONREAD), by a
    call that keeps the interpreter lock (``unread_held``: a few microseconds in the kernel;
    where it cannot be had, fcntl's, which lets the lock go); the others are counted as what
-   the loop has read. The
-   look used to ask each connection in turn, each ioctl letting the interpreter lock go: with
-   250 connections held half-way through a request (connections.py's caps) a rotctld STOP's
-   round trip went from 0.1-2 ms to 6-35 ms, and beside a thread running Python (it takes the
-   lock back for up to its switch interval, 5 ms, at each) a look over 500 took 0.3 s at p95.
+   the loop has read. The look used to ask each connection in turn, each ioctl letting the
+   interpreter lock go: with 250 connections held half-way through a request (connections.py's
+   caps) a rotctld STOP's round trip went from 0.1-2 ms to 6-35 ms, and beside a thread
+   running Python (it takes the lock back for up to its switch interval, 5 ms, at each) a look
+   over 500 took 0.3 s at p95; now 0.3 ms (docs/performance.md, "Operator console").
 5. Where the kernel cannot say what waits unread (Windows, no FIONREAD: the remote runs there),
    or asyncio does not accept and read through these sockets (its proactor loop), nothing is
    looked at: commands.py rule 5's start of the request dates it, as before.
@@ -140,9 +140,9 @@ class Conn(socket.socket):
                 looks.read += got
         return got
 
-    def look(self, rotator_id: str, count: int, unread: bool = True) -> None:
+    def look(self, rotator_id: str, count: int, waiting: bool = True) -> None:
         """Rule 2: one look, at ``count``, if the connection holds bytes past ``low`` that no
-        look has counted yet; ``unread``: the kernel may hold bytes unread (False: a poll
+        look has counted yet; ``waiting``: the kernel may hold bytes unread (False: a poll
         since ``count`` was read found none, rule 4: what the loop has read is all)."""
         with self.lock:
             looks = self.looks.get(rotator_id)
@@ -150,7 +150,7 @@ class Conn(socket.socket):
             if looks is None or fd < 0:
                 return
             sent, counted = looks.read, True
-            if unread:
+            if waiting:
                 try:
                     sent += unread_held(fd)
                 except OSError:  # (the kernel cannot say: rule 5)
@@ -343,7 +343,7 @@ class HaltLooks:
             if not any(fd < 0 or fd in waiting for fd in listening):
                 self.floors[rotator_id] = max(self.floors.get(rotator_id, now), now + 1)
         for conn, fd in zip(each, fds, strict=True):
-            conn.look(rotator_id, count, unread=fd in waiting)
+            conn.look(rotator_id, count, waiting=fd in waiting)
 
 
 def _fd(sock: socket.socket) -> int:
