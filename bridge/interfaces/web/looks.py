@@ -40,7 +40,8 @@ Rules:
    interpreter lock go: with 250 connections held half-way through a request (connections.py's
    caps) a rotctld STOP's round trip went from 0.1-2 ms to 6-35 ms, and beside a thread
    running Python (it takes the lock back for up to its switch interval, 5 ms, at each) a look
-   over 500 took 0.3 s at p95; now 0.3 ms (docs/performance.md, "Operator console").
+   over 500 took 0.3 s at p95; now the poll alone lets it go, once (a switch interval or two
+   at worst: docs/performance.md, "Operator console").
 5. Where the kernel cannot say what waits unread (Windows, no FIONREAD: the remote runs there),
    or asyncio does not accept and read through these sockets (its proactor loop), nothing is
    looked at: commands.py rule 5's start of the request dates it, as before.
