@@ -20,8 +20,9 @@ from contextlib import ExitStack, contextmanager
 
 import pytest
 
+from bridge.interfaces.fdwait import readable
 from bridge.interfaces.web.connections import MAX_CONNECTIONS, MAX_PER_ADDRESS
-from bridge.interfaces.web.looks import LOOKS_KEPT, Conn
+from bridge.interfaces.web.looks import LOOKS_KEPT, Conn, ready_held
 from bridge.interfaces.web.server import WebConsole
 from tests.support.console import ConsoleClient
 from tests.support.rig import Rig
@@ -184,3 +185,19 @@ def test_a_connection_held_through_many_halts_keeps_few_looks_and_dates_as_befor
             conn.look("r", count)
         assert len(conn.looks["r"].seen) <= LOOKS_KEPT
         assert conn.arrived("r") == 500
+
+
+def test_the_looks_one_poll_finds_what_waits_unread_as_fdwait_does() -> None:
+    """The look's poll (looks.py rule 4, the interpreter lock kept around it) finds the
+    connections with bytes unread and those whose peer left, as fdwait.py's poll does, and
+    never a closed one (-1)."""
+    with ExitStack() as stack:
+        pairs = [socket.socketpair() for _ in range(6)]
+        socks = [stack.enter_context(a) for a, _ in pairs]
+        peers = [stack.enter_context(b) for _, b in pairs]
+        peers[0].sendall(b"GET")
+        peers[3].sendall(b"x" * 100_000)
+        peers[4].close()
+        fds = [s.fileno() for s in socks] + [-1]
+        assert ready_held(fds) == set(readable(fds, 0)) == {fds[0], fds[3], fds[4]}
+        assert ready_held([]) == set()

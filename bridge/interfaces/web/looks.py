@@ -32,16 +32,17 @@ Rules:
 4. Only the console's event loop reads a connection; a look runs on the halting thread and
    takes only the connection's lock. What a halt's look costs is bounded and small, whatever
    the console holds (connections.py's MOST_HELD at most) and whatever another thread runs:
-   one ``poll`` over every connection and the listeners (whose queue rule 2 asks about) says
-   which have bytes unread in the kernel, and only those are asked how many (FIONREAD), by a
-   call that keeps the interpreter lock (``unread_held``: a few microseconds in the kernel;
-   where it cannot be had, fcntl's, which lets the lock go); the others are counted as what
-   the loop has read. The look used to ask each connection in turn, each ioctl letting the
-   interpreter lock go: with 250 connections held half-way through a request (connections.py's
-   caps) a rotctld STOP's round trip went from 0.1-2 ms to 6-35 ms, and beside a thread
-   running Python (it takes the lock back for up to its switch interval, 5 ms, at each) a look
-   over 500 took 0.3 s at p95; now the poll alone lets it go, once (a switch interval or two
-   at worst: docs/performance.md, "Operator console").
+   one ``poll`` with no wait over every connection and the listeners (whose queue rule 2 asks
+   about) says which have bytes unread in the kernel, and only those are asked how many
+   (FIONREAD); the others are counted as what the loop has read. Both system calls keep the
+   interpreter lock (``ready_held``, ``unread_held``: ctypes' PyDLL, on Linux; each a few
+   microseconds to a tenth of a millisecond in the kernel, never a wait); elsewhere they are
+   fdwait's and fcntl's, which let it go. The look used to ask each connection in turn, each
+   ioctl letting the lock go: with 250 connections held half-way through a request
+   (connections.py's caps) a rotctld STOP's round trip went from 0.1-2 ms to 6-35 ms, and
+   beside a thread running Python (it takes the lock back for up to its switch interval,
+   5 ms, each time) a look over 500 took 0.3 s at p95; a poll that let it go, once, still
+   9-14 ms (docs/performance.md, "Operator console").
 5. Where the kernel cannot say what waits unread (Windows, no FIONREAD: the remote runs there),
    or asyncio does not accept and read through these sockets (its proactor loop), nothing is
    looked at: commands.py rule 5's start of the request dates it, as before.
@@ -71,7 +72,7 @@ from bridge.core.haltwatch import HaltWatchers
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.tcplines import Looks, unread
 
-__all__ = ["Conn", "HaltLooks", "Listener", "unread_held"]
+__all__ = ["Conn", "HaltLooks", "Listener", "ready_held", "unread_held"]
 
 BACKLOG = 100  # the kernel's queue of connections (asyncio's own default)
 LOOKS_KEPT = 16  # rule 6: a connection's looks kept per rotator, at most
@@ -106,6 +107,42 @@ def _unread_holding() -> Callable[[int], int]:
 
 
 unread_held = _unread_holding()
+
+
+def _polling_holding() -> Callable[[list[int]], set[int]]:
+    """Rule 4: which of the descriptors hold bytes unread (or an error, a hang-up: fdwait.py
+    rule 2; -1 never), by one ``poll`` with no wait that keeps the interpreter lock (ctypes'
+    PyDLL), on Linux; elsewhere fdwait's, which lets it go. Its ``struct pollfd`` array is an
+    ``array`` of int pairs (a descriptor; its events, the kernel's answer beside them)."""
+    fallback: Callable[[list[int]], set[int]] = lambda fds: set(readable(fds, 0))  # noqa: E731
+    if sys.platform != "linux":
+        return fallback
+    try:
+        import array
+        import ctypes
+        import select
+
+        poll = ctypes.PyDLL(None, use_errno=True).poll
+        poll.argtypes = (ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
+        poll.restype = ctypes.c_int
+        asked = select.POLLIN | select.POLLPRI
+        if array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
+            return fallback
+    except (ImportError, OSError, AttributeError):
+        return fallback
+    shift = 16 if sys.byteorder == "little" else 0  # (where revents sits in the second int)
+
+    def held(fds: list[int]) -> set[int]:
+        pairs = array.array("i", [asked << (16 - shift)]) * (2 * len(fds))
+        pairs[0::2] = array.array("i", fds)
+        if fds and poll(pairs.buffer_info()[0], len(fds), 0) < 0:
+            return fallback(fds)  # (EINTR, ENOMEM: asked again, the lock let go)
+        return {fd for fd, word in zip(fds, pairs[1::2], strict=True) if (word >> shift) & 0xFFFF}
+
+    return held
+
+
+ready_held = _polling_holding()
 
 
 class Conn(socket.socket):
@@ -340,7 +377,7 @@ class HaltLooks:
         with self.queue_lock:  # (one poll for both, after both counts were read: rule 4)
             now = self._counts[rotator_id]()
             listening = [_fd(sock) for sock in self._listeners]
-            waiting = set(readable(fds + listening, 0))
+            waiting = ready_held(fds + listening)
             if not any(fd < 0 or fd in waiting for fd in listening):
                 self.floors[rotator_id] = max(self.floors.get(rotator_id, now), now + 1)
         for conn, fd in zip(each, fds, strict=True):
