@@ -14,16 +14,22 @@ Rules:
    write that follows says what happened. A descriptor numbered -1 (a socket already closed) is
    not waited on and never ready (``select()`` raised ValueError for it): a wait with no other
    descriptor is its timeout alone, and for ever with None.
+3. ``ready_held`` asks the same of many descriptors at once without waiting, and keeps the
+   interpreter lock meanwhile (ctypes' PyDLL: one ``poll`` of a tenth of a millisecond or so in
+   the kernel, and no other thread takes the lock, then keeps it for up to its switch interval,
+   5 ms, before the caller has it back); on Linux alone (elsewhere ``readable``'s, which lets
+   it go). For a look right before a halt (interfaces/web/looks.py rule 4).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import sys
+from collections.abc import Callable, Sequence
 
 from bridge.core.polling import POLLIN, POLLOUT, POLLPRI, new_poller
 
-__all__ = ["readable", "writable"]
+__all__ = ["readable", "ready_held", "writable"]
 
 _IN = POLLIN | POLLPRI
 _OUT = POLLOUT
@@ -48,3 +54,40 @@ def writable(fd: int, timeout_s: float | None) -> bool:
     """Whether ``fd`` takes bytes (or reports an error, a hang-up: rule 2) within
     ``timeout_s``."""
     return bool(_wait((fd,), _OUT, timeout_s))
+
+
+def _polling_holding() -> Callable[[list[int]], set[int]]:
+    """Rule 3. Its ``struct pollfd`` array is an ``array`` of int pairs (a descriptor; its
+    events, the kernel's answer beside them in the same four bytes)."""
+
+    def letting_go(fds: list[int]) -> set[int]:
+        return set(readable(fds, 0))
+
+    if sys.platform != "linux":
+        return letting_go
+    try:
+        import array
+        import ctypes
+        import select
+
+        poll = ctypes.PyDLL(None, use_errno=True).poll
+        poll.argtypes = (ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
+        poll.restype = ctypes.c_int
+        asked = select.POLLIN | select.POLLPRI
+        if array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
+            return letting_go
+    except (ImportError, OSError, AttributeError):
+        return letting_go
+    shift = 16 if sys.byteorder == "little" else 0  # (where revents sits in the second int)
+
+    def held(fds: list[int]) -> set[int]:
+        pairs = array.array("i", [asked << (16 - shift)]) * (2 * len(fds))
+        pairs[0::2] = array.array("i", fds)  # (a negative one: never ready, rule 2)
+        if fds and poll(pairs.buffer_info()[0], len(fds), 0) < 0:
+            return letting_go(fds)  # (EINTR, ENOMEM: asked again, the lock let go)
+        return {fd for fd, word in zip(fds, pairs[1::2], strict=True) if (word >> shift) & 0xFFFF}
+
+    return held
+
+
+ready_held = _polling_holding()

@@ -20,9 +20,9 @@ from contextlib import ExitStack, contextmanager
 
 import pytest
 
-from bridge.interfaces.fdwait import readable
+from bridge.interfaces.fdwait import readable, ready_held
 from bridge.interfaces.web.connections import MAX_CONNECTIONS, MAX_PER_ADDRESS
-from bridge.interfaces.web.looks import LOOKS_KEPT, Conn, ready_held
+from bridge.interfaces.web.looks import LOOKS_KEPT, Conn
 from bridge.interfaces.web.server import WebConsole
 from tests.support.console import ConsoleClient
 from tests.support.rig import Rig

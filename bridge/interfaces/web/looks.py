@@ -35,10 +35,10 @@ Rules:
    one ``poll`` with no wait over every connection and the listeners (whose queue rule 2 asks
    about) says which have bytes unread in the kernel, and only those are asked how many
    (FIONREAD); the others are counted as what the loop has read. Both system calls keep the
-   interpreter lock (``ready_held``, ``unread_held``: ctypes' PyDLL, on Linux; each a few
-   microseconds to a tenth of a millisecond in the kernel, never a wait); elsewhere they are
-   fdwait's and fcntl's, which let it go. The look used to ask each connection in turn, each
-   ioctl letting the lock go: with 250 connections held half-way through a request
+   interpreter lock (``ready_held``, fdwait.py rule 3, and ``unread_held``: ctypes' PyDLL, on Linux;
+   each a few microseconds to a tenth of a millisecond in the kernel, never a wait); elsewhere
+   they are fdwait's and fcntl's, which let it go. The look used to ask each connection in
+   turn, each ioctl letting the lock go: with 250 connections held half-way through a request
    (connections.py's caps) a rotctld STOP's round trip went from 0.1-2 ms to 6-35 ms, and
    beside a thread running Python (it takes the lock back for up to its switch interval,
    5 ms, each time) a look over 500 took 0.3 s at p95; a poll that let it go, once, still
@@ -69,10 +69,10 @@ from collections.abc import Callable, Hashable, Iterable
 from typing import Any
 
 from bridge.core.haltwatch import HaltWatchers
-from bridge.interfaces.fdwait import readable
+from bridge.interfaces.fdwait import ready_held
 from bridge.interfaces.tcplines import Looks, unread
 
-__all__ = ["Conn", "HaltLooks", "Listener", "ready_held", "unread_held"]
+__all__ = ["Conn", "HaltLooks", "Listener", "unread_held"]
 
 BACKLOG = 100  # the kernel's queue of connections (asyncio's own default)
 LOOKS_KEPT = 16  # rule 6: a connection's looks kept per rotator, at most
@@ -107,42 +107,6 @@ def _unread_holding() -> Callable[[int], int]:
 
 
 unread_held = _unread_holding()
-
-
-def _polling_holding() -> Callable[[list[int]], set[int]]:
-    """Rule 4: which of the descriptors hold bytes unread (or an error, a hang-up: fdwait.py
-    rule 2; -1 never), by one ``poll`` with no wait that keeps the interpreter lock (ctypes'
-    PyDLL), on Linux; elsewhere fdwait's, which lets it go. Its ``struct pollfd`` array is an
-    ``array`` of int pairs (a descriptor; its events, the kernel's answer beside them)."""
-    fallback: Callable[[list[int]], set[int]] = lambda fds: set(readable(fds, 0))  # noqa: E731
-    if sys.platform != "linux":
-        return fallback
-    try:
-        import array
-        import ctypes
-        import select
-
-        poll = ctypes.PyDLL(None, use_errno=True).poll
-        poll.argtypes = (ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
-        poll.restype = ctypes.c_int
-        asked = select.POLLIN | select.POLLPRI
-        if array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
-            return fallback
-    except (ImportError, OSError, AttributeError):
-        return fallback
-    shift = 16 if sys.byteorder == "little" else 0  # (where revents sits in the second int)
-
-    def held(fds: list[int]) -> set[int]:
-        pairs = array.array("i", [asked << (16 - shift)]) * (2 * len(fds))
-        pairs[0::2] = array.array("i", fds)
-        if fds and poll(pairs.buffer_info()[0], len(fds), 0) < 0:
-            return fallback(fds)  # (EINTR, ENOMEM: asked again, the lock let go)
-        return {fd for fd, word in zip(fds, pairs[1::2], strict=True) if (word >> shift) & 0xFFFF}
-
-    return held
-
-
-ready_held = _polling_holding()
 
 
 class Conn(socket.socket):
