@@ -88,19 +88,6 @@ each written out in the module that keeps it:
    re-published there (a config changed while the broker stalled came back older, and
    stayed). So ``on_connect`` takes them from paho: one whose retained topic is in the cache
    is superseded by the value just sent; the others (events, deletions) go again, after it.
-19. The main connection reads its own heartbeats back (heartbeat.py rule 11, ``Echo``): it
-   subscribes to the heartbeat topic (QoS 0, like the beats), takes each beat it sent
-   (``_tick``) as it comes back (``_intercepted``, known by its exact payload, this process's
-   clock to the millisecond when it was sent; another's is dropped, as is a retained one), and
-   ``broker_late`` says whether the broker is late now (service.py rule 12 asks, on paho's
-   thread, as the message is handled; any thread may: the echo is kept under ``_echo_lock``,
-   which is taken with no other lock held inside it). A new connection starts with nothing out.
-   After a late beat came back, the next beat goes at once. Being late, and no longer, is said
-   on ``B/bridge/info`` (``on_late``, on a thread of its own; the last verdict is the one said,
-   under ``_late_lock``). A connection none of whose beats came back within UNREAD_S (an ACL
-   that denies reading the topic: mosquitto grants the subscription and drops the beats) is
-   never called late, and that is said as rule 11 says, once, naming the topic; a beat that
-   comes back clears it (as rule 16's probe). It costs one message read every HEARTBEAT_S.
 
 Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
 cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
@@ -128,13 +115,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
-from bridge.interfaces.mqtt.heartbeat import (
-    LATE_S,
-    Beat,
-    Echo,
-    beat_payload,
-    beat_properties,
-)
+from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload, beat_properties
 from bridge.interfaces.mqtt.limiter import EventLimiter
 from bridge.interfaces.mqtt.look import (
     CLEARS_SAID_AT_ONCE,
@@ -180,13 +161,12 @@ class MqttClient(Connection):
         heartbeat: str | None = None,
         wall: Callable[[], float] = time.time,
         station: str | None = None,
-        on_late: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
             settings,
             settings.effective_client_id(),
-            subscriptions=[*subscriptions, *([heartbeat] if heartbeat is not None else [])],
+            subscriptions=subscriptions,
             on_message=on_message,
             clock=clock,
             **options,
@@ -245,12 +225,6 @@ class MqttClient(Connection):
         self._beat = Beat()
         self._wall = wall
         self._station = station  # rule 2: the process the beats name (heartbeat.py rule 7)
-        self._echo = Echo()  # rule 19 (under ``_echo_lock``)
-        self._echo_lock = threading.Lock()  # rule 19: paho's thread, and ``broker_late``'s
-        self._on_late = on_late  # rule 19: said on B/bridge/info while it lasts
-        self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
-        self._late_now = False  # rule 19: the verdict (paho's thread writes it)
-        self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
 
     @property
     def problems(self) -> list[str]:
@@ -288,12 +262,6 @@ class MqttClient(Connection):
         a marker it publishes from now on comes back after those (the stop lane's holds wait
         for it: halts.py)."""
         return self._up and self._subscribing
-
-    def broker_late(self) -> float | None:
-        """Rule 19: how long the broker held the bridge's beats up, while it is late now; None
-        when it is not (or when no beat of this connection came back). Any thread."""
-        with self._echo_lock:
-            return self._echo.late(self._clock())
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -480,8 +448,6 @@ class MqttClient(Connection):
         with self._lock:
             self._delivery.new_connection()
             self._held.extend(held)  # a look that never ended leaves its own
-            with self._echo_lock:
-                self._echo.connected()  # rule 19
             self._owned.connected()
             look = self._look
             self._look_lost = False  # rule 16: judged anew
@@ -527,61 +493,15 @@ class MqttClient(Connection):
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
-        now = self._clock()
-        echo = self._echo
-        with self._echo_lock:  # (rule 19: uncontended but for a test that asks)
-            due = self._beat.due(now) or echo.returning  # (rule 19: at once after a late one)
-            payload = beat_payload(self._wall()).encode() if due else b""
-            if due:
-                echo.sent(payload, now)  # rule 19 (before it can come back)
-            late, unread = echo.late(now) is not None, echo.unread(now)
-        if due:
+        if self._beat.due(self._clock()):
             props = None
             if self._station is not None and self._v5:  # (3.1.1 has no properties)
                 props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
                 props.UserProperty = beat_properties(self._station)
+            payload = beat_payload(self._wall()).encode()
             self._client.publish(topic, payload, qos=0, properties=props)
-        if late != self._late_now:  # rule 19: said while it lasts
-            self._late_now = late
-            threading.Thread(target=self._say_late, daemon=True).start()
-        if unread and not self._delivery.denied(topic):
-            self._delivery.deny(
-                topic,
-                "read back what it publishes on",
-                "none of the heartbeats this connection published there came back (the "
-                "broker's ACL denies reading it?): a move the broker holds up (a broker that "
-                "stalls) is then not known late, and is carried out when it comes",
-            )
-
-    def _say_late(self) -> None:
-        """Rule 19 (its own thread): the last verdict on the broker's lateness, said."""
-        with self._late_lock:
-            late, said = self._late_now, self._late_said
-            if late == (said is not None) or self._on_late is None:
-                return
-            if late:
-                self._late_said = (
-                    f"the MQTT broker holds up what the bridge publishes (a heartbeat on "
-                    f"{self._heartbeat} not back within {LATE_S:g} s): until one sent after it "
-                    "comes back, MQTT moves sent without a stamp (`sent`) are refused; stops "
-                    "and locks go through"
-                )
-                log.warning("%s", self._late_said)
-                self._on_late(self._late_said, True)
-            else:
-                self._late_said = None
-                log.info("the MQTT broker is quick again: its heartbeats come back in time")
-                assert said is not None
-                self._on_late(said, False)
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
-        if topic == self._heartbeat:  # rule 19: ours back (another's, a retained one: dropped)
-            if not retained:
-                with self._echo_lock:
-                    ours = self._echo.back(payload, self._clock())
-                if ours:
-                    self._fence_back(topic)  # (a denial said before is over)
-            return True
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None

@@ -97,26 +97,6 @@ Rules:
    comparing the two stamps directly, takes it for not older: service.py rule 9), never
    another front end's (an attack pass: lifted to PstRotator's STOP, Gpredict's ``P`` seen
    before it turned the rotor). The reckoning rule 8 keeps from going back is the send time's.
-11. A message without a stamp carries no send time, but the station can tell that its broker
-   holds messages up (frozen, not gone: an SD card writing the broker's file, a VM paused, a
-   swap storm; attack 13: a target held 10 s turned the rotor when the broker ran on): the main
-   connection reads its own beats back (``Echo``, client.py rule 19), each known by its exact
-   payload (this process's clock to the millisecond as it went, under MQTT 3.1.1 too: another
-   bridge's beat is no echo of ours; a forger who copies ours at once can only make the broker
-   look quick, as it looked before this rule). The broker is late while a beat of ours has been
-   out longer than LATE_S, and, once one that late came back, until a beat sent after that
-   return comes back (what the broker held is ahead of it: mosquitto reads every ready socket
-   in each round of its loop; one beat goes at once after a late return, not a beat period
-   later). While it is late, an unstamped move read on the main connection is refused
-   (service.py rule 12). A beat goes out every HEARTBEAT_S, up to a second later (paho's loop,
-   paho_client.py rule 2): a move held up more than LATE_S + HEARTBEAT_S + 1 s (5 s: the age at
-   which the console and the remote refuse one) finds a beat out longer than LATE_S, one held
-   less may be refused too (the safe side: "send it again"). No clock decides anything but a
-   refusal: a broker that is quick again lets the next move through, and one whose beats were
-   never read back on this connection (an ACL that denies reading the heartbeat topic:
-   mosquitto grants the subscription and drops the messages) is never called late; that is said
-   once (client.py rule 19). The beats out are kept by payload, MAX_ECHOES at most (the oldest
-   go first: a broker frozen longer than that still shows a beat out too long).
 """
 
 from __future__ import annotations
@@ -140,11 +120,6 @@ NAMELESS = ""  # rule 7: the name a stamp gives a process whose beats named none
 MAX_EXPIRY_S = 3600.0
 MAX_PROPERTIES_BYTES = 4096  # rule 9: a PUBLISH's properties read, at most
 UNREAD_PROPERTIES = "rotor-bridge unread properties"  # rule 9: in their place, their size
-# rule 11: a beat out this long, the broker is late; plus a beat period and paho's second, 5 s,
-# the age at which the console (web/commands.py MAX_AGE_S) and the remote refuse a move
-LATE_S = 2.0
-MAX_ECHOES = 32  # rule 11: the beats out kept (a minute of them)
-UNREAD_S = 5 * HEARTBEAT_S  # rule 11: no beat of a connection back this long: never read back
 
 
 def beat_payload(now_unix: float) -> str:
@@ -184,69 +159,6 @@ class Beat:
             return False
         self._last = now
         return True
-
-
-class Echo:
-    """Rule 11 on the station: the bridge's own beats read back, and whether the broker is late
-    now. Pure (the monotonic time handed in); one thread (paho's) calls it."""
-
-    def __init__(self, late_s: float = LATE_S, unread_s: float = UNREAD_S) -> None:
-        self._late_s = late_s
-        self._unread_s = unread_s
-        self._out: dict[bytes, float] = {}  # payload -> sent, oldest first
-        self._first: float | None = None  # this connection's first beat sent
-        self._read = False  # one of this connection's beats came back
-        self._returned: float | None = None  # a late beat came back then: late until a later
-        self._held_s = 0.0  # ... beat is back; the longest a beat was out meanwhile
-
-    def connected(self) -> None:
-        """A new connection: nothing of the last one comes back on it."""
-        self._out.clear()
-        self._first, self._read, self._returned, self._held_s = None, False, None, 0.0
-
-    def sent(self, payload: bytes, now: float) -> None:
-        if self._first is None:
-            self._first = now
-        self._out[payload] = now
-        while len(self._out) > MAX_ECHOES:
-            del self._out[next(iter(self._out))]
-
-    def back(self, payload: bytes, now: float) -> bool:
-        """A beat read back: True if it was one of ours out (then, True from ``caught_up``'s
-        point of view too, see there)."""
-        sent = self._out.pop(payload, None)
-        if sent is None:
-            return False
-        for older in [p for p, t in self._out.items() if t <= sent]:
-            del self._out[older]  # (the broker keeps one order: those are lost, not late)
-        self._read = True
-        out_s = now - sent
-        if out_s > self._late_s:
-            self._returned = now  # a new late return: a beat sent after it must come back
-            self._held_s = max(self._held_s, out_s)
-        elif self._returned is not None and sent >= self._returned:
-            self._returned, self._held_s = None, 0.0  # caught up
-        return True
-
-    def late(self, now: float) -> float | None:
-        """How long the broker held our beats up, if it is late now; None when it is not (or
-        when no beat of this connection has come back: nothing to judge by)."""
-        if not self._read:
-            return None
-        oldest = next(iter(self._out.values()), None)
-        out_s = 0.0 if oldest is None else now - oldest
-        if out_s > self._late_s:
-            return max(out_s, self._held_s)
-        return self._held_s if self._returned is not None else None
-
-    @property
-    def returning(self) -> bool:
-        """A late beat came back and none sent after it yet: one should go at once."""
-        return self._returned is not None and all(t < self._returned for t in self._out.values())
-
-    def unread(self, now: float) -> bool:
-        """No beat of this connection came back though the first went out UNREAD_S ago."""
-        return not self._read and self._first is not None and now - self._first > self._unread_s
 
 
 class StationClock:
