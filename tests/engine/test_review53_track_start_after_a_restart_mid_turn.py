@@ -23,15 +23,21 @@ from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
+def restarted_mid_turn(v: VirtualRotator, within_s: float = 10) -> None:
+    """The bridge's process gone mid-turn (no end, no stop) and started again: the controller
+    answers and the old turn is seen going on (``within_s``: a limit, not a deadline)."""
+    v.link_down(None)
+    v.run_for(1.0)  # (not a deadline)
+    v.session = RotatorSession(v.cfg)  # the bridge started again
+    v._do(v.session.start(v.now))
+    v.link_up()
+    v.run_until(lambda h: h.status.available, within_s, "the controller answers again")
+    v.run_until(lambda h: h.status.moving, within_s, "the old turn seen going on")
+
+
 def test_a_tracking_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_body() -> None:
     with turning_away_from_the_sun() as (v, lat, lon):
-        v.link_down(None)  # the bridge's process gone: no end, no stop
-        v.run_for(1.0)  # (not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        v.run_until(lambda h: h.status.moving, 10, "the old turn seen going on")
+        restarted_mid_turn(v)
         assert v.truth().is_moving  # (it finishes its old turn by itself)
         v.track(Body.sun())
         v.run_for(60.0)  # (the old target is some 15 s on; the sun's some 25 s back)
@@ -52,13 +58,7 @@ def test_a_follow_start_right_after_a_restart_mid_turn_turns_the_rotor_to_the_pa
         v.target(round(away))
         v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 15.0, 30, "turning")
         v.run_for(0.1)  # (between two polls: a query torn by the unplug is another story)
-        v.link_down(None)  # the bridge's process gone: no end, no stop
-        v.run_for(1.0)  # (not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        v.run_until(lambda h: h.status.moving, 10, "the old turn seen going on")
+        restarted_mid_turn(v)
         v.follow(True)
         v.heard("JA1ABC", "PM95")
         v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.session.session import RotatorSession
 from bridge.sky import Body
 from tests.engine.test_review46_track_start_mid_turn import turning_away_from_the_sun
+from tests.engine.test_review53_track_start_after_a_restart_mid_turn import restarted_mid_turn
 from tests.engine.test_session_tracking import off_deg
 from tests.support.sky import sun_altaz
 
@@ -27,13 +27,7 @@ def test_a_tracking_start_after_a_restart_mid_turn_of_a_slowly_polled_spid_turns
     model: str,
 ) -> None:
     with turning_away_from_the_sun(model) as (v, lat, lon):
-        v.link_down(None)  # the bridge's process gone: no end, no stop
-        v.run_for(1.0)  # (not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 20, "the controller answers again")
-        v.run_until(lambda h: h.status.moving, 20, "the old turn seen going on")
+        restarted_mid_turn(v, 20)
         assert v.truth().is_moving  # (it finishes its old turn by itself)
         v.track(Body.sun())
         v.run_for(60.0)  # (the old target is tens of seconds on: not a deadline)
