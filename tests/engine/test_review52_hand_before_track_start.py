@@ -12,6 +12,10 @@ What a user notices: the antenna he is turning by hand is stopped, and turned aw
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+from typing import NamedTuple
+
 import pytest
 
 from bridge.sky import Body, Sky
@@ -22,23 +26,39 @@ from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import sun_altaz
 
 
-@pytest.mark.parametrize("sun", ["allowed", "in a keep-out sector"])
-def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_stopped(
-    sun: str,
-) -> None:
+class Beside(NamedTuple):
+    v: VirtualRotator
+    sun_az: float
+    away: float  # 120 degrees from the sun, never across north
+    toward: float  # the side of the sun the rotor starts on (20 degrees, signed)
+
+
+@contextlib.contextmanager
+def beside_the_sun(keep_out_sun: bool = False, settled: bool = True) -> Iterator[Beside]:
+    """A Rotor-EZ 20 degrees from the sun, answering; ``settled``: at rest, its start-up brake
+    delay over; ``keep_out_sun``: the sun in a keep-out sector (never between the two)."""
     wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
     sun_az = sun_altaz(lat, lon, wall)[0]
     away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
     toward = 20.0 if away > sun_az else -20.0  # (never through the sector)
     emulator = {"start_az_deg": round(sun_az + toward)}
-    settings = {"keep_out": [[round(sun_az) - 10, round(sun_az) + 10]]} if sun != "allowed" else {}
+    settings = {"keep_out": [[round(sun_az) - 10, round(sun_az) + 10]]} if keep_out_sun else {}
     with VirtualRotator(
         "rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator, settings=settings
     ) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        if settled:
+            v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+            v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        yield Beside(v, sun_az, away, toward)
+
+
+@pytest.mark.parametrize("sun", ["allowed", "in a keep-out sector"])
+def test_a_hand_turning_the_rotor_when_tracking_starts_ends_tracking_and_is_not_stopped(
+    sun: str,
+) -> None:
+    with beside_the_sun(keep_out_sun=sun != "allowed") as (v, sun_az, away, toward):
         v.manual_rotate(round(away))  # a hand at the panel
         v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
         hand = v.now
@@ -75,16 +95,7 @@ def test_a_hand_after_a_replugged_turn_came_to_rest_is_a_hand_at_a_tracking_star
     replug mid-turn, the rotor at rest at its target, then a hand at the panel and ``track
     sun``: tracking ends "turned by hand", nothing but polls goes out, and the rotor stays where
     the hand left it (review 53's first question of ``Motion.carried``)."""
-    wall = SUN_EPOCH
-    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
-    sun_az = sun_altaz(lat, lon, wall)[0]
-    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
-    toward = 20.0 if away > sun_az else -20.0
-    emulator = {"start_az_deg": round(sun_az + toward)}
-    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+    with beside_the_sun() as (v, sun_az, away, toward):
         v.target(round(sun_az + 2 * toward))  # a short turn
         v.run_until(lambda h: h.truth().is_moving, 10, "turning")
         v.link_down()

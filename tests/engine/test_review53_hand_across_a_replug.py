@@ -9,23 +9,13 @@ What a user notices: the beam he is turning at the panel is stopped and turned a
 
 from __future__ import annotations
 
-from bridge.sky import Body, Sky
-from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
-from tests.engine.virtual import VirtualRotator
-from tests.support.sky import sun_altaz
+from bridge.sky import Body
+from tests.engine.test_review52_hand_before_track_start import beside_the_sun
+from tests.engine.test_session_tracking import off_deg
 
 
 def test_a_hand_turning_the_rotor_across_a_replug_ends_a_tracking_start() -> None:
-    wall = SUN_EPOCH
-    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
-    sun_az = sun_altaz(lat, lon, wall)[0]
-    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
-    toward = 20.0 if away > sun_az else -20.0
-    emulator = {"start_az_deg": round(sun_az + toward)}
-    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+    with beside_the_sun() as (v, sun_az, away, toward):
         v.manual_rotate(round(away))  # a hand at the panel
         v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
         v.link_down()

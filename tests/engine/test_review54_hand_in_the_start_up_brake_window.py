@@ -13,21 +13,13 @@ that starts tracking when the bridge comes back)."""
 
 from __future__ import annotations
 
-from bridge.sky import Body, Sky
-from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
-from tests.engine.virtual import VirtualRotator
-from tests.support.sky import sun_altaz
+from bridge.sky import Body
+from tests.engine.test_review52_hand_before_track_start import beside_the_sun
+from tests.engine.test_session_tracking import off_deg
 
 
 def test_a_hand_begun_at_rest_in_the_start_up_brake_window_ends_a_tracking_start() -> None:
-    wall = SUN_EPOCH
-    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
-    sun_az = sun_altaz(lat, lon, wall)[0]
-    away = sun_az - 120.0 if sun_az > 180.0 else sun_az + 120.0  # never across north
-    toward = 20.0 if away > sun_az else -20.0
-    emulator = {"start_az_deg": round(sun_az + toward)}
-    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall, emulator=emulator) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    with beside_the_sun(settled=False) as (v, _sun_az, away, _toward):
         v.run_for(3.0)  # read at rest for 3 s (settle_s is 1.5): inside the 5 s brake window
         assert not v.status.moving and not v.truth().is_moving
         v.manual_rotate(round(away))  # a hand at the panel
