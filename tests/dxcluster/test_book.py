@@ -174,14 +174,16 @@ def test_a_spot_is_as_old_as_its_own_time_says() -> None:
 
 def test_midnight() -> None:
     """Rule 2: a spot's day is the bridge's, the day before for a time ahead of the bridge's
-    clock by more than SKEW_S; a node's clock a little ahead across midnight is of the next."""
+    clock by more than SKEW_S (30 minutes); a node's clock ahead across midnight is of the
+    next."""
     clock, now = FakeClock(), [wall_at("0002")]
     b = Book(None, None, max_age_s=1800.0, clock=clock, wall=lambda: now[0])
     assert b.add(at("JA1ABC", "2358"))  # four minutes ago, yesterday
     assert b.add(at("JA1ABC", "0001"))  # newer, today
     assert not b.add(at("JA1ABC", "2359"))  # replayed: older
-    assert not b.add(at("VK2XYZ", "0010"))  # eight minutes ahead: yesterday's, 23h52 old
-    assert b.add(at("VK2XYZ", "0006"))  # four minutes ahead: the node's clock, today
+    assert not b.add(at("VK2XYZ", "0040"))  # 38 minutes ahead: yesterday's, 23h22 old
+    assert b.add(at("VK2XYZ", "0010"))  # eight minutes ahead: the node's clock, today
+    assert b.add(at("ZL1AAA", "0030"))  # 28 minutes ahead (review 56: 5 minutes lost spots)
     now[0] = wall_at("2358")
     b = Book(None, None, max_age_s=1800.0, clock=clock, wall=lambda: now[0])
     assert b.add(at("JA1ABC", "2357"))

@@ -12,18 +12,11 @@ age was by when it was heard, so such a host kept them.
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.interfaces.dxcluster.book import Book
 from bridge.interfaces.dxcluster.spots import Spot
 from tests.support.clock import FakeClock, wall_at
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 56: a time more than SKEW_S (5 min) ahead of the host's clock is read as "
-    "yesterday's, so a host 6 minutes behind the node keeps no spot though max_age_min is 30",
-)
 def test_a_host_clock_six_minutes_behind_the_node_still_keeps_fresh_spots() -> None:
     clock = FakeClock(0.0)
     # the node's clock says 12:40 when the host's says 12:34 (wrong by 6 min < max_age 30 min)
