@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import socket
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 from bridge.interfaces.wsjtx import WsjtxListener
 from bridge.session.follow import Heard
@@ -37,23 +37,33 @@ class Ears:
         self.got.append(heard)
 
 
-def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
+@contextlib.contextmanager
+def listening(
+    ears: Ears,
+) -> Iterator[tuple[WsjtxListener, Ears, FakeClock, contextlib.ExitStack]]:
+    """A listener on a free loopback port handing statuses to ``ears``, on a fake clock that
+    stands still unless a test moves it (nothing refills); the stack's sockets close before the
+    listener stops."""
     clock = FakeClock()
-    ears = Ears()
     listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
     listener.start()
     try:
         with contextlib.ExitStack() as stack:
-            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
-            wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
-            sent = 1
-            sent = flood_of_another_name(stack, listener, sent)
-            transmits_through(wsjtx, listener, sent)
-        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
-        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
+            yield listener, ears, clock, stack
     finally:
         listener.stop()
+
+
+def test_wsjtx_is_heard_through_a_flood_of_other_programs_statuses() -> None:
+    with listening(Ears()) as (listener, ears, clock, stack):
+        wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
+        sent = 1
+        sent = flood_of_another_name(stack, listener, sent)
+        transmits_through(wsjtx, listener, sent)
+        ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
+        assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
 
 
 def flood_of_another_name(
@@ -101,26 +111,19 @@ def test_wsjtx_restarted_on_a_new_socket_keeps_its_room_through_the_flood() -> N
     """The room is WSJT-X's instance's latest sender: WSJT-X restarted (a new socket, the same
     Id) is heard through the same flood, its first status after the restart taken within
     the shared cap before the flood spends it."""
-    clock = FakeClock()
-    ears = Ears()
-    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
-    listener.start()
-    try:
-        with contextlib.ExitStack() as stack:
-            first = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            first.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
-            wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
-            again = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            again.sendto(w.status(w.StatusFields(dx_call="G4XYZ")), listener.address)
-            wait_until(lambda: len(ears.got) == 2, slow(10), "WSJT-X heard again")
-            sent = 2
-            sent = flood_of_another_name(stack, listener, sent)
-            again.sendto(
-                w.status(w.StatusFields(dx_call="JA1ABC", transmitting=True)), listener.address
-            )
-            sent += 1
-            wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's status read")
+    with listening(Ears()) as (listener, ears, clock, stack):
+        first = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        first.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        wait_until(lambda: len(ears.got) == 1, slow(10), "WSJT-X heard")
+        again = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        again.sendto(w.status(w.StatusFields(dx_call="G4XYZ")), listener.address)
+        wait_until(lambda: len(ears.got) == 2, slow(10), "WSJT-X heard again")
+        sent = 2
+        sent = flood_of_another_name(stack, listener, sent)
+        again.sendto(
+            w.status(w.StatusFields(dx_call="JA1ABC", transmitting=True)), listener.address
+        )
+        sent += 1
+        wait_until(lambda: _read(listener) >= sent, slow(10), "WSJT-X's status read")
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "G4XYZ", "JA1ABC"], f"WSJT-X's statuses handed on: {ours}"
-    finally:
-        listener.stop()

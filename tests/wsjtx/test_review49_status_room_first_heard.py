@@ -12,21 +12,19 @@ UDP sockets, virtual time, as tests/wsjtx/test_attack11_status_flood.py."""
 
 from __future__ import annotations
 
-import contextlib
 import socket
 from collections.abc import Callable
 
 import pytest
 
-from bridge.interfaces.wsjtx import WsjtxListener
 from tests.support import wait_until
 from tests.support import wsjtx as w
-from tests.support.clock import FakeClock
 from tests.support.waiting import slow
 from tests.wsjtx.test_attack11_status_flood import (
     Ears,
     _read,
     flood_of_another_name,
+    listening,
     transmits_through,
 )
 
@@ -37,32 +35,25 @@ from tests.wsjtx.test_attack11_status_flood import (
 def test_wsjtx_is_heard_through_a_flood_after_two_other_programs_were_heard_first(
     before: tuple[str, str],
 ) -> None:
-    clock = FakeClock()
-    ears = Ears()
-    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
-    listener.start()
-    try:
-        with contextlib.ExitStack() as stack:
-            sent = 0
-            for instance in before:  # heard once, their sockets gone
-                with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as other:
-                    other.sendto(
-                        w.status(w.StatusFields(dx_call="W1AW", instance=instance)),
-                        listener.address,
-                    )
-                sent += 1
-                wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
-            clock.t += 3600.0  # hours later (every budget full again)
-            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+    with listening(Ears()) as (listener, ears, clock, stack):
+        sent = 0
+        for instance in before:  # heard once, their sockets gone
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as other:
+                other.sendto(
+                    w.status(w.StatusFields(dx_call="W1AW", instance=instance)),
+                    listener.address,
+                )
             sent += 1
-            wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X heard")
-            sent = flood_of_another_name(stack, listener, sent)
-            transmits_through(wsjtx, listener, sent)
+            wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
+        clock.t += 3600.0  # hours later (every budget full again)
+        wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        sent += 1
+        wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X heard")
+        sent = flood_of_another_name(stack, listener, sent)
+        transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
-    finally:
-        listener.stop()
 
 
 @pytest.mark.parametrize(
@@ -77,22 +68,15 @@ def test_wsjtx_keeps_its_room_through_a_flood_of_names_heard_after_it(
     flood of statuses of two names in turn (each flooded far past a program's pace), or of a
     new name in every datagram (from senders flooding past their own budget), takes none of
     it, and WSJT-X, heard before the flood, is heard through it."""
-    clock = FakeClock()
-    ears = Ears()
-    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
-    listener.start()
-    try:
-        with contextlib.ExitStack() as stack:
-            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
-            wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
-            sent = flood_of_another_name(stack, listener, 1, name)
-            transmits_through(wsjtx, listener, sent)
+    with listening(Ears()) as (listener, ears, clock, stack):
+        wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
+        sent = flood_of_another_name(stack, listener, 1, name)
+        transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
         assert {h.instance for h in ears.got} - {"WSJT-X"}  # (the flood was heard, in part)
-    finally:
-        listener.stop()
 
 
 def test_wsjtx_followed_keeps_its_room_after_two_names_heard_at_a_programs_pace() -> None:
@@ -100,27 +84,20 @@ def test_wsjtx_followed_keeps_its_room_after_two_names_heard_at_a_programs_pace(
     heard after it: two names sent at a program's pace from sockets of their own after WSJT-X's
     status are the programs heard last and take the room for programs followed by none; a
     rotator following WSJT-X keeps its statuses' room, and they are heard through the flood."""
-    clock = FakeClock()
-    ears = Ears(followed="WSJT-X")
-    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
-    listener.start()
-    try:
-        with contextlib.ExitStack() as stack:
-            wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
-            sent = 1
-            wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
-            for instance in ("paced-1", "paced-2"):
-                paced = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                for _ in range(3):
-                    fields = w.StatusFields(dx_call="W1AW", instance=instance)
-                    paced.sendto(w.status(fields), listener.address)
-                    sent += 1
-                    wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
-                    clock.t += 1.0  # a program's pace
-            sent = flood_of_another_name(stack, listener, sent)
-            transmits_through(wsjtx, listener, sent)
+    with listening(Ears(followed="WSJT-X")) as (listener, ears, clock, stack):
+        wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        sent = 1
+        wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
+        for instance in ("paced-1", "paced-2"):
+            paced = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            for _ in range(3):
+                fields = w.StatusFields(dx_call="W1AW", instance=instance)
+                paced.sendto(w.status(fields), listener.address)
+                sent += 1
+                wait_until(lambda n=sent: _read(listener) >= n, slow(10), "heard")
+                clock.t += 1.0  # a program's pace
+        sent = flood_of_another_name(stack, listener, sent)
+        transmits_through(wsjtx, listener, sent)
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", "JA1ABC", "VK2XYZ"], f"WSJT-X's statuses handed on: {ours}"
-    finally:
-        listener.stop()

@@ -12,7 +12,6 @@ for all gained meanwhile), as tests/wsjtx/test_attack11_status_flood.py."""
 
 from __future__ import annotations
 
-import contextlib
 import socket
 
 import pytest
@@ -20,9 +19,8 @@ import pytest
 from bridge.interfaces.wsjtx import WsjtxListener
 from tests.support import wait_until
 from tests.support import wsjtx as w
-from tests.support.clock import FakeClock
 from tests.support.waiting import slow
-from tests.wsjtx.test_attack11_status_flood import Ears
+from tests.wsjtx.test_attack11_status_flood import Ears, listening
 
 CALLS = ("JA1ABC", "VK2XYZ", "ZL1AAA")  # WSJT-X's statuses during the flood, transmitting
 
@@ -55,32 +53,25 @@ def _burst(flooders: list[socket.socket], listener: WsjtxListener, sent: int) ->
     ids=["same-socket", "restarted-in-the-flood"],
 )
 def test_wsjtx_followed_is_heard_through_a_flood_that_runs_on(restarted: bool) -> None:
-    clock = FakeClock()
-    ears = Ears(followed="WSJT-X")  # a rotator follows WSJT-X (follow.py rule 8)
-    listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
-    listener.start()
-    try:
-        with contextlib.ExitStack() as stack:
+    # (a rotator follows WSJT-X (follow.py rule 8))
+    with listening(Ears(followed="WSJT-X")) as (listener, ears, clock, stack):
+        wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+        wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
+        wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
+        sent = 1
+        flooders = [
+            stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM)) for _ in range(8)
+        ]
+        while listener.counts.over_budget == 0:  # the flood begins: the cap for all spent
+            sent = _burst(flooders, listener, sent)
+        if restarted:  # WSJT-X restarted: the same Id from a socket of its own
             wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            wsjtx.sendto(w.status(w.StatusFields(dx_call="K1ABC")), listener.address)
-            wait_until(lambda: _read(listener) >= 1, slow(10), "WSJT-X heard")
-            sent = 1
-            flooders = [
-                stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                for _ in range(8)
-            ]
-            while listener.counts.over_budget == 0:  # the flood begins: the cap for all spent
-                sent = _burst(flooders, listener, sent)
-            if restarted:  # WSJT-X restarted: the same Id from a socket of its own
-                wsjtx = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-            for call in CALLS:
-                clock.t += 0.1  # the flood runs on: what the cap gained is spent again
-                sent = _burst(flooders, listener, sent)
-                fields = w.StatusFields(dx_call=call, transmitting=True)
-                wsjtx.sendto(w.status(fields), listener.address)
-                sent += 1
-                wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X's status read")
+        for call in CALLS:
+            clock.t += 0.1  # the flood runs on: what the cap gained is spent again
+            sent = _burst(flooders, listener, sent)
+            fields = w.StatusFields(dx_call=call, transmitting=True)
+            wsjtx.sendto(w.status(fields), listener.address)
+            sent += 1
+            wait_until(lambda n=sent: _read(listener) >= n, slow(10), "WSJT-X's status read")
         ours = [h.call for h in ears.got if h.instance == "WSJT-X"]
         assert ours == ["K1ABC", *CALLS], f"WSJT-X's statuses handed on: {ours}"
-    finally:
-        listener.stop()
