@@ -53,8 +53,9 @@ Rules:
    that is neither dates nothing any more. At most LOOKS_KEPT are kept: past that two
    neighbours at bytes not read yet become one, dated by the earlier (toward refusing; only a
    connection paused over its budget, connections.py rule 4, through that many halts gets
-   there). A page's WebSocket or event stream is one request for hours, and kept up to the
-   TCP ports' SEEN_KEPT (4,096) looks a rotator, one per halt that found it had sent more.
+   there). A page's WebSocket or event stream is one request for hours: it kept up to the
+   TCP ports' SEEN_KEPT (4,096) looks a rotator, one per halt that found it had sent more,
+   before this rule (review 51: some 160 MB a rotator at the console's caps).
 """
 
 from __future__ import annotations
