@@ -26,10 +26,11 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from bridge.core.polling import POLLIN, POLLOUT, POLLPRI, new_poller
 
-__all__ = ["readable", "ready_held", "writable"]
+__all__ = ["libc_holding", "readable", "ready_held", "writable"]
 
 _IN = POLLIN | POLLPRI
 _OUT = POLLOUT
@@ -56,6 +57,24 @@ def writable(fd: int, timeout_s: float | None) -> bool:
     return bool(_wait((fd,), _OUT, timeout_s))
 
 
+def libc_holding(name: str, *argtypes: Any) -> Any | None:
+    """Rule 3: libc's ``name`` called through ctypes' PyDLL, which keeps the interpreter lock
+    across the call, taking ``argtypes`` and returning an int (errno kept for
+    ``ctypes.get_errno``); None off Linux, or where it cannot be had (the caller then asks
+    the way that lets the lock go)."""
+    if sys.platform != "linux":
+        return None
+    try:
+        import ctypes
+
+        call = ctypes.PyDLL(None, use_errno=True)[name]
+    except (ImportError, OSError, AttributeError):
+        return None
+    call.argtypes = argtypes
+    call.restype = ctypes.c_int
+    return call
+
+
 def _polling_holding() -> Callable[[list[int]], set[int]]:
     """Rule 3. Its ``struct pollfd`` array is an ``array`` of int pairs (a descriptor; its
     events, the kernel's answer beside them in the same four bytes)."""
@@ -63,21 +82,13 @@ def _polling_holding() -> Callable[[list[int]], set[int]]:
     def letting_go(fds: list[int]) -> set[int]:
         return set(readable(fds, 0))
 
-    if sys.platform != "linux":
-        return letting_go
-    try:
-        import array
-        import ctypes
-        import select
+    import array
+    import ctypes
 
-        poll = ctypes.PyDLL(None, use_errno=True).poll
-        poll.argtypes = (ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
-        poll.restype = ctypes.c_int
-        asked = select.POLLIN | select.POLLPRI
-        if array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
-            return letting_go
-    except (ImportError, OSError, AttributeError):
+    poll = libc_holding("poll", ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
+    if poll is None or array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
         return letting_go
+    asked = POLLIN | POLLPRI
     shift = 16 if sys.byteorder == "little" else 0  # (where revents sits in the second int)
 
     def held(fds: list[int]) -> set[int]:

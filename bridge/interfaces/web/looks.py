@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import itertools
 import socket
-import sys
 import threading
 import time
 import weakref
@@ -70,7 +69,7 @@ from collections.abc import Callable, Hashable, Iterable
 from typing import Any
 
 from bridge.core.haltwatch import HaltWatchers
-from bridge.interfaces.fdwait import ready_held
+from bridge.interfaces.fdwait import libc_holding, ready_held
 from bridge.interfaces.tcplines import Looks, unread
 
 __all__ = ["Conn", "HaltLooks", "Listener", "unread_held"]
@@ -84,18 +83,14 @@ def _unread_holding() -> Callable[[int], int]:
     not let go around it), on Linux; elsewhere ``unread``'s (fcntl), which lets it go (an
     ioctl takes variadic arguments, whose calling convention ctypes is trusted with on Linux
     alone here)."""
-    if sys.platform != "linux":
-        return unread
-    try:
-        import ctypes
-        import termios
+    import ctypes
 
-        ioctl = ctypes.PyDLL(None, use_errno=True).ioctl
-        ioctl.argtypes = (ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p)
-        ioctl.restype = ctypes.c_int
-        request = termios.FIONREAD
-    except (ImportError, OSError, AttributeError):
+    ioctl = libc_holding("ioctl", ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p)
+    if ioctl is None:
         return unread
+    import termios  # (on Linux: libc_holding says so)
+
+    request = termios.FIONREAD
 
     def held(fd: int) -> int:
         waiting = ctypes.c_int(0)
