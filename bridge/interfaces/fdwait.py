@@ -82,9 +82,11 @@ def _polling_holding() -> Callable[[list[int]], set[int]]:
     def letting_go(fds: list[int]) -> set[int]:
         return set(readable(fds, 0))
 
-    import array
-    import ctypes
-
+    try:
+        import array
+        import ctypes
+    except ImportError:
+        return letting_go
     poll = libc_holding("poll", ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int)
     if poll is None or array.array("i").itemsize != 4 or ctypes.sizeof(ctypes.c_short) != 2:
         return letting_go

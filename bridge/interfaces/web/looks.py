@@ -83,13 +83,14 @@ def _unread_holding() -> Callable[[int], int]:
     not let go around it), on Linux; elsewhere ``unread``'s (fcntl), which lets it go (an
     ioctl takes variadic arguments, whose calling convention ctypes is trusted with on Linux
     alone here)."""
-    import ctypes
-
+    try:
+        import ctypes
+        import termios  # (a POSIX module: the remote runs where it is missing)
+    except ImportError:
+        return unread
     ioctl = libc_holding("ioctl", ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p)
     if ioctl is None:
         return unread
-    import termios  # (on Linux: libc_holding says so)
-
     request = termios.FIONREAD
 
     def held(fd: int) -> int:
