@@ -116,7 +116,7 @@ class Lease:
             )
         if isinstance(minutes, bool) or not isinstance(minutes, (int, float)):
             raise LeaseError("minutes must be a number")
-        if not math.isfinite(minutes) or not MIN_MINUTES <= minutes <= MAX_MINUTES:
+        if not MIN_MINUTES <= minutes <= MAX_MINUTES:  # (NaN, infinities, any int: exact)
             raise LeaseError(f"minutes must be from {MIN_MINUTES:g} to {MAX_MINUTES:g}")
         held = self.holder(now_unix)
         if held is not None and not same_operator(held.operator, name):

@@ -60,6 +60,7 @@ def test_a_claim_while_held_by_another_is_refused_and_changes_nothing() -> None:
         ("DL1ABC", True, "minutes"),
         ("DL1ABC", float("nan"), "minutes"),
         ("DL1ABC", float("inf"), "minutes"),
+        pytest.param("DL1ABC", 10**400, "minutes", id="minutes-past-a-float"),
     ],
 )
 def test_a_bad_claim_is_refused_and_changes_nothing(
