@@ -7,6 +7,7 @@ tests/support/remote.py's StallingLink)."""
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -27,10 +28,16 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 
-def _remote(port: int, broker_port: int, **endpoint: object) -> Remote:
-    """The remote, started: rotator ``tower`` on a rotctld port, and ``endpoint``'s ports."""
+def _remote(port: int, broker_port: int, patient: bool = False, **endpoint: object) -> Remote:
+    """The remote, started: rotator ``tower`` on a rotctld port, and ``endpoint``'s ports;
+    ``patient``: it waits for the broker's acknowledgement as long as this machine needs (a
+    test whose link never stalls: on a loaded machine a local broker's PUBACK took over the
+    default second, and the remote reset its link as a stalled one)."""
+    wait_s = max(1.0, slow(1.0)) if patient else 1.0
     settings = RemoteSettings(
         operator="DL1ABC",
+        ack_wait_s=wait_s,
+        command_expiry_s=max(5, math.ceil(wait_s)),
         mqtt={"host": "127.0.0.1", "port": broker_port, "base_topic": "rotor"},
         endpoints=[{"rotator": "tower", "rotctld_port": port, **endpoint}],
     )
@@ -81,7 +88,7 @@ def test_a_move_sent_right_after_the_remotes_own_stop_is_carried_out(station: Ri
     by when it came, so the target its operator sends right after it (a logger's ``S`` then
     ``P``) is not taken for older than the STOP, however short or long the link's trip."""
     port = free_port()
-    remote = _remote(port, station.broker.port)
+    remote = _remote(port, station.broker.port, patient=True)
     try:
         wait_until(lambda: ask(port, b"P 10 0\n") == b"RPRT 0\n", 20, "the remote taking a move")
         station.arrived("tower", 10)
