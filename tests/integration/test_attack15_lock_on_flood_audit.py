@@ -1,0 +1,110 @@
+"""Attack 15: a flood of lock ONs while the lock is ON (or of ``track off`` while nothing is
+tracked, ``follow off`` while nothing is followed) erases the audit trail.
+
+The audit trail folds floods of refusals and stops (runtime/audit.py rule 6) and of commands
+that change nothing when sent again (rule 9: a lock OFF while unlocked, a release of a free
+lease, the holder's claim renewed), so that one sender cannot roll the four files over and erase
+the line of who turned the rotor (tests/integration/test_attack_audit_flood.py). A lock ON while
+the lock is already ON changes nothing either (it stops a rotor that is stopped), but it is
+neither a stop nor ``same_again``: every one is a line of its own. A Node-RED flow or a Home
+Assistant automation that republishes the switch's ``ON`` in a loop writes a line per message,
+and the file rolls over as the STOP flood of rule 6's attack pass did. ``track off`` and
+``follow off`` (never refused, like a stop) are the same: each again changes nothing, and each
+is a line.
+"""
+
+from __future__ import annotations
+
+import json
+
+import paho.mqtt.client as paho
+import pytest
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+
+from bridge.runtime.audit import FREE_LINES
+from tests.support import wait_until
+from tests.support.rig import Rig
+
+N = 400
+
+
+def _client(port: int) -> paho.Client:
+    c = paho.Client(CallbackAPIVersion.VERSION2, client_id="lock-flood", protocol=paho.MQTTv5)
+    c.connect("127.0.0.1", port)
+    c.loop_start()
+    return c
+
+
+def _lines(rig: Rig, app: object) -> list[dict[str, object]]:
+    app.audit.flush()  # type: ignore[attr-defined]
+    path = rig.tmp / "audit.jsonl"
+    return [json.loads(x) for x in path.read_text().splitlines()]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 15: 400 lock ONs while locked (track offs, follow offs while idle) are 400 "
+    "audit lines (a loop republishing the lock switch rolls the audit files over and erases who "
+    "turned the rotor)",
+)
+@pytest.mark.parametrize(
+    ("topic", "payload", "word"),
+    [
+        ("rotor/lock", "ON", "lock ON"),
+        ("rotor/track", "off", "track"),
+        ("rotor/follow", "off", "follow"),
+    ],
+    ids=["lock-on-locked", "track-off-idle", "follow-off-idle"],
+)
+def test_a_flood_of_halts_that_change_nothing_is_folded_like_any_flood(
+    rig: Rig, topic: str, payload: str, word: str
+) -> None:
+    rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
+    rig.sections["station"] = {"locator": "JO62qm"}  # (tracking and following need it)
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    c = _client(rig.broker.port)
+    for _ in range(N):
+        c.publish(topic, payload, qos=1).wait_for_publish(5)
+    c.publish("rotor/target", "20", qos=1).wait_for_publish(5)  # marker: after the flood
+    wait_until(lambda: any(e["command"] == "target '20'" for e in _lines(rig, app)), 10, "marker")
+    lines = [e for e in _lines(rig, app) if word in str(e["command"])]
+    c.loop_stop()
+    c.disconnect()
+    assert len(lines) <= FREE_LINES + 1, f"{len(lines)} lines for {N} {word} that changed nothing"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 15: a flood of track offs (never folded, never routine) spends R/audit's "
+    "budget for moves: the lease holder's target that turns the rotor is left out of R/audit",
+)
+def test_a_flood_of_track_offs_does_not_leave_a_move_out_of_r_audit(rig: Rig) -> None:
+    """service.py rule 8: R/audit has one budget for refusals and stops, another for the rest,
+    so that a crowd cannot leave the lease holder's move out; ``track off`` while nothing is
+    tracked is neither, and 200 of them leave the move that turned the rotor out."""
+    rig.sections["station"] = {"locator": "JO62qm"}
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    c = _client(rig.broker.port)
+    holder = paho.Client(CallbackAPIVersion.VERSION2, client_id="holder", protocol=paho.MQTTv5)
+    holder.connect("127.0.0.1", rig.broker.port)
+    holder.loop_start()
+    props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+    props.UserProperty = ("operator", "DL1ABC")
+    flood = [c.publish("rotor/track", "off", qos=1) for _ in range(N // 2)]
+    flood[-1].wait_for_publish(5)  # the broker has them all (one client: in order)
+    holder.publish("rotor/target", "60", qos=1, properties=props).wait_for_publish(5)
+    emu.wait_for(lambda s: s.is_moving, 10)  # the move was taken: its audit went before
+    rig.probe.caught_up()
+    audited = [json.loads(m.text) for m in rig.probe.on("rotor/audit")]
+    for client in (c, holder):
+        client.loop_stop()
+        client.disconnect()
+    assert any(e["command"] == "target '60'" for e in audited), (
+        f"the move that turned the rotor is not on R/audit; its last line: {audited[-1]}"
+    )
