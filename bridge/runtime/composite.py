@@ -68,7 +68,14 @@ Rules:
    (the rotator is offline: no box parks its axis alone, and the spell starts again when both
    answer, as autopark.py rule 1 has it for one controller); each box then parks its own axis,
    the azimuth box the park's azimuth alone (app.py ``axis_configs``, as the wind's park),
-   together once the rotator was left alone that long.
+   together once the rotator was left alone that long. That park, and the storm's (each box
+   parks its own axis too), is judged as the rotator's whole park (``judged_whole``, the
+   parts' ``Scene.whole``: the rotator's judge against the azimuth box's reading, as
+   ``R/park`` is judged, then each box's own), all axes or none: judged by each box alone, the
+   azimuth box (a Rotor-EZ, its stop at south) refused a park whose turn passed north while
+   the elevation box (a GS-232B, its azimuth never turned) took it and lowered the dish from
+   40 to its stow, under an R/error saying the park was refused (an attack pass). Both boxes
+   then refuse it in the same words, said once (rule 9).
 8. No axis turns alone to a target while the rotator is offline: when a box stops answering, a
    target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first) is
    dropped there, as a single controller's is when its line goes (said on R/error), and a target
@@ -186,7 +193,15 @@ from bridge.session.session import DROPS, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
 
-__all__ = ["CompositeWorker", "Composition", "joined", "merge", "share_quiet", "split"]
+__all__ = [
+    "CompositeWorker",
+    "Composition",
+    "joined",
+    "judged_whole",
+    "merge",
+    "share_quiet",
+    "split",
+]
 
 log = logging.getLogger(__name__)
 AXES = (Axis.AZIMUTH, Axis.ELEVATION)
@@ -223,6 +238,34 @@ def joined(composition: Composition, sessions: dict[Axis, RotatorSession]) -> No
     13: ``Composition.expires_as``)."""
     for axis, session in sessions.items():
         session.expires_as = partial(composition.expires_as, axis)
+
+
+def judged_whole(cfg: WorkerConfig, sessions: dict[Axis, RotatorSession]) -> None:
+    """Rule 7: each box's session told how a park of the bridge's own (auto-park's, the
+    storm's) is judged whole: Refused if the rotator's judge (``cfg``'s, as ``R/park``'s,
+    against the azimuth box's reading) or either box's own refuses that park."""
+    azimuth = sessions[Axis.AZIMUTH]
+
+    def whole(park: Target) -> None:
+        rotator = _park_as(cfg, park)
+        if rotator is not None:
+            cfg.aim.judge(rotator, azimuth.controller.motion.position_deg)
+        for session in sessions.values():
+            own = _park_as(session.cfg, park)
+            if own is not None:
+                session.cfg.aim.judge(own, session.controller.motion.position_deg)
+
+    for session in sessions.values():
+        session.judge_whole = whole
+
+
+def _park_as(cfg: WorkerConfig, park: Target) -> Target | None:
+    """``park`` (a box's auto-park or storm's park) as ``cfg``'s park of the same kind."""
+    if park.source is Source.WIND:
+        where = None if cfg.wind is None else cfg.wind.park
+    else:
+        where = cfg.aim.park
+    return None if where is None else replace(park, az_deg=where[0], el_deg=where[1])
 
 
 def share_quiet(sessions: list[RotatorSession], now: float) -> None:
@@ -559,7 +602,9 @@ class CompositeWorker:
                 port_opener=port_opener,
                 sky=sky,
             )
-        joined(self.composition, {axis: box.session for axis, box in self.boxes.items()})
+        sessions = {axis: box.session for axis, box in self.boxes.items()}
+        joined(self.composition, sessions)
+        judged_whole(cfg, sessions)  # rule 7
 
     @property
     def status(self) -> RotatorStatus:

@@ -28,6 +28,12 @@ Rules:
    dropped if still waiting, else its turn is halted (``Scene.parking``: the last target sent
    was the park): a GS-232B sends its park at once, and the elevation went on to its stow
    under a hand on the azimuth, which parked a whole spell later (one axis at a time).
+5. On a rotator of two boxes each box's park is judged as the rotator's whole park first
+   (``Scene.whole``: the rotator's judge, as ``R/park``'s, and each box's own, runtime/
+   composite.py rule 7): all axes or none. Judged by each box alone, the azimuth box refused a
+   park whose turn passed north while the elevation box took it and lowered the dish to its
+   stow, under an R/error that said the park was refused (an attack pass). Both boxes then say
+   the same refusal, said once (composite.py rule 9).
 """
 
 from __future__ import annotations
@@ -120,6 +126,8 @@ class AutoPark:
         self._parked_t = now  # rule 3
         park = Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
         try:
+            if scene.whole is not None:  # rule 5: all axes or none
+                scene.whole(park)
             judged = self._rig.aim.judge(park, m.position_deg)
         except Refused as exc:
             return Proposal(

@@ -93,6 +93,9 @@ class Scene(NamedTuple):
     slewing: bool  # a silent controller's slew is under way (slew.py)
     wall_offset_s: float  # wall clock (unix seconds) = now + this
     parking: bool = False  # the last target sent was auto-park's (autopark.py rule 4)
+    # a rotator of two boxes' judge of a park of the bridge's own as the rotator's whole park
+    # (runtime/composite.py rule 7: Refused if any axis's would be); None: one controller
+    whole: Callable[[Target], None] | None = None
 
 
 @dataclass(frozen=True)

@@ -362,6 +362,10 @@ class RotatorSession:
         # rule 13: the target a waiting one expires as when a hold ends (on a rotator of two
         # boxes, the whole one it is a half of: runtime/composite.py rule 8 sets it)
         self.expires_as: Callable[[Target], Target] = lambda target: target
+        # a park of the bridge's own (auto-park's, the storm's) judged as the whole rotator's
+        # park: on a rotator of two boxes, all axes or none (runtime/composite.py rule 7 sets
+        # it; the parts see it as ``Scene.whole``)
+        self.judge_whole: Callable[[Target], None] | None = None
         # mailbox.py rule 10: the halt count of the last batch applied; ``status`` shows every
         # stop and lock ON up to it (set once the step built the status: a thread that reads
         # this count and then the status sees a status at least that new)
@@ -1081,7 +1085,9 @@ class RotatorSession:
         parked, offset_s = self.status.parked, self.wall_offset_s
         parking = self.view.last_source == Source.AUTO_PARK.value
         held = self.locked or self.lock_unknown  # (parts.py rule 7: a lock not known yet)
-        scene = Scene(now, motion, pending, held, parked, slewing, offset_s, parking)
+        scene = Scene(
+            now, motion, pending, held, parked, slewing, offset_s, parking, self.judge_whole
+        )
         try:  # (_guarded's, without a closure: the measuring parts run at every reading)
             proposal = part.step(self, scene)
         except Exception:

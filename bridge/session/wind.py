@@ -48,7 +48,10 @@ Rules:
    The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same (a safeguard: the settings refuse such a park when they are
-   read, settings/wind.py rule 1).
+   read, settings/wind.py rule 1). On a rotator of two boxes it is judged as the rotator's
+   whole park first (``Scene.whole``, runtime/composite.py rule 7): all axes or none, as
+   autopark.py rule 5 has it (an attack pass: the azimuth box refused the storm's park and the
+   elevation box lowered the dish alone).
 6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the
@@ -281,6 +284,8 @@ class WindPark:
         self._park_owed = self._arrived = self._end_owed = False  # (the park ends them)
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
         try:
+            if scene.whole is not None:  # rule 5: a rotator of two boxes', all axes or none
+                scene.whole(park)
             judged = self._rig.aim.judge(park, scene.motion.position_deg)
         except Refused as exc:  # rule 5
             why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")

@@ -43,11 +43,6 @@ def at_300_40(v: VirtualComposite) -> bool:
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: auto-park on a rotator of two boxes lowers the elevation to its stow "
-    "alone while the azimuth box refuses the park (R/error: auto-park refused)",
-)
 def test_a_park_the_azimuth_box_refuses_moves_no_axis() -> None:
     with VirtualComposite("rotorez", "gs232b", settings=LIMITS_AND_STOW, emulators=BOXES) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
@@ -65,11 +60,6 @@ def test_a_park_the_azimuth_box_refuses_moves_no_axis() -> None:
         )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: the storm's park on a rotator of two boxes lowers the elevation alone "
-    "while the azimuth box refuses the park (R/error: wind park refused)",
-)
 def test_a_storm_park_the_azimuth_box_refuses_moves_no_axis() -> None:
     wind = {**LIMITS_AND_STOW, "park_after_idle_s": 0, "wind_topic": "w", "wind_park_above": 60}
     with VirtualComposite("rotorez", "gs232b", settings=wind, emulators=BOXES) as v:

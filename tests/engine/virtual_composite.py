@@ -19,7 +19,14 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, Siblings, joined, share_quiet, split
+from bridge.runtime.composite import (
+    Composition,
+    Siblings,
+    joined,
+    judged_whole,
+    share_quiet,
+    split,
+)
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -64,7 +71,9 @@ class VirtualComposite:
                 emulator=(emulators or {}).get(axis),
             )
             self._seen[axis] = 0
-        joined(self.composition, {axis: box.session for axis, box in self.boxes.items()})
+        sessions = {axis: box.session for axis, box in self.boxes.items()}
+        joined(self.composition, sessions)
+        judged_whole(self.cfg, sessions)  # (as CompositeWorker: composite.py rule 7)
         self._absorb()
 
     @property
