@@ -38,7 +38,12 @@ Rules:
    the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
    rule 7). A rotator with ``bands`` (rule 9) takes the newest fresh status whose dial is on
    one of them when the newest of all is not (two radios: the QSO under way on its band, not
-   a refusal for the other radio's band and a wait for the next status: a review).
+   a refusal for the other radio's band and a wait for the next status: a review), of a
+   program whose own newest status it is: a program's status is what it says now, and one it
+   sent on the band before its dial moved away (its later status on another band) is no QSO
+   under way there (an attack pass: switched on 5 s after the only WSJT-X moved 20 m -> 40 m,
+   the 20 m antenna turned to the partner it had named on 20 m). What it keeps of them is
+   bounded (each program's newest, of the MINE_KEPT heard last on its bands).
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is reported once for that grid and not tried again.
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
@@ -57,9 +62,11 @@ Rules:
    antenna follows the program on 40 m, whichever spoke first (an attack pass: it took the
    one on 20 m, heard first, and ignored the 40 m radio's for as long as it followed). The
    program followed that leaves its bands (a dial moved to 20 m) is let go: another program
-   heard on them in the last FRESH_S is followed at once (its newest status: two radios that
-   swap bands, their statuses in one batch), else the first heard on them again, it or another
-   (a review: the 40 m antenna kept the radio gone to 20 m and ignored the one come to 40 m).
+   heard on them in the last FRESH_S, and still on them by its own newest status (rule 4), is
+   followed at once (its newest status: two radios that swap bands, their statuses in one
+   batch), else the first heard on them again, it or another (a review: the 40 m antenna kept
+   the radio gone to 20 m and ignored the one come to 40 m; an attack pass: it followed
+   rig2's old 40 m status though rig2 had moved to 15 m since, and turned to its old partner).
 9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
    is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
    dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
@@ -107,6 +114,7 @@ log = logging.getLogger(__name__)
 HAND = "turned by hand"  # rule 1: following_ended
 FRESH_S = 30.0  # rule 4
 IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said once)
+MINE_KEPT = 32  # rules 4 and 8: the programs on its bands whose newest status is kept
 IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
 NAME_SHOWN = 40  # characters of an instance name a log line quotes (WSJT-X's Id is short)
 MAX_CALL = 32  # rule 10: WSJT-X's longest (a compound call in <>) is some 15 characters
@@ -168,8 +176,9 @@ class Follower:
         self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
         self._ignored_since = 0  # rule 8: others first heard since then
         self._off_band: str | None = None  # rule 9: the band a grid was refused on, said
-        self._mine: Heard | None = None  # rule 4: the newest status on one of its bands
-        self._mine_t = -math.inf
+        # rules 4 and 8: each program's newest status, while it is on one of its bands (a
+        # program's status on another band retires its own), newest last; bounded
+        self._mine: OrderedDict[str, tuple[Heard, float]] = OrderedDict()
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
 
     @property
@@ -183,8 +192,9 @@ class Follower:
         starter = follow.origin.operator if follow.origin is not None else None
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         fresh = self._heard if now - self._heard_t <= FRESH_S else None
-        if (fresh is None or not self._for_me(fresh)) and now - self._mine_t <= FRESH_S:
-            fresh, self._heard_t = self._mine, self._mine_t  # rule 4: the QSO on its band
+        mine = self._newest_mine(now)
+        if (fresh is None or not self._for_me(fresh)) and mine is not None:
+            fresh, self._heard_t = mine  # rule 4: the QSO on its band
         self._heard = fresh
         self._listen(fresh.instance if fresh is not None and self._for_me(fresh) else None)
         self._ignored.clear()
@@ -201,8 +211,8 @@ class Follower:
 
     def heard(self, heard: Heard, now: float) -> None:
         """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
-        if self._rig.follow.bands and self._for_me(heard):  # rule 4: its band's newest
-            self._mine, self._mine_t = heard, now
+        if self._rig.follow.bands:  # rule 4: each program's newest on its bands
+            self._keep_mine(heard, now)
         if self.info is not None:
             if self._instance is None:
                 if self._for_me(heard):  # rule 8: the first program on this antenna's band
@@ -212,14 +222,35 @@ class Follower:
                 return
             elif not self._for_me(heard):  # rule 8: it left this antenna's bands
                 self._ignored.clear()
-                mine = self._mine  # another program's newest on its bands, heard already
-                if mine is not None and mine.instance != heard.instance:
-                    if now - self._mine_t <= FRESH_S:
-                        self._listen(mine.instance)
-                        self._heard, self._heard_t = mine, self._mine_t
-                        return
+                mine = self._newest_mine(now)  # another program still on its bands, heard
+                if mine is not None:  # (its own, retired by this status: _keep_mine)
+                    self._listen(mine[0].instance)
+                    self._heard, self._heard_t = mine
+                    return
                 self._listen(None)
         self._heard, self._heard_t = heard, now
+
+    def _keep_mine(self, heard: Heard, now: float) -> None:
+        """Rules 4 and 8: ``heard`` as its program's newest status: kept while on one of this
+        antenna's bands, and retiring that program's older one when on another (what a program
+        says now is where its dial is: a status it sent before its dial left the band is no
+        QSO under way there)."""
+        mine = self._mine
+        if not self._for_me(heard):
+            mine.pop(heard.instance, None)
+            return
+        mine[heard.instance] = (heard, now)
+        mine.move_to_end(heard.instance)
+        if len(mine) > MINE_KEPT:
+            mine.popitem(last=False)
+
+    def _newest_mine(self, now: float) -> tuple[Heard, float] | None:
+        """Rules 4 and 8: the newest status of a program still on one of this antenna's
+        bands, if at most FRESH_S old (None: none)."""
+        if not self._mine:
+            return None
+        heard, t = next(reversed(self._mine.values()))
+        return (heard, t) if now - t <= FRESH_S else None
 
     def _listen(self, instance: str | None) -> None:
         """Rule 8: the program followed (None: the first heard), shown in the status's info

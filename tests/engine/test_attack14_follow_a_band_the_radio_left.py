@@ -19,8 +19,6 @@ In virtual time, an MD-01 (SPID) as tests/engine/test_follow.py drives it."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.session.follow import Heard
 from tests.engine.test_follow import FORTY, TWENTY, bearing, sets, spid
 from tests.engine.virtual import VirtualRotator
@@ -45,12 +43,6 @@ def test_control_switched_on_it_turns_to_the_qso_under_way_on_its_band() -> None
         assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: following switched on turns a bands antenna to the grid its only "
-    "WSJT-X named on that band before the dial moved to another band (a stale status "
-    "moves the rotor)",
-)
 def test_switched_on_it_does_not_turn_to_a_grid_named_before_the_radio_left_its_band() -> None:
     with spid(bands=["20m"]) as v:
         hear(v, Heard("JA1ABC", "PM95", False, "WSJT-X", TWENTY))  # on 20 m: PM95
@@ -78,12 +70,6 @@ def test_control_it_switches_to_the_program_that_is_still_on_its_band() -> None:
         assert angle_between(v.truth().az_deg, bearing("QF56")) <= 0.5
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: when the program followed leaves the band, following switches to "
-    "another program's old status on that band though that program has left it too, and "
-    "turns the rotor to it",
-)
 def test_it_does_not_switch_to_a_program_that_has_left_its_band_too() -> None:
     with spid(bands=["40m"]) as v:
         v.follow(True)
