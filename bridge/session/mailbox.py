@@ -41,7 +41,11 @@ Rules:
    one's "transmitting" in the same batch replaced it, and the beam turned on through the
    transmission (follow.py rule 3); nor is a wind reading
    (``put_wind``: the highest since the last take, so that no gust is lost; one the broker
-   replayed apart, wind.py rule 6).
+   replayed apart, wind.py rule 6). A stop or lock ON keeps its place among the live
+   readings: those put before it are kept apart (``wind_halted``), and the session applies
+   them before the halt and the rest after it, so a STOP put just before a storm's first
+   reading is no stop in that storm (wind.py rule 3; attack 14: the two taken in one batch,
+   the reading applied first, and the STOP cancelled the storm's park for the whole storm).
 10. The halt count (``epoch``): every stop and lock ON put adds one to it, under the lock the
     put takes anyway (nothing else: a stop waits for nothing new). A motion command (a target,
     a track or follow start) is put with the count its judge read before judging it
@@ -170,6 +174,8 @@ class Batch:
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: tuple[Heard, ...] = ()  # rule 9: each program's newest status, in the order put
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
+    wind_halted: float | None = None  # rule 9: ... the highest put before the last stop or
+    # lock ON of the batch (the session applies it before the halt, ``wind`` after)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
     ending: bool = False  # rule 13: the bridge's end began (session.py rule 21)
@@ -203,6 +209,7 @@ class Batch:
         fence = fence or self.express_hold is not None or self.express_release is not None
         feeds = self.follow is not None or bool(self.heard)
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
+        feeds = feeds or self.wind_halted is not None
         feeds = feeds or bool(self.feature_commands) or self.activity or self.ends is not None
         feeds = feeds or self.offline is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
@@ -221,6 +228,13 @@ class Batch:
         if self.feature_commands:  # rule 12
             self.drop_moving()
             self.mark("clear")
+
+    def halt_wind(self) -> None:
+        """Rule 9: a stop or lock ON is put: the live readings put so far came before it."""
+        if self.wind is not None:
+            held = self.wind_halted
+            self.wind_halted = self.wind if held is None else max(held, self.wind)
+            self.wind = None
 
     def mark(self, what: Halt) -> None:
         """Rule 12: a stop, lock or clearing came after the feature commands put so far."""
@@ -341,6 +355,7 @@ class Mailbox:
                 self._halt_placed = self._placed(None)  # rule 10a
                 self._epoch += 1  # rule 10
                 self._batch.stop = command
+                self._batch.halt_wind()  # rule 9: the readings put before it
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
@@ -397,6 +412,7 @@ class Mailbox:
             if locked:
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
+                self._batch.halt_wind()  # rule 9: the readings put before it
                 self._batch.target = None
                 self._batch.track = None
                 self._batch.follow = None

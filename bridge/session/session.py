@@ -437,10 +437,12 @@ class RotatorSession:
             self.follower.heard(heard, now)  # rule 15
         if batch.wind_replayed is not None:  # wind.py rule 6: before a fresh one
             self.wind.reading(batch.wind_replayed, now, replayed=True)
-        if batch.wind is not None:
-            self.wind.reading(batch.wind, now)  # wind.py: no command either
+        if batch.wind_halted is not None:  # (mailbox.py rule 9: put before the halt)
+            self.wind.reading(batch.wind_halted, now)  # wind.py: no command either
         if batch.stop is not None or batch.lock_on:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
+        if batch.wind is not None:  # (mailbox.py rule 9: put after any halt of the batch)
+            self.wind.reading(batch.wind, now)
         if batch.control_set:
             self.view.control = batch.control
             if batch.control_unix is not None:  # rule 23: the lease's clock (operators.py 5)

@@ -39,7 +39,11 @@ Rules:
    ``halted``, kept by runtime/kept.py rule 4) and a reset of this part (session.py rule 14):
    neither undoes the operator's STOP. A stop or lock ON in a storm known only from a replay
    (rule 6) stops no park and holds none back: that storm is not kept across a restart, and
-   the STOP would hold the park back before one and not after it (a review).
+   the STOP would hold the park back before one and not after it (a review). "During" is
+   in the order put: a stop or lock ON put before the storm's first reading, though taken in
+   one batch with it, is no stop in the storm (mailbox.py rule 9: the session applies the
+   batch's readings put before the halt, the halt, then the rest; attack 14: applied reading
+   first, a STOP sent at rest just before the storm cancelled its park for the whole storm).
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept (the report says which: a storm known only from a
    replay, rule 6, parked nothing; one whose park a stop or lock ON stopped short, rule 3, is

@@ -12,8 +12,6 @@ In virtual time, a Rotor-EZ at 90 with its storm park at 180."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Stop
 from tests.engine.virtual import VirtualRotator
 
@@ -43,12 +41,6 @@ def test_control_a_stop_then_a_storm_a_batch_apart_parks_for_the_storm() -> None
         assert at_rest_at(v, 180.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: a STOP sent just before a storm began, taken in one batch with the "
-    "storm's first reading, cancels the storm park for the whole storm (antenna left facing "
-    "the wind, motion refused, status says a stop stopped its park)",
-)
 def test_a_stop_put_before_the_storm_in_the_same_batch_still_parks_for_the_storm() -> None:
     with resting_at_90() as v:
         v.mailbox.put(Stop())  # the operator's STOP, at rest: nothing to stop
@@ -61,11 +53,6 @@ def test_a_stop_put_before_the_storm_in_the_same_batch_still_parks_for_the_storm
         assert at_rest_at(v, 180.0), f"rotor at {v.truth().az_deg:.0f}, not at the storm park"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: a lock ON then the storm's first reading in one batch count as a lock "
-    "in the storm: after the lock OFF the storm park never goes (it does a batch apart)",
-)
 def test_a_lock_on_before_the_storm_in_the_same_batch_parks_at_the_lock_off() -> None:
     with resting_at_90() as v:
         v.mailbox.put_lock(True)
@@ -89,3 +76,16 @@ def test_control_a_lock_on_then_a_storm_a_batch_apart_parks_at_the_lock_off() ->
         v.lock(False)
         v.run_for(PARK_TIME_S)
         assert at_rest_at(v, 180.0)
+
+
+def test_a_stop_put_after_the_storms_first_reading_in_the_same_batch_stops_its_park() -> None:
+    """The batch's order both ways: a STOP put after the storm's first reading is a STOP in
+    the storm (session/wind.py rule 3), though the two are taken in one round."""
+    with resting_at_90() as v:
+        v.mailbox.put_wind(STORM_KMH)  # the storm's first reading
+        v.mailbox.put(Stop())  # then the operator's STOP
+        v._take()
+        v.run_for(PARK_TIME_S)
+        wind = v.status.wind
+        assert wind is not None and wind.storm and wind.halted
+        assert at_rest_at(v, 90.0), f"rotor at {v.truth().az_deg:.0f}: the STOP was not heeded"

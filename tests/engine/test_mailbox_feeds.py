@@ -39,7 +39,8 @@ def test_a_stop_or_lock_drops_a_follow_command_but_never_an_input() -> None:
         box.put(Stop())
         batch = box.take()
         assert batch.follow is None and batch.stop is not None
-        assert batch.heard == (Heard("JA1ABC", "PM95", False),) and batch.wind == 70.0
+        assert batch.heard == (Heard("JA1ABC", "PM95", False),)
+        assert batch.wind_halted == 70.0 and batch.wind is None  # (kept, before the stop)
         box.put_follow(Follow(True))
         box.put_lock(True)
         assert box.take().follow is None
