@@ -58,7 +58,8 @@ Rules:
     rotator:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
-   drops whatever target or tracking waits. A stamped target (``Target.not_after_s``: its
+   drops whatever target or tracking waits, but the storm's park (wind.py rule 8), which
+   goes then as at any release. A stamped target (``Target.not_after_s``: its
    expiry, interfaces/mqtt/service.py rule 9) whose expiry has passed when a hold it waited
    under ends, or when it is taken from the mailbox (a move the stop lane's marker kept behind
    a lock OFF, lastword.py rule 13, or a slow link's), is dropped, said (EXPIRED, and
@@ -746,10 +747,13 @@ class RotatorSession:
         return self.wind.refusal()  # wind.py rule 1
 
     def _fence(self, batch: Batch, now: float) -> bool:
-        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited (True)."""
+        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited (True),
+        but the storm's park (wind.py rule 8: the bridge's own move, which nobody could send
+        again in the storm), which goes now, unsaid."""
         if not self.fence.apply(batch):
             return False
-        self._drop_pending(self.fence.cleared_why)
+        if not self._storm_park_waiting():
+            self._drop_pending(self.fence.cleared_why)
         self._end("a stop or lock came first; send the {} command again", now)
         return True
 

@@ -93,13 +93,14 @@ Rules:
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
-   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6). The stop
+   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6); but not the
+   storm's park, the bridge's own, which goes then (wind.py rule 8). The stop
    express's hold (interfaces/mqtt/express.py rule 8) is a second one, with numbers of its own: a
    target waits while either is held; its release clears only when the express's connection
    (or the express) ended before its word came back, which no clock bounds: what waited is
    dropped then, said (EXPRESS_LOST), not sent late (an attack pass: a firewall that dropped
    the express's flow alone held a target sent after a STOP until the keepalive noticed, and
-   the rotor turned 45 s after, unasked).
+   the rotor turned 45 s after, unasked); the storm's park aside, as above: the storm asks it.
 6. A controller that reports no position (a DCU-1) gets every stop twice, STOP_REPEAT_GAP_S
    apart: no reading can show one lost, and stopping is always safe (an attack pass: one bit
    flipped in a lock ON's ``AS1;`` and the rotor turned on 27 s). A target written in between

@@ -88,6 +88,15 @@ Rules:
    mid-park) parks again, as it did. A rotor that cannot report its position (a DCU-1) is
    never seen there: the end of its estimated move is no arrival, and an offline or a restart
    owes its park again (a review of 3e4f0f4).
+8. The park waits, like any target, under the hold of a STOP or lock ON that came before the
+   storm (the stop lane's or the stop express's: session.py rule 13), and goes when the hold
+   ends; a hold that ends by clearing (the main connection lost before its marker came back,
+   the express ended before its word: stops.py rule 5) drops what an operator sent, who may
+   send it again, but not the park, which goes then too: it is the bridge's own move, and
+   nobody can send it again in the storm (rule 1; attack 14: the park dropped so, the rotor
+   faced the storm 90 degrees off while the status said "parked for the storm"). Nothing is
+   lost to the order either: a STOP of this storm (rule 3) halted the park already, and the
+   waiting park would have gone at an ordinary release all the same.
 """
 
 from __future__ import annotations

@@ -16,8 +16,6 @@ in for by what they put in the mailbox, as tests/engine/test_session_last_word.p
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Source, Stop
 from tests.engine.virtual import VirtualRotator
 
@@ -30,12 +28,6 @@ def at_rest_at(v: VirtualRotator, az: float) -> bool:
     return abs(v.truth().az_deg - az) < 2.0 and v.state is MotionState.IDLE
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: a lane STOP's hold that ends with clearing (main MQTT connection "
-    "dropped) drops the storm's park waiting under it; nothing sends it again, the rotor "
-    "faces the storm with motion refused while the status says parked for the storm",
-)
 def test_a_storm_park_waiting_under_a_hold_that_clears_is_sent_after_all() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
@@ -58,11 +50,6 @@ def test_a_storm_park_waiting_under_a_hold_that_clears_is_sent_after_all() -> No
         )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: the stop express's hold that ends by its loss drops the storm's park "
-    "waiting under it; nothing sends it again, the rotor faces the storm with motion refused",
-)
 def test_a_storm_park_waiting_under_an_express_hold_lost_is_sent_after_all() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
