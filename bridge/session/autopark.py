@@ -5,10 +5,14 @@ owns the quiet spell; each step gets a read-only ``Scene`` (parts.py) and return
 Rules:
 1. The quiet spell counts from the last command (a target, a stop or the lock switched either
    way), from the last moment the rotor was seen turning (a hand on the front panel), from
-   start-up, from the controller answering again and from the end of a storm (session.py
-   ``_storm``): a rotor never parks the moment someone unlocks it, switches its controller
-   back on, or a calm reading ends a storm (wind.py rule 2; an attack pass: the spell, long
-   over in the storm, parked the rotor the instant the storm ended, moved by a reading).
+   start-up, from the controller answering again, from the end of a storm (session.py
+   ``_storm``) and from the lock becoming known (runtime/kept.py rule 10: the broker's first
+   look said no lock ON, after a start whose state file did not say it): a rotor never parks
+   the moment someone unlocks it, switches its controller back on, a calm reading ends a
+   storm (wind.py rule 2; an attack pass: the spell, long over in the storm, parked the rotor
+   the instant the storm ended, moved by a reading) or a broker back from a long absence
+   says there is no lock (attack 14: the spell ran out while the lock was not known, and the
+   rotor turned the instant the look came).
 2. Parking happens only when everything else would allow a target: the controller answering,
    the lock off and known (``Scene.locked`` is set while it is not known yet: runtime/kept.py
    rule 10), the rotor idle, no target waiting, and not already at the park position.

@@ -456,6 +456,8 @@ class RotatorSession:
         if batch.lock_saved is not None:  # (the status says what a restart would find)
             self.lock_shown = batch.lock_saved
         if batch.lock_unknown is not None:
+            if self.lock_unknown and not batch.lock_unknown:  # autopark.py rule 1: known at
+                self._activity(now)  # last, a refusal ended: a new quiet spell
             self.lock_unknown = batch.lock_unknown
         if unlocked:  # parts.py rule 7: nothing turned on while locked turns it once unlocked
             self._end_parts("lock released", now)

@@ -16,8 +16,6 @@ tests/engine/test_unknown_lock_own_moves.py starts it."""
 
 from __future__ import annotations
 
-import pytest
-
 from tests.engine.test_unknown_lock_own_moves import AUTOPARK, heard, started_unknown, unmoved
 
 SPELL_S = float(AUTOPARK["park_after_idle_s"])
@@ -35,11 +33,6 @@ def test_control_an_unlock_word_starts_a_new_quiet_spell() -> None:
         v.run_until(lambda h: h.status.parked, 4 * SPELL_S, "parked after a quiet spell")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 14: auto-park turns the rotor the instant the broker's first look says "
-    "there is no lock (the quiet spell ran out while the lock was not known)",
-)
 def test_the_lock_known_at_last_starts_a_new_quiet_spell() -> None:
     with started_unknown("rotorez", AUTOPARK) as v:
         v.run_for(BROKER_AWAY_S)  # the broker away ten quiet spells long: nothing moves
@@ -47,3 +40,4 @@ def test_the_lock_known_at_last_starts_a_new_quiet_spell() -> None:
         heard(v, False)  # the broker is back and holds no lock ON
         v.run_for(A_MOMENT_S)
         assert unmoved(v), f"turning to the park at once: at {v.truth().az_deg:.0f}"
+        v.run_until(lambda h: h.status.parked, 4 * SPELL_S, "parked after a quiet spell")
