@@ -73,6 +73,17 @@ Rules:
    came; a section whose size cannot be read is left to paho, which refuses it, and one that
    runs past its packet is made one paho refuses at its first property (a cold review: paho
    read all of it first).
+11. ``hearing``, when set, is told what the network thread saw on the socket (the main
+   connection's: heartbeat.py rule 11 tells a broker that held the bridge up from a backlog by
+   it): ``quiet(until)`` after a poll that found nothing to read, which proves that nothing came
+   from the last read up to ``until`` (a byte that came stays in the socket until read, and
+   would have made the poll say so); ``until`` is the clock before the poll, plus its whole
+   wait when it waited it all out (no event: the kernel looked at least that late; and no later
+   than the clock after it), never the clock after it alone (the thread may have run long
+   after the kernel looked). ``reading()`` right
+   before a read that finds bytes, before any message in them is handled; ``read()`` when it
+   is over (quiet is counted from then). TLS: bytes the SSL socket has already decrypted
+   (``pending()``) are read at once and are never quiet, though the raw socket is not readable.
 """
 
 from __future__ import annotations
@@ -86,7 +97,7 @@ import struct
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any, Protocol, cast
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
@@ -120,6 +131,15 @@ def acknowledge_now(sock: object) -> None:
         setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
     except OSError:  # closed meanwhile: paho notices that on its own
         pass
+
+
+class Hearing(Protocol):
+    """Rule 11: what the network thread says it saw (on that thread; each call cheap)."""
+
+    def clock(self) -> float: ...
+    def quiet(self, until: float) -> None: ...
+    def reading(self) -> None: ...
+    def read(self) -> None: ...
 
 
 class Waker:
@@ -231,6 +251,7 @@ class Client(paho.Client):
     (``tick``), rule 6 (``loop_start``: the network thread) and rule 9 (``publish_qos0``)."""
 
     tick: Callable[[], None] | None = None
+    hearing: Hearing | None = None  # rule 11
     name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
     _net: threading.Thread | None = None  # rule 6
@@ -412,10 +433,13 @@ class Client(paho.Client):
         select refuses (the connection would be made and torn down again for ever)."""
         pending = getattr(sock, "pending", None)  # TLS: bytes already decrypted
         ready = pending() if pending is not None else 0
+        hearing = self.hearing  # rule 11
         try:
             fd = sock.fileno()
             poller.register(fd, POLL_READ | POLLOUT if self.want_write() else POLL_READ)
-            events = poller.poll(0 if ready else 1000)
+            wait_ms = 0 if ready else 1000
+            before = hearing.clock() if hearing is not None else 0.0
+            events = poller.poll(wait_ms)
         except (OSError, TypeError, ValueError):  # closed under us: reconnect
             return False
         readable = False
@@ -426,8 +450,17 @@ class Client(paho.Client):
                 readable = bool(mask & READ_EVENTS)  # an error or a hang-up too: read, it says
             else:
                 self._waker.drain()
+        if hearing is not None and not (ready or readable):  # rule 11: nothing came up to then
+            hearing.quiet(before if events else min(before + wait_ms / 1000, hearing.clock()))
         if ready or readable:
-            self.loop_read()
+            if hearing is None:
+                self.loop_read()
+            else:
+                hearing.reading()
+                try:
+                    self.loop_read()
+                finally:
+                    hearing.read()
             if self.socket() is not sock:
                 return True
             if self._delay_s is not None and self.is_connected():
