@@ -303,6 +303,7 @@ class App:
             ),
             on_refused=self._refused,
             fence_topic=self.topics.bridge_fence,  # client.py rule 16
+            on_late=self._info,  # client.py rule 19
         )
         self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
@@ -315,6 +316,7 @@ class App:
             on_info=lambda problem, on: self._info(problem, on),
             stamp_clock=station_time.now_unix,  # heartbeat.py rule 6
             station=station_time.identity,  # heartbeat.py rule 7
+            broker_late=self.client.broker_late,  # service.py rule 12
         )
         # lastword.py rule 15: a marker sent again at QoS 1; its refusal on both topics said
         self.mqtt.confirm_markers_with(

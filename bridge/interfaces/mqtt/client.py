@@ -88,6 +88,26 @@ each written out in the module that keeps it:
    re-published there (a config changed while the broker stalled came back older, and
    stayed). So ``on_connect`` takes them from paho: one whose retained topic is in the cache
    is superseded by the value just sent; the others (events, deletions) go again, after it.
+19. The main connection reads its own heartbeats back (heartbeat.py rule 11, ``Echo``): it
+   subscribes to the heartbeat topic (QoS 0, like the beats), takes each beat it sent
+   (``_tick``) as it comes back (``_intercepted``, known by its exact payload, this process's
+   clock to the millisecond when it was sent; another's is dropped, as is a retained one), and
+   its network thread tells the echo what it saw (``_Ears``: paho_client.py rule 11, the quiet
+   an empty poll proves, and each read, judged before its messages are handled).
+   ``broker_late`` says whether the broker held the bridge up and no beat sent after that is
+   back yet (service.py rule 12 asks, on paho's thread, as the message is handled; any thread
+   may: the echo is kept under ``_echo_lock``, which is taken with no other lock held inside
+   it). A new connection starts clean. After a hold, the next beat goes at once. Being late,
+   and no longer, is said on ``B/bridge/info`` (``on_late``, on a thread of its own; the last
+   verdict is the one said, under ``_late_lock``). A connection none of whose beats came back
+   through UNREAD_S of quiet seen with one out (an ACL that denies reading the topic:
+   mosquitto grants the subscription and drops the beats) is never called late, and that is
+   said as rule 11 says, once, naming the topic; a beat that comes back clears it (as rule
+   16's probe). A backlog, however long (a start-up reading tens of thousands of retained
+   topics, a burst of targets), sees no quiet and is never taken for that (review 57: the
+   first design said it after 10 s of beats not back, whatever held them). It costs one
+   message read every HEARTBEAT_S, and a clock reading and the echo's lock at each round of
+   the network thread.
 
 Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
 cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
@@ -115,7 +135,13 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
-from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload, beat_properties
+from bridge.interfaces.mqtt.heartbeat import (
+    QUIET_S,
+    Beat,
+    Echo,
+    beat_payload,
+    beat_properties,
+)
 from bridge.interfaces.mqtt.limiter import EventLimiter
 from bridge.interfaces.mqtt.look import (
     CLEARS_SAID_AT_ONCE,
@@ -141,6 +167,28 @@ LOOK_TIMEOUT_S = 5.0  # rule 14: nothing from the broker this long ends the look
 LOOK_MAX_S = 60.0  # ... and this long whatever comes (a flood of messages ends it all the same)
 
 
+class _Ears:
+    """Rule 19: what the network thread saw (paho_client.py rule 11), into the echo under its
+    lock (paho's thread)."""
+
+    def __init__(self, echo: Echo, lock: threading.Lock, clock: Callable[[], float]) -> None:
+        self._echo, self._lock, self.clock = echo, lock, clock
+
+    def quiet(self, until: float) -> None:
+        with self._lock:
+            self._echo.quiet(until)
+
+    def reading(self) -> None:
+        now = self.clock()
+        with self._lock:
+            self._echo.reading(now)
+
+    def read(self) -> None:
+        now = self.clock()
+        with self._lock:
+            self._echo.read(now)
+
+
 class MqttClient(Connection):
     def __init__(
         self,
@@ -161,12 +209,13 @@ class MqttClient(Connection):
         heartbeat: str | None = None,
         wall: Callable[[], float] = time.time,
         station: str | None = None,
+        on_late: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
             settings,
             settings.effective_client_id(),
-            subscriptions=subscriptions,
+            subscriptions=[*subscriptions, *([heartbeat] if heartbeat is not None else [])],
             on_message=on_message,
             clock=clock,
             **options,
@@ -225,6 +274,14 @@ class MqttClient(Connection):
         self._beat = Beat()
         self._wall = wall
         self._station = station  # rule 2: the process the beats name (heartbeat.py rule 7)
+        self._echo = Echo()  # rule 19 (under ``_echo_lock``)
+        self._echo_lock = threading.Lock()  # rule 19: paho's thread, and ``broker_late``'s
+        if heartbeat is not None:  # rule 19: what the network thread saw, into the echo
+            self._client.hearing = _Ears(self._echo, self._echo_lock, clock)
+        self._on_late = on_late  # rule 19: said on B/bridge/info while it lasts
+        self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
+        self._late_now = False  # rule 19: the verdict (paho's thread writes it)
+        self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
 
     @property
     def problems(self) -> list[str]:
@@ -262,6 +319,12 @@ class MqttClient(Connection):
         a marker it publishes from now on comes back after those (the stop lane's holds wait
         for it: halts.py)."""
         return self._up and self._subscribing
+
+    def broker_late(self) -> float | None:
+        """Rule 19: how long the broker held the bridge up (the quiet seen), while it is late
+        now; None when it is not (or when no beat of this connection came back). Any thread."""
+        with self._echo_lock:
+            return self._echo.late(self._clock())
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -448,6 +511,8 @@ class MqttClient(Connection):
         with self._lock:
             self._delivery.new_connection()
             self._held.extend(held)  # a look that never ended leaves its own
+            with self._echo_lock:
+                self._echo.connected()  # rule 19
             self._owned.connected()
             look = self._look
             self._look_lost = False  # rule 16: judged anew
@@ -493,15 +558,64 @@ class MqttClient(Connection):
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
-        if self._beat.due(self._clock()):
+        now = self._clock()
+        echo = self._echo
+        with self._echo_lock:  # (rule 19: uncontended but for a test that asks)
+            due = self._beat.due(now) or echo.returning  # (rule 19: at once after a late one)
+            payload = beat_payload(self._wall()).encode() if due else b""
+            if due:
+                echo.sent(payload, now)  # rule 19 (before it can come back)
+            late, unread = echo.late(now) is not None, echo.unread(now)
+        if due:
             props = None
             if self._station is not None and self._v5:  # (3.1.1 has no properties)
                 props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
                 props.UserProperty = beat_properties(self._station)
-            payload = beat_payload(self._wall()).encode()
             self._client.publish(topic, payload, qos=0, properties=props)
+        if late != self._late_now:  # rule 19: said while it lasts
+            self._late_now = late
+            threading.Thread(target=self._say_late, daemon=True).start()
+        if unread and not self._delivery.denied(topic):
+            self._delivery.deny(
+                topic,
+                "read back what it publishes on",
+                "none of the heartbeats this connection published there came back (the "
+                "broker's ACL denies reading it?): a move the broker holds up (a broker that "
+                "stalls) is then not known late, and is carried out when it comes",
+            )
+
+    def _say_late(self) -> None:
+        """Rule 19 (its own thread): the last verdict on the broker's lateness, said."""
+        with self._late_lock:
+            late, said = self._late_now, self._late_said
+            if late == (said is not None) or self._on_late is None:
+                return
+            if late:
+                self._late_said = (
+                    f"the MQTT broker holds up what the bridge publishes (a heartbeat on "
+                    f"{self._heartbeat} out through {QUIET_S:g} s in which nothing came from "
+                    "it): until one sent after that comes back, MQTT moves sent without a "
+                    "stamp (`sent`) are refused; stops and locks go through"
+                )
+                log.warning("%s", self._late_said)
+                self._on_late(self._late_said, True)
+            else:
+                self._late_said = None
+                log.info(
+                    "the MQTT broker is quick again: a heartbeat sent after it held the "
+                    "bridge up came back"
+                )
+                assert said is not None
+                self._on_late(said, False)
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
+        if topic == self._heartbeat:  # rule 19: ours back (another's, a retained one: dropped)
+            if not retained:
+                with self._echo_lock:
+                    ours = self._echo.back(payload, self._clock())
+                if ours:
+                    self._fence_back(topic)  # (a denial said before is over)
+            return True
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None

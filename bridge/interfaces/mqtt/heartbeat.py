@@ -97,6 +97,42 @@ Rules:
    comparing the two stamps directly, takes it for not older: service.py rule 9), never
    another front end's (an attack pass: lifted to PstRotator's STOP, Gpredict's ``P`` seen
    before it turned the rotor). The reckoning rule 8 keeps from going back is the send time's.
+11. A message without a stamp carries no send time, but the station can tell that its broker
+   held messages up (frozen, not gone: an SD card writing the broker's file, a VM paused, a
+   swap storm; attack 13: a target held 10 s turned the rotor when the broker ran on): the main
+   connection reads its own beats back (``Echo``, client.py rule 19), each known by its exact
+   payload (this process's clock to the millisecond as it went, under MQTT 3.1.1 too: another
+   bridge's beat is no echo of ours; a forger who copies ours at once can only make the broker
+   look quick, as it looked before this rule), and its network thread says what it saw
+   (paho_client.py rule 11): a poll that found nothing to read proves that nothing came from
+   the last read up to it, whatever the thread's scheduling. The broker HELD the bridge up when
+   bytes are read after such quiet through which a beat of ours was out for QUIET_S or more:
+   the broker had the beat and passed nothing on. A late beat alone proves nothing: a main
+   connection kept seconds behind by a backlog (a burst of 10,000 targets, a flood on any topic
+   it reads) reads its own beats seconds late, as from a stalled broker, but never sees quiet
+   (its socket always has bytes), and the reverted first design refused the burst's newest
+   target after older ones were carried out (the newest word must win). From a hold on, until
+   a beat sent after it comes back (what the broker held is ahead of that beat: mosquitto reads
+   every ready socket in each round of its loop; one goes at once, not a beat period later), an
+   unstamped move read on the main connection is refused (service.py rule 12); the hold is
+   judged before anything in the read that ended the quiet is handled, so held beats read
+   before the held target, or after it, change nothing. A beat goes out every HEARTBEAT_S, up
+   to a second later (paho's loop, paho_client.py rule 2), and the thread sees quiet to within
+   a second: a move held up QUIET_S + HEARTBEAT_S + 2 s (7 s) or more is always refused, one
+   held QUIET_S or more may be (the console and the remote refuse one at 5 s). A healthy link sees a
+   beat out for a round trip; one whose echoes come in a pipeline (a round trip longer than
+   the beat period) reads an echo every beat period: neither sees QUIET_S with a beat out, nor
+   does an idle bridge with its heartbeat off (no beat out). A link whose round trip is QUIET_S
+   or more holds every message that long, and a move over it may be refused, the safe side.
+   No clock decides anything but a refusal (docs/architecture.md rule 15): a broker that is
+   quick again lets the next move through, and one none of whose beats were read back on this
+   connection (an ACL that denies reading the heartbeat topic: mosquitto grants the
+   subscription and drops the messages) is never called late. That is said once (client.py
+   rule 19) after UNREAD_S of quiet seen with a beat out, never for a backlog however long (a
+   start-up reading tens of thousands of retained topics sees no quiet: its beats are behind
+   them, not unread). A new connection starts clean. The beats out are kept by payload,
+   MAX_ECHOES at most (the oldest go first: a broker frozen longer than that still shows a
+   beat out through the quiet).
 """
 
 from __future__ import annotations
@@ -120,6 +156,12 @@ NAMELESS = ""  # rule 7: the name a stamp gives a process whose beats named none
 MAX_EXPIRY_S = 3600.0
 MAX_PROPERTIES_BYTES = 4096  # rule 9: a PUBLISH's properties read, at most
 UNREAD_PROPERTIES = "rotor-bridge unread properties"  # rule 9: in their place, their size
+# rule 11: quiet seen this long with a beat out, the broker held the bridge up (a healthy link
+# sees a beat out a round trip, a pipelined one under a beat period: HEARTBEAT_S and up to 1 s);
+# plus a beat period and paho's seconds, 7 s (the console and the remote refuse a move at 5 s)
+QUIET_S = 3.0
+MAX_ECHOES = 32  # rule 11: the beats out kept (a minute of them)
+UNREAD_S = 5 * HEARTBEAT_S  # rule 11: none back through this much quiet with one out: unread
 
 
 def beat_payload(now_unix: float) -> str:
@@ -159,6 +201,104 @@ class Beat:
             return False
         self._last = now
         return True
+
+
+class Echo:
+    """Rule 11 on the station: the bridge's own beats read back, the quiet the network thread
+    saw, and whether the broker held the bridge up. Pure (the monotonic time handed in); the
+    caller keeps it under one lock (client.py rule 19)."""
+
+    def __init__(self, quiet_s: float = QUIET_S, unread_s: float = UNREAD_S) -> None:
+        self._quiet_s = quiet_s
+        self._unread_s = unread_s
+        self._out: dict[bytes, float] = {}  # payload -> sent, oldest first
+        self._read = False  # one of this connection's beats came back
+        self._heard = -math.inf  # the last read that found bytes ended then
+        self._quiet_to: float | None = None  # an empty poll proved nothing came from then to this
+        self._unread_quiet_s = 0.0  # quiet seen with a beat out while none came back, summed
+        self._held_at: float | None = None  # held up: judged then; late until a beat sent
+        self._held_s = 0.0  # ... after it is back; the longest quiet meanwhile
+
+    def connected(self) -> None:
+        """A new connection: nothing of the last one comes back on it, nothing was heard yet."""
+        self._out.clear()
+        self._read, self._heard, self._quiet_to = False, -math.inf, None
+        self._unread_quiet_s, self._held_at, self._held_s = 0.0, None, 0.0
+
+    def sent(self, payload: bytes, now: float) -> None:
+        self._out[payload] = now
+        while len(self._out) > MAX_ECHOES:
+            del self._out[next(iter(self._out))]
+
+    def quiet(self, until: float) -> None:
+        """An empty poll: nothing came on the connection from the last read up to ``until``."""
+        if until > self._heard and (self._quiet_to is None or until > self._quiet_to):
+            self._quiet_to = until
+
+    def reading(self, now: float) -> None:
+        """Bytes wait and are about to be read (the messages in them handled inside the read):
+        the quiet seen since the last read is over; judged before any of them is handled."""
+        quiet_to, self._quiet_to = self._quiet_to, None
+        if quiet_to is None:
+            return  # (a backlog: every poll found bytes)
+        waited_s = self._waited(quiet_to)
+        if not self._read:
+            self._unread_quiet_s += waited_s
+        if waited_s >= self._quiet_s:  # the broker held a beat of ours that long, silent
+            self._held_at = now
+            self._held_s = max(self._held_s, quiet_to - self._heard)
+
+    def read(self, now: float) -> None:
+        """The read is over: quiet, if any, is counted from now."""
+        self._heard = now
+
+    def back(self, payload: bytes, now: float) -> bool:
+        """A beat read back: True if it was one of ours out."""
+        sent = self._out.pop(payload, None)
+        if sent is None:
+            return False
+        for older in [p for p, t in self._out.items() if t <= sent]:
+            del self._out[older]  # (the broker keeps one order: those are lost, not late)
+        self._read = True
+        if self._held_at is not None and sent >= self._held_at:
+            self._held_at, self._held_s = None, 0.0  # sent after the hold ended: caught up
+        return True
+
+    def late(self, now: float) -> float | None:
+        """How long the broker held the bridge up (the quiet seen), while it is late now: a hold
+        judged and no beat sent after it back yet, or a beat out through QUIET_S of quiet seen
+        so far; None when it is not, or when no beat of this connection has come back (nothing
+        to judge by: an ACL that denies reading them)."""
+        if not self._read:
+            return None
+        if self._held_at is not None:
+            return self._held_s
+        quiet_to = self._quiet_to
+        if quiet_to is not None and self._waited(quiet_to) >= self._quiet_s:
+            return quiet_to - self._heard
+        return None
+
+    @property
+    def returning(self) -> bool:
+        """A hold was judged and no beat sent after it yet: one should go at once."""
+        held_at = self._held_at
+        return held_at is not None and all(t < held_at for t in self._out.values())
+
+    def unread(self, now: float) -> bool:
+        """No beat of this connection came back though one was out through UNREAD_S of quiet
+        seen (a backlog, however long, shows no quiet: its beats are behind it, not unread)."""
+        if self._read:
+            return False
+        quiet_to = self._quiet_to
+        open_s = 0.0 if quiet_to is None else self._waited(quiet_to)
+        return self._unread_quiet_s + open_s > self._unread_s
+
+    def _waited(self, quiet_to: float) -> float:
+        """The part of the quiet up to ``quiet_to`` through which a beat of ours was out."""
+        oldest = next(iter(self._out.values()), None)
+        if oldest is None:
+            return 0.0
+        return max(0.0, quiet_to - max(self._heard, oldest))
 
 
 class StationClock:

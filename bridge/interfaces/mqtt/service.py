@@ -111,6 +111,20 @@ Rules:
    with it). A lock OFF read then, after a lock ON, is refused as
    halts.py says; its halt count goes with it too, and the judge refuses it if a lock ON
    came between (runtime/rotator.py).
+12. A move the main connection reads without a stamp (a target, a preset, park, a nudge, a
+   place or a call, a track or follow start, a feature's command that moves, a group's target)
+   while the broker is late (``broker_late``: the broker held the bridge up, seen as quiet with
+   a beat of its own out, and no beat sent after that is back yet: heartbeat.py rule 11,
+   client.py rule 19) is refused on ``R/error`` ("the MQTT broker held this up ...; send it
+   again") and changes nothing: it may have been published long before (attack 13). A move
+   read late only because the main connection is behind (a backlog: a burst of targets) is
+   not refused: the newest of a burst is carried out, as the last word wants. It is judged
+   before anything else is done with the move (a lock OFF's wait included, rule 11). A
+   stamped move keeps rule 9's judgement, by its own send time. Stop and lock ON are never
+   refused (docs/architecture.md rule 11), nor is a lock OFF, an option or a track or follow
+   OFF: they turn nothing (a lock OFF the broker held lets only a later move go, and that move
+   is judged here). A clock decides nothing else (docs/architecture.md rule 15: it may only
+   refuse, the safe side): a broker quick again lets the next move through.
 """
 
 from __future__ import annotations
@@ -189,6 +203,7 @@ class MqttService:
         on_info: Callable[[str, bool], None] | None = None,
         stamp_clock: Callable[[], float] | None = None,
         station: str | None = None,
+        broker_late: Callable[[], float | None] | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
@@ -197,6 +212,7 @@ class MqttService:
         self._wall = wall
         self._stamp_clock = wall if stamp_clock is None else stamp_clock  # rule 9
         self._station = station  # rule 9: this process, as its heartbeats name it
+        self._broker_late = broker_late  # rule 12
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._audit_limiter = EventLimiter(
             clock, round(5 * error_events_per_s), error_events_per_s
@@ -542,6 +558,8 @@ class MqttService:
             )
         elif (late := self._late(stamp)) is not None:
             why = late
+        elif stamp is None and (held := self._held_up()) is not None:  # rule 12
+            why = held
         elif gated:
             why = "not taken: the bridge is still checking its base topic; send it again"
         if why is not None:
@@ -669,6 +687,17 @@ class MqttService:
             return sent_unix < halted_unix
         return time.monotonic() - (self._stamp_clock() - sent_unix) < halted_s
 
+    def _held_up(self) -> str | None:
+        """Rule 12: why an unstamped move read now may be one the broker held up, or None."""
+        held_s = None if self._broker_late is None else self._broker_late()
+        if held_s is None:
+            return None
+        return (
+            f"the MQTT broker held this up: it passed nothing on for {held_s:.0f} s while it "
+            "held a heartbeat of the bridge's (it stalled), so this move may have been sent "
+            "that long ago, and is not carried out; send it again"
+        )
+
     def _not_after(self, stamp: Stamp | None) -> float | None:
         """Rule 9: when a stamped move expires, on the steady clock the sessions keep (None:
         no stamp, or none that can be read; such a one was refused)."""
@@ -766,7 +795,9 @@ class MqttService:
             self._halts.main_lock_off(rot, origin)
             return
         try:
-            self._command(rot, kind, arg, payload, what, origin, self._not_after(stamp))
+            self._command(
+                rot, kind, arg, payload, what, origin, self._not_after(stamp), stamp is not None
+            )
         except pl.PayloadError as exc:
             rot.report_refusal(str(exc), what, origin=origin)
         except Refused:
@@ -781,10 +812,16 @@ class MqttService:
         what: str,
         by: Origin,
         not_after_s: float | None = None,
+        stamped: bool = False,
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge (a move with
-        its stamp's expiry, ``not_after_s``: rule 9); PayloadError or Refused."""
+        its stamp's expiry, ``not_after_s``: rule 9; one without a stamp judged by rule 12);
+        PayloadError or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
+        moves = isinstance(command, Called) or (command is not None and turns_rotor(command))
+        if moves and not stamped and (held := self._held_up()) is not None:  # rule 12
+            rot.report_refusal(held, what, origin=by)
+            return
         if not_after_s is not None and isinstance(command, Target | Move):
             command = replace(command, not_after_s=not_after_s)
         if (
