@@ -273,6 +273,19 @@ def test_a_broker_frozen_longer_than_the_beats_kept_still_shows_one_out_through_
     assert held is not None and held > QUIET_S
 
 
+def test_a_hold_before_any_read_of_the_connection_is_said_from_its_beat_on() -> None:
+    """(Nothing read yet on the connection: the quiet counts from the beat that was out.)"""
+    clock, echo = FakeClock(), Echo()
+    echo.connected()
+    echo.sent(b"100.000", clock())
+    clock.t += 5.0
+    echo.quiet(clock())
+    echo.reading(clock())
+    assert echo.late(clock()) is None  # (no beat of the connection back yet: not judged)
+    assert echo.back(b"100.000", clock())
+    assert echo.late(clock()) == 5.0  # the hold stands until a beat sent after it is back
+
+
 # -- the service (rule 12) ------------------------------------------------------------------------
 class Broker:
     def __init__(self) -> None:

@@ -246,7 +246,7 @@ class Echo:
             self._unread_quiet_s += waited_s
         if waited_s >= self._quiet_s:  # the broker held a beat of ours that long, silent
             self._held_at = now
-            self._held_s = max(self._held_s, quiet_to - self._heard)
+            self._held_s = max(self._held_s, self._quiet_for(quiet_to))
 
     def read(self, now: float) -> None:
         """The read is over: quiet, if any, is counted from now."""
@@ -275,7 +275,7 @@ class Echo:
             return self._held_s
         quiet_to = self._quiet_to
         if quiet_to is not None and self._waited(quiet_to) >= self._quiet_s:
-            return quiet_to - self._heard
+            return self._quiet_for(quiet_to)
         return None
 
     @property
@@ -292,6 +292,10 @@ class Echo:
         quiet_to = self._quiet_to
         open_s = 0.0 if quiet_to is None else self._waited(quiet_to)
         return self._unread_quiet_s + open_s > self._unread_s
+
+    def _quiet_for(self, quiet_to: float) -> float:
+        """How long nothing came, up to ``quiet_to`` (what is said: the hold's length)."""
+        return quiet_to - self._heard if self._heard > -math.inf else self._waited(quiet_to)
 
     def _waited(self, quiet_to: float) -> float:
         """The part of the quiet up to ``quiet_to`` through which a beat of ours was out."""
