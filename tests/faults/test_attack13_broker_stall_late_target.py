@@ -8,6 +8,8 @@ reads was published long before. A target Home Assistant published at the start 
 stall reaches the bridge when the broker runs on, and the rotor turns then, 10 s after the
 operator asked and saw nothing happen: twice the age at which the house refuses a move from
 its own console (web/commands.py MAX_AGE_S) or from the remote (``command_expiry_s``).
+Now the bridge's network thread sees the stall as quiet while a heartbeat of its own is out
+(heartbeat.py rule 11), and refuses an unstamped move until a beat sent after it is back.
 
 Real parts: mosquitto (frozen with SIGSTOP), the bridge in-process, an emulated Rotor-EZ on a
 pty, a paho client (the probe) as Home Assistant."""
