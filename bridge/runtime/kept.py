@@ -65,29 +65,40 @@ Rules:
    start guards a turn on to it (noticed in an attack pass: stopped short of 300, the bridge
    restarted, and a poll garbled into ``AM1;`` turned the rotor on to 300 unsaid). It is
    saved only when it changes: at a stop short of the target, and at the next turn.
-10. A state file that does not say the rotator's lock (a new one: the service run by hand, whose
-   default ``state_file`` is another; a container recreated without its volume; the file
-   deleted; or a lock ON its save failed to keep, rule 3, where no lock was saved before) is not
-   the last word on it: the ``R/lock/state`` ON the broker held from an earlier run
-   (interfaces/mqtt/look.py rule 14) locks the rotator (``heard_lock``), saved as any lock ON
-   and said (kind ``state``), unless a lock word has been said since the start (it is newer). An
-   attack pass: the lock ON set for tower work came back OFF after a restart on a new state
-   file, the retained ON was put back as OFF without a word, and a target turned the rotor.
+10. Only a state file's lock ON is the last word on the lock at a start. A file that does not
+   say ON (a new one: the service run by hand, whose default ``state_file`` is another; a
+   container recreated without its volume; the file deleted; a lock ON its save failed to
+   keep, rule 3; or one that says OFF) leaves the lock to the broker too: the ``R/lock/state``
+   ON it held from an earlier run (interfaces/mqtt/look.py rule 14) locks the rotator
+   (``heard_lock``), saved as any lock ON and said (kind ``state``, and in the log), unless a
+   lock word has been said since the start (it is newer). An attack pass: the lock ON set for
+   tower work came back OFF after a restart on a new state file, the retained ON was put back
+   as OFF without a word, and a target turned the rotor. Attack 15: the same with a file that
+   says OFF, the OFF the service saved before the bridge was run by hand on another file
+   (``state_file`` left out) and locked there; the file's OFF won, as it did until then, though
+   it was older than the ON. A file's OFF cannot tell the ON the broker holds older or newer,
+   and a lock is safety state: losing an ON without a word is dangerous, keeping an unlock
+   too long only inconvenient. So an OFF saved while the broker was away (its OFF not
+   published), then a restart before the broker came back, starts locked from the broker's
+   older ON, said (``said_off``: the wording says the file's OFF): the safe side; a lock OFF
+   ends it. A stranger's retained ON there locks it too, said.
    Until that look has said it (the broker down, or slower to start than the bridge;
    ``await_heard_lock``), such a rotator refuses motion, as a locked one does (a review:
    rotctld, the console and the loggers run before the look, and a tracking program's target
-   turned the rotor meanwhile); a lock word ends the wait. The status says so meanwhile
-   (``lock_unknown``): ``locked`` false is no OFF then (an attack pass: the console showed
-   "Lock OFF" while it refused every click for a lock that may be ON). The bridge's own moves
-   wait too (session/parts.py rule 7): auto-park (``park_after_idle_s``) and the park of a
-   storm kept in the file (rule 4) send nothing while the lock is not known; a lock ON heard
-   then refuses them (wind.py rule 3: that park is not tried again), nothing heard lets them go
-   (a review: auto-park parked, and a kept storm's park turned, a rotor whose lock only the
-   broker still held, while the broker stayed away, before the look said it).
-   A file that says the lock wins, and waits for no broker: OFF was written after the ON the
-   broker holds, or the ON is a stranger's, or (not told apart) the ON's save failed after
-   an OFF was saved: a lock ON whose save failed is taken from the broker only where the file
-   never said the rotator's lock.
+   turned the rotor meanwhile); a lock word ends the wait. So a start with the broker down
+   refuses motion until the broker is read whatever the file says but ON (the price of the
+   rule above: docs/mqtt.md ``R/lock``). Only the bridge waits (app.py, which always has a
+   broker to ask); a rotator built without ``await_heard_lock`` never waits. The status says
+   so meanwhile (``lock_unknown``): ``locked`` false is no OFF then (an attack pass: the
+   console showed "Lock OFF" while it refused every click for a lock that may be ON). The
+   bridge's own moves wait too (session/parts.py rule 7): auto-park (``park_after_idle_s``) and
+   the park of a storm kept in the file (rule 4) send nothing while the lock is not known; a
+   lock ON heard then refuses them (wind.py rule 3: that park is not tried again), nothing
+   heard lets them go (a review: auto-park parked, and a kept storm's park turned, a rotor
+   whose lock only the broker still held, while the broker stayed away, before the look said
+   it).
+   A file that says ON wins, and waits for no broker: the broker's OFF (or none) is older, or
+   a stranger's, or an OFF said on another run's file: kept locked, the safe side.
 11. The version its controller reported last outlives a restart (state_store.py rule 12), kept
    with the model's name: at the next start it is the rotator's version (``version``; in its
    status, so ``R/version``, ``R/status`` and Home Assistant's ``sw_version`` say it) until the
@@ -186,8 +197,10 @@ class Kept:
         self._unsaved: dict[str, SettingValue] = {}  # rule 7: options whose save is queued
         self._unsaved_guard = threading.Lock()  # the owner's step and the writer's
         self._lock_unsaved = False  # rule 7: a lock save is queued and has not read the lock
-        self.lock_unsaid = not store.holds_lock(rotator_id)  # rule 10 (no word since start)
         self.locked = store.locked(rotator_id)  # rule 2: the one copy
+        # rule 10: only a file's ON is the last word; its OFF is said apart (``said_off``)
+        self.said_off = store.holds_lock(rotator_id) and not self.locked
+        self.lock_unsaid = not self.locked  # rule 10 (and no word since start)
         if self.locked:  # rule 6
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it

@@ -129,10 +129,15 @@ HEARD_LOCK_MESSAGE = (  # kept.py rule 10
     "lock ON kept from the broker: R/lock/state said ON before this start, and the state file "
     "did not say this rotator's lock (a new or another state_file?); lock OFF releases it"
 )
+HEARD_OVER_OFF_MESSAGE = (  # kept.py rule 10 (attack 15): the file said OFF
+    "lock ON kept from the broker: R/lock/state said ON before this start, and this bridge's "
+    "state file says OFF (a lock set by another run of the bridge, on another state_file, or "
+    "an OFF that never reached the broker?); lock OFF releases it"
+)
 UNHEARD_LOCK_MESSAGE = (  # kept.py rule 10
-    "motion refused: the state file does not say this rotator's safety lock, and the broker's "
-    "R/lock/state, which may say ON, has not been read yet (the MQTT broker not reached); "
-    "a lock OFF releases it"
+    "motion refused: the state file does not say this rotator's safety lock is ON, and the "
+    "broker's R/lock/state, which may say ON, has not been read yet (the MQTT broker not "
+    "reached); a lock OFF releases it"
 )
 ON_ITS_WAY_MESSAGE = (
     "a command sent just before it is still on its way to the controller: send it again"
@@ -785,7 +790,7 @@ class Rotator:
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
 
     def await_heard_lock(self) -> None:
-        """kept.py rule 10: motion is refused while the state file has not said the lock and
+        """kept.py rule 10: motion is refused while the state file has not said the lock ON and
         ``heard_lock`` has not been called (before the front ends start); the status says the
         lock is not known meanwhile (``lock_unknown``), a lock word or ``heard_lock`` ends it."""
         self._unheard = True
@@ -795,7 +800,8 @@ class Rotator:
     def heard_lock(self, payload: bytes | None) -> bool:
         """kept.py rule 10: ``R/lock/state`` as the broker held it from an earlier run (MQTT's
         first look; None: it held none); ON locks the rotator if the state file did not say its
-        lock and no lock word came since the start. True if it did. Motion waits no more."""
+        lock ON (nothing, or OFF) and no lock word came since the start. True if it did.
+        Motion waits no more."""
         with self._owner:  # (one step with every lock word: one said since is newer)
             took = payload == b"ON" and self._kept.lock_unsaid and not self._kept.locked
             if took:
@@ -817,8 +823,9 @@ class Rotator:
             return False
         who = Origin(Source.MQTT, "retained R/lock/state")
         self.operators.audit(who, describe_command(Lock(on=True)), EXECUTED)
-        self.report(ErrorKind.STATE, HEARD_LOCK_MESSAGE, "lock")
-        log.warning("%s: %s", self.id, HEARD_LOCK_MESSAGE)
+        said = HEARD_OVER_OFF_MESSAGE if self._kept.said_off else HEARD_LOCK_MESSAGE
+        self.report(ErrorKind.STATE, said, "lock")
+        log.warning("%s: %s", self.id, said)
         return True
 
     def note(self, message: str) -> None:

@@ -1,7 +1,8 @@
-"""kept.py rule 10: a state file that does not say a rotator's lock is not the last word on it.
-The ``R/lock/state`` ON the broker held from an earlier run (the first look hands it on:
-interfaces/mqtt/look.py rule 14) locks the rotator, saved and said; a file that says the lock,
-either way, or a lock word since the start, is newer and wins."""
+"""kept.py rule 10: only a state file's lock ON is the last word on the lock at a start. The
+``R/lock/state`` ON the broker held from an earlier run (the first look hands it on:
+interfaces/mqtt/look.py rule 14) locks a rotator whose file does not say ON (nothing, or OFF:
+attack 15), saved and said; a file that says ON, or a lock word since the start, is newer and
+wins."""
 
 from __future__ import annotations
 
@@ -12,7 +13,12 @@ import pytest
 
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorEvent, ErrorKind, Target
-from bridge.runtime.rotator import HEARD_LOCK_MESSAGE, OFFLINE_MESSAGE, UNHEARD_LOCK_MESSAGE
+from bridge.runtime.rotator import (
+    HEARD_LOCK_MESSAGE,
+    HEARD_OVER_OFF_MESSAGE,
+    OFFLINE_MESSAGE,
+    UNHEARD_LOCK_MESSAGE,
+)
 from bridge.runtime.state_store import StateStore
 from tests.engine.test_owner import Station, console_lock
 
@@ -43,12 +49,35 @@ def test_a_lock_on_the_broker_held_locks_a_rotator_the_state_file_lost(
     assert st.restarted().locked
 
 
-@pytest.mark.parametrize("said", [False, True], ids=["file says OFF", "file says ON"])
-def test_a_state_file_that_says_the_lock_wins(tmp_path: Path, said: bool) -> None:
-    """An OFF written after the ON the broker holds (or a stranger's ON) is the last word."""
-    st, events = _with_file(tmp_path, {"locked": said})
-    assert not st.rot.heard_lock(b"ON")
-    assert st.rot.locked is said and events == []
+def test_a_lock_on_the_broker_held_locks_a_rotator_whose_state_file_says_off(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Attack 15: the file's OFF cannot tell the broker's ON older or newer (the ON was set on a
+    run of the bridge by hand, on another state file; or the OFF was saved while the broker was
+    away and never reached it): it used to win, and the ON was put back as OFF without a word.
+    A lock is safety state: the ON locks it, said as the file's OFF overridden."""
+    st, events = _with_file(tmp_path, {"locked": False})
+    assert st.rot.heard_lock(b"ON")
+    shown = st.settle()
+    assert st.rot.locked and shown.locked
+    assert StateStore(st.path).locked("tower")
+    assert [(e.kind, e.message) for e in events] == [(ErrorKind.STATE, HEARD_OVER_OFF_MESSAGE)]
+    assert "state file says OFF" in HEARD_OVER_OFF_MESSAGE
+    assert "lock OFF releases it" in HEARD_OVER_OFF_MESSAGE
+    assert f"tower: {HEARD_OVER_OFF_MESSAGE}" in caplog.messages
+    with pytest.raises(Refused, match="locked"):
+        st.rot.submit(Target(100.0, None))
+    assert st.restarted().locked
+
+
+def test_a_state_file_that_says_the_lock_on_wins(tmp_path: Path) -> None:
+    """An ON kept is the last word: the broker's OFF (or none) is older, a stranger's, or an OFF
+    said on another run's file; kept locked, the safe side. (Until attack 15 a file's OFF won
+    the same way: now it does not, above.)"""
+    st, events = _with_file(tmp_path, {"locked": True})
+    for payload in (b"OFF", None):
+        assert not st.rot.heard_lock(payload)
+    assert st.rot.locked and events == []
 
 
 def test_a_lock_word_since_the_start_is_newer(tmp_path: Path) -> None:
@@ -80,13 +109,19 @@ def test_anything_but_on_changes_nothing(tmp_path: Path, caplog: pytest.LogCaptu
     assert not st.rot.locked and events == []
 
 
-@pytest.mark.parametrize("entry", [None, {"options": {}}], ids=["no file", "no lock"])
+@pytest.mark.parametrize(
+    "entry",
+    [None, {"options": {}}, {"locked": False}],
+    ids=["no file", "no lock", "file says OFF"],
+)
 def test_no_motion_until_the_broker_said_a_lock_the_state_file_does_not_say(
     tmp_path: Path, entry: dict[str, object] | None
 ) -> None:
     """Before the first look (the broker down, or slower to start than the bridge) a target
     from rotctld, the console or a logger turned a rotor whose lock only the broker still
-    held; it is refused until the look hands on what the broker held (nothing: free)."""
+    held; it is refused until the look hands on what the broker held (nothing: free). A file
+    that says OFF waits too (attack 15: it used to wait for no broker, and the ON the broker
+    held from a run on another state file was lost)."""
     st, _ = _with_file(tmp_path, entry)
     st.rot.await_heard_lock()
     with pytest.raises(Refused, match="R/lock/state") as refused:
@@ -96,11 +131,22 @@ def test_no_motion_until_the_broker_said_a_lock_the_state_file_does_not_say(
     assert _judged(st) == OFFLINE_MESSAGE  # (the judge goes on: this station has no link)
 
 
-@pytest.mark.parametrize("said", [False, True], ids=["file says OFF", "file says ON"])
-def test_a_state_file_that_says_the_lock_waits_for_no_broker(tmp_path: Path, said: bool) -> None:
-    st, _ = _with_file(tmp_path, {"locked": said})
+def test_a_state_file_that_says_the_lock_on_waits_for_no_broker(tmp_path: Path) -> None:
+    """Locked at once, and said so (not "not known yet"). A file that says OFF waits now
+    (attack 15: above)."""
+    st, _ = _with_file(tmp_path, {"locked": True})
     st.rot.await_heard_lock()
-    assert _judged(st) != UNHEARD_LOCK_MESSAGE
+    assert "locked (safety lock ON)" in _judged(st)
+    assert not st.settle().lock_unknown
+
+
+def test_a_rotator_that_is_never_told_to_wait_never_waits(tmp_path: Path) -> None:
+    """Only the bridge (app.py, which always has a broker to ask) calls ``await_heard_lock``;
+    a file that says OFF, or nothing, refuses no motion for the lock without it."""
+    for name, entry in (("new", None), ("off", {"locked": False})):
+        (tmp_path / name).mkdir()
+        st, _ = _with_file(tmp_path / name, entry)
+        assert _judged(st) == OFFLINE_MESSAGE
 
 
 def _judged(st: Station) -> str:

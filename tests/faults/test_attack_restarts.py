@@ -42,6 +42,10 @@ def test_a_lock_on_the_bridge_said_is_still_on_after_a_crash_right_after_it(
         emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
         for round_ in range(3):
             state.write_text(json.dumps({"rotators": {"tower": {"locked": False}}}))
+            # the broker's word too (the last round's restart left its ON there): since attack
+            # 15 a file's OFF no longer outweighs it (kept.py rule 10), so both say OFF here,
+            # as a bridge that saved and said OFF leaves them
+            assert probe.publish("rotor/lock/state", "OFF", retain=True)
             t = time.monotonic()
             bridge = rig.start_process()
             probe.wait_value("rotor/lock/state", "OFF", timeout_s=30, after=t)

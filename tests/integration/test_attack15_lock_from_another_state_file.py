@@ -17,18 +17,11 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
+from bridge.runtime.rotator import HEARD_OVER_OFF_MESSAGE
 from bridge.runtime.state_store import StateStore
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 15: a lock ON the broker held from a run on another state file is put back "
-    "to OFF by a start whose state file says OFF, without a word, and the next target turns "
-    "the rotor locked for tower work",
-)
 def test_a_lock_on_from_a_run_on_another_state_file_is_kept_or_said(rig: Rig) -> None:
     service, by_hand = rig.tmp / "service-state.json", rig.tmp / "by-hand-state.json"
     assert StateStore(service).set_locked("tower", False)  # the service's last word: OFF
@@ -62,4 +55,43 @@ def test_a_lock_on_from_a_run_on_another_state_file_is_kept_or_said(rig: Rig) ->
     assert refused or said, (
         f"lock/state {probe.last('rotor/lock/state')}, target {done.text}, "
         f"rotor at {emu.state().az_deg:.0f}: the broker's lock ON dropped without a word"
+    )
+
+
+def test_the_service_starts_locked_says_why_and_the_rotor_stays(rig: Rig) -> None:
+    """The fix (kept.py rule 10): the file's OFF no longer outweighs the broker's ON. The
+    service starts locked, says on ``R/error`` (kind ``state``) that the broker held a lock
+    ON its file says was OFF, keeps ``R/lock/state`` ON and its own file ON (the next start is
+    locked too), and the next target turns nothing."""
+    service, by_hand = rig.tmp / "service-state.json", rig.tmp / "by-hand-state.json"
+    assert StateStore(service).set_locked("tower", False)
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    probe = rig.probe
+    rig.sections["state_file"] = str(by_hand)
+    rig.start()
+    rig.ready("tower")
+    probe.publish("rotor/lock", "ON")
+    probe.wait_value("rotor/lock/state", "ON")
+    rig.stop()
+
+    after = probe.caught_up()
+    rig.sections["state_file"] = str(service)
+    rig.start()
+    rig.ready("tower", after=after)
+    said = probe.wait_for(
+        "rotor/error", lambda m: json.loads(m.text)["kind"] == "state", after=after
+    )
+    assert json.loads(said.text)["message"] == HEARD_OVER_OFF_MESSAGE
+    probe.publish("rotor/target", "200")
+    done = probe.wait_for(
+        "rotor/audit", lambda m: json.loads(m.text)["command"] == "target '200'", after=after
+    )
+    assert json.loads(done.text)["result"].startswith("refused"), done.text
+    assert [m.text for m in probe.on("rotor/lock/state") if m.t >= after] in ([], ["ON"])
+    shown = probe.last("rotor/lock/state")
+    assert shown is not None and shown.text == "ON"
+    rig.stop()
+    assert StateStore(service).locked("tower")  # the next start is locked too
+    assert abs(emu.state().az_deg - 10) < 1 and not any(
+        f.data.startswith((b"AP", b"AM")) for f in emu.log()
     )
