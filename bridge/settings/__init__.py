@@ -174,7 +174,11 @@ class Settings(BaseSettings):
         "console's page) is kept beside it. A file of its own: the configuration file, the "
         "audit file or a file another key names is refused (it would be overwritten). A file "
         "there that is no state file (unreadable) starts every rotator locked, and is kept as "
-        "<name>.unreadable before the bridge first writes it anew",
+        "<name>.unreadable before the bridge first writes it anew. Only a lock ON there is the "
+        "last word at a start: a rotator whose lock it says OFF, or does not say, takes the "
+        "lock ON the broker still holds on R/lock/state (set by a run on another state_file), "
+        "said on R/error, and refuses every motion until the broker has been read (the broker "
+        "down at start: until it comes, or a lock word)",
         examples=["/var/lib/rotor-bridge/state.json"],
         json_schema_extra={
             "unset": "$STATE_DIRECTORY/state.json under systemd, else "
