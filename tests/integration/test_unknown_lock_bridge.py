@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import time
 
+import pytest
+
 from bridge.runtime.state_store import StateStore
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until
@@ -41,8 +43,13 @@ def _stays_unturned(rig: Rig) -> None:
         time.sleep(0.1)  # a poll, not a deadline
 
 
-def test_auto_park_waits_for_the_broker_to_say_the_lock(rig: Rig) -> None:
+@pytest.mark.parametrize("said_off", [False, True], ids=["file says nothing", "file says OFF"])
+def test_auto_park_waits_for_the_broker_to_say_the_lock(rig: Rig, said_off: bool) -> None:
+    """A file that says OFF waits as one that says nothing (attack 15: its OFF cannot tell the
+    broker's ON older or newer; it used to wait for no broker)."""
     rig.add("tower", emu=EMU, **PARKING)
+    if said_off:
+        assert StateStore(rig.settings.state_file).set_locked("tower", False)
     rig.broker.stop()
     _answering_unknown(rig)
     _stays_unturned(rig)
