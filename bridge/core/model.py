@@ -177,15 +177,22 @@ class AuditEvent:
     more_senders: bool = False
     names: tuple[str, ...] = ()
     # a command that, sent again by its sender with nothing executed in between, changes nothing
-    # (an absolute target, a claim, a release, a lock OFF, a setting): folded (runtime/audit.py
-    # rule 9); not a nudge, a preset or a park, which may turn the rotor anew
+    # (an absolute target, a claim, a release, a lock word, a setting, tracking or following
+    # OFF): folded (runtime/audit.py rule 9); not a nudge, a preset or a park, which may turn
+    # the rotor anew
     same_again: bool = False
+    # a halt that changed nothing: a lock ON while the lock was ON (no storm's park owed),
+    # tracking OFF while nothing was tracked, following OFF while nothing was followed
+    # (runtime/audit.py rule 10): folded like a stop, and R/audit counts it with the stops
+    # (interfaces/mqtt/service.py rule 8)
+    unchanged: bool = False
 
     @property
     def routine(self) -> bool:
-        """A refusal or an executed stop: what a flood is made of, folded into one line per
-        sender (runtime/audit.py rule 6); a move, a lease or a lock change never is."""
-        return self.halt or self.result.startswith("refused")
+        """A refusal, an executed stop or a halt that changed nothing: what a flood is made of,
+        folded into one line per sender (runtime/audit.py rules 6, 10); a move, a lease or a
+        lock change never is."""
+        return self.halt or self.unchanged or self.result.startswith("refused")
 
     def as_dict(self) -> dict[str, object]:
         doc: dict[str, object] = {

@@ -630,6 +630,13 @@ class CompositeWorker:
             return 0
         return applied
 
+    @property
+    def features_on(self) -> tuple[bool, bool]:
+        """What a tracking OFF and a following OFF would end now, in either box (rule 4: one
+        box may track or follow while the merged status, the azimuth box's, shows nothing)."""
+        ons = [box.session.features_on for box in self.boxes.values()]
+        return any(t for t, _ in ons), any(f for _, f in ons)
+
     def _event(self, axis: Axis, event: ErrorEvent) -> None:
         event = self.composition.whole(axis, event)  # rule 9
         if self.composition.said(axis, event):

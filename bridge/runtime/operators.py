@@ -248,9 +248,10 @@ class Operators:
         *,
         halt: bool = False,
         same_again: bool = False,
+        unchanged: bool = False,
     ) -> None:
         """``halt``: an executed stop (audit.py rule 6); ``same_again``: a command that changes
-        nothing when sent again (rule 9)."""
+        nothing when sent again (rule 9); ``unchanged``: a halt that changed nothing (rule 10)."""
         if self._on_audit is None:
             return
         try:
@@ -264,6 +265,7 @@ class Operators:
                 bearing,
                 halt,
                 same_again=same_again,
+                unchanged=unchanged,
             )
             self._on_audit(event)
         except Exception:

@@ -20,7 +20,9 @@ the put: mailbox.py rule 14, refused here as ``leased``; a controller setting ju
 another's claim is refused so in its owner's step);
 nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule 11); every
 command judged here, executed or refused, is an audit event, written in one place (``submit``,
-after the put; a value outside the union is refused as unsupported). The bridge's own moves
+after the put; a value outside the union is refused as unsupported), which says whether it was
+a halt that changed nothing (a lock ON while ON, tracking or following OFF with nothing to end:
+runtime/audit.py rule 10). The bridge's own moves
 (auto-park, the wind park, tracking's and following's targets) are the session's, never
 judged by the lease. The safety state has one owner per rotator (kept.py rule 5,
 docs/architecture.md rule 14): a lock word, and the lease's claims, releases and end
@@ -59,7 +61,7 @@ import time
 from collections.abc import Callable, Hashable
 from dataclasses import replace
 from functools import partial
-from typing import NoReturn, Protocol
+from typing import NoReturn, Protocol, TypeVar
 
 import serial
 
@@ -116,6 +118,7 @@ from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion, SkyWorker
 
 log = logging.getLogger(__name__)
+_T = TypeVar("_T")
 
 # mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
 STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
@@ -365,17 +368,44 @@ class Rotator:
         what = describe_command(command) if isinstance(command, Lock) else None
         what = what or described or describe_command(command)
         epoch = self._mailbox.epoch if since is None else since  # before the judge (rule 10)
+        ends = self._ends_something(command)  # (a halt that changed nothing: before its put)
         try:
-            result = self._carry(command, what, who, hold, epoch, ticket, since)
+            result, idle = self._carry(command, what, who, hold, epoch, ticket, since)
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=who)
             raise
-        if result is not None and not echo:  # after the put (operators.py rule 3)
+        if not echo:  # after the put (operators.py rule 3)
             stop = isinstance(command, Stop)
-            same = isinstance(command, Target | Claim | Release | SetOption) or (
-                isinstance(command, Lock) and not command.on
+            # runtime/audit.py rule 9: a lock word, tracking or following OFF, sent again by
+            # its sender with nothing carried out between, changes nothing; rule 10: nor did a
+            # lock ON while ON, nor an OFF that ended nothing, the first time
+            same = ends is not None or isinstance(
+                command, Target | Claim | Release | SetOption | Lock
             )
-            self.operators.audit(who, what, result, halt=stop, same_again=same)
+            unchanged = not ends() if ends is not None else idle
+            self.operators.audit(who, what, result, halt=stop, same_again=same, unchanged=unchanged)
+
+    def _ends_something(self, command: Command) -> Callable[[], bool] | None:
+        """For a tracking or following OFF (None for anything else): whether it ended anything,
+        asked once it is put (runtime/audit.py rule 10: one that ended nothing is folded like a
+        stop). Looked at before the put and again after it: a body tracked, a look-up under
+        way, following on (in either box of two: session.py ``features_on``), or a start on its
+        way to the session (mailbox.py rule 10a) at either look is something it may have ended;
+        a start put after it only makes it say so when it did not."""
+        if isinstance(command, TrackBody) and command.off:
+            which = 0
+        elif isinstance(command, FollowQso) and not command.on:
+            which = 1
+        else:
+            return None
+        worker, mailbox = self._worker, self._mailbox
+
+        def on() -> bool:
+            shown = worker.newest_applied  # (first: the features read are at least as new)
+            return worker.features_on[which] or mailbox.motion_unseen(shown)
+
+        before = on()
+        return lambda: before or on()
 
     def _carry(
         self,
@@ -386,9 +416,10 @@ class Rotator:
         epoch: int,
         ticket: int | None = None,
         since: int | None = None,
-    ) -> str | None:
+    ) -> tuple[str, bool]:
         """The decision for each kind: the audit trail's result (a health reset's too: it
-        moves nothing, but ends a baseline and its warnings, an attack pass), or Refused
+        moves nothing, but ends a baseline and its warnings, an attack pass) and whether it was
+        a lock ON that changed nothing (runtime/audit.py rule 10: ``_lock``), or Refused
         (reported by ``submit``).
         ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10);
         ``since``: the one the caller read (a lock OFF's, ``_lock``)."""
@@ -399,16 +430,17 @@ class Rotator:
             case Stop() if src is not Source.MQTT:  # (a stop is judged by nothing)
                 self._fenced(False, lambda: self._judged(command, epoch, hold))
             case Lock() if command.on and src is not Source.MQTT:
-                self._fenced(True, lambda: self._lock(True, hold, sent_s=command.sent_s))
+                locking = partial(self._lock, True, hold, sent_s=command.sent_s)
+                return EXECUTED, self._fenced(True, locking)  # (idle: ON while ON)
             case Target() | Stop() | SetOption():
                 self._judged(command, epoch, hold)
             case Lock():
-                self._lock(command.on, hold, since, command.sent_s)
+                return EXECUTED, self._lock(command.on, hold, since, command.sent_s)
             case Claim():
                 self.operators.claim(command.operator, command.minutes, who)
             case Release():
                 if self.operators.release(who) is None:
-                    return f"{EXECUTED} (was free)"
+                    return f"{EXECUTED} (was free)", False
             case TrackBody():
                 self._track(command, what, epoch)
             case FollowQso():
@@ -445,21 +477,21 @@ class Rotator:
                 self._reset_health()
             case FeatureCommand():
                 self._feature(command, epoch)
-        return EXECUTED
+        return EXECUTED, False
 
-    def _fenced(self, lock: bool, halt: Callable[[], None]) -> None:
+    def _fenced(self, lock: bool, halt: Callable[[], _T]) -> _T:
         """The module's docstring: another interface's stop (``lock``: lock ON), told to the
-        fence before and after it is put; a fence that fails is logged, the halt goes on."""
+        fence before and after it is put; a fence that fails is logged, the halt goes on.
+        What ``halt`` returns."""
         fence = self._fence
         if fence is None:
-            halt()
-            return
+            return halt()
         try:
             fence.fence_asked(self.id)
         except Exception:
             log.exception("%s: the MQTT fence failed (the halt goes on)", self.id)
         try:
-            halt()
+            return halt()
         finally:  # (asked and never fenced, it would refuse every MQTT move for good)
             try:
                 fence.fence_carried(self.id, lock)
@@ -774,20 +806,31 @@ class Rotator:
 
     def _lock(
         self, locked: bool, hold: int | None, since: int | None = None, sent_s: float | None = None
-    ) -> None:
-        """Never refused, but a lock OFF put with a halt count (``since``, as for ``submit``)
-        that a stop or lock ON put since has made old while the lock is ON: it may be older
-        than that lock ON (interfaces/mqtt/lastword.py rule 11), and the lock stays ON.
+    ) -> bool:
+        """Whether it was a lock ON that changed nothing (runtime/audit.py rule 10): the lock
+        was ON already, and no storm's park was owed that a lock ON ends (wind.py rule 3: it
+        is not tried again after one). Never refused, but a lock OFF put with a halt count
+        (``since``, as for ``submit``) that a stop or lock ON put since has made old while the
+        lock is ON: it may be older than that lock ON (interfaces/mqtt/lastword.py rule 11), and
+        the lock stays ON.
         ``hold`` as for ``submit``. The lock, the mailbox put and the save queued for the state
         file are one step (kept.py rules 2, 5), from every interface."""
         with self._owner:
             if not locked and since is not None and self._kept.locked:
                 if self._mailbox.epoch != since:
                     raise Refused(RefusalCode.STALE, LOCK_OFF_STALE_MESSAGE)
+            idle = locked and self._kept.locked and not self._storm_parks()
             self._kept.set_lock(locked)
             if locked:
                 self._halted(sent_s)
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
+        return idle
+
+    def _storm_parks(self) -> bool:
+        """Whether the status shows a storm whose park a lock ON would stop or hold back for
+        good (wind.py rule 3): a lock ON then changes something, even while the lock is ON."""
+        wind = self.status.wind
+        return wind is not None and wind.parks and not wind.halted
 
     def await_heard_lock(self) -> None:
         """kept.py rule 10: motion is refused while the state file has not said the lock ON and

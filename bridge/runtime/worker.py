@@ -269,6 +269,11 @@ class Worker:
         """mailbox.py rule 10a: the newest place the status shows every command up to."""
         return self.session.newest_applied
 
+    @property
+    def features_on(self) -> tuple[bool, bool]:
+        """What a tracking OFF and a following OFF would end now (session.py ``features_on``)."""
+        return self.session.features_on
+
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None
         if isinstance(result, Exception):

@@ -390,6 +390,15 @@ class RotatorSession:
         return 0 if self.target_unshown else taken  # status, then this, then the place)
 
     @property
+    def features_on(self) -> tuple[bool, bool]:
+        """Whether a tracking OFF and a following OFF would end anything here now: a body
+        tracked or a look-up under way (tracking.py rule 8: not in the status), following on.
+        Read from another thread (runtime/rotator.py: a halt that changed nothing, audit.py
+        rule 10), attribute reads, after ``newest_applied`` (the batch applied before it)."""
+        tracker = self.tracker
+        return tracker.body is not None or tracker.lookup is not None, self.follower.on
+
+    @property
     def name(self) -> str:
         return self.cfg.rotator_id
 

@@ -1182,3 +1182,40 @@ def test_a_claim_that_drops_the_azimuth_stops_a_satel_elevations_half_sent_again
         assert v.el.truth().el_deg < 35.0, v.el.truth()  # observed: on to 40
         assert [f for f in v.az.sent(since=t) if f.startswith(b"AP1")] == []
         assert _the_drop_said(v, t) == "target az 300 el 40"  # observed: 'target az 300'
+
+
+def test_a_tracking_or_following_off_ends_what_either_box_still_does() -> None:
+    """runtime/audit.py rule 10: whether a tracking or following OFF changes anything is asked
+    of both boxes (rule 4: one box may still track or follow while the merged status, the
+    azimuth box's, shows nothing), so an OFF that ends the elevation box's tracking is never
+    folded away as a halt that changed nothing."""
+    rotator = RotatorSettings.model_validate(
+        {
+            "id": "v",
+            "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+            "elevation": {"model": "gs232b", "port": "/dev/ttyEL"},
+        }
+    )
+    axes = app.axis_configs(rotator)
+    assert axes is not None
+
+    def unplugged(path: str, spec: object, baud: int) -> serial.Serial:
+        raise PortError(f"{path}: no such port")
+
+    box = Mailbox()
+    worker = CompositeWorker(
+        app.worker_config(rotator),
+        axes,
+        box,
+        lambda s: None,
+        lambda e: None,
+        port_opener=unplugged,
+    )
+    worker.begin(0.0, lambda: None)
+    assert worker.features_on == (False, False)
+    worker.boxes[Axis.ELEVATION].session.tracker.start(Body.sun())  # the azimuth's ended
+    assert worker.status.tracking is None and worker.features_on == (True, False)
+    worker.boxes[Axis.ELEVATION].session.tracker.end("off")
+    worker.boxes[Axis.ELEVATION].session.follower.start(Follow(True), 0.0)
+    assert worker.status.following is None and worker.features_on == (False, True)
+    box.close()

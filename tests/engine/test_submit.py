@@ -331,3 +331,53 @@ def test_a_halt_stamped_ahead_keeps_no_stamp_later_than_when_it_came(bench: Benc
         "a move sent 0.5 s after a STOP stamped 0.8 s ahead is taken for older: kept stamp "
         f"{stamp - station_now:+.3f} s from when it came"
     )
+
+
+def test_a_halt_that_changed_nothing_is_audited_so_and_one_that_ended_something_is_not(
+    bench: Bench,
+) -> None:
+    """runtime/audit.py rule 10: a lock ON while the lock was ON, tracking or following OFF with
+    nothing to end, changed nothing (folded like a stop, counted on R/audit with the stops); a
+    lock ON that locked, an OFF that ended tracking, following or a start on its way to the
+    session, each changed something (a line of its own). Each of these sent again is rule 9's
+    ``same_again`` too."""
+    bench.audit.clear()
+    steps: list[tuple[Command, str]] = [
+        (Lock(True, origin=WHO), "lock ON"),  # locks
+        (Lock(True, origin=OTHER), "lock ON"),  # another's, while locked: nothing
+        (Lock(False, origin=WHO), "lock OFF"),  # a lock change, never a halt
+        (TrackBody("sun", origin=WHO), "track sun"),
+        (TrackBody("off", origin=WHO), "track off"),  # ends tracking
+        (TrackBody("off", origin=OTHER), "track off"),  # nothing tracked
+        (FollowQso(True, origin=WHO), "follow wsjtx"),
+        (FollowQso(False, origin=WHO), "follow off"),  # ends following
+        (FollowQso(False, origin=OTHER), "follow off"),  # nothing followed
+    ]
+    for command, described in steps:
+        bench.submit(command, described)
+    assert [(e.origin.who, e.command, e.unchanged, e.routine) for e in bench.audit] == [
+        ("DL1ABC", "lock ON", False, False),
+        ("G4XYZ", "lock ON", True, True),
+        ("DL1ABC", "lock OFF", False, False),
+        ("DL1ABC", "track sun", False, False),
+        ("DL1ABC", "track off", False, False),
+        ("G4XYZ", "track off", True, True),
+        ("DL1ABC", "follow wsjtx", False, False),
+        ("DL1ABC", "follow off", False, False),
+        ("G4XYZ", "follow off", True, True),
+    ]
+    starts = ("track sun", "follow wsjtx")  # (each again may turn the rotor anew)
+    assert [e.same_again for e in bench.audit] == [e.command not in starts for e in bench.audit]
+    # a start put and not yet taken by the session: the OFF put behind it ends it
+    bench.audit.clear()
+    bench.rot.submit(TrackBody("moon", origin=WHO), "track moon")
+    bench.submit(TrackBody("off", origin=OTHER), "track off")
+    bench.rot.submit(FollowQso(True, origin=WHO), "follow wsjtx")
+    bench.submit(FollowQso(False, origin=OTHER), "follow off")
+    assert [(e.command, e.unchanged) for e in bench.audit] == [
+        ("track moon", False),
+        ("track off", False),
+        ("follow wsjtx", False),
+        ("follow off", False),
+    ]
+    assert bench.v.status.tracking is None and bench.v.status.following is None
