@@ -29,13 +29,15 @@ Rules:
    rotator's error topic, kind ``audit``.
 6. A flood does not erase the trail (an attack pass: 1,000 console STOPs a second rolled all
    four files over in 25 s, and the line of who turned the rotor a minute before was gone).
-   ``AuditTrail`` folds what a flood is made of, a refusal or an executed stop
-   (``AuditEvent.routine``), per rotator, sender (``Origin``: interface, operator, address)
-   and kind (refused, stop): a run's first FREE_LINES events are written one by one, the
+   ``AuditTrail`` folds what a flood is made of, a refusal, an executed stop or a halt that
+   changed nothing (rule 10) (``AuditEvent.routine``), per rotator, sender (``Origin``:
+   interface, operator, address) and kind (refused, stop, each such halt's command): a run's
+   first FREE_LINES events are written one by one, the
    rest are counted; when the run has been quiet for QUIET_S, and every SPAN_S while it goes
    on, one line stands for those counted: the last of them with ``count``, ``first`` and
    ``last`` (their times; written then, so maybe after lines of later times). A move (but the
-   same target again, rule 9), a lease change, a lock change (anything else) is never folded,
+   same target again, rule 9), a lease change, a lock change, a tracking or following OFF that
+   ended something (anything else) is never folded,
    and one sender's run never
    folds another's events. More than MOST_RUNS runs open at once (senders without number:
    an operator name per message) fold by interface and kind alone, the line ``mixed`` and
@@ -76,8 +78,24 @@ Rules:
    sent again (``same_again``): the holder's claim renewed again and again, a lock OFF while
    unlocked, a release of a lease nobody holds, a setting to the value it has (a second attack
    pass: 32,000 releases from one client rolled the four files over in 6.2 s, and the line of
-   who turned the rotor was gone). Not a nudge, a preset or a park: each again may turn the
-   rotor anew.
+   who turned the rotor was gone), and the halts of rule 10 (a lock ON, tracking OFF,
+   following OFF), whether or not the first of them changed anything. Not a nudge, a preset
+   or a park: each again may turn the rotor anew.
+10. Nor does a halt that changed nothing (``AuditEvent.unchanged``, judged where the command is
+   carried out: runtime/rotator.py): a lock ON while the lock was ON (and no storm's park was
+   owed, which a lock ON ends: session/wind.py rule 3), a tracking OFF while nothing was
+   tracked nor looked up, a following OFF while nothing was followed (in either box of a
+   rotator of two), from any interface (MQTT, a lock switch's loop; the console, a group's
+   member, the remote's words as they reach the station). A third attack pass: 400 ``R/lock
+   ON`` while locked were 400 lines, as were 400 ``track off`` and 400 ``follow off`` with
+   nothing to end; a loop republishing them rolls the four files over as rule 6's STOPs did.
+   Such a halt is folded as rule 6 folds a stop (one run per rotator, sender and command, its
+   first FREE_LINES written, a crowd's beyond MOST_RUNS), and sent again it is rule 9's too;
+   ``R/audit`` counts it with the refusals and stops, never against the budget that keeps the
+   moves (interfaces/mqtt/service.py rule 8: 200 ``track off`` left the lease holder's move
+   out). A lock ON that locked, an OFF that ended tracking or following, is a line of its own.
+   An OFF judged while a start is on its way to the session, or put while one comes, is taken
+   to have ended it (never folded for a start it may have ended).
 """
 
 from __future__ import annotations
@@ -378,7 +396,7 @@ class Runs:
         self._most = most
         self._runs: dict[tuple[str, Origin, str, bool], _Run] = {}
         # rule 9: each rotator's latest event that was carried out: (sender, command, result)
-        # when it was an absolute target, None when anything else
+        # when it was one that changes nothing sent again (``same_again``), None when not
         self._latest: dict[str, tuple[Origin, str, str] | None] = {}
 
     def offer(self, rotator_id: str, event: AuditEvent, now: float) -> list[Said]:
@@ -393,7 +411,9 @@ class Runs:
             if key not in self._runs and len(self._runs) >= self._most:
                 return [*out, (rotator_id, event)]
         else:
+            # (rule 10: a halt that changed nothing, a run of each command, apart from stops)
             kind = "stop" if event.halt else "refused"
+            kind = f"unchanged {event.command}" if event.unchanged else kind
             key = (rotator_id, event.origin, kind, False)
             crowd = (rotator_id, Origin(event.origin.interface), kind, True)
             if key not in self._runs and (len(self._runs) >= self._most or crowd in self._runs):

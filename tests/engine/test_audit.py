@@ -666,3 +666,50 @@ def test_the_same_target_sent_over_and_over_cannot_roll_the_trail_over(tmp_path:
         ("node-red", "target '200'", 3000 - FREE_LINES - 2),  # the rest, counted
     ]
     assert (written[-1]["first"], written[-1]["last"]) == (1_790_000_000.12, 1_790_000_059.98)
+
+
+def test_halts_that_changed_nothing_fold_each_by_its_command_and_a_lock_that_locked_is_a_line(
+    tmp_path: Path,
+) -> None:
+    """Rule 10 (attack 15: 400 lock ONs while locked were 400 lines, so were track and follow
+    OFFs with nothing to end): a loop sending a lock ON while locked and a tracking OFF with
+    nothing tracked, between its stops, is the first lines of each command and a count of each
+    (its stops apart, as rule 6 has them); another sender's lock ON that locked, amid it, is a
+    line of its own; R/audit gets the same lines, the counts among the routine ones (service.py
+    rule 8's budget for refusals and stops)."""
+    path = tmp_path / "audit.jsonl"
+    clock = FakeClock()
+    published: list[AuditEvent] = []
+    trail = AuditTrail(path, 1_000_000, lambda _r, e: published.append(e), [], clock=clock)
+    loop = Origin(Source.MQTT, "node-red")
+    holder = Origin(Source.MQTT, "DL1ABC")
+    audited = trail.of("rotor")
+    trail.start()
+    try:
+        for n in range(300):
+            audited(replace(_said(loop, n, "lock ON", "executed"), unchanged=True))
+            audited(replace(_said(loop, n, "track off", "executed"), unchanged=True))
+            audited(_said(loop, n, "stop", "executed", halt=True))
+            if n == 150:
+                audited(_said(holder, n, "lock ON", "executed"))  # it locked: a line
+            clock.t += 0.01
+        clock.t += QUIET_S
+        trail.tick()
+        trail.flush()
+    finally:
+        trail.stop()
+    written = lines(path)
+    assert [(d["operator"], d["command"], d.get("count")) for d in written] == [
+        *[
+            ("node-red", c, None)
+            for _ in range(FREE_LINES)
+            for c in ("lock ON", "track off", "stop")
+        ],
+        ("DL1ABC", "lock ON", None),
+        ("node-red", "lock ON", 300 - FREE_LINES),
+        ("node-red", "track off", 300 - FREE_LINES),
+        ("node-red", "stop", 300 - FREE_LINES),
+    ]
+    assert [e.as_dict() for e in published] == written
+    assert [e.routine for e in published if e.count > 1] == [True] * 3
+    assert not next(e for e in published if e.origin == holder).routine

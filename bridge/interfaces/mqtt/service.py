@@ -55,10 +55,11 @@ Rules:
    are commands like any (never retained, never while gated); ``R/control`` follows the status.
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
-   says how many were left out. The audit file has them all (folded alike). Refusals and
-   stops (the events runtime/audit.py rule 6 folds) have one budget, the rest (moves, lease
-   and lock changes) another: 50 refused commands left the lease holder's own move out (an
-   attack pass).
+   says how many were left out. The audit file has them all (folded alike). Refusals, stops
+   and halts that changed nothing (a lock ON while ON, tracking or following OFF with nothing
+   to end: the events runtime/audit.py rules 6 and 10 fold) have one budget, the rest (moves,
+   lease and lock changes) another: 50 refused commands left the lease holder's own move out
+   (an attack pass), and so did 200 ``track off`` while nothing was tracked (a third).
 9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5), judged by ``stamp_clock`` (the station's steady clock, heartbeat.py
@@ -621,8 +622,9 @@ class MqttService:
         if rotator_id not in self._rotators:
             return
         t = self.topics.rotator(rotator_id)
-        # rule 8: refusals and stops, already folded per sender (runtime/audit.py rule 6),
-        # have a budget of their own: however many there are, a move's event is not left out
+        # rule 8: refusals, stops and halts that changed nothing, already folded per sender
+        # (runtime/audit.py rules 6, 10), have a budget of their own: however many there are,
+        # a move's event is not left out
         left_out = self._audit_limiter.admit(t.audit + ("\0routine" if event.routine else ""))
         if left_out is None:
             return
