@@ -381,3 +381,25 @@ def test_a_halt_that_changed_nothing_is_audited_so_and_one_that_ended_something_
         ("follow off", False),
     ]
     assert bench.v.status.tracking is None and bench.v.status.following is None
+
+
+def test_a_lock_on_while_locked_in_a_storm_whose_park_waits_is_a_change(tmp_path: Path) -> None:
+    """runtime/audit.py rule 10: a lock ON while the lock is ON changes nothing, but in a storm
+    whose park waits for the lock OFF it ends that park (session/wind.py rule 3: not tried again
+    in this storm), so it is never audited as a halt that changed nothing; once that park is
+    given up, the next one is."""
+    bench = Bench(tmp_path, wind_topic="weather/wind", wind_park_above=60)
+    bench.submit(Lock(True, origin=WHO), "lock ON")
+    bench.rot.wind(90.0)  # a storm under the lock: its park waits for the lock OFF
+    bench.v._take()
+    bench.v.run_for(2.0)
+    wind = bench.v.status.wind
+    assert wind is not None and wind.parks and wind.waiting and not wind.halted
+    bench.audit.clear()
+    bench.submit(Lock(True, origin=OTHER), "lock ON")
+    bench.v.run_for(2.0)
+    wind = bench.v.status.wind
+    assert wind is not None and wind.halted  # the park is given up for this storm
+    bench.submit(Lock(True, origin=OTHER), "lock ON")
+    assert [e.unchanged for e in bench.audit] == [False, True]
+    bench.close()
