@@ -94,3 +94,21 @@ def test_control_the_same_hold_ending_by_clearing_after_the_storm_moves_nothing(
         v._take()
         v.run_for(PARK_TIME_S)
         assert at_rest_at(v, 90.0)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 60: the clearing that drops the storm's park after the storm says "
+    "'target dropped ... send it again' on R/error of a 'target az 180' nobody sent",
+)
+def test_the_park_dropped_by_a_clearing_after_the_storm_is_not_said_as_a_target() -> None:
+    """The bridge's own park, dropped, is no operator's target to send again (wind.py rule 1:
+    a cold review, tracking's and auto-park's so dropped were said as targets nobody sent)."""
+    with VirtualRotator("rotorez", settings=WIND) as v:
+        held_through_a_short_storm(v, express=False)
+        since = v.now
+        v.mailbox.put_release(0, clear=True)  # the main connection dropped
+        v._take()
+        v.run_for(GUST_S)
+        said = [(e.message, e.command) for e in v.errors("refused", since=since)]
+        assert said == [], f"R/error: {said}"
