@@ -10,16 +10,22 @@ looks at the junk in front: the torn ``AZ15`` stands as that exchange's reading.
 a reading at rest (controller.py rule 9) then counts it as the first of two: a re-poll answer
 that loses a byte alike (``AZ15.0``) agrees with it, and the bridge shows the rotor at 15,
 MOVING, stops it and says it turned without a command, though it never left 150. On the az/el
-model the same two faults are a torn exchange and one doubted reading, never shown.
+model the same two faults are a torn exchange and one doubted reading, never shown. At
+start-up one torn reply is enough: the connection's first reading is not doubted, the rotor is
+shown at 15 for a second, and a nudge of +10 then turns it from 150 down to 25.
 
 In virtual time, the emulated box at 150; the next two answers read as given."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
+from bridge.core.model import Nudge, Origin, Source
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from tests.engine.virtual import VirtualRotator
 
 REST_DEG = 150.0
@@ -27,6 +33,7 @@ REST_DEG = 150.0
 TORN = b"AZ15\n0.0 EL0.0\n"
 SHORT = b"AZ15.0 EL0.0\n"
 SHOWN_WITHIN_DEG = 1.0  # a still rotor's readings, in tenths, jitter by less
+WHO = Origin(Source.MQTT, "DL1ABC")
 
 
 def answers_read_as(v: VirtualRotator, *replies: bytes) -> list[bytes]:
@@ -96,3 +103,58 @@ def test_a_reply_torn_by_a_line_end_is_no_reading_on_an_azimuth_model(
     )
     assert not stops, f"a rotor at rest was stopped for a torn reply: {stops}"
     assert not [e.message for e in v.errors("stop", since=t)]
+
+
+# One torn reply is enough at start-up: the connection's first reading is not doubted
+# (controller.py rule 9), so the torn ``AZ15`` is the bearing shown until the next idle poll, a
+# second later, and a nudge judged from it in that time turns the rotor the wrong way, the
+# whole way down to 25 for a nudge of +10 (the az/el model drops the torn exchange, asks again,
+# and the nudge goes to 160).
+NUDGE_DEG = 10.0
+WATCH_S = 40  # the turn at 6 degrees a second, with room
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        "easycomm2",
+        pytest.param(
+            "easycomm2-az",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason=(
+                    "attack 16: an Easycomm azimuth box at 150 whose first reply at start-up "
+                    "is torn by a line end is shown at 15; a nudge of +10 then turns the "
+                    "rotor 125 degrees the wrong way, to 25"
+                ),
+            ),
+        ),
+    ],
+)
+def test_a_nudge_after_a_torn_first_reply_turns_the_rotor_by_the_nudge(
+    tmp_path: Path, model: str
+) -> None:
+    v = VirtualRotator(model, emulator={"start_az_deg": REST_DEG}, connect=False)
+    answers_read_as(v, TORN)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 5, "the controller answers")
+    rot = Rotator(v.cfg, StateStore(tmp_path / "state.json"), lambda s: None, lambda e: None)
+    v.mailbox.close()  # the judge's mailbox, as test_halt_epoch's Bench takes it
+    v.mailbox = rot._mailbox
+    rot._worker.session = v.session
+    try:
+        shown = rot.status.bearing_deg
+        rot.submit(Nudge(NUDGE_DEG, source=Source.MQTT, origin=WHO), "nudge +10")
+        v._take()
+        lowest = REST_DEG
+        for _ in range(WATCH_S):
+            v.run_for(1.0)
+            lowest = min(lowest, v.truth().az_deg)
+        assert lowest >= REST_DEG - SHOWN_WITHIN_DEG, (
+            f"a nudge of +{NUDGE_DEG:g} at {REST_DEG:g} (shown {shown}) turned the rotor down "
+            f"to {lowest:g}: {[f.data for f in v.frames('move')]}"
+        )
+        assert v.truth().az_deg == pytest.approx(REST_DEG + NUDGE_DEG, abs=SHOWN_WITHIN_DEG)
+    finally:
+        rot.operators.stop()
+        v.close()
