@@ -39,7 +39,11 @@ Rules:
    SatNOGS controller's encoder is zeroed at its home switch and its PID rests anywhere within
    0.2 of the target, so turned to north it may say ``AZ-0.1`` (review 39; Hamlib reads it).
 3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
-   UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED.
+   UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED. An
+   azimuth model's elevation line (harmless, rule 2) with junk in front is noise, not
+   chatter: it is the tail of a reply a stray line end tore (``AZ15`` LF ``0.0 EL0.0`` from a
+   rotor at 150), and it must spoil the reading its head made (an attack pass: ``AZ15`` stood
+   as a clean reading, shown at start-up, and a nudge turned the rotor from 150 to 25).
 4. ``VExxx`` is the controller's version whenever it comes.
 5. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent.
@@ -277,6 +281,9 @@ class EasycommCodec(OneQuery):
         if az is not None:
             az = min(max(az, 0.0), float(AZ_MAX_DEG))  # rule 2: the slack is read as its end
         if not self.elevation and az is None:
+            if pre.strip(b"\r\n "):  # rule 3: a reply torn by a stray line end, its tail
+                self._junk(raw, JunkReason.NOISE, "junk in front of an elevation", out)
+                return
             out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
             return
         whole = az is not None and (el is not None or not self.elevation)

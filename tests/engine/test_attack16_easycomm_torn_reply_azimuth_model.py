@@ -61,28 +61,8 @@ def answers_read_as(v: VirtualRotator, *replies: bytes) -> list[bytes]:
     "model",
     [
         "easycomm2",
-        pytest.param(
-            "easycomm2-az",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason=(
-                    "attack 16: an Easycomm azimuth box at 150 whose reply is torn by a line "
-                    "end, and whose re-poll answer loses a byte, is shown at 15, MOVING, "
-                    "stopped and said to turn unasked"
-                ),
-            ),
-        ),
-        pytest.param(
-            "easycomm3-az",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason=(
-                    "attack 16: an Easycomm azimuth box at 150 whose reply is torn by a line "
-                    "end, and whose re-poll answer loses a byte, is shown at 15, MOVING, "
-                    "stopped and said to turn unasked"
-                ),
-            ),
-        ),
+        "easycomm2-az",
+        "easycomm3-az",
     ],
 )
 def test_a_reply_torn_by_a_line_end_is_no_reading_on_an_azimuth_model(
@@ -118,17 +98,7 @@ WATCH_S = 40  # the turn at 6 degrees a second, with room
     "model",
     [
         "easycomm2",
-        pytest.param(
-            "easycomm2-az",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason=(
-                    "attack 16: an Easycomm azimuth box at 150 whose first reply at start-up "
-                    "is torn by a line end is shown at 15; a nudge of +10 then turns the "
-                    "rotor 125 degrees the wrong way, to 25"
-                ),
-            ),
-        ),
+        "easycomm2-az",
     ],
 )
 def test_a_nudge_after_a_torn_first_reply_turns_the_rotor_by_the_nudge(
