@@ -8,6 +8,7 @@ so what a user would notice is what the emulated controller did.
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from pathlib import Path
@@ -17,6 +18,7 @@ import pytest
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import (
     COMMANDS,
+    AuditEvent,
     Claim,
     Command,
     FeatureCommand,
@@ -39,8 +41,10 @@ from bridge.core.model import (
     TrackBody,
     describe_command,
 )
+from bridge.runtime.audit import FREE_LINES, QUIET_S, AuditTrail
 from tests.engine.test_halt_epoch import START_AZ
 from tests.engine.test_halt_epoch import Bench as EpochBench
+from tests.support.clock import FakeClock
 
 TOKYO = (35.6875, 139.7917)  # PM95vq
 WHO = Origin(Source.MQTT, "DL1ABC")
@@ -403,3 +407,62 @@ def test_a_lock_on_while_locked_in_a_storm_whose_park_waits_is_a_change(tmp_path
     bench.submit(Lock(True, origin=OTHER), "lock ON")
     assert [e.unchanged for e in bench.audit] == [False, True]
     bench.close()
+
+
+def _trail_lines(
+    tmp_path: Path, events: list[AuditEvent]
+) -> tuple[list[dict[str, object]], list[AuditEvent]]:
+    """``events`` through the audit trail as the bridge writes them (runtime/audit.py), its
+    runs ended: the lines of the file and what R/audit was given."""
+    path = tmp_path / "audit.jsonl"
+    clock = FakeClock()
+    published: list[AuditEvent] = []
+    trail = AuditTrail(path, 1_000_000, lambda _r, e: published.append(e), [], clock=clock)
+    audited = trail.of("v")
+    trail.start()
+    try:
+        for event in events:
+            audited(event)
+        clock.t += QUIET_S
+        trail.tick()
+        trail.flush()
+    finally:
+        trail.stop()
+    return [json.loads(line) for line in path.read_text().splitlines()], published
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 62: a lock ON that gave up the storm's park, sent by the sender whose lock "
+    "ONs were already a run, is folded into that run's count: no line and nothing on R/audit "
+    "says who stopped the park",
+)
+def test_a_lock_on_sent_again_that_gave_up_a_storm_park_is_a_line_of_its_own(
+    tmp_path: Path,
+) -> None:
+    """runtime/audit.py rules 9 and 10: a lock ON sent again by its sender, nothing carried out
+    between, is folded as changing nothing. But a storm that began in between (no audited
+    command) owes a park a lock ON gives up for the whole storm (session/wind.py rule 3): that
+    lock ON changed something, and its line (and R/audit's) is the only word of who stopped
+    the park. A loop republishing lock ON (attack 15's) is exactly such a sender."""
+    bench = Bench(tmp_path, wind_topic="weather/wind", wind_park_above=60)
+    try:
+        bench.submit(Lock(True, origin=WHO), "lock ON")  # locks: a line
+        for _ in range(FREE_LINES + 2):  # the loop, while nothing is owed: folded after a few
+            bench.submit(Lock(True, origin=WHO), "lock ON")
+        bench.rot.wind(90.0)  # a storm under the lock: its park waits for the lock OFF
+        bench.v._take()
+        bench.v.run_for(2.0)
+        wind = bench.v.status.wind
+        assert wind is not None and wind.parks and wind.waiting and not wind.halted
+        bench.submit(Lock(True, origin=WHO), "lock ON")  # the loop's next: gives the park up
+        bench.v.run_for(2.0)
+        wind = bench.v.status.wind
+        assert wind is not None and wind.halted  # the park is given up for this storm
+        ender = bench.audit[-1]
+        assert not ender.unchanged  # (the judge says it changed something)
+        written, published = _trail_lines(tmp_path, bench.audit)
+    finally:
+        bench.close()
+    assert ender.as_dict() in written, [(d["command"], d.get("count")) for d in written]
+    assert ender in published
