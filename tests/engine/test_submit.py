@@ -466,3 +466,39 @@ def test_a_lock_on_sent_again_that_gave_up_a_storm_park_is_a_line_of_its_own(
         bench.close()
     assert ender.as_dict() in written, [(d["command"], d.get("count")) for d in written]
     assert ender in published
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 62: a lock ON that gave up the storm's park is folded into a count as a halt "
+    "that changed nothing when the storm's first reading had not yet reached the status (two "
+    "senders' loops of lock ONs: the one right after the reading), no line or R/audit event "
+    "of its own",
+)
+def test_a_lock_on_right_after_the_storms_first_reading_is_a_line_of_its_own(
+    tmp_path: Path,
+) -> None:
+    """runtime/audit.py rule 10: ``_storm_parks`` reads the status, which has not yet taken a
+    wind reading put just before the lock ON; the lock ON put behind it stops that reading's
+    park all the same (mailbox.py rule 9: the readings put before it), so the park is given
+    up for the storm while the judge calls the lock ON idle, and the trail folds it into the
+    sender's run of idle lock ONs. Two senders take turns (neither is rule 9's sent again), so
+    only rule 10 folds them."""
+    bench = Bench(tmp_path, wind_topic="weather/wind", wind_park_above=60)
+    try:
+        bench.submit(Lock(True, origin=OTHER), "lock ON")  # locks: a line
+        for _ in range(FREE_LINES + 2):  # two loops while nothing is owed: each folded
+            bench.submit(Lock(True, origin=WHO), "lock ON")
+            bench.submit(Lock(True, origin=OTHER), "lock ON")
+        bench.v.run_for(2.0)
+        bench.rot.wind(90.0)  # the storm's first reading, not yet taken by the session
+        bench.submit(Lock(True, origin=WHO), "lock ON")  # the loop's next, right behind it
+        bench.v.run_for(2.0)
+        wind = bench.v.status.wind
+        assert wind is not None and wind.parks and wind.halted  # the park is given up
+        ender = bench.audit[-1]
+        written, published = _trail_lines(tmp_path, bench.audit)
+    finally:
+        bench.close()
+    assert ender.as_dict() in written, [(d["command"], d.get("count")) for d in written]
+    assert ender in published
