@@ -13,10 +13,15 @@ from typing import Any
 import pytest
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
+from bridge.core.model import Target
 from bridge.core.polling import POLLIN
 from bridge.interfaces.mqtt.client import _Ears
-from bridge.interfaces.mqtt.heartbeat import Echo
+from bridge.interfaces.mqtt.heartbeat import Echo, Stamp
 from bridge.interfaces.mqtt.paho_client import Client, Waker
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
+from tests.mqtt.test_broker_late import Link
+from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 from tests.support.clock import FakeClock
 
 SOCK_FD = 1000  # (never polled for real: the poller is scripted)
@@ -177,3 +182,37 @@ def test_the_same_stall_without_wake_ups_is_refused() -> None:
     finally:
         t.close()
     assert verdicts[0] is not None
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 61: the remote's target (stamped, a 15 s expiry) and Home Assistant's newer "
+    "one, both held by a broker frozen 10 s: the rotor ends at the remote's older target, and "
+    "the newer one is refused as held up (before the change both went, the newer last)",
+)
+def test_a_newer_unstamped_target_is_not_refused_while_an_older_stamped_one_held_with_it_goes() -> (
+    None
+):
+    """The broker frozen 10 s; 1 s into the stall a remote operator (``command_expiry_s`` 15:
+    a slow link) sends P 200, stamped; a second later Home Assistant sends target 100, no
+    stamp. The broker passes both on when it runs on, in that order. The stamped one is 9 s old
+    by its stamp, within its expiry: carried out (service.py rule 9); the unstamped one, newer,
+    is refused as held up (rule 12). The last word (docs/architecture.md rule 11) is 100."""
+    link = Link()
+    link.send()  # a beat out through the stall
+    link.quiet(10.0)
+    link.read()  # the broker runs on: the hold is judged before what it held is handled
+    assert link.late() is not None
+    svc = MqttService(
+        Topics("rotor", {"tower": "rotor"}),
+        RecordingPublisher(),
+        wall=lambda: NOW_UNIX,
+        broker_late=link.late,
+    )
+    tower = RecordingRotator("tower", "rotorez")
+    svc.attach(tower)
+    svc.on_message("rotor/target", b"200", False, stamp=Stamp.of(NOW_UNIX - 9.0, 15.0))
+    svc.on_message("rotor/target", b"100", False)  # newer: sent 1 s after the remote's
+    targets = [c[1] for c in tower.calls if c[0] == "submit" and isinstance(c[1], Target)]
+    assert targets, tower.calls
+    assert targets[-1].az_deg == 100.0, f"the rotor ends at {targets[-1].az_deg:g}: {tower.calls}"
