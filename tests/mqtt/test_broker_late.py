@@ -350,12 +350,18 @@ def test_while_the_broker_is_late_stop_lock_options_and_offs_go_through() -> Non
     assert isinstance(upper.calls[0][1], Stop)
 
 
-def test_a_stamped_move_is_judged_by_its_own_send_time_not_by_the_broker() -> None:
+def test_a_stamped_move_is_refused_too_while_the_broker_is_late() -> None:
+    """service.py rule 12 (review 61): a stamped move read in the window is refused though its
+    stamp would pass: let through, it stood over a newer unstamped move refused beside it."""
     broker, svc, upper, _lower = late_service()
     broker.held_s = 10.4
     stamp = Stamp.of(NOW_UNIX - 0.2, 5.0)  # sent 0.2 s ago, by its stamp
     svc.on_message("rotor/upper/target", b"200", False, stamp=stamp)
-    assert [c[0] for c in upper.calls] == ["submit"]
+    assert [c[0] for c in upper.calls] == ["refused"]
+    assert "held this up" in str(upper.calls[0][1])
+    broker.held_s = None  # a beat sent after the hold is back: the next stamped move goes
+    svc.on_message("rotor/upper/target", b"200", False, stamp=stamp)
+    assert [c[0] for c in upper.calls] == ["refused", "submit"]
 
 
 def test_a_group_target_is_refused_for_every_member_while_the_broker_is_late() -> None:

@@ -121,7 +121,12 @@ Rules:
    read late only because the main connection is behind (a backlog: a burst of targets) is
    not refused: the newest of a burst is carried out, as the last word wants. It is judged
    before anything else is done with the move (a lock OFF's wait included, rule 11). A
-   stamped move keeps rule 9's judgement, by its own send time. Stop and lock ON are never
+   stamped move read then is refused too, though its stamp would pass rule 9: the broker held
+   what it delivers in that window in one order of its own, and a stamped move it let through
+   would stand over a newer unstamped one refused beside it (review 61: the remote's target,
+   stamped with a 15 s expiry, and Home Assistant's newer one, both held 10 s, ended at the
+   remote's). The window lasts until a beat sent after the hold is back (a round trip after
+   the broker runs on), so a move sent after it goes. Stop and lock ON are never
    refused (docs/architecture.md rule 11), nor is a lock OFF, an option or a track or follow
    OFF: they turn nothing (a lock OFF the broker held lets only a later move go, and that move
    is judged here). A clock decides nothing else (docs/architecture.md rule 15: it may only
@@ -559,7 +564,7 @@ class MqttService:
             )
         elif (late := self._late(stamp)) is not None:
             why = late
-        elif stamp is None and (held := self._held_up()) is not None:  # rule 12
+        elif (held := self._held_up()) is not None:  # rule 12 (stamped or not)
             why = held
         elif gated:
             why = "not taken: the bridge is still checking its base topic; send it again"
@@ -821,7 +826,7 @@ class MqttService:
         PayloadError or Refused."""
         command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
         moves = isinstance(command, Called) or (command is not None and turns_rotor(command))
-        if moves and not stamped and (held := self._held_up()) is not None:  # rule 12
+        if moves and (held := self._held_up()) is not None:  # rule 12 (stamped or not)
             rot.report_refusal(held, what, origin=by)
             return
         if not_after_s is not None and isinstance(command, Target | Move):
