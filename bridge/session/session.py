@@ -1075,7 +1075,8 @@ class RotatorSession:
         tracking and following (rule 15). One that ended starts auto-park's quiet spell
         again, as unlocking does (autopark.py rule 1): the reading that ended it moves
         nothing (an attack pass: auto-park's spell, long over in the storm, parked the rotor
-        the instant a calm reading ended it)."""
+        the instant a calm reading ended it), and the storm's park still waiting goes no more
+        (wind.py rule 8)."""
         storm = self.wind.storm
         if storm and not self._storm_seen:
             why = self.wind.refusal() or "storm"
@@ -1093,6 +1094,9 @@ class RotatorSession:
                 # went out 6 s into the storm)
         elif self._storm_seen and not storm:
             self._activity(now)
+            self.targets.clear_from(Source.WIND)  # wind.py rule 8: a park still waiting (a
+            # STOP's hold) or its try more goes no more, unsaid (review 60: it went when the
+            # hold ended after the storm, the rotor turned 90 degrees unasked)
         self._storm_seen = storm
 
     def _part(self, part: Part[RotatorSession], now: float) -> None:

@@ -94,7 +94,8 @@ Rules:
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
    waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6); but not the
-   storm's park, the bridge's own, which goes then (wind.py rule 8). The stop
+   storm's park, the bridge's own, which goes then (wind.py rule 8; the storm's end drops it
+   first). The stop
    express's hold (interfaces/mqtt/express.py rule 8) is a second one, with numbers of its own: a
    target waits while either is held; its release clears only when the express's connection
    (or the express) ended before its word came back, which no clock bounds: what waited is

@@ -96,7 +96,12 @@ Rules:
    nobody can send it again in the storm (rule 1; attack 14: the park dropped so, the rotor
    faced the storm 90 degrees off while the status said "parked for the storm"). Nothing is
    lost to the order either: a STOP of this storm (rule 3) halted the park already, and the
-   waiting park would have gone at an ordinary release all the same.
+   waiting park would have gone at an ordinary release all the same. But only in the storm:
+   the storm's end (rule 2) drops a park still waiting, unsaid (session.py ``_storm``): after
+   the storm the rotator stays where it is (review 60: a calm reading ended the storm before
+   the hold's marker came back, and the park went then, the rotor turned 90 degrees with no
+   storm and nobody asking; a clearing then dropped it as an operator's target, "send it
+   again").
 """
 
 from __future__ import annotations

@@ -64,11 +64,6 @@ def held_through_a_short_storm(v: VirtualRotator, express: bool) -> None:
     assert at_rest_at(v, 90.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 60: a storm's park that waited under a STOP's hold turns the rotor 90 "
-    "degrees when the hold ends after the storm is over (no storm, nobody asked)",
-)
 @pytest.mark.parametrize("express", [False, True], ids=["lane", "express"])
 def test_a_storm_park_waiting_under_a_hold_stays_put_once_the_storm_is_over(
     express: bool,
@@ -96,11 +91,6 @@ def test_control_the_same_hold_ending_by_clearing_after_the_storm_moves_nothing(
         assert at_rest_at(v, 90.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 60: the clearing that drops the storm's park after the storm says "
-    "'target dropped ... send it again' on R/error of a 'target az 180' nobody sent",
-)
 def test_the_park_dropped_by_a_clearing_after_the_storm_is_not_said_as_a_target() -> None:
     """The bridge's own park, dropped, is no operator's target to send again (wind.py rule 1:
     a cold review, tracking's and auto-park's so dropped were said as targets nobody sent)."""
