@@ -282,6 +282,7 @@ class WindInfo:
     # in a storm: its park is owed and not sent (the lock holds it back, the controller does
     # not answer: wind.py rules 4 and 7); the rotor is not parking
     waiting: bool = False
+    refused: bool = False  # in a storm: the judge refused its park (wind.py rule 5): not parked
 
     @property
     def parks(self) -> bool:

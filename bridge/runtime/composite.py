@@ -299,12 +299,15 @@ def merge(
         state = next((s for s in order if s in states), az.state)
     said = [box.version for box, has in zip((az, el), versioned, strict=True) if has]
     version = " / ".join(v for v in said if v) if said and all(said) else None
-    wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's)
+    wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's;
+    # refused if either's, in the words of the box that refused it)
     if wind is not None and el.wind is not None:
         wind = replace(
             wind,
             arrived=wind.arrived and el.wind.arrived,
             waiting=wind.waiting or el.wind.waiting,
+            refused=wind.refused or el.wind.refused,
+            refusal=el.wind.refusal if el.wind.refused and not wind.refused else wind.refusal,
         )
     return replace(
         az,

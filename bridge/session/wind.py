@@ -52,10 +52,16 @@ Rules:
    The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same (a safeguard: the settings refuse such a park when they are
-   read, settings/wind.py rule 1). On a rotator of two boxes it is judged as the rotator's
-   whole park first (``Scene.whole``, runtime/composite.py rule 7): all axes or none, as
-   autopark.py rule 5 has it (an attack pass: the azimuth box refused the storm's park and the
-   elevation box lowered the dish alone).
+   read, settings/wind.py rule 1), said so: "wind 72 km/h above 60: motion refused for the
+   storm (its park refused: ...)", the status's ``refused``, never "parked for the storm"
+   (review 60: R/status, Home Assistant's "Parked for the storm" and every refusal in the
+   storm said it parked while the antenna faced the storm where it stood; the settings'
+   guard judges the park without a reading, so a park refused from where the rotor stands
+   passes it). A park owed again (rule 7) is judged again, and one it takes ends that. On a
+   rotator of two boxes it is judged as the rotator's whole park first (``Scene.whole``,
+   runtime/composite.py rule 7): all axes or none, as autopark.py rule 5 has it (an attack
+   pass: the azimuth box refused the storm's park and the elevation box lowered the dish
+   alone).
 6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the
@@ -145,6 +151,7 @@ class WindPark:
         self._arrived = storm and arrived  # rule 7: the rotor was seen at this storm's park
         self._replayed = storm and replayed  # rule 6: the storm known only from a replay
         self._end_owed = False  # rule 6: tracking and following to end, with no park to carry it
+        self._refused: str | None = None  # rule 5: why the judge refused this storm's park
         self._wall_offset_s = 0.0
 
     @property
@@ -162,6 +169,7 @@ class WindPark:
             halted=self._halted,
             arrived=self._arrived,
             waiting=self.storm and self._park_owed,
+            refused=self.storm and self._refused is not None,
         )
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
@@ -195,6 +203,7 @@ class WindPark:
             return  # (but a live reading in a storm known only from a replay: rule 6)
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
+            self._refused = None  # (rule 5: a new storm's park is judged anew)
             self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
         self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
@@ -247,6 +256,8 @@ class WindPark:
         if self._replayed:  # rule 6
             above = self._cfg.park_above_kmh
             return f"{self._why}: motion refused; the park waits for a new reading above {above:g}"
+        if self.storm and self._refused is not None:  # rule 5: nothing parked (review 60)
+            return f"{self._why}: motion refused for the storm (its park refused: {self._refused})"
         if self._halted and not self._arrived:  # rule 3: its park stopped short (a review)
             return f"{self._why}: motion refused for the storm (a stop or lock ON stopped its park)"
         return f"{self._why}: parked for the storm" if self.storm else None
@@ -277,6 +288,8 @@ class WindPark:
                     "a storm known only from the reading the broker kept: motion refused, "
                     "nothing parked"
                 )
+            elif self._refused is not None and self.storm:  # rule 5: the park refused
+                kept = "a storm whose park was refused: motion refused, nothing parked"
             elif self._halted and not self._arrived:  # rule 3: the park stopped short
                 kept = "a storm whose park a stop or lock ON stopped: motion refused"
             elif self._park_owed and scene.locked:  # rule 4: begun under the lock, not sent
@@ -292,6 +305,7 @@ class WindPark:
         if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
             self._halted = self._replayed = False
+            self._refused = None
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if self._end_owed and not self._park_owed:  # rule 6: no park, the end all the same
             self._end_owed = False
@@ -306,6 +320,8 @@ class WindPark:
                 scene.whole(park)
             judged = self._rig.aim.judge(park, scene.motion.position_deg)
         except Refused as exc:  # rule 5
+            self._refused = exc.message  # (said so, not "parked": review 60)
             why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")
             return Proposal(error=why, ended=self._why, busy=True)
+        self._refused = None
         return Proposal(target=judged, error=error, ended=self._why, busy=True)

@@ -16,8 +16,6 @@ In virtual time, the rotator of test_attack14_composite_auto_park_one_axis."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Target
 from tests.engine.test_attack14_composite_auto_park_one_axis import (
     BOXES,
@@ -31,11 +29,6 @@ WIND = {**LIMITS_AND_STOW, "park_after_idle_s": 0, "wind_topic": "w", "wind_park
 STORM_KMH = 90.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 60: the storm's park was refused and nothing moved, yet R/status and every "
-    "refused command say 'parked for the storm' while the antenna faces the storm",
-)
 def test_a_refused_storm_park_is_not_said_parked() -> None:
     with VirtualComposite("rotorez", "gs232b", settings=WIND, emulators=BOXES) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")

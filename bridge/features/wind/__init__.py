@@ -45,6 +45,8 @@ def wind_json(info: WindInfo) -> dict[str, object]:
         # its park is owed and not sent: the lock holds it back (wind.py rule 4), or the
         # controller does not answer (rule 7); the rotor stands where it was
         "waiting": info.waiting,
+        # the judge refused its park (wind.py rule 5): the rotor stands where the storm found it
+        "refused": info.refused,
         "calm_since": None
         if calm is None
         else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
@@ -79,7 +81,8 @@ def _storm(r: RotatorView) -> dict[str, object]:
         "state_topic": r.topics.status, "icon": "mdi:weather-windy",
         "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm and "
                           "not value_json.wind.replayed and not value_json.wind.halted and "
-                          "not value_json.wind.waiting else 'OFF' }}",
+                          "not value_json.wind.waiting and not value_json.wind.refused "
+                          "else 'OFF' }}",
     }  # fmt: skip
 
 
