@@ -93,7 +93,12 @@ Rules:
    by itself), while a start in a storm whose park was not seen reached (the bridge died
    mid-park) parks again, as it did. A rotor that cannot report its position (a DCU-1) is
    never seen there: the end of its estimated move is no arrival, and an offline or a restart
-   owes its park again (a review of 3e4f0f4).
+   owes its park again (a review of 3e4f0f4). A park owed so is judged (rule 5) from the first
+   reading taken once the controller answers, never from the one kept from before the
+   offline: it waits for that reading, owed (review 60: the first reading back, doubted,
+   made the controller answer while the motion still held the bearing from before the
+   offline; judged from it, a park from where the rotor had since been turned by hand was
+   refused for the whole storm).
 8. The park waits, like any target, under the hold of a STOP or lock ON that came before the
    storm (the stop lane's or the stop express's: session.py rule 13), and goes when the hold
    ends; a hold that ends by clearing (the main connection lost before its marker came back,
@@ -115,12 +120,18 @@ from __future__ import annotations
 import logging
 
 from bridge.core.errors import Refused
-from bridge.core.model import ErrorKind, Source, Target, WindInfo
+from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
 from bridge.session.parts import NOTHING, Proposal, Scene
 
 log = logging.getLogger(__name__)
+
+
+def unread(scene: Scene) -> bool:
+    """Rule 7: no reading taken since the controller answered again (the motion still the
+    offline one: the first back doubted, controller.py rule 9): the park waits for one."""
+    return scene.motion.state is MotionState.OFFLINE
 
 
 class WindPark:
@@ -311,7 +322,7 @@ class WindPark:
             self._end_owed = False
             if self.storm:
                 return Proposal(error=error, ended=self._why)
-        if not (self.storm and self._park_owed) or scene.locked:
+        if not (self.storm and self._park_owed) or scene.locked or unread(scene):
             return NOTHING if error is None else Proposal(error=error)
         self._park_owed = self._arrived = self._end_owed = False  # (the park ends them)
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)

@@ -14,8 +14,6 @@ In virtual time, a Rotor-EZ."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -33,12 +31,6 @@ AWAY_S = 60.0  # virtual: unplugged
 PARK_TIME_S = 300.0  # virtual: a Rotor-EZ turns 70 degrees well inside this
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 60: the storm's park owed after an offline is refused from the bearing "
-    "before the offline; the rotor, turned by hand meanwhile to where the park is allowed, "
-    "faces the storm all storm",
-)
 def test_a_park_owed_after_an_offline_is_judged_from_where_the_rotor_is() -> None:
     with VirtualRotator("rotorez", settings=ALONE) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
