@@ -75,7 +75,13 @@ Rules:
    azimuth box (a Rotor-EZ, its stop at south) refused a park whose turn passed north while
    the elevation box (a GS-232B, its azimuth never turned) took it and lowered the dish from
    40 to its stow, under an R/error saying the park was refused (an attack pass). Both boxes
-   then refuse it in the same words, said once (rule 9).
+   then refuse it in the same words, said once (rule 9). While the azimuth box does not
+   answer, or has taken no reading since it answers again (the first back doubted), its
+   reading is the one from before its offline: the whole park is then not judged at all
+   (``Unjudged``), neither taken nor refused: the storm's park stays owed in each box
+   (session/wind.py rule 5) and both park once both answer (review 60: the elevation box
+   refused the whole storm park from the azimuth box's bearing before its offline, for the
+   whole storm, the azimuth rotor turned by hand meanwhile to where the park was allowed).
 8. No axis turns alone to a target while the rotator is offline: when a box stops answering, a
    target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first) is
    dropped there, as a single controller's is when its line goes (said on R/error), and a target
@@ -189,6 +195,7 @@ from bridge.session.actions import Action, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
+from bridge.session.parts import Unjudged
 from bridge.session.session import DROPS, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
@@ -243,10 +250,14 @@ def joined(composition: Composition, sessions: dict[Axis, RotatorSession]) -> No
 def judged_whole(cfg: WorkerConfig, sessions: dict[Axis, RotatorSession]) -> None:
     """Rule 7: each box's session told how a park of the bridge's own (auto-park's, the
     storm's) is judged whole: Refused if the rotator's judge (``cfg``'s, as ``R/park``'s,
-    against the azimuth box's reading) or either box's own refuses that park."""
+    against the azimuth box's reading) or either box's own refuses that park; Unjudged while
+    the azimuth box does not answer or has taken no reading since it answers again."""
     azimuth = sessions[Axis.AZIMUTH]
 
     def whole(park: Target) -> None:
+        ctl = azimuth.controller  # (no reading of its own since it answers again: a stale one)
+        if ctl.link is None or not ctl.answering or ctl.motion.state is MotionState.OFFLINE:
+            raise Unjudged(park)
         rotator = _park_as(cfg, park)
         if rotator is not None:
             cfg.aim.judge(rotator, azimuth.controller.motion.position_deg)

@@ -37,7 +37,9 @@ Rules:
    composite.py rule 7): all axes or none. Judged by each box alone, the azimuth box refused a
    park whose turn passed north while the elevation box took it and lowered the dish to its
    stow, under an R/error that said the park was refused (an attack pass). Both boxes then say
-   the same refusal, said once (composite.py rule 9).
+   the same refusal, said once (composite.py rule 9). While the azimuth box has no reading of
+   its own since it answers again (``Unjudged``) it does not park yet: the next step judges
+   it again.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from bridge.core.model import ErrorKind, MotionState, Source, Target
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene
+from bridge.session.parts import NOTHING, Proposal, Scene, Unjudged
 
 log = logging.getLogger(__name__)
 
@@ -133,6 +135,8 @@ class AutoPark:
             if scene.whole is not None:  # rule 5: all axes or none
                 scene.whole(park)
             judged = self._rig.aim.judge(park, m.position_deg)
+        except Unjudged:  # rule 5: the azimuth box's reading not fresh yet: not now
+            return NOTHING
         except Refused as exc:
             return Proposal(
                 error=Report(ErrorKind.REFUSED, f"auto-park refused: {exc.message}", "park")

@@ -94,8 +94,15 @@ class Scene(NamedTuple):
     wall_offset_s: float  # wall clock (unix seconds) = now + this
     parking: bool = False  # the last target sent was auto-park's (autopark.py rule 4)
     # a rotator of two boxes' judge of a park of the bridge's own as the rotator's whole park
-    # (runtime/composite.py rule 7: Refused if any axis's would be); None: one controller
+    # (runtime/composite.py rule 7: Refused if any axis's would be, Unjudged while it cannot be
+    # judged yet); None: one controller
     whole: Callable[[Target], None] | None = None
+
+
+class Unjudged(Exception):
+    """``Scene.whole``: the rotator's whole park cannot be judged yet (runtime/composite.py
+    rule 7: its azimuth box does not answer, or has taken no reading since it answers again):
+    neither taken nor refused, it waits."""
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,13 @@ Rules:
    rotator of two boxes it is judged as the rotator's whole park first (``Scene.whole``,
    runtime/composite.py rule 7): all axes or none, as autopark.py rule 5 has it (an attack
    pass: the azimuth box refused the storm's park and the elevation box lowered the dish
-   alone).
+   alone). While the azimuth box does not answer, or has taken no reading since it answers
+   again, the whole park is not judged: it stays owed (``waiting``), neither taken nor refused
+   (``Unjudged``), and tracking and following end as the park would have ended them; each box
+   parks once both answer (review 60: the elevation box judged the whole park from the
+   azimuth box's bearing from before its offline, refused it for the whole storm, and once
+   the azimuth box was back where the park is allowed, the antenna faced the storm at
+   100/40).
 6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the
@@ -123,7 +129,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
-from bridge.session.parts import NOTHING, Proposal, Scene
+from bridge.session.parts import NOTHING, Proposal, Scene, Unjudged
 
 log = logging.getLogger(__name__)
 
@@ -163,6 +169,7 @@ class WindPark:
         self._replayed = storm and replayed  # rule 6: the storm known only from a replay
         self._end_owed = False  # rule 6: tracking and following to end, with no park to carry it
         self._refused: str | None = None  # rule 5: why the judge refused this storm's park
+        self._unjudged = False  # rule 5: the whole park waited, tracking's end proposed already
         self._wall_offset_s = 0.0
 
     @property
@@ -214,7 +221,7 @@ class WindPark:
             return  # (but a live reading in a storm known only from a replay: rule 6)
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
-            self._refused = None  # (rule 5: a new storm's park is judged anew)
+            self._refused, self._unjudged = None, False  # (rule 5: a new storm's park anew)
             self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
         self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
@@ -330,6 +337,10 @@ class WindPark:
             if scene.whole is not None:  # rule 5: a rotator of two boxes', all axes or none
                 scene.whole(park)
             judged = self._rig.aim.judge(park, scene.motion.position_deg)
+        except Unjudged:  # rule 5: the azimuth box without a fresh reading: owed, not refused
+            self._park_owed, said = True, self._unjudged
+            self._unjudged = True  # (tracking and following end once, as the park would end them)
+            return Proposal(error=error, ended=None if said else self._why)
         except Refused as exc:  # rule 5
             self._refused = exc.message  # (said so, not "parked": review 60)
             why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")

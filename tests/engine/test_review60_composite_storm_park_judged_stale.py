@@ -17,8 +17,6 @@ In virtual time, the rotator of test_attack14_composite_auto_park_one_axis."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
@@ -40,12 +38,6 @@ AWAY_S = 60.0  # virtual: unplugged
 PARK_TIME_S = 300.0  # virtual: a Rotor-EZ turns 70 degrees, a GS-232B lowers 40, well inside
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 60: on a rotator of two boxes, a storm begun while the azimuth box was "
-    "unplugged is refused whole from its reading before the offline, and the antenna stays "
-    "at 100/40 in the storm once it is back where the park is allowed",
-)
 def test_a_composite_storm_begun_with_the_azimuth_box_out_parks_both_axes_once_it_is_back() -> None:
     with VirtualComposite("rotorez", "gs232b", settings=WIND, emulators=BOXES) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
