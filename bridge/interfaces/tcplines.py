@@ -13,8 +13,9 @@ Rules:
    HTTP header (``Host: ...``). A text protocol parses any bytes as commands, so a web page open
    on the shack PC could otherwise turn the antenna through a loopback port. Bytes that are a
    whole command on their own and move nothing (``singles``: a DCU-1's ``V`` and option letters,
-   which no end follows) go at once while the first line is nothing else, so such a program is
-   answered when it asks; the line they begin is still held and judged whole.
+   which no end follows; rotctld's ``S`` and ``p``) go at once while the first line is nothing
+   else, so such a program is answered when it asks (and a stop carried out); the line they
+   begin is still held and judged whole.
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
@@ -723,7 +724,7 @@ class LineServer:
         self._ends = ends
         # rule 5: a byte of these in a newcomer's bytes, or no command is complete there (no
         # stop: HttpGuard lets nothing through before an end but ``singles``, none of them)
-        self._end_bytes = () if singles else tuple(bytes([end]) for end in ends)
+        self._end_bytes = tuple(bytes([end]) for end in ends + singles)
         self._halts = halts
         self._singles = singles
         self._greets = greets  # rule 8

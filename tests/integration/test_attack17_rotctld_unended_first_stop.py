@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import socket
 
-import pytest
-
 from tests.integration.test_rotctld_integration import ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -27,13 +25,6 @@ def _answer(sock: socket.socket) -> bytes:
         return b""
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 17: an S sent as a rotctld connection's first command without a line end is "
-        "held for ever: no RPRT 0, and the rotor turns on to its target"
-    ),
-)
 def test_a_bare_s_as_a_connections_first_command_stops_at_once(rig: Rig) -> None:
     port, _ = start(rig, start_az_deg=10)  # 290 degrees to go: over 7 s
     emu = rig.emus["tower"]

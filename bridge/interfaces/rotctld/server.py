@@ -59,6 +59,14 @@ def _greeting(rotator: Rotator, data: bytes) -> bytes | None:
     return b"".join(out for out in RotctldSession(rotator).feed(data) if isinstance(out, bytes))
 
 
+# tcplines.py rule 2: whole commands of one byte that move nothing, let through a first line
+# held for the HTTP check: rotctld answers a bare ``S`` (stop) or ``p`` (position) at once, no
+# line end after it (an attack pass: a script's ``printf S | nc`` got no RPRT 0, and the rotor
+# turned on to its target). A web page's request line that begins with S (``SEARCH``) runs its
+# first byte alone, a stop, and is refused whole.
+SINGLES = b"Sp"
+
+
 class RotctldServer(LineServer):
     """One TCP listener for one rotator; one thread per client."""
 
@@ -86,6 +94,7 @@ class RotctldServer(LineServer):
             clock=clock,
             peer_session=lambda peer: RotctldSession(rotator, peer),
             halts=holds_stop,
+            singles=SINGLES,
             greets=lambda data: _greeting(rotator, data),
             halt_count=halt_count(rotator),
             halt_watchers=halt_watchers(rotator),
