@@ -22,13 +22,6 @@ from tests.support.rig import Rig
 pytestmark = pytest.mark.hamlib
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 17: rotctl -m 403 asked for north (P 360) on the DCU-1 port turns a Yaesu at "
-        "355 the whole way back through south (M000) instead of 5 degrees on to 360"
-    ),
-)
 def test_a_dcu1_north_turns_a_yaesu_at_355_the_short_way(
     rig: Rig, tmp_path: Path, rotctl_path: str
 ) -> None:

@@ -103,7 +103,11 @@ Rules:
     ``AP1200;`` read after an MQTT STOP sent after it, and its ``AM1;`` turned the rotor to
     200); else it is refused on ``R/error`` and turns nothing;
     ``AP1ddd`` CR
-    turns at once; ``AI1;`` (or ``AI1`` CR) answers ``;ddd``, the true bearing rounded to a
+    turns at once; a bearing of 000 is north, a direction (the protocol has no 360: Hamlib
+    sends 360 as ``AP1000;``), so it goes to whichever end of the travel is nearer where
+    0 and 360 are both (``Target.az_either_end``, pointing.py rule 2; attack 17: a Yaesu
+    behind a GS-232 at 355 asked for north was sent ``M000`` and turned back through south);
+    ``AI1;`` (or ``AI1`` CR) answers ``;ddd``, the true bearing rounded to a
     whole degree, 360 as 000, and nothing while the bridge does not have it (Hamlib's
     ``-m 401`` would otherwise ask for ever); the options are taken and change nothing (the
     station's own are set on ``R/option``). An invalid command, a refused move and a stop the

@@ -403,7 +403,12 @@ class Dcu1Session(_Session[Dcu1Request]):
             # a STOP between the check above and the put overtakes the bearing: mailbox.py
             az_deg, since = stored[0], stored[3]  # rule 10 (a review: it went out after it)
         try:
-            target = Target(az_deg, None, Source.DCU1, origin=self.origin)
+            # package rule 10: 000 is north, a direction, not an end of the travel (the
+            # protocol cannot say 360, Hamlib sends 360 as AP1000;): the end nearer the rotor
+            # (pointing.py rule 2; an attack pass: a Yaesu behind a GS-232 at 355 asked for
+            # north was sent M000 and turned back through south)
+            either = az_deg is not None and az_deg % 360 == 0
+            target = Target(az_deg, None, Source.DCU1, origin=self.origin, az_either_end=either)
             self.fence.move(target, described, since=since)
         except Refused:
             return DCU1_ERROR  # Rotator.submit has reported it on R/error
