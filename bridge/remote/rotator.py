@@ -28,8 +28,10 @@ Rules:
 3. ``submit``: each command (core/model.py's union) is one publish on the station's own topic for
    it (docs/mqtt.md): a Target on ``R/target`` as JSON, a Stop on ``R/stop``, the lock on
    ``R/lock``, a preset, a nudge, tracking on theirs, through the link (interfaces/mqtt/remote.py:
-   QoS 1, expiry, operator); one the station takes on no topic (an elevation alone, an option, the
-   lease, following) is refused (UNSUPPORTED; an elevation alone says to send both). While the
+   QoS 1, expiry, operator), an elevation alone on ``R/target/elevation`` (attack 17: Hamlib's
+   PstRotator client sends ``P 200 30`` as an azimuth datagram and an elevation one, and the
+   remote refused every elevation: the antenna never lifted); one the station takes on no
+   topic (an option, the lease, following) is refused (UNSUPPORTED). While the
    link is down each is refused with OFFLINE at once. A command that moves (a target, park, a
    place) is refused with OFFLINE at once too while the station is not current (rule 1: its
    bridge or the rotator offline), as the station's own rotctld refuses it for a rotator
@@ -444,11 +446,14 @@ class RemoteRotator:
                     reader=reader,
                     move=True,
                 )
-            case Target():  # an elevation alone (rule 3)
-                raise Refused(
-                    RefusalCode.UNSUPPORTED,
-                    "an elevation alone cannot go to the station, whose target topic takes "
-                    "the azimuth with it: send both",
+            case Target() if command.el_deg is not None:  # an elevation alone (rule 3)
+                if not self.spec.has_elevation:
+                    raise Refused(RefusalCode.UNSUPPORTED, "this rotator has no elevation")
+                self.check_move(since, source)
+                self.pointing.judge(command, None)  # early word; the station judges again
+                payload = f"{command.el_deg:g}"
+                self.publish(
+                    t.target_elevation, payload, guard, seen_s=seen_s, reader=reader, move=True
                 )
             case _:
                 raise Refused(

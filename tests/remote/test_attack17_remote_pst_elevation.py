@@ -35,13 +35,6 @@ def endpoints(station: Rig, tmp_path: Path) -> Iterator[Endpoints]:
     e.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 17: through the remote's PstRotator port, Hamlib's P 200 30 (two datagrams) "
-        "turns the azimuth but never the elevation: every <ELEVATION> alone is refused"
-    ),
-)
 def test_hamlibs_azimuth_then_elevation_datagrams_turn_both_axes_through_the_remote(
     station: Rig, endpoints: Endpoints
 ) -> None:

@@ -221,12 +221,12 @@ def test_a_stop_counted_while_a_move_is_on_its_way_to_the_link_is_never_overtake
     assert link.sent == [("rotor/tower/stop", "stop")]
 
 
-def test_an_elevation_alone_is_refused_as_remote_md_says(
+def test_an_elevation_alone_goes_to_the_stations_elevation_topic(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    """docs/remote.md: the station's target topic takes an azimuth always; Easycomm's ``EL30``
-    alone cannot be said there, and the remote's log says why in those words (it said "the
-    remote does not send 'target': targets, ...", which named targets among what it sends)."""
+    """docs/remote.md: Easycomm's ``EL30`` alone goes to the station's ``R/target/elevation``
+    (attack 17: it was refused, and a client that sends the two axes apart never lifted the
+    antenna); both together go on ``R/target`` as one document."""
     station, link = StationTopics("rotor"), Link()
     azel = Info.parse(
         b'{"name":"dish","model":"rot2prog","azimuth_range":[0,360],"elevation_range":[0,90]}'
@@ -237,14 +237,11 @@ def test_an_elevation_alone_is_refused_as_remote_md_says(
     view.put(station.rotator("dish").availability, b"online")
     rot = RemoteRotator("dish", station.rotator("dish"), station, azel, view, link, "X", 5)
     with caplog.at_level(logging.WARNING, logger="bridge.remote.rotator"):
-        assert EasycommSession(rot).feed(b"EL30.0\n") == [b""]  # refused: in the remote's log
-    assert link.sent == []
-    assert [r.getMessage() for r in caplog.records] == [
-        "dish: easycomm EL30.0 refused: an elevation alone cannot go to the station, whose "
-        "target topic takes the azimuth with it: send both"
-    ]
+        assert EasycommSession(rot).feed(b"EL30.0\n") == [b""]
+    assert not caplog.records
+    assert link.sent == [("rotor/dish/target/elevation", "30")]
     assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]
-    assert link.sent == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]
+    assert link.sent[1:] == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]
 
 
 def test_another_operators_lease_refuses_a_move_at_once_in_the_stations_words() -> None:
