@@ -1,0 +1,62 @@
+"""Review 64 of cad0e49c (dcu1: a bearing of 000 is north, the nearer end of a travel whose
+ends are 0 and 360): the remote's DCU-1 endpoint (remote/settings.py ``dcu1_port``, the same
+Dcu1Session) marks AP1000 as either end as the station's does, but the remote hands a Target on
+to the station as ``{"azimuth": 0}`` on ``R/target`` (remote/rotator.py rule 3), where 0 named
+is the counter-clockwise end (pointing.py rule 2): the mark is lost on the way. A DCU-1
+program on the operator's computer (rotctl -m 403 P 360, sent as ``AP1000;`` ``AM1;``) asking
+a Yaesu behind a GS-232 at 355 for north turns it 355 degrees back through south, the very
+turn the fix stopped on the station's own DCU-1 port."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.remote.run import Remote
+from bridge.remote.settings import RemoteSettings
+from tests.integration.test_dcu1_endpoint import DCU1
+from tests.integration.test_gs232_integration import rotctl
+from tests.remote.test_remote import OPERATOR
+from tests.support import wait_until
+from tests.support.mosquitto import free_port
+from tests.support.rig import Rig
+from tests.support.waiting import slow
+
+pytestmark = pytest.mark.hamlib
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 64: a DCU-1 program's north through the remote (AP1000; AM1;) turns a Yaesu "
+        "behind a GS-232 at 355 back through south (M000), not 5 degrees on to 360"
+    ),
+)
+def test_a_dcu1_north_through_the_remote_turns_a_yaesu_at_355_the_short_way(
+    rig: Rig, rotctl_path: str
+) -> None:
+    emu = rig.add("tower", model="gs232b-az", emu={"start_az_deg": 355})
+    rig.start()
+    rig.ready("tower")
+    port = free_port()
+    remote = Remote(
+        RemoteSettings(
+            operator=OPERATOR,
+            mqtt={"host": "127.0.0.1", "port": rig.broker.port, "base_topic": "rotor"},
+            endpoints=[{"rotator": "tower", "dcu1_port": port}],
+        )
+    )
+    try:
+        remote.start()
+        wait_until(
+            lambda: remote.rotators[0].status.bearing_deg is not None,
+            slow(10),
+            "the remote's view of the station",
+        )
+        rotctl(rotctl_path, DCU1, port, "P", "360", "0")  # Hamlib sends AP1000; then AM1;
+        rig.arrived("tower", 0)  # north, on either end of the scale
+    finally:
+        remote.stop()
+    assert [f.data for f in emu.frames("move")] == [b"M360"], (
+        "the rotor at 355 was sent the far end of its travel for north through the remote: "
+        "a turn of 355 degrees through south for a bearing 5 degrees away"
+    )
