@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import socket
 
-import pytest
-
 from tests.integration.test_rotctld_integration import ask, connect, start
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -28,13 +26,6 @@ def _answer(sock: socket.socket) -> bytes:
         return b""
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 64: an extended-form stop (+S) sent as a rotctld connection's first bytes "
-        "without a line end is held for ever: no 'stop: RPRT 0', and the rotor turns on"
-    ),
-)
 def test_an_extended_s_as_a_connections_first_command_stops_at_once(rig: Rig) -> None:
     port, _ = start(rig, start_az_deg=10)  # 290 degrees to go: over 7 s
     emu = rig.emus["tower"]

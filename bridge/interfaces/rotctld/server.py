@@ -3,6 +3,7 @@ one session per client (``p`` answers each client in its own terms)."""
 
 from __future__ import annotations
 
+import string
 import time
 from collections.abc import Callable
 
@@ -59,12 +60,15 @@ def _greeting(rotator: Rotator, data: bytes) -> bytes | None:
     return b"".join(out for out in RotctldSession(rotator).feed(data) if isinstance(out, bytes))
 
 
-# tcplines.py rule 2: whole commands of one byte that move nothing, let through a first line
-# held for the HTTP check: rotctld answers a bare ``S`` (stop) or ``p`` (position) at once, no
-# line end after it (an attack pass: a script's ``printf S | nc`` got no RPRT 0, and the rotor
-# turned on to its target). A web page's request line that begins with S (``SEARCH``) runs its
-# first byte alone, a stop, and is refused whole.
-SINGLES = b"Sp"
+# tcplines.py rule 2: the bytes of the commands that move nothing and need no line end, let
+# through a first line held for the HTTP check while it is nothing else: rotctld answers a bare
+# ``S`` (stop), ``p`` or ``s`` at once, no line end after it, and so the extended forms
+# (``+S``, ``;S``, ``+\stop``: a prefix of punctuation, spaces, ``\stop``'s letters). An
+# attack pass: a script's ``printf S | nc`` got no RPRT 0, and the rotor turned on to its
+# target (review 64: ``+S`` likewise). What such a line can run is a stop, a position or a
+# status asked, or an error; a web page's request line that begins with S (``SEARCH``) runs
+# its first byte alone, a stop, and is refused whole.
+SINGLES = bytes(sorted(ord(c) for c in string.punctuation if c not in "\\_#")) + b" \t\\Spsto"
 
 
 class RotctldServer(LineServer):
