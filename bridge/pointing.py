@@ -149,6 +149,16 @@ def unfolded(bearing_deg: float | None, raw_deg: float | None) -> float | None:
     return raw_deg + offset
 
 
+def raw_reading(status: RotatorStatus) -> float | None:
+    """Rule 1: the raw value of ``status``'s reading: its raw bearing, else its bearing (a
+    status read from the station's ``R/status``, which leaves the raw bearing out where it
+    tells nothing more: no offset and a scale that wraps, ``shows_raw``), else None. The
+    remote picks the nearer end of a travel for north by it (review 64: it had no raw
+    bearing, and a DCU-1's north through it went to the far end)."""
+    raw = status.raw_bearing_deg
+    return status.bearing_deg if raw is None else raw
+
+
 def at_south_stop(raw_deg: float) -> bool:
     """Whether ``raw_deg`` is a Hy-Gain rotor's stop, raw 180, where no reading tells which end
     of its travel it is at (rules 4 and 6)."""

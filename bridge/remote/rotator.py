@@ -119,7 +119,7 @@ from bridge.features import control, tracking
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
 from bridge.interfaces.mqtt.payloads import one_line
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
-from bridge.pointing import Limits
+from bridge.pointing import Limits, raw_reading
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
 
 __all__ = ["Info", "InfoError", "RemoteRotator", "StationView", "parse_status"]
@@ -408,7 +408,7 @@ class RemoteRotator:
                 if command.park:  # the station's park position, so that it shows "parked"
                     self.publish(t.park, "park", guard, seen_s=seen_s, reader=reader, move=True)
                 else:
-                    doc: dict[str, float] = {"azimuth": command.az_deg}
+                    doc: dict[str, float] = {"azimuth": self._end_named(command)}
                     if command.el_deg is not None:
                         doc["elevation"] = command.el_deg
                     self._send_json(t.target, doc, guard, seen_s, reader)
@@ -461,6 +461,19 @@ class RemoteRotator:
                     f"the remote does not send {describe_command(command).split(' ')[0]!r}: "
                     "targets, stops, the lock, presets, park, nudges, places and tracking",
                 )
+
+    def _end_named(self, target: Target) -> float:
+        """Rule 3: the azimuth the station is sent for ``target``: north that names neither
+        end (``Target.az_either_end``: a DCU-1's 000) as the end of the travel nearer the
+        station's reading, for the station's ``R/target`` takes 0 named for the
+        counter-clockwise end (pointing.py rule 2; review 64: a DCU-1 program's north through
+        the remote turned a Yaesu at 355 back through south); equals, or no reading: 0."""
+        az = target.az_deg
+        assert az is not None
+        raw = raw_reading(self.status)
+        if not target.az_either_end or az % 360.0 != 0.0 or raw is None:
+            return az
+        return min((0.0, 360.0), key=lambda end: self.pointing.turn_deg(end, raw))
 
     def check_move(self, since: int | None, source: Source) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);

@@ -24,13 +24,6 @@ from tests.support.waiting import slow
 pytestmark = pytest.mark.hamlib
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 64: a DCU-1 program's north through the remote (AP1000; AM1;) turns a Yaesu "
-        "behind a GS-232 at 355 back through south (M000), not 5 degrees on to 360"
-    ),
-)
 def test_a_dcu1_north_through_the_remote_turns_a_yaesu_at_355_the_short_way(
     rig: Rig, rotctl_path: str
 ) -> None:
