@@ -75,13 +75,19 @@ Rules:
    azimuth box (a Rotor-EZ, its stop at south) refused a park whose turn passed north while
    the elevation box (a GS-232B, its azimuth never turned) took it and lowered the dish from
    40 to its stow, under an R/error saying the park was refused (an attack pass). Both boxes
-   then refuse it in the same words, said once (rule 9). While the azimuth box does not
-   answer, or has taken no reading since it answers again (the first back doubted), its
-   reading is the one from before its offline: the whole park is then not judged at all
-   (``Unjudged``), neither taken nor refused: the storm's park stays owed in each box
-   (session/wind.py rule 5) and both park once both answer (review 60: the elevation box
-   refused the whole storm park from the azimuth box's bearing before its offline, for the
-   whole storm, the azimuth rotor turned by hand meanwhile to where the park was allowed).
+   then refuse it in the same words, said once (rule 9). All axes or none holds while both
+   boxes answer. While the azimuth box does not answer, its reading is the one from before
+   its offline, which judges nothing (review 60: the elevation box refused the whole storm
+   park from the azimuth box's bearing before its offline, for the whole storm, the azimuth
+   rotor turned by hand meanwhile to where the park was allowed): the storm's park is then
+   the elevation box's own axis's, judged by that box alone, and it lowers the dish (the safe
+   side, as a storm begun with the elevation box out parks the azimuth alone; review 63:
+   judged ``Unjudged``, the dish stayed raised for the whole storm), while the azimuth box's
+   park stays owed until it answers (session/wind.py rule 7); auto-park's waits (no box parks
+   its axis alone while the rotator is offline: ``share_quiet``). While the azimuth box
+   answers again but has taken no reading since (the first back doubted), the whole park is
+   not judged at all (``Unjudged``), neither taken nor refused: it stays owed in each box
+   (session/wind.py rule 5), and is judged whole at the first reading.
 8. No axis turns alone to a target while the rotator is offline: when a box stops answering, a
    target still waiting in the other (held back by a Rotor-EZ's brake delay, a stop first) is
    dropped there, as a single controller's is when its line goes (said on R/error), and a target
@@ -251,13 +257,19 @@ def judged_whole(cfg: WorkerConfig, sessions: dict[Axis, RotatorSession]) -> Non
     """Rule 7: each box's session told how a park of the bridge's own (auto-park's, the
     storm's) is judged whole: Refused if the rotator's judge (``cfg``'s, as ``R/park``'s,
     against the azimuth box's reading) or either box's own refuses that park; Unjudged while
-    the azimuth box does not answer or has taken no reading since it answers again."""
+    the azimuth box has taken no reading since it answers again, and while it does not answer
+    (auto-park's); the storm's park with the azimuth box offline is the elevation box's alone,
+    judged there by its own judge (the part's, after this)."""
     azimuth = sessions[Axis.AZIMUTH]
 
     def whole(park: Target) -> None:
-        ctl = azimuth.controller  # (no reading of its own since it answers again: a stale one)
-        if ctl.link is None or not ctl.answering or ctl.motion.state is MotionState.OFFLINE:
-            raise Unjudged(park)
+        ctl = azimuth.controller
+        if ctl.link is None or not ctl.answering:  # the azimuth box offline:
+            if park.source is Source.WIND:  # the storm's park is the elevation box's own,
+                return  # judged by that box alone (review 63: the dish stayed up all storm)
+            raise Unjudged(park)  # (auto-park's waits for the rotator: ``share_quiet``)
+        if ctl.motion.state is MotionState.OFFLINE:  # back, no reading of its own since:
+            raise Unjudged(park)  # the one it has is from before its offline, a stale one
         rotator = _park_as(cfg, park)
         if rotator is not None:
             cfg.aim.judge(rotator, azimuth.controller.motion.position_deg)

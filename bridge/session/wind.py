@@ -61,13 +61,16 @@ Rules:
    rotator of two boxes it is judged as the rotator's whole park first (``Scene.whole``,
    runtime/composite.py rule 7): all axes or none, as autopark.py rule 5 has it (an attack
    pass: the azimuth box refused the storm's park and the elevation box lowered the dish
-   alone). While the azimuth box does not answer, or has taken no reading since it answers
-   again, the whole park is not judged: it stays owed (``waiting``), neither taken nor refused
-   (``Unjudged``), and tracking and following end as the park would have ended them; each box
-   parks once both answer (review 60: the elevation box judged the whole park from the
-   azimuth box's bearing from before its offline, refused it for the whole storm, and once
-   the azimuth box was back where the park is allowed, the antenna faced the storm at
-   100/40).
+   alone), while both boxes answer. While the azimuth box does not answer, the elevation box
+   judges and parks its own axis alone (the safe side, as a storm begun with the elevation
+   box out parks the azimuth alone; review 63: it waited for the azimuth box, and the dish
+   stayed raised for the whole storm), and the azimuth box's park stays owed (rule 7). While
+   the azimuth box answers again but has taken no reading since, the whole park is not
+   judged: it stays owed (``waiting``), neither taken nor refused (``Unjudged``), and tracking
+   and following end as the park would have ended them; it is judged whole at that box's
+   first reading (review 60: the elevation box judged the whole park from the azimuth box's
+   bearing from before its offline, refused it for the whole storm, and once the azimuth box
+   was back where the park is allowed, the antenna faced the storm at 100/40).
 6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the

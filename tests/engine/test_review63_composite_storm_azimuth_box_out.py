@@ -15,8 +15,6 @@ limit or keep-out in the way from anywhere. In virtual time."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
@@ -30,11 +28,6 @@ STORM_KMH = 90.0
 STORM_S = 600.0  # virtual: the azimuth box stays out; a GS-232B lowers 30 degrees in 12 s
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 63: a storm with the azimuth box unplugged leaves the dish up at 30 degrees "
-    "for the whole storm (the elevation box's park waits for the azimuth box for ever)",
-)
 def test_a_storm_with_the_azimuth_box_out_still_lowers_the_dish() -> None:
     with VirtualComposite("rt21", "gs232b", settings=WIND, emulators=FAST) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
