@@ -113,7 +113,8 @@ class Proposal:
     error: Report | None = None  # hand this error event out
     ended: str | None = None  # end tracking and following for this reason (their targets dropped)
     busy: bool = False  # activity: auto-park's quiet spell starts again (autopark.py rule 1)
-    halt: bool = False  # stop the turn under way (following: a transmission began, follow.py)
+    halt: bool = False  # stop the turn under way (following: a transmission began, follow.py;
+    # the wind: its storm's park refused, wind.py rule 5)
     drop: Source | None = None  # drop the waiting target if this source put it (autopark.py
     # rule 3: a hand on the panel before the park went)
 

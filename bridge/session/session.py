@@ -1210,7 +1210,8 @@ class RotatorSession:
         if proposal.ended is not None:
             self.features.end(proposal.ended)  # (tracking may have ended itself)
             self.targets.clear_from(Source.TRACKING)
-        if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
+        if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3);
+            # the wind: its storm's park refused (wind.py rule 5)
             self._halt(now)
             self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
         if proposal.drop is not None:  # (auto-park's, a hand before it went: autopark.py rule 3)

@@ -57,9 +57,12 @@ Rules:
    (review 60: R/status, Home Assistant's "Parked for the storm" and every refusal in the
    storm said it parked while the antenna faced the storm where it stood; the settings'
    guard judges the park without a reading, so a park refused from where the rotor stands
-   passes it). A park owed again (rule 7) is judged again, and one it takes ends that. On a
-   rotator of two boxes it is judged as the rotator's whole park first (``Scene.whole``,
-   runtime/composite.py rule 7): all axes or none, as autopark.py rule 5 has it (an attack
+   passes it). The turn under way then stops (``Proposal.halt``, a halt of the bridge's own,
+   no STOP of rule 3): the park would have replaced it, and the rotor stands where the storm
+   found it (review 63: it ran on 70 degrees to the operator's pre-storm target). A park owed
+   again (rule 7) is judged again, and one it takes ends that. On a rotator of two boxes it
+   is judged as the rotator's whole park first (``Scene.whole``, runtime/composite.py rule
+   7): all axes or none, as autopark.py rule 5 has it (an attack
    pass: the azimuth box refused the storm's park and the elevation box lowered the dish
    alone), while both boxes answer. While the azimuth box does not answer, the elevation box
    judges and parks its own axis alone (the safe side, as a storm begun with the elevation
@@ -132,6 +135,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
+from bridge.session.motion import Motion
 from bridge.session.parts import NOTHING, Proposal, Scene, Unjudged
 
 log = logging.getLogger(__name__)
@@ -347,6 +351,13 @@ class WindPark:
         except Refused as exc:  # rule 5
             self._refused = exc.message  # (said so, not "parked": review 60)
             why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")
-            return Proposal(error=why, ended=self._why, busy=True)
+            m = scene.motion  # (the turn under way stops, as the park would have replaced it)
+            return Proposal(error=why, ended=self._why, busy=True, halt=_turning(m))
         self._refused = None
         return Proposal(target=judged, error=error, ended=self._why, busy=True)
+
+
+def _turning(m: Motion) -> bool:
+    """Rule 5: a turn under way, or a target out, with no stop of the bridge's sent for it."""
+    aimed = m.target_deg is not None or m.el_target_deg is not None
+    return m.stop_sent_t is None and (m.state is MotionState.MOVING or aimed)

@@ -15,8 +15,6 @@ time."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -32,11 +30,6 @@ STORM_S = 120.0  # virtual: a Rotor-EZ turns the last 70 degrees well inside thi
 BRAKE_DEG = 10.0  # what a stopped Rotor-EZ may run on, at most
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 63: a storm whose park is refused lets the rotor run on 70 degrees to the "
-    "operator's pre-storm target while R/status says it stands where the storm found it",
-)
 def test_a_refused_storm_park_leaves_the_rotor_where_the_storm_found_it() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
