@@ -34,7 +34,9 @@ Rules:
    on while the elevation box was unplugged was shown offline and not moving, and a group
    with that rotator said idle.) Its wind is the azimuth box's, whose storm's park is seen
    reached (session/wind.py rule 7, kept over a restart by runtime/kept.py rule 4) only when
-   both boxes' parks were: otherwise a restart in the storm parks both again. Its version is
+   both boxes' parks were: otherwise a restart in the storm parks both again; refused, or
+   waiting, when either box's park is, in that box's words (session/wind.py rules 5 and 9: a
+   park waiting in one box is no park said done for the rotator). Its version is
    its boxes' joined, azimuth first (``1.4S / SatEL``), each box whose model reports one
    (protocols/axes.py rule 4), and none until every such box has said its own, the rotator
    saying meanwhile the pair kept from the last run, if any (runtime/kept.py rule 11). One
@@ -323,14 +325,20 @@ def merge(
     said = [box.version for box, has in zip((az, el), versioned, strict=True) if has]
     version = " / ".join(v for v in said if v) if said and all(said) else None
     wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's;
-    # refused if either's, in the words of the box that refused it)
+    # refused if either's, in the words of the box that refused it, else waiting in the words
+    # of the box whose park waits: session/wind.py rule 9)
     if wind is not None and el.wind is not None:
+        refusal = wind.refusal
+        if el.wind.refused and not wind.refused:
+            refusal = el.wind.refusal
+        elif el.wind.waiting and not (wind.refused or wind.waiting):
+            refusal = el.wind.refusal
         wind = replace(
             wind,
             arrived=wind.arrived and el.wind.arrived,
             waiting=wind.waiting or el.wind.waiting,
             refused=wind.refused or el.wind.refused,
-            refusal=el.wind.refusal if el.wind.refused and not wind.refused else wind.refusal,
+            refusal=refusal,
         )
     return replace(
         az,

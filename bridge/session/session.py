@@ -1028,6 +1028,7 @@ class RotatorSession:
         elif self._storm_park_seen():
             self.wind.arrived()  # (wind.py rule 7: the last status saw it at the storm's park)
         self._answered = ctl.link is not None and ctl.answering
+        self.wind.answering(self._answered)  # (wind.py rule 9: what its park waits for)
         if ctl.link is not None and ctl.answering:
             going = self.targets.pending is not None and not self.fence.held
             ctl.check_stop(now, going, self.locked)  # (stops.py rule 7: the lock's own check)
@@ -1280,6 +1281,7 @@ class RotatorSession:
         )
         link, view = ctl.link, self.view
         slew = link.slew if link is not None else None
+        wind.held_back(self.fence.held and self._storm_park_waiting())  # (wind.py rule 9)
         key: tuple[object, ...] = (  # one flat tuple: this runs at every step
             # (the bearings first: a turning rotor's every reading changes one, and the
             # comparison ends there, before the motion's __eq__ compares its every field)

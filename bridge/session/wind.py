@@ -125,6 +125,15 @@ Rules:
    the hold's marker came back, and the park went then, the rotor turned 90 degrees with no
    storm and nobody asking; a clearing then dropped it as an operator's target, "send it
    again").
+9. A park owed and not sent (rules 4, 5 and 7: for the lock OFF, for the controller to answer,
+   for its first reading since, for the azimuth box's) or taken and waiting under a STOP's
+   hold (rule 8: the session says so, ``held_back``) is said waiting, never parked: the
+   status's ``waiting`` (Home Assistant's "Parked for the storm" off), and the refusal "wind
+   72 km/h above 60: motion refused for the storm (its park waits for the lock OFF)", with
+   what it waits for; "parked for the storm" only once the park was sent (review 63: a park
+   waiting for the azimuth box was refused to operators as "parked for the storm", and one
+   under a STOP's hold showed ``waiting: false`` and "Parked for the storm" ON while the
+   rotor faced the storm where it stood).
 """
 
 from __future__ import annotations
@@ -139,6 +148,13 @@ from bridge.session.motion import Motion
 from bridge.session.parts import NOTHING, Proposal, Scene, Unjudged
 
 log = logging.getLogger(__name__)
+
+# rule 9: what a park owed and not sent waits for
+ANSWER = "the controller to answer"
+LOCK_OFF = "the lock OFF"
+READING = "the controller's first reading since it answers again"
+AZIMUTH_READING = "the azimuth box's first reading since it answers again"
+HOLD = "the hold of a STOP or lock ON sent before the storm"
 
 
 def unread(scene: Scene) -> bool:
@@ -177,6 +193,9 @@ class WindPark:
         self._end_owed = False  # rule 6: tracking and following to end, with no park to carry it
         self._refused: str | None = None  # rule 5: why the judge refused this storm's park
         self._unjudged = False  # rule 5: the whole park waited, tracking's end proposed already
+        self._waits: str | None = None  # rule 9: what the park owed waited for at a step
+        self._offline = False  # rule 9: the controller does not answer (no step runs)
+        self._held_back = False  # rules 8 and 9: the park taken waits under a STOP's hold
         self._wall_offset_s = 0.0
 
     @property
@@ -193,7 +212,7 @@ class WindPark:
             replayed=self._replayed,
             halted=self._halted,
             arrived=self._arrived,
-            waiting=self.storm and self._park_owed,
+            waiting=self.waiting is not None,
             refused=self.storm and self._refused is not None,
         )
 
@@ -231,6 +250,7 @@ class WindPark:
             self._refused, self._unjudged = None, False  # (rule 5: a new storm's park anew)
             self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
+        self._waits = None  # (rule 9: judged at the next step, if the controller answers)
         self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
         if replayed:
             self._why += " (the last reading the broker kept)"
@@ -269,12 +289,33 @@ class WindPark:
         """Rule 7: the line took the rotator (offline, unplugged) in this storm (rule 6: one
         known only from a replay sent no park, and owes none)."""
         if self.storm and not self._replayed and not self._halted and not self._arrived:
-            self._park_owed = True
+            self._park_owed, self._waits = True, None  # (rule 9: ``answering``)
 
     def arrived(self) -> None:
         """Rule 7: the rotor was seen at rest at this storm's park: an offline owes it no more."""
         if self.storm and not self._park_owed:
             self._arrived = True
+
+    @property
+    def waiting(self) -> str | None:
+        """Rule 9: what this storm's park, owed or taken and not sent, waits for (None: it
+        does not wait: sent, parked, stopped, refused, or no storm)."""
+        if not self.storm or self._replayed or self._halted or self._refused is not None:
+            return None
+        if self._park_owed:  # (None from a step's wait: judged at the next step, which
+            return ANSWER if self._offline else self._waits  # runs while it answers)
+        return HOLD if self._held_back else None
+
+    def answering(self, answering: bool) -> None:
+        """Rule 9: whether the controller answers (told by the session at each step): while
+        it does not, no step runs, and a park owed waits for it."""
+        self._offline = not answering
+
+    def held_back(self, held: bool) -> None:
+        """Rule 9: whether the park this part proposed waits, taken, under the hold of a STOP
+        or lock ON sent before the storm (rule 8: session.py rule 13; told by the session
+        before each status)."""
+        self._held_back = held
 
     def refusal(self) -> str | None:
         """Why motion is refused now (rule 1), if it is."""
@@ -285,6 +326,9 @@ class WindPark:
             return f"{self._why}: motion refused for the storm (its park refused: {self._refused})"
         if self._halted and not self._arrived:  # rule 3: its park stopped short (a review)
             return f"{self._why}: motion refused for the storm (a stop or lock ON stopped its park)"
+        waits = self.waiting
+        if waits is not None:  # rule 9: owed and not sent (review 63)
+            return f"{self._why}: motion refused for the storm (its park waits for {waits})"
         return f"{self._why}: parked for the storm" if self.storm else None
 
     def wakeup(self, now: float) -> float | None:
@@ -317,8 +361,10 @@ class WindPark:
                 kept = "a storm whose park was refused: motion refused, nothing parked"
             elif self._halted and not self._arrived:  # rule 3: the park stopped short
                 kept = "a storm whose park a stop or lock ON stopped: motion refused"
-            elif self._park_owed and scene.locked:  # rule 4: begun under the lock, not sent
-                kept = "a storm whose park waits for the lock OFF: motion refused, nothing parked"
+            elif self.waiting is not None:  # rules 4 and 9: owed (the lock ON...), not sent
+                kept = (
+                    f"a storm whose park waits for {self.waiting}: motion refused, nothing parked"
+                )
             else:
                 kept = "parked for the storm" if self.storm else "no storm"
             error = Report(
@@ -337,6 +383,8 @@ class WindPark:
             if self.storm:
                 return Proposal(error=error, ended=self._why)
         if not (self.storm and self._park_owed) or scene.locked or unread(scene):
+            if self.storm and self._park_owed:  # rule 9: what it waits for
+                self._waits = LOCK_OFF if scene.locked else READING
             return NOTHING if error is None else Proposal(error=error)
         self._park_owed = self._arrived = self._end_owed = False  # (the park ends them)
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
@@ -345,7 +393,7 @@ class WindPark:
                 scene.whole(park)
             judged = self._rig.aim.judge(park, scene.motion.position_deg)
         except Unjudged:  # rule 5: the azimuth box without a fresh reading: owed, not refused
-            self._park_owed, said = True, self._unjudged
+            self._park_owed, said, self._waits = True, self._unjudged, AZIMUTH_READING  # (9)
             self._unjudged = True  # (tracking and following end once, as the park would end them)
             return Proposal(error=error, ended=None if said else self._why)
         except Refused as exc:  # rule 5

@@ -19,8 +19,6 @@ from __future__ import annotations
 import json
 from types import SimpleNamespace
 
-import pytest
-
 from bridge.core.model import MotionState, Source, Stop
 from bridge.features.wind import _storm, wind_json
 from tests.engine.virtual import VirtualRotator
@@ -39,11 +37,6 @@ def ha_parked(v: VirtualRotator) -> str:
     return render(template, json.dumps({"wind": wind_json(v.status.wind)}))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 63: a storm park waiting under a STOP's hold shows Home Assistant's "
-    "'Parked for the storm' ON and R/status waiting false while nothing moved",
-)
 def test_a_storm_park_waiting_under_a_hold_is_not_shown_parked() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
