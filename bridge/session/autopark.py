@@ -38,8 +38,9 @@ Rules:
    park whose turn passed north while the elevation box took it and lowered the dish to its
    stow, under an R/error that said the park was refused (an attack pass). Both boxes then say
    the same refusal, said once (composite.py rule 9). While the azimuth box has no reading of
-   its own since it answers again (``Unjudged``) it does not park yet: the next step judges
-   it again.
+   its own since it answers again (``Unjudged``) it does not park yet, and that is no park
+   tried (rule 3): the next step judges it again (review 63: it counted as one, and the next
+   try came a whole quiet spell later).
 """
 
 from __future__ import annotations
@@ -129,14 +130,15 @@ class AutoPark:
         ready = mo.at_rest(m) and scene.pending is None  # rule 2 (no brake: motion rule 4)
         if not ready or scene.locked or scene.parked:
             return NOTHING
-        self._parked_t = now  # rule 3
+        before, self._parked_t = self._parked_t, now  # rule 3
         park = Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
         try:
             if scene.whole is not None:  # rule 5: all axes or none
                 scene.whole(park)
             judged = self._rig.aim.judge(park, m.position_deg)
-        except Unjudged:  # rule 5: the azimuth box's reading not fresh yet: not now
-            return NOTHING
+        except Unjudged:  # rule 5: the azimuth box's reading not fresh yet: not now, and no
+            self._parked_t = before  # park tried (the next step judges it again, not the
+            return NOTHING  # next quiet spell: review 63)
         except Refused as exc:
             return Proposal(
                 error=Report(ErrorKind.REFUSED, f"auto-park refused: {exc.message}", "park")

@@ -18,7 +18,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.mailbox import Batch
 from bridge.session.options import OPTIONS_REFRESH_S, Options
-from bridge.session.parts import NOTHING, Scene
+from bridge.session.parts import NOTHING, Scene, Unjudged
 from bridge.session.slew import Slew
 from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_TRIES_BEFORE_ERROR, Fence, Stops
 from bridge.session.targets import Go, Targets, decide
@@ -60,6 +60,24 @@ def test_auto_park_proposes_the_park_after_a_quiet_spell_and_only_when_free() ->
     assert proposal.target is not None and proposal.target.park
     assert proposal.target.source is Source.AUTO_PARK and proposal.error is None
     assert park.step(scene(62.0)) is NOTHING  # rule 3: the park itself is activity
+
+
+def test_auto_park_judged_unjudged_is_judged_again_at_the_next_step() -> None:
+    """autopark.py rule 5: a whole park that cannot be judged yet (a rotator of two boxes'
+    azimuth box back, its first reading not taken) is no park tried: the next step parks, not
+    the next quiet spell (review 63)."""
+    park = AutoPark(rig(park_az_deg=0, park_after_idle_s=60))
+    park.activity(0.0)
+    fresh = [False]
+
+    def whole(target: Target) -> None:
+        if not fresh[0]:
+            raise Unjudged(target)
+
+    assert park.step(scene(61.0, whole=whole)) is NOTHING  # the azimuth box not read yet
+    fresh[0] = True  # its first reading, a poll later
+    proposal = park.step(scene(62.0, whole=whole))
+    assert proposal.target is not None and proposal.target.source is Source.AUTO_PARK
 
 
 def test_a_rotor_seen_turning_starts_the_quiet_spell_again() -> None:
