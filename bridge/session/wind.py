@@ -194,7 +194,7 @@ class WindPark:
         self._refused: str | None = None  # rule 5: why the judge refused this storm's park
         self._unjudged = False  # rule 5: the whole park waited, tracking's end proposed already
         self._waits: str | None = None  # rule 9: what the park owed waited for at a step
-        self._offline = False  # rule 9: the controller does not answer (no step runs)
+        self._offline = True  # rule 9: the controller does not answer (none has yet: no step)
         self._held_back = False  # rules 8 and 9: the park taken waits under a STOP's hold
         self._wall_offset_s = 0.0
 
@@ -346,6 +346,7 @@ class WindPark:
         if not self.on:
             return NOTHING
         self._wall_offset_s = scene.wall_offset_s
+        self._offline = False  # (rule 9: a step runs only while the controller answers)
         if self._since_t is None:
             self._since_t = now
         error = None

@@ -91,6 +91,25 @@ def test_the_storm_ends_only_after_the_hold_below_the_release_level() -> None:
     assert not part.storm and part.refusal() is None
 
 
+def test_a_park_owed_and_not_sent_is_said_waiting_with_what_it_waits_for() -> None:
+    """Rule 9 (review 63): a park owed says what it waits for, never "parked", until sent."""
+    part = park()
+    part.reading(72.0, 0.0)  # the storm begins before the controller ever answered
+    assert part.info is not None and part.info.waiting
+    said = "wind 72 km/h above 60: motion refused for the storm (its park waits for "
+    assert part.refusal() == said + "the controller to answer)"
+    assert part.step(scene(1.0, locked=True)) is not None and part.info.waiting
+    assert part.refusal() == said + "the lock OFF)"
+    proposal = part.step(scene(2.0))  # the lock OFF: the park goes
+    assert proposal.target is not None and not part.info.waiting
+    part.held_back(True)  # taken, but waiting under a STOP's hold (rule 8)
+    assert part.info.waiting and part.refusal() == said + (
+        "the hold of a STOP or lock ON sent before the storm)"
+    )
+    part.held_back(False)
+    assert part.refusal() == "wind 72 km/h above 60: parked for the storm"
+
+
 def test_a_stop_or_the_lock_stops_the_park_and_it_is_not_tried_again_in_this_storm() -> None:
     part = park()
     part.reading(80.0, 0.0)
