@@ -186,6 +186,15 @@ class AuditEvent:
     # (runtime/audit.py rule 10): folded like a stop, and R/audit counts it with the stops
     # (interfaces/mqtt/service.py rule 8)
     unchanged: bool = False
+    # the command as read (``describe_command``: stripped, case-folded words), what rules 9 and
+    # 10 of runtime/audit.py fold by; empty: ``command`` (a front end's words for it)
+    read_as: str = ""
+
+    @property
+    def folds_as(self) -> str:
+        """The command a run of like events is kept by (runtime/audit.py rules 9, 10): as read,
+        not as sent (`` off`` and ``OFF\t`` are the one ``track off``)."""
+        return self.read_as or self.command
 
     @property
     def routine(self) -> bool:
@@ -731,7 +740,7 @@ def describe_command(command: Command) -> str:
         case Release():
             return "release"
         case TrackBody():
-            return f"track {command.name}"
+            return "track off" if command.off else f"track {command.name}"
         case FollowQso():
             return f"follow {'ON' if command.on else 'OFF'}"
         case GoToPreset():

@@ -91,6 +91,9 @@ Rules:
    nothing to end; a loop republishing them rolls the four files over as rule 6's STOPs did.
    Such a halt is folded as rule 6 folds a stop (one run per rotator, sender and command, its
    first FREE_LINES written, a crowd's beyond MOST_RUNS), and sent again it is rule 9's too;
+   the command is the one read (``AuditEvent.folds_as``: ``track off``, ``follow OFF``, a lock
+   word), not the payload as it came (a review: 400 ``track off`` each padded with other
+   whitespace or case were 400 runs of one line; the line still shows the sender's words);
    ``R/audit`` counts it with the refusals and stops, never against the budget that keeps the
    moves (interfaces/mqtt/service.py rule 8: 200 ``track off`` left the lease holder's move
    out). A lock ON that locked, an OFF that ended tracking or following, is a line of its own.
@@ -407,13 +410,13 @@ class Runs:
         if not event.routine and not again:  # a move, a lease or a lock change: its own line
             return [*out, (rotator_id, event)]
         if again:  # rule 9: one sender's one command, never a crowd's
-            key = (rotator_id, event.origin, f"again {event.command}", False)
+            key = (rotator_id, event.origin, f"again {event.folds_as}", False)
             if key not in self._runs and len(self._runs) >= self._most:
                 return [*out, (rotator_id, event)]
         else:
             # (rule 10: a halt that changed nothing, a run of each command, apart from stops)
             kind = "stop" if event.halt else "refused"
-            kind = f"unchanged {event.command}" if event.unchanged else kind
+            kind = f"unchanged {event.folds_as}" if event.unchanged else kind
             key = (rotator_id, event.origin, kind, False)
             crowd = (rotator_id, Origin(event.origin.interface), kind, True)
             if key not in self._runs and (len(self._runs) >= self._most or crowd in self._runs):
@@ -439,7 +442,7 @@ class Runs:
         latest."""
         if event.result.startswith("refused"):
             return False
-        this = (event.origin, event.command, event.result) if event.same_again else None
+        this = (event.origin, event.folds_as, event.result) if event.same_again else None
         before = self._latest.get(rotator_id)
         self._latest[rotator_id] = this
         return this is not None and this == before

@@ -249,9 +249,11 @@ class Operators:
         halt: bool = False,
         same_again: bool = False,
         unchanged: bool = False,
+        read_as: str = "",
     ) -> None:
         """``halt``: an executed stop (audit.py rule 6); ``same_again``: a command that changes
-        nothing when sent again (rule 9); ``unchanged``: a halt that changed nothing (rule 10)."""
+        nothing when sent again (rule 9); ``unchanged``: a halt that changed nothing (rule 10);
+        ``read_as``: the command as read, what rules 9 and 10 fold by (empty: ``command``)."""
         if self._on_audit is None:
             return
         try:
@@ -266,6 +268,7 @@ class Operators:
                 halt,
                 same_again=same_again,
                 unchanged=unchanged,
+                read_as=read_as,
             )
             self._on_audit(event)
         except Exception:

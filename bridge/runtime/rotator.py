@@ -383,7 +383,18 @@ class Rotator:
                 command, Target | Claim | Release | SetOption | Lock
             )
             unchanged = not ends() if ends is not None else idle
-            self.operators.audit(who, what, result, halt=stop, same_again=same, unchanged=unchanged)
+            # rule 10's halts fold by the command as read (a tracking OFF padded anew each time
+            # is the one command); the rest by the sender's words (a claim's say whose it is)
+            halt_read = describe_command(command) if ends is not None else ""
+            self.operators.audit(
+                who,
+                what,
+                result,
+                halt=stop,
+                same_again=same,
+                unchanged=unchanged,
+                read_as=halt_read,
+            )
 
     def _ends_something(self, command: Command) -> Callable[[], bool] | None:
         """For a tracking or following OFF (None for anything else): whether it ended anything,

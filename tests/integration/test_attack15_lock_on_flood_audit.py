@@ -102,12 +102,6 @@ def test_a_flood_of_track_offs_does_not_leave_a_move_out_of_r_audit(rig: Rig) ->
             client.disconnect()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 62: a loop of track off (or follow off) with nothing to end, each message "
-    "padded with different whitespace, is still a line each in the audit trail: the fold runs "
-    "by the sender's words, not by the command",
-)
 @pytest.mark.parametrize(
     ("topic", "word"),
     [("rotor/track", "track"), ("rotor/follow", "follow")],
@@ -117,11 +111,11 @@ def test_a_flood_of_idle_offs_each_padded_differently_is_folded_all_the_same(
     rig: Rig, topic: str, word: str
 ) -> None:
     """runtime/audit.py rule 10 folds a halt that changed nothing in one run per sender and
-    command; the command is the sender's words as they came (payloads.py ``describe``: the
-    payload whole, its whitespace too), while the payload is read stripped and case-folded.
-    Rule 6 folds a stop or a refusal whatever its words; a ``track off`` that ends nothing is
-    no more a change for being sent as `` off`` or ``OFF\\t``. Attack 15's loop, its payload
-    padded differently each time, writes a line per message again and rolls the files over."""
+    command, the command as read (``AuditEvent.folds_as``), not the sender's words as they came
+    (payloads.py ``describe``: the payload whole, its whitespace too; review 62 found the fold
+    keyed by those). Rule 6 folds a stop or a refusal whatever its words; a ``track off`` that
+    ends nothing is no more a change for being sent as `` off`` or ``OFF\\t``. Attack 15's loop,
+    its payload padded differently each time, must not write a line per message again."""
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     rig.sections["station"] = {"locator": "JO62qm"}  # (tracking and following need it)
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
