@@ -177,9 +177,9 @@ class AuditEvent:
     more_senders: bool = False
     names: tuple[str, ...] = ()
     # a command that, sent again by its sender with nothing executed in between, changes nothing
-    # (an absolute target, a claim, a release, a lock word, a setting, tracking or following
-    # OFF): folded (runtime/audit.py rule 9); not a nudge, a preset or a park, which may turn
-    # the rotor anew
+    # (an absolute target, a claim, a release, a lock OFF, a setting; a lock ON, tracking or
+    # following OFF when it changed nothing): folded (runtime/audit.py rule 9); not a nudge, a
+    # preset or a park, which may turn the rotor anew
     same_again: bool = False
     # a halt that changed nothing: a lock ON while the lock was ON (no storm's park owed),
     # tracking OFF while nothing was tracked, following OFF while nothing was followed

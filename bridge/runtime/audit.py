@@ -79,11 +79,16 @@ Rules:
    unlocked, a release of a lease nobody holds, a setting to the value it has (a second attack
    pass: 32,000 releases from one client rolled the four files over in 6.2 s, and the line of
    who turned the rotor was gone), and the halts of rule 10 (a lock ON, tracking OFF,
-   following OFF), whether or not the first of them changed anything. Not a nudge, a preset
-   or a park: each again may turn the rotor anew.
+   following OFF) that changed nothing (``unchanged``), whether or not the first of them
+   changed anything: those fold in rule 10's run, one for the loop whether or not each is
+   sent again. A halt the judge says changed something is never rule 9's, sent again or not
+   (a review: a loop's lock ON that gave up a storm's park begun in between was folded into
+   the loop's count, and nothing said who stopped the park). Not a nudge, a preset or a
+   park: each again may turn the rotor anew.
 10. Nor does a halt that changed nothing (``AuditEvent.unchanged``, judged where the command is
    carried out: runtime/rotator.py): a lock ON while the lock was ON (and no storm's park was
-   owed, which a lock ON ends: session/wind.py rule 3), a tracking OFF while nothing was
+   owed, which a lock ON ends: session/wind.py rule 3 , a
+   tracking OFF while nothing was
    tracked nor looked up, a following OFF while nothing was followed (in either box of a
    rotator of two), from any interface (MQTT, a lock switch's loop; the console, a group's
    member, the remote's words as they reach the station). A third attack pass: 400 ``R/lock
@@ -409,12 +414,13 @@ class Runs:
         again = self._again(rotator_id, event)  # rule 9
         if not event.routine and not again:  # a move, a lease or a lock change: its own line
             return [*out, (rotator_id, event)]
-        if again:  # rule 9: one sender's one command, never a crowd's
+        if again and not event.unchanged:  # rule 9: one sender's one command, never a crowd's
             key = (rotator_id, event.origin, f"again {event.folds_as}", False)
             if key not in self._runs and len(self._runs) >= self._most:
                 return [*out, (rotator_id, event)]
         else:
-            # (rule 10: a halt that changed nothing, a run of each command, apart from stops)
+            # (rule 10: a halt that changed nothing, a run of each command, apart from stops;
+            # sent again too, rule 9's: one run for a loop of them)
             kind = "stop" if event.halt else "refused"
             kind = f"unchanged {event.folds_as}" if event.unchanged else kind
             key = (rotator_id, event.origin, kind, False)

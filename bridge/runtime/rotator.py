@@ -376,13 +376,14 @@ class Rotator:
             raise
         if not echo:  # after the put (operators.py rule 3)
             stop = isinstance(command, Stop)
-            # runtime/audit.py rule 9: a lock word, tracking or following OFF, sent again by
-            # its sender with nothing carried out between, changes nothing; rule 10: nor did a
-            # lock ON while ON, nor an OFF that ended nothing, the first time
-            same = ends is not None or isinstance(
-                command, Target | Claim | Release | SetOption | Lock
-            )
+            # runtime/audit.py rule 10: a lock ON while ON, an OFF that ended nothing, changed
+            # nothing; rule 9: such a halt sent again by its sender with nothing carried out
+            # between changes nothing either, unless the judge says it did (a storm's park it
+            # gave up: a review found it folded into its sender's run)
             unchanged = not ends() if ends is not None else idle
+            judged = ends is not None or (isinstance(command, Lock) and command.on)
+            kinds = Target | Claim | Release | SetOption | Lock  # (a Lock not judged: OFF)
+            same = unchanged if judged else isinstance(command, kinds)
             # rule 10's halts fold by the command as read (a tracking OFF padded anew each time
             # is the one command); the rest by the sender's words (a claim's say whose it is)
             halt_read = describe_command(command) if ends is not None else ""

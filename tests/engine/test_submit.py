@@ -343,8 +343,8 @@ def test_a_halt_that_changed_nothing_is_audited_so_and_one_that_ended_something_
     """runtime/audit.py rule 10: a lock ON while the lock was ON, tracking or following OFF with
     nothing to end, changed nothing (folded like a stop, counted on R/audit with the stops); a
     lock ON that locked, an OFF that ended tracking, following or a start on its way to the
-    session, each changed something (a line of its own). Each of these sent again is rule 9's
-    ``same_again`` too."""
+    session, each changed something (a line of its own). Each that changed nothing is rule 9's
+    ``same_again`` too, and so is a lock OFF."""
     bench.audit.clear()
     steps: list[tuple[Command, str]] = [
         (Lock(True, origin=WHO), "lock ON"),  # locks
@@ -370,8 +370,20 @@ def test_a_halt_that_changed_nothing_is_audited_so_and_one_that_ended_something_
         ("DL1ABC", "follow off", False, False),
         ("G4XYZ", "follow off", True, True),
     ]
-    starts = ("track sun", "follow wsjtx")  # (each again may turn the rotor anew)
-    assert [e.same_again for e in bench.audit] == [e.command not in starts for e in bench.audit]
+    # rule 9: a start again may turn the rotor anew; a halt is the same again only when it
+    # changed nothing (one that changed something, a storm's park given up, is a line of its
+    # own); a lock OFF always
+    assert [e.same_again for e in bench.audit] == [
+        False,  # lock ON that locked
+        True,  # lock ON while ON
+        True,  # lock OFF
+        False,  # track sun
+        False,  # track off that ended it
+        True,  # track off with nothing to end
+        False,  # follow wsjtx
+        False,  # follow off that ended it
+        True,  # follow off with nothing to end
+    ]
     # a start put and not yet taken by the session: the OFF put behind it ends it
     bench.audit.clear()
     bench.rot.submit(TrackBody("moon", origin=WHO), "track moon")
@@ -431,12 +443,6 @@ def _trail_lines(
     return [json.loads(line) for line in path.read_text().splitlines()], published
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 62: a lock ON that gave up the storm's park, sent by the sender whose lock "
-    "ONs were already a run, is folded into that run's count: no line and nothing on R/audit "
-    "says who stopped the park",
-)
 def test_a_lock_on_sent_again_that_gave_up_a_storm_park_is_a_line_of_its_own(
     tmp_path: Path,
 ) -> None:
