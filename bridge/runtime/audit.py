@@ -86,24 +86,24 @@ Rules:
    the loop's count, and nothing said who stopped the park). Not a nudge, a preset or a
    park: each again may turn the rotor anew.
 10. Nor does a halt that changed nothing (``AuditEvent.unchanged``, judged where the command is
-   carried out: runtime/rotator.py): a lock ON while the lock was ON (and no storm's park was
-   owed, which a lock ON ends: session/wind.py rule 3 , a
-   tracking OFF while nothing was
-   tracked nor looked up, a following OFF while nothing was followed (in either box of a
-   rotator of two), from any interface (MQTT, a lock switch's loop; the console, a group's
-   member, the remote's words as they reach the station). A third attack pass: 400 ``R/lock
-   ON`` while locked were 400 lines, as were 400 ``track off`` and 400 ``follow off`` with
-   nothing to end; a loop republishing them rolls the four files over as rule 6's STOPs did.
-   Such a halt is folded as rule 6 folds a stop (one run per rotator, sender and command, its
-   first FREE_LINES written, a crowd's beyond MOST_RUNS), and sent again it is rule 9's too;
-   the command is the one read (``AuditEvent.folds_as``: ``track off``, ``follow OFF``, a lock
-   word), not the payload as it came (a review: 400 ``track off`` each padded with other
-   whitespace or case were 400 runs of one line; the line still shows the sender's words);
-   ``R/audit`` counts it with the refusals and stops, never against the budget that keeps the
-   moves (interfaces/mqtt/service.py rule 8: 200 ``track off`` left the lease holder's move
-   out). A lock ON that locked, an OFF that ended tracking or following, is a line of its own.
-   An OFF judged while a start is on its way to the session, or put while one comes, is taken
-   to have ended it (never folded for a start it may have ended).
+   carried out: runtime/rotator.py): a lock ON while the lock was ON (and no storm's park was owed,
+   which a lock ON ends: session/wind.py rule 3; nor a live wind reading on its way that the status
+   does not show yet, session/mailbox.py rule 9: its park may be the one ended), a tracking OFF
+   while nothing was tracked nor looked up, a following OFF while nothing was followed (in either
+   box of a rotator of two), from any interface (MQTT, a lock switch's loop; the console, a group's
+   member, the remote's words as they reach the station). A third attack pass: 400 ``R/lock ON``
+   while locked were 400 lines, as were 400 ``track off`` and 400 ``follow off`` with nothing to
+   end; a loop republishing them rolls the four files over as rule 6's STOPs did. Such a halt is
+   folded as rule 6 folds a stop (one run per rotator, sender and command, its first FREE_LINES
+   written, a crowd's beyond MOST_RUNS), and sent again it is rule 9's too; the command is the one
+   read (``AuditEvent.folds_as``: ``track off``, ``follow OFF``, a lock word), not the payload as it
+   came (a review: 400 ``track off`` each padded with other whitespace or case were 400 runs of one
+   line; the line still shows the sender's words); ``R/audit`` counts it with the refusals and
+   stops, never against the budget that keeps the moves (interfaces/mqtt/service.py rule 8: 200
+   ``track off`` left the lease holder's move out). A lock ON that locked, an OFF that ended
+   tracking or following, is a line of its own. An OFF judged while a start is on its way to the
+   session, or put while one comes, is taken to have ended it (never folded for a start it may have
+   ended).
 """
 
 from __future__ import annotations

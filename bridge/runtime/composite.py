@@ -613,6 +613,7 @@ class CompositeWorker:
         self._on_event = on_event
         self._halts_applied = 0
         self._newest_applied = 0
+        self._winds_applied = 0
         self.composition = Composition(
             cfg.rotator_id, (axes[0].spec.has_version, axes[1].spec.has_version)
         )
@@ -663,6 +664,11 @@ class CompositeWorker:
         if any(box.session.target_unshown for box in self.boxes.values()):
             return 0
         return applied
+
+    @property
+    def winds_applied(self) -> int:
+        """mailbox.py rule 9, as a worker's (set with ``halts_applied``)."""
+        return self._winds_applied
 
     @property
     def features_on(self) -> tuple[bool, bool]:
@@ -731,6 +737,7 @@ class CompositeWorker:
                 self._hand(batches, now)  # rule 1: both boxes in this one serve
                 self._halts_applied = batch.epoch
                 self._newest_applied = batch.newest
+                self._winds_applied = batch.winds
         for box in self.boxes.values():
             fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):

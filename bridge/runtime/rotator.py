@@ -840,9 +840,16 @@ class Rotator:
 
     def _storm_parks(self) -> bool:
         """Whether the status shows a storm whose park a lock ON would stop or hold back for
-        good (wind.py rule 3): a lock ON then changes something, even while the lock is ON."""
+        good (wind.py rule 3): a lock ON then changes something, even while the lock is ON. So
+        may it when a live wind reading is on its way that the status does not show yet
+        (mailbox.py rule 9: the lock ON put behind it stops that reading's park; a review
+        found it called idle and folded); the reading may be calm: a line too many, never one
+        too few."""
+        applied = self._worker.winds_applied  # (first: the status read is at least as new)
         wind = self.status.wind
-        return wind is not None and wind.parks and not wind.halted
+        if wind is not None and wind.parks and not wind.halted:
+            return True
+        return self._mailbox.wind_unseen(applied)
 
     def await_heard_lock(self) -> None:
         """kept.py rule 10: motion is refused while the state file has not said the lock ON and

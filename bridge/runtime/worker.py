@@ -270,6 +270,11 @@ class Worker:
         return self.session.newest_applied
 
     @property
+    def winds_applied(self) -> int:
+        """mailbox.py rule 9: the live wind readings the status shows (``wind_unseen``)."""
+        return self.session.winds_applied
+
+    @property
     def features_on(self) -> tuple[bool, bool]:
         """What a tracking OFF and a following OFF would end now (session.py ``features_on``)."""
         return self.session.features_on

@@ -46,6 +46,10 @@ Rules:
    them before the halt and the rest after it, so a STOP put just before a storm's first
    reading is no stop in that storm (wind.py rule 3; attack 14: the two taken in one batch,
    the reading applied first, and the STOP cancelled the storm's park for the whole storm).
+   The live readings put are counted too (``winds``, carried by each batch as its ``epoch``
+   is): a lock ON judged while a reading the status does not show yet is on its way may stop
+   that reading's park (``wind_unseen``; runtime/audit.py rule 10: a review, such a lock ON
+   was called one that changed nothing and folded, though it gave the storm's park up).
 10. The halt count (``epoch``): every stop and lock ON put adds one to it, under the lock the
     put takes anyway (nothing else: a stop waits for nothing new). A motion command (a target,
     a track or follow start) is put with the count its judge read before judging it
@@ -187,6 +191,7 @@ class Batch:
     epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
     # in this batch or an earlier one)
     newest: int = 0  # rule 10a: the newest place put when taken (likewise)
+    winds: int = 0  # rule 9: the live wind readings put when taken (likewise)
     # rule 12, in the order put, with where a stop, lock or clearing came among them
     feature_commands: list[FeatureCommand | PartsEnd] = field(default_factory=list)
 
@@ -280,6 +285,7 @@ class Mailbox:
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
+        self._winds = 0  # rule 9: live wind readings put so far
         self._lease = 0  # rule 14: changes of the control lease put so far
         self._control: Control | None = None  # rule 14: ... and the lease as the last one put
         self.halt_watchers = HaltWatchers()  # rule 10: told before each halt is counted
@@ -332,6 +338,13 @@ class Mailbox:
             # must not hide a motion command put before it: a review)
             placed = self._motion_placed
             return placed > applied and placed > self._halt_placed
+
+    def wind_unseen(self, applied: int) -> bool:
+        """Rule 9: whether a live wind reading was put after the ``applied`` one (the count of
+        the batches a status shows: ``winds``): a storm that status does not show may be on
+        its way."""
+        with self._lock:
+            return self._winds > applied
 
     def put(
         self,
@@ -557,6 +570,7 @@ class Mailbox:
                 b.wind_replayed = speed_kmh
             else:
                 b.wind = speed_kmh
+                self._winds += 1
         self._wake_once()
 
     def put_health_reset(self) -> None:
@@ -595,6 +609,7 @@ class Mailbox:
             batch, self._batch = self._batch, Batch()
             batch.epoch = self._epoch  # rule 10
             batch.newest = self._newest  # rule 10a
+            batch.winds = self._winds  # rule 9
             self._woken = False  # rule 5
             batch.options = list(self._option_order.values())
             self._option_order = {}

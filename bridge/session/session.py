@@ -372,6 +372,7 @@ class RotatorSession:
         # this count and then the status sees a status at least that new)
         self.halts_applied = 0
         self._newest_taken = 0  # mailbox.py rule 10a: the newest place of the batches applied
+        self.winds_applied = 0  # mailbox.py rule 9: the live wind readings of those (likewise)
         self.target_unshown = False  # ... and whether ``status`` cannot show the target waiting
         self._lost_turn = ""  # rule 12: what the port error said of the turn it dropped
         self._waiting: _Waiting | None = None  # rule 13: a stamped start taken under a hold
@@ -567,6 +568,7 @@ class RotatorSession:
         actions = self._step(now)
         self.halts_applied = batch.epoch  # (after the status: see __init__)
         self._newest_taken = batch.newest
+        self.winds_applied = batch.winds
         return actions
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:

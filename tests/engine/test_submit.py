@@ -474,13 +474,6 @@ def test_a_lock_on_sent_again_that_gave_up_a_storm_park_is_a_line_of_its_own(
     assert ender in published
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 62: a lock ON that gave up the storm's park is folded into a count as a halt "
-    "that changed nothing when the storm's first reading had not yet reached the status (two "
-    "senders' loops of lock ONs: the one right after the reading), no line or R/audit event "
-    "of its own",
-)
 def test_a_lock_on_right_after_the_storms_first_reading_is_a_line_of_its_own(
     tmp_path: Path,
 ) -> None:
