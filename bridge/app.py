@@ -945,18 +945,28 @@ class App:
 
 
 def _heard(
-    by_lock_state: dict[str, Rotator], heard: dict[str, bytes]
+    by_lock_state: dict[str, Rotator], heard: dict[str, bytes], unread: frozenset[str]
 ) -> dict[str, Callable[[], bool]]:
     """runtime/kept.py rule 10: each rotator's ``R/lock/state`` as the broker held it before
     this start (interfaces/mqtt/look.py rule 14), None where it held none; the topics whose
     ON locked its rotator, each with whether it is locked still (left as the broker holds them
-    while it is: the OFF cached before is older)."""
-    taken = [(t, rot) for t, rot in by_lock_state.items() if rot.heard_lock(heard.get(t))]
-    return {topic: _locked_still(rot) for topic, rot in taken}
+    while it is: the OFF cached before is older). A topic the broker does not let the bridge
+    read (``unread``) is left alone too while its rotator waits for a lock word."""
+    out: dict[str, Callable[[], bool]] = {}
+    for topic, rot in by_lock_state.items():
+        if topic in unread and rot.lock_unread():
+            out[topic] = _waits_still(rot)
+        elif topic not in unread and rot.heard_lock(heard.get(topic)):
+            out[topic] = _locked_still(rot)
+    return out
 
 
 def _locked_still(rot: Rotator) -> Callable[[], bool]:
     return lambda: rot.locked
+
+
+def _waits_still(rot: Rotator) -> Callable[[], bool]:
+    return lambda: rot.lock_waits
 
 
 def _room_for_files(ports_hold: int, spare: int) -> None:

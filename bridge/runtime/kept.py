@@ -97,6 +97,12 @@ Rules:
    heard lets them go (a review: auto-park parked, and a kept storm's park turned, a rotor
    whose lock only the broker still held, while the broker stayed away, before the look said
    it).
+   A broker that does not let the bridge read ``R/lock/state`` (its ACL; interfaces/mqtt/
+   look.py rule 14's probe does not come back) is no look that said it: such a rotator waits
+   on (``lock_unread``), said (kind ``state``, and in the log), and nothing is published over
+   what the broker holds there until a lock word ends the wait (review 62: the look ended as
+   if the broker held nothing, the rotator started unlocked, OFF went over a stranger's ON
+   and a target turned the rotor, unsaid).
    A file that says ON wins, and waits for no broker: the broker's OFF (or none) is older, or
    a stranger's, or an OFF said on another run's file: kept locked, the safe side.
 11. The version its controller reported last outlives a restart (state_store.py rule 12), kept

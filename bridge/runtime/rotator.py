@@ -137,6 +137,11 @@ HEARD_OVER_OFF_MESSAGE = (  # kept.py rule 10 (attack 15): the file said OFF
     "state file says OFF (a lock set by another run of the bridge, on another state_file, or "
     "an OFF that never reached the broker?); lock OFF releases it"
 )
+UNREAD_LOCK_MESSAGE = (  # kept.py rule 10 (review 62): the broker drops what it sends there
+    "cannot read R/lock/state (the broker's ACL?): it may hold a lock ON that this start cannot "
+    "see; motion refused and R/lock/state left as the broker holds it until a lock word is sent "
+    "(lock ON, or lock OFF once the tower is known clear)"
+)
 UNHEARD_LOCK_MESSAGE = (  # kept.py rule 10
     "motion refused: the state file does not say this rotator's safety lock is ON, and the "
     "broker's R/lock/state, which may say ON, has not been read yet (the MQTT broker not "
@@ -203,6 +208,7 @@ class Rotator:
         self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._unheard = False  # kept.py rule 10: the lock waits for the broker (await_heard_lock)
+        self._unread = False  # kept.py rule 10: ... which would not let it read R/lock/state
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
         self._worker: Worker | CompositeWorker
@@ -859,12 +865,31 @@ class Rotator:
         if self._kept.lock_unsaid:
             self._mailbox.put_lock_unknown(True)
 
+    @property
+    def lock_waits(self) -> bool:
+        """kept.py rule 10: motion waits for the broker's word on the lock, or a lock word."""
+        return self._unheard and self._kept.lock_unsaid
+
+    def lock_unread(self) -> bool:
+        """kept.py rule 10 (review 62): the broker's first look could not read ``R/lock/state``
+        (it drops what it sends there: its ACL). A rotator that waits for it waits on, said
+        (kind ``state``, and in the log), until a lock word; True if it does."""
+        with self._owner:
+            waits = self._unread = self.lock_waits
+        if waits:
+            self.report(ErrorKind.STATE, UNREAD_LOCK_MESSAGE, "lock")
+            log.warning("%s: %s", self.id, UNREAD_LOCK_MESSAGE)
+        return waits
+
     def heard_lock(self, payload: bytes | None) -> bool:
         """kept.py rule 10: ``R/lock/state`` as the broker held it from an earlier run (MQTT's
         first look; None: it held none); ON locks the rotator if the state file did not say its
         lock ON (nothing, or OFF) and no lock word came since the start. True if it did.
         Motion waits no more."""
         with self._owner:  # (one step with every lock word: one said since is newer)
+            if payload is None and self._unread:  # (another's late witness: nothing of ours)
+                return False
+            self._unread = False  # (a value read there after all: it is the broker's word)
             took = payload == b"ON" and self._kept.lock_unsaid and not self._kept.locked
             if took:
                 self._kept.set_lock(True)

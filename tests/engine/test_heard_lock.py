@@ -18,6 +18,7 @@ from bridge.runtime.rotator import (
     HEARD_OVER_OFF_MESSAGE,
     OFFLINE_MESSAGE,
     UNHEARD_LOCK_MESSAGE,
+    UNREAD_LOCK_MESSAGE,
 )
 from bridge.runtime.state_store import StateStore
 from tests.engine.test_owner import Station, console_lock
@@ -164,3 +165,31 @@ def test_a_lock_word_before_the_broker_is_reached_ends_the_wait(tmp_path: Path) 
     assert _judged(st) == OFFLINE_MESSAGE
     assert not st.rot.heard_lock(b"ON")
     assert not st.rot.locked
+
+
+def test_a_lock_state_the_broker_does_not_let_the_bridge_read_keeps_the_wait(
+    tmp_path: Path,
+) -> None:
+    """Review 62: a broker whose ACL drops what it would send on ``R/lock/state`` showed the
+    ON it held as nothing, and the rotator started unlocked. Unread (look.py rule 14's probe
+    not back), the rotator waits on, said, until a lock word."""
+    st, events = _with_file(tmp_path, {"locked": False})
+    st.rot.await_heard_lock()
+    assert st.rot.lock_unread()
+    assert [(e.kind, e.message) for e in events] == [(ErrorKind.STATE, UNREAD_LOCK_MESSAGE)]
+    assert "cannot read R/lock/state (the broker's ACL?)" in UNREAD_LOCK_MESSAGE
+    assert _judged(st) == UNHEARD_LOCK_MESSAGE
+    assert st.settle().lock_unknown
+    assert not st.rot.heard_lock(None)  # (another rotator's late witness: nothing read here)
+    assert _judged(st) == UNHEARD_LOCK_MESSAGE
+    console_lock(st.rot, True)  # a lock word ends it (ON here: the safe side)
+    assert st.rot.locked and not st.rot.lock_waits
+
+
+def test_a_lock_state_unread_changes_nothing_for_a_rotator_whose_file_says_on(
+    tmp_path: Path,
+) -> None:
+    st, events = _with_file(tmp_path, {"locked": True})
+    st.rot.await_heard_lock()
+    assert not st.rot.lock_unread()
+    assert events == [] and st.rot.locked

@@ -32,11 +32,6 @@ def broker_conf(tmp_path: Path) -> str:
     return f"allow_anonymous true\nacl_file {acl}\nuser root"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 62: with R/lock/state write-only to the bridge, a start whose file says OFF "
-    "drops the broker's lock ON and turns the rotor, and nothing says the lock could not be read",
-)
 def test_a_lock_on_the_bridge_cannot_read_is_not_dropped_in_silence(rig: Rig) -> None:
     rig.mqtt_extra = {"username": "bridge", "password": "anything"}
     emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})

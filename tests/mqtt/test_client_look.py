@@ -76,7 +76,8 @@ def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its
         client.publish_retained("t/r/lock/state", "OFF")  # (the status before the start)
     locked = [False]
 
-    def took(heard: dict[str, bytes]) -> dict[str, Callable[[], bool]]:
+    def took(heard: dict[str, bytes], unread: frozenset[str]) -> dict[str, Callable[[], bool]]:
+        assert not unread  # (read: its probe came back)
         locked[0] = heard.get("t/r/lock/state") == b"ON"
         return {"t/r/lock/state": lambda: locked[0]} if locked[0] else {}
 
@@ -90,7 +91,7 @@ def test_a_witnessed_on_the_hook_took_is_not_put_over_by_a_status_older_than_its
         client.publish_retained("t/r/lock/state", "ON")  # the lock saved: its status
         client.publish_retained("t/bridge/info", "marker")  # (after these, in order)
         seed.wait_value("t/bridge/info", "marker", 5)
-        assert [m.text for m in seed.on("t/r/lock/state")] == ["ON"]
+        assert [m.text for m in seed.on("t/r/lock/state")] == ["ON"]  # (heard: no probe)
         assert retained_snapshot(broker.port, "t/r/lock/state") == {"t/r/lock/state": b"ON"}
         locked[0] = False  # a lock OFF: the status says so
         client.publish_retained("t/r/lock/state", "OFF")

@@ -15,7 +15,8 @@ each written out in the module that keeps it:
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
   only halts are taken while it runs, ``gated``; what an earlier run left on the witnessed
-  topics handed to ``witness``'s hook once it ends, before ``online``; it times out after
+  topics handed to ``witness``'s hook once it ends, before ``online``, with those it could
+  not read: a probe of those it heard nothing on, then a second hello; it times out after
   LOOK_TIMEOUT_S in which nothing retained came from the broker, LOOK_MAX_S at most: a broker
   still handing over what it held answers (a live message does not: a review, a tracker's
   targets kept a look whose hello was denied open for a minute), and a slow machine reading
@@ -156,10 +157,15 @@ from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
-# rule 14: the witnesses' hook: what the broker held -> the topics it took, and whether each holds
-Heard = Callable[[dict[str, bytes]], dict[str, Callable[[], bool]]]
+# rule 14: the witnesses' hook: what the broker held, and the witnesses it would not let the
+# bridge read -> the topics it took (or must not write over), and whether each holds
+Heard = Callable[[dict[str, bytes], frozenset[str]], dict[str, Callable[[], bool]]]
 
 STATE_QOS = 0  # rule 8
+# rule 14 (MQTT 5): the look's own filter beside each witness (its level ``+``), its probe heard
+# there (the owned topics are no-local, and mosquitto 2.0 keeps a filter's no-local when it is
+# subscribed again); no retained value sent there (the owned filter had it)
+_HEAR_PROBE = SubscribeOptions(qos=0, noLocal=False, retainAsPublished=False, retainHandling=2)
 # rule 10 (MQTT 3.1.1): a broker shutting down sends the bridge its own last will and closes the
 # connection right after; an ``offline`` the connection outlives by this long was a stranger's
 WILL_OUTLIVED_S = 1.0
@@ -257,6 +263,7 @@ class MqttClient(Connection):
         self._look_sub: int | None = None  # rule 14: the look's SUBSCRIBE, until its SUBACK
         self._as_published: Callable[[str], bool] | None = None  # rule 14 (``_broker_held``)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
+        self._probing: list[str] = []  # rule 14: the filters the look hears its probes on (MQTT 5)
         self._hello_back = False  # rule 16: it, or the probe, came back (in time or later)
         self.refused: str | None = None
         self.yielded = False  # claim rule 4: refused while running (not at its first look)
@@ -520,7 +527,14 @@ class MqttClient(Connection):
             if look is not None:  # rule 14: look first
                 hello = self._hello_out = look.begin()
                 self._as_published = None  # rule 14: this connection's (``_broker_held``)
-                self._look_sub = self._subscribe(client, [(look.claim.hello_topic, 0)])
+                subs: list[tuple[str, int | SubscribeOptions]] = [(look.claim.hello_topic, 0)]
+                # (rule 14, MQTT 5: the owned topics are subscribed no-local, so a witness's
+                # probe would never come back there; heard on a filter of the look's, until it
+                # ends)
+                wide = sorted({t.rpartition("/")[0] + "/+" for t in look.witnessed})
+                self._probing = [] if self._owned.hears_own else wide
+                subs += [(t, _HEAR_PROBE) for t in self._probing]
+                self._look_sub = self._subscribe(client, subs)
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
                     self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
@@ -622,6 +636,10 @@ class MqttClient(Connection):
                 self._markers_back()
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
+        if self._look is not None and not payload and not retained:
+            with self._lock:  # rule 14: a witness's probe back (it can be read)
+                if self._look.probe_back(topic, payload, retained):
+                    return True
         if self._look is not None:
             if retained and self._broker_held(topic):  # rule 14: the broker hands over what
                 self._look_heard = time.monotonic()  # it held (a tracker's target does not)
@@ -629,7 +647,7 @@ class MqttClient(Connection):
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
-            if late and self._on_heard is not None and self._on_heard(late):
+            if late and self._on_heard is not None and self._on_heard(late, frozenset()):
                 return True  # its rotator's ON goes out: the OFF the open sent is not put back
         return bool(self._owned.filters) and self._foreign(topic, payload, live=not retained)
 
@@ -705,10 +723,19 @@ class MqttClient(Connection):
         one of a topic published since it was asked), then ``connected``."""
         send = self._delivery.send
         self._delivery.take_dirty()  # every retained value goes out below
+        if self._probing:  # rule 14: the probes' filters go, before anything of ours
+            self._client.unsubscribe(self._probing)
+            self._probing = []
         send(self._will_topic, b"online", 1, retain=True)
         heard = look.heard if look is not None and taken else None
+        unread = look.unread if look is not None and taken else frozenset()
         left = set()
         for topic, holds in (taken or {}).items():
+            if topic in unread and holds():  # rule 14: the broker's value, not read: nothing
+                self._retained.pop(topic, None)  # goes over it while its rotator waits; the
+                self._left[topic] = (b"", holds)  # next value once it does not goes out
+                left.add(topic)
+                continue
             # the broker's, whether or not a status was cached before (its first one may come
             # after this: a review, its OFF went out over the ON): a change goes out
             if heard is not None and topic in heard and holds():
@@ -772,7 +799,7 @@ class MqttClient(Connection):
         if outcome.heard is not None and self._on_heard is not None:
             # rule 14: before ``online``, so nothing that waits for it (a target sent on it)
             # finds a rotator still waiting for its lock; outside the lock (it reports)
-            taken = self._on_heard(outcome.heard)
+            taken = self._on_heard(outcome.heard, outcome.unread)
             with self._lock:
                 if look.looking is not None or not self._up or self._stopping:
                     return  # the connection ended meanwhile: the next one's look opens
@@ -830,9 +857,17 @@ class MqttClient(Connection):
         if topic == look.claim.hello_topic:
             with self._lock:
                 n = look.ended_by(payload)
+                again = n is not None and look.probing  # (rule 14: the second hello)
+                probes, hello = look.probes() if n is not None else ([], b"")
             if n is not None:
-                self._markers_back()
-                self._judge_probe()
+                if not again:
+                    self._markers_back()
+                    self._judge_probe()
+                if probes:  # rule 14: then the second hello ends the look
+                    for witness in probes:  # (QoS 1, as the hello after them)
+                        self._delivery.send(witness, b"", 1, retain=False)
+                    self._delivery.send(look.claim.hello_topic, hello, 1, retain=False)
+                    return True
                 self._end_look(n)
                 return True
             if payload == self._hello_out:  # rule 16: back after the look's time

@@ -55,6 +55,25 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    retain-as-published (owned.py rule 10), so the flag tells a held value from a live one
    there too, but no broker the bridge meets streams them late under MQTT 5 (aedes speaks
    MQTT 3.1.1 only), and none was tried.
+   Nothing held and nothing readable look alike: a broker whose ACL lets the bridge publish a
+   witness but not read it (mosquitto grants the subscription and drops what it would send
+   there) showed an ON it held as nothing, the rotator started unlocked and the bridge put
+   OFF over the ON (review 62). So the look that may hand the witnesses on asks, once its
+   hello is back, of the witnesses it heard nothing on (``probes``; a value heard says the
+   topic can be read, and nothing is sent there: a subscriber sees no probe over a value the
+   broker holds): an empty message, not retained, QoS 1, on each, then a second hello (as
+   rule 16's probe: one client's messages of one QoS keep their order), which ends the look.
+   A probe that came back before it (``probe_back``: an empty live message there during the
+   look, whoever sent it) says the topic can be read; a witness whose probe did not is handed
+   on as ``unread`` (a timed-out look says nothing of it). Under MQTT 5 the
+   owned topics are no-local (the probe would never come back there, and mosquitto 2.0 keeps
+   a filter's no-local when it is subscribed again), so the look subscribes a filter of its
+   own beside each witness (its last level ``+``, no retained value sent) and unsubscribes it
+   before anything of the bridge's goes out. A subscriber sees the probe (an empty message:
+   neither ON nor OFF, the least one acts on) once per process, where the broker held nothing
+   it could show (the bridge's own value follows, when it can read it). The hook leaves an
+   unread witness as the broker holds it (none of the cached value goes out over it) while
+   its rotator waits (runtime/kept.py rule 10).
 15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
    (thousands of configs published under the bridge's node ids) is a few lines: a few at once
    (CLEARS_SAID_AT_ONCE), then one a minute (client.py's FOREIGN_LOG_S, the limiter it hands
@@ -85,6 +104,7 @@ class Outcome:
     clear: bool
     clears: list[str]
     heard: dict[str, bytes] | None = None  # rule 14: the witnesses' values (the first open)
+    unread: frozenset[str] = frozenset()  # rule 14: the witnesses the broker does not let us read
 
 
 class FirstLook:
@@ -99,11 +119,18 @@ class FirstLook:
         self._witnesses: frozenset[str] = frozenset()  # rule 14: their retained values kept
         self._heard: dict[str, bytes] = {}
         self._opened = False  # a look has let the bridge run: later ones hand nothing on
+        self._probes: set[str] = set()  # rule 14: the witnesses whose probe is out, until back
+        self.probing = False  # rule 14: this look's probes went out (its second hello too)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
         self._witnesses = frozenset(topics)
+
+    @property
+    def witnessed(self) -> list[str]:
+        """Rule 14: the witnesses a look under way may probe (none after the first open)."""
+        return [] if self._opened else sorted(self._witnesses)
 
     def _hello(self, n: int) -> bytes:
         return f"{self.claim.me.id} {n}".encode()
@@ -115,12 +142,38 @@ class FirstLook:
         self._seen = {}
         self._clears = {}
         self._heard = {}
+        self._probes = set()
+        self.probing = False
         return self._hello(n)
+
+    def probes(self) -> tuple[list[str], bytes]:
+        """Rule 14, once the hello is back: the witnesses to probe (none heard: an empty
+        message, not retained, on each), and the second hello to send after them; none in a
+        look that hands nothing on (after the first open), or probed already."""
+        n = self.looking
+        if n is None or self._opened or self.probing:
+            return [], b""
+        self._probes = set(self._witnesses) - set(self._heard)
+        if not self._probes:
+            return [], b""
+        self.probing = True
+        return sorted(self._probes), self._hello(n) + b" probe"
+
+    def probe_back(self, topic: str, payload: bytes, retained: bool) -> bool:
+        """Rule 14: whether a message is a witness's probe come back during the look (an empty
+        live message there: that topic can be read; whoever sent it, it proves as much)."""
+        if self.looking is None or payload or retained or topic not in self._witnesses:
+            return False
+        self._probes.discard(topic)
+        return True
 
     def ended_by(self, payload: bytes) -> int | None:
         """The look that a hello heard back ends, if any."""
         n = self.looking
-        return n if n is not None and payload == self._hello(n) else None
+        if n is None:
+            return None
+        hello = self._hello(n) + (b" probe" if self.probing else b"")  # (rule 14's second)
+        return n if payload == hello else None
 
     def saw(self, topic: str, payload: bytes) -> bool:
         """Whether a message belongs to the look under way (and is kept for its verdict)."""
@@ -155,6 +208,11 @@ class FirstLook:
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
         heard, self._heard = (None if self._opened else self._heard), {}
+        # rule 14: the hello back before a witness's probe, and nothing held heard there: the
+        # broker drops what it sends on that topic (its ACL; a timed-out look says nothing)
+        unread = frozenset() if timed_out or heard is None else frozenset(self._probes)
+        unread -= set(heard or {})
+        self._probes, self.probing = set(), False
         self._late = not self._opened  # rule 14: the rest of its connection's replays count
         self._opened = True
         if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
@@ -164,7 +222,9 @@ class FirstLook:
                 self.claim.base_topic,
                 other.described() if other else "another bridge",
             )
-        return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard)
+        return Outcome(
+            refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard, unread=unread
+        )
 
     def late(self, topic: str, payload: bytes, retained: bool) -> dict[str, bytes]:
         """Rule 14: a witness the broker replays (``retained``, under MQTT 3.1.1: the caller
