@@ -102,7 +102,9 @@ Rules:
    on (``lock_unread``), said (kind ``state``, and in the log), and nothing is published over
    what the broker holds there until a lock word ends the wait (review 62: the look ended as
    if the broker held nothing, the rotator started unlocked, OFF went over a stranger's ON
-   and a target turned the rotor, unsaid).
+   and a target turned the rotor, unsaid). A rotator that waits says so in the log once at
+   start; a lock OFF that ends the wait before the broker was read says that in the log too
+   (the operator may have released a lock ON the broker holds).
    A file that says ON wins, and waits for no broker: the broker's OFF (or none) is older, or
    a stranger's, or an OFF said on another run's file: kept locked, the safe side.
 11. The version its controller reported last outlives a restart (state_store.py rule 12), kept

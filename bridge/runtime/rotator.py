@@ -838,10 +838,18 @@ class Rotator:
                 if self._mailbox.epoch != since:
                     raise Refused(RefusalCode.STALE, LOCK_OFF_STALE_MESSAGE)
             idle = locked and self._kept.locked and not self._storm_parks()
+            unread_off = not locked and self.lock_waits  # (kept.py rule 10: said below)
             self._kept.set_lock(locked)
             if locked:
                 self._halted(sent_s)
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
+        if unread_off:
+            log.warning(
+                "%s: lock OFF ends the wait for the broker's word on the lock before its "
+                "R/lock/state was read: a lock ON it holds (another run's, a stranger's) may "
+                "have been released",
+                self.id,
+            )
         return idle
 
     def _storm_parks(self) -> bool:
@@ -864,6 +872,11 @@ class Rotator:
         self._unheard = True
         if self._kept.lock_unsaid:
             self._mailbox.put_lock_unknown(True)
+            log.info(
+                "%s: motion refused until the broker's R/lock/state is read, or a lock word is "
+                "sent (the state file does not say the lock ON)",
+                self.id,
+            )
 
     @property
     def lock_waits(self) -> bool:

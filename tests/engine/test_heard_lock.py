@@ -7,6 +7,7 @@ wins."""
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import pytest
@@ -165,6 +166,32 @@ def test_a_lock_word_before_the_broker_is_reached_ends_the_wait(tmp_path: Path) 
     assert _judged(st) == OFFLINE_MESSAGE
     assert not st.rot.heard_lock(b"ON")
     assert not st.rot.locked
+
+
+def test_a_wait_for_the_broker_is_said_at_start_and_a_lock_off_that_ends_it_is_said_too(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """kept.py rule 10 (review 62's advice): an operator reading the log learns why motion is
+    refused from the start, and that a lock OFF sent before the broker was read may have
+    released a lock ON the broker holds."""
+    caplog.set_level(logging.INFO, logger="bridge.runtime.rotator")
+    st, _ = _with_file(tmp_path, {"locked": False})
+    st.rot.await_heard_lock()
+    waits = [m for m in caplog.messages if "until the broker's R/lock/state is read" in m]
+    assert waits and waits[0].startswith("tower: motion refused")
+    console_lock(st.rot, False)
+    assert any("before its R/lock/state was read" in m for m in caplog.messages)
+    assert _judged(st) == OFFLINE_MESSAGE
+
+
+def test_a_lock_off_after_the_broker_was_read_is_not_said_as_ending_the_wait(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    st, _ = _with_file(tmp_path, {"locked": False})
+    st.rot.await_heard_lock()
+    assert not st.rot.heard_lock(None)
+    console_lock(st.rot, False)
+    assert not any("before its R/lock/state was read" in m for m in caplog.messages)
 
 
 def test_a_lock_state_the_broker_does_not_let_the_bridge_read_keeps_the_wait(
