@@ -57,9 +57,10 @@ Rules:
    (review 60: R/status, Home Assistant's "Parked for the storm" and every refusal in the
    storm said it parked while the antenna faced the storm where it stood; the settings'
    guard judges the park without a reading, so a park refused from where the rotor stands
-   passes it). The turn under way then stops (``Proposal.halt``, a halt of the bridge's own,
-   no STOP of rule 3): the park would have replaced it, and the rotor stands where the storm
-   found it (review 63: it ran on 70 degrees to the operator's pre-storm target). A park owed
+   passes it). The bridge's turn under way then stops (``Proposal.halt``, a halt of the
+   bridge's own, no STOP of rule 3): the park would have replaced it, and the rotor stands
+   where the storm found it (review 63: it ran on 70 degrees to the operator's pre-storm
+   target); a hand's turn on the panel is left alone (review 65). A park owed
    again (rule 7) is judged again, and one it takes ends that. On a rotator of two boxes it
    is judged as the rotator's whole park first (``Scene.whole``, runtime/composite.py rule
    7): all axes or none, as autopark.py rule 5 has it (an attack
@@ -407,6 +408,9 @@ class WindPark:
 
 
 def _turning(m: Motion) -> bool:
-    """Rule 5: a turn under way, or a target out, with no stop of the bridge's sent for it."""
+    """Rule 5: a turn of the bridge's under way (a target out, or the controller finishing one
+    over a lost link: ``carried``, motion.py rule 4), with no stop of the bridge's sent for
+    it; never a hand's on the panel (review 65: a park refused again after a line blip
+    stopped the operator's own turn to 200 at 270, the one turn a storm leaves a person)."""
     aimed = m.target_deg is not None or m.el_target_deg is not None
-    return m.stop_sent_t is None and (m.state is MotionState.MOVING or aimed)
+    return m.stop_sent_t is None and (aimed or (m.state is MotionState.MOVING and m.carried))

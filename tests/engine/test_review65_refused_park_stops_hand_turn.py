@@ -16,8 +16,6 @@ the port drops for 2 s mid-turn. In virtual time."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -36,11 +34,6 @@ AFTER_S = 60.0  # virtual: the hand turn over well inside this
 HAND_DEG = 200.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 65: a refused storm park judged again after a line blip stops the "
-    "operator's hand turn on the panel; the antenna is left at 270, not 200",
-)
 def test_a_refused_storm_park_judged_again_leaves_a_hand_turn_alone() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
