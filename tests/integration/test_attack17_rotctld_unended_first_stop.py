@@ -3,14 +3,17 @@ line end. To rotctld ``S`` is whole as it comes (one character, no argument): ro
 answers ``S`` on a fresh connection ``RPRT 0`` and stops at once, with no CR or LF after it
 (checked against ``rotctld -m 1``). The shared line server holds a connection's first line
 until its end to look for HTTP (interfaces/tcplines.py rule 2; its ``singles`` let a DCU-1's
-one-byte commands through, rotctld has none), so the operator's ``S`` from a script or a
+one-byte commands through, rotctld had none), so the operator's ``S`` from a script or a
 Node-RED TCP node that sends the bare word and waits for the answer is neither answered nor
 carried out, and the rotor turns on to its target; one that closes after sending it loses
-the stop for good."""
+the stop for good. Review 64: the same held for ever the extended forms rotctld answers at once
+too, ``+S`` with ``stop:`` and ``RPRT 0``, ``;S`` with ``stop:;RPRT 0``."""
 
 from __future__ import annotations
 
 import socket
+
+import pytest
 
 from tests.integration.test_rotctld_integration import ask, connect, start
 from tests.support.rig import Rig
@@ -25,14 +28,21 @@ def _answer(sock: socket.socket) -> bytes:
         return b""
 
 
-def test_a_bare_s_as_a_connections_first_command_stops_at_once(rig: Rig) -> None:
+@pytest.mark.parametrize(
+    ("stop", "answer"),
+    [(b"S", b"RPRT 0\n"), (b"+S", b"stop:\nRPRT 0\n"), (b";S", b"stop:;RPRT 0\n")],
+    ids=["S", "+S", ";S"],
+)
+def test_a_bare_s_as_a_connections_first_command_stops_at_once(
+    rig: Rig, stop: bytes, answer: bytes
+) -> None:
     port, _ = start(rig, start_az_deg=10)  # 290 degrees to go: over 7 s
     emu = rig.emus["tower"]
     with connect(port) as tracker:
         ask(tracker, b"P 300 0\n", b"RPRT 0\n")
         emu.wait_for(lambda s: s.is_moving, slow(10))
         with connect(port) as operator:
-            operator.sendall(b"S")  # whole to rotctld: answered and carried out at once
-            assert _answer(operator) == b"RPRT 0\n"
+            operator.sendall(stop)  # whole to rotctld: answered and carried out at once
+            assert _answer(operator) == answer
             emu.wait_for(lambda s: not s.is_moving, slow(10))
     assert emu.state().az_deg < 290  # stopped on its way, not arrived
