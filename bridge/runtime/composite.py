@@ -184,6 +184,7 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
+from bridge.core.errors import Refused
 from bridge.core.model import (
     ErrorEvent,
     ErrorKind,
@@ -203,7 +204,7 @@ from bridge.session.actions import Action, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
-from bridge.session.parts import Unjudged
+from bridge.session.parts import RefusedHere, Unjudged
 from bridge.session.session import DROPS, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
@@ -280,8 +281,17 @@ def judged_whole(cfg: WorkerConfig, sessions: dict[Axis, RotatorSession]) -> Non
             if own is not None:
                 session.cfg.aim.judge(own, session.controller.motion.position_deg)
 
+    def judge(mine: RotatorSession, park: Target) -> None:
+        try:
+            whole(park)
+        except Refused as exc:  # (RefusedHere: the other box's axis parked alone already)
+            others = [s for s in sessions.values() if s is not mine]
+            if park.source is Source.WIND and any(s.wind.parked for s in others):
+                raise RefusedHere(exc.code, exc.message) from exc
+            raise
+
     for session in sessions.values():
-        session.judge_whole = whole
+        session.judge_whole = partial(judge, session)
 
 
 def _park_as(cfg: WorkerConfig, park: Target) -> Target | None:

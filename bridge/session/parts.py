@@ -67,6 +67,7 @@ from dataclasses import dataclass
 from enum import Flag, auto
 from typing import Generic, NamedTuple, TypeVar
 
+from bridge.core.errors import Refused
 from bridge.core.model import FeatureCommand, Source, Target
 from bridge.pointing import Pointing, angle_between
 from bridge.session import motion as mo
@@ -103,6 +104,13 @@ class Unjudged(Exception):
     """``Scene.whole``: the rotator's whole park cannot be judged yet (runtime/composite.py
     rule 7: its azimuth box does not answer, or has taken no reading since it answers again):
     neither taken nor refused, it waits."""
+
+
+class RefusedHere(Refused):
+    """``Scene.whole``: the rotator's whole storm park refused on this box while the other box
+    has its own axis parked already (runtime/composite.py rule 7: parked alone while this box
+    did not answer): this box's axis stands where the storm found it, the other's at its park
+    (review 65: the azimuth's refusal said 'nothing parked' beside a dish at its stow)."""
 
 
 @dataclass(frozen=True)

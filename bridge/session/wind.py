@@ -60,7 +60,11 @@ Rules:
    passes it). The bridge's turn under way then stops (``Proposal.halt``, a halt of the
    bridge's own, no STOP of rule 3): the park would have replaced it, and the rotor stands
    where the storm found it (review 63: it ran on 70 degrees to the operator's pre-storm
-   target); a hand's turn on the panel is left alone (review 65). A park owed
+   target); a hand's turn on the panel is left alone (review 65). On a rotator of two boxes
+   whose other box parked its own axis alone while this one did not answer (``RefusedHere``),
+   this box's refusal is said so when the wind falls silent (rule 4): "refused on this axis
+   ... the other parked for the storm", never "nothing parked" (review 65: the dish stood
+   at its stow). A park owed
    again (rule 7) is judged again, and one it takes ends that. On a rotator of two boxes it
    is judged as the rotator's whole park first (``Scene.whole``, runtime/composite.py rule
    7): all axes or none, as autopark.py rule 5 has it (an attack
@@ -146,7 +150,7 @@ from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
 from bridge.session.motion import Motion
-from bridge.session.parts import NOTHING, Proposal, Scene, Unjudged
+from bridge.session.parts import NOTHING, Proposal, RefusedHere, Scene, Unjudged
 
 log = logging.getLogger(__name__)
 
@@ -193,6 +197,7 @@ class WindPark:
         self._replayed = storm and replayed  # rule 6: the storm known only from a replay
         self._end_owed = False  # rule 6: tracking and following to end, with no park to carry it
         self._refused: str | None = None  # rule 5: why the judge refused this storm's park
+        self._here = False  # rule 5: refused on this box alone, the other's axis parked
         self._unjudged = False  # rule 5: the whole park waited, tracking's end proposed already
         self._waits: str | None = None  # rule 9: what the park owed waited for at a step
         self._offline = True  # rule 9: the controller does not answer (none has yet: no step)
@@ -249,6 +254,7 @@ class WindPark:
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
             self._refused, self._unjudged = None, False  # (rule 5: a new storm's park anew)
+            self._here = False
             self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
         self._waits = None  # (rule 9: judged at the next step, if the controller answers)
@@ -280,6 +286,15 @@ class WindPark:
     def park_arrived(self) -> bool:
         """Rule 7: the rotor was seen at this storm's park: it is not sent again."""
         return self._arrived
+
+    @property
+    def parked(self) -> bool:
+        """Rule 5: this storm's park was sent (or seen reached): not refused, owed, waiting,
+        stopped short, nor a replay's (runtime/composite.py rule 7: a box's axis parked alone
+        while the other box did not answer)."""
+        if not self.storm or self._replayed or self._refused is not None or self._park_owed:
+            return False
+        return (self._arrived or not self._halted) and self.waiting is None
 
     @property
     def park_replayed(self) -> bool:
@@ -323,6 +338,11 @@ class WindPark:
         if self._replayed:  # rule 6
             above = self._cfg.park_above_kmh
             return f"{self._why}: motion refused; the park waits for a new reading above {above:g}"
+        if self.storm and self._refused is not None and self._here:  # rule 5: this axis
+            return (  # alone: the other box's is parked (review 65)
+                f"{self._why}: motion refused for the storm (its park refused on this axis: "
+                f"{self._refused}; the other axis parked)"
+            )
         if self.storm and self._refused is not None:  # rule 5: nothing parked (review 60)
             return f"{self._why}: motion refused for the storm (its park refused: {self._refused})"
         if self._halted and not self._arrived:  # rule 3: its park stopped short (a review)
@@ -359,6 +379,11 @@ class WindPark:
                     "a storm known only from the reading the broker kept: motion refused, "
                     "nothing parked"
                 )
+            elif self._refused is not None and self.storm and self._here:  # rule 5: this
+                kept = (  # box's axis alone (RefusedHere): the other box's is parked (review 65)
+                    "a storm whose park was refused on this axis: motion refused, this axis "
+                    "unparked, the other parked for the storm"
+                )
             elif self._refused is not None and self.storm:  # rule 5: the park refused
                 kept = "a storm whose park was refused: motion refused, nothing parked"
             elif self._halted and not self._arrived:  # rule 3: the park stopped short
@@ -377,7 +402,7 @@ class WindPark:
         calm, last = self._calm_since, self._last_t
         if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
-            self._halted = self._replayed = False
+            self._halted = self._replayed = self._here = False
             self._refused = None
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if self._end_owed and not self._park_owed:  # rule 6: no park, the end all the same
@@ -400,10 +425,11 @@ class WindPark:
             return Proposal(error=error, ended=None if said else self._why)
         except Refused as exc:  # rule 5
             self._refused = exc.message  # (said so, not "parked": review 60)
+            self._here = isinstance(exc, RefusedHere)  # (the other box's axis parked: 65)
             why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")
             m = scene.motion  # (the turn under way stops, as the park would have replaced it)
             return Proposal(error=why, ended=self._why, busy=True, halt=_turning(m))
-        self._refused = None
+        self._refused, self._here = None, False
         return Proposal(target=judged, error=error, ended=self._why, busy=True)
 
 

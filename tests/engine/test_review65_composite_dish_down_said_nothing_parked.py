@@ -17,8 +17,6 @@ elevation at 300/40, limits 20..340, park 30/0). In virtual time."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Target
 from tests.engine.test_attack14_composite_auto_park_one_axis import (
     BOXES,
@@ -33,11 +31,6 @@ LOWERED_S = 120.0  # virtual: a GS-232B lowers 40 degrees in 16 s
 SILENT_S = 2000.0  # virtual: past the 15 min a silent wind sensor is said after
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 65: the dish lowered for the storm, the azimuth's park refused once its "
-    "box is back: R/error says 'nothing parked' while the dish stands at its stow",
-)
 def test_a_dish_lowered_for_the_storm_is_not_said_nothing_parked() -> None:
     with VirtualComposite("rotorez", "gs232b", settings=WIND, emulators=BOXES) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
@@ -53,6 +46,9 @@ def test_a_dish_lowered_for_the_storm_is_not_said_nothing_parked() -> None:
         v.run_for(LOWERED_S)
         refused = [e.message for e in v.az.errors("refused")]
         assert refused and refused[0].startswith("wind park refused")  # the azimuth's, said
+        wind = v.status.wind  # R/status: the refusal says which axis stands unparked
+        assert wind is not None and wind.refused
+        assert wind.refusal is not None and "the other axis parked" in wind.refusal, wind.refusal
         v.run_for(SILENT_S)  # the wind sensor says no more
         assert abs(v.el.truth().el_deg) < 1.0  # (the dish still down)
         said = [e.message for box in (v.az, v.el) for e in box.errors("wind")]
