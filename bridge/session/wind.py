@@ -60,7 +60,10 @@ Rules:
    passes it). The bridge's turn under way then stops (``Proposal.halt``, a halt of the
    bridge's own, no STOP of rule 3): the park would have replaced it, and the rotor stands
    where the storm found it (review 63: it ran on 70 degrees to the operator's pre-storm
-   target); a hand's turn on the panel is left alone (review 65). On a rotator of two boxes
+   target); a hand's turn on the panel is left alone (review 65). While the storm lasts with
+   its park refused, a turn of the bridge's found later stops too (review 66: the turn a
+   restart mid-turn finds is known for the bridge's only at the start's second reading, after
+   the park was refused at the first, and it ran on 43 degrees). On a rotator of two boxes
    whose other box parked its own axis alone while this one did not answer (``RefusedHere``),
    this box's refusal is said so when the wind falls silent (rule 4): "refused on this axis
    ... the other parked for the storm", never "nothing parked" (review 65: the dish stood
@@ -409,6 +412,10 @@ class WindPark:
             self._end_owed = False
             if self.storm:
                 return Proposal(error=error, ended=self._why)
+        if self.storm and self._refused is not None and not self._park_owed:
+            if _turning(scene.motion):  # rule 5: a turn of the bridge's known only now (a
+                # restart's carried turn, seen at its second reading: review 66) stops too
+                return Proposal(error=error, halt=True)
         if not (self.storm and self._park_owed) or scene.locked or unread(scene):
             if self.storm and self._park_owed:  # rule 9: what it waits for
                 self._waits = LOCK_OFF if scene.locked else READING

@@ -15,8 +15,6 @@ pass north, as in review 65's files), turning from 200 to 335 when the bridge re
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from bridge.session.session import RotatorSession
 from tests.engine.virtual import VirtualRotator
@@ -34,11 +32,6 @@ AFTER_S = 60.0  # virtual: the old turn over well inside this
 OLD_DEG = 335.0  # the operator's target, before the storm
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 66: a storm park refused at the first reading after a restart mid-turn "
-    "leaves the old process's turn running on (carried is known only at the second reading)",
-)
 def test_a_park_refused_after_a_restart_mid_turn_stops_the_old_turn() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
