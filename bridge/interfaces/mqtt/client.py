@@ -608,8 +608,8 @@ class MqttClient(Connection):
                 self._late_said = (
                     f"the MQTT broker holds up what the bridge publishes (a heartbeat on "
                     f"{self._heartbeat} out through {QUIET_S:g} s in which nothing came from "
-                    "it): until one sent after that comes back, MQTT moves sent without a "
-                    "stamp (`sent`) are refused; stops and locks go through"
+                    "it): until one sent after that comes back, MQTT moves are refused (a "
+                    "stamped one too); stops and locks go through"
                 )
                 log.warning("%s", self._late_said)
                 self._on_late(self._late_said, True)

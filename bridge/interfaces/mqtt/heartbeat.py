@@ -113,8 +113,9 @@ Rules:
    (its socket always has bytes), and the reverted first design refused the burst's newest
    target after older ones were carried out (the newest word must win). From a hold on, until
    a beat sent after it comes back (what the broker held is ahead of that beat: mosquitto reads
-   every ready socket in each round of its loop; one goes at once, not a beat period later), an
-   unstamped move read on the main connection is refused (service.py rule 12); the hold is
+   every ready socket in each round of its loop; one goes at once, not a beat period later), a
+   move read on the main connection is refused, a stamped one too (service.py rule 12; review
+   61: a stamped move let through stood over a newer unstamped one refused); the hold is
    judged before anything in the read that ended the quiet is handled, so held beats read
    before the held target, or after it, change nothing. A beat goes out every HEARTBEAT_S, up
    to a second later (paho's loop, paho_client.py rule 2), and the thread sees quiet to within

@@ -112,8 +112,8 @@ Rules:
    with it). A lock OFF read then, after a lock ON, is refused as
    halts.py says; its halt count goes with it too, and the judge refuses it if a lock ON
    came between (runtime/rotator.py).
-12. A move the main connection reads without a stamp (a target, a preset, park, a nudge, a
-   place or a call, a track or follow start, a feature's command that moves, a group's target)
+12. A move the main connection reads (a target, a preset, park, a nudge, a place or a call, a
+   track or follow start, a feature's command that moves, a group's target)
    while the broker is late (``broker_late``: the broker held the bridge up, seen as quiet with
    a beat of its own out, and no beat sent after that is back yet: heartbeat.py rule 11,
    client.py rule 19) is refused on ``R/error`` ("the MQTT broker held this up ...; send it
@@ -695,7 +695,7 @@ class MqttService:
         return time.monotonic() - (self._stamp_clock() - sent_unix) < halted_s
 
     def _held_up(self) -> str | None:
-        """Rule 12: why an unstamped move read now may be one the broker held up, or None."""
+        """Rule 12: why a move read now may be one the broker held up, or None."""
         held_s = None if self._broker_late is None else self._broker_late()
         if held_s is None:
             return None
