@@ -30,15 +30,21 @@ STORM_S = 120.0  # virtual: a Rotor-EZ turns the last 70 degrees well inside thi
 BRAKE_DEG = 10.0  # what a stopped Rotor-EZ may run on, at most
 
 
+def turned_to_rest(v: VirtualRotator, az_deg: float) -> None:
+    """The controller answering, the rotor turned to ``az_deg`` and at rest there (the set-up of
+    the refused storm park's tests: reviews 63, 65, 66)."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.target(az_deg)
+    v.run_until(
+        lambda h: abs(h.truth().az_deg - az_deg) < 1.0 and h.state is MotionState.IDLE,
+        120,
+        f"at rest at {az_deg:g}",
+    )
+
+
 def test_a_refused_storm_park_leaves_the_rotor_where_the_storm_found_it() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.target(100.0)
-        v.run_until(
-            lambda h: abs(h.truth().az_deg - 100.0) < 1.0 and h.state is MotionState.IDLE,
-            120,
-            "at rest at 100",
-        )
+        turned_to_rest(v, 100.0)
         v.target(330.0)
         v.run_until(lambda h: h.truth().az_deg > 260.0, 120, "turning, past 260")
         found = v.truth().az_deg

@@ -16,17 +16,13 @@ the port drops for 2 s mid-turn. In virtual time."""
 
 from __future__ import annotations
 
-from bridge.core.model import MotionState
+from tests.engine.test_review63_refused_storm_park_turn_goes_on import (
+    STORM_KMH,
+    WIND,
+    turned_to_rest,
+)
 from tests.engine.virtual import VirtualRotator
 
-WIND = {
-    "az_min_deg": 20,
-    "az_max_deg": 340,
-    "park_az_deg": 30,
-    "wind_topic": "weather/wind",
-    "wind_park_above": 60,
-}
-STORM_KMH = 90.0
 JUDGED_S = 30.0  # virtual: the storm's park judged and refused well inside this
 TURNING_S = 3.0  # virtual: the hand turn under way (a Rotor-EZ turns 100 degrees in ~ 25 s)
 BLIP_S = 2.0  # virtual: the USB line out
@@ -36,13 +32,7 @@ HAND_DEG = 200.0
 
 def test_a_refused_storm_park_judged_again_leaves_a_hand_turn_alone() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.target(300.0)
-        v.run_until(
-            lambda h: abs(h.truth().az_deg - 300.0) < 1.0 and h.state is MotionState.IDLE,
-            120,
-            "at rest at 300",
-        )
+        turned_to_rest(v, 300.0)
         v.mailbox.put_wind(STORM_KMH)
         v._take()
         v.run_for(JUDGED_S)

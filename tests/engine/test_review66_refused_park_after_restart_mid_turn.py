@@ -15,18 +15,14 @@ pass north, as in review 65's files), turning from 200 to 335 when the bridge re
 
 from __future__ import annotations
 
-from bridge.core.model import MotionState
 from bridge.session.session import RotatorSession
+from tests.engine.test_review63_refused_storm_park_turn_goes_on import (
+    STORM_KMH,
+    WIND,
+    turned_to_rest,
+)
 from tests.engine.virtual import VirtualRotator
 
-WIND = {
-    "az_min_deg": 20,
-    "az_max_deg": 340,
-    "park_az_deg": 30,
-    "wind_topic": "weather/wind",
-    "wind_park_above": 60,
-}
-STORM_KMH = 90.0
 GONE_S = 1.0  # virtual: the bridge's process down
 AFTER_S = 60.0  # virtual: the old turn over well inside this
 OLD_DEG = 335.0  # the operator's target, before the storm
@@ -34,13 +30,7 @@ OLD_DEG = 335.0  # the operator's target, before the storm
 
 def test_a_park_refused_after_a_restart_mid_turn_stops_the_old_turn() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.target(200.0)
-        v.run_until(
-            lambda h: abs(h.truth().az_deg - 200.0) < 1.0 and h.state is MotionState.IDLE,
-            120,
-            "at rest at 200",
-        )
+        turned_to_rest(v, 200.0)
         v.target(OLD_DEG)
         v.run_until(lambda h: h.truth().az_deg >= 285.0, 60, "turning past 285")
         v.link_down(None)  # the bridge's process gone mid-turn (no end, no stop)
