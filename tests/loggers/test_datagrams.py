@@ -303,3 +303,49 @@ def test_every_n1mm_stop_is_found_by_the_byte_search(datagram: bytes) -> None:
 def test_the_byte_search_passes_over_what_is_no_stop() -> None:
     assert not may_stop_pst(b"<PST><AZIMUTH>x</AZIMUTH></PST>")
     assert not may_stop_n1mm(b"<N1MMRotor><rotor>T</rotor><goazi>9</goazi></N1MMRotor>")
+
+
+# -- rule 8: what an XML writer puts in front of the root element ------------------------------
+_DECLARATION = b'<?xml version="1.0" encoding="utf-8"?>'
+_BOM = b"\xef\xbb\xbf"
+
+
+@pytest.mark.parametrize(
+    "head",
+    [
+        _DECLARATION,
+        _DECLARATION + b"\r\n",
+        _BOM,
+        _BOM + _DECLARATION + b"\n",
+        b" <?XML version='1.0'?> ",
+    ],
+)
+def test_a_bom_and_an_xml_declaration_in_front_are_passed_over_as_an_xml_parser_would(
+    head: bytes,
+) -> None:
+    """An attack pass: a datagram headed as N1MM heads its other broadcasts was Malformed, its
+    stop included, and the rotor turned on."""
+    assert parse_pst(head + b"<PST><STOP>1</STOP></PST>") == PstRequest(stop=True)
+    assert parse_pst(head + b"<PST><AZIMUTH>85</AZIMUTH></PST>") == PstRequest(azimuth=85.0)
+    assert parse_n1mm(head + b"<N1MMRotor><stop>Tower</stop></N1MMRotor>") == N1mmRequest(
+        "Tower", stop=True
+    )
+    assert parse_n1mm(head + N1MM_SAMPLE) == N1mmRequest("*", azimuth=66.0, freqband_mhz=28.0)
+    padded = head + b"<PST><STOP>1</STOP>" + b" " * MAX_DATAGRAM  # rule 7, the socket's cut
+    assert parse_pst(padded[: MAX_DATAGRAM + 1]) == PstRequest(stop=True)
+
+
+@pytest.mark.parametrize(
+    "datagram",
+    [
+        _DECLARATION + _DECLARATION + b"<PST><AZIMUTH>85</AZIMUTH></PST>",  # one declaration
+        b"<!-- x --><PST><AZIMUTH>85</AZIMUTH></PST>",  # no comment
+        b"<?xml-stylesheet href='a'?><PST><AZIMUTH>85</AZIMUTH></PST>",  # no other instruction
+        _BOM + _BOM + b"<PST><AZIMUTH>85</AZIMUTH></PST>",
+        b"<PST><AZIMUTH>85</AZIMUTH></PST>" + _DECLARATION,  # only in front
+        _DECLARATION,
+    ],
+)
+def test_nothing_else_in_front_is_passed_over(datagram: bytes) -> None:
+    with pytest.raises(Malformed):
+        parse_pst(datagram)

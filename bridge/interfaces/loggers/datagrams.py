@@ -39,6 +39,11 @@ Rules:
    ``<N1MMRotor>``) and holds its stop (``<STOP>``; ``<stop`` and a rotor's name, from
    ``<rotor>`` or ``<stop>``'s text) in what was read is that stop (a stop is never refused:
    one padded past 2 KiB was dropped, and the rotor turned on). Anything else in it is moot.
+8. What an XML writer may put in front of the root element is passed over, as an XML parser
+   would: a UTF-8 byte-order mark and one XML declaration (``<?xml version="1.0"
+   encoding="utf-8"?>``, the head of N1MM's other broadcasts), with white space around them
+   (an attack pass: a datagram so headed was Malformed, a stop included). Nothing else is
+   (no comment, no DOCTYPE): the forms are the fact sheet's.
 """
 
 from __future__ import annotations
@@ -58,6 +63,8 @@ _ITEM = re.compile(
 )
 _VALUE = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+))(?:\.\d+)?\s*$")
 _N1MM = re.compile(rb"^\s*<n1mmrotor>(?P<body>.*)</n1mmrotor>\s*$", re.I | re.S)
+#: rule 8: a byte-order mark and an XML declaration ahead of the root element
+_PROLOG = re.compile(rb"^\s*(?:\xef\xbb\xbf)?\s*(?:<\?xml(?:\s[^<>]{0,200})?\?>)?", re.I)
 
 
 class Malformed(ValueError):
@@ -102,11 +109,19 @@ def may_stop_n1mm(datagram: bytes) -> bool:
     return b"<stop" in datagram.lower()
 
 
+def without_prolog(datagram: bytes) -> bytes:
+    """Rule 8: ``datagram`` from its root element on (a byte-order mark and an XML declaration
+    in front of it passed over), else as it is."""
+    m = _PROLOG.match(datagram)  # it matches the empty prolog too
+    return datagram if m is None else datagram[m.end() :]
+
+
 def _text(
     datagram: bytes, pattern: re.Pattern[bytes], what: str, may_stop: Callable[[bytes], bool]
 ) -> str:
     if len(datagram) > MAX_DATAGRAM:
         raise Malformed(f"{len(datagram)} bytes, over {MAX_DATAGRAM}")
+    datagram = without_prolog(datagram)
     if not datagram.isascii():
         if not may_stop(datagram):
             raise Malformed("not ASCII")
@@ -133,6 +148,7 @@ def _over_long_stop(datagram: bytes, head: bytes, may_stop: Callable[[bytes], bo
     socket gives at most MAX_DATAGRAM + 1 bytes, the rest is lost), else None."""
     if len(datagram) <= MAX_DATAGRAM or not may_stop(datagram):
         return None
+    datagram = without_prolog(datagram)
     if datagram.lstrip()[: len(head)].lower() != head:
         return None
     return ascii_text(datagram)
