@@ -1556,3 +1556,32 @@ def test_one_n1mm_port_bound_to_two_addresses_is_refused_naming_the_field(tmp_pa
     )
     with pytest.raises(ConfigError, match="n1mm_udp_port 12040 is bound to 0.0.0.0 and 127.0.0.1"):
         load_settings(write(tmp_path, text), environ={})
+
+
+def test_a_path_beginning_with_a_tilde_is_in_the_home_folder_for_every_path_key(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """settings/base.py rule 7 (attack 18: state_file '~/...' was a folder named '~' under the
+    working directory; password_file '~/...' was 'no such file')."""
+    home = tmp_path / "home"
+    home.mkdir()
+    pw = home / "pw"
+    pw.write_text("s3cret\n")
+    os.chmod(pw, 0o600)
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(tmp_path)
+    text = MINIMAL.replace(
+        'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword_file = "~/pw"'
+    )
+    s = load_settings(write(tmp_path, 'state_file = "~/s.json"\naudit_file = "~/a.jsonl"\n' + text))
+    assert (s.state_file, s.audit_file, s.mqtt.password_file) == (
+        home / "s.json",
+        home / "a.jsonl",
+        pw,
+    )
+    assert s.mqtt.password is not None and s.mqtt.password.get_secret_value() == "s3cret"
+    out = cli(
+        "check-config", "-c", str(write(tmp_path, 'state_file = "~nosuchuser9/s.json"\n' + MINIMAL))
+    )
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert "state_file: ~nosuchuser9 names no user on this system" in out.stderr

@@ -33,10 +33,17 @@ Rules:
    serial port the name ``"/dev/ttyX\nconfig OK: ..."`` and check-config's report and its
    warning printed a forged line (the log at run too); a pty's path and a bind address
    likewise. (Other text keys judge their own text, with their own words.)
+7. A path that begins with ``~`` (``~/...``, ``~user/...``) is the home folder's, as a shell
+   reads it, for every key that takes a path: an attack pass wrote ``state_file`` as the
+   docs write its default, ``~/.local/state/...``, and the bridge kept its state and its lock
+   under a folder named ``~`` of whatever directory it was started from (two runs of one
+   installation from two directories both started). A ``~user`` that names no user here is
+   an error, not a folder named so.
 """
 
 from __future__ import annotations
 
+import os
 import types
 from pathlib import Path
 from typing import Annotated, Any, Union, get_args, get_origin
@@ -112,7 +119,18 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
         if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
             check_named_path(value)
+        if value.startswith("~") and _a_path(field.annotation):  # rule 7
+            return _home_path(value)
     return value
+
+
+def _home_path(value: str) -> str:
+    """Rule 7: ``value``, a path beginning with ``~``, in the home folder it names."""
+    home = os.path.expanduser(value)
+    if home.startswith("~"):
+        user = value[1:].split("/", 1)[0]
+        raise ValueError(f"~{user} names no user on this system (a home folder: ~/...)")
+    return home
 
 
 def _text_fault(value: Any) -> str | None:

@@ -11,19 +11,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from bridge.runtime.state_store import held
 from tests.support import to_toml, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.process import bridge_env
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: state_file '~/...' is kept under ./~ of the current directory: a second "
-    "run of one installation from another directory starts and fights the first on the broker",
-)
 def test_a_state_file_under_home_written_with_a_tilde_is_held_there(
     tmp_path: Path, broker: Mosquitto
 ) -> None:
