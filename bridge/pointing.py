@@ -116,6 +116,7 @@ Rules:
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 from bridge.core import geo
@@ -152,9 +153,9 @@ def unfolded(bearing_deg: float | None, raw_deg: float | None) -> float | None:
 def raw_reading(status: RotatorStatus) -> float | None:
     """Rule 1: the raw value of ``status``'s reading: its raw bearing, else its bearing (a
     status read from the station's ``R/status``, which leaves the raw bearing out where it
-    tells nothing more: no offset and a scale that wraps, ``shows_raw``), else None. The
-    remote picks the nearer end of a travel for north by it (review 64: it had no raw
-    bearing, and a DCU-1's north through it went to the far end)."""
+    tells nothing more: no offset and a scale that wraps, ``shows_raw``), else None. North's
+    nearer end is picked by it (``Pointing.least_turn``; review 64: the remote had no raw
+    bearing, and a DCU-1's north through it went to the far end; a logger's too)."""
     raw = status.raw_bearing_deg
     return status.bearing_deg if raw is None else raw
 
@@ -296,6 +297,22 @@ class Pointing:
         if raw is None:
             return math.inf
         return geo.travel_deg(current_raw_deg, raw, self.az_wraps, self.az_ends_at_north)
+
+    def least_turn(self, named: Iterable[float], status: RotatorStatus) -> float:
+        """Of the azimuths ``named``, each folded into 0..360, the one the rotor turns least to
+        (``turn_deg``) from ``status``'s reading (``raw_reading``); north, 0 or 360, names
+        both ends of the travel (0 first), as a logger's north does (it names a direction:
+        interfaces/loggers/commands.py rule 3) and a DCU-1's 000 (rule 2, ``az_either_end``).
+        The first of equals; without a reading, the first as named. One choice for the
+        loggers' ``heading`` and the remote's ``_end_named`` (remote/rotator.py rule 3): a
+        status read from the station's ``R/status`` has no raw bearing where it equals the
+        bearing, and the loggers' north through the remote, picked by the raw bearing alone,
+        went out as 0, the counter-clockwise end: a Yaesu at 355 turned back through south."""
+        ways = [n for w in named for n in ((0.0, 360.0) if norm360(w) == 0.0 else (norm360(w),))]
+        raw = raw_reading(status)
+        if raw is None:
+            return ways[0]
+        return min(ways, key=lambda a: self.turn_deg(a, raw))
 
     def _north_step(self, raw_deg: float, current_raw_deg: float | None) -> float | None:
         """Rule 2 on a controller that rounds (a SatEL's ten degrees, a GS-232's whole degrees,

@@ -119,7 +119,7 @@ from bridge.features import control, tracking
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
 from bridge.interfaces.mqtt.payloads import one_line
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
-from bridge.pointing import Limits, raw_reading
+from bridge.pointing import Limits
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
 
 __all__ = ["Info", "InfoError", "RemoteRotator", "StationView", "parse_status"]
@@ -467,13 +467,13 @@ class RemoteRotator:
         end (``Target.az_either_end``: a DCU-1's 000) as the end of the travel nearer the
         station's reading, for the station's ``R/target`` takes 0 named for the
         counter-clockwise end (pointing.py rule 2; review 64: a DCU-1 program's north through
-        the remote turned a Yaesu at 355 back through south); equals, or no reading: 0."""
+        the remote turned a Yaesu at 355 back through south); equals, or no reading: 0. The
+        loggers' north picks its end the same way (``Pointing.least_turn``)."""
         az = target.az_deg
         assert az is not None
-        raw = raw_reading(self.status)
-        if not target.az_either_end or az % 360.0 != 0.0 or raw is None:
+        if not target.az_either_end or az % 360.0 != 0.0:
             return az
-        return min((0.0, 360.0), key=lambda end: self.pointing.turn_deg(end, raw))
+        return self.pointing.least_turn((az,), self.status)
 
     def check_move(self, since: int | None, source: Source) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);

@@ -13,6 +13,7 @@ import pytest
 from bridge.core.model import RotatorStatus, Source, Stop, Target
 from bridge.interfaces.loggers.commands import Commands, N1mmEndpoint, N1mmRotor, NoRotor, choose
 from bridge.interfaces.loggers.datagrams import parse_n1mm
+from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import n1mm_turn
@@ -25,7 +26,13 @@ class Recording:
 
     @property
     def status(self) -> RotatorStatus:
-        return RotatorStatus(self.id, available=True, bearing_deg=10.0)
+        """As the bridge's own rotator reads one at 10 (the raw bearing beside the bearing)."""
+        return RotatorStatus(self.id, available=True, bearing_deg=10.0, raw_bearing_deg=10.0)
+
+    @property
+    def pointing(self) -> Pointing:
+        """Its judge's terms, the model's (commands.py ``heading`` asks which way it turns)."""
+        return Pointing.of(self.spec)
 
     def halts_for(self, source: Any) -> int:
         return 0

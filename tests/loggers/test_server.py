@@ -24,6 +24,7 @@ from bridge.interfaces.loggers import LoggerEndpoints, server
 from bridge.interfaces.loggers.commands import STALE, N1mmEndpoint, N1mmRotor
 from bridge.interfaces.loggers.limiter import REPLY_BURST
 from bridge.interfaces.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
+from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import (
@@ -49,7 +50,14 @@ class Recording:
 
     @property
     def status(self) -> RotatorStatus:
-        return RotatorStatus(self.id, available=True, bearing_deg=10.0)
+        """As the bridge's own rotator reads one at 10 (session/status.py: the raw bearing
+        beside the bearing, no offset)."""
+        return RotatorStatus(self.id, available=True, bearing_deg=10.0, raw_bearing_deg=10.0)
+
+    @property
+    def pointing(self) -> Pointing:
+        """Its judge's terms, the model's (commands.py ``heading`` asks which way it turns)."""
+        return Pointing.of(self.spec)
 
     def halts_for(self, source: Source) -> int:
         return self.halts
@@ -231,7 +239,9 @@ class AzEl(Recording):
 
     @property
     def status(self) -> RotatorStatus:
-        return RotatorStatus(self.id, available=True, bearing_deg=10.0, elevation_deg=20.0)
+        return RotatorStatus(
+            self.id, available=True, bearing_deg=10.0, raw_bearing_deg=10.0, elevation_deg=20.0
+        )
 
 
 @contextlib.contextmanager
@@ -564,7 +574,9 @@ class Standing(Recording):
 
     @property
     def status(self) -> RotatorStatus:
-        return RotatorStatus(self.id, available=True, bearing_deg=self.bearing_deg)
+        return RotatorStatus(
+            self.id, available=True, bearing_deg=self.bearing_deg, raw_bearing_deg=self.bearing_deg
+        )
 
 
 def test_a_name_two_rotators_share_by_band_reports_the_heading_of_the_one_on_the_band(

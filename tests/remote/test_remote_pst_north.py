@@ -22,19 +22,7 @@ from tests.support.udp_logger import PstClient, reserve_pst_ports, tag
 from tests.support.waiting import slow
 
 
-@pytest.fixture(
-    params=[
-        pytest.param(
-            "gs232b-az",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="commands.py heading reads raw_bearing_deg, None through the remote: "
-                "north goes out as 0, the far end",
-            ),
-        ),
-        "gs232b-az-450",  # (R/status carries the raw bearing of a travel past 360)
-    ]
-)
+@pytest.fixture(params=["gs232b-az", "gs232b-az-450"])  # (0..450: R/status has the raw bearing)
 def yaesu_at_355(rig: Rig, request: pytest.FixtureRequest) -> Rig:
     """A Yaesu rotor (its stop at north) behind a GS-232, travel 0..360 or 0..450, at 355."""
     rig.add("tower", model=request.param, emu={"start_az_deg": 355})

@@ -89,7 +89,7 @@ from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
 from bridge.front import HaltCounted
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, ascii_text, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
-from bridge.pointing import Pointing, norm360
+from bridge.pointing import Pointing
 
 
 class Rotator(HaltCounted, Protocol):
@@ -191,13 +191,12 @@ def heading(rot: Rotator, ways: Iterable[float]) -> float:
     bidirectional), folded into 0..360, that the rotor turns least to along its travel; north
     is a direction, not an end: 0 or 360, whichever is nearer where the two are the ends of the
     travel (an attack pass: a Yaesu at 355 sent 0 turned 355 degrees back through south, and
-    bidirectional took 180 for it). The first of equals; as named without a reading."""
-    named = [n for w in ways for n in ((0.0, 360.0) if norm360(w) == 0.0 else (norm360(w),))]
-    raw = rot.status.raw_bearing_deg
-    if raw is None:
-        return named[0]
-    aim = rot.pointing
-    return min(named, key=lambda a: aim.turn_deg(a, raw))
+    bidirectional took 180 for it). The first of equals; as named without a reading. The
+    reading is ``pointing.raw_reading``'s (``Pointing.least_turn``): the remote's rotator reads
+    the station's ``R/status``, which leaves the raw bearing out where it equals the bearing,
+    and by the raw bearing alone its north went out as 0, the far end (a Yaesu at 355 turned
+    back through south)."""
+    return rot.pointing.least_turn(ways, rot.status)
 
 
 @dataclass
