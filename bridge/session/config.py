@@ -5,12 +5,13 @@ by every part of the engine and importing none of them (parts.py is what a part 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 from bridge.session import motion as mo
-from bridge.session.parts import Part
+from bridge.session.parts import Part, Speeds
 from bridge.sky import Sky
 
 
@@ -97,3 +98,9 @@ class WorkerConfig:
         """The pointing transform (never None after construction)."""
         assert self.pointing is not None
         return self.pointing
+
+    @cached_property
+    def speeds(self) -> Speeds:
+        """The speeds above as the parts see them (parts.py rule 9): made once a configuration
+        (the controller's in effect is replaced whenever a setting retunes it)."""
+        return Speeds(self.az_speed_deg_s, self.el_speed_deg_s)

@@ -58,6 +58,11 @@ Rules:
    ``R/target`` would (review 50: ``track sun`` right after a replug ended at once as "turned
    by hand", and the rotor turned on to the old target; review 52: a hand already at the panel
    when tracking started was taken for such a turn, stopped and overridden).
+9. A part times a turn by the speeds in effect (``Scene.speeds``: the configured ones times the
+   factor of the speed setting the controller was last sent, controller.py rule 7), never by
+   the configuration it was made with, which keeps the configured speeds (attack 19: a GS-232B
+   set to speed 1, a quarter of full speed, left for the next pass when full speed would have
+   made it, and stood 99 degrees off, still turning, when the pass rose).
 """
 
 from __future__ import annotations
@@ -83,6 +88,13 @@ class Wake(Flag):
     MOTION = auto()  # the motion changed: a reading taken, the motion machine's clock, a write
 
 
+class Speeds(NamedTuple):
+    """The rotor's speeds in effect, degrees a second (rule 9)."""
+
+    az_deg_s: float
+    el_deg_s: float
+
+
 class Scene(NamedTuple):
     """The session as a part may see it at ``now`` (a tuple: read-only, cheap at every step)."""
 
@@ -93,6 +105,7 @@ class Scene(NamedTuple):
     parked: bool  # the last status said so (status.py rule 4)
     slewing: bool  # a silent controller's slew is under way (slew.py)
     wall_offset_s: float  # wall clock (unix seconds) = now + this
+    speeds: Speeds  # rule 9: the configuration in effect's (controller.py ``cfg``)
     parking: bool = False  # the last target sent was auto-park's (autopark.py rule 4)
     # a rotator of two boxes' judge of a park of the bridge's own as the rotator's whole park
     # (runtime/composite.py rule 7: Refused if any axis's would be, Unjudged while it cannot be

@@ -1109,8 +1109,9 @@ class RotatorSession:
         parked, offset_s = self.status.parked, self.wall_offset_s
         parking = self.view.last_source == Source.AUTO_PARK.value
         held = self.locked or self.lock_unknown  # (parts.py rule 7: a lock not known yet)
+        speeds = self.controller.cfg.speeds  # (parts.py rule 9: the speeds in effect)
         scene = Scene(
-            now, motion, pending, held, parked, slewing, offset_s, parking, self.judge_whole
+            now, motion, pending, held, parked, slewing, offset_s, speeds, parking, self.judge_whole
         )
         try:  # (_guarded's, without a closure: the measuring parts run at every reading)
             proposal = part.step(self, scene)

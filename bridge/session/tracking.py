@@ -18,7 +18,10 @@ Rules:
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
    when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S
    (its way measured along its travel, motion.py rule 5: a review, a Hy-Gain rotor left at
-   170 by one pass came to the next, rising at 190, 35 s late: 340 degrees timed as 20).
+   170 by one pass came to the next, rising at 190, 35 s late: 340 degrees timed as 20). Its
+   real speeds are those in effect (``Scene.speeds``, parts.py rule 9), here and in rule 4
+   (the flip): attack 19, a GS-232B set to speed 1 was timed at full speed and stood 99 degrees
+   off, still turning, when the pass rose.
    At the end of a pass it parks (``at_los = "park"``, if a park position is configured) or
    stays where it is. A wall clock stepped back (NTP) has a pass that has not begun by it
    waited for again (an attack pass: five minutes back mid-pass, the pass in hand still the
@@ -494,19 +497,19 @@ class Tracker:
         return min(self.cfg.step_deg / 2.0 / rate, MAX_LEAD_S)
 
     def _travel_s(self, scene: Scene, az: float, el: float | None, raw: float | None) -> float:
-        """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2),
-        to the raw azimuth ``raw`` if the side is chosen (rule 9), the azimuth's way measured
-        along its travel (motion.py rule 5)."""
-        rig, m = self._rig, scene.motion
+        """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2:
+        those in effect, parts.py rule 9), to the raw azimuth ``raw`` if the side is chosen
+        (rule 9), the azimuth's way measured along its travel (motion.py rule 5)."""
+        rig, m, speeds = self._rig, scene.motion, scene.speeds
         if raw is None:
             try:
                 raw = rig.aim.raw_for(az, m.position_deg)
             except Refused:
                 return 0.0
         pos = m.position_deg
-        t = 0.0 if pos is None else mo.along_travel(pos, raw, rig.motion) / rig.az_speed_deg_s
+        t = 0.0 if pos is None else mo.along_travel(pos, raw, rig.motion) / speeds.az_deg_s
         if el is not None and m.el_position_deg is not None:
-            t = max(t, abs(el - m.el_position_deg) / rig.el_speed_deg_s)
+            t = max(t, abs(el - m.el_position_deg) / speeds.el_deg_s)
         return t + rig.spec.brake_delay_s
 
     def _first_allowed(
@@ -591,7 +594,7 @@ class Tracker:
         """Rule 4: whether this pass is flown flipped (None: its track is being computed, rule
         8). Satellites only: the sun and the moon move too slowly across a "pass" of half a day
         for a flip to be worth its elevation travel."""
-        aim, rig = self._rig.aim, self._rig
+        aim, speeds = self._rig.aim, scene.speeds  # (parts.py rule 9)
         if not self.cfg.flip:  # (one box of two: it would decide for its own axis alone)
             return False
         if not aim.has_elevation or aim.el_max_deg < 180.0 - self.cfg.min_el_deg:
@@ -620,12 +623,12 @@ class Tracker:
                     return math.inf
                 if el is not None and raw is not None:
                     total += max(
-                        abs(nxt - raw) / rig.az_speed_deg_s, abs(el_want - el) / rig.el_speed_deg_s
+                        abs(nxt - raw) / speeds.az_deg_s, abs(el_want - el) / speeds.el_deg_s
                     )
                 raw, el = nxt, el_want
             return total
 
-        return travel_s(True) + FLIP_SAVING_DEG / rig.az_speed_deg_s < travel_s(False)
+        return travel_s(True) + FLIP_SAVING_DEG / speeds.az_deg_s < travel_s(False)
 
     def _inform(self, sky: SkyTrack, utc: float, p: Pass | None, phase: str, now: float) -> None:
         """The status's tracking block, refreshed every INFO_EVERY_S or when the phase changes."""

@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 from bridge.sky import Body, Pass, Sky
 from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
 from tests.engine.virtual import VirtualRotator
@@ -43,11 +41,6 @@ def _scripted_sky(q: Question) -> Answer:
     return Answer(q, [_at(t) for t in q.times])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: a GS-232 set to speed 1 leaves for the next pass as if at full speed "
-    "and comes to it 66 s after AOS (99 degrees off at AOS)",
-)
 def test_a_gs232_set_to_its_slowest_speed_is_at_the_next_pass_when_it_rises() -> None:
     line1, line2 = synthetic_tle(
         "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0

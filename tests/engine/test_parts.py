@@ -18,7 +18,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.mailbox import Batch
 from bridge.session.options import OPTIONS_REFRESH_S, Options
-from bridge.session.parts import NOTHING, Scene, Unjudged
+from bridge.session.parts import NOTHING, Scene, Speeds, Unjudged
 from bridge.session.slew import Slew
 from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_TRIES_BEFORE_ERROR, Fence, Stops
 from bridge.session.targets import Go, Targets, decide
@@ -39,7 +39,9 @@ def rig(model: str = "rotorez", sky: Sky | None = None, **settings: Any) -> Work
 
 
 def scene(now: float, motion: mo.Motion = IDLE_AT_90, **kw: Any) -> Scene:
-    seen: dict[str, Any] = dict(pending=None, locked=False, parked=False, slewing=False)
+    seen: dict[str, Any] = dict(
+        pending=None, locked=False, parked=False, slewing=False, speeds=Speeds(6.0, 3.0)
+    )
     return Scene(now=now, motion=motion, wall_offset_s=1_750_000_000.0, **{**seen, **kw})
 
 
