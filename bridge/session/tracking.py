@@ -48,7 +48,11 @@ Rules:
    satellite's pass with elevation 180 - el and azimuth + 180 when that saves turning time
    during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
    (the first from where the rotor is); the saving must exceed FLIP_SAVING_DEG at the azimuth
-   speed. A pass across a
+   speed. A step the judge refuses (a limit, a keep-out sector) counts as its share of the
+   pass spent off the body, the rotor held (rule 5), for either way alike (attack 19: a limit
+   counted as endless and a keep-out sector as free, a pass across the north was flown
+   flipped through a southern sector, the antenna up to 60 degrees off the satellite for 137 s
+   of 300, where not flipping cost one 54 s unwind). A pass across a
    stop (the north on a 0..360 rotor) then stays clear of it. Decided once per pass. Never on a
    rotator of two boxes (``TrackConfig.flip``): each box's session would decide it for its own
    axis, from what its own box knows (an attack pass: an RT-21 azimuth box never flipped, its
@@ -605,10 +609,15 @@ class Tracker:
         if track is None:
             return None
 
+        held_s = (p.los_s - p.aos_s) / max(1, len(track) - 1)  # a sample's share of the pass
+
         def travel_s(flip: bool) -> float:
-            """The time the rotor spends turning during the pass, on its slower axis at each
-            step (both axes at their real speeds): an unwind through a stop shows as a long
-            step. The move to where the pass rises is left out: it is made while waiting."""
+            """The time the antenna is off the body during the pass: turning, on its slower
+            axis at each step (both axes at the speeds in effect), an unwind through a stop
+            showing as a long step; and held where the judge refuses a sample (a limit, a
+            keep-out sector: rule 5, the rotor holds until the body is back where it may go),
+            for that sample's share of the pass. The move to where the pass rises (or first
+            may be followed) is left out: it is made while waiting."""
             raw: float | None = scene.motion.position_deg
             first = (track[0][0] + 180.0) % 360.0 if flip else track[0][0]
             start = self._start(first, track, flip, scene, False) if track else None
@@ -617,10 +626,13 @@ class Tracker:
             total = 0.0
             for az_b, el_b in track:
                 az_want, el_want = ((az_b + 180.0) % 360.0, 180.0 - el_b) if flip else (az_b, el_b)
-                try:
-                    nxt = aim.raw_for(az_want, raw)
+                try:  # (rule 5: as the judge takes each step, keep-out sectors and limits)
+                    nxt = aim.judge(Target(az_want, None, Source.TRACKING), raw).az_deg
                 except Refused:
-                    return math.inf
+                    total += held_s
+                    continue
+                if nxt is None:  # (never: an azimuth judged is a raw azimuth)
+                    continue
                 if el is not None and raw is not None:
                     total += max(
                         abs(nxt - raw) / speeds.az_deg_s, abs(el_want - el) / speeds.el_deg_s

@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 from bridge.sky import Body, Pass, Sky
 from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
 from tests.engine.virtual import VirtualRotator
@@ -76,11 +74,6 @@ def _seconds_off(el_max_deg: float) -> int:
     return off
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: a pass flown flipped into a keep-out sector holds the antenna off the "
-    "satellite for 137 s of 300, where not flipping costs 54 s",
-)
 def test_a_rotor_that_can_flip_never_follows_a_pass_worse_for_a_keep_out_sector() -> None:
     unflipped = _seconds_off(90.0)  # cannot flip: one unwind at north
     assert unflipped <= 70  # (the unwind of 360 degrees at 6 a second, and its brake)

@@ -321,13 +321,34 @@ def test_a_pass_through_a_keep_out_sector_holds_and_says_so_once(
     line1, line2, aos, los = a_pass
     mid_az, _ = sgp4_altaz(line1, line2, *BERLIN, (aos + los) / 2)
     sector = [round(mid_az - 15) % 360, round(mid_az + 15) % 360]
-    v, _errors = fly("rot2prog", a_pass, {"keep_out": [sector]})
+    # (kept to 0..90 of elevation: a rotor that can flip flies the pass around the sector,
+    # test_a_rotor_that_can_flip_flies_a_pass_around_a_keep_out_sector)
+    v, _errors = fly("rot2prog", a_pass, {"keep_out": [sector], "el_max_deg": 90})
     with v:
         refusals = [e for e in v.errors("refused") if "tracking TESTSAT" in e.message]
         assert len(refusals) == 1, refusals
         assert "keep-out" in refusals[0].message
         for f in v.frames("set", "set: clamped"):
             assert not _in_sector(f.data, sector)
+
+
+def test_a_rotor_that_can_flip_flies_a_pass_around_a_keep_out_sector(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    """Attack 19 (tracking.py rule 4): the flip weighs what the judge refuses, so the pass
+    through the sector above is flown flipped, clear of it, on a Rot2Prog whose elevation
+    reaches 180: nothing refused, nothing sent into the sector, the satellite followed."""
+    line1, line2, aos, los = a_pass
+    mid_az, _ = sgp4_altaz(line1, line2, *BERLIN, (aos + los) / 2)
+    sector = [round(mid_az - 15) % 360, round(mid_az + 15) % 360]
+    v, errors = fly("rot2prog", a_pass, {"keep_out": [sector]})
+    with v:
+        during = [s.tracking for t, s in v.statuses if aos <= v.wall_epoch_s + t < los]
+        assert during and all(i is not None and i.flip for i in during)
+        assert not [e for e in v.errors("refused") if "tracking TESTSAT" in e.message]
+        for f in v.frames("set", "set: clamped"):
+            assert not _in_sector(f.data, sector)
+        assert max(e[1] for e in errors) <= 3.5  # (observed: 2.2 degrees at most)
 
 
 def _in_sector(frame: bytes, sector: list[int]) -> bool:
@@ -535,7 +556,9 @@ def test_a_pass_rising_in_a_keep_out_sector_is_waited_for_where_it_leaves_the_se
     line1, line2, aos, los = a_pass_clear_of_north
     rise_az, _ = sgp4_altaz(line1, line2, *BERLIN, aos)
     sector = [round(rise_az - 10) % 360, round(rise_az + 10) % 360]
-    v, errors = fly("rot2prog", a_pass_clear_of_north, {"keep_out": [sector]})
+    # (kept to 0..90 of elevation: flipped, the pass would rise clear of the sector)
+    settings = {"keep_out": [sector], "el_max_deg": 90}
+    v, errors = fly("rot2prog", a_pass_clear_of_north, settings)
     with v:
         exit_t = next(
             t
