@@ -11,7 +11,11 @@ Rules:
    once the pass in hand is over, and when the wall clock steps back past the time the pass
    in hand was searched from (NTP: an attack pass, a clock stepped back an hour mid-pass left
    the rotor where the satellite had been, waiting for that same pass an hour on, and after
-   "none in sight" nothing was searched for until the clock caught up again).
+   "none in sight" nothing was searched for until the clock caught up again). Once the pass
+   in hand is over the next is searched for at once, not PASS_RETRY_S after the search that
+   found the one over (attack 19: a pass tracked from its last minute ended into 40 s of "no
+   pass", the park after it waiting as long); but a search made after that pass's end (one
+   that gave a pass already over) keeps the pace, as "none in sight" does: no search loop.
 4. A new body (or a new start) is a new ``SkyTrack``: nothing asked for the old one is kept.
 """
 
@@ -109,6 +113,8 @@ class SkyTrack:
         p = self._pass
         if p is not None and utc > p.los_s:
             self.after_pass, self._pass = True, None
+            if self._pass_checked <= p.los_s:  # rule 3: the next one at once (a search made
+                self._pass_checked = -math.inf  # after this LOS that gave it keeps its pace)
         if utc < self._pass_checked - CLOCK_BACK_S:  # the clock stepped back: what was found
             self._pass, self._pass_checked = None, -math.inf  # from later may not come next
         if self._pass is not None or utc - self._pass_checked < PASS_RETRY_S:

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 from bridge.sky import Body, Pass, Sky
 from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
 from tests.engine.virtual import VirtualRotator
@@ -40,11 +38,6 @@ def _scripted_sky(q: Question) -> Answer:
     return Answer(q, [_at(t) for t in q.times])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: after a pass tracked from its last minute the status says 'no pass' for "
-    "40 s and the park after it waits as long",
-)
 def test_a_pass_tracked_from_its_last_minute_is_followed_by_the_next_one_at_once() -> None:
     line1, line2 = synthetic_tle(
         "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
