@@ -88,7 +88,8 @@ Rules:
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed), and the settle time they need
    (motion.py rule 2: from the slower axis it turns, a composite's elevation box's own);
-   ``base_cfg`` as configured.
+   ``base_cfg`` as configured. Its speeds are the one source of the rotor's speeds: the
+   session's parts see them in their scene (parts.py rule 9).
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
 9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking, stalled,
