@@ -143,6 +143,9 @@ class EntityRow:
     needs: str | None = None
     bridge_only: bool = False
     after: str | None = None  # rule 5: the object id of the row it follows
+    # the end of the entity id Home Assistant is asked for, where it is not the object id
+    # (interfaces/homeassistant/entities.py rule 10)
+    suffix: str | None = None
 
 
 @dataclass(frozen=True)

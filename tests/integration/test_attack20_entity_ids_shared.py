@@ -13,8 +13,6 @@ from __future__ import annotations
 import json
 from collections import Counter
 
-import pytest
-
 from bridge.app import App
 from bridge.settings.pointing import StationSettings
 from tests.support.mqtt import retained_snapshot
@@ -24,10 +22,6 @@ from tests.support.waiting import wait_until
 PREFIX = "homeassistant"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 20: sat's tracked elevation and sat_track's elevation ask for one entity id",
-)
 def test_no_two_entities_ask_home_assistant_for_one_entity_id(rig: Rig) -> None:
     rig.add("sat", model="md01")
     rig.add("sat_track", model="md01")

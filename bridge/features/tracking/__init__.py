@@ -154,6 +154,8 @@ FEATURE = Feature(
         EntityRow(
             "sensor", "track_azimuth", "Tracked azimuth", _azimuth, needs=TRACK_OPTIONS, after=AFTER
         ),
+        # asks for sensor.<id>_track_el: "_track_elevation" ends with "_elevation", which
+        # rotator "sat"'s shared with rotator "sat_track"'s elevation (homeassistant/ rule 10)
         EntityRow(
             "sensor",
             "track_elevation",
@@ -161,6 +163,7 @@ FEATURE = Feature(
             _elevation,
             needs=TRACK_OPTIONS,
             after=AFTER,
+            suffix="track_el",
         ),
         EntityRow("sensor", "next_aos", "Next AOS", _aos, needs=TRACK_OPTIONS, after=AFTER),
     ),  # fmt: skip

@@ -44,6 +44,20 @@ another):
    ``<node>:<object>``, which no plain one can be (``unshared``, said in the log at start);
    the other, and every entity of a configuration without such a pair, keeps its id, so
    Home Assistant's history and settings stay with it.
+10. The entity id an entity asks for (``default_entity_id``) is ``<platform>.<slug>_<suffix>``:
+   the slug its device's id as Home Assistant writes it (core/text.py ``entity_slug``: no '_'
+   at either end), the suffix its object id unless its row names another (``suffix``). No
+   suffix of a platform ends in '_' and another suffix of that platform (the bridge's, a
+   rotator's or a group's): then two devices whose slugs differ never ask for one entity id
+   (``a_X`` = ``b_Y`` with ``a`` the shorter makes ``b`` ``a_Z`` and ``X`` ``Z_Y``, which ends
+   in ``_Y``; an empty slug, a group's, asks for ``X`` alone, the same), and the settings'
+   check that no two slugs are one is the whole check. ``sat``'s tracked elevation and
+   ``sat_track``'s elevation both asked for ``sensor.sat_track_elevation`` (an attack pass:
+   Home Assistant gave the second ``_2``, and a card written from docs/homeassistant.md showed
+   the other antenna's value); the tracked elevation's suffix is ``track_el``. No
+   configuration is refused for it, and no entity Home Assistant has is renamed: it honours
+   the id asked for only when it first creates an entity (its unique id, rule 8, is as it
+   was), so only a new one gets the new id.
 """
 
 from __future__ import annotations
@@ -66,6 +80,15 @@ ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
 STATES = [s.value for s in MotionState]
 
 
+def _entity_id(platform: str, named: str, suffix: str) -> str:
+    """Rule 10: the entity id asked for, ``named``'s slug (core/text.py entity_slug), then the
+    suffix; the suffix alone where the slug is empty (a group id of '-' and '_' only, which the
+    settings take: a review found ``button._stop`` asked for, an id Home Assistant does not
+    write)."""
+    slug = entity_slug(named)
+    return f"{platform}.{slug}_{suffix}" if slug else f"{platform}.{suffix}"
+
+
 def _entity(
     platform: str,
     node: str,
@@ -77,16 +100,11 @@ def _entity(
     **config: object,
 ) -> tuple[tuple[str, str, str], dict[str, object]]:
     """((platform, node, object_id), payload); availability None: the entity has none. The entity
-    id asked for is ``named``'s slug (core/text.py entity_slug), then the object id; the object
-    id alone where the slug is empty (a group id of '-' and '_' only, which the settings take:
-    a review found ``button._stop`` asked for, an id Home Assistant does not write)."""
-    slug = entity_slug(named)
+    id asked for ends with the object id (a row's own suffix: ``rotator_configs``)."""
     payload: dict[str, object] = {
         "name": name,
         "unique_id": f"{node}_{object_id}",
-        "default_entity_id": f"{platform}.{slug}_{object_id}"
-        if slug
-        else f"{platform}.{object_id}",
+        "default_entity_id": _entity_id(platform, named, object_id),
         "device": device,
         "origin": ORIGIN,
         "qos": 1,
@@ -138,6 +156,7 @@ class Entity:
     needs: str | None = None  # RotatorInfo.has (rule 1): without it, no entity
     bridge_only: bool = False  # rule 2: available while the rotator is unreachable
     named: Callable[[RotatorInfo], str] | None = None  # a name that depends on the rotator
+    suffix: str | None = None  # rule 10: the entity id's end, where not the object id
 
     def expand(self, info: RotatorInfo) -> list[Entity]:
         if self.needs is not None and not info.has(self.needs):
@@ -149,7 +168,18 @@ def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
     """The registered features' rows (bridge/feature.py), in the registry's order, each with
     the object id of the row it follows (None: after all the others)."""
     return tuple(
-        (e.after, Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only))
+        (
+            e.after,
+            Entity(
+                e.platform,
+                e.object_id,
+                e.name,
+                e.config,
+                e.needs,
+                e.bridge_only,
+                suffix=e.suffix,
+            ),
+        )
         for f in registered()
         for e in f.entities
     )
@@ -385,6 +415,8 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
             )
             if e.object_id in r.shared_ids:  # rule 8
                 payload["unique_id"] = f"{node}:{e.object_id}"
+            if e.suffix is not None:  # rule 10
+                payload["default_entity_id"] = _entity_id(e.platform, r.rotator_id, e.suffix)
             out[where] = payload
     return out
 
