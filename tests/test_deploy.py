@@ -299,7 +299,7 @@ def test_web_page_has_presets_locator_park_and_nudge(flow: list[dict]) -> None:
 def test_web_page_starts_and_ends_tracking_and_shows_it(flow: list[dict]) -> None:
     page = _page_chain(flow)[1]["template"]
     assert set(re.findall(r'data-track="(\w+)"', page)) == {"sun", "moon", "off"}
-    assert re.search(r'<input id="satellite" type="text" maxlength="64"', page)
+    assert re.search(r'<input id="satellite" type="text" maxlength="255"', page)
     assert 'id="tracking"' in page and 'id="track-info"' in page
     assert 'case "tracking": onTracking(v)' in page  # rotor/tracking
     # the status's tracking block as the bridge writes it (every key, a pass included) and
@@ -510,8 +510,8 @@ _TRACK_CASES: list[tuple[object, str | None]] = [
     ("25544", "25544"),
     ("AO-7 [+]", "AO-7 [+]"),
     ("Åland-Sat ☀", "Åland-Sat ☀"),
-    ("X" * 64, "X" * 64),
-    ("X" * 65, None),
+    ("X" * 255, "X" * 255),  # R/track's longest name (payloads.py MAX_NAME_CHARS)
+    ("X" * 256, None),
     ("", None),
     ("   ", None),
     ('{"tle": ["ISS", "1 25544U", "2 25544"]}', None),

@@ -27,7 +27,7 @@ from bridge.interfaces.homeassistant import (
     all_configs,
 )
 from bridge.interfaces.homeassistant.publisher import ROUND_MIN_S
-from bridge.interfaces.mqtt.payloads import parse_follow, parse_nudge, status_json
+from bridge.interfaces.mqtt.payloads import parse_follow, parse_nudge, parse_track, status_json
 from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -663,6 +663,23 @@ def test_track_select_is_capped_at_max_satellites_of_a_large_tle_file() -> None:
         )
         == []
     )
+
+
+def test_track_select_offers_only_names_r_track_takes_as_themselves() -> None:
+    """Attack 20: the select offered a TLE file's name of 79 characters, and R/track refused it
+    at 64 ("a name of at most 64 printable characters"): a satellite the dashboard offered
+    could not be tracked from it. A name is taken up to 255 (the longest state Home Assistant
+    keeps); one R/track cannot take as itself is no option, and does not count among the
+    first MAX_SATELLITES."""
+    words = "AMSAT-OSCAR 7 (AO-7) - the oldest amateur satellite still heard, launched 1974"
+    refused = ("N" * 256, "ISS\t(ZARYA)", '{"tle": ["A", "1 a", "2 b"]}')
+    names = (words, "N" * 255, *refused, *(f"SAT {i:04d}" for i in range(MAX_SATELLITES)))
+    options = tracking_discovery(satellites=names)["select.track"]["options"]
+    assert options[3:5] == [words, "N" * 255]
+    assert not set(refused) & set(options)
+    assert len(options) == 3 + MAX_SATELLITES  # the refused ones leave room for others
+    for option in options:
+        assert parse_track(option.encode()) == (option, None), option
 
 
 def test_tracked_body_sensors_read_the_status_and_say_what_they_measure() -> None:

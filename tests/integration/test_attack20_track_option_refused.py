@@ -14,8 +14,6 @@ import json
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.integration.test_tracking_bridge import (
     BERLIN,
     QUICK_BRIDGE,
@@ -31,10 +29,6 @@ from tests.support.rig import Rig
 LONG_NAME = "AMSAT-OSCAR 7 (AO-7) - the oldest amateur satellite still heard, launched 1974"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 20: a satellite Home Assistant's track select offers is refused on R/track",
-)
 def test_every_satellite_the_track_select_offers_can_be_tracked(rig: Rig, tmp_path: Path) -> None:
     assert len(LONG_NAME) > 64
     wall = Wall(SAT_EPOCH)

@@ -227,14 +227,26 @@ def test_only_ascii_numbers_and_one_name_per_axis(parse, raw: bytes, why: str) -
 
 @pytest.mark.parametrize(
     "lines",
-    [["N" * 65, "1 a", "2 b"], ["SAT\u202e", "1 a", "2 b"], ["SAT", "1 a\x1b[2J", "2 b"]],
+    [["N\nF", "1 a", "2 b"], ["SAT\u202e", "1 a", "2 b"], ["SAT", "1 a\x1b[2J", "2 b"]],
 )
 def test_a_tles_name_and_lines_are_held_to_a_bare_names_rules(lines: list[str]) -> None:
     """An attack pass: the name line of ``{"tle": [...]}`` skipped the bare name's checks, so
-    a line break, terminal escapes or a bidi override reached the log and the retained state."""
-    with pytest.raises(pl.PayloadError, match="at most 64 printable characters"):
+    a line break, terminal escapes or a bidi override reached the log and the retained state.
+    (Its length is held by the payload's: a TLE's lines leave no room for a name of 256.)"""
+    with pytest.raises(pl.PayloadError, match="at most 255 printable characters"):
         pl.parse_track(json.dumps({"tle": lines}).encode())
-    assert pl.parse_track(json.dumps({"tle": ["N" * 64, "1 a", "2 b"]}).encode())[0] == "N" * 64
+    assert pl.parse_track(json.dumps({"tle": ["N" * 80, "1 a", "2 b"]}).encode())[0] == "N" * 80
+
+
+def test_a_satellites_name_is_taken_up_to_the_longest_state_home_assistant_keeps() -> None:
+    """Attack 20: a TLE file's name of 79 characters, offered by Home Assistant's track select,
+    was refused at 64. A name is taken up to 255 (Home Assistant keeps no longer state, and
+    its select shows the name), not one more."""
+    long = "AMSAT-OSCAR 7 (AO-7) - the oldest amateur satellite still heard, launched 1974"
+    assert pl.parse_track(long.encode()) == (long, None)
+    assert pl.parse_track(b"N" * 255) == ("N" * 255, None)
+    with pytest.raises(pl.PayloadError, match="track: a name of at most 255 printable"):
+        pl.parse_track(b"N" * 256)
 
 
 def test_a_tle_sent_without_its_line_2_is_refused_saying_so() -> None:

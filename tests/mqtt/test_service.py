@@ -522,11 +522,11 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/nudge", b"left", "nudge must be a number, got 'left'", "nudge 'left'"),
         ("rotor/track", b'{"tle": "x"}', 'track: JSON must be {"tle": ["NAME", "1 ...", "2 ..."]}',
          "track '{\"tle\": \"x\"}'"),
-        ("rotor/track", b"a\x07b", "track: a name of at most 64 printable characters",
+        ("rotor/track", b"a\x07b", "track: a name of at most 255 printable characters",
          "track 'a\\x07b'"),
         # a TLE's name as a bare one's (an attack pass: a forged log line, escapes retained)
         ("rotor/track", b'{"tle": ["E\\nF", "1 a", "2 b"]}',
-         "track: the TLE's name is at most 64 printable characters, and its lines printable text",
+         "track: the TLE's name is at most 255 printable characters, and its lines printable text",
          "track '{\"tle\": [\"E\\\\nF\", \"1 a\", \"2 b\"]}'"),
         ("rotor/preset", b"", "empty payload", "preset"),
         ("rotor/follow", b"on", "follow: expected wsjtx or off, got 'on'", "follow 'on'"),

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, replace
+from itertools import islice
 
 from bridge.feature import registered
+from bridge.interfaces.mqtt.payloads import PayloadError, parse_track
 from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols.axes import Axis
@@ -22,8 +24,22 @@ NO_SPOTS = "no spots yet"  # the spot select's one option before the first spot 
 
 
 def track_options(satellites: tuple[str, ...]) -> tuple[str, ...]:
-    """The track select's options: off, the sun, the moon, the first satellites by name."""
-    return ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
+    """The track select's options: off, the sun, the moon, the first satellites by name, each a
+    name ``R/track`` takes as itself (payloads.py ``parse_track``, whose bound of 255 is also
+    the longest state Home Assistant keeps). A name it refuses (longer, a tab in it, one that
+    reads as JSON) is no option: picking it was refused (an attack pass); the satellite is
+    tracked by its catalog number."""
+    named = (name for name in satellites if _as_itself(name))
+    return ("off", "sun", "moon", *islice(named, MAX_SATELLITES))
+
+
+def _as_itself(name: str) -> bool:
+    """Whether ``R/track`` takes ``name``, sent as Home Assistant sends an option, as that
+    name."""
+    try:
+        return parse_track(name.encode()) == (name, None)
+    except PayloadError:
+        return False
 
 
 def spot_options(calls: tuple[str, ...]) -> tuple[str, ...]:

@@ -30,7 +30,10 @@ from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
 MAX_COMMAND_BYTES = 256
-MAX_NAME_CHARS = 64  # a preset's or a satellite's name
+#: a satellite's name on R/track: a TLE file's name line may be long (a hand-made file naming
+#: its satellite in words; an attack pass: a name of 79 the track select offered was refused at
+#: 64), and this is the longest state Home Assistant keeps, the select's option being the name
+MAX_NAME_CHARS = 255
 #: a target's two fields: apart by spaces, or by one comma or semicolon with spaces round it
 #: or not; an empty field (",30", "120,,30") is no value left out but a refusal (an attack
 #: pass: ",30", meant as elevation 30, turned the rotor to azimuth 30)
@@ -232,7 +235,9 @@ def parse_name(payload: bytes, what: str) -> str:
 def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
     """``R/track``: ``sun``, ``moon``, ``off``, a satellite's name from the TLE file, or JSON
     ``{"tle": ["NAME", "1 ...", "2 ..."]}`` (the name line may be left out). The elements are
-    checked by the rotator (sky.Body.satellite)."""
+    checked by the rotator (sky.Body.satellite). A name is printable and at most
+    MAX_NAME_CHARS long (and the payload at most MAX_COMMAND_BYTES): Home Assistant's track
+    select offers only names taken here (homeassistant/info.py ``track_options``)."""
     text = _text(payload)
     if not text.startswith("{"):
         if len(text) > MAX_NAME_CHARS or not text.isprintable():
