@@ -13,8 +13,6 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from tests.integration.test_pointing_bridge import QUICK_BRIDGE, QUICK_EMU, motion_frames
 from tests.support.rig import Rig
 
@@ -22,10 +20,6 @@ from tests.support.rig import Rig
 SAYS_NO = (b"OFF\x00", b"\xef\xbb\xbfOFF", b"\xef\xbb\xbffalse", b"0\x00")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 20: R/park 'OFF' with a C string's NUL or a byte-order mark parks the rotor",
-)
 def test_a_park_that_says_no_with_a_nul_or_a_bom_moves_nothing(rig: Rig) -> None:
     emu = rig.add("tower", emu={**QUICK_EMU, "start_az_deg": 120}, park_az_deg=0, **QUICK_BRIDGE)
     rig.start()

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import json
+import re
 from datetime import UTC, datetime
 from typing import Any
 
@@ -254,3 +255,68 @@ def test_a_tle_sent_without_its_line_2_is_refused_saying_so() -> None:
     with pytest.raises(pl.PayloadError, match='"1 ..." and "2 ...", a name first'):
         pl.parse_track(json.dumps({"tle": ["ISS (ZARYA)", "1 25544U 98067A"]}).encode())
     assert pl.parse_track(json.dumps({"tle": ["1 25544U", "2 25544"]}).encode())[0] == "25544"
+
+
+# attack 20: what a sender's tools put round the words, as C and Windows clients send them
+NUL_AND_BOM = [b"%s\x00", b"\xef\xbb\xbf%s", b"\xef\xbb\xbf %s\x00\x00\r\n"]
+
+
+@pytest.mark.parametrize("frame", NUL_AND_BOM)
+@pytest.mark.parametrize(
+    "word", [b"OFF", b"off", b"0", b"false", b"no", b"null", b'"OFF"', b"'off'", b'"\\u0000OFF"']
+)
+def test_a_press_that_says_no_says_no_with_a_nul_or_a_bom(frame: bytes, word: bytes) -> None:
+    """``OFF\\0`` (an Arduino publishing strlen + 1) and a byte-order mark before OFF parked
+    the rotor: one rule reads every topic's words (``_words``), and the press's is no yes."""
+    with pytest.raises(pl.PayloadError, match="does not park: send PARK"):
+        pl.parse_press(frame % word, "park", "PARK")
+
+
+@pytest.mark.parametrize("frame", NUL_AND_BOM)
+def test_a_switch_reads_the_same_words_as_a_press(frame: bytes) -> None:
+    """The lock refused ``ON\\0`` as no switch word where a park took ``OFF\\0`` as a press:
+    now both read the word within."""
+    assert pl.parse_switch(frame % b"ON") is True
+    assert pl.parse_switch(frame % b"OFF") is False
+    assert pl.parse_target(frame % b"120 30") == (120.0, 30.0)
+    assert pl.parse_follow(frame % b"off") == (False, False)
+    assert pl.parse_press(frame % b"PARK", "park", "PARK") == "PARK"
+
+
+@pytest.mark.parametrize(
+    ("raw", "named"),
+    [
+        (b"O\x00FF", "U+0000"),  # a NUL is taken only at the end
+        (b"\x00OFF", "U+0000"),
+        (b"OFF\x07", "U+0007"),
+        (b"\x1b[2JPARK", "U+001B"),
+        (b"OFF\xc2\x9b", "U+009B"),
+        (b"OF\xef\xbb\xbfF", "U+FEFF, a byte-order mark, past its start"),
+        (b"\xef\xbb\xbf\xef\xbb\xbfOFF", "U+FEFF"),
+    ],
+)
+def test_any_other_control_character_is_refused_on_every_topic_naming_it(
+    raw: bytes, named: str
+) -> None:
+    for parse in (
+        lambda p: pl.parse_press(p, "park", "PARK"),
+        pl.parse_switch,
+        pl.parse_target,
+        pl.parse_track,
+        pl.parse_follow,
+        pl.text,
+    ):
+        with pytest.raises(pl.PayloadError, match=re.escape(f"payload holds {named}")):
+            parse(raw)
+
+
+@pytest.mark.parametrize("raw", ["OFF\u200b", "\u200bPARK", "PARK\tnow", '"OFF', '"OFF\\u200b"'])
+def test_a_press_is_printable_text(raw: str) -> None:
+    """What a sender cannot see, or a JSON string that does not end, is no press."""
+    with pytest.raises(pl.PayloadError, match="does not park"):
+        pl.parse_press(raw.encode(), "park", "PARK")
+
+
+@pytest.mark.parametrize("raw", [b"PARK", b"park", b"1", b"1700000000123", b"RESET please"])
+def test_a_press_is_still_any_other_word_or_number(raw: bytes) -> None:
+    assert pl.parse_press(raw, "park", "PARK") == raw.decode()

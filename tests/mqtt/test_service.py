@@ -522,7 +522,9 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/nudge", b"left", "nudge must be a number, got 'left'", "nudge 'left'"),
         ("rotor/track", b'{"tle": "x"}', 'track: JSON must be {"tle": ["NAME", "1 ...", "2 ..."]}',
          "track '{\"tle\": \"x\"}'"),
-        ("rotor/track", b"a\x07b", "track: a name of at most 255 printable characters",
+        # attack 20: one rule for every topic's words (payloads.py ``_words``), naming it
+        ("rotor/track", b"a\x07b", "payload holds U+0007, which no command's words hold (a "
+         "control character or a non-character; a C string's NUL is taken only at the end)",
          "track 'a\\x07b'"),
         # a TLE's name as a bare one's (an attack pass: a forged log line, escapes retained)
         ("rotor/track", b'{"tle": ["E\\nF", "1 a", "2 b"]}',

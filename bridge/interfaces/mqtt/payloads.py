@@ -5,8 +5,10 @@ is a bare azimuth (``123``, ``123.5``), ``az el`` (space or comma), a JSON objec
 ``{"azimuth": a, "elevation": e}``, or a place: a bare Maidenhead locator of 4, 6 or 8
 characters (``PM95vq``; a two-letter field only in JSON: ``JA`` is more often a preset's name),
 ``{"locator": "PM95vq"}`` or ``{"latitude": 35.7, "longitude": 139.7}``, each with an optional
-``"path": "long"``; switches are ON/OFF, 1/0, true/false in any case. Anything else raises
-PayloadError with a message meant for the user.
+``"path": "long"``; switches are ON/OFF, 1/0, true/false in any case. Every payload's words
+are read by one rule (``_words``: a byte-order mark before them and NULs after them dropped,
+any other control character refused). Anything else raises PayloadError with a message meant
+for the user.
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ def _status_encoder() -> Callable[[object], str]:
 
 
 _STATUS_ENCODE = _status_encoder()
+_BOM = "\ufeff"  # (U+FEFF: what a UTF-8 byte-order mark decodes to)
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 # words that never press a button (parse_press): a switch's off and what else says "no"
@@ -91,14 +94,39 @@ def one_line(text: str) -> str:
 
 
 def _text(payload: bytes) -> str:
+    """Every command payload's text, read here and nowhere else (attack 20: ``R/park`` took
+    ``OFF\\0`` as a press where ``R/lock`` refused ``ON\\0``): UTF-8, not too large, then
+    ``_words``."""
     if len(payload) > MAX_COMMAND_BYTES:
         raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")
     try:
-        text = payload.decode("utf-8").strip()
+        decoded = payload.decode("utf-8")
     except UnicodeDecodeError:
         raise PayloadError("payload is not UTF-8 text") from None
+    return _words(decoded)
+
+
+def _words(text: str) -> str:
+    """The one rule for what a sender's tools put round the words, for every topic alike (a
+    payload's text; a JSON string a press is read from): blanks at either end, a UTF-8
+    byte-order mark at the start (a Windows script's) and NULs at the end (a C string's
+    terminator: an Arduino sketch that publishes ``strlen + 1`` bytes) are no part of the
+    words and are dropped (``OFF\\0`` is OFF to the lock, a park, an option, a follow).
+    Any other control character, or a byte-order mark elsewhere, is refused, naming it: no
+    word a command takes holds one, and what cannot be read is never taken as a yes (a press).
+    Blanks inside (space, tab, line breaks) are the parsers' to judge: they part a target's
+    two fields."""
+    text = text.strip().removeprefix(_BOM).strip().rstrip("\0").rstrip()
     if not text:
         raise PayloadError("empty payload")
+    for c in text:
+        if c == _BOM:
+            raise PayloadError("payload holds U+FEFF, a byte-order mark, past its start")
+        if not c.isspace() and bad_char(c) is not None:
+            raise PayloadError(
+                f"payload holds U+{ord(c):04X}, which no command's words hold (a control "
+                "character or a non-character; a C string's NUL is taken only at the end)"
+            )
     return text
 
 
@@ -331,7 +359,11 @@ def parse_press(payload: bytes, what: str, word: str) -> str:
     parked a rotor on ``no``, ``null`` and ``{"park": false}``): the words of ``_NOT_A_PRESS``,
     also as a JSON string, JSON's false and null, a zero in any spelling, and any JSON object
     or array (a press carries no document, and one that says ``false`` inside must not move a
-    rotor). A number other than zero is a press: Node-RED's inject node sends a timestamp."""
+    rotor). A number other than zero is a press: Node-RED's inject node sends a timestamp.
+    What cannot be read is no press either (attack 20: ``OFF\\0`` and a byte-order mark before
+    ``OFF`` parked a rotor): the payload's words are read as every topic's are (``_words``:
+    ``OFF\\0`` is OFF, another control character is refused naming it), and a press is
+    printable text (an invisible character, a JSON string not ended, says no)."""
     text = _text(payload)
     if _not_a_press(text):
         raise PayloadError(f"{text[:20]!r} does not {what}: send {word}")
@@ -344,12 +376,21 @@ def _not_a_press(text: str) -> bool:
         return True
     if text[0] in "{[":
         return True  # a document, whatever it holds (see parse_press)
+    if not text.isprintable():
+        return True  # an invisible character (U+200B, a tab): what it says is not seen
+    if text[0] == "'" and text[-1] == "'" and len(text) > 1:
+        text = json.dumps(text[1:-1])  # 'OFF' (a shell's quotes kept) as "OFF"
     if text[0] == '"':
         try:
             inner = json.loads(text)
         except ValueError:
-            return False
-        return not isinstance(inner, str) or _not_a_press(inner.strip() or "0")
+            return True  # "OFF without its end: not read, so no yes
+        if not isinstance(inner, str):
+            return True
+        try:  # the same words as a bare payload's ("\\u0000OFF", "\\ufeffOFF": no press)
+            return _not_a_press(_words(inner))
+        except PayloadError:
+            return True  # empty, or what cannot be read: never a yes
     try:
         return float(word) == 0  # 0.0, -0, 00, 0e0; nan and inf are no number a switch sends
     except ValueError:
