@@ -13,16 +13,10 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from tests.integration.test_pointing_bridge import QUICK_BRIDGE, QUICK_EMU, motion_frames
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 20: '+10' on R/target (a nudge on the wrong topic) turns the rotor to 10",
-)
 def test_a_signed_step_on_the_target_topic_is_refused_not_taken_as_a_bearing(rig: Rig) -> None:
     emu = rig.add("tower", emu={**QUICK_EMU, "start_az_deg": 120}, **QUICK_BRIDGE)
     rig.start()

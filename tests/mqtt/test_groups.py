@@ -115,6 +115,13 @@ def test_what_is_no_bearing_is_refused_for_the_whole_group(payload: bytes) -> No
         fan_out(STACK, payload, AZ_ONLY)
 
 
+@pytest.mark.parametrize("payload", [b"+10", b"+10 30", b'{"azimuth": "+10"}'])
+def test_a_signed_step_on_the_groups_target_is_refused_as_a_nudge(payload: bytes) -> None:
+    """Attack 20: ``+10``, the nudge buttons' word, was the bearing 10 for every member."""
+    with pytest.raises(pl.PayloadError, match="is a signed step, a nudge: send it to the nudge"):
+        fan_out(STACK, payload, {"upper": True, "lower": True})
+
+
 def test_the_reserved_words_are_every_first_level_of_a_rotators_topics() -> None:
     """settings/groups.py rule 4 in step with topics.py: a group may not take any of them."""
     t = RotatorTopics("R")

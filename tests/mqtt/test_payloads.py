@@ -320,3 +320,34 @@ def test_a_press_is_printable_text(raw: str) -> None:
 @pytest.mark.parametrize("raw", [b"PARK", b"park", b"1", b"1700000000123", b"RESET please"])
 def test_a_press_is_still_any_other_word_or_number(raw: bytes) -> None:
     assert pl.parse_press(raw, "park", "PARK") == raw.decode()
+
+
+@pytest.mark.parametrize(
+    "raw",
+    [
+        b"+10",
+        b" +10 ",
+        b"+10 30",
+        b"+10,30",
+        b"+0",
+        b"+1e1",
+        b'{"azimuth": "+10"}',
+        b'{"az": " +5"}',
+    ],
+)
+def test_a_signed_step_on_the_target_topic_is_a_nudge_not_a_bearing(raw: bytes) -> None:
+    """Attack 20: ``+10``, the nudge buttons' word, was taken as the bearing 10 (a rotor at
+    120 turned to 10 where the sender meant 130)."""
+    for parse in (pl.parse_target, pl.parse_aim):
+        with pytest.raises(
+            pl.PayloadError, match="is a signed step, a nudge: send it to the nudge"
+        ):
+            parse(raw)
+    assert pl.parse_nudge(b"+10") == (10.0, None)  # where it belongs
+
+
+def test_a_negative_bearing_stays_a_bearing_for_the_judge() -> None:
+    """A minus names the side past north counter-clockwise (a SPID's overlap: docs/pointing.md);
+    the judge refuses it on a scale that wraps."""
+    assert pl.parse_target(b"-10") == (-10.0, None)
+    assert pl.parse_aim(b'{"azimuth": "-10", "elevation": "+5"}') == (-10.0, 5.0)

@@ -329,14 +329,31 @@ def parse_target(payload: bytes) -> tuple[float, float | None]:
         el_raw = obj.get("elevation", obj.get("el"))
         if az_raw is None:
             raise PayloadError('JSON target needs "azimuth"')
-        az = _number(az_raw, "azimuth")
+        az = _bearing(az_raw)
         return az, None if el_raw is None else _number(el_raw, "elevation")
     parts = _SPLIT.split(text)
     if len(parts) > 2 or "" in parts:
         raise PayloadError(f"target must be 'azimuth' or 'azimuth elevation', got {text[:40]!r}")
-    az = _number(parts[0], "azimuth")
+    az = _bearing(parts[0])
     el = _number(parts[1], "elevation") if len(parts) == 2 else None
     return az, el
+
+
+def _bearing(raw: object) -> float:
+    """A target's azimuth: a number, never one written with a plus sign. ``+10`` is the nudge
+    buttons' word (Home Assistant's, docs/mqtt.md ``R/nudge``), and on the target topic it
+    was the bearing 10: a rotor at 120 turned 110 degrees the other way where the sender meant
+    130 (attack 20), as ``,30`` once turned one to azimuth 30. No one writes a bearing with a
+    plus. A minus stays a bearing: past north counter-clockwise on a rotor whose travel goes
+    there (a SPID's -180, docs/pointing.md; Hamlib's convention), and refused by the judge as
+    outside 0..360 where it does not."""
+    if isinstance(raw, str) and raw.strip().startswith("+"):
+        shown = raw.strip()[:20]
+        raise PayloadError(
+            f"{shown!r} is a signed step, a nudge: send it to the nudge topic; a bearing is "
+            "written without '+'"
+        )
+    return _number(raw, "azimuth")
 
 
 def parse_number(payload: bytes, what: str) -> float:
