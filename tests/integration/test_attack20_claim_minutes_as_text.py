@@ -10,15 +10,9 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason='attack 20: a claim\'s {"minutes": "30"} is refused though numbers may be strings',
-)
 def test_a_claim_whose_minutes_are_a_string_holding_a_number_takes_the_lease(rig: Rig) -> None:
     rig.add("tower")
     rig.start()

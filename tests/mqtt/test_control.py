@@ -17,6 +17,26 @@ def test_a_claim_names_an_operator_and_minutes_or_takes_the_messages_operator() 
 
 
 @pytest.mark.parametrize(
+    ("minutes", "read"), [('"30"', 30.0), ('" 7.5 "', 7.5), ('"1e1"', 10.0), ('"thirty"', "thirty")]
+)
+def test_a_claims_minutes_may_be_a_string_that_holds_a_number(minutes: str, read: object) -> None:
+    """Attack 20: docs/mqtt.md's numbers, "in JSON a number, or a string that holds one", as
+    R/target reads them; a string that holds none goes as sent, for the lease to refuse."""
+    payload = f'{{"operator": "DL1ABC", "minutes": {minutes}}}'.encode()
+    assert parse_claim(payload, None) == ("DL1ABC", read)
+
+
+def test_a_claim_is_read_by_every_topics_word_rule() -> None:
+    """payloads.py ``_words``: a byte-order mark before it and a C string's NUL after it."""
+    assert parse_claim(b'\xef\xbb\xbf{"operator": "DL1ABC", "minutes": 30}\x00', None) == (
+        "DL1ABC",
+        30,
+    )
+    with pytest.raises(PayloadError, match="empty payload"):
+        parse_claim(b"", None)
+
+
+@pytest.mark.parametrize(
     ("payload", "why"),
     [
         (b"{not json", "bad JSON"),

@@ -6,6 +6,10 @@ Rules:
 1. A claim is a JSON object with ``minutes`` and, unless the message carries the MQTT 5 user
    property ``operator``, an ``operator``; any other key, or anything that is not such an
    object, is a PayloadError naming what was wrong (refused on ``R/error``, nothing changes).
+   Its minutes are read as every payload's numbers are (interfaces/mqtt/payloads.py
+   ``json_number``; docs/mqtt.md: in JSON a number, or a string that holds one): ``"30"`` is
+   30 (attack 20: it was refused "minutes must be a number", where ``R/target`` took
+   ``{"azimuth": "123"}``). Anything else goes as sent, for the lease to judge.
 2. A release takes any payload; a JSON object's valid ``operator`` names who released it when
    the message has no user property (Home Assistant's button sends one); one that gives it
    twice names nobody (an attack pass: its last value was the name in the audit trail).
@@ -21,20 +25,18 @@ from datetime import UTC, datetime
 
 from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import Control, valid_operator
-from bridge.interfaces.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError
+from bridge.interfaces.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError, json_number
+from bridge.interfaces.mqtt.payloads import text as payload_text
 
 EXAMPLE = '{"operator": "DL1ABC", "minutes": 30}'
 
 
 def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
-    """Rule 1: (operator, minutes) as sent; the message's own operator when it names none."""
-    if len(payload) > MAX_COMMAND_BYTES:
-        raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")
+    """Rule 1: (operator, minutes) as sent, minutes that a string holds as that number; the
+    message's own operator when it names none."""
+    text = payload_text(payload)  # (the words every topic reads: size, UTF-8, a BOM, a NUL)
     try:  # NaN: a string; a key given twice: refused (core/jsonkeys.py)
-        text = payload.decode("utf-8")
         obj = json.loads(text, parse_constant=lambda c: c, object_pairs_hook=unique_keys)
-    except UnicodeDecodeError:
-        raise PayloadError("payload is not UTF-8 text") from None
     except json.JSONDecodeError as exc:
         raise PayloadError(f"bad JSON: {exc.msg}; a claim is {EXAMPLE}") from None
     except DuplicateKey as exc:
@@ -49,7 +51,13 @@ def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
     who = obj.get("operator", operator)
     if who is None:
         raise PayloadError(f'a claim needs "operator", e.g. {EXAMPLE}')
-    return who, obj["minutes"]
+    minutes = obj["minutes"]
+    if isinstance(minutes, str):  # rule 1: a string that holds a number is that number
+        try:
+            minutes = json_number(minutes, "minutes")
+        except PayloadError:
+            pass  # as sent: the lease refuses it, "minutes must be a number"
+    return who, minutes
 
 
 def parse_release(payload: bytes) -> str | None:

@@ -356,6 +356,12 @@ def _bearing(raw: object) -> float:
     return _number(raw, "azimuth")
 
 
+def json_number(raw: object, what: str) -> float:
+    """A JSON value as a number, as every payload's is read (docs/mqtt.md: in JSON a number,
+    or a string that holds one; ASCII digits, finite); PayloadError naming ``what`` if not."""
+    return _number(raw, what)
+
+
 def parse_number(payload: bytes, what: str) -> float:
     """One bare number (also as a JSON number)."""
     return _number(_text(payload), what)
