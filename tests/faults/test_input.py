@@ -158,13 +158,15 @@ PAYLOADS = st.one_of(
 
 
 def switch_oracle(payload: bytes) -> bool | None:
-    """README: ON/OFF, 1/0, true/false in any case (surrounding white space is not part of it)."""
+    """README: ON/OFF, 1/0, true/false in any case (surrounding white space is not part of it;
+    docs/mqtt.md, attack 20: nor a byte-order mark before it, nor a C string's NULs after it)."""
     if len(payload) > 256:
         return None
     try:
-        text = payload.decode("utf-8").strip().lower()
+        text = payload.decode("utf-8").strip().removeprefix("\ufeff").strip()
     except UnicodeDecodeError:
         return None
+    text = text.rstrip("\x00").rstrip().lower()
     return True if text in ("on", "1", "true") else False if text in ("off", "0", "false") else None
 
 
