@@ -11,18 +11,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: a bridge with base_topic rotor/tower beside a live bridge's rotator tower "
-    "starts, and a target for that tower turns both rotors",
-)
 def test_a_bridge_on_another_bridges_rotator_topic_never_turns_on_its_targets(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -37,6 +37,35 @@ Rules:
    while the other is there and online. One message proves no other bridge (an attack pass:
    one forged, non-retained info on ``B/bridge/info`` ended a bridge mid-turn for good, code
    2, its stop express with it, and the STOP after it reached nothing: the rotor ran on).
+5. One bridge per tree of topics, not only per base topic (attack 18: a second bridge on
+   ``rotor/tower``, the first bridge's rotator ``tower``, passed its look, which read only
+   ``rotor/tower/bridge/info``; a target on ``rotor/tower/target`` then turned both rotors, and
+   the two put their states back over each other's). Rule 1's info names the bridge's
+   ``topics``: each rotator's and group's topic (``R``, ``G``). A topic ``inner`` lies in
+   ``outer``'s tree when it is ``outer`` itself or under it by one of the names a bridge uses
+   under a root (``names``: a rotator's ``target``, ``lock``, ``option``..., the base topic's
+   ``bridge`` and ``spots``; one namespace, topics.py ``_check_suffixes``); two bridges overlap
+   when a topic of one (its base topic or one of its ``topics``) lies in the tree of one of the
+   other's (``overlap``). A bridge on ``rotor/site2`` beside one on ``rotor`` does not
+   (``site2`` is no such name: its topics are none of the other's; review 93 keeps it working,
+   stale.py rule 3); one on ``rotor/tower`` beside the rotator ``rotor/tower`` does, and so does
+   one on ``rotor`` whose rotator ``x`` is ``rotor/x`` beside a bridge on ``rotor/x``.
+   The first look reads, besides its own, the info and state of every topic that is its base
+   topic's or a rotator's or group's topic or above one (``watched``: ``rotor`` and
+   ``rotor/tower`` for base ``rotor/tower``; ``rotor/x`` for a rotator ``rotor/x``): another
+   instance there, ``online`` (rule 2: an ``offline`` or missing state is a bridge gone, whose
+   leftovers never refuse a start), whose topics overlap this bridge's, refuses the start as
+   rule 2 does (code 2; a reconnect's look: the bridge yields as rule 4), naming
+   ``mqtt.base_topic`` and both topics. An info without ``topics`` (a bridge from before
+   them) counts as its base topic alone. While the bridge runs it keeps reading them: another
+   instance that comes online there overlapping it (two started at once; one of an older
+   version, which looks only at its own base topic) makes the younger yield as rule 4; the
+   older says it, in the log at ERROR and on ``B/bridge/info`` while it lasts, and goes on (it
+   cannot move the other off its topics, and stopping its own rotators would leave them to the
+   other's targets with no bridge to stop them). Not seen: a bridge whose base topic is none
+   of the watched ones (a rotator of its with a ``topic`` of its own, outside its base topic;
+   or a base topic under one of this bridge's names, ``rotor/tower/lock``): the broker's ACL
+   (docs/deployment.md) is the guard there.
 """
 
 from __future__ import annotations
@@ -46,7 +75,10 @@ import json
 import os
 import socket
 import time
-from dataclasses import dataclass
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+MAX_TOPICS = 4096  # rule 5: topics read from an info at most (a forged one is junk past them)
 
 
 @dataclass(frozen=True)
@@ -55,10 +87,13 @@ class Instance:
     host: str
     pid: int
     started_unix: float
+    topics: tuple[str, ...] = ()  # rule 5: its rotators' and groups' topics
 
     @staticmethod
-    def me(instance_id: str) -> Instance:
-        return Instance(instance_id, socket.gethostname(), os.getpid(), round(time.time(), 3))
+    def me(instance_id: str, topics: Iterable[str] = ()) -> Instance:
+        return Instance(
+            instance_id, socket.gethostname(), os.getpid(), round(time.time(), 3), tuple(topics)
+        )
 
     def info(self, problems: list[str]) -> str:
         """Rule 1: the retained ``B/bridge/info`` payload."""
@@ -67,6 +102,7 @@ class Instance:
             "host": self.host,
             "pid": self.pid,
             "started": self.started_unix,
+            "topics": list(self.topics),
             "problems": problems,
         }
         return json.dumps(doc, separators=(",", ":"))
@@ -91,11 +127,18 @@ class Instance:
             started_unix = float(started) if isinstance(started, int | float) else 0.0
         except OverflowError:
             return None
+        listed = doc.get("topics")
+        topics = (
+            tuple(t for t in listed[:MAX_TOPICS] if isinstance(t, str) and t)
+            if isinstance(listed, list)
+            else ()
+        )
         return Instance(
             iid,
             host if isinstance(host, str) else "?",
             pid if isinstance(pid, int) and not isinstance(pid, bool) else 0,
             started_unix,
+            topics,
         )
 
     def described(self) -> str:
@@ -137,6 +180,56 @@ def refusal(base_topic: str, other: Instance, live_since_look: bool) -> str:
     )
 
 
+def lies_in(inner: str, outer: str, names: frozenset[str]) -> bool:
+    """Rule 5: whether ``inner`` is ``outer`` or under it by one of a root's names."""
+    if inner == outer:
+        return True
+    if not inner.startswith(outer + "/"):
+        return False
+    return inner[len(outer) + 1 :].split("/", 1)[0] in names
+
+
+def overlap(
+    mine: Sequence[str], theirs: Sequence[str], names: frozenset[str]
+) -> tuple[str, str] | None:
+    """Rule 5: a topic of ``mine`` and one of ``theirs`` of which one lies in the other's
+    tree, if any."""
+    for m in mine:
+        for t in theirs:
+            if lies_in(m, t, names) or lies_in(t, m, names):
+                return m, t
+    return None
+
+
+def above(topic: str) -> list[str]:
+    """Rule 5: ``topic`` and every topic above it (``a``, ``a/b`` for ``a/b``)."""
+    levels = topic.split("/")
+    return ["/".join(levels[:i]) for i in range(1, len(levels) + 1)]
+
+
+def overlapping(
+    base_topic: str, where: str, other: Instance, mine: str, theirs: str, *, live: bool = False
+) -> str:
+    """Rule 5: the error a bridge refuses (or yields) with, one line; ``live``: met while
+    running (what the older one says)."""
+    how = (
+        "came online while this one runs"
+        if live
+        else "is online (or crashed less than 1.5 keepalives ago: then start again in a minute)"
+    )
+    what = (
+        f"this bridge's {mine!r} is its {theirs!r}"
+        if mine == theirs
+        else f"this bridge's {mine!r} and its {theirs!r} share topics"
+    )
+    return (
+        f"another bridge's topics overlap this one's (mqtt.base_topic {base_topic!r}): "
+        f"{other.described()}, base topic {where!r}, {how}, and {what}. A target on one turns "
+        f"both rotors and each overwrites the other's state: stop the other one, or give this "
+        f"one an mqtt.base_topic (and rotator topics) outside the other's"
+    )
+
+
 @dataclass(frozen=True)
 class Claim:
     """What the client needs to take its first look (client.py rule 14)."""
@@ -145,3 +238,20 @@ class Claim:
     base_topic: str
     info_topic: str
     hello_topic: str
+    # rule 5: the names a bridge uses under a root (topics.py ``Topics.names``); none: rule 5
+    # is not looked at (the base topic alone, rule 2)
+    names: frozenset[str] = field(default_factory=frozenset)
+
+    @property
+    def mine(self) -> list[str]:
+        """Rule 5: this bridge's topics: its base topic, its rotators' and groups'."""
+        return [self.base_topic, *(t for t in self.me.topics if t != self.base_topic)]
+
+    @property
+    def watched(self) -> list[str]:
+        """Rule 5: the base topics whose info and state the looks read, besides its own."""
+        if not self.names:
+            return []
+        found = {p for t in self.mine for p in above(t)}
+        found.discard(self.base_topic)
+        return sorted(found)

@@ -216,6 +216,7 @@ class MqttClient(Connection):
         wall: Callable[[], float] = time.time,
         station: str | None = None,
         on_late: Callable[[str, bool], None] | None = None,
+        on_overlap: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
@@ -289,6 +290,9 @@ class MqttClient(Connection):
         self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
         self._late_now = False  # rule 19: the verdict (paho's thread writes it)
         self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
+        self._on_overlap = on_overlap  # claim rule 5: said on B/bridge/info while it lasts
+        self._overlap_lock = threading.Lock()  # claim rule 5: one report at a time
+        self._overlap_said: set[str] = set()  # claim rule 5: as said (under ``_overlap_lock``)
 
     @property
     def problems(self) -> list[str]:
@@ -534,6 +538,7 @@ class MqttClient(Connection):
                 wide = sorted({t.rpartition("/")[0] + "/+" for t in look.witnessed})
                 self._probing = [] if self._owned.hears_own else wide
                 subs += [(t, _HEAR_PROBE) for t in self._probing]
+                subs += [(t, 0) for t in look.near_topics]  # claim rule 5: other bridges'
                 self._look_sub = self._subscribe(client, subs)
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
@@ -644,6 +649,9 @@ class MqttClient(Connection):
             if retained and self._broker_held(topic):  # rule 14: the broker hands over what
                 self._look_heard = time.monotonic()  # it held (a tracker's target does not)
             if self._look_saw(self._look, topic, payload):
+                return True
+            if self._look.watches(topic):  # claim rule 5: another bridge's, while we run
+                self._near(self._look, topic, payload)
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
@@ -793,6 +801,8 @@ class MqttClient(Connection):
             elif outcome.heard is None or self._on_heard is None:
                 self._ran = True
                 self._open(outcome)
+        if outcome.said:
+            self._say_overlaps()
         if self.refused is not None:
             self._refuse()
             return
@@ -843,6 +853,41 @@ class MqttClient(Connection):
                     self._markers_lost()
         look.say_timed_out(round(waited_s, 1))
         self._end_look(n, timed_out=True)
+
+    def _near(self, look: FirstLook, topic: str, payload: bytes) -> None:
+        """Claim rule 5 (paho's thread): another bridge's info or state on a watched topic
+        while the bridge runs: the younger of two overlapping bridges yields, the older says
+        it."""
+        with self._lock:
+            if self._stopping or self.refused is not None:
+                return
+            refused, said = look.near(topic, payload)
+            if refused is not None:
+                self.refused, self.yielded = refused, True
+                self._stopping = True  # nothing more goes out (as claim rule 4's yield)
+                self.connected.clear()
+        if said:
+            self._say_overlaps()
+        if self.refused is not None:
+            self._refuse()
+
+    def _say_overlaps(self) -> None:
+        """Claim rule 5: what is said of overlapping bridges, on a thread of its own (it
+        publishes: paho's thread holds its mutex here); the last verdict is the one said."""
+        if self._on_overlap is not None:
+            threading.Thread(target=self._report_overlaps, daemon=True).start()
+
+    def _report_overlaps(self) -> None:
+        look, report = self._look, self._on_overlap
+        assert look is not None and report is not None
+        with self._overlap_lock:
+            with self._lock:
+                now = set(look.saying)
+            for problem in sorted(self._overlap_said - now):
+                report(problem, False)
+            for problem in sorted(now - self._overlap_said):
+                report(problem, True)
+            self._overlap_said = now
 
     def _refuse(self) -> None:
         """Never on paho's thread: the app stops the client (loop_stop joins paho's thread)."""

@@ -86,8 +86,18 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
+from bridge.interfaces.mqtt.claim import (
+    Claim,
+    Instance,
+    Verdict,
+    first_look,
+    overlap,
+    overlapping,
+    refusal,
+    yields_to,
+)
 from bridge.interfaces.mqtt.limiter import EventLimiter
+from bridge.interfaces.mqtt.topics import Topics
 
 log = logging.getLogger(__name__)
 
@@ -105,6 +115,7 @@ class Outcome:
     clears: list[str]
     heard: dict[str, bytes] | None = None  # rule 14: the witnesses' values (the first open)
     unread: frozenset[str] = frozenset()  # rule 14: the witnesses the broker does not let us read
+    said: bool = False  # claim rule 5: what is said of overlapping bridges changed (``saying``)
 
 
 class FirstLook:
@@ -122,6 +133,63 @@ class FirstLook:
         self._probes: set[str] = set()  # rule 14: the witnesses whose probe is out, until back
         self.probing = False  # rule 14: this look's probes went out (its second hello too)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
+        # claim rule 5: each watched base topic's info and state topics, the values read there
+        # (this connection's), and what is said of an older bridge overlapping this one, by
+        # its base topic
+        self._near: dict[str, str] = {}
+        for where in claim.watched:
+            t = Topics(where, {})
+            self._near[t.bridge_info] = self._near[t.bridge_state] = where
+        self._near_held: dict[str, bytes] = {}
+        self._said: dict[str, str] = {}
+
+    @property
+    def near_topics(self) -> list[str]:
+        """Claim rule 5: the topics every look subscribes to besides its own."""
+        return sorted(self._near)
+
+    def watches(self, topic: str) -> bool:
+        """Claim rule 5: whether ``topic`` is a watched bridge's info or state."""
+        return topic in self._near
+
+    @property
+    def saying(self) -> list[str]:
+        """Claim rule 5: the overlaps to say on ``B/bridge/info`` now."""
+        return sorted(self._said.values())
+
+    def _judge_near(self, where: str, *, first: bool) -> tuple[str | None, bool]:
+        """Claim rule 5, for the bridge on ``where``: the error to refuse (``first``: the
+        process's first look) or yield with, and whether what is said changed."""
+        t = Topics(where, {})
+        info = self._near_held.get(t.bridge_info)
+        state = self._near_held.get(t.bridge_state, b"")
+        other = Instance.parse(info) if info else None
+        clash: str | None = None
+        if other is not None and other.id != self.claim.me.id and state.strip() == b"online":
+            hit = overlap(self.claim.mine, [where, *other.topics], self.claim.names)
+            if hit is not None:
+                clash = overlapping(self.claim.base_topic, where, other, *hit, live=not first)
+        said = self._said.pop(where, None)
+        if clash is None:
+            if said is not None:
+                log.warning("the bridge on %r no longer overlaps this one's topics", where)
+            return None, said is not None
+        assert other is not None
+        if first or yields_to(self.claim.me, other):
+            return clash, said is not None
+        self._said[where] = clash
+        if said != clash:
+            log.error("%s", clash)
+        return None, said != clash
+
+    def near(self, topic: str, payload: bytes) -> tuple[str | None, bool]:
+        """Claim rule 5, while the bridge runs (no look under way): a watched topic's message:
+        the error to yield with, and whether what is said changed."""
+        where = self._near.get(topic)
+        if where is None or self.looking is not None:
+            return None, False
+        self._near_held[topic] = payload
+        return self._judge_near(where, first=False)
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -144,6 +212,7 @@ class FirstLook:
         self._heard = {}
         self._probes = set()
         self.probing = False
+        self._near_held = {}  # claim rule 5: the broker hands them over again
         return self._hello(n)
 
     def probes(self) -> tuple[list[str], bytes]:
@@ -182,6 +251,9 @@ class FirstLook:
         if topic in self._witnesses:  # rule 14: kept, and judged as an owned topic's value
             self._heard[topic] = payload
             return False
+        if topic in self._near:  # claim rule 5: judged at the look's end
+            self._near_held[topic] = payload
+            return True
         if topic not in (self.claim.info_topic, self._state_topic):
             return False
         self._seen[topic] = payload
@@ -207,6 +279,14 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
+        # claim rule 5: a bridge overlapping this one's topics, online: the first look refuses;
+        # a later one (the bridge ran) judges as while running (the younger yields)
+        said = False
+        for where in sorted(set(self._near.values())):
+            overlapped, changed = self._judge_near(where, first=not self._opened)
+            said = said or changed
+            if overlapped is not None:
+                return Outcome(refused=overlapped, clear=False, clears=[], said=said)
         heard, self._heard = (None if self._opened else self._heard), {}
         # rule 14: the hello back before a witness's probe, and nothing held heard there: the
         # broker drops what it sends on that topic (its ACL; a timed-out look says nothing)
@@ -223,7 +303,12 @@ class FirstLook:
                 other.described() if other else "another bridge",
             )
         return Outcome(
-            refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard, unread=unread
+            refused=None,
+            clear=verdict is Verdict.OURS,
+            clears=clears,
+            heard=heard,
+            unread=unread,
+            said=said,
         )
 
     def late(self, topic: str, payload: bytes, retained: bool) -> dict[str, bytes]:
