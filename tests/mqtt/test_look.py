@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.look import FirstLook
+from bridge.interfaces.mqtt.topics import Topics
 
 ME = Instance("rotor-me", "shack", 100, 1000.0)
 OTHER = Instance("rotor-other", "attic", 200, 900.0)
@@ -153,3 +154,65 @@ def test_a_deletion_asked_twice_in_one_look_is_sent_and_named_once() -> None:
     for topic in (jam, STALE, jam):
         assert lk.defer_clear(topic)
     assert lk.end(timed_out=False).clears == [jam, STALE]
+
+
+NEAR_INFO, NEAR_STATE = "t/tower/bridge/info", "t/tower/bridge/state"  # (claim rule 5)
+A = Instance("rotor-a", "attic", 200, 900.0, ("t/tower", "t/yagi"))  # base "t", older
+TOWER = Instance("rotor-me", "shack", 100, 1000.0, ("t/tower",))  # base "t/tower", one rotator
+
+
+def tower_look() -> FirstLook:
+    hello = "t/tower/bridge/hello"
+    return FirstLook(Claim(TOWER, "t/tower", NEAR_INFO, hello, Topics("t", {}).names()), NEAR_STATE)
+
+
+def test_a_live_bridge_whose_rotator_topic_is_this_ones_base_topic_refuses_its_first_look() -> None:
+    """Claim rule 5 (attack 18): base ``t/tower`` beside a live bridge on ``t`` whose rotator
+    ``tower`` is ``t/tower``: its info and state on ``t/bridge/`` are read and refuse."""
+    lk = tower_look()
+    assert lk.near_topics == [INFO, STATE]
+    lk.begin()
+    assert lk.saw(INFO, A.info([]).encode()) and lk.saw(STATE, b"online")
+    outcome = lk.end(timed_out=False)
+    assert outcome.refused is not None and "rotor-a" in outcome.refused
+    assert "mqtt.base_topic 't/tower'" in outcome.refused
+
+
+def test_a_gone_bridges_leftovers_and_a_bridge_beside_this_ones_topics_never_refuse() -> None:
+    for info, state in [
+        (A.info([]), b"offline"),  # a clean stop, or its last will
+        (A.info([]), None),  # no state at all
+        (Instance("rotor-b", "h", 1, 1.0, ("t/mast",)).info([]), b"online"),  # its own
+        (Instance("rotor-c", "h", 1, 1.0, ("t",)).info([]), b"online"),  # one rotator on t
+        (TOWER.info([]), b"online"),  # this installation's, an earlier configuration
+    ]:
+        lk = tower_look()
+        lk.begin()
+        lk.saw(INFO, info.encode())
+        if state is not None:
+            lk.saw(STATE, state)
+        assert lk.end(timed_out=False).refused is None, (info, state)
+
+
+def test_an_overlapping_bridge_met_while_running_the_older_says_it_and_the_younger_yields() -> None:
+    lk = tower_look()
+    lk.begin()
+    lk.end(timed_out=False)
+    assert lk.near(INFO, A.info([]).encode()) == (None, False)  # no state yet: not live
+    refused, said = lk.near(STATE, b"online")  # A is older: this one yields
+    assert refused is not None and "rotor-a" in refused and not said
+    lk = tower_look()
+    lk.begin()
+    lk.end(timed_out=False)
+    young = Instance("rotor-young", "attic", 300, 2000.0, ("t/tower",))
+    lk.near(STATE, b"online")
+    assert lk.near(INFO, young.info([]).encode()) == (None, True)  # said, goes on
+    assert len(lk.saying) == 1 and "rotor-young" in lk.saying[0]
+    assert lk.near(INFO, young.info(["x"]).encode()) == (None, False)  # said already
+    assert lk.near(STATE, b"offline") == (None, True) and lk.saying == []  # gone: unsaid
+    lk.near(STATE, b"online")
+    assert lk.saying
+    lk.begin()  # a reconnect's look: said, not refused (this one ran, and is the older)
+    lk.saw(INFO, young.info([]).encode())
+    lk.saw(STATE, b"online")
+    assert lk.end(timed_out=False).refused is None and len(lk.saying) == 1

@@ -217,10 +217,12 @@ def overlapping(
         if live
         else "is online (or crashed less than 1.5 keepalives ago: then start again in a minute)"
     )
+    ours = f"{'base' if mine == base_topic else 'rotator or group'} topic {mine!r}"
+    its = f"{'base' if theirs == where else 'rotator or group'} topic {theirs!r}"
     what = (
-        f"this bridge's {mine!r} is its {theirs!r}"
+        f"this bridge's {ours} is its {its}"
         if mine == theirs
-        else f"this bridge's {mine!r} and its {theirs!r} share topics"
+        else f"this bridge's {ours} and its {its} share topics"
     )
     return (
         f"another bridge's topics overlap this one's (mqtt.base_topic {base_topic!r}): "

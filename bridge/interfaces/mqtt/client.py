@@ -250,6 +250,9 @@ class MqttClient(Connection):
         self._owned.will = (will_topic, b"offline")
         self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
+        if self._look is not None:  # claim rule 5: another's topics, read where the ACL lets us
+            cost = "a bridge on that base topic whose topics overlap this one's goes unseen"
+            self.optional({t: cost for t in self._look.near_topics})  # (rule 17)
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
         self._on_heard: Heard | None = None  # rule 14: the witnesses' hook

@@ -27,7 +27,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    TAKE_OVER (said once, in the log), or a look that timed out (an ACL that denies the
    hello), or any look after one of those in this process: nothing is deleted, and the
    configs are named in the log as left alone (claim rule 3). Another instance's info
-   arriving while the bridge runs is judged by claim rule 4 (``live_info``).
+   arriving while the bridge runs is judged by claim rule 4 (``live_info``). The look reads
+   too the info and state of the base topics claim rule 5 watches (``near_topics``, subscribed
+   in the look's SUBSCRIBE, before the hello): judged at its end, and while the bridge runs
+   as each comes (``near``).
    The values the broker held on the topics handed to ``witness`` (each rotator's
    ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
    owned-topic judge all the same), and the first look of the process that lets the bridge run
