@@ -55,8 +55,9 @@ Rules:
    ``rotor/tower`` for base ``rotor/tower``; ``rotor/x`` for a rotator ``rotor/x``): another
    instance there, ``online`` (rule 2: an ``offline`` or missing state is a bridge gone, whose
    leftovers never refuse a start), whose topics overlap this bridge's, refuses the start as
-   rule 2 does (code 2; a reconnect's look: the bridge yields as rule 4), naming
-   ``mqtt.base_topic`` and both topics. An info without ``topics`` (a bridge from before
+   rule 2 does (code 2), naming ``mqtt.base_topic`` and both topics; a reconnect's look (the
+   bridge ran) judges it as one met while running, below (a bridge started during the outage
+   is the younger: it yields, not this one). An info without ``topics`` (a bridge from before
    them) counts as its base topic alone. While the bridge runs it keeps reading them: another
    instance that comes online there overlapping it (two started at once; one of an older
    version, which looks only at its own base topic) makes the younger yield as rule 4; the
