@@ -63,6 +63,15 @@ Rules:
    the configuration it was made with, which keeps the configured speeds (attack 19: a GS-232B
    set to speed 1, a quarter of full speed, left for the next pass when full speed would have
    made it, and stood 99 degrees off, still turning, when the pass rose).
+10. A start's first target stops the turn it found under way (or re-targets it) as any newest
+    target does; a first target the judge refuses (the limits, a keep-out sector) holds the
+    rotor where it is all the same: tracking's start proposes one halt
+    (``Proposal.halt``) of a turn or slew under way then (``StartHalt``), once per start, never
+    for a later target's refusal (its own turn to the target before goes on). Once: the stop
+    then takes its course (review 52: a SatEL's slew, stopped and waited out silently, was
+    halted again at every step). Review 50 (tracking), attack 19 (a tracking start whose wait
+    for the pass was refused said so on R/error while a Rotor-EZ turned on some 110 degrees to
+    the older target).
 """
 
 from __future__ import annotations
@@ -165,6 +174,33 @@ class Before:
         alone = turning_alone(m) and m.carried  # (not a turn seen begin with the link up)
         self._seen = alone if self._seen is None else self._seen and alone
         return self._seen
+
+
+def turning(scene: Scene) -> bool:
+    """Rule 9: a turn or a slew under way with no stop of the bridge's out (one whose port was
+    out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it); on a
+    controller with no readings (a DCU-1), its own target out with no stop since, within its
+    assumed travel time (motion.py rule 6: it may be turning)."""
+    m = scene.motion
+    moving = m.state is mo.MOVING and m.stop_sent_t is None and not m.lost_turning
+    return moving or scene.slewing or mo.may_turn_blind(m, scene.now)
+
+
+class StartHalt:
+    """Rule 9: the one halt a start proposes when its first target is refused."""
+
+    def __init__(self) -> None:
+        self._done = False
+
+    def start(self) -> None:
+        self._done = False
+
+    def wanted(self, scene: Scene, first: bool) -> bool:
+        """Whether the refusal of a target (``first``: the start's first) halts the turn under
+        way: the first's, once per start, while a turn or slew goes on."""
+        halt = first and not self._done and turning(scene)
+        self._done = self._done or halt
+        return halt
 
 
 def turned_by_hand(

@@ -65,12 +65,17 @@ Rules:
    pass: the rotor stood where it was until the satellite left the sector, then turned 200
    degrees to it). A start whose first target is refused holds the rotor where it is: a turn
    under way (to an older target, or one the start found going on by itself, parts.py rule
-   8) is stopped (``Proposal.halt``), as the start's own target would have stopped it (rule
-   3); on a DCU-1 (no readings) the turn its own target may still be making (review 52).
-   Review 50: ``track sun`` with the sun in a keep-out sector said "holding" while a
-   Rotor-EZ turned on to the older target, 120 degrees from the sun. Once per start: the stop
-   then takes its course (review 52: a SatEL's slew, stopped and waited out silently, was
-   halted again at every step, a stop five times a second and the status "moving" for good).
+   8) is stopped (``Proposal.halt``, parts.py rule 9: ``StartHalt``), as the start's own
+   target would have stopped it (rule 3); on a DCU-1 (no readings) the turn its own target
+   may still be making (review 52). The first target is the wait where the next pass rises
+   (rule 2) as much as the first step of a pass under way: it counts as put (``_last``) only
+   once the judge took it (attack 19: a start whose wait was refused, the whole pass in a
+   keep-out sector, was taken for a later step, and a Rotor-EZ said "holding" while it turned
+   on 110 degrees to the older target). Review 50: ``track sun`` with the sun in a keep-out
+   sector said "holding" while a Rotor-EZ turned on to the older target, 120 degrees from the
+   sun. Once per start: the stop then takes its course (review 52: a SatEL's slew, stopped
+   and waited out silently, was halted again at every step, a stop five times a second and
+   the status "moving" for good).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
    it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the
@@ -131,7 +136,7 @@ from bridge.pointing import angle_between
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Before, Proposal, Scene, turned_by_hand
+from bridge.session.parts import NOTHING, Before, Proposal, Scene, StartHalt, turned_by_hand
 from bridge.session.skytrack import CLOCK_BACK_S, SkyTrack, flip_times
 from bridge.sky import Body, Pass, tle_epoch_unix
 from bridge.sky.worker import Answer, LookupQuestion, Question
@@ -192,7 +197,7 @@ class Tracker:
         self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
-        self._halted = False  # rule 5: the start's one halt of the turn it found has gone
+        self._halt = StartHalt()  # rule 5 (parts.py rule 9): the start's one halt
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
@@ -344,8 +349,7 @@ class Tracker:
             aos = sky.pass_now.aos_s if sky.pass_now is not None else None
             # (the turn the start found: stopped once, as the start's own target would; then
             # the rotor is polled and seen at rest as after any stop: review 52)
-            halt = self._last is None and not self._halted and _turning(scene)
-            self._halted = self._halted or halt
+            halt = self._halt.wanted(scene, self._last is None)
             if self._refused_for != aos or aos is None:
                 self._refused_for = aos
                 why = f"tracking {sky.body.name}: {exc.message}; holding"
@@ -387,8 +391,10 @@ class Tracker:
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
         self._waited_for = self._sided_for = p.aos_s
-        self._last = (az, el)
-        return self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])
+        put = self._put(sky, Target(az, el, Source.TRACKING), scene, side[0])
+        if put.target is not None:  # (after the judge: a start's refused wait halts, rule 5)
+            self._last = (az, el)
+        return put
 
     def _say_age(self, body: Body, utc: float) -> None:
         """Rule 11."""
@@ -683,16 +689,6 @@ def _thinned(track: list[tuple[float, float]] | None) -> tuple[tuple[float, floa
     step = max(1, math.ceil((n - 1) / (PASS_TRACK_POINTS - 1)))
     picked = [*track[: n - 1 : step], track[-1]]
     return tuple((round(az % 360.0, 1), round(el, 1)) for az, el in picked)
-
-
-def _turning(scene: Scene) -> bool:
-    """Rule 5: a turn or a slew under way with no stop of the bridge's out (one whose port was
-    out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it); on a
-    controller with no readings (a DCU-1), its own target out with no stop since, within its
-    assumed travel time (motion.py rule 6: it may be turning)."""
-    m = scene.motion
-    moving = m.state is MotionState.MOVING and m.stop_sent_t is None and not m.lost_turning
-    return moving or scene.slewing or mo.may_turn_blind(m, scene.now)
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:

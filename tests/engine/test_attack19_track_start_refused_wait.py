@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.sky import Body, Pass, Sky
 from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
@@ -42,11 +40,6 @@ def _scripted_sky(q: Question) -> Answer:
     return Answer(q, [at(t) for t in q.times])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: a track start whose wait for the pass is refused (keep-out) says "
-    "'holding' while the rotor turns on 110 degrees to the older target",
-)
 def test_a_track_start_whose_wait_for_the_pass_is_refused_stops_the_turn_under_way() -> None:
     line1, line2 = synthetic_tle(
         "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
