@@ -45,7 +45,12 @@ Rules:
    the 20 m antenna turned to the partner it had named on 20 m). What it keeps of them is
    bounded (each program's newest, of the MINE_KEPT heard last on its bands).
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
-   sectors). One it refuses is reported once for that grid and not tried again.
+   sectors). One it refuses is reported once for that grid and not tried again. A start whose
+   first grid is refused (nothing turned to since it was switched on) holds the rotor where it
+   is, as tracking's start does (tracking.py rule 5, parts.py rule 9): a turn under way to an
+   older target is stopped (``Proposal.halt``), once, as that grid's own target would have
+   stopped it (rule 2). Attack 19: a Rotor-EZ turning to an older target, told to follow a
+   partner in a keep-out sector, said so on R/error and turned on 105 degrees.
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
 7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
    and ``last_operator``), with the operator who switched following on if they named
@@ -107,7 +112,7 @@ from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Sou
 from bridge.pointing import toward
 from bridge.session.actions import Report
 from bridge.session.config import WorkerConfig
-from bridge.session.parts import NOTHING, Before, Proposal, Scene, turned_by_hand
+from bridge.session.parts import NOTHING, Before, Proposal, Scene, StartHalt, turned_by_hand
 
 log = logging.getLogger(__name__)
 
@@ -180,6 +185,7 @@ class Follower:
         # program's status on another band retires its own), newest last; bounded
         self._mine: OrderedDict[str, tuple[Heard, float]] = OrderedDict()
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
+        self._halt = StartHalt()  # rule 5 (parts.py rule 9): the start's one halt
 
     @property
     def on(self) -> bool:
@@ -199,6 +205,7 @@ class Follower:
         self._listen(fresh.instance if fresh is not None and self._for_me(fresh) else None)
         self._ignored.clear()
         self._before.start()
+        self._halt.start()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
     def end(self, why: str) -> bool:
@@ -378,7 +385,11 @@ class Follower:
             why = exc.message if isinstance(exc, Refused) else str(exc)
             self.info = replace(info, call=call, grid=grid, bearing_deg=None, held=False)
             what = f"follow {call or '?'} {grid}"
-            return Proposal(error=Report(ErrorKind.REFUSED, f"following: {why}", what), busy=True)
+            # (the start's first grid: the turn under way to an older target stopped, once,
+            # as its own target would have stopped it: rule 2, parts.py rule 9)
+            halt = self._halt.wanted(scene, self._bearing is None)
+            error = Report(ErrorKind.REFUSED, f"following: {why}", what)
+            return Proposal(error=error, busy=True, halt=halt)
         self._bearing = az
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False

@@ -65,13 +65,13 @@ Rules:
    made it, and stood 99 degrees off, still turning, when the pass rose).
 10. A start's first target stops the turn it found under way (or re-targets it) as any newest
     target does; a first target the judge refuses (the limits, a keep-out sector) holds the
-    rotor where it is all the same: tracking's start proposes one halt
+    rotor where it is all the same: tracking's and following's starts each propose one halt
     (``Proposal.halt``) of a turn or slew under way then (``StartHalt``), once per start, never
-    for a later target's refusal (its own turn to the target before goes on). Once: the stop
+    for a later target's refusal (their own turn to the target before goes on). Once: the stop
     then takes its course (review 52: a SatEL's slew, stopped and waited out silently, was
     halted again at every step). Review 50 (tracking), attack 19 (a tracking start whose wait
-    for the pass was refused said so on R/error while a Rotor-EZ turned on some 110 degrees to
-    the older target).
+    for the pass was refused, and a following start whose first grid was: each said so on
+    R/error while a Rotor-EZ turned on some 100 degrees to the older target).
 """
 
 from __future__ import annotations

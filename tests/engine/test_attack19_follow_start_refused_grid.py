@@ -9,19 +9,12 @@ with JA1ABC in PM95 (42 degrees, inside the sector 32..52) heard, said the refus
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_follow import STATION, bearing
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: a follow start whose partner is in a keep-out sector says so while the "
-    "rotor turns on 105 degrees to the older target",
-)
 def test_a_follow_start_whose_first_grid_is_refused_stops_the_turn_under_way() -> None:
     partner = bearing("PM95")  # 42.2 from the test station
     sector = [round(partner) - 10, round(partner) + 10]
