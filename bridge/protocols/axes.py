@@ -63,6 +63,18 @@ Rules:
    azimuth rotor turned 200 degrees; a review: the first reading after a replug likewise).
    The session's readings of the axis it drives are judged by its own rules
    (session/controller.py rule 9).
+6. A box made for an elevation rotor alone (BEARING_IS_ELEVATION: a Prosistel D as
+   ``prosistel-el``), configured as a rotator of its own, has one bearing, and it is the
+   elevation (``bearing_is_elevation``): whatever the bridge itself works out as an azimuth
+   is never its target. It is no member of a group (settings/groups.py: a group's bearing is
+   an azimuth), and it neither tracks nor follows, nor turns to a place (a locator, a
+   coordinate, a DX cluster's call, a logger's locator), each refused by the judge
+   (session/feature_commands.py rule 6): the body's azimuth (tracking.py rule 6), the QSO
+   partner's bearing, the place's great-circle bearing. A number sent as its bearing
+   (``R/target``, rotctld's ``P``, a logger's heading, N1MM's ``*`` included) is taken as
+   that box's bearing, as the user sent it: nothing says which angle the sender meant.
+   (Attack 19: ``R/track sun`` raised such a dish to the sun's azimuth, 65 for a sun 22 up,
+   under "tracking"; ``R/follow wsjtx`` to a partner's bearing, 42.)
 """
 
 from __future__ import annotations
@@ -102,8 +114,14 @@ ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el", "prosistel-el-a"})
 ONE_AXIS_EL_MAX_DEG = 180.0
 EL_READ_SLACK_DEG = 3.0  # rule 2: a one-axis box's bearing this far past an end reads as the end
 # ... and of those, the models made for the elevation alone: as a rotator of its own, what such a
-# box calls its bearing is an elevation (a group's azimuth would tilt it)
+# box calls its bearing is an elevation (rule 6: an azimuth would tilt it)
 BEARING_IS_ELEVATION = frozenset({"prosistel-el", "prosistel-el-a"})
+
+
+def bearing_is_elevation(spec: ModelSpec) -> bool:
+    """Rule 6: ``spec`` is a box of BEARING_IS_ELEVATION as a rotator of its own (as a
+    composite's elevation box, ``axis_spec``, it has an elevation and no such bearing)."""
+    return spec.name in BEARING_IS_ELEVATION and not spec.has_elevation
 
 
 def can_drive(spec: ModelSpec, axis: Axis) -> str | None:

@@ -100,6 +100,7 @@ from bridge.core.model import (
 )
 from bridge.feature import session_parts
 from bridge.pointing import Limits, toward
+from bridge.protocols.axes import bearing_is_elevation
 from bridge.protocols.base import ModelSpec
 from bridge.runtime.composite import CompositeWorker
 from bridge.runtime.health_memory import HealthMemory
@@ -109,7 +110,7 @@ from bridge.runtime.operators import EXECUTED, Operators
 from bridge.runtime.port import PortWatch, open_port
 from bridge.runtime.state_store import StateStore
 from bridge.runtime.worker import Worker, WorkerConfig
-from bridge.session.feature_commands import body_to_track, check_can_follow
+from bridge.session.feature_commands import PLACE, body_to_track, check_azimuth, check_can_follow
 from bridge.session.follow import Follow as Following
 from bridge.session.follow import Heard
 from bridge.session.mailbox import LeaseChanged, Mailbox
@@ -190,7 +191,9 @@ class Rotator:
         self.station = station  # (latitude, longitude): targets by locator or coordinates
         self.catalog = catalog or TleCatalog(None)  # satellites to track by name
         self._has_sky = cfg.tracking.sky is not None
-        self.can_track = self._has_sky and cfg.spec.can_report_position
+        self.can_track = (  # (feature_commands.py: what ``body_to_track`` refuses)
+            self._has_sky and cfg.spec.can_report_position and not bearing_is_elevation(cfg.spec)
+        )
         self._follow = cfg.follow  # follow.py: the station, the [wsjtx] listener
         self._parts = cfg.parts  # the session's parts (a feature's command goes to its own)
         self._store = store
@@ -614,7 +617,9 @@ class Rotator:
         *,
         ticket: int | None = None,
     ) -> None:
-        """A place, by the path asked for: a target with where it lies (``target_info``)."""
+        """A place, by the path asked for: a target with where it lies (``target_info``); never
+        on a rotator whose bearing is an elevation (session/feature_commands.py rule 6)."""
+        check_azimuth(self.spec, PLACE)
         if isinstance(command, Toward):
             locator = command.locator
         az, info = toward(
@@ -715,8 +720,11 @@ class Rotator:
 
     @property
     def can_follow(self) -> bool:
-        """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
-        return self._follow.wsjtx and self._follow.station is not None
+        """A QSO partner can be followed: the [wsjtx] listener runs and the station is known,
+        and the rotator turns in azimuth (feature_commands.py: what ``check_can_follow``
+        refuses)."""
+        follow = self._follow
+        return follow.wsjtx and follow.station is not None and not bearing_is_elevation(self.spec)
 
     @property
     def followed(self) -> str | None:
@@ -733,7 +741,7 @@ class Rotator:
         on, origin = command.on, command.origin
         lease = self._mailbox.lease if on else None  # (before the judge: mailbox.py rule 14)
         if on:
-            check_can_follow(self._follow)
+            check_can_follow(self._follow, self.spec)
             self._check_start(origin or Origin(command.source))
         follow = Following(on, command.long_path, command.source, what, origin)
         follow = replace(follow, not_after_s=command.not_after_s)  # (as a track start's)

@@ -26,6 +26,12 @@ Rules:
    that is missing, whoever sent it: it never waits in the mailbox.
 5. A satellite's name is not looked up by the judge (a file read, docs/architecture.md rule
    12): the sky worker answers it, and ``body_to_track`` says so with None.
+6. A rotator whose bearing is an elevation (a box made for an elevation rotor, configured on
+   its own: protocols/axes.py rule 6) is never sent an azimuth the bridge works out: a track
+   or follow start, and a place (runtime/rotator.py ``_toward``), are refused as unsupported
+   (``check_azimuth``), by the judge as rule 4 has it, and by the session too, whatever
+   brought the start (attack 19: the sun's azimuth and a QSO partner's bearing each raised a
+   dish as its elevation, nothing said).
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from dataclasses import dataclass
 
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorKind, Origin, Source
+from bridge.protocols.axes import bearing_is_elevation
 from bridge.protocols.base import ModelSpec
 from bridge.session.actions import Report
 from bridge.session.config import FollowConfig, WorkerConfig
@@ -46,6 +53,22 @@ from bridge.sky.catalog import CatalogError, TleCatalog
 from bridge.sky.worker import Answer
 
 log = logging.getLogger(__name__)
+
+# rule 6: what would send an azimuth to a rotator whose bearing is an elevation
+TRACKING = "tracking sends the body's azimuth"
+FOLLOWING = "following WSJT-X sends the QSO partner's bearing, an azimuth"
+PLACE = "a place (a locator, coordinates, a call) is turned to by its bearing, an azimuth"
+
+
+def check_azimuth(spec: ModelSpec, doing: str) -> None:
+    """Rule 6: Refused if ``spec``'s bearing is an elevation; ``doing``: what would have sent it
+    an azimuth (TRACKING, FOLLOWING, PLACE)."""
+    if bearing_is_elevation(spec):
+        raise Refused(
+            RefusalCode.UNSUPPORTED,
+            f"{doing}, and the {spec.display_name} ({spec.name}) turns an elevation rotor: its "
+            "bearing is the elevation",
+        )
 
 
 def body_to_track(
@@ -68,14 +91,16 @@ def body_to_track(
             f"the {spec.display_name} cannot report where it points: tracking needs a "
             "controller that does",
         )
+    check_azimuth(spec, TRACKING)  # rule 6
     try:
         return catalog.body(name, tle)
     except (SkyError, CatalogError) as exc:
         raise Refused(RefusalCode.INVALID, str(exc)) from None
 
 
-def check_can_follow(cfg: FollowConfig) -> None:
-    """Following WSJT-X needs its messages and the station's position (rule 4)."""
+def check_can_follow(cfg: FollowConfig, spec: ModelSpec) -> None:
+    """Following WSJT-X needs its messages and the station's position (rule 4), and a rotator
+    that turns in azimuth (rule 6)."""
     if not cfg.wsjtx:
         raise Refused(
             RefusalCode.UNSUPPORTED, "following WSJT-X needs its messages: [wsjtx] enabled = true"
@@ -86,6 +111,7 @@ def check_can_follow(cfg: FollowConfig) -> None:
             "following WSJT-X needs the station's position ([station] locator, or "
             "latitude_deg and longitude_deg): bearings are from there",
         )
+    check_azimuth(spec, FOLLOWING)
 
 
 @dataclass(frozen=True)
@@ -102,6 +128,7 @@ DONE = Done()
 class FeatureCommands:
     def __init__(self, cfg: WorkerConfig, targets: Targets) -> None:
         self.name = cfg.rotator_id
+        self.spec = cfg.spec
         self.targets = targets
         self.tracker = Tracker(cfg)
         self.follower = Follower(cfg)
@@ -113,6 +140,7 @@ class FeatureCommands:
             self.targets.clear_from(Source.TRACKING)
             return DONE
         name = track.body.name if track.body is not None else track.lookup and track.lookup.name
+        refused = refused or _azimuth_refused(self.spec, TRACKING)  # rule 6
         if refused is not None:
             return Done(Report(ErrorKind.REFUSED, refused, track.described or f"track {name}"))
         if leased is not None:  # rule 1: audited with its sender
@@ -135,6 +163,7 @@ class FeatureCommands:
         if not follow.on:
             self.end("off", tracking=False)  # rule 2
             return DONE
+        refused = refused or _azimuth_refused(self.spec, FOLLOWING)  # rule 6
         if refused is not None:
             return Done(Report(ErrorKind.REFUSED, refused, follow.described or "follow"))
         if leased is not None:  # rule 1: audited with its sender
@@ -170,3 +199,12 @@ class FeatureCommands:
             self.targets.clear_from(Source.TRACKING)
         if self.follower.end(why.replace("{}", "follow")):
             self.targets.clear_from(Source.WSJTX)
+
+
+def _azimuth_refused(spec: ModelSpec, doing: str) -> str | None:
+    """Rule 6, as the session says it: why a start is refused (None: it is not)."""
+    try:
+        check_azimuth(spec, doing)
+    except Refused as exc:
+        return exc.message
+    return None

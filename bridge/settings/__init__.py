@@ -71,7 +71,7 @@ from pydantic_settings import (
 
 from bridge.core.text import entity_slug
 from bridge.feature import topic_words
-from bridge.protocols.axes import BEARING_IS_ELEVATION
+from bridge.protocols.axes import bearing_is_elevation
 from bridge.settings import errors as settings_errors
 from bridge.settings.base import plain_value
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
@@ -407,6 +407,7 @@ class Settings(BaseSettings):
         """settings/groups.py rule 4: members are rotators, a group's topics no other's."""
         roots = {r.id: self.rotator_topic(r) for r in self.rotators}
         models = {r.id: r.model for r in self.rotators}
+        specs = {r.id: r.spec for r in self.rotators}
         seen: set[str] = set()
         # Home Assistant's entity ids write each run of "-" and "_" as one "_", none at the end
         # (core/text.py entity_slug): two ids that differ only so would ask for the same
@@ -436,7 +437,7 @@ class Settings(BaseSettings):
                         f"{', '.join(roots)})"
                     )
                 model = models[rid]
-                if model in BEARING_IS_ELEVATION:  # (an attack pass: G/target 80 tilted it)
+                if bearing_is_elevation(specs[rid]):  # (an attack pass: G/target 80 tilted it)
                     raise ValueError(
                         f"{where}.rotators: {rid!r} is a {model} box, whose bearing is an "
                         "elevation: a group turns its members in azimuth; leave it out"

@@ -11,8 +11,7 @@ tilt it", docs/groups.md); tracking and following do not."""
 
 from __future__ import annotations
 
-import pytest
-
+from bridge.core.model import ErrorKind
 from bridge.sky import Body, Sky
 from tests.engine.test_follow import STATION
 from tests.engine.virtual import VirtualRotator
@@ -23,11 +22,6 @@ SPOT = (0.0, -40.0)  # where the sun stands at about azimuth 65, elevation 22 th
 START_EL = 10.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: R/track sun on an elevation rotor of its own raises the dish to the sun's "
-    "azimuth (65 for a sun 22 up)",
-)
 def test_tracking_never_turns_an_elevation_rotor_to_the_bodys_azimuth() -> None:
     sun_az, sun_el = sun_altaz(*SPOT, WALL)
     assert abs(sun_az - sun_el) > 30.0  # (the two are far apart: the test can tell them)
@@ -40,13 +34,12 @@ def test_tracking_never_turns_an_elevation_rotor_to_the_bodys_azimuth() -> None:
         assert el is not None
         # refused (left where it was) or following the sun's elevation: observed at 65
         assert abs(el - START_EL) <= 1.0 or abs(el - sun_el) <= 3.0, (el, sun_az, sun_el)
+        # refused, and said so (feature_commands.py rule 6): nothing tracked
+        [refused] = v.errors(ErrorKind.REFUSED)
+        assert "elevation" in refused.message and "azimuth" in refused.message, refused
+        assert v.status.tracking is None and abs(el - START_EL) <= 1.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 19: R/follow wsjtx on an elevation rotor of its own raises the dish to the "
-    "partner's bearing (42 for PM95)",
-)
 def test_following_never_turns_an_elevation_rotor_to_a_bearing() -> None:
     emulator = {"start_el_deg": START_EL}
     with VirtualRotator("prosistel-el", follow=STATION, emulator=emulator) as v:
@@ -56,3 +49,7 @@ def test_following_never_turns_an_elevation_rotor_to_a_bearing() -> None:
         v.run_for(60.0)  # (a turn of 32 degrees at 3 a second is 11 s: not a deadline)
         el = v.truth().el_deg
         assert el is not None and abs(el - START_EL) <= 1.0, el  # observed: 42
+        # refused, and said so (feature_commands.py rule 6): nothing followed
+        [refused] = v.errors(ErrorKind.REFUSED)
+        assert "elevation" in refused.message and "azimuth" in refused.message, refused
+        assert v.status.following is None

@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 from bridge.emulators.pty import EmulatedPort
+from tests.support import free_port
 from tests.support.mqtt import Message
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -190,6 +191,27 @@ def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(
     # the hard stop (again, if a reading in flight showed the rotor still turning)
     assert set(frames(emu, "stop")) == {b"\x02%sG999\r" % unit} and frames(emu, "refused") == []
     assert emu.state().az_deg == 0.0  # the box has no azimuth
+
+
+def test_a_d_on_an_elevation_rotor_refuses_whatever_would_send_it_an_azimuth(rig: Rig) -> None:
+    """Attack 19 (session/feature_commands.py rule 6, protocols/axes.py rule 6): tracking, a
+    QSO partner followed and a place each name an azimuth, which this box would turn its
+    elevation to; the judge refuses each on R/error and nothing goes to the box. A number is
+    its bearing, the elevation, as the user sent it."""
+    rig.sections["station"] = {"locator": "JO62qm"}  # (tracking and following need it)
+    rig.sections["wsjtx"] = {"enabled": True, "port": free_port()}
+    emu = rig.add("mast", model="prosistel-el", emu={"start_el_deg": 10})
+    rig.start()
+    rig.ready("mast", timeout_s=15)
+    info = json.loads(rig.retained()["rotor/info"])
+    assert info["can_track"] is False  # (Home Assistant and the console offer no tracking)
+    for leaf, payload in [("track", "sun"), ("follow", "wsjtx"), ("target", "PM95")]:
+        why = rig.refused("mast", payload, leaf)
+        assert "azimuth" in why and "elevation rotor" in why, (leaf, why)
+    assert frames(emu, "move") == []
+    assert rig.status("mast").tracking is None and rig.status("mast").following is None
+    rig.probe.publish("rotor/target", "30")  # its bearing: the elevation
+    emu.wait_for(lambda s: s.el_deg == 30.0 and not s.is_moving, 15)
 
 
 @azimuth_models

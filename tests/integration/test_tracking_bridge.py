@@ -37,7 +37,7 @@ from tests.engine.test_session_tracking import (
 from tests.integration.test_rotctld_integration import ask, connect
 from tests.support import free_port
 from tests.support.mqtt import Message, retained_snapshot
-from tests.support.rig import Rig
+from tests.support.rig import FAST_POLLING, Rig
 from tests.support.sky import sgp4_altaz, sgp4_altaz_array, sun_altaz, synthetic_tle, tle_with_pass
 from tests.support.waiting import wait_until
 
@@ -434,3 +434,39 @@ def test_a_tle_with_a_digit_that_is_not_ascii_is_refused_and_tracking_still_work
     assert emu.frames("set", "set: clamped") == []
     rig.probe.publish("rotor/track", "sun")
     emu.wait_for(on_the_sun(SUN_STATION, wall), timeout_s=20)
+
+
+def test_an_elevation_box_tracks_as_the_elevation_of_two_boxes(rig: Rig) -> None:
+    """session/feature_commands.py rule 6 refuses tracking on a Prosistel D on an elevation
+    rotor configured on its own (its bearing is the elevation: attack 19); as the elevation box
+    of an az/el rotator of two boxes it is sent the sun's elevation, the azimuth box the
+    sun's azimuth."""
+    wall = Wall(SUN_EPOCH)
+    az = rig.open_line(rig, "dish-az", "md01", {**QUICK_EMU, "start_az_deg": 0.0})
+    el = rig.open_line(rig, "dish-el", "prosistel-el", {"start_el_deg": 10.0})
+    rig.rotators.append(
+        {
+            "id": "dish",
+            "azimuth": {"model": "md01", "port": str(az.path)},
+            "elevation": {"model": "prosistel-el", "port": str(el.path)},
+            **FAST_POLLING,
+        }
+    )
+    station = StationSettings(latitude_deg=SUN_STATION[0], longitude_deg=SUN_STATION[1])
+    rig.app = App(rig.settings.model_copy(update={"station": station}), wall=wall)
+    rig.app.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    t = time.monotonic()
+    rig.probe.publish("rotor/track", "sun")
+    rig.probe.wait_value("rotor/tracking", "sun", after=t)
+
+    def on_the_sun() -> bool:
+        """Both boxes at rest, within 2 degrees of the sun each on its own axis."""
+        sun_az, sun_el = sun_altaz(*SUN_STATION, wall())
+        a, e = az.emu.state(), el.emu.state()
+        if a.is_moving or e.is_moving or e.el_deg is None:
+            return False
+        return off_deg(a.az_deg, sun_az) <= 2.0 and abs(e.el_deg - sun_el) <= 2.0
+
+    wait_until(on_the_sun, timeout_s=30, what="both boxes on the sun")

@@ -12,7 +12,7 @@ from bridge.feature import registered
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_track
 from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics
 from bridge.pointing import Pointing
-from bridge.protocols.axes import Axis
+from bridge.protocols.axes import Axis, bearing_is_elevation
 from bridge.protocols.base import ModelSpec
 
 _UNSAFE = re.compile(r"[^a-zA-Z0-9_-]")
@@ -112,8 +112,10 @@ class RotatorInfo:
             has_park=pointing.park is not None,
             has_station=has_station,
             nudge_step_deg=nudge_step_deg,
-            track_options=(
-                track_options(satellites) if has_station and spec.can_report_position else ()
+            track_options=(  # (what runtime/rotator.py ``can_track`` says: its bearing turned
+                track_options(satellites)  # to a body's azimuth, session/feature_commands.py)
+                if has_station and spec.can_report_position and not bearing_is_elevation(spec)
+                else ()
             ),
             can_follow=can_follow,
             features=features,
