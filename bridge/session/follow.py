@@ -47,7 +47,7 @@ Rules:
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is reported once for that grid and not tried again. A start whose
    first grid is refused (nothing turned to since it was switched on) holds the rotor where it
-   is, as tracking's start does (tracking.py rule 5, parts.py rule 9): a turn under way to an
+   is, as tracking's start does (tracking.py rule 5, parts.py rule 10): a turn under way to an
    older target is stopped (``Proposal.halt``), once, as that grid's own target would have
    stopped it (rule 2). Attack 19: a Rotor-EZ turning to an older target, told to follow a
    partner in a keep-out sector, said so on R/error and turned on 105 degrees.
@@ -185,7 +185,7 @@ class Follower:
         # program's status on another band retires its own), newest last; bounded
         self._mine: OrderedDict[str, tuple[Heard, float]] = OrderedDict()
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
-        self._halt = StartHalt()  # rule 5 (parts.py rule 9): the start's one halt
+        self._halt = StartHalt()  # rule 5 (parts.py rule 10): the start's one halt
 
     @property
     def on(self) -> bool:
@@ -386,7 +386,7 @@ class Follower:
             self.info = replace(info, call=call, grid=grid, bearing_deg=None, held=False)
             what = f"follow {call or '?'} {grid}"
             # (the start's first grid: the turn under way to an older target stopped, once,
-            # as its own target would have stopped it: rule 2, parts.py rule 9)
+            # as its own target would have stopped it: rule 2, parts.py rule 10)
             halt = self._halt.wanted(scene, self._bearing is None)
             error = Report(ErrorKind.REFUSED, f"following: {why}", what)
             return Proposal(error=error, busy=True, halt=halt)

@@ -65,7 +65,7 @@ Rules:
    pass: the rotor stood where it was until the satellite left the sector, then turned 200
    degrees to it). A start whose first target is refused holds the rotor where it is: a turn
    under way (to an older target, or one the start found going on by itself, parts.py rule
-   8) is stopped (``Proposal.halt``, parts.py rule 9: ``StartHalt``), as the start's own
+   8) is stopped (``Proposal.halt``, parts.py rule 10: ``StartHalt``), as the start's own
    target would have stopped it (rule 3); on a DCU-1 (no readings) the turn its own target
    may still be making (review 52). The first target is the wait where the next pass rises
    (rule 2) as much as the first step of a pass under way: it counts as put (``_last``) only
@@ -197,7 +197,7 @@ class Tracker:
         self._wait_at: tuple[float, float, float | None, tuple[float | None]] | None = None
         self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
         self._refused_for: float | None = None
-        self._halt = StartHalt()  # rule 5 (parts.py rule 9): the start's one halt
+        self._halt = StartHalt()  # rule 5 (parts.py rule 10): the start's one halt
         self._before = Before()  # rule 1 (parts.py rule 8): the turn the start found
         self._info_t = -math.inf
         self._utc_seen = -math.inf  # rule 2: the latest wall clock a step saw
