@@ -16,11 +16,6 @@ from bridge.sky.catalog import TleCatalog
 QUOTED_MAX = 1000  # characters: far more than any TLE line (69) or satellite name
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: a TLE file of one long line is quoted whole in one warning (megabytes "
-    "in the journal)",
-)
 def test_a_tle_file_of_one_long_line_is_no_megabyte_log_line(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

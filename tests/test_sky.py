@@ -475,7 +475,7 @@ def test_a_tle_with_an_element_no_orbit_has_is_refused_naming_it(
     sets, problems = parse_tles(f"SAT\n{l1}\n{l2}\n")
     at = 2 if line == 1 else 3  # (the file's lines: the name first)
     assert sets == {} and len(problems) == 1, problems
-    assert problems[0].startswith(f"line {at}: SAT: {message.split(': ', 1)[1]}"), problems
+    assert problems[0].startswith(f"line {at}: 'SAT': {message.split(': ', 1)[1]}"), problems
     fine = forged(tle(25544)[1], 52, "16.90000000")  # a decaying object's mean motion
     assert Body.satellite("SAT", tle(25544)[0], fine).tle[1] == fine
 
@@ -525,12 +525,30 @@ def test_parse_tles_skips_bad_sets_and_says_where() -> None:
     sets, problems = parse_tles(text)
     assert sets == {"GOOD": (c1, c2), "ALSO GOOD": (d1, d2)}
     assert problems == [
-        f"line 6: BAD SUM: checksum is '{bad_sum}', the line sums to {b2[68]}",
-        "line 9: MIXED: catalog number '00004' is not line 1's '00003'",
-        "line 10: '<html>garbage</html>' is not followed by a TLE",
+        f"line 6: 'BAD SUM': checksum is '{bad_sum}', the line sums to {b2[68]}",
+        "line 9: 'MIXED': catalog number '00004' is not line 1's '00003'",
+        "line 10: a line of 20 characters is not followed by a TLE",  # (never quoted)
         "line 14: a TLE line 1 without its line 2",
         "line 15: 'GOOD' again (first at line 1): used",
-        "line 18: 'TRAILING' is not followed by a TLE",
+        "line 18: a line of 8 characters is not followed by a TLE",
+    ]
+
+
+def test_parse_tles_quotes_no_stray_line_and_cuts_a_long_name_short() -> None:
+    """Attack 18 (bodies.py rule 2): a line no TLE follows may be anything (the one line of a
+    password file named as tle_file): said by its number and length, never quoted; a
+    satellite's name is quoted, escaped and cut short, so a file of one long line is no
+    megabyte log line."""
+    (a1, a2), (b1, b2) = tle(1), tle(2)
+    secret = "Wr1tten-0nly-1n-the-password-file"
+    bad = with_checksum(a2, (int(a2[68]) + 1) % 10)
+    text = "\n".join([secret, "N" * 100_000, a1, bad, "\x1b[2J" * 2, b1, b2, "\x1b[2J"])
+    _sets, problems = parse_tles(text)
+    assert problems == [
+        "line 1: a line of 33 characters is not followed by a TLE",
+        f"line 4: {'N' * 40!r}… (100000 characters): checksum is '{bad[68]}', the line sums "
+        f"to {a2[68]}",
+        "line 8: a line of 4 characters is not followed by a TLE",  # (an escape: never in)
     ]
 
 

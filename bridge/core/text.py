@@ -6,16 +6,23 @@ surrogate (what Python makes of a byte that is not UTF-8: it cannot be sent at a
 non-character (U+FDD0-FDEF, U+xFFFE, U+xFFFF). Everything else is text: a no-break space, a
 zero-width joiner in Persian or an emoji, characters newer than Python's Unicode tables.
 (``str.isprintable`` refuses all of those: a review found it refusing real users' names.)
+
+And how a message quotes what a file or a sender wrote (``quoted``): escaped, and cut short at
+QUOTED_MOST characters with its length said, so a file of one long line (a binary, a
+compressed download, ``/dev/zero``) is no megabyte line in the journal (attack 18).
 """
 
 from __future__ import annotations
 
 import re
 
-__all__ = ["NOT_TEXT", "bad_char", "entity_slug"]
+__all__ = ["NOT_TEXT", "QUOTED_MOST", "bad_char", "entity_slug", "quoted"]
 
 # what a refusal says after the character: U+0001, {NOT_TEXT}
 NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or a non-character)"
+# the most of what a file or a sender wrote that a message quotes (``quoted``): more than any
+# satellite's or entity's name, far less than a line of a binary
+QUOTED_MOST = 40
 
 
 def bad_char(text: str) -> str | None:
@@ -44,3 +51,11 @@ def entity_slug(text: str) -> str:
     ``sensor.tower__bearing``, which Home Assistant makes ``sensor.tower_bearing``, the entity
     of a rotator ``tower`` beside it."""
     return _NOT_SLUG.sub("_", text.lower()).strip("_")
+
+
+def quoted(text: str, most: int = QUOTED_MOST) -> str:
+    """``text`` as a message quotes it: ``repr`` (a control character escaped), and past
+    ``most`` characters its first ``most`` and its length (``'ab'… (9000 characters)``)."""
+    if len(text) <= most:
+        return repr(text)
+    return f"{text[:most]!r}… ({len(text)} characters)"

@@ -13,6 +13,12 @@ Rules:
 2. A TLE file (parse_tles) is 3-line sets (a name line, Space-Track's "0 " prefix dropped) or
    bare 2-line sets (named by their catalog number); blank lines and CRLF are fine; a bad set is
    reported, naming its line, and skipped; a name seen again is reported and the later set used.
+   A problem quotes a line only where the file shows it to be a satellite's name (the line
+   right before a TLE's two lines), cut short (core/text.py ``quoted``); a line that names no
+   set (stray text: an HTML page, a file named by mistake) is said by its number and length,
+   never quoted (attack 18: the MQTT password file named as tle_file put the password in the
+   journal at WARNING, and a file of one long line put megabytes in one log line). sgp4's own
+   complaint, which quotes the line over several lines, is cut to its first.
 3. A satellite named "off", "sun" or "moon" (any case) is called "satellite off" and so on:
    ``R/tracking`` saying "off" or "sun" must mean that.
 4. What cannot be computed raises SkyError, whose ``reason`` is what a user reads when tracking
@@ -26,6 +32,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import Any
+
+from bridge.core.text import quoted
 
 KINDS = ("sun", "moon", "satellite")
 MINUTES_PER_DAY = 1440.0
@@ -113,7 +121,8 @@ def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
     try:
         sat = Satrec.twoline2rv(line1, line2)
     except (ValueError, IndexError) as e:
-        return 1, f"sgp4 cannot read the elements: {e}"
+        said = (str(e).splitlines() or [""])[0]  # rule 2: not the line it quotes below
+        return 1, f"sgp4 cannot read the elements: {said}"
     impossible = _out_of_range(sat)
     if impossible is not None:
         return impossible
@@ -165,11 +174,13 @@ def parse_tles(text: str) -> tuple[dict[str, tuple[str, str]], list[str]]:
             problem = _tle_problem(line, line2)
             if problem is not None:
                 at = number if problem[0] == 1 else lines[i][0]
-                problems.append(f"line {at}: {title}: {problem[1]}")
+                problems.append(f"line {at}: {quoted(title)}: {problem[1]}")
             else:
                 if title in sets:
                     first = first_line[title]
-                    problems.append(f"line {start}: {title!r} again (first at line {first}): used")
+                    problems.append(
+                        f"line {start}: {quoted(title)} again (first at line {first}): used"
+                    )
                 first_line.setdefault(title, start)
                 sets[title] = (line, line2)
             i += 1
@@ -181,8 +192,14 @@ def parse_tles(text: str) -> tuple[dict[str, tuple[str, str]], list[str]]:
             name = None
         else:
             if name is not None:
-                problems.append(f"line {name[0]}: {name[1]!r} is not followed by a TLE")
+                problems.append(_stray(*name))
             name = (number, line[2:].strip() if line.startswith("0 ") else line)
     if name is not None:
-        problems.append(f"line {name[0]}: {name[1]!r} is not followed by a TLE")
+        problems.append(_stray(*name))
     return sets, problems
+
+
+def _stray(number: int, line: str) -> str:
+    """Rule 2: a line no TLE follows, said by its number and length, never quoted (it may be
+    anything: a password file's one line)."""
+    return f"line {number}: a line of {len(line)} characters is not followed by a TLE"

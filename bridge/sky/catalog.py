@@ -12,13 +12,20 @@ Rules:
 3. Names are matched ignoring case and surrounding blanks; the catalog number works too.
 4. A file larger than MAX_FILE_BYTES is not read (a TLE file of every active satellite is
    about 2 MB): it counts as a file that cannot be read, and a lookup is refused naming the
-   file and the limit.
+   file and the limit. So is what is no regular file (a device, a pipe), its kind seen on the
+   file opened without waiting, before a byte is read (attack 18: ``/dev/zero``, of size 0,
+   was read to the limit at every change of nothing; a FIFO nobody writes held the catalog's
+   lock, and every lookup behind it, for ever). A file that grew past the limit between its
+   size and its read is not read either: its first 4 MiB are no TLE file.
+5. What the file holds is quoted in the log only as sky.parse_tles words its problems
+   (bodies.py rule 2): a satellite's name cut short, any other line by its number alone.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import stat
 import threading
 from pathlib import Path
 
@@ -39,7 +46,7 @@ class TleCatalog:
         self._lock = threading.Lock()  # looked up from paho's thread and rotctld's
         self._seen: tuple[int, int] | None = None
         self._sets: dict[str, tuple[str, str, str]] = {}  # folded name -> (name, line1, line2)
-        self._too_large: str | None = None  # rule 4: why the file was not read
+        self._not_read: str | None = None  # rule 4: why the file was not read
 
     def names(self) -> list[str]:
         with self._lock:
@@ -70,8 +77,8 @@ class TleCatalog:
         self.check_configured(name)
         with self._lock:
             self._refresh()
-            if self._too_large is not None and not self._sets:
-                raise CatalogError(f"no satellite {name!r}: {self._too_large}")
+            if self._not_read is not None and not self._sets:
+                raise CatalogError(f"no satellite {name!r}: {self._not_read}")
             key = _fold(name)
             found = self._sets.get(key)  # a name first, even one of digits ("0815")
             if found is None and key.isdigit():
@@ -93,22 +100,19 @@ class TleCatalog:
             seen = (st.st_size, st.st_mtime_ns)
             if seen == self._seen:
                 return
-            if st.st_size > MAX_FILE_BYTES:  # rule 4
-                self._seen = seen
-                self._too_large = (
-                    f"tle_file {self.path} is {st.st_size} bytes, over the limit of "
-                    f"{MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
-                )
-                log.warning("%s", self._too_large)
-                return
-            with open(self.path, encoding="ascii", errors="replace") as f:
-                text = f.read(MAX_FILE_BYTES + 1)  # grown since the stat: still bounded
+            data = self._read(st)
         except OSError as exc:
             if self._seen != (-1, -1):
                 log.warning("tle_file %s cannot be read: %s", self.path, exc.strerror or exc)
                 self._seen = (-1, -1)
             return
-        self._seen, self._too_large = seen, None
+        self._seen = seen
+        if isinstance(data, str):  # rule 4: not read, said once per change
+            self._not_read = data
+            log.warning("%s", data)
+            return
+        self._not_read = None
+        text = data.decode("ascii", errors="replace")
         sets, problems = parse_tles(text)
         if problems:  # rule 2: one warning per read, not one per bad line
             log.warning(
@@ -125,6 +129,35 @@ class TleCatalog:
         for entry in list(self._sets.values()):  # catalog numbers, after every name
             self._sets.setdefault(entry[1][2:7].strip().lstrip("0"), entry)
         log.info("tle_file %s: %d satellite(s)", self.path, len(sets))
+
+    def _read(self, seen: os.stat_result) -> bytes | str:
+        """The file's bytes, or why they are not read (rule 4); OSError if it cannot be."""
+        assert self.path is not None
+        limit = f"over the limit of {MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
+        if stat.S_ISREG(seen.st_mode) and seen.st_size > MAX_FILE_BYTES:
+            return f"tle_file {self.path} is {seen.st_size} bytes, {limit}"
+        # (O_NONBLOCK: a FIFO's open waits for a writer that may never come)
+        flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+        fd = os.open(self.path, flags)
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):  # (what is open now, not what was seen)
+                return (
+                    f"tle_file {self.path} is no regular file (a device, a pipe or a folder): "
+                    "not read"
+                )
+            chunks: list[bytes] = []
+            size = 0
+            while size <= MAX_FILE_BYTES:
+                chunk = os.read(fd, MAX_FILE_BYTES + 1 - size)
+                if not chunk:
+                    break
+                chunks.append(chunk)
+                size += len(chunk)
+        finally:
+            os.close(fd)
+        if size > MAX_FILE_BYTES:
+            return f"tle_file {self.path} grew past {MAX_FILE_BYTES} bytes, {limit}"
+        return b"".join(chunks)
 
 
 def _fold(name: str) -> str:

@@ -20,6 +20,7 @@ from bridge.sky import catalog as catalog_module
 from bridge.sky.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
 from bridge.sky.worker import LookupQuestion
 from tests.engine.virtual import VirtualRotator
+from tests.support import wait_until
 from tests.support.sky import synthetic_tle
 
 EPOCH = 1767225600.0  # 2026-01-01 00:00 UTC: a fixed epoch, so every run reads the same lines
@@ -270,3 +271,66 @@ def test_track_by_name_returns_before_the_file_is_read_and_is_refused_later(
     refused = v.errors(ErrorKind.REFUSED)
     assert len(refused) == 1 and refused[0].command == "track 'ISS'", refused
     assert f"no satellite 'ISS' in {path} (0 satellites)" == refused[0].message
+
+
+# -- what is no regular file (attack 18: /dev/zero read to the limit, a FIFO held the lock) ----
+def test_a_device_is_not_read_and_a_lookup_says_why(caplog: pytest.LogCaptureFixture) -> None:
+    """Rule 4: /dev/zero (of size 0) was read to the 4 MiB limit and its one line quoted whole,
+    16 MB in one warning."""
+    catalog = TleCatalog(Path("/dev/zero"))
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
+        for _ in range(3):
+            with pytest.raises(CatalogError, match="no regular file") as err:
+                catalog.lookup("ISS")
+            assert "/dev/zero" in str(err.value), err.value
+        assert catalog.names() == []
+    said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert said == [
+        "tle_file /dev/zero is no regular file (a device, a pipe or a folder): not read"
+    ]
+
+
+def test_a_fifo_nobody_writes_holds_no_lookup(tmp_path: Path) -> None:
+    """Rule 4: a FIFO's open waited for a writer, under the catalog's lock: every lookup behind
+    it, the sky worker's and the names for Home Assistant, waited for ever."""
+    fifo = tmp_path / "active.txt"
+    os.mkfifo(fifo)
+    catalog = TleCatalog(fifo)
+    said: list[str] = []
+
+    def look() -> None:
+        try:
+            catalog.lookup("ISS")
+        except CatalogError as exc:
+            said.append(str(exc))
+
+    reader = threading.Thread(target=look, daemon=True)
+    reader.start()
+    try:
+        wait_until(lambda: said, 5, "the lookup to answer")
+    finally:  # (a reader still blocked in open: a writer's open lets it go)
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:  # (ENXIO: no reader left: nothing to let go)
+            pass
+        reader.join()
+    assert said == [
+        f"no satellite 'ISS': tle_file {fifo} is no regular file (a device, a pipe "
+        "or a folder): not read"
+    ]
+
+
+def test_a_file_of_one_secret_line_is_said_without_quoting_it(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Attack 18, whatever the settings know of the file (a token of another program's named
+    by mistake): its one line is no satellite's name, and the warning never quotes it."""
+    path = tmp_path / "token"
+    path.write_text("Wr1tten-0nly-1n-the-token-file\n")
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
+        assert TleCatalog(path).names() == []
+    said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert said == [
+        f"tle_file {path}: 1 bad entry skipped (the first: line 1: a line of 30 characters is "
+        "not followed by a TLE)"
+    ]
