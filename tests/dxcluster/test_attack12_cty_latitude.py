@@ -46,17 +46,20 @@ def test_the_entity_is_refused_where_it_is_read_and_said_naming_its_line() -> No
     cty = parse_dat(CTY_DAT + SLIP)
     assert cty.lookup("T88AB") is None and cty.lookup("JA1ABC") is not None
     assert cty.refused == [
-        "line 12: Palau: latitude 357.0 is no place's (-90..90); its calls are placed nowhere"
+        "line 12: 'Palau': latitude '357.0' is no place's (-90..90); its calls are placed nowhere"
     ]
     csv = parse_csv(CTY_CSV + "T8,Palau,22,OC,27,64,7.45,-534.53,-9.0,T8;\n")
     assert csv.lookup("T88AB") is None and csv.lookup("VK2ABC") is not None
     assert csv.refused == [
-        "line 6: Palau: longitude -534.53 is no place's (-180..180); its calls are placed nowhere"
+        "line 6: 'Palau': longitude '-534.53' is no place's (-180..180); its calls are placed "
+        "nowhere"
     ]
     odd = parse_dat(CTY_DAT.replace("<27.10/-142.20>", "<127.10/-142.20>"))
     japan = odd.lookup("JA1ABC")
     assert japan is not None and odd.lookup("JA1XYZ/JD1") == japan  # (Japan's own place)
-    assert len(odd.refused) == 1 and odd.refused[0].startswith("line 3: Japan's =JA1XYZ/JD1<")
+    assert len(odd.refused) == 1 and odd.refused[0].startswith(
+        "line 3: '=JA1XYZ/JD1<127.10/-142.20>' of 'Japan': latitude '127.10' is no place's"
+    )
 
 
 def test_the_refusal_is_logged_once_at_start(
@@ -69,7 +72,7 @@ def test_the_refusal_is_logged_once_at_start(
     with caplog.at_level(logging.WARNING):
         dxcluster(settings, None, lambda payload: None)
     said = [r.getMessage() for r in caplog.records if "Palau" in r.getMessage()]
-    assert len(said) == 1 and "cty.dat line 12: Palau: latitude 357.0" in said[0], said
+    assert len(said) == 1 and "cty.dat line 12: 'Palau': latitude '357.0'" in said[0], said
 
 
 def test_one_spot_whose_entry_cannot_be_made_is_left_out_and_the_rest_listed(

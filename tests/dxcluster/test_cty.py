@@ -3,12 +3,15 @@ the prefix overrides, exact calls, and how a call with a portable part is looked
 
 from __future__ import annotations
 
+import os
+import threading
 from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.dxcluster.cty import Cty, CtyError, load, parse_csv, parse_dat
+from bridge.interfaces.dxcluster.cty import CTY_FILE_MAX, Cty, CtyError, load, parse_csv, parse_dat
 from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
+from tests.support import wait_until
 
 
 @pytest.fixture(params=["dat", "csv"])
@@ -71,6 +74,57 @@ def test_load_tells_the_formats_apart_and_names_a_bad_file(tmp_path: Path) -> No
     (tmp_path / "empty.dat").write_bytes(b"\xff\xfe nothing here\n")
     with pytest.raises(CtyError, match="empty.dat: no entity"):
         load(tmp_path / "empty.dat")
+
+
+def test_what_is_no_regular_file_or_too_large_is_not_read(tmp_path: Path) -> None:
+    """Rule 4 (attack 18): /dev/zero was read until the memory ran out; a file over the limit
+    is refused before it is parsed, naming the limit."""
+    with pytest.raises(CtyError, match="/dev/zero cannot be read: it is no regular file"):
+        load(Path("/dev/zero"))
+    huge = tmp_path / "cty.dat"
+    huge.write_text(CTY_DAT)
+    with huge.open("r+") as f:
+        f.truncate(CTY_FILE_MAX + 1)  # sparse: a good file, then nothing to the limit and a byte
+    with pytest.raises(CtyError, match="cty.dat cannot be read: it is larger than 16 MiB"):
+        load(huge)
+
+
+def test_a_fifo_nobody_writes_holds_no_start(tmp_path: Path) -> None:
+    """Rule 4 (attack 18): a FIFO's open waited for a writer: the start, for ever."""
+    fifo = tmp_path / "cty.dat"
+    os.mkfifo(fifo)
+    said: list[str] = []
+
+    def start() -> None:
+        try:
+            load(fifo)
+        except CtyError as exc:
+            said.append(str(exc))
+
+    loader = threading.Thread(target=start, daemon=True)
+    loader.start()
+    try:
+        wait_until(lambda: said, 5, "the load to answer")
+    finally:  # (a loader still blocked in open: a writer's open lets it go)
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:  # (ENXIO: no reader left)
+            pass
+        loader.join()
+    assert said == [
+        f"cty_file {fifo} cannot be read: it is no regular file (a device, a pipe or a folder): "
+        "name AD1C's cty.dat or cty.csv"
+    ]
+
+
+def test_what_is_refused_is_quoted_cut_short() -> None:
+    """Rule 5 (attack 18): a name or a number of a megabyte is no megabyte in the log."""
+    name, lat = "P" * 1_000_000, "9" * 100_000
+    cty = parse_dat(CTY_DAT + f"{name}:  27:  64:  OC:   {lat}:  -134.53:    -9.0:  T8:\n    T8;\n")
+    assert cty.refused == [
+        f"line 12: {'P' * 40!r}… (1000000 characters): latitude {'9' * 40!r}… (100000 "
+        "characters) is no place's (-90..90); its calls are placed nowhere"
+    ]
 
 
 def test_lighthouse_rover_and_beacon_suffixes_name_no_entity() -> None:

@@ -18,7 +18,12 @@ Rules:
    entity (equal lengths: the first).
 4. A file that cannot be read or holds no entity raises CtyError naming the file and line;
    an odd line inside a good file is skipped and counted (``skipped``): AD1C's files are
-   trusted, a hand-edited one should not stop the bridge.
+   trusted, a hand-edited one should not stop the bridge. What is no regular file (a device,
+   a pipe) or is larger than CTY_FILE_MAX cannot be read: it is opened without waiting, its
+   kind looked at before a byte is read, and at most CTY_FILE_MAX bytes and one are read
+   (attack 18: ``/dev/zero`` was read until the memory ran out, a FIFO nobody writes held the
+   start for ever). The start and check-config judge a file by this one reading
+   (interfaces/dxcluster/setup.py ``read_cty``).
 5. A position no place has (a latitude outside -90..90, a longitude outside -180..180, or no
    number: a hand edit's slip, ``357.0`` for ``35.70``) is refused where it is read: an
    entity's header with its prefixes, a prefix's ``<lat/lon>`` override alone. Each is
@@ -28,20 +33,28 @@ Rules:
    prefixes and calls are kept, as no place (``lookup`` gives None for them): skipped, its
    calls went to the longest prefix left, another entity's (review 48: a slip in Hawaii's
    line placed every KH6 in the United States, its bearing the mainland's); a prefix whose
-   override is refused is its entity's, at the entity's place.
+   override is refused is its entity's, at the entity's place. What ``refused`` quotes of the
+   file (a name, a prefix, a number) is escaped and cut short (core/text.py ``quoted``): a
+   line of a megabyte is no megabyte in the log (attack 18).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from bridge.core.text import quoted
 
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
 _PLAIN = re.compile(r"=?[A-Z0-9/]+")
 _DROPPED = frozenset({"P", "M", "QRP", "QRPP", "A", "LH", "LGT", "R", "B"})  # rule 3
 _NOWHERE = frozenset({"MM", "AM"})
+CTY_FILE_MAX = 16 << 20  # rule 4: AD1C's cty.csv is some 300 KB, the big cty.dat some 2 MB
+_AD1C = "name AD1C's cty.dat or cty.csv"  # rule 4: what to do of a file that cannot be read
 
 
 class CtyError(ValueError):
@@ -56,9 +69,9 @@ def _position(lat_text: str, lon_text: str) -> tuple[float, float]:
     """Rule 5: (latitude, longitude) as the file gives them (west-positive), or _Nowhere."""
     lat, lon = float(lat_text), float(lon_text)
     if not (math.isfinite(lat) and -90.0 <= lat <= 90.0):
-        raise _Nowhere(f"latitude {lat_text.strip()} is no place's (-90..90)")
+        raise _Nowhere(f"latitude {quoted(lat_text.strip())} is no place's (-90..90)")
     if not (math.isfinite(lon) and -180.0 <= lon <= 180.0):
-        raise _Nowhere(f"longitude {lon_text.strip()} is no place's (-180..180)")
+        raise _Nowhere(f"longitude {quoted(lon_text.strip())} is no place's (-180..180)")
     return lat, lon
 
 
@@ -139,7 +152,9 @@ def _add(cty: Cty, base: Entity | None, tokens: list[str], where: str) -> None:
         except _Nowhere as exc:  # rule 5: the prefix stays its entity's, at its place
             assert base is not None
             cty.skipped += 1
-            cty.refused.append(f"{where}: {base.name}'s {token}: {exc}; the entity's place taken")
+            cty.refused.append(
+                f"{where}: {quoted(token)} of {quoted(base.name)}: {exc}; the entity's place taken"
+            )
             plain, entity = _OVERRIDE.sub("", token).strip().upper(), base
             if not _PLAIN.fullmatch(plain):
                 continue
@@ -168,7 +183,7 @@ def _entity(name: str, cq: str, itu: str, cont: str, lat: str, lon: str, prefix:
 def _refuse(cty: Cty, where: str, name: str, exc: _Nowhere) -> None:
     """Rule 5: an entity refused, said once."""
     cty.skipped += 1
-    cty.refused.append(f"{where}: {name.strip()}: {exc}; its calls are placed nowhere")
+    cty.refused.append(f"{where}: {quoted(name.strip())}: {exc}; its calls are placed nowhere")
 
 
 def parse_dat(text: str) -> Cty:
@@ -224,7 +239,7 @@ def parse_csv(text: str) -> Cty:
 def load(path: Path) -> Cty:
     """Rule 4: the file read and parsed; CtyError says what is wrong with it."""
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = _read(path).decode("utf-8", errors="replace")
     except OSError as exc:
         raise CtyError(f"cty_file {path} cannot be read: {exc.strerror or exc}") from None
     first = next((line for line in text.splitlines() if line.strip()), "")
@@ -233,3 +248,27 @@ def load(path: Path) -> Cty:
     if not any(e is not None for e in (*cty.prefixes.values(), *cty.exact.values())):
         raise CtyError(f"cty_file {path}: no entity in it (is it AD1C's cty.dat or cty.csv?)")
     return cty
+
+
+def _read(path: Path) -> bytes:
+    """Rule 4: the file's bytes; OSError if it cannot be read, is no regular file or is
+    larger than CTY_FILE_MAX."""
+    # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_BINARY: Windows)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    fd = os.open(path, flags)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(f"it is no regular file (a device, a pipe or a folder): {_AD1C}")
+        chunks: list[bytes] = []
+        size = 0
+        while size <= CTY_FILE_MAX:
+            chunk = os.read(fd, CTY_FILE_MAX + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    finally:
+        os.close(fd)
+    if size > CTY_FILE_MAX:
+        raise OSError(f"it is larger than {CTY_FILE_MAX >> 20} MiB: {_AD1C}")
+    return b"".join(chunks)
