@@ -36,7 +36,8 @@ Rules:
    mqtt's topic table iterates it), so an import of it from below would be a circle; the app
    hands the parts to the sessions, and a session made without them finds them here. Nothing
    heavy is imported by a declaration: a feature's service is the app's to import, and only
-   when its settings turn it on (``service_on``).
+   when its settings turn it on (``service_on``); so is its ``check``, check-config's, which
+   judges what the service's start would refuse with the function that start calls.
 5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
    entity table's or of a feature's: where the table had it before the feature was a package),
    those after one row in the registry's order; one that names no row, after all the others.
@@ -218,6 +219,10 @@ class Feature:
     base_topics: tuple[str, ...] = ()
     service: str | None = None
     service_on: Callable[[Any], bool] | None = None
+    # "module:function" of the file's Settings, raising ConfigError for what the service's
+    # start would stop on (its files read as the start reads them): check-config calls it
+    # while ``service_on`` (rule 4)
+    check: str | None = None
 
     def __post_init__(self) -> None:
         part = self.part
@@ -254,6 +259,16 @@ def make_service(feature: Feature, view: AppView) -> FeatureService | None:
     module, _, name = feature.service.partition(":")
     make: Callable[[AppView], FeatureService] = getattr(importlib.import_module(module), name)
     return make(view)
+
+
+def check_service(feature: Feature, settings: Any) -> None:
+    """ConfigError if the feature's service, which its settings turn on, would not start on
+    them (``check``, its module imported now: rule 4); check-config asks every feature."""
+    if feature.check is None or not feature.serves(settings):
+        return
+    module, _, name = feature.check.partition(":")
+    judge: Callable[[Any], None] = getattr(importlib.import_module(module), name)
+    judge(settings)
 
 
 def registered() -> tuple[Feature, ...]:

@@ -105,23 +105,6 @@ def masked(settings: Settings) -> dict[str, Any]:
     return out
 
 
-def check_cty_file(settings: Settings) -> None:
-    """ConfigError if ``[dxcluster]`` is on and its cty file cannot be read: the start stops
-    on it (docs/dxcluster.md; an attack pass: check-config said "NOT FOUND" and "config OK").
-    Its content is judged at the start."""
-    dx = settings.dxcluster
-    if not dx.enabled or dx.cty_file is None:
-        return
-    try:
-        with open(dx.cty_file, "rb") as f:
-            f.read(1)
-    except OSError as exc:
-        raise ConfigError(
-            f"dxcluster.cty_file {dx.cty_file} cannot be read: {exc.strerror or exc} (the start "
-            "would stop on it)"
-        ) from None
-
-
 def check_state_file(settings: Settings) -> None:
     """ConfigError, in the start's words (app.py), if the start would refuse the state file
     whoever runs it (rule 5). Nothing is written."""

@@ -42,13 +42,28 @@ def test_the_start_stops_on_a_cty_file_without_entities(tmp_path: Path) -> None:
     assert "no entity in it" in out.stderr, out.stderr
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: check-config says 'config OK' of a cty file with no entity, which the "
-    "start refuses (exit code 2)",
-)
 def test_check_config_refuses_a_cty_file_without_entities(tmp_path: Path) -> None:
     out = cli("check-config", "-c", str(_config(tmp_path)))
     assert "config OK" not in out.stdout, out.stdout
     assert out.returncode == 2, out
     assert "cty_file" in out.stderr, out.stderr
+
+
+@pytest.mark.parametrize(
+    ("cty_file", "says"),
+    [
+        ("/dev/zero", "/dev/zero cannot be read: it is no regular file"),  # (read 1 byte: "OK")
+        ("nowhere.dat", "nowhere.dat cannot be read: No such file or directory"),
+    ],
+)
+def test_check_config_judges_the_cty_file_in_the_start_s_words(
+    tmp_path: Path, cty_file: str, says: str
+) -> None:
+    """One reading for both (interfaces/dxcluster/setup.py read_cty): check-config names the
+    key and says what the start would."""
+    config = _config(tmp_path)
+    path = cty_file if cty_file.startswith("/") else str(tmp_path / cty_file)
+    config.write_text(config.read_text().replace(str(tmp_path / "cty.dat"), path))
+    out = cli("check-config", "-c", str(config))
+    assert out.returncode == 2 and "config OK" not in out.stdout, out
+    assert f"dxcluster.cty_file {path}" in out.stderr and says in out.stderr, out.stderr
