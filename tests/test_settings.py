@@ -13,6 +13,7 @@ from bridge.core.model import Target
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, RotatorSettings, files, load_settings, settings_from
 from bridge.settings.report import config_warnings, masked
+from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import ROOT, cli, run_cli
 
 MINIMAL = """
@@ -173,6 +174,54 @@ def test_a_file_the_bridge_writes_is_no_file_the_configuration_reads(tmp_path: P
         )
         in out.stderr
     ), out.stderr
+
+
+@pytest.mark.parametrize(
+    ("reader", "holder"),
+    [
+        ("tracking.tle_file", "mqtt.password_file"),
+        ("tracking.tle_file", "web.password_file"),
+        ("tracking.tle_file", "the console's secret kept beside state_file"),
+        ("dxcluster.cty_file", "mqtt.password_file"),
+        ("dxcluster.cty_file", "the configuration file"),
+        ("tracking.tle_file", "the configuration file"),
+    ],
+)
+def test_a_secret_s_file_is_read_as_nothing_else(tmp_path: Path, reader: str, holder: str) -> None:
+    """Settings rule 7 (attack 18): tracking.tle_file naming the MQTT password file passed
+    check-config, and the start's TLE reader logged the password at WARNING. The console's
+    secret is one whether or not the console has a password now (an earlier run left it);
+    the configuration file may hold mqtt.password."""
+    secret = "Wr1tten-0nly-1n-the-password-file"
+    files = {name: tmp_path / name for name in ("mqtt-pw", "web-pw", "console-secret")}
+    for path in files.values():
+        path.write_text(secret + "\n")
+        path.chmod(0o600)
+    path = tmp_path / "c.toml"
+    given = {
+        "mqtt.password_file": files["mqtt-pw"],
+        "web.password_file": files["web-pw"],
+        "the console's secret kept beside state_file": files["console-secret"],
+        "the configuration file": path,
+    }[holder]
+    table, key = reader.split(".")
+    logins = f'base_topic = "rotor"\nusername = "u"\npassword_file = "{files["mqtt-pw"]}"'
+    text = (
+        f'state_file = "{tmp_path}/state.json"\n'
+        + MINIMAL.replace('base_topic = "rotor"', logins)
+        + (f'\n[web]\npassword_file = "{files["web-pw"]}"\n' if "web" in holder else "")
+        + f'\n[{table}]\n{key} = "{given}"\n'
+        + ('enabled = true\nhost = "dx.example"\nlogin = "G4ABC"\n' if table == "dxcluster" else "")
+    )
+    path.write_text(text)
+    out = cli("check-config", "-c", str(path))
+    assert out.returncode == 2 and "config OK" not in out.stdout, out.stdout + out.stderr
+    assert f"{reader} {given} is also {holder}: a secret's file" in out.stderr, out.stderr
+    assert secret not in out.stdout + out.stderr
+    (tmp_path / "other").write_text(CTY_DAT)  # (a cty file; a TLE file of no satellite)
+    path.write_text(text.replace(f'{key} = "{given}"', f'{key} = "{tmp_path}/other"'))
+    out = cli("check-config", "-c", str(path))  # (its own file: OK)
+    assert out.returncode == 0 and "config OK" in out.stdout, out.stdout + out.stderr
 
 
 @pytest.mark.parametrize(

@@ -42,6 +42,16 @@ Rules:
    file passed check-config, and the first lock OFF replaced the configuration with the state
    (the next start: "not valid TOML"); a password file was overwritten likewise, and a
    console password file named ``console-secret`` beside the state file by random bytes.
+7. A file that holds a secret (``files_secret``: the MQTT and console password files, the TLS
+   key, the console's secret beside the state file, kept there by any run with a console
+   password) is read as nothing else (``secret_read``): no other key that names a file to
+   read (a TLS certificate, the cty or TLE file) names it, nor the configuration file, which
+   may hold mqtt.password; the error names both keys. An attack pass: ``tracking.tle_file``
+   naming the MQTT password file passed check-config, and the start's TLE reader logged
+   "line 1: '<the password>' is not followed by a TLE" at WARNING. A certificate and its key
+   in one PEM file (cert_file or ca_file and key_file alike) is the one case allowed: ssl
+   reads it, and never quotes it. (The remote reads no file but its secrets and TLS files,
+   which its [mqtt] table's TLS check refuses as no PEM before a rule like this one could.)
 """
 
 from __future__ import annotations
@@ -112,6 +122,11 @@ ENV_PREFIX = "ROTOR_BRIDGE_"
 CONFIG_FILE_MAX = 16 << 20  # rule 5: the most of a configuration file read
 _SECRET = "the console's secret kept beside state_file"  # rule 6: a file written
 _OWN = "give it a file of its own"  # rule 6: what to do of a file written where another is
+# rule 7: the keys that read a file as a secret, and a reader allowed to share one's file
+_SECRET_KEYS = ("mqtt.password_file", "web.password_file", "mqtt.tls.key_file", _SECRET)
+_TOGETHER = frozenset(  # (one PEM file of a certificate and its key; ssl quotes neither)
+    {("mqtt.tls.cert_file", "mqtt.tls.key_file"), ("mqtt.tls.ca_file", "mqtt.tls.key_file")}
+)
 _ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
 
 
@@ -472,7 +487,16 @@ class Settings(BaseSettings):
                         f"{name} {path} is also {other}: the bridge writes there, and would "
                         f"overwrite it; {fix}"
                     )
+        said = secret_read(self.files_secret(), self.files_read())  # rule 7
+        if said is not None:
+            raise ValueError(said)
         return self
+
+    def files_secret(self) -> list[tuple[str, Path]]:
+        """The files that hold a secret (rule 7), by key: the console's secret whether or not
+        the console has a password now (a run that had one left it there)."""
+        secret = [(name, path) for name, path in self.files_read() if name in _SECRET_KEYS]
+        return [*secret, (_SECRET, self.console_secret())]
 
     def files_written(self) -> list[tuple[str, Path]]:
         """The files the bridge writes (rule 6), by key."""
@@ -566,6 +590,21 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
+def secret_read(secret: list[tuple[str, Path]], read: list[tuple[str, Path]]) -> str | None:
+    """Rule 7: why a key of ``read`` that reads no secret names a file of ``secret`` (both by
+    key), or None; the bridge's keys and the remote's alike."""
+    for name, path in read:
+        if name in _SECRET_KEYS:
+            continue
+        for holder, held in secret:
+            if (name, holder) not in _TOGETHER and same_file(path, held):
+                return (
+                    f"{name} {path} is also {holder}: a secret's file, which {name} would "
+                    f"read as no secret (and could quote in the log); name the file {name} wants"
+                )
+    return None
+
+
 def load_settings(
     path: str | os.PathLike[str] | None, environ: dict[str, str] | None = None
 ) -> Settings:
@@ -638,6 +677,9 @@ def settings_from(
                 f"invalid configuration:\n  {name}: {written} is the configuration file itself: "
                 f"the bridge writes there, and would overwrite it; {_OWN}"
             )
+    said = path and secret_read([("the configuration file", Path(path))], settings.files_read())
+    if said:  # rule 7: nor the file that may hold mqtt.password
+        raise ConfigError(f"invalid configuration:\n  {said}")
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
     return settings

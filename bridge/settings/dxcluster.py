@@ -64,7 +64,10 @@ class DxClusterSettings(Strict):
     cty_file: Path | None = Field(
         None,
         description="AD1C's cty.dat or cty.csv (country-files.com), downloaded by you: the "
-        "entity, and so the bearing, of a spotted call without a locator",
+        "entity, and so the bearing, of a spotted call without a locator. A regular file of "
+        "16 MiB at most, with an entity in it (the start and check-config judge it alike); a "
+        "secret's file (a password file, the TLS key, the console's secret) or the "
+        "configuration file is refused",
         examples=["/etc/rotor-bridge/cty.dat"],
         json_schema_extra={"unset": "needed when enabled"},
     )

@@ -85,7 +85,8 @@ class TrackingSettings(Strict):
         None,
         description="a TLE file (Celestrak's 3-line form) naming the satellites that can be "
         "tracked; re-read when it changes, so refresh it with cron. The sun and the moon need "
-        "no file.",
+        "no file. A regular file of 4 MiB at most; a secret's file (a password file, the TLS "
+        "key, the console's secret) or the configuration file is refused.",
         examples=["/var/lib/rotor-bridge/amateur.tle"],
         json_schema_extra={"unset": "satellites cannot be tracked (the sun and the moon can)"},
     )

@@ -10,19 +10,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import pytest
-
 from tests.support import BridgeProcess, wait_until
 from tests.support.mosquitto import Mosquitto
 
 SECRET = "Wr1tten-0nly-1n-the-password-file"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: tle_file naming the MQTT password file logs the password at WARNING "
-    "('line 1: <password> is not followed by a TLE')",
-)
 def test_a_tle_file_that_is_the_password_file_never_puts_the_password_in_the_log(
     tmp_path: Path, broker: Mosquitto
 ) -> None:

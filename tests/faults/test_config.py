@@ -394,6 +394,26 @@ def test_tls_files_that_cannot_be_used_are_exit_2_and_one_message(
     assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
 
 
+def test_the_tls_key_s_file_is_read_as_no_tle_file_but_may_hold_its_certificate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], pki: Pki
+) -> None:
+    """Settings rule 7 (attack 18): a secret's file is read as nothing else, the TLS key's
+    too, named by both keys; a certificate and its key in one PEM file is the pair allowed
+    (ssl reads it and quotes neither)."""
+    both = tmp_path / "client.pem"
+    both.write_text(pki.path("client.crt").read_text() + pki.path("client.key").read_text())
+    both.chmod(0o600)
+    tls = f"[mqtt.tls]\nenabled = true\ncert_file = {str(both)!r}\nkey_file = {str(both)!r}\n"
+    path = tmp_path / "tls.toml"
+    path.write_text(BASE + tls)
+    assert main(["check-config", "-c", str(path)]) == 0
+    assert "config OK" in capsys.readouterr().out
+    path.write_text(BASE + tls + f"[tracking]\ntle_file = {str(both)!r}\n")
+    code, out, err = run_main(capsys, "check-config", "-c", str(path))
+    assert (code, out) == (2, ""), err
+    assert f"tracking.tle_file {both} is also mqtt.tls.key_file: a secret's file" in err, err
+
+
 @pytest.mark.parametrize(
     ("content", "said"),
     [(b"one\ntwo\n", "on one line (it holds several lines)"), (b"\n", "(it holds nothing)"),
