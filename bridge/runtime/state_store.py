@@ -436,7 +436,8 @@ class StateStore:
             if isinstance(operator, str) and isinstance(until, (int, float)):
                 if not isinstance(until, bool) and abs(until) < 1e300:  # float() can't fail
                     return Control(operator, float(until))
-        log.warning("state file: lease for %r is malformed (%s): ignored", rotator_id, raw)
+        shown = json.dumps(raw)[:80]  # (as a malformed entry's: a lease of a megabyte, cut)
+        log.warning("state file: lease for %r is malformed (%s): ignored", rotator_id, shown)
         return None
 
     def set_lease(self, rotator_id: str, held: Control | None) -> bool:

@@ -206,6 +206,19 @@ def test_a_malformed_entry_starts_its_rotator_locked_and_says_why(
     assert StateStore(path).problems == {}  # written down properly: the next start is clean
 
 
+def test_a_malformed_lease_is_said_cut_short(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Attack 18's rule for what a file holds (a quotation cut short, as a malformed entry's
+    at 80 characters): a lease of a megabyte was one megabyte line in the log."""
+    path = tmp_path / "state.json"
+    path.write_text(json.dumps({"rotators": {"tower": {"lease": "L" * 1_000_000}}}))
+    with caplog.at_level(logging.WARNING, logger="bridge.runtime.state_store"):
+        assert StateStore(path).lease("tower") is None
+    said = [r.getMessage() for r in caplog.records]
+    assert said == [f"state file: lease for 'tower' is malformed (\"{'L' * 79}): ignored"], said
+
+
 def test_the_start_writes_the_real_content_but_never_over_an_unreadable_file(
     tmp_path: Path,
 ) -> None:
