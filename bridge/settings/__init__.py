@@ -592,7 +592,7 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
 
 def secret_read(secret: list[tuple[str, Path]], read: list[tuple[str, Path]]) -> str | None:
     """Rule 7: why a key of ``read`` that reads no secret names a file of ``secret`` (both by
-    key), or None; the bridge's keys and the remote's alike."""
+    key), or None."""
     for name, path in read:
         if name in _SECRET_KEYS:
             continue

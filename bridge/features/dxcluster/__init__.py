@@ -58,7 +58,6 @@ FEATURE = Feature(
     base_topics=(SPOTS,),
     service="bridge.interfaces.dxcluster.setup:service",
     service_on=_on,
-    check="bridge.interfaces.dxcluster.setup:check",  # check-config: the cty file as the start
-    # reads it
+    check="bridge.interfaces.dxcluster.setup:check",  # check-config: the cty file, read as run
     console=("the spots on the map (interfaces/web/static/console.js, from B/spots' document)",),
 )
