@@ -19,11 +19,6 @@ FRAMES = [
 ]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 68: a release sent with a BOM or a trailing NUL names nobody in the audit "
-    "trail, where a claim in the same framing names its operator",
-)
 @pytest.mark.parametrize(("before", "after"), FRAMES)
 def test_a_release_names_its_operator_in_the_framing_a_claim_is_read_in(
     before: bytes, after: bytes

@@ -13,11 +13,6 @@ from bridge.core.model import Target
 from tests.mqtt.test_service import service
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 68: R/target '120<U+001F>30' (a control character inside) turns the rotor "
-    "to 120/30, where docs/mqtt.md says it is refused naming U+001F",
-)
 @pytest.mark.parametrize("control", ["\x1c", "\x1d", "\x1e", "\x1f", "\x85"])
 def test_a_control_character_inside_a_target_is_refused_naming_it(control: str) -> None:
     svc, _, rots = service({"tower": "gs232b"})

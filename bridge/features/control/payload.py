@@ -12,7 +12,9 @@ Rules:
    ``{"azimuth": "123"}``). Anything else goes as sent, for the lease to judge.
 2. A release takes any payload; a JSON object's valid ``operator`` names who released it when
    the message has no user property (Home Assistant's button sends one); one that gives it
-   twice names nobody (an attack pass: its last value was the name in the audit trail).
+   twice names nobody (an attack pass: its last value was the name in the audit trail). It is
+   read in the words a claim is (review 68: one framed with a BOM or a C string's NUL named
+   nobody, where its claim had named its operator).
    (Under MQTT 3.1.1 an empty one is refused before it comes here: interfaces/mqtt/service.py
    rule 1.)
 3. ``R/control`` says who holds the lease and until when (ISO 8601, UTC), or nobody.
@@ -25,7 +27,7 @@ from datetime import UTC, datetime
 
 from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import Control, valid_operator
-from bridge.interfaces.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError, json_number
+from bridge.interfaces.mqtt.payloads import PayloadError, json_number
 from bridge.interfaces.mqtt.payloads import text as payload_text
 
 EXAMPLE = '{"operator": "DL1ABC", "minutes": 30}'
@@ -63,11 +65,15 @@ def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
 def parse_release(payload: bytes) -> str | None:
     """Rule 2: who the payload says released it, or None (a payload no command is as long as,
     or JSON nested past the parser's depth, an attack pass: names nobody, and still releases)."""
-    if len(payload) > MAX_COMMAND_BYTES or not payload.strip().startswith(b"{"):
+    try:  # the words every topic reads, a claim's too (review 68: a BOM or a C string's NUL)
+        text = payload_text(payload)
+    except PayloadError:  # (too large, not UTF-8, a control character: names nobody)
+        return None
+    if not text.startswith("{"):
         return None
     try:  # a key given twice names nobody (core/jsonkeys.py: which did the sender mean?)
-        obj = json.loads(payload.decode("utf-8"), object_pairs_hook=unique_keys)
-    except (ValueError, RecursionError):  # (not UTF-8, not JSON, DuplicateKey)
+        obj = json.loads(text, object_pairs_hook=unique_keys)
+    except (ValueError, RecursionError):  # (not JSON, DuplicateKey)
         return None
     return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
 

@@ -106,6 +106,9 @@ def _text(payload: bytes) -> str:
     return _words(decoded)
 
 
+_BLANKS = frozenset(" \t\n\r")  # _words: the control characters that part a payload's words
+
+
 def _words(text: str) -> str:
     """The one rule for what a sender's tools put round the words, for every topic alike (a
     payload's text; a JSON string a press is read from): blanks at either end, a UTF-8
@@ -114,15 +117,18 @@ def _words(text: str) -> str:
     words and are dropped (``OFF\\0`` is OFF to the lock, a park, an option, a follow).
     Any other control character, or a byte-order mark elsewhere, is refused, naming it: no
     word a command takes holds one, and what cannot be read is never taken as a yes (a press).
-    Blanks inside (space, tab, line breaks) are the parsers' to judge: they part a target's
-    two fields."""
-    text = text.strip().removeprefix(_BOM).strip().rstrip("\0").rstrip()
+    Blanks inside (space, tab, line breaks: ``_BLANKS``) are the parsers' to judge: they part a
+    target's two fields; no other control character is a blank here, though Python's
+    ``isspace`` says so of U+001C..U+001F and NEL (review 68: ``120<US>30`` turned the rotor to
+    120, 30)."""
+    blanks = " \t\n\r"  # (_BLANKS: str.strip's own would drop U+001C..U+001F and NEL too)
+    text = text.strip(blanks).removeprefix(_BOM).strip(blanks).rstrip("\0").rstrip(blanks)
     if not text:
         raise PayloadError("empty payload")
     for c in text:
         if c == _BOM:
             raise PayloadError("payload holds U+FEFF, a byte-order mark, past its start")
-        if not c.isspace() and bad_char(c) is not None:
+        if c not in _BLANKS and bad_char(c) is not None:
             raise PayloadError(
                 f"payload holds U+{ord(c):04X}, which no command's words hold (a control "
                 "character or a non-character; a C string's NUL is taken only at the end)"
