@@ -766,6 +766,10 @@ def _no_group_variables(env: Any) -> None:
 
 
 def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
+    if not isinstance(data.get("rotators", []), list):
+        # nothing to set a rotator's key in: validation names ``rotators`` (an attack pass:
+        # ``rotators = 5`` with any rotator's variable was a TypeError traceback, exit code 1)
+        return
     for key, value in env.items():
         m = _ROTATOR_ENV.match(key)
         if not m:

@@ -18,11 +18,6 @@ from tests.support import run_cli
     ["ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "ROTOR_BRIDGE_ROTATORS__TOWERPORT"],
     ids=["a rotator's key", "no rotator's key"],
 )
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 18: rotators = 5 with a ROTOR_BRIDGE_ROTATORS__ variable is a TypeError "
-    "traceback, exit code 1, not a line naming rotators",
-)
 def test_rotators_not_a_list_with_a_rotator_variable_is_one_line_naming_rotators(
     tmp_path: Path, variable: str
 ) -> None:
