@@ -77,6 +77,11 @@ instead, which beats the file:
 a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/serial/by-id/...`),
 and its boxes' the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/serial/by-id/...`).
 A list or a table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`). A
+preset is also set by its name (`ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU=50`, an az/el one as
+`'[180, 45]'`): a variable's name is read in any case, so it changes the file's preset of that
+name whatever its case (`EU`), and a name the file lacks is added as the variable spells it;
+two presets whose names differ only by case (`EU`, `eu`) cannot be set so, and such a variable
+is an error naming both. A
 `ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
 takes `__`) is an error, as an unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
 `config/example.toml` is a commented starting point with the keys most people change.

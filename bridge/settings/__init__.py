@@ -52,6 +52,13 @@ Rules:
    in one PEM file (cert_file or ca_file and key_file alike) is the one case allowed: ssl
    reads it, and never quotes it. (The remote reads no file but its secrets and TLS files,
    which its [mqtt] table's TLS check refuses as no PEM before a rule like this one could.)
+8. A variable that sets one entry of a table keyed by the user's names (a rotator's
+   ``presets``: ``ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU``; groups, the other such tables,
+   are set in the file only, rule 4) sets the file's entry of that name whatever its case, as
+   a variable's name is read in any case; a name the file lacks is added as the variable spells
+   it; two of the file's names that differ only by case are an error naming both (an attack
+   pass: ``PRESETS__EU=50`` added a preset ``eu`` beside the file's ``EU = 45``; Home
+   Assistant's select showed both, and ``EU`` still turned the antenna to 45).
 """
 
 from __future__ import annotations
@@ -777,7 +784,8 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
                 raise ConfigError(_no_rotator_key(key, data))
             continue
         # a key of a table in the rotator (its azimuth box's port) joined with "__" as elsewhere
-        rid, path = m.group(1).lower(), m.group(2).lower().split("__")
+        rid, words = m.group(1).lower(), m.group(2).split("__")
+        path = [w.lower() for w in words]
         if _complex(["rotators", *path]):  # a list or a table: JSON, as for the other tables
             try:  # (a review: the text itself was handed on, and refused as no table)
                 value = json.loads(value)
@@ -789,14 +797,77 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
                 ) from None
         for r in data.get("rotators", []):
             if isinstance(r, dict) and str(r.get("id", "")).lower() == rid:
-                for name in path[:-1]:
+                for i, name in enumerate(path[:-1]):
+                    if _user_keyed(["rotators", *path[:i]]):
+                        name = _file_key(key, r, words[i])
                     if not isinstance(r.get(name), dict):
                         r[name] = {}
                     r = r[name]
-                r[path[-1]] = value
+                last = path[-1]
+                if _user_keyed(["rotators", *path[:-1]]):
+                    last = _file_key(key, r, words[-1])
+                    value = _entry_value(key, ["rotators", *path[:-1]], value)
+                r[last] = value
                 break
         else:
             raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
+
+
+def _annotation_at(path: list[str]) -> Any:
+    """The type of the key at ``path`` (a table's, then its key's; any word in a table keyed by
+    the user's names, a preset's), or None where no key is."""
+    annotation: Any = Settings
+    for name in path:
+        kinds = (annotation, *get_args(annotation))
+        model = next((a for a in kinds if isinstance(a, type) and issubclass(a, BaseModel)), None)
+        table = next((a for a in kinds if get_origin(a) is dict), None)
+        if model is not None and name in model.model_fields:
+            annotation = model.model_fields[name].annotation
+        elif model is None and table is not None:
+            annotation = get_args(table)[1]
+        else:
+            return None
+    return annotation
+
+
+def _user_keyed(path: list[str]) -> bool:
+    """Whether the key at ``path`` is a table whose keys are the user's names (a rotator's
+    ``presets``), not the bridge's."""
+    annotation = _annotation_at(path)
+    return annotation is not None and any(
+        get_origin(a) is dict for a in (annotation, *get_args(annotation))
+    )
+
+
+def _file_key(key: str, table: dict[str, Any], word: str) -> str:
+    """The key of ``table`` that ``word``, a name in variable ``key``, sets (rule 7): the
+    file's own spelling, matched whatever its case, or ``word`` where the file lacks it."""
+    same = sorted(k for k in table if isinstance(k, str) and k.lower() == word.lower())
+    if len(same) > 1:
+        raise ConfigError(
+            f"{key}: {' and '.join(repr(k) for k in same)} differ only by case, and a variable's "
+            "name is read in any case: it cannot say which it sets; rename one, or set it in "
+            "the configuration file"
+        )
+    return same[0] if same else word
+
+
+def _entry_value(key: str, path: list[str], value: str) -> Any:
+    """``value`` for an entry of the user-keyed table at ``path``: JSON where the entry may be
+    a list and ``value`` is one (a preset's ``[azimuth, elevation]``: ``PRESETS__SAT='[180,
+    45]'``), else the text, which the table's type reads."""
+    entry = get_args(_annotation_at(path))[1]  # dict[str, entry]
+    if not value.lstrip().startswith("[") or not any(
+        get_origin(a) is list for a in (entry, *get_args(entry))
+    ):
+        return value
+    try:
+        return json.loads(value)
+    except (ValueError, RecursionError):
+        raise ConfigError(
+            f"{key}: a list is set from the environment in JSON ('[180, 45]'), or in the "
+            "configuration file"
+        ) from None
 
 
 def _no_rotator_key(key: str, data: dict[str, Any]) -> str:
