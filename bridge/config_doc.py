@@ -83,7 +83,8 @@ name whatever its case (`EU`), and a name the file lacks is added as the variabl
 two presets whose names differ only by case (`EU`, `eu`) cannot be set so, and such a variable
 is an error naming both. A
 `ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
-takes `__`) is an error, as an unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
+takes `__`; `ROTOR_BRIDGE_LOG_LEVEL__X`, under a key that is one value) is an error, as an
+unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
 `config/example.toml` is a commented starting point with the keys most people change.
 """
 

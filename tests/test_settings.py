@@ -1537,6 +1537,32 @@ def test_a_variable_of_the_bridge_that_names_no_key_is_refused_naming_it(
 
 
 @pytest.mark.parametrize(
+    ("variable", "itself"),
+    [
+        ("ROTOR_BRIDGE_CONFIG__X", "set ROTOR_BRIDGE_CONFIG itself"),
+        ("ROTOR_BRIDGE_LOG_LEVEL__X", "set ROTOR_BRIDGE_LOG_LEVEL itself"),
+        ("rotor_bridge_state_file__x", "set rotor_bridge_state_file itself"),
+        ("ROTOR_BRIDGE_MQTT__HOST__X", "set ROTOR_BRIDGE_MQTT__HOST itself"),
+        ("ROTOR_BRIDGE_WEB__HOST_NAMES__X", "set ROTOR_BRIDGE_WEB__HOST_NAMES itself"),
+        ("ROTOR_BRIDGE_ROTATORS__TOWER__PORT__X", "set ROTOR_BRIDGE_ROTATORS__TOWER__PORT itself"),
+    ],
+)
+def test_a_variable_under_a_key_that_is_one_value_is_refused_naming_it(
+    tmp_path: Path, variable: str, itself: str
+) -> None:
+    """settings rule 4: a key that is one value has no key under it. An attack pass:
+    ``ROTOR_BRIDGE_CONFIG__X`` and ``ROTOR_BRIDGE_LOG_LEVEL__X`` were dropped without a word
+    ("config OK") while other variables that name no key were refused, and one under
+    ``mqtt.host`` was "Input should be a valid string", naming no variable."""
+    out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env={variable: "DEBUG"})
+    assert out.returncode == 2, out
+    assert "config OK" not in out.stdout
+    said = [line for line in out.stderr.splitlines() if line.strip()]
+    assert len(said) == 1 and said[0].startswith(f"rotor-bridge: {variable}: "), out.stderr
+    assert itself in said[0], out.stderr
+
+
+@pytest.mark.parametrize(
     ("topic", "under"),
     [
         ("rotor/bearing", "rotor, rotator 'tower''s"),

@@ -30,7 +30,9 @@ Rules:
    opened the file's port). So is any ``ROTOR_BRIDGE_GROUPS`` variable: groups are set in the
    file only (docs/configuration.md says so); read, ``GROUPS__STACK__OFFSETS`` replaced the
    file's ``[[groups]]`` with a table and was refused as "groups: Input should be a valid
-   list", naming no variable (attack 12).
+   list", naming no variable (attack 12). So is a variable under a key that is one value
+   (``ROTOR_BRIDGE_LOG_LEVEL__X``, ``ROTOR_BRIDGE_MQTT__HOST__X``, ``ROTOR_BRIDGE_CONFIG__X``):
+   nothing is under it (attack 18: dropped without a word, or refused naming no variable).
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
@@ -747,7 +749,14 @@ def _check_variables(env: Any) -> None:
             continue
         name = key[len(ENV_PREFIX) :].lower()
         first = name.split("__")[0]
+        if first == "config" and name != first:
+            raise ConfigError(
+                f"{key}: {ENV_PREFIX}CONFIG names the configuration file, and has no keys under "
+                f"it: set {ENV_PREFIX}CONFIG itself, or a key as {ENV_PREFIX}<KEY>"
+            )
         if first in known:
+            if first not in ("rotators", "groups"):  # (theirs: _apply_rotator_env, below)
+                _nothing_under_a_value(key, name.split("__"))
             continue
         table = next((t for t in known if first.startswith(f"{t}_")), None)
         if table is None:
@@ -760,6 +769,32 @@ def _check_variables(env: Any) -> None:
             f"{key}: unknown key {first!r} (the keys at the top: "
             f"{', '.join(Settings.model_fields)}; a table's keys are joined with __){hint}"
         )
+
+
+def _nothing_under_a_value(key: str, path: list[str], rotator: str | None = None) -> None:
+    """Rule 4: ConfigError if variable ``key``, setting the key at ``path``, goes through a key
+    that is one value (text, a number, a list): nothing is under it (an attack pass:
+    ``ROTOR_BRIDGE_LOG_LEVEL__X`` and ``ROTOR_BRIDGE_STATE_FILE__X`` were dropped without a
+    word, ``ROTOR_BRIDGE_MQTT__HOST__X`` was "mqtt.host: Input should be a valid string",
+    naming no variable). ``rotator``: the id of the rotator whose key ``path`` (``rotators``,
+    then the key) is."""
+    for i in range(1, len(path)):
+        annotation = _annotation_at(path[:i])
+        if annotation is None:
+            return  # an unknown key: validation names it and the variable
+        kinds = (annotation, *get_args(annotation))
+        if not any(
+            get_origin(a) is dict or (isinstance(a, type) and issubclass(a, BaseModel))
+            for a in kinds
+        ):
+            over = key.rsplit("__", len(path) - i)[0]
+            where = ".".join(path[:i])
+            if rotator is not None:
+                where = f"rotator {rotator!r}'s {'.'.join(path[1:i])}"
+            raise ConfigError(
+                f"{key}: {where} is one value, not a table: there is no key under it (set "
+                f"{over} itself)"
+            )
 
 
 def _no_group_variables(env: Any) -> None:
@@ -786,6 +821,7 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
         # a key of a table in the rotator (its azimuth box's port) joined with "__" as elsewhere
         rid, words = m.group(1).lower(), m.group(2).split("__")
         path = [w.lower() for w in words]
+        _nothing_under_a_value(key, ["rotators", *path], rid)
         if _complex(["rotators", *path]):  # a list or a table: JSON, as for the other tables
             try:  # (a review: the text itself was handed on, and refused as no table)
                 value = json.loads(value)
