@@ -76,6 +76,10 @@ instead, which beats the file:
 `ROTOR_BRIDGE_` and the key, tables joined with `__` (`ROTOR_BRIDGE_MQTT__HOST=broker.lan`);
 a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/serial/by-id/...`),
 and its boxes' the same way (`ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT=/dev/serial/by-id/...`).
+The id is written whole: a `-` in it stays (`ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT` for
+`tower-2`), a name a shell's `export` and systemd's `Environment=` do not take (`env(1)` does:
+`env 'ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT=...' rotor-bridge run ...`); give a rotator you
+set from the environment an id without `-`, or set its keys in the file.
 A list or a table is given in JSON (`ROTOR_BRIDGE_WEB__HOST_NAMES='["shack.example.org"]'`). A
 preset is also set by its name (`ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU=50`, an az/el one as
 `'[180, 45]'`): a variable's name is read in any case, so it changes the file's preset of that

@@ -1536,6 +1536,47 @@ def test_a_variable_of_the_bridge_that_names_no_key_is_refused_naming_it(
     assert cli("check-config", env={"ROTOR_BRIDGE_CONFIG": path, **good}).returncode == 0
 
 
+def test_a_variable_for_an_id_with_a_dash_written_with_underscores_says_how_to_spell_it(
+    tmp_path: Path,
+) -> None:
+    """A shell's export and systemd's Environment= take no '-' in a name, so a rotator
+    ``tower-2`` is set as ``ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT`` (env(1) takes it) or in the
+    file. A review: ``TOWER_2`` was only "no rotator with id 'tower_2'"."""
+    config = write(tmp_path, MINIMAL.replace('id = "tower"', 'id = "tower-2"'))
+    out = cli("check-config", "-c", str(config), env={"ROTOR_BRIDGE_ROTATORS__TOWER_2__PORT": "/x"})
+    assert out.returncode == 2, out
+    assert "no rotator with id 'tower_2'" in out.stderr, out.stderr
+    assert "ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT" in out.stderr and "env(1)" in out.stderr
+    dashed = {"ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT": str(tmp_path / "tty")}
+    out = cli("check-config", "--full", "-c", str(config), env=dashed)
+    assert out.returncode == 0, out.stderr
+    assert json.dumps(str(tmp_path / "tty")) in out.stdout
+
+
+@pytest.mark.parametrize("rid", ["a__b", "tower_"])
+def test_a_rotator_whose_id_holds_the_delimiter_is_set_from_the_environment(
+    tmp_path: Path, rid: str
+) -> None:
+    """The file's ids are looked for whole: ``a__b`` was read as id ``a`` and key ``b__port``
+    ("no rotator with id 'a'"), so such a rotator could not be set from the environment."""
+    config = write(tmp_path, MINIMAL.replace('id = "tower"', f'id = "{rid}"'))
+    env = {f"ROTOR_BRIDGE_ROTATORS__{rid.upper()}__PORT": str(tmp_path / "tty")}
+    out = cli("check-config", "--full", "-c", str(config), env=env)
+    assert out.returncode == 0, out.stderr
+    assert json.dumps(str(tmp_path / "tty")) in out.stdout
+
+
+def test_a_variable_two_rotators_ids_both_fit_is_refused_naming_both(tmp_path: Path) -> None:
+    """``ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT`` is ``sky``'s azimuth box's port and
+    ``sky__azimuth``'s port: which cannot be told."""
+    second = MINIMAL[MINIMAL.index("[[rotators]]") :].replace('id = "tower"', 'id = "sky__azimuth"')
+    text = MINIMAL.replace('id = "tower"', 'id = "sky"') + second.replace("A1B2C3", "D4E5F6")
+    env = {"ROTOR_BRIDGE_ROTATORS__SKY__AZIMUTH__PORT": str(tmp_path / "tty")}
+    out = cli("check-config", "-c", str(write(tmp_path, text)), env=env)
+    assert out.returncode == 2, out
+    assert "rotator 'sky''s azimuth.port and rotator 'sky__azimuth''s port" in out.stderr, out
+
+
 @pytest.mark.parametrize(
     ("variable", "itself"),
     [

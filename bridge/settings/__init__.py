@@ -27,12 +27,14 @@ Rules:
    left the bridge on the file's broker). So is a ``ROTOR_BRIDGE_ROTATORS__`` variable that
    names no rotator's key (``ROTOR_BRIDGE_ROTATORS__TOWER_PORT``: the settings source drops
    every such variable, and only ``ROTATORS__<ID>__<KEY>`` is read; a review: the bridge
-   opened the file's port). So is any ``ROTOR_BRIDGE_GROUPS`` variable: groups are set in the
-   file only (docs/configuration.md says so); read, ``GROUPS__STACK__OFFSETS`` replaced the
-   file's ``[[groups]]`` with a table and was refused as "groups: Input should be a valid
-   list", naming no variable (attack 12). So is a variable under a key that is one value
-   (``ROTOR_BRIDGE_LOG_LEVEL__X``, ``ROTOR_BRIDGE_MQTT__HOST__X``, ``ROTOR_BRIDGE_CONFIG__X``):
-   nothing is under it (attack 18: dropped without a word, or refused naming no variable).
+   opened the file's port), or no rotator of the file (the file's ids are looked for whole,
+   ``__`` and ``-`` in them too: _rotator_of). So is any ``ROTOR_BRIDGE_GROUPS`` variable:
+   groups are set in the file only (docs/configuration.md says so); read,
+   ``GROUPS__STACK__OFFSETS`` replaced the file's ``[[groups]]`` with a table and was refused
+   as "groups: Input should be a valid list", naming no variable (attack 12). So is a
+   variable under a key that is one value (``ROTOR_BRIDGE_LOG_LEVEL__X``,
+   ``ROTOR_BRIDGE_MQTT__HOST__X``, ``ROTOR_BRIDGE_CONFIG__X``): nothing is under it (attack
+   18: dropped without a word, or refused naming no variable).
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
@@ -812,14 +814,12 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
         # nothing to set a rotator's key in: validation names ``rotators`` (an attack pass:
         # ``rotators = 5`` with any rotator's variable was a TypeError traceback, exit code 1)
         return
+    rotators = [r for r in data.get("rotators", []) if isinstance(r, dict)]
     for key, value in env.items():
-        m = _ROTATOR_ENV.match(key)
-        if not m:
-            if key.upper().startswith(f"{ENV_PREFIX}ROTATORS__"):  # rule 4
-                raise ConfigError(_no_rotator_key(key, data))
+        if not key.upper().startswith(f"{ENV_PREFIX}ROTATORS__"):
             continue
         # a key of a table in the rotator (its azimuth box's port) joined with "__" as elsewhere
-        rid, words = m.group(1).lower(), m.group(2).split("__")
+        r, rid, words = _rotator_of(key, rotators, data)
         path = [w.lower() for w in words]
         _nothing_under_a_value(key, ["rotators", *path], rid)
         if _complex(["rotators", *path]):  # a list or a table: JSON, as for the other tables
@@ -828,25 +828,65 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
             except (ValueError, RecursionError):
                 raise ConfigError(
                     f"{key}: a list or a table is set from the environment in JSON "
-                    f"({ENV_PREFIX}ROTATORS__{m.group(1)}__PRESETS='{{\"EU\": 45}}'), or in the "
+                    f"({ENV_PREFIX}ROTATORS__{rid.upper()}__PRESETS='{{\"EU\": 45}}'), or in the "
                     "configuration file"
                 ) from None
-        for r in data.get("rotators", []):
-            if isinstance(r, dict) and str(r.get("id", "")).lower() == rid:
-                for i, name in enumerate(path[:-1]):
-                    if _user_keyed(["rotators", *path[:i]]):
-                        name = _file_key(key, r, words[i])
-                    if not isinstance(r.get(name), dict):
-                        r[name] = {}
-                    r = r[name]
-                last = path[-1]
-                if _user_keyed(["rotators", *path[:-1]]):
-                    last = _file_key(key, r, words[-1])
-                    value = _entry_value(key, ["rotators", *path[:-1]], value)
-                r[last] = value
-                break
-        else:
-            raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
+        for i, name in enumerate(path[:-1]):
+            if _user_keyed(["rotators", *path[:i]]):
+                name = _file_key(key, r, words[i])
+            if not isinstance(r.get(name), dict):
+                r[name] = {}
+            r = r[name]
+        last = path[-1]
+        if _user_keyed(["rotators", *path[:-1]]):
+            last = _file_key(key, r, words[-1])
+            value = _entry_value(key, ["rotators", *path[:-1]], value)
+        r[last] = value
+
+
+def _rotator_of(
+    key: str, rotators: list[dict[str, Any]], data: dict[str, Any]
+) -> tuple[dict[str, Any], str, list[str]]:
+    """The rotator (its table in the file) whose key variable ``key`` sets, its id, and the
+    key's words as the variable spells them. The file's ids are looked for whole, in any case,
+    so an id with ``__`` in it or at its end (``a__b``, ``tower_``) is read as one; ConfigError
+    (rule 4) where none is, or where two ids both fit. An id with ``-`` keeps it in the name
+    (``ROTOR_BRIDGE_ROTATORS__TOWER-2__PORT``), which a shell's ``export`` and systemd's
+    ``Environment=`` do not take: a review: ``TOWER_2`` for ``tower-2`` was only "no rotator
+    with id 'tower_2'"; the refusal now says so."""
+    rest = key[len(f"{ENV_PREFIX}ROTATORS__") :]
+    found = []
+    for r in rotators:
+        rid = str(r.get("id", ""))
+        if rid and rest.lower().startswith(f"{rid.lower()}__") and len(rest) > len(rid) + 2:
+            found.append((r, rid, rest[len(rid) + 2 :].split("__")))
+    if len(found) > 1:  # (``sky`` and ``sky__azimuth``): the one whose key is a rotator's
+        found = [f for f in found if _annotation_at(["rotators", f[2][0].lower()]) is not None]
+    if len(found) > 1:
+        fits = " and ".join(f"rotator {rid!r}'s {'.'.join(w).lower()}" for _, rid, w in found)
+        raise ConfigError(
+            f"{key}: it may set {fits}: set the key in the configuration file, or give one "
+            "rotator an id without '__'"
+        )
+    if found:
+        r, rid, words = found[0]
+        return r, rid.lower(), words
+    m = _ROTATOR_ENV.match(key)
+    if not m:
+        raise ConfigError(_no_rotator_key(key, data))
+    rid = m.group(1).lower()
+    ids = [str(r.get("id", "")) for r in rotators if r.get("id")]
+    dashed = [i for i in ids if "-" in i and i.lower().replace("-", "_") == rid]
+    if dashed:
+        named = f"{ENV_PREFIX}ROTATORS__{dashed[0].upper()}__{m.group(2)}"
+        hint = (
+            f"; rotator {dashed[0]!r}'s variable keeps the id's '-': {named} (a name that "
+            "a shell's export and systemd's Environment= do not take; env(1) does: "
+            f"env '{named}=...' rotor-bridge run ...), or set the key in the configuration file"
+        )
+    else:
+        hint = f" (its rotators: {', '.join(ids)})" if ids else ""
+    raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration{hint}")
 
 
 def _annotation_at(path: list[str]) -> Any:
