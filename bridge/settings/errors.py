@@ -110,15 +110,22 @@ def unknown_model(name: str, known: list[str]) -> str:
 def _variable(
     prefix: str, loc: tuple[int | str, ...], data: dict[str, Any] | None, env: Any
 ) -> str | None:
-    """The environment variable that set the value at ``loc``, if one did."""
+    """The environment variable that set the value at ``loc``, if one did: the one named for
+    ``loc``, or for a key above it whose whole value it gave (a number, a text, a list; not a
+    table, which is merged with the file's): an error in a union names the branch after the
+    key (``rotators[0].presets.EU.float``), and such a line named no variable (attack 18)."""
     parts = [str(p) for p in loc]
     if len(loc) >= 3 and loc[0] == "rotators" and isinstance(loc[1], int):
         rotator = _value_at(data, loc[:2])
         if not isinstance(rotator, dict) or "id" not in rotator:
             return None
         parts = ["rotators", str(rotator["id"]), *parts[2:]]
-    wanted = (prefix + "__".join(parts)).upper()
-    return next((k for k in env if k.upper() == wanted), None)
+    for n in range(len(parts), 0, -1):
+        wanted = (prefix + "__".join(parts[:n])).upper()
+        found: str | None = next((str(k) for k in env if k.upper() == wanted), None)
+        if found is not None and (n == len(parts) or not str(env[found]).lstrip().startswith("{")):
+            return found
+    return None
 
 
 def _unknown(
