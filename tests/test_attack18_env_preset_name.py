@@ -51,18 +51,32 @@ def test_an_az_el_preset_set_by_name_takes_its_two_numbers_in_json(tmp_path: Pat
     assert presets_shown(out.stdout) == {"EU": 45.0, "SAT": [180.0, 45.0]}
 
 
-def test_a_preset_set_by_name_to_no_bearing_names_its_variable(tmp_path: Path) -> None:
-    """settings/errors.py rule 1: pydantic names the branch of a preset's union after the key
-    (``rotators[0].presets.EU.float``), and the lines named no variable."""
+def test_a_preset_set_by_name_to_no_bearing_is_one_line_naming_its_variable(
+    tmp_path: Path,
+) -> None:
+    """settings/errors.py rule 1: pydantic's union of a number and a list gave two lines, each
+    named after a branch (``rotators[0].presets.EU.float``, ``...EU.list[float]``), and neither
+    named the variable."""
     out = check(tmp_path, {"EU": 45}, {"ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU": "abc"})
     assert out.returncode == 2, out
-    said = [line for line in out.stderr.splitlines()[1:] if line.strip()]
-    assert said, out.stderr
-    assert all("(from ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU)" in line for line in said), said
+    said = [line.strip() for line in out.stderr.splitlines()[1:] if line.strip()]
+    assert said == [
+        "rotators[0].presets.EU (from ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU): a preset is a "
+        "bearing (a number) or [azimuth, elevation]"
+    ], out.stderr
+
+
+def test_a_preset_of_no_bearing_in_the_file_is_one_line_naming_it(tmp_path: Path) -> None:
+    out = check(tmp_path, {"EU": "abc"}, {})
+    assert out.returncode == 2, out
+    said = [line.strip() for line in out.stderr.splitlines()[1:] if line.strip()]
+    assert said == [
+        "rotators[0].presets.EU: a preset is a bearing (a number) or [azimuth, elevation]"
+    ], out.stderr
 
 
 def check(
-    tmp_path: Path, presets: dict[str, float], env: dict[str, str], model: str = "rotorez"
+    tmp_path: Path, presets: dict[str, Any], env: dict[str, str], model: str = "rotorez"
 ) -> subprocess.CompletedProcess[str]:
     config = tmp_path / "bridge.toml"
     rotator = {"id": "tower", "model": model, "port": str(tmp_path / "tty"), "presets": presets}

@@ -933,9 +933,7 @@ def _entry_value(key: str, path: list[str], value: str) -> Any:
     a list and ``value`` is one (a preset's ``[azimuth, elevation]``: ``PRESETS__SAT='[180,
     45]'``), else the text, which the table's type reads."""
     entry = get_args(_annotation_at(path))[1]  # dict[str, entry]
-    if not value.lstrip().startswith("[") or not any(
-        get_origin(a) is list for a in (entry, *get_args(entry))
-    ):
+    if not value.lstrip().startswith("[") or not _admits_list(entry):
         return value
     try:
         return json.loads(value)
@@ -944,6 +942,11 @@ def _entry_value(key: str, path: list[str], value: str) -> Any:
             f"{key}: a list is set from the environment in JSON ('[180, 45]'), or in the "
             "configuration file"
         ) from None
+
+
+def _admits_list(annotation: Any) -> bool:
+    """Whether ``annotation`` (a union, an Annotated) takes a list."""
+    return get_origin(annotation) is list or any(_admits_list(a) for a in get_args(annotation))
 
 
 def _no_rotator_key(key: str, data: dict[str, Any]) -> str:

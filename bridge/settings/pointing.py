@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from bridge.core import geo
 from bridge.core.errors import Refused
@@ -23,6 +23,24 @@ from bridge.settings.base import Strict
 
 PRESET_NAME_MAX = 32
 Degrees = Annotated[float, Field(allow_inf_nan=False)]
+
+
+def _bearing_or_two(value: object) -> object:
+    """A preset is a number or a list (``_two_numbers`` judges the list): anything else is one
+    line naming the preset, where pydantic's union gave two, each named after one of its
+    branches (``rotators[0].presets.EU.float``, ``...EU.list[float]``; attack 18's loose end:
+    ``ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU=abc``, or ``EU = "abc"`` in the file)."""
+    if isinstance(value, bool | list):  # (a boolean: refused as one by base.py first)
+        return value
+    try:
+        if isinstance(value, int | float | str) and math.isfinite(float(value)):
+            return value
+    except (ValueError, OverflowError):
+        pass
+    raise ValueError("a preset is a bearing (a number) or [azimuth, elevation]")
+
+
+Preset = Annotated[Degrees | list[Degrees], BeforeValidator(_bearing_or_two)]
 
 
 class StationSettings(Strict):
@@ -104,7 +122,7 @@ class PointingFields(Strict):
         "bearings; az_min_deg/az_max_deg stay on the controller's scale.",
         examples=[180],
     )
-    presets: dict[str, Degrees | list[Degrees]] = Field(
+    presets: dict[str, Preset] = Field(
         default_factory=dict,
         description="named true bearings for R/preset and Home Assistant's select; on az/el "
         "models [azimuth, elevation]",
