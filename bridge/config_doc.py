@@ -88,7 +88,9 @@ two presets whose names differ only by case (`EU`, `eu`) cannot be set so, and s
 is an error naming both. A
 `ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
 takes `__`; `ROTOR_BRIDGE_LOG_LEVEL__X`, under a key that is one value) is an error, as an
-unknown key in the file is; `ROTOR_BRIDGE_CONFIG` names the file.
+unknown key in the file is; so are two variables that set one key (names that differ only
+by case, or one setting a table whole and the other a key in it).
+`ROTOR_BRIDGE_CONFIG` names the file (spelt so, in capitals).
 `config/example.toml` is a commented starting point with the keys most people change.
 """
 

@@ -1578,6 +1578,50 @@ def test_a_variable_two_rotators_ids_both_fit_is_refused_naming_both(tmp_path: P
 
 
 @pytest.mark.parametrize(
+    ("first", "second", "why"),
+    [
+        ("ROTOR_BRIDGE_MQTT__HOST", "rotor_bridge_mqtt__host", "both set one key"),
+        (
+            "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU",
+            "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__eu",
+            "both set one key",
+        ),
+        ("ROTOR_BRIDGE_MQTT", "ROTOR_BRIDGE_MQTT__HOST", "sets a table whole"),
+        (
+            "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS",
+            "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU",
+            "sets a table whole",
+        ),
+    ],
+)
+def test_two_variables_that_set_one_key_are_refused_naming_both(
+    tmp_path: Path, first: str, second: str, why: str
+) -> None:
+    """settings rule 4. An attack pass: the bridge took one of the two as their order in the
+    environment decided, without a word (mqtt.host was a or b as the two were listed)."""
+    values = {
+        "ROTOR_BRIDGE_MQTT": '{"host": "a.example.org"}',
+        "ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS": '{"JA": 330}',
+    }
+    for env in ({first: values.get(first, "10"), second: "20"}, {second: "20", first: "10"}):
+        env = {k: values.get(k, v) for k, v in env.items()}
+        out = cli("check-config", "-c", str(write(tmp_path, MINIMAL)), env=env)
+        assert out.returncode == 2, out
+        said = [line for line in out.stderr.splitlines() if line.strip()]
+        assert len(said) == 1 and f"{first}, {second}: " in said[0] and why in said[0], said
+
+
+def test_the_configuration_files_variable_in_small_letters_is_refused_naming_it(
+    tmp_path: Path,
+) -> None:
+    """The bridge reads ``ROTOR_BRIDGE_CONFIG`` as spelt, and every other variable in any case:
+    ``rotor_bridge_config`` was "no configuration file given ... or set ROTOR_BRIDGE_CONFIG"."""
+    out = cli("check-config", env={"rotor_bridge_config": str(write(tmp_path, MINIMAL))})
+    assert out.returncode == 2, out
+    assert "rotor_bridge_config: " in out.stderr and "spelt ROTOR_BRIDGE_CONFIG" in out.stderr
+
+
+@pytest.mark.parametrize(
     ("variable", "itself"),
     [
         ("ROTOR_BRIDGE_CONFIG__X", "set ROTOR_BRIDGE_CONFIG itself"),

@@ -34,7 +34,8 @@ Rules:
    as "groups: Input should be a valid list", naming no variable (attack 12). So is a
    variable under a key that is one value (``ROTOR_BRIDGE_LOG_LEVEL__X``,
    ``ROTOR_BRIDGE_MQTT__HOST__X``, ``ROTOR_BRIDGE_CONFIG__X``): nothing is under it (attack
-   18: dropped without a word, or refused naming no variable).
+   18: dropped without a word, or refused naming no variable). So are two variables that set
+   one key (_one_variable_each: the environment's order chose one without a word).
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
@@ -659,6 +660,7 @@ def settings_from(
     """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
     env = os.environ if environ is None else environ
     _check_variables(env)
+    _one_variable_each(env)
     _no_group_variables(env)
     _apply_rotator_env(data, env)
     unknown = [k for k in data if k not in Settings.model_fields]
@@ -756,6 +758,10 @@ def _check_variables(env: Any) -> None:
                 f"{key}: {ENV_PREFIX}CONFIG names the configuration file, and has no keys under "
                 f"it: set {ENV_PREFIX}CONFIG itself, or a key as {ENV_PREFIX}<KEY>"
             )
+        if name == "config" and key != f"{ENV_PREFIX}CONFIG":  # (read so spelt: cli.py too)
+            raise ConfigError(
+                f"{key}: the configuration file's variable is spelt {ENV_PREFIX}CONFIG, in capitals"
+            )
         if first in known:
             if first not in ("rotators", "groups"):  # (theirs: _apply_rotator_env, below)
                 _nothing_under_a_value(key, name.split("__"))
@@ -771,6 +777,30 @@ def _check_variables(env: Any) -> None:
             f"{key}: unknown key {first!r} (the keys at the top: "
             f"{', '.join(Settings.model_fields)}; a table's keys are joined with __){hint}"
         )
+
+
+def _one_variable_each(env: Any) -> None:
+    """Rule 4: ConfigError naming two variables that set one key: names that differ only by
+    case (``ROTOR_BRIDGE_MQTT__HOST``, ``rotor_bridge_mqtt__host``; ``PRESETS__EU``,
+    ``PRESETS__eu``), or one setting a table whole and the other a key in it
+    (``ROTOR_BRIDGE_MQTT``, ``ROTOR_BRIDGE_MQTT__HOST``). An attack pass: which one the bridge
+    took was decided by their order in the environment, without a word."""
+    ours = sorted(
+        (k for k in env if k.upper().startswith(ENV_PREFIX)), key=lambda k: (k.upper(), k)
+    )
+    for i, a in enumerate(ours):
+        for b in ours[i + 1 :]:
+            wa, wb = a.upper().split("__"), b.upper().split("__")
+            if wa == wb:
+                raise ConfigError(
+                    f"{a}, {b}: both set one key (a variable's name is read in any case), and "
+                    "which the bridge took would depend on their order: set one"
+                )
+            if wa == wb[: len(wa)]:  # (sorted: the shorter is first)
+                raise ConfigError(
+                    f"{a}, {b}: the first sets a table whole and the second a key in it, and "
+                    "which the bridge took would depend on their order: set one"
+                )
 
 
 def _nothing_under_a_value(key: str, path: list[str], rotator: str | None = None) -> None:
