@@ -73,8 +73,9 @@ import json
 import os
 import re
 import tomllib
+import types
 from pathlib import Path
-from typing import Any, get_args, get_origin
+from typing import Annotated, Any, Union, get_args, get_origin
 
 from pydantic import (
     BaseModel,
@@ -814,10 +815,9 @@ def _nothing_under_a_value(key: str, path: list[str], rotator: str | None = None
         annotation = _annotation_at(path[:i])
         if annotation is None:
             return  # an unknown key: validation names it and the variable
-        kinds = (annotation, *get_args(annotation))
         if not any(
             get_origin(a) is dict or (isinstance(a, type) and issubclass(a, BaseModel))
-            for a in kinds
+            for a in _kinds(annotation)
         ):
             over = key.rsplit("__", len(path) - i)[0]
             where = ".".join(path[:i])
@@ -924,25 +924,40 @@ def _annotation_at(path: list[str]) -> Any:
     the user's names, a preset's), or None where no key is."""
     annotation: Any = Settings
     for name in path:
-        kinds = (annotation, *get_args(annotation))
-        model = next((a for a in kinds if isinstance(a, type) and issubclass(a, BaseModel)), None)
+        kinds = _kinds(annotation)
+        model = next(
+            (
+                a
+                for a in kinds
+                if isinstance(a, type) and issubclass(a, BaseModel) and name in a.model_fields
+            ),
+            None,
+        )
         table = next((a for a in kinds if get_origin(a) is dict), None)
-        if model is not None and name in model.model_fields:
+        if model is not None:
             annotation = model.model_fields[name].annotation
-        elif model is None and table is not None:
+        elif table is not None:
             annotation = get_args(table)[1]
         else:
             return None
     return annotation
 
 
+def _kinds(annotation: Any) -> tuple[Any, ...]:
+    """What a key of type ``annotation`` may hold: a union's members, an Annotated's type, a
+    list's items (``rotators``: its tables), each so unwrapped."""
+    origin = get_origin(annotation)
+    if origin in (Union, types.UnionType):
+        return tuple(k for a in get_args(annotation) for k in _kinds(a))
+    if origin in (Annotated, list):
+        return _kinds(get_args(annotation)[0])
+    return (annotation,)
+
+
 def _user_keyed(path: list[str]) -> bool:
     """Whether the key at ``path`` is a table whose keys are the user's names (a rotator's
     ``presets``), not the bridge's."""
-    annotation = _annotation_at(path)
-    return annotation is not None and any(
-        get_origin(a) is dict for a in (annotation, *get_args(annotation))
-    )
+    return any(get_origin(a) is dict for a in _kinds(_annotation_at(path)))
 
 
 def _file_key(key: str, table: dict[str, Any], word: str) -> str:
@@ -962,7 +977,8 @@ def _entry_value(key: str, path: list[str], value: str) -> Any:
     """``value`` for an entry of the user-keyed table at ``path``: JSON where the entry may be
     a list and ``value`` is one (a preset's ``[azimuth, elevation]``: ``PRESETS__SAT='[180,
     45]'``), else the text, which the table's type reads."""
-    entry = get_args(_annotation_at(path))[1]  # dict[str, entry]
+    table = next(a for a in _kinds(_annotation_at(path)) if get_origin(a) is dict)
+    entry = get_args(table)[1]  # dict[str, entry]
     if not value.lstrip().startswith("[") or not _admits_list(entry):
         return value
     try:
