@@ -961,7 +961,7 @@ def _user_keyed(path: list[str]) -> bool:
 
 
 def _file_key(key: str, table: dict[str, Any], word: str) -> str:
-    """The key of ``table`` that ``word``, a name in variable ``key``, sets (rule 7): the
+    """The key of ``table`` that ``word``, a name in variable ``key``, sets (rule 8): the
     file's own spelling, matched whatever its case, or ``word`` where the file lacks it."""
     same = sorted(k for k in table if isinstance(k, str) and k.lower() == word.lower())
     if len(same) > 1:
