@@ -483,8 +483,8 @@ class WebConsole:
 
     def _serve(self, request: web.Request, name: str) -> web.StreamResponse:
         found = self._files.get(name)
-        if found is None:
-            raise web.HTTPNotFound(reason=f"no {name}")
+        if found is None:  # (rule 7: the name, the client's text, in the body alone, escaped)
+            return _json({"error": f"no {name}"}, 404)
         plain, packed, kind = found
         zipped = "gzip" in request.headers.get("Accept-Encoding", "")
         response = web.Response(body=packed if zipped else plain)
