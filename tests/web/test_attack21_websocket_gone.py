@@ -36,11 +36,6 @@ def _opening(port: int, protocols: str | None) -> bytes:
     ).encode()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 21: a WebSocket opening whose client closed at once is an ERROR with a "
-    "traceback in the log, from anyone who reaches the port (no token, no password)",
-)
 @pytest.mark.parametrize(
     "protocols",
     ["rotor-bridge", "rotor-bridge, token.1.2.3", None],

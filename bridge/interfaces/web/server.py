@@ -430,6 +430,14 @@ class WebConsole:
                 return await handler(request)
             except web.HTTPException as exc:
                 return _json({"error": exc.reason}, exc.status)
+            except ConnectionError as exc:  # rule 7: an answer begun to a client that went
+                transport = request.transport
+                if transport is not None and not transport.is_closing():
+                    raise  # (not the client's doing: aiohttp says it, with its traceback)
+                log.debug(
+                    "web console: a client at %s went before its answer (%s)", request.remote, exc
+                )
+                return _json({"error": "the connection closed"}, 400)  # (aiohttp writes none)
         finally:
             self._conns.finished(request.transport)
             del self._started[id(request)]
