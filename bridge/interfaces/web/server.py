@@ -45,7 +45,17 @@ Rules:
    error too) goes at its level NOISE_BURST at once, then one every NOISE_EVERY_S, the rest at
    DEBUG (an attack pass: aiohttp logged every malformed request at ERROR with its traceback,
    22,000 lines a second from one client that needed no token, and journald's rate limit then
-   drops every line of the service, its warnings too).
+   drops every line of the service, its warnings too). A body is read in one place (``_body``,
+   for every endpoint that reads one): one that does not come within BODY_S is a 408, one
+   whose client went a 400, and one that is not the gzip or deflate its Content-Encoding
+   names a 400 after which its connection is closed (a login's counts against its address's
+   tries), never a 500; one left unread (sent to ``api/session``) that aiohttp finds bad so
+   is one line. An answer
+   begun to a client already gone (a WebSocket's opening, closed at once) is one line at
+   DEBUG. No reason or header carries the client's text: a file name not served is said in
+   the 404's JSON body (an attack pass: ``GET /a%0ab`` put it in the reason, which aiohttp
+   refuses for its line break: a 500; a bad gzip body and a
+   WebSocket whose client went were each a traceback at ERROR).
 8. An accept the system refuses for want of descriptors or memory (EMFILE, ENFILE, ENOBUFS,
    ENOMEM: the process is at its ``ulimit -n``, its other ports' clients hold the rest) is one
    warning per ACCEPT_SAY_S naming it and how many since, no traceback (``AcceptErrors``, the
@@ -105,6 +115,7 @@ from collections.abc import Awaitable, Callable, Hashable
 
 from aiohttp import web
 from aiohttp.http_exceptions import HttpProcessingError
+from aiohttp.web_protocol import RequestPayloadError
 
 from bridge import __version__
 from bridge.core.errors import RefusalCode, Refused
@@ -159,9 +170,13 @@ class Quieter(logging.Filter):
         if record.levelno < logging.WARNING:
             return True
         exc = record.exc_info[1] if record.exc_info else None
+        if isinstance(exc, RequestPayloadError):  # a body not as its headers say (rule 7)
+            exc = exc.__cause__ if isinstance(exc.__cause__, HttpProcessingError) else None
+            if exc is None:  # (no words of aiohttp's to give: the console's)
+                exc = HttpProcessingError(code=400, message="a body that could not be read")
         if isinstance(exc, HttpProcessingError):  # the client's bytes: what was wrong, in short
             said = (str(exc.message).splitlines() or [""])[0][:80]
-            who = record.args[0] if isinstance(record.args, tuple) and record.args else "?"
+            who = record.args[0] if isinstance(record.args, tuple) and record.args else "a client"
             record.msg = "web console: a malformed request from %s refused (%d: %r)"
             record.args = (who, exc.code, said)
             record.exc_info, record.exc_text = None, None
@@ -219,6 +234,44 @@ def _named(exc: OSError, bind: str, port: int) -> OSError:
 
 def _json(doc: object, status: int = 200) -> web.Response:
     return web.json_response(doc, status=status, headers={"Cache-Control": "no-store"})
+
+
+class Unread(Exception):
+    """Rule 7: a request's body that could not be read, the client's doing: the answer's
+    ``status`` and why, in the console's own words (never the client's text), and whether its
+    connection is closed after the answer (``close``: what follows the body cannot be told
+    from a next request)."""
+
+    def __init__(self, status: int, why: str, *, close: bool = False) -> None:
+        super().__init__(why)
+        self.status, self.why, self.close = status, why, close
+
+    def answer(self, code: str | None = None) -> web.Response:
+        response = _json({"error": self.why, **({"code": code} if code else {})}, self.status)
+        if self.close:
+            response.force_close()
+        return response
+
+
+async def _body(request: web.Request, whose: str) -> bytes:
+    """Rule 7: the one place a request's body is read (``whose``: "the login's", "the
+    command's"), within BODY_S, at most the server's ``client_max_size`` (over it aiohttp's
+    HTTPRequestEntityTooLarge, which the caller says: rule 9). A body that did not come in
+    time, whose client went, or that is not the gzip or deflate (or the chunks) its headers
+    name, is Unread: no traceback, and its reason the console's words."""
+    try:
+        return await asyncio.wait_for(request.read(), BODY_S)
+    except TimeoutError:
+        raise Unread(408, f"{whose} body did not come within {BODY_S:g} s") from None
+    except ConnectionError:  # the client went before its body came
+        raise Unread(400, "the connection closed before the body came") from None
+    except RequestPayloadError:
+        # aiohttp's parser set the error and went on to what follows: for it the body is done.
+        # Said so, or its lingering close reads the body again after the answer, and logs the
+        # same error at ERROR with its traceback (an attack pass: a gzip body that was not)
+        request.content.feed_eof()
+        why = f"{whose} body could not be read as its Content-Encoding or Transfer-Encoding say"
+        raise Unread(400, why, close=True) from None
 
 
 class WebConsole:
@@ -526,26 +579,33 @@ class WebConsole:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
             return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
         try:  # its body within BODY_S, as a command's (connections.py rule 2)
-            doc = await asyncio.wait_for(request.json(), BODY_S)
-        except TimeoutError:
-            return _json({"error": f"the login's body did not come within {BODY_S:g} s"}, 408)
-        except ConnectionError:  # rule 7: the client went before its body came
-            return _json({"error": "the connection closed before the body came"}, 400)
+            body = await _body(request, "the login's")
+        except Unread as exc:
+            if exc.close:  # a body that is not what its headers say: a try, counted (rule 7)
+                self._failed(key, now, proxy, client)
+            return exc.answer()
+        try:  # in the charset its client names
+            doc = json.loads(body.decode(request.charset or "utf-8"))
         except (ValueError, RecursionError):
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
         if not isinstance(given, str) or not auth.password_matches(given, self._password):
-            self._logins.failed(key, now, proxy)
-            self._wrong_since += 1
-            if now - self._wrong_said_s >= WRONG_LOG_S:
-                log.warning(
-                    "web console: a wrong password from %s (%d since the last said)",
-                    client,
-                    self._wrong_since,
-                )
-                self._wrong_said_s, self._wrong_since = now, 0
+            self._failed(key, now, proxy, client)
             return _json({"error": "wrong password"}, 401)
         return _json({"token": self._tokens.issue(self._wall())})
+
+    def _failed(self, key: str, now: float, proxy: str | None, client: str) -> None:
+        """A login that failed, counted against its address (auth.py rule 6) and said at most
+        once per WRONG_LOG_S, with a count."""
+        self._logins.failed(key, now, proxy)
+        self._wrong_since += 1
+        if now - self._wrong_said_s >= WRONG_LOG_S:
+            log.warning(
+                "web console: a wrong password from %s (%d since the last said)",
+                client,
+                self._wrong_since,
+            )
+            self._wrong_said_s, self._wrong_since = now, 0
 
     # -- what the page reads -----------------------------------------------------------------
     async def _config(self, request: web.Request) -> web.StreamResponse:
@@ -660,11 +720,12 @@ class WebConsole:
         try:
             if size > MAX_BODY_BYTES:  # rule 9: refused unread
                 raise web.HTTPRequestEntityTooLarge(MAX_BODY_BYTES, size)
-            body = await asyncio.wait_for(request.read(), BODY_S)
-        except TimeoutError:
-            return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
-        except ConnectionError:  # rule 7: the client went before its body came
-            return _json({"error": "the connection closed before the body came"}, 400)
+            body = await _body(request, "the command's")
+        except Unread as exc:
+            if exc.close:  # a body not what its headers say: a bad body (rule 9's R/error)
+                rot.report_refusal(exc.why, "console: a body that could not be read", origin=by)
+                return exc.answer("invalid")
+            return exc.answer()
         except web.HTTPRequestEntityTooLarge:  # rule 9 (one without its length: over 16 KiB)
             why = f"a command is at most {MAX_BODY_BYTES} bytes"
             said = f"console: a body of {size} bytes" if size else "console: a body over 16 KiB"
