@@ -50,11 +50,11 @@ Rules:
    whose client went a 400, and one that is not the gzip or deflate its Content-Encoding
    names a 400 after which its connection is closed (a login's counts against its address's
    tries), never a 500; one left unread (sent to ``api/session``) that aiohttp finds bad so
-   is one line. An answer
+   is one line. A login in a charset that is no text encoding is a wrong password. An answer
    begun to a client already gone (a WebSocket's opening, closed at once) is one line at
    DEBUG. No reason or header carries the client's text: a file name not served is said in
    the 404's JSON body (an attack pass: ``GET /a%0ab`` put it in the reason, which aiohttp
-   refuses for its line break: a 500; a bad gzip body and a
+   refuses for its line break: a 500; a bad gzip body, a charset that is none and a
    WebSocket whose client went were each a traceback at ERROR).
 8. An accept the system refuses for want of descriptors or memory (EMFILE, ENFILE, ENOBUFS,
    ENOMEM: the process is at its ``ulimit -n``, its other ports' clients hold the rest) is one
@@ -584,9 +584,9 @@ class WebConsole:
             if exc.close:  # a body that is not what its headers say: a try, counted (rule 7)
                 self._failed(key, now, proxy, client)
             return exc.answer()
-        try:  # in the charset its client names
+        try:  # in the charset its client names: one that is no text encoding is no password
             doc = json.loads(body.decode(request.charset or "utf-8"))
-        except (ValueError, RecursionError):
+        except (ValueError, LookupError, RecursionError):
             doc = None
         given = doc.get("password") if isinstance(doc, dict) else None
         if not isinstance(given, str) or not auth.password_matches(given, self._password):
