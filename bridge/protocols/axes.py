@@ -85,6 +85,7 @@ from dataclasses import replace
 from bridge.core.geo import apart_deg
 from bridge.protocols.base import (
     Codec,
+    HalfLine,
     HamlibRotType,
     HoldsOnGrid,
     JunkReason,
@@ -94,6 +95,7 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     ScalesAzimuth,
+    StopsOnTheLine,
     TakesReadings,
 )
 
@@ -159,6 +161,12 @@ class AzimuthOnly:
         ]
 
     def encode_stop(self) -> bytes | list[bytes]:
+        return self._inner.encode_stop()
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes | list[bytes]:
+        """base.py rule 9: ``inner``'s stop as the line left off, where it has one."""
+        if isinstance(self._inner, StopsOnTheLine):
+            return self._inner.encode_stop_after(last_axis, half)
         return self._inner.encode_stop()
 
     def encode_query(self) -> bytes | list[bytes] | None:

@@ -47,6 +47,25 @@ Rules:
    drives any axis it reads, False if it says of every one that it drives none, None where a
    reply does not say. The engine ends a turn the controller gave up on that flag
    (session/controller.py rule 12), never on a flag alone.
+9. A stop is written where the line left off (``StopsOnTheLine``). The first frame of a
+   connection lands behind whatever half frame the one before left in the box (an adapter
+   pulled mid-frame, a frame a full tty buffer cut short: runtime/port.py rule 6), and the
+   box reads the two as one command: a GS-232's ``S`` then ``S`` CR is ``SS``, refused
+   (``?>``); an Easycomm's ``S`` then ``SA SE`` is ``SSA SE``, the elevation's stop alone; an
+   RC2800's ``A`` then ``A`` CR ``S`` CR is ``AA``, and the ``S`` stops the axis still
+   selected (attack 22: the azimuth turned on until the stop was sent again 2 s later). Such
+   a codec writes that stop so that no half frame eats it (``HalfLine``): the stop after a
+   throwaway frame that takes the half frame in (refused or partial; the stop itself, or on
+   an RC2800 the axis's selection, twice), or, where no move can have been cut (no target
+   whose bytes may not all have reached the box), after a bare line end, which ends a cut
+   stop or poll as the command it was (a GS-232's ``S`` then CR: the stop, taken first). A
+   bare line end is never written where a move may have been cut: it would carry out
+   ``M18`` of ``M180`` (interfaces/mqtt/express.py rule 9). On a line that carried a frame
+   already the stop is the plain one (``HalfLine.NONE``). A codec that does not say how is
+   sent ``encode_stop``, as before: the Rotor-EZ, the DCU-1, the RT-21, the SPID (fixed
+   13-byte frames; the fact sheet's simulator drops a frame short of them 0.1 s after its
+   last byte, and no source says what the box does), the SatEL and the Prosistel (STX
+   framed): none of them looked at closely here.
 """
 
 from __future__ import annotations
@@ -167,6 +186,23 @@ class Codec(Protocol):
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         """The position the controller will actually be sent (after its rounding)."""
         ...
+
+
+class HalfLine(enum.Enum):
+    """Rule 9: what the box may hold in its line buffer when a stop is written."""
+
+    NONE = "none"  # a frame went on this connection already: its end ended any half frame
+    HARMLESS = "harmless"  # the connection's first frame; what the last cut is no move
+    MOVE = "move"  # the connection's first frame; a target of the last may have been cut
+
+
+@runtime_checkable
+class StopsOnTheLine(Protocol):
+    """Rule 9: a codec whose stop depends on what the line carried before it: ``last_axis``
+    the axis the last frame written named (``ModelSpec.axis_prefixes``; None: none or not
+    known), ``half`` what the box may hold. It opens the stop's exchange as ``encode_stop``."""
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes | list[bytes]: ...
 
 
 @runtime_checkable

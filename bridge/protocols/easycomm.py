@@ -105,6 +105,14 @@ Rules:
    the next poll took it, and that poll's own answer, one line later, was told on R/error as
    bytes that are no reply; and a poll given up before a stop had its late answer taken for
    the stop's, teaching that this controller answers stops.)
+11. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
+   a cut write left in the box, which reads the two as one line: ``S`` then ``SA SE`` is
+   ``SSA SE``, the elevation's stop alone (attack 22: the azimuth turned on 2 s until the
+   stop went again). So it is ``SA SE`` twice, one write: the first takes the half frame in
+   (what the box makes of that line, the second stops), the second is whole. Never a bare
+   line end first: a cut poll's ``AZ`` ended alone is "turn to 0" on a SatNOGS box (rule 8),
+   a cut ``AZ18`` a move. Each ``SA SE`` is answered as ever (rules 7 and 9: a SatNOGS box's
+   position, an azimuth model's ``?``).
 """
 
 from __future__ import annotations
@@ -113,6 +121,7 @@ import re
 from typing import Any
 
 from bridge.protocols.base import (
+    HalfLine,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -150,7 +159,9 @@ _VERSION = re.compile(rb"%(sp)s*VE(?P<v>[ -~]*?)%(sp)s*" % {b"sp": _SP})
 _ALARM = re.compile(rb"%(sp)s*AL(?P<a>[ -~]*?)%(sp)s*" % {b"sp": _SP})
 _CHATTER = re.compile(_SP + rb"*")
 _NO_SE = re.compile(rb"%(sp)s*\?%(sp)s*" % {b"sp": _SP})  # rule 7
-STOP_FRAMES = 3  # rule 7: the SA SE one STOP puts on the wire: the express's, the session's two
+# rule 7: the SA SE one STOP puts on the wire: the express's, the session's two (a stop and
+# its repeat 0.1 s apart, or a connection's first stop, twice in one write: rule 11)
+STOP_FRAMES = 3
 # rule 7: up to STOP_FRAMES refusals, one to a line (read one way only, rule 6)
 _NO_SES = re.compile(rb"(?:[\r\n ]*\? *[\r\n]){1,%d}[\r\n ]*" % STOP_FRAMES)
 UNASKED_POLLS = 2  # rule 9: the poll the express's stop's answer came in, the re-poll it asked
@@ -194,6 +205,11 @@ class EasycommCodec(OneQuery):
         self._stop_open = True  # rule 9
         self._stop_behind = self._query_open  # rule 9: the query's answer comes first
         return b"SA SE\n"
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes:
+        """Rule 11 (base.py rule 9): the connection's first stop, behind a half frame."""
+        stop = self.encode_stop()
+        return stop if half is HalfLine.NONE else stop + stop
 
     def expire_query(self) -> None:
         if self._query_open:  # rule 10: its answer may still come, what is left of it

@@ -58,6 +58,16 @@ Rules:
    loaded host: the poll that went out with a STOP was answered after its reply time, the
    next poll took that answer, and its own, a line later, was told on R/error as bytes that
    are no reply.)
+6. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
+   a cut write left in the box, which reads the two as one command: ``S`` then ``S`` CR is
+   ``SS``, refused (attack 22: the rotor turned on 2 s until the stop went again). Where no
+   target may have been cut it is a line end and the stop (CR ``S`` CR): a cut ``S`` is ended
+   as the stop it was, and taken first, a cut ``C`` or ``C2`` as the poll; on a line with
+   nothing in it the box may answer the empty line ``?>`` (interfaces/mqtt/express.py rule
+   9), which is then no refusal: harmless, until the box answers anything else or a target
+   is written. Where a target may have been cut it is the stop twice (``S`` CR ``S`` CR): a
+   cut ``M18`` takes the first (``M18S``, refused, and told: the box did refuse a command),
+   never a line end that would carry it out, and the second is whole.
 """
 
 from __future__ import annotations
@@ -67,6 +77,7 @@ from typing import Any
 
 from bridge.core.model import SettingValue
 from bridge.protocols.base import (
+    HalfLine,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -132,6 +143,7 @@ class Gs232Codec(OneQuery):
         self._after_cr = False  # rule 1: the last line ended with a CR (its LF may follow)
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
+        self._line_end = False  # rule 6: a bare line end went, its ?> may come
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -142,11 +154,21 @@ class Gs232Codec(OneQuery):
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         az, el = self.wire_target(az_deg, el_deg)
+        self._line_end = False  # rule 6: a ?> from now on may be the target's refusal
         if el is None:
             return [b"M%03d\r" % az]
         return [b"W%03d %03d\r" % (az, el)]
 
     def encode_stop(self) -> bytes:
+        return b"S\r"
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes:
+        """Rule 6 (base.py rule 9): the connection's first stop, written behind a half frame."""
+        if half is HalfLine.MOVE:  # (S CR S CR: a cut M18 takes the first S, refused)
+            return b"S\rS\r"
+        if half is HalfLine.HARMLESS:  # (a cut S, C or C2 ended as itself: S then S CR)
+            self._line_end = True
+            return b"\rS\r"
         return b"S\r"
 
     def encode_query(self) -> bytes:
@@ -178,6 +200,12 @@ class Gs232Codec(OneQuery):
                 if refused:  # what came before it on its line
                     self._line(bytes(self._buf[:refused]), out)
                 del self._buf[: refused + len(REFUSED)]
+                if self._line_end and not refused:  # rule 6: the empty line's answer
+                    self._line_end = False
+                    self._say(REFUSED)
+                    why = "the answer to the line end written before a stop"
+                    out.append(JunkReply(REFUSED, JunkReason.CHATTER, why))
+                    continue
                 why = "the controller refused a command (?>)"
                 self._junk(REFUSED, JunkReason.REFUSED, why, out)
                 continue
@@ -192,6 +220,7 @@ class Gs232Codec(OneQuery):
             self._line(line, out)
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
+        self._line_end = False  # rule 6: the box answered past the line end
         if _CHATTER.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
             return

@@ -14,7 +14,8 @@ with rotctl -m 1001.
 Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms on az/el):
   ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
   ``A\\r`` then ``E\\r``               ask each axis; answered by its line
-  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the first at once)
+  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the first at once, the
+                                   axis the last frame named first: rule 9)
 The azimuth model sends only the azimuth's frames.
 
 Rules:
@@ -90,6 +91,20 @@ Rules:
    purpose would be fought, and the limits of an azimuth that wraps are not watched on the way.
    The same holds for an RC2800 that turns a composite's elevation (``E`` CR, ``E5`` CR), where
    other models' elevation boxes follow (settings ``unasked_moves_of``).
+9. A stop begins with the axis the line's last frame named (``encode_stop_after``): that
+   frame goes at once and keeps the box's 200 ms between its axes, which a stop to the
+   other axis a few milliseconds after an ``E`` CR poll broke (attack 22; a box that drops
+   or mis-takes that selection stops the elevation it still has selected, and the azimuth
+   turns on); the other axis's frame follows the gap after it. Its exchange waits for the
+   axes' lines in that order (rule 2).
+10. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
+   a cut write left in the box: ``A`` then ``A`` CR is ``AA``, answered ``ERR``, and the
+   ``S`` stops the axis still selected (attack 22). So its first axis is selected twice
+   (``A`` CR ``A`` CR ``S`` CR): the first selection takes the half frame in (``AA``, ``SA``,
+   ``A12A``: none is a command the box takes), the second is whole and the ``S`` stops that
+   axis. Never a bare line end first: it would carry out a cut ``A12`` of ``A123.4``. A
+   clean line answers the extra selection with one more line of that axis, read as the
+   exchange's (rule 2).
 """
 
 from __future__ import annotations
@@ -98,6 +113,7 @@ import re
 
 from bridge.protocols.base import (
     Codec,
+    HalfLine,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -161,15 +177,24 @@ class Rc2800Codec(Plain, LateAnswers):
         return frames if el is None else [*frames, b"E%.1f\r" % el]
 
     def encode_stop(self) -> list[bytes]:
-        self._open(2)  # each axis answers its selection and its stop
-        return [b"%c\rS\r" % axis for axis in self._axes]
+        return self.encode_stop_after(None, HalfLine.NONE)
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> list[bytes]:
+        """Rules 9 and 10 (base.py rule 9): the axis the line's last frame named first."""
+        first = last_axis[0] if last_axis and last_axis[0] in self._axes else self._axes[0]
+        axes = bytes([first]) + self._axes.replace(bytes([first]), b"")
+        self._open(2, axes)  # each axis answers its selection and its stop
+        frames = [b"%c\rS\r" % axis for axis in axes]
+        if half is not HalfLine.NONE:  # rule 10: a selection to take a half frame in
+            frames[0] = b"%c\r" % first + frames[0]
+        return frames
 
     def encode_query(self) -> list[bytes]:
         self._open(1)
         return [b"%c\r" % axis for axis in self._axes]
 
-    def _open(self, lines_per_axis: int) -> None:
-        self._want = [axis for axis in self._axes for _ in range(lines_per_axis)]
+    def _open(self, lines_per_axis: int, axes: bytes | None = None) -> None:
+        self._want = [axis for axis in axes or self._axes for _ in range(lines_per_axis)]
         self._query = lines_per_axis == 1
         # rule 2: no older than the exchange before this one, and none of one with line noise
         self._seen = set() if self._noisy else self._seen & self._heard

@@ -652,6 +652,7 @@ class Controller:
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
+        self._cut_move = True  # link.py rule 13: a target the last connection wrote may be cut
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
         self._passing = False  # stops.py rule 4: the stops checked now are a pass's (or rule 10's)
         self._pass_ends = False  # ... and the stop due now its last try: given up once written
@@ -782,6 +783,7 @@ class Controller:
         spec = self.cfg.spec
         self._port_error = None
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
+        link.cut_move = self._cut_move  # link.py rule 13: what the last connection may have cut
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = False
@@ -814,6 +816,8 @@ class Controller:
     def disconnect(self, failed: bool, now: float) -> None:
         """The port is closed (``failed``: not on purpose)."""
         stop_due = self.link is not None and self.link.stop_due
+        if self.link is not None:  # link.py rule 13: a target of it may be cut in the box
+            self._cut_move = self.link.move_unsure
         unseen = self.stops.unseen_t
         self.stops.port_closed(failed, stop_due, self.motion, now)
         if self.stops.owed and unseen is not None and unseen == self._released_unseen_t:

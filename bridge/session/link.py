@@ -94,7 +94,9 @@ Rules:
    one to the other axis, written or waiting. A target goes first to the axis last addressed
    (no wait), and the poll frames still waiting are dropped for it (its answers answer the
    poll); a poll waits while frames do and for the gap after any frame. A stop never waits:
-   its first frame goes at once, its others the gap apart.
+   its first frame goes at once, its others the gap apart; its first frame is to the axis the
+   last frame written named (the codec's ``encode_stop_after``), so that going at once keeps
+   the gap too (attack 22: a stop's ``A`` 2 ms after an ``E`` CR poll).
 11. A garbled answer: bytes no healthy exchange has (rule 9's: not the controller's harmless
    chatter, nor a refusal) while a reply is owed and no slew. The controller answered (rule 2),
    but nothing of it is a reading. Its exchange, ended without one (at its deadline, or if the
@@ -142,6 +144,16 @@ Rules:
    start, 'does not answer'; a GS-232B 0.1 s past its 1 s, whose next poll went as the last was
    given up, had each poll take the one before's answer: its bearing published 5 degrees behind
    a turning rotor.)
+13. The connection's first frame lands behind whatever half frame the connection before left
+   in the box (an adapter pulled mid-frame; runtime/port.py rule 6 loses the link rather than
+   leave a frame cut, so only a connection's end leaves one). A stop written as that first
+   frame is the codec's stop behind a half line (protocols/base.py rule 9: ``HalfLine``),
+   told whether a move may be what was cut: ``cut_move``, the controller's word on the
+   connection before (``move_unsure``: a target was written there and no valid reply
+   answered a question written after it, so its bytes may not all have reached the box; a
+   bridge just started knows nothing and says it may). Any frame written ends the half line:
+   stops after it are the plain ones. (Attack 22: a GS-232B's stop owed across an unplug was
+   read as ``SS`` behind the ``S`` the unplug cut, refused, and the rotor turned on 2 s.)
 """
 
 from __future__ import annotations
@@ -152,11 +164,13 @@ from dataclasses import replace
 
 from bridge.protocols.base import (
     Codec,
+    HalfLine,
     JunkReason,
     JunkReply,
     LateAnswers,
     ModelSpec,
     PositionReply,
+    StopsOnTheLine,
 )
 from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 
@@ -228,6 +242,10 @@ class Link:
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
         self._read_t = -math.inf  # rule 11: the last bytes read
+        self._fresh = True  # rule 13: no frame written on this connection yet
+        self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
+        self._move_t = -math.inf  # rule 13: when the last target's last frame goes
+        self._whole_t = -math.inf  # rule 13: the last question a valid reply answered
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -289,6 +307,7 @@ class Link:
     # -- writing ----------------------------------------------------------------------------
     def write(self, frame: bytes, now: float) -> None:
         self._output.append(frame)
+        self._fresh = False  # rule 13: its end ends any half frame in the box
         self._last_write_t = now
         self._last_axis = self._axis(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
@@ -355,8 +374,7 @@ class Link:
         held = self._held
         if held is not None and self.end_held(now) is held:
             self._held, self._held_until = held, now
-        stop = self.codec.encode_stop()
-        frames = stop if isinstance(stop, list) else [stop]
+        frames = self._stop_frames()
         self.write(frames[0], now)  # rule 10: never held back
         self._queue(frames[1:], now + self._gap_s, now)
         if self._slew is not None:
@@ -382,6 +400,7 @@ class Link:
             frames = first[:1] + [f for f in frames if f is not first[0]] if first else frames
         self._repoll_due = False  # rule 11: the target takes the re-poll's place
         first_t = max(now, self._paced_from(frames[0]))
+        self._move_t = first_t + (len(frames) - 1) * self._gap_s  # rule 13
         if first_t > now:
             self._queue(frames, first_t, now)
             return
@@ -390,6 +409,25 @@ class Link:
         if self.spec.refusal_bytes:  # rule 4 (what is sent is a target: controller.py)
             sent = sum(map(len, frames)) + self.spec.refusal_bytes + 1
             self._refusal_until = now + sent * self._byte_s + self.late_s
+
+    def _stop_frames(self) -> list[bytes]:
+        """Rules 10 and 13: the stop's frames, as the line left off."""
+        codec = self.codec
+        if isinstance(codec, StopsOnTheLine):
+            half = HalfLine.NONE
+            if self._fresh:
+                half = HalfLine.MOVE if self.cut_move else HalfLine.HARMLESS
+            stop = codec.encode_stop_after(self._last_axis, half)
+        else:
+            stop = codec.encode_stop()
+        return stop if isinstance(stop, list) else [stop]
+
+    @property
+    def move_unsure(self) -> bool:
+        """Rule 13: a target written on this connection may not have reached the box whole
+        (no valid reply answered a question written after it); or, nothing written on it,
+        what the connection before left (``cut_move``)."""
+        return self._move_t >= self._whole_t or (self._fresh and self.cut_move)
 
     @property
     def _gap_s(self) -> float:
@@ -634,6 +672,8 @@ class Link:
     def _answered(self, now: float) -> None:
         """Rule 2: a valid reply came now: the question it answered went out then (a reply
         to no question since the last one answered, the controller's own, counts from now)."""
+        if self.asked_since_heard:  # rule 13: what was written before that question is whole
+            self._whole_t = self._asked_t
         self._answered_t = self._asked_t if self.asked_since_heard else now
 
     def ask_again(self, now: float, once: bool) -> None:

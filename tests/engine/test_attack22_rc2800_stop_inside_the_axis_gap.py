@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -27,13 +25,6 @@ Rig = Callable[..., VirtualRotator]
 FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: an RC2800 STOP after a frame to the elevation selects the azimuth within "
-        "200 ms of it, breaking the box's axis rule"
-    ),
-)
 def test_a_stop_right_after_a_poll_of_the_elevation_keeps_the_boxs_axis_gap(rig: Rig) -> None:
     v = rig("rc2800", emulator=FAST)
     v.run_until_state(MotionState.IDLE, 30)

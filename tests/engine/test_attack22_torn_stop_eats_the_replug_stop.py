@@ -35,13 +35,6 @@ UNPLUGGED_S = 0.5  # how long the adapter is out (not a deadline)
 RUN_ON_DEG = 3.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: a stop torn by an unplug eats the stop sent on replug; "
-        "the rotor turns on 2 s (12 degrees) before the stop goes again"
-    ),
-)
 @pytest.mark.parametrize(
     ("model", "elevation"), [("gs232b", None), ("easycomm2", 60.0), ("rc2800", 60.0)]
 )

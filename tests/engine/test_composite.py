@@ -173,8 +173,9 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
         az = v.az.truth().az_deg
         v.run_for(3.0)
         assert v.az.truth().az_deg == az < 100.0  # still, short of the target
-        v.el.link_up()  # replugged: the stop it was owed is its first frame
-        assert v.el.sent(since=v.now)[:1] == [b"S\r"]
+        v.el.link_up()  # replugged: the stop it was owed is its first frame (behind a line
+        # end that ends a half frame the unplug left: gs232.py rule 6)
+        assert v.el.sent(since=v.now)[:1] == [b"\rS\r"]
         v.run_until(online, 10, "both boxes answer again")
         assert v.status.state is not MotionState.OFFLINE
 

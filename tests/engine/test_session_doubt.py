@@ -289,7 +289,7 @@ def test_a_stop_lost_at_a_reconnect_stays_owed_when_the_first_reading_back_was_d
     v.stop()  # the operator's STOP while the port is out: owed, the first frame at connect
     v.run_for(0.2)
     assert v.status.stop_owed
-    v.drop_writes(b"S\r")  # ... and the line loses it
+    v.drop_writes(b"\rS\r")  # ... and the line loses it (a connection's first: gs232.py rule 6)
     stop_t = v.now
     v.link_up()
     c = v.session.controller

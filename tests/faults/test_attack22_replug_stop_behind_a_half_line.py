@@ -16,20 +16,11 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from bridge.emulators.gs232 import Outcome
 from tests.faults.conftest import Rig
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: a GS-232B's stop owed across an unplug is refused (?>) behind the half "
-        "frame the unplug left in the box; the rotor turns on 2 s until it goes again"
-    ),
-)
 def test_the_stop_owed_across_an_unplug_is_the_first_command_the_box_takes(rig: Rig) -> None:
     rig.add("gs", "gs232b", emu={"start_az_deg": 10, "az_speed_deg_s": 10.0})
     rig.start()
