@@ -43,6 +43,14 @@ Rules:
    (``JunkReply.late``: the engine learns from it how late the board answers, link.py rule
    12; before, a board that answered every poll 0.1 s late was 'not answering'). Like any
    bearing frame nobody asked for, it is never a reading and harmless (rule 5's known junk).
+8. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
+   a cut write left in the board, an open ``A`` frame that a ``;`` ends: ``AI`` then ``;`` is
+   ``AI;``, invalid (the banner), and the rotor turns on until the stop goes again (attack
+   22's exposure here: 12 degrees on a RotorCard). So on an Idiom board it is ``;`` twice:
+   the first ends the half frame (whatever it makes of it: a bearing command while turning
+   stops the rotor too, the emulator's rule 5), the second stops; to a rotor already still
+   it is answered by the banner, harmless (rule 5). The DCU-1's ``AS1;`` is left as it is:
+   every stop of its goes twice 0.1 s apart already (session/stops.py rule 6).
 """
 
 from __future__ import annotations
@@ -54,6 +62,7 @@ from typing import Any
 from bridge.core.model import SettingValue
 from bridge.protocols.base import (
     Codec,
+    HalfLine,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -144,6 +153,11 @@ class RotorEzCodec(LateAnswers):
 
     def encode_stop(self) -> bytes:
         return b"AS1;" if self._dcu1 else b";"
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes:
+        """Rule 8 (base.py rule 9): the connection's first stop, behind a half frame."""
+        stop = self.encode_stop()
+        return stop if half is HalfLine.NONE or self._dcu1 else stop + stop
 
     def encode_query(self) -> bytes | None:
         if self._dcu1:

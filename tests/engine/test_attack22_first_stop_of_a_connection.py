@@ -113,3 +113,25 @@ def test_a_replug_stop_on_a_clean_line_stops_at_once_and_says_nothing(rig: Rig, 
     assert v.state is MotionState.IDLE
     assert v.errors(since=replug) == [], v.errors(since=replug)
     assert getattr(v.truth(), "too_soon", 0) == 0
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
+def test_a_rotor_ez_replug_stop_behind_a_torn_poll_stops_the_rotor(rig: Rig, model: str) -> None:
+    """The same exposure on an Idiom board: the unplug cut a poll ``AI1;`` after ``AI``, the box
+    holds the open frame, and the replug's stop ``;`` ends it as ``AI;``, an invalid command
+    (its banner): no stop. The first stop of a connection is ``;`` twice: the first ends the
+    half frame, the second stops (a ``;`` to a still rotor is answered by the banner)."""
+    v = rig(model, emulator={"brake_delay_s": 0.0})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.target(200)
+    v.run_until(lambda h: h.state is MotionState.MOVING and h.truth().az_deg > 30, 30, "turning")
+    v.run_until(lambda h: h.writes[-1].data == b"AI1;" and h.writes[-1].t == h.now, 5, "polled")
+    v.run_for(10 / v.cfg.baud * 2.5)  # AI has reached the box, 1; has not
+    v.link_down()
+    v.stop()  # owed
+    v.run_for(UNPLUGGED_S)
+    az_at_replug = v.truth().az_deg
+    assert v.truth().is_moving
+    v.link_up()
+    v.run_until(lambda h: not h.truth().is_moving, 5, "stopped")
+    assert abs(v.truth().az_deg - az_at_replug) < RUN_ON_DEG, (az_at_replug, v.truth().az_deg)

@@ -164,7 +164,7 @@ def test_a_stop_while_the_port_is_closed_is_the_first_frame_once_it_is_open(rig:
     t = v.now
     v.link_up()
     v.run_for(0.5)
-    assert v.sent(since=t)[0] == b";"
+    assert v.sent(since=t)[0] == b";;"  # (a connection's first stop: rotorez.py rule 8)
     assert v.frames(since=t)[0].outcome == "stop"
     v.run_for(2)
     assert not v.truth().is_moving

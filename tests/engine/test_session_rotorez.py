@@ -213,7 +213,7 @@ def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopenin
     t = v.now
     v.link_up()
     v.run_for(1)
-    assert v.sent(since=t)[:1] == [b";"]
+    assert v.sent(since=t)[:1] == [b";;"]  # (a connection's first stop: rotorez.py rule 8)
     assert not v.truth().is_moving
 
 
