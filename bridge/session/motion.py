@@ -113,7 +113,13 @@ Rules:
    last the travel time at the nominal speed (the whole range when the start is unknown), its
    way measured as rule 5's ``along_travel``: 170 to 190 on a DCU-1's Hy-Gain rotor is 340
    degrees round its stop at south, not 20 (a review: taken as over in 7 s, the next target went
-   into the turn, which the box ignores, stopping the rotor 105 degrees off, unsaid).
+   into the turn, which the box ignores, stopping the rotor 105 degrees off, unsaid). Assumed
+   generously (``blind_busy_s``): BLIND_SLOW_FACTOR times the nominal travel time plus
+   BLIND_START_S to get going. A connect (a replug, the bridge started) cannot know whether a
+   turn is still under way: the end assumed before the port was lost is kept, and at least the
+   whole range's generous time from the connect is assumed (attack 22: the connect put the
+   whole range at the nominal speed alone, no margin, in place of what it knew; a rotor a quarter
+   slower was still turning when the next target went, and the box stopped there, unsaid).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -176,6 +182,8 @@ OFFLINE, UNKNOWN, MOVING = MotionState.OFFLINE, MotionState.UNKNOWN, MotionState
 BRAKING, STALLED, IDLE = MotionState.BRAKING, MotionState.STALLED, MotionState.IDLE
 AWAY_MARGIN_DEG = 5.0  # rule 5
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
+BLIND_SLOW_FACTOR = 1.5  # rule 6: a rotor without feedback may be this much slower than nominal
+BLIND_START_S = 2.0  # rule 6: ...and take this long to get going
 COAST_S = 1.0  # ``coast_end``: a rotor's run-on after its motor is cut
 
 
@@ -307,11 +315,18 @@ def stop_checked(m: Motion) -> Motion:
 
 
 # -- observations ----------------------------------------------------------------------------
+def blind_busy_s(travel_deg: float, cfg: MotionConfig) -> float:
+    """Rule 6: how long a turn of ``travel_deg`` is assumed to last without feedback."""
+    return BLIND_SLOW_FACTOR * travel_deg / cfg.nominal_speed_deg_s + BLIND_START_S
+
+
 def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
     if not cfg.can_report_position:
-        # we cannot know whether it is still turning or braking: assume the worst once
-        worst = cfg.az_span_deg / cfg.nominal_speed_deg_s
-        return Motion(state=UNKNOWN, busy_until_t=now + worst)
+        # rule 6: we cannot know whether it is still turning or braking: assume the worst once,
+        # as generously as a turn sent, and never sooner than the end assumed before
+        worst = now + blind_busy_s(cfg.az_span_deg, cfg)
+        kept = m.busy_until_t
+        return Motion(state=UNKNOWN, busy_until_t=worst if kept is None else max(kept, worst))
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,
@@ -332,6 +347,7 @@ def link_down(m: Motion) -> Motion:
         el_position_deg=m.el_position_deg,
         lost_turning=turning or m.lost_turning,
         lost_hand=hand or (m.lost_hand and m.state is OFFLINE),
+        busy_until_t=m.busy_until_t,  # rule 6: no feedback: the turn's assumed end is kept
     )
 
 
@@ -645,8 +661,7 @@ def commanded(
         start = m.assumed_deg
         # (no wrap past the stop; the farther way where the stop is not known to be at north)
         travel = cfg.az_span_deg if start is None else along_travel(start, target_deg, cfg)
-        # generous: 50 % slower than nominal plus two seconds to get going
-        busy = 1.5 * travel / cfg.nominal_speed_deg_s + 2.0
+        busy = blind_busy_s(travel, cfg)  # rule 6: generous
         return replace(
             m,
             target_deg=target_deg,

@@ -25,6 +25,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.emulators.rotorez import Outcome
+from bridge.session.motion import blind_busy_s
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -32,21 +33,14 @@ SLOWER = 4.5  # degrees a second: a quarter below the model's nominal 6
 QUIET_S = 62.0  # the operator's pause before the next target (not a deadline)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: a DCU-1 connect (replug, start) mid-turn resets the turn's assumed end to "
-        "60 s with no margin; the next target goes into the turn, the box stops there and "
-        "ignores it, unsaid"
-    ),
-)
 @pytest.mark.parametrize("connect", ["replug mid-turn", "start mid-turn"])
 def test_a_target_after_a_connect_mid_turn_never_goes_into_that_turn(
     rig: Rig, connect: str
 ) -> None:
     if connect == "replug mid-turn":
         v = rig("dcu1", emulator={"speed_deg_s": SLOWER})
-        v.run_for(90)  # (the start-up's own window over: not a deadline)
+        cfg = v.cfg.motion  # the start-up's own window over (not a deadline):
+        v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
         v.target(350)  # 0 to 350: 78 s at 4.5 deg/s
         v.run_for(1.0)
         v.link_down()

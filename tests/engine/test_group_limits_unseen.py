@@ -17,6 +17,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorEvent, Target
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
+from bridge.session.motion import blind_busy_s
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -27,7 +28,7 @@ def test_a_group_target_with_limits_is_refused_where_no_reading_shows_the_way(ri
     # controller's scale is true 300 -> 390, through north, outside 20..340
     v = rig("dcu1", settings={"az_offset_deg": 180}, emulator={"start_az_deg": 120})
     cfg = v.cfg.motion
-    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
     assert v.status.available and v.status.raw_bearing_deg is None
     t = v.now
     with pytest.raises(Refused) as refused:  # the group's part, judged as the Rotator does
@@ -48,7 +49,7 @@ def test_an_arc_that_ends_at_north_is_refused_where_no_reading_shows_the_way(
     # 300..0, and from raw 0 (true north, inside the arc) any turn goes round the other way
     v = rig("dcu1", emulator={"start_az_deg": start_raw})
     cfg = v.cfg.motion
-    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
     assert v.status.available and v.status.raw_bearing_deg is None
     t = v.now
     with pytest.raises(Refused) as refused:
@@ -67,7 +68,7 @@ def test_an_arc_clear_of_north_and_south_is_kept_where_no_reading_shows_the_way(
     # where its stop is (protocols/rotorez.py), and 300 -> 30 may go through north
     v = rig("dcu1", emulator={"start_az_deg": 300})
     cfg = v.cfg.motion
-    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
     with pytest.raises(Refused) as refused:
         v.aim(Target(30.0, within_deg=(20.0, 340.0)))
     assert refused.value.code is RefusalCode.LIMITS

@@ -15,6 +15,7 @@ import pytest
 
 from bridge.core.model import MotionState
 from bridge.emulators.rotorez_models import Outcome
+from bridge.session.motion import blind_busy_s
 from tests.engine.virtual import WALL_EPOCH_S, VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -26,7 +27,7 @@ def settled(rig: Rig) -> VirtualRotator:
     """Connected long enough for the start-up assumption (maybe turning) to have passed."""
     v = rig("dcu1", emulator={"start_az_deg": 30})
     cfg = v.cfg.motion
-    v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+    v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
     return v
 
 

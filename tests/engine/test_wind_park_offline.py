@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from bridge.core.model import MotionState, Target
 from bridge.protocols.axes import Axis
+from bridge.session.motion import blind_busy_s
 from tests.engine.test_wind import wind, windy
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
@@ -170,7 +171,7 @@ def test_a_dcu1_park_never_seen_is_sent_again_after_the_port_comes_back() -> Non
     v = VirtualRotator("dcu1", settings=settings, emulator={"start_az_deg": 30})
     try:
         cfg = v.cfg.motion
-        v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+        v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
         v.set_deaf(True)  # (a wedged adapter: what the bridge writes never arrives)
         storm(v)
         v.run_until(lambda h: h.status.parked, 120, "the park's estimated move over")

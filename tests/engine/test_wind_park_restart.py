@@ -16,6 +16,7 @@ from bridge.protocols import REGISTRY
 from bridge.runtime.composite import merge
 from bridge.runtime.kept import Kept
 from bridge.runtime.state_store import StateStore
+from bridge.session.motion import blind_busy_s
 from bridge.session.session import RotatorSession
 from tests.engine.test_wind import a_bug_once, wind, windy
 from tests.engine.test_wind_park_offline import parked_then_turned_by_hand
@@ -103,7 +104,7 @@ def test_a_dcu1_park_is_sent_again_by_a_restart_whatever_the_file_says(tmp_path:
     v = VirtualRotator("dcu1", settings=settings, emulator={"start_az_deg": 30})
     try:
         cfg = v.cfg.motion
-        v.run_for(cfg.az_span_deg / cfg.nominal_speed_deg_s + cfg.brake_delay_s + 1)
+        v.run_for(blind_busy_s(cfg.az_span_deg, cfg) + cfg.brake_delay_s + 1)
         wind(v, 90.0)
         v.run_until(lambda h: h.status.parked, 120, "the park's estimated move over")
         assert kept(v, path).storm_arrived is False
