@@ -92,6 +92,7 @@ from bridge.protocols.base import (
     JunkReply,
     ModelSpec,
     NotReady,
+    PacedConnect,
     PositionReply,
     Reply,
     ScalesAzimuth,
@@ -192,6 +193,10 @@ class AzimuthOnly:
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return self._inner.encode_connect(now_unix)
+
+    def connect_written(self, frame: bytes) -> None:
+        if isinstance(self._inner, PacedConnect):  # (session/link.py rule 13)
+            self._inner.connect_written(frame)
 
 
 class _KeepsOwn(AzimuthOnly):

@@ -208,6 +208,15 @@ class StopsOnTheLine(Protocol):
 
 
 @runtime_checkable
+class PacedConnect(Protocol):
+    """A codec whose connect frames owe their replies from their own writes, not from
+    ``encode_connect`` (session/link.py rule 13: each is written when the line takes it, on a
+    half-duplex line only once the one before was answered): told of each as it is written."""
+
+    def connect_written(self, frame: bytes) -> None: ...
+
+
+@runtime_checkable
 class TakesReadings(Protocol):
     """A codec told which of its positions the engine took as readings (link.py rule 9: a
     position whose exchange a second reply spoiled is none). A composite's elevation box sends

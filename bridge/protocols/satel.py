@@ -30,7 +30,10 @@ Rules:
    bridge took the port) would turn the rotor by itself once ``g`` went out, past the lock
    and every limit, unseen (a slew nobody asked for is answered by no report, and a poll
    into it is input while slewing). Cleared before the clock is set and before ``g``, no
-   stored point ever moves it.
+   stored point ever moves it. The engine writes these one at a time, the stop first and then
+   again until the stopped controller's report comes (a stop lost on the line must not let the
+   rest into a slew), the rest each when the line takes it (session/link.py rule 13): what
+   ``?`` and ``z`` owe is owed from their writes (``connect_written``).
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
    Its values are three digits, zero padded, always (the controller's printf; Hamlib reads them
@@ -117,8 +120,14 @@ class SatelCodec:
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         clock = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(now_unix)).encode()
-        self._owed += ["ident", "report"]
         return [b"s", b"x", b"?", b"t" + clock + b"\r\n", b"g", b"z"]  # rule 2
+
+    def connect_written(self, frame: bytes) -> None:
+        """Rule 2: a connect frame just written owes its reply from now (PacedConnect)."""
+        if frame == b"?":
+            self._owed.append("ident")
+        elif frame == b"z":
+            self._owed.append("report")
 
     def encode_query(self) -> bytes:
         self._owed.append("report")

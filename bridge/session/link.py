@@ -154,6 +154,22 @@ Rules:
    bridge just started knows nothing and says it may). Any frame written ends the half line:
    stops after it are the plain ones. (Attack 22: a GS-232B's stop owed across an unplug was
    read as ``SS`` behind the ``S`` the unplug cut, refused, and the rotor turned on 2 s.)
+14. The connect's frames (the codec's ``encode_connect``) keep these rules as every other frame
+    does: each is written when the line takes it (rule 3: on a half-duplex line, not while the
+    reply the one before owes is still coming; ``free``), and what it asks is owed from its
+    write (protocols/base.py ``PacedConnect``), so a reply that is no reading (a version)
+    closes its exchange when the codec awaits no more (``replied``). Until the last is written
+    nothing else goes but a stop: no poll, target, setting or enable. A controller whose connect
+    begins with its stop (``spec.connect_stops``: a SatEL, that takes no input but a stop while
+    it slews, and may be slewing for a process before this one) gets slew.py rule 6 for it: the
+    stop is followed by the stopped controller's report or written again, up to
+    SLEW_STOP_TRIES, and only then does the rest go, once the line has been quiet JUNK_QUIET_S.
+    Each stop's report is waited for as a verdict's reply (rule 2): until it can be whole, and
+    VERDICT_SLACK_S (a stopped controller reports at once; most connects find it at rest, and a
+    reply time a try would hold each of them 6 s). (Attack 22: ``s x ? t... g z`` went out in one
+    breath: one noise burst on the ``s`` let the set-up into the slew, which wedged the box, shown
+    idle with no error; and the clock line, ``g`` and ``z`` went while the box still answered
+    ``?``.)
 """
 
 from __future__ import annotations
@@ -169,10 +185,11 @@ from bridge.protocols.base import (
     JunkReply,
     LateAnswers,
     ModelSpec,
+    PacedConnect,
     PositionReply,
     StopsOnTheLine,
 )
-from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
+from bridge.session.slew import SLEW_MARGIN_S, SLEW_STOP_TRIES, SLEW_TIME_FACTOR, Slew
 
 JUNK_QUIET_S = 0.05
 SETTLE_BYTES = 3  # rule 9: the next byte of a reply sent back to back comes after one
@@ -246,6 +263,9 @@ class Link:
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
         self._move_t = -math.inf  # rule 13: when the last target's last frame goes
         self._whole_t = -math.inf  # rule 13: the last question a valid reply answered
+        self._connecting: deque[bytes] = deque()  # rule 14: the connect's frames still to go
+        self._connect_stops = 0  # rule 14: the connect's stops written
+        self._connect_wait: float | None = None  # rule 14: its stop's report awaited until then
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -381,6 +401,55 @@ class Link:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
             self._reply_deadline = now + self.reply_timeout_s
 
+    def connect(self, frames: list[bytes], now: float) -> None:
+        """Rule 13: the connect's frames, each written when the line takes it (a leading stop
+        where the model's connect begins with one: followed by its report or written again)."""
+        self._connecting = deque(frames)
+        if self.spec.connect_stops and self._connecting:
+            self._connecting.popleft()  # (the codec's stop, written as every stop is)
+            self._connect_stop(now)
+        self.flush_connect(now)
+
+    @property
+    def connecting(self) -> bool:
+        """Rule 13: frames of the connect still to go (or its stop's report awaited)."""
+        return bool(self._connecting) or self._connect_wait is not None
+
+    def _connect_stop(self, now: float) -> None:
+        """Rule 13: the connect's stop, its report awaited until it can be whole."""
+        self.write_stop(now)
+        self._connect_stops += 1
+        whole_s = (1 + self.spec.reply_bytes + 1) * self._byte_s + self.late_s + self.overdue_s
+        self._connect_wait = now + whole_s + self._settle_s + VERDICT_SLACK_S
+
+    def _connect_quiet_t(self) -> float:
+        """Rule 13: the rest of the connect goes no sooner (a stopped controller's report,
+        or any bytes still coming, let finish first)."""
+        return self._held_until if self._held is not None else self._read_t + JUNK_QUIET_S
+
+    def flush_connect(self, now: float) -> None:
+        """Rule 13: the connect's next frames, as far as the line takes them now."""
+        if self._connect_wait is not None:
+            if now < self._connect_wait:
+                return
+            if self._connect_stops < SLEW_STOP_TRIES:
+                self._connect_stop(now)  # no report: lost on the line, or at rest
+                return
+            self._connect_wait = None  # (no report after its tries: at rest)
+        if self._connecting and self.spec.connect_stops and now < self._connect_quiet_t():
+            return
+        while self._connecting and not self._stop_due and self._line_free():
+            frame = self._connecting.popleft()
+            if isinstance(self.codec, PacedConnect):
+                self.codec.connect_written(frame)
+            self.write(frame, now)
+
+    def replied(self) -> None:
+        """Rule 13: a reply that is no reading (a version) came: its exchange is over if the
+        codec awaits no more."""
+        if self._slew is None and not self.codec.awaiting_reply():
+            self._reply_deadline = None
+
     def begin_slew(self, slew: Slew, travel_s: float) -> None:
         """The target just sent starts a slew expected to take ``travel_s``: its report is owed
         until twice that, plus SLEW_MARGIN_S."""
@@ -452,13 +521,24 @@ class Link:
     def _queue(self, frames: list[bytes], first_t: float, now: float, poll: bool = False) -> None:
         for i, frame in enumerate(frames):
             self._outbox.append((first_t + i * self._gap_s, frame, poll))
-        self.flush_outbox(now)
+        self._flush_waiting(now)
 
     def flush_outbox(self, now: float) -> None:
+        """The frames whose time came, then the connect's the line takes now (rule 14)."""
+        self._flush_waiting(now)
+        if self.connecting:
+            self.flush_connect(now)
+
+    def _flush_waiting(self, now: float) -> None:
         while self._outbox and self._outbox[0][0] <= now:
             self.write(self._outbox.popleft()[1], now)
 
     def free(self, for_stop: bool = False) -> bool:
+        if not for_stop and self.connecting:  # rule 14: the connect's frames first
+            return False
+        return self._line_free(for_stop)
+
+    def _line_free(self, for_stop: bool = False) -> bool:
         if self.spec.full_duplex or self._reply_deadline is None:
             return True
         if not for_stop:
@@ -647,7 +727,9 @@ class Link:
         return True
 
     def got_reading(self, now: float) -> None:
-        """A valid position: the slew (if any) is over and the reply is no longer owed."""
+        """A valid position: the slew (if any) is over and the reply is no longer owed (the
+        connect's stop's report: the controller stopped, rule 14)."""
+        self._connect_wait = None
         if not self.codec.awaiting_reply():
             if self._reply_deadline is not None and now - self._asked_t <= self.reply_timeout_s:
                 self.overdue_s -= self.overdue_s * OVERDUE_EASE  # rule 12: answered in time
@@ -662,6 +744,7 @@ class Link:
         """A valid position not taken as a reading (controller.py rule 9: doubted): the reply
         is no longer owed and the controller is not silent, but nothing counts as a fresh
         reading (targets.py rule 7 waits for one)."""
+        self._connect_wait = None  # (rule 14: the controller answered its connect's stop)
         if not self.codec.awaiting_reply():
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a valid reply, which gives a poll
@@ -708,6 +791,8 @@ class Link:
     def poll(self, now: float, interval_s: float) -> bool:
         """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
+            return False
+        if self.connecting:  # rule 14
             return False
         if now < self._refusal_until or now < self.setting_until:  # rule 4
             return False
@@ -806,9 +891,15 @@ class Link:
             times.append(self._junk_t + JUNK_QUIET_S)
         if self._held is not None:
             times.append(self._held_until)
+        if self._connect_wait is not None:  # rule 14
+            times.append(self._connect_wait)
+        elif self._connecting and self.spec.connect_stops and self._reply_deadline is None:
+            times.append(self._connect_quiet_t())
         if self.spec.can_report_position:
             deadline = self._reply_deadline
-            if deadline is None:
+            if deadline is None and self.connecting:
+                pass  # rule 14: no poll before the connect's frames are out
+            elif deadline is None:
                 hold = -math.inf if self._verdict else self._late_hold_t()  # rule 12
                 refusal = max(self._refusal_until, self.setting_until)  # rule 4
                 times.append(max(self._next_poll, self._paced_from(), refusal, hold))

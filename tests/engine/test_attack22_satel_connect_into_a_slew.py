@@ -20,20 +20,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator, settled_at
 
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: a SatEL connect's stop lost on the line lets x ? t g z into the slew the "
-        "box still runs; the box is wedged, shown idle, and the next target never goes"
-    ),
-)
 def test_a_connect_whose_stop_is_lost_sends_nothing_more_into_the_slew(rig: Rig) -> None:
     v = rig("satel", connect=False, emulator={"corrupt_on_misuse": True})
     v.device.receive(b"g", v.now)  # the process before this one set the box slewing

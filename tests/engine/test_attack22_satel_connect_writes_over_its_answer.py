@@ -15,20 +15,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "attack 22: a SatEL connect writes its clock line while the box still answers ?, "
-        "against the half-duplex rule"
-    ),
-)
 def test_nothing_is_written_to_a_satel_while_it_answers_its_identify(rig: Rig) -> None:
     v = rig("satel")
     v.run_for(3)  # (the connect's exchanges: not a deadline)

@@ -256,7 +256,8 @@ def satel_script() -> st.SearchStrategy[list[tuple]]:
         return 1
 
     def connect(c: SatelCodec) -> int:
-        c.encode_connect(0.0)
+        for frame in c.encode_connect(0.0):  # (each as the engine writes it: link.py rule 13)
+            c.connect_written(frame)
         return 1  # one report (and an identification)
 
     return st.lists(

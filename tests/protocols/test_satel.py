@@ -83,8 +83,16 @@ def test_identify_and_connect_sequence() -> None:
     c = SatelCodec()
     frames = c.encode_connect(0.0)
     assert frames == [b"s", b"x", b"?", b"t1970/01/01 00:00:00\r\n", b"g", b"z"]
-    out = c.feed(b"SatEL\r\n" + REPORT)
-    assert VersionReply("SatEL") in out and positions(out) == [READING]
+    assert not c.awaiting_reply()  # owed as each is written (session/link.py rule 13)
+    for frame in frames[:3]:
+        c.connect_written(frame)
+    assert c.awaiting_reply()  # the identification
+    assert c.feed(b"SatEL\r\n") == [VersionReply("SatEL")]
+    assert not c.awaiting_reply()  # the rest may go
+    for frame in frames[3:]:
+        c.connect_written(frame)
+    assert c.awaiting_reply()  # the report
+    assert positions(c.feed(REPORT)) == [READING]
     assert not c.awaiting_reply()
 
 
