@@ -518,3 +518,27 @@ def test_an_elevation_alone_sent_while_a_late_slews_target_waits_keeps_its_azimu
     assert points(v)[-1] == b"p200 40\r"
     assert (v.truth().az_deg, v.truth().el_deg) == (200, 40)
     assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_connect_into_a_slew_stops_it_once_and_sets_up_after_its_report(rig: Rig) -> None:
+    """session/link.py rule 13: the connect's stop answered by the stopped slew's report is
+    not written again, and the set-up follows that report, not the stop."""
+    v = rig("satel", connect=False, emulator={"corrupt_on_misuse": True})
+    v.device.receive(b"g", v.now)  # the process before this one set the box slewing
+    v.device.receive(b"p200 60\r\n", v.now)
+    v.run_for(2)  # (the bridge restarts mid-slew: not a deadline)
+    v.link_up()
+    v.run_for(5)  # (the connect's exchanges: not a deadline)
+    sent = [w.data for w in v.writes]
+    assert sent[:3] == [b"s", b"x", b"?"], sent
+    assert sent.count(b"s") == 1, sent
+    received, report_t = b"", None
+    for t, chunk in v.received:
+        received += chunk
+        if b"Number of stored" in received:
+            report_t = t
+            break
+    assert report_t is not None
+    x_t = next(w.t for w in v.writes if w.data == b"x")
+    assert x_t > report_t  # (the stopped slew's report whole before the set-up)
+    assert v.truth().misuse_count == 0 and not slewing(v)
