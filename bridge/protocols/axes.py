@@ -195,7 +195,7 @@ class AzimuthOnly:
         return self._inner.encode_connect(now_unix)
 
     def connect_written(self, frame: bytes) -> None:
-        if isinstance(self._inner, PacedConnect):  # (session/link.py rule 13)
+        if isinstance(self._inner, PacedConnect):  # (session/link.py rule 14)
             self._inner.connect_written(frame)
 
 

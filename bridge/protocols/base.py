@@ -210,7 +210,7 @@ class StopsOnTheLine(Protocol):
 @runtime_checkable
 class PacedConnect(Protocol):
     """A codec whose connect frames owe their replies from their own writes, not from
-    ``encode_connect`` (session/link.py rule 13: each is written when the line takes it, on a
+    ``encode_connect`` (session/link.py rule 14: each is written when the line takes it, on a
     half-duplex line only once the one before was answered): told of each as it is written."""
 
     def connect_written(self, frame: bytes) -> None: ...

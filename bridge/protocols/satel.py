@@ -32,7 +32,7 @@ Rules:
    into it is input while slewing). Cleared before the clock is set and before ``g``, no
    stored point ever moves it. The engine writes these one at a time, the stop first and then
    again until the stopped controller's report comes (a stop lost on the line must not let the
-   rest into a slew), the rest each when the line takes it (session/link.py rule 13): what
+   rest into a slew), the rest each when the line takes it (session/link.py rule 14): what
    ``?`` and ``z`` owe is owed from their writes (``connect_written``).
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.

@@ -800,7 +800,7 @@ class Controller:
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
             log.info("%s: sending the stop that came while the port was closed", self.name)
             self._send_owed(link, now)
-        link.connect(link.codec.encode_connect(wall_s), now)  # link.py rule 13
+        link.connect(link.codec.encode_connect(wall_s), now)  # link.py rule 14
 
     def _send_owed(self, link: Link, now: float) -> None:
         """stops.py rule 3: the stop owed, written now (checked as any: rule 4)."""
@@ -1027,7 +1027,7 @@ class Controller:
                 if reply.version != self.version:
                     log.info("%s: controller version %s", self.name, reply.version)
                 self.version = reply.version
-                link.replied()  # link.py rule 13: its exchange over
+                link.replied()  # link.py rule 14: its exchange over
             elif isinstance(reply, JunkReply):
                 if reply.reason is JunkReason.POWER_ON:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)

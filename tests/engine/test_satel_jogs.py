@@ -45,7 +45,7 @@ def test_the_clock_line_at_connect_garbled_into_a_jog_up_is_stopped() -> None:
 
 def test_the_opening_stop_garbled_into_a_jog_is_stopped() -> None:
     """The ``s`` that opens the connection, read as ``r``: no report answers it, so it is
-    written again (session/link.py rule 13, as a stop lost on the line), and that stop ends
+    written again (session/link.py rule 14, as a stop lost on the line), and that stop ends
     the jog a few degrees on, before the rest of the connect goes."""
     v = VirtualRotator("satel", settings={"az_max_deg": 300}, emulator=START, connect=False)
     v.garble_writes(b"s", b"r")

@@ -521,7 +521,7 @@ def test_an_elevation_alone_sent_while_a_late_slews_target_waits_keeps_its_azimu
 
 
 def test_a_connect_into_a_slew_stops_it_once_and_sets_up_after_its_report(rig: Rig) -> None:
-    """session/link.py rule 13: the connect's stop answered by the stopped slew's report is
+    """session/link.py rule 14: the connect's stop answered by the stopped slew's report is
     not written again, and the set-up follows that report, not the stop."""
     v = rig("satel", connect=False, emulator={"corrupt_on_misuse": True})
     v.device.receive(b"g", v.now)  # the process before this one set the box slewing

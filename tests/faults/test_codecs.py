@@ -256,7 +256,7 @@ def satel_script() -> st.SearchStrategy[list[tuple]]:
         return 1
 
     def connect(c: SatelCodec) -> int:
-        for frame in c.encode_connect(0.0):  # (each as the engine writes it: link.py rule 13)
+        for frame in c.encode_connect(0.0):  # (each as the engine writes it: link.py rule 14)
             c.connect_written(frame)
         return 1  # one report (and an identification)
 

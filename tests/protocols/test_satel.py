@@ -83,7 +83,7 @@ def test_identify_and_connect_sequence() -> None:
     c = SatelCodec()
     frames = c.encode_connect(0.0)
     assert frames == [b"s", b"x", b"?", b"t1970/01/01 00:00:00\r\n", b"g", b"z"]
-    assert not c.awaiting_reply()  # owed as each is written (session/link.py rule 13)
+    assert not c.awaiting_reply()  # owed as each is written (session/link.py rule 14)
     for frame in frames[:3]:
         c.connect_written(frame)
     assert c.awaiting_reply()  # the identification
