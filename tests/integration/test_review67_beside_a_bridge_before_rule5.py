@@ -24,11 +24,6 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 67: beside a station of the version before rule 5, a bridge on its rotator's "
-    "topic starts, and one target turns both rotors (attack 18 again)",
-)
 def test_a_bridge_on_an_old_stations_rotator_topic_never_turns_on_its_targets(
     tmp_path: Path, broker: Mosquitto, probe: Probe, monkeypatch: pytest.MonkeyPatch
 ) -> None:

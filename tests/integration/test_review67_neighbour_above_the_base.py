@@ -55,11 +55,6 @@ def shared(tmp_path: Path) -> Iterator[tuple[Rig, Probe]]:
         broker.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 67: a client the ACL keeps off the bridge's topics stops its rotor and ends "
-    "the bridge for good with a forged info above its base topic",
-)
 def test_a_client_kept_off_the_bridges_topics_cannot_end_it(
     shared: tuple[Rig, Probe],
 ) -> None:

@@ -10,19 +10,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.interfaces.mqtt.claim import Instance
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 67: after the younger bridge yields, its B/bridge/state stays 'online' and "
-    "the older bridge's next start is refused (code 2), leaving its rotor unattended",
-)
 def test_the_older_bridge_starts_again_after_the_younger_one_yielded(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -161,18 +161,27 @@ A = Instance("rotor-a", "attic", 200, 900.0, ("t/tower", "t/yagi"))  # base "t",
 TOWER = Instance("rotor-me", "shack", 100, 1000.0, ("t/tower",))  # base "t/tower", one rotator
 
 
+# claim rule 6: the R/info on t/tower, this bridge's one rotator's ("mast") or A's tower's
+EVIDENCE = "t/tower/info"
+MAST_INFO, A_TOWER_INFO = b'{"id":"mast","name":"Mast"}', b'{"id":"tower","name":"Tower"}'
+
+
 def tower_look() -> FirstLook:
     hello = "t/tower/bridge/hello"
-    return FirstLook(Claim(TOWER, "t/tower", NEAR_INFO, hello, Topics("t", {}).names()), NEAR_STATE)
+    names = Topics("t", {}).names()
+    claim = Claim(TOWER, "t/tower", NEAR_INFO, hello, names, base_rotator="mast")
+    return FirstLook(claim, NEAR_STATE)
 
 
 def test_a_live_bridge_whose_rotator_topic_is_this_ones_base_topic_refuses_its_first_look() -> None:
     """Claim rule 5 (attack 18): base ``t/tower`` beside a live bridge on ``t`` whose rotator
-    ``tower`` is ``t/tower``: its info and state on ``t/bridge/`` are read and refuse."""
+    ``tower`` is ``t/tower``: its info and state on ``t/bridge/`` are read and, with its
+    rotator's ``R/info`` on ``t/tower`` (rule 6: ``t`` is outside this bridge's tree), refuse."""
     lk = tower_look()
-    assert lk.near_topics == [INFO, STATE]
+    assert lk.near_topics == [INFO, STATE, EVIDENCE]
     lk.begin()
     assert lk.saw(INFO, A.info([]).encode()) and lk.saw(STATE, b"online")
+    assert not lk.saw(EVIDENCE, A_TOWER_INFO)  # (left to the owned topics' judge too)
     outcome = lk.end(timed_out=False)
     assert outcome.refused is not None and "rotor-a" in outcome.refused
     assert "mqtt.base_topic 't/tower'" in outcome.refused
@@ -189,6 +198,7 @@ def test_a_gone_bridges_leftovers_and_a_bridge_beside_this_ones_topics_never_ref
         lk = tower_look()
         lk.begin()
         lk.saw(INFO, info.encode())
+        lk.saw(EVIDENCE, A_TOWER_INFO)  # (a rotator of another bridge there, rule 6)
         if state is not None:
             lk.saw(STATE, state)
         assert lk.end(timed_out=False).refused is None, (info, state)
@@ -197,12 +207,14 @@ def test_a_gone_bridges_leftovers_and_a_bridge_beside_this_ones_topics_never_ref
 def test_an_overlapping_bridge_met_while_running_the_older_says_it_and_the_younger_yields() -> None:
     lk = tower_look()
     lk.begin()
+    lk.saw(EVIDENCE, A_TOWER_INFO)
     lk.end(timed_out=False)
     assert lk.near(INFO, A.info([]).encode()) == (None, False)  # no state yet: not live
     refused, said = lk.near(STATE, b"online")  # A is older: this one yields
     assert refused is not None and "rotor-a" in refused and not said
     lk = tower_look()
     lk.begin()
+    lk.saw(EVIDENCE, A_TOWER_INFO)
     lk.end(timed_out=False)
     young = Instance("rotor-young", "attic", 300, 2000.0, ("t/tower",))
     lk.near(STATE, b"online")
@@ -213,6 +225,65 @@ def test_an_overlapping_bridge_met_while_running_the_older_says_it_and_the_young
     lk.near(STATE, b"online")
     assert lk.saying
     lk.begin()  # a reconnect's look: said, not refused (this one ran, and is the older)
+    lk.saw(EVIDENCE, A_TOWER_INFO)  # (the broker hands it over again)
     lk.saw(INFO, young.info([]).encode())
     lk.saw(STATE, b"online")
     assert lk.end(timed_out=False).refused is None and len(lk.saying) == 1
+
+
+def test_an_info_above_the_base_topic_is_believed_only_with_another_rotator_on_it() -> None:
+    """Claim rule 6 (review 67): ``t/bridge/info`` is outside this bridge's tree (``t/tower``),
+    where a client the ACL keeps off it may write: an online info there naming ``t/tower``,
+    older, refuses nothing and ends nothing, unless the ``R/info`` on ``t/tower`` is another
+    rotator's (a bridge's own rotator's info is written inside this bridge's tree)."""
+    forged = Instance("rotor-forged", "nowhere", 1, 1.0, ("t/tower",))
+    for held in (None, MAST_INFO, b"", b"junk", b'{"id":7}'):  # none, this bridge's own
+        lk = tower_look()
+        lk.begin()
+        lk.saw(INFO, forged.info([]).encode())
+        lk.saw(STATE, b"online")
+        if held is not None:
+            lk.saw(EVIDENCE, held)
+        assert lk.end(timed_out=False).refused is None, held
+        assert lk.near(INFO, forged.info(["x"]).encode()) == (None, False), held
+        assert lk.saying == []
+    # the rotator comes: the younger yields (this one), and says it offline, but A's tower
+    lk = tower_look()
+    lk.begin()
+    lk.saw(INFO, forged.info([]).encode())
+    lk.saw(STATE, b"online")
+    lk.saw(EVIDENCE, MAST_INFO)
+    lk.end(timed_out=False)
+    refused, _ = lk.near(EVIDENCE, A_TOWER_INFO)
+    assert refused is not None and "rotor-forged" in refused
+    assert lk.left_offline() == [NEAR_STATE]  # t/tower/availability: the other's rotator's
+
+
+def test_a_bridge_from_before_topics_above_the_base_refuses_with_its_rotator_there() -> None:
+    """Claim rule 6 (review 67): an info without ``topics`` (a station of the version before
+    rule 5) on ``t``, online, with its rotator's ``R/info`` on this bridge's base topic: its
+    rotator is there, and the start is refused naming it."""
+    old = Instance("rotor-old", "attic", 200, 900.0)  # no topics
+    lk = tower_look()
+    lk.begin()
+    lk.saw(INFO, old.info([]).encode())
+    lk.saw(STATE, b"online")
+    lk.saw(EVIDENCE, A_TOWER_INFO)
+    refused = lk.end(timed_out=False).refused
+    assert refused is not None and "rotor-old" in refused and "'t/tower'" in refused
+
+
+def test_a_yielding_bridge_says_offline_on_its_own_state_and_rotators_not_the_others() -> None:
+    """Claim rule 5 (review 67): base ``t`` with the rotators ``t/tower`` and ``t/yagi`` yields
+    to an older bridge on ``t/tower`` (one rotator, on its base topic): its own state and
+    ``t/yagi/availability`` are left offline; ``t/tower/availability`` is the other's."""
+    me = Instance("rotor-me", "shack", 100, 1000.0, ("t/tower", "t/yagi"))
+    lk = FirstLook(Claim(me, "t", INFO, HELLO, Topics("t", {}).names()), STATE)
+    assert lk.left_offline() == []
+    lk.begin()
+    lk.end(timed_out=False)
+    older = Instance("rotor-older", "attic", 200, 900.0, ("t/tower",))
+    lk.near(NEAR_INFO, older.info([]).encode())
+    refused, _ = lk.near(NEAR_STATE, b"online")
+    assert refused is not None
+    assert lk.left_offline() == [STATE, "t/yagi/availability"]

@@ -66,7 +66,34 @@ Rules:
    other's targets with no bridge to stop them). Not seen: a bridge whose base topic is none
    of the watched ones (a rotator of its with a ``topic`` of its own, outside its base topic;
    or a base topic under one of this bridge's names, ``rotor/tower/lock``): the broker's ACL
-   (docs/deployment.md) is the guard there.
+   (docs/deployment.md) is the guard there. The younger yields as rule 4's, with one
+   difference (review 67: copied from rule 4, it left its ``B/bridge/state`` retained
+   ``online`` beside an info naming its topics, and the older bridge's next start, an upgrade
+   or a reboot, was refused for good, code 2): under rule 5 that state topic is its own, so it
+   says ``offline`` there, and on the availability of each of its rotators and groups whose
+   topic is none of the other's (look.py ``left_offline``), before it goes.
+6. What a client may forge, and where (review 67). A watched topic inside the bridge's own
+   tree (its rotators' topics, anything under its base topic: ``within``) is written only by
+   whoever the broker's ACL lets write there, who could forge its own ``B/bridge/info`` as
+   well: an info there is believed as rule 4 believes its own. One above it
+   (``shack/bridge/info`` for base ``shack/rotor``) is outside: a client the ACL keeps off
+   ``shack/rotor/#`` but lets write ``shack/#`` (a home-automation user) forged an older
+   info naming ``shack/rotor``, and the running bridge yielded, every restart refused after.
+   A real bridge overlapping this one from above has a rotator on this bridge's base topic,
+   and so publishes that rotator's ``R/info`` there, inside this bridge's tree, naming its
+   rotator id (``rotator_there``: an id that is not this bridge's own rotator's on its base
+   topic, ``base_rotator``, whose leftover of an earlier run names its own). So an info
+   outside counts only while the ``R/info`` on this bridge's base topic is another rotator's
+   (the evidence topic, read on every look and while the bridge runs), and only as that
+   overlap: its rotator on this bridge's base topic, where its info names that topic, or no
+   topics at all (a station of the version before rule 5, whose rotator ``tower`` holds
+   ``rotor/tower/...``: review 67, the likeliest order on the air, a new host installed before
+   the station is upgraded). Otherwise it refuses nothing, ends nothing and is said nowhere.
+   Not seen from this side: another bridge above whose rotator on this base topic has the id
+   of this bridge's own rotator there (its ``R/info`` looks like this bridge's leftover), or
+   whose rotator's topic is one of this bridge's rotators' topics (not its base topic); the
+   other bridge, whose tree holds this one's info, sees this one (it yields if the younger,
+   else it says it), and its own start beside this one is refused.
 """
 
 from __future__ import annotations
@@ -233,6 +260,26 @@ def overlapping(
     )
 
 
+def within(topic: str, roots: Sequence[str]) -> bool:
+    """Rule 6: whether ``topic`` is one of ``roots`` or anywhere under one (what an ACL that
+    gives a bridge ``root/#`` lets it, and no one kept off it, write)."""
+    return any(topic == r or topic.startswith(r + "/") for r in roots)
+
+
+def rotator_there(info: bytes | None, mine: str | None) -> bool:
+    """Rule 6: whether ``info`` (the retained ``R/info`` on this bridge's base topic) is another
+    bridge's rotator's: it names a rotator id, not ``mine`` (this bridge's rotator on its base
+    topic, if it has one: its own leftover of an earlier run names that id)."""
+    if not info:
+        return False
+    try:
+        doc = json.loads(info)
+    except (ValueError, RecursionError):
+        return False
+    rid = doc.get("id") if isinstance(doc, dict) else None
+    return isinstance(rid, str) and bool(rid) and rid != mine
+
+
 @dataclass(frozen=True)
 class Claim:
     """What the client needs to take its first look (client.py rule 14)."""
@@ -244,6 +291,8 @@ class Claim:
     # rule 5: the names a bridge uses under a root (topics.py ``Topics.names``); none: rule 5
     # is not looked at (the base topic alone, rule 2)
     names: frozenset[str] = field(default_factory=frozenset)
+    # rule 6: the id of this bridge's rotator whose topic is its base topic (one rotator), if any
+    base_rotator: str | None = None
 
     @property
     def mine(self) -> list[str]:
@@ -258,3 +307,8 @@ class Claim:
         found = {p for t in self.mine for p in above(t)}
         found.discard(self.base_topic)
         return sorted(found)
+
+    def outside(self, where: str) -> bool:
+        """Rule 6: whether a watched base topic is outside this bridge's own tree (above its
+        base topic): a client the ACL keeps off that tree may write there."""
+        return not within(where, self.mine)

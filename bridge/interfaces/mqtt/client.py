@@ -252,7 +252,9 @@ class MqttClient(Connection):
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         if self._look is not None:  # claim rule 5: another's topics, read where the ACL lets us
             cost = "a bridge on that base topic whose topics overlap this one's goes unseen"
-            self.optional({t: cost for t in self._look.near_topics})  # (rule 17)
+            self.optional(
+                {t: cost for t in self._look.near_topics if t != self._look.evidence_topic}
+            )  # (rule 17; claim rule 6's evidence topic is the bridge's own tree's)
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
         self._on_heard: Heard | None = None  # rule 14: the witnesses' hook
@@ -541,7 +543,10 @@ class MqttClient(Connection):
                 wide = sorted({t.rpartition("/")[0] + "/+" for t in look.witnessed})
                 self._probing = [] if self._owned.hears_own else wide
                 subs += [(t, _HEAR_PROBE) for t in self._probing]
-                subs += [(t, 0) for t in look.near_topics]  # claim rule 5: other bridges'
+                # claim rule 5: other bridges' (rule 6's evidence: where no filter of the
+                # bridge's own is that topic, whose options a second SUBSCRIBE would replace)
+                own = {f for f, _ in self._owned.subscriptions()} | set(self._subscriptions)
+                subs += [(t, 0) for t in look.near_topics if t not in own]
                 self._look_sub = self._subscribe(client, subs)
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
@@ -655,7 +660,8 @@ class MqttClient(Connection):
                 return True
             if self._look.watches(topic):  # claim rule 5: another bridge's, while we run
                 self._near(self._look, topic, payload)
-                return True
+                if not self._look.evidence(topic) or not self._owned.owns(topic):
+                    return True  # (claim rule 6's evidence, one of ours: judged as such too)
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
             if late and self._on_heard is not None and self._on_heard(late, frozenset()):
@@ -801,6 +807,8 @@ class MqttClient(Connection):
                 self.refused = outcome.refused
                 self.yielded = self._ran  # (a reconnect's look: the bridge ran: claim rule 4)
                 self._stopping = True
+                if self._ran:  # claim rule 5: what it leaves of its own says it gone
+                    self._leave_offline(look)
             elif outcome.heard is None or self._on_heard is None:
                 self._ran = True
                 self._open(outcome)
@@ -867,12 +875,24 @@ class MqttClient(Connection):
             refused, said = look.near(topic, payload)
             if refused is not None:
                 self.refused, self.yielded = refused, True
-                self._stopping = True  # nothing more goes out (as claim rule 4's yield)
+                self._stopping = True  # nothing more goes out (as claim rule 4's yield)...
+                self._leave_offline(look)  # ... but what of its own says it gone
                 self.connected.clear()
         if said:
             self._say_overlaps()
         if self.refused is not None:
             self._refuse()
+
+    def _leave_offline(self, look: FirstLook) -> None:
+        """Claim rule 5, under the lock, as the bridge yields to an overlapping bridge: its own
+        ``B/bridge/state`` and its rotators' availability (look.py ``left_offline``) are left
+        ``offline`` (retained, QoS 1; a clean disconnect fires no will): left ``online``, they
+        said a live bridge for ever and refused the other's next start (review 67)."""
+        if not self._up:
+            return
+        for topic in look.left_offline():
+            self._retained[topic] = (b"offline", 1)
+            self._delivery.send(topic, b"offline", 1, retain=True)
 
     def _say_overlaps(self) -> None:
         """Claim rule 5: what is said of overlapping bridges, on a thread of its own (it

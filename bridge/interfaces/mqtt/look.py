@@ -29,8 +29,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    configs are named in the log as left alone (claim rule 3). Another instance's info
    arriving while the bridge runs is judged by claim rule 4 (``live_info``). The look reads
    too the info and state of the base topics claim rule 5 watches (``near_topics``, subscribed
-   in the look's SUBSCRIBE, before the hello): judged at its end, and while the bridge runs
-   as each comes (``near``).
+   in the look's SUBSCRIBE, before the hello), and, where one is above the base topic, the
+   ``R/info`` on the base topic that claim rule 6 asks for (``evidence_topic``; subscribed
+   there unless it is an owned topic's filter already, the one rotator's, whose judge sees it
+   too): judged at its end, and while the bridge runs as each comes (``near``).
    The values the broker held on the topics handed to ``witness`` (each rotator's
    ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
    owned-topic judge all the same), and the first look of the process that lets the bridge run
@@ -97,10 +99,11 @@ from bridge.interfaces.mqtt.claim import (
     overlap,
     overlapping,
     refusal,
+    rotator_there,
     yields_to,
 )
 from bridge.interfaces.mqtt.limiter import EventLimiter
-from bridge.interfaces.mqtt.topics import Topics
+from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 
 log = logging.getLogger(__name__)
 
@@ -145,11 +148,35 @@ class FirstLook:
             self._near[t.bridge_info] = self._near[t.bridge_state] = where
         self._near_held: dict[str, bytes] = {}
         self._said: dict[str, str] = {}
+        # claim rule 6: the watched base topics outside this bridge's tree, believed only with
+        # another bridge's rotator on this bridge's base topic (its ``R/info`` there: the
+        # evidence topic, inside this bridge's tree)
+        self._outside = {w for w in claim.watched if claim.outside(w)}
+        self.evidence_topic = RotatorTopics(claim.base_topic).info if self._outside else None
+        if self.evidence_topic is not None:
+            self._near[self.evidence_topic] = ""
+        self.yielded_to: tuple[str, Instance] | None = None  # claim rule 5: where, and whom
 
     @property
     def near_topics(self) -> list[str]:
-        """Claim rule 5: the topics every look subscribes to besides its own."""
+        """Claim rule 5: the topics every look subscribes to besides its own (rule 6's
+        evidence topic among them)."""
         return sorted(self._near)
+
+    def left_offline(self) -> list[str]:
+        """Claim rule 5: what a bridge that yields to an overlapping bridge says ``offline``
+        on, being its own: its ``B/bridge/state`` (under rule 5 no other bridge's) and each of
+        its rotators' and groups' availability but those at a topic of the other's (its base
+        topic, a topic its info names; an info naming none: this bridge's base topic too,
+        where rule 6 found its rotator)."""
+        if self.yielded_to is None:
+            return []
+        where, other = self.yielded_to
+        theirs = {where, *other.topics}
+        if not other.topics:
+            theirs.add(self.claim.base_topic)
+        own = [t for t in self.claim.me.topics if t not in theirs]
+        return [self._state_topic, *(RotatorTopics(t).availability for t in own)]
 
     def watches(self, topic: str) -> bool:
         """Claim rule 5: whether ``topic`` is a watched bridge's info or state."""
@@ -169,7 +196,7 @@ class FirstLook:
         other = Instance.parse(info) if info else None
         clash: str | None = None
         if other is not None and other.id != self.claim.me.id and state.strip() == b"online":
-            hit = overlap(self.claim.mine, [where, *other.topics], self.claim.names)
+            hit = self._overlap(where, other)
             if hit is not None:
                 clash = overlapping(self.claim.base_topic, where, other, *hit, live=not first)
         said = self._said.pop(where, None)
@@ -179,11 +206,28 @@ class FirstLook:
             return None, said is not None
         assert other is not None
         if first or yields_to(self.claim.me, other):
+            self.yielded_to = where, other
             return clash, said is not None
         self._said[where] = clash
         if said != clash:
             log.error("%s", clash)
         return None, said != clash
+
+    def _overlap(self, where: str, other: Instance) -> tuple[str, str] | None:
+        """Claim rules 5 and 6: the topics of this bridge and of the bridge on ``where`` that
+        overlap, if any. One outside this bridge's tree (rule 6) only where another bridge's
+        rotator is on this bridge's base topic, and its info names that topic (or no topics:
+        a bridge from before them)."""
+        if where not in self._outside:
+            return overlap(self.claim.mine, [where, *other.topics], self.claim.names)
+        base = self.claim.base_topic
+        assert self.evidence_topic is not None
+        evidence = self._near_held.get(self.evidence_topic)
+        if not rotator_there(evidence, self.claim.base_rotator):
+            return None
+        if other.topics and base not in other.topics:
+            return None
+        return base, base
 
     def near(self, topic: str, payload: bytes) -> tuple[str | None, bool]:
         """Claim rule 5, while the bridge runs (no look under way): a watched topic's message:
@@ -192,7 +236,20 @@ class FirstLook:
         if where is None or self.looking is not None:
             return None, False
         self._near_held[topic] = payload
-        return self._judge_near(where, first=False)
+        if where:
+            return self._judge_near(where, first=False)
+        said = False  # claim rule 6: the evidence changed: every base topic outside is judged
+        for outside in sorted(self._outside):
+            refused, changed = self._judge_near(outside, first=False)
+            said = said or changed
+            if refused is not None:
+                return refused, said
+        return None, said
+
+    def evidence(self, topic: str) -> bool:
+        """Claim rule 6: whether ``topic`` is the evidence topic (its messages are the
+        bridge's own topic's too, when a rotator of its is on its base topic)."""
+        return topic == self.evidence_topic
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -256,7 +313,7 @@ class FirstLook:
             return False
         if topic in self._near:  # claim rule 5: judged at the look's end
             self._near_held[topic] = payload
-            return True
+            return topic != self.evidence_topic  # (rule 6: also the owned topic's judge's)
         if topic not in (self.claim.info_topic, self._state_topic):
             return False
         self._seen[topic] = payload
@@ -285,7 +342,7 @@ class FirstLook:
         # claim rule 5: a bridge overlapping this one's topics, online: the first look refuses;
         # a later one (the bridge ran) judges as while running (the younger yields)
         said = False
-        for where in sorted(set(self._near.values())):
+        for where in sorted(set(self._near.values()) - {""}):
             overlapped, changed = self._judge_near(where, first=not self._opened)
             said = said or changed
             if overlapped is not None:
