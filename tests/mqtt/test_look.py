@@ -3,9 +3,15 @@ look saw decides whether stale discovery is deleted, left alone, or the bridge r
 
 from __future__ import annotations
 
+import logging
+
+import pytest
+
 from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.limiter import EventLimiter
 from bridge.interfaces.mqtt.look import FirstLook
 from bridge.interfaces.mqtt.topics import Topics
+from tests.support.clock import FakeClock
 
 ME = Instance("rotor-me", "shack", 100, 1000.0)
 OTHER = Instance("rotor-other", "attic", 200, 900.0)
@@ -166,11 +172,11 @@ EVIDENCE = "t/tower/info"
 MAST_INFO, A_TOWER_INFO = b'{"id":"mast","name":"Mast"}', b'{"id":"tower","name":"Tower"}'
 
 
-def tower_look() -> FirstLook:
+def tower_look(said: EventLimiter | None = None) -> FirstLook:
     hello = "t/tower/bridge/hello"
     names = Topics("t", {}).names()
     claim = Claim(TOWER, "t/tower", NEAR_INFO, hello, names, base_rotator="mast")
-    return FirstLook(claim, NEAR_STATE)
+    return FirstLook(claim, NEAR_STATE, said)
 
 
 def test_a_live_bridge_whose_rotator_topic_is_this_ones_base_topic_refuses_its_first_look() -> None:
@@ -287,3 +293,28 @@ def test_a_yielding_bridge_says_offline_on_its_own_state_and_rotators_not_the_ot
     refused, _ = lk.near(NEAR_STATE, b"online")
     assert refused is not None
     assert lk.left_offline() == [STATE, "t/yagi/availability"]
+
+
+def test_a_flapping_overlapping_bridge_is_logged_a_few_times_then_once_a_minute(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Claim rule 7 (review 67): each online and offline of a younger overlapping bridge
+    changes what is said, but the log has a few lines, then one a minute, saying how many it
+    left out."""
+    clock = FakeClock()
+    lk = tower_look(EventLimiter(clock, 3, 1 / 60))
+    lk.begin()
+    lk.saw(EVIDENCE, A_TOWER_INFO)
+    lk.end(timed_out=False)
+    young = Instance("rotor-young", "attic", 300, 2000.0, ("t/tower",))
+    lk.near(INFO, young.info([]).encode())
+    with caplog.at_level(logging.INFO, logger="bridge.interfaces.mqtt.look"):
+        for _ in range(100):
+            assert lk.near(STATE, b"online") == (None, True)
+            assert lk.near(STATE, b"offline") == (None, True)
+        assert len(caplog.records) == 3
+        clock.t += 60
+        lk.near(STATE, b"online")
+    assert len(caplog.records) == 4
+    assert "197 more line(s) of that bridge not logged" in caplog.records[-1].getMessage()
+    assert lk.saying and "rotor-young" in lk.saying[0]  # B/bridge/info: the last verdict

@@ -21,11 +21,6 @@ from tests.support.rig import Rig
 BURST = 200  # pairs of online and offline
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 67: a watched bridge/state flapping online/offline writes two log lines per "
-    "flap and republishes B/bridge/info each time, without limit",
-)
 def test_a_flapping_overlapping_bridge_is_not_logged_line_by_line(
     rig: Rig, probe: Probe, caplog: pytest.LogCaptureFixture
 ) -> None:

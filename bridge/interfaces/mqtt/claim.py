@@ -94,6 +94,11 @@ Rules:
    whose rotator's topic is one of this bridge's rotators' topics (not its base topic); the
    other bridge, whose tree holds this one's info, sees this one (it yields if the younger,
    else it says it), and its own start beside this one is refused.
+7. What is said of an overlapping bridge is bounded (review 67: a watched state flapping
+   ``online`` and ``offline`` wrote two log lines a flap and republished ``B/bridge/info``
+   each time): the log has a few lines of each watched base topic at once, then one a minute,
+   saying how many it left out (client.py's limiter, handed to look.py); ``B/bridge/info``
+   says the last verdict, at most once a second (client.py OVERLAPS_SAID_EVERY_S).
 """
 
 from __future__ import annotations

@@ -171,6 +171,8 @@ _HEAR_PROBE = SubscribeOptions(qos=0, noLocal=False, retainAsPublished=False, re
 WILL_OUTLIVED_S = 1.0
 LOOK_TIMEOUT_S = 5.0  # rule 14: nothing from the broker this long ends the look...
 LOOK_MAX_S = 60.0  # ... and this long whatever comes (a flood of messages ends it all the same)
+OVERLAPS_SAID_AT_ONCE = 3  # claim rule 7: lines of one overlapping bridge before the limit
+OVERLAPS_SAID_EVERY_S = 1.0  # claim rule 7: B/bridge/info says them again at most this often
 
 
 class _Ears:
@@ -249,7 +251,10 @@ class MqttClient(Connection):
         self._owned = OwnedTopics(clock, hears_own=not self._v5)  # rule 10
         self._owned.will = (will_topic, b"offline")
         self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
-        self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
+        # rule 14; claim rule 7: what is logged of each overlapping bridge, a few lines at
+        # once, then one a minute
+        said = EventLimiter(clock, OVERLAPS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
+        self._look = FirstLook(claim, will_topic, said) if claim is not None else None
         if self._look is not None:  # claim rule 5: another's topics, read where the ACL lets us
             cost = "a bridge on that base topic whose topics overlap this one's goes unseen"
             self.optional(
@@ -298,6 +303,9 @@ class MqttClient(Connection):
         self._on_overlap = on_overlap  # claim rule 5: said on B/bridge/info while it lasts
         self._overlap_lock = threading.Lock()  # claim rule 5: one report at a time
         self._overlap_said: set[str] = set()  # claim rule 5: as said (under ``_overlap_lock``)
+        self._overlap_owed_lock = threading.Lock()  # claim rule 7: the report owed, and when
+        self._overlap_owed = False
+        self._overlap_next = 0.0  # (monotonic: the timer's clock)
 
     @property
     def problems(self) -> list[str]:
@@ -896,14 +904,27 @@ class MqttClient(Connection):
 
     def _say_overlaps(self) -> None:
         """Claim rule 5: what is said of overlapping bridges, on a thread of its own (it
-        publishes: paho's thread holds its mutex here); the last verdict is the one said."""
-        if self._on_overlap is not None:
-            threading.Thread(target=self._report_overlaps, daemon=True).start()
+        publishes: paho's thread holds its mutex here); the last verdict is the one said.
+        Claim rule 7: one report owed at a time, OVERLAPS_SAID_EVERY_S after the last at the
+        soonest (a state flapping online and offline republished B/bridge/info each time)."""
+        if self._on_overlap is None:
+            return
+        with self._overlap_owed_lock:
+            if self._overlap_owed:
+                return  # the report owed says the last verdict
+            self._overlap_owed = True
+            wait_s = max(0.0, self._overlap_next - time.monotonic())
+        timer = threading.Timer(wait_s, self._report_overlaps)
+        timer.daemon = True
+        timer.start()
 
     def _report_overlaps(self) -> None:
         look, report = self._look, self._on_overlap
         assert look is not None and report is not None
         with self._overlap_lock:
+            with self._overlap_owed_lock:  # (a change from now on owes a report of its own)
+                self._overlap_owed = False
+                self._overlap_next = time.monotonic() + OVERLAPS_SAID_EVERY_S
             with self._lock:
                 now = set(look.saying)
             for problem in sorted(self._overlap_said - now):

@@ -125,7 +125,9 @@ class Outcome:
 
 
 class FirstLook:
-    def __init__(self, claim: Claim, will_topic: str) -> None:
+    def __init__(self, claim: Claim, will_topic: str, said: EventLimiter | None = None) -> None:
+        """``said``: claim rule 7's limiter of what is logged of each overlapping bridge (by
+        its base topic); none: every line."""
         self.claim = claim
         self._state_topic = will_topic  # ``B/bridge/state``
         self._looks = 0
@@ -155,6 +157,7 @@ class FirstLook:
         self.evidence_topic = RotatorTopics(claim.base_topic).info if self._outside else None
         if self.evidence_topic is not None:
             self._near[self.evidence_topic] = ""
+        self._logged = said
         self.yielded_to: tuple[str, Instance] | None = None  # claim rule 5: where, and whom
 
     @property
@@ -177,6 +180,14 @@ class FirstLook:
             theirs.add(self.claim.base_topic)
         own = [t for t in self.claim.me.topics if t not in theirs]
         return [self._state_topic, *(RotatorTopics(t).availability for t in own)]
+
+    def _say(self, where: str, level: int, message: str) -> None:
+        """Claim rule 7: a line of what is said of the bridge on ``where``, within its limit."""
+        left_out = self._logged.admit(where) if self._logged is not None else 0
+        if left_out is None:
+            return
+        more = f" ({left_out} more line(s) of that bridge not logged)" if left_out else ""
+        log.log(level, "%s%s", message, more)
 
     def watches(self, topic: str) -> bool:
         """Claim rule 5: whether ``topic`` is a watched bridge's info or state."""
@@ -202,7 +213,11 @@ class FirstLook:
         said = self._said.pop(where, None)
         if clash is None:
             if said is not None:
-                log.warning("the bridge on %r no longer overlaps this one's topics", where)
+                self._say(
+                    where,
+                    logging.WARNING,
+                    f"the bridge on {where!r} no longer overlaps this one's topics",
+                )
             return None, said is not None
         assert other is not None
         if first or yields_to(self.claim.me, other):
@@ -210,7 +225,7 @@ class FirstLook:
             return clash, said is not None
         self._said[where] = clash
         if said != clash:
-            log.error("%s", clash)
+            self._say(where, logging.ERROR, clash)
         return None, said != clash
 
     def _overlap(self, where: str, other: Instance) -> tuple[str, str] | None:
