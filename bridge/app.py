@@ -304,8 +304,7 @@ class App:
                 self.topics.bridge_info,
                 self.topics.bridge_hello,
                 self.topics.names(),  # claim rule 5
-                # claim rule 6: its own rotator on its base topic (one rotator), if any
-                next((rid for rid, t in roots.items() if t == settings.mqtt.base_topic), None),
+                frozenset(roots),  # claim rule 6: its rotators' ids
             ),
             on_refused=self._refused,
             on_overlap=self._info,  # claim rule 5: said while it lasts

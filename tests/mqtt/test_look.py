@@ -175,7 +175,9 @@ MAST_INFO, A_TOWER_INFO = b'{"id":"mast","name":"Mast"}', b'{"id":"tower","name"
 def tower_look(said: EventLimiter | None = None) -> FirstLook:
     hello = "t/tower/bridge/hello"
     names = Topics("t", {}).names()
-    claim = Claim(TOWER, "t/tower", NEAR_INFO, hello, names, base_rotator="mast")
+    claim = Claim(
+        TOWER, "t/tower", NEAR_INFO, hello, names, rotator_ids=frozenset({"mast", "dish"})
+    )
     return FirstLook(claim, NEAR_STATE, said)
 
 
@@ -243,7 +245,8 @@ def test_an_info_above_the_base_topic_is_believed_only_with_another_rotator_on_i
     older, refuses nothing and ends nothing, unless the ``R/info`` on ``t/tower`` is another
     rotator's (a bridge's own rotator's info is written inside this bridge's tree)."""
     forged = Instance("rotor-forged", "nowhere", 1, 1.0, ("t/tower",))
-    for held in (None, MAST_INFO, b"", b"junk", b'{"id":7}'):  # none, this bridge's own
+    dish = b'{"id":"dish"}'  # (its one rotator on t/tower before it had two)
+    for held in (None, MAST_INFO, dish, b"", b"junk", b'{"id":7}'):  # none, this bridge's own
         lk = tower_look()
         lk.begin()
         lk.saw(INFO, forged.info([]).encode())

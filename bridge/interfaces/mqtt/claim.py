@@ -81,8 +81,9 @@ Rules:
    info naming ``shack/rotor``, and the running bridge yielded, every restart refused after.
    A real bridge overlapping this one from above has a rotator on this bridge's base topic,
    and so publishes that rotator's ``R/info`` there, inside this bridge's tree, naming its
-   rotator id (``rotator_there``: an id that is not this bridge's own rotator's on its base
-   topic, ``base_rotator``, whose leftover of an earlier run names its own). So an info
+   rotator id (``rotator_there``: an id that is none of this bridge's own rotators' ids,
+   ``rotator_ids``: its leftover of an earlier run, its one rotator on the base topic before
+   it had several, names one of them). So an info
    outside counts only while the ``R/info`` on this bridge's base topic is another rotator's
    (the evidence topic, read on every look and while the bridge runs), and only as that
    overlap: its rotator on this bridge's base topic, where its info names that topic, or no
@@ -90,7 +91,7 @@ Rules:
    ``rotor/tower/...``: review 67, the likeliest order on the air, a new host installed before
    the station is upgraded). Otherwise it refuses nothing, ends nothing and is said nowhere.
    Not seen from this side: another bridge above whose rotator on this base topic has the id
-   of this bridge's own rotator there (its ``R/info`` looks like this bridge's leftover), or
+   of one of this bridge's rotators (its ``R/info`` looks like this bridge's leftover), or
    whose rotator's topic is one of this bridge's rotators' topics (not its base topic); the
    other bridge, whose tree holds this one's info, sees this one (it yields if the younger,
    else it says it), and its own start beside this one is refused.
@@ -271,10 +272,10 @@ def within(topic: str, roots: Sequence[str]) -> bool:
     return any(topic == r or topic.startswith(r + "/") for r in roots)
 
 
-def rotator_there(info: bytes | None, mine: str | None) -> bool:
+def rotator_there(info: bytes | None, mine: frozenset[str]) -> bool:
     """Rule 6: whether ``info`` (the retained ``R/info`` on this bridge's base topic) is another
-    bridge's rotator's: it names a rotator id, not ``mine`` (this bridge's rotator on its base
-    topic, if it has one: its own leftover of an earlier run names that id)."""
+    bridge's rotator's: it names a rotator id, none of ``mine`` (this bridge's rotators' ids:
+    its own leftover of an earlier run names one)."""
     if not info:
         return False
     try:
@@ -282,7 +283,7 @@ def rotator_there(info: bytes | None, mine: str | None) -> bool:
     except (ValueError, RecursionError):
         return False
     rid = doc.get("id") if isinstance(doc, dict) else None
-    return isinstance(rid, str) and bool(rid) and rid != mine
+    return isinstance(rid, str) and bool(rid) and rid not in mine
 
 
 @dataclass(frozen=True)
@@ -296,8 +297,8 @@ class Claim:
     # rule 5: the names a bridge uses under a root (topics.py ``Topics.names``); none: rule 5
     # is not looked at (the base topic alone, rule 2)
     names: frozenset[str] = field(default_factory=frozenset)
-    # rule 6: the id of this bridge's rotator whose topic is its base topic (one rotator), if any
-    base_rotator: str | None = None
+    # rule 6: this bridge's rotators' ids (a retained R/info naming one is its own leftover)
+    rotator_ids: frozenset[str] = field(default_factory=frozenset)
 
     @property
     def mine(self) -> list[str]:

@@ -238,7 +238,7 @@ class FirstLook:
         base = self.claim.base_topic
         assert self.evidence_topic is not None
         evidence = self._near_held.get(self.evidence_topic)
-        if not rotator_there(evidence, self.claim.base_rotator):
+        if not rotator_there(evidence, self.claim.rotator_ids):
             return None
         if other.topics and base not in other.topics:
             return None
