@@ -1,0 +1,97 @@
+"""Review 70 (968c2d20, 9890fe96: parts.py rule 10, ``StartHalt``): a start whose first target
+the judge refuses holds the rotor where it is, the turn under way stopped once, and that turn
+may be the one a controller finishes by itself after a replug mid-turn (parts.py rule 8,
+review 50's case: the start's first target stops it or re-targets it). But ``turning`` leaves
+out a turn carried over the lost link that no reading has shown moving since (motion.py rule
+4, ``lost_turning``), and the two refusals attack 19 fixed are judged once and never again:
+following's grid ("reported once for that grid and not tried again", follow.py rule 5) and
+tracking's wait for the pass (``_waited_for`` is set before the judge). A start right after the
+controller answers again is refused on R/error, nothing halts, and the rotor turns on some 95
+degrees to the target from before the unplug, which nobody stands for any more. (A refused
+step mid-pass is judged again at every step and halts the turn once it is seen: not this.)"""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.core.model import ErrorKind
+from bridge.sky import Body, Sky
+from tests.engine.test_attack19_track_start_refused_wait import T0, _scripted_sky
+from tests.engine.test_follow import STATION, bearing
+from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between
+from tests.support.sky import synthetic_tle
+
+
+def _replugged_mid_turn(v: VirtualRotator) -> None:
+    """The adapter pulled and put back while the rotor turns; the controller answers again,
+    finishing its old turn by itself (its target dropped with the port)."""
+    v.run_for(0.1)  # (between two polls: a query torn by the unplug is another story)
+    v.link_down()
+    v.run_for(2.0)  # (the adapter out: not a deadline)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+    assert v.truth().is_moving  # (it finishes its old turn by itself)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 70: a follow start right after a replug mid-turn, its partner in a keep-out "
+    "sector, says the refusal while the rotor turns on 90 degrees to the old target",
+)
+def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
+    partner = bearing("PM95")  # 42.2 from the test station
+    sector = [round(partner) - 10, round(partner) + 10]
+    emulator = {"start_az_deg": round(partner) + 20}
+    settings = {"keep_out": [sector]}
+    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        v.target(round(partner + 140.0))  # (never through the sector)
+        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+        _replugged_mid_turn(v)
+        t, here = v.now, v.truth().az_deg
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)
+        [refused] = v.errors(ErrorKind.REFUSED, since=t)
+        assert "keep-out" in refused.message
+        assert v.status.following is not None  # taken, and waiting for a grid it may turn to
+        # held where it was (a stop and the Rotor-EZ's coast): observed 90 -> 182
+        assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 70: a track start right after a replug mid-turn, whose wait for the pass is "
+    "refused, says 'holding' while the rotor turns on 95 degrees to the old target",
+)
+def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds_the_rotor() -> (
+    None
+):
+    line1, line2 = synthetic_tle(
+        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    v = VirtualRotator(
+        "rotorez",
+        sky=Sky(52.52, 13.29),
+        wall_epoch_s=T0,
+        emulator={"start_az_deg": 200.0},
+        settings={"keep_out": [[90, 150]]},  # the whole pass (azimuth 100 to 140) is in it
+    )
+    v.answer_sky = _scripted_sky
+    with v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
+        v.target(340)
+        v.run_until(lambda h: h.truth().az_deg >= 230.0, 60, "turning toward 340")
+        _replugged_mid_turn(v)
+        t, here = v.now, v.truth().az_deg
+        v.track(Body.satellite("TESTSAT", line1, line2))
+        v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
+        assert v.status.tracking is not None  # taken, and holding
+        [refused] = v.errors(ErrorKind.REFUSED, since=t)
+        assert "keep-out" in refused.message and "holding" in refused.message
+        # held where it was (a stop and the Rotor-EZ's coast): observed 244 -> 340
+        assert abs(v.truth().az_deg - here) <= 15.0, (here, v.truth().az_deg)
