@@ -317,7 +317,7 @@ _BOM = b"\xef\xbb\xbf"
         _DECLARATION + b"\r\n",
         _BOM,
         _BOM + _DECLARATION + b"\n",
-        b" <?XML version='1.0'?> ",
+        b" <?xml version='1.0' standalone='yes' ?> ",
     ],
 )
 def test_a_bom_and_an_xml_declaration_in_front_are_passed_over_as_an_xml_parser_would(
@@ -344,6 +344,7 @@ def test_a_bom_and_an_xml_declaration_in_front_are_passed_over_as_an_xml_parser_
         _BOM + _BOM + b"<PST><AZIMUTH>85</AZIMUTH></PST>",
         b"<PST><AZIMUTH>85</AZIMUTH></PST>" + _DECLARATION,  # only in front
         _DECLARATION,
+        b"<?XML version='1.0'?><PST><AZIMUTH>85</AZIMUTH></PST>",  # 'xml' is lower case
     ],
 )
 def test_nothing_else_in_front_is_passed_over(datagram: bytes) -> None:

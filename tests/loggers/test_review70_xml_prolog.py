@@ -40,11 +40,6 @@ def test_no_xml_reader_takes_these_heads(head: bytes) -> None:
     assert not _xml_reads(head + _TURN_N1MM)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: a logger's datagram headed by '<?xml' and any junk up to '?>' (no "
-    "version, non-ASCII bytes) is taken for an XML declaration and turns the rotor",
-)
 @pytest.mark.parametrize("head", _NO_DECLARATIONS)
 def test_what_is_no_xml_declaration_in_front_moves_nothing(head: bytes) -> None:
     with pytest.raises(Malformed):  # observed: PstRequest(azimuth=85.0)

@@ -42,8 +42,10 @@ Rules:
 8. What an XML writer may put in front of the root element is passed over, as an XML parser
    would: a UTF-8 byte-order mark and one XML declaration (``<?xml version="1.0"
    encoding="utf-8"?>``, the head of N1MM's other broadcasts), with white space around them
-   (an attack pass: a datagram so headed was Malformed, a stop included). Nothing else is
-   (no comment, no DOCTYPE): the forms are the fact sheet's.
+   (an attack pass: a datagram so headed was Malformed, a stop included). A declaration is
+   what XML 1.0's grammar calls one (review 70: ``<?xml`` and any junk up to ``?>``, which no
+   XML reader takes, turned the rotor). Nothing else is (no comment, no DOCTYPE): the forms
+   are the fact sheet's.
 """
 
 from __future__ import annotations
@@ -63,8 +65,14 @@ _ITEM = re.compile(
 )
 _VALUE = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+))(?:\.\d+)?\s*$")
 _N1MM = re.compile(rb"^\s*<n1mmrotor>(?P<body>.*)</n1mmrotor>\s*$", re.I | re.S)
-#: rule 8: a byte-order mark and an XML declaration ahead of the root element
-_PROLOG = re.compile(rb"^\s*(?:\xef\xbb\xbf)?\s*(?:<\?xml(?:\s[^<>]{0,200})?\?>)?", re.I)
+#: rule 8: a byte-order mark and an XML declaration ahead of the root element, as XML 1.0's
+#: grammar has it (``XMLDecl``): a version, then an encoding and a standalone, each optional
+_DECLARATION = (
+    rb"<\?xml\s+version\s*=\s*(?:\"1\.[0-9]+\"|'1\.[0-9]+')"
+    rb"(?:\s+encoding\s*=\s*(?:\"[A-Za-z][A-Za-z0-9._-]*\"|'[A-Za-z][A-Za-z0-9._-]*'))?"
+    rb"(?:\s+standalone\s*=\s*(?:\"(?:yes|no)\"|'(?:yes|no)'))?\s*\?>"
+)
+_PROLOG = re.compile(rb"^\s*(?:\xef\xbb\xbf)?\s*(?:" + _DECLARATION + rb")?")
 
 
 class Malformed(ValueError):
