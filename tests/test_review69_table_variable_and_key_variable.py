@@ -1,0 +1,44 @@
+"""Review 69: 2bfa58c0 refuses two variables of which "the first sets a table whole and the
+second a key in it", saying "which the bridge took would depend on their order". For a table
+of the top (``[mqtt]``, ``[web]``...) it does not: pydantic-settings reads the table's JSON and
+lays the key's variable over it, in either order, and the bridge took both (the key's value
+for that key, the JSON for the others). deploy/docker/compose.yaml sets
+``ROTOR_BRIDGE_MQTT__HOST`` and ``__PORT`` for everyone; a user who adds the rest of ``[mqtt]``
+as one ``ROTOR_BRIDGE_MQTT`` JSON variable had a bridge that started before the change and is
+refused after it, exit 2, for an order that never mattered."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.support import cli, to_toml
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 69: ROTOR_BRIDGE_MQTT='{...}' beside compose.yaml's ROTOR_BRIDGE_MQTT__HOST "
+    "worked (the key's variable wins, in any order) and is now refused, exit 2",
+)
+def test_a_table_in_json_beside_a_variable_of_one_of_its_keys_is_both(tmp_path: Path) -> None:
+    config = tmp_path / "bridge.toml"
+    config.write_text(
+        to_toml(
+            {
+                "state_file": tmp_path / "state.json",
+                "mqtt": {"host": "127.0.0.1"},
+                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
+            }
+        )
+    )
+    env = {  # compose.yaml's two, and the rest of [mqtt] in one variable
+        "ROTOR_BRIDGE_MQTT__HOST": "192.168.1.10",
+        "ROTOR_BRIDGE_MQTT__PORT": "1884",
+        "ROTOR_BRIDGE_MQTT": '{"base_topic": "shack", "client_id": "rotor-bridge-docker"}',
+    }
+    out = cli("check-config", "-c", str(config), env=env)
+    assert out.returncode == 0, out.stderr
+    assert "broker: 192.168.1.10:1884," in out.stdout, out.stdout
+    assert "client id rotor-bridge-docker" in out.stdout, out.stdout
+    assert "topic shack;" in out.stdout, out.stdout
