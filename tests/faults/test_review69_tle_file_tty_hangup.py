@@ -59,6 +59,8 @@ def test_a_tle_file_that_is_a_terminal_line_does_not_tie_the_bridge_to_it(tmp_pa
             what="the TLE reader to look at the line",
         )
         assert bridge.poll() is None, log.read_text()
+        fields = Path(f"/proc/{bridge.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        assert fields[4] == "0", f"the bridge's controlling terminal is now {tty} ({fields[4]})"
     finally:
         os.close(controller)  # the line hangs up (an adapter unplugged): a SIGHUP is sent now
         bridge.send_signal(signal.SIGTERM)  # (one already sent is taken first)
