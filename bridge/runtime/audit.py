@@ -140,7 +140,7 @@ Said = tuple[str, AuditEvent]  # (rotator id, event): a line to write and publis
 _STOP = object()
 # rule 3: O_NONBLOCK changes nothing for a file; a FIFO at the path (no reader, or one that
 # never reads) fails its open or write at once instead of hanging the writer unsaid
-_FLAGS = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NONBLOCK
+_FLAGS = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC
 
 
 _LINE_BREAKS = str.maketrans({"\x85": "\\u0085", "\u2028": "\\u2028", "\u2029": "\\u2029"})

@@ -156,7 +156,7 @@ def _read(path: Path) -> str:
     one was put there since it was looked at (O_NONBLOCK: opening a FIFO does not wait)."""
     kind = _kind_at(path)
     if kind is None:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
         with os.fdopen(fd, "rb") as f:
             kind = _not_regular(os.fstat(fd).st_mode)
             if kind is None:
@@ -259,8 +259,9 @@ def held(path: Path | None) -> Iterator[None]:
         return
     lock_path = _lock_path(path)
     lock_path.parent.mkdir(parents=True, exist_ok=True)
-    flags = os.O_CLOEXEC | os.O_NONBLOCK | os.O_NOFOLLOW  # (a FIFO must not hang the start;
-    writable = True  # a link: rule 7)
+    # (a FIFO must not hang the start; a link: rule 7; a tty never becomes ours: review 69)
+    flags = os.O_CLOEXEC | os.O_NONBLOCK | os.O_NOFOLLOW | os.O_NOCTTY
+    writable = True
     _check_lock_kind(lock_path)
     try:
         fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | flags, 0o644)

@@ -136,8 +136,11 @@ class TleCatalog:
         limit = f"over the limit of {MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
         if stat.S_ISREG(seen.st_mode) and seen.st_size > MAX_FILE_BYTES:
             return f"tle_file {self.path} is {seen.st_size} bytes, {limit}"
-        # (O_NONBLOCK: a FIFO's open waits for a writer that may never come)
+        # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_NOCTTY: a
+        # terminal line named here would become a service's controlling terminal, and its
+        # hang-up, SIGHUP, end the bridge for good: review 69)
         flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+        flags |= getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
         fd = os.open(self.path, flags)
         try:
             if not stat.S_ISREG(os.fstat(fd).st_mode):  # (what is open now, not what was seen)

@@ -18,17 +18,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from tests.support import slow, to_toml, wait_until
 from tests.support.process import bridge_env
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: a tle_file naming a terminal line becomes the service's controlling "
-    "terminal, and the line's hangup ends the bridge (SIGHUP, exit 0: systemd does not restart it)",
-)
 def test_a_tle_file_that_is_a_terminal_line_does_not_tie_the_bridge_to_it(tmp_path: Path) -> None:
     controller, line = os.openpty()
     tty = os.ttyname(line)

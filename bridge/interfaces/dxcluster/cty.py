@@ -253,8 +253,10 @@ def load(path: Path) -> Cty:
 def _read(path: Path) -> bytes:
     """Rule 4: the file's bytes; OSError if it cannot be read, is no regular file or is
     larger than CTY_FILE_MAX."""
-    # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_BINARY: Windows)
+    # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_BINARY: Windows;
+    # O_NOCTTY: a terminal line must not become the service's controlling terminal, review 69)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    flags |= getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
     fd = os.open(path, flags)
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
