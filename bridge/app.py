@@ -87,7 +87,7 @@ from bridge.runtime.lines import Lines
 from bridge.runtime.listeners import contained
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.rotator import Rotator
-from bridge.runtime.state_store import Changed, InUse, StateStore, held
+from bridge.runtime.state_store import Changed, InUse, StateStore, held, tilde_leftover
 from bridge.runtime.worker import WorkerConfig
 from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.session.motion import MotionConfig
@@ -328,7 +328,9 @@ class App:
         self.mqtt.confirm_markers_with(
             self.client.publish_marker_confirmed, self.client.markers_refused
         )
-        store = self.store = StateStore(settings.state_file, deferred=True)  # (written by start)
+        store = self.store = StateStore(  # (written by start; state_store.py rule 13)
+            settings.state_file, deferred=True, read_from=tilde_leftover(settings.state_file)
+        )
         try:
             store.check_kind()  # (a FIFO, a directory: refused now, nothing written: rule 4)
         except OSError as exc:

@@ -92,6 +92,11 @@ Rules:
    (runtime/composite.py rule 3), each up to a line of its protocol (an Easycomm III's 80
    characters), and the 128 it was dropped a pair of two long ones at every start, whose
    discovery then went out twice (an attack pass).
+13. A state file under the home folder that is not there yet is read from where versions
+   before settings/base.py rule 7 kept one written ``~/...``: a folder named ``~`` under the
+   directory the bridge runs from (``tilde_leftover``), said at WARNING; it is written at its
+   own path from then on, and the old one is left for the user to delete (review 69: a
+   rotator locked there for tower work started unlocked after the update, without a word).
 """
 
 from __future__ import annotations
@@ -288,11 +293,39 @@ def held(path: Path | None) -> Iterator[None]:
         os.close(fd)  # (the lock with it)
 
 
+def tilde_leftover(path: Path | None) -> Path | None:
+    """Rule 13: the file an earlier version kept for ``path`` written ``~/...``, if ``path``
+    is under the home folder and not there yet, and that file is; else None."""
+    if path is None:
+        return None
+    try:
+        old = Path.cwd() / "~" / path.relative_to(Path.home())
+        if path.exists() or path.is_symlink() or not old.is_file():
+            return None
+    except (ValueError, RuntimeError, OSError):  # (not under home; no home; no cwd)
+        return None
+    return old
+
+
 class StateStore:
-    def __init__(self, path: Path | None, *, deferred: bool = False) -> None:
+    def __init__(
+        self, path: Path | None, *, deferred: bool = False, read_from: Path | None = None
+    ) -> None:
         """``deferred``: nothing is written before ``check_writable`` (rule 7: the bridge holds
-        the installation's lock by then); a save asked before is made then."""
+        the installation's lock by then); a save asked before is made then. ``read_from``: the
+        file read in place of ``path`` (rule 13), written at ``path``."""
+        if path is not None and read_from is not None:
+            log.warning(
+                "state file %s: not there yet; read from %s, where an earlier version kept a "
+                "state_file written '~/...' (a folder named '~' under the directory it ran "
+                "from). Its locks and options hold; the bridge writes them to %s from now on: "
+                "delete the old one",
+                path,
+                read_from,
+                path,
+            )
         self._path = path
+        self._read_path = read_from or path  # rule 11: the file read, looked at again
         self._deferred = deferred  # rule 7: saves wait for check_writable
         self._owed = False  # a save asked while deferred
         self._lock = threading.Lock()
@@ -306,6 +339,8 @@ class StateStore:
         self._dirty = False  # a malformed entry was replaced: written down at the first read
         self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
         self._read_as: str | None = None  # rule 11: the text read (None: no file, or unread)
+        if read_from is not None:
+            path = read_from  # (rule 13: read there, written at self._path)
         if path is not None and (path.exists() or path.is_symlink()):
             self._kind = _kind_at(path)
             if self._kind is not None:
@@ -369,7 +404,8 @@ class StateStore:
         if self._path is None:
             return
         self.check_kind()
-        if self._deferred and not self.corrupt and _now_as(self._path) != self._read_as:
+        read = self._read_path or self._path
+        if self._deferred and not self.corrupt and _now_as(read) != self._read_as:
             raise Changed(self._path)  # rule 11: nothing of this store's written yet
         self._path.parent.mkdir(parents=True, exist_ok=True)
         _remove_leftovers(Path(os.path.realpath(self._path)))  # rule 1

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from bridge.app import App
-from bridge.runtime.state_store import InUse, StateStore, held
+from bridge.runtime.state_store import InUse, StateStore, held, tilde_leftover
 from bridge.settings import Settings
 from tests.support.waiting import slow
 
@@ -589,3 +589,24 @@ def test_a_copy_aside_that_fails_leaves_no_part_of_it_to_take_the_name(
     monkeypatch.setattr(os, "fsync", real_fsync)  # room again: kept aside, then written
     assert s.set_locked("tower", False) is True
     assert (tmp_path / "state.json.unreadable").read_text() == ADIF
+
+
+def test_a_tilde_leftover_is_read_only_while_the_home_folders_file_is_not_there(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rule 13 (review 69): the file an earlier version kept for 'state_file = "~/..."' under
+    ./~ of the directory it ran from is read until the home folder's own is written."""
+    home, run_from = tmp_path / "home", tmp_path / "cwd"
+    old = run_from / "~" / "rb" / "state.json"
+    old.parent.mkdir(parents=True)
+    old.write_text(json.dumps({"rotators": {"tower": {"locked": True}}}))
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(run_from)
+    new = home / "rb" / "state.json"
+    assert tilde_leftover(new) == old
+    assert tilde_leftover(tmp_path / "elsewhere.json") is None  # not under the home folder
+    store = StateStore(new, deferred=True, read_from=tilde_leftover(new))
+    assert store.locked("tower")
+    store.check_writable()
+    assert json.loads(new.read_text())["rotators"]["tower"]["locked"] is True
+    assert tilde_leftover(new) is None  # the home folder's own is read from now on

@@ -14,19 +14,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, to_toml
 from tests.support.mosquitto import Mosquitto
 from tests.support.process import bridge_env
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: a rotator locked in the state file an earlier version kept for "
-    "state_file '~/...' (./~/... of the directory it ran from) starts unlocked after the "
-    "update, without a word",
-)
 def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:
@@ -60,3 +52,5 @@ def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
         _, err = bridge.communicate()
     said = str(old) in err or "./~/rb/state.json" in err or "~/rb/state.json" in err
     assert lock == "ON" or said, f"R/lock/state {lock}, and the log says nothing of {old}:\n{err}"
+    assert lock == "ON", f"R/lock/state {lock}: the lock kept at {old} was not read"
+    assert json.loads((home / "rb" / "state.json").read_text())["rotators"]["tower"]["locked"]
