@@ -11,16 +11,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import pytest
-
 from tests.support import cli, to_toml
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: port = '~/rotor' naming a real serial line in the home folder is "
-    "'NOT FOUND' in check-config, and run never opens it",
-)
 def test_a_serial_port_written_with_a_tilde_is_the_one_in_the_home_folder(tmp_path: Path) -> None:
     home = tmp_path / "home"
     home.mkdir()

@@ -37,8 +37,9 @@ Rules:
    reads it, for every key that takes a path: an attack pass wrote ``state_file`` as the
    docs write its default, ``~/.local/state/...``, and the bridge kept its state and its lock
    under a folder named ``~`` of whatever directory it was started from (two runs of one
-   installation from two directories both started). A ``~user`` that names no user here is
-   an error, not a folder named so.
+   installation from two directories both started); a rotator's serial ``port`` too, a text
+   key (review 69: ``~/rotor``, a link kept in the service user's home, was never opened).
+   A ``~user`` that names no user here is an error, not a folder named so.
 """
 
 from __future__ import annotations
@@ -119,7 +120,7 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
         if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
             check_named_path(value)
-        if value.startswith("~") and _a_path(field.annotation):  # rule 7
+        if value.startswith("~") and (_a_path(field.annotation) or named == "port"):  # rule 7
             return _home_path(value)
     return value
 
