@@ -72,6 +72,16 @@ Rules:
     halted again at every step). Review 50 (tracking), attack 19 (a tracking start whose wait
     for the pass was refused, and a following start whose first grid was: each said so on
     R/error while a Rotor-EZ turned on some 100 degrees to the older target).
+    A turn carried over a lost link (rule 8, motion.py rule 4: ``carried``) that no reading
+    has shown moving yet may have come to rest while the port was out (no stop to it:
+    ``turning``), and a restart's is known only at its second reading; the refusals of those
+    starts are not judged again (following's grid, tracking's wait). So the halt is owed,
+    while no target of the part's is taken and that turn is carried, and proposed at the step
+    a reading shows it move (``StartHalt.owed``, as the storm park's refusal stops a carried
+    turn known later: wind.py rule 5, review 66); a turn known to be none (at rest, a stop or
+    target of the bridge's into it) drops it, and a hand's turn is never carried (reviews 52,
+    53). Review 70: a start right after a replug mid-turn, refused, halted nothing, and the
+    Rotor-EZ turned on some 95 degrees to the target from before the unplug.
 """
 
 from __future__ import annotations
@@ -187,20 +197,49 @@ def turning(scene: Scene) -> bool:
 
 
 class StartHalt:
-    """Rule 9: the one halt a start proposes when its first target is refused."""
+    """Rule 10: the one halt a start proposes when its first target is refused; and, while
+    that refusal stands, the one owed to the turn carried over a lost link that no reading
+    has shown moving yet, once one does (``owed``)."""
 
     def __init__(self) -> None:
         self._done = False
+        self._owed = False  # the first refused with a carried turn not yet known
 
     def start(self) -> None:
-        self._done = False
+        self._done = self._owed = False
 
     def wanted(self, scene: Scene, first: bool) -> bool:
         """Whether the refusal of a target (``first``: the start's first) halts the turn under
-        way: the first's, once per start, while a turn or slew goes on."""
+        way: the first's, once per start, while a turn or slew goes on. A turn carried over a
+        lost link not yet seen moving (or a restart's, not yet seen at all) is owed the
+        halt instead (``owed``)."""
         halt = first and not self._done and turning(scene)
         self._done = self._done or halt
+        self._owed = first and not self._done and _carried(scene.motion)
         return halt
+
+    def owed(self, scene: Scene, first: bool) -> bool:
+        """At every step after the refusal (the part's own refusals are not judged again:
+        following's grid, tracking's wait): whether the carried turn is known now, seen
+        moving with no stop of the bridge's out, and is halted, once; ``first``: no target
+        of the part's taken since (one that is stops or re-targets it). Dropped once that
+        turn is known to be none (at rest, a stop or target of the bridge's into it), so a
+        hand's turn begun later is never taken for it (reviews 52, 53)."""
+        if not self._owed:
+            return False
+        if not first or self._done or not _carried(scene.motion):
+            self._owed = False
+            return False
+        if not turning(scene):
+            return False
+        self._owed, self._done = False, True
+        return True
+
+
+def _carried(m: mo.Motion) -> bool:
+    """Rule 10: a turn the controller may be finishing by itself, carried over a lost link or
+    found by a restart (motion.py rule 4, ``carried``), nothing of the bridge's sent into it."""
+    return m.carried and m.target_deg is None and m.stop_sent_t is None
 
 
 def turned_by_hand(

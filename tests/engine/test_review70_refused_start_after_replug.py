@@ -12,8 +12,6 @@ step mid-pass is judged again at every step and halts the turn once it is seen: 
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.sky import Body, Sky
 from tests.engine.test_attack19_track_start_refused_wait import T0, _scripted_sky
@@ -34,11 +32,6 @@ def _replugged_mid_turn(v: VirtualRotator) -> None:
     assert v.truth().is_moving  # (it finishes its old turn by itself)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: a follow start right after a replug mid-turn, its partner in a keep-out "
-    "sector, says the refusal while the rotor turns on 90 degrees to the old target",
-)
 def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
     partner = bearing("PM95")  # 42.2 from the test station
     sector = [round(partner) - 10, round(partner) + 10]
@@ -62,11 +55,6 @@ def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() 
         assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: a track start right after a replug mid-turn, whose wait for the pass is "
-    "refused, says 'holding' while the rotor turns on 95 degrees to the old target",
-)
 def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds_the_rotor() -> (
     None
 ):
