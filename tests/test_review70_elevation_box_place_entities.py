@@ -39,11 +39,6 @@ def test_an_azimuth_rotor_with_a_station_offers_places() -> None:
     assert {"locator", "long_path", "distance", "spot"} <= _entities("prosistel")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: an elevation rotor on its own, which refuses every place, is still "
-    "offered Home Assistant's Locator text, Long path button, Distance and Spot select",
-)
 @pytest.mark.parametrize("model", ["prosistel-el", "prosistel-el-a"])
 def test_an_elevation_rotor_on_its_own_is_offered_no_place_it_refuses(model: str) -> None:
     ids = _entities(model)

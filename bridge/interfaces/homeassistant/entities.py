@@ -17,7 +17,8 @@ another):
    entity exists only if
    the model can do it: no bearing for a DCU-1, options only where the controller has them; and
    only where configured: the preset select with presets, park with a park position, the
-   locator, long path and distance with the station's position.
+   locator, long path and distance with the station's position, for a bearing that is an
+   azimuth (an elevation rotor on its own refuses every place: info.py ``RotatorInfo.of``).
 2. Entities that describe the rotator are available only while both the bridge and the rotator
    are online (``availability_mode: all``). Entities that must work while the rotator is
    unreachable (the stop, the safety lock, the connection state, the last error) follow the

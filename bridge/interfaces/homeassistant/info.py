@@ -62,7 +62,9 @@ class RotatorInfo:
     version: str | None = None
     presets: tuple[str, ...] = ()  # names, in the configuration's order
     has_park: bool = False
-    has_station: bool = False  # the station's position: targets by locator
+    # the station's position and a bearing that is an azimuth: targets by locator, a long
+    # path, a distance, a spotted call (``of``: none for an elevation rotor on its own)
+    has_station: bool = False
     nudge_step_deg: float = 10.0
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
     can_follow: bool = False  # [wsjtx] and a station: R/follow (session/follow.py)
@@ -98,6 +100,10 @@ class RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings;
         ``boxes``: a rotator of two boxes, its azimuth's and its elevation's box."""
         az_min, az_max = pointing.target_range()
+        # an elevation rotor on its own refuses every place (runtime/rotator.py ``_toward``,
+        # session/feature_commands.py rule 6): no locator, long path, distance or spot select
+        # that could only be refused (review 70), as no track select or follow switch
+        places = has_station and not bearing_is_elevation(spec)
         return cls(
             rotator_id,
             name,
@@ -110,16 +116,16 @@ class RotatorInfo:
             version,
             presets=tuple(pointing.presets),
             has_park=pointing.park is not None,
-            has_station=has_station,
+            has_station=places,
             nudge_step_deg=nudge_step_deg,
             track_options=(  # (what runtime/rotator.py ``can_track`` says: its bearing turned
                 track_options(satellites)  # to a body's azimuth, session/feature_commands.py)
-                if has_station and spec.can_report_position and not bearing_is_elevation(spec)
+                if places and spec.can_report_position
                 else ()
             ),
             can_follow=can_follow,
             features=features,
-            spot_options=spot_options(()) if DXCLUSTER in features and has_station else (),
+            spot_options=spot_options(()) if DXCLUSTER in features and places else (),
             el_health=spec.has_elevation and not boxes,
             versioned_boxes=tuple(
                 axis.value for axis, box in zip(Axis, boxes, strict=False) if box.has_version
