@@ -83,3 +83,35 @@ def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds
         assert "keep-out" in refused.message and "holding" in refused.message
         # held where it was (a stop and the Rotor-EZ's coast): observed 244 -> 340
         assert abs(v.truth().az_deg - here) <= 15.0, (here, v.truth().az_deg)
+
+
+def test_a_refused_follow_start_after_a_replug_whose_turn_ended_unplugged_halts_no_hand() -> None:
+    """The halt owed to the carried turn is dropped once that turn is known to be none (the
+    rotor came to rest while its port was out: no stop to it, motion.py rule 4), so a hand at
+    the panel afterwards is never halted as the bridge's turn (reviews 52, 53)."""
+    partner = bearing("PM95")
+    sector = [round(partner) - 10, round(partner) + 10]
+    emulator = {"start_az_deg": round(partner) + 20}
+    settings = {"keep_out": [sector]}
+    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+        v.target(round(partner + 140.0))
+        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+        v.link_down()
+        v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        t = v.now
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
+        v.run_until(lambda h: not h.status.moving, 30, "seen at rest")
+        v.run_for(5.0)  # (a few polls at rest: not a deadline)
+        hand_to = round(partner + 60.0)  # (never through the sector)
+        v.manual_rotate(hand_to)  # a hand at the panel
+        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
+        v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
+        assert {f.outcome for f in v.frames(since=t)} == {"query"}  # no stop: none owed
+        assert angle_between(v.truth().az_deg, hand_to) <= 1.0  # where the hand left it
