@@ -53,8 +53,11 @@ Rules:
    way that the readings came back to (``before``: the part's first step saw it ``carried``
    over a lost link, motion.py rule 4, and it has gone on since with no target and no stop
    out): the controller finishing a turn by itself, its target dropped with the port (a
-   replug mid-turn), is nobody's hand; a turn the bridge saw begin from rest with the link up
-   is a hand as ever. The start's first target stops the carried turn or re-targets it as an
+   replug mid-turn), is nobody's hand; a start at a restart's first reading, before the second
+   says whether the rotor turns (motion.py rule 4), is judged at the step that says (review
+   70: the old turn seen then was taken for a hand, following ended, and it ran on 98
+   degrees); a turn the bridge saw begin from rest with the link up is a hand as ever. The
+   start's first target stops the carried turn or re-targets it as an
    ``R/target`` would (review 50: ``track sun`` right after a replug ended at once as "turned
    by hand", and the rotor turned on to the old target; review 52: a hand already at the panel
    when tracking started was taken for such a turn, stopped and overridden).
@@ -179,11 +182,21 @@ class Before:
         self._seen = None
 
     def look(self, scene: Scene) -> bool:
-        """The turn under way is the one the start found (at every step, before judging)."""
+        """The turn under way is the one the start found (at every step, before judging). A
+        start at a restart's first reading finds a turn ``carried`` not yet seen (motion.py
+        rule 4: its second reading says whether it goes on): judged at the step that says."""
         m = scene.motion
         alone = turning_alone(m) and m.carried  # (not a turn seen begin with the link up)
+        if self._seen is None and not alone and _unseen(m):
+            return False  # (no turn seen yet: nothing a hand's either)
         self._seen = alone if self._seen is None else self._seen and alone
         return self._seen
+
+
+def _unseen(m: mo.Motion) -> bool:
+    """Rule 8: a turn carried (motion.py rule 4) that no reading has shown yet: a restart's
+    first reading, before its second says whether the rotor turns."""
+    return m.carried and m.state is not mo.MOVING and m.target_deg is None
 
 
 def turning(scene: Scene) -> bool:
