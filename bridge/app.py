@@ -263,10 +263,7 @@ class App:
         groups = {g.id: settings.group_topic(g) for g in settings.groups}
         self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
-        # interfaces/mqtt/claim.py (rule 5: its info names its rotators' and groups' topics)
-        self.me = Instance.me(
-            settings.mqtt.effective_client_id(), [*roots.values(), *groups.values()]
-        )
+        self.me = Instance.me(settings.mqtt.effective_client_id())  # interfaces/mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
         self._lane_started = False
@@ -303,11 +300,8 @@ class App:
                 settings.mqtt.base_topic,
                 self.topics.bridge_info,
                 self.topics.bridge_hello,
-                self.topics.names(),  # claim rule 5
-                frozenset(roots),  # claim rule 6: its rotators' ids
             ),
             on_refused=self._refused,
-            on_overlap=self._info,  # claim rule 5: said while it lasts
             fence_topic=self.topics.bridge_fence,  # client.py rule 16
             on_late=self._info,  # client.py rule 19
         )

@@ -171,8 +171,6 @@ _HEAR_PROBE = SubscribeOptions(qos=0, noLocal=False, retainAsPublished=False, re
 WILL_OUTLIVED_S = 1.0
 LOOK_TIMEOUT_S = 5.0  # rule 14: nothing from the broker this long ends the look...
 LOOK_MAX_S = 60.0  # ... and this long whatever comes (a flood of messages ends it all the same)
-OVERLAPS_SAID_AT_ONCE = 3  # claim rule 7: lines of one overlapping bridge before the limit
-OVERLAPS_SAID_EVERY_S = 1.0  # claim rule 7: B/bridge/info says them again at most this often
 
 
 class _Ears:
@@ -218,7 +216,6 @@ class MqttClient(Connection):
         wall: Callable[[], float] = time.time,
         station: str | None = None,
         on_late: Callable[[str, bool], None] | None = None,
-        on_overlap: Callable[[str, bool], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
@@ -251,15 +248,7 @@ class MqttClient(Connection):
         self._owned = OwnedTopics(clock, hears_own=not self._v5)  # rule 10
         self._owned.will = (will_topic, b"offline")
         self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
-        # rule 14; claim rule 7: what is logged of each overlapping bridge, a few lines at
-        # once, then one a minute
-        said = EventLimiter(clock, OVERLAPS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
-        self._look = FirstLook(claim, will_topic, said) if claim is not None else None
-        if self._look is not None:  # claim rule 5: another's topics, read where the ACL lets us
-            cost = "a bridge on that base topic whose topics overlap this one's goes unseen"
-            self.optional(
-                {t: cost for t in self._look.near_topics if t != self._look.evidence_topic}
-            )  # (rule 17; claim rule 6's evidence topic is the bridge's own tree's)
+        self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
         self._on_heard: Heard | None = None  # rule 14: the witnesses' hook
@@ -300,12 +289,6 @@ class MqttClient(Connection):
         self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
         self._late_now = False  # rule 19: the verdict (paho's thread writes it)
         self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
-        self._on_overlap = on_overlap  # claim rule 5: said on B/bridge/info while it lasts
-        self._overlap_lock = threading.Lock()  # claim rule 5: one report at a time
-        self._overlap_said: set[str] = set()  # claim rule 5: as said (under ``_overlap_lock``)
-        self._overlap_owed_lock = threading.Lock()  # claim rule 7: the report owed, and when
-        self._overlap_owed = False
-        self._overlap_next = 0.0  # (monotonic: the timer's clock)
 
     @property
     def problems(self) -> list[str]:
@@ -551,10 +534,6 @@ class MqttClient(Connection):
                 wide = sorted({t.rpartition("/")[0] + "/+" for t in look.witnessed})
                 self._probing = [] if self._owned.hears_own else wide
                 subs += [(t, _HEAR_PROBE) for t in self._probing]
-                # claim rule 5: other bridges' (rule 6's evidence: where no filter of the
-                # bridge's own is that topic, whose options a second SUBSCRIBE would replace)
-                own = {f for f, _ in self._owned.subscriptions()} | set(self._subscriptions)
-                subs += [(t, 0) for t in look.near_topics if t not in own]
                 self._look_sub = self._subscribe(client, subs)
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
@@ -666,10 +645,6 @@ class MqttClient(Connection):
                 self._look_heard = time.monotonic()  # it held (a tracker's target does not)
             if self._look_saw(self._look, topic, payload):
                 return True
-            if self._look.watches(topic):  # claim rule 5: another bridge's, while we run
-                self._near(self._look, topic, payload)
-                if not self._look.evidence(topic) or not self._owned.owns(topic):
-                    return True  # (claim rule 6's evidence, one of ours: judged as such too)
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
             if late and self._on_heard is not None and self._on_heard(late, frozenset()):
@@ -815,13 +790,9 @@ class MqttClient(Connection):
                 self.refused = outcome.refused
                 self.yielded = self._ran  # (a reconnect's look: the bridge ran: claim rule 4)
                 self._stopping = True
-                if self._ran:  # claim rule 5: what it leaves of its own says it gone
-                    self._leave_offline(look)
             elif outcome.heard is None or self._on_heard is None:
                 self._ran = True
                 self._open(outcome)
-        if outcome.said:
-            self._say_overlaps()
         if self.refused is not None:
             self._refuse()
             return
@@ -872,66 +843,6 @@ class MqttClient(Connection):
                     self._markers_lost()
         look.say_timed_out(round(waited_s, 1))
         self._end_look(n, timed_out=True)
-
-    def _near(self, look: FirstLook, topic: str, payload: bytes) -> None:
-        """Claim rule 5 (paho's thread): another bridge's info or state on a watched topic
-        while the bridge runs: the younger of two overlapping bridges yields, the older says
-        it."""
-        with self._lock:
-            if self._stopping or self.refused is not None:
-                return
-            refused, said = look.near(topic, payload)
-            if refused is not None:
-                self.refused, self.yielded = refused, True
-                self._stopping = True  # nothing more goes out (as claim rule 4's yield)...
-                self._leave_offline(look)  # ... but what of its own says it gone
-                self.connected.clear()
-        if said:
-            self._say_overlaps()
-        if self.refused is not None:
-            self._refuse()
-
-    def _leave_offline(self, look: FirstLook) -> None:
-        """Claim rule 5, under the lock, as the bridge yields to an overlapping bridge: its own
-        ``B/bridge/state`` and its rotators' availability (look.py ``left_offline``) are left
-        ``offline`` (retained, QoS 1; a clean disconnect fires no will): left ``online``, they
-        said a live bridge for ever and refused the other's next start (review 67)."""
-        if not self._up:
-            return
-        for topic in look.left_offline():
-            self._retained[topic] = (b"offline", 1)
-            self._delivery.send(topic, b"offline", 1, retain=True)
-
-    def _say_overlaps(self) -> None:
-        """Claim rule 5: what is said of overlapping bridges, on a thread of its own (it
-        publishes: paho's thread holds its mutex here); the last verdict is the one said.
-        Claim rule 7: one report owed at a time, OVERLAPS_SAID_EVERY_S after the last at the
-        soonest (a state flapping online and offline republished B/bridge/info each time)."""
-        if self._on_overlap is None:
-            return
-        with self._overlap_owed_lock:
-            if self._overlap_owed:
-                return  # the report owed says the last verdict
-            self._overlap_owed = True
-            wait_s = max(0.0, self._overlap_next - time.monotonic())
-        timer = threading.Timer(wait_s, self._report_overlaps)
-        timer.daemon = True
-        timer.start()
-
-    def _report_overlaps(self) -> None:
-        look, report = self._look, self._on_overlap
-        assert look is not None and report is not None
-        with self._overlap_lock:
-            with self._overlap_owed_lock:  # (a change from now on owes a report of its own)
-                self._overlap_owed = False
-                self._overlap_next = time.monotonic() + OVERLAPS_SAID_EVERY_S
-            with self._lock:
-                now = set(look.saying)
-            for problem in sorted(self._overlap_said - now):
-                report(problem, False)
-            for problem in sorted(now - self._overlap_said):
-                report(problem, True)
-            self._overlap_said = now
 
     def _refuse(self) -> None:
         """Never on paho's thread: the app stops the client (loop_stop joins paho's thread)."""

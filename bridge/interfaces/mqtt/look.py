@@ -27,12 +27,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    TAKE_OVER (said once, in the log), or a look that timed out (an ACL that denies the
    hello), or any look after one of those in this process: nothing is deleted, and the
    configs are named in the log as left alone (claim rule 3). Another instance's info
-   arriving while the bridge runs is judged by claim rule 4 (``live_info``). The look reads
-   too the info and state of the base topics claim rule 5 watches (``near_topics``, subscribed
-   in the look's SUBSCRIBE, before the hello), and, where one is above the base topic, the
-   ``R/info`` on the base topic that claim rule 6 asks for (``evidence_topic``; subscribed
-   there unless it is an owned topic's filter already, the one rotator's, whose judge sees it
-   too): judged at its end, and while the bridge runs as each comes (``near``).
+   arriving while the bridge runs is judged by claim rule 4 (``live_info``).
    The values the broker held on the topics handed to ``witness`` (each rotator's
    ``R/lock/state``) and that arrive during the look are kept too (``saw`` leaves them to the
    owned-topic judge all the same), and the first look of the process that lets the bridge run
@@ -91,19 +86,8 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from bridge.interfaces.mqtt.claim import (
-    Claim,
-    Instance,
-    Verdict,
-    first_look,
-    overlap,
-    overlapping,
-    refusal,
-    rotator_there,
-    yields_to,
-)
+from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
 from bridge.interfaces.mqtt.limiter import EventLimiter
-from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 
 log = logging.getLogger(__name__)
 
@@ -121,13 +105,10 @@ class Outcome:
     clears: list[str]
     heard: dict[str, bytes] | None = None  # rule 14: the witnesses' values (the first open)
     unread: frozenset[str] = frozenset()  # rule 14: the witnesses the broker does not let us read
-    said: bool = False  # claim rule 5: what is said of overlapping bridges changed (``saying``)
 
 
 class FirstLook:
-    def __init__(self, claim: Claim, will_topic: str, said: EventLimiter | None = None) -> None:
-        """``said``: claim rule 7's limiter of what is logged of each overlapping bridge (by
-        its base topic); none: every line."""
+    def __init__(self, claim: Claim, will_topic: str) -> None:
         self.claim = claim
         self._state_topic = will_topic  # ``B/bridge/state``
         self._looks = 0
@@ -141,130 +122,6 @@ class FirstLook:
         self._probes: set[str] = set()  # rule 14: the witnesses whose probe is out, until back
         self.probing = False  # rule 14: this look's probes went out (its second hello too)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
-        # claim rule 5: each watched base topic's info and state topics, the values read there
-        # (this connection's), and what is said of an older bridge overlapping this one, by
-        # its base topic
-        self._near: dict[str, str] = {}
-        for where in claim.watched:
-            t = Topics(where, {})
-            self._near[t.bridge_info] = self._near[t.bridge_state] = where
-        self._near_held: dict[str, bytes] = {}
-        self._said: dict[str, str] = {}
-        # claim rule 6: the watched base topics outside this bridge's tree, believed only with
-        # another bridge's rotator on this bridge's base topic (its ``R/info`` there: the
-        # evidence topic, inside this bridge's tree)
-        self._outside = {w for w in claim.watched if claim.outside(w)}
-        self.evidence_topic = RotatorTopics(claim.base_topic).info if self._outside else None
-        if self.evidence_topic is not None:
-            self._near[self.evidence_topic] = ""
-        self._logged = said
-        self.yielded_to: tuple[str, Instance] | None = None  # claim rule 5: where, and whom
-
-    @property
-    def near_topics(self) -> list[str]:
-        """Claim rule 5: the topics every look subscribes to besides its own (rule 6's
-        evidence topic among them)."""
-        return sorted(self._near)
-
-    def left_offline(self) -> list[str]:
-        """Claim rule 5: what a bridge that yields to an overlapping bridge says ``offline``
-        on, being its own: its ``B/bridge/state`` (under rule 5 no other bridge's) and each of
-        its rotators' and groups' availability but those at a topic of the other's (its base
-        topic, a topic its info names; an info naming none: this bridge's base topic too,
-        where rule 6 found its rotator)."""
-        if self.yielded_to is None:
-            return []
-        where, other = self.yielded_to
-        theirs = {where, *other.topics}
-        if not other.topics:
-            theirs.add(self.claim.base_topic)
-        own = [t for t in self.claim.me.topics if t not in theirs]
-        return [self._state_topic, *(RotatorTopics(t).availability for t in own)]
-
-    def _say(self, where: str, level: int, message: str) -> None:
-        """Claim rule 7: a line of what is said of the bridge on ``where``, within its limit."""
-        left_out = self._logged.admit(where) if self._logged is not None else 0
-        if left_out is None:
-            return
-        more = f" ({left_out} more line(s) of that bridge not logged)" if left_out else ""
-        log.log(level, "%s%s", message, more)
-
-    def watches(self, topic: str) -> bool:
-        """Claim rule 5: whether ``topic`` is a watched bridge's info or state."""
-        return topic in self._near
-
-    @property
-    def saying(self) -> list[str]:
-        """Claim rule 5: the overlaps to say on ``B/bridge/info`` now."""
-        return sorted(self._said.values())
-
-    def _judge_near(self, where: str, *, first: bool) -> tuple[str | None, bool]:
-        """Claim rule 5, for the bridge on ``where``: the error to refuse (``first``: the
-        process's first look) or yield with, and whether what is said changed."""
-        t = Topics(where, {})
-        info = self._near_held.get(t.bridge_info)
-        state = self._near_held.get(t.bridge_state, b"")
-        other = Instance.parse(info) if info else None
-        clash: str | None = None
-        if other is not None and other.id != self.claim.me.id and state.strip() == b"online":
-            hit = self._overlap(where, other)
-            if hit is not None:
-                clash = overlapping(self.claim.base_topic, where, other, *hit, live=not first)
-        said = self._said.pop(where, None)
-        if clash is None:
-            if said is not None:
-                self._say(
-                    where,
-                    logging.WARNING,
-                    f"the bridge on {where!r} no longer overlaps this one's topics",
-                )
-            return None, said is not None
-        assert other is not None
-        if first or yields_to(self.claim.me, other):
-            self.yielded_to = where, other
-            return clash, said is not None
-        self._said[where] = clash
-        if said != clash:
-            self._say(where, logging.ERROR, clash)
-        return None, said != clash
-
-    def _overlap(self, where: str, other: Instance) -> tuple[str, str] | None:
-        """Claim rules 5 and 6: the topics of this bridge and of the bridge on ``where`` that
-        overlap, if any. One outside this bridge's tree (rule 6) only where another bridge's
-        rotator is on this bridge's base topic, and its info names that topic (or no topics:
-        a bridge from before them)."""
-        if where not in self._outside:
-            return overlap(self.claim.mine, [where, *other.topics], self.claim.names)
-        base = self.claim.base_topic
-        assert self.evidence_topic is not None
-        evidence = self._near_held.get(self.evidence_topic)
-        if not rotator_there(evidence, self.claim.rotator_ids):
-            return None
-        if other.topics and base not in other.topics:
-            return None
-        return base, base
-
-    def near(self, topic: str, payload: bytes) -> tuple[str | None, bool]:
-        """Claim rule 5, while the bridge runs (no look under way): a watched topic's message:
-        the error to yield with, and whether what is said changed."""
-        where = self._near.get(topic)
-        if where is None or self.looking is not None:
-            return None, False
-        self._near_held[topic] = payload
-        if where:
-            return self._judge_near(where, first=False)
-        said = False  # claim rule 6: the evidence changed: every base topic outside is judged
-        for outside in sorted(self._outside):
-            refused, changed = self._judge_near(outside, first=False)
-            said = said or changed
-            if refused is not None:
-                return refused, said
-        return None, said
-
-    def evidence(self, topic: str) -> bool:
-        """Claim rule 6: whether ``topic`` is the evidence topic (its messages are the
-        bridge's own topic's too, when a rotator of its is on its base topic)."""
-        return topic == self.evidence_topic
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -287,7 +144,6 @@ class FirstLook:
         self._heard = {}
         self._probes = set()
         self.probing = False
-        self._near_held = {}  # claim rule 5: the broker hands them over again
         return self._hello(n)
 
     def probes(self) -> tuple[list[str], bytes]:
@@ -326,9 +182,6 @@ class FirstLook:
         if topic in self._witnesses:  # rule 14: kept, and judged as an owned topic's value
             self._heard[topic] = payload
             return False
-        if topic in self._near:  # claim rule 5: judged at the look's end
-            self._near_held[topic] = payload
-            return topic != self.evidence_topic  # (rule 6: also the owned topic's judge's)
         if topic not in (self.claim.info_topic, self._state_topic):
             return False
         self._seen[topic] = payload
@@ -354,14 +207,6 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
-        # claim rule 5: a bridge overlapping this one's topics, online: the first look refuses;
-        # a later one (the bridge ran) judges as while running (the younger yields)
-        said = False
-        for where in sorted(set(self._near.values()) - {""}):
-            overlapped, changed = self._judge_near(where, first=not self._opened)
-            said = said or changed
-            if overlapped is not None:
-                return Outcome(refused=overlapped, clear=False, clears=[], said=said)
         heard, self._heard = (None if self._opened else self._heard), {}
         # rule 14: the hello back before a witness's probe, and nothing held heard there: the
         # broker drops what it sends on that topic (its ACL; a timed-out look says nothing)
@@ -378,12 +223,7 @@ class FirstLook:
                 other.described() if other else "another bridge",
             )
         return Outcome(
-            refused=None,
-            clear=verdict is Verdict.OURS,
-            clears=clears,
-            heard=heard,
-            unread=unread,
-            said=said,
+            refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard, unread=unread
         )
 
     def late(self, topic: str, payload: bytes, retained: bool) -> dict[str, bytes]:

@@ -257,22 +257,6 @@ class Topics:
         ``base_topics``: the DX cluster's ``B/spots``): ``B/<suffix>``."""
         return f"{self.base}/{suffix}"
 
-    def names(self) -> frozenset[str]:
-        """interfaces/mqtt/claim.py rule 5: the first levels a bridge uses under a root, a
-        rotator's (core and features', commands and states), a group's (a rotator's too: its
-        other commands are refused there) and the base topic's own (``bridge``, a station
-        feature's ``spots``): one namespace (``_check_suffixes``)."""
-        core = RotatorTopics("")
-        suffixes = [
-            getattr(core, name).lstrip("/")
-            for name in dir(RotatorTopics)
-            if isinstance(getattr(RotatorTopics, name), property)
-        ]
-        suffixes += [c.suffix for f in self.features for c in f.commands]
-        suffixes += [s.suffix for f in self.features for s in f.states]
-        suffixes += [suffix for f in self.features for suffix in f.base_topics]
-        return frozenset({"bridge", "option", *(s.split("/", 1)[0] for s in suffixes)})
-
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
         best: tuple[int, str] | None = None
