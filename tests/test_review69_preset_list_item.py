@@ -15,11 +15,6 @@ import pytest
 from tests.support import cli
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason='review 69: presets = { SAT = [180, "high"] } is refused in two lines named '
-    "rotators[0].presets.SAT.float and ...SAT.list[float][1], pydantic's branches",
-)
 @pytest.mark.parametrize("elevation", ['"high"', "nan"])
 def test_an_az_el_preset_whose_elevation_is_no_number_is_one_line_naming_it(
     tmp_path: Path, elevation: str

@@ -25,18 +25,31 @@ PRESET_NAME_MAX = 32
 Degrees = Annotated[float, Field(allow_inf_nan=False)]
 
 
-def _bearing_or_two(value: object) -> object:
-    """A preset is a number or a list (``_two_numbers`` judges the list): anything else is one
-    line naming the preset, where pydantic's union gave two, each named after one of its
-    branches (``rotators[0].presets.EU.float``, ``...EU.list[float]``; attack 18's loose end:
-    ``ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU=abc``, or ``EU = "abc"`` in the file)."""
-    if isinstance(value, bool | list):  # (a boolean: refused as one by base.py first)
-        return value
+def _a_number(value: object) -> bool:
+    """A finite number, or text that reads as one (the environment's and lax mode's)."""
+    if isinstance(value, bool):  # (a boolean: refused as one by base.py first)
+        return True
     try:
-        if isinstance(value, int | float | str) and math.isfinite(float(value)):
-            return value
+        return isinstance(value, int | float | str) and math.isfinite(float(value))
     except (ValueError, OverflowError):
-        pass
+        return False
+
+
+def _bearing_or_two(value: object) -> object:
+    """A preset is a number or a list of numbers (``_two_numbers`` judges the list's length):
+    anything else is one line naming the preset, where pydantic's union gave two, each named
+    after one of its branches (``rotators[0].presets.EU.float``, ``...EU.list[float]``; attack
+    18's loose end: ``ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU=abc``, or ``EU = "abc"`` in the
+    file; review 69: a list whose elevation is no number, ``SAT = [180, "high"]``, ``[180,
+    nan]``, was still the two)."""
+    if isinstance(value, list):
+        if all(_a_number(item) for item in value):
+            return value
+        raise ValueError(
+            "a preset is a bearing (a number) or [azimuth, elevation], two finite numbers"
+        )
+    if _a_number(value):
+        return value
     raise ValueError("a preset is a bearing (a number) or [azimuth, elevation]")
 
 
