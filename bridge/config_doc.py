@@ -90,6 +90,12 @@ is an error naming both. A
 takes `__`; `ROTOR_BRIDGE_LOG_LEVEL__X`, under a key that is one value) is an error, as an
 unknown key in the file is; so are two variables that set one key (names that differ only
 by case, or one setting a table whole and the other a key in it).
+The variables Kubernetes gives every pod for a Service named `rotor-bridge` (its service
+links: `ROTOR_BRIDGE_SERVICE_HOST`, `ROTOR_BRIDGE_SERVICE_PORT`,
+`ROTOR_BRIDGE_SERVICE_PORT_<NAME>`, `ROTOR_BRIDGE_PORT=tcp://...` and
+`ROTOR_BRIDGE_PORT_<n>_<TCP|UDP|SCTP>` with its `_PROTO`, `_PORT` and `_ADDR`) name no key and
+are ignored: those names only, in capitals, with values of the form Kubernetes gives them
+(`ROTOR_BRIDGE_PORT=/dev/ttyUSB0` is still an error); `run` logs at INFO which it ignored.
 `ROTOR_BRIDGE_CONFIG` names the file (spelt so, in capitals).
 `config/example.toml` is a commented starting point with the keys most people change.
 """

@@ -64,11 +64,21 @@ Rules:
    it; two of the file's names that differ only by case are an error naming both (an attack
    pass: ``PRESETS__EU=50`` added a preset ``eu`` beside the file's ``EU = 45``; Home
    Assistant's select showed both, and ``EU`` still turned the antenna to 45).
+9. The variables Kubernetes gives every pod for a Service named ``rotor-bridge`` (its
+   "service links": ``ROTOR_BRIDGE_SERVICE_HOST``, ``ROTOR_BRIDGE_SERVICE_PORT[_<NAME>]``,
+   ``ROTOR_BRIDGE_PORT``, ``ROTOR_BRIDGE_PORT_<n>_<TCP|UDP|SCTP>[_PROTO|_PORT|_ADDR]``) are
+   no keys, and are ignored, not refused by rule 4: a review: the bridge in such a pod ended
+   "ROTOR_BRIDGE_PORT: unknown key 'port'", exit 2, and restarted into it for ever, for
+   variables the user never set. Only those names, in capitals, each with a value of the
+   platform's form (``tcp://10.96.0.12:8754``, a port, an address), and only while no key of
+   the file's top is ``port`` or ``service...``: ``ROTOR_BRIDGE_PORT=/dev/ttyUSB0`` is still
+   refused. ``run`` logs at INFO which it ignored.
 """
 
 from __future__ import annotations
 
 import difflib
+import ipaddress
 import json
 import os
 import re
@@ -227,6 +237,7 @@ class Settings(BaseSettings):
     )
     # mqtt.password is written in the configuration file itself (check-config warns)
     _password_in_file: bool = PrivateAttr(default=False)
+    _service_links: list[str] = PrivateAttr(default_factory=list)  # rule 9: set, ignored
     # settings/base.py rule 2, as every table's (a BaseSettings is no Strict)
     _plain_value = field_validator("*", mode="before")(plain_value)
 
@@ -660,8 +671,10 @@ def settings_from(
 ) -> Settings:
     """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
     env = os.environ if environ is None else environ
-    _check_variables(env)
-    _one_variable_each(env)
+    links = service_links(env)  # rule 9
+    ours = {k: v for k, v in env.items() if k not in links}
+    _check_variables(ours)
+    _one_variable_each(ours)
     _no_group_variables(env)
     _apply_rotator_env(data, env)
     unknown = [k for k in data if k not in Settings.model_fields]
@@ -696,6 +709,7 @@ def settings_from(
         raise ConfigError(f"invalid configuration:\n  {said}")
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
+    settings._service_links = links
     return settings
 
 
@@ -744,6 +758,66 @@ def _is_json(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+# rule 9: the variables Kubernetes gives every pod for a Service named rotor-bridge (its
+# "service links", enableServiceLinks on by default: the Service's own, then docker links')
+_LINK_NAMES = re.compile(
+    r"^ROTOR_BRIDGE_(?:SERVICE_HOST|SERVICE_PORT(?:_[A-Z0-9]+)*|PORT"
+    r"|PORT_(?P<port>[0-9]+)_(?P<proto>TCP|UDP|SCTP)(?:_(?P<part>PROTO|PORT|ADDR))?)$"
+)
+_LINK_URL = re.compile(
+    r"^(?P<proto>tcp|udp|sctp)://(?P<host>\[[0-9A-Fa-f:.]+\]|[0-9.]+):(?P<port>[0-9]+)$"
+)
+
+
+def _an_address(text: str) -> bool:
+    try:
+        ipaddress.ip_address(text.removeprefix("[").removesuffix("]"))
+    except ValueError:
+        return False
+    return True
+
+
+def _a_port(text: str) -> bool:
+    return text.isascii() and text.isdigit() and 0 < int(text) < 65536
+
+
+def _service_link(key: str, value: str) -> bool:
+    """Rule 9: whether variable ``key`` is one Kubernetes sets for a Service named rotor-bridge,
+    its name in the platform's spelling (capitals) and its value of the platform's form."""
+    m = _LINK_NAMES.match(key)
+    if m is None:
+        return False
+    if key == "ROTOR_BRIDGE_SERVICE_HOST" or m["part"] == "ADDR":
+        return _an_address(value)
+    if m["part"] == "PROTO":
+        return value == m["proto"].lower()
+    if m["part"] == "PORT":
+        return value == m["port"] and _a_port(value)
+    if key.startswith("ROTOR_BRIDGE_SERVICE_PORT"):
+        return _a_port(value)
+    url = _LINK_URL.match(value)  # ROTOR_BRIDGE_PORT, ROTOR_BRIDGE_PORT_<n>_<PROTO>
+    return (
+        url is not None
+        and _an_address(url["host"])
+        and _a_port(url["port"])
+        and (m["port"] is None or (url["port"], url["proto"]) == (m["port"], m["proto"].lower()))
+    )
+
+
+def service_links(env: Any) -> list[str]:
+    """Rule 9: the variables of ``env`` that Kubernetes set for a Service named rotor-bridge,
+    which the bridge ignores (none of them names a key: ``port`` and ``service_*`` are no keys
+    of the file's top)."""
+    return sorted(k for k in env if _service_link(k, env[k]) and not _names_a_key(k))
+
+
+def _names_a_key(key: str) -> bool:
+    """Whether variable ``key`` could name a key of the file's top (the whole of it after the
+    prefix, or its start up to a ``_``): then it is no service link, whatever its form."""
+    name = key[len(ENV_PREFIX) :].lower()
+    return any(name == f or name.startswith(f"{f}_") for f in Settings.model_fields)
 
 
 def _check_variables(env: Any) -> None:
