@@ -89,7 +89,11 @@ is an error naming both. A
 `ROTOR_BRIDGE_` variable that names no key (`ROTOR_BRIDGE_MQTT_HOST`, one `_` where a table
 takes `__`; `ROTOR_BRIDGE_LOG_LEVEL__X`, under a key that is one value) is an error, as an
 unknown key in the file is; so are two variables that set one key (names that differ only
-by case, or one setting a table whole and the other a key in it).
+by case, or one setting a table whole and the other a key in it, as
+`ROTOR_BRIDGE_MQTT__TLS='{{...}}'` beside `ROTOR_BRIDGE_MQTT__TLS__CA_FILE` or a rotator's
+`..._PRESETS='{{...}}'` beside `..._PRESETS__EU`). A table of the top in JSON
+(`ROTOR_BRIDGE_MQTT='{{"base_topic": "shack"}}'`) beside a variable of one of its keys
+(`ROTOR_BRIDGE_MQTT__HOST`) is both: the key's variable sets that key, whatever their order.
 The variables Kubernetes gives every pod for a Service named `rotor-bridge` (its service
 links: `ROTOR_BRIDGE_SERVICE_HOST`, `ROTOR_BRIDGE_SERVICE_PORT`,
 `ROTOR_BRIDGE_SERVICE_PORT_<NAME>`, `ROTOR_BRIDGE_PORT=tcp://...` and

@@ -16,11 +16,6 @@ import pytest
 from tests.support import cli, to_toml
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: ROTOR_BRIDGE_MQTT='{...}' beside compose.yaml's ROTOR_BRIDGE_MQTT__HOST "
-    "worked (the key's variable wins, in any order) and is now refused, exit 2",
-)
 def test_a_table_in_json_beside_a_variable_of_one_of_its_keys_is_both(tmp_path: Path) -> None:
     config = tmp_path / "bridge.toml"
     config.write_text(
@@ -42,3 +37,54 @@ def test_a_table_in_json_beside_a_variable_of_one_of_its_keys_is_both(tmp_path: 
     assert "broker: 192.168.1.10:1884," in out.stdout, out.stdout
     assert "client id rotor-bridge-docker" in out.stdout, out.stdout
     assert "topic shack;" in out.stdout, out.stdout
+
+
+@pytest.mark.parametrize("json_first", [True, False], ids=["JSON first", "key first"])
+def test_the_key_variable_is_the_value_whatever_the_order(tmp_path: Path, json_first: bool) -> None:
+    """Where the table's JSON sets the key too, the bridge takes the key's own variable, in
+    either order of the environment: the one result the refusal was there to make sure of."""
+    config = tmp_path / "bridge.toml"
+    config.write_text(
+        to_toml(
+            {
+                "state_file": tmp_path / "state.json",
+                "mqtt": {"host": "127.0.0.1"},
+                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
+            }
+        )
+    )
+    table = ("ROTOR_BRIDGE_MQTT", '{"host": "10.0.0.1", "port": 1885, "base_topic": "shack"}')
+    key = ("ROTOR_BRIDGE_MQTT__HOST", "192.168.1.10")
+    out = cli(
+        "check-config", "-c", str(config), env=dict([table, key] if json_first else [key, table])
+    )
+    assert out.returncode == 0, out.stderr
+    assert "broker: 192.168.1.10:1885," in out.stdout, out.stdout
+    assert "topic shack;" in out.stdout, out.stdout
+
+
+def test_a_table_below_the_top_in_json_beside_a_variable_of_its_key_is_still_refused(
+    tmp_path: Path,
+) -> None:
+    """``[mqtt.tls]`` is laid in the environment's order (pydantic-settings' explode_env_vars):
+    there the order decides, and the two stay refused (2bfa58c0's case)."""
+    config = tmp_path / "bridge.toml"
+    config.write_text(
+        to_toml(
+            {
+                "state_file": tmp_path / "state.json",
+                "mqtt": {"host": "127.0.0.1"},
+                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
+            }
+        )
+    )
+    env = {
+        "ROTOR_BRIDGE_MQTT__TLS": '{"ca_file": "/etc/ssl/a.pem"}',
+        "ROTOR_BRIDGE_MQTT__TLS__CA_FILE": "/etc/ssl/b.pem",
+    }
+    out = cli("check-config", "-c", str(config), env=env)
+    assert out.returncode == 2, out.stdout
+    assert (
+        "ROTOR_BRIDGE_MQTT__TLS, ROTOR_BRIDGE_MQTT__TLS__CA_FILE: the first sets a table whole"
+        in out.stderr
+    ), out.stderr

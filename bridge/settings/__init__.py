@@ -35,7 +35,9 @@ Rules:
    variable under a key that is one value (``ROTOR_BRIDGE_LOG_LEVEL__X``,
    ``ROTOR_BRIDGE_MQTT__HOST__X``, ``ROTOR_BRIDGE_CONFIG__X``): nothing is under it (attack
    18: dropped without a word, or refused naming no variable). So are two variables that set
-   one key (_one_variable_each: the environment's order chose one without a word).
+   one key (_one_variable_each: the environment's order chose one without a word), but a
+   table of the top in JSON beside a variable of one of its keys, which is both, in any order
+   (_laid_over).
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
@@ -857,9 +859,10 @@ def _check_variables(env: Any) -> None:
 def _one_variable_each(env: Any) -> None:
     """Rule 4: ConfigError naming two variables that set one key: names that differ only by
     case (``ROTOR_BRIDGE_MQTT__HOST``, ``rotor_bridge_mqtt__host``; ``PRESETS__EU``,
-    ``PRESETS__eu``), or one setting a table whole and the other a key in it
-    (``ROTOR_BRIDGE_MQTT``, ``ROTOR_BRIDGE_MQTT__HOST``). An attack pass: which one the bridge
-    took was decided by their order in the environment, without a word."""
+    ``PRESETS__eu``), or one setting a table whole and the other a key in it where their
+    order decides (``ROTOR_BRIDGE_MQTT__TLS``, ``ROTOR_BRIDGE_MQTT__TLS__CA_FILE``; not a table
+    of the top: _laid_over). An attack pass: which one the bridge took was decided by their
+    order in the environment, without a word."""
     ours = sorted(
         (k for k in env if k.upper().startswith(ENV_PREFIX)), key=lambda k: (k.upper(), k)
     )
@@ -871,11 +874,32 @@ def _one_variable_each(env: Any) -> None:
                     f"{a}, {b}: both set one key (a variable's name is read in any case), and "
                     "which the bridge took would depend on their order: set one"
                 )
-            if wa == wb[: len(wa)]:  # (sorted: the shorter is first)
+            if wa == wb[: len(wa)] and not _laid_over(wa):  # (sorted: the shorter is first)
                 raise ConfigError(
                     f"{a}, {b}: the first sets a table whole and the second a key in it, and "
                     "which the bridge took would depend on their order: set one"
                 )
+
+
+def _laid_over(words: list[str]) -> bool:
+    """Whether the variable of ``words`` (its name split at ``__``) sets a table of the top
+    whole, in JSON, which pydantic-settings reads first and lays every variable of a key in it
+    over, in whatever order they come (its env source: the table's JSON, then ``deep_update``
+    with the rest): the key's variable is what the bridge takes for that key, the JSON for the
+    others (a review: 2bfa58c0 refused ``ROTOR_BRIDGE_MQTT`` beside compose.yaml's
+    ``ROTOR_BRIDGE_MQTT__HOST``, which had always worked). A table below the top is laid in
+    the environment's order, and a rotator's keys (_apply_rotator_env) likewise: refused."""
+    if len(words) != 1:
+        return False
+    field = Settings.model_fields.get(words[0].removeprefix(ENV_PREFIX).lower())
+    if field is None:
+        return False
+    kinds = [field.annotation]
+    if get_origin(field.annotation) in (Union, types.UnionType):  # (``... | None``)
+        kinds = list(get_args(field.annotation))
+    return all(get_origin(a) is not list for a in kinds) and any(
+        get_origin(a) is dict or (isinstance(a, type) and issubclass(a, BaseModel)) for a in kinds
+    )
 
 
 def _nothing_under_a_value(key: str, path: list[str], rotator: str | None = None) -> None:
