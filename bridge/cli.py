@@ -71,19 +71,20 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_check_config(args: argparse.Namespace) -> int:
     """A summary, the warnings, every value with --full, and the line that says it is good
     (settings/report.py); a file that is not good is one message on stderr and exit 2."""
-    from bridge.feature import check_service, registered
+    from bridge.feature import check_feature, registered
     from bridge.settings.report import check_state_file, config_warnings, masked, summary
 
     settings = _load(args)
+    warnings: list[str] = []
     try:
         check_state_file(settings)  # as the start tries it (settings/report.py rule 5)
-        for feature in registered():  # a feature's service's files, as its start reads them
-            check_service(feature, settings)
+        for feature in registered():  # a feature's files, as its start reads them
+            warnings += check_feature(feature, settings)  # (and what that start warns of)
     except ConfigError as exc:
         raise _fail(exc) from None
     for line in summary(settings):
         print(line)
-    warnings = config_warnings(settings)
+    warnings = config_warnings(settings) + warnings
     for warning in warnings:
         print(f"warning: {warning}")
     if args.full:

@@ -37,7 +37,9 @@ Rules:
    hands the parts to the sessions, and a session made without them finds them here. Nothing
    heavy is imported by a declaration: a feature's service is the app's to import, and only
    when its settings turn it on (``service_on``); so is its ``check``, check-config's, which
-   judges what the service's start would refuse with the function that start calls.
+   judges what the start would refuse with the function that start calls, and returns what
+   that start would warn of (a feature with no service, tracking's TLE file, is checked
+   always: its check says whether its settings name anything to judge).
 5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
    entity table's or of a feature's: where the table had it before the feature was a package),
    those after one row in the registry's order; one that names no row, after all the others.
@@ -220,8 +222,9 @@ class Feature:
     service: str | None = None
     service_on: Callable[[Any], bool] | None = None
     # "module:function" of the file's Settings, raising ConfigError for what the service's
-    # start would stop on (its files read as the start reads them): check-config calls it
-    # while ``service_on`` (rule 4)
+    # start would stop on (its files read as the start reads them) and returning what it would
+    # warn of (check-config's warnings): check-config calls it while ``service_on``, or always
+    # for a feature with no service (rule 4)
     check: str | None = None
 
     def __post_init__(self) -> None:
@@ -261,14 +264,15 @@ def make_service(feature: Feature, view: AppView) -> FeatureService | None:
     return make(view)
 
 
-def check_service(feature: Feature, settings: Any) -> None:
-    """ConfigError if the feature's service, which its settings turn on, would not start on
-    them (``check``, its module imported now: rule 4); check-config asks every feature."""
-    if feature.check is None or not feature.serves(settings):
-        return
+def check_feature(feature: Feature, settings: Any) -> list[str]:
+    """ConfigError if the feature's start, its service's where its settings turn it on, would
+    stop on them; else what that start would warn of (``check``, its module imported now:
+    rule 4); check-config asks every feature."""
+    if feature.check is None or (feature.service is not None and not feature.serves(settings)):
+        return []
     module, _, name = feature.check.partition(":")
-    judge: Callable[[Any], None] = getattr(importlib.import_module(module), name)
-    judge(settings)
+    judge: Callable[[Any], list[str]] = getattr(importlib.import_module(module), name)
+    return judge(settings)
 
 
 def registered() -> tuple[Feature, ...]:

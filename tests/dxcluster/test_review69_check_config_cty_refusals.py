@@ -9,19 +9,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import cli, to_toml
 
 SLIP = "Palau:                    27:  64:  OC:   357.0:  -134.53:    -9.0:  T8:\n    T8;\n"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: check-config reads the cty file as the start does and warns of nothing "
-    "the start warns of (an entity placed nowhere)",
-)
 def test_check_config_warns_of_an_entity_the_start_will_place_nowhere(tmp_path: Path) -> None:
     cty = tmp_path / "cty.dat"
     cty.write_text(CTY_DAT + SLIP)

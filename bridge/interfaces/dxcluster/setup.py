@@ -36,10 +36,13 @@ def service(view: AppView) -> DxCluster:
     return cluster
 
 
-def check(settings: Any) -> None:
+def check(settings: Any) -> list[str]:
     """ConfigError if the start would stop on ``[dxcluster]`` of ``settings`` (the file's
-    Settings, its service on): check-config asks this (bridge/feature.py ``check``)."""
-    read_cty(settings.dxcluster)
+    Settings, its service on), else what it would warn of, the cty file's refusals (cty.py
+    rule 5; a review: check-config dropped them and said "config OK" of the very line the
+    start warns of): check-config asks this (bridge/feature.py ``check``)."""
+    dx = settings.dxcluster
+    return [f"dxcluster.cty_file: {dx.cty_file} {why}" for why in read_cty(dx).refused]
 
 
 def read_cty(settings: DxClusterSettings) -> Cty:
