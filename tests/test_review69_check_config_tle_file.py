@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from tests.support import cli, to_toml
+from tests.support.sky import synthetic_tle
 
 
 def _html(tmp_path: Path) -> Path:
@@ -30,11 +31,6 @@ def _fifo(tmp_path: Path) -> Path:
     return pipe
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 69: check-config says a TLE file with no satellite in it is '(found)' and "
-    "warns of nothing, and a pipe the start will not read 'does not exist now'",
-)
 @pytest.mark.parametrize("made", [_html, _fifo], ids=["an error page", "a pipe"])
 def test_check_config_says_of_a_tle_file_what_the_start_will_find_in_it(
     tmp_path: Path, made: Callable[[Path], Path]
@@ -56,3 +52,36 @@ def test_check_config_says_of_a_tle_file_what_the_start_will_find_in_it(
     warned = [line for line in out.stdout.splitlines() if line.startswith("warning: tracking.")]
     assert warned, out.stdout  # the start's log says it: check-config says it too
     assert "does not exist" not in warned[0], warned[0]  # it exists: it is no TLE file
+
+
+def _good(tmp_path: Path) -> Path:
+    line1, line2 = synthetic_tle(
+        "", 1767225600.0, inclination_deg=51.6, raan_deg=0.0, mean_anomaly_deg=0.0, catalog=25544
+    )
+    tle = tmp_path / "amateur.tle"
+    tle.write_text(f"ISS (ZARYA)\n{line1}\n{line2}\n")
+    return tle
+
+
+def test_check_config_says_nothing_against_a_tle_file_the_start_reads_a_satellite_from(
+    tmp_path: Path,
+) -> None:
+    """The other side: a file the start reads whole is '(found)', and no warning names it."""
+    tle = _good(tmp_path)
+    config = tmp_path / "bridge.toml"
+    config.write_text(
+        to_toml(
+            {
+                "state_file": tmp_path / "state.json",
+                "mqtt": {"host": "127.0.0.1"},
+                "station": {"locator": "JO01"},
+                "tracking": {"tle_file": tle},
+                "rotators": [{"id": "tower", "model": "gs232b", "port": "/dev/rotor"}],
+            }
+        )
+    )
+    out = cli("check-config", "-c", str(config))
+    assert out.returncode == 0, out.stderr
+    assert f"the satellites in {tle} (found)" in out.stdout, out.stdout
+    assert "warning: tracking." not in out.stdout, out.stdout
+    assert not out.stderr, out.stderr  # (the reading's log is not check-config's output)

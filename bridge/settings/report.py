@@ -141,12 +141,6 @@ def config_warnings(settings: Settings) -> list[str]:
             "mqtt.password is written in the configuration file: put it in a file of its own, "
             "readable only by the service user, and name that in mqtt.password_file"
         )
-    tle = settings.tracking.tle_file
-    if tle is not None and not os.path.isfile(tle):
-        found.append(
-            f"tracking.tle_file: {tle} does not exist now; satellites can be tracked by name "
-            "once it does (it is read when it changes)"
-        )
     wsjtx = settings.wsjtx
     if wsjtx.enabled and not is_loopback(wsjtx.bind):  # a forged Status turns a follower
         found.append(
@@ -233,7 +227,7 @@ def summary(settings: Settings) -> list[str]:
     if tle is None:
         lines.append(f"tracking: {sky}; no TLE file, so no satellites")
     else:
-        there = "found" if os.path.isfile(tle) else "NOT FOUND"
+        there = "found" if os.path.lexists(tle) else "NOT FOUND"  # (read: features/tracking/)
         lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
     wsjtx = settings.wsjtx
     where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"

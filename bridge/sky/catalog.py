@@ -19,6 +19,9 @@ Rules:
    size and its read is not read either: its first 4 MiB are no TLE file.
 5. What the file holds is quoted in the log only as sky.parse_tles words its problems
    (bodies.py rule 2): a satellite's name cut short, any other line by its number alone.
+6. check-config reads the file with this reader (``warnings``), and shows what its reading
+   warned of (a review: it judged the file by ``isfile`` alone: an error page saved as the TLE
+   file was "(found)", no warning, and a pipe "does not exist now").
 """
 
 from __future__ import annotations
@@ -41,12 +44,15 @@ class CatalogError(ValueError):
 
 
 class TleCatalog:
-    def __init__(self, path: Path | None) -> None:
+    def __init__(self, path: Path | None, *, logged: bool = True) -> None:
         self.path = path
+        self._logged = logged  # rule 6: check-config's reading keeps its warnings, unlogged
         self._lock = threading.Lock()  # looked up from paho's thread and rotctld's
         self._seen: tuple[int, int] | None = None
         self._sets: dict[str, tuple[str, str, str]] = {}  # folded name -> (name, line1, line2)
         self._not_read: str | None = None  # rule 4: why the file was not read
+        # rule 6: the last read's warnings, as logged (check-config shows them: warnings())
+        self._said: list[str] = []
 
     def names(self) -> list[str]:
         with self._lock:
@@ -71,6 +77,19 @@ class TleCatalog:
                 f"no satellite {name!r}: no tle_file is configured ([tracking] tle_file); "
                 'send the elements as {"tle": ["NAME", "1 ...", "2 ..."]}'
             )
+
+    def warnings(self) -> tuple[int, list[str]]:
+        """The file read now as a lookup reads it (rule 6): how many satellites it holds, and
+        what that reading warned of. Slow: rule 1."""
+        with self._lock:
+            self._refresh()
+            return len(set(self._sets.values())), list(self._said)
+
+    def _warn(self, text: str) -> None:
+        """Rules 2 and 4: said in the log once per change, and kept (rule 6)."""
+        self._said.append(text)
+        if self._logged:
+            log.warning("%s", text)
 
     def lookup(self, name: str) -> Body:
         """The satellite called ``name`` (CatalogError if there is none). Slow: rule 1."""
@@ -103,24 +122,24 @@ class TleCatalog:
             data = self._read(st)
         except OSError as exc:
             if self._seen != (-1, -1):
-                log.warning("tle_file %s cannot be read: %s", self.path, exc.strerror or exc)
+                self._said = []
+                self._warn(f"tle_file {self.path} cannot be read: {exc.strerror or exc}")
                 self._seen = (-1, -1)
             return
         self._seen = seen
+        self._said = []
         if isinstance(data, str):  # rule 4: not read, said once per change
             self._not_read = data
-            log.warning("%s", data)
+            self._warn(data)
             return
         self._not_read = None
         text = data.decode("ascii", errors="replace")
         sets, problems = parse_tles(text)
         if problems:  # rule 2: one warning per read, not one per bad line
-            log.warning(
-                "tle_file %s: %d bad entr%s skipped (the first: %s)",
-                self.path,
-                len(problems),
-                "y" if len(problems) == 1 else "ies",
-                problems[0],
+            many = "y" if len(problems) == 1 else "ies"
+            self._warn(
+                f"tle_file {self.path}: {len(problems)} bad entr{many} skipped "
+                f"(the first: {problems[0]})"
             )
         self._sets = {}
         for set_name, (line1, line2) in sets.items():

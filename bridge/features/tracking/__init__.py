@@ -142,6 +142,7 @@ PART: Part[RotatorSession] = Part(
 FEATURE = Feature(
     name=NAME,
     docs="docs/tracking.md",
+    check="bridge.features.tracking.check:check",  # check-config: the TLE file, read as run
     summary="follows the sun, the moon or a satellite across the sky",
     commands=(CommandTopic(COMMAND, "track", _track),),
     states=(StateTopic(STATE, _status, tracking_state, needs=NEEDS),),
