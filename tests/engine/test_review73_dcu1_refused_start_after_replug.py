@@ -1,0 +1,49 @@
+"""Review 73 (d609655e, parts.py rule 10: ``StartHalt.owed``): review 70's refused start right
+after a replug mid-turn, on a DCU-1. Its turn is never seen (no readings: motion.py rule 6), so
+it is never ``carried`` and nothing is owed; and ``turning`` counts a blind turn only while the
+bridge's own target is out, which the unplug dropped ("the controller may finish it by itself
+(unseen, not stopped)", the log says). So a follow start whose first grid is refused right
+after the replug halts nothing, and the DCU-1 turns on some 90 degrees to the target from
+before the unplug under 'refused'. Without the replug the same refusal stops the turn (two
+stop frames at once), and after d609655e a Rotor-EZ's is stopped once a reading shows it."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.core.model import ErrorKind
+from tests.engine.test_follow import STATION, bearing
+from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 73: a DCU-1's follow start refused right after a replug mid-turn halts "
+    "nothing, and the rotor turns on some 90 degrees to the target from before the unplug",
+)
+def test_a_dcu1s_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
+    partner = bearing("PM95")  # 42.2 from the test station
+    sector = [round(partner) - 10, round(partner) + 10]
+    emulator = {"start_az_deg": round(partner) + 20}
+    settings = {"keep_out": [sector]}
+    with VirtualRotator("dcu1", emulator=emulator, follow=STATION, settings=settings) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.target(round(partner + 140.0))  # (never through the sector)
+        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+        v.run_for(0.1)  # (not a deadline)
+        v.link_down()
+        v.run_for(2.0)  # (the adapter out: not a deadline)
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        assert v.truth().is_moving  # (it finishes its old turn by itself)
+        t, here = v.now, v.truth().az_deg
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
+        [refused] = v.errors(ErrorKind.REFUSED, since=t)
+        assert "keep-out" in refused.message
+        assert v.status.following is not None  # taken, and waiting for a grid it may turn to
+        # held where it was: observed 92 -> 182, no stop frame
+        assert "stop" in {f.outcome for f in v.frames(since=t)}
+        assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
