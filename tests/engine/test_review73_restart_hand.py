@@ -53,3 +53,40 @@ def test_a_hand_at_the_panel_before_a_restarts_second_reading_is_a_hand() -> Non
         assert "stop" not in {f.outcome for f in v.frames(since=t)}
         assert angle_between(v.truth().az_deg, hand_to) <= 1.0, (hand_to, v.truth().az_deg)
         assert v.status.following is None and v.status.following_ended == "turned by hand"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 73: a hand at a Rot2Prog's panel two seconds after the bridge restarted, "
+    "following on and waiting for a grid, does not end following: the next grid turns the "
+    "rotor back from where the hand sent it",
+)
+def test_a_hand_before_a_restarts_second_reading_ends_an_accepted_follow_start() -> None:
+    """The same judgement with nothing refused: a follow start waiting for its first grid at
+    a restart's first reading. Before f33b510d the hand ended following 'turned by hand' at
+    the second reading, and the rotor went where the hand sent it."""
+    partner = bearing("PM95")  # 42.2 from the test station
+    emulator = {"start_az_deg": round(partner) + 20}
+    with VirtualRotator("rot2prog", emulator=emulator, follow=STATION) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(20.0)  # at rest for long (not a deadline)
+        v.link_down(None)
+        v.run_for(1.0)  # (not a deadline)
+        v.session = RotatorSession(v.cfg)  # the bridge started again
+        v._do(v.session.start(v.now))
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        rest = v.truth().az_deg
+        v.follow(True)  # taken: waiting for WSJT-X
+        v.run_for(2.0)  # (not a deadline)
+        assert v.truth().az_deg == rest and not v.truth().is_moving  # (never moved)
+        hand_to = round(partner + 140.0)
+        v.manual_rotate(hand_to)  # a hand at the panel
+        v.run_until(lambda h: h.status.moving, 30, "the bridge sees the hand's turn")
+        v.run_for(3.0)  # (the hand's turn under way: not a deadline)
+        v.heard("JA1ABC", "PM95")  # the next grid
+        v.run_until(lambda h: not h.truth().is_moving, 300, "the rotor at rest")
+        # observed: following on, the rotor turned back to the partner's 42 (not 182)
+        assert angle_between(v.truth().az_deg, hand_to) <= 1.0, (hand_to, v.truth().az_deg)
+        assert v.status.following is None and v.status.following_ended == "turned by hand"
