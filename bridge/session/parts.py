@@ -53,11 +53,8 @@ Rules:
    way that the readings came back to (``before``: the part's first step saw it ``carried``
    over a lost link, motion.py rule 4, and it has gone on since with no target and no stop
    out): the controller finishing a turn by itself, its target dropped with the port (a
-   replug mid-turn), is nobody's hand; a start at a restart's first reading, before the second
-   says whether the rotor turns (motion.py rule 4), is judged at the step that says (review
-   70: the old turn seen then was taken for a hand, following ended, and it ran on 98
-   degrees); a turn the bridge saw begin from rest with the link up is a hand as ever. The
-   start's first target stops the carried turn or re-targets it as an
+   replug mid-turn), is nobody's hand; a turn the bridge saw begin from rest with the link up
+   is a hand as ever. The start's first target stops the carried turn or re-targets it as an
    ``R/target`` would (review 50: ``track sun`` right after a replug ended at once as "turned
    by hand", and the rotor turned on to the old target; review 52: a hand already at the panel
    when tracking started was taken for such a turn, stopped and overridden).
@@ -75,16 +72,6 @@ Rules:
     halted again at every step). Review 50 (tracking), attack 19 (a tracking start whose wait
     for the pass was refused, and a following start whose first grid was: each said so on
     R/error while a Rotor-EZ turned on some 100 degrees to the older target).
-    A turn carried over a lost link (rule 8, motion.py rule 4: ``carried``) that no reading
-    has shown moving yet may have come to rest while the port was out (no stop to it:
-    ``turning``), and a restart's is known only at its second reading; the refusals of those
-    starts are not judged again (following's grid, tracking's wait). So the halt is owed,
-    while no target of the part's is taken and that turn is carried, and proposed at the step
-    a reading shows it move (``StartHalt.owed``, as the storm park's refusal stops a carried
-    turn known later: wind.py rule 5, review 66); a turn known to be none (at rest, a stop or
-    target of the bridge's into it) drops it, and a hand's turn is never carried (reviews 52,
-    53). Review 70: a start right after a replug mid-turn, refused, halted nothing, and the
-    Rotor-EZ turned on some 95 degrees to the target from before the unplug.
 """
 
 from __future__ import annotations
@@ -182,21 +169,11 @@ class Before:
         self._seen = None
 
     def look(self, scene: Scene) -> bool:
-        """The turn under way is the one the start found (at every step, before judging). A
-        start at a restart's first reading finds a turn ``carried`` not yet seen (motion.py
-        rule 4: its second reading says whether it goes on): judged at the step that says."""
+        """The turn under way is the one the start found (at every step, before judging)."""
         m = scene.motion
         alone = turning_alone(m) and m.carried  # (not a turn seen begin with the link up)
-        if self._seen is None and not alone and _unseen(m):
-            return False  # (no turn seen yet: nothing a hand's either)
         self._seen = alone if self._seen is None else self._seen and alone
         return self._seen
-
-
-def _unseen(m: mo.Motion) -> bool:
-    """Rule 8: a turn carried (motion.py rule 4) that no reading has shown yet: a restart's
-    first reading, before its second says whether the rotor turns."""
-    return m.carried and m.state is not mo.MOVING and m.target_deg is None
 
 
 def turning(scene: Scene) -> bool:
@@ -210,49 +187,20 @@ def turning(scene: Scene) -> bool:
 
 
 class StartHalt:
-    """Rule 10: the one halt a start proposes when its first target is refused; and, while
-    that refusal stands, the one owed to the turn carried over a lost link that no reading
-    has shown moving yet, once one does (``owed``)."""
+    """Rule 9: the one halt a start proposes when its first target is refused."""
 
     def __init__(self) -> None:
         self._done = False
-        self._owed = False  # the first refused with a carried turn not yet known
 
     def start(self) -> None:
-        self._done = self._owed = False
+        self._done = False
 
     def wanted(self, scene: Scene, first: bool) -> bool:
         """Whether the refusal of a target (``first``: the start's first) halts the turn under
-        way: the first's, once per start, while a turn or slew goes on. A turn carried over a
-        lost link not yet seen moving (or a restart's, not yet seen at all) is owed the
-        halt instead (``owed``)."""
+        way: the first's, once per start, while a turn or slew goes on."""
         halt = first and not self._done and turning(scene)
         self._done = self._done or halt
-        self._owed = first and not self._done and _carried(scene.motion)
         return halt
-
-    def owed(self, scene: Scene, first: bool) -> bool:
-        """At every step after the refusal (the part's own refusals are not judged again:
-        following's grid, tracking's wait): whether the carried turn is known now, seen
-        moving with no stop of the bridge's out, and is halted, once; ``first``: no target
-        of the part's taken since (one that is stops or re-targets it). Dropped once that
-        turn is known to be none (at rest, a stop or target of the bridge's into it), so a
-        hand's turn begun later is never taken for it (reviews 52, 53)."""
-        if not self._owed:
-            return False
-        if not first or self._done or not _carried(scene.motion):
-            self._owed = False
-            return False
-        if not turning(scene):
-            return False
-        self._owed, self._done = False, True
-        return True
-
-
-def _carried(m: mo.Motion) -> bool:
-    """Rule 10: a turn the controller may be finishing by itself, carried over a lost link or
-    found by a restart (motion.py rule 4, ``carried``), nothing of the bridge's sent into it."""
-    return m.carried and m.target_deg is None and m.stop_sent_t is None
 
 
 def turned_by_hand(

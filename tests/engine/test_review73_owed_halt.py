@@ -11,20 +11,12 @@ one by ``Before``: not asserted here)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_follow import STATION, bearing
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a hand at the panel a second after a replug (the rotor at rest since "
-    "long before it, every reading since showing it still) is stopped by a refused follow "
-    "start's owed halt, the rotor left some 75 degrees short of where the hand sent it",
-)
 def test_a_hand_at_the_panel_right_after_a_replug_at_rest_is_not_the_owed_halts_turn() -> None:
     partner = bearing("PM95")  # 42.2 from the test station
     sector = [round(partner) - 10, round(partner) + 10]

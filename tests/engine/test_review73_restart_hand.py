@@ -9,8 +9,6 @@ where the hand sent it (as it still does on a Rotor-EZ, whose second reading com
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
 from tests.engine.test_follow import STATION, bearing
@@ -18,12 +16,6 @@ from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a hand at a Rot2Prog's panel two seconds after the bridge restarted "
-    "(the rotor at rest for long before) is stopped by a refused follow start's owed halt, "
-    "115 degrees short, and following goes on",
-)
 def test_a_hand_at_the_panel_before_a_restarts_second_reading_is_a_hand() -> None:
     partner = bearing("PM95")  # 42.2 from the test station
     sector = [round(partner) - 10, round(partner) + 10]
@@ -55,12 +47,6 @@ def test_a_hand_at_the_panel_before_a_restarts_second_reading_is_a_hand() -> Non
         assert v.status.following is None and v.status.following_ended == "turned by hand"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a hand at a Rot2Prog's panel two seconds after the bridge restarted, "
-    "following on and waiting for a grid, does not end following: the next grid turns the "
-    "rotor back from where the hand sent it",
-)
 def test_a_hand_before_a_restarts_second_reading_ends_an_accepted_follow_start() -> None:
     """The same judgement with nothing refused: a follow start waiting for its first grid at
     a restart's first reading. Before f33b510d the hand ended following 'turned by hand' at
