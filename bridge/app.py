@@ -835,6 +835,8 @@ class App:
         state_file = self.settings.state_file
         try:
             self._installation.enter_context(held(state_file))
+            if self.store.leftover is not None:  # (state_store.py rule 13: read as its own)
+                self._installation.enter_context(held(self.store.leftover))
         except InUse as exc:
             by = f" ({exc.holder})" if exc.holder else ""
             raise ConfigError(

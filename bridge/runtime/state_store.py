@@ -97,6 +97,9 @@ Rules:
    directory the bridge runs from (``tilde_leftover``), said at WARNING; it is written at its
    own path from then on, and the old one is left for the user to delete (review 69: a
    rotator locked there for tower work started unlocked after the update, without a word).
+   The installation's lock (rule 7) is taken on both (review 73: an earlier version still
+   running on the old file did not stop the start that read it); ``~user/...`` likewise, from
+   ``./~user/...``.
 """
 
 from __future__ import annotations
@@ -294,17 +297,26 @@ def held(path: Path | None) -> Iterator[None]:
 
 
 def tilde_leftover(path: Path | None) -> Path | None:
-    """Rule 13: the file an earlier version kept for ``path`` written ``~/...``, if ``path``
-    is under the home folder and not there yet, and that file is; else None."""
+    """Rule 13: the file an earlier version kept for ``path`` written ``~/...`` or
+    ``~user/...``, if ``path`` is under that home folder and not there yet, and that file is;
+    else None."""
     if path is None:
         return None
     try:
-        old = Path.cwd() / "~" / path.relative_to(Path.home())
-        if path.exists() or path.is_symlink() or not old.is_file():
+        if path.exists() or path.is_symlink():
             return None
-    except (ValueError, RuntimeError, OSError):  # (not under home; no home; no cwd)
+        here = Path.cwd()
+        tildes = [e.name for e in here.iterdir() if e.name.startswith("~") and e.is_dir()]
+    except OSError:  # (no working directory)
         return None
-    return old
+    for name in tildes:  # '~' for '~/...', '~user' for '~user/...'
+        try:
+            old = here / name / path.relative_to(os.path.expanduser(name))
+        except ValueError:  # (not under that home; a '~user' naming nobody stays as it is)
+            continue
+        if old.is_file():
+            return old
+    return None
 
 
 class StateStore:
@@ -326,6 +338,7 @@ class StateStore:
             )
         self._path = path
         self._read_path = read_from or path  # rule 11: the file read, looked at again
+        self.leftover = read_from  # rule 13: an earlier version's file, read as this one's
         self._deferred = deferred  # rule 7: saves wait for check_writable
         self._owed = False  # a save asked while deferred
         self._lock = threading.Lock()

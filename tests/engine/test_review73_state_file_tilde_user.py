@@ -21,12 +21,6 @@ from bridge.app import App
 from bridge.settings import Settings
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: state_file '~user/...' kept by an earlier version at ./~user/... is not "
-    "read after the update (rule 13 looks at ./~/... only): a rotator locked there for tower "
-    "work starts unlocked, without a word",
-)
 def test_a_lock_kept_where_earlier_versions_kept_a_tilde_user_state_file_still_locks(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

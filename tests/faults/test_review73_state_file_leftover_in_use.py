@@ -13,8 +13,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from bridge.runtime.state_store import held
 from tests.support import Probe, to_toml
 from tests.support.mosquitto import Mosquitto
@@ -22,11 +20,6 @@ from tests.support.process import bridge_env
 from tests.support.waiting import wait_until
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a bridge still running on the state file an earlier version kept at "
-    "./~/... does not stop the updated one that reads it: two bridges run one installation",
-)
 def test_a_bridge_running_on_the_leftover_state_file_stops_the_start_that_reads_it(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:
