@@ -32,6 +32,7 @@ import stat
 import threading
 from pathlib import Path
 
+from bridge.core.readfile import NotRegular, TooLarge, read_regular
 from bridge.sky import Body, SkyError, parse_tles
 
 log = logging.getLogger(__name__)
@@ -155,31 +156,14 @@ class TleCatalog:
         limit = f"over the limit of {MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
         if stat.S_ISREG(seen.st_mode) and seen.st_size > MAX_FILE_BYTES:
             return f"tle_file {self.path} is {seen.st_size} bytes, {limit}"
-        # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_NOCTTY: a
-        # terminal line named here would become a service's controlling terminal, and its
-        # hang-up, SIGHUP, end the bridge for good: review 69)
-        flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
-        flags |= getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
-        fd = os.open(self.path, flags)
-        try:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):  # (what is open now, not what was seen)
-                return (
-                    f"tle_file {self.path} is no regular file (a device, a pipe or a folder): "
-                    "not read"
-                )
-            chunks: list[bytes] = []
-            size = 0
-            while size <= MAX_FILE_BYTES:
-                chunk = os.read(fd, MAX_FILE_BYTES + 1 - size)
-                if not chunk:
-                    break
-                chunks.append(chunk)
-                size += len(chunk)
-        finally:
-            os.close(fd)
-        if size > MAX_FILE_BYTES:
+        try:  # (core/readfile.py: what is open now is judged, not what was seen)
+            return read_regular(self.path, MAX_FILE_BYTES)
+        except NotRegular:
+            return (
+                f"tle_file {self.path} is no regular file (a device, a pipe or a folder): not read"
+            )
+        except TooLarge:
             return f"tle_file {self.path} grew past {MAX_FILE_BYTES} bytes, {limit}"
-        return b"".join(chunks)
 
 
 def _fold(name: str) -> str:

@@ -41,12 +41,11 @@ Rules:
 from __future__ import annotations
 
 import math
-import os
 import re
-import stat
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from bridge.core.readfile import NotRegular, TooLarge, read_regular
 from bridge.core.text import quoted
 
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
@@ -252,25 +251,10 @@ def load(path: Path) -> Cty:
 
 def _read(path: Path) -> bytes:
     """Rule 4: the file's bytes; OSError if it cannot be read, is no regular file or is
-    larger than CTY_FILE_MAX."""
-    # (O_NONBLOCK: a FIFO's open waits for a writer that may never come; O_BINARY: Windows;
-    # O_NOCTTY: a terminal line must not become the service's controlling terminal, review 69)
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
-    flags |= getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
-    fd = os.open(path, flags)
+    larger than CTY_FILE_MAX (core/readfile.py)."""
     try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise OSError(f"it is no regular file (a device, a pipe or a folder): {_AD1C}")
-        chunks: list[bytes] = []
-        size = 0
-        while size <= CTY_FILE_MAX:
-            chunk = os.read(fd, CTY_FILE_MAX + 1 - size)
-            if not chunk:
-                break
-            chunks.append(chunk)
-            size += len(chunk)
-    finally:
-        os.close(fd)
-    if size > CTY_FILE_MAX:
-        raise OSError(f"it is larger than {CTY_FILE_MAX >> 20} MiB: {_AD1C}")
-    return b"".join(chunks)
+        return read_regular(path, CTY_FILE_MAX)
+    except NotRegular:
+        raise OSError(f"it is no regular file (a device, a pipe or a folder): {_AD1C}") from None
+    except TooLarge:
+        raise OSError(f"it is larger than {CTY_FILE_MAX >> 20} MiB: {_AD1C}") from None
