@@ -63,8 +63,10 @@ Rules:
    ``M18`` of ``M180`` (interfaces/mqtt/express.py rule 9). On a line that carried a frame
    already the stop is the plain one (``HalfLine.NONE``). A Rotor-EZ's ``;`` ends an open
    ``A`` frame (``AI`` then ``;``: invalid, no stop), so it goes twice too (rotorez.py rule
-   8). A codec that does not say how is sent ``encode_stop``, as before: the DCU-1 (every
-   stop twice 0.1 s apart already, session/stops.py rule 6), the RT-21, the SPID (fixed
+   8), and so does an RT-21's, whose ``;`` ends every command it takes (a cut ``BI1`` or a
+   target's ``AP1200.0`` CR takes the lone ``;`` as its end: rt21.py rule 6; review 71). A
+   codec that does not say how is sent ``encode_stop``, as before: the DCU-1 (every stop
+   twice 0.1 s apart already, session/stops.py rule 6), the SPID (fixed
    13-byte frames; the fact sheet's simulator drops a frame short of them 0.1 s after its
    last byte, and no source says what the box does), the SatEL and the Prosistel (STX
    framed): none of them looked at closely here.

@@ -43,6 +43,17 @@ Rules:
    is open is that query's, as ever. (A loaded host: a poll's answer came after its reply
    time, the next poll took it, and that poll's own answer, right behind it, was told on
    R/error as bytes that are no valid reply.)
+6. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
+   a cut write left in the box, and ``;``, the stop, is also what ends every command: a cut
+   ``BI1`` (the poll without its ``;``) or ``AP1200.0`` CR (the target turning the rotor,
+   its closing ``;`` lost) takes that ``;`` as its own end, and the rotor turns on until the
+   stop goes again 2 s later (review 71: 12 degrees). So it is ``;`` twice, one write: the
+   first ends the half frame, the second stops (a ``;`` with no command open is the stop; to
+   a box with nothing open both are, and a still rotor answers neither). A cut ``BI1`` ends
+   as the poll it was and is answered with a bearing: that one line is owed (rule 5's
+   bookkeeping), harmless, never a reading. Never a bare line end or another byte first: any
+   byte after a target's CR closes it and is read afresh (a letter would open a command that
+   eats the ``;``).
 """
 
 from __future__ import annotations
@@ -52,6 +63,7 @@ from typing import Any
 
 from bridge.protocols.base import (
     Codec,
+    HalfLine,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -100,6 +112,13 @@ class Rt21Codec(OneQuery):
 
     def encode_stop(self) -> bytes:
         return b";"
+
+    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes:
+        """Rule 6 (base.py rule 9): the connection's first stop, behind a half frame."""
+        if half is HalfLine.NONE:
+            return b";"
+        self._owe_late(1)  # rule 6: a cut BI1 ended by the first ; answers its bearing
+        return b";;"
 
     def encode_query(self) -> bytes:
         self._open_query()

@@ -25,11 +25,6 @@ UNPLUGGED_S = 0.5  # how long the adapter is out (not a deadline)
 RUN_ON_DEG = 3.0  # a reply time and the coast at 6 degrees a second (as attack 22's test)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: an RT-21's stop sent on replug is eaten by the command the unplug cut; "
-    "the rotor turns on 2 s, 12 degrees",
-)
 @pytest.mark.parametrize(
     ("cut", "reached"),
     [(b"BI1;", 3), (b"AP1200.0\r;", 9)],  # the poll without its ;, the target without its ;
@@ -54,3 +49,27 @@ def test_an_rt21_replug_stop_behind_a_cut_command_stops_the_rotor(
     v.link_up()
     v.run_until(lambda h: not h.truth().is_moving, 30, "stopped")
     assert abs(v.truth().az_deg - az_at_replug) < RUN_ON_DEG, (az_at_replug, v.truth().az_deg)
+
+
+AFTER_S = 3.0  # how long R/error is watched after the replug (not a deadline)
+
+
+def test_an_rt21_replug_stop_behind_a_cut_poll_says_nothing_on_r_error(rig: Rig) -> None:
+    """The first ``;`` ends the cut ``BI1`` as the poll it was, and the box answers it with a
+    bearing nobody asks for any more (rt21.py rule 6): dropped, not told on R/error."""
+    v = rig("rt21", emulator={"az_speed_deg_s": 6.0})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.target(200)
+    v.run_until(lambda h: h.state is MotionState.MOVING and h.truth().az_deg > 30, 30, "turning")
+    v.run_until(lambda h: h.writes[-1].data == b"BI1;" and h.writes[-1].t == h.now, 5, "a poll")
+    v.run_for(10 / v.cfg.baud * 3.5)  # BI1 has reached the box, its ; has not
+    v.link_down()
+    v.stop()
+    v.run_for(UNPLUGGED_S)
+    replug = v.now
+    v.link_up()
+    v.run_until(lambda h: not h.truth().is_moving, 30, "stopped")
+    v.run_for(AFTER_S)
+    assert any(b"BI1;" in f.data for f in v.device.log if f.time_s >= replug), v.device.log
+    assert v.state is MotionState.IDLE
+    assert v.errors(since=replug) == [], v.errors(since=replug)
