@@ -164,10 +164,10 @@ class AzimuthOnly:
     def encode_stop(self) -> bytes | list[bytes]:
         return self._inner.encode_stop()
 
-    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes | list[bytes]:
+    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes | list[bytes]:
         """base.py rule 9: ``inner``'s stop as the line left off, where it has one."""
         if isinstance(self._inner, StopsOnTheLine):
-            return self._inner.encode_stop_after(last_axis, half)
+            return self._inner.encode_stop_after(half, axes)
         return self._inner.encode_stop()
 
     def encode_query(self) -> bytes | list[bytes] | None:

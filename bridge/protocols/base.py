@@ -202,11 +202,14 @@ class HalfLine(enum.Enum):
 
 @runtime_checkable
 class StopsOnTheLine(Protocol):
-    """Rule 9: a codec whose stop depends on what the line carried before it: ``last_axis``
-    the axis the last frame written named (``ModelSpec.axis_prefixes``; None: none or not
-    known), ``half`` what the box may hold. It opens the stop's exchange as ``encode_stop``."""
+    """Rule 9: a codec whose stop depends on what the line carried before it: ``half`` what
+    the box may hold; ``axes``, where the stop is a frame to each axis, the order they go in
+    (their ``ModelSpec.axis_prefixes``; None: the codec's own order). It opens the stop's
+    exchange as ``encode_stop``."""
 
-    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes | list[bytes]: ...
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None
+    ) -> bytes | list[bytes]: ...
 
 
 @runtime_checkable
@@ -513,8 +516,8 @@ class ModelSpec:
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
     # the controller needs this long between commands to its two axes (RC2800): no frame goes
-    # sooner after the one before it, a command's frames go this far apart; a stop's first
-    # frame never waits for it (its frames keep the gap among themselves)
+    # sooner after the one before it to the other axis, a command's frames go this far apart,
+    # a stop's first too (the azimuth's: at once, or when the gap ends; session/link.py rule 10)
     axis_gap_s: float = 0.0
     # how a frame names the axis it is for (its first bytes: RC2800 b"A", b"E"): frames to the
     # same axis need no axis gap between them

@@ -206,7 +206,7 @@ class EasycommCodec(OneQuery):
         self._stop_behind = self._query_open  # rule 9: the query's answer comes first
         return b"SA SE\n"
 
-    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> bytes:
+    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
         """Rule 11 (base.py rule 9): the connection's first stop, behind a half frame."""
         stop = self.encode_stop()
         return stop if half is HalfLine.NONE else stop + stop

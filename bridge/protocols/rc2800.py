@@ -14,8 +14,8 @@ with rotctl -m 1001.
 Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms on az/el):
   ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
   ``A\\r`` then ``E\\r``               ask each axis; answered by its line
-  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the first at once, the
-                                   axis the last frame named first: rule 9)
+  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the azimuth first, as
+                                   soon as the axis gap allows: rule 9)
 The azimuth model sends only the azimuth's frames.
 
 Rules:
@@ -91,12 +91,19 @@ Rules:
    purpose would be fought, and the limits of an azimuth that wraps are not watched on the way.
    The same holds for an RC2800 that turns a composite's elevation (``E`` CR, ``E5`` CR), where
    other models' elevation boxes follow (settings ``unasked_moves_of``).
-9. A stop begins with the axis the line's last frame named (``encode_stop_after``): that
-   frame goes at once and keeps the box's 200 ms between its axes, which a stop to the
-   other axis a few milliseconds after an ``E`` CR poll broke (attack 22; a box that drops
-   or mis-takes that selection stops the elevation it still has selected, and the azimuth
-   turns on); the other axis's frame follows the gap after it. Its exchange waits for the
-   axes' lines in that order (rule 2).
+9. A stop begins with the azimuth (``A`` CR ``S`` CR), the elevation's frame the gap after
+   it; the link writes the first as soon as the box's 200 ms between its axes allows: at
+   once after a frame to the azimuth or once the gap since the last ``E`` frame is over, else
+   when that gap ends (session/link.py rule 10). (Attack 22: a stop's ``A`` 2 ms after an
+   ``E`` CR poll broke that gap. Helper-590 then began the stop with the axis the last frame
+   named, ``E`` CR ``S`` CR at once, but that put the azimuth's stop a whole gap after the
+   STOP however long ago the ``E`` went (review 71: up to 200 ms later, 1.2 degrees more
+   coast at 6 degrees a second). The azimuth is the axis a user turns most, and the one
+   stopped first: the elevation's stop goes the gap after it, up to two gaps after the STOP
+   where helper-590's went at once after an ``E`` frame.) A repeat of a stop whose
+   frames still wait (``axes``: the order they go in) keeps them where they are and adds the
+   frames of the axes whose stop already went after them; the exchange waits for the axes'
+   lines in the order the frames go (rule 2).
 10. The connection's first stop (base.py rule 9) goes behind whatever half frame an unplug or
    a cut write left in the box: ``A`` then ``A`` CR is ``AA``, answered ``ERR``, and the
    ``S`` stops the axis still selected (attack 22). So its first axis is selected twice
@@ -177,16 +184,15 @@ class Rc2800Codec(Plain, LateAnswers):
         return frames if el is None else [*frames, b"E%.1f\r" % el]
 
     def encode_stop(self) -> list[bytes]:
-        return self.encode_stop_after(None, HalfLine.NONE)
+        return self.encode_stop_after(HalfLine.NONE)
 
-    def encode_stop_after(self, last_axis: bytes | None, half: HalfLine) -> list[bytes]:
-        """Rules 9 and 10 (base.py rule 9): the axis the line's last frame named first."""
-        first = last_axis[0] if last_axis and last_axis[0] in self._axes else self._axes[0]
-        axes = bytes([first]) + self._axes.replace(bytes([first]), b"")
-        self._open(2, axes)  # each axis answers its selection and its stop
-        frames = [b"%c\rS\r" % axis for axis in axes]
+    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> list[bytes]:
+        """Rules 9 and 10 (base.py rule 9): each axis's stop, in the order ``axes`` go."""
+        order = bytes(a for a in axes or self._axes if a in self._axes) or self._axes
+        self._open(2, order)  # each axis answers its selection and its stop
+        frames = [b"%c\rS\r" % axis for axis in order]
         if half is not HalfLine.NONE:  # rule 10: a selection to take a half frame in
-            frames[0] = b"%c\r" % first + frames[0]
+            frames[0] = b"%c\r" % order[0] + frames[0]
         return frames
 
     def encode_query(self) -> list[bytes]:

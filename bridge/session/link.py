@@ -93,10 +93,15 @@ Rules:
    a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
    one to the other axis, written or waiting. A target goes first to the axis last addressed
    (no wait), and the poll frames still waiting are dropped for it (its answers answer the
-   poll); a poll waits while frames do and for the gap after any frame. A stop never waits:
-   its first frame goes at once, its others the gap apart; its first frame is to the axis the
-   last frame written named (the codec's ``encode_stop_after``), so that going at once keeps
-   the gap too (attack 22: a stop's ``A`` 2 ms after an ``E`` CR poll).
+   poll); a poll waits while frames do and for the gap after any frame. A stop waits for
+   nothing but that gap: its first frame (the codec's order: an RC2800's azimuth) goes at
+   once if the gap allows, else when the gap since the last frame to the other axis ends,
+   its others the gap apart. (Attack 22: a stop's ``A`` 2 ms after an ``E`` CR poll broke the
+   gap; review 71: starting with the axis last addressed instead put the azimuth's stop a
+   whole gap after the STOP.) A stop's frames still waiting are kept, their times too, by a
+   stop written meanwhile (a STOP's second copy, a repeat: stops.py rule 1): it adds only
+   the frames of the axes whose stop already went, after them (review 71: the repeat had
+   cancelled the azimuth's waiting frame and begun again, its stop 0.3 s after the STOP).
 11. A garbled answer: bytes no healthy exchange has (rule 9's: not the controller's harmless
    chatter, nor a refusal) while a reply is owed and no slew. The controller answered (rule 2),
    but nothing of it is a reading. Its exchange, ended without one (at its deadline, or if the
@@ -241,7 +246,8 @@ class Link:
         self._last_reply_t: float | None = None
         self._heard_t = -math.inf  # ``heard``: the last reply whose reading was doubted
         self._stop_due = False
-        self._outbox: deque[tuple[float, bytes, bool]] = deque()  # when, frame, a poll's
+        # when, frame, a poll's, a stop's (rule 10)
+        self._outbox: deque[tuple[float, bytes, bool, bool]] = deque()
         self._output: list[bytes] = []
         self._slew: Slew | None = None
         self._junk = bytearray()
@@ -354,8 +360,9 @@ class Link:
             self.setting_until = now + sent * self._byte_s + self.late_s
 
     def want_stop(self) -> None:
-        """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
-        self._outbox.clear()
+        """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6 (rule
+        10: a stop's frames still waiting keep their time)."""
+        self._keep_stop_frames()
         self._stop_due = True
 
     def stop_ready(self) -> bool:
@@ -390,16 +397,32 @@ class Link:
         """Write a stop now, whatever the line is doing (a stalled motor must not wait). A
         reading still held (rule 9) is settled now if ``end_held`` would take it (``settled``
         hands it over at once), dropped otherwise."""
-        self._outbox.clear()
+        waiting = self._keep_stop_frames()
         held = self._held
         if held is not None and self.end_held(now) is held:
             self._held, self._held_until = held, now
-        frames = self._stop_frames()
-        self.write(frames[0], now)  # rule 10: never held back
-        self._queue(frames[1:], now + self._gap_s, now)
+        first_t = now
+        if waiting:  # rule 10: a repeat: what waits keeps its time, the axes gone go after it
+            frames = self._stop_frames(waiting)[len(waiting) :]
+            self._queue(frames, self._outbox[-1][0] + self._gap_s, now, stop=True)
+        else:
+            frames = self._stop_frames()
+            first_t = max(now, self._paced_from(frames[0]))  # rule 10: the axis gap only
+            if first_t > now:
+                self._queue(frames, first_t, now, stop=True)
+            else:
+                self.write(frames[0], now)
+                self._queue(frames[1:], now + self._gap_s, now, stop=True)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
-            self._reply_deadline = now + self.reply_timeout_s
+            self._reply_deadline = first_t + self.reply_timeout_s
+
+    def _keep_stop_frames(self) -> bytes:
+        """Rule 10: the outbox cleared but for a stop's frames still waiting; their axes, in
+        the order they go (empty: none waits)."""
+        kept = self.spec.axis_gap_s > 0  # (only frames the axis gap keeps apart wait so)
+        self._outbox = deque(e for e in self._outbox if e[3] and kept)
+        return b"".join(self._axis(e[1]) or b"" for e in self._outbox)
 
     def connect(self, frames: list[bytes], now: float) -> None:
         """Rule 13: the connect's frames, each written when the line takes it (a leading stop
@@ -463,6 +486,7 @@ class Link:
         cancel the second alone)."""
         if self.spec.axis_gap_s:  # rule 10
             self._outbox = deque(e for e in self._outbox if not e[2])
+            # (a stop's frames still waiting go first: a target's wait for them, rule 10)
             last = self._outbox[-1][1] if self._outbox else None
             last_axis = self._axis(last) if last is not None else self._last_axis
             first = [f for f in frames if self._axis(f) == last_axis and last_axis is not None]
@@ -479,14 +503,19 @@ class Link:
             sent = sum(map(len, frames)) + self.spec.refusal_bytes + 1
             self._refusal_until = now + sent * self._byte_s + self.late_s
 
-    def _stop_frames(self) -> list[bytes]:
-        """Rules 10 and 13: the stop's frames, as the line left off."""
+    def _stop_frames(self, waiting: bytes = b"") -> list[bytes]:
+        """Rules 10 and 13: the stop's frames, as the line left off; ``waiting`` the axes
+        whose stop frames still wait (a repeat's: those first, the others after them)."""
         codec = self.codec
         if isinstance(codec, StopsOnTheLine):
             half = HalfLine.NONE
             if self._fresh:
                 half = HalfLine.MOVE if self.cut_move else HalfLine.HARMLESS
-            stop = codec.encode_stop_after(self._last_axis, half)
+            axes = None
+            if waiting:
+                gone = [p for p in self.spec.axis_prefixes if p not in waiting]
+                axes = waiting + b"".join(gone)
+            stop = codec.encode_stop_after(half, axes)
         else:
             stop = codec.encode_stop()
         return stop if isinstance(stop, list) else [stop]
@@ -518,9 +547,16 @@ class Link:
         same = axis is not None and axis == last_axis
         return last_t if same else last_t + self.spec.axis_gap_s
 
-    def _queue(self, frames: list[bytes], first_t: float, now: float, poll: bool = False) -> None:
+    def _queue(
+        self,
+        frames: list[bytes],
+        first_t: float,
+        now: float,
+        poll: bool = False,
+        stop: bool = False,
+    ) -> None:
         for i, frame in enumerate(frames):
-            self._outbox.append((first_t + i * self._gap_s, frame, poll))
+            self._outbox.append((first_t + i * self._gap_s, frame, poll, stop))
         self._flush_waiting(now)
 
     def flush_outbox(self, now: float) -> None:
@@ -641,7 +677,7 @@ class Link:
             return None
         if self._slew is not None or self.codec.awaiting_reply():
             return None
-        if any(poll for _t, _frame, poll in self._outbox):  # rule 10: its other axis to come
+        if any(e[2] for e in self._outbox):  # rule 10: its other axis to come
             return None
         return max(self._read_t + JUNK_QUIET_S, self._hold_until)
 

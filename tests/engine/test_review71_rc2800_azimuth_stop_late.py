@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -25,11 +23,6 @@ STOP_AFTER_E_S = 0.15  # the STOP comes this long after the poll's E CR (not a d
 SLACK_S = 0.02  # a few byte times at 9600 baud
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: an RC2800's azimuth stops a full 200 ms after a STOP that came late in "
-    "the gap after an E poll, later than the box's axis gap needs and than before",
-)
 def test_the_azimuths_stop_goes_when_the_axis_gap_allows_not_a_gap_after_the_stop(
     rig: Rig,
 ) -> None:

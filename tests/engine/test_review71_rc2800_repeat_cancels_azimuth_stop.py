@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -26,11 +24,6 @@ SLACK_S = 0.02  # a few byte times at 9600 baud
 RUN_ON_DEG = 1.5  # the azimuth's coast if its stop goes when the axis gap allows (1.2 + slack)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: an RC2800's double STOP right after an E poll stops the azimuth 0.3 s "
-    "later: the repeat cancels its waiting frame and stops the elevation again",
-)
 def test_the_repeat_of_a_double_stop_does_not_push_back_the_azimuths_stop(rig: Rig) -> None:
     v = rig("rc2800", emulator=FAST)
     v.run_until_state(MotionState.IDLE, 30)
