@@ -111,7 +111,10 @@ Rules:
    ``A12A``: none is a command the box takes), the second is whole and the ``S`` stops that
    axis. Never a bare line end first: it would carry out a cut ``A12`` of ``A123.4``. A
    clean line answers the extra selection with one more line of that axis, read as the
-   exchange's (rule 2).
+   exchange's (rule 2); a half frame taken in is answered ``A ERR=1`` (``E ERR=1``): the
+   answer the stop provokes, so one such line in that stop's exchange is harmless, never
+   told on R/error (review 71: "8 bytes that are no valid reply" after a replug whose stop
+   took). A second, or one in any other exchange, is told as ever.
 """
 
 from __future__ import annotations
@@ -173,6 +176,7 @@ class Rc2800Codec(Plain, LateAnswers):
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position line's tail
         self._late_newest = False  # rule 6: lines owed late, and no exchange opened since
+        self._taken_in = False  # rule 10: the extra selection's ERR may come in this exchange
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -193,6 +197,7 @@ class Rc2800Codec(Plain, LateAnswers):
         frames = [b"%c\rS\r" % axis for axis in order]
         if half is not HalfLine.NONE:  # rule 10: a selection to take a half frame in
             frames[0] = b"%c\r" % order[0] + frames[0]
+            self._taken_in = True
         return frames
 
     def encode_query(self) -> list[bytes]:
@@ -208,6 +213,7 @@ class Rc2800Codec(Plain, LateAnswers):
         self._heard = set()
         self._owed = set()
         self._late_newest = False  # (rule 6: a line owed late may be this one's now)
+        self._taken_in = False  # (rule 10: the stop's exchange is over)
 
     def expire_query(self) -> None:
         self._owe_late(len(self._want))  # rule 6: they may still come
@@ -222,6 +228,7 @@ class Rc2800Codec(Plain, LateAnswers):
         of the connection's first line the opening cut (rule 1); an error is not."""
         if self._cut and junk.startswith(self._cut):  # rule 1: the connection's first line
             junk = junk[len(self._cut) :]
+        junk = self._unsaid(junk)  # rule 10: the extra selection's ERR
         lines = re.split(rb"[\r\n]", junk)
         return all(not line.strip() or _ECHO.fullmatch(line) or _in_range(line) for line in lines)
 
@@ -257,7 +264,13 @@ class Rc2800Codec(Plain, LateAnswers):
         if not raw.strip() or _ECHO.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "echo" if raw.strip() else "blank"))
             return
-        if m := _ERROR.fullmatch(raw):
+        if (m := _ERROR.fullmatch(raw)) and self._taken_in:  # rule 10: the stop provoked it
+            self._taken_in = False
+            self._say(raw)
+            why = "the answer to the selection that took a half frame in"
+            out.append(JunkReply(raw, JunkReason.CHATTER, why))
+            return
+        if m:
             code = m.group("code").decode()
             # rule 1: a target's refusal only where a target is one frame
             reason = JunkReason.CHATTER if self.elevation else JunkReason.REFUSED

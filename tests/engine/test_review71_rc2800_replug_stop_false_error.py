@@ -25,11 +25,6 @@ AFTER_S = 3.0  # how long R/error is watched after the replug (not a deadline)
 RUN_ON_DEG = 3.0  # a reply time and the coast at 6 degrees a second (as attack 22's test)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: after an RC2800 replug whose stop took, R/error says the controller sent "
-    "bytes that are no valid reply (the ERR to the throwaway selection)",
-)
 @pytest.mark.parametrize("torn", [b"A\r", b"E\r"])
 def test_an_rc2800_replug_stop_behind_a_torn_poll_says_nothing_on_r_error(
     rig: Rig, torn: bytes
