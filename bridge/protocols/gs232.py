@@ -65,7 +65,11 @@ Rules:
    as the stop it was, and taken first, a cut ``C`` or ``C2`` as the poll; on a line with
    nothing in it the box may answer the empty line ``?>`` (interfaces/mqtt/express.py rule
    9), which is then no refusal: harmless, until the box answers anything else or a target
-   is written. Where a target may have been cut it is the stop twice (``S`` CR ``S`` CR): a
+   is written. A cut poll so ended is answered with a position line the connection's first
+   poll did not ask: one such line is owed as a late answer is (rule 5), harmless, never
+   told (review 71: "16 bytes that are no valid reply" after a replug whose stop took; the
+   first of the two lines answers that poll, the second is the one owed). Where a target may
+   have been cut it is the stop twice (``S`` CR ``S`` CR): a
    cut ``M18`` takes the first (``M18S``, refused, and told: the box did refuse a command),
    never a line end that would carry it out, and the second is whole.
 """
@@ -168,6 +172,7 @@ class Gs232Codec(OneQuery):
             return b"S\rS\r"
         if half is HalfLine.HARMLESS:  # (a cut S, C or C2 ended as itself: S then S CR)
             self._line_end = True
+            self._owe_late(1)  # (a cut C or C2 ended so is answered: one more position line)
             return b"\rS\r"
         return b"S\r"
 

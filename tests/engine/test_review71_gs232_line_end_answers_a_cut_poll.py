@@ -25,11 +25,6 @@ AFTER_S = 3.0  # how long R/error is watched after the replug (not a deadline)
 RUN_ON_DEG = 3.0  # a reply time and the coast at 6 degrees a second (as attack 22's test)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: after a GS-232 replug whose stop took, R/error says the controller sent "
-    "bytes that are no valid reply (the answer to the poll its line end completed)",
-)
 @pytest.mark.parametrize(
     ("model", "poll"), [("gs232b", b"C2\r"), ("gs232a", b"C2\r"), ("gs232b-az", b"C\r")]
 )
