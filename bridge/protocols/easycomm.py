@@ -112,7 +112,13 @@ Rules:
    (what the box makes of that line, the second stops), the second is whole. Never a bare
    line end first: a cut poll's ``AZ`` ended alone is "turn to 0" on a SatNOGS box (rule 8),
    a cut ``AZ18`` a move. Each ``SA SE`` is answered as ever (rules 7 and 9: a SatNOGS box's
-   position, an azimuth model's ``?``).
+   position, an azimuth model's ``?``). The connection's first poll goes right behind it,
+   before the codec can know whether this box answers stops, so the two position lines a
+   SatNOGS box answers come ahead of the poll's own: one that comes while the poll is open
+   is read as its answer (the box's position then), and two lines are owed as late answers
+   are (rule 10): harmless, never told, never readings (review 71: "28 bytes that are no
+   valid reply" after a replug whose stop took). On a box that answers no stop they stay
+   owed, and two unasked position lines later on go untold.
 """
 
 from __future__ import annotations
@@ -209,7 +215,10 @@ class EasycommCodec(OneQuery):
     def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
         """Rule 11 (base.py rule 9): the connection's first stop, behind a half frame."""
         stop = self.encode_stop()
-        return stop if half is HalfLine.NONE else stop + stop
+        if half is HalfLine.NONE:
+            return stop
+        self._owe_late(2)  # (a SatNOGS box's two answers, ahead of the first poll's)
+        return stop + stop
 
     def expire_query(self) -> None:
         if self._query_open:  # rule 10: its answer may still come, what is left of it

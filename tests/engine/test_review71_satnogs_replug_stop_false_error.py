@@ -24,11 +24,6 @@ AFTER_S = 3.0  # how long R/error is watched after the replug (not a deadline)
 RUN_ON_DEG = 3.0  # a reply time and the coast at 6 degrees a second (as attack 22's test)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 71: after a SatNOGS replug whose stop took, R/error says the controller sent "
-    "bytes that are no valid reply (the doubled stop's two answers)",
-)
 @pytest.mark.parametrize("model", ["easycomm2", "easycomm2-az"])
 def test_a_satnogs_replug_stop_on_a_clean_line_says_nothing_on_r_error(
     rig: Rig, model: str
