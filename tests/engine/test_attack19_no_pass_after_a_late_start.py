@@ -8,34 +8,12 @@ made at the start, 20 s before LOS. The sky is scripted (the test's own geometry
 
 from __future__ import annotations
 
-import math
-
-from bridge.sky import Body, Pass, Sky
-from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question
+from bridge.sky import Body, Sky
+from tests.engine.test_attack19_wait_timed_at_full_speed import PASSES, T0, scripted_sky
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle
 
-T0 = 1_781_020_000.0  # the wall clock at the start (a fixed instant: the same sky every run)
-PASSES = [(T0 + 100.0, T0 + 400.0, 100.0, 110.0), (T0 + 3000.0, T0 + 3300.0, 280.0, 290.0)]
 LOS = PASSES[0][1]
-
-
-def _at(t: float) -> tuple[float, float]:
-    for aos, los, az0, az1 in PASSES:
-        if aos <= t <= los:
-            f = (t - aos) / (los - aos)
-            return az0 + f * (az1 - az0), 30.0 * math.sin(math.pi * f)
-    return 180.0, -20.0
-
-
-def _scripted_sky(q: Question) -> Answer:
-    if isinstance(q, PassQuestion):
-        for aos, los, az0, az1 in PASSES:
-            if q.utc <= los:
-                return Answer(q, Pass(aos, los, (aos + los) / 2, 30.0, az0, az1))
-        return Answer(q, None)
-    assert isinstance(q, PositionsQuestion)
-    return Answer(q, [_at(t) for t in q.times])
 
 
 def test_a_pass_tracked_from_its_last_minute_is_followed_by_the_next_one_at_once() -> None:
@@ -44,7 +22,7 @@ def test_a_pass_tracked_from_its_last_minute_is_followed_by_the_next_one_at_once
     )
     settings = {"park_az_deg": 0, "park_el_deg": 0, "track_at_los": "park"}
     v = VirtualRotator("md01", sky=Sky(52.52, 13.29), wall_epoch_s=T0, settings=settings)
-    v.answer_sky = _scripted_sky
+    v.answer_sky = scripted_sky
     with v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         v.run_until(lambda h: h.wall() >= LOS - 20.0, 600, "the pass's last 20 s")

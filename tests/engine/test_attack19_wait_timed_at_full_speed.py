@@ -31,7 +31,8 @@ def _at(t: float) -> tuple[float, float]:
     return 180.0, -20.0
 
 
-def _scripted_sky(q: Question) -> Answer:
+def scripted_sky(q: Question) -> Answer:
+    """The sky of PASSES: the sky worker's answers, scripted (no real sky)."""
     if isinstance(q, PassQuestion):
         for aos, los, az0, az1 in PASSES:
             if q.utc <= los:
@@ -52,7 +53,7 @@ def test_a_gs232_set_to_its_slowest_speed_is_at_the_next_pass_when_it_rises() ->
         options={"speed": "1"},  # R/option/speed 1, as the state file keeps it
         emulator={"start_az_deg": 100.0},
     )
-    v.answer_sky = _scripted_sky
+    v.answer_sky = scripted_sky
     aos = PASSES[1][0]
     with v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
