@@ -19,9 +19,9 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.process import bridge_env
 
 
-def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
-    tmp_path: Path, broker: Mosquitto, probe: Probe
-) -> None:
+def tilde_installation(tmp_path: Path, broker: Mosquitto) -> tuple[Path, Path, Path]:
+    """An installation run from its home folder: ``state_file = "~/rb/state.json"`` and the lock
+    kept, as every earlier version kept it, at ``./~/rb/state.json``. (home, old file, config)"""
     home = tmp_path / "home"
     home.mkdir()
     old = home / "~" / "rb" / "state.json"  # run from the home folder, as before the update
@@ -37,7 +37,12 @@ def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
             }
         )
     )
-    bridge = subprocess.Popen(
+    return home, old, config
+
+
+def start_from_home(home: Path, config: Path) -> subprocess.Popen[str]:
+    """``rotor-bridge run`` started from the home folder, with HOME set to it."""
+    return subprocess.Popen(
         [sys.executable, "-m", "bridge", "run", "-c", str(config)],
         cwd=str(home),
         env=bridge_env({"HOME": str(home)}),
@@ -45,6 +50,13 @@ def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
         stderr=subprocess.PIPE,
         text=True,
     )
+
+
+def test_a_lock_kept_where_earlier_versions_kept_a_tilde_state_file_still_locks(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    home, old, config = tilde_installation(tmp_path, broker)
+    bridge = start_from_home(home, config)
     try:
         lock = probe.wait_for("rotor/lock/state", lambda m: m.text in ("ON", "OFF")).text
     finally:

@@ -8,45 +8,21 @@ of the one state, the very case rule 7 refuses."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 from bridge.runtime.state_store import held
-from tests.support import Probe, to_toml
+from tests.faults.test_review69_state_file_tilde_moved import start_from_home, tilde_installation
+from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
-from tests.support.process import bridge_env
 from tests.support.waiting import wait_until
 
 
 def test_a_bridge_running_on_the_leftover_state_file_stops_the_start_that_reads_it(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:
-    home = tmp_path / "home"
-    home.mkdir()
-    old = home / "~" / "rb" / "state.json"  # run from the home folder, as before the update
-    old.parent.mkdir(parents=True)
-    old.write_text(json.dumps({"rotators": {"tower": {"locked": True}}}))
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": "~/rb/state.json",
-                "mqtt": {"host": "127.0.0.1", "port": broker.port, "base_topic": "rotor"},
-                "rotators": [{"id": "tower", "model": "rotorez", "port": str(tmp_path / "tty")}],
-            }
-        )
-    )
+    home, old, config = tilde_installation(tmp_path, broker)
     with held(old):  # the earlier version, still running on its file (rule 7's lock)
-        bridge = subprocess.Popen(
-            [sys.executable, "-m", "bridge", "run", "-c", str(config)],
-            cwd=str(home),
-            env=bridge_env({"HOME": str(home)}),
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
+        bridge = start_from_home(home, config)
         try:
             wait_until(
                 lambda: bridge.poll() is not None or probe.last("rotor/lock/state") is not None,
