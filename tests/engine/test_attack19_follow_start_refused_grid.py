@@ -14,17 +14,29 @@ from tests.engine.test_follow import STATION, bearing
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
+PARTNER = bearing("PM95")  # 42.2 from the test station: JA1ABC's grid
+
+
+def follower_by_a_keep_out(model: str) -> VirtualRotator:
+    """Following the test station's partners, with a keep-out sector 10 degrees either side of
+    PARTNER's bearing and the rotor starting 20 degrees past it."""
+    sector = [round(PARTNER) - 10, round(PARTNER) + 10]
+    emulator = {"start_az_deg": round(PARTNER) + 20}
+    settings = {"keep_out": [sector]}
+    return VirtualRotator(model, emulator=emulator, follow=STATION, settings=settings)
+
+
+def turning_away_from_the_partner(v: VirtualRotator) -> None:
+    """A turn to 140 degrees past PARTNER (never through the sector), 35 degrees from it."""
+    v.target(round(PARTNER + 140.0))  # (never through the sector)
+    v.run_until(lambda h: angle_between(h.truth().az_deg, PARTNER) >= 35.0, 30, "turning")
+
 
 def test_a_follow_start_whose_first_grid_is_refused_stops_the_turn_under_way() -> None:
-    partner = bearing("PM95")  # 42.2 from the test station
-    sector = [round(partner) - 10, round(partner) + 10]
-    emulator = {"start_az_deg": round(partner) + 20}
-    settings = {"keep_out": [sector]}
-    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
+    with follower_by_a_keep_out("rotorez") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(round(partner + 140.0))  # (never through the sector)
-        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+        turning_away_from_the_partner(v)
         t, here = v.now, v.truth().az_deg
         v.follow(True)
         v.heard("JA1ABC", "PM95")

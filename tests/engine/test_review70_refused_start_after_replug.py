@@ -16,8 +16,12 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.sky import Body, Sky
+from tests.engine.test_attack19_follow_start_refused_grid import (
+    PARTNER,
+    follower_by_a_keep_out,
+    turning_away_from_the_partner,
+)
 from tests.engine.test_attack19_track_start_refused_wait import T0, _scripted_sky
-from tests.engine.test_follow import STATION, bearing
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import synthetic_tle
@@ -34,22 +38,23 @@ def _replugged_mid_turn(v: VirtualRotator) -> None:
     assert v.truth().is_moving  # (it finishes its old turn by itself)
 
 
+def rotorez_turning_away_from_the_partner(v: VirtualRotator) -> None:
+    """A Rotor-EZ answering, seen at rest, its start's brake delay over, then turning away from
+    PARTNER (attack 19's set-up)."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+    v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
+    turning_away_from_the_partner(v)
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="review 70: a follow start right after a replug mid-turn, its partner in a keep-out "
     "sector, says the refusal while the rotor turns on 90 degrees to the old target",
 )
 def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
-    partner = bearing("PM95")  # 42.2 from the test station
-    sector = [round(partner) - 10, round(partner) + 10]
-    emulator = {"start_az_deg": round(partner) + 20}
-    settings = {"keep_out": [sector]}
-    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(round(partner + 140.0))  # (never through the sector)
-        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+    with follower_by_a_keep_out("rotorez") as v:
+        rotorez_turning_away_from_the_partner(v)
         _replugged_mid_turn(v)
         t, here = v.now, v.truth().az_deg
         v.follow(True)
@@ -101,16 +106,8 @@ def test_a_refused_follow_start_after_a_replug_whose_turn_ended_unplugged_halts_
     """The halt owed to the carried turn is dropped once that turn is known to be none (the
     rotor came to rest while its port was out: no stop to it, motion.py rule 4), so a hand at
     the panel afterwards is never halted as the bridge's turn (reviews 52, 53)."""
-    partner = bearing("PM95")
-    sector = [round(partner) - 10, round(partner) + 10]
-    emulator = {"start_az_deg": round(partner) + 20}
-    settings = {"keep_out": [sector]}
-    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(round(partner + 140.0))
-        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+    with follower_by_a_keep_out("rotorez") as v:
+        rotorez_turning_away_from_the_partner(v)
         v.link_down()
         v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
         v.link_up()
@@ -121,7 +118,7 @@ def test_a_refused_follow_start_after_a_replug_whose_turn_ended_unplugged_halts_
         v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
         v.run_until(lambda h: not h.status.moving, 30, "seen at rest")
         v.run_for(5.0)  # (a few polls at rest: not a deadline)
-        hand_to = round(partner + 60.0)  # (never through the sector)
+        hand_to = round(PARTNER + 60.0)  # (never through the sector)
         v.manual_rotate(hand_to)  # a hand at the panel
         v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
         v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
