@@ -12,22 +12,16 @@ one by ``Before``: not asserted here)."""
 from __future__ import annotations
 
 from bridge.core.model import ErrorKind
-from tests.engine.test_follow import STATION, bearing
-from tests.engine.virtual import VirtualRotator
+from tests.engine.test_attack19_follow_start_refused_grid import PARTNER, follower_by_a_keep_out
+from tests.engine.test_review70_refused_start_after_replug import (
+    rotorez_turning_away_from_the_partner,
+)
 from tests.integration.test_pointing_bridge import angle_between
 
 
 def test_a_hand_at_the_panel_right_after_a_replug_at_rest_is_not_the_owed_halts_turn() -> None:
-    partner = bearing("PM95")  # 42.2 from the test station
-    sector = [round(partner) - 10, round(partner) + 10]
-    emulator = {"start_az_deg": round(partner) + 20}
-    settings = {"keep_out": [sector]}
-    with VirtualRotator("rotorez", emulator=emulator, follow=STATION, settings=settings) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(round(partner + 140.0))  # (never through the sector)
-        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
+    with follower_by_a_keep_out("rotorez") as v:
+        rotorez_turning_away_from_the_partner(v)
         v.link_down()
         v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
         v.run_for(10.0)  # at rest, unplugged, long before the replug (not a deadline)
@@ -40,7 +34,7 @@ def test_a_hand_at_the_panel_right_after_a_replug_at_rest_is_not_the_owed_halts_
         v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
         v.run_for(1.0)  # five polls, each reading the rotor still (not a deadline)
         assert v.truth().az_deg == rest and not v.truth().is_moving  # (never moved since)
-        hand_to = round(partner + 60.0)  # (never through the sector)
+        hand_to = round(PARTNER + 60.0)  # (never through the sector)
         v.manual_rotate(hand_to)  # a hand at the panel
         v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
         v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
