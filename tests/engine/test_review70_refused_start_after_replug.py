@@ -27,7 +27,7 @@ from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import synthetic_tle
 
 
-def _replugged_mid_turn(v: VirtualRotator) -> None:
+def replugged_mid_turn(v: VirtualRotator) -> None:
     """The adapter pulled and put back while the rotor turns; the controller answers again,
     finishing its old turn by itself (its target dropped with the port)."""
     v.run_for(0.1)  # (between two polls: a query torn by the unplug is another story)
@@ -55,7 +55,7 @@ def rotorez_turning_away_from_the_partner(v: VirtualRotator) -> None:
 def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("rotorez") as v:
         rotorez_turning_away_from_the_partner(v)
-        _replugged_mid_turn(v)
+        replugged_mid_turn(v)
         t, here = v.now, v.truth().az_deg
         v.follow(True)
         v.heard("JA1ABC", "PM95")
@@ -91,7 +91,7 @@ def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds
         v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
         v.target(340)
         v.run_until(lambda h: h.truth().az_deg >= 230.0, 60, "turning toward 340")
-        _replugged_mid_turn(v)
+        replugged_mid_turn(v)
         t, here = v.now, v.truth().az_deg
         v.track(Body.satellite("TESTSAT", line1, line2))
         v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)

@@ -12,8 +12,11 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.test_follow import STATION, bearing
-from tests.engine.virtual import VirtualRotator
+from tests.engine.test_attack19_follow_start_refused_grid import (
+    follower_by_a_keep_out,
+    turning_away_from_the_partner,
+)
+from tests.engine.test_review70_refused_start_after_replug import replugged_mid_turn
 from tests.integration.test_pointing_bridge import angle_between
 
 
@@ -23,20 +26,10 @@ from tests.integration.test_pointing_bridge import angle_between
     "nothing, and the rotor turns on some 90 degrees to the target from before the unplug",
 )
 def test_a_dcu1s_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
-    partner = bearing("PM95")  # 42.2 from the test station
-    sector = [round(partner) - 10, round(partner) + 10]
-    emulator = {"start_az_deg": round(partner) + 20}
-    settings = {"keep_out": [sector]}
-    with VirtualRotator("dcu1", emulator=emulator, follow=STATION, settings=settings) as v:
+    with follower_by_a_keep_out("dcu1") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.target(round(partner + 140.0))  # (never through the sector)
-        v.run_until(lambda h: angle_between(h.truth().az_deg, partner) >= 35.0, 30, "turning")
-        v.run_for(0.1)  # (not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        assert v.truth().is_moving  # (it finishes its old turn by itself)
+        turning_away_from_the_partner(v)
+        replugged_mid_turn(v)
         t, here = v.now, v.truth().az_deg
         v.follow(True)
         v.heard("JA1ABC", "PM95")
