@@ -13,13 +13,10 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.remote.run import Remote
-from bridge.remote.settings import RemoteSettings
 from tests.remote.test_remote import OPERATOR
-from tests.support import wait_until
+from tests.support.remote import running_remote
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, reserve_pst_ports, tag
-from tests.support.waiting import slow
 
 
 @pytest.fixture(params=["gs232b-az", "gs232b-az-450"])  # (0..450: R/status has the raw bearing)
@@ -35,24 +32,14 @@ def yaesu_at_355(rig: Rig, request: pytest.FixtureRequest) -> Rig:
 def remote_pst(yaesu_at_355: Rig) -> Iterator[PstClient]:
     """The remote's PstRotator port onto the station's ``tower``, the remote's view current."""
     port, replies = reserve_pst_ports()
-    remote = Remote(
-        RemoteSettings(
-            operator=OPERATOR,
-            mqtt={"host": "127.0.0.1", "port": yaesu_at_355.broker.port, "base_topic": "rotor"},
-            endpoints=[{"rotator": "tower", "pst_udp_port": port}],
-        )
-    )
+    endpoint = {"rotator": "tower", "pst_udp_port": port}
     try:
-        remote.start()
-        wait_until(
-            lambda: remote.rotators[0].status.bearing_deg is not None,
-            slow(10),
-            "the remote's view of the station",
-        )
-        with PstClient(port, replies=replies) as client:
+        with (
+            running_remote(yaesu_at_355.broker.port, OPERATOR, endpoint),
+            PstClient(port, replies=replies) as client,
+        ):
             yield client
     finally:
-        remote.stop()
         replies.close()
 
 

@@ -11,15 +11,12 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.remote.run import Remote
-from bridge.remote.settings import RemoteSettings
 from tests.integration.test_dcu1_endpoint import DCU1
 from tests.integration.test_gs232_integration import rotctl
 from tests.remote.test_remote import OPERATOR
-from tests.support import wait_until
 from tests.support.mosquitto import free_port
+from tests.support.remote import running_remote
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -31,24 +28,9 @@ def test_a_dcu1_north_through_the_remote_turns_a_yaesu_at_355_the_short_way(
     rig.start()
     rig.ready("tower")
     port = free_port()
-    remote = Remote(
-        RemoteSettings(
-            operator=OPERATOR,
-            mqtt={"host": "127.0.0.1", "port": rig.broker.port, "base_topic": "rotor"},
-            endpoints=[{"rotator": "tower", "dcu1_port": port}],
-        )
-    )
-    try:
-        remote.start()
-        wait_until(
-            lambda: remote.rotators[0].status.bearing_deg is not None,
-            slow(10),
-            "the remote's view of the station",
-        )
+    with running_remote(rig.broker.port, OPERATOR, {"rotator": "tower", "dcu1_port": port}):
         rotctl(rotctl_path, DCU1, port, "P", "360", "0")  # Hamlib sends AP1000; then AM1;
         rig.arrived("tower", 0)  # north, on either end of the scale
-    finally:
-        remote.stop()
     assert [f.data for f in emu.frames("move")] == [b"M360"], (
         "the rotor at 355 was sent the far end of its travel for north through the remote: "
         "a turn of 355 degrees through south for a bearing 5 degrees away"

@@ -8,15 +8,17 @@ import re
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from types import TracebackType
 
 from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.heartbeat import beat_payload
+from bridge.remote.run import Remote
+from bridge.remote.settings import RemoteSettings
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
-from tests.support.waiting import slow
+from tests.support.waiting import slow, wait_until
 
 _RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
 
@@ -27,6 +29,32 @@ def remote_published(broker: Mosquitto, log_from: int) -> list[bytes]:
     with open(broker.log, "rb") as f:
         f.seek(log_from)
         return _RECEIVED.findall(f.read())
+
+
+@contextlib.contextmanager
+def running_remote(
+    broker_port: int, operator: str, endpoint: dict[str, object]
+) -> Iterator[Remote]:
+    """A remote for ``operator`` on the station's broker at ``broker_port`` (base topic
+    ``rotor``) with the one ``endpoint``, started and its view of the station's first rotator
+    current; stopped on leaving."""
+    remote = Remote(
+        RemoteSettings(
+            operator=operator,
+            mqtt={"host": "127.0.0.1", "port": broker_port, "base_topic": "rotor"},
+            endpoints=[endpoint],
+        )
+    )
+    try:
+        remote.start()
+        wait_until(
+            lambda: remote.rotators[0].status.bearing_deg is not None,
+            slow(10),
+            "the remote's view of the station",
+        )
+        yield remote
+    finally:
+        remote.stop()
 
 
 @dataclass
