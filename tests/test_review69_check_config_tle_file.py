@@ -19,6 +19,23 @@ from tests.support import cli, to_toml
 from tests.support.sky import synthetic_tle
 
 
+def _config(tmp_path: Path, tle: Path) -> Path:
+    """A configuration that tracks with ``tle`` as its TLE file."""
+    config = tmp_path / "bridge.toml"
+    config.write_text(
+        to_toml(
+            {
+                "state_file": tmp_path / "state.json",
+                "mqtt": {"host": "127.0.0.1"},
+                "station": {"locator": "JO01"},
+                "tracking": {"tle_file": tle},
+                "rotators": [{"id": "tower", "model": "gs232b", "port": "/dev/rotor"}],
+            }
+        )
+    )
+    return config
+
+
 def _html(tmp_path: Path) -> Path:
     page = tmp_path / "amateur.tle"
     page.write_text("<html><body><h1>404 Not Found</h1></body></html>\n")
@@ -36,18 +53,7 @@ def test_check_config_says_of_a_tle_file_what_the_start_will_find_in_it(
     tmp_path: Path, made: Callable[[Path], Path]
 ) -> None:
     tle = made(tmp_path)
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "station": {"locator": "JO01"},
-                "tracking": {"tle_file": tle},
-                "rotators": [{"id": "tower", "model": "gs232b", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = _config(tmp_path, tle)
     out = cli("check-config", "-c", str(config))
     warned = [line for line in out.stdout.splitlines() if line.startswith("warning: tracking.")]
     assert warned, out.stdout  # the start's log says it: check-config says it too
@@ -68,18 +74,7 @@ def test_check_config_says_nothing_against_a_tle_file_the_start_reads_a_satellit
 ) -> None:
     """The other side: a file the start reads whole is '(found)', and no warning names it."""
     tle = _good(tmp_path)
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "station": {"locator": "JO01"},
-                "tracking": {"tle_file": tle},
-                "rotators": [{"id": "tower", "model": "gs232b", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = _config(tmp_path, tle)
     out = cli("check-config", "-c", str(config))
     assert out.returncode == 0, out.stderr
     assert f"the satellites in {tle} (found)" in out.stdout, out.stdout
