@@ -32,9 +32,9 @@ SERVICE_LINKS = {
 }
 
 
-def test_the_variables_kubernetes_sets_for_a_service_named_rotor_bridge_do_not_stop_its_start(
-    tmp_path: Path,
-) -> None:
+def one_rotor_config(tmp_path: Path) -> Path:
+    """A configuration file of one Rotor-EZ and a broker, none of it set by the variables under
+    test."""
     config = tmp_path / "bridge.toml"
     config.write_text(
         to_toml(
@@ -45,6 +45,13 @@ def test_the_variables_kubernetes_sets_for_a_service_named_rotor_bridge_do_not_s
             }
         )
     )
+    return config
+
+
+def test_the_variables_kubernetes_sets_for_a_service_named_rotor_bridge_do_not_stop_its_start(
+    tmp_path: Path,
+) -> None:
+    config = one_rotor_config(tmp_path)
     out = cli("check-config", "-c", str(config), env=SERVICE_LINKS)
     assert out.returncode == 0, out.stderr
     assert f"config OK: {config}" in out.stdout, out.stdout
@@ -63,16 +70,7 @@ def test_the_variables_kubernetes_sets_for_a_service_named_rotor_bridge_do_not_s
 def test_a_variable_only_like_a_service_link_is_still_refused(
     tmp_path: Path, name: str, value: str
 ) -> None:
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = one_rotor_config(tmp_path)
     out = cli("check-config", "-c", str(config), env={**SERVICE_LINKS, name: value})
     assert out.returncode == 2, out.stdout
     assert out.stderr.startswith(f"rotor-bridge: {name}: unknown key"), out.stderr

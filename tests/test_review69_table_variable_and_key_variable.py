@@ -13,20 +13,12 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import cli, to_toml
+from tests.support import cli
+from tests.test_review69_container_variables import one_rotor_config
 
 
 def test_a_table_in_json_beside_a_variable_of_one_of_its_keys_is_both(tmp_path: Path) -> None:
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = one_rotor_config(tmp_path)
     env = {  # compose.yaml's two, and the rest of [mqtt] in one variable
         "ROTOR_BRIDGE_MQTT__HOST": "192.168.1.10",
         "ROTOR_BRIDGE_MQTT__PORT": "1884",
@@ -43,16 +35,7 @@ def test_a_table_in_json_beside_a_variable_of_one_of_its_keys_is_both(tmp_path: 
 def test_the_key_variable_is_the_value_whatever_the_order(tmp_path: Path, json_first: bool) -> None:
     """Where the table's JSON sets the key too, the bridge takes the key's own variable, in
     either order of the environment: the one result the refusal was there to make sure of."""
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = one_rotor_config(tmp_path)
     table = ("ROTOR_BRIDGE_MQTT", '{"host": "10.0.0.1", "port": 1885, "base_topic": "shack"}')
     key = ("ROTOR_BRIDGE_MQTT__HOST", "192.168.1.10")
     out = cli(
@@ -68,16 +51,7 @@ def test_a_table_below_the_top_in_json_beside_a_variable_of_its_key_is_still_ref
 ) -> None:
     """``[mqtt.tls]`` is laid in the environment's order (pydantic-settings' explode_env_vars):
     there the order decides, and the two stay refused (2bfa58c0's case)."""
-    config = tmp_path / "bridge.toml"
-    config.write_text(
-        to_toml(
-            {
-                "state_file": tmp_path / "state.json",
-                "mqtt": {"host": "127.0.0.1"},
-                "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
-            }
-        )
-    )
+    config = one_rotor_config(tmp_path)
     env = {
         "ROTOR_BRIDGE_MQTT__TLS": '{"ca_file": "/etc/ssl/a.pem"}',
         "ROTOR_BRIDGE_MQTT__TLS__CA_FILE": "/etc/ssl/b.pem",
