@@ -16,21 +16,27 @@ from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
+def _restarted_at_rest(v: VirtualRotator) -> None:
+    """The rotor at rest for long, then the bridge started again (a new session, the link down
+    for a second) and the controller answering it."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+    v.run_for(20.0)  # at rest for long (not a deadline)
+    v.link_down(None)
+    v.run_for(1.0)  # (not a deadline)
+    v.session = RotatorSession(v.cfg)  # the bridge started again
+    v._do(v.session.start(v.now))
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+
+
 def test_a_hand_at_the_panel_before_a_restarts_second_reading_is_a_hand() -> None:
     partner = bearing("PM95")  # 42.2 from the test station
     sector = [round(partner) - 10, round(partner) + 10]
     emulator = {"start_az_deg": round(partner) + 20}
     settings = {"keep_out": [sector]}
     with VirtualRotator("rot2prog", emulator=emulator, follow=STATION, settings=settings) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(20.0)  # at rest for long (not a deadline)
-        v.link_down(None)
-        v.run_for(1.0)  # (not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        _restarted_at_rest(v)
         t, rest = v.now, v.truth().az_deg
         v.follow(True)
         v.heard("JA1ABC", "PM95")
@@ -54,15 +60,7 @@ def test_a_hand_before_a_restarts_second_reading_ends_an_accepted_follow_start()
     partner = bearing("PM95")  # 42.2 from the test station
     emulator = {"start_az_deg": round(partner) + 20}
     with VirtualRotator("rot2prog", emulator=emulator, follow=STATION) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(20.0)  # at rest for long (not a deadline)
-        v.link_down(None)
-        v.run_for(1.0)  # (not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        _restarted_at_rest(v)
         rest = v.truth().az_deg
         v.follow(True)  # taken: waiting for WSJT-X
         v.run_for(2.0)  # (not a deadline)
