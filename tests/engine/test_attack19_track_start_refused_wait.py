@@ -40,10 +40,9 @@ def _scripted_sky(q: Question) -> Answer:
     return Answer(q, [at(t) for t in q.times])
 
 
-def test_a_track_start_whose_wait_for_the_pass_is_refused_stops_the_turn_under_way() -> None:
-    line1, line2 = synthetic_tle(
-        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
-    )
+def rotorez_under_a_kept_out_pass() -> VirtualRotator:
+    """A Rotor-EZ at 200 under the scripted sky, a keep-out sector (90 to 150) holding the whole
+    pass (azimuth 100 to 140)."""
     v = VirtualRotator(
         "rotorez",
         sky=Sky(52.52, 13.29),
@@ -52,11 +51,23 @@ def test_a_track_start_whose_wait_for_the_pass_is_refused_stops_the_turn_under_w
         settings={"keep_out": [[90, 150]]},  # the whole pass is in it
     )
     v.answer_sky = _scripted_sky
-    with v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(340)
-        v.run_until(lambda h: h.truth().az_deg >= 230.0, 60, "turning toward 340")
+    return v
+
+
+def turning_toward_340(v: VirtualRotator) -> None:
+    """The controller answering, its start's brake delay over, then sent to 340 and past 230."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
+    v.target(340)
+    v.run_until(lambda h: h.truth().az_deg >= 230.0, 60, "turning toward 340")
+
+
+def test_a_track_start_whose_wait_for_the_pass_is_refused_stops_the_turn_under_way() -> None:
+    line1, line2 = synthetic_tle(
+        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    with rotorez_under_a_kept_out_pass() as v:
+        turning_toward_340(v)
         t, here = v.now, v.truth().az_deg
         v.track(Body.satellite("TESTSAT", line1, line2))
         v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)

@@ -15,13 +15,17 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
-from bridge.sky import Body, Sky
+from bridge.sky import Body
 from tests.engine.test_attack19_follow_start_refused_grid import (
     PARTNER,
     follower_by_a_keep_out,
     turning_away_from_the_partner,
 )
-from tests.engine.test_attack19_track_start_refused_wait import T0, _scripted_sky
+from tests.engine.test_attack19_track_start_refused_wait import (
+    T0,
+    rotorez_under_a_kept_out_pass,
+    turning_toward_340,
+)
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 from tests.support.sky import synthetic_tle
@@ -78,19 +82,8 @@ def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds
     line1, line2 = synthetic_tle(
         "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
     )
-    v = VirtualRotator(
-        "rotorez",
-        sky=Sky(52.52, 13.29),
-        wall_epoch_s=T0,
-        emulator={"start_az_deg": 200.0},
-        settings={"keep_out": [[90, 150]]},  # the whole pass (azimuth 100 to 140) is in it
-    )
-    v.answer_sky = _scripted_sky
-    with v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_for(8.0)  # the Rotor-EZ's brake delay after its start is over
-        v.target(340)
-        v.run_until(lambda h: h.truth().az_deg >= 230.0, 60, "turning toward 340")
+    with rotorez_under_a_kept_out_pass() as v:
+        turning_toward_340(v)
         replugged_mid_turn(v)
         t, here = v.now, v.truth().az_deg
         v.track(Body.satellite("TESTSAT", line1, line2))
