@@ -98,9 +98,11 @@ Rules:
    ``E`` CR poll broke that gap. Helper-590 then began the stop with the axis the last frame
    named, ``E`` CR ``S`` CR at once, but that put the azimuth's stop a whole gap after the
    STOP however long ago the ``E`` went (review 71: up to 200 ms later, 1.2 degrees more
-   coast at 6 degrees a second). The azimuth is the axis a user turns most, and the one
-   stopped first: the elevation's stop goes the gap after it, up to two gaps after the STOP
-   where helper-590's went at once after an ``E`` frame.) A repeat of a stop whose
+   coast at 6 degrees a second). The axis whose motor runs by the last reading (rule 7) is
+   stopped first, the azimuth where both or neither run: the other's stop goes the gap after
+   it, up to two gaps after the STOP. (Review 74: always the azimuth first, an RC2800 that
+   turns a composite's elevation, its azimuth never driven, stopped its elevation 0.35 s
+   after a STOP 50 ms after an ``E`` CR poll, where at once was allowed.) A repeat of a stop whose
    frames still wait (``axes``: the order they go in) keeps them where they are and adds the
    frames of the axes whose stop already went after them; the exchange waits for the axes'
    lines in the order the frames go (rule 2).
@@ -192,7 +194,8 @@ class Rc2800Codec(Plain, LateAnswers):
 
     def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> list[bytes]:
         """Rules 9 and 10 (base.py rule 9): each axis's stop, in the order ``axes`` go."""
-        order = bytes(a for a in axes or self._axes if a in self._axes) or self._axes
+        first = sorted(self._axes, key=lambda a: not self._driving.get(a))  # (stable: A, E)
+        order = bytes(a for a in axes or bytes(first) if a in self._axes) or self._axes
         self._open(2, order)  # each axis answers its selection and its stop
         frames = [b"%c\rS\r" % axis for axis in order]
         if half is not HalfLine.NONE:  # rule 10: a selection to take a half frame in

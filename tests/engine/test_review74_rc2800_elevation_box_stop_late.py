@@ -10,8 +10,6 @@ once). In virtual time (tests/engine/virtual_composite.py)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
@@ -26,11 +24,6 @@ def online(v: VirtualComposite) -> bool:
     return v.status.available
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 74: an RC2800 turning a composite's elevation stops it up to 0.4 s after "
-    "the STOP (the unmoving azimuth's stop first), where its E CR S CR may go at once",
-)
 def test_an_rc2800_elevation_box_stops_its_elevation_at_once_after_an_e_poll() -> None:
     with VirtualComposite("rt21", "rc2800", emulators=BOXES) as v:
         v.run_until(online, 10, "both boxes answer")
