@@ -4,14 +4,13 @@ the prefix overrides, exact calls, and how a call with a portable part is looked
 from __future__ import annotations
 
 import os
-import threading
 from pathlib import Path
 
 import pytest
 
 from bridge.interfaces.dxcluster.cty import CTY_FILE_MAX, Cty, CtyError, load, parse_csv, parse_dat
 from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
-from tests.support import wait_until
+from tests.support.waiting import refusal_beside_a_fifo
 
 
 @pytest.fixture(params=["dat", "csv"])
@@ -93,24 +92,7 @@ def test_a_fifo_nobody_writes_holds_no_start(tmp_path: Path) -> None:
     """Rule 4 (attack 18): a FIFO's open waited for a writer: the start, for ever."""
     fifo = tmp_path / "cty.dat"
     os.mkfifo(fifo)
-    said: list[str] = []
-
-    def start() -> None:
-        try:
-            load(fifo)
-        except CtyError as exc:
-            said.append(str(exc))
-
-    loader = threading.Thread(target=start, daemon=True)
-    loader.start()
-    try:
-        wait_until(lambda: said, 5, "the load to answer")
-    finally:  # (a loader still blocked in open: a writer's open lets it go)
-        try:
-            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
-        except OSError:  # (ENXIO: no reader left)
-            pass
-        loader.join()
+    said = [refusal_beside_a_fifo(fifo, lambda: load(fifo), CtyError)]
     assert said == [
         f"cty_file {fifo} cannot be read: it is no regular file (a device, a pipe or a folder): "
         "name AD1C's cty.dat or cty.csv"

@@ -20,8 +20,8 @@ from bridge.sky import catalog as catalog_module
 from bridge.sky.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
 from bridge.sky.worker import LookupQuestion
 from tests.engine.virtual import VirtualRotator
-from tests.support import wait_until
 from tests.support.sky import synthetic_tle
+from tests.support.waiting import refusal_beside_a_fifo
 
 EPOCH = 1767225600.0  # 2026-01-01 00:00 UTC: a fixed epoch, so every run reads the same lines
 
@@ -296,24 +296,7 @@ def test_a_fifo_nobody_writes_holds_no_lookup(tmp_path: Path) -> None:
     fifo = tmp_path / "active.txt"
     os.mkfifo(fifo)
     catalog = TleCatalog(fifo)
-    said: list[str] = []
-
-    def look() -> None:
-        try:
-            catalog.lookup("ISS")
-        except CatalogError as exc:
-            said.append(str(exc))
-
-    reader = threading.Thread(target=look, daemon=True)
-    reader.start()
-    try:
-        wait_until(lambda: said, 5, "the lookup to answer")
-    finally:  # (a reader still blocked in open: a writer's open lets it go)
-        try:
-            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
-        except OSError:  # (ENXIO: no reader left: nothing to let go)
-            pass
-        reader.join()
+    said = [refusal_beside_a_fifo(fifo, lambda: catalog.lookup("ISS"), CatalogError)]
     assert said == [
         f"no satellite 'ISS': tle_file {fifo} is no regular file (a device, a pipe "
         "or a folder): not read"

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -94,3 +95,29 @@ def wait_until(
         if time.monotonic() > deadline:
             raise error(f"timed out after {slow(timeout_s):g} s waiting for {what or predicate}")
         time.sleep(interval_s)
+
+
+def refusal_beside_a_fifo(fifo: os.PathLike[str], call: Callable[[], Any], error: type) -> str:
+    """What ``call`` raises (an ``error``) with a FIFO nobody writes at ``fifo`` it reads
+    (core/readfile.py rule 1: no open may wait for a writer): run on a thread of its own and
+    waited for; a call still blocked in its open is let go by a writer's open, whatever
+    happens."""
+    said: list[str] = []
+
+    def run() -> None:
+        try:
+            call()
+        except error as exc:
+            said.append(str(exc))
+
+    runner = threading.Thread(target=run, daemon=True)
+    runner.start()
+    try:
+        wait_until(lambda: said, 5, "the reader to answer")
+    finally:
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:  # (ENXIO: no reader left: nothing to let go)
+            pass
+        runner.join()
+    return said[0]
