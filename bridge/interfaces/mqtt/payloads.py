@@ -106,7 +106,7 @@ def _text(payload: bytes) -> str:
     return _words(decoded)
 
 
-_BLANKS = frozenset(" \t\n\r")  # _words: the control characters that part a payload's words
+_BLANKS = " \t\n\r"  # _words: the blanks of a payload (str.strip's own take U+001C..U+001F, NEL)
 
 
 def _words(text: str) -> str:
@@ -121,8 +121,7 @@ def _words(text: str) -> str:
     target's two fields; no other control character is a blank here, though Python's
     ``isspace`` says so of U+001C..U+001F and NEL (review 68: ``120<US>30`` turned the rotor to
     120, 30)."""
-    blanks = " \t\n\r"  # (_BLANKS: str.strip's own would drop U+001C..U+001F and NEL too)
-    text = text.strip(blanks).removeprefix(_BOM).strip(blanks).rstrip("\0").rstrip(blanks)
+    text = text.strip(_BLANKS).removeprefix(_BOM).strip(_BLANKS).rstrip("\0").rstrip(_BLANKS)
     if not text:
         raise PayloadError("empty payload")
     for c in text:
