@@ -104,6 +104,8 @@ def test_nonsense_is_refused_naming_the_key(rotator: dict[str, Any], words: str)
         ("azimuth", "", "must name the serial port"),
         ("elevation", " ", "must name the serial port"),
         ("elevation", "/dev/ttyEL\x00", "must not hold a NUL byte"),
+        # (review 73: the port of both was read from the tables as written, and said it again)
+        ("azimuth", "~no-such-user-rb/az", "~no-such-user-rb names no user on this system"),
     ],
 )
 def test_a_box_port_that_names_no_serial_port_is_refused_naming_the_key(

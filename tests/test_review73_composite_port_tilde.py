@@ -11,14 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.settings import settings_from
+from bridge.settings import ConfigError, settings_from
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a composite rotator whose elevation port is written '~/...' prints "
-    "port '<az>+~/el' in check-config --full, and what it prints no longer loads",
-)
 def test_a_composite_with_an_elevation_port_in_the_home_folder_loads_as_it_is_printed(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -32,3 +27,17 @@ def test_a_composite_with_an_elevation_port_in_the_home_folder_loads_as_it_is_pr
     assert r.port == f"/dev/ttyAZ+{tmp_path / 'el'}", r.port  # (observed: /dev/ttyAZ+~/el)
     again = type(r).model_validate(r.model_dump())  # what check-config --full prints loads
     assert (again.model, again.ports) == (r.model, r.ports)
+
+
+def test_a_box_port_written_in_the_home_folder_and_as_its_path_is_one_port(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One port for both boxes is refused naming the elevation's, however each is written."""
+    monkeypatch.setenv("HOME", str(tmp_path))
+    boxes = {
+        "azimuth": {"model": "rt21", "port": "~/box"},
+        "elevation": {"model": "gs232b", "port": str(tmp_path / "box")},
+    }
+    with pytest.raises(ConfigError) as err:
+        settings_from({"rotators": [{"id": "sky", **boxes}]}, environ={})
+    assert f"elevation.port: {tmp_path / 'box'} is the azimuth's port too" in str(err.value)

@@ -120,13 +120,15 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
         if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
             check_named_path(value)
-        if value.startswith("~") and (_a_path(field.annotation) or named == "port"):  # rule 7
-            return _home_path(value)
+        if _a_path(field.annotation) or named == "port":  # rule 7
+            return home_path(value)
     return value
 
 
-def _home_path(value: str) -> str:
-    """Rule 7: ``value``, a path beginning with ``~``, in the home folder it names."""
+def home_path(value: str) -> str:
+    """Rule 7: ``value``, a path, in the home folder it names if it begins with ``~``."""
+    if not value.startswith("~"):
+        return value
     home = os.path.expanduser(value)
     if home.startswith("~"):
         user = value[1:].split("/", 1)[0]

@@ -19,8 +19,10 @@ Rules:
    with a NUL byte, names no port and is refused (check_port).
 4. A composite rotator (protocols/axes.py) gives ``azimuth`` and ``elevation`` tables, each a
    model and a port, in place of ``model`` and ``port``: its ``model`` reads ``AZ+EL`` and its
-   ``port`` both ports; a model that cannot drive its axis, one port for both, or ``model``
-   or ``port`` beside the tables is refused naming the key.
+   ``port`` both ports as their tables read them (``~/el`` in the home folder, settings/base.py
+   rule 7: derived before, it kept ``~/el``, which no longer loaded: review 73); a model that
+   cannot drive its axis, one port for both (however each is written), or ``model`` or
+   ``port`` beside the tables is refused naming the key.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
-from bridge.settings.base import Strict, check_name, check_named_path
+from bridge.settings.base import Strict, check_name, check_named_path, home_path
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_bind, check_topic
@@ -125,22 +127,25 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                     '{ model = "...", port = "..." }'
                 )
             tables.append(table)
+        ports = []
         for axis, table in zip(Axis, tables, strict=True):  # (said so, not in the port of both)
-            if isinstance(table["port"], str):
+            port = table["port"]
+            if isinstance(port, str):
                 try:
-                    check_port(table["port"])
+                    port = home_path(check_port(port))  # as the table's own port reads it
                 except ValueError as exc:
                     raise ValueError(f"{axis.value}.port: {exc}") from None
+            ports.append(port)
         az, el = tables
-        model, port = f"{az['model']}+{el['model']}", f"{az['port']}+{el['port']}"
+        model, port = f"{az['model']}+{el['model']}", f"{ports[0]}+{ports[1]}"
         for key, derived in (("model", model), ("port", port), ("baud", None)):
             if data.get(key) not in (None, derived):  # (what a dump of these settings says)
                 raise ValueError(
                     f"{key} is given with azimuth/elevation tables: a composite rotator names "
                     "its model, port and baud in each table"
                 )
-        if az["port"] == el["port"]:
-            raise ValueError(f"elevation.port: {el['port']} is the azimuth's port too")
+        if ports[0] == ports[1]:  # (~/el and its home folder's path are one port)
+            raise ValueError(f"elevation.port: {ports[1]} is the azimuth's port too")
         return {**data, "model": model, "port": port}
 
     id: str = Field(
