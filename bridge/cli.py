@@ -252,8 +252,10 @@ def main(argv: list[str] | None = None) -> int:
     the emulators' take them once loaded; the remote's from its first step, cmd_remote) is one
     line and exit code 2, not a traceback: loading the bridge takes a few tenths of a second.
     A pipe that closes before check-config or ports has printed all (``| head``) ends it with
-    exit code 1 and no traceback."""
+    exit code 1 and no traceback. What stdout cannot encode is escaped, as on stderr (_escaping).
+    """
     argv = sys.argv[1:] if argv is None else argv
+    _escaping(sys.stdout)
     who = "rotor-bridge"
     args = None
     try:
@@ -270,6 +272,18 @@ def main(argv: list[str] | None = None) -> int:
         # `check-config | head`: the reader left; no traceback, and none at exit's flush either
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
+
+
+def _escaping(stream: object) -> None:
+    """``stream`` escapes, with a backslash, what its encoding cannot write, as Python's stderr
+    does, where it raised: a path holds what the home folder's name or the configuration
+    file's does (settings/base.py rules 3, 7), any bytes, which Python reads as lone
+    surrogates, and under en_US.UTF-8 stdout refused one: check-config ended in a
+    UnicodeEncodeError traceback (review 69). So a path reads the same in what check-config
+    prints and in the log, under every locale (C.UTF-8's stdout wrote the raw byte)."""
+    reconfigure = getattr(stream, "reconfigure", None)  # (a StringIO's has none: no encoding)
+    if reconfigure is not None:
+        reconfigure(errors="backslashreplace")
 
 
 # the commands whose output is only printed, which a pipe may close early (main)
