@@ -38,8 +38,11 @@ Rules:
    docs write its default, ``~/.local/state/...``, and the bridge kept its state and its lock
    under a folder named ``~`` of whatever directory it was started from (two runs of one
    installation from two directories both started); a rotator's serial ``port`` too, a text
-   key (review 69: ``~/rotor``, a link kept in the service user's home, was never opened).
-   A ``~user`` that names no user here is an error, not a folder named so.
+   key (review 69: ``~/rotor``, a link kept in the service user's home, was never opened);
+   a pty's link too, a text key (``*_pty``: the pty server read ``~/`` itself, but a
+   ``~user/...`` naming no user made its link under a folder named so, unsaid, and
+   check-config showed ``~/...``). A ``~user`` that names no user here is an error, not a
+   folder named so.
 """
 
 from __future__ import annotations
@@ -120,7 +123,7 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
         if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
             check_named_path(value)
-        if _a_path(field.annotation) or named == "port":  # rule 7
+        if _a_path(field.annotation) or named == "port" or named.endswith("_pty"):  # rule 7
             return home_path(value)
     return value
 

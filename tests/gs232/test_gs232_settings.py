@@ -112,3 +112,18 @@ def test_a_dcu1_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
 def test_gs232_replies_are_a_or_b(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="gs232_replies"):
         load_settings(write(tmp_path, ['gs232_replies = "C"']), environ={})
+
+
+def test_check_config_shows_a_pty_written_in_the_home_folder_where_its_link_goes(
+    tmp_path: Path,
+) -> None:
+    """settings/base.py rule 7 for a pty's link: shown where the start makes it, not '~/...'."""
+    path = write(tmp_path, ['gs232_pty = "~/rotor-gs232"'])
+    out = cli("check-config", "-c", str(path), env={"HOME": str(tmp_path)})
+    assert f"GS-232B on a pty at {tmp_path}/rotor-gs232" in out.stdout, out.stdout + out.stderr
+
+
+def test_a_pty_of_a_user_this_system_has_not_is_refused_naming_the_key(tmp_path: Path) -> None:
+    """Not a link made under a folder named '~no-such-user-rb' of the working directory."""
+    with pytest.raises(ConfigError, match=r"rotators\[0\]\.dcu1_pty: ~no-such-user-rb names no"):
+        load_settings(write(tmp_path, ['dcu1_pty = "~no-such-user-rb/dcu1"']), environ={})
