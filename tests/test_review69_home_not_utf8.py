@@ -11,6 +11,9 @@ and prints nothing.)"""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
+
+import pytest
 
 from tests.support import run_cli, to_toml
 
@@ -58,3 +61,32 @@ def test_check_config_names_a_configuration_file_whose_path_is_not_utf8_escaped(
     assert out.returncode == 0, out.stderr
     shown = str(config).encode("utf-8", "backslashreplace").decode()  # .../h\udce9/bridge.toml
     assert out.stdout.splitlines()[-1] == f"config OK: {shown}", out.stdout
+
+
+@pytest.mark.parametrize(
+    ("keys", "said"),
+    [
+        ({"mqtt": {"username": "u", "password_file": "~/pw"}}, "password_file {home}/pw: No such"),
+        ({"mqtt": {"tls": {"enabled": True, "ca_file": "~/ca.pem"}}}, "ca_file {home}/ca.pem is"),
+        ({"audit_file": "~"}, "audit_file: {home} is a folder: name a file in it ({home}/audit"),
+    ],
+    ids=["mqtt.password_file", "mqtt.tls.ca_file", "audit_file"],
+)
+def test_a_refusal_names_a_file_in_a_home_folder_not_in_utf8_escaped(
+    tmp_path: Path, keys: dict[str, Any], said: str
+) -> None:
+    """settings/base.py rule 8: the refusal naming the file was a UnicodeEncodeError traceback
+    in pydantic, exit 1 (which the systemd unit restarts for ever), for check-config and run."""
+    home = tmp_path / "h\udce9"
+    home.mkdir()
+    base = {
+        "mqtt": {"host": "127.0.0.1"},
+        "rotators": [{"id": "tower", "model": "rotorez", "port": "/dev/rotor"}],
+    }
+    config = tmp_path / "bridge.toml"
+    config.write_text(to_toml(base | keys | {"mqtt": base["mqtt"] | keys.get("mqtt", {})}))
+    out = run_cli("check-config", "-c", str(config), env={"HOME": str(home)})
+    assert "Traceback" not in out.stderr, out.stderr
+    assert out.returncode == 2, out.stderr
+    shown = str(home).encode("utf-8", "backslashreplace").decode()  # .../h\udce9
+    assert said.format(home=shown) in out.stderr, out.stderr

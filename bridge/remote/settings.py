@@ -29,7 +29,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from bridge.core.model import OPERATOR_CHARS, valid_operator
 from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings import ConfigError, read_toml
-from bridge.settings.base import Strict
+from bridge.settings.base import Strict, shown_path
 from bridge.settings.errors import describe
 from bridge.settings.mqtt import MqttSettings
 from bridge.settings.web import WebSettings
@@ -211,7 +211,8 @@ class RemoteSettings(Strict):
                     if claim in taken:
                         what = "path" if transport == "pty" else "port"
                         raise ValueError(
-                            f"{name} {where} clashes with {taken[claim]}: give it another {what}"
+                            f"{name} {shown_path(str(where))} clashes with {taken[claim]}: "
+                            f"give it another {what}"
                         )
                 taken[(transport, where)] = name
         if self.web.enabled and ("tcp", self.web.port) in taken:  # rule 2: the console too

@@ -108,7 +108,7 @@ from bridge.core.text import entity_slug
 from bridge.feature import topic_words
 from bridge.protocols.axes import bearing_is_elevation
 from bridge.settings import errors as settings_errors
-from bridge.settings.base import plain_value
+from bridge.settings.base import plain_value, shown_path
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
 from bridge.settings.groups import GroupSettings, reserved, station_words
@@ -248,7 +248,7 @@ class Settings(BaseSettings):
     def _audit_file(cls, v: Path | None) -> Path | None:
         if v is not None and os.path.isdir(os.path.expanduser(v)):  # (an attack pass: config
             raise ValueError(  # OK, and every line lost at run)
-                f"{v} is a folder: name a file in it ({v / 'audit.jsonl'})"
+                f"{shown_path(v)} is a folder: name a file in it ({shown_path(v / 'audit.jsonl')})"
             )
         return v
 
@@ -270,7 +270,7 @@ class Settings(BaseSettings):
         ports = [p for r in self.rotators for p in r.ports]  # a composite's both
         dup = {p for p in ports if ports.count(p) > 1}
         if dup:
-            raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
+            raise ValueError(f"port {shown_path(sorted(dup)[0])} is given to two rotators")
         # one device under two names (a /dev/serial/by-id link and its ttyUSB0): the second
         # was offline for good, "busy: another program holds it" (an attack pass)
         device: dict[str, str] = {}
@@ -278,7 +278,8 @@ class Settings(BaseSettings):
             real = os.path.realpath(p) if p else p
             if real in device:
                 raise ValueError(
-                    f"port {p} is {device[real]} under another name (both {real}): one device "
+                    f"port {shown_path(p)} is {shown_path(device[real])} under another name "
+                    f"(both {shown_path(real)}): one device "
                     "is given to two rotators (name each by its /dev/serial/by-id link: a "
                     "ttyUSB number may go to another adapter at the next boot)"
                 )
@@ -313,7 +314,9 @@ class Settings(BaseSettings):
         for n, (path, name) in enumerate(ptys):  # one link, one pty
             clash = [other for p, other in ptys[:n] if p == path]
             if clash:
-                raise ValueError(f"{name} {path} is also {clash[0]}: give it another path")
+                raise ValueError(
+                    f"{name} {shown_path(path)} is also {clash[0]}: give it another path"
+                )
         pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         n1mm_first: dict[int, str] = {}  # (rotators named on one N1MM port share it: below)

@@ -40,9 +40,15 @@ Rules:
    installation from two directories both started); a rotator's serial ``port`` too, a text
    key (review 69: ``~/rotor``, a link kept in the service user's home, was never opened);
    a pty's link too, a text key (``*_pty``: the pty server read ``~/`` itself, but a
-   ``~user/...`` naming no user made its link under a folder named so, unsaid, and
+   ``~user/...`` naming no user passed check-config and was taken as ``./~user/...``, and
    check-config showed ``~/...``). A ``~user`` that names no user here is an error, not a
    folder named so.
+8. A refusal names a path as ``shown_path`` spells it: a path in the home folder holds what
+   the home folder's name does (rule 3: any bytes), and a byte that is not UTF-8, which Python
+   reads as a lone surrogate, in a refusal's text ended check-config and run in a
+   UnicodeEncodeError traceback (pydantic cannot hold it), exit 1, where a configuration error
+   is exit 2 (the systemd unit restarts after exit 1, for ever). It is escaped as Python's
+   stderr, and cli.py's stdout, write it (``\\udce9``).
 """
 
 from __future__ import annotations
@@ -126,6 +132,11 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
         if _a_path(field.annotation) or named == "port" or named.endswith("_pty"):  # rule 7
             return home_path(value)
     return value
+
+
+def shown_path(path: str | os.PathLike[str]) -> str:
+    """Rule 8: ``path`` as a refusal names it, a lone surrogate escaped (``\\udce9``)."""
+    return os.fspath(path).encode("utf-8", "backslashreplace").decode()
 
 
 def home_path(value: str) -> str:

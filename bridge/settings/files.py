@@ -29,6 +29,8 @@ import ssl
 import stat
 from pathlib import Path
 
+from bridge.settings.base import shown_path
+
 # rule 4: the most of a password file read (MQTT's longest password is 64 KiB: a longer one is
 # still read whole, to be refused with its length)
 PASSWORD_FILE_MAX = 1024 * 1024
@@ -37,8 +39,8 @@ PASSWORD_FILE_MAX = 1024 * 1024
 def _every_user(key: str, path: Path) -> str:
     """Why a secret's file (``key``'s) every user may read is refused, and the fix."""
     return (
-        f"{key} {path} is readable by every user; let only the user that runs rotor-bridge read "
-        "it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
+        f"{key} {shown_path(path)} is readable by every user; let only the user that runs "
+        "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
     )
 
 
@@ -54,9 +56,9 @@ def _may_not_read(path: Path, exc: OSError) -> str:
         except KeyError:  # a uid with no name (docker run --user 1000)
             who = f"uid {os.getuid()}"
     return (
-        f"password_file {path}: {exc.strerror} for user {who}; run rotor-bridge as the user "
-        "that may read it (the service's file: sudo, or as rotor-bridge), or let this user "
-        "read it (chmod 600 and chown to it)"
+        f"password_file {shown_path(path)}: {exc.strerror} for user {who}; run rotor-bridge as "
+        "the user that may read it (the service's file: sudo, or as rotor-bridge), or let this "
+        "user read it (chmod 600 and chown to it)"
     )
 
 
@@ -69,31 +71,32 @@ def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path
             continue
         try:  # (is_file raises but for a missing file: a folder it may not enter, a name too
             if not f.is_file():  # long ended check-config in a traceback, an attack pass)
-                raise ValueError(f"{name} {f} is not a readable file")
+                raise ValueError(f"{name} {shown_path(f)} is not a readable file")
             every = os.name == "posix" and f.stat().st_mode & stat.S_IROTH
             if name == "key_file" and every:  # (Windows: no such bits, a review)
                 raise ValueError(_every_user("key_file", f))  # (a private key: a secret too)
             f.open("rb").close()
         except OSError as exc:
-            raise ValueError(f"{name} {f}: {exc.strerror}") from None
+            raise ValueError(f"{name} {shown_path(f)}: {exc.strerror}") from None
     context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
     if ca_file is not None:
         try:
             context.load_verify_locations(cafile=str(ca_file))
         except ssl.SSLError as exc:
             raise ValueError(
-                f"ca_file {ca_file} holds no PEM certificate ({_ssl_reason(exc)})"
+                f"ca_file {shown_path(ca_file)} holds no PEM certificate ({_ssl_reason(exc)})"
             ) from None
     if cert_file is not None and key_file is not None:
 
         def no_passphrase() -> bytes:  # rule 3
-            raise ValueError(f"key_file {key_file} is encrypted: it must not be")
+            raise ValueError(f"key_file {shown_path(key_file)} is encrypted: it must not be")
 
         try:
             context.load_cert_chain(cert_file, key_file, password=no_passphrase)
         except ssl.SSLError as exc:
             raise ValueError(
-                f"cert_file {cert_file} and key_file {key_file} are not a PEM "
+                f"cert_file {shown_path(cert_file)} and key_file {shown_path(key_file)} are "
+                "not a PEM "
                 f"certificate and its key ({_ssl_reason(exc)})"
             ) from None
 
@@ -112,15 +115,15 @@ def read_password_file(path: Path) -> str:
     except PermissionError as exc:
         raise ValueError(_may_not_read(path, exc)) from None
     except OSError as exc:
-        raise ValueError(f"password_file {path}: {exc.strerror}") from None
+        raise ValueError(f"password_file {shown_path(path)}: {exc.strerror}") from None
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISFIFO(mode):  # a pipe given it (<(...)): read to its end, as before
             os.set_blocking(fd, True)  # (none writing: an end at once, "it holds nothing")
         elif not stat.S_ISREG(mode):
             raise ValueError(
-                f"password_file {path} is not a file (a directory or a device): write the "
-                "password in a file of its own"
+                f"password_file {shown_path(path)} is not a file (a directory or a device): "
+                "write the password in a file of its own"
             )
         if mode & (stat.S_IROTH | stat.S_IWOTH):
             raise ValueError(_every_user("password_file", path))
@@ -131,16 +134,16 @@ def read_password_file(path: Path) -> str:
                 break
             data += chunk
     except OSError as exc:
-        raise ValueError(f"password_file {path}: {exc.strerror}") from None
+        raise ValueError(f"password_file {shown_path(path)}: {exc.strerror}") from None
     finally:
         os.close(fd)
     if len(data) > PASSWORD_FILE_MAX:
         raise ValueError(
-            f"password_file {path} is larger than {PASSWORD_FILE_MAX // 1024} KiB: it holds one "
-            "line, the password"
+            f"password_file {shown_path(path)} is larger than {PASSWORD_FILE_MAX // 1024} KiB: "
+            "it holds one line, the password"
         )
     try:
         text = data.decode()
     except UnicodeDecodeError:
-        raise ValueError(f"password_file {path} is not UTF-8 text") from None
+        raise ValueError(f"password_file {shown_path(path)} is not UTF-8 text") from None
     return text.strip("\r\n")

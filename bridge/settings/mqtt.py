@@ -36,7 +36,7 @@ from pydantic import (
 )
 
 from bridge.core.text import NOT_TEXT, bad_char
-from bridge.settings.base import NOT_SHOWN, Strict
+from bridge.settings.base import NOT_SHOWN, Strict, shown_path
 from bridge.settings.files import check_tls_files, read_password_file
 
 _TOPIC_BAD = re.compile(r"[+#\x00]")
@@ -341,13 +341,13 @@ class MqttSettings(Strict):
         password = read_password_file(self.password_file)
         if not password or "\n" in password or "\r" in password:  # (an attack pass)
             raise ValueError(
-                f"password_file {self.password_file} must hold the password on one line (it "
-                f"holds {'nothing' if not password else 'several lines'})"
+                f"password_file {shown_path(self.password_file)} must hold the password on one "
+                f"line (it holds {'nothing' if not password else 'several lines'})"
             )
         try:
             check_length(password, MQTT_STRING_MAX, "a password")
         except ValueError as exc:
-            raise ValueError(f"password_file {self.password_file}: {exc}") from None
+            raise ValueError(f"password_file {shown_path(self.password_file)}: {exc}") from None
         self.password = SecretStr(password)
         return self
 

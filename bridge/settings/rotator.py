@@ -38,7 +38,7 @@ from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
-from bridge.settings.base import Strict, check_name, check_named_path, home_path
+from bridge.settings.base import Strict, check_name, check_named_path, home_path, shown_path
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_bind, check_topic
@@ -145,7 +145,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                     "its model, port and baud in each table"
                 )
         if ports[0] == ports[1]:  # (~/el and its home folder's path are one port)
-            raise ValueError(f"elevation.port: {ports[1]} is the azimuth's port too")
+            raise ValueError(f"elevation.port: {shown_path(ports[1])} is the azimuth's port too")
         return {**data, "model": model, "port": port}
 
     id: str = Field(

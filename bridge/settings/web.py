@@ -32,7 +32,7 @@ from pydantic import (
     model_validator,
 )
 
-from bridge.settings.base import NOT_SHOWN, Strict
+from bridge.settings.base import NOT_SHOWN, Strict, shown_path
 from bridge.settings.files import read_password_file
 from bridge.settings.loggers import is_loopback
 from bridge.settings.mqtt import check_bind
@@ -177,7 +177,7 @@ class WebSettings(Strict):
     def _password_and_reach(self) -> WebSettings:
         if self.password_file is not None:
             password = read_password_file(self.password_file)
-            where = f"password_file {self.password_file}"
+            where = f"password_file {shown_path(self.password_file)}"
             if not password:
                 raise ValueError(f"{where} is empty: write the console's password in it")
             if "\n" in password or "\r" in password:
