@@ -15,6 +15,9 @@ from typing import Any
 
 import pytest
 
+from bridge.settings import settings_from
+from bridge.settings.mqtt import MqttSettings
+from tests.faults.conftest import Pki
 from tests.support import run_cli, to_toml
 
 
@@ -90,3 +93,44 @@ def test_a_refusal_names_a_file_in_a_home_folder_not_in_utf8_escaped(
     assert out.returncode == 2, out.stderr
     shown = str(home).encode("utf-8", "backslashreplace").decode()  # .../h\udce9
     assert said.format(home=shown) in out.stderr, out.stderr
+
+
+def test_a_serial_port_and_a_pty_in_a_home_folder_not_in_utf8_are_taken_and_shown(
+    tmp_path: Path,
+) -> None:
+    """Rule 3 exempts the home folder: a port '~/rotor' was refused there as holding "U+DCE9, a
+    control character" (rule 6 judged it once expanded), a pty '~/...' by pydantic's
+    min_length ("unable to parse raw data as a unicode string")."""
+    home = tmp_path / "h\udce9"
+    home.mkdir()
+    (home / "rotor").touch()
+    rotator = {"id": "tower", "model": "rotorez", "port": "~/rotor", "gs232_pty": "~/gs232"}
+    config = tmp_path / "bridge.toml"
+    config.write_text(to_toml({"mqtt": {"host": "127.0.0.1"}, "rotators": [rotator]}))
+    out = run_cli("check-config", "-c", str(config), env={"HOME": str(home)})
+    assert out.returncode == 0, out.stderr
+    shown = str(home).encode("utf-8", "backslashreplace").decode()
+    assert f"tower: Rotor-EZ (rotorez) on {shown}/rotor (found)" in out.stdout, out.stdout
+    assert f"GS-232B on a pty at {shown}/gs232" in out.stdout, out.stdout
+
+
+def test_settings_with_paths_in_a_home_folder_not_in_utf8_load_as_they_are_printed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """What check-config --full prints loads back (test_composite_settings.py's promise), and
+    the stop express, which is handed the broker's settings so and reads them again
+    (interfaces/mqtt/express.py), reads them: a TLS file '~/...' there was refused as not
+    UTF-8 (rule 3), and the express never started."""
+    home = tmp_path / "h\udce9"
+    Pki(home / "pki")
+    monkeypatch.setenv("HOME", str(home))
+    tls = {"enabled": True, "ca_file": "~/pki/ca.crt"}
+    rotator = {"id": "tower", "model": "rotorez", "port": "~/rotor", "dcu1_pty": "~/dcu1"}
+    s = settings_from({"mqtt": {"host": "h", "tls": tls}, "rotators": [rotator]}, environ={})
+    assert s.mqtt.tls.ca_file == home / "pki" / "ca.crt"
+    again = MqttSettings.model_validate(s.mqtt.model_dump(mode="json"))  # the express's
+    assert again.tls.ca_file == s.mqtt.tls.ca_file
+    r = s.rotators[0]
+    assert (r.port, r.dcu1_pty) == (str(home / "rotor"), str(home / "dcu1"))
+    back = type(r).model_validate(r.model_dump())
+    assert (back.port, back.dcu1_pty) == (r.port, r.dcu1_pty)

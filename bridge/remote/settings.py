@@ -80,8 +80,7 @@ def _bind(what: str) -> Any:
 
 def _pty(what: str) -> Any:
     return Field(
-        None,
-        min_length=1,
+        None,  # (no min_length: settings/base.py rule 4 refuses an empty one)
         description=f"{what} on a pseudo-terminal: the path of a link to it, made at start and "
         "removed at the end (anything but a link already there is refused)",
     )

@@ -18,11 +18,14 @@ Rules:
    named in an error ended check-config in one (reviews). So every value, a path's too, is
    UTF-8 text (a Linux path may be other bytes: the bridge names its paths in its messages and
    on MQTT, and takes none that is not). The configuration file's own path and the home folder
-   are no keys: they may be any bytes.
+   are no keys: they may be any bytes; a path in the home folder is judged as the ``~/...``
+   it reads as (``beyond_home``, by rules 3 and 6), so a serial port or pty written so is
+   taken there, and settings read again (check-config --full's, the stop express's) load.
 4. A path given empty (``audit_file = ""``, or ``ROTOR_BRIDGE_AUDIT_FILE=`` from a variable
    left unset) is an error: pydantic reads it as ``.``, the current folder (an attack pass: an
    empty audit_file passed check-config, and every line was lost at run; an empty password
-   file was "not a file").
+   file was "not a file"). A pty's link too, a text key, here and not by pydantic's
+   ``min_length``: that refused a path in a home folder whose name is not UTF-8 (rules 3, 7).
 5. A name a person reads (a rotator's, a group's: ``check_name``) is 1 to NAME_MAX characters
    MQTT carries, without blanks at either end: an attack pass gave a rotator the name
    ``"HF\nconfig OK: ..."`` with a terminal's escape sequence, and check-config printed a forged
@@ -69,8 +72,9 @@ NAME_MAX = 64  # rule 5: a rotator's or a group's name
 
 
 def check_named_path(v: str) -> str:
-    """Rule 6: ``v`` if it is a path the bridge can name in a line of its own; ValueError."""
-    bad = bad_char(v)
+    """Rule 6: ``v`` if it is a path the bridge can name in a line of its own; ValueError. The
+    home folder's part of it is not judged (rule 3: any bytes, escaped where named: rule 8)."""
+    bad = bad_char(beyond_home(v))
     if bad is not None:
         raise ValueError(
             f"holds {bad}, a control character or a non-character: the bridge names its "
@@ -119,19 +123,34 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     field = cls.model_fields.get(info.field_name or "")
     if field is not None and takes_boolean_for_number(field.annotation, value):
         raise ValueError("must be a number, not true or false")
-    if field is not None and value == "" and _a_path(field.annotation):  # rule 4
-        raise ValueError("empty: name a file, or leave the key out")
+    named = info.field_name or ""
+    if field is not None and value == "" and (_a_path(field.annotation) or named.endswith("_pty")):
+        raise ValueError("empty: name a file, or leave the key out")  # rule 4
+    # rule 7's paths: the keys that take one, a serial port, a pty's link
+    a_path = field is not None and (
+        _a_path(field.annotation) or named == "port" or named.endswith("_pty")
+    )
     if field is None or not _a_model(field.annotation):
-        fault = _text_fault(value)
+        fault = _text_fault(beyond_home(value) if a_path and isinstance(value, str) else value)
         if fault is not None:
             raise ValueError(fault)
-    named = info.field_name or ""
     if field is not None and isinstance(value, str):  # rule 6 (after rule 3's NUL)
         if _a_path(field.annotation) or named.endswith(("bind", "_pty")):
             check_named_path(value)
-        if _a_path(field.annotation) or named == "port" or named.endswith("_pty"):  # rule 7
+        if a_path:  # rule 7
             return home_path(value)
     return value
+
+
+def beyond_home(path: str) -> str:
+    """Rule 3: what of ``path`` is not the home folder's (that is any bytes): all of it but
+    in the home folder. A path rule 7 put there is judged as the ``~/...`` it was written as,
+    and so is the same path read again (what check-config --full prints, the settings the stop
+    express is handed: refused as not UTF-8 in a home folder whose name is not)."""
+    home = os.path.expanduser("~").rstrip("/")
+    if home.startswith("/") and (path == home or path.startswith(home + "/")):
+        return "~" + path[len(home) :]
+    return path
 
 
 def shown_path(path: str | os.PathLike[str]) -> str:

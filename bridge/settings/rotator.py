@@ -406,8 +406,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         examples=["0.0.0.0"],
     )
     gs232_pty: str | None = Field(
-        None,
-        min_length=1,
+        None,  # (no min_length: pydantic refuses a home folder not UTF-8 then; base.py rule 4)
         description="Yaesu GS-232B on a pseudo-terminal, for programs that want a serial port "
         "(`rotctl -m 603 -r /run/rotor-bridge/gs232`): the path of a link to it, made at start "
         "and removed at the end; anything but a link already there is refused. Under the "
@@ -417,7 +416,6 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     )
     easycomm_pty: str | None = Field(
         None,
-        min_length=1,
         description="Easycomm II on a pseudo-terminal (`rotctl -m 202 -r "
         "/run/rotor-bridge/easycomm`), linked at this path like gs232_pty",
         examples=["/run/rotor-bridge/easycomm"],
@@ -448,7 +446,6 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     )
     dcu1_pty: str | None = Field(
         None,
-        min_length=1,
         description="DCU-1 / Rotor-EZ on a pseudo-terminal (`rotctl -m 401 -r "
         "/run/rotor-bridge/dcu1`, a logger under Wine), linked at this path like gs232_pty",
         examples=["/run/rotor-bridge/dcu1"],
