@@ -51,3 +51,37 @@ def test_a_storm_park_that_stalls_short_is_not_said_parked() -> None:
             f"the park stalled {short:.0f} degrees short; R/status wind: {block}; "
             f"the refusal: {refusal!r}"
         )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 25: a rotor turned 110 degrees off the storm's park at its front panel is "
+    "still 'parked for the storm' in R/status (Home Assistant's sensor ON) and every refusal",
+)
+def test_a_storm_park_left_by_hand_is_not_said_parked() -> None:
+    """The same words from the other side: the park reached, then a hand at the front panel
+    turns the rotor 110 degrees off it (session/wind.py rule 7: the bridge rightly does not
+    turn it back). R/status's own ``parked`` goes false; its ``wind`` block and every refusal
+    still say the rotor is parked for the storm."""
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        v.manual_rotate(200.0)
+        v.run_until(
+            lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 200.0) < 1.0,
+            60,
+            "the hand's turn",
+        )
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+        assert not v.status.parked  # R/status: the rotor left its park
+        v.target(100.0)  # refused for the storm
+        refusal = v.errors("refused")[-1].message
+        assert v.status.wind is not None
+        block = wind_json(v.status.wind)
+        said_parked = block["storm"] and not any(
+            block[k] for k in ("replayed", "halted", "waiting", "refused")
+        )  # Home Assistant's "Parked for the storm" (features/wind ``_storm``)
+        assert not said_parked and "parked for the storm" not in refusal, (
+            f"the rotor stands at {v.truth().az_deg:.0f}, {PARK_AZ:g} is the park; R/status "
+            f"wind: {block}; the refusal: {refusal!r}"
+        )
