@@ -1,0 +1,144 @@
+"""Attack 24: a flood on ``R/lock`` from another client keeps an operator's STOP from the wire for
+seconds, past the whole turn.
+
+The stop lane exists so that "no flood of targets from other clients" delays a stop (README,
+Safety; docs/mqtt.md, three connections): it subscribes to ``R/stop`` and ``R/lock`` alone. But
+the lock words come on the lane too, one per message, every one read and judged in turn there
+(halts.py ``on_lane``: a lock OFF takes the last word's lock, shared with the main connection,
+which carries out each OFF in order as an owner's step, a save and an audit line), and on the
+main connection as well. A client that republishes ``R/lock`` ``OFF`` in a loop (two
+automations fighting over a switch: docs/reliability.md knows 400 ``R/lock ON`` from one) fills
+the lane faster than it reads: a STOP published behind that flood, by Home Assistant's button
+on its own connection, waits on the lane and on the main connection behind every word of it.
+The stop express (its own process, which would write the stop at once) gets no copy of a
+DCU-1's port (``ModelSpec.stop_anytime``), nor of a SPID's, a SatEL's, an RC2800's, an
+RT-21's or a Prosistel's, and is off with ``mqtt.stop_express = false``.
+
+Measured here (a DCU-1 turning at 20 degrees a second, the express on, the bridge's default):
+the DCU-1's ``AS1;`` went 2.2 s after the STOP with ``OFF`` at 10,000 messages a second, 9.9 s
+at 20,000 (``junk`` in place of ``OFF``: 5.1 s); as fast as one client can, the STOP never
+went before the rotor reached the target it was stopped on the way to. The same flood on
+``R/target``: the stop in 7 ms.
+
+The test keeps the flood going as fast as the broker takes it and sends the STOP once the
+bridge has read a share of it, the rotor turning from 20 to 300; it asserts the end, not a
+time: the rotor rests where the STOP caught it, short of 300 (the control: so it does behind
+the same flood on ``R/target``).
+
+Real parts: mosquitto, the bridge (App), an emulated DCU-1 on a pty."""
+
+from __future__ import annotations
+
+import socket
+import threading
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from tests.integration.test_stop_after_backlog import packet, publish
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+GOAL_DEG = 300  # the turn the STOP is sent in, from 20
+STOP_BEFORE_DEG = 150  # the STOP is published while the rotor is short of this...
+SHORT_OF_DEG = 220  # ... and a STOP carried out promptly leaves it resting short of this
+READ_FIRST = 5_000  # flood messages the bridge has read when the STOP is published: it is on
+BURST = 2_000  # lock words a write of the flooding client
+
+
+class Flood:
+    """A client that publishes ``payload`` on ``topic`` at QoS 0 as fast as the broker takes
+    it, on a thread, until ``end``."""
+
+    def __init__(self, port: int, topic: str, payload: bytes) -> None:
+        self._burst = b"".join(publish(topic, payload) for _ in range(BURST))
+        self._sock = socket.create_connection(("127.0.0.1", port), timeout=slow(30))
+        self._sock.sendall(packet(0x10, b"\x00\x04MQTT\x04\x02\x00\x3c\x00\x07flooder"))
+        assert self._sock.recv(4) == b"\x20\x02\x00\x00", "CONNACK"
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="lock-flood", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            while not self._done.is_set():
+                self._sock.sendall(self._burst)
+        except OSError:
+            pass  # (closed by ``end``)
+
+    def end(self) -> None:
+        self._done.set()
+        self._sock.close()
+        self._thread.join(slow(10))
+
+
+def stop_in_a_flood(tmp_path: Path, topic: str, payload: bytes) -> None:
+    """The rotor turning from 20 to GOAL_DEG, a flood of ``payload`` on ``topic`` under way (the
+    main connection has read READ_FIRST of it), the operator's STOP: the rotor rests short of
+    SHORT_OF_DEG."""
+    broker = Mosquitto(tmp_path / "broker")
+    broker.start()
+    probe = Probe(broker.port, "rotor/availability|rotor/state|rotor/error")
+    rig = Rig(tmp_path, broker, probe)
+    rig.express = None  # the bridge's own default: the stop express on
+    operator = Probe(broker.port, "")
+    flood: Flood | None = None
+    try:
+        emu: Any = rig.add("tower", "dcu1", emu={"start_az_deg": 20, "speed_deg_s": 20.0})
+        app = rig.start()
+        rig.ready("tower")
+        wait_until(app.lane.connected.is_set, 10, "the lane is up")
+        read = [0]
+        on_main = app.client._handler
+
+        def counted(
+            seen: str, data: bytes, retain: bool, sender: str | None, stamp: Stamp | None
+        ) -> None:
+            if seen == topic:
+                read[0] += 1
+            on_main(seen, data, retain, sender, stamp)
+
+        app.client._handler = counted
+        operator.publish("rotor/target", str(GOAL_DEG).encode())
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        flood = Flood(broker.port, topic, payload)
+        wait_until(lambda: read[0] >= READ_FIRST, 30, "the bridge reads the flood")
+        at_stop = emu.state()
+        assert at_stop.is_moving and at_stop.az_deg < STOP_BEFORE_DEG, at_stop  # (in the turn)
+        frames_before = len(emu.log())
+        operator.publish("rotor/stop", b"STOP")  # Home Assistant's button, its own connection
+        rest = emu.wait_for(lambda s: not s.is_moving, slow(60))
+        stops = [f.data for f in emu.log()[frames_before:] if f.data == b"AS1;"]
+        assert rest.az_deg < SHORT_OF_DEG, (
+            f"STOP published at {at_stop.az_deg:.0f} degrees; the rotor came to rest at "
+            f"{rest.az_deg:.0f} (stop frames since: {len(stops)})"
+        )
+    finally:
+        if flood is not None:
+            flood.end()
+        operator.close()
+        rig.close()
+        probe.close()
+        broker.stop()
+
+
+def test_control_a_stop_behind_a_flood_of_targets_stops_the_rotor_where_it_was(
+    tmp_path: Path,
+) -> None:
+    """The same flood on the main connection alone (a target it refuses): the lane's STOP."""
+    stop_in_a_flood(tmp_path, "rotor/target", b"junk")
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 24: a flood of R/lock OFF from another client keeps a STOP from a DCU-1 "
+    "for seconds (2 s at 10,000 a second): the rotor turns on to the target it was stopped on",
+)
+def test_a_stop_behind_a_flood_of_lock_words_stops_the_rotor_where_it_was(
+    tmp_path: Path,
+) -> None:
+    stop_in_a_flood(tmp_path, "rotor/lock", b"OFF")
