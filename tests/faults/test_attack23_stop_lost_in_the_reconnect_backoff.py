@@ -7,9 +7,10 @@ exponential back-off (1 s doubling to 30 s)". Every connection of the bridge (th
 the stop lane, the stop express: interfaces/mqtt/connection.py) tries again on that back-off
 alone, so after 33 s without a broker the next try is at about 61 s: for some 28 s after the
 broker is back nothing of the bridge's is subscribed. The broker meanwhile shows what it kept
-(``B/bridge/state`` and ``R/availability`` ``online``, ``R/state`` ``moving``: a broker's own
-shutdown sends no last will), so the dashboard offers STOP, and the STOP it sends reaches nobody
-(a clean session keeps nothing for later): the rotor turns on to its old target.
+(``R/availability`` ``online``: a broker's own shutdown sends no last will), so the dashboard
+offers STOP, and the STOP it sends reaches nobody (a clean session keeps nothing for later):
+the rotor turns on to its old target (from 217 to 300 in a run; the bridge reconnected 28 s
+after the broker was back).
 """
 
 from __future__ import annotations
