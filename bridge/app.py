@@ -317,6 +317,7 @@ class App:
             stamp_clock=station_time.now_unix,  # heartbeat.py rule 6
             station=station_time.identity,  # heartbeat.py rule 7
             broker_late=self.client.broker_late,  # service.py rule 12
+            instance=self.me.id,  # claim.py rule 5: in each R/info
         )
         # lastword.py rule 15: a marker sent again at QoS 1; its refusal on both topics said
         self.mqtt.confirm_markers_with(

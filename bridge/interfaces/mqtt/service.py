@@ -210,10 +210,13 @@ class MqttService:
         stamp_clock: Callable[[], float] | None = None,
         station: str | None = None,
         broker_late: Callable[[], float | None] | None = None,
+        instance: str | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
-        handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
+        handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay.
+        ``instance``: the bridge's, named in each ``R/info`` (claim.py rule 5)."""
         self.topics = topics
+        self._instance = instance
         self._publisher = publisher
         self._wall = wall
         self._stamp_clock = wall if stamp_clock is None else stamp_clock  # rule 9
@@ -269,7 +272,13 @@ class MqttService:
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
         info = pl.info_json(
-            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console, rotator.id
+            rotator.name,
+            rotator.spec,
+            rotator.pointing,
+            rotator.can_track,
+            console,
+            rotator.id,
+            self._instance,
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 
