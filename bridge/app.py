@@ -70,7 +70,7 @@ from bridge.core.model import Lock, Source, Stop
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
-from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.claim import Claim, Instance, Post
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES
 from bridge.interfaces.mqtt.express import Express
@@ -300,6 +300,7 @@ class App:
                 settings.mqtt.base_topic,
                 self.topics.bridge_info,
                 self.topics.bridge_hello,
+                tuple(Post(*p) for p in self.topics.posts()),  # claim rule 5
             ),
             on_refused=self._refused,
             fence_topic=self.topics.bridge_fence,  # client.py rule 16

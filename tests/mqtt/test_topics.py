@@ -104,3 +104,21 @@ def test_route_answers_for_the_first_rotator_whose_topic_it_is_whatever_the_root
         topics |= {"rotor", "rotor/", "other/target", "homeassistant/sensor/x/bearing/config"}
         for topic in sorted(topics):
             assert t.route(topic) == routed_one_by_one(t, roots, topic), topic
+
+
+def test_the_posts_another_bridge_would_stand_on_are_this_bridges_own_topics() -> None:
+    """claim.py rule 5: each rotator's root and the base topic, and a bridge's info under each
+    rotator's root; nothing above the base topic."""
+    several = Topics("rotor", {"tower": "rotor/tower", "yagi": "far/yagi"}).posts()
+    assert several == [
+        ("rotor/bridge/info", "rotor/bridge/state", True),
+        ("rotor/tower/bridge/info", "rotor/tower/bridge/state", True),
+        ("far/yagi/bridge/info", "far/yagi/bridge/state", True),
+        ("rotor/tower/info", "rotor/tower/availability", False),
+        ("far/yagi/info", "far/yagi/availability", False),
+        ("rotor/info", "rotor/availability", False),
+    ]
+    assert Topics("rotor/tower", {"mast": "rotor/tower"}).posts() == [
+        ("rotor/tower/bridge/info", "rotor/tower/bridge/state", True),
+        ("rotor/tower/info", "rotor/tower/availability", False),
+    ]

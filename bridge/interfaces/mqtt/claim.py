@@ -37,6 +37,30 @@ Rules:
    while the other is there and online. One message proves no other bridge (an attack pass:
    one forged, non-retained info on ``B/bridge/info`` ended a bridge mid-turn for good, code
    2, its stop express with it, and the STOP after it reached nothing: the rotor ran on).
+5. Another bridge on this one's topics, above or below them (attack 18: a bridge on
+   ``rotor/tower`` beside a live bridge on ``rotor`` with a rotator ``tower`` started, and one
+   target turned both rotors). Each rotator's retained ``R/info`` names its bridge's instance
+   too. The first look (rule 2: before anything retained goes out, command topics gated) also
+   reads, inside this bridge's own topics only, the ``posts`` where another bridge would say
+   who it is: ``X/info`` with ``X/availability`` for each rotator's root and the base topic
+   itself (a bridge whose rotator's topic is one of ours), and ``R/bridge/info`` with
+   ``R/bridge/state`` for each rotator's root under another name than the base topic (a bridge
+   whose base topic is one of our rotators'). Another instance there with ``online`` beside it
+   refuses this bridge as rule 2 does (code 2 at a start, a yield after it ran), naming the
+   topic; its own instance never does (a restart of this installation), nor junk or an older
+   bridge's ``R/info`` without one. An instance that a bridge post here says is not online (its
+   last will, its clean stop) is gone, whatever its rotators' availability still says (a
+   bridge killed on ``rotor`` leaves its ``rotor/info`` ``online``: rule 2 takes the base topic
+   over then, as before); so is one whose rotator said ``offline`` (a clean stop): said in the
+   log, never refused. Why only our own topics: an earlier try read the bridge info above the
+   base topic, outside what the broker's ACL gives this bridge, and a client kept off our
+   topics ended the bridge with a forged info there, and a refused bridge's leftovers there
+   refused the older bridge for good; here a refused bridge has published nothing retained,
+   and whatever the look reads only a client the ACL lets write our own topics could forge.
+   Not seen: a bridge killed outright on a topic above ours, whose rotator's availability stays
+   ``online`` (the refusal says to start and stop it, or delete that topic); a live bridge
+   whose rotator's controller does not answer (its availability ``offline``); two bridges that
+   start at the same moment (no live rule 4 here).
 """
 
 from __future__ import annotations
@@ -99,6 +123,8 @@ class Instance:
         )
 
     def described(self) -> str:
+        if self.host == "?" and not self.pid:  # (rule 5: a rotator's info names the id alone)
+            return f"instance {self.id!r}"
         return f"instance {self.id!r} on host {self.host!r} (pid {self.pid})"
 
 
@@ -137,6 +163,56 @@ def refusal(base_topic: str, other: Instance, live_since_look: bool) -> str:
     )
 
 
+def standing(
+    me: Instance, posts: tuple[Post, ...], seen: dict[str, bytes]
+) -> tuple[Instance, Post, bool] | None:
+    """Rule 5: the first other instance the look saw live on one of ``posts`` (``seen``: the
+    payloads of their topics), with its post and True; else the first one seen gone there,
+    with False (said in the log); None when there is none."""
+    gone: set[str] = set()
+    found: list[tuple[Instance, Post, bool]] = []
+    for post in posts:
+        info = seen.get(post.info)
+        other = Instance.parse(info) if info else None
+        if other is None or other.id == me.id:
+            continue
+        live = (seen.get(post.live) or b"").strip() == b"online"
+        if post.bridge and not live:
+            gone.add(other.id)  # its last will, or its clean stop
+        found.append((other, post, live))
+    for other, post, live in found:
+        if live and other.id not in gone:
+            return other, post, True
+    return (found[0][0], found[0][1], False) if found else None
+
+
+def refusal_on(other: Instance, post: Post) -> str:
+    """Rule 5's error: another bridge on one of this bridge's topics."""
+    why = (
+        f"{post.live} says online"
+        if post.bridge
+        else f"{post.live} says online (killed outright, a bridge leaves it so: then start "
+        "that bridge and stop it, or delete that retained topic)"
+    )
+    return (
+        f"another bridge runs on this bridge's topics: {other.described()} says so on "
+        f"{post.info!r}, and {why}. Two bridges whose topics lie one under the other turn both "
+        f"rotors on one target: stop the other one, or give each its own mqtt.base_topic, no "
+        f"other bridge's topics under it"
+    )
+
+
+@dataclass(frozen=True)
+class Post:
+    """Rule 5: where another bridge would say who it is on this bridge's topics (``info``), and
+    the topic beside it that says whether it is live (``live``, ``online``); ``bridge``: a
+    bridge's own ``bridge/info`` (its ``bridge/state`` is its last will), not a rotator's."""
+
+    info: str
+    live: str
+    bridge: bool = False
+
+
 @dataclass(frozen=True)
 class Claim:
     """What the client needs to take its first look (client.py rule 14)."""
@@ -145,3 +221,4 @@ class Claim:
     base_topic: str
     info_topic: str
     hello_topic: str
+    posts: tuple[Post, ...] = ()  # rule 5

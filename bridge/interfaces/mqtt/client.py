@@ -261,6 +261,7 @@ class MqttClient(Connection):
         self._look_lost = False  # rule 16: this connection's look timed out
         self._look_heard = 0.0  # rule 14: when the broker last sent anything (monotonic)
         self._look_sub: int | None = None  # rule 14: the look's SUBSCRIBE, until its SUBACK
+        self._look_only: frozenset[str] | None = None  # claim rule 5: read for the look alone
         self._as_published: Callable[[str], bool] | None = None  # rule 14 (``_broker_held``)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
         self._probing: list[str] = []  # rule 14: the filters the look hears its probes on (MQTT 5)
@@ -534,6 +535,7 @@ class MqttClient(Connection):
                 wide = sorted({t.rpartition("/")[0] + "/+" for t in look.witnessed})
                 self._probing = [] if self._owned.hears_own else wide
                 subs += [(t, _HEAR_PROBE) for t in self._probing]
+                subs += [(t, 0) for t in self._posts_only(look)]  # claim rule 5
                 self._look_sub = self._subscribe(client, subs)
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
@@ -852,6 +854,23 @@ class MqttClient(Connection):
         if self._on_refused is not None:
             threading.Thread(target=self._on_refused, args=(message,), daemon=True).start()
 
+    def _posts_only(self, look: FirstLook) -> list[str]:
+        """Claim rule 5, under the lock: the topics of the look's posts no other filter reads
+        (mosquitto sends a message once per filter it matches), read for the look alone; their
+        denial is no problem (rule 17)."""
+        if self._look_only is None:
+            read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
+            posted = (t for p in look.claim.posts for t in (p.info, p.live))
+            self._look_only = frozenset(t for t in posted if not read(t))
+            self.optional(
+                {
+                    t: "another bridge whose base topic is one of this bridge's rotators' topics "
+                    "is not seen there (interfaces/mqtt/claim.py rule 5)"
+                    for t in self._look_only
+                }
+            )
+        return sorted(self._look_only)
+
     def _look_saw(self, look: FirstLook, topic: str, payload: bytes) -> bool:
         """Rule 14: True if the message belongs to the first look (handled here)."""
         if topic == look.claim.hello_topic:
@@ -878,7 +897,7 @@ class MqttClient(Connection):
             # rule 7): the handler tells this process's markers from the rest
             return False
         with self._lock:
-            return look.saw(topic, payload)
+            return look.saw(topic, payload) or topic in (self._look_only or ())
 
     def _markers_back(self) -> None:
         """Rule 16 (paho's thread): this connection's hello or probe is back: the markers come

@@ -86,7 +86,16 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
+from bridge.interfaces.mqtt.claim import (
+    Claim,
+    Instance,
+    Verdict,
+    first_look,
+    refusal,
+    refusal_on,
+    standing,
+    yields_to,
+)
 from bridge.interfaces.mqtt.limiter import EventLimiter
 
 log = logging.getLogger(__name__)
@@ -122,6 +131,8 @@ class FirstLook:
         self._probes: set[str] = set()  # rule 14: the witnesses whose probe is out, until back
         self.probing = False  # rule 14: this look's probes went out (its second hello too)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
+        # claim rule 5: the topics of the posts where another bridge would stand on ours
+        self._posted = frozenset(t for p in claim.posts for t in (p.info, p.live))
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -183,6 +194,8 @@ class FirstLook:
             self._heard[topic] = payload
             return False
         if topic not in (self.claim.info_topic, self._state_topic):
+            if topic in self._posted:  # claim rule 5: kept, and handled as ever
+                self._seen[topic] = payload
             return False
         self._seen[topic] = payload
         return True
@@ -207,6 +220,15 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
+        stands = standing(self.claim.me, self.claim.posts, self._seen)  # claim rule 5
+        if stands is not None and stands[2]:
+            return Outcome(refused=refusal_on(stands[0], stands[1]), clear=False, clears=[])
+        if stands is not None and not self._opened and stands[1].info != self.claim.info_topic:
+            log.warning(
+                "%s, gone, left %s on this bridge's topics: taken over",
+                stands[0].described(),
+                stands[1].info,
+            )
         heard, self._heard = (None if self._opened else self._heard), {}
         # rule 14: the hello back before a witness's probe, and nothing held heard there: the
         # broker drops what it sends on that topic (its ACL; a timed-out look says nothing)
