@@ -158,3 +158,29 @@ def test_its_own_restart_before_the_broker_saw_it_die_runs(
         probe.publish("rotor/tower/target", "90")
         tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
         assert again.alive()
+
+
+def test_a_bridge_killed_on_the_same_base_topic_is_still_taken_over(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """claim.py rule 5 beside rule 2: killed outright, a bridge with one rotator leaves that
+    rotator's ``rotor/availability`` ``online`` beside its ``rotor/info``; its last will on
+    ``rotor/bridge/state`` says it is gone, so the next bridge on ``rotor`` takes over, as
+    before rule 5, and is not refused for that rotator's leftovers."""
+    with Rig(tmp_path / "a", broker, probe) as a, Rig(tmp_path / "b", broker, probe) as b:
+        a.mqtt_extra = {"keepalive_s": 5}  # (the broker sends its will 7.5 s after the kill)
+        a.add("tower", emu={"start_az_deg": 0, "jitter_deg": 0})
+        bridge = a.start_process()
+        a.ready("tower", 30)
+        bridge.kill()
+        probe.wait_value("rotor/bridge/state", "offline", 20)
+        assert retained_snapshot(broker.port, "rotor/availability") == {
+            "rotor/availability": b"online"
+        }
+        mast = b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0})
+        t = probe.caught_up()
+        app = b.start()
+        b.ready("mast", after=t)
+        probe.publish("rotor/target", "90")
+        mast.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
+        assert not app.failed.is_set()
