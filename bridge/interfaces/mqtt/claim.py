@@ -49,18 +49,19 @@ Rules:
    refuses this bridge as rule 2 does (code 2 at a start, a yield after it ran), naming the
    topic; its own instance never does (a restart of this installation), nor junk or an older
    bridge's ``R/info`` without one. An instance that a bridge post here says is not online (its
-   last will, its clean stop) is gone, whatever its rotators' availability still says (a
-   bridge killed on ``rotor`` leaves its ``rotor/info`` ``online``: rule 2 takes the base topic
-   over then, as before); so is one whose rotator said ``offline`` (a clean stop): said in the
-   log, never refused. Why only our own topics: an earlier try read the bridge info above the
-   base topic, outside what the broker's ACL gives this bridge, and a client kept off our
-   topics ended the bridge with a forged info there, and a refused bridge's leftovers there
-   refused the older bridge for good; here a refused bridge has published nothing retained,
-   and whatever the look reads only a client the ACL lets write our own topics could forge.
-   Not seen: a bridge killed outright on a topic above ours, whose rotator's availability stays
-   ``online`` (the refusal says to start and stop it, or delete that topic); a live bridge
-   whose rotator's controller does not answer (its availability ``offline``); two bridges that
-   start at the same moment (no live rule 4 here).
+   last will, its clean stop) is gone, whatever its rotators' availability still says (a bridge
+   killed on ``rotor`` leaves its one rotator's ``rotor/availability`` ``online`` beside its
+   ``rotor/info``: rule 2 takes the base topic over then, as before); so is one whose rotator
+   said ``offline`` (a clean stop): said in the log, never refused. Why only our own topics: an
+   earlier try read the bridge info above the base topic, outside what the broker's ACL gives
+   this bridge, and a client kept off our topics ended the bridge with a forged info there, and
+   a refused bridge's leftovers there refused the older bridge for good; here a refused bridge
+   has published nothing retained, and whatever the look reads only a client the ACL lets write
+   our own topics could forge. Misjudged: a bridge killed outright above ours leaves its
+   rotator's availability ``online`` and refuses this one until it is started and stopped
+   again, or that topic deleted (the refusal says so). Not seen: a live bridge whose rotator's
+   controller does not answer (its availability ``offline``); two bridges that start at the
+   same moment (no live rule 4 here).
 """
 
 from __future__ import annotations
