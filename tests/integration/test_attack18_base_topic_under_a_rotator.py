@@ -18,6 +18,7 @@ import pytest
 from bridge.emulators.pty import EmulatedPort
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
+from tests.support.process import run_cli, to_toml
 from tests.support.rig import Rig
 
 
@@ -184,3 +185,34 @@ def test_a_bridge_killed_on_the_same_base_topic_is_still_taken_over(
         probe.publish("rotor/target", "90")
         mast.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
         assert not app.failed.is_set()
+
+
+def test_the_service_refused_on_a_rotator_topic_exits_with_code_2_naming_the_topic(
+    tmp_path: Path, rig: Rig
+) -> None:
+    """claim.py rule 5 through the CLI: as rule 2's refusal, code 2 (systemd does not restart
+    it) and one line naming the other instance and the topic."""
+    station_on_rotor(rig)
+    app = rig.start()
+    rig.ready("tower")
+    config = tmp_path / "second.toml"
+    config.write_text(
+        to_toml(
+            {
+                "mqtt": {
+                    "host": "127.0.0.1",
+                    "port": rig.broker.port,
+                    "client_id": "second",
+                    "base_topic": "rotor/tower",
+                },
+                "state_file": str(tmp_path / "second-state.json"),
+                "rotators": [{"id": "mast", "model": "rotorez", "port": str(tmp_path / "none")}],
+            }
+        )
+    )
+    done = run_cli("run", "-c", str(config), timeout_s=30)
+    assert done.returncode == 2, done.stderr
+    last = done.stderr.strip().splitlines()[-1]  # (the CLI's own line, after the log's)
+    assert last.startswith("rotor-bridge: ") and "'rotor/tower/info'" in last, done.stderr
+    assert app.me.id in last and "mqtt.base_topic" in last
+    assert retained_snapshot(rig.broker.port, "rotor/tower/bridge/#") == {}
