@@ -140,6 +140,10 @@ class JunkReply:
     data: bytes
     reason: JunkReason
     detail: str = ""  # the codec's words, for a log line or a test
+    # the axis ("azimuth", "elevation") whose own frame of a target the controller refused,
+    # where a target is a frame per axis (an RC2800's az/el box, a Combi-Track): that axis is
+    # not driven to it (session/motion.py rule 3: not judged stalled on its own)
+    axis: str | None = None
 
     @property
     def late(self) -> bool:
@@ -519,6 +523,10 @@ class ModelSpec:
     # sooner after the one before it to the other axis, a command's frames go this far apart,
     # a stop's first too (the azimuth's: at once, or when the gap ends; session/link.py rule 10)
     axis_gap_s: float = 0.0
+    # it turns its two axes one after the other, not together (the axis waiting its turn does
+    # not move): movement on either counts as progress for both (session/motion.py rule 3).
+    # None of the families here does (each fact sheet and emulator: both axes turn at once)
+    axes_in_turn: bool = False
     # how a frame names the axis it is for (its first bytes: RC2800 b"A", b"E"): frames to the
     # same axis need no axis gap between them
     axis_prefixes: tuple[bytes, ...] = ()

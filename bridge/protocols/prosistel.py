@@ -85,7 +85,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from bridge.protocols.base import (
@@ -246,6 +246,11 @@ class ProsistelCodec(OneQuery):
             # rule 3: a D's target is its one G: an error to it is the box's refusal
             refused = cmd == "G" and not self.elevation
             self._junk(frame, JunkReason.REFUSED if refused else JunkReason.SPOILED, why, out)
+            if cmd == "G" and self.elevation:  # a Combi-Track's: that unit's axis is not driven
+                first = m.group("unit").decode() == self.family.units[0]
+                junk = out[-1]  # (the JunkReply just made)
+                assert isinstance(junk, JunkReply)
+                out[-1] = replace(junk, axis="azimuth" if first else "elevation")
         elif _ANSWER.fullmatch(body):
             out.append(JunkReply(frame, JunkReason.CHATTER, "the answer to a command"))
         elif m := _POSITION.fullmatch(body):

@@ -277,7 +277,10 @@ class Rc2800Codec(Plain, LateAnswers):
             code = m.group("code").decode()
             # rule 1: a target's refusal only where a target is one frame
             reason = JunkReason.CHATTER if self.elevation else JunkReason.REFUSED
-            out.append(JunkReply(raw, reason, f"controller error {code}"))
+            refused = None  # (the az/el box: the axis whose frame it refused, if a bearing's)
+            if self.elevation:
+                refused = "elevation" if raw.lstrip().startswith(b"E") else "azimuth"
+            out.append(JunkReply(raw, reason, f"controller error {code}", refused))
             return
         m = _POSITION.fullmatch(raw)
         if m is None:

@@ -1040,6 +1040,8 @@ class Controller:
                     self._motion_events(events, now)
                     if events:
                         continue  # the answer to the target, reported as such: no junk
+                if reply.axis is not None:  # motion.py rule 3: that axis's frame refused
+                    self.motion = mo.undriven(self.motion, reply.axis)
                 if reply.late:  # link.py rule 12: it answers, late
                     link.answered_late(now)
                 if reply.reason is JunkReason.MISFIT:  # rule 6: in the codec's words, if
@@ -1914,11 +1916,13 @@ class Controller:
 
     def _stall_check_t(self, link: Link) -> float:
         """Rule 2: the last check before the motion machine could call the turn under way
-        stalled: ``stall_timeout_s`` from the last movement it saw (motion.py ``progress_t``),
-        less a moving poll and a reply time, how late the check may come; inf with none, or
-        with the rotor at its target (motion.py rule 3: no stall then)."""
-        progress_t, cfg = self.motion.progress_t, self.cfg
-        if progress_t is None or mo.at_target(self.motion, cfg.motion):  # (at it: no stall)
+        stalled: ``stall_timeout_s`` from the last movement it saw of the axis judged first
+        (motion.py rule 3, ``stall_from``: each axis off its target on its own), less a moving
+        poll and a reply time, how late the check may come; inf with none, or with the rotor
+        at its target (motion.py rule 3: no stall then)."""
+        cfg = self.cfg
+        progress_t = mo.stall_from(self.motion, cfg.motion)  # (None at it: no stall)
+        if progress_t is None:
             return math.inf
         late_s = cfg.moving_poll_interval_s + link.reply_wait_s
         return progress_t + cfg.motion.stall_timeout_s - late_s

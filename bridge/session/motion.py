@@ -29,8 +29,26 @@ Rules:
    (``stall_due``, controller.py ``tick``): its reading decides a reply time later, not a
    moving poll later (a review: the motor drove on against a jam for one more moving poll).
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
-   end stop first moves away from a target across the stop.) A reading tells a stall only
-   when the question it answers went out at the stall's time or later (``reading``'s
+   end stop first moves away from a target across the stop.) On an az/el rotor each axis is
+   judged on its own (``stalling``): an axis off its target whose own movement (more than
+   ``noise_deg`` from where that axis last moved since the target went out: rule 5's
+   ``az_from_deg``, ``el_from_deg``; not rule 1's shared anchor, which moves with either axis)
+   stopped ``stall_timeout_s`` ago is stalled while the other still turns; an axis within
+   ``tolerance_deg`` of its target, or one the target leaves out, is not judged (attack 25:
+   the azimuth's turn counted as a jammed elevation's progress, its motor drove against the
+   jam 30 s longer on a 180 degree GS-232B move, and the stall was said at the azimuth, which
+   had arrived). The stall names its axis (``Motion.stalled``). Every family here turns both
+   axes at once (their fact sheets and emulators: SPID, SatEL's slew, GS-232's ``W``,
+   Easycomm, an RC2800's two frames 200 ms apart, a Combi-Track's two units; a composite's two
+   boxes each judge their own axis); a box that turned them one after the other
+   (``ModelSpec.axes_in_turn``) would show its waiting axis not moving: there movement of
+   either axis counts for both, as before. So it does for an axis whose own frame of the
+   target the controller refused (``undriven``: an RC2800's ``E ERR``, a Combi-Track's unit
+   B error, the target a frame per axis): the controller does not drive it, and the other
+   axis's turn goes on to its target (a review: an RC2800's refused elevation was taken for
+   the whole target's refusal while the azimuth turned 190 degrees to it; judged per axis, it
+   was stopped 10 s into that turn). A reading tells a stall only when the question it
+   answers went out at the stall's time or later (``reading``'s
    ``asked_t``): the reply to one asked before it shows the rotor as it was when answered,
    any time from the question on, and a reply read late (the bridge's process held with a
    poll out, SIGSTOP, a host that stalls, a starved thread) was taken for no progress in all
@@ -246,7 +264,13 @@ class Motion:
     still_since_t: float | None = None
     target_deg: float | None = None
     target_t: float | None = None
-    progress_t: float | None = None  # last movement while a target is active
+    progress_t: float | None = None  # last movement while a target is active (either axis)
+    # rule 3: each axis's last movement (from its own ``az_from_deg``/``el_from_deg``) while a
+    # target is active
+    az_progress_t: float | None = None
+    el_progress_t: float | None = None
+    stalled: str | None = None  # rule 3: the axis the last stall was of ("azimuth", "elevation")
+    undriven: str | None = None  # rule 3: the axis whose frame of the target was refused
     idle_not_before_t: float | None = None
     stop_sent_t: float | None = None
     stop_read_t: float | None = None  # the first reading after the last stop (``stop_again``)
@@ -366,7 +390,8 @@ def slew_ended(m: Motion, now: float) -> Motion:
     count start now. The reading asked for at once decides arrival (or a real stall)."""
     if m.state is not MOVING:
         return m
-    return replace(m, last_move_t=now, progress_t=now if m.target_deg is not None else None)
+    t = now if m.target_deg is not None else None
+    return replace(m, last_move_t=now, progress_t=t, az_progress_t=t, el_progress_t=t)
 
 
 def at_target(m: Motion, cfg: MotionConfig) -> bool:
@@ -445,6 +470,17 @@ def reading(
             changes["progress_t"] = now
     elif m.carried and m.state is not MOVING:  # rule 4: a start's second reading saw no turn
         changes["carried"] = False
+    if m.target_deg is not None:  # rule 3: each axis's own progress, from where it last moved
+        ref = m.az_from_deg if m.az_from_deg is not None else m.position_deg
+        if ref is not None:  # (measured as ``_passing`` moves ``az_from_deg``: the same float)
+            step = az_deg - ref
+            if wraps:
+                step = (step + 180.0) % 360.0 - 180.0
+            if abs(step) > cfg.noise_deg:
+                changes["az_progress_t"] = now
+        ref = m.el_from_deg if m.el_from_deg is not None else m.el_position_deg
+        if el_deg is not None and ref is not None and abs(el_deg - ref) > cfg.noise_deg:
+            changes["el_progress_t"] = now
     if changes:
         m = _with(m, changes)
     if moved and m.target_deg is not None:  # rule 10
@@ -512,6 +548,8 @@ def _dropped(m: Motion) -> Motion:
         el_target_deg=None,
         target_t=None,
         progress_t=None,
+        az_progress_t=None,
+        el_progress_t=None,
         closest_err=None,
         away_err=None,
         az_pass=None,
@@ -677,6 +715,10 @@ def commanded(
         el_target_deg=el_target_deg,
         target_t=now,
         progress_t=now,
+        az_progress_t=now,
+        el_progress_t=now,
+        stalled=None,
+        undriven=None,
         stop_sent_t=None,
         still_since_t=None,
         carried=False,  # (the bridge's own turn now: a review)
@@ -730,6 +772,8 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         target_deg=None,
         el_target_deg=None,
         progress_t=None,
+        az_progress_t=None,
+        el_progress_t=None,
         stop_sent_t=now,
         closest_err=None,
         away_err=None,
@@ -753,6 +797,8 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
                 target_deg=None,
                 el_target_deg=None,
                 progress_t=None,
+                az_progress_t=None,
+                el_progress_t=None,
                 closest_err=None,
                 away_err=None,
                 az_pass=None,
@@ -815,7 +861,8 @@ def tick(
         return m, events
     if m.state is MOVING:
         still = read and now >= still_from(m, cfg)  # rule 2
-        stall_t = (m.progress_t or now) + cfg.stall_timeout_s
+        judged = stalling(m, cfg)
+        stall_t = (now if judged is None else judged[1]) + cfg.stall_timeout_s
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
@@ -831,7 +878,8 @@ def tick(
                 and now >= stall_t
             ):
                 events.append(Event.STALLED)
-                m = _at_rest(m, cfg, now, STALLED)
+                axis = None if judged is None else judged[0]
+                m = replace(_at_rest(m, cfg, now, STALLED), stalled=axis)
         elif still:
             events.append(Event.STOPPED)
             m = _at_rest(m, cfg, now, BRAKING)
@@ -873,6 +921,8 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         el_target_deg=None,
         target_t=None,
         progress_t=None,
+        az_progress_t=None,
+        el_progress_t=None,
         stop_sent_t=None,
         closest_err=None,
         away_err=None,
@@ -944,10 +994,54 @@ def stall_due(m: Motion, cfg: MotionConfig, now: float) -> bool:
     called for want of a reading since (``tick``'s): the controller is to be asked at once,
     not at the next moving poll (a review: the motor drove against a jam a moving poll longer,
     2 s for a GS-232B polled every 2 s while turning)."""
-    if m.state is not MOVING or m.progress_t is None or now < m.progress_t + cfg.stall_timeout_s:
+    if m.state is not MOVING:
         return False
-    err = target_error(m, cfg)
-    return err is not None and err > cfg.tolerance_deg
+    judged = stalling(m, cfg)
+    return judged is not None and now >= judged[1] + cfg.stall_timeout_s
+
+
+def undriven(m: Motion, axis: str) -> Motion:
+    """Rule 3: the controller refused ``axis``'s own frame of the target out (a target of a
+    frame per axis: an RC2800's az/el box, a Combi-Track); not driven to it, that axis is
+    judged by either axis's movement, as before, not stalled while the other turns. Nothing
+    if no target is out, or the axis moved since it went (the refusal was of something
+    else)."""
+    if m.state is not MOVING or m.target_deg is None or m.target_t is None:
+        return m
+    moved_t = m.az_progress_t if axis == "azimuth" else m.el_progress_t
+    if moved_t is not None and moved_t > m.target_t:
+        return m
+    return replace(m, undriven=axis)
+
+
+def stall_from(m: Motion, cfg: MotionConfig) -> float | None:
+    """Rule 3: from when the turn under way may be called stalled ``stall_timeout_s`` later
+    (``stalling``'s time), or None: no stall can come (no target, or at it)."""
+    judged = stalling(m, cfg)
+    return None if judged is None else judged[1]
+
+
+def stalling(m: Motion, cfg: MotionConfig) -> tuple[str, float] | None:
+    """Rule 3: the axis off its target (beyond ``tolerance_deg``) whose own last movement since
+    the target went out is the oldest, and that time ("azimuth" or "elevation"); None with no
+    target, no reading, or every axis at its target. On a box that turns its axes one after the
+    other (``axes_in_turn``) either axis's movement is both axes' progress."""
+    shared = m.progress_t
+    if shared is None or m.target_deg is None or m.position_deg is None:
+        return None
+    in_turn, undriven = cfg.spec.axes_in_turn, m.undriven
+    judged: tuple[str, float] | None = None
+    if angle_error(m.position_deg, m.target_deg, cfg.spec.az_wraps) > cfg.tolerance_deg:
+        t = m.az_progress_t
+        old = in_turn or t is None or undriven == "azimuth"
+        judged = ("azimuth", shared if old or t is None else t)
+    el, el_target = m.el_position_deg, m.el_target_deg
+    if el is not None and el_target is not None and abs(el - el_target) > cfg.tolerance_deg:
+        t = m.el_progress_t
+        t = shared if in_turn or t is None or undriven == "elevation" else t
+        if judged is None or t < judged[1]:
+            judged = ("elevation", t)
+    return judged
 
 
 def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
@@ -956,8 +1050,9 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
     soonest: float | None = None
     state = m.state
     if state is MOVING:  # (the rotor found still comes with a reading: rule 2)
-        if m.progress_t is not None:
-            t = m.progress_t + cfg.stall_timeout_s
+        judged = None if m.progress_t is None else stalling(m, cfg)
+        if judged is not None:  # (rule 3: the axis judged first)
+            t = judged[1] + cfg.stall_timeout_s
             if t > now and (soonest is None or t < soonest):
                 soonest = t
         if m.stop_sent_t is not None:  # (stop_again's window)

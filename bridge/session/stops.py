@@ -427,8 +427,17 @@ class Stops:
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "past a limit")
         if event is mo.Event.STALLED:
+            stalled_axis, el_deg = m.stalled, m.el_position_deg  # (motion.py rule 3: its axis)
+            both = cfg.spec.has_elevation and cfg.spec.turns_azimuth and el_deg is not None
+            if el_deg is not None and both and stalled_axis == "elevation":  # the jammed axis
+                own = f"elevation {el_deg:g}°, azimuth {pos:g}°"  # and its reading, first
+            elif el_deg is not None and both:
+                own = f"{pos:g}°, elevation {el_deg:g}°"
+            progress = (
+                f"its {stalled_axis} made no progress" if both and stalled_axis else "no progress"
+            )
             why = (
-                f"rotor stalled at {own} (no progress for {cfg.stall_timeout_s:g} s): brake "
+                f"rotor stalled at {own} ({progress} for {cfg.stall_timeout_s:g} s): brake "
                 "paddle pressed, rotor stuck, or the controller restarted (power cycled or "
                 "reset) and forgot its target; target dropped: send the target again"
             )

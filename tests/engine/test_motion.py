@@ -684,8 +684,15 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
     """next_deadline as its rules say it, every time in a list, the soonest in the future."""
     times: list[float] = []
     if m.state is S.MOVING:  # (arrival and a stop come with a reading: rule 2)
-        if m.progress_t is not None:
-            times.append(m.progress_t + cfg.stall_timeout_s)
+        if m.progress_t is not None and m.target_deg is not None and m.position_deg is not None:
+            off = []  # (rule 3: each axis off its target, from its own last movement)
+            if mo.angle_error(m.position_deg, m.target_deg, cfg.az_wraps) > cfg.tolerance_deg:
+                off.append(m.progress_t if m.az_progress_t is None else m.az_progress_t)
+            el, el_target = m.el_position_deg, m.el_target_deg
+            if el is not None and el_target is not None and abs(el - el_target) > cfg.tolerance_deg:
+                off.append(m.progress_t if m.el_progress_t is None else m.el_progress_t)
+            if off:
+                times.append(min(off) + cfg.stall_timeout_s)
         ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
         if m.stop_sent_t is not None:  # (a stop's repeat: from resend, until still)
             times += [m.stop_sent_t + cfg.stop_resend_s, ref + cfg.settle_s]
@@ -707,7 +714,7 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
 
 _TIMES = st.one_of(st.none(), st.sampled_from([0.0, 1.0, 2.5, 4.0, 7.0, 9.0, 12.0]))
 _CLOCKS = ("last_move_t", "target_t", "stop_sent_t", "stop_read_t", "progress_t", "still_since_t")
-_CLOCKS += ("idle_not_before_t", "busy_until_t")
+_CLOCKS += ("idle_not_before_t", "busy_until_t", "az_progress_t", "el_progress_t")
 
 
 def _motions(states: list[S], **more: st.SearchStrategy[object]) -> st.SearchStrategy[mo.Motion]:
@@ -754,6 +761,51 @@ def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
         for t in (t0 + (end - t0) * f for f in (0.25, 0.5, 0.999)):
             assert mo.tick(made, cfg, t) == (made, []), (made, t)
             assert mo.plan_target(made, cfg, t) is plan, (made, t)
+
+
+AZEL = mo.MotionConfig(
+    REGISTRY["gs232b"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=0, settle_s=1.5,
+    noise_deg=2,
+)  # fmt: skip
+_AZEL_MOTIONS = _motions(
+    [S.MOVING, S.IDLE, S.STALLED],
+    position_deg=st.sampled_from([100.0, 199.0, 150.0]),
+    anchor_deg=st.just(100.0),
+    target_deg=st.sampled_from([None, 101.0, 200.0]),
+    el_position_deg=st.sampled_from([None, 0.0, 44.0]),
+    el_anchor_deg=st.just(0.0),
+    el_target_deg=st.sampled_from([None, 45.0]),
+)
+
+
+@settings(max_examples=500)
+@given(_AZEL_MOTIONS, st.sampled_from([0.0, 3.0, 6.0, 10.0, 20.0]))
+def test_an_az_el_turns_next_deadline_is_the_stall_of_the_axis_judged_first(
+    m: mo.Motion, now: float
+) -> None:
+    """Rule 3 with rule 9: each axis off its target is judged stalled from its own last
+    movement (an axis at its target, or one the target leaves out, not at all); the deadline
+    is the soonest of them."""
+    assert mo.next_deadline(m, AZEL, now) == _deadline_as_written(m, AZEL, now)
+
+
+@settings(max_examples=300)
+@given(_AZEL_MOTIONS, st.sampled_from([0.0, 3.0, 6.0, 10.0]))
+def test_an_az_el_motion_left_as_it_was_stays_so_until_its_next_deadline(
+    m: mo.Motion, t0: float
+) -> None:
+    """Rule 9 on an az/el rotor: nothing a per-axis stall (rule 3) makes comes before
+    ``next_deadline``."""
+    left, _ = mo.tick(m, AZEL, t0)
+    for made in (left, mo.commanded(left, AZEL, 150.0, t0, 30.0)):
+        assert mo.tick(made, AZEL, t0) == (made, [])
+        deadline = mo.next_deadline(made, AZEL, t0)
+        end = t0 + 30.0 if deadline is None else deadline
+        for t in (t0 + (end - t0) * f for f in (0.25, 0.5, 0.999)):
+            assert mo.tick(made, AZEL, t) == (made, []), (made, t)
+        if deadline is not None and made.state is S.MOVING and made.target_deg is not None:
+            ticked, events = mo.tick(made, AZEL, deadline, asking_since=deadline)
+            assert mo.stall_due(made, AZEL, deadline) == (mo.Event.STALLED in events)
 
 
 @pytest.mark.parametrize(("at", "to"), [(179.0, 181.0), (181.0, 179.0), (180.0, 182.0)])
