@@ -651,6 +651,8 @@ class RotatorHealth:
     moves: int = 0
     stalls: int = 0
     stall_azimuths_deg: tuple[float, ...] = ()  # the recent stalls, raw
+    # the recent stalls of the elevation (jammed while the azimuth turned or had come), raw
+    stall_elevations_deg: tuple[float, ...] = ()
     motor_on_s: float = 0.0
     warnings: tuple[str, ...] = ()
     # what the state file keeps (session/health_judge.py); never compared

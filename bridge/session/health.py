@@ -53,7 +53,9 @@ Rules:
    Its speed is measured up to the stop it obeyed. The arrival error is of a move that came
    to rest by itself: not one stopped, stalled or ended by a new target while turning (it
    arrived nowhere).
-4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
+4. A stall is the motion machine's; it is counted at the raw azimuth where it happened, or,
+   the elevation's (motion.py rule 3: its axis), at the raw elevation, never at the azimuth
+   (attack 25: an elevation jammed at 0 was counted at azimuth 190, where nothing held it).
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
    position (DCU-1) has a report that says so and never another.
@@ -235,6 +237,7 @@ class Health:
                 if coast is not None:
                     values[f"{axis}_coast"] = coast
         stalled = m.state is MotionState.STALLED
+        el_stall = stalled and m.stalled == "elevation" and m.el_position_deg is not None
         turned = move.first_change_t is not None
         if move.target_t is not None and move.from_rest and move.first_change_t is not None:
             seen_turning = sum(1 for r in move.readings if r[0] > move.first_change_t) >= 2
@@ -261,7 +264,8 @@ class Health:
             travel_deg=(travel[0], travel[1]),
             arrival_error_deg=(errors[0], errors[1]),
             motor_on_s=max(0.0, last_moved_t - start_t) if turned else 0.0,
-            stalled_at_deg=m.position_deg if stalled else None,
+            stalled_at_deg=(m.el_position_deg if el_stall else m.position_deg) if stalled else None,
+            stalled_axis="el" if el_stall else "az",
         )
         self._judge.add(done)
         self.report = self._judge.report()

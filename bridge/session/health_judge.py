@@ -21,7 +21,9 @@ Rules:
 3. Stalls warn when they repeat at one azimuth: STALL_REPEATS of the last STALL_MEMORY within
    STALL_NEAR_DEG of each other (on a scale that wraps, 359 and 1 are 2 apart; on one that
    goes past 360, 370 is another place than 10). Single stalls scattered round the circle do
-   not.
+   not. A stall of the elevation (the motion machine's stalled axis, motion.py rule 3: jammed
+   while the azimuth turned on or had come) is kept at its elevation, apart (``stall_el_at``),
+   and warns the same way: never at the azimuth, where nothing held the rotor (attack 25).
 4. A warning names what changed and by how much, in words a user reads on a dashboard.
 5. A reset starts a new baseline and forgets the recent moves and stalls; the totals (moves,
    stalls, odometer, motor-on time) go on: they only ever grow.
@@ -93,6 +95,7 @@ class Move:
     arrival_error_deg: tuple[float | None, float | None] = (None, None)
     motor_on_s: float = 0.0
     stalled_at_deg: float | None = None
+    stalled_axis: str = "az"  # rule 3: "el": ``stalled_at_deg`` is the elevation
 
 
 def _median(values: list[float]) -> float | None:
@@ -149,6 +152,7 @@ class Judge:
         self.learning: dict[str, list[float]] = {k: [] for k in METRICS}
         self.recent: dict[str, list[float]] = {k: [] for k in METRICS}  # the last WINDOW each
         self.stall_at: list[float] = []
+        self.stall_el_at: list[float] = []  # rule 3: the elevation's stalls
         self.from_settings = False
         for axis, speed in (("az", self._cfg.az_speed_deg_s), ("el", self._cfg.el_speed_deg_s)):
             if speed is not None:
@@ -172,7 +176,11 @@ class Judge:
                 self.last_error[i] = error
         if move.stalled_at_deg is not None:
             self.stalls += 1
-            if _fits(move.stalled_at_deg, *STALL_SCALE_DEG):  # rule 6
+            if not _fits(move.stalled_at_deg, *STALL_SCALE_DEG):  # rule 6
+                pass
+            elif move.stalled_axis == "el":  # rule 3: at its elevation
+                self.stall_el_at = [*self.stall_el_at, move.stalled_at_deg][-STALL_MEMORY:]
+            else:
                 self.stall_at = [*self.stall_at, move.stalled_at_deg][-STALL_MEMORY:]
         for i, key in enumerate(COASTS):
             coast = move.values.get(key)
@@ -233,7 +241,7 @@ class Judge:
                     f"{NAMES[key]} {coast:.1f}°, {coast - base:.1f}° more than its baseline "
                     f"{base:.1f} over the last {len(self.recent[key])} stops"
                 )
-        return out + self._stall_warnings()
+        return out + self._stall_warnings() + self._stall_warnings(elevation=True)
 
     def _apart(self, axis: str, pct: float, over: str) -> list[str]:
         up, down = self.recent_median(f"{axis}_up"), self.recent_median(f"{axis}_down")
@@ -249,28 +257,32 @@ class Judge:
             f"{now_pct:.0f} % apart ({base_pct:.0f} % at the baseline) {over}"
         ]
 
-    def _stall_warnings(self) -> list[str]:
-        """Rule 3: one warning per place the stalls repeat at."""
+    def _stall_warnings(self, *, elevation: bool = False) -> list[str]:
+        """Rule 3: one warning per place the stalls repeat at (the elevation's apart)."""
         out: list[str] = []
-        left = list(self.stall_at)
+        kept = self.stall_el_at if elevation else self.stall_at
+        wraps = self._wraps and not elevation
+        left = list(kept)
         while left:
             here = left[0]
-            near = [a for a in left if self._apart_deg(a, here) <= STALL_NEAR_DEG]
+            near = [a for a in left if self._apart_deg(a, here, wraps) <= STALL_NEAR_DEG]
             if len(near) >= STALL_REPEATS:
-                where = here if self._wraps else statistics.median(near)  # no median across 0
+                where = here if wraps else statistics.median(near)  # no median across 0
+                place = f"elevation {where:.0f}°" if elevation else f"{where:.0f}°"
                 out.append(
-                    f"{len(near)} stalls near {where:.0f}° (within {STALL_NEAR_DEG:g}°) among the "
-                    f"last {len(self.stall_at)}: something holds the rotor there"
+                    f"{len(near)} stalls near {place} (within {STALL_NEAR_DEG:g}°) among the "
+                    f"last {len(kept)}: something holds the rotor there"
                 )
-                left = [a for a in left if self._apart_deg(a, where) > STALL_NEAR_DEG]
+                left = [a for a in left if self._apart_deg(a, where, wraps) > STALL_NEAR_DEG]
             else:
                 left = left[1:]
         return out
 
-    def _apart_deg(self, a: float, b: float) -> float:
-        """Rule 3: raw azimuths, on a scale that wraps or not."""
+    @staticmethod
+    def _apart_deg(a: float, b: float, wraps: bool) -> float:
+        """Rule 3: raw azimuths, on a scale that wraps or not (an elevation's never wraps)."""
         d = abs(a - b)
-        return min(d, 360.0 - d) if self._wraps and d > 180.0 else d
+        return min(d, 360.0 - d) if wraps and d > 180.0 else d
 
     # -- what it tells and keeps ----------------------------------------------------------------
     def report(self) -> RotatorHealth:
@@ -289,6 +301,7 @@ class Judge:
             moves=self.moves,
             stalls=self.stalls,
             stall_azimuths_deg=tuple(self.stall_at),
+            stall_elevations_deg=tuple(self.stall_el_at),
             motor_on_s=self.motor_on_s,
             warnings=tuple(self.warnings()),
             memory=self.memory(),
@@ -321,6 +334,7 @@ class Judge:
             "learning": {k: list(v) for k, v in self.learning.items() if v},
             "recent": {k: list(v) for k, v in self.recent.items() if v},
             "stall_at": list(self.stall_at),
+            "stall_el_at": list(self.stall_el_at),
         }
 
     def _restore(self, memory: Mapping[str, object]) -> None:
@@ -353,6 +367,8 @@ class Judge:
             k: _within(_floats(recent.get(k, [])), *BOUNDS[k])[-WINDOW:] for k in METRICS
         }
         self.stall_at = _within(_floats(memory["stall_at"]), *STALL_SCALE_DEG)[-STALL_MEMORY:]
+        el_at = _floats(memory.get("stall_el_at", []))  # (absent in a memory written before)
+        self.stall_el_at = _within(el_at, *STALL_SCALE_DEG)[-STALL_MEMORY:]
 
 
 def _count(raw: object) -> int:

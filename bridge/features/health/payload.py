@@ -40,6 +40,7 @@ def health_doc(health: RotatorHealth) -> dict[str, object]:
     }
     if health.el is not None:
         doc.update(_el_health(health.el))
+        doc["stall_elevations"] = [round(a, 1) for a in health.stall_elevations_deg]
     baseline: dict[str, object] = {
         "from": health.baseline_from,
         "moves_to_learn": health.baseline_moves_left,
