@@ -98,6 +98,7 @@ from bridge.protocols.base import (
     ScalesAzimuth,
     StopsOnTheLine,
     TakesReadings,
+    WatchesWrites,
 )
 
 # positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
@@ -197,6 +198,10 @@ class AzimuthOnly:
     def connect_written(self, frame: bytes) -> None:
         if isinstance(self._inner, PacedConnect):  # (session/link.py rule 14)
             self._inner.connect_written(frame)
+
+    def frame_written(self, frame: bytes) -> None:
+        if isinstance(self._inner, WatchesWrites):  # (base.py WatchesWrites)
+            self._inner.frame_written(frame)
 
 
 class _KeepsOwn(AzimuthOnly):

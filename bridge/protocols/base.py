@@ -226,6 +226,16 @@ class PacedConnect(Protocol):
 
 
 @runtime_checkable
+class WatchesWrites(Protocol):
+    """A codec told of every frame as it is written (session/link.py ``write``), not only as
+    it is encoded: a frame encoded may wait and be dropped unwritten (link.py rule 10: a
+    target's second axis, behind the axis gap, when a stop comes). An RC2800 orders its stop
+    by the axes the bridge has just set turning (rc2800.py rule 9)."""
+
+    def frame_written(self, frame: bytes) -> None: ...
+
+
+@runtime_checkable
 class TakesReadings(Protocol):
     """A codec told which of its positions the engine took as readings (link.py rule 9: a
     position whose exchange a second reply spoiled is none). A composite's elevation box sends

@@ -94,7 +94,8 @@ Rules:
    one to the other axis, written or waiting. A target goes first to the axis last addressed
    (no wait), and the poll frames still waiting are dropped for it (its answers answer the
    poll); a poll waits while frames do and for the gap after any frame. A stop waits for
-   nothing but that gap: its first frame (the codec's order: an RC2800's azimuth) goes at
+   nothing but that gap: its first frame (the codec's order: rc2800.py rule 9, which asks
+   the frames written too, each told to a codec that ``WatchesWrites``) goes at
    once if the gap allows, else when the gap since the last frame to the other axis ends,
    its others the gap apart. (Attack 22: a stop's ``A`` 2 ms after an ``E`` CR poll broke the
    gap; review 71: starting with the axis last addressed instead put the azimuth's stop a
@@ -193,6 +194,7 @@ from bridge.protocols.base import (
     PacedConnect,
     PositionReply,
     StopsOnTheLine,
+    WatchesWrites,
 )
 from bridge.session.slew import SLEW_MARGIN_S, SLEW_STOP_TRIES, SLEW_TIME_FACTOR, Slew
 
@@ -218,6 +220,8 @@ class Link:
     def __init__(self, codec: Codec, spec: ModelSpec, now: float, baud: int) -> None:
         self.codec = codec
         self.spec = spec
+        # told of each frame written (protocols/base.py WatchesWrites: rc2800.py rule 9)
+        self._watches = codec if isinstance(codec, WatchesWrites) else None
         self._byte_s = 10 / baud  # 8N1
         self._settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * self._byte_s)  # rule 9
         # the model's reply timeout is for its default baud: a slower line needs longer
@@ -333,6 +337,8 @@ class Link:
     # -- writing ----------------------------------------------------------------------------
     def write(self, frame: bytes, now: float) -> None:
         self._output.append(frame)
+        if self._watches is not None:
+            self._watches.frame_written(frame)
         self._fresh = False  # rule 13: its end ends any half frame in the box
         self._last_write_t = now
         self._last_axis = self._axis(frame)
