@@ -14,8 +14,9 @@ with rotctl -m 1001.
 Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms on az/el):
   ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
   ``A\\r`` then ``E\\r``               ask each axis; answered by its line
-  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the azimuth first, as
-                                   soon as the axis gap allows: rule 9)
+  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (first the axis that
+                                   runs or was just sent a bearing, as soon as the axis gap
+                                   allows: rule 9)
 The azimuth model sends only the azimuth's frames.
 
 Rules:
@@ -98,11 +99,21 @@ Rules:
    ``E`` CR poll broke that gap. Helper-590 then began the stop with the axis the last frame
    named, ``E`` CR ``S`` CR at once, but that put the azimuth's stop a whole gap after the
    STOP however long ago the ``E`` went (review 71: up to 200 ms later, 1.2 degrees more
-   coast at 6 degrees a second). The axis whose motor runs by the last reading (rule 7) is
-   stopped first, the azimuth where both or neither run: the other's stop goes the gap after
-   it, up to two gaps after the STOP. (Review 74: always the azimuth first, an RC2800 that
-   turns a composite's elevation, its azimuth never driven, stopped its elevation 0.35 s
-   after a STOP 50 ms after an ``E`` CR poll, where at once was allowed.) A repeat of a stop whose
+   coast at 6 degrees a second). The axis stopped first is one whose motor runs by its last
+   line (rule 7) or that a drive frame (``A200.0`` CR) went to since that line, the one with
+   the most recent such frame where both are, the azimuth where both or neither are and no
+   such frame went: the other's stop goes the gap after it, up to two gaps after the STOP.
+   (Review 74: always the azimuth first, an RC2800 that turns a composite's elevation, its
+   azimuth never driven, stopped its elevation 0.35 s after a STOP 50 ms after an ``E`` CR
+   poll, where at once was allowed. Attack 24: by the lines alone, a STOP within ~30 ms of an
+   ``A200`` frame, the dish elevating, began with the elevation, the azimuth just set turning
+   stopped 0.4 s after the STOP; at rest, a STOP right after ``E60`` began with the idle
+   azimuth.) A drive frame counts from its write (base.py ``WatchesWrites``: one encoded and
+   dropped unwritten, a target's second axis behind the gap when the STOP came, never
+   counts) until that axis's first line owed to no frame written before it (a poll's answer
+   still on its way when the frame went says nothing of it), an ``ERR`` too; an exchange
+   given up forgets the lines owed (a lost one would keep the frame counted for good), and
+   the axis's own stop frame ends it. A repeat of a stop whose
    frames still wait (``axes``: the order they go in) keeps them where they are and adds the
    frames of the axes whose stop already went after them; the exchange waits for the axes'
    lines in the order the frames go (rule 2).
@@ -151,6 +162,7 @@ _POSITION = re.compile(
 # Hamlib's example S); any other says neither
 _DRIVING = {b"MV": True, b"M": True, b"ST": False, b"S": False}
 _ERROR = re.compile(rb"\s*[AE] ERR=(?P<code>\d+)\s*")
+_DRIVE = re.compile(rb"[AE]\d")  # rule 9: a frame that sets an axis turning (``A200.0``)
 _ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, echoed
 _LINES = re.compile(rb"[^\r\n]*[\r\n]")
 # rule 1: what an axis's line may have lost at the port's opening, from its head to its end
@@ -175,6 +187,10 @@ class Rc2800Codec(Plain, LateAnswers):
         self._owed: set[int] = set()  # rule 2: axes a query read early owes, read as they come
         self._deg: dict[int, float] = {}  # each axis's latest value
         self._driving: dict[int, bool | None] = {}  # rule 7: and whether its motor runs
+        self._written = 0  # rule 9: drive frames written on this connection
+        self._driven: dict[int, int] = {}  # rule 9: an axis's drive frame since its last line
+        self._before: dict[int, int] = {}  # rule 9: ... and its lines owed from before it
+        self._owing: dict[int, int] = {}  # rule 9: each axis's lines owed for frames written
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position line's tail
         self._late_newest = False  # rule 6: lines owed late, and no exchange opened since
@@ -194,7 +210,7 @@ class Rc2800Codec(Plain, LateAnswers):
 
     def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> list[bytes]:
         """Rules 9 and 10 (base.py rule 9): each axis's stop, in the order ``axes`` go."""
-        first = sorted(self._axes, key=lambda a: not self._driving.get(a))  # (stable: A, E)
+        first = sorted(self._axes, key=self._stop_rank)  # (stable: A, E)
         order = bytes(a for a in axes or bytes(first) if a in self._axes) or self._axes
         self._open(2, order)  # each axis answers its selection and its stop
         frames = [b"%c\rS\r" % axis for axis in order]
@@ -202,6 +218,37 @@ class Rc2800Codec(Plain, LateAnswers):
             frames[0] = b"%c\r" % order[0] + frames[0]
             self._taken_in = True
         return frames
+
+    def _stop_rank(self, axis: int) -> tuple[bool, int]:
+        """Rule 9: an axis whose motor runs by its last line, or that a drive frame went to
+        since, before one that neither; of those, the most recent drive frame first."""
+        driven = self._driven.get(axis, 0)
+        return not (driven or self._driving.get(axis)), -driven
+
+    def frame_written(self, frame: bytes) -> None:
+        """Rule 9 (base.py WatchesWrites): a drive frame marks its axis as just set turning
+        until a line the box said after it; a stop frame ends the mark."""
+        axis = frame[0] if frame else 0
+        if axis not in self._axes:
+            return
+        if _DRIVE.match(frame):
+            self._written += 1
+            self._driven[axis] = self._written
+            self._before[axis] = self._owing.get(axis, 0)
+        elif frame.endswith(b"S\r"):
+            self._driven.pop(axis, None)
+        self._owing[axis] = self._owing.get(axis, 0) + frame.count(b"\r")  # a line a command
+
+    def _answered(self, axis: int) -> None:
+        """Rule 9: a line of ``axis`` came: one owed fewer, and the drive frame's mark ends at
+        the first line owed to no frame written before it."""
+        self._owing[axis] = max(0, self._owing.get(axis, 0) - 1)
+        if axis not in self._driven:
+            return
+        if self._before.get(axis):
+            self._before[axis] -= 1
+        else:
+            del self._driven[axis]
 
     def encode_query(self) -> list[bytes]:
         self._open(1)
@@ -220,6 +267,8 @@ class Rc2800Codec(Plain, LateAnswers):
 
     def expire_query(self) -> None:
         self._owe_late(len(self._want))  # rule 6: they may still come
+        self._owing.clear()  # rule 9: (given up: a line lost must not keep a mark for good)
+        self._before.clear()
         self._late_newest = self._late_newest or bool(self._want)
         self._want = []
 
@@ -267,7 +316,9 @@ class Rc2800Codec(Plain, LateAnswers):
         if not raw.strip() or _ECHO.fullmatch(raw):
             out.append(JunkReply(raw, JunkReason.CHATTER, "echo" if raw.strip() else "blank"))
             return
-        if (m := _ERROR.fullmatch(raw)) and self._taken_in:  # rule 10: the stop provoked it
+        if (m := _ERROR.fullmatch(raw)) and raw.strip()[0] in self._axes:
+            self._answered(raw.strip()[0])  # rule 9: a frame's answer (a target refused)
+        if m and self._taken_in:  # rule 10: the stop provoked it
             self._taken_in = False
             self._say(raw)
             why = "the answer to the selection that took a half frame in"
@@ -299,6 +350,7 @@ class Rc2800Codec(Plain, LateAnswers):
             return
         self._deg[axis] = value
         self._driving[axis] = _DRIVING.get(m["state"] or b"")
+        self._answered(axis)  # rule 9
         self._seen.add(axis)
         self._heard.add(axis)
         if self._want:

@@ -360,7 +360,9 @@ def test_a_stop_drops_a_held_reading_that_bytes_after_it_spoil() -> None:
 # -- rule 10: a controller that needs time between its axes -------------------------------------
 def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None:
     """A target's and a poll's frames go 200 ms apart, the next frame no sooner after the last;
-    a stop's first frame goes at once (and cancels what waits), its second 200 ms later."""
+    a stop's first frame goes at once (and cancels what waits), its second 200 ms later. (The
+    box answers each axis's frame, both turning: the codec's stop begins with the azimuth,
+    rc2800.py rule 9.)"""
     spec = RC2800["rc2800"]
     link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
 
@@ -377,7 +379,11 @@ def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None
 
     link.send(link.codec.encode_target(100, 20), 0.0)
     link.poll_now(0.0)
-    assert wire(0.0, 0.5) == [(0.0, b"A100.0\r"), (0.2, b"E20.0\r"), (0.4, b"A\r")]
+    assert wire(0.0, 0.1) == [(0.0, b"A100.0\r")]
+    link.codec.feed(b"A P= 0.5 S=9 MV\r")  # its answer
+    assert wire(0.11, 0.3) == [(0.2, b"E20.0\r")]
+    link.codec.feed(b"E P= 0.3 S=9 MV\r")
+    assert wire(0.31, 0.5) == [(0.4, b"A\r")]
     assert link.wakeups()[0] == pytest.approx(0.6)  # the poll's E
     link.want_stop()
     assert link.flush_stop(0.5)  # at once, 100 ms after the last frame: a stop never waits
