@@ -240,6 +240,29 @@ def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
     )
 
 
+def status_halted(payload: bytes) -> tuple[float, bool, bool] | None:
+    """``R/status``'s word on a halt (interfaces/mqtt/remote.py rule 10): its time (the
+    station's clock), whether the rotor is still with nothing to turn to (neither turning nor
+    braking before a target, no target), whether the lock is ON; None for a status without a
+    time or not readable (rule 1)."""
+    try:
+        doc = load(payload)
+    except ValueError:
+        return None
+    if not isinstance(doc, dict):
+        return None
+    when = _unix(doc.get("time"))
+    if when is None:
+        return None
+    still = (
+        doc.get("state") != MotionState.MOVING.value
+        and doc.get("moving") is False
+        and "target" in doc
+        and doc["target"] is None
+    )
+    return when, still, doc.get("locked") is True
+
+
 def parse_control(payload: bytes | None) -> Control | None:
     """``R/control`` (features/control/payload.py): who holds the control lease, or None (free,
     or not a payload the station writes: the station judges every command again anyway)."""

@@ -49,7 +49,11 @@ Rules:
    down, turned on to its last target. Both go again once the station's bridge is heard
    (interfaces/mqtt/remote.py rule 6, ``until_heard``; an attack pass: a STOP while the
    station's bridge restarted mid-move never reached the bridge that started again, and the
-   rotor turned on); nothing that moves can be sent before that.
+   rotor turned on); nothing that moves can be sent before that. A stop or lock ON the
+   station's bridge was heard for is held by the link too until the station's status shows
+   it carried it out, and sent again when its bridge connects again before that
+   (interfaces/mqtt/remote.py rule 10; attack 26: its route to the broker died without a
+   word, the broker took the STOP, ``RPRT 0``, and the rotor turned on to its target).
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
    coordinates) on ``R/target``: the station knows where it is, the remote does not.

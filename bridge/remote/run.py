@@ -57,12 +57,13 @@ from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S, StationTime
 from bridge.interfaces.mqtt.payloads import one_line
-from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.interfaces.mqtt.remote import Proof, RemoteLink
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.interfaces.rotctld import RotctldServer
 from bridge.interfaces.web.server import WebConsole
 from bridge.interfaces.web.view import RotatorFacts
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
+from bridge.remote.readings import status_halted
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.settings import ConfigError
@@ -109,6 +110,7 @@ class Remote:
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
     _locks: set[str] = field(default_factory=set)
+    _statuses: dict[str, RotatorTopics] = field(default_factory=dict)  # status -> its rotator's
     # one RemoteRotator per station rotator, however many endpoints name it: its halt count is
     # what refuses a move judged before another front end's STOP (remote/rotator.py ``submit``)
     _made: dict[RotatorTopics, RemoteRotator] = field(default_factory=dict)
@@ -128,6 +130,8 @@ class Remote:
             on_change=self._on_link,
             last_word=self._last_word,
             heartbeat=self.station.bridge_heartbeat,
+            station_state=self.station.bridge_state,
+            proof=self._proof,
             ack_wait_s=s.ack_wait_s,
         )
         self.link.start()
@@ -234,6 +238,20 @@ class Remote:
         """A stop or lock ON to one of the station's rotators (interfaces/mqtt/remote.py rule 6);
         paho's thread or a front end's, with the send lock held."""
         return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
+
+    def _proof(self, topic: str, payload: bytes) -> Proof | None:
+        """A rotator's status, as published, on the halts it shows carried out
+        (interfaces/mqtt/remote.py rule 10); paho's thread."""
+        topics = self._statuses.get(topic)
+        if topics is None:
+            return None
+        said = status_halted(payload)
+        if said is None:
+            return None
+        when, still, locked = said
+        halts: tuple[tuple[str, bytes], ...] = ((topics.stop, b"stop"),) if still else ()
+        halts += ((topics.lock, b"ON"),) if locked else ()
+        return Proof(when, halts) if halts else None
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload, replayed=retain)
@@ -356,6 +374,7 @@ class Remote:
             return made
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
+        self._statuses[topics.status] = topics
         self._errors[topics.error] = rid
         made = self._made[topics] = RemoteRotator(
             rid,

@@ -21,16 +21,23 @@ from __future__ import annotations
 import contextlib
 import socket
 import threading
+import time
 from collections.abc import Iterator
 
 import pytest
 
+from bridge.core.errors import Refused
+from bridge.core.model import Lock, Source
+from bridge.interfaces.mqtt.heartbeat import beat_payload
+from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
-from tests.support import wait_until
-from tests.support.mosquitto import free_port
-from tests.support.remote import ask
+from bridge.settings.mqtt import MqttSettings
+from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto, free_port
+from tests.support.remote import ask, remote_published
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 START_AZ, TARGET_AZ = 10.0, 300.0
 
@@ -108,14 +115,9 @@ def station(rig: Rig, route: CuttableLink) -> Rig:
     return rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 26: a STOP sent as the station's route dies is answered RPRT 0 and lost",
-)
-def test_a_stop_sent_as_the_stations_route_dies_still_stops_the_rotor(
-    station: Rig, route: CuttableLink
-) -> None:
-    port = free_port()
+def remote_on(station: Rig, port: int) -> Remote:
+    """The operator's remote on the station's broker (not through the route), a rotctld
+    endpoint on ``port`` for ``tower``; started."""
     remote = Remote(
         RemoteSettings(
             operator="DL1ABC",
@@ -124,22 +126,165 @@ def test_a_stop_sent_as_the_stations_route_dies_still_stops_the_rotor(
         )
     )
     remote.start()
+    return remote
+
+
+def turning_then_cut(station: Rig, route: CuttableLink, port: int) -> float:
+    """The rotor sent toward TARGET_AZ by the remote's rotctld, the route cut mid-turn: the
+    bearing then."""
+    emu = station.emus["tower"]
+    assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
+    wait_until(lambda: emu.state().az_deg > START_AZ + 20, slow(10), "the rotor turning")
+    route.cut()  # the station's route dies mid-turn; the remote still hears it
+    return float(emu.state().az_deg)
+
+
+def healed_later(station: Rig, route: CuttableLink, remote: Remote, cut_az: float) -> None:
+    """The route dead while the rotor turns on some 30 degrees (1.5 s), then healed: the
+    station's bridge connects again, a clean session, and is heard again; the rotor still."""
+    emu = station.emus["tower"]
+    wait_until(lambda: emu.state().az_deg > cut_az + 30, slow(10), "the rotor turning on")
+    route.heal()
+    rotator = remote.rotators[0]
+    wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
+    wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
+
+
+def test_a_stop_sent_as_the_stations_route_dies_still_stops_the_rotor(
+    station: Rig, route: CuttableLink
+) -> None:
+    port = free_port()
+    remote = remote_on(station, port)
     try:
         emu = station.emus["tower"]
-        assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
-        wait_until(lambda: emu.state().az_deg > START_AZ + 20, 10, "the rotor turning")
-        route.cut()  # the station's route dies mid-turn; the remote still hears it
-        cut_az = emu.state().az_deg
+        cut_az = turning_then_cut(station, route, port)
         said = ask(port, b"S\n")  # the operator's STOP, at once
-        # the route is dead while the rotor turns on some 30 degrees (1.5 s), then heals: the
-        # station's bridge connects again, a clean session, and is heard again
-        wait_until(lambda: emu.state().az_deg > cut_az + 30, 10, "the rotor turning on")
-        route.heal()
-        rotator = remote.rotators[0]
-        wait_until(lambda: rotator.away() is None, 30, "the station's bridge back")
-        wait_until(lambda: not emu.state().is_moving, 30, "the rotor still")
+        healed_later(station, route, remote, cut_az)
     finally:
         remote.stop()
     az = emu.state().az_deg
     assert said in (b"RPRT 0\n", b"RPRT -5\n", b"RPRT -6\n")
     assert abs(az - TARGET_AZ) > 30, f"STOP answered {said!r}; the rotor turned on to {az:.0f}"
+
+
+def test_a_lock_on_sent_as_the_stations_route_dies_is_held_and_sent_again(
+    station: Rig, route: CuttableLink
+) -> None:
+    """The same partition, the console's lock ON instead of a STOP (the same path: a halt the
+    broker took and passed into the dead connection): someone about to climb the tower was
+    told it is locked while the station's bridge, back with a clean session, never had it."""
+    port = free_port()
+    remote = remote_on(station, port)
+    try:
+        emu = station.emus["tower"]
+        cut_az = turning_then_cut(station, route, port)
+        with contextlib.suppress(Refused):  # (taken by the broker, or said not delivered)
+            remote.rotators[0].submit(Lock(on=True, source=Source.MQTT), "lock ON")
+        healed_later(station, route, remote, cut_az)
+        wait_until(lambda: station.status("tower").locked, slow(10), "the station locked")
+        lock_state = station.topic("tower", "lock/state")
+        wait_until(
+            lambda: (said := station.probe.last(lock_state)) is not None and said.payload == b"ON",
+            slow(10),
+            "the station's retained lock/state ON",
+        )
+        assert ask(port, b"P 100 0\n") == b"RPRT -9\n"  # and the remote sees it so
+    finally:
+        remote.stop()
+    az = emu.state().az_deg
+    assert abs(az - TARGET_AZ) > 30, f"lock ON lost: the rotor turned on to {az:.0f}"
+
+
+def test_a_stop_the_station_showed_it_took_is_not_sent_again_over_a_later_move(
+    station: Rig, route: CuttableLink
+) -> None:
+    """The station's own status, stamped after the STOP and showing the rotor still with no
+    target, is its word that it has the STOP (interfaces/mqtt/remote.py rule 10): the remote
+    no longer holds it. Home Assistant then turns the rotor at the station; the station's
+    route dies and heals meanwhile, and the STOP, held for ever, would be sent again when the
+    station's bridge connects again and stop that later turn short of its target."""
+    port = free_port()
+    remote = remote_on(station, port)
+    try:
+        emu = station.emus["tower"]
+        assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
+        wait_until(lambda: emu.state().az_deg > START_AZ + 60, slow(10), "the rotor turning")
+        mark = station.probe.mark()
+        assert ask(port, b"S\n") == b"RPRT 0\n"  # taken at once: the route is fine
+        status = station.topic("tower", "status")
+        station.probe.wait(  # the station's word that it has the STOP
+            lambda m: (
+                m.topic == status
+                and b'"target":null' in m.payload
+                and b'"moving":false' in m.payload
+            ),
+            slow(10),
+            "the station's status: still, no target",
+            mark,
+        )
+        wait_until(lambda: not emu.state().is_moving, slow(10), "the rotor still")
+        stopped_az = float(emu.state().az_deg)
+        mark = station.probe.mark()
+        station.probe.publish(station.topic("tower", "target"), "5")  # Home Assistant's
+        station.probe.wait(
+            lambda m: m.topic == status and b'"moving":true' in m.payload,
+            slow(10),
+            "the station turning to 5",
+            mark,
+        )
+        cut_az = float(emu.state().az_deg)
+        route.cut()
+        wait_until(lambda: emu.state().az_deg < cut_az - 10, slow(10), "the rotor turning on")
+        route.heal()
+        rotator = remote.rotators[0]
+        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
+        station.arrived("tower", 5)
+    finally:
+        remote.stop()
+    assert stopped_az > 5 + 60
+
+
+def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe: Probe) -> None:
+    """interfaces/mqtt/remote.py rule 10: a STOP the station has not shown it has is sent again
+    when its bridge connects again, but not after a later target from this remote: sent
+    again after it, it would stop the newer target (the order the operator asked in)."""
+    heard: list[str] = []
+    link = RemoteLink(
+        MqttSettings(host="127.0.0.1", port=broker.port),
+        "remote-order-test",
+        ["rotor/bridge/heartbeat", "rotor/bridge/state"],
+        lambda topic, payload, retain: heard.append(topic),
+        last_word=lambda topic, payload: topic == "rotor/stop",
+        heartbeat="rotor/bridge/heartbeat",
+        station_state="rotor/bridge/state",
+    )
+    link.start()
+    try:
+        wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
+
+        def station(topic: str, payload: bytes) -> None:  # the station's bridge's word
+            n = len(heard)
+            probe.publish(topic, payload, qos=0)
+            wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
+
+        station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        log_from = broker.log.stat().st_size
+        link.send("rotor/stop", "stop", "DL1ABC", 5)  # into a dead connection, maybe
+        link.send(
+            "rotor/target", '{"azimuth":100}', "DL1ABC", 5, lambda: None, after=("rotor/stop",)
+        )
+        station("rotor/bridge/state", b"online")  # its bridge connected again
+        station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
+        wait_until(lambda: len(remote_published(broker, log_from)) >= 3, slow(10), "the marker")
+        assert remote_published(broker, log_from) == [b"stop", b"target", b"track"]
+        # without the target, the same STOP goes again (what the test above would miss)
+        log_from = broker.log.stat().st_size
+        link.send("rotor/stop", "stop", "DL1ABC", 5)
+        station("rotor/bridge/state", b"online")
+        station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        link.send("rotor/track", "off", "DL1ABC", 5)
+        wait_until(lambda: len(remote_published(broker, log_from)) >= 3, slow(10), "the marker")
+        assert remote_published(broker, log_from) == [b"stop", b"stop", b"track"]
+    finally:
+        link.stop()

@@ -121,6 +121,31 @@ Rules:
    ``submit``) is asked so under that lock, right before it is handed on, so a stop that
    counted itself before that is never overtaken, and one that counts itself after it goes
    after it.
+10. The broker's PUBACK says the broker has a halt, not that the station's bridge does: a
+   station whose route to the broker dies without a word (no FIN: its last will only after
+   1.5 keepalives) is still heard for up to SILENT_S, and the broker hands the halt to its
+   dead connection; the bridge comes back with a clean session and never gets it (attack 26:
+   the STOP answered ``RPRT 0``, the rotor turned on to its target). So every halt the
+   broker took (``send``'s, and each sent again: rule 6) is held (``_unproven``) until the
+   station shows it has it: a status of its rotator as published (not replayed) stamped on
+   the station's clock at or after the halt's stamp (its earliest sending's; a halt sent
+   without a stamp: any such status) that shows the rotor still with no target (a STOP;
+   remote/run.py's ``_proof``), or the lock ON (a lock ON). The station publishes a status
+   after every change and stamps it with its wall clock, never ahead of the clock its
+   heartbeats carry (heartbeat.py rule 6), which the halt's stamp is reckoned from, never
+   later than the truth (rule 3): a status so stamped was made after the halt was sent. A
+   status the station made before it took the halt may pass if made within the trip before
+   it came; the rotor was then still with nothing to turn to, which is what the halt asks.
+   The station's bridge saying ``online`` as published (``B/bridge/state``: it connected
+   again, a clean session) sends every halt still held again at its first live heartbeat,
+   as rule 6 sends the halts kept (and before any later command: rule 6). No clock ends the
+   wait: only the station's word does, or a later word of this remote's that the halt must
+   not overtake: a later command on its topic (a lock OFF after a lock ON), and a later
+   move of its rotator (``after``: a STOP sent again after it would stop the newer target;
+   the order the operator asked in wins). Left so: a STOP to a rotor already still changes
+   nothing the station publishes, so it stays held and goes again whenever the station's
+   bridge connects again (a stop moves nothing: docs/architecture.md rule 11), until this
+   remote's next move.
 """
 
 from __future__ import annotations
@@ -135,6 +160,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Hashable
+from dataclasses import dataclass
 from typing import Any
 
 from paho.mqtt.enums import MQTTErrorCode
@@ -185,6 +211,15 @@ KEPT = (
 NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to 3.1.1 only
 
 
+@dataclass(frozen=True)
+class Proof:
+    """Rule 10: a station's status as published, at ``time_unix`` on its clock, showing the
+    halts ``halts`` (topic, payload) carried out: the rotor still with no target, the lock ON."""
+
+    time_unix: float
+    halts: tuple[tuple[str, bytes], ...]
+
+
 class RemoteLink(Connection):
     """Subscribes ``filters``; hands every message to ``on_message`` (paho's thread);
     ``on_change`` is called whenever the connection comes up or goes down."""
@@ -200,6 +235,8 @@ class RemoteLink(Connection):
         on_change: Callable[[], None] = lambda: None,
         last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
         heartbeat: str | None = None,
+        station_state: str | None = None,
+        proof: Callable[[str, bytes], Proof | None] = lambda topic, payload: None,
         clock: Callable[[], float] = time.monotonic,
         ack_wait_s: float = ACK_WAIT_S,
     ) -> None:
@@ -212,6 +249,8 @@ class RemoteLink(Connection):
             settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
         )
         self._heartbeat = heartbeat
+        self._station_state = station_state  # rule 10: B/bridge/state
+        self._proof = proof  # rule 10
         self._auto = False  # rule 1: never steps down to MQTT 3.1.1
         self._send_lock = threading.Lock()
         self._on_change = on_change
@@ -222,6 +261,9 @@ class RemoteLink(Connection):
         self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
         # rule 6: sent again on this connection, and once more when the station is heard on it
         self._unheard: list[tuple[str, bytes, Properties]] = []
+        # rule 10: halts the broker took that the station has not yet shown it has: (topic,
+        # payload) -> (the properties they went with, the earliest stamp's send time or None)
+        self._unproven: dict[tuple[str, bytes], tuple[Properties, float | None]] = {}
         # rule 8: the latest stamp a halt went out with, by topic (its time, its station)
         self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
         # rule 8: each halt's latest asking (its topic, payload): when it was seen, its source
@@ -328,6 +370,10 @@ class RemoteLink(Connection):
             if halt and until_heard:  # rule 6: maybe nobody subscribed to it yet
                 if not any(t == topic and p == payload.encode() for t, p, _ in self._unheard):
                     self._unheard.append((topic, payload.encode(), props))
+            if halt:  # rule 10: until the station shows it has it
+                self._unprove(topic, payload.encode(), props)
+            else:  # rule 10: a later word on its topic, or a later move, ends the wait
+                self._unproven_end(topic, after, moves=check is not None)
             generation = self._generation
         self._await_ack(topic, info.mid, generation, halt)
 
@@ -492,10 +538,54 @@ class RemoteLink(Connection):
         if stamp is not None:
             props = _stamped(props, stamp)
         info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
+        self._unprove(topic, payload, props)  # rule 10: until the station shows it has it
         if reader is not None and seen is not None:  # (stamped now: its reader's floor not
             self._note_halt(topic, props, reader)  # lifted to that, review 30)
         with self._acks:
             self._unawaited.add(info.mid)
+
+    def _unprove(self, topic: str, payload: bytes, props: Properties) -> None:
+        """Rule 10: a halt the broker takes (caller holds _send_lock) is held until the station
+        shows it has it; the same halt again keeps its earliest send time (what a status must
+        be stamped after)."""
+        stamp = Stamp.of_properties(list(getattr(props, "UserProperty", None) or []))
+        sent = None if stamp is None else stamp.sent_unix()
+        held = self._unproven.pop((topic, payload), None)
+        if held is not None and held[1] is not None and (sent is None or held[1] < sent):
+            sent = held[1]
+        self._unproven[topic, payload] = props, sent  # (the newest last: sent again in order)
+
+    def _unproven_end(self, topic: str, after: tuple[str, ...], *, moves: bool) -> None:
+        """Rule 10: a later word that is no halt (caller holds _send_lock): on a halt's own
+        topic (a lock OFF) it is the last word; a move (``moves``: sent with a ``check``)
+        must not be undone by its rotator's halts (``after``: their topics; none said, every
+        halt's) sent again after it."""
+        every = moves and not after
+        for key in [k for k in self._unproven if every or k[0] == topic or k[0] in after]:
+            del self._unproven[key]
+
+    def _proven(self, proof: Proof) -> None:
+        """Rule 10, paho's thread: a live status of the station's says, stamped ``time`` on its
+        clock, that the rotor is still (``proof.halts``: the halts it shows carried out)."""
+        with self._send_lock:
+            for key in proof.halts:
+                held = self._unproven.get(key)
+                if held is not None and (held[1] is None or held[1] <= proof.time_unix):
+                    del self._unproven[key]
+
+    def _station_back(self) -> None:
+        """Rule 10, paho's thread: the station's bridge says ``online`` as published (it
+        connected again: its session is clean, what went into its dead connection is lost):
+        the halts it has not shown it has go again at its first live heartbeat (rule 6)."""
+        with self._send_lock:
+            for (topic, payload), (props, _sent) in self._unproven.items():
+                if not any(t == topic and p == payload for t, p, _ in self._unheard):
+                    log.warning(
+                        "%s: the station's bridge connected again before it showed it had "
+                        "this: sent again once it is heard",
+                        topic,
+                    )
+                    self._unheard.append((topic, payload, props))
 
     def _note_read(self, topic: str, read: float, reader: Hashable | None) -> None:
         """Rule 8: a halt on ``topic`` from ``reader`` read by ``read`` (caller holds
@@ -549,6 +639,16 @@ class RemoteLink(Connection):
                 pass  # no time: no beat
             except Exception:
                 log.exception("error reading the station's heartbeat")
+        elif not msg.retain and self._unproven:  # rule 10 (as published: news of now)
+            try:
+                if msg.topic == self._station_state and bytes(msg.payload) == b"online":
+                    self._station_back()
+                else:
+                    proof = self._proof(msg.topic, bytes(msg.payload))
+                    if proof is not None:
+                        self._proven(proof)
+            except Exception:
+                log.exception("error reading the station's word on its halts")
         super()._on_message(client, userdata, msg)
 
     def _refused(self, reason: str) -> None:
