@@ -133,9 +133,10 @@ Rules:
    remote/run.py's ``_proof``), or the lock ON (a lock ON). The station publishes a status
    after every change and stamps it with its wall clock, never ahead of the clock its
    heartbeats carry (heartbeat.py rule 6), which the halt's stamp is reckoned from, never
-   later than the truth (rule 3): a status so stamped was made after the halt was sent. A
-   status the station made before it took the halt may pass if made within the trip before
-   it came; the rotor was then still with nothing to turn to, which is what the halt asks.
+   later than the truth (rule 3): a status so stamped was made no earlier than the halt was
+   seen (its stamp is its seen time: rule 8). One the station made between that and the
+   halt's arrival may pass: the rotor was then still with nothing to turn to, which is what
+   the halt asks.
    The station's bridge saying ``online`` as published (``B/bridge/state``: it connected
    again, a clean session) sends every halt still held again at its first live heartbeat,
    as rule 6 sends the halts kept (and before any later command: rule 6). No clock ends the
