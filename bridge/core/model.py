@@ -53,6 +53,7 @@ class Source(enum.StrEnum):
     DXCLUSTER = "dxcluster"  # turned to a spotted call (R/target {"call": ...}, dxcluster/)
 
 
+_INTERFACES = frozenset(source.value for source in Source)  # interface_name: no operator's
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
 # valid_operator: NFKC makes one character of four at most (a canonical decomposition's longest,
 # U+1F82): a text longer than this many times OPERATOR_CHARS is none before it is normalized
@@ -109,6 +110,24 @@ def _stray_joiner(name: str) -> bool:
             if len(around) < 2 or any(a.isascii() for a in around):
                 return True
     return False
+
+
+def interface_name(name: str) -> bool:
+    """``name`` is how the bridge names an interface or a feature of its own (``mqtt``,
+    ``rotctld 127.0.0.1``, ``auto-park``): no operator's, it stands for everyone who sends
+    without a name there (runtime/lease.py rule 1)."""
+    words = name.split(None, 1)
+    return bool(words) and words[0].casefold() in _INTERFACES
+
+
+def operator_name(text: object) -> str | None:
+    """``text`` as the name a sender gives itself (an MQTT 5 user property ``operator``, a
+    release's ``operator``), or None: ``valid_operator``'s, and not an interface's
+    (``interface_name``; an attack pass: ``rotctld 192.168.1.20`` as a user property was
+    audited, and shown as ``last_operator``, as the rotctld client at that address, which sent
+    nothing). The one test every front end that takes a sender's own word for its name asks."""
+    name = valid_operator(text)
+    return None if name is None or interface_name(name) else name
 
 
 def same_operator(a: str, b: str) -> bool:

@@ -26,7 +26,7 @@ from typing import Any, Literal, NamedTuple
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from bridge.core.model import OPERATOR_CHARS, valid_operator
+from bridge.core.model import OPERATOR_CHARS, operator_name, valid_operator
 from bridge.core.text import NOT_TEXT, bad_char
 from bridge.settings import ConfigError, read_toml
 from bridge.settings.base import Strict, shown_path
@@ -179,6 +179,8 @@ class RemoteSettings(Strict):
             raise ValueError(
                 f"1 to {OPERATOR_CHARS} characters, none of them invisible or a direction override"
             )
+        if operator_name(name) is None:  # the station would ignore it (lease.py rule 1)
+            raise ValueError(f"{name!r} is how the bridge names an interface: use your call sign")
         return name
 
     @model_validator(mode="after")

@@ -41,13 +41,18 @@ from __future__ import annotations
 
 import math
 
-from bridge.core.model import OPERATOR_CHARS, Control, Source, same_operator, valid_operator
+from bridge.core.model import (
+    OPERATOR_CHARS,
+    Control,
+    interface_name,
+    same_operator,
+    valid_operator,
+)
 
 __all__ = ["Lease", "LeaseError", "held_text", "restorable", "valid_operator"]
 
 MIN_MINUTES = 1.0
 MAX_MINUTES = 24 * 60.0
-INTERFACES = frozenset(source.value for source in Source)  # rule 1: never an operator's name
 
 
 class LeaseError(ValueError):
@@ -64,16 +69,11 @@ def _ended(held: Control, now_unix: float) -> bool:
     return not 0.0 < held.until_unix - now_unix <= 60.0 * MAX_MINUTES
 
 
-def _interface(name: str) -> bool:
-    """Rule 1: ``name`` is how the bridge names an interface (``mqtt``, ``rotctld 127.0.0.1``)."""
-    return name.split(None, 1)[0].casefold() in INTERFACES
-
-
 def restorable(held: Control | None, now_unix: float) -> Control | None:
     """Rule 6: the kept lease ``held`` if a claim could have made it, else None."""
     if held is None or valid_operator(held.operator) != held.operator:
         return None
-    if _interface(held.operator):  # rule 1: no claim makes it (an attack pass: restored)
+    if interface_name(held.operator):  # rule 1: no claim makes it (an attack pass: restored)
         return None
     left_s = held.until_unix - now_unix
     return held if math.isfinite(left_s) and left_s <= 60.0 * MAX_MINUTES else None
@@ -109,7 +109,7 @@ class Lease:
                 f"operator must be a name of 1 to {OPERATOR_CHARS} characters, none of them "
                 "invisible (core/model.py valid_operator)"
             )
-        if _interface(name):  # rule 1
+        if interface_name(name):  # rule 1
             raise LeaseError(
                 f"{name!r} is how the bridge names an interface, not an operator: claim the "
                 "lease with your call sign"

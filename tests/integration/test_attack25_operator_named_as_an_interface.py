@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 
 import paho.mqtt.client as paho
-import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
@@ -39,11 +38,6 @@ def _lines(rig: Rig) -> list[dict[str, object]]:
     return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 25: an MQTT message with user property operator 'rotctld 192.168.1.20' is "
-    "audited (and shown as last operator) as sent by the rotctld client at that address",
-)
 def test_an_interfaces_name_is_no_operator_in_the_audit_trail(rig: Rig) -> None:
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})

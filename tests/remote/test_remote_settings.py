@@ -121,6 +121,17 @@ def test_an_operator_the_station_would_not_take_is_refused(tmp_path: Path, opera
         load_remote_settings(str(path))
 
 
+@pytest.mark.parametrize("operator", ["rotctld 192.168.1.20", "MQTT", "auto-park"])
+def test_an_interfaces_name_as_the_operator_is_refused(tmp_path: Path, operator: str) -> None:
+    """The station ignores such a user property (an interface's name is no operator's:
+    runtime/lease.py rule 1): every command would go as plain ``mqtt``, the lease refused."""
+    path = tmp_path / "remote.toml"
+    head = HEAD.replace('operator = "DL1ABC"', f"operator = {json.dumps(operator)}")
+    path.write_text(head + "[[endpoints]]\nrotctld_port = 4533\n")
+    with pytest.raises(ConfigError, match=r"operator: .*names an interface"):
+        load_remote_settings(str(path))
+
+
 @pytest.mark.parametrize(
     "operator", ["DL1ABC\u00a0Jo", "\u0645\u062d\u0645\u062f\u200c\u0631\u0636\u0627"]
 )

@@ -26,7 +26,7 @@ import json
 from datetime import UTC, datetime
 
 from bridge.core.jsonkeys import DuplicateKey, unique_keys
-from bridge.core.model import Control, valid_operator
+from bridge.core.model import Control, operator_name
 from bridge.interfaces.mqtt.payloads import PayloadError, json_number
 from bridge.interfaces.mqtt.payloads import text as payload_text
 
@@ -75,7 +75,7 @@ def parse_release(payload: bytes) -> str | None:
         obj = json.loads(text, object_pairs_hook=unique_keys)
     except (ValueError, RecursionError):  # (not JSON, DuplicateKey)
         return None
-    return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
+    return operator_name(obj.get("operator")) if isinstance(obj, dict) else None
 
 
 _FREE = json.dumps({"holder": None, "until": None}, separators=(",", ":"))  # (every status's)

@@ -176,7 +176,7 @@ Rules:
    lock ON a connection heard too, just after its SUBACK (before the express answered for
    it), is set twice, and a lock OFF carried out between the two is undone: the safe side,
    said in docs/mqtt.md. Who sent it is named in these words only as an operator's name
-   (core/model.py ``valid_operator``, what the bridge takes of it anyway), never as the user
+   (core/model.py ``operator_name``, what the bridge takes of it anyway), never as the user
    property came: a STOP whose ``operator`` held 21,845 non-ASCII characters (the 64 KiB an
    MQTT string may hold) made a word of 131 KB that the bridge read cut at 64 KiB, its reader
    died on the JSON, and no target after a stop went out again (an attack pass). Its name
@@ -212,7 +212,7 @@ from typing import Any
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.afterlock import later
-from bridge.core.model import valid_operator
+from bridge.core.model import operator_name
 from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
@@ -1322,7 +1322,7 @@ def main(argv: list[str]) -> int:
 def _named(operator: str | None) -> str | None:
     """Rule 11: who sent it as a word may carry it, an operator's name or none (a word is
     read whole only up to _PACKET bytes)."""
-    return None if operator is None else valid_operator(operator)
+    return None if operator is None else operator_name(operator)
 
 
 def _sender(operator: str | None) -> dict[str, str]:

@@ -50,9 +50,11 @@ Rules:
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
 7. Who sent a command: the MQTT 5 user property ``operator`` when it is short printable text
-   (model.valid_operator); one that is not is ignored (the command goes on as from ``mqtt``)
-   and logged, once at WARNING, then at DEBUG. ``R/control/claim`` and ``R/control/release``
-   are commands like any (never retained, never while gated); ``R/control`` follows the status.
+   and no interface's name (model.operator_name: ``rotctld 192.168.1.20`` is the rotctld
+   client there, lease.py rule 1, an attack pass); one that is not is ignored (the command goes
+   on as from ``mqtt``) and logged, once at WARNING, then at DEBUG. ``R/control/claim`` and
+   ``R/control/release`` are commands like any (never retained, never while gated);
+   ``R/control`` follows the status.
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
    says how many were left out. The audit file has them all (folded alike). Refusals, stops
@@ -165,9 +167,9 @@ from bridge.core.model import (
     Target,
     Toward,
     TrackBody,
+    operator_name,
     setting_text,
     turns_rotor,
-    valid_operator,
 )
 from bridge.feature import CommandTopic, StateTopic, registered
 from bridge.interfaces.mqtt import payloads as pl
@@ -652,11 +654,15 @@ class MqttService:
         """Rule 7: who sent a message, from its user property ``operator`` (None: none)."""
         if operator is None:
             return Origin(Source.MQTT)
-        name = valid_operator(operator)
+        name = operator_name(operator)  # (an interface's name is none: lease.py rule 1)
         if name is None:
             level = logging.DEBUG if self._bad_operator_said else logging.WARNING
             self._bad_operator_said = True
-            log.log(level, "operator %r ignored: not a name of 1 to 32 characters", operator[:40])
+            log.log(
+                level,
+                "operator %r ignored: not a name of 1 to 32 characters, or an interface's",
+                operator[:40],
+            )
             return Origin(Source.MQTT)
         return Origin(Source.MQTT, name)
 
