@@ -199,6 +199,15 @@ Rules:
    (``forsake``; a SatEL's put back stands for the half it was: targets.py rule 3), and the
    two are said once, naming the whole target (runtime/composite.py
    rules 8 and 9).
+24. Every drop of a command taken (judged ``executed`` in the audit trail) before it moved the
+   rotor is a refusal of its sender's command, said on R/error and in the audit trail by one
+   path (``_refuse_dropped``; a start's end by its expiry, ``_waited``, names its sender too):
+   a lease's (rule 23), a storm's (``_storm``, wind.py rule 1, and its try more), a hold's that
+   ends clearing (``_fence``, rule 13), an expiry's (rule 13), a lost link's, a box gone
+   offline, a restarted express's. The report carries the target's ``origin`` (its interface
+   when it has none: ``auto-park`` for the bridge's own park); runtime/rotator.py audits it
+   (an attack pass: a target the storm dropped, waiting for a Rotor-EZ's brake, stayed
+   ``executed`` in the trail, while a lease's drop was audited).
 """
 
 from __future__ import annotations
@@ -500,8 +509,7 @@ class RotatorSession:
                 self._drop_pending(EXPIRED)
             self._waited(now)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
-            what = describe_command(batch.lost_target)
-            self._error(ErrorKind.REFUSED, f"{DROPPED}: {EXPRESS_LOST}", command=what)
+            self._refuse_dropped(batch.lost_target, f"{DROPPED}: {EXPRESS_LOST}")
         if batch.offline is not None:  # (runtime/composite.py rule 8)
             if not self._storm_park_waiting():  # (the storm's park, this box's own axis,
                 self._drop_pending(batch.offline)  # waits on: nobody could send it again)
@@ -527,7 +535,8 @@ class RotatorSession:
             if start and done.error is None:
                 began = track.body is not None  # (a look-up: no tracking until its answer)
                 what = track.described or "track"
-                self._wait(track.not_after_s, what, "tracking ended", ends=began)
+                by = track.origin or Origin(track.source)
+                self._wait(track.not_after_s, what, "tracking ended", by, ends=began)
         if (follow := batch.follow) is not None:
             leased = None
             if follow.on:
@@ -538,7 +547,8 @@ class RotatorSession:
             done = self.features.follow(follow, self._refused() or late, now, leased)
             self._apply(done)
             if follow.on and done.error is None:
-                self._wait(follow.not_after_s, follow.described or "follow", "following ended")
+                what, by = follow.described or "follow", follow.origin or Origin(follow.source)
+                self._wait(follow.not_after_s, what, "following ended", by)
         ends: dict[Halt, str | None] = {  # parts.py rule 7 where the mailbox marks them
             "stop": "stop",
             "lock": "lock",
@@ -858,8 +868,13 @@ class RotatorSession:
     def _refuse_leased(self, target: Target, why: str) -> None:
         """Rule 23: said on R/error, and (with its sender) in the audit trail."""
         self._drop(target)
+        self._refuse_dropped(target, why)
+
+    def _refuse_dropped(self, target: Target, message: str) -> None:
+        """Rule 24: a target dropped here before it went out (or its try more), said on
+        R/error and, with its sender, in the audit trail as a refusal of its command."""
         origin = target.origin or Origin(target.source)
-        self._error(ErrorKind.REFUSED, why, command=describe_command(target), origin=origin)
+        self._error(ErrorKind.REFUSED, message, command=describe_command(target), origin=origin)
 
     def _drop(self, target: Target) -> None:
         """Rule 23, wind.py rule 1: ``target`` dropped before it moved the rotor; on a rotator of
@@ -872,6 +887,7 @@ class RotatorSession:
         not_after_s: float | None,
         what: str,
         said: str,
+        by: Origin,
         part: bool = False,
         ends: bool = True,
     ) -> None:
@@ -882,10 +898,11 @@ class RotatorSession:
         (review 37: an
         unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
         at the marker): the two are judged as one, by the sooner expiry (the safe side: a
-        late look-up also ends following begun in time under the same hold)."""
+        late look-up also ends following begun in time under the same hold). ``by``: who sent
+        it (rule 24)."""
         new = None
         if not_after_s is not None and self.fence.held:
-            new = _Waiting(not_after_s, what, said, part)
+            new = _Waiting(not_after_s, what, said, part, by)
         if not ends:  # (a look-up: its own, for when its answer begins tracking)
             self._lookup_held, self._lookup_waiting = self.fence.held, new
         before = None if ends else self._waiting
@@ -911,13 +928,15 @@ class RotatorSession:
         pending = self.targets.pending
         if waiting.part and pending is not None and pending.source not in OWN_MOVES:
             self.targets.clear()  # (the target its part proposed, said once: below)
-        self._error(ErrorKind.REFUSED, f"{waiting.said}: {EXPIRED}", command=waiting.what)
+        said = f"{waiting.said}: {EXPIRED}"  # (rule 24: with its sender, in the audit trail)
+        self._error(ErrorKind.REFUSED, said, command=waiting.what, origin=waiting.origin)
 
     def _drop_pending(self, why: str | None) -> None:
+        """The target waiting dropped; with ``why``, said and audited (rule 24); without,
+        unsaid (a lock ON's, whose own line says it; another box's, which said it)."""
         dropped = self.targets.clear()
         if dropped is not None and why:
-            what = describe_command(dropped)
-            self._error(ErrorKind.REFUSED, f"{DROPPED}: {why}", command=what)
+            self._refuse_dropped(dropped, f"{DROPPED}: {why}")
 
     def _error(
         self,
@@ -959,10 +978,9 @@ class RotatorSession:
             elif isinstance(note, Retry):  # slew.py rule 4
                 storm = self.wind.refusal() if note.target.source is not Source.WIND else None
                 if storm is not None:  # wind.py rule 1: not put back, said once (a review: a
-                    what = describe_command(note.target)  # storm known from a replay, and a
-                    said = f"{note.late}: {SLEW_STOPPED}: {storm}"  # SatEL's late slew's
-                    self._error(ErrorKind.REFUSED, said, command=what)  # target went again)
-                    continue
+                    said = f"{note.late}: {SLEW_STOPPED}: {storm}"  # storm known from a replay,
+                    self._refuse_dropped(note.target, said)  # and a SatEL's late slew's target
+                    continue  # went again)
                 if note.error is not None:
                     self._error(note.error.kind, note.error.message, note.error.command)
                 self.targets.put_back(note.target, note.attempt, now, note.of)
@@ -986,8 +1004,7 @@ class RotatorSession:
                         # motion was refused)
                         self.controller.forgo(now)  # (its turn never began: no stall)
                         self._drop(note.target)
-                        what = describe_command(note.target)
-                        self._error(ErrorKind.REFUSED, f"{TRY_DROPPED}: {storm}", command=what)
+                        self._refuse_dropped(note.target, f"{TRY_DROPPED}: {storm}")
                         continue
                     log.warning(
                         "%s: the target did not move the rotor, or was refused before it did "
@@ -1140,7 +1157,9 @@ class RotatorSession:
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 return
-            self._wait(command.not_after_s, what, f"{command.feature} command ended", part=True)
+            by = command.origin or Origin(command.source)
+            said = f"{command.feature} command ended"
+            self._wait(command.not_after_s, what, said, by, part=True)
         proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return
@@ -1411,3 +1430,4 @@ class _Waiting(NamedTuple):
     what: str  # the command, as the error names it
     said: str  # how its end is said
     part: bool  # a feature's own command (its part's motion), not a track or follow start
+    origin: Origin  # who sent it: its end is a refusal of that sender's command (rule 24)

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
 from tests.support import wait_until
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -32,11 +30,6 @@ def _lines(rig: Rig) -> list[dict[str, object]]:
     return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 25: a target a storm dropped before it went out is 'executed' in the audit "
-    "trail, with no refusal after it (a lease's drop is audited)",
-)
 def test_a_target_the_storm_drops_is_refused_in_the_audit_trail(rig: Rig) -> None:
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     emu = rig.add(
