@@ -171,7 +171,8 @@ Rules:
    target are then twins, said once (a claim or a storm that found both halves waiting said
    the drop twice, ``target az 300`` then ``target el 40``), and one box's drop names what
    the user lost (a cold review: a claim's or a storm's drop of the azimuth's try more, the
-   elevation stopped for it, named ``target az 300`` alone).
+   elevation stopped for it, named ``target az 300`` alone). So are the two boxes' audit
+   lines of one park of the bridge's own (auto-park's, the storm's: session.py rule 25).
 """
 
 from __future__ import annotations
@@ -200,7 +201,7 @@ from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.worker import Worker
 from bridge.session import status as st
-from bridge.session.actions import Action, Write
+from bridge.session.actions import Action, Audit, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
@@ -614,6 +615,7 @@ class CompositeWorker:
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
+        on_audit: Callable[[Audit], None] | None = None,
     ) -> None:
         self.cfg = cfg
         self._mailbox = mailbox
@@ -621,6 +623,9 @@ class CompositeWorker:
         self._urgent = frozenset({self._box})
         self._on_status = on_status
         self._on_event = on_event
+        self._on_audit = on_audit
+        self._wall = wall
+        self._audited: dict[Axis, tuple[Audit, float] | None] = dict.fromkeys(AXES)  # rule 9
         self._halts_applied = 0
         self._newest_applied = 0
         self._winds_applied = 0
@@ -646,6 +651,7 @@ class CompositeWorker:
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,
+                on_audit=partial(self._audit, axis),
             )
         sessions = {axis: box.session for axis, box in self.boxes.items()}
         joined(self.composition, sessions)
@@ -691,6 +697,19 @@ class CompositeWorker:
         event = self.composition.whole(axis, event)  # rule 9
         if self.composition.said(axis, event):
             self._on_event(event)
+
+    def _audit(self, axis: Axis, audit: Audit) -> None:
+        """Rule 9: the two boxes' audit lines of one move of the bridge's own (each box parks
+        its axis: session.py rule 25) are the rotator's one line."""
+        now = self._wall()
+        other = AXES[1] if axis is AXES[0] else AXES[0]
+        twin = self._audited[other]
+        if twin is not None and twin[0] == audit and abs(now - twin[1]) < TWIN_S:
+            self._audited[other] = None
+            return
+        self._audited[axis] = (audit, now)
+        if self._on_audit is not None:
+            self._on_audit(audit)
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)

@@ -110,6 +110,7 @@ from bridge.runtime.operators import EXECUTED, Operators
 from bridge.runtime.port import PortWatch, open_port
 from bridge.runtime.state_store import StateStore
 from bridge.runtime.worker import Worker, WorkerConfig
+from bridge.session.actions import Audit
 from bridge.session.feature_commands import PLACE, body_to_track, check_azimuth, check_can_follow
 from bridge.session.follow import Follow as Following
 from bridge.session.follow import Heard
@@ -233,6 +234,7 @@ class Rotator:
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
                 port_watch=port_watch,  # the stop express's copy of the port (port.py rule 7)
+                on_audit=self._session_audit,  # session.py rule 25
             )
         else:  # two boxes, one judge (this one), one mailbox, one status (composite.py)
             self._worker = CompositeWorker(
@@ -251,6 +253,7 @@ class Rotator:
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,
+                on_audit=self._session_audit,  # session.py rule 25
             )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self.operators = Operators(
@@ -290,11 +293,16 @@ class Rotator:
 
     def _session_event(self, event: ErrorEvent) -> None:
         """The session's error events to the listeners; one that names a sender (a target the
-        session dropped when the lease changed hands: session.py rule 23) is in the audit
-        trail too, as a refusal of that sender's command."""
+        session dropped before it went out: session.py rules 23, 24) is in the audit trail
+        too, as a refusal of that sender's command."""
         self._on_event(event)
         if event.origin is not None:
             self.audit_refusal(event.message, event.command or "target", event.origin)
+
+    def _session_audit(self, audit: Audit) -> None:
+        """A move of the bridge's own (auto-park's, the storm's park: session.py rule 25),
+        in the audit trail as the feature's command, executed."""
+        self.operators.audit(audit.origin, audit.command, EXECUTED)
 
     def _reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""

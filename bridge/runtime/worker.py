@@ -61,7 +61,7 @@ from bridge.runtime.port import (
     watched,
     write_frame,
 )
-from bridge.session.actions import Action, Ask, Publish, Report, Write
+from bridge.session.actions import Action, Ask, Audit, Publish, Report, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.mailbox import Mailbox
 from bridge.session.session import RotatorSession
@@ -93,6 +93,7 @@ class Worker:
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
         port_watch: PortWatch | None = None,
+        on_audit: Callable[[Audit], None] | None = None,
     ) -> None:
         self.cfg = cfg
         self._sky = sky or SkyWorker()
@@ -112,6 +113,8 @@ class Worker:
         self._box = mailbox.fileno()
         self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")
         self._on_event = contained(on_event, f"{cfg.rotator_id}: event listener")
+        # session.py rule 25: the bridge's own moves, to the audit trail (the judge's)
+        self._on_audit = contained(on_audit or _unheard, f"{cfg.rotator_id}: audit listener")
         self._wall = wall
         self._watch = port_watch  # port.py rule 7: the stop express holds a copy of the port
         self._open = port_opener if port_watch is None else watched(port_opener, port_watch)
@@ -326,5 +329,11 @@ class Worker:
                 when = self._wall()
                 event = ErrorEvent(action.kind, action.message, action.command, when, action.origin)
                 self._on_event(event)
+            elif isinstance(action, Audit):
+                self._on_audit(action)
             elif isinstance(action, Ask):
                 self._sky.ask(action.question, partial(self._answered, action.generation))
+
+
+def _unheard(audit: Audit) -> None:
+    """No audit listener (a worker on a bench): a move of the bridge's own goes unwritten."""

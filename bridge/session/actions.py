@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from bridge.core.model import ErrorKind, Origin, RotatorStatus
 from bridge.sky.worker import Question
 
-__all__ = ["Action", "Ask", "Publish", "Report", "Write"]
+__all__ = ["Action", "Ask", "Audit", "Publish", "Report", "Write"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,15 @@ class Report:
 
 
 @dataclass(frozen=True)
+class Audit:
+    """A move of the bridge's own taken (auto-park's, the storm's park: session.py rule 25):
+    its line in the audit trail, ``command`` executed, ``origin`` naming the feature."""
+
+    origin: Origin
+    command: str
+
+
+@dataclass(frozen=True)
 class Ask:
     """Hand ``question`` to the sky worker; its answer goes back to the session with
     ``generation`` (``RotatorSession.sky_answer``, tracking.py rule 8)."""
@@ -45,4 +54,4 @@ class Ask:
     question: Question
 
 
-Action = Write | Publish | Report | Ask
+Action = Write | Publish | Report | Audit | Ask

@@ -208,6 +208,13 @@ Rules:
    when it has none: ``auto-park`` for the bridge's own park); runtime/rotator.py audits it
    (an attack pass: a target the storm dropped, waiting for a Rotor-EZ's brake, stayed
    ``executed`` in the trail, while a lease's drop was audited).
+25. A move of the bridge's own that no command started (``UNASKED``: auto-park's park, the
+   storm's park) is a line in the audit trail when a part proposes it (``Audit``: command
+   ``park``, executed, its interface and operator the feature's: ``auto-park``, ``wind``), as
+   every operator's command is; tracking's and following's targets are not (their start was
+   an operator's command, audited then), nor a try more (attack 25: an auto-park
+   turned the rotor 110 degrees and the trail's last word on it was the operator's target).
+   On a rotator of two boxes the two boxes' lines are one (runtime/composite.py rule 9).
 """
 
 from __future__ import annotations
@@ -236,7 +243,7 @@ from bridge.core.model import (
 )
 from bridge.feature import session_parts
 from bridge.session import status as st
-from bridge.session.actions import Action, Ask, Publish, Report, Write
+from bridge.session.actions import Action, Ask, Audit, Publish, Report, Write
 from bridge.session.autopark import AutoPark
 from bridge.session.config import WorkerConfig
 from bridge.session.controller import Again, Controller, Drop, Ends, Fed, Forgot, Retry
@@ -268,6 +275,9 @@ TRY_DROPPED = (
 )
 # rule 23: the bridge's own moves, never judged by the lease (rules 10, 15; autopark.py)
 OWN_MOVES = frozenset({Source.TRACKING, Source.WSJTX, Source.AUTO_PARK, Source.WIND})
+# rule 25: the bridge's own moves that nobody's command started, each one line in the audit
+# trail (tracking's and following's targets follow a start an operator sent, audited then)
+UNASKED = frozenset({Source.AUTO_PARK, Source.WIND})
 # rule 13: a stamped target whose expiry passed while the last word's order held it up...
 EXPIRED = "its expiry passed while it waited for the order of a STOP or lock; send it again"
 # ... or before it was taken at all (a slow link, a busy machine; or kept behind a lock OFF)
@@ -1241,6 +1251,8 @@ class RotatorSession:
             self.targets.clear_from(proposal.drop)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
+            if proposal.target.source in UNASKED:  # rule 25: the trail names the feature
+                self._actions.append(Audit(Origin(proposal.target.source), "park"))
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported (``_failed``); nothing else

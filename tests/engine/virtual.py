@@ -43,7 +43,7 @@ from bridge import emulators
 from bridge.app import worker_config
 from bridge.core.model import MotionState, RotatorStatus, SetOption, SettingValue, Stop, Target
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
-from bridge.session.actions import Ask
+from bridge.session.actions import Ask, Audit
 from bridge.session.config import FollowConfig, WorkerConfig
 from bridge.session.follow import Follow, Heard
 from bridge.session.mailbox import Mailbox
@@ -113,6 +113,7 @@ class VirtualRotator:
         self.writes: list[Sent] = []
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.events: list[tuple[float, Report]] = []
+        self.audited: list[tuple[float, Audit]] = []  # session.py rule 25: the bridge's own moves
         self.to_device: Callable[[bytes, float], bytes] | None = None  # rule 3: custom faults
         self.to_host: Callable[[bytes, float], bytes] | None = None
         self.received: list[tuple[float, bytes]] = []  # device output the host got, by chunk
@@ -448,6 +449,8 @@ class VirtualRotator:
                 self.statuses.append((self.now, action.status))
             elif isinstance(action, Report):
                 self.events.append((self.now, action))
+            elif isinstance(action, Audit):
+                self.audited.append((self.now, action))
             elif isinstance(action, Ask):
                 self.asked.append((self.now, action))
                 answer = self.answer_sky(action.question)

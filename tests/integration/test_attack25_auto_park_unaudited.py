@@ -14,8 +14,6 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from tests.integration.test_pointing_bridge import PARK_FRAME, PARKING, PARKING_EMU, start
 from tests.support import wait_until
 from tests.support.rig import Rig
@@ -29,11 +27,6 @@ def _lines(rig: Rig) -> list[dict[str, object]]:
     return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 25: an auto-park turns the rotor 110 degrees and the audit trail has no line "
-    "for it (its last line is the operator's target)",
-)
 def test_an_auto_park_that_turns_the_rotor_is_in_the_audit_trail(rig: Rig) -> None:
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     emu = rig.add("tower", emu={**PARKING_EMU, "start_az_deg": 100}, **PARKING)
