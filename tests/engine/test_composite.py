@@ -35,7 +35,7 @@ from bridge.interfaces.mqtt.groups import Group, Member, status_json
 from bridge.protocols.axes import Axis
 from bridge.runtime.composite import TWIN_S, CompositeWorker, Composition
 from bridge.runtime.port import PortError
-from bridge.session.actions import Report
+from bridge.session.actions import Audit, Report
 from bridge.session.follow import Follow, Heard
 from bridge.session.mailbox import Mailbox
 from bridge.session.parts import Part, Proposal, Scene, Wake
@@ -1219,4 +1219,40 @@ def test_a_tracking_or_following_off_ends_what_either_box_still_does() -> None:
     worker.boxes[Axis.ELEVATION].session.tracker.end("off")
     worker.boxes[Axis.ELEVATION].session.follower.start(Follow(True), 0.0)
     assert worker.status.following is None and worker.features_on == (False, True)
+    box.close()
+
+
+def test_the_two_boxes_audit_lines_of_one_park_of_the_bridges_own_are_one() -> None:
+    """Rule 9, session.py rule 25: each box parks its own axis for the storm, and each hands
+    the judge the park's audit line; the rotator's trail has one line for that park, and
+    one for a later park again."""
+    rotator = RotatorSettings.model_validate(
+        {
+            "id": "v",
+            "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+            "elevation": {"model": "gs232b", "port": "/dev/ttyEL"},
+        }
+    )
+    axes = app.axis_configs(rotator)
+    assert axes is not None
+    wall = [1000.0]
+    audited: list[Audit] = []
+    box = Mailbox()
+    worker = CompositeWorker(
+        app.worker_config(rotator),
+        axes,
+        box,
+        lambda s: None,
+        lambda e: None,
+        wall=lambda: wall[0],
+        on_audit=audited.append,
+    )
+    park = Audit(Origin(Source.WIND), "park")
+    worker.boxes[Axis.AZIMUTH]._do([park])  # as each box's session hands it out
+    worker.boxes[Axis.ELEVATION]._do([park])
+    assert audited == [park]
+    wall[0] += 600.0  # a later storm's park
+    worker.boxes[Axis.ELEVATION]._do([park])
+    worker.boxes[Axis.AZIMUTH]._do([park])
+    assert audited == [park, park]
     box.close()
