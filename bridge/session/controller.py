@@ -971,7 +971,7 @@ class Controller:
             link.write_stop(now)
             self.stops.wrote_at_rest(now, False)
             why = (
-                f"rotor turning at {self._standing()} after the stop its stall was "
+                f"rotor turning at {self.where()} after the stop its stall was "
                 "given (freed, turned by hand, or that stop lost on the line): stopped once "
                 "more; if it still turns, stop it at the controller"
             )
@@ -1310,7 +1310,7 @@ class Controller:
         el_short = el is not None and el_at is not None and abs(el_at - el) > within
         if not (short or el_short):
             return
-        at = self._standing()  # (an azimuth's: the elevation too where it is the one short, a
+        at = self.where()  # (an azimuth's: the elevation too where it is the one short, a
         if el_short and self.cfg.spec.turns_azimuth:  # cold review: "at rest at 10°, short of
             at += f", elevation {el_at:g}°"  # its turn to 10°, elevation 80°")
         message = (
@@ -1562,7 +1562,7 @@ class Controller:
         self.notes.append(Again(target, *self._retry_raw, verdict.error, verdict.ends_tracking))
         return True
 
-    def _standing(self) -> str:
+    def where(self) -> str:
         """Where the rotor stands, in an error's words (stops.py ``standing``: a composite's
         elevation box names its elevation)."""
         return standing(self.motion, self.cfg.motion, self._shown_az())

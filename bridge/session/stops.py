@@ -154,6 +154,9 @@ STOP_TRIES_BEFORE_ERROR = 3
 STOP_MERGE_MIN_S = 1.0  # rule 1: stops merge within the brake window, or at least this long
 STOP_REPEAT_GAP_S = 0.1  # rule 1: a repeat this soon to a rotor maybe still turning is owed
 STOP_UNSURE_S = 1.0  # rule 3: a stop written this recently when the port failed is sent again
+# rule 4: how the errors of a turn a motion event dropped end (session.py ``_heed`` says
+# otherwise for a storm's park, which nobody can send again: wind.py rule 10)
+SEND_AGAIN = "send the target again"
 EXPRESS_LOST = (
     "the stop express lost its connection while the target waited for it to confirm the stop "
     "before; send it again"
@@ -423,7 +426,7 @@ class Stops:
             why = (
                 f"rotor turned past {beyond}, on its way to its target; now at {where} (a "
                 "command garbled on the line, or a hand at the panel): target dropped and the "
-                "rotor stopped; send the target again"
+                f"rotor stopped; {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "past a limit")
         if event is mo.Event.STALLED:
@@ -439,7 +442,7 @@ class Stops:
             why = (
                 f"rotor stalled at {own} ({progress} for {cfg.stall_timeout_s:g} s): brake "
                 "paddle pressed, rotor stuck, or the controller restarted (power cycled or "
-                "reset) and forgot its target; target dropped: send the target again"
+                f"reset) and forgot its target; target dropped: {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "stalled")
         if event is mo.Event.RESTARTED:  # (controller.py rule 12: the controller's)
@@ -454,7 +457,7 @@ class Stops:
             why = (
                 f"the controller stopped turning short of its target at {own} (it says its motor "
                 "is off: power cycled or reset, stopped at its panel, or its own limit or "
-                f"protection): {turn} was dropped, not resumed: send the target again"
+                f"protection): {turn} was dropped, not resumed: {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "the controller stopped")
         if event is mo.Event.TURNED_AWAY:
@@ -469,14 +472,14 @@ class Stops:
             why = (
                 f"rotor turned on past its target, now at {where} (the target may never have "
                 "reached the controller, or a hand at the panel): target dropped and the rotor "
-                "stopped; send the target again"
+                f"stopped; {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "passed its target")
         if event is mo.Event.TURNED_BACK:  # (stopped as a pass is: at once, a bounded series)
             why = (
                 f"rotor turned back on its way to its target, now at {where} (a command "
                 "garbled on the line, or a hand at the panel): target dropped and the rotor "
-                "stopped; send the target again"
+                f"stopped; {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "turned back")
         if event is mo.Event.REFUSED:
