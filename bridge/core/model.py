@@ -311,6 +311,9 @@ class WindInfo:
     # not answer: wind.py rules 4 and 7); the rotor is not parking
     waiting: bool = False
     refused: bool = False  # in a storm: the judge refused its park (wind.py rule 5): not parked
+    # in a storm: its park was sent and the rotor is not on its way there nor at it (a stall
+    # cut it short, a hand turned it off: wind.py rule 10): not parked
+    off_park: bool = False
 
     @property
     def parks(self) -> bool:

@@ -35,8 +35,9 @@ Rules:
    with that rotator said idle.) Its wind is the azimuth box's, whose storm's park is seen
    reached (session/wind.py rule 7, kept over a restart by runtime/kept.py rule 4) only when
    both boxes' parks were: otherwise a restart in the storm parks both again; refused, or
-   waiting, when either box's park is, in that box's words (session/wind.py rules 5 and 9: a
-   park waiting in one box is no park said done for the rotator). Its version is
+   waiting, or off the park sent, when either box's park is, in that box's words
+   (session/wind.py rules 5, 9 and 10: a park waiting in one box, or one box's rotor off its
+   park, is no park said done for the rotator). Its version is
    its boxes' joined, azimuth first (``1.4S / SatEL``), each box whose model reports one
    (protocols/axes.py rule 4), and none until every such box has said its own, the rotator
    saying meanwhile the pair kept from the last run, if any (runtime/kept.py rule 11). One
@@ -337,18 +338,22 @@ def merge(
     version = " / ".join(v for v in said if v) if said and all(said) else None
     wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's;
     # refused if either's, in the words of the box that refused it, else waiting in the words
-    # of the box whose park waits: session/wind.py rule 9)
+    # of the box whose park waits, else off the park in those of the box off it:
+    # session/wind.py rules 9 and 10)
     if wind is not None and el.wind is not None:
         refusal = wind.refusal
         if el.wind.refused and not wind.refused:
             refusal = el.wind.refusal
         elif el.wind.waiting and not (wind.refused or wind.waiting):
             refusal = el.wind.refusal
+        elif el.wind.off_park and not (wind.refused or wind.waiting or wind.off_park):
+            refusal = el.wind.refusal  # (session/wind.py rule 10: the box off its park)
         wind = replace(
             wind,
             arrived=wind.arrived and el.wind.arrived,
             waiting=wind.waiting or el.wind.waiting,
             refused=wind.refused or el.wind.refused,
+            off_park=wind.off_park or el.wind.off_park,
             refusal=refusal,
         )
     return replace(

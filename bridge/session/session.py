@@ -254,7 +254,7 @@ from bridge.session.link import Link
 from bridge.session.mailbox import Batch, Halt, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
-from bridge.session.stops import EXPRESS_LOST, Fence
+from bridge.session.stops import EXPRESS_LOST, SEND_AGAIN, Fence
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.tracking import Track
 from bridge.session.wind import WindPark
@@ -288,6 +288,8 @@ TRACK_REFUSED = "tracking not started"  # ... a track start (or its look-up's an
 FOLLOW_REFUSED = "following not started"  # ... and a follow start
 # slew.py rule 4: a late slew's target put back, in a storm that refuses it (wind.py rule 1)
 SLEW_STOPPED = "stopping it to ask where it is; its target is not sent again"
+# wind.py rule 10: how a motion event's error ends for the storm's park, for SEND_AGAIN
+PARK_NOT_AGAIN = "the storm's park is not sent again in this storm (motion refused for it)"
 # how every target dropped before it moved the rotor begins (runtime/composite.py rule 9 names
 # the whole target in each: a storm's or a claim's drop of a try more named one box's half)
 DROPS = (DROPPED, AGAIN_DROPPED, TRY_DROPPED)
@@ -980,7 +982,11 @@ class RotatorSession:
         """What the controller noted, applied in the order it came."""
         for note in self.controller.take_notes():
             if isinstance(note, Report):
-                self._error(note.kind, note.message, note.command)
+                message = note.message
+                if note.kind is ErrorKind.STALLED and message.endswith(SEND_AGAIN):
+                    if self._storm_park():  # wind.py rule 10: nobody can (attack 25: a stall
+                        message = message[: -len(SEND_AGAIN)] + PARK_NOT_AGAIN  # said so)
+                self._error(note.kind, message, note.command)
             elif isinstance(note, Ends):
                 self._end(note.reason, now)
             elif isinstance(note, Drop):
@@ -1303,6 +1309,8 @@ class RotatorSession:
             view.last_source, view.last_operator = st.sent_by(target, view.last_operator)
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
+            if target.source is Source.WIND:
+                self.wind.sent(wire)  # (wind.py rule 10: where it is parked, as held there)
 
     def _emit_status(self, now: float) -> None:
         """Rule 18: the status is built again only when something it shows may have changed."""
@@ -1316,6 +1324,11 @@ class RotatorSession:
         link, view = ctl.link, self.view
         slew = link.slew if link is not None else None
         wind.held_back(self.fence.held and self._storm_park_waiting())  # (wind.py rule 9)
+        if wind.storm:  # (wind.py rule 10: where the rotor stands against the park sent)
+            m = ctl.motion
+            going = m.target_deg is not None or m.el_target_deg is not None or slew is not None
+            where = ctl.where() if m.position_deg is not None else ""
+            wind.seen(m, going or self._storm_park_waiting(), where)
         key: tuple[object, ...] = (  # one flat tuple: this runs at every step
             # (the bearings first: a turning rotor's every reading changes one, and the
             # comparison ends there, before the motion's __eq__ compares its every field)

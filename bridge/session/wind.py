@@ -142,6 +142,24 @@ Rules:
    waiting for the azimuth box was refused to operators as "parked for the storm", and one
    under a STOP's hold showed ``waiting: false`` and "Parked for the storm" ON while the
    rotor faced the storm where it stood).
+10. A park sent says "parked" only while the rotor is on its way to it or stands at it (as
+   the controller holds it, status.py rule 4's ``parked``: the session tells this part where
+   the rotor is before each status, ``seen``). A park whose turn ended short of it (a stall:
+   ice, a caught cable; a pass, a turn back, a limit, the controller stopping its motor) says
+   "its park not reached" and where the rotor stands, and one turned off it after it was
+   reached (a hand at the front panel: rule 7 leaves it there) "turned off its park" and
+   where: the status's ``off_park`` (Home Assistant's "Parked for the storm" off), and the
+   refusal "wind 72 km/h above 60: motion refused for the storm (its park not reached: the
+   rotor stands at 168°)". A rotor turned back to the park is parked again. Motion stays
+   refused, and the bridge does not send a park that ended short again in this storm: its
+   motor drove for ``stall_timeout_s`` without moving it, and would drive on against the
+   jam; nobody can send it in the storm either, so the stall's own error says so, never "send
+   the target again" (session.py ``_heed``); nor does an offline after it owe it (rule 7: the
+   line took no park; a restart in the storm still parks again, as rule 7 says of a park not
+   seen reached). A rotor that cannot report its position (a DCU-1) is never judged so.
+   (Attack 25: a park that stalled 78 degrees short, and one a hand turned 110 degrees off
+   it, were said "parked for the storm" in R/status, Home Assistant and every refusal, and
+   the stall said "send the target again", which the storm refused.)
 """
 
 from __future__ import annotations
@@ -152,7 +170,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
-from bridge.session.motion import Motion
+from bridge.session.motion import Motion, within_tolerance
 from bridge.session.parts import NOTHING, Proposal, RefusedHere, Scene, Unjudged
 
 log = logging.getLogger(__name__)
@@ -205,6 +223,8 @@ class WindPark:
         self._waits: str | None = None  # rule 9: what the park owed waited for at a step
         self._offline = True  # rule 9: the controller does not answer (none has yet: no step)
         self._held_back = False  # rules 8 and 9: the park taken waits under a STOP's hold
+        self._wire: tuple[float, float | None] | None = None  # rule 10: this storm's park, sent
+        self._off: str | None = None  # rule 10: where the rotor stands off that park, in words
         self._wall_offset_s = 0.0
 
     @property
@@ -223,6 +243,7 @@ class WindPark:
             arrived=self._arrived,
             waiting=self.waiting is not None,
             refused=self.storm and self._refused is not None,
+            off_park=self._off is not None,
         )
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
@@ -257,7 +278,7 @@ class WindPark:
         if not self.storm:
             self.storm, self._halted, self._arrived = True, False, False
             self._refused, self._unjudged = None, False  # (rule 5: a new storm's park anew)
-            self._here = False
+            self._here, self._wire, self._off = False, None, None  # (rule 10 likewise)
             self._end_owed = replayed  # rule 6: no park carries the end (rule 1)
         self._replayed, self._park_owed = replayed, not (replayed or self._halted)
         self._waits = None  # (rule 9: judged at the next step, if the controller answers)
@@ -294,7 +315,11 @@ class WindPark:
     def parked(self) -> bool:
         """Rule 5: this storm's park was sent (or seen reached): not refused, owed, waiting,
         stopped short, nor a replay's (runtime/composite.py rule 7: a box's axis parked alone
-        while the other box did not answer)."""
+        while the other box did not answer); and the rotor not off it (rule 10)."""
+        return self._sent() and self._off is None
+
+    def _sent(self) -> bool:
+        """Rules 5 and 10: this storm's park was sent (or seen reached), wherever the rotor is."""
         if not self.storm or self._replayed or self._refused is not None or self._park_owed:
             return False
         return (self._arrived or not self._halted) and self.waiting is None
@@ -306,9 +331,35 @@ class WindPark:
 
     def lost(self) -> None:
         """Rule 7: the line took the rotator (offline, unplugged) in this storm (rule 6: one
-        known only from a replay sent no park, and owes none)."""
+        known only from a replay sent no park, and owes none; rule 10: nor one whose turn
+        ended short of it before)."""
         if self.storm and not self._replayed and not self._halted and not self._arrived:
-            self._park_owed, self._waits = True, None  # (rule 9: ``answering``)
+            if self._off is None:
+                self._park_owed, self._waits = True, None  # (rule 9: ``answering``)
+
+    def sent(self, wire: tuple[float, float | None]) -> None:
+        """Rule 10: this storm's park went to the controller as ``wire`` (as it holds it), or
+        was found there already (told by the session)."""
+        if self.storm:
+            self._wire = wire
+
+    def seen(self, m: Motion, going: bool, where: str) -> None:
+        """Rule 10: where the rotor stands against this storm's park, told by the session before
+        each status: ``going``, the park waits to go out or its turn is under way (a target
+        out, a slew); ``where``, the rotor's bearing in an error's words (stops.py
+        ``standing``). Offline, the last word is kept: where it stands is not known."""
+        wire = self._wire
+        if wire is None or going or not self._sent() or not self._rig.spec.can_report_position:
+            self._off = None
+            return
+        if m.state is MotionState.OFFLINE or m.position_deg is None:
+            return
+        if within_tolerance(m, self._rig.motion, wire):
+            self._off = None
+        elif self._arrived:  # rule 7: reached, then turned (a hand at the front panel)
+            self._off = f"turned off its park after reaching it: the rotor stands at {where}"
+        else:
+            self._off = f"its park not reached: the rotor stands at {where}"
 
     def arrived(self) -> None:
         """Rule 7: the rotor was seen at rest at this storm's park: an offline owes it no more."""
@@ -353,6 +404,8 @@ class WindPark:
         waits = self.waiting
         if waits is not None:  # rule 9: owed and not sent (review 63)
             return f"{self._why}: motion refused for the storm (its park waits for {waits})"
+        if self.storm and self._off is not None:  # rule 10: off the park sent (attack 25)
+            return f"{self._why}: motion refused for the storm ({self._off})"
         return f"{self._why}: parked for the storm" if self.storm else None
 
     def wakeup(self, now: float) -> float | None:
@@ -395,6 +448,8 @@ class WindPark:
                 kept = (
                     f"a storm whose park waits for {self.waiting}: motion refused, nothing parked"
                 )
+            elif self.storm and self._off is not None:  # rule 10: off the park sent
+                kept = f"a storm whose park was sent: motion refused, {self._off}"
             else:
                 kept = "parked for the storm" if self.storm else "no storm"
             error = Report(
@@ -406,7 +461,7 @@ class WindPark:
         if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
             self._halted = self._replayed = self._here = False
-            self._refused = None
+            self._refused, self._wire, self._off = None, None, None
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if self._end_owed and not self._park_owed:  # rule 6: no park, the end all the same
             self._end_owed = False
@@ -421,6 +476,7 @@ class WindPark:
                 self._waits = LOCK_OFF if scene.locked else READING
             return NOTHING if error is None else Proposal(error=error)
         self._park_owed = self._arrived = self._end_owed = False  # (the park ends them)
+        self._wire = self._off = None  # (rule 10: told again once this park is sent)
         park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
         try:
             if scene.whole is not None:  # rule 5: a rotator of two boxes', all axes or none

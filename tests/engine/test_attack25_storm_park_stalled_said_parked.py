@@ -15,20 +15,15 @@ In virtual time on the emulated MD-01 (its azimuth jammed mid-park).
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from bridge.features.wind import wind_json
+from bridge.session.session import PARK_NOT_AGAIN
+from tests.engine.test_review63_storm_park_held_said_parked import ha_parked
 from tests.engine.test_wind import wind, windy
 
 PARK_AZ = 90.0  # test_wind's wind_park_az_deg
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 25: a storm's park that stalled 78 degrees short is still 'parked for the "
-    "storm' in R/status (Home Assistant's sensor ON) and in every refusal",
-)
 def test_a_storm_park_that_stalls_short_is_not_said_parked() -> None:
     with windy() as v:
         wind(v, 90.0)
@@ -44,20 +39,49 @@ def test_a_storm_park_that_stalls_short_is_not_said_parked() -> None:
         refusal = v.errors("refused")[-1].message
         assert v.status.wind is not None
         block = wind_json(v.status.wind)
-        said_parked = block["storm"] and not any(
-            block[k] for k in ("replayed", "halted", "waiting", "refused")
-        )  # Home Assistant's "Parked for the storm" (features/wind ``_storm``)
+        said_parked = ha_parked(v) == "ON"  # Home Assistant's "Parked for the storm"
         assert not said_parked and "parked for the storm" not in refusal, (
             f"the park stalled {short:.0f} degrees short; R/status wind: {block}; "
             f"the refusal: {refusal!r}"
         )
+        # the true state instead (wind.py rule 10): where it stands, and no "send it again"
+        assert block["storm"] and block["off_park"]
+        assert f"its park not reached: the rotor stands at {v.status.bearing_deg:g}°" in refusal
+        stalled = v.errors("stalled")[0].message
+        assert stalled.endswith(PARK_NOT_AGAIN) and "send the target again" not in stalled
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 25: a rotor turned 110 degrees off the storm's park at its front panel is "
-    "still 'parked for the storm' in R/status (Home Assistant's sensor ON) and every refusal",
-)
+def test_a_storm_park_that_stalled_is_not_sent_again_not_after_a_line_blip() -> None:
+    """Wind.py rule 10: the park that stalled is not driven against the jam again in the
+    storm, not after a line blip either (rule 7: the line took no park), and the refusal says
+    where the rotor stands all along."""
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(
+            lambda h: h.truth().is_moving and h.truth().az_deg < 170, 20, "the park under way"
+        )
+        v.jam()
+        v.run_until(lambda h: h.state is MotionState.STALLED, 60, "the stall")
+        v.unjam()  # (the ice gone: a park sent again would turn it now)
+        v.run_until(
+            lambda h: not h.truth().is_moving and h.state is not MotionState.MOVING, 30, "at rest"
+        )
+        t, stands = v.now, v.truth().az_deg
+        v.set_silent(True)  # a blip on the line: offline
+        v.run_until(lambda h: not h.status.available, 30, "offline")
+        v.set_silent(False)
+        v.run_until(lambda h: h.status.available, 30, "answering again")
+        v.run_for(60.0)
+        moves = [f for f in v.frames(since=t) if f.outcome not in ("status", "stop")]
+        assert moves == [] and abs(v.truth().az_deg - stands) < 1.0  # no park sent again
+        assert v.status.wind is not None and v.status.wind.off_park and ha_parked(v) == "OFF"
+        v.target(200.0)
+        assert v.errors("refused")[-1].message == (
+            "wind 90 km/h above 60: motion refused for the storm (its park not reached: the "
+            f"rotor stands at {v.status.bearing_deg:g}°)"
+        )
+
+
 def test_a_storm_park_left_by_hand_is_not_said_parked() -> None:
     """The same words from the other side: the park reached, then a hand at the front panel
     turns the rotor 110 degrees off it (session/wind.py rule 7: the bridge rightly does not
@@ -78,10 +102,15 @@ def test_a_storm_park_left_by_hand_is_not_said_parked() -> None:
         refusal = v.errors("refused")[-1].message
         assert v.status.wind is not None
         block = wind_json(v.status.wind)
-        said_parked = block["storm"] and not any(
-            block[k] for k in ("replayed", "halted", "waiting", "refused")
-        )  # Home Assistant's "Parked for the storm" (features/wind ``_storm``)
+        said_parked = ha_parked(v) == "ON"  # Home Assistant's "Parked for the storm"
         assert not said_parked and "parked for the storm" not in refusal, (
             f"the rotor stands at {v.truth().az_deg:.0f}, {PARK_AZ:g} is the park; R/status "
             f"wind: {block}; the refusal: {refusal!r}"
         )
+        assert block["off_park"] and "turned off its park after reaching it" in refusal
+        assert abs(v.truth().az_deg - 200.0) < 1.0  # (rule 7: not turned back by itself)
+        v.manual_rotate(PARK_AZ)  # the hand turns it back to the park: parked again
+        v.run_until(lambda h: h.status.parked, 60, "back at the park")
+        v.target(100.0)
+        assert v.errors("refused")[-1].message == "wind 90 km/h above 60: parked for the storm"
+        assert ha_parked(v) == "ON"

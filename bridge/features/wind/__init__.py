@@ -9,8 +9,8 @@ What it is made of:
 - its input: the user's wind topic, read by feed.py;
 - here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, unknown
   while the topic is silent; the storm, on only for a storm the rotor is parked or parking
-  for, not one known only from a replay, one whose park a stop cut short nor one whose park
-  waits for the lock OFF) and its declaration.
+  for, not one known only from a replay, one whose park a stop cut short, one whose park
+  waits for the lock OFF nor one the rotor stands off: a stall, a hand) and its declaration.
 """
 
 from __future__ import annotations
@@ -47,6 +47,9 @@ def wind_json(info: WindInfo) -> dict[str, object]:
         "waiting": info.waiting,
         # the judge refused its park (wind.py rule 5): the rotor stands where the storm found it
         "refused": info.refused,
+        # its park was sent and the rotor stands off it: its turn ended short (a stall), or a
+        # hand turned it off after it was reached (wind.py rule 10); the refusal says where
+        "off_park": info.off_park,
         "calm_since": None
         if calm is None
         else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
@@ -75,14 +78,15 @@ def _storm(r: RotatorView) -> dict[str, object]:
     """On while the rotor is parked, or parking, for a storm: not for a storm known only from a
     replayed reading, which parks nothing (session/wind.py rule 6), nor for one whose park a
     STOP or lock ON stopped short (rule 3), nor for one whose park waits for the lock OFF (rule
-    4). A review: Home Assistant said "Parked for the storm" while the rotor stood where it
-    was, or where the stop or the lock left it."""
+    4), nor once the rotor stands off the park sent (rule 10: a stall cut it short, a hand
+    turned it off). A review: Home Assistant said "Parked for the storm" while the rotor stood
+    where it was, or where the stop or the lock left it."""
     return {
         "state_topic": r.topics.status, "icon": "mdi:weather-windy",
         "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm and "
                           "not value_json.wind.replayed and not value_json.wind.halted and "
-                          "not value_json.wind.waiting and not value_json.wind.refused "
-                          "else 'OFF' }}",
+                          "not value_json.wind.waiting and not value_json.wind.refused and "
+                          "not value_json.wind.off_park else 'OFF' }}",
     }  # fmt: skip
 
 
