@@ -142,8 +142,9 @@ Rules:
    waiting for the azimuth box was refused to operators as "parked for the storm", and one
    under a STOP's hold showed ``waiting: false`` and "Parked for the storm" ON while the
    rotor faced the storm where it stood).
-10. A park sent says "parked" only while the rotor is on its way to it or stands at it (as
-   the controller holds it, status.py rule 4's ``parked``: the session tells this part where
+10. A park sent says "parked" only while the rotor is on its way to it or stands at it
+   (within ``tolerance_deg`` of it as the controller holds it, as status.py rule 4's
+   ``parked``, but braking or settling there too, ``_at``: the session tells this part where
    the rotor is before each status, ``seen``). A park whose turn ended short of it (a stall:
    ice, a caught cable; a pass, a turn back, a limit, the controller stopping its motor) says
    "its park not reached" and where the rotor stands, and one turned off it after it was
@@ -170,7 +171,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
-from bridge.session.motion import Motion, within_tolerance
+from bridge.session.motion import Motion, MotionConfig, angle_error
 from bridge.session.parts import NOTHING, Proposal, RefusedHere, Scene, Unjudged
 
 log = logging.getLogger(__name__)
@@ -354,7 +355,7 @@ class WindPark:
             return
         if m.state is MotionState.OFFLINE or m.position_deg is None:
             return
-        if within_tolerance(m, self._rig.motion, wire):
+        if _at(m, self._rig.motion, wire):  # (braking or settling there too: no flicker)
             self._off = None
         elif self._arrived:  # rule 7: reached, then turned (a hand at the front panel)
             self._off = f"turned off its park after reaching it: the rotor stands at {where}"
@@ -494,6 +495,19 @@ class WindPark:
             return Proposal(error=why, ended=self._why, busy=True, halt=_turning(m))
         self._refused, self._here = None, False
         return Proposal(target=judged, error=error, ended=self._why, busy=True)
+
+
+def _at(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
+    """Rule 10: the rotor within ``tolerance_deg`` of ``wire`` on each axis it names, at rest
+    or not: status.py's ``parked`` waits for rest, and a Rotor-EZ's brake window after its
+    arrival, or a turn's settling, would say the rotor off its park for seconds."""
+    pos = m.position_deg
+    if pos is None or angle_error(pos, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
+        return False
+    el = wire[1]
+    return (
+        el is None or m.el_position_deg is None or abs(m.el_position_deg - el) <= cfg.tolerance_deg
+    )
 
 
 def _turning(m: Motion) -> bool:

@@ -18,8 +18,9 @@ from __future__ import annotations
 from bridge.core.model import MotionState
 from bridge.features.wind import wind_json
 from bridge.session.session import PARK_NOT_AGAIN
-from tests.engine.test_review63_storm_park_held_said_parked import ha_parked
+from tests.engine.test_review63_storm_park_held_said_parked import WIND, ha_parked
 from tests.engine.test_wind import wind, windy
+from tests.engine.virtual import VirtualRotator
 
 PARK_AZ = 90.0  # test_wind's wind_park_az_deg
 
@@ -114,3 +115,24 @@ def test_a_storm_park_left_by_hand_is_not_said_parked() -> None:
         v.target(100.0)
         assert v.errors("refused")[-1].message == "wind 90 km/h above 60: parked for the storm"
         assert ha_parked(v) == "ON"
+
+
+def test_a_storm_park_reached_is_never_said_off_it_in_the_brake_window() -> None:
+    """Wind.py rule 10 judges where the rotor stands, not whether it is at rest: a Rotor-EZ
+    that reached its park sits out its brake window (5 s) braking, and no status of the
+    whole park says it is off it (Home Assistant's "Parked for the storm" flicking OFF)."""
+    with VirtualRotator("rotorez", settings=WIND) as v:  # (its park at 180)
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.target(90.0)
+        v.run_until(
+            lambda h: abs(h.truth().az_deg - 90.0) < 2.0 and h.state is MotionState.IDLE,
+            120,
+            "at rest at 90",
+        )
+        t = v.now
+        wind(v, 90.0)
+        v.run_until(lambda h: h.state is MotionState.BRAKING, 120, "braking at the park")
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the brake window over")
+        assert v.status.parked and abs(v.truth().az_deg - 180.0) < 2.0
+        storm = [s.wind for s in v.published(since=t) if s.wind is not None and s.wind.storm]
+        assert storm and not any(w.off_park for w in storm)
