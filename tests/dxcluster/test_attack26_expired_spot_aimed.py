@@ -10,8 +10,6 @@ the rotator is a recording one (test_client.py's ``Asked``)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Origin, Source
 from bridge.interfaces.dxcluster.book import Book
 from bridge.interfaces.dxcluster.client import MAX_BACKOFF_S, DxCluster
@@ -24,10 +22,6 @@ from tests.support.clock import FakeClock, wall_at
 MAX_AGE_S = 1800.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 26: a call target turns to a spot older than max_age_min while the node is down",
-)
 def test_a_call_target_never_turns_to_a_spot_past_its_age() -> None:
     clock = FakeClock(1000.0)
     wall = [wall_at("1830")]

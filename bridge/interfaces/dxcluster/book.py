@@ -20,7 +20,10 @@ Rules:
    side): the age is counted down on the monotonic clock from when it came (a wall clock
    set back keeps no spot longer than ``max_age_s`` after it was heard); a wall clock wrong
    by more than ``max_age_s`` drops every spot, said in the log (client.py rule 3), never
-   keeps an old one.
+   keeps an old one. The age is judged where the book is read, not only where it is pruned:
+   ``newest``, ``calls`` and ``as_json`` pass over a spot past ``max_age_s`` whether or not
+   ``prune`` ran since (attack 26: while the node was down the client pruned once per
+   back-off, up to a minute apart, and a call target turned to a spot 30 min 25 s old).
 3. Bearings and distances are geo.great_circle's from [station] (the same function the
    pointing judge uses); without a station they are null, and so are the bearings of a
    place with no direction (the station's own, its antipode).
@@ -178,22 +181,29 @@ class Book:
             self._unlisted &= set(self._spots)
             return len(self._spots) != before
 
+    def _young(self, now_s: float) -> list[Kept]:
+        """Rule 2: the kept spots not past their age at ``now_s``, newest first, pruned or not
+        (called with the lock held)."""
+        return [k for k in self._spots if k.until_s >= now_s]
+
     def newest(self, call: str) -> Kept | None:
-        """The newest spot of ``call`` (any case), if one is kept."""
-        wanted = call.strip().upper()
+        """The newest spot of ``call`` (any case), if one is kept and not past its age."""
+        wanted, now_s = call.strip().upper(), self._clock()
         with self._lock:
-            return next((k for k in self._spots if k.spot.call == wanted), None)
+            return next((k for k in self._young(now_s) if k.spot.call == wanted), None)
 
     def calls(self) -> tuple[str, ...]:
         """The calls of the newest spots, each once, at most MAX_CALLS."""
+        now_s = self._clock()
         with self._lock:
-            calls = dict.fromkeys(k.spot.call for k in self._spots)
+            calls = dict.fromkeys(k.spot.call for k in self._young(now_s))
         return tuple(calls)[:MAX_CALLS]
 
     def as_json(self) -> str:
         """``B/spots``: ``{"spots": [...]}``, newest first."""
+        now_s = self._clock()
         with self._lock:
-            spots = list(self._spots)
+            spots = self._young(now_s)
         listed = []
         for k in spots:
             try:
