@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
 from bridge.interfaces.dxcluster.book import Book
 from bridge.interfaces.dxcluster.client import DxCluster
 from bridge.interfaces.dxcluster.cty import parse_dat
@@ -33,10 +31,6 @@ def calls(published: list[str]) -> list[str]:
     return [s["call"] for s in json.loads(published[-1])["spots"]]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 26: a spot whose comment ends with a time is dated by it, and dropped as old",
-)
 def test_a_time_at_the_end_of_the_comment_is_not_the_spots_time() -> None:
     published: list[str] = []
 

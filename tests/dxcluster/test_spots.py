@@ -25,6 +25,23 @@ SPOTS = [
         Spot("W1XYZ", 50313.0, "G4ABC", "2359", "FT8 JO01<>FN31pr"),
     ),
     (b"DX de DL1XX:  3510  F5ABC  1200Z", Spot("F5ABC", 3510.0, "DL1XX", "1200", "")),
+    # rule 6: a time in the comment is the comment's; after the spot's time, a zone, a state
+    (
+        b"DX de EA5WU:     14025.0  JA1ABC       PM95 QRV til 2300Z            1829Z",
+        Spot("JA1ABC", 14025.0, "EA5WU", "1829", "PM95 QRV til 2300Z"),
+    ),
+    (
+        b"DX de EA5WU:     14025.0  JA1ABC       QSX 1835Z                    1829Z JO01",
+        Spot("JA1ABC", 14025.0, "EA5WU", "1829", "QSX 1835Z"),
+    ),
+    (
+        b"DX de K1TTT:     14025.0  JA1ABC       cq                      25  1829Z  5",
+        Spot("JA1ABC", 14025.0, "K1TTT", "1829", "cq                      25"),
+    ),
+    (
+        b"DX de K1TTT:     14025.0  JA1ABC       cq                             1829Z MA",
+        Spot("JA1ABC", 14025.0, "K1TTT", "1829", "cq"),
+    ),
 ]
 JUNK = [
     b"",
@@ -36,6 +53,8 @@ JUNK = [
     b"DX de EA5WU:     14025.0  JA1ABC       cq                             2459Z",  # hour 24
     b"DX de EA5WU:     14025.0  JA1ABC       cq                             1860Z",  # minute 60
     b"DX de EA5WU:     14025.0  JA1ABC       cq",  # no time
+    b"DX de EA5WU:     14025.0  JA1ABC       cq 1829Z  QRV",  # rule 6: no field a node adds
+    b"DX de EA5WU:     14025.0  JA1ABC       cq 1829Z  1830",
     b"DX de EA5WU:     abc  JA1ABC       cq   1829Z",
     b"DX de EA5WU:     14025.0  ABCDEF       cq   1829Z",  # no digit: no call
     b"DX de EA5WU:     0.0  JA1ABC       cq   1829Z",
@@ -166,7 +185,7 @@ def test_a_line_of_spaces_with_no_time_is_no_spot_at_the_longest_line() -> None:
             for _ in range(40):
                 assert parse_spot(line) is None, line
                 assert parse_spot(line.encode()) is None
-    spot = _hostile("DX de K1ABC: 14000 DL1ABC 1829Z", " ", MAX_LINE_BYTES - 1)  # x: a locator
+    spot = _hostile("DX de K1ABC: 14000 DL1ABC 1829Z", " ", MAX_LINE_BYTES - 1)[:-4] + "JO01"
     assert parse_spot(spot) == Spot("DL1ABC", 14000.0, "K1ABC", "1829", "")
 
 
@@ -182,9 +201,12 @@ def test_a_line_longer_than_the_longest_is_no_spot_whatever_it_holds() -> None:
     assert parse_spot(fits) == Spot("JA1ABC", 14025.0, "EA5WU", "1829", fits[33:-5].strip())
 
 
-_ORACLE = re.compile(  # the pattern the parser had: right, but cubic on hostile lines
+# the pattern the parser had: right, but cubic on hostile lines; after the time, only what a
+# node puts there (spots.py rule 6: a locator, a zone, a state)
+_ORACLE = re.compile(
     r"DX de (?P<spotter>[A-Z0-9/#-]{3,24}):?\s+(?P<freq>\d{1,9}(?:\.\d{1,3})?)\s+"
-    r"(?P<call>[A-Z0-9/]{3,20})\s+(?P<comment>.*?)\s*(?P<time>\d{4})Z(?:\s+\S+)?\s*",
+    r"(?P<call>[A-Z0-9/]{3,20})\s+(?P<comment>.*?)\s*(?P<time>\d{4})Z"
+    r"(?:\s+(?:[A-R]{2}\d{2}(?:[A-X]{2})?|\d{1,2}|[A-Z]{2}))?\s*",
     re.ASCII | re.IGNORECASE,
 )
 

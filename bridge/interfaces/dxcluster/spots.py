@@ -1,8 +1,15 @@
 """DX cluster lines, sans-IO: bytes in, ``Spot`` values out (the client is client.py).
 
 A cluster node (DX Spider, AR-Cluster, CC Cluster) sends its users text lines; a spot is one of
-them, ``DX de SPOTTER:  FREQ_KHZ  CALL  comment  HHMMZ`` (the comment may be empty, the time
-may carry a locator after it: ``1234Z JO01``).
+them, ``DX de SPOTTER:  FREQ_KHZ  CALL  comment  HHMMZ`` (the comment may be empty). The layout
+is DX Spider's (``format_dx_spot``: ``"DX de %-7.7s%11.1f  %-12.12s %-s $t$loc"``, the comment
+cut and padded to 30 characters), which the other nodes copy: the time ``HHMMZ`` comes after
+the comment, and after the time at most one short field the node adds for a user who asked
+for it (``$loc``): the spotter's locator (its ``wantgrid``: ``1234Z JO01``), a zone
+(``wantdxitu``, ``wantdxcq``: ``%2d``, ``1234Z  14``) or a US state (``wantusstate``:
+``1234Z MA``). Nothing else follows the time; a comment may hold a time of its own
+(``QRV til 2300Z``), and the columns are not to be counted on (nodes and their users' settings
+differ, as do calls longer than the fields).
 
 Rules:
 1. Sans-IO (house rule 1): ``Lines.feed`` takes any bytes, whole or byte by byte, and returns
@@ -25,9 +32,14 @@ Rules:
    poses as one, chooses them; the parser runs beside the stop, docs/architecture.md rule 12):
    the head (spotter, frequency, call) is one anchored match whose parts cannot overlap (each
    class stops where the next one's first character starts), the tail (comment, time, an
-   optional locator) is read from the end with ``rfind``, and a line longer than
+   optional field after it) is read from the end with ``rfind``, and a line longer than
    MAX_LINE_BYTES is no spot. No pattern here has two quantifiers that can take the same
    characters (a regex that does backtracks in cubic time on a line of spaces).
+6. The time is the last word when that ends in ``HHMMZ``; otherwise the last word must be a
+   field the node puts after the time (``_AFTER_TIME``: a locator, a zone, a state) and the
+   time ends the word before it; any other line is no spot. The last word is never taken for
+   that field unchecked (attack 26: ``PM95 QRV til 2300Z  1829Z`` heard at 18:30 was dated
+   by the comment's 2300Z, a spot of 23:00 yesterday, and never listed).
 """
 
 from __future__ import annotations
@@ -44,6 +56,9 @@ _HEAD = re.compile(
     re.ASCII | re.IGNORECASE,
 )
 _DIGITS = frozenset("0123456789")
+# rule 6: what DX Spider puts after the time (its ``$loc``): the spotter's locator (4
+# characters; 6 taken too), an ITU or CQ zone (``%2d``) or a US state
+_AFTER_TIME = re.compile(r"[A-R]{2}[0-9]{2}(?:[A-X]{2})?|[0-9]{1,2}|[A-Z]{2}", re.ASCII | re.I)
 # rule 3: the header before what a user said (an announcement, a talk, WWV and WCY): a call
 # after "de", then a colon, an SSID and a <hour> between them at most
 _SAID = re.compile(r"\bde +[A-Z0-9/#-]{3,24}(?: *<[^>]{0,8}>)? *:", re.ASCII | re.IGNORECASE)
@@ -103,9 +118,10 @@ def _time_at_end(token: str) -> bool:
 
 
 def _tail(rest: str) -> tuple[str, str] | None:
-    """Rule 5: what follows the call (empty, or starting with a space) as (comment, HHMM):
-    the time ends the last word, or the word before it (then the last is a locator); the
-    earlier of the two when both could be (``1829Z 1830Z``: the second is the locator)."""
+    """Rules 5 and 6: what follows the call (empty, or starting with a space) as (comment,
+    HHMM): the time ends the last word; or, when the last word is what a node puts after the
+    time (a locator, a zone, a state), the word before it. A time in the comment before the
+    spot's own (``QRV til 2300Z  1829Z``) is the comment's."""
     rest = rest.rstrip(" ")
     if not rest:
         return None
@@ -113,10 +129,10 @@ def _tail(rest: str) -> tuple[str, str] | None:
     last = rest[cut + 1 :]
     before = rest[:cut].rstrip(" ")
     word = before[before.rfind(" ") + 1 :]
-    if before and _time_at_end(word):
-        end = len(before)
-    elif _time_at_end(last):
+    if _time_at_end(last):
         end = len(rest)
+    elif before and _AFTER_TIME.fullmatch(last) and _time_at_end(word):
+        end = len(before)
     else:
         return None
     return rest[: end - 5].strip(" "), rest[end - 5 : end - 1]
