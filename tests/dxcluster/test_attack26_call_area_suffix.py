@@ -31,10 +31,6 @@ RUSSIA = (
     ("call", "entity"),
     [("UA3ABC/9", "Asiatic Russia"), ("UA3ABC/2", "Kaliningrad"), ("UA9ABC/3", "European Russia")],
 )
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 26: a call-area suffix (UA3ABC/9) is dropped: the spot placed in the home area",
-)
 def test_a_call_area_suffix_places_the_call_in_that_area(call: str, entity: str) -> None:
     book = Book(parse_dat(RUSSIA), (52.5, 13.4), clock=FakeClock(), wall=lambda: wall_at("1830"))
     assert book.add(Spot(call, 14025.0, "EA5WU", "1829", "cq"))

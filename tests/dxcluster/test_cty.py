@@ -50,9 +50,30 @@ def test_portable_forms(cty: Cty) -> None:
     assert cty.lookup("F/G4ABC").name == "France"  # type: ignore[union-attr]  # the prefix
     assert cty.lookup("G4ABC/F").name == "France"  # type: ignore[union-attr]
     assert cty.lookup("F/G4ABC/P").name == "France"  # type: ignore[union-attr]
+    assert cty.lookup("F/G4ABC/9").name == "France"  # type: ignore[union-attr]  # rule 3a
+    assert cty.lookup("W1XYZ/4").name == "United States"  # type: ignore[union-attr]  # W4
     assert cty.lookup("G4ABC/MM") is None  # maritime mobile: no entity
     assert cty.lookup("/") is None
     assert cty.lookup("") is None
+
+
+def test_a_call_area_is_looked_up_in_that_area_not_by_the_home_calls_exact_entry() -> None:
+    """Rule 3a: ``/9`` is the call area the station is in: the home call's own exact entry
+    (an operator listed at home, far from the entity's centre) is not where it is now; an
+    exact entry of the whole form is."""
+    cty = parse_dat(
+        "European Russia:  16:  29:  EU:   53.65:  -41.37:  -4.0:  UA:\n"
+        "    UA,UA3,=UA3ABC<44.00/-39.00>,=UA3XYZ/9<60.00/-30.00>;\n"
+        "Asiatic Russia:   17:  30:  AS:   55.88:  -84.08:  -7.0:  UA9:\n"
+        "    UA9,UA0;\n"
+    )
+    home = cty.lookup("UA3ABC")
+    assert home is not None and home.latitude_deg == 44.00  # the exact entry, at home
+    away = cty.lookup("UA3ABC/9/P")
+    assert away is not None and (away.name, away.latitude_deg) == ("Asiatic Russia", 55.88)
+    listed = cty.lookup("UA3XYZ/9")
+    assert listed is not None and (listed.name, listed.latitude_deg) == ("European Russia", 60.0)
+    assert cty.lookup("UA9ABC/0").name == "Asiatic Russia"  # type: ignore[union-attr]
 
 
 def test_odd_lines_are_skipped_and_counted() -> None:

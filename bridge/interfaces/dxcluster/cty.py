@@ -10,12 +10,25 @@ Rules:
    ``[itu]`` the ITU zone, ``<lat/lon>`` the position (west-positive too), ``{cont}`` the
    continent; ``~tz~`` is read past. ``=CALL`` is an exact call, matched before any prefix.
 3. ``lookup``: an exact call first, then the longest prefix of the call. What is looked up:
-   upper case; a portable suffix (``/P``, ``/M``, ``/QRP``, ``/QRPP``, ``/A``, a lone digit) is
-   dropped, and so are ``/LH`` and ``/LGT`` (a lighthouse), ``/R`` (a rover) and ``/B`` (a
-   beacon), which say what a station is, not where (read as prefixes: Norway, Russia, China);
-   ``/MM`` and ``/AM`` (maritime and aeronautical mobile) are in no entity (None); of two
-   parts left (``F/G4ABC``, ``G4ABC/F``) the shorter one is the prefix that names the
-   entity (equal lengths: the first).
+   upper case; a portable suffix (``/P``, ``/M``, ``/QRP``, ``/QRPP``, ``/A``) is dropped, and
+   so are ``/LH`` and ``/LGT`` (a lighthouse), ``/R`` (a rover) and ``/B`` (a beacon), which
+   say what a station is, not where (read as prefixes: Norway, Russia, China); ``/MM`` and
+   ``/AM`` (maritime and aeronautical mobile) are in no entity (None); of two parts left
+   (``F/G4ABC``, ``G4ABC/F``) the shorter one is the prefix that names the entity (equal
+   lengths: the first).
+3a. A lone digit is a call area, not a portable mark: the station is on the air from that
+   area of its own country (``UA3ABC/9``: a Moscow call in Siberia, the commonest portable
+   form in Russian spots). As loggers read it (JTDX's ``effective_prefix``, for one), the
+   prefix looked up is the call's prefix (up to and including its last digit) with that
+   digit replaced by the suffix's: ``UA9`` (Asiatic Russia); ``UA3ABC/2``, ``UA2``
+   (Kaliningrad, an entity of its own); ``UA9ABC/3``, ``UA3``; a call without a digit gets
+   the digit added. The home call's exact entry (``=UA3ABC``) is not its place there, so it
+   is not looked at; an exact entry of the whole form (``=UA3ABC/9``) still comes first.
+   Dropped as a portable mark, the digit left the call in its home area, 16 to 19 degrees
+   off from Berlin (attack 26). A call area read this way may name another entity than the
+   operator's (``KH6ABC/4`` reads ``KH4``, Midway), as in the loggers: AD1C's file lists
+   such calls whole. With a prefix of another country as well (``F/G4ABC/9``), that prefix
+   names the entity and the digit is read past.
 4. A file that cannot be read or holds no entity raises CtyError naming the file and line;
    an odd line inside a good file is skipped and counted (``skipped``): AD1C's files are
    trusted, a hand-edited one should not stop the bridge. What is no regular file (a device,
@@ -51,6 +64,7 @@ from bridge.core.text import quoted
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
 _PLAIN = re.compile(r"=?[A-Z0-9/]+")
 _DROPPED = frozenset({"P", "M", "QRP", "QRPP", "A", "LH", "LGT", "R", "B"})  # rule 3
+_DIGITS = "0123456789"
 _NOWHERE = frozenset({"MM", "AM"})
 CTY_FILE_MAX = 16 << 20  # rule 4: AD1C's cty.csv is some 300 KB, the big cty.dat some 2 MB
 _AD1C = "name AD1C's cty.dat or cty.csv"  # rule 4: what to do of a file that cannot be read
@@ -100,8 +114,11 @@ class Cty:
         parts = [p for p in whole.split("/") if p]
         if not parts or any(p in _NOWHERE for p in parts[1:]):
             return None
+        areas = [p for p in parts[1:] if len(p) == 1 and p in _DIGITS]  # rule 3a
         parts = [parts[0], *(p for p in parts[1:] if p not in _DROPPED and not p.isdigit())]
-        if len(parts) == 1:
+        if len(parts) == 1 and areas:
+            base = _in_area(parts[0], areas[-1])  # rule 3a: no exact call of the home area
+        elif len(parts) == 1:
             base = parts[0]
             if base in self.exact:
                 return self.exact[base]
@@ -111,6 +128,13 @@ class Cty:
             if base[:end] in self.prefixes:
                 return self.prefixes[base[:end]]  # (None: a refused entity's, rule 5)
         return None
+
+
+def _in_area(call: str, digit: str) -> str:
+    """Rule 3a: the prefix of ``call`` on the air from call area ``digit`` (``UA3ABC``, ``9``:
+    ``UA9``): its prefix up to its last digit, that digit replaced; none: the digit added."""
+    last = max(call.rfind(d) for d in _DIGITS)
+    return call[:last] + digit if last >= 0 else call + digit
 
 
 def _override(base: Entity, token: str) -> tuple[str, Entity]:
