@@ -1,0 +1,77 @@
+"""Review 79 (interfaces/mqtt/remote.py rule 10): a STOP to a rotor already still, whose last
+command was this operator's (Gpredict's ``S`` on disengaging after its own turn), changes
+nothing the station publishes, so the remote holds it for ever (until its own next move) and
+sends it again whenever the station's bridge connects again. (A STOP after another operator's
+word is shown: ``last_operator`` changes, the station publishes a status, the hold ends.)
+Home Assistant then turns the rotor at the station, after that STOP; the station's route to
+its broker dies mid-turn and heals (a home router's reboot), its bridge connects again, and
+the remote's old STOP goes again and stops the newer turn short of its target: an older
+command from one front end overriding a newer one from another. The station said what could
+tell the hold it is superseded: a live status stamped after the STOP showing a target and
+another ``last_operator`` (a new turn the station took after it).
+Real parts: mosquitto, the station's bridge on an emulated Rotor-EZ behind a route this test
+cuts and heals (attack 26's), the remote's rotctld, Home Assistant's target published as it
+would be."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.remote.test_attack26_stop_into_a_partition import (
+    TARGET_AZ,
+    CuttableLink,
+    remote_on,
+    route,  # noqa: F401  (the fixture)
+    station,  # noqa: F401  (the fixture)
+)
+from tests.support import wait_until
+from tests.support.mosquitto import free_port
+from tests.support.remote import ask
+from tests.support.rig import Rig
+from tests.support.waiting import slow
+
+FIRST_AZ = 60.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 79: a STOP to a still rotor is held for ever and sent again at the "
+    "station's reconnect, stopping a later turn Home Assistant started at the station",
+)
+def test_an_old_stop_to_a_still_rotor_never_stops_a_later_turn_from_the_station(
+    station: Rig,  # noqa: F811
+    route: CuttableLink,  # noqa: F811
+) -> None:
+    port = free_port()
+    remote = remote_on(station, port)
+    try:
+        emu = station.emus["tower"]
+        rotator = remote.rotators[0]
+        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
+        assert ask(port, f"P {FIRST_AZ:g} 0\n".encode()) == b"RPRT 0\n"  # the operator's turn
+        station.arrived("tower", FIRST_AZ)
+        # Gpredict disengaging sends S: the rotor is still, this operator's word the last the
+        # station took, so the STOP changes nothing the station publishes
+        assert ask(port, b"S\n") == b"RPRT 0\n"
+        status = station.topic("tower", "status")
+        mark = station.probe.mark()
+        station.probe.publish(station.topic("tower", "target"), f"{TARGET_AZ:g}")  # HA's, later
+        station.probe.wait(
+            lambda m: m.topic == status and b'"moving":true' in m.payload,
+            slow(10),
+            "the station turning for Home Assistant",
+            mark,
+        )
+        wait_until(lambda: emu.state().az_deg > FIRST_AZ + 20, slow(10), "the rotor turning")
+        cut_az = float(emu.state().az_deg)
+        route.cut()  # the station's route dies mid-turn, heals 30 degrees later
+        wait_until(lambda: emu.state().az_deg > cut_az + 30, slow(10), "the rotor turning on")
+        route.heal()
+        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
+        wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
+    finally:
+        remote.stop()
+    az = emu.state().az_deg
+    assert abs(az - TARGET_AZ) < 2, (
+        f"Home Assistant's turn to {TARGET_AZ:g}, asked after the remote's STOP, ended at {az:.0f}"
+    )
