@@ -49,3 +49,30 @@ def test_a_lost_azimuth_frame_mid_turn_is_sent_again_not_called_a_stall(rig: Rig
     assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 175.0)
     health = v.status.health
     assert health is not None and health.stalls == 0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 78: the same false stall on a Combi-Track (a frame per unit): its unit A "
+    "frame lost mid-turn, the azimuth called stalled while the elevation climbs",
+)
+def test_a_combi_tracks_lost_azimuth_frame_mid_turn_is_no_stall(rig: Rig) -> None:
+    """The same on a Prosistel Combi-Track, whose units go a frame each (its elevation at 2
+    degrees a second, set so, climbs 30 s after its azimuth rests): 434064a6 sent the target
+    again once the rotor rested and reached (200, 88)."""
+    v = rig(
+        "prosistel-combi",
+        settings={"el_speed_deg_s": 2.0},
+        emulator={"start_az_deg": 0, "start_el_deg": 0, "el_speed_deg_s": 2.0},
+    )
+    v.run_until_state(MotionState.IDLE, 30)
+    t0 = v.now
+    v.target(100, 85)
+    v.run_for(MID_TURN_S)
+    v.drop_writes(b"\x02AG2000\r")  # (unit A's frame, lost on the line)
+    v.target(200, 88)
+    v.run_until(lambda h: settled_at(200, 88)(h) or h.state is MotionState.STALLED, 180, "an end")
+    assert [w.data for w in v.writes if w.lost] == [b"\x02AG2000\r"]
+    said = [r.message for r in v.errors(ErrorKind.STALLED, since=t0)]
+    assert said == [], said
+    assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 88.0)
