@@ -11,6 +11,13 @@ Rules:
 1. Any serial error closes the port, tells the session the link is down and retries with
    back-off (``reconnect_min_s`` doubling up to ``reconnect_max_s``); a worker never dies of
    one. Commands are still taken while the port is closed (they are refused with a reason).
+   While the session owes the controller a stop (session/stops.py rule 3: a STOP or lock ON
+   that came while the port was out), the port is tried again every OWED_RETRY_S instead,
+   however far the back-off has grown: that stop is the first frame once the adapter is back,
+   and a rotor that kept its power turns on until it goes (attack 23: an adapter out 17 s had
+   the next try up to 10 s after it was back, and the rotor turned on 36 degrees). Trying a
+   missing path is cheap (one failed open() on a thread of its own). The back-off is kept
+   while nothing is owed: then nothing is lost by waiting.
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
    and when that hold ends the port is read without waiting to be told it is readable (up to
@@ -71,6 +78,10 @@ __all__ = ["Worker", "WorkerConfig"]
 
 log = logging.getLogger(__name__)
 _NOTHING: frozenset[int] = frozenset()
+# rule 1: how soon the port is tried again while a stop is owed, whatever the back-off: a
+# rotor at 6 degrees a second turns on 1.5 degrees at most, once its adapter is back, before
+# the stop's try (four failed open()s a second on a missing path cost next to nothing)
+OWED_RETRY_S = 0.25
 
 
 class Worker:
@@ -125,6 +136,7 @@ class Worker:
         self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
+        self._tried_at = 0.0  # when the port last failed: to open, or while open (rule 1)
         self._held = False
         self._wanted: tuple[list[int], float, float] | None = None  # rule 6
         self._urgent = frozenset({self._box})
@@ -134,7 +146,7 @@ class Worker:
     def begin(self, now: float, wake: Callable[[], None]) -> None:
         self._wake = wake  # wakes the lines thread when a port opened (rule 4)
         self._do(self.session.start(now))
-        self._reopen_at = now
+        self._reopen_at = self._tried_at = now
 
     def end(self, now: float) -> None:
         """Close the port for good (the rotator is stopping), in the background (rule 4): the
@@ -175,7 +187,8 @@ class Worker:
             return self._wanted
         if self._port is None:
             if self._opening is None:
-                return [self._box], self._reopen_at, self._reopen_at
+                reopen_at = self._next_try()
+                return [self._box], reopen_at, reopen_at
             until = math.inf if self._opening.result is None else now  # it is there
             return [self._box], until, until
         session = self.session
@@ -211,7 +224,7 @@ class Worker:
                 self._take_answers(now)
             if self._opening is not None and self._opening.result is not None:
                 self._opened(self._opening.result, now)
-            elif self._opening is None and now >= self._reopen_at:
+            elif self._opening is None and now >= self._next_try():
                 attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
                 self._opening = PendingOpen(attempt, self._wake)
             return
@@ -282,13 +295,21 @@ class Worker:
         """What a tracking OFF and a following OFF would end now (session.py ``features_on``)."""
         return self.session.features_on
 
+    def _next_try(self) -> float:
+        """When the port is tried again: after the back-off, or OWED_RETRY_S after the last
+        failure while a stop is owed (rule 1; asked anew each time: a STOP taken while the
+        port is out shortens the wait it came in)."""
+        if self.session.controller.stops.owed:
+            return min(self._reopen_at, self._tried_at + OWED_RETRY_S)
+        return self._reopen_at
+
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None
         if isinstance(result, Exception):
             if not isinstance(result, PortError):
                 log.error("%s: opening %s failed: %r", self.cfg.rotator_id, self.cfg.port, result)
             self._do(self.session.open_failed(str(result), now))
-            self._reopen_at = now + self._backoff_s
+            self._tried_at, self._reopen_at = now, now + self._backoff_s
             self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
             return
         log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
@@ -300,7 +321,7 @@ class Worker:
         port, self._port, self._fd = self._port, None, -1
         if port is not None:
             self._closes(close_in_background(port, self._watch))  # rule 4
-        self._reopen_at = now + self._backoff_s
+        self._tried_at, self._reopen_at = now, now + self._backoff_s
         self._do(self.session.link_down(reason, now, kind))
 
     def _take_answers(self, now: float) -> bool:
