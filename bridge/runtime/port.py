@@ -206,17 +206,25 @@ def close_in_background(port: serial.Serial, watch: PortWatch | None = None) -> 
 
 class PendingOpen:
     """One attempt to open a port, on a thread of its own (a wedged USB adapter can hold open()
-    for seconds); ``wake`` is called when ``result`` (the port, or the exception) is there.
-    Abandoned (the rotator stops meanwhile), a port opened too late is closed at once."""
+    for seconds, or for good); ``wake`` is called when ``result`` (the port, or the exception)
+    is there. Abandoned (the rotator stops meanwhile, or the open outlasts worker.py's
+    OPEN_BOUND_S), a port opened too late is closed at once; ``running`` says whether its
+    open() has returned yet (worker.py rule 4: one abandoned attempt left running at most)."""
 
     def __init__(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
         self.result: serial.Serial | Exception | None = None
         self._lock = threading.Lock()
         self._abandoned = False
         self._watch: PortWatch | None = None  # abandon's, told before a late port is closed
-        threading.Thread(
+        self._thread = threading.Thread(
             target=self._run, args=(attempt, wake), name="open port", daemon=True
-        ).start()
+        )
+        self._thread.start()
+
+    @property
+    def running(self) -> bool:
+        """Whether the attempt is still inside its open(), abandoned or not."""
+        return self._thread.is_alive()
 
     def _run(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
         try:

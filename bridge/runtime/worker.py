@@ -16,8 +16,9 @@ Rules:
    however far the back-off has grown: that stop is the first frame once the adapter is back,
    and a rotor that kept its power turns on until it goes (attack 23: an adapter out 17 s had
    the next try up to 10 s after it was back, and the rotor turned on 36 degrees). Trying a
-   missing path is cheap (one failed open() on a thread of its own). The back-off is kept
-   while nothing is owed: then nothing is lost by waiting.
+   missing path is cheap (one failed open() on a thread of its own), and a try that hangs is
+   bounded (rule 4). The back-off is kept while nothing is owed: then nothing is lost by
+   waiting.
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
    and when that hold ends the port is read without waiting to be told it is readable (up to
@@ -31,6 +32,18 @@ Rules:
    not hold up the other lines. Meanwhile the rotator is offline and its commands are answered
    (refused) as when the port is closed. ``wait_closed`` waits for those closes, on any thread
    but the lines thread (lines.py rule 4: a stopped rotator's port is closed or being closed).
+   An open that has not returned OPEN_BOUND_S after it started (a wedged adapter's driver) is
+   abandoned, said once (the session's port error: R/error and a WARNING, once per reason),
+   and the port is tried again at once (attack 23: a hung open() was waited for for ever, and
+   the adapter pulled and plugged back in never brought the rotator back until a restart). At
+   most one abandoned attempt is left running: while it is still inside its open(), a next
+   attempt that hangs too is waited for (looked at again every OPEN_BOUND_S), not abandoned,
+   so a driver wedged for good holds two threads for good, not one more every few seconds
+   (a thread stuck in the kernel cannot be ended from here). One is enough for the replug: the
+   abandoned open hangs on the old device, the new attempt opens the new one. The bound is
+   liveness, not correctness (docs/architecture.md rule 15): it decides when the port is
+   tried again, never what the controller is sent; a port the abandoned attempt opens late
+   is closed at once (port.py PendingOpen), unused.
 5. The session's questions about the sky (``Ask``) go to the sky worker (skywork.py); each
    answer is queued here by that thread, which then wakes the lines thread through the mailbox
    pipe, and is handed to the session on the lines thread after the mailbox's commands.
@@ -82,6 +95,9 @@ _NOTHING: frozenset[int] = frozenset()
 # rotor at 6 degrees a second turns on 1.5 degrees at most, once its adapter is back, before
 # the stop's try (four failed open()s a second on a missing path cost next to nothing)
 OWED_RETRY_S = 0.25
+# rule 4: how long an open() may take before it is given up as hung. A tty's takes
+# milliseconds; a Bluetooth serial port's (rfcomm) pages the device first, some 5 s at most
+OPEN_BOUND_S = 10.0
 
 
 class Worker:
@@ -133,6 +149,8 @@ class Worker:
         self._port: serial.Serial | None = None
         self._fd = -1
         self._opening: PendingOpen | None = None
+        self._open_until = math.inf  # when the pending open is given up as hung (rule 4)
+        self._hung: PendingOpen | None = None  # the last one given up, maybe still running
         self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
@@ -189,7 +207,7 @@ class Worker:
             if self._opening is None:
                 reopen_at = self._next_try()
                 return [self._box], reopen_at, reopen_at
-            until = math.inf if self._opening.result is None else now  # it is there
+            until = self._open_until if self._opening.result is None else now  # it is there
             return [self._box], until, until
         session = self.session
         until, hold = session.next_wakeup(), session.hold_reads_until()
@@ -222,11 +240,15 @@ class Worker:
             if self._box in ready:
                 self._do(self.session.commands(self._mailbox.take(), now))
                 self._take_answers(now)
-            if self._opening is not None and self._opening.result is not None:
-                self._opened(self._opening.result, now)
-            elif self._opening is None and now >= self._next_try():
+            opening = self._opening
+            if opening is not None and opening.result is not None:
+                self._opened(opening.result, now)
+            elif opening is not None and now >= self._open_until:
+                self._open_hung(opening, now)
+            elif opening is None and now >= self._next_try():
                 attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
                 self._opening = PendingOpen(attempt, self._wake)
+                self._open_until = now + OPEN_BOUND_S
             return
         session, acted = self.session, False
         try:
@@ -302,6 +324,22 @@ class Worker:
         if self.session.controller.stops.owed:
             return min(self._reopen_at, self._tried_at + OWED_RETRY_S)
         return self._reopen_at
+
+    def _open_hung(self, opening: PendingOpen, now: float) -> None:
+        """Rule 4: the pending open outlasted OPEN_BOUND_S: given up and tried again at once,
+        unless the last one given up is still inside its open() (then waited for, and looked
+        at again after another bound)."""
+        if self._hung is not None and self._hung.running:
+            self._open_until = now + OPEN_BOUND_S
+            return
+        self._closes(opening.abandon(self._watch))  # (a port it opened just now: closed)
+        self._hung, self._opening = opening, None
+        reason = (
+            f"opening {self.cfg.port} hung for {OPEN_BOUND_S:g} s (the adapter or its driver "
+            "wedged? unplug it and plug it back in): given up and tried again"
+        )
+        self._do(self.session.open_failed(reason, now))  # once per reason (controller.py)
+        self._tried_at = self._reopen_at = now  # the bound was the wait
 
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None

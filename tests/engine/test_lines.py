@@ -32,7 +32,7 @@ from bridge.runtime.lines import GATHER_S, Lines, wake_at
 from bridge.runtime.port import open_port
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
-from bridge.runtime.worker import Worker
+from bridge.runtime.worker import OPEN_BOUND_S, Worker
 from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
@@ -111,6 +111,7 @@ def test_one_rotators_trouble_never_holds_up_anothers_stop(
     sick = rotator("sick", str(tmp_path / "nowhere"), lines, bad, events)
     assert emu.link is not None
     good = rotator("good", emu.link, lines, open_port, events)
+    started = time.monotonic()
     sick.start()
     good.start()
     try:
@@ -122,14 +123,17 @@ def test_one_rotators_trouble_never_holds_up_anothers_stop(
         assert not release.is_set() and not sick.status.available
         with pytest.raises(Refused):
             sick.submit(Target(10.0))  # offline: refused, as with a missing adapter
+        calls, window_s = bad.calls, time.monotonic() - started
     finally:
         release.set()
         sick.stop()
         good.stop()
     if trouble == "a bug":
         assert 1 <= bad.calls <= 6  # retried with back-off, not in a spin
-    else:
-        assert bad.calls == 1  # still in its one open() the whole time
+    elif window_s < OPEN_BOUND_S:
+        assert calls == 1  # still in its one open() the whole time
+    else:  # a loaded run outlasted worker.py's bound (rule 4): given up once, no more while
+        assert 1 <= calls <= 2  # the first still hangs (the second maybe not begun yet)
 
 
 def test_a_port_that_will_not_close_holds_up_neither_another_line_nor_the_stop(

@@ -1,26 +1,32 @@
-"""runtime/worker.py rule 1: when a port that is out is tried again, in virtual time. Real parts:
-real pyserial on a path that is missing, then a pseudo-terminal linked there (the adapter back
-under its stable name); the times are the worker's own ``now``, handed in by the test.
+"""runtime/worker.py rules 1 and 4: when a port that is out is tried again, in virtual time.
+Real parts: real pyserial on a path that is missing, then a pseudo-terminal linked there (the
+adapter back under its stable name); the times are the worker's own ``now``, from the test.
 
 Nothing owed: the back-off (0.5 s doubling to 10 s). A stop owed (a STOP taken while the port
 is out): tried every OWED_RETRY_S instead, and the stop is the first frame once it opens
 (attack 23: the owed stop waited out the back-off, up to 10 s after the adapter was back).
+An open() that hangs is given up after OPEN_BOUND_S and the port tried again, one given up
+left hanging at most (attack 23: a wedged adapter's open was waited for for ever).
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import select
+import threading
 from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
 
 import pytest
+import serial
 
 from bridge.app import worker_config
 from bridge.core.model import Stop
-from bridge.runtime.port import PendingOpen
-from bridge.runtime.worker import OWED_RETRY_S, Worker
+from bridge.protocols.base import ModelSpec
+from bridge.runtime.port import PendingOpen, open_port
+from bridge.runtime.worker import OPEN_BOUND_S, OWED_RETRY_S, Worker
 from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
@@ -110,5 +116,78 @@ def test_a_stop_owed_has_the_port_tried_promptly_and_goes_out_first(
     finally:
         worker.guarded(worker.end, START)
         assert worker.wait_closed(slow(5))
+        os.close(master)
+        os.close(slave)
+
+
+class Wedged:
+    """A port opener whose every open() hangs until the test lets it go (a driver wedged for
+    good), and then opens the pty it is given: a port the worker gets late."""
+
+    def __init__(self, tty: str) -> None:
+        self.tty = tty
+        self.gates: list[threading.Event] = []
+        self.ports: list[serial.Serial] = []
+
+    def __call__(self, path: str, spec: ModelSpec, baud: int | None) -> serial.Serial:
+        gate = threading.Event()
+        self.gates.append(gate)
+        gate.wait(slow(60))  # a guard, past the test's end (not a deadline it judges)
+        port = open_port(self.tty, spec, baud)
+        self.ports.append(port)
+        return port
+
+
+def test_a_hung_open_is_given_up_and_tried_again_leaving_one_hanging_at_most(
+    link: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    master, slave = os.openpty()
+    wedged = Wedged(os.ttyname(slave))
+    settings = RotatorSettings.model_validate(
+        {"id": "tower", "model": "rotorez", "port": str(link), **FAST_BRIDGE}
+    )
+    box, events = Mailbox(), []
+    worker = Worker(worker_config(settings), box, lambda s: None, events.append, port_opener=wedged)
+    caplog.set_level(logging.WARNING, logger="bridge")
+
+    def served(now: float) -> float:
+        worker.guarded(worker.serve, now, set())
+        return worker.wants(now)[1]
+
+    try:
+        worker.guarded(worker.begin, START, lambda: None)
+        assert served(START) == START + OPEN_BOUND_S  # the first open, given a bound
+        wait_until(lambda: len(wedged.gates) == 1, slow(5), "the first open() hanging")
+        now = served(START + OPEN_BOUND_S)  # given up...
+        assert now == START + OPEN_BOUND_S  # ...and tried again at once
+        second_until = served(now)
+        wait_until(lambda: len(wedged.gates) == 2, slow(5), "the second open() hanging")
+        second = worker._opening
+        for _ in range(3):  # the first still hangs: the second is waited for, not given up
+            second_until = served(second_until)
+            assert worker._opening is second
+        assert len(wedged.gates) == 2  # two threads in open(), never more
+        wedged.gates[0].set()  # the first comes back late, with a port: closed at once
+        wait_until(lambda: wedged.ports and not wedged.ports[0].is_open, slow(5), "closed")
+        now = served(second_until)  # now the second is given up, and a third started
+        served(now)
+        wait_until(lambda: len(wedged.gates) == 3, slow(5), "the third open()")
+        wedged.gates[2].set()  # the adapter replugged: this one opens
+        opening = worker._opening
+        assert opening is not None
+        wait_until(partial(has_result, opening), slow(5), "the third open() back")
+        served(now)
+        assert select.select([master], [], [], slow(5))[0]
+        assert b"AI1;" in os.read(master, 64)  # the controller is asked its bearing again
+        hung = [e for e in events if "hung for" in e.message]
+        assert len(hung) == 1  # R/error said it once, for two given up
+        said = [r for r in caplog.records if "hung for" in r.getMessage()]
+        assert [r.levelno for r in said] == [logging.WARNING]
+    finally:
+        for gate in wedged.gates:
+            gate.set()
+        worker.guarded(worker.end, START)
+        assert worker.wait_closed(slow(5))
+        box.close()
         os.close(master)
         os.close(slave)
