@@ -57,3 +57,22 @@ def test_a_restart_mid_storm_park_never_says_send_the_target_again() -> None:
         assert not any(m.endswith("send the target again") for m in said), (
             f"R/error told the user to send the storm's park again, which the storm refuses: {said}"
         )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 80: a storm's park the box's known restart (its power-on byte) cut short is "
+    "never sent again: the antenna faces the storm off its park, and all motion is refused",
+)
+def test_a_storm_park_a_known_restart_cut_short_is_sent_again() -> None:
+    """Wind.py rule 7 sends again a park the line took; rule 10 keeps back only a park whose
+    motor drove against a jam. The power-on byte says neither: the box lost the park, its motor
+    is free, and nobody else can send the park in the storm. (Not new in 1222fcd3..45112209:
+    the same before 16eb7df1; found by this review.)"""
+    with VirtualRotator("rotorez", settings=WIND) as v:
+        power_cycled_mid_park(v)
+        assert v.status.wind is not None and v.status.wind.storm  # the storm goes on
+        assert abs(v.truth().az_deg - 180.0) < 2.0, (
+            f"the rotor stands at {v.truth().az_deg:.0f}, its storm park is 180; R/status "
+            f"wind: off_park={v.status.wind.off_park}; R/error: {[e.message for e in v.errors()]}"
+        )
