@@ -101,12 +101,14 @@ class StatusBlock(Generic[T]):
     (a JSON value) or, with ``rendered``, its JSON text (made once, appended last), from the
     value alone: while ``value`` gives the same object, R/status keeps the text it made of it
     (interfaces/mqtt/payloads.py ``StatusText``; a part's value is never changed after it was
-    handed on, session/parts.py rule 6)."""
+    handed on, session/parts.py rule 6). ``kind``: the JSON the block is (an object, or text),
+    all a remote lets through of a station's block (remote/readings.py rule 3)."""
 
     key: str
     value: Callable[[RotatorStatus], T | None]
     render: Callable[[T], object]
     rendered: bool = False
+    kind: type[dict[str, object]] | type[str] = dict
 
 
 class TopicView(Protocol):

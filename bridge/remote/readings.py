@@ -14,11 +14,25 @@ Rules:
    holding a control character, or blank at either end (an attack pass: a forged R/info's
    id ``"tower\nDL1ABC -> ..."`` with a terminal's escape sequence put a forged line in the
    remote's start lines on the operator's terminal); the station's model stands for it.
+3. ``R/status`` is read back whole, as the station's console shows it (docs/remote.md): its
+   core fields into the status's own (``control`` and ``last_operator`` too: an attack pass
+   found them dropped, and the remote's page showed a free rotator while another operator
+   held the lease), and every feature's block (bridge/feature.py ``StatusBlock``: rotor
+   health, following, the wind, tracking...) carried as the station wrote it
+   (``RotatorStatus.relayed``), by the registry's keys, so a block added there reaches the
+   remote's page with no word here. A block is checked first (``checked_block``): JSON of the
+   block's kind, nested no deeper than BLOCK_DEPTH, no longer than BLOCK_CHARS once written,
+   every number finite, every text free of control characters (bad_char) and no longer than
+   TEXT_CHARS; one that is not is left out, and the log says which and why, once while it
+   stays so (each status is read again at each use). A name shown (``last_operator``, the
+   lease's holder) is one ``_shown`` lets through and no longer than NAME_CHARS, or unknown
+   (a lease's holder: UNSHOWN, the lease shown all the same).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -33,10 +47,19 @@ from bridge.core.model import (
     TrackingInfo,
 )
 from bridge.core.text import bad_char
+from bridge.feature import StatusBlock, status_blocks
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
+
+log = logging.getLogger(__name__)
+
+BLOCK_DEPTH = 6  # rule 3: how deep a block nests (the station's nest three deep at most)
+BLOCK_CHARS = 64_000  # rule 3: a block's JSON text, at most (a pass's track: a few KB)
+TEXT_CHARS = 200  # rule 3: a text in a block (a reason, a call, a body's name), at most
+NAME_CHARS = 64  # rule 3: an operator's name shown
+UNSHOWN = "(a name not shown)"  # rule 3: a lease's holder whose name cannot be shown
 
 
 class InfoError(ValueError):
@@ -237,7 +260,104 @@ def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
         target_info=_target_info(doc.get("target_info")),
         tracking=_tracking(doc.get("tracking")),
         tracking_ended=doc.get("tracking_ended"),
+        last_operator=_name(doc.get("last_operator")),
+        control=_shown_control(doc.get("control")),
+        relayed=_relayed(rotator_id, doc),
     )
+
+
+def _name(text: object) -> str | None:
+    """Rule 3: an operator's name the page may show, or unknown."""
+    if not isinstance(text, str) or not _shown(text) or len(text) > NAME_CHARS:
+        return None
+    return text
+
+
+def _control(doc: object) -> Control | None:
+    """Who holds the lease (features/control/payload.py's words: R/control, the status's
+    ``control``), or None: free, or not what the station writes (rule 1)."""
+    if not isinstance(doc, dict) or not isinstance(doc.get("holder"), str):
+        return None
+    until = _unix(doc.get("until"))
+    return None if until is None else Control(doc["holder"], until)
+
+
+def _shown_control(doc: object) -> Control | None:
+    """Rule 3: the status's ``control`` as the page shows it: held by a name it may show, or
+    by UNSHOWN (a lease held all the same: the station refuses the others' moves)."""
+    held = _control(doc)
+    if held is None or _name(held.operator) is not None:
+        return held
+    return Control(UNSHOWN, held.until_unix)
+
+
+#: rule 3: (rotator, block) -> why it was last left out, said once while it stays so
+_told: dict[tuple[str, str], str] = {}
+
+
+def _relayed(rotator_id: str, doc: dict[str, Any]) -> dict[str, object]:
+    """Rule 3: every feature's block of the station's status, checked; one that is not what a
+    station writes is left out, and said."""
+    out: dict[str, object] = {}
+    for block in status_blocks():
+        value = doc.get(block.key)
+        if value is None:
+            continue
+        why = checked_block(block, value)
+        if why is None:
+            out[block.key] = value
+            _told.pop((rotator_id, block.key), None)
+        elif _told.get((rotator_id, block.key)) != why:
+            _told[rotator_id, block.key] = why
+            log.warning(
+                "%s: the station's status has a %r block the console will not show: %s",
+                rotator_id,
+                block.key,
+                why,
+            )
+    return out
+
+
+def checked_block(block: StatusBlock[Any], value: object) -> str | None:
+    """Rule 3: why ``value`` is no ``block`` a station writes, or None when it may be shown."""
+    if not isinstance(value, block.kind):
+        return f"it is {type(value).__name__}, not {block.kind.__name__}"
+    why = _json_why(value, BLOCK_DEPTH)
+    if why is not None:
+        return why
+    if len(json.dumps(value)) > BLOCK_CHARS:
+        return f"it is longer than {BLOCK_CHARS} characters"
+    return None
+
+
+def _json_why(value: object, depth: int) -> str | None:
+    """Rule 3: why ``value`` (parsed JSON) may not reach a page, or None."""
+    if value is None or isinstance(value, bool):
+        return None
+    if isinstance(value, int | float):
+        try:
+            _finite(value)
+        except ValueError as exc:
+            return str(exc)
+        return None
+    if isinstance(value, str):
+        if len(value) > TEXT_CHARS:
+            return f"a text is longer than {TEXT_CHARS} characters"
+        bad = bad_char(value)
+        return None if bad is None else f"a text holds {bad}"
+    if depth <= 0:
+        return f"it nests deeper than {BLOCK_DEPTH}"
+    if isinstance(value, dict):
+        items: list[object] = [*value.keys(), *value.values()]
+    elif isinstance(value, list):
+        items = value
+    else:  # (json.loads makes nothing else)
+        return f"{type(value).__name__} is no JSON"
+    for item in items:
+        why = _json_why(item, depth - 1)
+        if why is not None:
+            return why
+    return None
 
 
 def status_halted(payload: bytes) -> tuple[float, bool, bool] | None:
@@ -270,7 +390,4 @@ def parse_control(payload: bytes | None) -> Control | None:
         doc = load(payload or b"null")
     except ValueError:
         return None
-    if not isinstance(doc, dict) or not isinstance(doc.get("holder"), str):
-        return None
-    until = _unix(doc.get("until"))
-    return Control(doc["holder"], until) if until is not None else None
+    return _control(doc)

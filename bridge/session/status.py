@@ -194,6 +194,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         features=dict(seen.features.parts) if seen.features.parts else {},
         stop_owed=seen.stop_owed,
         short_of_deg=seen.short_of_deg,
+        relayed=None,  # (a remote's reading alone: remote/readings.py rule 3)
     )
     return status
 

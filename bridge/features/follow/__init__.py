@@ -96,7 +96,7 @@ FEATURE = Feature(
     states=(StateTopic(STATE, _status, follow_state, needs=NEEDS),),
     status=(
         StatusBlock("following", _following, following_json),
-        StatusBlock("following_ended", _ended, str),
+        StatusBlock("following_ended", _ended, str, kind=str),
     ),
     entities=(
         EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS, after="distance"),

@@ -148,7 +148,7 @@ FEATURE = Feature(
     states=(StateTopic(STATE, _status, tracking_state, needs=NEEDS),),
     status=(
         StatusBlock("tracking", _tracking, tracking_json),
-        StatusBlock("tracking_ended", _ended, str),
+        StatusBlock("tracking_ended", _ended, str, kind=str),
     ),
     entities=(
         EntityRow("select", "track", "Track", _select, needs=TRACK_OPTIONS, after=AFTER),

@@ -583,12 +583,16 @@ class StatusText:
 
     def render(self, status: RotatorStatus, time_unix: float, shows_raw: bool) -> str:
         blocks = status_blocks()
-        values = [block.value(status) for block in blocks]
+        relayed = status.relayed  # (a remote's: the station's blocks, as it wrote them)
+        if relayed is None:
+            values = [block.value(status) for block in blocks]
+        else:
+            values = [relayed.get(block.key) for block in blocks]
         options = status.options
         key = (blocks, *_REST_FIELDS(status), *values, *options, *options.values())
         kept, middle, tail = self._kept
         if len(key) != len(kept) or not all(map(is_, key, kept)):
-            middle, tail = _status_rest(status, blocks, values)
+            middle, tail = _status_rest(status, blocks, values, relayed is not None)
             self._kept = key, middle, tail
         head = _STATUS_ENCODE(_status_head(status, self._has_elevation, shows_raw))
         return f'{head[:-1]},{middle}"{_iso(time_unix)}"{tail}'  # (a time needs no escape)
@@ -633,21 +637,26 @@ def _status_head(status: RotatorStatus, has_elevation: bool, shows_raw: bool) ->
 
 
 def _status_rest(
-    status: RotatorStatus, blocks: tuple[StatusBlock[Any], ...], values: list[object]
+    status: RotatorStatus,
+    blocks: tuple[StatusBlock[Any], ...],
+    values: list[object],
+    relayed: bool = False,
 ) -> tuple[str, str]:
     """R/status after its head, around its time: its members from ``parked`` to ``estimated``
     then ``"time":``; and after the time, the blocks rendered once (rotor health's, once per
     move) and the closing brace. The blocks are each feature's (bridge/feature.py), in the
-    registry's order; ``values`` holds each one's value."""
+    registry's order; ``values`` holds each one's value: with ``relayed``, each its block
+    already (a remote's reading of the station's R/status: remote/readings.py rule 3)."""
     doc: dict[str, object] = {"parked": status.parked}
     tail = []
     for block, value in zip(blocks, values, strict=True):
         if value is None:
             continue
         if block.rendered:
-            tail.append(f',"{block.key}":{block.render(value)}')
+            text = _STATUS_ENCODE(value) if relayed else block.render(value)
+            tail.append(f',"{block.key}":{text}')
         else:
-            doc[block.key] = block.render(value)
+            doc[block.key] = value if relayed else block.render(value)
     control = status.control
     doc["state"] = status.state.value
     doc["moving"] = status.moving
