@@ -44,7 +44,25 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    never a crash; a login refused names the keys to check (``login_hint``: it said "Not
    authorized" and no key, an attack pass): with a client certificate and no user name, the
    certificate (a broker that takes it as the login), not a password to set. Rule 7 only
-   slows that loop down. A connection the broker closes before it answers the CONNECT (an
+   slows that loop down. The back-off is 1 s doubling to 30 s (``RECONNECT_MAX_S``) for the main
+   connection, whose tries a broker refusing the login sees; a connection that carries stops
+   and locks (the stop lane, the stop express: their ``RECONNECT_MAX_S``) doubles to
+   STOP_RECONNECT_MAX_S (2 s) only. A broker back from an outage is not announced: its
+   persisted retained ``R/availability`` says ``online`` at once (a broker's own shutdown
+   sends no last will), so a dashboard offers STOP while the bridge is still waiting out its
+   back-off, and a clean session keeps nothing for a connection not yet back (rule 1). With
+   30 s, after a 33 s outage every connection came back 28 s after the broker, and a STOP
+   sent then reached nobody: the rotor turned on to its target (attack 23). The cost of 2 s
+   is small: a try at a broker that is away is a TCP connection refused (or one that times
+   out, which spaces the tries by itself), and the stop lane and the express start only once
+   the main connection was accepted, so a wrong password is tried on the main connection's
+   back-off alone; a lane the broker keeps refusing or closing (rule 3 of lane.py: said once)
+   tries under 30 times a minute, below what a broker's flapping detection bans (EMQX: 30
+   disconnects a minute when it is turned on). Less would pass that ban, and close the window
+   no better: a STOP sent before the lane is back, however soon it tries, reaches the main
+   connection only, if that one is back; only the broker keeping the STOP for the lane would
+   close it, which a clean session does not ask (docs/reliability.md, Limits, says why the
+   lane's stays clean). A connection the broker closes before it answers the CONNECT (an
    ACL on the client id, a connection limit, a broker without MQTT 5) is said too, once, with
    the likely fixes (``_closed_early``): it is never silent.
 7. One client id, one connection. A broker that gets a second connection with a client id closes
@@ -174,6 +192,7 @@ TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
+STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
@@ -311,7 +330,7 @@ class Options(TypedDict, total=False):
     no_replay: list[str] | None  # command filters whose retained message is not replayed
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
-    reconnect_max_s: int
+    reconnect_max_s: int  # (by default the class's RECONNECT_MAX_S: rule 6)
 
 
 class Connection:
@@ -319,6 +338,7 @@ class Connection:
     through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_MAX_S  # rule 7: TAKEOVER_FIRST_S for one that carries stops
+    RECONNECT_MAX_S = 30  # rule 6: STOP_RECONNECT_MAX_S for one that carries stops
 
     def __init__(
         self,
@@ -346,7 +366,10 @@ class Connection:
         self._on_new_connection = options.get("on_new_connection")
         self._on_subscribed = options.get("on_subscribed")
         self._clock = clock
-        self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
+        self._reconnect_s = (
+            options.get("reconnect_min_s", 1),
+            options.get("reconnect_max_s", self.RECONNECT_MAX_S),
+        )
         self._guard = TakeoverGuard()
         self._peer: tuple[str, int] | None = None  # rule 7: the address the connection had
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)

@@ -58,7 +58,8 @@ Rules:
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies, one whose client id another client keeps taking over (said until a connection of it
-   lasts connection.py's STABLE_S; it backs off TAKEOVER_FIRST_S at most: connection.py rule 7),
+   lasts connection.py's STABLE_S; it backs off TAKEOVER_FIRST_S at most: connection.py rule 7,
+   and reconnects otherwise on rule 6's short back-off for a connection that carries stops),
    a frame left half-written (rule 9) and a long hold (rule 8) are said on ``B/bridge/info``
    (``on_problem``); stops then take the stop lane in the bridge's process, as without it. An
    express that ended is started again, RESTART_FIRST_S later, the wait doubling for each end in
@@ -216,6 +217,7 @@ from bridge.core.model import operator_name
 from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
+    STOP_RECONNECT_MAX_S,
     TAKEOVER_FIRST_S,
     Connection,
     Ending,
@@ -965,6 +967,7 @@ class _Link(Connection):
     """The express's connection (rule 2): the lane's hooks, its words to the bridge."""
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 6: it carries stops (connection.py rule 7)
+    RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
 
     def __init__(
         self,

@@ -31,7 +31,11 @@ Rules:
    other disconnects are logged at debug level (the main connection says the same). It
    judges a takeover as connection.py rule 7 does, counting only connections that were
    accepted, and backs off for one TAKEOVER_FIRST_S at most (``FIGHT_BACKOFF_MAX_S``: a
-   crash-looping broker can look the same, and stops must come soon after it is back).
+   crash-looping broker can look the same, and stops must come soon after it is back); any
+   other way, it tries again on connection.py rule 6's back-off for a connection that carries
+   stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a broker's return is
+   heard). Its session stays clean (rule 2; docs/reliability.md, Limits, says why a kept one
+   is not asked for).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
@@ -60,6 +64,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
+    STOP_RECONNECT_MAX_S,
     TAKEOVER_FIRST_S,
     Connection,
     Ending,
@@ -90,6 +95,7 @@ def lane_client_id(settings: MqttSettings) -> str:
 
 class StopLane(Connection):
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 3
+    RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
 
     def __init__(
         self,
