@@ -22,11 +22,6 @@ from tests.support import wait_until
 DOWN_S = START_WAIT_S + 2.0  # the broker away: the fault's length (not a deadline)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 23: after a broker outage of over 10 s the log says at ERROR that the stop "
-    "express did not come up, though it was up and only the broker was away",
-)
 def test_a_broker_outage_is_not_said_as_a_stop_express_that_did_not_start(
     rig: Rig, caplog: pytest.LogCaptureFixture
 ) -> None:

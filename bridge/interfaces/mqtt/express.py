@@ -55,7 +55,10 @@ Rules:
    handed over (an unplug and replug), leaves that one held (the express closed the old copy
    then). An express that does not answer in time is killed (rule 6) and the port closed all
    the same.
-6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
+6. Never silent: an express not up within START_WAIT_S of its start (judged once a child: one
+   that came up and whose connection then ended waits for its broker, which the main
+   connection says; after an outage of over START_WAIT_S it was said at ERROR, and on
+   ``B/bridge/info``, as a start that failed: attack 23), one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies, one whose client id another client keeps taking over (said until a connection of it
    lasts connection.py's STABLE_S; it backs off TAKEOVER_FIRST_S at most: connection.py rule 7,
@@ -546,9 +549,9 @@ class Express:
             "stops and locks go through"
         )
 
-    def _tick(self, up: bool, late: str) -> None:
+    def _tick(self, came_up: bool, late: str) -> None:
         """On the reader's thread, once a second while the child starts or a hold waits."""
-        if not up and time.monotonic() - self._started_at >= START_WAIT_S:
+        if not came_up and time.monotonic() - self._started_at >= START_WAIT_S:
             self._problem(late, True)
         with self._lock:
             sock = self._sock
@@ -710,7 +713,7 @@ class Express:
             self._kill("does not read its socket")
         late = f"the stop express did not come up within {START_WAIT_S:g} s"
         passing: set[str] = set()  # problems said until it is up (rule 6)
-        up = False
+        came_up = False  # rule 6: its start is judged once, a child
         ticked = time.monotonic()
         poller = select.poll()  # (not select.select: a bridge with many clients has fds > 1023)
         poller.register(mine, select.POLLIN)
@@ -722,7 +725,7 @@ class Express:
                 readable = poller.poll(TICK_S * 1000)
                 if time.monotonic() - ticked >= TICK_S or not readable:
                     ticked = time.monotonic()  # (due even while its words keep coming)
-                    self._tick(up, late)
+                    self._tick(came_up, late)
                 if not readable:
                     continue
                 data = mine.recv(_PACKET)
@@ -735,22 +738,25 @@ class Express:
                 word = json.loads(data)
                 op = word.get("op")
                 if op == "up":
-                    up = True
                     ended = [t for t in self._said if t.startswith("the stop express ")]
                     for text in (late, *passing, *ended):
                         self._problem(text, False)
                     passing.clear()
-                    log.info(
-                        "stop express up as %s (pid %d, %.2f s)",
-                        self.client_id,
-                        child.pid,
-                        time.monotonic() - t0,
-                    )
+                    if came_up:  # (the time since its start would count the broker's absence)
+                        log.info(
+                            "stop express up again as %s (its connection back)", self.client_id
+                        )
+                    else:
+                        log.info(
+                            "stop express up as %s (pid %d, %.2f s)",
+                            self.client_id,
+                            child.pid,
+                            time.monotonic() - t0,
+                        )
+                    came_up = True
                     self.up.set()
-                elif op == "down":  # its connection ended: up again when it is back (rule 8)
-                    up = False
-                    self._started_at = time.monotonic()
-                    self.up.clear()
+                elif op == "down":  # its connection ended: up again when it is back (rule 8);
+                    self.up.clear()  # no start to judge (rule 6): its broker went away
                 elif op == "synced":
                     self._answered(word["n"], bool(word.get("lost")))
                 elif op == "held":
