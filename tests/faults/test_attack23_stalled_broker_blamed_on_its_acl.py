@@ -23,11 +23,6 @@ KEEPALIVE_S = 5  # the least the settings take
 FROZEN_S = 4.0 * KEEPALIVE_S  # the broker stalled: the fault's length (not a deadline)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 23: a stalled (frozen) broker, given up on by the bridge's own keep-alive, "
-    "is logged at ERROR as the broker closing the connection, blamed on its ACL and limits",
-)
 def test_a_stalled_broker_is_not_said_as_one_that_refused_the_bridge(
     rig: Rig, caplog: pytest.LogCaptureFixture
 ) -> None:

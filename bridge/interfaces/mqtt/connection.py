@@ -64,7 +64,15 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    close it, which a clean session does not ask (docs/reliability.md, Limits, says why the
    lane's stays clean). A connection the broker closes before it answers the CONNECT (an
    ACL on the client id, a connection limit, a broker without MQTT 5) is said too, once, with
-   the likely fixes (``_closed_early``): it is never silent.
+   the likely fixes (``_closed_early``): it is never silent. One the bridge itself ends for want
+   of an answer (``unanswered``: paho's keep-alive, or paho_client.py rule 5's CONNACK_TIMEOUT_S,
+   ran out before any byte of the broker's) is said as that (``_unanswered``): the broker took
+   the connection and said nothing, a broker stalled or overloaded, or its host or the network
+   holding its packets, never its access rules nor a connection limit, which answer or close
+   (attack 23: a broker frozen past the keep-alive was said at ERROR as one that "closed the
+   connection before accepting it (Keep alive timeout)", its ACL to check, and the stop lane
+   said the same of its own). The stop lane and the express leave it to the main connection,
+   which speaks to the same broker (as they do a broker that cannot be reached).
 7. One client id, one connection. A broker that gets a second connection with a client id closes
    the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the socket), so
    two processes with one id (two hosts sharing a configuration, a stale container beside a new
@@ -144,7 +152,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.interfaces.mqtt.heartbeat import Stamp
-from bridge.interfaces.mqtt.paho_client import accepts_mqtt311, new_client
+from bridge.interfaces.mqtt.paho_client import CONNACK_TIMEOUT_S, accepts_mqtt311, new_client
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -187,6 +195,7 @@ MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/broker
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
 CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
+KEEPALIVE_TIMEOUT = 0x8D  # rule 6: paho's "Keep alive timeout" (its own, not the broker's)
 TAKEOVER_FIRST_S = 5
 TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
@@ -303,6 +312,20 @@ def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
     return "other"
 
 
+def unanswered(
+    flags: paho.DisconnectFlags, reason_code: ReasonCode, client: Any, keepalive_s: int
+) -> str | None:
+    """Rule 6: for an attempt the broker never answered, how long it was given ("within the
+    keep-alive (60 s)"), if the bridge's own client ended it for that; None if the broker
+    closed it (or any other end)."""
+    if getattr(client, "connack_timed_out", False):
+        return f"within {CONNACK_TIMEOUT_S:g} s"
+    from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
+    if not from_server and getattr(reason_code, "value", None) == KEEPALIVE_TIMEOUT:
+        return f"within the keep-alive ({keepalive_s} s)"
+    return None
+
+
 # the broker's words for a login it refused: MQTT 5's reasons 0x86 and 0x87, MQTT 3.1.1's 4 and 5
 LOGIN_REFUSED = ("Bad user name or password", "Not authorized")
 
@@ -356,6 +379,8 @@ class Connection:
         self._auto = settings.protocol == "auto"  # ... and may step down (``_fall_back``)
         self._accepted_once = False  # a connection was accepted: the protocol is settled
         self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
+        self._gave_up = False  # ... or, unanswered, this client ended it (rule 6: ``unanswered``)
+        self._keep_s = settings.keepalive_s  # (what rule 6 says it waited)
         self._trial_lock = threading.Lock()  # rule 1: the MQTT 3.1.1 trial after a close
         self._trial: threading.Thread | None = None
         self._trial_ok = False  # ... was accepted, since the last MQTT 5 attempt closed
@@ -481,6 +506,31 @@ class Connection:
             f"the MQTT broker closed the connection before accepting it ({reason}): check the "
             "broker's log "
             "(its access rules for this client id and user, a connection limit)" + hint
+        )
+        if text != self._last_refusal:
+            log.error("%s (retrying)", text)
+            self._last_refusal = text
+
+    def _unanswered(self, waited: str) -> None:
+        """Rule 6: the connection was ended by this client: the broker did not answer it
+        ``waited`` ("within the keep-alive (60 s)")."""
+        if self._stopping:
+            return
+        hint = ""
+        if self._v5 and not self._accepted_once:  # (amqtt: paho_client.py rule 5)
+            hint = (
+                "; amqtt 0.12 never answers an MQTT 5 connection that carries a will: if this "
+                'is one, set mqtt.protocol = "3.1.1" for it'
+                + (
+                    ' (with "auto" the bridge asks the broker in MQTT 3.1.1 to tell)'
+                    if self._trusts_closes
+                    else ""
+                )
+            )
+        text = (
+            f"the MQTT broker did not answer the connection {waited}: it took the connection "
+            "and then said nothing (the broker stalled or overloaded, or its host or the "
+            "network holding its packets; check that the broker runs and answers)" + hint
         )
         if text != self._last_refusal:
             log.error("%s (retrying)", text)
@@ -681,8 +731,14 @@ class Connection:
         self._subscribed_since = None
         answered, self._answered = self._answered, False
         self.connected.clear()
+        # rule 6: an attempt our own client gave up on, unanswered, is no close of the broker's
+        waited = None if was or answered else unanswered(flags, reason_code, client, self._keep_s)
+        self._gave_up = waited is not None
         if not was and not answered and not self._close_steps_down():  # no CONNACK came
-            self._closed_early(str(reason_code))  # rule 6: never silent
+            if waited is not None:
+                self._unanswered(waited)
+            else:
+                self._closed_early(str(reason_code))  # rule 6: never silent
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)

@@ -1011,10 +1011,13 @@ class _Link(Connection):
     def _closed_early(self, reason: str) -> None:
         pass
 
+    def _unanswered(self, waited: str) -> None:
+        pass  # the main connection says it (connection.py rule 6)
+
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         if was_up:
             self._on_link(False)  # after its last message (rule 8)
-        else:
+        elif not self._gave_up:  # (unanswered: no close of the broker's, connection.py rule 6)
             text = f"the MQTT broker closed its connection: {reason_code}"
             self._say(op="problem", text=text, until_up=True)
         return was_up

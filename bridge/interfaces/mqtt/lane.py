@@ -29,7 +29,9 @@ Rules:
    nowhere, while stops quietly lost their connection) is logged and said on B/bridge/info
    (``on_info``) once an episode, and unsaid once a connection lasts STABLE_S (a review). Its
    other disconnects are logged at debug level (the main connection says the same). It
-   judges a takeover as connection.py rule 7 does, counting only connections that were
+   judges a takeover as connection.py rule 7 does (an attempt the broker never answered, given
+   up by the lane's own client, is no refusal: connection.py rule 6, said by the main
+   connection), counting only connections that were
    accepted, and backs off for one TAKEOVER_FIRST_S at most (``FIGHT_BACKOFF_MAX_S``: a
    crash-looping broker can look the same, and stops must come soon after it is back); any
    other way, it tries again on connection.py rule 6's back-off for a connection that carries
@@ -198,8 +200,13 @@ class StopLane(Connection):
     def _closed_early(self, reason: str) -> None:
         pass  # _closed reports it, as the lane's own problem
 
+    def _unanswered(self, waited: str) -> None:
+        log.debug("stop lane: the MQTT broker did not answer %s", waited)  # the main one says it
+
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
-        if not was_up:  # closed before it was accepted (a connection limit): no takeover evidence
+        if not was_up and not self._gave_up:  # closed before it was accepted (a connection
+            # limit): no takeover evidence; one the broker never answered is no refusal of the
+            # lane's (connection.py rule 6: the main connection says it)
             self._report(f"the MQTT broker closed the stop lane's connection: {reason_code}")
         return was_up
 

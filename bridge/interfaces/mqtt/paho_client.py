@@ -19,7 +19,8 @@ Rules:
    paho's thread.
 5. A broker that never answers the CONNECT is given CONNACK_TIMEOUT_S, then the connection is
    ended as if the broker had closed it (the socket shut down: paho sees the end as always and
-   reconnects; connection.py says it, rule 6). amqtt 0.12 waits for ever on an MQTT 5 CONNECT
+   reconnects; connection.py says it, rule 6: ``connack_timed_out`` tells it from a close).
+   amqtt 0.12 waits for ever on an MQTT 5 CONNECT
    that carries a will; paho alone would wait the keepalive (a minute) each time.
 6. ``loop_start`` runs paho's external-loop API (``socket``, ``want_write``, ``loop_read``,
    ``loop_write``, ``loop_misc``) on a thread of ours, in place of paho's own loop, and
@@ -258,6 +259,7 @@ class Client(paho.Client):
     hearing: Hearing | None = None  # rule 11
     name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
+    connack_timed_out = False  # rule 5: this attempt was ended for want of a CONNACK
     _net: threading.Thread | None = None  # rule 6
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
@@ -311,6 +313,7 @@ class Client(paho.Client):
 
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
+        self.connack_timed_out = False
         rc = super().reconnect()
         self._connect_first()
         return rc
@@ -555,6 +558,7 @@ class Client(paho.Client):
             self._connect_t = None
             shutdown = getattr(self.socket(), "shutdown", None)  # None: no socket (yet)
             if shutdown is not None:
+                self.connack_timed_out = True  # (connection.py rule 6 says it so)
                 log.debug("no CONNACK in %g s: ending the connection", CONNACK_TIMEOUT_S)
                 with contextlib.suppress(OSError):
                     shutdown(socket.SHUT_RDWR)

@@ -23,8 +23,9 @@ Rules:
    while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
 5. Until the first connection is accepted, a refusal or a failed attempt is not logged (the
    start-up error says it, once, in one line: ``failure``, also when the broker closed the
-   connection without a word); a refused login, a broker without MQTT 5 or a TLS handshake
-   that fails is ``fatal``, for the start to end at once, since trying again cannot mend it.
+   connection without a word, or never answered it: connection.py rule 6); a refused login,
+   a broker without MQTT 5 or a TLS handshake that fails is ``fatal``, for the start to end
+   at once, since trying again cannot mend it.
    Once the remote has been connected, both are logged and retried as the bridge does
    (connection.py rule 6).
 6. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
@@ -678,6 +679,17 @@ class RemoteLink(Connection):
             f"the broker closed the connection before accepting it ({reason}): it answered, but "
             "either it does not speak MQTT 5, which the remote needs (RabbitMQ and amqtt close "
             "the connection so), or its access rules refuse this client id or user"
+        )
+        log.debug("%s", self.failure)
+
+    def _unanswered(self, waited: str) -> None:
+        if self._ever_up or self._stopping:
+            super()._unanswered(waited)
+            return
+        self.failure = (  # (connection.py rule 6: neither a refusal nor a close of the broker's)
+            f"the broker did not answer the connection {waited}: it took the connection and "
+            "then said nothing (stalled or overloaded, or its host or the network holding its "
+            "packets)"
         )
         log.debug("%s", self.failure)
 
