@@ -72,7 +72,7 @@ from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.interfaces.mqtt.claim import Claim, Instance, Post
 from bridge.interfaces.mqtt.client import MqttClient
-from bridge.interfaces.mqtt.connection import MQTT311_LOSES
+from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection
 from bridge.interfaces.mqtt.express import Express
 from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.interfaces.mqtt.heartbeat import StationTime
@@ -287,7 +287,7 @@ class App:
             on_new_connection=self._main_new,
             on_subscribed=lambda: self._vouch("main"),
             on_connection_lost=lambda: self.mqtt.main_gone(),
-            no_replay=self.topics.stop_lane(),
+            no_replay=[*self.topics.stop_lane(), *self.topics.lock_lane()],
             replayed=[  # a feature's input whose retain flag says "replayed" (the wind's)
                 topic
                 for f in FEATURES
@@ -478,15 +478,28 @@ class App:
         self.lane = StopLane(
             settings.mqtt,
             subscriptions=self.mqtt.stop_lane_subscriptions(),
-            on_message=self.mqtt.on_lane_message,
-            on_denied=self._denied,
+            on_message=self.mqtt.on_stop_lane_message,
+            on_denied=partial(self._denied, lanes=("stop",)),
             on_info=self._info,
-            on_new_connection=self.mqtt.lane_connected,
-            on_subscribed=self._lane_subscribed,
-            no_replay=self.mqtt.no_replay_subscriptions(),
+            on_new_connection=partial(self.mqtt.lane_connected, ("stop",)),
+            on_subscribed=partial(self._lane_subscribed, "stop"),
+            no_replay=self.topics.stop_lane(),
         )
-        # interfaces/mqtt/lane.py rule 4: a stop before a backlog
-        self.client.before_message = self.lane.first
+        # interfaces/mqtt/lastword.py rule 16: the lock words on a lane of their own, so that
+        # no flood of them sits ahead of a stop on the stop lane
+        self.lock_lane = StopLane(
+            settings.mqtt,
+            subscriptions=self.mqtt.lock_lane_subscriptions(),
+            on_message=self.mqtt.on_lock_lane_message,
+            on_denied=partial(self._denied, lanes=("lock",)),
+            on_info=self._info,
+            kind="lock",
+            on_new_connection=partial(self.mqtt.lane_connected, ("lock",)),
+            on_subscribed=partial(self._lane_subscribed, "lock"),
+            no_replay=self.topics.lock_lane(),
+        )
+        # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
+        self.client.before_message = self._lanes_first
         self.client.watch_owned(self.topics.owned())
         for rid in sorted(store.locked_ids() - set(self._by_id)):  # state_store.py rule 9
             log.warning(
@@ -590,7 +603,8 @@ class App:
     def _heard_only_by_express(self, rotator_id: str, t: float, kind: str) -> Rotator | None:
         """Rule 11's test: the rotator, if neither connection could have had the ``kind``
         ("stop" or "lock") the express read at ``t``."""
-        for via, connection in (("main", self.client), ("lane", self.lane)):
+        for via in ("main", "lane" if kind == "stop" else "lock"):  # (lastword.py rule 16)
+            connection = self._connection(via)
             vouched = self.express.vouched(via)  # (the express's word came after its SUBACK,
             if vouched is not None and connection.heard_since(vouched):  # and this after that)
                 return None  # (it came, or comes, on one of them, in its order)
@@ -598,19 +612,29 @@ class App:
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
 
-    def _lane_subscribed(self) -> None:
-        self.mqtt.lane_subscribed()
-        self._vouch("lane")
+    def _lanes_first(self) -> None:
+        """interfaces/mqtt/lane.py rule 4: the main connection waits for each lane in turn."""
+        self.lane.first()
+        self.lock_lane.first()
+
+    def _lane_subscribed(self, kind: str) -> None:
+        """A lane's SUBACK (lastword.py rules 9 and 16): ``kind``, "stop" or "lock"."""
+        self.mqtt.lane_subscribed((kind,))
+        self._vouch("lane" if kind == "stop" else "lock")
+
+    def _connection(self, via: str) -> Connection:
+        """The connection ``via`` names (halts.py ``read_since``): "main", "lane" or "lock"."""
+        return {"main": self.client, "lane": self.lane, "lock": self.lock_lane}[via]
 
     def _vouch(self, via: str) -> None:
         """express.py rule 11: a connection's command topics subscribed (on its paho thread):
         the express is asked to vouch that the stops it says from then on came after it."""
-        since = (self.client if via == "main" else self.lane).subscribed_since
+        since = self._connection(via).subscribed_since
         if since is not None:
             self.express.vouch(via, since)
 
     def _connection_heard_since(self, via: str, t: float) -> bool:
-        return (self.client if via == "main" else self.lane).heard_since(t)
+        return self._connection(via).heard_since(t)
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs
@@ -714,16 +738,17 @@ class App:
             service.with_discovery(publisher)
         return publisher
 
-    def _denied(self, topic: str, problem: str) -> None:
+    def _denied(self, topic: str, problem: str, lanes: tuple[str, ...] = ("stop",)) -> None:
         """The broker refused a topic (client.py rule 11): the rotator's status says so, and
-        ``B/bridge/info`` lists every such problem."""
+        ``B/bridge/info`` lists every such problem. ``lanes``: the lane's kinds, when a lane
+        was refused it (lastword.py rule 16)."""
         if topic == self.topics.bridge_fence_lane:  # (the fence's: ``_markers``)
-            self.mqtt.lane_markers_denied()
+            self.mqtt.lane_markers_denied(lanes)
         rid = self.topics.rotator_of(topic)
         for rot in self.rotators:
             if rid is None or rot.id == rid:
                 rot.note(problem)
-        self._say(problem, True)  # the stop lane's (the client's is in the list already)
+        self._say(problem, True)  # a lane's (the client's is in the list already)
 
     def _allowed(self, topic: str) -> None:
         """The broker takes a topic it refused before (client.py rule 16: the fence's probe
@@ -767,9 +792,10 @@ class App:
         if not self._lane_started and not self._stopped.is_set():
             self._lane_started = True
             # mqtt.protocol "auto" stepped down (interfaces/mqtt/connection.py)
-            if not self.client.v5:
-                self.lane.use_mqtt311()
-            self.lane.start()
+            for lane in (self.lane, self.lock_lane):
+                if not self.client.v5:
+                    lane.use_mqtt311()
+                lane.start()
             self.express.start(mqtt311=not self.client.v5)
         stepped_down = self.settings.mqtt.protocol == "auto" and not self.client.v5
         if stepped_down != (STEPPED_DOWN in self.client.problems):
@@ -944,6 +970,7 @@ class App:
         self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
+        self.lock_lane.stop()
         self.express.stop()  # (the ports are closed: it holds none)
         self.store.flush()  # rule 6: a lock word taken since the flush above, before letting go
         self.release()

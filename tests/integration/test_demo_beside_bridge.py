@@ -81,17 +81,13 @@ def test_a_demo_beside_a_real_bridge_leaves_it_alone(tmp_path: Path, rig: Rig) -
     assert [m.text for m in probe.on("rotor/bridge/state")] == ["online"]
     log = rig.broker.log.read_text()
     assert "already connected, closing old connection" not in log, log[-3000:]
-    # the demo came with three client ids of its own (the stop lane's too), short enough for
-    # any broker
+    # the demo came with client ids of its own (the stop lane's and the lock lane's too:
+    # lastword.py rule 16), short enough for any broker
     ids = set(re.findall(r"New client connected from \S+ as (\S+) ", log))
     assert rig.settings.mqtt.effective_client_id() in ids
-    assert {i for i in ids if i.startswith(base)} == {
-        base,
-        f"{base}-ui",
-        f"{base}-stop",
-        f"{base}-fast",
-    }
-    assert all(len(i) <= 23 for i in (base, f"{base}-ui", f"{base}-stop", f"{base}-fast"))
+    own = {base, f"{base}-ui", f"{base}-stop", f"{base}-lock", f"{base}-fast"}
+    assert {i for i in ids if i.startswith(base)} == own
+    assert all(len(i) <= 23 for i in own)
     # none of its Home Assistant configs was cleared, and all are still there
     real_configs = _configs_of(real, probe.messages)
     assert [m.topic for m in real_configs if not m.payload] == []

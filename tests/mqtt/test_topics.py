@@ -26,7 +26,9 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/control/release",
         "rotor/bridge/fence",
     ]
-    assert t.stop_lane() == ["rotor/stop", "rotor/lock"]
+    # lastword.py rule 16: the stop lane carries nothing a neighbour's lock words can flood
+    assert t.stop_lane() == ["rotor/stop"]
+    assert t.lock_lane() == ["rotor/lock"]
     assert t.bridge_fence_lane == "rotor/bridge/fence/lane"
 
 

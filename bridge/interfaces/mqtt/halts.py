@@ -56,7 +56,7 @@ from bridge.core.model import (
 )
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group
-from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, LastWord
+from bridge.interfaces.mqtt.lastword import LANES, LONG_HOLD_S, RESEND_MAX_S, LastWord
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import Topics
 
@@ -134,6 +134,10 @@ LOCK_OFF_OLDER = (
     "stop connection; the lock stays ON (make sure nobody is working on the tower before "
     "unlocking)"
 )
+
+
+# lastword.py rule 16: the lane each kind of halt comes on, as ``read_since`` names it
+_VIA = {"stop": "lane", "lock": "lock"}
 
 
 def _ends(off: Command, kept: Command) -> bool:
@@ -243,7 +247,7 @@ class Halts:
         left the rotator unlocked). An attack pass: a second after a broker restart, the
         express's second stop dropped a target sent after a STOP both connections had read."""
         kinds = ("stop", "lock") if kind == "stop" else ("lock",)
-        for via in ("main", "lane"):
+        for via in ("main", "lane", "lock"):
             for halt in kinds:
                 t = self._read.get((via, rotator_id, halt))
                 if t is not None and heard_since(via, t):
@@ -251,8 +255,8 @@ class Halts:
         return False
 
     def _noted(self, via: str, rotator_id: str, kind: str) -> None:
-        """``read_since``'s books: ``via`` ("main" or "lane") read a live halt (never a replayed
-        one) of this ``kind`` ("stop" or "lock") for this rotator now."""
+        """``read_since``'s books: ``via`` ("main", "lane" or "lock") read a live halt (never a
+        replayed one) of this ``kind`` ("stop" or "lock") for this rotator now."""
         self._read[via, rotator_id, kind] = self._clock()
 
     def main_gone(self) -> None:
@@ -275,15 +279,16 @@ class Halts:
         self._say(said)
         self._say_taken(False)
 
-    def lane_connected(self) -> None:
+    def lane_connected(self, lanes: tuple[str, ...] = LANES) -> None:
+        """A new connection of the lanes of these kinds (lastword.py rule 16)."""
         with self._lock:
-            self.word.lane_connected()
+            self.word.lane_connected(lanes)
 
-    def lane_subscribed(self) -> None:
+    def lane_subscribed(self, lanes: tuple[str, ...] = LANES) -> None:
         """The lane's subscription is acknowledged (lastword.py rule 9), on its paho thread:
         before any message it brings."""
         with self._lock:
-            n = self.word.lane_subscribed(self._clock())
+            n = self.word.lane_subscribed(self._clock(), lanes)
         if n is not None:
             self._send_marker(n)
 
@@ -319,10 +324,11 @@ class Halts:
         if n is not None:  # (a hold put while they were off, or the lane's: rule 9)
             self._send_marker(n)
 
-    def lane_markers_denied(self) -> None:
+    def lane_markers_denied(self, lanes: tuple[str, ...] = LANES) -> None:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
         with self._lock:
-            self.word.echoes = False
+            for lane in lanes:
+                self.word.lane_deaf(lane)
 
     # -- another interface's halt (lastword.py rule 11) ---------------------------------------
     def fence_asked(self, rotator_id: str) -> None:
@@ -379,12 +385,13 @@ class Halts:
             return AFTER_WAITING_OFF
         return None
 
-    def _lane_blind(self) -> bool:
+    def _lane_blind(self, lane: str) -> bool:
         """lastword.py rule 14: neither connection can read the bridge's markers while the main
         connection reads its commands: a lane halt could be neither told from the echo of one
         the main connection carried out nor ever ended, so the lane carries out nothing (the
-        main connection carries out every halt, in order: stops lose the lane's speed only)."""
-        blind = not self.word.markers and not self.word.echoes and self._holds_possible()
+        main connection carries out every halt, in order: stops lose the lane's speed only).
+        ``lane``: the kind of the lane that read it (lastword.py rule 16)."""
+        blind = not self.word.markers and not self.word.lane_echoes(lane) and self._holds_possible()
         if blind and not self._blind_said:
             self._blind_said = True
             log.warning(
@@ -693,10 +700,10 @@ class Halts:
         for rot, why, what, origin in said:
             rot.report_refusal(why, what, origin=origin)
 
-    def on_lane_marker(self, payload: bytes) -> None:
-        """The lane read its marker (lastword.py rule 4)."""
+    def on_lane_marker(self, payload: bytes, lanes: tuple[str, ...] = LANES) -> None:
+        """The lane read its marker (lastword.py rule 4): the notes of its kinds end (rule 16)."""
         with self._lock:
-            self.word.lane_marker_back(payload)
+            self.word.lane_marker_back(payload, lanes)
 
     def replayed_halt(self, rot: RotatorPort, topic: str, kind: str, payload: bytes) -> None:
         """lastword.py rule 6 under MQTT 3.1.1: a replayed retained stop or lock ON, once."""
@@ -723,27 +730,30 @@ class Halts:
         origin: Origin | None = None,
         late: Callable[[], str | None] = lambda: None,
         sent_s: float | None = None,
+        lane: str | None = None,
     ) -> None:
-        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6). ``late``: why a
+        """The lanes' messages (rule 5; lastword.py rules 2-4, 6 and 16). ``late``: why a
         stamped lock OFF is too old to carry out (service.py rule 9), asked only of the OFF it
-        would carry out; a stop or lock ON is never asked. ``sent_s``: a halt's stamp (carry)."""
+        would carry out; a stop or lock ON is never asked. ``sent_s``: a halt's stamp (carry).
+        ``lane``: the kind of the lane that read it ("stop", "lock"; None: told by the topic);
+        a word of the other kind is none of that lane's (lastword.py rule 16)."""
         if topic == self.topics.bridge_fence_lane:
-            self.on_lane_marker(payload)
+            self.on_lane_marker(payload, LANES if lane is None else (lane,))
             return
         route = self.topics.route(topic)
         if route is None and not (retain and not payload):
             group = self.topics.group_route(topic)
-            if group is not None and group[1] == "stop":
+            if group is not None and group[1] == "stop" and lane in (None, "stop"):
                 self.lane_group_stop(group[0], topic, payload, retain, origin, sent_s)
             return
         if route is None or (retain and not payload):
             return
         rotator_id, kind, _arg = route
         rot = self._rotators.get(rotator_id)
-        if rot is None or kind not in ("stop", "lock"):
+        if rot is None or kind not in ("stop", "lock") or lane not in (None, kind):
             return
         if not retain and (kind == "stop" or switch_on(payload)):
-            self._noted("lane", rotator_id, kind)
+            self._noted(_VIA[kind], rotator_id, kind)
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
@@ -773,7 +783,7 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_halt(rot, topic, kind, payload)
             return
-        if self._lane_blind():
+        if self._lane_blind(kind):
             return
         self.live_halt(topic, payload)
         what = pl.describe(kind, payload)
@@ -894,7 +904,7 @@ class Halts:
         if retain and not self.retain_is_live:
             self.replayed_group_stop(group_id, topic, payload)
             return
-        if self._lane_blind():
+        if self._lane_blind("stop"):
             return
         self.live_halt(topic, payload)
         what = pl.describe("stop", payload)

@@ -1,17 +1,18 @@
-"""The stop lane: stop and lock on an MQTT connection of their own (issue 14, item 13).
+"""The lanes: stop, and lock, each on an MQTT connection of its own (issue 14, item 13; attack 24).
 
 One connection delivers its messages in order: a stop published behind a flood of targets
 waited until the bridge had read every one of them (100,000 targets in 10 s on 32 rotators:
 stops reached their controllers 0.85 to 3.9 s late). The broker writes what a subscriber gets
-on that subscriber's socket, so a second connection subscribed only to ``R/stop`` and
-``R/lock`` is a lane no target is queued in; its own paho thread reads it, and the message goes
-to the same handler as the main connection's (the service: the same rules for retained stops,
-payloads and the lock).
+on that subscriber's socket, so a second connection subscribed only to ``R/stop`` is a lane no
+target is queued in; its own paho thread reads it, and the message goes to the same handler as
+the main connection's (the service: the same rules for retained stops, payloads and the lock).
+The lock words take a lane of their own the same way (rule 5).
 
 Rules:
-1. Subscribed to the stop and lock topics only, a group's stop too (the main connection has
-   them, and its copies keep the order: lastword.py decides what each copy does, so a lane
-   that is down or refused loses no stop, only speed). The stop topics are subscribed
+1. Subscribed to its own kind's topics only (the stop lane: the stop topics, a group's stop
+   too; the lock lane: the lock topics) and the lane markers (the main connection has them,
+   and its copies keep the order: lastword.py decides what each copy does, so a lane that is
+   down or refused loses no stop, only speed). The stop topics are subscribed
    without the broker's replay of a retained stop (lastword.py rule 6). It publishes nothing:
    no will, no state; the main connection (client.py) is the bridge's presence and carries
    its markers.
@@ -20,8 +21,9 @@ Rules:
    quick-ack (client.py rule 9): both are connection.py's Connection, which builds, connects
    and subscribes them. Under ``mqtt.protocol = "auto"`` it speaks what the main connection
    settled on (the app calls ``use_mqtt311`` before ``start``). Client id: ``lane_client_id``
-   (the main id with ``rstop-`` for ``rotor-``, as long; an explicit id gets ``-stop``,
-   shortened with a hash to 23 characters if it would be longer).
+   (the main id with ``rstop-``, the lock lane's ``rlock-``, for ``rotor-``, as long; an
+   explicit id gets ``-stop`` or ``-lock``, shortened with a hash to 23 characters if it would
+   be longer).
 3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
    limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
    (the bridge's problems, B/bridge/info): stops then take the main connection only. A fight
@@ -49,6 +51,13 @@ Rules:
    past YIELD_MAX_S the main connection goes on, and past YIELD_BUDGET_S in a second (a flood
    of anything on the stop and lock topics keeps the lane's socket busy) it waits no more in
    that second; what comes on the lane keeps its order rules (lastword.py) whenever it is read.
+   Each lane is waited for in turn, within its own bounds.
+5. Two lanes, one class: ``kind`` "stop" or "lock" (lastword.py rule 16). One connection
+   delivers in order, so a lane that carried both kinds kept a STOP behind every lock word
+   published before it: a client republishing ``R/lock OFF`` in a loop kept a DCU-1's STOP
+   off the wire past the whole turn (attack 24). Each lane carries one kind, and nothing a
+   neighbour can flood sits ahead of a stop but a stop; a flood of lock words delays only the
+   lock words behind it. The cost: one connection more (client id ``rlock-...``).
 """
 
 from __future__ import annotations
@@ -83,16 +92,17 @@ YIELD_MAX_S = 0.02  # rule 4: at most this long per message
 YIELD_BUDGET_S = 0.1  # rule 4: ... and this long in all per second (a flood on the lane)
 
 
-def lane_client_id(settings: MqttSettings) -> str:
-    """Rule 2: as short as the main id where that one is generated (23 characters at most)."""
+def lane_client_id(settings: MqttSettings, kind: str = "stop") -> str:
+    """Rule 2: as short as the main id where that one is generated (23 characters at most);
+    ``kind``: the lane's ("stop", "lock": rule 5), four letters either way."""
     main = settings.effective_client_id()
     if settings.client_id is None and main.startswith("rotor-"):
-        return "rstop-" + main[len("rotor-") :]
-    lane = main + "-stop"
+        return f"r{kind}-" + main[len("rotor-") :]
+    lane = f"{main}-{kind}"
     if len(lane) <= 23:
         return lane
     digest = hashlib.sha256(main.encode()).hexdigest()[:6]
-    return f"{main[:11]}-{digest}-stop"
+    return f"{main[:11]}-{digest}-{kind}"
 
 
 class StopLane(Connection):
@@ -107,9 +117,12 @@ class StopLane(Connection):
         on_message: MessageHandler,
         on_denied: Callable[[str, str], None] | None = None,
         on_info: Callable[[str, bool], None] | None = None,
+        kind: str = "stop",
         **options: Unpack[Options],
     ) -> None:
-        self.client_id = lane_client_id(settings)
+        self.kind = kind  # rule 5: "stop" or "lock"
+        self.name = f"{kind} lane"  # (what the log and B/bridge/info call it)
+        self.client_id = lane_client_id(settings, kind)
         super().__init__(
             settings, self.client_id, subscriptions=subscriptions, on_message=on_message, **options
         )
@@ -164,7 +177,7 @@ class StopLane(Connection):
 
     # -- connection.py's hooks (the lane's own paho thread) ---------------------------------
     def _refused(self, reason: str) -> None:
-        self._report(f"the MQTT broker refused the stop lane's connection: {reason}")
+        self._report(f"the MQTT broker refused the {self.name}'s connection: {reason}")
 
     def _failed(self) -> None:
         pass  # the main connection says why the broker cannot be reached
@@ -174,7 +187,7 @@ class StopLane(Connection):
 
     def _opened(self, client: paho.Client) -> None:
         self.connected.set()
-        log.debug("stop lane connected as %s", self.client_id)
+        log.debug("%s connected as %s", self.name, self.client_id)
         self._opens += 1
         if self._fight is not None:  # rule 3: unsaid once a connection lasts STABLE_S
             calm = threading.Timer(STABLE_S, self._calm, args=(self._opens,))
@@ -188,7 +201,7 @@ class StopLane(Connection):
         if fight is None or opened != self._opens or not self.connected.is_set():
             return
         self._fight = None
-        log.info("stop lane: its client id %r is its own again", self.client_id)
+        log.info("%s: its client id %r is its own again", self.name, self.client_id)
         if self._on_info is not None:
             self._on_info(fight, False)
 
@@ -201,20 +214,20 @@ class StopLane(Connection):
         pass  # _closed reports it, as the lane's own problem
 
     def _unanswered(self, waited: str) -> None:
-        log.debug("stop lane: the MQTT broker did not answer %s", waited)  # the main one says it
+        log.debug("%s: the MQTT broker did not answer %s", self.name, waited)  # the main one says it
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         if not was_up and not self._gave_up:  # closed before it was accepted (a connection
             # limit): no takeover evidence; one the broker never answered is no refusal of the
             # lane's (connection.py rule 6: the main connection says it)
-            self._report(f"the MQTT broker closed the stop lane's connection: {reason_code}")
+            self._report(f"the MQTT broker closed the {self.name}'s connection: {reason_code}")
         return was_up
 
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
-        log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
+        log.debug("%s disconnected (%s)", self.name, reason_code)  # the main connection says why
         if fight and self._fight is None:  # rule 3: a fight over its client id is its own (an
             said = takeover_message(self.client_id, ending, TAKEOVER_FIRST_S)  # attack pass:
-            self._fight = f"stop lane: {said}"  # nothing said it)
+            self._fight = f"{self.name}: {said}"  # nothing said it)
             log.error("%s", self._fight)
             if self._on_info is not None:
                 self._on_info(self._fight, True)
@@ -225,9 +238,10 @@ class StopLane(Connection):
             return
         self._reported.add(problem)
         log.error(
-            "%s (stops still come on the main connection, without the lane's speed; check the "
-            "broker's ACL and connection limits for client id %r)",
+            "%s (%s words still come on the main connection, without the lane's speed; check "
+            "the broker's ACL and connection limits for client id %r)",
             problem,
+            self.kind,
             self.client_id,
         )
         if self._on_denied is not None:

@@ -40,7 +40,8 @@ Rules:
    no payload can forge or flood a log line. On ``R/error`` too what was sent is cut short
    (payloads.describe), an option's name from the topic with it: an attack pass published on
    ``R/option/<60,000 characters>``, and each refusal carried the name twice, 120 KB.
-5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
+5. Stop and lock come on two connections each, the main one and a lane of their kind (lane.py:
+   the stop lane, the lock lane; lastword.py rule 16), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
    the rotator's targets until the main connection has caught up with it (its marker, read on
@@ -79,7 +80,7 @@ Rules:
    got RPRT 0); else the move's stamp is put on the steady clock (the steady clock read before
    the station's, so a lost moment makes it earlier: refused, the safe side) and compared with
    when the halt came, with no grain. Halts: never refused. The
-   same on the stop lane, for the lock OFF it carries out while the main connection is down.
+   same on the lock lane, for the lock OFF it carries out while the main connection is down.
    A stamped move taken goes with its expiry on the steady clock (``Target.not_after_s``, a
    ``Move``'s: a preset, park, nudge or place, a track or follow start, a feature's command;
    a call's goes to the DX cluster's aimer, and with the ``Toward`` it makes): one that waits
@@ -178,6 +179,7 @@ from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refus
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
 from bridge.interfaces.mqtt.halts import AFTER_WAITING_OFF, Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.lastword import LANES
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
 from bridge.interfaces.mqtt.topics import GROUP_KINDS, RotatorTopics, Topics
@@ -331,30 +333,36 @@ class MqttService:
         }
 
     def stop_lane_subscriptions(self) -> list[str]:
-        """Stop and lock, for the connection of their own (lane.py), also handled here; and the
-        lane's own markers (lastword.py rule 4)."""
+        """Stop, for the connection of its own (lane.py), also handled here; and the lanes'
+        markers (lastword.py rule 4)."""
         return [*self.topics.stop_lane(), self.topics.bridge_fence_lane]
+
+    def lock_lane_subscriptions(self) -> list[str]:
+        """Lock, for the connection of its own (lastword.py rule 16), also handled here; and
+        the lanes' markers (lastword.py rule 4: each lane ends its own kind's notes)."""
+        return [*self.topics.lock_lane(), self.topics.bridge_fence_lane]
 
     def no_replay_subscriptions(self) -> list[str]:
         """Filters the broker is asked not to replay retained messages of (lastword.py rule 6)."""
-        return self.topics.stop_lane()
+        return [*self.topics.stop_lane(), *self.topics.lock_lane()]
 
     # -- the last word (halts.py), both connections --------------------------------------------
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message)."""
         self._halts.main_gone()
 
-    def lane_connected(self) -> None:
-        self._halts.lane_connected()
+    def lane_connected(self, lanes: tuple[str, ...] = LANES) -> None:
+        """A new connection of the lanes of these kinds (lastword.py rule 16)."""
+        self._halts.lane_connected(lanes)
 
-    def lane_subscribed(self) -> None:
-        self._halts.lane_subscribed()
+    def lane_subscribed(self, lanes: tuple[str, ...] = LANES) -> None:
+        self._halts.lane_subscribed(lanes)
 
     def markers_denied(self) -> None:
         self._halts.markers_denied()
 
-    def lane_markers_denied(self) -> None:
-        self._halts.lane_markers_denied()
+    def lane_markers_denied(self, lanes: tuple[str, ...] = LANES) -> None:
+        self._halts.lane_markers_denied(lanes)
 
     def markers_allowed(self) -> None:
         self._halts.markers_allowed()
@@ -673,9 +681,11 @@ class MqttService:
         retain: bool,
         operator: str | None = None,
         stamp: Stamp | None = None,
+        lane: str | None = None,
     ) -> None:
-        """The stop lane's messages (rule 5: halts.py); its halts are never refused, a lock OFF
-        it carries out is judged by its stamp as the main connection's would be (rule 9)."""
+        """The lanes' messages (rule 5: halts.py); its halts are never refused, a lock OFF
+        it carries out is judged by its stamp as the main connection's would be (rule 9).
+        ``lane``: which lane read it, "stop" or "lock" (lastword.py rule 16)."""
         self._halts.on_lane(
             topic,
             payload,
@@ -683,7 +693,30 @@ class MqttService:
             self.origin(operator),
             late=lambda: self._late(stamp),
             sent_s=self._halt_sent_s(stamp),
+            lane=lane,
         )
+
+    def on_stop_lane_message(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        stamp: Stamp | None = None,
+    ) -> None:
+        """The stop lane's messages (lastword.py rule 16), as ``on_lane_message``."""
+        self.on_lane_message(topic, payload, retain, operator, stamp, lane="stop")
+
+    def on_lock_lane_message(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        stamp: Stamp | None = None,
+    ) -> None:
+        """The lock lane's messages (lastword.py rule 16), as ``on_lane_message``."""
+        self.on_lane_message(topic, payload, retain, operator, stamp, lane="lock")
 
     def _late(self, stamp: Stamp | None, *rots: RotatorPort) -> str | None:
         """Rule 9: why a stamped command (never a halt) for ``rots`` is too old to carry out,

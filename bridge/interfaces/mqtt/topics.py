@@ -309,13 +309,16 @@ class Topics:
         ]
 
     def stop_lane(self) -> list[str]:
-        """Stop and lock also on a connection of their own (lane.py), behind no flood of
-        targets; subscribed on both without the broker's replay of a retained message
-        (lastword.py rule 6)."""
-        subs: list[str] = []
-        for t in self._rotators.values():
-            subs += [t.stop, t.lock]
+        """Stop also on a connection of its own (lane.py), behind no flood of targets, nor of
+        lock words (lastword.py rule 16); subscribed on both without the broker's replay of a
+        retained message (lastword.py rule 6)."""
+        subs = [t.stop for t in self._rotators.values()]
         return subs + [g.stop for g in self._groups.values()]
+
+    def lock_lane(self) -> list[str]:
+        """Lock also on a connection of its own (lane.py, lastword.py rule 16): behind no flood
+        of targets, and no flood of lock words ahead of a stop; without the replay too."""
+        return [t.lock for t in self._rotators.values()]
 
     def owned(self) -> list[str]:
         """Filters for the retained topics the bridge publishes (client.py rule 10 watches them
