@@ -854,6 +854,12 @@ class Rotator:
                 if self._mailbox.epoch != since:
                     raise Refused(RefusalCode.STALE, LOCK_OFF_STALE_MESSAGE)
             idle = locked and self._kept.locked and not self._storm_parks()
+            if not locked and not self._kept.locked and not self._kept.lock_unsaid:
+                # a lock OFF while the last word was OFF changes nothing: no save queued, no
+                # put, no wake of the lines thread (attack 24: a flood of OFFs from another
+                # client cost each one an owner's step, a save and a mailbox wake); its place
+                # in the order is the OFF before it, which every later word follows anyway
+                return False
             unread_off = not locked and self.lock_waits  # (kept.py rule 10: said below)
             self._kept.set_lock(locked)
             if locked:

@@ -116,6 +116,41 @@ def test_the_lock_and_options_are_saved_off_the_callers_thread(tmp_path) -> None
     assert StateStore(tmp_path / "state.json").locked("t") is True
 
 
+def test_a_lock_off_while_the_lock_is_off_writes_nothing(tmp_path) -> None:  # noqa: ANN001
+    """Attack 24: a client republishing lock OFF in a loop cost each word an owner's step, a
+    state file save and a wake of the serial-lines thread. An OFF while the last word was OFF
+    changes nothing and is not saved again; the first OFF after a start (it ends the wait for
+    the lock's word, kept.py rule 10) and every word that changes the lock still are."""
+    store = StateStore(tmp_path / "state.json")
+    writes: list[object] = []
+    write = store._write
+
+    def counted(*args, **kwargs) -> None:  # noqa: ANN002, ANN003
+        writes.append(args)
+        write(*args, **kwargs)
+
+    store._write = counted  # type: ignore[method-assign]
+    cfg = worker_config(RotatorSettings(id="t", model="rotorez", port="/dev/null"))
+    rot = Rotator(cfg, store, lambda s: None, lambda e: None)
+    rot.submit(Lock(False))  # the first word since the start: taken and saved
+    store.flush()
+    first = len(writes)
+    assert first >= 1
+    epoch = rot.halts
+    for _ in range(1_000):
+        rot.submit(Lock(False))
+    store.flush()
+    assert len(writes) == first and rot.halts == epoch and not rot.locked
+    rot.submit(Lock(True))
+    rot.submit(Lock(False))
+    store.flush()
+    assert len(writes) > first
+    assert StateStore(tmp_path / "state.json").locked("t") is False
+    rot.submit(Lock(True))
+    store.flush()
+    assert StateStore(tmp_path / "state.json").locked("t") is True
+
+
 class _Fence:
     """What the MQTT service is told of a halt from another interface (rotator.py
     ``HaltFence``); ``fail``: it raises."""
