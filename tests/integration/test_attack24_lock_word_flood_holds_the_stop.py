@@ -50,13 +50,16 @@ STOP_BEFORE_DEG = 150  # the STOP is published while the rotor is short of this.
 SHORT_OF_DEG = 220  # ... and a STOP carried out promptly leaves it resting short of this
 READ_FIRST = 5_000  # flood messages the bridge has read when the STOP is published: it is on
 BURST = 2_000  # lock words a write of the flooding client
+FINITE_BURSTS = 15  # a flood that ends (30,000 lock OFFs), and then the lock ON
 
 
 class Flood:
     """A client that publishes ``payload`` on ``topic`` at QoS 0 as fast as the broker takes
-    it, on a thread, until ``end``."""
+    it, on a thread, until ``end`` (or ``bursts`` writes of BURST)."""
 
-    def __init__(self, port: int, topic: str, payload: bytes) -> None:
+    def __init__(self, port: int, topic: str, payload: bytes, bursts: int | None = None) -> None:
+        self._topic = topic
+        self._bursts = -1 if bursts is None else bursts  # (-1: until ``end``)
         self._burst = b"".join(publish(topic, payload) for _ in range(BURST))
         self._sock = socket.create_connection(("127.0.0.1", port), timeout=slow(30))
         self._sock.sendall(packet(0x10, b"\x00\x04MQTT\x04\x02\x00\x3c\x00\x07flooder"))
@@ -67,15 +70,22 @@ class Flood:
 
     def _run(self) -> None:
         try:
-            while not self._done.is_set():
+            while not self._done.is_set() and self._bursts != 0:
                 self._sock.sendall(self._burst)
+                self._bursts -= 1
         except OSError:
             pass  # (closed by ``end``)
 
-    def end(self) -> None:
+    def end(self, last: bytes | None = None) -> None:
+        """The flood over; ``last``: one more message on its topic, published after every
+        one of the flood (its own socket: the broker takes them in that order)."""
         self._done.set()
-        self._sock.close()
         self._thread.join(slow(10))
+        if last is not None and not self._thread.is_alive():
+            self._sock.sendall(publish(self._topic, last))
+            self._sock.sendall(packet(0xC0, b""))  # PINGREQ: its answer says all was taken
+            assert self._sock.recv(2) == b"\xd0\x00", "PINGRESP"
+        self._sock.close()
 
 
 def stop_in_a_flood(tmp_path: Path, topic: str, payload: bytes) -> None:
@@ -139,3 +149,67 @@ def test_a_stop_behind_a_flood_of_lock_words_stops_the_rotor_where_it_was(
     tmp_path: Path,
 ) -> None:
     stop_in_a_flood(tmp_path, "rotor/lock", b"OFF")
+
+
+def test_a_lock_on_after_a_flood_of_lock_offs_halts_the_rotor_and_stays_on(tmp_path: Path) -> None:
+    """The lock words moved to a lane of their own (lastword.py rule 16): a lock ON published
+    after a flood of lock OFFs (by the flooding client itself, so the broker had every OFF
+    first) is still the last word on every connection that reads it. The rotor, turning from
+    20 to GOAL_DEG, is stopped short of it; once the main connection has read the whole
+    flood, the ON and a target after them, the lock is still ON in the bridge and in its
+    retained R/lock/state, and the rotor has not moved. (Measured here: locked about 2 s
+    after the ON, the lock lane reading the 30,000 OFFs ahead of it.)"""
+    broker = Mosquitto(tmp_path / "broker")
+    broker.start()
+    probe = Probe(broker.port, "rotor/availability|rotor/state|rotor/error|rotor/lock/state")
+    rig = Rig(tmp_path, broker, probe)
+    rig.express = None  # the bridge's own default: the stop express on
+    operator = Probe(broker.port, "")
+    flood: Flood | None = None
+    try:
+        emu: Any = rig.add("tower", "dcu1", emu={"start_az_deg": 20, "speed_deg_s": 5.0})
+        app = rig.start()
+        rig.ready("tower")
+        wait_until(app.lock_lane.connected.is_set, 10, "the lock lane is up")
+        read = [0]
+        main_read_target = threading.Event()
+        on_main = app.client._handler
+
+        def counted(
+            seen: str, data: bytes, retain: bool, sender: str | None, stamp: Stamp | None
+        ) -> None:
+            if seen == "rotor/lock":
+                read[0] += 1
+            on_main(seen, data, retain, sender, stamp)
+            if seen == "rotor/target" and data == b"100":
+                main_read_target.set()  # (judged: its refusal, or its put, is done)
+
+        app.client._handler = counted
+        operator.publish("rotor/target", str(GOAL_DEG).encode())
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        # (a flood the broker drops none of, for a reader behind: its queue, QoS 0, would as
+        # well drop the ON, which then never comes, as a target after a flood: reliability.md)
+        flood = Flood(broker.port, "rotor/lock", b"OFF", bursts=FINITE_BURSTS)
+        wait_until(lambda: read[0] >= READ_FIRST, 30, "the bridge reads the flood")
+        flood.end(last=b"ON")
+        flood = None
+        rotator = app.rotators[0]
+        wait_until(lambda: rotator.status.locked, 60, "the lock ON after the flood")
+        rest = emu.wait_for(lambda s: not s.is_moving, slow(60))
+        assert rest.az_deg < GOAL_DEG - 10, rest  # (stopped by the ON, not at the target)
+        probe.wait_value("rotor/lock/state", "ON", slow(30))
+        # a target after it: once the main connection has judged it, it has read the whole
+        # flood and the ON (each OFF refused as older than the lane's ON: lastword.py rule 8),
+        # and the lock is still ON: the target was refused by it (or by the ON's hold)
+        operator.publish("rotor/target", b"100")
+        wait_until(main_read_target.is_set, 60, "the main connection reads the target")
+        assert rotator.locked and rotator.status.locked
+        assert [m.text for m in probe.on("rotor/lock/state")][-1] == "ON"
+        assert not emu.state().is_moving
+    finally:
+        if flood is not None:
+            flood.end()
+        operator.close()
+        rig.close()
+        probe.close()
+        broker.stop()
