@@ -369,8 +369,9 @@ def test_a_broker_that_refuses_the_express_is_said_and_stops_take_the_lane(
     tmp_path: Path,
 ) -> None:
     """A connection limit: the test's probe, the main connection and the stop lane take all
-    there are, the express's is turned away. B/bridge/info says so; a stop still stops the
-    rotor. (mosquitto 2.0 lets in one connection more than its max_connections.)"""
+    there are (started first), the express's is turned away (the lock lane's, started after
+    the stop lane's, may be too: lastword.py rule 16). B/bridge/info says so; a stop still
+    stops the rotor. (mosquitto 2.0 lets in one connection more than its max_connections.)"""
     conf = "allow_anonymous true\nmax_connections 2\n"
     broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
     probe = Probe(broker.port, "rotor/#")
