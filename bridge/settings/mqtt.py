@@ -267,9 +267,10 @@ class MqttSettings(Strict):
 
     stop_express: bool = Field(
         True,
-        description="a STOP's frame written by a small process of its own, on a third "
-        "connection to the broker (client id 'rfast-...' beside 'rotor-...' and the stop "
-        "lane's 'rstop-...'), so that nothing the bridge's process is busy with delays it; "
+        description="a STOP's frame written by a small process of its own, on a connection "
+        "of its own to the broker (client id 'rfast-...' beside 'rotor-...', the stop lane's "
+        "'rstop-...' and the lock lane's 'rlock-...'), so that nothing the bridge's process "
+        "is busy with delays it; "
         "only for controllers that take a stop frame at any moment (Rotor-EZ, RotorCard, "
         "GS-232, Easycomm). Off: stops take the stop lane in the bridge's process",
         examples=[False],

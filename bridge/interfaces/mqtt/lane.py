@@ -214,7 +214,9 @@ class StopLane(Connection):
         pass  # _closed reports it, as the lane's own problem
 
     def _unanswered(self, waited: str) -> None:
-        log.debug("%s: the MQTT broker did not answer %s", self.name, waited)  # the main one says it
+        log.debug(
+            "%s: the MQTT broker did not answer %s", self.name, waited
+        )  # the main one says it
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         if not was_up and not self._gave_up:  # closed before it was accepted (a connection
