@@ -11,19 +11,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 77: a bridge on a live bridge's B/bridge topic is not refused by claim rule "
-    "5 (the live bridge's B/bridge/info, read as a rotator's info, counts as gone)",
-)
 def test_a_bridge_on_another_bridges_bridge_topics_is_refused_and_ends_nothing(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

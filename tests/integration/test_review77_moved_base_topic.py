@@ -12,18 +12,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 77: a live bridge's old bridge state offline, left on a base topic it ran "
-    "on before, makes claim rule 5 take it for gone on its rotator's topic there",
-)
 def test_a_bridge_on_the_topic_a_live_station_once_ran_on_is_still_refused(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -14,19 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 77: the station's own base topic, taken over from a computer killed "
-    "outright, refuses its later start with a rotator back (claim rule 5 reads that "
-    "computer's R/info and online, and B/bridge/info names the station now)",
-)
 def test_a_station_taken_over_from_a_dead_computer_runs_with_its_rotator_back(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

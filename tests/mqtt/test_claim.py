@@ -19,7 +19,15 @@ OTHER = Instance("rotor-tower-9f8e7d", "tower", 200, 900.0)
 
 def test_an_info_payload_names_its_instance_and_junk_names_none() -> None:
     assert Instance.parse(ME.info(["x"]).encode()) == ME
-    for junk in (b"", b"x", b"[]", b'{"problems": []}', b'{"instance": 5}', b"\xff"):
+    for junk in (
+        b"",
+        b"x",
+        b"[]",
+        b'{"problems": []}',
+        b'{"instance": 5}',
+        b"\xff",
+        b'{"instance": "x"}',
+    ):
         assert Instance.parse(junk) is None
 
 
@@ -46,55 +54,88 @@ def test_the_refusal_names_the_other_bridge_and_what_to_do() -> None:
     assert "rotor-tower-9f8e7d" in text and "'tower'" in text and "mqtt.base_topic" in text
 
 
-POSTS = (
-    Post("rotor/bridge/info", "rotor/bridge/state", bridge=True),
-    Post("rotor/tower/bridge/info", "rotor/tower/bridge/state", bridge=True),
-    Post("rotor/tower/info", "rotor/tower/availability"),
+POSTS = (  # ME's on base topic rotor/tower with one rotator (R = rotor/tower)
+    Post("rotor/tower/bridge/info"),
+    Post("rotor/tower/info"),
 )
+ROTATOR = b'{"id":"tower","bridge":{"instance":"rotor-tower-9f8e7d","base_topic":"rotor"}}'
+
+
+def stands(seen: dict[str, bytes], base: str = "rotor/tower") -> tuple[str, str, bool] | None:
+    found = standing(ME, base, POSTS, seen)
+    return None if found is None else (found.other.id, found.beside, found.live)
 
 
 def test_another_instance_live_on_a_post_stands_there_and_its_own_never() -> None:
     """Rule 5: a rotator's info or a bridge's info of another instance, ``online`` beside it."""
-    rotator = {"rotor/tower/info": b'{"id":"tower","instance":"rotor-tower-9f8e7d"}'}
-    live = {**rotator, "rotor/tower/availability": b"online"}
-    assert standing(ME, POSTS, live) == (
-        Instance("rotor-tower-9f8e7d", "?", 0, 0.0),
-        POSTS[2],
-        True,
-    )
+    live = {"rotor/tower/info": ROTATOR, "rotor/tower/availability": b"online"}
+    assert stands(live) == ("rotor-tower-9f8e7d", "rotor/tower/availability", True)
     bridge = {"rotor/tower/bridge/info": OTHER.info([]).encode()}
-    assert standing(ME, POSTS, {**bridge, "rotor/tower/bridge/state": b"online"}) == (
-        OTHER,
-        POSTS[1],
+    assert stands({**bridge, "rotor/tower/bridge/state": b"online"}) == (
+        "rotor-tower-9f8e7d",
+        "rotor/tower/bridge/state",
         True,
     )
-    mine = {"rotor/tower/info": b'{"instance":"rotor-shack-1a2b3c"}'}
-    assert standing(ME, POSTS, {**mine, "rotor/tower/availability": b"online"}) is None
+    mine = {"rotor/tower/info": ROTATOR.replace(b"rotor-tower-9f8e7d", ME.id.encode())}
+    assert stands({**mine, "rotor/tower/availability": b"online"}) is None
     old = {"rotor/tower/info": b'{"id":"tower"}', "rotor/tower/availability": b"online"}
-    assert standing(ME, POSTS, old) is None  # an older bridge's info names no instance
+    assert stands(old) is None  # an older bridge's info names no instance
+
+
+def test_a_rotators_info_is_never_a_bridges_nor_a_bridges_info_a_rotators() -> None:
+    """Review 77: a rotator's ``R/info`` names no bridge to rules 2 and 4; a bridge's info
+    where rule 5 looks for a rotator's (``rotor/bridge/info``, a bridge on ``rotor``, read by
+    one on ``rotor/bridge``) is a bridge's, live by its state beside it."""
+    assert Instance.parse(ROTATOR) is None and Instance.stamped(ME.info([]).encode()) is None
+    on_rotor = {"rotor/bridge/info": OTHER.info([]).encode(), "rotor/bridge/state": b"online"}
+    found = standing(ME, "rotor/bridge", (Post("rotor/bridge/info"),), on_rotor)
+    assert found is not None and (found.other, found.base, found.live) == (OTHER, "rotor", True)
+    lone = {"rotor/bridge/info": ROTATOR.replace(b'"rotor"', b'"rotor/bridge"')}
+    lone["rotor/bridge/availability"] = b"online"  # a bridge on rotor/bridge, read by one on rotor
+    found = standing(ME, "rotor", (Post("rotor/bridge/info"),), lone)
+    assert found is not None and (found.base, found.live) == ("rotor/bridge", True)
+
+
+def test_a_rotator_of_a_bridge_on_this_base_topic_is_left_to_rules_2_and_4() -> None:
+    """Review 77: a computer killed outright on ``rotor`` left its rotators' ``R/info`` and
+    ``online``; the station that took ``rotor`` over (its own ``B/bridge/info`` there now) is
+    not refused by them."""
+    seen = {"rotor/tower/info": ROTATOR, "rotor/tower/availability": b"online"}
+    assert (
+        standing(ME, "rotor", (Post("rotor/bridge/info"), Post("rotor/tower/info")), seen) is None
+    )
 
 
 def test_a_gone_instance_stands_nowhere_whatever_its_rotators_say() -> None:
     """Rule 5: a rotator that said ``offline`` (a clean stop), or an instance whose bridge info
-    here says it is not online (its last will), is gone: found, not standing."""
-    rotator = {"rotor/tower/info": b'{"instance":"rotor-tower-9f8e7d"}'}
-    offline = {**rotator, "rotor/tower/availability": b"offline"}
-    assert standing(ME, POSTS, offline) == (
-        Instance.parse(rotator["rotor/tower/info"]),
-        POSTS[2],
-        False,
-    )
+    on the same base topic says it is not online (its last will), is gone: found, not
+    standing; gone on that base topic alone (review 77: a live station's old bridge state on a
+    base topic it ran on before)."""
+    offline = {"rotor/tower/info": ROTATOR, "rotor/tower/availability": b"offline"}
+    assert stands(offline) == ("rotor-tower-9f8e7d", "rotor/tower/availability", False)
+    below = ROTATOR.replace(b'"rotor"', b'"rotor/tower/x"')
+    posts = (Post("rotor/tower/x/bridge/info"), Post("rotor/tower/x/info"))
     killed = {  # its last will on its bridge state; its rotator's availability left online
-        "rotor/bridge/info": OTHER.info([]).encode(),
-        "rotor/bridge/state": b"offline",
-        "rotor/tower/info": b'{"instance":"rotor-tower-9f8e7d"}',
+        "rotor/tower/x/bridge/info": OTHER.info([]).encode(),
+        "rotor/tower/x/bridge/state": b"offline",
+        "rotor/tower/x/info": below,
+        "rotor/tower/x/availability": b"online",
+    }
+    found = standing(ME, "rotor/tower", posts, killed)
+    assert found is not None and not found.live
+    moved = {  # its old bridge state, where it ran before; its rotator live on rotor
+        "rotor/tower/bridge/info": OTHER.info([]).encode(),
+        "rotor/tower/bridge/state": b"offline",
+        "rotor/tower/info": ROTATOR,
         "rotor/tower/availability": b"online",
     }
-    found = standing(ME, POSTS, killed)
-    assert found is not None and not found[2]
+    assert stands(moved) == ("rotor-tower-9f8e7d", "rotor/tower/availability", True)
 
 
 def test_the_refusal_on_a_post_names_the_other_and_the_topic() -> None:
-    text = refusal_on(OTHER, POSTS[1])
+    seen = {"rotor/tower/bridge/info": OTHER.info([]).encode()}
+    found = standing(ME, "rotor/tower", POSTS, {**seen, "rotor/tower/bridge/state": b"online"})
+    assert found is not None
+    text = refusal_on(found)
     assert "rotor-tower-9f8e7d" in text and "'rotor/tower/bridge/info'" in text
     assert "mqtt.base_topic" in text and "\n" not in text

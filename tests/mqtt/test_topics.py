@@ -113,14 +113,14 @@ def test_the_posts_another_bridge_would_stand_on_are_this_bridges_own_topics() -
     rotator's root; nothing above the base topic."""
     several = Topics("rotor", {"tower": "rotor/tower", "yagi": "far/yagi"}).posts()
     assert several == [
-        ("rotor/bridge/info", "rotor/bridge/state", True),
-        ("rotor/tower/bridge/info", "rotor/tower/bridge/state", True),
-        ("far/yagi/bridge/info", "far/yagi/bridge/state", True),
-        ("rotor/tower/info", "rotor/tower/availability", False),
-        ("far/yagi/info", "far/yagi/availability", False),
-        ("rotor/info", "rotor/availability", False),
+        "rotor/bridge/info",
+        "rotor/tower/bridge/info",
+        "far/yagi/bridge/info",
+        "rotor/tower/info",
+        "far/yagi/info",
+        "rotor/info",
     ]
     assert Topics("rotor/tower", {"mast": "rotor/tower"}).posts() == [
-        ("rotor/tower/bridge/info", "rotor/tower/bridge/state", True),
-        ("rotor/tower/info", "rotor/tower/availability", False),
+        "rotor/tower/bridge/info",
+        "rotor/tower/info",
     ]

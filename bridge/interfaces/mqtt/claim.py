@@ -39,29 +39,45 @@ Rules:
    2, its stop express with it, and the STOP after it reached nothing: the rotor ran on).
 5. Another bridge on this one's topics, above or below them (attack 18: a bridge on
    ``rotor/tower`` beside a live bridge on ``rotor`` with a rotator ``tower`` started, and one
-   target turned both rotors). Each rotator's retained ``R/info`` names its bridge's instance
-   too. The first look (rule 2: before anything retained goes out, command topics gated) also
-   reads, inside this bridge's own topics only, the ``posts`` where another bridge would say
-   who it is: ``X/info`` with ``X/availability`` for each rotator's root and the base topic
-   itself (a bridge whose rotator's topic is one of ours), and ``R/bridge/info`` with
-   ``R/bridge/state`` for each rotator's root under another name than the base topic (a bridge
-   whose base topic is one of our rotators'). Another instance there with ``online`` beside it
-   refuses this bridge as rule 2 does (code 2 at a start, a yield after it ran), naming the
-   topic; its own instance never does (a restart of this installation), nor junk or an older
-   bridge's ``R/info`` without one. An instance that a bridge post here says is not online (its
-   last will, its clean stop) is gone, whatever its rotators' availability still says (a bridge
-   killed on ``rotor`` leaves its one rotator's ``rotor/availability`` ``online`` beside its
-   ``rotor/info``: rule 2 takes the base topic over then, as before); so is one whose rotator
-   said ``offline`` (a clean stop): said in the log, never refused. Why only our own topics: an
-   earlier try read the bridge info above the base topic, outside what the broker's ACL gives
-   this bridge, and a client kept off our topics ended the bridge with a forged info there, and
-   a refused bridge's leftovers there refused the older bridge for good; here a refused bridge
-   has published nothing retained, and whatever the look reads only a client the ACL lets write
-   our own topics could forge. Misjudged: a bridge killed outright above ours leaves its
-   rotator's availability ``online`` and refuses this one until it is started and stopped
-   again, or that topic deleted (the refusal says so). Not seen: a live bridge whose rotator's
-   controller does not answer (its availability ``offline``); two bridges that start at the
-   same moment (no live rule 4 here).
+   target turned both rotors). Each rotator's retained ``R/info`` says, under ``bridge``
+   (``stamp``), its bridge's instance and base topic; never in the bridge info's own shape, so
+   rules 2 and 4 never take it for a bridge's info (review 77: a bridge on ``rotor/bridge``
+   put its one rotator's ``R/info`` on a live bridge's ``rotor/bridge/info``, read as a
+   second bridge started at 0, and the live one yielded). The first look (rule 2: before
+   anything retained goes out, command topics gated) also reads, inside this bridge's own
+   topics only, the ``posts`` where another bridge would say who it is: ``X/info`` for each
+   rotator's root and the base topic itself (a bridge whose rotator's topic is one of ours),
+   and ``R/bridge/info`` for each rotator's root under another name than the base topic (a
+   bridge whose base topic is one of our rotators'). What stands on a post says what it is: a
+   bridge's info (on ``Y/bridge/info``: a bridge on ``Y``) is live by ``Y/bridge/state``
+   beside it, its last will; a rotator's by ``X/availability`` beside it. So a live bridge's
+   own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its rotator's post,
+   refuses it (review 77: it was read as a rotator's, without availability, and taken for
+   gone), and the other way round. Another instance live there refuses this bridge as rule 2
+   does (code 2 at a start, a yield after it ran), naming the topic; its own instance never
+   does (a restart of this installation), nor junk or an older bridge's ``R/info`` without a
+   stamp, nor a rotator whose bridge's base topic is this bridge's own: a bridge on our base
+   topic is rules 2 and 4's, by ``B/bridge/info`` (review 77: a station that took its base
+   topic over from a computer killed outright was refused for good by that computer's
+   rotators' ``R/info`` and ``online``, left retained, once one of them was configured
+   again). An instance is gone on a base topic where a bridge post says it is not online (its
+   last will, its clean stop), there alone, whatever its rotators of that base topic still
+   say (a bridge killed on ``rotor/tower/x`` leaves its rotator's availability ``online``;
+   review 77: one set of gone ids for every place took a live station on ``rotor`` for gone
+   by its old, offline bridge state on ``rotor/tower``, where it had run before); so is a
+   rotator that said ``offline`` (a clean stop): said in the log, never refused. Why only our
+   own topics: an earlier try read the bridge info above the base topic, outside what the
+   broker's ACL gives this bridge, and a client kept off our topics ended the bridge with a
+   forged info there, and a refused bridge's leftovers there refused the older bridge for
+   good; here a refused bridge has published nothing retained, and whatever the look reads
+   only a client the ACL lets write our own topics could forge. Misjudged: a bridge killed
+   outright above ours leaves its rotator's availability ``online`` and refuses this one
+   until it is started and stopped again, or that topic deleted (the refusal says so). Not
+   seen (review 77): a live bridge whose rotator's controller does not answer, switched off
+   between sessions or not yet answered after a start (its availability ``offline``: nothing
+   on our own topics says that bridge is live, its ``B/bridge/state`` lies above ours); a
+   bridge on a live bridge's group topic ``B/<group id>``, or the other way round (a group
+   publishes no info); two bridges that start at the same moment (no live rule 4 here).
 """
 
 from __future__ import annotations
@@ -71,7 +87,7 @@ import json
 import os
 import socket
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 
 @dataclass(frozen=True)
@@ -98,22 +114,25 @@ class Instance:
 
     @staticmethod
     def parse(payload: bytes) -> Instance | None:
-        """The instance an info payload names; None for anything else (an older bridge's
-        ``{"problems": [...]}``, junk, an empty deletion). Junk is anything another client may
+        """The instance a bridge's info payload names; None for anything else (an older
+        bridge's ``{"problems": [...]}``, a rotator's ``R/info``: no ``started``, its stamp
+        under ``bridge``, rule 5; junk, an empty deletion). Junk is anything another client may
         retain there: JSON nested past the parser's depth, a start past a float's range (an
         attack pass: each raised in the first look, on paho's thread, at every connect, and the
-        bridge never ran while the forged message stayed on the broker)."""
-        try:
-            doc = json.loads(payload)
-        except (ValueError, RecursionError):  # (UnicodeDecodeError is a ValueError)
-            return None
-        if not isinstance(doc, dict):
+        bridge never ran while the forged message stayed on the broker). Only the bridge info's
+        own shape (an instance and a start) names one (review 77: a rotator's ``R/info`` on
+        ``rotor/bridge/info``, a bridge's on ``rotor/bridge``, read as a second bridge on
+        ``rotor`` started at 0, ended the live bridge there)."""
+        doc = _json(payload)
+        if doc is None:
             return None
         iid, host, pid, started = (doc.get(k) for k in ("instance", "host", "pid", "started"))
         if not isinstance(iid, str) or not iid:
             return None
+        if not isinstance(started, int | float) or isinstance(started, bool):
+            return None
         try:
-            started_unix = float(started) if isinstance(started, int | float) else 0.0
+            started_unix = float(started)
         except OverflowError:
             return None
         return Instance(
@@ -123,10 +142,36 @@ class Instance:
             started_unix,
         )
 
+    @staticmethod
+    def stamped(payload: bytes) -> tuple[Instance, str] | None:
+        """Rule 5: the instance and base topic a rotator's ``R/info`` names (``stamp``); None
+        for anything else (a bridge's info, an older bridge's ``R/info``, junk)."""
+        doc = _json(payload)
+        mark = doc.get("bridge") if doc is not None else None
+        if not isinstance(mark, dict):
+            return None
+        iid, base = mark.get("instance"), mark.get("base_topic")
+        if not isinstance(iid, str) or not iid or not isinstance(base, str) or not base:
+            return None
+        return Instance(iid, "?", 0, 0.0), base
+
     def described(self) -> str:
         if self.host == "?" and not self.pid:  # (rule 5: a rotator's info names the id alone)
             return f"instance {self.id!r}"
         return f"instance {self.id!r} on host {self.host!r} (pid {self.pid})"
+
+
+def _json(payload: bytes) -> dict[str, object] | None:
+    try:
+        doc = json.loads(payload)
+    except (ValueError, RecursionError):  # (UnicodeDecodeError is a ValueError)
+        return None
+    return doc if isinstance(doc, dict) else None
+
+
+def stamp(instance_id: str, base_topic: str) -> dict[str, str]:
+    """Rule 5: what each rotator's ``R/info`` says of its bridge, under ``bridge``."""
+    return {"instance": instance_id, "base_topic": base_topic}
 
 
 class Verdict(enum.Enum):
@@ -164,54 +209,95 @@ def refusal(base_topic: str, other: Instance, live_since_look: bool) -> str:
     )
 
 
-def standing(
-    me: Instance, posts: tuple[Post, ...], seen: dict[str, bytes]
-) -> tuple[Instance, Post, bool] | None:
-    """Rule 5: the first other instance the look saw live on one of ``posts`` (``seen``: the
-    payloads of their topics), with its post and True; else the first one seen gone there,
-    with False (said in the log); None when there is none."""
-    gone: set[str] = set()
-    found: list[tuple[Instance, Post, bool]] = []
-    for post in posts:
-        info = seen.get(post.info)
-        other = Instance.parse(info) if info else None
-        if other is None or other.id == me.id:
-            continue
-        live = (seen.get(post.live) or b"").strip() == b"online"
-        if post.bridge and not live:
-            gone.add(other.id)  # its last will, or its clean stop
-        found.append((other, post, live))
-    for other, post, live in found:
-        if live and other.id not in gone:
-            return other, post, True
-    return (found[0][0], found[0][1], False) if found else None
+@dataclass(frozen=True)
+class Post:
+    """Rule 5: a topic ``X/info`` where another bridge would say who it is on this bridge's
+    topics. What stands there says what it is: a bridge's info (``X`` is its ``B/bridge``; live
+    by ``X/state``, its last will) or a rotator's (``X`` is its root; live by
+    ``X/availability``)."""
 
+    info: str
 
-def refusal_on(other: Instance, post: Post) -> str:
-    """Rule 5's error: another bridge on one of this bridge's topics."""
-    why = (
-        f"{post.live} says online"
-        if post.bridge
-        else f"{post.live} says online (killed outright, a bridge leaves it so: then start "
-        "that bridge and stop it, or delete that retained topic)"
-    )
-    return (
-        f"another bridge runs on this bridge's topics: {other.described()} says so on "
-        f"{post.info!r}, and {why}. Two bridges whose topics lie one under the other turn both "
-        f"rotors on one target: stop the other one, or give each its own mqtt.base_topic, no "
-        f"other bridge's topics under it"
-    )
+    @property
+    def state(self) -> str:
+        return f"{self.info.rsplit('/', 1)[0]}/state"
+
+    @property
+    def availability(self) -> str:
+        return f"{self.info.rsplit('/', 1)[0]}/availability"
+
+    @property
+    def topics(self) -> tuple[str, str, str]:
+        """What the first look reads for this post."""
+        return self.info, self.state, self.availability
+
+    @property
+    def bridge_base(self) -> str | None:
+        """The base topic of a bridge whose info this topic would be (``Y/bridge/info``)."""
+        return (
+            self.info.removesuffix("/bridge/info") if self.info.endswith("/bridge/info") else None
+        )
 
 
 @dataclass(frozen=True)
-class Post:
-    """Rule 5: where another bridge would say who it is on this bridge's topics (``info``), and
-    the topic beside it that says whether it is live (``live``, ``online``); ``bridge``: a
-    bridge's own ``bridge/info`` (its ``bridge/state`` is its last will), not a rotator's."""
+class Stand:
+    """Rule 5: another instance found on a post: its bridge's base topic, the topic that says
+    whether it is live (``beside``) and whether it is, and whether it was a bridge's info."""
 
-    info: str
-    live: str
-    bridge: bool = False
+    other: Instance
+    post: Post
+    base: str
+    beside: str
+    live: bool
+    bridge: bool
+
+
+def standing(
+    me: Instance, base_topic: str, posts: tuple[Post, ...], seen: dict[str, bytes]
+) -> Stand | None:
+    """Rule 5: the first other instance the look saw live on one of ``posts`` (``seen``: the
+    payloads of their topics), not gone; else the first one seen gone there (said in the log);
+    None when there is none."""
+    gone: set[tuple[str, str]] = set()  # (instance, base topic): gone there, per place
+    found: list[Stand] = []
+    for post in posts:
+        info = seen.get(post.info)
+        if not info:
+            continue
+        bridge, base = Instance.parse(info), post.bridge_base
+        if bridge is not None:
+            if base is None or bridge.id == me.id:
+                continue  # (a bridge's info where no bridge's is: not one)
+            live = (seen.get(post.state) or b"").strip() == b"online"
+            if not live:
+                gone.add((bridge.id, base))  # its last will, or its clean stop
+            found.append(Stand(bridge, post, base, post.state, live, True))
+            continue
+        mark = Instance.stamped(info)
+        if mark is None or mark[0].id == me.id or mark[1] == base_topic:
+            continue  # (a rotator of a bridge on this base topic: rules 2 and 4 judge it)
+        live = (seen.get(post.availability) or b"").strip() == b"online"
+        found.append(Stand(mark[0], post, mark[1], post.availability, live, False))
+    for stand in found:
+        if stand.live and (stand.other.id, stand.base) not in gone:
+            return stand
+    return replace(found[0], live=False) if found else None
+
+
+def refusal_on(stand: Stand) -> str:
+    """Rule 5's error: another bridge on one of this bridge's topics."""
+    why = (
+        f"{stand.beside} says online"
+        if stand.bridge
+        else f"{stand.beside} says online (killed outright, a bridge leaves it so: then start "
+        "that bridge and stop it, or delete that retained topic)"
+    )
+    return (
+        f"another bridge runs on this bridge's topics: {stand.other.described()} says so on "
+        f"{stand.post.info!r}, and {why}. Two bridges whose topics lie one under the other turn "
+        f"both rotors on one target: stop the other one, or give each its own mqtt.base_topic, "
+        f"no other bridge's topics under it"
+    )
 
 
 @dataclass(frozen=True)

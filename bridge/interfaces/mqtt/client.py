@@ -860,7 +860,7 @@ class MqttClient(Connection):
         denial is no problem (rule 17)."""
         if self._look_only is None:
             read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
-            posted = (t for p in look.claim.posts for t in (p.info, p.live))
+            posted = (t for p in look.claim.posts for t in p.topics)
             self._look_only = frozenset(t for t in posted if not read(t))
             self.optional(
                 {

@@ -132,7 +132,7 @@ class FirstLook:
         self.probing = False  # rule 14: this look's probes went out (its second hello too)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
         # claim rule 5: the topics of the posts where another bridge would stand on ours
-        self._posted = frozenset(t for p in claim.posts for t in (p.info, p.live))
+        self._posted = frozenset(t for p in claim.posts for t in p.topics)
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -220,14 +220,15 @@ class FirstLook:
             assert other is not None
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
-        stands = standing(self.claim.me, self.claim.posts, self._seen)  # claim rule 5
-        if stands is not None and stands[2]:
-            return Outcome(refused=refusal_on(stands[0], stands[1]), clear=False, clears=[])
-        if stands is not None and not self._opened and stands[1].info != self.claim.info_topic:
+        claim = self.claim
+        stands = standing(claim.me, claim.base_topic, claim.posts, self._seen)  # claim rule 5
+        if stands is not None and stands.live:
+            return Outcome(refused=refusal_on(stands), clear=False, clears=[])
+        if stands is not None and not self._opened and stands.post.info != claim.info_topic:
             log.warning(
                 "%s, gone, left %s on this bridge's topics: taken over",
-                stands[0].described(),
-                stands[1].info,
+                stands.other.described(),
+                stands.post.info,
             )
         heard, self._heard = (None if self._opened else self._heard), {}
         # rule 14: the hello back before a witness's probe, and nothing held heard there: the

@@ -506,12 +506,12 @@ def info_json(
     can_track: bool,
     console: ConsoleFacts | None = None,
     rotator_id: str | None = None,
-    instance: str | None = None,
+    bridge: dict[str, str] | None = None,
 ) -> str:
     """``R/info``: what a rotator is and may do, for a client far from the station (limits,
     sectors, presets, capabilities as the station's configuration has them; true bearings);
-    with ``console``, what a console there draws too; with ``instance``, the bridge's
-    (claim.py rule 5: another bridge's first look reads it)."""
+    with ``console``, what a console there draws too; with ``bridge``, the bridge's stamp
+    (claim.py rule 5: ``Instance.stamp``, another bridge's first look reads it)."""
     lo, hi = pointing.target_range()
     doc: dict[str, object] = {
         "id": rotator_id,
@@ -540,8 +540,8 @@ def info_json(
         doc["beamwidth"] = console.beamwidth_deg
         doc["nudge_step"] = console.nudge_step_deg
         doc["satellites"] = list(console.satellites)
-    if instance is not None:
-        doc["instance"] = instance
+    if bridge is not None:
+        doc["bridge"] = bridge
     return json.dumps(doc, separators=(",", ":"))
 
 

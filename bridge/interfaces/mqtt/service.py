@@ -175,6 +175,7 @@ from bridge.core.model import (
 from bridge.feature import CommandTopic, StateTopic, registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
+from bridge.interfaces.mqtt.claim import stamp
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
 from bridge.interfaces.mqtt.halts import AFTER_WAITING_OFF, Halts, switch_on
@@ -218,7 +219,8 @@ class MqttService:
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay.
-        ``instance``: the bridge's, named in each ``R/info`` (claim.py rule 5)."""
+        ``instance``: the bridge's, named in each ``R/info`` with the base topic
+        (claim.py rule 5: ``Instance.stamp``)."""
         self.topics = topics
         self._instance = instance
         self._publisher = publisher
@@ -282,7 +284,7 @@ class MqttService:
             rotator.can_track,
             console,
             rotator.id,
-            self._instance,
+            None if self._instance is None else stamp(self._instance, self.topics.base),
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 

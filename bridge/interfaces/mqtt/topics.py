@@ -332,19 +332,16 @@ class Topics:
             subs += [g.status, g.availability]
         return subs
 
-    def posts(self) -> list[tuple[str, str, bool]]:
+    def posts(self) -> list[str]:
         """claim.py rule 5: where, on this bridge's own topics, another bridge would say who it
-        is, the topic that says whether it is live, and whether it is a bridge's own info (else a
-        rotator's): ``B/bridge/info`` (rule 2's), ``R/bridge/info`` for each rotator's root but
-        the base topic, ``X/info`` for each rotator's root and the base topic."""
+        is (what stands there says whether it is a bridge's info or a rotator's, and so which
+        topic beside it says whether it is live): ``B/bridge/info`` (rule 2's),
+        ``R/bridge/info`` for each rotator's root but the base topic, ``X/info`` for each
+        rotator's root and the base topic."""
         roots = list(dict.fromkeys([*(t.root for t in self._rotators.values()), self.base]))
-        found = [(self.bridge_info, self.bridge_state, True)]
-        found += [
-            (Topics(x, {}).bridge_info, Topics(x, {}).bridge_state, True)
-            for x in roots
-            if x != self.base
-        ]
-        found += [(RotatorTopics(x).info, RotatorTopics(x).availability, False) for x in roots]
+        found = [self.bridge_info]
+        found += [Topics(x, {}).bridge_info for x in roots if x != self.base]
+        found += [RotatorTopics(x).info for x in roots]
         return found
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
