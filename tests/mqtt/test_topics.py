@@ -109,8 +109,8 @@ def test_route_answers_for_the_first_rotator_whose_topic_it_is_whatever_the_root
 
 
 def test_the_posts_another_bridge_would_stand_on_are_this_bridges_own_topics() -> None:
-    """claim.py rule 5: each rotator's root and the base topic, and a bridge's info under each
-    rotator's root; nothing above the base topic."""
+    """claim.py rule 5: each rotator's and group's root and the base topic, and a bridge's info
+    under each rotator's and group's root; nothing above the base topic."""
     several = Topics("rotor", {"tower": "rotor/tower", "yagi": "far/yagi"}).posts()
     assert several == [
         "rotor/bridge/info",
@@ -118,6 +118,15 @@ def test_the_posts_another_bridge_would_stand_on_are_this_bridges_own_topics() -
         "far/yagi/bridge/info",
         "rotor/tower/info",
         "far/yagi/info",
+        "rotor/info",
+    ]
+    grouped = Topics("rotor", {"upper": "rotor/upper"}, {"tower": "rotor/tower"}).posts()
+    assert grouped == [  # review 77: a group's root too
+        "rotor/bridge/info",
+        "rotor/upper/bridge/info",
+        "rotor/tower/bridge/info",
+        "rotor/upper/info",
+        "rotor/tower/info",
         "rotor/info",
     ]
     assert Topics("rotor/tower", {"mast": "rotor/tower"}).posts() == [

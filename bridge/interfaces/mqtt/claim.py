@@ -37,47 +37,47 @@ Rules:
    while the other is there and online. One message proves no other bridge (an attack pass:
    one forged, non-retained info on ``B/bridge/info`` ended a bridge mid-turn for good, code
    2, its stop express with it, and the STOP after it reached nothing: the rotor ran on).
-5. Another bridge on this one's topics, above or below them (attack 18: a bridge on
-   ``rotor/tower`` beside a live bridge on ``rotor`` with a rotator ``tower`` started, and one
-   target turned both rotors). Each rotator's retained ``R/info`` says, under ``bridge``
-   (``stamp``), its bridge's instance and base topic; never in the bridge info's own shape, so
-   rules 2 and 4 never take it for a bridge's info (review 77: a bridge on ``rotor/bridge``
-   put its one rotator's ``R/info`` on a live bridge's ``rotor/bridge/info``, read as a
-   second bridge started at 0, and the live one yielded). The first look (rule 2: before
-   anything retained goes out, command topics gated) also reads, inside this bridge's own
-   topics only, the ``posts`` where another bridge would say who it is: ``X/info`` for each
-   rotator's root and the base topic itself (a bridge whose rotator's topic is one of ours),
-   and ``R/bridge/info`` for each rotator's root under another name than the base topic (a
-   bridge whose base topic is one of our rotators'). What stands on a post says what it is: a
-   bridge's info (on ``Y/bridge/info``: a bridge on ``Y``) is live by ``Y/bridge/state``
-   beside it, its last will; a rotator's by ``X/availability`` beside it. So a live bridge's
-   own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its rotator's post,
-   refuses it (review 77: it was read as a rotator's, without availability, and taken for
-   gone), and the other way round. Another instance live there refuses this bridge as rule 2
-   does (code 2 at a start, a yield after it ran), naming the topic; its own instance never
-   does (a restart of this installation), nor junk or an older bridge's ``R/info`` without a
-   stamp, nor a rotator whose bridge's base topic is this bridge's own: a bridge on our base
-   topic is rules 2 and 4's, by ``B/bridge/info`` (review 77: a station that took its base
-   topic over from a computer killed outright was refused for good by that computer's
-   rotators' ``R/info`` and ``online``, left retained, once one of them was configured
-   again). An instance is gone on a base topic where a bridge post says it is not online (its
-   last will, its clean stop), there alone, whatever its rotators of that base topic still
-   say (a bridge killed on ``rotor/tower/x`` leaves its rotator's availability ``online``;
-   review 77: one set of gone ids for every place took a live station on ``rotor`` for gone
-   by its old, offline bridge state on ``rotor/tower``, where it had run before); so is a
-   rotator that said ``offline`` (a clean stop): said in the log, never refused. Why only our
-   own topics: an earlier try read the bridge info above the base topic, outside what the
-   broker's ACL gives this bridge, and a client kept off our topics ended the bridge with a
-   forged info there, and a refused bridge's leftovers there refused the older bridge for
-   good; here a refused bridge has published nothing retained, and whatever the look reads
-   only a client the ACL lets write our own topics could forge. Misjudged: a bridge killed
-   outright above ours leaves its rotator's availability ``online`` and refuses this one
-   until it is started and stopped again, or that topic deleted (the refusal says so). Not
-   seen (review 77): a live bridge whose rotator's controller does not answer, switched off
-   between sessions or not yet answered after a start (its availability ``offline``: nothing
-   on our own topics says that bridge is live, its ``B/bridge/state`` lies above ours); a
-   bridge on a live bridge's group topic ``B/<group id>``, or the other way round (a group
-   publishes no info); two bridges that start at the same moment (no live rule 4 here).
+5. Another bridge on this one's topics, above or below them (attack 18: a bridge on ``rotor/tower``
+   beside a live bridge on ``rotor`` with a rotator ``tower`` started, and one target turned both
+   rotors). Each rotator's retained ``R/info`` says, under ``bridge`` (``stamp``), its bridge's
+   instance and base topic; never in the bridge info's own shape, so rules 2 and 4 never take it for
+   a bridge's info (review 77: a bridge on ``rotor/bridge`` put its one rotator's ``R/info`` on a
+   live bridge's ``rotor/bridge/info``, read as a second bridge started at 0, and the live one
+   yielded). The first look (rule 2: before anything retained goes out, command topics gated) also
+   reads, inside this bridge's own topics only, the ``posts`` where another bridge would say who it
+   is: ``X/info`` for each rotator's and group's root and the base topic itself (a bridge whose
+   rotator's topic is one of ours), and ``R/bridge/info`` for each rotator's and group's root under
+   another name than the base topic (a bridge whose base topic is one of our rotators' or groups';
+   review 77: a bridge with a group ``tower`` started beside a live bridge on ``rotor/tower``). What
+   stands on a post says what it is: a bridge's info (on ``Y/bridge/info``: a bridge on ``Y``) is
+   live by ``Y/bridge/state`` beside it, its last will; a rotator's by ``X/availability`` beside it.
+   So a live bridge's own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its
+   rotator's post, refuses it (review 77: it was read as a rotator's, without availability, and
+   taken for gone), and the other way round. Another instance live there refuses this bridge as rule
+   2 does (code 2 at a start, a yield after it ran), naming the topic; its own instance never does
+   (a restart of this installation), nor junk or an older bridge's ``R/info`` without a stamp, nor a
+   rotator whose bridge's base topic is this bridge's own: a bridge on our base topic is rules 2 and
+   4's, by ``B/bridge/info`` (review 77: a station that took its base topic over from a computer
+   killed outright was refused for good by that computer's rotators' ``R/info`` and ``online``, left
+   retained, once one of them was configured again). An instance is gone on a base topic where a
+   bridge post says it is not online (its last will, its clean stop), there alone, whatever its
+   rotators of that base topic still say (a bridge killed on ``rotor/tower/x`` leaves its rotator's
+   availability ``online``; review 77: one set of gone ids for every place took a live station on
+   ``rotor`` for gone by its old, offline bridge state on ``rotor/tower``, where it had run before);
+   so is a rotator that said ``offline`` (a clean stop): said in the log, never refused. Why only
+   our own topics: an earlier try read the bridge info above the base topic, outside what the
+   broker's ACL gives this bridge, and a client kept off our topics ended the bridge with a forged
+   info there, and a refused bridge's leftovers there refused the older bridge for good; here a
+   refused bridge has published nothing retained, and whatever the look reads only a client the ACL
+   lets write our own topics could forge. Misjudged: a bridge killed outright above ours leaves its
+   rotator's availability ``online`` and refuses this one until it is started and stopped again, or
+   that topic deleted (the refusal says so). Not seen (review 77): a live bridge whose rotator's
+   controller does not answer, switched off between sessions or not yet answered after a start (its
+   availability ``offline``: nothing on our own topics says that bridge is live, its
+   ``B/bridge/state`` lies above ours); a bridge started on a live bridge's group topic ``B/<group
+   id>`` (a group publishes no info, and a ``G/info`` would read as a removed rotator's,
+   interfaces/mqtt/stale.py rule 4, and as a rotator to a remote; the group's bridge started second
+   is refused); two bridges that start at the same moment (no live rule 4 here).
 """
 
 from __future__ import annotations

@@ -336,9 +336,11 @@ class Topics:
         """claim.py rule 5: where, on this bridge's own topics, another bridge would say who it
         is (what stands there says whether it is a bridge's info or a rotator's, and so which
         topic beside it says whether it is live): ``B/bridge/info`` (rule 2's),
-        ``R/bridge/info`` for each rotator's root but the base topic, ``X/info`` for each
-        rotator's root and the base topic."""
-        roots = list(dict.fromkeys([*(t.root for t in self._rotators.values()), self.base]))
+        ``R/bridge/info`` for each rotator's and group's root but the base topic, ``X/info``
+        for each rotator's and group's root and the base topic (review 77: a group's target
+        turned another bridge's rotor on its topic)."""
+        roots = [t.root for t in self._rotators.values()] + [g.root for g in self._groups.values()]
+        roots = list(dict.fromkeys([*roots, self.base]))
         found = [self.bridge_info]
         found += [Topics(x, {}).bridge_info for x in roots if x != self.base]
         found += [RotatorTopics(x).info for x in roots]
