@@ -17,11 +17,6 @@ import pytest
 from tests.support import run_cli, to_toml
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 76: 'state_file ... is also audit_file' and 'tracking.tle_file ... is also "
-    "mqtt.password_file' name the path unescaped: a traceback, exit 1, in a home not in UTF-8",
-)
 @pytest.mark.parametrize(
     ("keys", "said"),
     [

@@ -10,13 +10,22 @@ zero-width joiner in Persian or an emoji, characters newer than Python's Unicode
 And how a message quotes what a file or a sender wrote (``quoted``): escaped, and cut short at
 QUOTED_MOST characters with its length said, so a file of one long line (a binary, a
 compressed download, ``/dev/zero``) is no megabyte line in the journal (attack 18).
+
+And how the bridge names a path in anything it says (``shown_path``): a refusal in the
+settings, R/error and R/status's ``last_error``, a log line, check-config's report. A path may
+be any bytes (the home folder's name above all: settings/base.py rule 3), and a byte that is
+not UTF-8 is a lone surrogate in Python's text, which no UTF-8 holds: in a JSON payload it is
+``\\udce9``, refused by a strict parser (Home Assistant's), and on a stream that encodes
+strictly it ends the process in a UnicodeEncodeError (review 76). So it is escaped once, here,
+as Python's stderr writes it (``\\udce9``), and every text naming a path goes through it.
 """
 
 from __future__ import annotations
 
+import os
 import re
 
-__all__ = ["NOT_TEXT", "QUOTED_MOST", "bad_char", "entity_slug", "quoted"]
+__all__ = ["NOT_TEXT", "QUOTED_MOST", "bad_char", "entity_slug", "quoted", "shown_path"]
 
 # what a refusal says after the character: U+0001, {NOT_TEXT}
 NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or a non-character)"
@@ -59,3 +68,12 @@ def quoted(text: str, most: int = QUOTED_MOST) -> str:
     if len(text) <= most:
         return repr(text)
     return f"{text[:most]!r}… ({len(text)} characters)"
+
+
+def shown_path(path: str | bytes | os.PathLike[str] | os.PathLike[bytes]) -> str:
+    """``path`` as the bridge names it in what it says: UTF-8 text, a byte that is not UTF-8
+    (a lone surrogate in Python's text) escaped as ``\\udce9``, so ``/home/h\\udce9/rotor``."""
+    text = os.fspath(path)
+    if isinstance(text, bytes):  # its bytes: read as Python reads a path from the system
+        text = text.decode("utf-8", "surrogateescape")
+    return text.encode("utf-8", "backslashreplace").decode()

@@ -27,9 +27,9 @@ from typing import Any, Literal, NamedTuple
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge.core.model import OPERATOR_CHARS, operator_name, valid_operator
-from bridge.core.text import NOT_TEXT, bad_char
+from bridge.core.text import NOT_TEXT, bad_char, shown_path
 from bridge.settings import ConfigError, read_toml
-from bridge.settings.base import Strict, shown_path
+from bridge.settings.base import Strict
 from bridge.settings.errors import describe
 from bridge.settings.mqtt import MqttSettings
 from bridge.settings.web import WebSettings

@@ -59,6 +59,10 @@ Rules:
    in one PEM file (cert_file or ca_file and key_file alike) is the one case allowed: ssl
    reads it, and never quotes it. (The remote reads no file but its secrets and TLS files,
    which its [mqtt] table's TLS check refuses as no PEM before a rule like this one could.)
+   Rules 6 and 7 name each path as ``shown_path`` spells it (settings/base.py rule 8; review
+   76: a file ``~/...`` in a home folder whose name is not UTF-8 ended check-config and run in
+   a UnicodeEncodeError traceback here, exit 1), and so does every refusal naming the
+   configuration file, whose own path may be any bytes (settings/base.py rule 3).
 8. A variable that sets one entry of a table keyed by the user's names (a rotator's
    ``presets``: ``ROTOR_BRIDGE_ROTATORS__TOWER__PRESETS__EU``; groups, the other such tables,
    are set in the file only, rule 4) sets the file's entry of that name whatever its case, as
@@ -104,11 +108,11 @@ from pydantic_settings import (
     SettingsError,
 )
 
-from bridge.core.text import entity_slug
+from bridge.core.text import entity_slug, shown_path
 from bridge.feature import topic_words
 from bridge.protocols.axes import bearing_is_elevation
 from bridge.settings import errors as settings_errors
-from bridge.settings.base import plain_value, shown_path
+from bridge.settings.base import plain_value
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
 from bridge.settings.groups import GroupSettings, reserved, station_words
@@ -513,8 +517,8 @@ class Settings(BaseSettings):
                 if same_file(path, given):
                     fix = "name that file otherwise" if name == _SECRET else _OWN
                     raise ValueError(
-                        f"{name} {path} is also {other}: the bridge writes there, and would "
-                        f"overwrite it; {fix}"
+                        f"{name} {shown_path(path)} is also {other}: the bridge writes there, and "
+                        f"would overwrite it; {fix}"
                     )
         said = secret_read(self.files_secret(), self.files_read())  # rule 7
         if said is not None:
@@ -628,8 +632,9 @@ def secret_read(secret: list[tuple[str, Path]], read: list[tuple[str, Path]]) ->
         for holder, held in secret:
             if (name, holder) not in _TOGETHER and same_file(path, held):
                 return (
-                    f"{name} {path} is also {holder}: a secret's file, which {name} would "
-                    f"read as no secret (and could quote in the log); name the file {name} wants"
+                    f"{name} {shown_path(path)} is also {holder}: a secret's file, which {name} "
+                    f"would read as no secret (and could quote in the log); name the file {name} "
+                    "wants"
                 )
     return None
 
@@ -651,21 +656,23 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
             data = f.read(CONFIG_FILE_MAX + 1)  # rule 5
         if len(data) > CONFIG_FILE_MAX:
             raise ConfigError(
-                f"config file {path} is larger than {CONFIG_FILE_MAX >> 20} MiB: no "
+                f"config file {shown_path(path)} is larger than {CONFIG_FILE_MAX >> 20} MiB: no "
                 "configuration is (is it the right file?)"
             )
         return tomllib.loads(data.decode())
     except FileNotFoundError:
-        raise ConfigError(f"config file {path} not found") from None
+        raise ConfigError(f"config file {shown_path(path)} not found") from None
     except OSError as exc:
-        raise ConfigError(f"config file {path}: {exc.strerror}") from None
+        raise ConfigError(f"config file {shown_path(path)}: {exc.strerror}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"config file {path} is not valid TOML: {exc}") from None
+        raise ConfigError(f"config file {shown_path(path)} is not valid TOML: {exc}") from None
     except RecursionError:  # (arrays or tables nested past the parser's depth)
-        raise ConfigError(f"config file {path} is not valid TOML: nested too deep") from None
+        raise ConfigError(
+            f"config file {shown_path(path)} is not valid TOML: nested too deep"
+        ) from None
     except UnicodeDecodeError as exc:
         raise ConfigError(
-            f"config file {path} is not UTF-8 text (byte {exc.start}): save it as UTF-8"
+            f"config file {shown_path(path)} is not UTF-8 text (byte {exc.start}): save it as UTF-8"
         ) from None
 
 
@@ -690,8 +697,8 @@ def settings_from(
     ):
         if path:
             raise ConfigError(
-                f"no rotators configured in {path}: add a [[rotators]] table with id, model "
-                "and port (docs/configuration.md)"
+                f"no rotators configured in {shown_path(path)}: add a [[rotators]] table with "
+                "id, model and port (docs/configuration.md)"
             )
         raise ConfigError(
             "no configuration file given: pass --config FILE (see config/example.toml) "
@@ -706,7 +713,8 @@ def settings_from(
     for name, written in settings.files_written():  # rule 6: nor the file itself
         if path and same_file(written, path):
             raise ConfigError(
-                f"invalid configuration:\n  {name}: {written} is the configuration file itself: "
+                f"invalid configuration:\n  {name}: {shown_path(written)} is the configuration "
+                "file itself: "
                 f"the bridge writes there, and would overwrite it; {_OWN}"
             )
     said = path and secret_read([("the configuration file", Path(path))], settings.files_read())

@@ -51,7 +51,11 @@ Rules:
    reads as a lone surrogate, in a refusal's text ended check-config and run in a
    UnicodeEncodeError traceback (pydantic cannot hold it), exit 1, where a configuration error
    is exit 2 (the systemd unit restarts after exit 1, for ever). It is escaped as Python's
-   stderr, and cli.py's stdout, write it (``\\udce9``).
+   stderr, and cli.py's stdout, write it (``\\udce9``). ``shown_path`` is core/text.py's, the
+   one spelling of a path in everything the bridge says (R/error, the log, the pty server's
+   words: review 76 found the running bridge naming such a port raw on MQTT), not the
+   settings' alone; every refusal naming a path uses it, settings/__init__.py's rules 6 and 7
+   too.
 """
 
 from __future__ import annotations
@@ -151,11 +155,6 @@ def beyond_home(path: str) -> str:
     if home.startswith("/") and (path == home or path.startswith(home + "/")):
         return "~" + path[len(home) :]
     return path
-
-
-def shown_path(path: str | os.PathLike[str]) -> str:
-    """Rule 8: ``path`` as a refusal names it, a lone surrogate escaped (``\\udce9``)."""
-    return os.fspath(path).encode("utf-8", "backslashreplace").decode()
 
 
 def home_path(value: str) -> str:

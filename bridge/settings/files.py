@@ -29,7 +29,7 @@ import ssl
 import stat
 from pathlib import Path
 
-from bridge.settings.base import shown_path
+from bridge.core.text import shown_path
 
 # rule 4: the most of a password file read (MQTT's longest password is 64 KiB: a longer one is
 # still read whole, to be refused with its length)

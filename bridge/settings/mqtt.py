@@ -35,8 +35,8 @@ from pydantic import (
     model_validator,
 )
 
-from bridge.core.text import NOT_TEXT, bad_char
-from bridge.settings.base import NOT_SHOWN, Strict, shown_path
+from bridge.core.text import NOT_TEXT, bad_char, shown_path
+from bridge.settings.base import NOT_SHOWN, Strict
 from bridge.settings.files import check_tls_files, read_password_file
 
 _TOPIC_BAD = re.compile(r"[+#\x00]")

@@ -32,6 +32,9 @@ Rules:
    group number, and that number, for compose's group_add, is what is said (a review: it was
    told to usermod, log in again, and that the systemd unit's user is in dialout). A user id
    with no name (``docker run --user 1000``) is named by its number.
+8. Every path printed (a port, a pty's link, the state, audit, TLE and cty files) is spelled
+   by ``shown_path`` (core/text.py): a path may be any bytes, a home folder's name above all
+   (settings/base.py rule 3), and what is printed is UTF-8 text (review 76).
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bridge.core.text import shown_path
 from bridge.protocols.axes import Axis
 from bridge.runtime.state_store import StateStore
 from bridge.settings import ConfigError, RotatorSettings, Settings, state_file_in
@@ -112,9 +116,9 @@ def check_state_file(settings: Settings) -> None:
     try:
         StateStore(path).check_kind()
     except OSError as exc:
-        where = f" ({exc.filename})" if exc.filename else ""
+        where = f" ({shown_path(exc.filename)})" if exc.filename else ""
         raise ConfigError(
-            f"state_file {path} cannot be written: {exc.strerror or exc}{where}"
+            f"state_file {shown_path(path)} cannot be written: {exc.strerror or exc}{where}"
         ) from None
 
 
@@ -133,8 +137,9 @@ def config_warnings(settings: Settings) -> list[str]:
     closed = _unwritable_state_dir(settings.state_file)
     if closed is not None:
         found.append(
-            f"state_file: {closed} cannot be written by {_who()}: the bridge does "
-            f"not start unless the user it runs as may write {settings.state_file} there"
+            f"state_file: {shown_path(closed)} cannot be written by {_who()}: the bridge does "
+            f"not start unless the user it runs as may write {shown_path(settings.state_file)} "
+            "there"
         )
     if settings._password_in_file:  # set by load_settings, which saw the file
         found.append(
@@ -154,17 +159,18 @@ def config_warnings(settings: Settings) -> list[str]:
         for key, path in zip(keys, r.ports, strict=True):  # a composite's both
             if not os.path.exists(path):
                 found.append(
-                    f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
-                    "ports` lists the serial ports); the bridge keeps trying to open it"
+                    f"{where}.{key}: {shown_path(path)} does not exist now (unplugged? "
+                    "`rotor-bridge ports` lists the serial ports); the bridge keeps trying to "
+                    "open it"
                 )
             elif not os.access(path, os.R_OK | os.W_OK):  # rule 7
                 found.append(f"{where}.{key}: {_no_access(path)}")
             if _NUMBERED.fullmatch(path):  # two alike controllers swapped turn the wrong antenna
                 found.append(
-                    f"{where}.{key}: {path} is numbered in the order the adapters appear: after "
-                    "a re-plug or a reboot it can name another adapter (another rotator's "
-                    "controller, a radio), or none; name the adapter by its /dev/serial/by-id/ "
-                    "path (`rotor-bridge ports`)"
+                    f"{where}.{key}: {shown_path(path)} is numbered in the order the adapters "
+                    "appear: after a re-plug or a reboot it can name another adapter (another "
+                    "rotator's controller, a radio), or none; name the adapter by its "
+                    "/dev/serial/by-id/ path (`rotor-bridge ports`)"
                 )
         for key, on, bind in (
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
@@ -228,23 +234,26 @@ def summary(settings: Settings) -> list[str]:
         lines.append(f"tracking: {sky}; no TLE file, so no satellites")
     else:
         there = "found" if os.path.lexists(tle) else "NOT FOUND"  # (read: features/tracking/)
-        lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
+        lines.append(f"tracking: {sky} and the satellites in {shown_path(tle)} ({there})")
     wsjtx = settings.wsjtx
     where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"
     lines.append(f"wsjtx: listening on {where}" if wsjtx.enabled else "wsjtx: off")
     dx = settings.dxcluster
     if dx.enabled:
         there = "found" if dx.cty_file is not None and os.path.isfile(dx.cty_file) else "NOT FOUND"
-        lines.append(f"dxcluster: {dx.host}:{dx.port} as {dx.login}, {dx.cty_file} ({there})")
+        cty = shown_path(str(dx.cty_file))
+        lines.append(f"dxcluster: {dx.host}:{dx.port} as {dx.login}, {cty} ({there})")
     else:
         lines.append("dxcluster: off")
-    state = f"state file: {settings.state_file}"
+    state = f"state file: {shown_path(settings.state_file)}"
     if service is not None:  # rule 6
         state += f" (run by hand as {_who()}; under the systemd unit {service})"
     lines.append(state)
     if settings.audit_file is not None:
         most = settings.audit_max_bytes
-        lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
+        lines.append(
+            f"audit file: {shown_path(settings.audit_file)} (renamed to .1 at {most} bytes)"
+        )
     return lines
 
 
@@ -252,8 +261,8 @@ def _no_access(port: str) -> str:
     """Rule 7: a port there that this user may not open, and the group that may."""
     user = _who()
     said = (
-        f"{port} cannot be opened by {user}: run by hand, the bridge keeps trying and says "
-        "'no permission'"
+        f"{shown_path(port)} cannot be opened by {user}: run by hand, the bridge keeps trying "
+        "and says 'no permission'"
     )
     try:
         st = os.stat(port)
@@ -353,7 +362,7 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
             on.append(f"{titles[key]} on {getattr(r, f'{key}_bind')}:{port}")
     for key in EMULATION_KEYS:
         if (path := getattr(r, f"{key}_pty")) is not None:
-            on.append(f"{titles[key]} on a pty at {path}")
+            on.append(f"{titles[key]} on a pty at {shown_path(path)}")
     if r.pst_udp_port is not None:
         on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
     if r.n1mm_rotor_name is not None:
@@ -363,7 +372,7 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     if r.wind_topic is not None:
         unit = r.wind_unit
         on.append(f"parks for the wind above {r.wind_park_above:g} {unit} on {r.wind_topic}")
-    first = f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), "
+    first = f"{name}: {r.spec.display_name} ({r.model}) on {shown_path(r.port)} ({found}), "
     first += f"{r.effective_baud} baud"
     if r.axes:  # a composite rotator: each box on its own port (settings/rotator.py rule 4)
         boxes = []
@@ -371,7 +380,7 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
             own = r.axis_settings(axis)
             there = "found" if os.path.exists(own.port) else "NOT FOUND"
             boxes.append(
-                f"{axis.value} by {own.spec.display_name} ({own.model}) on {own.port} "
+                f"{axis.value} by {own.spec.display_name} ({own.model}) on {shown_path(own.port)} "
                 f"({there}), {own.effective_baud} baud"
             )
         first = f"{name}: {'; '.join(boxes)}"

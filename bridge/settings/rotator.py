@@ -32,13 +32,14 @@ from typing import Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
+from bridge.core.text import shown_path
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 from bridge.settings import defaults
 from bridge.settings.bands import BandFields
-from bridge.settings.base import Strict, check_name, check_named_path, home_path, shown_path
+from bridge.settings.base import Strict, check_name, check_named_path, home_path
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_bind, check_topic

@@ -32,7 +32,8 @@ from pydantic import (
     model_validator,
 )
 
-from bridge.settings.base import NOT_SHOWN, Strict, shown_path
+from bridge.core.text import shown_path
+from bridge.settings.base import NOT_SHOWN, Strict
 from bridge.settings.files import read_password_file
 from bridge.settings.loggers import is_loopback
 from bridge.settings.mqtt import check_bind
