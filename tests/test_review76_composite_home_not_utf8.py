@@ -15,11 +15,6 @@ import pytest
 from bridge.settings import settings_from
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 76: a composite's elevation box '~/el' in a home folder not in UTF-8 is "
-    "refused as 'rotators[0].port: must be UTF-8 text' (the port of both is judged whole)",
-)
 def test_a_composite_elevation_box_in_a_home_folder_not_in_utf8_is_taken(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -56,6 +56,12 @@ Rules:
    words: review 76 found the running bridge naming such a port raw on MQTT), not the
    settings' alone; every refusal naming a path uses it, settings/__init__.py's rules 6 and 7
    too.
+9. A value made of parts each judged under its own key (a composite rotator's port of both,
+   ``<azimuth's>+<elevation's>``, from its ``azimuth.port`` and ``elevation.port``:
+   settings/rotator.py rule 4) is not judged again whole (``Strict.judged_in_parts``): judged
+   whole, only its head was the home folder's by rule 3, so an elevation box ``~/el`` in a
+   home folder whose name is not UTF-8 was refused as ``port: must be UTF-8 text``, a key the
+   file does not give, where the azimuth's box written so was taken (review 76).
 """
 
 from __future__ import annotations
@@ -128,6 +134,8 @@ def plain_value(cls: type[BaseModel], value: Any, info: ValidationInfo) -> Any:
     if field is not None and takes_boolean_for_number(field.annotation, value):
         raise ValueError("must be a number, not true or false")
     named = info.field_name or ""
+    if field is not None and issubclass(cls, Strict) and cls.judged_in_parts(named, info):
+        return value  # rule 9: each part was judged, under its own key
     if field is not None and value == "" and (_a_path(field.annotation) or named.endswith("_pty")):
         raise ValueError("empty: name a file, or leave the key out")  # rule 4
     # rule 7's paths: the keys that take one, a serial port, a pty's link
@@ -207,5 +215,11 @@ class Strict(BaseModel):
     """Rule 1."""
 
     model_config = ConfigDict(extra="forbid")
+
+    @classmethod
+    def judged_in_parts(cls, name: str, info: ValidationInfo) -> bool:
+        """Rule 9: whether key ``name``'s value is made of parts each judged under a key of its
+        own (the keys validated so far: ``info.data``), so is not judged whole here."""
+        return False
 
     _plain_value = field_validator("*", mode="before")(plain_value)

@@ -22,7 +22,10 @@ Rules:
    ``port`` both ports as their tables read them (``~/el`` in the home folder, settings/base.py
    rule 7: derived before, it kept ``~/el``, which no longer loaded: review 73); a model that
    cannot drive its axis, one port for both (however each is written), or ``model`` or
-   ``port`` beside the tables is refused naming the key.
+   ``port`` beside the tables is refused naming the key. Each box's port is judged in its own
+   table, as ``azimuth.port`` or ``elevation.port``; the port of both is not judged again
+   (settings/base.py rule 9; review 76: judged whole, an elevation box ``~/el`` in a home
+   folder whose name is not UTF-8 was refused naming ``port``, which the file does not give).
 """
 
 from __future__ import annotations
@@ -501,8 +504,15 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
 
     @field_validator("port")
     @classmethod
-    def _port(cls, v: str) -> str:
-        return check_port(v)
+    def _port(cls, v: str, info: ValidationInfo) -> str:
+        return v if cls.judged_in_parts("port", info) else check_port(v)
+
+    @classmethod
+    def judged_in_parts(cls, name: str, info: ValidationInfo) -> bool:
+        """Rule 4 (settings/base.py rule 9): a composite's port of both is its tables' ports,
+        each judged as its own key (``azimuth.port``, ``elevation.port``; ``_composite`` made
+        it of them, and refuses another), never as one joined text."""
+        return name == "port" and "+" in str(info.data.get("model", ""))
 
     @field_validator("topic")
     @classmethod
