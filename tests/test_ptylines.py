@@ -323,3 +323,31 @@ def test_a_client_asking_faster_than_the_budget_is_read_no_faster(tmp_path: Path
     finally:
         client.close()
         server.stop()
+
+
+def test_a_link_whose_path_is_not_utf8_is_served_claimed_and_named_in_utf8(
+    tmp_path: Path,
+) -> None:
+    """Review 76: a path may be any bytes (a home folder's name: settings/base.py rule 3). The
+    claim hashes its bytes (rule 1; the text's ``encode()`` raised UnicodeEncodeError, the
+    station's and the remote's start alike), so a second server there is still refused, and
+    what is said of the path is UTF-8 text, the byte escaped."""
+    folder = tmp_path / "h\udce9"  # b"h\xe9": a Latin-1 name, as os.environ holds it
+    folder.mkdir()
+    path = str(folder / "rotor-gs232")
+    first, second = gs232_pty(StandIn(), path), gs232_pty(StandIn(), path)
+    first.start()
+    try:
+        c = Client(path)
+        try:
+            assert c.ask(b"C\r") == b"AZ=042\r\n"
+        finally:
+            c.close()
+        with pytest.raises(OSError) as caught:
+            second.listen()
+        assert caught.value.errno == errno.EADDRINUSE
+        said = str(caught.value.strerror)
+        assert "h\\udce9/rotor-gs232" in said and said.encode()  # UTF-8: no lone surrogate
+    finally:
+        first.stop()
+    assert not os.path.lexists(path)

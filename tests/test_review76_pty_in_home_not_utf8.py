@@ -19,11 +19,6 @@ from tests.support.rig import Rig
 pytestmark = pytest.mark.hamlib
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 76: a gs232_pty '~/gs232' in a home folder not in UTF-8 passes check-config, "
-    "and the start ends in UnicodeEncodeError (ptylines.py _claimed encodes the path)",
-)
 def test_a_gs232_pty_in_a_home_folder_not_in_utf8_is_linked_and_answers(
     rig: Rig, rotctl_path: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -14,7 +14,11 @@ Rules:
    live server serves is no leftover: each server claims its path for as long as it lives (a
    Linux abstract socket named after the path, which dies with its process, so a crash leaves
    no claim), and a path claimed already is refused (EADDRINUSE). Where there are no abstract
-   sockets (macOS) a link there is replaced as before.
+   sockets (macOS) a link there is replaced as before. The claim's name hashes the path's
+   bytes (``os.fsencode``), not its UTF-8 text: a path may be any bytes (a home folder whose
+   name is not UTF-8, settings/base.py rule 3), and its text's ``encode()`` ended the start in
+   a UnicodeEncodeError (review 76). What this module says of the path, its errors and its
+   log, spells it by ``shown_path`` (core/text.py).
 2. ``stop`` removes the link only while it still points at this pty (another program's link
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
@@ -88,6 +92,7 @@ from typing import Protocol
 
 from bridge.core.haltwatch import HaltWatchers
 from bridge.core.ratelimit import Budget
+from bridge.core.text import shown_path
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.tcplines import (
     RATE_BYTES_S,
@@ -140,6 +145,7 @@ class PtyLineServer:
         self.rotator_id = rotator_id
         self.label = label
         self.path = os.path.abspath(os.path.expanduser(os.fspath(path)))
+        self.shown = shown_path(self.path)  # (rule 1: what it says of the path)
         self._key = key
         self._session = session
         self._useful_within_s = useful_within_s
@@ -177,7 +183,8 @@ class PtyLineServer:
     def _error(self, code: int, reason: str) -> OSError:
         return OSError(
             code,
-            f"{self.label} for rotator {self.rotator_id!r}: cannot link a pty at {self.path}: "
+            f"{self.label} for rotator {self.rotator_id!r}: cannot link a pty at "
+            f"{self.shown}: "
             f"{reason} (give it another {self._key}_pty)",
         )
 
@@ -210,7 +217,7 @@ class PtyLineServer:
 
     def _claimed(self) -> socket.socket | None:
         """Rule 1: this path claimed for this server's life; OSError if another holds it."""
-        key = hashlib.sha256(self.path.encode()).hexdigest()[:32]
+        key = hashlib.sha256(os.fsencode(self.path)).hexdigest()[:32]  # its bytes: any
         claim = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         try:
             claim.bind(f"\0rotor-bridge-pty-{key}")
@@ -238,7 +245,7 @@ class PtyLineServer:
             target=self._serve, name=f"{self._key}-pty-{self.rotator_id}", daemon=True
         )
         self._thread.start()
-        log.info("%s for %s on %s (%s)", self.label, self.rotator_id, self.path, self.slave_name)
+        log.info("%s for %s on %s (%s)", self.label, self.rotator_id, self.shown, self.slave_name)
 
     def stop(self, timeout_s: float = 3.0) -> None:
         """Rule 2."""
@@ -408,7 +415,7 @@ class PtyLineServer:
                     "as commands): turned off again",
                     self.label,
                     self.rotator_id,
-                    self.path,
+                    self.shown,
                 )
 
     def _write(self, reply: bytes) -> None:
@@ -428,6 +435,6 @@ class PtyLineServer:
                         "%s for %s: a reply dropped, nobody reads %s",
                         self.label,
                         self.rotator_id,
-                        self.path,
+                        self.shown,
                     )
                 return

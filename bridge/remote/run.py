@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from bridge.core.ending import Ending
+from bridge.core.text import shown_path
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S, StationTime
@@ -208,6 +209,8 @@ class Remote:
                         where,
                     )
             name = offer.key.rsplit("_", 1)[0].replace("_", " ")  # gs232, pst udp, ...
+            if offer.transport == "pty":  # a path: any bytes (core/text.py shown_path)
+                where = shown_path(where)
             said.append(f"{name} {offer.bind}:{where}" if offer.bind else f"{name} {where}")
         return said
 
