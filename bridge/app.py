@@ -67,6 +67,7 @@ from typing import TYPE_CHECKING, Any
 
 from bridge.core.ending import Ending
 from bridge.core.model import Lock, Source, Stop
+from bridge.core.text import shown_path
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
@@ -506,7 +507,7 @@ class App:
                 "state file %s keeps the safety lock ON for %r, which is no rotator of the "
                 "configuration (renamed or removed?): that lock holds nothing now; a renamed "
                 "rotator starts as its new id was kept",
-                settings.state_file,
+                shown_path(settings.state_file),
                 rid,
             )
         # runtime/kept.py rule 10: a lock ON an earlier run said, which the state file lost
@@ -868,7 +869,8 @@ class App:
         except InUse as exc:
             by = f" ({exc.holder})" if exc.holder else ""
             raise ConfigError(
-                f"another rotor-bridge runs this installation{by}: its state_file {state_file} "
+                f"another rotor-bridge runs this installation{by}: its state_file "
+                f"{shown_path(str(state_file))} "
                 "is in use. Stop that one first (two would take turns on the broker under one "
                 "client id, and a stop could be lost between them), or give this one its own "
                 "state_file"
@@ -880,9 +882,9 @@ class App:
         except Changed:
             self.release()
             raise NotYet(  # state_store.py rule 11: the next start reads it as it is now
-                f"state_file {state_file} changed since this bridge read it (another bridge "
-                "on it was ending?): not started, so as not to run on, and write back, what "
-                "the file said before; start it again"
+                f"state_file {shown_path(str(state_file))} changed since this bridge read it "
+                "(another bridge on it was ending?): not started, so as not to run on, and "
+                "write back, what the file said before; start it again"
             ) from None
         except OSError as exc:
             self.release()
@@ -1047,8 +1049,9 @@ def _room_for_files(ports_hold: int, spare: int) -> None:
 
 def _unwritable(state_file: Path | None, exc: OSError) -> ConfigError:
     """The start's words for a state file it cannot write (or lock beside)."""
-    where = f" ({exc.filename})" if exc.filename else ""
-    return ConfigError(f"state_file {state_file} cannot be written: {exc.strerror or exc}{where}")
+    where = f" ({shown_path(exc.filename)})" if exc.filename else ""
+    shown = shown_path(str(state_file))
+    return ConfigError(f"state_file {shown} cannot be written: {exc.strerror or exc}{where}")
 
 
 def run(settings: Settings, stop_event: threading.Event | None = None) -> int:

@@ -32,11 +32,6 @@ def _texts(doc: Any) -> list[str]:
     return []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 76: a port '~/rotor' in a home folder not in UTF-8 is taken, and R/error "
-    "names it with a lone surrogate ('\\udce9' in the JSON), which no UTF-8 text holds",
-)
 def test_what_the_bridge_says_of_a_port_in_a_home_folder_not_in_utf8_is_utf8_text(
     rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

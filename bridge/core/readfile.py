@@ -17,6 +17,8 @@ import os
 import stat
 from pathlib import Path
 
+from bridge.core.text import shown_path
+
 _FLAGS = (
     os.O_RDONLY
     | getattr(os, "O_NONBLOCK", 0)
@@ -40,7 +42,7 @@ def read_regular(path: Path, limit: int) -> bytes:
     fd = os.open(path, _FLAGS)
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise NotRegular(f"{path} is no regular file")
+            raise NotRegular(f"{shown_path(path)} is no regular file")
         chunks: list[bytes] = []
         size = 0
         while size <= limit:
@@ -52,5 +54,5 @@ def read_regular(path: Path, limit: int) -> bytes:
     finally:
         os.close(fd)
     if size > limit:
-        raise TooLarge(f"{path} is over {limit} bytes")
+        raise TooLarge(f"{shown_path(path)} is over {limit} bytes")
     return b"".join(chunks)

@@ -124,6 +124,7 @@ from pathlib import Path
 from typing import Protocol
 
 from bridge.core.model import AuditEvent, ErrorKind, Origin
+from bridge.core.text import shown_path
 
 log = logging.getLogger(__name__)
 
@@ -168,6 +169,7 @@ class AuditFile:
     ) -> None:
         """``on_problem``: a message when writing fails (rule 3), None when it works again."""
         self.path = path
+        self.shown = shown_path(path)  # what it says of the file (core/text.py)
         self._max_bytes = max_bytes
         self._keep = keep
         self._on_problem = on_problem
@@ -191,7 +193,7 @@ class AuditFile:
         try:  # full: the writer drains it, unless it hangs on its disk (then give up)
             self._queue.put(_STOP, timeout=timeout_s)
         except queue.Full:
-            log.error("audit file %s: the writer does not answer; lines may be lost", self.path)
+            log.error("audit file %s: the writer does not answer; lines may be lost", self.shown)
             return
         self._thread.join(timeout_s)
 
@@ -228,7 +230,7 @@ class AuditFile:
                 except Exception:  # rule 3: a bug costs its batch, never the writer
                     self.lines_lost += len(events)
                     self._unsaid += len(events)
-                    log.exception("audit file %s: %d line(s) lost", self.path, len(events))
+                    log.exception("audit file %s: %d line(s) lost", self.shown, len(events))
             for item in batch:
                 if isinstance(item, threading.Event):
                     item.set()
@@ -247,7 +249,7 @@ class AuditFile:
             except Exception:  # rule 3: a bug costs its line, counted in the next one
                 self.lines_lost += 1
                 self._unsaid += 1
-                log.exception("audit file %s: a line lost", self.path)
+                log.exception("audit file %s: a line lost", self.shown)
                 continue
             if "dropped" in doc:
                 carried, self._dropped, self._unsaid = self._dropped + self._unsaid, 0, 0
@@ -261,7 +263,9 @@ class AuditFile:
             self._unsaid = lost + (carried if done == 0 else 0)  # a lost line's count goes on
             if not self._failing:  # once
                 self._failing = True
-                problem = f"audit file {self.path} cannot be written ({exc}): lines are lost"
+                problem = shown_path(
+                    f"audit file {self.path} cannot be written ({exc}): lines are lost"
+                )
                 log.error("%s", problem)
                 if self._on_problem is not None:
                     self._on_problem(problem)
@@ -270,7 +274,7 @@ class AuditFile:
             self._failing = False
             log.warning(
                 "audit file %s is written again; %d line(s) lost in all (%d failed write(s))",
-                self.path,
+                self.shown,
                 self.lines_lost,
                 self.write_failures,
             )

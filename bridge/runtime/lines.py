@@ -167,7 +167,7 @@ class Lines:
             log.warning(
                 "%s: %s is still closing after %g s (a wedged adapter?); it closes on its own",
                 worker.cfg.rotator_id,
-                worker.cfg.port,
+                worker.cfg.shown_port,
                 timeout_s,
             )
         return True

@@ -54,6 +54,7 @@ from typing import Protocol, TypeAlias
 import serial
 from serial.tools import list_ports
 
+from bridge.core.text import shown_path
 from bridge.protocols.base import ModelSpec
 
 
@@ -92,7 +93,9 @@ def watched(opener: PortOpener, watch: PortWatch) -> PortOpener:
         try:
             watch.opened(port.fileno())
         except Exception:
-            log.exception("%s: the port's watch failed (the port is open all the same)", path)
+            log.exception(
+                "%s: the port's watch failed (the port is open all the same)", shown_path(path)
+            )
         return port
 
     return open_watched
@@ -120,17 +123,23 @@ def open_port(path: str, spec: ModelSpec, baud: int | None = None) -> serial.Ser
     except serial.SerialException as exc:
         raise PortError(_explain(path, exc)) from None
     except (OSError, ValueError, termios.error) as exc:  # termios.error is no OSError
-        raise PortError(f"cannot open {path}: {exc}") from None
+        raise PortError(shown_path(f"cannot open {path}: {exc}")) from None
     try:
         port.reset_input_buffer()
         fcntl.ioctl(port.fileno(), termios.TIOCEXCL)  # rule 2: no later open() either
     except (serial.SerialException, OSError, termios.error) as exc:
         port.close()
-        raise PortError(f"cannot flush {path}: {exc}") from None
+        raise PortError(shown_path(f"cannot flush {path}: {exc}")) from None
     return port
 
 
 def _explain(path: str, exc: serial.SerialException) -> str:
+    """Why ``path`` did not open, as the bridge says it: pyserial's text names the path too,
+    so all of it is spelled as ``shown_path`` spells a path (core/text.py)."""
+    return shown_path(_why(path, exc))
+
+
+def _why(path: str, exc: serial.SerialException) -> str:
     text = str(exc)
     err = getattr(exc, "errno", None)
     if err == errno.ENOENT or (not os.path.exists(path) and "No such file" in text):
@@ -275,8 +284,8 @@ def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
     if not data and readable:
         if path is not None and os.path.exists(path):
             raise serial.SerialException(
-                f"{path} is busy: readable but the bytes were gone, while the adapter is "
-                "there: another program reads from this port (Hamlib's rotctld, another "
+                f"{shown_path(path)} is busy: readable but the bytes were gone, while the "
+                "adapter is there: another program reads from this port (Hamlib's rotctld, another "
                 "bridge?); stop it"
             )
         raise serial.SerialException("port readable but no data (adapter unplugged?)")

@@ -121,6 +121,7 @@ from pathlib import Path
 from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import Control, SettingValue
 from bridge.core.ondemand import OnDemandThread
+from bridge.core.text import shown_path
 
 log = logging.getLogger(__name__)
 
@@ -221,7 +222,7 @@ class Changed(Exception):
     """Rule 11: the file is not what this start read from it."""
 
     def __init__(self, path: Path) -> None:
-        super().__init__(f"{path} changed while this bridge started")
+        super().__init__(f"{shown_path(path)} changed while this bridge started")
 
 
 def _now_as(path: Path) -> str | None:
@@ -238,7 +239,7 @@ class InUse(Exception):
     """Rule 7: another process holds this installation's state file."""
 
     def __init__(self, lock_path: Path, holder: str) -> None:
-        super().__init__(f"{lock_path} is held by {holder or 'another process'}")
+        super().__init__(f"{shown_path(lock_path)} is held by {holder or 'another process'}")
         self.holder = holder
 
 
@@ -253,9 +254,11 @@ def _check_lock_kind(lock_path: Path) -> None:
     """Rule 7: OSError if what is at ``lock_path`` is a link, or no regular file (nothing
     there is fine: the start makes it)."""
     if lock_path.is_symlink():
-        raise OSError(errno.ELOOP, f"{lock_path} is a symbolic link, not a file of its own")
+        raise OSError(
+            errno.ELOOP, f"{shown_path(lock_path)} is a symbolic link, not a file of its own"
+        )
     if _kind_at(lock_path) is not None:
-        raise OSError(errno.EINVAL, f"{lock_path} is not a regular file")
+        raise OSError(errno.EINVAL, f"{shown_path(lock_path)} is not a regular file")
 
 
 @contextlib.contextmanager
@@ -280,7 +283,7 @@ def held(path: Path | None) -> Iterator[None]:
         fd, writable = os.open(lock_path, os.O_RDONLY | flags), False
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise OSError(errno.EINVAL, f"{lock_path} is not a regular file")
+            raise OSError(errno.EINVAL, f"{shown_path(lock_path)} is not a regular file")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -332,9 +335,9 @@ class StateStore:
                 "state_file written '~/...' (a folder named '~' under the directory it ran "
                 "from). Its locks and options hold; the bridge writes them to %s from now on: "
                 "delete the old one",
-                path,
-                read_from,
-                path,
+                shown_path(path),
+                shown_path(read_from),
+                shown_path(path),
             )
         self._path = path
         self._read_path = read_from or path  # rule 11: the file read, looked at again
@@ -371,14 +374,14 @@ class StateStore:
             except (OSError, ValueError, RecursionError) as exc:  # (nesting past the parser's
                 # depth: a few kilobytes of brackets)
                 why = "nested too deep" if isinstance(exc, RecursionError) else exc
-                self._unreadable = (
+                self._unreadable = shown_path(
                     f"state file {path} unreadable ({why}): every rotator starts locked"
                 )
                 log.error(
                     "%s; the file is kept as %s.unreadable (or .unreadable.2 ...) before the "
                     "bridge writes it anew",
                     self._unreadable,
-                    os.path.realpath(path),
+                    shown_path(os.path.realpath(path)),
                 )
                 self.corrupt = self._aside = True
 
@@ -395,7 +398,10 @@ class StateStore:
             assert isinstance(entry, dict)
             return entry
         shown = json.dumps(entry)[:80]
-        problem = f"state file {path}: entry for {rotator_id!r} is malformed ({shown}): locked"
+        problem = (
+            f"state file {shown_path(path)}: entry for {rotator_id!r} is malformed ({shown}): "
+            "locked"
+        )
         log.error("%s", problem)
         self.problems[rotator_id] = problem
         self._dirty = True
@@ -627,7 +633,7 @@ class StateStore:
             self._write(self._path)
             return True
         except OSError as exc:
-            log.error("cannot write state file %s: %s", self._path, exc)
+            log.error("cannot write state file %s", shown_path(f"{self._path}: {exc}"))
             return False
 
     def _write(self, path: Path, *, put_in_place: bool = True) -> None:
@@ -650,8 +656,8 @@ class StateStore:
                     if aside is not None:
                         log.warning(
                             "state file %s was unreadable: kept as %s, and written anew",
-                            path,
-                            aside.name,
+                            shown_path(path),
+                            shown_path(aside.name),
                         )
                 os.replace(tmp, path)
                 renamed = True

@@ -69,6 +69,7 @@ from typing import Any
 import serial
 
 from bridge.core.model import ErrorEvent, ErrorKind, RotatorStatus, SettingValue
+from bridge.core.text import shown_path
 from bridge.runtime.listeners import contained
 from bridge.runtime.port import (
     PendingOpen,
@@ -275,7 +276,7 @@ class Worker:
                 if actions:
                     self._do(actions)
         except (serial.SerialException, OSError) as exc:
-            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+            self._lost(self._link_lost(exc), ErrorKind.SERIAL, now)
 
     def carry_out(self, now: float, actions: list[Action]) -> None:
         """What the session decided on a batch taken from another mailbox (a composite
@@ -284,7 +285,7 @@ class Worker:
         try:
             self._do(actions)
         except (serial.SerialException, OSError) as exc:
-            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+            self._lost(self._link_lost(exc), ErrorKind.SERIAL, now)
 
     @property
     def status(self) -> RotatorStatus:
@@ -335,7 +336,7 @@ class Worker:
         self._closes(opening.abandon(self._watch))  # (a port it opened just now: closed)
         self._hung, self._opening = opening, None
         reason = (
-            f"opening {self.cfg.port} hung for {OPEN_BOUND_S:g} s (the adapter or its driver "
+            f"opening {self.cfg.shown_port} hung for {OPEN_BOUND_S:g} s (the adapter or its driver "
             "wedged? unplug it and plug it back in): given up and tried again"
         )
         self._do(self.session.open_failed(reason, now))  # once per reason (controller.py)
@@ -345,15 +346,25 @@ class Worker:
         self._opening = None
         if isinstance(result, Exception):
             if not isinstance(result, PortError):
-                log.error("%s: opening %s failed: %r", self.cfg.rotator_id, self.cfg.port, result)
+                log.error(
+                    "%s: opening %s failed: %s",
+                    self.cfg.rotator_id,
+                    self.cfg.shown_port,
+                    shown_path(repr(result)),
+                )
             self._do(self.session.open_failed(str(result), now))
             self._tried_at, self._reopen_at = now, now + self._backoff_s
             self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
             return
-        log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
+        log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.shown_port)
         self._backoff_s = self.cfg.reconnect_min_s
         self._port, self._fd = result, result.fileno()
         self._do(self.session.link_up(now, self._wall()))
+
+    def _link_lost(self, exc: Exception) -> str:
+        """What is said of a port that failed: its error may name the path too (pyserial's
+        do), spelled as ``shown_path`` spells it (core/text.py)."""
+        return shown_path(f"serial link to {self.cfg.port} lost: {exc}")
 
     def _lost(self, reason: str, kind: ErrorKind, now: float) -> None:
         port, self._port, self._fd = self._port, None, -1

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+from bridge.core.text import shown_path
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 from bridge.session import motion as mo
@@ -92,6 +93,12 @@ class WorkerConfig:
     def __post_init__(self) -> None:
         if self.pointing is None:
             object.__setattr__(self, "pointing", Pointing.of(self.spec))
+
+    @cached_property
+    def shown_port(self) -> str:
+        """The port as the bridge names it in what it says (R/error, R/status, the log): a
+        path may be any bytes, a home folder's name above all (core/text.py ``shown_path``)."""
+        return shown_path(self.port)
 
     @property
     def aim(self) -> Pointing:

@@ -1815,13 +1815,14 @@ class Controller:
             if by_silence:
                 quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)
                 why = (
-                    f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:g} s)"
+                    f"controller on {cfg.shown_port} stopped answering (no valid reply for "
+                    f"{quiet_s:g} s)"
                 )
             else:  # rule 2: garbled answers only (its limit: before a stop moves the stall's)
                 quiet_s = self._garbled_offline_t(link, now) - (now - unread_s)
                 why = (
-                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
-                    f"{quiet_s:.3g} s)"
+                    f"controller on {cfg.shown_port} answers only garbled replies (no valid "
+                    f"reply for {quiet_s:.3g} s)"
                 )
             m = self.motion
             turning = self.turning() or self._lost_aim is not None  # (rule 13's, followed)
@@ -1856,10 +1857,10 @@ class Controller:
             self.notes.append(Ends("controller not answering"))
         elif never and not self._silence_reported:
             self._silence_reported = True
-            why = f"controller on {cfg.port} does not answer"
+            why = f"controller on {cfg.shown_port} does not answer"
             if link.silent_for(now) < timeout_s:  # rule 2: it answers, garbled
                 why = (
-                    f"controller on {cfg.port} answers only garbled replies: the wrong baud "
+                    f"controller on {cfg.shown_port} answers only garbled replies: the wrong baud "
                     "rate or model, or a noisy line?"
                 )
             if self._lost_aim is not None:  # rule 13: the turn the port dropped, which no

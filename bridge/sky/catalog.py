@@ -33,6 +33,7 @@ import threading
 from pathlib import Path
 
 from bridge.core.readfile import NotRegular, TooLarge, read_regular
+from bridge.core.text import shown_path
 from bridge.sky import Body, SkyError, parse_tles
 
 log = logging.getLogger(__name__)
@@ -47,6 +48,7 @@ class CatalogError(ValueError):
 class TleCatalog:
     def __init__(self, path: Path | None, *, logged: bool = True) -> None:
         self.path = path
+        self.shown = None if path is None else shown_path(path)  # what it says (core/text.py)
         self._logged = logged  # rule 6: check-config's reading keeps its warnings, unlogged
         self._lock = threading.Lock()  # looked up from paho's thread and rotctld's
         self._seen: tuple[int, int] | None = None
@@ -105,11 +107,11 @@ class TleCatalog:
                 found = self._sets.get(key.lstrip("0"))  # then a catalog number
             if found is None:
                 count = len(set(self._sets.values()))  # each set is there by name and number
-                raise CatalogError(f"no satellite {name!r} in {self.path} ({count} satellites)")
+                raise CatalogError(f"no satellite {name!r} in {self.shown} ({count} satellites)")
         try:
             return Body.satellite(*found)
         except SkyError as exc:  # parse_tles checked it already; a defect if it happens
-            raise CatalogError(f"{name!r} in {self.path}: {exc}") from None
+            raise CatalogError(f"{name!r} in {self.shown}: {exc}") from None
 
     def _refresh(self) -> None:
         """Rule 1 and 2 (under the lock)."""
@@ -124,7 +126,7 @@ class TleCatalog:
         except OSError as exc:
             if self._seen != (-1, -1):
                 self._said = []
-                self._warn(f"tle_file {self.path} cannot be read: {exc.strerror or exc}")
+                self._warn(f"tle_file {self.shown} cannot be read: {exc.strerror or exc}")
                 self._seen = (-1, -1)
             return
         self._seen = seen
@@ -139,7 +141,7 @@ class TleCatalog:
         if problems:  # rule 2: one warning per read, not one per bad line
             many = "y" if len(problems) == 1 else "ies"
             self._warn(
-                f"tle_file {self.path}: {len(problems)} bad entr{many} skipped "
+                f"tle_file {self.shown}: {len(problems)} bad entr{many} skipped "
                 f"(the first: {problems[0]})"
             )
         self._sets = {}
@@ -148,22 +150,22 @@ class TleCatalog:
             self._sets[_fold(set_name)] = entry
         for entry in list(self._sets.values()):  # catalog numbers, after every name
             self._sets.setdefault(entry[1][2:7].strip().lstrip("0"), entry)
-        log.info("tle_file %s: %d satellite(s)", self.path, len(sets))
+        log.info("tle_file %s: %d satellite(s)", self.shown, len(sets))
 
     def _read(self, seen: os.stat_result) -> bytes | str:
         """The file's bytes, or why they are not read (rule 4); OSError if it cannot be."""
         assert self.path is not None
         limit = f"over the limit of {MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
         if stat.S_ISREG(seen.st_mode) and seen.st_size > MAX_FILE_BYTES:
-            return f"tle_file {self.path} is {seen.st_size} bytes, {limit}"
+            return f"tle_file {self.shown} is {seen.st_size} bytes, {limit}"
         try:  # (core/readfile.py: what is open now is judged, not what was seen)
             return read_regular(self.path, MAX_FILE_BYTES)
         except NotRegular:
             return (
-                f"tle_file {self.path} is no regular file (a device, a pipe or a folder): not read"
+                f"tle_file {self.shown} is no regular file (a device, a pipe or a folder): not read"
             )
         except TooLarge:
-            return f"tle_file {self.path} grew past {MAX_FILE_BYTES} bytes, {limit}"
+            return f"tle_file {self.shown} grew past {MAX_FILE_BYTES} bytes, {limit}"
 
 
 def _fold(name: str) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 from typing import Any
 
+from bridge.core.text import shown_path
 from bridge.sky.catalog import TleCatalog
 
 
@@ -19,13 +20,13 @@ def check(settings: Any) -> list[str]:
         return []
     if not os.path.lexists(path):
         return [
-            f"tracking.tle_file: {path} does not exist now; satellites can be tracked by name "
-            "once it does (it is read when it changes)"
+            f"tracking.tle_file: {shown_path(path)} does not exist now; satellites can be "
+            "tracked by name once it does (it is read when it changes)"
         ]
     count, said = TleCatalog(path, logged=False).warnings()
     found = [f"tracking.tle_file: {line.removeprefix('tle_file ')}" for line in said]
     if count == 0 and not found:  # (read, and empty)
-        found.append(f"tracking.tle_file: {path} holds no satellite")
+        found.append(f"tracking.tle_file: {shown_path(path)} holds no satellite")
     elif count == 0:
         found[0] += "; it holds no satellite"
     return found

@@ -59,7 +59,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from bridge.core.readfile import NotRegular, TooLarge, read_regular
-from bridge.core.text import quoted
+from bridge.core.text import quoted, shown_path
 
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
 _PLAIN = re.compile(r"=?[A-Z0-9/]+")
@@ -264,12 +264,16 @@ def load(path: Path) -> Cty:
     try:
         text = _read(path).decode("utf-8", errors="replace")
     except OSError as exc:
-        raise CtyError(f"cty_file {path} cannot be read: {exc.strerror or exc}") from None
+        raise CtyError(
+            f"cty_file {shown_path(path)} cannot be read: {exc.strerror or exc}"
+        ) from None
     first = next((line for line in text.splitlines() if line.strip()), "")
     csv = first.count(",") >= 9 and ":" not in first.split(",")[0]
     cty = parse_csv(text) if csv else parse_dat(text)
     if not any(e is not None for e in (*cty.prefixes.values(), *cty.exact.values())):
-        raise CtyError(f"cty_file {path}: no entity in it (is it AD1C's cty.dat or cty.csv?)")
+        raise CtyError(
+            f"cty_file {shown_path(path)}: no entity in it (is it AD1C's cty.dat or cty.csv?)"
+        )
     return cty
 
 

@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from bridge.core.text import shown_path
 from bridge.feature import AppView
 from bridge.interfaces.dxcluster.book import Book
 from bridge.interfaces.dxcluster.client import DxCluster
@@ -42,7 +43,8 @@ def check(settings: Any) -> list[str]:
     rule 5; a review: check-config dropped them and said "config OK" of the very line the
     start warns of): check-config asks this (bridge/feature.py ``check``)."""
     dx = settings.dxcluster
-    return [f"dxcluster.cty_file: {dx.cty_file} {why}" for why in read_cty(dx).refused]
+    shown = shown_path(str(dx.cty_file))
+    return [f"dxcluster.cty_file: {shown} {why}" for why in read_cty(dx).refused]
 
 
 def read_cty(settings: DxClusterSettings) -> Cty:
@@ -70,7 +72,7 @@ def dxcluster(
     if cty is None:
         cty = load(settings.cty_file)
     for why in cty.refused:  # cty.py rule 5: said once
-        log.warning("DX cluster: cty_file %s %s", settings.cty_file, why)
+        log.warning("DX cluster: cty_file %s %s", shown_path(str(settings.cty_file)), why)
     book = Book(
         cty,
         station,

@@ -21,6 +21,8 @@ import stat
 from importlib import resources
 from pathlib import Path
 
+from bridge.core.text import shown_path
+
 log = logging.getLogger(__name__)
 
 _TYPES = {
@@ -74,7 +76,11 @@ def installation_secret(path: Path) -> bytes:
     except FileNotFoundError:
         pass
     except OSError as exc:
-        log.warning("web console: %s cannot be read (%s): logins end at a restart", path, exc)
+        log.warning(
+            "web console: %s cannot be read (%s): logins end at a restart",
+            shown_path(path),
+            shown_path(str(exc)),
+        )
         return secrets.token_bytes(32)
     data = secrets.token_bytes(32)
     try:
@@ -82,5 +88,9 @@ def installation_secret(path: Path) -> bytes:
         with os.fdopen(fd, "wb") as out:
             out.write(data)
     except OSError as exc:
-        log.warning("web console: %s cannot be written (%s): logins end at a restart", path, exc)
+        log.warning(
+            "web console: %s cannot be written (%s): logins end at a restart",
+            shown_path(path),
+            shown_path(str(exc)),
+        )
     return data
