@@ -12,6 +12,7 @@ import sys
 
 from bridge import __version__
 from bridge.core.ending import Ending
+from bridge.core.text import shown_path
 from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
@@ -91,7 +92,7 @@ def cmd_check_config(args: argparse.Namespace) -> int:
         print("every value (model defaults filled in):")
         print(json.dumps(masked(settings), indent=2))
     path = args.config or os.environ.get("ROTOR_BRIDGE_CONFIG")
-    source = os.path.abspath(path) if path else "(the environment)"
+    source = shown_path(os.path.abspath(path)) if path else "(the environment)"
     print(f"config OK: {source}")
     return 0
 
@@ -104,8 +105,9 @@ def cmd_ports(args: argparse.Namespace) -> int:
         print("no serial ports found (is the USB adapter plugged in?)")
         return 0
     for p in ports:
-        print(p.device)
-        print(f"  use this path: {p.stable_path or p.device + '  (no /dev/serial/by-id link)'}")
+        print(shown_path(p.device))
+        stable = p.stable_path or p.device + "  (no /dev/serial/by-id link)"
+        print(f"  use this path: {shown_path(stable)}")
         if p.description and p.description != "n/a":
             print(f"  description:   {p.description}")
         if p.vid is not None:
