@@ -123,6 +123,14 @@ def test_the_remote_console_shows_every_status_field_the_station_s_console_shows
         10,
         "the remote's view of the station's status",
     )
+
+    def at_rest(page: ConsoleClient) -> bool:
+        doc = newest_status(page)
+        return doc.get("state") == "idle" and "G4XYZ" in json.dumps(doc.get("control"))
+
+    wait_until(  # (each page is told each status in turn: both at the settled one)
+        lambda: at_rest(own) and at_rest(far), 10, "both pages told the settled status"
+    )
     shown, relayed = newest_status(own), newest_status(far)
     del shown["time"], relayed["time"]  # (each made when it was rendered)
     assert sorted(relayed) == sorted(shown), set(shown) ^ set(relayed)
