@@ -209,11 +209,13 @@ Rules:
    (an attack pass: a target the storm dropped, waiting for a Rotor-EZ's brake, stayed
    ``executed`` in the trail, while a lease's drop was audited).
 25. A move of the bridge's own that no command started (``UNASKED``: auto-park's park, the
-   storm's park) is a line in the audit trail when a part proposes it (``Audit``: command
+   storm's park) is a line in the audit trail when its frame goes out (``Audit``: command
    ``park``, executed, its interface and operator the feature's: ``auto-park``, ``wind``), as
    every operator's command is; tracking's and following's targets are not (their start was
    an operator's command, audited then), nor a try more (attack 25: an auto-park
    turned the rotor 110 degrees and the trail's last word on it was the operator's target).
+   Not when the part proposes it (review 80: a storm's park kept by a STOP's hold and dropped
+   unsaid by the storm's end, wind.py rule 8, stayed ``executed`` with the rotor unmoved).
    On a rotator of two boxes the two boxes' lines are one (runtime/composite.py rule 9).
 """
 
@@ -1257,8 +1259,6 @@ class RotatorSession:
             self.targets.clear_from(proposal.drop)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
-            if proposal.target.source in UNASKED:  # rule 25: the trail names the feature
-                self._actions.append(Audit(Origin(proposal.target.source), "park"))
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported (``_failed``); nothing else
@@ -1299,7 +1299,10 @@ class RotatorSession:
             link.poll_now(now, self.cfg.moving_poll_interval_s)  # ask first; the target
             # follows the answer (a noisy line: at the moving rate, link.py rule 11)
         elif todo.go is Go.SEND:
-            ctl.send(todo, pending, self.targets.sent(now), now)
+            attempt = self.targets.sent(now)
+            ctl.send(todo, pending, attempt, now)
+            if attempt == 1 and pending.source in UNASKED:  # rule 25: the trail names the
+                self._actions.append(Audit(Origin(pending.source), "park"))  # feature, sent
             self._aimed(pending, todo.wire)
 
     def _aimed(self, target: Target | None, wire: tuple[float, float | None]) -> None:

@@ -13,8 +13,6 @@ In virtual time, a Rotor-EZ at 90 with its storm park at 180 (review 60's settin
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Origin, Source
 from tests.engine.test_review60_storm_park_after_the_storm import (
     MARKER,
@@ -26,11 +24,6 @@ from tests.engine.test_review60_storm_park_after_the_storm import (
 from tests.engine.virtual import VirtualRotator
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: the storm's park is audited executed when proposed, though a hold kept "
-    "it and the storm's end dropped it unwritten",
-)
 def test_a_storm_park_never_written_is_no_executed_line_in_the_audit_trail() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         held_through_a_short_storm(v, express=False)
