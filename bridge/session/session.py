@@ -520,7 +520,8 @@ class RotatorSession:
         if held and not self.fence.held and not cleared:  # rule 13: what waited for it
             pending = self.targets.pending
             if pending is not None and _expired(self.expires_as(pending), now):
-                self._drop_pending(EXPIRED)
+                if not self._part_waited(pending, now):  # (else said once, as its command)
+                    self._drop_pending(EXPIRED)
             self._waited(now)
         if batch.lost_target is not None:  # (stops.py rule 5: dropped in the mailbox, said)
             self._refuse_dropped(batch.lost_target, f"{DROPPED}: {EXPRESS_LOST}")
@@ -944,6 +945,16 @@ class RotatorSession:
             self.targets.clear()  # (the target its part proposed, said once: below)
         said = f"{waiting.said}: {EXPIRED}"  # (rule 24: with its sender, in the audit trail)
         self._error(ErrorKind.REFUSED, said, command=waiting.what, origin=waiting.origin)
+
+    def _part_waited(self, target: Target, now: float) -> bool:
+        """Rule 24: ``target`` is the one a feature's command taken under the hold proposed,
+        whose expiry passed: ``_waited`` ends that command and drops the target, said once as
+        the command its sender sent (review 80: the target was refused first, as a ``target
+        az 200`` nobody sent, and the command again)."""
+        waiting = self._waiting
+        if waiting is None or not waiting.part or not _past(waiting.not_after_s, now):
+            return False
+        return target.source not in OWN_MOVES and target.origin == waiting.origin
 
     def _drop_pending(self, why: str | None) -> None:
         """The target waiting dropped; with ``why``, said and audited (rule 24); without,

@@ -33,11 +33,6 @@ HELD_S = 8.0  # virtual: the STOP's marker comes back past it
 AFTER_S = 30.0  # virtual
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: the expired part command's target and its command are each audited as a "
-    "refusal of its sender (rule 24 says one)",
-)
 def test_an_expired_feature_command_is_one_refusal_of_its_sender(
     rig: Rig, monkeypatch: pytest.MonkeyPatch
 ) -> None:
