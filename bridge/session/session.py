@@ -885,11 +885,14 @@ class RotatorSession:
         self._drop(target)
         self._refuse_dropped(target, why)
 
-    def _refuse_dropped(self, target: Target, message: str) -> None:
+    def _refuse_dropped(
+        self, target: Target, message: str, kind: ErrorKind = ErrorKind.REFUSED
+    ) -> None:
         """Rule 24: a target dropped here before it went out (or its try more), said on
-        R/error and, with its sender, in the audit trail as a refusal of its command."""
+        R/error (as ``kind``: a restart's drop is said as the ``serial`` fault it is) and,
+        with its sender, in the audit trail as a refusal of its command."""
         origin = target.origin or Origin(target.source)
-        self._error(ErrorKind.REFUSED, message, command=describe_command(target), origin=origin)
+        self._error(kind, message, command=describe_command(target), origin=origin)
 
     def _drop(self, target: Target) -> None:
         """Rule 23, wind.py rule 1: ``target`` dropped before it moved the rotor; on a rotator of
@@ -1020,8 +1023,11 @@ class RotatorSession:
                     if not park:  # never named as dropped, a cold review)
                         self.targets.clear()
                     self.controller.restarts += 1  # (a composite's other box abandons its own)
-                    newer = None if waiting is note.target or park else describe_command(waiting)
-                    self._error(note.error.kind, note.error.message, note.error.command or newer)
+                    error = note.error
+                    if waiting is note.target or park or error.command is not None:
+                        self._error(error.kind, error.message, error.command)
+                    else:  # a newer target, never sent: its sender's refusal (rule 24; review
+                        self._refuse_dropped(waiting, error.message, error.kind)  # 80: unaudited)
                     self._end("the controller restarted", now)
             elif isinstance(note, Again):  # controller.py rule 11
                 took = self._lease_took(note.target, now)  # (said: its refusal is not, below)

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import Origin, Source, Target
 from tests.engine.test_session_satel import points, ready
 from tests.engine.virtual import VirtualRotator
@@ -25,11 +23,6 @@ G4XYZ = Origin(Source.MQTT, "G4XYZ")
 Rig = Callable[..., VirtualRotator]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: the restart's drop (Forgot) of a newer target is said without its sender: "
-    "not audited as a refusal (rule 24 misses this path)",
-)
 def test_a_target_a_restarted_satel_drops_is_its_senders_refusal(rig: Rig) -> None:
     v = ready(rig)
     v.target(200, 40)
