@@ -792,6 +792,10 @@ class RotatorSession:
             return False
         if not self._storm_park_waiting():
             self._drop_pending(self.fence.cleared_why)
+        waiting = self._waiting  # a start taken under the hold: its sender's refusal (rule 24;
+        if waiting is not None and self._began(waiting):  # review 80: 'executed' in the trail)
+            said = f"{waiting.said}: {self.fence.cleared_why}"
+            self._error(ErrorKind.REFUSED, said, command=waiting.what, origin=waiting.origin)
         self._end("a stop or lock came first; send the {} command again", now)
         return True
 
@@ -917,10 +921,12 @@ class RotatorSession:
         unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
         at the marker): the two are judged as one, by the sooner expiry (the safe side: a
         late look-up also ends following begun in time under the same hold). ``by``: who sent
-        it (rule 24)."""
+        it (rule 24). One without an expiry is kept too (never past): a hold that ends
+        clearing ends what it began, its sender's refusal (``_fence``)."""
         new = None
-        if not_after_s is not None and self.fence.held:
-            new = _Waiting(not_after_s, what, said, part, by)
+        if self.fence.held:
+            expiry = math.inf if not_after_s is None else not_after_s
+            new = _Waiting(expiry, what, said, part, by)
         if not ends:  # (a look-up: its own, for when its answer begins tracking)
             self._lookup_held, self._lookup_waiting = self.fence.held, new
         before = None if ends else self._waiting
@@ -936,18 +942,22 @@ class RotatorSession:
         said once."""
         waiting, self._waiting = self._waiting, None
         self._lookup_held, self._lookup_waiting = False, None
-        if waiting is None or not _past(waiting.not_after_s, now):
+        if waiting is None or not _past(waiting.not_after_s, now) or not self._began(waiting):
             return
-        tracker = self.tracker
-        if not waiting.part and tracker.body is None and tracker.lookup is None:
-            if self.follower.info is None:
-                return  # (over already: nothing to end)
         self._end(EXPIRED, now)
         pending = self.targets.pending
         if waiting.part and pending is not None and pending.source not in OWN_MOVES:
             self.targets.clear()  # (the target its part proposed, said once: below)
         said = f"{waiting.said}: {EXPIRED}"  # (rule 24: with its sender, in the audit trail)
         self._error(ErrorKind.REFUSED, said, command=waiting.what, origin=waiting.origin)
+
+    def _began(self, waiting: _Waiting) -> bool:
+        """Rule 13: what the start ``waiting`` began is not over already (a part's motion is
+        the part's to end; tracking, a look-up or following may have ended)."""
+        tracker = self.tracker
+        if waiting.part or tracker.body is not None or tracker.lookup is not None:
+            return True
+        return self.follower.info is not None
 
     def _part_waited(self, target: Target, now: float) -> bool:
         """Rule 24: ``target`` is the one a feature's command taken under the hold proposed,
@@ -1469,9 +1479,9 @@ def _late(not_after_s: float | None, now: float, said: str) -> str | None:
 
 
 class _Waiting(NamedTuple):
-    """Rule 13: a stamped start taken under a hold (``RotatorSession._wait``)."""
+    """Rule 13: a start taken under a hold (``RotatorSession._wait``)."""
 
-    not_after_s: float
+    not_after_s: float  # its expiry (inf: none)
     what: str  # the command, as the error names it
     said: str  # how its end is said
     part: bool  # a feature's own command (its part's motion), not a track or follow start

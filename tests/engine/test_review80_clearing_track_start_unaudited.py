@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.core.model import ErrorEvent, Source, Stop, TrackBody
 from tests.engine.test_halt_epoch import Bench as Station
 from tests.engine.test_lease_waiting_target import DL1ABC, G4XYZ
@@ -27,11 +25,6 @@ HELD_S = 1.0  # virtual: the hold goes on a while
 AFTER_S = 5.0  # virtual
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: _fence's clearing ends a track start under the hold without rule 24's "
-    "refusal: the audit trail keeps it executed",
-)
 def test_a_track_start_a_clearing_hold_ends_is_refused_in_the_audit_trail(
     tmp_path: Path,
 ) -> None:
