@@ -12,6 +12,7 @@ seconds (monotonic unless the name says ``_unix``).
 from __future__ import annotations
 
 import enum
+import ipaddress
 import math
 import unicodedata
 from dataclasses import dataclass, field, replace
@@ -54,6 +55,9 @@ class Source(enum.StrEnum):
 
 
 _INTERFACES = frozenset(source.value for source in Source)  # interface_name: no operator's
+# interface_name: N1MM's UDP endpoint names every sender with its address (recvfrom's:
+# loggers/server.py), never by the interface alone: ``N1MM``, a real call sign, is an operator's
+_NEVER_ALONE = frozenset({Source.N1MM.value})
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
 # valid_operator: NFKC makes one character of four at most (a canonical decomposition's longest,
 # U+1F82): a text longer than this many times OPERATOR_CHARS is none before it is normalized
@@ -115,9 +119,33 @@ def _stray_joiner(name: str) -> bool:
 def interface_name(name: str) -> bool:
     """``name`` is how the bridge names an interface or a feature of its own (``mqtt``,
     ``rotctld 127.0.0.1``, ``auto-park``): no operator's, it stands for everyone who sends
-    without a name there (runtime/lease.py rule 1)."""
-    words = name.split(None, 1)
-    return bool(words) and words[0].casefold() in _INTERFACES
+    without a name there (runtime/lease.py rule 1). The bridge names a sender only so
+    (``Origin.who``): the name alone, or with its peer's address; a call sign or a name that
+    merely begins with one (``N1MM``, ``Mqtt Guy``, ``Web Dev``) is an operator's (review 80:
+    refused, its every command went as plain ``mqtt``, a remote with it did not start)."""
+    words = name.split()
+    first = words[0].casefold() if words else ""
+    if first not in _INTERFACES:
+        return False
+    if len(words) == 1:
+        return first not in _NEVER_ALONE
+    return len(words) == 2 and _address(words[1])
+
+
+def _address(word: str) -> bool:
+    """``word`` could be a peer's address as ``Origin.who`` names it: an IP address (an IPv6
+    one with its zone, in brackets or with a port as some write it), or the web console's
+    ``?`` for a request with none."""
+    if word == "?":
+        return True
+    text = word[1:].split("]", 1)[0] if word.startswith("[") else word
+    for candidate in (text, text.rsplit(":", 1)[0] if text.count(":") == 1 else text):
+        try:
+            ipaddress.ip_address(candidate.split("%", 1)[0])
+        except ValueError:
+            continue
+        return True
+    return False
 
 
 def operator_name(text: object) -> str | None:

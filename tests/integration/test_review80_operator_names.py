@@ -36,7 +36,6 @@ NAMES = ["N1MM", "Mqtt Guy"]  # a real call sign; a name (no interface's peer is
 REFUSED = "review 80: a name whose first word is an interface's is refused as an operator's"
 
 
-@pytest.mark.xfail(strict=True, reason=REFUSED)
 @pytest.mark.parametrize("name", NAMES)
 def test_a_call_sign_spelled_like_an_interface_is_audited_as_sent(rig: Rig, name: str) -> None:
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
@@ -62,7 +61,6 @@ def test_a_call_sign_spelled_like_an_interface_is_audited_as_sent(rig: Rig, name
     assert line["operator"] == name, f"{name!r} sent target 40; the audit line says {line}"
 
 
-@pytest.mark.xfail(strict=True, reason=REFUSED)
 @pytest.mark.parametrize("name", NAMES)
 def test_a_remote_whose_operator_is_spelled_like_an_interface_starts(
     tmp_path: Path, name: str
