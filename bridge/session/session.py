@@ -790,10 +790,14 @@ class RotatorSession:
         again in the storm), which goes now, unsaid."""
         if not self.fence.apply(batch):
             return False
-        if not self._storm_park_waiting():
-            self._drop_pending(self.fence.cleared_why)
         waiting = self._waiting  # a start taken under the hold: its sender's refusal (rule 24;
-        if waiting is not None and self._began(waiting):  # review 80: 'executed' in the trail)
+        if waiting is not None and not self._began(waiting):  # review 80: 'executed' in the
+            waiting = None  # trail)
+        if not self._storm_park_waiting():
+            pending = self.targets.pending  # (its part's target: said once, as its command)
+            of_part = pending is not None and waiting is not None and _proposed(pending, waiting)
+            self._drop_pending(None if of_part else self.fence.cleared_why)
+        if waiting is not None:
             said = f"{waiting.said}: {self.fence.cleared_why}"
             self._error(ErrorKind.REFUSED, said, command=waiting.what, origin=waiting.origin)
         self._end("a stop or lock came first; send the {} command again", now)
@@ -965,9 +969,9 @@ class RotatorSession:
         the command its sender sent (review 80: the target was refused first, as a ``target
         az 200`` nobody sent, and the command again)."""
         waiting = self._waiting
-        if waiting is None or not waiting.part or not _past(waiting.not_after_s, now):
+        if waiting is None or not _past(waiting.not_after_s, now):
             return False
-        return target.source not in OWN_MOVES and target.origin == waiting.origin
+        return _proposed(target, waiting)
 
     def _drop_pending(self, why: str | None) -> None:
         """The target waiting dropped; with ``why``, said and audited (rule 24); without,
@@ -1460,6 +1464,12 @@ def _leaves_out(target: Target, half: Target) -> bool:
     az = half.az_deg is not None and target.az_deg is not None
     el = half.el_deg is not None and target.el_deg is not None
     return not (az or el)
+
+
+def _proposed(target: Target, waiting: _Waiting) -> bool:
+    """Rule 24: ``target`` is the one the feature's command ``waiting`` had its part propose
+    (its end is said once, as that command)."""
+    return waiting.part and target.source not in OWN_MOVES and target.origin == waiting.origin
 
 
 def _past(not_after_s: float | None, now: float) -> bool:

@@ -52,3 +52,25 @@ def test_an_expired_feature_command_is_one_refusal_of_its_sender(
     assert bearings(v, since=t) == []  # nothing went out
     audited = [(e.command, e.message) for e in v.errors(since=t) if e.origin == G4XYZ]
     assert len(audited) == 1, f"G4XYZ sent one command; the judge audits {audited}"
+
+
+def test_a_feature_command_a_clearing_hold_ends_is_one_refusal_of_its_sender(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same command, unstamped, ended by the hold clearing (the main MQTT connection lost
+    before the STOP's marker came back): its part's target and the command are one refusal,
+    the command G4XYZ sent."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY, DISH_FEATURE))
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=1)
+    aim = FeatureCommand(feature="dish", name="aim", value=200.0, origin=G4XYZ)
+    v.mailbox.put_feature(aim)  # taken under the hold: its part proposes 200
+    v._take()
+    v.run_for(HELD_S)
+    v.mailbox.put_release(1, clear=True)  # the hold clears: what waited goes no more
+    v._take()
+    v.run_for(AFTER_S)
+    assert bearings(v, since=t) == []  # nothing went out
+    audited = [(e.command, e.message) for e in v.errors(since=t) if e.origin == G4XYZ]
+    assert [command for command, _ in audited] == ["dish aim 200"], audited
