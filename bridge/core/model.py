@@ -710,6 +710,22 @@ class RotatorHealth:
 
 
 @dataclass(frozen=True)
+class Order:
+    """Where a rotator's status stands in the order of the commands its station took
+    (``R/status``'s ``order``; session/mailbox.py rule 10a's places, counted from 1 in each
+    run of the station's bridge): ``run`` names the run (a restart counts again), ``taken``
+    is the newest place the status shows every command up to, ``turn`` the place of the
+    command the target or turn shown comes from (a target, a track or follow start; 0: none
+    this run), ``lock`` the place of the last lock word (0: none this run). A remote orders
+    its held halts by them (interfaces/mqtt/remote.py rule 10)."""
+
+    run: str
+    taken: int
+    turn: int
+    lock: int
+
+
+@dataclass(frozen=True)
 class RotatorStatus:
     """One complete snapshot of a rotator, as published on ``R/status``."""
 
@@ -759,6 +775,7 @@ class RotatorStatus:
     # block (bridge/feature.py StatusBlock) by its key, as the station wrote it, checked; the
     # status's blocks are then these, not the typed fields above (interfaces/mqtt/payloads.py)
     relayed: dict[str, object] | None = None
+    order: Order | None = None  # where it stands in the order of commands taken (Order)
 
     @property
     def moving(self) -> bool:

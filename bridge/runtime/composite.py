@@ -192,6 +192,7 @@ from bridge.core.model import (
     ErrorKind,
     FeatureCommand,
     MotionState,
+    Order,
     RotatorStatus,
     Source,
     Target,
@@ -316,6 +317,15 @@ def share_quiet(sessions: list[RotatorSession], now: float) -> None:
             s.autopark.told(latest)
 
 
+def _order(az: Order | None, el: Order | None) -> Order | None:
+    """Rule 3: the rotator's place in the order of its commands: both boxes take the same
+    places (one mailbox, its batches split), each box's turn and lock word its own; the newest
+    of each, named by the azimuth box's run (both start together)."""
+    if az is None or el is None:
+        return az or el
+    return Order(az.run, max(az.taken, el.taken), max(az.turn, el.turn), max(az.lock, el.lock))
+
+
 def merge(
     rotator_id: str,
     az: RotatorStatus,
@@ -372,6 +382,7 @@ def merge(
         controller_time=az.controller_time or el.controller_time,
         parked=az.parked and el.parked,
         stop_owed=az.stop_owed or el.stop_owed,
+        order=_order(az.order, el.order),
         wind=wind,
     )
 

@@ -223,6 +223,7 @@ from __future__ import annotations
 
 import logging
 import math
+import secrets
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
@@ -234,6 +235,7 @@ from bridge.core.model import (
     ErrorKind,
     FeatureCommand,
     MotionState,
+    Order,
     Origin,
     RotatorStatus,
     SettingValue,
@@ -403,6 +405,12 @@ class RotatorSession:
         # the one judged once its answer begins tracking
         self._lookup_held = False
         self._lookup_waiting: _Waiting | None = None
+        # the status's ``order`` (core/model.py Order; interfaces/mqtt/remote.py rule 10): this
+        # run's name, the newest place taken, the place of the turn shown and of the lock word
+        self._run = secrets.token_hex(4)
+        self._taking = 0
+        self._turn_place = 0
+        self._lock_place = 0
 
     @property
     def newest_applied(self) -> int:
@@ -462,6 +470,7 @@ class RotatorSession:
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
         ctl = self.controller
+        self._taking = max(self._taking, batch.newest)  # (the status made below shows it)
         commanded = batch.stop or batch.target or batch.options or batch.track or batch.follow
         if commanded or batch.feature_commands or batch.lock is not None:
             self.view.last_error = None  # rule 12: until this batch refuses something again
@@ -486,6 +495,7 @@ class RotatorSession:
         unlocked = batch.lock is False and (self.locked or batch.lock_on)
         if batch.lock is not None:
             self.locked = batch.lock
+            self._lock_place = batch.newest  # (Order: the lock word's place)
         if batch.lock_saved is not None:  # (the status says what a restart would find)
             self.lock_shown = batch.lock_saved
         if batch.lock_unknown is not None:
@@ -548,6 +558,7 @@ class RotatorSession:
             done = self.features.track(track, self._refused() or late, leased)
             self._apply(done)
             if start and done.error is None:
+                self._turn_place = batch.newest  # (Order: the turn's place)
                 began = track.body is not None  # (a look-up: no tracking until its answer)
                 what = track.described or "track"
                 by = track.origin or Origin(track.source)
@@ -562,6 +573,7 @@ class RotatorSession:
             done = self.features.follow(follow, self._refused() or late, now, leased)
             self._apply(done)
             if follow.on and done.error is None:
+                self._turn_place = batch.newest  # (Order: the turn's place)
                 what, by = follow.described or "follow", follow.origin or Origin(follow.source)
                 self._wait(follow.not_after_s, what, "following ended", by)
         ends: dict[Halt, str | None] = {  # parts.py rule 7 where the mailbox marks them
@@ -588,6 +600,7 @@ class RotatorSession:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:
                 self.targets.put(batch.target, now)
+                self._turn_place = batch.newest  # (Order: the turn's place)
         elif batch.ends is not None:  # (a target to a composite's other box: ended here too)
             self._end(batch.ends, now)
         actions = self._step(now)
@@ -1387,6 +1400,8 @@ class RotatorSession:
             view.last_operator,
             view.control,
             ctl.stops.owed,  # (kept across a restart: runtime/kept.py)
+            self._turn_place,  # (Order: a new turn is a new status, the same bearing too)
+            self._lock_place,
             # what the parts show (st.Features, in its order: the last _SHOWN of the key)
             tracker.info,
             tracker.ended,
@@ -1409,7 +1424,8 @@ class RotatorSession:
             self.wall_offset_s,
             shown,
         )
-        status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
+        order = Order(self._run, self._taking, self._turn_place, self._lock_place)
+        status = st.current(ctl.cfg, seen, now, order)  # (controller.py rule 7)
         if self.lock_unknown:  # (runtime/kept.py rule 10)
             status = replace(status, lock_unknown=True)
         if st.worth_emitting(status, self.status):

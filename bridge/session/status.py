@@ -36,6 +36,7 @@ from bridge.core.model import (
     Control,
     FollowingInfo,
     MotionState,
+    Order,
     RotatorHealth,
     RotatorStatus,
     SettingValue,
@@ -132,7 +133,7 @@ def sent_by(target: Target, operator: str | None) -> tuple[str, str | None]:
     return target.source.value, None  # the bridge's own (auto-park, the wind)
 
 
-def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
+def current(rig: WorkerConfig, seen: Seen, now: float, order: Order | None = None) -> RotatorStatus:
     """The status as of ``now``."""
     m, spec, view = seen.motion, rig.spec, seen.view
     answering = seen.answering
@@ -195,6 +196,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         stop_owed=seen.stop_owed,
         short_of_deg=seen.short_of_deg,
         relayed=None,  # (a remote's reading alone: remote/readings.py rule 3)
+        order=order,
     )
     return status
 

@@ -612,6 +612,7 @@ _REST_FIELDS = attrgetter(
     "last_operator",
     "control",
     "estimated",
+    "order",
 )
 
 
@@ -674,6 +675,14 @@ def _status_rest(
         None if control is None else {"holder": control.operator, "until": _iso(control.until_unix)}
     )
     doc["estimated"] = status.estimated
+    order = status.order
+    if order is not None:  # (interfaces/mqtt/remote.py rule 10 orders a remote's halts by it)
+        doc["order"] = {
+            "run": order.run,
+            "taken": order.taken,
+            "turn": order.turn,
+            "lock": order.lock,
+        }
     return f'{_STATUS_ENCODE(doc)[1:-1]},"time":', f"{''.join(tail)}}}"
 
 
