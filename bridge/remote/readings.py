@@ -36,7 +36,7 @@ import logging
 import math
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, NamedTuple
 
 from bridge.core.model import (
     Control,
@@ -360,27 +360,46 @@ def _json_why(value: object, depth: int) -> str | None:
     return None
 
 
-def status_halted(payload: bytes) -> tuple[float, bool, bool] | None:
-    """``R/status``'s word on a halt (interfaces/mqtt/remote.py rule 10): its time (the
-    station's clock), whether the rotor is still with nothing to turn to (neither turning nor
-    braking before a target, no target), whether the lock is ON; None for a status without a
-    time or not readable (rule 1)."""
+class StatusOrder(NamedTuple):
+    """``R/status``'s word on a remote's held halts (interfaces/mqtt/remote.py rule 10): its
+    ``order`` (the station's run, the newest place taken, the turn's place, the lock word's
+    place) and whether the rotor turns or has somewhere to turn to (moving, a target, tracking
+    or following) and whether the lock is ON."""
+
+    run: str
+    taken: int
+    turn: int
+    lock: int
+    turning: bool
+    locked: bool
+
+
+def status_order(payload: bytes) -> StatusOrder | None:
+    """``R/status``'s ``order`` and the states a halt ends (interfaces/mqtt/remote.py rule 10);
+    None for a status without an ``order`` (a station's bridge before it: no halt is held for
+    it) or not readable (rule 1)."""
     try:
         doc = load(payload)
     except ValueError:
         return None
     if not isinstance(doc, dict):
         return None
-    when = _unix(doc.get("time"))
-    if when is None:
+    order = doc.get("order")
+    if not isinstance(order, dict):
         return None
-    still = (
-        doc.get("state") != MotionState.MOVING.value
-        and doc.get("moving") is False
-        and "target" in doc
-        and doc["target"] is None
+    run, said = order.get("run"), [order.get(k) for k in ("taken", "turn", "lock")]
+    places = [p for p in said if type(p) is int]
+    if not isinstance(run, str) or len(places) != len(said):
+        return None
+    turning = (
+        doc.get("state") == MotionState.MOVING.value
+        or doc.get("moving") is True
+        or doc.get("target") is not None
+        or doc.get("tracking") is not None
+        or doc.get("following") is not None
     )
-    return when, still, doc.get("locked") is True
+    taken, turn, lock = places
+    return StatusOrder(run, taken, turn, lock, turning, doc.get("locked") is True)
 
 
 def parse_control(payload: bytes | None) -> Control | None:

@@ -50,9 +50,10 @@ Rules:
    (interfaces/mqtt/remote.py rule 6, ``until_heard``; an attack pass: a STOP while the
    station's bridge restarted mid-move never reached the bridge that started again, and the
    rotor turned on); nothing that moves can be sent before that. A stop or lock ON the
-   station's bridge was heard for is held by the link too until the station's status shows
-   it carried it out, and sent again when its bridge connects again before that
-   (interfaces/mqtt/remote.py rule 10; attack 26: its route to the broker died without a
+   station's bridge was heard for is held by the link too, and sent again when the station's
+   bridge connected again and its status still shows the turn (or the lock OFF) the halt was
+   asked against, taken no later than the halt's stamp (interfaces/mqtt/remote.py rule 10,
+   by the order of the station's commands; attack 26: its route to the broker died without a
    word, the broker took the STOP, ``RPRT 0``, and the rotor turned on to its target).
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or

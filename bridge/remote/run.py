@@ -58,13 +58,13 @@ from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S, StationTime
 from bridge.interfaces.mqtt.payloads import one_line
-from bridge.interfaces.mqtt.remote import Proof, RemoteLink
+from bridge.interfaces.mqtt.remote import RemoteLink, Standing
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.interfaces.rotctld import RotctldServer
 from bridge.interfaces.web.server import WebConsole
 from bridge.interfaces.web.view import RotatorFacts
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
-from bridge.remote.readings import status_halted
+from bridge.remote.readings import status_order
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.settings import ConfigError
@@ -242,19 +242,11 @@ class Remote:
         paho's thread or a front end's, with the send lock held."""
         return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
 
-    def _proof(self, topic: str, payload: bytes) -> Proof | None:
-        """A rotator's status, as published, on the halts it shows carried out
-        (interfaces/mqtt/remote.py rule 10); paho's thread."""
+    def _proof(self, topic: str, payload: bytes) -> Standing | None:
+        """A rotator's status on the halts to it (interfaces/mqtt/remote.py rule 10); paho's
+        thread."""
         topics = self._statuses.get(topic)
-        if topics is None:
-            return None
-        said = status_halted(payload)
-        if said is None:
-            return None
-        when, still, locked = said
-        halts: tuple[tuple[str, bytes], ...] = ((topics.stop, b"stop"),) if still else ()
-        halts += ((topics.lock, b"ON"),) if locked else ()
-        return Proof(when, halts) if halts else None
+        return None if topics is None else standing(topics.stop, topics.lock, payload)
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload, replayed=retain)
@@ -454,3 +446,21 @@ def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:
         if own:
             stopping.close()
     return 0
+
+
+def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
+    """A rotator's ``R/status`` on its halts (interfaces/mqtt/remote.py rule 10): a STOP on
+    ``stop`` ends the turn shown, from its place (``order.turn``); a lock ON on ``lock`` ends
+    the lock OFF, from the lock word's place (``order.lock``); None for a status without an
+    ``order`` (no halt is held for it)."""
+    said = status_order(payload)
+    if said is None:
+        return None
+    return Standing(
+        said.run,
+        said.taken,
+        (
+            ((stop, b"stop"), said.turn if said.turning else None),
+            ((lock, b"ON"), None if said.locked else said.lock),
+        ),
+    )

@@ -19,6 +19,7 @@ keepalives end them; the bridge connects again)."""
 from __future__ import annotations
 
 import contextlib
+import json
 import socket
 import threading
 import time
@@ -29,8 +30,8 @@ import pytest
 from bridge.core.errors import Refused
 from bridge.core.model import Lock, Source
 from bridge.interfaces.mqtt.heartbeat import beat_payload
-from bridge.interfaces.mqtt.remote import RemoteLink
-from bridge.remote.run import Remote
+from bridge.interfaces.mqtt.remote import RemoteLink, Standing
+from bridge.remote.run import Remote, standing
 from bridge.remote.settings import RemoteSettings
 from bridge.settings.mqtt import MqttSettings
 from tests.support import Probe, wait_until
@@ -40,6 +41,21 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 START_AZ, TARGET_AZ = 10.0, 300.0
+STATUS = "rotor/status"  # the one rotator's status, for the tests of the link alone
+
+
+def turning_status(turn: int, taken: int | None = None, run: str = "run-1") -> bytes:
+    """The station's ``R/status`` as its bridge publishes it, cut to what the link reads of
+    it (interfaces/mqtt/remote.py rule 10): the rotor turning to a target taken at place
+    ``turn``, every command up to ``taken`` (default: that one) shown, in the run ``run``."""
+    order = {"run": run, "taken": turn if taken is None else taken, "turn": turn, "lock": 0}
+    doc = {"target": 100.0, "state": "moving", "moving": True, "locked": False, "order": order}
+    return json.dumps(doc).encode()
+
+
+def rotor_standing(topic: str, payload: bytes) -> Standing | None:
+    """What the remote reads of ``rotor/status`` on its halts (remote/run.py's ``_proof``)."""
+    return standing("rotor/stop", "rotor/lock", payload) if topic == STATUS else None
 
 
 class CuttableLink:
@@ -245,18 +261,21 @@ def test_a_stop_the_station_showed_it_took_is_not_sent_again_over_a_later_move(
 
 
 def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe: Probe) -> None:
-    """interfaces/mqtt/remote.py rule 10: a STOP the station has not shown it has is sent again
-    when its bridge connects again, but not after a later target from this remote: sent
-    again after it, it would stop the newer target (the order the operator asked in)."""
+    """interfaces/mqtt/remote.py rule 10: a STOP the station has not shown done is sent again
+    when its bridge connects again and its status shows the turn the STOP was asked against
+    still on, but not once its status shows a turn taken after the STOP (a later target, from
+    this remote or another front end): sent again then, it would stop the newer target (the
+    order the commands were taken in)."""
     heard: list[str] = []
     link = RemoteLink(
         MqttSettings(host="127.0.0.1", port=broker.port),
         "remote-order-test",
-        ["rotor/bridge/heartbeat", "rotor/bridge/state"],
+        ["rotor/bridge/heartbeat", "rotor/bridge/state", STATUS],
         lambda topic, payload, retain: heard.append(topic),
         last_word=lambda topic, payload: topic == "rotor/stop",
         heartbeat="rotor/bridge/heartbeat",
         station_state="rotor/bridge/state",
+        proof=rotor_standing,
     )
     link.start()
     try:
@@ -268,20 +287,24 @@ def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe:
             wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
 
         station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        station(STATUS, turning_status(1))  # turning to a target taken at place 1
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # into a dead connection, maybe
         link.send(
             "rotor/target", '{"azimuth":100}', "DL1ABC", 5, lambda: None, after=("rotor/stop",)
         )
         station("rotor/bridge/state", b"online")  # its bridge connected again
+        station(STATUS, turning_status(2))  # turning to the later target (place 2)
         station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
         link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
         wait_until(lambda: len(remote_published(broker, log_from)) >= 3, slow(10), "the marker")
         assert remote_published(broker, log_from) == [b"stop", b"target", b"track"]
-        # without the target, the same STOP goes again (what the test above would miss)
+        # with the STOP's own turn still shown, the same STOP goes again (what the test above
+        # would miss)
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)
         station("rotor/bridge/state", b"online")
+        station(STATUS, turning_status(2))
         station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
         link.send("rotor/track", "off", "DL1ABC", 5)
         wait_until(lambda: len(remote_published(broker, log_from)) >= 3, slow(10), "the marker")

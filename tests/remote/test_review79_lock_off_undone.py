@@ -10,8 +10,6 @@ remote's console rotator and rotctld, Home Assistant's lock OFF published as it 
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import Lock, Source
 from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
@@ -29,11 +27,6 @@ from tests.support.waiting import slow
 TURN_AZ = 100.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: a lock ON to a station already locked is held for ever and sent again "
-    "at the station's reconnect, undoing a later lock OFF from Home Assistant",
-)
 def test_a_lock_off_at_the_station_is_not_undone_by_an_older_lock_on_sent_again(
     station: Rig,  # noqa: F811
     route: CuttableLink,  # noqa: F811

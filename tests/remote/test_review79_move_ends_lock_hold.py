@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import contextlib
 
-import pytest
-
 from bridge.core.errors import Refused
 from bridge.core.model import Lock, Source
 from tests.remote.test_attack26_stop_into_a_partition import (
@@ -34,11 +32,6 @@ from tests.support.waiting import slow
 NEXT_AZ, LATER_AZ = 100.0, 150.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: a later move ends a held lock ON's wait; the lock ON lost into the "
-    "station's dead connection is never sent again and the rotor turns while locked",
-)
 def test_a_lock_on_lost_in_a_partition_is_not_given_up_for_a_later_move(
     station: Rig,  # noqa: F811
     route: CuttableLink,  # noqa: F811

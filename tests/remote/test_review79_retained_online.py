@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import time
 
-import pytest
-
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings.mqtt import MqttSettings
-from tests.remote.test_attack26_stop_into_a_partition import CuttableLink
+from tests.remote.test_attack26_stop_into_a_partition import (
+    STATUS,
+    CuttableLink,
+    rotor_standing,
+    turning_status,
+)
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.remote import remote_published
@@ -25,11 +28,6 @@ from tests.support.waiting import slow
 STATE, BEAT = "rotor/bridge/state", "rotor/bridge/heartbeat"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: the station's online seen only as a retained replay after the remote's "
-    "own reconnect: a held STOP is never sent again",
-)
 def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_away(
     broker: Mosquitto, probe: Probe
 ) -> None:
@@ -38,11 +36,12 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
     link = RemoteLink(
         MqttSettings(host="127.0.0.1", port=route.port),
         "remote-review79",
-        [BEAT, STATE],
+        [BEAT, STATE, STATUS],
         lambda topic, payload, retain: heard.append((topic, retain)),
         last_word=lambda topic, payload: topic == "rotor/stop",
         heartbeat=BEAT,
         station_state=STATE,
+        proof=rotor_standing,
     )
     link.start()
     try:
@@ -50,7 +49,8 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
         probe.publish(STATE, b"online", retain=True)
         n = len(heard)
         probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)
-        wait_until(lambda: len(heard) > n, slow(10), "the station's beat heard")
+        probe.publish(STATUS, turning_status(1), qos=0)  # turning to a target, place 1
+        wait_until(lambda: (STATUS, False) in heard[n:], slow(10), "the station heard turning")
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # taken; into the station's dead connection
         first = link.subscribed_since
@@ -61,8 +61,9 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
         wait_until(lambda: link.subscribed_since not in (None, first), slow(30), "the link back")
         wait_until(lambda: (STATE, True) in heard[n:], slow(10), "the replayed online")
         n = len(heard)
+        probe.publish(STATUS, turning_status(1), qos=0)  # still turning to that target
         probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)  # the station heard
-        wait_until(lambda: len(heard) > n, slow(10), "the station's beat heard")
+        wait_until(lambda: (BEAT, False) in heard[n:], slow(10), "the station's beat heard")
         link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
         wait_until(lambda: b"track" in remote_published(broker, log_from), slow(10), "marker")
     finally:

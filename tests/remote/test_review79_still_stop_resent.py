@@ -15,8 +15,6 @@ would be."""
 
 from __future__ import annotations
 
-import pytest
-
 from tests.remote.test_attack26_stop_into_a_partition import (
     TARGET_AZ,
     CuttableLink,
@@ -33,11 +31,6 @@ from tests.support.waiting import slow
 FIRST_AZ = 60.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: a STOP to a still rotor is held for ever and sent again at the "
-    "station's reconnect, stopping a later turn Home Assistant started at the station",
-)
 def test_an_old_stop_to_a_still_rotor_never_stops_a_later_turn_from_the_station(
     station: Rig,  # noqa: F811
     route: CuttableLink,  # noqa: F811

@@ -9,8 +9,6 @@ bridge on an emulated Rotor-EZ behind a route this test cuts and heals, the remo
 
 from __future__ import annotations
 
-import pytest
-
 from tests.remote.test_attack26_stop_into_a_partition import (
     TARGET_AZ,
     CuttableLink,
@@ -27,11 +25,6 @@ from tests.support.rig import Rig
 NEW_AZ = 120.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: a later move the station never got ends the STOP's hold; neither is "
-    "sent again and the rotor turns on to the target the operator stopped",
-)
 def test_a_stop_then_a_new_target_both_lost_do_not_leave_the_rotor_on_the_old_target(
     station: Rig,  # noqa: F811
     route: CuttableLink,  # noqa: F811

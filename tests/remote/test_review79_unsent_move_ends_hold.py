@@ -18,7 +18,12 @@ from bridge.core.errors import Refused
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings.mqtt import MqttSettings
-from tests.remote.test_attack26_stop_into_a_partition import CuttableLink
+from tests.remote.test_attack26_stop_into_a_partition import (
+    STATUS,
+    CuttableLink,
+    rotor_standing,
+    turning_status,
+)
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.remote import remote_published
@@ -27,11 +32,6 @@ from tests.support.waiting import slow
 STATE, BEAT = "rotor/bridge/state", "rotor/bridge/heartbeat"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: a move refused unsent (a stalled link) ends a held STOP's wait; the "
-    "STOP is not sent again when the station's bridge connects again",
-)
 def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
     broker: Mosquitto, probe: Probe
 ) -> None:
@@ -40,18 +40,20 @@ def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
     link = RemoteLink(
         MqttSettings(host="127.0.0.1", port=route.port),
         "remote-review79-unsent",
-        [BEAT, STATE],
+        [BEAT, STATE, STATUS],
         lambda topic, payload, retain: heard.append((topic, retain)),
         last_word=lambda topic, payload: topic == "rotor/stop",
         heartbeat=BEAT,
         station_state=STATE,
+        proof=rotor_standing,
     )
     link.start()
     try:
         wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
         n = len(heard)
         probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)
-        wait_until(lambda: len(heard) > n, slow(10), "the station's beat heard")
+        probe.publish(STATUS, turning_status(1), qos=0)  # turning to a target, place 1
+        wait_until(lambda: (STATUS, False) in heard[n:], slow(10), "the station heard turning")
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # taken; into the station's dead connection
         first = link.subscribed_since
@@ -66,8 +68,9 @@ def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
         probe.publish(STATE, b"online")  # the station's bridge connected again, clean session
         wait_until(lambda: (STATE, False) in heard[n:], slow(10), "its online heard live")
         n = len(heard)
+        probe.publish(STATUS, turning_status(1), qos=0)  # still turning to that target
         probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)  # and heard
-        wait_until(lambda: len(heard) > n, slow(10), "the station's beat heard")
+        wait_until(lambda: (BEAT, False) in heard[n:], slow(10), "the station's beat heard")
         link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
         wait_until(lambda: b"track" in remote_published(broker, log_from), slow(10), "marker")
     finally:

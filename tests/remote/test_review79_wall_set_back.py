@@ -61,11 +61,6 @@ def station(rig: Rig, route: CuttableLink, wall: SteppedWall) -> Rig:  # noqa: F
     return rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 79: statuses stamped by the station's raw wall clock, halts by its never "
-    "set back heartbeat clock: after a step back no STOP is ever shown, each held for ever",
-)
 def test_a_stop_the_station_took_after_its_clock_was_set_back_is_not_sent_again(
     station: Rig,
     route: CuttableLink,  # noqa: F811

@@ -127,27 +127,36 @@ Rules:
    1.5 keepalives) is still heard for up to SILENT_S, and the broker hands the halt to its
    dead connection; the bridge comes back with a clean session and never gets it (attack 26:
    the STOP answered ``RPRT 0``, the rotor turned on to its target). So every halt the
-   broker took (``send``'s, and each sent again: rule 6) is held (``_unproven``) until the
-   station shows it has it: a status of its rotator as published (not replayed) stamped on
-   the station's clock at or after the halt's stamp (its earliest sending's; a halt sent
-   without a stamp: any such status) that shows the rotor still with no target (a STOP;
-   remote/run.py's ``_proof``), or the lock ON (a lock ON). The station publishes a status
-   after every change and stamps it with its wall clock, never ahead of the clock its
-   heartbeats carry (heartbeat.py rule 6), which the halt's stamp is reckoned from, never
-   later than the truth (rule 3): a status so stamped was made no earlier than the halt was
-   seen (its stamp is its seen time: rule 8). One the station made between that and the
-   halt's arrival may pass: the rotor was then still with nothing to turn to, which is what
-   the halt asks.
-   The station's bridge saying ``online`` as published (``B/bridge/state``: it connected
-   again, a clean session) sends every halt still held again at its first live heartbeat,
-   as rule 6 sends the halts kept (and before any later command: rule 6). No clock ends the
-   wait: only the station's word does, or a later word of this remote's that the halt must
-   not overtake: a later command on its topic (a lock OFF after a lock ON), and a later
-   move of its rotator (``after``: a STOP sent again after it would stop the newer target;
-   the order the operator asked in wins). Left so: a STOP to a rotor already still changes
-   nothing the station publishes, so it stays held and goes again whenever the station's
-   bridge connects again (a stop moves nothing: docs/architecture.md rule 11), until this
-   remote's next move.
+   broker took (``send``'s, and each sent again: rule 6) is held (``_unproven``), and ORDER
+   decides what becomes of it, never a clock (review 79: the station's wall clock set back,
+   no status was ever after a halt) nor a guess. The station's ``R/status`` says where it
+   stands in the order of its rotator's commands (``order``: session/mailbox.py rule 10a's
+   places in this run of its bridge, ``run``; the newest it shows every command up to,
+   ``taken``; the place of the command the turn shown comes from, ``turn``; of the last lock
+   word, ``lock``: core/model.py ``Order``). A halt is stamped with the ``taken`` its
+   rotator's last status (replayed or not) showed when it was asked (the same halt sent
+   again by this link keeps its stamp; pressed again, it is stamped anew). A status as
+   published (``live``; remote/run.py's ``_proof`` reads it) then judges it: a STOP is done
+   (no longer held) once a status shows no turn (moving, a target, tracking or following:
+   it took the STOP, or there was nothing to stop), or a turn from a place after the stamp
+   (a newer command, this remote's or another front end's, wins: review 79, an old STOP
+   sent again stopped Home Assistant's later turn), or another run (a restart ends every
+   turn); a lock ON is done once a status shows the lock ON, or a lock word after the stamp
+   (a lock OFF at the tower: review 79, undone by an old lock ON), or another run. What was
+   asked against still standing (the turn, the lock OFF, from a place not after the stamp)
+   means the station never took the halt, if its bridge connected again since: the halt is
+   ``due`` once the station's bridge says ``online`` (as published, or replayed to this
+   link's new connection: review 79, a broker restart; either way a new connection of the
+   station's may have lost it), and the first live status after that showing what it was
+   asked against still standing sends it again at the station's next live heartbeat (rule
+   6's ``_unheard``, and before any later command), once per ``online`` (the rate limit:
+   on one connection the broker hands the station what it took in order, so a status
+   before the halt came says nothing). A held halt found done while it waits to go again
+   does not go. A later move ends no hold (review 79: a move the station never had, or one
+   the broker never took, proved nothing; and a move never overrides a lock ON); a later
+   word on a halt's own topic that the broker took (a lock OFF after a lock ON) is this
+   remote's last word there and ends it. A station's bridge whose status carries no
+   ``order`` (an older version) gets no hold: its halts go as before rule 10.
 """
 
 from __future__ import annotations
@@ -214,12 +223,28 @@ NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to
 
 
 @dataclass(frozen=True)
-class Proof:
-    """Rule 10: a station's status as published, at ``time_unix`` on its clock, showing the
-    halts ``halts`` (topic, payload) carried out: the rotor still with no target, the lock ON."""
+class Standing:
+    """Rule 10: a station's status of one rotator, on the halts to it: its run and the newest
+    place it shows every command up to (``taken``), and for each halt (topic, payload) the
+    place of the state that halt ends if it still stands (the turn a STOP ends, the lock OFF
+    a lock ON ends), else None."""
 
-    time_unix: float
-    halts: tuple[tuple[str, bytes], ...]
+    run: str
+    taken: int
+    halts: tuple[tuple[tuple[str, bytes], int | None], ...]
+
+
+@dataclass
+class _Held:
+    """Rule 10: a halt the broker took, held: what it went with, the station's run and the
+    newest place this remote had seen when it was asked (its stamp), whether the station's
+    bridge said ``online`` since (``due``), and whether it waits in ``_unheard`` to go again."""
+
+    props: Properties
+    run: str
+    stamp: int
+    due: bool = False
+    queued: bool = False
 
 
 class RemoteLink(Connection):
@@ -238,7 +263,7 @@ class RemoteLink(Connection):
         last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
         heartbeat: str | None = None,
         station_state: str | None = None,
-        proof: Callable[[str, bytes], Proof | None] = lambda topic, payload: None,
+        proof: Callable[[str, bytes], Standing | None] = lambda topic, payload: None,
         clock: Callable[[], float] = time.monotonic,
         ack_wait_s: float = ACK_WAIT_S,
     ) -> None:
@@ -263,9 +288,11 @@ class RemoteLink(Connection):
         self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
         # rule 6: sent again on this connection, and once more when the station is heard on it
         self._unheard: list[tuple[str, bytes, Properties]] = []
-        # rule 10: halts the broker took that the station has not yet shown it has: (topic,
-        # payload) -> (the properties they went with, the earliest stamp's send time or None)
-        self._unproven: dict[tuple[str, bytes], tuple[Properties, float | None]] = {}
+        # rule 10: halts the broker took that the station has not yet shown done or outdated
+        self._unproven: dict[tuple[str, bytes], _Held] = {}
+        # rule 10: by halt (topic, payload), the last order its rotator's status showed: the
+        # station's run and the newest place taken (what a halt asked now is stamped with)
+        self._orders: dict[tuple[str, bytes], tuple[str, int]] = {}
         # rule 8: the latest stamp a halt went out with, by topic (its time, its station)
         self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
         # rule 8: each halt's latest asking (its topic, payload): when it was seen, its source
@@ -372,12 +399,14 @@ class RemoteLink(Connection):
             if halt and until_heard:  # rule 6: maybe nobody subscribed to it yet
                 if not any(t == topic and p == payload.encode() for t, p, _ in self._unheard):
                     self._unheard.append((topic, payload.encode(), props))
-            if halt:  # rule 10: until the station shows it has it
-                self._unprove(topic, payload.encode(), props)
-            else:  # rule 10: a later word on its topic, or a later move, ends the wait
-                self._unproven_end(topic, after, moves=check is not None)
+            if halt:  # rule 10: until the station shows it done, or outdated
+                self._unprove(topic, payload.encode(), props, asked=True)
             generation = self._generation
         self._await_ack(topic, info.mid, generation, halt)
+        if not halt:  # rule 10: a later word on a halt's topic the broker took is the last
+            with self._send_lock:
+                for key in [k for k in self._unproven if k[0] == topic]:
+                    self._unproven_end(key)
 
     def _await_ack(self, topic: str, mid: int, generation: int, halt: bool) -> None:
         """Rule 7: returns once the broker acknowledged ``mid``; else Refused."""
@@ -540,54 +569,71 @@ class RemoteLink(Connection):
         if stamp is not None:
             props = _stamped(props, stamp)
         info = self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
-        self._unprove(topic, payload, props)  # rule 10: until the station shows it has it
+        self._unprove(topic, payload, props, asked=False)  # rule 10: still held
         if reader is not None and seen is not None:  # (stamped now: its reader's floor not
             self._note_halt(topic, props, reader)  # lifted to that, review 30)
         with self._acks:
             self._unawaited.add(info.mid)
 
-    def _unprove(self, topic: str, payload: bytes, props: Properties) -> None:
-        """Rule 10: a halt the broker takes (caller holds _send_lock) is held until the station
-        shows it has it; the same halt again keeps its earliest send time (what a status must
-        be stamped after)."""
-        stamp = Stamp.of_properties(list(getattr(props, "UserProperty", None) or []))
-        sent = None if stamp is None else stamp.sent_unix()
-        held = self._unproven.pop((topic, payload), None)
-        if held is not None and held[1] is not None and (sent is None or held[1] < sent):
-            sent = held[1]
-        self._unproven[topic, payload] = props, sent  # (the newest last: sent again in order)
+    def _unprove(self, topic: str, payload: bytes, props: Properties, *, asked: bool) -> None:
+        """Rule 10 (caller holds _send_lock): a halt the broker takes is held, stamped with the
+        newest place its rotator's status showed taken; ``asked`` (pressed now, not sent again
+        by this link): stamped anew. With no place seen (a station's bridge that publishes no
+        ``order``) it is not held."""
+        key = (topic, payload)
+        held = self._unproven.get(key)
+        if held is not None and not asked:
+            held.props = props
+            return
+        order = self._orders.get(key)
+        if order is None:
+            self._unproven_end(key)
+            return
+        if held is not None:
+            self._unproven_end(key)
+        self._unproven[key] = _Held(props, order[0], order[1])
 
-    def _unproven_end(self, topic: str, after: tuple[str, ...], *, moves: bool) -> None:
-        """Rule 10: a later word that is no halt (caller holds _send_lock): on a halt's own
-        topic (a lock OFF) it is the last word; a move (``moves``: sent with a ``check``)
-        must not be undone by its rotator's halts (``after``: their topics; none said, every
-        halt's) sent again after it."""
-        every = moves and not after
-        for key in [k for k in self._unproven if every or k[0] == topic or k[0] in after]:
-            del self._unproven[key]
+    def _unproven_end(self, key: tuple[str, bytes]) -> None:
+        """Rule 10 (caller holds _send_lock): ``key``'s halt no longer held; not sent again
+        either, if it waits to be."""
+        held = self._unproven.pop(key, None)
+        if held is not None and held.queued:
+            self._unheard = [h for h in self._unheard if (h[0], h[1]) != key]
 
-    def _proven(self, proof: Proof) -> None:
-        """Rule 10, paho's thread: a live status of the station's says, stamped ``time`` on its
-        clock, that the rotor is still (``proof.halts``: the halts it shows carried out)."""
+    def _standing(self, standing: Standing, live: bool) -> None:
+        """Rule 10, paho's thread: a status of the station's (``live``: as published, not a
+        replay). Its order is what a halt asked from now is stamped with; live, it ends each
+        held halt of its rotator whose state no longer stands, or stands from a place after
+        the halt's stamp, or from another run; and a held halt whose state still stands from
+        a place not after its stamp, once the station's bridge said ``online`` since, goes
+        again at its first live heartbeat (rule 6)."""
         with self._send_lock:
-            for key in proof.halts:
+            for key, place in standing.halts:
+                self._orders[key] = standing.run, standing.taken
                 held = self._unproven.get(key)
-                if held is not None and (held[1] is None or held[1] <= proof.time_unix):
-                    del self._unproven[key]
+                if held is None or not live:
+                    continue
+                if held.run != standing.run or place is None or place > held.stamp:
+                    self._unproven_end(key)
+                elif held.due:
+                    held.due = False
+                    if not any((t, p) == key for t, p, _ in self._unheard):
+                        log.warning(
+                            "%s: the station's bridge connected again and its status shows "
+                            "what this ended still standing: sent again once it is heard",
+                            key[0],
+                        )
+                        self._unheard.append((key[0], key[1], held.props))
+                        held.queued = True
 
     def _station_back(self) -> None:
-        """Rule 10, paho's thread: the station's bridge says ``online`` as published (it
-        connected again: its session is clean, what went into its dead connection is lost):
-        the halts it has not shown it has go again at its first live heartbeat (rule 6)."""
+        """Rule 10, paho's thread: the station's bridge says ``online`` (as published, or
+        replayed to this link's new connection: either way it may have connected again since
+        a held halt went, a clean session): each held halt is judged again by the station's
+        next live status of its rotator."""
         with self._send_lock:
-            for (topic, payload), (props, _sent) in self._unproven.items():
-                if not any(t == topic and p == payload for t, p, _ in self._unheard):
-                    log.warning(
-                        "%s: the station's bridge connected again before it showed it had "
-                        "this: sent again once it is heard",
-                        topic,
-                    )
-                    self._unheard.append((topic, payload, props))
+            for held in self._unproven.values():
+                held.due = True
 
     def _note_read(self, topic: str, read: float, reader: Hashable | None) -> None:
         """Rule 8: a halt on ``topic`` from ``reader`` read by ``read`` (caller holds
@@ -641,14 +687,13 @@ class RemoteLink(Connection):
                 pass  # no time: no beat
             except Exception:
                 log.exception("error reading the station's heartbeat")
-        elif not msg.retain and self._unproven:  # rule 10 (as published: news of now)
+        else:  # rule 10
             try:
-                if msg.topic == self._station_state and bytes(msg.payload) == b"online":
-                    self._station_back()
-                else:
-                    proof = self._proof(msg.topic, bytes(msg.payload))
-                    if proof is not None:
-                        self._proven(proof)
+                if msg.topic == self._station_state:
+                    if bytes(msg.payload) == b"online" and self._unproven:
+                        self._station_back()
+                elif (standing := self._proof(msg.topic, bytes(msg.payload))) is not None:
+                    self._standing(standing, live=not msg.retain)
             except Exception:
                 log.exception("error reading the station's word on its halts")
         super()._on_message(client, userdata, msg)
