@@ -363,8 +363,8 @@ def _json_why(value: object, depth: int) -> str | None:
 class StatusOrder(NamedTuple):
     """``R/status``'s word on a remote's held halts (interfaces/mqtt/remote.py rule 10): its
     ``order`` (the station's run, the newest place taken, the turn's place, the lock word's
-    place) and whether the rotor turns or has somewhere to turn to (moving, a target, tracking
-    or following) and whether the lock is ON."""
+    place) and whether the rotor has somewhere to turn to (a target, tracking or following:
+    a rotor coasting to a stop with none has taken the stop) and whether the lock is ON."""
 
     run: str
     taken: int
@@ -391,10 +391,8 @@ def status_order(payload: bytes) -> StatusOrder | None:
     places = [p for p in said if type(p) is int]
     if not isinstance(run, str) or len(places) != len(said):
         return None
-    turning = (
-        doc.get("state") == MotionState.MOVING.value
-        or doc.get("moving") is True
-        or doc.get("target") is not None
+    turning = (  # (a rotor coasting or braking to a stop with no target has taken it)
+        doc.get("target") is not None
         or doc.get("tracking") is not None
         or doc.get("following") is not None
     )

@@ -214,11 +214,11 @@ def test_a_lock_on_sent_as_the_stations_route_dies_is_held_and_sent_again(
 def test_a_stop_the_station_showed_it_took_is_not_sent_again_over_a_later_move(
     station: Rig, route: CuttableLink
 ) -> None:
-    """The station's own status, stamped after the STOP and showing the rotor still with no
-    target, is its word that it has the STOP (interfaces/mqtt/remote.py rule 10): the remote
-    no longer holds it. Home Assistant then turns the rotor at the station; the station's
-    route dies and heals meanwhile, and the STOP, held for ever, would be sent again when the
-    station's bridge connects again and stop that later turn short of its target."""
+    """The station's own status showing the rotor with no target after the STOP is its word
+    that it has the STOP (interfaces/mqtt/remote.py rule 10): the remote no longer holds it.
+    Home Assistant then turns the rotor at the station; the station's route dies and heals
+    meanwhile, and the STOP, held for ever, would be sent again when the station's bridge
+    connects again and stop that later turn short of its target."""
     port = free_port()
     remote = remote_on(station, port)
     try:
@@ -309,5 +309,46 @@ def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe:
         link.send("rotor/track", "off", "DL1ABC", 5)
         wait_until(lambda: len(remote_published(broker, log_from)) >= 3, slow(10), "the marker")
         assert remote_published(broker, log_from) == [b"stop", b"stop", b"track"]
+    finally:
+        link.stop()
+
+
+def test_a_station_without_order_gets_no_hold(broker: Mosquitto, probe: Probe) -> None:
+    """interfaces/mqtt/remote.py rule 10: a station's bridge whose status carries no ``order``
+    (an older version) cannot say whether a turn it shows came before a halt or after it:
+    the remote holds nothing for it and sends its STOP once, as before rule 10, whatever
+    the station's ``online`` and turning statuses say after it."""
+    heard: list[str] = []
+    link = RemoteLink(
+        MqttSettings(host="127.0.0.1", port=broker.port),
+        "remote-no-order-test",
+        ["rotor/bridge/heartbeat", "rotor/bridge/state", STATUS],
+        lambda topic, payload, retain: heard.append(topic),
+        last_word=lambda topic, payload: topic == "rotor/stop",
+        heartbeat="rotor/bridge/heartbeat",
+        station_state="rotor/bridge/state",
+        proof=rotor_standing,
+    )
+    old = json.loads(turning_status(1))
+    del old["order"]
+    link.start()
+    try:
+        wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
+
+        def station(topic: str, payload: bytes) -> None:  # the station's bridge's word
+            n = len(heard)
+            probe.publish(topic, payload, qos=0)
+            wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
+
+        station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        station(STATUS, json.dumps(old).encode())
+        log_from = broker.log.stat().st_size
+        link.send("rotor/stop", "stop", "DL1ABC", 5)
+        station("rotor/bridge/state", b"online")
+        station(STATUS, json.dumps(old).encode())  # still turning, as far as it says
+        station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
+        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
+        wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")
+        assert remote_published(broker, log_from) == [b"stop", b"track"]
     finally:
         link.stop()

@@ -137,8 +137,8 @@ Rules:
    rotator's last status (replayed or not) showed when it was asked (the same halt sent
    again by this link keeps its stamp; pressed again, it is stamped anew). A status as
    published (``live``; remote/run.py's ``_proof`` reads it) then judges it: a STOP is done
-   (no longer held) once a status shows no turn (moving, a target, tracking or following:
-   it took the STOP, or there was nothing to stop), or a turn from a place after the stamp
+   (no longer held) once a status shows no turn (a target, tracking or following; a rotor
+   coasting to a stop without one has taken it), or a turn from a place after the stamp
    (a newer command, this remote's or another front end's, wins: review 79, an old STOP
    sent again stopped Home Assistant's later turn), or another run (a restart ends every
    turn); a lock ON is done once a status shows the lock ON, or a lock word after the stamp
