@@ -346,12 +346,19 @@ class RotatorSession:
         )
         self.health = Health(cfg, health)
         self.view = st.View()
+        # the status's ``order`` (core/model.py Order; interfaces/mqtt/remote.py rule 10): this
+        # run's name, the newest place taken, the place of the turn shown and of the lock word
+        self._run = secrets.token_hex(4)
+        self._taking = 0
+        self._turn_place = 0
+        self._lock_place = 0
         self.status = RotatorStatus(
             cfg.rotator_id,
             locked=locked,
             health=self.health.report,
             stop_owed=self.controller.stops.owed,
             short_of_deg=self.controller.short_of_deg,  # (kept: the first status says so too)
+            order=Order(self._run, 0, 0, 0),  # (the first status's too: no change to say)
         )
         # rule 17: the parts handed in (the features', from the app), in the order they run
         parts: tuple[Part[RotatorSession], ...] = (
@@ -405,12 +412,6 @@ class RotatorSession:
         # the one judged once its answer begins tracking
         self._lookup_held = False
         self._lookup_waiting: _Waiting | None = None
-        # the status's ``order`` (core/model.py Order; interfaces/mqtt/remote.py rule 10): this
-        # run's name, the newest place taken, the place of the turn shown and of the lock word
-        self._run = secrets.token_hex(4)
-        self._taking = 0
-        self._turn_place = 0
-        self._lock_place = 0
 
     @property
     def newest_applied(self) -> int:
