@@ -41,6 +41,7 @@ from typing import Any, NamedTuple
 from bridge.core.model import (
     Control,
     MotionState,
+    Order,
     RotatorStatus,
     SettingValue,
     TargetInfo,
@@ -263,6 +264,7 @@ def _status(rotator_id: str, payload: bytes) -> RotatorStatus:
         last_operator=_name(doc.get("last_operator")),
         control=_shown_control(doc.get("control")),
         relayed=_relayed(rotator_id, doc),
+        order=_order(doc.get("order")),  # (the station's, shown as its console shows it)
     )
 
 
@@ -384,20 +386,31 @@ def status_order(payload: bytes) -> StatusOrder | None:
         return None
     if not isinstance(doc, dict):
         return None
-    order = doc.get("order")
-    if not isinstance(order, dict):
-        return None
-    run, said = order.get("run"), [order.get(k) for k in ("taken", "turn", "lock")]
-    places = [p for p in said if type(p) is int]
-    if not isinstance(run, str) or len(places) != len(said):
+    order = _order(doc.get("order"))
+    if order is None:
         return None
     turning = (  # (a rotor coasting or braking to a stop with no target has taken it)
         doc.get("target") is not None
         or doc.get("tracking") is not None
         or doc.get("following") is not None
     )
-    taken, turn, lock = places
+    run, taken, turn, lock = order.run, order.taken, order.turn, order.lock
     return StatusOrder(run, taken, turn, lock, turning, doc.get("locked") is True)
+
+
+def _order(value: object) -> Order | None:
+    """``R/status``'s ``order`` as the station writes it (its run's name, three places), or
+    None: a status without it (a station's bridge before it), or not what a station writes
+    (rule 1; rule 3: the run's name is text the page may show)."""
+    if not isinstance(value, dict):
+        return None
+    run, places = value.get("run"), [value.get(k) for k in ("taken", "turn", "lock")]
+    if not isinstance(run, str) or not _shown(run) or len(run) > NAME_CHARS:
+        return None
+    if any(type(p) is not int or p < 0 for p in places):
+        return None
+    taken, turn, lock = places
+    return Order(run, taken, turn, lock)  # type: ignore[arg-type]
 
 
 def parse_control(payload: bytes | None) -> Control | None:
