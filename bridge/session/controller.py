@@ -190,13 +190,18 @@ Rules:
    ``noise_deg`` from where that turn was going; or with no turn under way within
    ``tolerance_deg`` of the last azimuth written, where a slow rotor called arrived may creep
    on; not after a stop: it moves whether the frame came or not) is judged by where it rests
-   instead: a reading at that time or later that shows the rotor come to rest (no movement for
-   ``settle_s``) with that axis where the turn before was going (within ``tolerance_deg`` +
-   ``noise_deg``) shows the frame lost (a probe: turning to 100, sent 200 at 60, lost: it rested
+   instead: a reading at that time or later that shows that axis come to rest (no movement of
+   its own for ``settle_s``, as motion.py rule 3 judges its stall, the other axis turning on or
+   not) off its target, where the turn before was going (within ``tolerance_deg`` +
+   ``noise_deg``), shows the frame lost (a probe: turning to 100, sent 200 at 60, lost: it rested
    at 100, and a "stalled" error 16 s later blamed the brake; and a rotor that jammed mid-turn,
    not moved since, was sent its new target twice). Each axis on its own: an RC2800's elevation
    frame lost under a new azimuth, or its azimuth's under a new elevation; and a target sent at
-   97 on the way to 100, lost, judged by whether it moved, was a stall that blamed the brake. It
+   97 on the way to 100, lost, judged by whether it moved, was a stall that blamed the brake.
+   (Review 78: judged once the whole rotor rested, an azimuth whose frame was lost mid-turn
+   rested at the old target while the elevation climbed on, was called stalled on its own 10 s
+   later and the elevation's healthy turn stopped; now the try goes once that axis rests, and
+   its stall counts from that try.) It
    goes again, try 2, with the raw bearing its first try resolved (an axis it left out
    included), if the bridge still stands for it (``Again``: targets.py rule 8, no newer target,
    stop or end of its feature since, no storm refusing motion: session/wind.py rule 1; if
@@ -536,17 +541,19 @@ def _left_behind(
     found left behind by the target's frame, and whether one is now. One that was still when
     the target went is left behind while it has not moved more than ``noise_deg`` from where it
     stood; one that was turning (``_turning_to``: ``before``, mid-turn, moves whether the frame
-    came or not) once the rotor has come to rest (no movement for ``settle_s``) where that
-    turn was going, within ``tolerance_deg`` + ``noise_deg`` (an attack pass: judged on both
-    axes together, an RC2800's lost elevation frame under a new azimuth went unseen)."""
+    came or not) once that axis has come to rest (no movement of its own for ``settle_s``, as
+    motion.py rule 3 judges its stall: ``axis_progress_t``) off its target, where that turn was
+    going, within ``tolerance_deg`` + ``noise_deg`` (an attack pass: judged on both axes
+    together, an RC2800's lost elevation frame under a new azimuth went unseen; review 78:
+    waiting for the whole rotor to rest, the axis whose frame was lost was called stalled while
+    the other still turned)."""
     open_ = lost = False
-    rests = m.progress_t is not None and now >= m.progress_t + cfg.settle_s
     near = cfg.tolerance_deg + cfg.noise_deg
     axes = (
-        (m.position_deg, start[0], before[0], cfg.az_wraps),
-        (m.el_position_deg, start[1], before[1], False),
+        ("azimuth", m.position_deg, m.target_deg, start[0], before[0], cfg.az_wraps),
+        ("elevation", m.el_position_deg, m.el_target_deg, start[1], before[1], False),
     )
-    for pos, stood, was, wraps in axes:
+    for axis, pos, aim, stood, was, wraps in axes:
         if stood is None:
             continue  # (no turn of its own to make)
         if was is None:  # still when the target went: moved since, or not
@@ -554,7 +561,12 @@ def _left_behind(
                 open_ = lost = True
         else:  # turning: left where the turn before was going, or not (yet)
             open_ = True
-            lost = lost or (rests and pos is not None and mo.angle_error(pos, was, wraps) <= near)
+            if lost or pos is None or mo.angle_error(pos, was, wraps) > near:
+                continue
+            if aim is not None and mo.angle_error(pos, aim, wraps) <= cfg.tolerance_deg:
+                continue  # (at its target: the frame came, or was not needed)
+            moved_t = mo.axis_progress_t(m, cfg, axis)
+            lost = moved_t is not None and now >= moved_t + cfg.settle_s
     return open_, lost
 
 

@@ -37,10 +37,13 @@ Rules:
    ``tolerance_deg`` of its target, or one the target leaves out, is not judged (attack 25:
    the azimuth's turn counted as a jammed elevation's progress, its motor drove against the
    jam 30 s longer on a 180 degree GS-232B move, and the stall was said at the azimuth, which
-   had arrived). The stall names its axis (``Motion.stalled``). Every family here turns both
-   axes at once (their fact sheets and emulators: SPID, SatEL's slew, GS-232's ``W``,
-   Easycomm, an RC2800's two frames 200 ms apart, a Combi-Track's two units; a composite's two
-   boxes each judge their own axis); a box that turned them one after the other
+   had arrived). The stall names its axis (``Motion.stalled``). An axis whose frame of a
+   target sent mid-turn was lost rests at the old target off the new one: controller.py
+   rule 11 finds it left behind by the same per-axis time (``axis_progress_t``) and sends the
+   target again before its stall is due, the stall counting from that try (review 78). Every
+   family here turns both axes at once (their fact sheets and emulators: SPID, SatEL's slew,
+   GS-232's ``W``, Easycomm, an RC2800's two frames 200 ms apart, a Combi-Track's two units;
+   a composite's two boxes each judge their own axis); a box that turned them one after the other
    (``ModelSpec.axes_in_turn``) would show its waiting axis not moving: there movement of
    either axis counts for both, as before. So it does for an axis whose own frame of the
    target the controller refused (``undriven``: an RC2800's ``E ERR``, a Combi-Track's unit
@@ -1029,19 +1032,28 @@ def stalling(m: Motion, cfg: MotionConfig) -> tuple[str, float] | None:
     shared = m.progress_t
     if shared is None or m.target_deg is None or m.position_deg is None:
         return None
-    in_turn, undriven = cfg.spec.axes_in_turn, m.undriven
     judged: tuple[str, float] | None = None
     if angle_error(m.position_deg, m.target_deg, cfg.spec.az_wraps) > cfg.tolerance_deg:
-        t = m.az_progress_t
-        old = in_turn or t is None or undriven == "azimuth"
-        judged = ("azimuth", shared if old or t is None else t)
+        t = axis_progress_t(m, cfg, "azimuth")
+        judged = ("azimuth", shared if t is None else t)
     el, el_target = m.el_position_deg, m.el_target_deg
     if el is not None and el_target is not None and abs(el - el_target) > cfg.tolerance_deg:
-        t = m.el_progress_t
-        t = shared if in_turn or t is None or undriven == "elevation" else t
+        t = axis_progress_t(m, cfg, "elevation")
+        t = shared if t is None else t
         if judged is None or t < judged[1]:
             judged = ("elevation", t)
     return judged
+
+
+def axis_progress_t(m: Motion, cfg: MotionConfig, axis: str) -> float | None:
+    """Rule 3: ``axis``'s last movement while the target is out, as its stall is judged (and
+    controller.py rule 11 judges it left behind): its own (``az_progress_t``,
+    ``el_progress_t``), or either axis's (``progress_t``) on a box that turns its axes in turn
+    or for an axis whose frame of the target was refused (``undriven``); None with no target."""
+    own = m.az_progress_t if axis == "azimuth" else m.el_progress_t
+    if cfg.spec.axes_in_turn or own is None or m.undriven == axis:
+        return m.progress_t
+    return own
 
 
 def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind, MotionState
 from tests.engine.virtual import VirtualRotator, settled_at
 
@@ -29,12 +27,6 @@ FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0, "start_az_deg": 0, "start_
 MID_TURN_S = 5.0  # the new target goes this long into the first turn
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 78: a mid-turn axis whose frame was lost is judged stalled on its own while "
-    "the other axis turns, before controller.py rule 11 can send the target again: a healthy "
-    "elevation turn stopped and a false stall said and counted",
-)
 def test_a_lost_azimuth_frame_mid_turn_is_sent_again_not_called_a_stall(rig: Rig) -> None:
     v = rig("rc2800", emulator=FAST)
     v.run_until_state(MotionState.IDLE, 30)
@@ -53,11 +45,6 @@ def test_a_lost_azimuth_frame_mid_turn_is_sent_again_not_called_a_stall(rig: Rig
     assert health is not None and health.stalls == 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 78: the same false stall on a Combi-Track (a frame per unit): its unit A "
-    "frame lost mid-turn, the azimuth called stalled while the elevation climbs",
-)
 def test_a_combi_tracks_lost_azimuth_frame_mid_turn_is_no_stall(rig: Rig) -> None:
     """The same on a Prosistel Combi-Track, whose units go a frame each (its elevation at 2
     degrees a second, set so, climbs 30 s after its azimuth rests): 434064a6 sent the target
@@ -80,11 +67,6 @@ def test_a_combi_tracks_lost_azimuth_frame_mid_turn_is_no_stall(rig: Rig) -> Non
     assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 88.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 78: the same false stall on a GS-232B, its whole W frame lost mid-turn: the "
-    "azimuth rests at the old target first and is called stalled while the elevation climbs",
-)
 def test_a_gs232bs_lost_target_mid_turn_is_sent_again_not_called_a_stall(rig: Rig) -> None:
     """Not the two-frame boxes' alone: a GS-232B turning to (100, 80), its ``W200 085`` lost
     5 s in, goes on to the old target; its azimuth rests at 100 while the elevation climbs to
@@ -102,3 +84,40 @@ def test_a_gs232bs_lost_target_mid_turn_is_sent_again_not_called_a_stall(rig: Ri
     said = [r.message for r in v.errors(ErrorKind.STALLED, since=t0)]
     assert said == [], said
     assert (v.truth().az_deg, v.truth().el_deg) == (200.0, 85.0)
+
+
+STALL_S = 10.0  # the bridge's default stall_timeout_s
+POLL_MARGIN_S = 2.0  # a moving poll or two for the reading that tells it (not a deadline)
+
+
+def test_an_azimuth_jammed_where_its_lost_frame_left_it_is_stopped_a_stall_timeout_after_the_try(
+    rig: Rig,
+) -> None:
+    """The fix's other side: the axis left behind is sent the target once more as soon as it
+    rests, and if it is really held there (jammed at the old target), the try does not move it
+    and it is called stalled ``stall_timeout_s`` after that try (controller.py rule 11), the
+    elevation's turn stopped with it, the error naming the azimuth."""
+    v = rig("rc2800", emulator=FAST)
+    assert v.cfg.motion.stall_timeout_s == STALL_S
+    v.run_until_state(MotionState.IDLE, 30)
+    t0 = v.now
+    v.target(100, 170)
+    v.run_for(MID_TURN_S)
+    v.drop_writes(b"A200.0\r")
+    v.target(200, 175)
+    v.run_until(lambda h: h.truth().az_deg == 100.0, 60, "the azimuth at the old target")
+    v.device._az.jam(v.now)  # type: ignore[attr-defined]  # held where the old turn left it
+    v.run_until(lambda h: h.state is MotionState.STALLED, 60, "a stall")
+    v.run_for(POLL_MARGIN_S)  # the stop the stall sends goes out
+    tries = [w.t for w in v.writes if w.data == b"A200.0\r"]
+    assert len(tries) == 2 and [w.lost for w in v.writes if w.data == b"A200.0\r"] == [
+        True,
+        False,
+    ], tries
+    stops = [w.t for w in v.writes if w.t > tries[-1] and w.data.endswith(b"S\r")]
+    assert stops, "the jammed azimuth was never stopped"
+    assert stops[0] <= tries[-1] + STALL_S + POLL_MARGIN_S, (stops[0] - tries[-1], tries)
+    said = [r.message for r in v.errors(ErrorKind.STALLED, since=t0)]
+    assert len(said) == 1 and said[0].startswith("rotor stalled at 100°"), said
+    assert v.truth().az_deg == 100.0 and v.truth().el_deg < 170.0  # (stopped on its way)
+    assert not v.truth().is_moving
