@@ -165,10 +165,12 @@ class AzimuthOnly:
     def encode_stop(self) -> bytes | list[bytes]:
         return self._inner.encode_stop()
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes | list[bytes]:
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> bytes | list[bytes]:
         """base.py rule 9: ``inner``'s stop as the line left off, where it has one."""
         if isinstance(self._inner, StopsOnTheLine):
-            return self._inner.encode_stop_after(half, axes)
+            return self._inner.encode_stop_after(half, axes, ready)
         return self._inner.encode_stop()
 
     def encode_query(self) -> bytes | list[bytes] | None:

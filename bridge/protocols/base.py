@@ -208,11 +208,12 @@ class HalfLine(enum.Enum):
 class StopsOnTheLine(Protocol):
     """Rule 9: a codec whose stop depends on what the line carried before it: ``half`` what
     the box may hold; ``axes``, where the stop is a frame to each axis, the order they go in
-    (their ``ModelSpec.axis_prefixes``; None: the codec's own order). It opens the stop's
-    exchange as ``encode_stop``."""
+    (their ``ModelSpec.axis_prefixes``; None: the codec's own order); ``ready``, the axes whose
+    stop frame the line would write at once, no axis gap to wait (session/link.py rule 10;
+    None: every axis, or no gap kept). It opens the stop's exchange as ``encode_stop``."""
 
     def encode_stop_after(
-        self, half: HalfLine, axes: bytes | None = None
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
     ) -> bytes | list[bytes]: ...
 
 

@@ -212,7 +212,9 @@ class EasycommCodec(OneQuery):
         self._stop_behind = self._query_open  # rule 9: the query's answer comes first
         return b"SA SE\n"
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> bytes:
         """Rule 11 (base.py rule 9): the connection's first stop, behind a half frame."""
         stop = self.encode_stop()
         if half is HalfLine.NONE:

@@ -166,7 +166,9 @@ class Gs232Codec(OneQuery):
     def encode_stop(self) -> bytes:
         return b"S\r"
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> bytes:
         """Rule 6 (base.py rule 9): the connection's first stop, written behind a half frame."""
         if half is HalfLine.MOVE:  # (S CR S CR: a cut M18 takes the first S, refused)
             return b"S\rS\r"

@@ -15,8 +15,8 @@ Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms 
   ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
   ``A\\r`` then ``E\\r``               ask each axis; answered by its line
   ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (first the axis that
-                                   runs or was just sent a bearing, as soon as the axis gap
-                                   allows: rule 9)
+                                   runs or was just sent a bearing, one the axis gap lets
+                                   go at once before one it holds: rule 9)
 The azimuth model sends only the azimuth's frames.
 
 Rules:
@@ -100,9 +100,15 @@ Rules:
    named, ``E`` CR ``S`` CR at once, but that put the azimuth's stop a whole gap after the
    STOP however long ago the ``E`` went (review 71: up to 200 ms later, 1.2 degrees more
    coast at 6 degrees a second). The axis stopped first is one whose motor runs by its last
-   line (rule 7) or that a drive frame (``A200.0`` CR) went to since that line, the one with
-   the most recent such frame where both are, the azimuth where both or neither are and no
-   such frame went: the other's stop goes the gap after it, up to two gaps after the STOP.
+   line (rule 7) or that a drive frame (``A200.0`` CR) went to since that line; where both
+   are, one whose stop the link writes at once (no axis gap to wait: the last frame was its
+   own, or the gap since the other axis's is over; link.py rule 10 tells it, ``ready``) before
+   one that must wait, then the one with the most recent such frame; the azimuth where both or
+   neither are and no such frame went: the other's stop goes the gap after it, up to two gaps
+   after the STOP. (Review 78: ranked by the drive frame alone, an ``E60.0`` whose answer came
+   late, or garbled, stayed counted past the next ``A`` CR poll, and a STOP then began with
+   the elevation behind the gap: the turning azimuth, running by its line, was stopped 0.4 s
+   after the STOP, 2.4 degrees more at 6 degrees a second, where at once was allowed.)
    (Review 74: always the azimuth first, an RC2800 that turns a composite's elevation, its
    azimuth never driven, stopped its elevation 0.35 s after a STOP 50 ms after an ``E`` CR
    poll, where at once was allowed. Attack 24: by the lines alone, a STOP within ~30 ms of an
@@ -208,9 +214,13 @@ class Rc2800Codec(Plain, LateAnswers):
     def encode_stop(self) -> list[bytes]:
         return self.encode_stop_after(HalfLine.NONE)
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> list[bytes]:
-        """Rules 9 and 10 (base.py rule 9): each axis's stop, in the order ``axes`` go."""
-        first = sorted(self._axes, key=self._stop_rank)  # (stable: A, E)
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> list[bytes]:
+        """Rules 9 and 10 (base.py rule 9): each axis's stop, in the order ``axes`` go
+        (``ready``: the axes whose stop the line writes at once, rule 9)."""
+        at_once = self._axes if ready is None else ready
+        first = sorted(self._axes, key=lambda axis: self._stop_rank(axis, axis in at_once))
         order = bytes(a for a in axes or bytes(first) if a in self._axes) or self._axes
         self._open(2, order)  # each axis answers its selection and its stop
         frames = [b"%c\rS\r" % axis for axis in order]
@@ -219,11 +229,14 @@ class Rc2800Codec(Plain, LateAnswers):
             self._taken_in = True
         return frames
 
-    def _stop_rank(self, axis: int) -> tuple[bool, int]:
+    def _stop_rank(self, axis: int, at_once: bool) -> tuple[bool, bool, int]:
         """Rule 9: an axis whose motor runs by its last line, or that a drive frame went to
-        since, before one that neither; of those, the most recent drive frame first."""
+        since, before one that neither; of those, one whose stop goes at once (``at_once``:
+        no axis gap to wait) before one that must wait, then the most recent drive frame
+        first (stable: A, E)."""
         driven = self._driven.get(axis, 0)
-        return not (driven or self._driving.get(axis)), -driven
+        runs = bool(driven or self._driving.get(axis))
+        return not runs, runs and not at_once, -driven
 
     def frame_written(self, frame: bytes) -> None:
         """Rule 9 (base.py WatchesWrites): a drive frame marks its axis as just set turning

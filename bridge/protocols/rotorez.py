@@ -154,7 +154,9 @@ class RotorEzCodec(LateAnswers):
     def encode_stop(self) -> bytes:
         return b"AS1;" if self._dcu1 else b";"
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> bytes:
         """Rule 8 (base.py rule 9): the connection's first stop, behind a half frame."""
         stop = self.encode_stop()
         return stop if half is HalfLine.NONE or self._dcu1 else stop + stop

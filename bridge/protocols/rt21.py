@@ -113,7 +113,9 @@ class Rt21Codec(OneQuery):
     def encode_stop(self) -> bytes:
         return b";"
 
-    def encode_stop_after(self, half: HalfLine, axes: bytes | None = None) -> bytes:
+    def encode_stop_after(
+        self, half: HalfLine, axes: bytes | None = None, ready: bytes | None = None
+    ) -> bytes:
         """Rule 6 (base.py rule 9): the connection's first stop, behind a half frame."""
         if half is HalfLine.NONE:
             return b";"

@@ -95,7 +95,8 @@ Rules:
    (no wait), and the poll frames still waiting are dropped for it (its answers answer the
    poll); a poll waits while frames do and for the gap after any frame. A stop waits for
    nothing but that gap: its first frame (the codec's order: rc2800.py rule 9, which asks
-   the frames written too, each told to a codec that ``WatchesWrites``) goes at
+   the frames written too, each told to a codec that ``WatchesWrites``, and is told which
+   axes' stop the gap lets go at once, ``ready``) goes at
    once if the gap allows, else when the gap since the last frame to the other axis ends,
    its others the gap apart. (Attack 22: a stop's ``A`` 2 ms after an ``E`` CR poll broke the
    gap; review 71: starting with the axis last addressed instead put the azimuth's stop a
@@ -412,7 +413,7 @@ class Link:
             frames = self._stop_frames(waiting)[len(waiting) :]
             self._queue(frames, self._outbox[-1][0] + self._gap_s, now, stop=True)
         else:
-            frames = self._stop_frames()
+            frames = self._stop_frames(ready=self._ready_axes(now))
             first_t = max(now, self._paced_from(frames[0]))  # rule 10: the axis gap only
             if first_t > now:
                 self._queue(frames, first_t, now, stop=True)
@@ -509,9 +510,17 @@ class Link:
             sent = sum(map(len, frames)) + self.spec.refusal_bytes + 1
             self._refusal_until = now + sent * self._byte_s + self.late_s
 
-    def _stop_frames(self, waiting: bytes = b"") -> list[bytes]:
+    def _ready_axes(self, now: float) -> bytes | None:
+        """Rule 10: the axes a stop's first frame could go to now, no axis gap to wait (None:
+        no gap kept, every axis)."""
+        if not self.spec.axis_gap_s:
+            return None
+        return b"".join(p for p in self.spec.axis_prefixes if self._paced_from(p) <= now)
+
+    def _stop_frames(self, waiting: bytes = b"", ready: bytes | None = None) -> list[bytes]:
         """Rules 10 and 13: the stop's frames, as the line left off; ``waiting`` the axes
-        whose stop frames still wait (a repeat's: those first, the others after them)."""
+        whose stop frames still wait (a repeat's: those first, the others after them);
+        ``ready`` the axes whose stop could go at once (``_ready_axes``)."""
         codec = self.codec
         if isinstance(codec, StopsOnTheLine):
             half = HalfLine.NONE
@@ -521,7 +530,7 @@ class Link:
             if waiting:
                 gone = [p for p in self.spec.axis_prefixes if p not in waiting]
                 axes = waiting + b"".join(gone)
-            stop = codec.encode_stop_after(half, axes)
+            stop = codec.encode_stop_after(half, axes, ready)
         else:
             stop = codec.encode_stop()
         return stop if isinstance(stop, list) else [stop]

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -80,12 +78,6 @@ def test_control_a_box_on_time_has_its_turning_azimuth_stopped_at_once(rig: Rig)
     assert v.truth().too_soon == 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 78: rc2800 rule 9 puts a drive-marked axis whose stop must wait the axis "
-    "gap ahead of the other axis running by its line, whose stop could go at once: the "
-    "turning azimuth stopped 0.4 s after the STOP on a box answering 0.25 s late",
-)
 def test_a_late_box_has_its_turning_azimuth_stopped_at_once(rig: Rig) -> None:
     v = stop_as_the_poll_after_an_elevation_frame_goes(rig, LATE_S)
     el_sent_t = max(w.t for w in v.writes if w.data == b"E60.0\r")
@@ -113,12 +105,6 @@ def stop_and_measure(v: VirtualRotator) -> tuple[list[tuple[float, bytes]], floa
     return frames, azimuth_stop(v, stop_t), abs(v.truth().az_deg - az_at_stop)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 78: one garbled answer keeps an RC2800 elevation frame counted past the next "
-    "A poll; the stop then begins with the elevation behind the axis gap and the turning "
-    "azimuth's stop goes 0.4 s after the STOP",
-)
 def test_a_garbled_elevation_answer_leaves_the_turning_azimuth_stopped_at_once(rig: Rig) -> None:
     v = stop_as_the_poll_after_an_elevation_frame_goes(rig, 0.0, garbled=True)
     assert [e for e in v.errors() if "no valid reply" in e.message]  # (the garbled line, told)
