@@ -1124,6 +1124,10 @@ class RotatorSession:
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
+        if self._answered and not ctl.answering:  # wind.py rule 7: the poll's own offline,
+            self.wind.lost()  # told now (review 80: a reply as the very next input made it
+            self._answered = False  # answering again before any step saw it offline, and
+            self.wind.answering(False)  # the park it cut short was never owed again)
         self._parts(self._measuring, now)  # what they measure is in the status
         self._emit_status(now)
         frames = ctl.link.output() if ctl.link is not None else None

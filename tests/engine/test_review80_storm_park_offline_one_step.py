@@ -18,8 +18,6 @@ In virtual time, a Rotor-EZ at 30 with its storm park at 180."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -27,11 +25,6 @@ WIND = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 180}
 TURN_S = 200.0  # virtual: a Rotor-EZ turns 150 degrees in well under this
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: an offline ended by the next input is never seen by a step: the storm's "
-    "park it cut short is never owed again",
-)
 def test_a_storm_park_cut_by_a_short_offline_is_sent_again() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
