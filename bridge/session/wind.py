@@ -151,7 +151,10 @@ Rules:
    reached (a hand at the front panel: rule 7 leaves it there) "turned off its park" and
    where: the status's ``off_park`` (Home Assistant's "Parked for the storm" off), and the
    refusal "wind 72 km/h above 60: motion refused for the storm (its park not reached: the
-   rotor stands at 168°)". A rotor turned back to the park is parked again. Motion stays
+   rotor stands at 168°)". A rotor turned back to the park is parked again. A park seen
+   reached before a restart in the storm, sent no more (rule 7), is judged so too, against
+   the park as judged from the first reading since (review 80: judged against no park sent,
+   a rotor turned 160 degrees off it was said parked). Motion stays
    refused, and the bridge does not send a park that ended short again in this storm: its
    motor drove for ``stall_timeout_s`` without moving it, and would drive on against the
    jam; nobody can send it in the storm either, so the stall's own error says so, never "send
@@ -349,11 +352,14 @@ class WindPark:
         each status: ``going``, the park waits to go out or its turn is under way (a target
         out, a slew); ``where``, the rotor's bearing in an error's words (stops.py
         ``standing``). Offline, the last word is kept: where it stands is not known."""
-        wire = self._wire
+        pos, offline = m.position_deg, m.state is MotionState.OFFLINE
+        if self._wire is None and self._arrived and pos is not None and not offline:
+            self._wire = self._kept_wire(pos)  # rule 7: reached before a restart, no park sent
+        wire = self._wire  # in this run (review 80: judged against nothing, said parked)
         if wire is None or going or not self._sent() or not self._rig.spec.can_report_position:
             self._off = None
             return
-        if m.state is MotionState.OFFLINE or m.position_deg is None:
+        if offline or pos is None:
             return
         if _at(m, self._rig.motion, wire):  # (braking or settling there too: no flicker)
             self._off = None
@@ -361,6 +367,17 @@ class WindPark:
             self._off = f"turned off its park after reaching it: the rotor stands at {where}"
         else:
             self._off = f"its park not reached: the rotor stands at {where}"
+
+    def _kept_wire(self, position_deg: float) -> tuple[float, float | None] | None:
+        """Rule 10: this storm's park as the controller would hold it, judged from where the
+        rotor stands, for a park seen reached before a restart (rule 7 sends it no more; review
+        80: a rotor turned 160 degrees off it was said parked)."""
+        cfg = self._cfg
+        try:
+            judged = self._rig.aim.judge(Target(cfg.park[0], cfg.park[1]), position_deg)
+        except Refused:  # (the settings refuse such a park: settings/wind.py rule 1)
+            return None
+        return (judged.az_deg if judged.az_deg is not None else position_deg, judged.el_deg)
 
     def arrived(self) -> None:
         """Rule 7: the rotor was seen at rest at this storm's park: an offline owes it no more."""

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.engine.test_review63_storm_park_held_said_parked import ha_parked
 from tests.engine.test_wind import windy
 from tests.engine.test_wind_park_offline import parked_then_turned_by_hand
@@ -28,11 +26,6 @@ from tests.engine.test_wind_park_restart import restart
 AFTER_S = 60.0  # virtual: the restarted bridge reads the rotor many times over
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: wind.py rule 10 judges off_park only against a park sent in this run: "
-    "after a restart in the storm a rotor turned off its park is said parked",
-)
 def test_a_rotor_turned_off_its_park_is_not_said_parked_after_a_restart(tmp_path: Path) -> None:
     with windy() as v:
         parked_then_turned_by_hand(v)

@@ -54,8 +54,11 @@ def restart(v: VirtualRotator, path: Path, *, saved: bool = False) -> None:
 
 
 def refused_in_the_storm(v: VirtualRotator) -> bool:
+    """Refused for the storm, said off its park (wind.py rule 10: review 80, these words said
+    'parked for the storm' of a rotor 160 degrees off it)."""
     v.command(Target(20.0))
-    return v.errors("refused")[-1].message.endswith("parked for the storm")
+    refusal = v.errors("refused")[-1].message
+    return refusal.endswith("(turned off its park after reaching it: the rotor stands at 250°)")
 
 
 def test_a_park_reached_and_turned_away_by_hand_is_not_sent_again_by_a_restart(
