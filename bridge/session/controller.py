@@ -339,7 +339,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.options import Options
 from bridge.session.slew import Slew, overdue, travel_s
-from bridge.session.stops import Stops, Verdict, standing
+from bridge.session.stops import SEND_AGAIN, Stops, Verdict, standing
 from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
@@ -1509,7 +1509,7 @@ class Controller:
             turn += f", elevation {target.el_deg:g}°"
         why = (
             f"the controller restarted mid-turn (its clock went back, to {after}) at {where}: "
-            f"{turn} was not resumed: send the target again"
+            f"{turn} was not resumed: {SEND_AGAIN}"
         )
         log.warning("%s: clock %s, then %s after the slew: restarted", self.name, before, after)
         self.notes.append(Forgot(target, Report(ErrorKind.SERIAL, why)))

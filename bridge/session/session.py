@@ -294,6 +294,8 @@ FOLLOW_REFUSED = "following not started"  # ... and a follow start
 SLEW_STOPPED = "stopping it to ask where it is; its target is not sent again"
 # wind.py rule 10: how a motion event's error ends for the storm's park, for SEND_AGAIN
 PARK_NOT_AGAIN = "the storm's park is not sent again in this storm (motion refused for it)"
+# ... and for a known restart's (the power-on byte, a SatEL's clock gone back): it goes again
+PARK_AGAIN = "the storm's park is sent again"
 # how every target dropped before it moved the rotor begins (runtime/composite.py rule 9 names
 # the whole target in each: a storm's or a claim's drop of a try more named one box's half)
 DROPS = (DROPPED, AGAIN_DROPPED, TRY_DROPPED)
@@ -1030,6 +1032,11 @@ class RotatorSession:
                 if note.kind is ErrorKind.STALLED and message.endswith(SEND_AGAIN):
                     if self._storm_park():  # wind.py rule 10: nobody can (attack 25: a stall
                         message = message[: -len(SEND_AGAIN)] + PARK_NOT_AGAIN  # said so)
+                elif note.kind is ErrorKind.SERIAL and message.endswith(SEND_AGAIN):  # the
+                    if self._storm_park():  # box's known restart (stops.py rule 4): no jam,
+                        self.wind.lost()  # wind.py rule 7: owed again (review 80: never sent)
+                        again = PARK_AGAIN if self.wind.park_owed else PARK_NOT_AGAIN
+                        message = message[: -len(SEND_AGAIN)] + again
                 self._error(note.kind, message, note.command)
             elif isinstance(note, Ends):
                 self._end(note.reason, now)
@@ -1052,10 +1059,13 @@ class RotatorSession:
                         self.targets.clear()
                     self.controller.restarts += 1  # (a composite's other box abandons its own)
                     error = note.error
+                    message = error.message  # (the park goes on: said so, review 80)
+                    if park and message.endswith(SEND_AGAIN):
+                        message = message[: -len(SEND_AGAIN)] + PARK_AGAIN
                     if waiting is note.target or park or error.command is not None:
-                        self._error(error.kind, error.message, error.command)
+                        self._error(error.kind, message, error.command)
                     else:  # a newer target, never sent: its sender's refusal (rule 24; review
-                        self._refuse_dropped(waiting, error.message, error.kind)  # 80: unaudited)
+                        self._refuse_dropped(waiting, message, error.kind)  # 80: unaudited)
                     self._end("the controller restarted", now)
             elif isinstance(note, Again):  # controller.py rule 11
                 took = self._lease_took(note.target, now)  # (said: its refusal is not, below)

@@ -449,7 +449,7 @@ class Stops:
             turn = "its turn" if aimed is None else f"its turn to {aimed:g}°"
             why = (
                 f"the controller restarted mid-turn (its power-on byte came) at {pos:g}°: {turn} "
-                "was not resumed: send the target again"
+                f"was not resumed: {SEND_AGAIN}"
             )
             return Verdict(True, Report(ErrorKind.SERIAL, why), "the controller restarted")
         if event is mo.Event.HALTED:  # (controller.py rule 12: the controller's word)

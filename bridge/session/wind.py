@@ -104,6 +104,10 @@ Rules:
    halted it (rule 3): motion is refused in the storm, so nobody can send it again. (A review
    of d35d250: a GS-232B whose replies were lost for 4 s while it parked for the storm was
    stopped at the offline, and stood 140 degrees short of the park for the rest of the storm.)
+   So is a park the box's known restart cut short (its power-on byte, controller.py rule 12;
+   a SatEL's clock gone back, rule 14, keeps it waiting): no jam, its motor is free, and its
+   error says the park goes again, never "send the target again" (review 80: it was never
+   sent again, the antenna facing the storm 100 degrees off its park).
    A park the rotor was seen to reach (``arrived``) is no park the line took: an offline after
    it owes nothing (an attack pass: a rotor turned at its front panel after the storm's park,
    its line silent for 3 s, was turned back to the park by itself once it answered). That
@@ -333,10 +337,15 @@ class WindPark:
         """Rule 6: the storm is known only from a replayed reading: no park is owed."""
         return self._replayed
 
+    @property
+    def park_owed(self) -> bool:
+        """Rule 7: this storm's park is owed, to be proposed again."""
+        return self.storm and self._park_owed
+
     def lost(self) -> None:
-        """Rule 7: the line took the rotator (offline, unplugged) in this storm (rule 6: one
-        known only from a replay sent no park, and owes none; rule 10: nor one whose turn
-        ended short of it before)."""
+        """Rule 7: the line took the rotator (offline, unplugged), or the box's known restart
+        its park, in this storm (rule 6: one known only from a replay sent no park, and owes
+        none; rule 10: nor one whose turn ended short of it before)."""
         if self.storm and not self._replayed and not self._halted and not self._arrived:
             if self._off is None:
                 self._park_owed, self._waits = True, None  # (rule 9: ``answering``)
