@@ -147,9 +147,10 @@ Rules:
    under a STOP's hold showed ``waiting: false`` and "Parked for the storm" ON while the
    rotor faced the storm where it stood).
 10. A park sent says "parked" only while the rotor is on its way to it or stands at it
-   (within ``tolerance_deg`` of it as the controller holds it, as status.py rule 4's
-   ``parked``, but braking or settling there too, ``_at``: the session tells this part where
-   the rotor is before each status, ``seen``). A park whose turn ended short of it (a stall:
+   (within ``tolerance_deg + noise_deg`` of it as the controller holds it, the band a rotor
+   at a bearing is judged by, braking or settling there too, ``_at``: the session tells this
+   part where the rotor is before each status, ``seen``; review 80: within ``tolerance_deg``
+   alone, a still rotor's noisy readings flipped it). A park whose turn ended short of it (a stall:
    ice, a caught cable; a pass, a turn back, a limit, the controller stopping its motor) says
    "its park not reached" and where the rotor stands, and one turned off it after it was
    reached (a hand at the front panel: rule 7 leaves it there) "turned off its park" and
@@ -524,16 +525,16 @@ class WindPark:
 
 
 def _at(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
-    """Rule 10: the rotor within ``tolerance_deg`` of ``wire`` on each axis it names, at rest
+    """Rule 10: the rotor within ``tolerance_deg + noise_deg`` of ``wire`` on each axis it
+    names (the band the controller judges a rotor at a bearing by: a still rotor's readings
+    wander within ``noise_deg``, review 80: off_park flipped at every other reading), at rest
     or not: status.py's ``parked`` waits for rest, and a Rotor-EZ's brake window after its
     arrival, or a turn's settling, would say the rotor off its park for seconds."""
-    pos = m.position_deg
-    if pos is None or angle_error(pos, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
+    pos, near = m.position_deg, cfg.tolerance_deg + cfg.noise_deg
+    if pos is None or angle_error(pos, wire[0], cfg.az_wraps) > near:
         return False
     el = wire[1]
-    return (
-        el is None or m.el_position_deg is None or abs(m.el_position_deg - el) <= cfg.tolerance_deg
-    )
+    return el is None or m.el_position_deg is None or abs(m.el_position_deg - el) <= near
 
 
 def _turning(m: Motion) -> bool:

@@ -15,8 +15,6 @@ In virtual time, a Rotor-EZ at 90 with its storm park at 180, its reading jitter
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.test_review63_storm_park_held_said_parked import ha_parked
 from tests.engine.virtual import VirtualRotator
@@ -28,11 +26,6 @@ TURN_S = 120.0  # virtual: a Rotor-EZ turns 90 degrees in well under this
 PARKED_S = 60.0  # virtual: a minute at the park, still
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: wind.py _at ignores noise_deg: a still rotor at its park is said off it "
-    "at every other reading (off_park, Home Assistant flicker)",
-)
 def test_a_still_rotor_at_its_storm_park_is_never_said_off_it_for_its_reading_noise() -> None:
     with VirtualRotator("rotorez", settings=SETTINGS, emulator=JITTER) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
