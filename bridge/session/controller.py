@@ -1574,10 +1574,16 @@ class Controller:
         self.notes.append(Again(target, *self._retry_raw, verdict.error, verdict.ends_tracking))
         return True
 
-    def where(self) -> str:
+    def where(self, *, both: bool = False) -> str:
         """Where the rotor stands, in an error's words (stops.py ``standing``: a composite's
-        elevation box names its elevation)."""
-        return standing(self.motion, self.cfg.motion, self._shown_az())
+        elevation box names its elevation); ``both``: a box that turns both axes names its
+        elevation too, where it has a reading (wind.py rule 10, review 80: an elevation short
+        of the storm's park was said to stand at the park's own azimuth)."""
+        m, spec = self.motion, self.cfg.spec
+        at = standing(m, self.cfg.motion, self._shown_az())
+        if both and spec.turns_azimuth and spec.has_elevation and m.el_position_deg is not None:
+            at += f", elevation {m.el_position_deg:g}°"
+        return at
 
     def _shown_az(self) -> float | None:
         """The bearing the user sees where the motion machine has the rotor (pointing.py)."""

@@ -1389,7 +1389,8 @@ class RotatorSession:
         if wind.storm:  # (wind.py rule 10: where the rotor stands against the park sent)
             m = ctl.motion
             going = m.target_deg is not None or m.el_target_deg is not None or slew is not None
-            where = ctl.where() if m.position_deg is not None else ""
+            both = self.cfg.wind is not None and self.cfg.wind.park[1] is not None  # (its
+            where = ctl.where(both=both) if m.position_deg is not None else ""  # elevation too)
             wind.seen(m, going or self._storm_park_waiting(), where)
         key: tuple[object, ...] = (  # one flat tuple: this runs at every step
             # (the bearings first: a turning rotor's every reading changes one, and the

@@ -156,7 +156,9 @@ Rules:
    reached (a hand at the front panel: rule 7 leaves it there) "turned off its park" and
    where: the status's ``off_park`` (Home Assistant's "Parked for the storm" off), and the
    refusal "wind 72 km/h above 60: motion refused for the storm (its park not reached: the
-   rotor stands at 168°)". A rotor turned back to the park is parked again. A park seen
+   rotor stands at 168°)", naming the elevation too where the park has one (review 80: an
+   elevation stalled short was said to stand at the park's own azimuth). A rotor turned
+   back to the park is parked again. A park seen
    reached before a restart in the storm, sent no more (rule 7), is judged so too, against
    the park as judged from the first reading since (review 80: judged against no park sent,
    a rotor turned 160 degrees off it was said parked). Motion stays
@@ -360,8 +362,9 @@ class WindPark:
     def seen(self, m: Motion, going: bool, where: str) -> None:
         """Rule 10: where the rotor stands against this storm's park, told by the session before
         each status: ``going``, the park waits to go out or its turn is under way (a target
-        out, a slew); ``where``, the rotor's bearing in an error's words (stops.py
-        ``standing``). Offline, the last word is kept: where it stands is not known."""
+        out, a slew); ``where``, the rotor's bearing in an error's words (Controller.where: its
+        elevation too where the park names one). Offline, the last word is kept: where it
+        stands is not known."""
         pos, offline = m.position_deg, m.state is MotionState.OFFLINE
         if self._wire is None and self._arrived and pos is not None and not offline:
             self._wire = self._kept_wire(pos)  # rule 7: reached before a restart, no park sent

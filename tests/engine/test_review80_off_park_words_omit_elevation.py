@@ -12,8 +12,6 @@ In virtual time on the emulated MD-01 (test_wind's ``windy``, park_el_deg 0)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import MotionState, Target
 from tests.engine.test_wind import wind, windy
 
@@ -21,11 +19,6 @@ TURN_S = 120.0  # virtual
 AFTER_S = 30.0  # virtual
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 80: the off-park refusal names the azimuth alone: an elevation short of the "
-    "park is said 'stands at 90°', the park's own azimuth",
-)
 def test_an_elevation_short_of_the_storm_park_is_named_in_the_refusal() -> None:
     with windy(park_el_deg=0) as v:
         v.command(Target(90.0, 40.0))
