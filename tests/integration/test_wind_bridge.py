@@ -345,9 +345,11 @@ def test_a_storm_park_reached_is_not_done_again_by_a_restart(rig: Rig) -> None:
     rig.start()
     rig.ready("tower", after=t_restart)
     assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
+    wind_of(rig, lambda w: w.get("off_park"), mark)  # (rule 10: judged from its first reading)
     before = rig.probe.mark()
     rig.probe.publish("rotor/target", "150")  # judged after the steps that would have parked
-    assert "parked for the storm" in error_after(rig, before, "refused")["message"]
+    refusal = error_after(rig, before, "refused")["message"]  # (wind.py rule 10: off its
+    assert "turned off its park after reaching it" in refusal  # park, review 80: "parked")
     assert len(rig.emu.frames("set")) == sets
     assert abs(rig.emu.state().az_deg - 200.0) < 1.0
 
