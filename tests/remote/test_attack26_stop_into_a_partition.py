@@ -36,6 +36,7 @@ from bridge.remote.settings import RemoteSettings
 from bridge.settings.mqtt import MqttSettings
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto, free_port
+from tests.support.mqtt import Message
 from tests.support.remote import ask, remote_published
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -164,6 +165,22 @@ def healed_later(station: Rig, route: CuttableLink, remote: Remote, cut_az: floa
     rotator = remote.rotators[0]
     wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
     wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
+
+
+def bridge_back_after(station: Rig, remote: Remote, mark: int) -> None:
+    """The station's bridge back (a clean session) as the probe saw it after ``mark``: its first
+    heartbeat after it said ``online``; then the remote's rotator hearing it again."""
+    bridge_state, beat = remote.station.bridge_state, remote.station.bridge_heartbeat
+    online: list[bool] = []
+
+    def beat_after_online(m: Message) -> bool:  # its first beat after it said online
+        if m.topic == bridge_state and m.payload == b"online":
+            online.append(True)
+        return bool(online) and m.topic == beat
+
+    station.probe.wait(beat_after_online, slow(30), "the station's bridge back", mark)
+    rotator = remote.rotators[0]
+    wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge heard")
 
 
 def test_a_stop_sent_as_the_stations_route_dies_still_stops_the_rotor(

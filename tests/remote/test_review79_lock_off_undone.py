@@ -13,13 +13,13 @@ from __future__ import annotations
 from bridge.core.model import Lock, Source
 from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
+    bridge_back_after,
     remote_on,
     route,  # noqa: F401  (the fixture)
     station,  # noqa: F401  (the fixture)
 )
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
-from tests.support.mqtt import Message
 from tests.support.remote import ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -50,16 +50,7 @@ def test_a_lock_off_at_the_station_is_not_undone_by_an_older_lock_on_sent_again(
         mark = station.probe.mark()
         route.cut()
         route.heal()  # the station's bridge connects again, a clean session
-        bridge_state, beat = remote.station.bridge_state, remote.station.bridge_heartbeat
-        online: list[bool] = []
-
-        def beat_after_online(m: Message) -> bool:  # its first beat after it said online
-            if m.topic == bridge_state and m.payload == b"online":
-                online.append(True)
-            return bool(online) and m.topic == beat
-
-        station.probe.wait(beat_after_online, slow(30), "the station's bridge back", mark)
-        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge heard")
+        bridge_back_after(station, remote, mark)
         said = ask(port, f"P {TURN_AZ:g} 0\n".encode())  # the operator's next turn
         wait_until(
             lambda: (

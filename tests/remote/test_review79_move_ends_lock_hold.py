@@ -17,6 +17,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import Lock, Source
 from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
+    bridge_back_after,
     remote_on,
     route,  # noqa: F401  (the fixture)
     station,  # noqa: F401  (the fixture)
@@ -24,7 +25,6 @@ from tests.remote.test_attack26_stop_into_a_partition import (
 )
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
-from tests.support.mqtt import Message
 from tests.support.remote import ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -47,16 +47,7 @@ def test_a_lock_on_lost_in_a_partition_is_not_given_up_for_a_later_move(
         said_next = ask(port, f"P {NEXT_AZ:g} 0\n".encode())  # Gpredict's next, after it
         mark = station.probe.mark()
         route.heal()  # the station's bridge connects again, a clean session
-        bridge_state, beat = remote.station.bridge_state, remote.station.bridge_heartbeat
-        online: list[bool] = []
-
-        def beat_after_online(m: Message) -> bool:  # its first beat after it said online
-            if m.topic == bridge_state and m.payload == b"online":
-                online.append(True)
-            return bool(online) and m.topic == beat
-
-        station.probe.wait(beat_after_online, slow(30), "the station's bridge back", mark)
-        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge heard")
+        bridge_back_after(station, remote, mark)
         said_later = ask(port, f"P {LATER_AZ:g} 0\n".encode())  # Gpredict's next again
         wait_until(
             lambda: (
