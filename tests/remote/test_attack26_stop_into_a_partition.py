@@ -23,7 +23,7 @@ import json
 import socket
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -57,6 +57,24 @@ def turning_status(turn: int, taken: int | None = None, run: str = "run-1") -> b
 def rotor_standing(topic: str, payload: bytes) -> Standing | None:
     """What the remote reads of ``rotor/status`` on its halts (remote/run.py's ``_proof``)."""
     return standing("rotor/stop", "rotor/lock", payload) if topic == STATUS else None
+
+
+def halting_link(
+    port: int, client_id: str, on_message: Callable[[str, bytes, bool], None]
+) -> RemoteLink:
+    """The remote's link (not started) to a broker on ``port``, for the one rotator whose
+    status is ``STATUS``: hearing the station's heartbeat, bridge state and status, holding
+    its ``rotor/stop`` (interfaces/mqtt/remote.py rule 10)."""
+    return RemoteLink(
+        MqttSettings(host="127.0.0.1", port=port),
+        client_id,
+        ["rotor/bridge/heartbeat", "rotor/bridge/state", STATUS],
+        on_message,
+        last_word=lambda topic, payload: topic == "rotor/stop",
+        heartbeat="rotor/bridge/heartbeat",
+        station_state="rotor/bridge/state",
+        proof=rotor_standing,
+    )
 
 
 class CuttableLink:
@@ -284,15 +302,8 @@ def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe:
     this remote or another front end): sent again then, it would stop the newer target (the
     order the commands were taken in)."""
     heard: list[str] = []
-    link = RemoteLink(
-        MqttSettings(host="127.0.0.1", port=broker.port),
-        "remote-order-test",
-        ["rotor/bridge/heartbeat", "rotor/bridge/state", STATUS],
-        lambda topic, payload, retain: heard.append(topic),
-        last_word=lambda topic, payload: topic == "rotor/stop",
-        heartbeat="rotor/bridge/heartbeat",
-        station_state="rotor/bridge/state",
-        proof=rotor_standing,
+    link = halting_link(
+        broker.port, "remote-order-test", lambda topic, payload, retain: heard.append(topic)
     )
     link.start()
     try:
@@ -336,15 +347,8 @@ def test_a_station_without_order_gets_no_hold(broker: Mosquitto, probe: Probe) -
     the remote holds nothing for it and sends its STOP once, as before rule 10, whatever
     the station's ``online`` and turning statuses say after it."""
     heard: list[str] = []
-    link = RemoteLink(
-        MqttSettings(host="127.0.0.1", port=broker.port),
-        "remote-no-order-test",
-        ["rotor/bridge/heartbeat", "rotor/bridge/state", STATUS],
-        lambda topic, payload, retain: heard.append(topic),
-        last_word=lambda topic, payload: topic == "rotor/stop",
-        heartbeat="rotor/bridge/heartbeat",
-        station_state="rotor/bridge/state",
-        proof=rotor_standing,
+    link = halting_link(
+        broker.port, "remote-no-order-test", lambda topic, payload, retain: heard.append(topic)
     )
     old = json.loads(turning_status(1))
     del old["order"]

@@ -12,12 +12,10 @@ from __future__ import annotations
 import time
 
 from bridge.interfaces.mqtt.heartbeat import beat_payload
-from bridge.interfaces.mqtt.remote import RemoteLink
-from bridge.settings.mqtt import MqttSettings
 from tests.remote.test_attack26_stop_into_a_partition import (
     STATUS,
     CuttableLink,
-    rotor_standing,
+    halting_link,
     turning_status,
 )
 from tests.support import Probe, wait_until
@@ -33,15 +31,8 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
 ) -> None:
     route = CuttableLink(broker.port)
     heard: list[tuple[str, bool]] = []
-    link = RemoteLink(
-        MqttSettings(host="127.0.0.1", port=route.port),
-        "remote-review79",
-        [BEAT, STATE, STATUS],
-        lambda topic, payload, retain: heard.append((topic, retain)),
-        last_word=lambda topic, payload: topic == "rotor/stop",
-        heartbeat=BEAT,
-        station_state=STATE,
-        proof=rotor_standing,
+    link = halting_link(
+        route.port, "remote-review79", lambda topic, payload, retain: heard.append((topic, retain))
     )
     link.start()
     try:

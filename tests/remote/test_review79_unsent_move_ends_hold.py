@@ -16,12 +16,10 @@ import pytest
 
 from bridge.core.errors import Refused
 from bridge.interfaces.mqtt.heartbeat import beat_payload
-from bridge.interfaces.mqtt.remote import RemoteLink
-from bridge.settings.mqtt import MqttSettings
 from tests.remote.test_attack26_stop_into_a_partition import (
     STATUS,
     CuttableLink,
-    rotor_standing,
+    halting_link,
     turning_status,
 )
 from tests.support import Probe, wait_until
@@ -37,15 +35,10 @@ def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
 ) -> None:
     route = CuttableLink(broker.port)
     heard: list[tuple[str, bool]] = []
-    link = RemoteLink(
-        MqttSettings(host="127.0.0.1", port=route.port),
+    link = halting_link(
+        route.port,
         "remote-review79-unsent",
-        [BEAT, STATE, STATUS],
         lambda topic, payload, retain: heard.append((topic, retain)),
-        last_word=lambda topic, payload: topic == "rotor/stop",
-        heartbeat=BEAT,
-        station_state=STATE,
-        proof=rotor_standing,
     )
     link.start()
     try:
