@@ -77,6 +77,18 @@ def halting_link(
     )
 
 
+def station_word(probe: Probe, heard: list[str]) -> Callable[[str, bytes], None]:
+    """The station's bridge's word: ``topic`` and ``payload`` published as it would (QoS 0),
+    returned once the link heard something more (``heard`` the topics it heard)."""
+
+    def station(topic: str, payload: bytes) -> None:
+        n = len(heard)
+        probe.publish(topic, payload, qos=0)
+        wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
+
+    return station
+
+
 class CuttableLink:
     """A TCP link on a loopback port to ``target``. ``cut``: from then on every byte either side
     sends is read and dropped, and a new connection is taken and dropped likewise, while no side
@@ -308,12 +320,7 @@ def test_a_stop_sent_again_never_undoes_a_later_target(broker: Mosquitto, probe:
     link.start()
     try:
         wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
-
-        def station(topic: str, payload: bytes) -> None:  # the station's bridge's word
-            n = len(heard)
-            probe.publish(topic, payload, qos=0)
-            wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
-
+        station = station_word(probe, heard)
         station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
         station(STATUS, turning_status(1))  # turning to a target taken at place 1
         log_from = broker.log.stat().st_size
@@ -355,12 +362,7 @@ def test_a_station_without_order_gets_no_hold(broker: Mosquitto, probe: Probe) -
     link.start()
     try:
         wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
-
-        def station(topic: str, payload: bytes) -> None:  # the station's bridge's word
-            n = len(heard)
-            probe.publish(topic, payload, qos=0)
-            wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
-
+        station = station_word(probe, heard)
         station("rotor/bridge/heartbeat", beat_payload(time.time()).encode())
         station(STATUS, json.dumps(old).encode())
         log_from = broker.log.stat().st_size
