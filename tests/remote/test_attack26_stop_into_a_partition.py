@@ -197,6 +197,22 @@ def healed_later(station: Rig, route: CuttableLink, remote: Remote, cut_az: floa
     wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
 
 
+def home_assistant_turn(station: Rig, past_az: float) -> None:
+    """Home Assistant's target TARGET_AZ published to ``tower``: returned once the station's
+    status shows it turning and the rotor is past ``past_az``."""
+    emu = station.emus["tower"]
+    status = station.topic("tower", "status")
+    mark = station.probe.mark()
+    station.probe.publish(station.topic("tower", "target"), f"{TARGET_AZ:g}")  # HA's, later
+    station.probe.wait(
+        lambda m: m.topic == status and b'"moving":true' in m.payload,
+        slow(10),
+        "the station turning for Home Assistant",
+        mark,
+    )
+    wait_until(lambda: emu.state().az_deg > past_az, slow(10), "the rotor turning")
+
+
 def bridge_back_after(station: Rig, remote: Remote, mark: int) -> None:
     """The station's bridge back (a clean session) as the probe saw it after ``mark``: its first
     heartbeat after it said ``online``; then the remote's rotator hearing it again."""

@@ -18,6 +18,8 @@ from __future__ import annotations
 from tests.remote.test_attack26_stop_into_a_partition import (
     TARGET_AZ,
     CuttableLink,
+    healed_later,
+    home_assistant_turn,
     remote_on,
     route,  # noqa: F401  (the fixture)
     station,  # noqa: F401  (the fixture)
@@ -46,22 +48,10 @@ def test_an_old_stop_to_a_still_rotor_never_stops_a_later_turn_from_the_station(
         # Gpredict disengaging sends S: the rotor is still, this operator's word the last the
         # station took, so the STOP changes nothing the station publishes
         assert ask(port, b"S\n") == b"RPRT 0\n"
-        status = station.topic("tower", "status")
-        mark = station.probe.mark()
-        station.probe.publish(station.topic("tower", "target"), f"{TARGET_AZ:g}")  # HA's, later
-        station.probe.wait(
-            lambda m: m.topic == status and b'"moving":true' in m.payload,
-            slow(10),
-            "the station turning for Home Assistant",
-            mark,
-        )
-        wait_until(lambda: emu.state().az_deg > FIRST_AZ + 20, slow(10), "the rotor turning")
+        home_assistant_turn(station, FIRST_AZ + 20)
         cut_az = float(emu.state().az_deg)
         route.cut()  # the station's route dies mid-turn, heals 30 degrees later
-        wait_until(lambda: emu.state().az_deg > cut_az + 30, slow(10), "the rotor turning on")
-        route.heal()
-        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
-        wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
+        healed_later(station, route, remote, cut_az)
     finally:
         remote.stop()
     az = emu.state().az_deg

@@ -21,6 +21,8 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     START_AZ,
     TARGET_AZ,
     CuttableLink,
+    healed_later,
+    home_assistant_turn,
     remote_on,
     route,  # noqa: F401  (the fixture)
 )
@@ -90,21 +92,10 @@ def test_a_stop_the_station_took_after_its_clock_was_set_back_is_not_sent_again(
         )
         wait_until(lambda: not emu.state().is_moving, slow(10), "the rotor still")
         stopped_az = float(emu.state().az_deg)
-        mark = station.probe.mark()
-        station.probe.publish(station.topic("tower", "target"), f"{TARGET_AZ:g}")  # HA's, later
-        station.probe.wait(
-            lambda m: m.topic == status and b'"moving":true' in m.payload,
-            slow(10),
-            "the station turning for Home Assistant",
-            mark,
-        )
-        wait_until(lambda: emu.state().az_deg > stopped_az + 10, slow(10), "the rotor turning")
+        home_assistant_turn(station, stopped_az + 10)
         cut_az = float(emu.state().az_deg)
         route.cut()  # the station's route dies mid-turn, heals 30 degrees later
-        wait_until(lambda: emu.state().az_deg > cut_az + 30, slow(10), "the rotor turning on")
-        route.heal()
-        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
-        wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
+        healed_later(station, route, remote, cut_az)
     finally:
         remote.stop()
     az = emu.state().az_deg
