@@ -38,17 +38,19 @@ def _lines(rig: Rig) -> list[dict[str, object]]:
     return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
 
 
-def test_an_interfaces_name_is_no_operator_in_the_audit_trail(rig: Rig) -> None:
+def audited_target(rig: Rig, client_id: str, operator: str) -> dict[str, object]:
+    """``tower`` started with an audit file; an MQTT client ``client_id`` publishes
+    ``rotor/target`` 40 with the user property ``operator``: the audit line of that target."""
     rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
     rig.start()
     rig.ready("tower")
-    c = paho.Client(CallbackAPIVersion.VERSION2, client_id="forger", protocol=paho.MQTTv5)
+    c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
     c.connect("127.0.0.1", rig.broker.port)
     c.loop_start()
     try:
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
-        props.UserProperty = ("operator", FORGED)
+        props.UserProperty = ("operator", operator)
         c.publish("rotor/target", "40", qos=1, properties=props).wait_for_publish(slow(5))
         wait_until(
             lambda: any(e["command"] == "target '40'" for e in _lines(rig)),
@@ -59,6 +61,11 @@ def test_an_interfaces_name_is_no_operator_in_the_audit_trail(rig: Rig) -> None:
         c.loop_stop()
         c.disconnect()
     line = next(e for e in _lines(rig) if e["command"] == "target '40'")
+    return line
+
+
+def test_an_interfaces_name_is_no_operator_in_the_audit_trail(rig: Rig) -> None:
+    line = audited_target(rig, "forger", FORGED)
     status = json.loads(
         rig.probe.wait_for(
             "rotor/status", lambda m: json.loads(m.payload)["last_operator"] is not None

@@ -20,17 +20,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import paho.mqtt.client as paho
 import pytest
-from paho.mqtt.enums import CallbackAPIVersion
-from paho.mqtt.packettypes import PacketTypes
-from paho.mqtt.properties import Properties
 
 from bridge.remote.settings import load_remote_settings
-from tests.integration.test_attack25_operator_named_as_an_interface import _lines
-from tests.support import wait_until
+from tests.integration.test_attack25_operator_named_as_an_interface import audited_target
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 NAMES = ["N1MM", "Mqtt Guy"]  # a real call sign; a name (no interface's peer is a word)
 REFUSED = "review 80: a name whose first word is an interface's is refused as an operator's"
@@ -38,26 +32,7 @@ REFUSED = "review 80: a name whose first word is an interface's is refused as an
 
 @pytest.mark.parametrize("name", NAMES)
 def test_a_call_sign_spelled_like_an_interface_is_audited_as_sent(rig: Rig, name: str) -> None:
-    rig.sections["audit_file"] = str(rig.tmp / "audit.jsonl")
-    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
-    rig.start()
-    rig.ready("tower")
-    c = paho.Client(CallbackAPIVersion.VERSION2, client_id="op", protocol=paho.MQTTv5)
-    c.connect("127.0.0.1", rig.broker.port)
-    c.loop_start()
-    try:
-        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
-        props.UserProperty = ("operator", name)
-        c.publish("rotor/target", "40", qos=1, properties=props).wait_for_publish(slow(5))
-        wait_until(
-            lambda: any(e["command"] == "target '40'" for e in _lines(rig)),
-            slow(10),
-            "the target in the audit file",
-        )
-    finally:
-        c.loop_stop()
-        c.disconnect()
-    line = next(e for e in _lines(rig) if e["command"] == "target '40'")
+    line = audited_target(rig, "op", name)
     assert line["operator"] == name, f"{name!r} sent target 40; the audit line says {line}"
 
 
