@@ -35,6 +35,9 @@ from __future__ import annotations
 
 import socket
 import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -88,36 +91,78 @@ class Flood:
         self._sock.close()
 
 
+@dataclass
+class Bench:
+    """A broker, the probe on it, the bridge (App) with ``tower``, an emulated DCU-1, and the
+    operator's own connection; ``flood``: the one under way, ended with the bench."""
+
+    broker: Mosquitto
+    probe: Probe
+    rig: Rig
+    operator: Probe
+    emu: Any
+    app: Any
+    flood: Flood | None = None
+
+
+@contextmanager
+def flooding_bench(tmp_path: Path, topics: str, speed_deg_s: float) -> Iterator[Bench]:
+    """The bench (the probe on ``topics``), the rotor at 20 turning at ``speed_deg_s``; all
+    closed after, a flood under way ended first."""
+    broker = Mosquitto(tmp_path / "broker")
+    broker.start()
+    probe = Probe(broker.port, topics)
+    rig = Rig(tmp_path, broker, probe)
+    rig.express = None  # the bridge's own default: the stop express on
+    operator = Probe(broker.port, "")
+    bench: Bench | None = None
+    try:
+        emu: Any = rig.add("tower", "dcu1", emu={"start_az_deg": 20, "speed_deg_s": speed_deg_s})
+        app = rig.start()
+        rig.ready("tower")
+        bench = Bench(broker, probe, rig, operator, emu, app)
+        yield bench
+    finally:
+        if bench is not None and bench.flood is not None:
+            bench.flood.end()
+        operator.close()
+        rig.close()
+        probe.close()
+        broker.stop()
+
+
+def counted_reads(
+    app: Any, topic: str, then: Callable[[str, bytes], None] | None = None
+) -> list[int]:
+    """The main connection's reads of ``topic`` counted (the one item of the list returned);
+    ``then``: told every message after the bridge's handler took it."""
+    read = [0]
+    on_main = app.client._handler
+
+    def counted(
+        seen: str, data: bytes, retain: bool, sender: str | None, stamp: Stamp | None
+    ) -> None:
+        if seen == topic:
+            read[0] += 1
+        on_main(seen, data, retain, sender, stamp)
+        if then is not None:
+            then(seen, data)
+
+    app.client._handler = counted
+    return read
+
+
 def stop_in_a_flood(tmp_path: Path, topic: str, payload: bytes) -> None:
     """The rotor turning from 20 to GOAL_DEG, a flood of ``payload`` on ``topic`` under way (the
     main connection has read READ_FIRST of it), the operator's STOP: the rotor rests short of
     SHORT_OF_DEG."""
-    broker = Mosquitto(tmp_path / "broker")
-    broker.start()
-    probe = Probe(broker.port, "rotor/availability|rotor/state|rotor/error")
-    rig = Rig(tmp_path, broker, probe)
-    rig.express = None  # the bridge's own default: the stop express on
-    operator = Probe(broker.port, "")
-    flood: Flood | None = None
-    try:
-        emu: Any = rig.add("tower", "dcu1", emu={"start_az_deg": 20, "speed_deg_s": 20.0})
-        app = rig.start()
-        rig.ready("tower")
+    with flooding_bench(tmp_path, "rotor/availability|rotor/state|rotor/error", 20.0) as bench:
+        broker, operator, emu, app = bench.broker, bench.operator, bench.emu, bench.app
         wait_until(app.lane.connected.is_set, 10, "the lane is up")
-        read = [0]
-        on_main = app.client._handler
-
-        def counted(
-            seen: str, data: bytes, retain: bool, sender: str | None, stamp: Stamp | None
-        ) -> None:
-            if seen == topic:
-                read[0] += 1
-            on_main(seen, data, retain, sender, stamp)
-
-        app.client._handler = counted
+        read = counted_reads(app, topic)
         operator.publish("rotor/target", str(GOAL_DEG).encode())
         emu.wait_for(lambda s: s.is_moving, slow(10))
-        flood = Flood(broker.port, topic, payload)
+        bench.flood = Flood(broker.port, topic, payload)
         wait_until(lambda: read[0] >= READ_FIRST, 30, "the bridge reads the flood")
         at_stop = emu.state()
         assert at_stop.is_moving and at_stop.az_deg < STOP_BEFORE_DEG, at_stop  # (in the turn)
@@ -129,13 +174,6 @@ def stop_in_a_flood(tmp_path: Path, topic: str, payload: bytes) -> None:
             f"STOP published at {at_stop.az_deg:.0f} degrees; the rotor came to rest at "
             f"{rest.az_deg:.0f} (stop frames since: {len(stops)})"
         )
-    finally:
-        if flood is not None:
-            flood.end()
-        operator.close()
-        rig.close()
-        probe.close()
-        broker.stop()
 
 
 def test_control_a_stop_behind_a_flood_of_targets_stops_the_rotor_where_it_was(
@@ -159,40 +197,32 @@ def test_a_lock_on_after_a_flood_of_lock_offs_halts_the_rotor_and_stays_on(tmp_p
     flood, the ON and a target after them, the lock is still ON in the bridge and in its
     retained R/lock/state, and the rotor has not moved. (Measured here: locked about 2 s
     after the ON, the lock lane reading the 30,000 OFFs ahead of it.)"""
-    broker = Mosquitto(tmp_path / "broker")
-    broker.start()
-    probe = Probe(broker.port, "rotor/availability|rotor/state|rotor/error|rotor/lock/state")
-    rig = Rig(tmp_path, broker, probe)
-    rig.express = None  # the bridge's own default: the stop express on
-    operator = Probe(broker.port, "")
-    flood: Flood | None = None
-    try:
-        emu: Any = rig.add("tower", "dcu1", emu={"start_az_deg": 20, "speed_deg_s": 5.0})
-        app = rig.start()
-        rig.ready("tower")
+    topics = "rotor/availability|rotor/state|rotor/error|rotor/lock/state"
+    with flooding_bench(tmp_path, topics, 5.0) as bench:
+        broker, probe, operator, emu, app = (
+            bench.broker,
+            bench.probe,
+            bench.operator,
+            bench.emu,
+            bench.app,
+        )
         wait_until(app.lock_lane.connected.is_set, 10, "the lock lane is up")
-        read = [0]
         main_read_target = threading.Event()
-        on_main = app.client._handler
 
-        def counted(
-            seen: str, data: bytes, retain: bool, sender: str | None, stamp: Stamp | None
-        ) -> None:
-            if seen == "rotor/lock":
-                read[0] += 1
-            on_main(seen, data, retain, sender, stamp)
+        def judged(seen: str, data: bytes) -> None:
             if seen == "rotor/target" and data == b"100":
                 main_read_target.set()  # (judged: its refusal, or its put, is done)
 
-        app.client._handler = counted
+        read = counted_reads(app, "rotor/lock", then=judged)
         operator.publish("rotor/target", str(GOAL_DEG).encode())
         emu.wait_for(lambda s: s.is_moving, slow(10))
         # (a flood the broker drops none of, for a reader behind: its queue, QoS 0, would as
         # well drop the ON, which then never comes, as a target after a flood: reliability.md)
         flood = Flood(broker.port, "rotor/lock", b"OFF", bursts=FINITE_BURSTS)
+        bench.flood = flood
         wait_until(lambda: read[0] >= READ_FIRST, 30, "the bridge reads the flood")
         flood.end(last=b"ON")
-        flood = None
+        bench.flood = None
         rotator = app.rotators[0]
         wait_until(lambda: rotator.status.locked, 60, "the lock ON after the flood")
         rest = emu.wait_for(lambda s: not s.is_moving, slow(60))
@@ -206,10 +236,3 @@ def test_a_lock_on_after_a_flood_of_lock_offs_halts_the_rotor_and_stays_on(tmp_p
         assert rotator.locked and rotator.status.locked
         assert [m.text for m in probe.on("rotor/lock/state")][-1] == "ON"
         assert not emu.state().is_moving
-    finally:
-        if flood is not None:
-            flood.end()
-        operator.close()
-        rig.close()
-        probe.close()
-        broker.stop()
