@@ -176,6 +176,19 @@ def remote_on(station: Rig, port: int) -> Remote:
     return remote
 
 
+def remote_heard(station: Rig, port: int) -> Remote:
+    """``remote_on``, returned once its rotator has heard the station (stopped if it never
+    does)."""
+    remote = remote_on(station, port)
+    try:
+        rotator = remote.rotators[0]
+        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
+    except BaseException:
+        remote.stop()
+        raise
+    return remote
+
+
 def turning_then_cut(station: Rig, route: CuttableLink, port: int) -> float:
     """The rotor sent toward TARGET_AZ by the remote's rotctld, the route cut mid-turn: the
     bearing then."""

@@ -14,7 +14,7 @@ from bridge.core.model import Lock, Source
 from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
     bridge_back_after,
-    remote_on,
+    remote_heard,
     route,  # noqa: F401  (the fixture)
     station,  # noqa: F401  (the fixture)
 )
@@ -32,11 +32,10 @@ def test_a_lock_off_at_the_station_is_not_undone_by_an_older_lock_on_sent_again(
     route: CuttableLink,  # noqa: F811
 ) -> None:
     port = free_port()
-    remote = remote_on(station, port)
+    remote = remote_heard(station, port)
     try:
         emu = station.emus["tower"]
         rotator = remote.rotators[0]
-        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
         rotator.submit(Lock(on=True, source=Source.MQTT), "lock ON")  # the console's
         wait_until(lambda: station.status("tower").locked, slow(10), "the station locked")
         assert ask(port, b"P 200 0\n") == b"RPRT -9\n"  # the remote sees it locked

@@ -20,15 +20,13 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
     healed_later,
     home_assistant_turn,
-    remote_on,
+    remote_heard,
     route,  # noqa: F401  (the fixture)
     station,  # noqa: F401  (the fixture)
 )
-from tests.support import wait_until
 from tests.support.mosquitto import free_port
 from tests.support.remote import ask
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 FIRST_AZ = 60.0
 
@@ -38,11 +36,9 @@ def test_an_old_stop_to_a_still_rotor_never_stops_a_later_turn_from_the_station(
     route: CuttableLink,  # noqa: F811
 ) -> None:
     port = free_port()
-    remote = remote_on(station, port)
+    remote = remote_heard(station, port)
     try:
         emu = station.emus["tower"]
-        rotator = remote.rotators[0]
-        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
         assert ask(port, f"P {FIRST_AZ:g} 0\n".encode()) == b"RPRT 0\n"  # the operator's turn
         station.arrived("tower", FIRST_AZ)
         # Gpredict disengaging sends S: the rotor is still, this operator's word the last the

@@ -23,7 +23,7 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     CuttableLink,
     healed_later,
     home_assistant_turn,
-    remote_on,
+    remote_heard,
     route,  # noqa: F401  (the fixture)
 )
 from tests.support import wait_until
@@ -69,11 +69,9 @@ def test_a_stop_the_station_took_after_its_clock_was_set_back_is_not_sent_again(
     wall: SteppedWall,
 ) -> None:
     port = free_port()
-    remote = remote_on(station, port)
+    remote = remote_heard(station, port)
     try:
         emu = station.emus["tower"]
-        rotator = remote.rotators[0]
-        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
         wall.back(STEP_S)  # the station's time server sets its clock back
         assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
         wait_until(lambda: emu.state().az_deg > START_AZ + 20, slow(10), "the rotor turning")
