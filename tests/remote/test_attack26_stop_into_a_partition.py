@@ -210,6 +210,23 @@ def healed_later(station: Rig, route: CuttableLink, remote: Remote, cut_az: floa
     wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
 
 
+def station_showed_stop(station: Rig, mark: int) -> float:
+    """The station's word, after ``mark``, that it has the STOP (``tower``'s status: still, no
+    target), then the rotor still: its bearing."""
+    emu = station.emus["tower"]
+    status = station.topic("tower", "status")
+    station.probe.wait(
+        lambda m: (
+            m.topic == status and b'"target":null' in m.payload and b'"moving":false' in m.payload
+        ),
+        slow(10),
+        "the station's status: still, no target",
+        mark,
+    )
+    wait_until(lambda: not emu.state().is_moving, slow(10), "the rotor still")
+    return float(emu.state().az_deg)
+
+
 def home_assistant_turn(station: Rig, past_az: float) -> None:
     """Home Assistant's target TARGET_AZ published to ``tower``: returned once the station's
     status shows it turning and the rotor is past ``past_az``."""
@@ -304,18 +321,7 @@ def test_a_stop_the_station_showed_it_took_is_not_sent_again_over_a_later_move(
         mark = station.probe.mark()
         assert ask(port, b"S\n") == b"RPRT 0\n"  # taken at once: the route is fine
         status = station.topic("tower", "status")
-        station.probe.wait(  # the station's word that it has the STOP
-            lambda m: (
-                m.topic == status
-                and b'"target":null' in m.payload
-                and b'"moving":false' in m.payload
-            ),
-            slow(10),
-            "the station's status: still, no target",
-            mark,
-        )
-        wait_until(lambda: not emu.state().is_moving, slow(10), "the rotor still")
-        stopped_az = float(emu.state().az_deg)
+        stopped_az = station_showed_stop(station, mark)
         mark = station.probe.mark()
         station.probe.publish(station.topic("tower", "target"), "5")  # Home Assistant's
         station.probe.wait(

@@ -25,6 +25,7 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     home_assistant_turn,
     remote_heard,
     route,  # noqa: F401  (the fixture)
+    station_showed_stop,
 )
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
@@ -75,21 +76,9 @@ def test_a_stop_the_station_took_after_its_clock_was_set_back_is_not_sent_again(
         wall.back(STEP_S)  # the station's time server sets its clock back
         assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
         wait_until(lambda: emu.state().az_deg > START_AZ + 20, slow(10), "the rotor turning")
-        status = station.topic("tower", "status")
         mark = station.probe.mark()
         assert ask(port, b"S\n") == b"RPRT 0\n"  # taken at once: the route is fine
-        station.probe.wait(  # the station's word that it has the STOP
-            lambda m: (
-                m.topic == status
-                and b'"target":null' in m.payload
-                and b'"moving":false' in m.payload
-            ),
-            slow(10),
-            "the station's status: still, no target",
-            mark,
-        )
-        wait_until(lambda: not emu.state().is_moving, slow(10), "the rotor still")
-        stopped_az = float(emu.state().az_deg)
+        stopped_az = station_showed_stop(station, mark)
         home_assistant_turn(station, stopped_az + 10)
         cut_az = float(emu.state().az_deg)
         route.cut()  # the station's route dies mid-turn, heals 30 degrees later
