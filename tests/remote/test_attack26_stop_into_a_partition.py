@@ -89,6 +89,30 @@ def station_word(probe: Probe, heard: list[str]) -> Callable[[str, bytes], None]
     return station
 
 
+def heard_turning(probe: Probe, heard: list[tuple[str, bool]]) -> int:
+    """The station's bridge's heartbeat and its status turning to a target (place 1),
+    published as it would: returned once the link heard the status live; what ``heard`` held
+    before them."""
+    n = len(heard)
+    probe.publish("rotor/bridge/heartbeat", beat_payload(time.time()).encode(), qos=0)
+    probe.publish(STATUS, turning_status(1), qos=0)  # turning to a target, place 1
+    wait_until(lambda: (STATUS, False) in heard[n:], slow(10), "the station heard turning")
+    return n
+
+
+def still_turning_then_marker(
+    broker: Mosquitto, probe: Probe, link: RemoteLink, heard: list[tuple[str, bool]], log_from: int
+) -> None:
+    """The station still turning to that target and its heartbeat, heard live; then the link's
+    marker (``rotor/track``) behind anything sent again, returned once the broker logged it."""
+    n = len(heard)
+    probe.publish(STATUS, turning_status(1), qos=0)  # still turning to that target
+    probe.publish("rotor/bridge/heartbeat", beat_payload(time.time()).encode(), qos=0)
+    wait_until(lambda: ("rotor/bridge/heartbeat", False) in heard[n:], slow(10), "its beat heard")
+    link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
+    wait_until(lambda: b"track" in remote_published(broker, log_from), slow(10), "marker")
+
+
 class CuttableLink:
     """A TCP link on a loopback port to ``target``. ``cut``: from then on every byte either side
     sends is read and dropped, and a new connection is taken and dropped likewise, while no side

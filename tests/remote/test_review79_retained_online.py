@@ -9,14 +9,11 @@ cuts and heals (attack 26's), the station's bridge's words published as it would
 
 from __future__ import annotations
 
-import time
-
-from bridge.interfaces.mqtt.heartbeat import beat_payload
 from tests.remote.test_attack26_stop_into_a_partition import (
-    STATUS,
     CuttableLink,
     halting_link,
-    turning_status,
+    heard_turning,
+    still_turning_then_marker,
 )
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
@@ -38,10 +35,7 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
     try:
         wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
         probe.publish(STATE, b"online", retain=True)
-        n = len(heard)
-        probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)
-        probe.publish(STATUS, turning_status(1), qos=0)  # turning to a target, place 1
-        wait_until(lambda: (STATUS, False) in heard[n:], slow(10), "the station heard turning")
+        n = heard_turning(probe, heard)
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # taken; into the station's dead connection
         first = link.subscribed_since
@@ -51,12 +45,7 @@ def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_
         route.heal()  # the remote connects again: the station's online is a retained replay
         wait_until(lambda: link.subscribed_since not in (None, first), slow(30), "the link back")
         wait_until(lambda: (STATE, True) in heard[n:], slow(10), "the replayed online")
-        n = len(heard)
-        probe.publish(STATUS, turning_status(1), qos=0)  # still turning to that target
-        probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)  # the station heard
-        wait_until(lambda: (BEAT, False) in heard[n:], slow(10), "the station's beat heard")
-        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
-        wait_until(lambda: b"track" in remote_published(broker, log_from), slow(10), "marker")
+        still_turning_then_marker(broker, probe, link, heard, log_from)
     finally:
         link.stop()
         route.close()

@@ -10,17 +10,14 @@ bridge's words published as it would."""
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from bridge.core.errors import Refused
-from bridge.interfaces.mqtt.heartbeat import beat_payload
 from tests.remote.test_attack26_stop_into_a_partition import (
-    STATUS,
     CuttableLink,
     halting_link,
-    turning_status,
+    heard_turning,
+    still_turning_then_marker,
 )
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
@@ -43,10 +40,7 @@ def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
     link.start()
     try:
         wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
-        n = len(heard)
-        probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)
-        probe.publish(STATUS, turning_status(1), qos=0)  # turning to a target, place 1
-        wait_until(lambda: (STATUS, False) in heard[n:], slow(10), "the station heard turning")
+        heard_turning(probe, heard)
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # taken; into the station's dead connection
         first = link.subscribed_since
@@ -60,12 +54,7 @@ def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
         n = len(heard)
         probe.publish(STATE, b"online")  # the station's bridge connected again, clean session
         wait_until(lambda: (STATE, False) in heard[n:], slow(10), "its online heard live")
-        n = len(heard)
-        probe.publish(STATUS, turning_status(1), qos=0)  # still turning to that target
-        probe.publish(BEAT, beat_payload(time.time()).encode(), qos=0)  # and heard
-        wait_until(lambda: (BEAT, False) in heard[n:], slow(10), "the station's beat heard")
-        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
-        wait_until(lambda: b"track" in remote_published(broker, log_from), slow(10), "marker")
+        still_turning_then_marker(broker, probe, link, heard, log_from)
     finally:
         link.stop()
         route.close()
