@@ -18,7 +18,7 @@ In virtual time, a Rotor-EZ at 30 with its storm park at 180."""
 
 from __future__ import annotations
 
-from bridge.core.model import MotionState
+from tests.engine.test_review80_storm_park_power_cycle import storm_park_under_way
 from tests.engine.virtual import VirtualRotator
 
 WIND = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 180}
@@ -27,18 +27,7 @@ TURN_S = 200.0  # virtual: a Rotor-EZ turns 150 degrees in well under this
 
 def test_a_storm_park_cut_by_a_short_offline_is_sent_again() -> None:
     with VirtualRotator("rotorez", settings=WIND) as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.target(30.0)
-        v.run_until(
-            lambda h: abs(h.truth().az_deg - 30.0) < 2.0 and h.state is MotionState.IDLE,
-            TURN_S,
-            "at rest at 30",
-        )
-        v.mailbox.put_wind(90.0)  # the storm: its park to 180
-        v._take()
-        v.run_until(
-            lambda h: h.truth().is_moving and h.truth().az_deg > 80.0, TURN_S, "the park under way"
-        )
+        storm_park_under_way(v)
         v.set_silent(True)  # the line drops the controller's replies ...
         v.run_until(lambda h: not h.status.available, 30, "offline (its turn stopped)")
         v.set_silent(False)  # ... and carries them again at once

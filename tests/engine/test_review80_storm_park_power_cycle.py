@@ -23,7 +23,8 @@ TURN_S = 200.0  # virtual: a Rotor-EZ turns 150 degrees in well under this
 AFTER_S = 400.0  # virtual: long enough for any park sent again to arrive
 
 
-def power_cycled_mid_park(v: VirtualRotator) -> None:
+def storm_park_under_way(v: VirtualRotator) -> None:
+    """The rotor at rest at 30, then the storm's park to 180 under way (past 80)."""
     v.run_until(lambda h: h.status.available, 10, "the controller answers")
     v.target(30.0)
     v.run_until(
@@ -36,6 +37,10 @@ def power_cycled_mid_park(v: VirtualRotator) -> None:
     v.run_until(
         lambda h: h.truth().is_moving and h.truth().az_deg > 80.0, TURN_S, "the park under way"
     )
+
+
+def power_cycled_mid_park(v: VirtualRotator) -> None:
+    storm_park_under_way(v)
     v.power_cycle()  # a mains blip: the box restarts, its power-on byte comes
     v.run_for(AFTER_S)
 
