@@ -283,6 +283,13 @@ def bridge_back_after(station: Rig, remote: Remote, mark: int) -> None:
     wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge heard")
 
 
+def cut_then_healed_later(station: Rig, route: CuttableLink, remote: Remote) -> None:
+    """The station's route cut now, mid-turn, then ``healed_later``."""
+    cut_az = float(station.emus["tower"].state().az_deg)
+    route.cut()  # the station's route dies mid-turn, heals 30 degrees later
+    healed_later(station, route, remote, cut_az)
+
+
 def test_a_stop_sent_as_the_stations_route_dies_still_stops_the_rotor(
     station: Rig, route: CuttableLink
 ) -> None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 from tests.remote.test_attack26_stop_into_a_partition import (
     TARGET_AZ,
     CuttableLink,
-    healed_later,
+    cut_then_healed_later,
     home_assistant_turn,
     remote_heard,
     route,  # noqa: F401  (the fixture)
@@ -45,9 +45,7 @@ def test_an_old_stop_to_a_still_rotor_never_stops_a_later_turn_from_the_station(
         # station took, so the STOP changes nothing the station publishes
         assert ask(port, b"S\n") == b"RPRT 0\n"
         home_assistant_turn(station, FIRST_AZ + 20)
-        cut_az = float(emu.state().az_deg)
-        route.cut()  # the station's route dies mid-turn, heals 30 degrees later
-        healed_later(station, route, remote, cut_az)
+        cut_then_healed_later(station, route, remote)
     finally:
         remote.stop()
     az = emu.state().az_deg

@@ -21,7 +21,7 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     START_AZ,
     TARGET_AZ,
     CuttableLink,
-    healed_later,
+    cut_then_healed_later,
     home_assistant_turn,
     remote_heard,
     route,  # noqa: F401  (the fixture)
@@ -80,9 +80,7 @@ def test_a_stop_the_station_took_after_its_clock_was_set_back_is_not_sent_again(
         assert ask(port, b"S\n") == b"RPRT 0\n"  # taken at once: the route is fine
         stopped_az = station_showed_stop(station, mark)
         home_assistant_turn(station, stopped_az + 10)
-        cut_az = float(emu.state().az_deg)
-        route.cut()  # the station's route dies mid-turn, heals 30 degrees later
-        healed_later(station, route, remote, cut_az)
+        cut_then_healed_later(station, route, remote)
     finally:
         remote.stop()
     az = emu.state().az_deg
