@@ -20,7 +20,7 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.remote import remote_published
 from tests.support.waiting import slow
 
-STATE, BEAT = "rotor/bridge/state", "rotor/bridge/heartbeat"
+STATE = "rotor/bridge/state"
 
 
 def test_a_held_stop_goes_again_when_the_station_came_back_while_the_remote_was_away(

@@ -24,7 +24,7 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.remote import remote_published
 from tests.support.waiting import slow
 
-STATE, BEAT = "rotor/bridge/state", "rotor/bridge/heartbeat"
+STATE = "rotor/bridge/state"
 
 
 def test_a_move_the_broker_never_took_does_not_end_a_held_stops_wait(
