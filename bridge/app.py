@@ -479,7 +479,7 @@ class App:
         self.lane = StopLane(
             settings.mqtt,
             subscriptions=self.mqtt.stop_lane_subscriptions(),
-            on_message=self.mqtt.on_stop_lane_message,
+            on_message=partial(self.mqtt.on_lane_message, lane="stop"),
             on_denied=partial(self._denied, lanes=("stop",)),
             on_info=self._info,
             on_new_connection=partial(self.mqtt.lane_connected, ("stop",)),
@@ -492,7 +492,7 @@ class App:
         self.lock_lane = StopLane(
             settings.mqtt,
             subscriptions=self.mqtt.lock_lane_subscriptions(),
-            on_message=self.mqtt.on_lock_lane_message,
+            on_message=partial(self.mqtt.on_lane_message, lane="lock"),
             on_denied=partial(self._denied, lanes=("lock",)),
             on_info=self._info,
             kind="lock",

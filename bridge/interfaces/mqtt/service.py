@@ -698,28 +698,6 @@ class MqttService:
             lane=lane,
         )
 
-    def on_stop_lane_message(
-        self,
-        topic: str,
-        payload: bytes,
-        retain: bool,
-        operator: str | None = None,
-        stamp: Stamp | None = None,
-    ) -> None:
-        """The stop lane's messages (lastword.py rule 16), as ``on_lane_message``."""
-        self.on_lane_message(topic, payload, retain, operator, stamp, lane="stop")
-
-    def on_lock_lane_message(
-        self,
-        topic: str,
-        payload: bytes,
-        retain: bool,
-        operator: str | None = None,
-        stamp: Stamp | None = None,
-    ) -> None:
-        """The lock lane's messages (lastword.py rule 16), as ``on_lane_message``."""
-        self.on_lane_message(topic, payload, retain, operator, stamp, lane="lock")
-
     def _late(self, stamp: Stamp | None, *rots: RotatorPort) -> str | None:
         """Rule 9: why a stamped command (never a halt) for ``rots`` is too old to carry out,
         or None."""
