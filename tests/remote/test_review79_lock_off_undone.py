@@ -38,6 +38,10 @@ def test_a_lock_off_at_the_station_is_not_undone_by_an_older_lock_on_sent_again(
         rotator = remote.rotators[0]
         rotator.submit(Lock(on=True, source=Source.MQTT), "lock ON")  # the console's
         wait_until(lambda: station.status("tower").locked, slow(10), "the station locked")
+        lock_state = station.topic("tower", "lock/state")
+        wait_until(  # (the station's retained word reaches the remote a moment later)
+            lambda: remote.view.get(lock_state) == b"ON", slow(10), "the remote told it"
+        )
         assert ask(port, b"P 200 0\n") == b"RPRT -9\n"  # the remote sees it locked
         rotator.submit(Lock(on=True, source=Source.MQTT), "lock ON")  # pressed again
         state = station.topic("tower", "lock/state")
