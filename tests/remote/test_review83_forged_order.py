@@ -21,7 +21,8 @@ published as they would be."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 import pytest
 
@@ -63,14 +64,12 @@ def _words(probe: Probe, heard: list[str]) -> Callable[[str, bytes], None]:
     return say
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a forged R/status order (taken far ahead) stamps a STOP so that it is "
-    "sent again over a newer turn from Home Assistant",
-)
-def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
+@contextmanager
+def _station_turning(
     broker: Mosquitto, probe: Probe
-) -> None:
+) -> Iterator[tuple[RemoteLink, Callable[[str, bytes], None]]]:
+    """The remote's link subscribed, and the station heard turning to a target it took at
+    place 1; the link stopped at the end."""
     heard: list[str] = []
     link = _link(broker, heard)
     link.start()
@@ -79,6 +78,26 @@ def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
         say = _words(probe, heard)
         say(BEAT, beat_payload(time.time()).encode())
         say(STATUS, turning_status(1))  # the station: turning to a target taken at place 1
+        yield link, say
+    finally:
+        link.stop()
+
+
+def _marker(link: RemoteLink, broker: Mosquitto, log_from: int) -> None:
+    """A marker behind anything the link sends again, and the wait for it at the broker."""
+    link.send("rotor/track", "off", "DL1ABC", 5)
+    wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 83: a forged R/status order (taken far ahead) stamps a STOP so that it is "
+    "sent again over a newer turn from Home Assistant",
+)
+def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    with _station_turning(broker, probe) as (link, say):
         say(STATUS, turning_status(1, taken=10**15))  # a client with write access on R/status
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # into the station's dead connection
@@ -87,10 +106,7 @@ def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
         say(STATE, b"online")
         say(STATUS, turning_status(2))
         say(BEAT, beat_payload(time.time()).encode())
-        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
-        wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")
-    finally:
-        link.stop()
+        _marker(link, broker, log_from)
     assert remote_published(broker, log_from) == [b"stop", b"track"], (
         "the old STOP went again and stopped the station's newer turn (place 2)"
     )
@@ -104,14 +120,7 @@ def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
 def test_a_forged_status_of_another_run_never_loses_a_held_stop(
     broker: Mosquitto, probe: Probe
 ) -> None:
-    heard: list[str] = []
-    link = _link(broker, heard)
-    link.start()
-    try:
-        wait_until(lambda: link.subscribed_since is not None, slow(10), "the link subscribed")
-        say = _words(probe, heard)
-        say(BEAT, beat_payload(time.time()).encode())
-        say(STATUS, turning_status(1))  # the station: turning to a target taken at place 1
+    with _station_turning(broker, probe) as (link, say):
         say(STATUS, turning_status(1, run="forged"))  # a client with write access on R/status
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # into the station's dead connection
@@ -119,10 +128,7 @@ def test_a_forged_status_of_another_run_never_loses_a_held_stop(
         say(STATE, b"online")  # its bridge connected again, a clean session
         say(STATUS, turning_status(1))  # still turning to the target the STOP was asked against
         say(BEAT, beat_payload(time.time()).encode())
-        link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
-        wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")
-    finally:
-        link.stop()
+        _marker(link, broker, log_from)
     assert remote_published(broker, log_from) == [b"stop", b"stop", b"track"], (
         "the STOP the station never took was not sent again after it connected again"
     )
