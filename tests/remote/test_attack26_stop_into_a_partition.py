@@ -24,6 +24,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import pytest
 
@@ -184,6 +185,17 @@ def station(rig: Rig, route: CuttableLink) -> Rig:
     rig.start()
     rig.ready("tower")
     return rig
+
+
+def killable_station(rig: Rig, route: CuttableLink, **tower: Any) -> Iterator[Rig]:
+    """A fixture's body: the station's bridge as a process of its own (so that a test can kill
+    it and start it again), reaching its broker over ``route``, one rotator ``tower``."""
+    rig.mqtt_extra["port"] = route.port  # the station's bridge reaches its broker over the route
+    rig.add("tower", **tower)
+    rig.start_process()
+    rig.ready("tower")
+    yield rig
+    rig.stop()
 
 
 def remote_on(station: Rig, port: int) -> Remote:

@@ -19,7 +19,13 @@ import pytest
 
 from bridge.core.errors import Refused
 from bridge.core.model import Lock, Source
-from tests.remote.test_attack26_stop_into_a_partition import START_AZ, CuttableLink, remote_on
+from tests.remote.test_attack26_stop_into_a_partition import (
+    START_AZ,
+    CuttableLink,
+    killable_station,
+    remote_on,
+    route,  # noqa: F401  (the fixture)
+)
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
 from tests.support.rig import Rig
@@ -27,20 +33,8 @@ from tests.support.waiting import slow
 
 
 @pytest.fixture
-def route(rig: Rig) -> Iterator[CuttableLink]:
-    link = CuttableLink(rig.broker.port)
-    yield link
-    link.close()
-
-
-@pytest.fixture
-def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:
-    rig.mqtt_extra["port"] = route.port  # the station's bridge reaches its broker over the route
-    rig.add("tower", emu={"start_az_deg": START_AZ, "jitter_deg": 0})
-    rig.start_process()
-    rig.ready("tower")
-    yield rig
-    rig.stop()
+def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
+    yield from killable_station(rig, route, emu={"start_az_deg": START_AZ, "jitter_deg": 0})
 
 
 @pytest.mark.xfail(
@@ -49,7 +43,8 @@ def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:
     "run, though the lock OFF it was asked against outlives the restart",
 )
 def test_a_lock_on_held_over_a_station_restart_mid_partition_still_locks_it(
-    station: Rig, route: CuttableLink
+    station: Rig,
+    route: CuttableLink,  # noqa: F811
 ) -> None:
     port = free_port()
     remote = remote_on(station, port)

@@ -22,7 +22,9 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     START_AZ,
     TARGET_AZ,
     CuttableLink,
+    killable_station,
     remote_on,
+    route,  # noqa: F401  (the fixture)
 )
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
@@ -32,21 +34,9 @@ from tests.support.waiting import slow
 
 
 @pytest.fixture
-def route(rig: Rig) -> Iterator[CuttableLink]:
-    link = CuttableLink(rig.broker.port)
-    yield link
-    link.close()
-
-
-@pytest.fixture
-def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:
-    rig.mqtt_extra["port"] = route.port  # the station's bridge reaches its broker over the route
+def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
     emu = {"start_az_deg": START_AZ, "jitter_deg": 0, "speed_deg_s": 10.0}
-    rig.add("tower", emu=emu, unasked_moves="follow")
-    rig.start_process()
-    rig.ready("tower")
-    yield rig
-    rig.stop()
+    yield from killable_station(rig, route, emu=emu, unasked_moves="follow")
 
 
 @pytest.mark.xfail(
@@ -55,7 +45,8 @@ def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:
     "though the box turns on to its old target under a bridge that follows unasked moves",
 )
 def test_a_stop_held_over_a_station_restart_mid_partition_still_stops_the_rotor(
-    station: Rig, route: CuttableLink
+    station: Rig,
+    route: CuttableLink,  # noqa: F811
 ) -> None:
     port = free_port()
     remote = remote_on(station, port)
