@@ -485,7 +485,6 @@ class App:
             on_new_connection=partial(self.mqtt.lane_connected, ("stop",)),
             on_subscribed=partial(self._lane_subscribed, "stop"),
             no_replay=self.topics.stop_lane(),
-            gate=self.client.accepted,  # (interfaces/mqtt/connection.py rule 6)
         )
         # interfaces/mqtt/lastword.py rule 16: the lock words on a lane of their own, so that
         # no flood of them sits ahead of a stop on the stop lane
@@ -499,7 +498,6 @@ class App:
             on_new_connection=partial(self.mqtt.lane_connected, ("lock",)),
             on_subscribed=partial(self._lane_subscribed, "lock"),
             no_replay=self.topics.lock_lane(),
-            gate=self.client.accepted,  # (interfaces/mqtt/connection.py rule 6)
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
         self.client.before_message = self._lanes_first
@@ -569,7 +567,6 @@ class App:
             on_release=lambda rid, n, lost: self._by_id[rid].express_release(n, lost),
             on_wrote=self._express_wrote,
             on_locked=self._express_locked,
-            gate=self.client.accepted,  # (interfaces/mqtt/connection.py rule 6)
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express

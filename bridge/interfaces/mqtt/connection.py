@@ -44,30 +44,20 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    never a crash; a login refused names the keys to check (``login_hint``: it said "Not
    authorized" and no key, an attack pass): with a client certificate and no user name, the
    certificate (a broker that takes it as the login), not a password to set. Rule 7 only
-   slows that loop down. The back-off is 1 s doubling to STOP_RECONNECT_MAX_S (2 s:
-   ``RECONNECT_MAX_S``) for every connection, the main one too (all of them carry stops);
-   the stop lane, the lock lane and the stop express (``gate``: the main connection's
-   ``accepted``; the express is told it over its socket) try only while the main connection
-   is accepted, as at the bridge's start: when it drops they may stay or drop, but never
-   reconnect ahead of it (review 81: after a restart of a broker with max_connections, the
-   three were back first on their 2 s, took the slots, and the main connection, then on 1 s
-   doubling to 30 s, was turned away for good; the lanes and the express hold nothing
-   without its markers and order). A refusal that does not change by itself
-   (``LASTING_REFUSALS``: bad user name or password, not authorized, banned, a bad
-   authentication method) slows a connection's back-off to REFUSED_RECONNECT_MAX_S (30 s),
-   the doubling going on from where it was, until a connection is accepted (review 81: a
-   broker back from a restart refusing the login was tried every 2 s by the lanes and the
-   express, 34 refused logins in 20 s). A broker back from an outage is not announced: its
+   slows that loop down. The back-off is 1 s doubling to 30 s (``RECONNECT_MAX_S``) for the main
+   connection, whose tries a broker refusing the login sees; a connection that carries stops
+   and locks (the stop lane, the stop express: their ``RECONNECT_MAX_S``) doubles to
+   STOP_RECONNECT_MAX_S (2 s) only. A broker back from an outage is not announced: its
    persisted retained ``R/availability`` says ``online`` at once (a broker's own shutdown
    sends no last will), so a dashboard offers STOP while the bridge is still waiting out its
    back-off, and a clean session keeps nothing for a connection not yet back (rule 1). With
    30 s, after a 33 s outage every connection came back 28 s after the broker, and a STOP
    sent then reached nobody: the rotor turned on to its target (attack 23). The cost of 2 s
    is small: a try at a broker that is away is a TCP connection refused (or one that times
-   out, which spaces the tries by itself), and the lanes and the express try only while the
-   main connection is accepted, so a wrong password is tried by the main connection alone,
-   on the slow back-off; a lane the broker keeps refusing or closing (rule 3 of lane.py: said
-   once) tries under 30 times a minute, below what a broker's flapping detection bans (EMQX: 30
+   out, which spaces the tries by itself), and the stop lane and the express start only once
+   the main connection was accepted, so a wrong password is tried on the main connection's
+   back-off alone; a lane the broker keeps refusing or closing (rule 3 of lane.py: said once)
+   tries under 30 times a minute, below what a broker's flapping detection bans (EMQX: 30
    disconnects a minute when it is turned on). Less would pass that ban, and close the window
    no better: a STOP sent before the lane is back, however soon it tries, reaches the main
    connection only, if that one is back; only the broker keeping the STOP for the lane would
@@ -211,12 +201,7 @@ TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
-STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most (every connection carries stops)
-REFUSED_RECONNECT_MAX_S = 30  # rule 6: ... after a refusal that lasts (LASTING_REFUSALS)
-# rule 6: CONNACK reasons that do not change by themselves (MQTT 5's; paho reads MQTT 3.1.1's
-# 4 and 5 as 0x86 and 0x87): bad user name or password, not authorized, banned, bad
-# authentication method
-LASTING_REFUSALS = frozenset({0x86, 0x87, 0x8A, 0x8C})
+STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
@@ -369,7 +354,6 @@ class Options(TypedDict, total=False):
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int  # (by default the class's RECONNECT_MAX_S: rule 6)
-    gate: threading.Event | None  # rule 6: attempts wait for it (the main one accepted)
 
 
 class Connection:
@@ -377,7 +361,7 @@ class Connection:
     through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_MAX_S  # rule 7: TAKEOVER_FIRST_S for one that carries stops
-    RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # rule 6 (REFUSED_RECONNECT_MAX_S when refused)
+    RECONNECT_MAX_S = 30  # rule 6: STOP_RECONNECT_MAX_S for one that carries stops
 
     def __init__(
         self,
@@ -425,12 +409,9 @@ class Connection:
         self._optional: dict[str, str] = {}  # rule 17: filter -> what its denial costs
         self._optional_said: set[str] = set()
         self.connected = threading.Event()
-        self.accepted = threading.Event()  # rule 6: a connection accepted, while it lasts
-        self._kept_most: float | None = None  # rule 6: the back-off's most, slowed by a refusal
         self.before_message: Callable[[], None] | None = None  # lane.py rule 4
         c = new_client(settings, client_id)
         c.reconnect_delay_set(*self._reconnect_s)
-        c.gate = options.get("gate")  # rule 6: the lanes' and the express's wait for the main one
         c.on_connect = self._on_connect
         c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
@@ -664,8 +645,6 @@ class Connection:
         if reason_code.is_failure:
             self._guard.connect_failed()
             code = getattr(reason_code, "value", None)
-            if code in LASTING_REFUSALS and self._kept_most is None:  # rule 6: the slow back-off
-                self._kept_most = self._client.delay_most(REFUSED_RECONNECT_MAX_S)
             if code == UNSUPPORTED_PROTOCOL and self._fall_back(
                 f'refused MQTT 5 ("{reason_code}")'
             ):
@@ -674,10 +653,6 @@ class Connection:
             return
         self._up = True
         self._accepted_once = True
-        if self._kept_most is not None:  # rule 6: accepted: the back-off's own most again
-            self._client.delay_most(self._kept_most)
-            self._kept_most = None
-        self.accepted.set()
         self._guard.connected(self._clock())
         self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
@@ -756,7 +731,6 @@ class Connection:
         self._subscribed_since = None
         answered, self._answered = self._answered, False
         self.connected.clear()
-        self.accepted.clear()
         # rule 6: an attempt our own client gave up on, unanswered, is no close of the broker's
         waited = None if was or answered else unanswered(flags, reason_code, client, self._keep_s)
         self._gave_up = waited is not None

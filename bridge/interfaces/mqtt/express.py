@@ -23,9 +23,7 @@ Rules:
    on the command line), the protocol the main connection settled on, subscribed to the stop
    and lock topics of every rotator, the stop topics of the groups, and its own sync topic
    (rule 8), without the broker's replay of a retained message (lastword.py rule 6). It
-   publishes its sync words, nothing else. It (re)connects only while the bridge's main
-   connection is accepted, as the lanes (connection.py rule 6, review 81): the bridge tells it
-   each change (``main``) over the socket, within a TICK_S.
+   publishes its sync words, nothing else.
 3. What it does, and all it does: a message on ``R/stop`` (any payload), a lock ON on
    ``R/lock`` or a message on ``G/stop`` of a group (each member), not a
    replay (under MQTT 3.1.1 a retained flag means "replayed"; the session carries such a
@@ -359,7 +357,6 @@ class Express:
         on_release: Callable[[str, int, bool], None] | None = None,
         on_wrote: Callable[[str, float, str | None], None] | None = None,
         on_locked: Callable[[str, float, str | None], None] | None = None,
-        gate: threading.Event | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"): the stops of
         the rotators in ``frames``, the locks of any (rule 11 says each); ``frames``:
@@ -367,8 +364,7 @@ class Express:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
         express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
         ``on_wrote``: a rotator's stop frame written, at that time; ``on_locked``: its lock ON
-        read, at that time, from that operator (rule 11); ``gate``: set while the main
-        connection is accepted (rule 2: the child connects only then)."""
+        read, at that time, from that operator (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
         self._topics = dict(topics)
@@ -380,8 +376,6 @@ class Express:
         self._on_release = on_release
         self._on_wrote = on_wrote
         self._on_locked = on_locked
-        self._gate = gate
-        self._gate_said: bool | None = None  # rule 2: what the child was last told of it
         self._command = command or [sys.executable, "-m", "bridge.interfaces.mqtt.express"]
         self._lock = threading.Lock()  # the ports, the socket, the child, the holds
         self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd), while open
@@ -555,23 +549,8 @@ class Express:
             "stops and locks go through"
         )
 
-    def _tell_gate(self) -> None:
-        """Rule 2: the child told whether the main connection is accepted, when that changed
-        (under ``_lock``)."""
-        if self._gate is None or self._sock is None:
-            return
-        up = self._gate.is_set()
-        if up != self._gate_said:
-            try:
-                self._sock.send({"op": "main", "up": up})
-            except OSError:
-                return  # (its end is read as such)
-            self._gate_said = up
-
     def _tick(self, came_up: bool, late: str) -> None:
         """On the reader's thread, once a second while the child starts or a hold waits."""
-        with self._lock:
-            self._tell_gate()
         if not came_up and time.monotonic() - self._started_at >= START_WAIT_S:
             self._problem(late, True)
         with self._lock:
@@ -705,7 +684,6 @@ class Express:
         self.starts += 1
         s = self._settings
         secret = s.password.get_secret_value() if s.password is not None else None
-        main_up = self._gate is None or self._gate.is_set()  # (rule 2: before it connects)
         config = {
             "op": "config",
             "mqtt": {**s.model_dump(mode="json"), "password": secret, "password_file": None},
@@ -716,7 +694,6 @@ class Express:
             "sync_topic": self._sync_topic,
             "frames": {rid: frame.hex() for rid, frame in self._frames.items()},
             "log_level": logging.getLogger("bridge").getEffectiveLevel(),
-            "main": main_up,
         }
         with self._lock:
             self._child = child
@@ -730,8 +707,6 @@ class Express:
                 self._sock.send(config)
             except OSError:
                 pass  # it died at once: read below as an end of file
-            self._gate_said = main_up
-            self._tell_gate()
             self.ended.clear()
             hung = not all(self._hand(rid, n, fd) for rid, (n, fd) in self._ports.items())
         if hung:
@@ -1090,9 +1065,6 @@ class _Child:
         self._sync_lock = threading.Lock()
         self.sync = Sync()
         self._upped = False  # rule 8: ``up`` said on this connection
-        self.main_up = threading.Event()  # rule 2: the bridge's main connection accepted
-        if config.get("main", True):  # (then each change, over the socket)
-            self.main_up.set()
         settings = MqttSettings.model_validate(config["mqtt"])
         filters = [*self._topics, *self._locks]
         self.link = _Link(
@@ -1104,7 +1076,6 @@ class _Child:
             on_message=self.on_message,
             on_subscribed=self._subscribed,
             no_replay=filters,
-            gate=self.main_up,
         )
         if config["mqtt311"]:
             self.link.use_mqtt311()
@@ -1297,8 +1268,6 @@ class _Child:
             rid, number = word.get("rotator"), word.get("n")
             if word.get("op") == "sync":
                 self.asked(int(word["n"]), bool(word.get("again")))
-            elif word.get("op") == "main":  # rule 2: connect only while the main one is up
-                (self.main_up.set if word.get("up") else self.main_up.clear)()
             elif word.get("op") == "port" and fds:
                 with self._lock:
                     old = self._ports.get(rid)

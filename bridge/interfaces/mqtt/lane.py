@@ -38,9 +38,8 @@ Rules:
    crash-looping broker can look the same, and stops must come soon after it is back); any
    other way, it tries again on connection.py rule 6's back-off for a connection that carries
    stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a broker's return is
-   heard), and only while the main connection is accepted (``gate``: connection.py rule 6,
-   review 81), never ahead of it. Its session stays clean (rule 2; docs/reliability.md,
-   Limits, says why a kept one is not asked for).
+   heard). Its session stays clean (rule 2; docs/reliability.md, Limits, says why a kept one
+   is not asked for).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's

@@ -30,11 +30,9 @@ Rules:
    then shut down: the broker, once back, sees the end). Everything else is as with paho's
    thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
-   (``reconnect_delay_set``; reset by an accepted connection; ``delay_most`` changes its most
-   and keeps the delay reached), ``on_connect_fail`` called inside the failure, an attempt
-   waiting for the client's ``gate`` while one is given and not set (connection.py rule 6),
-   no reconnect after ``disconnect``; ``loop_stop`` joins the thread also when it was
-   already ending by itself after a ``disconnect``. A callback that raises (paho hands
+   (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
+   inside the failure, no reconnect after ``disconnect``; ``loop_stop`` joins the thread also
+   when it was already ending by itself after a ``disconnect``. A callback that raises (paho hands
    its exception up the loop, which ended paho's thread) is logged and the connection made
    again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
@@ -119,7 +117,6 @@ log = logging.getLogger(__name__)
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # connection.py rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
-GATE_POLL_S = 0.05  # rule 6: how often an attempt waiting for its ``gate`` looks at it
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
 _JOIN_BYTES = 65536  # rule 9: a packet of joined messages, at most about
@@ -267,9 +264,6 @@ class Client(paho.Client):
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
-    # rule 6: set, an attempt waits for it to be set (the lanes and the express: the main
-    # connection accepted, connection.py rule 6); None: no wait
-    gate: threading.Event | None = None
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
     _halt_t = 0.0  # rule 6: when loop_stop was called
     _topic_parts: dict[str, tuple[int, bytes]] | None = None  # rule 9: protocol, topic part
@@ -339,13 +333,6 @@ class Client(paho.Client):
     def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
         super().reconnect_delay_set(min_delay, max_delay)
         self._delays, self._delay_s = (min_delay, max_delay), None
-
-    def delay_most(self, most: float) -> float:
-        """Rule 6: the back-off's most from now on, the delay reached so far kept (a doubling
-        goes on from it); the most it had."""
-        lo, hi = self._delays
-        self._delays = (lo, max(lo, most))
-        return hi
 
     def connect_async(self, *args: Any, **kwargs: Any) -> None:
         self._leaving = False
@@ -438,8 +425,6 @@ class Client(paho.Client):
                 return
             if not first and not self._back_off():
                 return
-            if not self._gated():
-                return
             first, lost = False, False
             try:
                 self.reconnect()
@@ -512,15 +497,6 @@ class Client(paho.Client):
         lo, hi = self._delays
         self._delay_s = lo if self._delay_s is None else min(self._delay_s * 2, hi)
         return not self._halt.wait(self._delay_s) and not self._leaving
-
-    def _gated(self) -> bool:
-        """Rule 6: an attempt waits for ``gate`` (polled every GATE_POLL_S). False: stopped
-        meanwhile."""
-        gate = self.gate
-        while gate is not None and not gate.is_set():
-            if self._halt.wait(GATE_POLL_S) or self._leaving:
-                return False
-        return True
 
     def _connect_failed(self) -> None:
         """paho's on_connect_fail, inside the ``except OSError`` that says why."""
