@@ -218,7 +218,8 @@ class PendingOpen:
     for seconds, or for good); ``wake`` is called when ``result`` (the port, or the exception)
     is there. Abandoned (the rotator stops meanwhile, or the open outlasts worker.py's
     OPEN_BOUND_S), a port opened too late is closed at once; ``running`` says whether its
-    open() has returned yet (worker.py rule 4: one abandoned attempt left running at most)."""
+    open() has returned yet (worker.py rule 4: each abandoned attempt still running doubles
+    the next one's bound)."""
 
     def __init__(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
         self.result: serial.Serial | Exception | None = None

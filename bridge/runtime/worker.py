@@ -35,15 +35,22 @@ Rules:
    An open that has not returned OPEN_BOUND_S after it started (a wedged adapter's driver) is
    abandoned, said once (the session's port error: R/error and a WARNING, once per reason),
    and the port is tried again at once (attack 23: a hung open() was waited for for ever, and
-   the adapter pulled and plugged back in never brought the rotator back until a restart). At
-   most one abandoned attempt is left running: while it is still inside its open(), a next
-   attempt that hangs too is waited for (looked at again every OPEN_BOUND_S), not abandoned,
-   so a driver wedged for good holds two threads for good, not one more every few seconds
-   (a thread stuck in the kernel cannot be ended from here). One is enough for the replug: the
-   abandoned open hangs on the old device, the new attempt opens the new one. The bound is
-   liveness, not correctness (docs/architecture.md rule 15): it decides when the port is
-   tried again, never what the controller is sent; a port the abandoned attempt opens late
-   is closed at once (port.py PendingOpen), unused.
+   the adapter pulled and plugged back in never brought the rotator back until a restart). A
+   thread stuck in the kernel cannot be ended from here, so abandoned attempts still inside
+   their open() are counted, and each one doubles the next attempt's bound (OPEN_BOUND_S, 2x,
+   4x, ...): a driver wedged for good holds about log2(t / OPEN_BOUND_S) threads after t
+   seconds (13 after a day), never one more every few seconds, and yet no attempt is waited
+   for for ever (review 81: with one abandoned attempt at most, the second hung try was waited
+   for as long as the first hung, for good, and an adapter replugged later than OPEN_BOUND_S
+   after it wedged was never tried again). A replug need not wait for a stretched bound: while
+   abandoned attempts still hang, the port's path is looked at every NODE_LOOK_S (one stat,
+   the link followed: no open, nothing of the driver's) and a device node that changed from
+   the one the pending attempt started on (gone, or another one: st_rdev, st_ino, st_ctime) is
+   the replug's evidence: that attempt is abandoned too and the port tried again at once (one
+   more thread per replug, a hand's act). The abandoned open hangs on the old device, the new
+   attempt opens the new one. The bound is liveness, not correctness (docs/architecture.md
+   rule 15): it decides when the port is tried again, never what the controller is sent; a
+   port an abandoned attempt opens late is closed at once (port.py PendingOpen), unused.
 5. The session's questions about the sky (``Ask``) go to the sky worker (skywork.py); each
    answer is queued here by that thread, which then wakes the lines thread through the mailbox
    pipe, and is handed to the session on the lines thread after the mailbox's commands.
@@ -59,6 +66,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import threading
 import time
 from collections import deque
@@ -99,6 +107,8 @@ OWED_RETRY_S = 0.25
 # rule 4: how long an open() may take before it is given up as hung. A tty's takes
 # milliseconds; a Bluetooth serial port's (rfcomm) pages the device first, some 5 s at most
 OPEN_BOUND_S = 10.0
+# rule 4: how often the port's path is looked at for a replug while abandoned opens still hang
+NODE_LOOK_S = 1.0
 
 
 class Worker:
@@ -151,7 +161,9 @@ class Worker:
         self._fd = -1
         self._opening: PendingOpen | None = None
         self._open_until = math.inf  # when the pending open is given up as hung (rule 4)
-        self._hung: PendingOpen | None = None  # the last one given up, maybe still running
+        self._hung: list[PendingOpen] = []  # attempts given up, maybe still running (rule 4)
+        self._node: tuple[int, int, int, int] | None = None  # the path's device at the try
+        self._look_at = math.inf  # when the path is looked at next for a replug (rule 4)
         self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
@@ -172,7 +184,7 @@ class Worker:
         rotator's stop() waits for that with ``wait_closed``, off this thread."""
         if self._opening is not None:
             self._closes(self._opening.abandon(self._watch))
-            self._opening = None
+            self._opening, self._look_at = None, math.inf
         port, self._port, self._fd = self._port, None, -1
         if port is not None:
             self._closes(close_in_background(port, self._watch))
@@ -208,7 +220,9 @@ class Worker:
             if self._opening is None:
                 reopen_at = self._next_try()
                 return [self._box], reopen_at, reopen_at
-            until = self._open_until if self._opening.result is None else now  # it is there
+            if self._opening.result is not None:
+                return [self._box], now, now  # it is there
+            until = min(self._open_until, self._look_at)
             return [self._box], until, until
         session = self.session
         until, hold = session.next_wakeup(), session.hold_reads_until()
@@ -245,11 +259,14 @@ class Worker:
             if opening is not None and opening.result is not None:
                 self._opened(opening.result, now)
             elif opening is not None and now >= self._open_until:
-                self._open_hung(opening, now)
+                self._open_hung(opening, now, self._hung_reason())
+            elif opening is not None and now >= self._look_at:
+                if _device_node(self.cfg.port) != self._node:  # rule 4: replugged
+                    self._open_hung(opening, now, self._replugged_reason())
+                else:
+                    self._look_at = now + NODE_LOOK_S
             elif opening is None and now >= self._next_try():
-                attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
-                self._opening = PendingOpen(attempt, self._wake)
-                self._open_until = now + OPEN_BOUND_S
+                self._start_open(now)
             return
         session, acted = self.session, False
         try:
@@ -326,24 +343,40 @@ class Worker:
             return min(self._reopen_at, self._tried_at + OWED_RETRY_S)
         return self._reopen_at
 
-    def _open_hung(self, opening: PendingOpen, now: float) -> None:
-        """Rule 4: the pending open outlasted OPEN_BOUND_S: given up and tried again at once,
-        unless the last one given up is still inside its open() (then waited for, and looked
-        at again after another bound)."""
-        if self._hung is not None and self._hung.running:
-            self._open_until = now + OPEN_BOUND_S
-            return
-        self._closes(opening.abandon(self._watch))  # (a port it opened just now: closed)
-        self._hung, self._opening = opening, None
-        reason = (
-            f"opening {self.cfg.shown_port} hung for {OPEN_BOUND_S:g} s (the adapter or its driver "
-            "wedged? unplug it and plug it back in): given up and tried again"
+    def _start_open(self, now: float) -> None:
+        """Rule 4: an attempt on a thread of its own, bounded by OPEN_BOUND_S doubled for each
+        abandoned attempt still inside its open(); the path looked at for a replug meanwhile
+        while any is."""
+        self._hung = [hung for hung in self._hung if hung.running]
+        self._node = _device_node(self.cfg.port)
+        attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
+        self._opening = PendingOpen(attempt, self._wake)
+        self._open_until = now + OPEN_BOUND_S * 2 ** len(self._hung)
+        self._look_at = now + NODE_LOOK_S if self._hung else math.inf
+
+    def _hung_reason(self) -> str:
+        return (
+            f"opening {self.cfg.shown_port} hung for {OPEN_BOUND_S:g} s or more (the adapter or "
+            "its driver wedged? unplug it and plug it back in): given up and tried again"
         )
+
+    def _replugged_reason(self) -> str:
+        return (
+            f"{self.cfg.shown_port} is another device now (replugged?) while opening it hung: "
+            "tried again"
+        )
+
+    def _open_hung(self, opening: PendingOpen, now: float, reason: str) -> None:
+        """Rule 4: the pending open outlasted its bound, or the device it was opening changed:
+        given up, kept count of while it still hangs, and tried again at once."""
+        self._closes(opening.abandon(self._watch))  # (a port it opened just now: closed)
+        self._hung.append(opening)
+        self._opening, self._look_at = None, math.inf
         self._do(self.session.open_failed(reason, now))  # once per reason (controller.py)
         self._tried_at = self._reopen_at = now  # the bound was the wait
 
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
-        self._opening = None
+        self._opening, self._look_at = None, math.inf
         if isinstance(result, Exception):
             if not isinstance(result, PortError):
                 log.error(
@@ -403,6 +436,16 @@ class Worker:
                 self._on_audit(action)
             elif isinstance(action, Ask):
                 self._sky.ask(action.question, partial(self._answered, action.generation))
+
+
+def _device_node(path: str) -> tuple[int, int, int, int] | None:
+    """Rule 4: the device a port's path names now (the link followed), or None if it names
+    none: a replug makes a new node (udev removes the old one and links the stable name anew)."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return st.st_rdev, st.st_dev, st.st_ino, st.st_ctime_ns
 
 
 def _unheard(audit: Audit) -> None:

@@ -20,7 +20,6 @@ import threading
 from functools import partial
 from pathlib import Path
 
-import pytest
 import serial
 
 from bridge.app import worker_config
@@ -62,11 +61,6 @@ class WedgedUntilReplugged:
         return open_port(self.tty, spec, baud)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 81: a second hung open is waited for for ever while the first still hangs, "
-    "so an adapter replugged more than OPEN_BOUND_S after it wedged is never tried again",
-)
 def test_an_adapter_replugged_a_minute_after_it_wedged_comes_back(tmp_path: Path) -> None:
     master, slave = os.openpty()
     opener = WedgedUntilReplugged(os.ttyname(slave))

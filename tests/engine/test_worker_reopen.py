@@ -5,8 +5,10 @@ adapter back under its stable name); the times are the worker's own ``now``, fro
 Nothing owed: the back-off (0.5 s doubling to 10 s). A stop owed (a STOP taken while the port
 is out): tried every OWED_RETRY_S instead, and the stop is the first frame once it opens
 (attack 23: the owed stop waited out the back-off, up to 10 s after the adapter was back).
-An open() that hangs is given up after OPEN_BOUND_S and the port tried again, one given up
-left hanging at most (attack 23: a wedged adapter's open was waited for for ever).
+An open() that hangs is given up after OPEN_BOUND_S, doubled for each one given up that still
+hangs, and the port tried again (attack 23: a wedged adapter's open was waited for for ever;
+review 81: so was a second one while the first hung); a replug seen on the path (another device
+node) gives the pending one up at once.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from bridge.app import worker_config
 from bridge.core.model import Stop
 from bridge.protocols.base import ModelSpec
 from bridge.runtime.port import PendingOpen, open_port
-from bridge.runtime.worker import OPEN_BOUND_S, OWED_RETRY_S, Worker
+from bridge.runtime.worker import NODE_LOOK_S, OPEN_BOUND_S, OWED_RETRY_S, Worker
 from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
@@ -138,9 +140,12 @@ class Wedged:
         return port
 
 
-def test_a_hung_open_is_given_up_and_tried_again_leaving_one_hanging_at_most(
+def test_hung_opens_are_given_up_after_a_bound_that_doubles_with_each_still_hanging(
     link: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
+    """Rule 4: each abandoned open still inside its open() doubles the next one's bound, so a
+    driver wedged for good holds a thread per doubling (log of the time), none waited for for
+    ever (review 81)."""
     master, slave = os.openpty()
     wedged = Wedged(os.ttyname(slave))
     settings = RotatorSettings.model_validate(
@@ -154,33 +159,36 @@ def test_a_hung_open_is_given_up_and_tried_again_leaving_one_hanging_at_most(
         worker.guarded(worker.serve, now, set())
         return worker.wants(now)[1]
 
+    def given_up(now: float) -> float:
+        """Served at each time the worker asks for until the pending open is given up: when."""
+        opening = worker._opening
+        while worker._opening is opening:
+            now = served(now)
+        return now
+
     try:
         worker.guarded(worker.begin, START, lambda: None)
         assert served(START) == START + OPEN_BOUND_S  # the first open, given a bound
         wait_until(lambda: len(wedged.gates) == 1, slow(5), "the first open() hanging")
-        now = served(START + OPEN_BOUND_S)  # given up...
-        assert now == START + OPEN_BOUND_S  # ...and tried again at once
-        second_until = served(now)
-        wait_until(lambda: len(wedged.gates) == 2, slow(5), "the second open() hanging")
-        second = worker._opening
-        for _ in range(3):  # the first still hangs: the second is waited for, not given up
-            second_until = served(second_until)
-            assert worker._opening is second
-        assert len(wedged.gates) == 2  # two threads in open(), never more
+        starts = [START]
+        for hanging in (2, 3, 4):
+            starts.append(given_up(starts[-1]))  # given up, and tried again at once
+            served(starts[-1])
+            wait_until(lambda n=hanging: len(wedged.gates) == n, slow(5), "the next open()")
+        gaps = [round(b - a, 6) for a, b in zip(starts, starts[1:], strict=False)]
+        assert gaps == [OPEN_BOUND_S, 2 * OPEN_BOUND_S, 4 * OPEN_BOUND_S]
+        assert len(wedged.gates) == 4  # one thread a doubling, no more
         wedged.gates[0].set()  # the first comes back late, with a port: closed at once
         wait_until(lambda: wedged.ports and not wedged.ports[0].is_open, slow(5), "closed")
-        now = served(second_until)  # now the second is given up, and a third started
-        served(now)
-        wait_until(lambda: len(wedged.gates) == 3, slow(5), "the third open()")
-        wedged.gates[2].set()  # the adapter replugged: this one opens
+        wedged.gates[3].set()  # the adapter replugged: this one opens
         opening = worker._opening
         assert opening is not None
-        wait_until(partial(has_result, opening), slow(5), "the third open() back")
-        served(now)
+        wait_until(partial(has_result, opening), slow(5), "the fourth open() back")
+        served(starts[-1])
         assert select.select([master], [], [], slow(5))[0]
         assert b"AI1;" in os.read(master, 64)  # the controller is asked its bearing again
         hung = [e for e in events if "hung for" in e.message]
-        assert len(hung) == 1  # R/error said it once, for two given up
+        assert len(hung) == 1  # R/error said it once, for three given up
         said = [r for r in caplog.records if "hung for" in r.getMessage()]
         assert [r.levelno for r in said] == [logging.WARNING]
     finally:
@@ -191,3 +199,75 @@ def test_a_hung_open_is_given_up_and_tried_again_leaving_one_hanging_at_most(
         box.close()
         os.close(master)
         os.close(slave)
+
+
+class WedgedOn:
+    """A port opener whose open() of one device (the wedged adapter's) hangs until the test
+    ends, and opens any other device the path names at once."""
+
+    def __init__(self, old: str) -> None:
+        self.old = old
+        self.gate = threading.Event()
+        self.hung = 0
+
+    def __call__(self, path: str, spec: ModelSpec, baud: int | None) -> serial.Serial:
+        if os.path.realpath(path) == self.old:
+            self.hung += 1
+            self.gate.wait(slow(60))  # a guard, past the test's end (not a deadline it judges)
+            raise serial.SerialException("the wedged open let go")
+        return open_port(path, spec, baud)
+
+
+def test_a_replug_seen_on_the_path_gives_a_stretched_hung_open_up_at_once(
+    link: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Rule 4: while an abandoned open still hangs, the next one's bound is doubled, but the
+    stable name linked to a new device (the adapter replugged) is tried again within
+    NODE_LOOK_S, not after the stretched bound."""
+    old_master, old_slave = os.openpty()
+    master, slave = os.openpty()
+    link.symlink_to(os.ttyname(old_slave))  # the wedged adapter
+    opener = WedgedOn(os.ttyname(old_slave))
+    settings = RotatorSettings.model_validate(
+        {"id": "tower", "model": "rotorez", "port": str(link), **FAST_BRIDGE}
+    )
+    box, events = Mailbox(), []
+    worker = Worker(worker_config(settings), box, lambda s: None, events.append, port_opener=opener)
+
+    def served(now: float) -> float:
+        worker.guarded(worker.serve, now, set())
+        return worker.wants(now)[1]
+
+    try:
+        worker.guarded(worker.begin, START, lambda: None)
+        now = served(START)
+        wait_until(lambda: opener.hung == 1, slow(5), "the first open() hanging")
+        now = served(now)  # the bound: given up, and tried again at once
+        served(now)
+        wait_until(lambda: opener.hung == 2, slow(5), "the second open() hanging")
+        second = worker._opening
+        replug_t = now + OPEN_BOUND_S / 2  # within the second's stretched bound
+        while now < replug_t:
+            now = served(now)
+            assert worker._opening is second  # the same device: waited for
+        link.unlink()
+        link.symlink_to(os.ttyname(slave))  # pulled and plugged back in: a new device
+        while worker._opening is second:
+            now = served(now)
+        assert now - replug_t <= NODE_LOOK_S
+        served(now)
+        opening = worker._opening
+        assert opening is not None
+        wait_until(partial(has_result, opening), slow(5), "the new device's open() back")
+        served(now)
+        assert select.select([master], [], [], slow(5))[0]
+        assert b"AI1;" in os.read(master, 64)  # the controller is asked its bearing again
+        assert opener.hung == 2  # the new device was never waited for
+        assert any("another device now" in e.message for e in events)
+    finally:
+        opener.gate.set()
+        worker.guarded(worker.end, START)
+        assert worker.wait_closed(slow(5))
+        box.close()
+        for fd in (old_master, old_slave, master, slave):
+            os.close(fd)
