@@ -50,7 +50,10 @@ Rules:
    is, as tracking's start does (tracking.py rule 5, parts.py rule 10): a turn under way to an
    older target is stopped (``Proposal.halt``), once, as that grid's own target would have
    stopped it (rule 2). Attack 19: a Rotor-EZ turning to an older target, told to follow a
-   partner in a keep-out sector, said so on R/error and turned on 105 degrees.
+   partner in a keep-out sector, said so on R/error and turned on 105 degrees. A turn carried
+   over a lost link that no reading back has shown yet is halted at the step the next one
+   shows it move, the grid not tried again (``StartHalt.owed``, parts.py rule 10; review 70:
+   right after a replug mid-turn, the refusal was said while the rotor turned on 90 degrees).
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
 7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
    and ``last_operator``), with the operator who switched following on if they named
@@ -340,6 +343,8 @@ class Follower:
             return NOTHING
         if self._turned_by_hand(scene):  # rule 1: the session ends it (its targets dropped)
             return Proposal(ended=HAND, busy=True)
+        if self._halt.owed(scene, self._bearing is None):  # rule 5: the first grid refused,
+            return Proposal(halt=True, busy=True)  # the carried turn seen only now
         if heard is None:  # rule 6: following waits for WSJT-X, the rotor is not idle
             return Proposal(busy=True)
         grid = grid_of(heard.grid)

@@ -86,7 +86,13 @@ Rules:
    clock: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
    reading, and a hand in a Rotor-EZ's first brake window was taken for the old turn); not a
    hand's turn the bridge saw begin before the link went (``lost_hand``), nor once the
-   bridge sends a target of its own into it (review 53).
+   bridge sends a target of its own into it (review 53). Readings back for ``carried_seen_s``
+   (the time a rotor turning at its nominal speed, as slow as rule 6 allows for, needs to move
+   more than ``noise_deg`` and a reading's step, plus a poll) that show no move say the lost
+   turn came to rest while the port was out (``lost_still``), though rule 2 waits ``settle_s``
+   to call it still: a turn seen after that is not known to be the lost one, and a refused
+   start's halt owed to it is dropped (parts.py rule 10; review 73, a hand a second after a
+   replug).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -141,6 +147,10 @@ Rules:
    whole range's generous time from the connect is assumed (attack 22: the connect put the
    whole range at the nominal speed alone, no margin, in place of what it knew; a rotor a quarter
    slower was still turning when the next target went, and the box stopped there, unsaid).
+   Whether a turn of the bridge's was under way when the port went (``lost_turning``) is kept
+   over the connect till that time is over or a stop or target goes: the controller may be
+   finishing it by itself (``may_finish_blind``; parts.py rule 10, review 73: a DCU-1's refused
+   start right after a replug halted nothing, and it turned on 90 degrees).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -301,6 +311,9 @@ class Motion:
     # controller finishing a turn by itself, its target dropped with the port), till it rests
     carried: bool = False
     lost_hand: bool = False  # rule 4: the turn lost was a hand's, seen begin with the link up
+    # rule 4: readings back for ``carried_seen_s`` and none showed the lost turn move: it came
+    # to rest meanwhile, and a turn seen after that is not known to be that one
+    lost_still: bool = False
 
 
 class Event(enum.StrEnum):
@@ -341,6 +354,15 @@ def stop_checked(m: Motion) -> Motion:
     return replace(m, stop_sent_t=None)
 
 
+def carried_seen_s(cfg: MotionConfig) -> float:
+    """Rule 4: how long after the first reading back a turn lost with the link, were it still
+    on, shows a move (more than ``noise_deg`` and a reading's step, at the nominal speed as
+    slow as rule 6 allows for) at a reading: none by then, the rotor came to rest while its
+    port was out, though rule 2 calls it still only ``settle_s`` on."""
+    step = cfg.noise_deg + cfg.spec.reading_step_deg
+    return BLIND_SLOW_FACTOR * step / cfg.nominal_speed_deg_s + cfg.poll_margin_s
+
+
 # -- observations ----------------------------------------------------------------------------
 def blind_busy_s(travel_deg: float, cfg: MotionConfig) -> float:
     """Rule 6: how long a turn of ``travel_deg`` is assumed to last without feedback."""
@@ -353,7 +375,8 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         # as generously as a turn sent, and never sooner than the end assumed before
         worst = now + blind_busy_s(cfg.az_span_deg, cfg)
         kept = m.busy_until_t
-        return Motion(state=UNKNOWN, busy_until_t=worst if kept is None else max(kept, worst))
+        busy = worst if kept is None else max(kept, worst)
+        return Motion(state=UNKNOWN, busy_until_t=busy, lost_turning=m.lost_turning)
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,
@@ -473,6 +496,9 @@ def reading(
             changes["progress_t"] = now
     elif m.carried and m.state is not MOVING:  # rule 4: a start's second reading saw no turn
         changes["carried"] = False
+    elif m.lost_turning and not m.lost_still and m.last_move_t is not None:  # rule 4: the
+        if now - m.last_move_t >= carried_seen_s(cfg):  # lost turn, were it on, seen by now
+            changes["lost_still"] = True
     if m.target_deg is not None:  # rule 3: each axis's own progress, from where it last moved
         ref = m.az_from_deg if m.az_from_deg is not None else m.position_deg
         if ref is not None:  # (measured as ``_passing`` moves ``az_from_deg``: the same float)
@@ -710,6 +736,7 @@ def commanded(
             busy_until_t=now + busy,
             assumed_deg=target_deg,
             stop_sent_t=None,
+            lost_turning=False,  # (rule 6: a turn of its own now)
         )
     return replace(
         m,
@@ -769,7 +796,14 @@ def along_travel(a_deg: float, b_deg: float, cfg: MotionConfig) -> float:
 def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
     if not cfg.can_report_position:
         # it may have been turning; from now on it is stopping, then braking
-        return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
+        return replace(
+            m,
+            target_deg=None,
+            stop_sent_t=now,
+            busy_until_t=now,
+            assumed_deg=None,
+            lost_turning=False,
+        )
     return replace(
         m,
         target_deg=None,
@@ -859,6 +893,8 @@ def tick(
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
         if m.target_deg is not None and done_t is not None and now >= done_t + cfg.brake_delay_s:
             m = replace(m, target_deg=None, target_t=None)
+        if m.lost_turning and (m.busy_until_t is None or now >= m.busy_until_t):
+            m = replace(m, lost_turning=False)  # rule 6: the carried turn's time is over
         return m, events
     if m.state is OFFLINE:
         return m, events
@@ -986,6 +1022,21 @@ def may_turn_blind(m: Motion, now: float) -> bool:
     return (
         m.state is UNKNOWN
         and m.target_deg is not None
+        and m.stop_sent_t is None
+        and busy is not None
+        and now < busy
+    )
+
+
+def may_finish_blind(m: Motion, now: float) -> bool:
+    """Rule 6: no feedback, and a turn under way when the link was lost (its target out) that
+    the controller may still be finishing by itself, within the time assumed from the connect,
+    nothing of the bridge's sent since (parts.py rule 10: a refused start halts it)."""
+    busy = m.busy_until_t
+    return (
+        m.state is UNKNOWN
+        and m.lost_turning
+        and m.target_deg is None
         and m.stop_sent_t is None
         and busy is not None
         and now < busy

@@ -72,6 +72,21 @@ Rules:
     halted again at every step). Review 50 (tracking), attack 19 (a tracking start whose wait
     for the pass was refused, and a following start whose first grid was: each said so on
     R/error while a Rotor-EZ turned on some 100 degrees to the older target).
+    Right after a replug mid-turn the turn carried over the lost link (motion.py rule 4) is
+    not seen yet at the start's refusal: the first reading back shows where the rotor is, not
+    whether it moves, and the refusals are not judged again (following's grid, tracking's
+    wait). So the halt is owed (``StartHalt.owed``) and proposed at the step the next reading
+    shows that turn move; the first reading that shows the rotor still instead drops it
+    (``Motion.lost_still``: the turn came to rest while the port was out), so a hand at the
+    panel after that is never halted for it (review 73: d609655e owed the halt until rule 2's
+    rest, a second or more, and stopped a hand begun in that time); nor is a restart's turn
+    (a new session knows of no lost turn; review 73's hand before a restart's second
+    reading). On a controller with no readings (a DCU-1) nothing ever shows the turn: the one
+    under way when the port went, the bridge's own, is taken as going on for the time
+    assumed from the connect (motion.py rule 6, ``may_finish_blind``) and halted at the
+    refusal itself, as it would be without the replug. Review 70: a start right after a
+    replug mid-turn, refused, halted nothing, and the rotor turned on some 95 degrees to the
+    target from before the unplug (review 73: a DCU-1's, 90 degrees, no stop frame).
 """
 
 from __future__ import annotations
@@ -177,30 +192,68 @@ class Before:
 
 
 def turning(scene: Scene) -> bool:
-    """Rule 9: a turn or a slew under way with no stop of the bridge's out (one whose port was
+    """Rule 10: a turn or a slew under way with no stop of the bridge's out (one whose port was
     out, not yet seen to move, may have come to rest: motion.py rule 4, no stop to it); on a
-    controller with no readings (a DCU-1), its own target out with no stop since, within its
-    assumed travel time (motion.py rule 6: it may be turning)."""
+    controller with no readings (a DCU-1), its own target out with no stop since, or a turn
+    under way when its port was lost that it may be finishing by itself, within the assumed
+    travel time (motion.py rule 6: it may be turning)."""
     m = scene.motion
     moving = m.state is mo.MOVING and m.stop_sent_t is None and not m.lost_turning
-    return moving or scene.slewing or mo.may_turn_blind(m, scene.now)
+    now = scene.now
+    return moving or scene.slewing or mo.may_turn_blind(m, now) or mo.may_finish_blind(m, now)
+
+
+def _unseen(m: mo.Motion) -> bool:
+    """Rule 10: a turn carried over a lost link (motion.py rule 4) that no reading back has
+    shown moving nor still yet, nothing of the bridge's sent into it."""
+    return (
+        m.state is mo.MOVING
+        and m.lost_turning
+        and m.carried
+        and not m.lost_still
+        and m.target_deg is None
+        and m.stop_sent_t is None
+    )
 
 
 class StartHalt:
-    """Rule 9: the one halt a start proposes when its first target is refused."""
+    """Rule 10: the one halt a start proposes when its first target is refused; and, while
+    that refusal stands, the one owed to a turn carried over a lost link that no reading back
+    has shown yet, proposed if the next reading shows it move (``owed``)."""
 
     def __init__(self) -> None:
         self._done = False
+        self._owed = False  # the first refused with a carried turn not yet seen
 
     def start(self) -> None:
-        self._done = False
+        self._done = self._owed = False
 
     def wanted(self, scene: Scene, first: bool) -> bool:
         """Whether the refusal of a target (``first``: the start's first) halts the turn under
-        way: the first's, once per start, while a turn or slew goes on."""
+        way: the first's, once per start, while a turn or slew goes on. A turn carried over a
+        lost link not yet seen is owed the halt instead (``owed``)."""
         halt = first and not self._done and turning(scene)
         self._done = self._done or halt
+        self._owed = first and not self._done and _unseen(scene.motion)
         return halt
+
+    def owed(self, scene: Scene, first: bool) -> bool:
+        """At every step after the refusal (the part's own refusals are not judged again:
+        following's grid, tracking's wait): whether the carried turn is seen now, moving with
+        no stop of the bridge's out, before any reading back showed the rotor still, and is
+        halted, once; ``first``: no target of the part's taken since (one that is stops or
+        re-targets it). Dropped at the first reading that shows the rotor still, or once the
+        turn is known to be none, so a hand's turn begun later is never halted for it."""
+        if not self._owed:
+            return False
+        m = scene.motion
+        if not first or self._done or m.lost_still or not m.carried or m.target_deg is not None:
+            self._owed = False
+            return False
+        if m.lost_turning:
+            return False  # (not seen yet: the next reading says)
+        self._owed, self._done = False, True
+        return turning(scene)
 
 
 def turned_by_hand(

@@ -75,7 +75,10 @@ Rules:
    sector said "holding" while a Rotor-EZ turned on to the older target, 120 degrees from the
    sun. Once per start: the stop then takes its course (review 52: a SatEL's slew, stopped
    and waited out silently, was halted again at every step, a stop five times a second and
-   the status "moving" for good).
+   the status "moving" for good). A turn carried over a lost link that no reading back has
+   shown yet is halted at the step the next one shows it move, the wait not judged again
+   (``StartHalt.owed``, parts.py rule 10; review 70: a refused start right after a replug
+   mid-turn said "holding" while the rotor turned on 95 degrees).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
    it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the
@@ -298,6 +301,8 @@ class Tracker:
         if self._turned_by_hand(scene, before):
             self.end("turned by hand")  # rule 1: the front panel is a command too
             return Proposal(ended="turned by hand", busy=True)
+        if self._halt.owed(scene, self._last is None):  # rule 5: the start's first target
+            return Proposal(busy=True, halt=True)  # refused, the carried turn seen only now
         utc = scene.now + scene.wall_offset_s
         if utc < self._utc_seen - CLOCK_BACK_S:  # rule 2: the clock stepped back (NTP)
             self._waited_for = self._sided_for = None  # (a pass not begun by it: wait again)

@@ -12,8 +12,6 @@ step mid-pass is judged again at every step and halts the turn once it is seen: 
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.sky import Body
 from tests.engine.test_attack19_follow_start_refused_grid import (
@@ -51,11 +49,6 @@ def rotorez_turning_away_from_the_partner(v: VirtualRotator) -> None:
     turning_away_from_the_partner(v)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: a follow start right after a replug mid-turn, its partner in a keep-out "
-    "sector, says the refusal while the rotor turns on 90 degrees to the old target",
-)
 def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("rotorez") as v:
         rotorez_turning_away_from_the_partner(v)
@@ -71,11 +64,6 @@ def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() 
         assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 70: a track start right after a replug mid-turn, whose wait for the pass is "
-    "refused, says 'holding' while the rotor turns on 95 degrees to the old target",
-)
 def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds_the_rotor() -> (
     None
 ):

@@ -9,8 +9,6 @@ stop frames at once), and after d609655e a Rotor-EZ's is stopped once a reading 
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import (
     follower_by_a_keep_out,
@@ -20,11 +18,6 @@ from tests.engine.test_review70_refused_start_after_replug import replugged_mid_
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 73: a DCU-1's follow start refused right after a replug mid-turn halts "
-    "nothing, and the rotor turns on some 90 degrees to the target from before the unplug",
-)
 def test_a_dcu1s_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("dcu1") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
