@@ -12,17 +12,10 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 27: a retained G/lock ON at start is refused as if just sent; the "
-    "refusal never says it is retained nor to clear it (Low)",
-)
 def test_a_retained_lock_on_a_groups_topic_is_said_as_retained(rig: Rig) -> None:
     up = rig.add("upper", emu={"start_az_deg": 10})
     low = rig.add("lower", emu={"start_az_deg": 190})

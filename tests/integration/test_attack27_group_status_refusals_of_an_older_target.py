@@ -12,16 +12,9 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 27: after a G/target refused whole, G/status (Home Assistant's attributes) "
-    "still shows the older target's refusals, naming a lock already off (Low)",
-)
 def test_a_group_target_refused_whole_replaces_the_refusals_in_its_status(rig: Rig) -> None:
     rig.add("upper", emu={"start_az_deg": 10})
     rig.add("lower", emu={"start_az_deg": 190})

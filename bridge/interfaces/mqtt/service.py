@@ -492,11 +492,17 @@ class MqttService:
             pub(g.availability, "online" if group_available(statuses) else "offline")
             pub(g.status, group_status_json(group, statuses, refused))
 
-    def _refuse_group(self, group: Group, message: str, what: str, origin: Origin) -> None:
+    def _refuse_group(
+        self, group: Group, message: str, what: str, origin: Origin, target: bool = True
+    ) -> None:
         """A group's command refused before it was split: said once on ``G/error``, and in
         every member's audit trail, as a member's own refused command is (an attack pass: a
-        retained or unreadable ``G/target`` was in no audit trail)."""
+        retained or unreadable ``G/target`` was in no audit trail). A target refused whole
+        is every member's refusal in ``G/status`` too, in place of the older target's
+        (attack 27: the status went on naming a lock since switched off)."""
         self._report_group(group.id, message, what)
+        if target:
+            self._set_group_refused(group, dict.fromkeys(group.member_ids, message))
         said = f"{what} (group {group.id})"
         for member in group.member_ids:
             rot = self._rotators.get(member)
@@ -565,9 +571,13 @@ class MqttService:
         name = f"option {topic.rpartition('/')[2]}" if kind == "option" else kind
         what = pl.describe(name, payload)
         if kind not in GROUP_KINDS:  # rule 10: a rotator's command, which no group takes
-            self._refuse_group(
-                group, self._not_for_groups(group, topic, kind, payload), what, origin
-            )
+            not_ours = self._not_for_groups(group, topic, kind, payload)
+            if retain:  # said as what it is, as a retained G/target is (attack 27)
+                not_ours = (
+                    f"retained command on {topic} ignored: {not_ours} "
+                    "(clear it with an empty retained message)"
+                )
+            self._refuse_group(group, not_ours, what, origin, target=False)
             return
         if kind == "stop":
             if retain and not self._halts.retain_is_live:
@@ -639,8 +649,12 @@ class MqttService:
                 refused[part.member] = exc.message
         if refused:
             self._group_event(group_id, refusals_json(group, what, refused))
-        if refused != self._group_refused.get(group_id, {}):  # a slider's flood: not each time
-            self._group_refused[group_id] = refused
+        self._set_group_refused(group, refused)
+
+    def _set_group_refused(self, group: Group, refused: dict[str, str]) -> None:
+        """The refusals of a group's last target, published when they change (rule 10)."""
+        if refused != self._group_refused.get(group.id, {}):  # a slider's flood: not each time
+            self._group_refused[group.id] = refused
             self._publish_group(group)
 
     def publish_audit(self, rotator_id: str, event: AuditEvent) -> None:
