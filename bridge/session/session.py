@@ -1440,7 +1440,17 @@ class RotatorSession:
             self.wall_offset_s,
             shown,
         )
-        order = Order(self._run, self._taking, self._turn_place, self._lock_place)
+        # the last status's Order while it says the same places: R/status's text keeps what a
+        # reading leaves by its very objects (payloads.py StatusText), and an Order made anew
+        # at every reading made the rest of that text again at every one
+        order = self.status.order
+        if order is None or (order.run, order.taken, order.turn, order.lock) != (
+            self._run,
+            self._taking,
+            self._turn_place,
+            self._lock_place,
+        ):
+            order = Order(self._run, self._taking, self._turn_place, self._lock_place)
         status = st.current(ctl.cfg, seen, now, order)  # (controller.py rule 7)
         if self.lock_unknown:  # (runtime/kept.py rule 10)
             status = replace(status, lock_unknown=True)

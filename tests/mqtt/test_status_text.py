@@ -27,6 +27,7 @@ from bridge.core.model import (
 )
 from bridge.feature import status_blocks
 from bridge.interfaces.mqtt import payloads as pl
+from tests.engine.virtual import VirtualRotator
 
 
 def _iso(t: float) -> str:
@@ -75,8 +76,16 @@ def fresh(status: RotatorStatus, time_unix: float, has_elevation: bool, shows_ra
         if control is None
         else {"holder": control.operator, "until": _iso(control.until_unix)},
         estimated=status.estimated,
-        time=_iso(time_unix),
     )
+    order = status.order
+    if order is not None:
+        doc["order"] = {
+            "run": order.run,
+            "taken": order.taken,
+            "turn": order.turn,
+            "lock": order.lock,
+        }
+    doc["time"] = _iso(time_unix)
     doc.update(last)
     return json.dumps(doc, separators=(",", ":"))
 
@@ -199,3 +208,34 @@ def test_a_reading_that_only_turns_the_rotor_makes_the_rest_once(
     status = replace(status, options={"enable": True})
     assert '"options":{"enable":true}' in text.render(status, T0, False)
     assert len(made) == 2
+
+
+def test_a_sessions_turning_readings_make_the_rest_once_per_state(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The statuses a real session emits (virtual time) while a Rotor-EZ turns from its front
+    panel, no command taken: each is made of the last one's values but the bearing, the
+    order's places too (an Order made anew at every status, the same places in it, made the
+    rest again at every reading: some 8 of the 20 us publishing a reading cost warm,
+    docs/performance.md). The rest is made for the first status and once per state the turn
+    shows (moving, then idle), the text the fresh one every time."""
+    made = []
+    rest = pl._status_rest
+
+    def counted(*args: object) -> tuple[str, str]:
+        made.append(1)
+        return rest(*args)  # type: ignore[arg-type]
+
+    v = VirtualRotator("rotorez", emulator={"speed_deg_s": 4.0})
+    v.run_for(3.0)  # online, idle, options read
+    start = len(v.statuses)
+    monkeypatch.setattr(pl, "_status_rest", counted)
+    text = pl.StatusText(False)
+    v.manual_rotate(90.0)
+    v.run_until(lambda h: not h.truth().is_moving, 200.0, "the turn ends")
+    v.run_for(3.0)
+    turn = [s for _, s in v.statuses[start:]]
+    assert len(turn) > 50  # (a reading each poll while it turned)
+    for n, status in enumerate(turn):
+        assert text.render(status, T0 + n, False) == fresh(status, T0 + n, False, False)
+    assert len(made) <= 3, [s.state for s in turn]
