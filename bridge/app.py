@@ -71,7 +71,7 @@ from bridge.core.text import shown_path
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
-from bridge.interfaces.mqtt.claim import Claim, Instance, Post
+from bridge.interfaces.mqtt.claim import Claim, Instance, Post, installation
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection
 from bridge.interfaces.mqtt.express import Express
@@ -264,7 +264,9 @@ class App:
         groups = {g.id: settings.group_topic(g) for g in settings.groups}
         self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
-        self.me = Instance.me(settings.mqtt.effective_client_id())  # interfaces/mqtt/claim.py
+        self.me = Instance.me(  # interfaces/mqtt/claim.py rule 5: ``installation`` too
+            settings.mqtt.effective_client_id(), installation(os.fsdecode(settings.state_file))
+        )
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
         self._lane_started = False
@@ -320,6 +322,7 @@ class App:
             station=station_time.identity,  # heartbeat.py rule 7
             broker_late=self.client.broker_late,  # service.py rule 12
             instance=self.me.id,  # claim.py rule 5: in each R/info
+            installation=self.me.installation,
         )
         # lastword.py rule 15: a marker sent again at QoS 1; its refusal on both topics said
         self.mqtt.confirm_markers_with(

@@ -15,19 +15,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, slow, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import retained_snapshot
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 82: a station moved to base topic rotor/tower after a crash is refused by "
-    "its own old rotator's rotor/tower/info (its default client id changed with the base topic)",
-)
 def test_a_station_given_its_one_rotators_topic_as_base_runs_after_a_crash(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from bridge.interfaces.mqtt.claim import (
     Instance,
     Post,
@@ -94,6 +96,22 @@ def test_a_rotators_info_is_never_a_bridges_nor_a_bridges_info_a_rotators() -> N
     lone["rotor/bridge/availability"] = b"online"  # a bridge on rotor/bridge, read by one on rotor
     found = standing(ME, "rotor", (Post("rotor/bridge/info"),), lone)
     assert found is not None and (found.base, found.live) == ("rotor/bridge", True)
+
+
+def test_a_stamp_of_this_installation_under_another_instance_id_never_stands() -> None:
+    """Review 82: the default client id changes with the base topic; the stamp's
+    ``installation`` does not. This installation's own ``R/info`` from its run on ``rotor``
+    (another client id) refuses nothing; another installation's, or a stamp naming none,
+    still does."""
+    here = replace(ME, installation="0a1b2c3d4e5f")
+    old = ROTATOR.replace(b'"rotor"}', b'"rotor","installation":"0a1b2c3d4e5f"}')
+    seen = {"rotor/tower/info": old, "rotor/tower/availability": b"online"}
+    assert Instance.stamped(old) is not None
+    assert standing(here, "rotor/tower", POSTS, seen) is None
+    for other in (ROTATOR, old.replace(b"0a1b2c3d4e5f", b"ffffffffffff")):
+        seen["rotor/tower/info"] = other
+        found = standing(here, "rotor/tower", POSTS, seen)
+        assert found is not None and (found.other.id, found.live) == (OTHER.id, True)
 
 
 def test_a_rotator_of_a_bridge_on_this_base_topic_is_left_to_rules_2_and_4() -> None:

@@ -54,8 +54,12 @@ Rules:
    So a live bridge's own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its
    rotator's post, refuses it (review 77: it was read as a rotator's, without availability, and
    taken for gone), and the other way round. Another instance live there refuses this bridge as rule
-   2 does (code 2 at a start, a yield after it ran), naming the topic; its own instance never does
-   (a restart of this installation), nor junk or an older bridge's ``R/info`` without a stamp, nor a
+   2 does (code 2 at a start, a yield after it ran), naming the topic; its own installation never
+   does (a restart; the stamp's ``installation``, a hash of the machine id, host and state file,
+   the same whatever the base topic: review 82, a station killed outright on ``rotor`` and
+   given its one remaining rotator's ``rotor/tower`` as base topic was refused for good by its
+   own ``rotor/tower/info``, stamped with the client id it had on ``rotor``), nor junk or an
+   older bridge's ``R/info`` without a stamp, nor a
    rotator whose bridge's base topic is this bridge's own: a bridge on our base topic is rules 2 and
    4's, by ``B/bridge/info`` (review 77: a station that took its base topic over from a computer
    killed outright was refused for good by that computer's rotators' ``R/info`` and ``online``, left
@@ -83,6 +87,7 @@ Rules:
 from __future__ import annotations
 
 import enum
+import hashlib
 import json
 import os
 import socket
@@ -96,10 +101,13 @@ class Instance:
     host: str
     pid: int
     started_unix: float
+    installation: str = ""  # rule 5: the same across base topics (``installation``); "": none
 
     @staticmethod
-    def me(instance_id: str) -> Instance:
-        return Instance(instance_id, socket.gethostname(), os.getpid(), round(time.time(), 3))
+    def me(instance_id: str, installation: str = "") -> Instance:
+        return Instance(
+            instance_id, socket.gethostname(), os.getpid(), round(time.time(), 3), installation
+        )
 
     def info(self, problems: list[str]) -> str:
         """Rule 1: the retained ``B/bridge/info`` payload."""
@@ -144,8 +152,9 @@ class Instance:
 
     @staticmethod
     def stamped(payload: bytes) -> tuple[Instance, str] | None:
-        """Rule 5: the instance and base topic a rotator's ``R/info`` names (``stamp``); None
-        for anything else (a bridge's info, an older bridge's ``R/info``, junk)."""
+        """Rule 5: the instance (with its ``installation``, when it says one) and base topic a
+        rotator's ``R/info`` names (``stamp``); None for anything else (a bridge's info, an
+        older bridge's ``R/info``, junk)."""
         doc = _json(payload)
         mark = doc.get("bridge") if doc is not None else None
         if not isinstance(mark, dict):
@@ -153,7 +162,16 @@ class Instance:
         iid, base = mark.get("instance"), mark.get("base_topic")
         if not isinstance(iid, str) or not iid or not isinstance(base, str) or not base:
             return None
-        return Instance(iid, "?", 0, 0.0), base
+        where = mark.get("installation")
+        return Instance(iid, "?", 0, 0.0, where if isinstance(where, str) else ""), base
+
+    def same_installation(self, other: Instance) -> bool:
+        """Rule 5: ``other`` is this installation, whatever base topic either ran on."""
+        return (
+            other.id == self.id
+            or bool(self.installation)
+            and (other.installation == self.installation)
+        )
 
     def described(self) -> str:
         if self.host == "?" and not self.pid:  # (rule 5: a rotator's info names the id alone)
@@ -169,9 +187,35 @@ def _json(payload: bytes) -> dict[str, object] | None:
     return doc if isinstance(doc, dict) else None
 
 
-def stamp(instance_id: str, base_topic: str) -> dict[str, str]:
+def stamp(instance_id: str, base_topic: str, installation: str = "") -> dict[str, str]:
     """Rule 5: what each rotator's ``R/info`` says of its bridge, under ``bridge``."""
-    return {"instance": instance_id, "base_topic": base_topic}
+    mark = {"instance": instance_id, "base_topic": base_topic}
+    if installation:
+        mark["installation"] = installation
+    return mark
+
+
+MACHINE_ID = ("/etc/machine-id", "/var/lib/dbus/machine-id")  # rule 5: read for installation
+
+
+def installation(state_file: str) -> str:
+    """Rule 5: this installation's identity, the same whatever its base topic (review 82: the
+    instance id, the default client id, changes with the base topic, and a station given its
+    one rotator's topic as base topic was refused by its own old ``R/info`` there): 12 hex
+    digits of a hash of the machine's id (``/etc/machine-id``: two computers cloned from one
+    image with one host name still differ), the host name and the state file's path (one
+    process per state file, state_store.py rule 7)."""
+    machine = ""
+    for path in MACHINE_ID:
+        try:
+            with open(path, encoding="ascii", errors="replace") as f:
+                machine = f.read(64).strip()
+        except OSError:
+            continue
+        if machine:
+            break
+    key = f"{machine}\n{socket.gethostname()}\n{state_file}".encode(errors="surrogatepass")
+    return hashlib.sha256(key).hexdigest()[:12]
 
 
 class Verdict(enum.Enum):
@@ -274,7 +318,7 @@ def standing(
             found.append(Stand(bridge, post, base, post.state, live, True))
             continue
         mark = Instance.stamped(info)
-        if mark is None or mark[0].id == me.id or mark[1] == base_topic:
+        if mark is None or me.same_installation(mark[0]) or mark[1] == base_topic:
             continue  # (a rotator of a bridge on this base topic: rules 2 and 4 judge it)
         live = (seen.get(post.availability) or b"").strip() == b"online"
         found.append(Stand(mark[0], post, mark[1], post.availability, live, False))

@@ -216,6 +216,7 @@ class MqttService:
         station: str | None = None,
         broker_late: Callable[[], float | None] | None = None,
         instance: str | None = None,
+        installation: str = "",
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay.
@@ -223,6 +224,7 @@ class MqttService:
         (claim.py rule 5: ``Instance.stamp``)."""
         self.topics = topics
         self._instance = instance
+        self._installation = installation  # (claim.py rule 5: its ``installation``)
         self._publisher = publisher
         self._wall = wall
         self._stamp_clock = wall if stamp_clock is None else stamp_clock  # rule 9
@@ -284,7 +286,9 @@ class MqttService:
             rotator.can_track,
             console,
             rotator.id,
-            None if self._instance is None else stamp(self._instance, self.topics.base),
+            None
+            if self._instance is None
+            else stamp(self._instance, self.topics.base, self._installation),
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 
