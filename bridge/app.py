@@ -303,7 +303,8 @@ class App:
                 settings.mqtt.base_topic,
                 self.topics.bridge_info,
                 self.topics.bridge_hello,
-                tuple(Post(p) for p in self.topics.posts()),  # claim rule 5
+                tuple(Post(p) for p in self.topics.posts())  # claim rule 5
+                + tuple(Post(p, above=True) for p in self.topics.above()),
             ),
             on_refused=self._refused,
             fence_topic=self.topics.bridge_fence,  # client.py rule 16

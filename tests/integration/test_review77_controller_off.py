@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.integration.test_attack18_base_topic_under_a_rotator import (
     station_on_rotor,
     station_on_tower,
@@ -22,11 +20,6 @@ from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 77: a live bridge whose rotator's controller is switched off is taken for "
-    "gone by claim rule 5; a bridge on that rotator's topic runs, and one target turns both",
-)
 def test_a_bridge_on_a_live_bridges_rotator_whose_controller_is_off_never_turns_on_its_targets(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -114,6 +114,31 @@ def test_a_stamp_of_this_installation_under_another_instance_id_never_stands() -
         assert found is not None and (found.other.id, found.live) == (OTHER.id, True)
 
 
+def test_a_rotator_offline_stands_live_when_its_bridge_above_says_online() -> None:
+    """Review 77: a live bridge's rotator whose controller is off says ``offline``; the bridge
+    info above (``rotor/bridge/info``, read on an ``above`` post) naming the stamp's instance,
+    ``online`` beside it, makes it live. Another instance's info there, or its state not
+    ``online``, does not; and what stands above never refuses by itself."""
+    posts = (*POSTS, Post("rotor/bridge/info", above=True))
+    off = {"rotor/tower/info": ROTATOR, "rotor/tower/availability": b"offline"}
+    above = {"rotor/bridge/info": OTHER.info([]).encode(), "rotor/bridge/state": b"online"}
+    found = standing(ME, "rotor/tower", posts, {**off, **above})
+    assert found is not None and (found.other.id, found.beside, found.live) == (
+        OTHER.id,
+        "rotor/bridge/state",
+        True,
+    )
+    assert "rotor/bridge/state says online" in refusal_on(found)
+    stranger = Instance("rotor-else-000000", "else", 1, 1.0).info([]).encode()
+    for seen in (
+        {**off, **above, "rotor/bridge/info": stranger},
+        {**off, **above, "rotor/bridge/state": b"offline"},
+    ):
+        found = standing(ME, "rotor/tower", posts, seen)
+        assert found is not None and not found.live
+    assert standing(ME, "rotor/tower", posts, above) is None  # above alone refuses nothing
+
+
 def test_a_rotator_of_a_bridge_on_this_base_topic_is_left_to_rules_2_and_4() -> None:
     """Review 77: a computer killed outright on ``rotor`` left its rotators' ``R/info`` and
     ``online``; the station that took ``rotor`` over (its own ``B/bridge/info`` there now) is

@@ -40,46 +40,50 @@ Rules:
 5. Another bridge on this one's topics, above or below them (attack 18: a bridge on ``rotor/tower``
    beside a live bridge on ``rotor`` with a rotator ``tower`` started, and one target turned both
    rotors). Each rotator's retained ``R/info`` says, under ``bridge`` (``stamp``), its bridge's
-   instance and base topic; never in the bridge info's own shape, so rules 2 and 4 never take it for
-   a bridge's info (review 77: a bridge on ``rotor/bridge`` put its one rotator's ``R/info`` on a
-   live bridge's ``rotor/bridge/info``, read as a second bridge started at 0, and the live one
+   instance and base topic; never in the bridge info's own shape, so rules 2 and 4 never take it
+   for a bridge's info (review 77: a bridge on ``rotor/bridge`` put its one rotator's ``R/info`` on
+   a live bridge's ``rotor/bridge/info``, read as a second bridge started at 0, and the live one
    yielded). The first look (rule 2: before anything retained goes out, command topics gated) also
    reads, inside this bridge's own topics only, the ``posts`` where another bridge would say who it
    is: ``X/info`` for each rotator's and group's root and the base topic itself (a bridge whose
    rotator's topic is one of ours), and ``R/bridge/info`` for each rotator's and group's root under
    another name than the base topic (a bridge whose base topic is one of our rotators' or groups';
-   review 77: a bridge with a group ``tower`` started beside a live bridge on ``rotor/tower``). What
-   stands on a post says what it is: a bridge's info (on ``Y/bridge/info``: a bridge on ``Y``) is
-   live by ``Y/bridge/state`` beside it, its last will; a rotator's by ``X/availability`` beside it.
-   So a live bridge's own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its
+   review 77: a bridge with a group ``tower`` started beside a live bridge on ``rotor/tower``).
+   What stands on a post says what it is: a bridge's info (on ``Y/bridge/info``: a bridge on ``Y``)
+   is live by ``Y/bridge/state`` beside it, its last will; a rotator's by ``X/availability`` beside
+   it. So a live bridge's own ``rotor/bridge/info``, read by a bridge on ``rotor/bridge`` as its
    rotator's post, refuses it (review 77: it was read as a rotator's, without availability, and
-   taken for gone), and the other way round. Another instance live there refuses this bridge as rule
-   2 does (code 2 at a start, a yield after it ran), naming the topic; its own installation never
-   does (a restart; the stamp's ``installation``, a hash of the machine id, host and state file,
-   the same whatever the base topic: review 82, a station killed outright on ``rotor`` and
-   given its one remaining rotator's ``rotor/tower`` as base topic was refused for good by its
-   own ``rotor/tower/info``, stamped with the client id it had on ``rotor``), nor junk or an
-   older bridge's ``R/info`` without a stamp, nor a
-   rotator whose bridge's base topic is this bridge's own: a bridge on our base topic is rules 2 and
-   4's, by ``B/bridge/info`` (review 77: a station that took its base topic over from a computer
-   killed outright was refused for good by that computer's rotators' ``R/info`` and ``online``, left
-   retained, once one of them was configured again). An instance is gone on a base topic where a
-   bridge post says it is not online (its last will, its clean stop), there alone, whatever its
-   rotators of that base topic still say (a bridge killed on ``rotor/tower/x`` leaves its rotator's
-   availability ``online``; review 77: one set of gone ids for every place took a live station on
-   ``rotor`` for gone by its old, offline bridge state on ``rotor/tower``, where it had run before);
-   so is a rotator that said ``offline`` (a clean stop): said in the log, never refused. Why only
-   our own topics: an earlier try read the bridge info above the base topic, outside what the
+   taken for gone), and the other way round. Another instance live there refuses this bridge as
+   rule 2 does (code 2 at a start, a yield after it ran), naming the topic; its own installation
+   never does (a restart; the stamp's ``installation``, a hash of the machine id, host and state
+   file, the same whatever the base topic: review 82, a station killed outright on ``rotor`` and
+   given its one remaining rotator's ``rotor/tower`` as base topic was refused for good by its own
+   ``rotor/tower/info``, stamped with the client id it had on ``rotor``), nor junk or an older
+   bridge's ``R/info`` without a stamp, nor a rotator whose bridge's base topic is this bridge's
+   own: a bridge on our base topic is rules 2 and 4's, by ``B/bridge/info`` (review 77: a station
+   that took its base topic over from a computer killed outright was refused for good by that
+   computer's rotators' ``R/info`` and ``online``, left retained, once one of them was configured
+   again). An instance is gone on a base topic where a bridge post says it is not online (its last
+   will, its clean stop), there alone, whatever its rotators of that base topic still say (a bridge
+   killed on ``rotor/tower/x`` leaves its rotator's availability ``online``; review 77: one set of
+   gone ids for every place took a live station on ``rotor`` for gone by its old, offline bridge
+   state on ``rotor/tower``, where it had run before); so is a rotator that said ``offline`` (a
+   clean stop): said in the log, never refused, unless its bridge is live: the look reads
+   ``A/bridge/info`` and ``A/bridge/state`` for each topic ``A`` above the base topic (``above``
+   posts), and a bridge info there naming the stamp's instance, ``online`` beside it, makes the
+   stamp live whatever the rotator says (review 77: a live bridge whose rotator's controller is
+   switched off, ``offline``, was taken for gone and a second bridge ran on its topics). What
+   stands above never refuses by itself nor takes anything for gone. Why posts on our own topics
+   only: an earlier try read the bridge info above the base topic as a post, outside what the
    broker's ACL gives this bridge, and a client kept off our topics ended the bridge with a forged
    info there, and a refused bridge's leftovers there refused the older bridge for good; here a
-   refused bridge has published nothing retained, and whatever the look reads only a client the ACL
-   lets write our own topics could forge. Misjudged: a bridge killed outright above ours leaves its
-   rotator's availability ``online`` and refuses this one until it is started and stopped again, or
-   that topic deleted (the refusal says so). Not seen (review 77): a live bridge whose rotator's
-   controller does not answer, switched off between sessions or not yet answered after a start (its
-   availability ``offline``: nothing on our own topics says that bridge is live, its
-   ``B/bridge/state`` lies above ours); a bridge started on a live bridge's group topic ``B/<group
-   id>`` (a group publishes no info, and a ``G/info`` would read as a removed rotator's,
+   refused bridge has published nothing retained, and what refuses needs a stamp on our own topics,
+   which only a client the ACL lets write them could forge (one above only vouches for it).
+   Misjudged: a bridge killed outright above ours leaves its rotator's availability ``online`` and
+   refuses this one until it is started and stopped again, or that topic deleted (the refusal says
+   so). Not seen (review 77): a live bridge whose rotator's controller does not answer where the
+   ACL denies this bridge the topics above; a bridge started on a live bridge's group topic
+   ``B/<group id>`` (a group publishes no info, and a ``G/info`` would read as a removed rotator's,
    interfaces/mqtt/stale.py rule 4, and as a rotator to a remote; the group's bridge started second
    is refused); two bridges that start at the same moment (no live rule 4 here).
 """
@@ -258,9 +262,13 @@ class Post:
     """Rule 5: a topic ``X/info`` where another bridge would say who it is on this bridge's
     topics. What stands there says what it is: a bridge's info (``X`` is its ``B/bridge``; live
     by ``X/state``, its last will) or a rotator's (``X`` is its root; live by
-    ``X/availability``)."""
+    ``X/availability``). One ``above`` (``A/bridge/info`` for each topic ``A`` above the base
+    topic) is no post: what stands there never refuses by itself, it only says that the bridge
+    a rotator's stamp names is live (review 77: its controller off, the rotator says
+    ``offline``)."""
 
     info: str
+    above: bool = False
 
     @property
     def state(self) -> str:
@@ -271,8 +279,10 @@ class Post:
         return f"{self.info.rsplit('/', 1)[0]}/availability"
 
     @property
-    def topics(self) -> tuple[str, str, str]:
+    def topics(self) -> tuple[str, ...]:
         """What the first look reads for this post."""
+        if self.above:
+            return self.info, self.state
         return self.info, self.state, self.availability
 
     @property
@@ -306,7 +316,7 @@ def standing(
     found: list[Stand] = []
     for post in posts:
         info = seen.get(post.info)
-        if not info:
+        if not info or post.above:
             continue
         bridge, base = Instance.parse(info), post.bridge_base
         if bridge is not None:
@@ -320,19 +330,30 @@ def standing(
         mark = Instance.stamped(info)
         if mark is None or me.same_installation(mark[0]) or mark[1] == base_topic:
             continue  # (a rotator of a bridge on this base topic: rules 2 and 4 judge it)
-        live = (seen.get(post.availability) or b"").strip() == b"online"
-        found.append(Stand(mark[0], post, mark[1], post.availability, live, False))
+        beside, live = post.availability, (seen.get(post.availability) or b"").strip() == b"online"
+        if not live and _vouched(mark[0], mark[1], seen):  # (its controller off)
+            beside, live = f"{mark[1]}/bridge/state", True
+        found.append(Stand(mark[0], post, mark[1], beside, live, False))
     for stand in found:
         if stand.live and (stand.other.id, stand.base) not in gone:
             return stand
     return replace(found[0], live=False) if found else None
 
 
+def _vouched(other: Instance, base: str, seen: dict[str, bytes]) -> bool:
+    """Rule 5: the bridge info on ``base`` (read on an ``above`` post, or a post) names
+    ``other`` and its state beside it says ``online``: that bridge is live whatever its
+    rotator says (its controller switched off)."""
+    info = Instance.parse(seen.get(f"{base}/bridge/info") or b"")
+    state = (seen.get(f"{base}/bridge/state") or b"").strip()
+    return info is not None and info.id == other.id and state == b"online"
+
+
 def refusal_on(stand: Stand) -> str:
     """Rule 5's error: another bridge on one of this bridge's topics."""
     why = (
         f"{stand.beside} says online"
-        if stand.bridge
+        if stand.bridge or not stand.beside.endswith("/availability")
         else f"{stand.beside} says online (killed outright, a bridge leaves it so: then start "
         "that bridge and stop it, or delete that retained topic)"
     )

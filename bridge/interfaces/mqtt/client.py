@@ -860,12 +860,18 @@ class MqttClient(Connection):
         denial is no problem (rule 17)."""
         if self._look_only is None:
             read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
+            above = {t for p in look.claim.posts if p.above for t in p.topics}
             posted = (t for p in look.claim.posts for t in p.topics)
             self._look_only = frozenset(t for t in posted if not read(t))
             self.optional(
                 {
-                    t: "another bridge whose base topic is one of this bridge's rotators' topics "
-                    "is not seen there (interfaces/mqtt/claim.py rule 5)"
+                    t: (
+                        "a live bridge on the topic above whose rotator's controller is off is "
+                        "taken for gone (interfaces/mqtt/claim.py rule 5)"
+                        if t in above
+                        else "another bridge whose base topic is one of this bridge's rotators' "
+                        "topics is not seen there (interfaces/mqtt/claim.py rule 5)"
+                    )
                     for t in self._look_only
                 }
             )

@@ -346,6 +346,13 @@ class Topics:
         found += [RotatorTopics(x).info for x in roots]
         return found
 
+    def above(self) -> list[str]:
+        """claim.py rule 5: ``A/bridge/info`` for each topic ``A`` above the base topic, where a
+        bridge whose rotator's topic is one of ours says who it is and, beside it, whether it is
+        live (read only to vouch for that rotator's stamp: its controller off, review 77)."""
+        levels = self.base.split("/")
+        return [Topics("/".join(levels[:n]), {}).bridge_info for n in range(len(levels) - 1, 0, -1)]
+
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
         """Map an inbound topic to (rotator id, command, argument), or None if it is not ours:
         the first rotator, in their order, whose core command, registered feature's command or
