@@ -691,7 +691,7 @@ class App:
         clear = self.client.clear_retained
 
         def on_message(topic: str, payload: bytes, retain: bool) -> bool:
-            doomed = stale.stale(topic) if retain and payload else []
+            doomed = stale.stale(topic, payload) if retain and payload else []
             for t in doomed:
                 clear(t)
             return bool(doomed)

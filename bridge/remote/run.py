@@ -57,7 +57,7 @@ from bridge.core.text import shown_path
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S, StationTime
-from bridge.interfaces.mqtt.payloads import one_line
+from bridge.interfaces.mqtt.payloads import is_group_info, one_line
 from bridge.interfaces.mqtt.remote import RemoteLink, Standing
 from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.interfaces.rotctld import RotctldServer
@@ -280,7 +280,7 @@ class Remote:
                 single_seen = single_seen or now
                 if now - single_seen >= ONE_ROTATOR_GRACE_S:
                     topics = one
-            ids = self.station.described(view.topics())
+            ids = self._rotator_ids()
             if topics == one and own is None and ids:  # rule 2: one of them is a leftover
                 raise StartError(
                     f"the station has rotators {', '.join(sorted(ids))} and one more on "
@@ -318,7 +318,7 @@ class Remote:
         s = self.settings
         rotators = list(dict.fromkeys(self.rotators))  # (two endpoints onto one: shown once)
         known = {rot.topics for rot in rotators}
-        for rid in self.station.described(self.view.topics()):
+        for rid in self._rotator_ids():
             topics = self.station.rotator(rid)
             if topics not in known:
                 more = self._described(rid, topics)
@@ -393,6 +393,12 @@ class Remote:
         reckoned = None if link is None else link.station_clock.now_unix()
         return time.time() if reckoned is None else reckoned
 
+    def _rotator_ids(self) -> list[str]:
+        """The ids of the station's rotators the view holds a ``B/<id>/info`` of (rule 2), but a
+        group's ``G/info`` (it names its bridge: claim.py rule 5), which is no rotator."""
+        ids = self.station.described(list(self.view.topics()))
+        return [r for r in ids if not is_group_info(self.view.get(self.station.rotator(r).info))]
+
     def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
         """A station rotator no endpoint names, for the console alone (None: not usable)."""
         try:
@@ -410,7 +416,7 @@ class Remote:
             return (
                 f"cannot reach the station's broker at {where}: {self.link.failure or 'no answer'}"
             )
-        ids = self.station.described(list(self.view.topics()))
+        ids = self._rotator_ids()
         looked = (own or self.station.rotator(None)).info
         hint = (
             f"; the station has rotators {', '.join(ids)}: name one in endpoints.rotator"

@@ -6,8 +6,8 @@ its rotator's target too. Nothing of the group names its bridge there (``G/statu
 ``G/availability`` only), so the second bridge starts, in either order, and one target turns
 the group's two rotors and the other bridge's rotor: attack 18's clash, through a group.
 Fixed for the group's bridge started second (rule 5 reads a group's root as a rotator's: the
-other's ``rotor/tower/bridge/info`` and ``online`` refuse it); not seen, documented, the
-other way round."""
+other's ``rotor/tower/bridge/info`` and ``online`` refuse it), and the other way round (the
+group's ``G/info`` names its bridge, ``G/availability`` beside it)."""
 
 from __future__ import annotations
 
@@ -40,14 +40,7 @@ def running_or_refused(b: Rig, app: App) -> None:
 @pytest.mark.parametrize(
     "order",
     [
-        pytest.param(
-            "group first",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="review 77: a group publishes no info: a bridge on a live bridge's "
-                "group topic runs, and one target turns both (claim rule 5: not seen)",
-            ),
-        ),
+        "group first",  # fixed: the group's G/info names its bridge (claim rule 5)
         "group last",  # fixed: claim rule 5 reads a group's root as a rotator's
     ],
 )

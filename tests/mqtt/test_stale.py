@@ -98,10 +98,13 @@ def test_a_rotator_replaced_by_a_group_of_its_id_leaves_no_ghost() -> None:
         {"rotor/stack"},
     )
     assert "rotor/stack/info" in stale.subscriptions
-    doomed = stale.stale("rotor/stack/info")
-    for leaf in ("info", "bearing", "state", "lock/state", "presets", "control"):
+    doomed = stale.stale("rotor/stack/info", b'{"id":"stack","model":"gs232b"}')
+    for leaf in ("bearing", "state", "lock/state", "presets", "control"):
         assert f"rotor/stack/{leaf}" in doomed
     assert "rotor/stack/status" not in doomed and "rotor/stack/availability" not in doomed
+    assert "rotor/stack/info" not in doomed  # (the group's own G/info is put over it)
+    own = b'{"group":"stack","name":"Stack","members":["a","b"]}'  # (claim rule 5)
+    assert stale.stale("rotor/stack/info", own) == []
     assert stale.stale("rotor/stack/option/jam/state") == ["rotor/stack/option/jam/state"]
     assert stale.stale("rotor/stack/availability") == []  # (the group's own)
     assert stale.stale("rotor/a/option/jam/state") == []

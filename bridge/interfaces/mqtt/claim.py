@@ -82,10 +82,13 @@ Rules:
    Misjudged: a bridge killed outright above ours leaves its rotator's availability ``online`` and
    refuses this one until it is started and stopped again, or that topic deleted (the refusal says
    so). Not seen (review 77): a live bridge whose rotator's controller does not answer where the
-   ACL denies this bridge the topics above; a bridge started on a live bridge's group topic
-   ``B/<group id>`` (a group publishes no info, and a ``G/info`` would read as a removed rotator's,
-   interfaces/mqtt/stale.py rule 4, and as a rotator to a remote; the group's bridge started second
-   is refused); two bridges that start at the same moment (no live rule 4 here).
+   ACL denies this bridge the topics above; two bridges that start at the same moment (no live
+   rule 4 here). A group's ``G/info`` is stamped as a rotator's ``R/info`` is
+   (payloads.py ``group_info_json``), ``G/availability`` beside it: a bridge started on a live
+   bridge's group topic ``B/<group id>`` is refused by it (review 77: a group published no info,
+   and that bridge ran), as the group's bridge started second is; ``is_group_info`` keeps it
+   from reading as a removed rotator's (interfaces/mqtt/stale.py rule 4) or a rotator to a
+   remote.
 """
 
 from __future__ import annotations

@@ -86,6 +86,28 @@ LOGGED_CHARS = 200  # service.py rule 4: of a command or a reason, in a log line
 KIND_CHARS = 80  # describe: of a command's kind and argument (an option's name) echoed back
 
 
+def group_info_json(
+    group_id: str, name: str, members: tuple[str, ...], bridge: dict[str, str] | None
+) -> str:
+    """``G/info``: a group (``group``: its id), its name and members, and its bridge's stamp
+    (claim.py rule 5: a bridge started on a live bridge's group topic is refused by it, review
+    77); never a rotator's (``is_group_info``)."""
+    doc: dict[str, object] = {"group": group_id, "name": name, "members": list(members)}
+    if bridge is not None:
+        doc["bridge"] = bridge
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def is_group_info(payload: bytes | None) -> bool:
+    """Whether ``payload`` is a group's ``G/info`` (``group_info_json``), not a rotator's
+    ``R/info``: a remote finds no rotator there, and stale.py rule 4 no removed rotator."""
+    try:
+        doc = json.loads(payload or b"")
+    except (ValueError, RecursionError):
+        return False
+    return isinstance(doc, dict) and isinstance(doc.get("group"), str)
+
+
 def one_line(text: str) -> str:
     """What a sender wrote, for a log line (service.py rule 4): what is not printable escaped
     (no payload starts a log line of its own), cut short."""

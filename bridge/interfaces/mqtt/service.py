@@ -302,8 +302,14 @@ class MqttService:
         self._halts.fence_carried(rotator_id, lock)
 
     def attach_group(self, group: Group) -> None:
-        """Rule 10: a group of attached rotators."""
+        """Rule 10: a group of attached rotators; its ``G/info`` names its bridge (claim.py rule
+        5: a bridge started on its topic is refused)."""
         self._groups[group.id] = group
+        mark = None
+        if self._instance is not None:
+            mark = stamp(self._instance, self.topics.base, self._installation)
+        info = pl.group_info_json(group.id, group.name, group.member_ids, mark)
+        self._publisher.publish_retained(self.topics.group(group.id).info, info)
 
     def add_feature(
         self,

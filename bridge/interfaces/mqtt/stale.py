@@ -30,9 +30,11 @@ Rules:
    once on the base topic), nor is anything under ``B/bridge``.
 4. A rotator removed and a group given its id shares its root, whose availability
    is then the group's: the rotator's bearing, state, lock, options and ``R/info`` (by which a
-   remote finds rotators) stayed for ever, a ghost rotator (a review). A group's ``G/info`` (a
-   group publishes none) tells a rotator was there: its topics that a group does not publish
-   are deleted; an option state under a group's root is deleted by itself.
+   remote finds rotators) stayed for ever, a ghost rotator (a review). A rotator's ``R/info`` on
+   a group's root (not the group's own ``G/info``, payloads.py ``is_group_info``: it names its
+   bridge, claim.py rule 5) tells a rotator was there: its topics that a group does not publish
+   are deleted (``G/info`` itself is the group's, put over it); an option state under a group's
+   root is deleted by itself.
 5. A rotator still configured keeps its root, but not every state topic a feature published
    there: one it no longer has (a station taken out: ``R/tracking``; ``[wsjtx]`` or the station:
    ``R/follow/state``; bridge/feature.py ``StateTopic.needs``) is published no more, and its
@@ -64,6 +66,7 @@ Rules:
 from __future__ import annotations
 
 from bridge.feature import registered
+from bridge.interfaces.mqtt.payloads import is_group_info
 from bridge.interfaces.mqtt.topics import GroupTopics, RotatorTopics, Topics
 
 
@@ -99,7 +102,7 @@ class StaleTopics:
             *sorted(self._unpublished - self._owned),
         ]
 
-    def stale(self, topic: str) -> list[str]:
+    def stale(self, topic: str, payload: bytes | None = None) -> list[str]:
         """Rule 1: what ``topic`` (read on ``subscriptions``) leaves to delete: every retained
         topic a rotator or a group publishes under a root no longer configured, for its
         availability; the option state itself, for one of its options' states; a configured
@@ -111,6 +114,8 @@ class StaleTopics:
             self._bridges.add(head)  # rule 3
             return []
         if topic.endswith("/info") and topic[: -len("/info")] in self._groups:  # rule 4
+            if is_group_info(payload):
+                return []  # (the group's own, claim.py rule 5)
             return self._rotator_only(topic[: -len("/info")])
         root, leaf = self._root(topic)
         if root in self._groups and leaf == "option":  # rule 4

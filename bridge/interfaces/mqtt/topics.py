@@ -157,6 +157,11 @@ class GroupTopics:
     def error(self) -> str:
         return f"{self.root}/error"
 
+    @property
+    def info(self) -> str:
+        """The group's info, its bridge's stamp in it (claim.py rule 5)."""
+        return f"{self.root}/info"
+
 
 @dataclass(frozen=True)
 class DiscoveryTopics:
@@ -329,7 +334,7 @@ class Topics:
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.info]
             subs += [t.feature(s.suffix) for f in self.features for s in f.states]
         for g in self._groups.values():
-            subs += [g.status, g.availability]
+            subs += [g.status, g.availability, g.info]
         return subs
 
     def posts(self) -> list[str]:
