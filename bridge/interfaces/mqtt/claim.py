@@ -125,6 +125,8 @@ class Instance:
             "started": self.started_unix,
             "problems": problems,
         }
+        if self.installation:  # (rule 5: as each rotator's stamp says it)
+            doc["installation"] = self.installation
         return json.dumps(doc, separators=(",", ":"))
 
     @staticmethod
@@ -150,11 +152,13 @@ class Instance:
             started_unix = float(started)
         except OverflowError:
             return None
+        where = doc.get("installation")
         return Instance(
             iid,
             host if isinstance(host, str) else "?",
             pid if isinstance(pid, int) and not isinstance(pid, bool) else 0,
             started_unix,
+            where if isinstance(where, str) else "",
         )
 
     @staticmethod
