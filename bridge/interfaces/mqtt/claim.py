@@ -9,8 +9,8 @@ against each other for ever, and each deletes the other's Home Assistant discove
 Rules:
 1. Each bridge says who it is, retained, on ``B/bridge/info``: its instance id (the MQTT
    client id: unique per installation and stable across its restarts,
-   MqttSettings.effective_client_id), host, process id and start time, with the problems the
-   broker made (client.py rule 11).
+   MqttSettings.effective_client_id), host, process id and start time, and its installation
+   (rule 5: ``installation``), with the problems the broker made (client.py rule 11).
 2. First look: on every connect, before it publishes or deletes anything, the bridge reads the
    retained ``B/bridge/info`` and ``B/bridge/state`` the broker holds. Another instance's
    info with the state ``online``: that bridge is live, and this one refuses to run (exit code
