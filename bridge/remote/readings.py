@@ -366,7 +366,9 @@ class StatusOrder(NamedTuple):
     """``R/status``'s word on a remote's held halts (interfaces/mqtt/remote.py rule 10): its
     ``order`` (the station's run, the newest place taken, the turn's place, the lock word's
     place) and whether the rotor has somewhere to turn to (a target, tracking or following:
-    a rotor coasting to a stop with none has taken the stop) and whether the lock is ON."""
+    a rotor coasting to a stop with none has taken the stop), whether the lock is ON and
+    whether the status knows it (``lock_known``: not while ``lock_unknown``, the state file
+    silent and the broker's lock state not read yet)."""
 
     run: str
     taken: int
@@ -374,6 +376,7 @@ class StatusOrder(NamedTuple):
     lock: int
     turning: bool
     locked: bool
+    lock_known: bool = True
 
 
 def status_order(payload: bytes) -> StatusOrder | None:
@@ -395,7 +398,8 @@ def status_order(payload: bytes) -> StatusOrder | None:
         or doc.get("following") is not None
     )
     run, taken, turn, lock = order.run, order.taken, order.turn, order.lock
-    return StatusOrder(run, taken, turn, lock, turning, doc.get("locked") is True)
+    locked, lock_known = doc.get("locked") is True, doc.get("lock_unknown") is not True
+    return StatusOrder(run, taken, turn, lock, turning, locked, lock_known)
 
 
 def _order(value: object) -> Order | None:

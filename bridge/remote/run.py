@@ -370,6 +370,9 @@ class Remote:
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
         self._statuses[topics.status] = topics
+        said = self.view.get(topics.status)  # (read before this rotator was known: its order,
+        if said is not None:  # what a halt asked from now is stamped with)
+            self.link.read_status(topics.status, said)
         self._errors[topics.error] = rid
         made = self._made[topics] = RemoteRotator(
             rid,
@@ -457,11 +460,14 @@ def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:
 def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
     """A rotator's ``R/status`` on its halts (interfaces/mqtt/remote.py rule 10): a STOP on
     ``stop`` ends the turn shown, from its place (``order.turn``); a lock ON on ``lock`` ends
-    the lock OFF, from the lock word's place (``order.lock``); None for a status without an
-    ``order`` (no halt is held for it)."""
+    the lock OFF, from the lock word's place (``order.lock``; 0 in a run that took none: the
+    lock the state file kept across a restart), and is not judged by a status that does not
+    know the lock (``lock_unknown``); None for a status without an ``order`` (no halt is held
+    for it)."""
     said = status_order(payload)
     if said is None:
         return None
+    unsaid = frozenset() if said.lock_known else frozenset({(lock, b"ON")})
     return Standing(
         said.run,
         said.taken,
@@ -469,4 +475,5 @@ def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
             ((stop, b"stop"), said.turn if said.turning else None),
             ((lock, b"ON"), None if said.locked else said.lock),
         ),
+        unsaid,
     )

@@ -37,11 +37,6 @@ def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
     yield from killable_station(rig, route, emu={"start_az_deg": START_AZ, "jitter_deg": 0})
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a held lock ON is dropped at the first status of the station's next "
-    "run, though the lock OFF it was asked against outlives the restart",
-)
 def test_a_lock_on_held_over_a_station_restart_mid_partition_still_locks_it(
     station: Rig,
     route: CuttableLink,  # noqa: F811

@@ -135,14 +135,20 @@ Rules:
    ``taken``; the place of the command the turn shown comes from, ``turn``; of the last lock
    word, ``lock``: core/model.py ``Order``). A halt is stamped with the ``taken`` its
    rotator's last status (replayed or not) showed when it was asked (the same halt sent
-   again by this link keeps its stamp; pressed again, it is stamped anew). A status as
-   published (``live``; remote/run.py's ``_proof`` reads it) then judges it: a STOP is done
-   (no longer held) once a status shows no turn (a target, tracking or following; a rotor
-   coasting to a stop without one has taken it), or a turn from a place after the stamp
-   (a newer command, this remote's or another front end's, wins: review 79, an old STOP
-   sent again stopped Home Assistant's later turn), or another run (a restart ends every
-   turn); a lock ON is done once a status shows the lock ON, or a lock word after the stamp
-   (a lock OFF at the tower: review 79, undone by an old lock ON), or another run. What was
+   again by this link keeps its stamp; pressed again, it is stamped anew; a rotator's
+   status read before the remote knew the rotator, its replay on subscribing, counts too:
+   ``read_status``). A status as published (``live``; remote/run.py's ``_proof`` reads it)
+   then judges it: a STOP is done (no longer held) once a status shows no turn (a target,
+   tracking or following; a rotor coasting to a stop without one has taken it), or a turn
+   from a place after the stamp (a newer command, this remote's or another front end's,
+   wins: review 79, an old STOP sent again stopped Home Assistant's later turn); a lock ON is
+   done once a status shows the lock ON, or a lock word after the stamp (a lock OFF at the
+   tower: review 79, undone by an old lock ON). A status of another run than the stamp's (the
+   station's bridge restarted) ends nothing by itself: every place of the new run came after
+   what the halt was asked against, so the stamp counts as 0 there, and what stands from
+   place 0 is what the restart kept (review 83: the lock, kept in the state file, outlives a
+   restart; a lock ON held over one, dropped at the new run's first status, left the station
+   unlocked). A status that does not know a state (``lock_unknown``) judges nothing. What was
    asked against still standing (the turn, the lock OFF, from a place not after the stamp)
    means the station never took the halt, if its bridge connected again since: the halt is
    ``due`` once the station's bridge says ``online`` (as published, or replayed to this
@@ -232,6 +238,7 @@ class Standing:
     run: str
     taken: int
     halts: tuple[tuple[tuple[str, bytes], int | None], ...]
+    unsaid: frozenset[tuple[str, bytes]] = frozenset()  # halts this status cannot judge
 
 
 @dataclass
@@ -604,16 +611,18 @@ class RemoteLink(Connection):
         """Rule 10, paho's thread: a status of the station's (``live``: as published, not a
         replay). Its order is what a halt asked from now is stamped with; live, it ends each
         held halt of its rotator whose state no longer stands, or stands from a place after
-        the halt's stamp, or from another run; and a held halt whose state still stands from
-        a place not after its stamp, once the station's bridge said ``online`` since, goes
-        again at its first live heartbeat (rule 6)."""
+        the halt's stamp (in another run than the stamp's, after 0: a restart since); and a
+        held halt whose state still stands from a place not after its stamp, once the
+        station's bridge said ``online`` since, goes again at its first live heartbeat (rule
+        6). A status that cannot say (``unsaid``: the lock not known yet) judges nothing."""
         with self._send_lock:
             for key, place in standing.halts:
                 self._orders[key] = standing.run, standing.taken
                 held = self._unproven.get(key)
-                if held is None or not live:
+                if held is None or not live or key in standing.unsaid:
                     continue
-                if held.run != standing.run or place is None or place > held.stamp:
+                stamp = held.stamp if held.run == standing.run else 0  # (a restart since)
+                if place is None or place > stamp:
                     self._unproven_end(key)
                 elif held.due:
                     held.due = False
@@ -625,6 +634,14 @@ class RemoteLink(Connection):
                         )
                         self._unheard.append((key[0], key[1], held.props))
                         held.queued = True
+
+    def read_status(self, topic: str, payload: bytes) -> None:
+        """Rule 10: a status read before ``proof`` knew its rotator (the remote finds its
+        rotators after it subscribed: their replayed statuses came first), taken as replayed:
+        its order is what a halt asked from now is stamped with; it judges no held halt."""
+        standing = self._proof(topic, payload)
+        if standing is not None:
+            self._standing(standing, live=False)
 
     def _station_back(self) -> None:
         """Rule 10, paho's thread: the station's bridge says ``online`` (as published, or
