@@ -366,7 +366,11 @@ class StatusOrder(NamedTuple):
     """``R/status``'s word on a remote's held halts (interfaces/mqtt/remote.py rule 10): its
     ``order`` (the station's run, the newest place taken, the turn's place, the lock word's
     place) and whether the rotor has somewhere to turn to (a target, tracking or following:
-    a rotor coasting to a stop with none has taken the stop), whether the lock is ON and
+    a rotor coasting to a stop with none has taken the stop); whether it turns all the same
+    (``moving``: moving or braking, not at rest; a turn no command of this run began, the
+    box's own across a restart of its bridge under ``unasked_moves = "follow"``, shows so);
+    whether the status knows the motion (``motion_known``: not while the controller is not
+    read, ``offline`` or ``unknown``, as in a run's first status); whether the lock is ON and
     whether the status knows it (``lock_known``: not while ``lock_unknown``, the state file
     silent and the broker's lock state not read yet)."""
 
@@ -377,6 +381,14 @@ class StatusOrder(NamedTuple):
     turning: bool
     locked: bool
     lock_known: bool = True
+    moving: bool = False
+    motion_known: bool = True
+
+
+#: ``StatusOrder.moving``'s states: not at rest (a restarted bridge's first reading of a box
+#: turning on its own says ``braking``: it cannot tell yet)
+_NOT_AT_REST = (MotionState.MOVING.value, MotionState.BRAKING.value)
+_NOT_READ = (MotionState.OFFLINE.value, MotionState.UNKNOWN.value)  # (``motion_known``)
 
 
 def status_order(payload: bytes) -> StatusOrder | None:
@@ -399,7 +411,11 @@ def status_order(payload: bytes) -> StatusOrder | None:
     )
     run, taken, turn, lock = order.run, order.taken, order.turn, order.lock
     locked, lock_known = doc.get("locked") is True, doc.get("lock_unknown") is not True
-    return StatusOrder(run, taken, turn, lock, turning, locked, lock_known)
+    state = doc.get("state")
+    moving = state in _NOT_AT_REST or doc.get("moving") is True
+    return StatusOrder(
+        run, taken, turn, lock, turning, locked, lock_known, moving, state not in _NOT_READ
+    )
 
 
 def _order(value: object) -> Order | None:

@@ -459,7 +459,9 @@ def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:
 
 def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
     """A rotator's ``R/status`` on its halts (interfaces/mqtt/remote.py rule 10): a STOP on
-    ``stop`` ends the turn shown, from its place (``order.turn``); a lock ON on ``lock`` ends
+    ``stop`` ends the turn shown, from its place (``order.turn``; a rotor not at rest with no
+    target, the box's own turn across a restart, from that place too: 0 in a run that took
+    none), and is not judged by a status whose controller is not read; a lock ON on ``lock`` ends
     the lock OFF, from the lock word's place (``order.lock``; 0 in a run that took none: the
     lock the state file kept across a restart), and is not judged by a status that does not
     know the lock (``lock_unknown``); None for a status without an ``order`` (no halt is held
@@ -467,12 +469,15 @@ def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
     said = status_order(payload)
     if said is None:
         return None
-    unsaid = frozenset() if said.lock_known else frozenset({(lock, b"ON")})
+    unsaid = frozenset(
+        ([] if said.motion_known else [(stop, b"stop")])
+        + ([] if said.lock_known else [(lock, b"ON")])
+    )
     return Standing(
         said.run,
         said.taken,
         (
-            ((stop, b"stop"), said.turn if said.turning else None),
+            ((stop, b"stop"), said.turn if said.turning or said.moving else None),
             ((lock, b"ON"), None if said.locked else said.lock),
         ),
         unsaid,

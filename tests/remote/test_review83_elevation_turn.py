@@ -17,8 +17,6 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings.mqtt import MqttSettings
@@ -46,11 +44,6 @@ def elevation_turning(turn: int) -> bytes:
     return json.dumps(doc).encode()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a status whose elevation turns to its target, no azimuth target, reads "
-    "as no turn: a STOP lost in a partition is dropped, never sent again",
-)
 def test_a_stop_held_over_an_elevation_turn_goes_again(broker: Mosquitto, probe: Probe) -> None:
     heard: list[str] = []
     link = RemoteLink(

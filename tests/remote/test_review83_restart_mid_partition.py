@@ -39,11 +39,6 @@ def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
     yield from killable_station(rig, route, emu=emu, unasked_moves="follow")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a held STOP is dropped at the first status of the station's next run, "
-    "though the box turns on to its old target under a bridge that follows unasked moves",
-)
 def test_a_stop_held_over_a_station_restart_mid_partition_still_stops_the_rotor(
     station: Rig,
     route: CuttableLink,  # noqa: F811

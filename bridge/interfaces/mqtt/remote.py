@@ -139,7 +139,9 @@ Rules:
    status read before the remote knew the rotator, its replay on subscribing, counts too:
    ``read_status``). A status as published (``live``; remote/run.py's ``_proof`` reads it)
    then judges it: a STOP is done (no longer held) once a status shows no turn (a target,
-   tracking or following; a rotor coasting to a stop without one has taken it), or a turn
+   tracking or following) and the rotor at rest (review 83: a box turning on to its old
+   target under a restarted bridge that follows unasked moves shows no target, and its
+   first reading says ``braking``; a rotor coasting to a stop ends the hold once still), or a turn
    from a place after the stamp (a newer command, this remote's or another front end's,
    wins: review 79, an old STOP sent again stopped Home Assistant's later turn); a lock ON is
    done once a status shows the lock ON, or a lock word after the stamp (a lock OFF at the
@@ -148,7 +150,9 @@ Rules:
    what the halt was asked against, so the stamp counts as 0 there, and what stands from
    place 0 is what the restart kept (review 83: the lock, kept in the state file, outlives a
    restart; a lock ON held over one, dropped at the new run's first status, left the station
-   unlocked). A status that does not know a state (``lock_unknown``) judges nothing. What was
+   unlocked; a STOP held over one, dropped so, let the box turn on to the target it was
+   pressed against). A status that does not know a state (``lock_unknown``; the motion:
+   ``offline`` or ``unknown``, a run's first status) judges nothing. What was
    asked against still standing (the turn, the lock OFF, from a place not after the stamp)
    means the station never took the halt, if its bridge connected again since: the halt is
    ``due`` once the station's bridge says ``online`` (as published, or replayed to this
