@@ -716,7 +716,9 @@ class Order:
     run of the station's bridge): ``run`` names the run (a restart counts again), ``taken``
     is the newest place the status shows every command up to, ``turn`` the place of the
     command the target or turn shown comes from (a target, a track or follow start; 0: none
-    this run), ``lock`` the place of the last lock word (0: none this run). A remote orders
+    this run), or the place the bridge's own turn took when it began (auto-park, the storm's
+    park: a place of its own, after every command asked before it; ``taken`` shows it too:
+    review 83), ``lock`` the place of the last lock word (0: none this run). A remote orders
     its held halts by them (interfaces/mqtt/remote.py rule 10)."""
 
     run: str

@@ -146,6 +146,7 @@ class Worker:
             storm_arrived=storm_arrived,
             stop_owed=stop_owed,
             short_of=short_of,
+            place=mailbox.ticket,  # (session.py's Order: the bridge's own turns' places)
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

@@ -319,8 +319,11 @@ class RotatorSession:
         storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
+        place: Callable[[], int] | None = None,  # mailbox.py rule 10a's ``ticket``: the
+        # place in the order of commands of a turn the bridge begins itself (``Order``)
     ) -> None:
         self.cfg = cfg
+        self._place = place
         self.locked = locked
         self.lock_shown = locked  # the lock saved last (runtime/kept.py rule 2)
         self.lock_unknown = False  # runtime/kept.py rule 10: the status says it is not known
@@ -1318,6 +1321,13 @@ class RotatorSession:
             self.targets.clear_from(proposal.drop)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
+            if proposal.target.source in UNASKED and self._place is not None:
+                # (Order: the bridge's own turn, auto-park's or the storm's park, takes a place
+                # of its own, after every command asked before it began, and the status shows
+                # every place up to it: a remote's STOP asked before it never ends it, one
+                # asked against it does: interfaces/mqtt/remote.py rule 10, review 83)
+                self._turn_place = self._place()
+                self._taking = max(self._taking, self._turn_place)
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported (``_failed``); nothing else

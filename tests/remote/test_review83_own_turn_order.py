@@ -49,11 +49,6 @@ def parking_station(rig: Rig, route: CuttableLink) -> Rig:
     return rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: R/status's order.turn names the last command's place while the turn "
-    "shown is the bridge's own auto-park: an old held STOP goes again and stops the park",
-)
 def test_an_old_stop_never_stops_the_auto_park_the_station_began_after_it(
     parking_station: Rig, route: CuttableLink
 ) -> None:
