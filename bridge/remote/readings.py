@@ -365,14 +365,15 @@ def _json_why(value: object, depth: int) -> str | None:
 class StatusOrder(NamedTuple):
     """``R/status``'s word on a remote's held halts (interfaces/mqtt/remote.py rule 10): its
     ``order`` (the station's run, the newest place taken, the turn's place, the lock word's
-    place) and whether the rotor has somewhere to turn to (a target, tracking or following:
-    a rotor coasting to a stop with none has taken the stop); whether it turns all the same
-    (``moving``: moving or braking, not at rest; a turn no command of this run began, the
-    box's own across a restart of its bridge under ``unasked_moves = "follow"``, shows so);
-    whether the status knows the motion (``motion_known``: not while the controller is not
-    read, ``offline`` or ``unknown``, as in a run's first status); whether the lock is ON and
-    whether the status knows it (``lock_known``: not while ``lock_unknown``, the state file
-    silent and the broker's lock state not read yet)."""
+    place) and whether the rotor has somewhere to turn to (an azimuth or an elevation
+    target, tracking or following: a rotor coasting to a stop with none has taken the stop);
+    whether it turns all the same (``moving``: moving or braking, not at rest; a turn no
+    command of this run began, the box's own across a restart of its bridge under
+    ``unasked_moves = "follow"``, shows so); whether the status knows the motion
+    (``motion_known``: not while the controller is not read, ``offline`` or ``unknown``, as
+    in a run's first status); whether the lock is ON and whether the status knows it
+    (``lock_known``: not while ``lock_unknown``, the state file silent and the broker's lock
+    state not read yet)."""
 
     run: str
     taken: int
@@ -406,6 +407,7 @@ def status_order(payload: bytes) -> StatusOrder | None:
         return None
     turning = (  # (a rotor coasting or braking to a stop with no target has taken it)
         doc.get("target") is not None
+        or doc.get("target_elevation") is not None  # (review 83: an elevation's own target)
         or doc.get("tracking") is not None
         or doc.get("following") is not None
     )

@@ -17,6 +17,8 @@ from __future__ import annotations
 import json
 import time
 
+import pytest
+
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings.mqtt import MqttSettings
@@ -29,22 +31,26 @@ from tests.support.waiting import slow
 STATE, BEAT = "rotor/bridge/state", "rotor/bridge/heartbeat"
 
 
-def elevation_turning(turn: int) -> bytes:
+def elevation_turning(turn: int, state: str = "moving") -> bytes:
     """``R/status`` (the fields rule 10 reads) of an az/el rotator whose elevation turns to a
-    target taken at place ``turn``, its azimuth at rest with none."""
+    target taken at place ``turn``, its azimuth at rest with none; ``state`` ``idle``: the
+    target taken, its turn not begun yet (the box's start delay, the brake's)."""
     order = {"run": "run-1", "taken": turn, "turn": turn, "lock": 0}
     doc = {
         "target": None,
         "target_elevation": 60.0,
-        "state": "moving",
-        "moving": True,
+        "state": state,
+        "moving": state == "moving",
         "locked": False,
         "order": order,
     }
     return json.dumps(doc).encode()
 
 
-def test_a_stop_held_over_an_elevation_turn_goes_again(broker: Mosquitto, probe: Probe) -> None:
+@pytest.mark.parametrize("state", ["moving", "idle"])
+def test_a_stop_held_over_an_elevation_turn_goes_again(
+    broker: Mosquitto, probe: Probe, state: str
+) -> None:
     heard: list[str] = []
     link = RemoteLink(
         MqttSettings(host="127.0.0.1", port=broker.port),
@@ -66,11 +72,11 @@ def test_a_stop_held_over_an_elevation_turn_goes_again(broker: Mosquitto, probe:
             wait_until(lambda: len(heard) > n, slow(10), f"{topic} heard")
 
         say(BEAT, beat_payload(time.time()).encode())
-        say(STATUS, elevation_turning(1))  # the elevation turning to a target taken at place 1
+        say(STATUS, elevation_turning(1, state))  # the elevation's target taken at place 1
         log_from = broker.log.stat().st_size
         link.send("rotor/stop", "stop", "DL1ABC", 5)  # into the station's dead connection
         say(STATE, b"online")  # its bridge connected again, a clean session: the STOP lost
-        say(STATUS, elevation_turning(1))  # still turning to the target the STOP was against
+        say(STATUS, elevation_turning(1, state))  # still the target the STOP was against
         say(BEAT, beat_payload(time.time()).encode())
         link.send("rotor/track", "off", "DL1ABC", 5)  # a marker behind anything sent again
         wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")

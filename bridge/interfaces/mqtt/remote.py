@@ -141,34 +141,36 @@ Rules:
    it is stamped anew; a rotator's status read before the remote knew the rotator, its
    replay on subscribing, counts too: ``read_status``). A status as published (``live``;
    remote/run.py's ``_proof`` reads it) then judges it: a STOP is done (no longer held) once
-   a status shows no turn (a target, tracking or following) and the rotor at rest (review
-   83: a box turning on to its old target under a restarted bridge that follows unasked
-   moves shows no target, and its first reading says ``braking``; a rotor coasting to a stop
-   ends the hold once still), or a turn from a place after the stamp (a newer command, this
-   remote's or another front end's, wins: review 79, an old STOP sent again stopped Home
-   Assistant's later turn); a lock ON is done once a status shows the lock ON, or a lock
-   word after the stamp (a lock OFF at the tower: review 79, undone by an old lock ON). A
-   status of another run than the stamp's (the station's bridge restarted) ends nothing by
-   itself: every place of the new run came after what the halt was asked against, so the
-   stamp counts as 0 there, and what stands from place 0 is what the restart kept (review
-   83: the lock, kept in the state file, outlives a restart; a lock ON held over one,
-   dropped at the new run's first status, left the station unlocked; a STOP held over one,
-   dropped so, let the box turn on to the target it was pressed against). A status that does
-   not know a state (``lock_unknown``; the motion: ``offline`` or ``unknown``, a run's first
-   status) judges nothing. What was asked against still standing (the turn, the lock OFF,
-   from a place not after the stamp) means the station never took the halt, if its bridge
-   connected again since: the halt is ``due`` once the station's bridge says ``online`` (as
-   published, or replayed to this link's new connection: review 79, a broker restart; either
-   way a new connection of the station's may have lost it), and the first live status after
-   that showing what it was asked against still standing sends it again at the station's
-   next live heartbeat (rule 6's ``_unheard``, and before any later command), once per
-   ``online`` (the rate limit: on one connection the broker hands the station what it took
-   in order, so a status before the halt came says nothing). A held halt found done while it
-   waits to go again does not go. A later move ends no hold (review 79: a move the station
-   never had, or one the broker never took, proved nothing; and a move never overrides a
-   lock ON); a later word on a halt's own topic that the broker took (a lock OFF after a
-   lock ON) is this remote's last word there and ends it. A station's bridge whose status
-   carries no ``order`` (an older version) gets no hold: its halts go as before rule 10.
+   a status shows no turn (a target, the azimuth's or the elevation's, tracking or
+   following: review 83, an az/el rotator's elevation target, its azimuth's arrived, read as
+   none) and the rotor at rest (review 83: a box turning on to its old target under a
+   restarted bridge that follows unasked moves shows no target, and its first reading says
+   ``braking``; a rotor coasting to a stop ends the hold once still), or a turn from a place
+   after the stamp (a newer command, this remote's or another front end's, wins: review 79,
+   an old STOP sent again stopped Home Assistant's later turn); a lock ON is done once a
+   status shows the lock ON, or a lock word after the stamp (a lock OFF at the tower: review
+   79, undone by an old lock ON). A status of another run than the stamp's (the station's
+   bridge restarted) ends nothing by itself: every place of the new run came after what the
+   halt was asked against, so the stamp counts as 0 there, and what stands from place 0 is
+   what the restart kept (review 83: the lock, kept in the state file, outlives a restart; a
+   lock ON held over one, dropped at the new run's first status, left the station unlocked;
+   a STOP held over one, dropped so, let the box turn on to the target it was pressed
+   against). A status that does not know a state (``lock_unknown``; the motion: ``offline``
+   or ``unknown``, a run's first status) judges nothing. What was asked against still
+   standing (the turn, the lock OFF, from a place not after the stamp) means the station
+   never took the halt, if its bridge connected again since: the halt is ``due`` once the
+   station's bridge says ``online`` (as published, or replayed to this link's new
+   connection: review 79, a broker restart; either way a new connection of the station's may
+   have lost it), and the first live status after that showing what it was asked against
+   still standing sends it again at the station's next live heartbeat (rule 6's
+   ``_unheard``, and before any later command), once per ``online`` (the rate limit: on one
+   connection the broker hands the station what it took in order, so a status before the
+   halt came says nothing). A held halt found done while it waits to go again does not go. A
+   later move ends no hold (review 79: a move the station never had, or one the broker never
+   took, proved nothing; and a move never overrides a lock ON); a later word on a halt's own
+   topic that the broker took (a lock OFF after a lock ON) is this remote's last word there
+   and ends it. A station's bridge whose status carries no ``order`` (an older version) gets
+   no hold: its halts go as before rule 10.
 """
 
 from __future__ import annotations
