@@ -24,8 +24,6 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-import pytest
-
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.settings.mqtt import MqttSettings
@@ -89,11 +87,6 @@ def _marker(link: RemoteLink, broker: Mosquitto, log_from: int) -> None:
     wait_until(lambda: len(remote_published(broker, log_from)) >= 2, slow(10), "the marker")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a forged R/status order (taken far ahead) stamps a STOP so that it is "
-    "sent again over a newer turn from Home Assistant",
-)
 def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
     broker: Mosquitto, probe: Probe
 ) -> None:
@@ -112,11 +105,6 @@ def test_a_forged_status_far_ahead_never_lets_an_old_stop_stop_a_newer_turn(
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 83: a forged R/status naming another run makes the remote drop a STOP the "
-    "station never took",
-)
 def test_a_forged_status_of_another_run_never_loses_a_held_stop(
     broker: Mosquitto, probe: Probe
 ) -> None:

@@ -136,30 +136,42 @@ Rules:
    bridge's own turn, an auto-park or a storm's park, which takes a place when it begins
    (review 83: with none, an old STOP went again over an auto-park begun after it and
    stopped it short of the park); of the last lock word, ``lock``: core/model.py ``Order``).
-   A halt is stamped with the ``taken`` its rotator's last status (replayed or not) showed
-   when it was asked (the same halt sent again by this link keeps its stamp; pressed again,
-   it is stamped anew; a rotator's status read before the remote knew the rotator, its
-   replay on subscribing, counts too: ``read_status``). A status as published (``live``;
-   remote/run.py's ``_proof`` reads it) then judges it: a STOP is done (no longer held) once
-   a status shows no turn (a target, the azimuth's or the elevation's, tracking or
-   following: review 83, an az/el rotator's elevation target, its azimuth's arrived, read as
-   none) and the rotor at rest (review 83: a box turning on to its old target under a
-   restarted bridge that follows unasked moves shows no target, and its first reading says
-   ``braking``; a rotor coasting to a stop ends the hold once still), or a turn from a place
-   after the stamp (a newer command, this remote's or another front end's, wins: review 79,
-   an old STOP sent again stopped Home Assistant's later turn); a lock ON is done once a
-   status shows the lock ON, or a lock word after the stamp (a lock OFF at the tower: review
-   79, undone by an old lock ON). A status of another run than the stamp's (the station's
-   bridge restarted) ends nothing by itself: every place of the new run came after what the
-   halt was asked against, so the stamp counts as 0 there, and what stands from place 0 is
-   what the restart kept (review 83: the lock, kept in the state file, outlives a restart; a
-   lock ON held over one, dropped at the new run's first status, left the station unlocked;
-   a STOP held over one, dropped so, let the box turn on to the target it was pressed
-   against). A status that does not know a state (``lock_unknown``; the motion: ``offline``
-   or ``unknown``, a run's first status) judges nothing. What was asked against still
-   standing (the turn, the lock OFF, from a place not after the stamp) means the station
-   never took the halt, if its bridge connected again since: the halt is ``due`` once the
-   station's bridge says ``online`` (as published, or replayed to this link's new
+   A halt is stamped from the places (``taken``) its rotator's statuses (replayed or not)
+   showed, by run, before it was asked: judged by a status of a run showing every command up
+   to ``taken``, its stamp is the newest place of that run seen before it that this
+   ``taken`` confirms (``held_stamp``: not past it; the station's own ``taken`` never goes
+   back within a run, so a place seen past it was not the station's: review 83, a status
+   forged far ahead stamped a STOP so that it went again over Home Assistant's newer turn),
+   or 0 for a run not seen before it (a restart since; review 83: a status forged naming
+   another run, read before the STOP, no longer ends the hold at the station's next status
+   of its own run). Who published a status is not known: MQTT 5 gives a subscriber no
+   publisher's identity, and a user property the station added would be forged as easily as
+   the payload. So a client allowed to publish on the station's topics can still end a hold
+   (a status showing the turn ended, or a later one) or make a stamp high within what the
+   station's next status confirms; the broker's ACL (only the station's bridge may publish
+   there) is the guard (docs/remote.md). (The same halt sent again by this link keeps its
+   stamp; pressed again, it is stamped anew; a rotator's status read before the remote knew
+   the rotator, its replay on subscribing, counts too: ``read_status``). A status as
+   published (``live``; remote/run.py's ``_proof`` reads it) then judges it: a STOP is done
+   (no longer held) once a status shows no turn (a target, the azimuth's or the elevation's,
+   tracking or following: review 83, an az/el rotator's elevation target, its azimuth's
+   arrived, read as none) and the rotor at rest (review 83: a box turning on to its old
+   target under a restarted bridge that follows unasked moves shows no target, and its first
+   reading says ``braking``; a rotor coasting to a stop ends the hold once still), or a turn
+   from a place after the stamp (a newer command, this remote's or another front end's,
+   wins: review 79, an old STOP sent again stopped Home Assistant's later turn); a lock ON
+   is done once a status shows the lock ON, or a lock word after the stamp (a lock OFF at
+   the tower: review 79, undone by an old lock ON). A status of another run than the stamp's
+   (the station's bridge restarted) ends nothing by itself: every place of the new run came
+   after what the halt was asked against, so the stamp counts as 0 there, and what stands
+   from place 0 is what the restart kept (review 83: the lock, kept in the state file,
+   outlives a restart; a lock ON held over one, dropped at the new run's first status, left
+   the station unlocked; a STOP held over one, dropped so, let the box turn on to the target
+   it was pressed against). A status that does not know a state (``lock_unknown``; the
+   motion: ``offline`` or ``unknown``, a run's first status) judges nothing. What was asked
+   against still standing (the turn, the lock OFF, from a place not after the stamp) means
+   the station never took the halt, if its bridge connected again since: the halt is ``due``
+   once the station's bridge says ``online`` (as published, or replayed to this link's new
    connection: review 79, a broker restart; either way a new connection of the station's may
    have lost it), and the first live status after that showing what it was asked against
    still standing sends it again at the station's next live heartbeat (rule 6's
@@ -215,6 +227,10 @@ COMMAND_QOS = 1  # rule 2
 ACK_WAIT_S = 1.0  # rule 7
 AGAIN_SEEN_MAX_S = 30.0  # rule 8: a halt kept longer is stamped when sent again
 HALT_READERS = 256  # rule 8: the sources whose last halt's stamp is kept
+# rule 10: the station's runs whose places seen are kept, by halt, and the places of each (a
+# forger flooding more crowds the station's own out: the stamp then counts as 0, docs/remote.md)
+LEDGER_RUNS = 4
+LEDGER_PLACES = 32
 NOT_CONNECTED = "not connected to the station's broker"
 NOT_HEARD = (
     "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
@@ -249,15 +265,38 @@ class Standing:
     unsaid: frozenset[tuple[str, bytes]] = frozenset()  # halts this status cannot judge
 
 
+def _ledger_put(ledger: dict[str, list[int]], run: str, taken: int) -> None:
+    """Rule 10: ``taken`` noted among the places seen of ``run``; at most LEDGER_RUNS runs (the
+    one noted longest ago goes) and LEDGER_PLACES places each (the lowest goes: the station's
+    ``taken`` only grows, and a later status confirms places up to its own)."""
+    places = ledger.pop(run, [])
+    ledger[run] = places  # (the run noted last, last)
+    if taken not in places:
+        places.append(taken)
+        places.sort()
+        del places[:-LEDGER_PLACES]
+    while len(ledger) > LEDGER_RUNS:
+        del ledger[next(iter(ledger))]
+
+
+def held_stamp(before: dict[str, tuple[int, ...]], run: str, taken: int) -> int:
+    """Rule 10: a held halt's stamp as a status of ``run`` showing every command up to
+    ``taken`` judges it: the newest place of that run seen before the halt was asked that
+    this status confirms (not past its ``taken``: the station's own never goes back in a
+    run, so a place seen past it was not the station's); 0 for a run not seen before it (a
+    restart since: every place of that run came after what the halt was asked against)."""
+    return max((p for p in before.get(run, ()) if p <= taken), default=0)
+
+
 @dataclass
 class _Held:
-    """Rule 10: a halt the broker took, held: what it went with, the station's run and the
-    newest place this remote had seen when it was asked (its stamp), whether the station's
-    bridge said ``online`` since (``due``), and whether it waits in ``_unheard`` to go again."""
+    """Rule 10: a halt the broker took, held: what it went with, the places of each run of the
+    station's that its rotator's statuses showed before it was asked (``held_stamp`` makes
+    its stamp of them), whether the station's bridge said ``online`` since (``due``), and
+    whether it waits in ``_unheard`` to go again."""
 
     props: Properties
-    run: str
-    stamp: int
+    before: dict[str, tuple[int, ...]]
     due: bool = False
     queued: bool = False
 
@@ -305,9 +344,9 @@ class RemoteLink(Connection):
         self._unheard: list[tuple[str, bytes, Properties]] = []
         # rule 10: halts the broker took that the station has not yet shown done or outdated
         self._unproven: dict[tuple[str, bytes], _Held] = {}
-        # rule 10: by halt (topic, payload), the last order its rotator's status showed: the
-        # station's run and the newest place taken (what a halt asked now is stamped with)
-        self._orders: dict[tuple[str, bytes], tuple[str, int]] = {}
+        # rule 10: by halt (topic, payload), the places its rotator's statuses showed taken, by
+        # the station's run (``_ledger_put``): what a halt asked now is stamped from
+        self._orders: dict[tuple[str, bytes], dict[str, list[int]]] = {}
         # rule 8: the latest stamp a halt went out with, by topic (its time, its station)
         self._halt_stamps: dict[tuple[str, Hashable | None], tuple[float, str]] = {}
         # rule 8: each halt's latest asking (its topic, payload): when it was seen, its source
@@ -600,13 +639,13 @@ class RemoteLink(Connection):
         if held is not None and not asked:
             held.props = props
             return
-        order = self._orders.get(key)
-        if order is None:
+        ledger = self._orders.get(key)
+        if not ledger:
             self._unproven_end(key)
             return
         if held is not None:
             self._unproven_end(key)
-        self._unproven[key] = _Held(props, order[0], order[1])
+        self._unproven[key] = _Held(props, {run: tuple(p) for run, p in ledger.items()})
 
     def _unproven_end(self, key: tuple[str, bytes]) -> None:
         """Rule 10 (caller holds _send_lock): ``key``'s halt no longer held; not sent again
@@ -617,20 +656,20 @@ class RemoteLink(Connection):
 
     def _standing(self, standing: Standing, live: bool) -> None:
         """Rule 10, paho's thread: a status of the station's (``live``: as published, not a
-        replay). Its order is what a halt asked from now is stamped with; live, it ends each
-        held halt of its rotator whose state no longer stands, or stands from a place after
-        the halt's stamp (in another run than the stamp's, after 0: a restart since); and a
+        replay). Its order is noted for what a halt asked from now is stamped from; live, it
+        ends each held halt of its rotator whose state no longer stands, or stands from a
+        place after the halt's stamp (``held_stamp``: in a run not seen before the halt, after
+        0: a restart since); and a
         held halt whose state still stands from a place not after its stamp, once the
         station's bridge said ``online`` since, goes again at its first live heartbeat (rule
         6). A status that cannot say (``unsaid``: the lock not known yet) judges nothing."""
         with self._send_lock:
             for key, place in standing.halts:
-                self._orders[key] = standing.run, standing.taken
+                _ledger_put(self._orders.setdefault(key, {}), standing.run, standing.taken)
                 held = self._unproven.get(key)
                 if held is None or not live or key in standing.unsaid:
                     continue
-                stamp = held.stamp if held.run == standing.run else 0  # (a restart since)
-                if place is None or place > stamp:
+                if place is None or place > held_stamp(held.before, standing.run, standing.taken):
                     self._unproven_end(key)
                 elif held.due:
                     held.due = False
