@@ -13,19 +13,12 @@ from __future__ import annotations
 import json
 import time
 
-import pytest
-
 from tests.integration.test_pointing_bridge import QUICK_BRIDGE, QUICK_EMU, motion_frames
 from tests.support.rig import Rig
 
 NO_NUMBER = (b"NaN", b"nan", b"Infinity", b"-Infinity")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: NaN (or Infinity) published on R/park turns the antenna to its park "
-    "position instead of being refused",
-)
 def test_a_park_of_no_number_moves_nothing(rig: Rig) -> None:
     emu = rig.add("tower", emu={**QUICK_EMU, "start_az_deg": 120}, park_az_deg=0, **QUICK_BRIDGE)
     rig.start()

@@ -317,6 +317,18 @@ def test_a_press_is_printable_text(raw: str) -> None:
         pl.parse_press(raw.encode(), "park", "PARK")
 
 
+@pytest.mark.parametrize(
+    "raw", [b"NaN", b"-nan", b"Infinity", b"-Infinity", b"inf", b"+inf", b"1e999", b'"NaN"']
+)
+def test_a_number_that_is_no_number_is_no_press(raw: bytes) -> None:
+    """Attack 28: a Node-RED ``Number()`` of ``off`` is NaN; it parked a rotor (and would
+    reset a rotor's health: ``R/health/reset`` is read by the same parse_press)."""
+    with pytest.raises(pl.PayloadError, match="does not park"):
+        pl.parse_press(raw, "park", "PARK")
+    with pytest.raises(pl.PayloadError, match="does not reset rotor health"):
+        pl.parse_press(raw, "reset rotor health", "RESET")
+
+
 @pytest.mark.parametrize("raw", [b"PARK", b"park", b"1", b"1700000000123", b"RESET please"])
 def test_a_press_is_still_any_other_word_or_number(raw: bytes) -> None:
     assert pl.parse_press(raw, "park", "PARK") == raw.decode()

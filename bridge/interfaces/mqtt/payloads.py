@@ -409,7 +409,9 @@ def parse_press(payload: bytes, what: str, word: str) -> str:
     parked a rotor on ``no``, ``null`` and ``{"park": false}``): the words of ``_NOT_A_PRESS``,
     also as a JSON string, JSON's false and null, a zero in any spelling, and any JSON object
     or array (a press carries no document, and one that says ``false`` inside must not move a
-    rotor). A number other than zero is a press: Node-RED's inject node sends a timestamp.
+    rotor). A finite number other than zero is a press: Node-RED's inject node sends a
+    timestamp; ``NaN``, ``Infinity``, ``-Infinity`` (or ``1e999``) is no number, so no press
+    (attack 28: a Node-RED ``Number()`` of ``off`` parked a rotor).
     What cannot be read is no press either (attack 20: ``OFF\\0`` and a byte-order mark before
     ``OFF`` parked a rotor): the payload's words are read as every topic's are (``_words``:
     ``OFF\\0`` is OFF, another control character is refused naming it), and a press is
@@ -442,9 +444,12 @@ def _not_a_press(text: str) -> bool:
         except PayloadError:
             return True  # empty, or what cannot be read: never a yes
     try:
-        return float(word) == 0  # 0.0, -0, 00, 0e0; nan and inf are no number a switch sends
+        value = float(word)
     except ValueError:
         return False
+    # a zero in any spelling (0.0, -0, 00, 0e0) says no; so does a number that is no number
+    # (attack 28: NaN, a Node-RED Number() of "off"; Infinity, -Infinity, 1e999): never a yes
+    return value == 0 or not math.isfinite(value)
 
 
 def parse_switch(payload: bytes) -> bool:
