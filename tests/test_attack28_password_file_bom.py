@@ -30,11 +30,6 @@ def _config(tmp_path: Path, table: str, secret: Path) -> Path:
     return cfg
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: a password file with a UTF-8 BOM logs in with U+FEFF in front of the "
-    "password (broker refuses it, console says wrong password), check-config says OK",
-)
 @pytest.mark.parametrize("table", ["mqtt", "web"])
 def test_a_password_files_byte_order_mark_is_no_part_of_the_password(
     tmp_path: Path, table: str

@@ -5,7 +5,11 @@ start, worded for the user, and not a traceback when the MQTT client first reads
 
 Rules:
 1. A file is read the way its user will read it: the TLS files through an ssl context as paho's
-   tls_set loads them, the password file as text with its line ending stripped.
+   tls_set loads them, the password file as text with its line ending stripped and a leading
+   byte-order mark dropped (attack 28: a file PowerShell 5 or an old Notepad saved as "UTF-8"
+   starts with U+FEFF, which no one types; taken as the password's first character, the
+   broker refused the login and the console said "wrong password" to the right one), as
+   every MQTT payload's words drop one (interfaces/mqtt/payloads.py ``_words``).
 2. Every problem is a ValueError naming the setting and the path (pydantic turns it into one
    line of the configuration error), an OSError's too (pydantic lets those through, as a
    traceback); nothing is changed when one is raised.
@@ -146,4 +150,4 @@ def read_password_file(path: Path) -> str:
         text = data.decode()
     except UnicodeDecodeError:
         raise ValueError(f"password_file {shown_path(path)} is not UTF-8 text") from None
-    return text.strip("\r\n")
+    return text.removeprefix("\ufeff").strip("\r\n")  # rule 1: a BOM is no part of it
