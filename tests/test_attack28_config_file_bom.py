@@ -10,18 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.settings import ConfigError, load_settings
 
 BOM = b"\xef\xbb\xbf"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: a config file with a UTF-8 BOM is refused as 'Invalid statement (at "
-    "line 1, column 1)', naming nothing the user can see",
-)
 def test_a_config_files_byte_order_mark_is_read_or_named(tmp_path: Path) -> None:
     cfg = tmp_path / "bridge.toml"
     cfg.write_bytes(

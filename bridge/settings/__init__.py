@@ -41,7 +41,11 @@ Rules:
 5. The configuration file is read up to CONFIG_FILE_MAX bytes; a larger one is an error (an
    attack pass: ``-c /dev/zero`` or ``/dev/urandom`` ended check-config and run in a
    MemoryError traceback after taking all the memory it could). It may be a pipe
-   (``-c <(...)``): only its size is judged.
+   (``-c <(...)``): only its size is judged. A UTF-8 byte-order mark at its start (Notepad
+   before 2019, PowerShell 5's ``-Encoding UTF8``) is no part of the document and is dropped,
+   as every MQTT payload's (interfaces/mqtt/payloads.py ``_words``): attack 28: such a file was
+   refused as "Invalid statement (at line 1, column 1)", pointing at an invisible character.
+   The remote's file is read by the same ``read_toml``.
 6. The files the bridge writes (``state_file``, ``audit_file``, and with a console password
    the console's secret beside the state file, ``console-secret``) are neither the
    configuration file, nor each other, nor a file another key names for reading (a password,
@@ -659,7 +663,9 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
                 f"config file {shown_path(path)} is larger than {CONFIG_FILE_MAX >> 20} MiB: no "
                 "configuration is (is it the right file?)"
             )
-        return tomllib.loads(data.decode())
+        # rule 5: a byte-order mark at the start is dropped (decoded whole first, so a byte an
+        # error names is counted from the file's start)
+        return tomllib.loads(data.decode().removeprefix("\ufeff"))
     except FileNotFoundError:
         raise ConfigError(f"config file {shown_path(path)} not found") from None
     except OSError as exc:

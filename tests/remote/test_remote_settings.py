@@ -148,3 +148,19 @@ def test_an_operator_mqtt_carries_is_taken_and_the_station_names_it(
     typed = operator.replace("\u00a0", " ")  # its compatibility form: one operator either way
     assert load_remote_settings(str(path)).operator == typed  # type: ignore[attr-defined]
     assert valid_operator(operator) == typed
+
+
+def test_a_byte_order_mark_before_the_remotes_file_is_read_past(tmp_path: Path) -> None:
+    """Attack 28: the remote's file is edited on Windows (PowerShell 5, old Notepad save a
+    byte-order mark); read by the bridge's read_toml, it was refused at line 1, column 1."""
+    path = tmp_path / "remote.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + (HEAD + "[[endpoints]]\nrotctld_port = 4533\n").encode())
+    assert load_remote_settings(str(path)).operator == "DL1ABC"  # type: ignore[attr-defined]
+
+
+def test_a_byte_the_remotes_file_cannot_decode_is_counted_from_its_start(tmp_path: Path) -> None:
+    """The mark dropped after decoding: the byte an error names is the file's own offset."""
+    path = tmp_path / "remote.toml"
+    path.write_bytes(b"\xef\xbb\xbf# \xff\n" + HEAD.encode())
+    with pytest.raises(ConfigError, match=r"is not UTF-8 text \(byte 5\)"):
+        load_remote_settings(str(path))
