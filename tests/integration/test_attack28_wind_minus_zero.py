@@ -18,11 +18,6 @@ TOPIC = "weather/station/wind"
 WAIT_S = 10.0  # the status after a reading: one engine turn, on a loaded machine
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: a wind reading of -0 shows the wind as -0.0 km/h in R/status and Home "
-    "Assistant's Wind sensor",
-)
 def test_a_wind_reading_of_minus_zero_is_shown_as_no_wind_with_a_sign(
     rig: Rig, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -5,6 +5,7 @@ refused with the key named."""
 from __future__ import annotations
 
 import logging
+import math
 from typing import Any
 
 import pytest
@@ -54,6 +55,15 @@ def test_a_reading_no_wind_can_have_is_dropped_in_either_unit(
         assert handle("w/ms", junk, False)
     assert got == [] and "over 1000 km/h" in caplog.text
     assert handle("w/ms", b"250", False) and got == [900.0]  # 900 km/h: a reading
+
+
+@pytest.mark.parametrize("unit", ["km/h", "m/s"])
+def test_a_reading_of_minus_zero_reaches_the_rotator_as_zero(unit: str) -> None:
+    """Attack 28: ``-0`` is not below 0 and was taken with its sign: R/status said -0.0."""
+    got: list[float] = []
+    subs, handle = wind_feed([("w", unit, lambda v, r: got.append(v))], FakeClock())
+    assert handle("w", b"-0", False) and handle("w", b"-0.0e5", False)
+    assert [math.copysign(1.0, v) for v in got] == [1.0, 1.0], got
 
 
 def rotator(**wind: Any) -> RotatorSettings:

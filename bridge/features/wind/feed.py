@@ -3,7 +3,9 @@ wind park, session/wind.py, decides). Its topics are the user's, named in the co
 
 Rules:
 1. A reading is a bare number (``12.5``, as Home Assistant's statestream and most weather
-   stations publish), in the rotator's ``wind_unit``; it reaches the rotator in km/h.
+   stations publish), in the rotator's ``wind_unit``; it reaches the rotator in km/h. A speed
+   has no sign: ``-0`` (a station's rounding of a small negative offset) is 0 (attack 28:
+   taken as it came, R/status and Home Assistant's Wind sensor showed -0.0 km/h).
 2. A retained reading is taken: it is the last known wind, a state and not a command (a high
    one parks the rotor; a reading never moves it anywhere else). One the broker replays on
    (re)subscribing is handed on as replayed (session/wind.py rule 6: it never ends a storm):
@@ -53,6 +55,7 @@ def wind_feed(
             value = parse_number(payload, "wind speed")
             if value < 0 or not math.isfinite(value):
                 raise PayloadError("wind speed must be 0 or more")
+            value = abs(value)  # rule 1: -0 (not below 0) is 0, a speed has no sign
         except PayloadError as exc:
             dropped(topic, exc)
             return True
