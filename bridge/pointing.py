@@ -51,7 +51,9 @@ Rules:
    A target at the stop itself (raw 180) is refused under such limits, named or with no
    reading: there no reading tells which end the rotor is at, and from one of them every turn
    passes north (a review: parked at 180, every target after was refused).
-5. A refusal raises Refused with a message naming the true and the raw value when they differ.
+5. A refusal raises Refused with a message naming the true and the raw value when they differ;
+   a value past a limit is quoted with the digits that keep it past it (core/text.py
+   ``shown_past``: attack 28, 360.00001 was refused as "azimuth 360 outside 0..360").
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
    station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
@@ -122,6 +124,7 @@ from dataclasses import dataclass, field, replace
 from bridge.core import geo
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
+from bridge.core.text import shown_past
 from bridge.protocols.base import ModelSpec, half_up, half_up_step
 
 MAX_NUDGE_DEG = 360.0  # rule 6: a nudge is less than a turn either way
@@ -367,7 +370,9 @@ class Pointing:
             return raw
         if not 0.0 <= az_deg <= 360.0:
             if self.az_wraps:
-                raise Refused(RefusalCode.LIMITS, f"azimuth {az_deg:g} outside 0..360")
+                raise Refused(
+                    RefusalCode.LIMITS, f"azimuth {shown_past(az_deg, 0.0, 360.0)} outside 0..360"
+                )
             raw = self._checked(az_deg, az_deg - self.offset_deg)
             if within is not None:
                 self._within(az_deg, current_raw_deg, [raw], within)
@@ -562,7 +567,8 @@ class Pointing:
             el, lo, hi = target.el_deg, self.el_min_deg, self.el_max_deg
             if not math.isfinite(el) or not lo <= el <= hi:
                 raise Refused(
-                    RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
+                    RefusalCode.LIMITS,
+                    f"elevation {shown_past(el, lo, hi)} outside the limits {lo:g}..{hi:g}",
                 )
             if not self._sent_within(el, lo, hi, el=True):
                 why = self._rounding(f"elevation {el:g}", el, lo, hi, el=True)
@@ -603,7 +609,8 @@ class Pointing:
             sent = math.isfinite(el) and self._sent_within(el, lo, hi, el=True)
             if not math.isfinite(el) or not lo <= el <= hi or not sent:
                 raise Refused(
-                    RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
+                    RefusalCode.LIMITS,
+                    f"elevation {shown_past(el, lo, hi)} outside the limits {lo:g}..{hi:g}",
                 )
 
     def _end_free(self, target: Target, raw_az: float | None) -> bool:
@@ -777,9 +784,10 @@ class Pointing:
 
     def _checked(self, az_deg: float, raw_deg: float) -> float:
         lo, hi = self.az_min_deg, self.az_max_deg
-        shown = f"azimuth {az_deg:g}"
+        # (rule 5: the value past the limits quoted with the digits that keep it past them)
+        shown = "azimuth " + (shown_past(az_deg, lo, hi) if raw_deg == az_deg else f"{az_deg:g}")
         if raw_deg != az_deg:
-            shown += f" (controller {raw_deg:g})"
+            shown += f" (controller {shown_past(raw_deg, lo, hi)})"
         if not lo <= raw_deg <= hi:
             raise Refused(RefusalCode.LIMITS, f"{shown} outside the limits {lo:g}..{hi:g}")
         if not self._sent_within(raw_deg, lo, hi):

@@ -55,6 +55,24 @@ def test_limits_stay_mechanical_and_refusals_name_both_values() -> None:
 
 
 @pytest.mark.parametrize(
+    ("pointing", "target", "said"),
+    [
+        (Pointing.of(EZ), Target(360.00001), "azimuth 360.00001 outside 0..360"),
+        (Pointing.of(EZ), Target(-0.0000001), "azimuth -1e-07 outside 0..360"),
+        (Pointing.of(SPID, (0, 360)), Target(360.0000004), "azimuth 360.0000004 outside"),
+        (Pointing.of(REGISTRY["gs232b"]), Target(10, 180.00001), "elevation 180.00001 out"),
+    ],
+)
+def test_a_refusal_quotes_a_value_past_a_limit_with_the_digits_that_keep_it_past(
+    pointing: Pointing, target: Target, said: str
+) -> None:
+    """Attack 28: six digits made 360.00001 "azimuth 360 outside 0..360" (rule 5)."""
+    with pytest.raises(Refused) as exc:
+        pointing.judge(target, None)
+    assert exc.value.message.startswith(said), exc.value.message
+
+
+@pytest.mark.parametrize(
     ("target", "current", "raw"),
     [
         (10, 350, 370),  # across north clockwise: 20 degrees, not 340 back

@@ -18,6 +18,11 @@ not UTF-8 is a lone surrogate in Python's text, which no UTF-8 holds: in a JSON 
 ``\\udce9``, refused by a strict parser (Home Assistant's), and on a stream that encodes
 strictly it ends the process in a UnicodeEncodeError (review 76). So it is escaped once, here,
 as Python's stderr writes it (``\\udce9``), and every text naming a path goes through it.
+
+And how a refusal quotes a number past a limit (``shown_past``): with as many digits as it
+takes to stay past it. ``:g``'s six digits made ``360.00001`` "azimuth 360 outside 0..360", a
+refusal that contradicts itself (attack 28); a number a user sent is never shown inside the
+limits it was refused for.
 """
 
 from __future__ import annotations
@@ -25,7 +30,15 @@ from __future__ import annotations
 import os
 import re
 
-__all__ = ["NOT_TEXT", "QUOTED_MOST", "bad_char", "entity_slug", "quoted", "shown_path"]
+__all__ = [
+    "NOT_TEXT",
+    "QUOTED_MOST",
+    "bad_char",
+    "entity_slug",
+    "quoted",
+    "shown_past",
+    "shown_path",
+]
 
 # what a refusal says after the character: U+0001, {NOT_TEXT}
 NOT_TEXT = "which MQTT does not carry (a control character, a lone surrogate or a non-character)"
@@ -77,3 +90,14 @@ def shown_path(path: str | bytes | os.PathLike[str] | os.PathLike[bytes]) -> str
     if isinstance(text, bytes):  # its bytes: read as Python reads a path from the system
         text = text.decode("utf-8", "surrogateescape")
     return text.encode("utf-8", "backslashreplace").decode()
+
+
+def shown_past(value: float, lo: float, hi: float) -> str:
+    """``value``, refused as outside ``lo..hi``, as a message quotes it: ``:g``'s six digits,
+    or as many more as it takes not to read as inside (``360.00001`` past 0..360, not ``360``);
+    a value inside (or no number) is shown as ``:g`` shows it."""
+    for digits in range(6, 18):
+        shown = f"{value:.{digits}g}"
+        if not lo <= float(shown) <= hi:
+            return shown
+    return f"{value:g}"  # (17 digits give any float back: only a value inside gets here)

@@ -6,16 +6,9 @@ on a real pty; asserted: the refusal's message."""
 
 from __future__ import annotations
 
-import pytest
-
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: R/target 360.00001 is refused as 'azimuth 360 outside 0..360', a "
-    "message that contradicts itself",
-)
 def test_a_refusal_past_a_limit_does_not_quote_a_number_inside_it(rig: Rig) -> None:
     rig.add("tower", "rotorez")
     rig.start()

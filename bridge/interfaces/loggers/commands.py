@@ -86,6 +86,7 @@ from bridge.core import geo
 from bridge.core.bands import band_of_mhz
 from bridge.core.errors import Refused
 from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
+from bridge.core.text import shown_past
 from bridge.front import HaltCounted
 from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, ascii_text, pst_reply
 from bridge.interfaces.loggers.limiter import ReplyLimiter
@@ -351,7 +352,8 @@ class Commands:
                 rot.submit(toward, described, since=since, seen_s=seen_s, reader=reader)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
-                    f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
+                    f"pst: azimuth {shown_past(req.azimuth, *AZ_FOLDED)} outside "
+                    f"{AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
                     described,
                 )
                 return

@@ -55,6 +55,8 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from bridge.core.text import shown_past
+
 MAX_DATAGRAM = 2048
 MAX_NAME = 64
 
@@ -274,7 +276,7 @@ def parse_n1mm(datagram: bytes) -> N1mmRequest:
         raise Malformed("neither <goazi> nor <stop>")
     az = _number(values["goazi"], "goazi")
     if not 0.0 <= az <= 360.0:
-        raise Malformed(f"goazi {az:g} outside 0..360")
+        raise Malformed(f"goazi {shown_past(az, 0.0, 360.0)} outside 0..360")
     offset = _number(values["offset"], "offset") if values.get("offset") else 0.0
     flag = values.get("bidirectional", "0").strip()
     if flag not in ("", "0", "1"):  # (an attack pass: "abc" was a yes: the reciprocal bearing)
