@@ -176,6 +176,40 @@ def test_a_file_the_bridge_writes_is_no_file_the_configuration_reads(tmp_path: P
     ), out.stderr
 
 
+def _rotator(port: Path, more: str = "") -> str:
+    return f'[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "{port}"\n{more}'
+
+
+def test_a_file_the_bridge_writes_is_no_serial_port_nor_device(tmp_path: Path) -> None:
+    """Attack 28 (rule 6): audit_file naming the rotator's port (by any name: links followed)
+    passed check-config and every audit line went down the controller's line; a device
+    (/dev/null, a tty) is no file to write either. The refusal names the key."""
+    tty = tmp_path / "ttyUSB0"
+    tty.symlink_to("/dev/null")  # (a device: a serial adapter's, to the settings)
+    by_id = tmp_path / "usb-FTDI_A1B2C3-if00-port0"
+    by_id.symlink_to(tty)
+    state = f'state_file = "{tmp_path / "state.json"}"\n'
+    cases = [
+        (f'audit_file = "{by_id}"\n{state}', "audit_file", "rotators[0].port"),
+        (f'audit_file = "{tty}"\n{state}', "audit_file", "rotators[0].port"),
+        (f'state_file = "{tty}"\n', "state_file", "rotators[0].port"),
+        (f'audit_file = "/dev/null"\n{state}', "audit_file", "is a character device"),
+    ]
+    for top, key, said in cases:
+        port = tmp_path / "ttyUSB9" if "device" in said else by_id  # (a port of its own)
+        cfg = write(tmp_path, top + _rotator(port))
+        with pytest.raises(ConfigError) as caught:
+            load_settings(cfg, environ={})
+        assert f"{key} " in str(caught.value) and said in str(caught.value), caught.value
+    composite = (
+        f'{state}audit_file = "{tty}"\n[[rotators]]\nid = "t"\n'
+        'azimuth = { model = "rt21", port = "/dev/ttyUSB7" }\n'
+        f'elevation = {{ model = "gs232b", port = "{by_id}" }}\nel_max_deg = 90\n'
+    )
+    with pytest.raises(ConfigError, match=r"audit_file .* is also rotators\[0\]\.elevation\.port"):
+        load_settings(write(tmp_path, composite), environ={})
+
+
 @pytest.mark.parametrize(
     ("reader", "holder"),
     [

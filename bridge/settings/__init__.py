@@ -53,6 +53,10 @@ Rules:
    file passed check-config, and the first lock OFF replaced the configuration with the state
    (the next start: "not valid TOML"); a password file was overwritten likewise, and a
    console password file named ``console-secret`` beside the state file by random bytes.
+   No file it writes is a rotator's serial port, by any name (links followed), nor a device
+   (a character or block device): attack 28: ``audit_file`` naming the port passed
+   check-config and every audit line went down the controller's line (a Rotor-EZ ran a
+   refused target's ``AM1;`` inside one). The error names the key.
 7. A file that holds a secret (``files_secret``: the MQTT and console password files, the TLS
    key, the console's secret beside the state file, kept there by any run with a console
    password) is read as nothing else (``secret_read``): no other key that names a file to
@@ -92,6 +96,7 @@ import ipaddress
 import json
 import os
 import re
+import stat
 import tomllib
 import types
 from pathlib import Path
@@ -220,7 +225,8 @@ class Settings(BaseSettings):
         description="where the lock and the options set at run time are kept across restarts; "
         "with a console password, the console's login secret (console-secret, see the "
         "console's page) is kept beside it. A file of its own: the configuration file, the "
-        "audit file or a file another key names is refused (it would be overwritten). A file "
+        "audit file, a file another key names, a rotator's serial port or a "
+        "device is refused (it would be overwritten, or written to the device). A file "
         "there that is no state file (unreadable) starts every rotator locked, and is kept as "
         "<name>.unreadable before the bridge first writes it anew. Only a lock ON there is the "
         "last word at a start: a rotator whose lock it says OFF, or does not say, takes the "
@@ -236,7 +242,9 @@ class Settings(BaseSettings):
     audit_file: Path | None = Field(
         None,
         description="the audit log: one JSON line per command executed or refused, from every "
-        "interface (who, how, what, the result); rotated by size",
+        "interface (who, how, what, the result); rotated by size. A file of its own: the "
+        "configuration file, the state file, a file another key names, a rotator's serial "
+        "port or a device is refused",
         examples=["/var/log/rotor-bridge/audit.jsonl"],
         json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
     )
@@ -524,6 +532,16 @@ class Settings(BaseSettings):
                         f"{name} {shown_path(path)} is also {other}: the bridge writes there, and "
                         f"would overwrite it; {fix}"
                     )
+            for other, port in self.serial_ports():
+                if same_file(path, port):
+                    raise ValueError(_on_a_port(name, path, other, port))
+            device = _device_at(path)
+            if device is not None:
+                fix = "remove what is there" if name == _SECRET else _OWN  # (no key names it)
+                raise ValueError(
+                    f"{name} {shown_path(path)} is a {device}, not a file: the bridge writes "
+                    f"there, and what it writes would go to the device; {fix}"
+                )
         said = secret_read(self.files_secret(), self.files_read())  # rule 7
         if said is not None:
             raise ValueError(said)
@@ -543,6 +561,16 @@ class Settings(BaseSettings):
         if self.web.password_file is not None:  # (app.py: a short one is made anew)
             written.append((_SECRET, self.console_secret()))
         return written
+
+    def serial_ports(self) -> list[tuple[str, str]]:
+        """The rotators' serial ports (rule 6), by key (a composite's both)."""
+        return [
+            (f"rotators[{i}].{key}", port)
+            for i, r in enumerate(self.rotators)
+            for key, port in zip(
+                ["azimuth.port", "elevation.port"] if r.axes else ["port"], r.ports, strict=True
+            )
+        ]
 
     def console_secret(self) -> Path:
         """Where the console's login secret is kept (interfaces/web/auth.py rule 2)."""
@@ -625,6 +653,23 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
         return os.path.samefile(a, b)
     except (OSError, ValueError):  # (one not there yet)
         return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _on_a_port(name: str, path: Path, port_key: str, port: str) -> str:
+    """Rule 6: why a file the bridge writes may not be a rotator's serial port."""
+    where = f"{name} {shown_path(path)} is also {port_key} ({shown_path(port)}), a serial port"
+    return f"{where}: what the bridge writes there would go to the controller; {_OWN}"
+
+
+def _device_at(path: Path) -> str | None:
+    """Rule 6: what is at ``path`` (links followed) if it is a device, else None."""
+    try:
+        mode = os.stat(os.path.expanduser(path)).st_mode
+    except (OSError, ValueError):  # (not there yet, or not to be looked at: the start says)
+        return None
+    if stat.S_ISCHR(mode):
+        return "character device"
+    return "block device" if stat.S_ISBLK(mode) else None
 
 
 def secret_read(secret: list[tuple[str, Path]], read: list[tuple[str, Path]]) -> str | None:

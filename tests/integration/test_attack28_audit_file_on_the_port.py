@@ -28,11 +28,6 @@ REFUSED = "AP1200;AM1;"  # a Rotor-EZ's target and move, as a payload R/target r
 AUDIT_WRITE_S = 5.0  # the audit writer's line after its R/audit message, on a loaded machine
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: audit_file set to the rotator's serial port passes check-config; audit "
-    "lines are written into the controller's line, which runs a refused AP1200;AM1; target",
-)
 def test_an_audit_file_on_the_rotators_port_sends_nothing_to_the_controller(rig: Rig) -> None:
     emu = rig.add("tower", "rotorez")
     rig.sections = {"audit_file": rig.rotators[0]["port"]}
