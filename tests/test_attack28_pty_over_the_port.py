@@ -21,11 +21,6 @@ import pytest
 from tests.support import cli
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 28: gs232_pty set to the rotator's own port passes check-config; the start "
-    "replaces the adapter's by-id link with its pty and the rotator never answers",
-)
 @pytest.mark.parametrize("key", ["gs232_pty", "easycomm_pty", "dcu1_pty"])
 def test_a_pty_at_the_rotators_own_port_is_refused_naming_it(tmp_path: Path, key: str) -> None:
     by_id = tmp_path / "usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"

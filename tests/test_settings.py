@@ -210,6 +210,44 @@ def test_a_file_the_bridge_writes_is_no_serial_port_nor_device(tmp_path: Path) -
         load_settings(write(tmp_path, composite), environ={})
 
 
+@pytest.mark.parametrize("key", ["gs232_pty", "easycomm_pty", "dcu1_pty"])
+def test_a_ptys_link_is_no_port_nor_file_the_bridge_writes(tmp_path: Path, key: str) -> None:
+    """Attack 28 (rule 6): a pty's link replaces what is at its path: at a rotator's port (by
+    any name) the rotator opened the bridge's own pty; at the state or audit file, another
+    pty's path (through a folder's link), or the configuration file, it is refused by key."""
+    tty = tmp_path / "ttyUSB0"
+    tty.symlink_to("/dev/null")
+    by_id = tmp_path / "by-id"
+    by_id.symlink_to(tty)
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run-link").symlink_to(tmp_path / "run")
+    state = tmp_path / "state.json"
+    top = f'state_file = "{state}"\n'
+    cases = [
+        (top, f'{key} = "{by_id}"', "rotators[0].port"),
+        (top, f'{key} = "{tty}"', "rotators[0].port"),  # the device under its other name
+        (top, f'{key} = "{state}"', "state_file"),
+        (f'{top}audit_file = "{tmp_path / "a.jsonl"}"\n', f'{key} = "{tmp_path}/a.jsonl"', "audit"),
+        (top, f'{key} = "{tmp_path / "c.toml"}"', "the configuration file itself"),
+    ]
+    other = "dcu1_pty" if key != "dcu1_pty" else "gs232_pty"
+    cases.append((top, f'{key} = "{tmp_path}/run/p"\n{other} = "{tmp_path}/run-link/p"', "is also"))
+    for head, pty, said in cases:
+        cfg = write(tmp_path, head + _rotator(by_id, pty + "\n"))
+        with pytest.raises(ConfigError) as caught:
+            load_settings(cfg, environ={})
+        assert key in str(caught.value) and said in str(caught.value), caught.value
+    # a crashed run's link left at the pty's path points at a device: its own, not refused
+    leftover = tmp_path / "run" / "gs"
+    leftover.symlink_to("/dev/null")
+    cfg = write(
+        tmp_path,
+        f'{top}audit_file = "{tmp_path / "a.jsonl"}"\n'
+        + _rotator(tmp_path / "nonesuch", f'{key} = "{leftover}"\n'),
+    )
+    assert getattr(load_settings(cfg, environ={}).rotators[0], key) == str(leftover)
+
+
 @pytest.mark.parametrize(
     ("reader", "holder"),
     [

@@ -53,10 +53,14 @@ Rules:
    file passed check-config, and the first lock OFF replaced the configuration with the state
    (the next start: "not valid TOML"); a password file was overwritten likewise, and a
    console password file named ``console-secret`` beside the state file by random bytes.
-   No file it writes is a rotator's serial port, by any name (links followed), nor a device
-   (a character or block device): attack 28: ``audit_file`` naming the port passed
-   check-config and every audit line went down the controller's line (a Rotor-EZ ran a
-   refused target's ``AM1;`` inside one). The error names the key.
+   A pty's link (``gs232_pty``, ``easycomm_pty``, ``dcu1_pty``) is a file the bridge writes
+   too (ptylines.py rule 1 replaces a link there). No file it writes is a rotator's serial
+   port, by any name (links followed), nor a device (a character or block device; a pty's
+   path excepted, where a link to a crashed run's pty is its own leftover): attack 28:
+   ``audit_file`` naming the port passed check-config and every audit line went down the
+   controller's line (a Rotor-EZ ran a refused target's ``AM1;`` inside one), and a
+   ``gs232_pty`` naming its rotator's by-id link replaced it with the pty's, so the rotator
+   opened the bridge's own pty and never answered. The error names the key.
 7. A file that holds a secret (``files_secret``: the MQTT and console password files, the TLS
    key, the console's secret beside the state file, kept there by any run with a console
    password) is read as nothing else (``secret_read``): no other key that names a file to
@@ -165,6 +169,8 @@ _SECRET_KEYS = ("mqtt.password_file", "web.password_file", "mqtt.tls.key_file", 
 _TOGETHER = frozenset(  # (one PEM file of a certificate and its key; ssl quotes neither)
     {("mqtt.tls.cert_file", "mqtt.tls.key_file"), ("mqtt.tls.ca_file", "mqtt.tls.key_file")}
 )
+# rule 6: the keys that name a pty's link, a file the bridge writes
+_PTY_KEYS = tuple(f"{key}_pty" for key in EMULATION_KEYS)
 _ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
 
 
@@ -225,7 +231,7 @@ class Settings(BaseSettings):
         description="where the lock and the options set at run time are kept across restarts; "
         "with a console password, the console's login secret (console-secret, see the "
         "console's page) is kept beside it. A file of its own: the configuration file, the "
-        "audit file, a file another key names, a rotator's serial port or a "
+        "audit file, a file another key names, a pty's path, a rotator's serial port or a "
         "device is refused (it would be overwritten, or written to the device). A file "
         "there that is no state file (unreadable) starts every rotator locked, and is kept as "
         "<name>.unreadable before the bridge first writes it anew. Only a lock ON there is the "
@@ -243,8 +249,8 @@ class Settings(BaseSettings):
         None,
         description="the audit log: one JSON line per command executed or refused, from every "
         "interface (who, how, what, the result); rotated by size. A file of its own: the "
-        "configuration file, the state file, a file another key names, a rotator's serial "
-        "port or a device is refused",
+        "configuration file, the state file, a file another key names, a pty's path, a "
+        "rotator's serial port or a device is refused",
         examples=["/var/log/rotor-bridge/audit.jsonl"],
         json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
     )
@@ -526,16 +532,16 @@ class Settings(BaseSettings):
         written = self.files_written()
         for n, (name, path) in enumerate(written):
             for other, given in [*written[n + 1 :], *self.files_read()]:
-                if same_file(path, given):
+                if _written_at(name, path, other, given):
                     fix = "name that file otherwise" if name == _SECRET else _OWN
                     raise ValueError(
                         f"{name} {shown_path(path)} is also {other}: the bridge writes there, and "
                         f"would overwrite it; {fix}"
                     )
-            for other, port in self.serial_ports():
-                if same_file(path, port):
+            for other, port in self.serial_ports():  # (a pty's link to the port's device too)
+                if same_file(path, port) or _written_at(name, path, other, Path(port)):
                     raise ValueError(_on_a_port(name, path, other, port))
-            device = _device_at(path)
+            device = None if name.endswith(_PTY_KEYS) else _device_at(path)
             if device is not None:
                 fix = "remove what is there" if name == _SECRET else _OWN  # (no key names it)
                 raise ValueError(
@@ -554,12 +560,19 @@ class Settings(BaseSettings):
         return [*secret, (_SECRET, self.console_secret())]
 
     def files_written(self) -> list[tuple[str, Path]]:
-        """The files the bridge writes (rule 6), by key."""
+        """The files the bridge writes (rule 6), by key: a pty's link too (ptylines.py rule 1:
+        it replaces a link there)."""
         written = [("state_file", self.state_file)]
         if self.audit_file is not None:
             written.append(("audit_file", self.audit_file))
         if self.web.password_file is not None:  # (app.py: a short one is made anew)
             written.append((_SECRET, self.console_secret()))
+        written += [
+            (f"rotators[{i}].{key}", Path(path))
+            for i, r in enumerate(self.rotators)
+            for key in _PTY_KEYS
+            if (path := getattr(r, key)) is not None
+        ]
         return written
 
     def serial_ports(self) -> list[tuple[str, str]]:
@@ -655,9 +668,34 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
+def _written_at(name: str, path: Path, other: str, given: Path) -> bool:
+    """Rule 6: whether ``name``'s file at ``path`` is ``other``'s at ``given``. A pty's file is
+    its link, not what a link there points at now (a crashed run's pty, replaced at the start):
+    it is the other's if its place is the other's, or where the other's links lead."""
+    ptys = [p for key, p in ((name, path), (other, given)) if key.endswith(_PTY_KEYS)]
+    if not ptys:
+        return same_file(path, given)
+    places = [_place(p) for p in (path, given)]
+    if len(ptys) == 2:
+        return places[0] == places[1]
+    pty, file = (places[0], given) if name.endswith(_PTY_KEYS) else (places[1], path)
+    return pty in (_place(file), os.path.realpath(os.path.expanduser(file)))
+
+
+def _place(path: Path) -> str:
+    """Where ``path`` is, its folder's links followed and not its own (a pty's link)."""
+    full = os.path.abspath(os.path.expanduser(path))
+    return os.path.join(os.path.realpath(os.path.dirname(full)), os.path.basename(full))
+
+
 def _on_a_port(name: str, path: Path, port_key: str, port: str) -> str:
     """Rule 6: why a file the bridge writes may not be a rotator's serial port."""
     where = f"{name} {shown_path(path)} is also {port_key} ({shown_path(port)}), a serial port"
+    if name.endswith(_PTY_KEYS):  # (ptylines.py rule 1: the port's link replaced by the pty's)
+        return (
+            f"{where}: the pty's link would replace the port's name, and the rotator would open "
+            "the bridge's own pty, not the controller; give the pty another path"
+        )
     return f"{where}: what the bridge writes there would go to the controller; {_OWN}"
 
 

@@ -413,7 +413,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,  # (no min_length: pydantic refuses a home folder not UTF-8 then; base.py rule 4)
         description="Yaesu GS-232B on a pseudo-terminal, for programs that want a serial port "
         "(`rotctl -m 603 -r /run/rotor-bridge/gs232`): the path of a link to it, made at start "
-        "and removed at the end; anything but a link already there is refused. Under the "
+        "and removed at the end; anything but a link already there is refused, and so is a "
+        "rotator's serial port (by any name), another pty's path or a file the bridge writes. "
+        "Under the "
         "systemd unit /tmp is the service's own (PrivateTmp): put links under /run/rotor-bridge",
         examples=["/run/rotor-bridge/gs232"],
         json_schema_extra={"unset": "no GS-232 pty"},
