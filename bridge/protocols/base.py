@@ -82,6 +82,7 @@ from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
 
 from bridge.core.model import SettingValue
+from bridge.core.text import shown_past
 
 
 @dataclass(frozen=True)
@@ -330,7 +331,8 @@ class Setting:
         unit = f" {self.unit}" if self.unit else ""
         span = f"{self.minimum:g}..{self.maximum:g}{unit}"
         if not math.isfinite(number) or not self.minimum <= number <= self.maximum:
-            raise ValueError(f"{self.name}: {number:g} is outside {span}")
+            shown = shown_past(number, self.minimum, self.maximum)  # (4.0000001: not "4")
+            raise ValueError(f"{self.name}: {shown} is outside {span}")
         steps = (number - self.minimum) / self.step
         if abs(steps - round(steps)) > 1e-6:
             raise ValueError(f"{self.name}: {number:g} is not on a step of {self.step:g} in {span}")

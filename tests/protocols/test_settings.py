@@ -63,6 +63,7 @@ def test_a_number_setting_takes_its_range_and_step_and_refuses_the_rest() -> Non
         ("0.3", "0.3 is not on a step of 0.5 in 0..10 s"),
         ("fast", "expected a number, got 'fast'"),
         ("nan", "nan is outside"),
+        ("10.0000001", "10.0000001 is outside 0..10 s"),  # (attack 28: not "10 is outside")
         (True, "expected a number"),
     ]:
         with pytest.raises(ValueError, match=words):
