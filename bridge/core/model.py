@@ -17,7 +17,7 @@ import math
 import unicodedata
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
-from typing import get_args
+from typing import TypeVar, get_args
 
 from bridge.core.text import bad_char
 
@@ -305,6 +305,29 @@ class TrackingInfo:
     elements_epoch_unix: float | None = None  # a satellite's: when its elements are for
     elements_stale: bool = False  # they are older than session/tracking.py's STALE_DAYS
     elements_ahead: bool = False  # dated after the station's clock by more than its AHEAD_DAYS
+
+
+_V = TypeVar("_V")
+
+
+def kept_if_same(new: _V, old: _V | None) -> _V:
+    """``old`` where ``new`` says the very same, to the letter, else ``new``: for a flat
+    frozen dataclass of scalars (an Order, a WindInfo) made anew at every reading though
+    nothing in it changed. R/status's text keeps what a reading leaves by the very objects it
+    was made of (interfaces/mqtt/payloads.py StatusText): an equal one made anew made that
+    text again at every reading. Equal is not enough (``1 == 1.0 == True``, ``0.0 == -0.0``:
+    each its own text): each field is also of the same type, and a float of the same sign."""
+    if old is None or old is new:
+        return new
+    if type(old) is not type(new) or old != new:
+        return new
+    for name in old.__dataclass_fields__:  # type: ignore[attr-defined]
+        a, b = getattr(old, name), getattr(new, name)
+        if type(a) is not type(b):
+            return new
+        if type(a) is float and math.copysign(1.0, a) != math.copysign(1.0, b):
+            return new
+    return old
 
 
 @dataclass(frozen=True)

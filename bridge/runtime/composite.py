@@ -198,6 +198,7 @@ from bridge.core.model import (
     Target,
     combine,
     describe_command,
+    kept_if_same,
 )
 from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
@@ -333,9 +334,14 @@ def merge(
     *,
     error: str | None = None,
     versioned: tuple[bool, bool] = (True, True),
+    before: RotatorStatus | None = None,
 ) -> RotatorStatus:
     """Rule 3: the rotator's status from its two boxes' (``error``: the newer last error;
-    ``versioned``: whether the azimuth's and the elevation's box report a version)."""
+    ``versioned``: whether the azimuth's and the elevation's box report a version). What it
+    makes of the two (the order, the joined version, the wind) is ``before``'s, the rotator's
+    last merged status, while it says the same: R/status's text keeps what a reading leaves by
+    its very objects (interfaces/mqtt/payloads.py StatusText), and those made anew at every
+    merge made the rest of that text again at every reading of either box (issue 39)."""
     states = {az.state, el.state}
     if MotionState.MOVING in states:  # (a box read turning while the other is out: turning)
         state = MotionState.MOVING
@@ -346,6 +352,8 @@ def merge(
         state = next((s for s in order if s in states), az.state)
     said = [box.version for box, has in zip((az, el), versioned, strict=True) if has]
     version = " / ".join(v for v in said if v) if said and all(said) else None
+    if before is not None and version is not None and version == before.version:
+        version = before.version  # (text: equal is the same text)
     wind = az.wind  # (its park seen reached only if both boxes' parks were; waiting if either's;
     # refused if either's, in the words of the box that refused it, else waiting in the words
     # of the box whose park waits, else off the park in those of the box off it:
@@ -366,6 +374,10 @@ def merge(
             off_park=wind.off_park or el.wind.off_park,
             refusal=refusal,
         )
+        wind = kept_if_same(wind, None if before is None else before.wind)
+    place = _order(az.order, el.order)
+    if before is not None and place is not az.order:
+        place = kept_if_same(place, before.order)
     return replace(
         az,
         rotator_id=rotator_id,
@@ -382,7 +394,7 @@ def merge(
         controller_time=az.controller_time or el.controller_time,
         parked=az.parked and el.parked,
         stop_owed=az.stop_owed or el.stop_owed,
-        order=_order(az.order, el.order),
+        order=place,
         wind=wind,
     )
 
@@ -504,7 +516,9 @@ class Composition:
                 if box.tracking is not None and self._ended is None:
                     self._ended = OFFLINE
         az, el = self.boxes[Axis.AZIMUTH], self.boxes[Axis.ELEVATION]
-        merged = merge(self.rotator_id, az, el, error=self._error, versioned=self.versioned)
+        merged = merge(
+            self.rotator_id, az, el, error=self._error, versioned=self.versioned, before=self.status
+        )
         if self._ended is not None and merged.tracking is None:
             merged = replace(merged, tracking_ended=self._ended)
         worth = self._first or st.worth_emitting(merged, self.status)

@@ -11,6 +11,7 @@ import random
 from collections.abc import Sequence
 from dataclasses import replace
 from datetime import UTC, datetime
+from itertools import pairwise
 
 import pytest
 
@@ -21,6 +22,7 @@ from bridge.core.model import (
     MotionState,
     RotatorHealth,
     RotatorStatus,
+    Target,
     TargetInfo,
     TrackingInfo,
     WindInfo,
@@ -28,6 +30,7 @@ from bridge.core.model import (
 from bridge.feature import status_blocks
 from bridge.interfaces.mqtt import payloads as pl
 from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual_composite import VirtualComposite
 
 
 def _iso(t: float) -> str:
@@ -239,3 +242,53 @@ def test_a_sessions_turning_readings_make_the_rest_once_per_state(
     for n, status in enumerate(turn):
         assert text.render(status, T0 + n, False) == fresh(status, T0 + n, False, False)
     assert len(made) <= 3, [s.state for s in turn]
+
+
+def _rebuilds(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Each time R/status's rest is made again (payloads.py ``_status_rest``), counted."""
+    made: list[int] = []
+    rest = pl._status_rest
+
+    def counted(*args: object) -> tuple[str, str]:
+        made.append(1)
+        return rest(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(pl, "_status_rest", counted)
+    return made
+
+
+def test_a_composites_turning_readings_make_the_rest_once_per_state(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A rotator of two boxes (runtime/composite.py), a Rotor-EZ's azimuth and a SatEL's
+    elevation, each box saying its version, a wind topic read and the lease held, turned to
+    200/40 in virtual time: its merged statuses are each made of the last one's values but the
+    bearings. ``merge`` made a new Order, a new joined version (``1.4S / SatEL``) and a new
+    wind at every merged status, the same in each: the rest of R/status was made again at
+    every reading of either box (issue 39). It is made for the first status and once per state
+    the turn shows, the text the fresh one every time."""
+    wind = {"wind_topic": "weather/wind", "wind_park_above": 60, "park_az_deg": 0}
+    with VirtualComposite("rotorez", "satel", settings=wind) as v:
+        v.run_until(lambda h: h.status.available, 10.0, "both boxes answer")
+        v.mailbox.put_wind(20.0)
+        v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+        v._take()
+        v.run_for(3.0)
+        start = len(v.statuses)
+        made = _rebuilds(monkeypatch)
+        text = pl.StatusText(True)
+        v.aim(Target(200.0, 40.0))
+        v.run_until(lambda h: h.status.moving, 5.0, "the turn starts")
+        v.run_until(lambda h: not h.status.moving, 200.0, "the turn ends")
+        v.run_for(3.0)
+        turn = [s for _, s in v.statuses[start:]]
+    assert turn[-1].version == "1.4S / SatEL" and turn[-1].wind is not None
+    assert turn[-1].control is not None and turn[-1].order is not None
+    assert len(turn) > 50  # (a reading each poll of either box while it turned)
+    for n, status in enumerate(turn):
+        assert text.render(status, T0 + n, False) == fresh(status, T0 + n, True, False)
+    # (the first status, then one per change of what the turn shows: braking, moving, the
+    # SatEL's estimate in its slew, idle)
+    shows = [(s.state, s.estimated) for s in turn]
+    changes = 1 + sum(a != b for a, b in pairwise(shows))
+    assert len(made) <= changes, (len(made), shows)
