@@ -178,7 +178,7 @@ from __future__ import annotations
 import logging
 
 from bridge.core.errors import Refused
-from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo
+from bridge.core.model import ErrorKind, MotionState, Source, Target, WindInfo, kept_if_same
 from bridge.session.actions import Report
 from bridge.session.config import WindConfig, WorkerConfig
 from bridge.session.motion import Motion, MotionConfig, angle_error
@@ -237,13 +237,18 @@ class WindPark:
         self._wire: tuple[float, float | None] | None = None  # rule 10: this storm's park, sent
         self._off: str | None = None  # rule 10: where the rotor stands off that park, in words
         self._wall_offset_s = 0.0
+        self._info: WindInfo | None = None  # the last ``info``, kept while it says the same
 
     @property
     def info(self) -> WindInfo | None:
+        """The status's ``wind``: the last one while it says the same (core/model.py
+        ``kept_if_same``). The session asks at every status it makes, and one made anew at
+        every reading made R/status's rest again at every one (payloads.py StatusText keeps it
+        by its very objects: issue 39)."""
         if not self.on:
             return None
         calm = self._calm_since
-        return WindInfo(
+        info = WindInfo(
             speed_kmh=None if self._speed is None else round(self._speed, 1),
             storm=self.storm,
             calm_since_unix=None if calm is None else calm + self._wall_offset_s,
@@ -256,6 +261,8 @@ class WindPark:
             refused=self.storm and self._refused is not None,
             off_park=self._off is not None,
         )
+        self._info = info = kept_if_same(info, self._info)
+        return info
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
         """Rules 1, 2, 4 and 6: a reading, in km/h (``replayed`` by the broker)."""

@@ -292,3 +292,38 @@ def test_a_composites_turning_readings_make_the_rest_once_per_state(
     shows = [(s.state, s.estimated) for s in turn]
     changes = 1 + sum(a != b for a, b in pairwise(shows))
     assert len(made) <= changes, (len(made), shows)
+
+
+def test_a_storms_park_readings_make_the_rest_once_per_change(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A Rotor-EZ with a wind topic and the lease held, parked for a storm in virtual time
+    (session/wind.py): the wind part made a new WindInfo at every status the session made,
+    the same in each, so R/status's rest was made again at every reading of the wind's park
+    turn, and of any turn (issue 39). It is made for the first status and once per change of
+    what that rest is made of (the park's state, parked, the wind's park seen reached, which
+    R/status does not show), the text the fresh one every time."""
+    wind = {"wind_topic": "weather/wind", "wind_park_above": 60, "wind_park_az_deg": 200}
+    v = VirtualRotator("rotorez", settings=wind, emulator={"speed_deg_s": 4.0})
+    v.run_for(3.0)  # online, idle, options read
+    v.mailbox.put_wind(20.0)
+    v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+    v._take()
+    v.run_for(3.0)
+    start = len(v.statuses)
+    v.mailbox.put_wind(90.0)  # the storm: the rotor turns to its park at 200
+    v._take()
+    v.run_until(lambda h: h.status.moving, 10.0, "the park's turn starts")
+    v.run_until(lambda h: h.status.parked, 200.0, "parked for the storm")
+    v.run_for(3.0)
+    turn = [s for _, s in v.statuses[start:]]
+    assert turn[-1].wind is not None and turn[-1].wind.storm and turn[-1].control is not None
+    assert len(turn) > 50  # (a reading each poll while it turned)
+    # (what the rest is made of, by value: the status's own fields, its blocks, its options)
+    rests = [(pl._REST_FIELDS(s), [b.value(s) for b in status_blocks()], s.options) for s in turn]
+    changes = 1 + sum(a != b for a, b in pairwise(rests))
+    made = _rebuilds(monkeypatch)
+    text = pl.StatusText(False)
+    for n, status in enumerate(turn):
+        assert text.render(status, T0 + n, False) == fresh(status, T0 + n, False, False)
+    assert len(made) <= changes, (len(made), changes, len(turn))
