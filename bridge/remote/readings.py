@@ -27,6 +27,12 @@ Rules:
    stays so (each status is read again at each use). A name shown (``last_operator``, the
    lease's holder) is one ``_shown`` lets through and no longer than NAME_CHARS, or unknown
    (a lease's holder: UNSHOWN, the lease shown all the same).
+4. A status read from a new payload keeps the last one's objects where it says the same, to
+   the letter (``parse_status``'s ``before``: its texts, lease, order, options and blocks):
+   the console's R/status text keeps what a reading leaves by its very objects
+   (interfaces/mqtt/payloads.py StatusText), and a payload read all anew made that text's
+   rest again at every reading (issue 39). The same payload is read once (remote/rotator.py
+   ``status``).
 """
 
 from __future__ import annotations
@@ -46,6 +52,7 @@ from bridge.core.model import (
     SettingValue,
     TargetInfo,
     TrackingInfo,
+    kept_if_same,
 )
 from bridge.core.text import bad_char
 from bridge.feature import StatusBlock, status_blocks
@@ -215,14 +222,65 @@ def _tracking(doc: object) -> TrackingInfo | None:
     )
 
 
-def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
+def parse_status(
+    rotator_id: str, payload: bytes, before: RotatorStatus | None = None
+) -> RotatorStatus:
     """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
     the console draws (the place targeted, the body tracked). Rule 1: ValueError, never more
-    (an integer past a float's range in a pass track raised OverflowError)."""
+    (an integer past a float's range in a pass track raised OverflowError). Rule 4: what
+    R/status's text is made of after its head is ``before``'s very objects (the status read
+    from the last payload) where it says the same, to the letter."""
     try:
-        return _status(rotator_id, payload)
+        status = _status(rotator_id, payload)
     except OverflowError as exc:
         raise ValueError(f"a number in the status is out of range: {exc}") from None
+    return status if before is None else _kept(status, before)
+
+
+def _kept(status: RotatorStatus, before: RotatorStatus) -> RotatorStatus:
+    """Rule 4: ``status`` with ``before``'s objects where they say the same (the interface's
+    StatusText keeps the rest of R/status by its very objects: every payload read anew made
+    it again at every reading of the remote's console)."""
+    kept = status.__dict__
+    for name in ("version", "last_error", "last_command_source", "last_operator"):
+        old = getattr(before, name)
+        if old is not None and old == kept[name]:  # (text: equal is the same text)
+            kept[name] = old
+    kept["control"] = kept_if_same(status.control, before.control)
+    kept["order"] = kept_if_same(status.order, before.order)
+    if _same(status.options, before.options):
+        kept["options"] = before.options
+    relayed, was = status.relayed, before.relayed
+    if relayed is not None and was is not None:
+        for key, value in relayed.items():
+            old = was.get(key)
+            if old is not None and _same(value, old):
+                relayed[key] = old
+    return status
+
+
+def _same(a: object, b: object) -> bool:
+    """Rule 4: two JSON values that write the same text: of the same types throughout, a
+    float of the same sign (``1 == 1.0 == True``, ``0.0 == -0.0``: each its own text), an
+    object's keys in the same order."""
+    if a is b:
+        return True
+    kind = type(a)
+    if kind is not type(b):
+        return False
+    if kind is dict:
+        x, y = a, b
+        assert isinstance(x, dict) and isinstance(y, dict)
+        return len(x) == len(y) and all(
+            k == j and _same(v, w) for (k, v), (j, w) in zip(x.items(), y.items(), strict=True)
+        )
+    if kind is list or kind is tuple:
+        x, y = a, b
+        assert isinstance(x, list | tuple) and isinstance(y, list | tuple)
+        return len(x) == len(y) and all(map(_same, x, y))
+    if kind is float:
+        return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)  # type: ignore[arg-type]
+    return a == b
 
 
 def _status(rotator_id: str, payload: bytes) -> RotatorStatus:

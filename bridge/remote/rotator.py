@@ -250,6 +250,9 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
+        # the last R/status payload read and what it read as (readings.py rule 4: one attribute,
+        # so a thread never reads one without the other)
+        self._read: tuple[bytes, RotatorStatus] | None = None
         # the last stop sent (monotonic; interfaces/web/port.py rule 2), and how many (rule 2a),
         # of them how many each front end sent (rule 2b): counted together, under one lock
         self.last_halt_s = -math.inf
@@ -301,10 +304,15 @@ class RemoteRotator:
         raw = self._view.get(self.topics.status)
         if raw is None or not self.current:
             return RotatorStatus(self.id, connected=self._link.up)
-        try:
-            status = parse_status(self.id, raw)
-        except (ValueError, TypeError):
-            return RotatorStatus(self.id, connected=self._link.up)
+        read = self._read
+        if read is not None and read[0] is raw:  # (the same payload: read once)
+            status = read[1]
+        else:
+            try:  # (the last one's objects where it says the same: readings.py rule 4)
+                status = parse_status(self.id, raw, None if read is None else read[1])
+            except (ValueError, TypeError):
+                return RotatorStatus(self.id, connected=self._link.up)
+            self._read = raw, status
         if status.state is MotionState.MOVING and not self._view.live_within(
             self.topics.status, self._moving_max_age_s
         ):

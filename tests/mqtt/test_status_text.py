@@ -29,6 +29,7 @@ from bridge.core.model import (
 )
 from bridge.feature import status_blocks
 from bridge.interfaces.mqtt import payloads as pl
+from bridge.remote.readings import parse_status
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -326,4 +327,49 @@ def test_a_storms_park_readings_make_the_rest_once_per_change(
     text = pl.StatusText(False)
     for n, status in enumerate(turn):
         assert text.render(status, T0 + n, False) == fresh(status, T0 + n, False, False)
+    assert len(made) <= changes, (len(made), changes, len(turn))
+
+
+def test_a_remotes_readings_of_a_turn_make_the_rest_once_per_change(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The remote's console renders the station's R/status as it read it back
+    (remote/readings.py ``parse_status``, each payload after the last): a Rotor-EZ with a wind
+    topic and the lease held, turned to 200 in virtual time, its every status published. Each
+    payload read all anew (new texts, lease, order, options, blocks) made the rest of the
+    console's R/status again at every reading (issue 39). It is made for the first and once
+    per change of what the rest says, the text the station's own every time."""
+    wind = {"wind_topic": "weather/wind", "wind_park_above": 60, "wind_park_az_deg": 200}
+    v = VirtualRotator(
+        "rotorez",
+        settings=wind,
+        emulator={"speed_deg_s": 4.0},
+        options={"endpoint": True, "overshoot": False},
+    )
+    v.run_for(3.0)  # online, idle, options read
+    v.mailbox.put_wind(20.0)
+    v.mailbox.put_control(Control("DL1ABC", v.wall() + 1800))
+    v._take()
+    v.run_for(3.0)
+    start = len(v.statuses)
+    v.target(200.0)
+    v.run_until(lambda h: h.status.moving, 10.0, "the turn starts")
+    v.run_until(lambda h: not h.status.moving, 200.0, "the turn ends")
+    v.run_for(3.0)
+    turn = [s for _, s in v.statuses[start:]]
+    assert turn[-1].wind is not None and turn[-1].control is not None and turn[-1].options
+    assert len(turn) > 50  # (a reading each poll while it turned)
+    station = pl.StatusText(False)
+    payloads = [station.render(s, T0 + n, False) for n, s in enumerate(turn)]
+    # (the rest of each payload, as the station wrote it: what lies between parked and time)
+    rests = [
+        p[p.index('"parked"') : p.index('"time"')] + p[p.index('"time"') + 38 :] for p in payloads
+    ]
+    changes = 1 + sum(a != b for a, b in pairwise(rests))
+    made = _rebuilds(monkeypatch)
+    text = pl.StatusText(False)
+    read = None
+    for n, payload in enumerate(payloads):
+        read = parse_status("v", payload.encode(), read)
+        assert text.render(read, T0 + n, False) == payload
     assert len(made) <= changes, (len(made), changes, len(turn))
