@@ -30,6 +30,7 @@ from bridge.core.model import (
 from bridge.feature import status_blocks
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.remote.readings import parse_status
+from bridge.runtime.composite import merge
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -373,3 +374,30 @@ def test_a_remotes_readings_of_a_turn_make_the_rest_once_per_change(
         read = parse_status("v", payload.encode(), read)
         assert text.render(read, T0 + n, False) == payload
     assert len(made) <= changes, (len(made), changes, len(turn))
+
+
+@pytest.mark.parametrize(("was", "now"), [(20, 20.0), (0.0, -0.0), (True, 1.0)])
+def test_a_merged_status_keeps_no_value_that_writes_another_text(was: float, now: float) -> None:
+    """``merge`` keeps the last merged wind only while it says the same to the letter
+    (core/model.py ``kept_if_same``): an equal speed of another type or sign is another text
+    on R/status (``20`` and ``20.0``, ``0.0`` and ``-0.0``), and the text is the fresh one."""
+    before = merge(
+        "v", RotatorStatus("v", wind=WindInfo(was)), RotatorStatus("v", wind=WindInfo(was))
+    )
+    after = merge(
+        "v",
+        RotatorStatus("v", wind=WindInfo(now)),
+        RotatorStatus("v", wind=WindInfo(now)),
+        before=before,
+    )
+    text = pl.StatusText(False)
+    assert text.render(before, T0, False) == fresh(before, T0, False, False)
+    assert text.render(after, T0, False) == fresh(after, T0, False, False)
+    assert text.render(after, T0, False) != text.render(before, T0, False)
+    same = merge(
+        "v",
+        RotatorStatus("v", wind=WindInfo(now)),
+        RotatorStatus("v", wind=WindInfo(now)),
+        before=after,
+    )
+    assert same.wind is after.wind  # (the very same: kept)
