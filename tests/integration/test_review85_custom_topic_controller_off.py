@@ -1,0 +1,55 @@
+"""Review 85: claim.py rule 5 vouches for a rotator's stamp (``R/info`` says ``offline``: its
+controller switched off) only by the bridge info on a topic above the looking bridge's base
+topic (``above``: ``A/bridge/info``), read where the stamp's base topic would be. A rotator
+with a ``topic`` of its own lies under no base topic of its bridge: bridge A on ``shack`` with
+a rotator ``tower`` at ``topic = "rotor/tower"`` stamps ``{"instance": A, "base_topic":
+"shack"}``, and ``shack/bridge/info`` is never read by a bridge on ``rotor/tower``. With the
+tower's controller off (a station's everyday state), a bridge started on ``rotor/tower`` takes
+live bridge A for gone and runs; once the controller is switched on, one target on
+``rotor/tower/target`` turns both rotors (review 77's clash, back through a rotator's own
+topic)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 85: a bridge started on a live bridge's rotator topic of its own "
+    "(topic = rotor/tower, base topic elsewhere), its controller off, runs, and once the "
+    "controller is on one target turns both rotors",
+)
+def test_a_bridge_on_a_live_bridges_own_rotator_topic_whose_controller_is_off_never_runs(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    with Rig(tmp_path / "a", broker, probe) as a, Rig(tmp_path / "b", broker, probe) as b:
+        a.base = "shack"  # bridge A: base topic shack, its tower's topic of its own rotor/tower
+        tower = a.add("tower", emu={"start_az_deg": 0, "jitter_deg": 0}, topic="rotor/tower")
+        a.add("yagi", emu={"start_az_deg": 0, "jitter_deg": 0})
+        tower.set_silent(True)  # the tower's controller switched off
+        first = a.start()
+        a.ready("yagi")
+        probe.wait_value("rotor/tower/availability", "offline")
+        b.base = "rotor/tower"  # bridge B's one rotator's topics are A's tower's
+        mast = b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0})
+        second = b.start()
+        if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
+            wait_until(
+                lambda: b.status("mast").available or second.failed.is_set(),
+                what="the second bridge's rotator to answer",
+            )
+        t = probe.caught_up()
+        tower.set_silent(False)  # switched on: the live bridge's tower answers
+        probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
+        probe.publish("rotor/tower/target", "90")
+        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
+        after = mast.state()
+        assert (after.az_deg, after.is_moving) == (200, False), after
+        assert second.failed.is_set() and not first.failed.is_set()
