@@ -53,3 +53,39 @@ def test_a_bridge_on_a_live_bridges_own_rotator_topic_whose_controller_is_off_ne
         after = mast.state()
         assert (after.az_deg, after.is_moving) == (200, False), after
         assert second.failed.is_set() and not first.failed.is_set()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 85: a bridge whose rotator has a topic of its own (rotor/tower, base topic "
+    "site) on a live bridge's rotator whose controller is off runs, and once the controller "
+    "is on one target turns both rotors",
+)
+def test_a_bridge_whose_own_rotator_topic_is_a_live_bridges_rotator_whose_controller_is_off_never_runs(  # noqa: E501
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    """The same defect's other face: the looking bridge's rotator has the topic of its own,
+    and ``above`` is read only above its base topic, never above that rotator's topic."""
+    with Rig(tmp_path / "a", broker, probe) as a, Rig(tmp_path / "b", broker, probe) as b:
+        tower = a.add("tower", emu={"start_az_deg": 0, "jitter_deg": 0})  # rotor/tower
+        a.add("yagi", emu={"start_az_deg": 0, "jitter_deg": 0})
+        tower.set_silent(True)  # the tower's controller switched off
+        first = a.start()
+        a.ready("yagi")
+        probe.wait_value("rotor/tower/availability", "offline")
+        b.base = "site"  # bridge B: base topic site, its one rotator's topic A's tower's
+        mast = b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0}, topic="rotor/tower")
+        second = b.start()
+        if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
+            wait_until(
+                lambda: b.status("mast").available or second.failed.is_set(),
+                what="the second bridge's rotator to answer",
+            )
+        t = probe.caught_up()
+        tower.set_silent(False)  # switched on: the live bridge's tower answers
+        probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
+        probe.publish("rotor/tower/target", "90")
+        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
+        after = mast.state()
+        assert (after.az_deg, after.is_moving) == (200, False), after
+        assert second.failed.is_set() and not first.failed.is_set()
