@@ -42,8 +42,10 @@ Rules:
    seconds (13 after a day), never one more every few seconds, and yet no attempt is waited
    for for ever (review 81: with one abandoned attempt at most, the second hung try was waited
    for as long as the first hung, for good, and an adapter replugged later than OPEN_BOUND_S
-   after it wedged was never tried again). A replug need not wait for a stretched bound: while
-   abandoned attempts still hang, the port's path is looked at every NODE_LOOK_S (one stat,
+   after it wedged was never tried again). A replug need not wait for a bound: while an
+   attempt is pending, the first one included (review 84: the first hung open was waited for
+   its whole OPEN_BOUND_S with the path never looked at, and a STOP owed meanwhile reached the
+   replugged adapter ~9 s late), the port's path is looked at every NODE_LOOK_S (one stat,
    the link followed: no open, nothing of the driver's) and a device node that changed from
    the one the pending attempt started on (gone, or another one: st_rdev, st_ino, st_ctime) is
    the replug's evidence: that attempt is abandoned too and the port tried again at once (one
@@ -346,14 +348,14 @@ class Worker:
 
     def _start_open(self, now: float) -> None:
         """Rule 4: an attempt on a thread of its own, bounded by OPEN_BOUND_S doubled for each
-        abandoned attempt still inside its open(); the path looked at for a replug meanwhile
-        while any is."""
+        abandoned attempt still inside its open(); the path looked at for a replug meanwhile,
+        the first attempt's wait included."""
         self._hung = [hung for hung in self._hung if hung.running]
         self._node = _device_node(self.cfg.port)
         attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
         self._opening = PendingOpen(attempt, self._wake)
         self._open_until = now + OPEN_BOUND_S * 2 ** len(self._hung)
-        self._look_at = now + NODE_LOOK_S if self._hung else math.inf
+        self._look_at = now + NODE_LOOK_S  # review 84: the first hung open's wait too
 
     def _hung_reason(self) -> str:
         return (

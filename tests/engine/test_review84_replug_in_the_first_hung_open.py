@@ -13,8 +13,6 @@ import select
 from functools import partial
 from pathlib import Path
 
-import pytest
-
 from bridge.app import worker_config
 from bridge.core.model import Stop
 from bridge.runtime.worker import NODE_LOOK_S, OPEN_BOUND_S, OWED_RETRY_S, Worker
@@ -26,13 +24,6 @@ from tests.support.rig import FAST_BRIDGE
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 84: an adapter replugged while its first open hangs is not tried till that "
-        "open's 10 s bound is over: a STOP owed meanwhile reaches the rotor ~9 s late"
-    ),
-)
 def test_a_replug_during_the_first_hung_open_has_the_owed_stop_out_promptly(
     tmp_path: Path,
 ) -> None:
