@@ -47,7 +47,9 @@ Rules:
    its whole OPEN_BOUND_S with the path never looked at, and a STOP owed meanwhile reached the
    replugged adapter ~9 s late), the port's path is looked at every NODE_LOOK_S (one stat,
    the link followed: no open, nothing of the driver's) and a device node that changed from
-   the one the pending attempt started on (gone, or another one: st_rdev, st_ino, st_ctime) is
+   the one the pending attempt started on (gone, or another one: the link's target, the
+   node's st_rdev, st_dev, st_ino; never its ctime, which a chmod or udev re-applying a rule
+   moves with no replug: review 84, a thread more hung in the wedged driver per touch) is
    the replug's evidence: that attempt is abandoned too and the port tried again at once (one
    more thread per replug, a hand's act). The abandoned open hangs on the old device, the new
    attempt opens the new one. The bound is liveness, not correctness (docs/architecture.md
@@ -165,7 +167,7 @@ class Worker:
         self._opening: PendingOpen | None = None
         self._open_until = math.inf  # when the pending open is given up as hung (rule 4)
         self._hung: list[PendingOpen] = []  # attempts given up, maybe still running (rule 4)
-        self._node: tuple[int, int, int, int] | None = None  # the path's device at the try
+        self._node: tuple[str, int, int, int] | None = None  # the path's device at the try
         self._look_at = math.inf  # when the path is looked at next for a replug (rule 4)
         self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
         self._wake: Callable[[], None] = lambda: None
@@ -441,14 +443,18 @@ class Worker:
                 self._sky.ask(action.question, partial(self._answered, action.generation))
 
 
-def _device_node(path: str) -> tuple[int, int, int, int] | None:
-    """Rule 4: the device a port's path names now (the link followed), or None if it names
-    none: a replug makes a new node (udev removes the old one and links the stable name anew)."""
+def _device_node(path: str) -> tuple[str, int, int, int] | None:
+    """Rule 4: the device a port's path names now, or None if it names none: the node the links
+    resolve to (a by-id link's target) and that node's identity (st_rdev, st_dev, st_ino). A
+    replug makes a new node (udev removes the old one and creates it, and links the stable name,
+    anew); a node touched in place (chmod, chown, an ACL, udev re-applying a rule at a change
+    event) keeps all of these and moves only its ctime, which is not looked at (review 84)."""
     try:
-        st = os.stat(path)
+        node = os.path.realpath(path)
+        st = os.stat(node)
     except (OSError, ValueError):
         return None
-    return st.st_rdev, st.st_dev, st.st_ino, st.st_ctime_ns
+    return node, st.st_rdev, st.st_dev, st.st_ino
 
 
 def _unheard(audit: Audit) -> None:

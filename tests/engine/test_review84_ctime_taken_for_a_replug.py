@@ -14,8 +14,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import pytest
-
 from bridge.app import worker_config
 from bridge.runtime.worker import NODE_LOOK_S, Worker
 from bridge.session.mailbox import Mailbox
@@ -28,13 +26,6 @@ from tests.support.waiting import slow
 TOUCHES = 5  # the node's permissions set again, NODE_LOOK_S apart: no replug
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 84: a wedged adapter's node chmod-ed (udev re-applying its rule) is taken for a "
-        "replug: R/error says 'another device now (replugged?)' and a thread more hangs per touch"
-    ),
-)
 def test_the_wedged_device_node_touched_in_place_is_no_replug(tmp_path: Path) -> None:
     link = tmp_path / "by-id-tower"  # the adapter's stable name
     old_master, old_slave = os.openpty()
