@@ -147,6 +147,7 @@ def worker_config(
             noise_deg=r.effective_noise_deg,
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=az_speed,
+            el_speed_deg_s=el_speed,
             # readings while moving come at most 1.5 intervals apart (link.py rule 8), each an
             # exchange long: the rotor may have stopped that long before the last change showed
             poll_margin_s=1.5 * r.moving_poll_interval_s + spec.exchange_time_s(r.effective_baud),

@@ -1750,6 +1750,7 @@ class Controller:
         motion = replace(
             was,
             nominal_speed_deg_s=was.nominal_speed_deg_s * factor,
+            el_speed_deg_s=el,
             settle_s=mo.settle_for(  # motion.py rule 2: slower, longer (never below the base's)
                 was.settle_s, was.noise_deg, step, slowest, base.moving_poll_interval_s
             ),

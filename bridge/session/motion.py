@@ -88,7 +88,11 @@ Rules:
    hand's turn the bridge saw begin before the link went (``lost_hand``), nor once the
    bridge sends a target of its own into it (review 53). Readings back for ``carried_seen_s``
    (the time a rotor turning at its nominal speed, as slow as rule 6 allows for, needs to move
-   more than ``noise_deg`` and a reading's step, plus a poll) that show no move say the lost
+   more than ``noise_deg`` and a reading's step, plus a poll; judged per axis as rule 3's stall
+   is, each axis the controller turns at its own speed, so the slower one's time: the lost turn
+   may be an elevation's alone, review 84: a GS-232's 2.5 deg/s elevation, read in whole
+   degrees with 2 degrees of noise, timed at the azimuth's 6 deg/s, was taken for at rest and
+   turned on 60 degrees past a refused start) that show no move say the lost
    turn came to rest while the port was out (``lost_still``), though rule 2 waits ``settle_s``
    to call it still: a turn seen after that is not known to be the lost one, and a refused
    start's halt owed to it is dropped (parts.py rule 10; review 73, a hand a second after a
@@ -228,6 +232,9 @@ class MotionConfig:
     noise_deg: float = 2.0
     az_span_deg: float = 360.0
     nominal_speed_deg_s: float = 6.0
+    # the elevation's nominal speed (the settings' el_speed_deg_s, else the model's); None: the
+    # model's (``spec.nominal_el_speed_deg_s``); read where an axis is timed on its own (rule 4)
+    el_speed_deg_s: float | None = None
     stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
     poll_margin_s: float = 0.2  # readings while moving come this often (rule 4)
     # rule 10: the raw limits each axis is held to (pointing.py rule 4's, the judge's)
@@ -354,13 +361,28 @@ def stop_checked(m: Motion) -> Motion:
     return replace(m, stop_sent_t=None)
 
 
+def axis_speeds_deg_s(cfg: MotionConfig) -> tuple[float, ...]:
+    """The nominal speed of each axis the controller turns (the azimuth unless a composite's
+    elevation box, the elevation on an az/el one), those above 0."""
+    spec, speeds = cfg.spec, []
+    if spec.turns_azimuth:
+        speeds.append(cfg.nominal_speed_deg_s)
+    if spec.has_elevation:
+        el = cfg.el_speed_deg_s
+        speeds.append(spec.nominal_el_speed_deg_s if el is None else el)
+    return tuple(speed for speed in speeds if speed > 0)
+
+
 def carried_seen_s(cfg: MotionConfig) -> float:
     """Rule 4: how long after the first reading back a turn lost with the link, were it still
-    on, shows a move (more than ``noise_deg`` and a reading's step, at the nominal speed as
-    slow as rule 6 allows for) at a reading: none by then, the rotor came to rest while its
-    port was out, though rule 2 calls it still only ``settle_s`` on."""
+    on, shows a move (more than ``noise_deg`` and a reading's step, at its axis's nominal speed
+    as slow as rule 6 allows for) at a reading: none by then, the rotor came to rest while its
+    port was out, though rule 2 calls it still only ``settle_s`` on. Each axis by its own
+    speed (rule 3's way): the lost turn may be either's alone, so the slowest axis's time
+    (review 84: a GS-232's elevation-only turn, timed at the azimuth's speed, taken for none)."""
     step = cfg.noise_deg + cfg.spec.reading_step_deg
-    return BLIND_SLOW_FACTOR * step / cfg.nominal_speed_deg_s + cfg.poll_margin_s
+    slowest = min(axis_speeds_deg_s(cfg), default=cfg.nominal_speed_deg_s)
+    return BLIND_SLOW_FACTOR * step / slowest + cfg.poll_margin_s
 
 
 # -- observations ----------------------------------------------------------------------------

@@ -10,8 +10,6 @@ while R/error says the follow start was refused. The same turn without the replu
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import PARTNER
 from tests.engine.test_follow import STATION
@@ -41,13 +39,6 @@ def raising_the_elevation(v: VirtualRotator) -> None:
     v.run_until(lambda h: h.truth().el_deg >= 20.0, 60, "the elevation turning")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 84: a follow start refused right after a replug mid-turn leaves an elevation "
-        "turn going on ~60 degrees to the old target (carried_seen_s timed at the azimuth speed)"
-    ),
-)
 def test_a_refused_follow_start_right_after_a_replug_halts_the_carried_elevation_turn() -> None:
     with gs232_azel_by_a_keep_out() as v:
         raising_the_elevation(v)
