@@ -1255,6 +1255,8 @@ class Controller:
         if self.motion.state is mo.MOVING and mo.stall_due(self.motion, cfg.motion, now):
             link.poll_now(now)  # (motion.py rule 3: asked before the stall's time, it decided
             # nothing; the answer to a question asked now does, a reply time later, review 36)
+        if mo.found_unjudged(self.motion):  # (motion.py rule 4: a restart's first readings
+            link.poll_every(now, cfg.moving_poll_interval_s)  # tell a turn found at once)
         if self.motion.state is not mo.MOVING:  # (stops.py rule 7: an episode's end)
             self.stops.lock_calm()
         if self.motion.state is mo.MOVING or mo.at_rest(self.motion):
@@ -1890,7 +1892,8 @@ class Controller:
                 )
             why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))
-        busy = busy or self.motion.state is mo.MOVING or now < self._watch_until
+        m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate)
+        busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 

@@ -53,7 +53,8 @@ Rules:
    partner in a keep-out sector, said so on R/error and turned on 105 degrees. A turn carried
    over a lost link that no reading back has shown yet is halted at the step the next one
    shows it move, the grid not tried again (``StartHalt.owed``, parts.py rule 10; review 70:
-   right after a replug mid-turn, the refusal was said while the rotor turned on 90 degrees).
+   right after a replug mid-turn, the refusal was said while the rotor turned on 90 degrees;
+   review 84: so a turn a bridge just started finds, right after a restart mid-turn).
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
 7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
    and ``last_operator``), with the operator who switched following on if they named

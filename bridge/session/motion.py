@@ -80,11 +80,16 @@ Rules:
    that came to rest while its port was out: a review), and that reading is no change of
    bearing (rotor health counts no move from it). That turn is ``carried`` until it comes to
    rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8);
-   so is a turn the second reading of a bridge just started finds (a restart mid-turn: the
+   so is a turn the readings of a bridge just started find (a restart mid-turn: the
    controller finishing the turn the bridge before it sent), until the rotor comes to rest;
-   a second reading that shows no move says a turn after it is seen to begin (not the
-   clock: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
-   reading, and a hand in a Rotor-EZ's first brake window was taken for the old turn); not a
+   readings for ``carried_seen_s`` from the first that show no move (as a lost turn's,
+   below), or the rotor at rest by rule 2 before that (``at_rest``: a short ``settle_s``),
+   say a turn after them is seen to begin, and till they do the controller is asked
+   at the moving rate (``found_unjudged``; not the clock alone, nor one reading a whole idle
+   poll on: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
+   reading, and a hand in a Rotor-EZ's first brake window was taken for the old turn; review
+   84: the restart's turn is judged as a replug's, so a refused start owes it a halt, parts.py
+   rule 10, and a GS-232 read 0.2 s on shows no move of a turn under way); not a
    hand's turn the bridge saw begin before the link went (``lost_hand``), nor once the
    bridge sends a target of its own into it (review 53). Readings back for ``carried_seen_s``
    (the time a rotor turning at its nominal speed, as slow as rule 6 allows for, needs to move
@@ -321,6 +326,9 @@ class Motion:
     # rule 4: readings back for ``carried_seen_s`` and none showed the lost turn move: it came
     # to rest meanwhile, and a turn seen after that is not known to be that one
     lost_still: bool = False
+    # rule 4: when the first reading since the link came up was taken (a restart's found turn
+    # is judged from it, as a lost one is)
+    first_read_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -371,6 +379,15 @@ def axis_speeds_deg_s(cfg: MotionConfig) -> tuple[float, ...]:
         el = cfg.el_speed_deg_s
         speeds.append(spec.nominal_el_speed_deg_s if el is None else el)
     return tuple(speed for speed in speeds if speed > 0)
+
+
+def found_unjudged(m: Motion) -> bool:
+    """Rule 4: a bridge just started, its first reading taken, and its readings have not yet
+    shown whether the rotor turns (a move; none for ``carried_seen_s``, or at rest by rule 2
+    sooner, ``tick``): it is asked at the moving rate meanwhile (controller.py), so that a
+    turn found is told from a hand's later one at once on every controller (a Rot2Prog's idle
+    poll is 6 s)."""
+    return m.carried and m.state is not MOVING and m.state is not OFFLINE
 
 
 def carried_seen_s(cfg: MotionConfig) -> float:
@@ -488,6 +505,7 @@ def reading(
             last_move_t=now if turning else m.last_move_t,
             carried=(turning and not m.lost_hand) or fresh,
             lost_hand=False,
+            first_read_t=now,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -516,8 +534,9 @@ def reading(
             changes["lost_turning"] = False
         if m.target_deg is not None:
             changes["progress_t"] = now
-    elif m.carried and m.state is not MOVING:  # rule 4: a start's second reading saw no turn
-        changes["carried"] = False
+    elif m.carried and m.state is not MOVING:  # rule 4: a restart's readings saw no turn
+        if m.first_read_t is None or now - m.first_read_t >= carried_seen_s(cfg):
+            changes["carried"] = False  # (for carried_seen_s: as a lost turn's, review 84)
     elif m.lost_turning and not m.lost_still and m.last_move_t is not None:  # rule 4: the
         if now - m.last_move_t >= carried_seen_s(cfg):  # lost turn, were it on, seen by now
             changes["lost_still"] = True
@@ -950,6 +969,8 @@ def tick(
     elif m.state is IDLE and m.idle_not_before_t is not None:
         if now >= m.idle_not_before_t:
             m = replace(m, idle_not_before_t=None)  # rule 4: settled
+    if m.carried and m.state is IDLE and m.idle_not_before_t is None:  # rule 4: a restart's
+        m = replace(m, carried=False)  # first readings at rest by rule 2: no turn was found
     return m, events
 
 

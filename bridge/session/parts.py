@@ -52,8 +52,10 @@ Rules:
    tracking's step): not jitter, coasting or a late start. Nor the turn its start found under
    way that the readings came back to (``before``: the part's first step saw it ``carried``
    over a lost link, motion.py rule 4, and it has gone on since with no target and no stop
-   out): the controller finishing a turn by itself, its target dropped with the port (a
-   replug mid-turn), is nobody's hand; a turn the bridge saw begin from rest with the link up
+   out; judged at the first step the readings tell whether the rotor turns: a bridge just
+   started waits for them, motion.py ``found_unjudged``): the controller finishing a turn by
+   itself, its target dropped with the port (a replug mid-turn) or the bridge restarted under
+   it, is nobody's hand; a turn the bridge saw begin from rest with the link up
    is a hand as ever. The start's first target stops the carried turn or re-targets it as an
    ``R/target`` would (review 50: ``track sun`` right after a replug ended at once as "turned
    by hand", and the rotor turned on to the old target; review 52: a hand already at the panel
@@ -79,12 +81,19 @@ Rules:
     shows that turn move; the first reading that shows the rotor still instead drops it
     (``Motion.lost_still``: the turn came to rest while the port was out), so a hand at the
     panel after that is never halted for it (review 73: d609655e owed the halt until rule 2's
-    rest, a second or more, and stopped a hand begun in that time); nor is a restart's turn
-    (a new session knows of no lost turn; review 73's hand before a restart's second
-    reading). On a controller with no readings (a DCU-1) nothing ever shows the turn: the one
-    under way when the port went, the bridge's own, is taken as going on for the time
-    assumed from the connect (motion.py rule 6, ``may_finish_blind``) and halted at the
-    refusal itself, as it would be without the replug. Review 70: a start right after a
+    rest, a second or more, and stopped a hand begun in that time). A bridge just started
+    does not know whether the box is turning either (a restart mid-turn: the controller
+    finishing the turn the bridge before it sent): a start refused before its readings have
+    told (motion.py rule 4, ``found_unjudged``: a move, or none for ``carried_seen_s``, asked
+    at the moving rate) owes the halt the same way, proposed if they show a move, dropped if
+    they show none, so a hand begun after that is never halted for it (review 73's hand on a
+    Rot2Prog, whose second reading came a whole 6 s idle poll on, stays a hand). Review 84:
+    after a restart mid-turn a refused follow or track start halted nothing, and the Rotor-EZ
+    turned on some 100 degrees to the old target. On a controller with no readings (a
+    DCU-1) nothing ever shows the turn: the one under way when the port went, the bridge's
+    own, is taken as going on for the time assumed from the connect (motion.py rule 6,
+    ``may_finish_blind``) and halted at the refusal itself, as it would be without the
+    replug. Review 70: a start right after a
     replug mid-turn, refused, halted nothing, and the rotor turned on some 95 degrees to the
     target from before the unplug (review 73: a DCU-1's, 90 degrees, no stop frame).
 """
@@ -186,6 +195,8 @@ class Before:
     def look(self, scene: Scene) -> bool:
         """The turn under way is the one the start found (at every step, before judging)."""
         m = scene.motion
+        if self._seen is None and mo.found_unjudged(m):  # a restart's readings not yet told
+            return False  # whether the rotor turns: judged at the first step they do
         alone = turning_alone(m) and m.carried  # (not a turn seen begin with the link up)
         self._seen = alone if self._seen is None else self._seen and alone
         return self._seen
@@ -204,11 +215,11 @@ def turning(scene: Scene) -> bool:
 
 
 def _unseen(m: mo.Motion) -> bool:
-    """Rule 10: a turn carried over a lost link (motion.py rule 4) that no reading back has
-    shown moving nor still yet, nothing of the bridge's sent into it."""
+    """Rule 10: a turn carried over a lost link (motion.py rule 4), or one a bridge just
+    started may have found (a restart mid-turn), that no reading back has shown moving nor
+    still yet, nothing of the bridge's sent into it."""
     return (
-        m.state is mo.MOVING
-        and m.lost_turning
+        _not_seen_yet(m)
         and m.carried
         and not m.lost_still
         and m.target_deg is None
@@ -216,10 +227,17 @@ def _unseen(m: mo.Motion) -> bool:
     )
 
 
+def _not_seen_yet(m: mo.Motion) -> bool:
+    """Rule 10: the readings back have not shown yet whether the rotor turns: a lost turn not
+    seen move (``lost_turning``), or a restart's first readings (``found_unjudged``)."""
+    return (m.state is mo.MOVING and m.lost_turning) or mo.found_unjudged(m)
+
+
 class StartHalt:
     """Rule 10: the one halt a start proposes when its first target is refused; and, while
-    that refusal stands, the one owed to a turn carried over a lost link that no reading back
-    has shown yet, proposed if the next reading shows it move (``owed``)."""
+    that refusal stands, the one owed to a turn carried over a lost link (or found by a bridge
+    just started) that no reading back has shown yet, proposed if the next readings show it
+    move (``owed``)."""
 
     def __init__(self) -> None:
         self._done = False
@@ -250,7 +268,7 @@ class StartHalt:
         if not first or self._done or m.lost_still or not m.carried or m.target_deg is not None:
             self._owed = False
             return False
-        if m.lost_turning:
+        if m.lost_turning or mo.found_unjudged(m):
             return False  # (not seen yet: the next reading says)
         self._owed, self._done = False, True
         return turning(scene)

@@ -78,7 +78,8 @@ Rules:
    the status "moving" for good). A turn carried over a lost link that no reading back has
    shown yet is halted at the step the next one shows it move, the wait not judged again
    (``StartHalt.owed``, parts.py rule 10; review 70: a refused start right after a replug
-   mid-turn said "holding" while the rotor turned on 95 degrees).
+   mid-turn said "holding" while the rotor turned on 95 degrees; review 84: so a turn a
+   bridge just started finds, right after a restart mid-turn).
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes. An
    az/el rotor's elevation is held within its limits (and above ``min_el_deg``): beyond them
    it is no refusal, the azimuth is followed at the limit (``_aim``), the limit as the

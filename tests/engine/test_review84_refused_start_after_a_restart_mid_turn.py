@@ -13,8 +13,6 @@ comes 0.2 s on, before any hand could be told from the old turn."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
 from bridge.sky import Body
@@ -45,13 +43,6 @@ def restarted_mid_turn(v: VirtualRotator) -> None:
     assert v.truth().is_moving  # (it finishes its old turn by itself)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 84: a follow start refused right after a bridge restart mid-turn says refused "
-        "while the Rotor-EZ turns on ~100 degrees to the old target (no halt, none owed)"
-    ),
-)
 def test_a_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("rotorez") as v:
         rotorez_turning_away_from_the_partner(v)
@@ -69,13 +60,6 @@ def test_a_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor()
         assert v.status.following is not None, v.status.following_ended
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 84: a track start whose wait is refused right after a bridge restart mid-turn "
-        "says refused while the Rotor-EZ turns on ~100 degrees to the old target"
-    ),
-)
 def test_a_track_start_refused_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
     """The same with tracking's wait for the pass refused (review 70's second case)."""
     line1, line2 = synthetic_tle(
