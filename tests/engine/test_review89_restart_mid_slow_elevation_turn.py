@@ -17,10 +17,15 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
-from tests.engine.test_attack19_follow_start_refused_grid import PARTNER
+from tests.engine.test_attack19_follow_start_refused_grid import (
+    PARTNER,
+    turning_away_from_the_partner,
+)
 from tests.engine.test_follow import STATION
 from tests.engine.test_review84_elevation_carried_turn import START_AZ, raising_the_elevation
+from tests.engine.test_review84_refused_start_after_a_restart_mid_turn import restarted_mid_turn
 from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between
 
 SLOW_EL_DEG_S = 2.0  # a G-5500 elevation 20 % under the model's 2.5 (rule 6 allows for 1.5x)
 
@@ -80,3 +85,42 @@ def test_the_same_turn_after_a_replug_is_halted() -> None:
         assert v.errors(ErrorKind.REFUSED, since=t)
         assert v.status.following is not None
         assert abs(v.truth().el_deg - here) <= 10.0, (here, v.truth().el_deg)
+
+
+def slow_azimuth_by_a_keep_out() -> VirtualRotator:
+    """Attack 19's set-up on an azimuth-only GS-232B told its rotor turns at 2 deg/s (a slow
+    rotor: a prop-pitch, say), the emulator turning at exactly that speed."""
+    sector = [round(PARTNER) - 10, round(PARTNER) + 10]
+    return VirtualRotator(
+        "gs232b-az",
+        emulator={"start_az_deg": round(PARTNER) + 20, "az_speed_deg_s": 2.0},
+        follow=STATION,
+        settings={"keep_out": [sector], "az_speed_deg_s": 2.0},
+    )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 89: after a bridge restart mid-turn, an azimuth GS-232B set to (and turning "
+    "at) 2 deg/s: a refused follow start sends no stop, the rotor turns on ~100 degrees to the "
+    "old target and following ends 'turned by hand' (High)",
+)
+def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_azimuth_turn() -> None:
+    """The same defect on the azimuth, at the speed the settings give (no slower): the found
+    turn needs ``carried_seen_s`` = 2.6 s to show its move and is dropped at rule 2's rest,
+    1.5 s after the first reading."""
+    with slow_azimuth_by_a_keep_out() as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        turning_away_from_the_partner(v)
+        restarted_mid_turn(v)
+        t, here = v.now, v.truth().az_deg
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(90.0)  # (the old target is some 50 s on: not a deadline)
+        [refused] = v.errors(ErrorKind.REFUSED, since=t)
+        assert "keep-out" in refused.message
+        # taken, and waiting for a grid it may turn to: observed ended "turned by hand"
+        assert v.status.following is not None, v.status.following_ended
+        # held where it was (a stop and its coast): observed 80 -> 182, no stop frame
+        assert "stop" in {f.outcome for f in v.frames(since=t)}
+        assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
