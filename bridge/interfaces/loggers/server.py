@@ -16,7 +16,13 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    reported when it has moved REPORT_MOVE_DEG since the last report (while the rotor turns,
    and where it came to rest), else every REPORT_IDLE_S. A name several rotators share is
    reported for one of them, the one its last turn chose by band (commands.py rule 6), at once
-   when that changes; none before a turn has chosen one.
+   when that changes; none before a turn has chosen one. The destination is an address in
+   digits when a report goes: this thread never looks a name up (rules 3 and 8; resolver.py
+   rule 1). A name (``n1mm-pc.lan:13010``) is looked up on a thread of its own, and a report
+   goes to the last address that found; while it has found none, the reports are dropped,
+   said once at warning level (an attack pass: with the name server silent, each report's
+   lookup inside ``sendto`` held this thread 5 s, and a PstRotator STOP reached the rotor 5 s
+   late, 50 degrees on).
 7. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
    logged with its traceback at most once per FAULT_LOG_S and the next datagram is served; a
    fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
@@ -163,6 +169,7 @@ from bridge.interfaces.loggers.datagrams import (
     parse_n1mm,
     parse_pst,
 )
+from bridge.interfaces.loggers.resolver import Lookup, ReportAddress, lookup_ipv4
 from bridge.pointing import angle_between
 
 log = logging.getLogger(__name__)
@@ -200,15 +207,20 @@ class N1mmReporter:
     rotator: Rotator
     name: str
     endpoint: N1mmEndpoint  # its socket sends the reports (from the configured address)
-    to: tuple[str, int]
+    to: ReportAddress  # rule 6: where they go, never looked up here
     next_s: float = 0.0
     last_deg: float | None = None  # the heading last reported
     failed: bool = False  # a report could not be sent (said once at warning level)
+    unknown: bool = False  # rule 6: a report dropped, its name not found yet (said once)
 
 
 class LoggerEndpoints:
-    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self, clock: Callable[[], float] = time.monotonic, lookup: Lookup = lookup_ipv4
+    ) -> None:
         self._clock = clock
+        self._lookup = lookup  # rule 6: a report address's name, on a thread of its own
+        self._report_addresses: dict[tuple[str, int], ReportAddress] = {}
         self.pst: list[PstEndpoint] = []
         self.n1mm: dict[tuple[str, int], N1mmEndpoint] = {}
         self._reporters: list[N1mmReporter] = []
@@ -250,7 +262,10 @@ class LoggerEndpoints:
         """``bands``: what a turn to a shared name or ``*`` is chosen by (commands.py rule 5)."""
         endpoint = self.n1mm.setdefault((bind, port), N1mmEndpoint(bind, port))
         endpoint.rotors.append(N1mmRotor(name, rotator, bands))
-        self._reporters.append(N1mmReporter(rotator, name, endpoint, report_to))
+        to = self._report_addresses.get(report_to)
+        if to is None:  # rule 6: one lookup thread a name, however many report there
+            to = self._report_addresses[report_to] = ReportAddress(*report_to, self._lookup)
+        self._reporters.append(N1mmReporter(rotator, name, endpoint, to))
 
     def __bool__(self) -> bool:
         return bool(self.pst or self.n1mm)
@@ -295,11 +310,15 @@ class LoggerEndpoints:
                     where,
                 )
             log.info("logger UDP port %s (%s) listening", where, _kind(endpoint))
+        for to in self._report_addresses.values():  # rule 6: names looked up beside it
+            to.start()
         self._wake_r, self._wake_w = os.pipe()
         self._thread = threading.Thread(target=self._loop, name="loggers", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
+        for to in self._report_addresses.values():  # (never waited for: resolver.py rule 4)
+            to.stop()
         if self._thread is not None:
             os.write(self._wake_w, b"x")
             self._thread.join(timeout_s)
@@ -606,13 +625,26 @@ class LoggerEndpoints:
         moved = r.last_deg is None or angle_between(bearing, r.last_deg) >= REPORT_MOVE_DEG
         if now < r.next_s and not moved:
             return
+        to = r.to.current()  # rule 6: an address in digits, or none yet; never a lookup here
+        if to is None:  # (looked at again in REPORT_MOVING_S, not at once: no busy wake-ups)
+            r.next_s = now + REPORT_MOVING_S
+            if not r.unknown:
+                r.unknown = True
+                log.warning(
+                    "N1MM reports of rotator %r to %s:%d are dropped until the name is found "
+                    "(looked up beside the logger ports, never in their way)",
+                    r.rotator.id,
+                    r.to.host,
+                    r.to.port,
+                )
+            return
         r.next_s, r.last_deg = now + REPORT_IDLE_S, bearing
         try:
-            sock.sendto(n1mm_report(r.name, bearing), r.to)
+            sock.sendto(n1mm_report(r.name, bearing), to)
         except OSError as exc:  # e.g. from 127.0.0.1 to another host: said once
             level = logging.DEBUG if r.failed else logging.WARNING
             r.failed = True
-            log.log(level, "N1MM report from %s to %s:%d: %s", r.endpoint.bind, *r.to, exc)
+            log.log(level, "N1MM report from %s to %s:%d: %s", r.endpoint.bind, *to, exc)
 
 
 def _named(e: N1mmEndpoint) -> str:
