@@ -61,7 +61,8 @@ class LoggerFields(Strict):
     n1mm_report_to: str = Field(
         "127.0.0.1:13010",
         description="where position reports for N1MM go, host:port; another machine needs an "
-        "n1mm_udp_bind that can reach it",
+        "n1mm_udp_bind that can reach it; a host name is looked up on a thread of its own, again "
+        "every minute, and reports go to the last address found (none until one is)",
         examples=["192.168.1.20:13010"],
     )
 
