@@ -73,7 +73,9 @@ Rules:
    answered ``RPRT 0`` and refused at the station (an attack pass).
    Likewise (LOCKED, ``RPRT -9``) while the station's ``R/lock/state`` is ``ON``.
 7. A command is answered only once the station's broker acknowledged it (interfaces/mqtt/remote.py
-   rule 7): ``RPRT 0`` means the broker has it, stamped with its send time for the station to
+   rule 7), ``submit`` returning then: ``RPRT 0`` means the broker has it (the PstRotator
+   ports, whose protocol answers no command, hand their moves to a sender thread instead and
+   go on: courier.py), stamped with its send time for the station to
    refuse it if a link held it up (heartbeat.py). A command a front end says when it was
    seen (``seen_s``, front.py rule 3: a TCP port's or a pty's look, tcplines.py rule 9; a
    datagram's arrival, loggers/server.py rule 9) is stamped with that time instead, a stop
@@ -328,6 +330,7 @@ class RemoteRotator:
         seen_s: float | None = None,
         reader: Hashable | None = None,
         read_s: float | None = None,
+        asked: int | None = None,
     ) -> None:
         """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
         the count of the stops and lock ONs of every front end but the command's own
@@ -338,7 +341,9 @@ class RemoteRotator:
         3): it is stamped so (rule 7). ``reader``: its source (the connection or port that read
         it: front.py rule 3), whose own last halt alone may lift a move's stamp (rule 7).
         ``read_s``: a halt's latest arrival, where the front end knows it (front.py rule 3;
-        None: when it is sent), before which another source's move is refused (rule 7)."""
+        None: when it is sent), before which another source's move is refused (rule 7).
+        ``asked``: the halt count when the move was asked, where that was before this call
+        (remote/courier.py rule 1: a move queued for its sender); None: now."""
         # a front end that asks and submits at once (rotctld, GS-232, the loggers): its move is
         # asked now, and a stop or lock ON of any front end counted from here on refuses it up
         # to the hand-off, as the station's judge drops one judged before a halt (mailbox.py
@@ -348,7 +353,8 @@ class RemoteRotator:
         # review: the DCU-1 endpoint's since, halts_besides(DCU1), left out another DCU-1
         # client's ';' counted between this submit and the hand-off, and the AM1's bearing,
         # asked before that stop, went to the broker after it)
-        asked = self.halts
+        if asked is None:
+            asked = self.halts
         try:
             self._send(command, since, asked, seen_s, reader, read_s)
         except Refused as exc:

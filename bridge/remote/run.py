@@ -64,6 +64,7 @@ from bridge.interfaces.rotctld import RotctldServer
 from bridge.interfaces.web.server import WebConsole
 from bridge.interfaces.web.view import RotatorFacts
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
+from bridge.remote.courier import Courier
 from bridge.remote.readings import status_order
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
@@ -115,6 +116,8 @@ class Remote:
     # one RemoteRotator per station rotator, however many endpoints name it: its halt count is
     # what refuses a move judged before another front end's STOP (remote/rotator.py ``submit``)
     _made: dict[RotatorTopics, RemoteRotator] = field(default_factory=dict)
+    # the PstRotator ports' sender of each rotator (courier.py), one however many ports
+    _couriers: dict[str, Courier] = field(default_factory=dict)
 
     @property
     def station(self) -> StationTopics:
@@ -198,7 +201,9 @@ class Remote:
                 else:
                     self.servers.append(emulation.server(rot, int(where), offer.bind, **options))
             elif offer.key == "pst_udp_port":
-                self.loggers.add_pst(rot, int(offer.where), offer.bind)
+                # its moves off the loggers' one thread (courier.py: attack 29)
+                courier = self._couriers.setdefault(rot.id, Courier(rot))
+                self.loggers.add_pst(courier, int(offer.where), offer.bind)
                 # as interfaces/tcplines.py warns
                 if offer.bind not in ("127.0.0.1", "::1", "localhost"):
                     log.warning(
@@ -225,6 +230,8 @@ class Remote:
             server.stop()
         self.servers.clear()
         self.loggers.stop()
+        for courier in self._couriers.values():
+            courier.stop()
         if self.link is not None:
             self.link.stop()
             self.link = None

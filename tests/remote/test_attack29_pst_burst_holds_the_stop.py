@@ -148,12 +148,6 @@ def test_control_a_stop_on_the_remotes_pst_port_is_prompt(
     assert rest - at_stop <= SPEED_DEG_S * slow(PROMPT_S), (at_stop, rest)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 29: a burst of targets from another program on the remote's PstRotator "
-    "port holds the operator's STOP behind a broker round trip per target: the rotor turns "
-    "on for seconds (to its target, on a 50 ms link)",
-)
 def test_a_burst_of_targets_on_the_remotes_pst_port_does_not_hold_the_stop(
     remote_pst: tuple[Rig, PstClient, int],
 ) -> None:

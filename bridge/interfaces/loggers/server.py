@@ -52,6 +52,11 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    counted (``over_budget``), said at warning level at most once per FLOOD_LOG_S with the
    count since and the last sender. A flood so costs a read and a search a datagram, and
    each socket asks the system for a receive buffer of RECV_BUFFER bytes to ride out bursts.
+   Nor may what a datagram is handed to hold the reads: the remote's rotator answers a
+   command only once its broker acknowledged it, so the remote hands the PstRotator ports a
+   rotator whose moves go to a sender thread of their own, a newer one replacing an unsent
+   older one, a stop dropping those unsent (remote/courier.py; attack 29: a burst of 190
+   targets held the operator's STOP one broker round trip per target, up to 10 s).
 9. Each datagram is read with the time the system took it (``SO_TIMESTAMPNS``, where the
    system has it: Linux), on the wall clock, made monotonic by its age when read (never
    below 0: a wall clock set back meanwhile makes it as new as its read). What a datagram

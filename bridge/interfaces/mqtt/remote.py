@@ -54,7 +54,10 @@ Rules:
    second sending, and the rotor turned on to its last target).
 7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
    ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
-   dropped, rule 3) and the command refused.
+   dropped, rule 3) and the command refused. A caller that must not wait so does not call
+   it on its own thread: the remote's PstRotator ports hand their moves to a sender of their
+   own (remote/courier.py; attack 29: the loggers' one thread, waiting a round trip per
+   target, held a STOP behind a burst of 190 for up to 10 s).
 8. A command is stamped with its send time on the station's clock as its live heartbeats let
    the remote reckon it (heartbeat.py), and with the station process that reckoning came
    from (the heartbeats' user property ``station``, empty if they named none: heartbeat.py
