@@ -157,3 +157,21 @@ def test_a_burst_of_targets_on_the_remotes_pst_port_does_not_hold_the_stop(
         f"the STOP was sent at {at_stop:.1f} degrees and the rotor came to rest at {rest:.1f}: "
         f"it turned on {(rest - at_stop) / SPEED_DEG_S:.1f} s after the STOP"
     )
+
+
+def test_the_newest_target_of_a_burst_on_the_remotes_pst_port_is_the_one_that_counts(
+    remote_pst: tuple[Rig, PstClient, int],
+) -> None:
+    """A newer target replaces one not yet sent (remote/courier.py rule 2): the rotor ends at
+    the burst's last target, never at one replaced on the way, nor short of it."""
+    rig, _operator, port = remote_pst
+    emu = rig.emus["tower"]
+    last = START_DEG + 40
+    other = udp_socket()
+    try:
+        for az in range(START_DEG + 1, last + 1):
+            other.sendto(pst(tag("AZIMUTH", az)), ("127.0.0.1", port))
+        rest = emu.wait_for(lambda s: abs(s.az_deg - last) < 1 and not s.is_moving, slow(30))
+    finally:
+        other.close()
+    assert abs(rest.az_deg - last) < 1, rest
