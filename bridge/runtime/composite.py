@@ -174,6 +174,13 @@ Rules:
    the user lost (a cold review: a claim's or a storm's drop of the azimuth's try more, the
    elevation stopped for it, named ``target az 300`` alone). So are the two boxes' audit
    lines of one park of the bridge's own (auto-park's, the storm's: session.py rule 25).
+10. A turn of the bridge's own (auto-park's park, the storm's: session.py ``Order``) takes its
+   place in the order of commands from the rotator's mailbox, whose counter the rotator's
+   commands advance (mailbox.py rule 10a), not from the box's own mailbox, which no command
+   reaches (review 86: each box's park took place 1 from it however many commands came
+   before, and a remote's old held STOP, read as asked against the park, went again and
+   stopped it short: a storm's park so left the antenna up in the wind; remote.py rule 10).
+   The merged order is the newest of each (rule 3), so it never goes back.
 """
 
 from __future__ import annotations
@@ -682,6 +689,7 @@ class CompositeWorker:
                 port_opener=port_opener,
                 sky=sky,
                 on_audit=partial(self._audit, axis),
+                place=mailbox.ticket,  # rule 10: the rotator's tickets, not the box's own
             )
         sessions = {axis: box.session for axis, box in self.boxes.items()}
         joined(self.composition, sessions)

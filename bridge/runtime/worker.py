@@ -136,6 +136,8 @@ class Worker:
         sky: SkyWorker | None = None,
         port_watch: PortWatch | None = None,
         on_audit: Callable[[Audit], None] | None = None,
+        place: Callable[[], int] | None = None,  # the bridge's own turns' places: ``mailbox``'s
+        # tickets unless given (a composite's box: the rotator's, runtime/composite.py rule 10)
     ) -> None:
         self.cfg = cfg
         self._sky = sky or SkyWorker()
@@ -150,7 +152,7 @@ class Worker:
             storm_arrived=storm_arrived,
             stop_owed=stop_owed,
             short_of=short_of,
-            place=mailbox.ticket,  # (session.py's Order: the bridge's own turns' places)
+            place=place or mailbox.ticket,  # (session.py's Order: the bridge's own turns' places)
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

@@ -320,7 +320,9 @@ class RotatorSession:
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
         place: Callable[[], int] | None = None,  # mailbox.py rule 10a's ``ticket``: the
-        # place in the order of commands of a turn the bridge begins itself (``Order``)
+        # place in the order of commands of a turn the bridge begins itself (``Order``), from
+        # the counter the rotator's commands advance (a composite's box: the rotator's
+        # mailbox's, not the box's own: runtime/composite.py rule 10, review 86)
     ) -> None:
         self.cfg = cfg
         self._place = place
@@ -1325,7 +1327,9 @@ class RotatorSession:
                 # (Order: the bridge's own turn, auto-park's or the storm's park, takes a place
                 # of its own, after every command asked before it began, and the status shows
                 # every place up to it: a remote's STOP asked before it never ends it, one
-                # asked against it does: interfaces/mqtt/remote.py rule 10, review 83)
+                # asked against it does: interfaces/mqtt/remote.py rule 10, review 83; the
+                # place is the rotator's, a composite's too:
+                # runtime/composite.py rule 10, review 86)
                 self._turn_place = self._place()
                 self._taking = max(self._taking, self._turn_place)
 

@@ -38,11 +38,6 @@ def turning(said: dict[str, Any]) -> bool:
     return said.get("target") is not None or said.get("target_elevation") is not None
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 86: a two-box rotator's auto-park or storm park shows order.turn 1, before "
-    "the commands asked before it: a remote's old held STOP goes again and stops the park short",
-)
 @pytest.mark.parametrize("park", list(PARKS))
 def test_a_composite_parks_turn_is_placed_after_the_commands_before_it(rig: Rig, park: str) -> None:
     composite(rig)

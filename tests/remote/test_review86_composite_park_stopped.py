@@ -59,11 +59,6 @@ def sky(rig: Rig, route: CuttableLink) -> tuple[Rig, Any]:
     return rig, az.emu
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 86: a two-box rotator's auto-park, begun after a remote's lost STOP, is "
-    "stopped short of the park when that old STOP goes again",
-)
 def test_an_old_stop_never_stops_a_two_box_rotators_auto_park_begun_after_it(
     sky: tuple[Rig, Any], route: CuttableLink
 ) -> None:
