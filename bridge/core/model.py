@@ -741,8 +741,9 @@ class Order:
     command the target or turn shown comes from (a target, a track or follow start; 0: none
     this run), or the place the bridge's own turn took when it began (auto-park, the storm's
     park: a place of its own, after every command asked before it; ``taken`` shows it too:
-    review 83), ``lock`` the place of the last lock word (0: none this run). A remote orders
-    its held halts by them (interfaces/mqtt/remote.py rule 10)."""
+    review 83; a rotator of two boxes parks both at one place of the rotator's:
+    runtime/composite.py rule 10), ``lock`` the place of the last lock word (0: none this
+    run). A remote orders its held halts by them (interfaces/mqtt/remote.py rule 10)."""
 
     run: str
     taken: int

@@ -1328,7 +1328,7 @@ class RotatorSession:
                 # of its own, after every command asked before it began, and the status shows
                 # every place up to it: a remote's STOP asked before it never ends it, one
                 # asked against it does: interfaces/mqtt/remote.py rule 10, review 83; the
-                # place is the rotator's, a composite's too:
+                # place is the rotator's, both boxes' parks one place on a composite:
                 # runtime/composite.py rule 10, review 86)
                 self._turn_place = self._place()
                 self._taking = max(self._taking, self._turn_place)

@@ -66,3 +66,36 @@ def test_a_composite_parks_turn_is_placed_after_the_commands_before_it(rig: Rig,
         f"{order['turn']}, target {doc(parking)['target']} (docs/mqtt.md: a place of its own "
         "after every command asked before it)"
     )
+
+
+@pytest.mark.parametrize("park", list(PARKS))
+def test_a_composite_parks_its_two_boxes_at_one_place_in_the_order(rig: Rig, park: str) -> None:
+    """Both boxes park their axes as one turn of the rotator's (runtime/composite.py rule 10):
+    every status of the park names one place, the next after the commands before it, and no
+    status goes back in the order (each box drawing a place of its own, the park showed one
+    box's place, then the other's)."""
+    composite(rig)
+    rig.rotators[-1].update(PARKS[park])
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    rig.probe.publish("rotor/target", "100 20")
+    at_rest = rig.probe.wait_for(  # at the target: nothing more asked
+        "rotor/status",
+        lambda m: (doc(m).get("bearing") or 0) > 99 and doc(m)["state"] == "idle",
+        30,
+    )
+    before = doc(at_rest)["order"]["taken"]
+    if park == "storm park":
+        rig.probe.publish("weather/wind", "90")
+    rig.probe.wait_for("rotor/status", lambda m: m.t > at_rest.t and turning(doc(m)), 30)
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: m.t > at_rest.t and not turning(doc(m)) and doc(m)["state"] == "idle",
+        60,
+    )
+    orders = [doc(m)["order"] for m in rig.probe.on("rotor/status") if m.t > at_rest.t]
+    turns = {o["turn"] for o in orders if o["turn"] > before}
+    assert turns == {before + 1}, f"the {park}'s statuses named places {sorted(turns)}"
+    taken = [o["taken"] for o in orders]
+    assert taken == sorted(taken), f"the order went back during the {park}: {taken}"
