@@ -1,0 +1,122 @@
+"""Review 88, with real mosquitto and a Rotor-EZ on a real pty: the broker behind a TCP proxy that
+accepts a connection and closes it when the broker behind it is away (Docker's userland proxy for
+a published port, haproxy or nginx's stream proxy with the backend down), restarted plainly.
+
+express.py rule 11 and connection.py rule 6 (attack 23): after a broker's restart the stop
+express and the stop lane are back on their own 2 s back-off, the express even while the main
+connection is not, so a STOP sent some seconds after the broker's return reaches the rotor.
+Review 81 made the lanes and the express hold back until the main connection is accepted (30 s
+at most) whenever the main connection is closed before its CONNACK. Behind such a proxy every try
+of a plain restart's outage is closed before its CONNACK: the first one holds the three back, and
+the main connection (1 s doubling) comes back many seconds after the broker. A STOP sent then
+reaches nobody and the rotor turns on to its target. Before review 81 (b4654e62) the same STOP
+stopped the rotor (checked by hand).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.mqtt.express import express_client_id
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+DOWN_S = 9.0  # the broker away: the fault's length (the main connection tries at 1, 2, 4, 8, 16 s)
+EXPRESS_BACK_S = 5.0  # the express's back-off is 2 s: back well within this after the broker
+
+
+class _Proxy:
+    """Accepts on a port of its own; joins each connection to the broker, or closes it at once
+    when the broker refuses (what Docker's proxy does for a container that is down)."""
+
+    def __init__(self, backend: int) -> None:
+        self._backend = backend
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self._listener.getsockname()[1]
+        self._socks: list[socket.socket] = []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                client, _addr = self._listener.accept()
+            except OSError:
+                return
+            try:
+                server = socket.create_connection(("127.0.0.1", self._backend))
+            except OSError:
+                client.close()  # the backend is away: accepted, then closed
+                continue
+            self._socks += [client, server]
+            for a, b in ((client, server), (server, client)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    @staticmethod
+    def _pipe(a: socket.socket, b: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := a.recv(65536):
+                b.sendall(data)
+        with contextlib.suppress(OSError):
+            b.shutdown(socket.SHUT_WR)
+
+    def close(self) -> None:
+        self._listener.close()
+        for s in self._socks:
+            s.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 88: broker behind a proxy restarted: the express waits for the main "
+    "connection (review 81), and a STOP sent seconds after the broker is back is lost",
+)
+def test_a_stop_after_a_plain_restart_behind_a_proxy_reaches_the_rotor(tmp_path: Path) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = _Proxy(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.express = True  # the default
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.express.up.is_set, 10, "the express up")
+            back = f"{express_client_id(rig.settings.mqtt)} 0 rotor/stop"  # its subscription
+            probe.publish("rotor/target", "300")  # a long turn (145 s)
+            emu.wait_for(lambda s: s.is_moving, slow(10))
+            broker.stop()
+            time.sleep(DOWN_S)  # the broker away: the fault's length (not a deadline)
+            start = broker.log.stat().st_size if broker.log.exists() else 0
+            broker.start()
+            wait_until(probe.client.is_connected, 10, "the dashboard back on the broker")
+            # the express back and subscribed on its own 2 s (rule 11); one held for the main one
+            # is not
+            with contextlib.suppress(AssertionError, TimeoutError):
+                wait_until(
+                    lambda: back in broker.log.read_bytes()[start:].decode(errors="replace"),
+                    EXPRESS_BACK_S,
+                    "the express back",
+                )
+            assert emu.state().is_moving
+            probe.publish("rotor/stop", "")  # the operator's STOP
+            with contextlib.suppress(AssertionError, TimeoutError):
+                emu.wait_for(lambda s: not s.is_moving, slow(10))
+            s = emu.state()
+            assert not s.is_moving, (
+                f"a STOP sent {slow(EXPRESS_BACK_S):g} s after the broker's return did not stop "
+                f"the rotor: it turns on ({s.az_deg:.0f} deg); the main connection up: "
+                f"{app.client.connected.is_set()}, the stop lane: {app.lane.connected.is_set()}"
+                f", the express: {app.express.up.is_set()}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
