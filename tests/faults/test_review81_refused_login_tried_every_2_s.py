@@ -17,6 +17,8 @@ import re
 import time
 from pathlib import Path
 
+import pytest
+
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
@@ -28,6 +30,11 @@ WATCHED_S = 20.0  # how long the refusals are counted (the fault's length, not a
 MAIN_TRIES = 8
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 81: after a restart, a broker refusing the login is tried every 2 s by the "
+    "stop lane, the lock lane and the express, not on the main connection's back-off",
+)
 def test_a_login_refused_after_a_restart_is_tried_on_the_main_connections_back_off(
     tmp_path: Path,
 ) -> None:

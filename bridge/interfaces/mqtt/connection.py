@@ -57,20 +57,14 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    out, which spaces the tries by itself), and the short back-off never stands in the main
    connection's way (``YIELDS``, ``main_news``, the app passing the main connection's
    ``on_main_news`` on; review 81). The stop lane, the lock lane and the express start only
-   once the main connection was accepted, and after that (a) a refusal of the login
-   (``LASTING_REFUSALS``: bad user name or password, not authorized, banned, a bad
-   authentication method; the login is the main connection's too), the broker's to one of
-   them or the main connection's while that one is down, holds it back (paho_client.py's
-   ``hold``) until the main connection is accepted, YIELD_MAX_S at most: a broker back from a
-   restart refusing the login is tried on the main connection's back-off, not every 2 s by
-   three connections more (review 81: 34 refused logins in 20 s, where the main connection
-   alone tries 4); (b) the main connection closed before its CONNACK, or refused as a limit
-   refuses (``TURNED_AWAY``: server busy, quota exceeded), ends their connections
-   (``drop``: no takeover evidence) and holds them back the same way, once until it is
-   accepted again, and it tries again after the back-off's least (``soon``): after a
+   once the main connection was accepted, and after that the main connection closed before
+   its CONNACK, or refused as a limit refuses (``TURNED_AWAY``: server busy, quota
+   exceeded), ends their connections (``drop``: no takeover evidence) and holds them back
+   (paho_client.py's ``hold``) until it is accepted, YIELD_MAX_S at most (once until it is
+   accepted again), and it tries again after the back-off's least (``soon``): after a
    restart of a broker with ``max_connections`` the three, back first on their 2 s, took
    the slots, the main connection was turned away on every try after, and no target was
-   taken again until the bridge was restarted (review 81). A plain restart asks neither (the
+   taken again until the bridge was restarted (review 81). A plain restart asks none (the
    broker refuses TCP while away, then accepts): each connection comes back on its own 2 s,
    the express even while the main connection is not back yet (express.py rule 11; gating
    them on the main connection's acceptance broke that). Asked once an outage, a main
@@ -223,10 +217,6 @@ FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
 STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
 YIELD_MAX_S = 30  # rule 6: how long such a one holds back for the main connection, at most
-# rule 6: CONNACK reasons that do not change by themselves (MQTT 5's; paho reads MQTT 3.1.1's
-# 4 and 5 as 0x86 and 0x87): bad user name or password, not authorized, banned, bad
-# authentication method. The login is the main connection's too: the others hold back.
-LASTING_REFUSALS = frozenset({0x86, 0x87, 0x8A, 0x8C})
 TURNED_AWAY = frozenset({0x89, 0x97})  # rule 6: server busy, quota exceeded (a limit's)
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
@@ -681,12 +671,7 @@ class Connection:
             ):
                 return
             self._refused(str(reason_code))
-            if code in LASTING_REFUSALS:  # rule 6: the login, shared: tried by the main one
-                if self.YIELDS:
-                    self._client.hold(YIELD_MAX_S)
-                else:
-                    self._news("refused")
-            elif code in TURNED_AWAY:
+            if code in TURNED_AWAY:
                 self._turned_away()
             return
         self._up = True
@@ -829,15 +814,11 @@ class Connection:
         self._news("turned away")
 
     def main_news(self, news: str) -> None:
-        """Rule 6 (one that yields): the main connection was ``accepted`` (a hold ends), its
-        login ``refused`` (no try of its own until it is accepted, YIELD_MAX_S at most, while
-        this one is down too), or it was ``turned away`` (this one ends its connection and
-        holds back the same way). Any thread."""
+        """Rule 6 (one that yields): the main connection was ``accepted`` (a hold ends), or it
+        was ``turned away`` (this one ends its connection, and holds back until it is
+        accepted, YIELD_MAX_S at most). Any thread."""
         if news == "accepted":
             self._client.release()
-        elif news == "refused":
-            if not self.connected.is_set():
-                self._client.hold(YIELD_MAX_S)
         elif news == "turned away":
             self._client.hold(YIELD_MAX_S)
             if self.connected.is_set():

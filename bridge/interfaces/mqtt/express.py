@@ -24,7 +24,7 @@ Rules:
    and lock topics of every rotator, the stop topics of the groups, and its own sync topic
    (rule 8), without the broker's replay of a retained message (lastword.py rule 6). It
    publishes its sync words, nothing else. Like the lanes it holds back for the main
-   connection when that one's login is refused or it is turned away by a connection limit
+   connection when that one is turned away by a connection limit
    (connection.py rule 6, review 81: the bridge passes the main connection's news on over
    the socket, ``main_news``); it never waits for the main connection otherwise, and after
    a plain broker restart it is back on its own (rule 11).

@@ -38,8 +38,8 @@ Rules:
    crash-looping broker can look the same, and stops must come soon after it is back); any
    other way, it tries again on connection.py rule 6's back-off for a connection that carries
    stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a broker's return is
-   heard), and holds back for the main connection (a login refused, the main connection
-   turned away by a connection limit: connection.py rule 6, review 81). Its session stays
+   heard), and holds back for the main connection (the main connection turned away by a
+   connection limit: connection.py rule 6, review 81). Its session stays
    clean (rule 2; docs/reliability.md, Limits, says why a kept one
    is not asked for).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
