@@ -506,8 +506,6 @@ class App:
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
         self.client.before_message = self._lanes_first
-        # interfaces/mqtt/connection.py rule 6: the main connection first, when it must be
-        self.client.on_main_news = self._main_news
         self.client.watch_owned(self.topics.owned())
         for rid in sorted(store.locked_ids() - set(self._by_id)):  # state_store.py rule 9
             log.warning(
@@ -577,13 +575,6 @@ class App:
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express
-
-    def _main_news(self, news: str) -> None:
-        """interfaces/mqtt/connection.py rule 6: the main connection's news (accepted, its
-        login refused, turned away) for the lanes and the express (on its thread)."""
-        self.lane.main_news(news)
-        self.lock_lane.main_news(news)
-        self.express.main_news(news)
 
     def _express_wrote(self, rotator_id: str, t: float, operator: str | None = None) -> None:
         """interfaces/mqtt/express.py rule 11: a stop the express wrote a frame for at ``t``,

@@ -17,6 +17,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
+
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
@@ -29,6 +31,11 @@ DOWN_S = 12.0  # the broker away: the fault's length, past the main connection's
 BACK_WITHIN_S = 45.0  # the main connection's back-off is 30 s at most: one try past it
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 81: after a broker restart the lanes and the express, on a 2 s back-off, "
+    "take the connection limit's slots and the main connection is turned away for good",
+)
 def test_targets_are_taken_again_after_a_restart_of_a_broker_with_a_connection_limit(
     tmp_path: Path,
 ) -> None:

@@ -54,23 +54,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    30 s, after a 33 s outage every connection came back 28 s after the broker, and a STOP
    sent then reached nobody: the rotor turned on to its target (attack 23). The cost of 2 s
    is small: a try at a broker that is away is a TCP connection refused (or one that times
-   out, which spaces the tries by itself), and the short back-off never stands in the main
-   connection's way (``YIELDS``, ``main_news``, the app passing the main connection's
-   ``on_main_news`` on; review 81). The stop lane, the lock lane and the express start only
-   once the main connection was accepted, and after that the main connection closed before
-   its CONNACK, or refused as a limit refuses (``TURNED_AWAY``: server busy, quota
-   exceeded), ends their connections (``drop``: no takeover evidence) and holds them back
-   (paho_client.py's ``hold``) until it is accepted, YIELD_MAX_S at most (once until it is
-   accepted again), and it tries again after the back-off's least (``soon``): after a
-   restart of a broker with ``max_connections`` the three, back first on their 2 s, took
-   the slots, the main connection was turned away on every try after, and no target was
-   taken again until the bridge was restarted (review 81). A plain restart asks none (the
-   broker refuses TCP while away, then accepts): each connection comes back on its own 2 s,
-   the express even while the main connection is not back yet (express.py rule 11; gating
-   them on the main connection's acceptance broke that). Asked once an outage, a main
-   connection closed for a reason of its own (an ACL on its client id) costs the others
-   YIELD_MAX_S at most, never their slots for good. A lane the broker keeps refusing or
-   closing (rule 3 of lane.py: said once)
+   out, which spaces the tries by itself), and the stop lane and the express start only once
+   the main connection was accepted, so a wrong password is tried on the main connection's
+   back-off alone; a lane the broker keeps refusing or closing (rule 3 of lane.py: said once)
    tries under 30 times a minute, below what a broker's flapping detection bans (EMQX: 30
    disconnects a minute when it is turned on). Less would pass that ban, and close the window
    no better: a STOP sent before the lane is back, however soon it tries, reaches the main
@@ -216,8 +202,6 @@ STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight 
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
 STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
-YIELD_MAX_S = 30  # rule 6: how long such a one holds back for the main connection, at most
-TURNED_AWAY = frozenset({0x89, 0x97})  # rule 6: server busy, quota exceeded (a limit's)
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
@@ -378,7 +362,6 @@ class Connection:
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_MAX_S  # rule 7: TAKEOVER_FIRST_S for one that carries stops
     RECONNECT_MAX_S = 30  # rule 6: STOP_RECONNECT_MAX_S for one that carries stops
-    YIELDS = False  # rule 6: one that carries stops yields to the main one (``main_news``)
 
     def __init__(
         self,
@@ -426,10 +409,6 @@ class Connection:
         self._optional: dict[str, str] = {}  # rule 17: filter -> what its denial costs
         self._optional_said: set[str] = set()
         self.connected = threading.Event()
-        # rule 6: the main connection's news for those that yield to it (the app's wiring)
-        self.on_main_news: Callable[[str], None] | None = None
-        self._asked_way = False  # rule 6: (the main one) yielded to since it was last accepted
-        self._yielding = False  # rule 6: (one that yields) this client ends its connection
         self.before_message: Callable[[], None] | None = None  # lane.py rule 4
         c = new_client(settings, client_id)
         c.reconnect_delay_set(*self._reconnect_s)
@@ -671,13 +650,9 @@ class Connection:
             ):
                 return
             self._refused(str(reason_code))
-            if code in TURNED_AWAY:
-                self._turned_away()
             return
         self._up = True
         self._accepted_once = True
-        self._asked_way = False
-        self._news("accepted")  # rule 6: the others' hold ends
         self._guard.connected(self._clock())
         self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
@@ -764,13 +739,6 @@ class Connection:
                 self._unanswered(waited)
             else:
                 self._closed_early(str(reason_code))  # rule 6: never silent
-                self._turned_away()
-        if self._yielding:  # rule 6: ended by this client, for the main connection
-            self._yielding = False
-            if was:  # (what its end means is said; no takeover evidence, rule 7)
-                self._closed(True, reason_code)
-                log.debug("%s: yielded to the main connection", self._client_id)
-                return
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)
@@ -791,40 +759,6 @@ class Connection:
             client.reconnect_delay_set(*self._reconnect_s)
             self._slowed = False
         self._ended(reason_code, ending, fight)
-
-    # -- rule 6: the main connection first ----------------------------------------------
-    def _news(self, news: str) -> None:
-        """Rule 6 (the main connection): ``news`` for those that yield to it."""
-        tell = self.on_main_news
-        if tell is None or self.YIELDS or self._stopping:
-            return
-        try:
-            tell(news)
-        except Exception:  # rule 5: a courtesy that fails costs no connection
-            log.exception("error telling the main connection's news")
-
-    def _turned_away(self) -> None:
-        """Rule 6 (the main connection): closed before its CONNACK, or refused with a
-        limit's reason: once until it is accepted again, the others yield it a slot and it
-        tries again after the back-off's least."""
-        if self.YIELDS or self.on_main_news is None or self._asked_way or self._stopping:
-            return
-        self._asked_way = True
-        self._client.soon()
-        self._news("turned away")
-
-    def main_news(self, news: str) -> None:
-        """Rule 6 (one that yields): the main connection was ``accepted`` (a hold ends), or it
-        was ``turned away`` (this one ends its connection, and holds back until it is
-        accepted, YIELD_MAX_S at most). Any thread."""
-        if news == "accepted":
-            self._client.release()
-        elif news == "turned away":
-            self._client.hold(YIELD_MAX_S)
-            if self.connected.is_set():
-                self._yielding = True  # (before the end: its thread reads it)
-                if not self._client.drop():
-                    self._yielding = False
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         before = self.before_message

@@ -23,11 +23,7 @@ Rules:
    on the command line), the protocol the main connection settled on, subscribed to the stop
    and lock topics of every rotator, the stop topics of the groups, and its own sync topic
    (rule 8), without the broker's replay of a retained message (lastword.py rule 6). It
-   publishes its sync words, nothing else. Like the lanes it holds back for the main
-   connection when that one is turned away by a connection limit
-   (connection.py rule 6, review 81: the bridge passes the main connection's news on over
-   the socket, ``main_news``); it never waits for the main connection otherwise, and after
-   a plain broker restart it is back on its own (rule 11).
+   publishes its sync words, nothing else.
 3. What it does, and all it does: a message on ``R/stop`` (any payload), a lock ON on
    ``R/lock`` or a message on ``G/stop`` of a group (each member), not a
    replay (under MQTT 3.1.1 a retained flag means "replayed"; the session carries such a
@@ -553,18 +549,6 @@ class Express:
             "stops and locks go through"
         )
 
-    def main_news(self, news: str) -> None:
-        """Rule 2: the main connection's news (connection.py rule 6) for the child's link; on
-        the main connection's thread, so never waiting: lost when the child is away or its
-        socket full (its link then tries on its own back-off, as after a broker's restart)."""
-        sock = self._sock
-        if sock is None:
-            return
-        try:
-            sock.send({"op": "main", "news": news})
-        except OSError:
-            pass
-
     def _tick(self, came_up: bool, late: str) -> None:
         """On the reader's thread, once a second while the child starts or a hold waits."""
         if not came_up and time.monotonic() - self._started_at >= START_WAIT_S:
@@ -990,7 +974,6 @@ class _Link(Connection):
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 6: it carries stops (connection.py rule 7)
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
-    YIELDS = True  # connection.py rule 6: ... yet never in the main connection's way
 
     def __init__(
         self,
@@ -1285,8 +1268,6 @@ class _Child:
             rid, number = word.get("rotator"), word.get("n")
             if word.get("op") == "sync":
                 self.asked(int(word["n"]), bool(word.get("again")))
-            elif word.get("op") == "main":  # rule 2: the main connection's news
-                self.link.main_news(str(word.get("news")))
             elif word.get("op") == "port" and fds:
                 with self._lock:
                     old = self._ports.get(rid)

@@ -38,9 +38,7 @@ Rules:
    crash-looping broker can look the same, and stops must come soon after it is back); any
    other way, it tries again on connection.py rule 6's back-off for a connection that carries
    stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a broker's return is
-   heard), and holds back for the main connection (the main connection turned away by a
-   connection limit: connection.py rule 6, review 81). Its session stays
-   clean (rule 2; docs/reliability.md, Limits, says why a kept one
+   heard). Its session stays clean (rule 2; docs/reliability.md, Limits, says why a kept one
    is not asked for).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
@@ -110,7 +108,6 @@ def lane_client_id(settings: MqttSettings, kind: str = "stop") -> str:
 class StopLane(Connection):
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 3
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
-    YIELDS = True  # connection.py rule 6: ... yet never in the main connection's way
 
     def __init__(
         self,

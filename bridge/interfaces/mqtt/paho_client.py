@@ -24,27 +24,26 @@ Rules:
    that carries a will; paho alone would wait the keepalive (a minute) each time.
 6. ``loop_start`` runs paho's external-loop API (``socket``, ``want_write``, ``loop_read``,
    ``loop_write``, ``loop_misc``) on a thread of ours, in place of paho's own loop, and
-   ``loop_stop`` ends it as paho's does (the queue written first), but gives the queue STOP_WRITE_S
-   at most: a frozen broker (the TCP window full) held paho's loop until the keepalive gave the
-   connection up (a minute), and the bridge's stop with it (the socket is then shut down: the
-   broker, once back, sees the end). Everything else is as with paho's thread: every read, write,
-   reconnect and callback happens on that one thread (a TLS socket is never used by two threads),
-   and paho's reconnect loop is kept: the same back-off (``reconnect_delay_set``; reset by an
-   accepted connection, or by ``soon``), ``on_connect_fail`` called inside the failure, no reconnect
-   after ``disconnect``; after the back-off an attempt waits out a ``hold`` until its ``release``
-   (and ``drop`` ends a connection as a broken one: connection.py rule 6, a connection yielding to
-   the main one); ``loop_stop`` joins the thread also when it was already ending by itself after a
-   ``disconnect``. A callback that raises (paho hands its exception up the loop, which ended paho's
-   thread) is logged and the connection made again: the thread goes on (connection.py rule 5). What
-   changes is the wake-up: paho's own loop is woken by a byte on its socket pair for every packet a
-   publish queues (a system call on the publishing thread, a wake-up of paho's thread for each
-   message); ours is woken through paho's ``on_socket_register_write``, which paho calls once until
-   the queue has been written, so a reading's messages cost one wake-up between them; a message
-   queued inside a round of the serial-lines thread wakes it once, when the round ends
-   (core/handoff.py), so the statuses of every rotator a round served cost one wake-up between them;
-   paho is then told that no wake-up was asked for, so that a message another thread queues
-   meanwhile (an error event, the stop lane's marker) wakes it at once, not with the round. It waits
-   with poll, not select (which refuses a descriptor above 1023, as a bridge with many clients open
+   ``loop_stop`` ends it as paho's does (the queue written first), but gives the queue
+   STOP_WRITE_S at most: a frozen broker (the TCP window full) held paho's loop until the
+   keepalive gave the connection up (a minute), and the bridge's stop with it (the socket is
+   then shut down: the broker, once back, sees the end). Everything else is as with paho's
+   thread: every read, write, reconnect and callback happens on that one thread (a TLS
+   socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
+   (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
+   inside the failure, no reconnect after ``disconnect``; ``loop_stop`` joins the thread also
+   when it was already ending by itself after a ``disconnect``. A callback that raises (paho hands
+   its exception up the loop, which ended paho's thread) is logged and the connection made
+   again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
+   own loop is woken by a byte on its socket pair for every packet a publish queues (a system
+   call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
+   through paho's ``on_socket_register_write``, which paho calls once until the queue has been
+   written, so a reading's messages cost one wake-up between them; a message queued inside a
+   round of the serial-lines thread wakes it once, when the round ends (core/handoff.py), so
+   the statuses of every rotator a round served cost one wake-up between them; paho is then
+   told that no wake-up was asked for, so that a message another thread queues meanwhile (an
+   error event, the stop lane's marker) wakes it at once, not with the round. It waits with
+   poll, not select (which refuses a descriptor above 1023, as a bridge with many clients open
    has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
    the message left the socket, building a reason code and properties each time (about as much
@@ -103,7 +102,6 @@ import struct
 import threading
 import time
 from collections.abc import Callable
-from functools import partial
 from typing import Any, Protocol, cast
 
 import paho.mqtt.client as paho
@@ -119,7 +117,6 @@ log = logging.getLogger(__name__)
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # connection.py rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
-HOLD_POLL_S = 0.05  # rule 6: how often an attempt held (``hold``) looks at its release
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
 _JOIN_BYTES = 65536  # rule 9: a packet of joined messages, at most about
@@ -268,8 +265,6 @@ class Client(paho.Client):
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
-    _hold_until = 0.0  # rule 6: the next attempt waits until then (``hold``) ...
-    _hold_wake: threading.Event | None = None  # ... unless this is set first (``release``)
     _halt_t = 0.0  # rule 6: when loop_stop was called
     _topic_parts: dict[str, tuple[int, bytes]] | None = None  # rule 9: protocol, topic part
 
@@ -338,40 +333,6 @@ class Client(paho.Client):
     def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
         super().reconnect_delay_set(min_delay, max_delay)
         self._delays, self._delay_s = (min_delay, max_delay), None
-
-    def hold(self, most_s: float) -> None:
-        """Rule 6: the next attempt waits, after the back-off, up to ``most_s`` from now or
-        until ``release`` (connection.py rule 6: a connection that yields to the main one)."""
-        self._hold_wake = threading.Event()
-        self._hold_until = time.monotonic() + most_s
-
-    def release(self) -> None:
-        """Rule 6: a ``hold`` ended now (any thread)."""
-        wake = self._hold_wake
-        if wake is not None:
-            wake.set()
-
-    def soon(self) -> None:
-        """Rule 6: the next attempt after the back-off's least, as after an accepted one."""
-        self._delay_s = None
-
-    def drop(self) -> bool:
-        """Rule 6: the connection ended by this client without a DISCONNECT, as a broken one
-        (any thread): paho's loop reads the end and tries again, after the back-off and a
-        ``hold``. False: no socket to end."""
-        sock = self._sock
-        shutdown: Callable[[int], None] | None
-        if isinstance(sock, socket.socket):  # (TLS too: the socket under it, not a TLS close)
-            shutdown = partial(socket.socket.shutdown, sock)
-        else:
-            shutdown = getattr(sock, "shutdown", None)
-        if shutdown is None:
-            return False
-        try:
-            shutdown(socket.SHUT_RDWR)
-        except OSError:
-            return False
-        return True
 
     def connect_async(self, *args: Any, **kwargs: Any) -> None:
         self._leaving = False
@@ -464,8 +425,6 @@ class Client(paho.Client):
                 return
             if not first and not self._back_off():
                 return
-            if not self._held():
-                return
             first, lost = False, False
             try:
                 self.reconnect()
@@ -538,20 +497,6 @@ class Client(paho.Client):
         lo, hi = self._delays
         self._delay_s = lo if self._delay_s is None else min(self._delay_s * 2, hi)
         return not self._halt.wait(self._delay_s) and not self._leaving
-
-    def _held(self) -> bool:
-        """Rule 6: the wait of a ``hold`` (polled every HOLD_POLL_S). False: stopped
-        meanwhile."""
-        wake = self._hold_wake
-        while wake is not None and not wake.is_set():
-            left = self._hold_until - time.monotonic()
-            if left <= 0:
-                break
-            if self._halt.wait(min(left, HOLD_POLL_S)) or self._leaving:
-                return False
-        if self._hold_wake is wake:
-            self._hold_wake = None
-        return True
 
     def _connect_failed(self) -> None:
         """paho's on_connect_fail, inside the ``except OSError`` that says why."""
