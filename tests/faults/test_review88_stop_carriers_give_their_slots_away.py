@@ -58,11 +58,6 @@ def _neighbour(port: int, client_id: str) -> paho.Client:
     return c
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 88: main connection knocked off a full broker: the stop lane gives its slot "
-    "away for it (review 81), and a STOP from a dashboard reaches nobody: the rotor turns on",
-)
 def test_a_stop_still_stops_the_rotor_when_the_main_connection_is_turned_away_by_a_full_broker(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -21,8 +21,6 @@ import threading
 import time
 from pathlib import Path
 
-import pytest
-
 from bridge.interfaces.mqtt.express import express_client_id
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
@@ -73,11 +71,6 @@ class _Proxy:
             s.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 88: broker behind a proxy restarted: the express waits for the main "
-    "connection (review 81), and a STOP sent seconds after the broker is back is lost",
-)
 def test_a_stop_after_a_plain_restart_behind_a_proxy_reaches_the_rotor(tmp_path: Path) -> None:
     broker = Mosquitto(tmp_path / "broker").start()
     proxy = _Proxy(broker.port)
