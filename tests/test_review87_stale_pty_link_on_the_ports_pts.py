@@ -43,11 +43,6 @@ def socat_pty() -> Iterator[str]:
         os.close(master)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 87: after a crash, a leftover gs232_pty link to the /dev/pts number the "
-    "rotator's socat port now has stops the start ('would replace the port's name'), exit 2",
-)
 @pytest.mark.parametrize("key", ["gs232_pty", "easycomm_pty", "dcu1_pty"])
 def test_a_crashed_runs_pty_link_on_the_ports_pts_number_does_not_stop_the_start(
     tmp_path: Path, socat_pty: str, key: str

@@ -56,7 +56,12 @@ Rules:
    A pty's link (``gs232_pty``, ``easycomm_pty``, ``dcu1_pty``) is a file the bridge writes
    too (ptylines.py rule 1 replaces a link there). No file it writes is a rotator's serial
    port, by any name (links followed), nor a device (a character or block device; a pty's
-   path excepted, where a link to a crashed run's pty is its own leftover): attack 28:
+   path excepted, where a link to a crashed run's pty is its own leftover). A pty's path is
+   judged by the link itself, never by where a link already there points (``_written_at``):
+   its place (its folder resolved, then its name) is none of the other file's names: the
+   other's own place, every link on its way, what it resolves to (review 87: a crashed run's
+   link left on the /dev/pts number a socat pty, the rotator's port, had since stopped the
+   start, "the pty's link would replace the port's name", until removed by hand). Attack 28:
    ``audit_file`` naming the port passed check-config and every audit line went down the
    controller's line (a Rotor-EZ ran a refused target's ``AM1;`` inside one), and a
    ``gs232_pty`` naming its rotator's by-id link replaced it with the pty's, so the rotator
@@ -538,8 +543,8 @@ class Settings(BaseSettings):
                         f"{name} {shown_path(path)} is also {other}: the bridge writes there, and "
                         f"would overwrite it; {fix}"
                     )
-            for other, port in self.serial_ports():  # (a pty's link to the port's device too)
-                if same_file(path, port) or _written_at(name, path, other, Path(port)):
+            for other, port in self.serial_ports():  # (a pty's at the port's device too)
+                if _written_at(name, path, other, Path(port)):
                     raise ValueError(_on_a_port(name, path, other, port))
             device = None if name.endswith(_PTY_KEYS) else _device_at(path)
             if device is not None:
@@ -670,22 +675,38 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
 
 def _written_at(name: str, path: Path, other: str, given: Path) -> bool:
     """Rule 6: whether ``name``'s file at ``path`` is ``other``'s at ``given``. A pty's file is
-    its link, not what a link there points at now (a crashed run's pty, replaced at the start):
-    it is the other's if its place is the other's, or where the other's links lead."""
+    its link, not what a link there points at now (a crashed run's pty, replaced at the start;
+    review 87: a leftover on the /dev/pts number a socat port had since was taken for the
+    port): it is the other's if its place is the other's, or one the other's links go through
+    or lead to."""
     ptys = [p for key, p in ((name, path), (other, given)) if key.endswith(_PTY_KEYS)]
     if not ptys:
         return same_file(path, given)
-    places = [_place(p) for p in (path, given)]
     if len(ptys) == 2:
-        return places[0] == places[1]
-    pty, file = (places[0], given) if name.endswith(_PTY_KEYS) else (places[1], path)
-    return pty in (_place(file), os.path.realpath(os.path.expanduser(file)))
+        return _place(path) == _place(given)
+    pty, file = (path, given) if name.endswith(_PTY_KEYS) else (given, path)
+    return _place(pty) in _ways(file)
 
 
 def _place(path: Path) -> str:
     """Where ``path`` is, its folder's links followed and not its own (a pty's link)."""
     full = os.path.abspath(os.path.expanduser(path))
     return os.path.join(os.path.realpath(os.path.dirname(full)), os.path.basename(full))
+
+
+def _ways(path: Path) -> set[str]:
+    """Rule 6: the places of ``path``, of every link on its way to the file, and of the file: a
+    pty's link at any of them would take that name over (a by-id link to a by-id link)."""
+    ways = {_place(path), os.path.realpath(os.path.expanduser(path))}
+    here = _place(path)
+    for _ in range(40):  # (the kernel's own bound on a chain of links)
+        try:
+            target = os.readlink(here)
+        except (OSError, ValueError):  # (no link: the file, or nothing there yet)
+            break
+        here = _place(Path(os.path.join(os.path.dirname(here), target)))
+        ways.add(here)
+    return ways
 
 
 def _on_a_port(name: str, path: Path, port_key: str, port: str) -> str:
@@ -800,7 +821,7 @@ def settings_from(
     except SettingsError as exc:  # a variable pydantic-settings reads as JSON, and cannot
         raise ConfigError(_not_json(exc, env)) from None
     for name, written in settings.files_written():  # rule 6: nor the file itself
-        if path and same_file(written, path):
+        if path and _written_at(name, written, "the configuration file", Path(path)):
             raise ConfigError(
                 f"invalid configuration:\n  {name}: {shown_path(written)} is the configuration "
                 "file itself: "
