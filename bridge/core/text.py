@@ -22,7 +22,8 @@ as Python's stderr writes it (``\\udce9``), and every text naming a path goes th
 And how a refusal quotes a number past a limit (``shown_past``): with as many digits as it
 takes to stay past it. ``:g``'s six digits made ``360.00001`` "azimuth 360 outside 0..360", a
 refusal that contradicts itself (attack 28); a number a user sent is never shown inside the
-limits it was refused for.
+limits it was refused for, nor, for limits of bearings where north is 0 and 360 alike (a group
+member's), a whole turn from inside them.
 """
 
 from __future__ import annotations
@@ -92,12 +93,15 @@ def shown_path(path: str | bytes | os.PathLike[str] | os.PathLike[bytes]) -> str
     return text.encode("utf-8", "backslashreplace").decode()
 
 
-def shown_past(value: float, lo: float, hi: float) -> str:
+def shown_past(value: float, lo: float, hi: float, *, around: bool = False) -> str:
     """``value``, refused as outside ``lo..hi``, as a message quotes it: ``:g``'s six digits,
     or as many more as it takes not to read as inside (``360.00001`` past 0..360, not ``360``);
-    a value inside (or no number) is shown as ``:g`` shows it."""
+    a value inside (or no number) is shown as ``:g`` shows it. ``around``: bearings, north 0
+    and 360 alike, so a number a whole turn from one inside reads as inside too (review 87: a
+    group member's 359.9999999 past 0..90 is not ``360``, which is north, inside)."""
+    turns = (0.0, 360.0, -360.0) if around else (0.0,)
     for digits in range(6, 18):
         shown = f"{value:.{digits}g}"
-        if not lo <= float(shown) <= hi:
+        if not any(lo <= float(shown) + turn <= hi for turn in turns):
             return shown
     return f"{value:g}"  # (17 digits give any float back: only a value inside gets here)

@@ -19,16 +19,9 @@ from __future__ import annotations
 import json
 import re
 
-import pytest
-
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 87: G/target 340.0000004 to a member with limits 20..340 is refused on "
-    "G/status as '340 is outside upper's limits ... (20..340)', a refusal that contradicts itself",
-)
 def test_a_members_refusal_quotes_a_bearing_past_its_limits_as_past_them(rig: Rig) -> None:
     rig.add("upper", emu={"start_az_deg": 10})
     rig.add("lower", emu={"start_az_deg": 190})

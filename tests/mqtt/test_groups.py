@@ -76,6 +76,18 @@ def test_a_member_outside_its_group_limits_is_refused_and_the_others_still_turn(
     assert targets(fan_out(narrow, b"20", AZ_ONLY))[0] == ("upper", 20.0, None, None)
 
 
+def test_a_members_refusal_never_quotes_a_bearing_inside_its_limits() -> None:
+    """Review 87: ':g' quoted 340.0000004 past 20..340 as '340 is outside ... (20..340)', and
+    359.9999999 past 0..90 as 360, north, which is inside 0..90 too (north is 0 and 360)."""
+    narrow = Group(
+        "stack", "Stack", (Member("upper", 0.0, (20.0, 340.0)), Member("lower", 0.0, (0.0, 90.0)))
+    )
+    said = [p.refused for p in fan_out(narrow, b"340.0000004", AZ_ONLY)]
+    assert said[0] == "340.0000004 is outside upper's limits in group stack (20..340)"
+    said = [p.refused for p in fan_out(narrow, b"359.9999999", AZ_ONLY)]
+    assert said[1] == "359.9999999 is outside lower's limits in group stack (0..90)"
+
+
 def test_north_is_inside_limits_that_end_at_0_or_at_360() -> None:
     """An attack pass: 360 (Home Assistant's top) was refused for limits 0..90, 0 for limits
     300..360, and the group's 180 plus an offset of 180 for limits 340..360."""

@@ -19,7 +19,9 @@ Rules:
    The group's azimuth itself must be 0..360 (an
    offset would make 361 a bearing the member takes); the refusal shows it as sent. A part
    outside the member's group limits (true bearings, after its offset; north is 0 and 360
-   alike) is that member's refusal, decided here; a part inside them carries them, and the
+   alike) is that member's refusal, decided here, quoting the bearing with the digits that
+   keep it past them (core/text.py ``shown_past``; review 87: ``340.0000004`` past 20..340
+   was "340 is outside upper's limits ... (20..340)"); a part inside them carries them, and the
    member's judge keeps the turn inside them too (pointing.py rule 9).
 3. The others still turn: a member's refusal, here or by its own judge (its limits, its lock,
    the wind, its lease, its link), is reported on the group's error topic and in the group's
@@ -40,6 +42,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Target
+from bridge.core.text import shown_past
 from bridge.interfaces.mqtt import payloads as pl
 
 
@@ -125,7 +128,8 @@ def fan_out(
                 Part(
                     m.id,
                     None,
-                    f"{member_az:g} is outside {m.id}'s limits in group {group.id} "
+                    f"{shown_past(member_az, *lo_hi, around=True)} is outside {m.id}'s limits "
+                    f"in group {group.id} "
                     f"({lo_hi[0]:g}..{lo_hi[1]:g})",
                 )
             )
