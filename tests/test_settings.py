@@ -210,6 +210,28 @@ def test_a_file_the_bridge_writes_is_no_serial_port_nor_device(tmp_path: Path) -
         load_settings(write(tmp_path, composite), environ={})
 
 
+def test_the_processs_own_output_is_judged_by_its_name(tmp_path: Path) -> None:
+    """Review 87 (rule 6): audit_file = /dev/stdout was judged by where the checking process's
+    stdout went (a terminal: "a character device"); by its name, it is the bridge's own output
+    (runtime/audit.py rule 11), and no other written file may be one: a state file is read back,
+    and a pty's link would replace the system's /dev/stdout."""
+    state = f'state_file = "{tmp_path / "state.json"}"\n'
+    for name in ("/dev/stdout", "/dev/stderr", "/dev/fd/1", "/proc/self/fd/2"):
+        cfg = write(tmp_path, f'{state}audit_file = "{name}"\n' + _rotator(tmp_path / "ttyUSB0"))
+        assert str(load_settings(cfg, environ={}).audit_file) == name
+    out = cli("check-config", "-c", str(cfg))  # (the last: /proc/self/fd/2)
+    assert "audit file: /proc/self/fd/2 (the bridge's own output, never rotated)" in out.stdout
+    for top, key in [
+        ('state_file = "/dev/stdout"\n', "state_file"),
+        (state, "rotators[0].gs232_pty"),
+    ]:
+        pty = 'gs232_pty = "/dev/stdout"\n' if "pty" in key else ""
+        with pytest.raises(ConfigError) as caught:
+            load_settings(write(tmp_path, top + _rotator(tmp_path / "ttyUSB0", pty)), environ={})
+        said = f"{key} /dev/stdout names one of the process's own descriptors, not a file"
+        assert said in str(caught.value), caught.value
+
+
 @pytest.mark.parametrize("key", ["gs232_pty", "easycomm_pty", "dcu1_pty"])
 def test_a_ptys_link_is_no_port_nor_file_the_bridge_writes(tmp_path: Path, key: str) -> None:
     """Attack 28 (rule 6): a pty's link replaces what is at its path: at a rotator's port (by

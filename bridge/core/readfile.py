@@ -1,5 +1,6 @@
 """Reading a file a user named (a TLE file, a cty file): its bytes, bounded, and only if it is
-a regular file. No thread of its own; the caller says what a refusal means to it.
+a regular file; and which paths a user names are the process's own descriptors. No thread of
+its own; the caller says what a refusal means to it.
 
 Rules:
 1. The file is opened without waiting and without adopting it (O_NONBLOCK: a FIFO's open waits
@@ -9,11 +10,16 @@ Rules:
    ``NotRegular``, unread.
 2. At most ``limit`` bytes are read: one more is ``TooLarge`` (a file that grew past the limit
    between a look at its size and the read; /dev/zero named by mistake never is, rule 1).
+3. ``stream_fd``: a path that names one of the process's own descriptors by its name alone
+   (``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N``, ``/proc/self/fd/N``) is that descriptor,
+   whatever it is now: the audit file written there (runtime/audit.py rule 11), judged by the
+   name in the settings (settings rule 6; review 87).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -56,3 +62,19 @@ def read_regular(path: Path, limit: int) -> bytes:
     if size > limit:
         raise TooLarge(f"{shown_path(path)} is over {limit} bytes")
     return b"".join(chunks)
+
+
+# rule 3: the names of the process's own descriptors
+_STREAM = re.compile(r"/dev/(?:std(out|err)|fd/([0-9]{1,9}))|/proc/self/fd/([0-9]{1,9})")
+
+
+def stream_fd(path: Path | str) -> int | None:
+    """Rule 3: the process's own descriptor ``path`` names by its name alone (``/dev/stdout``
+    1, ``/dev/stderr`` 2, ``/dev/fd/N`` and ``/proc/self/fd/N`` N), else None."""
+    m = _STREAM.fullmatch(str(path))
+    if m is None:
+        return None
+    std, fd, proc = m.groups()
+    if std is not None:
+        return 1 if std == "out" else 2
+    return int(fd if fd is not None else proc)

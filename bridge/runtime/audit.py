@@ -104,6 +104,14 @@ Rules:
    tracking or following, is a line of its own. An OFF judged while a start is on its way to the
    session, or put while one comes, is taken to have ended it (never folded for a start it may have
    ended).
+11. A path that names one of the process's own descriptors (core/readfile.py ``stream_fd``:
+   ``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N``, ``/proc/self/fd/N``, by name) is that
+   descriptor: the lines are written on a copy of it (``os.dup``), never by opening the path, and
+   it is never rotated (review 87: a user may want the trail in the journal; opening
+   ``/dev/stdout`` on the journal's socket fails, ENXIO, and settings rule 6 judged the name by
+   where the checking process's own stdout went). It is the process's stream as it was started: a
+   write blocks while its reader does not read (the writer's thread alone waits: rule 1), and one
+   that fails (no reader, a closed descriptor) is rule 3's failure.
 """
 
 from __future__ import annotations
@@ -124,6 +132,7 @@ from pathlib import Path
 from typing import Protocol
 
 from bridge.core.model import AuditEvent, ErrorKind, Origin
+from bridge.core.readfile import stream_fd
 from bridge.core.text import shown_path
 
 log = logging.getLogger(__name__)
@@ -285,11 +294,15 @@ class AuditFile:
         """Rule 2: the lines appended, one ``os.write`` each on an O_APPEND descriptor; how many
         were, and the error that ended it (rule 3: the file is cut back to the line before)."""
         fd, done, size = -1, 0, 0
+        stream = stream_fd(self.path)  # rule 11: written on, never opened nor rotated
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
+            if stream is not None:
+                fd = os.dup(stream)
+            else:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
             for line in lines:
                 data = line.encode()
-                if fd < 0 or (size and size + len(data) > self._max_bytes):
+                if stream is None and (fd < 0 or (size and size + len(data) > self._max_bytes)):
                     if fd >= 0:
                         os.close(fd)
                         fd = -1

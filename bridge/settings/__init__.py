@@ -65,7 +65,13 @@ Rules:
    ``audit_file`` naming the port passed check-config and every audit line went down the
    controller's line (a Rotor-EZ ran a refused target's ``AM1;`` inside one), and a
    ``gs232_pty`` naming its rotator's by-id link replaced it with the pty's, so the rotator
-   opened the bridge's own pty and never answered. The error names the key.
+   opened the bridge's own pty and never answered. The error names the key. ``audit_file``
+   may name the process's own output by name (``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N``,
+   ``/proc/self/fd/N``: runtime/audit.py rule 11, the trail in the journal or a terminal): such
+   a name is judged by itself, never by where the checking process's descriptor goes (review
+   87: check-config in a terminal refused, as "a character device", the file it and the
+   service accepted with stdout a pipe or the journal's socket); another written file naming
+   one is refused. A real device node (``/dev/ttyUSB0``, ``/dev/null``) is still refused.
 7. A file that holds a secret (``files_secret``: the MQTT and console password files, the TLS
    key, the console's secret beside the state file, kept there by any run with a console
    password) is read as nothing else (``secret_read``): no other key that names a file to
@@ -126,6 +132,7 @@ from pydantic_settings import (
     SettingsError,
 )
 
+from bridge.core.readfile import stream_fd
 from bridge.core.text import entity_slug, shown_path
 from bridge.feature import topic_words
 from bridge.protocols.axes import bearing_is_elevation
@@ -255,7 +262,9 @@ class Settings(BaseSettings):
         description="the audit log: one JSON line per command executed or refused, from every "
         "interface (who, how, what, the result); rotated by size. A file of its own: the "
         "configuration file, the state file, a file another key names, a pty's path, a "
-        "rotator's serial port or a device is refused",
+        "rotator's serial port or a device is refused. /dev/stdout, /dev/stderr, /dev/fd/N "
+        "and /proc/self/fd/N are taken by name: the lines go to the bridge's own output (the "
+        "journal under systemd), never rotated",
         examples=["/var/log/rotor-bridge/audit.jsonl"],
         json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
     )
@@ -536,6 +545,11 @@ class Settings(BaseSettings):
         """Rule 6: the files the bridge writes are no file the settings name otherwise."""
         written = self.files_written()
         for n, (name, path) in enumerate(written):
+            if name != "audit_file" and stream_fd(path) is not None:  # (audit.py rule 11)
+                raise ValueError(
+                    f"{name} {shown_path(path)} names one of the process's own descriptors, not "
+                    f"a file: only audit_file may be the process's output; {_OWN}"
+                )
             for other, given in [*written[n + 1 :], *self.files_read()]:
                 if _written_at(name, path, other, given):
                     fix = "name that file otherwise" if name == _SECRET else _OWN
@@ -546,7 +560,8 @@ class Settings(BaseSettings):
             for other, port in self.serial_ports():  # (a pty's at the port's device too)
                 if _written_at(name, path, other, Path(port)):
                     raise ValueError(_on_a_port(name, path, other, port))
-            device = None if name.endswith(_PTY_KEYS) else _device_at(path)
+            mine = name.endswith(_PTY_KEYS) or stream_fd(path) is not None  # (judged by name)
+            device = None if mine else _device_at(path)
             if device is not None:
                 fix = "remove what is there" if name == _SECRET else _OWN  # (no key names it)
                 raise ValueError(
@@ -679,6 +694,8 @@ def _written_at(name: str, path: Path, other: str, given: Path) -> bool:
     review 87: a leftover on the /dev/pts number a socat port had since was taken for the
     port): it is the other's if its place is the other's, or one the other's links go through
     or lead to."""
+    if stream_fd(path) is not None or stream_fd(given) is not None:  # (by name: rule 6)
+        return _place(path) == _place(given)
     ptys = [p for key, p in ((name, path), (other, given)) if key.endswith(_PTY_KEYS)]
     if not ptys:
         return same_file(path, given)

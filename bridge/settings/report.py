@@ -49,6 +49,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bridge.core.readfile import stream_fd
 from bridge.core.text import shown_path
 from bridge.protocols.axes import Axis
 from bridge.runtime.state_store import StateStore
@@ -251,9 +252,12 @@ def summary(settings: Settings) -> list[str]:
     lines.append(state)
     if settings.audit_file is not None:
         most = settings.audit_max_bytes
-        lines.append(
-            f"audit file: {shown_path(settings.audit_file)} (renamed to .1 at {most} bytes)"
+        kept = (  # (runtime/audit.py rule 11: the process's own output is never rotated)
+            "the bridge's own output, never rotated"
+            if stream_fd(settings.audit_file) is not None
+            else f"renamed to .1 at {most} bytes"
         )
+        lines.append(f"audit file: {shown_path(settings.audit_file)} ({kept})")
     return lines
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import subprocess
 import sys
 import threading
@@ -81,6 +82,36 @@ def test_the_file_rotates_by_size_and_keeps_a_few(tmp_path: Path) -> None:
     ]
     assert [d["command"] for d in lines(tmp_path / "audit.jsonl.2")][0] == "P 13 0"
     assert all(p.stat().st_size <= 3 * one for p in tmp_path.iterdir())
+
+
+def test_the_processs_own_output_by_name_gets_every_line_never_rotated() -> None:
+    """Review 87 (rule 11): audit_file = /dev/stdout for the journal. Under systemd the
+    descriptor is the journal's socket, which no open() of /dev/stdout reaches (ENXIO): the
+    lines are written on the descriptor itself, and past max_bytes nothing is renamed."""
+    journal, ours = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
+    journal.settimeout(slow(5))  # (lines that never come fail the test, not hang it)
+    one = len(json.dumps(event(10).as_dict(), separators=(",", ":"))) + 1
+    try:
+        for name in (f"/dev/fd/{ours.fileno()}", f"/proc/self/fd/{ours.fileno()}"):
+            said: list[str | None] = []
+            audit = AuditFile(Path(name), max_bytes=2 * one, on_problem=said.append)
+            audit.start()
+            try:
+                for n in range(10, 15):  # more than two files' worth
+                    audit.put(event(n))
+                audit.flush()
+            finally:
+                audit.stop()
+            got = b""
+            while got.count(b"\n") < 5:
+                got += journal.recv(65536)
+            assert [json.loads(x)["command"] for x in got.splitlines()] == [
+                f"P {n} 0" for n in range(10, 15)
+            ], name
+            assert said == [] and audit.lines_written == 5, said
+    finally:
+        journal.close()
+        ours.close()
 
 
 def test_a_full_disk_is_reported_once_never_fatal_and_recovers(tmp_path: Path) -> None:
