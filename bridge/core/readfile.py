@@ -68,10 +68,10 @@ def read_regular(path: Path, limit: int) -> bytes:
 _STREAM = re.compile(r"/dev/(?:std(out|err)|fd/([0-9]{1,9}))|/proc/self/fd/([0-9]{1,9})")
 
 
-def stream_fd(path: Path | str) -> int | None:
+def stream_fd(path: str | os.PathLike[str]) -> int | None:
     """Rule 3: the process's own descriptor ``path`` names by its name alone (``/dev/stdout``
     1, ``/dev/stderr`` 2, ``/dev/fd/N`` and ``/proc/self/fd/N`` N), else None."""
-    m = _STREAM.fullmatch(str(path))
+    m = _STREAM.fullmatch(os.fspath(path))
     if m is None:
         return None
     std, fd, proc = m.groups()

@@ -14,6 +14,13 @@ Rules:
    PstRotator UDP); every bind is loopback unless set.
 5. ``[web]`` is the bridge's own table (WebSettings), with its refusal of a console beyond
    loopback without a password.
+6. A pty's path is a file the remote writes (ptylines.py rule 1 replaces a link there), as the
+   bridge's settings rule 6 says of the station's: it is not the remote's file itself nor a
+   file another key names (``mqtt.password_file``, ``mqtt.tls``'s files,
+   ``web.password_file``), by any name its links go through (``pty_takes``), nor one of the
+   process's own descriptors (``/dev/stdout``). A review (87): ``gs232_pty`` naming the
+   symlinked password or configuration file (a dotfiles folder's link) passed, and the start
+   replaced that link with the pty's: the next start could not read its file.
 """
 
 from __future__ import annotations
@@ -22,13 +29,15 @@ import hashlib
 import os
 import re
 import socket
+from pathlib import Path
 from typing import Any, Literal, NamedTuple
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from bridge.core.model import OPERATOR_CHARS, operator_name, valid_operator
+from bridge.core.readfile import stream_fd
 from bridge.core.text import NOT_TEXT, bad_char, shown_path
-from bridge.settings import ConfigError, read_toml
+from bridge.settings import ConfigError, pty_takes, read_toml
 from bridge.settings.base import Strict
 from bridge.settings.errors import describe
 from bridge.settings.mqtt import MqttSettings
@@ -216,10 +225,38 @@ class RemoteSettings(Strict):
                             f"give it another {what}"
                         )
                 taken[(transport, where)] = name
+                if transport == "pty":
+                    self._own_pty(name, str(where))
         if self.web.enabled and ("tcp", self.web.port) in taken:  # rule 2: the console too
             clash = taken[("tcp", self.web.port)]
             raise ValueError(f"web.port {self.web.port} clashes with {clash}: give it another port")
         return self
+
+    def files_read(self) -> list[tuple[str, Path]]:
+        """The files the remote's keys name for it to read (rule 6), by key."""
+        tls = self.mqtt.tls
+        named = [
+            ("mqtt.password_file", self.mqtt.password_file),
+            ("mqtt.tls.ca_file", tls.ca_file),
+            ("mqtt.tls.cert_file", tls.cert_file),
+            ("mqtt.tls.key_file", tls.key_file),
+            ("web.password_file", self.web.password_file),
+        ]
+        return [(key, path) for key, path in named if path is not None]
+
+    def _own_pty(self, name: str, path: str) -> None:
+        """Rule 6: ValueError when the pty's link at ``path`` would take another file's name."""
+        if stream_fd(path) is not None:
+            raise ValueError(
+                f"{name} {shown_path(path)} names one of the process's own descriptors, not a "
+                "path for a pty's link: give the pty another path"
+            )
+        for key, file in self.files_read():
+            if pty_takes(path, file):
+                raise ValueError(
+                    f"{name} {shown_path(path)} is also {key}: the pty's link would replace that "
+                    "file's name; give the pty another path"
+                )
 
     def client_id(self) -> str:
         """``mqtt.client_id``, or one per operator, host and what the file serves, that no
@@ -239,6 +276,14 @@ def load_remote_settings(path: str) -> RemoteSettings:
     """The file validated; ConfigError with one line per problem."""
     data: dict[str, Any] = read_toml(path)
     try:
-        return RemoteSettings(**data)
+        settings = RemoteSettings(**data)
     except ValidationError as exc:
         raise ConfigError(describe(exc, RemoteSettings, ENV_PREFIX, data, {})) from None
+    for i, e in enumerate(settings.endpoints):  # rule 6: nor the file itself
+        for key, transport, where, _ in e.offers():
+            if transport == "pty" and pty_takes(str(where), path):
+                raise ConfigError(
+                    f"endpoints[{i}].{key}: {shown_path(str(where))} is the configuration file "
+                    "itself: the pty's link would replace it; give the pty another path"
+                )
+    return settings

@@ -57,7 +57,8 @@ Rules:
    too (ptylines.py rule 1 replaces a link there). No file it writes is a rotator's serial
    port, by any name (links followed), nor a device (a character or block device; a pty's
    path excepted, where a link to a crashed run's pty is its own leftover). A pty's path is
-   judged by the link itself, never by where a link already there points (``_written_at``):
+   judged by the link itself, never by where a link already there points (``pty_takes``, the
+   remote's ptys' judge too: remote/settings.py rule 6):
    its place (its folder resolved, then its name) is none of the other file's names: the
    other's own place, every link on its way, what it resolves to (review 87: a crashed run's
    link left on the /dev/pts number a socat pty, the rotator's port, had since stopped the
@@ -702,7 +703,15 @@ def _written_at(name: str, path: Path, other: str, given: Path) -> bool:
     if len(ptys) == 2:
         return _place(path) == _place(given)
     pty, file = (path, given) if name.endswith(_PTY_KEYS) else (given, path)
-    return _place(pty) in _ways(file)
+    return pty_takes(pty, file)
+
+
+def pty_takes(pty: str | os.PathLike[str], file: str | os.PathLike[str]) -> bool:
+    """Rule 6: whether a pty's link at ``pty`` would take over the name of the file at ``file``
+    (the remote's ptys against the files it reads: remote/settings.py rule 6)."""
+    if stream_fd(pty) is not None or stream_fd(file) is not None:
+        return _place(Path(pty)) == _place(Path(file))
+    return _place(Path(pty)) in _ways(Path(file))
 
 
 def _place(path: Path) -> str:

@@ -164,3 +164,38 @@ def test_a_byte_the_remotes_file_cannot_decode_is_counted_from_its_start(tmp_pat
     path.write_bytes(b"\xef\xbb\xbf# \xff\n" + HEAD.encode())
     with pytest.raises(ConfigError, match=r"is not UTF-8 text \(byte 5\)"):
         load_remote_settings(str(path))
+
+
+def test_a_ptys_path_takes_no_file_the_remote_reads(tmp_path: Path) -> None:
+    """Review 87 (rule 6): a pty's path naming the symlinked password file (a dotfiles folder's
+    link), or the remote's own file, passed; the start replaced that link with the pty's, and
+    the next start could not read the file. Refused naming the key, by any name the file's links
+    go through; /dev/stdout too."""
+    (tmp_path / "dotfiles").mkdir()
+    real = tmp_path / "dotfiles" / "mqtt-password"
+    real.write_text("s3cret\n")
+    real.chmod(0o600)
+    link = tmp_path / "mqtt-password"
+    link.symlink_to(real)
+    head = HEAD + f'username = "dl1abc"\npassword_file = "{link}"\n'
+    remote = tmp_path / "remote.toml"
+    for pty, said in [
+        (link, "endpoints[0].gs232_pty"),
+        (real, "endpoints[0].gs232_pty"),
+        (Path("/dev/stdout"), "names one of the process's own descriptors"),
+    ]:
+        remote.write_text(head + f'[[endpoints]]\ngs232_pty = "{pty}"\n')
+        with pytest.raises(ConfigError) as caught:
+            load_remote_settings(str(remote))
+        assert said in str(caught.value) and "s3cret" not in str(caught.value), caught.value
+    (tmp_path / "dotfiles" / "remote.toml").write_text(
+        HEAD + f'[[endpoints]]\ndcu1_pty = "{tmp_path / "remote.toml"}"\n'
+    )
+    remote.unlink()
+    remote.symlink_to(tmp_path / "dotfiles" / "remote.toml")
+    with pytest.raises(ConfigError, match=r"endpoints\[0\]\.dcu1_pty: .* configuration file"):
+        load_remote_settings(str(remote))
+    remote.unlink()  # a leftover pty link at the path is the remote's own: taken
+    remote.write_text(head + f'[[endpoints]]\ngs232_pty = "{tmp_path / "gs"}"\n')
+    (tmp_path / "gs").symlink_to("/dev/null")
+    assert load_remote_settings(str(remote)).endpoints[0].gs232_pty == str(tmp_path / "gs")
