@@ -182,8 +182,9 @@ def _rotator(port: Path, more: str = "") -> str:
 
 def test_a_file_the_bridge_writes_is_no_serial_port_nor_device(tmp_path: Path) -> None:
     """Attack 28 (rule 6): audit_file naming the rotator's port (by any name: links followed)
-    passed check-config and every audit line went down the controller's line; a device
-    (/dev/null, a tty) is no file to write either. The refusal names the key."""
+    passed check-config and every audit line went down the controller's line; a serial line
+    or a terminal's device is no file to write either (/dev/null and /dev/full are: the disk
+    full test writes to the latter). The refusal names the key."""
     tty = tmp_path / "ttyUSB0"
     tty.symlink_to("/dev/null")  # (a device: a serial adapter's, to the settings)
     by_id = tmp_path / "usb-FTDI_A1B2C3-if00-port0"
@@ -193,14 +194,17 @@ def test_a_file_the_bridge_writes_is_no_serial_port_nor_device(tmp_path: Path) -
         (f'audit_file = "{by_id}"\n{state}', "audit_file", "rotators[0].port"),
         (f'audit_file = "{tty}"\n{state}', "audit_file", "rotators[0].port"),
         (f'state_file = "{tty}"\n', "state_file", "rotators[0].port"),
-        (f'audit_file = "/dev/null"\n{state}', "audit_file", "is a character device"),
+        (f'audit_file = "/dev/ptmx"\n{state}', "audit_file", "is a serial line or terminal"),
     ]
     for top, key, said in cases:
-        port = tmp_path / "ttyUSB9" if "device" in said else by_id  # (a port of its own)
+        port = tmp_path / "ttyUSB9" if "serial line" in said else by_id  # (a port of its own)
         cfg = write(tmp_path, top + _rotator(port))
         with pytest.raises(ConfigError) as caught:
             load_settings(cfg, environ={})
         assert f"{key} " in str(caught.value) and said in str(caught.value), caught.value
+    for sink in ("/dev/null", "/dev/full"):
+        cfg = write(tmp_path, f'audit_file = "{sink}"\n{state}' + _rotator(tmp_path / "ttyUSB9"))
+        assert str(load_settings(cfg, environ={}).audit_file) == sink
     composite = (
         f'{state}audit_file = "{tty}"\n[[rotators]]\nid = "t"\n'
         'azimuth = { model = "rt21", port = "/dev/ttyUSB7" }\n'

@@ -55,8 +55,12 @@ Rules:
    console password file named ``console-secret`` beside the state file by random bytes.
    A pty's link (``gs232_pty``, ``easycomm_pty``, ``dcu1_pty``) is a file the bridge writes
    too (ptylines.py rule 1 replaces a link there). No file it writes is a rotator's serial
-   port, by any name (links followed), nor a device (a character or block device; a pty's
-   path excepted, where a link to a crashed run's pty is its own leftover). A pty's path is
+   port, by any name (links followed), nor a serial line's or terminal's device nor a disk
+   (a pty's path excepted, where a link to a crashed run's pty is its own leftover; other
+   devices, ``/dev/null`` and ``/dev/full``, are files to write as far as the bridge cares).
+   A rotator's pty may be another rotator's port where nothing stands or a link to a pty
+   does: the bridge driving its own emulated port (the integration tests' loop-backs, which
+   the first form of attack 28's fix refused). A pty's path is
    judged by the link itself, never by where a link already there points (``pty_takes``, the
    remote's ptys' judge too: remote/settings.py rule 6):
    its place (its folder resolved, then its name) is none of the other file's names: the
@@ -72,7 +76,7 @@ Rules:
    a name is judged by itself, never by where the checking process's descriptor goes (review
    87: check-config in a terminal refused, as "a character device", the file it and the
    service accepted with stdout a pipe or the journal's socket); another written file naming
-   one is refused. A real device node (``/dev/ttyUSB0``, ``/dev/null``) is still refused.
+   one is refused. A serial line's device node (``/dev/ttyUSB0``) is still refused.
 7. A file that holds a secret (``files_secret``: the MQTT and console password files, the TLS
    key, the console's secret beside the state file, kept there by any run with a console
    password) is read as nothing else (``secret_read``): no other key that names a file to
@@ -559,6 +563,8 @@ class Settings(BaseSettings):
                         f"would overwrite it; {fix}"
                     )
             for other, port in self.serial_ports():  # (a pty's at the port's device too)
+                if _loop_back(name, other, port):
+                    continue
                 if _written_at(name, path, other, Path(port)):
                     raise ValueError(_on_a_port(name, path, other, port))
             mine = name.endswith(_PTY_KEYS) or stream_fd(path) is not None  # (judged by name)
@@ -746,15 +752,37 @@ def _on_a_port(name: str, path: Path, port_key: str, port: str) -> str:
     return f"{where}: what the bridge writes there would go to the controller; {_OWN}"
 
 
+# Linux's character majors of serial lines and terminals (Documentation/admin-guide/devices):
+# 3 old ptys, 4 tty/ttyS, 5 tty/console/ptmx, 136-143 pts, 166 ttyACM, 188 ttyUSB, 204 more UARTs
+_SERIAL_MAJORS = frozenset((3, 4, 5, *range(136, 144), 166, 188, 204))
+
+
 def _device_at(path: Path) -> str | None:
-    """Rule 6: what is at ``path`` (links followed) if it is a device, else None."""
+    """Rule 6: what is at ``path`` (links followed) if it is a serial line or a disk, else
+    None. Other devices are files to write to as far as the bridge cares (``/dev/null``, and
+    ``/dev/full`` to try a full disk: the first CI run of attack 28's fix refused both)."""
     try:
-        mode = os.stat(os.path.expanduser(path)).st_mode
+        st = os.stat(os.path.expanduser(path))
     except (OSError, ValueError):  # (not there yet, or not to be looked at: the start says)
         return None
-    if stat.S_ISCHR(mode):
-        return "character device"
-    return "block device" if stat.S_ISBLK(mode) else None
+    if stat.S_ISCHR(st.st_mode) and os.major(st.st_rdev) in _SERIAL_MAJORS:
+        return "serial line or terminal"
+    return "block device" if stat.S_ISBLK(st.st_mode) else None
+
+
+def _loop_back(name: str, port_key: str, port: str) -> bool:
+    """Rule 6: whether ``name``, a rotator's pty, is another rotator's port that a link to a
+    pty stands at or nothing does: the bridge driving its own emulated port (a Rotor-EZ
+    rotator on a DCU-1 rotator's pty, as the integration tests run them). A pty on its own
+    rotator's port, or on a port where a real serial line stands, is still refused (attack
+    28: the by-id name pasted into both)."""
+    if not name.endswith(_PTY_KEYS) or name.split(".")[0] == port_key.split(".")[0]:
+        return False
+    try:
+        st = os.stat(os.path.expanduser(port))
+    except (OSError, ValueError):
+        return True  # (nothing there: the pty's link will be it)
+    return stat.S_ISCHR(st.st_mode) and os.major(st.st_rdev) in range(136, 144)
 
 
 def secret_read(secret: list[tuple[str, Path]], read: list[tuple[str, Path]]) -> str | None:
