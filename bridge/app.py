@@ -266,7 +266,7 @@ class App:
         self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
         self.me = Instance.me(  # interfaces/mqtt/claim.py rule 5: ``installation`` too
-            settings.mqtt.effective_client_id(), installation(os.fsdecode(settings.state_file))
+            settings.mqtt.effective_client_id(), installation(settings.state_file)
         )
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()

@@ -35,12 +35,6 @@ def spawn_in(directory: Path) -> Spawn:
     return spawn
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: a second installation on the same host, its state_file relative "
-    "(\"state.json\") like the first's, starts on the first's rotator topic and one target "
-    "turns both rotors (installation hashes the path as written, not the file)",
-)
 def test_two_installations_with_a_relative_state_file_never_both_run_nested(
     tmp_path: Path, broker: Mosquitto, probe: Probe, monkeypatch: pytest.MonkeyPatch
 ) -> None:

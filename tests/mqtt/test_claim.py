@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
+
+import pytest
 
 from bridge.interfaces.mqtt.claim import (
     Instance,
     Post,
     Verdict,
     first_look,
+    installation,
     refusal,
     refusal_on,
     standing,
@@ -182,3 +186,19 @@ def test_the_refusal_on_a_post_names_the_other_and_the_topic() -> None:
     text = refusal_on(found)
     assert "rotor-tower-9f8e7d" in text and "'rotor/tower/bridge/info'" in text
     assert "mqtt.base_topic" in text and "\n" not in text
+
+
+def test_the_installation_hashes_the_state_files_resolved_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Review 85: ``state_file = "state.json"`` run from two directories is two installations;
+    the same file named through a link, or relative from its own directory, is one."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "a")
+    monkeypatch.chdir(tmp_path / "a")
+    here = installation("state.json")
+    assert here == installation(tmp_path / "a" / "state.json")
+    assert here == installation(tmp_path / "link" / "state.json")
+    monkeypatch.chdir(tmp_path / "b")
+    assert installation("state.json") != here

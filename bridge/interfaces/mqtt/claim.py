@@ -56,7 +56,9 @@ Rules:
    taken for gone), and the other way round. Another instance live there refuses this bridge as
    rule 2 does (code 2 at a start, a yield after it ran), naming the topic; its own installation
    never does (a restart; the stamp's ``installation``, a hash of the machine id, host and state
-   file, the same whatever the base topic: review 82, a station killed outright on ``rotor`` and
+   file's resolved path (``state_path``; review 85: hashed as written, two installations run
+   from two directories with ``state_file = "state.json"`` were one), the same whatever the base
+   topic: review 82, a station killed outright on ``rotor`` and
    given its one remaining rotator's ``rotor/tower`` as base topic was refused for good by its own
    ``rotor/tower/info``, stamped with the client id it had on ``rotor``), nor junk or an older
    bridge's ``R/info`` without a stamp, nor a rotator whose bridge's base topic is this bridge's
@@ -100,6 +102,7 @@ import os
 import socket
 import time
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 
 @dataclass(frozen=True)
@@ -209,13 +212,13 @@ def stamp(instance_id: str, base_topic: str, installation: str = "") -> dict[str
 MACHINE_ID = ("/etc/machine-id", "/var/lib/dbus/machine-id")  # rule 5: read for installation
 
 
-def installation(state_file: str) -> str:
+def installation(state_file: str | os.PathLike[str]) -> str:
     """Rule 5: this installation's identity, the same whatever its base topic (review 82: the
     instance id, the default client id, changes with the base topic, and a station given its
     one rotator's topic as base topic was refused by its own old ``R/info`` there): 12 hex
     digits of a hash of the machine's id (``/etc/machine-id``: two computers cloned from one
     image with one host name still differ), the host name and the state file's path (one
-    process per state file, state_store.py rule 7)."""
+    process per state file, state_store.py rule 7), resolved (``state_path``)."""
     machine = ""
     for path in MACHINE_ID:
         try:
@@ -225,8 +228,24 @@ def installation(state_file: str) -> str:
             continue
         if machine:
             break
-    key = f"{machine}\n{socket.gethostname()}\n{state_file}".encode(errors="surrogatepass")
+    path = state_path(state_file)
+    key = f"{machine}\n{socket.gethostname()}\n{path}".encode(errors="surrogatepass")
     return hashlib.sha256(key).hexdigest()[:12]
+
+
+def state_path(state_file: str | os.PathLike[str]) -> str:
+    """Rule 5: the state file's path as ``installation`` hashes it: ``~`` expanded, made
+    absolute against the working directory and its links resolved (review 85: hashed as the
+    configuration wrote it, two installations on one host each run from its own directory with
+    ``state_file = "state.json"`` had one installation, and a bridge on the other's rotator
+    topic took that rotator's stamp for its own earlier run and ran: one target turned both
+    rotors). A path that cannot be resolved (a loop of links) is hashed absolute."""
+    path = Path(os.fsdecode(state_file)).expanduser().absolute()
+    try:
+        path = path.resolve()
+    except (OSError, RuntimeError):  # (a loop of links: RuntimeError before Python 3.13)
+        pass
+    return os.fsdecode(path)
 
 
 class Verdict(enum.Enum):
