@@ -698,6 +698,8 @@ class App:
             return bool(doomed)
 
         self.mqtt.add_feature(stale.subscriptions, on_message)
+        # (rule 4: a group's G/info is one of the bridge's own topics, judged here first)
+        self.client.peek(stale.peeked, lambda topic, payload: on_message(topic, payload, True))
         self.client.spare = stale.spared  # (rule 3: judged when the look ends)
 
     def _discovery(self, settings: Settings, *, retired: bool) -> DiscoveryPublisher:

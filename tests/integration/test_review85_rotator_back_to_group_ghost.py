@@ -12,8 +12,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import retained_snapshot
@@ -22,12 +20,6 @@ from tests.support.rig import Rig
 GROUP = {"groups": [{"id": "stack", "name": "Stack", "rotators": ["upper", "lower"]}]}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: a rotator made a group of its id again leaves its bearing, state, lock "
-    "and more retained for ever on the group's root (a ghost rotator: stale.py rule 4 no "
-    "longer reads the rotator's R/info there)",
-)
 def test_a_rotator_made_a_group_again_leaves_no_ghost(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

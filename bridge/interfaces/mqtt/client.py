@@ -123,7 +123,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 from typing import Any, Unpack
 
@@ -251,6 +251,8 @@ class MqttClient(Connection):
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         # rule 14: deletions a look asked for that are spared at its end (stale.py rule 3)
         self.spare: Callable[[str], bool] | None = None
+        # rule 10: owned topics whose held value a reader also judges first (stale.py rule 4)
+        self._peeks: dict[str, Callable[[str, bytes], object]] = {}
         self._on_heard: Heard | None = None  # rule 14: the witnesses' hook
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
@@ -651,7 +653,18 @@ class MqttClient(Connection):
             late = self._look.late(topic, payload, retained)
             if late and self._on_heard is not None and self._on_heard(late, frozenset()):
                 return True  # its rotator's ON goes out: the OFF the open sent is not put back
+        peek = self._peeks.get(topic) if retained and payload else None
+        if peek is not None:  # rule 10: judged as a value the broker held, then as ours
+            peek(topic, payload)
         return bool(self._owned.filters) and self._foreign(topic, payload, live=not retained)
+
+    def peek(self, topics: Iterable[str], on: Callable[[str, bytes], object]) -> None:
+        """Rule 10: ``on`` is handed a value the broker holds on one of ``topics``, the bridge's
+        own, before the owned-topic watch puts the bridge's own over it (a group's ``G/info``,
+        where a rotator's ``R/info`` left retained tells a ghost rotator: stale.py rule 4; a
+        review: the watch took it, and the rotator's bearing, state and lock stayed for ever)."""
+        for topic in topics:
+            self._peeks[topic] = on
 
     def _on_subscribe(
         self,

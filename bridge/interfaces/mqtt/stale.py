@@ -34,7 +34,9 @@ Rules:
    a group's root (not the group's own ``G/info``, payloads.py ``is_group_info``: it names its
    bridge, claim.py rule 5) tells a rotator was there: its topics that a group does not publish
    are deleted (``G/info`` itself is the group's, put over it); an option state under a group's
-   root is deleted by itself.
+   root is deleted by itself. ``G/info`` being one of the bridge's own topics, the owned-topic
+   watch takes what the broker holds there: it is handed here first (``peeked``, client.py
+   ``peek``; review 85: it was not, and a rotator made a group again left its topics for ever).
 5. A rotator still configured keeps its root, but not every state topic a feature published
    there: one it no longer has (a station taken out: ``R/tracking``; ``[wsjtx]`` or the station:
    ``R/follow/state``; bridge/feature.py ``StateTopic.needs``) is published no more, and its
@@ -101,6 +103,14 @@ class StaleTopics:
             # twice, it was deleted and said twice)
             *sorted(self._unpublished - self._owned),
         ]
+
+    @property
+    def peeked(self) -> list[str]:
+        """Rule 4: the groups' ``G/info``, one of the bridge's own topics (claim.py rule 5), whose
+        value the broker held the client hands here before its owned-topic watch puts the
+        group's own over it (client.py ``peek``; review 85: the watch took it, never read here,
+        and a rotator made a group again left its bearing, state and lock for ever)."""
+        return [f"{g}/info" for g in sorted(self._groups) if f"{g}/info" in self._owned]
 
     def stale(self, topic: str, payload: bytes | None = None) -> list[str]:
         """Rule 1: what ``topic`` (read on ``subscriptions``) leaves to delete: every retained
