@@ -12,18 +12,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: one retained 'online' forged on rotor/bridge/state, above a station's "
-    "topics, makes a gone bridge's leftover R/info refuse the station on rotor/tower (code 2)",
-)
 def test_a_forged_state_above_never_refuses_a_station_by_a_gone_bridges_leftover(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

@@ -15,7 +15,9 @@ from bridge.interfaces.mqtt.claim import (
     installation,
     refusal,
     refusal_on,
+    stamp_stopped,
     standing,
+    stopped,
     yields_to,
 )
 
@@ -141,6 +143,24 @@ def test_a_rotator_offline_stands_live_when_its_bridge_above_says_online() -> No
         found = standing(ME, "rotor/tower", posts, seen)
         assert found is not None and not found.live
     assert standing(ME, "rotor/tower", posts, above) is None  # above alone refuses nothing
+
+
+def test_a_forged_online_above_never_vouches_for_a_stamp_its_bridge_stopped() -> None:
+    """Review 85: a bridge stopped cleanly stamps its rotators' ``R/info`` ``stopped``; an
+    ``online`` forged on the bridge state above (a client kept off our topics) never makes
+    that leftover live. The same stamp from a running bridge (its controller off) is vouched
+    for as ever."""
+    posts = (*POSTS, Post("rotor/bridge/info", above=True))
+    above = {"rotor/bridge/info": OTHER.info([]).encode(), "rotor/bridge/state": b"online"}
+    left = stopped(ROTATOR.decode()).encode()
+    assert stamp_stopped(left) and not stamp_stopped(ROTATOR)
+    assert Instance.stamped(left) == Instance.stamped(ROTATOR)
+    assert stopped("junk") == "junk" and stopped('{"id":"x"}') == '{"id":"x"}'
+    seen = {"rotor/tower/info": left, "rotor/tower/availability": b"offline", **above}
+    found = standing(ME, "rotor/tower", posts, seen)
+    assert found is not None and not found.live
+    found = standing(ME, "rotor/tower", posts, {**seen, "rotor/tower/info": ROTATOR})
+    assert found is not None and found.live
 
 
 def test_a_rotator_of_a_bridge_on_this_base_topic_is_left_to_rules_2_and_4() -> None:

@@ -82,8 +82,9 @@ class RecordingPublisher:
 
     up = hears = True
 
-    def publish_offline_now(self, topics: list[str]) -> None:
+    def publish_offline_now(self, topics: list[str], last: dict[str, str] | None = None) -> None:
         self.log.append("offline " + " ".join(topics))
+        self.retained.update(last or {})
         for topic in topics:
             self.retained[topic] = "offline"
 

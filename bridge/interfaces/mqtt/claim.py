@@ -75,7 +75,11 @@ Rules:
    posts), and a bridge info there naming the stamp's instance, ``online`` beside it, makes the
    stamp live whatever the rotator says (review 77: a live bridge whose rotator's controller is
    switched off, ``offline``, was taken for gone and a second bridge ran on its topics). What
-   stands above never refuses by itself nor takes anything for gone. Why posts on our own topics
+   stands above never refuses by itself nor takes anything for gone, and never vouches for a
+   stamp that says its bridge stopped: at a clean stop each ``R/info`` and ``G/info`` is left
+   stamped ``"stopped": true`` (``stopped``; review 85: a retained ``online`` forged on a gone
+   bridge's ``A/bridge/state``, above a station's topics, vouched for that bridge's leftover
+   ``R/info`` and refused the station for as long as it stayed). Why posts on our own topics
    only: an earlier try read the bridge info above the base topic as a post, outside what the
    broker's ACL gives this bridge, and a client kept off our topics ended the bridge with a forged
    info there, and a refused bridge's leftovers there refused the older bridge for good; here a
@@ -207,6 +211,24 @@ def stamp(instance_id: str, base_topic: str, installation: str = "") -> dict[str
     if installation:
         mark["installation"] = installation
     return mark
+
+
+def stopped(info: str) -> str:
+    """Rule 5: a rotator's ``R/info`` (a group's ``G/info``) as its bridge leaves it at a clean
+    stop: its stamp says ``"stopped": true``; anything else unchanged."""
+    doc = _json(info.encode())
+    mark = doc.get("bridge") if doc is not None else None
+    if doc is None or not isinstance(mark, dict):
+        return info
+    doc["bridge"] = {**mark, "stopped": True}
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def stamp_stopped(payload: bytes) -> bool:
+    """Rule 5: the stamp in ``payload`` says its bridge stopped cleanly (``stopped``)."""
+    doc = _json(payload)
+    mark = doc.get("bridge") if doc is not None else None
+    return isinstance(mark, dict) and mark.get("stopped") is True
 
 
 MACHINE_ID = ("/etc/machine-id", "/var/lib/dbus/machine-id")  # rule 5: read for installation
@@ -357,7 +379,7 @@ def standing(
         if mark is None or me.same_installation(mark[0]) or mark[1] == base_topic:
             continue  # (a rotator of a bridge on this base topic: rules 2 and 4 judge it)
         beside, live = post.availability, (seen.get(post.availability) or b"").strip() == b"online"
-        if not live and _vouched(mark[0], mark[1], seen):  # (its controller off)
+        if not live and not stamp_stopped(info) and _vouched(mark[0], mark[1], seen):
             beside, live = f"{mark[1]}/bridge/state", True
         found.append(Stand(mark[0], post, mark[1], beside, live, False))
     for stand in found:

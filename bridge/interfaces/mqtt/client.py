@@ -465,16 +465,21 @@ class MqttClient(Connection):
         PUBACK, or the probe) since they were last seen allowed."""
         return all(self._delivery.denied(topic) for topic in topics)
 
-    def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
-        """At shutdown: mark these retained topics offline and wait until the broker has them."""
+    def publish_offline_now(
+        self, topics: list[str], last: dict[str, str] | None = None, timeout_s: float = 1.0
+    ) -> None:
+        """At shutdown: mark these retained topics offline and wait until the broker has them;
+        ``last``: retained values to leave first (each stamp saying its bridge stopped,
+        claim.py rule 5)."""
         infos = []
         if self.refused is not None:
             return  # rule 14: these topics are another bridge's
-        for topic in topics:
+        said = [(t, v.encode()) for t, v in (last or {}).items()]
+        for topic, payload in [*said, *((t, b"offline") for t in topics)]:
             with self._lock:
-                self._retained[topic] = (b"offline", 1)
+                self._retained[topic] = (payload, 1)
             if self.connected.is_set():
-                infos.append(self._client.publish(topic, b"offline", qos=1, retain=True))
+                infos.append(self._client.publish(topic, payload, qos=1, retain=True))
         wait_published(infos, timeout_s, self.connected)
 
     def _resend(self) -> None:

@@ -175,7 +175,7 @@ from bridge.core.model import (
 from bridge.feature import CommandTopic, StateTopic, registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
-from bridge.interfaces.mqtt.claim import stamp
+from bridge.interfaces.mqtt.claim import stamp, stopped
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.interfaces.mqtt.groups import status_json as group_status_json
 from bridge.interfaces.mqtt.halts import AFTER_WAITING_OFF, Halts, switch_on
@@ -261,6 +261,7 @@ class MqttService:
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
         self._states = [state for f in topics.features for state in f.states]
         self._out: dict[str, _Outbound] = {}  # each attached rotator's status topics
+        self._infos: dict[str, str] = {}  # each R/info and G/info published (claim.py rule 5)
 
     def retain_is_live(self, v5: bool) -> None:
         """The main connection's MQTT version, before any message of a connection (``auto``
@@ -291,6 +292,7 @@ class MqttService:
             else stamp(self._instance, self.topics.base, self._installation),
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
+        self._infos[t.info] = info  # (claim.py rule 5: stamped ``stopped`` at a clean stop)
 
     def fence_asked(self, rotator_id: str) -> None:
         """Rule 11: another interface's stop or lock ON is about to be put (runtime/rotator.py
@@ -310,6 +312,7 @@ class MqttService:
             mark = stamp(self._instance, self.topics.base, self._installation)
         info = pl.group_info_json(group.id, group.name, group.member_ids, mark)
         self._publisher.publish_retained(self.topics.group(group.id).info, info)
+        self._infos[self.topics.group(group.id).info] = info
 
     def add_feature(
         self,
@@ -408,7 +411,12 @@ class MqttService:
         self._handed.clear()  # rule 3: offline is what the client holds now
         self._publisher.publish_offline_now(
             [self.topics.rotator(rid).availability for rid in self._rotators]
-            + [self.topics.group(gid).availability for gid in self._groups]
+            + [self.topics.group(gid).availability for gid in self._groups],
+            # claim.py rule 5: each stamp says its bridge stopped, so that a retained
+            # ``online`` forged above never vouches for what a clean stop left (review 85)
+            {topic: stopped(info) for topic, info in self._infos.items()}
+            if self._instance is not None
+            else None,
         )
         self._publisher.stop()
 
