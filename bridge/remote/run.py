@@ -14,7 +14,10 @@ Rules:
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several, also when ``B/info``
    is there beside them (one or the other left from an earlier configuration: nothing clears
-   a retained description).
+   a retained description). An endpoint whose rotator is a group's id (its ``G/info`` there,
+   claim.py rule 5) is a start-up error that says so and names the station's rotators (review
+   85: it was parsed as a rotator's description and said "not the station's description:
+   'model'").
 3. One line per endpoint goes to stdout at start, naming everything it serves:
    ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533, gs232 /tmp/rotor-gs232,
    pst udp 127.0.0.1:12000``.
@@ -44,6 +47,7 @@ Rules:
 
 from __future__ import annotations
 
+import json
 import logging
 import secrets
 import signal
@@ -278,10 +282,15 @@ class Remote:
         one = self.station.rotator(None)
         deadline = time.monotonic() + s.info_wait_s
         single_seen: float | None = None
+        group_seen: float | None = None
         while True:
             now = time.monotonic()
             topics = None
-            if own is not None and view.get(own.info) is not None:
+            if own is not None and is_group_info(view.get(own.info)):  # rule 2: a group's id
+                group_seen = group_seen or now
+                if now - group_seen >= ONE_ROTATOR_GRACE_S or now >= deadline:
+                    raise StartError(self._group(own))
+            elif own is not None and view.get(own.info) is not None:
                 topics = own
             elif view.get(one.info) is not None:
                 single_seen = single_seen or now
@@ -417,6 +426,28 @@ class Remote:
             log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
             return None
         return self._remote_rotator(rid, topics, info)
+
+    def _group(self, own: RotatorTopics) -> str:
+        """Rule 2: the start error of an endpoint whose ``rotator`` is a group's id (its
+        ``G/info``, claim.py rule 5; review 85: parsed as a rotator's, it said "not the
+        station's description: 'model'")."""
+        try:
+            members = json.loads(self.view.get(own.info) or b"").get("members")
+        except (ValueError, RecursionError, AttributeError):
+            members = None
+        of = (
+            f" of {', '.join(sorted(m for m in members if isinstance(m, str)))}"
+            if isinstance(members, list)
+            else ""
+        )
+        ids = sorted(self._rotator_ids())
+        rotators = (
+            f"the station has rotators {', '.join(ids)}" if ids else "the station has no rotator"
+        )
+        return (
+            f"{own.info} describes a group{of}, not a rotator: a remote endpoint serves one "
+            f"rotator; {rotators}: name one in endpoints.rotator"
+        )
 
     def _missing(self, ep: Endpoint, own: RotatorTopics | None) -> str:
         s = self.settings

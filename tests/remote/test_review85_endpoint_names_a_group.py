@@ -18,11 +18,6 @@ from tests.support.rig import Rig
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: a remote endpoint naming the station's group fails with "
-    "\"rotor/stack/info is not the station's description: 'model'\", not naming the rotators",
-)
 def test_a_remote_told_a_groups_id_names_the_stations_rotators(rig: Rig, probe: Probe) -> None:
     rig.add("upper", emu={"start_az_deg": 0, "jitter_deg": 0})
     rig.add("lower", emu={"start_az_deg": 0, "jitter_deg": 0})
@@ -41,3 +36,4 @@ def test_a_remote_told_a_groups_id_names_the_stations_rotators(rig: Rig, probe: 
         Remote(s).start()
     said = str(failed.value)
     assert "'model'" not in said and "lower, upper" in said, said
+    assert "rotor/stack/info describes a group" in said, said
