@@ -13,19 +13,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: a bridge started on a live bridge's rotator topic of its own "
-    "(topic = rotor/tower, base topic elsewhere), its controller off, runs, and once the "
-    "controller is on one target turns both rotors",
-)
 def test_a_bridge_on_a_live_bridges_own_rotator_topic_whose_controller_is_off_never_runs(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:
@@ -55,12 +47,6 @@ def test_a_bridge_on_a_live_bridges_own_rotator_topic_whose_controller_is_off_ne
         assert second.failed.is_set() and not first.failed.is_set()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 85: a bridge whose rotator has a topic of its own (rotor/tower, base topic "
-    "site) on a live bridge's rotator whose controller is off runs, and once the controller "
-    "is on one target turns both rotors",
-)
 def test_a_bridge_whose_own_rotator_topic_is_a_live_bridges_rotator_whose_controller_is_off_never_runs(  # noqa: E501
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

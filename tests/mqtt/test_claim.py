@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from bridge.interfaces.mqtt.claim import (
+    Claim,
     Instance,
     Post,
     Verdict,
@@ -18,6 +19,7 @@ from bridge.interfaces.mqtt.claim import (
     stamp_stopped,
     standing,
     stopped,
+    vouch_reads,
     yields_to,
 )
 
@@ -222,3 +224,23 @@ def test_the_installation_hashes_the_state_files_resolved_path(
     assert here == installation(tmp_path / "link" / "state.json")
     monkeypatch.chdir(tmp_path / "b")
     assert installation("state.json") != here
+
+
+def test_the_look_reads_the_bridge_posts_on_the_base_topic_a_stamp_names() -> None:
+    """Review 85: a live bridge on ``shack`` whose rotator has ``topic = "rotor/tower"`` (its
+    controller off: ``offline``) is vouched for by ``shack/bridge/info`` and ``state``, read
+    once the stamp is seen (``vouch_reads``); nothing is read for a rotator ``online``, a
+    stopped stamp, or one of this bridge's base topic."""
+    claim = Claim(ME, "rotor/tower", "rotor/tower/bridge/info", "rotor/tower/bridge/hello", POSTS)
+    on_shack = ROTATOR.replace(b'"rotor"}', b'"shack"}')
+    seen = {"rotor/tower/info": on_shack, "rotor/tower/availability": b"offline"}
+    assert vouch_reads(claim, seen) == ["shack/bridge/info", "shack/bridge/state"]
+    assert vouch_reads(claim, {**seen, "rotor/tower/availability": b"online"}) == []
+    assert (
+        vouch_reads(claim, {**seen, "rotor/tower/info": stopped(on_shack.decode()).encode()}) == []
+    )
+    mine = on_shack.replace(b'"shack"}', b'"rotor/tower"}')
+    assert vouch_reads(claim, {**seen, "rotor/tower/info": mine}) == []
+    above = {"shack/bridge/info": OTHER.info([]).encode(), "shack/bridge/state": b"online"}
+    found = standing(ME, "rotor/tower", POSTS, {**seen, **above})
+    assert found is not None and found.live and found.beside == "shack/bridge/state"

@@ -72,10 +72,15 @@ Rules:
    state on ``rotor/tower``, where it had run before); so is a rotator that said ``offline`` (a
    clean stop): said in the log, never refused, unless its bridge is live: the look reads
    ``A/bridge/info`` and ``A/bridge/state`` for each topic ``A`` above the base topic (``above``
-   posts), and a bridge info there naming the stamp's instance, ``online`` beside it, makes the
-   stamp live whatever the rotator says (review 77: a live bridge whose rotator's controller is
-   switched off, ``offline``, was taken for gone and a second bridge ran on its topics). What
-   stands above never refuses by itself nor takes anything for gone, and never vouches for a
+   posts) and, once its hello is back, those on the base topic each such stamp names
+   (``vouch_reads``, subscribed before a second hello that ends the look; review 85: a live
+   bridge on ``shack`` whose rotator has ``topic = "rotor/tower"``, or one on ``rotor`` whose
+   rotator's topic is the looking bridge's rotator's own ``topic``, its controller off, was
+   taken for gone, and one target turned both rotors), and a bridge info there naming the
+   stamp's instance, ``online`` beside it, makes the stamp live whatever the rotator says
+   (review 77: a live bridge whose rotator's controller is switched off, ``offline``, was taken
+   for gone and a second bridge ran on its topics). What stands above (or on the stamp's base
+   topic) never refuses by itself nor takes anything for gone, and never vouches for a
    stamp that says its bridge stopped: at a clean stop each ``R/info`` and ``G/info`` is left
    stamped ``"stopped": true`` (``stopped``; review 85: a retained ``online`` forged on a gone
    bridge's ``A/bridge/state``, above a station's topics, vouched for that bridge's leftover
@@ -386,6 +391,31 @@ def standing(
         if stand.live and (stand.other.id, stand.base) not in gone:
             return stand
     return replace(found[0], live=False) if found else None
+
+
+def vouch_reads(claim: Claim, seen: dict[str, bytes]) -> list[str]:
+    """Rule 5: what the look reads once its hello is back, before a second one ends it: the
+    bridge info and state on the base topic each stamp seen on a post names, when the stamp's
+    rotator is not ``online``, it is not marked ``stopped`` and they are no post's (review 85:
+    only the topics above the looking bridge's base topic were read, and a live bridge whose
+    rotator has a ``topic`` of its own, or whose rotator's topic is one of the looking bridge's
+    rotators' topics, its controller off, was taken for gone: one target turned both
+    rotors)."""
+    posted = {t for p in claim.posts for t in p.topics}
+    found: dict[str, None] = {}
+    for post in claim.posts:
+        info = seen.get(post.info)
+        if post.above or not info:
+            continue
+        mark = Instance.stamped(info)
+        if mark is None or mark[1] == claim.base_topic or claim.me.same_installation(mark[0]):
+            continue
+        if (seen.get(post.availability) or b"").strip() == b"online" or stamp_stopped(info):
+            continue
+        for topic in (f"{mark[1]}/bridge/info", f"{mark[1]}/bridge/state"):
+            if topic not in posted:
+                found[topic] = None
+    return list(found)
 
 
 def _vouched(other: Instance, base: str, seen: dict[str, bytes]) -> bool:

@@ -264,6 +264,7 @@ class MqttClient(Connection):
         self._look_heard = 0.0  # rule 14: when the broker last sent anything (monotonic)
         self._look_sub: int | None = None  # rule 14: the look's SUBSCRIBE, until its SUBACK
         self._look_only: frozenset[str] | None = None  # claim rule 5: read for the look alone
+        self._reading: list[str] = []  # claim rule 5: a look's vouch reads, until it ends
         self._as_published: Callable[[str], bool] | None = None  # rule 14 (``_broker_held``)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
         self._probing: list[str] = []  # rule 14: the filters the look hears its probes on (MQTT 5)
@@ -746,6 +747,9 @@ class MqttClient(Connection):
         if self._probing:  # rule 14: the probes' filters go, before anything of ours
             self._client.unsubscribe(self._probing)
             self._probing = []
+        if self._reading:  # claim rule 5: the look's vouch reads too
+            self._client.unsubscribe(self._reading)
+            self._reading = []
         send(self._will_topic, b"online", 1, retain=True)
         heard = look.heard if look is not None and taken else None
         unread = look.unread if look is not None and taken else frozenset()
@@ -902,11 +906,14 @@ class MqttClient(Connection):
                 n = look.ended_by(payload)
                 again = n is not None and look.probing  # (rule 14: the second hello)
                 probes, hello = look.probes() if n is not None else ([], b"")
+                reads = self._reads_only(look.reads) if hello and not again else []
             if n is not None:
                 if not again:
                     self._markers_back()
                     self._judge_probe()
-                if probes:  # rule 14: then the second hello ends the look
+                if hello:  # rule 14: then the second hello ends the look
+                    if reads:  # claim rule 5: their retained values come before it
+                        self._subscribe(self._client, [(t, 0) for t in reads])
                     for witness in probes:  # (QoS 1, as the hello after them)
                         self._delivery.send(witness, b"", 1, retain=False)
                     self._delivery.send(look.claim.hello_topic, hello, 1, retain=False)
@@ -921,7 +928,25 @@ class MqttClient(Connection):
             # rule 7): the handler tells this process's markers from the rest
             return False
         with self._lock:
-            return look.saw(topic, payload) or topic in (self._look_only or ())
+            return (
+                look.saw(topic, payload)
+                or topic in (self._look_only or ())
+                or topic in self._reading
+            )
+
+    def _reads_only(self, reads: list[str]) -> list[str]:
+        """Claim rule 5, under the lock: the look's vouch reads no other filter reads (their
+        denial is no problem, rule 17), subscribed until the look ends (``_open``)."""
+        read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
+        self._reading = [t for t in reads if not read(t) and t not in (self._look_only or ())]
+        self.optional(
+            {
+                t: "a live bridge whose rotator on this bridge's topics has its controller off "
+                "is taken for gone (interfaces/mqtt/claim.py rule 5)"
+                for t in self._reading
+            }
+        )
+        return list(self._reading)
 
     def _markers_back(self) -> None:
         """Rule 16 (paho's thread): this connection's hello or probe is back: the markers come

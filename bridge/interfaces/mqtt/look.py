@@ -63,6 +63,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    topic can be read, and nothing is sent there: a subscriber sees no probe over a value the
    broker holds): an empty message, not retained, QoS 1, on each, then a second hello (as
    rule 16's probe: one client's messages of one QoS keep their order), which ends the look.
+   Any look sends that second hello, probes or none, after subscribing claim.py rule 5's
+   ``vouch_reads`` (``reads``: the bridge posts on the base topic a stamp seen names), so their
+   retained values come before it.
    A probe that came back before it (``probe_back``: an empty live message there during the
    look, whoever sent it) says the topic can be read; a witness whose probe did not is handed
    on as ``unread`` (a timed-out look says nothing of it). Under MQTT 5 the
@@ -94,6 +97,7 @@ from bridge.interfaces.mqtt.claim import (
     refusal,
     refusal_on,
     standing,
+    vouch_reads,
     yields_to,
 )
 from bridge.interfaces.mqtt.limiter import EventLimiter
@@ -133,6 +137,7 @@ class FirstLook:
         self._late = False  # rule 14: the connection of that look lasts: its replays count
         # claim rule 5: the topics of the posts where another bridge would stand on ours
         self._posted = frozenset(t for p in claim.posts for t in p.topics)
+        self.reads: list[str] = []  # claim rule 5: the stamps' bridge posts, read this look
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -155,6 +160,7 @@ class FirstLook:
         self._heard = {}
         self._probes = set()
         self.probing = False
+        self.reads = []
         return self._hello(n)
 
     def probes(self) -> tuple[list[str], bytes]:
@@ -162,10 +168,12 @@ class FirstLook:
         message, not retained, on each), and the second hello to send after them; none in a
         look that hands nothing on (after the first open), or probed already."""
         n = self.looking
-        if n is None or self._opened or self.probing:
+        if n is None or self.probing:
             return [], b""
-        self._probes = set(self._witnesses) - set(self._heard)
-        if not self._probes:
+        if not self._opened:
+            self._probes = set(self._witnesses) - set(self._heard)
+        self.reads = vouch_reads(self.claim, self._seen)  # claim rule 5: subscribed first
+        if not self._probes and not self.reads:
             return [], b""
         self.probing = True
         return sorted(self._probes), self._hello(n) + b" probe"
@@ -194,7 +202,7 @@ class FirstLook:
             self._heard[topic] = payload
             return False
         if topic not in (self.claim.info_topic, self._state_topic):
-            if topic in self._posted:  # claim rule 5: kept, and handled as ever
+            if topic in self._posted or topic in self.reads:  # claim rule 5: kept
                 self._seen[topic] = payload
             return False
         self._seen[topic] = payload
