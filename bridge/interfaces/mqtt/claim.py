@@ -92,9 +92,13 @@ Rules:
    which only a client the ACL lets write them could forge (one above only vouches for it).
    Misjudged: a bridge killed outright above ours leaves its rotator's availability ``online`` and
    refuses this one until it is started and stopped again, or that topic deleted (the refusal says
-   so). Not seen (review 77): a live bridge whose rotator's controller does not answer where the
-   ACL denies this bridge the topics above; two bridges that start at the same moment (no live
-   rule 4 here). A group's ``G/info`` is stamped as a rotator's ``R/info`` is
+   so). So does a station's own ``R/info`` once its host name changed (review 85: a container
+   made anew, whose host name is its new id; left so: without the host name, containers of one
+   image, its machine id baked in or none, would be one installation on every computer, and a
+   bridge on another station's rotator topic would run). Not seen (review 77): a live bridge
+   whose rotator's controller does not answer where the ACL denies this bridge the topics
+   above; two bridges that start at the same moment (no live rule 4 here). A group's
+   ``G/info`` is stamped as a rotator's ``R/info`` is
    (payloads.py ``group_info_json``), ``G/availability`` beside it: a bridge started on a live
    bridge's group topic ``B/<group id>`` is refused by it (review 77: a group published no info,
    and that bridge ran), as the group's bridge started second is; ``is_group_info`` keeps it
