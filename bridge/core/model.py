@@ -735,20 +735,25 @@ class RotatorHealth:
 @dataclass(frozen=True)
 class Order:
     """Where a rotator's status stands in the order of the commands its station took
-    (``R/status``'s ``order``; session/mailbox.py rule 10a's places, counted from 1 in each
-    run of the station's bridge): ``run`` names the run (a restart counts again), ``taken``
-    is the newest place the status shows every command up to, ``turn`` the place of the
-    command the target or turn shown comes from (a target, a track or follow start; 0: none
-    this run), or the place the bridge's own turn took when it began (auto-park, the storm's
-    park: a place of its own, after every command asked before it; ``taken`` shows it too:
-    review 83; a rotator of two boxes parks both at one place of the rotator's:
-    runtime/composite.py rule 10), ``lock`` the place of the last lock word (0: none this
-    run). A remote orders its held halts by them (interfaces/mqtt/remote.py rule 10)."""
+    (``R/status``'s ``order``; session/mailbox.py rule 10a's places): ``run`` names the run
+    of the station's bridge (a restart begins a new one), ``taken`` is the newest place the
+    status shows every command up to, ``turn`` the place of the command the target or turn
+    shown comes from (a target, a track or follow start; 0: none known), or the place the
+    bridge's own turn took when it began (auto-park, the storm's park: a place of its own,
+    after every command asked before it; ``taken`` shows it too: review 83; a rotator of two
+    boxes parks both at one place of the rotator's: runtime/composite.py rule 10), ``lock`` the
+    place of the last lock word (0: none known). A remote orders its held halts by them
+    (interfaces/mqtt/remote.py rule 10). Places go on across runs (review 86): a run counts
+    on after the places the runs before it reserved in the state file (runtime/kept.py rule
+    12), ``since``: no place of an earlier run is past it, and ``turn`` and ``lock`` may name
+    an earlier run's place (the turn and the lock word the state file kept across the
+    restart). ``since`` 0: none kept (a station that counts from 1 in each run)."""
 
     run: str
     taken: int
     turn: int
     lock: int
+    since: int = 0
 
 
 @dataclass(frozen=True)

@@ -334,7 +334,13 @@ def _order(az: Order | None, el: Order | None) -> Order | None:
     of each, named by the azimuth box's run (both start together)."""
     if az is None or el is None:
         return az or el
-    return Order(az.run, max(az.taken, el.taken), max(az.turn, el.turn), max(az.lock, el.lock))
+    return Order(
+        az.run,
+        max(az.taken, el.taken),
+        max(az.turn, el.turn),
+        max(az.lock, el.lock),
+        az.since,  # (both boxes': the rotator's, kept.py rule 12)
+    )
 
 
 def merge(
@@ -652,6 +658,7 @@ class CompositeWorker:
         storm_arrived: bool = False,  # (both boxes were seen at their parks: ``merge``)
         stop_owed: bool = False,
         short_of: float | None = None,
+        order: tuple[int, int, int] = (0, 0, 0),  # kept.py rule 12
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -690,6 +697,7 @@ class CompositeWorker:
                 storm_arrived=storm_arrived,
                 stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
                 short_of=short_of if axis is Axis.AZIMUTH else None,  # (the status's)
+                order=order,  # (kept.py rule 12: the rotator's, kept whole)
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,

@@ -128,22 +128,51 @@ Rules:
    such lines, 139 saves). A save that fails is not
    reported as rule 3 has it (the log says it): it costs only a second round of discovery at
    the next start.
+12. The places in the order of commands (session/mailbox.py rule 10a; ``R/status``'s
+   ``order``) go on across restarts (review 86: a remote orders a STOP or lock ON it holds
+   against them, and a turn or lock OFF of the run before a restart, counted from 1 again,
+   looked older than that STOP or lock ON and was undone by it). The state file keeps the last
+   place reserved (state_store.py rule 14): a start counts on after it (``since``, shown as
+   the order's ``since``), the status that shows its first command taken reserves PLACES_BLOCK
+   more (the lines thread, ``seen_order``, hands the save to the writer: nothing written, no
+   writer started, before a command), and a status that shows half the block taken reserves
+   the next. So a flood of targets writes the file once per half a block, not per message, and
+   a run killed at any time used no place the next run counts again (unless the writer fell
+   half a block behind, or the first command's reservation was not written yet: the next run's
+   ``since`` is then below places of that run, which a remote then compares with none of the
+   next run's, as before). The place of the turn shown and of the last lock word are kept with
+   it (``turn``, ``lock``), at most once every ORDER_SAVE_S (the status that shows a newer
+   place after that saves it: a turn the restart would carry over goes on showing statuses,
+   its bearing's), one save queued at a time, which writes the latest (a lock word's save
+   waiting writes them too, in its one write): a flood of targets or lock words writes the
+   file a few times a second at most, and a lock word's own save (rule 2) waits behind one at
+   most. The next start shows them until a command of its own replaces them, so what the
+   restart kept (the lock, a turn the box went on with under ``unasked_moves = "follow"``) is
+   shown at its own place. A run killed within ORDER_SAVE_S of a command shows the place
+   before it (a remote may then take a turn begun right before the kill for an older one, or
+   send an older lock ON again over a lock OFF: the safe side). A save that fails is said in
+   the log only.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 
 from bridge.core.afterlock import later
-from bridge.core.model import ErrorKind, SettingValue, WindInfo
+from bridge.core.model import ErrorKind, Order, SettingValue, WindInfo
 from bridge.protocols.base import ModelSpec, SettingKind
 from bridge.runtime.state_store import StateStore
 from bridge.session.mailbox import Mailbox
 
 log = logging.getLogger(__name__)
+
+PLACES_BLOCK = 1 << 16  # rule 12: the places reserved at a time
+ORDER_SAVE_S = 0.5  # rule 12: the turn's and the lock word's places saved at most this often
 
 
 class Owner:
@@ -195,6 +224,7 @@ class Kept:
         report: Callable[[ErrorKind, str, str | None], None],
         saved_lock: Callable[[bool], None] = lambda locked: None,
         wake: Callable[[], None] = lambda: None,
+        clock: Callable[[], float] = time.monotonic,  # rule 12's ORDER_SAVE_S
     ) -> None:
         self._store = store
         self._saved_lock = saved_lock  # rule 2: the status shows the lock once it is saved
@@ -218,6 +248,13 @@ class Kept:
         self.short_of = store.short_of(rotator_id)  # rule 9
         self.version = store.version(rotator_id, spec.name)  # rule 11
         self._version_queued = False  # rule 11: a save of the latest version waits
+        # rule 12: the places earlier runs reserved, and the turn and lock word kept
+        self.since, self.turn_place, self.lock_place = store.order(rotator_id)
+        # (the first command taken reserves this run's block: half of none is taken)
+        self._reserved = self.since + PLACES_BLOCK // 2
+        self._order_queued = False  # rule 12: a save of the latest places waits
+        self._clock = clock
+        self._order_saved_s = -math.inf  # rule 12: when a save of the places was last queued
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
@@ -248,6 +285,39 @@ class Kept:
             if not self._version_queued:
                 self._version_queued = True
                 self._store.later(self._save_version_now)
+
+    def seen_order(self, order: Order | None) -> None:
+        """Rule 12 (lines thread: it only compares and hands over): the next block reserved
+        once half of this one is taken, at once; the turn's and the lock word's places kept,
+        at most once every ORDER_SAVE_S; one save queued at a time, which writes the latest."""
+        if order is None:
+            return
+        reserve = order.taken > self._reserved - PLACES_BLOCK // 2
+        if reserve:
+            self._reserved = order.taken + PLACES_BLOCK
+        now = self._clock()
+        changed = (order.turn, order.lock) != (self.turn_place, self.lock_place)
+        if reserve or (changed and now - self._order_saved_s >= ORDER_SAVE_S):
+            with self._unsaved_guard:  # (a lock word's save waiting writes them: one write)
+                self.turn_place, self.lock_place = order.turn, order.lock
+                if self._lock_unsaved or self._order_queued:
+                    return
+                self._order_queued = True
+            self._order_saved_s = now
+            self._store.later(self._save_order_now)
+
+    def _save_order_now(self) -> None:
+        with self._unsaved_guard:  # (before the read: a newer one queues a save of its own)
+            self._order_queued = False
+            places = self._reserved, self.turn_place, self.lock_place
+        self._store.set_order(self._id, *places)
+
+    def _places(self) -> tuple[int, int, int] | None:
+        """Rule 12 (under the guard): the places to write with a lock word's save; None before
+        this run reserved any (nothing of its own to keep yet)."""
+        if self._reserved <= self.since + PLACES_BLOCK // 2:
+            return None
+        return self._reserved, self.turn_place, self.lock_place
 
     def _save_version_now(self) -> None:
         self._version_queued = False  # (before the read: a newer one queues a save of its own)
@@ -329,8 +399,9 @@ class Kept:
     def _save_lock_now(self) -> None:
         with self._unsaved_guard:  # rule 7: the last word so far
             locked, self._lock_unsaved = self.locked, False
+            places = self._places()  # rule 12: in the same write
         try:
-            saved = self._store.set_locked(self._id, locked)
+            saved = self._store.set_locked(self._id, locked, places)
         finally:  # rule 2: now the status says it (and, failed, the error below)
             with self._unsaved_guard:  # (a word since: its own save says it; a review: an
                 # ON said by a save that read it before an OFF, with the OFF being written)

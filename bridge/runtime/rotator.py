@@ -208,7 +208,10 @@ class Rotator:
             report=self.report,
             saved_lock=partial(self._mailbox.put_lock_saved, wake=False),
             wake=self._mailbox.wake_once,
+            clock=clock,
         )
+        self._mailbox.places_after(self._kept.since)  # kept.py rule 12: on from earlier runs
+        kept_order = (self._kept.since, self._kept.turn_place, self._kept.lock_place)
         self._leaving: str | None = None  # ``leave``: why nothing but a halt is taken now
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._unheard = False  # kept.py rule 10: the lock waits for the broker (await_heard_lock)
@@ -230,6 +233,7 @@ class Rotator:
                 storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
+                order=kept_order,  # kept.py rule 12
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -250,6 +254,7 @@ class Rotator:
                 storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
+                order=kept_order,  # kept.py rule 12
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,
@@ -287,6 +292,7 @@ class Rotator:
         self._kept.seen_stop(status.stop_owed)
         self._kept.seen_short_of(status.short_of_deg)
         self._kept.seen_version(status.version)
+        self._kept.seen_order(status.order)
         if status.version is None and self._kept.version is not None:  # kept.py rule 11
             status = replace(status, version=self._kept.version)
         self._on_status(status)

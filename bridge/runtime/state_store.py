@@ -1,8 +1,9 @@
 """What must survive a restart of the bridge: each rotator's safety lock, the options the
 user set (the controller forgets them at power-off, so the bridge re-applies them), a stop owed
 to a controller (kept.py rule 8), what rotor
-health (session/health.py) has learned of the rotor, the control lease (runtime/lease.py), and
-the version its controller reported last (rule 12).
+health (session/health.py) has learned of the rotor, the control lease (runtime/lease.py),
+the version its controller reported last (rule 12), and its places in the order of commands
+(rule 14).
 
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
@@ -100,6 +101,11 @@ Rules:
    The installation's lock (rule 7) is taken on both (review 73: an earlier version still
    running on the old file did not stop the start that read it); ``~user/...`` likewise, from
    ``./~user/...``.
+14. A rotator's places in the order of commands (runtime/kept.py rule 12) are kept as
+   ``order``: ``{"places": <the last place reserved>, "turn": <the place of the turn>,
+   "lock": <the place of the lock word>}``, whole numbers not below 0, ``turn`` and ``lock``
+   not past ``places``. One that is malformed is none (all 0: the places count from 1, as a
+   station that keeps none does, and a remote compares none of them with an earlier run's).
 """
 
 from __future__ import annotations
@@ -608,10 +614,40 @@ class StateStore:
             self._data.setdefault(rotator_id, {})["version"] = {"model": model, "text": version}
             return self._save()
 
-    def set_locked(self, rotator_id: str, locked: bool) -> bool:
-        """Remember the lock; False if it could not be written (it will not survive a restart)."""
+    def order(self, rotator_id: str) -> tuple[int, int, int]:
+        """Rule 14: the places kept (reserved, the turn's, the lock word's); all 0 for none or
+        a malformed entry."""
         with self._lock:
-            self._data.setdefault(rotator_id, {})["locked"] = locked
+            raw = self._data.get(rotator_id, {}).get("order")
+        if not isinstance(raw, dict):
+            return 0, 0, 0
+        kept = [raw.get(k) for k in ("places", "turn", "lock")]
+        if any(type(n) is not int or n < 0 for n in kept):
+            return 0, 0, 0
+        places, turn, lock = kept
+        assert isinstance(places, int) and isinstance(turn, int) and isinstance(lock, int)
+        if turn > places or lock > places:
+            return 0, 0, 0
+        return places, turn, lock
+
+    def set_order(self, rotator_id: str, places: int, turn: int, lock: int) -> bool:
+        """Rule 14: remember them; False if they could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            entry["order"] = {"places": places, "turn": turn, "lock": lock}
+            return self._save()
+
+    def set_locked(
+        self, rotator_id: str, locked: bool, order: tuple[int, int, int] | None = None
+    ) -> bool:
+        """Remember the lock (and ``order``'s places with it, rule 14, in one write); False if
+        it could not be written (it will not survive a restart)."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            entry["locked"] = locked
+            if order is not None:
+                places, turn, lock = order
+                entry["order"] = {"places": places, "turn": turn, "lock": lock}
             return self._save()
 
     def set_option(self, rotator_id: str, name: str, enabled: SettingValue) -> bool:

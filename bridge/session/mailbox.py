@@ -80,7 +80,9 @@ Rules:
     it as on its way (``motion_unseen``; a review). A batch taken
     carries the newest place put (``Batch.newest``), as it carries the halt count: a judge
     that reads a newer one in the mailbox knows the status it sees predates a motion command
-    (a nudge is then refused: runtime/rotator.py).
+    (a nudge is then refused: runtime/rotator.py). The places go on across runs of the
+    bridge (``places_after``: from the block the state file reserved, runtime/kept.py rule 12),
+    so a remote can order a place of an earlier run against one of this (review 86).
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -312,6 +314,11 @@ class Mailbox:
         """Rule 14: the lease's generation, read before judging a target (one attribute read,
         as ``epoch``)."""
         return self._lease
+
+    def places_after(self, since: int) -> None:
+        """Rule 10a: the places counted on after ``since`` (the places earlier runs reserved:
+        runtime/kept.py rule 12), before any is taken."""
+        self._tickets = itertools.count(since + 1)
 
     def ticket(self) -> int:
         """Rule 10a: a place in the order of commands, for one asked now and put later (``next``

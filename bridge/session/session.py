@@ -323,6 +323,8 @@ class RotatorSession:
         # place in the order of commands of a turn the bridge begins itself (``Order``), from
         # the counter the rotator's commands advance (a composite's box: the rotator's
         # mailbox's, not the box's own: runtime/composite.py rule 10, review 86)
+        order: tuple[int, int, int] = (0, 0, 0),  # runtime/kept.py rule 12: the places
+        # earlier runs reserved (``since``), and the turn's and the lock word's kept
     ) -> None:
         self.cfg = cfg
         self._place = place
@@ -354,18 +356,21 @@ class RotatorSession:
         self.health = Health(cfg, health)
         self.view = st.View()
         # the status's ``order`` (core/model.py Order; interfaces/mqtt/remote.py rule 10): this
-        # run's name, the newest place taken, the place of the turn shown and of the lock word
+        # run's name, the newest place taken, the place of the turn shown and of the lock word,
+        # on from the places earlier runs took (runtime/kept.py rule 12: a turn and a lock word
+        # kept across the restart at their own places)
         self._run = secrets.token_hex(4)
-        self._taking = 0
-        self._turn_place = 0
-        self._lock_place = 0
+        self._since, self._turn_place, self._lock_place = order
+        self._taking = self._since
         self.status = RotatorStatus(
             cfg.rotator_id,
             locked=locked,
             health=self.health.report,
             stop_owed=self.controller.stops.owed,
             short_of_deg=self.controller.short_of_deg,  # (kept: the first status says so too)
-            order=Order(self._run, 0, 0, 0),  # (the first status's too: no change to say)
+            order=Order(  # (the first status's too: no change to say)
+                self._run, self._since, self._turn_place, self._lock_place, self._since
+            ),
         )
         # rule 17: the parts handed in (the features', from the app), in the order they run
         parts: tuple[Part[RotatorSession], ...] = (
@@ -1464,7 +1469,7 @@ class RotatorSession:
             self._turn_place,
             self._lock_place,
         ):
-            order = Order(self._run, self._taking, self._turn_place, self._lock_place)
+            order = Order(self._run, self._taking, self._turn_place, self._lock_place, self._since)
         status = st.current(ctl.cfg, seen, now, order)  # (controller.py rule 7)
         if self.lock_unknown:  # (runtime/kept.py rule 10)
             status = replace(status, lock_unknown=True)

@@ -15,6 +15,7 @@ import threading
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -364,8 +365,8 @@ def test_a_lock_on_after_an_off_is_not_said_while_the_off_is_saved(
     wrote: dict[bool, threading.Event] = {True: threading.Event(), False: threading.Event()}
     go: dict[bool, threading.Event] = {True: threading.Event(), False: threading.Event()}
 
-    def slow_save(rid: str, locked: bool) -> bool:  # the write done, its word not yet said
-        saved = real(rid, locked)
+    def slow_save(rid: str, locked: bool, *places: Any) -> bool:  # the write done, its word
+        saved = real(rid, locked, *places)  # not yet said
         wrote[locked].set()
         go[locked].wait(slow(10))
         return saved

@@ -89,6 +89,7 @@ def fresh(status: RotatorStatus, time_unix: float, has_elevation: bool, shows_ra
             "taken": order.taken,
             "turn": order.turn,
             "lock": order.lock,
+            "since": order.since,
         }
     doc["time"] = _iso(time_unix)
     doc.update(last)

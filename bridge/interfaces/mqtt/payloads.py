@@ -709,6 +709,7 @@ def _status_rest(
             "taken": order.taken,
             "turn": order.turn,
             "lock": order.lock,
+            "since": order.since,
         }
     return f'{_STATUS_ENCODE(doc)[1:-1]},"time":', f"{''.join(tail)}}}"
 
