@@ -442,6 +442,7 @@ class StatusOrder(NamedTuple):
     lock_known: bool = True
     moving: bool = False
     motion_known: bool = True
+    since: int = 0  # core/model.py Order: no place of an earlier run is past it (0: none kept)
 
 
 #: ``StatusOrder.moving``'s states: not at rest (a restarted bridge's first reading of a box
@@ -474,12 +475,21 @@ def status_order(payload: bytes) -> StatusOrder | None:
     state = doc.get("state")
     moving = state in _NOT_AT_REST or doc.get("moving") is True
     return StatusOrder(
-        run, taken, turn, lock, turning, locked, lock_known, moving, state not in _NOT_READ
+        run,
+        taken,
+        turn,
+        lock,
+        turning,
+        locked,
+        lock_known,
+        moving,
+        state not in _NOT_READ,
+        order.since,
     )
 
 
 def _order(value: object) -> Order | None:
-    """``R/status``'s ``order`` as the station writes it (its run's name, three places), or
+    """``R/status``'s ``order`` as the station writes it (its run's name, four places), or
     None: a status without it (a station's bridge before it), or not what a station writes
     (rule 1; rule 3: the run's name is text the page may show)."""
     if not isinstance(value, dict):
@@ -489,8 +499,11 @@ def _order(value: object) -> Order | None:
         return None
     if any(type(p) is not int or p < 0 for p in places):
         return None
+    since = value.get("since", 0)  # (none: a station that counts from 1 in each run)
+    if type(since) is not int or since < 0:
+        return None
     taken, turn, lock = places
-    return Order(run, taken, turn, lock)  # type: ignore[arg-type]
+    return Order(run, taken, turn, lock, since)  # type: ignore[arg-type]
 
 
 def parse_control(payload: bytes | None) -> Control | None:

@@ -498,10 +498,10 @@ def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:
 def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
     """A rotator's ``R/status`` on its halts (interfaces/mqtt/remote.py rule 10): a STOP on
     ``stop`` ends the turn shown, from its place (``order.turn``; a rotor not at rest with no
-    target, the box's own turn across a restart, from that place too: 0 in a run that took
-    none), and is not judged by a status whose controller is not read; a lock ON on ``lock`` ends
-    the lock OFF, from the lock word's place (``order.lock``; 0 in a run that took none: the
-    lock the state file kept across a restart), and is not judged by a status that does not
+    target, the box's own turn across a restart, from that place too: the one the state file
+    kept), and is not judged by a status whose controller is not read; a lock ON on ``lock`` ends
+    the lock OFF, from the lock word's place (``order.lock``; the lock word's place the state
+    file kept across a restart), and is not judged by a status that does not
     know the lock (``lock_unknown``); None for a status without an ``order`` (no halt is held
     for it)."""
     said = status_order(payload)
@@ -519,4 +519,5 @@ def standing(stop: str, lock: str, payload: bytes) -> Standing | None:
             ((lock, b"ON"), None if said.locked else said.lock),
         ),
         unsaid,
+        said.since,
     )

@@ -66,11 +66,6 @@ def remote_route(rig: Rig) -> Iterator[CuttableLink]:
     link.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 86: an old held lock ON goes again after a station restart and undoes a "
-    "lock OFF made at the tower after it (the station locked, the operator's turn refused)",
-)
 def test_a_lock_off_at_the_tower_before_a_restart_is_not_undone_by_an_older_lock_on(
     station: Rig,
     route: CuttableLink,  # noqa: F811

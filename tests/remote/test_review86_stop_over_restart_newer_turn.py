@@ -46,11 +46,6 @@ def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
     yield from killable_station(rig, route, emu=emu, unasked_moves="follow")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 86: an old held STOP goes again after a station restart and stops a turn "
-    "Home Assistant began after it (the rotor stops short of the newer target)",
-)
 def test_an_old_stop_held_over_a_restart_never_stops_a_turn_begun_after_it(
     station: Rig,
     route: CuttableLink,  # noqa: F811

@@ -126,66 +126,70 @@ Rules:
    counted itself before that is never overtaken, and one that counts itself after it goes
    after it.
 10. The broker's PUBACK says the broker has a halt, not that the station's bridge does: a
-   station whose route to the broker dies without a word (no FIN: its last will only after
-   1.5 keepalives) is still heard for up to SILENT_S, and the broker hands the halt to its
-   dead connection; the bridge comes back with a clean session and never gets it (attack 26:
-   the STOP answered ``RPRT 0``, the rotor turned on to its target). So every halt the
-   broker took (``send``'s, and each sent again: rule 6) is held (``_unproven``), and ORDER
-   decides what becomes of it, never a clock (review 79: the station's wall clock set back,
-   no status was ever after a halt) nor a guess. The station's ``R/status`` says where it
-   stands in the order of its rotator's commands (``order``: session/mailbox.py rule 10a's
-   places in this run of its bridge, ``run``; the newest it shows every command up to,
-   ``taken``; the place of the command the turn shown comes from, ``turn``, or of the
-   bridge's own turn, an auto-park or a storm's park, which takes a place when it begins
-   (review 83: with none, an old STOP went again over an auto-park begun after it and
-   stopped it short of the park); of the last lock word, ``lock``: core/model.py ``Order``).
-   A halt is stamped from the places (``taken``) its rotator's statuses (replayed or not)
-   showed, by run, before it was asked: judged by a status of a run showing every command up
-   to ``taken``, its stamp is the newest place of that run seen before it that this
-   ``taken`` confirms (``held_stamp``: not past it; the station's own ``taken`` never goes
-   back within a run, so a place seen past it was not the station's: review 83, a status
-   forged far ahead stamped a STOP so that it went again over Home Assistant's newer turn),
-   or 0 for a run not seen before it (a restart since; review 83: a status forged naming
-   another run, read before the STOP, no longer ends the hold at the station's next status
-   of its own run). Who published a status is not known: MQTT 5 gives a subscriber no
-   publisher's identity, and a user property the station added would be forged as easily as
-   the payload. So a client allowed to publish on the station's topics can still end a hold
-   (a status showing the turn ended, or a later one) or make a stamp high within what the
-   station's next status confirms; the broker's ACL (only the station's bridge may publish
-   there) is the guard (docs/remote.md). (The same halt sent again by this link keeps its
-   stamp; pressed again, it is stamped anew; a rotator's status read before the remote knew
-   the rotator, its replay on subscribing, counts too: ``read_status``). A status as
-   published (``live``; remote/run.py's ``_proof`` reads it) then judges it: a STOP is done
-   (no longer held) once a status shows no turn (a target, the azimuth's or the elevation's,
-   tracking or following: review 83, an az/el rotator's elevation target, its azimuth's
-   arrived, read as none) and the rotor at rest (review 83: a box turning on to its old
-   target under a restarted bridge that follows unasked moves shows no target, and its first
-   reading says ``braking``; a rotor coasting to a stop ends the hold once still), or a turn
-   from a place after the stamp (a newer command, this remote's or another front end's,
-   wins: review 79, an old STOP sent again stopped Home Assistant's later turn); a lock ON
-   is done once a status shows the lock ON, or a lock word after the stamp (a lock OFF at
-   the tower: review 79, undone by an old lock ON). A status of another run than the stamp's
-   (the station's bridge restarted) ends nothing by itself: every place of the new run came
-   after what the halt was asked against, so the stamp counts as 0 there, and what stands
-   from place 0 is what the restart kept (review 83: the lock, kept in the state file,
-   outlives a restart; a lock ON held over one, dropped at the new run's first status, left
-   the station unlocked; a STOP held over one, dropped so, let the box turn on to the target
-   it was pressed against). A status that does not know a state (``lock_unknown``; the
-   motion: ``offline`` or ``unknown``, a run's first status) judges nothing. What was asked
-   against still standing (the turn, the lock OFF, from a place not after the stamp) means
-   the station never took the halt, if its bridge connected again since: the halt is ``due``
-   once the station's bridge says ``online`` (as published, or replayed to this link's new
-   connection: review 79, a broker restart; either way a new connection of the station's may
-   have lost it), and the first live status after that showing what it was asked against
-   still standing sends it again at the station's next live heartbeat (rule 6's
-   ``_unheard``, and before any later command), once per ``online`` (the rate limit: on one
-   connection the broker hands the station what it took in order, so a status before the
-   halt came says nothing). A held halt found done while it waits to go again does not go. A
-   later move ends no hold (review 79: a move the station never had, or one the broker never
-   took, proved nothing; and a move never overrides a lock ON); a later word on a halt's own
-   topic that the broker took (a lock OFF after a lock ON) is this remote's last word there
-   and ends it. A station's bridge whose status carries no ``order`` (an older version) gets
-   no hold: its halts go as before rule 10.
+   station whose route to the broker dies without a word (no FIN: its last will only after 1.5
+   keepalives) is still heard for up to SILENT_S, and the broker hands the halt to its dead
+   connection; the bridge comes back with a clean session and never gets it (attack 26: the
+   STOP answered ``RPRT 0``, the rotor turned on to its target). So every halt the broker took
+   (``send``'s, and each sent again: rule 6) is held (``_unproven``), and ORDER decides what
+   becomes of it, never a clock (review 79: the station's wall clock set back, no status was
+   ever after a halt) nor a guess. The station's ``R/status`` says where it stands in the
+   order of its rotator's commands (``order``: session/mailbox.py rule 10a's places, which go
+   on across restarts, runtime/kept.py rule 12; the run of its bridge, ``run``, and the place
+   that run counts on after, ``since``; the newest it shows every command up to, ``taken``;
+   the place of the command the turn shown comes from, ``turn``, or of the bridge's own turn,
+   an auto-park or a storm's park, which takes a place when it begins (review 83: with none,
+   an old STOP went again over an auto-park begun after it and stopped it short of the park);
+   of the last lock word, ``lock``: core/model.py ``Order``). A halt is stamped from the
+   places (``taken``) its rotator's statuses (replayed or not) showed, by run, before it was
+   asked: judged by a status of a run showing every command up to ``taken``, its stamp is the
+   newest place seen before it that this status confirms (``held_stamp``): one of that run not
+   past ``taken`` (the station's own ``taken`` never goes back within a run, so a place seen
+   past it was not the station's: review 83, a status forged far ahead stamped a STOP so that
+   it went again over Home Assistant's newer turn), or one of another run not past ``since``
+   (an earlier run's, the places going on across a restart: review 86), else 0 (review 83: a
+   status forged naming another run, read before the STOP, no longer ends the hold at the
+   station's next status of its own run; a station that counts from 1 in each run, ``since``
+   0: every place of its new run came after what the halt was asked against). Who published a
+   status is not known: MQTT 5 gives a subscriber no publisher's identity, and a user property
+   the station added would be forged as easily as the payload. So a client allowed to publish
+   on the station's topics can still end a hold (a status showing the turn ended, or a later
+   one) or make a stamp high within what the station's next status confirms; the broker's ACL
+   (only the station's bridge may publish there) is the guard (docs/remote.md). (The same halt
+   sent again by this link keeps its stamp; pressed again, it is stamped anew; a rotator's
+   status read before the remote knew the rotator, its replay on subscribing, counts too:
+   ``read_status``). A status as published (``live``; remote/run.py's ``_proof`` reads it)
+   then judges it: a STOP is done (no longer held) once a status shows no turn (a target, the
+   azimuth's or the elevation's, tracking or following: review 83, an az/el rotator's
+   elevation target, its azimuth's arrived, read as none) and the rotor at rest (review 83: a
+   box turning on to its old target under a restarted bridge that follows unasked moves shows
+   no target, and its first reading says ``braking``; a rotor coasting to a stop ends the hold
+   once still), or a turn from a place after the stamp (a newer command, this remote's or
+   another front end's, wins: review 79, an old STOP sent again stopped Home Assistant's later
+   turn); a lock ON is done once a status shows the lock ON, or a lock word after the stamp (a
+   lock OFF at the tower: review 79, undone by an old lock ON). A status of another run than
+   the stamp's (the station's bridge restarted) ends nothing by itself: what the restart kept
+   stands at its own place, kept with it in the state file (review 83: the lock outlives a
+   restart; a lock ON held over one, dropped at the new run's first status, left the station
+   unlocked; a STOP held over one, dropped so, let the box turn on to the target it was
+   pressed against), and is judged against the stamp as any (review 86: with the places
+   counted from 1 in each run, the stamp counted as 0 in the new run and what it kept as from
+   place 0, so a lock OFF at the tower, or Home Assistant's turn, taken after the held halt
+   while this remote was away and kept over the restart, was undone by it). A status that does
+   not know a state (``lock_unknown``; the motion: ``offline`` or ``unknown``, a run's first
+   status) judges nothing. What was asked against still standing (the turn, the lock OFF, from
+   a place not after the stamp) means the station never took the halt, if its bridge connected
+   again since: the halt is ``due`` once the station's bridge says ``online`` (as published,
+   or replayed to this link's new connection: review 79, a broker restart; either way a new
+   connection of the station's may have lost it), and the first live status after that showing
+   what it was asked against still standing sends it again at the station's next live
+   heartbeat (rule 6's ``_unheard``, and before any later command), once per ``online`` (the
+   rate limit: on one connection the broker hands the station what it took in order, so a
+   status before the halt came says nothing). A held halt found done while it waits to go
+   again does not go. A later move ends no hold (review 79: a move the station never had, or
+   one the broker never took, proved nothing; and a move never overrides a lock ON); a later
+   word on a halt's own topic that the broker took (a lock OFF after a lock ON) is this
+   remote's last word there and ends it. A station's bridge whose status carries no ``order``
+   (an older version) gets no hold: its halts go as before rule 10.
 """
 
 from __future__ import annotations
@@ -266,6 +270,7 @@ class Standing:
     taken: int
     halts: tuple[tuple[tuple[str, bytes], int | None], ...]
     unsaid: frozenset[tuple[str, bytes]] = frozenset()  # halts this status cannot judge
+    since: int = 0  # no place of an earlier run is past it (core/model.py Order; 0: none kept)
 
 
 def _ledger_put(ledger: dict[str, list[int]], run: str, taken: int) -> None:
@@ -282,13 +287,19 @@ def _ledger_put(ledger: dict[str, list[int]], run: str, taken: int) -> None:
         del ledger[next(iter(ledger))]
 
 
-def held_stamp(before: dict[str, tuple[int, ...]], run: str, taken: int) -> int:
+def held_stamp(before: dict[str, tuple[int, ...]], run: str, taken: int, since: int = 0) -> int:
     """Rule 10: a held halt's stamp as a status of ``run`` showing every command up to
-    ``taken`` judges it: the newest place of that run seen before the halt was asked that
-    this status confirms (not past its ``taken``: the station's own never goes back in a
-    run, so a place seen past it was not the station's); 0 for a run not seen before it (a
-    restart since: every place of that run came after what the halt was asked against)."""
-    return max((p for p in before.get(run, ()) if p <= taken), default=0)
+    ``taken``, and no place of an earlier run past ``since``, judges it: the newest place
+    seen before the halt was asked that this status confirms: one of that run not past its
+    ``taken`` (the station's own never goes back in a run, so a place seen past it was not
+    the station's), or one of another run not past ``since`` (an earlier run's: review 86,
+    places go on across restarts); 0 if none (a restart since, of a station that counts from
+    1 in each run: every place of the new run came after what the halt was asked against)."""
+    floor = min(since, taken)
+    return max(
+        (p for r, places in before.items() for p in places if p <= (taken if r == run else floor)),
+        default=0,
+    )
 
 
 @dataclass
@@ -672,7 +683,8 @@ class RemoteLink(Connection):
                 held = self._unproven.get(key)
                 if held is None or not live or key in standing.unsaid:
                     continue
-                if place is None or place > held_stamp(held.before, standing.run, standing.taken):
+                stamp = held_stamp(held.before, standing.run, standing.taken, standing.since)
+                if place is None or place > stamp:
                     self._unproven_end(key)
                 elif held.due:
                     held.due = False
