@@ -91,17 +91,21 @@ Rules:
    84: the restart's turn is judged as a replug's, so a refused start owes it a halt, parts.py
    rule 10, and a GS-232 read 0.2 s on shows no move of a turn under way); not a
    hand's turn the bridge saw begin before the link went (``lost_hand``), nor once the
-   bridge sends a target of its own into it (review 53). Readings back for ``carried_seen_s``
-   (the time a rotor turning at its nominal speed, as slow as rule 6 allows for, needs to move
-   more than ``noise_deg`` and a reading's step, plus a poll; judged per axis as rule 3's stall
-   is, each axis the controller turns at its own speed, so the slower one's time: the lost turn
-   may be an elevation's alone, review 84: a GS-232's 2.5 deg/s elevation, read in whole
-   degrees with 2 degrees of noise, timed at the azimuth's 6 deg/s, was taken for at rest and
-   turned on 60 degrees past a refused start) that show no move say the lost
-   turn came to rest while the port was out (``lost_still``), though rule 2 waits ``settle_s``
-   to call it still: a turn seen after that is not known to be the lost one, and a refused
-   start's halt owed to it is dropped (parts.py rule 10; review 73, a hand a second after a
-   replug).
+   bridge sends a target of its own into it (review 53). The lost turn is judged per axis, as
+   rule 3's stall is (``_judged``): readings back for an axis's own ``axis_seen_s`` (the time
+   that axis turning at its nominal speed, as slow as rule 6 allows for, needs to move more
+   than ``noise_deg`` and a reading's step, plus a poll) that show it no move decide it still
+   (``still_axes``); a move on an axis not yet decided is the lost turn, seen; a move only on
+   axes decided still is a turn begun since, not known to be the lost one; every axis decided
+   (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to rest while the
+   port was out. Either way ``lost_still``, though rule 2 waits ``settle_s`` to call the rotor
+   still, and a refused start's halt owed to the lost turn is dropped (parts.py rule 10;
+   review 73, a hand a second after a replug). Review 84: the lost turn may be an
+   elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees with 2 degrees of
+   noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned on 60 degrees past
+   a refused start); review 89: the slowest axis's time for every axis (2.1 s on an az/el
+   GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
+   and the owed halt stopped it a few degrees in.
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -329,6 +333,10 @@ class Motion:
     # rule 4: when the first reading since the link came up was taken (a restart's found turn
     # is judged from it, as a lost one is)
     first_read_t: float | None = None
+    # rule 4: the axes ("azimuth", "elevation") a reading since the first has shown still for
+    # their own ``axis_seen_s``: a lost (or found) turn is not theirs, a move of theirs after
+    # that is a turn begun since
+    still_axes: frozenset[str] = frozenset()
 
 
 class Event(enum.StrEnum):
@@ -369,18 +377,6 @@ def stop_checked(m: Motion) -> Motion:
     return replace(m, stop_sent_t=None)
 
 
-def axis_speeds_deg_s(cfg: MotionConfig) -> tuple[float, ...]:
-    """The nominal speed of each axis the controller turns (the azimuth unless a composite's
-    elevation box, the elevation on an az/el one), those above 0."""
-    spec, speeds = cfg.spec, []
-    if spec.turns_azimuth:
-        speeds.append(cfg.nominal_speed_deg_s)
-    if spec.has_elevation:
-        el = cfg.el_speed_deg_s
-        speeds.append(spec.nominal_el_speed_deg_s if el is None else el)
-    return tuple(speed for speed in speeds if speed > 0)
-
-
 def found_unjudged(m: Motion) -> bool:
     """Rule 4: a bridge just started, its first reading taken, and its readings have not yet
     shown whether the rotor turns (a move; none for ``carried_seen_s``, or at rest by rule 2
@@ -390,16 +386,57 @@ def found_unjudged(m: Motion) -> bool:
     return m.carried and m.state is not MOVING and m.state is not OFFLINE
 
 
+def axis_seen_s(cfg: MotionConfig) -> dict[str, float]:
+    """Rule 4: how long after the first reading back a turn lost with the link on each axis the
+    controller turns, were it still on, shows a move (more than ``noise_deg`` and a reading's
+    step, at that axis's nominal speed as slow as rule 6 allows for) at a reading: none by
+    then, that axis came to rest while its port was out, though rule 2 calls it still only
+    ``settle_s`` on. Each axis by its own speed (rule 3's way; review 84: a GS-232's
+    elevation-only turn, timed at the azimuth's speed, taken for none; review 89: an azimuth
+    timed at the elevation's, a hand at it a second after a replug taken for the lost turn)."""
+    step = BLIND_SLOW_FACTOR * (cfg.noise_deg + cfg.spec.reading_step_deg)
+    spec, speeds = cfg.spec, {}
+    if spec.turns_azimuth:
+        speeds["azimuth"] = cfg.nominal_speed_deg_s
+    if spec.has_elevation:
+        el = cfg.el_speed_deg_s
+        speeds["elevation"] = spec.nominal_el_speed_deg_s if el is None else el
+    seen = {axis: step / speed + cfg.poll_margin_s for axis, speed in speeds.items() if speed > 0}
+    return seen or {"azimuth": step / cfg.nominal_speed_deg_s + cfg.poll_margin_s}
+
+
 def carried_seen_s(cfg: MotionConfig) -> float:
-    """Rule 4: how long after the first reading back a turn lost with the link, were it still
-    on, shows a move (more than ``noise_deg`` and a reading's step, at its axis's nominal speed
-    as slow as rule 6 allows for) at a reading: none by then, the rotor came to rest while its
-    port was out, though rule 2 calls it still only ``settle_s`` on. Each axis by its own
-    speed (rule 3's way): the lost turn may be either's alone, so the slowest axis's time
-    (review 84: a GS-232's elevation-only turn, timed at the azimuth's speed, taken for none)."""
-    step = cfg.noise_deg + cfg.spec.reading_step_deg
-    slowest = min(axis_speeds_deg_s(cfg), default=cfg.nominal_speed_deg_s)
-    return BLIND_SLOW_FACTOR * step / slowest + cfg.poll_margin_s
+    """Rule 4: by when the readings back have shown a lost (or found) turn on every axis, were
+    it on: the slowest axis's ``axis_seen_s``."""
+    return max(axis_seen_s(cfg).values())
+
+
+def _judged(
+    m: Motion, cfg: MotionConfig, now: float, az_moved: bool, el_moved: bool
+) -> dict[str, Any]:
+    """Rule 4: what a reading at ``now`` tells of a turn lost with the link (``lost_turning``,
+    the rotor taken for turning) or found by a bridge just started (``found_unjudged``): a
+    move on an axis not yet shown still for its own ``axis_seen_s`` is that turn, seen; a
+    move only on axes that were is a turn begun since (not the lost one: ``lost_still``; not
+    the found one: no longer ``carried``); a reading with no move shows each axis still whose
+    own time is over, and the turn over (or none) once every axis is (review 89: the slowest
+    axis's time for every axis stopped a hand at a GS-232B's azimuth a second after a
+    replug)."""
+    lost = m.state is MOVING
+    if az_moved or el_moved:
+        if (az_moved and "azimuth" not in m.still_axes) or (
+            el_moved and "elevation" not in m.still_axes
+        ):
+            return {}  # (the turn seen, as it was taken for)
+        return {"lost_still": True} if lost else {"carried": False}
+    first = m.first_read_t if m.first_read_t is not None else now
+    seen = axis_seen_s(cfg)
+    still = m.still_axes | {axis for axis, s in seen.items() if now - first >= s}
+    if still == m.still_axes:
+        return {}
+    if not still.issuperset(seen):
+        return {"still_axes": still}
+    return {"still_axes": still, "lost_still": True} if lost else {"carried": False}
 
 
 # -- observations ----------------------------------------------------------------------------
@@ -506,6 +543,7 @@ def reading(
             carried=(turning and not m.lost_hand) or fresh,
             lost_hand=False,
             first_read_t=now,
+            still_axes=frozenset(),
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -520,9 +558,15 @@ def reading(
         else {}
     )
     wraps = cfg.spec.az_wraps  # (asked twice: no property call)
-    moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
-    if el_deg is not None and m.el_anchor_deg is not None:
-        moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    az_moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
+    el_moved = (
+        el_deg is not None
+        and m.el_anchor_deg is not None
+        and abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    )
+    moved = az_moved or el_moved
+    if (m.lost_turning and not m.lost_still and m.state is MOVING) or found_unjudged(m):
+        changes.update(_judged(m, cfg, now, az_moved, el_moved))  # rule 4: each axis its own
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -534,12 +578,6 @@ def reading(
             changes["lost_turning"] = False
         if m.target_deg is not None:
             changes["progress_t"] = now
-    elif m.carried and m.state is not MOVING:  # rule 4: a restart's readings saw no turn
-        if m.first_read_t is None or now - m.first_read_t >= carried_seen_s(cfg):
-            changes["carried"] = False  # (for carried_seen_s: as a lost turn's, review 84)
-    elif m.lost_turning and not m.lost_still and m.last_move_t is not None:  # rule 4: the
-        if now - m.last_move_t >= carried_seen_s(cfg):  # lost turn, were it on, seen by now
-            changes["lost_still"] = True
     if m.target_deg is not None:  # rule 3: each axis's own progress, from where it last moved
         ref = m.az_from_deg if m.az_from_deg is not None else m.position_deg
         if ref is not None:  # (measured as ``_passing`` moves ``az_from_deg``: the same float)

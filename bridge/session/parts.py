@@ -78,10 +78,13 @@ Rules:
     not seen yet at the start's refusal: the first reading back shows where the rotor is, not
     whether it moves, and the refusals are not judged again (following's grid, tracking's
     wait). So the halt is owed (``StartHalt.owed``) and proposed at the step the next reading
-    shows that turn move; the first reading that shows the rotor still instead drops it
-    (``Motion.lost_still``: the turn came to rest while the port was out), so a hand at the
-    panel after that is never halted for it (review 73: d609655e owed the halt until rule 2's
-    rest, a second or more, and stopped a hand begun in that time). A bridge just started
+    shows that turn move; readings that show the rotor still instead drop it, each axis judged
+    by its own speed (``Motion.lost_still``, motion.py rule 4: every axis still for its own
+    time, the turn came to rest while the port was out; or a move only on axes already shown
+    still, a turn begun since), so a hand at the panel after that is never halted for it
+    (review 73: d609655e owed the halt until rule 2's rest, a second or more, and stopped a
+    hand begun in that time; review 89: so did the slowest axis's time for every axis, a hand
+    at a GS-232B's azimuth a second after a replug). A bridge just started
     does not know whether the box is turning either (a restart mid-turn: the controller
     finishing the turn the bridge before it sent): a start refused before its readings have
     told (motion.py rule 4, ``found_unjudged``: a move, or none for ``carried_seen_s``, asked

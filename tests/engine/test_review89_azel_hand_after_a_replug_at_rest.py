@@ -10,8 +10,6 @@ GS-232B; before 4ade0199 the hand's turn went where the hand sent it)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import (
     PARTNER,
@@ -21,11 +19,6 @@ from tests.engine.test_attack19_follow_start_refused_grid import (
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 89: a hand turning a GS-232B's azimuth at the panel a second after a "
-    "replug at rest (a follow start refused) is stopped a few degrees in (Medium)",
-)
 def test_a_hand_at_a_gs232_azimuth_a_second_after_a_replug_at_rest_is_not_stopped() -> None:
     with follower_by_a_keep_out("gs232b") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
