@@ -82,9 +82,13 @@ Rules:
    rest: the controller finishing a turn by itself, no hand on the panel (parts.py rule 8);
    so is a turn the readings of a bridge just started find (a restart mid-turn: the
    controller finishing the turn the bridge before it sent), until the rotor comes to rest;
-   readings for ``carried_seen_s`` from the first that show no move (as a lost turn's,
-   below), or the rotor at rest by rule 2 before that (``at_rest``: a short ``settle_s``),
-   say a turn after them is seen to begin, and till they do the controller is asked
+   readings that show each axis no move for its own ``axis_seen_s`` from the first (as a
+   lost turn's, below; not rule 2's ``settle_s``, shorter than a slow axis needs to show its
+   move: review 89, a GS-232's elevation at 2 deg/s and an azimuth set to 2 deg/s, dropped
+   at rule 2's rest after a restart mid-turn, turned on 60 and 100 degrees past a refused
+   start, and following ended "turned by hand"; only a ``settle_s`` the user set, rule 2's
+   to pair with the speeds, ends the wait at rest sooner, ``settle_own``) say a turn after
+   them is seen to begin, and till they do the controller is asked
    at the moving rate (``found_unjudged``; not the clock alone, nor one reading a whole idle
    poll on: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
    reading, and a hand in a Rotor-EZ's first brake window was taken for the old turn; review
@@ -238,6 +242,9 @@ class MotionConfig:
     stall_timeout_s: float = 10.0
     brake_delay_s: float = 5.0
     settle_s: float = 1.5
+    # rule 4: ``settle_s`` is the user's own (set in the settings, rule 2's to pair with the
+    # speeds): the rotor at rest by it ends a found turn's wait; the default's never does
+    settle_own: bool = False
     noise_deg: float = 2.0
     az_span_deg: float = 360.0
     nominal_speed_deg_s: float = 6.0
@@ -379,8 +386,9 @@ def stop_checked(m: Motion) -> Motion:
 
 def found_unjudged(m: Motion) -> bool:
     """Rule 4: a bridge just started, its first reading taken, and its readings have not yet
-    shown whether the rotor turns (a move; none for ``carried_seen_s``, or at rest by rule 2
-    sooner, ``tick``): it is asked at the moving rate meanwhile (controller.py), so that a
+    shown whether the rotor turns (a move; none on each axis for its own ``axis_seen_s``, or
+    at rest sooner by a ``settle_s`` of the user's, ``tick``): it is asked at the moving rate
+    meanwhile (controller.py), so that a
     turn found is told from a hand's later one at once on every controller (a Rot2Prog's idle
     poll is 6 s)."""
     return m.carried and m.state is not MOVING and m.state is not OFFLINE
@@ -1007,8 +1015,8 @@ def tick(
     elif m.state is IDLE and m.idle_not_before_t is not None:
         if now >= m.idle_not_before_t:
             m = replace(m, idle_not_before_t=None)  # rule 4: settled
-    if m.carried and m.state is IDLE and m.idle_not_before_t is None:  # rule 4: a restart's
-        m = replace(m, carried=False)  # first readings at rest by rule 2: no turn was found
+    if m.carried and cfg.settle_own and at_rest(m):  # rule 4: a restart's first readings at
+        m = replace(m, carried=False)  # rest by a settle time of the user's: no turn found
     return m, events
 
 

@@ -87,9 +87,11 @@ Rules:
     at a GS-232B's azimuth a second after a replug). A bridge just started
     does not know whether the box is turning either (a restart mid-turn: the controller
     finishing the turn the bridge before it sent): a start refused before its readings have
-    told (motion.py rule 4, ``found_unjudged``: a move, or none for ``carried_seen_s``, asked
-    at the moving rate) owes the halt the same way, proposed if they show a move, dropped if
-    they show none, so a hand begun after that is never halted for it (review 73's hand on a
+    told (motion.py rule 4, ``found_unjudged``: a move, or none on each axis for its own
+    time, not rule 2's ``settle_s``, asked at the moving rate) owes the halt the same way,
+    proposed if they show a move, dropped if they show none (review 89: dropped at rule 2's
+    rest, a slow elevation turned on 60 degrees), so a hand begun after that is never halted
+    for it (review 73's hand on a
     Rot2Prog, whose second reading came a whole 6 s idle poll on, stays a hand). Review 84:
     after a restart mid-turn a refused follow or track start halted nothing, and the Rotor-EZ
     turned on some 100 degrees to the old target. On a controller with no readings (a

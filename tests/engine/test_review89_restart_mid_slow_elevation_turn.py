@@ -13,8 +13,6 @@ halted; so is it after a restart at the emulator's nominal 2.5 deg/s."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
 from tests.engine.test_attack19_follow_start_refused_grid import (
@@ -39,12 +37,6 @@ def gs232_with_a_slow_elevation_by_a_keep_out() -> VirtualRotator:
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 89: after a bridge restart mid elevation-only turn (a GS-232 elevation at "
-    "2 deg/s), a refused follow start sends no stop: the elevation turns on 23 -> 85 and "
-    "following ends 'turned by hand' (High)",
-)
 def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_elevation_turn() -> None:
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
         raising_the_elevation(v)
@@ -99,12 +91,6 @@ def slow_azimuth_by_a_keep_out() -> VirtualRotator:
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 89: after a bridge restart mid-turn, an azimuth GS-232B set to (and turning "
-    "at) 2 deg/s: a refused follow start sends no stop, the rotor turns on ~100 degrees to the "
-    "old target and following ends 'turned by hand' (High)",
-)
 def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_azimuth_turn() -> None:
     """The same defect on the azimuth, at the speed the settings give (no slower): the found
     turn needs ``carried_seen_s`` = 2.6 s to show its move and is dropped at rule 2's rest,
