@@ -167,7 +167,11 @@ Rules:
    Whether a turn of the bridge's was under way when the port went (``lost_turning``) is kept
    over the connect till that time is over or a stop or target goes: the controller may be
    finishing it by itself (``may_finish_blind``; parts.py rule 10, review 73: a DCU-1's refused
-   start right after a replug halted nothing, and it turned on 90 degrees).
+   start right after a replug halted nothing, and it turned on 90 degrees). So is one at a
+   bridge's first connect (no end assumed before: the bridge just started, and the box may be
+   finishing the turn the bridge before it sent; review 89: a refused start right after a
+   restart mid-turn halted nothing, and the DCU-1 turned on 95 degrees; a stop, ``AS1;``, to
+   a box at rest does nothing).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -460,7 +464,10 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         worst = now + blind_busy_s(cfg.az_span_deg, cfg)
         kept = m.busy_until_t
         busy = worst if kept is None else max(kept, worst)
-        return Motion(state=UNKNOWN, busy_until_t=busy, lost_turning=m.lost_turning)
+        # (no end assumed before: the bridge just started, and the box may be finishing the
+        # turn the bridge before it sent, as after a replug mid-turn: review 89)
+        lost = m.lost_turning or kept is None
+        return Motion(state=UNKNOWN, busy_until_t=busy, lost_turning=lost)
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,

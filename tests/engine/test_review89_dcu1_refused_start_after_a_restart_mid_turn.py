@@ -10,8 +10,6 @@ and after a restart every model with readings is stopped (31e6aa00)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import (
     follower_by_a_keep_out,
@@ -21,11 +19,6 @@ from tests.engine.test_review84_refused_start_after_a_restart_mid_turn import re
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 89: a DCU-1's refused follow start right after a bridge restart mid-turn "
-    "sends no stop: the rotor turns on ~95 degrees to the old target under 'refused' (High)",
-)
 def test_a_dcu1s_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("dcu1") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
