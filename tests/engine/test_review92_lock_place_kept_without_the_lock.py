@@ -1,0 +1,69 @@
+"""Review 92 (runtime/kept.py rule 12, interfaces/mqtt/remote.py rule 10): the save of the
+places that was queued before a lock ON (a target's turn place) runs after the session showed
+the lock word's place, writes that place, and writes the lock as it was: the lock ON's own
+save comes next. A power cut (or kill) between the two writes, one fsync on a slow SD card,
+leaves a state file that keeps the lock ON's place but not the lock. The next run shows the
+rotator unlocked with ``order.lock`` at the ON's place, past what a remote's held lock ON was
+stamped against, so the remote takes its lock ON as overtaken by a newer lock word and drops
+it instead of sending it again: the tower is left unlocked. Before rule 12 the new run showed
+lock place 0 and the remote sent its lock ON again. Real parts: the state file on disk, the
+rotator's Kept fed the statuses its session shows, the remote's own ``held_stamp``; the
+writer's jobs run by hand in their order (a slow writer), a fake steady clock."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from bridge.app import worker_config
+from bridge.core.model import ErrorKind, Order
+from bridge.interfaces.mqtt.remote import held_stamp
+from bridge.runtime.kept import ORDER_SAVE_S, Kept
+from bridge.runtime.state_store import StateStore
+from bridge.settings import RotatorSettings
+
+
+class Steady:
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 92: a power cut between the places' save and the lock ON's own save keeps "
+    "the ON's place without the lock: the next run shows it unlocked, and a remote drops its "
+    "held lock ON as overtaken instead of sending it again",
+)
+def test_a_lock_ons_place_is_never_kept_without_the_lock(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path, clock = tmp_path / "state.json", Steady()
+    spec = worker_config(RotatorSettings(id="tower", model="rotorez", port="/dev/null")).spec
+
+    def report(kind: ErrorKind, message: str, what: str | None) -> None:
+        raise AssertionError(message)
+
+    store = StateStore(path)
+    jobs: list[Callable[[], None]] = []  # the writer's line, run by hand: a slow writer
+    monkeypatch.setattr(store, "later", jobs.append)
+    monkeypatch.setattr(store, "queue", jobs.append)
+    kept = Kept(store, "tower", spec, report=report, clock=clock)
+    kept.seen_order(Order("run1", 0, 0, 0, 0))  # the run's first status
+    kept.seen_order(Order("run1", 1, 1, 0, 0))  # a target at place 1: the places' save queued
+    kept.set_lock(True)  # the remote's lock ON, at place 2: its own save queued behind
+    clock.now += ORDER_SAVE_S + 0.1  # (the writer still in an earlier fsync)
+    kept.seen_order(Order("run1", 2, 1, 2, 0))  # the session took the lock word at place 2
+    jobs.pop(0)()  # the places' save
+    # the power is cut here, before the lock ON's save
+    after = StateStore(path)
+    since, _, lock_place = after.order("tower")
+    stamp = held_stamp({"run1": (1,)}, "run2", since, since)  # the remote saw place 1 before it
+    assert after.locked("tower") or lock_place <= stamp, (
+        f"the next run shows the lock OFF with the lock word's place {lock_place}, past the "
+        f"remote's held lock ON's stamp {stamp}: the remote drops it"
+    )
