@@ -141,7 +141,10 @@ Rules:
    half a block behind, or the first command's reservation was not written yet: the next run's
    ``since`` is then below places of that run, which a remote then compares with none of the
    next run's, as before). The place of the turn shown and of the last lock word are kept with
-   it (``turn``, ``lock``), at most once every ORDER_SAVE_S (the status that shows a newer
+   it (``turn``, ``lock``), at most once every ORDER_SAVE_S, and a turn's place at most
+   ORDER_SAVES times in any ORDER_WINDOW_S, a lock word's whenever it moves (review 92: a
+   rotctld client tracking with a target a second wrote and fsynced the whole file every
+   second, an SD card's wear; now some eight times in ten minutes) (the status that shows a newer
    place after that saves it: a turn the restart would carry over goes on showing statuses,
    its bearing's), one save queued at a time, which writes the latest (a lock word's save
    waiting writes them too, in its one write): a flood of targets or lock words writes the
@@ -150,8 +153,13 @@ Rules:
    restart kept (the lock, a turn the box went on with under ``unasked_moves = "follow"``) is
    shown at its own place. A run killed within ORDER_SAVE_S of a command shows the place
    before it (a remote may then take a turn begun right before the kill for an older one, or
-   send an older lock ON again over a lock OFF: the safe side). A save that fails is said in
-   the log only.
+   send an older lock ON again over a lock OFF: the safe side; in a long stream of targets,
+   the turn's place of the window's last save). A save of the places writes the lock word's
+   place only while the file holds the lock that word left (no lock save waiting, none
+   failed): review 92, a save queued before a lock ON wrote the ON's place with the lock still
+   OFF, and a power cut before the ON's own save left a file whose lock word looked newer than
+   a remote's held lock ON, which the remote then dropped. A save that fails is said in the
+   log only.
 """
 
 from __future__ import annotations
@@ -173,6 +181,8 @@ log = logging.getLogger(__name__)
 
 PLACES_BLOCK = 1 << 16  # rule 12: the places reserved at a time
 ORDER_SAVE_S = 0.5  # rule 12: the turn's and the lock word's places saved at most this often
+ORDER_SAVES = 8  # rule 12: ... and at most this many times ...
+ORDER_WINDOW_S = 600.0  # ... in any ten minutes (a target a second: an SD card's wear)
 
 
 class Owner:
@@ -255,6 +265,11 @@ class Kept:
         self._order_queued = False  # rule 12: a save of the latest places waits
         self._clock = clock
         self._order_saved_s = -math.inf  # rule 12: when a save of the places was last queued
+        self._order_saves: deque[float] = deque()  # ... and the saves of the last window
+        # rule 12: the lock word's place the file holds with the lock it holds (a save of the
+        # places writes a newer one only while the file's lock is the lock: review 92)
+        self._file_locked = self.locked
+        self._file_lock_place = self.lock_place
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
@@ -297,20 +312,31 @@ class Kept:
             self._reserved = order.taken + PLACES_BLOCK
         now = self._clock()
         changed = (order.turn, order.lock) != (self.turn_place, self.lock_place)
-        if reserve or (changed and now - self._order_saved_s >= ORDER_SAVE_S):
+        saves = self._order_saves
+        while saves and now - saves[0] >= ORDER_WINDOW_S:
+            saves.popleft()
+        due = now - self._order_saved_s >= ORDER_SAVE_S and len(saves) < ORDER_SAVES
+        if reserve or (changed and due):
             with self._unsaved_guard:  # (a lock word's save waiting writes them: one write)
                 self.turn_place, self.lock_place = order.turn, order.lock
                 if self._lock_unsaved or self._order_queued:
                     return
                 self._order_queued = True
             self._order_saved_s = now
+            saves.append(now)
             self._store.later(self._save_order_now)
 
     def _save_order_now(self) -> None:
         with self._unsaved_guard:  # (before the read: a newer one queues a save of its own)
             self._order_queued = False
-            places = self._reserved, self.turn_place, self.lock_place
-        self._store.set_order(self._id, *places)
+            lock_place = self.lock_place
+            if self._lock_unsaved or self._file_locked != self.locked:
+                lock_place = self._file_lock_place  # (review 92: never a word's place alone)
+            places = self._reserved, self.turn_place, lock_place
+        if self._store.set_order(self._id, *places):
+            with self._unsaved_guard:
+                if self._file_locked == self.locked:
+                    self._file_lock_place = lock_place
 
     def _places(self) -> tuple[int, int, int] | None:
         """Rule 12 (under the guard): the places to write with a lock word's save; None before
@@ -402,6 +428,11 @@ class Kept:
             places = self._places()  # rule 12: in the same write
         try:
             saved = self._store.set_locked(self._id, locked, places)
+            if saved:  # rule 12: the file's lock and the lock word's place with it
+                with self._unsaved_guard:
+                    self._file_locked = locked
+                    if places is not None:
+                        self._file_lock_place = places[2]
         finally:  # rule 2: now the status says it (and, failed, the error below)
             with self._unsaved_guard:  # (a word since: its own save says it; a review: an
                 # ON said by a save that read it before an OFF, with the OFF being written)

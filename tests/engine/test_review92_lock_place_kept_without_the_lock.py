@@ -33,12 +33,6 @@ class Steady:
         return self.now
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 92: a power cut between the places' save and the lock ON's own save keeps "
-    "the ON's place without the lock: the next run shows it unlocked, and a remote drops its "
-    "held lock ON as overtaken instead of sending it again",
-)
 def test_a_lock_ons_place_is_never_kept_without_the_lock(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -27,11 +27,6 @@ class Steady:
         return self.now
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 92: a rotctld client's target every second (Gpredict tracking) writes and "
-    "fsyncs the whole state file once per target: SD-card wear the lock alone never caused",
-)
 def test_a_target_every_second_does_not_write_the_state_file_each_time(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
