@@ -10,7 +10,10 @@ rare moment but whenever the controller is off."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
+from bridge.app import App
+from bridge.emulators.pty import EmulatedPort
 from tests.integration.test_attack18_base_topic_under_a_rotator import (
     station_on_rotor,
     station_on_tower,
@@ -30,17 +33,26 @@ def test_a_bridge_on_a_live_bridges_rotator_whose_controller_is_off_never_turns_
         a.ready("yagi")
         probe.wait_value("rotor/tower/availability", "offline")
         mast = station_on_tower(b)
-        second = b.start()
-        if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
-            wait_until(
-                lambda: b.status("mast").available or second.failed.is_set(),
-                what="the second bridge's rotator to answer",
-            )
-        t = probe.caught_up()
-        tower.set_silent(False)  # switched on: the live bridge's tower answers
-        probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
-        probe.publish("rotor/tower/target", "90")
-        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
-        after = mast.state()
-        assert (after.az_deg, after.is_moving) == (200, False), after
-        assert second.failed.is_set() and not first.failed.is_set()
+        second_bridge_never_turns_with_the_tower(probe, first, b, tower, mast)
+
+
+def second_bridge_never_turns_with_the_tower(
+    probe: Probe, first: App, b: Rig, tower: EmulatedPort[Any], mast: EmulatedPort[Any]
+) -> None:
+    """Bridge B (its rotator ``mast`` at 200) started while live bridge A's tower on
+    ``rotor/tower`` is switched off; the tower switched on and sent to 90: B must have been
+    refused, its rotor never turned by A's target."""
+    second = b.start()
+    if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
+        wait_until(
+            lambda: b.status("mast").available or second.failed.is_set(),
+            what="the second bridge's rotator to answer",
+        )
+    t = probe.caught_up()
+    tower.set_silent(False)  # switched on: the live bridge's tower answers
+    probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
+    probe.publish("rotor/tower/target", "90")
+    tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
+    after = mast.state()
+    assert (after.az_deg, after.is_moving) == (200, False), after
+    assert second.failed.is_set() and not first.failed.is_set()

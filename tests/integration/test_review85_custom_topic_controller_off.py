@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.support import Probe, wait_until
+from tests.integration.test_review77_controller_off import second_bridge_never_turns_with_the_tower
+from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
@@ -31,20 +32,7 @@ def test_a_bridge_on_a_live_bridges_own_rotator_topic_whose_controller_is_off_ne
         probe.wait_value("rotor/tower/availability", "offline")
         b.base = "rotor/tower"  # bridge B's one rotator's topics are A's tower's
         mast = b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0})
-        second = b.start()
-        if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
-            wait_until(
-                lambda: b.status("mast").available or second.failed.is_set(),
-                what="the second bridge's rotator to answer",
-            )
-        t = probe.caught_up()
-        tower.set_silent(False)  # switched on: the live bridge's tower answers
-        probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
-        probe.publish("rotor/tower/target", "90")
-        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
-        after = mast.state()
-        assert (after.az_deg, after.is_moving) == (200, False), after
-        assert second.failed.is_set() and not first.failed.is_set()
+        second_bridge_never_turns_with_the_tower(probe, first, b, tower, mast)
 
 
 def test_a_bridge_whose_own_rotator_topic_is_a_live_bridges_rotator_whose_controller_is_off_never_runs(  # noqa: E501
@@ -61,17 +49,4 @@ def test_a_bridge_whose_own_rotator_topic_is_a_live_bridges_rotator_whose_contro
         probe.wait_value("rotor/tower/availability", "offline")
         b.base = "site"  # bridge B: base topic site, its one rotator's topic A's tower's
         mast = b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0}, topic="rotor/tower")
-        second = b.start()
-        if not second.failed.is_set():  # refused at once is the fix; started, its rotator answers
-            wait_until(
-                lambda: b.status("mast").available or second.failed.is_set(),
-                what="the second bridge's rotator to answer",
-            )
-        t = probe.caught_up()
-        tower.set_silent(False)  # switched on: the live bridge's tower answers
-        probe.wait_for("rotor/tower/status", lambda m: b'"bearing":0.0' in m.payload, after=t)
-        probe.publish("rotor/tower/target", "90")
-        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 15)
-        after = mast.state()
-        assert (after.az_deg, after.is_moving) == (200, False), after
-        assert second.failed.is_set() and not first.failed.is_set()
+        second_bridge_never_turns_with_the_tower(probe, first, b, tower, mast)
