@@ -16,28 +16,36 @@ from tests.engine.test_attack19_follow_start_refused_grid import PARTNER, follow
 from tests.engine.test_review70_refused_start_after_replug import (
     rotorez_turning_away_from_the_partner,
 )
+from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
 def test_a_hand_at_the_panel_right_after_a_replug_at_rest_is_not_the_owed_halts_turn() -> None:
     with follower_by_a_keep_out("rotorez") as v:
         rotorez_turning_away_from_the_partner(v)
-        v.link_down()
-        v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
-        v.run_for(10.0)  # at rest, unplugged, long before the replug (not a deadline)
-        rest = v.truth().az_deg
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        t = v.now
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
-        v.run_for(1.0)  # five polls, each reading the rotor still (not a deadline)
-        assert v.truth().az_deg == rest and not v.truth().is_moving  # (never moved since)
-        hand_to = round(PARTNER + 60.0)  # (never through the sector)
-        v.manual_rotate(hand_to)  # a hand at the panel
-        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
-        v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
         # observed: a stop frame 0.2 s into the hand's turn, the rotor left at 178 (not 102)
-        assert {f.outcome for f in v.frames(since=t)} == {"query"}, v.frames(since=t)
-        assert angle_between(v.truth().az_deg, hand_to) <= 1.0, (hand_to, v.truth().az_deg)
+        a_hand_at_the_panel_right_after_a_replug_at_rest(v)
+
+
+def a_hand_at_the_panel_right_after_a_replug_at_rest(v: VirtualRotator) -> None:
+    """``v`` turning away from PARTNER, unplugged: the old turn over, at rest long before the
+    replug; replugged, a follow start refused; a hand at the panel a second later turns the
+    rotor to PARTNER + 60: the bridge sends it no stop and the hand's turn ends there."""
+    v.link_down()
+    v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
+    v.run_for(10.0)  # at rest, unplugged, long before the replug (not a deadline)
+    rest = v.truth().az_deg
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+    t = v.now
+    v.follow(True)
+    v.heard("JA1ABC", "PM95")
+    v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
+    v.run_for(1.0)  # five polls, each reading the rotor still (not a deadline)
+    assert v.truth().az_deg == rest and not v.truth().is_moving  # (never moved since)
+    hand_to = round(PARTNER + 60.0)  # (never through the sector)
+    v.manual_rotate(hand_to)  # a hand at the panel
+    v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
+    v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
+    assert {f.outcome for f in v.frames(since=t)} == {"query"}, v.frames(since=t)
+    assert angle_between(v.truth().az_deg, hand_to) <= 1.0, (hand_to, v.truth().az_deg)

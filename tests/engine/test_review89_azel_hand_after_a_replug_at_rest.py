@@ -10,13 +10,11 @@ GS-232B; before 4ade0199 the hand's turn went where the hand sent it)."""
 
 from __future__ import annotations
 
-from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import (
-    PARTNER,
     follower_by_a_keep_out,
     turning_away_from_the_partner,
 )
-from tests.integration.test_pointing_bridge import angle_between
+from tests.engine.test_review73_owed_halt import a_hand_at_the_panel_right_after_a_replug_at_rest
 
 
 def test_a_hand_at_a_gs232_azimuth_a_second_after_a_replug_at_rest_is_not_stopped() -> None:
@@ -24,22 +22,5 @@ def test_a_hand_at_a_gs232_azimuth_a_second_after_a_replug_at_rest_is_not_stoppe
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
         turning_away_from_the_partner(v)  # an azimuth-only turn
-        v.link_down()
-        v.run_until(lambda h: not h.truth().is_moving, 60, "the old turn over, unplugged")
-        v.run_for(10.0)  # at rest, unplugged, long before the replug (not a deadline)
-        rest = v.truth().az_deg
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        t = v.now
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_until(lambda h: bool(h.errors(ErrorKind.REFUSED, since=t)), 10, "refused")
-        v.run_for(1.0)  # five polls, each reading the rotor still (not a deadline)
-        assert v.truth().az_deg == rest and not v.truth().is_moving  # (never moved since)
-        hand_to = round(PARTNER + 60.0)  # (never through the sector)
-        v.manual_rotate(hand_to)  # a hand at the panel
-        v.run_until(lambda h: h.status.moving, 10, "the bridge sees the hand's turn")
-        v.run_until(lambda h: not h.truth().is_moving, 90, "the hand's turn over")
         # observed: a stop frame a reading into the hand's turn, the rotor left near 179
-        assert {f.outcome for f in v.frames(since=t)} == {"query"}, v.frames(since=t)
-        assert angle_between(v.truth().az_deg, hand_to) <= 1.0, (hand_to, v.truth().az_deg)
+        a_hand_at_the_panel_right_after_a_replug_at_rest(v)
