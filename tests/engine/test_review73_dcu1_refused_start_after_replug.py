@@ -9,20 +9,32 @@ stop frames at once), and after d609655e a Rotor-EZ's is stopped once a reading 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import (
     follower_by_a_keep_out,
     turning_away_from_the_partner,
 )
 from tests.engine.test_review70_refused_start_after_replug import replugged_mid_turn
+from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
 
 def test_a_dcu1s_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
+    # held where it was: observed 92 -> 182, no stop frame
+    a_dcu1s_refused_follow_start_holds_the_rotor(replugged_mid_turn)
+
+
+def a_dcu1s_refused_follow_start_holds_the_rotor(
+    interrupted: Callable[[VirtualRotator], None],
+) -> None:
+    """A DCU-1 turning away from PARTNER, ``interrupted`` mid-turn (a replug, a restart); a
+    follow start refused at once for the keep-out: it must stop the rotor where it was."""
     with follower_by_a_keep_out("dcu1") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         turning_away_from_the_partner(v)
-        replugged_mid_turn(v)
+        interrupted(v)
         t, here = v.now, v.truth().az_deg
         v.follow(True)
         v.heard("JA1ABC", "PM95")
@@ -30,6 +42,5 @@ def test_a_dcu1s_refused_follow_start_right_after_a_replug_mid_turn_holds_the_ro
         [refused] = v.errors(ErrorKind.REFUSED, since=t)
         assert "keep-out" in refused.message
         assert v.status.following is not None  # taken, and waiting for a grid it may turn to
-        # held where it was: observed 92 -> 182, no stop frame
         assert "stop" in {f.outcome for f in v.frames(since=t)}
         assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)

@@ -10,27 +10,12 @@ and after a restart every model with readings is stopped (31e6aa00)."""
 
 from __future__ import annotations
 
-from bridge.core.model import ErrorKind
-from tests.engine.test_attack19_follow_start_refused_grid import (
-    follower_by_a_keep_out,
-    turning_away_from_the_partner,
+from tests.engine.test_review73_dcu1_refused_start_after_replug import (
+    a_dcu1s_refused_follow_start_holds_the_rotor,
 )
 from tests.engine.test_review84_refused_start_after_a_restart_mid_turn import restarted_mid_turn
-from tests.integration.test_pointing_bridge import angle_between
 
 
 def test_a_dcu1s_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
-    with follower_by_a_keep_out("dcu1") as v:
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        turning_away_from_the_partner(v)
-        restarted_mid_turn(v)
-        t, here = v.now, v.truth().az_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
-        [refused] = v.errors(ErrorKind.REFUSED, since=t)
-        assert "keep-out" in refused.message
-        assert v.status.following is not None  # taken, and waiting for a grid it may turn to
-        # held where it was: observed 87 -> 182, no stop frame
-        assert "stop" in {f.outcome for f in v.frames(since=t)}
-        assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
+    # held where it was: observed 87 -> 182, no stop frame
+    a_dcu1s_refused_follow_start_holds_the_rotor(restarted_mid_turn)
