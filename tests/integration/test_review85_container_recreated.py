@@ -16,9 +16,12 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import Probe, slow, wait_until
+from tests.integration.test_review82_base_topic_kept_topics import (
+    runs_on_the_towers_topic_alone,
+    tower_and_yagi_station_killed,
+)
+from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
-from tests.support.mqtt import retained_snapshot
 from tests.support.process import ROOT, Spawn, bridge_env
 from tests.support.rig import Rig
 
@@ -58,29 +61,7 @@ def test_a_station_in_a_container_made_anew_runs_on_its_one_rotators_topic_after
     tmp_path: Path, broker: Mosquitto, probe: Probe, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     with Rig(tmp_path / "station", broker, probe, spawn=named(FIRST)) as station:
-        # the default client id (made of host, state file and base topic), as installed
-        station.mqtt_extra = {"client_id": "", "keepalive_s": 5}
-        tower = station.add("tower", emu={"start_az_deg": 0, "jitter_deg": 0})
-        station.add("yagi", emu={"start_az_deg": 0, "jitter_deg": 0})
-        bridge = station.start_process()
-        station.ready("tower", slow(30))
-        station.ready("yagi", slow(30))
-        bridge.kill()  # a power cut
-        probe.wait_value("rotor/bridge/state", "offline", slow(20))
-        held = retained_snapshot(broker.port, "rotor/tower/availability")
-        assert held == {"rotor/tower/availability": b"online"}, held
+        tower = tower_and_yagi_station_killed(station, broker, probe)
         # the container made anew: a new host name, the same configuration and state volume
         monkeypatch.setattr("socket.gethostname", lambda: AGAIN)
-        station.rotators[:] = [r for r in station.rotators if r["id"] == "tower"]
-        del station.lines["yagi"]
-        station.base = "rotor/tower"
-        t = probe.caught_up()
-        app = station.start()
-        wait_until(
-            lambda: app.failed.is_set() or station.status("tower").available,
-            what="the station to run or be refused",
-        )
-        assert not app.failed.is_set(), app.failure
-        station.ready("tower", after=t)
-        probe.publish("rotor/tower/target", "90")
-        tower.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, slow(15))
+        runs_on_the_towers_topic_alone(station, probe, tower)
