@@ -13,9 +13,12 @@ route this test cuts and heals (attack 26's), the remote's rotctld."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
+from bridge.emulators.pty import EmulatedPort
+from bridge.remote.run import Remote
 from tests.integration.test_pointing_bridge import PARKING, PARKING_EMU
 from tests.remote.test_attack26_stop_into_a_partition import (
     START_AZ,
@@ -54,9 +57,25 @@ def test_an_old_stop_never_stops_the_auto_park_the_station_began_after_it(
 ) -> None:
     station = parking_station
     port = free_port()
-    remote = remote_on(station, port)
+    emu = station.emus["tower"]
+    old_stop_over_the_auto_park(
+        remote_on(station, port), port, emu, route, START_AZ, TARGET_AZ, PARK_AZ
+    )
+
+
+def old_stop_over_the_auto_park(
+    remote: Remote,
+    port: int,
+    emu: EmulatedPort[Any],
+    route: CuttableLink,
+    START_AZ: float,
+    TARGET_AZ: float,
+    PARK_AZ: float,
+) -> None:
+    """The remote's rotctld sends the rotor from START_AZ toward TARGET_AZ, the route is cut
+    mid-turn and a STOP asked into it; the station's bridge auto-parks after the turn, the
+    route healed mid-park: the rotor must end at the park PARK_AZ. Stops ``remote``."""
     try:
-        emu = station.emus["tower"]
         rotator = remote.rotators[0]
         wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
         assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"

@@ -20,11 +20,9 @@ import pytest
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.remote.test_attack26_stop_into_a_partition import CuttableLink
-from tests.support import wait_until
+from tests.remote.test_review83_own_turn_order import old_stop_over_the_auto_park
 from tests.support.mosquitto import free_port
-from tests.support.remote import ask
 from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
-from tests.support.waiting import slow
 
 PARK_AZ, START_AZ, TARGET_AZ = 10.0, 10.0, 200.0
 PARK = {"park_az_deg": PARK_AZ, "park_el_deg": 0, "park_after_idle_s": 5}
@@ -72,24 +70,4 @@ def test_an_old_stop_never_stops_a_two_box_rotators_auto_park_begun_after_it(
         )
     )
     remote.start()
-    try:
-        rotator = remote.rotators[0]
-        wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
-        assert ask(port, f"P {TARGET_AZ:g} 0\n".encode()) == b"RPRT 0\n"
-        wait_until(lambda: emu.state().az_deg > START_AZ + 20, slow(10), "the rotor turning")
-        route.cut()  # the station's route dies mid-turn; the remote still hears it a while
-        assert ask(port, b"S\n") == b"RPRT 0\n"  # the broker took it: the station never gets it
-        wait_until(lambda: emu.state().az_deg > TARGET_AZ - 2, slow(30), "the turn finished")
-        # the quiet spell: the station's bridge auto-parks, its own turn, after the STOP
-        wait_until(lambda: emu.state().is_moving, slow(30), "the auto-park turning")
-        wait_until(lambda: emu.state().az_deg < TARGET_AZ - 20, slow(10), "well under way")
-        route.heal()  # its bridge connects again mid-park
-        wait_until(lambda: rotator.away() is None, slow(30), "the station's bridge back")
-        wait_until(lambda: not emu.state().is_moving, slow(30), "the rotor still")
-    finally:
-        remote.stop()
-    az = emu.state().az_deg
-    assert abs(az - PARK_AZ) < 2, (
-        f"the auto-park the station began after the remote's STOP ended at {az:.0f}, not at "
-        f"the park ({PARK_AZ:g}): the old STOP was sent again over it"
-    )
+    old_stop_over_the_auto_park(remote, port, emu, route, START_AZ, TARGET_AZ, PARK_AZ)
