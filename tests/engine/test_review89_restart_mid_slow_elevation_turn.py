@@ -13,6 +13,8 @@ halted; so is it after a restart at the emulator's nominal 2.5 deg/s."""
 
 from __future__ import annotations
 
+from typing import Any
+
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
 from tests.engine.test_attack19_follow_start_refused_grid import (
@@ -28,32 +30,40 @@ from tests.integration.test_pointing_bridge import angle_between
 SLOW_EL_DEG_S = 2.0  # a G-5500 elevation 20 % under the model's 2.5 (rule 6 allows for 1.5x)
 
 
-def gs232_with_a_slow_elevation_by_a_keep_out() -> VirtualRotator:
-    """Review 84's GS-232B az/el by a keep-out sector, its elevation turning at 2.0 deg/s."""
+def gs232_with_a_slow_elevation_by_a_keep_out(**settings: Any) -> VirtualRotator:
+    """Review 84's GS-232B az/el by a keep-out sector, its elevation turning at 2.0 deg/s;
+    ``settings`` written in its config besides."""
     sector = [round(PARTNER) - 10, round(PARTNER) + 10]
     emulator = {"start_az_deg": START_AZ, "start_el_deg": 0, "el_speed_deg_s": SLOW_EL_DEG_S}
     return VirtualRotator(
-        "gs232b", emulator=emulator, follow=STATION, settings={"keep_out": [sector]}
+        "gs232b", emulator=emulator, follow=STATION, settings={"keep_out": [sector], **settings}
     )
+
+
+def refused_right_after_a_restart_mid_the_elevation_turn(v: VirtualRotator) -> tuple[float, float]:
+    """``v``'s bridge restarted mid elevation-only turn, a follow start refused at once for the
+    keep-out; a minute on. When the start was asked and the elevation then."""
+    raising_the_elevation(v)
+    v.run_for(0.1)  # (between two polls: not a deadline)
+    v.link_down(None)
+    v.run_for(1.0)  # (the bridge down: not a deadline)
+    v.session = RotatorSession(v.cfg)  # the bridge started again
+    v._do(v.session.start(v.now))
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers the new bridge")
+    assert v.truth().is_moving  # (it finishes its old turn by itself)
+    t, here = v.now, v.truth().el_deg
+    v.follow(True)
+    v.heard("JA1ABC", "PM95")
+    v.run_for(60.0)  # (the old target is some 30 s on: not a deadline)
+    [refused] = v.errors(ErrorKind.REFUSED, since=t)
+    assert "keep-out" in refused.message
+    return t, here
 
 
 def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_elevation_turn() -> None:
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
-        raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down(None)
-        v.run_for(1.0)  # (the bridge down: not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers the new bridge")
-        assert v.truth().is_moving  # (it finishes its old turn by itself)
-        t, here = v.now, v.truth().el_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_for(60.0)  # (the old target is some 30 s on: not a deadline)
-        [refused] = v.errors(ErrorKind.REFUSED, since=t)
-        assert "keep-out" in refused.message
+        t, here = refused_right_after_a_restart_mid_the_elevation_turn(v)
         # taken, and waiting for a grid it may turn to: observed ended "turned by hand"
         assert v.status.following is not None, v.status.following_ended
         # held where it was (a stop and its coast): observed 23 -> 85, no stop frame

@@ -13,23 +13,17 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.core.model import ErrorKind
-from bridge.session.session import RotatorSession
-from tests.engine.test_attack19_follow_start_refused_grid import PARTNER
-from tests.engine.test_follow import STATION
-from tests.engine.test_review84_elevation_carried_turn import START_AZ, raising_the_elevation
+from tests.engine.test_review89_restart_mid_slow_elevation_turn import (
+    gs232_with_a_slow_elevation_by_a_keep_out,
+    refused_right_after_a_restart_mid_the_elevation_turn,
+)
 from tests.engine.virtual import VirtualRotator
-
-SLOW_EL_DEG_S = 2.0  # review 89's G-5500 elevation, 20 % under the model's 2.5
 
 
 def gs232_with_settle_s_written(settle_s: float) -> VirtualRotator:
     """Review 89's GS-232B az/el by a keep-out sector, its elevation turning at 2.0 deg/s,
     with ``settle_s`` written in its config."""
-    sector = [round(PARTNER) - 10, round(PARTNER) + 10]
-    emulator = {"start_az_deg": START_AZ, "start_el_deg": 0, "el_speed_deg_s": SLOW_EL_DEG_S}
-    settings = {"keep_out": [sector], "settle_s": settle_s}
-    return VirtualRotator("gs232b", emulator=emulator, follow=STATION, settings=settings)
+    return gs232_with_a_slow_elevation_by_a_keep_out(settle_s=settle_s)
 
 
 @pytest.mark.xfail(
@@ -40,21 +34,7 @@ def gs232_with_settle_s_written(settle_s: float) -> VirtualRotator:
 )
 def test_the_default_settle_s_written_in_the_config_still_halts_a_restarts_slow_turn() -> None:
     with gs232_with_settle_s_written(1.5) as v:
-        raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down(None)
-        v.run_for(1.0)  # (the bridge down: not a deadline)
-        v.session = RotatorSession(v.cfg)  # the bridge started again
-        v._do(v.session.start(v.now))
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers the new bridge")
-        assert v.truth().is_moving  # (it finishes its old turn by itself)
-        t, here = v.now, v.truth().el_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_for(60.0)  # (the old target is some 30 s on: not a deadline)
-        [refused] = v.errors(ErrorKind.REFUSED, since=t)
-        assert "keep-out" in refused.message
+        t, here = refused_right_after_a_restart_mid_the_elevation_turn(v)
         # held where it was (a stop and its coast): observed 23 -> 85, no stop frame
         assert abs(v.truth().el_deg - here) <= 10.0, (here, v.truth().el_deg)
         assert "stop" in {f.outcome for f in v.frames(since=t)}
