@@ -10,27 +10,15 @@ the frames the controller received and R/error."""
 
 from __future__ import annotations
 
-import json
-import time
-
-from tests.integration.test_pointing_bridge import QUICK_BRIDGE, QUICK_EMU, motion_frames
+from tests.integration.test_attack20_park_says_no import park_words_judged
+from tests.integration.test_pointing_bridge import motion_frames
 from tests.support.rig import Rig
 
 NO_NUMBER = (b"NaN", b"nan", b"Infinity", b"-Infinity")
 
 
 def test_a_park_of_no_number_moves_nothing(rig: Rig) -> None:
-    emu = rig.add("tower", emu={**QUICK_EMU, "start_az_deg": 120}, park_az_deg=0, **QUICK_BRIDGE)
-    rig.start()
-    rig.ready("tower")
-    t0 = time.monotonic()
-    for payload in NO_NUMBER:
-        rig.probe.publish(rig.t("park"), payload)
-    # a barrier on the same connection: the bridge takes its messages in order, so the park
-    # words were judged before this refusal is said
-    rig.probe.publish(rig.t("target"), "north")
-    rig.probe.wait_for(rig.t("error"), lambda m: b"north" in m.payload, after=t0)
-    errors = [json.loads(m.payload) for m in rig.probe.on(rig.t("error"))]
+    emu, t0, errors = park_words_judged(rig, NO_NUMBER)
     parks = [e for e in errors if e.get("command", "").startswith("park")]
     assert len(parks) == len(NO_NUMBER), f"a park of no number was taken as a press: {errors}"
     assert not motion_frames(emu, t0), "the rotor was sent to its park position"
