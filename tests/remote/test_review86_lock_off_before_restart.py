@@ -54,6 +54,47 @@ def station_back(station: Rig, remote: Remote, mark: int) -> None:
     station.probe.wait(beat_after_online, slow(30), "the station's bridge back", mark)
 
 
+def remote_over(remote_route: CuttableLink, port: int) -> Remote:
+    """The remote (operator DL1ABC, rotator ``tower`` on rotctld ``port``) reaching the broker
+    over ``remote_route``; not yet started."""
+    remote = Remote(
+        RemoteSettings(
+            operator="DL1ABC",
+            mqtt={"host": "127.0.0.1", "port": remote_route.port, "base_topic": "rotor"},
+            endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        )
+    )
+    return remote
+
+
+def run_of(m: Message) -> str:
+    return str(json.loads(m.payload)["order"]["run"])
+
+
+def restarted_and_the_remote_back(
+    station: Rig, remote: Remote, remote_route: CuttableLink, first: Message
+) -> None:
+    """The station's bridge killed and started again, its new run (other than ``first``'s)
+    on ``R/status``; then the remote's route healed and the remote reading that new run."""
+    status = station.topic("tower", "status")
+    mark = station.probe.mark()
+    assert station.bridge is not None
+    station.bridge.kill()  # the station's bridge restarts ...
+    station.start_process()
+    new = station.probe.wait(  # ... its new run
+        lambda m: m.topic == status and run_of(m) != run_of(first),
+        slow(30),
+        "the station's new run",
+        mark,
+    )
+    remote_route.heal()  # the remote back, on a new connection
+    wait_until(
+        lambda: (remote.view.get(status) or b"").find(run_of(new).encode()) >= 0,
+        slow(30),
+        "the remote reading the new run",
+    )
+
+
 @pytest.fixture
 def station(rig: Rig, route: CuttableLink) -> Iterator[Rig]:  # noqa: F811
     yield from killable_station(rig, route, emu={"start_az_deg": START_AZ, "jitter_deg": 0})
@@ -72,13 +113,7 @@ def test_a_lock_off_at_the_tower_before_a_restart_is_not_undone_by_an_older_lock
     remote_route: CuttableLink,
 ) -> None:
     port = free_port()
-    remote = Remote(
-        RemoteSettings(
-            operator="DL1ABC",
-            mqtt={"host": "127.0.0.1", "port": remote_route.port, "base_topic": "rotor"},
-            endpoints=[{"rotator": "tower", "rotctld_port": port}],
-        )
-    )
+    remote = remote_over(remote_route, port)
     remote.start()
     try:
         emu = station.emus["tower"]
@@ -90,9 +125,6 @@ def test_a_lock_off_at_the_tower_before_a_restart_is_not_undone_by_an_older_lock
         def said() -> bytes | None:  # the station's lock/state, as the broker has it
             last = station.probe.last(lock_state)
             return None if last is None else bytes(last.payload)
-
-        def run_of(m: Message) -> str:
-            return str(json.loads(m.payload)["order"]["run"])
 
         wait_until(lambda: said() == b"OFF", slow(10), "the station's lock/state OFF")
         first = station.probe.last(status)
@@ -113,22 +145,8 @@ def test_a_lock_off_at_the_tower_before_a_restart_is_not_undone_by_an_older_lock
                 f"the tower's lock {word} taken",
                 mark,
             )
-        mark = station.probe.mark()
-        assert station.bridge is not None
-        station.bridge.kill()  # the station's bridge restarts (an update) ...
-        station.start_process()
-        new = station.probe.wait(  # ... its new run shows the lock OFF the tower left
-            lambda m: m.topic == status and run_of(m) != run_of(first),
-            slow(30),
-            "the station's new run",
-            mark,
-        )
-        remote_route.heal()  # the remote back, on a new connection
-        wait_until(
-            lambda: (remote.view.get(status) or b"").find(run_of(new).encode()) >= 0,
-            slow(30),
-            "the remote reading the new run",
-        )
+        # the station's bridge restarts (an update): its new run shows the lock OFF the tower left
+        restarted_and_the_remote_back(station, remote, remote_route, first)
         wait_until(lambda: rotator.away() is None, slow(30), "the station heard again")
         answer = ask(port, f"P {TURN_AZ:g} 0\n".encode())  # the operator's next turn
         wait_until(

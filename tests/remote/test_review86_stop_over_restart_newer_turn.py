@@ -14,13 +14,10 @@ rotctld, Home Assistant's target published as it would."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 
 import pytest
 
-from bridge.remote.run import Remote
-from bridge.remote.settings import RemoteSettings
 from tests.remote.test_attack26_stop_into_a_partition import (
     START_AZ,
     TARGET_AZ,
@@ -29,12 +26,13 @@ from tests.remote.test_attack26_stop_into_a_partition import (
     route,  # noqa: F401  (the fixture)
 )
 from tests.remote.test_review86_lock_off_before_restart import (
+    remote_over,
     remote_route,  # noqa: F401  (the fixture)
+    restarted_and_the_remote_back,
     station_back,
 )
 from tests.support import wait_until
 from tests.support.mosquitto import free_port
-from tests.support.mqtt import Message
 from tests.support.remote import ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
@@ -52,22 +50,13 @@ def test_an_old_stop_held_over_a_restart_never_stops_a_turn_begun_after_it(
     remote_route: CuttableLink,  # noqa: F811
 ) -> None:
     port = free_port()
-    remote = Remote(
-        RemoteSettings(
-            operator="DL1ABC",
-            mqtt={"host": "127.0.0.1", "port": remote_route.port, "base_topic": "rotor"},
-            endpoints=[{"rotator": "tower", "rotctld_port": port}],
-        )
-    )
+    remote = remote_over(remote_route, port)
     remote.start()
     try:
         emu = station.emus["tower"]
         rotator = remote.rotators[0]
         wait_until(lambda: rotator.away() is None, slow(30), "the station heard")
         status = station.topic("tower", "status")
-
-        def run_of(m: Message) -> str:
-            return str(json.loads(m.payload)["order"]["run"])
 
         first = station.probe.last(status)
         assert first is not None
@@ -81,22 +70,8 @@ def test_an_old_stop_held_over_a_restart_never_stops_a_turn_begun_after_it(
         wait_until(  # Home Assistant turns the rotor: a newer command than the STOP
             lambda: emu.state().az_deg > START_AZ + 20, slow(10), "Home Assistant's turn"
         )
-        mark = station.probe.mark()
-        assert station.bridge is not None
-        station.bridge.kill()  # the station's bridge restarts mid-turn (an update) ...
-        station.start_process()
-        new = station.probe.wait(  # ... and lets the box turn on (``follow``)
-            lambda m: m.topic == status and run_of(m) != run_of(first),
-            slow(30),
-            "the station's new run",
-            mark,
-        )
-        remote_route.heal()  # the remote back, on a new connection
-        wait_until(
-            lambda: (remote.view.get(status) or b"").find(run_of(new).encode()) >= 0,
-            slow(30),
-            "the remote reading the new run",
-        )
+        # the station's bridge restarts mid-turn (an update) and lets the box turn on (``follow``)
+        restarted_and_the_remote_back(station, remote, remote_route, first)
         wait_until(lambda: not emu.state().is_moving, slow(60), "the rotor still")
     finally:
         remote.stop()
