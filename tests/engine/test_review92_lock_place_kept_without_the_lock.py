@@ -17,36 +17,22 @@ from pathlib import Path
 
 import pytest
 
-from bridge.app import worker_config
-from bridge.core.model import ErrorKind, Order
+from bridge.core.model import Order
 from bridge.interfaces.mqtt.remote import held_stamp
-from bridge.runtime.kept import ORDER_SAVE_S, Kept
+from bridge.runtime.kept import ORDER_SAVE_S
 from bridge.runtime.state_store import StateStore
-from bridge.settings import RotatorSettings
-
-
-class Steady:
-    def __init__(self) -> None:
-        self.now = 1000.0
-
-    def __call__(self) -> float:
-        return self.now
+from tests.engine.test_review92_state_file_written_per_target import Steady, towers_kept
 
 
 def test_a_lock_ons_place_is_never_kept_without_the_lock(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     path, clock = tmp_path / "state.json", Steady()
-    spec = worker_config(RotatorSettings(id="tower", model="rotorez", port="/dev/null")).spec
-
-    def report(kind: ErrorKind, message: str, what: str | None) -> None:
-        raise AssertionError(message)
-
     store = StateStore(path)
     jobs: list[Callable[[], None]] = []  # the writer's line, run by hand: a slow writer
     monkeypatch.setattr(store, "later", jobs.append)
     monkeypatch.setattr(store, "queue", jobs.append)
-    kept = Kept(store, "tower", spec, report=report, clock=clock)
+    kept = towers_kept(store, clock)
     kept.seen_order(Order("run1", 0, 0, 0, 0))  # the run's first status
     kept.seen_order(Order("run1", 1, 1, 0, 0))  # a target at place 1: the places' save queued
     kept.set_lock(True)  # the remote's lock ON, at place 2: its own save queued behind

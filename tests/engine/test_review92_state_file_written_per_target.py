@@ -20,6 +20,8 @@ from bridge.settings import RotatorSettings
 
 
 class Steady:
+    """A fake steady clock: ``now`` moved by hand."""
+
     def __init__(self) -> None:
         self.now = 1000.0
 
@@ -27,16 +29,22 @@ class Steady:
         return self.now
 
 
-def test_a_target_every_second_does_not_write_the_state_file_each_time(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    path, clock = tmp_path / "state.json", Steady()
+def towers_kept(store: StateStore, clock: Steady) -> Kept:
+    """The Kept of a Rotor-EZ ``tower`` on ``store``, timed by ``clock``; any report it makes
+    fails the test."""
     spec = worker_config(RotatorSettings(id="tower", model="rotorez", port="/dev/null")).spec
 
     def report(kind: ErrorKind, message: str, what: str | None) -> None:
         raise AssertionError(message)
 
-    kept = Kept(StateStore(path), "tower", spec, report=report, clock=clock)
+    return Kept(store, "tower", spec, report=report, clock=clock)
+
+
+def test_a_target_every_second_does_not_write_the_state_file_each_time(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path, clock = tmp_path / "state.json", Steady()
+    kept = towers_kept(StateStore(path), clock)
     store = kept._store
     kept.seen_order(Order("run1", 0, 0, 0, 0))  # the run's first status
     kept.seen_order(Order("run1", 1, 1, 0, 0))  # the first target: this run's block reserved
