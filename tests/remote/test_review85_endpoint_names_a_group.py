@@ -8,32 +8,18 @@ a Python key error that neither says the id is a group's nor names the station's
 
 from __future__ import annotations
 
-import pytest
-
-from bridge.remote.run import Remote, StartError
-from bridge.remote.settings import RemoteSettings
+from tests.remote.test_review77_group_info_is_no_rotator import (
+    a_remote_refused_at_start,
+    a_station_with_a_group,
+)
 from tests.support import Probe
 from tests.support.mosquitto import free_port
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 
 def test_a_remote_told_a_groups_id_names_the_stations_rotators(rig: Rig, probe: Probe) -> None:
-    rig.add("upper", emu={"start_az_deg": 0, "jitter_deg": 0})
-    rig.add("lower", emu={"start_az_deg": 0, "jitter_deg": 0})
-    rig.sections = {"groups": [{"id": "stack", "name": "Stack", "rotators": ["upper", "lower"]}]}
-    rig.start()
-    rig.ready("upper")
-    rig.ready("lower")
-    probe.wait_for("rotor/stack/info", lambda m: b'"group":"stack"' in m.payload)
-    s = RemoteSettings(
-        operator="DL1ABC",
-        mqtt={"host": "127.0.0.1", "port": rig.broker.port, "base_topic": "rotor"},
-        endpoints=[{"rotctld_port": free_port(), "rotator": "stack"}],
-        info_wait_s=slow(1.0),
-    )  # type: ignore[arg-type]
-    with pytest.raises(StartError) as failed:
-        Remote(s).start()
+    a_station_with_a_group(rig, probe)
+    failed = a_remote_refused_at_start(rig, {"rotctld_port": free_port(), "rotator": "stack"})
     said = str(failed.value)
     assert "'model'" not in said and "lower, upper" in said, said
     assert "rotor/stack/info describes a group" in said, said
