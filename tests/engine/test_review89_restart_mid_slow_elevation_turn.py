@@ -16,7 +16,6 @@ from __future__ import annotations
 from typing import Any
 
 from bridge.core.model import ErrorKind
-from bridge.session.session import RotatorSession
 from tests.engine.test_attack19_follow_start_refused_grid import (
     PARTNER,
     turning_away_from_the_partner,
@@ -44,14 +43,7 @@ def refused_right_after_a_restart_mid_the_elevation_turn(v: VirtualRotator) -> t
     """``v``'s bridge restarted mid elevation-only turn, a follow start refused at once for the
     keep-out; a minute on. When the start was asked and the elevation then."""
     raising_the_elevation(v)
-    v.run_for(0.1)  # (between two polls: not a deadline)
-    v.link_down(None)
-    v.run_for(1.0)  # (the bridge down: not a deadline)
-    v.session = RotatorSession(v.cfg)  # the bridge started again
-    v._do(v.session.start(v.now))
-    v.link_up()
-    v.run_until(lambda h: h.status.available, 10, "the controller answers the new bridge")
-    assert v.truth().is_moving  # (it finishes its old turn by itself)
+    restarted_mid_turn(v)
     t, here = v.now, v.truth().el_deg
     v.follow(True)
     v.heard("JA1ABC", "PM95")
