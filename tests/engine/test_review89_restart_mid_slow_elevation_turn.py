@@ -53,6 +53,21 @@ def refused_right_after_a_restart_mid_the_elevation_turn(v: VirtualRotator) -> t
     return t, here
 
 
+def following_right_after_a_replug_mid_the_elevation_turn(v: VirtualRotator) -> tuple[float, float]:
+    """``v`` unplugged mid elevation-only turn and plugged back in, following turned on and a
+    grid in the keep-out heard at once. When it was asked and the elevation then."""
+    raising_the_elevation(v)
+    v.run_for(0.1)  # (between two polls: not a deadline)
+    v.link_down()
+    v.run_for(2.0)  # (the adapter out: not a deadline)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+    t, here = v.now, v.truth().el_deg
+    v.follow(True)
+    v.heard("JA1ABC", "PM95")
+    return t, here
+
+
 def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_elevation_turn() -> None:
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
         t, here = refused_right_after_a_restart_mid_the_elevation_turn(v)
@@ -66,15 +81,7 @@ def test_a_refused_follow_start_right_after_a_restart_halts_a_slow_elevation_tur
 def test_the_same_turn_after_a_replug_is_halted() -> None:
     """The control: the same slow elevation turn carried over a replug is halted."""
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
-        raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        t, here = v.now, v.truth().el_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
+        t, here = following_right_after_a_replug_mid_the_elevation_turn(v)
         v.run_for(60.0)  # (the old target is some 30 s on: not a deadline)
         assert v.errors(ErrorKind.REFUSED, since=t)
         assert v.status.following is not None

@@ -16,8 +16,9 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.test_review84_elevation_carried_turn import START_AZ, raising_the_elevation
+from tests.engine.test_review84_elevation_carried_turn import START_AZ
 from tests.engine.test_review89_restart_mid_slow_elevation_turn import (
+    following_right_after_a_replug_mid_the_elevation_turn,
     gs232_with_a_slow_elevation_by_a_keep_out,
 )
 from tests.engine.virtual import VirtualRotator
@@ -52,15 +53,7 @@ def flipped_bit_in_the_azimuth(v: VirtualRotator, after_s: float) -> list[float]
 )
 def test_one_garbled_reading_of_a_decided_axis_does_not_drop_the_halt_of_a_lost_turn() -> None:
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
-        raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
-        t, here = v.now, v.truth().el_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
+        t, here = following_right_after_a_replug_mid_the_elevation_turn(v)
         glitched = flipped_bit_in_the_azimuth(v, AZ_SEEN_S)
         v.run_for(60.0)  # (the old target is some 30 s on: not a deadline)
         assert glitched
