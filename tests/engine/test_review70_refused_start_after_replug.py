@@ -12,6 +12,8 @@ step mid-pass is judged again at every step and halts the turn once it is seen: 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from bridge.core.model import ErrorKind
 from bridge.sky import Body
 from tests.engine.test_attack19_follow_start_refused_grid import (
@@ -49,16 +51,42 @@ def rotorez_turning_away_from_the_partner(v: VirtualRotator) -> None:
     turning_away_from_the_partner(v)
 
 
+def a_follow_start_refused_after(
+    v: VirtualRotator, interrupted: Callable[[VirtualRotator], None]
+) -> tuple[float, float]:
+    """A Rotor-EZ turning away from PARTNER, ``interrupted`` mid-turn (a replug, a restart);
+    a follow start refused at once for the keep-out, a minute on. When it was asked and the
+    azimuth then."""
+    rotorez_turning_away_from_the_partner(v)
+    interrupted(v)
+    t, here = v.now, v.truth().az_deg
+    v.follow(True)
+    v.heard("JA1ABC", "PM95")
+    v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)
+    [refused] = v.errors(ErrorKind.REFUSED, since=t)
+    assert "keep-out" in refused.message
+    return t, here
+
+
+def a_track_started_after(
+    v: VirtualRotator, interrupted: Callable[[VirtualRotator], None]
+) -> tuple[float, float]:
+    """A Rotor-EZ under a kept-out pass turning toward 340, ``interrupted`` mid-turn; a track
+    of the pass started at once, a minute on. When it was asked and the azimuth then."""
+    line1, line2 = synthetic_tle(
+        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    turning_toward_340(v)
+    interrupted(v)
+    t, here = v.now, v.truth().az_deg
+    v.track(Body.satellite("TESTSAT", line1, line2))
+    v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
+    return t, here
+
+
 def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("rotorez") as v:
-        rotorez_turning_away_from_the_partner(v)
-        replugged_mid_turn(v)
-        t, here = v.now, v.truth().az_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)
-        [refused] = v.errors(ErrorKind.REFUSED, since=t)
-        assert "keep-out" in refused.message
+        t, here = a_follow_start_refused_after(v, replugged_mid_turn)
         assert v.status.following is not None  # taken, and waiting for a grid it may turn to
         # held where it was (a stop and the Rotor-EZ's coast): observed 90 -> 182
         assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
@@ -67,15 +95,8 @@ def test_a_refused_follow_start_right_after_a_replug_mid_turn_holds_the_rotor() 
 def test_a_track_start_whose_wait_is_refused_right_after_a_replug_mid_turn_holds_the_rotor() -> (
     None
 ):
-    line1, line2 = synthetic_tle(
-        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
-    )
     with rotorez_under_a_kept_out_pass() as v:
-        turning_toward_340(v)
-        replugged_mid_turn(v)
-        t, here = v.now, v.truth().az_deg
-        v.track(Body.satellite("TESTSAT", line1, line2))
-        v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
+        t, here = a_track_started_after(v, replugged_mid_turn)
         assert v.status.tracking is not None  # taken, and holding
         [refused] = v.errors(ErrorKind.REFUSED, since=t)
         assert "keep-out" in refused.message and "holding" in refused.message

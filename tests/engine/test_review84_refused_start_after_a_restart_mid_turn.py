@@ -15,19 +15,16 @@ from __future__ import annotations
 
 from bridge.core.model import ErrorKind
 from bridge.session.session import RotatorSession
-from bridge.sky import Body
 from tests.engine.test_attack19_follow_start_refused_grid import follower_by_a_keep_out
 from tests.engine.test_attack19_track_start_refused_wait import (
-    T0,
     rotorez_under_a_kept_out_pass,
-    turning_toward_340,
 )
 from tests.engine.test_review70_refused_start_after_replug import (
-    rotorez_turning_away_from_the_partner,
+    a_follow_start_refused_after,
+    a_track_started_after,
 )
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
-from tests.support.sky import synthetic_tle
 
 
 def restarted_mid_turn(v: VirtualRotator) -> None:
@@ -45,14 +42,7 @@ def restarted_mid_turn(v: VirtualRotator) -> None:
 
 def test_a_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
     with follower_by_a_keep_out("rotorez") as v:
-        rotorez_turning_away_from_the_partner(v)
-        restarted_mid_turn(v)
-        t, here = v.now, v.truth().az_deg
-        v.follow(True)
-        v.heard("JA1ABC", "PM95")
-        v.run_for(60.0)  # (the old target is some 15 s on: not a deadline)
-        [refused] = v.errors(ErrorKind.REFUSED, since=t)
-        assert "keep-out" in refused.message
+        t, here = a_follow_start_refused_after(v, restarted_mid_turn)
         # held where it was (a stop and the Rotor-EZ's coast), as after a replug: 84 -> 182
         assert angle_between(v.truth().az_deg, here) <= 15.0, (here, v.truth().az_deg)
         # taken, and waiting for a grid it may turn to: observed ended "turned by hand", though
@@ -62,15 +52,8 @@ def test_a_refused_follow_start_right_after_a_restart_mid_turn_holds_the_rotor()
 
 def test_a_track_start_refused_right_after_a_restart_mid_turn_holds_the_rotor() -> None:
     """The same with tracking's wait for the pass refused (review 70's second case)."""
-    line1, line2 = synthetic_tle(
-        "TESTSAT", T0, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
-    )
     with rotorez_under_a_kept_out_pass() as v:
-        turning_toward_340(v)
-        restarted_mid_turn(v)
-        t, here = v.now, v.truth().az_deg
-        v.track(Body.satellite("TESTSAT", line1, line2))
-        v.run_for(60.0)  # (the old target is some 20 s on: not a deadline)
+        t, here = a_track_started_after(v, restarted_mid_turn)
         [refused] = v.errors(ErrorKind.REFUSED, since=t)
         assert "keep-out" in refused.message
         # held where it was (a stop and the Rotor-EZ's coast): observed 238 -> 340
