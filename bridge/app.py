@@ -144,7 +144,7 @@ def worker_config(
             stall_timeout_s=r.stall_timeout_s,
             brake_delay_s=r.effective_brake_delay_s,
             settle_s=r.settle_s,
-            settle_own="settle_s" in r.model_fields_set,  # (motion.py rule 4)
+            settle_own=r.settle_own,  # (motion.py rule 4: a settle_s other than the default)
             noise_deg=r.effective_noise_deg,
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=az_speed,

@@ -87,7 +87,9 @@ Rules:
    move: review 89, a GS-232's elevation at 2 deg/s and an azimuth set to 2 deg/s, dropped
    at rule 2's rest after a restart mid-turn, turned on 60 and 100 degrees past a refused
    start, and following ended "turned by hand"; only a ``settle_s`` the user set, rule 2's
-   to pair with the speeds, ends the wait at rest sooner, ``settle_own``) say a turn after
+   to pair with the speeds, ends the wait at rest sooner, ``settle_own``: one other than the
+   default, since the default written out in the file is no choice of the user's; review 93:
+   ``settle_s = 1.5`` written out brought review 89's slow elevation back) say a turn after
    them is seen to begin, and till they do the controller is asked
    at the moving rate (``found_unjudged``; not the clock alone, nor one reading a whole idle
    poll on: review 54, a Rot2Prog polled every 9 s at rest had settled before its second
@@ -246,8 +248,9 @@ class MotionConfig:
     stall_timeout_s: float = 10.0
     brake_delay_s: float = 5.0
     settle_s: float = 1.5
-    # rule 4: ``settle_s`` is the user's own (set in the settings, rule 2's to pair with the
-    # speeds): the rotor at rest by it ends a found turn's wait; the default's never does
+    # rule 4: ``settle_s`` is the user's own (set in the settings to other than the default,
+    # rule 2's to pair with the speeds): the rotor at rest by it ends a found turn's wait; the
+    # default's never does, written out in the file or not (review 93)
     settle_own: bool = False
     noise_deg: float = 2.0
     az_span_deg: float = 360.0

@@ -265,7 +265,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         description="steady this long means stopped; at least two moving poll intervals (the "
         "bridge waits longer while a speed setting slows the rotor so much that noise_deg and "
         "a step of its readings take longer: a GS-232 at X1). Raise it for a rotor that slow "
-        "at its configured speed",
+        "at its configured speed. A value other than the default also ends the wait of a "
+        "bridge just started for a turn under way at rest by it, sooner than a slow axis may "
+        "show its move (the default, written out or not, waits for each axis's own time)",
         examples=[2.0],
     )
     deadband_deg: float = Field(
@@ -632,6 +634,15 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         return self.pointing_for(self.spec, self.effective_az_limits, self.effective_el_limits)
 
     # -- what the engine uses: the user's value, else the default (settings/defaults.py) -------
+    @property
+    def settle_own(self) -> bool:
+        """motion.py rule 4: a ``settle_s`` the user chose, one other than the default (the
+        default written out in the file, as a copied or generated one has it, is no choice),
+        ends a restart's wait for its found turn at rest by it, sooner than a slow axis's own
+        time (review 93: ``settle_s = 1.5`` written out undid review 89's fix)."""
+        default: float = type(self).model_fields["settle_s"].default
+        return self.settle_s != default
+
     @property
     def effective_baud(self) -> int:
         return self.baud or self.spec.baud

@@ -11,8 +11,6 @@ nobody touched the panel. With the key left out the same turn is halted (review 
 
 from __future__ import annotations
 
-import pytest
-
 from tests.engine.test_review89_restart_mid_slow_elevation_turn import (
     gs232_with_a_slow_elevation_by_a_keep_out,
     refused_right_after_a_restart_mid_the_elevation_turn,
@@ -26,12 +24,6 @@ def gs232_with_settle_s_written(settle_s: float) -> VirtualRotator:
     return gs232_with_a_slow_elevation_by_a_keep_out(settle_s=settle_s)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 93: with settle_s = 1.5 (the default) written in the config,"
-    " a refused follow start after a restart mid elevation turn sends no stop and the elevation"
-    " turns on some 60 degrees; following ends 'turned by hand'",
-)
 def test_the_default_settle_s_written_in_the_config_still_halts_a_restarts_slow_turn() -> None:
     with gs232_with_settle_s_written(1.5) as v:
         t, here = refused_right_after_a_restart_mid_the_elevation_turn(v)
