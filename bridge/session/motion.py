@@ -102,19 +102,15 @@ Rules:
    that axis turning at its nominal speed, as slow as rule 6 allows for, needs to move more
    than ``noise_deg`` and a reading's step, plus a poll) that show it no move decide it still
    (``still_axes``); a move on an axis not yet decided is the lost turn, seen; a move only on
-   axes decided still that the next reading confirms (still more than ``noise_deg`` from where
-   they stood; till then that reading moves nothing: ``begun_t``) is a turn begun since, not
-   known to be the lost one (review 93: one garbled reading of a decided azimuth, 062 read
-   066, was taken for a hand's turn, a refused start's owed halt dropped, and a slow
-   elevation turned on 25 -> 85; one reading back at where it stood is no turn); every
-   axis decided (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to
-   rest while the port was out. Either way ``lost_still``, though rule 2 waits ``settle_s``
-   to call the rotor still, and a refused start's halt owed to the lost turn is dropped
-   (parts.py rule 10; review 73, a hand a second after a replug). Review 84: the lost turn
-   may be an elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees with 2
-   degrees of noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned on 60
-   degrees past a refused start); review 89: the slowest axis's time for every axis (2.1 s on an
-   az/el GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
+   axes decided still is a turn begun since, not known to be the lost one; every axis decided
+   (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to rest while the
+   port was out. Either way ``lost_still``, though rule 2 waits ``settle_s`` to call the rotor
+   still, and a refused start's halt owed to the lost turn is dropped (parts.py rule 10;
+   review 73, a hand a second after a replug). Review 84: the lost turn may be an
+   elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees with 2 degrees of
+   noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned on 60 degrees past
+   a refused start); review 89: the slowest axis's time for every axis (2.1 s on an az/el
+   GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
    and the owed halt stopped it a few degrees in.
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
@@ -355,9 +351,6 @@ class Motion:
     # their own ``axis_seen_s``: a lost (or found) turn is not theirs, a move of theirs after
     # that is a turn begun since
     still_axes: frozenset[str] = frozenset()
-    # rule 4: when a reading showed a move only on axes in ``still_axes``, not yet confirmed
-    # by the next (a turn begun since, or one garbled reading): that reading moved nothing
-    begun_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -439,31 +432,26 @@ def _judged(
     """Rule 4: what a reading at ``now`` tells of a turn lost with the link (``lost_turning``,
     the rotor taken for turning) or found by a bridge just started (``found_unjudged``): a
     move on an axis not yet shown still for its own ``axis_seen_s`` is that turn, seen; a
-    move only on axes that were, confirmed by the next reading (``begun_t``: one garbled
-    reading is no turn; review 93), is a turn begun since (not the lost one:
-    ``lost_still``; not the found one: no longer ``carried``); a reading with no move shows
-    each axis still whose own time is over, and the turn over (or none) once every axis is
-    (review 89: the slowest axis's time for every axis stopped a hand at a GS-232B's azimuth
-    a second after a replug)."""
+    move only on axes that were is a turn begun since (not the lost one: ``lost_still``; not
+    the found one: no longer ``carried``); a reading with no move shows each axis still whose
+    own time is over, and the turn over (or none) once every axis is (review 89: the slowest
+    axis's time for every axis stopped a hand at a GS-232B's azimuth a second after a
+    replug)."""
     lost = m.state is MOVING
-    held: dict[str, Any] = {} if m.begun_t is None else {"begun_t": None}
     if az_moved or el_moved:
         if (az_moved and "azimuth" not in m.still_axes) or (
             el_moved and "elevation" not in m.still_axes
         ):
-            return held  # (the turn seen, as it was taken for)
-        if m.begun_t is None:  # (one reading away: a hand's turn, or one garbled reading)
-            return {"begun_t": now}
-        return {**held, "lost_still": True} if lost else {**held, "carried": False}
+            return {}  # (the turn seen, as it was taken for)
+        return {"lost_still": True} if lost else {"carried": False}
     first = m.first_read_t if m.first_read_t is not None else now
     seen = axis_seen_s(cfg)
     still = m.still_axes | {axis for axis, s in seen.items() if now - first >= s}
     if still == m.still_axes:
-        return held
+        return {}
     if not still.issuperset(seen):
-        return {**held, "still_axes": still}
-    done = {**held, "still_axes": still, "lost_still": True}
-    return done if lost else {**held, "carried": False}
+        return {"still_axes": still}
+    return {"still_axes": still, "lost_still": True} if lost else {"carried": False}
 
 
 # -- observations ----------------------------------------------------------------------------
@@ -574,7 +562,6 @@ def reading(
             lost_hand=False,
             first_read_t=now,
             still_axes=frozenset(),
-            begun_t=None,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -598,8 +585,6 @@ def reading(
     moved = az_moved or el_moved
     if (m.lost_turning and not m.lost_still and m.state is MOVING) or found_unjudged(m):
         changes.update(_judged(m, cfg, now, az_moved, el_moved))  # rule 4: each axis its own
-        if changes.get("begun_t") == now:  # (a move on decided axes alone, the next to confirm
-            moved = False  # it: till then, from where the axes stood, it moved nothing)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)

@@ -81,8 +81,7 @@ Rules:
     shows that turn move; readings that show the rotor still instead drop it, each axis judged
     by its own speed (``Motion.lost_still``, motion.py rule 4: every axis still for its own
     time, the turn came to rest while the port was out; or a move only on axes already shown
-    still that the next reading confirms, a turn begun since; one garbled reading is none:
-    review 93), so a hand at the panel after that is never halted for it
+    still, a turn begun since), so a hand at the panel after that is never halted for it
     (review 73: d609655e owed the halt until rule 2's rest, a second or more, and stopped a
     hand begun in that time; review 89: so did the slowest axis's time for every axis, a hand
     at a GS-232B's azimuth a second after a replug). A bridge just started

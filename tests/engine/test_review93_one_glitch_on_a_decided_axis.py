@@ -13,6 +13,8 @@ replug test). A glitch on the elevation of an azimuth turn (an RC2800's) is the 
 
 from __future__ import annotations
 
+import pytest
+
 from bridge.core.model import ErrorKind
 from tests.engine.test_review84_elevation_carried_turn import START_AZ
 from tests.engine.test_review89_restart_mid_slow_elevation_turn import (
@@ -44,6 +46,11 @@ def flipped_bit_in_the_azimuth(v: VirtualRotator, after_s: float) -> list[float]
     return when
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 93: one garbled azimuth reading a second after a replug mid elevation turn"
+    " drops the refused follow start's halt: no stop, the elevation turns on 25 -> 85",
+)
 def test_one_garbled_reading_of_a_decided_axis_does_not_drop_the_halt_of_a_lost_turn() -> None:
     with gs232_with_a_slow_elevation_by_a_keep_out() as v:
         t, here = following_right_after_a_replug_mid_the_elevation_turn(v)
