@@ -14,18 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, slow, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 90: a bridge on rotor runs beside a live bridge on rotor/shack whose tower "
-    "(topic rotor/tower, controller off) it takes for gone; one target turns both rotors",
-)
 def test_a_live_bridge_nested_one_level_under_the_looking_bridge_vouches_for_its_rotator(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

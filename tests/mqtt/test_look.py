@@ -3,7 +3,9 @@ look saw decides whether stale discovery is deleted, left alone, or the bridge r
 
 from __future__ import annotations
 
-from bridge.interfaces.mqtt.claim import Claim, Instance
+import json
+
+from bridge.interfaces.mqtt.claim import Claim, Instance, Post, stamp
 from bridge.interfaces.mqtt.look import FirstLook
 
 ME = Instance("rotor-me", "shack", 100, 1000.0)
@@ -153,3 +155,35 @@ def test_a_deletion_asked_twice_in_one_look_is_sent_and_named_once() -> None:
     for topic in (jam, STALE, jam):
         assert lk.defer_clear(topic)
     assert lk.end(timed_out=False).clears == [jam, STALE]
+
+
+def test_a_vouch_read_heard_before_the_look_asks_for_it_still_vouches() -> None:
+    """Review 90 (claim.py rule 5): a bridge on ``rotor`` with a rotator ``tower``, beside a
+    live bridge on ``rotor/shack`` whose tower has ``topic = "rotor/tower"`` (its controller
+    off: ``offline``). That bridge's ``rotor/shack/bridge/info`` and ``state`` are also read by
+    another filter of the looking bridge (stale.py's ``rotor/+/bridge/state``), so the broker
+    sends them before the stamp that names them, and never again: kept from the look's start,
+    they vouch for the stamp, and the bridge refuses to run. Not heard at all: taken for gone."""
+    posts = (Post("rotor/bridge/info"), Post("rotor/tower/bridge/info"), Post("rotor/tower/info"))
+    claim = Claim(ME, "rotor", "rotor/bridge/info", "rotor/bridge/hello", posts)
+    shack = {
+        "rotor/shack/bridge/info": OTHER.info([]).encode(),
+        "rotor/shack/bridge/state": b"online",
+    }
+    tower = {
+        "rotor/tower/info": json.dumps(
+            {"id": "tower", "bridge": stamp(OTHER.id, "rotor/shack")}
+        ).encode(),
+        "rotor/tower/availability": b"offline",
+    }
+    for heard_first, refused in ((shack, True), ({}, False)):
+        lk = FirstLook(claim, "rotor/bridge/state")
+        hello = lk.begin()
+        for topic, payload in {**heard_first, **tower}.items():
+            lk.saw(topic, payload)
+        assert lk.ended_by(hello) == 1
+        lk.probes()  # once the hello is back: what it reads (these are read already)
+        outcome = lk.end(timed_out=False)
+        assert (outcome.refused is not None) == refused, heard_first
+        if refused:
+            assert outcome.refused is not None and "rotor/shack/bridge/state" in outcome.refused

@@ -76,7 +76,11 @@ Rules:
    (``vouch_reads``, subscribed before a second hello that ends the look; review 85: a live
    bridge on ``shack`` whose rotator has ``topic = "rotor/tower"``, or one on ``rotor`` whose
    rotator's topic is the looking bridge's rotator's own ``topic``, its controller off, was
-   taken for gone, and one target turned both rotors), and a bridge info there naming the
+   taken for gone, and one target turned both rotors; the look keeps the newest value of every
+   bridge's info and state it hears from its start, ``bridge_post``, as one another filter of
+   the bridge reads is sent once, maybe before the stamp: review 90, a live bridge on
+   ``rotor/shack``'s ``online``, read by stale.py's ``rotor/+/bridge/state`` before the
+   looking bridge on ``rotor`` asked for it, was lost), and a bridge info there naming the
    stamp's instance, ``online`` beside it, makes the stamp live whatever the rotator says
    (review 77: a live bridge whose rotator's controller is switched off, ``offline``, was taken
    for gone and a second bridge ran on its topics). What stands above (or on the stamp's base
@@ -404,7 +408,8 @@ def vouch_reads(claim: Claim, seen: dict[str, bytes]) -> list[str]:
     only the topics above the looking bridge's base topic were read, and a live bridge whose
     rotator has a ``topic`` of its own, or whose rotator's topic is one of the looking bridge's
     rotators' topics, its controller off, was taken for gone: one target turned both
-    rotors)."""
+    rotors). What another filter of the bridge read already came, maybe before the stamp, and
+    was kept (``bridge_post``: review 90)."""
     posted = {t for p in claim.posts for t in p.topics}
     found: dict[str, None] = {}
     for post in claim.posts:
@@ -420,6 +425,14 @@ def vouch_reads(claim: Claim, seen: dict[str, bytes]) -> list[str]:
             if topic not in posted:
                 found[topic] = None
     return list(found)
+
+
+def bridge_post(topic: str) -> bool:
+    """Rule 5: ``topic`` is where a bridge says who it is or whether it is live (``Y/bridge/info``,
+    ``Y/bridge/state``): the look keeps the newest value it hears there from its start, as a vouch
+    read may need it (review 90: one read by another filter of the bridge came before the look
+    knew it would ask, and was lost)."""
+    return topic.endswith(("/bridge/info", "/bridge/state"))
 
 
 def _vouched(other: Instance, base: str, seen: dict[str, bytes]) -> bool:

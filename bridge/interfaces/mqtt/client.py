@@ -936,7 +936,9 @@ class MqttClient(Connection):
 
     def _reads_only(self, reads: list[str]) -> list[str]:
         """Claim rule 5, under the lock: the look's vouch reads no other filter reads (their
-        denial is no problem, rule 17), subscribed until the look ends (``_open``)."""
+        denial is no problem, rule 17), subscribed until the look ends (``_open``). One another
+        filter reads is not subscribed again: its value came once, and the look kept it from
+        its start, whenever it came (look.py rule 14, review 90)."""
         read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
         self._reading = [t for t in reads if not read(t) and t not in (self._look_only or ())]
         self.optional(

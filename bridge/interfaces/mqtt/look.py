@@ -65,7 +65,13 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    rule 16's probe: one client's messages of one QoS keep their order), which ends the look.
    Any look sends that second hello, probes or none, after subscribing claim.py rule 5's
    ``vouch_reads`` (``reads``: the bridge posts on the base topic a stamp seen names), so their
-   retained values come before it.
+   retained values come before it. One another filter of the bridge reads is not subscribed
+   again, and the broker sent its value once, maybe before the stamp that names it: so the look
+   keeps the newest value it hears on every bridge's info and state (``Y/bridge/info``,
+   ``Y/bridge/state``: claim.py ``bridge_post``) from its start, whatever asked for it, and the
+   verdict consults them (review 90: a live bridge on ``rotor/shack``'s ``online``, read by
+   stale.py's ``rotor/+/bridge/state`` before the hello, was kept only once the hello was back,
+   so lost, and that bridge taken for gone).
    A probe that came back before it (``probe_back``: an empty live message there during the
    look, whoever sent it) says the topic can be read; a witness whose probe did not is handed
    on as ``unread`` (a timed-out look says nothing of it). Under MQTT 5 the
@@ -93,6 +99,7 @@ from bridge.interfaces.mqtt.claim import (
     Claim,
     Instance,
     Verdict,
+    bridge_post,
     first_look,
     refusal,
     refusal_on,
@@ -126,7 +133,10 @@ class FirstLook:
         self._state_topic = will_topic  # ``B/bridge/state``
         self._looks = 0
         self.looking: int | None = None  # the look under way: its number
-        self._seen: dict[str, bytes] = {}  # retained info/state seen during the look
+        # the newest value heard during the look on its info and state, the posts' topics
+        # (claim rule 5) and every bridge's info and state (a vouch read's, whichever filter
+        # read it: review 90)
+        self._seen: dict[str, bytes] = {}
         self._clears: dict[str, None] = {}  # (in the order asked; one asked twice: once)
         self._took_over = False  # for the life of the process (claim rule 3)
         self._witnesses: frozenset[str] = frozenset()  # rule 14: their retained values kept
@@ -202,7 +212,7 @@ class FirstLook:
             self._heard[topic] = payload
             return False
         if topic not in (self.claim.info_topic, self._state_topic):
-            if topic in self._posted or topic in self.reads:  # claim rule 5: kept
+            if topic in self._posted or bridge_post(topic):  # claim rule 5: kept
                 self._seen[topic] = payload
             return False
         self._seen[topic] = payload
