@@ -892,6 +892,12 @@ class Controller:
             and not mo.at_target(m, self.cfg.motion)
         )
 
+    def halt_owed(self, owed: bool) -> None:
+        """parts.py rule 10: a refused start's halt is owed to the turn its readings are still
+        judging (``owed``), or no longer: motion.py rule 4 then confirms a move only on axes
+        decided still by the next reading before it takes it for a hand's."""
+        self.motion = mo.halt_owed(self.motion, owed)
+
     def cut_mid_turn(self) -> bool:
         """The port is closed and the rotor was turning, or had a target out, when it went
         (rule 10's ``_still_at_close``): a turn that goes on when the port is back unless a
@@ -1290,6 +1296,8 @@ class Controller:
         if self._lost_aim is not None and before is mo.MOVING and self.motion.state in _RESTS:
             self._lost_rest(now)  # rule 13
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
+        if mo.held_back(m, now):  # (motion.py rule 4: a move the next reading is to confirm,
+            return  # shown then if it does: one garbled reading never)
         if was.anchor_deg is None and self._afresh:  # (``_lose_motion``)
             self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
             self._afresh = False

@@ -395,7 +395,7 @@ class Follower:
             # as its own target would have stopped it: rule 2, parts.py rule 10)
             halt = self._halt.wanted(scene, self._bearing is None)
             error = Report(ErrorKind.REFUSED, f"following: {why}", what)
-            return Proposal(error=error, busy=True, halt=halt)
+            return Proposal(error=error, busy=True, halt=halt, owes=self._halt.owing)
         self._bearing = az
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False

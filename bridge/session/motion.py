@@ -112,6 +112,20 @@ Rules:
    a refused start); review 89: the slowest axis's time for every axis (2.1 s on an az/el
    GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
    and the owed halt stopped it a few degrees in.
+   While a refused start's halt is owed to the turn under judgement (``owes_halt``, set by
+   the session from the part's ``Proposal.owes``, parts.py rule 10, cleared when tracking and
+   following end; ``owed_halt``: no target nor stop sent since), a move only on decided axes
+   is a turn begun since only once the next reading confirms it (still more than
+   ``noise_deg`` from where those axes stood, or on an undecided axis: the lost turn, seen).
+   The reading that showed it is held back (``begun_t``, ``held_back``): no move, no rest
+   told by it, nothing of it shown in the status (controller.py feeds no bearing from it),
+   so one garbled reading keeps the halt owed and never shows, and a hand is followed and
+   shown moving one reading later (review 93: "AZ=066" read for 062 a second after a replug
+   mid slow elevation turn was taken for a hand's turn, the owed halt dropped, and the
+   elevation turned on 25 -> 85). Only then: with no halt owed a hand is told at once, as it
+   was, for 03af385a, which asked the second reading everywhere and showed the first at
+   rest, published one 'idle' status with a hand's new bearing before 'moving' (a hand at a
+   slowed GS-232's panel just after a bridge started), and was reverted.
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -351,6 +365,13 @@ class Motion:
     # their own ``axis_seen_s``: a lost (or found) turn is not theirs, a move of theirs after
     # that is a turn begun since
     still_axes: frozenset[str] = frozenset()
+    # rule 4: a start refused while that turn was not yet seen owes it a halt (parts.py rule
+    # 10, set by the session: ``halt_owed``); meanwhile a move only on axes in ``still_axes``
+    # is a turn begun since only once the next reading confirms it
+    owes_halt: bool = False
+    # rule 4: when a reading showed such a move, not yet confirmed (a hand's turn, or one
+    # garbled reading): that reading was held back, neither a move nor a rest, nor shown
+    begun_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -433,25 +454,50 @@ def _judged(
     the rotor taken for turning) or found by a bridge just started (``found_unjudged``): a
     move on an axis not yet shown still for its own ``axis_seen_s`` is that turn, seen; a
     move only on axes that were is a turn begun since (not the lost one: ``lost_still``; not
-    the found one: no longer ``carried``); a reading with no move shows each axis still whose
-    own time is over, and the turn over (or none) once every axis is (review 89: the slowest
-    axis's time for every axis stopped a hand at a GS-232B's azimuth a second after a
-    replug)."""
+    the found one: no longer ``carried``), while a refused start's halt is owed only once the
+    next reading confirms it (``begun_t``: this one held back; review 93); a reading with no
+    move shows each axis still whose own time is over, and the turn over (or none) once
+    every axis is (review 89: the slowest axis's time for every axis stopped a hand at a
+    GS-232B's azimuth a second after a replug)."""
     lost = m.state is MOVING
+    held: dict[str, Any] = {} if m.begun_t is None else {"begun_t": None}  # (told now)
     if az_moved or el_moved:
         if (az_moved and "azimuth" not in m.still_axes) or (
             el_moved and "elevation" not in m.still_axes
         ):
-            return {}  # (the turn seen, as it was taken for)
-        return {"lost_still": True} if lost else {"carried": False}
+            return held  # (the turn seen, as it was taken for)
+        if m.begun_t is None and owed_halt(m):  # (a halt owed: one reading is no hand's)
+            return {"begun_t": now}
+        return {**held, "lost_still": True} if lost else {**held, "carried": False}
     first = m.first_read_t if m.first_read_t is not None else now
     seen = axis_seen_s(cfg)
     still = m.still_axes | {axis for axis, s in seen.items() if now - first >= s}
     if still == m.still_axes:
-        return {}
+        return held
     if not still.issuperset(seen):
-        return {"still_axes": still}
-    return {"still_axes": still, "lost_still": True} if lost else {"carried": False}
+        return {**held, "still_axes": still}
+    done = {**held, "still_axes": still}
+    return {**done, "lost_still": True} if lost else {**done, "carried": False}
+
+
+def owed_halt(m: Motion) -> bool:
+    """Rule 4: a refused start's halt is owed to the turn under judgement (``owes_halt``, as
+    parts.py rule 10's ``StartHalt.owed`` keeps it: no target, no stop sent since)."""
+    return m.owes_halt and m.target_deg is None and m.stop_sent_t is None
+
+
+def halt_owed(m: Motion, owed: bool) -> Motion:
+    """Rule 4: the session says a refused start's halt is owed to the turn under judgement
+    (parts.py rule 10), or no longer (the start's part ended)."""
+    if m.owes_halt is owed:
+        return m
+    return replace(m, owes_halt=owed, begun_t=m.begun_t if owed else None)
+
+
+def held_back(m: Motion, now: float) -> bool:
+    """Rule 4: the reading just taken at ``now`` was held back (a move only on axes decided
+    still while a halt is owed, the next reading to confirm it): nothing of it is shown."""
+    return m.begun_t == now
 
 
 # -- observations ----------------------------------------------------------------------------
@@ -562,6 +608,7 @@ def reading(
             lost_hand=False,
             first_read_t=now,
             still_axes=frozenset(),
+            begun_t=None,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -584,7 +631,11 @@ def reading(
     )
     moved = az_moved or el_moved
     if (m.lost_turning and not m.lost_still and m.state is MOVING) or found_unjudged(m):
-        changes.update(_judged(m, cfg, now, az_moved, el_moved))  # rule 4: each axis its own
+        judged = _judged(m, cfg, now, az_moved, el_moved)  # rule 4: each axis its own
+        if judged.get("begun_t") == now:  # (held back till the next reading confirms it: no
+            m = replace(m, begun_t=now)  # move, no rest told by it, nothing shown of it)
+            return tick(m, cfg, now, asking_since=None)
+        changes.update(judged)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)

@@ -81,7 +81,9 @@ Rules:
     shows that turn move; readings that show the rotor still instead drop it, each axis judged
     by its own speed (``Motion.lost_still``, motion.py rule 4: every axis still for its own
     time, the turn came to rest while the port was out; or a move only on axes already shown
-    still, a turn begun since), so a hand at the panel after that is never halted for it
+    still, a turn begun since, once the next reading confirms it: one garbled reading is none,
+    review 93; ``Proposal.owes`` tells the motion the halt is owed), so a hand at the panel
+    after that is never halted for it
     (review 73: d609655e owed the halt until rule 2's rest, a second or more, and stopped a
     hand begun in that time; review 89: so did the slowest axis's time for every axis, a hand
     at a GS-232B's azimuth a second after a replug). A bridge just started
@@ -178,6 +180,7 @@ class Proposal:
     # the wind: its storm's park refused, wind.py rule 5)
     drop: Source | None = None  # drop the waiting target if this source put it (autopark.py
     # rule 3: a hand on the panel before the park went)
+    owes: bool = False  # rule 10: a start's refusal owes its halt to a turn not yet seen
 
 
 NOTHING = Proposal()
@@ -252,6 +255,12 @@ class StartHalt:
 
     def start(self) -> None:
         self._done = self._owed = False
+
+    @property
+    def owing(self) -> bool:
+        """The halt is owed (``Proposal.owes``: motion.py rule 4 judges that turn meanwhile by
+        two readings of a move only on axes decided still, not one)."""
+        return self._owed
 
     def wanted(self, scene: Scene, first: bool) -> bool:
         """Whether the refusal of a target (``first``: the start's first) halts the turn under

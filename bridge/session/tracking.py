@@ -356,11 +356,13 @@ class Tracker:
             # (the turn the start found: stopped once, as the start's own target would; then
             # the rotor is polled and seen at rest as after any stop: review 52)
             halt = self._halt.wanted(scene, self._last is None)
+            owes = self._halt.owing
             if self._refused_for != aos or aos is None:
                 self._refused_for = aos
                 why = f"tracking {sky.body.name}: {exc.message}; holding"
-                return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True, halt=halt)
-            return Proposal(busy=True, halt=halt)
+                error = Report(ErrorKind.REFUSED, why)
+                return Proposal(error=error, busy=True, halt=halt, owes=owes)
+            return Proposal(busy=True, halt=halt, owes=owes)
         self._last_raw = judged.az_deg
         return Proposal(target=judged, busy=True)
 
