@@ -116,3 +116,57 @@ def test_a_combi_track_wandering_a_tenth_at_its_end_is_not_told_as_junk(
     v.run_for(REST_S)
     assert v.status.available
     assert not [e.message for e in v.errors(since=t)]
+
+
+# The same on a D, in whole degrees (its spec's noise_deg 1.0): an azimuth box at its 360 end
+# whose pot says ``A,?,361``, and a D turning an elevation of its own (prosistel-el) at its 90
+# end saying ``E,?,091``: offline for good, never turned back.
+D_CASES = [
+    ("prosistel", {"start_az_deg": 330.0}, b"\x02A,?,360,", b"\x02A,?,361,", 360.0, 300.0),
+    ("prosistel-el", {"start_el_deg": 80.0}, b"\x02E,?,090,", b"\x02E,?,091,", 90.0, 45.0),
+]
+
+
+def replaced(said: bytes, read: bytes) -> Callable[[bytes, float], bytes]:
+    """Each answer line handed on whole at its CR, ``said`` in it read as ``read``."""
+    line = bytearray()
+
+    def rewrite(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        out = b""
+        while b"\r" in line:
+            end = line.index(b"\r") + 1
+            whole = bytes(line[:end])
+            del line[:end]
+            out += whole.replace(said, read)
+        return out
+
+    return rewrite
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 30: a Prosistel D whose pot reads a degree past 360 (or 90 on an elevation "
+    "D) goes offline ('answers only garbled replies') for good and is never turned back",
+)
+@pytest.mark.parametrize(("model", "emulator", "said", "read", "end", "back"), D_CASES)
+def test_a_prosistel_d_a_degree_past_its_end_is_still_turned_back(
+    rig: Callable[..., VirtualRotator],
+    model: str,
+    emulator: dict[str, float],
+    said: bytes,
+    read: bytes,
+    end: float,
+    back: float,
+) -> None:
+    v = rig(model, emulator=emulator)
+    v.run_for(5)
+    v.target(end)
+    v.run_until(lambda h: h.status.raw_bearing_deg == end and not h.truth().is_moving, 30, "end")
+    v.run_for(5)  # at rest there
+    v.to_host = replaced(said, read)  # the pot a degree past the end
+    v.run_for(20)
+    v.target(back)
+    v.run_for(60)
+    told = [e.message for e in v.errors()]
+    assert v.status.available and v.status.raw_bearing_deg == back, told
