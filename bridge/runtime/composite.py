@@ -180,10 +180,15 @@ Rules:
    reaches (review 86: each box's park took place 1 from it however many commands came
    before, and a remote's old held STOP, read as asked against the park, went again and
    stopped it short: a storm's park so left the antenna up in the wind; remote.py rule 10).
-   Both boxes' parks begun in one serve (the storm's wind reading handed to both, the quiet
-   spell shared: rule 7) are the rotator's one turn and take one place (``_place``): each
-   drawing its own, the status showed one box's place, then the other's, one park at two
-   places. The merged order is the newest of each (rule 3), so it never goes back.
+   Both boxes' parks of one turn are the rotator's one turn and take one place (mailbox.py
+   rule 10b's ``own_place``, the turn named by the session: the storm's park by its storm,
+   auto-park's by its moment, the quiet spell shared: rule 7): each drawing its own, the
+   status showed one box's place, then the other's, one park at two places (review 86), and
+   so did one storm's park whose second box began it in a later serve, plugged back
+   mid-storm, or a box's park owed again once the box answers (wind.py rule 7; review 91:
+   places 2 and 3, no command between). A motion command or a halt put since makes a park
+   begun after it a turn of its own, at a later place. The merged order is the newest of
+   each (rule 3), so it never goes back.
 """
 
 from __future__ import annotations
@@ -682,8 +687,6 @@ class CompositeWorker:
         self._siblings = Siblings()  # rules 6 and 8
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
-        self._serves = 0  # rule 10: the begins and serves so far
-        self._placed: tuple[int, int] | None = None  # rule 10: the own turn's place, its serve
         for axis, box, own in zip(AXES, axes, self._own, strict=True):
             self.boxes[axis] = Worker(
                 box,
@@ -702,7 +705,7 @@ class CompositeWorker:
                 port_opener=port_opener,
                 sky=sky,
                 on_audit=partial(self._audit, axis),
-                place=self._place,  # rule 10: the rotator's tickets, not the box's own
+                place=mailbox.own_place,  # rule 10: the rotator's places, not the box's own
             )
         sessions = {axis: box.session for axis, box in self.boxes.items()}
         joined(self.composition, sessions)
@@ -762,14 +765,6 @@ class CompositeWorker:
         if self._on_audit is not None:
             self._on_audit(audit)
 
-    def _place(self) -> int:
-        """Rule 10: the place of a turn of the bridge's own a box begins (session.py ``Order``):
-        a ticket of the rotator's mailbox, the one its commands take theirs from; both boxes'
-        parks begun in one serve (a storm's, a quiet spell's) are one turn, at one place."""
-        if self._placed is None or self._placed[1] != self._serves:
-            self._placed = (self._mailbox.ticket(), self._serves)
-        return self._placed[0]
-
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)
         if merged is not None:
@@ -777,7 +772,6 @@ class CompositeWorker:
 
     # -- what the serial-lines thread asks of a worker (lines.py) -------------------------------
     def begin(self, now: float, wake: Callable[[], None]) -> None:
-        self._serves += 1  # (rule 10)
         for box in self.boxes.values():
             box.guarded(box.begin, now, wake)
 
@@ -816,7 +810,6 @@ class CompositeWorker:
             log.exception("%s: unexpected error in the composite worker", self.cfg.rotator_id)
 
     def serve(self, now: float, ready: set[int]) -> None:
-        self._serves += 1  # (rule 10: a park begun in this serve, one place for both boxes)
         if self._box in ready:
             batch = self._mailbox.take()
             if batch:

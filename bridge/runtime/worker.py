@@ -74,7 +74,7 @@ import os
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from functools import partial
 from typing import Any
 
@@ -137,8 +137,9 @@ class Worker:
         sky: SkyWorker | None = None,
         port_watch: PortWatch | None = None,
         on_audit: Callable[[Audit], None] | None = None,
-        place: Callable[[], int] | None = None,  # the bridge's own turns' places: ``mailbox``'s
-        # tickets unless given (a composite's box: the rotator's, runtime/composite.py rule 10)
+        place: Callable[[Hashable], int] | None = None,  # the bridge's own turns' places:
+        # ``mailbox``'s unless given (a composite's box: the rotator's, runtime/composite.py
+        # rule 10; mailbox.py rule 10b)
     ) -> None:
         self.cfg = cfg
         self._sky = sky or SkyWorker()
@@ -154,7 +155,8 @@ class Worker:
             stop_owed=stop_owed,
             short_of=short_of,
             order=order,
-            place=place or mailbox.ticket,  # (session.py's Order: the bridge's own turns' places)
+            place=place
+            or mailbox.own_place,  # (session.py's Order: the bridge's own turns' places)
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

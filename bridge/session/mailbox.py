@@ -83,6 +83,18 @@ Rules:
     (a nudge is then refused: runtime/rotator.py). The places go on across runs of the
     bridge (``places_after``: from the block the state file reserved, runtime/kept.py rule 12),
     so a remote can order a place of an earlier run against one of this (review 86).
+10b. A turn of the bridge's own (auto-park's park, the storm's: session.py ``Order``) takes a
+    ticket when it begins (``own_place``), after every command asked before it, and that one
+    turn named again (``turn``, the session's name for it: the same storm's park, begun again
+    by a controller back from its offline, wind.py rule 7, or begun by a composite's other
+    box, runtime/composite.py rule 10) keeps that place while no motion command and no stop
+    or lock ON was put after it. Each begin drawing its own, one storm's park showed two
+    places with no command between (review 91: a composite's elevation box plugged back
+    mid-storm), and a remote's STOP asked against the park read the second as a newer turn
+    (interfaces/mqtt/remote.py rule 10). A turn named otherwise (another storm's park, an
+    auto-park's of another moment), or the same one after a motion command or a halt put
+    since, is a new turn and takes the next ticket: a park begun after a STOP is never
+    stopped by it, and a turn begun after the park never looks older than it.
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -127,6 +139,7 @@ from __future__ import annotations
 import itertools
 import os
 import threading
+from collections.abc import Hashable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -287,6 +300,7 @@ class Mailbox:
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
+        self._own: tuple[Hashable, int] | None = None  # rule 10b: the own turn's name, place
         self._winds = 0  # rule 9: live wind readings put so far
         self._lease = 0  # rule 14: changes of the control lease put so far
         self._control: Control | None = None  # rule 14: ... and the lease as the last one put
@@ -324,6 +338,19 @@ class Mailbox:
         """Rule 10a: a place in the order of commands, for one asked now and put later (``next``
         on an ``itertools.count`` is one step under the interpreter's lock)."""
         return next(self._tickets)
+
+    def own_place(self, turn: Hashable) -> int:
+        """Rule 10b: the place of the bridge's own turn named ``turn`` as it begins: the one it
+        took, while no motion command or halt was put after it; else the next ticket. (Only
+        the lines thread, which serves the rotator, asks.)"""
+        with self._lock:
+            newer = max(self._motion_placed, self._halt_placed)
+        own = self._own
+        if own is not None and own[0] == turn and newer < own[1]:
+            return own[1]
+        place = self.ticket()
+        self._own = (turn, place)
+        return place
 
     def _placed(self, ticket: int | None) -> int:
         """Rule 10a (under the lock): 0 if ``ticket`` is older than the newest put; else the

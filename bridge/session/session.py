@@ -224,7 +224,7 @@ from __future__ import annotations
 import logging
 import math
 import secrets
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import replace
 from functools import partial
 from typing import NamedTuple, TypeVar
@@ -319,10 +319,11 @@ class RotatorSession:
         storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
-        place: Callable[[], int] | None = None,  # mailbox.py rule 10a's ``ticket``: the
-        # place in the order of commands of a turn the bridge begins itself (``Order``), from
-        # the counter the rotator's commands advance (a composite's box: the rotator's
-        # mailbox's, not the box's own: runtime/composite.py rule 10, review 86)
+        place: Callable[[Hashable], int] | None = None,  # mailbox.py rule 10b's
+        # ``own_place``: the place in the order of commands of a turn the bridge begins itself
+        # (``Order``), named (``_own_turn``), from the counter the rotator's commands advance
+        # (a composite's box: the rotator's mailbox's, not the box's own: runtime/composite.py
+        # rule 10, review 86)
         order: tuple[int, int, int] = (0, 0, 0),  # runtime/kept.py rule 12: the places
         # earlier runs reserved (``since``), and the turn's and the lock word's kept
     ) -> None:
@@ -1337,10 +1338,21 @@ class RotatorSession:
                 # of its own, after every command asked before it began, and the status shows
                 # every place up to it: a remote's STOP asked before it never ends it, one
                 # asked against it does: interfaces/mqtt/remote.py rule 10, review 83; the
-                # place is the rotator's, both boxes' parks one place on a composite:
-                # runtime/composite.py rule 10, review 86)
-                self._turn_place = self._place()
+                # place is the rotator's, one turn one place however often begun, both boxes'
+                # parks one place on a composite: mailbox.py rule 10b, runtime/composite.py
+                # rule 10, reviews 86 and 91)
+                self._turn_place = self._place(self._own_turn(proposal.target.source, now))
                 self._taking = max(self._taking, self._turn_place)
+
+    def _own_turn(self, source: Source, now: float) -> Hashable:
+        """mailbox.py rule 10b: what names a turn of the bridge's own as it begins: the storm's
+        park by its storm (one turn, however often begun in it: again once the controller
+        answers, wind.py rule 7, or by a composite's other box plugged back, review 91),
+        auto-park's by the moment it began (a composite's two boxes park together, in one
+        serve: runtime/composite.py rule 10; the next spell's park is another turn)."""
+        if source is Source.WIND:
+            return (source, self.wind.storms)
+        return (source, now)
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported (``_failed``); nothing else

@@ -211,10 +211,15 @@ class WindPark:
         halted: bool = False,
         arrived: bool = False,
         replayed: bool = False,
+        storms: int = 0,
     ) -> None:
         self._rig, self._cfg = rig, rig.wind or WindConfig(0.0, 0.0, 0.0, (0.0, None), 0.0)
         self.on = rig.wind is not None
         self.storm = storm
+        # the storms begun so far (a storm kept across a restart counted as none): what names
+        # this storm's park (session.py ``_own_turn``), one turn however often it is begun
+        # (mailbox.py rule 10b); a reset keeps it
+        self.storms = storms
         self._why = "wind above the park level"  # rule 1's reason, once a reading says it
         self._speed: float | None = None
         self._last_t: float | None = None  # when the last reading came
@@ -294,6 +299,7 @@ class WindPark:
         if self.storm and (replayed or not self._replayed):
             return  # (but a live reading in a storm known only from a replay: rule 6)
         if not self.storm:
+            self.storms += 1  # (mailbox.py rule 10b: a new storm's park is a new turn)
             self.storm, self._halted, self._arrived = True, False, False
             self._refused, self._unjudged = None, False  # (rule 5: a new storm's park anew)
             self._here, self._wire, self._off = False, None, None  # (rule 10 likewise)

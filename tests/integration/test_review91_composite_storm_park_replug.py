@@ -13,8 +13,6 @@ from __future__ import annotations
 import json
 from typing import Any
 
-import pytest
-
 from tests.integration.test_composite_bridge import composite
 from tests.support.mqtt import Message
 from tests.support.rig import Rig
@@ -34,11 +32,6 @@ def doc(m: Message) -> dict[str, Any]:
     return said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 91: a storm's one park of a two-box rotator shows two places in "
-    "order.turn when the elevation box is plugged back mid-storm",
-)
 def test_a_storm_park_finished_after_a_box_replug_keeps_one_place(rig: Rig) -> None:
     _, el = composite(rig)
     rig.rotators[-1].update(STORM)

@@ -116,6 +116,7 @@ def _reset(s: RotatorSession, now: float) -> None:
         halted=w.park_halted,
         arrived=w.park_arrived,
         replayed=w.park_replayed,
+        storms=w.storms,  # (the same storm's park: mailbox.py rule 10b)
     )
 
 
