@@ -181,14 +181,15 @@ Rules:
    before, and a remote's old held STOP, read as asked against the park, went again and
    stopped it short: a storm's park so left the antenna up in the wind; remote.py rule 10).
    Both boxes' parks of one turn are the rotator's one turn and take one place (mailbox.py
-   rule 10b's ``own_place``, the turn named by the session: the storm's park by its storm,
-   auto-park's by its moment, the quiet spell shared: rule 7): each drawing its own, the
-   status showed one box's place, then the other's, one park at two places (review 86), and
-   so did one storm's park whose second box began it in a later serve, plugged back
-   mid-storm, or a box's park owed again once the box answers (wind.py rule 7; review 91:
-   places 2 and 3, no command between). A motion command or a halt put since makes a park
-   begun after it a turn of its own, at a later place. The merged order is the newest of
-   each (rule 3), so it never goes back.
+   rule 10b's ``own_place``, the turn named by the session: the storm's park by the newest
+   storm either box saw begin, ``rotators_turn``; auto-park's by its moment, the quiet spell
+   shared: rule 7): each drawing its own, the status showed one box's place, then the
+   other's, one park at two places (review 86), and so did one storm's park whose second box
+   began it in a later serve, plugged back mid-storm, or a box's park owed again once the
+   box answers (wind.py rule 7; review 91: places 2 and 3, no command between). A motion
+   command or a halt put since, or a new storm, makes a park begun after it a turn of its
+   own, at a later place. The merged order is the newest of each (rule 3), so it never goes
+   back.
 """
 
 from __future__ import annotations
@@ -224,7 +225,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.parts import RefusedHere, Unjudged
-from bridge.session.session import DROPS, RotatorSession
+from bridge.session.session import DROPS, OwnTurn, RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
 
@@ -234,6 +235,7 @@ __all__ = [
     "joined",
     "judged_whole",
     "merge",
+    "rotators_turn",
     "share_quiet",
     "split",
 ]
@@ -331,6 +333,17 @@ def share_quiet(sessions: list[RotatorSession], now: float) -> None:
     for s in sessions:
         if s.autopark.since < latest:
             s.autopark.told(latest)
+
+
+def rotators_turn(turn: OwnTurn, sessions: list[RotatorSession]) -> OwnTurn:
+    """Rule 10: a box's own turn as the rotator's: a storm's park is the park of the newest
+    storm either box saw begin. A box that does not answer keeps the storm it had (its calm is
+    judged at its steps: session/wind.py rule 2) while the other, answering, sees that storm
+    end and the next begin; plugged back in the next, it parks for the storm the rotator is
+    in, at that park's place, not at a place of its own."""
+    if turn.source is not Source.WIND:
+        return turn
+    return turn._replace(of=max(s.wind.storms for s in sessions))
 
 
 def _order(az: Order | None, el: Order | None) -> Order | None:
@@ -705,7 +718,7 @@ class CompositeWorker:
                 port_opener=port_opener,
                 sky=sky,
                 on_audit=partial(self._audit, axis),
-                place=mailbox.own_place,  # rule 10: the rotator's places, not the box's own
+                place=self._place,  # rule 10: the rotator's places, not the box's own
             )
         sessions = {axis: box.session for axis, box in self.boxes.items()}
         joined(self.composition, sessions)
@@ -764,6 +777,11 @@ class CompositeWorker:
         self._audited[axis] = (audit, now)
         if self._on_audit is not None:
             self._on_audit(audit)
+
+    def _place(self, turn: OwnTurn) -> int:
+        """Rule 10: the place of a turn of the bridge's own a box begins: the rotator's."""
+        sessions = [box.session for box in self.boxes.values()]
+        return self._mailbox.own_place(rotators_turn(turn, sessions))
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)

@@ -74,7 +74,7 @@ import os
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -97,7 +97,7 @@ from bridge.runtime.port import (
 from bridge.session.actions import Action, Ask, Audit, Publish, Report, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.mailbox import Mailbox
-from bridge.session.session import RotatorSession
+from bridge.session.session import OwnTurn, RotatorSession
 from bridge.sky.worker import Answer, SkyWorker
 
 __all__ = ["Worker", "WorkerConfig"]
@@ -137,7 +137,7 @@ class Worker:
         sky: SkyWorker | None = None,
         port_watch: PortWatch | None = None,
         on_audit: Callable[[Audit], None] | None = None,
-        place: Callable[[Hashable], int] | None = None,  # the bridge's own turns' places:
+        place: Callable[[OwnTurn], int] | None = None,  # the bridge's own turns' places:
         # ``mailbox``'s unless given (a composite's box: the rotator's, runtime/composite.py
         # rule 10; mailbox.py rule 10b)
     ) -> None:

@@ -224,7 +224,7 @@ from __future__ import annotations
 import logging
 import math
 import secrets
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 from typing import NamedTuple, TypeVar
@@ -264,11 +264,23 @@ from bridge.session.tracking import Track
 from bridge.session.wind import WindPark
 from bridge.sky.worker import Answer
 
-__all__ = ["DROPS", "Action", "Publish", "Report", "RotatorSession", "Write"]
+__all__ = ["DROPS", "Action", "OwnTurn", "Publish", "Report", "RotatorSession", "Write"]
 
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
+
+
+class OwnTurn(NamedTuple):
+    """What names a turn of the bridge's own as it begins (``_own_turn``; mailbox.py rule
+    10b): its source, and ``of``: the storm's park the storm's number (wind.py ``storms``; a
+    rotator of two boxes: the newest storm either box saw begin, runtime/composite.py rule
+    10), auto-park's park the moment it began."""
+
+    source: Source
+    of: float
+
+
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 DROPPED = "target dropped"  # how a target dropped before it went out is said (rules 4, 23)
 PART_ERROR_LOG_S = 10.0  # rule 22: a part's error in the log at most this often (a count)
@@ -319,7 +331,7 @@ class RotatorSession:
         storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
-        place: Callable[[Hashable], int] | None = None,  # mailbox.py rule 10b's
+        place: Callable[[OwnTurn], int] | None = None,  # mailbox.py rule 10b's
         # ``own_place``: the place in the order of commands of a turn the bridge begins itself
         # (``Order``), named (``_own_turn``), from the counter the rotator's commands advance
         # (a composite's box: the rotator's mailbox's, not the box's own: runtime/composite.py
@@ -1344,15 +1356,15 @@ class RotatorSession:
                 self._turn_place = self._place(self._own_turn(proposal.target.source, now))
                 self._taking = max(self._taking, self._turn_place)
 
-    def _own_turn(self, source: Source, now: float) -> Hashable:
+    def _own_turn(self, source: Source, now: float) -> OwnTurn:
         """mailbox.py rule 10b: what names a turn of the bridge's own as it begins: the storm's
         park by its storm (one turn, however often begun in it: again once the controller
         answers, wind.py rule 7, or by a composite's other box plugged back, review 91),
         auto-park's by the moment it began (a composite's two boxes park together, in one
         serve: runtime/composite.py rule 10; the next spell's park is another turn)."""
         if source is Source.WIND:
-            return (source, self.wind.storms)
-        return (source, now)
+            return OwnTurn(source, self.wind.storms)
+        return OwnTurn(source, now)
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported (``_failed``); nothing else

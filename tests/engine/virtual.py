@@ -47,7 +47,7 @@ from bridge.session.actions import Ask, Audit
 from bridge.session.config import FollowConfig, WorkerConfig
 from bridge.session.follow import Follow, Heard
 from bridge.session.mailbox import Mailbox
-from bridge.session.session import Action, Publish, Report, RotatorSession, Write
+from bridge.session.session import Action, OwnTurn, Publish, Report, RotatorSession, Write
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
@@ -98,6 +98,10 @@ class VirtualRotator:
         sky_delay_s: float = 0.0,
         follow: FollowConfig | None = None,
         cfg: WorkerConfig | None = None,  # one box of a composite rotator (virtual_composite.py)
+        place: Callable[[OwnTurn], int] | None = None,  # the own turns' places (the box's:
+        # the composite's mailbox's, as runtime/composite.py rule 10 has it)
+        own_places: bool = False,  # the mailbox's own_place, as runtime/worker.py gives it
+        # (mailbox.py rule 10b; off by default: a session copied whole would copy the mailbox)
     ) -> None:
         self.now = start_s
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
@@ -107,8 +111,14 @@ class VirtualRotator:
         self.settings = rotator
         self.cfg = cfg or worker_config(rotator, sky, follow)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
-        self.session = RotatorSession(self.cfg, options=options, locked=locked, stop_owed=stop_owed)
         self.mailbox = Mailbox()
+        self.session = RotatorSession(
+            self.cfg,
+            options=options,
+            locked=locked,
+            stop_owed=stop_owed,
+            place=self.mailbox.own_place if own_places else place,
+        )
         self.connected = False
         self.writes: list[Sent] = []
         self.statuses: list[tuple[float, RotatorStatus]] = []

@@ -24,10 +24,12 @@ from bridge.runtime.composite import (
     Siblings,
     joined,
     judged_whole,
+    rotators_turn,
     share_quiet,
     split,
 )
 from bridge.session.mailbox import Batch, Mailbox
+from bridge.session.session import OwnTurn
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
@@ -69,12 +71,18 @@ class VirtualComposite:
                 sky=sky,
                 wall_epoch_s=wall_epoch_s,
                 emulator=(emulators or {}).get(axis),
+                place=self._place,  # (composite.py rule 10: the rotator's places)
             )
             self._seen[axis] = 0
         sessions = {axis: box.session for axis, box in self.boxes.items()}
         joined(self.composition, sessions)
         judged_whole(self.cfg, sessions)  # (as CompositeWorker: composite.py rule 7)
         self._absorb()
+
+    def _place(self, turn: OwnTurn) -> int:
+        """As CompositeWorker's (composite.py rule 10)."""
+        sessions = [box.session for box in self.boxes.values()]
+        return self.mailbox.own_place(rotators_turn(turn, sessions))
 
     @property
     def az(self) -> VirtualRotator:
