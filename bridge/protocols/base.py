@@ -70,6 +70,22 @@ Rules:
    13-byte frames; the fact sheet's simulator drops a frame short of them 0.1 s after its
    last byte, and no source says what the box does), the SatEL and the Prosistel (STX
    framed): none of them looked at closely here.
+10. A reading a little past an end of its axis's range is that end (``read_in_range``): a
+   healthy box at rest at an end may say a little more than it, and a reading spoiled there
+   is spoiled at every poll, the rotator offline for good and no target ever turning it back
+   (attack 30: a GS-232 450-degree model at 451, a G-5500 at elevation 181, a Prosistel at
+   361, 091, 3601 or 0901, an RC2800 at -0.2 or 360.2; review 39's Easycomm at ``AZ-0.1``;
+   review 49's RT-21 at 181, axes.py rule 2). How far is the model's read slack, at least its
+   ``noise_deg`` (how far a still rotor's readings wander: resting at an end, that far past
+   it): POT_SLACK_DEG for a potentiometer read in whole degrees (a GS-232, a Prosistel D: set
+   by hand at the box, a degree or two off with the weather, a coast past the end; K3NG's own
+   forms say up to 3 below the horizon), TENTHS_SLACK_DEG for a sensor read in tenths (an
+   Easycomm box, a Combi-Track, an RC2800: its noise and a PID's dead zone, and under a
+   degree, so that a reading a whole degree past, ``A P= 361.0``, is still told). A one-axis
+   box turning a composite's elevation is read with a pot's slack past the elevation's ends
+   whatever its resolution (axes.py rule 2, EL_READ_SLACK_DEG: an RT-21's pot a degree off,
+   review 49). Past the slack a reading is no bearing the box can have: spoiled (or a MISFIT
+   where it says the box is set up otherwise, gs232.py rule 2; axes.py rule 2), as before.
 """
 
 from __future__ import annotations
@@ -445,6 +461,20 @@ class OneQuery(Plain, LateAnswers):
         if self._query_open:
             self._noisy = True
         out.append(JunkReply(raw, reason, why))
+
+
+POT_SLACK_DEG = 3  # rule 10: a potentiometer read in whole degrees, set by hand at the box
+TENTHS_SLACK_DEG = 0.5  # rule 10: a sensor read in tenths; under a whole degree
+
+
+def read_in_range(value: float, low: float, high: float, slack: float) -> float | None:
+    """Rule 10: a reading ``value`` of an axis whose range is ``low``..``high``: as it is within
+    it, the end it passed by at most ``slack``, None (no reading) past that."""
+    if low - slack <= value < low:
+        return float(low)
+    if high < value <= high + slack:
+        return float(high)
+    return float(value) if low <= value <= high else None
 
 
 def half_up(value_deg: float, per_deg: int) -> int:

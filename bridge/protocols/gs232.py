@@ -26,9 +26,13 @@ Rules:
    at every reading); blank lines (the CR answering ``M W S``, K3NG's blank lines after ``W``)
    are the controller's chatter, never a reading.
 2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
-   while a query is open, and only with values in range (azimuth 0..450, elevation 0..180;
-   K3NG's forms of an elevation up to 3 degrees below 0, ``EL=00-1`` in the B form and
-   ``-0000`` or ``-000-1`` in the A form, read as 0: the horizon; review 39).
+   while a query is open, and only with values in range (azimuth 0..450, elevation 0..180),
+   or past an end by at most READ_SLACK_DEG, read as that end (base.py rule 10: a pot read in
+   whole degrees, noise_deg 2, set by hand at the box): K3NG's forms of an elevation up to 3
+   degrees below 0, ``EL=00-1`` in the B form and ``-0000`` or ``-000-1`` in the A form, read
+   as 0, the horizon (review 39); ``EL=181`` as 180, a G-5500 flipped up to its end (attack
+   30); ``AZ=451`` as 450 on a 450-degree model at its end (attack 30). Further past is
+   "position out of range", spoiled.
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
@@ -36,8 +40,8 @@ Rules:
    to the other range, P45 (a 450-degree rotor's G-800DXA, G-1000DXA, G-2800DXA): MISFIT,
    never a reading, and its words (told on R/error once such replies persist: a lone one is
    doubted as line noise, controller.py rule 6) name the model to configure or the box's
-   P36. Up to AZ_DRIFT_DEG past it is a pot calibrated a little short of its end, read as the
-   end, as K3NG's elevation below the horizon is read as the horizon. (Attack 12: ``AZ=400``
+   P36. Up to READ_SLACK_DEG past it is a pot calibrated a little short of its end, read as
+   the end, as K3NG's elevation below the horizon is read as the horizon. (Attack 12: ``AZ=400``
    was read on a gs232b-az as 40, nothing said, and a target of 50 went out as ``M050``: the
    rotor ran 350 degrees the long way round.) A 450-degree model whose box says only 0..360
    (K3NG's, which reports its azimuth modulo 360) reads as ever. A box whose azimuth is never
@@ -81,6 +85,7 @@ from typing import Any
 
 from bridge.core.model import SettingValue
 from bridge.protocols.base import (
+    POT_SLACK_DEG,
     HalfLine,
     HamlibRotType,
     JunkReason,
@@ -94,11 +99,12 @@ from bridge.protocols.base import (
     Setting,
     SettingKind,
     half_up,
+    read_in_range,
 )
 
 AZ_MAX_DEG = 450  # the widest range the commands carry (the 450-degree models)
 AZ_SCALE_DEG = 360  # the 360-degree models' scale: the box at P36
-AZ_DRIFT_DEG = 3  # rule 2: past the top of the scale by a pot's calibration, read as the top
+READ_SLACK_DEG = POT_SLACK_DEG  # rule 2 (base.py rule 10): past an end by a pot's calibration
 EL_MAX_DEG = 180
 REFUSED = b"?>"
 AXIS_STOPS = {"az": b"A\r", "el": b"E\r"}
@@ -239,19 +245,22 @@ class Gs232Codec(OneQuery):
             self._junk(raw, JunkReason.NOISE, why, out)
             return
         az, el = int(own.group(2)), own.group(3)
-        # K3NG's "00-1" (and the A form's "-0000"): the antenna at the horizon with its pot a
-        # degree off reads as the horizon
-        el_deg = None if el is None else max(0, int(el.lstrip(b"0") or b"0"))
-        if az > AZ_MAX_DEG or (el_deg is not None and el_deg > EL_MAX_DEG):
+        # rule 2: K3NG's "00-1" (and the A form's "-0000"), the antenna at the horizon with its
+        # pot a degree off, reads as the horizon, as 181 at the top reads as 180
+        el_deg = None if el is None else int(el.lstrip(b"0") or b"0")
+        el_read = None if el_deg is None else read_in_range(el_deg, 0, EL_MAX_DEG, READ_SLACK_DEG)
+        if read_in_range(az, 0, AZ_MAX_DEG, READ_SLACK_DEG) is None or (
+            el_deg is not None and el_read is None
+        ):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
-        if self.elevation and el_deg is None:
+        if self.elevation and el_read is None:
             self._junk(raw, JunkReason.SPOILED, "no elevation in the reply", out)
             return
-        if az > self.az_top_deg + AZ_DRIFT_DEG:  # rule 2: the box set to the other range
+        az_read = read_in_range(az, 0, self.az_top_deg, READ_SLACK_DEG)
+        if az_read is None:  # rule 2: the box set to the other range
             self._junk(raw, JunkReason.MISFIT, self._misfit(az), out)
             return
-        az = min(az, self.az_top_deg)  # (a pot a little past its end: the end)
         clean = not own.group("pre").strip(b"\r\n ")
         if clean and self._late_answer(raw, out):  # rule 5
             return
@@ -262,10 +271,10 @@ class Gs232Codec(OneQuery):
         if not clean or self._noisy:
             out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
             return
-        if self.elevation and el_deg is not None:
-            out.append(PositionReply(float(az), float(el_deg)))
+        if self.elevation and el_read is not None:
+            out.append(PositionReply(float(az_read), float(el_read)))
         else:
-            out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
+            out.append(PositionReply(float(az_read)))  # an azimuth box that says EL: dropped
 
     def azimuth_unturned(self) -> None:
         """Rule 2: the box's azimuth is never turned (a composite's elevation box): its scale

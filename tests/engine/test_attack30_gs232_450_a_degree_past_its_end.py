@@ -43,11 +43,6 @@ def read_past_the_end(said: bytes, read: bytes) -> Callable[[bytes, float], byte
     return rewrite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a GS-232 450-degree model whose pot reads 451 at its end goes offline "
-    "('answers only garbled replies') for good and is never turned back",
-)
 @pytest.mark.parametrize(
     ("model", "said", "read"),
     [

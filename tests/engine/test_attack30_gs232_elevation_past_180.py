@@ -43,11 +43,6 @@ def read_past_the_end(said: bytes, read: bytes) -> Callable[[bytes, float], byte
     return rewrite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a GS-232 whose elevation reads 181 at its 180 end goes offline "
-    "('answers only garbled replies') for good and is never brought down",
-)
 @pytest.mark.parametrize(
     ("model", "said", "read"),
     [("gs232b", b"EL=180", b"EL=181"), ("gs232a", b"+0180\r", b"+0181\r")],

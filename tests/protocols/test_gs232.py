@@ -162,7 +162,7 @@ def test_the_other_forms_reply_names_the_likely_mistake() -> None:
 
 
 def test_out_of_range_and_half_replies_are_no_readings() -> None:
-    for reply in (b"AZ=451  EL=000\r\n", b"AZ=100  EL=181\r\n", b"AZ=100\r\n"):
+    for reply in (b"AZ=454  EL=000\r\n", b"AZ=100  EL=184\r\n", b"AZ=100\r\n"):
         codec = asked("b")
         replies = codec.feed(reply)
         assert positions(replies) == [], reply
