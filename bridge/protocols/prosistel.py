@@ -39,12 +39,19 @@ Rules:
    line with no STX anywhere later. A position is ``STX u,?,n,s`` with n one to four digits and
    s a status letter; it is read only while a query is open and for a unit this model has, and
    the query is answered once every unit has said its position (two lines on the Combi-Track, in
-   any order). Values beyond the unit's range (azimuth 0..360, elevation 0..90) are spoiled.
+   any order). A value past the top of the unit's range (azimuth 360, elevation 90) by at most
+   its family's read slack is read as that end (base.py rule 10): a D's, POT_SLACK_DEG, a pot
+   read in whole degrees (noise_deg 1; ``A,?,361`` at north, ``E,?,091`` at the zenith, as
+   axes.py rule 2 reads a one-axis elevation box past its end); a Combi-Track's,
+   TENTHS_SLACK_DEG, an encoder read in tenths (noise_deg 0.2; ``A,?,3601``, ``B,?,0901``)
+   (attack 30: spoiled there, a box at rest at its end went offline for good, and one
+   wandering a tenth either side of it was told as junk every 30 s). Further past is
+   spoiled.
 2. A position nobody asked for (the box's continuous output, or a unit's second line in one
    exchange) is the box's own chatter: harmless, never a reading, never a spoiler; but only a
-   position this box can say (its unit, its width, in range): any other is told, asked for or
-   not (an attack pass: ``A,?,361,B`` or a Combi-Track's ``B,?,0950,B`` was dropped and asked
-   again, and nobody was told). The bridge
+   position this box can say (its unit, its width, in range or within rule 1's slack): any
+   other is told, asked for or not (an attack pass: ``A,?,365,B`` or a Combi-Track's
+   ``B,?,0950,B`` was dropped and asked again, and nobody was told). The bridge
    turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
 3. The answers to ``G`` and ``S`` are chatter too, whatever their payload; an answer that says
    ``E,<code>`` is the box's refusal or error (SPOILED, its code in the detail, not harmless).
@@ -89,6 +96,8 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from bridge.protocols.base import (
+    POT_SLACK_DEG,
+    TENTHS_SLACK_DEG,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -98,6 +107,7 @@ from bridge.protocols.base import (
     Reply,
     RetargetPolicy,
     half_up,
+    read_in_range,
 )
 
 STX = b"\x02"
@@ -118,22 +128,25 @@ _TAIL = re.compile(rb"(?:(?:(?:[A-Z]?,)?\?)?,\d{1,4}|\d{0,4}),[A-Z]\r|[A-Z]\r")
 @dataclass(frozen=True)
 class Family:
     """What a box of one family is on the wire: its units (the bridge's bearing first), the top
-    of each unit's range in degrees, its scale (1: degrees, 10: tenths), its hard stop and how
-    many digits its positions have (rule 6)."""
+    of each unit's range in degrees, its scale (1: degrees, 10: tenths), its hard stop, how
+    many digits its positions have (rule 6) and how far past a top a reading is that top
+    (rule 1, base.py rule 10)."""
 
     units: tuple[str, ...]
     tops: tuple[int, ...]
     scale: int
     hard_stop: int
     digits: range
+    slack: float
 
 
-D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999, range(1, 4))
+# rule 1: a D reads a pot in whole degrees, a Combi-Track an encoder in tenths
+D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999, range(1, 4), POT_SLACK_DEG)
 # a D on an elevation rotor: its one unit, E, is the rotator's bearing (0..90)
-D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999, range(1, 4))
+D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999, range(1, 4), POT_SLACK_DEG)
 # ... and one set up as an azimuth box (Hamlib's "D elevation CBOX az"): the same, as unit A
-D_ELEVATION_UNIT_A = Family(("A",), (EL_MAX_DEG,), 1, 999, range(1, 4))
-COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999, range(4, 5))
+D_ELEVATION_UNIT_A = Family(("A",), (EL_MAX_DEG,), 1, 999, range(1, 4), POT_SLACK_DEG)
+COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999, range(4, 5), TENTHS_SLACK_DEG)
 
 
 def _value(deg: float, top: int, scale: int, axis: str) -> int:
@@ -267,16 +280,23 @@ class ProsistelCodec(OneQuery):
         if len(digits) not in self.family.digits:  # rule 6
             form = "tenths (a Combi-Track)" if len(digits) == 4 else "whole degrees (a D)"
             return JunkReason.NOISE, f"a position in {form}: is the model right?"
-        if int(digits) / self.family.scale > self.family.tops[units.index(unit)]:
+        if self._read(unit, digits) is None:  # rule 1
             return JunkReason.SPOILED, "position out of range"
         return None
+
+    def _read(self, unit: str, digits: bytes) -> float | None:
+        """Rule 1: the bearing ``unit`` says in ``digits``, a little past its top read as the
+        top; None past its slack."""
+        top = self.family.tops[self.family.units.index(unit)]
+        return read_in_range(int(digits) / self.family.scale, 0, top, self.family.slack)
 
     def _position(self, frame: bytes, m: re.Match[bytes], clean: bool, out: list[Reply]) -> None:
         units, unit, digits = self.family.units, m["unit"].decode(), m["value"]
         if (misfit := self._misfit(unit, digits)) is not None:
             self._junk(frame, *misfit, out)
             return
-        deg = int(digits) / self.family.scale
+        deg = self._read(unit, digits)
+        assert deg is not None  # (_misfit said so)
         if clean and self._late_answer(frame, out):  # rule 7
             return
         if not self._query_open or unit in self._said:  # rule 2

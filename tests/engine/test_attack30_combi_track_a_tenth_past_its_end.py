@@ -72,11 +72,6 @@ def at_the_end(rig: Callable[..., VirtualRotator], target: tuple[float, float]) 
     return v
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a Combi-Track whose encoder reads a tenth past 360 or 90 goes offline "
-    "('answers only garbled replies') for good and is never turned back",
-)
 @pytest.mark.parametrize(("unit", "said", "target", "back"), CASES)
 def test_a_combi_track_a_tenth_past_its_end_is_still_turned_back(
     rig: Callable[..., VirtualRotator],
@@ -96,11 +91,6 @@ def test_a_combi_track_a_tenth_past_its_end_is_still_turned_back(
     assert v.status.available, told
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a Combi-Track at rest at 360 or 90 whose encoder wanders a tenth either "
-    "side is told on R/error as 'no valid reply' every 30 s",
-)
 @pytest.mark.parametrize(("unit", "said", "target", "back"), CASES)
 def test_a_combi_track_wandering_a_tenth_at_its_end_is_not_told_as_junk(
     rig: Callable[..., VirtualRotator],
@@ -144,11 +134,6 @@ def replaced(said: bytes, read: bytes) -> Callable[[bytes, float], bytes]:
     return rewrite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a Prosistel D whose pot reads a degree past 360 (or 90 on an elevation "
-    "D) goes offline ('answers only garbled replies') for good and is never turned back",
-)
 @pytest.mark.parametrize(("model", "emulator", "said", "read", "end", "back"), D_CASES)
 def test_a_prosistel_d_a_degree_past_its_end_is_still_turned_back(
     rig: Callable[..., VirtualRotator],

@@ -47,11 +47,6 @@ def read_past_the_end(unit: bytes) -> Callable[[bytes, float], bytes]:
     return rewrite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: a Prosistel D elevation box reading 91 (a degree past its end) takes "
-    "the composite offline for good and is never turned back down",
-)
 @pytest.mark.parametrize(("model", "unit"), [("prosistel-el", b"E"), ("prosistel-el-a", b"A")])
 def test_a_prosistel_elevation_box_a_degree_past_its_end_is_still_turned_back(
     model: str, unit: bytes

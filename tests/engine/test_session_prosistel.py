@@ -194,7 +194,7 @@ def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> N
 @pytest.mark.parametrize(
     ("model", "glitch"),
     [
-        ("prosistel", b"\x02A,?,361,B\r"),  # out of range
+        ("prosistel", b"\x02A,?,364,B\r"),  # out of range, past its slack (rule 1)
         ("prosistel", b"\x02A,?,0450,B\r"),  # a Combi-Track's width
         ("prosistel", b"\x02E,?,045,B\r"),  # a unit this box has not got
         ("prosistel-combi", b"\x02B,?,0950,B\r"),  # an elevation above 90

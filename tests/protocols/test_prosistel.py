@@ -71,7 +71,7 @@ def test_a_d_on_an_elevation_rotor_speaks_as_unit_e_within_0_to_90() -> None:
     assert codec.encode_connect(0.0) == [b"\x02ES\r"]
     with pytest.raises(ValueError, match="bearing 90.6 outside 0..90"):
         codec.encode_target(90.6)
-    got = codec.feed(b"\x02E,?,091,B\r")
+    got = codec.feed(b"\x02E,?,094,B\r")  # past its 90 by more than the slack (rule 1)
     assert positions(got) == [] and junk(got)[0].reason is JunkReason.SPOILED
     got = asked(D_ELEVATION).feed(b"\x02A,?,045,B\r")  # an azimuth box on the line
     assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
@@ -88,7 +88,7 @@ def test_a_d_on_an_elevation_rotor_set_up_as_unit_a_speaks_as_unit_a_within_0_to
         with pytest.raises(ValueError, match=f"bearing {deg:g} outside 0..90"):
             codec.encode_target(deg)
     assert codec.wire_target(12.5) == (13.0, None)
-    got = asked(D_ELEVATION_UNIT_A).feed(b"\x02A,?,091,B\r")  # above an elevation's 90
+    got = asked(D_ELEVATION_UNIT_A).feed(b"\x02A,?,094,B\r")  # above an elevation's 93
     assert positions(got) == [] and junk(got)[0].reason is JunkReason.SPOILED
     got = asked(D_ELEVATION_UNIT_A).feed(b"\x02E,?,045,B\r")  # a unit-E box on the line
     assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
@@ -152,12 +152,12 @@ def test_positions_nobody_asked_for_are_harmless_and_never_read() -> None:
 def test_a_position_the_box_cannot_say_is_never_harmless() -> None:
     """Rule 2: only the box's own positions are chatter (its unit, its width, in range)."""
     for family, line in (
-        (D, b"\x02A,?,361,B\r"),
+        (D, b"\x02A,?,364,B\r"),
         (D, b"\x02A,?,0200,B\r"),
         (D, b"\x02B,?,045,B\r"),
-        (COMBI, b"\x02B,?,0901,B\r"),
+        (COMBI, b"\x02B,?,0906,B\r"),
         (COMBI, b"\x02A,?,200,B\r"),
-        (D_ELEVATION, b"\x02E,?,091,B\r"),
+        (D_ELEVATION, b"\x02E,?,094,B\r"),
     ):
         codec = ProsistelCodec(family)
         assert not codec.harmless(line) and positions(codec.feed(line)) == [], line
@@ -204,10 +204,10 @@ def test_an_error_to_a_ds_g_is_its_refusal_and_to_a_combi_tracks_unit_is_not() -
 
 
 def test_out_of_range_and_torn_replies_are_no_readings() -> None:
-    for reply in (b"\x02A,?,361,B\r", b"\x02A,?,12345,B\r", b"\x02A,?,12,\r", b"\x02A?\r"):
+    for reply in (b"\x02A,?,364,B\r", b"\x02A,?,12345,B\r", b"\x02A,?,12,\r", b"\x02A?\r"):
         got = asked().feed(reply)
         assert positions(got) == [] and junk(got), reply
-    got = asked(COMBI).feed(b"\x02A,?,0100,R\r\x02B,?,0901,R\r")  # elevation above 90
+    got = asked(COMBI).feed(b"\x02A,?,0100,R\r\x02B,?,0906,R\r")  # elevation above 90.5
     assert positions(got) == [] and junk(got)[-1].reason is JunkReason.SPOILED
 
 
