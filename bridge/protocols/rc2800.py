@@ -53,8 +53,12 @@ Rules:
    elevation line, if it comes, is read as it comes and carried no further (else each poll of
    a clean line after it was read at its azimuth with the poll before's elevation, for good);
    a line of an exchange that had line noise is never carried (it may be a mangled one).
-3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading, and never
-   harmless, asked for or not (an attack pass: ``A P= 361.0`` was dropped and nobody told).
+3. A value past an end of its axis's range (azimuth 0..360, elevation -90..180) by at most
+   READ_SLACK_DEG is read as that end (base.py rule 10: a pot read in tenths, noise_deg 0.5;
+   attack 30: a rotor at rest at north saying ``A P=  -0.2`` or ``A P= 360.2`` was spoiled at
+   every poll, offline for good, as an Easycomm box's ``AZ-0.1`` was before review 39). Further
+   past it is spoiled and no reading, and never harmless, asked for or not (an attack pass:
+   ``A P= 361.0`` was dropped and nobody told).
 4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent. A new bearing while turning goes straight out.
 5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
@@ -141,6 +145,7 @@ from __future__ import annotations
 import re
 
 from bridge.protocols.base import (
+    TENTHS_SLACK_DEG,
     Codec,
     HalfLine,
     HamlibRotType,
@@ -152,12 +157,14 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     RetargetPolicy,
+    read_in_range,
     tenths_pair,
 )
 
 AZ_MAX_DEG = 360
 EL_MAX_DEG = 180
 EL_READ_MIN_DEG = -90  # a pot a little below the horizon is still a reading
+READ_SLACK_DEG = TENTHS_SLACK_DEG  # rule 3 (base.py rule 10): a pot read in tenths
 AXIS_GAP_S = 0.2  # between commands to the two axes (Hamlib's rc2800.c waits as long)
 _MAX_LINE = 64
 _POSITION = re.compile(
@@ -350,8 +357,8 @@ class Rc2800Codec(Plain, LateAnswers):
         if m is None:
             self._junk(raw, JunkReason.NOISE, "not a reply line", out)
             return
-        axis, value = m.group("axis")[0], float(m.group("deg"))
-        if not _in_range(raw):
+        axis, value = m.group("axis")[0], _read(m)
+        if value is None:  # rule 3
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
         if axis not in self._axes:
@@ -404,12 +411,17 @@ class Rc2800Codec(Plain, LateAnswers):
 
 
 def _in_range(line: bytes) -> bool:
-    """Rules 1 and 3: ``line`` is a position line whose value is in its axis's range."""
+    """Rules 1 and 3: ``line`` is a position line whose value is in its axis's range (or
+    within its slack)."""
     m = _POSITION.fullmatch(line)
-    if m is None:
-        return False
+    return m is not None and _read(m) is not None
+
+
+def _read(m: re.Match[bytes]) -> float | None:
+    """Rule 3: the value of position line ``m``, a little past an end read as the end; None
+    past the slack."""
     low, top = (0, AZ_MAX_DEG) if m.group("axis") == b"A" else (EL_READ_MIN_DEG, EL_MAX_DEG)
-    return low <= float(m.group("deg")) <= top
+    return read_in_range(float(m.group("deg")), low, top, READ_SLACK_DEG)
 
 
 def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:

@@ -39,11 +39,6 @@ def read_past_the_end(said: bytes, read: bytes) -> Callable[[bytes, float], byte
     return rewrite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 30: an RC2800 parked at north whose pot reads -0.2 or 360.2 goes offline "
-    "('answers only garbled replies') for good and is never turned again",
-)
 @pytest.mark.parametrize(
     ("start", "end", "said", "read", "back"),
     [

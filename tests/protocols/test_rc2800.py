@@ -209,7 +209,7 @@ def test_the_tail_of_a_line_the_ports_opening_cut_is_harmless_only_as_the_first_
 def test_a_position_out_of_range_is_never_harmless() -> None:
     """Rule 3: a position line is chatter only in its axis's range."""
     codec = Rc2800Codec()
-    for line in (b"A P= 361.0 S=9 ST\r", b"A P= -0.5\r", b"E P= 180.1\r", b"E=-90.5\r"):
+    for line in (b"A P= 361.0 S=9 ST\r", b"A P= -0.6\r", b"E P= 180.6\r", b"E=-90.6\r"):
         assert not codec.harmless(line), line
     assert codec.harmless(b"A P= 360.0 S=9 ST\rE P= -90.0 S=9 ST\rE=180.0\r")
 
