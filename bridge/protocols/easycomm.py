@@ -34,10 +34,12 @@ Rules:
    or ``AZ<n> EL<n>`` (spaces optional, and only spaces: a tab or a form feed is junk, rule 3;
    decimals optional, a sign allowed, radio words after ignored). The query is answered once
    every axis the model reads has a value, whether they came on one line or two; an azimuth
-   model ignores an elevation on the line. Values outside azimuth 0..360 or elevation -90..180
-   are spoiled, but for an azimuth within half a degree beyond either end, read as that end: a
-   SatNOGS controller's encoder is zeroed at its home switch and its PID rests anywhere within
-   0.2 of the target, so turned to north it may say ``AZ-0.1`` (review 39; Hamlib reads it).
+   model ignores an elevation on the line. A value past an end of its axis's range (azimuth
+   0..360, elevation -90..180) by at most READ_SLACK_DEG, half a degree, is read as that end
+   (base.py rule 10: a sensor read in tenths, noise_deg 0.1): a SatNOGS controller's encoder is
+   zeroed at its home switch and its PID rests anywhere within 0.2 of the target, so turned to
+   north it may say ``AZ-0.1`` (review 39; Hamlib reads it), and flipped up to 180,
+   ``EL180.2``. Further past is spoiled.
 3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
    UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED. An
    azimuth model's elevation line (harmless, rule 2) with junk in front is noise, not
@@ -127,6 +129,7 @@ import re
 from typing import Any
 
 from bridge.protocols.base import (
+    TENTHS_SLACK_DEG,
     HalfLine,
     HamlibRotType,
     JunkReason,
@@ -137,13 +140,14 @@ from bridge.protocols.base import (
     Reply,
     RetargetPolicy,
     VersionReply,
+    read_in_range,
     tenths_pair,
 )
 
 AZ_MAX_DEG = 360
 EL_MAX_DEG = 180
 EL_READ_MIN_DEG = -90  # a reading below the horizon is a reading (a rotor parked at -0.5)
-AZ_READ_SLACK_DEG = 0.5  # rule 2: a SatNOGS at rest within its dead zone either side of 0 or 360
+READ_SLACK_DEG = TENTHS_SLACK_DEG  # rule 2: a SatNOGS at rest within its dead zone past an end
 _MAX_LINE = 80
 _NUM = rb"[-+]?\d{1,3}(?:\.\d*)?"  # 123.4, 123, 5.
 # a reply at the end of its line, with whatever came before it on that line in "pre"
@@ -300,13 +304,15 @@ class EasycommCodec(OneQuery):
             el = None if m.group("el") is None else float(m.group("el"))
         if not self.elevation and az is not None:
             el = None  # rule 2: an azimuth model ignores it, out of range or not
-        if (az is not None and not -AZ_READ_SLACK_DEG <= az <= AZ_MAX_DEG + AZ_READ_SLACK_DEG) or (
-            el is not None and not EL_READ_MIN_DEG <= el <= EL_MAX_DEG
-        ):
+        # rule 2: a little past an end is that end, further is no reading
+        az_read = None if az is None else read_in_range(az, 0, AZ_MAX_DEG, READ_SLACK_DEG)
+        el_read = (
+            None if el is None else read_in_range(el, EL_READ_MIN_DEG, EL_MAX_DEG, READ_SLACK_DEG)
+        )
+        if (az is not None and az_read is None) or (el is not None and el_read is None):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
-        if az is not None:
-            az = min(max(az, 0.0), float(AZ_MAX_DEG))  # rule 2: the slack is read as its end
+        az, el = az_read, el_read
         if not self.elevation and az is None:
             if pre.strip(b"\r\n "):  # rule 3: a reply torn by a stray line end, its tail
                 self._junk(raw, JunkReason.NOISE, "junk in front of an elevation", out)

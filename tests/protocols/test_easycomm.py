@@ -170,7 +170,7 @@ def test_out_of_range_and_empty_replies_are_no_readings() -> None:
     for reply, reason in (
         (b"AZ360.6 EL0.0\n", JunkReason.SPOILED),
         (b"AZ-0.6 EL0.0\n", JunkReason.SPOILED),
-        (b"AZ100.0 EL180.5\n", JunkReason.SPOILED),
+        (b"AZ100.0 EL180.6\n", JunkReason.SPOILED),
         (b"AZ-1.0 EL10.0\n", JunkReason.SPOILED),
         (b"AZ EL\n", JunkReason.NOISE),  # an echo of the question is no answer
         (b"AZ=123\n", JunkReason.NOISE),  # a GS-232B answer
