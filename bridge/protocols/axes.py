@@ -32,8 +32,10 @@ Rules:
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
    A one-axis box's bearing outside the elevation axis's scale (0..180 of its range, up to
-   EL_READ_SLACK_DEG past an end read as that end, as gs232.py rule 2 reads an azimuth past
-   its top: a pot a degree or two off with the weather, a coast past the end; below 0 on a
+   EL_READ_SLACK_DEG past an end read as that end, base.py rule 10's pot slack, as gs232.py
+   rule 2 reads a GS-232 past an end: a pot a degree or two off with the weather, a coast
+   past the end; the box's own codec reads within the same slack past its own scale's ends
+   first, a Prosistel D's 091 as 90, prosistel.py rule 1, attack 30; below 0 on a
    box whose bearings wrap, as the RT-21's do, 0.0..359.9, whose horizon a little low reads
    359.x: that too is the bottom end, read as 0; review 49: with half a degree, an RT-21
    reading 181 at its end was offline for good, no target ever turning it back) is
@@ -84,6 +86,7 @@ from dataclasses import replace
 
 from bridge.core.geo import apart_deg
 from bridge.protocols.base import (
+    POT_SLACK_DEG,
     Codec,
     HalfLine,
     HamlibRotType,
@@ -116,7 +119,8 @@ class Axis(enum.StrEnum):
 # (prosistel-el: a D box, unit E; prosistel-el-a: one answering as unit A)
 ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el", "prosistel-el-a"})
 ONE_AXIS_EL_MAX_DEG = 180.0
-EL_READ_SLACK_DEG = 3.0  # rule 2: a one-axis box's bearing this far past an end reads as the end
+# rule 2: a one-axis box's bearing this far past an end reads as the end (base.py rule 10)
+EL_READ_SLACK_DEG = float(POT_SLACK_DEG)
 # ... and of those, the models made for the elevation alone: as a rotator of its own, what such a
 # box calls its bearing is an elevation (rule 6: an azimuth would tilt it)
 BEARING_IS_ELEVATION = frozenset({"prosistel-el", "prosistel-el-a"})
