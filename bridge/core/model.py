@@ -803,6 +803,9 @@ class RotatorStatus:
     # the raw azimuth of the last target written, which the controller keeps and the rotor
     # rests short of (session/controller.py rule 10); kept across a restart (runtime/kept.py)
     short_of_deg: float | None = None
+    # a box with no feedback (DCU-1): a turn of the bridge's may be in flight, unseen
+    # (session/motion.py rule 6, ``turn_kept``); kept across a restart (runtime/kept.py)
+    turn_kept: bool = False
     # a remote's reading of the station's R/status (remote/readings.py rule 3): every feature's
     # block (bridge/feature.py StatusBlock) by its key, as the station wrote it, checked; the
     # status's blocks are then these, not the typed fields above (interfaces/mqtt/payloads.py)

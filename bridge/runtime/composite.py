@@ -428,6 +428,7 @@ def merge(
         controller_time=az.controller_time or el.controller_time,
         parked=az.parked and el.parked,
         stop_owed=az.stop_owed or el.stop_owed,
+        turn_kept=az.turn_kept or el.turn_kept,
         order=place,
         wind=wind,
     )
@@ -676,6 +677,7 @@ class CompositeWorker:
         storm_arrived: bool = False,  # (both boxes were seen at their parks: ``merge``)
         stop_owed: bool = False,
         short_of: float | None = None,
+        turn_kept: bool = False,  # kept.py rule 13 (an azimuth box's with no feedback)
         order: tuple[int, int, int] = (0, 0, 0),  # kept.py rule 12
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
@@ -713,6 +715,7 @@ class CompositeWorker:
                 storm_arrived=storm_arrived,
                 stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
                 short_of=short_of if axis is Axis.AZIMUTH else None,  # (the status's)
+                turn_kept=turn_kept and axis is Axis.AZIMUTH,  # (the elevation box reports)
                 order=order,  # (kept.py rule 12: the rotator's, kept whole)
                 wall=wall,
                 port_opener=port_opener,

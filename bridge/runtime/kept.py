@@ -160,6 +160,15 @@ Rules:
    OFF, and a power cut before the ON's own save left a file whose lock word looked newer than
    a remote's held lock ON, which the remote then dropped. A save that fails is said in the
    log only.
+13. A turn the bridge sent to a box with no feedback (a DCU-1) outlives a restart while it may
+   be in flight (session/motion.py rule 6, ``turn_kept`` in the status): ``seen_turn`` looks at
+   every status on the lines thread, as ``seen_stop`` does, and hands the change to the writer,
+   so the file is written when a turn begins from rest and when it is over (a stop went out,
+   or ``TURN_KEPT_S`` past its end assumed), never per target. The next start takes such a
+   box as possibly finishing it (a start refused then halts it: review 89, the DCU-1 turned
+   on 95 degrees after a restart mid-turn); one with no turn kept (a new file, a run that sent
+   none or saw it over) as at rest (review 93: every start took it as turning, and a refused
+   start stopped the operator's own turn at the panel). A save that fails is reported (rule 3).
 """
 
 from __future__ import annotations
@@ -256,6 +265,7 @@ class Kept:
         self.storm_arrived = self.storm and store.storm_arrived(rotator_id)
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
+        self.turn_kept = store.turn_kept(rotator_id)  # rule 13
         self.version = store.version(rotator_id, spec.name)  # rule 11
         self._version_queued = False  # rule 11: a save of the latest version waits
         # rule 12: the places earlier runs reserved, and the turn and lock word kept
@@ -291,6 +301,12 @@ class Kept:
         if raw_az != self.short_of:
             self.short_of = raw_az
             self._store.later(lambda: self._save_short_of_now(raw_az))
+
+    def seen_turn(self, kept: bool) -> None:
+        """Rule 13 (lines thread: it only compares and hands over)."""
+        if kept != self.turn_kept:
+            self.turn_kept = kept
+            self._store.later(lambda: self._save_turn_now(kept))
 
     def seen_version(self, version: str | None) -> None:
         """Rule 11 (lines thread: it only compares and hands over): the controller's own; one
@@ -367,6 +383,16 @@ class Kept:
                 f"a stop {'owed' if owed else 'sent'} could not be saved: a restart would "
                 f"{'not owe it' if owed else 'send it again'} (state file not writable)",
                 "stop",
+            )
+
+    def _save_turn_now(self, kept: bool) -> None:
+        if not self._store.set_turn_kept(self._id, kept):
+            self._report(
+                ErrorKind.STATE,
+                f"a turn {'sent' if kept else 'over'} could not be saved: after a restart a "
+                f"start refused at once would {'not halt it' if kept else 'send a stop'} "
+                "(state file not writable)",
+                None,
             )
 
     def _save_storm_now(self, storm: bool, halted: bool, arrived: bool) -> None:

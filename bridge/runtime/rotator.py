@@ -233,6 +233,7 @@ class Rotator:
                 storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
+                turn_kept=self._kept.turn_kept,  # kept.py rule 13
                 order=kept_order,  # kept.py rule 12
                 wall=wall,
                 port_opener=port_opener,
@@ -254,6 +255,7 @@ class Rotator:
                 storm_arrived=self._kept.storm_arrived,
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
+                turn_kept=self._kept.turn_kept,  # kept.py rule 13
                 order=kept_order,  # kept.py rule 12
                 wall=wall,
                 port_opener=port_opener,
@@ -291,6 +293,7 @@ class Rotator:
         self._kept.seen_wind(status.wind)
         self._kept.seen_stop(status.stop_owed)
         self._kept.seen_short_of(status.short_of_deg)
+        self._kept.seen_turn(status.turn_kept)
         self._kept.seen_version(status.version)
         self._kept.seen_order(status.order)
         if status.version is None and self._kept.version is not None:  # kept.py rule 11

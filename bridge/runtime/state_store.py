@@ -2,8 +2,8 @@
 user set (the controller forgets them at power-off, so the bridge re-applies them), a stop owed
 to a controller (kept.py rule 8), what rotor
 health (session/health.py) has learned of the rotor, the control lease (runtime/lease.py),
-the version its controller reported last (rule 12), and its places in the order of commands
-(rule 14).
+the version its controller reported last (rule 12), its places in the order of commands
+(rule 14), and a turn a box with no feedback may have in flight (rule 15).
 
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
@@ -106,6 +106,9 @@ Rules:
    "lock": <the place of the lock word>}``, whole numbers not below 0, ``turn`` and ``lock``
    not past ``places``. One that is malformed is none (all 0: the places count from 1, as a
    station that keeps none does, and a remote compares none of them with an earlier run's).
+15. A turn a box with no feedback may have had in flight (kept.py rule 13) is kept as
+   ``turn_kept``: true, or no key (none). Anything else there (a damaged entry), or a file
+   that could not be read, is a turn kept: the safe side.
 """
 
 from __future__ import annotations
@@ -575,6 +578,25 @@ class StateStore:
                 entry["stop_owed"] = True
             else:
                 entry.pop("stop_owed", None)
+            return self._save()
+
+    def turn_kept(self, rotator_id: str) -> bool:
+        """Whether a turn sent to a box with no feedback may have been in flight when last
+        written (kept.py rule 13); one that is not false (a damaged entry), or a file that
+        could not be read (rule 2), says it may: a stop more is the safe side."""
+        with self._lock:
+            if self.corrupt:
+                return True
+            return self._data.get(rotator_id, {}).get("turn_kept", False) is not False
+
+    def set_turn_kept(self, rotator_id: str, kept: bool) -> bool:
+        """Remember a turn possibly in flight, or none; False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if kept:
+                entry["turn_kept"] = True
+            else:
+                entry.pop("turn_kept", None)
             return self._save()
 
     def short_of(self, rotator_id: str) -> float | None:

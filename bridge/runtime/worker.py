@@ -131,6 +131,7 @@ class Worker:
         storm_arrived: bool = False,
         stop_owed: bool = False,
         short_of: float | None = None,
+        turn_kept: bool = False,  # kept.py rule 13
         order: tuple[int, int, int] = (0, 0, 0),  # kept.py rule 12: since, turn, lock kept
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
@@ -154,6 +155,7 @@ class Worker:
             storm_arrived=storm_arrived,
             stop_owed=stop_owed,
             short_of=short_of,
+            turn_kept=turn_kept,
             order=order,
             place=place
             or mailbox.own_place,  # (session.py's Order: the bridge's own turns' places)

@@ -773,6 +773,13 @@ class Controller:
         """Rule 10's ``_short_of`` now (the first status's, before any step)."""
         return self._short_of(self.motion)
 
+    def keep_turn(self) -> None:
+        """motion.py rule 6, at the start: the state file keeps a turn the run before may have
+        left in flight (runtime/kept.py rule 13): on a box with no feedback, taken at the first
+        connect as one lost with the port (``lost_turning``); readings tell the others'."""
+        if not self.cfg.spec.can_report_position:
+            self.motion = replace(self.motion, lost_turning=True)
+
     def keep_short_of(self, raw_az: float) -> None:
         """Rule 10, at the start: the target the rotor rested short of when the bridge last ran
         (runtime/kept.py rule 9): its guard as if written in this session."""

@@ -183,11 +183,27 @@ Rules:
    Whether a turn of the bridge's was under way when the port went (``lost_turning``) is kept
    over the connect till that time is over or a stop or target goes: the controller may be
    finishing it by itself (``may_finish_blind``; parts.py rule 10, review 73: a DCU-1's refused
-   start right after a replug halted nothing, and it turned on 90 degrees). So is one at a
-   bridge's first connect (no end assumed before: the bridge just started, and the box may be
-   finishing the turn the bridge before it sent; review 89: a refused start right after a
-   restart mid-turn halted nothing, and the DCU-1 turned on 95 degrees; a stop, ``AS1;``, to
-   a box at rest does nothing).
+   start right after a replug halted nothing, and it turned on 90 degrees). So is one the
+   run of the bridge before may have left in flight (review 89: a refused start right after
+   a restart mid-turn halted nothing, and the DCU-1 turned on 95 degrees), as the state file
+   keeps it (runtime/kept.py rule 13): a session started with a turn kept (``turn_kept``
+   said so in the run before, or the file could not say) takes the first connect as a
+   replug mid-turn. Not every first connect: a DCU-1 reports nothing, so a turn taken for the
+   old bridge's is also a hand's at the panel, and a refused start stopped that (review 93:
+   for some 90 s after every start, none of any bridge's ever sent, the operator's turn cut
+   short at 74 of 182). ``turn_kept`` is true from a turn of the bridge's sent (a target out,
+   or one taken as carried over a connect) till TURN_KEPT_S past its end (``kept_end_t``: the
+   end assumed, or the stop that ended it, the first of a new target's stop-first too): the
+   state file is written when it changes, so at a turn begun from rest and a minute after it
+   is over, never per target (a tracker's or a logger's targets in a row, each a stop and a
+   turn on a DCU-1, are one turn kept, not two writes each). What stays: a bridge that dies
+   between writing a turn's frame and the state writer's save of it (the status, then an
+   fsync: tens of milliseconds), or whose save failed (said, kind ``state``), starts with no
+   turn kept, and a refused start then does not halt that turn (review 89's case, in that
+   window alone: the unsafe side, a turn on to the old target under "refused"); one
+   restarted within TURN_KEPT_S of a turn's end, or after a file it could not read, stops a
+   box at rest or a hand's turn at a start refused in the range's time, as every start did
+   (the safe side).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -252,6 +268,7 @@ AWAY_MARGIN_DEG = 5.0  # rule 5
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 BLIND_SLOW_FACTOR = 1.5  # rule 6: a rotor without feedback may be this much slower than nominal
 BLIND_START_S = 2.0  # rule 6: ...and take this long to get going
+TURN_KEPT_S = 60.0  # rule 6: a turn is kept in the state file this long past its end assumed
 COAST_S = 1.0  # ``coast_end``: a rotor's run-on after its motor is cut
 
 
@@ -372,6 +389,9 @@ class Motion:
     # rule 4: when a reading showed such a move, not yet confirmed (a hand's turn, or one
     # garbled reading): that reading was held back, neither a move nor a rest, nor shown
     begun_t: float | None = None
+    # rule 6 (no feedback): the end of the last turn of the bridge's, assumed or stopped
+    # (``turn_kept``)
+    kept_end_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -513,10 +533,12 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         worst = now + blind_busy_s(cfg.az_span_deg, cfg)
         kept = m.busy_until_t
         busy = worst if kept is None else max(kept, worst)
-        # (no end assumed before: the bridge just started, and the box may be finishing the
-        # turn the bridge before it sent, as after a replug mid-turn: review 89)
-        lost = m.lost_turning or kept is None
-        return Motion(state=UNKNOWN, busy_until_t=busy, lost_turning=lost)
+        # (a turn lost with the port, or one the run before kept in flight, controller.py
+        # ``keep_turn``: review 89; not every first connect, review 93)
+        lost, end = m.lost_turning, m.kept_end_t
+        if lost:
+            end = busy if end is None else max(end, busy)  # (turn_kept: from its time)
+        return Motion(state=UNKNOWN, busy_until_t=busy, lost_turning=lost, kept_end_t=end)
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,
@@ -538,6 +560,7 @@ def link_down(m: Motion) -> Motion:
         lost_turning=turning or m.lost_turning,
         lost_hand=hand or (m.lost_hand and m.state is OFFLINE),
         busy_until_t=m.busy_until_t,  # rule 6: no feedback: the turn's assumed end is kept
+        kept_end_t=m.kept_end_t,  # (rule 6: turn_kept)
     )
 
 
@@ -885,6 +908,7 @@ def commanded(
             assumed_deg=target_deg,
             stop_sent_t=None,
             lost_turning=False,  # (rule 6: a turn of its own now)
+            kept_end_t=now + busy,  # (rule 6: turn_kept)
         )
     return replace(
         m,
@@ -951,6 +975,7 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
             busy_until_t=now,
             assumed_deg=None,
             lost_turning=False,
+            kept_end_t=now if turn_kept(m, now) else m.kept_end_t,  # (rule 6: it ended it)
         )
     return replace(
         m,
@@ -1041,7 +1066,8 @@ def tick(
         done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
         if m.target_deg is not None and done_t is not None and now >= done_t + cfg.brake_delay_s:
             m = replace(m, target_deg=None, target_t=None)
-        if m.lost_turning and (m.busy_until_t is None or now >= m.busy_until_t):
+        busy = m.busy_until_t  # (None: a turn kept, the port not open yet: its time from
+        if m.lost_turning and busy is not None and now >= busy:  # the connect, link_up)
             m = replace(m, lost_turning=False)  # rule 6: the carried turn's time is over
         return m, events
     if m.state is OFFLINE:
@@ -1193,6 +1219,17 @@ def may_finish_blind(m: Motion, now: float) -> bool:
     )
 
 
+def turn_kept(m: Motion, now: float) -> bool:
+    """Rule 6 (no feedback): whether a turn of the bridge's may be in flight, as the state file
+    keeps it (runtime/kept.py rule 13): one taken as carried over a connect (``lost_turning``;
+    before the connect, with no end assumed yet, as kept), or TURN_KEPT_S not past the end of
+    the last one sent (``kept_end_t``)."""
+    if m.lost_turning:
+        return True  # (till its time from the connect is over: ``tick``)
+    end = m.kept_end_t
+    return end is not None and now < end + TURN_KEPT_S
+
+
 def stall_due(m: Motion, cfg: MotionConfig, now: float) -> bool:
     """Rule 3: turning off target with no movement for ``stall_timeout_s``, the stall not
     called for want of a reading since (``tick``'s): the controller is to be asked at once,
@@ -1290,6 +1327,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             None if busy is None else busy + cfg.brake_delay_s,
             None if stop is None else stop + cfg.brake_delay_s,
             None if stop is None else stop + cfg.brake_delay_s + BRAKE_GUARD_S,  # (plan_target)
+            None if m.kept_end_t is None else m.kept_end_t + TURN_KEPT_S,  # (turn_kept)
         ):
             if t_or_none is not None and t_or_none > now:
                 if soonest is None or t_or_none < soonest:

@@ -98,10 +98,12 @@ Rules:
     after a restart mid-turn a refused follow or track start halted nothing, and the Rotor-EZ
     turned on some 100 degrees to the old target. On a controller with no readings (a
     DCU-1) nothing ever shows the turn: the one under way when the port went, the bridge's
-    own, or one a bridge just started may have found (a restart mid-turn; review 89: the
-    DCU-1 turned on 95 degrees under "refused"), is taken as going on for the time assumed
-    from the connect (motion.py rule 6, ``may_finish_blind``) and halted at the refusal
-    itself, as it would be without the replug (a stop to a DCU-1 at rest does nothing).
+    own, or one the run before kept in flight in the state file (a restart mid-turn; review
+    89: the DCU-1 turned on 95 degrees under "refused"; runtime/kept.py rule 13), is taken as
+    going on for the time assumed from the connect (motion.py rule 6, ``may_finish_blind``)
+    and halted at the refusal itself, as it would be without the replug. Not a start with
+    none kept: nothing tells the old bridge's turn from a hand's at the panel, and review 93
+    found the operator's own turn stopped by a refused start after every bridge start.
     Review 70: a start right after a replug mid-turn, refused, halted nothing, and the rotor
     turned on some 95 degrees to the target from before the unplug (review 73: a DCU-1's, 90
     degrees, no stop frame).

@@ -331,6 +331,7 @@ class RotatorSession:
         storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
+        turn_kept: bool = False,  # a turn possibly in flight then (kept.py rule 13)
         place: Callable[[OwnTurn], int] | None = None,  # mailbox.py rule 10b's
         # ``own_place``: the place in the order of commands of a turn the bridge begins itself
         # (``Order``), named (``_own_turn``), from the counter the rotator's commands advance
@@ -356,6 +357,8 @@ class RotatorSession:
             self.controller.owe_stop()
         if short_of is not None:  # (controller.py rule 10)
             self.controller.keep_short_of(short_of)
+        if turn_kept:  # (motion.py rule 6: a box with no feedback may be finishing it)
+            self.controller.keep_turn()
         self.targets = Targets(cfg)
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower
@@ -381,6 +384,7 @@ class RotatorSession:
             health=self.health.report,
             stop_owed=self.controller.stops.owed,
             short_of_deg=self.controller.short_of_deg,  # (kept: the first status says so too)
+            turn_kept=not cfg.spec.can_report_position and turn_kept,  # (likewise)
             order=Order(  # (the first status's too: no change to say)
                 self._run, self._since, self._turn_place, self._lock_place, self._since
             ),

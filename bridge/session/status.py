@@ -195,6 +195,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float, order: Order | None = Non
         features=dict(seen.features.parts) if seen.features.parts else {},
         stop_owed=seen.stop_owed,
         short_of_deg=seen.short_of_deg,
+        turn_kept=not spec.can_report_position and mo.turn_kept(m, now),
         relayed=None,  # (a remote's reading alone: remote/readings.py rule 3)
         order=order,
     )

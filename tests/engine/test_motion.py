@@ -708,13 +708,15 @@ def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> floa
         if m.stop_sent_t is not None:
             times.append(m.stop_sent_t + cfg.brake_delay_s)
             times.append(m.stop_sent_t + cfg.brake_delay_s + mo.BRAKE_GUARD_S)
+        if m.kept_end_t is not None:  # (rule 6: the state file's turn kept, over)
+            times.append(m.kept_end_t + mo.TURN_KEPT_S)
     future = [t for t in times if t > now]
     return min(future) if future else None
 
 
 _TIMES = st.one_of(st.none(), st.sampled_from([0.0, 1.0, 2.5, 4.0, 7.0, 9.0, 12.0]))
 _CLOCKS = ("last_move_t", "target_t", "stop_sent_t", "stop_read_t", "progress_t", "still_since_t")
-_CLOCKS += ("idle_not_before_t", "busy_until_t", "az_progress_t", "el_progress_t")
+_CLOCKS += ("idle_not_before_t", "busy_until_t", "az_progress_t", "el_progress_t", "kept_end_t")
 
 
 def _motions(states: list[S], **more: st.SearchStrategy[object]) -> st.SearchStrategy[mo.Motion]:

@@ -33,7 +33,9 @@ def restarted_mid_turn(v: VirtualRotator) -> None:
     v.run_for(0.1)  # (between two polls: not a deadline)
     v.link_down(None)
     v.run_for(1.0)  # (the bridge down: not a deadline)
-    v.session = RotatorSession(v.cfg)  # the bridge started again
+    # the bridge started again, with what its state file kept of the turn (a DCU-1's, sent and
+    # not seen over: runtime/kept.py rule 13)
+    v.session = RotatorSession(v.cfg, turn_kept=v.status.turn_kept)
     v._do(v.session.start(v.now))
     v.link_up()
     v.run_until(lambda h: h.status.available, 10, "the controller answers the new bridge")

@@ -10,18 +10,11 @@ from 62 to 182 stopped at 74, R/error saying only that the start was refused). B
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import PARTNER, follower_by_a_keep_out
 from tests.integration.test_pointing_bridge import angle_between
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 93: for ~90 s after a bridge starts, a DCU-1 turned by hand at its panel is"
-    " stopped (AS1;) by a refused follow start, the hand's turn cut short at 74 of 182",
-)
 def test_a_dcu1_turned_by_hand_after_a_bridge_start_at_rest_is_not_stopped_by_a_refusal() -> None:
     with follower_by_a_keep_out("dcu1") as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
