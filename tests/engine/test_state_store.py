@@ -610,3 +610,22 @@ def test_a_tilde_leftover_is_read_only_while_the_home_folders_file_is_not_there(
     store.check_writable()
     assert json.loads(new.read_text())["rotators"]["tower"]["locked"] is True
     assert tilde_leftover(new) is None  # the home folder's own is read from now on
+
+
+def test_a_turn_kept_survives_a_restart_and_a_damaged_or_unreadable_one_is_kept(
+    tmp_path: Path,
+) -> None:
+    """state_store.py rule 15 (kept.py rule 13): a DCU-1's turn possibly in flight."""
+    path = tmp_path / "state.json"
+    s = StateStore(path)
+    assert s.turn_kept("dcu") is False  # a new file: no turn of any bridge's
+    assert s.set_turn_kept("dcu", True) is True
+    assert StateStore(path).turn_kept("dcu") is True
+    assert StateStore(path).turn_kept("tower") is False  # (another rotator's: none)
+    assert s.set_turn_kept("dcu", False) is True
+    assert "turn_kept" not in json.loads(path.read_text())["rotators"]["dcu"]
+    assert StateStore(path).turn_kept("dcu") is False
+    path.write_text('{"rotators": {"dcu": {"turn_kept": "yes"}}}')
+    assert StateStore(path).turn_kept("dcu") is True  # damaged: the safe side
+    path.write_text("not json")
+    assert StateStore(path).turn_kept("dcu") is True  # unreadable: likewise
