@@ -8,9 +8,9 @@ minute later the file says no turn while the rotor still turns to that target; a
 killed then (a crash, or ``systemctl restart``, whose end stops nothing the bridge takes for at
 rest) starts with none kept, and a follow start refused at once halts nothing: the DCU-1 turns
 on to the old target under "refused" (review 89's case, which every start halted before).
-The rotor here turns at 5 degrees a second, its nominal 6 (a Hy-Gain rotor rated at 60 Hz,
-run from 50 Hz mains: 5/6 of its speed), well within the 1.5 times slower rule 6 allows for
-(BLIND_SLOW_FACTOR); at its nominal speed the same turn ends some 4 s inside the hold."""
+The rotor here turns at 5 degrees a second, its nominal 6 (a sixth slower: cold grease, wind
+load, a motor rated for 60 Hz mains run from 50 Hz), well within the 1.5 times slower rule 6
+allows for (BLIND_SLOW_FACTOR); at its nominal speed the same turn ends some 4 s inside the hold."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from tests.engine.test_review93_dcu1_turn_kept_in_the_state_file import Filed
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
-SLOWER = 5.0  # degrees a second: a Hy-Gain rotor's 6 at 60 Hz, on 50 Hz mains (rule 6: 4)
+SLOWER = 5.0  # degrees a second, its nominal 6: a sixth slower (rule 6 allows down to 4)
 LAST = round(PARTNER + 140.0)  # the bridge's last bearing (182), off the keep-out sector
 HAND = LAST - 4  # the operator's, at the panel: 178, the far end of a south-stop travel
 NEXT = LAST + 3  # a logger's next bearing: 3 degrees from the last the bridge sent
