@@ -16,8 +16,6 @@ Pure: Sync, the express's rule 8, decided with no clock and no broker.
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.interfaces.mqtt.express import Sync
 
 FEW = 3
@@ -35,11 +33,6 @@ def _words_kept_after(asked_again: int) -> int:
     return len(sync._out)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 31: a stop express whose broker stopped passing its words back keeps a word "
-    "(and its mark) for every ask again, one every 2 s, for as long as its connection lasts",
-)
 def test_words_asked_again_while_a_hold_waits_are_not_kept_for_ever() -> None:
     few, many = _words_kept_after(FEW), _words_kept_after(MANY)
     assert many == few, f"words kept: {few} after {FEW} asks again, {many} after {MANY}"

@@ -103,7 +103,9 @@ Rules:
    it from writing, never holds a target. A connection that ends, an express that dies or is
    not running, answer every request (nothing of it can write any more); no clock ends a
    hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
-   waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A stop's
+   waits; the new word replaces the words out (it answers every request they answer: a
+   broker that stopped passing them back keeps one word and its mark, not one a RESEND_S,
+   attack 31), and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A stop's
    request is not sent while the last word sent is a request the express has not read yet
    (``_Outbox``: it reads that one after the bridge read this stop, so its answer answers
    both): a flood of stops, carried out on both connections, leaves a request or two unread
@@ -923,6 +925,10 @@ class Sync:
             self._out.clear()
             return self._answer_all(), self._publish() if self.linked else None
         if again or not self._out:  # a word out now was published before the request
+            # the new word answers every request the words out answer, and more: they are
+            # forgotten (a broker that stopped passing its words back would otherwise have
+            # one kept each RESEND_S for as long as the hold waits; one out at a time)
+            self._out.clear()
             return None, self._publish()
         return None, None
 
@@ -1106,8 +1112,8 @@ class _Child:
         """A request from the bridge (its socket's thread)."""
         with self._sync_lock:
             answer, word = self.sync.asked(n, again)
-            if answer is not None:
-                self._marks.clear()  # (as Sync forgot its words out)
+            if answer is not None or word is not None:
+                self._marks.clear()  # (as Sync forgot its words out: one out at most)
             self._answer(answer)  # (under the lock: the answers in order)
         self._publish(word)
 
