@@ -33,7 +33,12 @@ Rules:
    ``_start_console``; it stops first.
 7. What the station refuses is logged here too, as it comes on a rotator's ``R/error`` (not
    replayed from the broker's store): a rotctld, GS-232 or PstRotator client was told its
-   command went, and the operator reads here why nothing turned.
+   command went, and the operator reads here why nothing turned. At most ERROR_SAY_BURST
+   lines at once, then one every ERROR_SAY_EVERY_S, the rest at DEBUG and counted in the next
+   line said, as every other log of the bridge's is held (interfaces/web/server.py rule 7,
+   interfaces/tcplines.py rule 5): anyone who may publish on ``R/error`` (a neighbour on a
+   shared broker, a flow gone wrong) wrote a WARNING a message into the operator's log, no
+   limit (attack 31: 500 lines for 500 messages).
 8. The endpoints are served once the station's heartbeat was heard (a move sent at once would
    be refused until then: remote/rotator.py rule 1), or after heartbeat.py's SILENT_S without
    one, said in the log: a station whose bridge is away still starts the remote. The wait is
@@ -57,6 +62,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from bridge.core.ending import Ending
+from bridge.core.ratelimit import TokenBucket
 from bridge.core.text import shown_path
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
@@ -80,6 +86,8 @@ log = logging.getLogger(__name__)
 # at once; a signal's handler may not touch the view's lock, so the wait looks this often)
 STOP_LOOK_S = 0.25
 ONE_ROTATOR_GRACE_S = 0.5  # rule 2: B/X/info may come just after B/info in one burst
+ERROR_SAY_BURST = 10  # rule 7: the station's refusals said at once, then one every
+ERROR_SAY_EVERY_S = 1.0  # ERROR_SAY_EVERY_S, the rest at DEBUG (counted in the next said)
 
 
 class Served(Protocol):
@@ -115,6 +123,7 @@ class Remote:
     wall: Callable[[], float] = time.time  # rule 9: the console's tokens' (never set back)
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
+    _errors_said: ErrorsSaid = field(default_factory=lambda: ErrorsSaid())  # rule 7
     _locks: set[str] = field(default_factory=set)
     _statuses: dict[str, RotatorTopics] = field(default_factory=dict)  # status -> its rotator's
     # one RemoteRotator per station rotator, however many endpoints name it: its halt count is
@@ -265,7 +274,7 @@ class Remote:
         if said is not None and not retain:  # rule 7
             event = parse_event(payload)
             if event is not None:
-                log.warning(  # (escaped: the station's message quotes what its sender wrote)
+                self._errors_said.say(  # (escaped: the station's message quotes its sender's)
                     "%s: the station says: %s (%s)",
                     said,
                     one_line(event.message),
@@ -467,6 +476,28 @@ class Remote:
         return (
             f"no description of the station's rotator on {looked} within {s.info_wait_s:g} s{hint}"
         )
+
+
+class ErrorsSaid:
+    """Rule 7's pace: a WARNING at most ERROR_SAY_BURST at once, then one every
+    ERROR_SAY_EVERY_S; the rest at DEBUG, and how many were left out said with the next
+    WARNING. Paho's thread alone calls it."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self._loud = TokenBucket.full(ERROR_SAY_BURST, 1.0 / ERROR_SAY_EVERY_S, clock())
+        self._left_out = 0
+
+    def say(self, msg: str, *args: object) -> None:
+        if not self._loud.take(self._clock()):
+            self._left_out += 1
+            log.debug(msg, *args)
+            return
+        if self._left_out:
+            msg += " (%d more of the station's refusals not said before it)"
+            args = (*args, self._left_out)
+            self._left_out = 0
+        log.warning(msg, *args)
 
 
 def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:

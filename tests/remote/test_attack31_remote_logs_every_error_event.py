@@ -33,11 +33,6 @@ def _event(message: str) -> str:
     return json.dumps({"kind": "refused", "message": message, "command": "100", "time": 1.0})
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 31: the remote logs a WARNING for every R/error message anyone publishes: "
-    "a flood of them is a flood of lines in the operator's log, no limit, no count",
-)
 def test_a_flood_of_error_events_is_a_few_lines_in_the_remotes_log(
     station: Rig, probe: Probe, caplog: pytest.LogCaptureFixture
 ) -> None:
