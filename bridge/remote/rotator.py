@@ -90,6 +90,17 @@ Rules:
    too (front.py rule 3: their latest arrival): another source's move seen before it is
    refused by the link (interfaces/mqtt/remote.py rule 8). The console says nothing: its
    commands are stamped when sent.
+8. The ``StationView`` keeps what the remote reads, bounded by the station's rotators, not by
+   what anyone publishes (attack 31: it kept every ``B/<id>/...`` topic it read, error events
+   too, until its connection dropped: a neighbour on a shared broker publishing under 2,000 ids
+   grew it by 2,000 topics). Under ``B/<id>`` it keeps the topics of the ids served (the
+   endpoints' rotators, ``serve``: named in the settings before it connects, and each rotator
+   made since) and of at most MAX_OTHER_IDS ids more, the first read on a connection (a station
+   rotator no endpoint names, for the console, and leftovers: rule 2 names them); what comes
+   under another id beyond them is not kept (said once a connection). An ``R/error`` message is
+   an event, never retained and never read again: kept only as the newest of a rotator served
+   (one each). The station's own topics (``B/bridge/...``, the one rotator's under ``B``) are
+   the subscriptions' fixed few.
 """
 
 from __future__ import annotations
@@ -134,6 +145,7 @@ __all__ = ["Info", "InfoError", "RemoteRotator", "StationView", "parse_status"]
 log = logging.getLogger(__name__)
 
 REFUSAL_LOG_S = 10.0  # rule 5
+MAX_OTHER_IDS = 64  # rule 8: ids under B kept beside the ones served (a station's rotators)
 STATION_AWAY = "the station's rotator is offline (its bridge or its controller): nothing sent"
 STATION_SILENT = (
     f"the station's bridge is not heard (no heartbeat within {SILENT_S:g} s): nothing sent"
@@ -182,16 +194,82 @@ def place_doc(latitude_deg: float, longitude_deg: float, locator: str | None) ->
 
 class StationView:
     """The retained topics the remote reads, newest first; written on paho's thread. Each value
-    keeps when it came (``clock``) and whether the broker replayed it from its store."""
+    keeps when it came (``clock``) and whether the broker replayed it from its store. Rule 8:
+    given the station's ``base``, it keeps the ``B/<id>/...`` topics of the ids served and of
+    MAX_OTHER_IDS more, and an error event only as a served rotator's newest."""
 
     def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._lock = threading.Condition()
         self._topics: dict[str, bytes] = {}
         self._came: dict[str, tuple[float, bool]] = {}  # topic -> (when, replayed)
         self._clock = clock
+        self._base: str | None = None  # rule 8 (None: all kept, as a test's view handed them)
+        self._fixed: set[str] = set()  # rule 8: topics under ``B`` that name no id
+        self._served: set[str] = set()  # rule 8: ids under B kept whatever comes
+        self._others: dict[str, set[str]] = {}  # rule 8: another id -> its topics kept
+        self._left_out = False  # rule 8: said on this connection
+
+    def bound_to(self, base: str) -> None:
+        """Rule 8: the station's base topic, before anything is read."""
+        with self._lock:
+            self._base = base
+            # the station's own topics and the one rotator's under ``B`` (``B/lock/state``
+            # among them, whose first level is no id): the subscriptions' fixed few
+            self._fixed = {t for t in StationTopics(base).subscriptions() if "+" not in t}
+
+    def serve(self, root: str) -> None:
+        """Rule 8: the rotator at ``root`` (``B/<id>``, or ``B`` itself) is served: its topics
+        are kept, its newest error event too."""
+        rid = self._id(root + "/")
+        if rid is None:
+            return
+        with self._lock:
+            self._served.add(rid)
+            self._others.pop(rid, None)
+
+    def _id(self, topic: str) -> str | None:
+        """The ``<id>`` of a ``B/<id>/...`` topic (None: the station's own or the one
+        rotator's, a fixed few)."""
+        if self._base is None or topic in self._fixed or not topic.startswith(self._base + "/"):
+            return None
+        rid, sep, _leaf = topic[len(self._base) + 1 :].partition("/")
+        return rid if sep and rid != "bridge" else None
+
+    def _kept(self, topic: str, payload: bytes) -> bool:
+        """Rule 8: whether ``topic`` is kept (called under the lock)."""
+        rid = self._id(topic)
+        if rid is None or rid in self._served:
+            return True
+        if topic == f"{self._base}/{rid}/error":
+            return False  # an event: only a served rotator's newest
+        kept = self._others.get(rid)
+        if kept is None:
+            if not payload:
+                return True  # (a deletion of nothing kept)
+            if len(self._others) >= MAX_OTHER_IDS:
+                if not self._left_out:
+                    self._left_out = True
+                    log.warning(
+                        "the station's broker has topics under more than %d rotator ids "
+                        "beside the ones served (%s and more): those are not kept",
+                        MAX_OTHER_IDS,
+                        one_line(f"{self._base}/{rid}"),
+                    )
+                return False
+            kept = self._others[rid] = set()
+        if payload:
+            kept.add(topic)
+        else:
+            kept.discard(topic)
+            if not kept:
+                del self._others[rid]  # (its place free again)
+        return True
 
     def put(self, topic: str, payload: bytes, replayed: bool = False) -> None:
         with self._lock:
+            if not self._kept(topic, payload):
+                self._lock.notify_all()  # (a wait for the next message: this was one)
+                return
             if payload:
                 self._topics[topic] = payload
                 self._came[topic] = (self._clock(), replayed)
@@ -204,6 +282,8 @@ class StationView:
         with self._lock:
             self._topics.clear()
             self._came.clear()
+            self._others.clear()  # (rule 8: the next connection's ids take the places)
+            self._left_out = False
 
     def live_within(self, topic: str, max_age_s: float) -> bool:
         """Whether ``topic``'s value came as published (not replayed) within ``max_age_s``."""

@@ -132,6 +132,14 @@ class Remote:
     # the PstRotator ports' sender of each rotator (courier.py), one however many ports
     _couriers: dict[str, Courier] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # remote/rotator.py rule 8: the view keeps what the station's rotators need, the ids
+        # the endpoints name kept whatever else comes
+        self.view.bound_to(self.station.base)
+        for ep in self.settings.endpoints:
+            if ep.rotator:
+                self.view.serve(self.station.rotator(ep.rotator).root)
+
     @property
     def station(self) -> StationTopics:
         return StationTopics(self.settings.mqtt.base_topic)
@@ -392,6 +400,7 @@ class Remote:
         made = self._made.get(topics)
         if made is not None:  # another endpoint onto the same rotator: the same halt count
             return made
+        self.view.serve(topics.root)  # (remote/rotator.py rule 8)
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
         self._statuses[topics.status] = topics

@@ -14,8 +14,8 @@ remote in this process with a rotctld endpoint, and a neighbour's MQTT client.
 
 from __future__ import annotations
 
-import pytest
-
+from bridge.remote.rotator import MAX_OTHER_IDS, StationView
+from tests.support.clock import FakeClock
 from tests.support.mosquitto import free_port
 from tests.support.mqtt import Probe
 from tests.support.remote import running_remote
@@ -35,11 +35,6 @@ def _neighbour_publishes(probe: Probe, ids: range, marker: str) -> None:
     probe.publish("rotor/error", marker)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 31: the remote keeps every B/<id>/... topic anyone publishes, for as long as "
-    "its connection lasts: its memory grows without bound on a shared broker",
-)
 def test_the_remote_does_not_keep_a_topic_for_every_id_published(
     station: Rig, probe: Probe
 ) -> None:
@@ -57,3 +52,35 @@ def test_the_remote_does_not_keep_a_topic_for_every_id_published(
         f"the remote's view held {after_few} topics after {FEW} strangers' ids and "
         f"{after_many} after {FEW + MANY}"
     )
+
+
+def test_retained_topics_under_many_ids_are_kept_for_a_bounded_few_and_the_served_always() -> None:
+    """remote/rotator.py rule 8, pure: a neighbour's retained descriptions and statuses under
+    many ids take at most MAX_OTHER_IDS places; the rotator served keeps every topic of its,
+    its newest error event too, whatever came before; a deletion frees a place."""
+    view = StationView(FakeClock())
+    view.bound_to("rotor")
+    view.serve("rotor/tower")
+    for i in range(MAX_OTHER_IDS * 10):
+        view.put(f"rotor/n{i}/info", b'{"model":"rotorez"}', replayed=True)
+        view.put(f"rotor/n{i}/status", b'{"bearing":1}', replayed=True)
+        view.put(f"rotor/n{i}/error", b'{"kind":"refused"}')
+    view.put("rotor/tower/info", b"tower's", replayed=True)
+    view.put("rotor/tower/error", b"tower's event")
+    view.put("rotor/bridge/state", b"online", replayed=True)
+    view.put("rotor/lock/state", b"ON", replayed=True)  # (the one rotator's: no id "lock")
+
+    kept = view.topics()
+    assert len(kept) == 2 * MAX_OTHER_IDS + 4, len(kept)
+    assert view.get("rotor/lock/state") == b"ON"
+    assert not [t for t in kept if t.startswith("rotor/n") and t.endswith("/error")]
+    assert view.get("rotor/tower/info") == b"tower's"
+    assert view.get("rotor/tower/error") == b"tower's event"
+    assert view.get("rotor/bridge/state") == b"online"
+
+    view.put("rotor/n0/info", b"")  # deleted: n0 still has its status, no place freed
+    view.put(f"rotor/n{MAX_OTHER_IDS}/info", b"{}")
+    assert view.get(f"rotor/n{MAX_OTHER_IDS}/info") is None
+    view.put("rotor/n0/status", b"")  # n0's last topic gone: its place is free
+    view.put(f"rotor/n{MAX_OTHER_IDS}/info", b"{}")
+    assert view.get(f"rotor/n{MAX_OTHER_IDS}/info") == b"{}"
