@@ -58,11 +58,6 @@ def _operators_page(client: ConsoleClient) -> object:
     return run_async(opened())
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 31: event streams their clients closed hold their places until the next "
-    "ping (10 s): a script opening and closing api/events keeps every page out with 503",
-)
 def test_event_streams_their_clients_closed_leave_room_for_the_operators_page(
     console: tuple[Rig, ConsoleClient],  # noqa: F811  (the fixture)
     monkeypatch: pytest.MonkeyPatch,

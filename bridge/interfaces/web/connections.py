@@ -31,6 +31,11 @@ Rules:
    WebSocket reads its messages within live.py rule 7's budget besides. An attack pass: 60
    local connections pipelining ``GET api/hello`` (it needs no token) held the bridge at
    60-85 % of a core.
+5. Whoever serves a request may ask to be told when its connection goes (``on_gone``): closed
+   by its client (its EOF read: the socket is read whatever the request, asyncio's transport
+   closes on it), reset, or closed here (rules 1 and 2). An event stream's client sends
+   nothing after its request, so its handler would otherwise learn of it only when a write
+   failed (live.py rule 9).
 """
 
 from __future__ import annotations
@@ -99,6 +104,7 @@ class _Held:
     trusted: bool = False  # a request on it showed a valid token (rule 1)
     paused: bool = False  # over its budget, not read (rule 4)
     waiters: list[asyncio.Future[None]] = field(default_factory=list)  # requests waiting
+    gone: list[Callable[[], None]] = field(default_factory=list)  # told when it goes (rule 5)
 
 
 class _Refused(asyncio.Protocol):
@@ -187,6 +193,15 @@ class Connections:
         if held is not None:
             held.trusted = True
 
+    def on_gone(self, transport: asyncio.BaseTransport | None, told: Callable[[], None]) -> bool:
+        """Rule 5: ``told`` is called (on the event loop) when the connection goes; False, and
+        ``told`` never called, when it is not held (gone already)."""
+        held = self._held.get(transport) if transport is not None else None
+        if held is None:
+            return False
+        held.gone.append(told)
+        return True
+
     def spend(self, proto: _Counted, cost: float) -> None:
         """Rule 4: ``cost`` charged to the connection; over its budget, paused."""
         transport = self._made.get(proto)
@@ -270,6 +285,9 @@ class Connections:
         if held is not None:
             held.paused = False
             self._wake(held)
+            gone, held.gone = held.gone, []
+            for told in gone:  # rule 5
+                told()
 
     def started(self, transport: asyncio.BaseTransport | None) -> None:
         held = self._held.get(transport) if transport is not None else None

@@ -47,6 +47,13 @@ Rules:
    6): never later than the truth, since a message arrives after it left. The steady clock,
    not the wall clock: neither a time server stepping the bridge's clock nor the phone's own
    clock (often wrong) can make a held-up click look young.
+9. An event stream ends as soon as its connection goes (connections.py rule 5: its client's
+   close read from the socket), not at the next write that fails: it sleeps on its page's
+   wake-up and writes only a status or a ping (PING_S), so a closed stream held its place among
+   MAX_PAGES up to 10 s, and a script opening and closing ``api/events`` MAX_PAGES times in
+   that kept every page out, the operator's and the STOP its WebSocket carries (rule 5) among
+   them, with 503 (attack 31). A WebSocket's close is its reader's (``_read``). MAX_PAGES
+   stays a limit of pages whose connections are open.
 """
 
 from __future__ import annotations
@@ -89,6 +96,7 @@ class Live:
         headers: dict[str, str],
         *,
         trust: Callable[[asyncio.BaseTransport | None], None],
+        on_gone: Callable[[asyncio.BaseTransport | None, Callable[[], None]], bool],
         halt: Callable[[str, bytes, str | None, str], None],
         client: Callable[[web.Request], str | None] = lambda request: request.remote,
     ) -> None:
@@ -96,6 +104,7 @@ class Live:
         self._client = client  # who a request is from (auth.py rule 6)
         self._headers = headers  # the console's safety headers (server.py rule 3)
         self._trust = trust  # connections.py rule 1
+        self._on_gone = on_gone  # rule 9 (connections.py rule 5)
         # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address and
         # its token
         self._halt = halt
@@ -141,6 +150,13 @@ class Live:
         )
         await response.prepare(request)
         page = self.join(request.headers.get(TOKEN_HEADER))
+
+        def gone() -> None:  # rule 9: its client went
+            page.closed = True
+            page.wake.set()
+
+        if not self._on_gone(request.transport, gone):
+            gone()  # (gone already)
         try:
             await response.write(b": hello\n\n")
             while await _next(page):

@@ -323,6 +323,7 @@ class WebConsole:
             wall,
             self._headers,
             trust=lambda transport: self._conns.trust(transport),
+            on_gone=lambda transport, told: self._conns.on_gone(transport, told),
             halt=self._halt,
             client=self._client,
         )
