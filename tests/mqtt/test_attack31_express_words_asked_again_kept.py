@@ -16,9 +16,9 @@ Pure: Sync, the express's rule 8, decided with no clock and no broker.
 
 from __future__ import annotations
 
-from bridge.interfaces.mqtt.express import Sync
+from bridge.interfaces.mqtt.express import WORDS_KEPT, Sync
 
-FEW = 3
+FEW = WORDS_KEPT + 2  # (past the few a slow broker may still bring back: rule 8)
 MANY = 1000  # about half an hour of a hold, asked again every 2 s
 
 
@@ -36,3 +36,22 @@ def _words_kept_after(asked_again: int) -> int:
 def test_words_asked_again_while_a_hold_waits_are_not_kept_for_ever() -> None:
     few, many = _words_kept_after(FEW), _words_kept_after(MANY)
     assert many == few, f"words kept: {few} after {FEW} asks again, {many} after {MANY}"
+
+
+def test_a_broker_slower_than_the_asks_again_still_ends_the_hold() -> None:
+    """Each word comes back only after the next is out (a broker some RESEND_S slow): the
+    word it brings back answers the request, as the newest would have (rule 8)."""
+    sync = Sync()
+    sync.accepted()
+    first = sync.subscribed()
+    assert sync.read_back(first) == (None, None) and sync.writing
+    _, word = sync.asked(1)
+    assert word is not None
+    for _ in range(FEW):
+        _, newer = sync.asked(1, again=True)
+        assert newer is not None
+        answer, _ = sync.read_back(word)  # the word before the newest, back late
+        if answer is not None:
+            break
+        word = newer
+    assert answer == 1

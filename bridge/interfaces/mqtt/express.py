@@ -103,9 +103,11 @@ Rules:
    it from writing, never holds a target. A connection that ends, an express that dies or is
    not running, answer every request (nothing of it can write any more); no clock ends a
    hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
-   waits; the new word replaces the words out (it answers every request they answer: a
-   broker that stopped passing them back keeps one word and its mark, not one a RESEND_S,
-   attack 31), and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A stop's
+   waits; the newest WORDS_KEPT words out are kept, older ones forgotten (the newest answers
+   every request they answer: a broker that stopped passing them back keeps WORDS_KEPT words
+   and their marks, not one a RESEND_S, attack 31; a broker slower than RESEND_S still ends
+   the hold with a word it brings back after the next went out), and a hold longer than
+   LONG_HOLD_S is said while it lasts, and holds. A stop's
    request is not sent while the last word sent is a request the express has not read yet
    (``_Outbox``: it reads that one after the bridge read this stop, so its answer answers
    both): a flood of stops, carried out on both connections, leaves a request or two unread
@@ -245,6 +247,9 @@ RESTART_STABLE_S = 60.0  # ... back to the first once one ran this long
 RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this long
 WORD_DIGITS = 20  # rule 8: a sync word's number, at most (a longer one is none of its own)
 LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
+#: rule 8: sync words kept out at most while a hold waits (asked again each RESEND_S: a broker
+#: up to this many RESEND_S slow still ends the hold with the word it brings back)
+WORDS_KEPT = 8
 TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
 READ_WAIT_S = 2.0  # rule 8: a word of the bridge's left unread this long: a hung express
 FINISH_WAIT_S = 0.5  # rule 9: the rest of a frame a write cut short, written within this
@@ -925,10 +930,13 @@ class Sync:
             self._out.clear()
             return self._answer_all(), self._publish() if self.linked else None
         if again or not self._out:  # a word out now was published before the request
-            # the new word answers every request the words out answer, and more: they are
-            # forgotten (a broker that stopped passing its words back would otherwise have
-            # one kept each RESEND_S for as long as the hold waits; one out at a time)
-            self._out.clear()
+            # the new word answers every request the words out answer, and more; the oldest
+            # beyond WORDS_KEPT are forgotten (a broker that stopped passing its words back
+            # would otherwise have one kept each RESEND_S for as long as the hold waits), but
+            # not all of them: a broker slower than RESEND_S brings each word back after the
+            # next is out, and the hold must still end then
+            for k in sorted(self._out)[: max(0, len(self._out) - WORDS_KEPT + 1)]:
+                del self._out[k]
             return None, self._publish()
         return None, None
 
@@ -968,6 +976,10 @@ class Sync:
             return None
         self._answered = self._asked
         return self._answered
+
+    def is_out(self, w: int) -> bool:
+        """Word ``w`` is out and kept (its mark is kept with it)."""
+        return w in self._out
 
     def _publish(self) -> int:
         self._word += 1
@@ -1112,8 +1124,8 @@ class _Child:
         """A request from the bridge (its socket's thread)."""
         with self._sync_lock:
             answer, word = self.sync.asked(n, again)
-            if answer is not None or word is not None:
-                self._marks.clear()  # (as Sync forgot its words out: one out at most)
+            for k in [k for k in self._marks if not self.sync.is_out(k)]:
+                del self._marks[k]  # (as Sync forgot its words out: WORDS_KEPT at most)
             self._answer(answer)  # (under the lock: the answers in order)
         self._publish(word)
 
