@@ -738,6 +738,13 @@ def test_a_flood_of_stops_right_after_a_turning_rotor_stopped_costs_the_next_tar
     v.target(300)
     v.run_until_state(MOVING, 10)
     v.run_for(1.0)
+    # (the bursts right after a reading: where the polls fell so that the rotor turned on into
+    # the next whole degree between the last reading and the first stop, the reading after the
+    # stop showed it turned, and the stop went again, as a turning rotor's)
+    link = v.session.controller.link
+    assert link is not None
+    last = link.last_reply_t
+    v.run_until(lambda h: link.last_reply_t != last, 1, "a reading")
     start, errors_before = v.now, len(v.events)
     for _ in range(150):  # within 0.3 s
         v.stop()

@@ -456,7 +456,10 @@ def test_a_target_sent_in_the_last_degrees_of_a_turn_the_line_lost_goes_again(
     a stall that blamed the brake). A GS-232B at 1 deg/s with whole-degree readings is called
     arrived at 97 and creeps on to 100: the same (before this change too)."""
     speeds = {"az_speed_deg_s": speed}
-    v = rig(model, emulator={**speeds, "start_az_deg": 80}, settings=speeds)
+    # (polled every 0.1 s: whole-degree readings 0.6 degrees apart at 6 deg/s never step over
+    # 97, whatever the phase of the polls)
+    settings = {**speeds, "moving_poll_interval_s": 0.1}
+    v = rig(model, emulator={**speeds, "start_az_deg": 80}, settings=settings)
     v.run_until_state(IDLE, 30)
     v.run_for(3)
     v.target(100.0)
