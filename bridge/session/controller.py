@@ -109,10 +109,28 @@ Rules:
    ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
    that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
-   models); a silent controller's report after its slew is not doubted, nor is a connection's
-   first, but for the first back where the rotor stood still when its readings were lost (a
-   port replugged, a controller answering again after a silence): that one is doubted against
-   where it stood (an attack pass: believed unchecked, one flipped bit was shown as the bearing
+   models); a silent controller's report after its slew is not doubted. A connection's first
+   reading (the bridge started, a port replugged, a controller answering again after a
+   silence) with nothing to doubt it against (no reading before, or the rotor turning or with
+   a target out when its readings were lost) is believed only when the next agrees with it,
+   within ``doubt_deg`` plus what the rotor can turn between them as for a reading asked again
+   at once below (``_doubts_first``: asked again at once, DOUBTS_TOLD in a row at most, then at
+   the usual polls within ``doubt_deg`` alone; the reading taken then is the first of the two,
+   which answered the question the motion machine times it by; a first the next two disagree
+   with is told as line noise). Until then the controller is not answering: the user sees it
+   offline, with no bearing, one reply time longer than before, as before any answer; nothing
+   relative to the bearing is made from that reading (a nudge is refused as before the first
+   answer, "no bearing to nudge from", rather than waited for: the judge makes it from the
+   status it sees, runtime/rotator.py, and the wait is one reply time; no target's side or end
+   is picked from it, pointing.py rule 2; no move, limit, stall or turn nobody asked for,
+   rules 10 and 13, is judged from it; no bearing is published). Attack 30: one byte lost or
+   flipped in the first answer after a start (``AZ150.0`` read ``AZ10.0`` on an Easycomm box,
+   ``AZ=150`` read ``AZ=110`` on a GS-232B) was the bearing, and a nudge of +10 from it turned
+   a rotor at rest at 150 down to 20; after a replug mid-turn, the same byte showed the rotor
+   at 110 (attack 16 had closed only a reply torn by a line end). The first back where the
+   rotor stood still when its readings were lost (a port replugged, a controller answering
+   again after a silence) is doubted against where it stood (an attack pass: believed
+   unchecked, one flipped bit was shown as the bearing
    at rest, and a nudge from it turned the rotor 190 degrees), a stop sent to it or not (a stop
    leaves a rotor at rest as still as it was; attack 9: a STOP at rest, the port replugged
    before a reading showed it taken, and 150 read as 350 was published and taken as a turn).
@@ -122,7 +140,10 @@ Rules:
    silence), and the first back after a loss makes it answering again as a reading would (its
    options, its connect guard, a stop owed written at once), shown at the bearing it stood at
    (a review: a line that went on disagreeing after a replug kept the rotator offline, where
-   the same inside a session leaves it online).
+   the same inside a session leaves it online); but a connection's first with nothing to doubt
+   it against makes it answering only once it is taken (there is no bearing to show: a line
+   that goes on disagreeing then keeps it offline, told from the DOUBTS_TOLD-th in a row on),
+   and a stop owed is written at once all the same.
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
    asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on;
    the bearing shown is the last two readings agreed on. A reading asked again at once agrees
@@ -612,6 +633,7 @@ class _Doubted(NamedTuple):
     t: float
     at_once: bool
     turning: bool = False
+    first: bool = False  # a connection's first, nothing to doubt it against: no answer yet
 
 
 NOT_DOUBTED = _Doubted(None, -math.inf, False)
@@ -662,6 +684,8 @@ class Controller:
         self._misfit_said = ""  # ... the last one's bytes, for the words of a lone one
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
+        self._first_said: PositionReply | None = None  # rule 9: a first reading, doubted
+        self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._cut_move = True  # link.py rule 13: a target the last connection wrote may be cut
@@ -807,7 +831,7 @@ class Controller:
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = False
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
-        # first reading is believed
+        # first reading is believed once the next agrees (``_doubts_first``)
         self._misfits = 0  # rule 6: counted anew
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
@@ -933,11 +957,12 @@ class Controller:
         reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
         if reply is not None:
             if self._doubts(reply, now) is Doubt.TAKEN:
-                self._reading(link, reply, now)
+                self._reading(link, self._confirmed(reply), now)
             else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
                 link.heard(now)  # poll later, the rotor turning on disagreed again, and the
                 link.poll_now(now)  # stop the line lost was never checked)
-                self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1)
+                first = self._doubted.first and self._doubts_in_row < DOUBTS_TOLD
+                self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1 or first)
         if link.flush_stop(now):
             self._stop_written(link, now)
 
@@ -1115,16 +1140,24 @@ class Controller:
             if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
                 self._ask_again(link, now, once=False)
             if not self.answering:  # rule 9: the first back, doubted, is an answer all the same
-                self._answers_again(now)
-                self._first_unread = True  # (the first taken is still the connection's first)
+                if not self._doubted.first:  # (where it stood is shown; a connection's first
+                    self._answers_again(now)  # has nothing to show: not answering yet)
+                    self._first_unread = True  # (the first taken is still the connection's)
                 if self.stops.owed:  # stops.py rule 3: the stop it went silent with, at once
                     log.info(
                         "%s: sending again the stop it went silent before confirming", self.name
                     )
                     self._send_owed(link, now)
             return False
-        self._reading(link, reply, now)
+        self._reading(link, self._confirmed(reply), now)
         return True
+
+    def _confirmed(self, reply: PositionReply) -> PositionReply:
+        """Rule 9: the reading taken for ``reply``: the first reading it confirmed (a
+        connection's first, ``_doubts_first``: the value that answered the question the motion
+        machine times it by, link.py ``first_asked_t``), else itself."""
+        first, self._first_agreed = self._first_agreed, None
+        return reply if first is None else first
 
     def _misfit(self, link: Link, reply: JunkReply, now: float) -> None:
         """Rule 6: a MISFIT reply is told in the codec's words from the MISFITS_TOLD-th in a
@@ -1148,8 +1181,10 @@ class Controller:
         if stands is None and self._rest_at_close and m.state is not mo.MOVING:
             stands, el_stands = m.position_deg, m.el_position_deg  # (the first back: where it
             # stood still when the readings were lost, an attack pass)
+        if stands is None and not self.answering:  # a connection's first: two must agree
+            return self._doubts_first(reply, doubted, now)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
-            self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
+            self._doubts_in_row = 0  # (turning, a target out, or a slew's report)
             if stands is not None and cfg.spec.reports_while_moving:
                 return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
             return Doubt.TAKEN
@@ -1198,6 +1233,48 @@ class Controller:
                 logged=False,
             )
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
+
+    def _doubts_first(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
+        """Rule 9: a connection's first reading, or the first back after readings were lost
+        while the rotor turned (nothing it stood at to doubt it against), is believed when the
+        next agrees, within ``doubt_deg`` and what the rotor can have turned between them
+        (asked at once: DOUBTS_TOLD readings in a row at most, then at the usual polls, within
+        ``doubt_deg`` alone). Until then it is no reading for anything, and the controller is
+        not answering yet (no bearing, offline, as before its first answer). Attack 30: one
+        byte lost or flipped in the first answer (``AZ150.0`` read ``AZ10.0``) was the
+        bearing, and a nudge of +10 turned the rotor from 150 down to 20."""
+        cfg = self.cfg.motion
+        first = doubted.reply if doubted.first else None
+        if first is not None:
+            turned = 0.0
+            if doubted.at_once:
+                turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted.t), DOUBT_TURN_MAX_DEG)
+            if not _apart(reply, first.az_deg, first.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
+                if self._doubts_in_row > 1:  # (the one that disagreed first was noise)
+                    self._say(
+                        f"a first reading of {_where(self._first_said or first)}, not said "
+                        f"again (the next two read {_where(reply)}): ignored (line noise?)",
+                        now,
+                        logged=True,
+                    )
+                self._doubts_in_row, self._first_said = 0, None
+                self._first_agreed = first  # (taken for this one: ``_confirmed``)
+                return Doubt.TAKEN
+        else:
+            self._doubts_in_row, self._first_said = 0, reply
+        self._doubts_in_row += 1
+        at_once = self._doubts_in_row < DOUBTS_TOLD
+        self._doubted = _Doubted(reply, now, at_once, first=True)
+        log.info("%s: a first reading of %s; asking again", self.name, _where(reply))
+        if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
+            self._say(
+                f"{self._doubts_in_row} first readings in a row disagree, the last "
+                f"{_where(reply)}: a noisy line or a failing position sensor; no bearing is "
+                "shown, nor a target taken, until two agree",
+                now,
+                logged=False,
+            )
+        return Doubt.ASK if at_once else Doubt.WAIT
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report

@@ -159,6 +159,12 @@ def test_a_garbled_satel_report_whose_rest_waits_in_the_port_is_read_before_the_
         os.write(master, b"SatEL\r\n" + REPORT)
         wait_until(lambda: readable(worker._fd), slow(5), "the report in the port")
         worker.guarded(worker.serve, now + 0.2, {worker._fd})
+        # a connection's first reading is believed when the next agrees (controller.py rule 9):
+        # the report settles, and the SatEL is asked again at once
+        now = polled(worker, master, now + 0.3, b"z")
+        os.write(master, REPORT)
+        wait_until(lambda: readable(worker._fd), slow(5), "the second report in the port")
+        worker.guarded(worker.serve, now + 0.2, {worker._fd})
         now = polled(worker, master, now + 0.3, b"z")  # a poll, its report held (rule 7)
         assert worker.status.available
         head, rest = REPORT.replace(b"Mode ", b"Mo\xe4e ").split(b"Time", 1)
