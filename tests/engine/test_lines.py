@@ -700,6 +700,16 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
     byte_s = 10 / 4800
     with worker_on_a_pty("rotorez", FAST_BRIDGE) as (worker, master, _box):
         now, holds = 100.0, []
+        for _ in range(2):  # the connection's first reading, and the one that confirms it
+            now = polled(worker, master, now, b"AI1;")  # (controller.py rule 9), in time
+            os.write(master, b";123")
+            wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
+            now = worker.wants(now)[1]  # the hold's end: the reply read
+            worker.guarded(worker.serve, now, {worker._fd})
+            now += 0.05
+            worker.guarded(worker.serve, now, set())  # its quiet time over: taken or doubted
+        assert worker.status.bearing_deg == 123
+        now = worker.wants(now)[1]  # the next poll
         for _ in range(3):
             now = polled(worker, master, now, b"AI1;")
             holds.append(worker.wants(now)[1] - now)
