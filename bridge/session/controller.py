@@ -684,7 +684,7 @@ class Controller:
         self._misfit_said = ""  # ... the last one's bytes, for the words of a lone one
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
-        self._first_said: PositionReply | None = None  # rule 9: a first reading, doubted
+        self._first_said: _Doubted | None = None  # rule 9: a first reading, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
@@ -1244,24 +1244,34 @@ class Controller:
         byte lost or flipped in the first answer (``AZ150.0`` read ``AZ10.0``) was the
         bearing, and a nudge of +10 turned the rotor from 150 down to 20."""
         cfg = self.cfg.motion
-        first = doubted.reply if doubted.first else None
-        if first is not None:
-            turned = 0.0
-            if doubted.at_once:
-                turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted.t), DOUBT_TURN_MAX_DEG)
-            if not _apart(reply, first.az_deg, first.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
-                if self._doubts_in_row > 1:  # (the one that disagreed first was noise)
+        if doubted.first:
+            # the last one doubted, or the chain's first (one glitch in the second: 150, 10,
+            # 150), within what the rotor can have turned since (asked at once: else none)
+            for first in (doubted, self._first_said):
+                if first is None or first.reply is None:
+                    continue
+                turned = 0.0
+                if doubted.at_once:
+                    turned = min(2 * cfg.nominal_speed_deg_s * (now - first.t), DOUBT_TURN_MAX_DEG)
+                one = first.reply
+                if _apart(reply, one.az_deg, one.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
+                    continue
+                said = self._first_said
+                noise = said.reply if said is not None and said.reply is not one else None
+                if noise is None and doubted.reply is not one:  # (the one between was)
+                    noise = doubted.reply
+                if noise is not None:
                     self._say(
-                        f"a first reading of {_where(self._first_said or first)}, not said "
-                        f"again (the next two read {_where(reply)}): ignored (line noise?)",
+                        f"a first reading of {_where(noise)}, not said again (two others "
+                        f"agree on {_where(reply)}): ignored (line noise?)",
                         now,
                         logged=True,
                     )
                 self._doubts_in_row, self._first_said = 0, None
-                self._first_agreed = first  # (taken for this one: ``_confirmed``)
+                self._first_agreed = one  # (taken for this one: ``_confirmed``)
                 return Doubt.TAKEN
         else:
-            self._doubts_in_row, self._first_said = 0, reply
+            self._doubts_in_row, self._first_said = 0, _Doubted(reply, now, True, first=True)
         self._doubts_in_row += 1
         at_once = self._doubts_in_row < DOUBTS_TOLD
         self._doubted = _Doubted(reply, now, at_once, first=True)
