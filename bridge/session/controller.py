@@ -116,8 +116,9 @@ Rules:
    within ``doubt_deg`` plus what the rotor can turn between them as for a reading asked again
    at once below (``_doubts_first``: asked again at once, DOUBTS_TOLD in a row at most, then at
    the usual polls within ``doubt_deg`` alone; the reading taken then is the first of the two,
-   which answered the question the motion machine times it by; a first the next two disagree
-   with is told as line noise). Until then the controller is not answering: the user sees it
+   which answered the question the motion machine times it by; where the second disagrees,
+   a third that agrees with either is taken, and the odd one is told as line noise). Until
+   then the controller is not answering: the user sees it
    offline, with no bearing, one reply time longer than before, as before any answer; nothing
    relative to the bearing is made from that reading (a nudge is refused as before the first
    answer, "no bearing to nudge from", rather than waited for: the judge makes it from the
