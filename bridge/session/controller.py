@@ -927,7 +927,7 @@ class Controller:
     def halt_owed(self, owed: bool) -> None:
         """parts.py rule 10: a refused start's halt is owed to the turn its readings are still
         judging (``owed``), or no longer: motion.py rule 4 then confirms a move only on axes
-        decided still by the next reading before it takes it for a hand's."""
+        decided still by a later reading before it takes it for a hand's."""
         self.motion = mo.halt_owed(self.motion, owed)
 
     def cut_mid_turn(self) -> bool:
@@ -1392,8 +1392,8 @@ class Controller:
         if self._lost_aim is not None and before is mo.MOVING and self.motion.state in _RESTS:
             self._lost_rest(now)  # rule 13
         m = self.motion  # the bearing shown (status.py rule 1): a turn's last degrees too
-        if mo.held_back(m, now):  # (motion.py rule 4: a move the next reading is to confirm,
-            return  # shown then if it does: one garbled reading never)
+        if mo.held_back(m, now):  # (motion.py rule 4: a move a later reading is to confirm,
+            return  # shown then if one does: a garbled reading never)
         if was.anchor_deg is None and self._afresh:  # (``_lose_motion``)
             self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
             self._afresh = False

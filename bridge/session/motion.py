@@ -115,14 +115,20 @@ Rules:
    While a refused start's halt is owed to the turn under judgement (``owes_halt``, set by
    the session from the part's ``Proposal.owes``, parts.py rule 10, cleared when tracking and
    following end; ``owed_halt``: no target nor stop sent since), a move only on decided axes
-   is a turn begun since only once the next reading confirms it (still more than
-   ``noise_deg`` from where those axes stood, or on an undecided axis: the lost turn, seen).
-   The reading that showed it is held back (``begun_t``, ``held_back``): no move, no rest
-   told by it, nothing of it shown in the status (controller.py feeds no bearing from it),
-   so one garbled reading keeps the halt owed and never shows, and a hand is followed and
-   shown moving one reading later (review 93: "AZ=066" read for 062 a second after a replug
-   mid slow elevation turn was taken for a hand's turn, the owed halt dropped, and the
-   elevation turned on 25 -> 85). Only then: with no halt owed a hand is told at once, as it
+   is a turn begun since only once a later reading confirms it (``_confirms``: an axis that
+   moved in it reads on from it the way it moved, a whole degree where the readings are in
+   whole degrees, or that move has lasted the axis's own ``axis_seen_s``; a move on an
+   undecided axis meanwhile is the lost turn, seen). The reading that showed it is held back
+   (``begun_t``, ``begun_deg``, ``held_back``), and so is every reading after it that still
+   shows the move unconfirmed (``held_t``): no move, no rest told by them, nothing of them
+   shown in the status (controller.py feeds no bearing from them); one that shows those axes
+   back where they stood ends the hold and is judged as any. So one garbled reading keeps the
+   halt owed and never shows, nor does the same garble read twice, and a hand is followed
+   and shown moving a reading or two later (review 93: "AZ=066" read for 062 a second after
+   a replug mid slow elevation turn was taken for a hand's turn, the owed halt dropped, and
+   the elevation turned on 25 -> 85; review 95: "EL=014" read for 010 in two readings in a
+   row confirmed itself, being as far from where the elevation stood as the first, and a
+   slow azimuth turned on 85 -> 250). Only then: with no halt owed a hand is told at once, as it
    was, for 03af385a, which asked the second reading everywhere and showed the first at
    rest, published one 'idle' status with a hand's new bearing before 'moving' (a hand at a
    slowed GS-232's panel just after a bridge started), and was reverted.
@@ -384,14 +390,20 @@ class Motion:
     still_axes: frozenset[str] = frozenset()
     # rule 4: a start refused while that turn was not yet seen owes it a halt (parts.py rule
     # 10, set by the session: ``halt_owed``); meanwhile a move only on axes in ``still_axes``
-    # is a turn begun since only once the next reading confirms it
+    # is a turn begun since only once a later reading confirms it (``_confirms``)
     owes_halt: bool = False
-    # rule 4: when a reading showed such a move, not yet confirmed (a hand's turn, or one
+    # rule 4: when a reading showed such a move, not yet confirmed (a hand's turn, or a
     # garbled reading): that reading was held back, neither a move nor a rest, nor shown
     begun_t: float | None = None
     # rule 6 (no feedback): the end of the last turn of the bridge's, assumed or stopped
     # (``turn_kept``)
     kept_end_t: float | None = None
+    # rule 4: that reading's azimuth and elevation: a hand's turn moves on from them the way
+    # they moved (a garble read again stays where it was)
+    begun_deg: tuple[float, float | None] | None = None
+    # rule 4: the last reading held back (``held_back``): the first, or one after it that
+    # neither confirmed the move nor showed the axes where they stood
+    held_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -468,26 +480,37 @@ def carried_seen_s(cfg: MotionConfig) -> float:
 
 
 def _judged(
-    m: Motion, cfg: MotionConfig, now: float, az_moved: bool, el_moved: bool
+    m: Motion,
+    cfg: MotionConfig,
+    now: float,
+    moved: tuple[bool, bool],
+    where: tuple[float, float | None],
 ) -> dict[str, Any]:
-    """Rule 4: what a reading at ``now`` tells of a turn lost with the link (``lost_turning``,
-    the rotor taken for turning) or found by a bridge just started (``found_unjudged``): a
-    move on an axis not yet shown still for its own ``axis_seen_s`` is that turn, seen; a
-    move only on axes that were is a turn begun since (not the lost one: ``lost_still``; not
-    the found one: no longer ``carried``), while a refused start's halt is owed only once the
-    next reading confirms it (``begun_t``: this one held back; review 93); a reading with no
-    move shows each axis still whose own time is over, and the turn over (or none) once
-    every axis is (review 89: the slowest axis's time for every axis stopped a hand at a
-    GS-232B's azimuth a second after a replug)."""
+    """Rule 4: what a reading at ``now`` (``where``: its azimuth and elevation; ``moved``:
+    which of them moved) tells of a turn lost with the link (``lost_turning``, the rotor taken
+    for turning) or found by a bridge just started (``found_unjudged``): a move on an axis not
+    yet shown still for its own ``axis_seen_s`` is that turn, seen; a move only on axes that
+    were is a turn begun since (not the lost one: ``lost_still``; not the found one: no
+    longer ``carried``), while a refused start's halt is owed only once a later reading
+    confirms it (``_confirms``; ``begun_t``: held back till then, reviews 93 and 95); a
+    reading with no move shows each axis still whose own time is over, and the turn over (or
+    none) once every axis is (review 89: the slowest axis's time for every axis stopped a
+    hand at a GS-232B's azimuth a second after a replug)."""
     lost = m.state is MOVING
-    held: dict[str, Any] = {} if m.begun_t is None else {"begun_t": None}  # (told now)
+    az_moved, el_moved = moved
+    held: dict[str, Any] = (  # (told now)
+        {} if m.begun_t is None else {"begun_t": None, "begun_deg": None, "held_t": None}
+    )
     if az_moved or el_moved:
         if (az_moved and "azimuth" not in m.still_axes) or (
             el_moved and "elevation" not in m.still_axes
         ):
             return held  # (the turn seen, as it was taken for)
-        if m.begun_t is None and owed_halt(m):  # (a halt owed: one reading is no hand's)
-            return {"begun_t": now}
+        if owed_halt(m):  # (a halt owed: a reading that only jumps is no hand's)
+            if m.begun_t is None:
+                return {"begun_t": now, "begun_deg": where, "held_t": now}
+            if not _confirms(m, cfg, now, where):
+                return {"held_t": now}  # (held back too: a garble read again, or a slow hand)
         return {**held, "lost_still": True} if lost else {**held, "carried": False}
     first = m.first_read_t if m.first_read_t is not None else now
     seen = axis_seen_s(cfg)
@@ -498,6 +521,39 @@ def _judged(
         return {**held, "still_axes": still}
     done = {**held, "still_axes": still}
     return {**done, "lost_still": True} if lost else {**done, "carried": False}
+
+
+def _confirms(m: Motion, cfg: MotionConfig, now: float, where: tuple[float, float | None]) -> bool:
+    """Rule 4: whether a reading at ``now`` (``where``), still showing a move only on decided
+    axes from where they stood, confirms the one held back since ``begun_t`` as a hand's turn:
+    an axis that moved in it reads on from it the way it moved (a hand turns on, a whole
+    degree at a time where the readings are in whole degrees; the same garble read again
+    stays: review 95, "EL=014" for 010 in two readings in a row dropped the owed halt), or
+    the move has lasted that axis's own ``axis_seen_s`` (a hand slower than a degree a
+    reading, or one that stopped: the move is the rotor's)."""
+    if m.begun_t is None or m.begun_deg is None:
+        return True
+    wraps, noise, seen = cfg.spec.az_wraps, cfg.noise_deg, axis_seen_s(cfg)
+    (az0, el0), (az, el) = m.begun_deg, where
+    axes: list[tuple[str, float, float, float, bool]] = []
+    if m.anchor_deg is not None:
+        axes.append(("azimuth", m.anchor_deg, az0, az, wraps))
+    if m.el_anchor_deg is not None and el0 is not None and el is not None:
+        axes.append(("elevation", m.el_anchor_deg, el0, el, False))
+    for axis, stood, then, read, wrap in axes:
+        way = then - stood
+        if wrap:
+            way = (way + 180.0) % 360.0 - 180.0
+        if abs(way) <= noise:
+            continue  # (this axis did not move in the reading held back)
+        if now - m.begun_t >= seen.get(axis, 0.0):
+            return True
+        on = read - then
+        if wrap:
+            on = (on + 180.0) % 360.0 - 180.0
+        if on * way > 0:
+            return True
+    return False
 
 
 def owed_halt(m: Motion) -> bool:
@@ -511,13 +567,15 @@ def halt_owed(m: Motion, owed: bool) -> Motion:
     (parts.py rule 10), or no longer (the start's part ended)."""
     if m.owes_halt is owed:
         return m
-    return replace(m, owes_halt=owed, begun_t=m.begun_t if owed else None)
+    if owed:
+        return replace(m, owes_halt=True)
+    return replace(m, owes_halt=False, begun_t=None, begun_deg=None, held_t=None)
 
 
 def held_back(m: Motion, now: float) -> bool:
     """Rule 4: the reading just taken at ``now`` was held back (a move only on axes decided
-    still while a halt is owed, the next reading to confirm it): nothing of it is shown."""
-    return m.begun_t == now
+    still while a halt is owed, a later reading to confirm it): nothing of it is shown."""
+    return m.held_t == now
 
 
 # -- observations ----------------------------------------------------------------------------
@@ -632,6 +690,8 @@ def reading(
             first_read_t=now,
             still_axes=frozenset(),
             begun_t=None,
+            begun_deg=None,
+            held_t=None,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -654,9 +714,10 @@ def reading(
     )
     moved = az_moved or el_moved
     if (m.lost_turning and not m.lost_still and m.state is MOVING) or found_unjudged(m):
-        judged = _judged(m, cfg, now, az_moved, el_moved)  # rule 4: each axis its own
-        if judged.get("begun_t") == now:  # (held back till the next reading confirms it: no
-            m = replace(m, begun_t=now)  # move, no rest told by it, nothing shown of it)
+        # rule 4: each axis its own
+        judged = _judged(m, cfg, now, (az_moved, el_moved), (az_deg, el_deg))
+        if judged.get("held_t") == now:  # (held back till a later reading confirms it: no
+            m = replace(m, **judged)  # move, no rest told by it, nothing shown of it)
             return tick(m, cfg, now, asking_since=None)
         changes.update(judged)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t

@@ -81,9 +81,10 @@ Rules:
     shows that turn move; readings that show the rotor still instead drop it, each axis judged
     by its own speed (``Motion.lost_still``, motion.py rule 4: every axis still for its own
     time, the turn came to rest while the port was out; or a move only on axes already shown
-    still, a turn begun since, once the next reading confirms it: one garbled reading is none,
-    review 93; ``Proposal.owes`` tells the motion the halt is owed), so a hand at the panel
-    after that is never halted for it
+    still, a turn begun since, once a later reading confirms it, reading on from it the way it
+    moved or that move lasting the axis's own time: one garbled reading is none, review 93,
+    nor the same garble read twice, review 95; ``Proposal.owes`` tells the motion the halt
+    is owed), so a hand at the panel after that is never halted for it
     (review 73: d609655e owed the halt until rule 2's rest, a second or more, and stopped a
     hand begun in that time; review 89: so did the slowest axis's time for every axis, a hand
     at a GS-232B's azimuth a second after a replug). A bridge just started
@@ -261,7 +262,7 @@ class StartHalt:
     @property
     def owing(self) -> bool:
         """The halt is owed (``Proposal.owes``: motion.py rule 4 judges that turn meanwhile by
-        two readings of a move only on axes decided still, not one)."""
+        a move only on axes decided still once a later reading confirms it, not by one)."""
         return self._owed
 
     def wanted(self, scene: Scene, first: bool) -> bool:

@@ -1344,7 +1344,7 @@ class RotatorSession:
             self._halt(now)
             self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
         if proposal.owes:  # parts.py rule 10: a refused start's halt owed to a turn unseen
-            self.controller.halt_owed(True)  # (motion.py rule 4: two readings tell a hand)
+            self.controller.halt_owed(True)  # (motion.py rule 4: a later reading tells a hand)
         if proposal.drop is not None:  # (auto-park's, a hand before it went: autopark.py rule 3)
             self.targets.clear_from(proposal.drop)
         if proposal.target is not None:

@@ -16,11 +16,15 @@ checked below as the control)."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_attack19_follow_start_refused_grid import PARTNER
 from tests.engine.test_follow import STATION
+from tests.engine.test_review73_restart_hand import _restarted_at_rest
+from tests.engine.test_review84_elevation_carried_turn import START_AZ
+from tests.engine.test_review89_restart_mid_slow_elevation_turn import (
+    gs232_with_a_slow_elevation_by_a_keep_out,
+)
+from tests.engine.test_review93_one_glitch_on_a_decided_axis import AZ_SEEN_S
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
@@ -91,13 +95,35 @@ def test_one_garbled_reading_of_the_decided_elevation_keeps_the_halt() -> None:
         assert angle_between(v.truth().az_deg, here) <= 10.0, (here, v.truth().az_deg)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 95: the same bit flipped in two readings in a row drops the owed halt of a "
-    "refused follow start, and the azimuth turns on 85 -> 250 to the old target",
-)
 def test_two_garbled_readings_in_a_row_of_the_decided_elevation_keep_the_halt() -> None:
     with slow_azimuth_fast_elevation() as v:
         here = refused_right_after_a_replug_mid_the_azimuth_turn(v, 2)
         # held where it was (a stop and its coast): observed 85 -> 250, no stop frame
         assert angle_between(v.truth().az_deg, here) <= 10.0, (here, v.truth().az_deg)
+
+
+def test_a_hand_that_nudges_a_decided_azimuth_while_the_halt_is_owed_is_shown_where_left() -> None:
+    """The fix's other side: a move that does not read on from the reading held back is held
+    back until it has lasted the axis's own time, then is a hand's. A bridge just started by
+    review 93's GS-232B at rest, a follow start refused at once (owed the halt), a hand that
+    turns the decided azimuth 3 degrees (past 2 of noise) and lets go: every reading from its
+    first past the noise reads the same. Shown where it stopped, at rest, never stopped (held
+    back for good, R/status would say the old bearing while the rotor stands 3 degrees on)."""
+    with gs232_with_a_slow_elevation_by_a_keep_out() as v:
+        _restarted_at_rest(v)
+        t = v.now
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(AZ_SEEN_S)  # (the azimuth decided still, the elevation not: not a deadline)
+        assert [e.kind for e in v.errors(since=t)] == [ErrorKind.REFUSED]
+        assert v.truth().az_deg == START_AZ and not v.truth().is_moving  # (never moved)
+        hand_to = START_AZ + 3  # (away from the keep-out sector)
+        v.manual_rotate(hand_to)  # a hand at the panel, a nudge
+        v.run_until(lambda h: not h.truth().is_moving, 10, "the nudge over")
+        v.run_until(
+            lambda h: h.status.raw_bearing_deg == hand_to and not h.status.moving,
+            10,
+            "the bridge shows the rotor where the hand left it, at rest",
+        )
+        assert "stop" not in {f.outcome for f in v.frames(since=t)}
+        assert v.truth().az_deg == hand_to
