@@ -32,6 +32,12 @@ Rules:
    (``check_azimuth``), by the judge as rule 4 has it, and by the session too, whatever
    brought the start (attack 19: the sun's azimuth and a QSO partner's bearing each raised a
    dish as its elevation, nothing said).
+7. A start's refusal may owe a halt to a turn not yet seen (parts.py rule 10, ``StartHalt``):
+   owed while that feature is on (``owing``), so nothing is owed once it ends, however it
+   ends (``off``, ``end``, the other feature's start, the sky worker's answer, its own step).
+   The session tells the motion so at every step (session.py ``_step``: motion.py rule 4's
+   ``owes_halt``), the one place (review 95: cleared only where the session ended a part
+   itself, a hand after ``follow OFF`` was still held back a reading).
 """
 
 from __future__ import annotations
@@ -192,6 +198,12 @@ class FeatureCommands:
             self.tracker.end(ends)
             self.targets.clear_from(Source.TRACKING)
         return DONE
+
+    @property
+    def owing(self) -> bool:
+        """Rule 7: a refused start's halt is owed (parts.py rule 10) by tracking or following,
+        while it is on; the session tells the motion at every step (motion.py rule 4)."""
+        return self.tracker.owing or self.follower.owing
 
     def end(self, why: str, *, tracking: bool = True) -> None:
         """Tracking and following end (rule 2); ``{}`` in ``why``: the command's name."""

@@ -195,6 +195,12 @@ class Follower:
     def on(self) -> bool:
         return self.info is not None
 
+    @property
+    def owing(self) -> bool:
+        """Following is on and its start's refusal owes a halt to a turn not yet seen (rule 5,
+        parts.py rule 10): off, it owes nothing (feature_commands.py ``owing``)."""
+        return self.info is not None and self._halt.owing
+
     def start(self, follow: Follow, now: float) -> None:
         """Rule 1; rule 4: only a fresh status turns the rotor at once."""
         self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
@@ -395,7 +401,7 @@ class Follower:
             # as its own target would have stopped it: rule 2, parts.py rule 10)
             halt = self._halt.wanted(scene, self._bearing is None)
             error = Report(ErrorKind.REFUSED, f"following: {why}", what)
-            return Proposal(error=error, busy=True, halt=halt, owes=self._halt.owing)
+            return Proposal(error=error, busy=True, halt=halt)
         self._bearing = az
         self.info = replace(
             info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False

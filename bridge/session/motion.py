@@ -112,9 +112,10 @@ Rules:
    a refused start); review 89: the slowest axis's time for every axis (2.1 s on an az/el
    GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
    and the owed halt stopped it a few degrees in.
-   While a refused start's halt is owed to the turn under judgement (``owes_halt``, set by
-   the session from the part's ``Proposal.owes``, parts.py rule 10, cleared when tracking and
-   following end; ``owed_halt``: no target nor stop sent since), a move only on decided axes
+   While a refused start's halt is owed to the turn under judgement (``owes_halt``, told by
+   the session at every step while the start's feature is on and owes it, parts.py rule 10,
+   feature_commands.py rule 7, so it ends however tracking or following end; ``owed_halt``:
+   no target nor stop sent since), a move only on decided axes
    is a turn begun since only once a later reading confirms it (``_confirms``: an axis that
    moved in it reads on from it the way it moved, a whole degree where the readings are in
    whole degrees, or that move has lasted the axis's own ``axis_seen_s``; a move on an
@@ -389,8 +390,8 @@ class Motion:
     # that is a turn begun since
     still_axes: frozenset[str] = frozenset()
     # rule 4: a start refused while that turn was not yet seen owes it a halt (parts.py rule
-    # 10, set by the session: ``halt_owed``); meanwhile a move only on axes in ``still_axes``
-    # is a turn begun since only once a later reading confirms it (``_confirms``)
+    # 10, kept by the session at every step: ``halt_owed``); meanwhile a move only on axes in
+    # ``still_axes`` is a turn begun since only once a later reading confirms it
     owes_halt: bool = False
     # rule 4: when a reading showed such a move, not yet confirmed (a hand's turn, or a
     # garbled reading): that reading was held back, neither a move nor a rest, nor shown

@@ -83,8 +83,9 @@ Rules:
     time, the turn came to rest while the port was out; or a move only on axes already shown
     still, a turn begun since, once a later reading confirms it, reading on from it the way it
     moved or that move lasting the axis's own time: one garbled reading is none, review 93,
-    nor the same garble read twice, review 95; ``Proposal.owes`` tells the motion the halt
-    is owed), so a hand at the panel after that is never halted for it
+    nor the same garble read twice, review 95; the session tells the motion the halt is
+    owed while the part is on: feature_commands.py rule 7), so a hand at the panel after
+    that is never halted for it
     (review 73: d609655e owed the halt until rule 2's rest, a second or more, and stopped a
     hand begun in that time; review 89: so did the slowest axis's time for every axis, a hand
     at a GS-232B's azimuth a second after a replug). A bridge just started
@@ -183,7 +184,6 @@ class Proposal:
     # the wind: its storm's park refused, wind.py rule 5)
     drop: Source | None = None  # drop the waiting target if this source put it (autopark.py
     # rule 3: a hand on the panel before the park went)
-    owes: bool = False  # rule 10: a start's refusal owes its halt to a turn not yet seen
 
 
 NOTHING = Proposal()
@@ -261,7 +261,7 @@ class StartHalt:
 
     @property
     def owing(self) -> bool:
-        """The halt is owed (``Proposal.owes``: motion.py rule 4 judges that turn meanwhile by
+        """The halt is owed (feature_commands.py rule 7: motion.py rule 4 judges that turn by
         a move only on axes decided still once a later reading confirms it, not by one)."""
         return self._owed
 

@@ -852,7 +852,6 @@ class RotatorSession:
         self._waiting = None
         self._lookup_held, self._lookup_waiting = False, None
         self.features.end(why)
-        self.controller.halt_owed(False)  # (parts.py rule 10: its start's halt owed no more)
         self._end_parts(why, now)
 
     def _end_parts(self, why: str, now: float) -> None:
@@ -1159,6 +1158,8 @@ class RotatorSession:
             ctl.send_options(now, waits)  # (one that may go while a target waits goes first:
             if waits:  # the turn starts at the speed set, not the box's own: an attack pass)
                 self._try_target(ctl.link, now)
+        ctl.halt_owed(self.features.owing)  # (feature_commands.py rule 7: owed while the
+        # refused start's feature is on, however it ended since; motion.py rule 4)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
@@ -1337,14 +1338,11 @@ class RotatorSession:
             self._error(error.kind, error.message, error.command, said=self._say(name, now))
         if proposal.ended is not None:
             self.features.end(proposal.ended)  # (tracking may have ended itself)
-            self.controller.halt_owed(False)  # (parts.py rule 10: owed no more)
             self.targets.clear_from(Source.TRACKING)
         if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3);
             # the wind: its storm's park refused (wind.py rule 5)
             self._halt(now)
             self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
-        if proposal.owes:  # parts.py rule 10: a refused start's halt owed to a turn unseen
-            self.controller.halt_owed(True)  # (motion.py rule 4: a later reading tells a hand)
         if proposal.drop is not None:  # (auto-park's, a hand before it went: autopark.py rule 3)
             self.targets.clear_from(proposal.drop)
         if proposal.target is not None:

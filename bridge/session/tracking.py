@@ -212,6 +212,12 @@ class Tracker:
         self._aged: Body | None = None  # rule 11: the elements whose age was judged
         self._epoch: float | None = None  # rule 11: their epoch (unix), if they have one
 
+    @property
+    def owing(self) -> bool:
+        """A body is tracked and its start's refusal owes a halt to a turn not yet seen (rule
+        5, parts.py rule 10): ended, it owes nothing (feature_commands.py ``owing``)."""
+        return self.body is not None and self._halt.owing
+
     # -- rule 1 ----------------------------------------------------------------------------
     def start(self, body: Body, from_file: LookupQuestion | None = None) -> None:
         self._reset(body)
@@ -356,13 +362,11 @@ class Tracker:
             # (the turn the start found: stopped once, as the start's own target would; then
             # the rotor is polled and seen at rest as after any stop: review 52)
             halt = self._halt.wanted(scene, self._last is None)
-            owes = self._halt.owing
             if self._refused_for != aos or aos is None:
                 self._refused_for = aos
                 why = f"tracking {sky.body.name}: {exc.message}; holding"
-                error = Report(ErrorKind.REFUSED, why)
-                return Proposal(error=error, busy=True, halt=halt, owes=owes)
-            return Proposal(busy=True, halt=halt, owes=owes)
+                return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True, halt=halt)
+            return Proposal(busy=True, halt=halt)
         self._last_raw = judged.az_deg
         return Proposal(target=judged, busy=True)
 

@@ -57,11 +57,6 @@ def moving_shown_after_a_hand(before_the_hand: Callable[[VirtualRotator], None])
         )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 95: after follow OFF a hand at the panel is still shown idle at its old "
-    "bearing for one more reading (the owed-halt hold outlives following)",
-)
 def test_a_hand_after_following_is_turned_off_is_shown_as_soon_as_without_it() -> None:
     control = moving_shown_after_a_hand(never_followed)
     # observed: 0.2 s later (one reading held back: 'idle' at 62 while it read 66)
