@@ -1066,7 +1066,6 @@ class Controller:
             log.debug("%s: <- %r", self.cfg.rotator_id, data)
         link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
-        link.fed(bool(replies), now)  # link.py rule 11: bytes made nothing (garbled?)
         if not replies:
             return Fed.NOTHING
         held = len(replies) == 1 and isinstance(replies[0], PositionReply)

@@ -133,14 +133,6 @@ Rules:
    half-duplex line with 80 bytes still coming, their tail closed the re-poll's exchange and
    a report from before a point ended its slew: the next ``z`` went into the slew; one noise
    byte before every GS-232B answer had it polled 44 times a second.
-   Bytes read since the question that the codec made nothing of by the time the reply is given
-   up (``fed``: held for a line end that never came) are such an answer too, for the silence
-   alone (rule 2: the controller answered, garbled; no re-poll): the wrong baud rate garbles
-   every byte, a line's end among them, and a line codec holds them until its longest line
-   has come, longer than a silence timeout of polls. (Attack 30: a GS-232, Easycomm or
-   RC2800 at the wrong baud rate was told "does not answer", and the user looked at the
-   cable, not at the baud rate.) Bytes the codec made something of, harmless chatter too (an
-   echo on a loopback), are not.
 12. A controller that answers late: a line of the answer to the question given up last that
    comes before the next question (protocols/base.py rule 7: never a reading) says how long
    after that question it came (``answered_late``); from then on every answer is waited for
@@ -288,7 +280,6 @@ class Link:
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
         self._read_t = -math.inf  # rule 11: the last bytes read
-        self._unmade_t = -math.inf  # rule 11: the last bytes read the codec made nothing of
         self._fresh = True  # rule 13: no frame written on this connection yet
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
         self._move_t = -math.inf  # rule 13: when the last target's last frame goes
@@ -348,11 +339,6 @@ class Link:
         if self._held is not None:  # rule 9: the line is not quiet yet
             self._held_after = True
             self._held_until = min(self._held_cap, max(self._held_until, now + self._settle_s))
-
-    def fed(self, made: bool, now: float) -> None:
-        """Rule 11: the bytes read now made a reply of the codec's (``made``), or nothing yet
-        (held for the rest of a reply, or garbled bytes the codec holds)."""
-        self._unmade_t = -math.inf if made else now
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -748,8 +734,6 @@ class Link:
         """Stop waiting for the owed reply (and for a slew's report: the slew is over); True if
         it came garbled and is asked again at once (rule 11)."""
         again = self._ask_garbled(now)
-        if self._slew is None and self._unmade_t >= self._asked_t:  # rule 11: bytes came,
-            self._garbled_t = max(self._garbled_t, self._unmade_t)  # nothing made of them
         self.codec.expire_query()
         self._reply_deadline = None
         if self._slew is None:  # rule 12: its answer may still come
