@@ -573,10 +573,6 @@ class ModelSpec:
     # how a frame names the axis it is for (its first bytes: RC2800 b"A", b"E"): frames to the
     # same axis need no axis gap between them
     axis_prefixes: tuple[bytes, ...] = ()
-    # its replies are whole lines, each with its own end, that the box may stream back to back
-    # (an RC2800's position lines): a second whole reading in a held one's quiet time takes its
-    # place, by the first's cap, rather than spoil it (session/link.py rule 9)
-    streams_lines: bool = False
     full_duplex: bool = True  # may a command be written while a reply is still coming?
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     # the stop frame may reach the controller at any moment, between any two frames the session

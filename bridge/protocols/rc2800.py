@@ -436,7 +436,6 @@ def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
         retarget=RetargetPolicy.DIRECT,  # a new bearing is taken while turning
         axis_gap_s=AXIS_GAP_S if elevation else 0.0,
         axis_prefixes=(b"A", b"E"),
-        streams_lines=True,  # rule 2: the box's own stream, its lines back to back
         az_min_deg=0.0,
         az_max_deg=float(AZ_MAX_DEG),
         el_min_deg=0.0,

@@ -88,16 +88,6 @@ Rules:
    second reply that spoils it; the controller is asked again). What comes after the stop
    belongs to the stop's own exchange (its reply is a reading of its own, never a second reply
    that spoils the held one).
-   A box whose replies are whole lines, each with its own end, that it may stream back to back
-   (``spec.streams_lines``: an RC2800's position lines, rc2800.py rule 2) has a second whole
-   reading in the quiet time take the first's place instead of spoiling it, and the newest is
-   taken by the first's cap at the latest (a stream that goes on would hold it for ever): a
-   well-formed line ended and followed by another is no reason to doubt either, and the newer
-   is the box's latest word (a glitch line ahead of the real one is overtaken by it). Junk
-   between them still spoils the held reading. (Attack 30: lines streamed 1.25 ms apart, under
-   three byte times, spoiled each other: no reading settled, an ``rc2800-az`` streaming every
-   20 ms was offline from the start, an ``rc2800`` every 40 ms had its turn called silent and
-   stopped.)
 10. A controller that needs time between commands to its two axes (``spec.axis_gap_s``,
    RC2800; a frame's axis by its first bytes, ``spec.axis_prefixes``) gets it: a command's or
    a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
@@ -630,13 +620,7 @@ class Link:
 
     def hold_reading(self, reply: PositionReply, now: float) -> bool:
         """Rule 9: a reading, taken once the line stays quiet after it; False when another is
-        held (two readings in one exchange: neither is, the held one is dropped), but for a
-        box that streams whole lines (``spec.streams_lines``): the newer takes the held one's
-        place, taken by the first's cap at the latest."""
-        if self._held is not None and self.spec.streams_lines:
-            self._held, self._held_after = reply, False
-            self._held_until = min(self._held_cap, now + self._settle_s)
-            return True
+        held (two readings in one exchange: neither is, the held one is dropped)."""
         if self._held is not None:
             self._held = None
             return False

