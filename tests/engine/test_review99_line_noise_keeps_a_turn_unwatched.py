@@ -64,12 +64,6 @@ def stop_after_cut(v: VirtualRotator, noisy: bool) -> tuple[float, float, list[s
     return (stopped[0] if stopped else math.inf), v.truth().az_deg, [why for _, why in said]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 99: a controller whose replies stop mid-turn on a line that still brings "
-    "a stray byte now and then is kept online as 'answers garbled': the turn runs on "
-    "unwatched 3 s (18 degrees) longer before the bridge's stop",
-)
 @pytest.mark.parametrize(
     "model", ["gs232b", "easycomm2", "easycomm3", "rc2800-az", "prosistel-combi"]
 )

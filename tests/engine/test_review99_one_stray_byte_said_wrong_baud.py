@@ -25,11 +25,6 @@ STRAY = b"\x00"
 TIMEOUT_S = 30  # the complaint at the silence timeout, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 99: a controller that is off (one stray NUL, then nothing) is told "
-    "'answers only garbled replies: the wrong baud rate or model', not 'does not answer'",
-)
 @pytest.mark.parametrize("model", ["gs232b", "easycomm2", "rc2800-az"])
 def test_one_stray_byte_then_nothing_is_still_said_not_to_answer(
     rig: Callable[..., VirtualRotator], model: str

@@ -53,12 +53,6 @@ def glitch_after_first_line(v: VirtualRotator) -> list[float]:
     return when
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 99: an RC2800's glitch line right after its first real one is published "
-    "(359 for a rotor at 100), then told as a turn with no command from the bridge and "
-    "answered with a stop",
-)
 @pytest.mark.parametrize("stream_s", [None, 0.5], ids=["asked", "streaming"])
 def test_a_glitch_line_right_after_the_real_one_is_never_published(
     rig: Callable[..., VirtualRotator], stream_s: float | None
@@ -81,11 +75,6 @@ AHEAD_DEG = 3.0  # the glitch says the rotor is this much further on (within its
 TURN_S = 60  # the turn to its end, with room (virtual time, not a deadline)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 99: mid-turn, an RC2800's glitch line right after its real one is "
-    "published as the bearing (153 for a rotor at 150.4)",
-)
 def test_a_glitch_line_right_after_the_real_one_mid_turn_is_never_published(
     rig: Callable[..., VirtualRotator],
 ) -> None:
