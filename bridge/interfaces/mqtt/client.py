@@ -653,7 +653,7 @@ class MqttClient(Connection):
         if self._look is not None:
             if retained and self._broker_held(topic):  # rule 14: the broker hands over what
                 self._look_heard = time.monotonic()  # it held (a tracker's target does not)
-            if self._look_saw(self._look, topic, payload):
+            if self._look_saw(self._look, topic, payload, retained):
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
             late = self._look.late(topic, payload, retained)
@@ -899,8 +899,13 @@ class MqttClient(Connection):
             )
         return sorted(self._look_only)
 
-    def _look_saw(self, look: FirstLook, topic: str, payload: bytes) -> bool:
+    def _look_saw(
+        self, look: FirstLook, topic: str, payload: bytes, retained: bool = False
+    ) -> bool:
         """Rule 14: True if the message belongs to the first look (handled here)."""
+        if topic == look.claim.hello_topic and retained:  # rule 14: never a hello (nor a
+            look.retained_hello(payload)  # marker: neither goes out retained); said once
+            return True
         if topic == look.claim.hello_topic:
             with self._lock:
                 n = look.ended_by(payload)

@@ -8,7 +8,13 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    or deleting anything, the client publishes a hello to itself on ``B/bridge/hello`` (QoS 1,
    as the fence probe sent right before it, client.py rule 16; not retained: nothing of it
    stays on the broker, and it names the instance and the look's number, so a late hello of an
-   earlier look, or another bridge's, ends nothing). The broker handles one client's packets in
+   earlier look, or another bridge's, ends nothing; nor does a message that comes retained
+   there, whatever it says: the bridge never publishes one retained on that topic, so it is a
+   forged or left-over one, said once in the process with how to delete it (``retained_hello``;
+   review 94: a retained ``"<client id> 1"``, the first look of every process, came back as
+   the broker answered the look's SUBSCRIBE, before the posts' values read for the look alone,
+   and ended it: a bridge ran beside a live one on its topics, and one target turned both
+   rotors, at every start). The broker handles one client's packets in
    order and sends the retained messages of a subscription before anything published after it:
    so the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before the hello comes
    back are all the broker held (``saw``).
@@ -148,6 +154,7 @@ class FirstLook:
         # claim rule 5: the topics of the posts where another bridge would stand on ours
         self._posted = frozenset(t for p in claim.posts for t in p.topics)
         self.reads: list[str] = []  # claim rule 5: the stamps' bridge posts, read this look
+        self._hello_said = False  # rule 14: a retained hello said in the log (once a process)
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -203,6 +210,22 @@ class FirstLook:
             return None
         hello = self._hello(n) + (b" probe" if self.probing else b"")  # (rule 14's second)
         return n if payload == hello else None
+
+    def retained_hello(self, payload: bytes) -> None:
+        """Rule 14: a retained message on the hello topic is no hello (the bridge never
+        publishes one retained): it ends nothing, and is said once in the process."""
+        if self._hello_said:
+            return
+        self._hello_said = True
+        topic = self.claim.hello_topic
+        log.warning(
+            "the MQTT broker holds a retained message on %s (%r): the bridge's first look never "
+            "publishes one retained there, so it is a forged or left-over message, and ends no "
+            "look; delete it (an empty retained message: mosquitto_pub -t '%s' -r -n)",
+            topic,
+            payload[:40],
+            topic,
+        )
 
     def saw(self, topic: str, payload: bytes) -> bool:
         """Whether a message belongs to the look under way (and is kept for its verdict)."""
