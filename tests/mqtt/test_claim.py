@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from bridge.interfaces.mqtt.claim import (
     stamp_stopped,
     standing,
     stopped,
+    unusable_stamp,
     vouch_reads,
     yields_to,
 )
@@ -244,3 +246,24 @@ def test_the_look_reads_the_bridge_posts_on_the_base_topic_a_stamp_names() -> No
     above = {"shack/bridge/info": OTHER.info([]).encode(), "shack/bridge/state": b"online"}
     found = standing(ME, "rotor/tower", POSTS, {**seen, **above})
     assert found is not None and found.live and found.beside == "shack/bridge/state"
+
+
+@pytest.mark.parametrize(
+    "base",
+    ["#", "rotor/+", "\ud800", "a\x00b", "$SYS", "x" * 70000],
+    ids=["hash", "plus", "surrogate", "nul", "dollar", "past-mqtt-length"],
+)
+def test_a_stamp_naming_a_base_topic_no_bridge_could_have_is_no_stamp(base: str) -> None:
+    """Review 94: a stamp's base topic is read as a topic (its vouch reads are subscribed): one
+    the configuration would refuse as a base topic (a wildcard, a lone surrogate, a NUL, '$',
+    past MQTT's length) is junk, no bridge's stamp: nothing is read for it, it stands nowhere,
+    and ``unusable_stamp`` says why, for the log."""
+    claim = Claim(ME, "rotor/tower", "rotor/tower/bridge/info", "rotor/tower/bridge/hello", POSTS)
+    forged = json.dumps({"id": "tower", "bridge": {"instance": OTHER.id, "base_topic": base}})
+    seen = {"rotor/tower/info": forged.encode(), "rotor/tower/availability": b"online"}
+    assert Instance.stamped(forged.encode()) is None
+    assert vouch_reads(claim, {**seen, "rotor/tower/availability": b"offline"}) == []
+    assert standing(ME, "rotor/tower", POSTS, seen) is None
+    said = unusable_stamp(forged.encode())
+    assert said is not None and said[0] == base
+    assert unusable_stamp(ROTATOR) is None and unusable_stamp(b"junk") is None

@@ -65,7 +65,13 @@ Rules:
    own: a bridge on our base topic is rules 2 and 4's, by ``B/bridge/info`` (review 77: a station
    that took its base topic over from a computer killed outright was refused for good by that
    computer's rotators' ``R/info`` and ``online``, left retained, once one of them was configured
-   again). An instance is gone on a base topic where a bridge post says it is not online (its last
+   again), nor a stamp whose base topic no bridge could have (one the configuration refuses as
+   ``mqtt.base_topic``, settings/mqtt.py ``check_topic``: a wildcard, a NUL or a lone surrogate,
+   a ``$``, past MQTT's length): junk, no stamp (``stamped``), nothing read for it, said once a
+   process for its post (``unusable_stamp``; review 94: ``"base_topic": "#"`` on ``rotor/info``
+   made the vouch read ``#/bridge/info``, which paho refused on its thread, or the broker
+   dropped the connection for, at every connect: the bridge never came online). An instance
+   is gone on a base topic where a bridge post says it is not online (its last
    will, its clean stop), there alone, whatever its rotators of that base topic still say (a bridge
    killed on ``rotor/tower/x`` leaves its rotator's availability ``online``; review 77: one set of
    gone ids for every place took a live station on ``rotor`` for gone by its old, offline bridge
@@ -120,6 +126,8 @@ import socket
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+
+from bridge.settings.mqtt import check_topic
 
 
 @dataclass(frozen=True)
@@ -185,16 +193,13 @@ class Instance:
     def stamped(payload: bytes) -> tuple[Instance, str] | None:
         """Rule 5: the instance (with its ``installation``, when it says one) and base topic a
         rotator's ``R/info`` names (``stamp``); None for anything else (a bridge's info, an
-        older bridge's ``R/info``, junk)."""
-        doc = _json(payload)
-        mark = doc.get("bridge") if doc is not None else None
-        if not isinstance(mark, dict):
+        older bridge's ``R/info``, junk, a stamp whose base topic no bridge could have:
+        ``unusable_stamp``)."""
+        mark = _mark(payload)
+        if mark is None or _no_base_topic(mark[1]) is not None:
             return None
-        iid, base = mark.get("instance"), mark.get("base_topic")
-        if not isinstance(iid, str) or not iid or not isinstance(base, str) or not base:
-            return None
-        where = mark.get("installation")
-        return Instance(iid, "?", 0, 0.0, where if isinstance(where, str) else ""), base
+        iid, base, where = mark
+        return Instance(iid, "?", 0, 0.0, where), base
 
     def same_installation(self, other: Instance) -> bool:
         """Rule 5: ``other`` is this installation, whatever base topic either ran on."""
@@ -208,6 +213,43 @@ class Instance:
         if self.host == "?" and not self.pid:  # (rule 5: a rotator's info names the id alone)
             return f"instance {self.id!r}"
         return f"instance {self.id!r} on host {self.host!r} (pid {self.pid})"
+
+
+def _mark(payload: bytes) -> tuple[str, str, str] | None:
+    """Rule 5: the instance, base topic and installation ("": none) a stamp says, as it says
+    them; None where ``payload`` holds no stamp."""
+    doc = _json(payload)
+    mark = doc.get("bridge") if doc is not None else None
+    if not isinstance(mark, dict):
+        return None
+    iid, base = mark.get("instance"), mark.get("base_topic")
+    if not isinstance(iid, str) or not iid or not isinstance(base, str) or not base:
+        return None
+    where = mark.get("installation")
+    return iid, base, where if isinstance(where, str) else ""
+
+
+def _no_base_topic(base: str) -> str | None:
+    """Rule 5: why ``base`` is no bridge's base topic (the configuration's own rule for one,
+    settings/mqtt.py ``check_topic``: a plain topic, no wildcard, no NUL or other character
+    MQTT does not carry, UTF-8, short enough for the levels a bridge adds), or None."""
+    try:
+        check_topic(base)
+    except ValueError as e:
+        return str(e)
+    return None
+
+
+def unusable_stamp(payload: bytes) -> tuple[str, str] | None:
+    """Rule 5: a stamp whose base topic no bridge could have (``'#'``, a NUL, a lone surrogate,
+    a topic past MQTT's length): that base topic and why; None for anything else. Such a stamp
+    is no bridge's (review 94: its vouch reads, ``#/bridge/info``, raised in paho or had the
+    broker drop the connection at every connect, and the bridge never came online)."""
+    mark = _mark(payload)
+    if mark is None:
+        return None
+    why = _no_base_topic(mark[1])
+    return None if why is None else (mark[1], why)
 
 
 def _json(payload: bytes) -> dict[str, object] | None:

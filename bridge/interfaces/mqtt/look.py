@@ -110,6 +110,7 @@ from bridge.interfaces.mqtt.claim import (
     refusal,
     refusal_on,
     standing,
+    unusable_stamp,
     vouch_reads,
     yields_to,
 )
@@ -155,6 +156,7 @@ class FirstLook:
         self._posted = frozenset(t for p in claim.posts for t in p.topics)
         self.reads: list[str] = []  # claim rule 5: the stamps' bridge posts, read this look
         self._hello_said = False  # rule 14: a retained hello said in the log (once a process)
+        self._unusable_said: set[str] = set()  # claim rule 5: posts whose junk stamp was said
 
     def witness(self, topics: set[str]) -> None:
         """Rule 14: the topics whose values of an earlier run the first look hands on."""
@@ -262,6 +264,7 @@ class FirstLook:
             message = refusal(self.claim.base_topic, other, live_since_look=False)
             return Outcome(refused=message, clear=False, clears=[])
         claim = self.claim
+        self._say_unusable()
         stands = standing(claim.me, claim.base_topic, claim.posts, self._seen)  # claim rule 5
         if stands is not None and stands.live:
             return Outcome(refused=refusal_on(stands), clear=False, clears=[])
@@ -289,6 +292,27 @@ class FirstLook:
         return Outcome(
             refused=None, clear=verdict is Verdict.OURS, clears=clears, heard=heard, unread=unread
         )
+
+    def _say_unusable(self) -> None:
+        """Claim rule 5: a stamp on a post whose base topic no bridge could have is no
+        bridge's (``unusable_stamp``): judged as junk, and said once a process for each post."""
+        for post in self.claim.posts:
+            info = self._seen.get(post.info)
+            if post.above or not info or post.info in self._unusable_said:
+                continue
+            bad = unusable_stamp(info)
+            if bad is None:
+                continue
+            self._unusable_said.add(post.info)
+            log.warning(
+                "%s names a bridge on base topic %s, which %s: no bridge's stamp (a forged or "
+                "damaged message?), ignored; delete it if no rotator of a bridge lives there "
+                "(an empty retained message: mosquitto_pub -t '%s' -r -n)",
+                post.info,
+                ascii(bad[0][:40]),
+                bad[1],
+                post.info,
+            )
 
     def late(self, topic: str, payload: bytes, retained: bool) -> dict[str, bytes]:
         """Rule 14: a witness the broker replays (``retained``, under MQTT 3.1.1: the caller
