@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from bridge.interfaces.mqtt.claim import Claim, Instance, Post, stamp
-from bridge.interfaces.mqtt.look import FirstLook
+from bridge.interfaces.mqtt.look import MAX_ROUNDS, FirstLook
 
 ME = Instance("rotor-me", "shack", 100, 1000.0)
 OTHER = Instance("rotor-other", "attic", 200, 900.0)
@@ -182,8 +182,44 @@ def test_a_vouch_read_heard_before_the_look_asks_for_it_still_vouches() -> None:
         for topic, payload in {**heard_first, **tower}.items():
             lk.saw(topic, payload)
         assert lk.ended_by(hello) == 1
-        lk.probes()  # once the hello is back: what it reads (these are read already)
+        lk.next_round()  # once the hello is back: what it reads (these are read already)
         outcome = lk.end(timed_out=False)
         assert (outcome.refused is not None) == refused, heard_first
         if refused:
             assert outcome.refused is not None and "rotor/shack/bridge/state" in outcome.refused
+
+
+def test_a_stamp_seen_after_the_vouch_reads_were_chosen_is_read_in_one_more_round() -> None:
+    """Review 94 (rule 14): aedes hands a subscription's retained messages beside what follows,
+    so a stamp on ``rotor/tower/info`` can come after the first hello, when the vouch reads are
+    chosen. The look then asks once more: its vouch reads, subscribed before a hello more, whose
+    return ends the look. A round in which the broker was still handing over what it held asks
+    again too (nothing to subscribe); at most MAX_ROUNDS of them."""
+    posts = (Post("rotor/bridge/info"), Post("rotor/tower/bridge/info"), Post("rotor/tower/info"))
+    claim = Claim(ME, "rotor", "rotor/bridge/info", "rotor/bridge/hello", posts)
+    stamped = json.dumps({"id": "tower", "bridge": stamp(OTHER.id, "shack")}).encode()
+    lk = FirstLook(claim, "rotor/bridge/state")
+    hello = lk.begin()
+    assert lk.ended_by(hello) == 1
+    assert lk.next_round() == ([], [], b"")  # nothing to ask, nothing late: the look ends
+    hello = lk.begin()
+    assert lk.ended_by(hello) == 2
+    first = lk.next_round(replaying=True)  # (the broker still handing over what it held)
+    assert first == ([], [], b"rotor-me 2 probe")
+    lk.saw("rotor/tower/info", stamped)  # the stamp, late
+    lk.saw("rotor/tower/availability", b"offline")
+    assert lk.ended_by(b"rotor-me 2") is None and lk.ended_by(first[2]) == 2
+    reads = ["shack/bridge/info", "shack/bridge/state"]
+    second = lk.next_round()
+    assert second == ([], reads, b"rotor-me 2 probe 2")
+    lk.saw("shack/bridge/info", OTHER.info([]).encode())
+    lk.saw("shack/bridge/state", b"online")
+    assert lk.ended_by(second[2]) == 2
+    assert lk.next_round() == ([], [], b"")  # (asked already: not again)
+    outcome = lk.end(timed_out=False)
+    assert outcome.refused is not None and "shack/bridge/state" in outcome.refused
+    lk.begin()
+    rounds = 0
+    while lk.next_round(replaying=True)[2]:  # a broker that never stops handing over
+        rounds += 1
+    assert rounds == MAX_ROUNDS

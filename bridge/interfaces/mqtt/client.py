@@ -262,9 +262,16 @@ class MqttClient(Connection):
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self._look_lost = False  # rule 16: this connection's look timed out
         self._look_heard = 0.0  # rule 14: when the broker last sent anything (monotonic)
+        self._replays = 0  # rule 14: the messages the broker handed over as held, so far
+        # rule 14: ``_replays`` when the look's last own live message came back (the fence's
+        # probe, then each hello): one more since, and the broker still hands over what it held
+        self._replays_at: int | None = None
         self._look_sub: int | None = None  # rule 14: the look's SUBSCRIBE, until its SUBACK
         self._look_only: frozenset[str] | None = None  # claim rule 5: read for the look alone
         self._reading: list[str] = []  # claim rule 5: a look's vouch reads, until it ends
+        # rule 14: the next round's hello, sent once the SUBACK of its vouch reads is in (the
+        # SUBSCRIBE's message id, the look's number)
+        self._hello_due: tuple[int, int, bytes] | None = None
         self._as_published: Callable[[str], bool] | None = None  # rule 14 (``_broker_held``)
         self._hello_out: bytes | None = None  # rule 16: this connection's hello
         self._probing: list[str] = []  # rule 14: the filters the look hears its probes on (MQTT 5)
@@ -533,6 +540,8 @@ class MqttClient(Connection):
             look = self._look
             self._look_lost = False  # rule 16: judged anew
             self._hello_out, self._hello_back = None, False
+            self._hello_due = None  # (rule 14: an earlier connection's round is over)
+            self._reading = []  # (claim rule 5: a clean start: none subscribed now)
             if look is not None:  # rule 14: look first
                 hello = self._hello_out = look.begin()
                 self._as_published = None  # rule 14: this connection's (``_broker_held``)
@@ -554,6 +563,7 @@ class MqttClient(Connection):
                 # under its message id for the next publish given that id to claim)
                 self._delivery.send(look.claim.hello_topic, hello, 1, retain=False)
                 self._look_heard = 0.0
+                self._replays_at = None
                 self._arm_look(look.looking, time.monotonic(), LOOK_TIMEOUT_S)
                 return
             self._open(None)
@@ -643,6 +653,7 @@ class MqttClient(Connection):
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None
+                self._replays_at = self._replays  # (rule 14: the broker's replays since?)
                 self._markers_back()
                 self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
@@ -653,6 +664,7 @@ class MqttClient(Connection):
         if self._look is not None:
             if retained and self._broker_held(topic):  # rule 14: the broker hands over what
                 self._look_heard = time.monotonic()  # it held (a tracker's target does not)
+                self._replays += 1
             if self._look_saw(self._look, topic, payload, retained):
                 return True
         if retained and self._owned.hears_own and self._look is not None:  # rule 14: late
@@ -683,6 +695,11 @@ class MqttClient(Connection):
         if mid == self._look_sub:  # rule 14: the replays of this connect's subscriptions came
             self._look_sub = None
         super()._on_subscribe(client, userdata, mid, reason_codes, properties)
+        due, look = self._hello_due, self._look
+        if due is not None and due[0] == mid and look is not None:
+            self._hello_due = None  # rule 14: the vouch reads' retained values go first
+            if look.looking == due[1]:
+                self._delivery.send(look.claim.hello_topic, due[2], 1, retain=False)
 
     def _broker_held(self, topic: str) -> bool:
         """Rule 14: whether a message that came retained on ``topic`` is the broker handing over
@@ -909,18 +926,30 @@ class MqttClient(Connection):
         if topic == look.claim.hello_topic:
             with self._lock:
                 n = look.ended_by(payload)
-                again = n is not None and look.probing  # (rule 14: the second hello)
-                probes, hello = look.probes() if n is not None else ([], b"")
-                reads = self._reads_only(look.reads) if hello and not again else []
+                again = n is not None and look.rounds > 0  # (rule 14: a later round's hello)
+                # rule 14: the broker handed over what it held after the last of our own live
+                # messages came back: it may still be at it (aedes), and the look asks again
+                at, replaying = self._replays_at, False
+                if n is not None:
+                    replaying = at is not None and self._replays > at
+                    self._replays_at = self._replays
+                probes, reads, hello = (
+                    look.next_round(replaying) if n is not None else ([], [], b"")
+                )
+                reads = self._reads_only(reads) if hello else []
             if n is not None:
                 if not again:
                     self._markers_back()
                     self._judge_probe()
-                if hello:  # rule 14: then the second hello ends the look
-                    if reads:  # claim rule 5: their retained values come before it
-                        self._subscribe(self._client, [(t, 0) for t in reads])
+                if hello:  # rule 14: then the next round's hello ends the look, or asks again
                     for witness in probes:  # (QoS 1, as the hello after them)
                         self._delivery.send(witness, b"", 1, retain=False)
+                    # claim rule 5: their retained values come before it; on the SUBACK (aedes
+                    # streams a subscription's retained messages once it has sent it)
+                    mid = self._subscribe(self._client, [(t, 0) for t in reads])
+                    if mid is not None:
+                        self._hello_due = (mid, n, hello)
+                        return True
                     self._delivery.send(look.claim.hello_topic, hello, 1, retain=False)
                     return True
                 self._end_look(n)
@@ -940,20 +969,22 @@ class MqttClient(Connection):
             )
 
     def _reads_only(self, reads: list[str]) -> list[str]:
-        """Claim rule 5, under the lock: the look's vouch reads no other filter reads (their
+        """Claim rule 5, under the lock: the round's vouch reads no other filter reads (their
         denial is no problem, rule 17), subscribed until the look ends (``_open``). One another
         filter reads is not subscribed again: its value came once, and the look kept it from
         its start, whenever it came (look.py rule 14, review 90)."""
         read = matcher([f for f, _o in self._filters()] + list(self._owned.filters))
-        self._reading = [t for t in reads if not read(t) and t not in (self._look_only or ())]
+        new = [t for t in reads if not read(t) and t not in (self._look_only or ())]
+        new = [t for t in new if t not in self._reading]
+        self._reading += new
         self.optional(
             {
                 t: "a live bridge whose rotator on this bridge's topics has its controller off "
                 "is taken for gone (interfaces/mqtt/claim.py rule 5)"
-                for t in self._reading
+                for t in new
             }
         )
-        return list(self._reading)
+        return new
 
     def _markers_back(self) -> None:
         """Rule 16 (paho's thread): this connection's hello or probe is back: the markers come

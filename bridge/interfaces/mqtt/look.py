@@ -65,19 +65,31 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    witness but not read it (mosquitto grants the subscription and drops what it would send
    there) showed an ON it held as nothing, the rotator started unlocked and the bridge put
    OFF over the ON (review 62). So the look that may hand the witnesses on asks, once its
-   hello is back, of the witnesses it heard nothing on (``probes``; a value heard says the
+   hello is back, of the witnesses it heard nothing on (``next_round``; a value heard says the
    topic can be read, and nothing is sent there: a subscriber sees no probe over a value the
    broker holds): an empty message, not retained, QoS 1, on each, then a second hello (as
    rule 16's probe: one client's messages of one QoS keep their order), which ends the look.
    Any look sends that second hello, probes or none, after subscribing claim.py rule 5's
    ``vouch_reads`` (``reads``: the bridge posts on the base topic a stamp seen names), so their
-   retained values come before it. One another filter of the bridge reads is not subscribed
-   again, and the broker sent its value once, maybe before the stamp that names it: so the look
-   keeps the newest value it hears on every bridge's info and state (``Y/bridge/info``,
-   ``Y/bridge/state``: claim.py ``bridge_post``) from its start, whatever asked for it, and the
-   verdict consults them (review 90: a live bridge on ``rotor/shack``'s ``online``, read by
-   stale.py's ``rotor/+/bridge/state`` before the hello, was kept only once the hello was back,
-   so lost, and that bridge taken for gone).
+   retained values come before it: it goes once the SUBACK of that SUBSCRIBE is in (aedes
+   starts a subscription's replay as it sends its SUBACK). Each hello back ends a round; the
+   look asks again, a hello more (``"<id> <n> probe <k>"``), at most MAX_ROUNDS times, while
+   a round brings what it did not read yet: a stamp seen since that names another base topic
+   (its vouch reads, subscribed then), or any message the broker handed over as held (the
+   retain flag, ``_broker_held``) after the bridge's last own live message came back (the
+   fence's probe, rule 16, then each hello): that broker is still replaying what it held, and a
+   stamp or a vouch read may be among what is still to come (review 94: aedes streams a
+   subscription's retained messages beside what follows; the stamp on ``rotor/tower/info``
+   came after the first hello, and then a vouch read's value after the second, and a live
+   bridge whose tower's controller was off was taken for gone). mosquitto replays all before
+   the probe: no more rounds there than the vouch reads ask for (and one after them, their
+   values having come after the last hello back). One another filter of the bridge reads is
+   not subscribed again, and the broker sent its value once, maybe before the stamp that names
+   it: so the look keeps the newest value it hears on every bridge's info and state
+   (``Y/bridge/info``, ``Y/bridge/state``: claim.py ``bridge_post``) from its start, whatever
+   asked for it, and the verdict consults them (review 90: a live bridge on ``rotor/shack``'s
+   ``online``, read by stale.py's ``rotor/+/bridge/state`` before the hello, was kept only once
+   the hello was back, so lost, and that bridge taken for gone).
    A probe that came back before it (``probe_back``: an empty live message there during the
    look, whoever sent it) says the topic can be read; a witness whose probe did not is handed
    on as ``unread`` (a timed-out look says nothing of it). Under MQTT 5 the
@@ -120,6 +132,7 @@ log = logging.getLogger(__name__)
 
 CLEARS_SAID_AT_ONCE = 3  # rule 15
 CLEARS_NAMED = 10  # rule 15: topics named in one line
+MAX_ROUNDS = 16  # rule 14: the hellos a look sends after its first, at most
 
 
 @dataclass(frozen=True)
@@ -150,7 +163,7 @@ class FirstLook:
         self._heard: dict[str, bytes] = {}
         self._opened = False  # a look has let the bridge run: later ones hand nothing on
         self._probes: set[str] = set()  # rule 14: the witnesses whose probe is out, until back
-        self.probing = False  # rule 14: this look's probes went out (its second hello too)
+        self.rounds = 0  # rule 14: the hellos this look sent after its first (probes, reads)
         self._late = False  # rule 14: the connection of that look lasts: its replays count
         # claim rule 5: the topics of the posts where another bridge would stand on ours
         self._posted = frozenset(t for p in claim.posts for t in p.topics)
@@ -167,8 +180,12 @@ class FirstLook:
         """Rule 14: the witnesses a look under way may probe (none after the first open)."""
         return [] if self._opened else sorted(self._witnesses)
 
-    def _hello(self, n: int) -> bytes:
-        return f"{self.claim.me.id} {n}".encode()
+    def _hello(self, n: int, rounds: int = 0) -> bytes:
+        """Rule 14: the hello that ends round ``rounds`` of look ``n`` (0: the first)."""
+        hello = f"{self.claim.me.id} {n}".encode()
+        if rounds == 0:
+            return hello
+        return hello + (b" probe" if rounds == 1 else f" probe {rounds}".encode())
 
     def begin(self) -> bytes:
         """A new look: the hello to publish."""
@@ -178,24 +195,40 @@ class FirstLook:
         self._clears = {}
         self._heard = {}
         self._probes = set()
-        self.probing = False
+        self.rounds = 0
         self.reads = []
         return self._hello(n)
 
-    def probes(self) -> tuple[list[str], bytes]:
-        """Rule 14, once the hello is back: the witnesses to probe (none heard: an empty
-        message, not retained, on each), and the second hello to send after them; none in a
-        look that hands nothing on (after the first open), or probed already."""
+    def next_round(self, replaying: bool = False) -> tuple[list[str], list[str], bytes]:
+        """Rule 14, once the hello of the round under way is back: the witnesses to probe (the
+        first round's alone; none heard: an empty message, not retained, on each; none in a
+        look that hands nothing on, after the first open), claim rule 5's vouch reads not asked
+        yet this look (to subscribe first), and the hello to send after them, which ends the
+        next round. Also a round with neither while the broker is ``replaying`` (it handed
+        over what it held after the bridge's last live message came back: aedes, whose
+        stamp or vouch read may still come). b"" when the look ends: nothing to
+        ask, or MAX_ROUNDS asked already."""
         n = self.looking
-        if n is None or self.probing:
-            return [], b""
-        if not self._opened:
+        if n is None:
+            return [], [], b""
+        if self.rounds == 0 and not self._opened:
             self._probes = set(self._witnesses) - set(self._heard)
-        self.reads = vouch_reads(self.claim, self._seen)  # claim rule 5: subscribed first
-        if not self._probes and not self.reads:
-            return [], b""
-        self.probing = True
-        return sorted(self._probes), self._hello(n) + b" probe"
+        probes = sorted(self._probes) if self.rounds == 0 else []
+        asked = set(self.reads)
+        reads = [t for t in vouch_reads(self.claim, self._seen) if t not in asked]
+        if not (probes or reads or replaying):
+            return [], [], b""
+        if self.rounds >= MAX_ROUNDS:
+            log.warning(
+                "the first look asked the broker %d times more for what it held, and more "
+                "came: judging on what it has%s",
+                MAX_ROUNDS,
+                f" (not read: {', '.join(reads)})" if reads else "",
+            )
+            return [], [], b""
+        self.rounds += 1
+        self.reads += reads
+        return probes, reads, self._hello(n, self.rounds)
 
     def probe_back(self, topic: str, payload: bytes, retained: bool) -> bool:
         """Rule 14: whether a message is a witness's probe come back during the look (an empty
@@ -210,8 +243,7 @@ class FirstLook:
         n = self.looking
         if n is None:
             return None
-        hello = self._hello(n) + (b" probe" if self.probing else b"")  # (rule 14's second)
-        return n if payload == hello else None
+        return n if payload == self._hello(n, self.rounds) else None  # (the round's own)
 
     def retained_hello(self, payload: bytes) -> None:
         """Rule 14: a retained message on the hello topic is no hello (the bridge never
@@ -279,7 +311,7 @@ class FirstLook:
         # broker drops what it sends on that topic (its ACL; a timed-out look says nothing)
         unread = frozenset() if timed_out or heard is None else frozenset(self._probes)
         unread -= set(heard or {})
-        self._probes, self.probing = set(), False
+        self._probes, self.rounds = set(), 0
         self._late = not self._opened  # rule 14: the rest of its connection's replays count
         self._opened = True
         if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
