@@ -26,6 +26,7 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -58,5 +59,42 @@ def test_a_rotor_turning_fast_when_the_bridge_starts_is_shown_at_once_and_not_ca
         f"first bearing shown {shown[:1]} s after the port opened; the turn ended at "
         f"{v.now - t:.1f} s"
     )
+    said = [e.message for e in v.errors(since=t)]
+    assert not [m for m in said if "noisy line" in m or "line noise" in m], said
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 100: a port replugged while a fast SPID turns to its target shows it offline, "
+        "no bearing, for the rest of the turn, told as a noisy line or a failing sensor"
+    ),
+)
+def test_a_replug_while_a_fast_rotor_turns_shows_it_at_once_and_calls_nothing_noise(
+    rig: Rig,
+) -> None:
+    """The same after a replug mid-turn, the bridge's own turn to 300: before the change the
+    first reading back was shown one exchange after the port came back (81 with the rotor at
+    90, then followed), with no error; now nothing is shown until the rotor rests at 300,
+    24 s later, and R/error blames the line or the sensor."""
+    v = rig("rot2prog", emulator={"start_az_deg": 10.0, **FAST})
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "idle")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().az_deg > 60.0, 60, "turning")
+    v.link_down()
+    v.run_for(0.5)
+    t = v.now
+    v.link_up()
+    v.run_until(lambda h: not h.truth().is_moving, 60, "the turn ends")
+    shown = [
+        (round(s_t - t, 2), s.bearing_deg)
+        for s_t, s in v.statuses
+        if s_t >= t and s.available and s.bearing_deg is not None
+    ]
+    assert shown and shown[0][0] <= SHOWN_WITHIN_S, (
+        f"first bearing shown {shown[:1]} s after the port came back; the turn ended at "
+        f"{v.now - t:.1f} s"
+    )
+    v.run_for(30)
     said = [e.message for e in v.errors(since=t)]
     assert not [m for m in said if "noisy line" in m or "line noise" in m], said
