@@ -16,16 +16,9 @@ Rules:
    X1), never shorter than it takes at its slower axis's speed to go a step of its readings
    beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
    degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
-   the user's to pair with ``settle_s``. A turn the controller finishes by itself (``carried``,
-   rule 4: over a lost link, or found by a bridge just started; not yet ``lost_still``, no
-   stop sent into it) is still only after its slowest axis's ``carried_seen_s`` too, the
-   time rule 4 judges it by (as slow as rule 6 allows for), unless ``settle_s`` is the
-   user's (``settle_own``): review 95, a GS-232B's elevation at 1.8 deg/s, read in whole
-   degrees with 2 degrees of noise, showed a move every 1.7 s; its turn carried over a replug
-   was called at rest at 1.5 s and stopped short by controller.py rule 13, and a hand begun
-   just before that rest was told as two moves. A target for a controller that must be
-   stopped first, come while the rotor stands at its target still by the clock with that
-   reading late, waits for it: no stop to a rotor at rest (``plan_target``; an attack pass).
+   the user's to pair with ``settle_s``. A target for a controller that must be stopped first,
+   come while the rotor stands at its target still by the clock with that reading late, waits
+   for it: no stop to a rotor at rest (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    A stall is told by a reading, or by time while the controller is asked and does not
@@ -1405,10 +1398,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 
 
 def still_from(m: Motion, cfg: MotionConfig) -> float:
-    """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``; a
-    turn the controller finishes by itself, for its slowest axis's ``carried_seen_s`` too)."""
-    if m.carried and not m.lost_still and m.stop_sent_t is None and not cfg.settle_own:
-        return _moved_ref(m) + max(cfg.settle_s, carried_seen_s(cfg))  # (rule 4: rare)
+    """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``)."""
     return _moved_ref(m) + cfg.settle_s
 
 
