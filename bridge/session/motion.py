@@ -527,9 +527,10 @@ def _judged(
 def _confirms(m: Motion, cfg: MotionConfig, now: float, where: tuple[float, float | None]) -> bool:
     """Rule 4: whether a reading at ``now`` (``where``), still showing a move only on decided
     axes from where they stood, confirms the one held back since ``begun_t`` as a hand's turn:
-    an axis that moved in it reads on from it the way it moved (a hand turns on, a whole
-    degree at a time where the readings are in whole degrees; the same garble read again
-    stays: review 95, "EL=014" for 010 in two readings in a row dropped the owed halt), or
+    an axis that moved in it reads on from it the way it moved by more than ``noise_deg`` (a
+    hand turns on; the same garble read again stays within the axis's noise: review 95,
+    "EL=014" for 010 in two readings in a row dropped the owed halt, and review 101, "EL=015"
+    for 011 on a still elevation wandering a degree between them did so again), or
     the move has lasted that axis's own ``axis_seen_s`` (a hand slower than a degree a
     reading, or one that stopped: the move is the rotor's)."""
     if m.begun_t is None or m.begun_deg is None:
@@ -552,7 +553,7 @@ def _confirms(m: Motion, cfg: MotionConfig, now: float, where: tuple[float, floa
         on = read - then
         if wrap:
             on = (on + 180.0) % 360.0 - 180.0
-        if on * way > 0:
+        if on * way > 0 and abs(on) > noise:
             return True
     return False
 
