@@ -43,6 +43,12 @@ def carried_over_a_replug(settings: dict[str, float]) -> None:
         assert v.truth().el_deg == pytest.approx(85.0, abs=1.0)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 95 (31a878ae's fix reverted: review 101 found it stopped a jammed carried"
+    " turn seconds late): a slower elevation's turn carried over a replug is called at rest"
+    " while it turns and stopped short",
+)
 def test_with_the_default_settle_s_a_slower_carried_elevation_turn_is_left_to_finish() -> None:
     """The control (review 95's test)."""
     carried_over_a_replug({})

@@ -13,8 +13,6 @@ azimuth's own time (1.1 s) is what a slow azimuth needs to show it moves on."""
 
 from __future__ import annotations
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
 from tests.engine.virtual import VirtualRotator
@@ -23,12 +21,6 @@ SLOW_EL_DEG_S = 1.0  # an elevation set slow (its axis_seen_s 4.8 s; the azimuth
 EL_SHOWN_STILL_S = 6.0  # after the replug, before the jam: past the elevation's own time
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 101: a jammed azimuth's carried turn after a replug is stopped 4.9 s after "
-    "the jam (1.5 s before 31a878ae): the rest waits the slow elevation's time though the "
-    "elevation was shown still for longer",
-)
 def test_a_jam_of_a_carried_azimuth_turn_is_stopped_by_the_azimuths_own_time() -> None:
     emulator = {"start_az_deg": 62, "start_el_deg": 0}
     with VirtualRotator(
