@@ -14,7 +14,12 @@ Rules:
    within the box's own elevation range (a box parked at -0.5 reports it, and its codec
    writes nothing below 0: sent as it was, every azimuth target raised), at the step of its
    grid it reads (``_held``: a Rot2Prog at 0.25 degrees reads 44.25 as 44.2, which it would
-   take as 44.0, spid.py rule 6).
+   take as 44.0, spid.py rule 6). What the box says of that elevation is judged by no range
+   (base.py ScalesElevation, rule 10): past its axis's slack it spoils nothing, the azimuth
+   in the same reply read as ever (review 98: a G-5500's box whose elevation input read
+   ``EL=190``, an Easycomm's ``EL181.0``, had its whole reply spoiled, the rotator offline
+   for good as "garbled replies", its azimuth never turned), and is sent back within the
+   range as above.
 2. The elevation box reports where it points and is either an az/el box used for its
    elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
    Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
@@ -99,6 +104,7 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     ScalesAzimuth,
+    ScalesElevation,
     StopsOnTheLine,
     TakesReadings,
     WatchesWrites,
@@ -258,6 +264,8 @@ class AzimuthOfAzEl(_KeepsOwn):
 
     def __init__(self, inner: Codec, el_range: tuple[float, float]) -> None:
         super().__init__(inner)
+        if isinstance(inner, ScalesElevation):  # rule 1: its elevation is judged by no range
+            inner.elevation_unread()
         self._el_range = el_range  # what its codec writes
         self._own_el: float | None = None  # what the box last said of its elevation, taken
 

@@ -86,6 +86,12 @@ Rules:
    whatever its resolution (axes.py rule 2, EL_READ_SLACK_DEG: an RT-21's pot a degree off,
    review 49). Past the slack a reading is no bearing the box can have: spoiled (or a MISFIT
    where it says the box is set up otherwise, gs232.py rule 2; axes.py rule 2), as before.
+   An axis the box never turns nor reads for the antenna is judged by no range: a
+   composite's azimuth box's own elevation (``ScalesElevation``, axes.py rule 1), as its
+   elevation box's own azimuth by no model's scale (``ScalesAzimuth``), and as a SPID's
+   unused elevation counter (spid.py rule 5): what it reads spoils nothing of the axis used
+   (review 98: a GS-232's ``EL=190``, an Easycomm's ``EL181.0``, spoiled the whole reply,
+   its azimuth too, and the rotator went offline for good, told as garbled replies).
 """
 
 from __future__ import annotations
@@ -270,6 +276,18 @@ class ScalesAzimuth(Protocol):
     the codec can read at all, and is never the antenna's)."""
 
     def azimuth_unturned(self) -> None: ...
+
+
+@runtime_checkable
+class ScalesElevation(Protocol):
+    """A codec that judges its elevation against its axis's range (rule 10: past the slack,
+    the whole reply spoiled, its azimuth too), told when its box's elevation is never turned
+    nor read (a composite's azimuth box, axes.py rule 1): that channel reads whatever the
+    reply's form carries, spoils nothing, and is never the antenna's (review 98: a G-5500's
+    box whose elevation input read 190 gave no azimuth reading at all, the rotator offline
+    for good; the mirror of ScalesAzimuth)."""
+
+    def elevation_unread(self) -> None: ...
 
 
 @runtime_checkable

@@ -39,7 +39,10 @@ Rules:
    (base.py rule 10: a sensor read in tenths, noise_deg 0.1): a SatNOGS controller's encoder is
    zeroed at its home switch and its PID rests anywhere within 0.2 of the target, so turned to
    north it may say ``AZ-0.1`` (review 39; Hamlib reads it), and flipped up to 180,
-   ``EL180.2``. Further past is spoiled.
+   ``EL180.2``. Further past is spoiled. A box whose elevation is never turned nor read (a
+   composite's azimuth box, axes.py rule 1) is judged by no elevation range
+   (``elevation_unread``): its ``EL`` spoils nothing of the azimuth (review 98: ``EL181.0``
+   spoiled every reply, the rotator offline for good, its azimuth never turned).
 3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
    UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED. An
    azimuth model's elevation line (harmless, rule 2) with junk in front is noise, not
@@ -200,6 +203,7 @@ class EasycommCodec(OneQuery):
         self._answers_stop = False  # rule 9: this controller was seen to answer one
         self._polls = 0  # rule 9: queries opened, to age ``_unasked``
         self._unasked: list[tuple[int, bytes]] = []  # rule 9: lines maybe the express's stop's
+        self._el_unread = False  # rule 2: its elevation judged by no range (elevation_unread)
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -306,9 +310,7 @@ class EasycommCodec(OneQuery):
             el = None  # rule 2: an azimuth model ignores it, out of range or not
         # rule 2: a little past an end is that end, further is no reading
         az_read = None if az is None else read_in_range(az, 0, AZ_MAX_DEG, READ_SLACK_DEG)
-        el_read = (
-            None if el is None else read_in_range(el, EL_READ_MIN_DEG, EL_MAX_DEG, READ_SLACK_DEG)
-        )
+        el_read = None if el is None else self._el_read(el)
         if (az is not None and az_read is None) or (el is not None and el_read is None):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
@@ -352,6 +354,18 @@ class EasycommCodec(OneQuery):
             out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
             return
         out.append(PositionReply(self._az, self._el if self.elevation else None))
+
+    def _el_read(self, el: float) -> float | None:
+        """Rule 2: the elevation a reply says as ``el``, a little past an end read as the end;
+        None past the slack, but on a box whose elevation is never read, as it reads."""
+        if self._el_unread:
+            return el
+        return read_in_range(el, EL_READ_MIN_DEG, EL_MAX_DEG, READ_SLACK_DEG)
+
+    def elevation_unread(self) -> None:
+        """Rule 2: the box's elevation is never turned nor read (a composite's azimuth box):
+        whatever it says there spoils nothing of the azimuth (base.ScalesElevation)."""
+        self._el_unread = True
 
 
 def _spec(name: str, display: str, version: int, *, elevation: bool, separate: bool) -> ModelSpec:

@@ -48,7 +48,11 @@ Rules:
    turned (a composite's elevation box, axes.py rules 2 and 5) is judged by no scale but the
    widest (``azimuth_unturned``): that channel is no antenna's (review 49: a G-5500's box at
    P45 whose azimuth rested at 400 was a MISFIT at every reply, the rotator offline and its
-   elevation never turned).
+   elevation never turned). Likewise a box whose elevation is never turned nor read (a
+   composite's azimuth box, axes.py rule 1) is judged by no elevation range
+   (``elevation_unread``): whatever three digits its ``EL=`` says, the azimuth is read
+   (review 98: a G-5500's box whose elevation input read ``EL=190`` was spoiled at every
+   reply, the rotator offline for good as "garbled replies", its azimuth never turned).
 3. ``?>`` (the box refused a command) is junk of its own reason (REFUSED), whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
@@ -154,6 +158,7 @@ class Gs232Codec(OneQuery):
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
         self._line_end = False  # rule 6: a bare line end went, its ?> may come
+        self._el_unread = False  # rule 2: its elevation judged by no range (elevation_unread)
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -248,7 +253,7 @@ class Gs232Codec(OneQuery):
         # rule 2: K3NG's "00-1" (and the A form's "-0000"), the antenna at the horizon with its
         # pot a degree off, reads as the horizon, as 181 at the top reads as 180
         el_deg = None if el is None else int(el.lstrip(b"0") or b"0")
-        el_read = None if el_deg is None else read_in_range(el_deg, 0, EL_MAX_DEG, READ_SLACK_DEG)
+        el_read = None if el_deg is None else self._el_read(el_deg)
         if read_in_range(az, 0, AZ_MAX_DEG, READ_SLACK_DEG) is None or (
             el_deg is not None and el_read is None
         ):
@@ -280,6 +285,18 @@ class Gs232Codec(OneQuery):
         """Rule 2: the box's azimuth is never turned (a composite's elevation box): its scale
         is no model's to judge, and a reading past 360 is no misfit (base.ScalesAzimuth)."""
         self.az_top_deg = AZ_MAX_DEG
+
+    def _el_read(self, el: int) -> float | None:
+        """Rule 2: the elevation a reply says as ``el``, a little past an end read as the end;
+        None past the slack, but on a box whose elevation is never read, as it reads."""
+        if self._el_unread:
+            return float(el)
+        return read_in_range(el, 0, EL_MAX_DEG, READ_SLACK_DEG)
+
+    def elevation_unread(self) -> None:
+        """Rule 2: the box's elevation is never turned nor read (a composite's azimuth box):
+        whatever it says there spoils nothing of the azimuth (base.ScalesElevation)."""
+        self._el_unread = True
 
     def _misfit(self, az: int) -> str:
         """Rule 2's words: what a reading of ``az`` past this model's scale says."""
