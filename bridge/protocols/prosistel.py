@@ -46,7 +46,11 @@ Rules:
    TENTHS_SLACK_DEG, an encoder read in tenths (noise_deg 0.2; ``A,?,3601``, ``B,?,0901``)
    (attack 30: spoiled there, a box at rest at its end went offline for good, and one
    wandering a tenth either side of it was told as junk every 30 s). Further past is
-   spoiled.
+   spoiled. A Combi-Track whose elevation is never turned nor read (a composite's azimuth
+   box, axes.py rule 1) is judged by no elevation range (``elevation_unread``): unit B's
+   four digits, whatever they say, are read as they read and spoil nothing of the azimuth
+   (review 98, as a GS-232's ``EL=190``: spoiled, every reply was, the rotator offline for
+   good, its azimuth never turned).
 2. A position nobody asked for (the box's continuous output, or a unit's second line in one
    exchange) is the box's own chatter: harmless, never a reading, never a spoiler; but only a
    position this box can say (its unit, its width, in range or within rule 1's slack): any
@@ -171,6 +175,7 @@ class ProsistelCodec(OneQuery):
         self._driving: dict[str, bool | None] = {}  # rule 8: and whether each drives its motor
         self._first = True  # rule 1: no line of this connection has ended yet
         self._cut = b""  # rule 1: the connection's first line, a position's tail
+        self._el_unread = False  # rule 1: its elevation judged by no range (elevation_unread)
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -287,8 +292,16 @@ class ProsistelCodec(OneQuery):
     def _read(self, unit: str, digits: bytes) -> float | None:
         """Rule 1: the bearing ``unit`` says in ``digits``, a little past its top read as the
         top; None past its slack."""
-        top = self.family.tops[self.family.units.index(unit)]
+        index = self.family.units.index(unit)
+        if self._el_unread and index == 1:  # (a Combi-Track's unit B, never read)
+            return int(digits) / self.family.scale
+        top = self.family.tops[index]
         return read_in_range(int(digits) / self.family.scale, 0, top, self.family.slack)
+
+    def elevation_unread(self) -> None:
+        """Rule 1: the box's elevation is never turned nor read (a composite's azimuth box):
+        whatever unit B says spoils nothing of the azimuth (base.ScalesElevation)."""
+        self._el_unread = True
 
     def _position(self, frame: bytes, m: re.Match[bytes], clean: bool, out: list[Reply]) -> None:
         units, unit, digits = self.family.units, m["unit"].decode(), m["value"]

@@ -58,7 +58,11 @@ Rules:
    attack 30: a rotor at rest at north saying ``A P=  -0.2`` or ``A P= 360.2`` was spoiled at
    every poll, offline for good, as an Easycomm box's ``AZ-0.1`` was before review 39). Further
    past it is spoiled and no reading, and never harmless, asked for or not (an attack pass:
-   ``A P= 361.0`` was dropped and nobody told).
+   ``A P= 361.0`` was dropped and nobody told). A box whose elevation is never turned nor
+   read (a composite's azimuth box, axes.py rule 1) is judged by no elevation range
+   (``elevation_unread``): its ``E`` line, whatever it says, is read as it reads and spoils
+   nothing of the azimuth (review 98, as a GS-232's ``EL=190``: spoiled, every exchange was,
+   the rotator offline for good, its azimuth never turned).
 4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
    they are refused before anything is sent. A new bearing while turning goes straight out.
 5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
@@ -208,6 +212,7 @@ class Rc2800Codec(Plain, LateAnswers):
         self._cut = b""  # rule 1: the connection's first line, a position line's tail
         self._late_newest = False  # rule 6: lines owed late, and no exchange opened since
         self._taken_in = False  # rule 10: the extra selection's ERR may come in this exchange
+        self._el_unread = False  # rule 3: its elevation judged by no range (elevation_unread)
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -302,7 +307,9 @@ class Rc2800Codec(Plain, LateAnswers):
             junk = junk[len(self._cut) :]
         junk = self._unsaid(junk)  # rule 10: the extra selection's ERR
         lines = re.split(rb"[\r\n]", junk)
-        return all(not line.strip() or _ECHO.fullmatch(line) or _in_range(line) for line in lines)
+        return all(
+            not line.strip() or _ECHO.fullmatch(line) or self._in_range(line) for line in lines
+        )
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
@@ -357,7 +364,7 @@ class Rc2800Codec(Plain, LateAnswers):
         if m is None:
             self._junk(raw, JunkReason.NOISE, "not a reply line", out)
             return
-        axis, value = m.group("axis")[0], _read(m)
+        axis, value = m.group("axis")[0], self._read(m)
         if value is None:  # rule 3
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
@@ -393,6 +400,24 @@ class Rc2800Codec(Plain, LateAnswers):
         driving = True if any(flags) else None if None in flags else False  # rule 7
         out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E")), driving=driving))
 
+    def elevation_unread(self) -> None:
+        """Rule 3: the box's elevation is never turned nor read (a composite's azimuth box):
+        whatever its ``E`` line says spoils nothing of the azimuth (base.ScalesElevation)."""
+        self._el_unread = True
+
+    def _in_range(self, line: bytes) -> bool:
+        """Rules 1 and 3: ``line`` is a position line whose value is in its axis's range (or
+        within its slack)."""
+        m = _POSITION.fullmatch(line)
+        return m is not None and self._read(m) is not None
+
+    def _read(self, m: re.Match[bytes]) -> float | None:
+        """Rule 3: the value of position line ``m``, a little past an end read as the end;
+        None past the slack; an elevation never read, as it reads."""
+        if self._el_unread and m.group("axis") == b"E":
+            return float(m.group("deg"))
+        return _read(m)
+
     @staticmethod
     def _cut_by_opening(raw: bytes) -> bool:
         """Rule 1: ``raw``, no line of its own, is the tail of an axis's position line."""
@@ -408,13 +433,6 @@ class Rc2800Codec(Plain, LateAnswers):
             self._noisy = True
             self._owed = set()  # (a line after noise is none of the early reading's)
         out.append(JunkReply(raw, reason, why))
-
-
-def _in_range(line: bytes) -> bool:
-    """Rules 1 and 3: ``line`` is a position line whose value is in its axis's range (or
-    within its slack)."""
-    m = _POSITION.fullmatch(line)
-    return m is not None and _read(m) is not None
 
 
 def _read(m: re.Match[bytes]) -> float | None:

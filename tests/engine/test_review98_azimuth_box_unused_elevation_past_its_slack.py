@@ -13,14 +13,14 @@ azimuth the box says is fine (R/error: "answers only garbled replies: the wrong 
 model, or a noisy line?", nothing of the elevation). The mirror of review 49 (the elevation
 box's own azimuth, now judged by no scale). Found in the line review 98 rewrote; older than it.
 
-The same in the Easycomm codec (its elevation past 180.5), and the RC2800's and the
-Combi-Track's (seen at the codec; not run here).
+The same in the Easycomm codec (its elevation past 180.5), and the RC2800's (past 180.5) and
+the Combi-Track's (unit B past 90.5).
 
 Fixed: AzimuthOfAzEl tells such a codec its elevation is never read (base.py ScalesElevation,
 rule 10): that elevation is judged by no range (tests/protocols/test_review98_*, every codec).
 
-In virtual time: the azimuth box a GS-232B (an Easycomm III) emulator whose answers say its
-elevation as 190 (181.0).
+In virtual time: the azimuth box a GS-232B (an Easycomm III, an RC2800, a Combi-Track)
+emulator whose answers say its elevation as 190 (181.0, 181.0, 95.0).
 """
 
 from __future__ import annotations
@@ -54,6 +54,8 @@ def elevation_read_as(form: bytes, said: bytes) -> Callable[[bytes, float], byte
 CASES = [
     ("gs232b", rb"EL=\d{3}", b"EL=190"),  # a pot read in whole degrees: 3 past 180
     ("easycomm3", rb"EL-?\d+(?:\.\d*)?", b"EL181.0"),  # a sensor read in tenths: half a degree
+    ("rc2800", rb"E P=\s*-?\d+(?:\.\d+)?", b"E P= 181.0"),  # tenths: half a degree
+    ("prosistel-combi", rb"B,\?,\d{4}", b"B,?,0950"),  # tenths: half a degree past 90
 ]
 
 

@@ -1,7 +1,7 @@
 """Review 98: a composite's az/el azimuth box's own elevation is never turned nor read
 (axes.py rule 1), so what it says there spoils nothing of the azimuth in the same reply
 (base.py rule 10, ScalesElevation), in every codec that judges an elevation's range: GS-232 A
-and B, Easycomm. Before, past base.py rule 10's slack, the whole reply was
+and B, Easycomm, RC2800, Combi-Track. Before, past base.py rule 10's slack, the whole reply was
 spoiled ("position out of range"), and the rotator went offline for good.
 
 Each case: the reply with that elevation past its slack, what the azimuth box reads of it, and
@@ -25,6 +25,14 @@ CASES = [
     ("gs232a", b"+0120+0190\r\n", 120.0, [b"W130 180\r"]),
     ("easycomm3", b"AZ120.0 EL181.0\n", 120.0, [b"AZ130.0 EL180.0\n"]),
     ("easycomm2", b"AZ120.0 EL-95.0\n", 120.0, [b"AZ130.0 EL0.0\n"]),
+    ("rc2800", b"A P= 120.0 S=9 ST\rE P= 181.0 S=9 ST\r", 120.0, [b"A130.0\r", b"E180.0\r"]),
+    ("rc2800", b"A P= 120.0 S=9 ST\rE P= -95.0 S=9 ST\r", 120.0, [b"A130.0\r", b"E0.0\r"]),
+    (
+        "prosistel-combi",
+        b"\x02A,?,1200,B\r\x02B,?,0950,B\r",
+        120.0,
+        [b"\x02AG1300\r", b"\x02BG900\r"],
+    ),
 ]
 
 
@@ -65,6 +73,8 @@ def test_the_same_reply_to_the_box_configured_on_its_own_is_spoiled_as_ever(
     [
         ("gs232b", b"AZ=460  EL=190\r\n"),
         ("easycomm3", b"AZ361.0 EL181.0\n"),
+        ("rc2800", b"A P= 361.0 S=9 ST\rE P= 181.0 S=9 ST\r"),
+        ("prosistel-combi", b"\x02A,?,3610,B\r\x02B,?,0950,B\r"),
     ],
 )
 def test_an_azimuth_boxs_own_azimuth_past_its_slack_is_spoiled_as_ever(
