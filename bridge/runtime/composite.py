@@ -337,10 +337,11 @@ def share_quiet(sessions: list[RotatorSession], now: float) -> None:
 
 def rotators_turn(turn: OwnTurn, sessions: list[RotatorSession]) -> OwnTurn:
     """Rule 10: a box's own turn as the rotator's: a storm's park is the park of the newest
-    storm either box saw begin. A box that does not answer keeps the storm it had (its calm is
-    judged at its steps: session/wind.py rule 2) while the other, answering, sees that storm
-    end and the next begin; plugged back in the next, it parks for the storm the rotator is
-    in, at that park's place, not at a place of its own."""
+    storm either box saw begin. Both boxes take every reading and judge a storm's begin and
+    end at it, answering or not (session/wind.py rule 2, review 96: a box silent through a
+    calm kept the storm it had, f96b859a named its park by the other's storm for its place
+    only), so they count the same storms; the newest names the park should they ever differ,
+    so a box plugged back parks at the rotator's park's place, never a place of its own."""
     if turn.source is not Source.WIND:
         return turn
     return turn._replace(of=max(s.wind.storms for s in sessions))

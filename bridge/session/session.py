@@ -398,7 +398,9 @@ class RotatorSession:
         self._waking = tuple(p for p in parts if p.wakeup is not None)
         self._waking_measuring = tuple(p for p in self._waking if not p.deciding)  # rule 20
         self._ending = tuple(p for p in parts if p.end is not None)
-        self._storm_seen = self.wind.storm  # parts.py rule 7: a storm kept was seen
+        # parts.py rule 7: a storm kept was seen; the storms begun with it (wind.py rule 2: one
+        # may end and the next begin between two looks, both judged at readings)
+        self._storm_seen = self._storm_look()
         self._answered = False  # wind.py rule 7: the controller answered at the last step
         self._parts_named = {p.name: p for p in parts}
         self._showing = tuple((p.name, p.status) for p in parts if p.status is not None)
@@ -712,7 +714,7 @@ class RotatorSession:
         session's own part of it holds (the controller's own: ``Controller.wakeups``)."""
         if self.targets.pending is not None or self._showing or self._status_key is None:
             return False
-        if self.wind.storm != self._storm_seen:
+        if self._storm_look() != self._storm_seen:
             return False
         motion = self.controller.motion
         for part in self._measuring:
@@ -1182,7 +1184,7 @@ class RotatorSession:
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
         """Rule 17: each part that is on and that something woke, in the order handed in."""
-        if self.wind.storm != self._storm_seen:  # (its look, without a call when the
+        if self._storm_look() != self._storm_seen:  # (its look, without a call when the
             self._storm(now)  # storm is as it was: twice at every step)
         for part in parts:
             if not part.on(self):
@@ -1193,7 +1195,7 @@ class RotatorSession:
                     continue
                 self._seen_motion[part.name] = motion
             self._part(part, now)
-            if self.wind.storm != self._storm_seen:
+            if self._storm_look() != self._storm_seen:
                 self._storm(now)
 
     def _storm(self, now: float) -> None:
@@ -1202,9 +1204,17 @@ class RotatorSession:
         again, as unlocking does (autopark.py rule 1): the reading that ended it moves
         nothing (an attack pass: auto-park's spell, long over in the storm, parked the rotor
         the instant a calm reading ended it), and the storm's park still waiting goes no more
-        (wind.py rule 8)."""
+        (wind.py rule 8). A storm that ended and a next that began since the last look (both
+        judged at readings, wind.py rule 2: the controller silent meanwhile) are both."""
         storm = self.wind.storm
-        if storm and not self._storm_seen:
+        seen, storms = self._storm_seen
+        new = self.wind.storms != storms
+        if seen and (not storm or new):
+            self._activity(now)
+            self.targets.clear_from(Source.WIND)  # wind.py rule 8: a park still waiting (a
+            # STOP's hold) or its try more goes no more, unsaid (review 60: it went when the
+            # hold ended after the storm, the rotor turned 90 degrees unasked)
+        if storm and (not seen or new):
             why = self.wind.refusal() or "storm"
             self._end_parts(why, now)
             for ended in (Source.TRACKING, Source.WSJTX, Source.AUTO_PARK):  # (the storm
@@ -1218,12 +1228,11 @@ class RotatorSession:
                 self._drop_pending(why)  # attack pass: a storm known only from a replay
                 # parked nothing in its place, and a Rotor-EZ's target, waiting for the brake,
                 # went out 6 s into the storm)
-        elif self._storm_seen and not storm:
-            self._activity(now)
-            self.targets.clear_from(Source.WIND)  # wind.py rule 8: a park still waiting (a
-            # STOP's hold) or its try more goes no more, unsaid (review 60: it went when the
-            # hold ended after the storm, the rotor turned 90 degrees unasked)
-        self._storm_seen = storm
+        self._storm_seen = self._storm_look()
+
+    def _storm_look(self) -> tuple[bool, int]:
+        """``_storm``'s look: whether in a storm, and the storms begun so far."""
+        return self.wind.storm, self.wind.storms
 
     def _part(self, part: Part[RotatorSession], now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""

@@ -32,7 +32,12 @@ Rules:
    So the hold ends with a reading that comes at least ``wind_hold_min`` after the calm began,
    never by the clock alone, and a gap of ``wind_silent_min`` between readings starts the calm
    again from the reading after it (a station that fell silent after one calm reading says
-   nothing of the wind since).
+   nothing of the wind since). The end is judged at that reading, whether the controller
+   answers or not (review 96: judged at this part's steps, which run only while it answers, a
+   controller silent through a calm kept the storm it had, and the next storm was taken for
+   it: a STOP of the old storm held the new park back, the new park took the old one's
+   place). The session looks at the storm and the storms begun (``storms``) at every step, so
+   a storm that ended and a next that began while it was silent are both seen.
 3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
    storm stops the park under way, and the park is not tried again until the next storm;
    motion stays refused meanwhile. That holds across a restart in the storm (the status's
@@ -289,8 +294,20 @@ class WindPark:
         elif self.storm and kmh < cfg.release_below_kmh:
             if self._calm_since is None or gap:
                 self._calm_since = now
+            if now - self._calm_since >= cfg.hold_s:
+                self._over()  # rule 2: at the reading, whether the controller answers or not
         else:
             self._calm_since = None  # rule 2: the hold starts again
+
+    def _over(self) -> None:
+        """Rule 2: the storm is over, judged at the reading that ends the hold, never at a
+        step: a step runs only while the controller answers, and a controller silent through
+        the calm kept the storm it had, the next storm taken for it (review 96: its STOP held
+        the new storm's park back, or the new park took the old storm's place)."""
+        self.storm, self._calm_since, self._park_owed = False, None, False
+        self._halted = self._replayed = self._here = False
+        self._refused, self._wire, self._off = None, None, None
+        log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
 
     def _stormy(self, kmh: float, *, replayed: bool = False) -> None:
         """Rule 1: a reading above the park level; rule 2: no calm since; rule 6: a replayed
@@ -501,12 +518,6 @@ class WindPark:
                 f"no wind reading on {cfg.topic} for {cfg.silent_s / 60:g} min: keeping the "
                 f"state it had ({kept})",
             )
-        calm, last = self._calm_since, self._last_t
-        if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
-            self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
-            self._halted = self._replayed = self._here = False
-            self._refused, self._wire, self._off = None, None, None
-            log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if self._end_owed and not self._park_owed:  # rule 6: no park, the end all the same
             self._end_owed = False
             if self.storm:

@@ -28,8 +28,6 @@ CompositeWorker does)."""
 
 from __future__ import annotations
 
-import pytest
-
 from tests.engine.test_review91_own_turn_one_place import CALM, at_rest, calm, taken, turns
 from tests.engine.test_wind_park_offline import FAST, at_10_30
 from tests.engine.virtual import VirtualRotator
@@ -52,11 +50,6 @@ def calm_while_silent(v: VirtualRotator) -> None:
     v.run_until(lambda h: h.status.available, 20, "back")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 96: a STOP in a storm the controller was silent after holds back the next "
-    "storm's park (the rotor never parked, R/error: a stop stopped its park)",
-)
 def test_the_next_storms_park_goes_though_the_last_storm_was_stopped_before_a_silence() -> None:
     """A GS-232B at 10 / 30, its wind park 180 / 0: a storm, its park STOPped 3 s in; the
     controller silent through a calm of two minutes and the next storm's first reading: once it
@@ -78,11 +71,6 @@ def test_the_next_storms_park_goes_though_the_last_storm_was_stopped_before_a_si
         v.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 96: the next storm's park after a silent calm shows the last storm's place: "
-    "a remote's STOP held from the last storm stops it",
-)
 def test_the_next_storms_park_after_a_silent_calm_takes_a_later_place() -> None:
     """A GS-232B parking for a storm falls silent 3 s in (its park owed: wind.py rule 7); a calm
     of two minutes and the next storm's first reading come while it is silent; once it answers
@@ -94,19 +82,14 @@ def test_the_next_storms_park_after_a_silent_calm_takes_a_later_place() -> None:
         v.mailbox.put_wind(90.0)
         v._take()
         v.run_for(3.0)
-        calm_while_silent(v)
-        first, seen = max(taken(s) for _, s in v.statuses), len(v.statuses)
+        first = max(taken(s) for _, s in v.statuses)  # (the first storm's places, before the
+        calm_while_silent(v)  # silence: the status that shows it back may show the new park)
         v.run_until(lambda h: abs(h.truth().az_deg - 180.0) < 1.0, 120, "parked")
-        assert turns(v.statuses[seen:], 0) == {first + 1}
+        assert turns(v.statuses, first) == {first + 1}
     finally:
         v.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 96: a STOP in a storm the elevation box was unplugged through keeps the "
-    "dish raised for the whole next storm (its half of the park never sent)",
-)
 def test_a_stop_in_one_storm_does_not_hold_back_the_next_storms_park_on_a_replugged_box() -> None:
     """RT-21 azimuth, GS-232B elevation at 10 / 30 (the wind park 180 / 0); the elevation box
     unplugged; a storm, its park stopped by the operator 3 s in; a calm ends the storm; a new
