@@ -188,8 +188,10 @@ Rules:
    began it in a later serve, plugged back mid-storm, or a box's park owed again once the
    box answers (wind.py rule 7; review 91: places 2 and 3, no command between). A motion
    command or a halt put since, or a new storm, makes a park begun after it a turn of its
-   own, at a later place. The merged order is the newest of each (rule 3), so it never goes
-   back.
+   own, at a later place. A storm's park a start sends again keeps the place the run before
+   gave it (``storm_place``, kept with the storm: runtime/kept.py rule 4), both boxes' halves
+   at that one place (review 96). The merged order is the newest of each (rule 3), so it
+   never goes back.
 """
 
 from __future__ import annotations
@@ -344,7 +346,10 @@ def rotators_turn(turn: OwnTurn, sessions: list[RotatorSession]) -> OwnTurn:
     so a box plugged back parks at the rotator's park's place, never a place of its own."""
     if turn.source is not Source.WIND:
         return turn
-    return turn._replace(of=max(s.wind.storms for s in sessions))
+    newest = max(s.wind.storms for s in sessions)
+    if newest == turn.of:
+        return turn
+    return turn._replace(of=newest, kept=0)  # (a storm of this run: no place kept for it)
 
 
 def _order(az: Order | None, el: Order | None) -> Order | None:
@@ -676,6 +681,7 @@ class CompositeWorker:
         storm: bool = False,
         storm_halted: bool = False,
         storm_arrived: bool = False,  # (both boxes were seen at their parks: ``merge``)
+        storm_place: int = 0,  # kept.py rule 4: the place the kept storm's park took
         stop_owed: bool = False,
         short_of: float | None = None,
         turn_kept: bool = False,  # kept.py rule 13 (an azimuth box's with no feedback)
@@ -714,6 +720,7 @@ class CompositeWorker:
                 storm=storm,
                 storm_halted=storm_halted,
                 storm_arrived=storm_arrived,
+                storm_place=storm_place,  # (the rotator's park's: rule 10)
                 stop_owed=stop_owed,  # (each box: the rotator's, kept whole)
                 short_of=short_of if axis is Axis.AZIMUTH else None,  # (the status's)
                 turn_kept=turn_kept and axis is Axis.AZIMUTH,  # (the elevation box reports)

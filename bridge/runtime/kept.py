@@ -34,7 +34,13 @@ Rules:
    controller since, and it is not turned back by itself; one whose park was not seen reached
    (the bridge died mid-park; a DCU-1, which is never seen there) parks again. A storm known
    only from a replayed reading (wind.py rule 6) is not kept: it parked nothing, and the
-   broker replays it to the next start. The wind park
+   broker replays it to the next start. The place in the order of commands the storm's park
+   took (rule 12; the turn a status in the storm shows first past the one shown before it:
+   motion is refused in the storm, so a turn begun in it is its park) is kept with the storm
+   (``storm_place``), so the park the next start sends again keeps it (session/mailbox.py
+   rule 10b, review 96: it took the new run's first place, and a remote's STOP held against
+   the park let it go); a park never sent has none kept, and takes a place of the new run
+   (the turn kept then is an older one's). The wind park
    has one owner, the session on the lines thread: it alone decides a storm, the judge reads
    the session's status, and the save is queued on that same thread in the order the storms
    came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
@@ -270,6 +276,13 @@ class Kept:
         self._version_queued = False  # rule 11: a save of the latest version waits
         # rule 12: the places earlier runs reserved, and the turn and lock word kept
         self.since, self.turn_place, self.lock_place = store.order(rotator_id)
+        # rule 4: the place the kept storm's park took (0: none known): a park the next start
+        # sends again keeps it (session/mailbox.py rule 10b, review 96); a place past ``since``
+        # is no place of an earlier run
+        place = store.storm_place(rotator_id) if self.storm else 0
+        self.storm_place = place if place <= self.since else 0
+        self._turn_seen = self.turn_place  # rule 4: the turn the last status showed
+        self._storm_from = self.since  # ... and before the storm: a turn past it is its park
         # (the first command taken reserves this run's block: half of none is taken)
         self._reserved = self.since + PLACES_BLOCK // 2
         self._order_queued = False  # rule 12: a save of the latest places waits
@@ -286,9 +299,17 @@ class Kept:
         storm = wind is not None and wind.parks  # (wind.py rule 6: a replay's is not kept)
         halted = storm and wind is not None and wind.halted
         arrived = storm and wind is not None and wind.arrived
+        if storm != self.storm:  # (a storm begun: its park is a turn past the last one shown)
+            self.storm_place, self._storm_from = 0, self._turn_seen
         if (storm, halted, arrived) != (self.storm, self.storm_halted, self.storm_arrived):
             self.storm, self.storm_halted, self.storm_arrived = storm, halted, arrived
-            self._store.later(lambda: self._save_storm_now(storm, halted, arrived))
+            self._save_storm()
+
+    def _save_storm(self) -> None:
+        """Rule 4: the storm as last seen, handed to the writer (lines thread)."""
+        storm, halted, arrived = self.storm, self.storm_halted, self.storm_arrived
+        place = self.storm_place
+        self._store.later(lambda: self._save_storm_now(storm, halted, arrived, place))
 
     def seen_stop(self, owed: bool) -> None:
         """Rule 8 (lines thread: it only compares and hands over)."""
@@ -323,6 +344,11 @@ class Kept:
         at most once every ORDER_SAVE_S; one save queued at a time, which writes the latest."""
         if order is None:
             return
+        self._turn_seen = order.turn  # rule 4: a turn begun in a storm is its park (motion
+        # is refused in it: wind.py rule 1), its place kept with the storm
+        if self.storm and order.turn > self._storm_from and order.turn != self.storm_place:
+            self.storm_place = order.turn
+            self._save_storm()
         reserve = order.taken > self._reserved - PLACES_BLOCK // 2
         if reserve:
             self._reserved = order.taken + PLACES_BLOCK
@@ -395,8 +421,8 @@ class Kept:
                 None,
             )
 
-    def _save_storm_now(self, storm: bool, halted: bool, arrived: bool) -> None:
-        if not self._store.set_storm(self._id, storm, halted=halted, arrived=arrived):
+    def _save_storm_now(self, storm: bool, halted: bool, arrived: bool, place: int) -> None:
+        if not self._store.set_storm(self._id, storm, halted=halted, arrived=arrived, place=place):
             self._report(
                 ErrorKind.STATE,
                 f"the storm's {'start' if storm else 'end'} could not be saved: a restart "

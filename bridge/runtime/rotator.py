@@ -231,6 +231,7 @@ class Rotator:
                 storm=self._kept.storm,  # kept.py rule 4
                 storm_halted=self._kept.storm_halted,
                 storm_arrived=self._kept.storm_arrived,
+                storm_place=self._kept.storm_place,  # kept.py rule 4 (mailbox.py rule 10b)
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
                 turn_kept=self._kept.turn_kept,  # kept.py rule 13
@@ -253,6 +254,7 @@ class Rotator:
                 storm=self._kept.storm,
                 storm_halted=self._kept.storm_halted,
                 storm_arrived=self._kept.storm_arrived,
+                storm_place=self._kept.storm_place,  # kept.py rule 4 (mailbox.py rule 10b)
                 stop_owed=self._kept.stop_owed,  # kept.py rule 8
                 short_of=self._kept.short_of,  # kept.py rule 9
                 turn_kept=self._kept.turn_kept,  # kept.py rule 13

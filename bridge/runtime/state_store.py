@@ -550,11 +550,25 @@ class StateStore:
         with self._lock:
             return self._data.get(rotator_id, {}).get("storm_arrived") is True
 
+    def storm_place(self, rotator_id: str) -> int:
+        """The place in the order of commands that storm's park took (kept.py rule 4; 0: none
+        known, or a malformed entry)."""
+        with self._lock:
+            place = self._data.get(rotator_id, {}).get("storm_place")
+        return place if type(place) is int and place > 0 else 0
+
     def set_storm(
-        self, rotator_id: str, storm: bool, *, halted: bool = False, arrived: bool = False
+        self,
+        rotator_id: str,
+        storm: bool,
+        *,
+        halted: bool = False,
+        arrived: bool = False,
+        place: int = 0,
     ) -> bool:
-        """Remember a storm begun or ended, whether its park was stopped, and whether it was
-        seen reached; False if it could not be written."""
+        """Remember a storm begun or ended, whether its park was stopped, whether it was
+        seen reached, and the place its park took (0: none known); False if it could not be
+        written."""
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
             for key, on in (("storm", storm), ("storm_halted", halted), ("storm_arrived", arrived)):
@@ -562,6 +576,10 @@ class StateStore:
                     entry[key] = True
                 else:
                     entry.pop(key, None)
+            if storm and place > 0:
+                entry["storm_place"] = place
+            else:
+                entry.pop("storm_place", None)
             return self._save()
 
     def stop_owed(self, rotator_id: str) -> bool:

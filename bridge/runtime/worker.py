@@ -129,6 +129,7 @@ class Worker:
         storm: bool = False,
         storm_halted: bool = False,
         storm_arrived: bool = False,
+        storm_place: int = 0,  # kept.py rule 4: the place the kept storm's park took
         stop_owed: bool = False,
         short_of: float | None = None,
         turn_kept: bool = False,  # kept.py rule 13
@@ -153,6 +154,7 @@ class Worker:
             storm=storm,
             storm_halted=storm_halted,
             storm_arrived=storm_arrived,
+            storm_place=storm_place,
             stop_owed=stop_owed,
             short_of=short_of,
             turn_kept=turn_kept,

@@ -94,7 +94,20 @@ Rules:
     (interfaces/mqtt/remote.py rule 10). A turn named otherwise (another storm's park, an
     auto-park's of another moment), or the same one after a motion command or a halt put
     since, is a new turn and takes the next ticket: a park begun after a STOP is never
-    stopped by it, and a turn begun after the park never looks older than it.
+    stopped by it, and a turn begun after the park never looks older than it. The storm's
+    park a start sends again (a storm kept across a restart, its park not stopped nor seen
+    reached: wind.py rule 7) is that same turn: it keeps the place it took in the run before
+    (``OwnTurn.kept``, the place the state file kept with the storm: runtime/kept.py rule 4)
+    while no motion command, stop or lock ON was put in this run (each of those takes a
+    place past the file's ``since``, so past it). Drawing this run's first ticket, it showed
+    a place past every place the run before showed for it, no command between, and a
+    remote's STOP held against the park let it go (review 96: a power blip cuts the link
+    and restarts the bridge). A park the run before never sent (the controller silent, the
+    lock ON) has no place kept and takes the next ticket: the turn the file kept then is an
+    older one, and a STOP held against that must not stop the park. What came in the run
+    before after the park is in the file already: a STOP or lock ON halted the park (it is
+    not sent again: wind.py rule 3), and a motion command was refused in the storm, so a
+    STOP held since was asked against the park, and stops it, as rule 3 has it.
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -139,15 +152,15 @@ from __future__ import annotations
 import itertools
 import os
 import threading
-from collections.abc import Hashable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, NamedTuple
 
 from bridge.core.haltwatch import HaltWatchers
 from bridge.core.model import (
     Control,
     FeatureCommand,
     SetOption,
+    Source,
     Stop,
     Target,
     combine,
@@ -156,6 +169,21 @@ from bridge.core.model import (
 )
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
+
+
+class OwnTurn(NamedTuple):
+    """What names a turn of the bridge's own as it begins (session.py ``_own_turn``; rule
+    10b places it): its source, and ``of``: the storm's park the storm's number (wind.py
+    ``storms``; a rotator of two boxes: the newest storm either box saw begin,
+    runtime/composite.py rule 10), auto-park's park the moment it began; ``kept``: the place
+    an earlier run's park of this same storm took, kept in the state file (a storm kept
+    across a restart, its park sent again by the start: wind.py rule 7, runtime/kept.py rule
+    4; 0: none)."""
+
+    source: Source
+    of: float
+    kept: int = 0
+
 
 HEARD_KEPT = 8  # rule 9: the programs whose newest status a batch keeps (a flood of names: 8)
 
@@ -300,7 +328,7 @@ class Mailbox:
         self._newest = 0  # rule 10a: the ticket of the newest motion command or halt put
         self._halt_placed = 0  # rule 10a: ... and of the newest halt
         self._motion_placed = 0  # rule 10a: ... and of the newest motion command
-        self._own: tuple[Hashable, int] | None = None  # rule 10b: the own turn's name, place
+        self._own: tuple[OwnTurn, int] | None = None  # rule 10b: the own turn's name, place
         self._winds = 0  # rule 9: live wind readings put so far
         self._lease = 0  # rule 14: changes of the control lease put so far
         self._control: Control | None = None  # rule 14: ... and the lease as the last one put
@@ -339,7 +367,7 @@ class Mailbox:
         on an ``itertools.count`` is one step under the interpreter's lock)."""
         return next(self._tickets)
 
-    def own_place(self, turn: Hashable) -> int:
+    def own_place(self, turn: OwnTurn) -> int:
         """Rule 10b: the place of the bridge's own turn named ``turn`` as it begins: the one it
         took, while no motion command or halt was put after it; else the next ticket. (Only
         the lines thread, which serves the rotator, asks.)"""
@@ -348,6 +376,9 @@ class Mailbox:
         own = self._own
         if own is not None and own[0] == turn and newer < own[1]:
             return own[1]
+        if own is None and turn.kept and newer < turn.kept:  # (a storm's park a restart
+            self._own = (turn, turn.kept)  # sends again, at the place it took: review 96)
+            return turn.kept
         place = self.ticket()
         self._own = (turn, place)
         return place

@@ -255,7 +255,7 @@ from bridge.session.feature_commands import Done, FeatureCommands
 from bridge.session.follow import Follow
 from bridge.session.health import Health
 from bridge.session.link import Link
-from bridge.session.mailbox import Batch, Halt, PartsEnd
+from bridge.session.mailbox import Batch, Halt, OwnTurn, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.stops import EXPRESS_LOST, SEND_AGAIN, Fence
@@ -269,16 +269,6 @@ __all__ = ["DROPS", "Action", "OwnTurn", "Publish", "Report", "RotatorSession", 
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
-
-
-class OwnTurn(NamedTuple):
-    """What names a turn of the bridge's own as it begins (``_own_turn``; mailbox.py rule
-    10b): its source, and ``of``: the storm's park the storm's number (wind.py ``storms``; a
-    rotator of two boxes: the newest storm either box saw begin, runtime/composite.py rule
-    10), auto-park's park the moment it began."""
-
-    source: Source
-    of: float
 
 
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
@@ -329,6 +319,7 @@ class RotatorSession:
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
         storm_halted: bool = False,  # ... and its park stopped (wind.py rule 3)
         storm_arrived: bool = False,  # ... or seen reached (wind.py rule 7)
+        storm_place: int = 0,  # ... the place its park took (0: none known; kept.py rule 4)
         stop_owed: bool = False,  # a stop owed when last stopped (kept.py rule 8)
         short_of: float | None = None,  # the target it rested short of then (kept.py rule 9)
         turn_kept: bool = False,  # a turn possibly in flight then (kept.py rule 13)
@@ -377,6 +368,10 @@ class RotatorSession:
         # kept across the restart at their own places)
         self._run = secrets.token_hex(4)
         self._since, self._turn_place, self._lock_place = order
+        # mailbox.py rule 10b: the kept storm's park, sent again by this start (wind.py rule
+        # 7), is the turn it was, at the place it took (review 96)
+        owed = storm and not storm_halted and not storm_arrived
+        self._storm_place = storm_place if owed and 0 < storm_place <= self._since else 0
         self._taking = self._since
         self.status = RotatorStatus(
             cfg.rotator_id,
@@ -1373,8 +1368,9 @@ class RotatorSession:
         answers, wind.py rule 7, or by a composite's other box plugged back, review 91),
         auto-park's by the moment it began (a composite's two boxes park together, in one
         serve: runtime/composite.py rule 10; the next spell's park is another turn)."""
-        if source is Source.WIND:
-            return OwnTurn(source, self.wind.storms)
+        if source is Source.WIND:  # (storms 0: the storm kept across the restart, review 96)
+            kept = self._storm_place if self.wind.storms == 0 else 0
+            return OwnTurn(source, self.wind.storms, kept)
         return OwnTurn(source, now)
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:

@@ -120,14 +120,15 @@ Rules:
    rule 4) and a reset of this part (session.py rule 14): neither parks again (a review of
    this rule: a bridge restarted in the storm turned a rotor moved by hand back to the park
    by itself), while a start in a storm whose park was not seen reached (the bridge died
-   mid-park) parks again, as it did. A rotor that cannot report its position (a DCU-1) is
-   never seen there: the end of its estimated move is no arrival, and an offline or a restart
-   owes its park again (a review of 3e4f0f4). A park owed so is judged (rule 5) from the first
-   reading taken once the controller answers, never from the one kept from before the
-   offline: it waits for that reading, owed (review 60: the first reading back, doubted,
-   made the controller answer while the motion still held the bearing from before the
-   offline; judged from it, a park from where the rotor had since been turned by hand was
-   refused for the whole storm).
+   mid-park) parks again, as it did, at the place that park took (mailbox.py rule 10b,
+   runtime/kept.py rule 4; review 96: a new place let a remote's STOP held against it go).
+   A rotor that cannot report its position (a DCU-1) is never seen there: the end of its
+   estimated move is no arrival, and an offline or a restart owes its park again (a review of
+   3e4f0f4). A park owed so is judged (rule 5) from the first reading taken once the controller
+   answers, never from the one kept from before the offline: it waits for that reading, owed
+   (review 60: the first reading back, doubted, made the controller answer while the motion
+   still held the bearing from before the offline; judged from it, a park from where the rotor
+   had since been turned by hand was refused for the whole storm).
 8. The park waits, like any target, under the hold of a STOP or lock ON that came before the
    storm (the stop lane's or the stop express's: session.py rule 13), and goes when the hold
    ends; a hold that ends by clearing (the main connection lost before its marker came back,

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.core.model import MotionState, RotatorStatus
 from bridge.interfaces.mqtt.remote import held_stamp
 from bridge.runtime.kept import Kept
@@ -62,6 +60,7 @@ def restart(v: VirtualRotator, path: Path) -> int:
         storm=again.storm,
         storm_halted=again.storm_halted,
         storm_arrived=again.storm_arrived,
+        storm_place=again.storm_place,  # (the place its park took: kept.py rule 4)
         order=(again.since, again.turn_place, again.lock_place),
         place=v.mailbox.own_place,
     )
@@ -75,11 +74,6 @@ def turns(statuses: list[RotatorStatus]) -> set[int]:
     return {s.order.turn for s in statuses if s.order is not None and s.order.turn}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 96: a storm's park finished after a restart shows a newer place than the "
-    "same park before it, no command between: a remote's held STOP against it is dropped",
-)
 def test_a_storm_park_finished_by_a_restart_keeps_the_place_it_had(tmp_path: Path) -> None:
     """A GS-232B at rest at 10 / 30; a storm; two seconds into the park the bridge dies and
     starts again in the storm. The park goes again and reaches 180 / 0 (as it should); every
@@ -114,5 +108,42 @@ def test_a_storm_park_finished_by_a_restart_keeps_the_place_it_had(tmp_path: Pat
         for s in again:
             assert s.order is not None
             assert s.order.turn <= held_stamp(before, s.order.run, s.order.taken, s.order.since)
+    finally:
+        v.close()
+
+
+def test_a_storm_park_never_sent_before_a_restart_takes_a_new_place(tmp_path: Path) -> None:
+    """The kept place is the park's own, never the turn shown before the storm: a GS-232B at
+    rest at 10 / 30 falls silent; a storm begins (its park waits for the controller); the
+    bridge restarts in the storm and the controller answers: the park goes, at a place of the
+    new run, past a remote's STOP pressed before the storm (stamped against the 10 / 30 turn,
+    the turn the state file kept), which so never stops it (review 83)."""
+    path = tmp_path / "state.json"
+    v = VirtualRotator("gs232b", settings=WIND, emulator={"az_speed_deg_s": 6.0}, own_places=True)
+    try:
+        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "ready")
+        v.target(10.0, 30.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 10) < 1, 120, "at 10")
+        before: dict[str, tuple[int, ...]] = {}  # a remote's STOP pressed before the storm
+        for s in v.published():
+            if s.order is not None:
+                before[s.order.run] = (*before.get(s.order.run, ()), s.order.taken)
+        v.set_silent(True)
+        v.run_until(lambda h: not h.status.available, 10, "offline")
+        storm(v)
+        assert v.status.wind is not None and v.status.wind.waiting  # (no park sent)
+        restarted = restart(v, path)
+        v.set_silent(False)
+        v.run_until(
+            lambda h: abs(h.truth().az_deg - 180.0) < 1.0 and abs(h.truth().el_deg) < 1.0,
+            180,
+            "at its park, sent by the new run",
+        )
+        again = [s for s in v.published()[restarted:] if s.target_az_deg is not None]
+        assert again
+        for s in again:
+            assert s.order is not None
+            assert s.order.turn > s.order.since  # (a place of the new run's)
+            assert s.order.turn > held_stamp(before, s.order.run, s.order.taken, s.order.since)
     finally:
         v.close()

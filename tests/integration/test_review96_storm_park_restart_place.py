@@ -14,8 +14,6 @@ from __future__ import annotations
 import json
 from typing import Any
 
-import pytest
-
 from bridge.interfaces.mqtt.remote import held_stamp
 from tests.support.mqtt import Message
 from tests.support.rig import Rig
@@ -29,11 +27,6 @@ def doc(m: Message) -> dict[str, Any]:
     return said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 96: a storm's park sent again by a restart shows a newer place than the "
-    "same park before it, no command between: a remote's held STOP against it is dropped",
-)
 def test_a_storm_park_sent_again_by_a_restart_keeps_its_place(rig: Rig) -> None:
     rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0, "speed_deg_s": 2.0}, **WIND)
     probe = rig.probe
