@@ -740,9 +740,11 @@ class Order:
     status shows every command up to, ``turn`` the place of the command the target or turn
     shown comes from (a target, a track or follow start; 0: none known), or the place the
     bridge's own turn took when it began (auto-park, the storm's park: a place of its own,
-    after every command asked before it; ``taken`` shows it too: review 83; one turn keeps
-    its place however often it begins, session/mailbox.py rule 10b, and a rotator of two boxes
-    parks both at one place of the rotator's: runtime/composite.py rule 10), ``lock`` the
+    after every command asked before it; ``taken`` shows it too: review 83; one storm's park
+    keeps its place however often it begins in that storm, across a restart too, until a
+    command, stop or lock ON is put after it: session/mailbox.py rule 10b and its limits,
+    and a rotator of two boxes parks both at one place of the rotator's:
+    runtime/composite.py rule 10), ``lock`` the
     place of the last lock word (0: none known). A remote orders its held halts by them
     (interfaces/mqtt/remote.py rule 10). Places go on across runs (review 86): a run counts
     on after the places the runs before it reserved in the state file (runtime/kept.py rule
