@@ -199,8 +199,15 @@ Rules:
    old bridge's is also a hand's at the panel, and a refused start stopped that (review 93:
    for some 90 s after every start, none of any bridge's ever sent, the operator's turn cut
    short at 74 of 182). ``turn_kept`` is true from a turn of the bridge's sent (a target out,
-   or one taken as carried over a connect) till TURN_KEPT_S past its end (``kept_end_t``: the
-   end assumed, or the stop that ended it, the first of a new target's stop-first too): the
+   or one taken as carried over a connect) till TURN_KEPT_S past its end (``kept_end_t``, or
+   the stop that ended it, the first of a new target's stop-first too). That end is not the
+   one assumed from the last bearing sent (``busy_until_t``): a DCU-1 reports nothing, so a
+   hand at its panel since may have left the rotor anywhere, and the next target, a few
+   degrees from the last, then runs the whole range (review 97: the hold ran out mid-turn,
+   and after a restart a refused follow start let it turn on 29 degrees). It is the end of a
+   turn over the whole range at the slowest this rule allows (``blind_busy_s`` of
+   ``az_span_deg``: BLIND_SLOW_FACTOR past nominal, and BLIND_START_S) counted from when the
+   turn was sent, whatever its length; a turn slower still outlasts it (then as before). The
    state file is written when it changes, so at a turn begun from rest and a minute after it
    is over, never per target (a tracker's or a logger's targets in a row, each a stop and a
    turn on a DCU-1, are one turn kept, not two writes each). What stays: a bridge that dies
@@ -275,7 +282,7 @@ AWAY_MARGIN_DEG = 5.0  # rule 5
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 BLIND_SLOW_FACTOR = 1.5  # rule 6: a rotor without feedback may be this much slower than nominal
 BLIND_START_S = 2.0  # rule 6: ...and take this long to get going
-TURN_KEPT_S = 60.0  # rule 6: a turn is kept in the state file this long past its end assumed
+TURN_KEPT_S = 60.0  # rule 6: a turn is kept in the state file this long past its end (the margin)
 COAST_S = 1.0  # ``coast_end``: a rotor's run-on after its motor is cut
 
 
@@ -971,7 +978,9 @@ def commanded(
             assumed_deg=target_deg,
             stop_sent_t=None,
             lost_turning=False,  # (rule 6: a turn of its own now)
-            kept_end_t=now + busy,  # (rule 6: turn_kept)
+            # (rule 6: turn_kept, for a turn over the whole range at the slowest, from now: a
+            # hand at the panel since may have left it anywhere; review 97)
+            kept_end_t=now + blind_busy_s(cfg.az_span_deg, cfg),
         )
     return replace(
         m,

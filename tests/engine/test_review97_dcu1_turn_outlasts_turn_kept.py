@@ -32,12 +32,6 @@ HAND = LAST - 4  # the operator's, at the panel: 178, the far end of a south-sto
 NEXT = LAST + 3  # a logger's next bearing: 3 degrees from the last the bridge sent
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 97: a DCU-1 turned by hand, then sent a bearing near the bridge's last, is"
-    " still turning when the state file says no turn; a restart then, and a refused follow"
-    " start lets it turn on some 30 degrees to the old target, no stop sent",
-)
 def test_a_dcu1_still_turning_after_its_turn_kept_ran_out_is_halted_by_a_refused_start(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -64,7 +58,9 @@ def test_a_dcu1_still_turning_after_its_turn_kept_ran_out_is_halted_by_a_refused
         v.run_for(mo.blind_busy_s(NEXT - LAST, motion) + mo.TURN_KEPT_S + 1.0)
         f.feed()
         assert v.truth().is_moving  # the bridge's turn still under way...
-        assert not f.says_turn()  # ...and the file says none (the defect's cause, shown)
+        # ...and the file keeps it (the whole range at the slowest, from when it was sent: it
+        # said none here before the fix, the defect's cause)
+        assert f.says_turn()
         f.restarted()  # killed here, started again from the file
         t, here = v.now, v.truth().az_deg
         v.follow(True)
