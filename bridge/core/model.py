@@ -808,6 +808,9 @@ class RotatorStatus:
     # a box with no feedback (DCU-1): a turn of the bridge's may be in flight, unseen
     # (session/motion.py rule 6, ``turn_kept``); kept across a restart (runtime/kept.py)
     turn_kept: bool = False
+    # ...and when that hold runs out, on the session's clock (None: no end known yet, or
+    # none kept); the state file keeps it on the kernel's boot clock (runtime/kept.py rule 13)
+    turn_kept_until: float | None = None
     # a remote's reading of the station's R/status (remote/readings.py rule 3): every feature's
     # block (bridge/feature.py StatusBlock) by its key, as the station wrote it, checked; the
     # status's blocks are then these, not the typed fields above (interfaces/mqtt/payloads.py)

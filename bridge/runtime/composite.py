@@ -435,6 +435,7 @@ def merge(
         parked=az.parked and el.parked,
         stop_owed=az.stop_owed or el.stop_owed,
         turn_kept=az.turn_kept or el.turn_kept,
+        turn_kept_until=az.turn_kept_until if az.turn_kept else el.turn_kept_until,
         order=place,
         wind=wind,
     )

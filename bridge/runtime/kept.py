@@ -175,6 +175,18 @@ Rules:
    on 95 degrees after a restart mid-turn); one with no turn kept (a new file, a run that sent
    none or saw it over) as at rest (review 93: every start took it as turning, and a refused
    start stopped the operator's own turn at the panel). A save that fails is reported (rule 3).
+   The file keeps with it when it runs out (state_store.py rule 15: the kernel's boot id and
+   its boot clock, never the wall clock), so a run that ended within the hold (shut down, a
+   crash, a power cut) leaves no turn kept for good: a start on the same boot after that end
+   takes the box at rest (review 97: a bare true stopped a hand at the panel at a refused
+   start an hour later). The end the status says (``turn_kept_until``, on ``clock``, the
+   session's) moves on at every target; the file is written to run out TURN_FILED_AHEAD_S
+   past it, and again only when a later target's end passes the one written, so targets in
+   a row write it once in some ten minutes, not per target. The price: a run ended within
+   that while is taken as possibly turning at a start on the same boot up to ten minutes more
+   (the safe side: a refused start then stops a box at rest or a hand). A start on another
+   boot, one whose boot clock cannot be read, or a turn kept with no end (its time counts
+   from a connect not yet made) keeps the turn: how long the machine was down is not known.
 """
 
 from __future__ import annotations
@@ -198,6 +210,7 @@ PLACES_BLOCK = 1 << 16  # rule 12: the places reserved at a time
 ORDER_SAVE_S = 0.5  # rule 12: the turn's and the lock word's places saved at most this often
 ORDER_SAVES = 8  # rule 12: ... and at most this many times ...
 ORDER_WINDOW_S = 600.0  # ... in any ten minutes (a target a second: an SD card's wear)
+TURN_FILED_AHEAD_S = 600.0  # rule 13: a turn kept is written to run out this much later
 
 
 class Owner:
@@ -272,6 +285,7 @@ class Kept:
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
         self.turn_kept = store.turn_kept(rotator_id)  # rule 13
+        self._turn_filed: float | None = None  # rule 13: its end as this run wrote it
         self.version = store.version(rotator_id, spec.name)  # rule 11
         self._version_queued = False  # rule 11: a save of the latest version waits
         # rule 12: the places earlier runs reserved, and the turn and lock word kept
@@ -323,11 +337,20 @@ class Kept:
             self.short_of = raw_az
             self._store.later(lambda: self._save_short_of_now(raw_az))
 
-    def seen_turn(self, kept: bool) -> None:
-        """Rule 13 (lines thread: it only compares and hands over)."""
-        if kept != self.turn_kept:
-            self.turn_kept = kept
-            self._store.later(lambda: self._save_turn_now(kept))
+    def seen_turn(self, kept: bool, until: float | None = None) -> None:
+        """Rule 13 (lines thread: it only compares and hands over): ``until``, when the turn
+        kept runs out on ``clock`` (None: no end known yet)."""
+        if not kept or until is None:
+            if kept != self.turn_kept:  # (kept with no end: as the file said it, or true)
+                self.turn_kept, self._turn_filed = kept, None
+                self._store.later(lambda: self._save_turn_now(kept, None))
+            return
+        filed = self._turn_filed
+        if self.turn_kept and filed is not None and until <= filed:
+            return  # (the file's end is later: targets in a row write nothing)
+        filed = until + TURN_FILED_AHEAD_S
+        self.turn_kept, self._turn_filed = True, filed
+        self._store.later(lambda: self._save_turn_now(True, filed))
 
     def seen_version(self, version: str | None) -> None:
         """Rule 11 (lines thread: it only compares and hands over): the controller's own; one
@@ -411,8 +434,11 @@ class Kept:
                 "stop",
             )
 
-    def _save_turn_now(self, kept: bool) -> None:
-        if not self._store.set_turn_kept(self._id, kept):
+    def _save_turn_now(self, kept: bool, filed: float | None) -> None:
+        until = None  # rule 13: the end on the boot clock, read beside ``clock`` (no end: kept)
+        if filed is not None and (boot := self._store.boot()) is not None:
+            until = (boot[0], boot[1] + filed - self._clock())
+        if not self._store.set_turn_kept(self._id, kept, until):
             self._report(
                 ErrorKind.STATE,
                 f"a turn {'sent' if kept else 'over'} could not be saved: after a restart a "

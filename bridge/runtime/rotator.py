@@ -295,7 +295,7 @@ class Rotator:
         self._kept.seen_wind(status.wind)
         self._kept.seen_stop(status.stop_owed)
         self._kept.seen_short_of(status.short_of_deg)
-        self._kept.seen_turn(status.turn_kept)
+        self._kept.seen_turn(status.turn_kept, status.turn_kept_until)
         self._kept.seen_version(status.version)
         self._kept.seen_order(status.order)
         if status.version is None and self._kept.version is not None:  # kept.py rule 11

@@ -107,8 +107,21 @@ Rules:
    not past ``places``. One that is malformed is none (all 0: the places count from 1, as a
    station that keeps none does, and a remote compares none of them with an earlier run's).
 15. A turn a box with no feedback may have had in flight (kept.py rule 13) is kept as
-   ``turn_kept``: true, or no key (none). Anything else there (a damaged entry), or a file
-   that could not be read, is a turn kept: the safe side.
+   ``turn_kept``: ``{"boot": <the kernel's boot id>, "until": <when it runs out, seconds on
+   CLOCK_BOOTTIME>}``, or no key (none). Not the wall clock (docs/architecture.md rule 15: a
+   clock stepped forward, by NTP or by hand, would run it out while the turn may still be
+   in flight): the boot clock counts the machine's time since it booted, suspend included,
+   and is never set, so it can be compared across a restart of the process on the same
+   boot (``boot_clock``; tests inject their own). At a start, one of the same boot whose
+   ``until`` is past is none (review 97: a bare true had no end, and a bridge ended within
+   its hold kept it for good: a start an hour later stopped a hand at the panel at a
+   refused start). One of another boot (the machine restarted: how long it was down is not
+   known), a boot clock that cannot be read, ``true`` (kept with no end known yet), or
+   anything else there (a damaged entry), or a file that could not be read, is a turn kept:
+   the safe side (a refused start in the range's time then stops a box at rest or a hand).
+   A clock decides the other way here, where architecture rule 15 lets none: a DCU-1
+   answers no question, so no reading can tell; the boot clock is the one that is never
+   stepped, and a boot clock past its end, on the same boot, is time that did pass.
 """
 
 from __future__ import annotations
@@ -124,6 +137,7 @@ import os
 import secrets
 import stat
 import threading
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -192,6 +206,18 @@ def _number(value: int | float) -> float:
         return float(value)
     except OverflowError:
         return math.inf if value > 0 else -math.inf
+
+
+def boot_clock() -> tuple[str, float] | None:
+    """Rule 15: the kernel's boot id and its CLOCK_BOOTTIME now; None if either cannot be read
+    (then a turn kept is kept: the safe side)."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id", encoding="ascii") as f:
+            boot = f.read().strip()
+        now = time.clock_gettime(time.CLOCK_BOOTTIME)
+    except (OSError, ValueError, AttributeError):
+        return None
+    return (boot, now) if boot else None
 
 
 def _integer(digits: str) -> int | float:
@@ -333,11 +359,18 @@ def tilde_leftover(path: Path | None) -> Path | None:
 
 class StateStore:
     def __init__(
-        self, path: Path | None, *, deferred: bool = False, read_from: Path | None = None
+        self,
+        path: Path | None,
+        *,
+        deferred: bool = False,
+        read_from: Path | None = None,
+        boot: Callable[[], tuple[str, float] | None] = boot_clock,
     ) -> None:
         """``deferred``: nothing is written before ``check_writable`` (rule 7: the bridge holds
         the installation's lock by then); a save asked before is made then. ``read_from``: the
-        file read in place of ``path`` (rule 13), written at ``path``."""
+        file read in place of ``path`` (rule 13), written at ``path``. ``boot``: the boot id
+        and the boot clock (rule 15)."""
+        self.boot = boot  # rule 15
         if path is not None and read_from is not None:
             log.warning(
                 "state file %s: not there yet; read from %s, where an earlier version kept a "
@@ -599,22 +632,40 @@ class StateStore:
             return self._save()
 
     def turn_kept(self, rotator_id: str) -> bool:
-        """Whether a turn sent to a box with no feedback may have been in flight when last
-        written (kept.py rule 13); one that is not false (a damaged entry), or a file that
-        could not be read (rule 2), says it may: a stop more is the safe side."""
+        """Whether a turn sent to a box with no feedback may still be in flight (kept.py rule
+        13): one kept, unless its ``until`` is past on this same boot (rule 15); one of
+        another boot, with no end, a damaged entry, a boot clock not read, or a file that could
+        not be read (rule 2), says it may: a stop more is the safe side."""
         with self._lock:
             if self.corrupt:
                 return True
-            return self._data.get(rotator_id, {}).get("turn_kept", False) is not False
+            kept = self._data.get(rotator_id, {}).get("turn_kept", False)
+        if kept is False:
+            return False
+        if not isinstance(kept, dict) or set(kept) != {"boot", "until"}:
+            return True  # (true: no end known; anything else: damaged)
+        boot, until = kept["boot"], kept["until"]
+        if not isinstance(boot, str) or not boot or isinstance(until, bool):
+            return True
+        if not isinstance(until, int | float) or not math.isfinite(until):
+            return True
+        now = self.boot()
+        return now is None or now[0] != boot or now[1] < until
 
-    def set_turn_kept(self, rotator_id: str, kept: bool) -> bool:
-        """Remember a turn possibly in flight, or none; False if it could not be written."""
+    def set_turn_kept(
+        self, rotator_id: str, kept: bool, until: tuple[str, float] | None = None
+    ) -> bool:
+        """Remember a turn possibly in flight till ``until`` (the boot id, and when it runs out
+        on that boot's clock: rule 15; None: no end known), or none; False if it could not be
+        written."""
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
-            if kept:
+            if not kept:
+                entry.pop("turn_kept", None)
+            elif until is None:
                 entry["turn_kept"] = True
             else:
-                entry.pop("turn_kept", None)
+                entry["turn_kept"] = {"boot": until[0], "until": until[1]}
             return self._save()
 
     def short_of(self, rotator_id: str) -> float | None:

@@ -208,16 +208,21 @@ Rules:
    turn over the whole range at the slowest this rule allows (``blind_busy_s`` of
    ``az_span_deg``: BLIND_SLOW_FACTOR past nominal, and BLIND_START_S) counted from when the
    turn was sent, whatever its length; a turn slower still outlasts it (then as before). The
+   status says when the hold runs out (``turn_kept_until``), which the state file keeps on
+   the kernel's boot clock (runtime/kept.py rule 13, state_store.py rule 15: a bridge ended
+   within the hold leaves none kept once it is past, on the same boot; review 97). The
    state file is written when it changes, so at a turn begun from rest and a minute after it
    is over, never per target (a tracker's or a logger's targets in a row, each a stop and a
-   turn on a DCU-1, are one turn kept, not two writes each). What stays: a bridge that dies
+   turn on a DCU-1, are one turn kept, not two writes each; the end written runs ten minutes
+   ahead, rewritten when a target's passes it). What stays: a bridge that dies
    between writing a turn's frame and the state writer's save of it (the status, then an
    fsync: tens of milliseconds), or whose save failed (said, kind ``state``), starts with no
    turn kept, and a refused start then does not halt that turn (review 89's case, in that
    window alone: the unsafe side, a turn on to the old target under "refused"); one
-   restarted within TURN_KEPT_S of a turn's end, or after a file it could not read, stops a
-   box at rest or a hand's turn at a start refused in the range's time, as every start did
-   (the safe side).
+   restarted on the same boot before the end the file keeps (TURN_KEPT_S past a turn's end,
+   and up to kept.py's TURN_FILED_AHEAD_S more), on another boot after a turn kept, or after
+   a file it could not read, stops a box at rest or a hand's turn at a start refused in the
+   range's time, as every start did (the safe side).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
@@ -1300,6 +1305,16 @@ def turn_kept(m: Motion, now: float) -> bool:
         return True  # (till its time from the connect is over: ``tick``)
     end = m.kept_end_t
     return end is not None and now < end + TURN_KEPT_S
+
+
+def turn_kept_until(m: Motion, now: float) -> float | None:
+    """Rule 6: when ``turn_kept`` runs out, on the session's clock: TURN_KEPT_S past
+    ``kept_end_t``; None while none is kept, or while one is kept with no end yet (carried
+    to a connect not made: its time counts from the connect, ``link_up``)."""
+    end = m.kept_end_t
+    if end is None or not turn_kept(m, now):
+        return None
+    return end + TURN_KEPT_S
 
 
 def stall_due(m: Motion, cfg: MotionConfig, now: float) -> bool:

@@ -196,6 +196,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float, order: Order | None = Non
         stop_owed=seen.stop_owed,
         short_of_deg=seen.short_of_deg,
         turn_kept=not spec.can_report_position and mo.turn_kept(m, now),
+        turn_kept_until=None if spec.can_report_position else mo.turn_kept_until(m, now),
         relayed=None,  # (a remote's reading alone: remote/readings.py rule 3)
         order=order,
     )

@@ -29,19 +29,26 @@ from tests.engine.test_review73_dcu1_refused_start_after_replug import (
 from tests.engine.virtual import VirtualRotator
 from tests.integration.test_pointing_bridge import angle_between
 
+BOOT = "0f5e0c3a-97b1-4c1e-9d2a-3b6c2f4e8a11"  # the machine's boot id, as the kernel's reads
+
 
 class Filed:
     """The rotator's Kept on a real state file, fed every status the session published (as
-    runtime/rotator.py ``_status`` does on the lines thread), its file writes counted."""
+    runtime/rotator.py ``_status`` does on the lines thread), its file writes counted. The
+    machine's boot clock (state_store.py rule 15) is the virtual one, some hours on: no boot
+    of the machine's between the runs (``rebooted`` for one)."""
 
     def __init__(self, path: Path, v: VirtualRotator, monkeypatch: pytest.MonkeyPatch) -> None:
         self.path, self.v, self.writes, self._fed = path, v, 0, 0
-        self.store = StateStore(path)
+        self.boot_id = BOOT
+        self.store = StateStore(path, boot=self.boot)
 
         def report(kind: ErrorKind, message: str, what: str | None) -> None:
             raise AssertionError(message)
 
-        self.kept = Kept(self.store, v.cfg.rotator_id, v.cfg.spec, report=report)
+        self.kept = Kept(
+            self.store, v.cfg.rotator_id, v.cfg.spec, report=report, clock=lambda: v.now
+        )
         real = StateStore._write
 
         def counted(store: StateStore, at: Path, *, put_in_place: bool = True) -> None:
@@ -50,16 +57,26 @@ class Filed:
 
         monkeypatch.setattr(StateStore, "_write", counted)
 
+    def boot(self) -> tuple[str, float]:
+        """The boot id and CLOCK_BOOTTIME now, on the virtual clock (12 h since the boot)."""
+        return self.boot_id, 43200.0 + self.v.now
+
+    def rebooted(self) -> None:
+        """The machine started again: another boot id, its clock counted anew."""
+        self.boot_id = f"{self.boot_id}-again"
+
     def feed(self) -> None:
-        """The statuses published since the last feed, in order, and their saves written."""
+        """The statuses published since the last feed, in order, and their saves written
+        (each on the writer thread: the clocks read there at the status's time, a step
+        behind at most)."""
         for _t, status in self.v.statuses[self._fed :]:
-            self.kept.seen_turn(status.turn_kept)
+            self.kept.seen_turn(status.turn_kept, status.turn_kept_until)
         self._fed = len(self.v.statuses)
         self.store.flush()
 
     def says_turn(self) -> bool:
         """What the file on disk says, read as the next start reads it."""
-        return StateStore(self.path).turn_kept(self.v.cfg.rotator_id)
+        return StateStore(self.path, boot=self.boot).turn_kept(self.v.cfg.rotator_id)
 
     def restarted(self) -> None:
         """The bridge killed where it stands (a crash, SIGKILL: no stop at its end) and started
@@ -68,7 +85,7 @@ class Filed:
         v = self.v
         v.link_down(None)
         v.run_for(1.0)  # (the bridge down: not a deadline)
-        kept = StateStore(self.path).turn_kept(v.cfg.rotator_id)
+        kept = self.says_turn()
         v.session = RotatorSession(v.cfg, turn_kept=kept)
         v._do(v.session.start(v.now))
         v.link_up()

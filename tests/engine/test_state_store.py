@@ -5,12 +5,13 @@ import json
 import logging
 import os
 import threading
+import time
 from pathlib import Path
 
 import pytest
 
 from bridge.app import App
-from bridge.runtime.state_store import InUse, StateStore, held, tilde_leftover
+from bridge.runtime.state_store import InUse, StateStore, boot_clock, held, tilde_leftover
 from bridge.settings import Settings
 from tests.support.waiting import slow
 
@@ -629,3 +630,51 @@ def test_a_turn_kept_survives_a_restart_and_a_damaged_or_unreadable_one_is_kept(
     assert StateStore(path).turn_kept("dcu") is True  # damaged: the safe side
     path.write_text("not json")
     assert StateStore(path).turn_kept("dcu") is True  # unreadable: likewise
+
+
+def test_a_turn_kept_runs_out_on_the_same_boot_only_and_is_kept_on_another_or_unknown(
+    tmp_path: Path,
+) -> None:
+    """state_store.py rule 15 (review 97): a turn kept carries when it runs out, on the
+    kernel's boot clock: a start on the same boot past it finds none; before it, on another
+    boot, with a boot clock not read, or a damaged end, one kept (the safe side)."""
+    path = tmp_path / "state.json"
+    clock: list[tuple[str, float] | None] = [("boot-a", 1000.0)]
+
+    def boot() -> tuple[str, float] | None:
+        return clock[0]
+
+    s = StateStore(path, boot=boot)
+    assert s.set_turn_kept("dcu", True, ("boot-a", 1500.0)) is True
+    kept = json.loads(path.read_text())["rotators"]["dcu"]["turn_kept"]
+    assert kept == {"boot": "boot-a", "until": 1500.0}
+    assert StateStore(path, boot=boot).turn_kept("dcu") is True  # (within its hold)
+    clock[0] = ("boot-a", 1500.0)
+    assert StateStore(path, boot=boot).turn_kept("dcu") is False  # run out on this boot
+    clock[0] = ("boot-b", 5000.0)
+    assert StateStore(path, boot=boot).turn_kept("dcu") is True  # another boot: not known
+    clock[0] = None
+    assert StateStore(path, boot=boot).turn_kept("dcu") is True  # no boot clock: likewise
+    clock[0] = ("boot-a", 9000.0)
+    assert StateStore(path, boot=boot).turn_kept("dcu") is False
+    for damaged in (
+        '{"boot": "boot-a"}',
+        '{"boot": "", "until": 1.0}',
+        '{"boot": "boot-a", "until": "1"}',
+        '{"boot": "boot-a", "until": true}',
+        '{"boot": "boot-a", "until": 1.0, "more": 1}',
+        '{"boot": 7, "until": 1.0}',
+        "[]",
+        "true",
+    ):
+        path.write_text(f'{{"rotators": {{"dcu": {{"turn_kept": {damaged}}}}}}}')
+        assert StateStore(path, boot=boot).turn_kept("dcu") is True, damaged
+
+
+def test_the_boot_clock_is_the_kernels_boot_id_and_boottime() -> None:
+    """state_store.py rule 15: the clock a turn kept runs out on is this boot's, never set."""
+    read = boot_clock()
+    assert read is not None
+    boot, now = read
+    assert boot == Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    assert 0.0 < now <= time.clock_gettime(time.CLOCK_BOOTTIME)
