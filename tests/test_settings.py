@@ -1347,6 +1347,17 @@ def test_a_topic_the_bridge_publishes_under_does_not_start_with_a_dollar() -> No
     assert settings_from(document(base_topic="shack/$rotor"), {}).mqtt.base_topic == "shack/$rotor"
 
 
+def test_a_topic_the_bridge_publishes_under_has_at_most_32_levels() -> None:
+    """Brokers drop a client (mosquitto, past some 200 levels) or die (aedes, past 100) for a
+    subscription deeper than they take; the bridge adds levels under its own (review 102)."""
+    deep = "/".join(["a"] * 33)
+    said = "has 33 levels, at most 32"
+    assert f"mqtt.base_topic: {said}" in refusal(document(base_topic=deep))
+    assert f"rotators[0].topic: {said}" in refusal(document({"topic": deep}))
+    ok = "/".join(["a"] * 32)
+    assert settings_from(document(base_topic=ok), {}).mqtt.base_topic == ok
+
+
 @pytest.mark.parametrize(
     ("key", "most"),
     [("client_id", 65530), ("username", 65535), ("password", 65535), ("base_topic", 64511)],

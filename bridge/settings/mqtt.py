@@ -48,6 +48,11 @@ MQTT_STRING_MAX = 65535
 # discovery prefix (<prefix>/<platform>/rotorbridge_<base>_r_<id>/<object>/config): a few
 # hundred bytes at most, with room to spare
 TOPIC_ROOM = 1024
+# levels a topic of the bridge's own may have: it adds up to five under one (a group's or a
+# rotator's words, a vouch read's <base>/bridge/info), and brokers drop or die of deeper
+# subscriptions (mosquitto drops a client past some 200 levels; aedes, Node-RED's broker, dies
+# past 100: review 102, a stamp naming a 250-level base topic)
+TOPIC_LEVELS_MAX = 32
 # what the stop lane and the stop express add to a client id set (interfaces/mqtt/lane.py)
 CLIENT_ID_ROOM = len("-stop")
 
@@ -56,8 +61,9 @@ def check_topic(v: str, *, own: bool = True) -> str:
     """``v`` if it is a plain topic: no wildcards, no leading, trailing or double '/', nothing
     core/text.py refuses (mosquitto drops a client whose topic holds a control character, the
     will's among them, at every CONNECT: an attack pass), and short enough for MQTT. ``own``: a
-    topic the bridge publishes under, which leaves room for the levels it adds (TOPIC_ROOM) and
-    does not start with '$' (the broker's own topics, $SYS: it would take no message there)."""
+    topic the bridge publishes under, which leaves room for the levels it adds (TOPIC_ROOM),
+    has at most TOPIC_LEVELS_MAX levels, and does not start with '$' (the broker's own topics,
+    $SYS: it would take no message there)."""
     if not v or v.startswith("/") or v.endswith("/") or _TOPIC_BAD.search(v) or "//" in v:
         raise ValueError(
             "must be a plain topic like 'rotor' (no wildcards, no leading/trailing '/')"
@@ -70,6 +76,12 @@ def check_topic(v: str, *, own: bool = True) -> str:
     if own:
         room = f"{TOPIC_ROOM} for the levels the bridge adds"
         check_length(v, MQTT_STRING_MAX - TOPIC_ROOM, "a topic", room)
+        levels = v.count("/") + 1
+        if levels > TOPIC_LEVELS_MAX:
+            raise ValueError(
+                f"has {levels} levels, at most {TOPIC_LEVELS_MAX} (brokers drop a client, or"
+                " stop, for subscriptions much deeper than that)"
+            )
     else:
         check_length(v, MQTT_STRING_MAX, "a topic")
     return v

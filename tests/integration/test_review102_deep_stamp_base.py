@@ -15,8 +15,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe, slow
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
@@ -24,11 +22,6 @@ from tests.support.rig import Rig
 LEVELS = 250  # mosquitto 2.0 drops a subscriber past 200 levels
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 102: one retained R/info stamped with a base topic of 250 levels keeps the "
-    "bridge off mosquitto for good (the vouch read's SUBSCRIBE gets it dropped at every connect)",
-)
 def test_a_stamp_naming_a_base_topic_too_deep_for_the_broker_does_not_keep_the_bridge_off_it(
     tmp_path: Path, broker: Mosquitto, probe: Probe
 ) -> None:

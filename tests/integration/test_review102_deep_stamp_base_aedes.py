@@ -39,11 +39,6 @@ def aedes(tmp_path: Path) -> Iterator[tuple[Aedes, Probe]]:
         broker.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 102: one retained R/info stamped with a base topic of 99 levels has the "
-    "bridge's first look kill an aedes broker (its vouch read's SUBSCRIBE)",
-)
 def test_on_aedes_a_stamp_naming_a_deep_base_topic_does_not_kill_the_broker(
     tmp_path: Path, aedes: tuple[Aedes, Probe]
 ) -> None:

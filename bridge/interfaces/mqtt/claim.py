@@ -242,9 +242,10 @@ def _no_base_topic(base: str) -> str | None:
 
 def unusable_stamp(payload: bytes) -> tuple[str, str] | None:
     """Rule 5: a stamp whose base topic no bridge could have (``'#'``, a NUL, a lone surrogate,
-    a topic past MQTT's length): that base topic and why; None for anything else. Such a stamp
-    is no bridge's (review 94: its vouch reads, ``#/bridge/info``, raised in paho or had the
-    broker drop the connection at every connect, and the bridge never came online)."""
+    a topic past MQTT's length or past TOPIC_LEVELS_MAX levels, review 102): that base topic
+    and why; None for anything else. Such a stamp is no bridge's (review 94: its vouch reads,
+    ``#/bridge/info``, raised in paho or had the broker drop the connection at every connect,
+    and the bridge never came online)."""
     mark = _mark(payload)
     if mark is None:
         return None
