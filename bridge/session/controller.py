@@ -115,7 +115,10 @@ Rules:
    a target out when its readings were lost) is believed only when the next agrees with it,
    within ``doubt_deg`` plus what the rotor can turn between them as for a reading asked again
    at once below (``_doubts_first``: asked again at once, DOUBTS_TOLD in a row at most, then at
-   the usual polls within ``doubt_deg`` alone; the reading taken then is the first of the two,
+   the moving rate, always allowing what the rotor can turn between the two compared at its top
+   speed, motion.py ``top_speed_deg_s``; review 100: at the usual polls within ``doubt_deg``
+   alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked for
+   ran past ``az_min_deg`` unjudged; the reading taken then is the first of the two,
    which answered the question the motion machine times it by; where the second disagrees,
    a third that agrees with either is taken, and the odd one is told as line noise). Until
    then the controller is not answering: the user sees it
@@ -685,7 +688,7 @@ class Controller:
         self._misfit_said = ""  # ... the last one's bytes, for the words of a lone one
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
-        self._first_said: _Doubted | None = None  # rule 9: a first reading, doubted
+        self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last two first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
@@ -1237,44 +1240,51 @@ class Controller:
     def _doubts_first(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9: a connection's first reading, or the first back after readings were lost
         while the rotor turned (nothing it stood at to doubt it against), is believed when the
-        next agrees, within ``doubt_deg`` and what the rotor can have turned between them
-        (asked at once: DOUBTS_TOLD readings in a row at most, then at the usual polls, within
-        ``doubt_deg`` alone). Until then it is no reading for anything, and the controller is
-        not answering yet (no bearing, offline, as before its first answer). Attack 30: one
-        byte lost or flipped in the first answer (``AZ150.0`` read ``AZ10.0``) was the
-        bearing, and a nudge of +10 turned the rotor from 150 down to 20."""
+        next agrees, or the one after it (the one between then line noise), within
+        ``doubt_deg`` and what the rotor can have turned between the two compared at its top
+        speed (motion.py ``top_speed_deg_s``), however they were asked: at once, DOUBTS_TOLD
+        in a row at most, then at the moving rate (``poll``; review 100: after three, at the
+        usual polls within ``doubt_deg`` alone, a rotor turning at its nominal speed never had
+        two readings agree, and its turn nobody asked for ran past ``az_min_deg`` unjudged).
+        Two compared further apart in time than DOUBT_TURN_MAX_DEG at that speed tell nothing.
+        Until then it is no reading for anything, and the controller is not answering yet (no
+        bearing, offline, as before its first answer). Attack 30: one byte lost or flipped in
+        the first answer (``AZ150.0`` read ``AZ10.0``) was the bearing, and a nudge of +10
+        turned the rotor from 150 down to 20."""
         cfg = self.cfg.motion
-        if doubted.first:
-            # the last one doubted, or the chain's first (one glitch in the second: 150, 10,
-            # 150), within what the rotor can have turned since (asked at once: else none)
-            for first in (doubted, self._first_said):
-                if first is None or first.reply is None:
-                    continue
-                turned = 0.0
-                if doubted.at_once:
-                    turned = min(2 * cfg.nominal_speed_deg_s * (now - first.t), DOUBT_TURN_MAX_DEG)
-                one = first.reply
-                if _apart(reply, one.az_deg, one.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
-                    continue
-                said = self._first_said
-                noise = said.reply if said is not None and said.reply is not one else None
-                if noise is None and doubted.reply is not one:  # (the one between was)
-                    noise = doubted.reply
-                if noise is not None:
-                    self._say(
-                        f"a first reading of {_where(noise)}, not said again (two others "
-                        f"agree on {_where(reply)}): ignored (line noise?)",
-                        now,
-                        logged=True,
-                    )
-                self._doubts_in_row, self._first_said = 0, None
-                self._first_agreed = one  # (taken for this one: ``_confirmed``)
-                return Doubt.TAKEN
-        else:
-            self._doubts_in_row, self._first_said = 0, _Doubted(reply, now, True, first=True)
+        chain = self._first_said if doubted.first else ()
+        top = mo.top_speed_deg_s(cfg)
+        # the last one doubted, or the one before it (one glitch between: 150, 10, 150)
+        for back, first in enumerate(reversed(chain)):
+            if first.reply is None:
+                continue
+            turned = top * max(0.0, now - first.t)
+            if turned > DOUBT_TURN_MAX_DEG:
+                continue  # (too far apart to tell a turn from a glitch)
+            one = first.reply
+            if _apart(reply, one.az_deg, one.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
+                continue
+            noise = None  # (the odd one: the one between, or the one before the pair)
+            if back == 1:
+                noise = chain[-1].reply
+            elif len(chain) > 1:
+                noise = chain[-2].reply
+            if noise is not None:
+                self._say(
+                    f"a first reading of {_where(noise)}, not said again (two others "
+                    f"agree on {_where(reply)}): ignored (line noise?)",
+                    now,
+                    logged=True,
+                )
+            self._doubts_in_row, self._first_said = 0, ()
+            self._first_agreed = one  # (taken for this one: ``_confirmed``)
+            return Doubt.TAKEN
+        if not chain:
+            self._doubts_in_row = 0
         self._doubts_in_row += 1
         at_once = self._doubts_in_row < DOUBTS_TOLD
         self._doubted = _Doubted(reply, now, at_once, first=True)
+        self._first_said = (*chain[-1:], self._doubted)
         log.info("%s: a first reading of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._say(
@@ -1995,8 +2005,10 @@ class Controller:
                 )
             why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))
-        m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate)
+        m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
+        # rule 9: a connection's first readings that disagree too, the rotor may be turning)
         busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
+        busy = busy or self._doubted.first
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 

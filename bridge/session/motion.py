@@ -284,6 +284,7 @@ from bridge.protocols.base import ModelSpec, RetargetPolicy
 OFFLINE, UNKNOWN, MOVING = MotionState.OFFLINE, MotionState.UNKNOWN, MotionState.MOVING
 BRAKING, STALLED, IDLE = MotionState.BRAKING, MotionState.STALLED, MotionState.IDLE
 AWAY_MARGIN_DEG = 5.0  # rule 5
+REACH_FACTOR = 3.0  # rule 5: a rotor may turn up to this much faster than nominal
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 BLIND_SLOW_FACTOR = 1.5  # rule 6: a rotor without feedback may be this much slower than nominal
 BLIND_START_S = 2.0  # rule 6: ...and take this long to get going
@@ -928,8 +929,14 @@ def reach_deg(m: Motion, cfg: MotionConfig, now: float, since_t: float | None = 
     one further is corrupt."""
     t0 = max(m.changed_t or -math.inf, m.target_t or -math.inf) if since_t is None else since_t
     dt = now - t0 if t0 > -math.inf else 0.0
-    speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
-    return 3.0 * speed * dt + cfg.away_deg
+    return top_speed_deg_s(cfg) * dt + cfg.away_deg
+
+
+def top_speed_deg_s(cfg: MotionConfig) -> float:
+    """Rule 5: the fastest a rotor is taken to turn on either axis, its speed-up bound over the
+    nominal speeds (REACH_FACTOR times the larger of the two): what it can have turned between
+    two readings (``reach_deg``; controller.py rule 9's first readings)."""
+    return REACH_FACTOR * max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
 
 
 def _back(back: Back | None, moved: bool, a: float, err: float, far: float) -> Back | None:

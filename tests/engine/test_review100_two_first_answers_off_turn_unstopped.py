@@ -25,8 +25,6 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -61,13 +59,6 @@ def first_answers_one_bit_off(
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 100: two first answers one bit off, and a rotor turning at the start runs past "
-        "az_min_deg unstopped, no bearing shown, where the old code stopped it at once"
-    ),
-)
 def test_a_turn_at_the_start_is_stopped_before_the_limit_when_two_first_answers_are_off(
     rig: Rig,
 ) -> None:
