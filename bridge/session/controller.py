@@ -118,7 +118,12 @@ Rules:
    the moving rate, always allowing what the rotor can turn between the two compared at its top
    speed, motion.py ``top_speed_deg_s``; review 100: at the usual polls within ``doubt_deg``
    alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked for
-   ran past ``az_min_deg`` unjudged; the reading taken then is the first of the two,
+   ran past ``az_min_deg`` unjudged; three in a row that disagree but lie on one steady turn,
+   each axis the same way at one rate within ``doubt_deg``, FIRST_TURN_MAX_DEG_S at most, are
+   a turn faster than that allowance: the last is taken, and the next reading that goes on
+   with it too, the turn's readings trusted till it rests, ``_steady``; review 100: a Rot2Prog
+   at 30 deg/s replugged mid-turn was offline for 24 s, till it rested, and R/error blamed the
+   line; the reading taken then is the first of the two,
    which answered the question the motion machine times it by; where the second disagrees,
    a third that agrees with either is taken, and the odd one is told as line noise). Until
    then the controller is not answering: the user sees it
@@ -376,6 +381,7 @@ DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agre
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 MISFITS_TOLD = 2  # rule 6: this many MISFIT replies in a row are told in the codec's words
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
+FIRST_TURN_MAX_DEG_S = 60.0  # rule 9: no rotor turns faster (a circle in 6 s): a steady turn
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -619,6 +625,36 @@ def _how_far(
     return " and ".join(f"{off:g}° off in {axis}" for off, axis in off_axes)
 
 
+def _signed(a_deg: float, b_deg: float, wraps: bool) -> float:
+    """Rule 9: ``b_deg`` less ``a_deg``, the short way round where ``wraps``."""
+    d = b_deg - a_deg
+    return (d + 180.0) % 360.0 - 180.0 if wraps else d
+
+
+def _steady(
+    readings: tuple[tuple[PositionReply, float], ...], cfg: mo.MotionConfig, limit_deg: float
+) -> bool:
+    """Rule 9: whether three readings in a row (each with its time) are one turn: each axis
+    moving the same way at a steady rate, the third within ``limit_deg`` of where the first
+    two put it at its time, at FIRST_TURN_MAX_DEG_S at most (or the model's top speed, if
+    faster). One byte off in one of them breaks the line; one flipped at a rate no rotor
+    turns (347, 247, 147 a reply time apart) is no turn."""
+    (r1, t1), (r2, t2), (r3, t3) = readings
+    if not t1 < t2 < t3:
+        return False
+    most = max(FIRST_TURN_MAX_DEG_S, mo.top_speed_deg_s(cfg))
+    axes = [(r1.az_deg, r2.az_deg, r3.az_deg, cfg.az_wraps)]
+    if r1.el_deg is not None and r2.el_deg is not None and r3.el_deg is not None:
+        axes.append((r1.el_deg, r2.el_deg, r3.el_deg, False))
+    for a, b, c, wraps in axes:
+        rate = _signed(a, b, wraps) / (t2 - t1)
+        if abs(rate) > most or abs(_signed(b, c, wraps) / (t3 - t2)) > most:
+            return False
+        if abs(_signed(b + rate * (t3 - t2), c, wraps)) > limit_deg:
+            return False
+    return True
+
+
 def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
 
@@ -690,6 +726,8 @@ class Controller:
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last two first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
+        # ... the last two of three taken as a turn: the next reading may go on with it
+        self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._cut_move = True  # link.py rule 13: a target the last connection wrote may be cut
@@ -834,6 +872,7 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = False
+        self._steady_from = None
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)
         self._misfits = 0  # rule 6: counted anew
@@ -1179,6 +1218,7 @@ class Controller:
         next poll: WAIT, the readings having disagreed more than once in a row)."""
         m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
         self._doubted = NOT_DOUBTED
+        steady, self._steady_from = self._steady_from, None  # (one reading's chance)
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         el_stands = m.el_anchor_deg
         if stands is None and self._rest_at_close and m.state is not mo.MOVING:
@@ -1191,6 +1231,8 @@ class Controller:
             if stands is not None and cfg.spec.reports_while_moving:
                 return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
             return Doubt.TAKEN
+        if steady is not None and _steady((*steady, (reply, now)), cfg, doubt_deg(cfg)):
+            return Doubt.TAKEN  # (the turn a connection's first readings showed goes on)
         self._turn_trusted = False  # (at rest: _doubts_turning's next turn is doubted anew)
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
         # no move for the motion machine (within noise_deg of where it stands): taken; a move
@@ -1279,6 +1321,14 @@ class Controller:
             self._doubts_in_row, self._first_said = 0, ()
             self._first_agreed = one  # (taken for this one: ``_confirmed``)
             return Doubt.TAKEN
+        if len(chain) == 2:  # three in a row on one steady line: a turn, faster than the
+            line = (*((d.reply, d.t) for d in chain if d.reply is not None), (reply, now))
+            if len(line) == 3 and _steady(line, cfg, doubt_deg(cfg)):  # top speed allows
+                log.info("%s: first readings of a turn, the last %s", self.name, _where(reply))
+                self._doubts_in_row, self._first_said = 0, ()
+                self._turn_trusted = True  # (its next readings as a turn's, ``_doubts``)
+                self._steady_from = (line[1], line[2])
+                return Doubt.TAKEN  # (the last of them: where it is now)
         if not chain:
             self._doubts_in_row = 0
         self._doubts_in_row += 1

@@ -24,8 +24,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -34,13 +32,6 @@ FAST = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 30.0}  # as test_session_doubt
 SHOWN_WITHIN_S = 3.0  # a few exchanges of 0.42 s: before the change, one
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 100: a SPID turning fast when the bridge starts is shown offline, no bearing, "
-        "for the whole turn, and told as a noisy line or a failing position sensor"
-    ),
-)
 def test_a_rotor_turning_fast_when_the_bridge_starts_is_shown_at_once_and_not_called_noise(
     rig: Rig,
 ) -> None:
@@ -63,13 +54,6 @@ def test_a_rotor_turning_fast_when_the_bridge_starts_is_shown_at_once_and_not_ca
     assert not [m for m in said if "noisy line" in m or "line noise" in m], said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 100: a port replugged while a fast SPID turns to its target shows it offline, "
-        "no bearing, for the rest of the turn, told as a noisy line or a failing sensor"
-    ),
-)
 def test_a_replug_while_a_fast_rotor_turns_shows_it_at_once_and_calls_nothing_noise(
     rig: Rig,
 ) -> None:
