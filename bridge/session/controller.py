@@ -2090,9 +2090,9 @@ class Controller:
             why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))
         m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
-        # rule 9: a connection's first readings that disagree too, the rotor may be turning)
+        # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
         busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
-        busy = busy or self._doubted.first
+        busy = busy or (self._doubted.first and not self._doubted.at_once)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
