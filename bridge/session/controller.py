@@ -123,9 +123,7 @@ Rules:
    a turn faster than that allowance: the last is taken, and the next reading that goes on
    with it too, the turn's readings trusted till it rests, ``_steady``; review 100: a Rot2Prog
    at 30 deg/s replugged mid-turn was offline for 24 s, till it rested, and R/error blamed the
-   line; while none is taken, one that, if true, is past a limit gets a stop, once a
-   connection, ``_first_past_limit``: a line that garbles every answer left a turn at the
-   start unwatched past ``az_min_deg``; the reading taken then is the first of the two,
+   line; the reading taken then is the first of the two,
    which answered the question the motion machine times it by; where the second disagrees,
    a third that agrees with either is taken, and the odd one is told as line noise). Until
    then the controller is not answering: the user sees it
@@ -728,7 +726,6 @@ class Controller:
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last two first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
-        self._first_stopped = False  # ... one past a limit stopped (``_first_past_limit``)
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -875,7 +872,7 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = False
-        self._steady_from, self._first_stopped = None, False
+        self._steady_from = None
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)
         self._misfits = 0  # rule 6: counted anew
@@ -1347,38 +1344,7 @@ class Controller:
                 now,
                 logged=False,
             )
-        self._first_past_limit(reply, now)  # (unconfirmed: the limits still hold)
         return Doubt.ASK if at_once else Doubt.WAIT
-
-    def _first_past_limit(self, reply: PositionReply, now: float) -> None:
-        """Rule 9: a connection's first reading not yet confirmed that, if true, puts an axis
-        more than ``tolerance_deg + noise_deg`` past a limit it is held to (motion.py rule
-        10's margin) gets a stop, once a connection (a stop is always safe; review 100: a line
-        that garbled every answer kept a turn at the start unconfirmed, unwatched, and it ran
-        past ``az_min_deg`` to its end)."""
-        if self._first_stopped:
-            return
-        cfg = self.cfg.motion
-        spec, margin = cfg.spec, cfg.tolerance_deg + cfg.noise_deg
-        axes = []
-        if spec.turns_azimuth:
-            axes.append(("az", reply.az_deg, cfg.az_limits_deg))
-        if spec.has_elevation and reply.el_deg is not None:
-            axes.append(("el", reply.el_deg, cfg.el_limits_deg))
-        for key, pos, (low, high) in axes:
-            past = f"{key}_min_deg" if pos < low - margin else ""
-            past = f"{key}_max_deg" if pos > high + margin else past
-            if not past:
-                continue
-            self._first_stopped = True
-            message = (
-                f"a first reading of {_where(reply)}, not yet confirmed by another, is past "
-                f"{past} if true: stopped, in case the rotor turns on past its limit"
-            )
-            log.warning("%s: %s", self.name, message)
-            self.notes.append(Report(ErrorKind.STOP, message))
-            self.stop(now)
-            return
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
