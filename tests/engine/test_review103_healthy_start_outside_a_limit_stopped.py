@@ -32,11 +32,6 @@ AZ_MIN_DEG = 60.0
 WATCH_S = 5.0  # several replies of the slowest of them (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a rotor resting at 30 with az_min_deg 60 gets a stop and a 'first "
-    "reading not yet confirmed ... stopped' error at every start, on a clean line",
-)
 @pytest.mark.parametrize("model", ["gs232b", "easycomm2", "rot2prog"])
 def test_a_healthy_start_outside_a_limit_writes_no_stop_and_says_no_stop(
     rig: Rig, model: str
@@ -54,11 +49,6 @@ def test_a_healthy_start_outside_a_limit_writes_no_stop_and_says_no_stop(
     assert v.frames("stop") == [] and stops == [], stops
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a GS-232B turning from 30 back inside az_min_deg 60 when the bridge "
-    "starts is stopped at 33 by the first reading's limit stop, left outside the limit",
-)
 def test_a_turn_back_inside_the_limit_when_the_bridge_starts_is_not_cut(rig: Rig) -> None:
     v = rig(
         "gs232b",
