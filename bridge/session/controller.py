@@ -2058,7 +2058,9 @@ class Controller:
         m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
         # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
         busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
-        busy = busy or (self._doubted.first and not self._doubted.at_once)
+        if self._doubted.first and not self._doubted.at_once:  # (review 103: the poll after
+            busy = True  # the DOUBTS_TOLD-th was set on the idle grid when it was asked)
+            link.poll_every(now, cfg.moving_poll_interval_s)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 

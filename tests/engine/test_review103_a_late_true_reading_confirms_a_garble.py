@@ -34,11 +34,6 @@ NUDGE_DEG = 10.0
 WATCH_S = 60.0  # a nudge's turn of 10 or 15 degrees at 1 deg/s, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a true first reading 8 s after a garbled 125 confirms it: shown at 125 "
-    "with the rotor at 150, and a nudge of +10 turns the rotor down to 135",
-)
 def test_a_nudge_after_three_garbled_first_answers_turns_the_rotor_by_the_nudge(
     rig: Rig,
 ) -> None:

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.test_review103_two_garbles_on_a_steady_line import frames_off
 from tests.engine.virtual import VirtualRotator
 
@@ -31,11 +29,6 @@ SHOWN_WITHIN_S = 3.0  # three garbled answers (0.47 s each) and a moving poll, w
 WATCH_S = 20.0  # two of the Rot2Prog's idle polls (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: after three disagreeing first readings the next is asked an idle poll "
-    "later: a Rot2Prog is shown offline with no bearing for 10.2 s, not about 2",
-)
 def test_first_readings_that_go_on_disagreeing_are_asked_again_at_the_moving_rate(
     rig: Rig,
 ) -> None:
