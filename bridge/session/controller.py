@@ -118,7 +118,8 @@ Rules:
    the moving rate, always allowing what the rotor can turn between the two compared at its top
    speed, motion.py ``top_speed_deg_s``; review 100: at the usual polls within ``doubt_deg``
    alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked for
-   ran past ``az_min_deg`` unjudged; three in a row that disagree but lie on one steady turn,
+   ran past ``az_min_deg`` unjudged; FIRST_TURN_READINGS (four: review 103, a true one and two
+   garbles at 150, 160, 170 made three) in a row that disagree but lie on one steady turn,
    each axis the same way at one rate within ``doubt_deg``, FIRST_TURN_MAX_DEG_S at most, are
    a turn faster than that allowance: the last is taken, and the next reading that goes on
    with it too, the turn's readings trusted till it rests, ``_steady``; review 100: a Rot2Prog
@@ -381,6 +382,7 @@ DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agre
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 MISFITS_TOLD = 2  # rule 6: this many MISFIT replies in a row are told in the codec's words
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
+FIRST_TURN_READINGS = 4  # rule 9: first readings in a row on one line taken for a turn
 FIRST_TURN_MAX_DEG_S = 60.0  # rule 9: no rotor turns faster (a circle in 6 s): a steady turn
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
@@ -638,7 +640,10 @@ def _steady(
     moving the same way at a steady rate, the third within ``limit_deg`` of where the first
     two put it at its time, at FIRST_TURN_MAX_DEG_S at most (or the model's top speed, if
     faster). One byte off in one of them breaks the line; one flipped at a rate no rotor
-    turns (347, 247, 147 a reply time apart) is no turn."""
+    turns (347, 247, 147 a reply time apart) is no turn. More than three: every three in a
+    row so."""
+    if len(readings) > 3:
+        return all(_steady(readings[i : i + 3], cfg, limit_deg) for i in range(len(readings) - 2))
     (r1, t1), (r2, t2), (r3, t3) = readings
     if not t1 < t2 < t3:
         return False
@@ -724,7 +729,7 @@ class Controller:
         self._misfit_said = ""  # ... the last one's bytes, for the words of a lone one
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
-        self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last two first, doubted
+        self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last three first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
@@ -1294,7 +1299,8 @@ class Controller:
         the first answer (``AZ150.0`` read ``AZ10.0``) was the bearing, and a nudge of +10
         turned the rotor from 150 down to 20."""
         cfg = self.cfg.motion
-        chain = self._first_said if doubted.first else ()
+        said = self._first_said if doubted.first else ()
+        chain = said[-2:]  # (the older one kept only for a turn's line: FIRST_TURN_READINGS)
         top = mo.top_speed_deg_s(cfg)
         # the last one doubted, or the one before it (one glitch between: 150, 10, 150)
         for back, first in enumerate(reversed(chain)):
@@ -1321,22 +1327,24 @@ class Controller:
             self._doubts_in_row, self._first_said = 0, ()
             self._first_agreed = one  # (taken for this one: ``_confirmed``)
             return Doubt.TAKEN
-        if len(chain) == 2:  # three in a row on one steady line: a turn, faster than the
-            line = (*((d.reply, d.t) for d in chain if d.reply is not None), (reply, now))
-            if len(line) == 3 and _steady(line, cfg, doubt_deg(cfg)):  # top speed allows
-                log.info("%s: first readings of a turn, the last %s", self.name, _where(reply))
-                self._doubts_in_row, self._first_said = 0, ()
-                self._turn_trusted = True  # (its next readings as a turn's, ``_doubts``)
-                self._steady_from = (line[1], line[2])
-                return Doubt.TAKEN  # (the last of them: where it is now)
-        if not chain:
+        # FIRST_TURN_READINGS in a row on one steady line: a turn, faster than the top speed
+        # allows (review 103: three were not enough, a true one and two garbles on one line)
+        line = (*((d.reply, d.t) for d in said if d.reply is not None), (reply, now))
+        on_line = len(line) >= 3 and _steady(line[-3:], cfg, doubt_deg(cfg))
+        if len(line) == FIRST_TURN_READINGS and _steady(line, cfg, doubt_deg(cfg)):
+            log.info("%s: first readings of a turn, the last %s", self.name, _where(reply))
+            self._doubts_in_row, self._first_said = 0, ()
+            self._turn_trusted = True  # (its next readings as a turn's, ``_doubts``)
+            self._steady_from = (line[-2], line[-1])
+            return Doubt.TAKEN  # (the last of them: where it is now)
+        if not said:
             self._doubts_in_row = 0
         self._doubts_in_row += 1
         at_once = self._doubts_in_row < DOUBTS_TOLD
         self._doubted = _Doubted(reply, now, at_once, first=True)
-        self._first_said = (*chain[-1:], self._doubted)
+        self._first_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
         log.info("%s: a first reading of %s; asking again", self.name, _where(reply))
-        if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
+        if self._doubts_in_row >= DOUBTS_TOLD and not on_line:  # (on a line: a turn's, maybe)
             self._say(
                 f"{self._doubts_in_row} first readings in a row disagree, the last "
                 f"{_where(reply)}: a noisy line or a failing position sensor; no bearing is "

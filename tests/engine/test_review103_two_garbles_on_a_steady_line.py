@@ -72,11 +72,6 @@ def started(rig: Rig) -> VirtualRotator:
     return v
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a true first reading and two garbles on one line are taken for a turn: "
-    "shown at 170 with the rotor at 150, and a nudge of -10 turns it up to 160",
-)
 def test_a_nudge_after_two_garbles_on_one_line_turns_the_rotor_by_the_nudge(rig: Rig) -> None:
     v = started(rig)
     shown = v.status.bearing_deg
@@ -93,11 +88,6 @@ def test_a_nudge_after_two_garbles_on_one_line_turns_the_rotor_by_the_nudge(rig:
     assert v.truth().az_deg == pytest.approx(REST_DEG + NUDGE_DEG, abs=1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a true first reading and two garbles on one line are published: the "
-    "rotator online at 170, then 'moving' back to 150, the rotor never turning",
-)
 def test_two_garbles_on_one_line_are_never_shown_nor_a_move(rig: Rig) -> None:
     v = started(rig)
     v.run_for(WATCH_S)
