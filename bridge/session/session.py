@@ -380,6 +380,10 @@ class RotatorSession:
             stop_owed=self.controller.stops.owed,
             short_of_deg=self.controller.short_of_deg,  # (kept: the first status says so too)
             turn_kept=not cfg.spec.can_report_position and turn_kept,  # (likewise)
+            # (likewise the storm kept: a first status with no wind said the wind off, and
+            # runtime/kept.py rule 4 took it for the storm over: review 104, its park's place
+            # lost at a second restart; None is the wind off, and only that)
+            wind=self.wind.info if self.wind.on else None,
             order=Order(  # (the first status's too: no change to say)
                 self._run, self._since, self._turn_place, self._lock_place, self._since
             ),

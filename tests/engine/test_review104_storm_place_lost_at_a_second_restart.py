@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.core.model import MotionState, RotatorStatus
 from bridge.interfaces.mqtt.remote import held_stamp
 from bridge.runtime.kept import Kept
@@ -74,11 +72,6 @@ def turns(statuses: list[RotatorStatus]) -> set[int]:
     return {s.order.turn for s in statuses if s.order is not None and s.order.turn}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 104: after a second restart mid-park the storm's park shows a new place, "
-    "a remote's held STOP is dropped and the rotor turns on to the park though stopped",
-)
 def test_a_storm_park_keeps_its_place_across_two_restarts(tmp_path: Path) -> None:
     """A GS-232B at rest at 10 / 30; a storm; two seconds into the park the bridge dies and
     starts again in the storm (the park goes again, at its place: review 96's fix); two
