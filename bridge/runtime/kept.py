@@ -182,7 +182,9 @@ Rules:
    start an hour later). The end the status says (``turn_kept_until``, on ``clock``, the
    session's) moves on at every target; the file is written to run out TURN_FILED_AHEAD_S
    past it, and again only when a later target's end passes the one written, so targets in
-   a row write it once in some ten minutes, not per target. The price: a run ended within
+   a row write it once in some ten minutes, not per target; the two ends are compared on the
+   boot clock (review 104: ``clock`` stops at a suspend, and a target after one wrote
+   nothing while the end on file was long past). The price: a run ended within
    that while is taken as possibly turning at a start on the same boot up to ten minutes more
    (the safe side: a refused start then stops a box at rest or a hand). A start on another
    boot, one whose boot clock cannot be read, or a turn kept with no end (its time counts
@@ -285,7 +287,8 @@ class Kept:
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
         self.turn_kept = store.turn_kept(rotator_id)  # rule 13
-        self._turn_filed: float | None = None  # rule 13: its end as this run wrote it
+        # rule 13: its end as this run wrote it (the boot id, and on that boot's clock)
+        self._turn_filed: tuple[str | None, float] | None = None
         self.version = store.version(rotator_id, spec.name)  # rule 11
         self._version_queued = False  # rule 11: a save of the latest version waits
         # rule 12: the places earlier runs reserved, and the turn and lock word kept
@@ -345,12 +348,17 @@ class Kept:
                 self.turn_kept, self._turn_filed = kept, None
                 self._store.later(lambda: self._save_turn_now(kept, None))
             return
+        # compared on the boot clock the file keeps it on (``clock`` stops at a suspend, the
+        # boot clock does not: review 104, a target after one wrote nothing, the end on file
+        # long past); no boot clock: on ``clock`` (the file then keeps the turn: rule 13)
+        boot = self._store.boot()
+        end = (None, until) if boot is None else (boot[0], until + boot[1] - self._clock())
         filed = self._turn_filed
-        if self.turn_kept and filed is not None and until <= filed:
+        if self.turn_kept and filed is not None and filed[0] == end[0] and end[1] <= filed[1]:
             return  # (the file's end is later: targets in a row write nothing)
-        filed = until + TURN_FILED_AHEAD_S
-        self.turn_kept, self._turn_filed = True, filed
-        self._store.later(lambda: self._save_turn_now(True, filed))
+        self.turn_kept, self._turn_filed = True, (end[0], end[1] + TURN_FILED_AHEAD_S)
+        ahead = until + TURN_FILED_AHEAD_S
+        self._store.later(lambda: self._save_turn_now(True, ahead))
 
     def seen_version(self, version: str | None) -> None:
         """Rule 11 (lines thread: it only compares and hands over): the controller's own; one

@@ -35,11 +35,6 @@ class Slept(Filed):
         return boot_id, now + self.slept_s
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 104: a DCU-1's turn sent after a suspend is not kept in the state file; "
-    "killed mid-turn, the next start's refused follow start halts nothing and it turns on",
-)
 def test_a_dcu1_turn_sent_after_a_suspend_is_kept_and_a_refused_start_stops_it(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
