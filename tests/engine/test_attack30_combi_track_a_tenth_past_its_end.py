@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.engine.test_attack30_gs232_450_a_degree_past_its_end import read_past_the_end
 from tests.engine.virtual import VirtualRotator
 
 CASES = [
@@ -117,23 +118,6 @@ D_CASES = [
 ]
 
 
-def replaced(said: bytes, read: bytes) -> Callable[[bytes, float], bytes]:
-    """Each answer line handed on whole at its CR, ``said`` in it read as ``read``."""
-    line = bytearray()
-
-    def rewrite(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\r" in line:
-            end = line.index(b"\r") + 1
-            whole = bytes(line[:end])
-            del line[:end]
-            out += whole.replace(said, read)
-        return out
-
-    return rewrite
-
-
 @pytest.mark.parametrize(("model", "emulator", "said", "read", "end", "back"), D_CASES)
 def test_a_prosistel_d_a_degree_past_its_end_is_still_turned_back(
     rig: Callable[..., VirtualRotator],
@@ -149,7 +133,7 @@ def test_a_prosistel_d_a_degree_past_its_end_is_still_turned_back(
     v.target(end)
     v.run_until(lambda h: h.status.raw_bearing_deg == end and not h.truth().is_moving, 30, "end")
     v.run_for(5)  # at rest there
-    v.to_host = replaced(said, read)  # the pot a degree past the end
+    v.to_host = read_past_the_end(said, read)  # the pot a degree past the end
     v.run_for(20)
     v.target(back)
     v.run_for(60)

@@ -19,28 +19,12 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.engine.test_attack30_gs232_450_a_degree_past_its_end import read_past_the_end
 from tests.engine.virtual import VirtualRotator
 
 AZ_DEG = 100.0
 TOP_DEG = 180.0
 DOWN_DEG = 90.0
-
-
-def read_past_the_end(said: bytes, read: bytes) -> Callable[[bytes, float], bytes]:
-    """Each answer line handed on whole at its CR, ``said`` in it read as ``read``."""
-    line = bytearray()
-
-    def rewrite(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\r" in line:
-            end = line.index(b"\r") + 1
-            whole = bytes(line[:end])
-            del line[:end]
-            out += whole.replace(said, read)
-        return out
-
-    return rewrite
 
 
 @pytest.mark.parametrize(
