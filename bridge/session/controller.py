@@ -154,6 +154,19 @@ Rules:
    it against makes it answering only once it is taken (there is no bearing to show: a line
    that goes on disagreeing then keeps it offline, told from the DOUBTS_TOLD-th in a row on),
    and a stop owed is written at once all the same.
+   First readings that go on disagreeing leave a rotor the bridge cannot watch: no limit,
+   stall or turn nobody asked for is judged, and a turn under way runs on unseen (review 100:
+   a line that garbled every answer differently, 0, +60, -60 in turn, kept an Easycomm turning
+   at the start unwatched, and it ran from 150 past ``az_min_deg`` 60 to its end). So
+   FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
+   start needs, two for a rotor at rest or turning within its top speed, four for a steady
+   turn, eight with one garble among those) get a stop (``_unwatched_stop``: a stop as any,
+   the line's discipline and the stop rules as ever; always safe); a ``stop`` error says the
+   readings do not agree and the rotor was stopped for it. They stay unconfirmed: nothing is
+   made from them. (A stop for
+   one unconfirmed reading past a limit, e9e2e51a, was taken back: it stopped every healthy
+   start of a rotor resting outside a limit with a false error, cut a turn back inside the
+   limit short, and one garble at rest spent it for the connection: review 103.)
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
    asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on;
    the bearing shown is the last two readings agreed on. A reading asked again at once agrees
@@ -384,6 +397,9 @@ MISFITS_TOLD = 2  # rule 6: this many MISFIT replies in a row are told in the co
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 FIRST_TURN_READINGS = 4  # rule 9: first readings in a row on one line taken for a turn
 FIRST_TURN_MAX_DEG_S = 60.0  # rule 9: no rotor turns faster (a circle in 6 s): a steady turn
+# rule 9: first readings in a row that did not confirm: the rotor cannot be watched, stopped (a
+# healthy start confirms within FIRST_TURN_READINGS, with one garble among them within twice)
+FIRST_UNWATCHED_READINGS = 2 * FIRST_TURN_READINGS
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -731,6 +747,8 @@ class Controller:
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last three first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
+        self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop)
+        self._unwatched_due = False  # ... the stop that many call for, due after the reading
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -876,8 +894,8 @@ class Controller:
         link.cut_move = self._cut_move  # link.py rule 13: what the last connection may have cut
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._first_unread = False
-        self._steady_from = None
+        self._first_unread = self._unwatched_due = False
+        self._steady_from, self._first_unconfirmed = None, 0
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)
         self._misfits = 0  # rule 6: counted anew
@@ -1009,6 +1027,7 @@ class Controller:
             else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
                 link.heard(now)  # poll later, the rotor turning on disagreed again, and the
                 link.poll_now(now)  # stop the line lost was never checked)
+                self._unwatched_due = False  # (the stop an unwatched rotor is owed: this one)
                 first = self._doubted.first and self._doubts_in_row < DOUBTS_TOLD
                 self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1 or first)
         if link.flush_stop(now):
@@ -1195,6 +1214,8 @@ class Controller:
                         "%s: sending again the stop it went silent before confirming", self.name
                     )
                     self._send_owed(link, now)
+            if self._unwatched_due:  # rule 9: first readings that never confirm
+                self._unwatched_stop(reply, now)
             return False
         self._reading(link, self._confirmed(reply), now)
         return True
@@ -1324,7 +1345,7 @@ class Controller:
                     now,
                     logged=True,
                 )
-            self._doubts_in_row, self._first_said = 0, ()
+            self._doubts_in_row, self._first_said, self._first_unconfirmed = 0, (), 0
             self._first_agreed = one  # (taken for this one: ``_confirmed``)
             return Doubt.TAKEN
         # FIRST_TURN_READINGS in a row on one steady line: a turn, faster than the top speed
@@ -1333,13 +1354,15 @@ class Controller:
         on_line = len(line) >= 3 and _steady(line[-3:], cfg, doubt_deg(cfg))
         if len(line) == FIRST_TURN_READINGS and _steady(line, cfg, doubt_deg(cfg)):
             log.info("%s: first readings of a turn, the last %s", self.name, _where(reply))
-            self._doubts_in_row, self._first_said = 0, ()
+            self._doubts_in_row, self._first_said, self._first_unconfirmed = 0, (), 0
             self._turn_trusted = True  # (its next readings as a turn's, ``_doubts``)
             self._steady_from = (line[-2], line[-1])
             return Doubt.TAKEN  # (the last of them: where it is now)
         if not said:
-            self._doubts_in_row = 0
+            self._doubts_in_row = self._first_unconfirmed = 0
         self._doubts_in_row += 1
+        self._first_unconfirmed += 1  # (a stop at FIRST_UNWATCHED_READINGS: _unwatched_stop)
+        self._unwatched_due = self._first_unconfirmed == FIRST_UNWATCHED_READINGS
         at_once = self._doubts_in_row < DOUBTS_TOLD
         self._doubted = _Doubted(reply, now, at_once, first=True)
         self._first_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
@@ -1353,6 +1376,25 @@ class Controller:
                 logged=False,
             )
         return Doubt.ASK if at_once else Doubt.WAIT
+
+    def _unwatched_stop(self, reply: PositionReply, now: float) -> None:
+        """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row that confirmed none: no
+        limit, stall or turn nobody asked for can be judged from them, so the rotor is stopped
+        (a stop is always safe; the line's and the stop rules' as any stop's), and R/error says
+        why (review 100: a line that garbled every answer differently
+        left a turn at the start unwatched, and it ran past ``az_min_deg`` to its end; review
+        103: a stop for one unconfirmed reading past a limit, tried before, stopped healthy
+        starts of a rotor resting outside a limit, and one garble spent it)."""
+        self._unwatched_due = False
+        count = self._first_unconfirmed
+        self.stop(now)
+        why = (
+            f"{count} first readings in a row do not agree (the last {_where(reply)}): the "
+            "bridge cannot watch the rotor (its limits, a stall, a turn nobody asked for), so "
+            "it was stopped: a noisy line or a failing position sensor?"
+        )
+        log.warning("%s: %s", self.name, why)
+        self.notes.append(Report(ErrorKind.STOP, why))
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report

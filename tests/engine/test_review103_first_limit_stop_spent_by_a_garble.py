@@ -59,8 +59,9 @@ def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="review 103: a garble at rest spends the connection's one limit stop, and a turn "
-    "begun after it runs from 150 to 5, 55 degrees past az_min_deg, unstopped",
+    reason="review 103: a garble at rest spends the connection's one stop for first readings "
+    "that never confirm (FIRST_UNWATCHED_READINGS), and a turn begun after it runs from 150 "
+    "to 5, 55 degrees past az_min_deg, unstopped",
 )
 def test_a_turn_past_the_limit_after_a_garble_spent_the_first_stop_is_stopped(rig: Rig) -> None:
     v = rig(
