@@ -161,9 +161,10 @@ Rules:
    FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
    start needs, two for a rotor at rest or turning within its top speed, four for a steady
    turn, eight with one garble among those) get a stop (``_unwatched_stop``: a stop as any,
-   the line's discipline and the stop rules as ever; always safe); a ``stop`` error says the
-   readings do not agree and the rotor was stopped for it. They stay unconfirmed: nothing is
-   made from them. (A stop for
+   the line's discipline and the stop rules as ever; always safe), and so do each as many more
+   while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
+   error says the readings do not agree and the rotor was stopped for it (at most every
+   ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. (A stop for
    one unconfirmed reading past a limit, e9e2e51a, was taken back: it stopped every healthy
    start of a rotor resting outside a limit with a false error, cut a turn back inside the
    limit short, and one garble at rest spent it for the connection: review 103.)
@@ -747,8 +748,9 @@ class Controller:
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last three first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
-        self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop)
+        self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
+        self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -1361,8 +1363,8 @@ class Controller:
         if not said:
             self._doubts_in_row = self._first_unconfirmed = 0
         self._doubts_in_row += 1
-        self._first_unconfirmed += 1  # (a stop at FIRST_UNWATCHED_READINGS: _unwatched_stop)
-        self._unwatched_due = self._first_unconfirmed == FIRST_UNWATCHED_READINGS
+        self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: _unwatched_stop)
+        self._unwatched_due = self._first_unconfirmed % FIRST_UNWATCHED_READINGS == 0
         at_once = self._doubts_in_row < DOUBTS_TOLD
         self._doubted = _Doubted(reply, now, at_once, first=True)
         self._first_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
@@ -1378,20 +1380,26 @@ class Controller:
         return Doubt.ASK if at_once else Doubt.WAIT
 
     def _unwatched_stop(self, reply: PositionReply, now: float) -> None:
-        """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row that confirmed none: no
-        limit, stall or turn nobody asked for can be judged from them, so the rotor is stopped
-        (a stop is always safe; the line's and the stop rules' as any stop's), and R/error says
-        why (review 100: a line that garbled every answer differently
+        """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row (and each as many more
+        while they go on) that confirmed none: no limit, stall or turn nobody asked for can be
+        judged from them, so the rotor is stopped (a stop is always safe; the line's and the
+        stop rules' as any stop's), and R/error says why, at most every
+        ``junk_report_interval_s`` (review 100: a line that garbled every answer differently
         left a turn at the start unwatched, and it ran past ``az_min_deg`` to its end; review
         103: a stop for one unconfirmed reading past a limit, tried before, stopped healthy
         starts of a rotor resting outside a limit, and one garble spent it)."""
         self._unwatched_due = False
         count = self._first_unconfirmed
         self.stop(now)
+        if now - self._unwatched_said_t < self.cfg.junk_report_interval_s:
+            log.info("%s: %d first readings in a row disagree: stopped again", self.name, count)
+            return
+        self._unwatched_said_t = now  # (its own clock: the doubt's words keep rule 6's)
         why = (
             f"{count} first readings in a row do not agree (the last {_where(reply)}): the "
             "bridge cannot watch the rotor (its limits, a stall, a turn nobody asked for), so "
-            "it was stopped: a noisy line or a failing position sensor?"
+            "it was stopped, and is stopped again while they go on disagreeing: a noisy line "
+            "or a failing position sensor?"
         )
         log.warning("%s: %s", self.name, why)
         self.notes.append(Report(ErrorKind.STOP, why))

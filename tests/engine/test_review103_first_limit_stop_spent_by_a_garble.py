@@ -8,7 +8,9 @@ put its first garble past the limit while the rotor stands well inside it: that 
 to a rotor at rest (harmless) and the once is used up. A turn that starts after it (a hand at
 the panel; on a clean line the bridge stops a turn nobody asked for within a second) runs on,
 unwatched, past ``az_min_deg`` to its end: no second stop is sent while the readings go on
-disagreeing, though they keep saying the rotor is past the limit.
+disagreeing, though they keep saying the rotor is past the limit. (That stop was reverted; now
+first readings that go on disagreeing get a stop at each FIRST_UNWATCHED_READINGS in a row, so
+a turn begun after the first such stop gets one too.)
 
 In virtual time: the emulated Easycomm II box at rest at 150 (``az_min_deg`` 60); every
 position answer reaches the host off by -100, +60 or 0 degrees in turn (the first reads 50, past
@@ -19,8 +21,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-
-import pytest
 
 from bridge.core.model import ErrorKind
 from tests.engine.virtual import VirtualRotator
@@ -57,12 +57,6 @@ def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 103: a garble at rest spends the connection's one stop for first readings "
-    "that never confirm (FIRST_UNWATCHED_READINGS), and a turn begun after it runs from 150 "
-    "to 5, 55 degrees past az_min_deg, unstopped",
-)
 def test_a_turn_past_the_limit_after_a_garble_spent_the_first_stop_is_stopped(rig: Rig) -> None:
     v = rig(
         "easycomm2",
