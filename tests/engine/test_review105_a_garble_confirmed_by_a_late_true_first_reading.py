@@ -18,11 +18,16 @@ garble"; but the time between two first answers is not the poll's alone:
 - a GS-232B whose first answer is flipped (``AZ=150`` read ``AZ=110``) and whose next is lost
   on the line is asked again at the next poll, after the reply timeout and on the idle grid,
   2.0 s later: the allowance is 5 + 18 x 2.0 = 41 degrees, the true 150 "agrees" with 110 and
-  110 is taken; a nudge of +10 (Home Assistant's button) turns the rotor from 150 down to 120.
+  110 is taken; a nudge of +10 (Home Assistant's button) turns the rotor from 150 down to 120;
+- with no reply lost, the moving rate itself opens the window: a GS-232B's true first answer,
+  then two flipped ones (``AZ=158``, ``AZ=050``) make three that disagree, the fourth is asked
+  at the moving rate, 0.2 s on, and compared with the one two back (5 + 18 x 0.25 = 9.5
+  degrees): the true 150 "agrees" with 158 and 158 is taken, the true first answer being out
+  of the window; a nudge of -5 turns the rotor up from 150 to 153.
 
 In virtual time: the emulated controller at rest at 150 (45 up on the RC2800); its first answer
 reaches the host with one digit flipped (and, on the GS-232B, its second answer lost on the
-line); the rest as sent.
+line, or its second and third flipped); the rest as sent.
 """
 
 from __future__ import annotations
@@ -131,3 +136,22 @@ def test_gs232b_a_flipped_first_answer_and_a_lost_one_are_not_the_bearing_a_nudg
         f"a nudge of +10 at {REST_DEG:g} (shown {shown}) turned the rotor down to {lowest:g}"
     )
     assert v.truth().az_deg == pytest.approx(REST_DEG + 10.0, abs=1.0)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 105: a GS-232B's true first answer, then two flipped (158, 050): the true one "
+    "asked at the moving rate confirms 158, and a nudge of -5 turns the rotor up to 153",
+)
+def test_gs232b_two_flipped_first_answers_after_a_true_one_are_not_the_bearing_a_nudge_is_made_from(
+    rig: Rig,
+) -> None:
+    v = rig("gs232b-az", emulator={"start_az_deg": REST_DEG}, connect=False)
+    v.to_host = lines_as(
+        [(b"AZ=150", b"AZ=150"), (b"AZ=150", b"AZ=158"), (b"AZ=150", b"AZ=050")], b"\n"
+    )
+    shown, lowest, highest = nudged(v, -5.0)
+    assert highest <= REST_DEG + 1.0, (
+        f"a nudge of -5 at {REST_DEG:g} (shown {shown}) turned the rotor up to {highest:g}"
+    )
+    assert v.truth().az_deg == pytest.approx(REST_DEG - 5.0, abs=1.0)
