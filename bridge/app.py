@@ -577,12 +577,14 @@ class App:
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express
 
-    def _express_wrote(self, rotator_id: str, t: float, operator: str | None = None) -> None:
+    def _express_wrote(
+        self, rotator_id: str, t: float, operator: str | None = None, early: bool = False
+    ) -> None:
         """interfaces/mqtt/express.py rule 11: a stop the express wrote a frame for at ``t``,
-        or read at ``t`` and wrote none for (from ``operator``), is the rotator's stop too
-        when neither connection could have had that stop (audited as its sender's: an attack
-        pass found it named ``mqtt`` alone)."""
-        rotator = self._heard_only_by_express(rotator_id, t, "stop")
+        or read at ``t`` and wrote none for (from ``operator``; ``early``: before its words
+        came back), is the rotator's stop too when neither connection could have had that
+        stop (audited as its sender's: an attack pass found it named ``mqtt`` alone)."""
+        rotator = self._heard_only_by_express(rotator_id, t, "stop", early)
         if rotator is None:
             return
         log.warning(
@@ -593,10 +595,13 @@ class App:
         stop = Stop(Source.MQTT, self.mqtt.origin(operator))
         rotator.submit(stop, "stop (heard by the stop express)")
 
-    def _express_locked(self, rotator_id: str, t: float, operator: str | None) -> None:
+    def _express_locked(
+        self, rotator_id: str, t: float, operator: str | None, early: bool = False
+    ) -> None:
         """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` (from
-        ``operator``) is set when neither connection could have had it."""
-        rotator = self._heard_only_by_express(rotator_id, t, "lock")
+        ``operator``; ``early``: before its words came back) is set when neither connection
+        could have had it."""
+        rotator = self._heard_only_by_express(rotator_id, t, "lock", early)
         if rotator is None:
             return
         log.warning(
@@ -607,11 +612,14 @@ class App:
         lock = Lock(True, source=Source.MQTT, origin=self.mqtt.origin(operator))
         rotator.submit(lock, "lock ON (heard by the stop express)")
 
-    def _heard_only_by_express(self, rotator_id: str, t: float, kind: str) -> Rotator | None:
+    def _heard_only_by_express(
+        self, rotator_id: str, t: float, kind: str, early: bool = False
+    ) -> Rotator | None:
         """Rule 11's test: the rotator, if neither connection could have had the ``kind``
-        ("stop" or "lock") the express read at ``t``."""
-        for via in ("main", "lane" if kind == "stop" else "lock"):  # (lastword.py rule 16)
-            connection = self._connection(via)
+        ("stop" or "lock") the express read at ``t``. ``early`` (read before the express's
+        words came back on its connection): its vouches do not order it, only the halts read."""
+        for via in () if early else ("main", "lane" if kind == "stop" else "lock"):
+            connection = self._connection(via)  # (lastword.py rule 16: the lane of the kind)
             vouched = self.express.vouched(via)  # (the express's word came after its SUBACK,
             if vouched is not None and connection.heard_since(vouched):  # and this after that)
                 return None  # (it came, or comes, on one of them, in its order)

@@ -36,11 +36,6 @@ def broker_conf(tmp_path: Path) -> str:
     return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a STOP the stop express reads before its sync word is back is dropped unsaid: with "
-    "the bridge's connections not yet back after a broker restart, the rotor turns on",
-)
 def test_a_stop_the_express_reads_before_its_word_is_back_stops_the_rotor(
     rig: Rig, broker: Mosquitto, tmp_path: Path
 ) -> None:

@@ -191,6 +191,16 @@ Rules:
    is judged after the frame is written, but before a group's next member's frame: a
    property too long to be a name is none at once (a cold review: 64 KiB of a ligature
    NFKC makes 18 characters were normalized whole, some 24 ms before each next member).
+   A stop or lock ON read on a connection before its word came back (rule 8: no frame then)
+   is said too, ``early`` (``_early``): a CI run of review 88's proxy restart published its
+   STOP just after the express, back first, had subscribed, a round trip before its word
+   came back; the express dropped it unsaid, the bridge's connections subscribed a few
+   milliseconds after it, and the rotor turned on to its target. An early word is judged by
+   the halts the bridge's connections read (``read_since``) alone, not by the vouches: a
+   vouch answered at once while the express was subscribed and not yet writing (rule 8)
+   says nothing of a stop it reads later, which may have been published before that
+   connection's SUBSCRIBE. A stop both had is then carried out twice at worst (the safe
+   side, as above).
 """
 
 from __future__ import annotations
@@ -362,16 +372,18 @@ class Express:
         sync_topic: str | None = None,
         on_hold: Callable[[str, int], None] | None = None,
         on_release: Callable[[str, int, bool], None] | None = None,
-        on_wrote: Callable[[str, float, str | None], None] | None = None,
-        on_locked: Callable[[str, float, str | None], None] | None = None,
+        on_wrote: Callable[[str, float, str | None, bool], None] | None = None,
+        on_locked: Callable[[str, float, str | None, bool], None] | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"): the stops of
         the rotators in ``frames``, the locks of any (rule 11 says each); ``frames``:
         each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
         express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
-        ``on_wrote``: a rotator's stop frame written, at that time; ``on_locked``: its lock ON
-        read, at that time, from that operator (rule 11)."""
+        ``on_wrote``: a rotator's stop frame written, or its stop read, at that time, from
+        that operator; ``on_locked``: its lock ON read, at that time, from that operator; each
+        ``early`` when read before the express's connection could order it against the
+        bridge's connections' subscriptions (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
         self._topics = dict(topics)
@@ -784,6 +796,7 @@ class Express:
                         word["rotator"],
                         word["t"],
                         word.get("operator"),
+                        False,
                     )
                 elif op == "heard":
                     log.debug("stop express: %s's stop read, no frame written", word["rotator"])
@@ -793,6 +806,7 @@ class Express:
                         word["rotator"],
                         word["t"],
                         word.get("operator"),
+                        word.get("early") is True,
                     )
                 elif op == "locked":
                     log.debug("stop express: %s's lock ON read", word["rotator"])
@@ -802,6 +816,7 @@ class Express:
                         word["rotator"],
                         word["t"],
                         word["operator"],
+                        word.get("early") is True,
                     )
                 elif op == "half":
                     self._problem(self._half(word["rotator"]), True)
@@ -1179,9 +1194,10 @@ class _Child:
             rids, locks = [rid], True
         if retain and (not self._v5 or not payload):
             return  # a replay (3.1.1), or a retained message being deleted (service.py rule 1)
-        if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
-            return
         read_t = self.clock()
+        if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
+            self._early(rids, locks, read_t, operator)
+            return
         owed, unwritten = [], []
         for rid in rids:
             tried = self._stop(rid, operator)
@@ -1201,6 +1217,22 @@ class _Child:
             if read_t >= self._heard_next.get(rid, read_t):  # (a flood: once in GAP_S)
                 self._heard_next[rid] = read_t + GAP_S
                 self.say(op="heard", rotator=rid, t=read_t, **_sender(operator))
+
+    def _early(self, rids: list[str], locks: bool, read_t: float, operator: str | None) -> None:
+        """Rule 11: a stop or lock ON read before this connection's word came back: no frame
+        (rule 8), but said, ``early`` (the bridge's vouches answered meanwhile do not order
+        it: rule 11), once in GAP_S a rotator."""
+        if locks:
+            if read_t >= self._locked_next.get(rids[0], read_t):
+                self._locked_next[rids[0]] = read_t + GAP_S
+                self.say(
+                    op="locked", rotator=rids[0], t=read_t, operator=_named(operator), early=True
+                )
+            return
+        for rid in rids:
+            if read_t >= self._heard_next.get(rid, read_t):
+                self._heard_next[rid] = read_t + GAP_S
+                self.say(op="heard", rotator=rid, t=read_t, early=True, **_sender(operator))
 
     def _stop(self, rid: str, operator: str | None) -> tuple[float, tuple[int, int], int] | bool:
         """Rule 3: the frame's one write, at once (True: written; False: nothing went, or
