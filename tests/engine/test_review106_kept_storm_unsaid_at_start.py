@@ -1,0 +1,75 @@
+"""Review 106 (Low): a storm kept in the state file (runtime/kept.py rule 4) turns the rotor at
+the start, and nothing in the log says why. The lock kept is said at start ("safety lock ON,
+kept from the state file", kept.py rule 6); a storm kept is not, and its park is the bridge's
+own move: the wind park's "parking for the storm" is logged for a reading alone
+(session/wind.py ``_stormy``), never for the storm a start takes from the file.
+
+What a user sees: the bridge restarted (a crash, an update, a power blip) while the state
+file says a storm whose park was not seen reached (the bridge died mid-park, a DCU-1's
+every park, or a file copied from another station, an old backup put back); it turns the
+rotor some 160 degrees to its park at 180 at once, before any wind reading; journalctl shows
+"controller answering", "arrived at 180.0" and nothing that names a storm or the state
+file. In virtual time, the file written by the rotator's Kept as runtime/rotator.py has it,
+the next start's Kept and session made from it as runtime/rotator.py makes them."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pytest
+
+from bridge.core.model import MotionState
+from bridge.runtime.kept import Kept
+from bridge.runtime.state_store import StateStore
+from bridge.session.session import RotatorSession
+from tests.engine.test_wind_park_offline import WIND, parking, storm
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 106: a start in a storm kept in the state file turns the rotor to the "
+    "park with nothing in the log naming the storm or the state file",
+)
+def test_a_start_in_a_storm_kept_in_the_state_file_says_so_in_the_log(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    path = tmp_path / "state.json"
+    v = parking()  # (a GS-232B at rest at 10 / 30, its wind park at 180 / 0)
+    try:
+        assert WIND["park_az_deg"] == 180
+        storm(v)  # two seconds into the park: the bridge dies here
+        store = StateStore(path)
+        memory = Kept(store, v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+        for _t, status in v.statuses:  # (as runtime/rotator.py ``_status``)
+            memory.seen_wind(status.wind)
+            memory.seen_order(status.order)
+        store.flush()
+        v.power_cycle()  # (the controller's turn ends with the power)
+        v.link_down(None)
+        v.run_for(1.0)  # (the bridge down: not a deadline)
+        here = v.truth().az_deg
+        caplog.clear()
+        with caplog.at_level(logging.INFO, logger="bridge"):
+            again = Kept(StateStore(path), v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+            assert again.storm
+            v.session = RotatorSession(
+                v.cfg,
+                storm=again.storm,
+                storm_halted=again.storm_halted,
+                storm_arrived=again.storm_arrived,
+                storm_place=again.storm_place,
+                order=(again.since, again.turn_place, again.lock_place),
+            )
+            v._do(v.session.start(v.now))
+            v.link_up()
+            v.run_until(
+                lambda h: abs(h.truth().az_deg - 180.0) < 1.0 and h.state is MotionState.IDLE,
+                120,
+                "at its park, sent by the start",
+            )
+        assert abs(here - 180.0) > 90.0, here  # (the start turned it: not a small move)
+        said = [r.getMessage() for r in caplog.records if r.levelno >= logging.INFO]
+        assert any("storm" in line.lower() for line in said), said
+    finally:
+        v.close()
