@@ -266,6 +266,9 @@ class Worker:
                 self._port, self._fd = None, -1  # at least: no port nobody serves
 
     def serve(self, now: float, ready: set[int]) -> None:
+        # a clock set late (NTP after boot) moves tracking; a suspend is a gap between wind
+        # readings (session/wind.py rule 2), the port out (often so at a resume) as much as in
+        self.session.set_wall(now, self._wall())
         if self._port is None:
             if self._box in ready:
                 self._do(self.session.commands(self._mailbox.take(), now))
@@ -285,7 +288,6 @@ class Worker:
             return
         session, acted = self.session, False
         try:
-            session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking
             if self._box in ready:
                 batch = self._mailbox.take()
                 if batch:

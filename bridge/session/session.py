@@ -509,14 +509,15 @@ class RotatorSession:
             self.view.last_error = note
         for heard in batch.heard:  # each program's newest, in the order put
             self.follower.heard(heard, now)  # rule 15
+        wall = self.wall_offset_s  # (wind.py rule 2: a gap across a suspend is a gap)
         if batch.wind_replayed is not None:  # wind.py rule 6: before a fresh one
-            self.wind.reading(batch.wind_replayed, now, replayed=True)
+            self.wind.reading(batch.wind_replayed, now, wall_offset_s=wall, replayed=True)
         if batch.wind_halted is not None:  # (mailbox.py rule 9: put before the halt)
-            self.wind.reading(batch.wind_halted, now)  # wind.py: no command either
+            self.wind.reading(batch.wind_halted, now, wall_offset_s=wall)  # no command either
         if batch.stop is not None or batch.lock_on:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.wind is not None:  # (mailbox.py rule 9: put after any halt of the batch)
-            self.wind.reading(batch.wind, now)
+            self.wind.reading(batch.wind, now, wall_offset_s=wall)
         if batch.control_set:
             self.view.control = batch.control
             if batch.control_unix is not None:  # rule 23: the lease's clock (operators.py 5)

@@ -28,16 +28,22 @@ Rules:
    began mid-slew, and the target went out again in it).
 2. The storm is over once the readings have stayed below ``wind_release_below`` for
    ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
-   readings end a storm: nothing else does, not a restart of the wind station, not silence.
-   So the hold ends with a reading that comes at least ``wind_hold_min`` after the calm began,
+   readings end a storm: nothing else does, not a restart of the wind station, not silence. So
+   the hold ends with a reading that comes at least ``wind_hold_min`` after the calm began,
    never by the clock alone, and a gap of ``wind_silent_min`` between readings starts the calm
    again from the reading after it (a station that fell silent after one calm reading says
-   nothing of the wind since). The end is judged at that reading, whether the controller
-   answers or not (review 96: judged at this part's steps, which run only while it answers, a
-   controller silent through a calm kept the storm it had, and the next storm was taken for
-   it: a STOP of the old storm held the new park back, the new park took the old one's
-   place). The session looks at the storm and the storms begun (``storms``) at every step, so
-   a storm that ended and a next that began while it was silent are both seen.
+   nothing of the wind since). The gap is judged on the session's clock and on the wall clock,
+   either one's a gap: the session's (monotonic) stands still while the machine sleeps, and a
+   silence across a suspend is a silence all the same (review 106: a laptop asleep two hours
+   after nine minutes of calm ended the storm at the first calm reading it heard awake). The
+   wall clock only adds gaps, so it can only make a storm last longer (a clock stepped on by NTP
+   starts the calm again; one stepped back hides no gap the session's clock sees), the one use
+   docs/architecture.md rule 15 lets a clock have. The end is judged at that reading, whether
+   the controller answers or not (review 96: judged at this part's steps, which run only while
+   it answers, a controller silent through a calm kept the storm it had, and the next storm was
+   taken for it: a STOP of the old storm held the new park back, the new park took the old one's
+   place). The session looks at the storm and the storms begun (``storms``) at every step, so a
+   storm that ended and a next that began while it was silent are both seen.
 3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
    storm stops the park under way, and the park is not tried again until the next storm;
    motion stays refused meanwhile. That holds across a restart in the storm (the status's
@@ -229,6 +235,7 @@ class WindPark:
         self._why = "wind above the park level"  # rule 1's reason, once a reading says it
         self._speed: float | None = None
         self._last_t: float | None = None  # when the last reading came
+        self._last_wall: float | None = None  # ... on the wall clock (rule 2: a suspend)
         self._since_t: float | None = None  # silence counts from here before any reading
         self._calm_since: float | None = None
         self._silent = False
@@ -275,8 +282,11 @@ class WindPark:
         self._info = info = kept_if_same(info, self._info)
         return info
 
-    def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
-        """Rules 1, 2, 4 and 6: a reading, in km/h (``replayed`` by the broker)."""
+    def reading(
+        self, kmh: float, now: float, *, wall_offset_s: float = 0.0, replayed: bool = False
+    ) -> None:
+        """Rules 1, 2, 4 and 6: a reading, in km/h (``replayed`` by the broker);
+        ``wall_offset_s``: the wall clock (unix seconds) is ``now`` + this (rule 2's gap)."""
         cfg = self._cfg
         if not self.on:
             return
@@ -288,8 +298,16 @@ class WindPark:
             elif kmh >= cfg.release_below_kmh:
                 self._calm_since = None
             return
-        gap = self._last_t is None or now - self._last_t >= cfg.silent_s  # rule 2
-        self._speed, self._last_t, self._silent = kmh, now, False
+        # rule 2: the gap on the session's clock, or on the wall clock (a suspend: the
+        # session's stands still, review 106); either starts the calm again, the safe side
+        wall = now + wall_offset_s
+        gap = (
+            self._last_t is None
+            or now - self._last_t >= cfg.silent_s
+            or self._last_wall is None
+            or wall - self._last_wall >= cfg.silent_s
+        )
+        self._speed, self._last_t, self._last_wall, self._silent = kmh, now, wall, False
         if kmh > cfg.park_above_kmh:
             self._stormy(kmh)
         elif self.storm and kmh < cfg.release_below_kmh:
