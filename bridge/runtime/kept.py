@@ -54,7 +54,11 @@ Rules:
    under that lock writes a byte or starts a thread either); the lines thread never takes it,
    and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
    the steps already under way or waiting, never for a flood of words after it.
-6. A lock kept from the state file is said in the log at start: motion will be refused.
+6. A lock kept from the state file is said in the log at start: motion will be refused. So
+   is a storm kept (rule 4), with what the start does with its park (sent again, or not: a
+   STOP stopped it, or it was reached), or that it is let go (no ``wind_topic`` configured
+   any more). Review 106: a start in a storm kept turned the rotor to its park, 160 degrees,
+   with nothing in the log naming the storm or the state file.
 7. Options waiting for the writer are saved together, the last value of each, and so are lock
    words (one save of each queued at a time): anyone who may publish ``R/option/<name>`` (or
    lock, never refused) can send thousands a second, and each was a rewrite of the state file
@@ -271,6 +275,7 @@ class Kept:
         saved_lock: Callable[[bool], None] = lambda locked: None,
         wake: Callable[[], None] = lambda: None,
         clock: Callable[[], float] = time.monotonic,  # rule 12's ORDER_SAVE_S
+        wind: bool = True,  # rule 6: a wind topic is configured (the storm kept is heeded)
     ) -> None:
         self._store = store
         self._saved_lock = saved_lock  # rule 2: the status shows the lock once it is saved
@@ -290,6 +295,8 @@ class Kept:
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
         self.storm_halted = self.storm and store.storm_halted(rotator_id)
         self.storm_arrived = self.storm and store.storm_arrived(rotator_id)
+        if self.storm:  # rule 6
+            log.warning("%s: %s", rotator_id, self._storm_said(wind))
         self.stop_owed = store.stop_owed(rotator_id)  # rule 8
         self.short_of = store.short_of(rotator_id)  # rule 9
         self.turn_kept = store.turn_kept(rotator_id)  # rule 13
@@ -316,6 +323,18 @@ class Kept:
         # places writes a newer one only while the file's lock is the lock: review 92)
         self._file_locked = self.locked
         self._file_lock_place = self.lock_place
+
+    def _storm_said(self, wind: bool) -> str:
+        """Rule 6: what a start does with the storm kept (wind.py rules 2, 3 and 7, as the
+        session takes it: session.py ``WindPark``)."""
+        if not wind:
+            return "a storm kept from the state file is let go: no wind_topic configured"
+        said = "in a storm kept from the state file: motion refused until wind readings end it"
+        if self.storm_halted:  # (wind.py rule 3: the operator's STOP outlives the restart)
+            return f"{said}; its park, stopped by a STOP or lock ON, is not sent again"
+        if self.storm_arrived and self._spec.can_report_position:  # (wind.py rule 7)
+            return f"{said}; its park was reached: not sent again"
+        return f"{said}; parking again (its park was not seen reached)"
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""

@@ -209,6 +209,7 @@ class Rotator:
             saved_lock=partial(self._mailbox.put_lock_saved, wake=False),
             wake=self._mailbox.wake_once,
             clock=clock,
+            wind=cfg.wind is not None,  # kept.py rule 6: a storm kept is heeded
         )
         self._mailbox.places_after(self._kept.since)  # kept.py rule 12: on from earlier runs
         kept_order = (self._kept.since, self._kept.turn_place, self._kept.lock_place)

@@ -26,11 +26,6 @@ from bridge.session.session import RotatorSession
 from tests.engine.test_wind_park_offline import WIND, parking, storm
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 106: a start in a storm kept in the state file turns the rotor to the "
-    "park with nothing in the log naming the storm or the state file",
-)
 def test_a_start_in_a_storm_kept_in_the_state_file_says_so_in_the_log(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -71,5 +66,38 @@ def test_a_start_in_a_storm_kept_in_the_state_file_says_so_in_the_log(
         assert abs(here - 180.0) > 90.0, here  # (the start turned it: not a small move)
         said = [r.getMessage() for r in caplog.records if r.levelno >= logging.INFO]
         assert any("storm" in line.lower() for line in said), said
+    finally:
+        v.close()
+
+
+@pytest.mark.parametrize(
+    ("halted", "arrived", "wind", "words"),
+    [
+        (True, False, True, "its park, stopped by a STOP or lock ON, is not sent again"),
+        (False, True, True, "its park was reached: not sent again"),
+        (False, False, False, "a storm kept from the state file is let go: no wind_topic"),
+    ],
+)
+def test_what_a_start_does_with_a_kept_storm_is_what_the_log_says(
+    tmp_path: Path,
+    caplog: pytest.LogCaptureFixture,
+    halted: bool,
+    arrived: bool,
+    wind: bool,
+    words: str,
+) -> None:
+    """Not "parking again" where the start parks nothing (kept.py rule 4: a park a STOP
+    stopped, or one seen reached, is not sent again; a storm with no wind topic configured
+    any more is let go: session.py ``WindPark``)."""
+    path = tmp_path / "state.json"
+    store = StateStore(path)
+    assert store.set_storm("tower", True, halted=halted, arrived=arrived, place=0)
+    v = parking()
+    try:
+        with caplog.at_level(logging.INFO, logger="bridge"):
+            Kept(StateStore(path), "tower", v.cfg.spec, report=lambda *a: None, wind=wind)
+        said = [r.getMessage() for r in caplog.records if r.levelno >= logging.INFO]
+        assert any(words in line for line in said), said
+        assert not any("parking again" in line for line in said), said
     finally:
         v.close()
