@@ -9,8 +9,7 @@ within the interval after the last such word (a flaky adapter: the very line tha
 one that drops) has its new connection's stops written, one every 1.6 s, with nothing said. The
 rotor is stopped over and over while R/error and R/status's ``last_error`` say only "virtual port
 unplugged", a word about a port that is back; the doubt's own "first readings in a row disagree"
-keeps rule 6's clock and is not said either. Every other word of a new connection (its first
-reading doubted, a turn nobody asked for) is said anew.
+keeps rule 6's clock and is not said either.
 
 In virtual time: the emulated Easycomm II box at rest at 150; every position answer reaches the
 host off by 0, +60 or -60 degrees in turn (review 100's line); the port unplugged three seconds
