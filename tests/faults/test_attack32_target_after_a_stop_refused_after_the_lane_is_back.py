@@ -22,6 +22,7 @@ uplink would; the STOP is published once the broker has sent the lane its SUBACK
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -81,6 +82,62 @@ def test_a_target_after_a_stop_right_after_the_lanes_suback_turns_the_rotor(
             assert not refused(), (
                 f"the target {NEW_DEG:g} sent after the STOP was refused, the rotor left at "
                 f"{emu.state().az_deg:.0f}: {refused()}"
+            )
+            rig.arrived("tower", NEW_DEG)
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 32: a lock OFF sent after a lock ON pressed just as the lock lane came back is "
+    "undone: R/lock/state OFF, then ON again without a word; the rotator stays locked",
+)
+def test_a_lock_off_after_a_lock_on_right_after_the_lock_lanes_suback_unlocks(
+    tmp_path: Path,
+) -> None:
+    """The lock lane's twin: the same window (the lock lane back alone, its ``lane_subscribed``
+    marker not yet at the broker), a lock ON pressed in it, then OFF. The OFF is carried out
+    (``R/lock/state`` OFF), and some 50 ms later, as the main connection's markers come back,
+    the lock is set again (``R/lock/state`` ON), nothing said on ``R/error``: the operator's
+    last word was OFF, and the next target is refused as locked. (With the stop express on and
+    half a second between the two, the OFF was refused instead, "a lock ON that may have been
+    published after it came on the stop connection".) docs/mqtt.md says as much of a lock ON
+    only the stop express heard, not of the lock lane. The same ON and OFF without the lock
+    lane's reconnect unlock (an attack run: ten in a row). The target sent after the OFF is
+    neither carried out nor refused: nothing on ``R/error``, no long hold on ``B/bridge/info``
+    25 s later (an attack run)."""
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = MqttProxy(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+            app = rig.start()
+            rig.ready("tower")
+            mqtt = rig.settings.mqtt
+            main, lane = mqtt.effective_client_id(), lane_client_id(mqtt, "lock")
+            wait_until(app.lock_lane.connected.is_set, 10, "the lock lane up")
+            subacks = proxy.subacks.get(lane, 0)
+            proxy.hold(main)  # its bytes (the lane's marker among them) wait: a busy uplink
+            proxy.drop(lane)  # the lock lane's connection lost; it comes back on its own
+            wait_until(lambda: proxy.subacks.get(lane, 0) > subacks, 10, "the lane's SUBACK")
+            assert probe.publish("rotor/lock", "ON")  # the operator's lock ON, at the broker
+            wait_until(lambda: rig.status("tower").locked, 10, "the lock ON carried out")
+            assert probe.publish("rotor/lock", "OFF")  # then OFF: the work is done
+            proxy.release(main)
+            said = lambda: [m.text for m in probe.on("rotor/error") if "refused" in m.text]  # noqa: E731
+            wait_until(lambda: said() or not rig.status("tower").locked, 10, "the OFF handled")
+            probe.publish("rotor/target", f"{NEW_DEG:g}")  # the next target
+            with contextlib.suppress(AssertionError):  # (judged below, with what was said)
+                wait_until(lambda: said() or emu.state().is_moving, 10, "the target taken")
+            shown = [m.text for m in probe.on("rotor/lock/state")]
+            assert not said() and shown[-1] == "OFF" and emu.state().is_moving, (
+                f"the lock OFF sent after the lock ON did not stand: R/lock/state said {shown}; "
+                f"the target {NEW_DEG:g} after it: the rotor moving {emu.state().is_moving}, "
+                f"R/error {said()}"
             )
             rig.arrived("tower", NEW_DEG)
     finally:
