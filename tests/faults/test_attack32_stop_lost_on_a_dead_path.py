@@ -35,15 +35,18 @@ from tests.support import Probe, retained_snapshot
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import MqttProxy
 from tests.support.rig import Rig
+from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
 
 PRESSED_S = STOP_RECONNECT_MAX_S + 1.0  # the STOP pressed this long after the path died
 PROMPT_S = 10.0  # a STOP reaches the controller within this (it takes well under a second)
 TURN: dict[str, tuple[str, dict[str, Any], str, bool]] = {
-    # a slow turn (145 s) of each model, its target, whether the bridge runs its stop express
+    # a slow turn of each model (145 s, 180 s: under way past every deadline below, however
+    # slowed), its target, whether the bridge runs its stop express
     "rotorez": ("rotorez", {"start_az_deg": 10, "speed_deg_s": 2.0}, "300", True),
-    "rot2prog": ("rot2prog", {"start_az_deg": 10, "az_speed_deg_s": 2.0}, "190 0", False),
+    "rot2prog": ("rot2prog", {"start_az_deg": 10, "az_speed_deg_s": 1.0}, "190 0", False),
 }
+SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
 
 
 @pytest.mark.xfail(
@@ -79,7 +82,8 @@ def test_a_stop_after_the_path_went_dead_reaches_the_rotor(tmp_path: Path, model
             with contextlib.suppress(AssertionError, TimeoutError):
                 emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
             s = emu.state()
-            assert not s.is_moving, (
+            short = not near_deg(s.az_deg, float(target.split()[0]), SHORT_DEG)
+            assert not s.is_moving and short, (
                 f"a STOP pressed {PRESSED_S:g} s after the path died, the broker up throughout, "
                 f"did not stop the rotor: it turns on ({s.az_deg:.0f} deg); the main connection "
                 f"up: {app.client.connected.is_set()}, the stop lane: "
