@@ -16,9 +16,23 @@ Rules:
    X1), never shorter than it takes at its slower axis's speed to go a step of its readings
    beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
    degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
-   the user's to pair with ``settle_s``. A target for a controller that must be stopped first,
-   come while the rotor stands at its target still by the clock with that reading late, waits
-   for it: no stop to a rotor at rest (``plan_target``; an attack pass).
+   the user's to pair with ``settle_s``. A turn the controller finishes by itself (``carried``,
+   rule 4: over a lost link, or found by a bridge just started; not ``lost_still``, no stop
+   sent into it) is still once each axis is, by its own time (``carried_rest_from``): no
+   movement of that axis's own (more than ``noise_deg`` from where that axis itself last
+   moved: ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen
+   move since) for the longer of ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's
+   step and ``noise_deg`` take at that axis's speed, as slow as rule 6 allows for), a user's
+   ``settle_s`` never shortening it. Review 95: a GS-232B's elevation at 1.8 deg/s, read in
+   whole degrees with 2 degrees of noise, shows a move every 1.7 s; its turn carried over a
+   replug was called at rest at rule 2's 1.5 s and stopped short by controller.py rule 13,
+   R/error blaming a jam. Not the slowest axis's time for every axis (31a878ae, reverted:
+   review 101, a carried azimuth turn jammed while a slow elevation had been shown still for
+   6 s was stopped 4.9 s after the jam, not 1.5 s; and a ``settle_s`` of the user's a little
+   above the default brought review 95 back): a jam of a fast axis is told by its own short
+   time, the slow axis shown still by its own. A target for a controller that must be stopped
+   first, come while the rotor stands at its target still by the clock with that reading
+   late, waits for it: no stop to a rotor at rest (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    A stall is told by a reading, or by time while the controller is asked and does not
@@ -104,14 +118,15 @@ Rules:
    (``still_axes``); a move on an axis not yet decided is the lost turn, seen; a move only on
    axes decided still is a turn begun since, not known to be the lost one; every axis decided
    (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to rest while the
-   port was out. Either way ``lost_still``, though rule 2 waits ``settle_s`` to call the rotor
-   still, and a refused start's halt owed to the lost turn is dropped (parts.py rule 10;
-   review 73, a hand a second after a replug). Review 84: the lost turn may be an
-   elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees with 2 degrees of
-   noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned on 60 degrees past
-   a refused start); review 89: the slowest axis's time for every axis (2.1 s on an az/el
-   GS-232B) took a hand at the azimuth a second after a replug at rest for the lost turn,
-   and the owed halt stopped it a few degrees in.
+   port was out. Either way ``lost_still``, though rule 2 waits each axis's own time (the
+   longer of ``settle_s`` and ``axis_seen_s``) to call the carried rotor still, and
+   ``settle_s`` for a turn begun since, and a refused start's halt owed to the lost turn is
+   dropped (parts.py rule 10; review 73, a hand a second after a replug). Review 84: the lost
+   turn may be an elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees
+   with 2 degrees of noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned
+   on 60 degrees past a refused start); review 89: the slowest axis's time for every axis
+   (2.1 s on an az/el GS-232B) took a hand at the azimuth a second after a replug at rest for
+   the lost turn, and the owed halt stopped it a few degrees in.
    While a refused start's halt is owed to the turn under judgement (``owes_halt``, told by
    the session at every step while the start's feature is on and owes it, parts.py rule 10,
    feature_commands.py rule 7, so it ends however tracking or following end; ``owed_halt``:
@@ -418,6 +433,13 @@ class Motion:
     # rule 4: the last reading held back (``held_back``): the first, or one after it that
     # neither confirmed the move nor showed the axes where they stood
     held_t: float | None = None
+    # rule 2: while ``carried``, each axis's own last movement (more than ``noise_deg`` from
+    # where that axis itself last moved; rule 1's anchor moves with either axis) and when,
+    # from the first reading back: the carried turn rests by each axis's own time
+    az_moved_deg: float | None = None
+    az_moved_t: float | None = None
+    el_moved_deg: float | None = None
+    el_moved_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -707,6 +729,10 @@ def reading(
             begun_t=None,
             begun_deg=None,
             held_t=None,
+            az_moved_deg=az_deg,  # (rule 2: each axis's own rest counts from here)
+            az_moved_t=now,
+            el_moved_deg=el_deg,
+            el_moved_t=None if el_deg is None else now,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -735,6 +761,13 @@ def reading(
             m = replace(m, **judged)  # move, no rest told by it, nothing shown of it)
             return tick(m, cfg, now, asking_since=None)
         changes.update(judged)
+    if m.carried:  # rule 2: each axis's own movement, for the carried turn's rest
+        ref = m.az_moved_deg
+        if ref is None or angle_error(az_deg, ref, wraps) > cfg.noise_deg:
+            changes["az_moved_deg"], changes["az_moved_t"] = az_deg, now
+        ref = m.el_moved_deg
+        if el_deg is not None and (ref is None or abs(el_deg - ref) > cfg.noise_deg):
+            changes["el_moved_deg"], changes["el_moved_t"] = el_deg, now
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -1430,8 +1463,25 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 
 
 def still_from(m: Motion, cfg: MotionConfig) -> float:
-    """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``)."""
+    """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``; a
+    carried turn's, each axis still for its own time too: ``carried_rest_from``)."""
+    if m.carried and not m.lost_still and m.stop_sent_t is None and m.state is MOVING:
+        return max(_moved_ref(m) + cfg.settle_s, carried_rest_from(m, cfg))  # (rule 4: rare)
     return _moved_ref(m) + cfg.settle_s
+
+
+def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
+    """Rule 2: from when a turn the controller finishes by itself (``carried``) may be found
+    at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
+    since its own last movement (``az_moved_t``, ``el_moved_t``: the first reading back, for
+    an axis not seen move since). A fast axis's jam is told by its own short time, a slow
+    axis's turn is not called over while it shows a move only every few readings."""
+    ref = -1e18
+    for axis, seen in axis_seen_s(cfg).items():
+        moved_t = m.az_moved_t if axis == "azimuth" else m.el_moved_t
+        if moved_t is not None:
+            ref = max(ref, moved_t + max(cfg.settle_s, seen))
+    return ref
 
 
 def stop_again(m: Motion, cfg: MotionConfig, now: float) -> bool:

@@ -267,7 +267,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "a step of its readings take longer: a GS-232 at X1). Raise it for a rotor that slow "
         "at its configured speed. A value other than the default also ends the wait of a "
         "bridge just started for a turn under way at rest by it, sooner than a slow axis may "
-        "show its move (the default, written out or not, waits for each axis's own time)",
+        "show its move (the default, written out or not, waits for each axis's own time). A "
+        "turn the controller finishes by itself after its port came back is still only once "
+        "each axis shows no move for the longer of this and what noise_deg and a step of its "
+        "readings take at that axis's speed",
         examples=[2.0],
     )
     deadband_deg: float = Field(

@@ -676,6 +676,8 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
         last_move_t=2000.0,
         still_since_t=None,
         lost_turning=False,  # (rule 4: a reading showed it turning)
+        az_moved_deg=150.0,  # (rule 2: carried, the azimuth's own movement)
+        az_moved_t=2000.0,
     )
     assert moved == mo.tick(expected, CFG, 2000.0)[0]
 

@@ -43,22 +43,10 @@ def carried_over_a_replug(settings: dict[str, float]) -> None:
         assert v.truth().el_deg == pytest.approx(85.0, abs=1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 95 (31a878ae's fix reverted: review 101 found it stopped a jammed carried"
-    " turn seconds late): a slower elevation's turn carried over a replug is called at rest"
-    " while it turns and stopped short",
-)
 def test_with_the_default_settle_s_a_slower_carried_elevation_turn_is_left_to_finish() -> None:
     """The control (review 95's test)."""
     carried_over_a_replug({})
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 101: with settle_s raised from 1.5 to 1.6 a slower elevation's turn carried "
-    "over a replug is called at rest while it turns, stopped at 29 short of 85, and R/error "
-    "says it rested (jammed, stopped at the panel)",
-)
 def test_with_a_longer_settle_s_of_the_users_it_is_left_to_finish_too() -> None:
     carried_over_a_replug({"settle_s": LONGER_SETTLE_S})

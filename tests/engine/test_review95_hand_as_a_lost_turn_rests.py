@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import itertools
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -24,11 +22,6 @@ from tests.engine.virtual import VirtualRotator
 HAND_AFTER_S = 1.3
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 95: a hand at the panel just after a replug, as the carried turn is called "
-    "at rest, is shown moving, idle at the hand's new bearing, then moving again",
-)
 def test_a_hand_just_after_a_replug_is_one_move() -> None:
     with VirtualRotator("gs232b", emulator={"start_az_deg": 62, "start_el_deg": 0}) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
