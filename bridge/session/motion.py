@@ -17,12 +17,14 @@ Rules:
    beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
    degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
    the user's to pair with ``settle_s``. A turn the controller finishes by itself (``carried``,
-   rule 4: over a lost link, or found by a bridge just started; not ``lost_still``, no stop
-   sent into it) is still once each axis is, by its own time (``carried_rest_from``): no
+   rule 4: over a lost link, or found by a bridge just started, and a turn begun since, no
+   stop sent into it) is still once each axis is, by its own time (``carried_rest_from``): no
    movement of that axis's own (more than ``noise_deg`` from where that axis itself last
    moved: ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen
-   move since) for the longer of ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's
-   step and ``noise_deg`` take at that axis's speed, as slow as rule 6 allows for), a user's
+   move since), nor a reading of it further from there than any since (it creeps inside
+   ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and forth does not), for the
+   longer of ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's step and
+   ``noise_deg`` take at that axis's speed, as slow as rule 6 allows for), a user's
    ``settle_s`` never shortening it. Review 95: a GS-232B's elevation at 1.8 deg/s, read in
    whole degrees with 2 degrees of noise, shows a move every 1.7 s; its turn carried over a
    replug was called at rest at rule 2's 1.5 s and stopped short by controller.py rule 13,
@@ -30,9 +32,13 @@ Rules:
    review 101, a carried azimuth turn jammed while a slow elevation had been shown still for
    6 s was stopped 4.9 s after the jam, not 1.5 s; and a ``settle_s`` of the user's a little
    above the default brought review 95 back): a jam of a fast axis is told by its own short
-   time, the slow axis shown still by its own. A target for a controller that must be stopped
-   first, come while the rotor stands at its target still by the clock with that reading
-   late, waits for it: no stop to a rotor at rest (``plan_target``; an attack pass).
+   time, the slow axis shown still by its own. The creep: review 95, a hand at a GS-232B's
+   azimuth begun as that rest came, its first readings 63 and 64 inside ``noise_deg`` of 62,
+   was shown moving, 'idle' at 64, then moving: one hand's turn told as two moves (before, a
+   hand 1.3 s after the port answered; with each axis's own time, 1.9 s). A target for a
+   controller that must be stopped first, come while the rotor stands at its target still by
+   the clock with that reading late, waits for it: no stop to a rotor at rest
+   (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    A stall is told by a reading, or by time while the controller is asked and does not
@@ -119,14 +125,15 @@ Rules:
    axes decided still is a turn begun since, not known to be the lost one; every axis decided
    (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to rest while the
    port was out. Either way ``lost_still``, though rule 2 waits each axis's own time (the
-   longer of ``settle_s`` and ``axis_seen_s``) to call the carried rotor still, and
-   ``settle_s`` for a turn begun since, and a refused start's halt owed to the lost turn is
-   dropped (parts.py rule 10; review 73, a hand a second after a replug). Review 84: the lost
-   turn may be an elevation's alone (a GS-232's 2.5 deg/s elevation, read in whole degrees
-   with 2 degrees of noise, timed at the azimuth's 6 deg/s, was taken for at rest and turned
-   on 60 degrees past a refused start); review 89: the slowest axis's time for every axis
-   (2.1 s on an az/el GS-232B) took a hand at the azimuth a second after a replug at rest for
-   the lost turn, and the owed halt stopped it a few degrees in.
+   longer of ``settle_s`` and ``axis_seen_s``) to call the rotor still (a turn begun since
+   too: the lost one may go on on an axis not yet decided), and a refused start's halt owed
+   to the lost turn is dropped (parts.py rule 10; review 73, a hand a second after a
+   replug). Review 84: the lost turn may be an elevation's alone (a GS-232's 2.5 deg/s
+   elevation, read in whole degrees with 2 degrees of noise, timed at the azimuth's 6 deg/s,
+   was taken for at rest and turned on 60 degrees past a refused start); review 89: the
+   slowest axis's time for every axis (2.1 s on an az/el GS-232B) took a hand at the azimuth
+   a second after a replug at rest for the lost turn, and the owed halt stopped it a few
+   degrees in.
    While a refused start's halt is owed to the turn under judgement (``owes_halt``, told by
    the session at every step while the start's feature is on and owes it, parts.py rule 10,
    feature_commands.py rule 7, so it ends however tracking or following end; ``owed_halt``:
@@ -434,12 +441,16 @@ class Motion:
     # neither confirmed the move nor showed the axes where they stood
     held_t: float | None = None
     # rule 2: while ``carried``, each axis's own last movement (more than ``noise_deg`` from
-    # where that axis itself last moved; rule 1's anchor moves with either axis) and when,
-    # from the first reading back: the carried turn rests by each axis's own time
+    # where that axis itself last moved; rule 1's anchor moves with either axis), the
+    # farthest its readings crept from there since, inside ``noise_deg``, and when the last
+    # of either was, from the first reading back: the carried turn rests by each axis's own
+    # time
     az_moved_deg: float | None = None
     az_moved_t: float | None = None
     el_moved_deg: float | None = None
     el_moved_t: float | None = None
+    az_crept_deg: float = 0.0
+    el_crept_deg: float = 0.0
 
 
 class Event(enum.StrEnum):
@@ -733,6 +744,8 @@ def reading(
             az_moved_t=now,
             el_moved_deg=el_deg,
             el_moved_t=None if el_deg is None else now,
+            az_crept_deg=0.0,
+            el_crept_deg=0.0,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -761,13 +774,22 @@ def reading(
             m = replace(m, **judged)  # move, no rest told by it, nothing shown of it)
             return tick(m, cfg, now, asking_since=None)
         changes.update(judged)
-    if m.carried:  # rule 2: each axis's own movement, for the carried turn's rest
+    if m.carried:  # rule 2: each axis's own movement and creep, for the carried turn's rest
         ref = m.az_moved_deg
-        if ref is None or angle_error(az_deg, ref, wraps) > cfg.noise_deg:
+        off = cfg.noise_deg + 1.0 if ref is None else angle_error(az_deg, ref, wraps)
+        if off > cfg.noise_deg:
             changes["az_moved_deg"], changes["az_moved_t"] = az_deg, now
+            changes["az_crept_deg"] = 0.0
+        elif off > m.az_crept_deg:  # (further than any reading since it moved: it creeps)
+            changes["az_crept_deg"], changes["az_moved_t"] = off, now
         ref = m.el_moved_deg
-        if el_deg is not None and (ref is None or abs(el_deg - ref) > cfg.noise_deg):
-            changes["el_moved_deg"], changes["el_moved_t"] = el_deg, now
+        if el_deg is not None:
+            off = cfg.noise_deg + 1.0 if ref is None else abs(el_deg - ref)
+            if off > cfg.noise_deg:
+                changes["el_moved_deg"], changes["el_moved_t"] = el_deg, now
+                changes["el_crept_deg"] = 0.0
+            elif off > m.el_crept_deg:
+                changes["el_crept_deg"], changes["el_moved_t"] = off, now
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -1465,7 +1487,7 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 def still_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``; a
     carried turn's, each axis still for its own time too: ``carried_rest_from``)."""
-    if m.carried and not m.lost_still and m.stop_sent_t is None and m.state is MOVING:
+    if m.carried and m.stop_sent_t is None and m.state is MOVING:
         return max(_moved_ref(m) + cfg.settle_s, carried_rest_from(m, cfg))  # (rule 4: rare)
     return _moved_ref(m) + cfg.settle_s
 
@@ -1473,8 +1495,8 @@ def still_from(m: Motion, cfg: MotionConfig) -> float:
 def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a turn the controller finishes by itself (``carried``) may be found
     at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
-    since its own last movement (``az_moved_t``, ``el_moved_t``: the first reading back, for
-    an axis not seen move since). A fast axis's jam is told by its own short time, a slow
+    since its own last movement or creep (``az_moved_t``, ``el_moved_t``: the first reading
+    back, for an axis not seen move since). A fast axis's jam is told by its own short time, a slow
     axis's turn is not called over while it shows a move only every few readings."""
     ref = -1e18
     for axis, seen in axis_seen_s(cfg).items():
