@@ -311,7 +311,13 @@ Rules:
    ``tolerance_deg`` + ``noise_deg`` from it on either axis (jammed, stopped at the panel, a
    power cut meanwhile: the readings cannot tell which) gets a stop, checked as an operator's
    (harmless to a rotor at rest), and a ``stop`` error that says why; a rest at it, a target or
-   a stop written meanwhile (an owed one at the connect, a composite box's) end it unsaid.
+   a stop written meanwhile (an owed one at the connect, a composite box's) end it unsaid. An
+   axis the readings back decide still (motion.py rule 4: ``still_axes`` when they decide the
+   lost turn over, ``lost_still``) is judged by where it stood then (``_lost_decided``): at its
+   aim, it is left out at the rest, and a hand at it after that is a turn begun since, not the
+   lost one (found fixing review 95: a hand at a GS-232B's azimuth after its lost elevation
+   turn ended at its aim was stopped at its rest at 182, R/error "short of its turn ...
+   jammed, stopped at the panel, or its power cut"); with no axis left, it ends unsaid.
    Where no reading judges it (the controller does not answer once the port is back, or goes
    silent before the rotor rests) it is a turn no reading watches, stopped as rule 2 stops
    one, in case the controller still hears, and the offline's error says so (a cold review:
@@ -778,6 +784,7 @@ class Controller:
         self._retry: Target | None = None  # rule 11: the target sent once, until judged
         # rule 13: the raw target of a turn a failed port dropped, judged at the first rest after
         self._lost_aim: tuple[float | None, float | None] | None = None
+        self._lost_at_aim: frozenset[str] = frozenset()  # rule 13: axes decided at it
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
@@ -951,6 +958,7 @@ class Controller:
         spec = self.cfg.spec  # rule 13: judged at its rest (not where the replug stops it)
         if failed and not self.cfg.box and not spec.connect_stops and self.turn_out():
             self._lost_aim = (self.motion.target_deg, self.motion.el_target_deg)
+            self._lost_at_aim = frozenset()
         self.link = None
         self._slew_retry = None  # rule 14: (its target waits no more: session.py)
         self.answering = self._first_unread = False
@@ -1487,6 +1495,8 @@ class Controller:
         self.motion, events = mo.reading(
             self.motion, cfg.motion, reply.az_deg, now, reply.el_deg, asked
         )
+        if self._lost_aim is not None and self.motion.lost_still and not was.lost_still:
+            self._lost_decided(was)  # rule 13: axes the readings showed still, judged now
         if self.motion.state is mo.MOVING and mo.stall_due(self.motion, cfg.motion, now):
             link.poll_now(now)  # (motion.py rule 3: asked before the stall's time, it decided
             # nothing; the answer to a question asked now does, a reply time later, review 36)
@@ -1548,6 +1558,32 @@ class Controller:
             where.append(f"elevation {el:g}°")
         return f" to {', '.join(where)}" if where else ""
 
+    def _lost_decided(self, was: mo.Motion) -> None:
+        """Rule 13: the readings back decided the lost turn over (motion.py rule 4,
+        ``lost_still``) on the axes they showed still for their own time (``still_axes``): one
+        of them that stood at its aim (``was``: the reading before, which a turn begun since
+        has not moved from there) is left out of the judgement at the rest (``_lost_at_aim``),
+        whoever turns it after; with none left, the turn ended at its aim, unsaid."""
+        az, el = cast(tuple[float | None, float | None], self._lost_aim)
+        m, cfg = self.motion, self.cfg.motion
+        within = cfg.tolerance_deg + cfg.noise_deg
+        stood, el_stood = was.position_deg, was.el_position_deg
+        at_aim = set(self._lost_at_aim)
+        if az is None or (
+            stood is not None
+            and "azimuth" in m.still_axes
+            and mo.angle_error(stood, az, cfg.az_wraps) <= within
+        ):
+            at_aim.add("azimuth")
+        if el is None or (
+            el_stood is not None and "elevation" in m.still_axes and abs(el_stood - el) <= within
+        ):
+            at_aim.add("elevation")
+        if at_aim >= {"azimuth", "elevation"}:
+            self._lost_aim = None
+        else:
+            self._lost_at_aim = frozenset(at_aim)
+
     def _lost_rest(self, now: float) -> None:
         """Rule 13: the rotor followed since its port came back is at rest: short of the turn
         the port dropped, it gets a stop (its motor may still drive a jammed rotor)."""
@@ -1556,9 +1592,19 @@ class Controller:
         if m.position_deg is None:
             return
         within = cfg.tolerance_deg + cfg.noise_deg
-        short = az is not None and mo.angle_error(m.position_deg, az, cfg.az_wraps) > within
+        judged = self._lost_at_aim  # (not the axes decided at their aim: ``_lost_decided``)
+        short = (
+            az is not None
+            and "azimuth" not in judged
+            and mo.angle_error(m.position_deg, az, cfg.az_wraps) > within
+        )
         el_at = m.el_position_deg
-        el_short = el is not None and el_at is not None and abs(el_at - el) > within
+        el_short = (
+            el is not None
+            and "elevation" not in judged
+            and el_at is not None
+            and abs(el_at - el) > within
+        )
         if not (short or el_short):
             return
         at = self.where()  # (an azimuth's: the elevation too where it is the one short, a
