@@ -74,13 +74,7 @@ Rules:
    rule 10, ``short_of_deg`` in the status) outlives a restart as a stop owed does: the next
    start guards a turn on to it (noticed in an attack pass: stopped short of 300, the bridge
    restarted, and a poll garbled into ``AM1;`` turned the rotor on to 300 unsaid). It is
-   saved only when it changes: at a stop short of the target, and at the next turn; not while
-   a target waits to go and the controller answers (controller.py ``_short_of_kept``: the
-   status says what it said before), so the session's own stop before a new bearing on a
-   Rotor-EZ, whose waiting target replaces the kept bearing moments later, writes nothing
-   (review 106: a tracker's stream rewrote and fsynced the file every few targets). The
-   price: a bridge killed in those moments (the brake's delay) starts unguarded against the
-   bearing it was about to replace.
+   saved only when it changes: at a stop short of the target, and at the next turn.
 10. Only a state file's lock ON is the last word on the lock at a start. A file that does not
    say ON (a new one: the service run by hand, whose default ``state_file`` is another; a
    container recreated without its volume; the file deleted; a lock ON its save failed to

@@ -216,10 +216,8 @@ Rules:
      stopped once, then followed; a poll garbled after a move by hand is not caught (writing the
      rest bearing to the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand
      at the panel short and turned a rotor at 360 a full circle). The target it rested short of
-     is in the status (``short_of_deg``; while a target waits to go and the controller
-     answers, what the status said before: ``_short_of_kept``) and outlives a restart
-     (runtime/kept.py rule 9): the next session starts guarded, its first readings too
-     (``keep_short_of``).
+     is in the status (``short_of_deg``) and outlives a restart (runtime/kept.py rule 9): the
+     next session starts guarded, its first readings too (``keep_short_of``).
    While such a turn would be stopped, a poll left unanswered or answered in part at rest (what
    a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
    polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
@@ -847,22 +845,8 @@ class Controller:
             wall_offset_s,
             features,
             self.stops.owed,  # stop_owed
-            self._short_of_kept(previous, pending, motion),  # short_of_deg
+            self._short_of(motion),  # short_of_deg
         )
-
-    def _short_of_kept(
-        self, previous: RotatorStatus, pending: Target | None, m: mo.Motion
-    ) -> float | None:
-        """Rule 10's ``_short_of`` as the status says it (runtime/kept.py rule 9 saves each
-        change): while a target waits to go and the controller answers (the session's own stop
-        before a new bearing on a Rotor-EZ, the brake let go), what the last status said,
-        whatever the rest: the waiting target replaces the bearing the controller keeps
-        moments later. Review 106: the rest short at each such stop, and the turn after it,
-        were two rewrites of the state file every few targets of a tracker's stream."""
-        short = self._short_of(m)  # (always asked: it keeps its latch)
-        if pending is not None and self.link is not None and self.answering:
-            return previous.short_of_deg
-        return short
 
     def _short_of(self, m: mo.Motion) -> float | None:
         """Rule 10: the last target written, while the guard is on and the rotor, not turning,

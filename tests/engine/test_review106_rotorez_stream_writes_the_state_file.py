@@ -82,6 +82,13 @@ def test_the_stream_to_a_gs232b_writes_the_state_file_a_few_times(
     assert writes_for_a_stream("gs232b", tmp_path, monkeypatch) <= ORDER_SAVES + 2
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 106 (its fix 88df070b reverted: review 109 found a restart under the "
+    "express's hold left unguarded): a stream of targets to a Rotor-EZ rewrites and fsyncs the "
+    "state file "
+    "every few targets (short_of saved at a retarget's stop and turn): 90 writes in 5 min",
+)
 def test_the_stream_to_a_rotorez_writes_the_state_file_a_few_times(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -20,8 +20,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-import pytest
-
 from bridge.core.model import MotionState, Source, Stop, Target
 from bridge.runtime.kept import Kept
 from bridge.runtime.state_store import StateStore
@@ -33,11 +31,6 @@ QUERY = b"AI1;"
 HOLD_S = 45.0  # the express's flow cut: its hold lasts until its keepalive notices
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 109: a Rotor-EZ stopped short of 300 while a target waits under the "
-    "express's hold keeps no short_of; a restart then lets a garbled poll turn it on to 300",
-)
 def test_a_stop_short_of_the_target_is_kept_while_a_target_waits_under_a_hold(
     rig: Rig, tmp_path: Path
 ) -> None:
