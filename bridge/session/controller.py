@@ -110,23 +110,32 @@ Rules:
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
    that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
    models); a silent controller's report after its slew is not doubted. A connection's first
-   reading (the bridge started, a port replugged, a controller answering again after a
-   silence) with nothing to doubt it against (no reading before, or the rotor turning or with
-   a target out when its readings were lost) is believed only when the next agrees with it,
-   within ``doubt_deg`` plus what the rotor can turn between them as for a reading asked again
-   at once below (``_doubts_first``: asked again at once, DOUBTS_TOLD in a row at most, then at
-   the moving rate, always allowing what the rotor can turn between the two compared at its top
-   speed, motion.py ``top_speed_deg_s``; review 100: at the usual polls within ``doubt_deg``
-   alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked for
-   ran past ``az_min_deg`` unjudged; FIRST_TURN_READINGS (four: review 103, a true one and two
-   garbles at 150, 160, 170 made three) in a row that disagree but lie on one steady turn,
-   each axis the same way at one rate within ``doubt_deg``, FIRST_TURN_MAX_DEG_S at most, are
-   a turn faster than that allowance: the last is taken, and the next reading that goes on
-   with it too, the turn's readings trusted till it rests, ``_steady``; review 100: a Rot2Prog
-   at 30 deg/s replugged mid-turn was offline for 24 s, till it rested, and R/error blamed the
-   line; the reading taken then is the first of the two,
-   which answered the question the motion machine times it by; where the second disagrees,
-   a third that agrees with either is taken, and the odd one is told as line noise). Until
+   reading (the bridge started, a port replugged, a controller answering
+   again after a silence) with nothing to doubt it against (no reading before, or the rotor
+   turning or with a target out when its readings were lost) is believed only when the next
+   agrees with it, within ``doubt_deg`` alone, however far apart in time (``_doubts_first``:
+   asked again at once, DOUBTS_TOLD in a row at most, then at the moving rate; where the
+   second disagrees, a third that agrees with either is taken, and the odd one is told as line
+   noise); the reading taken is the first of the two, which answered the question the motion
+   machine times it by (within ``doubt_deg`` of the other: a pot's jitter shows its first
+   phase). Two further apart than ``doubt_deg`` may be a turn, or a garble and the true
+   reading in either order, which two readings cannot tell: review 105, an allowance of what
+   the rotor can turn between them at its top speed (motion.py ``top_speed_deg_s``) let the
+   true reading confirm a flipped one before it whenever the two came far enough apart (an
+   RC2800 az/el's two axes asked 200 ms apart, a K3NG box answering 400 ms late, a reply lost,
+   the moving rate's ask compared with the one two back): the garble was the bearing and a
+   nudge turned the rotor the wrong way; taking the newer of the two would only have turned it
+   round (the true reading, then a garble within reach), and a pot's jitter, 10 then 11, into
+   its second phase. A turn is told by its line instead: FIRST_TURN_READINGS (four: review
+   103, a true one and two garbles at 150, 160, 170 made three) in a row that disagree but lie
+   on one steady turn, each axis the same way at one rate within ``doubt_deg``,
+   FIRST_TURN_MAX_DEG_S at most (or the top speed, if faster), are a turn: the last is taken,
+   and the next reading that goes on with it too, the turn's readings trusted till it rests,
+   ``_steady`` (review 100: a Rot2Prog at 30 deg/s replugged mid-turn was offline for 24 s,
+   till it rested, and R/error blamed the line; and at the usual polls within ``doubt_deg``
+   alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked
+   for ran past ``az_min_deg`` unjudged: asked at once or at the moving rate, its readings
+   agree, or lie on its line). Until
    then the controller is not answering: the user sees it
    offline, with no bearing, one reply time longer than before, as before any answer; nothing
    relative to the bearing is made from that reading (a nudge is refused as before the first
@@ -159,9 +168,10 @@ Rules:
    a line that garbled every answer differently, 0, +60, -60 in turn, kept an Easycomm turning
    at the start unwatched, and it ran from 150 past ``az_min_deg`` 60 to its end). So
    FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
-   start needs, two for a rotor at rest or turning within its top speed, four for a steady
-   turn, eight with one garble among those) get a stop (``_unwatched_stop``: a stop as any,
-   the line's discipline and the stop rules as ever; always safe), and so do each as many more
+   start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two
+   readings, four for a steady turn, eight with one garble among those) get a stop
+   (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
+   always safe), and so do each as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
    error says the readings do not agree and the rotor was stopped for it (at most every
    ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. (A stop for
@@ -1319,29 +1329,27 @@ class Controller:
         """Rule 9: a connection's first reading, or the first back after readings were lost
         while the rotor turned (nothing it stood at to doubt it against), is believed when the
         next agrees, or the one after it (the one between then line noise), within
-        ``doubt_deg`` and what the rotor can have turned between the two compared at its top
-        speed (motion.py ``top_speed_deg_s``), however they were asked: at once, DOUBTS_TOLD
-        in a row at most, then at the moving rate (``poll``; review 100: after three, at the
-        usual polls within ``doubt_deg`` alone, a rotor turning at its nominal speed never had
-        two readings agree, and its turn nobody asked for ran past ``az_min_deg`` unjudged).
-        Two compared further apart in time than DOUBT_TURN_MAX_DEG at that speed tell nothing.
-        Until then it is no reading for anything, and the controller is not answering yet (no
-        bearing, offline, as before its first answer). Attack 30: one byte lost or flipped in
+        ``doubt_deg`` alone, the first of the two taken, however they were asked: at once,
+        DOUBTS_TOLD in a row at most, then at the moving rate (``poll``; review 100: after
+        three, at the usual polls, a rotor turning at its nominal speed never had two readings
+        agree, and its turn nobody asked for ran past ``az_min_deg`` unjudged). Further apart
+        they may be a turn, told by FIRST_TURN_READINGS on its line (``_steady``), never by two
+        (review 105: an allowance of the top speed between them let a true reading confirm the
+        garble before it, taken for the bearing). Until then it is no reading for anything,
+        and the controller is not answering yet (no bearing, offline, as before its first
+        answer). Attack 30: one byte lost or flipped in
         the first answer (``AZ150.0`` read ``AZ10.0``) was the bearing, and a nudge of +10
         turned the rotor from 150 down to 20."""
         cfg = self.cfg.motion
         said = self._first_said if doubted.first else ()
         chain = said[-2:]  # (the older one kept only for a turn's line: FIRST_TURN_READINGS)
-        top = mo.top_speed_deg_s(cfg)
-        # the last one doubted, or the one before it (one glitch between: 150, 10, 150)
+        # the last one doubted, or the one before it (one glitch between: 150, 10, 150), within
+        # doubt_deg alone however far apart in time: two readings further apart than that may
+        # be a turn or a garble and the true reading (in either order), which two cannot tell
+        # (review 105); a turn is told by its line, below
         for back, first in enumerate(reversed(chain)):
-            if first.reply is None:
-                continue
-            turned = top * max(0.0, now - first.t)
-            if turned > DOUBT_TURN_MAX_DEG:
-                continue  # (too far apart to tell a turn from a glitch)
             one = first.reply
-            if _apart(reply, one.az_deg, one.el_deg, doubt_deg(cfg) + turned, cfg.az_wraps):
+            if one is None or _apart(reply, one.az_deg, one.el_deg, doubt_deg(cfg), cfg.az_wraps):
                 continue
             noise = None  # (the odd one: the one between, or the one before the pair)
             if back == 1:
@@ -1358,8 +1366,8 @@ class Controller:
             self._doubts_in_row, self._first_said, self._first_unconfirmed = 0, (), 0
             self._first_agreed = one  # (taken for this one: ``_confirmed``)
             return Doubt.TAKEN
-        # FIRST_TURN_READINGS in a row on one steady line: a turn, faster than the top speed
-        # allows (review 103: three were not enough, a true one and two garbles on one line)
+        # FIRST_TURN_READINGS in a row on one steady line: a turn stepping further than
+        # doubt_deg (review 103: three were not enough, a true one and two garbles on one line)
         line = (*((d.reply, d.t) for d in said if d.reply is not None), (reply, now))
         on_line = len(line) >= 3 and _steady(line[-3:], cfg, doubt_deg(cfg))
         if len(line) == FIRST_TURN_READINGS and _steady(line, cfg, doubt_deg(cfg)):

@@ -990,7 +990,7 @@ def reach_deg(m: Motion, cfg: MotionConfig, now: float, since_t: float | None = 
 def top_speed_deg_s(cfg: MotionConfig) -> float:
     """Rule 5: the fastest a rotor is taken to turn on either axis, its speed-up bound over the
     nominal speeds (REACH_FACTOR times the larger of the two): what it can have turned between
-    two readings (``reach_deg``; controller.py rule 9's first readings)."""
+    two readings (``reach_deg``; controller.py rule 9's first readings on one line, ``_steady``)."""
     return REACH_FACTOR * max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
 
 

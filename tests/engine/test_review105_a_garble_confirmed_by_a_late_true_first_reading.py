@@ -29,6 +29,9 @@ garble"; but the time between two first answers is not the poll's alone:
   and one flipped bit (150 read 140) is confirmed by the clean answer after it, no other
   fault: a nudge of +5 turns the rotor down to 145.
 
+Now two first readings agree within ``doubt_deg`` alone (the first of them taken); further
+apart they are a turn only on FIRST_TURN_READINGS on one line.
+
 In virtual time: the emulated controller at rest at 150 (45 up on the RC2800); its first answer
 reaches the host with one digit flipped (and, on the GS-232B, its second answer lost on the
 line, or its second and third flipped); the rest as sent.
@@ -92,12 +95,6 @@ def nudged(v: VirtualRotator, nudge_deg: float) -> tuple[float | None, float, fl
     return shown, lowest, highest
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 105: an RC2800's first azimuth answer with one bit flipped (150 read 140) is "
-    "confirmed by the clean next one 0.4 s later: shown at 140, and a nudge of +5 turns the "
-    "rotor down to 145",
-)
 def test_rc2800_one_flipped_first_answer_is_not_the_bearing_a_nudge_is_made_from(
     rig: Rig,
 ) -> None:
@@ -110,11 +107,6 @@ def test_rc2800_one_flipped_first_answer_is_not_the_bearing_a_nudge_is_made_from
     assert v.truth().az_deg == pytest.approx(REST_DEG + 5.0, abs=1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 105: an RC2800's first azimuth answer with one bit flipped (150 read 140) is "
-    "shown, then 'moving' to 150, stopped, and R/error says the rotor turned with no command",
-)
 def test_rc2800_one_flipped_first_answer_is_never_shown_nor_a_turn_stopped(rig: Rig) -> None:
     v = rig("rc2800", emulator={"start_az_deg": REST_DEG, "start_el_deg": 45.0}, connect=False)
     v.to_host = lines_as([(b"P= 150.0", b"P= 140.0")], b"\r")
@@ -126,11 +118,6 @@ def test_rc2800_one_flipped_first_answer_is_never_shown_nor_a_turn_stopped(rig: 
     assert not [m for m in said if "no command" in m], said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 105: a GS-232B's first answer flipped (150 read 110) and the next lost: the "
-    "true one 2 s later confirms 110, and a nudge of +10 turns the rotor down to 120",
-)
 def test_gs232b_a_flipped_first_answer_and_a_lost_one_are_not_the_bearing_a_nudge_is_made_from(
     rig: Rig,
 ) -> None:
@@ -143,11 +130,6 @@ def test_gs232b_a_flipped_first_answer_and_a_lost_one_are_not_the_bearing_a_nudg
     assert v.truth().az_deg == pytest.approx(REST_DEG + 10.0, abs=1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 105: a GS-232B's true first answer, then two flipped (158, 050): the true one "
-    "asked at the moving rate confirms 158, and a nudge of -5 turns the rotor up to 153",
-)
 def test_gs232b_two_flipped_first_answers_after_a_true_one_are_not_the_bearing_a_nudge_is_made_from(
     rig: Rig,
 ) -> None:
@@ -162,12 +144,6 @@ def test_gs232b_two_flipped_first_answers_after_a_true_one_are_not_the_bearing_a
     assert v.truth().az_deg == pytest.approx(REST_DEG - 5.0, abs=1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 105: a K3NG box in GS-232B mode answering C 400 ms late: its first answer "
-    "flipped (150 read 140) is confirmed by the clean next one, and a nudge of +5 turns the "
-    "rotor down to 145",
-)
 def test_gs232b_answering_late_one_flipped_first_answer_is_not_the_bearing_a_nudge_is_made_from(
     rig: Rig,
 ) -> None:
