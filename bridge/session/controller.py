@@ -109,8 +109,11 @@ Rules:
    ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
    that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
-   models); a silent controller's report after its slew is not doubted. A connection's first
-   reading (the bridge started, a port replugged, a controller answering
+   models); a silent controller's report after its slew is not doubted, and only that one
+   (review 105: a SatEL's answers after it, polled at the moving rate while it settles, were
+   all taken unchecked, and one flipped bit, 200 read 280, was published past ``az_max_deg``
+   and fed to the motion as a move; now they are doubted as a turning rotor's). A
+   connection's first reading (the bridge started, a port replugged, a controller answering
    again after a silence) with nothing to doubt it against (no reading before, or the rotor
    turning or with a target out when its readings were lost) is believed only when the next
    agrees with it, within ``doubt_deg`` alone, however far apart in time (``_doubts_first``:
@@ -1274,9 +1277,10 @@ class Controller:
             return self._doubts_first(reply, doubted, now)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a slew's report)
-            if stands is not None and cfg.spec.reports_while_moving:
-                return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
-            return Doubt.TAKEN
+            report = self.link is not None and self.link.slew is not None  # (a silent one's
+            if stands is not None and not report:  # after its slew; only that one: review 105,
+                return self._doubts_turning(reply, doubted, now)  # a SatEL's answers after
+            return Doubt.TAKEN  # it, while it settles, were taken unchecked)
         if steady is not None and _steady((*steady, (reply, now)), cfg, doubt_deg(cfg)):
             return Doubt.TAKEN  # (the turn a connection's first readings showed goes on)
         self._turn_trusted = False  # (at rest: _doubts_turning's next turn is doubted anew)
