@@ -1,0 +1,83 @@
+"""Review 110 (attacking bbafe67a, motion.py rule 2: "a carried axis that creeps inside
+noise_deg is not yet at rest"): each reading of a carried turn's axis further from where it last
+moved than any since restarts that axis's own time (``az_crept_deg``, ``az_moved_t``), however
+slowly it creeps, and a move beyond ``noise_deg`` starts the creep over from zero. So a pot
+reading that drifts a tenth at a time (a stalled motor heating, its current on the pot's
+ground), a tenth every 1.2 s, keeps a jammed carried turn 'moving' for ever: 0.08 deg/s, 70
+times slower than the RC2800's 6 deg/s, slower than any turn rule 6 allows for. An RC2800
+(noise_deg 0.5, read in tenths) whose turn was carried over a replug jams with its motor
+driving: controller.py rule 13's stop ("in case its motor still drives") never goes, and
+R/status shows it moving a minute on. Before bbafe67a the same readings were at rest 1.7 s after
+the jam and the stop went (a creep of 0.6 degrees takes 7.2 s, rule 2's settle_s is 1.5)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+import pytest
+
+from bridge.core.model import ErrorKind, MotionState
+from bridge.session import motion as mo
+from tests.engine.virtual import VirtualRotator
+
+DRIFT_DEG = 0.1  # a count of the RC2800's readings
+DRIFT_EVERY_S = 1.2  # 0.08 deg/s: no turn of a 6 deg/s rotor
+WATCHED_S = 60.0
+
+
+def drifting_from(since: float) -> Callable[[bytes, float], bytes]:
+    """The box's lines as they reach the host, each bearing a tenth more every DRIFT_EVERY_S
+    since ``since`` (a line goes whole at its CR, when the box's last byte of it would)."""
+    line = bytearray()
+
+    def drift(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        if not data.endswith(b"\r"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        counts = int((now - since) // DRIFT_EVERY_S)
+        return re.sub(
+            rb"P=\s*([0-9.]+)",
+            lambda m: b"P=%5.1f" % (float(m.group(1)) + DRIFT_DEG * counts),
+            whole,
+            count=1,
+        )
+
+    return drift
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 110: a jammed carried turn whose pot drifts a tenth a second is shown moving "
+    "for ever and never stopped",
+)
+def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
+    with VirtualRotator("rc2800-az", emulator={"start_az_deg": 10}) as v:
+        cfg = v.cfg.motion
+        own_s = max(cfg.settle_s, mo.axis_seen_s(cfg)["azimuth"])
+        assert DRIFT_EVERY_S < own_s  # (the set-up: the drift restarts the axis's own time)
+        assert DRIFT_DEG / DRIFT_EVERY_S < cfg.nominal_speed_deg_s / 50  # (no turn)
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+        v.target(300)
+        v.run_until(lambda h: h.truth().az_deg >= 40.0, 60, "the azimuth turning")
+        v.run_for(0.1)  # (between two polls: not a deadline)
+        v.link_down()
+        v.run_for(2.0)  # (the adapter out: not a deadline)
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        v.run_for(3.0)  # (the carried turn followed: not a deadline)
+        assert v.truth().is_moving and v.status.moving
+        jam_t = v.now
+        v.jam()  # its motor driving
+        v.to_host = drifting_from(jam_t)
+        v.run_for(WATCHED_S)
+        # observed: no stop in a minute, R/status 'moving' at 76.7 (jammed at 71.8)
+        [stop, *_] = [f for f in v.frames(since=jam_t) if f.outcome == "stop"] or [None]
+        assert stop is not None, "no stop to a jammed rotor whose motor drives"
+        allowed = own_s + v.cfg.moving_poll_interval_s + DRIFT_EVERY_S
+        assert stop.time_s - jam_t <= allowed, (stop.time_s - jam_t, allowed)
+        assert any("short of its turn" in e.message for e in v.errors(ErrorKind.STOP, since=jam_t))
+        assert not v.status.moving
