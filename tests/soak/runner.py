@@ -83,6 +83,12 @@ AZEL = ("rot2prog", "md01", "satel")
 IDLE_POLL_S = 1.0  # the idle poll every rotator here has: "within one poll"
 SATEL_STOP_REPORT_S = 2.0  # after a stop the SatEL reports within its reply time, or never
 RECOVERY_SLACK_S = 1.0  # a fresh retained snapshot is itself a broker round trip or two
+# R/state in which a rotator is sent its next target (docs/mqtt.md, what the states mean). A
+# fresh bridge shows one of READY; `stalled` is one too: the bridge stopped the rotor and said
+# "send the target again" (a Rot2Prog or MD-01 power-cycled mid-turn forgets its target and has
+# no power-on byte to say so), and it stays stalled until the next command, as a user would send
+READY = (b"idle", b"unknown", b"moving", b"braking")
+COMMANDABLE = (*READY, b"stalled")
 
 
 def reaches(model: str, az: float, el: float | None) -> tuple[float, float | None]:
@@ -293,15 +299,16 @@ class Soak:
         self.bridge = BridgeProcess(self.dir, config, log_level="INFO").start()
         self.monitor = Monitor(self.broker.port, self)
         deadline = time.monotonic() + slow(60)
-        while not all(self.healthy_view(r) for r in self.rots.values()):
+        while not all(self.healthy_view(r, READY) for r in self.rots.values()):
             if time.monotonic() > deadline:
                 raise SystemExit(f"rotators not ready: {self.bridge.log()[-3000:]}")
             time.sleep(0.1)
 
-    def healthy_view(self, rot: Rot) -> bool:
+    def healthy_view(self, rot: Rot, states: tuple[bytes, ...] = COMMANDABLE) -> bool:
+        """Online, in a state the bridge takes a target in (``READY`` at the start)."""
         avail = self.monitor.value(f"rotor/{rot.rid}/availability")
         state = self.monitor.value(f"rotor/{rot.rid}/state")
-        return avail == b"online" and state in (b"idle", b"unknown", b"moving", b"braking")
+        return avail == b"online" and state in states
 
     # -- the run -------------------------------------------------------------------------------
     def run(self, verbose: bool) -> int:
@@ -580,7 +587,11 @@ class Soak:
             return
         e = rot.expectation
         idle = e is None or e.outcome is not None
-        if not idle and self.rng.random() > 0.15:  # mostly wait for the move, sometimes re-target
+        # mostly wait for the move, sometimes re-target; never a stalled one: a stall is no
+        # excuse for an open command, judged by its deadline (lost, unless a serial fault
+        # interrupted it), never replaced unjudged; once it is judged, the next one goes
+        stalled = self.monitor.value(f"rotor/{rot.rid}/state") == b"stalled"
+        if not idle and (stalled or self.rng.random() > 0.15):
             rot.next_cmd = now + 2.0
             return
         roll = self.rng.random()
