@@ -1,0 +1,85 @@
+"""Review 108: the stop express's ``early`` word (express.py rule 11, a6477fe9) is carried out
+by the bridge with no test of order at all: ``_heard_only_by_express(..., early=True)`` skips
+the vouches and asks only whether one of the bridge's connections read a *halt* of the rotator
+since. A target the main connection read after the STOP is no halt, so a STOP published before
+that target, read late by the express (before its sync word came back), stops the turn to the
+newer target: rule 8's promise (a late frame never stops a newer move) broken by the bridge
+itself, on the express's behalf.
+
+Real mosquitto, the bridge in this process, the express in its own, a Rotor-EZ on a real pty.
+The express reads the STOP late behind the gate of
+tests/integration/test_stop_before_the_express_words_are_back.py (a proxy holding what the
+broker sends it), its sync words dropped by an ACL (so every stop it reads is early).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.mqtt.express import express_client_id
+from bridge.interfaces.mqtt.lane import lane_client_id
+from tests.integration.test_stop_before_the_express_words_are_back import OPEN, WORDS, _Gate
+from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt import Probe
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+
+@pytest.fixture
+def broker_conf(tmp_path: Path) -> str:
+    (tmp_path / "words.acl").write_text(OPEN)
+    return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 108: a target published after a STOP is stopped short when the stop "
+    "express reads that STOP late, before its sync word is back (its early word)",
+)
+def test_an_early_stop_read_late_does_not_stop_a_target_published_after_it(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    gate = _Gate(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
+    try:
+        with Rig(tmp_path, gate, probe) as rig:
+            rig.express = True
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+            settings = rig.settings.mqtt
+            gate.held_id = express_client_id(settings)
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.express.up.is_set, 10, "the express up")
+            wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+            main_and_lane = {settings.effective_client_id(), lane_client_id(settings)}
+            gate.refused |= main_and_lane  # the bridge's connections back after the STOP
+            (tmp_path / "words.acl").write_text(f"{OPEN}topic deny {WORDS}\n")
+            start = broker.log.stat().st_size
+            broker.restart()
+            denied = f"Denied PUBLISH from {app.express.client_id}"
+            wait_until(
+                lambda: denied in broker.log.read_bytes()[start:].decode(errors="replace"),
+                15,
+                "the express back and subscribed, its word dropped",
+            )
+            gate.hold(True)  # the express reads what the broker sends it late
+            assert probe.publish("rotor/stop", "STOP")  # 1: a STOP (the rotor is still)
+            gate.refused -= main_and_lane
+            wait_until(
+                lambda: (
+                    app.client.subscribed_since is not None
+                    and app.lane.subscribed_since is not None
+                ),
+                15,
+                "the bridge's connections back and subscribed",
+            )
+            assert probe.publish("rotor/target", "100")  # 2: then a target, after the STOP
+            emu.wait_for(lambda s: s.is_moving, slow(10))  # the bridge carries it out
+            gate.hold(False)  # the express reads the older STOP now (early: no frame)
+            still = emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, slow(30))
+            assert abs(still.az_deg - 100) <= 2, f"stopped at {still.az_deg:.1f}, not at 100"
+    finally:
+        probe.close()
+        gate.close()
