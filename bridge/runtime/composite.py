@@ -17,6 +17,10 @@ Rules:
    each (a feature's own command goes to one: rule 6), in the same serve: one STOP writes a
    stop frame on both lines before either status goes to the listeners, and each session
    keeps its own stop rules (a stop owed to an unplugged box is its first frame on replug).
+   Both sessions are told the wall clock (worker.py ``tell_wall``) before either is handed
+   its batch (review 109: told only by its box's own serve, after the batch, a session judged
+   the first wind reading after a suspend by the clock from before it, session/wind.py rule 2,
+   and a two-box rotator's storm ended with ten minutes of calm never heard).
 2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
    axis it leaves out is no target for that box (but a park's: it goes to both boxes, the
    elevation box holding its axis where it reads, session/targets.py rule 9, as in a storm;
@@ -840,6 +844,11 @@ class CompositeWorker:
             log.exception("%s: unexpected error in the composite worker", self.cfg.rotator_id)
 
     def serve(self, now: float, ready: set[int]) -> None:
+        # both sessions told the wall clock before either is handed its batch (rule 1): only
+        # a box's own serve told its own, after the batch, and the first wind reading after a
+        # suspend was judged by the clock from before it (review 109; session/wind.py rule 2)
+        for box in self.boxes.values():
+            box.guarded(box.tell_wall, now)
         if self._box in ready:
             batch = self._mailbox.take()
             if batch:

@@ -265,10 +265,16 @@ class Worker:
             except Exception:
                 self._port, self._fd = None, -1  # at least: no port nobody serves
 
-    def serve(self, now: float, ready: set[int]) -> None:
-        # a clock set late (NTP after boot) moves tracking; a suspend is a gap between wind
-        # readings (session/wind.py rule 2), the port out (often so at a resume) as much as in
+    def tell_wall(self, now: float) -> None:
+        """The session told the wall clock at ``now``: before any batch is handed to it (a
+        clock set late, NTP after boot, moves tracking; a suspend is a gap between wind
+        readings, session/wind.py rule 2), the port out (often so at a resume) as much as in.
+        A rotator of two boxes hands both sessions their batches before either box is served
+        (runtime/composite.py rule 1), and tells them first (review 109)."""
         self.session.set_wall(now, self._wall())
+
+    def serve(self, now: float, ready: set[int]) -> None:
+        self.tell_wall(now)  # (``tell_wall``: before the batch, the port out or in)
         if self._port is None:
             if self._box in ready:
                 self._do(self.session.commands(self._mailbox.take(), now))

@@ -38,12 +38,15 @@ Rules:
    after nine minutes of calm ended the storm at the first calm reading it heard awake). The
    wall clock only adds gaps, so it can only make a storm last longer (a clock stepped on by NTP
    starts the calm again; one stepped back hides no gap the session's clock sees), the one use
-   docs/architecture.md rule 15 lets a clock have. The end is judged at that reading, whether
-   the controller answers or not (review 96: judged at this part's steps, which run only while
-   it answers, a controller silent through a calm kept the storm it had, and the next storm was
-   taken for it: a STOP of the old storm held the new park back, the new park took the old one's
-   place). The session looks at the storm and the storms begun (``storms``) at every step, so a
-   storm that ended and a next that began while it was silent are both seen.
+   docs/architecture.md rule 15 lets a clock have. The session is told the wall clock before
+   every batch it is handed (runtime/worker.py ``tell_wall``; on a rotator of two boxes before
+   either box's, runtime/composite.py rule 1: review 109). The end is judged at that reading,
+   whether the controller answers or not (review 96: judged at this part's steps, which run
+   only while it answers, a controller silent through a calm kept the storm it had, and the
+   next storm was taken for it: a STOP of the old storm held the new park back, the new park
+   took the old one's place). The session looks at the storm and the storms begun
+   (``storms``) at every step, so a storm that ended and a next that began while it was
+   silent are both seen.
 3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
    storm stops the park under way, and the park is not tried again until the next storm;
    motion stays refused meanwhile. That holds across a restart in the storm (the status's

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge import app
 from bridge.runtime.composite import CompositeWorker
 from bridge.session.mailbox import Mailbox
@@ -32,12 +30,6 @@ SLEPT_S = 2 * 3600.0  # the machine sleeps two hours (wind_silent_min is 15)
 MINUTE_S = 60.0  # the weather station publishes once a minute
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 109: on a rotator of two boxes, a storm ends at the first calm reading "
-    "after the machine slept (the wall clock not told before the batch): motion allowed "
-    "with ten minutes of calm never heard",
-)
 def test_a_suspend_is_a_gap_between_wind_readings_on_a_rotator_of_two_boxes(
     tmp_path: Path,
 ) -> None:
