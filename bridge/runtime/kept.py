@@ -55,10 +55,13 @@ Rules:
    and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
    the steps already under way or waiting, never for a flood of words after it.
 6. A lock kept from the state file is said in the log at start: motion will be refused. So
-   is a storm kept (rule 4), with what the start does with its park (sent again, or not: a
-   STOP stopped it, or it was reached), or that it is let go (no ``wind_topic`` configured
+   is a storm kept (rule 4), with what the start does with its park (sent again, or not: it
+   was reached, a STOP after that or none, or a STOP stopped it short), in the session's
+   words (session/wind.py ``kept_start``), or that it is let go (no ``wind_topic`` configured
    any more). Review 106: a start in a storm kept turned the rotor to its park, 160 degrees,
-   with nothing in the log naming the storm or the state file.
+   with nothing in the log naming the storm or the state file. Review 109: a park reached,
+   then a STOP, was said "stopped by a STOP or lock ON" while the status said "parked for
+   the storm" (the file's ``halted`` read before its ``arrived``).
 7. Options waiting for the writer are saved together, the last value of each, and so are lock
    words (one save of each queued at a time): anyone who may publish ``R/option/<name>`` (or
    lock, never refused) can send thousands a second, and each was a rewrite of the state file
@@ -209,6 +212,7 @@ from bridge.core.model import ErrorKind, Order, SettingValue, WindInfo
 from bridge.protocols.base import ModelSpec, SettingKind
 from bridge.runtime.state_store import StateStore
 from bridge.session.mailbox import Mailbox
+from bridge.session.wind import kept_start
 
 log = logging.getLogger(__name__)
 
@@ -319,16 +323,13 @@ class Kept:
         self._file_lock_place = self.lock_place
 
     def _storm_said(self, wind: bool) -> str:
-        """Rule 6: what a start does with the storm kept (wind.py rules 2, 3 and 7, as the
-        session takes it: session.py ``WindPark``)."""
+        """Rule 6: what a start does with the storm kept, in wind.py's words (``kept_start``:
+        rules 3 and 7, as the session's ``WindPark`` takes the storm)."""
         if not wind:
             return "a storm kept from the state file is let go: no wind_topic configured"
         said = "in a storm kept from the state file: motion refused until wind readings end it"
-        if self.storm_halted:  # (wind.py rule 3: the operator's STOP outlives the restart)
-            return f"{said}; its park, stopped by a STOP or lock ON, is not sent again"
-        if self.storm_arrived and self._spec.can_report_position:  # (wind.py rule 7)
-            return f"{said}; its park was reached: not sent again"
-        return f"{said}; parking again (its park was not seen reached)"
+        arrived = self.storm_arrived and self._spec.can_report_position  # (as session.py)
+        return f"{said}; {kept_start(halted=self.storm_halted, arrived=arrived)}"
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""

@@ -215,6 +215,19 @@ def unread(scene: Scene) -> bool:
     return scene.motion.state is MotionState.OFFLINE
 
 
+def kept_start(*, halted: bool, arrived: bool) -> str:
+    """What a start in a storm kept across a restart (runtime/kept.py rules 4 and 6) does with
+    its park, in the words the log says it with: as ``WindPark`` takes ``halted`` and
+    ``arrived`` (``arrived`` as the session hands it on: never a DCU-1's). A park seen reached
+    first: a STOP after it stopped no park (rule 1: still "parked for the storm"), and the
+    file holds both (review 109: such a start was said to have its park stopped)."""
+    if arrived:  # rule 7
+        return "its park was reached: not sent again"
+    if halted:  # rule 3: the operator's STOP outlives the restart
+        return "its park, stopped by a STOP or lock ON, is not sent again"
+    return "parking again (its park was not seen reached)"
+
+
 class WindPark:
     """Without a wind topic (``rig.wind`` None) it never does anything."""
 

@@ -25,11 +25,6 @@ from bridge.session.session import RotatorSession
 from tests.engine.test_wind_park_offline import parking, storm
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 109: a start in a storm whose park was reached, then a STOP, logs 'its "
-    "park, stopped by a STOP or lock ON' while the status says 'parked for the storm'",
-)
 def test_a_stop_after_the_park_was_reached_is_no_park_stopped_in_the_start_line(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
