@@ -55,13 +55,16 @@ Rules:
    and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
    the steps already under way or waiting, never for a flood of words after it.
 6. A lock kept from the state file is said in the log at start: motion will be refused. So
-   is a storm kept (rule 4), with what the start does with its park (sent again, or not: it
-   was reached, a STOP after that or none, or a STOP stopped it short), in the session's
-   words (session/wind.py ``kept_start``), or that it is let go (no ``wind_topic`` configured
-   any more). Review 106: a start in a storm kept turned the rotor to its park, 160 degrees,
+   is a storm kept (rule 4), with what the start does with its park (not sent again: it was
+   reached, a STOP after that or none, or a STOP stopped it short; or sent again, at once or
+   held back by the lock kept with it until a lock OFF), in the session's words
+   (session/wind.py ``kept_start``), or that it is let go (no ``wind_topic`` configured any
+   more). Review 106: a start in a storm kept turned the rotor to its park, 160 degrees,
    with nothing in the log naming the storm or the state file. Review 109: a park reached,
    then a STOP, was said "stopped by a STOP or lock ON" while the status said "parked for
-   the storm" (the file's ``halted`` read before its ``arrived``).
+   the storm" (the file's ``halted`` read before its ``arrived``), and a park the lock kept
+   ON holds back (session/wind.py rules 4 and 9: said waiting) was said "parking again"
+   while the rotor stood still.
 7. Options waiting for the writer are saved together, the last value of each, and so are lock
    words (one save of each queued at a time): anyone who may publish ``R/option/<name>`` (or
    lock, never refused) can send thousands a second, and each was a rewrite of the state file
@@ -329,7 +332,8 @@ class Kept:
             return "a storm kept from the state file is let go: no wind_topic configured"
         said = "in a storm kept from the state file: motion refused until wind readings end it"
         arrived = self.storm_arrived and self._spec.can_report_position  # (as session.py)
-        return f"{said}; {kept_start(halted=self.storm_halted, arrived=arrived)}"
+        park = kept_start(halted=self.storm_halted, arrived=arrived, locked=self.locked)
+        return f"{said}; {park}"  # (the lock is the file's: read above, rule 2)
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""

@@ -215,17 +215,27 @@ def unread(scene: Scene) -> bool:
     return scene.motion.state is MotionState.OFFLINE
 
 
-def kept_start(*, halted: bool, arrived: bool) -> str:
+def kept_start(*, halted: bool, arrived: bool, locked: bool) -> str:
     """What a start in a storm kept across a restart (runtime/kept.py rules 4 and 6) does with
     its park, in the words the log says it with: as ``WindPark`` takes ``halted`` and
-    ``arrived`` (``arrived`` as the session hands it on: never a DCU-1's). A park seen reached
-    first: a STOP after it stopped no park (rule 1: still "parked for the storm"), and the
-    file holds both (review 109: such a start was said to have its park stopped)."""
+    ``arrived`` (``arrived`` as the session hands it on: never a DCU-1's) and its step the
+    lock kept with it (``locked``). A park seen reached first: a STOP after it stopped no park
+    (rule 1: still "parked for the storm"), and the file holds both (review 109: such a start
+    was said to have its park stopped). A park owed under the lock kept ON waits for the lock
+    OFF (rules 4 and 9: said waiting, never parked; review 109: it was said "parking again"
+    while the rotor stood where the lock held it); one owed with no lock kept goes once the
+    controller answers, unless a lock ON comes first (the broker's, runtime/kept.py rule 10:
+    that park is not tried again, rule 3)."""
     if arrived:  # rule 7
         return "its park was reached: not sent again"
     if halted:  # rule 3: the operator's STOP outlives the restart
         return "its park, stopped by a STOP or lock ON, is not sent again"
-    return "parking again (its park was not seen reached)"
+    if locked:  # rules 4 and 9: the step sends nothing while locked
+        return f"its park (not seen reached) waits for {LOCK_OFF}: nothing turns until then"
+    return (
+        "parking again once the controller answers, unless a lock ON comes first (its park "
+        "was not seen reached)"
+    )
 
 
 class WindPark:

@@ -26,11 +26,6 @@ from bridge.session.session import RotatorSession
 from tests.engine.test_wind_park_offline import parking, storm
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 109: a start in a storm kept with the lock kept ON logs 'parking again' "
-    "while the park waits for the lock OFF and the rotor does not move",
-)
 def test_a_start_locked_in_a_storm_does_not_say_it_parks(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
