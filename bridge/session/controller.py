@@ -177,20 +177,12 @@ Rules:
    always safe), and so do each as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
    error says the readings do not agree and the rotor was stopped for it (at most every
-   ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. From the
-   first such stop on they are asked at the idle rate, not the moving rate (the rotor is
-   stopped; review 105: a sensor failed before the start was asked some 400 times a minute for
-   good, where the same failure after a confirmed start gets the idle rate's 80), and the stop
-   goes again at each FIRST_UNWATCHED_READINGS of those (a line that comes right confirms on
-   two of them, within ``doubt_deg`` alone, as at rest). (A stop for
+   ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. (A stop for
    one unconfirmed reading past a limit, e9e2e51a, was taken back: it stopped every healthy
    start of a rotor resting outside a limit with a false error, cut a turn back inside the
    limit short, and one garble at rest spent it for the connection: review 103.)
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
-   asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on
-   (the idle rate's, from then on, also where a start's found turn is not judged yet, motion.py
-   ``found_unjudged``: readings that disagree cannot judge it; review 105, a line gone bad as a
-   clean start was shown idle was asked at the moving rate for good);
+   asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on;
    the bearing shown is the last two readings agreed on. A reading asked again at once agrees
    with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its speed
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
@@ -1342,8 +1334,7 @@ class Controller:
         while the rotor turned (nothing it stood at to doubt it against), is believed when the
         next agrees, or the one after it (the one between then line noise), within
         ``doubt_deg`` alone, the first of the two taken, however they were asked: at once,
-        DOUBTS_TOLD in a row at most, then at the moving rate until their unwatched stop, the
-        idle rate after it (``poll``; review 100: after
+        DOUBTS_TOLD in a row at most, then at the moving rate (``poll``; review 100: after
         three, at the usual polls, a rotor turning at its nominal speed never had two readings
         agree, and its turn nobody asked for ran past ``az_min_deg`` unjudged). Further apart
         they may be a turn, told by FIRST_TURN_READINGS on its line (``_steady``), never by two
@@ -2180,16 +2171,12 @@ class Controller:
                 )
             why += self._late_words(link, now - unread_s)
             self.notes.append(Report(ErrorKind.SERIAL, why))
-        m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate,
-        # while readings can judge it: not once DOUBTS_TOLD at rest in a row disagree, rule 9,
-        # review 105; a connection's first readings that go on disagreeing too: it may be
-        # turning, until their unwatched stop)
-        unjudged = mo.found_unjudged(m) and self._doubts_in_row < DOUBTS_TOLD
-        busy = busy or m.state is mo.MOVING or now < self._watch_until or unjudged
-        first = self._doubted.first and not self._doubted.at_once  # (review 103: the poll
-        if first and self._first_unconfirmed < FIRST_UNWATCHED_READINGS:  # after the
-            busy = True  # DOUBTS_TOLD-th was set on the idle grid when it was asked), until
-            link.poll_every(now, cfg.moving_poll_interval_s)  # the rotor's unwatched stop
+        m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
+        # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
+        busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
+        if self._doubted.first and not self._doubted.at_once:  # (review 103: the poll after
+            busy = True  # the DOUBTS_TOLD-th was set on the idle grid when it was asked)
+            link.poll_every(now, cfg.moving_poll_interval_s)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 

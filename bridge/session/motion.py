@@ -495,7 +495,7 @@ def found_unjudged(m: Motion) -> bool:
     """Rule 4: a bridge just started, its first reading taken, and its readings have not yet
     shown whether the rotor turns (a move; none on each axis for its own ``axis_seen_s``, or
     at rest sooner by a ``settle_s`` of the user's, ``tick``): it is asked at the moving rate
-    meanwhile (controller.py; while its readings at rest agree: controller.py rule 9), so that a
+    meanwhile (controller.py), so that a
     turn found is told from a hand's later one at once on every controller (a Rot2Prog's idle
     poll is 6 s)."""
     return m.carried and m.state is not MOVING and m.state is not OFFLINE

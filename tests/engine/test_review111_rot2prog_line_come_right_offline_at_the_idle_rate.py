@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.test_review111_rot2prog_unwatched_restop_at_the_idle_rate import (
     every_frame_off,
 )
@@ -30,11 +28,6 @@ GARBLED_S = 60.0  # a minute of disagreeing first readings: several unwatched st
 SOUND_S = 3.0  # a healthy start's confirmation (0.94 s) with room: a few exchanges (virtual)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 111: a Rot2Prog whose first readings disagreed until the unwatched stop is "
-    "shown offline for 15 s after its line comes right (two idle polls of 9.3 s)",
-)
 def test_a_rot2prog_line_that_comes_right_is_confirmed_within_a_few_exchanges(rig: Rig) -> None:
     v = rig("rot2prog", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.to_host = every_frame_off(OFFSETS)

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -62,12 +60,6 @@ def every_frame_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 111: a Rot2Prog whose first readings never agree is stopped again only every "
-    "eight idle polls (up to 74 s) after its first unwatched stop: a hand turn runs past "
-    "az_min_deg",
-)
 def test_a_hand_turn_on_a_garbling_rot2prog_start_is_stopped_before_the_limit(rig: Rig) -> None:
     v = rig(
         "rot2prog",
