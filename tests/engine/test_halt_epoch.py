@@ -360,6 +360,20 @@ def test_a_halt_a_connection_read_stands_for_the_express_s_of_its_kind_only(benc
     assert lane.read_since("v", "lock", always)
 
 
+def test_a_lock_on_the_lock_lane_read_stands_for_no_stop(bench: Bench) -> None:
+    """Review 108: the lock lane subscribes to ``R/lock`` alone (lastword.py rule 16), so a lock
+    ON it read, and its topics kept since, says nothing of a STOP only the express read: that
+    STOP is the bridge's to carry out (it had been dropped, and the rotor turned on)."""
+
+    def lock_lane_only(via: str, t: float) -> bool:  # the main connection and stop lane away
+        return via == "lock"
+
+    halts = bench.lane
+    halts.on_lane("rotor/v/lock", b"ON", False)
+    assert halts.read_since("v", "lock", lock_lane_only)  # (it stands for a lock ON)
+    assert not halts.read_since("v", "stop", lock_lane_only)
+
+
 def test_a_group_s_stop_read_on_the_main_connection_stands_for_each_member_s(
     bench: Bench,
 ) -> None:

@@ -102,11 +102,6 @@ class _Cutter:
             s.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 108: a STOP only the stop express read is dropped because the lock lane "
-    "once read a lock ON: the rotor turns on",
-)
 def test_a_stop_only_the_express_read_is_not_vetoed_by_a_lock_on_of_the_lock_lane(
     tmp_path: Path, broker: Mosquitto
 ) -> None:

@@ -245,9 +245,15 @@ class Halts:
         is older than the halt it read. A stop or a lock ON stands for a stop; only a lock ON
         for a lock ON (a review: a STOP read after a lock ON only the express had would have
         left the rotator unlocked). An attack pass: a second after a broker restart, the
-        express's second stop dropped a target sent after a STOP both connections had read."""
+        express's second stop dropped a target sent after a STOP both connections had read.
+        Only a connection that subscribes to that ``kind``'s topic vouches for it: the main
+        connection, and the lane of that kind (lastword.py rule 16); review 108: the lock lane
+        never reads a STOP, so its lock ON (since turned OFF, a target sent) had let a STOP only
+        the express read be dropped, and the rotor turned on. A lock ON the main connection read
+        still stands for a stop even after an OFF: a STOP published after it reached that
+        connection too (carried out there), and one published before it is older than it."""
         kinds = ("stop", "lock") if kind == "stop" else ("lock",)
-        for via in ("main", "lane", "lock"):
+        for via in ("main", _VIA[kind]):
             for halt in kinds:
                 t = self._read.get((via, rotator_id, halt))
                 if t is not None and heard_since(via, t):
