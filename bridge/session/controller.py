@@ -174,7 +174,11 @@ Rules:
    start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two
    readings, four for a steady turn, eight with one garble among those) get a stop
    (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
-   always safe), and so do each as many more
+   always safe; but checked only until a reading a resend time after it shows the rotor still,
+   then let go as a released lock's stop, ``_release_check``, unless it came over another stop
+   still checked, an operator's or the lock's: review 107, checked until the next target, a
+   hand at the panel ten minutes after the line came right was stopped, unsaid), and so do each
+   as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
    error says the readings do not agree and the rotor was stopped for it (at most every
    ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. (A stop for
@@ -773,6 +777,7 @@ class Controller:
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
+        self._unwatched_stopping = False  # rule 9: the stop being written is the unwatched one
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._cut_move = True  # link.py rule 13: a target the last connection wrote may be cut
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
@@ -1024,11 +1029,14 @@ class Controller:
         stop is owed (runtime/composite.py rule 8)."""
         return self.link is None and self._still_at_close is False
 
-    def stop(self, now: float, merge: bool = False, ends_pass: bool = False) -> None:
+    def stop(
+        self, now: float, merge: bool = False, ends_pass: bool = False, unwatched: bool = False
+    ) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
         is closed, as the first frame it gets (stops.py rule 3); ``ends_pass``: a pass's last
-        try (stops.py rule 4)."""
+        try (stops.py rule 4); ``unwatched``: rule 9's, let go once readings show it had."""
         self._passing, self._pass_ends = False, ends_pass  # (else a stop anew: checked as any)
+        self._unwatched_stopping = unwatched  # (any other: checked as an operator's)
         self._retry = None  # rule 11: a stop ends the target's tries
         if self.link is None:
             self.stops.owed = True
@@ -1061,6 +1069,9 @@ class Controller:
         stop rules and the next poll learn it alike (a review found the owed stop's own copy
         of these lines had lost two of them)."""
         self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        if self._unwatched_stopping:  # rule 9: the unwatched stop, let go as a released
+            self._unwatched_stopping = False  # lock's once a reading shows it had (review 107)
+            self._released_stop_t = self.motion.stop_sent_t
         self._connect_guard = False  # (rule 10: a stop's own checks watch it from now)
         self._lost_aim = None  # (rule 13: a stop is all its rest would get)
         self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
@@ -1410,7 +1421,10 @@ class Controller:
         starts of a rotor resting outside a limit, and one garble spent it)."""
         self._unwatched_due = False
         count = self._first_unconfirmed
-        self.stop(now)
+        m = self.motion  # (let go once readings confirm, ``_release_check``: not where it
+        # stands for another stop still checked, an operator's or the lock's; review 107: kept
+        # checked until the next target, a hand at the panel minutes later was stopped, unsaid)
+        self.stop(now, unwatched=m.stop_sent_t is None or m.stop_sent_t == self._released_stop_t)
         if now - self._unwatched_said_t < self.cfg.junk_report_interval_s:
             log.info("%s: %d first readings in a row disagree: stopped again", self.name, count)
             return

@@ -37,9 +37,11 @@ Rules:
    must not leave the rotor turning. The price: a move by hand long after such a stop is stopped
    once too; not after the lock is released (controller.py ``lock_released``: the lock's stop is
    checked while it holds, and its release says the tower work is over; a lock kept across a
-   restart owes its stop on the first connect, session.py rule 11). Readings the doubt does
-   not take (controller.py rule 9) show no turn to this check, and a replug or a silence
-   rebuilds the motion without the lock's stop: rule 7 sends it again then.
+   restart owes its stop on the first connect, session.py rule 11), nor after the stop the
+   bridge sends first readings that never confirm (controller.py rule 9: nobody pressed STOP;
+   let go as a released lock's once a reading shows the rotor still, review 107). Readings the
+   doubt does not take (controller.py rule 9) show no turn to this check, and a replug or a
+   silence rebuilds the motion without the lock's stop: rule 7 sends it again then.
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.test_review105_first_readings_polled_at_the_moving_rate_forever import failing
 from tests.engine.virtual import VirtualRotator
 
@@ -52,11 +50,6 @@ def test_after_a_clean_start_a_hand_turn_is_followed(rig: Rig) -> None:
     assert stops == [] and v.truth().az_deg == HAND_DEG, (stops, said)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: after a garbled start's unwatched stop, a hand turn at the panel ten "
-    "minutes later (line long sound, GS-232B, unasked_moves follow) is stopped, unsaid",
-)
 def test_after_a_garbled_start_a_hand_turn_much_later_is_followed(rig: Rig) -> None:
     v = rig("gs232b", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.to_host = failing()
