@@ -181,7 +181,9 @@ Rules:
    as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
    error says the readings do not agree and the rotor was stopped for it (at most every
-   ``junk_report_interval_s``). They stay unconfirmed: nothing is made from them. (A stop for
+   ``junk_report_interval_s``, a connection's first always: review 107, a port replugged
+   within the interval had its stops written every 1.6 s, unsaid, R/error's last word "port
+   unplugged"). They stay unconfirmed: nothing is made from them. (A stop for
    one unconfirmed reading past a limit, e9e2e51a, was taken back: it stopped every healthy
    start of a rotor resting outside a limit with a false error, cut a turn back inside the
    limit short, and one garble at rest spent it for the connection: review 103.)
@@ -923,6 +925,7 @@ class Controller:
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
         self._steady_from, self._first_unconfirmed = None, 0
+        self._unwatched_said_t = -math.inf  # rule 9: a new connection's first such stop said
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)
         self._misfits = 0  # rule 6: counted anew

@@ -20,8 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
 from tests.engine.virtual import VirtualRotator
@@ -34,11 +32,6 @@ UNPLUGGED_S = 2.0  # a flaky adapter's drop (virtual time)
 WATCH_S = 10.0  # several stops of the new connection, well inside junk_report_interval_s
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: replugged within junk_report_interval_s, a garbling line's rotor is "
-    "stopped every 1.6 s with nothing said: R/error's last word is 'port unplugged'",
-)
 def test_the_stops_of_a_replugged_line_that_never_confirms_are_said(rig: Rig) -> None:
     v = rig("easycomm2", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.to_host = every_answer_off(OFFSETS)
