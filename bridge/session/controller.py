@@ -180,7 +180,8 @@ Rules:
    hand at the panel ten minutes after the line came right was stopped, unsaid), and so do each
    as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
-   error says the readings do not agree and the rotor was stopped for it (at most every
+   error says the readings do not agree (the last in true bearings, pointing.py: review 107
+   found it raw) and the rotor was stopped for it (at most every
    ``junk_report_interval_s``, a connection's first always: review 107, a port replugged
    within the interval had its stops written every 1.6 s, unsaid, R/error's last word "port
    unplugged"). They stay unconfirmed: nothing is made from them. (A stop for
@@ -1432,8 +1433,10 @@ class Controller:
             log.info("%s: %d first readings in a row disagree: stopped again", self.name, count)
             return
         self._unwatched_said_t = now  # (its own clock: the doubt's words keep rule 6's)
+        az = self.cfg.aim.true_of(reply.az_deg)  # (in true bearings, as every bearing shown:
+        last = f"{az:g}" if reply.el_deg is None else f"{az:g}/{reply.el_deg:g}"  # review 107)
         why = (
-            f"{count} first readings in a row do not agree (the last {_where(reply)}): the "
+            f"{count} first readings in a row do not agree (the last {last}): the "
             "bridge cannot watch the rotor (its limits, a stall, a turn nobody asked for), so "
             "it was stopped, and is stopped again while they go on disagreeing: a noisy line "
             "or a failing position sensor?"

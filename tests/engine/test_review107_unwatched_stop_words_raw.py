@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
 from tests.engine.virtual import VirtualRotator
@@ -32,11 +30,6 @@ GARBLED_S = 3.0  # the first unwatched stop and its words (virtual time)
 EIGHTH_TRUE = "310"  # the eighth answer, raw 150 + 60, in true bearings
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: with az_offset_deg set, the unwatched stop's R/error names the raw "
-    "reading ('the last 210/0') where every other bearing shown is true (310)",
-)
 def test_the_unwatched_stop_names_the_last_reading_in_true_bearings(rig: Rig) -> None:
     v = rig(
         "easycomm2",
