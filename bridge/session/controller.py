@@ -231,13 +231,15 @@ Rules:
      ``AM1;``, a probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said
      why): the first such turn since the last target written, if the rotor rested further than
      ``tolerance_deg + noise_deg`` from that target (stopped short of it: a STOP or a lock mid-turn,
-     a pass). That first turn ends the guard, stopped or not, and so does the lock's release (a move
-     by hand after it is the operator's: ``lock_released``): a hand at the panel after a STOP is
-     stopped once, then followed; a poll garbled after a move by hand is not caught (writing the
-     rest bearing to the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand
-     at the panel short and turned a rotor at 360 a full circle). The target it rested short of
-     is in the status (``short_of_deg``) and outlives a restart (runtime/kept.py rule 9): the
-     next session starts guarded, its first readings too (``keep_short_of``).
+     a pass, rule 9's unwatched stop). That first turn ends the guard, stopped or not (not a turn
+     the first readings back find going on across a reconnect: nobody's new turn; review 107, a
+     replug mid-turn forgot the guard of the turn a stop then cut short), and so does the lock's
+     release (a move by hand after it is the operator's: ``lock_released``): a hand at the panel
+     after a STOP is stopped once, then followed; a poll garbled after a move by hand is not caught
+     (writing the rest bearing to the board, ``AP1xxx;``, was tried and taken back: a review found
+     it cut a hand at the panel short and turned a rotor at 360 a full circle). The target it rested
+     short of is in the status (``short_of_deg``) and outlives a restart (runtime/kept.py rule 9):
+     the next session starts guarded, its first readings too (``keep_short_of``).
    While such a turn would be stopped, a poll left unanswered or answered in part at rest (what
    a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
    polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
@@ -1697,7 +1699,11 @@ class Controller:
             ):
                 self._rested = (was.position_deg, was.el_position_deg)
                 self._rested_at_start = first and self._guard_at_start
-            self._guarded = False  # (the first turn ends the guard, stopped or not)
+            if was.state is not mo.OFFLINE:  # (the first turn ends the guard, stopped or not;
+                self._guarded = False  # not one the first readings back find going on across
+                # a reconnect, nobody's new turn: review 107, a turn the unwatched stop, or a
+                # STOP owed to the reconnect, cut short lost its guard, and a poll garbled into
+                # AM1; later ran the Rotor-EZ on to its old target)
         rested = self._rested
         if rested is None or m.position_deg is None:
             return

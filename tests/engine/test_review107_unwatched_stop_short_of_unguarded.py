@@ -23,8 +23,6 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -62,11 +60,6 @@ def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: a Rotor-EZ turn the unwatched stop cut short after a replug is not "
-    "guarded: a poll garbled into AM1; runs it on to the old target, 180 degrees, unsaid",
-)
 def test_a_turn_cut_short_by_the_unwatched_stop_is_not_run_on_by_a_garbled_poll(
     rig: Rig,
 ) -> None:
