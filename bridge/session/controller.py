@@ -172,7 +172,11 @@ Rules:
    at the start unwatched, and it ran from 150 past ``az_min_deg`` 60 to its end). So
    FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
    start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two
-   readings, four for a steady turn, eight with one garble among those) get a stop
+   readings, four for a steady turn, eight with one garble among those; a poll answered
+   garbled past parsing counts as one, ``_garbled_first``: review 107, a line that tore every
+   answer had none counted, and a turn at the start ran past ``az_min_deg`` to its end; a
+   controller that answers nothing at all is rule 2's silence, and one that reports no
+   position never has first readings) get a stop
    (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
    always safe; but checked only until a reading a resend time after it shows the rotor still,
    then let go as a released lock's stop, ``_release_check``, unless it came over another stop
@@ -777,6 +781,7 @@ class Controller:
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last three first, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
+        self._first_garbled = False  # ... some of them answers garbled past parsing
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... the last two of three taken as a turn: the next reading may go on with it
@@ -927,7 +932,7 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
-        self._steady_from, self._first_unconfirmed = None, 0
+        self._steady_from, self._first_unconfirmed, self._first_garbled = None, 0, False
         self._unwatched_said_t = -math.inf  # rule 9: a new connection's first such stop said
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)
@@ -1397,8 +1402,8 @@ class Controller:
             self._turn_trusted = True  # (its next readings as a turn's, ``_doubts``)
             self._steady_from = (line[-2], line[-1])
             return Doubt.TAKEN  # (the last of them: where it is now)
-        if not said:
-            self._doubts_in_row = self._first_unconfirmed = 0
+        if not said:  # (the count goes on: answers garbled past parsing, ``_garbled_first``)
+            self._doubts_in_row = 0
         self._doubts_in_row += 1
         self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: _unwatched_stop)
         self._unwatched_due = self._first_unconfirmed % FIRST_UNWATCHED_READINGS == 0
@@ -1416,7 +1421,7 @@ class Controller:
             )
         return Doubt.ASK if at_once else Doubt.WAIT
 
-    def _unwatched_stop(self, reply: PositionReply, now: float) -> None:
+    def _unwatched_stop(self, reply: PositionReply | None, now: float) -> None:
         """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row (and each as many more
         while they go on) that confirmed none: no limit, stall or turn nobody asked for can be
         judged from them, so the rotor is stopped (a stop is always safe; the line's and the
@@ -1435,8 +1440,10 @@ class Controller:
             log.info("%s: %d first readings in a row disagree: stopped again", self.name, count)
             return
         self._unwatched_said_t = now  # (its own clock: the doubt's words keep rule 6's)
-        az = self.cfg.aim.true_of(reply.az_deg)  # (in true bearings, as every bearing shown:
-        last = f"{az:g}" if reply.el_deg is None else f"{az:g}/{reply.el_deg:g}"  # review 107)
+        last = "garbled past reading"  # (``_garbled_first``)
+        if reply is not None:  # (in true bearings, as every bearing shown: review 107)
+            az = self.cfg.aim.true_of(reply.az_deg)
+            last = f"{az:g}" if reply.el_deg is None else f"{az:g}/{reply.el_deg:g}"
         why = (
             f"{count} first readings in a row do not agree (the last {last}): the "
             "bridge cannot watch the rotor (its limits, a stall, a turn nobody asked for), so "
@@ -1490,6 +1497,7 @@ class Controller:
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
+        self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:
@@ -1928,7 +1936,7 @@ class Controller:
                     self._unseen()
                 if self.options.values and link.asking_since is not None:  # options.py
                     self.options.unanswered = True  # rule 1: nothing came: was it off?
-                self._given_up(link.give_up_reply(now))
+                self._given_up(link.give_up_reply(now), now)
                 if self._watching() and mo.at_rest(self.motion):  # rule 10: a poll left
                     self._watch_until = now + self.cfg.motion.settle_s  # unanswered may have
                     link.poll_every(now, self.cfg.moving_poll_interval_s)  # been a command
@@ -1941,9 +1949,9 @@ class Controller:
             self._junk(*junk, now)
         again = link.end_garbled(now)  # link.py rule 11: a garbled reply the codec ended
         if again is not None:
-            self._given_up(again)
+            self._given_up(again, now)
 
-    def _given_up(self, again: bool) -> None:
+    def _given_up(self, again: bool, now: float) -> None:
         """The owed reply is given up, and asked again at once if ``again`` (link.py rule 11:
         it came garbled): a reading doubted keeps its window as asked at once then, not at
         the next poll (rule 9: a review found the ask's answer lost, a reading at the next idle
@@ -1951,6 +1959,27 @@ class Controller:
         idle rate: readings of a rotor turned by hand disagreed, the bearing stale for 10 s)."""
         if not again:
             self._doubted = self._doubted._replace(at_once=False)
+        link = self.link
+        if link is not None and link.poll_garbled and self._first_phase():
+            self._garbled_first(now)
+
+    def _first_phase(self) -> bool:
+        """Rule 9: a reading now would be a connection's first (``_doubts_first``)."""
+        m = self.motion
+        stands = m.anchor_deg
+        if stands is None and self._rest_at_close and m.state is not mo.MOVING:
+            stands = m.position_deg
+        return stands is None and not self.answering
+
+    def _garbled_first(self, now: float) -> None:
+        """Rule 9: a poll answered garbled past parsing where a connection's first reading is
+        awaited is a first reading that confirmed none, counted toward the unwatched stop
+        (review 107: a line that tore every answer had none counted, and a turn at the start
+        ran past ``az_min_deg`` to its end)."""
+        self._first_unconfirmed += 1
+        self._first_garbled = True
+        if self._first_unconfirmed % FIRST_UNWATCHED_READINGS == 0:
+            self._unwatched_stop(None, now)
 
     def tick(self, now: float) -> None:
         """The motion machine's clock (rule 4: not during a slew), and an enable owed. Not
@@ -2200,8 +2229,9 @@ class Controller:
         m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
         # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
         busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
-        if self._doubted.first and not self._doubted.at_once:  # (review 103: the poll after
-            busy = True  # the DOUBTS_TOLD-th was set on the idle grid when it was asked)
+        garbled = self._first_garbled and self._first_phase()  # (answers garbled past reading)
+        if garbled or (self._doubted.first and not self._doubted.at_once):  # (review 103: the
+            busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)

@@ -266,6 +266,7 @@ class Link:
         self._first_asked_t = -math.inf  # ... the first of them since the last valid reply
         self._last_axis: bytes | None = None
         self._garbled = False  # rule 11: the reply owed now came garbled
+        self.poll_garbled = False  # ... the exchange closed last was a poll's, answered garbled
         self._garbled_t = -math.inf  # rule 11: the last garbled answer
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
@@ -671,6 +672,7 @@ class Link:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll
         was not such a re-poll and a stop can go at any time. True if it is."""
         garbled, self._garbled = self._garbled, False
+        self.poll_garbled = garbled and self._polled_t == self._asked_t  # (controller.py rule 9)
         if not garbled or self._slew is not None:
             return False
         if not (self.spec.full_duplex or self.spec.stop_interrupts):

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -36,11 +34,6 @@ def torn(data: bytes, now: float) -> bytes:
     return data.replace(b".", b"?")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: an Easycomm turning at the start whose every answer is garbled past "
-    "parsing gets no unwatched stop and runs from 150 past az_min_deg 60 to 5",
-)
 def test_a_turn_whose_answers_never_parse_is_stopped_before_the_limit(rig: Rig) -> None:
     v = rig(
         "easycomm2",
