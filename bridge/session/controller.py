@@ -176,7 +176,9 @@ Rules:
    garbled past parsing counts as one, ``_garbled_first``: review 107, a line that tore every
    answer had none counted, and a turn at the start ran past ``az_min_deg`` to its end; a
    controller that answers nothing at all is rule 2's silence, and one that reports no
-   position never has first readings) get a stop
+   position never has first readings; counted across a replug until a reading is taken:
+   review 107, a flaky adapter's connections of seven readings each never reached eight) get a
+   stop
    (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
    always safe; but checked only until a reading a resend time after it shows the rotor still,
    then let go as a released lock's stop, ``_release_check``, unless it came over another stop
@@ -932,7 +934,9 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
-        self._steady_from, self._first_unconfirmed, self._first_garbled = None, 0, False
+        self._steady_from = None  # (rule 9: the unconfirmed count goes on until a reading
+        # is taken, ``_reading``; review 107: a flaky adapter's connections of seven readings
+        # each never reached FIRST_UNWATCHED_READINGS, and a turn at the start ran to its end)
         self._unwatched_said_t = -math.inf  # rule 9: a new connection's first such stop said
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed once the next agrees (``_doubts_first``)

@@ -20,8 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
 from tests.engine.virtual import VirtualRotator
@@ -35,12 +33,6 @@ DOWN_S = 1.0  # each drop (virtual time)
 WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 107: a garbling line whose adapter drops every second (seven readings a "
-    "connection) never reaches the unwatched stop's eight: the start's turn runs past "
-    "az_min_deg to its end",
-)
 def test_a_garbling_start_on_a_flaky_adapter_is_stopped_before_the_limit(rig: Rig) -> None:
     v = rig(
         "easycomm2",
