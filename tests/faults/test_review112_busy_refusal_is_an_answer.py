@@ -1,0 +1,122 @@
+"""Review 112: a broker that refuses new connections because it is overloaded ("server busy",
+a connection quota or rate limit reached) has its refusal taken as the answer that proves the
+bridge's path dead (paho_client.py rule 12: "any CONNACK, an acceptance or a refusal"), and
+the bridge ends the connections it had for ones the broker will not take.
+
+An overloaded broker (EMQX, HiveMQ, a cloud broker's quota) passes what it routes late and
+answers a new connection at once with a refusal (MQTT 5 0x89 server busy, 0x97 quota exceeded,
+0x9F connection rate exceeded; 3.1.1's 3, server unavailable). The main connection is silent
+(its heartbeat stuck in the broker's backlog), the probe is refused at once: "answered", the
+verdict is a dead path, and the main connection, both lanes and the express are ended. Their
+new connections are refused as the probe was, and the STOP the broker had already put on the
+old ones (QoS 1, unacknowledged) goes with their sessions: when the broker catches up nothing
+of the bridge is there to have it, and the rotor turns on. Kept, the connections would have
+had it then. A refusal for load says the broker lives, not that the bridge's path is dead.
+
+The overload is the test's proxy's: the streams open at its start pass nothing until it ends
+(then all of it, in order: the broker's backlog delivered), and a new connection is answered
+by a CONNACK refusing it as busy, as the broker's own front would.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.faults.test_review112_stop_lost_on_a_stalled_path import StallProxy
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt_proxy import CONNECT, _client_id, _packets, _Stream
+from tests.support.rig import Rig
+from tests.support.tap import near_deg
+from tests.support.waiting import slow, wait_until
+
+KEEPALIVE_S = 30  # the bridge's default keep-alive: the kept connections outlive the overload
+BUSY_S = 15.0  # the overload's length: past the verdict, well within the keep-alive
+PROMPT_S = 10.0  # a STOP reaches the controller within this once the broker caught up
+SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
+SERVER_BUSY_5 = b"\x20\x03\x00\x89\x00"  # CONNACK, MQTT 5: 0x89 server busy
+SERVER_UNAVAILABLE_311 = b"\x20\x02\x00\x03"  # CONNACK, 3.1.1: 3 server unavailable
+
+
+class BusyProxy(StallProxy):
+    """``stall`` as StallProxy's, and while stalled a new connection is refused as busy."""
+
+    busy = False
+
+    def stall(self) -> None:
+        super().stall()
+        self.busy = True
+
+    def unstall(self) -> None:
+        self.busy = False
+        super().unstall()
+
+    def _up(self, s: _Stream) -> None:
+        if self.busy:  # a connection made during the overload: refused, nothing forwarded
+            buf = bytearray()
+            with contextlib.suppress(OSError):
+                while data := s.client.recv(65536):
+                    buf += data
+                    for packet in _packets(buf):
+                        if packet[0] >> 4 == CONNECT:
+                            s.client_id = _client_id(packet)
+                            v5 = b"MQTT\x05" in packet[:16]
+                            s.client.sendall(SERVER_BUSY_5 if v5 else SERVER_UNAVAILABLE_311)
+                            s.client.close()
+                            s.server.close()
+                            return
+            return
+        super()._up(s)
+
+    def _down(self, s: _Stream) -> None:
+        if self.busy:
+            return  # (its server side closed by ``_up``)
+        super()._down(s)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 112: an overloaded broker's 'server busy' refusal of the probe is taken for a "
+    "dead path: the connections are ended, the new ones refused, and a STOP the broker held for "
+    "the old ones is lost: the rotor turns on",
+)
+def test_a_stop_an_overloaded_broker_held_reaches_the_rotor_when_it_catches_up(
+    tmp_path: Path,
+) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = BusyProxy(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # the operator's phone, on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.express = True
+            rig.mqtt_extra = {"keepalive_s": KEEPALIVE_S}
+            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.lane.connected.is_set, 10, "the stop lane up")
+            wait_until(app.express.up.is_set, 10, "the stop express up")
+            probe.publish("rotor/target", "300")  # a long turn (145 s)
+            emu.wait_for(lambda s: s.is_moving, slow(10))
+            proxy.stall()  # the broker overloaded: its backlog, new connections refused
+            try:
+                assert probe.publish("rotor/stop", "")  # the operator's STOP, taken
+                time.sleep(BUSY_S)  # the overload: the fault's length (not a deadline)
+            finally:
+                proxy.unstall()
+            with contextlib.suppress(AssertionError, TimeoutError):
+                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+            s = emu.state()
+            assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
+                f"a STOP the broker took during a {BUSY_S:g} s overload (new connections "
+                f"refused as busy) did not stop the rotor once it caught up: it turns on "
+                f"({s.az_deg:.0f} deg); connections remade for a 'dead path': "
+                f"{app.client.redials}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
