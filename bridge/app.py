@@ -77,7 +77,7 @@ from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection
 from bridge.interfaces.mqtt.express import Express
 from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.interfaces.mqtt.heartbeat import StationTime
-from bridge.interfaces.mqtt.lane import StopLane, lane_client_id
+from bridge.interfaces.mqtt.lane import StopLane
 from bridge.interfaces.mqtt.payloads import ConsoleFacts
 from bridge.interfaces.mqtt.service import MqttService, never_published
 from bridge.interfaces.mqtt.stale import StaleTopics
@@ -311,8 +311,6 @@ class App:
             on_refused=self._refused,
             fence_topic=self.topics.bridge_fence,  # client.py rule 16
             on_late=self._info,  # client.py rule 19
-            probe_id=lane_client_id(settings.mqtt, "path"),  # client.py rule 21
-            on_dead_path=self._dead_path,
         )
         self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
@@ -628,14 +626,6 @@ class App:
         if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since, early):
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
-
-    def _dead_path(self) -> None:
-        """interfaces/mqtt/client.py rule 21: the main connection found the path under the
-        bridge's connections dead and remade itself: the lanes and the express too."""
-        for lane in (self.lane, self.lock_lane):
-            if lane.redial():
-                log.info("%s made again (a dead path)", lane.name)
-        self.express.redial()
 
     def _lanes_first(self) -> None:
         """interfaces/mqtt/lane.py rule 4: the main connection waits for each lane in turn."""

@@ -10,7 +10,7 @@ each written out in the module that keeps it:
   QoS 0; 5 short callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one
   connection (the takeover back-off); 9 TCP quick-ack after every read; 17 an optional
   subscription's denial said once, no problem; 18 the largest packet the broker may send,
-  said in CONNECT; 20 a connection remade at once for a dead path.
+  said in CONNECT.
 - owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,
@@ -109,18 +109,6 @@ each written out in the module that keeps it:
    first design said it after 10 s of beats not back, whatever held them). It costs one
    message read every HEARTBEAT_S, and a clock reading and the echo's lock at each round of
    the network thread.
-21. A dead path under the bridge's connections (heartbeat.py rule 12, attack 32) is ended, not
-   waited out on the keep-alive: while this connection is silent (a beat out through QUIET_S
-   of quiet, and quiet on) ``_tick`` starts a probe (``PathWatch``) on a thread of its own,
-   a connection with a client id of its own (``probe_id``: lane.py's ``rpath-``; any CONNACK,
-   a refusal too, is an answer), and once the broker answered it and this connection saw
-   quiet past that answer, it is remade at once (connection.py rule 20), said at WARNING, and
-   ``on_dead_path`` (on a thread of its own) has the stop and lock lanes and the express
-   remade too: they ride the same path, publish little and would wait their own keep-alive.
-   A STOP published before the new connections subscribed is lost (a clean session keeps
-   nothing for them, connection.py rule 1): the promise is the connections back within
-   QUIET_S + HEARTBEAT_S + 2 s (rule 11's judgement) and a probe's round trip, a poll and a
-   connect of the path dying (docs/reliability.md), not the STOP pressed before that.
 
 Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
 cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
@@ -149,11 +137,9 @@ from bridge.interfaces.mqtt.claim import Claim
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
 from bridge.interfaces.mqtt.heartbeat import (
-    PROBE_WAIT_S,
     QUIET_S,
     Beat,
     Echo,
-    PathWatch,
     beat_payload,
     beat_properties,
 )
@@ -167,7 +153,6 @@ from bridge.interfaces.mqtt.look import (
 )
 from bridge.interfaces.mqtt.owned import FOREIGN_LOG_S, OwnedTopics, matcher
 from bridge.interfaces.mqtt.owned import SETTLE_AFTER_CONNECT_S as SETTLE_AFTER_CONNECT_S
-from bridge.interfaces.mqtt.paho_client import answers
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -231,8 +216,6 @@ class MqttClient(Connection):
         wall: Callable[[], float] = time.time,
         station: str | None = None,
         on_late: Callable[[str, bool], None] | None = None,
-        probe_id: str | None = None,
-        on_dead_path: Callable[[], None] | None = None,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
@@ -317,10 +300,6 @@ class MqttClient(Connection):
         self._late_lock = threading.Lock()  # rule 19: one report at a time, the last verdict
         self._late_now = False  # rule 19: the verdict (paho's thread writes it)
         self._late_said: str | None = None  # rule 19: as said (under ``_late_lock``)
-        self._probe_id = probe_id  # rule 21: the probe's client id (None: no probe)
-        self._path = PathWatch()  # rule 21 (under ``_echo_lock``)
-        self._on_dead_path = on_dead_path
-        self.redials = 0  # rule 21: connections remade for a dead path, so far
 
     @property
     def problems(self) -> list[str]:
@@ -557,7 +536,6 @@ class MqttClient(Connection):
             self._held.extend(held)  # a look that never ended leaves its own
             with self._echo_lock:
                 self._echo.connected()  # rule 19
-                self._path.connected()  # rule 21
             self._owned.connected()
             look = self._look
             self._look_lost = False  # rule 16: judged anew
@@ -622,16 +600,6 @@ class MqttClient(Connection):
             if due:
                 echo.sent(payload, now)  # rule 19 (before it can come back)
             late, unread = echo.late(now) is not None, echo.unread(now)
-            probe = dead = False
-            if self._probe_id is not None:  # rule 21
-                probe = self._path.due(now, echo.silent(now))
-                dead = self._path.dead(echo, now)
-        if probe:
-            threading.Thread(
-                target=self._probe_path, args=(now,), name="mqtt-path-probe", daemon=True
-            ).start()
-        if dead:
-            self._dead_path()
         if due:
             props = None
             if self._station is not None and self._v5:  # (3.1.1 has no properties)
@@ -649,43 +617,6 @@ class MqttClient(Connection):
                 "broker's ACL denies reading it?): a move the broker holds up (a broker that "
                 "stalls) is then not known late, and is carried out when it comes",
             )
-
-    def _probe_path(self, since: float) -> None:
-        """Rule 21 (its own thread): whether the broker answers a new connection now."""
-        assert self._probe_id is not None
-        try:
-            answered = answers(self._settings, self._probe_id, not self._v5, PROBE_WAIT_S)
-        except Exception:  # connection.py rule 5: a probe that fails is no answer
-            log.debug("the MQTT path probe failed", exc_info=True)
-            answered = False
-        at = self._clock()
-        with self._echo_lock:
-            if answered:
-                self._path.answered(since, at)
-            else:
-                self._path.unanswered()
-        if not answered:
-            log.info(
-                "the MQTT broker holds up what the bridge publishes and does not answer a new "
-                "connection either (stalled, or the network holding its packets): the "
-                "connections are kept, what it holds comes when it runs on"
-            )
-
-    def _dead_path(self) -> None:
-        """Rule 21 (paho's thread): the path under this connection is dead: every connection
-        remade."""
-        if not self.redial():
-            return
-        self.redials += 1
-        log.warning(
-            "the MQTT broker answers a new connection at once but has passed nothing to this "
-            "one through %g s with a heartbeat out (a dead network path: a router that lost "
-            "its connection table, a link remade under another address): the bridge's "
-            "connections are made again now",
-            QUIET_S,
-        )
-        if self._on_dead_path is not None:
-            threading.Thread(target=self._on_dead_path, name="mqtt-redial", daemon=True).start()
 
     def _say_late(self) -> None:
         """Rule 19 (its own thread): the last verdict on the broker's lateness, said."""

@@ -213,12 +213,6 @@ Rules:
    and the early word is carried out. Only the main connection and the lane of the word's
    kind answer for it: the lock lane never reads a STOP (review 108: a lock ON it read once,
    since turned OFF, had let a STOP only the express read be dropped).
-12. A dead path under the bridge's connections (client.py rule 21: the main connection judges
-   it) is the express's too: ``redial`` asks it (``{"op": "redial"}``) to remake its
-   connection at once (connection.py rule 20), as the lanes are; an express that does not
-   know the word (started from another version) ignores it and waits out its keep-alive.
-   It publishes its sync words only while a hold waits, so it could not tell a dead path
-   from a quiet broker by itself without words of its own every few seconds.
 """
 
 from __future__ import annotations
@@ -491,17 +485,6 @@ class Express:
             except subprocess.TimeoutExpired:
                 child.kill()
                 child.wait()
-
-    def redial(self) -> None:
-        """Rule 12: its connection remade at once (any thread; nothing when none runs)."""
-        with self._lock:
-            sock = self._sock
-        if sock is None:
-            return
-        try:
-            sock.send({"op": "redial"})
-        except OSError:  # (BlockingIOError too: a full socket is rule 8's hang, seen there)
-            pass
 
     # -- rule 8: the holds (on the thread that carries a stop out, under the last word's lock)
     def hold(self, rotator_id: str) -> None:
@@ -1347,9 +1330,6 @@ class _Child:
             rid, number = word.get("rotator"), word.get("n")
             if word.get("op") == "sync":
                 self.asked(int(word["n"]), bool(word.get("again")))
-            elif word.get("op") == "redial":  # rule 12
-                if self.link.redial():
-                    log.info("its connection made again (a dead path)")
             elif word.get("op") == "port" and fds:
                 with self._lock:
                     old = self._ports.get(rid)

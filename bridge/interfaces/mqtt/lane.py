@@ -58,10 +58,6 @@ Rules:
    off the wire past the whole turn (attack 24). Each lane carries one kind, and nothing a
    neighbour can flood sits ahead of a stop but a stop; a flood of lock words delays only the
    lock words behind it. The cost: one connection more (client id ``rlock-...``).
-6. A lane publishes nothing, so it cannot tell a dead path under it from a quiet broker
-   before its keep-alive; the main connection, whose heartbeats come back, judges that for
-   both lanes (client.py rule 21, its probe's client id ``lane_client_id(settings, "path")``:
-   ``rpath-...``) and has each remade at once (``redial``, connection.py rule 20).
 """
 
 from __future__ import annotations
