@@ -134,27 +134,6 @@ Rules:
    them, not unread). A new connection starts clean. The beats out are kept by payload,
    MAX_ECHOES at most (the oldest go first: a broker frozen longer than that still shows a
    beat out through the quiet).
-12. A dead path is not a frozen broker (attack 32). A NAT or firewall that lost its table, a
-   VPN or Wi-Fi link remade under another address, a proxy's failover: the bridge's streams
-   pass nothing either way and nothing closes them, while the broker takes new connections
-   at once; each connection would notice by its keep-alive alone (30 to 60 s), and every STOP
-   meanwhile goes to the dead streams. From the network thread's side it looks as rule 11's
-   hold: a beat out through QUIET_S of quiet, and quiet on (``Echo.silent``). So while it is
-   silent, the main connection asks the broker, on a connection of its own, whether it answers
-   a new connection (``PathWatch``: a probe, paho_client.py rule 12); if it does, and this
-   connection read nothing from the probe's start and saw quiet on past its answer
-   (``Echo.quiet_through``: an order, the broker answering a stranger now and sending this
-   connection nothing after it, not a time), the path under the bridge's connections is
-   dead, and they are made again (client.py rule 21). A frozen broker, or a link that stalls
-   and delivers later, answers no probe, and the connections are kept as before: what the
-   broker holds for them (a STOP) comes when it runs on; remade, its copy would be lost with
-   the clean session. A probe goes at once when the quiet is judged, and again while it lasts,
-   PROBE_FIRST_S after it, the wait doubling up to PROBE_MAX_S, back to the first only
-   PROBE_CALM_S after the last probe: a broker that keeps passing nothing to its clients it
-   answers (not one seen yet) costs a reconnect at that pace, no more. A false verdict costs a
-   reconnect: the connections are remade at once (the broker just answered one), each without
-   its subscriptions for a round trip. Nothing judges a probe but its answer (no clock decides
-   correctness: docs/architecture.md rule 15; PROBE_WAIT_S is the longest the probe waits).
 """
 
 from __future__ import annotations
@@ -183,14 +162,6 @@ UNREAD_PROPERTIES = "rotor-bridge unread properties"  # rule 9: in their place, 
 # plus a beat period and paho's seconds, 7 s (the console and the remote refuse a move at 5 s)
 QUIET_S = 3.0
 MAX_ECHOES = 32  # rule 11: the beats out kept (a minute of them)
-PROBE_FIRST_S = 2.0  # rule 12: the first wait between two probes of one quiet ...
-PROBE_MAX_S = 30.0  # ... doubling up to this (the keep-alive's default: it has its say by then)
-PROBE_CALM_S = 120.0  # ... and back to the first this long after the last probe
-PROBE_WAIT_S = 5.0  # rule 12: a probe's CONNACK waited for this long at most
-#: rule 12: the bridge's connections remade within this of a path dying, on a LAN: the quiet
-#: judged (QUIET_S + HEARTBEAT_S + 2 s, rule 11), the probe's round trip, the poll that sees
-#: quiet past its answer (a second at most), the connects' and subscriptions' round trips
-DEAD_PATH_S = QUIET_S + HEARTBEAT_S + 2.0 + 1.0 + 1.0
 UNREAD_S = 5 * HEARTBEAT_S  # rule 11: none back through this much quiet with one out: unread
 
 
@@ -308,18 +279,6 @@ class Echo:
             return self._quiet_for(quiet_to)
         return None
 
-    def silent(self, now: float) -> bool:
-        """Rule 12: a beat of ours has been out through QUIET_S of quiet, and the quiet goes on
-        (nothing read since: not a hold that ended), on a connection one of whose beats came
-        back."""
-        quiet_to = self._quiet_to
-        return self._read and quiet_to is not None and self._waited(quiet_to) >= self._quiet_s
-
-    def quiet_through(self, since: float, until: float) -> bool:
-        """Rule 12: nothing was read from ``since`` on, and quiet is proven past ``until``."""
-        quiet_to = self._quiet_to
-        return self._heard < since and quiet_to is not None and quiet_to > until
-
     @property
     def returning(self) -> bool:
         """A hold was judged and no beat sent after it yet: one should go at once."""
@@ -335,10 +294,6 @@ class Echo:
         open_s = 0.0 if quiet_to is None else self._waited(quiet_to)
         return self._unread_quiet_s + open_s > self._unread_s
 
-    def heard_since(self, t: float) -> bool:
-        """Rule 12: a read ended at ``t`` or after it."""
-        return self._heard >= t
-
     def _quiet_for(self, quiet_to: float) -> float:
         """How long nothing came, up to ``quiet_to`` (what is said: the hold's length)."""
         return quiet_to - self._heard if self._heard > -math.inf else self._waited(quiet_to)
@@ -349,61 +304,6 @@ class Echo:
         if oldest is None:
             return 0.0
         return max(0.0, quiet_to - max(self._heard, oldest))
-
-
-class PathWatch:
-    """Rule 12 on the station: when the main connection probes the broker on a connection of
-    its own, and whether its answer proves the path under the bridge's connections dead. Pure
-    (the monotonic time handed in); kept under the echo's lock (client.py rule 21)."""
-
-    def __init__(self) -> None:
-        self._gap_s = PROBE_FIRST_S  # the wait before the next probe of a quiet
-        self._last = -math.inf  # the last probe started then
-        self._running = False
-        self._answered: tuple[float, float] | None = None  # (its start, its answer)
-
-    def connected(self) -> None:
-        """A new connection: an answer to a probe for the last one proves nothing of it."""
-        self._answered = None
-
-    def due(self, now: float, silent: bool) -> bool:
-        """Whether a probe starts now (it is then running until ``answered`` or ``unanswered``)."""
-        if not silent:
-            self._answered = None
-            return False
-        if self._running or self._answered is not None:
-            return False
-        if now - self._last >= PROBE_CALM_S:
-            self._gap_s = PROBE_FIRST_S
-        elif now - self._last < self._gap_s:
-            return False
-        else:
-            self._gap_s = min(2 * self._gap_s, PROBE_MAX_S)
-        self._last, self._running = now, True
-        return True
-
-    def answered(self, since: float, at: float) -> None:
-        """The probe started at ``since`` had the broker's answer at ``at``."""
-        self._running = False
-        self._answered = (since, at)
-
-    def unanswered(self) -> None:
-        self._running = False
-
-    def dead(self, echo: Echo, now: float) -> bool:
-        """Whether the path is dead: the broker answered the probe, and the connection, still
-        silent, read nothing since the probe began and saw quiet past its answer. True once:
-        the answer is used up."""
-        answered = self._answered
-        if answered is None or not echo.silent(now):
-            return False
-        if echo.heard_since(answered[0]):
-            self._answered = None  # the connection read something since: alive
-            return False
-        if not echo.quiet_through(*answered):
-            return False  # (the next empty poll proves it)
-        self._answered = None
-        return True
 
 
 class StationClock:
