@@ -131,10 +131,6 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    as too large: tests/faults/test_input.py), so only a message no client means gets none; such
    a "stop" is not carried out either (a 1 MiB bound dropped the 1 MiB stop and target of the
    fault tests without a word: CI).
-20. A connection ended for a dead path (``redial``: client.py rule 21) is remade at once, not
-   after the back-off (paho_client.py rule 12), and its end is no evidence of a fight over
-   its client id (rule 7): the bridge ended it itself; the new connection takes the old
-   session over at the broker, whose DISCONNECT for it goes down the dead path.
 """
 
 from __future__ import annotations
@@ -408,7 +404,6 @@ class Connection:
         self._subscribing = False  # ... or at least its SUBSCRIBE is on its way (``hears``)
         self._command_mid: int | None = None
         self._stopping = False  # a shutdown under way: a broker going away is no news
-        self._redialing = False  # rule 20: the bridge itself ends this connection
         self._last_refusal: str | None = None  # rule 6: each reason said once in a row
         self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
         self._optional: dict[str, str] = {}  # rule 17: filter -> what its denial costs
@@ -439,15 +434,6 @@ class Connection:
     def _disconnect(self) -> None:
         self._client.disconnect()
         self._client.loop_stop()  # joins paho's thread: never call this on it
-
-    def redial(self) -> bool:
-        """Rule 20 (any thread): the connection up now is ended and made again at once; False
-        when none is up (one being made is on a path of its own already)."""
-        if not self._up or self._stopping:
-            return False
-        self._redialing = True
-        self._client.redial()
-        return True
 
     def optional(self, filters: dict[str, str]) -> None:
         """Rule 17: filters (among the subscriptions) whose denial is no problem, each with
@@ -743,7 +729,6 @@ class Connection:
     ) -> None:
         was, self._up, self._subscribed, self._subscribing = self._up, False, False, False
         self._subscribed_since = None
-        redialed, self._redialing = self._redialing and was, False  # rule 20
         answered, self._answered = self._answered, False
         self.connected.clear()
         # rule 6: an attempt our own client gave up on, unanswered, is no close of the broker's
@@ -758,9 +743,7 @@ class Connection:
             return
         ending = ending_of(flags, reason_code)
         peer, self._peer = self._peer, None
-        if redialed:  # rule 20: ended by the bridge itself: no evidence of a fight, however
-            ending = "gone"  # the episode stands (as a broker gone)
-        elif ending == "dropped" and peer is not None and not listening(*peer):
+        if ending == "dropped" and peer is not None and not listening(*peer):
             ending = "gone"  # rule 7: a broker killed or restarted, not a takeover
         fight = self._guard.disconnected(self._clock(), ending)
         if fight:
@@ -775,9 +758,6 @@ class Connection:
         elif self._slowed:  # a connection lasted: paho's own delays again
             client.reconnect_delay_set(*self._reconnect_s)
             self._slowed = False
-        if redialed:  # (rule 20: said by the one that judged the path dead)
-            log.debug("MQTT connection %s ended for a dead path: made again", self._client_id)
-            return
         self._ended(reason_code, ending, fight)
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:

@@ -89,13 +89,6 @@ Rules:
    before a read that finds bytes, before any message in them is handled; ``read()`` when it
    is over (quiet is counted from then). TLS: bytes the SSL socket has already decrypted
    (``pending()``) are read at once and are never quiet, though the raw socket is not readable.
-12. ``redial`` ends the connection from any thread as rule 5 does (its socket shut down: paho
-   reads the end as always) and makes the next connect at once, not after the back-off (the
-   broker just answered a new connection: client.py rule 21, a dead path under this one).
-   ``answers`` asks a broker once whether it answers a new connection now (any CONNACK, an
-   acceptance or a refusal: both prove the broker and the path to it alive), as rule 4's
-   trial (its own client id, nothing subscribed or published), within ``timeout_s``; it
-   blocks: never on paho's thread.
 """
 
 from __future__ import annotations
@@ -273,7 +266,6 @@ class Client(paho.Client):
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
     _halt_t = 0.0  # rule 6: when loop_stop was called
-    _redial_now = False  # rule 12: the next connect goes without the back-off's wait
     _topic_parts: dict[str, tuple[int, bytes]] | None = None  # rule 9: protocol, topic part
 
     def publish_qos0(self, topic: str, payload: bytes, retain: bool) -> MQTTErrorCode:
@@ -337,14 +329,6 @@ class Client(paho.Client):
                     del queue[i]
                     queue.appendleft(packet)
                 return
-
-    def redial(self) -> None:
-        """Rule 12: the connection ended now, the next one made at once (any thread)."""
-        self._redial_now = True
-        shutdown = getattr(self.socket(), "shutdown", None)  # None: no socket (yet)
-        if shutdown is not None:
-            with contextlib.suppress(OSError):
-                shutdown(socket.SHUT_RDWR)
 
     def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
         super().reconnect_delay_set(min_delay, max_delay)
@@ -510,9 +494,6 @@ class Client(paho.Client):
 
     def _back_off(self) -> bool:
         """paho's wait before a reconnect: min, doubling up to max. False: stopped meanwhile."""
-        if self._redial_now:  # rule 12: at once (once: a failed try waits as always)
-            self._redial_now = False
-            return not self._halt.is_set() and not self._leaving
         lo, hi = self._delays
         self._delay_s = lo if self._delay_s is None else min(self._delay_s * 2, hi)
         return not self._halt.wait(self._delay_s) and not self._leaving
@@ -631,35 +612,23 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
 
 def accepts_mqtt311(settings: MqttSettings, client_id: str, timeout_s: float = 5.0) -> bool:
     """Rule 4: whether the broker accepts an MQTT 3.1.1 connection from this client now."""
-    return _trial(settings, client_id, True, timeout_s) == [True]
-
-
-def answers(settings: MqttSettings, client_id: str, mqtt311: bool, timeout_s: float) -> bool:
-    """Rule 12: whether the broker answers a new connection (any CONNACK) within ``timeout_s``."""
-    return bool(_trial(settings, client_id, mqtt311, timeout_s))
-
-
-def _trial(settings: MqttSettings, client_id: str, mqtt311: bool, timeout_s: float) -> list[bool]:
-    """Rules 4 and 12: a connection made, its CONNACK waited for, closed: the answers (one at
-    most: accepted or not), none if the broker did not answer in time."""
     c = new_client(settings, client_id)
-    if mqtt311:
-        c.use_mqtt311()
+    c.use_mqtt311()
     c.connect_timeout = timeout_s
-    got: list[bool] = []
+    answers: list[bool] = []
 
     def on_connect(*args: object) -> None:
         reason = args[3]
-        got.append(not getattr(reason, "is_failure", True))
+        answers.append(not getattr(reason, "is_failure", True))
 
     c.on_connect = on_connect
     try:
         c.connect(settings.host, settings.port, keepalive=max(5, settings.keepalive_s))
     except (OSError, ValueError, ssl.SSLError):
-        return []
+        return False
     try:
         deadline = time.monotonic() + timeout_s
-        while not got and time.monotonic() < deadline:
+        while not answers and time.monotonic() < deadline:
             if c.loop(timeout=0.1) != MQTTErrorCode.MQTT_ERR_SUCCESS:
                 break
     finally:
@@ -667,4 +636,4 @@ def _trial(settings: MqttSettings, client_id: str, mqtt311: bool, timeout_s: flo
             c.disconnect()
         with contextlib.suppress(Exception):
             c.loop(timeout=0.1)  # hands the DISCONNECT to the socket
-    return got
+    return answers == [True]
