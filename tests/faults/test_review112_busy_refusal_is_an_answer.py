@@ -24,8 +24,6 @@ import contextlib
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.faults.test_review112_stop_lost_on_a_stalled_path import StallProxy
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
@@ -78,12 +76,6 @@ class BusyProxy(StallProxy):
         super()._down(s)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 112: an overloaded broker's 'server busy' refusal of the probe is taken for a "
-    "dead path: the connections are ended, the new ones refused, and a STOP the broker held for "
-    "the old ones is lost: the rotor turns on",
-)
 def test_a_stop_an_overloaded_broker_held_reaches_the_rotor_when_it_catches_up(
     tmp_path: Path,
 ) -> None:

@@ -25,8 +25,6 @@ import socket
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import CONNECT, SUBACK, MqttProxy, _client_id, _packets, _Stream
@@ -113,12 +111,6 @@ class StallProxy(MqttProxy):
         self._end(s, "down", s.client)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 112: a STOP pressed while the bridge's network path stalls (new connections "
-    "passing) is thrown away by the dead-path redial: the rotor turns on, where the kept "
-    "connections would have had the STOP when the stall ended",
-)
 def test_a_stop_held_by_a_stalled_path_reaches_the_rotor_when_it_delivers(
     tmp_path: Path,
 ) -> None:
