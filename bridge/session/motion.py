@@ -22,10 +22,15 @@ Rules:
    movement of that axis's own (more than ``noise_deg`` from where that axis itself last
    moved: ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen
    move since), nor a reading of it further from there than any since (it creeps inside
-   ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and forth does not), for the
+   ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and forth does not) at
+   CREEP_SHARE of the speed that axis turns at its slowest (``slowest_deg_s``) or faster,
+   timed from its last creep (its first since a move, from the reading before), for the
    longer of ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's step and
    ``noise_deg`` take at that axis's speed, as slow as rule 6 allows for), a user's
-   ``settle_s`` never shortening it. Review 95: a GS-232B's elevation at 1.8 deg/s, read in
+   ``settle_s`` never shortening it. A creep slower than any turn is no turn: review 110,
+   every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose pot drifted a
+   tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for ever and
+   never got controller.py rule 13's stop. Review 95: a GS-232B's elevation at 1.8 deg/s, read in
    whole degrees with 2 degrees of noise, shows a move every 1.7 s; its turn carried over a
    replug was called at rest at rule 2's 1.5 s and stopped short by controller.py rule 13,
    R/error blaming a jam. Not the slowest axis's time for every axis (31a878ae, reverted:
@@ -309,6 +314,9 @@ AWAY_MARGIN_DEG = 5.0  # rule 5
 REACH_FACTOR = 3.0  # rule 5: a rotor may turn up to this much faster than nominal
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 BLIND_SLOW_FACTOR = 1.5  # rule 6: a rotor without feedback may be this much slower than nominal
+#: rule 2: a carried axis's creep inside ``noise_deg`` is a move only at this share of the speed
+#: it turns at its slowest (``slowest_deg_s``) or faster: a turn's first degrees, not a drift
+CREEP_SHARE = 0.25
 BLIND_START_S = 2.0  # rule 6: ...and take this long to get going
 TURN_KEPT_S = 60.0  # rule 6: a turn is kept in the state file this long past its end (the margin)
 COAST_S = 1.0  # ``coast_end``: a rotor's run-on after its motor is cut
@@ -443,14 +451,18 @@ class Motion:
     # rule 2: while ``carried``, each axis's own last movement (more than ``noise_deg`` from
     # where that axis itself last moved; rule 1's anchor moves with either axis), the
     # farthest its readings crept from there since, inside ``noise_deg``, and when the last
-    # of either was, from the first reading back: the carried turn rests by each axis's own
-    # time
+    # move or creep as fast as a turn was, from the first reading back: the carried turn
+    # rests by each axis's own time
     az_moved_deg: float | None = None
     az_moved_t: float | None = None
     el_moved_deg: float | None = None
     el_moved_t: float | None = None
     az_crept_deg: float = 0.0
     el_crept_deg: float = 0.0
+    # rule 2: each axis's last creep (or, not crept since it moved, its last reading): the
+    # next creep's speed is measured from it
+    az_crept_t: float | None = None
+    el_crept_t: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -509,15 +521,23 @@ def axis_seen_s(cfg: MotionConfig) -> dict[str, float]:
     ``settle_s`` on. Each axis by its own speed (rule 3's way; review 84: a GS-232's
     elevation-only turn, timed at the azimuth's speed, taken for none; review 89: an azimuth
     timed at the elevation's, a hand at it a second after a replug taken for the lost turn)."""
-    step = BLIND_SLOW_FACTOR * (cfg.noise_deg + cfg.spec.reading_step_deg)
+    step = cfg.noise_deg + cfg.spec.reading_step_deg
+    seen = {axis: step / speed + cfg.poll_margin_s for axis, speed in slowest_deg_s(cfg).items()}
+    return seen or {
+        "azimuth": BLIND_SLOW_FACTOR * step / cfg.nominal_speed_deg_s + cfg.poll_margin_s
+    }
+
+
+def slowest_deg_s(cfg: MotionConfig) -> dict[str, float]:
+    """Rules 2 and 4: the speed each axis the controller turns turns at its slowest: its
+    nominal speed (the elevation's as configured) as slow as rule 6 allows for."""
     spec, speeds = cfg.spec, {}
     if spec.turns_azimuth:
         speeds["azimuth"] = cfg.nominal_speed_deg_s
     if spec.has_elevation:
         el = cfg.el_speed_deg_s
         speeds["elevation"] = spec.nominal_el_speed_deg_s if el is None else el
-    seen = {axis: step / speed + cfg.poll_margin_s for axis, speed in speeds.items() if speed > 0}
-    return seen or {"azimuth": step / cfg.nominal_speed_deg_s + cfg.poll_margin_s}
+    return {axis: speed / BLIND_SLOW_FACTOR for axis, speed in speeds.items() if speed > 0}
 
 
 def carried_seen_s(cfg: MotionConfig) -> float:
@@ -746,6 +766,8 @@ def reading(
             el_moved_t=None if el_deg is None else now,
             az_crept_deg=0.0,
             el_crept_deg=0.0,
+            az_crept_t=now,
+            el_crept_t=None if el_deg is None else now,
             still_since_t=None if turning else now,
             idle_not_before_t=None if turning else now + cfg.settle_s,
             stop_read_t=now if m.stop_sent_t is not None else m.stop_read_t,  # (an owed stop's)
@@ -777,19 +799,11 @@ def reading(
     if m.carried:  # rule 2: each axis's own movement and creep, for the carried turn's rest
         ref = m.az_moved_deg
         off = cfg.noise_deg + 1.0 if ref is None else angle_error(az_deg, ref, wraps)
-        if off > cfg.noise_deg:
-            changes["az_moved_deg"], changes["az_moved_t"] = az_deg, now
-            changes["az_crept_deg"] = 0.0
-        elif off > m.az_crept_deg:  # (further than any reading since it moved: it creeps)
-            changes["az_crept_deg"], changes["az_moved_t"] = off, now
+        _own_move(changes, cfg, now, "az", off, az_deg, m.az_crept_deg, m.az_crept_t)
         ref = m.el_moved_deg
         if el_deg is not None:
             off = cfg.noise_deg + 1.0 if ref is None else abs(el_deg - ref)
-            if off > cfg.noise_deg:
-                changes["el_moved_deg"], changes["el_moved_t"] = el_deg, now
-                changes["el_crept_deg"] = 0.0
-            elif off > m.el_crept_deg:
-                changes["el_crept_deg"], changes["el_moved_t"] = off, now
+            _own_move(changes, cfg, now, "el", off, el_deg, m.el_crept_deg, m.el_crept_t)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -846,6 +860,39 @@ def reading(
                 m, events = tick(_dropped(m), cfg, now, read=True, asking_since=None, asked_t=asked)
                 return m, [Event.TURNED_AWAY, *events]
     return tick(m, cfg, now, read=True, asking_since=None, asked_t=asked)
+
+
+def _own_move(
+    changes: dict[str, Any],
+    cfg: MotionConfig,
+    now: float,
+    axis: str,
+    off: float,
+    deg: float,
+    crept: float,
+    crept_t: float | None,
+) -> None:
+    """Rule 2: what a reading of a carried turn's axis (``axis``: "az" or "el"; ``off``: how
+    far it is from where that axis last moved, ``deg``) tells of that axis's own movement: more
+    than ``noise_deg``, a move (its own time starts again from here); further than any reading
+    since inside ``noise_deg`` (it creeps), a move only if it crept at least CREEP_SHARE of
+    what the axis turns at its slowest (``slowest_deg_s``) since its last creep (the first
+    creep since a move: since the reading before). A creep slower than any turn is no turn
+    (review 110: a jammed RC2800's pot drifting a tenth every 1.2 s kept the turn 'moving' for
+    ever, no stop). Jitter back and forth counts once at most."""
+    if off > cfg.noise_deg:
+        changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
+        changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
+        return
+    if off <= crept:
+        if crept == 0.0:  # (not crept since it moved: a first creep is timed from here)
+            changes[f"{axis}_crept_t"] = now
+        return
+    changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = off, now
+    slowest = slowest_deg_s(cfg).get("azimuth" if axis == "az" else "elevation")
+    dt = None if crept_t is None else now - crept_t
+    if slowest is None or not dt or off - crept >= CREEP_SHARE * slowest * dt:
+        changes[f"{axis}_moved_t"] = now  # (a creep as fast as a turn: its first degrees)
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
@@ -1495,9 +1542,10 @@ def still_from(m: Motion, cfg: MotionConfig) -> float:
 def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a turn the controller finishes by itself (``carried``) may be found
     at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
-    since its own last movement or creep (``az_moved_t``, ``el_moved_t``: the first reading
-    back, for an axis not seen move since). A fast axis's jam is told by its own short time, a slow
-    axis's turn is not called over while it shows a move only every few readings."""
+    since its own last movement or creep as fast as a turn (``az_moved_t``, ``el_moved_t``:
+    the first reading back, for an axis not seen move since). A fast axis's jam is told by
+    its own short time, a slow axis's turn is not called over while it shows a move only
+    every few readings."""
     ref = -1e18
     for axis, seen in axis_seen_s(cfg).items():
         moved_t = m.az_moved_t if axis == "azimuth" else m.el_moved_t

@@ -15,8 +15,6 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind, MotionState
 from bridge.session import motion as mo
 from tests.engine.virtual import VirtualRotator
@@ -48,11 +46,6 @@ def drifting_from(since: float) -> Callable[[bytes, float], bytes]:
     return drift
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 110: a jammed carried turn whose pot drifts a tenth a second is shown moving "
-    "for ever and never stopped",
-)
 def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
     with VirtualRotator("rc2800-az", emulator={"start_az_deg": 10}) as v:
         cfg = v.cfg.motion

@@ -49,6 +49,7 @@ def test_a_reading_s_motion_is_the_dataclass_s_own() -> None:
         el_anchor_deg=None,
         az_moved_deg=20.0,  # (motion.py rule 2: a found turn's azimuth, its own movement)
         az_moved_t=0.2,
+        az_crept_t=0.2,
     )
     with pytest.raises(dataclasses.FrozenInstanceError):
         m2.position_deg = 1.0  # type: ignore[misc]
