@@ -17,33 +17,37 @@ Rules:
    beyond ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at X1, 1.5
    degrees a second, called arrived at 128.9 on its way to 130). Speeds the user configures are
    the user's to pair with ``settle_s``. A turn the controller finishes by itself (``carried``,
-   rule 4: over a lost link, or found by a bridge just started, and a turn begun since, no
-   stop sent into it) is still once each axis is, by its own time (``carried_rest_from``): no
-   movement of that axis's own (more than ``noise_deg`` from where that axis itself last
-   moved: ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen
-   move since), nor a reading of it further from there than any since (it creeps inside
-   ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and forth does not) at
-   CREEP_SHARE of the speed that axis turns at its slowest (``slowest_deg_s``) or faster,
-   timed from its last creep (its first since a move, from the reading before), for the
-   longer of ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's step and
-   ``noise_deg`` take at that axis's speed, as slow as rule 6 allows for), a user's
-   ``settle_s`` never shortening it. A creep slower than any turn is no turn: review 110,
-   every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose pot drifted a
-   tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for ever and
-   never got controller.py rule 13's stop. Review 95: a GS-232B's elevation at 1.8 deg/s, read in
-   whole degrees with 2 degrees of noise, shows a move every 1.7 s; its turn carried over a
-   replug was called at rest at rule 2's 1.5 s and stopped short by controller.py rule 13,
-   R/error blaming a jam. Not the slowest axis's time for every axis (31a878ae, reverted:
-   review 101, a carried azimuth turn jammed while a slow elevation had been shown still for
-   6 s was stopped 4.9 s after the jam, not 1.5 s; and a ``settle_s`` of the user's a little
-   above the default brought review 95 back): a jam of a fast axis is told by its own short
-   time, the slow axis shown still by its own. The creep: review 95, a hand at a GS-232B's
-   azimuth begun as that rest came, its first readings 63 and 64 inside ``noise_deg`` of 62,
-   was shown moving, 'idle' at 64, then moving: one hand's turn told as two moves (before, a
-   hand 1.3 s after the port answered; with each axis's own time, 1.9 s). A target for a
-   controller that must be stopped first, come while the rotor stands at its target still by
-   the clock with that reading late, waits for it: no stop to a rotor at rest
-   (``plan_target``; an attack pass).
+   rule 4: over a lost link, or found by a bridge just started, and a turn begun since, no stop
+   sent into it) is still once each axis is, by its own time (``carried_rest_from``): no
+   movement of that axis's own (more than ``noise_deg`` from where that axis itself last moved:
+   ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen move
+   since, but not at all, till it is seen move, for an axis the lost target left out or leaves
+   where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``), nor a reading
+   of it further from there than any since (it creeps inside ``noise_deg``: ``az_crept_deg``,
+   ``el_crept_deg``; jitter back and forth does not) at CREEP_SHARE of the speed that axis turns
+   at its slowest (``slowest_deg_s``) or faster, timed from its last creep (its first since a
+   move, from the reading before), for the longer of ``settle_s`` and its ``axis_seen_s`` (rule
+   4: what a reading's step and ``noise_deg`` take at that axis's speed, as slow as rule 6
+   allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
+   turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
+   pot drifted a tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for
+   ever and never got controller.py rule 13's stop. Nor is an axis with nothing to do waited on:
+   review 110, an azimuth-only turn on a GS-232B with its elevation set slow (1.0 deg/s), jammed
+   a second after a replug, was stopped 3.9 s after the jam (8.5 s at 0.5 deg/s), by the
+   elevation's own time counted from the first reading back, not the azimuth's 1.7 s. Review 95:
+   a GS-232B's elevation at 1.8 deg/s, read in whole degrees with 2 degrees of noise, shows a
+   move every 1.7 s; its turn carried over a replug was called at rest at rule 2's 1.5 s and
+   stopped short by controller.py rule 13, R/error blaming a jam. Not the slowest axis's time
+   for every axis (31a878ae, reverted: review 101, a carried azimuth turn jammed while a slow
+   elevation had been shown still for 6 s was stopped 4.9 s after the jam, not 1.5 s; and a
+   ``settle_s`` of the user's a little above the default brought review 95 back): a jam of a
+   fast axis is told by its own short time, the slow axis shown still by its own. The creep:
+   review 95, a hand at a GS-232B's azimuth begun as that rest came, its first readings 63 and
+   64 inside ``noise_deg`` of 62, was shown moving, 'idle' at 64, then moving: one hand's turn
+   told as two moves (before, a hand 1.3 s after the port answered; with each axis's own time,
+   1.9 s). A target for a controller that must be stopped first, come while the rotor stands at
+   its target still by the clock with that reading late, waits for it: no stop to a rotor at
+   rest (``plan_target``; an attack pass).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    A stall is told by a reading, or by time while the controller is asked and does not
@@ -130,8 +134,9 @@ Rules:
    axes decided still is a turn begun since, not known to be the lost one; every axis decided
    (by ``carried_seen_s``, the slowest axis's time) says the lost turn came to rest while the
    port was out. Either way ``lost_still``, though rule 2 waits each axis's own time (the
-   longer of ``settle_s`` and ``axis_seen_s``) to call the rotor still (a turn begun since
-   too: the lost one may go on on an axis not yet decided), and a refused start's halt owed
+   longer of ``settle_s`` and ``axis_seen_s``; none for an axis the lost target gave nothing
+   to do, till it is seen move) to call the rotor still (a turn begun since too: the lost one
+   may go on on an axis not yet decided), and a refused start's halt owed
    to the lost turn is dropped (parts.py rule 10; review 73, a hand a second after a
    replug). Review 84: the lost turn may be an elevation's alone (a GS-232's 2.5 deg/s
    elevation, read in whole degrees with 2 degrees of noise, timed at the azimuth's 6 deg/s,
@@ -451,8 +456,9 @@ class Motion:
     # rule 2: while ``carried``, each axis's own last movement (more than ``noise_deg`` from
     # where that axis itself last moved; rule 1's anchor moves with either axis), the
     # farthest its readings crept from there since, inside ``noise_deg``, and when the last
-    # move or creep as fast as a turn was, from the first reading back: the carried turn
-    # rests by each axis's own time
+    # move or creep as fast as a turn was, from the first reading back (None: an axis with
+    # nothing to do in the lost turn, not seen move): the carried turn rests by each axis's
+    # own time
     az_moved_deg: float | None = None
     az_moved_t: float | None = None
     el_moved_deg: float | None = None
@@ -463,6 +469,10 @@ class Motion:
     # next creep's speed is measured from it
     az_crept_t: float | None = None
     el_crept_t: float | None = None
+    # rule 2: the target out when the readings were lost (``link_down``; its azimuth and
+    # elevation), kept till the first reading back: an axis it leaves where it stands has
+    # nothing to do in the turn carried, and that turn's rest waits no time of its own
+    lost_aim: tuple[float, float | None] | None = None
 
 
 class Event(enum.StrEnum):
@@ -671,6 +681,7 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         el_position_deg=m.el_position_deg,
         lost_turning=m.lost_turning,
         lost_hand=m.lost_hand,
+        lost_aim=m.lost_aim,
     )
 
 
@@ -679,6 +690,9 @@ def link_down(m: Motion) -> Motion:
     had a target out, is kept for the first reading back (rule 4)."""
     turning = m.state is MOVING or m.target_deg is not None or m.el_target_deg is not None
     hand = m.state is MOVING and m.target_deg is None and m.stop_sent_t is None and not m.carried
+    aim = m.lost_aim if m.anchor_deg is None else None  # (rule 2: lost before, nothing read)
+    if m.target_deg is not None:
+        aim = (m.target_deg, m.el_target_deg)
     return Motion(
         state=OFFLINE,
         position_deg=m.position_deg,
@@ -687,6 +701,7 @@ def link_down(m: Motion) -> Motion:
         lost_hand=hand or (m.lost_hand and m.state is OFFLINE),
         busy_until_t=m.busy_until_t,  # rule 6: no feedback: the turn's assumed end is kept
         kept_end_t=m.kept_end_t,  # (rule 6: turn_kept)
+        lost_aim=aim,
     )
 
 
@@ -745,6 +760,8 @@ def reading(
         # (a turn found going on with nothing known of before it, the bridge restarted, is the
         # controller's too, until the rotor is seen at rest; a hand's turn lost is a hand's)
         fresh = m.position_deg is None
+        # (rule 2: an axis the lost target leaves where it stands waits no time of its own)
+        az_idle, el_idle = _nothing_to_do(m, cfg, az_deg, el_deg)
         m = replace(
             m,
             state=MOVING if turning else BRAKING if cfg.brake_delay_s > 0 else IDLE,
@@ -761,9 +778,10 @@ def reading(
             begun_deg=None,
             held_t=None,
             az_moved_deg=az_deg,  # (rule 2: each axis's own rest counts from here)
-            az_moved_t=now,
+            az_moved_t=None if az_idle else now,
             el_moved_deg=el_deg,
-            el_moved_t=None if el_deg is None else now,
+            el_moved_t=None if el_deg is None or el_idle else now,
+            lost_aim=None,
             az_crept_deg=0.0,
             el_crept_deg=0.0,
             az_crept_t=now,
@@ -860,6 +878,25 @@ def reading(
                 m, events = tick(_dropped(m), cfg, now, read=True, asking_since=None, asked_t=asked)
                 return m, [Event.TURNED_AWAY, *events]
     return tick(m, cfg, now, read=True, asking_since=None, asked_t=asked)
+
+
+def _nothing_to_do(
+    m: Motion, cfg: MotionConfig, az_deg: float, el_deg: float | None
+) -> tuple[bool, bool]:
+    """Rule 2: whether the first reading back (``az_deg``, ``el_deg``) shows the azimuth and
+    the elevation with nothing to do in the turn the controller carries on by itself (a turn
+    of the bridge's lost with the link, ``lost_aim``, not a hand's): the target left that axis
+    out, or it stands within ``tolerance_deg`` of it. Such an axis is not waited on at the
+    carried turn's rest till it is seen move (review 110: an azimuth-only turn jammed a second
+    after a replug waited a slow elevation's own time, 3.9 s, not the azimuth's 1.7 s)."""
+    aim = m.lost_aim
+    if aim is None or not m.lost_turning or m.lost_hand:
+        return False, False
+    az, el = aim
+    tol = cfg.tolerance_deg
+    az_idle = along_travel(az_deg, az, cfg) <= tol  # (179 and 181 on a Hy-Gain: a turn apart)
+    el_idle = el is None or (el_deg is not None and abs(el_deg - el) <= tol)
+    return az_idle, el_idle
 
 
 def _own_move(
@@ -1543,7 +1580,8 @@ def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a turn the controller finishes by itself (``carried``) may be found
     at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
     since its own last movement or creep as fast as a turn (``az_moved_t``, ``el_moved_t``:
-    the first reading back, for an axis not seen move since). A fast axis's jam is told by
+    the first reading back, for an axis not seen move since; none, for one the lost target
+    gave nothing to do, ``_nothing_to_do``, till it is seen move). A fast axis's jam is told by
     its own short time, a slow axis's turn is not called over while it shows a move only
     every few readings."""
     ref = -1e18
