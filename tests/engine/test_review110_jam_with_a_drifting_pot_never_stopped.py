@@ -74,3 +74,53 @@ def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
         assert stop.time_s - jam_t <= allowed, (stop.time_s - jam_t, allowed)
         assert any("short of its turn" in e.message for e in v.errors(ErrorKind.STOP, since=jam_t))
         assert not v.status.moving
+
+
+def drifting_degrees_from(since: float) -> Callable[[bytes, float], bytes]:
+    """A GS-232B's lines as they reach the host, the azimuth a whole degree (a count of its
+    readings) more every DRIFT_EVERY_S since ``since``."""
+    line = bytearray()
+
+    def drift(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        if not data.endswith(b"\r"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        counts = int((now - since) // DRIFT_EVERY_S)
+        return re.sub(
+            rb"AZ=(\d+)", lambda m: b"AZ=%03d" % (int(m.group(1)) + counts), whole, count=1
+        )
+
+    return drift
+
+
+def test_a_jammed_carried_turn_read_in_whole_degrees_drifting_is_stopped() -> None:
+    """The same on a box read in whole degrees (noise_deg 2): each count of the drift is a
+    reading's whole step, a first one as sudden as a hand's first degree (motion.py rule 2
+    counts it), the next slower than any turn (0.83 deg/s; the slowest 4): it rests between
+    rule 1's moves. On bbafe67a: moving for ever, no stop."""
+    with VirtualRotator("gs232b", emulator={"start_az_deg": 62, "start_el_deg": 0}) as v:
+        cfg = v.cfg.motion
+        own_s = max(cfg.settle_s, mo.axis_seen_s(cfg)["azimuth"])
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+        v.run_for(6.0)  # (its brake delay over: not a deadline)
+        v.target(250)
+        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
+        v.run_for(0.1)  # (between two polls: not a deadline)
+        v.link_down()
+        v.run_for(2.0)  # (the adapter out: not a deadline)
+        v.link_up()
+        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        v.run_for(3.0)  # (the carried turn followed: not a deadline)
+        assert v.truth().is_moving and v.status.moving
+        jam_t = v.now
+        v.jam()  # its motor driving
+        v.to_host = drifting_degrees_from(jam_t)
+        v.run_for(WATCHED_S)
+        [stop, *_] = [f for f in v.frames(since=jam_t) if f.outcome == "stop"] or [None]
+        assert stop is not None, "no stop to a jammed rotor whose motor drives"
+        allowed = own_s + v.cfg.moving_poll_interval_s + 2 * DRIFT_EVERY_S
+        assert stop.time_s - jam_t <= allowed, (stop.time_s - jam_t, allowed)
+        assert any("short of its turn" in e.message for e in v.errors(ErrorKind.STOP, since=jam_t))
