@@ -623,7 +623,7 @@ class App:
             vouched = self.express.vouched(via)  # (the express's word came after its SUBACK,
             if vouched is not None and connection.heard_since(vouched):  # and this after that)
                 return None  # (it came, or comes, on one of them, in its order)
-        if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since, early):
+        if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since):
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
 

@@ -374,44 +374,6 @@ def test_a_lock_on_the_lock_lane_read_stands_for_no_stop(bench: Bench) -> None:
     assert not halts.read_since("v", "stop", lock_lane_only)
 
 
-def test_a_move_the_main_connection_took_stands_for_an_early_stop_alone(bench: Bench) -> None:
-    """Review 108 (express.py rules 8, 11): a move the main connection read, with its topics
-    kept since, was published after any STOP that connection never had (it subscribed after
-    that STOP), so a STOP only the express read early (no frame) does not stop it; a STOP
-    published later reaches that connection too. One whose frame went stopped the controller:
-    the bridge carries it out too. A move stands for no lock ON."""
-
-    def main_only(via: str, t: float) -> bool:
-        return via == "main"
-
-    halts = bench.lane
-    assert not halts.read_since("v", "stop", main_only, early=True)
-    halts.moved("v", halts.now())
-    assert halts.read_since("v", "stop", main_only, early=True)
-    assert not halts.read_since("v", "stop", main_only)  # (its frame went)
-    assert not halts.read_since("v", "stop", lambda via, t: via != "main", early=True)
-    assert not halts.read_since("v", "lock", main_only, early=True)
-
-
-def test_a_lock_off_read_stands_for_a_lock_on_only_the_express_read(bench: Bench) -> None:
-    """Review 108: a lock OFF a connection of the lock's topic read, with its topics kept since,
-    was published after any lock ON it never had, so such an ON only the express read (late)
-    locks nothing again; an OFF stands for no stop."""
-
-    def only(name: str) -> Callable[[str, float], bool]:
-        return lambda via, t: via == name
-
-    halts = bench.lane
-    halts.on_lane("rotor/v/lock", b"OFF", False)  # (the lock lane's; the main connection down)
-    assert halts.read_since("v", "lock", only("lock"), early=True)
-    assert halts.read_since("v", "lock", only("lock"))
-    assert not halts.read_since("v", "lock", only("main"))
-    assert not halts.read_since("v", "stop", only("lock"), early=True)
-    halts.main_lock_off(bench.rot)
-    assert halts.read_since("v", "lock", only("main"))
-    assert not halts.read_since("v", "stop", only("main"), early=True)
-
-
 def test_a_group_s_stop_read_on_the_main_connection_stands_for_each_member_s(
     bench: Bench,
 ) -> None:

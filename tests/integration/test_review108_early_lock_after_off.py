@@ -35,6 +35,11 @@ def broker_conf(tmp_path: Path) -> str:
     return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 108: a lock ON the stop express reads late and early locks the rotator "
+    "after a lock OFF published after it; targets are refused as locked",
+)
 def test_an_early_lock_on_read_late_does_not_undo_a_lock_off_published_after_it(
     tmp_path: Path, broker: Mosquitto, caplog: pytest.LogCaptureFixture
 ) -> None:

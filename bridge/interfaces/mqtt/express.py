@@ -182,9 +182,8 @@ Rules:
    a broker restart the express came back first, and a ``G/stop`` stopped the group's
    Rotor-EZ while its SPID turned on to the group's target). A
    lock ON a connection heard too, just after its SUBACK (before the express answered for
-   it), is set twice, and a lock OFF carried out between the two is undone unless that
-   connection read the OFF after its SUBACK (``read_since``): the safe side. Who sent it is
-   named in these words only as an operator's name
+   it), is set twice, and a lock OFF carried out between the two is undone: the safe side,
+   said in docs/mqtt.md. Who sent it is named in these words only as an operator's name
    (core/model.py ``operator_name``, what the bridge takes of it anyway), never as the user
    property came: a STOP whose ``operator`` held 21,845 non-ASCII characters (the 64 KiB an
    MQTT string may hold) made a word of 131 KB that the bridge read cut at 64 KiB, its reader
@@ -201,18 +200,14 @@ Rules:
    vouch answered at once while the express was subscribed and not yet writing (rule 8)
    says nothing of a stop it reads later, which may have been published before that
    connection's SUBSCRIBE. A stop both had is then carried out twice at worst (the safe
-   side, as above). Nor may it undo a newer word (rule 8: a late frame never stops a newer
-   move; review 108: a STOP read late, early, stopped the turn to a target published after
-   it, and a lock ON read so locked the rotator again after the operator's lock OFF): a
-   connection that has had its topics without a break since it read a word orders the early
-   one by that subscription, not by a clock (docs/architecture.md rule 15): published after
-   the SUBSCRIBE it reaches that connection too, published before it, it is older than what
-   that connection read. So a move the main connection read and the rotator took stands for
-   an early stop, and a lock OFF the main connection or the lock lane read for a lock ON
-   (``read_since``); a connection that has read nothing since it subscribed orders nothing,
-   and the early word is carried out. Only the main connection and the lane of the word's
-   kind answer for it: the lock lane never reads a STOP (review 108: a lock ON it read once,
-   since turned OFF, had let a STOP only the express read be dropped).
+   side, as above). Only the main connection and the lane of the word's kind answer for it
+   (``read_since``): the lock lane never reads a STOP (review 108: a lock ON it read once,
+   since turned OFF, had let a STOP only the express read be dropped). A move or a lock OFF
+   read since does not order an early word (review 114: a move the session refused after
+   taking it, a lock OFF refused as stale, or one read on a path that had died unseen, let
+   a STOP or lock ON only the express read be dropped); review 108's price, open: an early
+   STOP read late may stop a target published after it, an early lock ON relock after a
+   newer OFF (the safe side).
 """
 
 from __future__ import annotations

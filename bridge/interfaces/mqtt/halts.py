@@ -237,11 +237,7 @@ class Halts:
         self.markers_refused: Callable[[tuple[str, ...]], bool] | None = None
 
     def read_since(
-        self,
-        rotator_id: str,
-        kind: str,
-        heard_since: Callable[[str, float], bool],
-        early: bool = False,
+        self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
     ) -> bool:
         """express.py rule 11: whether a connection read a halt of this rotator that stands
         for a ``kind`` ("stop" or "lock") only the express read, and has had its command topics
@@ -255,18 +251,8 @@ class Halts:
         never reads a STOP, so its lock ON (since turned OFF, a target sent) had let a STOP only
         the express read be dropped, and the rotor turned on. A lock ON the main connection read
         still stands for a stop even after an OFF: a STOP published after it reached that
-        connection too (carried out there), and one published before it is older than it.
-        The same order makes a lock OFF a connection of the lock's read stand for a lock ON
-        (review 108: an early lock ON read late had locked the rotator again after an OFF
-        published after it), and, for an ``early`` stop (express.py rule 11: no frame went), a
-        move the main connection read and the rotator took (``moved``): a STOP published after
-        that connection subscribed reaches it too, and one published before is older than the
-        move (review 108: an early STOP read late stopped a target published after it; rule 8).
-        Not for a stop whose frame went: the controller stopped, and the bridge says so too."""
-        kinds = {
-            "stop": ("stop", "lock", "move") if early else ("stop", "lock"),
-            "lock": ("lock", "off"),
-        }[kind]
+        connection too (carried out there), and one published before it is older than it."""
+        kinds = ("stop", "lock") if kind == "stop" else ("lock",)
         for via in ("main", _VIA[kind]):
             for halt in kinds:
                 t = self._read.get((via, rotator_id, halt))
@@ -274,20 +260,10 @@ class Halts:
                     return True
         return False
 
-    def _noted(self, via: str, rotator_id: str, kind: str, t: float | None = None) -> None:
-        """``read_since``'s books: ``via`` ("main", "lane" or "lock") read a live word (never a
-        replayed one) of this ``kind`` for this rotator now (or at ``t``): a halt ("stop" or
-        "lock"), a lock OFF ("off"), a move the rotator took ("move", the main connection's)."""
-        self._read[via, rotator_id, kind] = self._clock() if t is None else t
-
-    def now(self) -> float:
-        """The clock ``moved`` takes (read before the move is judged)."""
-        return self._clock()
-
-    def moved(self, rotator_id: str, t: float) -> None:
-        """``read_since``: a move the main connection read at ``t`` (live), which the rotator
-        took (its judge let it through)."""
-        self._noted("main", rotator_id, "move", t)
+    def _noted(self, via: str, rotator_id: str, kind: str) -> None:
+        """``read_since``'s books: ``via`` ("main", "lane" or "lock") read a live halt (never a
+        replayed one) of this ``kind`` ("stop" or "lock") for this rotator now."""
+        self._read[via, rotator_id, kind] = self._clock()
 
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message): holds end with
@@ -787,7 +763,6 @@ class Halts:
         if kind == "lock" and not switch_on(payload):
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
-            self._noted("lock", rotator_id, "off")  # (read_since: an ON only the express read)
             # lastword.py rule 12, as main_lock_off: the halt count read before the look (a lock
             # ON put after it refuses the OFF at the judge), and another interface's halt under way
             since, under_way = rot.halts, self.fenced(rotator_id, lock_off=True)
@@ -865,7 +840,6 @@ class Halts:
 
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
-        self._noted("main", rot.id, "off")  # (read_since: an ON only the express read)
         since = rot.halts  # lastword.py rule 11: read before the fence is asked, so that a
         # lock ON put after that refuses it; and the lock ONs counted before it too (rule 13:
         # one carried out between the look and the lock is after the snapshot; a review)

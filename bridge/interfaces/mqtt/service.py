@@ -383,14 +383,10 @@ class MqttService:
         self._halts.markers_allowed()
 
     def halt_read_since(
-        self,
-        rotator_id: str,
-        kind: str,
-        heard_since: Callable[[str, float], bool],
-        early: bool = False,
+        self, rotator_id: str, kind: str, heard_since: Callable[[str, float], bool]
     ) -> bool:
         """interfaces/mqtt/express.py rule 11 (halts.py ``read_since``)."""
-        return self._halts.read_since(rotator_id, kind, heard_since, early)
+        return self._halts.read_since(rotator_id, kind, heard_since)
 
     def confirm_markers_with(
         self,
@@ -665,13 +661,10 @@ class MqttService:
                 refused[part.member] = late
                 rot.report_refusal(late, said, origin=origin)
                 continue
-            read_t = self._halts.now()
             try:
                 rot.submit(target, said, since=since)
             except Refused as exc:
                 refused[part.member] = exc.message
-            else:
-                self._halts.moved(rot.id, read_t)  # (halts.py read_since)
         if refused:
             self._group_event(group_id, refusals_json(group, what, refused))
         self._set_group_refused(group, refused)
@@ -918,10 +911,7 @@ class MqttService:
             assert since is not None  # (read above, before the fence was asked)
             self._by_call(rot, command.call, command.long_path, what, by, since, not_after_s)
         elif command is not None:
-            read_t = self._halts.now()
             rot.submit(command, what, since=since)
-            if since is not None:  # a move the rotator took (halts.py read_since)
-                self._halts.moved(rot.id, read_t)
 
 
 class _Outbound(NamedTuple):
