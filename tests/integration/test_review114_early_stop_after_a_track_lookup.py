@@ -35,13 +35,6 @@ def broker_conf(tmp_path: Path) -> str:
     return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 114: a STOP only the stop express read is dropped for a track start whose "
-        "look-up the session then refuses; the rotor turns on to the target before the STOP"
-    ),
-)
 def test_an_early_stop_is_carried_out_after_a_track_start_whose_lookup_is_refused(
     tmp_path: Path, broker: Mosquitto
 ) -> None:

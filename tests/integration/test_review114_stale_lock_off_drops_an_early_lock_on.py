@@ -60,13 +60,6 @@ def _stale_lock_off(port: int) -> None:
         client.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 114: a lock OFF the bridge refused as stale still drops a lock ON only the "
-        "stop express read: the rotator stays unlocked and the next target turns the rotor"
-    ),
-)
 def test_an_early_lock_on_is_set_after_a_lock_off_the_bridge_refused(
     tmp_path: Path, broker: Mosquitto, caplog: pytest.LogCaptureFixture
 ) -> None:
