@@ -1,0 +1,65 @@
+"""Review 113: a start whose every byte is garbled (its line ends too) gets its unwatched stop
+only after 22 s: the Easycomm turning at the start runs from 150 past ``az_min_deg`` 60 down to
+15 (review 107's defect, whose fix covers answers that still end as lines).
+
+Commit 3acc6c92 counts "a poll answered garbled past parsing" toward controller.py rule 9's
+unwatched stop (``_garbled_first``, on ``link.poll_garbled``). Review 107's line tore each
+decimal point and kept the line ends: each poll's answer closes as a garbled one and eight are
+counted in seconds. A receive line that garbles every byte (a failing RX level shifter, RF in
+the cable: the host's own writes arrive intact) tears the line ends too: no answer ever
+closes, the bridge says the controller "does not answer", as if silent (rule 2), though it reads
+every byte, and counts nothing until its junk buffer spills 22 s later; by then the turn is 75
+degrees past the limit. The parent ran it to its end.
+
+In virtual time: review 107's start (the emulated Easycomm II box turning from 150 to 5 when the
+bridge starts, ``az_min_deg`` 60); every byte it sends reaches the host XORed with 0x5A.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+START_DEG = 150.0
+AZ_MIN_DEG = 60.0
+TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
+WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
+STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+
+
+def torn(data: bytes, now: float) -> bytes:
+    """Every byte from the controller garbled (its line ends too): nothing parses."""
+    return bytes(b ^ 0x5A for b in data)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 113: a turn at the start whose every received byte is garbled is stopped "
+    "22 s late, 75 degrees past az_min_deg",
+)
+def test_a_turn_whose_every_byte_is_garbled_is_stopped_before_the_limit(rig: Rig) -> None:
+    v = rig(
+        "easycomm2",
+        emulator={"start_az_deg": START_DEG},
+        settings={"az_min_deg": AZ_MIN_DEG},
+        connect=False,
+    )
+    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
+    v.run_for(TURNING_S)
+    assert v.truth().is_moving
+    t = v.now
+    v.to_host = torn
+    v.link_up()
+    lowest = START_DEG
+    while v.now < t + WATCH_S:
+        v.run_for(STEP_S)
+        lowest = min(lowest, v.truth().az_deg)
+    said = [e.message for e in v.errors(since=t)]
+    assert lowest >= AZ_MIN_DEG, (
+        f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "
+        f"{AZ_MIN_DEG:g}; stop frames: {len(v.frames('stop', since=t))}; said: {said}"
+    )
