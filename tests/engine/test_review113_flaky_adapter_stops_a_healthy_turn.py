@@ -57,3 +57,47 @@ def test_a_healthy_turn_on_a_flaky_adapter_is_not_stopped(rig: Rig) -> None:
         f"{v.truth().az_deg:.0f}, moving: {v.truth().is_moving}); said: {said[:1]}"
     )
     assert v.truth().is_moving or v.truth().az_deg == pytest.approx(TARGET_DEG, abs=2)
+
+
+TORN_BYTES = 6  # the bytes each opening of the port garbles (a line cut at the opening)
+UP_TORN_S = 1.5  # each connection of the second adapter (virtual time, not a deadline)
+DROPS_TORN = 12
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 113: a healthy RC2800 turn on an adapter whose every opening garbles an "
+    "answer is stopped, its target never reached",
+)
+def test_a_healthy_turn_whose_every_reconnect_garbles_an_answer_is_not_stopped(
+    rig: Rig,
+) -> None:
+    """The same with connections of a second and a half, each opening garbling the first
+    answer (3acc6c92 counts it): an RC2800's turn to 350 is stopped near 80, a Rot2Prog's and
+    a GS-232B's likewise; the parent let each run on."""
+    v = rig("rc2800", emulator={"start_az_deg": START_DEG})
+    v.run_for(SETTLE_S)
+    t = v.now
+    v.target(TARGET_DEG)
+    v.run_until(lambda h: h.truth().is_moving, STARTS_S, "the turn begun")
+    read = [0]
+
+    def opening_garbles(data: bytes, now: float) -> bytes:
+        read[0] += len(data)
+        if read[0] > TORN_BYTES:
+            return data
+        return bytes(b if b in b"\r\n" else b ^ 0x20 for b in data)
+
+    v.to_host = opening_garbles
+    for _ in range(DROPS_TORN):
+        v.link_down()
+        v.run_for(DOWN_S)
+        read[0] = 0
+        v.link_up()
+        v.run_for(UP_TORN_S)
+    said = [e.message for e in v.errors(since=t) if e.kind == ErrorKind.STOP]
+    stops = v.frames("stop", since=t)
+    assert not stops, (
+        f"{len(stops)} stop frames written to a healthy turn (the rotor at "
+        f"{v.truth().az_deg:.0f}, moving: {v.truth().is_moving}); said: {said[:1]}"
+    )
