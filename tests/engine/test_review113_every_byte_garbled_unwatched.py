@@ -8,7 +8,7 @@ decimal point and kept the line ends: each poll's answer closes as a garbled one
 counted in seconds. A receive line that garbles every byte (a failing RX level shifter, RF in
 the cable: the host's own writes arrive intact) tears the line ends too: no answer ever
 closes, the bridge says the controller "does not answer", as if silent (rule 2), though it reads
-every byte, and counts nothing until its junk buffer spills 22 s later; by then the turn is 75
+every byte, and counts nothing until its junk buffer spills 22 s later; by then the turn is 45
 degrees past the limit. The parent ran it to its end.
 
 In virtual time: review 107's start (the emulated Easycomm II box turning from 150 to 5 when the
@@ -39,7 +39,7 @@ def torn(data: bytes, now: float) -> bytes:
 @pytest.mark.xfail(
     strict=True,
     reason="review 113: a turn at the start whose every received byte is garbled is stopped "
-    "22 s late, 75 degrees past az_min_deg",
+    "22 s late, 45 degrees past az_min_deg",
 )
 def test_a_turn_whose_every_byte_is_garbled_is_stopped_before_the_limit(rig: Rig) -> None:
     v = rig(
