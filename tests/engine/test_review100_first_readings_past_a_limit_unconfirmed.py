@@ -18,10 +18,10 @@ in turn: no two agree, and no three lie on a turn a rotor can make.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
+from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -29,30 +29,6 @@ START_DEG = 150.0
 AZ_MIN_DEG = 60.0
 OFFSETS = [0.0, 60.0, -60.0]
 WATCH_S = 40  # 145 degrees at 6 deg/s, with room
-
-
-def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
-    """Each answer line's azimuth reaches the host off by the next of ``offsets``, in turn."""
-    line = bytearray()
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\n" in line:
-            cut = line.index(b"\n") + 1
-            whole = bytes(line[:cut])
-            del line[:cut]
-            found = re.search(rb"AZ(\d+\.\d)", whole)
-            if found:
-                off = offsets[count[0] % len(offsets)]
-                count[0] += 1
-                said = f"AZ{float(found.group(1)) + off:.1f}".encode()
-                whole = whole[: found.start()] + said + whole[found.end() :]
-            out += whole
-        return out
-
-    return garble
 
 
 def test_a_turn_whose_first_readings_never_agree_is_stopped_before_the_limit(rig: Rig) -> None:

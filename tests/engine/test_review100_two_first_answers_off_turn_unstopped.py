@@ -22,9 +22,9 @@ one bit off, the rest as sent.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
+from tests.engine.garblers import first_answers_one_bit_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -32,31 +32,6 @@ START_DEG = 150.0
 AZ_MIN_DEG = 60.0
 FLIPS = [b"3", b"2"]  # the hundreds' 1 (0x31) read as 3 (0x33), then as 2 (0x32): one bit each
 WATCH_S = 40  # 145 degrees at 6 deg/s, with room
-
-
-def first_answers_one_bit_off(
-    flips: list[bytes],
-) -> Callable[[bytes, float], bytes]:
-    """The box's first ``len(flips)`` answer lines with a bearing of 100 to 199 reach the host
-    with its hundreds digit as the next of ``flips``; everything else as sent."""
-    line = bytearray()
-    left = list(flips)
-
-    def garble(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\n" in line:
-            cut = line.index(b"\n") + 1
-            whole = bytes(line[:cut])
-            del line[:cut]
-            found = re.search(rb"AZ1\d\d\.\d", whole)
-            if found and left:
-                at = found.start() + 2
-                whole = whole[:at] + left.pop(0) + whole[at + 1 :]
-            out += whole
-        return out
-
-    return garble
 
 
 def test_a_turn_at_the_start_is_stopped_before_the_limit_when_two_first_answers_are_off(

@@ -19,10 +19,10 @@ the limit); three seconds after the start a hand turns the rotor down to 5 at th
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
+from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -31,30 +31,6 @@ AZ_MIN_DEG = 60.0
 OFFSETS = [-100.0, 60.0, 0.0]  # the first answer reads 50: past az_min_deg, the rotor is not
 SETTLED_S = 3.0  # the start's first readings, at rest (not a deadline)
 WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
-
-
-def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
-    """Each answer line's azimuth reaches the host off by the next of ``offsets``, in turn."""
-    line = bytearray()
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\n" in line:
-            cut = line.index(b"\n") + 1
-            whole = bytes(line[:cut])
-            del line[:cut]
-            found = re.search(rb"AZ(\d+\.\d)", whole)
-            if found:
-                off = offsets[count[0] % len(offsets)]
-                count[0] += 1
-                said = f"AZ{float(found.group(1)) + off:.1f}".encode()
-                whole = whole[: found.start()] + said + whole[found.end() :]
-            out += whole
-        return out
-
-    return garble
 
 
 def test_a_turn_past_the_limit_after_a_garble_spent_the_first_stop_is_stopped(rig: Rig) -> None:

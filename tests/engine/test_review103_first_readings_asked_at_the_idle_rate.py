@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.test_review103_two_garbles_on_a_steady_line import frames_off
+from tests.engine.garblers import frames_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -31,7 +31,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
+from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -25,6 +25,7 @@ from dataclasses import replace
 import pytest
 
 from bridge.core.model import MotionState, Source
+from tests.engine.garblers import frames_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -32,36 +33,6 @@ REST_DEG = 150.0
 OFFSETS = [0.0, 10.0, 20.0]  # the first frame true, the next two on one line with it
 NUDGE_DEG = -10.0
 WATCH_S = 60.0  # a nudge's turn of 10 degrees at 1 deg/s, with room (virtual time)
-FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
-
-
-def frames_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
-    """Each position frame's azimuth reaches the host off by the next of ``offsets``, in
-    turn (the raw digits rewritten: tenths of a degree), then as sent."""
-    buf = bytearray()
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        buf.extend(data)
-        out = b""
-        while len(buf) >= FRAME:
-            if buf[0] != 0x57:
-                out += bytes(buf[:1])
-                del buf[:1]
-                continue
-            frame = bytearray(buf[:FRAME])
-            del buf[:FRAME]
-            if frame[-1] == 0x20 and count[0] < len(offsets):
-                tenths = frame[1] * 1000 + frame[2] * 100 + frame[3] * 10 + frame[4]
-                tenths += round(offsets[count[0]] * 10)
-                count[0] += 1
-                frame[1:5] = bytes(
-                    [tenths // 1000, tenths // 100 % 10, tenths // 10 % 10, tenths % 10]
-                )
-            out += bytes(frame)
-        return out
-
-    return garble
 
 
 def started(rig: Rig) -> VirtualRotator:

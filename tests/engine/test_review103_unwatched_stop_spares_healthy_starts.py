@@ -22,8 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
-from tests.engine.test_review103_two_garbles_on_a_steady_line import frames_off
+from tests.engine.garblers import every_answer_off, frames_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.test_review100_first_readings_past_a_limit_unconfirmed import every_answer_off
+from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

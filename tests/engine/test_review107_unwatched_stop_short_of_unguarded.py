@@ -20,9 +20,9 @@ three seconds; then the line is sound, and twenty seconds later one poll reaches
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
+from tests.engine.garblers import every_rotorez_answer_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -39,27 +39,6 @@ POLL = b"AI1;"
 JOG = b"AM1;"  # one flipped bit: turn to the stored target
 
 
-def every_answer_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
-    """Each ``;ddd`` azimuth answer reaches the host off by the next of ``offsets``, in turn."""
-    held = bytearray()
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        held.extend(data)
-        out = b""
-        while (found := re.search(rb";(\d{3})", held)) is not None:
-            off = offsets[count[0] % len(offsets)]
-            count[0] += 1
-            said = f";{round(float(found.group(1)) + off) % 360:03d}".encode()
-            out += bytes(held[: found.start()]) + said
-            del held[: found.end()]
-        if b";" not in held:  # (no answer begun: the rest as sent)
-            out, held[:] = out + bytes(held), b""
-        return out
-
-    return garble
-
-
 def test_a_turn_cut_short_by_the_unwatched_stop_is_not_run_on_by_a_garbled_poll(
     rig: Rig,
 ) -> None:
@@ -70,7 +49,7 @@ def test_a_turn_cut_short_by_the_unwatched_stop_is_not_run_on_by_a_garbled_poll(
     assert v.truth().is_moving
     v.link_down()
     v.run_for(UNPLUGGED_S)
-    v.to_host = every_answer_off(OFFSETS)
+    v.to_host = every_rotorez_answer_off(OFFSETS)
     v.link_up()
     v.run_for(GARBLED_S)
     v.to_host = None

@@ -24,7 +24,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.test_review103_two_garbles_on_a_steady_line import frames_off
+from tests.engine.garblers import frames_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

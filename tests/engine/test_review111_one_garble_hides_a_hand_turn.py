@@ -21,11 +21,11 @@ read ``3`` (0x31 read 0x33: one bit); every other answer as sent.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
 import pytest
 
+from tests.engine.garblers import first_turning_answer_one_bit_off
 from tests.engine.virtual import Sent, VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -37,30 +37,6 @@ CONFIRMED_S = 5.0  # the start's readings on a clean line (not a deadline)
 POLLED_S = 5.0  # until a poll goes out (virtual time: one a second)
 WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
-
-
-def first_turning_answer_one_bit_off(rest: str) -> Callable[[bytes, float], bytes]:
-    """The first answer line whose azimuth is not ``rest`` (the rotor turned) reaches the host
-    with the hundreds digit of that azimuth read ``3`` for ``1``; everything else as sent."""
-    line = bytearray()
-    done = [False]
-
-    def garble(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\n" in line:
-            cut = line.index(b"\n") + 1
-            whole = bytes(line[:cut])
-            del line[:cut]
-            found = re.search(rb"AZ(1\d\d\.\d)", whole)
-            if found and not done[0] and found.group(1).decode() != rest:
-                done[0] = True
-                at = found.start() + 2
-                whole = whole[:at] + b"3" + whole[at + 1 :]
-            out += whole
-        return out
-
-    return garble
 
 
 @pytest.mark.xfail(

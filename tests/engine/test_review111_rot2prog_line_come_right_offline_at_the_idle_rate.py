@@ -16,9 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.test_review111_rot2prog_unwatched_restop_at_the_idle_rate import (
-    every_frame_off,
-)
+from tests.engine.garblers import every_frame_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from tests.engine.garblers import every_frame_off
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -28,36 +29,6 @@ OFFSETS = [0.0, 60.0, -60.0]
 GARBLED_S = 180.0  # three minutes of disagreeing first readings (virtual time)
 WATCH_S = 150.0  # 145 degrees at 1 deg/s, with room (virtual time)
 STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
-FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
-
-
-def every_frame_off(offsets: list[float]) -> Callable[[bytes, float], bytes]:
-    """Each position frame's azimuth reaches the host off by the next of ``offsets``, in
-    turn, for good (the raw digits rewritten: tenths of a degree)."""
-    buf = bytearray()
-    count = [0]
-
-    def garble(data: bytes, now: float) -> bytes:
-        buf.extend(data)
-        out = b""
-        while len(buf) >= FRAME:
-            if buf[0] != 0x57:
-                out += bytes(buf[:1])
-                del buf[:1]
-                continue
-            frame = bytearray(buf[:FRAME])
-            del buf[:FRAME]
-            if frame[-1] == 0x20:
-                tenths = frame[1] * 1000 + frame[2] * 100 + frame[3] * 10 + frame[4]
-                tenths += round(offsets[count[0] % len(offsets)] * 10)
-                count[0] += 1
-                frame[1:5] = bytes(
-                    [tenths // 1000, tenths // 100 % 10, tenths // 10 % 10, tenths % 10]
-                )
-            out += bytes(frame)
-        return out
-
-    return garble
 
 
 def test_a_hand_turn_on_a_garbling_rot2prog_start_is_stopped_before_the_limit(rig: Rig) -> None:

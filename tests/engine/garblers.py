@@ -1,0 +1,139 @@
+"""Garblers for ``VirtualRotator.to_host``: what a noisy line does to a box's answers.
+
+Each returns a ``(data, now) -> data`` function that rewrites the position answers on their
+way to the host, keeping whatever it has not yet seen whole (a line, a frame) for the next
+call. Shared by the review tests of the first-readings doubt (controller.py rule 9) and the
+unwatched stop (reviews 100, 103, 107, 111).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+Garble = Callable[[bytes, float], bytes]
+ROT2PROG_FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
+
+
+def _easycomm_lines(rewrite: Callable[[bytes], bytes]) -> Garble:
+    """Each whole answer line (up to ``\\n``) through ``rewrite``; a part line held back."""
+    line = bytearray()
+
+    def garble(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        out = b""
+        while b"\n" in line:
+            cut = line.index(b"\n") + 1
+            whole = bytes(line[:cut])
+            del line[:cut]
+            out += rewrite(whole)
+        return out
+
+    return garble
+
+
+def every_answer_off(offsets: list[float]) -> Garble:
+    """Each answer line's azimuth reaches the host off by the next of ``offsets``, in turn."""
+    count = [0]
+
+    def rewrite(whole: bytes) -> bytes:
+        found = re.search(rb"AZ(\d+\.\d)", whole)
+        if found:
+            off = offsets[count[0] % len(offsets)]
+            count[0] += 1
+            said = f"AZ{float(found.group(1)) + off:.1f}".encode()
+            whole = whole[: found.start()] + said + whole[found.end() :]
+        return whole
+
+    return _easycomm_lines(rewrite)
+
+
+def first_answers_one_bit_off(flips: list[bytes]) -> Garble:
+    """The box's first ``len(flips)`` answer lines with a bearing of 100 to 199 reach the host
+    with its hundreds digit as the next of ``flips``; everything else as sent."""
+    left = list(flips)
+
+    def rewrite(whole: bytes) -> bytes:
+        found = re.search(rb"AZ1\d\d\.\d", whole)
+        if found and left:
+            at = found.start() + 2
+            whole = whole[:at] + left.pop(0) + whole[at + 1 :]
+        return whole
+
+    return _easycomm_lines(rewrite)
+
+
+def first_turning_answer_one_bit_off(rest: str) -> Garble:
+    """The first answer line whose azimuth is not ``rest`` (the rotor turned) reaches the host
+    with the hundreds digit of that azimuth read ``3`` for ``1``; everything else as sent."""
+    done = [False]
+
+    def rewrite(whole: bytes) -> bytes:
+        found = re.search(rb"AZ(1\d\d\.\d)", whole)
+        if found and not done[0] and found.group(1).decode() != rest:
+            done[0] = True
+            at = found.start() + 2
+            whole = whole[:at] + b"3" + whole[at + 1 :]
+        return whole
+
+    return _easycomm_lines(rewrite)
+
+
+def every_rotorez_answer_off(offsets: list[float]) -> Garble:
+    """Each ``;ddd`` azimuth answer reaches the host off by the next of ``offsets``, in turn."""
+    held = bytearray()
+    count = [0]
+
+    def garble(data: bytes, now: float) -> bytes:
+        held.extend(data)
+        out = b""
+        while (found := re.search(rb";(\d{3})", held)) is not None:
+            off = offsets[count[0] % len(offsets)]
+            count[0] += 1
+            said = f";{round(float(found.group(1)) + off) % 360:03d}".encode()
+            out += bytes(held[: found.start()]) + said
+            del held[: found.end()]
+        if b";" not in held:  # (no answer begun: the rest as sent)
+            out, held[:] = out + bytes(held), b""
+        return out
+
+    return garble
+
+
+def _rot2prog_frames(offsets: list[float], *, for_good: bool) -> Garble:
+    buf = bytearray()
+    count = [0]
+
+    def garble(data: bytes, now: float) -> bytes:
+        buf.extend(data)
+        out = b""
+        while len(buf) >= ROT2PROG_FRAME:
+            if buf[0] != 0x57:
+                out += bytes(buf[:1])
+                del buf[:1]
+                continue
+            frame = bytearray(buf[:ROT2PROG_FRAME])
+            del buf[:ROT2PROG_FRAME]
+            if frame[-1] == 0x20 and (for_good or count[0] < len(offsets)):
+                tenths = frame[1] * 1000 + frame[2] * 100 + frame[3] * 10 + frame[4]
+                tenths += round(offsets[count[0] % len(offsets)] * 10)
+                count[0] += 1
+                frame[1:5] = bytes(
+                    [tenths // 1000, tenths // 100 % 10, tenths // 10 % 10, tenths % 10]
+                )
+            out += bytes(frame)
+        return out
+
+    return garble
+
+
+def frames_off(offsets: list[float]) -> Garble:
+    """Each Rot2Prog position frame's azimuth reaches the host off by the next of ``offsets``,
+    in turn (the raw digits rewritten: tenths of a degree), then as sent."""
+    return _rot2prog_frames(offsets, for_good=False)
+
+
+def every_frame_off(offsets: list[float]) -> Garble:
+    """Each Rot2Prog position frame's azimuth reaches the host off by the next of ``offsets``,
+    in turn, for good (the raw digits rewritten: tenths of a degree)."""
+    return _rot2prog_frames(offsets, for_good=True)
