@@ -16,6 +16,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
+from tests.engine.carried import replugged
 from tests.engine.test_review84_elevation_carried_turn import START_AZ, raising_the_elevation
 from tests.engine.virtual import VirtualRotator
 
@@ -28,11 +29,7 @@ def carried_over_a_replug(settings: dict[str, float]) -> None:
     with VirtualRotator("gs232b", emulator=emulator, settings=settings) as v:
         assert v.cfg.motion.settle_s >= 1.5  # (the default or longer: not a deadline)
         raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         assert v.truth().is_moving  # it finishes its old turn by itself
         t = v.now
         v.run_until(lambda h: not h.truth().is_moving, 60, "the turn over")

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
+from tests.engine.carried import at_rest, replugged
 from tests.engine.virtual import VirtualRotator
 
 SLOW_EL_DEG_S = 1.0  # an elevation set slow (its axis_seen_s 4.8 s; the azimuth's 1.1 s)
@@ -29,16 +30,10 @@ def test_a_jam_of_a_carried_azimuth_turn_is_stopped_by_the_azimuths_own_time() -
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
         assert seen["elevation"] < EL_SHOWN_STILL_S  # (the set-up: not a deadline)
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # (its brake delay over: not a deadline)
+        at_rest(v)
         v.target(250, 0)
         v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         v.run_for(EL_SHOWN_STILL_S)  # the elevation still all along, the azimuth turning on
         assert v.truth().is_moving and v.status.moving
         jam_t = v.now

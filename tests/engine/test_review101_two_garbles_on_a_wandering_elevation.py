@@ -23,6 +23,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
+from tests.engine.carried import at_rest, replugged
 from tests.engine.test_attack19_follow_start_refused_grid import PARTNER
 from tests.engine.test_follow import STATION
 from tests.engine.virtual import VirtualRotator
@@ -86,16 +87,10 @@ def refused_right_after_a_replug_mid_the_azimuth_turn(
     """``v`` unplugged mid azimuth turn to 250 and plugged back in, following turned on and a
     grid in the keep-out heard at once; the elevation wandering, ``glitches`` readings of it
     garbled a while on. Where the azimuth was when the start was asked."""
-    v.run_until(lambda h: h.status.available, 10, "the controller answers")
-    v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-    v.run_for(6.0)  # (settled: not a deadline)
+    at_rest(v)
     v.target(250, ELEVATION)
     v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-    v.run_for(0.1)  # (between two polls: not a deadline)
-    v.link_down()
-    v.run_for(2.0)  # (the adapter out: not a deadline)
-    v.link_up()
-    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+    replugged(v)
     assert v.truth().is_moving  # it finishes its old turn by itself
     t, here = v.now, v.truth().az_deg
     v.follow(True)

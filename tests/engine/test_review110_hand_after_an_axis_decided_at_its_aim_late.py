@@ -17,6 +17,7 @@ import pytest
 
 from bridge.core.model import ErrorKind, MotionState
 from bridge.session import motion as mo
+from tests.engine.carried import replugged
 from tests.engine.virtual import VirtualRotator
 
 START_AZ = 62
@@ -38,11 +39,7 @@ def test_a_hand_at_an_azimuth_shown_still_at_its_aim_while_the_lost_elevation_tu
         v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
         v.target(START_AZ, EL_AIM)
         v.run_until(lambda h: h.truth().el_deg >= 25.0, 60, "the elevation turning")
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         v.run_for(HAND_AFTER_S)  # the azimuth read still at its aim, the elevation turning on
         assert v.truth().is_moving and v.truth().az_deg == START_AZ
         hand_t = v.now

@@ -17,6 +17,7 @@ from collections.abc import Callable
 
 from bridge.core.model import ErrorKind, MotionState
 from bridge.session import motion as mo
+from tests.engine.carried import at_rest, replugged
 from tests.engine.virtual import VirtualRotator
 
 DRIFT_DEG = 0.1  # a count of the RC2800's readings
@@ -56,11 +57,7 @@ def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
         v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
         v.target(300)
         v.run_until(lambda h: h.truth().az_deg >= 40.0, 60, "the azimuth turning")
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         v.run_for(3.0)  # (the carried turn followed: not a deadline)
         assert v.truth().is_moving and v.status.moving
         jam_t = v.now
@@ -103,16 +100,10 @@ def test_a_jammed_carried_turn_read_in_whole_degrees_drifting_is_stopped() -> No
     with VirtualRotator("gs232b", emulator={"start_az_deg": 62, "start_el_deg": 0}) as v:
         cfg = v.cfg.motion
         own_s = max(cfg.settle_s, mo.axis_seen_s(cfg)["azimuth"])
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
-        v.run_for(6.0)  # (its brake delay over: not a deadline)
+        at_rest(v)
         v.target(250)
         v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         v.run_for(3.0)  # (the carried turn followed: not a deadline)
         assert v.truth().is_moving and v.status.moving
         jam_t = v.now

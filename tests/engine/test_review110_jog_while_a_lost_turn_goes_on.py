@@ -17,6 +17,7 @@ import pytest
 
 from bridge.core.model import ErrorKind, MotionState
 from bridge.session.controller import UNASKED_MOVE_DEG
+from tests.engine.carried import replugged
 from tests.engine.virtual import VirtualRotator
 
 START_AZ = 200.0
@@ -33,11 +34,7 @@ def jogged_after_a_replug(el_aim: float, out_s: float) -> VirtualRotator:
     v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
     v.target(START_AZ, el_aim)
     v.run_until(lambda h: h.truth().el_deg >= 20.0, 60, "the elevation turning")
-    v.run_for(0.1)  # (between two polls: not a deadline)
-    v.link_down()
-    v.run_for(out_s)  # (the adapter out: not a deadline)
-    v.link_up()
-    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+    replugged(v, out_s)
     v.run_for(JOG_AFTER_S)  # (the azimuth read still at its aim: not a deadline)
     assert v.truth().az_deg == START_AZ
     v.garble_writes(b"AZ EL\n", b"AZ ML\n")

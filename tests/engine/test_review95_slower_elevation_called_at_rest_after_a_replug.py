@@ -19,6 +19,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.core.model import ErrorKind
+from tests.engine.carried import replugged
 from tests.engine.test_review84_elevation_carried_turn import START_AZ, raising_the_elevation
 from tests.engine.virtual import VirtualRotator
 
@@ -29,11 +30,7 @@ def test_a_slower_elevation_turn_carried_over_a_replug_is_left_to_finish() -> No
     emulator = {"start_az_deg": START_AZ, "start_el_deg": 0, "el_speed_deg_s": EL_DEG_S}
     with VirtualRotator("gs232b", emulator=emulator) as v:
         raising_the_elevation(v)
-        v.run_for(0.1)  # (between two polls: not a deadline)
-        v.link_down()
-        v.run_for(2.0)  # (the adapter out: not a deadline)
-        v.link_up()
-        v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+        replugged(v)
         assert v.truth().is_moving  # it finishes its old turn by itself
         t = v.now
         v.run_until(lambda h: not h.truth().is_moving, 60, "the turn over")

@@ -1,0 +1,29 @@
+"""Set-up shared by the carried-turn reviews (95, 101, 110): a virtual rotator brought to rest,
+then its adapter pulled mid-turn and plugged back in, so that the turn goes on unasked across
+the replug (motion.py rule 2's carried turn; controller.py's first readings after a replug).
+"""
+
+from __future__ import annotations
+
+from tests.engine.virtual import VirtualRotator
+
+BETWEEN_POLLS_S = 0.1  # pulled between two polls
+OUT_S = 2.0  # the adapter out
+BRAKE_S = 6.0  # a GS-232's brake delay, with room
+
+
+def at_rest(v: VirtualRotator) -> None:
+    """``v`` answering, read at rest and its brake delay over (virtual time)."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.run_until(lambda h: h.status.state is not None and not h.status.moving, 30, "at rest")
+    v.run_for(BRAKE_S)  # (settled: not a deadline)
+
+
+def replugged(v: VirtualRotator, out_s: float = OUT_S) -> None:
+    """``v``'s adapter pulled between two polls, out ``out_s`` (virtual time), plugged back in,
+    and the controller answering again; the rotor goes on with whatever it was doing."""
+    v.run_for(BETWEEN_POLLS_S)  # (between two polls: not a deadline)
+    v.link_down()
+    v.run_for(out_s)  # (the adapter out: not a deadline)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the controller answers again")
