@@ -20,48 +20,24 @@ from pathlib import Path
 
 from bridge.core.model import MotionState, RotatorStatus
 from bridge.interfaces.mqtt.remote import held_stamp
-from bridge.runtime.kept import Kept
-from bridge.runtime.state_store import StateStore
 from bridge.session.mailbox import Mailbox
-from bridge.session.session import RotatorSession
+from tests.engine.kept_storm import kept, saved, session_from
 from tests.engine.test_wind_park_offline import WIND, storm
 from tests.engine.virtual import VirtualRotator
-
-
-def saved(v: VirtualRotator, path: Path, begun: int) -> None:
-    """The state file as one run's statuses (from ``begun``) left it, each handed to Kept as
-    runtime/rotator.py ``_status`` does (kept.py rules 4, 12)."""
-    store, clock = StateStore(path), [0.0]
-    memory = Kept(
-        store, v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None, clock=lambda: clock[0]
-    )
-    for t, status in v.statuses[begun:]:
-        clock[0] = t
-        memory.seen_wind(status.wind)
-        memory.seen_order(status.order)
-    store.flush()
 
 
 def restart(v: VirtualRotator, path: Path, begun: int) -> int:
     """The bridge dies mid-park (the run's statuses from ``begun`` saved) and starts again
     from the state file as runtime/rotator.py starts it; returns where the new run begins."""
-    saved(v, path, begun)
+    saved(v, path, begun, timed=True)
     v.power_cycle()
     v.link_down(None)
     v.run_for(1.0)
-    again = Kept(StateStore(path), v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+    again = kept(v, path)
     v.mailbox.close()
     v.mailbox = Mailbox()
     v.mailbox.places_after(again.since)
-    v.session = RotatorSession(
-        v.cfg,
-        storm=again.storm,
-        storm_halted=again.storm_halted,
-        storm_arrived=again.storm_arrived,
-        storm_place=again.storm_place,
-        order=(again.since, again.turn_place, again.lock_place),
-        place=v.mailbox.own_place,
-    )
+    v.session = session_from(v, again, place=v.mailbox.own_place)
     begun = len(v.statuses)
     v._do(v.session.start(v.now))
     v.link_up()

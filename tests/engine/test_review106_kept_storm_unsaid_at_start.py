@@ -22,7 +22,7 @@ import pytest
 from bridge.core.model import MotionState
 from bridge.runtime.kept import Kept
 from bridge.runtime.state_store import StateStore
-from bridge.session.session import RotatorSession
+from tests.engine.kept_storm import kept, saved, session_from
 from tests.engine.test_wind_park_offline import WIND, parking, storm
 
 
@@ -34,28 +34,16 @@ def test_a_start_in_a_storm_kept_in_the_state_file_says_so_in_the_log(
     try:
         assert WIND["park_az_deg"] == 180
         storm(v)  # two seconds into the park: the bridge dies here
-        store = StateStore(path)
-        memory = Kept(store, v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
-        for _t, status in v.statuses:  # (as runtime/rotator.py ``_status``)
-            memory.seen_wind(status.wind)
-            memory.seen_order(status.order)
-        store.flush()
+        saved(v, path)  # (as runtime/rotator.py ``_status``)
         v.power_cycle()  # (the controller's turn ends with the power)
         v.link_down(None)
         v.run_for(1.0)  # (the bridge down: not a deadline)
         here = v.truth().az_deg
         caplog.clear()
         with caplog.at_level(logging.INFO, logger="bridge"):
-            again = Kept(StateStore(path), v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+            again = kept(v, path)
             assert again.storm
-            v.session = RotatorSession(
-                v.cfg,
-                storm=again.storm,
-                storm_halted=again.storm_halted,
-                storm_arrived=again.storm_arrived,
-                storm_place=again.storm_place,
-                order=(again.since, again.turn_place, again.lock_place),
-            )
+            v.session = session_from(v, again)
             v._do(v.session.start(v.now))
             v.link_up()
             v.run_until(

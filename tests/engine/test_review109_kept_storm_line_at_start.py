@@ -19,9 +19,7 @@ from pathlib import Path
 import pytest
 
 from bridge.core.model import MotionState
-from bridge.runtime.kept import Kept
-from bridge.runtime.state_store import StateStore
-from bridge.session.session import RotatorSession
+from tests.engine.kept_storm import kept, saved, session_from
 from tests.engine.test_wind_park_offline import parking, storm
 
 
@@ -41,25 +39,13 @@ def test_a_stop_after_the_park_was_reached_is_no_park_stopped_in_the_start_line(
         v.run_for(2.0)  # (the status after it: not a deadline)
         assert v.status.wind is not None and v.status.wind.halted and v.status.wind.arrived
         assert v.status.wind.refusal is not None and "parked for the storm" in v.status.wind.refusal
-        store = StateStore(path)
-        memory = Kept(store, v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
-        for _t, status in v.statuses:  # (as runtime/rotator.py ``_status``)
-            memory.seen_wind(status.wind)
-            memory.seen_order(status.order)
-        store.flush()
+        saved(v, path)  # (as runtime/rotator.py ``_status``)
         v.link_down(None)  # the bridge restarts
         caplog.clear()
         with caplog.at_level(logging.INFO, logger="bridge"):
-            again = Kept(StateStore(path), v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+            again = kept(v, path)
         said = [r.getMessage() for r in caplog.records if "storm" in r.getMessage()]
-        v.session = RotatorSession(
-            v.cfg,
-            storm=again.storm,
-            storm_halted=again.storm_halted,
-            storm_arrived=again.storm_arrived,
-            storm_place=again.storm_place,
-            order=(again.since, again.turn_place, again.lock_place),
-        )
+        v.session = session_from(v, again)
         v._do(v.session.start(v.now))
         v.link_up()
         v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the controller answers")

@@ -20,9 +20,7 @@ from pathlib import Path
 import pytest
 
 from bridge.core.model import MotionState
-from bridge.runtime.kept import Kept
-from bridge.runtime.state_store import StateStore
-from bridge.session.session import RotatorSession
+from tests.engine.kept_storm import kept, saved, session_from
 from tests.engine.test_wind_park_offline import parking, storm
 
 
@@ -36,29 +34,16 @@ def test_a_start_locked_in_a_storm_does_not_say_it_parks(
         v.run_for(1.0)  # (the status after it: not a deadline)
         storm(v)  # its park waits for the lock OFF
         assert v.status.wind is not None and v.status.wind.storm and v.status.wind.waiting
-        store = StateStore(path)
-        memory = Kept(store, v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
-        for _t, status in v.statuses:  # (as runtime/rotator.py ``_status``)
-            memory.seen_wind(status.wind)
-            memory.seen_order(status.order)
-        store.flush()
+        store = saved(v, path)  # (as runtime/rotator.py ``_status``)
         assert store.set_locked(v.cfg.rotator_id, True)  # (the lock ON saved, as ever)
         v.link_down(None)  # the bridge restarts
         here = v.truth().az_deg
         caplog.clear()
         with caplog.at_level(logging.INFO, logger="bridge"):
-            again = Kept(StateStore(path), v.cfg.rotator_id, v.cfg.spec, report=lambda *a: None)
+            again = kept(v, path)
         said = [r.getMessage() for r in caplog.records if "storm" in r.getMessage()]
         assert again.locked and again.storm
-        v.session = RotatorSession(
-            v.cfg,
-            locked=again.locked,
-            storm=again.storm,
-            storm_halted=again.storm_halted,
-            storm_arrived=again.storm_arrived,
-            storm_place=again.storm_place,
-            order=(again.since, again.turn_place, again.lock_place),
-        )
+        v.session = session_from(v, again, locked=again.locked)
         v._do(v.session.start(v.now))
         v.link_up()
         v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the controller answers")
