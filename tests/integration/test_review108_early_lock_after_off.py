@@ -22,7 +22,7 @@ import pytest
 
 from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.test_stop_before_the_express_words_are_back import OPEN, WORDS, _Gate
+from tests.integration.express_gate import OPEN, Gate, acl_conf, express_holding, words_dropped
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -31,8 +31,7 @@ from tests.support.waiting import wait_until
 
 @pytest.fixture
 def broker_conf(tmp_path: Path) -> str:
-    (tmp_path / "words.acl").write_text(OPEN)
-    return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
+    return acl_conf(tmp_path, OPEN)
 
 
 @pytest.mark.xfail(
@@ -44,7 +43,7 @@ def test_an_early_lock_on_read_late_does_not_undo_a_lock_off_published_after_it(
     tmp_path: Path, broker: Mosquitto, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.DEBUG, logger="bridge.interfaces.mqtt.express")
-    gate = _Gate(broker.port)
+    gate = Gate(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
@@ -54,8 +53,7 @@ def test_an_early_lock_on_read_late_does_not_undo_a_lock_off_published_after_it(
             gate.held_id = express_client_id(settings)
             app = rig.start()
             rig.ready("tower")
-            wait_until(app.express.up.is_set, 10, "the express up")
-            wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+            express_holding(app)
             assert probe.publish("rotor/lock", "ON")  # locked for work on the tower
             probe.wait_value("rotor/lock/state", "ON")
             bridge_ids = {
@@ -64,15 +62,7 @@ def test_an_early_lock_on_read_late_does_not_undo_a_lock_off_published_after_it(
                 lane_client_id(settings, "lock"),
             }
             gate.refused |= bridge_ids  # the bridge's connections back after the lock ON
-            (tmp_path / "words.acl").write_text(f"{OPEN}topic deny {WORDS}\n")
-            start = broker.log.stat().st_size
-            broker.restart()
-            denied = f"Denied PUBLISH from {app.express.client_id}"
-            wait_until(
-                lambda: denied in broker.log.read_bytes()[start:].decode(errors="replace"),
-                15,
-                "the express back and subscribed, its word dropped",
-            )
+            words_dropped(app, broker, tmp_path)
             gate.hold(True)  # the express reads what the broker sends it late
             assert probe.publish("rotor/lock", "ON")  # 1: locked again (a second press)
             gate.refused -= bridge_ids

@@ -20,7 +20,7 @@ import pytest
 
 from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.test_stop_before_the_express_words_are_back import OPEN, WORDS, _Gate
+from tests.integration.express_gate import OPEN, Gate, acl_conf, express_holding, words_dropped
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -29,8 +29,7 @@ from tests.support.waiting import slow, wait_until
 
 @pytest.fixture
 def broker_conf(tmp_path: Path) -> str:
-    (tmp_path / "words.acl").write_text(OPEN)
-    return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
+    return acl_conf(tmp_path, OPEN)
 
 
 @pytest.mark.xfail(
@@ -41,7 +40,7 @@ def broker_conf(tmp_path: Path) -> str:
 def test_an_early_stop_read_late_does_not_stop_a_target_published_after_it(
     tmp_path: Path, broker: Mosquitto
 ) -> None:
-    gate = _Gate(broker.port)
+    gate = Gate(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
@@ -51,19 +50,10 @@ def test_an_early_stop_read_late_does_not_stop_a_target_published_after_it(
             gate.held_id = express_client_id(settings)
             app = rig.start()
             rig.ready("tower")
-            wait_until(app.express.up.is_set, 10, "the express up")
-            wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+            express_holding(app)
             main_and_lane = {settings.effective_client_id(), lane_client_id(settings)}
             gate.refused |= main_and_lane  # the bridge's connections back after the STOP
-            (tmp_path / "words.acl").write_text(f"{OPEN}topic deny {WORDS}\n")
-            start = broker.log.stat().st_size
-            broker.restart()
-            denied = f"Denied PUBLISH from {app.express.client_id}"
-            wait_until(
-                lambda: denied in broker.log.read_bytes()[start:].decode(errors="replace"),
-                15,
-                "the express back and subscribed, its word dropped",
-            )
+            words_dropped(app, broker, tmp_path)
             gate.hold(True)  # the express reads what the broker sends it late
             assert probe.publish("rotor/stop", "STOP")  # 1: a STOP (the rotor is still)
             gate.refused -= main_and_lane

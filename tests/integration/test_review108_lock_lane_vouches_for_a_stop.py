@@ -13,19 +13,12 @@ while the lock lane and the express stay connected.
 
 from __future__ import annotations
 
-import contextlib
-import socket
-import threading
 from pathlib import Path
 
 import pytest
 
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.test_stop_before_the_express_words_are_back import (
-    OPEN,
-    WORDS,
-    _client_id,
-)
+from tests.integration.express_gate import OPEN, WORDS, Cutter, acl_conf
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -34,78 +27,13 @@ from tests.support.waiting import slow, wait_until
 
 @pytest.fixture
 def broker_conf(tmp_path: Path) -> str:
-    (tmp_path / "words.acl").write_text(f"{OPEN}topic deny {WORDS}\n")
-    return f"allow_anonymous true\nacl_file {tmp_path / 'words.acl'}\nuser root"
-
-
-class _Cutter:
-    """A TCP proxy in front of the broker that knows each connection by its client id and can
-    cut those named (and keep them out from then on)."""
-
-    def __init__(self, backend: int) -> None:
-        self._backend = backend
-        self._refused: set[str] = set()
-        self._lock = threading.Lock()
-        self._socks: dict[str, list[socket.socket]] = {}
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port = self._listener.getsockname()[1]
-        threading.Thread(target=self._serve, daemon=True).start()
-
-    def cut(self, ids: set[str]) -> None:
-        with self._lock:
-            self._refused |= ids
-            socks = [s for who in ids for s in self._socks.pop(who, [])]
-        for s in socks:
-            with contextlib.suppress(OSError):
-                s.shutdown(socket.SHUT_RDWR)
-            s.close()
-
-    def _serve(self) -> None:
-        while True:
-            try:
-                client, _addr = self._listener.accept()
-            except OSError:
-                return
-            threading.Thread(target=self._join, args=(client,), daemon=True).start()
-
-    def _join(self, client: socket.socket) -> None:
-        try:
-            connect = client.recv(65536)
-            who = _client_id(connect) or ""
-            with self._lock:
-                if who in self._refused:
-                    client.close()
-                    return
-            server = socket.create_connection(("127.0.0.1", self._backend))
-            server.sendall(connect)
-        except OSError:
-            client.close()
-            return
-        with self._lock:
-            self._socks.setdefault(who, []).extend([client, server])
-        threading.Thread(target=self._pipe, args=(client, server), daemon=True).start()
-        self._pipe(server, client)
-
-    @staticmethod
-    def _pipe(a: socket.socket, b: socket.socket) -> None:
-        with contextlib.suppress(OSError):
-            while data := a.recv(65536):
-                b.sendall(data)
-        with contextlib.suppress(OSError):
-            b.shutdown(socket.SHUT_WR)
-
-    def close(self) -> None:
-        self._listener.close()
-        with self._lock:
-            socks = [s for group in self._socks.values() for s in group]
-        for s in socks:
-            s.close()
+    return acl_conf(tmp_path, f"{OPEN}topic deny {WORDS}\n")
 
 
 def test_a_stop_only_the_express_read_is_not_vetoed_by_a_lock_on_of_the_lock_lane(
     tmp_path: Path, broker: Mosquitto
 ) -> None:
-    cutter = _Cutter(broker.port)
+    cutter = Cutter(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, cutter, probe) as rig:
