@@ -24,15 +24,12 @@ import contextlib
 import time
 from pathlib import Path
 
+from tests.faults.behind_a_proxy import bridge_behind
 from tests.faults.test_review112_stop_lost_on_a_stalled_path import StallProxy
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import CONNECT, _client_id, _packets, _Stream
-from tests.support.rig import Rig
 from tests.support.tap import near_deg
-from tests.support.waiting import slow, wait_until
+from tests.support.waiting import slow
 
-KEEPALIVE_S = 30  # the bridge's default keep-alive: the kept connections outlive the overload
 BUSY_S = 15.0  # the overload's length: past the verdict, well within the keep-alive
 PROMPT_S = 10.0  # a STOP reaches the controller within this once the broker caught up
 SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
@@ -79,36 +76,25 @@ class BusyProxy(StallProxy):
 def test_a_stop_an_overloaded_broker_held_reaches_the_rotor_when_it_catches_up(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = BusyProxy(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # the operator's phone, on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.express = True
-            rig.mqtt_extra = {"keepalive_s": KEEPALIVE_S}
-            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            app = rig.start()
-            rig.ready("tower")
-            wait_until(app.lane.connected.is_set, 10, "the stop lane up")
-            wait_until(app.express.up.is_set, 10, "the stop express up")
-            probe.publish("rotor/target", "300")  # a long turn (145 s)
-            emu.wait_for(lambda s: s.is_moving, slow(10))
-            proxy.stall()  # the broker overloaded: its backlog, new connections refused
-            try:
-                assert probe.publish("rotor/stop", "")  # the operator's STOP, taken
-                time.sleep(BUSY_S)  # the overload: the fault's length (not a deadline)
-            finally:
-                proxy.unstall()
-            with contextlib.suppress(AssertionError, TimeoutError):
-                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-            s = emu.state()
-            assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
-                f"a STOP the broker took during a {BUSY_S:g} s overload (new connections "
-                f"refused as busy) did not stop the rotor once it caught up: it turns on "
-                f"({s.az_deg:.0f} deg); connections remade for a 'dead path': "
-                f"{app.client.redials}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    with bridge_behind(tmp_path, BusyProxy) as b:
+        proxy = b.proxy
+        probe = b.probe
+        app = b.app
+        emu = b.emu
+        probe.publish("rotor/target", "300")  # a long turn (145 s)
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        proxy.stall()  # the broker overloaded: its backlog, new connections refused
+        try:
+            assert probe.publish("rotor/stop", "")  # the operator's STOP, taken
+            time.sleep(BUSY_S)  # the overload: the fault's length (not a deadline)
+        finally:
+            proxy.unstall()
+        with contextlib.suppress(AssertionError, TimeoutError):
+            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+        s = emu.state()
+        assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
+            f"a STOP the broker took during a {BUSY_S:g} s overload (new connections "
+            f"refused as busy) did not stop the rotor once it caught up: it turns on "
+            f"({s.az_deg:.0f} deg); connections remade for a 'dead path': "
+            f"{app.client.redials}"
+        )

@@ -22,57 +22,42 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
+from tests.faults.behind_a_proxy import KEEPALIVE_S, bridge_behind
 from tests.support.mqtt_proxy import MqttProxy
-from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
-KEEPALIVE_S = 30  # the bridge's default keep-alive: it outlasts the busy spell
 BUSY_S = 12.0  # the uplink's busy spell: the quiet judged (7 s at most) and a probe answered
 
 
 def test_a_busy_uplink_does_not_remake_the_connections(tmp_path: Path) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = MqttProxy(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard, on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.express = True
-            rig.mqtt_extra = {"keepalive_s": KEEPALIVE_S}
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            app = rig.start()
-            rig.ready("tower")
-            wait_until(app.lane.connected.is_set, 10, "the stop lane up")
-            wait_until(app.express.up.is_set, 10, "the stop express up")
-            main_id = app.settings.mqtt.effective_client_id()
-            ids = [main_id, app.lane.client_id, app.express.client_id]
-            before = {cid: proxy.subacks.get(cid, 0) for cid in ids}
-            mark = probe.mark()
-            proxy.hold(main_id)  # the main connection's uplink busy
-            try:
-                time.sleep(BUSY_S)  # the busy spell: the fault's length (not a deadline)
-            finally:
-                proxy.release(main_id)
-            # the queue drained: the bridge says its broker no longer holds anything up
-            wait_until(
-                lambda: (
-                    any(
-                        m.topic == "rotor/bridge/info" and b'"problems":[]' in m.payload
-                        for m in probe.messages[mark:]
-                    )
-                    and not app.client.problems
-                ),
-                slow(KEEPALIVE_S),
-                "the bridge's heartbeats back",
-            )
-            shown = [m.payload for m in probe.messages[mark:] if m.topic == "rotor/bridge/state"]
-            remade = [cid for cid in ids if proxy.subacks.get(cid, 0) > before[cid]]
-            assert b"offline" not in shown and not remade, (
-                f"a {BUSY_S:g} s busy spell of the main connection's uplink, the broker healthy: "
-                f"dashboards were shown the bridge {shown}, connections remade: {remade}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    with bridge_behind(tmp_path, MqttProxy) as b:
+        proxy = b.proxy
+        probe = b.probe
+        app = b.app
+        main_id = app.settings.mqtt.effective_client_id()
+        ids = [main_id, app.lane.client_id, app.express.client_id]
+        before = {cid: proxy.subacks.get(cid, 0) for cid in ids}
+        mark = probe.mark()
+        proxy.hold(main_id)  # the main connection's uplink busy
+        try:
+            time.sleep(BUSY_S)  # the busy spell: the fault's length (not a deadline)
+        finally:
+            proxy.release(main_id)
+        # the queue drained: the bridge says its broker no longer holds anything up
+        wait_until(
+            lambda: (
+                any(
+                    m.topic == "rotor/bridge/info" and b'"problems":[]' in m.payload
+                    for m in probe.messages[mark:]
+                )
+                and not app.client.problems
+            ),
+            slow(KEEPALIVE_S),
+            "the bridge's heartbeats back",
+        )
+        shown = [m.payload for m in probe.messages[mark:] if m.topic == "rotor/bridge/state"]
+        remade = [cid for cid in ids if proxy.subacks.get(cid, 0) > before[cid]]
+        assert b"offline" not in shown and not remade, (
+            f"a {BUSY_S:g} s busy spell of the main connection's uplink, the broker healthy: "
+            f"dashboards were shown the bridge {shown}, connections remade: {remade}"
+        )

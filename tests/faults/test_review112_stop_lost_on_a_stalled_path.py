@@ -25,14 +25,11 @@ import socket
 import time
 from pathlib import Path
 
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
+from tests.faults.behind_a_proxy import bridge_behind
 from tests.support.mqtt_proxy import CONNECT, SUBACK, MqttProxy, _client_id, _packets, _Stream
-from tests.support.rig import Rig
 from tests.support.tap import near_deg
-from tests.support.waiting import slow, wait_until
+from tests.support.waiting import slow
 
-KEEPALIVE_S = 30  # the bridge's default keep-alive: the stalled connections outlive the stall
 STALL_S = 15.0  # the stall's length: past the redial (DEAD_PATH_S), well within the keep-alive
 PROMPT_S = 10.0  # a STOP reaches the controller within this once the stall ends
 SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
@@ -114,37 +111,26 @@ class StallProxy(MqttProxy):
 def test_a_stop_held_by_a_stalled_path_reaches_the_rotor_when_it_delivers(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = StallProxy(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # the operator's phone, on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.express = True
-            rig.mqtt_extra = {"keepalive_s": KEEPALIVE_S}
-            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            app = rig.start()
-            rig.ready("tower")
-            wait_until(app.lane.connected.is_set, 10, "the stop lane up")
-            wait_until(app.express.up.is_set, 10, "the stop express up")
-            probe.publish("rotor/target", "300")  # a long turn (145 s)
-            emu.wait_for(lambda s: s.is_moving, slow(10))
-            proxy.stall()  # the streams open now stall; new ones pass
-            try:
-                # the operator's STOP, taken by the broker (its PUBACK seen) and sent on into
-                # the stalled streams of every stop carrier
-                assert probe.publish("rotor/stop", "")
-                time.sleep(STALL_S)  # the stall: the fault's length (not a deadline)
-            finally:
-                proxy.unstall()
-            with contextlib.suppress(AssertionError, TimeoutError):
-                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-            s = emu.state()
-            assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
-                f"a STOP the broker took during a {STALL_S:g} s stall of the bridge's path did "
-                f"not stop the rotor once the stall ended: it turns on ({s.az_deg:.0f} deg); "
-                f"connections remade for a 'dead path': {app.client.redials}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    with bridge_behind(tmp_path, StallProxy) as b:
+        proxy = b.proxy
+        probe = b.probe
+        app = b.app
+        emu = b.emu
+        probe.publish("rotor/target", "300")  # a long turn (145 s)
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        proxy.stall()  # the streams open now stall; new ones pass
+        try:
+            # the operator's STOP, taken by the broker (its PUBACK seen) and sent on into
+            # the stalled streams of every stop carrier
+            assert probe.publish("rotor/stop", "")
+            time.sleep(STALL_S)  # the stall: the fault's length (not a deadline)
+        finally:
+            proxy.unstall()
+        with contextlib.suppress(AssertionError, TimeoutError):
+            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+        s = emu.state()
+        assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
+            f"a STOP the broker took during a {STALL_S:g} s stall of the bridge's path did "
+            f"not stop the rotor once the stall ended: it turns on ({s.az_deg:.0f} deg); "
+            f"connections remade for a 'dead path': {app.client.redials}"
+        )
