@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import socket
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,51 +24,12 @@ from pathlib import Path
 from bridge.interfaces.mqtt.express import express_client_id
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt_proxy import MqttProxy
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 DOWN_S = 9.0  # the broker away: the fault's length (the main connection tries at 1, 2, 4, 8, 16 s)
 EXPRESS_BACK_S = 5.0  # the express's back-off is 2 s: back well within this after the broker
-
-
-class _Proxy:
-    """Accepts on a port of its own; joins each connection to the broker, or closes it at once
-    when the broker refuses (what Docker's proxy does for a container that is down)."""
-
-    def __init__(self, backend: int) -> None:
-        self._backend = backend
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port = self._listener.getsockname()[1]
-        self._socks: list[socket.socket] = []
-        threading.Thread(target=self._serve, daemon=True).start()
-
-    def _serve(self) -> None:
-        while True:
-            try:
-                client, _addr = self._listener.accept()
-            except OSError:
-                return
-            try:
-                server = socket.create_connection(("127.0.0.1", self._backend))
-            except OSError:
-                client.close()  # the backend is away: accepted, then closed
-                continue
-            self._socks += [client, server]
-            for a, b in ((client, server), (server, client)):
-                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
-
-    @staticmethod
-    def _pipe(a: socket.socket, b: socket.socket) -> None:
-        with contextlib.suppress(OSError):
-            while data := a.recv(65536):
-                b.sendall(data)
-        with contextlib.suppress(OSError):
-            b.shutdown(socket.SHUT_WR)
-
-    def close(self) -> None:
-        self._listener.close()
-        for s in self._socks:
-            s.close()
 
 
 class _Told(logging.Handler):
@@ -117,7 +76,7 @@ def _told() -> Iterator[_Told]:
 
 def test_a_stop_after_a_plain_restart_behind_a_proxy_reaches_the_rotor(tmp_path: Path) -> None:
     broker = Mosquitto(tmp_path / "broker").start()
-    proxy = _Proxy(broker.port)
+    proxy = MqttProxy(broker.port)  # (accepts, then closes at once while the broker is away)
     probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
     try:
         with Rig(tmp_path, proxy, probe) as rig, _told() as told:
