@@ -1,9 +1,9 @@
 """Garblers for ``VirtualRotator.to_host``: what a noisy line does to a box's answers.
 
-Each returns a ``(data, now) -> data`` function that rewrites the position answers on their
+Each garbler returns a ``(data, now) -> data`` function that rewrites the position answers on their
 way to the host, keeping whatever it has not yet seen whole (a line, a frame) for the next
 call. Shared by the review tests of the first-readings doubt (controller.py rule 9) and the
-unwatched stop (reviews 100, 103, 107, 111).
+unwatched stop (reviews 100, 103, 107, 111), with ``lowest_az``, how far a turn they hid ran.
 """
 
 from __future__ import annotations
@@ -11,8 +11,21 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+from tests.engine.virtual import VirtualRotator
+
 Garble = Callable[[bytes, float], bytes]
 ROT2PROG_FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
+STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+
+
+def lowest_az(v: VirtualRotator, until: float, start: float, step_s: float = STEP_S) -> float:
+    """The lowest azimuth the rotor truly reached, from ``start``, stepping virtual time by
+    ``step_s`` until ``until``."""
+    lowest = start
+    while v.now < until:
+        v.run_for(step_s)
+        lowest = min(lowest, v.truth().az_deg)
+    return lowest
 
 
 def _easycomm_lines(rewrite: Callable[[bytes], bytes]) -> Garble:

@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off
+from tests.engine.garblers import every_answer_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -44,10 +44,7 @@ def test_a_turn_whose_first_readings_never_agree_is_stopped_before_the_limit(rig
     t = v.now
     v.to_host = every_answer_off(OFFSETS)
     v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(0.1)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
     errors = v.errors(since=t)
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

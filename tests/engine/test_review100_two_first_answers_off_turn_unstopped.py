@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import first_answers_one_bit_off
+from tests.engine.garblers import first_answers_one_bit_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -49,10 +49,7 @@ def test_a_turn_at_the_start_is_stopped_before_the_limit_when_two_first_answers_
     t = v.now
     v.to_host = first_answers_one_bit_off(FLIPS)
     v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(0.1)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
     said = [e.message for e in v.errors(since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -22,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off
+from tests.engine.garblers import every_answer_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -46,10 +46,7 @@ def test_a_turn_past_the_limit_after_a_garble_spent_the_first_stop_is_stopped(ri
     assert v.truth().az_deg == REST_DEG and not v.truth().is_moving
     t = v.now
     v.manual_rotate(5.0)  # (a hand at the panel: a turn nobody asked for, towards the limit)
-    lowest = REST_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(0.1)  # (a step of virtual time: not a deadline)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG)
     errors = v.errors()
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "

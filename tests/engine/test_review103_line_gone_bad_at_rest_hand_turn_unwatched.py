@@ -31,7 +31,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off
+from tests.engine.garblers import every_answer_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -63,10 +63,7 @@ def test_a_hand_turn_on_a_line_gone_bad_at_rest_is_stopped_before_the_limit(rig:
     v.run_for(GONE_BAD_S)
     t = v.now
     v.manual_rotate(5.0)  # (a hand at the panel: a turn nobody asked for, towards the limit)
-    lowest = REST_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(0.1)  # (a step of virtual time: not a deadline)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG)
     said = [e.message for e in v.errors(since=t) if e.kind == ErrorKind.STOP]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from tests.engine.garblers import lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -47,10 +48,7 @@ def test_a_turn_whose_answers_never_parse_is_stopped_before_the_limit(rig: Rig) 
     t = v.now
     v.to_host = torn
     v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, START_DEG, STEP_S)
     said = [e.message for e in v.errors(since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import first_turning_answer_one_bit_off
+from tests.engine.garblers import first_turning_answer_one_bit_off, lowest_az
 from tests.engine.virtual import Sent, VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -58,10 +58,7 @@ def test_one_garbled_answer_does_not_hide_a_hand_turn_past_the_limit(rig: Rig) -
     v.to_host = first_turning_answer_one_bit_off(f"{REST_DEG:.1f}")
     t = v.now
     v.manual_rotate(HAND_TO_DEG)  # (a hand at the panel, towards the limit)
-    lowest = REST_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG, STEP_S)
     stops = [round(f.time_s - t, 2) for f in v.frames("stop", since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import every_frame_off
+from tests.engine.garblers import every_frame_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -45,10 +45,7 @@ def test_a_hand_turn_on_a_garbling_rot2prog_start_is_stopped_before_the_limit(ri
     assert v.frames("stop")  # (the first unwatched stop was made)
     t = v.now
     v.manual_rotate(5.0)  # (a hand at the panel, towards the limit)
-    lowest = REST_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG, STEP_S)
     stops = [round(f.time_s - t, 2) for f in v.frames("stop", since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
