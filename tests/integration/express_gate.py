@@ -11,9 +11,14 @@ import contextlib
 import socket
 import threading
 from pathlib import Path
+from typing import Any
 
 from bridge.app import App
+from bridge.emulators.pty import EmulatedPort
+from bridge.interfaces.mqtt.express import express_client_id
+from bridge.settings.mqtt import MqttSettings
 from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
 from tests.support.waiting import wait_until
 
 OPEN = "topic readwrite rotor/#\ntopic readwrite homeassistant/#\n"
@@ -30,6 +35,20 @@ def express_holding(app: App) -> None:
     """The express up and holding the tower's port."""
     wait_until(app.express.up.is_set, 10, "the express up")
     wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+
+
+def gated_start(rig: Rig, gate: Gate, **tower: Any) -> tuple[EmulatedPort[Any], MqttSettings, App]:
+    """The bridge with its express started behind ``gate`` (what the broker sends the express
+    the one ``gate`` may hold), its tower (``rig.add("tower", **tower)``) ready and the express
+    holding its port."""
+    rig.express = True
+    emu = rig.add("tower", **tower)
+    settings = rig.settings.mqtt
+    gate.held_id = express_client_id(settings)
+    app = rig.start()
+    rig.ready("tower")
+    express_holding(app)
+    return emu, settings, app
 
 
 def words_dropped(app: App, broker: Mosquitto, tmp_path: Path) -> None:

@@ -20,9 +20,14 @@ from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.express_gate import OPEN, Gate, acl_conf, express_holding, words_dropped
+from tests.integration.express_gate import (
+    OPEN,
+    Gate,
+    acl_conf,
+    gated_start,
+    words_dropped,
+)
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -47,13 +52,9 @@ def test_an_early_lock_on_read_late_does_not_undo_a_lock_off_published_after_it(
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
-            rig.express = True
-            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
-            settings = rig.settings.mqtt
-            gate.held_id = express_client_id(settings)
-            app = rig.start()
-            rig.ready("tower")
-            express_holding(app)
+            emu, settings, app = gated_start(
+                rig, gate, emu={"start_az_deg": 10, "speed_deg_s": 20.0}
+            )
             assert probe.publish("rotor/lock", "ON")  # locked for work on the tower
             probe.wait_value("rotor/lock/state", "ON")
             bridge_ids = {

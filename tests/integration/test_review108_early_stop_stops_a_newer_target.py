@@ -18,9 +18,14 @@ from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.express_gate import OPEN, Gate, acl_conf, express_holding, words_dropped
+from tests.integration.express_gate import (
+    OPEN,
+    Gate,
+    acl_conf,
+    gated_start,
+    words_dropped,
+)
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -44,13 +49,9 @@ def test_an_early_stop_read_late_does_not_stop_a_target_published_after_it(
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
-            rig.express = True
-            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
-            settings = rig.settings.mqtt
-            gate.held_id = express_client_id(settings)
-            app = rig.start()
-            rig.ready("tower")
-            express_holding(app)
+            emu, settings, app = gated_start(
+                rig, gate, emu={"start_az_deg": 10, "speed_deg_s": 20.0}
+            )
             main_and_lane = {settings.effective_client_id(), lane_client_id(settings)}
             gate.refused |= main_and_lane  # the bridge's connections back after the STOP
             words_dropped(app, broker, tmp_path)
@@ -70,6 +71,50 @@ def test_an_early_stop_read_late_does_not_stop_a_target_published_after_it(
             gate.hold(False)  # the express reads the older STOP now (early: no frame)
             still = emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, slow(30))
             assert abs(still.az_deg - 100) <= 2, f"stopped at {still.az_deg:.1f}, not at 100"
+    finally:
+        probe.close()
+        gate.close()
+
+
+def test_an_early_stop_is_carried_out_after_a_target_the_bridge_refused(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    """The other side of the same rule: only a move the rotator took orders the early STOP
+    before it. A target the judge refused (a keep-out sector) leaves the turn published before
+    the STOP under way, and that STOP, read by the express alone, stops it."""
+    gate = Gate(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
+    try:
+        with Rig(tmp_path, gate, probe) as rig:
+            emu, settings, app = gated_start(
+                rig, gate, emu={"start_az_deg": 10, "speed_deg_s": 2.0}, keep_out=[[340, 350]]
+            )
+            assert probe.publish("rotor/target", "300")  # a long turn (145 s)
+            emu.wait_for(lambda s: s.is_moving, slow(10))
+            main_and_lane = {settings.effective_client_id(), lane_client_id(settings)}
+            gate.refused |= main_and_lane  # the bridge's connections back after the STOP
+            words_dropped(app, broker, tmp_path)
+            gate.hold(True)  # the express reads what the broker sends it late
+            assert probe.publish("rotor/stop", "STOP")  # 1: the operator's STOP
+            gate.refused -= main_and_lane
+            wait_until(
+                lambda: (
+                    app.client.subscribed_since is not None
+                    and app.lane.subscribed_since is not None
+                ),
+                15,
+                "the bridge's connections back and subscribed",
+            )
+            mark = probe.mark()
+            assert probe.publish("rotor/target", "345")  # 2: a target the judge refuses
+
+            def refused() -> bool:
+                return any(m.topic == "rotor/error" for m in probe.messages[mark:])
+
+            wait_until(refused, 10, "the target refused")
+            assert emu.wait_for(lambda s: True).is_moving  # (the turn to 300 goes on)
+            gate.hold(False)  # the express reads the STOP now (early: no frame)
+            emu.wait_for(lambda s: not s.is_moving, slow(10))
     finally:
         probe.close()
         gate.close()

@@ -27,9 +27,15 @@ from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.express_gate import OPEN, Gate, acl_conf, express_holding, words_dropped
+from tests.integration.express_gate import (
+    OPEN,
+    Gate,
+    acl_conf,
+    express_holding,
+    gated_start,
+    words_dropped,
+)
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -74,13 +80,9 @@ def test_a_stop_the_express_reads_early_is_carried_out_though_a_lane_was_vouched
     probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
-            rig.express = True
-            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            settings = rig.settings.mqtt
-            gate.held_id = express_client_id(settings)
-            app = rig.start()
-            rig.ready("tower")
-            express_holding(app)
+            emu, settings, app = gated_start(
+                rig, gate, emu={"start_az_deg": 10, "speed_deg_s": 2.0}
+            )
             probe.publish("rotor/target", "300")  # a long turn (145 s)
             emu.wait_for(lambda s: s.is_moving, slow(10))
             gate.refused |= {settings.effective_client_id(), lane_client_id(settings)}
