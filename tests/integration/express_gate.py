@@ -90,26 +90,15 @@ def client_id_of(packet: bytes) -> str | None:
         return None
 
 
-class Gate:
-    """A TCP proxy in front of the broker that knows each connection by its client id: those
-    in ``refused`` are closed at once (the broker away, for them alone), and while ``holding``
-    what the broker sends the connection of ``held_id`` waits here, in order."""
+class _Listening:
+    """A TCP listener on a port of its own, each connection accepted handed to ``_join`` on a
+    thread of its own; the subclass's own state is set before this starts."""
 
     def __init__(self, backend: int) -> None:
         self._backend = backend
-        self.held_id = ""
-        self.refused: set[str] = set()
-        self._cond = threading.Condition()
-        self._holding = False
         self._listener = socket.create_server(("127.0.0.1", 0))
         self.port = self._listener.getsockname()[1]
-        self._socks: list[socket.socket] = []
         threading.Thread(target=self._serve, daemon=True).start()
-
-    def hold(self, on: bool) -> None:
-        with self._cond:
-            self._holding = on
-            self._cond.notify_all()
 
     def _serve(self) -> None:
         while True:
@@ -118,6 +107,28 @@ class Gate:
             except OSError:
                 return
             threading.Thread(target=self._join, args=(client,), daemon=True).start()
+
+    def _join(self, client: socket.socket) -> None:
+        raise NotImplementedError
+
+
+class Gate(_Listening):
+    """A TCP proxy in front of the broker that knows each connection by its client id: those
+    in ``refused`` are closed at once (the broker away, for them alone), and while ``holding``
+    what the broker sends the connection of ``held_id`` waits here, in order."""
+
+    def __init__(self, backend: int) -> None:
+        self.held_id = ""
+        self.refused: set[str] = set()
+        self._cond = threading.Condition()
+        self._holding = False
+        self._socks: list[socket.socket] = []
+        super().__init__(backend)
+
+    def hold(self, on: bool) -> None:
+        with self._cond:
+            self._holding = on
+            self._cond.notify_all()
 
     def _join(self, client: socket.socket) -> None:
         try:
@@ -151,18 +162,15 @@ class Gate:
             s.close()
 
 
-class Cutter:
+class Cutter(_Listening):
     """A TCP proxy in front of the broker that knows each connection by its client id and can
     cut those named (and keep them out from then on)."""
 
     def __init__(self, backend: int) -> None:
-        self._backend = backend
         self._refused: set[str] = set()
         self._lock = threading.Lock()
         self._socks: dict[str, list[socket.socket]] = {}
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port = self._listener.getsockname()[1]
-        threading.Thread(target=self._serve, daemon=True).start()
+        super().__init__(backend)
 
     def cut(self, ids: set[str]) -> None:
         with self._lock:
@@ -172,14 +180,6 @@ class Cutter:
             with contextlib.suppress(OSError):
                 s.shutdown(socket.SHUT_RDWR)
             s.close()
-
-    def _serve(self) -> None:
-        while True:
-            try:
-                client, _addr = self._listener.accept()
-            except OSError:
-                return
-            threading.Thread(target=self._join, args=(client,), daemon=True).start()
 
     def _join(self, client: socket.socket) -> None:
         try:
