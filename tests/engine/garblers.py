@@ -3,7 +3,8 @@
 Each garbler returns a ``(data, now) -> data`` function that rewrites the position answers on their
 way to the host, keeping whatever it has not yet seen whole (a line, a frame) for the next
 call. Shared by the review tests of the first-readings doubt (controller.py rule 9) and the
-unwatched stop (reviews 100, 103, 107, 111), with ``lowest_az``, how far a turn they hid ran.
+unwatched stop (reviews 100, 103, 107, 111), with their rotor (``limited``, ``turning_down``)
+and ``lowest_az``, how far a turn they hid ran.
 """
 
 from __future__ import annotations
@@ -16,6 +17,26 @@ from tests.engine.virtual import VirtualRotator
 Garble = Callable[[bytes, float], bytes]
 ROT2PROG_FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
 STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+
+
+def limited(
+    rig: Callable[..., VirtualRotator], model: str, start_deg: float, az_min_deg: float
+) -> VirtualRotator:
+    """A ``model`` box at ``start_deg``, ``az_min_deg`` configured, its port not yet open."""
+    return rig(
+        model,
+        emulator={"start_az_deg": start_deg},
+        settings={"az_min_deg": az_min_deg},
+        connect=False,
+    )
+
+
+def turning_down(v: VirtualRotator, under_way_s: float) -> None:
+    """The Easycomm box sent a turn to 5 before the bridge opens its port (a turn it goes on
+    with across a restart), under way for ``under_way_s`` (virtual time)."""
+    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
+    v.run_for(under_way_s)
+    assert v.truth().is_moving
 
 
 def lowest_az(v: VirtualRotator, until: float, start: float, step_s: float = STEP_S) -> float:

@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off, lowest_az
+from tests.engine.garblers import every_answer_off, limited, lowest_az, turning_down
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -32,15 +32,8 @@ WATCH_S = 40  # 145 degrees at 6 deg/s, with room
 
 
 def test_a_turn_whose_first_readings_never_agree_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
-    v.run_for(0.5)
-    assert v.truth().is_moving
+    v = limited(rig, "easycomm2", START_DEG, AZ_MIN_DEG)
+    turning_down(v, 0.5)
     t = v.now
     v.to_host = every_answer_off(OFFSETS)
     v.link_up()

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import first_answers_one_bit_off, lowest_az
+from tests.engine.garblers import first_answers_one_bit_off, limited, lowest_az, turning_down
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -37,15 +37,8 @@ WATCH_S = 40  # 145 degrees at 6 deg/s, with room
 def test_a_turn_at_the_start_is_stopped_before_the_limit_when_two_first_answers_are_off(
     rig: Rig,
 ) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
-    v.run_for(0.5)
-    assert v.truth().is_moving
+    v = limited(rig, "easycomm2", START_DEG, AZ_MIN_DEG)
+    turning_down(v, 0.5)
     t = v.now
     v.to_host = first_answers_one_bit_off(FLIPS)
     v.link_up()

@@ -22,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off, lowest_az
+from tests.engine.garblers import every_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -34,12 +34,7 @@ WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
 def test_a_turn_past_the_limit_after_a_garble_spent_the_first_stop_is_stopped(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
     v.to_host = every_answer_off(OFFSETS)
     v.link_up()
     v.run_for(SETTLED_S)

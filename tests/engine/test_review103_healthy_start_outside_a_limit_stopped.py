@@ -24,6 +24,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind
+from tests.engine.garblers import limited
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -36,12 +37,7 @@ WATCH_S = 5.0  # several replies of the slowest of them (virtual time)
 def test_a_healthy_start_outside_a_limit_writes_no_stop_and_says_no_stop(
     rig: Rig, model: str
 ) -> None:
-    v = rig(
-        model,
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, model, REST_DEG, AZ_MIN_DEG)
     v.link_up()
     v.run_for(WATCH_S)
     assert v.status.available and v.status.bearing_deg == REST_DEG
@@ -50,12 +46,7 @@ def test_a_healthy_start_outside_a_limit_writes_no_stop_and_says_no_stop(
 
 
 def test_a_turn_back_inside_the_limit_when_the_bridge_starts_is_not_cut(rig: Rig) -> None:
-    v = rig(
-        "gs232b",
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, "gs232b", REST_DEG, AZ_MIN_DEG)
     v.device.receive(b"M180\r", v.now)  # (sent before the restart: turning back inside)
     v.run_for(0.5)  # (the turn under way: not a deadline)
     assert v.truth().is_moving

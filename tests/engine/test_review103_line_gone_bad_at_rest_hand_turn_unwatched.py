@@ -31,7 +31,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off, lowest_az
+from tests.engine.garblers import every_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -50,12 +50,7 @@ WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
     " Easycomm from 150 to 5, 55 degrees past az_min_deg, unstopped",
 )
 def test_a_hand_turn_on_a_line_gone_bad_at_rest_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
     v.link_up()
     v.run_for(CONFIRMED_S)
     assert v.status.available and v.status.bearing_deg == REST_DEG

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import lowest_az
+from tests.engine.garblers import limited, lowest_az, turning_down
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -36,15 +36,8 @@ def torn(data: bytes, now: float) -> bytes:
 
 
 def test_a_turn_whose_answers_never_parse_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
+    v = limited(rig, "easycomm2", START_DEG, AZ_MIN_DEG)
+    turning_down(v, TURNING_S)
     t = v.now
     v.to_host = torn
     v.link_up()

@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_answer_off
+from tests.engine.garblers import every_answer_off, limited, turning_down
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -34,15 +34,8 @@ WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
 def test_a_garbling_start_on_a_flaky_adapter_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
-    v.run_for(DOWN_S)
-    assert v.truth().is_moving
+    v = limited(rig, "easycomm2", START_DEG, AZ_MIN_DEG)
+    turning_down(v, DOWN_S)
     v.to_host = every_answer_off(OFFSETS)
     t, lowest = v.now, START_DEG
     while v.now < t + WATCH_S:

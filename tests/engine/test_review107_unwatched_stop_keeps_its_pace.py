@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import every_answer_off, lowest_az
+from tests.engine.garblers import every_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -33,12 +33,7 @@ STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
 def test_a_hand_turn_minutes_into_a_garbling_start_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
     v.to_host = every_answer_off(OFFSETS)
     v.link_up()
     v.run_for(GARBLED_S)

@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import first_turning_answer_one_bit_off, lowest_az
+from tests.engine.garblers import first_turning_answer_one_bit_off, limited, lowest_az
 from tests.engine.virtual import Sent, VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -45,12 +45,7 @@ STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
     "it shown idle at 150 while it runs past az_min_deg 60 to 5, stopped only at its end",
 )
 def test_one_garbled_answer_does_not_hide_a_hand_turn_past_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2-az",
-        emulator={"start_az_deg": REST_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
+    v = limited(rig, "easycomm2-az", REST_DEG, AZ_MIN_DEG)
     v.link_up()
     v.run_for(CONFIRMED_S)
     assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
