@@ -21,14 +21,12 @@ by a CONNACK refusing it as busy, as the broker's own front would.
 from __future__ import annotations
 
 import contextlib
-import time
 from pathlib import Path
 
 from tests.faults.behind_a_proxy import bridge_behind
-from tests.faults.test_review112_stop_lost_on_a_stalled_path import StallProxy
+from tests.faults.test_review112_stop_lost_on_a_stalled_path import StallProxy, stop_through_a_stall
 from tests.support.mqtt_proxy import CONNECT, _client_id, _packets, _Stream
 from tests.support.tap import near_deg
-from tests.support.waiting import slow
 
 BUSY_S = 15.0  # the overload's length: past the verdict, well within the keep-alive
 PROMPT_S = 10.0  # a STOP reaches the controller within this once the broker caught up
@@ -77,21 +75,9 @@ def test_a_stop_an_overloaded_broker_held_reaches_the_rotor_when_it_catches_up(
     tmp_path: Path,
 ) -> None:
     with bridge_behind(tmp_path, BusyProxy) as b:
-        proxy = b.proxy
-        probe = b.probe
         app = b.app
-        emu = b.emu
-        probe.publish("rotor/target", "300")  # a long turn (145 s)
-        emu.wait_for(lambda s: s.is_moving, slow(10))
-        proxy.stall()  # the broker overloaded: its backlog, new connections refused
-        try:
-            assert probe.publish("rotor/stop", "")  # the operator's STOP, taken
-            time.sleep(BUSY_S)  # the overload: the fault's length (not a deadline)
-        finally:
-            proxy.unstall()
-        with contextlib.suppress(AssertionError, TimeoutError):
-            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-        s = emu.state()
+        # the broker overloaded (its backlog, new connections refused) as the STOP is taken
+        s = stop_through_a_stall(b, BUSY_S, PROMPT_S)
         assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
             f"a STOP the broker took during a {BUSY_S:g} s overload (new connections "
             f"refused as busy) did not stop the rotor once it caught up: it turns on "

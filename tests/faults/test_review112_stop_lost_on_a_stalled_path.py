@@ -24,8 +24,10 @@ import contextlib
 import socket
 import time
 from pathlib import Path
+from typing import TypeVar
 
-from tests.faults.behind_a_proxy import bridge_behind
+from bridge.emulators.base import RotatorState
+from tests.faults.behind_a_proxy import Behind, bridge_behind
 from tests.support.mqtt_proxy import CONNECT, SUBACK, MqttProxy, _client_id, _packets, _Stream
 from tests.support.tap import near_deg
 from tests.support.waiting import slow
@@ -108,27 +110,34 @@ class StallProxy(MqttProxy):
         self._end(s, "down", s.client)
 
 
+S = TypeVar("S", bound=StallProxy)
+
+
+def stop_through_a_stall(b: Behind[S], fault_s: float, prompt_s: float) -> RotatorState:
+    """The tower on a long turn (to 300, 145 s); the proxy's ``stall`` for ``fault_s``, the
+    operator's STOP taken by the broker (its PUBACK seen) at its start; then ``unstall``. The
+    rotor as it is once stopped, or ``prompt_s`` on."""
+    b.probe.publish("rotor/target", "300")  # a long turn (145 s)
+    b.emu.wait_for(lambda s: s.is_moving, slow(10))
+    b.proxy.stall()
+    try:
+        assert b.probe.publish("rotor/stop", "")  # the operator's STOP, taken
+        time.sleep(fault_s)  # the fault's length (not a deadline)
+    finally:
+        b.proxy.unstall()
+    with contextlib.suppress(AssertionError, TimeoutError):
+        b.emu.wait_for(lambda s: not s.is_moving, slow(prompt_s))
+    return b.emu.state()
+
+
 def test_a_stop_held_by_a_stalled_path_reaches_the_rotor_when_it_delivers(
     tmp_path: Path,
 ) -> None:
     with bridge_behind(tmp_path, StallProxy) as b:
-        proxy = b.proxy
-        probe = b.probe
         app = b.app
-        emu = b.emu
-        probe.publish("rotor/target", "300")  # a long turn (145 s)
-        emu.wait_for(lambda s: s.is_moving, slow(10))
-        proxy.stall()  # the streams open now stall; new ones pass
-        try:
-            # the operator's STOP, taken by the broker (its PUBACK seen) and sent on into
-            # the stalled streams of every stop carrier
-            assert probe.publish("rotor/stop", "")
-            time.sleep(STALL_S)  # the stall: the fault's length (not a deadline)
-        finally:
-            proxy.unstall()
-        with contextlib.suppress(AssertionError, TimeoutError):
-            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-        s = emu.state()
+        # the streams open now stall (new ones pass); the operator's STOP, taken by the
+        # broker, sent on into the stalled streams of every stop carrier
+        s = stop_through_a_stall(b, STALL_S, PROMPT_S)
         assert not s.is_moving and not near_deg(s.az_deg, 300, SHORT_DEG), (
             f"a STOP the broker took during a {STALL_S:g} s stall of the bridge's path did "
             f"not stop the rotor once the stall ended: it turns on ({s.az_deg:.0f} deg); "
