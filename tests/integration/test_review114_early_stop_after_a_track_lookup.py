@@ -22,7 +22,7 @@ import pytest
 
 from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.test_stop_before_the_express_words_are_back import OPEN, WORDS, _Gate
+from tests.integration.express_gate import OPEN, WORDS, Gate
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -38,7 +38,7 @@ def broker_conf(tmp_path: Path) -> str:
 def test_an_early_stop_is_carried_out_after_a_track_start_whose_lookup_is_refused(
     tmp_path: Path, broker: Mosquitto
 ) -> None:
-    gate = _Gate(broker.port)
+    gate = Gate(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     tle = tmp_path / "sats.tle"
     tle.write_text("")  # a TLE file with no satellite in it: every name is unknown

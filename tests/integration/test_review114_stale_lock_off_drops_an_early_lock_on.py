@@ -28,7 +28,7 @@ from paho.mqtt.properties import Properties
 from bridge.interfaces.mqtt.express import express_client_id
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.integration.test_stop_before_the_express_words_are_back import OPEN, WORDS, _Gate
+from tests.integration.express_gate import OPEN, WORDS, Gate
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
@@ -64,7 +64,7 @@ def test_an_early_lock_on_is_set_after_a_lock_off_the_bridge_refused(
     tmp_path: Path, broker: Mosquitto, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.DEBUG, logger="bridge.interfaces.mqtt.express")
-    gate = _Gate(broker.port)
+    gate = Gate(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
     try:
         with Rig(tmp_path, gate, probe) as rig:
