@@ -340,6 +340,8 @@ def test_a_lock_on_sent_as_the_stations_route_dies_is_held_and_sent_again(
             slow(10),
             "the station's retained lock/state ON",
         )
+        rotator = remote.rotators[0]  # (its own connection reads it after the station's probe)
+        wait_until(lambda: rotator.status.locked, slow(10), "the remote's view locked")
         assert ask(port, b"P 100 0\n") == b"RPRT -9\n"  # and the remote sees it so
     finally:
         remote.stop()
