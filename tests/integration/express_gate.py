@@ -7,6 +7,7 @@ proxies in front of the broker that know each connection by the client id of its
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import socket
 import threading
@@ -90,7 +91,7 @@ def client_id_of(packet: bytes) -> str | None:
         return None
 
 
-class _Listening:
+class _Listening(abc.ABC):
     """A TCP listener on a port of its own, each connection accepted handed to ``_join`` on a
     thread of its own; the subclass's own state is set before this starts."""
 
@@ -108,8 +109,9 @@ class _Listening:
                 return
             threading.Thread(target=self._join, args=(client,), daemon=True).start()
 
+    @abc.abstractmethod
     def _join(self, client: socket.socket) -> None:
-        raise NotImplementedError
+        """One connection accepted: the subclass joins it to the broker, or closes it."""
 
 
 class Gate(_Listening):
