@@ -171,3 +171,26 @@ def every_frame_off(offsets: list[float]) -> Garble:
     """Each Rot2Prog position frame's azimuth reaches the host off by the next of ``offsets``,
     in turn, for good (the raw digits rewritten: tenths of a degree)."""
     return _rot2prog_frames(offsets, for_good=True)
+
+
+def rc2800_drifting_from(since: float, every_s: float, step_deg: float = 0.1) -> Garble:
+    """An RC2800's lines as they reach the host, each bearing ``step_deg`` more every
+    ``every_s`` since ``since`` (a line goes whole at its CR, when the box's last byte of it
+    would): a pot read drifting (reviews 110 and 115)."""
+    line = bytearray()
+
+    def drift(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        if not data.endswith(b"\r"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        counts = int((now - since) // every_s)
+        return re.sub(
+            rb"P=\s*([0-9.]+)",
+            lambda m: b"P=%5.1f" % (float(m.group(1)) + step_deg * counts),
+            whole,
+            count=1,
+        )
+
+    return drift

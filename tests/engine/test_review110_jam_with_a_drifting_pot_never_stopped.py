@@ -18,6 +18,7 @@ from collections.abc import Callable
 from bridge.core.model import ErrorKind, MotionState
 from bridge.session import motion as mo
 from tests.engine.carried import at_rest, replugged
+from tests.engine.garblers import rc2800_drifting_from
 from tests.engine.virtual import VirtualRotator
 
 DRIFT_DEG = 0.1  # a count of the RC2800's readings
@@ -27,24 +28,8 @@ WATCHED_S = 60.0
 
 def drifting_from(since: float) -> Callable[[bytes, float], bytes]:
     """The box's lines as they reach the host, each bearing a tenth more every DRIFT_EVERY_S
-    since ``since`` (a line goes whole at its CR, when the box's last byte of it would)."""
-    line = bytearray()
-
-    def drift(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        if not data.endswith(b"\r"):
-            return b""
-        whole = bytes(line)
-        line.clear()
-        counts = int((now - since) // DRIFT_EVERY_S)
-        return re.sub(
-            rb"P=\s*([0-9.]+)",
-            lambda m: b"P=%5.1f" % (float(m.group(1)) + DRIFT_DEG * counts),
-            whole,
-            count=1,
-        )
-
-    return drift
+    since ``since``."""
+    return rc2800_drifting_from(since, DRIFT_EVERY_S, DRIFT_DEG)
 
 
 def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
