@@ -5,7 +5,12 @@ the replug (motion.py rule 2's carried turn; controller.py's first readings afte
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
+
+Garble = Callable[[bytes, float], bytes]
 
 BETWEEN_POLLS_S = 0.1  # pulled between two polls
 OUT_S = 2.0  # the adapter out
@@ -27,3 +32,20 @@ def replugged(v: VirtualRotator, out_s: float = OUT_S) -> None:
     v.run_for(out_s)  # (the adapter out: not a deadline)
     v.link_up()
     v.run_until(lambda h: h.status.available, 10, "the controller answers again")
+
+
+def jammed_after_a_carried_turn(v: VirtualRotator, drift: Callable[[float], Garble]) -> float:
+    """An RC2800 turning to 300 (from its start at rest), replugged, its carried turn followed,
+    then jammed with its motor driving and its lines rewritten by ``drift(jam_t)``: the jam's
+    time (reviews 110 and 115)."""
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
+    v.target(300)
+    v.run_until(lambda h: h.truth().az_deg >= 40.0, 60, "the azimuth turning")
+    replugged(v)
+    v.run_for(3.0)  # (the carried turn followed: not a deadline)
+    assert v.truth().is_moving and v.status.moving
+    jam_t = v.now
+    v.jam()  # its motor driving
+    v.to_host = drift(jam_t)
+    return jam_t

@@ -15,9 +15,9 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-from bridge.core.model import ErrorKind, MotionState
+from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import at_rest, replugged
+from tests.engine.carried import at_rest, jammed_after_a_carried_turn, replugged
 from tests.engine.garblers import rc2800_drifting_from
 from tests.engine.virtual import VirtualRotator
 
@@ -38,16 +38,7 @@ def test_a_jammed_carried_turn_read_drifting_inside_noise_is_stopped() -> None:
         own_s = max(cfg.settle_s, mo.axis_seen_s(cfg)["azimuth"])
         assert DRIFT_EVERY_S < own_s  # (the set-up: the drift restarts the axis's own time)
         assert DRIFT_DEG / DRIFT_EVERY_S < cfg.nominal_speed_deg_s / 50  # (no turn)
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
-        v.target(300)
-        v.run_until(lambda h: h.truth().az_deg >= 40.0, 60, "the azimuth turning")
-        replugged(v)
-        v.run_for(3.0)  # (the carried turn followed: not a deadline)
-        assert v.truth().is_moving and v.status.moving
-        jam_t = v.now
-        v.jam()  # its motor driving
-        v.to_host = drifting_from(jam_t)
+        jam_t = jammed_after_a_carried_turn(v, drifting_from)
         v.run_for(WATCHED_S)
         # observed: no stop in a minute, R/status 'moving' at 76.7 (jammed at 71.8)
         [stop, *_] = [f for f in v.frames(since=jam_t) if f.outcome == "stop"] or [None]

@@ -15,9 +15,9 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import ErrorKind, MotionState
+from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import replugged
+from tests.engine.carried import jammed_after_a_carried_turn
 from tests.engine.garblers import rc2800_drifting_from
 from tests.engine.virtual import VirtualRotator
 
@@ -45,16 +45,7 @@ def test_a_jammed_carried_turn_read_drifting_past_noise_is_stopped() -> None:
         slowest = mo.slowest_deg_s(cfg)["azimuth"]
         assert drift_deg_s < mo.CREEP_SHARE * slowest  # (slower than any turn, by the rule)
         assert cfg.noise_deg + DRIFT_DEG < drift_deg_s * cfg.settle_s  # (a move within settle_s)
-        v.run_until(lambda h: h.status.available, 10, "the controller answers")
-        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
-        v.target(300)
-        v.run_until(lambda h: h.truth().az_deg >= 40.0, 60, "the azimuth turning")
-        replugged(v)
-        v.run_for(3.0)  # (the carried turn followed: not a deadline)
-        assert v.truth().is_moving and v.status.moving
-        jam_t = v.now
-        v.jam()  # its motor driving
-        v.to_host = drifting_from(jam_t)
+        jam_t = jammed_after_a_carried_turn(v, drifting_from)
         v.run_for(WATCHED_S)
         # observed: no stop in a minute, R/status 'moving'
         [stop, *_] = [f for f in v.frames(since=jam_t) if f.outcome == "stop"] or [None]
