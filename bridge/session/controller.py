@@ -201,8 +201,14 @@ Rules:
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
    asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
-   (polls half a minute apart would let any two agree). (A composite box's axis that is never
-   turned is kept so too: axes.py rule 5.)
+   (polls half a minute apart would let any two agree). A turn is told by its line as at the
+   start: FIRST_TURN_READINGS of them in a row on one steady line (``_steady``) are a turn,
+   the last taken and the turn's readings trusted till it rests, so rule 10 judges it (review
+   111: one flipped bit in a hand turn's first answer broke the pair, an Easycomm stepping 6
+   degrees a poll never had two agree, and it ran shown idle at 150 past ``az_min_deg`` 60 to
+   5; review 111 too: a fast turn confirmed at the start, garbled right after its line, shown
+   idle for the rest of it). (A composite box's axis that is never turned is kept so too:
+   axes.py rule 5.)
    Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
    handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
    (stops.py rule 7; review 40: a turn by hand whose readings the doubt never took, two garbled
@@ -781,6 +787,7 @@ class Controller:
         self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._first_unread = False  # rule 9: answering by a doubted reading, none taken yet
         self._first_said: tuple[_Doubted, ...] = ()  # rule 9: the last three first, doubted
+        self._rest_said: tuple[_Doubted, ...] = ()  # rule 9: the last three at rest, doubted
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._first_garbled = False  # ... some of them answers garbled past parsing
@@ -934,6 +941,7 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
+        self._rest_said = ()  # (rule 9: a line at rest is one connection's)
         self._steady_from = None  # (rule 9: the unconfirmed count goes on until a reading
         # is taken, ``_reading``; review 107: a flaky adapter's connections of seven readings
         # each never reached FIRST_UNWATCHED_READINGS, and a turn at the start ran to its end)
@@ -1339,8 +1347,19 @@ class Controller:
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
+        # FIRST_TURN_READINGS in a row on one steady line: a turn, as at the start (review 111:
+        # one garble broke the pair, and a hand turn stepping 6 degrees a poll never agreed)
+        said = self._rest_said
+        line = (*((d.reply, d.t) for d in said if d.reply is not None), (reply, now))
+        if len(line) >= FIRST_TURN_READINGS and _steady(line, cfg, limit):
+            log.info("%s: readings at rest of a turn, the last %s", self.name, _where(reply))
+            self._doubts_in_row, self._rest_said = 0, ()
+            self._turn_trusted = True  # (its next readings as a turn's)
+            self._steady_from = (line[-2], line[-1])
+            return Doubt.TAKEN  # (the last of them: where it is now)
         self._doubts_in_row += 1
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
+        self._rest_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
         turns_az = cfg.spec.turns_azimuth  # (stops.py rule 7: the lock's stop again; not for
         if _apart(reply, stands, el_stands, cfg.noise_deg, wraps, turns_az):  # an axis the box
             self.stops.lock_sign(now, _where(reply))  # never turns: review 43)
@@ -1502,6 +1521,7 @@ class Controller:
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
+        self._rest_said = ()
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:

@@ -23,8 +23,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.garblers import frames_off
 from tests.engine.virtual import VirtualRotator
@@ -40,11 +38,6 @@ TURN_S = 20.0  # 290 degrees at 30 deg/s, with room (virtual time)
 NEAR_DEG = 30.0  # a second of the turn: what a reading a poll old can be behind
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 111: a Rot2Prog turning at 30 deg/s at the start, its fifth answer garbled, "
-    "is shown idle at 82.5 for the rest of its turn to 300, R/error blaming the line",
-)
 def test_a_fast_turn_at_the_start_garbled_after_its_line_is_shown_turning(rig: Rig) -> None:
     v = rig(
         "rot2prog",

@@ -17,14 +17,18 @@ In virtual time: the emulated Easycomm II (azimuth) at rest at 150 (``az_min_deg
 confirmed on a clean line; a hand turns it down to 5 at the box's speed, and the first answer
 after that whose bearing is off where it stood reaches the host with its hundreds digit ``1``
 read ``3`` (0x31 read 0x33: one bit); every other answer as sent.
+
+Fixed (rule 9): a turn is told by its line as at the start (FIRST_TURN_READINGS on one steady
+line, ``_steady``): the answers after the garble, 143.6, 137.6, 131.6, 125.6 at the idle polls,
+are its turn, and rule 10 stops it ("the rotor turned with no command from the bridge", at about
+126, four seconds in).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
+from bridge.core.model import ErrorKind
 from tests.engine.garblers import first_turning_answer_one_bit_off, limited, lowest_az
 from tests.engine.virtual import Sent, VirtualRotator
 
@@ -37,13 +41,9 @@ CONFIRMED_S = 5.0  # the start's readings on a clean line (not a deadline)
 POLLED_S = 5.0  # until a poll goes out (virtual time: one a second)
 WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+UNASKED = "the rotor turned with no command from the bridge"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 111: one flipped bit in the first answer of a hand turn on an Easycomm keeps "
-    "it shown idle at 150 while it runs past az_min_deg 60 to 5, stopped only at its end",
-)
 def test_one_garbled_answer_does_not_hide_a_hand_turn_past_the_limit(rig: Rig) -> None:
     v = limited(rig, "easycomm2-az", REST_DEG, AZ_MIN_DEG)
     v.link_up()
@@ -59,3 +59,5 @@ def test_one_garbled_answer_does_not_hide_a_hand_turn_past_the_limit(rig: Rig) -
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
         f"{AZ_MIN_DEG:g}; stops written {stops} s into the turn"
     )
+    said = [e.message for e in v.errors(ErrorKind.STOP, since=t)]
+    assert said and all(UNASKED in m for m in said), said  # (rule 10's, not the unwatched)
