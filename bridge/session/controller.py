@@ -195,20 +195,32 @@ Rules:
    start of a rotor resting outside a limit with a false error, cut a turn back inside the
    limit short, and one garble at rest spent it for the connection: review 103.)
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
-   asked for at the usual polls, not at once, and told from the DOUBTS_TOLD-th in a row on;
-   the bearing shown is the last two readings agreed on. A reading asked again at once agrees
+   asked for at the moving rate, not at once, until the first unwatched stop below, then at
+   the usual polls (review 103's follow-up: eight at a Rot2Prog's idle rate, 9.3 s, took 74 s;
+   not for good, the polling load review 105 found), and at the usual polls while the
+   controller is not answering (review 40); told from the DOUBTS_TOLD-th in a row on; the
+   bearing shown is the last two readings agreed on. A reading asked again at once agrees
    with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its speed
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
-   asked once the stop is out; readings at the idle rate agree within ``doubt_deg`` alone
+   asked once the stop is out; readings at a poll's distance agree within ``doubt_deg`` alone
    (polls half a minute apart would let any two agree). A turn is told by its line as at the
    start: FIRST_TURN_READINGS of them in a row on one steady line (``_steady``) are a turn,
    the last taken and the turn's readings trusted till it rests, so rule 10 judges it (review
    111: one flipped bit in a hand turn's first answer broke the pair, an Easycomm stepping 6
    degrees a poll never had two agree, and it ran shown idle at 150 past ``az_min_deg`` 60 to
    5; review 111 too: a fast turn confirmed at the start, garbled right after its line, shown
-   idle for the rest of it). (A composite box's axis that is never turned is kept so too:
-   axes.py rule 5.)
+   idle for the rest of it). And FIRST_UNWATCHED_READINGS of them in a row that confirmed none
+   (a garble and a line, one garble among a fast turn's, fit well within) leave a rotor the
+   bridge cannot watch, and get the first readings' unwatched stop (``_unwatched_stop``, each
+   as many more while they go on, said on R/error as readings at rest, as rarely; merged as
+   stops.py rule 1 merges, the lock's stop a brake window before being that stop): the
+   maintainers' decision on review 103's follow-up, the limits hold over a rotor the bridge
+   cannot watch (a line gone bad at rest, every answer off by 0, +60 or -60, hid a hand turn,
+   and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5 unstopped); a stop to a still
+   rotor costs nothing, and a failing sensor must be told. (Before, such readings got no stop
+   without the lock: review 40's "the same noise without the lock writes no stop", superseded.)
+   (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
    Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
    handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
    (stops.py rule 7; review 40: a turn by hand whose readings the doubt never took, two garbled
@@ -1271,8 +1283,8 @@ class Controller:
                         "%s: sending again the stop it went silent before confirming", self.name
                     )
                     self._send_owed(link, now)
-            if self._unwatched_due:  # rule 9: first readings that never confirm
-                self._unwatched_stop(reply, now)
+            if self._unwatched_due:  # rule 9: readings that never confirm
+                self._unwatched_stop(reply, now, self._doubted.first)
             return False
         self._reading(link, self._confirmed(reply), now)
         return True
@@ -1358,6 +1370,8 @@ class Controller:
             self._steady_from = (line[-2], line[-1])
             return Doubt.TAKEN  # (the last of them: where it is now)
         self._doubts_in_row += 1
+        self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: review 103)
+        self._unwatched_due = self._first_unconfirmed % FIRST_UNWATCHED_READINGS == 0
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         self._rest_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
         turns_az = cfg.spec.turns_azimuth  # (stops.py rule 7: the lock's stop again; not for
@@ -1444,7 +1458,7 @@ class Controller:
             )
         return Doubt.ASK if at_once else Doubt.WAIT
 
-    def _unwatched_stop(self, reply: PositionReply | None, now: float) -> None:
+    def _unwatched_stop(self, reply: PositionReply | None, now: float, first: bool = True) -> None:
         """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row (and each as many more
         while they go on) that confirmed none: no limit, stall or turn nobody asked for can be
         judged from them, so the rotor is stopped (a stop is always safe; the line's and the
@@ -1452,15 +1466,23 @@ class Controller:
         ``junk_report_interval_s`` (review 100: a line that garbled every answer differently
         left a turn at the start unwatched, and it ran past ``az_min_deg`` to its end; review
         103: a stop for one unconfirmed reading past a limit, tried before, stopped healthy
-        starts of a rotor resting outside a limit, and one garble spent it)."""
+        starts of a rotor resting outside a limit, and one garble spent it). So do readings at
+        rest (``first`` False: a session's, after a reading was taken) that go on disagreeing
+        (review 103's follow-up: a line gone bad at rest hid a hand turn, which ran past
+        ``az_min_deg`` unstopped; the maintainers' decision: the limit holds over a rotor the
+        bridge cannot watch, and a still rotor's stop costs nothing)."""
         self._unwatched_due = False
         count = self._first_unconfirmed
+        readings = "first readings in a row" if first else "readings in a row at rest"
         m = self.motion  # (let go once readings confirm, ``_release_check``: not where it
         # stands for another stop still checked, an operator's or the lock's; review 107: kept
         # checked until the next target, a hand at the panel minutes later was stopped, unsaid)
-        self.stop(now, unwatched=m.stop_sent_t is None or m.stop_sent_t == self._released_stop_t)
+        unwatched = m.stop_sent_t is None or m.stop_sent_t == self._released_stop_t
+        # (at rest merged as stops.py rule 1 merges: the lock's own, a brake window before, is
+        # that stop; stops.py rule 7 keeps the lock's a second apart on a noisy line)
+        self.stop(now, merge=not first, unwatched=unwatched)
         if now - self._unwatched_said_t < self.cfg.junk_report_interval_s:
-            log.info("%s: %d first readings in a row disagree: stopped again", self.name, count)
+            log.info("%s: %d %s disagree: stopped again", self.name, count, readings)
             return
         self._unwatched_said_t = now  # (its own clock: the doubt's words keep rule 6's)
         last = "garbled past reading"  # (``_garbled_first``)
@@ -1468,7 +1490,7 @@ class Controller:
             az = self.cfg.aim.true_of(reply.az_deg)
             last = f"{az:g}" if reply.el_deg is None else f"{az:g}/{reply.el_deg:g}"
         why = (
-            f"{count} first readings in a row do not agree (the last {last}): the "
+            f"{count} {readings} do not agree (the last {last}): the "
             "bridge cannot watch the rotor (its limits, a stall, a turn nobody asked for), so "
             "it was stopped, and is stopped again while they go on disagreeing: a noisy line "
             "or a failing position sensor?"
@@ -2254,7 +2276,14 @@ class Controller:
         # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
         busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
         garbled = self._first_garbled and self._first_phase()  # (answers garbled past reading)
-        if garbled or (self._doubted.first and not self._doubted.at_once):  # (review 103: the
+        doubted = self._doubted
+        # rule 9: readings at rest that go on disagreeing, at the moving rate until the first
+        # unwatched stop (review 103's follow-up: a Rot2Prog's eight at its idle rate took 74 s;
+        # not for good, the load review 105 found), while it answers (review 40: offline, idle)
+        at_rest = doubted.reply is not None and not (doubted.first or doubted.turning)
+        at_rest = at_rest and self.answering and not doubted.at_once
+        at_rest = at_rest and self._first_unconfirmed < FIRST_UNWATCHED_READINGS
+        if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
