@@ -490,6 +490,7 @@ class App:
             on_info=self._info,
             on_new_connection=partial(self.mqtt.lane_connected, ("stop",)),
             on_subscribed=partial(self._lane_subscribed, "stop"),
+            behind_subscribe=partial(self.mqtt.lane_subscribing, ("stop",)),
             no_replay=self.topics.stop_lane(),
         )
         # interfaces/mqtt/lastword.py rule 16: the lock words on a lane of their own, so that
@@ -503,6 +504,7 @@ class App:
             kind="lock",
             on_new_connection=partial(self.mqtt.lane_connected, ("lock",)),
             on_subscribed=partial(self._lane_subscribed, "lock"),
+            behind_subscribe=partial(self.mqtt.lane_subscribing, ("lock",)),
             no_replay=self.topics.lock_lane(),
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog

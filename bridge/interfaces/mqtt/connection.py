@@ -350,6 +350,9 @@ class Options(TypedDict, total=False):
 
     on_new_connection: Callable[[], None] | None  # before any message of a new connection
     on_subscribed: Callable[[], None] | None  # the command topics' SUBACK, before their messages
+    # what to publish (topic, payload; QoS 0) right behind the command topics' SUBSCRIBE, on
+    # the same connection (a lane's marker: lastword.py rule 17)
+    behind_subscribe: Callable[[], list[tuple[str, str]]] | None
     no_replay: list[str] | None  # command filters whose retained message is not replayed
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
@@ -390,6 +393,7 @@ class Connection:
         self._handler = on_message
         self._on_new_connection = options.get("on_new_connection")
         self._on_subscribed = options.get("on_subscribed")
+        self._behind_subscribe = options.get("behind_subscribe")
         self._clock = clock
         self._reconnect_s = (
             options.get("reconnect_min_s", 1),
@@ -666,6 +670,9 @@ class Connection:
         # lost and sent again: a hold a few seconds long, the safe direction)
         self._subscribing = True
         self._command_mid = self._subscribe(client, self._filters())
+        if self._behind_subscribe is not None and self._command_mid is not None:
+            for topic, payload in self._behind_subscribe():  # (paho's queue keeps the order)
+                client.publish(topic, payload, qos=0, retain=False)
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:

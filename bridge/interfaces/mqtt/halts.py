@@ -290,6 +290,18 @@ class Halts:
         with self._lock:
             self.word.lane_connected(lanes)
 
+    def lane_subscribing(self, lanes: tuple[str, ...] = LANES) -> list[tuple[str, str]]:
+        """The lane's SUBSCRIBE is queued on its new connection, on its paho thread: the
+        markers (topic, payload) it publishes right behind it, on that connection
+        (lastword.py rule 17: on the fence topic and the hello topic, as every marker of the
+        main connection, rule 7); none while the main connection cannot read them."""
+        with self._lock:
+            n = self.word.lane_subscribing(lanes)
+        if n is None:
+            return []
+        marker = self.word.marker(n)
+        return [(self.topics.bridge_fence, marker), (self.topics.bridge_hello, marker)]
+
     def lane_subscribed(self, lanes: tuple[str, ...] = LANES) -> None:
         """The lane's subscription is acknowledged (lastword.py rule 9), on its paho thread:
         before any message it brings."""

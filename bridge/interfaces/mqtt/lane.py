@@ -13,9 +13,11 @@ Rules:
    too; the lock lane: the lock topics) and the lane markers (the main connection has them,
    and its copies keep the order: lastword.py decides what each copy does, so a lane that is
    down or refused loses no stop, only speed). The stop topics are subscribed
-   without the broker's replay of a retained stop (lastword.py rule 6). It publishes nothing:
+   without the broker's replay of a retained stop (lastword.py rule 6). It publishes one
+   thing only: on each connection, right behind its SUBSCRIBE, a marker that tells the main
+   connection when its subscription was taken (``behind_subscribe``, lastword.py rule 17);
    no will, no state; the main connection (client.py) is the bridge's presence and carries
-   its markers.
+   every other marker.
 2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
    retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
    quick-ack (client.py rule 9): both are connection.py's Connection, which builds, connects

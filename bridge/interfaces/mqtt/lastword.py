@@ -102,7 +102,8 @@ words (rule 16). The broker keeps each connection's order, but not the order bet
    comes on the main connection only, and must not be taken for the copy of a newer one. So
    when the lane's subscription is acknowledged, a marker goes out on the main connection
    (``lane_subscribed``); until one at least as new comes back (or the main connection is new,
-   subscribed after the lane), a halt the main connection reads does not count as the copy of
+   subscribed after the lane; or the lane's own marker behind its SUBSCRIBE is back, rule
+   17), a halt the main connection reads does not count as the copy of
    the lane's halts read on that connection: carried out all the same (rule 1), noting and
    ending nothing. A copy lets the moves of every hold up to its lane halt's number wait
    instead of being refused (rule 13).
@@ -240,6 +241,28 @@ words (rule 16). The broker keeps each connection's order, but not the order bet
    The stop express's connection reads ``R/stop`` and ``R/lock`` both (express.py rule 2):
    behind a flood of lock OFFs its frame for a STOP went 6 ms to 0.7 s after it (Rotor-EZ),
    while the stop lane's went in 2 to 13 ms: speed, not a stop, is lost there.
+17. Rule 9's marker goes out on the main connection once the lane's SUBACK is in, behind
+   whatever the main connection is sending; a halt published after the broker took the lane's
+   SUBSCRIBE and read before that marker is back counted for nothing, so a move read after it
+   was refused (``held``) as published before the lane's copy of that very halt, and a lock
+   ON read there first made no echo note, so the lane's copy, read after the OFF that
+   followed, locked the rotator again, unsaid (attack 32: the lane back alone and the
+   operator's STOP, or lock ON, right after its SUBACK, with the main connection's uplink
+   busy). So each lane connection also publishes a marker of the main connection's kind
+   itself (``lane_subscribing``, numbered as every marker, on the fence topic and the hello
+   topic, rule 7), queued right behind its SUBSCRIBE on that connection: the broker takes a
+   connection's packets in order, so it took the SUBSCRIBE before that marker, and a halt
+   the main connection reads after it was published after the subscription, so it reaches
+   the lane too. The main connection reading that very marker (its number, not one as high:
+   a marker numbered after it may have been published on the main connection before the
+   SUBSCRIBE reached the broker) puts that lane's connection in step as rule 9's marker
+   does (``_in_step``), for its copies and its echo notes (rule 4), whichever of the two
+   comes back first; it ends the holds and fences up to its number as any marker does (it
+   was published after they were put). Nothing is timed: a marker lost, or one the broker
+   does not let the lane publish, leaves rule 9's marker to do it, as before. What is left:
+   a halt the broker takes between the lane's SUBSCRIBE and that marker (two packets of one
+   connection, back to back) is read before the marker, and a move after it is refused as
+   before (the safe direction: sent again, it goes).
 """
 
 from __future__ import annotations
@@ -291,10 +314,17 @@ class LastWord:
     _resend_s: float = RESEND_S
     # rule 9: (rotator, kind) -> (number, the marker the main connection must have passed for
     # the main copy to count), oldest first
-    _lane_waiting: dict[tuple[str, str], deque[tuple[int, int]]] = field(default_factory=dict)
+    # (rule 17: and the marker its lane's connection published behind its SUBSCRIBE, 0: none)
+    _lane_waiting: dict[tuple[str, str], deque[tuple[int, int, int]]] = field(default_factory=dict)
     # rule 9: kind ("stop", "lock": rule 16, each its own lane) -> the marker sent when that
     # lane's subscription was acknowledged
     _lane_sub: dict[str, int] = field(default_factory=lambda: dict.fromkeys(LANES, 0))
+    # rule 17: kind -> the marker the lane's present connection published right behind its
+    # SUBSCRIBE (0: none yet on this connection), the newest one it published (any
+    # connection), and the newest of them the main connection read back
+    _lane_q: dict[str, int] = field(default_factory=lambda: dict.fromkeys(LANES, 0))
+    _q_sent: dict[str, int] = field(default_factory=lambda: dict.fromkeys(LANES, 0))
+    _q_past: dict[str, int] = field(default_factory=lambda: dict.fromkeys(LANES, 0))
     _main_past: int = 0  # rule 9: the newest marker the main connection has read past
     _echoes: dict[tuple[str, str], deque[int]] = field(default_factory=dict)  # rule 4
     _lane_next: int = 0
@@ -332,7 +362,8 @@ class LastWord:
         self._held_since.setdefault(rotator_id, now)
         if self.markers:
             self._marker_sent_at[n] = now
-        self._lane_waiting.setdefault(key, deque()).append((n, self._lane_sub[kind]))
+        entry = (n, self._lane_sub[kind], self._lane_q[kind])
+        self._lane_waiting.setdefault(key, deque()).append(entry)
         return n
 
     def marker(self, n: int, lane: bool = False) -> str:
@@ -370,6 +401,24 @@ class LastWord:
             del self._echoes[key]
         for lane in lanes:
             self._lane_sub[lane] = NOT_YET
+            self._lane_q[lane] = 0
+
+    def lane_subscribing(self, lanes: tuple[str, ...] = LANES) -> int | None:
+        """Rule 17: the lane's SUBSCRIBE is queued on its new connection: the number of the
+        marker that connection publishes right behind it (None while the main connection
+        cannot read markers, rule 7: nothing would read it)."""
+        if not self.markers:
+            return None
+        self._next += 1
+        for lane in lanes:
+            self._lane_q[lane] = self._q_sent[lane] = self._next
+        return self._next
+
+    def _in_step(self, kind: str, after: int, q: int) -> bool:
+        """Rules 9 and 17: whether a halt the main connection reads now was published after
+        the broker took the SUBSCRIBE of the lane connection that ``after`` (the marker its
+        SUBACK sent) and ``q`` (the one it published behind its SUBSCRIBE) belong to."""
+        return not self.markers or after <= self._main_past or 0 < q <= self._q_past[kind]
 
     def lane_subscribed(self, now: float, lanes: tuple[str, ...] = LANES) -> int | None:
         """Rule 9: the lane's subscription is acknowledged: the marker to publish on the main
@@ -465,8 +514,8 @@ class LastWord:
         key = (rotator_id, kind)
         waiting = self._lane_waiting.get(key)
         if waiting:
-            n, after = waiting[0]
-            if after > self._main_past and self.markers:
+            n, after, q = waiting[0]
+            if not self._in_step(kind, after, q):
                 return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
             if not self.markers:  # rule 13: no marker can come; the count copy ends the holds
@@ -477,11 +526,13 @@ class LastWord:
             self._marker_sent_at[self._next] = now
             self._resend_s = RESEND_S
             return Copy(echo=True, upto=n, marker=self._next)
-        sub = self._lane_sub[kind]
-        if not self.lane_echoes(kind) or sub == NOT_YET:  # (rule 4: nothing to note against)
+        sub, q = self._lane_sub[kind], self._lane_q[kind]
+        if not self.lane_echoes(kind):  # (rule 4: nothing to note against)
             return Copy()
-        if sub > self._main_past and self.markers:  # rule 4 as rule 9: this halt may be
-            return Copy()  # older than the lane's subscription, which has no copy of it
+        if sub == NOT_YET and not 0 < q <= self._q_past[kind]:  # (not subscribed: rule 4;
+            return Copy()  # rule 17: its SUBSCRIBE taken before a marker read here)
+        if not self._in_step(kind, sub, q):  # rule 4 as rule 9: this halt may be older than
+            return Copy()  # the lane's subscription, which has no copy of it
         self._lane_next += 1
         self._echoes.setdefault(key, deque()).append(self._lane_next)
         return Copy(lane_marker=self._lane_next)
@@ -516,6 +567,9 @@ class LastWord:
         if not n:
             return 0, []
         self._main_past = max(self._main_past, n)
+        for lane in LANES:  # rule 17: a lane's own marker, behind its SUBSCRIBE, is back
+            if n == self._q_sent[lane]:
+                self._q_past[lane] = n
         return n, self._passed(n)
 
     def _passed(self, n: int, fences: bool = True) -> list[str]:

@@ -370,6 +370,10 @@ class MqttService:
         """A new connection of the lanes of these kinds (lastword.py rule 16)."""
         self._halts.lane_connected(lanes)
 
+    def lane_subscribing(self, lanes: tuple[str, ...] = LANES) -> list[tuple[str, str]]:
+        """What the lane publishes right behind its SUBSCRIBE (lastword.py rule 17)."""
+        return self._halts.lane_subscribing(lanes)
+
     def lane_subscribed(self, lanes: tuple[str, ...] = LANES) -> None:
         self._halts.lane_subscribed(lanes)
 
