@@ -44,11 +44,6 @@ FAR_DEG = 300.0  # the first turn's target: under way when the lane is dropped
 NEW_DEG = 100.0  # the target sent after the STOP
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 32: a target sent right after a STOP pressed just as the stop lane came back "
-    "is refused as 'published before a STOP'; the rotor stays stopped",
-)
 @pytest.mark.parametrize("model", sorted(MODELS))
 def test_a_target_after_a_stop_right_after_the_lanes_suback_turns_the_rotor(
     tmp_path: Path, model: str
@@ -90,11 +85,6 @@ def test_a_target_after_a_stop_right_after_the_lanes_suback_turns_the_rotor(
         broker.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 32: a lock OFF sent after a lock ON pressed just as the lock lane came back is "
-    "undone: R/lock/state OFF, then ON again without a word; the rotator stays locked",
-)
 def test_a_lock_off_after_a_lock_on_right_after_the_lock_lanes_suback_unlocks(
     tmp_path: Path,
 ) -> None:
