@@ -262,7 +262,12 @@ words (rule 16). The broker keeps each connection's order, but not the order bet
    does not let the lane publish, leaves rule 9's marker to do it, as before. What is left:
    a halt the broker takes between the lane's SUBSCRIBE and that marker (two packets of one
    connection, back to back) is read before the marker, and a move after it is refused as
-   before (the safe direction: sent again, it goes).
+   before (the safe direction: sent again, it goes). The rule leans on the broker taking a
+   connection's SUBSCRIBE before the PUBLISH behind it (mosquitto does, one packet after the
+   other); a broker that routed that marker before the subscription took effect would make a
+   halt published in between count as the lane's (rule 13's count off: a move after it waits,
+   and the lane's real copy drops it; an echo note made for it lasts until its lane marker
+   is back, a lane round trip, and a lane halt read meanwhile waits for the main connection).
 """
 
 from __future__ import annotations
