@@ -174,7 +174,9 @@ Rules:
    start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two
    readings, four for a steady turn, eight with one garble among those; a poll answered
    garbled past parsing counts as one, ``_garbled_first``: review 107, a line that tore every
-   answer had none counted, and a turn at the start ran past ``az_min_deg`` to its end; a
+   answer had none counted, and a turn at the start ran past ``az_min_deg`` to its end; so
+   does one torn past any form, its line ends too, link.py rule 11: review 113, such a line was
+   silence and the stop came 22 s late, 45 degrees past the limit; a
    controller that answers nothing at all is rule 2's silence, and one that reports no
    position never has first readings; counted across a replug until a reading is taken:
    review 107, a flaky adapter's connections of seven readings each never reached eight) get a
@@ -1201,6 +1203,7 @@ class Controller:
             log.debug("%s: <- %r", self.cfg.rotator_id, data)
         link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
+        link.parsed(replies, now)  # link.py rule 11: a reply of the controller's form, or none
         if not replies:
             return Fed.NOTHING
         held = len(replies) == 1 and isinstance(replies[0], PositionReply)

@@ -123,6 +123,20 @@ Rules:
    half-duplex line with 80 bytes still coming, their tail closed the re-poll's exchange and
    a report from before a point ended its slew: the next ``z`` went into the slew; one noise
    byte before every GS-232B answer had it polled 44 times a second.
+   An answer torn past any form is garbled too: an exchange given up (``_tears``) with
+   TORN_SHARE of a reply's bytes or more read since its question and none of them forming a
+   reply of the controller's (``parsed``: any the codec makes but bytes that form none, NOISE
+   or SPOILED not harmless; a reading, a version, an echo, a power-on byte, a late answer or a
+   refusal is of its form), the second such in a row with no reply formed between, once per
+   exchange however many its bytes. A line that garbles every byte, its line ends too (a
+   failing RX level shifter, the wrong baud rate) leaves the codec waiting for a line end that
+   never comes: such answers were silence, 'does not answer', and counted nothing toward
+   controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
+   turn at the start 45 degrees past ``az_min_deg``; attack 30: the wrong baud rate told as a
+   cable). The first of a run alone is not counted: an answer still arriving (in parts, late)
+   forms its reply with its rest. A stray byte now and then is no answer (review 99: any byte
+   counted kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told
+   as the wrong baud rate).
 12. A controller that answers late: a line of the answer to the question given up last that
    comes before the next question (protocols/base.py rule 7: never a reading) says how long
    after that question it came (``answered_late``); from then on every answer is waited for
@@ -183,6 +197,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import replace
 
 from bridge.protocols.base import (
@@ -194,6 +209,7 @@ from bridge.protocols.base import (
     ModelSpec,
     PacedConnect,
     PositionReply,
+    Reply,
     StopsOnTheLine,
     WatchesWrites,
 )
@@ -207,6 +223,8 @@ LATE_EASE = 1 / 256  # rule 7: of the learned lateness, given back per reply who
 VERDICT_SLACK_S = 0.2  # rule 2: a verdict's reply is owed this long after it can be whole
 OVERDUE_SHARE = 0.25  # rule 12: a late answer's lateness past the reply time, waited on top
 OVERDUE_EASE = 1 / 16  # rule 12: of the learned overdue time, given back per answer in time
+TORN_SHARE = 0.5  # rule 11: of a reply's bytes, read with none formed: a torn answer
+_FORMLESS = (JunkReason.NOISE, JunkReason.SPOILED)  # rule 11: bytes that form no reply
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
@@ -271,6 +289,9 @@ class Link:
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
         self._read_t = -math.inf  # rule 11: the last bytes read
+        self._formed_t = -math.inf  # rule 11: the last reply of the controller's form
+        self._torn = False  # rule 11: the exchange given up last had bytes, none of them formed
+        self._asked_bytes = 0  # rule 11: bytes read since the last frame that awaits a reply
         self._fresh = True  # rule 13: no frame written on this connection yet
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
         self._move_t = -math.inf  # rule 13: when the last target's last frame goes
@@ -320,6 +341,7 @@ class Link:
                 self._late_seen = math.inf
             return
         self._read_t = now  # rule 11
+        self._asked_bytes += count
         if self._hold_bytes:
             self._hold_reads += 1
             missing = max(0, self._hold_bytes - count)
@@ -330,6 +352,17 @@ class Link:
         if self._held is not None:  # rule 9: the line is not quiet yet
             self._held_after = True
             self._held_until = min(self._held_cap, max(self._held_until, now + self._settle_s))
+
+    def parsed(self, replies: Sequence[Reply], now: float) -> None:
+        """Rule 11: what the codec made of the bytes read now: a reply of the controller's
+        form (a reading, a version, an echo, a power-on byte, a late answer, a refusal: any but
+        bytes that form none) shows its line does not tear every byte."""
+        for reply in replies:
+            if isinstance(reply, JunkReply) and reply.reason in _FORMLESS:
+                if not self.codec.harmless(reply.data):  # (a banner is of its form)
+                    continue
+            self._formed_t, self._torn = now, False
+            return
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -350,6 +383,7 @@ class Link:
             if self._asked_t <= self._heard_from():  # rule 2
                 self._first_asked_t = now
             self._asked_t = now
+            self._asked_bytes = 0  # rule 11
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
             self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
@@ -719,6 +753,7 @@ class Link:
     def give_up_reply(self, now: float) -> bool:
         """Stop waiting for the owed reply (and for a slew's report: the slew is over); True if
         it came garbled and is asked again at once (rule 11)."""
+        self._tears(now)
         again = self._ask_garbled(now)
         self.codec.expire_query()
         self._reply_deadline = None
@@ -731,6 +766,22 @@ class Link:
                 self._late_hold_until = self._asked_t + 2 * self.reply_timeout_s
         self.end_slew(now)
         return again
+
+    def _tears(self, now: float) -> None:
+        """Rule 11: the owed reply, given up now, came torn past any form (bytes read since
+        it was asked, and none of them a reply of the controller's form: a line that garbles
+        every byte, its line ends too), the second such in a row with no reply formed between:
+        garbled (one per exchange, however many its bytes). The first alone may be an answer
+        still arriving (one in parts, a late one): its rest forms a reply then, and ends the
+        run."""
+        if self._garbled or self._slew is not None:
+            return
+        asked = self._asked_t
+        most = self._asked_bytes >= TORN_SHARE * self.spec.reply_bytes  # (no stray byte)
+        torn = most and self._read_t >= asked and self._formed_t < asked
+        if torn and self._torn:
+            self._garbled, self._garbled_t = True, now
+        self._torn = torn
 
     def _late_hold_t(self) -> float:
         """Rule 12: no poll before then: the late hold's end, or, if a late answer's bytes are
