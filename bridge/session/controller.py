@@ -185,7 +185,9 @@ Rules:
    always safe; but checked only until a reading a resend time after it shows the rotor still,
    then let go as a released lock's stop, ``_release_check``, unless it came over another stop
    still checked, an operator's or the lock's: review 107, checked until the next target, a
-   hand at the panel ten minutes after the line came right was stopped, unsaid), and so do each
+   hand at the panel ten minutes after the line came right was stopped, unsaid; its copy owed
+   across a drop, stops.py rule 3, is let go so too, ``_let_go``: review 113, written on the
+   reconnect it was checked as an operator's, for good), and so do each
    as many more
    while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
    error says the readings do not agree (the last in true bearings, pointing.py: review 107
@@ -992,8 +994,8 @@ class Controller:
             self._cut_move = self.link.move_unsure
         unseen = self.stops.unseen_t
         self.stops.port_closed(failed, stop_due, self.motion, now)
-        if self.stops.owed and unseen is not None and unseen == self._released_unseen_t:
-            self._released_owed = True  # (the released lock's: stops.py rule 2)
+        if self.stops.owed and self._let_go(unseen):
+            self._released_owed = True  # (the released lock's, or rule 9's unwatched one)
         spec = self.cfg.spec  # rule 13: judged at its rest (not where the replug stops it)
         if failed and not self.cfg.box and not spec.connect_stops and self.turn_out():
             self._lost_aim = (self.motion.target_deg, self.motion.el_target_deg)
@@ -1137,6 +1139,14 @@ class Controller:
         self._released_owed = self.stops.owed  # (the port out: the stop it writes on connect)
         self._guarded = False  # (rule 10's guard too)
         self._released_unseen_t = self.stops.unseen_t  # (owed if found silent: rule 2 too)
+
+    def _let_go(self, unseen: float | None) -> bool:
+        """Whether the stop written at ``unseen`` (the last, no reading at rest since) is one
+        let go once a reading shows it had: the released lock's (``lock_released``), or rule 9's
+        unwatched stop (``_unwatched_stop``). Owed across a drop (stops.py rule 3), its copy
+        written on the reconnect is let go so too (review 113: checked as an operator's, for
+        good, a hand at the panel ten minutes later was stopped, unsaid)."""
+        return unseen is not None and unseen in (self._released_unseen_t, self._released_stop_t)
 
     def _release_check(self, now: float) -> None:
         """``lock_released``'s stop let go, after a reading (the motion just updated)."""
@@ -2239,7 +2249,7 @@ class Controller:
             unseen = self.stops.unseen_t
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
                 self.stops.owed = True  # when it answers again, as released if it was the
-                self._released_owed = unseen == self._released_unseen_t  # released lock's
+                self._released_owed = self._let_go(unseen)  # released lock's (or rule 9's)
             stopped = turning and self.motion.stop_sent_t is not None
             if turning and not stopped:  # (rule 2: its stop waits for the line: a turn not
                 why += " while the rotor turned to its target (it may still be turning)"  # seen

@@ -14,13 +14,14 @@ GS-232B (``unasked_moves`` "follow") the hand's turn to 250 is cut a few degrees
 In virtual time: review 107's start (the emulated GS-232B at rest at 150, readings of a failing
 sensor that never agree); the port drops the moment the unwatched stop is written and is back
 a second later with the line sound; ten minutes on, a hand turns the rotor to 250.
+
+Fixed: the owed copy of rule 9's unwatched stop is let go as the unwatched stop itself
+(controller.py ``_let_go``: ``_released_owed`` at the drop).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-
-import pytest
 
 from tests.engine.test_review105_first_readings_polled_at_the_moving_rate_forever import failing
 from tests.engine.test_review107_unwatched_stop_checked_for_good import (
@@ -35,11 +36,6 @@ GARBLED_S = 10.0  # for the unwatched stop to be written (virtual time)
 DOWN_S = 1.0  # the drop (virtual time, not a deadline)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 113: an unwatched stop owed across a replug is checked for good: a hand "
-    "turn ten minutes later is stopped, unsaid",
-)
 def test_an_unwatched_stop_owed_across_a_drop_lets_a_later_hand_turn_be(rig: Rig) -> None:
     v = rig("gs232b", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.to_host = failing()
