@@ -1,0 +1,52 @@
+"""Attack 33: a program on 127.0.0.1:1883 that takes connections but speaks no MQTT (a hostile
+neighbour, a hung broker, an SSH tunnel whose far end is gone) is taken by ``./demo`` for "the MQTT
+broker already running at 127.0.0.1:1883" (bridge/demo/mosquitto.py ``answers`` is a TCP connect
+that succeeds, no CONNACK asked for). The banner says so and prints the ``mosquitto_pub`` commands
+to turn the rotator, but the bridge never connects: nothing is published, no command reaches it,
+the typed ones neither (the demo's own prompt goes through the broker), and no line says why; at
+the end it says the broker "no longer answers". README: the demo uses the broker at
+127.0.0.1:1883 "if one answers", else starts a private one. A port that answers no MQTT is no
+broker: the demo says so (and ends, or bridges to a private mosquitto that answers), instead of
+running dead while saying it is bridged."""
+
+from __future__ import annotations
+
+import logging
+import socket
+from pathlib import Path
+
+import pytest
+
+from bridge import demo
+from bridge.cli import build_parser
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 33: a port that takes connections but speaks no MQTT is announced as the "
+    "broker the demo is bridged to; the demo runs dead, unsaid",
+)
+def test_a_port_that_speaks_no_mqtt_is_not_announced_as_the_broker(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    caplog.set_level(logging.INFO)
+    with socket.socket() as silent:  # connections complete in the kernel's backlog, unanswered
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(16)
+        port = silent.getsockname()[1]
+        args = build_parser().parse_args(
+            ["demo", "--mqtt-port", str(port), "--web-port", "0", "--duration-s", "3"]
+        )
+        code = demo.run(args)
+    said = capsys.readouterr()
+    connected = "connected to MQTT broker" in caplog.text
+    claimed = f"the MQTT broker already running at 127.0.0.1:{port}" in said.out + said.err
+    assert not claimed, f"the demo announced a silent port as its broker: {said.out[:400]}"
+    assert code != 0 or connected, (
+        f"the demo ran to its end (exit {code}) never connected to any broker, unsaid: "
+        f"{said.err[-400:]}"
+    )
