@@ -25,8 +25,13 @@ Rules:
    where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``), nor a reading
    of it further from there than any since (it creeps inside ``noise_deg``: ``az_crept_deg``,
    ``el_crept_deg``; jitter back and forth does not) at CREEP_SHARE of the speed that axis turns
-   at its slowest (``slowest_deg_s``) or faster, timed from its last creep (its first since a
-   move, from the reading before), for the longer of ``settle_s`` and its ``axis_seen_s`` (rule
+   at its slowest (``slowest_deg_s``) or faster, timed from the last reading that showed it
+   where it stood (``az_crept_t``, ``el_crept_t``) by what it turned at least, a reading's step
+   less (a pot read in steps reads one on at any speed: review 115, one reading of a still
+   elevation a degree off, inside a GS-232B's 2 degrees of noise, counted as its turn
+   starting, and a jam's stop waited that elevation's own time, 5 s; one step off only holds
+   the rest while it stands, till a turn at the axis's slowest would read on, ``_step_hold_s``,
+   then the axis stands there), for the longer of ``settle_s`` and its ``axis_seen_s`` (rule
    4: what a reading's step and ``noise_deg`` take at that axis's speed, as slow as rule 6
    allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
    turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
@@ -465,8 +470,9 @@ class Motion:
     el_moved_t: float | None = None
     az_crept_deg: float = 0.0
     el_crept_deg: float = 0.0
-    # rule 2: each axis's last creep (or, not crept since it moved, its last reading): the
-    # next creep's speed is measured from it
+    # rule 2: each axis's last reading where it stood (at ``az_moved_deg``/``el_moved_deg``, or
+    # its last move): a creep's speed is measured from it, and a reading a step off holds the
+    # carried turn's rest from it (``_step_hold_s``)
     az_crept_t: float | None = None
     el_crept_t: float | None = None
     # rule 2: the target out when the readings were lost (``link_down``; its azimuth and
@@ -907,29 +913,47 @@ def _own_move(
     off: float,
     deg: float,
     crept: float,
-    crept_t: float | None,
+    stood_t: float | None,
 ) -> None:
     """Rule 2: what a reading of a carried turn's axis (``axis``: "az" or "el"; ``off``: how
     far it is from where that axis last moved, ``deg``) tells of that axis's own movement: more
     than ``noise_deg``, a move (its own time starts again from here); further than any reading
     since inside ``noise_deg`` (it creeps), a move only if it crept at least CREEP_SHARE of
-    what the axis turns at its slowest (``slowest_deg_s``) since its last creep (the first
-    creep since a move: since the reading before). A creep slower than any turn is no turn
-    (review 110: a jammed RC2800's pot drifting a tenth every 1.2 s kept the turn 'moving' for
-    ever, no stop). Jitter back and forth counts once at most."""
+    what the axis turns at its slowest (``slowest_deg_s``) since it last read where it moved
+    (``stood_t``), by what it turned at least: a reading's step less (a pot read in steps
+    reads one on at any speed). So a creep of one step is no move (review 115: one reading of
+    a still elevation a degree off counted as its turn starting, and a jam's stop waited that
+    elevation's own time, 5 s): it only holds the rest while it stands (``carried_rest_from``),
+    till a turn at the axis's slowest would have read on (``_step_hold_s``); after that, the
+    axis stands there. A creep slower than any turn is no turn (review 110: a jammed RC2800's
+    pot drifting a tenth every 1.2 s kept the turn 'moving' for ever, no stop). Jitter back
+    and forth counts once at most."""
+    step = cfg.spec.reading_step_deg
+    if off < step / 2:  # (where it last moved: it stands there)
+        changes[f"{axis}_crept_t"] = now
+        return
     if off > cfg.noise_deg:
         changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
         changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
         return
-    if off <= crept:
-        if crept == 0.0:  # (not crept since it moved: a first creep is timed from here)
-            changes[f"{axis}_crept_t"] = now
-        return
-    changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = off, now
     slowest = slowest_deg_s(cfg).get("azimuth" if axis == "az" else "elevation")
-    dt = None if crept_t is None else now - crept_t
-    if slowest is None or not dt or off - crept >= CREEP_SHARE * slowest * dt:
+    dt = None if stood_t is None else now - stood_t
+    if off < 1.5 * step:  # (a step: no speed told by it)
+        if slowest is not None and dt is not None and dt >= _step_hold_s(cfg, slowest):
+            changes[f"{axis}_moved_deg"], changes[f"{axis}_crept_t"] = deg, now  # (it stands
+            changes[f"{axis}_crept_deg"] = 0.0  # here: its rest told no turn)
+        return
+    if off <= crept + step / 2:  # (no further than any since: jitter)
+        return
+    changes[f"{axis}_crept_deg"] = off
+    if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
         changes[f"{axis}_moved_t"] = now  # (a creep as fast as a turn: its first degrees)
+
+
+def _step_hold_s(cfg: MotionConfig, slowest: float) -> float:
+    """Rule 2: how long after a carried axis last read where it moved a turn at its slowest
+    (``slowest``) reads a second step on: a reading one step off holds the rest till then."""
+    return 2.0 * cfg.spec.reading_step_deg / slowest + cfg.poll_margin_s
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
@@ -1585,10 +1609,21 @@ def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     its own short time, a slow axis's turn is not called over while it shows a move only
     every few readings."""
     ref = -1e18
+    slowest, half = slowest_deg_s(cfg), cfg.spec.reading_step_deg / 2
     for axis, seen in axis_seen_s(cfg).items():
-        moved_t = m.az_moved_t if axis == "azimuth" else m.el_moved_t
+        if axis == "azimuth":
+            moved_t, at, stood_t = m.az_moved_t, m.az_moved_deg, m.az_crept_t
+            now_deg = m.position_deg
+            off = None if at is None or now_deg is None else angle_error(now_deg, at, cfg.az_wraps)
+        else:
+            moved_t, at, stood_t = m.el_moved_t, m.el_moved_deg, m.el_crept_t
+            now_deg = m.el_position_deg
+            off = None if at is None or now_deg is None else abs(now_deg - at)
         if moved_t is not None:
             ref = max(ref, moved_t + max(cfg.settle_s, seen))
+        speed = slowest.get(axis)
+        if off is not None and off >= half and stood_t is not None and speed is not None:
+            ref = max(ref, stood_t + _step_hold_s(cfg, speed))  # (off where it stood: held)
     return ref
 
 

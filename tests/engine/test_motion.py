@@ -679,7 +679,7 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
         az_moved_deg=150.0,  # (rule 2: carried, the azimuth's own movement)
         az_moved_t=2000.0,
         az_crept_deg=0.0,
-        az_crept_t=2000.0,  # (rule 2: a creep's speed is measured from here)
+        az_crept_t=2000.0,  # (rule 2: where it stood, a creep's speed measured from here)
     )
     assert moved == mo.tick(expected, CFG, 2000.0)[0]
 
