@@ -36,7 +36,13 @@ Rules:
    allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
    turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
    pot drifted a tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for
-   ever and never got controller.py rule 13's stop. Nor is an axis with nothing to do waited on:
+   ever and never got controller.py rule 13's stop. Nor is a drift past ``noise_deg`` as slow
+   (a move by rule 1, but the carried turn's rest waits each axis's own moves alone, weighed
+   as a creep is, and ``settle_s`` from the first reading back): review 115, a jammed RC2800's
+   pot drifting a tenth every 0.2 s (0.5 deg/s, an eighth of its slowest turn) crossed
+   ``noise_deg`` every 1.2 s, inside ``settle_s``, and was shown moving for ever, never
+   stopped; a healthy turn at its slowest reads on some four times as fast as CREEP_SHARE
+   asks (its readings' step allowed for). Nor is an axis with nothing to do waited on:
    review 110, an azimuth-only turn on a GS-232B with its elevation set slow (1.0 deg/s), jammed
    a second after a replug, was stopped 3.9 s after the jam (8.5 s at 0.5 deg/s), by the
    elevation's own time counted from the first reading back, not the azimuth's 1.7 s. Review 95:
@@ -932,12 +938,15 @@ def _own_move(
     if off < step / 2:  # (where it last moved: it stands there)
         changes[f"{axis}_crept_t"] = now
         return
-    if off > cfg.noise_deg:
-        changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
-        changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
-        return
     slowest = slowest_deg_s(cfg).get("azimuth" if axis == "az" else "elevation")
     dt = None if stood_t is None else now - stood_t
+    if off > cfg.noise_deg:
+        if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
+            changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
+            changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
+        elif off > crept:  # (a drift past the noise slower than any turn: no turn's move,
+            changes[f"{axis}_crept_deg"] = off  # review 115)
+        return
     if off < 1.5 * step:  # (a step: no speed told by it)
         if slowest is not None and dt is not None and dt >= _step_hold_s(cfg, slowest):
             changes[f"{axis}_moved_deg"], changes[f"{axis}_crept_t"] = deg, now  # (it stands
@@ -1595,8 +1604,11 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 def still_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``; a
     carried turn's, each axis still for its own time too: ``carried_rest_from``)."""
-    if m.carried and m.stop_sent_t is None and m.state is MOVING:
-        return max(_moved_ref(m) + cfg.settle_s, carried_rest_from(m, cfg))  # (rule 4: rare)
+    if m.carried and m.stop_sent_t is None and m.state is MOVING:  # (rule 4: rare)
+        # (each axis's own moves alone: rule 1's anchor moves with a drift slower than any
+        # turn too, review 115; settle_s from the first reading back at least)
+        first = m.first_read_t if m.first_read_t is not None else _moved_ref(m)
+        return max(first + cfg.settle_s, carried_rest_from(m, cfg))
     return _moved_ref(m) + cfg.settle_s
 
 
