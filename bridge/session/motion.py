@@ -31,7 +31,11 @@ Rules:
    elevation a degree off, inside a GS-232B's 2 degrees of noise, counted as its turn
    starting, and a jam's stop waited that elevation's own time, 5 s; one step off only holds
    the rest while it stands, till a turn at the axis's slowest would read on, ``_step_hold_s``,
-   then the axis stands there), for the longer of ``settle_s`` and its ``axis_seen_s`` (rule
+   then the axis stands there; a move or creep read one step on from the reading before showed
+   no movement after the first reading of that one, and its ``settle_s`` counts from there,
+   ``_moved_at``: review 115, a reading just after a jam showing the last degree turned before
+   it put the stop a moving poll past the axis's own time), for the longer of ``settle_s`` and
+   its ``axis_seen_s`` (rule
    4: what a reading's step and ``noise_deg`` take at that axis's speed, as slow as rule 6
    allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
    turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
@@ -829,11 +833,16 @@ def reading(
     if m.carried:  # rule 2: each axis's own movement and creep, for the carried turn's rest
         ref = m.az_moved_deg
         off = cfg.noise_deg + 1.0 if ref is None else angle_error(az_deg, ref, wraps)
-        _own_move(changes, cfg, now, "az", off, az_deg, m.az_crept_deg, m.az_crept_t)
+        step, was, was_el = cfg.spec.reading_step_deg, m.position_deg, m.el_position_deg
+        on = was is not None and step / 2 <= angle_error(az_deg, was, wraps) < 1.5 * step
+        since = m.changed_t if on else None  # (one step on: no move shown since that reading)
+        _own_move(changes, cfg, now, "az", off, az_deg, m.az_crept_deg, m.az_crept_t, since)
         ref = m.el_moved_deg
         if el_deg is not None:
             off = cfg.noise_deg + 1.0 if ref is None else abs(el_deg - ref)
-            _own_move(changes, cfg, now, "el", off, el_deg, m.el_crept_deg, m.el_crept_t)
+            on = was_el is not None and step / 2 <= abs(el_deg - was_el) < 1.5 * step
+            since = m.changed_t if on else None
+            _own_move(changes, cfg, now, "el", off, el_deg, m.el_crept_deg, m.el_crept_t, since)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -920,6 +929,7 @@ def _own_move(
     deg: float,
     crept: float,
     stood_t: float | None,
+    since_t: float | None = None,
 ) -> None:
     """Rule 2: what a reading of a carried turn's axis (``axis``: "az" or "el"; ``off``: how
     far it is from where that axis last moved, ``deg``) tells of that axis's own movement: more
@@ -933,7 +943,11 @@ def _own_move(
     till a turn at the axis's slowest would have read on (``_step_hold_s``); after that, the
     axis stands there. A creep slower than any turn is no turn (review 110: a jammed RC2800's
     pot drifting a tenth every 1.2 s kept the turn 'moving' for ever, no stop). Jitter back
-    and forth counts once at most."""
+    and forth counts once at most. A move read one step on from the reading before
+    (``since_t``: the first reading of that one) showed no movement after that reading: its
+    ``settle_s`` counts from there, its ``axis_seen_s`` from this reading still (review 115:
+    a reading just after a jam, showing the last degree turned before it, put the jam's stop
+    a moving poll later than the axis's own time)."""
     step = cfg.spec.reading_step_deg
     if off < step / 2:  # (where it last moved: it stands there)
         changes[f"{axis}_crept_t"] = now
@@ -942,7 +956,8 @@ def _own_move(
     dt = None if stood_t is None else now - stood_t
     if off > cfg.noise_deg:
         if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
-            changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
+            moved_t = _moved_at(cfg, now, axis, since_t)
+            changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, moved_t
             changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
         elif off > crept:  # (a drift past the noise slower than any turn: no turn's move,
             changes[f"{axis}_crept_deg"] = off  # review 115)
@@ -956,7 +971,19 @@ def _own_move(
         return
     changes[f"{axis}_crept_deg"] = off
     if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
-        changes[f"{axis}_moved_t"] = now  # (a creep as fast as a turn: its first degrees)
+        changes[f"{axis}_moved_t"] = _moved_at(cfg, now, axis, since_t)  # (a creep as fast
+        # as a turn: its first degrees)
+
+
+def _moved_at(cfg: MotionConfig, now: float, axis: str, since_t: float | None) -> float:
+    """Rule 2: when a carried axis's move read at ``now`` is timed for its rest: ``now``, or,
+    read one step on from the reading before, the first reading of that one (``since_t``:
+    no movement shown after it), never so early that its ``axis_seen_s`` from ``now`` is
+    cut short (``settle_s`` counts from when it moved, ``axis_seen_s`` from the reading)."""
+    if since_t is None or since_t >= now:
+        return now
+    seen = axis_seen_s(cfg).get("azimuth" if axis == "az" else "elevation", 0.0)
+    return max(since_t, now - max(0.0, cfg.settle_s - seen))
 
 
 def _step_hold_s(cfg: MotionConfig, slowest: float) -> float:
