@@ -49,7 +49,10 @@ Rules:
    asks (its readings' step allowed for). Nor is an axis with nothing to do waited on:
    review 110, an azimuth-only turn on a GS-232B with its elevation set slow (1.0 deg/s), jammed
    a second after a replug, was stopped 3.9 s after the jam (8.5 s at 0.5 deg/s), by the
-   elevation's own time counted from the first reading back, not the azimuth's 1.7 s. Review 95:
+   elevation's own time counted from the first reading back, not the azimuth's 1.7 s; the lost
+   target is kept while its turn is carried, over a second replug too (review 115: forgotten
+   at the first reading back, a jam after the adapter dropped out again waited the idle
+   elevation's time, 3.9 s). Review 95:
    a GS-232B's elevation at 1.8 deg/s, read in whole degrees with 2 degrees of noise, shows a
    move every 1.7 s; its turn carried over a replug was called at rest at rule 2's 1.5 s and
    stopped short by controller.py rule 13, R/error blaming a jam. Not the slowest axis's time
@@ -486,8 +489,9 @@ class Motion:
     az_crept_t: float | None = None
     el_crept_t: float | None = None
     # rule 2: the target out when the readings were lost (``link_down``; its azimuth and
-    # elevation), kept till the first reading back: an axis it leaves where it stands has
-    # nothing to do in the turn carried, and that turn's rest waits no time of its own
+    # elevation), kept while the turn it left the controller is carried (over a second
+    # replug too: review 115): an axis it leaves where it stands has nothing to do in the
+    # turn carried, and that turn's rest waits no time of its own
     lost_aim: tuple[float, float | None] | None = None
 
 
@@ -706,7 +710,10 @@ def link_down(m: Motion) -> Motion:
     had a target out, is kept for the first reading back (rule 4)."""
     turning = m.state is MOVING or m.target_deg is not None or m.el_target_deg is not None
     hand = m.state is MOVING and m.target_deg is None and m.stop_sent_t is None and not m.carried
-    aim = m.lost_aim if m.anchor_deg is None else None  # (rule 2: lost before, nothing read)
+    # (rule 2: the lost target, lost before with nothing read since, or lost again with the
+    # turn it left the controller still carried: review 115, a second replug forgot it)
+    carrying = m.carried and m.state is MOVING and not m.lost_still
+    aim = m.lost_aim if m.anchor_deg is None or carrying else None
     if m.target_deg is not None:
         aim = (m.target_deg, m.el_target_deg)
     return Motion(
@@ -797,7 +804,7 @@ def reading(
             az_moved_t=None if az_idle else now,
             el_moved_deg=el_deg,
             el_moved_t=None if el_deg is None or el_idle else now,
-            lost_aim=None,
+            lost_aim=m.lost_aim if turning and not m.lost_hand else None,  # (while carried)
             az_crept_deg=0.0,
             el_crept_deg=0.0,
             az_crept_t=now,

@@ -4,8 +4,8 @@ CREEP_SHARE of the axis's slowest turn is none either. A healthy turn at the slo
 6 allows for (nominal over BLIND_SLOW_FACTOR), read in whole degrees with 2 degrees of noise
 (a GS-232B: a move past the noise only every 3 degrees), carried over a replug, must still be
 left to finish: no stop, no R/error, the rotor at the target it was sent. On a 450-degree rotor,
-the azimuth across 360 and past it, and an elevation-only turn; the adapter out long enough for
-the readings back to meet the turns at each phase of a step."""
+the azimuth across 360 and past it, and an elevation-only turn; the adapter out once or twice, long
+enough for the readings back to meet the turns at each phase of a step."""
 
 from __future__ import annotations
 
@@ -27,10 +27,11 @@ def slowest(model: str) -> dict[str, float]:
         return mo.slowest_deg_s(v.cfg.motion)
 
 
+@pytest.mark.parametrize("replugs", [1, 2])  # (the lost target kept over a second one)
 @pytest.mark.parametrize("out_s", [2.0, 2.15, 2.3, 2.45])  # (a step's phases: not deadlines)
 @pytest.mark.parametrize(("az", "el"), [(300.0, 40.0), (None, 60.0)])  # (across 360; el alone)
 def test_a_turn_at_the_slowest_speeds_carried_over_a_replug_is_left_to_finish(
-    az: float | None, el: float, out_s: float
+    az: float | None, el: float, out_s: float, replugs: int
 ) -> None:
     speeds = slowest(MODEL)
     emulator = {
@@ -44,7 +45,9 @@ def test_a_turn_at_the_slowest_speeds_carried_over_a_replug_is_left_to_finish(
         v.run_until(lambda h: h.state is MotionState.IDLE, 30, "at rest")
         v.target(az, el)
         v.run_until(lambda h: h.truth().el_deg >= 10.0, 60, "the elevation turning")
-        replugged(v, out_s)
+        for _ in range(replugs):
+            replugged(v, out_s)
+            v.run_for(1.0)  # (its readings back: not a deadline)
         assert v.truth().is_moving  # it finishes its old turn by itself
         t = v.now
         v.run_until(lambda h: not h.truth().is_moving, 120, "the turn over")
