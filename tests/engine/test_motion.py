@@ -665,6 +665,8 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
     fields = [f for f in mo.Motion.__dataclass_fields__ if f != "state"]
     m = replace(ready(), **{f: 1000.0 + i for i, f in enumerate(fields)})
     m = replace(m, state=S.MOVING, anchor_deg=100.0, position_deg=100.0, target_deg=None)
+    # (rule 2: the azimuth last stood a moving poll before, so its move is as fast as a turn)
+    m = replace(m, az_crept_t=2000.0 - CFG.poll_margin_s)
     moved, _ = mo.reading(m, CFG, 150.0, 2000.0)
     expected = replace(
         m,
