@@ -1,0 +1,83 @@
+"""Review 116: the unwatched stop at rest is merged into a STOP written before the hand began
+turning: nothing goes on the wire, R/error says "it was stopped", and the hand's turn runs eight
+idle polls more, past ``az_min_deg``.
+
+controller.py rule 9 (review 103's follow-up, f23b2118): readings at rest that go on disagreeing
+get the unwatched stop at each FIRST_UNWATCHED_READINGS (8) of them, "merged as stops.py rule 1
+merges, the lock's stop a brake window before being that stop" (``self.stop(now, merge=True)``).
+stops.py rule 1 merges a stop into one written within the brake window (a Rotor-EZ's 5 s) unless
+"a reading since that stop showed the rotor turning": at rest on a line gone bad no reading is
+ever taken, so none can show it. An operator's STOP to a rotor at rest (or any stop) followed
+within the brake window by a hand at the panel: the eighth disagreeing reading comes 1.7 s into
+the hand's turn, the unwatched stop is merged into the earlier STOP (which the hand came after),
+"8 readings in a row at rest do not agree ... so it was stopped" is said, and no stop frame is
+written; the next goes eight idle polls later, 8.5 s into the turn, at about 99: past
+``az_min_deg`` 110. The same line without the earlier STOP is stopped 1.7 s in, at about 140.
+
+In virtual time: the emulated Rotor-EZ at rest at 150 (``az_min_deg`` 110), confirmed on a clean
+line; an operator's STOP; then every azimuth answer reaches the host off by +60 or -60 in turn (a
+line gone bad, never back where it stood); half a second on, a hand turns the rotor down to 5.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.core.model import ErrorKind
+from tests.engine.garblers import every_rotorez_answer_off, limited, lowest_az
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+REST_DEG = 150.0
+AZ_MIN_DEG = 110.0
+OFFSETS = [60.0, -60.0]
+CONFIRMED_S = 15.0  # the start's readings on a clean line (virtual time, not a deadline)
+STOP_OUT_S = 0.3  # the STOP written (virtual time)
+HAND_AFTER_S = 0.2  # the hand comes this long after the line goes bad (virtual time)
+WATCH_S = 60.0  # 145 degrees at the box's speed, with room (virtual time)
+UNWATCHED = "readings in a row at rest do not agree"
+
+
+def _turned_by_hand(rig: Rig, stop_first: bool) -> tuple[VirtualRotator, float, float]:
+    v = limited(rig, "rotorez", REST_DEG, AZ_MIN_DEG)
+    v.link_up()
+    v.run_for(CONFIRMED_S)
+    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    if stop_first:
+        v.stop()  # (an operator's STOP to a rotor at rest)
+    v.run_for(STOP_OUT_S)
+    v.to_host = every_rotorez_answer_off(OFFSETS)
+    v.run_for(HAND_AFTER_S)
+    t = v.now
+    v.manual_rotate(5.0)  # (a hand at the panel, after the STOP, towards the limit)
+    return v, t, lowest_az(v, t + WATCH_S, REST_DEG)
+
+
+def test_without_an_earlier_stop_the_hand_is_stopped_before_the_limit(rig: Rig) -> None:
+    """The premise: the same line and hand, no STOP before, is stopped well short of it."""
+    _, _, lowest = _turned_by_hand(rig, stop_first=False)
+    assert lowest >= AZ_MIN_DEG
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 116: after a STOP to a rotor at rest, a hand turn on a line gone bad gets its "
+    "unwatched stop merged away (said 'stopped', nothing written) and runs past az_min_deg",
+)
+def test_a_hand_after_a_stop_at_rest_gets_the_unwatched_stop_on_the_wire(rig: Rig) -> None:
+    v, t, lowest = _turned_by_hand(rig, stop_first=True)
+    said = [(round(at - t, 1), e.message) for at, e in v.events if at >= t]
+    said = [(at, m) for at, m in said if UNWATCHED in m]
+    stops = [round(f.time_s - t, 1) for f in v.frames("stop", since=t)]
+    assert said  # (the unwatched stop was made, and said)
+    assert all(e.kind == ErrorKind.STOP for at, e in v.events if at >= t and UNWATCHED in e.message)
+    assert stops and stops[0] <= said[0][0], (
+        f"said {said[0][0]} s into the hand's turn that the rotor was stopped; stops written "
+        f"{stops} s in"
+    )
+    assert lowest >= AZ_MIN_DEG, (
+        f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
+        f"{AZ_MIN_DEG:g}; stops written {stops} s into the turn"
+    )
