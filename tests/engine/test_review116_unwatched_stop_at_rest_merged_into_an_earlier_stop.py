@@ -16,7 +16,15 @@ written; the next goes eight idle polls later, 8.5 s into the turn, at about 99:
 
 In virtual time: the emulated Rotor-EZ at rest at 150 (``az_min_deg`` 110), confirmed on a clean
 line; an operator's STOP; then every azimuth answer reaches the host off by +60 or -60 in turn (a
-line gone bad, never back where it stood); half a second on, a hand turns the rotor down to 5.
+line gone bad, never back where it stood); half a second after the STOP, a hand turns the rotor
+down to 5.
+
+The same merge swallows the unwatched stop's own next one where the brake window is longer than
+eight idle polls: an Easycomm configured with ``brake_delay_s`` 10 (a brake as a HAM-IV's, set
+long), its line gone bad at rest, its first unwatched stop out, turned by hand a moment later:
+the sixteenth disagreeing reading's stop (about 7 s in) is merged into the first, and the next
+goes 14.6 s in, at about 62, past ``az_min_deg`` 100; the stops go 15 s apart, every other one
+merged away (with no brake window they go 7 s apart). The second test.
 """
 
 from __future__ import annotations
@@ -26,7 +34,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind
-from tests.engine.garblers import every_rotorez_answer_off, limited, lowest_az
+from tests.engine.garblers import every_answer_off, every_rotorez_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -80,4 +88,38 @@ def test_a_hand_after_a_stop_at_rest_gets_the_unwatched_stop_on_the_wire(rig: Ri
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
         f"{AZ_MIN_DEG:g}; stops written {stops} s into the turn"
+    )
+
+
+LONG_BRAKE_S = 10.0  # a brake window longer than eight idle polls (a setting, not a deadline)
+FIRST_STOP_S = 60.0  # eight readings at the moving rate, with room (virtual time)
+EASYCOMM_MIN_DEG = 100.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 116: with a long brake_delay_s, the unwatched stop at rest after the first is "
+    "merged into the first: a hand turn after it runs 14 s, past az_min_deg",
+)
+def test_the_next_unwatched_stop_is_not_merged_into_the_first(rig: Rig) -> None:
+    v = rig(
+        "easycomm2",
+        emulator={"start_az_deg": REST_DEG},
+        settings={"az_min_deg": EASYCOMM_MIN_DEG, "brake_delay_s": LONG_BRAKE_S},
+        connect=False,
+    )
+    v.link_up()
+    v.run_for(CONFIRMED_S)
+    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v.to_host = every_answer_off(OFFSETS)
+    t0 = v.now
+    v.run_until(lambda h: bool(h.frames("stop", since=t0)), FIRST_STOP_S, "the unwatched stop")
+    v.run_for(HAND_AFTER_S)
+    t = v.now
+    v.manual_rotate(5.0)  # (a hand at the panel after the first unwatched stop)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG)
+    stops = [round(f.time_s - t, 1) for f in v.frames("stop", since=t)]
+    assert lowest >= EASYCOMM_MIN_DEG, (
+        f"turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
+        f"{EASYCOMM_MIN_DEG:g}; stops written {stops} s into the turn"
     )
