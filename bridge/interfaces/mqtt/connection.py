@@ -153,8 +153,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    rule 7 counts only drops of accepted connections) and hands the new one what it had sent into
    the dead one and not had acknowledged, the STOP with it (at QoS 1: a STOP published at QoS 0,
    a dashboard button's default, is delivered at QoS 0 and kept by no broker). A dead path so
-   costs a stop carrier 5 to 10 s and a reconnect (about 11 s in all; 6 to 12 s from the death to
-   the STOP at the rotor, measured by tests/faults/test_attack32_stop_lost_on_a_dead_path.py),
+   costs a stop carrier 5 to 10 s and a reconnect (6 to 11 s in all, with the ping's phase: 6.1 to
+   11.1 s from the death to the STOP at the rotor over 16 runs of
+   tests/faults/test_attack32_stop_lost_on_a_dead_path.py, a STOP pressed 3 s after the death),
    and a STOP pressed meanwhile is late, not lost. The verdict is each connection's own (review
    112: one probe judging for all remade healthy lanes and threw away what stalled ones held), it
    costs no connection slot, and it loses nothing where it is wrong: a path that stalls and
