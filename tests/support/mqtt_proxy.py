@@ -153,10 +153,11 @@ class MqttProxy:
                     with contextlib.suppress(OSError):
                         s.server.sendall(held)
 
-    def blackhole(self) -> None:
-        """Every connection open now is a dead path: what either side sends is lost, and
-        neither side is told (no FIN, no RST); connections made after it pass."""
-        for s in list(self._streams):
+    def blackhole(self, client_id: str | None = None) -> None:
+        """Every connection open now (``client_id``'s only, if given) is a dead path: what
+        either side sends is lost, and neither side is told (no FIN, no RST); connections
+        made after it pass."""
+        for s in list(self._streams) if client_id is None else self._of(client_id):
             s.dead = True
 
     def close(self) -> None:
