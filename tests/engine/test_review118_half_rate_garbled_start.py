@@ -10,9 +10,10 @@ controller.py rule 9's unwatched stop, and the turn under way at the start runs 
 ``az_min_deg`` to its end, unstopped: review 113's High, still open for this line.
 
 The same start with every byte garbled one for one (review 113's own test) is stopped at 119.
-A GS-232A azimuth box (``+0150`` CR LF, 7 bytes, read as 3 of its 7: under 3.5) runs to its end
-likewise; Easycomm III and the separate-line builds too, and a Prosistel is stopped 15 s in, at
-55.6, past the limit (seen, not tested here). At rest the same line is told as silence ('does
+A GS-232A azimuth box (``+0150`` CR LF, 7 bytes, read as 3 and 4 in turn: the 4 reach half of
+7, the 3 do not, so no two torn answers ever come in a row) runs to its end likewise; so do
+Easycomm III and the separate-line builds, and a Prosistel is stopped 15 s in, at 55.6, past
+the limit (seen, not tested here). At rest the same line is told as silence ('does
 not answer': the cable), not as garbled replies ('the wrong baud rate'), attack 30's words.
 
 In virtual time: review 113's start (the emulated box turning from 150 to 5 when the bridge
