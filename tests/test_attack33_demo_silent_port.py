@@ -21,11 +21,6 @@ from bridge import demo
 from bridge.cli import build_parser
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 33: a port that takes connections but speaks no MQTT is announced as the "
-    "broker the demo is bridged to; the demo runs dead, unsaid",
-)
 def test_a_port_that_speaks_no_mqtt_is_not_announced_as_the_broker(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
@@ -50,3 +45,26 @@ def test_a_port_that_speaks_no_mqtt_is_not_announced_as_the_broker(
         f"the demo ran to its end (exit {code}) never connected to any broker, unsaid: "
         f"{said.err[-400:]}"
     )
+
+
+def test_a_port_that_speaks_no_mqtt_ends_a_demo_told_to_start_no_broker_saying_so(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """With ``--no-private-broker`` the demo has nothing to fall back on: it ends at once, its
+    one line saying that what is on the port is no MQTT broker (not that nothing is there)."""
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(16)
+        port = silent.getsockname()[1]
+        args = build_parser().parse_args(
+            ["demo", "--mqtt-port", str(port), "--web-port", "0", "--no-private-broker"]
+        )
+        code = demo.run(args)
+    said = capsys.readouterr()
+    assert code == 1, said.err
+    assert f"127.0.0.1:{port} takes connections but answers no MQTT" in said.err, said.err
+    assert "bridged to" not in said.out, said.out
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

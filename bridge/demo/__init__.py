@@ -1,7 +1,8 @@
 """``rotor-bridge demo``: emulated rotators bridged to MQTT, no hardware and no broker needed.
 
-If nothing answers at the MQTT address, a private mosquitto is started there
-(bridge.demo.mosquitto); a broker that answers is used as it is. Everything the console shows and
+If no MQTT broker answers at the MQTT address, a private mosquitto is started there
+(bridge.demo.mosquitto; on a free port when another program holds that one, rule 6); a broker
+that answers is used as it is. Everything the console shows and
 sends goes through the broker, exactly as Home Assistant or Node-RED would see it.
 
 Rules:
@@ -29,6 +30,11 @@ Rules:
    mark, bridge/demo/console.py rule 5): that one ends with the other demo, and this one would
    be left without a broker, so it starts a private mosquitto of its own on a free port (the
    commands it prints name that port). A private broker it starts carries its mark.
+6. A broker answers when a CONNECT gets a CONNACK (bridge/demo/mosquitto.py ``answers``), not
+   when a connection is taken: a program on the port that speaks no MQTT (a hung broker, an SSH
+   tunnel whose far end is gone) would leave the demo running dead, saying it is bridged. The
+   demo says so in one line and starts a private mosquitto on a free port (with
+   ``--no-private-broker``: says so and ends).
 """
 
 from __future__ import annotations
@@ -57,7 +63,7 @@ from bridge.core import geo
 from bridge.core.ending import Ending
 from bridge.demo import sky as demo_sky
 from bridge.demo.console import Console, private_broker_of
-from bridge.demo.mosquitto import BrokerError, Mosquitto, answers, free_port
+from bridge.demo.mosquitto import BrokerError, Mosquitto, answers, free_port, listens
 from bridge.demo.screen import Screen
 from bridge.interfaces.homeassistant import Identity
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
@@ -113,7 +119,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=int,
         default=1883,
         help="the MQTT broker's port (default 1883), or the private mosquitto's (a free one "
-        "when the broker there is another demo's, which ends with it)",
+        "when the broker there is another demo's, which ends with it, or when what is there "
+        "answers no MQTT)",
     )
     p.add_argument(
         "--base-topic", help="base topic (default rotor-demo-<instance>, new for every run)"
@@ -286,25 +293,34 @@ def _run(
     host, port = asked = args.mqtt_host, args.mqtt_port
     there = answers(host, port)
     other = private_broker_of(host, port) if there and not args.no_private_broker else None
+    # rule 6: a program there, but no broker (asked again: one may have come up meanwhile)
+    mute = not there and listens(host, port) and not answers(host, port)
     private = not there or other is not None
+    if mute:
+        print(
+            f"rotor-bridge demo: {host}:{port} takes connections but answers no MQTT (no "
+            f"CONNACK): not a broker"
+            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
+            file=sys.stderr,
+            flush=True,
+        )
     if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
     elif args.no_private_broker:
-        print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
+        if not mute:
+            print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
         return 1
     else:
-        if other is not None:  # rule 5: that one ends with demo `other`
-            port = args.mqtt_port = free_port()
-            settings = demo_settings(args, models, instance, workdir)
-        broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
-        stack.callback(broker.stop)
-        try:
-            broker.start()
-        except BrokerError as exc:
-            raise BrokerError(f"no MQTT broker answers and {exc}") from None
+        taken = other is not None or mute  # rules 5, 6: not on that port
+        port = _start_private_broker(host, free_port() if taken else port, workdir, stack)
         where = f"a private mosquitto on {host}:{port}"
         if other is not None:
             where += f" (the one on {host}:{asked[1]} is demo {other}'s, and ends with it)"
+        elif mute:
+            where += f" (what is on {host}:{asked[1]} speaks no MQTT)"
+        if port != asked[1]:
+            args.mqtt_port = port
+            settings = demo_settings(args, models, instance, workdir)
     roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
     topics = Topics(settings.mqtt.base_topic, roots)
     ident = Identity(topics.base)
@@ -368,6 +384,17 @@ def _run(
         done.end("--duration-s is over")
     screen.log(f"rotor-bridge demo: stopping ({done.reason})")
     return 0
+
+
+def _start_private_broker(host: str, port: int, workdir: Path, stack: contextlib.ExitStack) -> int:
+    """A private mosquitto on host:port: the port it listens on."""
+    broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
+    stack.callback(broker.stop)
+    try:
+        broker.start()
+    except BrokerError as exc:
+        raise BrokerError(f"no MQTT broker answers and {exc}") from None
+    return port
 
 
 def _print_banner(

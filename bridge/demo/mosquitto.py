@@ -21,10 +21,14 @@ exec; the demo starts it from its main thread, before it starts any other thread
 forgets that signal when a process changes its user, as mosquitto started by root does (to the
 user ``mosquitto``, unless told ``user root``): run as root, its configuration says ``user root``;
 run by anyone else it never changes user. It listens on the loopback address only.
+
+A broker answers (``answers``) when a CONNECT gets a CONNACK: a program that only takes
+connections (``listens``) may speak no MQTT at all, and a demo bridged to it would run dead.
 """
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import re
@@ -54,9 +58,45 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def answers(host: str, port: int, timeout_s: float = 0.5) -> bool:
+def listens(host: str, port: int, timeout_s: float = 0.5) -> bool:
+    """Whether something takes connections at host:port (any program: see ``answers``)."""
     try:
         with socket.create_connection((host, port), timeout=timeout_s):
+            return True
+    except OSError:
+        return False
+
+
+# MQTT 3.1.1 CONNECT (every broker speaks 3.1.1): a clean session, keep-alive 10 s, an empty
+# client id (the broker makes one up)
+_CONNECT = bytes([0x10, 12, 0, 4]) + b"MQTT" + bytes([4, 0x02, 0, 10, 0, 0])
+_CONNACK = 0x20
+_DISCONNECT = bytes([0xE0, 0])
+
+
+def answers(host: str, port: int, timeout_s: float = 2.0) -> bool:
+    """Whether an MQTT broker answers at host:port: a CONNECT gets a CONNACK within
+    ``timeout_s`` (refusing a login too: that is a broker). A program that takes connections
+    and says nothing, or something else than MQTT (a hung broker, an SSH tunnel whose far end
+    is gone, a web server), is no broker: the demo would run dead on it."""
+    deadline = time.monotonic() + timeout_s
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s) as s:
+            s.sendall(_CONNECT)
+            connack = b""  # fixed header (type, length 2), flags, return code
+            while len(connack) < 4:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                s.settimeout(left)
+                chunk = s.recv(4 - len(connack))
+                if not chunk:  # closed without a CONNACK
+                    return False
+                connack += chunk
+                if not bytes([_CONNACK, 2]).startswith(connack[:2]):
+                    return False
+            with contextlib.suppress(OSError):
+                s.sendall(_DISCONNECT)
             return True
     except OSError:
         return False
@@ -128,7 +168,7 @@ class Mosquitto:
                 preexec_fn=_dies_with_this_thread() if self.dies_with_parent else None,
             )
         deadline = time.monotonic() + timeout_s
-        while not (self._running(logged) and answers(self.host, self.port, 0.2)):
+        while not (self._running(logged) and listens(self.host, self.port, 0.2)):
             if self.proc.poll() is not None:
                 raise BrokerError(f"mosquitto exited: {self.log.read_text()[-2000:]}")
             if time.monotonic() > deadline:

@@ -25,7 +25,7 @@ import threading
 import time
 from pathlib import Path
 
-from tests.support.mosquitto import BrokerError, answers, free_port
+from tests.support.mosquitto import BrokerError, free_port, listens
 from tests.support.waiting import slow
 
 
@@ -90,7 +90,7 @@ class _Process(abc.ABC):
                 argv, stdout=log, stderr=subprocess.STDOUT, cwd=self.workdir, env=env
             )
         deadline = time.monotonic() + timeout_s
-        while not (self._bound(logged) and answers(self.host, self.port, 0.2)):
+        while not (self._bound(logged) and listens(self.host, self.port, 0.2)):
             if self.proc.poll() is not None:
                 raise BrokerError(f"{self.name} exited: {self.log.read_text()[-2000:]}")
             if time.monotonic() > deadline:

@@ -9,12 +9,12 @@ import signal
 from pathlib import Path
 from typing import Self
 
-from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto
+from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto, listens
 from bridge.demo.mosquitto import Mosquitto as DemoMosquitto
 from tests.support.ports import free_port
 from tests.support.waiting import slow
 
-__all__ = ["BrokerError", "Mosquitto", "answers", "find_mosquitto", "free_port"]
+__all__ = ["BrokerError", "Mosquitto", "answers", "find_mosquitto", "free_port", "listens"]
 
 
 class Mosquitto(DemoMosquitto):

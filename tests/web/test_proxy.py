@@ -33,7 +33,7 @@ from playwright import sync_api
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support import ROOT, free_port, wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
-from tests.support.mosquitto import answers
+from tests.support.mosquitto import listens
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms
 
@@ -96,7 +96,7 @@ class Proxy(ABC):
                 self.command(), stdout=log, stderr=subprocess.STDOUT, env=env
             )
         up = wait_until(
-            lambda: "up" if answers("127.0.0.1", self.port) else process.poll() is not None,
+            lambda: "up" if listens("127.0.0.1", self.port) else process.poll() is not None,
             10.0,
             f"{self.fence} to listen",
         )
