@@ -22,11 +22,6 @@ from tests.support.mosquitto import free_port
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="attack 33: of two demos started at once, one fails with 'no MQTT broker answers "
-    "... Address already in use' instead of starting on a free port",
-)
 def test_a_demo_whose_private_port_another_demo_just_took_still_starts(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,

@@ -1,9 +1,9 @@
 """``rotor-bridge demo``: emulated rotators bridged to MQTT, no hardware and no broker needed.
 
 If no MQTT broker answers at the MQTT address, a private mosquitto is started there
-(bridge.demo.mosquitto; on a free port when another program holds that one, rule 6); a broker
-that answers is used as it is. Everything the console shows and
-sends goes through the broker, exactly as Home Assistant or Node-RED would see it.
+(bridge.demo.mosquitto; on a free port when another program holds that one, rules 6 and 7); a
+broker that answers is used as it is. Everything the console shows and sends goes through the
+broker, exactly as Home Assistant or Node-RED would see it.
 
 Rules:
 1. A demo is never mistaken for a real bridge on the same broker, nor for another demo: each run
@@ -35,6 +35,9 @@ Rules:
    tunnel whose far end is gone) would leave the demo running dead, saying it is bridged. The
    demo says so in one line and starts a private mosquitto on a free port (with
    ``--no-private-broker``: says so and ends).
+7. Two demos started at once may both find nothing on the port: the one whose mosquitto loses
+   the race for it starts its own on a free port (the port is taken now: rule 5's case), never
+   fails for it.
 """
 
 from __future__ import annotations
@@ -318,6 +321,8 @@ def _run(
             where += f" (the one on {host}:{asked[1]} is demo {other}'s, and ends with it)"
         elif mute:
             where += f" (what is on {host}:{asked[1]} speaks no MQTT)"
+        elif port != asked[1]:  # rule 7
+            where += f" ({host}:{asked[1]} was taken as it started: another demo's?)"
         if port != asked[1]:
             args.mqtt_port = port
             settings = demo_settings(args, models, instance, workdir)
@@ -386,15 +391,23 @@ def _run(
     return 0
 
 
-def _start_private_broker(host: str, port: int, workdir: Path, stack: contextlib.ExitStack) -> int:
-    """A private mosquitto on host:port: the port it listens on."""
-    broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
-    stack.callback(broker.stop)
-    try:
-        broker.start()
-    except BrokerError as exc:
-        raise BrokerError(f"no MQTT broker answers and {exc}") from None
-    return port
+def _start_private_broker(
+    host: str, port: int, workdir: Path, stack: contextlib.ExitStack, tries: int = 3
+) -> int:
+    """A private mosquitto on host:port, or on a free port when another program took that one
+    as it started (rule 7): the port it listens on."""
+    for tried in range(1, tries + 1):
+        broker = Mosquitto(workdir / "broker", port=port, host=host, dies_with_parent=True)
+        stack.callback(broker.stop)
+        try:
+            broker.start()
+        except BrokerError as exc:
+            if tried == tries or not listens(host, port):  # not taken: mosquitto's own failure
+                raise BrokerError(f"no MQTT broker answers and {exc}") from None
+            port = free_port()
+        else:
+            return port
+    raise AssertionError("unreachable")
 
 
 def _print_banner(
