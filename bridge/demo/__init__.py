@@ -45,6 +45,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import inspect
+import math
 import secrets
 import shutil
 import signal
@@ -54,6 +55,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -89,6 +91,54 @@ def _speed(text: str) -> float:
     return value
 
 
+MAX_DURATION_S = 7 * 86400.0  # --duration-s: a week at most (without it: until q)
+MAX_RISES_IN_S = 7 * 86400.0  # --satellite-rises-in-s: within a week (the TLE's epoch then)
+MAX_PORT = 65535
+
+
+def _number(text: str) -> float:
+    """A finite number: nan and inf are no duration, time or port (argparse names the flag)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
+    return value
+
+
+def _duration(text: str) -> float:
+    value = _number(text)
+    if not 0 < value <= MAX_DURATION_S:
+        raise argparse.ArgumentTypeError(
+            f"{value:g} is outside 0..{MAX_DURATION_S:g} s (a week; without it the demo runs "
+            "until q)"
+        )
+    return value
+
+
+def _rises_in(text: str) -> float:
+    value = _number(text)
+    if not 0 <= value <= MAX_RISES_IN_S:
+        raise argparse.ArgumentTypeError(f"{value:g} is outside 0..{MAX_RISES_IN_S:g} s (a week)")
+    return value
+
+
+def _port(lowest: int) -> Callable[[str], int]:
+    """A TCP port, ``lowest``..65535 (the console's 0: none)."""
+
+    def port(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+        if not lowest <= value <= MAX_PORT:
+            raise argparse.ArgumentTypeError(f"{value} is outside {lowest}..{MAX_PORT}")
+        return value
+
+    return port
+
+
 def _locator(text: str) -> str:
     try:
         geo.parse_locator(text)
@@ -119,7 +169,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--mqtt-port",
-        type=int,
+        type=_port(1),
         default=1883,
         help="the MQTT broker's port (default 1883), or the private mosquitto's (a free one "
         "when the broker there is another demo's, which ends with it, or when what is there "
@@ -151,15 +201,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--web-port",
-        type=int,
+        type=_port(0),
         default=8754,
         help="the operator console's port on 127.0.0.1 (default 8754; another free one if that "
         "is taken; 0: no console)",
     )
-    p.add_argument("--duration-s", type=float, help="stop after this long (default: until q/^C)")
+    p.add_argument(
+        "--duration-s",
+        type=_duration,
+        help="stop after this many seconds, at most a week (default: until q/^C)",
+    )
     p.add_argument(
         "--satellite-rises-in-s",
-        type=float,
+        type=_rises_in,
         default=DEMOSAT_RISES_IN_S,
         help=f"when the made-up satellite {demo_sky.NAME} rises over the station, in seconds "
         f"from the start (default {DEMOSAT_RISES_IN_S:g})",
