@@ -217,8 +217,12 @@ Rules:
    idle for the rest of it). And FIRST_UNWATCHED_READINGS of them in a row that confirmed none
    (a garble and a line, one garble among a fast turn's, fit well within) leave a rotor the
    bridge cannot watch, and get the first readings' unwatched stop (``_unwatched_stop``, each
-   as many more while they go on, said on R/error as readings at rest, as rarely; merged as
-   stops.py rule 1 merges, the lock's stop a brake window before being that stop): the
+   as many more while they go on, said on R/error as readings at rest, as rarely; never
+   merged away: one within STOP_MERGE_MIN_S of the last stop written, the lock's own (stops.py
+   rule 7), goes once that second is over unless a stop went since; review 116: merged as
+   stops.py rule 1 merges, into any stop a brake window before, no reading ever showing the
+   rotor turning, a STOP before a hand's turn, and under a long ``brake_delay_s`` every other
+   unwatched stop, were dropped, and the hand ran past ``az_min_deg``): the
    maintainers' decision on review 103's follow-up, the limits hold over a rotor the bridge
    cannot watch (a line gone bad at rest, every answer off by 0, +60 or -60, hid a hand turn,
    and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5 unstopped); a stop to a still
@@ -440,7 +444,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.options import Options
 from bridge.session.slew import Slew, overdue, travel_s
-from bridge.session.stops import SEND_AGAIN, Stops, Verdict, standing
+from bridge.session.stops import SEND_AGAIN, STOP_MERGE_MIN_S, Stops, Verdict, standing
 from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
@@ -809,6 +813,9 @@ class Controller:
         self._first_garbled = False  # ... some of them answers garbled past parsing
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
+        # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
+        # was due, and its reading (written once that second is over, never merged away)
+        self._unwatched_owed: tuple[float, PositionReply | None] | None = None
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -957,6 +964,7 @@ class Controller:
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
+        self._unwatched_owed = None  # (rule 9: the port's fall owed the last stop, stops.py 3)
         self._rest_said = ()  # (rule 9: a line at rest is one connection's)
         self._steady_from = None  # (rule 9: the unconfirmed count goes on until a reading
         # is taken, ``_reading``; review 107: a flaky adapter's connections of seven readings
@@ -1184,6 +1192,7 @@ class Controller:
             last = passing and error is not None  # stops.py rule 4: a pass's last try
             self.stop(now, ends_pass=last)
             self._passing = passing and not last  # (the same series)
+        self._owed_unwatched(now)
         cfg = self.cfg
         lock, said, why = self.stops.lock_check(
             locked,
@@ -1490,10 +1499,18 @@ class Controller:
         m = self.motion  # (let go once readings confirm, ``_release_check``: not where it
         # stands for another stop still checked, an operator's or the lock's; review 107: kept
         # checked until the next target, a hand at the panel minutes later was stopped, unsaid)
-        unwatched = m.stop_sent_t is None or m.stop_sent_t == self._released_stop_t
-        # (at rest merged as stops.py rule 1 merges: the lock's own, a brake window before, is
-        # that stop; stops.py rule 7 keeps the lock's a second apart on a noisy line)
-        self.stop(now, merge=not first, unwatched=unwatched)
+        last_t = m.stop_sent_t
+        if not first and last_t is not None and now - last_t < STOP_MERGE_MIN_S:
+            # at rest, never merged away (review 116: merged as stops.py rule 1 merges, into any
+            # stop a brake window before, a STOP before a hand's turn and every other unwatched
+            # stop under a 10 s brake_delay_s were dropped, and the hand ran past az_min_deg):
+            # within a second of the last (the lock's own, stops.py rule 7), written once that
+            # second is over, unless a stop went since (``_owed_unwatched``): a second apart
+            self._unwatched_owed = (now, reply)
+            return
+        self._unwatched_owed = None
+        unwatched = last_t is None or last_t == self._released_stop_t
+        self.stop(now, unwatched=unwatched)
         if now - self._unwatched_said_t < self.cfg.junk_report_interval_s:
             log.info("%s: %d %s disagree: stopped again", self.name, count, readings)
             return
@@ -1510,6 +1527,26 @@ class Controller:
         )
         log.warning("%s: %s", self.name, why)
         self.notes.append(Report(ErrorKind.STOP, why))
+
+    def _unwatched_owed_at(self) -> float | None:
+        """Rule 9: when the unwatched stop at rest held back a second goes (None: none owed,
+        or a stop went since it was due, which is that stop)."""
+        owed, last_t = self._unwatched_owed, self.motion.stop_sent_t
+        if owed is None or self.link is None:
+            return None
+        if last_t is None or last_t >= owed[0]:
+            self._unwatched_owed = None
+            return None
+        return last_t + STOP_MERGE_MIN_S
+
+    def _owed_unwatched(self, now: float) -> None:
+        """Rule 9: the unwatched stop at rest held back a second, written now if due."""
+        at = self._unwatched_owed_at()
+        if at is None or now < at:
+            return
+        owed = self._unwatched_owed
+        assert owed is not None
+        self._unwatched_stop(owed[1], now, first=False)
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
@@ -1556,6 +1593,7 @@ class Controller:
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
+        self._unwatched_owed = None  # (the rotor is watched again)
         self._rest_said = ()
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
@@ -2398,6 +2436,9 @@ class Controller:
         repeat = self.stops.repeat_at(m)  # stops.py rule 1: a stop repeat owed (line_work's)
         if repeat is not None and now < repeat < latest and link is not None:
             latest = repeat
+        owed = self._unwatched_owed_at()  # rule 9: the unwatched stop held back a second
+        if owed is not None and owed < latest:
+            latest = max(now, owed)
         blind = self.stops.blind_at  # stops.py rule 6
         if blind is not None and blind < latest and link is not None:
             latest = max(now, blind)

@@ -31,8 +31,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import ErrorKind
 from tests.engine.garblers import every_answer_off, every_rotorez_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
@@ -69,11 +67,6 @@ def test_without_an_earlier_stop_the_hand_is_stopped_before_the_limit(rig: Rig) 
     assert lowest >= AZ_MIN_DEG
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 116: after a STOP to a rotor at rest, a hand turn on a line gone bad gets its "
-    "unwatched stop merged away (said 'stopped', nothing written) and runs past az_min_deg",
-)
 def test_a_hand_after_a_stop_at_rest_gets_the_unwatched_stop_on_the_wire(rig: Rig) -> None:
     v, t, lowest = _turned_by_hand(rig, stop_first=True)
     said = [(round(at - t, 1), e.message) for at, e in v.events if at >= t]
@@ -96,11 +89,6 @@ FIRST_STOP_S = 60.0  # eight readings at the moving rate, with room (virtual tim
 EASYCOMM_MIN_DEG = 100.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 116: with a long brake_delay_s, the unwatched stop at rest after the first is "
-    "merged into the first: a hand turn after it runs 14 s, past az_min_deg",
-)
 def test_the_next_unwatched_stop_is_not_merged_into_the_first(rig: Rig) -> None:
     v = rig(
         "easycomm2",
