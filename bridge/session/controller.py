@@ -201,7 +201,10 @@ Rules:
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
    asked for at the moving rate, not at once, until the first unwatched stop below, then at
    the usual polls (review 103's follow-up: eight at a Rot2Prog's idle rate, 9.3 s, took 74 s;
-   not for good, the polling load review 105 found), and at the usual polls while the
+   not for good, the polling load review 105 found), with one more asked as a turn at the
+   rotor's nominal speed would have gone UNWATCHED_TURN_DEG since the last unwatched stop,
+   which brings the next (review 116: eight idle polls more, 49 s, let a hand after the first
+   stop run 19 degrees past ``az_min_deg``), and at the usual polls while the
    controller is not answering (review 40); told from the DOUBTS_TOLD-th in a row on; the
    bearing shown is the last two readings agreed on. A reading asked again at once agrees
    with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its speed
@@ -217,17 +220,18 @@ Rules:
    idle for the rest of it). And FIRST_UNWATCHED_READINGS of them in a row that confirmed none
    (a garble and a line, one garble among a fast turn's, fit well within) leave a rotor the
    bridge cannot watch, and get the first readings' unwatched stop (``_unwatched_stop``, each
-   as many more while they go on, said on R/error as readings at rest, as rarely; never
-   merged away: one within STOP_MERGE_MIN_S of the last stop written, the lock's own (stops.py
-   rule 7), goes once that second is over unless a stop went since; review 116: merged as
-   stops.py rule 1 merges, into any stop a brake window before, no reading ever showing the
-   rotor turning, a STOP before a hand's turn, and under a long ``brake_delay_s`` every other
-   unwatched stop, were dropped, and the hand ran past ``az_min_deg``): the
-   maintainers' decision on review 103's follow-up, the limits hold over a rotor the bridge
-   cannot watch (a line gone bad at rest, every answer off by 0, +60 or -60, hid a hand turn,
-   and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5 unstopped); a stop to a still
-   rotor costs nothing, and a failing sensor must be told. (Before, such readings got no stop
-   without the lock: review 40's "the same noise without the lock writes no stop", superseded.)
+   as many more while they go on, or sooner by the clock as above; said on R/error as readings
+   at rest, as rarely; never merged away: one within STOP_MERGE_MIN_S of the last stop
+   written, the lock's own (stops.py rule 7), goes once that second is over unless a stop
+   went since; review 116: merged as stops.py rule 1 merges, into any stop a brake window
+   before, no reading ever showing the rotor turning, a STOP before a hand's turn, and under
+   a long ``brake_delay_s`` every other unwatched stop, were dropped, and the hand ran past
+   ``az_min_deg``): the maintainers' decision on review 103's follow-up, the limits hold over
+   a rotor the bridge cannot watch (a line gone bad at rest, every answer off by 0, +60 or
+   -60, hid a hand turn, and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5
+   unstopped); a stop to a still rotor costs nothing, and a failing sensor must be told.
+   (Before, such readings got no stop without the lock: review 40's "the same noise without
+   the lock writes no stop", superseded.)
    (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
    Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
    handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
@@ -461,6 +465,9 @@ FIRST_TURN_MAX_DEG_S = 60.0  # rule 9: no rotor turns faster (a circle in 6 s): 
 # rule 9: first readings in a row that did not confirm: the rotor cannot be watched, stopped (a
 # healthy start confirms within FIRST_TURN_READINGS, with one garble among them within twice)
 FIRST_UNWATCHED_READINGS = 2 * FIRST_TURN_READINGS
+# rule 9: after the first unwatched stop at rest, the next comes before a turn at nominal speed
+# has gone this far (``_unwatched_at_rest_due``)
+UNWATCHED_TURN_DEG = 20.0
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -816,6 +823,8 @@ class Controller:
         # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
         # was due, and its reading (written once that second is over, never merged away)
         self._unwatched_owed: tuple[float, PositionReply | None] | None = None
+        # ... the count and time of the last at rest (the next comes sooner: review 116)
+        self._unwatched_last: tuple[int, float] | None = None
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -1392,8 +1401,8 @@ class Controller:
             self._steady_from = (line[-2], line[-1])
             return Doubt.TAKEN  # (the last of them: where it is now)
         self._doubts_in_row += 1
-        self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: review 103)
-        self._unwatched_due = self._first_unconfirmed % FIRST_UNWATCHED_READINGS == 0
+        self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: review 103;
+        self._unwatched_due = self._unwatched_at_rest_due(now)  # then sooner, review 116)
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         self._rest_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
         turns_az = cfg.spec.turns_azimuth  # (stops.py rule 7: the lock's stop again; not for
@@ -1480,6 +1489,29 @@ class Controller:
             )
         return Doubt.ASK if at_once else Doubt.WAIT
 
+    def _unwatched_at_rest_due(self, now: float) -> bool:
+        """Rule 9: whether the readings at rest that confirmed none in a row so far call for
+        the unwatched stop: the FIRST_UNWATCHED_READINGS-th, then each as many more, or sooner
+        once a turn at the rotor's nominal speed would have gone UNWATCHED_TURN_DEG since the
+        last such stop, asked at the usual polls (review 116: eight more at a Rot2Prog's 9.3 s
+        idle rate let a hand after the first stop run 49 s, 19 degrees past ``az_min_deg``;
+        asked at the moving rate instead, a failing sensor's load for good: review 105). By
+        the clock, not a count: the stop's own check asks at the moving rate."""
+        count, last = self._first_unconfirmed, self._unwatched_last
+        if last is None:
+            return count % FIRST_UNWATCHED_READINGS == 0
+        last_count, last_t = last
+        if count - last_count >= FIRST_UNWATCHED_READINGS:
+            return True
+        return count > last_count and now - last_t >= self._unwatched_after_s()
+
+    def _unwatched_after_s(self) -> float:
+        """Rule 9: how long a turn at the rotor's nominal speed takes to go UNWATCHED_TURN_DEG:
+        the next unwatched stop at rest comes with the first reading after it."""
+        motion = self.cfg.motion
+        speed = max(motion.nominal_speed_deg_s, motion.el_speed_deg_s or 0.0)
+        return max(STOP_MERGE_MIN_S, UNWATCHED_TURN_DEG / speed)
+
     def _unwatched_stop(self, reply: PositionReply | None, now: float, first: bool = True) -> None:
         """Rule 9: FIRST_UNWATCHED_READINGS first readings in a row (and each as many more
         while they go on) that confirmed none: no limit, stall or turn nobody asked for can be
@@ -1495,6 +1527,8 @@ class Controller:
         bridge cannot watch, and a still rotor's stop costs nothing)."""
         self._unwatched_due = False
         count = self._first_unconfirmed
+        if not first:  # (the next at rest by the clock too: ``_unwatched_at_rest_due``)
+            self._unwatched_last = (count, now)
         readings = "first readings in a row" if first else "readings in a row at rest"
         m = self.motion  # (let go once readings confirm, ``_release_check``: not where it
         # stands for another stop still checked, an operator's or the lock's; review 107: kept
@@ -1593,7 +1627,7 @@ class Controller:
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
-        self._unwatched_owed = None  # (the rotor is watched again)
+        self._unwatched_owed = self._unwatched_last = None  # (the rotor is watched again)
         self._rest_said = ()
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
@@ -2337,6 +2371,9 @@ class Controller:
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
+        last = self._unwatched_last  # rule 9: the reading that the next at rest is due with,
+        if last is not None and doubted.reply is not None and self.answering:  # asked then
+            link.poll_by(last[1] + self._unwatched_after_s())  # (review 116: not an idle poll on)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
