@@ -231,7 +231,10 @@ Rules:
    -60, hid a hand turn, and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5
    unstopped); a stop to a still rotor costs nothing, and a failing sensor must be told.
    (Before, such readings got no stop without the lock: review 40's "the same noise without
-   the lock writes no stop", superseded.)
+   the lock writes no stop", superseded.) A poll answered garbled past parsing at rest counts
+   as one of them, as a first reading's does (``_garbled_at_rest``; review 116: a line that
+   tore every answer at rest, each '.' read '?', had none counted, and a hand turn ran from
+   150 past ``az_min_deg`` 60 to 5 unstopped); one now and then is never eight in a row.
    (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
    Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
    handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
@@ -2091,8 +2094,11 @@ class Controller:
         if not again:
             self._doubted = self._doubted._replace(at_once=False)
         link = self.link
-        if link is not None and link.poll_garbled and self._first_phase():
-            self._garbled_first(now)
+        if link is not None and link.poll_garbled:
+            if self._first_phase():
+                self._garbled_first(now)
+            elif self._rest_phase():
+                self._garbled_at_rest(now)
 
     def _first_phase(self) -> bool:
         """Rule 9: a reading now would be a connection's first (``_doubts_first``)."""
@@ -2101,6 +2107,25 @@ class Controller:
         if stands is None and self._rest_at_close and m.state is not mo.MOVING:
             stands = m.position_deg
         return stands is None and not self.answering
+
+    def _rest_phase(self) -> bool:
+        """Rule 9: a reading now would be one at rest (``_doubts``' own, doubted against where
+        the rotor stands): answering, no turn, no target, no slew."""
+        m, link = self.motion, self.link
+        if not self.answering or link is None or link.slew is not None:
+            return False
+        return m.anchor_deg is not None and m.state is not mo.MOVING and m.target_deg is None
+
+    def _garbled_at_rest(self, now: float) -> None:
+        """Rule 9: a poll answered garbled past parsing at rest is a reading at rest that
+        confirmed none, counted toward the unwatched stop as a first reading's is (review 116:
+        a line that tore every answer at rest, every '.' read '?', had none counted, and a hand
+        turn ran from 150 past ``az_min_deg`` 60 to 5, no stop written). One now and then is
+        never eight in a row: a reading taken starts the count again (``_reading``)."""
+        self._first_unconfirmed += 1
+        self._first_garbled = True
+        if self._unwatched_at_rest_due(now):
+            self._unwatched_stop(None, now, first=False)
 
     def _garbled_first(self, now: float) -> None:
         """Rule 9: a poll answered garbled past parsing where a connection's first reading is
@@ -2367,12 +2392,15 @@ class Controller:
         # not for good, the load review 105 found), while it answers (review 40: offline, idle)
         at_rest = doubted.reply is not None and not (doubted.first or doubted.turning)
         at_rest = at_rest and self.answering and not doubted.at_once
-        at_rest = at_rest and self._first_unconfirmed < FIRST_UNWATCHED_READINGS
+        count = self._first_unconfirmed  # (review 116: answers torn at rest too, from the
+        torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # third on:
+        unwatched = at_rest or torn  # one or two garbled are asked again as ever, link.py 11)
+        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
         last = self._unwatched_last  # rule 9: the reading that the next at rest is due with,
-        if last is not None and doubted.reply is not None and self.answering:  # asked then
+        if last is not None and unwatched:  # asked then
             link.poll_by(last[1] + self._unwatched_after_s())  # (review 116: not an idle poll on)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
