@@ -828,6 +828,7 @@ class Controller:
         self._unwatched_owed: tuple[float, PositionReply | None] | None = None
         # ... the count and time of the last at rest (the next comes sooner: review 116)
         self._unwatched_last: tuple[int, float] | None = None
+        self._unwatched_ask_t: float | None = None  # ... when the reading for the next is asked
         # ... the last two of three taken as a turn: the next reading may go on with it
         self._steady_from: tuple[tuple[PositionReply, float], ...] | None = None
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
@@ -1532,6 +1533,7 @@ class Controller:
         count = self._first_unconfirmed
         if not first:  # (the next at rest by the clock too: ``_unwatched_at_rest_due``)
             self._unwatched_last = (count, now)
+            self._unwatched_ask_t = now + self._unwatched_after_s()
         readings = "first readings in a row" if first else "readings in a row at rest"
         m = self.motion  # (let go once readings confirm, ``_release_check``: not where it
         # stands for another stop still checked, an operator's or the lock's; review 107: kept
@@ -1570,6 +1572,9 @@ class Controller:
         or a stop went since it was due, which is that stop)."""
         owed, last_t = self._unwatched_owed, self.motion.stop_sent_t
         if owed is None or self.link is None:
+            return None
+        if not self.answering:  # (offline: the last stop is owed as any, stops.py rule 3)
+            self._unwatched_owed = None
             return None
         if last_t is None or last_t >= owed[0]:
             self._unwatched_owed = None
@@ -1631,6 +1636,7 @@ class Controller:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
         self._unwatched_owed = self._unwatched_last = None  # (the rotor is watched again)
+        self._unwatched_ask_t = None
         self._rest_said = ()
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
@@ -2399,11 +2405,13 @@ class Controller:
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
-        last = self._unwatched_last  # rule 9: the reading that the next at rest is due with,
-        if last is not None and unwatched:  # asked then
-            link.poll_by(last[1] + self._unwatched_after_s())  # (review 116: not an idle poll on)
+        ask_t = self._unwatched_ask_t  # rule 9: the reading that the next at rest is due
+        if ask_t is not None and unwatched:  # with, asked then (review 116: not an idle poll
+            link.poll_by(ask_t)  # on), once (a reply lost: the usual polls)
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
+            if ask_t is not None and now >= ask_t:
+                self._unwatched_ask_t = None
 
     def _late_words(self, link: Link, heard_t: float) -> str:
         """Rule 2: what an offline's error adds where the controller answered since ``heard_t``,
