@@ -30,15 +30,17 @@ Rules:
    less (a pot read in steps reads one on at any speed: review 115, one reading of a still
    elevation a degree off, inside a GS-232B's 2 degrees of noise, counted as its turn
    starting, and a jam's stop waited that elevation's own time, 5 s; one step off only holds
-   the rest while it stands, till a turn at the axis's slowest would read on, ``_step_hold_s``,
-   then the axis stands there; a move or creep read one step on from the reading before showed
-   no movement after the first reading of that one, and its ``settle_s`` counts from there,
-   ``_moved_at``: review 115, a reading just after a jam showing the last degree turned before
-   it put the stop a moving poll past the axis's own time), for the longer of ``settle_s`` and
-   its ``axis_seen_s`` (rule
-   4: what a reading's step and ``noise_deg`` take at that axis's speed, as slow as rule 6
-   allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
-   turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
+   the rest while it stands, till a turn at CREEP_SHARE of the axis's slowest would read on,
+   ``_step_hold_s`` (review 119: held only as long as a turn at its slowest takes, a carried
+   elevation slowing its last degrees to 0.375 of that was called at rest 8 degrees short and
+   stopped), then the axis stands there; a move or creep read one step on from the reading
+   before showed no movement after the first reading of that one, and its ``settle_s`` counts
+   from there, ``_moved_at``: review 115, a reading just after a jam showing the last degree
+   turned before it put the stop a moving poll past the axis's own time), for the longer of
+   ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's step and ``noise_deg`` take
+   at that axis's speed, as slow as rule 6 allows for), a user's ``settle_s`` never shortening it.
+   A creep slower than any turn is no turn: review 110, every creep counted, a jammed RC2800
+   (noise_deg 0.5, read in tenths) whose
    pot drifted a tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for
    ever and never got controller.py rule 13's stop. Nor is a drift past ``noise_deg`` as slow
    (a move by rule 1, but the carried turn's rest waits each axis's own moves alone, weighed
@@ -947,11 +949,11 @@ def _own_move(
     reads one on at any speed). So a creep of one step is no move (review 115: one reading of
     a still elevation a degree off counted as its turn starting, and a jam's stop waited that
     elevation's own time, 5 s): it only holds the rest while it stands (``carried_rest_from``),
-    till a turn at the axis's slowest would have read on (``_step_hold_s``); after that, the
-    axis stands there. A creep slower than any turn is no turn (review 110: a jammed RC2800's
-    pot drifting a tenth every 1.2 s kept the turn 'moving' for ever, no stop). Jitter back
-    and forth counts once at most. A move read one step on from the reading before
-    (``since_t``: the first reading of that one) showed no movement after that reading: its
+    till a turn at CREEP_SHARE of the axis's slowest would have read on (``_step_hold_s``);
+    after that, the axis stands there. A creep slower than any turn is no turn (review 110: a
+    jammed RC2800's pot drifting a tenth every 1.2 s kept the turn 'moving' for ever, no
+    stop). Jitter back and forth counts once at most. A move read one step on from the reading
+    before (``since_t``: the first reading of that one) showed no movement after that reading: its
     ``settle_s`` counts from there, its ``axis_seen_s`` from this reading still (review 115:
     a reading just after a jam, showing the last degree turned before it, put the jam's stop
     a moving poll later than the axis's own time)."""
@@ -994,9 +996,14 @@ def _moved_at(cfg: MotionConfig, now: float, axis: str, since_t: float | None) -
 
 
 def _step_hold_s(cfg: MotionConfig, slowest: float) -> float:
-    """Rule 2: how long after a carried axis last read where it moved a turn at its slowest
-    (``slowest``) reads a second step on: a reading one step off holds the rest till then."""
-    return 2.0 * cfg.spec.reading_step_deg / slowest + cfg.poll_margin_s
+    """Rule 2: how long after a carried axis last read where it moved a turn as slow as still
+    counts (CREEP_SHARE of its slowest, ``slowest``) reads a second step on, a creep ``_own_move``
+    counts: a reading one step off holds the rest till then. Not a turn at its slowest (review
+    119: a GS-232B's elevation slowing its last degrees to 0.375 of its slowest read a step
+    every 1.6 s, past that hold, 1.5 s; each step stood, none counted, and its carried turn was
+    called at rest and stopped 8 degrees short, R/error blaming a jam); later, two steps on
+    are a drift slower than any turn all the same."""
+    return cfg.spec.reading_step_deg / (CREEP_SHARE * slowest)
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:

@@ -34,11 +34,6 @@ def slows_down(v: VirtualRotator, speed: float) -> None:
     axis.start_move(target, v.now)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 119: a carried elevation turn that slows its last 10 degrees to a quarter of "
-    "its speed is stopped 8 degrees short with a false 'short of its turn ... jammed' R/error",
-)
 @pytest.mark.parametrize("out_s", [2.0, 2.2])  # (the readings' phases: not deadlines)
 def test_a_carried_turn_slowing_near_its_aim_is_left_to_finish(out_s: float) -> None:
     with VirtualRotator("gs232b", emulator={"start_az_deg": 20, "start_el_deg": 0}) as v:
