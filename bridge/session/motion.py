@@ -22,11 +22,12 @@ Rules:
    movement of that axis's own (more than ``noise_deg`` from where that axis itself last moved:
    ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen move
    since, but not at all, till it is seen move, for an axis the lost target left out or leaves
-   where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``), nor a reading
-   of it further from there than any since (it creeps inside ``noise_deg``: ``az_crept_deg``,
-   ``el_crept_deg``; jitter back and forth does not) at CREEP_SHARE of the speed that axis turns
-   at its slowest (``slowest_deg_s``) or faster, timed from the last reading that showed it
-   where it stood (``az_crept_t``, ``el_crept_t``) by what it turned at least, a reading's step
+   where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``; a step off holds
+   it no more than it moves it, review 119), nor a reading of it further from there than any
+   since (it creeps inside ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and
+   forth does not) at CREEP_SHARE of the speed that axis turns at its slowest
+   (``slowest_deg_s``) or faster, timed from the last reading that showed it where it stood
+   (``az_crept_t``, ``el_crept_t``) by what it turned at least, a reading's step
    less (a pot read in steps reads one on at any speed: review 115, one reading of a still
    elevation a degree off, inside a GS-232B's 2 degrees of noise, counted as its turn
    starting, and a jam's stop waited that elevation's own time, 5 s; one step off only holds
@@ -1658,9 +1659,10 @@ def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
     since its own last movement or creep as fast as a turn (``az_moved_t``, ``el_moved_t``:
     the first reading back, for an axis not seen move since; none, for one the lost target
-    gave nothing to do, ``_nothing_to_do``, till it is seen move). A fast axis's jam is told by
-    its own short time, a slow axis's turn is not called over while it shows a move only
-    every few readings."""
+    gave nothing to do, ``_nothing_to_do``, till it is seen move, nor a step off's hold:
+    review 119, a still elevation read one count off from an azimuth's jam on held the jam's
+    stop 3.3 s, 6.3 s set slower). A fast axis's jam is told by its own short time, a slow
+    axis's turn is not called over while it shows a move only every few readings."""
     ref = -1e18
     slowest, half = slowest_deg_s(cfg), cfg.spec.reading_step_deg / 2
     for axis, seen in axis_seen_s(cfg).items():
@@ -1672,8 +1674,9 @@ def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
             moved_t, at, stood_t = m.el_moved_t, m.el_moved_deg, m.el_crept_t
             now_deg = m.el_position_deg
             off = None if at is None or now_deg is None else abs(now_deg - at)
-        if moved_t is not None:
-            ref = max(ref, moved_t + max(cfg.settle_s, seen))
+        if moved_t is None:  # (nothing to do, not seen move: a step off is no move, nor a
+            continue  # hold, review 119)
+        ref = max(ref, moved_t + max(cfg.settle_s, seen))
         speed = slowest.get(axis)
         if off is not None and off >= half and stood_t is not None and speed is not None:
             ref = max(ref, stood_t + _step_hold_s(cfg, speed))  # (off where it stood: held)
