@@ -1,0 +1,80 @@
+"""Review 120: connection.py rule 22 drops a stop lane's handed-over copy when the main
+connection "had it" (its command topics without a break since the lane's previous connection
+was accepted, and ``broker_late`` None). Neither says the main connection's *path* carried the
+word: a path that died under the main connection moments before the lane comes back leaves it
+subscribed and not yet late (a beat must be out through 3 s of quiet), so the lane's copy of a
+STOP pressed in between, which the main connection never read, is dropped. The main connection
+notices its own dead path only at its keep-alive (30 s here) and comes back clean: the STOP is
+lost, and the rotor turns on to its target.
+
+A Rot2Prog (no stop express: the stop lane is its only stop carrier besides the main
+connection), real mosquitto, the test's proxy (tests/support/mqtt_proxy.py ``blackhole``)
+between it and the bridge; the operator on the broker's own port.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import pytest
+
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt_proxy import MqttProxy
+from tests.support.rig import Rig
+from tests.support.tap import near_deg
+from tests.support.waiting import slow, wait_until
+
+KEEPALIVE_S = 30  # the bridge's default keep-alive (the main connection's)
+TARGET = "190 0"  # a slow turn: 180 s at 1 deg/s, under way past every deadline below
+GONE_S = 15.0  # a stop lane gives its dead path up within this (5-10 s)
+PROMPT_S = 12.0  # the promise: a STOP after a path died reaches the rotor within ~12 s
+SHORT_DEG = 20.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 120: a STOP pressed while the stop lane reconnects, the main connection's path "
+        "dead for under 3 s, is dropped as a copy 'the main connection had': the rotor turns on"
+    ),
+)
+def test_a_stop_the_main_connection_never_read_is_not_dropped_as_its_copy(
+    tmp_path: Path,
+) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = MqttProxy(broker.port)
+    probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.mqtt_extra = {"keepalive_s": KEEPALIVE_S}
+            emu = rig.add("tower", "rot2prog", emu={"start_az_deg": 10, "az_speed_deg_s": 1.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.lane.connected.is_set, slow(10), "the stop lane up")
+            main = rig.settings.mqtt.effective_client_id()
+            lane = app.lane.client_id
+            before = proxy.subacks.get(lane, 0)
+            probe.publish("rotor/target", TARGET)
+            emu.wait_for(lambda s: s.is_moving, slow(10))
+            proxy.blackhole(lane)  # the stop lane's path dies alone
+            wait_until(lambda: not app.lane.connected.is_set(), slow(GONE_S), "the lane gone")
+            # it connects again a second later, with its session; meanwhile the main
+            # connection's path dies too (a link re-made), and the operator presses STOP
+            proxy.blackhole(main)
+            assert probe.publish("rotor/stop", "")  # QoS 1: the lane's session keeps it
+            wait_until(lambda: proxy.subacks.get(lane, 0) > before, slow(GONE_S), "lane back")
+            with contextlib.suppress(AssertionError, TimeoutError):
+                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+            s = emu.state()
+            assert not s.is_moving and not near_deg(s.az_deg, 190.0, SHORT_DEG), (
+                f"a STOP pressed while the stop lane was away, the main connection's path dead "
+                f"a moment, was held in the lane's session and handed over, and dropped as a "
+                f"copy the main connection had: the rotor turns on ({s.az_deg:.0f} deg); main "
+                f"connection up: {app.client.connected.is_set()}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
