@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.faults.behind_a_proxy import bridge_behind
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import MqttProxy
@@ -78,3 +79,39 @@ def test_a_stop_the_main_connection_never_read_is_not_dropped_as_its_copy(
         probe.close()
         proxy.close()
         broker.stop()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 120: a lock ON pressed while the lock lane reconnects, the main connection's "
+        "path dead for under 3 s, is dropped as a copy; the express only stops: never locked"
+    ),
+)
+def test_a_lock_on_the_main_connection_never_read_is_not_dropped_as_its_copy(
+    tmp_path: Path,
+) -> None:
+    """The same drop, the default set-up (a Rotor-EZ with its stop express, its path alive):
+    the express writes the lock ON's stop frame but leaves the lock to the main connection,
+    subscribed and vouched for (app.py ``_heard_only_by_express``), whose path is dead; the
+    lock lane drops its handed-over copy as one the main connection had. The rotator is
+    stopped and never locked (the bridge's own status: its R/lock/state goes out on the
+    main connection, whose path is dead), and the next target from any front end turns it
+    while someone is on the tower."""
+    with bridge_behind(tmp_path, MqttProxy) as b:
+        main = b.rig.settings.mqtt.effective_client_id()
+        lane = b.app.lock_lane.client_id
+        before = b.proxy.subacks.get(lane, 0)
+        b.proxy.blackhole(lane)  # the lock lane's path dies alone
+        wait_until(lambda: not b.app.lock_lane.connected.is_set(), slow(GONE_S), "lane gone")
+        b.proxy.blackhole(main)  # ... and a moment later the main connection's
+        assert b.probe.publish("rotor/lock", "ON")  # QoS 1: the lock lane's session keeps it
+        wait_until(lambda: b.proxy.subacks.get(lane, 0) > before, slow(GONE_S), "lane back")
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(lambda: b.rig.status("tower").locked, slow(PROMPT_S), "the lock ON")
+        assert b.rig.status("tower").locked, (
+            "a lock ON pressed while the lock lane was away, the main connection's path dead "
+            "a moment, was handed over to the lane and dropped as a copy the main connection "
+            "had; the stop express stopped the rotor but left the lock to the main connection: "
+            f"the rotator is not locked (the emulator moving: {b.emu.state().is_moving})"
+        )
