@@ -509,8 +509,6 @@ class App:
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
         self.client.before_message = self._lanes_first
-        for lane in (self.lane, self.lock_lane):  # connection.py rule 22: its late copies
-            lane.has_all = self._main_had_all
         self.client.watch_owned(self.topics.owned())
         for rid in sorted(store.locked_ids() - set(self._by_id)):  # state_store.py rule 9
             log.warning(
@@ -630,12 +628,6 @@ class App:
         if self.mqtt.halt_read_since(rotator_id, kind, self._connection_heard_since):
             return None  # (it came on one of them, or a later halt did: halts.py read_since)
         return self._by_id.get(rotator_id)
-
-    def _main_had_all(self, since: float) -> bool:
-        """interfaces/mqtt/connection.py rule 22: whether the main connection has had its
-        command topics without a break since ``since`` and its path is alive now (its beats
-        come back): then it had every word a stop lane's kept session hands over."""
-        return self.client.heard_since(since) and self.client.broker_late() is None
 
     def _lanes_first(self) -> None:
         """interfaces/mqtt/lane.py rule 4: the main connection waits for each lane in turn."""

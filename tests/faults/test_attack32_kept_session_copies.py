@@ -18,6 +18,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
+
 from tests.faults.behind_a_proxy import bridge_behind
 from tests.support.mqtt_proxy import MqttProxy
 from tests.support.waiting import slow, wait_until
@@ -28,6 +30,12 @@ NEW_DEG = 60.0  # the target sent after the STOP
 NEAR_DEG = 3.0
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 32's kept sessions (Medium, safe side): a stop lane whose path died alone "
+    "carries out its session's old copy of a STOP the main connection had: the newer target is "
+    "stopped on its way (the drop that fixed it, 1f2e23a9, dropped real STOPs: review 120)",
+)
 def test_a_stop_lanes_handed_over_stop_does_not_stop_the_newer_target(tmp_path: Path) -> None:
     with bridge_behind(tmp_path, MqttProxy) as b:
         lane = b.app.lane.client_id
@@ -48,6 +56,12 @@ def test_a_stop_lanes_handed_over_stop_does_not_stop_the_newer_target(tmp_path: 
         )
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 32's kept sessions (Medium, safe side): a lock lane whose path died alone "
+    "carries out its session's old copy of a lock ON after the newer OFF: R/lock/state ON again, "
+    "unsaid (the drop that fixed it, 1f2e23a9, dropped real lock ONs: review 120)",
+)
 def test_a_lock_lanes_handed_over_lock_on_does_not_undo_the_newer_lock_off(
     tmp_path: Path,
 ) -> None:

@@ -19,8 +19,6 @@ import contextlib
 import time
 from pathlib import Path
 
-import pytest
-
 from bridge.interfaces.mqtt.connection import STOP_RECONNECT_MAX_S
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
@@ -38,13 +36,6 @@ PROMPT_S = 12.0  # the promise: a STOP after a path died reaches the rotor withi
 SHORT_DEG = 20.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 120: with the heartbeat topic denied by the broker's ACL, a STOP pressed after "
-        "the path died is dropped by the stop lane as a copy 'the main connection had'"
-    ),
-)
 def test_a_stop_after_the_path_died_reaches_the_rotor_when_the_beats_are_denied(
     tmp_path: Path,
 ) -> None:

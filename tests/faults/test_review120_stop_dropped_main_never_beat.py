@@ -18,8 +18,6 @@ import contextlib
 import socket
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import SUBACK, MqttProxy, _packets, _Stream
@@ -60,13 +58,6 @@ class Flapping(MqttProxy):
             s.client.shutdown(socket.SHUT_WR)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 120: a main connection whose path died right after its SUBACK is never late; "
-        "the stop lane drops its kept copy of a STOP that connection never read"
-    ),
-)
 def test_a_stop_is_not_dropped_for_a_main_connection_that_never_heard_a_beat(
     tmp_path: Path,
 ) -> None:

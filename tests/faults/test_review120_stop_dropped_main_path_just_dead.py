@@ -17,8 +17,6 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-import pytest
-
 from tests.faults.behind_a_proxy import bridge_behind
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
@@ -34,13 +32,6 @@ PROMPT_S = 12.0  # the promise: a STOP after a path died reaches the rotor withi
 SHORT_DEG = 20.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 120: a STOP pressed while the stop lane reconnects, the main connection's path "
-        "dead for under 3 s, is dropped as a copy 'the main connection had': the rotor turns on"
-    ),
-)
 def test_a_stop_the_main_connection_never_read_is_not_dropped_as_its_copy(
     tmp_path: Path,
 ) -> None:
@@ -81,13 +72,6 @@ def test_a_stop_the_main_connection_never_read_is_not_dropped_as_its_copy(
         broker.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 120: a lock ON pressed while the lock lane reconnects, the main connection's "
-        "path dead for under 3 s, is dropped as a copy; the express only stops: never locked"
-    ),
-)
 def test_a_lock_on_the_main_connection_never_read_is_not_dropped_as_its_copy(
     tmp_path: Path,
 ) -> None:

@@ -133,53 +133,49 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    as too large: tests/faults/test_input.py), so only a message no client means gets none; such
    a "stop" is not carried out either (a 1 MiB bound dropped the 1 MiB stop and target of the
    fault tests without a word: CI).
-22. A connection that carries stops (the stop and lock lanes, the stop express: ``CARRIES_STOPS``)
-   asks a keep-alive of STOP_KEEPALIVE_S (5 s) at most, whatever ``mqtt.keepalive_s`` says, and
-   under MQTT 5 keeps its session across its own reconnects: a clean start at its first connect
-   only (paho's MQTT_CLEAN_START_FIRST_ONLY: nothing of an earlier run is handed to it), then
-   ``clean_start`` false with a session expiry of STOP_SESSION_S, the words it carries (its
-   ``no_replay`` filters: the stop or lock topics; not the lane markers nor the express's sync
-   word) subscribed at KEPT_QOS (1). Attack 32: a path that died without a word (a NAT's table
-   lost, a link re-made; the broker taking new connections throughout) left every connection to its
-   keep-alive, 30 to 60 s, and a STOP pressed 3 s after the death reached none of them: the rotor
-   turned on to its target. Now each stop carrier sees its own path by paho's own PINGREQ: one sent
-   after 5 s without a byte in or out, the connection ended 5 s later if no byte came (paho 2.2's
-   ``_check_keepalive``, run from ``loop_misc`` at every round of the connection's own network
-   thread, 1 s at most: paho_client.py rule 2; no serial line's thread is on that path, and the
-   broker, which drops a client 1.5 keep-alives after its last packet, hears a PINGREQ 5 to 6 s
-   after the last one). The connection is made again on rule 6's back-off (1 s first) with the same
-   client id and its session: the broker ends the old connection (a takeover of the session's own,
-   never a fight: rule 7 counts only drops of accepted connections) and hands the new one what it
-   had sent into the dead one and not had acknowledged, the STOP with it (at QoS 1: a STOP
-   published at QoS 0, a dashboard button's default, is delivered at QoS 0 and kept by no broker).
-   A dead path so costs a stop carrier 5 to 10 s and a reconnect (6 to 11 s in all, with the ping's
-   phase: 6.1 to 11.1 s from the death to the STOP at the rotor over 16 runs of
-   tests/faults/test_attack32_stop_lost_on_a_dead_path.py, a STOP pressed 3 s after the death), and
-   a STOP pressed meanwhile is late, not lost. The verdict is each connection's own (review 112:
-   one probe judging for all remade healthy lanes and threw away what stalled ones held), it costs
-   no connection slot, and it loses nothing where it is wrong: a path that stalls and delivers
-   later, or a broker merely slow to answer (its backlog, a load that refuses new connections), has
-   its stop carriers remade with the session the broker kept for them, so what it held comes on the
-   new connection (or, the broker refusing it, on the main connection's own stream, whose
-   keep-alive is the setting's and outlasts the stall). The price: a stop carrier sends a PINGREQ
-   every 5 s while quiet (three connections, a few bytes each); a broker slower than 5 s to answer
-   one makes it reconnect (said at debug level; a STOP held is handed over); a STOP or lock ON the
-   broker took while a stop carrier was away is delivered when it is back within STOP_SESSION_S
-   (the same run only: later, or after the bridge's own restart, the session is gone), late and
-   possibly twice. A lane's handed-over copies (read before its command SUBACK, its session
-   present) of what the main connection had are dropped (``has_all``, the app's: the main
-   connection has had its command topics without a break since the lane's previous connection was
-   accepted, and its heartbeats come back, so its path is alive): with the path dead under one lane
-   alone, a copy of a STOP stopped the target sent after it, and a copy of a lock ON locked the
-   rotator again after the OFF sent after it (tests/faults/test_attack32_kept_session_copies.py).
-   The express's copies are written as they come (express.py rule 11: a target sent after a stop
-   waits for the express to answer for it, and is dropped when the express's connection is lost).
-   MQTT 3.1.1 has no session expiry (a kept session lasts as long as the broker's own setting, for
-   ever by default in mosquitto), so there the stop carriers stay clean: a dead path is noticed as
-   soon, but a STOP pressed before their SUBACK is lost (docs/reliability.md, Limits). The main
-   connection keeps the setting's keep-alive and its clean session: it is the bridge's presence,
-   and a busy uplink under it (what it sends held for a while) must not remake it (review 112:
-   dashboards shown the bridge offline for a queue that drained).
+22. A connection that carries stops (the stop and lock lanes, the stop express:
+   ``CARRIES_STOPS``) asks a keep-alive of STOP_KEEPALIVE_S (5 s) at most, whatever
+   ``mqtt.keepalive_s`` says, and under MQTT 5 keeps its session across its own reconnects: a
+   clean start at its first connect only (paho's MQTT_CLEAN_START_FIRST_ONLY: nothing of an
+   earlier run is handed to it), then ``clean_start`` false with a session expiry of
+   STOP_SESSION_S, the words it carries (its ``no_replay`` filters: the stop or lock topics; not
+   the lane markers nor the express's sync word) subscribed at KEPT_QOS (1). Attack 32: a path
+   that died without a word (a NAT's table lost, a link re-made; the broker taking new
+   connections throughout) left every connection to its keep-alive, 30 to 60 s, and a STOP
+   pressed 3 s after the death reached none of them: the rotor turned on to its target. Now each
+   stop carrier sees its own path by paho's own PINGREQ: one sent after 5 s without a byte in or
+   out, the connection ended 5 s later if no byte came (paho 2.2's ``_check_keepalive``, run from
+   ``loop_misc`` at every round of the connection's own network thread, 1 s at most:
+   paho_client.py rule 2; no serial line's thread is on that path, and the broker, which drops a
+   client 1.5 keep-alives after its last packet, hears a PINGREQ 5 to 6 s after the last one).
+   The connection is made again on rule 6's back-off (1 s first) with the same client id and its
+   session: the broker ends the old connection (a takeover of the session's own, never a fight:
+   rule 7 counts only drops of accepted connections) and hands the new one what it had sent into
+   the dead one and not had acknowledged, the STOP with it (at QoS 1: a STOP published at QoS 0,
+   a dashboard button's default, is delivered at QoS 0 and kept by no broker). A dead path so
+   costs a stop carrier 5 to 10 s and a reconnect (6 to 11 s in all, with the ping's phase: 6.1 to
+   11.1 s from the death to the STOP at the rotor over 16 runs of
+   tests/faults/test_attack32_stop_lost_on_a_dead_path.py, a STOP pressed 3 s after the death),
+   and a STOP pressed meanwhile is late, not lost. The verdict is each connection's own (review
+   112: one probe judging for all remade healthy lanes and threw away what stalled ones held), it
+   costs no connection slot, and it loses nothing where it is wrong: a path that stalls and
+   delivers later, or a broker merely slow to answer (its backlog, a load that refuses new
+   connections), has its stop carriers remade with the session the broker kept for them, so what
+   it held comes on the new connection (or, the broker refusing it, on the main connection's own
+   stream, whose keep-alive is the setting's and outlasts the stall). The price: a stop carrier
+   sends a PINGREQ every 5 s while quiet (three connections, a few bytes each); a broker slower
+   than 5 s to answer one makes it reconnect (said at debug level; a STOP held is handed over); a
+   STOP or lock ON the broker took while a stop carrier was away is delivered when it is back
+   within STOP_SESSION_S (the same run only: later, or after the bridge's own restart, the
+   session is gone), late and possibly twice (the old connection's copy and the new one's: a stop
+   carried out twice is the safe side; lastword.py and express.py rule 11 order a copy as they
+   order any late one). MQTT 3.1.1 has no session expiry (a kept session lasts as long as the
+   broker's own setting, for ever by default in mosquitto), so there the stop carriers stay
+   clean: a dead path is noticed as soon, but a STOP pressed before their SUBACK is lost
+   (docs/reliability.md, Limits). The main connection keeps the setting's keep-alive and its
+   clean session: it is the bridge's presence, and a busy uplink under it (what it sends held for
+   a while) must not remake it (review 112: dashboards shown the bridge offline for a queue that
+   drained).
 """
 
 from __future__ import annotations
@@ -474,11 +470,6 @@ class Connection:
         self._optional_said: set[str] = set()
         self.connected = threading.Event()
         self.before_message: Callable[[], None] | None = None  # lane.py rule 4
-        # rule 22: whether another connection had every command published since a time (the
-        # main connection's, the app's); a kept session's copies it had are dropped
-        self.has_all: Callable[[float], bool] | None = None
-        self._accepted_at: float | None = None  # rule 22: when this connection was accepted
-        self._handed_from: float | None = None  # ... the one whose session it was handed
         c = new_client(settings, client_id)
         c.reconnect_delay_set(*self._reconnect_s)
         c.on_connect = self._on_connect
@@ -743,9 +734,6 @@ class Connection:
         self._up = True
         self._accepted_once = True
         self._guard.connected(self._clock())
-        present = bool(getattr(flags, "session_present", False)) and self.kept_session
-        self._handed_from = self._accepted_at if present else None  # rule 22
-        self._accepted_at = self._clock()
         self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
         self._subscribed_since = None
@@ -855,21 +843,6 @@ class Connection:
             self._slowed = False
         self._ended(reason_code, ending, fight)
 
-    def _handed_over_had(self) -> bool:
-        """Rule 22: whether a message read now is a kept session's copy (before this
-        connection's command SUBACK, its session handed over) of what the main connection had
-        (its command topics without a break since the previous connection was accepted, and
-        its path alive now: ``has_all``)."""
-        since = self._handed_from
-        if since is None or self._subscribed:
-            return False
-        has_all = self.has_all
-        try:
-            return has_all is not None and has_all(since)
-        except Exception:  # rule 5: never the thread's end; the copy is carried (the safe side)
-            log.exception("error asking whether the main connection had a copy")
-            return False
-
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         before = self.before_message
         if before is not None:
@@ -877,9 +850,6 @@ class Connection:
                 before()  # another connection's messages go before this one's (lane.py rule 4)
             except Exception:  # rule 5: a courtesy that fails costs neither thread nor message
                 log.exception("error letting the stop lane go first")
-        if self._handed_over_had():
-            log.debug("%s: a kept session's copy the main connection had: dropped", msg.topic)
-            return
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload, bool(msg.retain)):
