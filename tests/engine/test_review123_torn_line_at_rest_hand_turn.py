@@ -1,6 +1,7 @@
-"""Review 123: a GS-232B or a SatEL at rest whose line then garbles every byte (its line ends
-too) gets no unwatched stop in time: a hand at the panel turns it from 150 past ``az_min_deg``
-100, a GS-232B to its end with no stop ever written, a SatEL to about 17.
+"""Review 123: a GS-232B (or GS-232A, RC2800) or a SatEL at rest whose line then garbles
+every byte (its line ends too) gets no unwatched stop in time: a hand at the panel turns it
+from 150 past ``az_min_deg`` 100, a GS-232B to its end with no stop ever written,
+a SatEL to about 17.
 
 controller.py rule 9 (review 116's third fix, 40a3ae59): "a poll answered garbled past parsing at
 rest counts as one of them [readings at rest that confirmed none], as a first reading's does";
@@ -9,7 +10,8 @@ the third on" are asked at the moving rate. The promise: a hand turn at rest on 
 stopped before a limit on every model. Measured: on a line that XORs every byte with 0x5A
 (review 113's ``torn``), a GS-232B is polled about once a second, each exchange waiting out its
 reply time, the first torn answer of a run not counted (link.py rule 11): rule 2 takes it
-offline ('answers only garbled replies', 6 s) before the eighth, and nothing counts offline
+offline ('answers only garbled replies', 6 s) before the eighth (a GS-232A and an RC2800
+the same), and nothing counts offline
 (``_rest_phase`` wants it answering); the hand runs on to 5, no stop frame written. A SatEL is
 polled every 2 s throughout (never the moving rate): the eighth comes 16.6 s into the hand's
 turn, at 6 deg/s about 17, 83 degrees past the limit. An Easycomm II on the same line is
@@ -57,9 +59,9 @@ def test_the_premise_an_easycomm_on_the_same_line_is_stopped_before_the_limit(ri
 @pytest.mark.xfail(
     strict=True,
     reason="review 123: a hand turn at rest on a line that garbles every byte runs past "
-    "az_min_deg (GS-232B: no stop at all, offline first; SatEL: stopped 16.6 s in, at 17)",
+    "az_min_deg (GS-232A/B, RC2800: no stop, offline first; SatEL: stopped 16.6 s in, at 17)",
 )
-@pytest.mark.parametrize("model", ["gs232b", "satel"])
+@pytest.mark.parametrize("model", ["gs232b", "gs232a", "rc2800-az", "satel"])
 def test_a_hand_turn_at_rest_on_a_line_garbling_every_byte_is_stopped_before_the_limit(
     rig: Rig, model: str
 ) -> None:
