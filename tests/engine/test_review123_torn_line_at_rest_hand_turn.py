@@ -72,3 +72,34 @@ def test_a_hand_turn_at_rest_on_a_line_garbling_every_byte_is_stopped_before_the
         f"{model}: turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
         f"{AZ_MIN_DEG:g}; stops written {stops} s into the turn; said: {said}"
     )
+
+
+LOCK_S = 5.0  # the lock's ON taken and its stop out (virtual time)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 123: with the lock ON, a hand turn on a GS-232B whose line garbles every "
+    "byte runs past az_min_deg to 5: neither the lock's stop nor the unwatched one is written",
+)
+def test_a_locked_gs232b_on_a_line_garbling_every_byte_is_stopped_before_the_limit(
+    rig: Rig,
+) -> None:
+    """The same with the lock ON: torn answers are no sign for the lock's stop (stops.py rule 7
+    takes only readings that parse and are doubted), and the unwatched count never reaches eight
+    before the offline: the rotor the operator locked turns from 150 to 5, no stop written."""
+    v = limited(rig, "gs232b", REST_DEG, AZ_MIN_DEG)
+    v.link_up()
+    v.run_for(CONFIRMED_S)
+    v.lock(True)
+    v.run_for(LOCK_S)
+    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v.to_host = torn
+    t = v.now
+    v.manual_rotate(5.0)  # (a hand at the panel of a locked rotor, towards the limit)
+    lowest = lowest_az(v, t + WATCH_S, REST_DEG)
+    stops = [round(f.time_s - t, 1) for f in v.frames("stop", since=t)]
+    assert lowest >= AZ_MIN_DEG, (
+        f"locked, turned unstopped from {REST_DEG:g} down to {lowest:g}, past az_min_deg "
+        f"{AZ_MIN_DEG:g}; stops written {stops} s into the turn"
+    )
