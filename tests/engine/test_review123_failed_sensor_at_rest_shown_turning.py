@@ -15,7 +15,8 @@ machine MOVING, no target), the stop's check reads the garbled values as the rot
 readings' count that brings the unwatched stop is no longer kept.
 
 In virtual time: the emulated Rotor-EZ at rest at 150, confirmed on a clean line; then each ``1``
-it sends reaches the host as the next of ``2``, ``3``, ``4``, ``0``, for a minute.
+it sends reaches the host as the next of ``2``, ``3``, ``4``, ``0``, for a minute. A RotorCard
+(the same family) the same.
 """
 
 from __future__ import annotations
@@ -50,8 +51,9 @@ def failing() -> Callable[[bytes, float], bytes]:
     reason="review 123: a Rotor-EZ at rest with a failed sensor is shown moving, its bearing "
     "jumping 50/250/354, and told 'still turning after 3 stop commands' (regression, e1e5afb3)",
 )
-def test_a_failed_sensor_at_rest_is_shown_at_rest_where_it_stood(rig: Rig) -> None:
-    v = rig("rotorez", emulator={"start_az_deg": REST_DEG}, connect=False)
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
+def test_a_failed_sensor_at_rest_is_shown_at_rest_where_it_stood(rig: Rig, model: str) -> None:
+    v = rig(model, emulator={"start_az_deg": REST_DEG}, connect=False)
     v.link_up()
     v.run_for(CONFIRMED_S)
     assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
