@@ -7,10 +7,14 @@ takes a little over a second from its last reading where it stood to its reading
 so that creep is no move, the step hold (one step at CREEP_SHARE of its slowest) is over by
 then, and its rest is called between two of its moves past the noise: controller.py rule 13
 stops the healthy turn short, R/error "rotor at rest ... short of its turn ... (jammed, stopped
-at the panel, or its power cut meanwhile)". Before this session (51a2f016) each case finished
-at its target. A turn as slow as these is one the rule promises to leave to finish."""
+at the panel, or its power cut meanwhile)". A K3NG answering late (polled slower) is stopped
+short at every phase of the replug. Before this session (51a2f016) each case finished at its
+target (bisected: 48918b44 for some, 766fa6eb for all). A turn as slow as these is one the rule
+promises to leave to finish."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import pytest
 
@@ -28,11 +32,14 @@ START_AZ = 20.0
     " a replug, is stopped dozens of degrees short with a false 'short of its turn ... jammed'",
 )
 @pytest.mark.parametrize(
-    ("model", "share", "aim", "replugs", "out_s", "after_s"),
+    ("model", "share", "aim", "replugs", "out_s", "after_s", "extra"),
     [
-        ("gs232b", 0.4, (250.0, None), 2, 2.2, 0.4),  # (azimuth only; out twice)
-        ("gs232b", 0.3, (250.0, None), 2, 2.2, 0.4),
-        ("gs232a-az", 0.4, (250.0, None), 2, 2.2, 0.4),
+        ("gs232b", 0.4, (250.0, None), 2, 2.2, 0.4, {}),  # (azimuth only; out twice)
+        ("gs232b", 0.3, (250.0, None), 2, 2.2, 0.4, {}),
+        ("gs232a-az", 0.4, (250.0, None), 2, 2.2, 0.4, {}),
+        # K3NG's late answers: polled slower, every phase stopped short
+        ("gs232b", 0.3, (200.0, 60.0), 1, 2.0, 1.0, {"processing_delay_s": 0.6}),
+        ("gs232b", 0.35, (200.0, 60.0), 2, 2.3, 0.2, {"processing_delay_s": 0.6}),
     ],
 )
 def test_a_healthy_carried_turn_above_creep_share_is_left_to_finish(
@@ -42,11 +49,12 @@ def test_a_healthy_carried_turn_above_creep_share_is_left_to_finish(
     replugs: int,
     out_s: float,
     after_s: float,
+    extra: dict[str, Any],
 ) -> None:
     with VirtualRotator(model) as probe:
         slowest = mo.slowest_deg_s(probe.cfg.motion)
     assert share > mo.CREEP_SHARE  # (a turn, not a drift)
-    emulator = {"start_az_deg": START_AZ, "az_speed_deg_s": share * slowest["azimuth"]}
+    emulator = extra | {"start_az_deg": START_AZ, "az_speed_deg_s": share * slowest["azimuth"]}
     if "elevation" in slowest:
         emulator |= {"start_el_deg": 0.0, "el_speed_deg_s": share * slowest["elevation"]}
     with VirtualRotator(model, emulator=emulator) as v:
@@ -63,3 +71,5 @@ def test_a_healthy_carried_turn_above_creep_share_is_left_to_finish(
         assert [e.message for e in v.errors(ErrorKind.STOP, since=t)] == []
         assert "stop" not in {f.outcome for f in v.frames(since=t)}
         assert v.truth().az_deg == pytest.approx(aim[0], abs=1.0)
+        if aim[1] is not None:
+            assert v.truth().el_deg == pytest.approx(aim[1], abs=1.0)
