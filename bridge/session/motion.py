@@ -22,40 +22,19 @@ Rules:
    movement of that axis's own (more than ``noise_deg`` from where that axis itself last moved:
    ``az_moved_deg``, ``el_moved_deg``; from the first reading back for an axis not seen move
    since, but not at all, till it is seen move, for an axis the lost target left out or leaves
-   where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``; a step off holds
-   it no more than it moves it, review 119), nor a reading of it further from there than any
-   since (it creeps inside ``noise_deg``: ``az_crept_deg``, ``el_crept_deg``; jitter back and
-   forth does not) at CREEP_SHARE of the speed that axis turns at its slowest
-   (``slowest_deg_s``) or faster, timed from the last reading that showed it where it stood
-   (``az_crept_t``, ``el_crept_t``) by what it turned at least, a reading's step
-   less (a pot read in steps reads one on at any speed: review 115, one reading of a still
-   elevation a degree off, inside a GS-232B's 2 degrees of noise, counted as its turn
-   starting, and a jam's stop waited that elevation's own time, 5 s; one step off only holds
-   the rest while it stands, till a turn at CREEP_SHARE of the axis's slowest would read on,
-   ``_step_hold_s`` (review 119: held only as long as a turn at its slowest takes, a carried
-   elevation slowing its last degrees to 0.375 of that was called at rest 8 degrees short and
-   stopped), then the axis stands there; a move or creep read one step on from the reading
-   before showed no movement after the first reading of that one, and its ``settle_s`` counts
-   from there, ``_moved_at``: review 115, a reading just after a jam showing the last degree
-   turned before it put the stop a moving poll past the axis's own time), for the longer of
-   ``settle_s`` and its ``axis_seen_s`` (rule 4: what a reading's step and ``noise_deg`` take
-   at that axis's speed, as slow as rule 6 allows for), a user's ``settle_s`` never shortening it.
-   A creep slower than any turn is no turn: review 110, every creep counted, a jammed RC2800
-   (noise_deg 0.5, read in tenths) whose
+   where it stands, within ``tolerance_deg``: ``lost_aim``, ``_nothing_to_do``), nor a reading
+   of it further from there than any since (it creeps inside ``noise_deg``: ``az_crept_deg``,
+   ``el_crept_deg``; jitter back and forth does not) at CREEP_SHARE of the speed that axis turns
+   at its slowest (``slowest_deg_s``) or faster, timed from its last creep (its first since a
+   move, from the reading before), for the longer of ``settle_s`` and its ``axis_seen_s`` (rule
+   4: what a reading's step and ``noise_deg`` take at that axis's speed, as slow as rule 6
+   allows for), a user's ``settle_s`` never shortening it. A creep slower than any turn is no
+   turn: review 110, every creep counted, a jammed RC2800 (noise_deg 0.5, read in tenths) whose
    pot drifted a tenth every 1.2 s (0.08 deg/s; its slowest turn 4 deg/s) was shown moving for
-   ever and never got controller.py rule 13's stop. Nor is a drift past ``noise_deg`` as slow
-   (a move by rule 1, but the carried turn's rest waits each axis's own moves alone, weighed
-   as a creep is, and ``settle_s`` from the first reading back): review 115, a jammed RC2800's
-   pot drifting a tenth every 0.2 s (0.5 deg/s, an eighth of its slowest turn) crossed
-   ``noise_deg`` every 1.2 s, inside ``settle_s``, and was shown moving for ever, never
-   stopped; a healthy turn at its slowest reads on some four times as fast as CREEP_SHARE
-   asks (its readings' step allowed for). Nor is an axis with nothing to do waited on:
+   ever and never got controller.py rule 13's stop. Nor is an axis with nothing to do waited on:
    review 110, an azimuth-only turn on a GS-232B with its elevation set slow (1.0 deg/s), jammed
    a second after a replug, was stopped 3.9 s after the jam (8.5 s at 0.5 deg/s), by the
-   elevation's own time counted from the first reading back, not the azimuth's 1.7 s; the lost
-   target is kept while its turn is carried, over a second replug too (review 115: forgotten
-   at the first reading back, a jam after the adapter dropped out again waited the idle
-   elevation's time, 3.9 s). Review 95:
+   elevation's own time counted from the first reading back, not the azimuth's 1.7 s. Review 95:
    a GS-232B's elevation at 1.8 deg/s, read in whole degrees with 2 degrees of noise, shows a
    move every 1.7 s; its turn carried over a replug was called at rest at rule 2's 1.5 s and
    stopped short by controller.py rule 13, R/error blaming a jam. Not the slowest axis's time
@@ -486,15 +465,13 @@ class Motion:
     el_moved_t: float | None = None
     az_crept_deg: float = 0.0
     el_crept_deg: float = 0.0
-    # rule 2: each axis's last reading where it stood (at ``az_moved_deg``/``el_moved_deg``, or
-    # its last move): a creep's speed is measured from it, and a reading a step off holds the
-    # carried turn's rest from it (``_step_hold_s``)
+    # rule 2: each axis's last creep (or, not crept since it moved, its last reading): the
+    # next creep's speed is measured from it
     az_crept_t: float | None = None
     el_crept_t: float | None = None
     # rule 2: the target out when the readings were lost (``link_down``; its azimuth and
-    # elevation), kept while the turn it left the controller is carried (over a second
-    # replug too: review 115): an axis it leaves where it stands has nothing to do in the
-    # turn carried, and that turn's rest waits no time of its own
+    # elevation), kept till the first reading back: an axis it leaves where it stands has
+    # nothing to do in the turn carried, and that turn's rest waits no time of its own
     lost_aim: tuple[float, float | None] | None = None
 
 
@@ -713,10 +690,7 @@ def link_down(m: Motion) -> Motion:
     had a target out, is kept for the first reading back (rule 4)."""
     turning = m.state is MOVING or m.target_deg is not None or m.el_target_deg is not None
     hand = m.state is MOVING and m.target_deg is None and m.stop_sent_t is None and not m.carried
-    # (rule 2: the lost target, lost before with nothing read since, or lost again with the
-    # turn it left the controller still carried: review 115, a second replug forgot it)
-    carrying = m.carried and m.state is MOVING and not m.lost_still
-    aim = m.lost_aim if m.anchor_deg is None or carrying else None
+    aim = m.lost_aim if m.anchor_deg is None else None  # (rule 2: lost before, nothing read)
     if m.target_deg is not None:
         aim = (m.target_deg, m.el_target_deg)
     return Motion(
@@ -807,7 +781,7 @@ def reading(
             az_moved_t=None if az_idle else now,
             el_moved_deg=el_deg,
             el_moved_t=None if el_deg is None or el_idle else now,
-            lost_aim=m.lost_aim if turning and not m.lost_hand else None,  # (while carried)
+            lost_aim=None,
             az_crept_deg=0.0,
             el_crept_deg=0.0,
             az_crept_t=now,
@@ -843,16 +817,11 @@ def reading(
     if m.carried:  # rule 2: each axis's own movement and creep, for the carried turn's rest
         ref = m.az_moved_deg
         off = cfg.noise_deg + 1.0 if ref is None else angle_error(az_deg, ref, wraps)
-        step, was, was_el = cfg.spec.reading_step_deg, m.position_deg, m.el_position_deg
-        on = was is not None and step / 2 <= angle_error(az_deg, was, wraps) < 1.5 * step
-        since = m.changed_t if on else None  # (one step on: no move shown since that reading)
-        _own_move(changes, cfg, now, "az", off, az_deg, m.az_crept_deg, m.az_crept_t, since)
+        _own_move(changes, cfg, now, "az", off, az_deg, m.az_crept_deg, m.az_crept_t)
         ref = m.el_moved_deg
         if el_deg is not None:
             off = cfg.noise_deg + 1.0 if ref is None else abs(el_deg - ref)
-            on = was_el is not None and step / 2 <= abs(el_deg - was_el) < 1.5 * step
-            since = m.changed_t if on else None
-            _own_move(changes, cfg, now, "el", off, el_deg, m.el_crept_deg, m.el_crept_t, since)
+            _own_move(changes, cfg, now, "el", off, el_deg, m.el_crept_deg, m.el_crept_t)
     sent_t, read_t = m.stop_sent_t, m.stop_read_t
     if sent_t is not None and (read_t is None or read_t <= sent_t):
         changes["stop_read_t"] = now  # (stop_again: it shows where the rotor was at the stop)
@@ -938,73 +907,29 @@ def _own_move(
     off: float,
     deg: float,
     crept: float,
-    stood_t: float | None,
-    since_t: float | None = None,
+    crept_t: float | None,
 ) -> None:
     """Rule 2: what a reading of a carried turn's axis (``axis``: "az" or "el"; ``off``: how
     far it is from where that axis last moved, ``deg``) tells of that axis's own movement: more
     than ``noise_deg``, a move (its own time starts again from here); further than any reading
     since inside ``noise_deg`` (it creeps), a move only if it crept at least CREEP_SHARE of
-    what the axis turns at its slowest (``slowest_deg_s``) since it last read where it moved
-    (``stood_t``), by what it turned at least: a reading's step less (a pot read in steps
-    reads one on at any speed). So a creep of one step is no move (review 115: one reading of
-    a still elevation a degree off counted as its turn starting, and a jam's stop waited that
-    elevation's own time, 5 s): it only holds the rest while it stands (``carried_rest_from``),
-    till a turn at CREEP_SHARE of the axis's slowest would have read on (``_step_hold_s``);
-    after that, the axis stands there. A creep slower than any turn is no turn (review 110: a
-    jammed RC2800's pot drifting a tenth every 1.2 s kept the turn 'moving' for ever, no
-    stop). Jitter back and forth counts once at most. A move read one step on from the reading
-    before (``since_t``: the first reading of that one) showed no movement after that reading: its
-    ``settle_s`` counts from there, its ``axis_seen_s`` from this reading still (review 115:
-    a reading just after a jam, showing the last degree turned before it, put the jam's stop
-    a moving poll later than the axis's own time)."""
-    step = cfg.spec.reading_step_deg
-    if off < step / 2:  # (where it last moved: it stands there)
-        changes[f"{axis}_crept_t"] = now
-        return
-    slowest = slowest_deg_s(cfg).get("azimuth" if axis == "az" else "elevation")
-    dt = None if stood_t is None else now - stood_t
+    what the axis turns at its slowest (``slowest_deg_s``) since its last creep (the first
+    creep since a move: since the reading before). A creep slower than any turn is no turn
+    (review 110: a jammed RC2800's pot drifting a tenth every 1.2 s kept the turn 'moving' for
+    ever, no stop). Jitter back and forth counts once at most."""
     if off > cfg.noise_deg:
-        if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
-            moved_t = _moved_at(cfg, now, axis, since_t)
-            changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, moved_t
-            changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
-        elif off > crept:  # (a drift past the noise slower than any turn: no turn's move,
-            changes[f"{axis}_crept_deg"] = off  # review 115)
+        changes[f"{axis}_moved_deg"], changes[f"{axis}_moved_t"] = deg, now
+        changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = 0.0, now
         return
-    if off < 1.5 * step:  # (a step: no speed told by it)
-        if slowest is not None and dt is not None and dt >= _step_hold_s(cfg, slowest):
-            changes[f"{axis}_moved_deg"], changes[f"{axis}_crept_t"] = deg, now  # (it stands
-            changes[f"{axis}_crept_deg"] = 0.0  # here: its rest told no turn)
+    if off <= crept:
+        if crept == 0.0:  # (not crept since it moved: a first creep is timed from here)
+            changes[f"{axis}_crept_t"] = now
         return
-    if off <= crept + step / 2:  # (no further than any since: jitter)
-        return
-    changes[f"{axis}_crept_deg"] = off
-    if slowest is None or not dt or off - step >= CREEP_SHARE * slowest * dt:
-        changes[f"{axis}_moved_t"] = _moved_at(cfg, now, axis, since_t)  # (a creep as fast
-        # as a turn: its first degrees)
-
-
-def _moved_at(cfg: MotionConfig, now: float, axis: str, since_t: float | None) -> float:
-    """Rule 2: when a carried axis's move read at ``now`` is timed for its rest: ``now``, or,
-    read one step on from the reading before, the first reading of that one (``since_t``:
-    no movement shown after it), never so early that its ``axis_seen_s`` from ``now`` is
-    cut short (``settle_s`` counts from when it moved, ``axis_seen_s`` from the reading)."""
-    if since_t is None or since_t >= now:
-        return now
-    seen = axis_seen_s(cfg).get("azimuth" if axis == "az" else "elevation", 0.0)
-    return max(since_t, now - max(0.0, cfg.settle_s - seen))
-
-
-def _step_hold_s(cfg: MotionConfig, slowest: float) -> float:
-    """Rule 2: how long after a carried axis last read where it moved a turn as slow as still
-    counts (CREEP_SHARE of its slowest, ``slowest``) reads a second step on, a creep ``_own_move``
-    counts: a reading one step off holds the rest till then. Not a turn at its slowest (review
-    119: a GS-232B's elevation slowing its last degrees to 0.375 of its slowest read a step
-    every 1.6 s, past that hold, 1.5 s; each step stood, none counted, and its carried turn was
-    called at rest and stopped 8 degrees short, R/error blaming a jam); later, two steps on
-    are a drift slower than any turn all the same."""
-    return cfg.spec.reading_step_deg / (CREEP_SHARE * slowest)
+    changes[f"{axis}_crept_deg"], changes[f"{axis}_crept_t"] = off, now
+    slowest = slowest_deg_s(cfg).get("azimuth" if axis == "az" else "elevation")
+    dt = None if crept_t is None else now - crept_t
+    if slowest is None or not dt or off - crept >= CREEP_SHARE * slowest * dt:
+        changes[f"{axis}_moved_t"] = now  # (a creep as fast as a turn: its first degrees)
 
 
 def _past_limit(before: Motion, m: Motion, cfg: MotionConfig) -> Past | None:
@@ -1646,11 +1571,8 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
 def still_from(m: Motion, cfg: MotionConfig) -> float:
     """Rule 2: from when a reading may find the rotor still (no movement for ``settle_s``; a
     carried turn's, each axis still for its own time too: ``carried_rest_from``)."""
-    if m.carried and m.stop_sent_t is None and m.state is MOVING:  # (rule 4: rare)
-        # (each axis's own moves alone: rule 1's anchor moves with a drift slower than any
-        # turn too, review 115; settle_s from the first reading back at least)
-        first = m.first_read_t if m.first_read_t is not None else _moved_ref(m)
-        return max(first + cfg.settle_s, carried_rest_from(m, cfg))
+    if m.carried and m.stop_sent_t is None and m.state is MOVING:
+        return max(_moved_ref(m) + cfg.settle_s, carried_rest_from(m, cfg))  # (rule 4: rare)
     return _moved_ref(m) + cfg.settle_s
 
 
@@ -1659,27 +1581,14 @@ def carried_rest_from(m: Motion, cfg: MotionConfig) -> float:
     at rest: every axis still for its own time (``axis_seen_s``, never under ``settle_s``)
     since its own last movement or creep as fast as a turn (``az_moved_t``, ``el_moved_t``:
     the first reading back, for an axis not seen move since; none, for one the lost target
-    gave nothing to do, ``_nothing_to_do``, till it is seen move, nor a step off's hold:
-    review 119, a still elevation read one count off from an azimuth's jam on held the jam's
-    stop 3.3 s, 6.3 s set slower). A fast axis's jam is told by its own short time, a slow
-    axis's turn is not called over while it shows a move only every few readings."""
+    gave nothing to do, ``_nothing_to_do``, till it is seen move). A fast axis's jam is told by
+    its own short time, a slow axis's turn is not called over while it shows a move only
+    every few readings."""
     ref = -1e18
-    slowest, half = slowest_deg_s(cfg), cfg.spec.reading_step_deg / 2
     for axis, seen in axis_seen_s(cfg).items():
-        if axis == "azimuth":
-            moved_t, at, stood_t = m.az_moved_t, m.az_moved_deg, m.az_crept_t
-            now_deg = m.position_deg
-            off = None if at is None or now_deg is None else angle_error(now_deg, at, cfg.az_wraps)
-        else:
-            moved_t, at, stood_t = m.el_moved_t, m.el_moved_deg, m.el_crept_t
-            now_deg = m.el_position_deg
-            off = None if at is None or now_deg is None else abs(now_deg - at)
-        if moved_t is None:  # (nothing to do, not seen move: a step off is no move, nor a
-            continue  # hold, review 119)
-        ref = max(ref, moved_t + max(cfg.settle_s, seen))
-        speed = slowest.get(axis)
-        if off is not None and off >= half and stood_t is not None and speed is not None:
-            ref = max(ref, stood_t + _step_hold_s(cfg, speed))  # (off where it stood: held)
+        moved_t = m.az_moved_t if axis == "azimuth" else m.el_moved_t
+        if moved_t is not None:
+            ref = max(ref, moved_t + max(cfg.settle_s, seen))
     return ref
 
 

@@ -665,8 +665,6 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
     fields = [f for f in mo.Motion.__dataclass_fields__ if f != "state"]
     m = replace(ready(), **{f: 1000.0 + i for i, f in enumerate(fields)})
     m = replace(m, state=S.MOVING, anchor_deg=100.0, position_deg=100.0, target_deg=None)
-    # (rule 2: the azimuth last stood a moving poll before, so its move is as fast as a turn)
-    m = replace(m, az_crept_t=2000.0 - CFG.poll_margin_s)
     moved, _ = mo.reading(m, CFG, 150.0, 2000.0)
     expected = replace(
         m,
@@ -681,7 +679,7 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
         az_moved_deg=150.0,  # (rule 2: carried, the azimuth's own movement)
         az_moved_t=2000.0,
         az_crept_deg=0.0,
-        az_crept_t=2000.0,  # (rule 2: where it stood, a creep's speed measured from here)
+        az_crept_t=2000.0,  # (rule 2: a creep's speed is measured from here)
     )
     assert moved == mo.tick(expected, CFG, 2000.0)[0]
 

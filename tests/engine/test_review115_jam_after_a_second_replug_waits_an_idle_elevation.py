@@ -10,6 +10,8 @@ the azimuth's own time as after a single replug (review 110's test, 1.7 s)."""
 
 from __future__ import annotations
 
+import pytest
+
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
 from tests.engine.carried import at_rest, replugged
@@ -20,6 +22,11 @@ READ_BACK_S = 1.0  # after the first replug: its readings back, the turn read go
 JAM_AFTER_S = 1.0  # after the second replug: the azimuth's carried move already read
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 115: after a second replug a jammed azimuth-only carried turn waits the idle "
+    "elevation's own time: its motor driven ~4 s before the stop",
+)
 def test_a_jam_after_a_second_replug_is_stopped_by_the_azimuths_time() -> None:
     emulator = {"start_az_deg": 62, "start_el_deg": 0}
     with VirtualRotator(

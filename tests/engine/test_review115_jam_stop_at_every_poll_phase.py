@@ -21,9 +21,24 @@ SLOW_EL_DEG_S = 1.0  # review 110's: an elevation set slow (its own time 4.8 s)
 PHASES_S = [
     round(0.8 + 0.05 * i, 2) for i in range(9)
 ]  # after the port answers: a poll's phases and more
+LATE_PHASE_S = 1.15  # the phase whose first reading after the jam shows the last degree turned
+PARAMS = [
+    pytest.param(
+        p,
+        marks=pytest.mark.xfail(
+            strict=True,
+            reason="review 115: a jam 1.15 s after the port answers is stopped 1.725 s after it "
+            "(the first reading after the jam shows the last degree turned; the fix, ba20ceed, "
+            "was taken back with review 115's others: review 124)",
+        ),
+    )
+    if p == LATE_PHASE_S
+    else p
+    for p in PHASES_S
+]
 
 
-@pytest.mark.parametrize("jam_after_s", PHASES_S)
+@pytest.mark.parametrize("jam_after_s", PARAMS)
 def test_a_jam_of_a_carried_turn_is_stopped_by_the_azimuths_time_at_every_phase(
     jam_after_s: float,
 ) -> None:

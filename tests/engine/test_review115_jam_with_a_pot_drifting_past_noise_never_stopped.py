@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
 from tests.engine.carried import jammed_after_a_carried_turn
@@ -30,6 +32,11 @@ def drifting_from(since: float) -> Callable[[bytes, float], bytes]:
     return rc2800_drifting_from(since, DRIFT_EVERY_S, DRIFT_DEG)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 115: a jammed carried turn whose pot drifts 0.5 deg/s (an eighth of any "
+    "turn) is shown moving for ever and never stopped, its motor driving",
+)
 def test_a_jammed_carried_turn_read_drifting_past_noise_is_stopped() -> None:
     with VirtualRotator("rc2800-az", emulator={"start_az_deg": 10}) as v:
         cfg = v.cfg.motion

@@ -13,6 +13,8 @@ elevation, which 4f34ae51 stopped waiting on, is waited on again."""
 
 from __future__ import annotations
 
+import pytest
+
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
 from tests.engine.carried import at_rest, replugged
@@ -23,6 +25,11 @@ JAM_AFTER_S = 1.0  # after the port answers: the azimuth's carried move already 
 FLICKER_DEG = 1  # the elevation's pot read once a degree off (inside noise_deg)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 115: one reading of a still elevation a degree off (inside noise_deg) "
+    "delays the stop of a jammed carried azimuth turn by the elevation's own time (~5 s)",
+)
 def test_one_flicker_of_a_still_elevation_does_not_delay_a_jam_stop() -> None:
     emulator = {"start_az_deg": 62, "start_el_deg": 0}
     with VirtualRotator(

@@ -38,6 +38,12 @@ def elevation_read_one_up() -> Garble:
     return rewrite
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 119: an idle elevation read one count off from a jam on puts the jammed "
+    "carried azimuth's stop about 5 s after the jam, its motor driving, not the azimuth's 1.7 s "
+    "(older than review 115's fixes, which were taken back: review 124)",
+)
 @pytest.mark.parametrize("el_speed", [1.0, 0.5])  # review 110's elevations set slow
 def test_an_idle_elevation_read_one_count_off_does_not_delay_a_jam_stop(el_speed: float) -> None:
     emulator = {"start_az_deg": 62, "start_el_deg": 0}

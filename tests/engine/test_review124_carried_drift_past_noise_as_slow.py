@@ -25,11 +25,6 @@ from tests.engine.virtual import VirtualRotator
 SHARE = 0.3  # of rule 6's slowest: above CREEP_SHARE (a turn, not a drift)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 124: a healthy MD-01 turn (read in tenths) at 0.3 of its slowest, carried"
-    " over a replug, is stopped seconds after the port is back, far short, with a false 'jammed'",
-)
 @pytest.mark.parametrize(
     ("model", "emulator", "aim", "out_s", "after_s"),
     [

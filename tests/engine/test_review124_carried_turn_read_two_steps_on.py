@@ -26,11 +26,6 @@ from tests.engine.virtual import VirtualRotator
 START_AZ = 20.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 124: a healthy GS-232B azimuth turn at 0.3-0.4 of its slowest, carried over"
-    " a replug, is stopped dozens of degrees short with a false 'short of its turn ... jammed'",
-)
 @pytest.mark.parametrize(
     ("model", "share", "aim", "replugs", "out_s", "after_s", "extra"),
     [

@@ -21,11 +21,6 @@ from tests.engine.virtual import VirtualRotator
 EL_SPEED = 0.5  # deg/s: the elevation set slow (review 110's rotor), as the emulator turns it
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 124: a jammed carried az/el turn with its elevation set slow (0.5 deg/s) is"
-    " stopped 2.4 s later than the elevation's own time, its motors driving ~12 s after the jam",
-)
 @pytest.mark.parametrize("jam_after_s", [0.76, 0.99, 1.22])  # (the readings' phases)
 def test_a_jammed_carried_turn_is_stopped_within_its_slow_elevations_own_time(
     jam_after_s: float,
@@ -50,11 +45,6 @@ def test_a_jammed_carried_turn_is_stopped_within_its_slow_elevations_own_time(
         assert stop.time_s - jam_t <= allowed, (stop.time_s - jam_t, allowed)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 124: at speed X1 a jammed carried elevation turn is stopped up to 1.8 s later"
-    " than the elevation's own time (9.2 s after the jam, 7.4 s at 51a2f016)",
-)
 @pytest.mark.parametrize("jam_after_s", [0.5, 0.87, 1.24, 1.61])  # (the readings' phases)
 def test_a_jammed_carried_turn_at_speed_x1_is_stopped_within_its_elevations_own_time(
     jam_after_s: float,
