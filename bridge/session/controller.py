@@ -21,21 +21,23 @@ Rules:
    by then (``_stall_check_t``: that offline cannot wait; a review: a line that lost 2.6 s of
    every 3.6 s took a GS-232B offline and stopped its turn, although it answered every time
    the line let it).
-   A DCU-1 is available while its port is open (it never answers). A garbled answer
-   (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
-   without a valid reply at most, and offline before the motion machine could call a turn fed no
-   reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll and a
-   reply time: how late the check may come), never less than one timeout: a line that gives only
-   garbage goes offline then, with its own words; one that gives nothing at all still after
-   ``silence_timeout_s``. While a target is out, either is offline before the turn could be
-   called stalled however long ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE
-   of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least, without a valid reply (without a
-   byte, for one that gives nothing: lost replies are ridden out). A turn under way that goes
-   offline so, whichever came first, is stopped then, in case the controller still hears (its
-   replies lost or garbled on their way), and the stop is owed again when it answers (stops.py
-   rule 3); the error says so. The bridge watches a turn's stall and its limits only through
-   readings, and a turn no reading watches does not go on: a jammed rotor's motor would drive on
-   against the jam; a free one is cut short, its target dropped as any waiting one, to be sent
+   A DCU-1 is available while its port is open (it never answers). A garbled answer (link.py rule
+   11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts without a valid reply at
+   most, and offline before the motion machine could call a turn fed no reading stalled
+   (``stall_timeout_s`` from the last movement it saw, less a moving poll and a reply time: how late
+   the check may come), never less than one timeout: a line that gives only garbage goes offline
+   then, with its own words; one that gives nothing at all still after ``silence_timeout_s``, and so
+   does one whose answers are torn past any form (link.py rule 11: no reading can come from them;
+   review 118: kept online as garbled, a turn ran 3 s longer unwatched), told as garbled. While a
+   target is out, either is offline before the turn could be called stalled however long
+   ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE of ``stall_timeout_s``, and
+   TURN_SILENCE_LEAST_S at least, without a valid reply (without a byte, for one that gives nothing:
+   lost replies are ridden out). A turn under way that goes offline so, whichever came first, is
+   stopped then, in case the controller still hears (its replies lost or garbled on their way), and
+   the stop is owed again when it answers (stops.py rule 3); the error says so. The bridge watches a
+   turn's stall and its limits only through readings, and a turn no reading watches does not go on:
+   a jammed rotor's motor would drive on against the jam; a free one is cut short, its target
+   dropped as any waiting one, to be sent
    again once the controller answers (the price of safety; a stop to a rotor at rest is
    harmless). (A review: the stop went only where that offline came before silence or garbage
    alone would have made it so, where the stall's would have gone; at the defaults, 3 s of
@@ -2329,14 +2331,17 @@ class Controller:
             and link.asked_since_heard
         )
         if silent and self.answering:
-            if by_silence:
+            # (link.py rule 11: answers torn past any form are silence's time, told garbled)
+            torn = by_silence and link.torn_since_heard
+            if by_silence and not torn:
                 quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)
                 why = (
                     f"controller on {cfg.shown_port} stopped answering (no valid reply for "
                     f"{quiet_s:g} s)"
                 )
             else:  # rule 2: garbled answers only (its limit: before a stop moves the stall's)
-                quiet_s = self._garbled_offline_t(link, now) - (now - unread_s)
+                offline_t = now if torn else self._garbled_offline_t(link, now)
+                quiet_s = min(offline_t - (now - unread_s), unread_s)
                 why = (
                     f"controller on {cfg.shown_port} answers only garbled replies (no valid "
                     f"reply for {quiet_s:.3g} s)"
@@ -2358,7 +2363,8 @@ class Controller:
                 why += " while the rotor turned to its target (it may still be turning)"  # seen
             elif stopped:  # to its end, not a stall)
                 why += " while the rotor turned to its target"
-            why += "" if by_silence else ": a noisy line?"
+            told_garbled = not by_silence or torn
+            why += ": a noisy line?" if told_garbled else ""
             why += self._late_words(link, now - unread_s)
             self._lose_motion(mo.link_down)
             said = None
@@ -2367,7 +2373,7 @@ class Controller:
             elif unseen is not None:  # (said: the stop may cut short a move that was heard)
                 said = "the last stop, no reading showed taking, goes again when it answers"
             if said is not None:
-                why += f"; {said}" if by_silence else f" {said[0].upper()}{said[1:]}"
+                why += f" {said[0].upper()}{said[1:]}" if told_garbled else f"; {said}"
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
@@ -2375,7 +2381,9 @@ class Controller:
         elif never and not self._silence_reported:
             self._silence_reported = True
             why = f"controller on {cfg.shown_port} does not answer"
-            if link.silent_for(now) < timeout_s:  # rule 2: it answers, garbled
+            if (
+                link.silent_for(now) < timeout_s or link.torn_since_heard
+            ):  # rule 2: garbled, or torn
                 why = (
                     f"controller on {cfg.shown_port} answers only garbled replies: the wrong baud "
                     "rate or model, or a noisy line?"

@@ -16,14 +16,16 @@ Rules:
 2. Silence is counted from the last valid reply, or from the end of a wait for a slew's report
    (a controller that was silent for a whole slew was not "not answering"), or from the last
    garbled answer (rule 11; ``unread_for`` counts without those: controller.py rule 2 bounds
-   them). Only the questions show it is the controller's (docs/architecture.md rule 15):
-   ``asked_for_s`` reaches from the question the last valid reply answered to the last one
-   asked. Where the clock has passed the silence's end and the questions have not (the last
-   went out a reply time before the end, and was lost), the controller is asked once more then
-   (``ask_verdict``): that reply, owed only until it can be whole (rule 7's hold, rule 9's quiet
-   time) and VERDICT_SLACK_S, decides. (A review: a GS-232B whose line lost 2.6 s of every
-   3.6 s was called silent 3.2 s into a turn, and the turn stopped, just as the question that
-   went next would have been answered.)
+   them), but not from one torn past any form (rule 11: no reading can come from it; review 118:
+   counted, a turn on a line that tore every byte ran 3 s longer unwatched; only the words count
+   it, ``torn_since_heard``). Only the questions show it is the controller's
+   (docs/architecture.md rule 15): ``asked_for_s`` reaches from the question the last valid
+   reply answered to the last one asked. Where the clock has passed the silence's end and the
+   questions have not (the last went out a reply time before the end, and was lost), the
+   controller is asked once more then (``ask_verdict``): that reply, owed only until it can be
+   whole (rule 7's hold, rule 9's quiet time) and VERDICT_SLACK_S, decides. (A review: a GS-232B
+   whose line lost 2.6 s of every 3.6 s was called silent 3.2 s into a turn, and the turn
+   stopped, just as the question that went next would have been answered.)
 3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
    except a stop on a controller that takes one at any time (``spec.stop_interrupts``).
 4. A poll is sent only when due, when nothing is owed and no stop is waiting, and not before
@@ -128,7 +130,8 @@ Rules:
    reply of the controller's (``parsed``: any the codec makes but bytes that form none, NOISE
    or SPOILED not harmless; a reading, a version, an echo, a power-on byte, a late answer or a
    refusal is of its form), the second such in a row with no reply formed between, once per
-   exchange however many its bytes. A line that garbles every byte, its line ends too (a
+   exchange however many its bytes; it ends no silence (rule 2). A line that garbles every
+   byte, its line ends too (a
    failing RX level shifter, the wrong baud rate) leaves the codec waiting for a line end that
    never comes: such answers were silence, 'does not answer', and counted nothing toward
    controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
@@ -286,6 +289,7 @@ class Link:
         self._garbled = False  # rule 11: the reply owed now came garbled
         self.poll_garbled = False  # ... the exchange closed last was a poll's, answered garbled
         self._garbled_t = -math.inf  # rule 11: the last garbled answer
+        self._torn_t = -math.inf  # rule 11: the last answer torn past any form (no silence's end)
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
         self._read_t = -math.inf  # rule 11: the last bytes read
@@ -779,8 +783,8 @@ class Link:
         asked = self._asked_t
         most = self._asked_bytes >= TORN_SHARE * self.spec.reply_bytes  # (no stray byte)
         torn = most and self._read_t >= asked and self._formed_t < asked
-        if torn and self._torn:
-            self._garbled, self._garbled_t = True, now
+        if torn and self._torn:  # (not _garbled_t: it yields no reading, and keeps no
+            self._garbled, self._torn_t = True, now  # controller online, controller.py rule 2)
         self._torn = torn
 
     def _late_hold_t(self) -> float:
@@ -930,6 +934,12 @@ class Link:
     def silent_for(self, now: float) -> float:
         """Rule 2: how long the controller has not answered, garbled answers counted."""
         return min(self.unread_for(now), now - self._garbled_t)
+
+    @property
+    def torn_since_heard(self) -> bool:
+        """Rule 2's words: answers torn past any form (rule 11: garbled, but no silence's end)
+        came since the last valid reply (or a slew's wait ended)."""
+        return self._torn_t > self._heard_from()
 
     def unread_for(self, now: float) -> float:
         """Rule 2: how long since a valid reply (or a slew's wait ended)."""
