@@ -1099,6 +1099,8 @@ class Controller:
         try (stops.py rule 4); ``unwatched``: rule 9's, let go once readings show it had."""
         self._passing, self._pass_ends = False, ends_pass  # (else a stop anew: checked as any)
         self._unwatched_stopping = unwatched  # (any other: checked as an operator's)
+        if not unwatched:  # (stops.py rule 2: somebody's, merged or waiting for the line, is
+            self._released_stop_t = self._released_unseen_t = None  # not let go: review 118)
         self._retry = None  # rule 11: a stop ends the target's tries
         if self.link is None:
             self.stops.owed = True
@@ -1168,7 +1170,9 @@ class Controller:
         let go once a reading shows it had: the released lock's (``lock_released``), or rule 9's
         unwatched stop (``_unwatched_stop``). Owed across a drop (stops.py rule 3), its copy
         written on the reconnect is let go so too (review 113: checked as an operator's, for
-        good, a hand at the panel ten minutes later was stopped, unsaid)."""
+        good, a hand at the panel ten minutes later was stopped, unsaid). Somebody's stop since
+        (an operator's, the lock's: merged into it, or waiting for a half-duplex line when the
+        port failed) forgets both (``stop``): checked as any (review 118)."""
         return unseen is not None and unseen in (self._released_unseen_t, self._released_stop_t)
 
     def _release_check(self, now: float) -> None:
@@ -2352,7 +2356,8 @@ class Controller:
                 self.stop(now)  # still hears (its stall and limits unseen); owed just below
             elif self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
                 self.stops.repeat_due(m, math.inf)  # (a silent controller may still hear: its
-                self.stop(now)  # motion is lost with the readings just below)
+                again = self._let_go(self.stops.unseen_t)  # motion is lost with the readings
+                self.stop(now, unwatched=again)  # just below; nobody's repeat is let go too)
             self.answering = busy = self._first_unread = False  # (the waiting target is dropped)
             unseen = self.stops.unseen_t
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
