@@ -137,7 +137,9 @@ Rules:
    controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
    turn at the start 45 degrees past ``az_min_deg``; attack 30: the wrong baud rate told as a
    cable). The first of a run alone is not counted: an answer still arriving (in parts, late)
-   forms its reply with its rest. A stray byte now and then is no answer (review 99: any byte
+   forms its reply with its rest. The run goes on across a replug (``torn_run``: controller.py
+   rule 9 counts so; review 118, begun anew with each link, an adapter that reset every 2 s
+   never had one counted). A stray byte now and then is no answer (review 99: any byte
    counted kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told
    as the wrong baud rate).
 12. A controller that answers late: a line of the answer to the question given up last that
@@ -780,12 +782,32 @@ class Link:
         run."""
         if self._garbled or self._slew is not None:
             return
-        asked = self._asked_t
-        most = self._asked_bytes >= TORN_SHARE * self.spec.reply_bytes  # (no stray byte)
-        torn = most and self._read_t >= asked and self._formed_t < asked
+        torn = self._torn_so_far()
         if torn and self._torn:  # (not _garbled_t: it yields no reading, and keeps no
             self._garbled, self._torn_t = True, now  # controller online, controller.py rule 2)
         self._torn = torn
+
+    def _torn_so_far(self) -> bool:
+        """Rule 11: the exchange asked last has TORN_SHARE of a reply's bytes or more read,
+        and none of them formed a reply of the controller's."""
+        asked = self._asked_t
+        most = self._asked_bytes >= TORN_SHARE * self.spec.reply_bytes  # (no stray byte)
+        return most and self._read_t >= asked and self._formed_t < asked
+
+    @property
+    def torn_run(self) -> bool:
+        """Rule 11: a run of torn answers is open as the port closes: the exchange given up
+        last came torn, or the one in flight had so far. The next connection's link goes on
+        with it (``carry_torn``), as controller.py rule 9 counts first readings across a
+        replug (review 118: begun anew, an adapter that reset every 2 s never had a torn
+        answer counted, and a turn at the start ran past ``az_min_deg``)."""
+        if self._torn:
+            return True
+        return self._reply_deadline is not None and self._slew is None and self._torn_so_far()
+
+    def carry_torn(self) -> None:
+        """Rule 11: the connection before ended in a run of torn answers (``torn_run``)."""
+        self._torn = True
 
     def _late_hold_t(self) -> float:
         """Rule 12: no poll before then: the late hold's end, or, if a late answer's bytes are

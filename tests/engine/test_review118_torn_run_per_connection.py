@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
 
@@ -34,11 +32,6 @@ UP_S = 2.0  # each connection lasts this long (virtual time)
 DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 118: a turn at the start on a line that garbles every byte, its adapter "
-    "resetting every 2 s, runs past az_min_deg: the torn run starts over on each connection",
-)
 def test_a_garbled_turn_on_a_resetting_adapter_is_stopped_before_the_limit(rig: Rig) -> None:
     v = rig(
         "gs232b",
