@@ -631,6 +631,9 @@ class ModelSpec:
     # from these (default_idle_poll_interval_s)
     query_bytes: int = field(kw_only=True)
     reply_bytes: int = field(kw_only=True)
+    # the shortest reply a poll can get where its width varies with the value (0: reply_bytes,
+    # the longest): what session/link.py rule 11 measures an answer torn past any form against
+    least_reply_bytes: int = 0
     # the bytes a controller refuses a target with (GS-232's ``?>`` CR: 3), 0 if it never does:
     # no poll goes out before such a refusal can have come (session/link.py rule 4)
     refusal_bytes: int = 0

@@ -398,6 +398,7 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         stop_anytime=True,  # SA SE waits for no reply (a SatNOGS answers it: rule 9)
         query_bytes=len(query),
         reply_bytes=len(reply),
+        least_reply_bytes=len(b"AZ0.0 EL0.0\n"),  # (the shortest: at 0, either form)
         hamlib_model=204 if version == 3 else 202,
         hamlib_rot_type=HamlibRotType.OTHER,  # what Hamlib's easycomm backend declares
         hamlib_info="EasycommIII" if version == 3 else "EasycommII",

@@ -823,7 +823,7 @@ class Controller:
         self._first_agreed: PositionReply | None = None  # ... the one the next confirmed
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._first_garbled = False  # ... some of them answers garbled past parsing
-        self._torn_run = False  # ... the connection before ended in torn answers (link.py 11)
+        self._torn_run = 0  # ... the connection before ended in torn answers (link.py 11)
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
@@ -978,7 +978,9 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         link.cut_move = self._cut_move  # link.py rule 13: what the last connection may have cut
         if self._torn_run:  # link.py rule 11: a run of torn answers goes on across a replug
-            link.carry_torn()  # (rule 9: counted until a reading is taken; review 118)
+            link.carry_torn(
+                self._torn_run
+            )  # (rule 9: counted until a reading is taken; review 118)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False

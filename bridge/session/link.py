@@ -126,7 +126,10 @@ Rules:
    a report from before a point ended its slew: the next ``z`` went into the slew; one noise
    byte before every GS-232B answer had it polled 44 times a second.
    An answer torn past any form is garbled too: an exchange given up (``_tears``) with
-   TORN_SHARE of a reply's bytes or more read since its question and none of them forming a
+   bytes read since its question, together with the one before TORN_SHARE of two of the
+   shortest replies or more (``spec.least_reply_bytes``: review 118, half the longest, a line
+   read at half rate, 7 of 14 bytes, or a GS-232A's 3 and 4 in turn, never counted), and none
+   of them forming a
    reply of the controller's (``parsed``: any the codec makes but bytes that form none, NOISE
    or SPOILED not harmless; a reading, a version, an echo, a power-on byte, a late answer or a
    refusal is of its form), the second such in a row with no reply formed between, once per
@@ -296,7 +299,7 @@ class Link:
         self._repolled = False  # rule 11: the last poll did
         self._read_t = -math.inf  # rule 11: the last bytes read
         self._formed_t = -math.inf  # rule 11: the last reply of the controller's form
-        self._torn = False  # rule 11: the exchange given up last had bytes, none of them formed
+        self._torn = 0  # rule 11: the bytes of the exchange given up last, none formed (0: not)
         self._asked_bytes = 0  # rule 11: bytes read since the last frame that awaits a reply
         self._fresh = True  # rule 13: no frame written on this connection yet
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
@@ -367,7 +370,7 @@ class Link:
             if isinstance(reply, JunkReply) and reply.reason in _FORMLESS:
                 if not self.codec.harmless(reply.data):  # (a banner is of its form)
                     continue
-            self._formed_t, self._torn = now, False
+            self._formed_t, self._torn = now, 0
             return
 
     def output(self) -> list[bytes]:
@@ -783,31 +786,33 @@ class Link:
         if self._garbled or self._slew is not None:
             return
         torn = self._torn_so_far()
-        if torn and self._torn:  # (not _garbled_t: it yields no reading, and keeps no
-            self._garbled, self._torn_t = True, now  # controller online, controller.py rule 2)
-        self._torn = torn
+        least = 2 * TORN_SHARE * (self.spec.least_reply_bytes or self.spec.reply_bytes)
+        if torn and self._torn and torn + self._torn >= least:  # (no stray byte; not
+            self._garbled, self._torn_t = True, now  # _garbled_t: it yields no reading, and
+        self._torn = torn  # keeps no controller online, controller.py rule 2)
 
-    def _torn_so_far(self) -> bool:
-        """Rule 11: the exchange asked last has TORN_SHARE of a reply's bytes or more read,
-        and none of them formed a reply of the controller's."""
+    def _torn_so_far(self) -> int:
+        """Rule 11: the bytes read since the question asked last, none of them forming a
+        reply of the controller's (0: none read, or one formed)."""
         asked = self._asked_t
-        most = self._asked_bytes >= TORN_SHARE * self.spec.reply_bytes  # (no stray byte)
-        return most and self._read_t >= asked and self._formed_t < asked
+        torn = self._read_t >= asked and self._formed_t < asked
+        return self._asked_bytes if torn else 0
 
     @property
-    def torn_run(self) -> bool:
+    def torn_run(self) -> int:
         """Rule 11: a run of torn answers is open as the port closes: the exchange given up
         last came torn, or the one in flight had so far. The next connection's link goes on
         with it (``carry_torn``), as controller.py rule 9 counts first readings across a
         replug (review 118: begun anew, an adapter that reset every 2 s never had a torn
         answer counted, and a turn at the start ran past ``az_min_deg``)."""
-        if self._torn:
-            return True
-        return self._reply_deadline is not None and self._slew is None and self._torn_so_far()
+        if self._torn or self._reply_deadline is None or self._slew is not None:
+            return self._torn
+        return self._torn_so_far()
 
-    def carry_torn(self) -> None:
-        """Rule 11: the connection before ended in a run of torn answers (``torn_run``)."""
-        self._torn = True
+    def carry_torn(self, count: int) -> None:
+        """Rule 11: the connection before ended in a run of torn answers (``torn_run``: the
+        bytes of its last)."""
+        self._torn = count
 
     def _late_hold_t(self) -> float:
         """Rule 12: no poll before then: the late hold's end, or, if a late answer's bytes are

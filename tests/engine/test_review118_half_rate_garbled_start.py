@@ -52,11 +52,6 @@ def at_half_rate() -> Callable[[bytes, float], bytes]:
     return read
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 118: a turn at the start read at the wrong baud rate (half its bytes, "
-    "garbled) runs past az_min_deg unstopped; told 'does not answer'",
-)
 @pytest.mark.parametrize(
     ("model", "target"), [("easycomm2", b"AZ5.0 EL0.0\n"), ("gs232a-az", b"M005\r")]
 )
@@ -86,11 +81,6 @@ def test_a_turn_read_at_half_rate_is_stopped_before_the_limit(
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 118: a controller at twice the configured baud rate is told as one that "
-    "'does not answer' (the cable), not as answering garbled (the baud rate)",
-)
 @pytest.mark.parametrize("model", ["easycomm2", "gs232a-az"])
 def test_a_controller_read_at_half_rate_is_said_to_answer_garbled(rig: Rig, model: str) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG}, connect=False)
