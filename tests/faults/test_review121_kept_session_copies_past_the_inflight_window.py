@@ -1,0 +1,61 @@
+"""Review 121: a stop lane's kept session (interfaces/mqtt/connection.py rule 22) hands its old
+copies over past its command SUBACK when there are more of them than the broker keeps in flight.
+
+The lane drops a handed-over copy the main connection already had only while it is read
+before the lane's command SUBACK (``_handed_over_had``). mosquitto sends a returning session at
+most ``max_inflight_messages`` (20 by default) QoS 1 messages at once and the rest only as
+PUBACKs come back; the lane's SUBSCRIBE goes out (in on_connect) ahead of those PUBACKs, so
+the broker's SUBACK is read after the first 20 copies and before the others. With the path
+dead under the stop lane alone, an operator who pressed STOP more than 20 times (a button
+hammered while the rotor coasts, a script that repeats it) and then sent a new target sees the
+rotor halt on its way to that target 5-10 s later: the 21st and later copies of the old STOP
+are carried out as new. 1 or 18 presses: the target is reached (checked by hand).
+
+Real mosquitto (its defaults), the test's proxy between it and the bridge (its ``blackhole`` of
+the stop lane's client id), a Rotor-EZ on a real pty; the operator on the broker's own port.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.faults.behind_a_proxy import bridge_behind
+from tests.support.mqtt_proxy import MqttProxy
+from tests.support.waiting import slow, wait_until
+
+BACK_S = 15.0  # a stop carrier given up and made again (5-10 s, and its back-off) within this
+AFTER_S = 3.0  # how long after the lane is back its copies have had their say (a quiet period)
+NEW_DEG = 60.0  # the target sent after the STOPs
+NEAR_DEG = 3.0
+PRESSES = 24  # STOPs pressed while the lane's path is dead: more than mosquitto's 20 in flight
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 121: more than 20 STOPs pressed while the stop lane's path was dead, then a "
+    "new target: the lane, back, carries out the old STOP copies read after its SUBACK and the "
+    "rotor halts short of the newer target",
+)
+def test_many_stops_handed_over_do_not_stop_the_newer_target(tmp_path: Path) -> None:
+    with bridge_behind(tmp_path, MqttProxy) as b:
+        lane = b.app.lane.client_id
+        before = b.proxy.subacks.get(lane, 0)
+        b.probe.publish("rotor/target", "300")
+        b.emu.wait_for(lambda s: s.is_moving, slow(10))
+        b.proxy.blackhole(lane)  # the stop lane's path dies alone
+        for _ in range(PRESSES):  # carried by the main connection, the express
+            assert b.probe.publish("rotor/stop", "")
+        b.emu.wait_for(lambda s: not s.is_moving, slow(5))
+        assert b.probe.publish("rotor/target", f"{NEW_DEG:g}")  # the operator's last word
+        b.emu.wait_for(lambda s: s.is_moving, slow(10))
+        wait_until(lambda: b.proxy.subacks.get(lane, 0) > before, slow(BACK_S), "the lane back")
+        time.sleep(AFTER_S)  # the handed-over copies' moment (a quiet period)
+        s = b.emu.state()
+        assert s.is_moving or abs(s.az_deg - NEW_DEG) < NEAR_DEG, (
+            f"the stop lane came back with {PRESSES} kept copies of the STOP sent before the "
+            f"target {NEW_DEG:g}; those past its SUBACK were carried out: the rotor stopped at "
+            f"{s.az_deg:.0f} deg, short of it"
+        )
