@@ -9,10 +9,13 @@ the broker's SUBACK is read after the first 20 copies and before the others. Wit
 dead under the stop lane alone, an operator who pressed STOP more than 20 times (a button
 hammered while the rotor coasts, a script that repeats it) and then sent a new target sees the
 rotor halt on its way to that target 5-10 s later: the 21st and later copies of the old STOP
-are carried out as new. 1 or 18 presses: the target is reached (checked by hand).
+are carried out as new. 1 or 18 presses: the target is reached (checked by hand). The lock
+lane the same way: 26 lock words toggled while its path is dead, the last an OFF, and an old
+ON copy past its SUBACK locks the rotator again (R/lock/state ON after the OFF, the next target
+refused; with 2 words, 1f2e23a9's own test, nothing comes back).
 
 Real mosquitto (its defaults), the test's proxy between it and the bridge (its ``blackhole`` of
-the stop lane's client id), a Rotor-EZ on a real pty; the operator on the broker's own port.
+the lane's client id), a Rotor-EZ on a real pty; the operator on the broker's own port.
 """
 
 from __future__ import annotations
@@ -58,4 +61,43 @@ def test_many_stops_handed_over_do_not_stop_the_newer_target(tmp_path: Path) -> 
             f"the stop lane came back with {PRESSES} kept copies of the STOP sent before the "
             f"target {NEW_DEG:g}; those past its SUBACK were carried out: the rotor stopped at "
             f"{s.az_deg:.0f} deg, short of it"
+        )
+
+
+WORDS = 13  # lock ON/OFF pairs sent while the lock lane's path is dead: 26 words, past 20
+TURN_DEG = 40.0  # the target sent once the lock lane is back (the rotor at 10, 2 deg/s)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 121: lock ON and OFF toggled 13 times while the lock lane's path was dead, "
+    "the last word OFF: the lane, back, carries out an old ON copy read after its SUBACK; "
+    "R/lock/state ON again and the next target is refused",
+)
+def test_many_lock_words_handed_over_do_not_undo_the_last_lock_off(tmp_path: Path) -> None:
+    with bridge_behind(tmp_path, MqttProxy) as b:
+        lane = b.app.lock_lane.client_id
+        before = b.proxy.subacks.get(lane, 0)
+        b.proxy.blackhole(lane)  # the lock lane's path dies alone
+        start = b.probe.mark()
+        for word in ("ON", "OFF") * WORDS:  # the operator's last word: OFF
+            assert b.probe.publish("rotor/lock", word)
+        b.probe.wait(
+            lambda m: m.topic == "rotor/lock/state" and m.text == "OFF",
+            what="R/lock/state OFF",
+            start=start,
+        )
+        mark = b.probe.mark()
+        wait_until(lambda: b.proxy.subacks.get(lane, 0) > before, slow(BACK_S), "the lane back")
+        time.sleep(AFTER_S)  # the handed-over copies' moment (a quiet period)
+        shown = [m.text for m in b.probe.messages[mark:] if m.topic == "rotor/lock/state"]
+        assert b.probe.publish("rotor/target", f"{TURN_DEG:g}")
+        try:
+            moved = b.emu.wait_for(lambda s: s.is_moving, slow(5)).is_moving
+        except TimeoutError:
+            moved = False
+        assert not shown and moved, (
+            f"the lock lane came back with {2 * WORDS} kept copies of lock words all carried out "
+            f"before, the last an OFF; those past its SUBACK were carried out: R/lock/state said "
+            f"{shown} after the OFF, and the target {TURN_DEG:g} then turned the rotor: {moved}"
         )
