@@ -14,7 +14,9 @@ never had it: when it gives its path up, 30-60 s later, it starts clean and the 
 
 Attack 32's own test, with a mosquitto ACL denying the heartbeat topic (as
 tests/mqtt/test_broker_late_acl.py does): a Rot2Prog (no stop express: the lane alone
-carries the STOP back). Without the ACL the same test passes (attack 32's test).
+carries the STOP back). Without the ACL the same test passes (attack 32's test). The lock lane
+the same way: a lock ON pressed after the death (before climbing the tower) is dropped, the
+rotor turns on and the rotator is never locked.
 """
 
 from __future__ import annotations
@@ -39,17 +41,20 @@ PRESSED_S = STOP_RECONNECT_MAX_S + 1.0  # the STOP pressed this long after the p
 PROMPT_S = 20.0  # well past the ~12 s a dead path costs a STOP (connection.py rule 22)
 TARGET = "190 0"  # a slow turn (180 s at 1 deg/s): under way past every deadline here
 SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
+WORDS = {"stop": ("rotor/stop", ""), "lock": ("rotor/lock", "ON")}  # each stops a turn
 
 
 @pytest.mark.xfail(
     strict=True,
-    reason="review 121: with the heartbeat topic denied by the broker's ACL, a STOP pressed "
-    "after the path died is dropped by the returning stop lane as a copy the main connection "
-    "had (it never had it): the rotor turns on",
+    reason="review 121: with the heartbeat topic denied by the broker's ACL, a STOP (a lock ON) "
+    "pressed after the path died is dropped by the returning stop (lock) lane as a copy the "
+    "main connection had (it never had it): the rotor turns on",
 )
+@pytest.mark.parametrize("word", sorted(WORDS))
 def test_a_stop_after_the_path_went_dead_reaches_the_rotor_with_the_beats_unread(
-    tmp_path: Path,
+    tmp_path: Path, word: str
 ) -> None:
+    topic, payload = WORDS[word]
     acl = tmp_path / "acl"
     acl.write_text(f"topic readwrite rotor/#\ntopic deny {BEAT}\n")
     # started as root, mosquitto would become user "mosquitto", who cannot read pytest's tmp
@@ -62,7 +67,8 @@ def test_a_stop_after_the_path_went_dead_reaches_the_rotor_with_the_beats_unread
             emu = rig.add("tower", "rot2prog", emu={"start_az_deg": 10, "az_speed_deg_s": 1.0})
             app = rig.start()
             rig.ready("tower")
-            wait_until(app.lane.connected.is_set, slow(10), "the stop lane up")
+            for lane in (app.lane, app.lock_lane):
+                wait_until(lane.connected.is_set, slow(10), f"the {lane.kind} lane up")
             wait_until(
                 lambda: any(BEAT in p for p in app.client.problems),
                 slow(3 * UNREAD_S),
@@ -73,15 +79,16 @@ def test_a_stop_after_the_path_went_dead_reaches_the_rotor_with_the_beats_unread
             proxy.blackhole()  # the path under every connection dies without a word
             time.sleep(PRESSED_S)  # the user's hand: the scenario's timing, not a wait
             assert emu.state().is_moving
-            assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
+            assert probe.publish(topic, payload)  # the operator's STOP (lock ON), at the broker
             with contextlib.suppress(AssertionError, TimeoutError):
                 emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
             s = emu.state()
             short = not near_deg(s.az_deg, float(TARGET.split()[0]), SHORT_DEG)
             assert not s.is_moving and short, (
-                f"a STOP pressed {PRESSED_S:g} s after the path died (the heartbeat topic "
+                f"a {word} pressed {PRESSED_S:g} s after the path died (the heartbeat topic "
                 f"denied by the ACL) did not stop the rotor within {PROMPT_S:g} s: it turns on "
-                f"({s.az_deg:.0f} deg); the stop lane up again: {app.lane.connected.is_set()}"
+                f"({s.az_deg:.0f} deg); the stop lane up again: {app.lane.connected.is_set()}, "
+                f"the lock lane: {app.lock_lane.connected.is_set()}"
             )
     finally:
         probe.close()
