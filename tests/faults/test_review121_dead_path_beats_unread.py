@@ -44,12 +44,6 @@ SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an
 WORDS = {"stop": ("rotor/stop", ""), "lock": ("rotor/lock", "ON")}  # each stops a turn
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 121: with the heartbeat topic denied by the broker's ACL, a STOP (a lock ON) "
-    "pressed after the path died is dropped by the returning stop (lock) lane as a copy the "
-    "main connection had (it never had it): the rotor turns on",
-)
 @pytest.mark.parametrize("word", sorted(WORDS))
 def test_a_stop_after_the_path_went_dead_reaches_the_rotor_with_the_beats_unread(
     tmp_path: Path, word: str

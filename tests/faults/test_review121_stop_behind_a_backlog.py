@@ -23,8 +23,6 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import MqttProxy
@@ -37,12 +35,6 @@ PROMPT_S = 3.0  # the lane's copy read and carried out once the lane is back (we
 TARGET = "190 0"  # a slow turn (180 s at 1 deg/s)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 121: the stop lane back from a dead path drops its kept STOP as a copy the "
-    "main connection had, while the main connection is still behind a burst of targets: the "
-    "STOP reaches the rotor 10+ s late",
-)
 def test_the_lanes_kept_stop_is_not_dropped_while_the_main_connection_is_behind(
     tmp_path: Path,
 ) -> None:
