@@ -213,7 +213,13 @@ Rules:
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
    asked once the stop is out; readings at a poll's distance agree within ``doubt_deg`` alone
-   (polls half a minute apart would let any two agree). A turn is told by its line as at the
+   (polls half a minute apart would let any two agree). Once FIRST_UNWATCHED_READINGS of them
+   in a row confirmed none (the unwatched stop's count), two agreeing are not enough: three in
+   a row must (``_pair_holds``; review 123: a failed Rotor-EZ sensor's few values, 250, 350,
+   50 in turn, agreed with themselves across a stop's banner and a lost answer, 250 was taken
+   a hundred degrees from where the rotor stood, shown MOVING, stopped every 2 s as still
+   turning after a stop, R/error sending the operator to stop it at the controller, and every
+   reading after it taken as a turn's). A turn is told by its line as at the
    start: FIRST_TURN_READINGS of them in a row on one steady line (``_steady``) are a turn,
    the last taken and the turn's readings trusted till it rests, so rule 10 judges it (review
    111: one flipped bit in a hand turn's first answer broke the pair, an Easycomm stepping 6
@@ -1401,14 +1407,16 @@ class Controller:
         turned = 0.0
         if doubted.at_once:
             turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted.t), DOUBT_TURN_MAX_DEG)
-        if doubted.reply is not None and not _apart(
-            reply, doubted.reply.az_deg, doubted.reply.el_deg, limit + turned, wraps
+        said = self._rest_said
+        if (
+            doubted.reply is not None
+            and not _apart(reply, doubted.reply.az_deg, doubted.reply.el_deg, limit + turned, wraps)
+            and self._pair_holds(reply, said, limit)
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
         # FIRST_TURN_READINGS in a row on one steady line: a turn, as at the start (review 111:
         # one garble broke the pair, and a hand turn stepping 6 degrees a poll never agreed)
-        said = self._rest_said
         line = (*((d.reply, d.t) for d in said if d.reply is not None), (reply, now))
         if len(line) >= FIRST_TURN_READINGS and _steady(line, cfg, limit):
             log.info("%s: readings at rest of a turn, the last %s", self.name, _where(reply))
@@ -1434,6 +1442,22 @@ class Controller:
                 logged=False,
             )
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
+
+    def _pair_holds(self, reply: PositionReply, said: tuple[_Doubted, ...], limit: float) -> bool:
+        """Rule 9: whether a reading at rest that agrees with the doubted one before it is
+        taken. Yes, but once the readings have gone on disagreeing FIRST_UNWATCHED_READINGS in
+        a row (the unwatched stop's, the rotor not watched): then two agreeing are what a
+        failing sensor's few values make by chance (review 123: a Rotor-EZ's sensor reading
+        250, 350, 50 in turn agreed with itself across a stop's banner and a lost answer, 250
+        taken a hundred degrees from where it stood, the rotor shown MOVING, stopped every
+        2 s 'still turning after a stop', and every reading after it taken as a turn's), and
+        the one before the doubted must agree too (within ``limit``): three in a row."""
+        if self._first_unconfirmed < FIRST_UNWATCHED_READINGS:
+            return True
+        if len(said) < 2 or said[-2].reply is None:
+            return False
+        before = said[-2].reply
+        return not _apart(reply, before.az_deg, before.el_deg, limit, self.cfg.motion.az_wraps)
 
     def _doubts_first(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9: a connection's first reading, or the first back after readings were lost
