@@ -203,7 +203,11 @@ Rules:
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
    asked for at the moving rate, not at once, until the first unwatched stop below, then at
    the usual polls (review 103's follow-up: eight at a Rot2Prog's idle rate, 9.3 s, took 74 s;
-   not for good, the polling load review 105 found), with one more asked as a turn at the
+   not for good, the polling load review 105 found; nor for more than FIRST_UNWATCHED_READINGS
+   of them counted since the last as many readings taken in a row, not since the last one
+   taken, ``_rest_spell_on``: review 123, a GS-232B sensor right one answer in five never had
+   eight disagree in a row, each right one began the spell again, and it was asked about 500
+   times a minute for good, a clean one 60), with one more asked as a turn at the
    rotor's nominal speed would have gone UNWATCHED_TURN_DEG since the last unwatched stop,
    which brings the next (review 116: eight idle polls more, 49 s, let a hand after the first
    stop run 19 degrees past ``az_min_deg``), and at the usual polls while the
@@ -830,6 +834,10 @@ class Controller:
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._first_garbled = False  # ... some of them answers garbled past parsing
         self._torn_run = 0  # ... the connection before ended in torn answers (link.py 11)
+        # ... at rest, counted toward the moving rate's spell: not ended by a lone reading
+        # taken, only by FIRST_UNWATCHED_READINGS taken in a row (``_rest_spell_on``)
+        self._rest_spell = 0
+        self._taken_in_row = 0  # ... readings taken in a row since the last that disagreed
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
@@ -1426,6 +1434,7 @@ class Controller:
             return Doubt.TAKEN  # (the last of them: where it is now)
         self._doubts_in_row += 1
         self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: review 103;
+        self._spell_counts()  # (the moving rate's spell: review 123)
         self._unwatched_due = self._unwatched_at_rest_due(now)  # then sooner, review 116)
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         self._rest_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
@@ -1671,6 +1680,9 @@ class Controller:
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
+        self._taken_in_row += 1  # (the moving rate's spell ends only with a row of them)
+        if self._taken_in_row >= FIRST_UNWATCHED_READINGS:
+            self._rest_spell = 0
         self._unwatched_owed = self._unwatched_last = None  # (the rotor is watched again)
         self._unwatched_ask_t = None
         self._rest_said = ()
@@ -2158,6 +2170,22 @@ class Controller:
             return False
         return m.anchor_deg is not None and m.state is not mo.MOVING and m.target_deg is None
 
+    def _spell_counts(self) -> None:
+        """Rule 9: a reading at rest that confirmed none (or an answer garbled past parsing)
+        counts toward the moving rate's spell, and ends a row of readings taken."""
+        self._rest_spell += 1
+        self._taken_in_row = 0
+
+    def _rest_spell_on(self) -> bool:
+        """Rule 9: whether readings at rest that disagree are still asked at the moving rate:
+        for FIRST_UNWATCHED_READINGS of them, counted since the last FIRST_UNWATCHED_READINGS
+        readings taken in a row, not since the last one taken (review 123: a GS-232B sensor
+        reading right one answer in five never had eight disagree in a row, each right one
+        started the spell again, and it was asked about 500 times a minute for good, where a
+        clean one is asked 60: review 105's load). The spell is what brings the first
+        unwatched stop soon; a sensor right now and then is watched then, and owes none."""
+        return self._rest_spell < FIRST_UNWATCHED_READINGS
+
     def _garbled_at_rest(self, now: float) -> None:
         """Rule 9: a poll answered garbled past parsing at rest is a reading at rest that
         confirmed none, counted toward the unwatched stop as a first reading's is (review 116:
@@ -2166,6 +2194,7 @@ class Controller:
         never eight in a row: a reading taken starts the count again (``_reading``)."""
         self._first_unconfirmed += 1
         self._first_garbled = True
+        self._spell_counts()
         if self._unwatched_at_rest_due(now):
             self._unwatched_stop(None, now, first=False)
 
@@ -2444,7 +2473,7 @@ class Controller:
         count = self._first_unconfirmed  # (review 116: answers torn at rest too, from the
         torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # third on:
         unwatched = at_rest or torn  # one or two garbled are asked again as ever, link.py 11)
-        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS
+        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS and self._rest_spell_on()
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)
