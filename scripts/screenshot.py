@@ -31,7 +31,7 @@ from pathlib import Path
 import paho.mqtt.client as mqtt
 from playwright.sync_api import ViewportSize, sync_playwright
 
-from tests.support.mosquitto import Mosquitto, answers, free_port
+from tests.support.mosquitto import Mosquitto, free_port, listens
 
 ROOT = Path(__file__).resolve().parent.parent
 FLOW = ROOT / "deploy" / "node-red" / "rotor-flow.json"
@@ -169,7 +169,7 @@ def shoot_console(work: Path, out: Path, chromium: str) -> int:
     # from 340 to New York's 296 the rotor turns anticlockwise, the beam sweeping toward it
     with running_bridge(work, CONSOLE_CONFIG, 340, web_port):
         deadline = time.monotonic() + 20
-        while not answers("127.0.0.1", web_port):
+        while not listens("127.0.0.1", web_port):  # an HTTP server: it sends no CONNACK
             if time.monotonic() > deadline:
                 print("screenshot: the console did not answer", file=sys.stderr)
                 return 1

@@ -35,11 +35,6 @@ class BrowserReached(Exception):
     """The script found the console up and went on to open the browser."""
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 122: scripts/screenshot console ends 'the console did not answer' with the "
-    "console up: it waits for an MQTT CONNACK from a web server",
-)
 def test_the_screenshot_script_finds_the_bridges_console_up(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
