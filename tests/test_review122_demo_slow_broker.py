@@ -79,11 +79,6 @@ def slow_broker(broker: Mosquitto) -> Iterator[SlowBroker]:
     relay.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 122: a broker that sends its CONNACK after 2 s (the bridge waits 5) is told "
-    "'answers no MQTT: not a broker' and the demo refuses to run on it",
-)
 def test_a_broker_slow_to_connack_is_still_the_demos_broker(
     slow_broker: SlowBroker,
     tmp_path: Path,

@@ -30,8 +30,9 @@ Rules:
    mark, bridge/demo/console.py rule 5): that one ends with the other demo, and this one would
    be left without a broker, so it starts a private mosquitto of its own on a free port (the
    commands it prints name that port). A private broker it starts carries its mark.
-6. A broker answers when a CONNECT gets a CONNACK (bridge/demo/mosquitto.py ``answers``), not
-   when a connection is taken: a program on the port that speaks no MQTT (a hung broker, an SSH
+6. A broker answers when a CONNECT gets a CONNACK (bridge/demo/mosquitto.py ``answers``, within
+   the time the bridge gives one: a slow broker serves the bridge), not when a connection is
+   taken: a program on the port that speaks no MQTT (a hung broker, an SSH
    tunnel whose far end is gone) would leave the demo running dead, saying it is bridged. The
    demo says so in one line and starts a private mosquitto on a free port (with
    ``--no-private-broker``: says so and ends).
@@ -76,6 +77,7 @@ from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, format_validation_error
 
 MIN_SPEED_DEG_S, MAX_SPEED_DEG_S = 0.5, 360.0  # the settings' range for a rotor's speed
+LOOK_AGAIN_S = 1.0  # rule 6: the second look at the broker's port, for one that just came up
 DEMOSAT_RISES_IN_S = 40.0  # the demo's satellite rises this long after the start (default)
 
 
@@ -350,8 +352,9 @@ def _run(
     host, port = asked = args.mqtt_host, args.mqtt_port
     there = answers(host, port)
     other = private_broker_of(host, port) if there and not args.no_private_broker else None
-    # rule 6: a program there, but no broker (asked again: one may have come up meanwhile)
-    mute = not there and listens(host, port) and not answers(host, port)
+    # rule 6: a program there, but no broker (asked again: one may have come up meanwhile, and
+    # answers at once; a program that took the first look's connection was given its full wait)
+    mute = not there and listens(host, port) and not answers(host, port, LOOK_AGAIN_S)
     private = not there or other is not None
     if mute:
         print(

@@ -22,8 +22,9 @@ forgets that signal when a process changes its user, as mosquitto started by roo
 user ``mosquitto``, unless told ``user root``): run as root, its configuration says ``user root``;
 run by anyone else it never changes user. It listens on the loopback address only.
 
-A broker answers (``answers``) when a CONNECT gets a CONNACK: a program that only takes
-connections (``listens``) may speak no MQTT at all, and a demo bridged to it would run dead.
+A broker answers (``answers``) when a CONNECT gets a CONNACK within the time the bridge gives
+one (CONNACK_TIMEOUT_S): a program that only takes connections (``listens``) may speak no MQTT
+at all, and a demo bridged to it would run dead.
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Self
+
+from bridge.interfaces.mqtt.paho_client import CONNACK_TIMEOUT_S
 
 
 class BrokerError(RuntimeError):
@@ -74,11 +77,12 @@ _CONNACK = 0x20
 _DISCONNECT = bytes([0xE0, 0])
 
 
-def answers(host: str, port: int, timeout_s: float = 2.0) -> bool:
+def answers(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> bool:
     """Whether an MQTT broker answers at host:port: a CONNECT gets a CONNACK within
-    ``timeout_s`` (refusing a login too: that is a broker). A program that takes connections
-    and says nothing, or something else than MQTT (a hung broker, an SSH tunnel whose far end
-    is gone, a web server), is no broker: the demo would run dead on it."""
+    ``timeout_s``, as long as the bridge waits for one (paho_client.py rule 5: a broker slower
+    than the demo's look but quicker than that serves the bridge, review 122). A program that
+    takes connections and says nothing, or something else than MQTT (a hung broker, an SSH
+    tunnel whose far end is gone, a web server), is no broker: the demo would run dead on it."""
     deadline = time.monotonic() + timeout_s
     try:
         with socket.create_connection((host, port), timeout=timeout_s) as s:
