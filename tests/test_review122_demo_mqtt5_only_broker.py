@@ -86,11 +86,6 @@ def mqtt5_only(broker: Mosquitto) -> Iterator[Mqtt5Only]:
     relay.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 122: an MQTT-5-only broker, which the bridge uses, is told 'answers no MQTT: "
-    "not a broker' and the demo refuses to run on it",
-)
 def test_a_broker_that_speaks_only_mqtt5_is_still_the_demos_broker(
     mqtt5_only: Mqtt5Only,
     tmp_path: Path,

@@ -70,11 +70,77 @@ def listens(host: str, port: int, timeout_s: float = 0.5) -> bool:
         return False
 
 
-# MQTT 3.1.1 CONNECT (every broker speaks 3.1.1): a clean session, keep-alive 10 s, an empty
-# client id (the broker makes one up)
-_CONNECT = bytes([0x10, 12, 0, 4]) + b"MQTT" + bytes([4, 0x02, 0, 10, 0, 0])
+# A CONNECT with a clean session, keep-alive 10 s and an empty client id (the broker makes one
+# up): MQTT 5 first, as the bridge and the demo's console connect, then MQTT 3.1.1 (every broker
+# speaks it; the bridge's ``protocol = "auto"`` steps down to it, connection.py rule 1)
+_CONNECT_5 = bytes([0x10, 13, 0, 4]) + b"MQTT" + bytes([5, 0x02, 0, 10, 0, 0, 0])  # no properties
+_CONNECT_311 = bytes([0x10, 12, 0, 4]) + b"MQTT" + bytes([4, 0x02, 0, 10, 0, 0])
 _CONNACK = 0x20
 _DISCONNECT = bytes([0xE0, 0])
+# a CONNACK's code that says "not this protocol version": MQTT 5's 0x84; 1, a 3.1.1 broker's
+# answer to an MQTT 5 CONNECT (its "unacceptable protocol version")
+_OTHER_VERSION = frozenset({0x84, 0x01})
+
+
+def connack(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> int | None:
+    """The code of the CONNACK a broker at host:port answers the demo's CONNECT with (0:
+    accepted; a refusal's code, in MQTT 5's words where it spoke MQTT 5), or None: nothing took
+    the connection, or no CONNACK came within ``timeout_s`` (as long as the bridge waits for
+    one: paho_client.py rule 5; review 122). MQTT 5 first; MQTT 3.1.1 when that connection was
+    closed before a CONNACK or refused for its protocol version (an MQTT 3.1.1 broker), as the
+    bridge steps down (connection.py rule 1); a broker that speaks MQTT 5 alone closes the
+    3.1.1 CONNECT, so it is never asked that first."""
+    deadline = time.monotonic() + timeout_s
+    code = _connack(host, port, _CONNECT_5, deadline)
+    if code is None or code in _OTHER_VERSION:
+        code311 = _connack(host, port, _CONNECT_311, deadline)
+        code = code311 if code311 is not None or code is None else code
+    return None if code is None or code < 0 else code
+
+
+def _connack(host: str, port: int, connect: bytes, deadline: float) -> int | None:
+    """One CONNECT: the CONNACK's code; None: no connection, closed before the CONNACK, or
+    something else than MQTT; -1: no CONNACK by ``deadline`` (no second try: it would wait
+    again)."""
+    try:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return -1
+        with socket.create_connection((host, port), timeout=left) as s:
+            s.sendall(connect)
+            if _read(s, 1, deadline) != bytes([_CONNACK]):
+                return None
+            length, shift = 0, 0  # the remaining length: 2 in 3.1.1, more with MQTT 5's properties
+            while True:
+                byte = _read(s, 1, deadline)[0]
+                length |= (byte & 0x7F) << shift
+                shift += 7
+                if not byte & 0x80 or shift > 21:
+                    break
+            if not 2 <= length <= 0xFFFF:  # (a CONNACK's properties are short)
+                return None
+            code = _read(s, 2, deadline)[1]  # (flags first)
+            with contextlib.suppress(OSError):
+                s.sendall(_DISCONNECT)
+            return code
+    except TimeoutError:
+        return -1
+    except (OSError, EOFError):
+        return None
+
+
+def _read(s: socket.socket, n: int, deadline: float) -> bytes:
+    got = b""
+    while len(got) < n:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError
+        s.settimeout(left)
+        chunk = s.recv(n - len(got))
+        if not chunk:  # closed without a CONNACK
+            raise EOFError
+        got += chunk
+    return got
 
 
 def answers(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> bool:
@@ -82,28 +148,9 @@ def answers(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> bool:
     ``timeout_s``, as long as the bridge waits for one (paho_client.py rule 5: a broker slower
     than the demo's look but quicker than that serves the bridge, review 122). A program that
     takes connections and says nothing, or something else than MQTT (a hung broker, an SSH
-    tunnel whose far end is gone, a web server), is no broker: the demo would run dead on it."""
-    deadline = time.monotonic() + timeout_s
-    try:
-        with socket.create_connection((host, port), timeout=timeout_s) as s:
-            s.sendall(_CONNECT)
-            connack = b""  # fixed header (type, length 2), flags, return code
-            while len(connack) < 4:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return False
-                s.settimeout(left)
-                chunk = s.recv(4 - len(connack))
-                if not chunk:  # closed without a CONNACK
-                    return False
-                connack += chunk
-                if not bytes([_CONNACK, 2]).startswith(connack[:2]):
-                    return False
-            with contextlib.suppress(OSError):
-                s.sendall(_DISCONNECT)
-            return True
-    except OSError:
-        return False
+    tunnel whose far end is gone, a web server), is no broker: the demo would run dead on it.
+    A broker that refuses the demo's login answers too (see ``refuses_login``)."""
+    return connack(host, port, timeout_s) is not None
 
 
 _RUNNING = re.compile(rb"mosquitto version \S+ running")  # said once every listener is bound
