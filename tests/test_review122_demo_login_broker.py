@@ -25,11 +25,6 @@ from tests.faults.conftest import mosquitto_password_file
 from tests.support.mosquitto import Mosquitto
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 122: beside a mosquitto that asks for a login the demo says it is bridged to "
-    "it and runs dead: its bridge and console are refused, nothing turns",
-)
 def test_a_broker_that_refuses_the_demos_login_is_not_announced_as_its_broker(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
@@ -58,3 +53,33 @@ def test_a_broker_that_refuses_the_demos_login_is_not_announced_as_its_broker(
         f"{said.out[:300]} / {caplog.text[-600:]}"
     )
     assert code != 0 or connected, f"the demo ran to its end never connected: {said.err[-400:]}"
+
+
+def test_a_broker_that_refuses_the_demos_login_ends_a_demo_told_to_start_no_broker_saying_so(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """With ``--no-private-broker`` the demo has nothing to fall back on: it ends at once, its
+    one line saying the broker refuses its login (not that no broker is there)."""
+    passwd = mosquitto_password_file(tmp_path / "passwd", {"ham": "secret"})
+    conf = f"user root\nallow_anonymous false\npassword_file {passwd}\n"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.setattr("tempfile.tempdir", str(work))
+    try:
+        args = build_parser().parse_args(
+            ["demo", "--mqtt-port", str(broker.port), "--web-port", "0", "--no-private-broker"]
+        )
+        code = demo.run(args)
+    finally:
+        broker.stop()
+    said = capsys.readouterr()
+    assert code == 1, said.err
+    assert f"the MQTT broker at 127.0.0.1:{broker.port} refuses the demo's login" in said.err, (
+        said.err
+    )
+    assert "no MQTT broker at" not in said.err, said.err
+    assert "bridged to" not in said.out, said.out
+    assert sorted(p.name for p in work.iterdir()) == []

@@ -39,6 +39,11 @@ Rules:
 7. Two demos started at once may both find nothing on the port: the one whose mosquitto loses
    the race for it starts its own on a free port (the port is taken now: rule 5's case), never
    fails for it.
+8. A broker that refuses the demo's login (its CONNACK says "not authorized" or "bad user name
+   or password": one set up with a password, as most for Home Assistant are) cannot be its
+   broker: the demo has no login flags, and its bridge and console would be refused, running
+   dead. The demo says so in one line and starts a private mosquitto on a free port (with
+   ``--no-private-broker``: says so and ends).
 """
 
 from __future__ import annotations
@@ -69,7 +74,15 @@ from bridge.core import geo
 from bridge.core.ending import Ending
 from bridge.demo import sky as demo_sky
 from bridge.demo.console import Console, private_broker_of
-from bridge.demo.mosquitto import BrokerError, Mosquitto, answers, free_port, listens
+from bridge.demo.mosquitto import (
+    LOGIN_REFUSED,
+    BrokerError,
+    Mosquitto,
+    answers,
+    connack,
+    free_port,
+    listens,
+)
 from bridge.demo.screen import Screen
 from bridge.interfaces.homeassistant import Identity
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
@@ -351,11 +364,23 @@ def _run(
         return 2
     host, port = asked = args.mqtt_host, args.mqtt_port
     there = answers(host, port)
+    refused = LOGIN_REFUSED.get(connack(host, port) or 0) if there else None  # rule 8
+    there = there and refused is None
     other = private_broker_of(host, port) if there and not args.no_private_broker else None
     # rule 6: a program there, but no broker (asked again: one may have come up meanwhile, and
     # answers at once; a program that took the first look's connection was given its full wait)
-    mute = not there and listens(host, port) and not answers(host, port, LOOK_AGAIN_S)
+    mute = (
+        not there and not refused and listens(host, port) and not answers(host, port, LOOK_AGAIN_S)
+    )
     private = not there or other is not None
+    if refused:
+        print(
+            f"rotor-bridge demo: the MQTT broker at {host}:{port} refuses the demo's login "
+            f"({refused}), and the demo has none to give it"
+            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
+            file=sys.stderr,
+            flush=True,
+        )
     if mute:
         print(
             f"rotor-bridge demo: {host}:{port} takes connections but answers no MQTT (no "
@@ -367,17 +392,19 @@ def _run(
     if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
     elif args.no_private_broker:
-        if not mute:
+        if not mute and not refused:
             print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
         return 1
     else:
-        taken = other is not None or mute  # rules 5, 6: not on that port
+        taken = other is not None or mute or bool(refused)  # rules 5, 6, 8: not on that port
         port = _start_private_broker(host, free_port() if taken else port, workdir, stack)
         where = f"a private mosquitto on {host}:{port}"
         if other is not None:
             where += f" (the one on {host}:{asked[1]} is demo {other}'s, and ends with it)"
         elif mute:
             where += f" (what is on {host}:{asked[1]} speaks no MQTT)"
+        elif refused:
+            where += f" (the broker on {host}:{asked[1]} refuses the demo's login)"
         elif port != asked[1]:  # rule 7
             where += f" ({host}:{asked[1]} was taken as it started: another demo's?)"
         if port != asked[1]:

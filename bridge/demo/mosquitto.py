@@ -22,9 +22,10 @@ forgets that signal when a process changes its user, as mosquitto started by roo
 user ``mosquitto``, unless told ``user root``): run as root, its configuration says ``user root``;
 run by anyone else it never changes user. It listens on the loopback address only.
 
-A broker answers (``answers``) when a CONNECT gets a CONNACK within the time the bridge gives
-one (CONNACK_TIMEOUT_S): a program that only takes connections (``listens``) may speak no MQTT
-at all, and a demo bridged to it would run dead.
+A broker answers (``answers``; ``connack`` with its code) when a CONNECT gets a CONNACK within
+the time the bridge gives one (CONNACK_TIMEOUT_S): a program that only takes connections
+(``listens``) may speak no MQTT at all, and a demo bridged to it would run dead. One whose
+CONNACK refuses the login (LOGIN_REFUSED) cannot be the demo's: it has no login to give.
 """
 
 from __future__ import annotations
@@ -143,13 +144,23 @@ def _read(s: socket.socket, n: int, deadline: float) -> bytes:
     return got
 
 
+# a CONNACK that refuses the login (MQTT 5's codes, and 3.1.1's): the demo has none to give
+LOGIN_REFUSED = {
+    0x86: "bad user name or password",
+    0x87: "not authorized",
+    0x8C: "bad authentication method",
+    4: "bad user name or password",
+    5: "not authorized",
+}
+
+
 def answers(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> bool:
     """Whether an MQTT broker answers at host:port: a CONNECT gets a CONNACK within
     ``timeout_s``, as long as the bridge waits for one (paho_client.py rule 5: a broker slower
     than the demo's look but quicker than that serves the bridge, review 122). A program that
     takes connections and says nothing, or something else than MQTT (a hung broker, an SSH
     tunnel whose far end is gone, a web server), is no broker: the demo would run dead on it.
-    A broker that refuses the demo's login answers too (see ``refuses_login``)."""
+    A broker that refuses the demo's login answers too (``connack``, LOGIN_REFUSED)."""
     return connack(host, port, timeout_s) is not None
 
 
