@@ -17,13 +17,6 @@ keeps the three dead connections, and nothing is listening for a STOP. docs/reli
 promises a STOP sent once the broker has been back 2 s (and a connect's time) reaches the
 bridge; here the broker was never away.
 
-Fixed (interfaces/mqtt/connection.py rule 22): each stop carrier (the stop lane, the stop
-express) asks a keep-alive of 5 s at most, so it gives its own dead path up 5 to 10 s after
-the death and connects again a second later; under MQTT 5 it keeps its session across that
-reconnect, its stop topics at QoS 1, so the broker hands the new connection the STOP it had
-sent into the dead one (the operator's STOP is QoS 1 here). The main connection keeps its
-30 s keep-alive (review 112's busy uplink must not remake it).
-
 The path dies at the test's own proxy (tests/support/mqtt_proxy.py ``blackhole``); the dashboard
 is on the broker's own port, as a phone on another network is.
 """
@@ -56,6 +49,12 @@ TURN: dict[str, tuple[str, dict[str, Any], str, bool]] = {
 SHORT_DEG = 20.0  # a stopped rotor is this far from its target at least (not an arrival)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 32: a STOP pressed 3 s after the bridge's network path went dead (the broker "
+    "up throughout) is lost: the connections wait out their keep-alive, 30-60 s, and the rotor "
+    "turns on",
+)
 @pytest.mark.parametrize("model", sorted(TURN))
 def test_a_stop_after_the_path_went_dead_reaches_the_rotor(tmp_path: Path, model: str) -> None:
     model_name, emu_options, target, express = TURN[model]

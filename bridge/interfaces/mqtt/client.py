@@ -10,7 +10,7 @@ each written out in the module that keeps it:
   QoS 0; 5 short callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one
   connection (the takeover back-off); 9 TCP quick-ack after every read; 17 an optional
   subscription's denial said once, no problem; 18 the largest packet the broker may send,
-  said in CONNECT; 22 a stop carrier's short keep-alive and kept session (a dead path).
+  said in CONNECT.
 - owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
 - delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
 - look.py: 14 one live bridge per base topic, the first look (here: the look is started,

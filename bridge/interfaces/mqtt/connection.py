@@ -6,36 +6,34 @@ beyond that (the bridge's presence, its retained state; or a lane for stops) is 
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
-   commands sent while the bridge was away are not replayed to it (a stop carrier's session is
-   kept across its own reconnects within a run, STOP_SESSION_S at most: rule 22); subscriptions
-   ask for retain-as-published, so a command published with the retain flag is recognised as such
-   even while the bridge is connected (MQTT 3.1.1 clears the flag then; so under MQTT 5 the flag
-   does not tell the broker's replay from a live message there: client.py rule 14); not the state
-   topics read (``replayed``: the wind) nor the bridge's own (owned.py rule 10), whose flag then
-   says "replayed" or "held", as under MQTT 3.1.1. ``protocol = "3.1.1"`` is for brokers without
-   MQTT 5 (clean session, same rules otherwise). ``"auto"``, the default, tries MQTT 5 and steps
-   down to 3.1.1 for good (paho_client.py rule 3) when the broker answers "Unsupported protocol
-   version" (NATS, aedes), as long as no MQTT 5 connection was ever accepted: said once, with
-   what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info`` while it lasts (app.py). RabbitMQ
-   3 and amqtt close an MQTT 5 connection before any CONNACK instead; but so does a broker
-   restarting, one not ready yet behind a proxy, a connection limit, or anyone on the path who
-   wants the bridge on 3.1.1 and its weaker rules (a retained command carried out, a remote's
-   stale command without its stamps). So a close alone never steps down: after one, ``auto`` asks
-   the broker once in MQTT 3.1.1 (a trial connection on a thread of its own, closed at once:
-   paho_client.py rule 4), and steps down only if that trial was accepted and the next MQTT 5
-   attempt is closed before its CONNACK again (a broker that came back speaks MQTT 5 to that
-   attempt; a connection limit refuses the trial too). Over TLS a close never steps down
-   (``_trusts_closes``): nobody on the path can answer for the broker there, but anyone can still
-   close connections, the first and the third, and let the trial between them through. Until
-   then, and for ``"5"``, the close is said with the fix (rule 6).
+   commands sent while the bridge was away are not replayed to it; subscriptions ask for
+   retain-as-published, so a command published with the retain flag is recognised as such even
+   while the bridge is connected (MQTT 3.1.1 clears the flag then; so under MQTT 5 the flag
+   does not tell the broker's replay from a live message there: client.py rule 14); not the
+   state topics read (``replayed``: the wind) nor the bridge's own (owned.py rule 10), whose
+   flag then says "replayed" or "held", as under MQTT 3.1.1. ``protocol =
+   "3.1.1"`` is for brokers without MQTT 5 (clean session, same rules otherwise). ``"auto"``, the
+   default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
+   answers "Unsupported protocol version" (NATS, aedes), as long as no MQTT 5 connection was
+   ever accepted: said once, with what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info``
+   while it lasts (app.py). RabbitMQ 3 and amqtt close an MQTT 5 connection before any CONNACK
+   instead; but so does a broker restarting, one not ready yet behind a proxy, a connection
+   limit, or anyone on the path who wants the bridge on 3.1.1 and its weaker rules (a retained
+   command carried out, a remote's stale command without its stamps). So a close alone never
+   steps down: after one, ``auto`` asks the broker once in MQTT 3.1.1 (a trial connection on a
+   thread of its own, closed at once: paho_client.py rule 4), and steps down only if that
+   trial was accepted and the next MQTT 5 attempt is closed before its CONNACK again (a
+   broker that came back speaks MQTT 5 to that attempt; a connection limit refuses the trial
+   too). Over TLS a close never steps down (``_trusts_closes``): nobody on the path can answer
+   for the broker there, but anyone can still close connections, the first and the third, and
+   let the trial between them through. Until then, and for ``"5"``, the close is said with the
+   fix (rule 6).
    ``"5"`` and ``"3.1.1"`` never change.
-4. Command topics are subscribed at QoS 0 (COMMAND_QOS); a stop carrier's stops and locks at
-   KEPT_QOS under MQTT 5 (rule 22: its session is kept, so there QoS 1 buys the STOP a dead path
-   took). The main connection's session is clean, so QoS 1 would buy it no redelivery; what it
-   does cost: a broker holds at most ~1000 QoS 1 messages for a subscriber that falls behind and
-   then drops the NEWEST (mosquitto: "Outgoing messages are being dropped"), which in a flood of
-   targets loses the final target, or a STOP. At QoS 0 a connected subscriber gets everything, in
-   order. (Measured: tests/faults, 10,000-target burst.)
+4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
+   buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
+   subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
+   being dropped"), which in a flood of targets loses the final target, or a STOP. At QoS 0 a
+   connected subscriber gets everything, in order. (Measured: tests/faults, 10,000-target burst.)
 5. Callbacks run on paho's thread and stay short: they hand messages to the handler, which must
    not block (it drops commands into mailboxes); a handler that raises is logged, and paho's
    thread goes on.
@@ -133,49 +131,6 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    as too large: tests/faults/test_input.py), so only a message no client means gets none; such
    a "stop" is not carried out either (a 1 MiB bound dropped the 1 MiB stop and target of the
    fault tests without a word: CI).
-22. A connection that carries stops (the stop and lock lanes, the stop express:
-   ``CARRIES_STOPS``) asks a keep-alive of STOP_KEEPALIVE_S (5 s) at most, whatever
-   ``mqtt.keepalive_s`` says, and under MQTT 5 keeps its session across its own reconnects: a
-   clean start at its first connect only (paho's MQTT_CLEAN_START_FIRST_ONLY: nothing of an
-   earlier run is handed to it), then ``clean_start`` false with a session expiry of
-   STOP_SESSION_S, the words it carries (its ``no_replay`` filters: the stop or lock topics; not
-   the lane markers nor the express's sync word) subscribed at KEPT_QOS (1). Attack 32: a path
-   that died without a word (a NAT's table lost, a link re-made; the broker taking new
-   connections throughout) left every connection to its keep-alive, 30 to 60 s, and a STOP
-   pressed 3 s after the death reached none of them: the rotor turned on to its target. Now each
-   stop carrier sees its own path by paho's own PINGREQ: one sent after 5 s without a byte in or
-   out, the connection ended 5 s later if no byte came (paho 2.2's ``_check_keepalive``, run from
-   ``loop_misc`` at every round of the connection's own network thread, 1 s at most:
-   paho_client.py rule 2; no serial line's thread is on that path, and the broker, which drops a
-   client 1.5 keep-alives after its last packet, hears a PINGREQ 5 to 6 s after the last one).
-   The connection is made again on rule 6's back-off (1 s first) with the same client id and its
-   session: the broker ends the old connection (a takeover of the session's own, never a fight:
-   rule 7 counts only drops of accepted connections) and hands the new one what it had sent into
-   the dead one and not had acknowledged, the STOP with it (at QoS 1: a STOP published at QoS 0,
-   a dashboard button's default, is delivered at QoS 0 and kept by no broker). A dead path so
-   costs a stop carrier 5 to 10 s and a reconnect (6 to 11 s in all, with the ping's phase: 6.1 to
-   11.1 s from the death to the STOP at the rotor over 16 runs of
-   tests/faults/test_attack32_stop_lost_on_a_dead_path.py, a STOP pressed 3 s after the death),
-   and a STOP pressed meanwhile is late, not lost. The verdict is each connection's own (review
-   112: one probe judging for all remade healthy lanes and threw away what stalled ones held), it
-   costs no connection slot, and it loses nothing where it is wrong: a path that stalls and
-   delivers later, or a broker merely slow to answer (its backlog, a load that refuses new
-   connections), has its stop carriers remade with the session the broker kept for them, so what
-   it held comes on the new connection (or, the broker refusing it, on the main connection's own
-   stream, whose keep-alive is the setting's and outlasts the stall). The price: a stop carrier
-   sends a PINGREQ every 5 s while quiet (three connections, a few bytes each); a broker slower
-   than 5 s to answer one makes it reconnect (said at debug level; a STOP held is handed over); a
-   STOP or lock ON the broker took while a stop carrier was away is delivered when it is back
-   within STOP_SESSION_S (the same run only: later, or after the bridge's own restart, the
-   session is gone), late and possibly twice (the old connection's copy and the new one's: a stop
-   carried out twice is the safe side; lastword.py and express.py rule 11 order a copy as they
-   order any late one). MQTT 3.1.1 has no session expiry (a kept session lasts as long as the
-   broker's own setting, for ever by default in mosquitto), so there the stop carriers stay
-   clean: a dead path is noticed as soon, but a STOP pressed before their SUBACK is lost
-   (docs/reliability.md, Limits). The main connection keeps the setting's keep-alive and its
-   clean session: it is the bridge's presence, and a busy uplink under it (what it sends held for
-   a while) must not remake it (review 112: dashboards shown the bridge offline for a queue that
-   drained).
 """
 
 from __future__ import annotations
@@ -247,9 +202,6 @@ STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight 
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
 STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
-STOP_KEEPALIVE_S = 5  # rule 22: the keep-alive's most for a connection that carries stops
-STOP_SESSION_S = 30  # rule 22: ... and its session's expiry (MQTT 5), kept across its reconnects
-KEPT_QOS = 1  # rule 22: what such a connection subscribes the words it carries at
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
@@ -335,23 +287,16 @@ def takeover_message(client_id: str, ending: Ending, most_s: int = TAKEOVER_MAX_
 
 
 def command_filters(
-    filters: list[str],
-    no_replay: frozenset[str],
-    v5: bool,
-    replayed: frozenset[str] = frozenset(),
-    kept: bool = False,
+    filters: list[str], no_replay: frozenset[str], v5: bool, replayed: frozenset[str] = frozenset()
 ) -> list[tuple[str, Any]]:
     """Rules 1 and 4: command topics at COMMAND_QOS, MQTT 5 with retain-as-published; the
     filters in ``no_replay`` (stop: lastword.py rule 6) also ask the broker not to replay their
-    retained message on subscribing (retain handling 2), at KEPT_QOS for a kept session
-    (``kept``, rule 22: the words a stop carrier carries; its markers stay at COMMAND_QOS);
-    those in ``replayed`` go without it."""
+    retained message on subscribing (retain handling 2); those in ``replayed`` go without it."""
     if not v5:
         return [(topic, COMMAND_QOS) for topic in filters]
     live = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
     keep = SubscribeOptions.RETAIN_DO_NOT_SEND
-    qos = KEPT_QOS if kept else COMMAND_QOS
-    fresh = SubscribeOptions(qos=qos, retainAsPublished=True, retainHandling=keep)
+    fresh = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True, retainHandling=keep)
     state = SubscribeOptions(qos=COMMAND_QOS)  # rule 1: the retain flag says "replayed"
     return [(t, fresh if t in no_replay else state if t in replayed else live) for t in filters]
 
@@ -420,7 +365,6 @@ class Connection:
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_MAX_S  # rule 7: TAKEOVER_FIRST_S for one that carries stops
     RECONNECT_MAX_S = 30  # rule 6: STOP_RECONNECT_MAX_S for one that carries stops
-    CARRIES_STOPS = False  # rule 22: a short keep-alive and a kept session (MQTT 5) if True
 
     def __init__(
         self,
@@ -439,7 +383,7 @@ class Connection:
         self._accepted_once = False  # a connection was accepted: the protocol is settled
         self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
         self._gave_up = False  # ... or, unanswered, this client ended it (rule 6: ``unanswered``)
-        self._keep_s = self.keepalive_of(settings)  # (what rule 6 says it waited)
+        self._keep_s = settings.keepalive_s  # (what rule 6 says it waited)
         self._trial_lock = threading.Lock()  # rule 1: the MQTT 3.1.1 trial after a close
         self._trial: threading.Thread | None = None
         self._trial_ok = False  # ... was accepted, since the last MQTT 5 attempt closed
@@ -480,32 +424,14 @@ class Connection:
         c.tick = self._tick
         self._client = c
 
-    @classmethod
-    def keepalive_of(cls, settings: MqttSettings) -> int:
-        """The keep-alive this connection asks for: the settings', STOP_KEEPALIVE_S at most for
-        one that carries stops (rule 22)."""
-        if cls.CARRIES_STOPS:
-            return min(settings.keepalive_s, STOP_KEEPALIVE_S)
-        return settings.keepalive_s
-
-    @property
-    def kept_session(self) -> bool:
-        """Rule 21: whether this connection keeps its session across its reconnects (a stop
-        carrier under MQTT 5; never under MQTT 3.1.1, which has no session expiry)."""
-        return self.CARRIES_STOPS and self._v5
-
     def _connect(self) -> None:
-        """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1; a
-        stop carrier's first start only, its session kept for STOP_SESSION_S: rule 22)."""
+        """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
         s = self._settings
-        fresh: bool | int = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean
+        fresh = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean session
         most = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]  # rule 18
         most.MaximumPacketSize = MAX_PACKET_BYTES  # (sent under MQTT 5 only)
-        if self.kept_session:
-            fresh = paho.MQTT_CLEAN_START_FIRST_ONLY
-            most.SessionExpiryInterval = STOP_SESSION_S
         self._client.connect_async(
-            s.host, s.port, keepalive=self._keep_s, clean_start=fresh, properties=most
+            s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh, properties=most
         )
         self._client.loop_start()
 
@@ -699,9 +625,7 @@ class Connection:
             self._trial_ok = ok and not self._accepted_once
 
     def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
-        return command_filters(
-            self._subscriptions, self._no_replay, self._v5, self._replayed, self.kept_session
-        )
+        return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
 
     def _intercepted(self, topic: str, payload: bytes, retained: bool = False) -> bool:
         """Whether a message is the connection's own business, not the handler's."""

@@ -1014,7 +1014,6 @@ class _Link(Connection):
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 6: it carries stops (connection.py rule 7)
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
-    CARRIES_STOPS = True  # connection.py rule 22: a dead path noticed in seconds, STOPs kept
 
     def __init__(
         self,

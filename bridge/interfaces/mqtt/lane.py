@@ -19,8 +19,7 @@ Rules:
    no will, no state; the main connection (client.py) is the bridge's presence and carries
    every other marker.
 2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
-   retain-as-published, QoS 0 for commands: client.py rules 1 and 4; but for its keep-alive and
-   its session, kept under MQTT 5: connection.py rule 22), and the same TCP
+   retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
    quick-ack (client.py rule 9): both are connection.py's Connection, which builds, connects
    and subscribes them. Under ``mqtt.protocol = "auto"`` it speaks what the main connection
    settled on (the app calls ``use_mqtt311`` before ``start``). Client id: ``lane_client_id``
@@ -28,22 +27,21 @@ Rules:
    explicit id gets ``-stop`` or ``-lock``, shortened with a hash to 23 characters if it would
    be longer).
 3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
-   limit) or a subscription it denies is an error, logged once and handed to ``on_denied`` (the
-   bridge's problems, B/bridge/info): stops then take the main connection only. A fight over its
-   client id (another client connecting with it: an attack pass found it said nowhere, while
-   stops quietly lost their connection) is logged and said on B/bridge/info (``on_info``) once an
-   episode, and unsaid once a connection lasts STABLE_S (a review). Its other disconnects are
-   logged at debug level (the main connection says the same). It judges a takeover as
-   connection.py rule 7 does (an attempt the broker never answered, given up by the lane's own
-   client, is no refusal: connection.py rule 6, said by the main connection), counting only
-   connections that were accepted, and backs off for one TAKEOVER_FIRST_S at most
-   (``FIGHT_BACKOFF_MAX_S``: a crash-looping broker can look the same, and stops must come soon
-   after it is back); any other way, it tries again on connection.py rule 6's back-off for a
-   connection that carries stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a
-   broker's return is heard). Its keep-alive is 5 s at most and, under MQTT 5, its session is
-   kept across its own reconnects, its stop or lock topics at QoS 1 (connection.py rule 22: a
-   dead path under it is noticed in 5 to 10 s and the STOP the broker sent into it handed to the
-   new connection).
+   limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
+   (the bridge's problems, B/bridge/info): stops then take the main connection only. A fight
+   over its client id (another client connecting with it: an attack pass found it said
+   nowhere, while stops quietly lost their connection) is logged and said on B/bridge/info
+   (``on_info``) once an episode, and unsaid once a connection lasts STABLE_S (a review). Its
+   other disconnects are logged at debug level (the main connection says the same). It
+   judges a takeover as connection.py rule 7 does (an attempt the broker never answered, given
+   up by the lane's own client, is no refusal: connection.py rule 6, said by the main
+   connection), counting only connections that were
+   accepted, and backs off for one TAKEOVER_FIRST_S at most (``FIGHT_BACKOFF_MAX_S``: a
+   crash-looping broker can look the same, and stops must come soon after it is back); any
+   other way, it tries again on connection.py rule 6's back-off for a connection that carries
+   stops (``RECONNECT_MAX_S``: 2 s at most, so a STOP sent 2 s after a broker's return is
+   heard). Its session stays clean (rule 2; docs/reliability.md, Limits, says why a kept one
+   is not asked for).
 4. The lane goes first (``first``, the main connection's ``before_message``): the main
    connection's thread calls it before each message it hands on, and while the lane's socket
    has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
@@ -112,7 +110,6 @@ def lane_client_id(settings: MqttSettings, kind: str = "stop") -> str:
 class StopLane(Connection):
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 3
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
-    CARRIES_STOPS = True  # connection.py rule 22: a dead path noticed in seconds, STOPs kept
 
     def __init__(
         self,
