@@ -21,8 +21,6 @@ import contextlib
 import socket
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import MqttProxy, _client_id, _packets, _Stream
@@ -63,13 +61,6 @@ class RefusingOnce(MqttProxy):
             s.server.shutdown(socket.SHUT_WR)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 120: a lock lane refused once at the bridge's start takes the previous run's "
-        "session: a lock ON published while the bridge was down locks the rotator at start"
-    ),
-)
 def test_nothing_of_the_previous_run_comes_back_after_a_refused_first_connect(
     tmp_path: Path,
 ) -> None:

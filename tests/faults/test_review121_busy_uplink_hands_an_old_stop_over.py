@@ -24,8 +24,6 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.faults.behind_a_proxy import bridge_behind
 from tests.support.mqtt_proxy import MqttProxy
 from tests.support.waiting import slow
@@ -34,12 +32,6 @@ BUSY_S = 12.0  # the uplink's busy spell: past the lane's 5 s keep-alive and its
 NEW_DEG = 60.0  # the target sent after the STOP (the rotor near 10, 2 deg/s)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 121: a 12 s busy uplink remakes the stop lane, its kept session hands over "
-    "the STOP it had already carried out, and the target sent after the STOP is dropped "
-    "unsaid; the rotor never turns (parent: it turns once the uplink drains)",
-)
 def test_a_target_after_a_stop_survives_a_busy_uplink(tmp_path: Path) -> None:
     with bridge_behind(tmp_path, MqttProxy) as b:
         main_id = b.app.settings.mqtt.effective_client_id()

@@ -25,8 +25,6 @@ import socket
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import CONNECT, MqttProxy, _client_id, _packets, _Stream
@@ -70,12 +68,6 @@ class BusyOnceProxy(MqttProxy):
             s.server.shutdown(socket.SHUT_WR)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 121: the lock lane's first CONNECT turned down (server busy) at the bridge's "
-    "start: its next one keeps the earlier run's session, and a lock ON published while the "
-    "bridge was away locks the rotator in the new run",
-)
 def test_a_lock_on_sent_while_the_bridge_was_away_is_not_carried_out_at_its_start(
     tmp_path: Path,
 ) -> None:
