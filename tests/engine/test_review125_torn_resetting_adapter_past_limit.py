@@ -1,0 +1,80 @@
+"""Review 125: review 118's fix (ab41651b: the torn run goes on across a replug) stops a
+garbled turn at the start before ``az_min_deg`` on an adapter that resets every 2 s (its
+test), but not at other reset periods of the same fault. A GS-232B line that garbles every
+byte (review 113's ``torn``) on an adapter reset every 1.5 s runs to 42, 18 degrees past
+az_min_deg 60, its first stop 17.6 s in; a GS-232A azimuth box read at half rate (review
+118's ``at_half_rate``) on an adapter reset every 1 s runs to the end of its turn at 5 (first
+stop 26 s in), every 1.5 s to 30, every 2.5 s to 49. Not a regression: at 51a2f016 none of
+these was ever stopped (the fix is partial).
+
+In virtual time: the emulated box turning from 150 to 5 when the bridge starts; every byte
+it sends reaches the host garbled; the port fails every ``up_s`` and reopens DOWN_S later
+(the worker's reconnect_min_s).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from tests.engine.garblers import Garble
+from tests.engine.test_review113_every_byte_garbled_unwatched import torn
+from tests.engine.test_review118_half_rate_garbled_start import at_half_rate
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+START_DEG = 150.0
+AZ_MIN_DEG = 60.0
+TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
+WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
+STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later (virtual time)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 125: a turn whose every byte is garbled, on an adapter resetting every "
+        "1-2.5 s (not 2 s), runs past az_min_deg, up to the end of its turn"
+    ),
+)
+@pytest.mark.parametrize(
+    ("model", "garble", "up_s"),
+    [
+        ("gs232b", "torn", 1.5),
+        ("gs232a-az", "half rate", 1.0),
+        ("gs232a-az", "half rate", 1.5),
+        ("gs232a-az", "half rate", 2.5),
+    ],
+)
+def test_a_garbled_turn_on_a_resetting_adapter_is_stopped_before_the_limit(
+    rig: Rig, model: str, garble: str, up_s: float
+) -> None:
+    v = rig(
+        model,
+        emulator={"start_az_deg": START_DEG},
+        settings={"az_min_deg": AZ_MIN_DEG},
+        connect=False,
+    )
+    v.device.receive(b"M005\r", v.now)  # (turning when the bridge starts)
+    v.run_for(TURNING_S)
+    assert v.truth().is_moving
+    t = v.now
+    garbler: Garble = torn if garble == "torn" else at_half_rate()
+    v.to_host = garbler
+    v.link_up()
+    lowest, drop_t = START_DEG, v.now + up_s
+    while v.now < t + WATCH_S:
+        v.run_for(STEP_S)
+        lowest = min(lowest, v.truth().az_deg)
+        if v.now >= drop_t:
+            v.link_down("adapter reset")
+            v.run_for(DOWN_S)
+            v.link_up()
+            drop_t = v.now + up_s
+    stops = v.frames("stop", since=t)
+    assert lowest >= AZ_MIN_DEG, (
+        f"turned from {START_DEG:g} down to {lowest:g}, past az_min_deg {AZ_MIN_DEG:g}; "
+        f"first stop frame at {stops[0].time_s - t if stops else None}"
+    )
