@@ -1,0 +1,43 @@
+"""A turn the bridge watched, then a line gone bad on an adapter that resets every ``up_s``
+(review 125): when its first stop frame went."""
+
+from __future__ import annotations
+
+from bridge.core.model import MotionState
+from tests.engine.garblers import Garble
+from tests.engine.virtual import VirtualRotator
+
+START_DEG = 20.0
+TARGET_DEG = 300.0
+SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
+TURNING_S = 5.0  # the turn well under way, watched (virtual time, not a deadline)
+WATCH_S = 30.0  # the silence, the offline and what follows (virtual time)
+STEP_S = 0.05  # a step of virtual time to see the first stop: not a deadline
+DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later (virtual time)
+
+
+def first_stop_s(v: VirtualRotator, garble: Garble | None, up_s: float | None) -> float | None:
+    """``v`` settles, turns from START_DEG to TARGET_DEG for TURNING_S, then its line goes bad
+    (every byte through ``garble``, or silent if None) and, if ``up_s``, the port fails every
+    ``up_s`` and reopens DOWN_S later: how long after the line went bad the first stop frame
+    went (None: none in WATCH_S)."""
+    v.run_until_state(MotionState.IDLE, SETTLE_S)
+    v.target(TARGET_DEG)
+    v.run_for(TURNING_S)
+    assert v.truth().is_moving
+    t = v.now
+    if garble is None:
+        v.set_silent(True)
+    else:
+        v.to_host = garble
+    drop_t = v.now + up_s if up_s else float("inf")
+    while v.now < t + WATCH_S:
+        v.run_for(STEP_S)
+        if v.frames("stop", since=t):
+            return v.now - t
+        if v.now >= drop_t:
+            v.link_down("adapter reset")
+            v.run_for(DOWN_S)
+            v.link_up()
+            drop_t = v.now + (up_s or 0.0)
+    return None
