@@ -4,10 +4,13 @@ test), but not at other reset periods of the same fault. A GS-232B line that gar
 byte (review 113's ``torn``) on an adapter reset every 1.5 s runs to 42, 18 degrees past
 az_min_deg 60, its first stop 17.6 s in; a GS-232A azimuth box read at half rate (review
 118's ``at_half_rate``) on an adapter reset every 1 s runs to the end of its turn at 5 (first
-stop 26 s in), every 1.5 s to 30, every 2.5 s to 49. Not a regression: at 51a2f016 none of
-these was ever stopped (the fix is partial).
+stop 26 s in), every 1.5 s to 30, every 2.5 s to 49; a GS-232B read at half rate every 1.5 s
+to 42; an RC2800 every 1.5 s to 54 (torn) or 42 (half rate). Not a regression: at 51a2f016
+the GS-232s and the half-rate RC2800 were never stopped, the torn RC2800 ran to 54 the same
+(the fix is partial).
 
-In virtual time: the emulated box turning from 150 to 5 when the bridge starts; every byte
+In virtual time: the emulated box turning from 150 to 5 when the bridge starts (a hand at
+its panel); every byte
 it sends reaches the host garbled; the port fails every ``up_s`` and reopens DOWN_S later
 (the worker's reconnect_min_s).
 """
@@ -46,6 +49,9 @@ DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later 
         ("gs232a-az", "half rate", 1.0),
         ("gs232a-az", "half rate", 1.5),
         ("gs232a-az", "half rate", 2.5),
+        ("gs232b", "half rate", 1.5),
+        ("rc2800", "torn", 1.5),
+        ("rc2800", "half rate", 1.5),
     ],
 )
 def test_a_garbled_turn_on_a_resetting_adapter_is_stopped_before_the_limit(
@@ -57,7 +63,7 @@ def test_a_garbled_turn_on_a_resetting_adapter_is_stopped_before_the_limit(
         settings={"az_min_deg": AZ_MIN_DEG},
         connect=False,
     )
-    v.device.receive(b"M005\r", v.now)  # (turning when the bridge starts)
+    v.manual_rotate(5.0)  # (turning when the bridge starts: a hand at the panel)
     v.run_for(TURNING_S)
     assert v.truth().is_moving
     t = v.now
