@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import every_frame_off, limited, lowest_az
+from tests.engine.garblers import every_answer_off, every_frame_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -56,3 +56,36 @@ def test_a_hand_turn_on_a_sensor_right_now_and_then_is_stopped_before_the_limit(
     lowest = lowest_az(v, t + WATCH_S, REST_DEG)
     stops = [round(f.time_s - t, 1) for f in v.frames("stop", since=t)]
     assert lowest >= AZ_MIN_DEG, (lowest, stops)
+
+
+EASYCOMM_AZ_MIN_DEG = 120.0
+REVIEW_103_LINE = [0.0, 60.0, -60.0]  # every answer off by 0, +60 or -60 in turn
+GONE_BAD_S = 3.0  # the bad line at rest before the hand (virtual time): review 103's
+HAND_WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 126: on review 103's own line, three seconds bad at rest spend the moving "
+    "rate's spell: a hand turn is first stopped seven seconds in, past az_min_deg",
+)
+def test_a_hand_turn_three_seconds_into_review_103s_line_is_stopped_within_seconds(
+    rig: Rig,
+) -> None:
+    """The same spell spent on review 103's own line (an Easycomm II, every answer off by 0,
+    +60 or -60 in turn, a hand three seconds after the line went bad): the readings taken
+    between (every third) start the count again, never eight taken in a row, and the spell of
+    eight disagreeing at the moving rate is spent before the hand comes. Its first unwatched
+    stop comes 7 s in, at 108, 42 degrees down; at 726b34d5^, 1.2 s in, at 143 (review 103's
+    "about a second and a quarter in, at about 143")."""
+    v = limited(rig, "easycomm2", REST_DEG, EASYCOMM_AZ_MIN_DEG)
+    v.link_up()
+    v.run_for(CONFIRMED_S)
+    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v.to_host = every_answer_off(REVIEW_103_LINE)
+    v.run_for(GONE_BAD_S)
+    t = v.now
+    v.manual_rotate(HAND_DEG)  # (a hand at the panel: a turn nobody asked for, to the limit)
+    lowest = lowest_az(v, t + HAND_WATCH_S, REST_DEG)
+    stops = [round(f.time_s - t, 1) for f in v.frames("stop", since=t)]
+    assert lowest >= EASYCOMM_AZ_MIN_DEG, (lowest, stops)
