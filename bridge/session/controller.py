@@ -203,11 +203,7 @@ Rules:
    Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
    asked for at the moving rate, not at once, until the first unwatched stop below, then at
    the usual polls (review 103's follow-up: eight at a Rot2Prog's idle rate, 9.3 s, took 74 s;
-   not for good, the polling load review 105 found; nor for more than FIRST_UNWATCHED_READINGS
-   of them counted since the last as many readings taken in a row, not since the last one
-   taken, ``_rest_spell_on``: review 123, a GS-232B sensor right one answer in five never had
-   eight disagree in a row, each right one began the spell again, and it was asked about 500
-   times a minute for good, a clean one 60), with one more asked as a turn at the
+   not for good, the polling load review 105 found), with one more asked as a turn at the
    rotor's nominal speed would have gone UNWATCHED_TURN_DEG since the last unwatched stop,
    which brings the next (review 116: eight idle polls more, 49 s, let a hand after the first
    stop run 19 degrees past ``az_min_deg``), and at the usual polls while the
@@ -217,13 +213,7 @@ Rules:
    between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
    believed on its second reading, also when a stop cut the first short and the second is
    asked once the stop is out; readings at a poll's distance agree within ``doubt_deg`` alone
-   (polls half a minute apart would let any two agree). Once FIRST_UNWATCHED_READINGS of them
-   in a row confirmed none (the unwatched stop's count), two agreeing are not enough: three in
-   a row must (``_pair_holds``; review 123: a failed Rotor-EZ sensor's few values, 250, 350,
-   50 in turn, agreed with themselves across a stop's banner and a lost answer, 250 was taken
-   a hundred degrees from where the rotor stood, shown MOVING, stopped every 2 s as still
-   turning after a stop, R/error sending the operator to stop it at the controller, and every
-   reading after it taken as a turn's). A turn is told by its line as at the
+   (polls half a minute apart would let any two agree). A turn is told by its line as at the
    start: FIRST_TURN_READINGS of them in a row on one steady line (``_steady``) are a turn,
    the last taken and the turn's readings trusted till it rests, so rule 10 judges it (review
    111: one flipped bit in a hand turn's first answer broke the pair, an Easycomm stepping 6
@@ -834,10 +824,6 @@ class Controller:
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._first_garbled = False  # ... some of them answers garbled past parsing
         self._torn_run = 0  # ... the connection before ended in torn answers (link.py 11)
-        # ... at rest, counted toward the moving rate's spell: not ended by a lone reading
-        # taken, only by FIRST_UNWATCHED_READINGS taken in a row (``_rest_spell_on``)
-        self._rest_spell = 0
-        self._taken_in_row = 0  # ... readings taken in a row since the last that disagreed
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
@@ -1415,16 +1401,14 @@ class Controller:
         turned = 0.0
         if doubted.at_once:
             turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted.t), DOUBT_TURN_MAX_DEG)
-        said = self._rest_said
-        if (
-            doubted.reply is not None
-            and not _apart(reply, doubted.reply.az_deg, doubted.reply.el_deg, limit + turned, wraps)
-            and self._pair_holds(reply, said, limit)
+        if doubted.reply is not None and not _apart(
+            reply, doubted.reply.az_deg, doubted.reply.el_deg, limit + turned, wraps
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
         # FIRST_TURN_READINGS in a row on one steady line: a turn, as at the start (review 111:
         # one garble broke the pair, and a hand turn stepping 6 degrees a poll never agreed)
+        said = self._rest_said
         line = (*((d.reply, d.t) for d in said if d.reply is not None), (reply, now))
         if len(line) >= FIRST_TURN_READINGS and _steady(line, cfg, limit):
             log.info("%s: readings at rest of a turn, the last %s", self.name, _where(reply))
@@ -1434,7 +1418,6 @@ class Controller:
             return Doubt.TAKEN  # (the last of them: where it is now)
         self._doubts_in_row += 1
         self._first_unconfirmed += 1  # (a stop each FIRST_UNWATCHED_READINGS: review 103;
-        self._spell_counts()  # (the moving rate's spell: review 123)
         self._unwatched_due = self._unwatched_at_rest_due(now)  # then sooner, review 116)
         self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         self._rest_said = (*said[-(FIRST_TURN_READINGS - 2) :], self._doubted)
@@ -1451,22 +1434,6 @@ class Controller:
                 logged=False,
             )
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
-
-    def _pair_holds(self, reply: PositionReply, said: tuple[_Doubted, ...], limit: float) -> bool:
-        """Rule 9: whether a reading at rest that agrees with the doubted one before it is
-        taken. Yes, but once the readings have gone on disagreeing FIRST_UNWATCHED_READINGS in
-        a row (the unwatched stop's, the rotor not watched): then two agreeing are what a
-        failing sensor's few values make by chance (review 123: a Rotor-EZ's sensor reading
-        250, 350, 50 in turn agreed with itself across a stop's banner and a lost answer, 250
-        taken a hundred degrees from where it stood, the rotor shown MOVING, stopped every
-        2 s 'still turning after a stop', and every reading after it taken as a turn's), and
-        the one before the doubted must agree too (within ``limit``): three in a row."""
-        if self._first_unconfirmed < FIRST_UNWATCHED_READINGS:
-            return True
-        if len(said) < 2 or said[-2].reply is None:
-            return False
-        before = said[-2].reply
-        return not _apart(reply, before.az_deg, before.el_deg, limit, self.cfg.motion.az_wraps)
 
     def _doubts_first(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9: a connection's first reading, or the first back after readings were lost
@@ -1680,9 +1647,6 @@ class Controller:
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
         self._first_unconfirmed, self._first_garbled = 0, False  # rule 9: a reading taken
-        self._taken_in_row += 1  # (the moving rate's spell ends only with a row of them)
-        if self._taken_in_row >= FIRST_UNWATCHED_READINGS:
-            self._rest_spell = 0
         self._unwatched_owed = self._unwatched_last = None  # (the rotor is watched again)
         self._unwatched_ask_t = None
         self._rest_said = ()
@@ -2170,22 +2134,6 @@ class Controller:
             return False
         return m.anchor_deg is not None and m.state is not mo.MOVING and m.target_deg is None
 
-    def _spell_counts(self) -> None:
-        """Rule 9: a reading at rest that confirmed none (or an answer garbled past parsing)
-        counts toward the moving rate's spell, and ends a row of readings taken."""
-        self._rest_spell += 1
-        self._taken_in_row = 0
-
-    def _rest_spell_on(self) -> bool:
-        """Rule 9: whether readings at rest that disagree are still asked at the moving rate:
-        for FIRST_UNWATCHED_READINGS of them, counted since the last FIRST_UNWATCHED_READINGS
-        readings taken in a row, not since the last one taken (review 123: a GS-232B sensor
-        reading right one answer in five never had eight disagree in a row, each right one
-        started the spell again, and it was asked about 500 times a minute for good, where a
-        clean one is asked 60: review 105's load). The spell is what brings the first
-        unwatched stop soon; a sensor right now and then is watched then, and owes none."""
-        return self._rest_spell < FIRST_UNWATCHED_READINGS
-
     def _garbled_at_rest(self, now: float) -> None:
         """Rule 9: a poll answered garbled past parsing at rest is a reading at rest that
         confirmed none, counted toward the unwatched stop as a first reading's is (review 116:
@@ -2194,7 +2142,6 @@ class Controller:
         never eight in a row: a reading taken starts the count again (``_reading``)."""
         self._first_unconfirmed += 1
         self._first_garbled = True
-        self._spell_counts()
         if self._unwatched_at_rest_due(now):
             self._unwatched_stop(None, now, first=False)
 
@@ -2473,7 +2420,7 @@ class Controller:
         count = self._first_unconfirmed  # (review 116: answers torn at rest too, from the
         torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # third on:
         unwatched = at_rest or torn  # one or two garbled are asked again as ever, link.py 11)
-        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS and self._rest_spell_on()
+        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
             busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
             link.poll_every(now, cfg.moving_poll_interval_s)

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.garblers import every_answer_off, every_frame_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
@@ -36,11 +34,6 @@ RIGHT_NOW_AND_THEN_S = 600.0  # ten minutes of the failing sensor at rest (virtu
 WATCH_S = 120.0  # the hand's turn (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 126: a Rot2Prog on a sensor right one answer in five, a hand turn at rest "
-    "is first stopped some forty seconds in, past az_min_deg",
-)
 def test_a_hand_turn_on_a_sensor_right_now_and_then_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
@@ -64,11 +57,6 @@ GONE_BAD_S = 3.0  # the bad line at rest before the hand (virtual time): review 
 HAND_WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 126: on review 103's own line, three seconds bad at rest spend the moving "
-    "rate's spell: a hand turn is first stopped seven seconds in, past az_min_deg",
-)
 def test_a_hand_turn_three_seconds_into_review_103s_line_is_stopped_within_seconds(
     rig: Rig,
 ) -> None:

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
@@ -39,11 +37,6 @@ TURN_S = 60.0  # 80 degrees at 6 deg/s and a settle, with lots of room (virtual 
 NEAR_DEG = 0.5  # shown where it rests (the box's tenth of a degree, rounded)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 126: after the unwatched stop at rest, a target turn on a line reading one "
-    "answer in three off is shown MOVING for good, its bearing flipping 60 degrees",
-)
 def test_a_target_turn_after_the_unwatched_stop_is_shown_idle_at_its_target(rig: Rig) -> None:
     v = rig("easycomm2", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.link_up()
