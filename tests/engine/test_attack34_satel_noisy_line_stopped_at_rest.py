@@ -67,3 +67,36 @@ def test_a_satel_at_rest_on_a_slightly_noisy_line_is_not_stopped_as_unwatched(ri
     assert intact >= reports * MOSTLY_INTACT, (intact, reports)  # (a line it can watch)
     assert not said, (intact, reports, said[:2])
     assert not v.frames("stop", since=t)
+
+
+RC2800_BAUD = 1200  # a slow line
+RC2800_BYTE_ERROR = 0.02  # two bytes in a hundred have a bit flipped
+RC2800_SEED = 3
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="attack 34: an RC2800 at rest on a 1200-baud line with 2 % byte errors gets unwatched "
+    "stops and 'the bridge cannot watch the rotor' on R/error (51a2f016: none)",
+)
+def test_an_rc2800_at_rest_on_a_noisy_slow_line_is_not_stopped_as_unwatched(rig: Rig) -> None:
+    """The same defect on an RC2800 read at 1200 baud, two bytes in a hundred off (seed 3): two
+    unwatched stops in ten minutes, said so; 51a2f016 none, its readings watched all along."""
+    rnd = random.Random(RC2800_SEED)
+    v = rig(
+        "rc2800",
+        settings={"baud": RC2800_BAUD},
+        emulator={"start_az_deg": 150.0, "baud": RC2800_BAUD},
+    )
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, ONLINE_S, "online")
+    v.run_for(SETTLE_S)
+    t = v.now
+    v.to_host = lambda data, now: bytes(
+        b ^ (1 << rnd.randrange(8)) if rnd.random() < RC2800_BYTE_ERROR else b for b in data
+    )
+    v.run_for(NOISY_S)
+    said = [r.message for r in v.errors(since=t) if "cannot watch" in r.message]
+    assert v.status.available and v.status.bearing_deg == 150.0  # (watched all along)
+    assert v.truth().az_deg == 150.0  # (it never moved)
+    assert not said, said[:2]
+    assert not v.frames("stop", since=t)
