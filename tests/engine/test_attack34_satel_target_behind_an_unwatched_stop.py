@@ -2,9 +2,13 @@
 unwatched stop (controller.py rule 9, its readings at rest counted as disagreeing, garbled
 answers among them: 40a3ae59) waits 3.4 s, and a second stop goes to the controller ahead of it
 (the spell's "stopped again while they go on disagreeing") before the rotor is turned: the
-operator's turn starts seconds late on a line the bridge watches (51a2f016: no stop, the target
-written at once). Medium: a healthy rotor's turn held back by stops it did not need; the
-target is kept (the turn then runs to its end).
+operator's turn starts seconds late on a line the bridge watches (51a2f016 on this line: no
+stop, the target written at once). Medium: a healthy rotor's turn held back by stops it did not
+need; the target is kept (the turn then runs to its end). What is new is the stops sent ahead of
+a target, not the lateness alone: over twelve seeds of this line, with a target at a random
+moment, today's code sent stops ahead of three targets (one written 5.3 s late, three stops
+ahead of it); 51a2f016 sent none, but was late too on some (up to 5.4 s) and lost two targets
+to its own 'offline' on this line.
 
 In virtual time: the emulated SatEL at rest at 150, online on a clean line; then every byte it
 sends has one bit flipped with probability 2/100 (a seeded generator: the same line every run),
