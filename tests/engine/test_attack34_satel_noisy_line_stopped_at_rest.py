@@ -6,9 +6,10 @@ seven reports in ten come through whole, and the reports counted against it most
 positions``, ``Absolute``, ``Motion ENABLED``, a ``Time:`` field).
 
 controller.py rule 9 (40a3ae59, review 116): "answers garbled past parsing at rest count toward
-the unwatched stop". A SatEL's report is 95 bytes or so; at 1 % byte errors about one in three
-is garbled somewhere, and eight in a row without two agreeing readings comes within minutes
-(seeds 0-5: the first at 18-427 s). 51a2f016 sent none over the same ten minutes (measured with
+the unwatched stop". A SatEL's report is some 165 bytes, its two position lines 50 of them; at
+1 % byte errors four reports in five have a byte off somewhere, mostly outside those lines, and
+eight in a row without two agreeing readings comes within minutes (seeds 0-5: the first at
+18-427 s). 51a2f016 sent none over the same ten minutes (measured with
 this very line: no stop, no such error). The rotor rests, so the stop moves nothing; what the
 user sees is a STOP-kind error, again and again, telling a failing sensor or a line the bridge
 cannot watch on a line it watches (Medium: a misleading error, a regression).
