@@ -17,6 +17,10 @@ from tests.engine.virtual import VirtualRotator
 Garble = Callable[[bytes, float], bytes]
 ROT2PROG_FRAME = 12  # 0x57, H1..H4, PH, V1..V4, PV, 0x20 (spid.py rule 3)
 STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
+START_DEG = 150.0  # where the turn at the start begins (reviews 107, 113, 118, 125)
+AZ_MIN_DEG = 60.0  # the limit it must be stopped short of
+TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
+WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
 def limited(
@@ -37,6 +41,54 @@ def turning_down(v: VirtualRotator, under_way_s: float) -> None:
     v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
     v.run_for(under_way_s)
     assert v.truth().is_moving
+
+
+def turning_at_the_start(
+    rig: Callable[..., VirtualRotator],
+    model: str,
+    turn: bytes | None,
+    emulator: dict[str, object] | None = None,
+) -> VirtualRotator:
+    """A ``model`` box at START_DEG, az_min_deg AZ_MIN_DEG, its port not yet open, sent ``turn``
+    (or, if None, turned to 5 by a hand at the panel) and under way for TURNING_S (virtual
+    time): the turn at the start of reviews 113, 118 and 125 (``emulator``: more settings)."""
+    v = rig(
+        model,
+        emulator={"start_az_deg": START_DEG, **(emulator or {})},
+        settings={"az_min_deg": AZ_MIN_DEG},
+        connect=False,
+    )
+    if turn is None:
+        v.manual_rotate(5.0)  # (turning when the bridge starts: a hand at the panel)
+    else:
+        v.device.receive(turn, v.now)  # (turning when the bridge starts)
+    v.run_for(TURNING_S)
+    assert v.truth().is_moving
+    return v
+
+
+def opened_through(v: VirtualRotator, garble: Garble) -> float:
+    """``v``'s port opened with every byte it sends through ``garble``: the time it opened."""
+    t = v.now
+    v.to_host = garble
+    v.link_up()
+    return t
+
+
+def at_half_rate() -> Garble:
+    """A box at twice the host's baud rate: every second byte read, as another (its top bit
+    set, never a line end)."""
+    count = [0]
+
+    def read(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for byte in data:
+            count[0] += 1
+            if count[0] % 2 == 0:
+                out.append((byte ^ 0x5A) | 0x80)
+        return bytes(out)
+
+    return read
 
 
 def lowest_az(v: VirtualRotator, until: float, start: float, step_s: float = STEP_S) -> float:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from bridge.core.model import MotionState
+from tests.engine.garblers import STEP_S as LOWEST_STEP_S
 from tests.engine.garblers import Garble
 from tests.engine.virtual import VirtualRotator
 
@@ -41,3 +42,19 @@ def first_stop_s(v: VirtualRotator, garble: Garble | None, up_s: float | None) -
             v.link_up()
             drop_t = v.now + (up_s or 0.0)
     return None
+
+
+def lowest_az_resetting(v: VirtualRotator, until: float, start: float, up_s: float) -> float:
+    """The lowest azimuth the rotor truly reached, from ``start``, stepping virtual time by
+    garblers' STEP_S until ``until``, the port failing every ``up_s`` and reopened DOWN_S
+    later (reviews 118 and 125)."""
+    lowest, drop_t = start, v.now + up_s
+    while v.now < until:
+        v.run_for(LOWEST_STEP_S)
+        lowest = min(lowest, v.truth().az_deg)
+        if v.now >= drop_t:
+            v.link_down("adapter reset")
+            v.run_for(DOWN_S)
+            v.link_up()
+            drop_t = v.now + up_s
+    return lowest

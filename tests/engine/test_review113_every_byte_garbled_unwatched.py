@@ -23,14 +23,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from tests.engine.garblers import (
+    AZ_MIN_DEG,
+    START_DEG,
+    WATCH_S,
+    lowest_az,
+    opened_through,
+    turning_at_the_start,
+)
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 150.0
-AZ_MIN_DEG = 60.0
-TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
-WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
-STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
 
 
 def torn(data: bytes, now: float) -> bytes:
@@ -39,22 +42,9 @@ def torn(data: bytes, now: float) -> bytes:
 
 
 def test_a_turn_whose_every_byte_is_garbled_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = rig(
-        "easycomm2",
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(b"AZ5.0 EL0.0\n", v.now)  # (turning when the bridge starts)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
-    v.to_host = torn
-    v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    v = turning_at_the_start(rig, "easycomm2", b"AZ5.0 EL0.0\n")
+    t = opened_through(v, torn)
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
     said = [e.message for e in v.errors(since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

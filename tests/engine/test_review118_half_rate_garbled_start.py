@@ -26,30 +26,18 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.engine.garblers import (
+    AZ_MIN_DEG,
+    START_DEG,
+    WATCH_S,
+    at_half_rate,
+    lowest_az,
+    opened_through,
+    turning_at_the_start,
+)
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 150.0
-AZ_MIN_DEG = 60.0
-TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
-WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
-STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
-
-
-def at_half_rate() -> Callable[[bytes, float], bytes]:
-    """A box at twice the host's baud rate: every second byte read, as another (its top bit
-    set, never a line end)."""
-    count = [0]
-
-    def read(data: bytes, now: float) -> bytes:
-        out = bytearray()
-        for byte in data:
-            count[0] += 1
-            if count[0] % 2 == 0:
-                out.append((byte ^ 0x5A) | 0x80)
-        return bytes(out)
-
-    return read
 
 
 @pytest.mark.parametrize(
@@ -58,22 +46,9 @@ def at_half_rate() -> Callable[[bytes, float], bytes]:
 def test_a_turn_read_at_half_rate_is_stopped_before_the_limit(
     rig: Rig, model: str, target: bytes
 ) -> None:
-    v = rig(
-        model,
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.device.receive(target, v.now)  # (turning when the bridge starts)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
-    v.to_host = at_half_rate()
-    v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    v = turning_at_the_start(rig, model, target)
+    t = opened_through(v, at_half_rate())
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
     said = [e.message for e in v.errors(since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -18,15 +18,18 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.test_review118_half_rate_garbled_start import at_half_rate
+from tests.engine.garblers import (
+    AZ_MIN_DEG,
+    START_DEG,
+    WATCH_S,
+    at_half_rate,
+    lowest_az,
+    opened_through,
+    turning_at_the_start,
+)
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 150.0
-AZ_MIN_DEG = 60.0
-TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
-WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
-STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
 
 
 @pytest.mark.xfail(
@@ -49,22 +52,11 @@ STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
 def test_a_gs232_turn_read_at_half_rate_is_stopped_before_the_limit(
     rig: Rig, model: str, line_ending: bytes, spacing: int
 ) -> None:
-    v = rig(
-        model,
-        emulator={"start_az_deg": START_DEG, "line_ending": line_ending, "spacing": spacing},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
+    v = turning_at_the_start(
+        rig, model, b"M005\r", {"line_ending": line_ending, "spacing": spacing}
     )
-    v.device.receive(b"M005\r", v.now)  # (turning when the bridge starts)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
-    v.to_host = at_half_rate()
-    v.link_up()
-    lowest = START_DEG
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
+    t = opened_through(v, at_half_rate())
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
     said = [e.message for e in v.errors(since=t)]
     assert lowest >= AZ_MIN_DEG, (
         f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "

@@ -21,18 +21,20 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import Garble
+from tests.engine.garblers import (
+    AZ_MIN_DEG,
+    START_DEG,
+    WATCH_S,
+    Garble,
+    at_half_rate,
+    opened_through,
+    turning_at_the_start,
+)
+from tests.engine.resetting import lowest_az_resetting
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
-from tests.engine.test_review118_half_rate_garbled_start import at_half_rate
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 150.0
-AZ_MIN_DEG = 60.0
-TURNING_S = 0.5  # the turn under way when the bridge starts (virtual time, not a deadline)
-WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
-STEP_S = 0.1  # a step of virtual time to see the lowest bearing: not a deadline
-DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later (virtual time)
 
 
 @pytest.mark.xfail(
@@ -57,28 +59,10 @@ DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later 
 def test_a_garbled_turn_on_a_resetting_adapter_is_stopped_before_the_limit(
     rig: Rig, model: str, garble: str, up_s: float
 ) -> None:
-    v = rig(
-        model,
-        emulator={"start_az_deg": START_DEG},
-        settings={"az_min_deg": AZ_MIN_DEG},
-        connect=False,
-    )
-    v.manual_rotate(5.0)  # (turning when the bridge starts: a hand at the panel)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    v = turning_at_the_start(rig, model, None)  # (a hand at the panel)
     garbler: Garble = torn if garble == "torn" else at_half_rate()
-    v.to_host = garbler
-    v.link_up()
-    lowest, drop_t = START_DEG, v.now + up_s
-    while v.now < t + WATCH_S:
-        v.run_for(STEP_S)
-        lowest = min(lowest, v.truth().az_deg)
-        if v.now >= drop_t:
-            v.link_down("adapter reset")
-            v.run_for(DOWN_S)
-            v.link_up()
-            drop_t = v.now + up_s
+    t = opened_through(v, garbler)
+    lowest = lowest_az_resetting(v, t + WATCH_S, START_DEG, up_s)
     stops = v.frames("stop", since=t)
     assert lowest >= AZ_MIN_DEG, (
         f"turned from {START_DEG:g} down to {lowest:g}, past az_min_deg {AZ_MIN_DEG:g}; "
