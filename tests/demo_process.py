@@ -15,6 +15,8 @@ import threading
 import time
 from pathlib import Path
 
+from bridge import demo
+from bridge.cli import build_parser
 from tests.support.mosquitto import free_port
 from tests.support.waiting import slow
 
@@ -163,3 +165,10 @@ def _web_port(args: tuple[str, ...] | list[str]) -> list[str]:
     if any(a.startswith("--web-port") for a in args) or "--help" in args:
         return []
     return ["--web-port", str(free_port())]
+
+
+def run_demo_in_process(port: int, *flags: str) -> int:
+    """``rotor-bridge demo --mqtt-port port --web-port 0 flags...`` run in this process (its
+    printed lines in the test's capsys, its log in caplog): its exit code."""
+    args = build_parser().parse_args(["demo", "--mqtt-port", str(port), "--web-port", "0", *flags])
+    return demo.run(args)

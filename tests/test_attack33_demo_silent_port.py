@@ -17,8 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge import demo
-from bridge.cli import build_parser
+from tests.demo_process import run_demo_in_process
 
 
 def test_a_port_that_speaks_no_mqtt_is_not_announced_as_the_broker(
@@ -33,10 +32,7 @@ def test_a_port_that_speaks_no_mqtt_is_not_announced_as_the_broker(
         silent.bind(("127.0.0.1", 0))
         silent.listen(16)
         port = silent.getsockname()[1]
-        args = build_parser().parse_args(
-            ["demo", "--mqtt-port", str(port), "--web-port", "0", "--duration-s", "3"]
-        )
-        code = demo.run(args)
+        code = run_demo_in_process(port, "--duration-s", "3")
     said = capsys.readouterr()
     connected = "connected to MQTT broker" in caplog.text
     claimed = f"the MQTT broker already running at 127.0.0.1:{port}" in said.out + said.err
@@ -59,10 +55,7 @@ def test_a_port_that_speaks_no_mqtt_ends_a_demo_told_to_start_no_broker_saying_s
         silent.bind(("127.0.0.1", 0))
         silent.listen(16)
         port = silent.getsockname()[1]
-        args = build_parser().parse_args(
-            ["demo", "--mqtt-port", str(port), "--web-port", "0", "--no-private-broker"]
-        )
-        code = demo.run(args)
+        code = run_demo_in_process(port, "--no-private-broker")
     said = capsys.readouterr()
     assert code == 1, said.err
     assert f"127.0.0.1:{port} takes connections but answers no MQTT" in said.err, said.err

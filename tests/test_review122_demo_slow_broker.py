@@ -15,61 +15,15 @@ broker (its CONNACK) late."""
 
 from __future__ import annotations
 
-import contextlib
 import logging
-import socket
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from bridge import demo
-from bridge.cli import build_parser
+from tests.demo_process import run_demo_in_process
+from tests.support.brokers import SlowBroker
 from tests.support.mosquitto import Mosquitto
-
-CONNACK_LATE_S = 3.0  # the broker's own pace, not a deadline: past the demo's 2 s, under paho's 5 s
-
-
-class SlowBroker:
-    """127.0.0.1:``port`` relays to ``backend``; the broker's first bytes on each connection (its
-    CONNACK) are handed on ``CONNACK_LATE_S`` late, everything after at once."""
-
-    def __init__(self, backend: int) -> None:
-        self._backend = backend
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self._listener.getsockname()[1]
-        self._closed = threading.Event()
-        self._socks: list[socket.socket] = []
-        threading.Thread(target=self._serve, daemon=True).start()
-
-    def _serve(self) -> None:
-        while True:
-            try:
-                client, _ = self._listener.accept()
-                server = socket.create_connection(("127.0.0.1", self._backend))
-            except OSError:
-                return
-            self._socks += [client, server]
-            threading.Thread(target=self._pipe, args=(client, server, False), daemon=True).start()
-            threading.Thread(target=self._pipe, args=(server, client, True), daemon=True).start()
-
-    def _pipe(self, src: socket.socket, dst: socket.socket, late: bool) -> None:
-        with contextlib.suppress(OSError):
-            while data := src.recv(65536):
-                if late:
-                    late = False
-                    if self._closed.wait(CONNACK_LATE_S):  # the broker's pace (not a deadline)
-                        return
-                dst.sendall(data)
-        with contextlib.suppress(OSError):
-            dst.shutdown(socket.SHUT_WR)
-
-    def close(self) -> None:
-        self._closed.set()
-        self._listener.close()
-        for s in self._socks:
-            s.close()
 
 
 @pytest.fixture
@@ -89,11 +43,7 @@ def test_a_broker_slow_to_connack_is_still_the_demos_broker(
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     caplog.set_level(logging.INFO)
     port = slow_broker.port
-    args = build_parser().parse_args(
-        ["demo", "--mqtt-port", str(port), "--web-port", "0", "--no-private-broker"]
-        + ["--duration-s", "12"]
-    )
-    code = demo.run(args)
+    code = run_demo_in_process(port, "--no-private-broker", "--duration-s", "12")
     said = capsys.readouterr()
     assert "answers no MQTT" not in said.err, f"the user's broker called no broker: {said.err}"
     assert code == 0, f"the demo refused the user's working broker (exit {code}): {said.err}"

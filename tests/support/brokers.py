@@ -279,12 +279,7 @@ class NoMqtt5:
                 return
             head += data
             level = protocol_level(head)
-        with self._lock:
-            self.levels.append(level)
-            closes_v5 = level == 5 and self.v5_closes_left != 0
-            if closes_v5 and self.v5_closes_left is not None:
-                self.v5_closes_left -= 1
-        if closes_v5 or self.close_all or self._closed:
+        if self._refuses(level) or self.close_all or self._closed:
             sock.close()  # what RabbitMQ 3.10 does with MQTT 5
             return
         up = socket.create_connection(("127.0.0.1", self.target))
@@ -293,6 +288,15 @@ class NoMqtt5:
         up.sendall(head)
         threading.Thread(target=self._pipe, args=(up, sock), daemon=True).start()
         self._pipe(sock, up)
+
+    def _refuses(self, level: int | None) -> bool:
+        """Whether a CONNECT of protocol ``level`` is answered by closing (``levels`` told)."""
+        with self._lock:
+            self.levels.append(level)
+            closes_v5 = level == 5 and self.v5_closes_left != 0
+            if closes_v5 and self.v5_closes_left is not None:
+                self.v5_closes_left -= 1
+        return closes_v5
 
     def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
         with contextlib.suppress(OSError):
@@ -309,3 +313,58 @@ class NoMqtt5:
             for s in self._socks:
                 with contextlib.suppress(OSError):
                     s.close()
+
+
+class Mqtt5Only(NoMqtt5):
+    """A relay on a free loopback port in front of ``port`` that closes every CONNECT that is
+    not MQTT 5 (a broker listener that speaks MQTT 5 alone: review 122) and passes an MQTT 5
+    connection through both ways."""
+
+    def _refuses(self, level: int | None) -> bool:
+        with self._lock:
+            self.levels.append(level)
+        return level != 5
+
+
+CONNACK_LATE_S = 3.0  # the broker's own pace, not a deadline: past the demo's 2 s, under paho's 5 s
+
+
+class SlowBroker:
+    """127.0.0.1:``port`` relays to ``backend``; the broker's first bytes on each connection (its
+    CONNACK) are handed on ``CONNACK_LATE_S`` late, everything after at once (review 122)."""
+
+    def __init__(self, backend: int) -> None:
+        self._backend = backend
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port: int = self._listener.getsockname()[1]
+        self._closed = threading.Event()
+        self._socks: list[socket.socket] = []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                client, _ = self._listener.accept()
+                server = socket.create_connection(("127.0.0.1", self._backend))
+            except OSError:
+                return
+            self._socks += [client, server]
+            threading.Thread(target=self._pipe, args=(client, server, False), daemon=True).start()
+            threading.Thread(target=self._pipe, args=(server, client, True), daemon=True).start()
+
+    def _pipe(self, src: socket.socket, dst: socket.socket, late: bool) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                if late:
+                    late = False
+                    if self._closed.wait(CONNACK_LATE_S):  # the broker's pace (not a deadline)
+                        return
+                dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+    def close(self) -> None:
+        self._closed.set()
+        self._listener.close()
+        for s in self._socks:
+            s.close()
