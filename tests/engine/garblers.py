@@ -101,6 +101,30 @@ def lowest_az(v: VirtualRotator, until: float, start: float, step_s: float = STE
     return lowest
 
 
+CONFIRMED_S = 15.0  # the start's readings on a clean line (virtual time, not a deadline)
+FIRST_STOP_S = 60.0  # eight readings at the moving rate, with room (virtual time)
+HAND_S = 60.0  # the hand's turn, with room (virtual time)
+
+
+def hand_after_the_unwatched_stop(
+    rig: Callable[..., VirtualRotator], rest_deg: float, hand_deg: float
+) -> VirtualRotator:
+    """An Easycomm II box at ``rest_deg``, its start confirmed on a clean line, then a line
+    reading every answer 60 degrees off (by turns up and down) until the unwatched stop, then a
+    hand turning it to ``hand_deg`` for HAND_S (its unwatched stops may cut the hand short):
+    the at-rest set-up of reviews 123 and 126, the line still bad."""
+    v = rig("easycomm2", emulator={"start_az_deg": rest_deg}, connect=False)
+    v.link_up()
+    v.run_for(CONFIRMED_S)
+    assert v.status.available and v.status.bearing_deg == rest_deg  # (confirmed, clean line)
+    v.to_host = every_answer_off([60.0, -60.0])
+    t0 = v.now
+    v.run_until(lambda h: bool(h.frames("stop", since=t0)), FIRST_STOP_S, "the unwatched stop")
+    v.manual_rotate(hand_deg)
+    v.run_for(HAND_S)  # (its unwatched stops may cut the hand short: it rests anyway)
+    return v
+
+
 def _easycomm_lines(rewrite: Callable[[bytes], bytes]) -> Garble:
     """Each whole answer line (up to ``\\n``) through ``rewrite``; a part line held back."""
     line = bytearray()

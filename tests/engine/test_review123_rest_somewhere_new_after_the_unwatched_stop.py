@@ -15,15 +15,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import MotionState
-from tests.engine.garblers import every_answer_off
+from tests.engine.garblers import hand_after_the_unwatched_stop
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
 REST_DEG = 150.0
 HAND_DEG = 120.0
-CONFIRMED_S = 15.0  # the start's readings on a clean line (virtual time, not a deadline)
-FIRST_STOP_S = 60.0  # eight readings at the moving rate, with room (virtual time)
-HAND_S = 60.0  # the hand's turn, with room (virtual time)
 CLEAN_S = 10.0  # the line right again: a few idle polls (virtual time)
 TURNED_DEG = 5.0  # the hand turned it further than any doubt's tolerance
 NEAR_DEG = 0.5  # shown where it rests (the box's tenth of a degree, rounded)
@@ -32,15 +29,7 @@ NEAR_DEG = 0.5  # shown where it rests (the box's tenth of a degree, rounded)
 def test_a_rotor_resting_somewhere_new_after_the_unwatched_stop_is_shown_there(
     rig: Rig,
 ) -> None:
-    v = rig("easycomm2", emulator={"start_az_deg": REST_DEG}, connect=False)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
-    v.to_host = every_answer_off([60.0, -60.0])
-    t0 = v.now
-    v.run_until(lambda h: bool(h.frames("stop", since=t0)), FIRST_STOP_S, "the unwatched stop")
-    v.manual_rotate(HAND_DEG)
-    v.run_for(HAND_S)  # (its unwatched stops may cut the hand short: it rests anyway)
+    v = hand_after_the_unwatched_stop(rig, REST_DEG, HAND_DEG)
     rests = v.truth().az_deg
     assert abs(rests - REST_DEG) > TURNED_DEG, rests  # (the premise: somewhere new)
     assert v.status.bearing_deg == REST_DEG  # (the line bad: shown where it stood)
