@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from bridge.core.model import MotionState
 from tests.engine.garblers import STEP_S as LOWEST_STEP_S
 from tests.engine.garblers import Garble
@@ -58,3 +60,18 @@ def lowest_az_resetting(v: VirtualRotator, until: float, start: float, up_s: flo
             v.link_up()
             drop_t = v.now + up_s
     return lowest
+
+
+def alone_then_resetting(
+    rig: Callable[..., VirtualRotator], model: str, garble: Garble | None, up_s: float
+) -> tuple[VirtualRotator, float, float | None, float]:
+    """``first_stop_s`` for a ``model`` box from START_DEG on one connection (it must stop),
+    then on a fresh one whose adapter resets every ``up_s``: that rotor, the first stop on one
+    connection, the first on the resetting one, and when that one was due at the latest (one
+    reconnect's time on top)."""
+    alone_s = first_stop_s(rig(model, emulator={"start_az_deg": START_DEG}), garble, None)
+    assert alone_s is not None  # (one connection: stopped at the silence time)
+    v = rig(model, emulator={"start_az_deg": START_DEG})
+    stop_s = first_stop_s(v, garble, up_s)
+    due_s = alone_s + DOWN_S + STEP_S  # (one reconnect's time at most on top)
+    return v, alone_s, stop_s, due_s

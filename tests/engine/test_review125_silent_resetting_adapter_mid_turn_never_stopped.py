@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.resetting import DOWN_S, STEP_S, first_stop_s
+from tests.engine.resetting import alone_then_resetting
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -33,11 +33,7 @@ Rig = Callable[..., VirtualRotator]
 def test_a_silent_turn_on_a_resetting_adapter_is_stopped_at_the_silence_time(
     rig: Rig, up_s: float
 ) -> None:
-    alone_s = first_stop_s(rig("gs232b", emulator={"start_az_deg": 20.0}), None, None)
-    assert alone_s is not None  # (one connection: stopped at the silence time)
-    v = rig("gs232b", emulator={"start_az_deg": 20.0})
-    stop_s = first_stop_s(v, None, up_s)
-    due_s = alone_s + DOWN_S + STEP_S  # (one reconnect's time at most on top)
+    v, alone_s, stop_s, due_s = alone_then_resetting(rig, "gs232b", None, up_s)
     said = [e.message for e in v.errors()]
     assert stop_s is not None and stop_s <= due_s, (
         f"first stop {stop_s} s after the controller fell silent (one connection: "
