@@ -35,6 +35,23 @@ def limited(
     )
 
 
+def confirmed_at_rest(
+    rig: Callable[..., VirtualRotator],
+    model: str,
+    rest_deg: float,
+    az_min_deg: float,
+    confirmed_s: float,
+) -> VirtualRotator:
+    """A ``limited`` box at rest at ``rest_deg``, its port opened and its start's readings
+    taken on a clean line for ``confirmed_s`` (virtual time): the at-rest start of reviews 116,
+    123 and 126."""
+    v = limited(rig, model, rest_deg, az_min_deg)
+    v.link_up()
+    v.run_for(confirmed_s)
+    assert v.status.available and v.status.bearing_deg == rest_deg  # (confirmed, clean line)
+    return v
+
+
 def turning_down(v: VirtualRotator, under_way_s: float) -> None:
     """The Easycomm box sent a turn to 5 before the bridge opens its port (a turn it goes on
     with across a restart), under way for ``under_way_s`` (virtual time)."""

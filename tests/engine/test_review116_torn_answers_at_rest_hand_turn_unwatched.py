@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import limited, lowest_az
+from tests.engine.garblers import confirmed_at_rest, lowest_az
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -37,10 +37,7 @@ def torn(data: bytes, now: float) -> bytes:
 
 
 def test_a_hand_turn_at_rest_on_a_torn_line_is_stopped_before_the_limit(rig: Rig) -> None:
-    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, "easycomm2", REST_DEG, AZ_MIN_DEG, CONFIRMED_S)
     v.to_host = torn
     t = v.now
     v.manual_rotate(5.0)  # (a hand at the panel, towards the limit)
@@ -59,10 +56,7 @@ TEAR_EVERY = 5  # one answer torn in this many, the rest clean
 def test_one_torn_answer_now_and_then_at_rest_gets_no_stop(rig: Rig) -> None:
     """The guard: a healthy box at rest whose line tears one answer in five (one garble is
     never eight in a row) is not stopped, and its bearing stands."""
-    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, "easycomm2", REST_DEG, AZ_MIN_DEG, CONFIRMED_S)
     answers = [0]
 
     def now_and_then(data: bytes, now: float) -> bytes:

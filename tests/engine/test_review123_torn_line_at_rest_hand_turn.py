@@ -29,7 +29,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import limited, lowest_az
+from tests.engine.garblers import confirmed_at_rest, limited, lowest_az
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
 
@@ -41,10 +41,7 @@ WATCH_S = 60.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
 def _hand_on_a_torn_line(rig: Rig, model: str) -> tuple[VirtualRotator, float, float]:
-    v = limited(rig, model, REST_DEG, AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, model, REST_DEG, AZ_MIN_DEG, CONFIRMED_S)
     v.to_host = torn
     t = v.now
     v.manual_rotate(5.0)  # (a hand at the panel, towards the limit)

@@ -24,7 +24,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.engine.garblers import limited, lowest_az
+from tests.engine.garblers import confirmed_at_rest, lowest_az
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
 
@@ -45,10 +45,7 @@ WATCH_S = 60.0  # 145 degrees at 6 deg/s, with room (virtual time)
 def test_a_hand_turn_after_a_torn_line_took_it_offline_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
-    v = limited(rig, "easycomm2", REST_DEG, AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, "easycomm2", REST_DEG, AZ_MIN_DEG, CONFIRMED_S)
     v.to_host = torn
     v.run_until(lambda h: not h.status.available, OFFLINE_S, "the offline")
     v.run_for(HAND_AFTER_S)

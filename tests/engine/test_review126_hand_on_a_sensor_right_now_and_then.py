@@ -21,7 +21,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tests.engine.garblers import every_answer_off, every_frame_off, limited, lowest_az
+from tests.engine.garblers import (
+    confirmed_at_rest,
+    every_answer_off,
+    every_frame_off,
+    lowest_az,
+)
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -37,10 +42,7 @@ WATCH_S = 120.0  # the hand's turn (virtual time)
 def test_a_hand_turn_on_a_sensor_right_now_and_then_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
-    v = limited(rig, "rot2prog", REST_DEG, AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, "rot2prog", REST_DEG, AZ_MIN_DEG, CONFIRMED_S)
     v.to_host = every_frame_off(OFFSETS)
     v.run_for(RIGHT_NOW_AND_THEN_S)
     assert v.truth().az_deg == REST_DEG  # (at rest all along)
@@ -66,10 +68,7 @@ def test_a_hand_turn_three_seconds_into_review_103s_line_is_stopped_within_secon
     eight disagreeing at the moving rate is spent before the hand comes. Its first unwatched
     stop comes 7 s in, at 108, 42 degrees down; at 726b34d5^, 1.2 s in, at 143 (review 103's
     "about a second and a quarter in, at about 143")."""
-    v = limited(rig, "easycomm2", REST_DEG, EASYCOMM_AZ_MIN_DEG)
-    v.link_up()
-    v.run_for(CONFIRMED_S)
-    assert v.status.available and v.status.bearing_deg == REST_DEG  # (confirmed, clean line)
+    v = confirmed_at_rest(rig, "easycomm2", REST_DEG, EASYCOMM_AZ_MIN_DEG, CONFIRMED_S)
     v.to_host = every_answer_off(REVIEW_103_LINE)
     v.run_for(GONE_BAD_S)
     t = v.now
