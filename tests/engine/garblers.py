@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Garble = Callable[[bytes, float], bytes]
@@ -50,6 +51,19 @@ def confirmed_at_rest(
     v.run_for(confirmed_s)
     assert v.status.available and v.status.bearing_deg == rest_deg  # (confirmed, clean line)
     return v
+
+
+def garbled_at_rest(
+    v: VirtualRotator, garble: Garble, online_s: float, count_s: float, settle_s: float
+) -> float:
+    """``v`` online and at rest (within ``online_s``), a further ``count_s`` there (the start's
+    carried turn judged, none: review 105), then its answers through ``garble`` for
+    ``settle_s`` (virtual time): when the count that follows starts (reviews 116 and 123)."""
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, online_s, "online")
+    v.run_for(count_s)  # (at rest a minute: the start's carried turn judged, none; review 105)
+    v.to_host = garble
+    v.run_for(settle_s)
+    return v.now
 
 
 def turning_down(v: VirtualRotator, under_way_s: float) -> None:

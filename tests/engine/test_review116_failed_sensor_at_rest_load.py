@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from bridge.core.model import MotionState
+from tests.engine.garblers import garbled_at_rest
 from tests.engine.test_review105_first_readings_polled_at_the_moving_rate_forever import failing
 from tests.engine.virtual import VirtualRotator
 
@@ -30,11 +30,7 @@ def test_a_sensor_failed_for_good_at_rest_is_stopped_but_not_asked_at_the_moving
     rig: Rig,
 ) -> None:
     v = rig("gs232b-az", emulator={"start_az_deg": 150.0})
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, ONLINE_S, "online")
-    v.run_for(COUNT_S)  # (at rest a minute: the start's carried turn judged, none; review 105)
-    v.to_host = failing()
-    v.run_for(SETTLE_S)
-    t = v.now
+    t = garbled_at_rest(v, failing(), ONLINE_S, COUNT_S, SETTLE_S)
     v.run_for(COUNT_S)
     asked = v.sent(since=t).count(QUERY)
     stops = v.frames("stop", since=t)

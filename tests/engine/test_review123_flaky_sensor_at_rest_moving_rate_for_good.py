@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from tests.engine.garblers import garbled_at_rest
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -61,11 +61,7 @@ def test_a_sensor_reading_right_now_and_then_is_not_asked_at_the_moving_rate_for
     rig: Rig,
 ) -> None:
     v = rig("gs232b-az", emulator={"start_az_deg": 150.0})
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, ONLINE_S, "online")
-    v.run_for(COUNT_S)  # (at rest a minute: the start's carried turn judged, none; review 105)
-    v.to_host = right_now_and_then()
-    v.run_for(SETTLE_S)
-    t = v.now
+    t = garbled_at_rest(v, right_now_and_then(), ONLINE_S, COUNT_S, SETTLE_S)
     v.run_for(COUNT_S)
     asked = v.sent(since=t).count(QUERY)
     assert v.status.available and v.status.bearing_deg == 150.0  # (watched: every fifth agrees)
