@@ -19,20 +19,31 @@ STEP_S = 0.05  # a step of virtual time to see the first stop: not a deadline
 DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later (virtual time)
 
 
+def turning_watched(v: VirtualRotator) -> float:
+    """``v`` settled at rest, then turning from START_DEG to TARGET_DEG for TURNING_S, watched
+    (virtual time): when the turn was well under way (reviews 118 and 125)."""
+    v.run_until_state(MotionState.IDLE, SETTLE_S)
+    v.target(TARGET_DEG)
+    v.run_for(TURNING_S)
+    assert v.truth().is_moving
+    return v.now
+
+
+def goes_bad(v: VirtualRotator, garble: Garble | None) -> None:
+    """``v``'s line from now on: every byte through ``garble``, or silent if None."""
+    if garble is None:
+        v.set_silent(True)
+    else:
+        v.to_host = garble
+
+
 def first_stop_s(v: VirtualRotator, garble: Garble | None, up_s: float | None) -> float | None:
     """``v`` settles, turns from START_DEG to TARGET_DEG for TURNING_S, then its line goes bad
     (every byte through ``garble``, or silent if None) and, if ``up_s``, the port fails every
     ``up_s`` and reopens DOWN_S later: how long after the line went bad the first stop frame
     went (None: none in WATCH_S)."""
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
-    if garble is None:
-        v.set_silent(True)
-    else:
-        v.to_host = garble
+    t = turning_watched(v)
+    goes_bad(v, garble)
     drop_t = v.now + up_s if up_s else float("inf")
     while v.now < t + WATCH_S:
         v.run_for(STEP_S)

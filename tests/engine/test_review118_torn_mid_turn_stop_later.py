@@ -19,25 +19,18 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bridge.core.model import MotionState
+from tests.engine.resetting import SETTLE_S, START_DEG, turning_watched
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 20.0
-TARGET_DEG = 300.0
-SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
-TURNING_S = 5.0  # the turn well under way, watched (virtual time, not a deadline)
 WATCH_S = 30.0  # the silence, the offline and what follows (virtual time)
 STEP_S = 0.1  # a step of virtual time to see the first stop: not a deadline
 
 
 def test_a_turn_whose_line_tears_every_byte_is_stopped_at_the_silence_timeout(rig: Rig) -> None:
     v = rig("gs232b", emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    t = turning_watched(v)
     v.to_host = torn
     stop_t = None
     while stop_t is None and v.now < t + WATCH_S:

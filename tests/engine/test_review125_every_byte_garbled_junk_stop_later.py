@@ -20,40 +20,21 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from tests.engine.resetting import START_DEG, goes_bad, turning_watched
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-START_DEG = 20.0
-TARGET_DEG = 300.0
-SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
-TURNING_S = 5.0  # the turn well under way, watched (virtual time, not a deadline)
 WATCH_S = 30.0  # the silence, the offline and what follows (virtual time)
 STEP_S = 0.1  # a step of virtual time to see the first stop: not a deadline
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review 125: a turn on a line that garbles every byte runs unwatched 6.3-6.5 s "
-        "before its stop, 3 s past rule 2's silence time, on every model but GS-232"
-    ),
-)
-@pytest.mark.parametrize("model", ["rotorez", "md01", "rt21", "rc2800", "easycomm2", "prosistel"])
 def first_stop_s(rig: Rig, model: str, fault: str) -> tuple[float | None, VirtualRotator]:
     """How long after the line went bad (``fault``: every byte garbled, or silent) the first
     stop frame went, mid-turn."""
     v = rig(model, emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
-    if fault == "torn":
-        v.to_host = torn
-    else:
-        v.set_silent(True)
+    t = turning_watched(v)
+    goes_bad(v, torn if fault == "torn" else None)
     while v.now < t + WATCH_S:
         v.run_for(STEP_S)
         if v.frames("stop", since=t):
