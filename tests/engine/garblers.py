@@ -156,7 +156,7 @@ def hand_after_the_unwatched_stop(
     return v
 
 
-def _easycomm_lines(rewrite: Callable[[bytes], bytes]) -> Garble:
+def easycomm_lines(rewrite: Callable[[bytes], bytes]) -> Garble:
     """Each whole answer line (up to ``\\n``) through ``rewrite``; a part line held back."""
     line = bytearray()
 
@@ -186,7 +186,7 @@ def every_answer_off(offsets: list[float]) -> Garble:
             whole = whole[: found.start()] + said + whole[found.end() :]
         return whole
 
-    return _easycomm_lines(rewrite)
+    return easycomm_lines(rewrite)
 
 
 def first_answers_one_bit_off(flips: list[bytes]) -> Garble:
@@ -201,7 +201,7 @@ def first_answers_one_bit_off(flips: list[bytes]) -> Garble:
             whole = whole[:at] + left.pop(0) + whole[at + 1 :]
         return whole
 
-    return _easycomm_lines(rewrite)
+    return easycomm_lines(rewrite)
 
 
 def first_turning_answer_one_bit_off(rest: str) -> Garble:
@@ -217,7 +217,7 @@ def first_turning_answer_one_bit_off(rest: str) -> Garble:
             whole = whole[:at] + b"3" + whole[at + 1 :]
         return whole
 
-    return _easycomm_lines(rewrite)
+    return easycomm_lines(rewrite)
 
 
 def every_rotorez_answer_off(offsets: list[float]) -> Garble:

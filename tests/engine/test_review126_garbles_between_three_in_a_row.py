@@ -25,6 +25,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState
+from tests.engine.garblers import easycomm_lines
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -39,7 +40,6 @@ SCRIPT: list[float | None] = [*FAR, -19.0, GARBLED, -18.0, GARBLED, -19.1]
 
 
 def scripted_answers() -> Callable[[bytes, float], bytes]:
-    line = bytearray()
     count = [0]
 
     def rewrite(whole: bytes) -> bytes:
@@ -54,17 +54,7 @@ def scripted_answers() -> Callable[[bytes, float], bytes]:
         said = f"AZ{float(found.group(1)) + off:.1f}".encode()
         return whole[: found.start()] + said + whole[found.end() :]
 
-    def garble(data: bytes, now: float) -> bytes:
-        line.extend(data)
-        out = b""
-        while b"\n" in line:
-            cut = line.index(b"\n") + 1
-            whole = bytes(line[:cut])
-            del line[:cut]
-            out += rewrite(whole)
-        return out
-
-    return garble
+    return easycomm_lines(rewrite)
 
 
 @pytest.mark.xfail(
