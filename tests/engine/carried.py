@@ -49,3 +49,13 @@ def jammed_after_a_carried_turn(v: VirtualRotator, drift: Callable[[float], Garb
     v.jam()  # its motor driving
     v.to_host = drift(jam_t)
     return jam_t
+
+
+def carried_azimuth_turn(v: VirtualRotator, el_aim: float | None) -> None:
+    """``v`` at rest, sent to azimuth 250 (elevation ``el_aim``: nothing for it to do), its
+    azimuth turning past 80, then replugged: the carried azimuth turn of the jam reviews
+    (110, 115, 119) going on unasked."""
+    at_rest(v)
+    v.target(250, el_aim)  # nothing for the elevation to do
+    v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
+    replugged(v)

@@ -15,7 +15,7 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import at_rest, replugged
+from tests.engine.carried import carried_azimuth_turn
 from tests.engine.virtual import VirtualRotator
 
 SLOW_EL_DEG_S = 1.0  # review 101's: an elevation set slow (its own time 4.8 s)
@@ -36,10 +36,7 @@ def test_an_early_jam_of_an_azimuth_only_carried_turn_is_stopped_by_the_azimuths
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
         assert JAM_AFTER_S < seen["elevation"]  # (the set-up: inside the elevation's own time)
-        at_rest(v)
-        v.target(250, el_aim)  # nothing for the elevation to do
-        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        replugged(v)
+        carried_azimuth_turn(v, el_aim)
         v.run_for(JAM_AFTER_S)  # (the azimuth read turning on: not a deadline)
         assert v.truth().is_moving and v.status.moving and v.truth().el_deg == 0.0
         jam_t = v.now

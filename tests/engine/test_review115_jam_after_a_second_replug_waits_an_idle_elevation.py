@@ -14,7 +14,7 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import at_rest, replugged
+from tests.engine.carried import carried_azimuth_turn, replugged
 from tests.engine.virtual import VirtualRotator
 
 SLOW_EL_DEG_S = 1.0  # review 110's: an elevation set slow (its own time 4.8 s)
@@ -35,10 +35,7 @@ def test_a_jam_after_a_second_replug_is_stopped_by_the_azimuths_time() -> None:
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
         assert JAM_AFTER_S < seen["elevation"]  # (the set-up: inside the elevation's own time)
-        at_rest(v)
-        v.target(250, None)  # nothing for the elevation to do
-        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        replugged(v)
+        carried_azimuth_turn(v, None)
         v.run_for(READ_BACK_S)  # (the readings back, the turn read going on: not a deadline)
         assert v.truth().is_moving and v.status.moving
         replugged(v)  # the flaky adapter out again

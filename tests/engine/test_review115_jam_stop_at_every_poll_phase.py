@@ -14,7 +14,7 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import at_rest, replugged
+from tests.engine.carried import carried_azimuth_turn
 from tests.engine.virtual import VirtualRotator
 
 SLOW_EL_DEG_S = 1.0  # review 110's: an elevation set slow (its own time 4.8 s)
@@ -48,10 +48,7 @@ def test_a_jam_of_a_carried_turn_is_stopped_by_the_azimuths_time_at_every_phase(
     ) as v:
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
-        at_rest(v)
-        v.target(250, None)  # nothing for the elevation to do
-        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        replugged(v)
+        carried_azimuth_turn(v, None)
         v.run_for(jam_after_s)  # (the azimuth read turning on: not a deadline)
         assert v.truth().is_moving and v.status.moving
         jam_t = v.now

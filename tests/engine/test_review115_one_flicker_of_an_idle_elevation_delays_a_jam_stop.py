@@ -17,7 +17,7 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import at_rest, replugged
+from tests.engine.carried import carried_azimuth_turn
 from tests.engine.virtual import VirtualRotator
 
 SLOW_EL_DEG_S = 1.0  # review 110's: an elevation set slow (its own time 4.8 s)
@@ -38,10 +38,7 @@ def test_one_flicker_of_a_still_elevation_does_not_delay_a_jam_stop() -> None:
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
         assert FLICKER_DEG <= cfg.noise_deg  # (the set-up: inside the noise)
-        at_rest(v)
-        v.target(250, None)  # nothing for the elevation to do
-        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        replugged(v)
+        carried_azimuth_turn(v, None)
         v.run_for(JAM_AFTER_S)  # (the azimuth read turning on: not a deadline)
         assert v.truth().is_moving and v.status.moving and v.truth().el_deg == 0.0
         jam_t = v.now

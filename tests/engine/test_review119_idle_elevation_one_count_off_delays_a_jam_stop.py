@@ -17,7 +17,7 @@ import pytest
 
 from bridge.core.model import ErrorKind
 from bridge.session import motion as mo
-from tests.engine.carried import Garble, at_rest, replugged
+from tests.engine.carried import Garble, carried_azimuth_turn
 from tests.engine.virtual import VirtualRotator
 
 JAM_AFTER_S = 1.0  # after the port answers: the azimuth's carried move already read
@@ -51,10 +51,7 @@ def test_an_idle_elevation_read_one_count_off_does_not_delay_a_jam_stop(el_speed
         cfg = v.cfg.motion
         seen = mo.axis_seen_s(cfg)
         assert cfg.spec.reading_step_deg <= cfg.noise_deg  # (the set-up: one count, inside it)
-        at_rest(v)
-        v.target(250, None)  # nothing for the elevation to do
-        v.run_until(lambda h: h.truth().az_deg >= 80.0, 60, "the azimuth turning")
-        replugged(v)
+        carried_azimuth_turn(v, None)
         v.run_for(JAM_AFTER_S)  # (the azimuth read turning on: not a deadline)
         assert v.truth().is_moving and v.status.moving and v.truth().el_deg == 0.0
         jam_t = v.now
