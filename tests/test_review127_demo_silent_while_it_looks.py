@@ -21,11 +21,6 @@ from bridge import demo
 from bridge.cli import build_parser
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 127: the demo says nothing for 11 s while it waits for a CONNACK from a "
-    "port that never answers",
-)
 def test_the_demo_says_where_it_looks_for_a_broker_before_it_waits_for_one(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,

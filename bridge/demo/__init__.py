@@ -363,6 +363,13 @@ def _run(
         print(f"rotor-bridge demo: {format_validation_error(exc)}", file=sys.stderr)
         return 2
     host, port = asked = args.mqtt_host, args.mqtt_port
+    # the look can take the bridge's whole wait for a CONNACK and more (rule 6): said first, so a
+    # silent port or a slow broker is not taken for a demo that hangs (review 127)
+    print(
+        f"rotor-bridge demo: looking for an MQTT broker on {host}:{port} ...",
+        file=sys.stderr,
+        flush=True,
+    )
     there = answers(host, port)
     refused = LOGIN_REFUSED.get(connack(host, port) or 0) if there else None  # rule 8
     there = there and refused is None
