@@ -17,17 +17,10 @@ import socket
 import threading
 from pathlib import Path
 
-import pytest
-
 from tests.demo_process import DemoProcess
 from tests.support.waiting import slow
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 127: Ctrl-C while the demo waits for a CONNACK is ignored; it then starts "
-    "a private broker and bridge and prints its banner before stopping",
-)
 def test_ctrl_c_while_the_demo_looks_at_a_silent_port_ends_it_without_starting(
     tmp_path: Path,
 ) -> None:

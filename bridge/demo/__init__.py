@@ -370,15 +370,34 @@ def _run(
         file=sys.stderr,
         flush=True,
     )
-    there = answers(host, port)
-    refused = LOGIN_REFUSED.get(connack(host, port) or 0) if there else None  # rule 8
+    # each wait of the look ends with the demo (^C, SIGTERM): nothing is started then (rule 3)
+    there = answers(host, port, ended=done.is_set)
+    refused = (
+        LOGIN_REFUSED.get(connack(host, port, ended=done.is_set) or 0) if there else None
+    )  # rule 8
     there = there and refused is None
-    other = private_broker_of(host, port) if there and not args.no_private_broker else None
+    other = (
+        private_broker_of(host, port)
+        if there and not args.no_private_broker and not done.is_set()
+        else None
+    )
     # rule 6: a program there, but no broker (asked again: one may have come up meanwhile, and
     # answers at once; a program that took the first look's connection was given its full wait)
     mute = (
-        not there and not refused and listens(host, port) and not answers(host, port, LOOK_AGAIN_S)
+        not there
+        and not refused
+        and not done.is_set()
+        and listens(host, port)
+        and not answers(host, port, LOOK_AGAIN_S, ended=done.is_set)
     )
+    if done.is_set():
+        print(
+            f"rotor-bridge demo: stopping ({done.reason}) while it looked for a broker; "
+            "nothing was started",
+            file=sys.stderr,
+            flush=True,
+        )
+        return 0
     private = not there or other is not None
     if refused:
         print(

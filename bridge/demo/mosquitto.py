@@ -32,6 +32,8 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
+import math
 import os
 import re
 import shutil
@@ -43,6 +45,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Self
 
+from bridge.core.polling import POLLIN, POLLOUT, new_poller
 from bridge.interfaces.mqtt.paho_client import CONNACK_TIMEOUT_S
 
 
@@ -81,46 +84,59 @@ _DISCONNECT = bytes([0xE0, 0])
 # a CONNACK's code that says "not this protocol version": MQTT 5's 0x84; 1, a 3.1.1 broker's
 # answer to an MQTT 5 CONNECT (its "unacceptable protocol version")
 _OTHER_VERSION = frozenset({0x84, 0x01})
+# the look waits in slices this long, each ended by ``ended`` (the demo's ^C, SIGTERM): a wait
+# of the bridge's whole CONNACK_TIMEOUT_S is no time for a user's ^C to be held (review 127)
+LOOK_SLICE_S = 0.05
 
 
-def connack(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> int | None:
+def _never() -> bool:
+    return False
+
+
+def connack(
+    host: str,
+    port: int,
+    timeout_s: float = CONNACK_TIMEOUT_S,
+    ended: Callable[[], bool] = _never,
+) -> int | None:
     """The code of the CONNACK a broker at host:port answers the demo's CONNECT with (0:
     accepted; a refusal's code, in MQTT 5's words where it spoke MQTT 5), or None: nothing took
     the connection, or no CONNACK came within ``timeout_s`` (as long as the bridge waits for
     one: paho_client.py rule 5; review 122). MQTT 5 first; MQTT 3.1.1 when that connection was
     closed before a CONNACK or refused for its protocol version (an MQTT 3.1.1 broker), as the
     bridge steps down (connection.py rule 1); a broker that speaks MQTT 5 alone closes the
-    3.1.1 CONNECT, so it is never asked that first."""
+    3.1.1 CONNECT, so it is never asked that first. None too as soon as ``ended()`` says the
+    demo ends: it is asked between slices of the wait (LOOK_SLICE_S; the name's look-up alone
+    is not sliced)."""
     deadline = time.monotonic() + timeout_s
-    code = _connack(host, port, _CONNECT_5, deadline)
+    code = _connack(host, port, _CONNECT_5, deadline, ended)
     if code is None or code in _OTHER_VERSION:
-        code311 = _connack(host, port, _CONNECT_311, deadline)
+        code311 = _connack(host, port, _CONNECT_311, deadline, ended)
         code = code311 if code311 is not None or code is None else code
     return None if code is None or code < 0 else code
 
 
-def _connack(host: str, port: int, connect: bytes, deadline: float) -> int | None:
+def _connack(
+    host: str, port: int, connect: bytes, deadline: float, ended: Callable[[], bool]
+) -> int | None:
     """One CONNECT: the CONNACK's code; None: no connection, closed before the CONNACK, or
-    something else than MQTT; -1: no CONNACK by ``deadline`` (no second try: it would wait
-    again)."""
+    something else than MQTT; -1: no CONNACK by ``deadline``, or ``ended()`` (no second try: it
+    would wait again)."""
     try:
-        left = deadline - time.monotonic()
-        if left <= 0:
-            return -1
-        with socket.create_connection((host, port), timeout=left) as s:
-            s.sendall(connect)
-            if _read(s, 1, deadline) != bytes([_CONNACK]):
+        with _connect(host, port, deadline, ended) as s:
+            s.sendall(connect)  # (a dozen bytes: the new socket's buffer takes them at once)
+            if _read(s, 1, deadline, ended) != bytes([_CONNACK]):
                 return None
             length, shift = 0, 0  # the remaining length: 2 in 3.1.1, more with MQTT 5's properties
             while True:
-                byte = _read(s, 1, deadline)[0]
+                byte = _read(s, 1, deadline, ended)[0]
                 length |= (byte & 0x7F) << shift
                 shift += 7
                 if not byte & 0x80 or shift > 21:
                     break
             if not 2 <= length <= 0xFFFF:  # (a CONNACK's properties are short)
                 return None
-            code = _read(s, 2, deadline)[1]  # (flags first)
+            code = _read(s, 2, deadline, ended)[1]  # (flags first)
             with contextlib.suppress(OSError):
                 s.sendall(_DISCONNECT)
             return code
@@ -130,13 +146,49 @@ def _connack(host: str, port: int, connect: bytes, deadline: float) -> int | Non
         return None
 
 
-def _read(s: socket.socket, n: int, deadline: float) -> bytes:
+def _slice_ms(deadline: float, ended: Callable[[], bool]) -> int:
+    """The next slice of a wait, in ms; TimeoutError once ``deadline`` passed or ``ended()``."""
+    left = deadline - time.monotonic()
+    if left <= 0 or ended():
+        raise TimeoutError
+    return math.ceil(min(left, LOOK_SLICE_S) * 1000)
+
+
+def _connect(host: str, port: int, deadline: float, ended: Callable[[], bool]) -> socket.socket:
+    """``socket.create_connection``, its wait in slices (``_slice_ms``): a non-blocking
+    socket, connected to host:port's first address that takes it."""
+    failed: OSError = OSError(f"no address for {host}")
+    for family, kind, proto, _, address in socket.getaddrinfo(host, port, 0, socket.SOCK_STREAM):
+        s = socket.socket(family, kind, proto)
+        try:
+            s.setblocking(False)
+            err = s.connect_ex(address)
+            if err not in (0, errno.EINPROGRESS):
+                raise OSError(err, os.strerror(err))
+            poller = new_poller()
+            poller.register(s, POLLOUT)
+            while not poller.poll(_slice_ms(deadline, ended)):
+                pass
+            err = s.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+            if err:
+                raise OSError(err, os.strerror(err))
+            return s
+        except TimeoutError:
+            s.close()
+            raise
+        except OSError as exc:
+            s.close()
+            failed = exc
+    raise failed
+
+
+def _read(s: socket.socket, n: int, deadline: float, ended: Callable[[], bool]) -> bytes:
+    poller = new_poller()
+    poller.register(s, POLLIN)
     got = b""
     while len(got) < n:
-        left = deadline - time.monotonic()
-        if left <= 0:
-            raise TimeoutError
-        s.settimeout(left)
+        if not poller.poll(_slice_ms(deadline, ended)):
+            continue
         chunk = s.recv(n - len(got))
         if not chunk:  # closed without a CONNACK
             raise EOFError
@@ -154,14 +206,20 @@ LOGIN_REFUSED = {
 }
 
 
-def answers(host: str, port: int, timeout_s: float = CONNACK_TIMEOUT_S) -> bool:
+def answers(
+    host: str,
+    port: int,
+    timeout_s: float = CONNACK_TIMEOUT_S,
+    ended: Callable[[], bool] = _never,
+) -> bool:
     """Whether an MQTT broker answers at host:port: a CONNECT gets a CONNACK within
     ``timeout_s``, as long as the bridge waits for one (paho_client.py rule 5: a broker slower
     than the demo's look but quicker than that serves the bridge, review 122). A program that
     takes connections and says nothing, or something else than MQTT (a hung broker, an SSH
     tunnel whose far end is gone, a web server), is no broker: the demo would run dead on it.
-    A broker that refuses the demo's login answers too (``connack``, LOGIN_REFUSED)."""
-    return connack(host, port, timeout_s) is not None
+    A broker that refuses the demo's login answers too (``connack``, LOGIN_REFUSED). False
+    as soon as ``ended()``."""
+    return connack(host, port, timeout_s, ended) is not None
 
 
 _RUNNING = re.compile(rb"mosquitto version \S+ running")  # said once every listener is bound
