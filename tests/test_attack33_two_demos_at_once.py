@@ -6,11 +6,12 @@ answers by then. The README: the demo "never gets in the way of ... another demo
 broker that is another demo's it starts a private mosquitto on a free port. Two
 ``rotor-bridge demo`` processes started at once on one port, three times: one of them failed
 twice. The test makes the race certain: the other demo's broker comes up between this demo's
-look (``answers``, which found nothing an instant before) and its own mosquitto's bind.
+look (``connack``, which found nothing an instant before) and its own mosquitto's bind.
 Asserted: what the user sees, the demo's exit code and whether it said it is bridged."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -30,20 +31,22 @@ def test_a_demo_whose_private_port_another_demo_just_took_still_starts(
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
     (tmp_path / "tmp").mkdir()
     port = free_port()
-    looks: list[bool] = []
-    real_answers = demo.answers
+    looks: list[int | None] = []
+    real_connack = demo.connack
 
-    def looked_an_instant_before_the_other_came_up(host: str, p: int, *a: float) -> bool:
+    def looked_an_instant_before_the_other_came_up(
+        host: str, p: int, *a: float, **kw: Callable[[], bool]
+    ) -> int | None:
         if not looks:  # this demo's first look: the other demo's mosquitto not up yet
-            looks.append(False)
-            return False
-        looks.append(real_answers(host, p, *a))
+            looks.append(None)
+            return None
+        looks.append(real_connack(host, p, *a, **kw))
         return looks[-1]
 
     other = PrivateBroker(tmp_path / "other", port=port)  # the other demo's, up a moment later
     try:
         other.start(slow(10))
-        monkeypatch.setattr(demo, "answers", looked_an_instant_before_the_other_came_up)
+        monkeypatch.setattr(demo, "connack", looked_an_instant_before_the_other_came_up)
         args = build_parser().parse_args(
             ["demo", "--mqtt-port", str(port), "--web-port", "0", "--duration-s", "1"]
         )

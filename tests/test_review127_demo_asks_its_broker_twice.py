@@ -24,11 +24,6 @@ from tests.support.mosquitto import Mosquitto
 PROBE = re.compile(r"New client connected from \S+ as auto-\S+ \(p\d, c1, k10\)")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 127: the demo asks its broker for a CONNACK twice before it starts, so a "
-    "slow broker delays the start twice over, silently",
-)
 def test_the_demo_asks_its_broker_for_one_connack_before_it_starts(
     broker: Mosquitto,
     tmp_path: Path,

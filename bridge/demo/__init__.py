@@ -371,11 +371,11 @@ def _run(
         flush=True,
     )
     # each wait of the look ends with the demo (^C, SIGTERM): nothing is started then (rule 3)
-    there = answers(host, port, ended=done.is_set)
-    refused = (
-        LOGIN_REFUSED.get(connack(host, port, ended=done.is_set) or 0) if there else None
-    )  # rule 8
-    there = there and refused is None
+    # one CONNECT: whether a broker answers (rule 6) and whether it lets the demo in (rule 8),
+    # from the same CONNACK (asking twice made a slow broker's wait twice as long)
+    code = connack(host, port, ended=done.is_set)
+    refused = None if code is None else LOGIN_REFUSED.get(code)
+    there = code is not None and refused is None
     other = (
         private_broker_of(host, port)
         if there and not args.no_private_broker and not done.is_set()
