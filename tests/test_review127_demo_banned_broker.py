@@ -55,11 +55,6 @@ class BanningBroker:
         self._listener.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 127: a broker that bans the demo (CONNACK 0x8A) is announced as its broker; "
-    "the bridge is refused for the whole run",
-)
 def test_a_broker_that_bans_the_demo_ends_a_demo_told_to_start_no_broker_saying_so(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,

@@ -42,7 +42,8 @@ Rules:
 8. A broker that refuses the demo's login (its CONNACK says "not authorized" or "bad user name
    or password": one set up with a password, as most for Home Assistant are) cannot be its
    broker: the demo has no login flags, and its bridge and console would be refused, running
-   dead. The demo says so in one line and starts a private mosquitto on a free port (with
+   dead. Nor can one that bans it (MQTT 5's 0x8A "banned", demo/mosquitto.py BANNED). The demo
+   says so in one line and starts a private mosquitto on a free port (with
    ``--no-private-broker``: says so and ends).
 """
 
@@ -75,6 +76,7 @@ from bridge.core.ending import Ending
 from bridge.demo import sky as demo_sky
 from bridge.demo.console import Console, private_broker_of
 from bridge.demo.mosquitto import (
+    BANNED,
     LOGIN_REFUSED,
     BrokerError,
     Mosquitto,
@@ -375,7 +377,8 @@ def _run(
     # from the same CONNACK (asking twice made a slow broker's wait twice as long)
     code = connack(host, port, ended=done.is_set)
     refused = None if code is None else LOGIN_REFUSED.get(code)
-    there = code is not None and refused is None
+    banned = None if code is None else BANNED.get(code)
+    there = code is not None and refused is None and banned is None
     other = (
         private_broker_of(host, port)
         if there and not args.no_private_broker and not done.is_set()
@@ -384,8 +387,7 @@ def _run(
     # rule 6: a program there, but no broker (asked again: one may have come up meanwhile, and
     # answers at once; a program that took the first look's connection was given its full wait)
     mute = (
-        not there
-        and not refused
+        code is None
         and not done.is_set()
         and listens(host, port)
         and not answers(host, port, LOOK_AGAIN_S, ended=done.is_set)
@@ -407,6 +409,14 @@ def _run(
             file=sys.stderr,
             flush=True,
         )
+    if banned:
+        print(
+            f"rotor-bridge demo: the MQTT broker at {host}:{port} refuses the demo ({banned}): "
+            "it cannot be the demo's broker"
+            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
+            file=sys.stderr,
+            flush=True,
+        )
     if mute:
         print(
             f"rotor-bridge demo: {host}:{port} takes connections but answers no MQTT (no "
@@ -418,11 +428,11 @@ def _run(
     if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
     elif args.no_private_broker:
-        if not mute and not refused:
+        if not mute and not refused and not banned:
             print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
         return 1
     else:
-        taken = other is not None or mute or bool(refused)  # rules 5, 6, 8: not on that port
+        taken = other is not None or mute or bool(refused or banned)  # rules 5, 6, 8: not there
         port = _start_private_broker(host, free_port() if taken else port, workdir, stack)
         where = f"a private mosquitto on {host}:{port}"
         if other is not None:
@@ -431,6 +441,8 @@ def _run(
             where += f" (what is on {host}:{asked[1]} speaks no MQTT)"
         elif refused:
             where += f" (the broker on {host}:{asked[1]} refuses the demo's login)"
+        elif banned:
+            where += f" (the broker on {host}:{asked[1]} bans the demo)"
         elif port != asked[1]:  # rule 7
             where += f" ({host}:{asked[1]} was taken as it started: another demo's?)"
         if port != asked[1]:

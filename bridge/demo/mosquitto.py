@@ -25,7 +25,8 @@ run by anyone else it never changes user. It listens on the loopback address onl
 A broker answers (``answers``; ``connack`` with its code) when a CONNECT gets a CONNACK within
 the time the bridge gives one (CONNACK_TIMEOUT_S): a program that only takes connections
 (``listens``) may speak no MQTT at all, and a demo bridged to it would run dead. One whose
-CONNACK refuses the login (LOGIN_REFUSED) cannot be the demo's: it has no login to give.
+CONNACK refuses the login (LOGIN_REFUSED) cannot be the demo's: it has no login to give; nor
+can one that bans it (BANNED).
 """
 
 from __future__ import annotations
@@ -204,6 +205,10 @@ LOGIN_REFUSED = {
     4: "bad user name or password",
     5: "not authorized",
 }
+# a CONNACK that shuts the demo out however it connects: MQTT 5's 0x8A "banned" (EMQX's banned
+# list, its flapping detection, keyed by the client's address); a broker that says so cannot be
+# the demo's any more than one that refuses its login (review 127). (A 3.1.1 broker says 5.)
+BANNED = {0x8A: "banned"}
 
 
 def answers(
