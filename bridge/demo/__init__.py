@@ -372,9 +372,9 @@ def _run(
         file=sys.stderr,
         flush=True,
     )
-    # each wait of the look ends with the demo (^C, SIGTERM): nothing is started then (rule 3)
     # one CONNECT: whether a broker answers (rule 6) and whether it lets the demo in (rule 8),
-    # from the same CONNACK (asking twice made a slow broker's wait twice as long)
+    # from the same CONNACK (asking twice made a slow broker's wait twice as long). Each wait of
+    # the look ends with the demo (^C, SIGTERM): nothing is started then (rule 3)
     code = connack(host, port, ended=done.is_set)
     refused = None if code is None else LOGIN_REFUSED.get(code)
     banned = None if code is None else BANNED.get(code)
