@@ -401,30 +401,18 @@ def _run(
         )
         return 0
     private = not there or other is not None
-    if refused:
-        print(
-            f"rotor-bridge demo: the MQTT broker at {host}:{port} refuses the demo's login "
-            f"({refused}), and the demo has none to give it"
-            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
-            file=sys.stderr,
-            flush=True,
-        )
-    if banned:
-        print(
-            f"rotor-bridge demo: the MQTT broker at {host}:{port} refuses the demo ({banned}): "
-            "it cannot be the demo's broker"
-            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
-            file=sys.stderr,
-            flush=True,
-        )
-    if mute:
-        print(
-            f"rotor-bridge demo: {host}:{port} takes connections but answers no MQTT (no "
-            f"CONNACK): not a broker"
-            + ("" if args.no_private_broker else "; a private mosquitto on a free port instead"),
-            file=sys.stderr,
-            flush=True,
-        )
+    instead = "" if args.no_private_broker else "; a private mosquitto on a free port instead"
+    for why in (
+        refused
+        and f"the MQTT broker at {host}:{port} refuses the demo's login ({refused}), and the "
+        "demo has none to give it",
+        banned
+        and f"the MQTT broker at {host}:{port} refuses the demo ({banned}): it cannot be the "
+        "demo's broker",
+        mute and f"{host}:{port} takes connections but answers no MQTT (no CONNACK): not a broker",
+    ):
+        if why:  # (rules 6, 8: why the broker there is not the demo's)
+            print(f"rotor-bridge demo: {why}{instead}", file=sys.stderr, flush=True)
     if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
     elif args.no_private_broker:
