@@ -9,6 +9,7 @@ import os
 import selectors
 import shutil
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -1265,6 +1266,126 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
         if not went:  # (its bytes came after its accept: the selector wakes the loop for them)
             server._accept_once(listener, waiting, sel)
         assert went == [operator.getsockname()[1]] and halts[0] == 1
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
+
+
+def _hand_loop(server: LineServer) -> tuple[socket.socket, selectors.BaseSelector]:
+    """The accept loop's listener and selector, its passes run by hand (no thread), the
+    loopback budget spent: no thread for any connection but a stop's."""
+    server.listen()
+    listener = server._listener
+    assert listener is not None
+    listener.setblocking(False)
+    sel = selectors.DefaultSelector()
+    sel.register(listener, selectors.EVENT_READ)
+    server._sel, server._watched = sel, set()  # (as the accept loop starts)
+    budget = server._accept_budget("loopback", server._clock())
+    while budget.take(server._clock()):
+        pass
+    return listener, sel
+
+
+def _reset_with(port: int, data: bytes) -> None:
+    """A connection that sends ``data`` and resets at once (SO_LINGER 0)."""
+    sock = _connect(port, data)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    sock.close()
+
+
+def test_a_waiting_clients_question_come_since_its_connect_is_answered_before_room_is_made(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 8 (a CI run under load): ``rotctl -m 2`` accepted before its ``\\dump_state``
+    came waited silent; its question came while the loop took a burst of newcomers, and when
+    room was made it was the oldest without a stop, reset unanswered (its bytes' wake-up not
+    yet read). It is looked at again before it is reset now: answered, it waits for its
+    command, and the oldest of the rest goes."""
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=FakeClock(),
+        halts=gs232_holds_stop,
+        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
+        max_clients=4,  # (16 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    client = _connect(server.port)  # silent: accepted before its question
+    held = [client]
+    try:
+        assert server._take(listener, waiting, sel) and len(waiting) == 1
+        held += [_connect(server.port, b"C\r") for _ in range(15)]
+        for _ in range(15):
+            assert server._take(listener, waiting, sel)
+        assert len(waiting) == 16  # full
+        client.sendall(b"Q\r")  # its question comes; the loop takes a newcomer first
+        wait_until(lambda: any(tcplines._peek(c, 2) == b"Q\r" for c in waiting), 10, "come")
+        held.append(_connect(server.port, b"C\r"))
+        assert server._take(listener, waiting, sel)
+        assert _answer(client, 7) == b"hello\r\n"
+        assert _gone(held[1]) and not _gone(client)  # the oldest of the rest reset
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
+
+
+def test_connections_reset_with_bytes_unread_are_closed_not_kept_for_room(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 8 (a CI run under load): a flood's connections, each sending ``p`` and resetting,
+    still peeked alive (the bytes, not the reset): they filled the waiting list, none was
+    swept, and a client silent since its connect was reset to make room for them. One reset
+    with bytes unread and no stop in them is closed when accepted, and swept once waiting."""
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=FakeClock(),
+        halts=gs232_holds_stop,
+        max_clients=4,  # (16 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    client = _connect(server.port)  # silent: it waits, the oldest
+    held = [client]
+    try:
+        assert server._take(listener, waiting, sel) and len(waiting) == 1
+        held += [_connect(server.port, b"C\r") for _ in range(15)]  # alive when accepted
+        for _ in range(15):
+            assert server._take(listener, waiting, sel)
+        assert len(waiting) == 16  # full
+        for sock in held[1:]:  # ... and then reset, their polls unread
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            sock.close()
+        for _ in range(50):  # newcomers already reset when accepted
+            _reset_with(server.port, b"C\r")
+            assert server._take(listener, waiting, sel)
+        held.append(_connect(server.port, b"C\r"))  # and one alive
+        assert server._take(listener, waiting, sel)
+        assert not _gone(client)
+        assert len(waiting) == 2  # the client and the live newcomer: the rest closed
+        client.sendall(b"S\r")
+        wait_until(lambda: tcplines._peek(next(iter(waiting)), 2) == b"S\r", 10, "its stop")
+        assert server._stop_in(next(iter(waiting)))
     finally:
         for sock in held:
             sock.close()

@@ -127,7 +127,13 @@ Rules:
    closed first, looked for at most every SWEEP_S, and one answered so is reset only when
    every other without a stop is gone: answered, its command comes a round trip later, while
    a flood's connections came by the dozen (the first form of this rule still lost one
-   ``S`` in three on a loaded machine, reset in that round trip).
+   ``S`` in three on a loaded machine, reset in that round trip). A peer gone by a reset
+   with its bytes unread still peeks alive (the bytes come before the reset): its TCP state
+   says so (Linux), and one whose bytes hold no stop is closed when accepted, or swept once
+   waiting; and one silent when last looked at is looked at again before it is reset for
+   room: a question come since is answered (a CI run under load: a flood's connections, each
+   sending ``p`` and resetting, filled the list and none was swept, and ``rotctl``, accepted
+   before its question came, was the oldest and reset unanswered).
 9. A STOP or lock ON is the last word over everything sent before it (docs/architecture.md
    rule 11), whichever interface brought it: a move a client sent before a rotator carried out
    a STOP or lock ON is not carried out, however late it is read (the budget, rule 5, leaves a
@@ -250,6 +256,7 @@ MINE_KEPT = 64  # rule 9: the numbers of a connection's own halts kept (the olde
 # Windows has no MSG_DONTWAIT (the remote runs there: tests/remote/test_remote_portable.py):
 # every use is a read of bytes known to wait, or a small send to a fresh connection
 _DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)
+_TCP_INFO: int | None = getattr(socket, "TCP_INFO", None) if sys.platform == "linux" else None
 STALE = "sent before a STOP or lock ON that came first: not carried out"  # rule 9
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 BACKLOG = 1024  # rule 5: the kernel's queue of connections (short: the text says why)
@@ -412,6 +419,20 @@ def _alive(conn: socket.socket) -> bool:
     except BlockingIOError:
         return True
     except OSError:
+        return False
+
+
+_TCP_CLOSE = 7  # Linux's TCP_CLOSE, the first byte of its ``struct tcp_info`` (tcpi_state)
+
+
+def _reset_by_peer(conn: socket.socket) -> bool:
+    """Rule 8: whether the peer has reset the connection (TCP state CLOSE) though bytes it sent
+    wait unread (a peek reads those, not the reset). Linux alone (TCP_INFO); elsewhere False."""
+    if _TCP_INFO is None:
+        return False
+    try:
+        return conn.getsockopt(socket.IPPROTO_TCP, _TCP_INFO, 1)[0] == _TCP_CLOSE
+    except (OSError, IndexError):
         return False
 
 
@@ -1054,8 +1075,8 @@ class LineServer:
         if len(waiting) >= self._waiting_max:
             self._sweep(waiting)
         if len(waiting) >= self._waiting_max:
-            greeted = self._greeted  # rule 8: those answered wait for their command: kept longer
-            gone = next((c for c in waiting if c not in greeted and not self._stop_in(c)), None)
+            # rule 8: those answered wait for their command: kept longer
+            gone = next((c for c in waiting if self._resettable(c)), None)
             if gone is None:
                 gone = next((c for c in waiting if not self._stop_in(c)), None)
             if gone is None and not self._stop_in(conn) and not _peek(conn, 1):
@@ -1078,6 +1099,18 @@ class LineServer:
                 return
         waiting[conn] = peer
 
+    def _resettable(self, conn: socket.socket) -> bool:
+        """Rules 5 and 8: whether ``conn`` may be reset first to make room: not answered
+        (``greets``), no stop in its bytes. One silent when last looked at is looked at again
+        first: a question come since is answered (rotctl's, come a moment after its connect,
+        was reset unanswered while the loop was busy with a flood, the event of its bytes not
+        yet read)."""
+        if conn in self._greeted or self._stop_in(conn):
+            return False
+        return not (
+            conn in self._watched and self._sel is not None and self._greet(conn, self._sel)
+        )
+
     def _sweep(self, waiting: dict[socket.socket, tuple[str, int]]) -> None:
         """Rule 8: the waiting connections whose peer has left and whose bytes hold no stop are
         closed (nobody waits for their answers), at most every SWEEP_S: a flood that resets its
@@ -1087,7 +1120,9 @@ class LineServer:
         if now - self._swept_t < SWEEP_S:
             return
         self._swept_t = now
-        for conn in [c for c in waiting if not _alive(c) and not self._stop_in(c)]:
+        for conn in [
+            c for c in waiting if (not _alive(c) or _reset_by_peer(c)) and not self._stop_in(c)
+        ]:
             del waiting[conn]
             self._looked.pop(conn, None)
             self._unwatch(conn)
@@ -1120,7 +1155,10 @@ class LineServer:
                 self._ended.wait(ERROR_PAUSE_S)  # the listener stays readable: no spin
             return False
         first = _arrived(conn, self._read_bytes)
-        if first is None:  # its peer already left: no thread, no budget
+        if first is None or (  # its peer already left: no thread, no budget (rule 8: reset
+            first and not self._stop_in(conn, first) and _reset_by_peer(conn)  # with bytes
+        ):  # unread, none a stop, it left too)
+            self._looked.pop(conn, None)
             conn.close()
             return True
         if self._halt_count is not None:  # rule 9: looked at before each halt from now on,

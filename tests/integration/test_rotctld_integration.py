@@ -238,6 +238,53 @@ def test_rotctls_stop_gets_through_a_thread_connecting_and_resetting_as_fast_as_
     assert floods[0] > 100  # (it flooded all along)
 
 
+def test_a_client_that_speaks_after_its_connect_keeps_its_place_behind_a_flood_of_resets(
+    rig: Rig,
+) -> None:
+    """tcplines.py rule 8 (a CI run under load): ``rotctl -m 2`` was accepted before its
+    ``\\dump_state`` came, so it waited silent among the flood's connections, each reset by
+    its peer with ``p`` unread: they still looked alive, and it was the oldest without a stop
+    when room was made, reset before its question was answered. A client that waits before it
+    speaks (a person at ``nc``, rotctl on a loaded machine) shows it with no load at all: it
+    sends its question after a few hundred of the flood's connections, and its ``S`` after
+    the answer, and the rotor stops."""
+    port, server = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    done = threading.Event()
+    floods = [0]
+
+    def flood() -> None:
+        while not done.is_set():  # not a deadline: bounded by the test's end
+            with contextlib.suppress(OSError):
+                sock = socket.create_connection(("127.0.0.1", port), timeout=slow(1))
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+                sock.sendall(b"p\n")
+                sock.close()  # (a reset: SO_LINGER 0)
+                floods[0] += 1
+
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, slow(30))
+    flooder = threading.Thread(target=flood, daemon=True)
+    flooder.start()
+    try:
+        wait_until(lambda: len(server.waiting) >= 8, 30, "connections waiting over the budget")
+        with connect(port) as client:  # (accepted silent: it waits among them)
+            after = floods[0] + 4 * server.most_held
+            wait_until(lambda: floods[0] >= after, 60, "the flood's connections after it")
+            client.sendall(b"\\dump_state\n")
+            answer = b""
+            while not answer.endswith(b"done\n"):
+                chunk = client.recv(65536)
+                assert chunk, f"closed after {answer!r}"
+                answer += chunk
+            ask(client, b"S\n", b"RPRT 0\n")
+        emu.wait_for(lambda s: not s.is_moving, slow(5))
+        assert len(emu.frames(Outcome.STOP)) == 1
+    finally:
+        done.set()
+        flooder.join()
+
+
 def _replies(sock: socket.socket, count: int, buf: bytes = b"") -> bytes:
     """``buf`` and what the client reads after it until it holds ``count`` whole reply lines
     (a client that sent only ``P`` and ``S``: ``RPRT n``)."""
