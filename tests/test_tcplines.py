@@ -1489,3 +1489,63 @@ def test_a_stop_that_comes_just_before_its_peers_reset_is_carried_out(
     held.append(_connect(server.port, b"C\r"))
     wait_until(lambda: seen and seen[0].fileno() == -1, 10, "the connection done with")
     assert any(isinstance(c, Stop) for c in tower.submitted), tower.submitted
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-128 2: greeted while room is made, its own wake-up the same pass unwatches it",
+)
+def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 8 (review 128): a waiting client silent at its connect sends its question just
+    after a newcomer came; one pass of the loop takes the newcomer first, and making room
+    answers the client's question (looked at again before a reset). The same pass then
+    handles the client's own wake-up for those bytes: taken out of the selector, and not put
+    back (answered already). Its stop then wakes nothing: it is found only by the poll for
+    half lines, PARTIAL_POLL_S later, not at once as every answered client's is."""
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=FakeClock(),
+        halts=gs232_holds_stop,
+        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
+        max_clients=4,  # (16 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    server._wake_r, wake_w = os.pipe()  # (as start() makes: stop() would write to it)
+    sel.register(server._wake_r, selectors.EVENT_READ)
+    went: list[int] = []
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: went.append(peer[1]))
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    client = _connect(server.port)  # silent: accepted before its question
+    held = [client]
+    try:
+        assert server._take(listener, waiting, sel) and len(waiting) == 1
+        held += [_connect(server.port, b"C\r") for _ in range(15)]
+        for _ in range(15):
+            assert server._take(listener, waiting, sel)
+        assert len(waiting) == 16  # full
+        held.append(_connect(server.port, b"C\r"))  # a newcomer, then the client's question
+        wait_until(lambda: tcplines.readable((listener.fileno(),), 0), 10, "the newcomer")
+        client.sendall(b"Q\r")
+        assert not server._accept_once(listener, waiting, sel)  # both wake-ups in one pass
+        assert _answer(client, 7) == b"hello\r\n"
+        client.sendall(b"S\r")  # its stop, once answered
+        mine = client.getsockname()[1]
+        wait_until(lambda: any(tcplines._peek(c, 2) == b"S\r" for c in waiting), 10, "come")
+        assert not server._accept_once(listener, waiting, sel)  # the pass its bytes wake
+        assert went == [mine]
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
+        os.close(server._wake_r)
+        os.close(wake_w)
