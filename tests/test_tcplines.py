@@ -1549,3 +1549,46 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
         listener.close()
         os.close(server._wake_r)
         os.close(wake_w)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-128 3: a stop past the first READ_BYTES of a connection reset by its peer: lost",
+)
+def test_a_stop_past_the_first_read_of_a_connection_reset_by_its_peer_is_carried_out() -> None:
+    """Rule 8 (review 128): a connection reset by its peer is closed when accepted if its
+    first bytes (READ_BYTES, what ``_stop_in`` reads) hold no stop; what follows them is not
+    looked at. A program that sends thirteen targets, then ``S``, and resets (SO_LINGER 0, or
+    closing with replies unread) had its stop carried out by the parent (its thread reads the
+    bytes queued before the reset: the targets, then the stop, last word); now none of it is,
+    and a rotor turning on another command keeps turning. The accept is made by hand, after
+    the reset (a busy loop's)."""
+    tower = _Tower()
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(tower),
+        label="gs232",
+        key="gs232",
+        clock=FakeClock(),
+        halts=gs232_holds_stop,
+    )
+    server.listen()
+    listener = server._listener
+    assert listener is not None
+    listener.setblocking(False)
+    sel = selectors.DefaultSelector()
+    sel.register(listener, selectors.EVENT_READ)
+    server._sel, server._watched = sel, set()  # (as the accept loop starts)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    try:
+        sock = _connect(server.port, b"M100\r" * 13 + b"S\r")  # (65 bytes before the stop)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        sock.close()
+        assert server._take(listener, waiting, sel) and not waiting
+        wait_until(lambda: server.client_count == 0, 10, "its thread, if any, done")
+        assert tower.submitted and isinstance(tower.submitted[-1], Stop), tower.submitted
+    finally:
+        sel.close()
+        listener.close()
