@@ -1455,10 +1455,6 @@ def _tcp_state(sock: socket.socket) -> int:
     return sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_INFO, 1)[0]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-128 1: a stop sent between the accept's peek and its reset check is lost",
-)
 def test_a_stop_that_comes_just_before_its_peers_reset_is_carried_out(
     gs232: Callable[..., tuple[_Tower, LineServer]], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -1491,10 +1487,6 @@ def test_a_stop_that_comes_just_before_its_peers_reset_is_carried_out(
     assert any(isinstance(c, Stop) for c in tower.submitted), tower.submitted
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-128 2: greeted while room is made, its own wake-up the same pass unwatches it",
-)
 def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -1551,10 +1543,6 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
         os.close(wake_w)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-128 3: a stop past the first READ_BYTES of a connection reset by its peer: lost",
-)
 def test_a_stop_past_the_first_read_of_a_connection_reset_by_its_peer_is_carried_out() -> None:
     """Rule 8 (review 128): a connection reset by its peer is closed when accepted if its
     first bytes (READ_BYTES, what ``_stop_in`` reads) hold no stop; what follows them is not

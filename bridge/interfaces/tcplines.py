@@ -961,9 +961,9 @@ class LineServer:
                 conn.close()
             elif self._stop_in(conn):  # a stop: ahead of the budget (_stop_now)
                 self._stop_now(conn, waiting.pop(conn), waiting)
-            else:
-                self._greet(conn, sel)
-        return False
+            elif not self._greet(conn, sel) and conn in self._greeted and not _peek(conn, 1):
+                self._watch(conn)  # (rule 8: answered meanwhile, ``_resettable``: its command
+        return False  # wakes the loop at once, a review found it left to the partial poll)
 
     def _stop_in(self, conn: socket.socket, data: bytes | None = None) -> bool:
         """Rule 5: whether ``conn``'s first commands (READ_BYTES of them, what its first read
@@ -1111,6 +1111,24 @@ class LineServer:
             conn in self._watched and self._sel is not None and self._greet(conn, self._sel)
         )
 
+    def _left_without_stop(self, conn: socket.socket) -> bool:
+        """Rule 8: whether ``conn``'s peer has reset it and nothing it sent holds a stop: the
+        reset looked for first (its bytes are all there then: a review found a stop come
+        between a peek and the look lost), then every byte unread, not only the first
+        READ_BYTES (the same review: a client's moves, its stop after them, and a reset; its
+        thread would have read them all and stopped the rotor)."""
+        if not _reset_by_peer(conn):
+            return False
+        if self._halts is None:
+            return True
+        try:
+            size = max(self._read_bytes, unread(conn.fileno()))
+        except OSError:
+            size = MAX_UNFINISHED
+        guard = HttpGuard(self._ends, self._singles)
+        body = guard.feed(_peek(conn, size))
+        return not (body and guard.http is None and self._halts(body))
+
     def _sweep(self, waiting: dict[socket.socket, tuple[str, int]]) -> None:
         """Rule 8: the waiting connections whose peer has left and whose bytes hold no stop are
         closed (nobody waits for their answers), at most every SWEEP_S: a flood that resets its
@@ -1121,7 +1139,9 @@ class LineServer:
             return
         self._swept_t = now
         for conn in [
-            c for c in waiting if (not _alive(c) or _reset_by_peer(c)) and not self._stop_in(c)
+            c
+            for c in waiting
+            if (not _alive(c) and not self._stop_in(c)) or self._left_without_stop(c)
         ]:
             del waiting[conn]
             self._looked.pop(conn, None)
@@ -1156,8 +1176,8 @@ class LineServer:
             return False
         first = _arrived(conn, self._read_bytes)
         if first is None or (  # its peer already left: no thread, no budget (rule 8: reset
-            first and not self._stop_in(conn, first) and _reset_by_peer(conn)  # with bytes
-        ):  # unread, none a stop, it left too)
+            first and not self._stop_in(conn, first) and self._left_without_stop(conn)
+        ):  # with bytes unread, none a stop, it left too)
             self._looked.pop(conn, None)
             conn.close()
             return True
