@@ -330,3 +330,49 @@ def test_a_clients_own_stop_in_its_burst_does_not_refuse_its_target_after_it(rig
         replies = _replies(sock, burst + 2).splitlines()
     assert replies[-2:] == [b"RPRT 0", b"RPRT 0"]
     emu.wait_for_frame(b"AP1100\r", Outcome.EXECUTED, slow(15))
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-130 1: a thread connecting, sending 64 KB of p and resetting keeps the accept "
+    "loop parsing every byte: rotctl's S on a new connection is late by seconds or lost",
+)
+def test_rotctls_stop_gets_through_a_thread_resetting_connections_with_a_buffer_full_unread(
+    rig: Rig, rotctl_path: str
+) -> None:
+    """tcplines.py rules 5 and 8 (review 130): a connection reset by its peer is read whole
+    and parsed when accepted (its first READ_BYTES no stop), some tens of milliseconds of the
+    accept thread for 64 KB of ``p``; the parent peeked READ_BYTES. One thread on the host
+    connecting, sending 64 KB of polls and resetting, as the parent's attack pass did with one
+    ``p``, keeps the kernel's queue ahead of every new connection: ``rotctl -m 2 S`` waits
+    behind it (the same thread with ``p`` alone: its stop at once, the test above)."""
+    port, _server = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    done = threading.Event()
+    floods = [0]
+    polls = b"p\n" * 32768
+
+    def flood() -> None:
+        while not done.is_set():  # not a deadline: bounded by the test's end
+            with contextlib.suppress(OSError):
+                sock = socket.create_connection(("127.0.0.1", port), timeout=slow(1))
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+                sock.sendall(polls)
+                sock.close()  # (a reset: SO_LINGER 0)
+                floods[0] += 1
+
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, slow(30))
+    flooder = threading.Thread(target=flood, daemon=True)
+    flooder.start()
+    try:
+        wait_until(lambda: floods[0] >= 200, 30, "the flood under way")
+        t0 = time.monotonic()
+        ok(rotctl(rotctl_path, port, "S"))
+        emu.wait_for(lambda s: not s.is_moving, slow(5))
+        took = time.monotonic() - t0
+        assert took < slow(2), f"the rotor stopped {took:.1f} s after rotctl's S"
+        assert len(emu.frames(Outcome.STOP)) == 1
+    finally:
+        done.set()
+        flooder.join()
