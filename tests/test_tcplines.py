@@ -1639,3 +1639,55 @@ def test_a_stop_behind_connections_reset_with_a_buffer_full_unread_is_let_in_at_
             sock.close()
         sel.close()
         listener.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-130 2: the sweep reads and parses whole every waiting connection reset with "
+    "a stop late in its bytes, again at each newcomer: seconds of the accept loop's CPU each",
+)
+def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_few_reads(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rules 5 and 8 (review 130): the sweep now asks every waiting connection whether its
+    peer reset it with no stop in any of its bytes, and one reset with a stop past its first
+    READ_BYTES (64 KB of polls, then ``S``) is read whole and parsed each time: it holds a
+    stop, so it is kept, and looked at again whole at the next sweep (nothing remembers the
+    answer). A full waiting list of them costs every newcomer a parse of the list's every
+    byte, not the few reads the parent spent (a peek each), and an operator's STOP behind a
+    handful of newcomers waits seconds. The loop is run here by hand (its CPU measured on this
+    thread, the clock moved on by SWEEP_S before the newcomer)."""
+    clock = FakeClock()
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=clock,
+        halts=gs232_holds_stop,
+        max_clients=16,  # (64 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    held: list[socket.socket] = []
+    try:
+        for _ in range(64):
+            _reset_with(server.port, b"C\r" * 32000 + b"S\r")
+            assert server._take(listener, waiting, sel)
+        assert len(waiting) == 64  # full: kept, a stop in their bytes
+        clock.t += tcplines.SWEEP_S
+        held.append(_connect(server.port, b"C\r"))
+        cpu = time.thread_time()
+        assert server._take(listener, waiting, sel)
+        cpu = time.thread_time() - cpu
+        assert cpu < slow(0.05), f"one newcomer took {cpu:.2f} s of the accept loop's CPU"
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
