@@ -1691,3 +1691,56 @@ def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_fe
             sock.close()
         sel.close()
         listener.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-130 3: a connection reset with a stop past its first READ_BYTES, kept by rule "
+    "8 for that stop, is the one reset to make room (judged by its first READ_BYTES): stop lost",
+)
+def test_a_reset_connection_kept_for_its_late_stop_is_not_the_one_reset_for_room(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 8 (review 130): 5a07cafc reads every byte of a connection reset by its peer, and
+    keeps one whose stop comes after its first READ_BYTES (thirteen targets, then ``S``: its
+    thread would carry them out, the stop last). But when room is made among the waiting, the
+    oldest without a stop is judged by its first READ_BYTES alone: that connection is reset
+    first, ahead of the live pollers that came after it, and its stop is never carried out.
+    The sweep just before had kept it because of that very stop. The loop is run here by hand
+    (the loopback budget spent, the clock moved on by SWEEP_S before the newcomer)."""
+    clock = FakeClock()
+    tower = _Tower()
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(tower),
+        label="gs232",
+        key="gs232",
+        clock=clock,
+        halts=gs232_holds_stop,
+        max_clients=4,  # (16 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    held: list[socket.socket] = []
+    try:
+        _reset_with(server.port, b"M100\r" * 13 + b"S\r")  # (65 bytes before the stop)
+        assert server._take(listener, waiting, sel) and len(waiting) == 1  # kept: its stop
+        (late,) = waiting
+        held += [_connect(server.port, b"C\r") for _ in range(15)]  # live pollers after it
+        for _ in range(15):
+            assert server._take(listener, waiting, sel)
+        assert len(waiting) == 16  # full
+        clock.t += tcplines.SWEEP_S
+        held.append(_connect(server.port, b"C\r"))  # one more poller: room is made
+        assert server._take(listener, waiting, sel)
+        assert late in waiting, "the connection holding a stop was reset for a poller"
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
