@@ -1592,11 +1592,6 @@ def _reset_flood(port: int, data: bytes, n: int) -> None:
         _reset_with(port, data)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-130 1: each newcomer reset with 64 KB unread is read and parsed whole by "
-    "the accept loop (tens of ms each): a STOP on a new connection behind a hundred waits seconds",
-)
 def test_a_stop_behind_connections_reset_with_a_buffer_full_unread_is_let_in_at_once(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -1641,11 +1636,6 @@ def test_a_stop_behind_connections_reset_with_a_buffer_full_unread_is_let_in_at_
         listener.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-130 2: the sweep reads and parses whole every waiting connection reset with "
-    "a stop late in its bytes, again at each newcomer: seconds of the accept loop's CPU each",
-)
 def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_few_reads(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -1114,19 +1114,22 @@ class LineServer:
     def _left_without_stop(self, conn: socket.socket) -> bool:
         """Rule 8: whether ``conn``'s peer has reset it and nothing it sent holds a stop: the
         reset looked for first (its bytes are all there then: a review found a stop come
-        between a peek and the look lost), then every byte unread, not only the first
-        READ_BYTES (the same review: a client's moves, its stop after them, and a reset; its
-        thread would have read them all and stopped the rotor)."""
+        between a peek and the look lost), then its bytes, READ_BYTES of them at most, as
+        ``_stop_in`` reads them. One that sent more is kept as any (its thread reads them all:
+        the same review found a client's moves, its stop after them and a reset lost; reading
+        them all here, the next review found 64 KB of polls before each reset cost the loop
+        50-90 ms a connection, and a flood of them kept rotctl's STOP out)."""
         if not _reset_by_peer(conn):
             return False
         if self._halts is None:
             return True
         try:
-            size = max(self._read_bytes, unread(conn.fileno()))
+            if unread(conn.fileno()) > self._read_bytes:
+                return False
         except OSError:
-            size = MAX_UNFINISHED
+            return False
         guard = HttpGuard(self._ends, self._singles)
-        body = guard.feed(_peek(conn, size))
+        body = guard.feed(_peek(conn, self._read_bytes))
         return not (body and guard.http is None and self._halts(body))
 
     def _sweep(self, waiting: dict[socket.socket, tuple[str, int]]) -> None:
