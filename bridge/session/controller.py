@@ -383,11 +383,7 @@ Rules:
    Where no reading judges it (the controller does not answer once the port is back, or goes
    silent before the rotor rests) it is a turn no reading watches, stopped as rule 2 stops
    one, in case the controller still hears, and the offline's error says so (a cold review:
-   'does not answer' said, the motor drove a rotor jammed meanwhile on for good): at the
-   silence's end, counted across replugs (link.py rule 2) and woken for (``_never_t``), with
-   no wait for an answer owed then (``_lost_silent``; review 125: on an adapter resetting
-   every 1.5 s, each connection shorter than the silence time, such a turn was never
-   stopped); such a silence is said once, not at each replug. A
+   'does not answer' said, the motor drove a rotor jammed meanwhile on for good). A
    single controller's port error says what became of the turn (``lost_turn``): dropped, its
    target in true bearings, that the controller may finish it by itself (followed, and stopped
    if it rests short; a DCU-1's never seen), that a STOP sent meanwhile goes first, and to
@@ -478,7 +474,6 @@ FIRST_UNWATCHED_READINGS = 2 * FIRST_TURN_READINGS
 # rule 9: after the first unwatched stop at rest, the next comes before a turn at nominal speed
 # has gone this far (``_unwatched_at_rest_due``)
 UNWATCHED_TURN_DEG = 20.0
-WAKE_SLACK_S = 1e-6  # rule 2: a wake-up at a silence's end this late (its sums' rounding)
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -830,7 +825,6 @@ class Controller:
         self._first_unconfirmed = 0  # ... in a row (FIRST_UNWATCHED_READINGS: a stop each)
         self._first_garbled = False  # ... some of them answers garbled past parsing
         self._torn_run = 0  # ... the connection before ended in torn answers (link.py 11)
-        self._silence_run = (0.0, False)  # ... and in a silence, how long (rule 2)
         self._unwatched_due = False  # ... the stop that many call for, due after the reading
         self._unwatched_said_t = -math.inf  # ... when such a stop was last said on R/error
         # ... one at rest that came within STOP_MERGE_MIN_S of the last stop written: when it
@@ -988,8 +982,6 @@ class Controller:
             link.carry_torn(
                 self._torn_run
             )  # (rule 9: counted until a reading is taken; review 118)
-        if self._silence_run[0] > 0:  # rule 2: so does a silence (link.py rule 2)
-            link.carry_silence(*self._silence_run, now)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
         self._first_unread = self._unwatched_due = False
@@ -1006,8 +998,7 @@ class Controller:
         self.answering = not spec.can_report_position
         if self.answering:  # (stops.py rule 7: a blind controller answers from its connect)
             self.stops.lock_sign(now)
-        # rule 2: a silence carried from the connection before is said once, not at each replug
-        self._silence_reported = self._silence_reported and self._silence_run[0] > 0
+        self._silence_reported = False
         self.options.connected(self.answering)
         self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
@@ -1031,7 +1022,6 @@ class Controller:
         if self.link is not None:  # link.py rule 13: a target of it may be cut in the box
             self._cut_move = self.link.move_unsure
             self._torn_run = self.link.torn_run  # (link.py rule 11: for the next connection)
-            self._silence_run = self.link.silence_run(now)  # (rule 2: likewise)
         unseen = self.stops.unseen_t
         self.stops.port_closed(failed, stop_due, self.motion, now)
         if self.stops.owed and self._let_go(unseen):
@@ -2348,7 +2338,7 @@ class Controller:
         # (never answered: no valid reply for one timeout, as ever)
         never = (
             link.last_reply_t is None
-            and (not link.reply_owed or self._lost_silent(link, now))
+            and not link.reply_owed
             and unread_s >= timeout_s
             and link.asked_since_heard
         )
@@ -2444,22 +2434,6 @@ class Controller:
             if ask_t is not None and now >= ask_t:
                 self._unwatched_ask_t = None
 
-    def _never_t(self, link: Link, now: float) -> float:
-        """Rule 2: when a connection that has had no valid reply is silent for
-        ``silence_timeout_s`` (its silence carried from the connection before, link.py rule 2),
-        if it is still to be said; inf if not."""
-        if self._silence_reported or link.last_reply_t is not None or not link.asked_since_heard:
-            return math.inf
-        return now - link.unread_for(now) + self.cfg.silence_timeout_s + WAKE_SLACK_S
-
-    def _lost_silent(self, link: Link, now: float) -> bool:
-        """Rules 2 and 13: a turn the port dropped (``_lost_aim``), not seen since, whose
-        controller has not answered for the silence time, this connection's and the one's
-        before it (link.py rule 2): its stop waits for no answer owed (review 125: on an
-        adapter resetting every 1.5 s, each connection's question waited its reply time, and
-        the turn ran unwatched 2 s past the silence time)."""
-        return self._lost_aim is not None and link.unread_for(now) >= self.cfg.silence_timeout_s
-
     def _late_words(self, link: Link, heard_t: float) -> str:
         """Rule 2: what an offline's error adds where the controller answered since ``heard_t``,
         but later than the bridge waits (link.py rule 12)."""
@@ -2552,9 +2526,6 @@ class Controller:
                 latest = min(latest, now + self.cfg.moving_poll_interval_s)
             if now < link.setting_until < latest:  # link.py rule 4: a target may wait for it
                 latest = link.setting_until
-            never_t = self._never_t(link, now)  # rule 2: the poll's check of a connection
-            if now < never_t < latest:  # never answered, at its silence's end (a poll held
-                latest = never_t  # for a late answer, link.py rule 12, comes after it)
         m, cfg = self.motion, self.cfg.motion
         repeat = self.stops.repeat_at(m)  # stops.py rule 1: a stop repeat owed (line_work's)
         if repeat is not None and now < repeat < latest and link is not None:

@@ -24,12 +24,9 @@ Rules:
    125: on six models such a turn ran 3 s longer unwatched, as review 118's had). At rest such
    junk keeps the controller online as garbled answers do, counted toward controller.py rule
    9's unwatched stop, which a hand turn on such a line needs (review 116; taken offline at the
-   silence time, such a turn ran past ``az_min_deg``). A silence goes on across a replug, the
-   time the port was closed left out (``silence_run``, ``carry_silence``: review 125, begun
-   anew with each link, a turn whose controller fell silent on an adapter that reset every 1.5
-   s was never stopped). Only the questions show it is the controller's (docs/architecture.md
-   rule 15): ``asked_for_s`` reaches from the question the last valid reply answered to the
-   last one asked. Where the clock has passed the silence's end and the
+   silence time, such a turn ran past ``az_min_deg``). Only the questions show it is the
+   controller's (docs/architecture.md rule 15): ``asked_for_s`` reaches from the question the
+   last valid reply answered to the last one asked. Where the clock has passed the silence's end and the
    questions have not (the last went out a reply time before the end, and was lost), the
    controller is asked once more then (``ask_verdict``): that reply, owed only until it can be
    whole (rule 7's hold, rule 9's quiet time) and VERDICT_SLACK_S, decides. (A review: a GS-232B
@@ -827,26 +824,6 @@ class Link:
         """Rule 11: the connection before ended in a run of torn answers (``torn_run``: the
         bytes of its last)."""
         self._torn = count
-
-    def silence_run(self, now: float) -> tuple[float, bool]:
-        """Rule 2: the silence open as the port closes ``now``: since the last valid reply, as
-        far as the questions since reach (the last one's reply wait, or rule 12's hold for its
-        late answer, at most; 0 if nothing was asked since), and whether torn answers came in it
-        (``torn_since_heard``): the next connection's link goes on with it (``carry_silence``)."""
-        if not self.asked_since_heard:
-            return 0.0, False
-        reach_t = min(now, max(self._asked_t + self.reply_wait_s, self._late_hold_until))
-        return max(0.0, reach_t - self._heard_from()), self.torn_since_heard
-
-    def carry_silence(self, span_s: float, torn: bool, now: float) -> None:
-        """Rule 2: the connection before ended ``span_s`` into a silence (``silence_run``):
-        this one's silence goes on from there, the time the port was closed left out (nothing
-        could be asked in it: docs/architecture.md rule 15). Review 125: begun anew with each
-        link, a controller gone silent or torn on an adapter that reset every 1.5-2 s was
-        never silent long enough, and the turn the port dropped was never stopped."""
-        self._quiet_from_t = self._answered_t = now - span_s
-        if torn:  # (its words: answers torn past any form, told as garbled)
-            self._torn_t = now
 
     def _late_hold_t(self) -> float:
         """Rule 12: no poll before then: the late hold's end, or, if a late answer's bytes are

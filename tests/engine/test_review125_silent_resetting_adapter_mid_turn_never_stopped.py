@@ -6,7 +6,6 @@ the port dropped (controller.py rule 13's lost aim) is stopped only once a conne
 unanswered for the whole silence time. The rotor turns on unwatched (its stall and limits
 unseen) for as long as the resets go on. The same at 51a2f016 (not a regression; a sibling of
 the torn case's partial fix, ab41651b, which carries the torn run but not the silence).
-Fixed: the silence goes on across a replug (link.py rule 2, ``carry_silence``).
 
 In virtual time: the emulated GS-232B turning from 20 to 300 (``tests/engine/resetting.py``).
 """
@@ -23,6 +22,13 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 125: a watched turn whose controller falls silent on an adapter resetting "
+        "every 1.5-2 s is never stopped (one connection: 3.3 s)"
+    ),
+)
 @pytest.mark.parametrize("up_s", [1.5, 2.0])
 def test_a_silent_turn_on_a_resetting_adapter_is_stopped_at_the_silence_time(
     rig: Rig, up_s: float

@@ -4,8 +4,7 @@ fix, ce9662d1); on an adapter that resets every 1.5 s it is stopped only 17.1 s 
 12.6 s in, the rotor turning 9-14 s longer unwatched (GS-232B; RC2800 the same). The torn run
 is carried across the replug (ab41651b), but not how long the turn has gone unheard: each
 connection, shorter than the silence time, starts it again. At 51a2f016 the GS-232B was never
-stopped (the fix is partial, no regression). Fixed: the silence goes on across a replug
-(link.py rule 2, ``carry_silence``).
+stopped (the fix is partial, no regression).
 
 In virtual time: the emulated box turning from 20 to 300 (``tests/engine/resetting.py``).
 """
@@ -23,6 +22,13 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 125: a watched turn whose line garbles every byte on an adapter resetting "
+        "every 1.5-2 s is stopped 12.6-17.1 s in, not at the 3 s silence time"
+    ),
+)
 @pytest.mark.parametrize("up_s", [1.5, 2.0])
 @pytest.mark.parametrize("model", ["gs232b", "rc2800"])
 def test_a_torn_turn_on_a_resetting_adapter_is_stopped_at_the_silence_time(
