@@ -22,9 +22,10 @@ Rules:
    every 3.6 s took a GS-232B offline and stopped its turn, although it answered every time
    the line let it).
    A DCU-1 is available while its port is open (it never answers). A garbled answer (link.py
-   rule 11) counts as answering (junk that forms no reply, mid-turn, does not: link.py rule
-   2), but for GARBLED_SILENCE_FACTOR silence timeouts without a valid reply at most, and
-   offline before the motion machine could call a turn fed no reading stalled
+   rule 11) of a reply's form (a reading after noise, a late answer; junk that forms none is
+   torn, link.py rule 2) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
+   without a valid reply at most, and offline before the motion machine could call a turn fed
+   no reading stalled
    (``stall_timeout_s`` from the last movement it saw, less a moving poll and a reply time: how late
    the check may come), never less than one timeout: a line that gives only garbage goes offline
    then, with its own words; one that gives nothing at all still after ``silence_timeout_s``, and so
@@ -1282,8 +1283,7 @@ class Controller:
                     self._misfit(link, reply, now)  # it persists
                 else:  # (told, and logged, once the line is quiet)
                     link.add_junk(reply.data, now)
-                turn = self.turning() or self._lost_aim is not None  # (link.py rule 2)
-                link.garbles(reply, now, turn)  # link.py rule 11: it answered, garbled
+                link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now, once=True)
         if self._settled(link, now):

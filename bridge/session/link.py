@@ -18,15 +18,12 @@ Rules:
    garbled answer (rule 11; ``unread_for`` counts without those: controller.py rule 2 bounds
    them), but not from one torn past any form (rule 11: no reading can come from it; review 118:
    counted, a turn on a line that tore every byte ran 3 s longer unwatched; only the words count
-   it, ``torn_since_heard``), nor, while a turn to a target is under way, from junk that forms
-   no reply of the controller's (NOISE or SPOILED, nothing of its form read since the question:
-   the same torn bytes, cut into junk by a codec that finds line ends or frames in them; review
-   125: on six models such a turn ran 3 s longer unwatched, as review 118's had). At rest such
-   junk keeps the controller online as garbled answers do, counted toward controller.py rule
-   9's unwatched stop, which a hand turn on such a line needs (review 116; taken offline at the
-   silence time, such a turn ran past ``az_min_deg``). Only the questions show it is the
-   controller's (docs/architecture.md rule 15): ``asked_for_s`` reaches from the question the
-   last valid reply answered to the last one asked. Where the clock has passed the silence's end and the
+   it, ``torn_since_heard``), nor from junk that forms no reply of the controller's (NOISE or
+   SPOILED, nothing of its form read since the question: the same torn bytes, cut into junk by
+   a codec that finds line ends or frames in them; review 125: on six models such a turn ran 3 s
+   longer unwatched, as review 118's had). Only the questions show it is the controller's
+   (docs/architecture.md rule 15): ``asked_for_s`` reaches from the question the last valid
+   reply answered to the last one asked. Where the clock has passed the silence's end and the
    questions have not (the last went out a reply time before the end, and was lost), the
    controller is asked once more then (``ask_verdict``): that reply, owed only until it can be
    whole (rule 7's hold, rule 9's quiet time) and VERDICT_SLACK_S, decides. (A review: a GS-232B
@@ -708,17 +705,16 @@ class Link:
         self._held = None
         return True
 
-    def garbles(self, junk: JunkReply, now: float, turn: bool = False) -> None:
+    def garbles(self, junk: JunkReply, now: float) -> None:
         """Rule 11: ``junk`` is the owed reply garbled, if it is bytes no healthy exchange has
-        (the controller answered: not silent; ``turn``: a turn to a target is under way, and
-        junk that forms no reply is torn, rule 2)."""
+        (the controller answered: not silent)."""
         if self._reply_deadline is None or self._slew is not None:
             return
         if junk.reason is JunkReason.REFUSED or not self._unhealthy(junk):
             return
         self._garbled = True
-        if turn and junk.reason in _FORMLESS and self._formed_t < self._asked_t:  # torn: no
-            self._torn_t = now  # silence's end (rule 2), as one given up so (review 125)
+        if junk.reason in _FORMLESS and self._formed_t < self._asked_t:  # torn: no silence's
+            self._torn_t = now  # end (rule 2), as one given up torn (review 125: junk ended it)
         else:
             self._garbled_t = now
 
