@@ -21,11 +21,9 @@ Rules:
    by then (``_stall_check_t``: that offline cannot wait; a review: a line that lost 2.6 s of
    every 3.6 s took a GS-232B offline and stopped its turn, although it answered every time
    the line let it).
-   A DCU-1 is available while its port is open (it never answers). A garbled answer (link.py
-   rule 11) of a reply's form (a reading after noise, a late answer; junk that forms none is
-   torn, link.py rule 2) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
-   without a valid reply at most, and offline before the motion machine could call a turn fed
-   no reading stalled
+   A DCU-1 is available while its port is open (it never answers). A garbled answer (link.py rule
+   11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts without a valid reply at
+   most, and offline before the motion machine could call a turn fed no reading stalled
    (``stall_timeout_s`` from the last movement it saw, less a moving poll and a reply time: how late
    the check may come), never less than one timeout: a line that gives only garbage goes offline
    then, with its own words; one that gives nothing at all still after ``silence_timeout_s``, and so

@@ -18,10 +18,7 @@ Rules:
    garbled answer (rule 11; ``unread_for`` counts without those: controller.py rule 2 bounds
    them), but not from one torn past any form (rule 11: no reading can come from it; review 118:
    counted, a turn on a line that tore every byte ran 3 s longer unwatched; only the words count
-   it, ``torn_since_heard``), nor from junk that forms no reply of the controller's (NOISE or
-   SPOILED, nothing of its form read since the question: the same torn bytes, cut into junk by
-   a codec that finds line ends or frames in them; review 125: on six models such a turn ran 3 s
-   longer unwatched, as review 118's had). Only the questions show it is the controller's
+   it, ``torn_since_heard``). Only the questions show it is the controller's
    (docs/architecture.md rule 15): ``asked_for_s`` reaches from the question the last valid
    reply answered to the last one asked. Where the clock has passed the silence's end and the
    questions have not (the last went out a reply time before the end, and was lost), the
@@ -712,11 +709,7 @@ class Link:
             return
         if junk.reason is JunkReason.REFUSED or not self._unhealthy(junk):
             return
-        self._garbled = True
-        if junk.reason in _FORMLESS and self._formed_t < self._asked_t:  # torn: no silence's
-            self._torn_t = now  # end (rule 2), as one given up torn (review 125: junk ended it)
-        else:
-            self._garbled_t = now
+        self._garbled, self._garbled_t = True, now
 
     def _ask_garbled(self, now: float) -> bool:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll

@@ -309,10 +309,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,
         gt=0,
         le=600,
-        description="no reply this long: the rotator is offline (one whose answers are "
-        "garbled but of a reply's form, a reading after line noise, after twice this; one whose "
-        "bytes form no reply at all after this; while it turns to a target, either may come "
-        "sooner, "
+        description="no reply this long: the rotator is offline (one that answers only "
+        "garbled replies after twice this; while it turns to a target, either may come sooner, "
         "before the turn could be called stalled, but not within half stall_timeout_s, nor 3 s, "
         "of the last reply). "
         "Longer than the idle poll interval; by default 3 s, or two idle polls and a reply "

@@ -5,7 +5,7 @@ silent). On Rotor-EZ, RT-21, RC2800, Prosistel, MD-01 and Easycomm lines the gar
 come as junk (NOISE), counted as garbled answers that keep the controller online for
 GARBLED_SILENCE_FACTOR silence timeouts: it is shown online, at its last bearing, 6.2-6.65 s
 (silent: 3.2-3.65 s); a Rot2Prog, whose silence time is 19 s, for 39.6 s (silent: 20.3 s).
-Not a regression: 51a2f016 the same. Fixed: link.py rule 2 (such junk ends no silence).
+Not a regression: 51a2f016 the same.
 
 In virtual time: the emulated box at rest at 150; then every byte it sends reaches the host
 XORed with 0x5A (review 113's ``torn``).
@@ -45,6 +45,13 @@ def offline_s(rig: Rig, model: str, fault: str) -> float | None:
     return None
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 125: a controller at rest on a line that garbles every byte is shown online "
+        "twice rule 2's silence time (6.2-6.65 s; a Rot2Prog 39.6 s), on every model but GS-232"
+    ),
+)
 @pytest.mark.parametrize(
     "model", ["rotorez", "rt21", "rc2800", "prosistel", "md01", "easycomm2", "rot2prog"]
 )

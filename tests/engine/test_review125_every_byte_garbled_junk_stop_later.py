@@ -8,8 +8,7 @@ garbled answer, keeping the turn online for GARBLED_SILENCE_FACTOR silence timeo
 runs unwatched 6.3-6.5 s before its first stop, 3 s past the silence time (the same line
 silent: stopped 3.3-3.5 s in). The bytes are the same torn answers rule 11 defines (none
 forms a reply of the controller's: NOISE or SPOILED junk), so one path ends no silence and
-the other does. Not a regression: 51a2f016 the same. Fixed: link.py rule 2 (such junk
-ends no silence).
+the other does. Not a regression: 51a2f016 the same.
 
 In virtual time: the emulated box turning from 20 to 300 for TURNING_S, watched; then every
 byte it sends reaches the host XORed with 0x5A (review 113's ``torn``).
@@ -43,6 +42,13 @@ def first_stop_s(rig: Rig, model: str, fault: str) -> tuple[float | None, Virtua
     return None, v
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 125: a turn on a line that garbles every byte runs unwatched 6.3-6.5 s "
+        "before its stop, 3 s past rule 2's silence time, on every model but GS-232"
+    ),
+)
 @pytest.mark.parametrize("model", ["rotorez", "md01", "rt21", "rc2800", "easycomm2", "prosistel"])
 def test_a_turn_whose_every_byte_is_garbled_is_stopped_at_the_silence_time(
     rig: Rig, model: str
