@@ -33,11 +33,6 @@ WATCH_S = 60.0  # the turn, with room (virtual time)
 STEP_S = 0.05  # a step of virtual time between resets: not a deadline
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 2: a late-answering controller's turn on a resetting adapter is "
-    "stopped as one that does not answer",
-)
 @pytest.mark.parametrize(("model", "late_s", "up_s"), [("rt21", 0.58, 2.0), ("gs232b", 1.5, 3.0)])
 def test_a_late_answering_turn_on_a_resetting_adapter_reaches_its_target(
     rig: Rig, model: str, late_s: float, up_s: float

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -30,11 +28,6 @@ DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later 
 WATCH_S = 10.0  # the new connection's words, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 3: a late-answering controller is said bare 'does not answer' 0.3 s "
-    "after a replug",
-)
 def test_a_late_controller_is_still_said_late_after_a_replug(rig: Rig) -> None:
     v = rig("rt21", emulator={"start_az_deg": 20.0})
     v.run_until_state(MotionState.IDLE, SETTLE_S)

@@ -51,11 +51,6 @@ def first_byte_of_each_line_off(until: float) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 1: answers one byte off for 4.5 s mid-turn taken as silence, the turn "
-    "stopped short",
-)
 @pytest.mark.parametrize("model", ["gs232b", "rc2800", "prosistel"])
 def test_a_turn_through_a_burst_of_answers_one_byte_off_reaches_its_target(
     rig: Rig, model: str

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -27,11 +25,6 @@ DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later 
 WATCH_S = 10.0  # the new connection's connect and readings, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 5: a SatEL answering after a replug is said 'does not answer' as its "
-    "first answer arrives",
-)
 def test_a_satel_answering_after_a_replug_is_not_said_silent(rig: Rig) -> None:
     v = rig("satel", emulator={"start_az_deg": 20.0})
     v.run_until_state(MotionState.IDLE, SETTLE_S)

@@ -35,11 +35,6 @@ WATCH_S = 40.0  # the silence on the new connection, and the rest of the turn (v
 STOPPED_BY_DEG = 150.0  # stopped at the silence time: far short of the target
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 4: 'does not answer' said once at the start, a turn the port drops "
-    "later while silent is never stopped",
-)
 @pytest.mark.parametrize("model", ["gs232b", "rotorez", "easycomm3"])
 def test_a_silent_turn_dropped_by_the_port_is_stopped_after_an_earlier_silence(
     rig: Rig, model: str

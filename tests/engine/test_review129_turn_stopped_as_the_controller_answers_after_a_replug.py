@@ -32,11 +32,6 @@ DOWN_S = 0.5  # the worker's reconnect_min_s: the port reopened this much later 
 WATCH_S = 60.0  # the rest of the turn, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-129 6: a turn whose controller answers at once after a replug is stopped "
-    "as 'does not answer' before its first poll is answered",
-)
 @pytest.mark.parametrize("model", ["gs232b", "rotorez", "rt21", "prosistel"])
 def test_a_turn_answered_at_once_after_a_replug_reaches_its_target(rig: Rig, model: str) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG})
