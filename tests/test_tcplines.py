@@ -1734,3 +1734,55 @@ def test_a_reset_connection_kept_for_its_late_stop_is_not_the_one_reset_for_room
             sock.close()
         sel.close()
         listener.close()
+
+
+# -- review 132 (third cold pass over 851c4776, 5a07cafc and ea067e1c) ----------------------
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-132 1: a newcomer reset with READ_BYTES or fewer unread has its bytes peeked "
+    "and parsed twice by the accept loop (rule 5: once): a STOP behind a flood of them comes later",
+)
+def test_a_newcomer_reset_with_a_few_bytes_unread_is_parsed_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 5 (review 132): a newcomer's bytes are read once and parsed once. ea067e1c's
+    ``_left_without_stop`` peeks a reset newcomer's bytes again after ``_stop_in`` parsed them
+    and runs HttpGuard and the front end's parser over them a second time (nothing reused), so
+    a flood that connects, sends a few polls and resets costs the accept loop about 1.6 times
+    the parent's CPU a connection: an operator's ``S`` behind 1,000 such rotctld connections
+    (ten ``P 1 2`` and two ``p``) was let in after 188 ms of the loop's CPU, 115 ms at
+    dd1e5dce. Counted here by the parses themselves (the front end's ``halts``), which the
+    CPU follows; the loop run by hand, the loopback budget spent."""
+    parsed: list[bytes] = []
+
+    def halts(data: bytes) -> bool:
+        parsed.append(data)
+        return gs232_holds_stop(data)
+
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=FakeClock(),
+        halts=halts,
+        max_clients=16,  # (64 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    try:
+        for _ in range(100):  # connect, a few polls (READ_BYTES of them), reset
+            _reset_with(server.port, b"C\r" * (tcplines.READ_BYTES // 2))
+            assert server._take(listener, waiting, sel)
+        assert not server._take(listener, waiting, sel)  # the kernel's queue drained
+        assert len(parsed) <= 100, f"{len(parsed)} parses for 100 newcomers"
+    finally:
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
