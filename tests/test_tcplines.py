@@ -1786,3 +1786,76 @@ def test_a_newcomer_reset_with_a_few_bytes_unread_is_parsed_once(
             sock.close()
         sel.close()
         listener.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-132 2: between two sweeps a silent client older than connections reset after "
+    "their accept is the one reset for room, the dead ones kept (rotctl reset unanswered)",
+)
+def test_a_silent_client_keeps_its_place_behind_connections_reset_after_their_accept(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 8 (review 132): 851c4776 keeps ``rotctl -m 2``, accepted before its question came,
+    behind a flood's connections reset by their peer with ``p`` unread: they are closed when
+    accepted, or swept once waiting. But the sweep runs at most every SWEEP_S, and a flood's
+    connection accepted alive (the loop keeping up) and reset a moment later sits in the
+    waiting list until then; a newcomer in between has room made by ``_resettable`` alone,
+    which passes over no dead connection: the oldest silent one, the client, is reset and
+    fifteen dead ones are kept. At thousands of connections a second, SWEEP_S is dozens of
+    them. The loop is run here by hand (the loopback budget spent, the clock moved on by half
+    SWEEP_S between the two newcomers). Not a regression: dd1e5dce swept none of them."""
+    clock = FakeClock()
+    server = LineServer(
+        "tower",
+        0,
+        "127.0.0.1",
+        lambda: Gs232Session(_Tower()),
+        label="gs232",
+        key="gs232",
+        clock=clock,
+        halts=gs232_holds_stop,
+        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
+        max_clients=4,  # (16 may wait)
+    )
+    listener, sel = _hand_loop(server)
+    monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
+    waiting: dict[socket.socket, tuple[str, int]] = {}
+    client = _connect(server.port)  # silent: accepted before its question
+    held = [client]
+
+    def flood_reset_after_accept(n: int) -> None:
+        socks = [_connect(server.port, b"C\r") for _ in range(n)]
+        before = set(waiting)
+        for _ in range(n):
+            assert server._take(listener, waiting, sel)  # accepted alive
+        for sock in socks:  # ... then reset, their polls unread
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            sock.close()
+        dead = [c for c in waiting if c not in before]
+        wait_until(lambda: all(_tcp_state(c) == 7 for c in dead), 10, "their resets come")
+
+    try:
+        assert server._take(listener, waiting, sel) and len(waiting) == 1
+        flood_reset_after_accept(15)
+        assert len(waiting) == 16  # full
+        held.append(_connect(server.port, b"C\r"))  # a newcomer: swept, the dead closed
+        assert server._take(listener, waiting, sel)
+        assert not _gone(client) and len(waiting) == 2
+        flood_reset_after_accept(14)
+        assert len(waiting) == 16  # full again
+        clock.t += tcplines.SWEEP_S / 2
+        held.append(_connect(server.port, b"C\r"))  # the next newcomer, before the next sweep
+        assert server._take(listener, waiting, sel)
+        assert not _gone(client), "the silent client was reset, dead connections kept"
+        client.sendall(b"Q\r")  # its question, late: answered
+        wait_until(lambda: tcplines._peek(next(iter(waiting)), 2) == b"Q\r", 10, "come")
+        server._accept_once(listener, waiting, sel)
+        assert _answer(client, 7) == b"hello\r\n"
+    finally:
+        for sock in held:
+            sock.close()
+        for sock in waiting:
+            sock.close()
+        sel.close()
+        listener.close()
