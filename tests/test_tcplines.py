@@ -1739,11 +1739,6 @@ def test_a_reset_connection_kept_for_its_late_stop_is_not_the_one_reset_for_room
 # -- review 132 (third cold pass over 851c4776, 5a07cafc and ea067e1c) ----------------------
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-132 1: a newcomer reset with READ_BYTES or fewer unread has its bytes peeked "
-    "and parsed twice by the accept loop (rule 5: once): a STOP behind a flood of them comes later",
-)
 def test_a_newcomer_reset_with_a_few_bytes_unread_is_parsed_once(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -1128,9 +1128,7 @@ class LineServer:
                 return False
         except OSError:
             return False
-        guard = HttpGuard(self._ends, self._singles)
-        body = guard.feed(_peek(conn, self._read_bytes))
-        return not (body and guard.http is None and self._halts(body))
+        return not self._stop_in(conn)  # (bytes parsed already are not again: review 132)
 
     def _sweep(self, waiting: dict[socket.socket, tuple[str, int]]) -> None:
         """Rule 8: the waiting connections whose peer has left and whose bytes hold no stop are
