@@ -236,10 +236,7 @@ Rules:
    the lock writes no stop", superseded.) A poll answered garbled past parsing at rest counts
    as one of them, as a first reading's does (``_garbled_at_rest``; review 116: a line that
    tore every answer at rest, each '.' read '?', had none counted, and a hand turn ran from
-   150 past ``az_min_deg`` 60 to 5 unstopped); one now and then is never eight in a row. So
-   does one once such answers have taken the controller offline at rest (``_offline_phase``;
-   review 123: from then on nothing counted, and a hand turn ran past ``az_min_deg`` to its
-   end, polled all the while); bytes that never come (a box switched off) count nothing.
+   150 past ``az_min_deg`` 60 to 5 unstopped); one now and then is never eight in a row.
    (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
    Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
    handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
@@ -2118,7 +2115,7 @@ class Controller:
         if link is not None and link.poll_garbled:
             if self._first_phase():
                 self._garbled_first(now)
-            elif self._rest_phase() or self._offline_phase():
+            elif self._rest_phase():
                 self._garbled_at_rest(now)
 
     def _first_phase(self) -> bool:
@@ -2136,16 +2133,6 @@ class Controller:
         if not self.answering or link is None or link.slew is not None:
             return False
         return m.anchor_deg is not None and m.state is not mo.MOVING and m.target_deg is None
-
-    def _offline_phase(self) -> bool:
-        """Rule 9: offline at rest, the port open: a controller whose answers a line garbles
-        past parsing goes offline at the silence time (rule 2), and they go on counting toward
-        the unwatched stop as at rest (review 123: from then on nothing counted them, and a
-        hand turn ran past ``az_min_deg`` to its end, the bridge polling all the while)."""
-        m, link = self.motion, self.link
-        if self.answering or link is None or link.slew is not None or self._first_phase():
-            return False
-        return m.state is not mo.MOVING and m.target_deg is None
 
     def _garbled_at_rest(self, now: float) -> None:
         """Rule 9: a poll answered garbled past parsing at rest is a reading at rest that
@@ -2431,8 +2418,7 @@ class Controller:
         at_rest = doubted.reply is not None and not (doubted.first or doubted.turning)
         at_rest = at_rest and self.answering and not doubted.at_once
         count = self._first_unconfirmed  # (review 116: answers torn at rest too, from the
-        torn = self._first_garbled and count >= DOUBTS_TOLD  # (the third on:
-        torn = torn and (self._rest_phase() or self._offline_phase())
+        torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # third on:
         unwatched = at_rest or torn  # one or two garbled are asked again as ever, link.py 11)
         at_rest = unwatched and count < FIRST_UNWATCHED_READINGS
         if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the

@@ -53,23 +53,12 @@ def test_the_premise_an_easycomm_on_the_same_line_is_stopped_before_the_limit(ri
     assert lowest >= AZ_MIN_DEG
 
 
-XFAIL = pytest.mark.xfail(
+@pytest.mark.xfail(
     strict=True,
     reason="review 123: a hand turn at rest on a line that garbles every byte runs past "
-    "az_min_deg (GS-232A/B: the first stop 9 s in, at 96, counted once offline; SatEL: "
-    "stopped 16.6 s in, at 17)",
+    "az_min_deg (GS-232A/B, RC2800: no stop, offline first; SatEL: stopped 16.6 s in, at 17)",
 )
-
-
-@pytest.mark.parametrize(
-    "model",
-    [
-        pytest.param("gs232b", marks=XFAIL),
-        pytest.param("gs232a", marks=XFAIL),
-        "rc2800-az",  # (counted once offline too: controller.py rule 9, ``_offline_phase``)
-        pytest.param("satel", marks=XFAIL),
-    ],
-)
+@pytest.mark.parametrize("model", ["gs232b", "gs232a", "rc2800-az", "satel"])
 def test_a_hand_turn_at_rest_on_a_line_garbling_every_byte_is_stopped_before_the_limit(
     rig: Rig, model: str
 ) -> None:
@@ -88,8 +77,7 @@ LOCK_S = 5.0  # the lock's ON taken and its stop out (virtual time)
 @pytest.mark.xfail(
     strict=True,
     reason="review 123: with the lock ON, a hand turn on a GS-232B whose line garbles every "
-    "byte runs past az_min_deg: no lock stop, the first unwatched one 9 s in (counted once "
-    "offline), at 96",
+    "byte runs past az_min_deg to 5: neither the lock's stop nor the unwatched one is written",
 )
 def test_a_locked_gs232b_on_a_line_garbling_every_byte_is_stopped_before_the_limit(
     rig: Rig,

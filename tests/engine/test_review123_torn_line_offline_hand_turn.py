@@ -22,6 +22,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from tests.engine.garblers import confirmed_at_rest, lowest_az
 from tests.engine.test_review113_every_byte_garbled_unwatched import torn
 from tests.engine.virtual import VirtualRotator
@@ -35,6 +37,11 @@ HAND_AFTER_S = 30.0  # the hand comes this long after the offline (virtual time)
 WATCH_S = 60.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 123: a rotor at rest taken offline by a line garbling every byte is never "
+    "stopped again: a hand turn runs past az_min_deg to its end",
+)
 def test_a_hand_turn_after_a_torn_line_took_it_offline_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
