@@ -41,20 +41,14 @@ HAND_S = 0.5  # the hand's turn under way when the operator sends STOP (virtual 
 AFTER_S = 6.0  # watched after the STOP, past the next unwatched stop (virtual time)
 STOP_WITHIN_S = 0.3  # the STOP's frame on the wire after it was sent, at most (virtual time)
 
-XFAIL = pytest.mark.xfail(
-    strict=True,
-    reason="review 131 3: an operator's STOP right after an unwatched stop written offline is "
-    "merged into it: the rotor a hand turns runs on to the next one by the clock, 2.5-3.5 s late",
-)
-
 
 @pytest.mark.parametrize(
     "model",
     [
-        pytest.param("gs232b", marks=XFAIL),
-        pytest.param("rt21", marks=XFAIL),
-        pytest.param("easycomm2", marks=XFAIL),
-        pytest.param("rc2800-az", marks=XFAIL),
+        ("gs232b"),
+        ("rt21"),
+        ("easycomm2"),
+        ("rc2800-az"),
     ],
 )
 def test_an_operators_stop_right_after_an_offline_unwatched_stop_goes_at_once(

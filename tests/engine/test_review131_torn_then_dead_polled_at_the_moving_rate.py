@@ -36,22 +36,15 @@ DEAD_S = 300.0  # long offline, nothing heard since (virtual time)
 MINUTE_S = 60.0  # the minute whose frames are counted (virtual time)
 SPARE = 2  # frames more than the idle rate makes in a minute, for the minute's edges
 
-XFAIL = pytest.mark.xfail(
-    strict=True,
-    reason="review 131 2: a box gone dead after three to seven torn answers at rest is polled "
-    "at the moving rate for good while offline (Easycomm 150/min, RT-21 200, RotorCard 241, "
-    "SatEL 30; idle 60, 15)",
-)
-
 
 @pytest.mark.parametrize(
     ("model", "torn_s"),
     [
-        pytest.param("easycomm2", 2.0, marks=XFAIL),  # (four torn answers: 1.5 to 3 s gives 3-7)
-        pytest.param("easycomm3", 2.0, marks=XFAIL),  # (four)
-        pytest.param("rt21", 1.75, marks=XFAIL),  # (five: 1.25 to 2.5 s gives 3-7)
-        pytest.param("rotorcard", 1.75, marks=XFAIL),  # (five: 1.25 to 2.25 s gives 3-7)
-        pytest.param("satel", 8.0, marks=XFAIL),  # (four: 5 to 12 s gives 3-6)
+        ("easycomm2", 2.0),  # (four torn answers: 1.5 to 3 s gives 3-7)
+        ("easycomm3", 2.0),  # (four)
+        ("rt21", 1.75),  # (five: 1.25 to 2.5 s gives 3-7)
+        ("rotorcard", 1.75),  # (five: 1.25 to 2.25 s gives 3-7)
+        ("satel", 8.0),  # (four: 5 to 12 s gives 3-6)
     ],
 )
 def test_a_box_gone_dead_after_a_few_torn_answers_is_polled_at_the_idle_rate(
