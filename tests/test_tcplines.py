@@ -1215,13 +1215,7 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
         halts[0] += 1
         return gs232_holds_stop(data)
 
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=clock,
         halts=counting,
         max_clients=16,  # (64 may wait)
@@ -1267,12 +1261,30 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
             server._accept_once(listener, waiting, sel)
         assert went == [operator.getsockname()[1]] and halts[0] == 1
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
+
+
+def _gs232_server(**kw: Any) -> LineServer:
+    """A GS-232 port's line server for the accept loop run by hand (``_hand_loop``), not
+    started: a tower at 120 degrees behind it, the front end's ``halts``."""
+    kw.setdefault("halts", gs232_holds_stop)
+    return LineServer(
+        "tower", 0, "127.0.0.1", lambda: Gs232Session(_Tower()), label="gs232", key="gs232", **kw
+    )
+
+
+def _close_all(
+    held: list[socket.socket],
+    waiting: dict[socket.socket, tuple[str, int]],
+    sel: selectors.BaseSelector,
+    listener: socket.socket,
+) -> None:
+    """What a test of the loop run by hand opened: its clients, the connections waiting in the
+    loop's books, the selector and the listener."""
+    for sock in [*held, *waiting]:
+        sock.close()
+    sel.close()
+    listener.close()
 
 
 def _hand_loop(server: LineServer) -> tuple[socket.socket, selectors.BaseSelector]:
@@ -1306,13 +1318,7 @@ def test_a_waiting_clients_question_come_since_its_connect_is_answered_before_ro
     room was made it was the oldest without a stop, reset unanswered (its bytes' wake-up not
     yet read). It is looked at again before it is reset now: answered, it waits for its
     command, and the oldest of the rest goes."""
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=FakeClock(),
         halts=gs232_holds_stop,
         greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
@@ -1336,12 +1342,7 @@ def test_a_waiting_clients_question_come_since_its_connect_is_answered_before_ro
         assert _answer(client, 7) == b"hello\r\n"
         assert _gone(held[1]) and not _gone(client)  # the oldest of the rest reset
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
 
 
 def test_connections_reset_with_bytes_unread_are_closed_not_kept_for_room(
@@ -1351,13 +1352,7 @@ def test_connections_reset_with_bytes_unread_are_closed_not_kept_for_room(
     still peeked alive (the bytes, not the reset): they filled the waiting list, none was
     swept, and a client silent since its connect was reset to make room for them. One reset
     with bytes unread and no stop in them is closed when accepted, and swept once waiting."""
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=FakeClock(),
         halts=gs232_holds_stop,
         max_clients=4,  # (16 may wait)
@@ -1387,12 +1382,7 @@ def test_connections_reset_with_bytes_unread_are_closed_not_kept_for_room(
         wait_until(lambda: tcplines._peek(next(iter(waiting)), 2) == b"S\r", 10, "its stop")
         assert server._stop_in(next(iter(waiting)))
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
 
 
 def test_the_accept_thread_runs_ahead_of_busy_programs_and_its_clients_at_the_bridges(
@@ -1496,13 +1486,7 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
     handles the client's own wake-up for those bytes: taken out of the selector, and not put
     back (answered already). Its stop then wakes nothing: it is found only by the poll for
     half lines, PARTIAL_POLL_S later, not at once as every answered client's is."""
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=FakeClock(),
         halts=gs232_holds_stop,
         greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
@@ -1533,12 +1517,7 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
         assert not server._accept_once(listener, waiting, sel)  # the pass its bytes wake
         assert went == [mine]
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
         os.close(server._wake_r)
         os.close(wake_w)
 
@@ -1603,13 +1582,7 @@ def test_a_stop_behind_connections_reset_with_a_buffer_full_unread_is_let_in_at_
     hundred of them in the kernel's queue ahead of the operator's STOP hold it back seconds
     of the accept thread's CPU. The loop's pass is run here by hand (its CPU measured on this
     thread, the budgets spent), the STOP's connection behind them."""
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=FakeClock(),
         halts=gs232_holds_stop,
     )
@@ -1628,12 +1601,7 @@ def test_a_stop_behind_connections_reset_with_a_buffer_full_unread_is_let_in_at_
         assert went == [operator.getsockname()[1]]
         assert cpu < slow(0.1), f"the accept loop took {cpu:.2f} s of CPU to reach the STOP"
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
 
 
 def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_few_reads(
@@ -1648,13 +1616,7 @@ def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_fe
     handful of newcomers waits seconds. The loop is run here by hand (its CPU measured on this
     thread, the clock moved on by SWEEP_S before the newcomer)."""
     clock = FakeClock()
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=clock,
         halts=gs232_holds_stop,
         max_clients=16,  # (64 may wait)
@@ -1675,12 +1637,7 @@ def test_a_newcomer_beside_waiting_connections_reset_with_a_late_stop_costs_a_fe
         cpu = time.thread_time() - cpu
         assert cpu < slow(0.05), f"one newcomer took {cpu:.2f} s of the accept loop's CPU"
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
 
 
 @pytest.mark.xfail(
@@ -1728,12 +1685,7 @@ def test_a_reset_connection_kept_for_its_late_stop_is_not_the_one_reset_for_room
         assert server._take(listener, waiting, sel)
         assert late in waiting, "the connection holding a stop was reset for a poller"
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
 
 
 # -- review 132 (third cold pass over 851c4776, 5a07cafc and ea067e1c) ----------------------
@@ -1756,13 +1708,7 @@ def test_a_newcomer_reset_with_a_few_bytes_unread_is_parsed_once(
         parsed.append(data)
         return gs232_holds_stop(data)
 
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=FakeClock(),
         halts=halts,
         max_clients=16,  # (64 may wait)
@@ -1801,13 +1747,7 @@ def test_a_silent_client_keeps_its_place_behind_connections_reset_after_their_ac
     them. The loop is run here by hand (the loopback budget spent, the clock moved on by half
     SWEEP_S between the two newcomers). Not a regression: dd1e5dce swept none of them."""
     clock = FakeClock()
-    server = LineServer(
-        "tower",
-        0,
-        "127.0.0.1",
-        lambda: Gs232Session(_Tower()),
-        label="gs232",
-        key="gs232",
+    server = _gs232_server(
         clock=clock,
         halts=gs232_holds_stop,
         greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
@@ -1848,9 +1788,4 @@ def test_a_silent_client_keeps_its_place_behind_connections_reset_after_their_ac
         server._accept_once(listener, waiting, sel)
         assert _answer(client, 7) == b"hello\r\n"
     finally:
-        for sock in held:
-            sock.close()
-        for sock in waiting:
-            sock.close()
-        sel.close()
-        listener.close()
+        _close_all(held, waiting, sel, listener)
