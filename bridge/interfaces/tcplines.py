@@ -129,8 +129,9 @@ Rules:
    a flood's connections came by the dozen (the first form of this rule still lost one
    ``S`` in three on a loaded machine, reset in that round trip). A peer gone by a reset
    with its bytes unread still peeks alive (the bytes come before the reset): its TCP state
-   says so (Linux), and one whose bytes hold no stop is closed when accepted, or swept once
-   waiting; and one silent when last looked at is looked at again before it is reset for
+   says so (Linux), and one whose bytes (READ_BYTES at most: one that sent more is kept as
+   any, its thread reads them) hold no stop is closed when accepted, or swept once waiting;
+   and one silent when last looked at is looked at again before it is reset for
    room: a question come since is answered (a CI run under load: a flood's connections, each
    sending ``p`` and resetting, filled the list and none was swept, and ``rotctl``, accepted
    before its question came, was the oldest and reset unanswered).
