@@ -132,6 +132,18 @@ def lowest_az(v: VirtualRotator, until: float, start: float, step_s: float = STE
     return lowest
 
 
+def stopped_before_the_limit(v: VirtualRotator, garble: Garble) -> None:
+    """``v``, turning at the start (``turning_at_the_start``), its port opened with every byte
+    through ``garble``: the rotor never went past AZ_MIN_DEG in WATCH_S."""
+    t = opened_through(v, garble)
+    lowest = lowest_az(v, t + WATCH_S, START_DEG)
+    said = [e.message for e in v.errors(since=t)]
+    assert lowest >= AZ_MIN_DEG, (
+        f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "
+        f"{AZ_MIN_DEG:g}; stop frames: {len(v.frames('stop', since=t))}; said: {said}"
+    )
+
+
 CONFIRMED_S = 15.0  # the start's readings on a clean line (virtual time, not a deadline)
 FIRST_STOP_S = 60.0  # eight readings at the moving rate, with room (virtual time)
 HAND_S = 60.0  # the hand's turn, with room (virtual time)

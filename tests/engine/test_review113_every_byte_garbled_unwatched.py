@@ -24,11 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from tests.engine.garblers import (
-    AZ_MIN_DEG,
-    START_DEG,
-    WATCH_S,
-    lowest_az,
-    opened_through,
+    stopped_before_the_limit,
     turning_at_the_start,
 )
 from tests.engine.virtual import VirtualRotator
@@ -43,10 +39,4 @@ def torn(data: bytes, now: float) -> bytes:
 
 def test_a_turn_whose_every_byte_is_garbled_is_stopped_before_the_limit(rig: Rig) -> None:
     v = turning_at_the_start(rig, "easycomm2", b"AZ5.0 EL0.0\n")
-    t = opened_through(v, torn)
-    lowest = lowest_az(v, t + WATCH_S, START_DEG)
-    said = [e.message for e in v.errors(since=t)]
-    assert lowest >= AZ_MIN_DEG, (
-        f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "
-        f"{AZ_MIN_DEG:g}; stop frames: {len(v.frames('stop', since=t))}; said: {said}"
-    )
+    stopped_before_the_limit(v, torn)

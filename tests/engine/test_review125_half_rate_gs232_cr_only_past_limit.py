@@ -19,12 +19,8 @@ from collections.abc import Callable
 import pytest
 
 from tests.engine.garblers import (
-    AZ_MIN_DEG,
-    START_DEG,
-    WATCH_S,
     at_half_rate,
-    lowest_az,
-    opened_through,
+    stopped_before_the_limit,
     turning_at_the_start,
 )
 from tests.engine.virtual import VirtualRotator
@@ -55,10 +51,4 @@ def test_a_gs232_turn_read_at_half_rate_is_stopped_before_the_limit(
     v = turning_at_the_start(
         rig, model, b"M005\r", {"line_ending": line_ending, "spacing": spacing}
     )
-    t = opened_through(v, at_half_rate())
-    lowest = lowest_az(v, t + WATCH_S, START_DEG)
-    said = [e.message for e in v.errors(since=t)]
-    assert lowest >= AZ_MIN_DEG, (
-        f"turned unstopped from {START_DEG:g} down to {lowest:g}, past az_min_deg "
-        f"{AZ_MIN_DEG:g}; stop frames: {len(v.frames('stop', since=t))}; said: {said}"
-    )
+    stopped_before_the_limit(v, at_half_rate())
