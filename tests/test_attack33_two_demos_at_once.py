@@ -31,12 +31,12 @@ def test_a_demo_whose_private_port_another_demo_just_took_still_starts(
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
     (tmp_path / "tmp").mkdir()
     port = free_port()
-    looks: list[int | None] = []
-    real_connack = demo.connack
+    looks: list[tuple[int, bool] | None] = []
+    real_connack = demo.connack_of
 
     def looked_an_instant_before_the_other_came_up(
         host: str, p: int, *a: float, **kw: Callable[[], bool]
-    ) -> int | None:
+    ) -> tuple[int, bool] | None:
         if not looks:  # this demo's first look: the other demo's mosquitto not up yet
             looks.append(None)
             return None
@@ -46,7 +46,7 @@ def test_a_demo_whose_private_port_another_demo_just_took_still_starts(
     other = PrivateBroker(tmp_path / "other", port=port)  # the other demo's, up a moment later
     try:
         other.start(slow(10))
-        monkeypatch.setattr(demo, "connack", looked_an_instant_before_the_other_came_up)
+        monkeypatch.setattr(demo, "connack_of", looked_an_instant_before_the_other_came_up)
         args = build_parser().parse_args(
             ["demo", "--mqtt-port", str(port), "--web-port", "0", "--duration-s", "1"]
         )

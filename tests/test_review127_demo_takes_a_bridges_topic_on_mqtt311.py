@@ -59,11 +59,6 @@ def publish_retained(port: int, messages: dict[str, bytes]) -> None:
         c.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review 127: on an MQTT 3.1.1 broker the demo runs on a real bridge's --base-topic, "
-    "leaving it retained offline",
-)
 def test_a_demo_on_an_mqtt311_broker_refuses_a_base_topic_a_bridge_uses(
     nats: Nats,
     tmp_path: Path,

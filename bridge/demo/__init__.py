@@ -81,7 +81,7 @@ from bridge.demo.mosquitto import (
     BrokerError,
     Mosquitto,
     answers,
-    connack,
+    connack_of,
     free_port,
     listens,
 )
@@ -375,13 +375,14 @@ def _run(
     # one CONNECT: whether a broker answers (rule 6) and whether it lets the demo in (rule 8),
     # from the same CONNACK (asking twice made a slow broker's wait twice as long). Each wait of
     # the look ends with the demo (^C, SIGTERM): nothing is started then (rule 3)
-    code = connack(host, port, ended=done.is_set)
+    answer = connack_of(host, port, ended=done.is_set)
+    code, mqtt5 = (None, True) if answer is None else answer
     refused = None if code is None else LOGIN_REFUSED.get(code)
     banned = None if code is None else BANNED.get(code)
     there = code is not None and refused is None and banned is None
     other = (
-        private_broker_of(host, port)
-        if there and not args.no_private_broker and not done.is_set()
+        private_broker_of(host, port)  # (a demo's private mosquitto speaks MQTT 5)
+        if there and mqtt5 and not args.no_private_broker and not done.is_set()
         else None
     )
     # rule 6: a program there, but no broker (asked again: one may have come up meanwhile, and
@@ -415,6 +416,8 @@ def _run(
             print(f"rotor-bridge demo: {why}{instead}", file=sys.stderr, flush=True)
     if there and other is None:
         where = f"the MQTT broker already running at {host}:{port}"
+        if not mqtt5:
+            where += " (it speaks MQTT 3.1.1, not 5)"
     elif args.no_private_broker:
         if not mute and not refused and not banned:
             print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
@@ -422,6 +425,7 @@ def _run(
     else:
         taken = other is not None or mute or bool(refused or banned)  # rules 5, 6, 8: not there
         port = _start_private_broker(host, free_port() if taken else port, workdir, stack)
+        mqtt5 = True  # (mosquitto)
         where = f"a private mosquitto on {host}:{port}"
         if other is not None:
             where += f" (the one on {host}:{asked[1]} is demo {other}'s, and ends with it)"
@@ -451,6 +455,7 @@ def _run(
         rotator_ids=list(roots),
         discovery_filters=[discovery.config("+", node, "+") for node in nodes],
         screen=screen,
+        mqtt5=mqtt5,
     )
     # a base topic of its own making is the demo's alone to clean up; one given with --base-topic
     # may hold someone else's retained state, which is not the demo's to delete

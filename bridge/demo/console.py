@@ -6,7 +6,12 @@ Rules:
 1. It reaches the bridge only through the broker: every typed line becomes one MQTT message on
    the demo's topics (from bridge.interfaces.mqtt.topics), nothing is called directly.
 2. It subscribes with retain-as-published (MQTT 5), so it knows which of the demo's topics hold a
-   retained message on the broker, and can clear exactly those.
+   retained message on the broker, and can clear exactly those. On a broker that speaks MQTT
+   3.1.1 alone (nats, RabbitMQ 3: the demo's look says which, bridge/demo/mosquitto.py
+   ``connack_of``) it connects in 3.1.1, where a message that arrives while subscribed never
+   says it was retained: before it clears, it subscribes anew, and what the broker hands a new
+   subscription as retained is what it clears (review 127: in MQTT 5 alone it was refused for
+   the whole run and left its retained messages behind).
 3. A line that is not a command is answered with a hint, never published as a target.
 4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
    elevation and state of every rotator stay on one status line, redrawn in place, and
@@ -58,8 +63,10 @@ class Console:
         rotator_ids: list[str],
         discovery_filters: list[str],
         screen: Screen | None = None,
+        mqtt5: bool = True,
     ) -> None:
         self.screen = screen or Screen()
+        self._v5 = mqtt5
         self._topics = topics
         self._ids = rotator_ids
         self._roots = {topics.rotator(rid).root for rid in rotator_ids}
@@ -69,12 +76,22 @@ class Console:
         self._last: dict[str, str] = {}
         self._lock = threading.Lock()
         self._synced = threading.Event()
+        self._subscribed = threading.Event()
         self.connected = threading.Event()
-        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
+        if mqtt5:
+            c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
+        else:  # (rule 2: a clean session, as MQTT 5's clean start)
+            c = paho.Client(
+                CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv311
+            )
         c.on_connect = self._on_connect
         c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
         c.reconnect_delay_set(1, 5)
-        c.connect_async(host, port, clean_start=True)
+        if mqtt5:
+            c.connect_async(host, port, clean_start=True)
+        else:
+            c.connect_async(host, port)
         c.loop_start()
         self._client = c
 
@@ -88,11 +105,20 @@ class Console:
     ) -> None:
         if reason_code.is_failure:
             return
-        # retain-as-published: what is retained on the broker arrives marked so even while we
-        # are subscribed, which is how the console knows what to remove at the end
-        opts = SubscribeOptions(qos=1, retainAsPublished=True)
-        client.subscribe([(f, opts) for f in self._filters])
+        self._subscribe(client)
         self.connected.set()
+
+    def _subscribe(self, client: paho.Client) -> None:
+        if self._v5:
+            # retain-as-published: what is retained on the broker arrives marked so even while
+            # we are subscribed, which is how the console knows what to remove at the end
+            opts = SubscribeOptions(qos=1, retainAsPublished=True)
+            client.subscribe([(f, opts) for f in self._filters])
+        else:  # (rule 2: what is retained is learnt anew before it is cleared)
+            client.subscribe([(f, 1) for f in self._filters])
+
+    def _on_subscribe(self, client: paho.Client, *_: Any) -> None:
+        self._subscribed.set()
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         topic = msg.topic
@@ -274,6 +300,8 @@ class Console:
     def remove_retained(self, timeout_s: float = 3.0) -> int | None:
         """Clear every retained message seen on the demo's topics; how many there were (None:
         the broker no longer answers, as a private one a Ctrl-C ended with the demo)."""
+        if not self._v5 and not self._subscribe_anew(timeout_s):  # (rule 2)
+            return None
         if not self.sync(timeout_s):  # the bridge's last "offline" included
             return None
         with self._lock:
@@ -283,6 +311,19 @@ class Console:
             with contextlib.suppress(RuntimeError, ValueError):
                 info.wait_for_publish(timeout_s)
         return len(topics)
+
+    def _subscribe_anew(self, timeout_s: float) -> bool:
+        """Rule 2, MQTT 3.1.1: the demo's topics unsubscribed and subscribed again, so that the
+        broker hands over what it holds retained now, marked retained (``sync`` then waits for
+        all of it); False when the broker does not answer in time."""
+        if not self.connected.wait(timeout_s):
+            return False
+        with self._lock:
+            self._retained.clear()
+        self._subscribed.clear()
+        self._client.unsubscribe(self._filters)
+        self._subscribe(self._client)
+        return self._subscribed.wait(timeout_s)
 
     def close(self, *, remove_retained: bool = False) -> None:
         try:

@@ -109,12 +109,27 @@ def connack(
     3.1.1 CONNECT, so it is never asked that first. None too as soon as ``ended()`` says the
     demo ends: it is asked between slices of the wait (LOOK_SLICE_S; the name's look-up alone
     is not sliced)."""
+    answer = connack_of(host, port, timeout_s, ended)
+    return None if answer is None else answer[0]
+
+
+def connack_of(
+    host: str,
+    port: int,
+    timeout_s: float = CONNACK_TIMEOUT_S,
+    ended: Callable[[], bool] = _never,
+) -> tuple[int, bool] | None:
+    """``connack``'s answer with the protocol that got it: (the code, True for MQTT 5 and False
+    for MQTT 3.1.1). The demo's console connects in the protocol the broker answered (review 127:
+    on a 3.1.1-only broker it spoke MQTT 5 alone and was refused for the whole run)."""
     deadline = time.monotonic() + timeout_s
     code = _connack(host, port, _CONNECT_5, deadline, ended)
+    v5 = True
     if code is None or code in _OTHER_VERSION:
         code311 = _connack(host, port, _CONNECT_311, deadline, ended)
-        code = code311 if code311 is not None or code is None else code
-    return None if code is None or code < 0 else code
+        if code311 is not None or code is None:
+            code, v5 = code311, False
+    return None if code is None or code < 0 else (code, v5)
 
 
 def _connack(
