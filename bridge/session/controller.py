@@ -1281,7 +1281,8 @@ class Controller:
                     self._misfit(link, reply, now)  # it persists
                 else:  # (told, and logged, once the line is quiet)
                     link.add_junk(reply.data, now)
-                link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
+                turn = self.turning() or self._lost_aim is not None  # (link.py rule 11)
+                link.garbles(reply, now, turn)  # link.py rule 11: it answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now, once=True)
         if self._settled(link, now):

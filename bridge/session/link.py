@@ -139,12 +139,23 @@ Rules:
    never comes: such answers were silence, 'does not answer', and counted nothing toward
    controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
    turn at the start 45 degrees past ``az_min_deg``; attack 30: the wrong baud rate told as a
-   cable). The first of a run alone is not counted: an answer still arriving (in parts, late)
+   cable). While a turn to a target is under way, so is junk that forms no reply (NOISE or
+   SPOILED) less than FORM_SHARE of whose bytes are the model's reply alphabet
+   (``spec.reply_alphabet``: the bytes its replies are made of): the same torn bytes, cut into
+   junk where a codec finds a frame's length or a line end in them (review 125: on six models a
+   turn on such a line ran 3 s past the silence time unwatched, kept online as garbled). It is
+   no garbled answer: its exchange runs to its deadline and is judged torn there. A reply a byte
+   or a few off (a burst of interference, a flipped bit) is still the controller's answer,
+   garbled (review 129: a turn through a 4.5 s burst of those reaches its target). At rest such
+   junk keeps the controller online as any garbled answer does, and counts toward controller.py
+   rule 9's unwatched stop, which a hand turn at rest on such a line needs (review 116; taken
+   offline at the silence time instead, such a turn ran past ``az_min_deg``: review 123's
+   premise). The first of a run alone is not counted: an answer still arriving (in parts, late)
    forms its reply with its rest. The run goes on across a replug (``torn_run``: controller.py
    rule 9 counts so; review 118, begun anew with each link, an adapter that reset every 2 s
-   never had one counted). A stray byte now and then is no answer (review 99: any byte
-   counted kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told
-   as the wrong baud rate).
+   never had one counted). A stray byte now and then is no answer (review 99: any byte counted
+   kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told as the
+   wrong baud rate).
 12. A controller that answers late: a line of the answer to the question given up last that
    comes before the next question (protocols/base.py rule 7: never a reading) says how long
    after that question it came (``answered_late``); from then on every answer is waited for
@@ -232,6 +243,9 @@ VERDICT_SLACK_S = 0.2  # rule 2: a verdict's reply is owed this long after it ca
 OVERDUE_SHARE = 0.25  # rule 12: a late answer's lateness past the reply time, waited on top
 OVERDUE_EASE = 1 / 16  # rule 12: of the learned overdue time, given back per answer in time
 TORN_SHARE = 0.5  # rule 11: of a reply's bytes, read with none formed: a torn answer
+# rule 11: of a formless junk's bytes, at least this share of the model's reply alphabet
+# (``spec.reply_alphabet``) for it to be the controller's answer garbled, not one torn
+FORM_SHARE = 0.5
 _FORMLESS = (JunkReason.NOISE, JunkReason.SPOILED)  # rule 11: bytes that form no reply
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
@@ -702,14 +716,26 @@ class Link:
         self._held = None
         return True
 
-    def garbles(self, junk: JunkReply, now: float) -> None:
+    def garbles(self, junk: JunkReply, now: float, turn: bool = False) -> None:
         """Rule 11: ``junk`` is the owed reply garbled, if it is bytes no healthy exchange has
-        (the controller answered: not silent)."""
+        (the controller answered: not silent); while a turn to a target is under way
+        (``turn``), not if it is torn past any form (``_of_form``)."""
         if self._reply_deadline is None or self._slew is not None:
             return
         if junk.reason is JunkReason.REFUSED or not self._unhealthy(junk):
             return
+        if turn and junk.reason in _FORMLESS and not self._of_form(junk.data):
+            return  # (torn past any form: judged at the exchange's deadline, ``_tears``)
         self._garbled, self._garbled_t = True, now
+
+    def _of_form(self, data: bytes) -> bool:
+        """Rule 11: whether formless junk's bytes are mostly the model's reply alphabet (a
+        reply a byte or a few off), not bytes torn past any form; True where the model
+        declares none."""
+        alphabet = self.spec.reply_alphabet
+        if not alphabet or not data:
+            return True
+        return len(data.translate(None, alphabet)) <= (1 - FORM_SHARE) * len(data)
 
     def _ask_garbled(self, now: float) -> bool:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll
