@@ -90,11 +90,6 @@ class Watcher:
         self._client.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-134 1: a bearing typed while the demo's MQTT 3.1.1 console is disconnected "
-    "is queued and published on its reconnect, seconds later, and turns the rotor then",
-)
 def test_a_bearing_typed_while_the_console_is_cut_off_is_not_sent_when_it_reconnects(
     nats: Nats,
 ) -> None:

@@ -132,11 +132,6 @@ def one_run(port: int, run: int) -> tuple[int | None, list[str], set[str]]:
     return removed, left_by_the_bridge, retained_on(port, "#").keys() & set(left_by_the_bridge)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-134 3: on aedes the demo's end clears only the retained messages that came "
-    "back before its sync marker, says it removed them all, and leaves the rest behind",
-)
 def test_the_demo_console_on_aedes_clears_everything_its_bridge_left_retained(
     aedes: Aedes,
 ) -> None:

@@ -59,11 +59,6 @@ def mark_as_another_demos(port: int, instance: str) -> None:
         c.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-134 2: one closed MQTT 5 CONNECT makes the demo take an MQTT 5 broker for "
-    "3.1.1 alone, and skip rule 5: another demo's private mosquitto is taken for the user's",
-)
 def test_one_closed_mqtt5_connect_does_not_hide_another_demos_private_broker(
     broker: Mosquitto,
     restarted: NoMqtt5,

@@ -38,11 +38,6 @@ def aedes(tmp_path: Path) -> Iterator[Aedes]:
     a.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-134 4: on aedes the demo's sync comes back before a real bridge's retained "
-    "bridge/state, so it runs on that bridge's --base-topic and leaves it retained offline",
-)
 def test_a_demo_on_aedes_refuses_a_base_topic_a_bridge_uses(
     aedes: Aedes,
     tmp_path: Path,

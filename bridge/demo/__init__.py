@@ -465,7 +465,7 @@ def _run(
         console.mark_private_broker(instance)
     # a bridge that uses this base topic, running or stopped, owns its Home Assistant devices:
     # the demo's discovery would clear them as stale
-    held = console.retained(topics.bridge_state) if args.base_topic is not None else None
+    held = console.look(topics.bridge_state) if args.base_topic is not None else None
     if held is not None:
         print(
             f"rotor-bridge demo: base topic {topics.base!r} belongs to a bridge "

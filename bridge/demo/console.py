@@ -7,11 +7,18 @@ Rules:
    the demo's topics (from bridge.interfaces.mqtt.topics), nothing is called directly.
 2. It subscribes with retain-as-published (MQTT 5), so it knows which of the demo's topics hold a
    retained message on the broker, and can clear exactly those. On a broker that speaks MQTT
-   3.1.1 alone (nats, RabbitMQ 3: the demo's look says which, bridge/demo/mosquitto.py
+   3.1.1 alone (nats, aedes, RabbitMQ 3: the demo's look says which, bridge/demo/mosquitto.py
    ``connack_of``) it connects in 3.1.1, where a message that arrives while subscribed never
-   says it was retained: before it clears, it subscribes anew, and what the broker hands a new
-   subscription as retained is what it clears (review 127: in MQTT 5 alone it was refused for
-   the whole run and left its retained messages behind).
+   says it was retained: it clears every topic of the demo's that carried a message since it
+   connected (the demo's base topic is its own, rule 1 of bridge.demo; a topic that held no
+   retained message is left as it was by an empty one), but those it published itself (review
+   127: in MQTT 5 alone it was refused for the whole run and left its retained messages behind;
+   review 134: a new subscription's retained messages came after the marker that was to wait
+   for them on aedes, and were left). A retained topic it must read before the bridge starts
+   is asked alone (``look``).
+3b. A typed command goes now or never: at QoS 0, and not while the console has lost the
+   broker, which it says (review 134: paho kept a QoS 1 bearing for the next connection, and
+   it turned the rotor seconds after it was typed).
 3. A line that is not a command is answered with a hint, never published as a target.
 4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
    elevation and state of every rotator stay on one status line, redrawn in place, and
@@ -67,6 +74,8 @@ class Console:
     ) -> None:
         self.screen = screen or Screen()
         self._v5 = mqtt5
+        self._seen: set[str] = set()  # rule 2, MQTT 3.1.1: the topics that carried a message
+        self._sent: set[str] = {PRIVATE_BROKER_MARK}  # rule 2: ... but those it published
         self._topics = topics
         self._ids = rotator_ids
         self._roots = {topics.rotator(rid).root for rid in rotator_ids}
@@ -114,7 +123,7 @@ class Console:
             # we are subscribed, which is how the console knows what to remove at the end
             opts = SubscribeOptions(qos=1, retainAsPublished=True)
             client.subscribe([(f, opts) for f in self._filters])
-        else:  # (rule 2: what is retained is learnt anew before it is cleared)
+        else:  # (rule 2: what is retained is what arrives)
             client.subscribe([(f, 1) for f in self._filters])
 
     def _on_subscribe(self, client: paho.Client, *_: Any) -> None:
@@ -125,6 +134,12 @@ class Console:
         if topic == self._sync_topic:
             self._synced.set()
             return
+        if not self._v5:  # rule 2: no flag says which are retained
+            with self._lock:
+                if msg.payload:
+                    self._seen.add(topic)
+                else:
+                    self._seen.discard(topic)
         if msg.retain:
             with self._lock:
                 if msg.payload:
@@ -200,7 +215,15 @@ class Console:
         return "see " + topic
 
     def publish(self, topic: str, payload: str) -> None:
-        self._client.publish(topic, payload, qos=1)
+        """Rule 3b: now or never."""
+        self._sent.add(topic)
+        if not self._client.is_connected():
+            self.screen.log(
+                f"rotor-bridge demo: not sent ({topic} {payload}): the console has lost the "
+                "broker, and connects again"
+            )
+            return
+        self._client.publish(topic, payload, qos=0)
 
     def command(self, line: str) -> bool:
         """Handle one typed line; False to quit."""
@@ -297,33 +320,35 @@ class Console:
         with self._lock:
             return self._retained.get(topic)
 
+    def look(self, topic: str, timeout_s: float = 5.0) -> bytes | None:
+        """Rule 2: what ``topic`` holds retained, asked alone (its own subscription, then a
+        round trip): on MQTT 3.1.1 a broker may hand a new subscription's many retained
+        messages after a later marker (review 134: aedes, a bridge's 150 configs), where one
+        alone comes ahead of it. None: nothing, or no answer in time."""
+        if not self.connected.wait(timeout_s):
+            return None
+        if self._v5 or self.retained(topic) is not None:
+            self.sync(timeout_s)
+            return self.retained(topic)
+        self._subscribed.clear()
+        self._client.subscribe(topic, 1)
+        if self._subscribed.wait(timeout_s):
+            self.sync(timeout_s)
+        self._client.unsubscribe(topic)
+        return self.retained(topic)
+
     def remove_retained(self, timeout_s: float = 3.0) -> int | None:
         """Clear every retained message seen on the demo's topics; how many there were (None:
         the broker no longer answers, as a private one a Ctrl-C ended with the demo)."""
-        if not self._v5 and not self._subscribe_anew(timeout_s):  # (rule 2)
-            return None
         if not self.sync(timeout_s):  # the bridge's last "offline" included
             return None
         with self._lock:
-            topics = sorted(self._retained)
+            topics = sorted(self._retained if self._v5 else self._seen - self._sent)
         infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
         for info in infos:
             with contextlib.suppress(RuntimeError, ValueError):
                 info.wait_for_publish(timeout_s)
         return len(topics)
-
-    def _subscribe_anew(self, timeout_s: float) -> bool:
-        """Rule 2, MQTT 3.1.1: the demo's topics unsubscribed and subscribed again, so that the
-        broker hands over what it holds retained now, marked retained (``sync`` then waits for
-        all of it); False when the broker does not answer in time."""
-        if not self.connected.wait(timeout_s):
-            return False
-        with self._lock:
-            self._retained.clear()
-        self._subscribed.clear()
-        self._client.unsubscribe(self._filters)
-        self._subscribe(self._client)
-        return self._subscribed.wait(timeout_s)
 
     def close(self, *, remove_retained: bool = False) -> None:
         try:
