@@ -92,7 +92,7 @@ def test_a_demo_on_an_mqtt311_broker_leaves_nothing_retained_there(
     left = {
         topic
         for topic in retained_on(nats.port, "#")
-        if topic.startswith("rotor-demo-") or "rotorbridge_rotor_demo_" in topic
+        if topic.startswith("rotor-demo-") or "rotorbridge_rotor-demo-" in topic
     }
     assert not left, (
         f"the demo left {len(left)} retained messages on the user's broker: "

@@ -11,7 +11,7 @@ Rules:
    ``rotor-demo-<instance>`` (``--base-topic`` overrides it), its own MQTT client ids
    (``rotor-demo-<instance>``, the console ``...-ui``: at most 23 characters, which every broker
    must accept; a real bridge's default has 6 hex digits there) and, from the base topic, its
-   own Home Assistant node ids (``rotorbridge_rotor_demo_<instance>``; a real bridge on ``rotor``
+   own Home Assistant node ids (``rotorbridge_rotor-demo-<instance>``; a real bridge on ``rotor``
    owns only ``rotorbridge_rotor`` and ``rotorbridge_rotor_r_*``, so neither clears the other's
    configs). Device names say "Demo".
 2. Its settings come from its flags alone: a ``ROTOR_BRIDGE_*`` environment written for the real
