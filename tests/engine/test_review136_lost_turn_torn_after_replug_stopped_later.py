@@ -37,11 +37,6 @@ STEP_S = 0.05  # a step of virtual time to see the first stop: not a deadline
 BEFORE_S = 2.8  # b28cd556^'s first stop at the latest (2.05-2.7 s), with room
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-136 3: a lost turn on a line torn after the replug is stopped at the "
-    "silence time, 2.95-3.25 s, no longer by rule 9's count (b28cd556^: 2.05-2.7 s)",
-)
 @pytest.mark.parametrize("line", ["torn", "half rate"])
 @pytest.mark.parametrize("model", ["rotorez", "rt21", "md01"])
 def test_a_lost_turn_on_a_line_torn_after_the_replug_is_stopped_as_soon_as_before(

@@ -35,11 +35,6 @@ OUT_S = 1.0  # the adapter out (virtual time)
 WATCH_S = 30.0  # the offline and its words, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-136 4: an RT-21 read at half rate mid-turn is said to have 'stopped "
-    "answering' / 'does not answer' (b28cd556^: 'answers only garbled replies')",
-)
 @pytest.mark.parametrize("replugged", [False, True], ids=["mid-turn", "lost turn"])
 def test_an_rt21_read_at_half_rate_is_said_to_answer_garbled(rig: Rig, replugged: bool) -> None:
     v = rig("rt21", emulator={"start_az_deg": START_DEG})

@@ -66,11 +66,6 @@ def stray_byte_after_each_answer(model: str, until: float) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-136 1: a turn through a 4.5 s burst of whole answers each followed by one "
-    "stray byte is stopped short, 'stopped answering' (b28cd556^: reaches its target)",
-)
 @pytest.mark.parametrize("model", ["rt21", "prosistel", "prosistel-combi", "rotorez", "md01"])
 def test_a_turn_through_a_burst_of_answers_each_followed_by_a_stray_byte_reaches_its_target(
     rig: Rig, model: str
@@ -106,11 +101,6 @@ def stray_byte_before_each_answer(model: str, until: float) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-136 1: a turn through a 4.5 s burst of whole answers each after one "
-    "stray byte is stopped short, 'stopped answering' (b28cd556^: reaches its target)",
-)
 @pytest.mark.parametrize("model", ["prosistel", "prosistel-combi", "rotorez"])
 def test_a_turn_through_a_burst_of_answers_each_after_a_stray_byte_reaches_its_target(
     rig: Rig, model: str

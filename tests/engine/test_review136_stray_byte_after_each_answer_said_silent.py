@@ -33,11 +33,6 @@ TURNING_S = 10.0  # the turn well under way, watched (virtual time, not a deadli
 WATCH_S = 30.0  # the offline and its words, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-136 2: a box answering every poll whole, each answer followed by a stray "
-    "byte, is said to have 'stopped answering' (b28cd556^: 'answers only garbled replies')",
-)
 @pytest.mark.parametrize("model", ["rt21", "prosistel", "rotorez"])
 def test_a_box_answering_whole_replies_each_with_a_stray_byte_is_not_said_silent(
     rig: Rig, model: str
