@@ -1,0 +1,111 @@
+"""Review 139, finding 1: since 725af295 the demo's console sends every typed line at QoS 0
+("now or never", bridge/demo/console.py rule 3b, review 134 (1)), the STOP typed as ``s``
+included. A stop cannot move a rotor, so the reason for "never later" (a stale bearing turning
+the rotor on reconnect) does not hold for it, and the house's first rule says a STOP must always
+get through. On a connection that went dead without paho knowing yet (a Wi-Fi drop, a NAT that
+forgot the flow: ``is_connected()`` still says yes), the QoS 0 STOP goes into a socket that
+carries nothing, the console says nothing, and when it reconnects the STOP is gone: the rotor
+runs on to its target. Its parent (16dff1c0) sent it at QoS 1, unacknowledged, so paho sent it
+again on the next connection and the rotor stopped.
+
+Real mosquitto (MQTT 5, the demo's usual broker); the console's own connection runs through a
+relay that first carries nothing (the dead path) and is then closed; what reaches the broker
+is read by an MQTT 3.1.1 client there."""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.demo.console import Console
+from bridge.demo.screen import Screen
+from bridge.interfaces.mqtt.topics import Topics
+from tests.support.mosquitto import Mosquitto
+from tests.support.waiting import slow, wait_until
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Cuttable, Watcher
+
+
+@pytest.fixture
+def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
+    m = Mosquitto(tmp_path / "mosquitto").start()
+    yield m
+    m.stop()
+
+
+class DeadPath(Cuttable):
+    """The relay, passing MQTT 5 too, that can also carry nothing while its sockets stay open
+    (a path gone dead: the client's writes are taken and never arrive)."""
+
+    def __init__(self, port: int) -> None:
+        super().__init__(port)
+        self.v5_closes_left = 0
+        self.dead = False
+        self.dropped = 0  # bytes taken while dead
+
+    def cut(self) -> None:
+        """Closed, both ways, so that each end sees it at once (a close alone waits for the
+        relay's reads)."""
+        with self._lock:
+            socks = list(self._socks)
+        for s in socks:
+            with contextlib.suppress(OSError):
+                s.shutdown(socket.SHUT_RDWR)
+        super().cut()
+
+    def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                if self.dead:
+                    self.dropped += len(data)
+                else:
+                    dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.close()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-139 1: a STOP typed on a console whose path went dead is sent at QoS 0 and "
+    "lost; the parent's QoS 1 STOP went again on reconnect",
+)
+def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
+    mosquitto: Mosquitto,
+) -> None:
+    relay = DeadPath(mosquitto.port)
+    watcher = Watcher(mosquitto.port)
+    topics = Topics(BASE, {"rotorez": BASE})
+    console = Console(
+        "127.0.0.1",
+        relay.port,
+        client_id=f"{BASE}-ui",
+        topics=topics,
+        rotator_ids=["rotorez"],
+        discovery_filters=[],
+        screen=Screen(),
+        mqtt5=True,
+    )
+    try:
+        assert console.sync(slow(20)), "the console never connected through the relay"
+        tries = len(relay.levels)
+        relay.dead = True  # the path carries nothing; nobody has noticed yet
+        assert console.command("s")  # typed: the rotor is turning
+        wait_until(lambda: relay.dropped > 0, 20, "the STOP's PUBLISH taken by the dead path")
+        relay.cut()  # the dead connection found out at last: closed
+        relay.dead = False
+        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
+        relay.restore()
+        assert console.sync(slow(20)), "the console never came back"
+        console.publish(f"{BASE}/console/mark", "after")
+        before = watcher.wait_for(f"{BASE}/console/mark", "after")
+        stops = [m for m in before if m[0] == topics.rotator("rotorez").stop]
+        assert stops == [(topics.rotator("rotorez").stop, "STOP")], (
+            f"the STOP typed on the dead connection never reached the broker: {before}"
+        )
+    finally:
+        console.close()
+        watcher.close()
+        relay.close()
