@@ -1,0 +1,77 @@
+"""Review 139, finding 3: since 725af295 the demo's console sends ``lock on`` at QoS 0 too
+(bridge/demo/console.py rule 3b). The safety lock ON is what a user types before climbing the
+tower or while someone works on the antenna: on a connection that went dead without paho
+knowing yet, it goes into a socket that carries nothing, the console says nothing (it does not
+show ``R/lock/state`` either), and after the reconnect the rotator is still unlocked: a target
+from Home Assistant or a logger turns it. A lock ON can move nothing, so "never later" (review
+134 (1): a stale bearing) is no reason to drop it. Its parent (16dff1c0) sent it at QoS 1,
+unacknowledged, and paho sent it again on the next connection.
+
+Real mosquitto (MQTT 5); the console's connection through the relay of finding 1, dead and
+then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.demo.console import Console
+from bridge.demo.screen import Screen
+from bridge.interfaces.mqtt.topics import Topics
+from tests.support.mosquitto import Mosquitto
+from tests.support.waiting import slow, wait_until
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+
+
+@pytest.fixture
+def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
+    m = Mosquitto(tmp_path / "mosquitto").start()
+    yield m
+    m.stop()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-139 3: a lock ON typed on a console whose path went dead is sent at QoS 0 "
+    "and lost; the parent's QoS 1 lock ON went again on reconnect",
+)
+def test_a_lock_on_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
+    mosquitto: Mosquitto,
+) -> None:
+    relay = DeadPath(mosquitto.port)
+    watcher = Watcher(mosquitto.port)
+    topics = Topics(BASE, {"rotorez": BASE})
+    console = Console(
+        "127.0.0.1",
+        relay.port,
+        client_id=f"{BASE}-ui",
+        topics=topics,
+        rotator_ids=["rotorez"],
+        discovery_filters=[],
+        screen=Screen(),
+        mqtt5=True,
+    )
+    try:
+        assert console.sync(slow(20)), "the console never connected through the relay"
+        tries = len(relay.levels)
+        relay.dead = True  # the path carries nothing; nobody has noticed yet
+        assert console.command("lock on")
+        wait_until(lambda: relay.dropped > 0, 20, "the lock's PUBLISH taken by the dead path")
+        relay.cut()  # the dead connection found out at last: closed
+        relay.dead = False
+        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
+        relay.restore()
+        assert console.sync(slow(20)), "the console never came back"
+        console.publish(f"{BASE}/console/mark", "after")
+        before = watcher.wait_for(f"{BASE}/console/mark", "after")
+        locks = [m for m in before if m[0] == topics.rotator("rotorez").lock]
+        assert locks == [(topics.rotator("rotorez").lock, "ON")], (
+            f"the lock ON typed on the dead connection never reached the broker: {before}"
+        )
+    finally:
+        console.close()
+        watcher.close()
+        relay.close()
