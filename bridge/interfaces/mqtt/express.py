@@ -462,8 +462,6 @@ class Express:
         """The main connection is up, or not (any thread): the child's connection, its login
         refused, tries again only once it is (mqtt/connection.py rule 6; review 81)."""
         with self._lock:
-            if up == self._main_up:
-                return
             self._main_up = up
             if self._sock is None or self.ended.is_set():
                 return
@@ -745,8 +743,7 @@ class Express:
             self._sock = _Outbox(mine, lambda: self.clock())
             try:
                 self._sock.send(config)
-                if not self._main_up:  # (``main``: a child starts with the main one up)
-                    self._sock.send({"op": "main", "up": False})
+                self._sock.send({"op": "main", "up": self._main_up})  # (``main``)
             except OSError:
                 pass  # it died at once: read below as an end of file
             self.ended.clear()
