@@ -291,7 +291,7 @@ class App:
             on_connect=self._connected,
             on_new_connection=self._main_new,
             on_subscribed=lambda: self._vouch("main"),
-            on_connection_lost=self._main_lost,
+            on_connection_lost=lambda: self.mqtt.main_gone(),
             no_replay=[*self.topics.stop_lane(), *self.topics.lock_lane()],
             replayed=[  # a feature's input whose retain flag says "replayed" (the wind's)
                 topic
@@ -492,7 +492,6 @@ class App:
             on_subscribed=partial(self._lane_subscribed, "stop"),
             behind_subscribe=partial(self.mqtt.lane_subscribing, ("stop",)),
             no_replay=self.topics.stop_lane(),
-            waits_for=self.client.connected,  # (a login refused: mqtt/connection.py rule 6)
         )
         # interfaces/mqtt/lastword.py rule 16: the lock words on a lane of their own, so that
         # no flood of them sits ahead of a stop on the stop lane
@@ -507,7 +506,6 @@ class App:
             on_subscribed=partial(self._lane_subscribed, "lock"),
             behind_subscribe=partial(self.mqtt.lane_subscribing, ("lock",)),
             no_replay=self.topics.lock_lane(),
-            waits_for=self.client.connected,  # (a login refused: mqtt/connection.py rule 6)
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
         self.client.before_message = self._lanes_first
@@ -806,16 +804,10 @@ class App:
         self.mqtt.retain_is_live(self.client.v5)
         self.mqtt.main_gone()
 
-    def _main_lost(self) -> None:
-        """The main connection is gone (paho's thread)."""
-        self.mqtt.main_gone()
-        self.express.main(False)  # (mqtt/connection.py rule 6: a refused login waits for it)
-
     def _connected(self) -> None:
         """The main connection is up (its first look done): the stop lane connects too, now
         that the broker is known to take the bridge (a wrong password is refused once, not
         twice per try)."""
-        self.express.main(True)  # (mqtt/connection.py rule 6; the lanes read ``connected``)
         if not self._lane_started and not self._stopped.is_set():
             self._lane_started = True
             # mqtt.protocol "auto" stepped down (interfaces/mqtt/connection.py)

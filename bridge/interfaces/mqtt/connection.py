@@ -38,43 +38,41 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    not block (it drops commands into mailboxes); a handler that raises is logged, and paho's
    thread goes on.
 6. paho's reconnect loop (connect_async + loop_start, exponential back-off; the loop runs on a
-   thread of ours, paho_client.py rule 6); a refused connection (bad credentials) or a failed one
-   (TLS, unreachable) is logged once with the reason (the main connection's words; the lane has its
-   own, lane.py rule 3) and retried, never a crash; a login refused names the keys to check
-   (``login_hint``: it said "Not authorized" and no key, an attack pass): with a client certificate
-   and no user name, the certificate (a broker that takes it as the login), not a password to set.
-   Rule 7 only slows that loop down. The back-off is 1 s doubling to 30 s (``RECONNECT_MAX_S``) for
-   the main connection, whose tries a broker refusing the login sees; a connection that carries
-   stops and locks (the stop lane, the stop express: their ``RECONNECT_MAX_S``) doubles to
-   STOP_RECONNECT_MAX_S (2 s) only. A broker back from an outage is not announced: its persisted
-   retained ``R/availability`` says ``online`` at once (a broker's own shutdown sends no last
-   will), so a dashboard offers STOP while the bridge is still waiting out its back-off, and a
-   clean session keeps nothing for a connection not yet back (rule 1). With 30 s, after a 33 s
-   outage every connection came back 28 s after the broker, and a STOP sent then reached nobody:
-   the rotor turned on to its target (attack 23). The cost of 2 s is small: a try at a broker that
-   is away is a TCP connection refused (or one that times out, which spaces the tries by itself),
-   and the stop lane and the express start only once the main connection was accepted, so a wrong
-   password is tried on the main connection's back-off alone; and once started, one whose login the
-   broker refuses (after a restart: its password file changed) tries again only once the main
-   connection is up (``waits_for``: review 81, each tried it every 2 s, some 90 refused logins a
-   minute that a broker's ban on failed logins would answer by shutting the bridge out, its main
-   connection too); a lane the broker keeps refusing or closing (rule 3 of lane.py: said once)
+   thread of ours, paho_client.py rule 6); a refused
+   connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
+   reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
+   never a crash; a login refused names the keys to check (``login_hint``: it said "Not
+   authorized" and no key, an attack pass): with a client certificate and no user name, the
+   certificate (a broker that takes it as the login), not a password to set. Rule 7 only
+   slows that loop down. The back-off is 1 s doubling to 30 s (``RECONNECT_MAX_S``) for the main
+   connection, whose tries a broker refusing the login sees; a connection that carries stops
+   and locks (the stop lane, the stop express: their ``RECONNECT_MAX_S``) doubles to
+   STOP_RECONNECT_MAX_S (2 s) only. A broker back from an outage is not announced: its
+   persisted retained ``R/availability`` says ``online`` at once (a broker's own shutdown
+   sends no last will), so a dashboard offers STOP while the bridge is still waiting out its
+   back-off, and a clean session keeps nothing for a connection not yet back (rule 1). With
+   30 s, after a 33 s outage every connection came back 28 s after the broker, and a STOP
+   sent then reached nobody: the rotor turned on to its target (attack 23). The cost of 2 s
+   is small: a try at a broker that is away is a TCP connection refused (or one that times
+   out, which spaces the tries by itself), and the stop lane and the express start only once
+   the main connection was accepted, so a wrong password is tried on the main connection's
+   back-off alone; a lane the broker keeps refusing or closing (rule 3 of lane.py: said once)
    tries under 30 times a minute, below what a broker's flapping detection bans (EMQX: 30
-   disconnects a minute when it is turned on). Less would pass that ban, and close the window no
-   better: a STOP sent before the lane is back, however soon it tries, reaches the main connection
-   only, if that one is back; only the broker keeping the STOP for the lane would close it, which a
-   clean session does not ask (docs/reliability.md, Limits, says why the lane's stays clean). A
-   connection the broker closes before it answers the CONNECT (an ACL on the client id, a
-   connection limit, a broker without MQTT 5) is said too, once, with the likely fixes
-   (``_closed_early``): it is never silent. One the bridge itself ends for want of an answer
-   (``unanswered``: paho's keep-alive, or paho_client.py rule 5's CONNACK_TIMEOUT_S, ran out before
-   any byte of the broker's) is said as that (``_unanswered``): the broker took the connection and
-   said nothing, a broker stalled or overloaded, or its host or the network holding its packets,
-   never its access rules nor a connection limit, which answer or close (attack 23: a broker frozen
-   past the keep-alive was said at ERROR as one that "closed the connection before accepting it
-   (Keep alive timeout)", its ACL to check, and the stop lane said the same of its own). The stop
-   lane and the express leave it to the main connection, which speaks to the same broker (as they
-   do a broker that cannot be reached).
+   disconnects a minute when it is turned on). Less would pass that ban, and close the window
+   no better: a STOP sent before the lane is back, however soon it tries, reaches the main
+   connection only, if that one is back; only the broker keeping the STOP for the lane would
+   close it, which a clean session does not ask (docs/reliability.md, Limits, says why the
+   lane's stays clean). A connection the broker closes before it answers the CONNECT (an
+   ACL on the client id, a connection limit, a broker without MQTT 5) is said too, once, with
+   the likely fixes (``_closed_early``): it is never silent. One the bridge itself ends for want
+   of an answer (``unanswered``: paho's keep-alive, or paho_client.py rule 5's CONNACK_TIMEOUT_S,
+   ran out before any byte of the broker's) is said as that (``_unanswered``): the broker took
+   the connection and said nothing, a broker stalled or overloaded, or its host or the network
+   holding its packets, never its access rules nor a connection limit, which answer or close
+   (attack 23: a broker frozen past the keep-alive was said at ERROR as one that "closed the
+   connection before accepting it (Keep alive timeout)", its ACL to check, and the stop lane
+   said the same of its own). The stop lane and the express leave it to the main connection,
+   which speaks to the same broker (as they do a broker that cannot be reached).
 7. One client id, one connection. A broker that gets a second connection with a client id closes
    the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the socket), so
    two processes with one id (two hosts sharing a configuration, a stale container beside a new
@@ -359,9 +357,6 @@ class Options(TypedDict, total=False):
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int  # (by default the class's RECONNECT_MAX_S: rule 6)
-    # rule 6: a connection that carries stops, its login refused, tries again only once this is
-    # set (the main connection up: its back-off alone tries a login the broker refuses)
-    waits_for: threading.Event | None
 
 
 class Connection:
@@ -405,8 +400,6 @@ class Connection:
             options.get("reconnect_max_s", self.RECONNECT_MAX_S),
         )
         self._guard = TakeoverGuard()
-        self._waits_for = options.get("waits_for")  # rule 6: the main connection up
-        self._login_refused = False  # rule 6: the last CONNACK refused the login
         self._peer: tuple[str, int] | None = None  # rule 7: the address the connection had
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
@@ -423,8 +416,6 @@ class Connection:
         self.before_message: Callable[[], None] | None = None  # lane.py rule 4
         c = new_client(settings, client_id)
         c.reconnect_delay_set(*self._reconnect_s)
-        if self._waits_for is not None:
-            c.held = self._login_held  # (paho_client.py rule 6)
         c.on_connect = self._on_connect
         c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
@@ -655,7 +646,6 @@ class Connection:
         self._answered = True
         with self._trial_lock:
             self._trial_ok = False  # rule 1: an answer, not a close: no evidence for a trial
-        self._login_refused = reason_code.is_failure and str(reason_code) in LOGIN_REFUSED
         if reason_code.is_failure:
             self._guard.connect_failed()
             code = getattr(reason_code, "value", None)
@@ -684,13 +674,6 @@ class Connection:
             for topic, payload in self._behind_subscribe():  # (paho's queue keeps the order)
                 client.publish(topic, payload, qos=0, retain=False)
         self._opened(client)
-
-    def _login_held(self) -> bool:
-        """Rule 6: whether the next try waits: the login was refused, and the main connection,
-        whose back-off alone tries it, is not up (review 81: after a restart that refused the
-        login, the stop lane, the lock lane and the express each tried it every 2 s)."""
-        waits = self._waits_for
-        return self._login_refused and waits is not None and not waits.is_set()
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
         with self._trial_lock:

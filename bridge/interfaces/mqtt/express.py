@@ -213,7 +213,6 @@ Rules:
 from __future__ import annotations
 
 import array
-import contextlib
 import fcntl
 import hashlib
 import json
@@ -412,7 +411,6 @@ class Express:
         self._child: subprocess.Popen[bytes] | None = None
         self._killed: subprocess.Popen[bytes] | None = None  # the child _kill killed
         self._started = False
-        self._main_up = True  # (``main``: it starts once the main connection was accepted)
         self._stopping = False
         self._ending = False  # rule 7: the bridge stops (shutting_down): no restart
         self._wake = threading.Event()  # stop(), shutting_down(): no restart, no wait for one
@@ -457,16 +455,6 @@ class Express:
             target=self._run, args=(mqtt311,), name="stop express", daemon=True
         )
         self.runner.start()
-
-    def main(self, up: bool) -> None:
-        """The main connection is up, or not (any thread): the child's connection, its login
-        refused, tries again only once it is (mqtt/connection.py rule 6; review 81)."""
-        with self._lock:
-            self._main_up = up
-            if self._sock is None or self.ended.is_set():
-                return
-            with contextlib.suppress(OSError):  # (BlockingIOError: a hung child, killed by
-                self._sock.send({"op": "main", "up": up})  # the next word that must go)
 
     def shutting_down(self) -> None:
         """Rule 7: the bridge begins to stop; the child runs on until ``stop``, but one that
@@ -743,7 +731,6 @@ class Express:
             self._sock = _Outbox(mine, lambda: self.clock())
             try:
                 self._sock.send(config)
-                self._sock.send({"op": "main", "up": self._main_up})  # (``main``)
             except OSError:
                 pass  # it died at once: read below as an end of file
             self.ended.clear()
@@ -1118,8 +1105,6 @@ class _Child:
         self._sync_lock = threading.Lock()
         self.sync = Sync()
         self._upped = False  # rule 8: ``up`` said on this connection
-        self._main_up = threading.Event()  # the bridge's main connection up (``serve``)
-        self._main_up.set()  # (the express starts once it was accepted)
         settings = MqttSettings.model_validate(config["mqtt"])
         filters = [*self._topics, *self._locks]
         self.link = _Link(
@@ -1131,7 +1116,6 @@ class _Child:
             on_message=self.on_message,
             on_subscribed=self._subscribed,
             no_replay=filters,
-            waits_for=self._main_up,  # (a login refused: connection.py rule 6)
         )
         if config["mqtt311"]:
             self.link.use_mqtt311()
@@ -1341,8 +1325,6 @@ class _Child:
             rid, number = word.get("rotator"), word.get("n")
             if word.get("op") == "sync":
                 self.asked(int(word["n"]), bool(word.get("again")))
-            elif word.get("op") == "main":  # (connection.py rule 6: a refused login waits)
-                (self._main_up.set if word.get("up") else self._main_up.clear)()
             elif word.get("op") == "port" and fds:
                 with self._lock:
                     old = self._ports.get(rid)

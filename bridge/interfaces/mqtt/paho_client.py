@@ -31,9 +31,7 @@ Rules:
    thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
    (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
-   inside the failure, no reconnect after ``disconnect``, and, where ``held`` is set, no try
-   while it says so once the back-off is over (connection.py rule 6: a stop carrier whose login
-   was refused waits for the main connection); ``loop_stop`` joins the thread also
+   inside the failure, no reconnect after ``disconnect``; ``loop_stop`` joins the thread also
    when it was already ending by itself after a ``disconnect``. A callback that raises (paho hands
    its exception up the loop, which ended paho's thread) is logged and the connection made
    again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
@@ -119,7 +117,6 @@ log = logging.getLogger(__name__)
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # connection.py rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
-HELD_LOOK_S = 0.25  # rule 6: how often a held back-off asks whether it may try again
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
 _JOIN_BYTES = 65536  # rule 9: a packet of joined messages, at most about
@@ -267,7 +264,6 @@ class Client(paho.Client):
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
-    held: Callable[[], bool] | None = None  # rule 6: True while the next try is to wait
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
     _halt_t = 0.0  # rule 6: when loop_stop was called
     _topic_parts: dict[str, tuple[int, bytes]] | None = None  # rule 9: protocol, topic part
@@ -500,13 +496,7 @@ class Client(paho.Client):
         """paho's wait before a reconnect: min, doubling up to max. False: stopped meanwhile."""
         lo, hi = self._delays
         self._delay_s = lo if self._delay_s is None else min(self._delay_s * 2, hi)
-        if self._halt.wait(self._delay_s) or self._leaving:
-            return False
-        held = self.held
-        while held is not None and held():  # (asked every HELD_LOOK_S while it holds)
-            if self._halt.wait(HELD_LOOK_S) or self._leaving:
-                return False
-        return True
+        return not self._halt.wait(self._delay_s) and not self._leaving
 
     def _connect_failed(self) -> None:
         """paho's on_connect_fail, inside the ``except OSError`` that says why."""
