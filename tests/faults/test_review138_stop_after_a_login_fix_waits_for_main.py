@@ -12,8 +12,6 @@ import contextlib
 import time
 from pathlib import Path
 
-import pytest
-
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
@@ -23,12 +21,6 @@ REFUSED_S = 16.0  # the refusal's length: the main connection's tries at 1, 3, 7
 AFTER_FIX_S = 4.0  # a STOP sent this long after the fix at most (twice a stop carrier's back-off)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-138 1: after a refused login is fixed, the stop lane, the lock lane and the "
-    "express wait for the main connection's back-off (up to 30 s): a STOP sent 4 s after the fix "
-    "reaches nobody and the rotor turns on to its target",
-)
 def test_a_stop_sent_soon_after_the_login_is_fixed_stops_the_rotor(tmp_path: Path) -> None:
     broker = Mosquitto(tmp_path / "broker").start()
     probe = Probe(broker.port, "rotor/#")

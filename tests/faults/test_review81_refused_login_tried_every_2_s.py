@@ -22,7 +22,7 @@ import pytest
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 WATCHED_S = 20.0  # how long the refusals are counted (the fault's length, not a deadline)
 # the main connection's tries in WATCHED_S on its back-off (1, 2, 4, 8 s: 4), and as many again
@@ -64,3 +64,42 @@ def test_a_login_refused_after_a_restart_is_tried_on_the_main_connections_back_o
         f"the bridge's logins refused in {WATCHED_S:g} s: {refused}; the main connection's "
         f"back-off (1 s doubling) tries {MAIN_TRIES} at most in that time"
     )
+
+
+def test_the_lanes_and_the_express_come_back_once_the_login_is_taken_again(
+    tmp_path: Path,
+) -> None:
+    """The other side of the wait: the broker's admin fixes the login (anonymous access on
+    again) and restarts it; the main connection comes back on its back-off, and the stop lane,
+    the lock lane and the express follow it, so a STOP sent then stops the rotor by the lane."""
+    broker = Mosquitto(tmp_path / "broker").start()
+    probe = Probe(broker.port, "rotor/#")
+    try:
+        with Rig(tmp_path, broker, probe) as rig:
+            rig.express = True
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 6.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.lock_lane.connected.is_set, 10, "the lock lane up")
+            wait_until(app.express.up.is_set, 10, "the express up")
+            broker.extra_conf = "allow_anonymous false"
+            broker.stop()
+            broker.start()
+            wait_until(lambda: not app.lane.connected.is_set(), 10, "the stop lane refused")
+            time.sleep(3.0)  # the lanes refused and waiting (the fault's length, not a deadline)
+            broker.extra_conf = ""  # the admin's fix
+            broker.stop()
+            broker.start()
+            wait_until(app.client.connected.is_set, 45, "the main connection back")
+            wait_until(app.lane.connected.is_set, 10, "the stop lane back after it")
+            wait_until(app.lock_lane.connected.is_set, 10, "the lock lane back after it")
+            wait_until(app.express.up.is_set, 10, "the express back after it")
+            wait_until(probe.client.is_connected, 10, "the dashboard back on the broker")
+            probe.publish("rotor/target", "200")
+            emu.wait_for(lambda s: s.is_moving, slow(10))
+            probe.publish("rotor/stop", "STOP")
+            emu.wait_for(lambda s: not s.is_moving, slow(10))
+            assert emu.state().az_deg < 150  # (stopped on its way, not at its target)
+    finally:
+        probe.close()
+        broker.stop()
