@@ -55,34 +55,36 @@ Rules:
    the rotor at rest where the controller took it by itself, never read that the turn had been
    dropped (a closing note).
 13. The last word (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane holds the
-   rotator: no target (the user's, tracking's, auto-park's) goes to the controller until the batch
-   that releases it, put by the main connection when it has caught up. A release that clears drops
-   whatever target or tracking waits, but the storm's park (wind.py rule 8), which goes then as at
-   any release. A stamped target (``Target.not_after_s``: its expiry, interfaces/mqtt/service.py
-   rule 9) whose expiry has passed when a hold it waited under ends, or when it is taken from the
-   mailbox (a move the stop lane's marker kept behind a lock OFF, lastword.py rule 13, or a slow
-   link's), is dropped, said (EXPIRED, and EXPIRED_TAKEN for one taken past it, which names no
-   STOP: none may have come; review 34): the order of a STOP held it up as a slow link would
-   (review 25, R25-3). Not once it is taken and waits for the controller's own rules (a brake
-   delay, a stop first): the bridge took it in time. So is a stamped start (``not_after_s`` on a
-   track or follow start, a feature's command that moves: core/model.py ``Move``): taken past its
-   expiry it is refused ("tracking not started", ...: EXPIRED_TAKEN); taken under a hold that then
-   ends past it, what it began (tracking, a look-up, following, its part's motion and the target
-   that part proposed) ends, said once (review 34: a track start read after a lane STOP's copy
-   began to turn the rotor at the marker's return, 14 s after it was sent). The newest start taken
-   under the hold is the one judged: it ended what the one before it began, and so does anything
-   that ends tracking (a stop, a target); one that ended already is not said. A target a stamped
-   feature command's part proposes carries that command's expiry, so a later command that ends in
-   no target leaves it to be judged as any target (attack 8: it went at the marker past its
-   expiry). A satellite's look-up ends no tracking or following until its answer, so it takes no
-   start's place: until then the two wait as one, and a hold that ends before its answer judges
-   each alone (the look-up, past its expiry, is dropped: review 137); once its answer begins
-   tracking under the hold, it is judged alone (review 38: an earlier late start's expiry ended the
-   tracking of a satellite asked for in time), and once its answer begins nothing (a name the
-   catalogue does not have), what waited before it waits as it did, the look-up's expiry gone with
-   it (review 37: following begun in time under the hold was ended by a failed look-up's). (A
-   look-up taken ends each part's motion at once, as any track start does; tracking and following
-   wait for its answer.)
+    rotator:
+   no target (the user's, tracking's, auto-park's) goes to the controller until the batch
+   that releases it, put by the main connection when it has caught up. A release that clears
+   drops whatever target or tracking waits, but the storm's park (wind.py rule 8), which
+   goes then as at any release. A stamped target (``Target.not_after_s``: its
+   expiry, interfaces/mqtt/service.py rule 9) whose expiry has passed when a hold it waited
+   under ends, or when it is taken from the mailbox (a move the stop lane's marker kept behind
+   a lock OFF, lastword.py rule 13, or a slow link's), is dropped, said (EXPIRED, and
+   EXPIRED_TAKEN for one taken past it, which names no STOP: none may have come; review 34):
+   the order of a STOP held it up as a slow link would (review 25, R25-3). Not once it is
+   taken and waits for the controller's own rules (a brake delay, a stop first): the bridge
+   took it in time. So is a stamped start (``not_after_s`` on a track or follow start, a
+   feature's command that moves: core/model.py ``Move``): taken past its expiry it is
+   refused ("tracking not started", ...: EXPIRED_TAKEN); taken under a hold that then ends
+   past it, what it began (tracking, a look-up, following, its part's motion and the target
+   that part proposed) ends, said once (review 34: a track start read after a lane STOP's
+   copy began to turn the rotor at the marker's return, 14 s after it was sent). The newest
+   start taken under the hold is the one judged: it ended what the one before it began, and
+   so does anything that ends tracking (a stop, a target); one that ended already is not
+   said. A target a stamped feature command's part proposes carries that command's expiry,
+   so a later command that ends in no target leaves it to be judged as any target (attack 8:
+   it went at the marker past its expiry). A satellite's look-up ends no tracking or
+   following until its answer, so it takes no start's place: until then the two are judged
+   as one, by the sooner expiry (the safe side); once its answer begins tracking under the
+   hold, it is judged alone (review 38: an earlier late start's expiry ended the tracking of a
+   satellite asked for in time), and once its answer begins nothing (a name the catalogue
+   does not have), what waited before it waits as it did, the look-up's expiry gone with it
+   (review 37: following begun in time under the hold was ended by a failed look-up's). (A
+   look-up taken ends each part's motion at once, as any track start does; tracking and
+   following wait for its answer.)
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -1017,19 +1019,9 @@ class RotatorSession:
         """Rule 13: the hold ended: what a stamped start taken under it began ends if its
         expiry passed (tracking, following, a part's own motion and the target it proposed),
         said once."""
-        unanswered = self._merged() and self.tracker.lookup is not None
-        looked, before = self._lookup_waiting, self._lookup_before
         waiting, self._waiting = self._waiting, None
         self._lookup_held, self._lookup_waiting = False, None
         self._lookup_before = self._lookup_merged = None
-        if unanswered and looked is not None:  # a look-up still unanswered: judged alone, and
-            if _past(looked.not_after_s, now):  # the start before it alone (review 137: late,
-                self.tracker.drop_look_up()  # it ended following begun in time, and a box of
-                said = f"{looked.said}: {EXPIRED}"  # an az/el rotator answered before the
-                self._error(  # marker turned its axis alone)
-                    ErrorKind.REFUSED, said, command=looked.what, origin=looked.origin
-                )
-            waiting = before
         if waiting is None or not _past(waiting.not_after_s, now) or not self._began(waiting):
             return
         self._end(EXPIRED, now)

@@ -243,15 +243,6 @@ class Tracker:
         self.lookup = track
         self._lookups.append(track.lookup)
 
-    def drop_look_up(self) -> None:
-        """Rule 8: the look-up under way given up (its start's expiry passed under a hold:
-        session.py rule 13); whatever is tracked goes on. Its answer, should it come, finds
-        none under way (``answered``: a look-up's answer is then the TLE file's, rule 10)."""
-        if self.lookup is not None:
-            asked = self.lookup.lookup
-            self._lookups = [q for q in self._lookups if q is not asked]
-            self.lookup = None
-
     def wakeup(self, now: float) -> float | None:
         """Tracking looks at the sky at least once a second."""
         return now + SAMPLE_S if self.body is not None else None

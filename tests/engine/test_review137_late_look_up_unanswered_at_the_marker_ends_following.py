@@ -31,6 +31,11 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-137 1: a late look-up still unanswered when the marker comes ends following "
+    "begun in time under the same hold",
+)
 def test_a_late_look_up_unanswered_at_the_marker_leaves_following_begun_before_it_alone(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
