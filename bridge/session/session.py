@@ -593,11 +593,8 @@ class RotatorSession:
                 if batch.control_set:  # rule 23: judged before the claim it came with
                     leased = self._start_leased(track, now, TRACK_REFUSED)
             late = _late(track.not_after_s, now, TRACK_REFUSED)  # rule 13
-            lookup = self.tracker.lookup
             done = self.features.track(track, self._refused() or late, leased)
             self._apply(done)
-            if not start and lookup is not None:  # rule 13: a look-up turned off (review 135)
-                self._lookup_gone()
             if start and done.error is None:
                 self._turn_place = batch.newest  # (Order: the turn's place)
                 began = track.body is not None  # (a look-up: no tracking until its answer)
@@ -677,7 +674,7 @@ class RotatorSession:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8); a
         satellite's name looked up is judged against the lease as it is now (rule 23)."""
         if generation == self.tracker.generation:
-            refused, lookup = self._refused(), self.tracker.lookup
+            refused, lookup, body = self._refused(), self.tracker.lookup, self.tracker.body
             leased = self._start_leased(lookup, now, TRACK_REFUSED) if lookup else None
             answered = self._guarded(
                 "tracking", lambda: self.features.answered(answer, refused, leased), now
@@ -685,14 +682,17 @@ class RotatorSession:
             if answered is not None:
                 self._apply(answered)
                 if lookup is not None and self.tracker.lookup is None:  # (its answer)
-                    began = answered.taken is not None  # (tracking it began: review 135, the
-                    # body tracked before, the same satellite again, read as none begun)
+                    began = self.tracker.body not in (None, body)  # (tracking it began)
                     if began and self._lookup_held and self.fence.held:  # rule 13: what
                         self._waiting = self._lookup_waiting  # waits is what it began
-                    elif not began:  # rule 13: the start before it waits as it did
-                        self._lookup_gone()
+                    elif (  # rule 13: it began nothing; the start before it waits as it did
+                        not began
+                        and self._lookup_held
+                        and self.fence.held
+                        and self._waiting is self._lookup_merged
+                    ):
+                        self._waiting = self._lookup_before
                     self._lookup_held, self._lookup_waiting = False, None
-                    self._lookup_before = self._lookup_merged = None
         return self._step(now)
 
     def set_wall(self, now: float, wall_s: float) -> None:
@@ -866,7 +866,6 @@ class RotatorSession:
         (parts.py rule 7): whatever a start that waits under a hold began (rule 13)."""
         self._waiting = None
         self._lookup_held, self._lookup_waiting = False, None
-        self._lookup_before = self._lookup_merged = None
         self.features.end(why)
         self._end_parts(why, now)
 
@@ -993,8 +992,6 @@ class RotatorSession:
         if not ends:  # (a look-up: its own, for when its answer begins tracking)
             self._lookup_held, self._lookup_waiting = self.fence.held, new
         before = None if ends else self._waiting
-        if not ends and self._merged():  # (a look-up before it, unanswered: it takes its
-            before = self._lookup_before  # place, review 135: its late expiry came back)
         if new is None or before is None:
             self._waiting = new if ends or before is None else before
         else:
@@ -1003,25 +1000,12 @@ class RotatorSession:
         if not ends:
             self._lookup_before, self._lookup_merged = before, self._waiting
 
-    def _merged(self) -> bool:
-        """Rule 13: what waits is a look-up's, judged with the start before it, unanswered."""
-        return self._lookup_merged is not None and self._waiting is self._lookup_merged
-
-    def _lookup_gone(self) -> None:
-        """Rule 13: a look-up taken under the hold began nothing (no such satellite, refused,
-        turned off before its answer): the start before it waits as it did, its own expiry
-        gone with it (review 37)."""
-        if self._lookup_held and self.fence.held and self._merged():
-            self._waiting = self._lookup_before
-        self._lookup_before = self._lookup_merged = None
-
     def _waited(self, now: float) -> None:
         """Rule 13: the hold ended: what a stamped start taken under it began ends if its
         expiry passed (tracking, following, a part's own motion and the target it proposed),
         said once."""
         waiting, self._waiting = self._waiting, None
         self._lookup_held, self._lookup_waiting = False, None
-        self._lookup_before = self._lookup_merged = None
         if waiting is None or not _past(waiting.not_after_s, now) or not self._began(waiting):
             return
         self._end(EXPIRED, now)

@@ -35,6 +35,13 @@ def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: flo
     v._take()
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review-135 2: a late look-up dropped by track OFF before its answer keeps its expiry "
+        "merged; following begun in time ends at the marker"
+    ),
+)
 def test_a_late_look_up_turned_off_under_a_hold_leaves_following_begun_before_it_alone(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:

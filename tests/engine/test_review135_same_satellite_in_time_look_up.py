@@ -38,6 +38,13 @@ def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: flo
     v._take()
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review-135 4: a look-up of the satellite tracked, sent again in time, is read as "
+        "'began nothing'; the earlier late one's expiry ends its tracking at the marker"
+    ),
+)
 def test_a_look_up_sent_again_in_time_under_the_hold_goes_on_tracking(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:

@@ -36,6 +36,13 @@ def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: flo
     v._take()
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review-135 1: a second look-up before a late one's answer puts the late one's expiry "
+        "back when it fails; following begun in time ends at the marker"
+    ),
+)
 def test_two_failed_look_ups_under_a_hold_leave_following_begun_before_them_alone(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
