@@ -77,14 +77,12 @@ Rules:
    said. A target a stamped feature command's part proposes carries that command's expiry,
    so a later command that ends in no target leaves it to be judged as any target (attack 8:
    it went at the marker past its expiry). A satellite's look-up ends no tracking or
-   following until its answer, so it takes no start's place: until then the two are judged
-   as one, by the sooner expiry (the safe side); once its answer begins tracking under the
-   hold, it is judged alone (review 38: an earlier late start's expiry ended the tracking of a
-   satellite asked for in time), and once its answer begins nothing (a name the catalogue
-   does not have), what waited before it waits as it did, the look-up's expiry gone with it
-   (review 37: following begun in time under the hold was ended by a failed look-up's). (A
-   look-up taken ends each part's motion at once, as any track start does; tracking and
-   following wait for its answer.)
+   following until its answer, so it takes no start's place: the two are judged as one, by
+   the sooner expiry (review 37; the safe side: a late look-up also ends following begun in
+   time under that hold, a known failure); once its answer begins tracking under the hold,
+   it is judged alone (review 38: an earlier late start's expiry ended the tracking of a
+   satellite asked for in time). (A look-up taken ends each part's motion at once, as any
+   track start does; tracking and following wait for its answer.)
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
    health starts again from its last memory, or stops measuring), an error event of kind
@@ -444,10 +442,6 @@ class RotatorSession:
         # the one judged once its answer begins tracking
         self._lookup_held = False
         self._lookup_waiting: _Waiting | None = None
-        # ... and what waited before it, and the two judged as one (rule 13: a look-up that
-        # begins nothing leaves the one before as it was)
-        self._lookup_before: _Waiting | None = None
-        self._lookup_merged: _Waiting | None = None
 
     @property
     def newest_applied(self) -> int:
@@ -685,13 +679,6 @@ class RotatorSession:
                     began = self.tracker.body not in (None, body)  # (tracking it began)
                     if began and self._lookup_held and self.fence.held:  # rule 13: what
                         self._waiting = self._lookup_waiting  # waits is what it began
-                    elif (  # rule 13: it began nothing; the start before it waits as it did
-                        not began
-                        and self._lookup_held
-                        and self.fence.held
-                        and self._waiting is self._lookup_merged
-                    ):
-                        self._waiting = self._lookup_before
                     self._lookup_held, self._lookup_waiting = False, None
         return self._step(now)
 
@@ -979,10 +966,10 @@ class RotatorSession:
         if the hold ends past it (``_waited``; ``said``: how that is said); it takes the place
         of the start before it, whose tracking, following or part's motion it ended
         (``ends``). A satellite's look-up ends no tracking or following until its answer
-        (review 37: an unknown name took the place of a late ``track sun`` waiting, and the sun
-        was tracked at the marker): until then the two are judged as one, by the sooner expiry;
-        an answer that begins nothing leaves the start before it waiting as it was (sky_answer;
-        review 37: a failed late look-up ended following begun in time). ``by``: who sent
+        (review 37: an
+        unknown name took the place of a late ``track sun`` waiting, and the sun was tracked
+        at the marker): the two are judged as one, by the sooner expiry (the safe side: a
+        late look-up also ends following begun in time under the same hold). ``by``: who sent
         it (rule 24). One without an expiry is kept too (never past): a hold that ends
         clearing ends what it began, its sender's refusal (``_fence``)."""
         new = None
@@ -994,11 +981,9 @@ class RotatorSession:
         before = None if ends else self._waiting
         if new is None or before is None:
             self._waiting = new if ends or before is None else before
-        else:
-            first = new if new.not_after_s < before.not_after_s else before
-            self._waiting = first._replace(part=new.part or before.part)
-        if not ends:
-            self._lookup_before, self._lookup_merged = before, self._waiting
+            return
+        first = new if new.not_after_s < before.not_after_s else before
+        self._waiting = first._replace(part=new.part or before.part)
 
     def _waited(self, now: float) -> None:
         """Rule 13: the hold ended: what a stamped start taken under it began ends if its

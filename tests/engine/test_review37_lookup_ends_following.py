@@ -32,6 +32,13 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "review 37: a stamped look-up track start held past its expiry ends following it "
+        "never ended (session.py _waited, rule 13)"
+    ),
+)
 def test_a_late_look_up_under_a_hold_leaves_following_begun_before_it_alone(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
