@@ -37,13 +37,6 @@ def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: flo
     v._take()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "review-135 3: a late look-up of the satellite already tracked restarts tracking, "
-        "read as 'began nothing'; the late start's tracking turns the rotor at the marker"
-    ),
-)
 def test_a_late_look_up_of_the_satellite_tracked_under_the_hold_turns_nothing(
     rig: Rig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:

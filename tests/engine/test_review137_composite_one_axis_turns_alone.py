@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from bridge.core.model import MotionState, Source, Stop
 from bridge.session.tracking import Track
 from bridge.sky import Body, Sky
@@ -31,11 +29,6 @@ from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-137 3: on an az/el rotator, a late look-up answered in one box before the "
-    "marker and in the other after it turns one axis alone, tracking then ended",
-)
 def test_a_late_look_up_answered_in_one_box_before_the_marker_turns_no_axis_alone(
     tmp_path: Path,
 ) -> None:

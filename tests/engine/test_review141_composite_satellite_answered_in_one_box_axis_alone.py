@@ -31,11 +31,6 @@ from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual_composite import VirtualComposite
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-141 1: on an az/el rotator, a late look-up of a satellite the file has, "
-    "answered in one box before the marker and in the other after it, turns one axis alone",
-)
 @pytest.mark.parametrize(
     "az_delay_s, el_delay_s", [(0.05, 0.4), (0.4, 0.05)], ids=["az-first", "el-first"]
 )
