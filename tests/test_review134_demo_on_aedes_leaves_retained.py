@@ -109,12 +109,13 @@ def one_run(port: int, run: int) -> tuple[int | None, list[str], set[str]]:
     """One demo's end: its console's count, what its bridge left and what is still there."""
     base = f"rotor-demo-r{run:03d}"
     nodes = [f"rotorbridge_{base}", *(f"rotorbridge_{base}_r_rot{i}" for i in range(8))]
+    topics = Topics(base, {f"rot{i}": f"{base}/rot{i}" for i in range(8)})
     console = Console(
         "127.0.0.1",
         port,
         client_id=f"{base}-ui",
-        topics=Topics(base, {"rotorez": f"{base}/rotorez"}),
-        rotator_ids=["rotorez"],
+        topics=topics,
+        rotator_ids=[f"rot{i}" for i in range(8)],
         discovery_filters=[f"homeassistant/+/{node}/+/config" for node in nodes],
         screen=Screen(),
         mqtt5=False,
@@ -122,9 +123,11 @@ def one_run(port: int, run: int) -> tuple[int | None, list[str], set[str]]:
     try:
         assert console.sync(slow(20)), "the MQTT 3.1.1 console never connected"
         # about what an 8-rotator demo's bridge leaves: its state topics and its configs
-        left_by_the_bridge = [f"{base}/rot{i}/s{j}" for i in range(8) for j in range(12)] + [
-            f"homeassistant/sensor/{node}/e{j}/config" for node in nodes for j in range(24)
-        ]
+        left_by_the_bridge = (
+            [f for f in topics.owned() if "+" not in f]
+            + [f"{base}/rot{i}/option/jam/state" for i in range(8)]
+            + [f"homeassistant/sensor/{node}/e{j}/config" for node in nodes for j in range(24)]
+        )
         publish_retained(port, left_by_the_bridge)
         removed = console.remove_retained(slow(10))
     finally:

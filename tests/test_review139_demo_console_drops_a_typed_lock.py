@@ -33,11 +33,6 @@ def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
     m.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-139 3: a lock ON typed on a console whose path went dead is sent at QoS 0 "
-    "and lost; the parent's QoS 1 lock ON went again on reconnect",
-)
 def test_a_lock_on_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
     mosquitto: Mosquitto,
 ) -> None:

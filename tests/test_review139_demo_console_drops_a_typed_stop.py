@@ -67,11 +67,6 @@ class DeadPath(Cuttable):
             dst.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-139 1: a STOP typed on a console whose path went dead is sent at QoS 0 and "
-    "lost; the parent's QoS 1 STOP went again on reconnect",
-)
 def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
     mosquitto: Mosquitto,
 ) -> None:

@@ -36,11 +36,6 @@ def nats(tmp_path: Path) -> Iterator[Nats]:
     n.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-139 4: a STOP typed while the console is cut off is dropped ('not sent'); "
-    "the parent sent it on the reconnect",
-)
 def test_a_stop_typed_while_the_console_is_cut_off_is_sent_when_it_reconnects(
     nats: Nats,
 ) -> None:

@@ -62,11 +62,6 @@ def publish(port: int, messages: list[tuple[str, bytes, bool]]) -> None:
         c.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-139 2: on MQTT 3.1.1 the demo counts (and clears) every topic that carried "
-    "a plain message as one of its retained messages",
-)
 def test_the_demo_on_an_mqtt311_broker_says_how_many_retained_messages_it_removed(
     nats: Nats,
 ) -> None:

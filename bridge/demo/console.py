@@ -10,15 +10,17 @@ Rules:
    3.1.1 alone (nats, aedes, RabbitMQ 3: the demo's look says which, bridge/demo/mosquitto.py
    ``connack_of``) it connects in 3.1.1, where a message that arrives while subscribed never
    says it was retained: it clears every topic of the demo's that carried a message since it
-   connected (the demo's base topic is its own, rule 1 of bridge.demo; a topic that held no
-   retained message is left as it was by an empty one), but those it published itself (review
-   127: in MQTT 5 alone it was refused for the whole run and left its retained messages behind;
-   review 134: a new subscription's retained messages came after the marker that was to wait
-   for them on aedes, and were left). A retained topic it must read before the bridge starts
-   is asked alone (``look``).
-3b. A typed command goes now or never: at QoS 0, and not while the console has lost the
-   broker, which it says (review 134: paho kept a QoS 1 bearing for the next connection, and
-   it turned the rotor seconds after it was typed).
+   connected and is one the bridge keeps retained (its state topics, ``Topics.owned``, and its
+   Home Assistant configs), but those it published itself (review 127: in MQTT 5 alone it was
+   refused for the whole run and left its retained messages behind; review 134: a new
+   subscription's retained messages came after the marker that was to wait for them on aedes,
+   and were left; review 139: its heartbeat, audit and errors were counted and cleared too). A
+   retained topic it must read before the bridge starts is asked alone (``look``).
+3b. A typed command that moves the rotor goes now or never: at QoS 0, and not while the
+   console has lost the broker, which it says (review 134: paho kept a QoS 1 bearing for the
+   next connection, and it turned the rotor seconds after it was typed). A STOP and a lock ON
+   go at QoS 1 whatever the connection, kept by paho for the next one: late, they move nothing
+   (review 139: at QoS 0 one typed on a dead connection was lost).
 3. A line that is not a command is answered with a hint, never published as a target.
 4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
    elevation and state of every rotator stay on one status line, redrawn in place, and
@@ -38,6 +40,7 @@ import threading
 from typing import Any
 
 import paho.mqtt.client as paho
+from paho.mqtt.client import topic_matches_sub
 from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
@@ -76,6 +79,7 @@ class Console:
         self._v5 = mqtt5
         self._seen: set[str] = set()  # rule 2, MQTT 3.1.1: the topics that carried a message
         self._sent: set[str] = {PRIVATE_BROKER_MARK}  # rule 2: ... but those it published
+        self._kept = [*topics.owned(), *discovery_filters]  # rule 2: those kept retained
         self._topics = topics
         self._ids = rotator_ids
         self._roots = {topics.rotator(rid).root for rid in rotator_ids}
@@ -214,9 +218,13 @@ class Console:
             return ", ".join(json.loads(self._last.get(topic, "{}"))) or "none"
         return "see " + topic
 
-    def publish(self, topic: str, payload: str) -> None:
-        """Rule 3b: now or never."""
+    def publish(self, topic: str, payload: str, halts: bool = False) -> None:
+        """Rule 3b: now or never, or (``halts``: a STOP, a lock ON) kept for the next
+        connection."""
         self._sent.add(topic)
+        if halts:
+            self._client.publish(topic, payload, qos=1)
+            return
         if not self._client.is_connected():
             self.screen.log(
                 f"rotor-bridge demo: not sent ({topic} {payload}): the console has lost the "
@@ -245,9 +253,9 @@ class Console:
         t = self._topics.rotator(rid)
         head, rest = words[0].lower(), words[1:]
         if head in ("s", "stop") and not rest:
-            self.publish(t.stop, "STOP")
+            self.publish(t.stop, "STOP", halts=True)
         elif head == "lock" and len(rest) == 1:
-            self.publish(t.lock, rest[0].upper())
+            self.publish(t.lock, rest[0].upper(), halts=rest[0].upper() == "ON")
         elif head in OPTIONS and len(rest) == 1:
             self.publish(t.option(head), rest[0].upper())
         elif head == "el" and len(rest) == 1:
@@ -343,7 +351,9 @@ class Console:
         if not self.sync(timeout_s):  # the bridge's last "offline" included
             return None
         with self._lock:
-            topics = sorted(self._retained if self._v5 else self._seen - self._sent)
+            seen = self._seen - self._sent  # (rule 2: those kept retained alone)
+            kept = {t for t in seen if any(topic_matches_sub(f, t) for f in self._kept)}
+            topics = sorted(self._retained if self._v5 else kept)
         infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
         for info in infos:
             with contextlib.suppress(RuntimeError, ValueError):
