@@ -105,138 +105,147 @@ Rules:
    nudge made from that bearing turned the rotor 200 degrees. A rotor not turning changes its
    bearing only by a hand at the controller's panel, which the reading asked a moment later
    confirms (a move by hand is seen one exchange later; a stop that did not take is checked one
-   exchange later, within stops.py rule 2's resend time). A turning rotor's readings change at
-   every poll: one is doubted only if it is further from the last taken than the rotor can have
-   turned since (motion.py ``reach_deg``: three times its nominal speed, and the tolerance, noise
-   and margin of a pass), once: the reading asked for then is taken, and one not back within reach
-   ends the doubt for that turn (``_doubts_turning``; a flipped digit mid-turn was published for
-   one poll on seven models); a silent controller's report after its slew is not doubted, and only
-   that one (review 105: a SatEL's answers after it, polled at the moving rate while it settles,
-   were all taken unchecked, and one flipped bit, 200 read 280, was published past ``az_max_deg``
-   and fed to the motion as a move; now they are doubted as a turning rotor's). A connection's
-   first reading (the bridge started, a port replugged, a controller answering again after a
-   silence) with nothing to doubt it against (no reading before, or the rotor turning or with a
-   target out when its readings were lost) is believed only when the next agrees with it, within
-   ``doubt_deg`` alone, however far apart in time (``_doubts_first``: asked again at once,
-   DOUBTS_TOLD in a row at most, then at the moving rate until the first unwatched stop below, then
-   at the usual polls but at least every UNWATCHED_POLL_S (review 111: a Rot2Prog's 9.3 s let a
-   hand turn run 44 s between two such stops), and a restart's turn no reading judges at the moving
-   rate until that stop too (review 105: a GS-232B whose sensor failed before its start, or as it
-   was first shown idle, was asked some 400 times a minute for good, 80 after a clean start); where
-   the second disagrees, a third that agrees with either is taken, and the odd one is told as line
+   exchange later, within stops.py rule 2's resend time).
+   A turning rotor's readings change at every poll: one is doubted only
+   if it is further from the last taken than the rotor can have turned since (motion.py
+   ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
+   once: the reading asked for then is taken, and one not back within reach ends the doubt for
+   that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
+   models); a silent controller's report after its slew is not doubted, and only that one
+   (review 105: a SatEL's answers after it, polled at the moving rate while it settles, were
+   all taken unchecked, and one flipped bit, 200 read 280, was published past ``az_max_deg``
+   and fed to the motion as a move; now they are doubted as a turning rotor's). A
+   connection's first reading (the bridge started, a port replugged, a controller answering
+   again after a silence) with nothing to doubt it against (no reading before, or the rotor
+   turning or with a target out when its readings were lost) is believed only when the next
+   agrees with it, within ``doubt_deg`` alone, however far apart in time (``_doubts_first``:
+   asked again at once, DOUBTS_TOLD in a row at most, then at the moving rate; where the
+   second disagrees, a third that agrees with either is taken, and the odd one is told as line
    noise); the reading taken is the first of the two, which answered the question the motion
-   machine times it by (within ``doubt_deg`` of the other: a pot's jitter shows its first phase).
-   Two further apart than ``doubt_deg`` may be a turn, or a garble and the true reading in either
-   order, which two readings cannot tell: review 105, an allowance of what the rotor can turn
-   between them at its top speed (motion.py ``top_speed_deg_s``) let the true reading confirm a
-   flipped one before it whenever the two came far enough apart (an RC2800 az/el's two axes asked
-   200 ms apart, a K3NG box answering 400 ms late, a reply lost, the moving rate's ask compared
-   with the one two back): the garble was the bearing and a nudge turned the rotor the wrong way;
-   taking the newer of the two would only have turned it round (the true reading, then a garble
-   within reach), and a pot's jitter, 10 then 11, into its second phase. A turn is told by its line
-   instead: FIRST_TURN_READINGS (four: review 103, a true one and two garbles at 150, 160, 170 made
-   three) in a row that disagree but lie on one steady turn, each axis the same way at one rate
-   within ``doubt_deg``, FIRST_TURN_MAX_DEG_S at most (or the top speed, if faster), are a turn:
-   the last is taken, and the next reading that goes on with it too, the turn's readings trusted
-   till it rests, ``_steady`` (review 100: a Rot2Prog at 30 deg/s replugged mid-turn was offline
-   for 24 s, till it rested, and R/error blamed the line; and at the usual polls within
-   ``doubt_deg`` alone, a rotor turning at its nominal speed never had two agree, and a turn nobody
-   asked for ran past ``az_min_deg`` unjudged: asked at once or at the moving rate, its readings
-   agree, or lie on its line). Until then the controller is not answering: the user sees it
+   machine times it by (within ``doubt_deg`` of the other: a pot's jitter shows its first
+   phase). Two further apart than ``doubt_deg`` may be a turn, or a garble and the true
+   reading in either order, which two readings cannot tell: review 105, an allowance of what
+   the rotor can turn between them at its top speed (motion.py ``top_speed_deg_s``) let the
+   true reading confirm a flipped one before it whenever the two came far enough apart (an
+   RC2800 az/el's two axes asked 200 ms apart, a K3NG box answering 400 ms late, a reply lost,
+   the moving rate's ask compared with the one two back): the garble was the bearing and a
+   nudge turned the rotor the wrong way; taking the newer of the two would only have turned it
+   round (the true reading, then a garble within reach), and a pot's jitter, 10 then 11, into
+   its second phase. A turn is told by its line instead: FIRST_TURN_READINGS (four: review
+   103, a true one and two garbles at 150, 160, 170 made three) in a row that disagree but lie
+   on one steady turn, each axis the same way at one rate within ``doubt_deg``,
+   FIRST_TURN_MAX_DEG_S at most (or the top speed, if faster), are a turn: the last is taken,
+   and the next reading that goes on with it too, the turn's readings trusted till it rests,
+   ``_steady`` (review 100: a Rot2Prog at 30 deg/s replugged mid-turn was offline for 24 s,
+   till it rested, and R/error blamed the line; and at the usual polls within ``doubt_deg``
+   alone, a rotor turning at its nominal speed never had two agree, and a turn nobody asked
+   for ran past ``az_min_deg`` unjudged: asked at once or at the moving rate, its readings
+   agree, or lie on its line). Until
+   then the controller is not answering: the user sees it
    offline, with no bearing, one reply time longer than before, as before any answer; nothing
    relative to the bearing is made from that reading (a nudge is refused as before the first
-   answer, "no bearing to nudge from", rather than waited for: the judge makes it from the status
-   it sees, runtime/rotator.py, and the wait is one reply time; no target's side or end is picked
-   from it, pointing.py rule 2; no move, limit, stall or turn nobody asked for, rules 10 and 13, is
-   judged from it; no bearing is published). Attack 30: one byte lost or flipped in the first
-   answer after a start (``AZ150.0`` read ``AZ10.0`` on an Easycomm box, ``AZ=150`` read ``AZ=110``
-   on a GS-232B) was the bearing, and a nudge of +10 from it turned a rotor at rest at 150 down to
-   20; after a replug mid-turn, the same byte showed the rotor at 110 (attack 16 had closed only a
-   reply torn by a line end). The first back where the rotor stood still when its readings were
-   lost (a port replugged, a controller answering again after a silence) is doubted against where
-   it stood (an attack pass: believed unchecked, one flipped bit was shown as the bearing at rest,
-   and a nudge from it turned the rotor 190 degrees), a stop sent to it or not (a stop leaves a
-   rotor at rest as still as it was; attack 9: a STOP at rest, the port replugged before a reading
-   showed it taken, and 150 read as 350 was published and taken as a turn). A doubted reading is no
-   reading for anything: not the motion's, not a target's fresh one (targets.py rule 7: a target
-   waits for the answer), not one a stop cuts short (rule 5); but the controller answered (no
+   answer, "no bearing to nudge from", rather than waited for: the judge makes it from the
+   status it sees, runtime/rotator.py, and the wait is one reply time; no target's side or end
+   is picked from it, pointing.py rule 2; no move, limit, stall or turn nobody asked for,
+   rules 10 and 13, is judged from it; no bearing is published). Attack 30: one byte lost or
+   flipped in the first answer after a start (``AZ150.0`` read ``AZ10.0`` on an Easycomm box,
+   ``AZ=150`` read ``AZ=110`` on a GS-232B) was the bearing, and a nudge of +10 from it turned
+   a rotor at rest at 150 down to 20; after a replug mid-turn, the same byte showed the rotor
+   at 110 (attack 16 had closed only a reply torn by a line end). The first back where the
+   rotor stood still when its readings were lost (a port replugged, a controller answering
+   again after a silence) is doubted against where it stood (an attack pass: believed
+   unchecked, one flipped bit was shown as the bearing
+   at rest, and a nudge from it turned the rotor 190 degrees), a stop sent to it or not (a stop
+   leaves a rotor at rest as still as it was; attack 9: a STOP at rest, the port replugged
+   before a reading showed it taken, and 150 read as 350 was published and taken as a turn).
+   A doubted reading is no reading for anything: not the motion's, not a target's fresh one
+   (targets.py rule 7: a target waits for the answer), not one a stop cuts short (rule 5); but
+   the controller answered (no
    silence), and the first back after a loss makes it answering again as a reading would (its
-   options, its connect guard, a stop owed written at once), shown at the bearing it stood at (a
-   review: a line that went on disagreeing after a replug kept the rotator offline, where the same
-   inside a session leaves it online); but a connection's first with nothing to doubt it against
-   makes it answering only once it is taken (there is no bearing to show: a line that goes on
-   disagreeing then keeps it offline, told from the DOUBTS_TOLD-th in a row on), and a stop owed is
-   written at once all the same. First readings that go on disagreeing leave a rotor the bridge
-   cannot watch: no limit, stall or turn nobody asked for is judged, and a turn under way runs on
-   unseen (review 100: a line that garbled every answer differently, 0, +60, -60 in turn, kept an
-   Easycomm turning at the start unwatched, and it ran from 150 past ``az_min_deg`` 60 to its end).
-   So FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
-   start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two readings,
-   four for a steady turn, eight with one garble among those; a poll answered garbled past parsing
-   counts as one, ``_garbled_first``: review 107, a line that tore every answer had none counted,
-   and a turn at the start ran past ``az_min_deg`` to its end; so does one torn past any form, its
-   line ends too, link.py rule 11: review 113, such a line was silence and the stop came 22 s late,
-   45 degrees past the limit; a controller that answers nothing at all is rule 2's silence, and one
-   that reports no position never has first readings; counted across a replug until a reading is
-   taken: review 107, a flaky adapter's connections of seven readings each never reached eight) get
-   a stop (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
-   always safe; but checked only until a reading a resend time after it shows the rotor still, then
-   let go as a released lock's stop, ``_release_check``, unless it came over another stop still
-   checked, an operator's or the lock's: review 107, checked until the next target, a hand at the
-   panel ten minutes after the line came right was stopped, unsaid; its copy owed across a drop,
-   stops.py rule 3, is let go so too, ``_let_go``: review 113, written on the reconnect it was
-   checked as an operator's, for good), and so do each as many more while they go on (a hand at the
-   panel after the first such stop, review 103); a ``stop`` error says the readings do not agree
-   (the last in true bearings, pointing.py: review 107 found it raw) and the rotor was stopped for
-   it (at most every ``junk_report_interval_s``, a connection's first always: review 107, a port
-   replugged within the interval had its stops written every 1.6 s, unsaid, R/error's last word
-   "port unplugged"). They stay unconfirmed: nothing is made from them. (A stop for one unconfirmed
-   reading past a limit, e9e2e51a, was taken back: it stopped every healthy start of a rotor
-   resting outside a limit with a false error, cut a turn back inside the limit short, and one
-   garble at rest spent it for the connection: review 103.) Readings at rest that go on disagreeing
-   (a line gone bad, a failing position sensor) are asked for at the moving rate, not at once,
-   until the first unwatched stop below, then at the usual polls (review 103's follow-up: eight at
-   a Rot2Prog's idle rate, 9.3 s, took 74 s; not for good, the polling load review 105 found), with
-   one more asked as a turn at the rotor's nominal speed would have gone UNWATCHED_TURN_DEG since
-   the last unwatched stop, which brings the next (review 116: eight idle polls more, 49 s, let a
-   hand after the first stop run 19 degrees past ``az_min_deg``), and at the usual polls while the
-   controller is not answering (review 40); told from the DOUBTS_TOLD-th in a row on; the bearing
-   shown is the last two readings agreed on. A reading asked again at once agrees with the doubted
-   one within ``doubt_deg`` plus twice what the rotor turns at its speed between them
-   (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is believed on its second
-   reading, also when a stop cut the first short and the second is asked once the stop is out;
-   readings at a poll's distance agree within ``doubt_deg`` alone (polls half a minute apart would
-   let any two agree). A turn is told by its line as at the start: FIRST_TURN_READINGS of them in a
-   row on one steady line (``_steady``) are a turn, the last taken and the turn's readings trusted
-   till it rests, so rule 10 judges it (review 111: one flipped bit in a hand turn's first answer
-   broke the pair, an Easycomm stepping 6 degrees a poll never had two agree, and it ran shown idle
-   at 150 past ``az_min_deg`` 60 to 5; review 111 too: a fast turn confirmed at the start, garbled
-   right after its line, shown idle for the rest of it). And FIRST_UNWATCHED_READINGS of them in a
-   row that confirmed none (a garble and a line, one garble among a fast turn's, fit well within)
-   leave a rotor the bridge cannot watch, and get the first readings' unwatched stop
-   (``_unwatched_stop``, each as many more while they go on, or sooner by the clock as above; said
-   on R/error as readings at rest, as rarely; never merged away: one within STOP_MERGE_MIN_S of the
-   last stop written, the lock's own (stops.py rule 7), goes once that second is over unless a stop
-   went since; review 116: merged as stops.py rule 1 merges, into any stop a brake window before,
-   no reading ever showing the rotor turning, a STOP before a hand's turn, and under a long
-   ``brake_delay_s`` every other unwatched stop, were dropped, and the hand ran past
-   ``az_min_deg``): the maintainers' decision on review 103's follow-up, the limits hold over a
-   rotor the bridge cannot watch (a line gone bad at rest, every answer off by 0, +60 or -60, hid a
-   hand turn, and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5 unstopped); a stop to a
-   still rotor costs nothing, and a failing sensor must be told. (Before, such readings got no stop
-   without the lock: review 40's "the same noise without the lock writes no stop", superseded.) A
-   poll answered garbled past parsing at rest counts as one of them, as a first reading's does
-   (``_garbled_at_rest``; review 116: a line that tore every answer at rest, each '.' read '?', had
-   none counted, and a hand turn ran from 150 past ``az_min_deg`` 60 to 5 unstopped); one now and
-   then is never eight in a row. (A composite box's axis that is never turned is kept so too:
-   axes.py rule 5.) Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may
-   be turning, handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes
-   again (stops.py rule 7; review 40: a turn by hand whose readings the doubt never took, two
-   garbled answers or one flipped one after its first, ran a locked rotor from 150 to 300
-   unfought). The doubt and the bearing it shows are left as they are (a fix that bent them was
-   taken back for three regressions it made, review 40). So is the controller answering again (a
-   port opened, the end of a silence; a blind controller at its connect): the lock's stop, which
-   the motion rebuilt then forgets, goes again.
+   options, its connect guard, a stop owed written at once), shown at the bearing it stood at
+   (a review: a line that went on disagreeing after a replug kept the rotator offline, where
+   the same inside a session leaves it online); but a connection's first with nothing to doubt
+   it against makes it answering only once it is taken (there is no bearing to show: a line
+   that goes on disagreeing then keeps it offline, told from the DOUBTS_TOLD-th in a row on),
+   and a stop owed is written at once all the same.
+   First readings that go on disagreeing leave a rotor the bridge cannot watch: no limit,
+   stall or turn nobody asked for is judged, and a turn under way runs on unseen (review 100:
+   a line that garbled every answer differently, 0, +60, -60 in turn, kept an Easycomm turning
+   at the start unwatched, and it ran from 150 past ``az_min_deg`` 60 to its end). So
+   FIRST_UNWATCHED_READINGS of them in a row that confirmed none (eight: more than any healthy
+   start needs, two for a rotor at rest or turning less than ``doubt_deg`` between two
+   readings, four for a steady turn, eight with one garble among those; a poll answered
+   garbled past parsing counts as one, ``_garbled_first``: review 107, a line that tore every
+   answer had none counted, and a turn at the start ran past ``az_min_deg`` to its end; so
+   does one torn past any form, its line ends too, link.py rule 11: review 113, such a line was
+   silence and the stop came 22 s late, 45 degrees past the limit; a
+   controller that answers nothing at all is rule 2's silence, and one that reports no
+   position never has first readings; counted across a replug until a reading is taken:
+   review 107, a flaky adapter's connections of seven readings each never reached eight) get a
+   stop
+   (``_unwatched_stop``: a stop as any, the line's discipline and the stop rules as ever;
+   always safe; but checked only until a reading a resend time after it shows the rotor still,
+   then let go as a released lock's stop, ``_release_check``, unless it came over another stop
+   still checked, an operator's or the lock's: review 107, checked until the next target, a
+   hand at the panel ten minutes after the line came right was stopped, unsaid; its copy owed
+   across a drop, stops.py rule 3, is let go so too, ``_let_go``: review 113, written on the
+   reconnect it was checked as an operator's, for good), and so do each
+   as many more
+   while they go on (a hand at the panel after the first such stop, review 103); a ``stop``
+   error says the readings do not agree (the last in true bearings, pointing.py: review 107
+   found it raw) and the rotor was stopped for it (at most every
+   ``junk_report_interval_s``, a connection's first always: review 107, a port replugged
+   within the interval had its stops written every 1.6 s, unsaid, R/error's last word "port
+   unplugged"). They stay unconfirmed: nothing is made from them. (A stop for
+   one unconfirmed reading past a limit, e9e2e51a, was taken back: it stopped every healthy
+   start of a rotor resting outside a limit with a false error, cut a turn back inside the
+   limit short, and one garble at rest spent it for the connection: review 103.)
+   Readings at rest that go on disagreeing (a line gone bad, a failing position sensor) are
+   asked for at the moving rate, not at once, until the first unwatched stop below, then at
+   the usual polls (review 103's follow-up: eight at a Rot2Prog's idle rate, 9.3 s, took 74 s;
+   not for good, the polling load review 105 found), with one more asked as a turn at the
+   rotor's nominal speed would have gone UNWATCHED_TURN_DEG since the last unwatched stop,
+   which brings the next (review 116: eight idle polls more, 49 s, let a hand after the first
+   stop run 19 degrees past ``az_min_deg``), and at the usual polls while the
+   controller is not answering (review 40); told from the DOUBTS_TOLD-th in a row on; the
+   bearing shown is the last two readings agreed on. A reading asked again at once agrees
+   with the doubted one within ``doubt_deg`` plus twice what the rotor turns at its speed
+   between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while taken for still is
+   believed on its second reading, also when a stop cut the first short and the second is
+   asked once the stop is out; readings at a poll's distance agree within ``doubt_deg`` alone
+   (polls half a minute apart would let any two agree). A turn is told by its line as at the
+   start: FIRST_TURN_READINGS of them in a row on one steady line (``_steady``) are a turn,
+   the last taken and the turn's readings trusted till it rests, so rule 10 judges it (review
+   111: one flipped bit in a hand turn's first answer broke the pair, an Easycomm stepping 6
+   degrees a poll never had two agree, and it ran shown idle at 150 past ``az_min_deg`` 60 to
+   5; review 111 too: a fast turn confirmed at the start, garbled right after its line, shown
+   idle for the rest of it). And FIRST_UNWATCHED_READINGS of them in a row that confirmed none
+   (a garble and a line, one garble among a fast turn's, fit well within) leave a rotor the
+   bridge cannot watch, and get the first readings' unwatched stop (``_unwatched_stop``, each
+   as many more while they go on, or sooner by the clock as above; said on R/error as readings
+   at rest, as rarely; never merged away: one within STOP_MERGE_MIN_S of the last stop
+   written, the lock's own (stops.py rule 7), goes once that second is over unless a stop
+   went since; review 116: merged as stops.py rule 1 merges, into any stop a brake window
+   before, no reading ever showing the rotor turning, a STOP before a hand's turn, and under
+   a long ``brake_delay_s`` every other unwatched stop, were dropped, and the hand ran past
+   ``az_min_deg``): the maintainers' decision on review 103's follow-up, the limits hold over
+   a rotor the bridge cannot watch (a line gone bad at rest, every answer off by 0, +60 or
+   -60, hid a hand turn, and an Easycomm ran from 150 past ``az_min_deg`` 60 to 5
+   unstopped); a stop to a still rotor costs nothing, and a failing sensor must be told.
+   (Before, such readings got no stop without the lock: review 40's "the same noise without
+   the lock writes no stop", superseded.) A poll answered garbled past parsing at rest counts
+   as one of them, as a first reading's does (``_garbled_at_rest``; review 116: a line that
+   tore every answer at rest, each '.' read '?', had none counted, and a hand turn ran from
+   150 past ``az_min_deg`` 60 to 5 unstopped); one now and then is never eight in a row.
+   (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
+   Whatever the doubt decides, a reading at rest it doubts is a sign the rotor may be turning,
+   handed to the stop rules (``Stops.lock_sign``): while the lock holds, its stop goes again
+   (stops.py rule 7; review 40: a turn by hand whose readings the doubt never took, two garbled
+   answers or one flipped one after its first, ran a locked rotor from 150 to 300 unfought).
+   The doubt and the bearing it shows are left as they are (a fix that bent them was taken
+   back for three regressions it made, review 40). So is the controller answering again (a
+   port opened, the end of a silence; a blind controller at its connect): the lock's stop,
+   which the motion rebuilt then forgets, goes again.
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``), or from the
    first readings back (a port opened, a controller answering again; still or braking, before
    the motion settled) where the rotor was still with no target out when the readings were
@@ -464,9 +473,6 @@ FIRST_UNWATCHED_READINGS = 2 * FIRST_TURN_READINGS
 # rule 9: after the first unwatched stop at rest, the next comes before a turn at nominal speed
 # has gone this far (``_unwatched_at_rest_due``)
 UNWATCHED_TURN_DEG = 20.0
-# rule 9: a connection's first readings that go on disagreeing, past the first unwatched stop,
-# are asked at least this often (at the idle rate where that is sooner)
-UNWATCHED_POLL_S = 1.0
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
@@ -2405,10 +2411,7 @@ class Controller:
             self.notes.append(Report(ErrorKind.SERIAL, why))
         m = self.motion  # (motion.py rule 4: a restart's found turn judged at the moving rate;
         # rule 9: a connection's first readings that go on disagreeing too: it may be turning)
-        count = self._first_unconfirmed  # (readings that confirmed none, in a row: rule 9)
-        found = mo.found_unjudged(m) and count < FIRST_UNWATCHED_READINGS  # (review 105: not
-        # for good where no reading is taken to judge it: the unwatched stop has gone then)
-        busy = busy or m.state is mo.MOVING or now < self._watch_until or found
+        busy = busy or m.state is mo.MOVING or now < self._watch_until or mo.found_unjudged(m)
         garbled = self._first_garbled and self._first_phase()  # (answers garbled past reading)
         doubted = self._doubted
         # rule 9: readings at rest that go on disagreeing, at the moving rate until the first
@@ -2416,23 +2419,17 @@ class Controller:
         # not for good, the load review 105 found), while it answers (review 40: offline, idle)
         at_rest = doubted.reply is not None and not (doubted.first or doubted.turning)
         at_rest = at_rest and self.answering and not doubted.at_once
-        # (review 116: answers torn at rest too, from the third on: one or two garbled are
-        torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # asked
-        unwatched = at_rest or torn  # again as ever, link.py rule 11)
-        # a connection's first readings doubted likewise (review 105: at the moving rate for
-        # good, some 400 polls a minute for a GS-232B whose sensor failed before the start)
-        first = doubted.first and not doubted.at_once
-        if garbled or ((unwatched or first) and count < FIRST_UNWATCHED_READINGS):  # (review
-            busy = True  # 103: the poll after the DOUBTS_TOLD-th was set on the idle grid when
-            link.poll_every(now, cfg.moving_poll_interval_s)  # asked)
-        idle_s = cfg.idle_poll_interval_s
-        if first and not busy:  # rule 9: past the first unwatched stop, no slower than this
-            idle_s = min(idle_s, UNWATCHED_POLL_S)  # (review 111: a Rot2Prog's 9.3 s let a
-            link.poll_every(now, idle_s)  # hand turn run 44 s between two such stops)
+        count = self._first_unconfirmed  # (review 116: answers torn at rest too, from the
+        torn = self._first_garbled and count >= DOUBTS_TOLD and self._rest_phase()  # third on:
+        unwatched = at_rest or torn  # one or two garbled are asked again as ever, link.py 11)
+        at_rest = unwatched and count < FIRST_UNWATCHED_READINGS
+        if garbled or at_rest or (doubted.first and not doubted.at_once):  # (review 103: the
+            busy = True  # poll after the DOUBTS_TOLD-th was set on the idle grid when asked)
+            link.poll_every(now, cfg.moving_poll_interval_s)
         ask_t = self._unwatched_ask_t  # rule 9: the reading that the next at rest is due
         if ask_t is not None and unwatched:  # with, asked then (review 116: not an idle poll
             link.poll_by(ask_t)  # on), once (a reply lost: the usual polls)
-        if link.poll(now, cfg.moving_poll_interval_s if busy else idle_s):
+        if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
             if ask_t is not None and now >= ask_t:
                 self._unwatched_ask_t = None

@@ -20,6 +20,8 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -46,6 +48,11 @@ def asked_in_a_minute(v: VirtualRotator) -> int:
     return v.sent(since=t).count(QUERY)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 105: a GS-232B whose sensor fails before the start is asked at the moving "
+    "rate for good: about 400 queries a minute, where the same after a clean start gets 80",
+)
 def test_first_readings_that_never_agree_are_not_asked_at_the_moving_rate_for_good(
     rig: Rig,
 ) -> None:

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState
 from tests.engine.test_review105_first_readings_polled_at_the_moving_rate_forever import (
     asked_in_a_minute,
@@ -38,6 +40,11 @@ def polled_after_failing(rig: Rig, after_s: float) -> int:
     return asked_in_a_minute(v)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review 105: a GS-232B whose readings go bad as it is first shown idle is asked at "
+    "the moving rate for good: about 400 queries a minute, 80 if they go bad 2 s later",
+)
 def test_a_line_gone_bad_before_the_start_was_judged_is_not_polled_at_the_moving_rate_for_good(
     rig: Rig,
 ) -> None:
