@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.test_review105_first_readings_polled_at_the_moving_rate_forever import (
     QUERY,
     failing,
@@ -35,11 +33,6 @@ COUNT_S = 60.0  # the minute counted (virtual time)
 ROOM = 1.5  # the moving rate's queries, with room for the stops' checks and at-once asks
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-142 2: first readings that never agree are asked once a second after the "
-    "first unwatched stop, twice as often as a 2 s moving_poll_interval_s (1b8194c1^: ~40/min)",
-)
 def test_first_readings_that_never_agree_are_not_asked_faster_than_the_moving_rate(
     rig: Rig,
 ) -> None:

@@ -23,8 +23,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.garblers import every_answer_off, limited, lowest_az
 from tests.engine.virtual import VirtualRotator
 
@@ -37,11 +35,6 @@ AFTER_S = 1.0  # the hand comes a second after the first unwatched stop (virtual
 WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-142 1: first readings that never agree are asked once a second after the "
-    "first unwatched stop, the next stop eight readings on: a hand turn runs 7 s, past az_min_deg",
-)
 def test_a_hand_turn_after_the_first_unwatched_stop_of_a_start_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.garblers import every_answer_off
 from tests.engine.virtual import VirtualRotator
 
@@ -33,11 +31,6 @@ CONFIRMED_S = 1.0  # how soon two healthy readings are believed: 1b8194c1^ withi
 WATCH_S = 30.0  # for the run to end where it never confirms (virtual time)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-142 5: a start's line that comes right mid-turn after the unwatched stop is "
-    "confirmed 3.5 s late: asked once a second, two readings 6 degrees apart never agree",
-)
 def test_a_line_that_comes_right_while_the_rotor_turns_is_confirmed_at_once(rig: Rig) -> None:
     v = rig("easycomm2", emulator={"start_az_deg": REST_DEG}, connect=False)
     v.to_host = every_answer_off(OFFSETS)

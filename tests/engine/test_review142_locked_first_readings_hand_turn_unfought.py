@@ -20,8 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.garblers import every_answer_off, lowest_az
 from tests.engine.virtual import VirtualRotator
 
@@ -35,11 +33,6 @@ WATCH_S = 40.0  # 145 degrees at 6 deg/s, with room (virtual time)
 HELD_DEG = 10.0  # what a locked rotor may be turned before a stop: at rest, about 6
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-142 3: a locked rotor whose first readings never agree is stopped only every "
-    "7 s after the first unwatched stop, and a hand turns it 36 degrees (1b8194c1^: 4)",
-)
 def test_a_locked_rotor_whose_first_readings_never_agree_is_held_against_a_hand(
     rig: Rig,
 ) -> None:

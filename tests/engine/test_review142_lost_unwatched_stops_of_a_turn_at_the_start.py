@@ -20,8 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import pytest
-
 from tests.engine.garblers import every_answer_off, stopped_before_the_limit, turning_at_the_start
 from tests.engine.virtual import VirtualRotator
 
@@ -30,11 +28,6 @@ STOP = b"SA SE\n"  # the Easycomm II stop (easycomm.py)
 LOST = 2  # stop frames lost on the noisy line
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-142 4: a turn at the start whose first readings never agree, its first two "
-    "unwatched stops lost, is stopped again only 7 s on and runs past az_min_deg",
-)
 def test_a_turn_at_the_start_whose_unwatched_stops_are_lost_is_stopped_before_the_limit(
     rig: Rig,
 ) -> None:
