@@ -316,7 +316,7 @@ class Link:
         self._torn = 0  # rule 11: the bytes of the exchange given up last, none formed (0: not)
         self._asked_bytes = 0  # rule 11: bytes read since the last frame that awaits a reply
         self._junk_bytes = 0  # rule 11: ... of them, in formless junk
-        self._alien = 0  # rule 11: ... of those, outside the reply alphabet
+        self._formy = False  # rule 11: ... one of which was mostly the reply alphabet
         self._fresh = True  # rule 13: no frame written on this connection yet
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
         self._move_t = -math.inf  # rule 13: when the last target's last frame goes
@@ -408,7 +408,8 @@ class Link:
             if self._asked_t <= self._heard_from():  # rule 2
                 self._first_asked_t = now
             self._asked_t = now
-            self._asked_bytes = self._alien = self._junk_bytes = 0  # rule 11
+            self._asked_bytes = self._junk_bytes = 0  # rule 11
+            self._formy = False
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
             self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
@@ -727,22 +728,26 @@ class Link:
         if junk.reason is JunkReason.REFUSED or not self._unhealthy(junk):
             return
         if junk.reason in _FORMLESS and not self._of_form(junk.data) and turn:
-            self._torn_t = now  # (torn past any form: no silence's end, but told as garbled
-            return  # answers, review 136; its exchange is judged at its deadline, ``_tears``)
+            least = self.spec.least_reply_bytes or self.spec.reply_bytes
+            if self._junk_bytes >= TORN_SHARE * least:  # (told as garbled answers, review
+                self._torn_t = now  # 136; a stray byte alone is no answer, review 140)
+            return  # (torn past any form: no silence's end; judged at its deadline, ``_tears``)
         self._garbled, self._garbled_t = True, now
 
     def _of_form(self, data: bytes) -> bool:
         """Rule 11: whether formless junk ``data`` is of the controller's form: a reply of its
         form came in the same exchange (a whole answer and a stray byte: review 136, the stray
-        byte judged alone stopped a healthy turn), or the exchange's formless junk so far is
-        mostly the model's reply alphabet (a reply a byte or a few off), not bytes torn past
-        any form; True where the model declares none."""
+        byte judged alone stopped a healthy turn), or a piece of the exchange's formless junk
+        so far is mostly the model's reply alphabet (a reply a byte or a few off, stray bytes
+        beside it or not: review 140), not bytes torn past any form; True where the model
+        declares none."""
         alphabet = self.spec.reply_alphabet
         if not alphabet or not data or self._formed_t >= self._asked_t:
             return True
         self._junk_bytes += len(data)
-        self._alien += len(data.translate(None, alphabet))
-        return self._alien <= (1 - FORM_SHARE) * self._junk_bytes
+        alien = len(data.translate(None, alphabet))
+        self._formy = self._formy or alien <= (1 - FORM_SHARE) * len(data)
+        return self._formy
 
     def _ask_garbled(self, now: float) -> bool:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll

@@ -48,11 +48,6 @@ def one_byte_then_nothing(byte: bytes) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-140 1: a box gone dead mid-turn after one stray byte is said to answer "
-    "only garbled replies (a noisy line?), not to have stopped answering (51bc69b4)",
-)
 @pytest.mark.parametrize(
     ("model", "byte"),
     [

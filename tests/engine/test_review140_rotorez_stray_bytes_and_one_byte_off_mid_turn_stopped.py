@@ -52,11 +52,6 @@ def stray_bytes_and_semicolon_off(until: float) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-140 2: a Rotor-EZ turn through a 4.5 s burst of answers a byte off, each "
-    "after three stray bytes, is stopped short (51bc69b4; b28cd556^ reached its target)",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_through_a_burst_of_stray_bytes_and_answers_a_byte_off_reaches_its_target(
     rig: Rig, model: str
