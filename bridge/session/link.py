@@ -139,14 +139,19 @@ Rules:
    never comes: such answers were silence, 'does not answer', and counted nothing toward
    controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
    turn at the start 45 degrees past ``az_min_deg``; attack 30: the wrong baud rate told as a
-   cable). While a turn to a target is under way, so is junk that forms no reply (NOISE or
-   SPOILED) less than FORM_SHARE of whose bytes are the model's reply alphabet
+   cable). While a turn to a target (controller.py ``turning``) is under way, so is junk that
+   forms no reply (NOISE or SPOILED) in an exchange where no reply of the controller's form
+   came and no piece of junk so far is FORM_SHARE or more the model's reply alphabet
    (``spec.reply_alphabet``: the bytes its replies are made of): the same torn bytes, cut into
    junk where a codec finds a frame's length or a line end in them (review 125: on six models a
    turn on such a line ran 3 s past the silence time unwatched, kept online as garbled). It is
-   no garbled answer: its exchange runs to its deadline and is judged torn there. A reply a byte
-   or a few off (a burst of interference, a flipped bit) is still the controller's answer,
-   garbled (review 129: a turn through a 4.5 s burst of those reaches its target). At rest such
+   no garbled answer: its exchange runs to its deadline and is judged torn there; it is told
+   as one once its junk reaches TORN_SHARE of the shortest reply (a stray byte is none: review
+   140). A reply a byte or a few off (a burst of interference, a flipped bit), with stray bytes
+   beside it or not, or a whole one and a stray byte, is still the controller's answer,
+   garbled (reviews 129, 136 and 140: a turn through a 4.5 s burst of those reaches its
+   target; a turn the port dropped is left to rule 9's count of garbled first readings,
+   sooner). At rest such
    junk keeps the controller online as any garbled answer does, and counts toward controller.py
    rule 9's unwatched stop, which a hand turn at rest on such a line needs (review 116; taken
    offline at the silence time instead, such a turn ran past ``az_min_deg``: review 123's
