@@ -12,6 +12,8 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
@@ -313,3 +315,27 @@ def rc2800_drifting_from(since: float, every_s: float, step_deg: float = 0.1) ->
         )
 
     return drift
+
+
+BURST_TARGET_DEG = 300.0  # the turn a burst comes in (reviews 129, 136, 140): to here ...
+BURST_SETTLE_S = 60.0  # ... once the first readings are taken, at rest (virtual time)
+BURST_TURNING_S = 10.0  # ... and well under way, watched (virtual time, not a deadline)
+
+
+def turning_for_a_burst(v: VirtualRotator) -> float:
+    """``v`` settled at rest, then turning to BURST_TARGET_DEG for BURST_TURNING_S (virtual
+    time): when the burst (reviews 129, 136, 140) begins."""
+    v.run_until_state(MotionState.IDLE, BURST_SETTLE_S)
+    v.target(BURST_TARGET_DEG)
+    v.run_for(BURST_TURNING_S)
+    assert v.truth().is_moving
+    return v.now
+
+
+def reached_through_the_burst(v: VirtualRotator, t: float) -> None:
+    """The turn went on through the burst begun at ``t``: nothing said of the controller's
+    answers, no stop written, the rotor at its target."""
+    said = [e.message for e in v.errors(since=t) if "answer" in e.message]
+    assert said == [], said
+    assert not v.frames("stop", since=t)
+    assert v.truth().az_deg == pytest.approx(BURST_TARGET_DEG, abs=1.0)

@@ -19,13 +19,10 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from tests.engine.garblers import reached_through_the_burst, turning_for_a_burst
 from tests.engine.test_review129_one_byte_off_answers_mid_turn_stopped import (
     BURST_S,
-    SETTLE_S,
     START_DEG,
-    TARGET_DEG,
-    TURNING_S,
     WATCH_S,
     first_byte_of_each_line_off,
 )
@@ -44,14 +41,7 @@ def test_an_easycomm_turn_through_a_burst_of_answers_one_byte_off_reaches_its_ta
     rig: Rig, model: str
 ) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    t = turning_for_a_burst(v)
     v.to_host = first_byte_of_each_line_off(t + BURST_S)
     v.run_for(WATCH_S)
-    said = [e.message for e in v.errors(since=t) if "answer" in e.message]
-    assert said == [], said  # observed: 'answers only garbled replies (no valid reply ...)'
-    assert not v.frames("stop", since=t)  # observed: stopped 3.6 s into the burst
-    assert v.truth().az_deg == pytest.approx(TARGET_DEG, abs=1.0)  # observed: 101
+    reached_through_the_burst(v, t)

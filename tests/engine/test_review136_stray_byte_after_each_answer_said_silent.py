@@ -19,17 +19,14 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from tests.engine.garblers import turning_for_a_burst
 from tests.engine.test_review136_stray_byte_after_each_answer_mid_turn_stopped import (
     START_DEG,
-    TARGET_DEG,
     stray_byte_after_each_answer,
 )
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
-TURNING_S = 10.0  # the turn well under way, watched (virtual time, not a deadline)
 WATCH_S = 30.0  # the offline and its words, with room (virtual time)
 
 
@@ -38,11 +35,7 @@ def test_a_box_answering_whole_replies_each_with_a_stray_byte_is_not_said_silent
     rig: Rig, model: str
 ) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    t = turning_for_a_burst(v)
     v.to_host = stray_byte_after_each_answer(model, float("inf"))
     v.run_for(WATCH_S)
     said = [e.message for e in v.errors(since=t) if "valid reply for" in e.message]

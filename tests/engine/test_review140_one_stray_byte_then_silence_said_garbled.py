@@ -23,15 +23,11 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
-from tests.engine.garblers import Garble
+from tests.engine.garblers import Garble, turning_for_a_burst
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
 START_DEG = 20.0
-TARGET_DEG = 300.0
-SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
-TURNING_S = 10.0  # the turn well under way, watched (virtual time, not a deadline)
 WATCH_S = 30.0  # the silence, the stop and its words, with room (virtual time)
 
 
@@ -62,11 +58,7 @@ def test_a_box_gone_dead_mid_turn_after_one_stray_byte_is_said_to_have_stopped_a
     rig: Rig, model: str, byte: bytes
 ) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    t = turning_for_a_burst(v)
     v.to_host = one_byte_then_nothing(byte)
     v.run_for(WATCH_S)
     assert v.frames("stop", since=t)  # (all trees: stopped at the silence time)

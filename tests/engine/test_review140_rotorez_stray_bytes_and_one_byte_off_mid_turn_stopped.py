@@ -26,15 +26,11 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
-from tests.engine.garblers import Garble
+from tests.engine.garblers import Garble, reached_through_the_burst, turning_for_a_burst
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
 START_DEG = 20.0
-TARGET_DEG = 300.0
-SETTLE_S = 60  # for the first readings to be taken, at rest (virtual time)
-TURNING_S = 10.0  # the turn well under way, watched (virtual time, not a deadline)
 BURST_S = 4.5  # between one silence time (3 s) and two (virtual time)
 WATCH_S = 120.0  # the rest of the turn, with room (virtual time)
 STRAY = b"\xff\xfe\xfd"
@@ -57,14 +53,7 @@ def test_a_turn_through_a_burst_of_stray_bytes_and_answers_a_byte_off_reaches_it
     rig: Rig, model: str
 ) -> None:
     v = rig(model, emulator={"start_az_deg": START_DEG})
-    v.run_until_state(MotionState.IDLE, SETTLE_S)
-    v.target(TARGET_DEG)
-    v.run_for(TURNING_S)
-    assert v.truth().is_moving
-    t = v.now
+    t = turning_for_a_burst(v)
     v.to_host = stray_bytes_and_semicolon_off(t + BURST_S)
     v.run_for(WATCH_S)
-    said = [e.message for e in v.errors(since=t) if "answer" in e.message]
-    assert said == [], said  # observed: 'answers only garbled replies (no valid reply for 3.2 s)
-    assert not v.frames("stop", since=t)  # observed: stopped 3.2-3.4 s into the burst
-    assert v.truth().az_deg == pytest.approx(TARGET_DEG, abs=1.0)  # observed: 91-99
+    reached_through_the_burst(v, t)
