@@ -21,12 +21,15 @@ from pathlib import Path
 
 import pytest
 
-from bridge.demo.console import Console
-from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.support.waiting import slow, wait_until
-from tests.test_review134_demo_console_replays_a_typed_target import BASE, Cuttable, Watcher
+from tests.test_review134_demo_console_replays_a_typed_target import (
+    BASE,
+    Cuttable,
+    Watcher,
+    console_through,
+)
 
 
 @pytest.fixture
@@ -73,16 +76,7 @@ def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_r
     relay = DeadPath(mosquitto.port)
     watcher = Watcher(mosquitto.port)
     topics = Topics(BASE, {"rotorez": BASE})
-    console = Console(
-        "127.0.0.1",
-        relay.port,
-        client_id=f"{BASE}-ui",
-        topics=topics,
-        rotator_ids=["rotorez"],
-        discovery_filters=[],
-        screen=Screen(),
-        mqtt5=True,
-    )
+    console = console_through(relay.port, topics, mqtt5=True)
     try:
         assert console.sync(slow(20)), "the console never connected through the relay"
         tries = len(relay.levels)

@@ -18,12 +18,10 @@ from pathlib import Path
 
 import pytest
 
-from bridge.demo.console import Console
-from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.brokers import Nats, find_nats
 from tests.support.waiting import slow, wait_until
-from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
@@ -42,16 +40,7 @@ def test_a_stop_typed_while_the_console_is_cut_off_is_sent_when_it_reconnects(
     relay = DeadPath(nats.port)  # (cut: closed both ways at once)
     watcher = Watcher(nats.port)
     topics = Topics(BASE, {"rotorez": BASE})
-    console = Console(
-        "127.0.0.1",
-        relay.port,
-        client_id=f"{BASE}-ui",
-        topics=topics,
-        rotator_ids=["rotorez"],
-        discovery_filters=[],
-        screen=Screen(),
-        mqtt5=False,
-    )
+    console = console_through(relay.port, topics, mqtt5=False)
     try:
         assert console.sync(slow(20)), "the MQTT 3.1.1 console never connected through the relay"
         tries = len(relay.levels)
