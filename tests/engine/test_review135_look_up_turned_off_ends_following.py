@@ -20,19 +20,11 @@ from bridge.core.model import Source, Stop
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
-from bridge.sky.worker import LookupQuestion
+from tests.engine.lookups import look_up
 from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-
-
-def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: float | None) -> None:
-    """A remote's ``track <name>`` (a look-up by name), taken now."""
-    lookup = LookupQuestion(catalog, name)
-    described = f"track {name}"
-    v.mailbox.put_track(Track(None, Source.MQTT, lookup, described, not_after_s=not_after_s))
-    v._take()
 
 
 @pytest.mark.xfail(
@@ -53,7 +45,7 @@ def test_a_late_look_up_turned_off_under_a_hold_leaves_following_begun_before_it
     v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold
     v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
     v._take()
-    _look_up(v, catalog, "nosuch", v.now + 5.0)  # late: the marker comes 8 s later
+    look_up(v, catalog, "nosuch", v.now + 5.0)  # late: the marker comes 8 s later
     v.mailbox.put_track(Track(None, Source.MQTT))  # track OFF, before the look-up's answer
     v._take()
     v.run_for(8.0)

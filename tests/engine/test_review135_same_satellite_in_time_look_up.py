@@ -21,21 +21,12 @@ from pathlib import Path
 import pytest
 
 from bridge.core.model import Source, Stop
-from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
-from bridge.sky.worker import LookupQuestion
+from tests.engine.lookups import look_up
 from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
-
-
-def _look_up(v: VirtualRotator, catalog: TleCatalog, name: str, not_after_s: float | None) -> None:
-    """A remote's ``track <name>`` (a look-up by name), taken now."""
-    lookup = LookupQuestion(catalog, name)
-    described = f"track {name}"
-    v.mailbox.put_track(Track(None, Source.MQTT, lookup, described, not_after_s=not_after_s))
-    v._take()
 
 
 @pytest.mark.xfail(
@@ -53,10 +44,10 @@ def test_a_look_up_sent_again_in_time_under_the_hold_goes_on_tracking(
     catalog = TleCatalog(iss_tle(v, tmp_path))
     v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
     v._take()
-    _look_up(v, catalog, "ISS (ZARYA)", t + 5.0)  # late: the marker comes 8 s later
+    look_up(v, catalog, "ISS (ZARYA)", t + 5.0)  # late: the marker comes 8 s later
     v.run_for(1.0)
     assert v.status.tracking is not None  # (its answer began tracking)
-    _look_up(v, catalog, "ISS (ZARYA)", None)  # sent again, in time
+    look_up(v, catalog, "ISS (ZARYA)", None)  # sent again, in time
     v.run_for(7.0)
     assert bearings(v, since=t) == []  # (held)
     v.mailbox.put_release(1)  # the marker back, past the first look-up's expiry
