@@ -153,9 +153,6 @@ class JunkReason(enum.StrEnum):
     MISFIT = "misfit"
 
 
-# ModelSpec.reply_alphabet of a family whose replies are upper-case text (GS-232, Easycomm,
-# Prosistel, RC2800): letters, digits, their punctuation and line ends, Prosistel's STX
-UPPER_TEXT = b"ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789+-.,:;=?>< \t\r\n\x02"
 LATE_ANSWER = "a poll's answer after its time"  # rule 7: the detail of a line owed late
 
 
@@ -637,10 +634,6 @@ class ModelSpec:
     # the shortest reply a poll can get where its width varies with the value (0: reply_bytes,
     # the longest): what session/link.py rule 11 measures an answer torn past any form against
     least_reply_bytes: int = 0
-    # the bytes the controller's replies are made of (b"": not judged): junk that forms no
-    # reply and is mostly other bytes is an answer torn past any form, no garbled answer of
-    # the controller's (session/link.py rule 11; review 125)
-    reply_alphabet: bytes = b""
     # the bytes a controller refuses a target with (GS-232's ``?>`` CR: 3), 0 if it never does:
     # no poll goes out before such a refusal can have come (session/link.py rule 4)
     refusal_bytes: int = 0

@@ -133,7 +133,6 @@ from typing import Any
 
 from bridge.protocols.base import (
     TENTHS_SLACK_DEG,
-    UPPER_TEXT,
     HalfLine,
     HamlibRotType,
     JunkReason,
@@ -400,7 +399,6 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         query_bytes=len(query),
         reply_bytes=len(reply),
         least_reply_bytes=len(b"AZ0.0 EL0.0\n"),  # (the shortest: at 0, either form)
-        reply_alphabet=UPPER_TEXT,
         hamlib_model=204 if version == 3 else 202,
         hamlib_rot_type=HamlibRotType.OTHER,  # what Hamlib's easycomm backend declares
         hamlib_info="EasycommIII" if version == 3 else "EasycommII",

@@ -90,7 +90,6 @@ from typing import Any
 from bridge.core.model import SettingValue
 from bridge.protocols.base import (
     POT_SLACK_DEG,
-    UPPER_TEXT,
     HalfLine,
     HamlibRotType,
     JunkReason,
@@ -359,7 +358,6 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         query_bytes=3 if elevation else 2,  # C2\r, C\r
         reply_bytes=len(reply),
         refusal_bytes=len(REFUSED) + 1,  # ?> CR (rule 3)
-        reply_alphabet=UPPER_TEXT,
         hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's gs232a backend has no get_info
         settings=(SPEED,),

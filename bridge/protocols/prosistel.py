@@ -102,7 +102,6 @@ from typing import Any
 from bridge.protocols.base import (
     POT_SLACK_DEG,
     TENTHS_SLACK_DEG,
-    UPPER_TEXT,
     HamlibRotType,
     JunkReason,
     JunkReply,
@@ -367,7 +366,6 @@ def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
         tenths=combi,  # rule 5
         query_bytes=query,
         reply_bytes=reply,
-        reply_alphabet=UPPER_TEXT,
         hamlib_rot_type=HamlibRotType.AZEL if combi else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's prosistel backend has no get_info
     )

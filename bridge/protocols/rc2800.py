@@ -150,7 +150,6 @@ import re
 
 from bridge.protocols.base import (
     TENTHS_SLACK_DEG,
-    UPPER_TEXT,
     Codec,
     HalfLine,
     HamlibRotType,
@@ -472,7 +471,6 @@ def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
         tenths=True,  # rule 4
         query_bytes=4 if elevation else 2,  # A CR, E CR
         reply_bytes=2 * line if elevation else line,
-        reply_alphabet=UPPER_TEXT,
         hamlib_model=1001,
         hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's m2 backend has no get_info

@@ -297,7 +297,6 @@ def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
         whole_degrees=True,
         query_bytes=4,  # AI1;
         reply_bytes=4,  # ;xxx
-        reply_alphabet=b";0123456789",
         hamlib_rot_type=HamlibRotType.OTHER,
         hamlib_folds_360=True,  # rotorez.c: "if (tmp == 360) tmp = 0"
     )

@@ -208,7 +208,6 @@ def _spec(**kw: Any) -> ModelSpec:
         tenths=True,  # rule 4
         query_bytes=4,  # BI1;
         reply_bytes=6,  # 123.4;
-        reply_alphabet=b"0123456789.; \r\n",
         hamlib_model=405,
         hamlib_rot_type=HamlibRotType.OTHER,  # as Hamlib's rotorez backend calls its family
         hamlib_info=None,  # Hamlib 4.5.4's RT-21 has no get_info

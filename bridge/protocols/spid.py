@@ -321,7 +321,6 @@ def _spec(name: str, display: str, **kw: Any) -> ModelSpec:
         nominal_speed_deg_s=1.0,
         query_bytes=13,
         reply_bytes=12,
-        reply_alphabet=bytes(range(11)) + b"W 0123456789",  # (its digits raw: 0..9, PH 1..10)
         hamlib_rot_type=HamlibRotType.AZEL,
         hamlib_info=None,  # Hamlib's spid backend has no get_info
     )

@@ -1281,9 +1281,7 @@ class Controller:
                     self._misfit(link, reply, now)  # it persists
                 else:  # (told, and logged, once the line is quiet)
                     link.add_junk(reply.data, now)
-                # link.py rule 11: it answered, garbled (a turn the port dropped is left to
-                # rule 9's count of garbled first readings, sooner: review 136)
-                link.garbles(reply, now, self.turning())
+                link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now, once=True)
         if self._settled(link, now):

@@ -139,28 +139,12 @@ Rules:
    never comes: such answers were silence, 'does not answer', and counted nothing toward
    controller.py rule 9's unwatched stop until the codec's buffer spilled (review 113: 22 s, a
    turn at the start 45 degrees past ``az_min_deg``; attack 30: the wrong baud rate told as a
-   cable). While a turn to a target (controller.py ``turning``) is under way, so is junk that
-   forms no reply (NOISE or SPOILED) in an exchange where no reply of the controller's form
-   came and no piece of junk so far is FORM_SHARE or more the model's reply alphabet
-   (``spec.reply_alphabet``: the bytes its replies are made of): the same torn bytes, cut into
-   junk where a codec finds a frame's length or a line end in them (review 125: on six models a
-   turn on such a line ran 3 s past the silence time unwatched, kept online as garbled). It is
-   no garbled answer: its exchange runs to its deadline and is judged torn there; it is told
-   as one once its junk reaches TORN_SHARE of the shortest reply (a stray byte is none: review
-   140). A reply a byte or a few off (a burst of interference, a flipped bit), with stray bytes
-   beside it or not, or a whole one and a stray byte, is still the controller's answer,
-   garbled (reviews 129, 136 and 140: a turn through a 4.5 s burst of those reaches its
-   target; a turn the port dropped is left to rule 9's count of garbled first readings,
-   sooner). At rest such
-   junk keeps the controller online as any garbled answer does, and counts toward controller.py
-   rule 9's unwatched stop, which a hand turn at rest on such a line needs (review 116; taken
-   offline at the silence time instead, such a turn ran past ``az_min_deg``: review 123's
-   premise). The first of a run alone is not counted: an answer still arriving (in parts, late)
+   cable). The first of a run alone is not counted: an answer still arriving (in parts, late)
    forms its reply with its rest. The run goes on across a replug (``torn_run``: controller.py
    rule 9 counts so; review 118, begun anew with each link, an adapter that reset every 2 s
-   never had one counted). A stray byte now and then is no answer (review 99: any byte counted
-   kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told as the
-   wrong baud rate).
+   never had one counted). A stray byte now and then is no answer (review 99: any byte
+   counted kept an unwatched turn online 3 s longer, and one NUL as a box switched off was told
+   as the wrong baud rate).
 12. A controller that answers late: a line of the answer to the question given up last that
    comes before the next question (protocols/base.py rule 7: never a reading) says how long
    after that question it came (``answered_late``); from then on every answer is waited for
@@ -248,9 +232,6 @@ VERDICT_SLACK_S = 0.2  # rule 2: a verdict's reply is owed this long after it ca
 OVERDUE_SHARE = 0.25  # rule 12: a late answer's lateness past the reply time, waited on top
 OVERDUE_EASE = 1 / 16  # rule 12: of the learned overdue time, given back per answer in time
 TORN_SHARE = 0.5  # rule 11: of a reply's bytes, read with none formed: a torn answer
-# rule 11: of a formless junk's bytes, at least this share of the model's reply alphabet
-# (``spec.reply_alphabet``) for it to be the controller's answer garbled, not one torn
-FORM_SHARE = 0.5
 _FORMLESS = (JunkReason.NOISE, JunkReason.SPOILED)  # rule 11: bytes that form no reply
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
@@ -320,8 +301,6 @@ class Link:
         self._formed_t = -math.inf  # rule 11: the last reply of the controller's form
         self._torn = 0  # rule 11: the bytes of the exchange given up last, none formed (0: not)
         self._asked_bytes = 0  # rule 11: bytes read since the last frame that awaits a reply
-        self._junk_bytes = 0  # rule 11: ... of them, in formless junk
-        self._formy = False  # rule 11: ... one of which was mostly the reply alphabet
         self._fresh = True  # rule 13: no frame written on this connection yet
         self.cut_move = True  # rule 13: a move the connection before wrote may have been cut
         self._move_t = -math.inf  # rule 13: when the last target's last frame goes
@@ -413,8 +392,7 @@ class Link:
             if self._asked_t <= self._heard_from():  # rule 2
                 self._first_asked_t = now
             self._asked_t = now
-            self._asked_bytes = self._junk_bytes = 0  # rule 11
-            self._formy = False
+            self._asked_bytes = 0  # rule 11
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
             self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
@@ -724,35 +702,14 @@ class Link:
         self._held = None
         return True
 
-    def garbles(self, junk: JunkReply, now: float, turn: bool = False) -> None:
+    def garbles(self, junk: JunkReply, now: float) -> None:
         """Rule 11: ``junk`` is the owed reply garbled, if it is bytes no healthy exchange has
-        (the controller answered: not silent); while a turn to a target is under way
-        (``turn``), not if it is torn past any form (``_of_form``)."""
+        (the controller answered: not silent)."""
         if self._reply_deadline is None or self._slew is not None:
             return
         if junk.reason is JunkReason.REFUSED or not self._unhealthy(junk):
             return
-        if junk.reason in _FORMLESS and not self._of_form(junk.data) and turn:
-            least = self.spec.least_reply_bytes or self.spec.reply_bytes
-            if self._junk_bytes >= TORN_SHARE * least:  # (told as garbled answers, review
-                self._torn_t = now  # 136; a stray byte alone is no answer, review 140)
-            return  # (torn past any form: no silence's end; judged at its deadline, ``_tears``)
         self._garbled, self._garbled_t = True, now
-
-    def _of_form(self, data: bytes) -> bool:
-        """Rule 11: whether formless junk ``data`` is of the controller's form: a reply of its
-        form came in the same exchange (a whole answer and a stray byte: review 136, the stray
-        byte judged alone stopped a healthy turn), or a piece of the exchange's formless junk
-        so far is mostly the model's reply alphabet (a reply a byte or a few off, stray bytes
-        beside it or not: review 140), not bytes torn past any form; True where the model
-        declares none."""
-        alphabet = self.spec.reply_alphabet
-        if not alphabet or not data or self._formed_t >= self._asked_t:
-            return True
-        self._junk_bytes += len(data)
-        alien = len(data.translate(None, alphabet))
-        self._formy = self._formy or alien <= (1 - FORM_SHARE) * len(data)
-        return self._formy
 
     def _ask_garbled(self, now: float) -> bool:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll

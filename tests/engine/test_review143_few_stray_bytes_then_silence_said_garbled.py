@@ -47,11 +47,6 @@ def junk_then_nothing(junk: bytes) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-143 1: a box gone dead mid-turn after a few stray bytes is said to answer "
-    "only garbled replies (b28cd556^: 'stopped answering')",
-)
 @pytest.mark.parametrize(
     ("model", "junk"),
     [

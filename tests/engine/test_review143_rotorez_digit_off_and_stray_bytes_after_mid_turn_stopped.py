@@ -64,11 +64,6 @@ def digit_off_and_stray_bytes_after(until: float) -> Garble:
     return garble
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-143 2: a Rotor-EZ turn through a burst of answers a digit off, three stray "
-    "bytes behind each, is stopped short as torn (b28cd556^: reaches its target)",
-)
 @pytest.mark.parametrize("model", ["rotorez", "rotorcard"])
 def test_a_turn_through_answers_a_digit_off_with_stray_bytes_behind_reaches_its_target(
     rig: Rig, model: str
