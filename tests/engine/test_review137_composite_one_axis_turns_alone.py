@@ -18,28 +18,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bridge.core.model import MotionState, Source, Stop
+from bridge.core.model import Source, Stop
 from bridge.session.tracking import Track
-from bridge.sky import Body, Sky
+from bridge.sky import Body
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
-from tests.engine.test_catalog import ISS, three_line
-from tests.engine.test_composite import FAST, FINE, online
-from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
-from tests.engine.virtual_composite import VirtualComposite
+from tests.engine.lookups import az_el_at_rest
 
 
 def test_a_late_look_up_answered_in_one_box_before_the_marker_turns_no_axis_alone(
     tmp_path: Path,
 ) -> None:
-    path = tmp_path / "sats.txt"
-    path.write_text(three_line(("ISS (ZARYA)", ISS)))
-    lat, lon = sun_up_somewhere(SUN_EPOCH)
-    with VirtualComposite(
-        "rt21", "gs232b", settings=FINE, emulators=FAST, sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH
-    ) as v:
-        v.run_until(online, 20, "both boxes answer")
-        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+    with az_el_at_rest(tmp_path) as (v, path):
         v.az.sky_delay_s, v.el.sky_delay_s = 0.05, 0.4  # each box's answer in its turn
         t = v.now
         v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
