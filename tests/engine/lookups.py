@@ -7,7 +7,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from bridge.core.model import MotionState, Source
+from bridge.core.model import MotionState, Source, Stop
+from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 from bridge.sky import Sky
 from bridge.sky.catalog import TleCatalog
@@ -40,3 +41,13 @@ def az_el_at_rest(tmp_path: Path) -> Iterator[tuple[VirtualComposite, Path]]:
         v.run_until(online, 20, "both boxes answer")
         v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
         yield v, path
+
+
+def following_under_a_hold(v: VirtualRotator) -> None:
+    """A STOP whose marker is late holds the rotator; WSJT-X following is started in time
+    under the hold, a QSO partner heard (reviews 37 and 135)."""
+    v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
+    v._take()
+    v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold
+    v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
+    v._take()

@@ -16,11 +16,10 @@ from pathlib import Path
 
 import pytest
 
-from bridge.core.model import Source, Stop
-from bridge.session.follow import Follow, Heard
+from bridge.core.model import Source
 from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
-from tests.engine.lookups import look_up
+from tests.engine.lookups import following_under_a_hold, look_up
 from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
 
@@ -40,11 +39,7 @@ def test_a_late_look_up_turned_off_under_a_hold_leaves_following_begun_before_it
     v = starts_rig(rig, monkeypatch)
     t = v.now
     catalog = TleCatalog(iss_tle(v, tmp_path))
-    v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
-    v._take()
-    v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold
-    v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
-    v._take()
+    following_under_a_hold(v)
     look_up(v, catalog, "nosuch", v.now + 5.0)  # late: the marker comes 8 s later
     v.mailbox.put_track(Track(None, Source.MQTT))  # track OFF, before the look-up's answer
     v._take()

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import pytest
 
-from bridge.core.model import Source, Stop
-from bridge.session.follow import Follow, Heard
+from bridge.core.model import Source
 from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
+from tests.engine.lookups import following_under_a_hold
 from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
 
@@ -43,11 +43,7 @@ def test_a_late_look_up_unanswered_at_the_marker_leaves_following_begun_before_i
     t = v.now
     catalog = TleCatalog(iss_tle(v, tmp_path))
     v.sky_delay_s = 0.5  # the sky worker a little behind (busy with another rotator's pass)
-    v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
-    v._take()
-    v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold
-    v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
-    v._take()
+    following_under_a_hold(v)
     v.run_for(4.8)
     lookup = LookupQuestion(catalog, "nosuch")  # a name the file does not have
     v.mailbox.put_track(

@@ -21,11 +21,11 @@ from pathlib import Path
 
 import pytest
 
-from bridge.core.model import Source, Stop
-from bridge.session.follow import Follow, Heard
+from bridge.core.model import Source
 from bridge.session.tracking import Track
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import LookupQuestion
+from tests.engine.lookups import following_under_a_hold
 from tests.engine.test_session_last_word import bearings, iss_tle, starts_rig
 from tests.engine.virtual import VirtualRotator
 
@@ -45,11 +45,7 @@ def test_a_late_look_up_under_a_hold_leaves_following_begun_before_it_alone(
     v = starts_rig(rig, monkeypatch)
     t = v.now
     path = iss_tle(v, tmp_path)
-    v.mailbox.put(Stop(Source.MQTT), hold=1)  # a STOP whose marker is late
-    v._take()
-    v.mailbox.put_follow(Follow(True, described="follow"))  # in time, under the hold
-    v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
-    v._take()
+    following_under_a_hold(v)
     lookup = LookupQuestion(TleCatalog(path), "nosuch")  # a name the file does not have
     v.mailbox.put_track(
         Track(None, Source.MQTT, lookup, described="track nosuch", not_after_s=v.now + 5.0)
