@@ -1,0 +1,67 @@
+"""Review 144, finding 3: e7d107fa sends a typed lock ON at QoS 1, kept by paho for the next
+connection (bridge/demo/console.py rule 3b, review 139 (3)), but tells a lock ON by the word
+``ON`` alone. The bridge takes ``1`` and ``true`` as ON too (payloads.py ``parse_switch``; the
+halts that carry a lock ON fast do as well), so ``lock true`` or ``lock 1`` typed on a dead
+connection still goes at QoS 0 into a socket that carries nothing: the rotator stays unlocked
+after the reconnect, and the console says nothing. Its grandparent 16dff1c0 sent every lock at
+QoS 1 and paho sent it again on the next connection (e7d107fa^ lost it too, as any lock ON).
+
+Real mosquitto (MQTT 5); review 139's dead path; what reaches the broker read by an MQTT 3.1.1
+client there."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.mqtt.topics import Topics
+from tests.support.mosquitto import Mosquitto
+from tests.support.waiting import slow, wait_until
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+
+
+@pytest.fixture
+def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
+    m = Mosquitto(tmp_path / "mosquitto").start()
+    yield m
+    m.stop()
+
+
+@pytest.mark.parametrize("word", ["true", "1"])
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-144 3: 'lock true' / 'lock 1' (a lock ON to the bridge) goes at QoS 0 and is "
+    "lost on a dead connection",
+)
+def test_a_lock_on_spelt_true_or_1_on_a_dead_connection_reaches_the_broker_on_reconnect(
+    mosquitto: Mosquitto, word: str
+) -> None:
+    relay = DeadPath(mosquitto.port)
+    watcher = Watcher(mosquitto.port)
+    topics = Topics(BASE, {"rotorez": BASE})
+    lock = topics.rotator("rotorez").lock
+    console = console_through(relay.port, topics, mqtt5=True)
+    try:
+        assert console.sync(slow(20)), "the console never connected through the relay"
+        tries = len(relay.levels)
+        relay.dead = True  # the path carries nothing; nobody has noticed yet
+        assert console.command(f"lock {word}")
+        wait_until(lambda: relay.dropped > 0, 20, "the lock's PUBLISH taken by the dead path")
+        relay.cut()  # the dead connection found out at last: closed
+        relay.dead = False
+        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
+        relay.restore()
+        assert console.sync(slow(20)), "the console never came back"
+        console.publish(f"{BASE}/console/mark", "after")
+        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+        locks = [m for m in got if m[0] == lock]
+        assert locks == [(lock, word.upper())], (
+            f"the lock {word} typed on the dead connection never reached the broker: {got}"
+        )
+    finally:
+        console.close()
+        watcher.close()
+        relay.close()
