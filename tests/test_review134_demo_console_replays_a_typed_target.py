@@ -93,6 +93,12 @@ class Watcher:
         self._client.loop_stop()
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-134 1: a bearing typed while the demo's console is cut off is sent when it "
+    "reconnects and turns the rotor seconds later (the price of one order for every typed "
+    "command: review 144)",
+)
 def test_a_bearing_typed_while_the_console_is_cut_off_is_not_sent_when_it_reconnects(
     nats: Nats,
 ) -> None:

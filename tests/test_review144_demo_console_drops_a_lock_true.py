@@ -31,11 +31,6 @@ def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
 
 
 @pytest.mark.parametrize("word", ["true", "1"])
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-144 3: 'lock true' / 'lock 1' (a lock ON to the bridge) goes at QoS 0 and is "
-    "lost on a dead connection",
-)
 def test_a_lock_on_spelt_true_or_1_on_a_dead_connection_reaches_the_broker_on_reconnect(
     mosquitto: Mosquitto, word: str
 ) -> None:

@@ -31,11 +31,6 @@ def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
     m.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-144 2: a lock ON whose PUBACK was lost is sent again on reconnect, after the "
-    "lock OFF typed behind it, and locks the rotator again",
-)
 def test_a_lock_on_typed_before_a_lock_off_is_not_sent_again_after_it_on_reconnect(
     mosquitto: Mosquitto,
 ) -> None:

@@ -55,11 +55,6 @@ class DeadWayBack(DeadPath):
             dst.close()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-144 1: a STOP whose PUBACK was lost is sent again on reconnect, after the "
-    "bearing typed behind it, and stops that turn",
-)
 def test_a_stop_typed_before_a_bearing_is_not_sent_again_after_it_on_reconnect(
     mosquitto: Mosquitto,
 ) -> None:

@@ -16,11 +16,13 @@ Rules:
    subscription's retained messages came after the marker that was to wait for them on aedes,
    and were left; review 139: its heartbeat, audit and errors were counted and cleared too). A
    retained topic it must read before the bridge starts is asked alone (``look``).
-3b. A typed command that moves the rotor goes now or never: at QoS 0, and not while the
-   console has lost the broker, which it says (review 134: paho kept a QoS 1 bearing for the
-   next connection, and it turned the rotor seconds after it was typed). A STOP and a lock ON
-   go at QoS 1 whatever the connection, kept by paho for the next one: late, they move nothing
-   (review 139: at QoS 0 one typed on a dead connection was lost).
+3b. Every typed command goes at QoS 1, in the order typed, kept by paho for the next
+   connection if the broker has not taken it: one order for all of them, so that a STOP or a
+   lock ON sent again never lands after what was typed behind it (review 144). The price, a
+   known failure: a bearing typed while the console has lost the broker turns the rotor when
+   it is back, seconds later (review 134); sent now or never, a STOP or lock ON typed on a dead
+   connection was lost (review 139), and one sent again on its own overtook the bearing or the
+   lock OFF typed after it (review 144).
 3. A line that is not a command is answered with a hint, never published as a target.
 4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
    elevation and state of every rotator stay on one status line, redrawn in place, and
@@ -218,20 +220,10 @@ class Console:
             return ", ".join(json.loads(self._last.get(topic, "{}"))) or "none"
         return "see " + topic
 
-    def publish(self, topic: str, payload: str, halts: bool = False) -> None:
-        """Rule 3b: now or never, or (``halts``: a STOP, a lock ON) kept for the next
-        connection."""
+    def publish(self, topic: str, payload: str) -> None:
+        """Rule 3b."""
         self._sent.add(topic)
-        if halts:
-            self._client.publish(topic, payload, qos=1)
-            return
-        if not self._client.is_connected():
-            self.screen.log(
-                f"rotor-bridge demo: not sent ({topic} {payload}): the console has lost the "
-                "broker, and connects again"
-            )
-            return
-        self._client.publish(topic, payload, qos=0)
+        self._client.publish(topic, payload, qos=1)
 
     def command(self, line: str) -> bool:
         """Handle one typed line; False to quit."""
@@ -253,9 +245,9 @@ class Console:
         t = self._topics.rotator(rid)
         head, rest = words[0].lower(), words[1:]
         if head in ("s", "stop") and not rest:
-            self.publish(t.stop, "STOP", halts=True)
+            self.publish(t.stop, "STOP")
         elif head == "lock" and len(rest) == 1:
-            self.publish(t.lock, rest[0].upper(), halts=rest[0].upper() == "ON")
+            self.publish(t.lock, rest[0].upper())
         elif head in OPTIONS and len(rest) == 1:
             self.publish(t.option(head), rest[0].upper())
         elif head == "el" and len(rest) == 1:
