@@ -16,13 +16,6 @@ Rules:
    subscription's retained messages came after the marker that was to wait for them on aedes,
    and were left; review 139: its heartbeat, audit and errors were counted and cleared too). A
    retained topic it must read before the bridge starts is asked alone (``look``).
-3b. Every typed command goes at QoS 1, in the order typed, kept by paho for the next
-   connection if the broker has not taken it: one order for all of them, so that a STOP or a
-   lock ON sent again never lands after what was typed behind it (review 144). The price, a
-   known failure: a bearing typed while the console has lost the broker turns the rotor when
-   it is back, seconds later (review 134); sent now or never, a STOP or lock ON typed on a dead
-   connection was lost (review 139), and one sent again on its own overtook the bearing or the
-   lock OFF typed after it (review 144).
 3. A line that is not a command is answered with a hint, never published as a target.
 4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
    elevation and state of every rotator stay on one status line, redrawn in place, and
@@ -31,6 +24,13 @@ Rules:
 5. A demo that started a private mosquitto says so on it, retained on ``PRIVATE_BROKER_MARK``
    (its instance name); ``private_broker_of`` reads that mark, so a second demo does not lean
    on a broker that ends with the first (bridge.demo rule 5).
+6. Every typed command goes at QoS 1, in the order typed, kept by paho for the next
+   connection if the broker has not taken it: one order for all of them, so that a STOP or a
+   lock ON sent again never lands after what was typed behind it (review 144). The price, a
+   known failure: a bearing typed while the console has lost the broker turns the rotor when
+   it is back, seconds later (review 134); sent now or never, a STOP or lock ON typed on a dead
+   connection was lost (review 139), and one sent again on its own overtook the bearing or the
+   lock OFF typed after it (review 144).
 """
 
 from __future__ import annotations
@@ -221,7 +221,7 @@ class Console:
         return "see " + topic
 
     def publish(self, topic: str, payload: str) -> None:
-        """Rule 3b."""
+        """Rule 6."""
         self._sent.add(topic)
         self._client.publish(topic, payload, qos=1)
 
