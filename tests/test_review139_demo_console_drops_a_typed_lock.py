@@ -19,9 +19,8 @@ import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
-from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
-from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
 @pytest.fixture
@@ -39,18 +38,7 @@ def test_a_lock_on_typed_on_a_dead_connection_reaches_the_broker_once_the_consol
     topics = Topics(BASE, {"rotorez": BASE})
     console = console_through(relay.port, topics, mqtt5=True)
     try:
-        assert console.sync(slow(20)), "the console never connected through the relay"
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command("lock on")
-        wait_until(lambda: relay.dropped > 0, 20, "the lock's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        before = watcher.wait_for(f"{BASE}/console/mark", "after")
+        before = typed_on_a_dead_path(console, relay, watcher, "lock on", "lock")
         locks = [m for m in before if m[0] == topics.rotator("rotorez").lock]
         assert locks == [(topics.rotator("rotorez").lock, "ON")], (
             f"the lock ON typed on the dead connection never reached the broker: {before}"

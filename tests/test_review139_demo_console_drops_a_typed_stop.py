@@ -21,6 +21,7 @@ from pathlib import Path
 
 import pytest
 
+from bridge.demo.console import Console
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.support.waiting import slow, wait_until
@@ -78,18 +79,7 @@ def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_r
     topics = Topics(BASE, {"rotorez": BASE})
     console = console_through(relay.port, topics, mqtt5=True)
     try:
-        assert console.sync(slow(20)), "the console never connected through the relay"
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command("s")  # typed: the rotor is turning
-        wait_until(lambda: relay.dropped > 0, 20, "the STOP's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        before = watcher.wait_for(f"{BASE}/console/mark", "after")
+        before = typed_on_a_dead_path(console, relay, watcher, "s", "STOP")
         stops = [m for m in before if m[0] == topics.rotator("rotorez").stop]
         assert stops == [(topics.rotator("rotorez").stop, "STOP")], (
             f"the STOP typed on the dead connection never reached the broker: {before}"
@@ -98,3 +88,23 @@ def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_r
         console.close()
         watcher.close()
         relay.close()
+
+
+def typed_on_a_dead_path(
+    console: Console, relay: DeadPath, watcher: Watcher, line: str, what: str
+) -> list[tuple[str, str]]:
+    """``line`` typed on the console while ``relay`` carries nothing (its PUBLISH, the
+    ``what``'s, taken by the dead path), then the dead connection found out and the console
+    back: what reached the broker before the console's mark after it."""
+    assert console.sync(slow(20)), "the console never connected through the relay"
+    tries = len(relay.levels)
+    relay.dead = True  # the path carries nothing; nobody has noticed yet
+    assert console.command(line)
+    wait_until(lambda: relay.dropped > 0, 20, f"the {what}'s PUBLISH taken by the dead path")
+    relay.cut()  # the dead connection found out at last: closed
+    relay.dead = False
+    wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
+    relay.restore()
+    assert console.sync(slow(20)), "the console never came back"
+    console.publish(f"{BASE}/console/mark", "after")
+    return watcher.wait_for(f"{BASE}/console/mark", "after")

@@ -18,9 +18,8 @@ import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
-from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
-from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
 @pytest.fixture
@@ -40,18 +39,7 @@ def test_a_lock_on_spelt_true_or_1_on_a_dead_connection_reaches_the_broker_on_re
     lock = topics.rotator("rotorez").lock
     console = console_through(relay.port, topics, mqtt5=True)
     try:
-        assert console.sync(slow(20)), "the console never connected through the relay"
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command(f"lock {word}")
-        wait_until(lambda: relay.dropped > 0, 20, "the lock's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+        got = typed_on_a_dead_path(console, relay, watcher, f"lock {word}", "lock")
         locks = [m for m in got if m[0] == lock]
         assert locks == [(lock, word.upper())], (
             f"the lock {word} typed on the dead connection never reached the broker: {got}"
