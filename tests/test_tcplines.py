@@ -1264,6 +1264,17 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
         _close_all(held, waiting, sel, listener)
 
 
+def _greeting_gs232(clock: FakeClock) -> LineServer:
+    """A GS-232 server that answers a rotctl-like ``Q`` with a greeting, four clients at most
+    (16 may wait): the accept loop's hand-run tests of reviews 128-132."""
+    return _gs232_server(
+        clock=clock,
+        halts=gs232_holds_stop,
+        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
+        max_clients=4,
+    )
+
+
 def _gs232_server(**kw: Any) -> LineServer:
     """A GS-232 port's line server for the accept loop run by hand (``_hand_loop``), not
     started: a tower at 120 degrees behind it, the front end's ``halts``."""
@@ -1318,12 +1329,7 @@ def test_a_waiting_clients_question_come_since_its_connect_is_answered_before_ro
     room was made it was the oldest without a stop, reset unanswered (its bytes' wake-up not
     yet read). It is looked at again before it is reset now: answered, it waits for its
     command, and the oldest of the rest goes."""
-    server = _gs232_server(
-        clock=FakeClock(),
-        halts=gs232_holds_stop,
-        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
-        max_clients=4,  # (16 may wait)
-    )
+    server = _greeting_gs232(FakeClock())
     listener, sel = _hand_loop(server)
     monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
     waiting: dict[socket.socket, tuple[str, int]] = {}
@@ -1486,12 +1492,7 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
     handles the client's own wake-up for those bytes: taken out of the selector, and not put
     back (answered already). Its stop then wakes nothing: it is found only by the poll for
     half lines, PARTIAL_POLL_S later, not at once as every answered client's is."""
-    server = _gs232_server(
-        clock=FakeClock(),
-        halts=gs232_holds_stop,
-        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
-        max_clients=4,  # (16 may wait)
-    )
+    server = _greeting_gs232(FakeClock())
     listener, sel = _hand_loop(server)
     server._wake_r, wake_w = os.pipe()  # (as start() makes: stop() would write to it)
     sel.register(server._wake_r, selectors.EVENT_READ)
@@ -1747,12 +1748,7 @@ def test_a_silent_client_keeps_its_place_behind_connections_reset_after_their_ac
     them. The loop is run here by hand (the loopback budget spent, the clock moved on by half
     SWEEP_S between the two newcomers). Not a regression: dd1e5dce swept none of them."""
     clock = FakeClock()
-    server = _gs232_server(
-        clock=clock,
-        halts=gs232_holds_stop,
-        greets=lambda data: b"hello\r\n" if data == b"Q\r" else None,
-        max_clients=4,  # (16 may wait)
-    )
+    server = _greeting_gs232(clock)
     listener, sel = _hand_loop(server)
     monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
     waiting: dict[socket.socket, tuple[str, int]] = {}
