@@ -24,11 +24,10 @@ import paho.mqtt.client as paho
 import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
-from bridge.demo.console import Console
-from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.brokers import Nats, find_nats
 from tests.support.waiting import slow
+from tests.test_review134_demo_console_replays_a_typed_target import console_through
 
 BASE = "rotor-demo-r139"
 
@@ -80,16 +79,7 @@ def test_the_demo_on_an_mqtt311_broker_says_how_many_retained_messages_it_remove
         (r.error, b'{"error": "refused"}', False),
         (r.target, b"120", False),  # the banner's "turn:" line, typed in another terminal
     ]
-    console = Console(
-        "127.0.0.1",
-        nats.port,
-        client_id=f"{BASE}-ui",
-        topics=topics,
-        rotator_ids=["rotorez"],
-        discovery_filters=[],
-        screen=Screen(),
-        mqtt5=False,
-    )
+    console = console_through(nats.port, topics, mqtt5=False)
     try:
         assert console.sync(slow(20)), "the MQTT 3.1.1 console never connected"
         publish(nats.port, retained + plain)

@@ -16,12 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from bridge.demo.console import Console
-from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.brokers import Nats, find_nats
 from tests.support.waiting import slow
 from tests.test_review127_demo_on_an_mqtt311_broker import retained_on
+from tests.test_review134_demo_console_replays_a_typed_target import console_through
 from tests.test_review139_demo_counts_plain_messages_as_retained import publish
 
 BASE = "rotor-demo-r144"
@@ -46,16 +45,7 @@ def test_the_demo_on_an_mqtt311_broker_leaves_nothing_retained_on_its_base_topic
 ) -> None:
     topics = Topics(BASE, {"rotorez": BASE})
     r = topics.rotator("rotorez")
-    console = Console(
-        "127.0.0.1",
-        nats.port,
-        client_id=f"{BASE}-ui",
-        topics=topics,
-        rotator_ids=["rotorez"],
-        discovery_filters=[],
-        screen=Screen(),
-        mqtt5=False,
-    )
+    console = console_through(nats.port, topics, mqtt5=False)
     try:
         assert console.sync(slow(20)), "the MQTT 3.1.1 console never connected"
         publish(
