@@ -1264,6 +1264,25 @@ def test_beside_a_full_waiting_list_a_newcomer_costs_a_few_reads_and_its_stop_is
         _close_all(held, waiting, sel, listener)
 
 
+def _silent_then_full(
+    server: LineServer,
+    listener: socket.socket,
+    waiting: dict[socket.socket, tuple[str, int]],
+    sel: selectors.BaseSelector,
+    held: list[socket.socket],
+) -> socket.socket:
+    """A silent client accepted first (before its question), then 15 polling ones: the 16
+    waiting places full. Every connection made goes into ``held``; the silent one is returned."""
+    client = _connect(server.port)  # silent: accepted before its question
+    held.append(client)
+    assert server._take(listener, waiting, sel) and len(waiting) == 1
+    held += [_connect(server.port, b"C\r") for _ in range(15)]
+    for _ in range(15):
+        assert server._take(listener, waiting, sel)
+    assert len(waiting) == 16  # full
+    return client
+
+
 def _greeting_gs232(clock: FakeClock) -> LineServer:
     """A GS-232 server that answers a rotctl-like ``Q`` with a greeting, four clients at most
     (16 may wait): the accept loop's hand-run tests of reviews 128-132."""
@@ -1333,14 +1352,9 @@ def test_a_waiting_clients_question_come_since_its_connect_is_answered_before_ro
     listener, sel = _hand_loop(server)
     monkeypatch.setattr(server, "_let_in", lambda conn, peer: None)  # (no thread here)
     waiting: dict[socket.socket, tuple[str, int]] = {}
-    client = _connect(server.port)  # silent: accepted before its question
-    held = [client]
+    held: list[socket.socket] = []
     try:
-        assert server._take(listener, waiting, sel) and len(waiting) == 1
-        held += [_connect(server.port, b"C\r") for _ in range(15)]
-        for _ in range(15):
-            assert server._take(listener, waiting, sel)
-        assert len(waiting) == 16  # full
+        client = _silent_then_full(server, listener, waiting, sel, held)
         client.sendall(b"Q\r")  # its question comes; the loop takes a newcomer first
         wait_until(lambda: any(tcplines._peek(c, 2) == b"Q\r" for c in waiting), 10, "come")
         held.append(_connect(server.port, b"C\r"))
@@ -1499,14 +1513,9 @@ def test_a_client_answered_while_room_is_made_is_woken_at_once_by_its_stop(
     went: list[int] = []
     monkeypatch.setattr(server, "_let_in", lambda conn, peer: went.append(peer[1]))
     waiting: dict[socket.socket, tuple[str, int]] = {}
-    client = _connect(server.port)  # silent: accepted before its question
-    held = [client]
+    held: list[socket.socket] = []
     try:
-        assert server._take(listener, waiting, sel) and len(waiting) == 1
-        held += [_connect(server.port, b"C\r") for _ in range(15)]
-        for _ in range(15):
-            assert server._take(listener, waiting, sel)
-        assert len(waiting) == 16  # full
+        client = _silent_then_full(server, listener, waiting, sel, held)
         held.append(_connect(server.port, b"C\r"))  # a newcomer, then the client's question
         wait_until(lambda: tcplines.readable((listener.fileno(),), 0), 10, "the newcomer")
         client.sendall(b"Q\r")
