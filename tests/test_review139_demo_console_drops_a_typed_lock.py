@@ -12,29 +12,17 @@ then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
-
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
-@pytest.fixture
-def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path / "mosquitto").start()
-    yield m
-    m.stop()
-
-
 def test_a_lock_on_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
-    mosquitto: Mosquitto,
+    broker: Mosquitto,
 ) -> None:
-    relay = DeadPath(mosquitto.port)
-    watcher = Watcher(mosquitto.port)
+    relay = DeadPath(broker.port)
+    watcher = Watcher(broker.port)
     topics = Topics(BASE, {"rotorez": BASE})
     console = console_through(relay.port, topics, mqtt5=True)
     try:

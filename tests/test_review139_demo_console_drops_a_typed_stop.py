@@ -16,10 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import socket
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
 
 from bridge.demo.console import Console
 from bridge.interfaces.mqtt.topics import Topics
@@ -31,13 +27,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import (
     Watcher,
     console_through,
 )
-
-
-@pytest.fixture
-def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path / "mosquitto").start()
-    yield m
-    m.stop()
 
 
 class DeadPath(Cuttable):
@@ -72,10 +61,10 @@ class DeadPath(Cuttable):
 
 
 def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_reconnects(
-    mosquitto: Mosquitto,
+    broker: Mosquitto,
 ) -> None:
-    relay = DeadPath(mosquitto.port)
-    watcher = Watcher(mosquitto.port)
+    relay = DeadPath(broker.port)
+    watcher = Watcher(broker.port)
     topics = Topics(BASE, {"rotorez": BASE})
     console = console_through(relay.port, topics, mqtt5=True)
     try:

@@ -11,9 +11,6 @@ client there."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from pathlib import Path
-
 import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
@@ -22,19 +19,12 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
-@pytest.fixture
-def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path / "mosquitto").start()
-    yield m
-    m.stop()
-
-
 @pytest.mark.parametrize("word", ["true", "1"])
 def test_a_lock_on_spelt_true_or_1_on_a_dead_connection_reaches_the_broker_on_reconnect(
-    mosquitto: Mosquitto, word: str
+    broker: Mosquitto, word: str
 ) -> None:
-    relay = DeadPath(mosquitto.port)
-    watcher = Watcher(mosquitto.port)
+    relay = DeadPath(broker.port)
+    watcher = Watcher(broker.port)
     topics = Topics(BASE, {"rotorez": BASE})
     lock = topics.rotator("rotorez").lock
     console = console_through(relay.port, topics, mqtt5=True)

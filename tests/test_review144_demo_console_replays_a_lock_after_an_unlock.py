@@ -12,11 +12,6 @@ broker read by an MQTT 3.1.1 client there, as the bridge would get it."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
-
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.support.waiting import slow, wait_until
@@ -24,18 +19,11 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review144_demo_console_replays_a_stop_after_a_turn import DeadWayBack
 
 
-@pytest.fixture
-def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path / "mosquitto").start()
-    yield m
-    m.stop()
-
-
 def test_a_lock_on_typed_before_a_lock_off_is_not_sent_again_after_it_on_reconnect(
-    mosquitto: Mosquitto,
+    broker: Mosquitto,
 ) -> None:
-    relay = DeadWayBack(mosquitto.port)
-    watcher = Watcher(mosquitto.port)
+    relay = DeadWayBack(broker.port)
+    watcher = Watcher(broker.port)
     topics = Topics(BASE, {"rotorez": BASE})
     lock = topics.rotator("rotorez").lock
     console = console_through(relay.port, topics, mqtt5=True)

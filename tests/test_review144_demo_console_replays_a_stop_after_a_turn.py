@@ -16,23 +16,12 @@ from __future__ import annotations
 
 import contextlib
 import socket
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
-
-
-@pytest.fixture
-def mosquitto(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path / "mosquitto").start()
-    yield m
-    m.stop()
 
 
 class DeadWayBack(DeadPath):
@@ -56,10 +45,10 @@ class DeadWayBack(DeadPath):
 
 
 def test_a_stop_typed_before_a_bearing_is_not_sent_again_after_it_on_reconnect(
-    mosquitto: Mosquitto,
+    broker: Mosquitto,
 ) -> None:
-    relay = DeadWayBack(mosquitto.port)
-    watcher = Watcher(mosquitto.port)
+    relay = DeadWayBack(broker.port)
+    watcher = Watcher(broker.port)
     topics = Topics(BASE, {"rotorez": BASE})
     r = topics.rotator("rotorez")
     console = console_through(relay.port, topics, mqtt5=True)
