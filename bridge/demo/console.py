@@ -80,7 +80,7 @@ class Console:
         self.screen = screen or Screen()
         self._v5 = mqtt5
         self._seen: set[str] = set()  # rule 2, MQTT 3.1.1: the topics that carried a message
-        self._sent: set[str] = {PRIVATE_BROKER_MARK}  # rule 2: ... but those it published
+        self._sent: set[str] = set()  # rule 2: ... but those it published
         self._kept = [*topics.owned(), *discovery_filters]  # rule 2: those kept retained
         self._topics = topics
         self._ids = rotator_ids
