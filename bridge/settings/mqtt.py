@@ -248,8 +248,9 @@ class MqttSettings(Strict):
         30,
         ge=5,
         le=3600,
-        description="seconds between keep-alive pings; the broker declares the bridge offline "
-        "after 1.5 times this without a word",
+        description="seconds between keep-alive pings of the main connection; the broker "
+        "declares the bridge offline after 1.5 times this without a word (the connections that "
+        "carry stops ping every 2 s, so that a dead network path under them is found within 7 s)",
         examples=[60],
     )
     error_events_per_s: float = Field(

@@ -241,6 +241,7 @@ from bridge.core.model import operator_name
 from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
+    STOP_KEEPALIVE_S,
     STOP_RECONNECT_MAX_S,
     TAKEOVER_FIRST_S,
     Connection,
@@ -1014,6 +1015,7 @@ class _Link(Connection):
 
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 6: it carries stops (connection.py rule 7)
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
+    KEEPALIVE_MAX_S = STOP_KEEPALIVE_S  # connection.py rule 6: a dead path found soon
 
     def __init__(
         self,

@@ -77,6 +77,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.mqtt.connection import (
     STABLE_S,
+    STOP_KEEPALIVE_S,
     STOP_RECONNECT_MAX_S,
     TAKEOVER_FIRST_S,
     Connection,
@@ -110,6 +111,7 @@ def lane_client_id(settings: MqttSettings, kind: str = "stop") -> str:
 class StopLane(Connection):
     FIGHT_BACKOFF_MAX_S = TAKEOVER_FIRST_S  # rule 3
     RECONNECT_MAX_S = STOP_RECONNECT_MAX_S  # connection.py rule 6: back soon after a broker
+    KEEPALIVE_MAX_S = STOP_KEEPALIVE_S  # connection.py rule 6: a dead path found soon
 
     def __init__(
         self,
