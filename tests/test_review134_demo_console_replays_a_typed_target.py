@@ -7,6 +7,8 @@ typed into a console that showed nothing turns the rotor whenever the broker com
 (architecture.md principle 7: no stale or replayed command moves a rotor; the remote's
 commands are "never queued for a later connection", interfaces/mqtt/remote.py). The parent
 did the same on MQTT 5 brokers (no message expiry either); on nats its console never connected.
+Fixed: a move typed while the console has lost the broker is refused and said (console.py rule
+6), never sent.
 
 Real nats-server; the console's own connection runs through a relay that is cut and restored
 (the bridge's would not be); what reaches the broker is read by an MQTT 3.1.1 client there."""
@@ -93,12 +95,6 @@ class Watcher:
         self._client.loop_stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-134 1: a bearing typed while the demo's console is cut off is sent when it "
-    "reconnects and turns the rotor seconds later (the price of one order for every typed "
-    "command: review 144)",
-)
 def test_a_bearing_typed_while_the_console_is_cut_off_is_not_sent_when_it_reconnects(
     nats: Nats,
 ) -> None:

@@ -24,13 +24,22 @@ Rules:
 5. A demo that started a private mosquitto says so on it, retained on ``PRIVATE_BROKER_MARK``
    (its instance name); ``private_broker_of`` reads that mark, so a second demo does not lean
    on a broker that ends with the first (bridge.demo rule 5).
-6. Every typed command goes at QoS 1, in the order typed, kept by paho for the next
-   connection if the broker has not taken it: one order for all of them, so that a STOP or a
-   lock ON sent again never lands after what was typed behind it (review 144). The price, a
-   known failure: a bearing typed while the console has lost the broker turns the rotor when
-   it is back, seconds later (review 134); sent now or never, a STOP or lock ON typed on a dead
-   connection was lost (review 139), and one sent again on its own overtook the bearing or the
-   lock OFF typed after it (review 144).
+6. Every typed command goes at QoS 1, in the order typed, only on a connection up: one the
+   console knows it has lost sends nothing it did not send before. What the broker has not
+   acknowledged when a connection goes (paho's queue, taken from it as the next one comes up:
+   ``drop_out_messages``) may have reached the broker or not, and is never sent again in
+   paho's way, all of it: a move sent late would turn the rotor seconds after it was typed
+   (review 134), and a STOP or lock ON sent again alone would land after the bearing or the
+   lock OFF typed behind it (review 144). So of the typed commands it held, those after the
+   last that can move a rotor or lift a lock (a STOP, ``lock`` ON, 1 or TRUE: the last words)
+   go again on the new connection, first, in their order: they land after everything typed
+   before them, and nothing was typed behind them; every other is said not to have gone for
+   sure, to be typed again if it is still wanted (a STOP typed on a dead connection reached
+   nobody and the rotor ran on: review 139). Typed while the console has lost the broker, a
+   last word is held for the next connection and goes there after those, said so; any other
+   command is refused, said so, and never sent (review 134: a bearing typed into a console
+   that showed nothing turned the rotor when the broker came back). The console's own
+   messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho would.
 """
 
 from __future__ import annotations
@@ -50,6 +59,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.demo.screen import Screen
 from bridge.features import tracking
+from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
 from bridge.interfaces.mqtt.topics import Topics
 
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
@@ -93,6 +103,10 @@ class Console:
         self._synced = threading.Event()
         self._subscribed = threading.Event()
         self.connected = threading.Event()
+        self._typed: dict[int, tuple[str, str]] = {}  # rule 6: sent, by message id
+        self._held: list[tuple[str, str]] = []  # rule 6: last words for the next connection
+        self._halts = {topics.rotator(rid).stop for rid in rotator_ids}  # rule 6: last words
+        self._locks = {topics.rotator(rid).lock for rid in rotator_ids}  # (ON ones)
         if mqtt5:
             c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
         else:  # (rule 2: a clean session, as MQTT 5's clean start)
@@ -100,6 +114,7 @@ class Console:
                 CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv311
             )
         c.on_connect = self._on_connect
+        c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
         c.on_subscribe = self._on_subscribe
         c.reconnect_delay_set(1, 5)
@@ -121,7 +136,47 @@ class Console:
         if reason_code.is_failure:
             return
         self._subscribe(client)
+        self._again(client)
         self.connected.set()
+
+    def _on_disconnect(self, client: paho.Client, *_: Any) -> None:
+        self.connected.clear()  # (rule 6: from now on a move typed is refused)
+
+    def _last_word(self, topic: str, payload: str) -> bool:
+        """Rule 6: a STOP, or a lock ON: sent late, it moves nothing."""
+        if topic in self._halts:
+            return True
+        if topic not in self._locks:
+            return False
+        try:
+            return parse_switch(payload.encode())
+        except PayloadError:
+            return False
+
+    def _again(self, client: paho.Client) -> None:
+        """Rule 6, as a connection comes up (paho's thread, before paho sends its queue again):
+        what the last one left unacknowledged, and the last words held meanwhile."""
+        out = client.drop_out_messages()
+        with self._lock:
+            typed = [(m, self._typed.pop(m.mid, None)) for m in out]
+            self._typed.clear()
+            moves = [
+                i for i, (_m, t) in enumerate(typed) if t is not None and not self._last_word(*t)
+            ]
+            cut = moves[-1] + 1 if moves else 0
+            held, self._held = self._held, []
+        for i, (m, t) in enumerate(typed):
+            if t is None:  # the console's own: as paho would have
+                client.publish(m.topic, m.payload, qos=m.qos, retain=m.retain)
+            elif i < cut:
+                self.screen.log(
+                    f"  not sure it was sent ({t[0]} {t[1]}): the console lost the broker "
+                    "before it said so; not sent again: type it again if you still want it"
+                )
+            else:
+                self._send(client, *t)
+        for topic, payload in held:
+            self._send(client, topic, payload)
 
     def _subscribe(self, client: paho.Client) -> None:
         if self._v5:
@@ -221,9 +276,23 @@ class Console:
         return "see " + topic
 
     def publish(self, topic: str, payload: str) -> None:
-        """Rule 6."""
+        """Rule 6: a typed command, sent now, held (a last word) or refused."""
         self._sent.add(topic)
-        self._client.publish(topic, payload, qos=1)
+        with self._lock:
+            if not self.connected.is_set():
+                if self._last_word(topic, payload):
+                    self._held.append((topic, payload))
+                    said = "held: it goes first when the broker is back"
+                else:
+                    said = "not sent"
+                self.screen.log(f"  {said} ({topic} {payload}): the console has lost the broker")
+                return
+        self._send(self._client, topic, payload)
+
+    def _send(self, client: paho.Client, topic: str, payload: str) -> None:
+        with self._lock:  # (the id kept before paho's thread can hand the message back)
+            info = client.publish(topic, payload, qos=1)
+            self._typed[info.mid] = (topic, payload)
 
     def command(self, line: str) -> bool:
         """Handle one typed line; False to quit."""
