@@ -1,0 +1,89 @@
+"""Review 146, finding 1: since 9b73f8b9 the demo's console (bridge/demo/console.py rule 6)
+holds a STOP or a lock ON typed while it has lost the broker, and sends what it holds when the
+next connection comes up (``_again``, in paho's thread, in on_connect). ``_again`` takes the
+held list first and sets ``connected`` only at its end, after it has said and sent the rest: a
+STOP typed in between (the input thread, while paho's thread is in on_connect) is refused as
+"the console has lost the broker", appended to a list already taken, and said "held: it goes
+first when the broker is back", though the broker is back. Nothing sends it: it waits for the
+next reconnect, which may never come, while every command typed after it goes at once. The
+rotor the user stopped runs on to its target; a lock ON alike leaves the rotator unlocked (and
+goes, if ever, after a lock OFF typed later). Its parent 1998b9a5 handed the STOP to paho, which
+sent it on the connection coming up.
+
+Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
+dead path, so that the reconnect has a bearing to say unsure; the user types ``s`` while paho's
+thread says so (its screen's log line, the console's only wait there, widened till the STOP is
+typed); what reaches the broker read by an MQTT 3.1.1 client there."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from bridge.demo.console import Console
+from bridge.demo.screen import Screen
+from bridge.interfaces.mqtt.topics import Topics
+from tests.support.mosquitto import Mosquitto
+from tests.support.waiting import slow
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
+
+
+class TypedDuringReconnect(Screen):
+    """A screen whose user types ``line`` (on a thread of its own, as the demo's input thread)
+    while paho's thread, in on_connect, says a command was not sure to have gone."""
+
+    def __init__(self, line: str) -> None:
+        super().__init__()
+        self.line = line
+        self.console: Console | None = None
+        self.typed = threading.Event()
+
+    def log(self, text: str, *, quiet: bool = False) -> None:
+        super().log(text, quiet=quiet)
+        if "not sure it was sent" in text and self.console and not self.typed.is_set():
+            user = threading.Thread(target=self.console.command, args=(self.line,))
+            user.start()
+            user.join(slow(20))
+            self.typed.set()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-146 1: a STOP typed while the console's reconnect is under way is said held "
+    "and never sent, though the broker is back: the rotor runs on",
+)
+@pytest.mark.parametrize(("typed", "word"), [("s", "STOP"), ("lock on", "ON")])
+def test_a_stop_typed_while_the_console_reconnects_reaches_the_broker(
+    broker: Mosquitto, capsys: pytest.CaptureFixture[str], typed: str, word: str
+) -> None:
+    relay = DeadPath(broker.port)
+    watcher = Watcher(broker.port)
+    topics = Topics(BASE, {"rotorez": BASE})
+    r = topics.rotator("rotorez")
+    screen = TypedDuringReconnect(typed)
+    console = Console(
+        "127.0.0.1",
+        relay.port,
+        client_id=f"{BASE}-ui",
+        topics=topics,
+        rotator_ids=["rotorez"],
+        discovery_filters=[],
+        screen=screen,
+        mqtt5=True,
+    )
+    screen.console = console
+    try:
+        got = typed_on_a_dead_path(console, relay, watcher, "200", "bearing")
+        said = capsys.readouterr().out
+    finally:
+        console.close()
+        watcher.close()
+        relay.close()
+    assert screen.typed.is_set(), f"the reconnect said no bearing unsure: {said}"
+    topic = r.stop if word == "STOP" else r.lock
+    assert (topic, word) in got, (
+        f"the {typed!r} typed as the console reconnected never reached the broker: {got}; "
+        f"the console said: {said}"
+    )
