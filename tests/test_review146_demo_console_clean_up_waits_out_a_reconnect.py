@@ -11,13 +11,13 @@ soon as they were acknowledged.
 
 Real mosquitto (MQTT 5); the console's connection through review 144's relay whose way back
 dies right after the clean-up's sync, then closed and restored; a long timeout for each wait, so
-that the clean-up ends when the broker has taken it, or hangs."""
+that the clean-up ends when the broker has taken it, or hangs.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
 import threading
-
-import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
@@ -26,11 +26,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review144_demo_console_replays_a_stop_after_a_turn import DeadWayBack
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 4: the demo's end-of-run clean-up, cut by a reconnect, waits out its "
-    "timeout for every retained message though the broker took them all again",
-)
 def test_the_clean_up_ends_once_the_broker_has_taken_it_again_after_a_reconnect(
     broker: Mosquitto,
 ) -> None:

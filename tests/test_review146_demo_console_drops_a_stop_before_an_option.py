@@ -9,7 +9,9 @@ nothing and nothing that moves was typed behind it. Its parent 1998b9a5 sent bot
 their order, and the rotor stopped.
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -22,11 +24,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 2: a STOP typed on a dead connection is not sent again on the next when "
-    "an option that moves nothing was typed after it: the rotor runs on",
-)
 @pytest.mark.parametrize("behind", ["jam off", "track off", "lock of"])
 def test_a_stop_typed_before_a_command_that_moves_nothing_goes_again_on_reconnect(
     broker: Mosquitto, behind: str

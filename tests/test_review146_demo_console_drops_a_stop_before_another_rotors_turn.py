@@ -7,11 +7,11 @@ own rotor, yet the rotor the user stopped runs on to its target. Its parent 1998
 again in their order, and the first rotor stopped.
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
-
-import pytest
 
 from bridge.demo.console import Console
 from bridge.demo.screen import Screen
@@ -22,11 +22,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 3: a STOP typed for one rotator on a dead connection is not sent again "
-    "when a bearing for another was typed after it: the stopped rotor runs on",
-)
 def test_a_stop_for_one_rotator_goes_again_though_another_was_turned_after_it(
     broker: Mosquitto,
 ) -> None:

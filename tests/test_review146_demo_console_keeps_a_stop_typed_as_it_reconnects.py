@@ -13,7 +13,10 @@ sent it on the connection coming up.
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
 dead path, so that the reconnect has a bearing to say unsure; the user types ``s`` while paho's
 thread says so (its screen's log line, the console's only wait there, widened till the STOP is
-typed); what reaches the broker read by an MQTT 3.1.1 client there."""
+typed, or till the typing waits for the console's lock); what reaches the broker read by an MQTT
+3.1.1 client there.
+
+Fixed: one lock orders typed commands against the connection coming up (console.py rule 6)."""
 
 from __future__ import annotations
 
@@ -25,19 +28,38 @@ from bridge.demo.console import Console
 from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
-from tests.support.waiting import slow
+from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
+class WatchedLock:
+    """The console's lock, which says when a thread had to wait for it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.RLock()
+        self.waited = threading.Event()
+
+    def __enter__(self) -> None:
+        if not self._lock.acquire(blocking=False):
+            self.waited.set()
+            self._lock.acquire()
+
+    def __exit__(self, *_: object) -> None:
+        self._lock.release()
+
+
 class TypedDuringReconnect(Screen):
     """A screen whose user types ``line`` (on a thread of its own, as the demo's input thread)
-    while paho's thread, in on_connect, says a command was not sure to have gone."""
+    while paho's thread, in on_connect, says a command was not sure to have gone: it goes on
+    once the line is typed, or the typing waits for the console's lock (a fix: typed commands
+    ordered against the connection coming up)."""
 
     def __init__(self, line: str) -> None:
         super().__init__()
         self.line = line
         self.console: Console | None = None
+        self.lock = WatchedLock()
         self.typed = threading.Event()
 
     def log(self, text: str, *, quiet: bool = False) -> None:
@@ -45,15 +67,12 @@ class TypedDuringReconnect(Screen):
         if "not sure it was sent" in text and self.console and not self.typed.is_set():
             user = threading.Thread(target=self.console.command, args=(self.line,))
             user.start()
-            user.join(slow(20))
+            wait_until(
+                lambda: not user.is_alive() or self.lock.waited.is_set(), 20, "the user's typing"
+            )
             self.typed.set()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 1: a STOP typed while the console's reconnect is under way is said held "
-    "and never sent, though the broker is back: the rotor runs on",
-)
 @pytest.mark.parametrize(("typed", "word"), [("s", "STOP"), ("lock on", "ON")])
 def test_a_stop_typed_while_the_console_reconnects_reaches_the_broker(
     broker: Mosquitto, capsys: pytest.CaptureFixture[str], typed: str, word: str
@@ -75,6 +94,8 @@ def test_a_stop_typed_while_the_console_reconnects_reaches_the_broker(
     )
     screen.console = console
     try:
+        assert console.sync(slow(20)), "the console never connected through the relay"
+        console._lock = screen.lock  # type: ignore[assignment]  # (each ``with`` binds its own)
         got = typed_on_a_dead_path(console, relay, watcher, "200", "bearing")
         said = capsys.readouterr().out
     finally:

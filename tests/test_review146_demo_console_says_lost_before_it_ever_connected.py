@@ -6,7 +6,9 @@ reads that it lost it (a broker that was there and went: wait for it), not that 
 reached (the address, the login, the broker's limits). Its parent 1998b9a5 said nothing and sent
 the command on the first connection.
 
-Real mosquitto; the console's connection through review 139's relay, refusing from the start."""
+Real mosquitto; the console's connection through review 139's relay, refusing from the start.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -19,11 +21,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, conso
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 6: a command typed before the console ever reached the broker is "
-    "refused as 'the console has lost the broker'",
-)
 def test_a_command_typed_before_the_first_connection_does_not_say_the_broker_was_lost(
     broker: Mosquitto, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -10,7 +10,9 @@ rotor was told nothing (review 144 (4)'s silence, left open in this window). Old
 Real nats-server (MQTT 3.1.1); the console's connection through review 134's relay, cut and kept
 refusing; the user types ``s`` (on a thread of their own, as the demo's input thread) while paho
 closes the socket (paho's on_socket_close, called there with the socket already gone, widened
-till the STOP is typed)."""
+till the STOP is typed).
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -40,11 +42,6 @@ def nats(tmp_path: Path) -> Iterator[Nats]:
     n.stop()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-146 5: a STOP typed as paho closes its lost connection is kept without a "
-    "word, and never goes if the broker does not come back",
-)
 def test_a_stop_typed_as_the_console_loses_the_broker_is_said_not_gone_yet(
     nats: Nats, capsys: pytest.CaptureFixture[str]
 ) -> None:

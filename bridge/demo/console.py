@@ -25,21 +25,27 @@ Rules:
    (its instance name); ``private_broker_of`` reads that mark, so a second demo does not lean
    on a broker that ends with the first (bridge.demo rule 5).
 6. Every typed command goes at QoS 1, in the order typed, only on a connection up: one the
-   console knows it has lost sends nothing it did not send before. What the broker has not
-   acknowledged when a connection goes (paho's queue, taken from it as the next one comes up:
-   ``drop_out_messages``) may have reached the broker or not, and is never sent again in
-   paho's way, all of it: a move sent late would turn the rotor seconds after it was typed
-   (review 134), and a STOP or lock ON sent again alone would land after the bearing or the
-   lock OFF typed behind it (review 144). So of the typed commands it held, those after the
-   last that can move a rotor or lift a lock (a STOP, ``lock`` ON, 1 or TRUE: the last words)
-   go again on the new connection, first, in their order: they land after everything typed
-   before them, and nothing was typed behind them; every other is said not to have gone for
-   sure, to be typed again if it is still wanted (a STOP typed on a dead connection reached
-   nobody and the rotor ran on: review 139). Typed while the console has lost the broker, a
-   last word is held for the next connection and goes there after those, said so; any other
-   command is refused, said so, and never sent (review 134: a bearing typed into a console
-   that showed nothing turned the rotor when the broker came back). The console's own
-   messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho would.
+   console knows it has lost (or never had) sends nothing it did not send before. What the
+   broker has not acknowledged when a connection goes (paho's queue, taken from it as the next
+   one comes up: ``drop_out_messages``) may have reached the broker or not, and is never sent
+   again in paho's way, all of it: a move sent late would turn the rotor seconds after it was
+   typed (review 134), and a STOP or lock ON sent again alone would land after the bearing or
+   the lock OFF typed behind it (review 144). Of each rotator's typed commands it held, those
+   after the last one that can move it or lift its lock (a target, an elevation, a preset,
+   park, a nudge, tracking begun, a lock OFF: ``_kind``) go again on the new connection,
+   first, in their order: they land after everything typed for it before them, and nothing
+   that moves it was typed behind them (a STOP typed on a dead connection reached nobody and
+   the rotor ran on: review 139; one left behind for a ``jam off`` or another rotator's turn
+   typed after it: review 146). That move and what was typed for the rotator before it are
+   said unsure, to be typed again if still wanted. Typed while the console has no connection
+   (or as paho finds it lost, its send refused), a STOP or lock ON is held for the next
+   connection and goes there after those, said so; a move is refused, said so, and never
+   sent (review 134: a bearing typed into a console that showed nothing turned the rotor when
+   the broker came back). One lock orders the typed commands against the connection coming up
+   (review 146: a STOP typed while it came up was said held and never sent). The console's
+   own messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho would;
+   the clean-up and the mark are waited for by a sync round trip behind them, one deadline for
+   all (review 146: each waited its whole timeout for the message it published first).
 """
 
 from __future__ import annotations
@@ -99,14 +105,21 @@ class Console:
         self._sync_topic = f"{topics.base}/console/sync"
         self._retained: dict[str, bytes] = {}
         self._last: dict[str, str] = {}
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()  # (rule 6: held across a connection's coming up)
+        self._ever = False  # rule 6: a connection was up once
         self._synced = threading.Event()
+        self._sync_word = b""  # the newest sync marker's (an older one back late ends no wait)
         self._subscribed = threading.Event()
         self.connected = threading.Event()
-        self._typed: dict[int, tuple[str, str]] = {}  # rule 6: sent, by message id
+        self._typed: dict[int, tuple[str, str, bool]] = {}  # rule 6: by message id (went?)
         self._held: list[tuple[str, str]] = []  # rule 6: last words for the next connection
-        self._halts = {topics.rotator(rid).stop for rid in rotator_ids}  # rule 6: last words
-        self._locks = {topics.rotator(rid).lock for rid in rotator_ids}  # (ON ones)
+        self._kinds: dict[str, tuple[str, str]] = {}  # rule 6: topic -> (rotator, what it is)
+        for rid in rotator_ids:
+            t = topics.rotator(rid)
+            moves = (t.target, t.target_elevation, t.preset, t.park, t.nudge)
+            self._kinds.update({topic: (rid, "move") for topic in moves})
+            self._kinds.update({t.stop: (rid, "stop"), t.lock: (rid, "lock")})
+            self._kinds[t.feature(tracking.COMMAND)] = (rid, "track")
         if mqtt5:
             c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
         else:  # (rule 2: a clean session, as MQTT 5's clean start)
@@ -136,45 +149,54 @@ class Console:
         if reason_code.is_failure:
             return
         self._subscribe(client)
-        self._again(client)
-        self.connected.set()
+        with self._lock:  # (rule 6: nothing typed meanwhile is held for a connection up)
+            self._again(client)
+            self._ever = True
+            self.connected.set()
 
     def _on_disconnect(self, client: paho.Client, *_: Any) -> None:
         self.connected.clear()  # (rule 6: from now on a move typed is refused)
 
-    def _last_word(self, topic: str, payload: str) -> bool:
-        """Rule 6: a STOP, or a lock ON: sent late, it moves nothing."""
-        if topic in self._halts:
-            return True
-        if topic not in self._locks:
-            return False
-        try:
-            return parse_switch(payload.encode())
-        except PayloadError:
-            return False
+    def _kind(self, topic: str, payload: str) -> tuple[str, str]:
+        """Rule 6: whose a typed command is (its rotator; the topic, for none) and what:
+        "last" (a STOP, a lock ON: sent late, it moves nothing), "move" (it can move the rotor
+        or lift its lock) or "other" (an option, tracking ended, a payload the bridge refuses)."""
+        rid, what = self._kinds.get(topic, (topic, "other"))
+        if what == "lock":
+            try:
+                what = "last" if parse_switch(payload.encode()) else "move"
+            except PayloadError:
+                what = "other"
+        elif what == "track":
+            what = "other" if payload.strip().lower() == "off" else "move"
+        elif what == "stop":
+            what = "last"
+        return rid, what
 
     def _again(self, client: paho.Client) -> None:
-        """Rule 6, as a connection comes up (paho's thread, before paho sends its queue again):
-        what the last one left unacknowledged, and the last words held meanwhile."""
+        """Rule 6, as a connection comes up (paho's thread, under the lock, before paho sends
+        its queue again): what the last one left unacknowledged, and the last words held."""
         out = client.drop_out_messages()
-        with self._lock:
-            typed = [(m, self._typed.pop(m.mid, None)) for m in out]
-            self._typed.clear()
-            moves = [
-                i for i, (_m, t) in enumerate(typed) if t is not None and not self._last_word(*t)
-            ]
-            cut = moves[-1] + 1 if moves else 0
-            held, self._held = self._held, []
+        typed = [(m, self._typed.pop(m.mid, None)) for m in out]
+        self._typed.clear()
+        cut: dict[str, int] = {}  # rotator -> the place after its last move that went
+        for i, (_m, t) in enumerate(typed):
+            if t is not None and t[2]:
+                rid, what = self._kind(t[0], t[1])
+                if what == "move":
+                    cut[rid] = i + 1
+        held, self._held = self._held, []
         for i, (m, t) in enumerate(typed):
             if t is None:  # the console's own: as paho would have
                 client.publish(m.topic, m.payload, qos=m.qos, retain=m.retain)
-            elif i < cut:
+            elif i >= cut.get(self._kind(t[0], t[1])[0], 0):
+                if t[2] or self._kind(t[0], t[1])[1] == "last":  # (a move refused: said then)
+                    self._send(client, t[0], t[1])
+            elif t[2]:  # (one refused as it was typed was said so then)
                 self.screen.log(
                     f"  not sure it was sent ({t[0]} {t[1]}): the console lost the broker "
                     "before it said so; not sent again: type it again if you still want it"
                 )
-            else:
-                self._send(client, *t)
         for topic, payload in held:
             self._send(client, topic, payload)
 
@@ -193,7 +215,8 @@ class Console:
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         topic = msg.topic
         if topic == self._sync_topic:
-            self._synced.set()
+            if msg.payload == self._sync_word:
+                self._synced.set()
             return
         if not self._v5:  # rule 2: no flag says which are retained
             with self._lock:
@@ -277,22 +300,24 @@ class Console:
 
     def publish(self, topic: str, payload: str) -> None:
         """Rule 6: a typed command, sent now, held (a last word) or refused."""
-        self._sent.add(topic)
         with self._lock:
-            if not self.connected.is_set():
-                if self._last_word(topic, payload):
-                    self._held.append((topic, payload))
-                    said = "held: it goes first when the broker is back"
-                else:
-                    said = "not sent"
-                self.screen.log(f"  {said} ({topic} {payload}): the console has lost the broker")
+            self._sent.add(topic)
+            if self.connected.is_set() and self._send(self._client, topic, payload):
                 return
-        self._send(self._client, topic, payload)
+            last = self._kind(topic, payload)[1] == "last"
+            if last and not self.connected.is_set():  # (one paho refused is in its queue)
+                self._held.append((topic, payload))
+            said = "held: it goes first when the broker is back" if last else "not sent"
+            why = "has lost the broker" if self._ever else "has not reached the broker yet"
+            self.screen.log(f"  {said} ({topic} {payload}): the console {why}")
 
-    def _send(self, client: paho.Client, topic: str, payload: str) -> None:
-        with self._lock:  # (the id kept before paho's thread can hand the message back)
-            info = client.publish(topic, payload, qos=1)
-            self._typed[info.mid] = (topic, payload)
+    def _send(self, client: paho.Client, topic: str, payload: str) -> bool:
+        """Under the lock: handed to paho; False if paho refused it for a connection lost (it
+        keeps it: the next connection's ``_again`` decides, rule 6)."""
+        info = client.publish(topic, payload, qos=1)
+        went = info.rc == paho.MQTT_ERR_SUCCESS
+        self._typed[info.mid] = (topic, payload, went)
+        return went
 
     def command(self, line: str) -> bool:
         """Handle one typed line; False to quit."""
@@ -376,14 +401,14 @@ class Console:
         if not self.connected.wait(timeout_s):
             return False
         self._synced.clear()
-        self._client.publish(self._sync_topic, b"sync", qos=1)
+        self._sync_word = f"sync {secrets.token_hex(4)}".encode()
+        self._client.publish(self._sync_topic, self._sync_word, qos=1)
         return self._synced.wait(timeout_s)
 
     def mark_private_broker(self, instance: str, timeout_s: float = 5.0) -> None:
         """Rule 5: say on the broker that it is this demo's private one, and ends with it."""
-        info = self._client.publish(PRIVATE_BROKER_MARK, instance.encode(), qos=1, retain=True)
-        with contextlib.suppress(RuntimeError, ValueError):
-            info.wait_for_publish(timeout_s)
+        self._client.publish(PRIVATE_BROKER_MARK, instance.encode(), qos=1, retain=True)
+        self.sync(timeout_s)  # (rule 6: a round trip behind it)
 
     def retained(self, topic: str) -> bytes | None:
         with self._lock:
@@ -415,10 +440,9 @@ class Console:
             seen = self._seen - self._sent  # (rule 2: those kept retained alone)
             kept = {t for t in seen if any(topic_matches_sub(f, t) for f in self._kept)}
             topics = sorted(self._retained if self._v5 else kept)
-        infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
-        for info in infos:
-            with contextlib.suppress(RuntimeError, ValueError):
-                info.wait_for_publish(timeout_s)
+        for topic in topics:
+            self._client.publish(topic, b"", qos=1, retain=True)
+        self.sync(timeout_s)  # rule 6: behind them all, on whichever connection takes them
         return len(topics)
 
     def close(self, *, remove_retained: bool = False) -> None:
