@@ -8,7 +8,10 @@ to go around: lane.py).
 
 Real parts: mosquitto, the bridge in-process, an emulated Rotor-EZ on a pty, a paho client at the
 broker's own port as the dashboard, and an MQTT-aware proxy (tests/support/mqtt_proxy.py) on the
-bridge's path that slows the broker's answers."""
+bridge's path that slows the broker's answers.
+
+Fixed: the CONNECT says the keep-alive asked for; a stop's carrier pings every 2 s once
+accepted (connection.py rule 6, paho_client.py ``ping_within``)."""
 
 from __future__ import annotations
 
@@ -17,8 +20,6 @@ import socket
 import threading
 import time
 from pathlib import Path
-
-import pytest
 
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
@@ -112,12 +113,6 @@ def test_a_stop_behind_a_backlog_takes_the_lane_of_a_broker_that_accepts_at_once
     stop_behind_a_backlog(tmp_path, 0.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-145 1: a broker (or path) that takes 2.5 s to accept a connection keeps the "
-    "stop lane off for good (paho's 2 s keep-alive gives the CONNACK 2 s); a STOP waits behind "
-    "the main connection's backlog and the rotor turns on",
-)
 def test_a_stop_behind_a_backlog_takes_the_lane_of_a_broker_slow_to_accept(
     tmp_path: Path,
 ) -> None:

@@ -10,7 +10,10 @@ stalls dropped nothing.
 Real parts: nats-server (MQTT 3.1.1), the bridge in-process, an emulated Rotor-EZ on a pty, a
 paho client at the broker's own port, and the MQTT-aware proxy (tests/support/mqtt_proxy.py) on
 the bridge's path, holding what the stop lane's connection sends (``hold``) for STALL_S (a new
-connection passes)."""
+connection passes).
+
+Fixed: the CONNECT says the keep-alive asked for; a stop's carrier pings every 2 s once
+accepted (connection.py rule 6, paho_client.py ``ping_within``)."""
 
 from __future__ import annotations
 
@@ -32,12 +35,6 @@ STALL_S = 4.0  # each stall of the lane's uplink: past the broker's 1.5 keep-ali
 INFO = "rotor/bridge/info"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-145 2: three 3-4 s stalls of the stop lane's uplink on an MQTT 3.1.1 broker "
-    "put a client-id fight that does not exist on B/bridge/info (the 2 s keep-alive: the broker "
-    "drops the lane after 3 s)",
-)
 def test_stalls_of_the_stop_lanes_uplink_say_no_client_id_fight(tmp_path: Path) -> None:
     if find_nats() is None:
         pytest.fail("nats-server is not installed (tests/run installs Debian's nats-server)")

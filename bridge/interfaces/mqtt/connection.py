@@ -74,23 +74,27 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    said the same of its own). The stop lane and the express leave it to the main connection,
    which speaks to the same broker (as they do a broker that cannot be reached).
    A connection of the bridge's that carries stops (the stop and lock lanes, the stop express:
-   their ``KEEPALIVE_MAX_S``) keeps alive every STOP_KEEPALIVE_S (2 s) at most, whatever
-   ``keepalive_s`` says, so that a path that dies without a word under it (a router's reboot
-   that lost its NAT table, a VPN or Wi-Fi link made again under another address: no FIN, no
-   RST, the broker still up and taking connections) is found within STOP_DEAD_PATH_S (7 s) and
-   the connection made again on a live one. With the setting's 30 s the three came back 30 to
-   60 s after the path died, while a dashboard showed the rotator online and a STOP pressed
-   then reached nobody: the rotor turned on to its target (attack 32). The main connection
-   keeps the setting: its keep-alive is the bridge's presence (its will after 1.5 of them),
-   and it rides out a broker that stalls for longer while its lanes come and go. The cost is a
-   PINGREQ and its answer every 2 s on each such connection while nothing else passes; a broker
-   that holds back its answer for 2 s more has such a connection made again (its stops take the
-   main connection meanwhile), as does a broker that hears nothing of it for 1.5 keep-alives (a
-   link that holds its bytes 3 s: what the connection sent meanwhile never lands), and a broker's
-   ``server_keep_alive`` above it wins (MQTT 5). The remote's link keeps the setting: it
-   watches its own path (remote.py rule 10), and what a stalled link held, stamped, is refused
-   late at the station. A STOP pressed in the first seconds after a path died still reaches
-   nobody on these paths (docs/reliability.md, Limits).
+   their ``KEEPALIVE_MAX_S``), once accepted, pings after STOP_KEEPALIVE_S (2 s) of quiet and
+   gives the connection up when a ping is not answered as long after it (paho_client.py
+   ``ping_within``), so that a path that dies without a word under it (a router's reboot that
+   lost its NAT table, a VPN or Wi-Fi link made again under another address: no FIN, no RST,
+   the broker still up and taking connections) is found within STOP_DEAD_PATH_S (7 s) and the
+   connection made again on a live one. With the setting's 30 s the three came back 30 to 60 s
+   after the path died, while a dashboard showed the rotator online and a STOP pressed then
+   reached nobody: the rotor turned on to its target (attack 32). Its CONNECT still says
+   ``keepalive_s``: a broker slow to accept has rule 5's CONNACK_TIMEOUT_S, and one that hears
+   nothing of it for a few seconds (a stalled uplink, the bridge's process held) does not drop
+   it (review 145: at 2 s in the CONNECT, a broker 2.5 s slow to accept kept the three off for
+   good, and 3 s stalls under MQTT 3.1.1 were said as a fight over the client id). The main
+   connection keeps the setting: its keep-alive is the bridge's presence (its will after 1.5 of
+   them), and it rides out a broker that stalls for longer while its lanes come and go. The
+   cost is a PINGREQ and its answer every 2 s on each such connection while nothing else
+   passes; a broker or a path that holds back an answer for 2 s more has such a connection
+   made again (its stops take the main connection meanwhile; paho's own keep-alive end, no
+   evidence of a fight: rule 7). The remote's link keeps the setting: it watches its own path
+   (remote.py rule 10), and what a stalled link held, stamped, is refused late at the station.
+   A STOP pressed in the first seconds after a path died still reaches nobody on these paths
+   (docs/reliability.md, Limits).
 7. One client id, one connection. A broker that gets a second connection with a client id closes
    the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the socket), so
    two processes with one id (two hosts sharing a configuration, a stale container beside a new
@@ -220,7 +224,7 @@ STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight 
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "gone", "other"]
 STOP_RECONNECT_MAX_S = 2  # rule 6: the back-off's most for a connection that carries stops
-STOP_KEEPALIVE_S = 2  # rule 6: the keep-alive's most for a connection that carries stops
+STOP_KEEPALIVE_S = 2  # rule 6: a ping after this much quiet on a connection that carries stops
 #: rule 6: a dead path under such a connection is found, and the connection made again on a live
 #: one, this long after the path died at most: the PINGREQ after the keep-alive of quiet, its
 #: answer given up as long after it (each seen by a round of paho's loop, a second apart at
@@ -408,8 +412,7 @@ class Connection:
         self._accepted_once = False  # a connection was accepted: the protocol is settled
         self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
         self._gave_up = False  # ... or, unanswered, this client ended it (rule 6: ``unanswered``)
-        keep = settings.keepalive_s  # rule 6: the setting's, or less for a stop's carrier
-        self._keep_s = keep if self.KEEPALIVE_MAX_S is None else min(keep, self.KEEPALIVE_MAX_S)
+        self._keep_s = settings.keepalive_s  # (what rule 6 says it waited)
         self._trial_lock = threading.Lock()  # rule 1: the MQTT 3.1.1 trial after a close
         self._trial: threading.Thread | None = None
         self._trial_ok = False  # ... was accepted, since the last MQTT 5 attempt closed
@@ -457,7 +460,7 @@ class Connection:
         most = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]  # rule 18
         most.MaximumPacketSize = MAX_PACKET_BYTES  # (sent under MQTT 5 only)
         self._client.connect_async(
-            s.host, s.port, keepalive=self._keep_s, clean_start=fresh, properties=most
+            s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh, properties=most
         )
         self._client.loop_start()
 
@@ -683,6 +686,8 @@ class Connection:
             return
         self._up = True
         self._accepted_once = True
+        if self.KEEPALIVE_MAX_S is not None:  # rule 6: a stop's carrier finds a dead path soon
+            self._client.ping_within(self.KEEPALIVE_MAX_S)
         self._guard.connected(self._clock())
         self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics

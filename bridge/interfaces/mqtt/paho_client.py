@@ -260,6 +260,7 @@ class Client(paho.Client):
     name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
     connack_timed_out = False  # rule 5: this attempt was ended for want of a CONNACK
+    _connect_keep: int | None = None  # ``ping_within``: the keep-alive the CONNECT says
     _net: threading.Thread | None = None  # rule 6
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
@@ -314,6 +315,8 @@ class Client(paho.Client):
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
         self.connack_timed_out = False
+        if self._connect_keep is not None:  # (``ping_within``: the CONNECT says the setting's)
+            self._keepalive = self._connect_keep
         rc = super().reconnect()
         self._connect_first()
         return rc
@@ -337,6 +340,17 @@ class Client(paho.Client):
     def connect_async(self, *args: Any, **kwargs: Any) -> None:
         self._leaving = False
         super().connect_async(*args, **kwargs)
+        self._connect_keep = self._keepalive
+
+    def ping_within(self, seconds: int) -> None:
+        """Connection.py rule 6, once a connection is accepted: a PINGREQ after ``seconds`` of
+        quiet, and the connection given up ``seconds`` after one unanswered (MQTT lets a
+        client ping at any time). Its CONNECT said the keep-alive asked for (or the broker's
+        own, MQTT 5), and the next says it again: the broker still waits 1.5 of those for a
+        word, and a CONNACK the CONNACK_TIMEOUT_S of rule 5 (review 145: at 2 s in the
+        CONNECT, a broker 2.5 s slow to accept never had the connection, and one that heard
+        nothing of it for 3 s dropped it)."""
+        self._keepalive = min(self._keepalive, seconds)
 
     def disconnect(self, *args: Any, **kwargs: Any) -> MQTTErrorCode:
         self._leaving = True
