@@ -1,0 +1,64 @@
+"""Review 147, finding 4: since 9b73f8b9 the demo's console (bridge/demo/console.py rule 6)
+sends again, as the next connection comes up, a rotator's typed commands the broker did not
+acknowledge that come after its last one "that can move it" (``_kind``); 8dbbaad5 made a
+refused ``lock`` word (review 146 (2): ``lock of``) no move, but a move the bridge refuses as
+surely is still one: a preset name the rotator does not have (the console knows its presets:
+``R/presets``, listed by ``help``), a target that is no JSON (``{nope``). A STOP typed before
+such a typo on a connection gone dead is said "not sure it was sent ... type it again" and not
+sent again, and the rotor runs on to its target, though sending it again could move nothing
+and nothing that moves was typed behind it. Its parent 1998b9a5 sent both again in their order
+(the bridge refusing the typo), and the rotor stopped.
+
+Real mosquitto (MQTT 5, the demo's usual broker); the rotator's presets retained on it as the
+bridge publishes them; the console's connection through review 139's relay, dead and then
+closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.interfaces.mqtt.topics import Topics
+from tests.support.mosquitto import Mosquitto
+from tests.support.waiting import slow, wait_until
+from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-147 4: a STOP typed before a move the bridge refuses is not sent again",
+)
+@pytest.mark.parametrize("behind", ["preset NOSUCH", "{nope"])
+def test_a_stop_typed_before_a_refused_move_goes_again_on_reconnect(
+    broker: Mosquitto, behind: str
+) -> None:
+    relay = DeadPath(broker.port)
+    watcher = Watcher(broker.port)
+    topics = Topics(BASE, {"rotorez": BASE})
+    r = topics.rotator("rotorez")
+    watcher._client.publish(r.presets, b'{"JA":45,"W":300}', qos=1, retain=True).wait_for_publish(
+        slow(20)
+    )
+    console = console_through(relay.port, topics, mqtt5=True)
+    try:
+        assert console.sync(slow(20)), "the console never connected through the relay"
+        wait_until(lambda: "JA, W" in console.help_text(), 20, "the presets listed by help")
+        tries = len(relay.levels)
+        relay.dead = True  # the path carries nothing; nobody has noticed yet
+        assert console.command("s")  # the rotor is turning: stopped
+        assert console.command(behind)  # then a typo the bridge refuses: nothing turns
+        wait_until(lambda: relay.dropped > 0, 20, "the STOP's PUBLISH taken by the dead path")
+        relay.cut()  # the dead connection found out at last: closed
+        relay.dead = False
+        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
+        relay.restore()
+        assert console.sync(slow(20)), "the console never came back"
+        console.publish(f"{BASE}/console/mark", "after")
+        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+    finally:
+        console.close()
+        watcher.close()
+        relay.close()
+    assert (r.stop, "STOP") in got, (
+        f"the STOP typed before {behind!r} never reached the broker: {got}"
+    )
