@@ -11,7 +11,9 @@ and nothing that moves was typed behind it. Its parent 1998b9a5 sent both again 
 
 Real mosquitto (MQTT 5, the demo's usual broker); the rotator's presets retained on it as the
 bridge publishes them; the console's connection through review 139's relay, dead and then
-closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -24,10 +26,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-147 4: a STOP typed before a move the bridge refuses is not sent again",
-)
 @pytest.mark.parametrize("behind", ["preset NOSUCH", "{nope"])
 def test_a_stop_typed_before_a_refused_move_goes_again_on_reconnect(
     broker: Mosquitto, behind: str

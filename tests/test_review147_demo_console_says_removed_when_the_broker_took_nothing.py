@@ -9,7 +9,9 @@ Older: 1998b9a5 and 9b73f8b9 ignored ``wait_for_publish``'s outcome alike.
 
 Real mosquitto (MQTT 5); the console's connection through review 139's relay, dead (both ways)
 right after the clean-up's first sync and never back; what stays retained read by an MQTT 3.1.1
-client on the broker itself."""
+client on the broker itself.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -54,10 +56,6 @@ def still_retained(port: int, topics: list[str]) -> list[str]:
     return sorted(got)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-147 1: 'removed its 2 retained messages' said though the broker took none",
-)
 def test_the_clean_up_does_not_say_removed_when_the_broker_never_took_it(
     broker: Mosquitto, capsys: pytest.CaptureFixture[str]
 ) -> None:

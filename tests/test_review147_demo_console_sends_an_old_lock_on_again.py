@@ -11,11 +11,11 @@ by id.
 
 Real mosquitto (MQTT 5); the console's connection through review 139's relay, dead and then
 closed. The 65,535 messages of a long session are stood in for by paho's message id counter,
-set to just before the old lock ON's id."""
+set to just before the old lock ON's id.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
-
-import pytest
 
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
@@ -24,10 +24,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-147 3: 65535 messages on, an old lock ON is sent again on a reconnect",
-)
 def test_a_lock_on_long_since_unlocked_is_not_sent_again_when_its_message_id_comes_round(
     broker: Mosquitto,
 ) -> None:

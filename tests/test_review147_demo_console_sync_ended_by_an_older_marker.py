@@ -11,7 +11,9 @@ Older in a wider form: 1998b9a5's marker was always b"sync", and any late one en
 Real mosquitto (MQTT 5); the console's connection through a relay whose way back from the
 broker can be held and let go (a slow path); the older marker let go while the new sync makes
 its marker (``secrets.token_hex``, widened till that marker has arrived), then a retained
-message published on the broker, held on its way to the console with the new marker."""
+message published on the broker, held on its way to the console with the new marker.
+
+Fixed: console.py rule 6."""
 
 from __future__ import annotations
 
@@ -66,10 +68,6 @@ class HeldWayBack(DeadPath):
                     dst.sendall(data)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-147 2: an older sync marker back late ends a new sync before what it waits for",
-)
 def test_an_older_marker_back_late_does_not_end_a_new_sync(
     broker: Mosquitto, monkeypatch: pytest.MonkeyPatch
 ) -> None:

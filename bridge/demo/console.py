@@ -36,8 +36,12 @@ Rules:
    first, in their order: they land after everything typed for it before them, and nothing
    that moves it was typed behind them (a STOP typed on a dead connection reached nobody and
    the rotor ran on: review 139; one left behind for a ``jam off`` or another rotator's turn
-   typed after it: review 146). That move and what was typed for the rotator before it are
-   said unsure, to be typed again if still wanted. Typed while the console has no connection
+   typed after it: review 146; or a typo: a move the console can tell the bridge refuses, a
+   preset its rotator's list lacks or a target neither numbers nor a JSON object, counts as
+   none, ``_may_move``, review 147). That move and what was typed for the rotator before it
+   are said unsure, to be typed again if still wanted; a command the broker acknowledged is
+   forgotten then (``_on_publish``: review 147, a message id paho handed out again took an
+   old lock ON's place). Typed while the console has no connection
    (or as paho finds it lost, its send refused), a STOP or lock ON is held for the next
    connection and goes there after those, said so; a move is refused, said so, and never
    sent (review 134: a bearing typed into a console that showed nothing turned the rotor when
@@ -128,6 +132,7 @@ class Console:
             )
         c.on_connect = self._on_connect
         c.on_disconnect = self._on_disconnect
+        c.on_publish = self._on_publish
         c.on_message = self._on_message
         c.on_subscribe = self._on_subscribe
         c.reconnect_delay_set(1, 5)
@@ -168,10 +173,29 @@ class Console:
             except PayloadError:
                 what = "other"
         elif what == "track":
-            what = "other" if payload.strip().lower() == "off" else "move"
+            what = "other" if payload.strip().casefold() == "off" else "move"
         elif what == "stop":
             what = "last"
+        elif what == "move" and not self._may_move(topic, payload):
+            what = "other"
         return rid, what
+
+    def _may_move(self, topic: str, payload: str) -> bool:
+        """Rule 6: a move the bridge could take, as far as the console can tell: not a preset
+        its rotator's retained list lacks, nor a target that is neither numbers nor a JSON
+        object (review 147: a STOP typed before such a typo was left unsent)."""
+        if topic.endswith("/preset"):
+            with contextlib.suppress(ValueError, TypeError):
+                names = json.loads(self._last.get(topic[: -len("preset")] + "presets", ""))
+                return not isinstance(names, dict) or payload in names
+            return True
+        if topic.endswith("/target") or topic.endswith("/target/elevation"):
+            if all(map(_is_number, payload.split())):
+                return bool(payload.split())
+            with contextlib.suppress(ValueError):
+                return isinstance(json.loads(payload), dict)
+            return False
+        return True
 
     def _again(self, client: paho.Client) -> None:
         """Rule 6, as a connection comes up (paho's thread, under the lock, before paho sends
@@ -317,7 +341,16 @@ class Console:
         info = client.publish(topic, payload, qos=1)
         went = info.rc == paho.MQTT_ERR_SUCCESS
         self._typed[info.mid] = (topic, payload, went)
+        if went and info.is_published():  # (acknowledged before it was kept: past
+            # ``_on_publish``; one paho refused raises there)
+            self._typed.pop(info.mid, None)
         return went
+
+    def _on_publish(self, client: paho.Client, userdata: Any, mid: int, *_: Any) -> None:
+        """Rule 6: acknowledged, so not kept (paho's thread, holding paho's lock of its queue:
+        the console's lock is not taken here; a message id paho hands out again later is then
+        no old command's: review 147)."""
+        self._typed.pop(mid, None)
 
     def command(self, line: str) -> bool:
         """Handle one typed line; False to quit."""
@@ -400,8 +433,8 @@ class Console:
         it: what was published before our marker reaches us before the marker)."""
         if not self.connected.wait(timeout_s):
             return False
-        self._synced.clear()
-        self._sync_word = f"sync {secrets.token_hex(4)}".encode()
+        self._sync_word = f"sync {secrets.token_hex(4)}".encode()  # (then cleared: an
+        self._synced.clear()  # older marker back meanwhile ends no wait, review 147)
         self._client.publish(self._sync_topic, self._sync_word, qos=1)
         return self._synced.wait(timeout_s)
 
@@ -442,7 +475,8 @@ class Console:
             topics = sorted(self._retained if self._v5 else kept)
         for topic in topics:
             self._client.publish(topic, b"", qos=1, retain=True)
-        self.sync(timeout_s)  # rule 6: behind them all, on whichever connection takes them
+        if not self.sync(timeout_s):  # rule 6: behind them all, on whichever connection
+            return None  # (review 147: said removed, though the broker took none of them)
         return len(topics)
 
     def close(self, *, remove_retained: bool = False) -> None:
