@@ -10,7 +10,9 @@ for ever).
 Real parts: mosquitto, the bridge in-process, an emulated Rotor-EZ (with its stop express) on a
 pty, a paho client at the broker's own port as the dashboard, and the MQTT-aware proxy on the
 bridge's path, which adds a Server Keep Alive of 0 to every MQTT 5 CONNACK it hands on (the
-broker's word) and then turns the path dead (``blackhole``)."""
+broker's word) and then turns the path dead (``blackhole``).
+
+Fixed: paho_client.py ``ping_within`` pings under a Server Keep Alive of 0 too."""
 
 from __future__ import annotations
 
@@ -18,8 +20,6 @@ import contextlib
 import socket
 import time
 from pathlib import Path
-
-import pytest
 
 from bridge.interfaces.mqtt.connection import STOP_DEAD_PATH_S
 from tests.support import Probe
@@ -86,12 +86,6 @@ class KeepAliveOff(MqttProxy):
             s.client.shutdown(socket.SHUT_WR)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-148 2: under an MQTT 5 broker whose CONNACK says Server Keep Alive 0, the "
-    "stop carriers never ping: a STOP pressed STOP_DEAD_PATH_S + 1 s after the path died "
-    "reaches nobody and the rotor turns on",
-)
 def test_a_stop_after_a_dead_path_under_a_broker_that_turns_keep_alive_off(
     tmp_path: Path,
 ) -> None:

@@ -90,11 +90,17 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    them), and it rides out a broker that stalls for longer while its lanes come and go. The
    cost is a PINGREQ and its answer every 2 s on each such connection while nothing else
    passes; a broker or a path that holds back an answer for 2 s more has such a connection
-   made again (its stops take the main connection meanwhile; paho's own keep-alive end, no
-   evidence of a fight: rule 7). The remote's link keeps the setting: it watches its own path
-   (remote.py rule 10), and what a stalled link held, stamped, is refused late at the station.
-   A STOP pressed in the first seconds after a path died still reaches nobody on these paths
-   (docs/reliability.md, Limits).
+   made again (paho's own keep-alive end, no evidence of a fight: rule 7), and its stops take
+   the main connection until it is back, behind whatever that one is reading (review 148: a
+   few seconds' stall of the uplink, its downlink fine, ended the stop lane, and a STOP then
+   waited behind a backlog of targets: a known failure, the price of finding a dead path;
+   a new connection made before the old one is given up would avoid it). A connection still
+   waiting for its CONNACK when the path dies is given up at rule 5's CONNACK_TIMEOUT_S (10
+   s), not within STOP_DEAD_PATH_S (review 148, a known failure: a shorter wait would again
+   keep a broker slow to accept from ever having it). The remote's link keeps the setting: it
+   watches its own path (remote.py rule 10), and what a stalled link held, stamped, is refused
+   late at the station. A STOP pressed in the first seconds after a path died still reaches
+   nobody on these paths (docs/reliability.md, Limits).
 7. One client id, one connection. A broker that gets a second connection with a client id closes
    the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the socket), so
    two processes with one id (two hosts sharing a configuration, a stale container beside a new

@@ -349,8 +349,11 @@ class Client(paho.Client):
         own, MQTT 5), and the next says it again: the broker still waits 1.5 of those for a
         word, and a CONNACK the CONNACK_TIMEOUT_S of rule 5 (review 145: at 2 s in the
         CONNECT, a broker 2.5 s slow to accept never had the connection, and one that heard
-        nothing of it for 3 s dropped it)."""
-        self._keepalive = min(self._keepalive, seconds)
+        nothing of it for 3 s dropped it). A broker's Server Keep Alive of 0 (MQTT 5: it
+        asks for none) turns off its wait, not these pings (review 148: the carriers never
+        found a dead path under such a broker)."""
+        keep = self._keepalive
+        self._keepalive = seconds if keep == 0 else min(keep, seconds)
 
     def disconnect(self, *args: Any, **kwargs: Any) -> MQTTErrorCode:
         self._leaving = True
