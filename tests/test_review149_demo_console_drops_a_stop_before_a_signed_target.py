@@ -10,7 +10,9 @@ it. Older: 8dbbaad5 and 9b73f8b9 counted every target as a move alike (review 14
 unfinished for these).
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6 (``_may_move`` reads with the bridge's own parsers)."""
 
 from __future__ import annotations
 
@@ -24,11 +26,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-149 2: a STOP typed before a target the bridge refuses ('+10', '120 30 5') "
-    "on a dead connection is never sent again; the rotor runs on",
-)
 @pytest.mark.parametrize("behind", ["+10", "120 30 5"])
 def test_a_stop_typed_before_a_target_the_bridge_refuses_goes_again_on_reconnect(
     broker: Mosquitto, behind: str

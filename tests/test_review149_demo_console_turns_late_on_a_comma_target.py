@@ -9,7 +9,9 @@ then, unasked: rule 6's "a move sent late would turn the rotor seconds after it 
 never sent again.
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6 (``_may_move`` reads with the bridge's own parsers)."""
 
 from __future__ import annotations
 
@@ -23,11 +25,6 @@ from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watch
 from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-149 1: a bearing typed '120 , 30' on a dead connection turns the rotor "
-    "seconds later, when the console reconnects",
-)
 @pytest.mark.parametrize("typed", ["120 , 30", "120 ;30"])
 def test_a_target_typed_with_a_comma_on_a_dead_connection_is_not_sent_late(
     broker: Mosquitto, typed: str

@@ -24,32 +24,30 @@ Rules:
 5. A demo that started a private mosquitto says so on it, retained on ``PRIVATE_BROKER_MARK``
    (its instance name); ``private_broker_of`` reads that mark, so a second demo does not lean
    on a broker that ends with the first (bridge.demo rule 5).
-6. Every typed command goes at QoS 1, in the order typed, only on a connection up: one the
-   console knows it has lost (or never had) sends nothing it did not send before. What the
-   broker has not acknowledged when a connection goes (paho's queue, taken from it as the next
-   one comes up: ``drop_out_messages``) may have reached the broker or not, and is never sent
-   again in paho's way, all of it: a move sent late would turn the rotor seconds after it was
-   typed (review 134), and a STOP or lock ON sent again alone would land after the bearing or
-   the lock OFF typed behind it (review 144). Of each rotator's typed commands it held, those
-   after the last one that can move it or lift its lock (a target, an elevation, a preset,
-   park, a nudge, tracking begun, a lock OFF: ``_kind``) go again on the new connection,
-   first, in their order: they land after everything typed for it before them, and nothing
-   that moves it was typed behind them (a STOP typed on a dead connection reached nobody and
-   the rotor ran on: review 139; one left behind for a ``jam off`` or another rotator's turn
-   typed after it: review 146; or a typo: a move the console can tell the bridge refuses, a
-   preset its rotator's list lacks or a target neither numbers nor a JSON object, counts as
-   none, ``_may_move``, review 147). That move and what was typed for the rotator before it
-   are said unsure, to be typed again if still wanted; a command the broker acknowledged is
-   forgotten then (``_on_publish``: review 147, a message id paho handed out again took an
-   old lock ON's place). Typed while the console has no connection
-   (or as paho finds it lost, its send refused), a STOP or lock ON is held for the next
-   connection and goes there after those, said so; a move is refused, said so, and never
-   sent (review 134: a bearing typed into a console that showed nothing turned the rotor when
-   the broker came back). One lock orders the typed commands against the connection coming up
-   (review 146: a STOP typed while it came up was said held and never sent). The console's
-   own messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho would;
-   the clean-up and the mark are waited for by a sync round trip behind them, one deadline for
-   all (review 146: each waited its whole timeout for the message it published first).
+6. Every typed command goes at QoS 1, in the order typed, only on a connection up: one the console
+   knows it has lost (or never had) sends nothing it did not send before. What the broker has not
+   acknowledged when a connection goes (paho's queue, taken from it as the next one comes up:
+   ``drop_out_messages``) may have reached the broker or not, and is never sent again in paho's
+   way, all of it: a move sent late would turn the rotor seconds after it was typed (review 134),
+   and a STOP or lock ON sent again alone would land after the bearing or the lock OFF typed behind
+   it (review 144). Of each rotator's typed commands it held, those after the last one that can
+   move it or lift its lock (a target, an elevation, a preset, park, a nudge, tracking begun, a
+   lock OFF: ``_kind``) go again on the new connection, first, in their order: they land after
+   everything typed for it before them, and nothing that moves it was typed behind them (a STOP
+   typed on a dead connection reached nobody and the rotor ran on: review 139; one left behind for
+   a ``jam off`` or another rotator's turn typed after it: review 146; or a typo: a move the
+   bridge's own parser of its topic refuses, or a preset its rotator's list lacks, counts as none,
+   ``_may_move``, reviews 147 and 149). That move and what was typed for the rotator before it are
+   said unsure, to be typed again if still wanted; a command the broker acknowledged is forgotten
+   then (``_on_publish``: review 147, a message id paho handed out again took an old lock ON's
+   place). Typed while the console has no connection (or as paho finds it lost, its send refused),
+   a STOP or lock ON is held for the next connection and goes there after those, said so; a move is
+   refused, said so, and never sent (review 134: a bearing typed into a console that showed nothing
+   turned the rotor when the broker came back). One lock orders the typed commands against the
+   connection coming up (review 146: a STOP typed while it came up was said held and never sent).
+   The console's own messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho
+   would; the clean-up and the mark are waited for by a sync round trip behind them, one deadline
+   for all (review 146: each waited its whole timeout for the message it published first).
 """
 
 from __future__ import annotations
@@ -58,6 +56,8 @@ import contextlib
 import json
 import secrets
 import threading
+from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import paho.mqtt.client as paho
@@ -69,6 +69,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.demo.screen import Screen
 from bridge.features import tracking
+from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
 from bridge.interfaces.mqtt.topics import Topics
 
@@ -118,12 +119,18 @@ class Console:
         self._typed: dict[int, tuple[str, str, bool]] = {}  # rule 6: by message id (went?)
         self._held: list[tuple[str, str]] = []  # rule 6: last words for the next connection
         self._kinds: dict[str, tuple[str, str]] = {}  # rule 6: topic -> (rotator, what it is)
+        self._parsers: dict[str, Callable[[bytes], object]] = {}  # rule 6: a move's, by topic
         for rid in rotator_ids:
             t = topics.rotator(rid)
             moves = (t.target, t.target_elevation, t.preset, t.park, t.nudge)
             self._kinds.update({topic: (rid, "move") for topic in moves})
             self._kinds.update({t.stop: (rid, "stop"), t.lock: (rid, "lock")})
             self._kinds[t.feature(tracking.COMMAND)] = (rid, "track")
+            self._parsers[t.target] = pl.parse_aim  # (rule 6: the bridge's own, service.py's)
+            self._parsers[t.target_elevation] = partial(pl.parse_number, what="elevation")
+            self._parsers[t.preset] = partial(pl.parse_name, what="preset")
+            self._parsers[t.park] = partial(pl.parse_press, what="park", word="PARK")
+            self._parsers[t.nudge] = pl.parse_nudge
         if mqtt5:
             c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
         else:  # (rule 2: a clean session, as MQTT 5's clean start)
@@ -181,20 +188,21 @@ class Console:
         return rid, what
 
     def _may_move(self, topic: str, payload: str) -> bool:
-        """Rule 6: a move the bridge could take, as far as the console can tell: not a preset
-        its rotator's retained list lacks, nor a target that is neither numbers nor a JSON
-        object (review 147: a STOP typed before such a typo was left unsent)."""
+        """Rule 6: a move the bridge could take, as far as the console can tell: read by the
+        bridge's own parser of its topic (review 149: the console's guesses took ``120 , 30``
+        for none and ``+10`` for one), and not a preset its rotator's retained list lacks
+        (review 147: a STOP typed before such a typo was left unsent)."""
+        parse = self._parsers.get(topic)
+        if parse is None:
+            return True
+        try:
+            parse(payload.encode())
+        except (PayloadError, ValueError):
+            return False
         if topic.endswith("/preset"):
             with contextlib.suppress(ValueError, TypeError):
                 names = json.loads(self._last.get(topic[: -len("preset")] + "presets", ""))
                 return not isinstance(names, dict) or payload in names
-            return True
-        if topic.endswith("/target") or topic.endswith("/target/elevation"):
-            if all(map(_is_number, payload.split())):
-                return bool(payload.split())
-            with contextlib.suppress(ValueError):
-                return isinstance(json.loads(payload), dict)
-            return False
         return True
 
     def _again(self, client: paho.Client) -> None:
