@@ -9,7 +9,9 @@ again, and the rotor runs on. Older: the parent (575ab89a) took every track but 
 move alike.
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6 (``_kind``, ``_may_move``: what the bridge reads)."""
 
 from __future__ import annotations
 
@@ -25,11 +27,6 @@ from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 TYPO = '{"tle": []}'
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-151 1: a STOP typed before a track the bridge's parser refuses "
-    "('track {\"tle\": []}') on a dead connection is never sent again; the rotor runs on",
-)
 def test_a_stop_typed_before_a_track_the_bridge_refuses_goes_again_on_reconnect(
     broker: Mosquitto,
 ) -> None:

@@ -10,12 +10,13 @@ typed (rule 6: "a move sent late would turn the rotor seconds after it was typed
 parent (575ab89a) compared the raw word with the list alike.
 
 Real mosquitto (MQTT 5, the demo's usual broker); the console's connection through review 139's
-relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there."""
+relay, dead and then closed; what reaches the broker read by an MQTT 3.1.1 client there.
+
+Fixed: console.py rule 6 (``_kind``, ``_may_move``: what the bridge reads)."""
 
 from __future__ import annotations
 
 import paho.mqtt.publish as publish
-import pytest
 
 from bridge.interfaces.mqtt.payloads import parse_name
 from bridge.interfaces.mqtt.topics import Topics
@@ -27,11 +28,6 @@ from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
 TYPED = "\ufeffJA"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-151 3: a preset typed with a byte-order mark ('\\ufeffJA') on a dead "
-    "connection is sent again on reconnect: the rotor turns to JA seconds late",
-)
 def test_a_preset_typed_with_a_bom_on_a_dead_connection_is_not_sent_late(
     broker: Mosquitto,
 ) -> None:

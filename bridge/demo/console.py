@@ -37,17 +37,19 @@ Rules:
    typed on a dead connection reached nobody and the rotor ran on: review 139; one left behind for
    a ``jam off`` or another rotator's turn typed after it: review 146; or a typo: a move the
    bridge's own parser of its topic refuses, or a preset its rotator's list lacks, counts as none,
-   ``_may_move``, reviews 147 and 149). That move and what was typed for the rotator before it are
-   said unsure, to be typed again if still wanted; a command the broker acknowledged is forgotten
-   then (``_on_publish``: review 147, a message id paho handed out again took an old lock ON's
-   place). Typed while the console has no connection (or as paho finds it lost, its send refused),
-   a STOP or lock ON is held for the next connection and goes there after those, said so; a move is
-   refused, said so, and never sent (review 134: a bearing typed into a console that showed nothing
-   turned the rotor when the broker came back). One lock orders the typed commands against the
-   connection coming up (review 146: a STOP typed while it came up was said held and never sent).
-   The console's own messages (its sync marker, the end's clean-up, rule 5's mark) go again as paho
-   would; the clean-up and the mark are waited for by a sync round trip behind them, one deadline
-   for all (review 146: each waited its whole timeout for the message it published first).
+   ``_may_move``, reviews 147, 149 and 151; one the bridge takes and the rotator then refuses, past
+   its travel or on an axis it lacks, still counts, a known failure: review 151). That move and
+   what was typed for the rotator before it are said unsure, to be typed again if still wanted; a
+   command the broker acknowledged is forgotten then (``_on_publish``: review 147, a message id
+   paho handed out again took an old lock ON's place). Typed while the console has no connection
+   (or as paho finds it lost, its send refused), a STOP or lock ON is held for the next connection
+   and goes there after those, said so; a move is refused, said so, and never sent (review 134: a
+   bearing typed into a console that showed nothing turned the rotor when the broker came back).
+   One lock orders the typed commands against the connection coming up (review 146: a STOP typed
+   while it came up was said held and never sent). The console's own messages (its sync marker, the
+   end's clean-up, rule 5's mark) go again as paho would; the clean-up and the mark are waited for
+   by a sync round trip behind them, one deadline for all (review 146: each waited its whole
+   timeout for the message it published first).
 """
 
 from __future__ import annotations
@@ -179,8 +181,13 @@ class Console:
                 what = "last" if parse_switch(payload.encode()) else "move"
             except PayloadError:
                 what = "other"
-        elif what == "track":
-            what = "other" if payload.strip().casefold() == "off" else "move"
+        elif what == "track":  # (the bridge's own reading: review 151)
+            try:
+                name, tle = pl.parse_track(payload.encode())
+            except (PayloadError, ValueError):
+                what = "other"
+            else:
+                what = "other" if tle is None and name.strip().casefold() == "off" else "move"
         elif what == "stop":
             what = "last"
         elif what == "move" and not self._may_move(topic, payload):
@@ -196,13 +203,13 @@ class Console:
         if parse is None:
             return True
         try:
-            parse(payload.encode())
+            read = parse(payload.encode())
         except (PayloadError, ValueError):
             return False
-        if topic.endswith("/preset"):
+        if topic.endswith("/preset"):  # (the name as the bridge reads it: review 151)
             with contextlib.suppress(ValueError, TypeError):
                 names = json.loads(self._last.get(topic[: -len("preset")] + "presets", ""))
-                return not isinstance(names, dict) or payload in names
+                return not isinstance(names, dict) or read in names
         return True
 
     def _again(self, client: paho.Client) -> None:
