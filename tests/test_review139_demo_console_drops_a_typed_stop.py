@@ -80,15 +80,17 @@ def test_a_stop_typed_on_a_dead_connection_reaches_the_broker_once_the_console_r
 
 
 def typed_on_a_dead_path(
-    console: Console, relay: DeadPath, watcher: Watcher, line: str, what: str
+    console: Console, relay: DeadPath, watcher: Watcher, line: str | list[str], what: str
 ) -> list[tuple[str, str]]:
-    """``line`` typed on the console while ``relay`` carries nothing (its PUBLISH, the
-    ``what``'s, taken by the dead path), then the dead connection found out and the console
-    back: what reached the broker before the console's mark after it."""
+    """``line`` (or each of the lines, in turn) typed on the console while ``relay`` carries
+    nothing (a PUBLISH, the first's, the ``what``'s, taken by the dead path), then the dead
+    connection found out and the console back: what reached the broker before the console's
+    mark after it."""
     assert console.sync(slow(20)), "the console never connected through the relay"
     tries = len(relay.levels)
     relay.dead = True  # the path carries nothing; nobody has noticed yet
-    assert console.command(line)
+    for typed in [line] if isinstance(line, str) else line:
+        assert console.command(typed)
     wait_until(lambda: relay.dropped > 0, 20, f"the {what}'s PUBLISH taken by the dead path")
     relay.cut()  # the dead connection found out at last: closed
     relay.dead = False

@@ -17,9 +17,8 @@ from bridge.demo.console import Console
 from bridge.demo.screen import Screen
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
-from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher
-from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
 def test_a_stop_for_one_rotator_goes_again_though_another_was_turned_after_it(
@@ -39,19 +38,7 @@ def test_a_stop_for_one_rotator_goes_again_though_another_was_turned_after_it(
         mqtt5=True,
     )
     try:
-        assert console.sync(slow(20)), "the console never connected through the relay"
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command("one s")  # the first rotor is turning: stopped
-        assert console.command("two 200")  # the other one turned
-        wait_until(lambda: relay.dropped > 0, 20, "the STOP's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+        got = typed_on_a_dead_path(console, relay, watcher, ["one s", "two 200"], "STOP")
     finally:
         console.close()
         watcher.close()
