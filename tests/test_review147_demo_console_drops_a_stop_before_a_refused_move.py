@@ -23,7 +23,7 @@ from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
 from tests.support.waiting import slow, wait_until
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
-from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 
 @pytest.mark.parametrize("behind", ["preset NOSUCH", "{nope"])
@@ -41,18 +41,7 @@ def test_a_stop_typed_before_a_refused_move_goes_again_on_reconnect(
     try:
         assert console.sync(slow(20)), "the console never connected through the relay"
         wait_until(lambda: "JA, W" in console.help_text(), 20, "the presets listed by help")
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command("s")  # the rotor is turning: stopped
-        assert console.command(behind)  # then a typo the bridge refuses: nothing turns
-        wait_until(lambda: relay.dropped > 0, 20, "the STOP's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+        got = typed_on_a_dead_path(console, relay, watcher, ["s", behind], "STOP")
     finally:
         console.close()
         watcher.close()

@@ -21,9 +21,9 @@ import paho.mqtt.publish as publish
 from bridge.interfaces.mqtt.payloads import parse_name
 from bridge.interfaces.mqtt.topics import Topics
 from tests.support.mosquitto import Mosquitto
-from tests.support.waiting import slow, wait_until
+from tests.support.waiting import slow
 from tests.test_review134_demo_console_replays_a_typed_target import BASE, Watcher, console_through
-from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath
+from tests.test_review139_demo_console_drops_a_typed_stop import DeadPath, typed_on_a_dead_path
 
 TYPED = "\ufeffJA"
 
@@ -42,17 +42,7 @@ def test_a_preset_typed_with_a_bom_on_a_dead_connection_is_not_sent_late(
     console = console_through(relay.port, topics, mqtt5=True)
     try:
         assert console.sync(slow(20)), "the console never connected through the relay"
-        tries = len(relay.levels)
-        relay.dead = True  # the path carries nothing; nobody has noticed yet
-        assert console.command(f"preset {TYPED}")
-        wait_until(lambda: relay.dropped > 0, 20, "the preset's PUBLISH taken by the dead path")
-        relay.cut()  # the dead connection found out at last: closed
-        relay.dead = False
-        wait_until(lambda: len(relay.levels) > tries, 20, "the console trying to reconnect")
-        relay.restore()
-        assert console.sync(slow(20)), "the console never came back"
-        console.publish(f"{BASE}/console/mark", "after")
-        got = watcher.wait_for(f"{BASE}/console/mark", "after")
+        got = typed_on_a_dead_path(console, relay, watcher, f"preset {TYPED}", "preset")
     finally:
         console.close()
         watcher.close()
