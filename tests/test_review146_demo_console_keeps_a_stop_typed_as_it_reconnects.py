@@ -20,6 +20,7 @@ Fixed: one lock orders typed commands against the connection coming up (console.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 
 import pytest
@@ -60,12 +61,14 @@ class TypedDuringReconnect(Screen):
         self.line = line
         self.console: Console | None = None
         self.lock = WatchedLock()
+        self.users: list[threading.Thread] = []  # the user's typing
         self.typed = threading.Event()
 
     def log(self, text: str, *, quiet: bool = False) -> None:
         super().log(text, quiet=quiet)
         if "not sure it was sent" in text and self.console and not self.typed.is_set():
             user = threading.Thread(target=self.console.command, args=(self.line,))
+            self.users.append(user)
             user.start()
             wait_until(
                 lambda: not user.is_alive() or self.lock.waited.is_set(), 20, "the user's typing"
@@ -96,15 +99,19 @@ def test_a_stop_typed_while_the_console_reconnects_reaches_the_broker(
     try:
         assert console.sync(slow(20)), "the console never connected through the relay"
         console._lock = screen.lock  # type: ignore[assignment]  # (each ``with`` binds its own)
-        got = typed_on_a_dead_path(console, relay, watcher, "200", "bearing")
+        typed_on_a_dead_path(console, relay, watcher, "200", "bearing")
+        assert screen.typed.is_set(), "the reconnect said no bearing unsure"
+        # the typing may still wait for the console's lock: its line, once it is through
+        wait_until(lambda: not screen.users or not screen.users[0].is_alive(), 20, "the typing")
+        topic = r.stop if word == "STOP" else r.lock
+        with contextlib.suppress(AssertionError):
+            watcher.wait_for(topic, word)
         said = capsys.readouterr().out
     finally:
         console.close()
         watcher.close()
         relay.close()
-    assert screen.typed.is_set(), f"the reconnect said no bearing unsure: {said}"
-    topic = r.stop if word == "STOP" else r.lock
-    assert (topic, word) in got, (
-        f"the {typed!r} typed as the console reconnected never reached the broker: {got}; "
-        f"the console said: {said}"
+    assert (topic, word) in watcher.got, (
+        f"the {typed!r} typed as the console reconnected never reached the broker: "
+        f"{watcher.got}; the console said: {said}"
     )
