@@ -122,6 +122,7 @@ class Console:
         self._held: list[tuple[str, str]] = []  # rule 6: last words for the next connection
         self._kinds: dict[str, tuple[str, str]] = {}  # rule 6: topic -> (rotator, what it is)
         self._parsers: dict[str, Callable[[bytes], object]] = {}  # rule 6: a move's, by topic
+        self._presets: dict[str, str] = {}  # rule 6: a preset topic -> its rotator's list
         for rid in rotator_ids:
             t = topics.rotator(rid)
             moves = (t.target, t.target_elevation, t.preset, t.park, t.nudge)
@@ -131,6 +132,7 @@ class Console:
             self._parsers[t.target] = pl.parse_aim  # (rule 6: the bridge's own, service.py's)
             self._parsers[t.target_elevation] = partial(pl.parse_number, what="elevation")
             self._parsers[t.preset] = partial(pl.parse_name, what="preset")
+            self._presets[t.preset] = t.presets  # (rule 6: the names it may take)
             self._parsers[t.park] = partial(pl.parse_press, what="park", word="PARK")
             self._parsers[t.nudge] = pl.parse_nudge
         if mqtt5:
@@ -206,9 +208,9 @@ class Console:
             read = parse(payload.encode())
         except (PayloadError, ValueError):
             return False
-        if topic.endswith("/preset"):  # (the name as the bridge reads it: review 151)
+        if topic in self._presets:  # (the name as the bridge reads it: review 151)
             with contextlib.suppress(ValueError, TypeError):
-                names = json.loads(self._last.get(topic[: -len("preset")] + "presets", ""))
+                names = json.loads(self._last.get(self._presets[topic], ""))
                 return not isinstance(names, dict) or read in names
         return True
 
