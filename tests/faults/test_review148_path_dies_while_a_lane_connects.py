@@ -26,7 +26,7 @@ from bridge.interfaces.mqtt.connection import STOP_DEAD_PATH_S
 from bridge.interfaces.mqtt.lane import lane_client_id
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
-from tests.support.mqtt_proxy import CONNECT, MqttProxy, _client_id, _packets, _Stream
+from tests.support.mqtt_proxy import CONNECT, MqttProxy, _Stream
 from tests.support.rig import Rig
 from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
@@ -45,22 +45,18 @@ class DiesOnConnect(MqttProxy):
         self.died = threading.Event()
         super().__init__(backend)
 
-    def _up(self, s: _Stream) -> None:
-        buf = bytearray()
-        with contextlib.suppress(OSError):
-            while data := s.client.recv(65536):
-                if s.dead:
-                    continue
-                buf += data
-                for packet in _packets(buf):
-                    if packet[0] >> 4 == CONNECT:
-                        s.client_id = _client_id(packet)
-                        if self.armed is not None and s.client_id == self.armed:
-                            self.armed = None
-                            self.blackhole()  # (this stream too: the CONNECT is lost)
-                            self.died.set()
-                            break
-                    s.server.sendall(packet)
+    def on_packet(self, s: _Stream, packet: bytes, *, up: bool) -> bytes | None:
+        if (
+            up
+            and packet[0] >> 4 == CONNECT
+            and self.armed is not None
+            and s.client_id == self.armed
+        ):
+            self.armed = None
+            self.blackhole()  # (this stream too: the CONNECT is lost)
+            self.died.set()
+            return None
+        return packet
 
 
 @pytest.mark.xfail(

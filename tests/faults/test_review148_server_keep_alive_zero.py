@@ -17,14 +17,13 @@ Fixed: paho_client.py ``ping_within`` pings under a Server Keep Alive of 0 too."
 from __future__ import annotations
 
 import contextlib
-import socket
 import time
 from pathlib import Path
 
 from bridge.interfaces.mqtt.connection import STOP_DEAD_PATH_S
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
-from tests.support.mqtt_proxy import SUBACK, MqttProxy, _packets, _Stream
+from tests.support.mqtt_proxy import MqttProxy, _Stream
 from tests.support.rig import Rig
 from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
@@ -69,21 +68,10 @@ def _with_keep_alive_off(connack: bytes) -> bytes:
 class KeepAliveOff(MqttProxy):
     """The proxy, the broker saying "keep-alive off" in every MQTT 5 CONNACK."""
 
-    def _down(self, s: _Stream) -> None:
-        buf = bytearray()
-        with contextlib.suppress(OSError):
-            while data := s.server.recv(65536):
-                if s.dead:
-                    continue
-                buf += data
-                for packet in _packets(buf):
-                    if packet[0] >> 4 == CONNACK:
-                        packet = _with_keep_alive_off(packet)
-                    s.client.sendall(packet)
-                    if packet[0] >> 4 == SUBACK:
-                        self.subacks[s.client_id] = self.subacks.get(s.client_id, 0) + 1
-        with contextlib.suppress(OSError):
-            s.client.shutdown(socket.SHUT_WR)
+    def on_packet(self, s: _Stream, packet: bytes, *, up: bool) -> bytes | None:
+        if not up and packet[0] >> 4 == CONNACK:
+            return _with_keep_alive_off(packet)
+        return packet
 
 
 def test_a_stop_after_a_dead_path_under_a_broker_that_turns_keep_alive_off(

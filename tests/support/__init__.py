@@ -11,7 +11,8 @@
 - codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
 - mqtt_proxy.py: ``MqttProxy``, a TCP proxy before the broker that knows each connection by
   its client id: one dropped, what one sends held, the SUBACKs counted, every open connection
-  made a dead path (``blackhole``); where a test places a message at a connection's moment
+  made a dead path (``blackhole``), each packet passing seen, changed or lost (``on_packet``);
+  where a test places a message at a connection's moment
 - rig.py: a broker, emulated controllers on real ptys and the bridge, in-process or as its own
   process (``Rig``): the one rig of the tests, the fault suite (tapped, faster) and the
   benchmarks (real timings, paced lines); imported from there, as it brings the whole bridge in

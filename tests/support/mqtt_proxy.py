@@ -71,7 +71,8 @@ class _Stream:
 class MqttProxy:
     """Between the bridge and the broker: each connection known by its client id; ``drop`` one,
     ``hold`` what one sends (its bytes kept, in order) until ``release``; ``subacks`` counts the
-    SUBACKs the broker sent each client id."""
+    SUBACKs the broker sent each client id. A test's own proxy changes or loses one kind of
+    packet by overriding ``on_packet``."""
 
     def __init__(self, backend: int) -> None:
         self._backend = backend
@@ -105,8 +106,13 @@ class MqttProxy:
                     continue
                 buf += data
                 for packet in _packets(buf):
+                    if s.dead:  # (made dead by ``on_packet``, say: the rest is lost too)
+                        break
                     if packet[0] >> 4 == CONNECT:
                         s.client_id = _client_id(packet)
+                    if (passed := self.on_packet(s, packet, up=True)) is None:
+                        continue
+                    packet = passed
                     with s.lock:
                         if s.held is not None:
                             s.held += packet
@@ -123,11 +129,24 @@ class MqttProxy:
                     continue
                 buf += data
                 for packet in _packets(buf):
+                    if s.dead:
+                        break
+                    if (passed := self.on_packet(s, packet, up=False)) is None:
+                        continue
+                    packet = passed
                     s.client.sendall(packet)
                     if packet[0] >> 4 == SUBACK:
                         self.subacks[s.client_id] = self.subacks.get(s.client_id, 0) + 1
         with contextlib.suppress(OSError):
             s.client.shutdown(socket.SHUT_WR)
+
+    def on_packet(self, s: _Stream, packet: bytes, *, up: bool) -> bytes | None:
+        """Each whole MQTT packet as it passes, ``up`` (the client's, to the broker) or down (the
+        broker's, to the client), on that stream's own thread: what is handed on in its place
+        (the packet itself here; a changed one), or None for none (the packet lost). Up, it
+        comes after its CONNECT named the stream (``s.client_id``) and before ``hold``; down,
+        before ``subacks`` counts what was handed on."""
+        return packet
 
     def _of(self, client_id: str) -> list[_Stream]:
         return [s for s in self._streams if s.client_id == client_id]
