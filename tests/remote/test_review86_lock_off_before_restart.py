@@ -67,6 +67,16 @@ def remote_over(remote_route: CuttableLink, port: int) -> Remote:
     return remote
 
 
+def saved_lock(station: Rig) -> bool | None:
+    """The station's state file's lock for ``tower`` (None: not there, or not whole yet)."""
+    try:
+        entry = json.loads((station.tmp / "state.json").read_text())["rotators"]["tower"]
+    except (OSError, ValueError, KeyError):
+        return None
+    locked = entry.get("locked")
+    return locked if isinstance(locked, bool) else None
+
+
 def run_of(m: Message) -> str:
     return str(json.loads(m.payload)["order"]["run"])
 
@@ -145,7 +155,10 @@ def test_a_lock_off_at_the_tower_before_a_restart_is_not_undone_by_an_older_lock
                 f"the tower's lock {word} taken",
                 mark,
             )
-        # the station's bridge restarts (an update): its new run shows the lock OFF the tower left
+        # the station's bridge restarts (an update, well after the lock OFF was saved: killed
+        # before, it starts locked, the safe side of runtime/kept.py rule 2, not this remote's)
+        wait_until(lambda: saved_lock(station) is False, slow(10), "the lock OFF saved")
+        # ... its new run shows the lock OFF the tower left
         restarted_and_the_remote_back(station, remote, remote_route, first)
         wait_until(lambda: rotator.away() is None, slow(30), "the station heard again")
         answer = ask(port, f"P {TURN_AZ:g} 0\n".encode())  # the operator's next turn
