@@ -133,13 +133,13 @@ class CuttableLink:
         self._cut.set()
 
     def heal(self) -> None:
-        with self._lock:
+        with self._lock:  # (a connection accepted meanwhile is cut or forwarded, never both)
             dead, self._socks = self._socks, []
+            for s in dead:  # closed before bytes pass again: what a pipe read from an old
+                with contextlib.suppress(OSError):  # connection while cut, and sends after,
+                    s.shutdown(socket.SHUT_RDWR)  # goes nowhere (under load the remote's
+                s.close()  # lock ON, cut, reached the station at the heal: review 86's flake)
             self._cut.clear()
-        for s in dead:
-            with contextlib.suppress(OSError):
-                s.shutdown(socket.SHUT_RDWR)
-            s.close()
 
     def _accept(self) -> None:
         while True:
