@@ -492,7 +492,6 @@ class App:
             on_subscribed=partial(self._lane_subscribed, "stop"),
             behind_subscribe=partial(self.mqtt.lane_subscribing, ("stop",)),
             no_replay=self.topics.stop_lane(),
-            after_dead_path=self.client.prove_path,  # (connection.py rule 6)
         )
         # interfaces/mqtt/lastword.py rule 16: the lock words on a lane of their own, so that
         # no flood of them sits ahead of a stop on the stop lane
@@ -507,7 +506,6 @@ class App:
             on_subscribed=partial(self._lane_subscribed, "lock"),
             behind_subscribe=partial(self.mqtt.lane_subscribing, ("lock",)),
             no_replay=self.topics.lock_lane(),
-            after_dead_path=self.client.prove_path,  # (connection.py rule 6)
         )
         # interfaces/mqtt/lane.py rule 4: a stop (a lock ON) before a backlog
         self.client.before_message = self._lanes_first

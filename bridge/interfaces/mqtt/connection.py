@@ -87,14 +87,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    it (review 145: at 2 s in the CONNECT, a broker 2.5 s slow to accept kept the three off for
    good, and 3 s stalls under MQTT 3.1.1 were said as a fight over the client id). The main
    connection keeps the setting: its keep-alive is the bridge's presence (its will after 1.5 of
-   them), and it rides out a broker that stalls for longer while its lanes come and go. But a
-   lane accepted again after it gave a connection up for an unanswered ping (``_pings_lost``:
-   the broker answers new connections, so the old path, not the broker, was dead) puts the
-   main connection's path in doubt (``after_dead_path``, ``prove_path``: paho_client.py): it
-   pings within STOP_KEEPALIVE_S until one answer, and unanswered is made again, back within
-   DEAD_PATH_S (review 150: it heard nothing for 30 to 60 s after the path died, and a target
-   or a lock OFF pressed then was lost; the lock lane's words wait for it while it counts as
-   up). A frozen broker answers no lane, so it does not put the main connection in doubt. The
+   them), and it rides out a broker that stalls for longer while its lanes come and go. The
    cost is a PINGREQ and its answer every 2 s on each such connection while nothing else
    passes; a broker or a path that holds back an answer for 2 s more has such a connection
    made again (paho's own keep-alive end, no evidence of a fight: rule 7), and its stops take
@@ -243,11 +236,6 @@ STOP_KEEPALIVE_S = 2  # rule 6: a ping after this much quiet on a connection tha
 #: answer given up as long after it (each seen by a round of paho's loop, a second apart at
 #: most: paho_client.py rule 2), then the reconnect's first wait (a second)
 STOP_DEAD_PATH_S = 2 * (STOP_KEEPALIVE_S + 1) + 1
-#: rule 6: ... and the main connection on it is made again this long after at most: a lane's
-#: new connection accepted puts the main one's path in doubt (``prove_path``), which pings at
-#: its next round (quiet that long already), gives the answer STOP_KEEPALIVE_S and a round, and
-#: reconnects after its first wait (a second)
-DEAD_PATH_S = STOP_DEAD_PATH_S + 1 + STOP_KEEPALIVE_S + 1 + 1
 PROBE_S = 1.0  # rule 7: how long the look at the broker's port after a drop may take
 _GONE_ERRNOS = (errno.ECONNREFUSED, errno.EHOSTUNREACH, errno.ENETUNREACH)  # rule 7: "gone"
 
@@ -402,9 +390,6 @@ class Options(TypedDict, total=False):
     no_replay: list[str] | None  # command filters whose retained message is not replayed
     replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
-    # rule 6: this connection accepted again after it gave one up for an unanswered ping (the
-    # broker answers: another connection of the bridge's may hear nothing on a dead path)
-    after_dead_path: Callable[[], None] | None
     reconnect_max_s: int  # (by default the class's RECONNECT_MAX_S: rule 6)
 
 
@@ -444,8 +429,6 @@ class Connection:
         self._on_new_connection = options.get("on_new_connection")
         self._on_subscribed = options.get("on_subscribed")
         self._behind_subscribe = options.get("behind_subscribe")
-        self._after_dead_path = options.get("after_dead_path")
-        self._pings_lost = False  # rule 6: the last connection given up for a ping unanswered
         self._clock = clock
         self._reconnect_s = (
             options.get("reconnect_min_s", 1),
@@ -711,9 +694,6 @@ class Connection:
         self._accepted_once = True
         if self.KEEPALIVE_MAX_S is not None:  # rule 6: a stop's carrier finds a dead path soon
             self._client.ping_within(self.KEEPALIVE_MAX_S)
-        lost, self._pings_lost = self._pings_lost, False
-        if lost and self._after_dead_path is not None:  # rule 6: the others' paths in doubt
-            self._after_dead_path()
         self._guard.connected(self._clock())
         self._peer = peer_of(client)  # rule 7: where to look after a drop
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
@@ -731,14 +711,6 @@ class Connection:
             for topic, payload in self._behind_subscribe():  # (paho's queue keeps the order)
                 client.publish(topic, payload, qos=0, retain=False)
         self._opened(client)
-
-    def prove_path(self) -> None:
-        """Rule 6, from any thread: this connection's path is in doubt (another of the bridge's
-        to the same broker gave one up for an unanswered ping and was answered anew): pinged
-        within STOP_KEEPALIVE_S and given up if that goes unanswered, as a stop's carrier is,
-        until one answer; a connection not accepted now has nothing to prove."""
-        if self._up:
-            self._client.prove_path(STOP_KEEPALIVE_S)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
         with self._trial_lock:
@@ -806,10 +778,6 @@ class Connection:
         # rule 6: an attempt our own client gave up on, unanswered, is no close of the broker's
         waited = None if was or answered else unanswered(flags, reason_code, client, self._keep_s)
         self._gave_up = waited is not None
-        if was:  # rule 6: an accepted one whose ping went unanswered (a dead path, or a stall)
-            self._pings_lost = not bool(
-                getattr(flags, "is_disconnect_packet_from_server", False)
-            ) and (getattr(reason_code, "value", None) == KEEPALIVE_TIMEOUT)
         if not was and not answered and not self._close_steps_down():  # no CONNACK came
             if waited is not None:
                 self._unanswered(waited)

@@ -261,8 +261,6 @@ class Client(paho.Client):
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
     connack_timed_out = False  # rule 5: this attempt was ended for want of a CONNACK
     _connect_keep: int | None = None  # ``ping_within``: the keep-alive the CONNECT says
-    _proving_t: float | None = None  # ``prove_path``: asked then, till a ping since is answered
-    _proven_keep = 0  # ... and the keep-alive this connection had then (the broker's, MQTT 5)
     _net: threading.Thread | None = None  # rule 6
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
@@ -319,7 +317,6 @@ class Client(paho.Client):
         self.connack_timed_out = False
         if self._connect_keep is not None:  # (``ping_within``: the CONNECT says the setting's)
             self._keepalive = self._connect_keep
-        self._proving_t = None  # (``prove_path``: a new connection, its own keep-alive)
         rc = super().reconnect()
         self._connect_first()
         return rc
@@ -357,26 +354,6 @@ class Client(paho.Client):
         found a dead path under such a broker)."""
         keep = self._keepalive
         self._keepalive = seconds if keep == 0 else min(keep, seconds)
-
-    def prove_path(self, seconds: int) -> None:
-        """Connection.py rule 6, from any thread: this accepted connection's path is in doubt
-        (another to the same broker found its own dead, and the broker answered it anew):
-        ``ping_within(seconds)`` until a ping sent from now on is answered, then the keep-alive
-        it had again (the CONNACK's Server Keep Alive, if the broker said one); unanswered, the
-        connection is given up. paho pings once the connection has been quiet ``seconds``
-        either way, a round (1 s at most) after this."""
-        if self._connect_keep is None or self._proving_t is not None:
-            return
-        self._proven_keep = self._keepalive
-        self._proving_t = time.monotonic()  # (paho's pings are timed by this clock too)
-        self.ping_within(seconds)
-
-    def _handle_pingresp(self) -> MQTTErrorCode:
-        since = self._proving_t
-        if since is not None and self._ping_t >= since:  # ``prove_path``: answered, alive
-            self._proving_t = None
-            self._keepalive = self._proven_keep
-        return super()._handle_pingresp()
 
     def disconnect(self, *args: Any, **kwargs: Any) -> MQTTErrorCode:
         self._leaving = True
