@@ -1,0 +1,79 @@
+"""Review 152 (cold review of 415730e0): a lane accepted again after it gave a connection up for
+an unanswered ping now puts the main connection's path in doubt (connection.py rule 6,
+``prove_path``): the main connection pings within STOP_KEEPALIVE_S and, unanswered, is made
+again. But a lane's ping goes unanswered for more than a dead path: review 148's few seconds'
+stall of the uplink (the bytes held, not lost) ends the stop lane too, and its new connection
+is accepted at once. If the main connection is reading a backlog at that moment (what the
+broker sends it held behind a flood: review 145's ``SlowPath``), its PINGRESP waits behind the
+backlog, and the main connection, whose path was fine all along, is given up by the bridge
+itself: the broker publishes its will, every dashboard is shown the rotator ``offline``, and
+the backlog it was reading is thrown away. Before 415730e0 (the setting's keep-alive, 30 s) the
+same spell ended nothing on the main connection.
+
+Real parts: mosquitto, the bridge in-process, an emulated Rotor-EZ on a pty, a paho client at
+the broker's own port as the dashboard, and the MQTT-aware proxy on the bridge's path."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.mqtt.connection import DEAD_PATH_S
+from bridge.interfaces.mqtt.lane import lane_client_id
+from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-152 1: a few seconds' stall of the stop lane's uplink while the main "
+    "connection reads a backlog makes the bridge drop its own healthy main connection: "
+    "dashboards see the bridge offline and the backlog it was reading is thrown away",
+)
+def test_a_stop_lane_stall_does_not_drop_a_main_connection_reading_a_backlog(
+    tmp_path: Path,
+) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = SlowPath(broker.port, 0.0)
+    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+            app = rig.start()
+            rig.ready("tower", timeout_s=slow(30))
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
+            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
+            main_id = rig.settings.mqtt.effective_client_id()
+            mark = probe.mark()
+            proxy.backlog(main_id)  # the main connection has a backlog to read
+            proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
+            wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
+
+            def offline() -> list[str]:
+                return [
+                    m.topic
+                    for m in probe.messages[mark:]
+                    if m.topic in ("rotor/availability", "rotor/bridge/state")
+                    and m.payload == b"offline"
+                ]
+
+            # the main connection's doubt is settled within DEAD_PATH_S of the lane's return
+            with contextlib.suppress(AssertionError, TimeoutError):
+                wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
+            main_up = app.client.connected.is_set()
+            proxy.released.set()  # the backlog read
+            assert not offline() and main_up, (
+                f"a stall of the stop lane's uplink while the main connection read a backlog, "
+                f"the broker healthy and the main connection's path fine: dashboards were shown "
+                f"{offline()} offline; the main connection up: {main_up}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
