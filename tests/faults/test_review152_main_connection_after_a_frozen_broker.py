@@ -1,0 +1,84 @@
+"""Review 152 (cold review of 415730e0): connection.py rule 6 and docs/reliability.md say "a
+broker that freezes answers no lane either, so the main connection still rides a frozen broker
+out". It does not: a broker frozen a few seconds (SIGSTOP here; a host swapping, a VM paused
+for a snapshot or a migration) leaves the stop and lock lanes' pings unanswered, they give
+their connections up, and their next ones, waiting in the broker's listen queue, are accepted
+the moment it runs again: each is "a lane answered anew after an unanswered ping", and the
+main connection's path is put in doubt (``prove_path``) right when the broker works through
+what the freeze held. A main connection that then has a backlog to read (what the broker sends
+it held behind a flood: review 145's ``SlowPath``) does not see its PINGRESP within 2 s and is
+given up by the bridge itself: its will says the bridge ``offline`` to every dashboard, and
+what it was reading is thrown away. Before 415730e0 (the setting's keep-alive, 30 s) the same
+freeze ended nothing on the main connection.
+
+Real parts: mosquitto (frozen with SIGSTOP), the bridge in-process, an emulated Rotor-EZ on a
+pty, a paho client at the broker's own port as the dashboard, the MQTT-aware proxy on the
+bridge's path."""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from pathlib import Path
+
+import pytest
+
+from bridge.interfaces.mqtt.connection import DEAD_PATH_S
+from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
+from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
+from tests.support.rig import Rig
+from tests.support.waiting import slow, wait_until
+
+FROZEN_S = 5.0  # the broker's freeze: the fault's length (not a wait for the bridge)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-152 3: a broker frozen a few seconds puts the main connection in doubt "
+    "after all (the lanes are answered anew at the thaw); reading a backlog then, it is "
+    "dropped by the bridge itself and dashboards see the bridge offline",
+)
+def test_a_frozen_broker_does_not_drop_a_main_connection_reading_a_backlog(
+    tmp_path: Path,
+) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = SlowPath(broker.port, 0.0)
+    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+            app = rig.start()
+            rig.ready("tower", timeout_s=slow(30))
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
+            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
+            main_id = rig.settings.mqtt.effective_client_id()
+            mark = probe.mark()
+            proxy.backlog(main_id)  # the main connection has a backlog to read
+            broker.pause()
+            try:
+                time.sleep(FROZEN_S)  # the freeze: the fault's length
+            finally:
+                broker.resume()
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up again")
+
+            def offline() -> list[str]:
+                return [
+                    m.topic
+                    for m in probe.messages[mark:]
+                    if m.topic in ("rotor/availability", "rotor/bridge/state")
+                    and m.payload == b"offline"
+                ]
+
+            with contextlib.suppress(AssertionError, TimeoutError):
+                wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
+            main_up = app.client.connected.is_set()
+            proxy.released.set()  # the backlog read
+            assert not offline() and main_up, (
+                f"a broker frozen {FROZEN_S:g} s while the main connection read a backlog: "
+                f"dashboards were shown {offline()} offline; the main connection up: {main_up}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
