@@ -77,3 +77,53 @@ def test_a_stop_lane_stall_does_not_drop_a_main_connection_reading_a_backlog(
         probe.close()
         proxy.close()
         broker.stop()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="review-152 1: a lock OFF pressed while the main connection reads a backlog is lost "
+    "when a stop lane's uplink stall makes the bridge drop the healthy main connection: the "
+    "rotator stays locked",
+)
+def test_a_lock_off_behind_a_backlog_stands_after_a_stop_lane_stall(tmp_path: Path) -> None:
+    """The same spell, a lock OFF pressed in it: the lock lane's OFF is not carried out while
+    the main connection is up (lastword.py rule 3), and the main connection's copy is in the
+    backlog the bridge throws away with the connection."""
+    broker = Mosquitto(tmp_path / "broker").start()
+    proxy = SlowPath(broker.port, 0.0)
+    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
+    try:
+        with Rig(tmp_path, proxy, probe) as rig:
+            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
+            app = rig.start()
+            rig.ready("tower", timeout_s=slow(30))
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
+            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
+            assert probe.publish("rotor/lock", "ON")  # the operator locks the rotator
+            wait_until(lambda: rig.status("tower").locked, slow(10), "the lock ON carried out")
+            main_id = rig.settings.mqtt.effective_client_id()
+            proxy.backlog(main_id)  # the main connection has a backlog to read
+            assert probe.publish("rotor/lock", "OFF")  # the work is done: OFF, at the broker
+            proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
+            wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
+            wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
+            with contextlib.suppress(AssertionError, TimeoutError):
+                wait_until(
+                    lambda: not app.client.connected.is_set(),
+                    slow(DEAD_PATH_S),
+                    "the main connection given up",
+                )
+            proxy.released.set()  # the backlog read
+            with contextlib.suppress(AssertionError, TimeoutError):
+                wait_until(
+                    lambda: not rig.status("tower").locked, slow(15), "the lock OFF carried out"
+                )
+            shown = [m.text for m in probe.on("rotor/lock/state")]
+            assert not rig.status("tower").locked, (
+                f"a lock OFF pressed while the main connection read a backlog, the stop lane's "
+                f"uplink stalling a few seconds meanwhile, was lost: R/lock/state said {shown}"
+            )
+    finally:
+        probe.close()
+        proxy.close()
+        broker.stop()
