@@ -12,7 +12,10 @@ doubt. docs/reliability.md promises a lock OFF reaches the bridge again within D
 the path dying; this one, pressed inside that time and read by the bridge, never takes effect.
 
 The path dies at the test's own proxy (tests/support/mqtt_proxy.py ``blackhole``); the
-dashboard is on the broker's own port."""
+dashboard is on the broker's own port.
+
+Open: 415730e0 was taken back, and with the main connection's own keep-alive the lock OFF
+waits for it 30 to 60 s and is lost the same way (review 150; docs/reliability.md, Limits)."""
 
 from __future__ import annotations
 
@@ -21,13 +24,16 @@ from pathlib import Path
 
 import pytest
 
-from bridge.interfaces.mqtt.connection import DEAD_PATH_S
 from bridge.interfaces.mqtt.lane import lane_client_id
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt_proxy import MqttProxy
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
+
+# 415730e0's DEAD_PATH_S (taken back): how long after a dead path or a lane's return a
+# doubted main connection was made again at most
+DEAD_PATH_S = 12
 
 
 @pytest.mark.xfail(

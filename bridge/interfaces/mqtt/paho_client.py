@@ -261,6 +261,7 @@ class Client(paho.Client):
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
     connack_timed_out = False  # rule 5: this attempt was ended for want of a CONNACK
     _connect_keep: int | None = None  # ``ping_within``: the keep-alive the CONNECT says
+    attempts = 0  # connection attempts so far (connection.py rule 6: one end said once)
     _net: threading.Thread | None = None  # rule 6
     _last_net: threading.Thread | None = None  # ... the last one started (loop_stop joins it)
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
@@ -313,6 +314,7 @@ class Client(paho.Client):
         return head + b"\x00" if self._protocol == paho.MQTTv5 else head
 
     def reconnect(self) -> MQTTErrorCode:
+        self.attempts += 1
         self._connect_t = time.monotonic()
         self.connack_timed_out = False
         if self._connect_keep is not None:  # (``ping_within``: the CONNECT says the setting's)
