@@ -72,11 +72,11 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    (attack 23: a broker frozen past the keep-alive was said at ERROR as one that "closed the
    connection before accepting it (Keep alive timeout)", its ACL to check, and the stop lane
    said the same of its own). The stop lane and the express leave it to the main connection,
-   which speaks to the same broker (as they do a broker that cannot be reached). Each attempt's
-   end is judged once (paho_client.py ``attempts``): paho says the end of an accepted one by its
-   keep-alive twice, the second as if the connection had never been accepted, and that second
-   word was said at ERROR as a broker that never answered, to check that it runs (review 152:
-   the main connection given up on a dead path, the broker healthy throughout).
+   which speaks to the same broker (as they do a broker that cannot be reached). An attempt's
+   end by paho's keep-alive is judged once (paho_client.py ``attempts``): paho says it twice,
+   the second as if the connection had never been accepted, and that second word was said at
+   ERROR as a broker that never answered, to check that it runs (review 152: the main
+   connection given up on a dead path, the broker healthy throughout).
    A connection of the bridge's that carries stops (the stop and lock lanes, the stop express:
    their ``KEEPALIVE_MAX_S``), once accepted, pings after STOP_KEEPALIVE_S (2 s) of quiet and
    gives the connection up when a ping is not answered as long after it (paho_client.py
@@ -442,7 +442,8 @@ class Connection:
         self._peer: tuple[str, int] | None = None  # rule 7: the address the connection had
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
-        self._ended_attempt: int | None = None  # rule 6: the attempt whose end was last said
+        # rule 6: the attempt whose end by paho's keep-alive was last said (and that reason)
+        self._ended_attempt: tuple[int | None, int] | None = None
         self._subscribed = False  # ... and the SUBACK of its command topics came
         self._subscribed_since: float | None = None  # ... then (``heard_since``), while it lasts
         self._subscribing = False  # ... or at least its SUBSCRIBE is on its way (``hears``)
@@ -777,9 +778,11 @@ class Connection:
         properties: Properties | None,
     ) -> None:
         attempt = getattr(client, "attempts", None)
-        if attempt is not None and attempt == self._ended_attempt and not self._up:
-            return  # rule 6: paho's second word of one end (its keep-alive's: review 152)
-        self._ended_attempt = attempt
+        code = getattr(reason_code, "value", None)
+        ended = (attempt, code) if code == KEEPALIVE_TIMEOUT else None
+        if ended is not None and ended == self._ended_attempt and not self._up:
+            return  # rule 6: paho's second word of its keep-alive's end (review 152)
+        self._ended_attempt = ended
         was, self._up, self._subscribed, self._subscribing = self._up, False, False, False
         self._subscribed_since = None
         answered, self._answered = self._answered, False
