@@ -25,10 +25,8 @@ from pathlib import Path
 import pytest
 
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
+from tests.faults.behind_a_proxy import lanes_behind
 from tests.support.mqtt_proxy import MqttProxy
-from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 # 415730e0's DEAD_PATH_S (taken back): how long after a dead path or a lane's return a
@@ -45,41 +43,29 @@ DEAD_PATH_S = 12
 def test_a_lock_off_read_on_the_lock_lane_back_on_a_live_path_takes_effect(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = MqttProxy(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
-            assert probe.publish("rotor/lock", "ON")  # the operator locks the rotator
-            wait_until(lambda: rig.status("tower").locked, slow(10), "the lock ON carried out")
-            lock_lane = lane_client_id(rig.settings.mqtt, "lock")
-            subacks = proxy.subacks.get(lock_lane, 0)
-            proxy.blackhole()  # the path under every connection dies without a word
+    with lanes_behind(tmp_path, MqttProxy) as b:  # a dashboard on the broker's own port
+        proxy, probe, rig, app = b.proxy, b.probe, b.rig, b.app
+        assert probe.publish("rotor/lock", "ON")  # the operator locks the rotator
+        wait_until(lambda: rig.status("tower").locked, slow(10), "the lock ON carried out")
+        lock_lane = lane_client_id(rig.settings.mqtt, "lock")
+        subacks = proxy.subacks.get(lock_lane, 0)
+        proxy.blackhole()  # the path under every connection dies without a word
+        wait_until(
+            lambda: proxy.subacks.get(lock_lane, 0) > subacks,
+            slow(15),
+            "the lock lane subscribed again on a live path",
+        )
+        main_up = app.client.connected.is_set()  # (still counted up, on the dead path)
+        assert probe.publish("rotor/lock", "OFF")  # the work is done: OFF, at the broker
+        with contextlib.suppress(AssertionError, TimeoutError):
             wait_until(
-                lambda: proxy.subacks.get(lock_lane, 0) > subacks,
-                slow(15),
-                "the lock lane subscribed again on a live path",
+                lambda: not rig.status("tower").locked,
+                slow(DEAD_PATH_S + 5),
+                "the lock OFF carried out",
             )
-            main_up = app.client.connected.is_set()  # (still counted up, on the dead path)
-            assert probe.publish("rotor/lock", "OFF")  # the work is done: OFF, at the broker
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(
-                    lambda: not rig.status("tower").locked,
-                    slow(DEAD_PATH_S + 5),
-                    "the lock OFF carried out",
-                )
-            shown = [m.text for m in probe.on("rotor/lock/state")]
-            assert not rig.status("tower").locked, (
-                f"a lock OFF pressed once the lock lane was back on a live path (the main "
-                f"connection counted up then: {main_up}) never took effect: R/lock/state said "
-                f"{shown}; the main connection up now: {app.client.connected.is_set()}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+        shown = [m.text for m in probe.on("rotor/lock/state")]
+        assert not rig.status("tower").locked, (
+            f"a lock OFF pressed once the lock lane was back on a live path (the main "
+            f"connection counted up then: {main_up}) never took effect: R/lock/state said "
+            f"{shown}; the main connection up now: {app.client.connected.is_set()}"
+        )

@@ -24,10 +24,8 @@ import contextlib
 import time
 from pathlib import Path
 
+from tests.faults.behind_a_proxy import lanes_behind, said_offline
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
-from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 # 415730e0's DEAD_PATH_S (taken back): how long after a dead path or a lane's return a
@@ -40,43 +38,27 @@ FROZEN_S = 5.0  # the broker's freeze: the fault's length (not a wait for the br
 def test_a_frozen_broker_does_not_drop_a_main_connection_reading_a_backlog(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = SlowPath(broker.port, 0.0)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
-            main_id = rig.settings.mqtt.effective_client_id()
-            mark = probe.mark()
-            proxy.backlog(main_id)  # the main connection has a backlog to read
-            broker.pause()
-            try:
-                time.sleep(FROZEN_S)  # the freeze: the fault's length
-            finally:
-                broker.resume()
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up again")
+    # a dashboard on the broker's own port; the bridge behind a SlowPath whose CONNACKs are prompt
+    with lanes_behind(tmp_path, lambda port: SlowPath(port, 0.0)) as b:
+        broker, proxy, probe, rig, app = b.broker, b.proxy, b.probe, b.rig, b.app
+        main_id = rig.settings.mqtt.effective_client_id()
+        mark = probe.mark()
+        proxy.backlog(main_id)  # the main connection has a backlog to read
+        broker.pause()
+        try:
+            time.sleep(FROZEN_S)  # the freeze: the fault's length
+        finally:
+            broker.resume()
+        wait_until(app.lane.connected.is_set, slow(15), "the stop lane up again")
 
-            def offline() -> list[str]:
-                return [
-                    m.topic
-                    for m in probe.messages[mark:]
-                    if m.topic in ("rotor/availability", "rotor/bridge/state")
-                    and m.payload == b"offline"
-                ]
+        def offline() -> list[str]:
+            return said_offline(probe, mark)
 
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
-            main_up = app.client.connected.is_set()
-            proxy.released.set()  # the backlog read
-            assert not offline() and main_up, (
-                f"a broker frozen {FROZEN_S:g} s while the main connection read a backlog: "
-                f"dashboards were shown {offline()} offline; the main connection up: {main_up}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
+        main_up = app.client.connected.is_set()
+        proxy.released.set()  # the backlog read
+        assert not offline() and main_up, (
+            f"a broker frozen {FROZEN_S:g} s while the main connection read a backlog: "
+            f"dashboards were shown {offline()} offline; the main connection up: {main_up}"
+        )

@@ -22,10 +22,8 @@ import contextlib
 from pathlib import Path
 
 from bridge.interfaces.mqtt.lane import lane_client_id
+from tests.faults.behind_a_proxy import lanes_behind, said_offline
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
-from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 # 415730e0's DEAD_PATH_S (taken back): how long after a dead path or a lane's return a
@@ -36,86 +34,57 @@ DEAD_PATH_S = 12
 def test_a_stop_lane_stall_does_not_drop_a_main_connection_reading_a_backlog(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = SlowPath(broker.port, 0.0)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
-            main_id = rig.settings.mqtt.effective_client_id()
-            mark = probe.mark()
-            proxy.backlog(main_id)  # the main connection has a backlog to read
-            proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
-            wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
+    # a dashboard on the broker's own port; the bridge behind a SlowPath whose CONNACKs are prompt
+    with lanes_behind(tmp_path, lambda port: SlowPath(port, 0.0)) as b:
+        proxy, probe, rig, app = b.proxy, b.probe, b.rig, b.app
+        main_id = rig.settings.mqtt.effective_client_id()
+        mark = probe.mark()
+        proxy.backlog(main_id)  # the main connection has a backlog to read
+        proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
+        wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
+        wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
 
-            def offline() -> list[str]:
-                return [
-                    m.topic
-                    for m in probe.messages[mark:]
-                    if m.topic in ("rotor/availability", "rotor/bridge/state")
-                    and m.payload == b"offline"
-                ]
+        def offline() -> list[str]:
+            return said_offline(probe, mark)
 
-            # the main connection's doubt is settled within DEAD_PATH_S of the lane's return
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
-            main_up = app.client.connected.is_set()
-            proxy.released.set()  # the backlog read
-            assert not offline() and main_up, (
-                f"a stall of the stop lane's uplink while the main connection read a backlog, "
-                f"the broker healthy and the main connection's path fine: dashboards were shown "
-                f"{offline()} offline; the main connection up: {main_up}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+        # the main connection's doubt is settled within DEAD_PATH_S of the lane's return
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
+        main_up = app.client.connected.is_set()
+        proxy.released.set()  # the backlog read
+        assert not offline() and main_up, (
+            f"a stall of the stop lane's uplink while the main connection read a backlog, "
+            f"the broker healthy and the main connection's path fine: dashboards were shown "
+            f"{offline()} offline; the main connection up: {main_up}"
+        )
 
 
 def test_a_lock_off_behind_a_backlog_stands_after_a_stop_lane_stall(tmp_path: Path) -> None:
     """The same spell, a lock OFF pressed in it: the lock lane's OFF is not carried out while
     the main connection is up (lastword.py rule 3), and the main connection's copy is in the
     backlog the bridge throws away with the connection."""
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = SlowPath(broker.port, 0.0)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
-            assert probe.publish("rotor/lock", "ON")  # the operator locks the rotator
-            wait_until(lambda: rig.status("tower").locked, slow(10), "the lock ON carried out")
-            main_id = rig.settings.mqtt.effective_client_id()
-            proxy.backlog(main_id)  # the main connection has a backlog to read
-            assert probe.publish("rotor/lock", "OFF")  # the work is done: OFF, at the broker
-            proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
-            wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(
-                    lambda: not app.client.connected.is_set(),
-                    slow(DEAD_PATH_S),
-                    "the main connection given up",
-                )
-            proxy.released.set()  # the backlog read
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(
-                    lambda: not rig.status("tower").locked, slow(15), "the lock OFF carried out"
-                )
-            shown = [m.text for m in probe.on("rotor/lock/state")]
-            assert not rig.status("tower").locked, (
-                f"a lock OFF pressed while the main connection read a backlog, the stop lane's "
-                f"uplink stalling a few seconds meanwhile, was lost: R/lock/state said {shown}"
+    # a dashboard on the broker's own port; the bridge behind a SlowPath whose CONNACKs are prompt
+    with lanes_behind(tmp_path, lambda port: SlowPath(port, 0.0)) as b:
+        proxy, probe, rig, app = b.proxy, b.probe, b.rig, b.app
+        assert probe.publish("rotor/lock", "ON")  # the operator locks the rotator
+        wait_until(lambda: rig.status("tower").locked, slow(10), "the lock ON carried out")
+        main_id = rig.settings.mqtt.effective_client_id()
+        proxy.backlog(main_id)  # the main connection has a backlog to read
+        assert probe.publish("rotor/lock", "OFF")  # the work is done: OFF, at the broker
+        proxy.hold(lane_client_id(rig.settings.mqtt))  # the stop lane's uplink stalls
+        wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the stop lane gone")
+        wait_until(app.lane.connected.is_set, slow(15), "the stop lane back")
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(
+                lambda: not app.client.connected.is_set(),
+                slow(DEAD_PATH_S),
+                "the main connection given up",
             )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+        proxy.released.set()  # the backlog read
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(lambda: not rig.status("tower").locked, slow(15), "the lock OFF carried out")
+        shown = [m.text for m in probe.on("rotor/lock/state")]
+        assert not rig.status("tower").locked, (
+            f"a lock OFF pressed while the main connection read a backlog, the stop lane's "
+            f"uplink stalling a few seconds meanwhile, was lost: R/lock/state said {shown}"
+        )

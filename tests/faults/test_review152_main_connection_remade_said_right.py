@@ -23,10 +23,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
+from tests.faults.behind_a_proxy import lanes_behind
 from tests.support.mqtt_proxy import MqttProxy
-from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 
 KEEPALIVE_S = 5  # the main connection's (mqtt.keepalive_s at its least)
@@ -35,37 +33,25 @@ KEEPALIVE_S = 5  # the main connection's (mqtt.keepalive_s at its least)
 def test_the_main_connection_made_again_on_a_dead_path_is_not_said_as_a_broker_that_never_answered(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = MqttProxy(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            rig.mqtt_extra["keepalive_s"] = KEEPALIVE_S  # (its end comes soon)
-            rig.add("tower", "rotorez", emu={"start_az_deg": 10})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            wait_until(app.lock_lane.connected.is_set, slow(15), "the lock lane up")
-            caplog.clear()
-            caplog.set_level(logging.INFO, logger="bridge")
-            proxy.blackhole()  # the path under every connection dies without a word
-            wait_until(
-                lambda: not app.client.connected.is_set(),
-                slow(2 * KEEPALIVE_S + 4),
-                "the main connection given up",
-            )
-            wait_until(app.client.connected.is_set, slow(15), "the main connection back")
-            said = [
-                r.getMessage()
-                for r in caplog.records
-                if r.levelno >= logging.ERROR and "did not answer the connection" in r.getMessage()
-            ]
-            assert not said, (
-                f"the main connection, accepted long before and given up for a ping unanswered "
-                f"2 s on a dead path, was told to the operator as a broker that never answered "
-                f"a connection: {said}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    # a dashboard on the broker's own port; the main connection's end comes soon
+    with lanes_behind(tmp_path, MqttProxy, keepalive_s=KEEPALIVE_S) as b:
+        proxy, app = b.proxy, b.app
+        caplog.clear()
+        caplog.set_level(logging.INFO, logger="bridge")
+        proxy.blackhole()  # the path under every connection dies without a word
+        wait_until(
+            lambda: not app.client.connected.is_set(),
+            slow(2 * KEEPALIVE_S + 4),
+            "the main connection given up",
+        )
+        wait_until(app.client.connected.is_set, slow(15), "the main connection back")
+        said = [
+            r.getMessage()
+            for r in caplog.records
+            if r.levelno >= logging.ERROR and "did not answer the connection" in r.getMessage()
+        ]
+        assert not said, (
+            f"the main connection, accepted long before and given up for a ping unanswered "
+            f"2 s on a dead path, was told to the operator as a broker that never answered "
+            f"a connection: {said}"
+        )

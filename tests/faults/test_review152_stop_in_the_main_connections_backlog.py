@@ -21,10 +21,8 @@ import contextlib
 from pathlib import Path
 
 from bridge.interfaces.mqtt.lane import lane_client_id
+from tests.faults.behind_a_proxy import TOWER, lanes_behind
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
-from tests.support.rig import Rig
 from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
 
@@ -40,40 +38,30 @@ PROMPT_S = 10.0  # the backlog read, the STOP reaches the controller within this
 def test_a_stop_behind_the_main_connections_backlog_is_carried_out_once_it_is_read(
     tmp_path: Path,
 ) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = SlowPath(broker.port, 0.0)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            probe.publish("rotor/target", TARGET)  # a long turn
-            emu.wait_for(lambda s: s.is_moving, slow(10))
-            proxy.backlog(rig.settings.mqtt.effective_client_id())  # the main one's reading
-            proxy.hold(lane_client_id(rig.settings.mqtt))  # the lane's uplink stalls
-            wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the lane gone")
-            assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
-            wait_until(app.lane.connected.is_set, slow(15), "the lane back")
-            # the main connection's doubt settled (or not) within DEAD_PATH_S of the lane's return
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(
-                    lambda: not app.client.connected.is_set(),
-                    slow(DEAD_PATH_S),
-                    "the main connection given up",
-                )
-            main_up = app.client.connected.is_set()
-            proxy.released.set()  # the backlog read
-            with contextlib.suppress(AssertionError, TimeoutError):
-                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-            s = emu.state()
-            assert not s.is_moving and not near_deg(s.az_deg, float(TARGET), SHORT_DEG), (
-                f"a STOP pressed while the stop lane was away and the main connection read a "
-                f"backlog was never carried out: the rotor turns on ({s.az_deg:.0f} deg); the "
-                f"main connection kept: {main_up}"
+    # a dashboard on the broker's own port; the tower at 10 deg, 2 deg/s; no wait for the lock lane
+    with lanes_behind(tmp_path, lambda port: SlowPath(port, 0.0), emu=TOWER, lock_lane=False) as b:
+        proxy, probe, rig, emu, app = b.proxy, b.probe, b.rig, b.emu, b.app
+        probe.publish("rotor/target", TARGET)  # a long turn
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        proxy.backlog(rig.settings.mqtt.effective_client_id())  # the main one's reading
+        proxy.hold(lane_client_id(rig.settings.mqtt))  # the lane's uplink stalls
+        wait_until(lambda: not app.lane.connected.is_set(), slow(10), "the lane gone")
+        assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
+        wait_until(app.lane.connected.is_set, slow(15), "the lane back")
+        # the main connection's doubt settled (or not) within DEAD_PATH_S of the lane's return
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(
+                lambda: not app.client.connected.is_set(),
+                slow(DEAD_PATH_S),
+                "the main connection given up",
             )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+        main_up = app.client.connected.is_set()
+        proxy.released.set()  # the backlog read
+        with contextlib.suppress(AssertionError, TimeoutError):
+            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+        s = emu.state()
+        assert not s.is_moving and not near_deg(s.az_deg, float(TARGET), SHORT_DEG), (
+            f"a STOP pressed while the stop lane was away and the main connection read a "
+            f"backlog was never carried out: the rotor turns on ({s.az_deg:.0f} deg); the "
+            f"main connection kept: {main_up}"
+        )
