@@ -7,6 +7,7 @@ past the proxy.
 from __future__ import annotations
 
 import contextlib
+import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,12 +48,13 @@ def bridge_behind(
     ready_s: float | None = None,
     up_s: float = 10,
     lock_lane: bool = False,
+    driver: str = "rotorez",
 ) -> Iterator[Behind[P]]:
-    """The bridge behind ``make_proxy(broker's port)``, its tower (a Rotor-EZ with the
-    emulator's options ``emu``) ready within ``ready_s`` (the rig's own by default) and its stop
-    lane up, with the express (``express``) or the lock lane (``lock_lane``) too, each within
-    ``up_s``; the main connection's keep-alive ``keepalive_s`` (None: the setting left out).
-    Closed (probe, proxy, broker) on the way out."""
+    """The bridge behind ``make_proxy(broker's port)``, its tower (a ``driver``, a Rotor-EZ
+    unless told, with the emulator's options ``emu``) ready within ``ready_s`` (the rig's own by
+    default) and its stop lane up, with the express (``express``) or the lock lane
+    (``lock_lane``) too, each within ``up_s``; the main connection's keep-alive ``keepalive_s``
+    (None: the setting left out). Closed (probe, proxy, broker) on the way out."""
     broker = Mosquitto(tmp_path / "broker").start()
     proxy = make_proxy(broker.port)
     probe = Probe(broker.port, "rotor/#")  # the operator, on the broker's own port
@@ -61,7 +63,7 @@ def bridge_behind(
             rig.express = express
             if keepalive_s is not None:
                 rig.mqtt_extra = {"keepalive_s": keepalive_s}
-            tower = rig.add("tower", "rotorez", emu=dict(emu))
+            tower = rig.add("tower", driver, emu=dict(emu))
             app = rig.start()
             rig.ready("tower", timeout_s=ready_s)
             wait_until(app.lane.connected.is_set, up_s, "the stop lane up")
@@ -106,3 +108,16 @@ def said_offline(probe: Probe, mark: int) -> list[str]:
         for m in probe.messages[mark:]
         if m.topic in ("rotor/availability", "rotor/bridge/state") and m.payload == b"offline"
     ]
+
+
+def main_up_after_a_doubt(
+    probe: Probe, mark: int, app: App, within_s: float, released: threading.Event
+) -> bool:
+    """Review 152's end: up to ``within_s`` for the bridge to say ``offline`` since ``mark``
+    (not an error if it does not), then whether the main connection is up; the backlog held for
+    it read after (``released`` set). The test says what it was shown (``said_offline``)."""
+    with contextlib.suppress(AssertionError, TimeoutError):
+        wait_until(lambda: said_offline(probe, mark), within_s, "the bridge said offline")
+    main_up = app.client.connected.is_set()
+    released.set()  # the backlog read
+    return main_up

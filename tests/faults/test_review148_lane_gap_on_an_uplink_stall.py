@@ -20,10 +20,8 @@ from pathlib import Path
 import pytest
 
 from bridge.interfaces.mqtt.lane import lane_client_id
+from tests.faults.behind_a_proxy import TOWER, lanes_behind
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
-from tests.support.rig import Rig
 from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
 
@@ -40,34 +38,24 @@ STALL_S = 10.0  # the lane's uplink stalls this long at most (the STOP is presse
     "stop lane, whose downlink was fine, and the rotor turns on",
 )
 def test_a_stop_during_an_uplink_stall_takes_the_lane_not_the_backlog(tmp_path: Path) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = SlowPath(broker.port, 0.0)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            emu = rig.add("tower", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 2.0})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(15), "the stop lane up")
-            probe.publish("rotor/target", TARGET)  # a long turn
-            emu.wait_for(lambda s: s.is_moving, slow(10))
-            proxy.backlog(rig.settings.mqtt.effective_client_id())  # the main one's reading
-            proxy.hold(lane_client_id(rig.settings.mqtt))  # the lane's uplink stalls
-            # the operator presses STOP during the stall: once the lane let its connection go
-            # (2 s ping, 2 s for its answer), or STALL_S into it if it never does
-            with contextlib.suppress(AssertionError, TimeoutError):
-                wait_until(lambda: not app.lane.connected.is_set(), STALL_S, "the lane gone")
-            gone = not app.lane.connected.is_set()
-            assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
-            with contextlib.suppress(AssertionError, TimeoutError):
-                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-            s = emu.state()
-            assert not s.is_moving and not near_deg(s.az_deg, float(TARGET), SHORT_DEG), (
-                f"a STOP pressed during a stall of the bridge's uplink (the stop lane gone "
-                f"meanwhile: {gone}), the main connection reading a backlog, did not stop the "
-                f"rotor: it turns on ({s.az_deg:.0f} deg)"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    # a dashboard on the broker's own port; the bridge behind a SlowPath whose CONNACKs are prompt
+    with lanes_behind(tmp_path, lambda port: SlowPath(port, 0.0), emu=TOWER, lock_lane=False) as b:
+        proxy, probe, rig, emu, app = b.proxy, b.probe, b.rig, b.emu, b.app
+        probe.publish("rotor/target", TARGET)  # a long turn
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        proxy.backlog(rig.settings.mqtt.effective_client_id())  # the main one's reading
+        proxy.hold(lane_client_id(rig.settings.mqtt))  # the lane's uplink stalls
+        # the operator presses STOP during the stall: once the lane let its connection go
+        # (2 s ping, 2 s for its answer), or STALL_S into it if it never does
+        with contextlib.suppress(AssertionError, TimeoutError):
+            wait_until(lambda: not app.lane.connected.is_set(), STALL_S, "the lane gone")
+        gone = not app.lane.connected.is_set()
+        assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
+        with contextlib.suppress(AssertionError, TimeoutError):
+            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+        s = emu.state()
+        assert not s.is_moving and not near_deg(s.az_deg, float(TARGET), SHORT_DEG), (
+            f"a STOP pressed during a stall of the bridge's uplink (the stop lane gone "
+            f"meanwhile: {gone}), the main connection reading a backlog, did not stop the "
+            f"rotor: it turns on ({s.az_deg:.0f} deg)"
+        )

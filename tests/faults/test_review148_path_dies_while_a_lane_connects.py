@@ -24,10 +24,8 @@ import pytest
 
 from bridge.interfaces.mqtt.connection import STOP_DEAD_PATH_S
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.support import Probe
-from tests.support.mosquitto import Mosquitto
+from tests.faults.behind_a_proxy import bridge_behind
 from tests.support.mqtt_proxy import CONNECT, MqttProxy, _Stream
-from tests.support.rig import Rig
 from tests.support.tap import near_deg
 from tests.support.waiting import slow, wait_until
 
@@ -66,34 +64,33 @@ class DiesOnConnect(MqttProxy):
     "reaches nobody and the rotor turns on",
 )
 def test_a_stop_after_the_path_died_under_a_lane_connecting(tmp_path: Path) -> None:
-    broker = Mosquitto(tmp_path / "broker").start()
-    proxy = DiesOnConnect(broker.port)
-    probe = Probe(broker.port, "rotor/#")  # a dashboard on the broker's own port
-    try:
-        with Rig(tmp_path, proxy, probe) as rig:
-            emu = rig.add("tower", "rot2prog", emu={"start_az_deg": 10, "az_speed_deg_s": 1.0})
-            app = rig.start()
-            rig.ready("tower", timeout_s=slow(30))
-            wait_until(app.lane.connected.is_set, slow(10), "the stop lane up")
-            probe.publish("rotor/target", TARGET)  # a long turn
-            emu.wait_for(lambda s: s.is_moving, slow(10))
-            lane = lane_client_id(rig.settings.mqtt)
-            proxy.armed = lane
-            proxy.drop(lane)  # the lane's stream dropped: it connects again
-            wait_until(proxy.died.is_set, slow(10), "the path dead under the lane's CONNECT")
-            # the user's hand: the scenario's timing (attack 32's), not a wait for the bridge
-            time.sleep(STOP_DEAD_PATH_S + 1.0)
-            assert emu.state().is_moving
-            assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
-            with contextlib.suppress(AssertionError, TimeoutError):
-                emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
-            s = emu.state()
-            assert not s.is_moving and not near_deg(s.az_deg, 190.0, SHORT_DEG), (
-                f"a STOP pressed {STOP_DEAD_PATH_S + 1.0:g} s after the path died under the "
-                f"stop lane's CONNECT did not stop the rotor: it turns on ({s.az_deg:.0f} deg); "
-                f"the stop lane up: {app.lane.connected.is_set()}"
-            )
-    finally:
-        probe.close()
-        proxy.close()
-        broker.stop()
+    # a dashboard on the broker's own port; no express (a Rot2Prog), nor the lock lane waited for
+    with bridge_behind(
+        tmp_path,
+        DiesOnConnect,
+        driver="rot2prog",
+        emu={"start_az_deg": 10, "az_speed_deg_s": 1.0},
+        express=False,
+        keepalive_s=None,
+        ready_s=slow(30),
+        up_s=slow(10),
+    ) as b:
+        proxy, probe, rig, emu, app = b.proxy, b.probe, b.rig, b.emu, b.app
+        probe.publish("rotor/target", TARGET)  # a long turn
+        emu.wait_for(lambda s: s.is_moving, slow(10))
+        lane = lane_client_id(rig.settings.mqtt)
+        proxy.armed = lane
+        proxy.drop(lane)  # the lane's stream dropped: it connects again
+        wait_until(proxy.died.is_set, slow(10), "the path dead under the lane's CONNECT")
+        # the user's hand: the scenario's timing (attack 32's), not a wait for the bridge
+        time.sleep(STOP_DEAD_PATH_S + 1.0)
+        assert emu.state().is_moving
+        assert probe.publish("rotor/stop", "")  # the operator's STOP, at the broker
+        with contextlib.suppress(AssertionError, TimeoutError):
+            emu.wait_for(lambda s: not s.is_moving, slow(PROMPT_S))
+        s = emu.state()
+        assert not s.is_moving and not near_deg(s.az_deg, 190.0, SHORT_DEG), (
+            f"a STOP pressed {STOP_DEAD_PATH_S + 1.0:g} s after the path died under the "
+            f"stop lane's CONNECT did not stop the rotor: it turns on ({s.az_deg:.0f} deg); "
+            f"the stop lane up: {app.lane.connected.is_set()}"
+        )

@@ -20,11 +20,10 @@ way of finding the main connection's dead path must pass it."""
 
 from __future__ import annotations
 
-import contextlib
 import time
 from pathlib import Path
 
-from tests.faults.behind_a_proxy import lanes_behind, said_offline
+from tests.faults.behind_a_proxy import lanes_behind, main_up_after_a_doubt, said_offline
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
 from tests.support.waiting import slow, wait_until
 
@@ -54,10 +53,7 @@ def test_a_frozen_broker_does_not_drop_a_main_connection_reading_a_backlog(
         def offline() -> list[str]:
             return said_offline(probe, mark)
 
-        with contextlib.suppress(AssertionError, TimeoutError):
-            wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
-        main_up = app.client.connected.is_set()
-        proxy.released.set()  # the backlog read
+        main_up = main_up_after_a_doubt(probe, mark, app, slow(DEAD_PATH_S), proxy.released)
         assert not offline() and main_up, (
             f"a broker frozen {FROZEN_S:g} s while the main connection read a backlog: "
             f"dashboards were shown {offline()} offline; the main connection up: {main_up}"

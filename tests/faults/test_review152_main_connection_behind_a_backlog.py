@@ -22,7 +22,7 @@ import contextlib
 from pathlib import Path
 
 from bridge.interfaces.mqtt.lane import lane_client_id
-from tests.faults.behind_a_proxy import lanes_behind, said_offline
+from tests.faults.behind_a_proxy import lanes_behind, main_up_after_a_doubt, said_offline
 from tests.faults.test_review145_stop_carriers_keepalive import SlowPath
 from tests.support.waiting import slow, wait_until
 
@@ -48,10 +48,7 @@ def test_a_stop_lane_stall_does_not_drop_a_main_connection_reading_a_backlog(
             return said_offline(probe, mark)
 
         # the main connection's doubt is settled within DEAD_PATH_S of the lane's return
-        with contextlib.suppress(AssertionError, TimeoutError):
-            wait_until(offline, slow(DEAD_PATH_S), "the bridge said offline")
-        main_up = app.client.connected.is_set()
-        proxy.released.set()  # the backlog read
+        main_up = main_up_after_a_doubt(probe, mark, app, slow(DEAD_PATH_S), proxy.released)
         assert not offline() and main_up, (
             f"a stall of the stop lane's uplink while the main connection read a backlog, "
             f"the broker healthy and the main connection's path fine: dashboards were shown "
