@@ -11,7 +11,8 @@ Assistant discovery on) with 16 emulated Rotor-EZ controllers behind paced lines
 run with its own import path (benchmarks/engines.py); everything else is this checkout's.
 The engines take turns, ROUNDS rounds each (old, older, new, old, older, new, ...), so all
 meet the same machine; each round starts its bridge afresh and measures, from /proc
-(procfs.cpu_seconds: every thread of the bridge process):
+(procfs.tree_cpu_seconds: every thread of the bridge process and of the processes it started,
+the stop express's child among them; the older engines start none):
 
 - start-up: the bridge's CPU seconds from its start to all 16 rotators ``online`` (Home
   Assistant discovery on), and to "settled": all 16 ``idle`` and a second more, by when the
@@ -48,7 +49,7 @@ from typing import Any
 
 from benchmarks.engines import compiled, engine_at, engine_spawner
 from benchmarks.harness import REPO, Scope, check_abort, child_env
-from benchmarks.procfs import cpu_seconds
+from benchmarks.procfs import tree_cpu_seconds as cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
 from benchmarks.without import PARTS, unknown
@@ -296,9 +297,10 @@ def run(
             f"({(new['ms_per_exchange'] - less) / new['ms_per_exchange']:.0%} of this tree's)."
         )
     table.notes += [
-        "CPU: the bridge process, every thread (/proc schedstat); exchanges: `AI1;` frames the "
-        "controllers logged. Start-up: from the process's start to all 16 `online` (discovery "
-        f"on; each engine from bytecode, as installed), the median of {STARTS} starts each in "
+        "CPU: the bridge process and the processes it started (the stop express), every "
+        "thread (/proc schedstat); exchanges: `AI1;` frames the controllers logged. Start-up: "
+        "from the process's start to all 16 `online` (discovery on; each engine from "
+        f"bytecode, as installed), the median of {STARTS} starts each in "
         "turns (the rounds' and more alone: "
         + ", ".join(
             f"{e} {spread[e]['startup_cpu_s'][0]:.2f}-{spread[e]['startup_cpu_s'][1]:.2f} s"

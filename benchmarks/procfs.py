@@ -52,6 +52,26 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def children(pid: int) -> list[int]:
+    """The live processes ``pid``'s threads started (each thread's children, from /proc)."""
+    out: list[int] = []
+    with contextlib.suppress(OSError):
+        for tid in os.listdir(f"/proc/{pid}/task"):
+            with contextlib.suppress(OSError), open(f"/proc/{pid}/task/{tid}/children") as f:
+                out += [int(k) for k in f.read().split()]
+    return out
+
+
+def tree_cpu_seconds(pid: int) -> float:
+    """CPU time of ``pid`` and of every live process under it: the bridge's cost with the stop
+    express's child (interfaces/mqtt/express.py rule 1), a second interpreter of its own."""
+    total = cpu_seconds(pid)
+    for kid in children(pid):
+        with contextlib.suppress(OSError, BenchError):
+            total += tree_cpu_seconds(kid)
+    return total
+
+
 @dataclass
 class Usage:
     cpu_pct: float  # % of one core over the window
