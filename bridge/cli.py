@@ -58,7 +58,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     logging.getLogger(__name__).info(
         "rotor-bridge %s starting with %d rotator(s)", __version__, len(settings.rotators)
     )
-    if settings._service_links:  # (settings/__init__.py rule 9)
+    if settings._service_links:  # (settings/config.py rule 9)
         logging.getLogger(__name__).info(
             "ignored %s: set by Kubernetes for a Service named rotor-bridge, no keys",
             ", ".join(settings._service_links),

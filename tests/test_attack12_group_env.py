@@ -2,7 +2,7 @@
 (``ROTOR_BRIDGE_ROTATORS__TOWER__PORT`` works; ``ROTOR_BRIDGE_GROUPS__STACK__OFFSETS`` or
 ``ROTOR_BRIDGE_GROUPS__0__ID`` looks the same) is read by pydantic-settings as a table that
 replaces the file's ``[[groups]]`` list, and refused as "groups: Input should be a valid list":
-no variable named (settings/__init__.py rule 4 names one for a rotator's key; errors name
+no variable named (settings/config.py rule 4 names one for a rotator's key; errors name
 the variable that set a value), so the operator looks at the file's [[groups]], which is a
 valid list, and the bridge does not start."""
 
@@ -34,7 +34,7 @@ FILE = {
 def test_a_groups_key_from_the_environment_is_taken_or_refused_naming_the_variable(
     monkeypatch: pytest.MonkeyPatch, variable: str, value: str
 ) -> None:
-    """settings/__init__.py rule 4: groups are the file's alone (docs/configuration.md), so
+    """settings/config.py rule 4: groups are the file's alone (docs/configuration.md), so
     such a variable is refused naming it."""
     monkeypatch.setenv(variable, value)
     try:

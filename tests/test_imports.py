@@ -85,3 +85,32 @@ def test_the_service_loads_neither_the_web_server_nor_the_astronomy_before_they_
         check=True,
     )
     assert out.stdout.strip() == "[]"
+
+
+def test_the_stop_express_child_loads_no_table_but_the_brokers() -> None:
+    """The stop express's child (interfaces/mqtt/express.py rule 1) is a second interpreter
+    started with the bridge and again after each of its ends: it takes the broker's table
+    (settings/mqtt.py) and nothing of the rest of the configuration, pydantic-settings among it
+    (a third of what it took to start, the package importing every table at once)."""
+    import subprocess
+    import sys
+
+    heavy = [
+        "pydantic_settings",
+        "bridge.settings.config",
+        "bridge.settings.rotator",
+        "bridge.settings.dxcluster",
+        "bridge.session",
+        "bridge.runtime",
+    ]
+    check = (
+        "import sys, bridge.interfaces.mqtt.express;"
+        " print(sorted(m for m in sys.modules if m in W))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", f"W = {set(heavy)!r}; {check}"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert out.stdout.strip() == "[]"

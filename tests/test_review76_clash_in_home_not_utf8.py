@@ -1,5 +1,5 @@
 """Review 76 of c6ac9e56 (settings/base.py rule 8: "a refusal names a path as ``shown_path``
-spells it"): two refusals naming a path were left out, settings/__init__.py's rule 6 (a file
+spells it"): two refusals naming a path were left out, settings/config.py's rule 6 (a file
 the bridge writes that is also another key's file) and rule 7 (``secret_read``: a file read
 as no secret that holds one). In a home folder whose name is not UTF-8 a file there written
 ``~/...`` ends check-config and run in the UnicodeEncodeError traceback inside pydantic that

@@ -54,7 +54,7 @@ Rules:
    stderr, and cli.py's stdout, write it (``\\udce9``). ``shown_path`` is core/text.py's, the
    one spelling of a path in everything the bridge says (R/error, the log, the pty server's
    words: review 76 found the running bridge naming such a port raw on MQTT), not the
-   settings' alone; every refusal naming a path uses it, settings/__init__.py's rules 6 and 7
+   settings' alone; every refusal naming a path uses it, settings/config.py's rules 6 and 7
    too.
 9. A value made of parts each judged under its own key (a composite rotator's port of both,
    ``<azimuth's>+<elevation's>``, from its ``azimuth.port`` and ``elevation.port``:

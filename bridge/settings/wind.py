@@ -16,7 +16,7 @@ Rules:
    level of 300 m/s (1,080 km/h), which the bound of 500 taken in the user's unit let
    through, never parked: no reading that is kept can pass it (an attack pass).
 3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station;
-   and none of the bridge's own (a rotator's, a group's, the bridge's: settings/__init__.py
+   and none of the bridge's own (a rotator's, a group's, the bridge's: settings/config.py
    ``_wind_topics``), where no weather station publishes. Under a rotator's topic only its
    words are its own: a lone rotator's topic is the base topic, and ``rotor/weather/wind``
    beside them is taken, as with two rotators.

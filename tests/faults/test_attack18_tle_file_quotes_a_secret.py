@@ -2,7 +2,7 @@
 /etc/rotor-bridge, a slip of tab completion) passes check-config, and the start's catalog
 reading quotes that file's first line in its warning: the MQTT password, in the log (the
 journal) at WARNING. The settings know the file is the password's (``mqtt.password_file``,
-settings/__init__.py rule 6 lists the files read), and every other message names a secret's
+settings/config.py rule 6 lists the files read), and every other message names a secret's
 file without quoting it (settings/files.py rule 3)."""
 
 from __future__ import annotations

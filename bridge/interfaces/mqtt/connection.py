@@ -185,7 +185,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.paho_client import CONNACK_TIMEOUT_S, accepts_mqtt311, new_client
-from bridge.settings import MqttSettings
+from bridge.settings.mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
 

@@ -16,7 +16,8 @@ Rules:
    once the main connection is up (as the lane: the broker is known to take the bridge), on a
    thread of its own that then stays to read the child's words (one thread, asleep on a
    socket, awake once a second to look at the start and the holds, rule 8). The
-   child imports paho, connection.py, the settings and payloads.py (the words of a lock ON),
+   child imports paho, connection.py, the broker's settings (settings/mqtt.py alone: not the
+   package's every table, nor pydantic-settings) and payloads.py (the words of a lock ON),
    nothing of the engine.
 2. Its connection is the lane's in all but the client id (``express_client_id``): the same
    broker settings, credentials and TLS (the password handed over the control socket, never
@@ -250,7 +251,7 @@ from bridge.interfaces.mqtt.connection import (
 )
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
-from bridge.settings import MqttSettings
+from bridge.settings.mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
 

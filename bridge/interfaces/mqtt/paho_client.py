@@ -110,7 +110,7 @@ from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 from bridge.core import handoff
 from bridge.core.polling import POLLERR, POLLHUP, POLLIN, POLLNVAL, POLLOUT, POLLPRI, new_poller
 from bridge.interfaces.mqtt.heartbeat import MAX_PROPERTIES_BYTES, UNREAD_PROPERTIES
-from bridge.settings import MqttSettings
+from bridge.settings.mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
 
