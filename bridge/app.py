@@ -271,6 +271,7 @@ class App:
         )
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
+        self.on_failed: Callable[[], None] | None = None  # (``_serve``: its wait ended at once)
         self._lane_started = False
         self._problems_lock = threading.Lock()  # rule 4
         # the heartbeat's wall clock and the one a stamped command is judged by (heartbeat.py)
@@ -834,6 +835,8 @@ class App:
                 rot.leave(YIELDING)
         self.failure = message
         self.failed.set()
+        if self.on_failed is not None:
+            self.on_failed()
 
     def _halt_all(
         self, *, turning_only: bool = False, done: frozenset[str] = frozenset()
@@ -1095,7 +1098,7 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
 
 def _serve(
     settings: Settings,
-    wait: Callable[[float], bool],
+    wait: Callable[[float | None], bool],
     ending: Ending,
     stop_event: threading.Event | None,
 ) -> int:
@@ -1103,6 +1106,7 @@ def _serve(
         app = App(settings)
     except OSError as exc:  # not foreseen, but a start that cannot work all the same
         raise ConfigError(f"cannot start: {exc}") from None
+    app.on_failed = ending.end  # (no reason: the failure says its own words)
     try:
         app.start()
     except BaseException:
@@ -1112,9 +1116,13 @@ def _serve(
     # collection first: it walked them all once more (15 ms of the start's CPU) to free what a
     # start leaves as garbage, some 30 KB (Home Assistant's entities, with no finalizer), kept
     gc.freeze()
+    # The wait ends on a signal or the app's failure (``ending``), at once: the thread sleeps
+    # until then (a look once a second was a wake-up a second of an idle bridge's ten, each
+    # costing what a hundred calls do). A caller's stop_event (a test's) is looked at once a
+    # second, and app.failed with it where the wait is on that event (off the main thread).
+    poll_s = None if stop_event is None else 1.0
     try:
-        # app.failed and (on the main thread) stop_event are looked at once a second
-        while not wait(1.0) and not app.failed.is_set():
+        while not wait(poll_s) and not app.failed.is_set():
             if stop_event is not None and stop_event.is_set():
                 break
         if ending.reason is not None:

@@ -16,7 +16,8 @@ short-lived thread would have cost a thread per signal, started under threading'
 
 Rules:
 1. ``end(reason)`` never blocks and takes no lock: a signal handler and any thread may call it,
-   as often as they like. The first reason is kept (what ended it, said once).
+   as often as they like. The first reason is kept (what ended it, said once); an end with
+   none (``end()``: a failure that says its own words) keeps none.
 2. One thread waits (``wait``): the main thread, or whichever thread runs the loop. ``wait``
    returns as soon as ``end`` was called, before its call or during it, whoever called it.
 3. ``on_signals(...)`` routes the signals to ``end`` with the signal's name as the reason, for
@@ -56,7 +57,7 @@ class Ending:
         self._ended = False
         self.reason: str | None = None  # rule 1: the first
 
-    def end(self, reason: str) -> None:
+    def end(self, reason: str | None = None) -> None:
         """Rule 1: no lock, no wait; from a signal handler or any thread."""
         if self.reason is None:
             self.reason = reason
