@@ -583,7 +583,9 @@ class MqttClient(Connection):
 
     def _tick(self) -> None:
         """Rule 2: the heartbeat, when due (paho's thread, after each round of its loop); rule
-        10: an ``offline`` on the will topic that the connection outlived was a stranger's."""
+        10: an ``offline`` on the will topic that the connection outlived was a stranger's.
+        Called again within a second (None: paho_client.py rule 2): the beat, its echo's
+        lateness (rule 19) and the will's verdict are on the clock."""
         heard = self._will_heard
         if heard is not None and self._clock() - heard[0] >= WILL_OUTLIVED_S:
             self._will_heard = None

@@ -169,6 +169,7 @@ from __future__ import annotations
 
 import errno
 import logging
+import math
 import socket
 import ssl
 import sys
@@ -672,8 +673,11 @@ class Connection:
         """Whether a message is the connection's own business, not the handler's."""
         return False
 
-    def _tick(self) -> None:
-        """After each round of paho's loop while connected (Client.tick): must be cheap."""
+    def _tick(self) -> float | None:
+        """After each round of paho's loop while connected (Client.tick): must be cheap. It
+        returns when (``time.monotonic``) it must run again, None within a second
+        (paho_client.py rule 2); a connection with nothing on a clock, never."""
+        return math.inf
 
     # -- paho callbacks (paho's thread) ---------------------------------------------------
     def _on_connect(

@@ -218,6 +218,7 @@ import fcntl
 import hashlib
 import json
 import logging
+import math
 import os
 import secrets
 import select
@@ -1071,12 +1072,18 @@ class _Link(Connection):
             self._fight = takeover_message(self._client_id, ending, TAKEOVER_FIRST_S)
             self._say(op="problem", text=self._fight)  # (the bridge logs it)
 
-    def _tick(self) -> None:
-        """Rule 6: a fight said is unsaid once a connection lasted STABLE_S (cheap: a compare)."""
+    def _tick(self) -> float | None:
+        """Rule 6: a fight said is unsaid once a connection lasted STABLE_S (cheap: a compare);
+        when that is due (paho_client.py rule 2), or never while none is said."""
         since = self._guard.connected_at
-        if self._fight is not None and since is not None and self._clock() - since >= STABLE_S:
-            self._say(op="problem", text=self._fight, off=True)
-            self._fight = None
+        if self._fight is None or since is None:
+            return math.inf  # (a connection's start runs a round, and this, again)
+        left_s = since + STABLE_S - self._clock()
+        if left_s > 0:
+            return time.monotonic() + left_s
+        self._say(op="problem", text=self._fight, off=True)
+        self._fight = None
+        return math.inf
 
 
 class _Child:

@@ -5,10 +5,15 @@ rule 9, where it is explained), and a tick on paho's own thread.
 
 Rules:
 1. ``new_client`` builds paho's client for the settings: MQTT 5 or 3.1.1, credentials, TLS.
-2. ``tick``, when set, is called on paho's thread after each round of its loop (at least once a
-   second while connected: its wait lasts 1 s at most), for what a connection does on a clock
-   without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
-   one that raises is logged and paho's thread goes on.
+2. ``tick``, when set, is called on paho's thread after each round of its loop, for what a
+   connection does on a clock without a thread of its own (the station's heartbeat, client.py
+   rule 2). It must be cheap; one that raises is logged and paho's thread goes on. It returns
+   when (``time.monotonic``) it must be called again, or None: within a second. A round waits
+   until the first thing due: that, paho's keep-alive (a ping after its quiet, the connection
+   given up when one is unanswered), rule 5's CONNACK, a ``loop_stop``'s end (rule 6); woken
+   sooner by the socket or another thread. (A wait of a second at most was one wake-up a
+   second of each connection: of an idle bridge's ten, four were the connections' that had
+   nothing due.)
 3. ``use_mqtt311`` turns a client built for MQTT 5 into one that speaks MQTT 3.1.1 with a clean
    session from its next connection on (``mqtt.protocol = "auto"``, connection.py rule 1), as
    paho itself steps down from 3.1.1 to 3.1 on a refusal: its CONNECT is built from these two
@@ -95,6 +100,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import socket
 import ssl
@@ -116,6 +122,8 @@ log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # connection.py rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
+_WAIT_MOST_S = 1.0  # rule 2: a round's wait where a tick names no time
+_WAIT_LONGEST_MS = 3_600_000  # rule 2: a round's longest wait (poll takes an int)
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
@@ -255,7 +263,8 @@ class Client(paho.Client):
     """paho's client with connection.py rule 9 (every read goes through loop_read), rule 2
     (``tick``), rule 6 (``loop_start``: the network thread) and rule 9 (``publish_qos0``)."""
 
-    tick: Callable[[], None] | None = None
+    tick: Callable[[], float | None] | None = None
+    _tick_due = -math.inf  # rule 2: when ``tick`` asked to be called again
     hearing: Hearing | None = None  # rule 11
     name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
@@ -463,7 +472,7 @@ class Client(paho.Client):
         try:
             fd = sock.fileno()
             poller.register(fd, POLL_READ | POLLOUT if self.want_write() else POLL_READ)
-            wait_ms = 0 if ready else 1000
+            wait_ms = 0 if ready else self._wait_ms()
             before = hearing.clock() if hearing is not None else 0.0
             events = poller.poll(wait_ms)
         except (OSError, TypeError, ValueError):  # closed under us: reconnect
@@ -510,6 +519,30 @@ class Client(paho.Client):
                 return True
         self.loop_misc()
         return True
+
+    def _wait_ms(self) -> int:
+        """Rule 2: how long a round may wait for its socket or a wake-up: until the first thing
+        due, at least a millisecond (a due time past is looked at by ``loop_misc`` at once,
+        and its look moves it on), a second at most where something asks it (a tick with no
+        time; paho's private clocks not found)."""
+        now = time.monotonic()
+        due = now + _WAIT_MOST_S if self._tick_due == -math.inf else self._tick_due
+        if self._connect_t is not None:  # rule 5
+            due = min(due, self._connect_t + CONNACK_TIMEOUT_S)
+        halt = getattr(self, "_halt", None)  # (None: no loop_start, a test's round)
+        if halt is not None and halt.is_set():  # rule 6: STOP_WRITE_S from ``loop_stop``
+            due = min(due, now + _WAIT_MOST_S)
+        keepalive = self._keepalive
+        if keepalive:  # paho's ``_check_keepalive`` and ``loop_misc``, as they look
+            sent = getattr(self, "_last_msg_out", None)
+            heard = getattr(self, "_last_bytes_received", None)
+            if not isinstance(sent, float | int) or not isinstance(heard, float | int):
+                due = min(due, now + _WAIT_MOST_S)
+            else:
+                due = min(due, min(sent, heard) + keepalive)
+                if self._ping_t:
+                    due = min(due, self._ping_t + keepalive)
+        return max(1, min(_WAIT_LONGEST_MS, math.ceil((due - now) * 1000)))
 
     def _back_off(self) -> bool:
         """paho's wait before a reconnect: min, doubling up to max. False: stopped meanwhile."""
@@ -596,11 +629,17 @@ class Client(paho.Client):
         self._unanswered()
         rc = super().loop_misc()
         tick = self.tick
+        self._tick_due = -math.inf  # (rule 2: within a second, unless it names a time)
         if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
             try:
-                tick()
+                due = tick()
             except Exception:  # connection.py rule 5: paho's network thread goes on
                 log.exception("error in the MQTT connection's tick")
+            else:
+                if due is not None:
+                    self._tick_due = due
+        elif tick is None:
+            self._tick_due = math.inf  # nothing on a clock but paho's own and rule 5's
         return rc
 
 
