@@ -1202,6 +1202,36 @@ def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
         assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
 
 
+def test_a_sleeping_reader_is_woken_by_a_hold_and_finds_the_express_hung(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Rule 1: with nothing to look at (the express up, every word read, no hold) the reader
+    sleeps until a word is sent to it; the request a hold sends wakes it, and an express that
+    leaves it unread READ_WAIT_S is still found hung and killed (rule 8)."""
+    problems, holds, now = Problems(), Holds(), [1000.0]
+    with up_on_a_fake_clock([sys.executable, "-c", UP_THEN_HUNG], problems, holds, now) as e:
+        child = e._child
+        assert child is not None
+        asleep = threading.Event()
+        tick = e._tick
+
+        def watched(*args: Any) -> bool:
+            waits = tick(*args)
+            if not waits:
+                asleep.set()  # (the reader's next wait has no end but a word)
+            return waits
+
+        e._tick = watched  # type: ignore[method-assign]
+        wait_until(asleep.is_set, 10, "the reader asleep, nothing to look at")
+        with caplog.at_level(logging.ERROR, logger=express_module.__name__):
+            e.hold("a")
+            now[0] += READ_WAIT_S
+            wait_until(lambda: child.poll() is not None, 10, "the hung one killed")
+            wait_until(lambda: ("release", "a", 1) in holds.log, 10, "its hold ended with it")
+        kills = [r.getMessage() for r in caplog.records if "killed" in r.getMessage()]
+        assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
+
+
 SLOW_START = (  # a host loading Python slowly: reads nothing until SIGUSR1, then is up
     "import signal, socket, sys, time\n"
     "signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGUSR1])\n"
@@ -1227,9 +1257,10 @@ def test_an_express_slow_to_start_is_said_late_never_killed(
     ticks = threading.Semaphore(0)
     tick = e._tick
 
-    def counted(*args: Any) -> None:
-        tick(*args)
+    def counted(*args: Any) -> bool:
+        waits = tick(*args)
         ticks.release()
+        return waits
 
     e._tick = counted  # type: ignore[method-assign]
     e.start(mqtt311=False)

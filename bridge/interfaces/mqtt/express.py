@@ -15,7 +15,8 @@ Rules:
 1. A process of its own (``python -m bridge.interfaces.mqtt.express``), started by ``Express.start``
    once the main connection is up (as the lane: the broker is known to take the bridge), on a
    thread of its own that then stays to read the child's words (one thread, asleep on a
-   socket, awake once a second to look at the start and the holds, rule 8). The
+   socket, awake once a second while the child starts, a word sent to it is unread or a hold
+   waits (rules 6 and 8), and woken by each word sent; nothing else wakes it). The
    child imports paho, connection.py, the broker's settings (settings/mqtt.py alone: not the
    package's every table, nor pydantic-settings) and payloads.py (the words of a lock ON),
    nothing of the engine.
@@ -251,6 +252,7 @@ from bridge.interfaces.mqtt.connection import (
     takeover_message,
 )
 from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.paho_client import Waker
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
 from bridge.settings.mqtt import MqttSettings
 
@@ -311,6 +313,10 @@ def _unread(sock: socket.socket) -> bool:
 
 
 # -- the bridge's side ---------------------------------------------------------------------------
+def _no_call() -> None:
+    """``_Outbox``'s ``sent`` where nothing waits for its sends (a test's)."""
+
+
 class _Outbox:
     """Rule 8: every word to one child, sent under one lock, so the request a stop would send
     is left out while the last word sent is a request the child has not read yet (that one is
@@ -321,9 +327,12 @@ class _Outbox:
     answers the newest number it has read (Sync), so an answer that reaches m then proves it
     read m. (Two threads carry stops out, and their requests may go in either order.)"""
 
-    def __init__(self, sock: socket.socket, clock: Callable[[], float]) -> None:
+    def __init__(
+        self, sock: socket.socket, clock: Callable[[], float], sent: Callable[[], None] = _no_call
+    ) -> None:
         self.sock = sock
         self._clock = clock
+        self._sent = sent  # (rule 1: wakes the reader, asleep while nothing waits)
         self._lock = threading.Lock()
         self._last: int | None = None  # the last word sent, when it was sync request n
         self._top = 0  # the highest request sent
@@ -335,6 +344,7 @@ class _Outbox:
         with self._lock:
             _send(self.sock, word, fds, socket.MSG_DONTWAIT)
             self._last, self._sent_at = None, self._clock()
+        self._sent()
 
     def ask(self, n: int, again: bool) -> None:
         """Request ``n`` (its stop already read by the bridge), or left out; as ``send``."""
@@ -349,6 +359,7 @@ class _Outbox:
             _send(self.sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
             self._last = n if n > self._top else None
             self._top, self._sent_at = max(self._top, n), self._clock()
+        self._sent()
 
     def answer(self, n: int) -> int:
         """The child answered request ``n``: the newest request that answers."""
@@ -578,8 +589,9 @@ class Express:
             "stops and locks go through"
         )
 
-    def _tick(self, came_up: bool, late: str) -> None:
-        """On the reader's thread, once a second while the child starts or a hold waits."""
+    def _tick(self, came_up: bool, late: str) -> bool:
+        """On the reader's thread, once a second while the child starts, a word sent to it is
+        unread or a hold waits (rule 1), and at each word sent: whether any of them is so."""
         if not came_up and time.monotonic() - self._started_at >= START_WAIT_S:
             self._problem(late, True)
         with self._lock:
@@ -594,12 +606,13 @@ class Express:
             newest = self._sync
         if oldest is None:
             self._problem(self._long_hold(), False)
-            return
+            return not came_up or (sock is not None and _unread(sock.sock))
         if now - oldest >= RESEND_S and now - self._asked_at >= RESEND_S:
             self._asked_at = now
             self._ask(newest, again=True)
         if now - oldest >= LONG_HOLD_S:
             self._problem(self._long_hold(), True)
+        return True
 
     # -- the ports (runtime/port.py rule 7, on the ports' open and close threads) ---------------
     def opened(self, rotator_id: str, fd: int) -> None:
@@ -724,14 +737,16 @@ class Express:
             "frames": {rid: frame.hex() for rid, frame in self._frames.items()},
             "log_level": logging.getLogger("bridge").getEffectiveLevel(),
         }
+        waker = Waker()  # rule 1: a word sent wakes the reader (its own thread's close)
         with self._lock:
             self._child = child
             if self._stopping:
                 mine.close()
+                waker.close()
                 child.kill()
                 child.wait()
                 return None
-            self._sock = _Outbox(mine, lambda: self.clock())
+            self._sock = _Outbox(mine, lambda: self.clock(), waker.wake)
             try:
                 self._sock.send(config)
             except OSError:
@@ -744,17 +759,23 @@ class Express:
         passing: set[str] = set()  # problems said until it is up (rule 6)
         came_up = False  # rule 6: its start is judged once, a child
         ticked = time.monotonic()
+        waits = True  # rule 1: something for the tick to look at (the start, a word, a hold)
         poller = select.poll()  # (not select.select: a bridge with many clients has fds > 1023)
         poller.register(mine, select.POLLIN)
+        poller.register(waker.fileno(), select.POLLIN)
         while True:
             # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
             # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
             # blocking socket), the stops' sends among them.
             try:
-                readable = poller.poll(TICK_S * 1000)
-                if time.monotonic() - ticked >= TICK_S or not readable:
+                events = poller.poll(TICK_S * 1000 if waits else None)
+                woken = any(fd == waker.fileno() for fd, _ in events)
+                if woken:
+                    waker.drain()  # a word sent: its reading is looked at from now on
+                readable = any(fd != waker.fileno() for fd, _ in events)
+                if woken or not events or time.monotonic() - ticked >= TICK_S:
                     ticked = time.monotonic()  # (due even while its words keep coming)
-                    self._tick(came_up, late)
+                    waits = self._tick(came_up, late)
                 if not readable:
                     continue
                 data = mine.recv(_PACKET)
@@ -850,6 +871,7 @@ class Express:
         for event in waiting_drops:  # its copies of the ports went with it
             event.set()
         mine.close()
+        waker.close()  # (a send after ``_gone`` on an outbox held meanwhile wakes nothing)
         self.up.clear()
         self.held.clear()
         self._problem(self._long_hold(), False)
