@@ -18,7 +18,9 @@ the stop express's child among them; the older engines start none):
   Assistant discovery on), and to "settled": all 16 ``idle`` and a second more, by when the
   discovery configs it published have come back to it and been read; every engine starts from
   bytecode, as an installed service does (benchmarks/engines.py rule 3);
-- idle: the 16 at rest (polled at their idle rate, nothing changing): % of one core;
+- idle: the 16 at rest (polled at their idle rate, nothing changing): % of one core, and the
+  wake-ups of the threads a second (their voluntary context switches: a count, where the
+  CPU each costs is the machine's);
 - turning: every rotor turned from its front panel (no command), so the bridge polls each at
   its moving rate (0.2 s) and publishes the bearing after every reply. CPU seconds divided by
   the poll exchanges completed in the window (the ``AI1;`` frames the controllers logged: the
@@ -49,6 +51,7 @@ from typing import Any
 
 from benchmarks.engines import compiled, engine_at, engine_spawner
 from benchmarks.harness import REPO, Scope, check_abort, child_env
+from benchmarks.procfs import children
 from benchmarks.procfs import tree_cpu_seconds as cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
@@ -116,6 +119,15 @@ def wakeups(pid: int) -> int:
     return total
 
 
+def tree_wakeups(pid: int) -> int:
+    """``wakeups`` of ``pid`` and of the processes it started (the stop express's child)."""
+    total = wakeups(pid)
+    for kid in children(pid):
+        with contextlib.suppress(OSError):
+            total += wakeups(kid)
+    return total
+
+
 def _polls_between(rig: Rig, t0: float, t1: float) -> int:
     return sum(
         1
@@ -157,10 +169,10 @@ def one_round(
         topics = [rig.t(rid, "state") for rid in rig.lines]
         rig.mqtt.wait_all(topics, "idle", 60)  # past the brake window assumed at start-up
         time.sleep(1.0)  # discovery's echoes read (an idle second costs a few ms)
-        c0, t0 = cpu_seconds(pid), time.monotonic()
+        i0, c0, t0 = tree_wakeups(pid), cpu_seconds(pid), time.monotonic()
         settled_cpu_s = c0
         time.sleep(window_s)
-        c1, t1 = cpu_seconds(pid), time.monotonic()
+        c1, t1, i1 = cpu_seconds(pid), time.monotonic(), tree_wakeups(pid)
         idle_pct = 100 * (c1 - c0) / (t1 - t0)
         idle_polls = _polls_between(rig, t0, t1)
         check_abort()
@@ -186,6 +198,7 @@ def one_round(
         "settled_cpu_s": settled_cpu_s,
         "startup_s": startup_s,
         "idle_pct": idle_pct,
+        "idle_wakeups_s": (i1 - i0) / (t1 - t0),
         "idle_polls_s": idle_polls / window_s,
         "exchanges": polls,
         "exchanges_s": polls / (t1 - t0),
@@ -245,6 +258,7 @@ def run(
             "start-up CPU s",
             "settled",
             "idle % core",
+            "idle wake-ups/s",
             "exchanges/s",
             "CPU ms/exchange",
             "1st thread",
@@ -261,6 +275,7 @@ def run(
                 f"{r['startup_cpu_s']:.2f}",
                 f"{r['settled_cpu_s']:.2f}",
                 f"{r['idle_pct']:.2f}",
+                f"{r['idle_wakeups_s']:.1f}",
                 f"{r['exchanges_s']:.1f}",
                 f"{r['ms_per_exchange']:.3f}",
                 *(f"{ms:.3f}" for ms in (r["busiest_threads_ms"] + [0.0, 0.0])[:2]),
@@ -308,7 +323,10 @@ def run(
         )
         + "); settled: to all 16 `idle` and a second "
         "more (discovery's own configs read back). "
-        "1st / 2nd thread: the two busiest threads' share while turning, ms per exchange.",
+        "Idle wake-ups/s: the voluntary context switches of every thread of the bridge and of "
+        "the stop express's child while at rest, a second (each one a wake-up, its CPU the "
+        "machine's). 1st / 2nd thread: the two busiest threads' share while turning, ms per "
+        "exchange.",
         "Replies as a UART sends them: "
         + ", ".join(f"{e} {rounds[e][0]['bytes_per_write']:.2f}" for e in engines)
         + " bytes per reply write.",
