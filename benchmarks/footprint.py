@@ -1,4 +1,5 @@
-"""Item 4, footprint: CPU (% of one core) and memory of the bridge process with 1, 8 and 32
+"""Item 4, footprint: CPU (% of one core) and memory of the bridge (its process and the stop
+express's child process, interfaces/mqtt/express.py rule 1) with 1, 8 and 32
 emulated Rotor-EZ controllers, idle and while every rotor turns; beside it one rotctld per
 rotator (Hamlib's way to serve several), summed.
 
@@ -22,7 +23,7 @@ from typing import Any
 
 from benchmarks.hamlib import RotctlConnection, start_rotctld
 from benchmarks.harness import Mqtt, Scope, start_bridge, start_broker, wait_until
-from benchmarks.procfs import Usage, measure_usage
+from benchmarks.procfs import Usage, children, measure_usage
 from benchmarks.report import ItemResult, Table, Verdict
 from benchmarks.rig import EmuHost
 
@@ -48,11 +49,11 @@ def bridge_usage(scope: Scope, count: int, window_s: float, quick: bool) -> dict
         if not quick:  # past the brake window assumed at start-up (5 s on a Rotor-EZ)
             mqtt.wait_all([f"{t}/state" for t in topics], "idle", 60)
         time.sleep(1.0)
-        idle = measure_usage([bridge.pid], window_s)
+        idle = measure_usage([bridge.pid, *children(bridge.pid)], window_s)  # (its stop express)
         host.command("rotate 350")
         mqtt.wait_all([f"{t}/state" for t in topics], "moving", 30)
         time.sleep(0.5)
-        moving = measure_usage([bridge.pid], window_s)
+        moving = measure_usage([bridge.pid, *children(bridge.pid)], window_s)
         still_moving = sum(1 for _, m in host.states() if m)
         bridge.check()
         if still_moving < count:
@@ -131,7 +132,8 @@ def run(scope: Scope, quick: bool) -> ItemResult:
                     "window_s": u.window_s,
                 }
     table.notes += [
-        "bridge: one Python process (paho thread + one thread for all serial lines); rotctld: one "
+        "bridge: its Python process (paho thread + one thread for all serial lines) and the stop "
+        "express's (a second interpreter with its own broker connection), summed; rotctld: one "
         "process per rotator, summed (RSS counts the shared Hamlib/libc pages once per process; "
         "PSS shares them out).",
         "idle: bridge polls each rotor once a second (default), the glue asks rotctld `p` once a "
