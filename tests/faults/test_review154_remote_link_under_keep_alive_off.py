@@ -32,11 +32,6 @@ from tests.support.waiting import slow, wait_until
 TOPIC = "rotor/bridge/heartbeat"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-154 k: under a Server Keep Alive of 0 the remote's link's network thread "
-    "spins on OverflowError (math.ceil(inf) in _wait_ms) and reads nothing more",
-)
 def test_the_remotes_link_hears_the_station_under_a_broker_that_turns_keep_alive_off(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -462,7 +462,8 @@ class Client(paho.Client):
                 log.exception("error on the MQTT network thread while connecting")
 
     def _round(self, sock: Any, poller: Any) -> bool:
-        """One round of the loop: wait (1 s at most, rule 2) for the socket or a wake-up, then
+        """One round of the loop: wait (until the first thing due, rule 2) for the socket or a
+        wake-up, then
         read, write what is queued, and the keepalive. False: the socket cannot be waited on.
         poll, not select: a bridge with many clients open has descriptors above 1023, which
         select refuses (the connection would be made and torn down again for ever)."""
@@ -542,7 +543,10 @@ class Client(paho.Client):
                 due = min(due, min(sent, heard) + keepalive)
                 if self._ping_t:
                     due = min(due, self._ping_t + keepalive)
-        return max(1, min(_WAIT_LONGEST_MS, math.ceil((due - now) * 1000)))
+        left_ms = (due - now) * 1000  # (inf: nothing due at all, a Server Keep Alive of 0
+        if left_ms >= _WAIT_LONGEST_MS:  # on a connection whose tick names none: review 154)
+            return _WAIT_LONGEST_MS
+        return max(1, math.ceil(left_ms))
 
     def _back_off(self) -> bool:
         """paho's wait before a reconnect: min, doubling up to max. False: stopped meanwhile."""
