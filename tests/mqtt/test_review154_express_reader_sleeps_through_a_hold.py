@@ -34,11 +34,6 @@ READS_WHEN_TOLD_ANSWERS_NOTHING = (  # up; reads nothing until SIGUSR1, then all
 )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="review-154 k: a hold put inside the tick's verdict, its request left out, is "
-    "never looked at again: the reader sleeps, no resend, no long hold said",
-)
 def test_a_hold_put_while_the_reader_judges_nothing_waits_is_still_looked_at(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -355,11 +355,12 @@ class _Outbox:
                 # stop was read, and answers m with a word it publishes after that (Sync)
                 a, b = self._cover or (m, n)
                 self._cover = (max(a, m), max(b, m, n))  # (merged: a later answer, never less)
-                return
-            _send(self.sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
-            self._last = n if n > self._top else None
-            self._top, self._sent_at = max(self._top, n), self._clock()
-        self._sent()
+            else:
+                _send(self.sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
+                self._last = n if n > self._top else None
+                self._top, self._sent_at = max(self._top, n), self._clock()
+        self._sent()  # (left out too, its hold looked at: review 154, a hold put inside the
+        # reader's verdict, its word left out for one the child read meanwhile, slept for good)
 
     def answer(self, n: int) -> int:
         """The child answered request ``n``: the newest request that answers."""
