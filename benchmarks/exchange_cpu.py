@@ -120,11 +120,13 @@ def wakeups(pid: int) -> int:
 
 
 def tree_wakeups(pid: int) -> int:
-    """``wakeups`` of ``pid`` and of the processes it started (the stop express's child)."""
+    """``wakeups`` of ``pid`` and of the live processes under it (the stop express's child);
+    a child that ended is not counted (a window it ends in counts less: /proc keeps no sum
+    of a reaped child's switches)."""
     total = wakeups(pid)
     for kid in children(pid):
         with contextlib.suppress(OSError):
-            total += wakeups(kid)
+            total += tree_wakeups(kid)
     return total
 
 

@@ -62,10 +62,21 @@ def children(pid: int) -> list[int]:
     return out
 
 
+def reaped_cpu_seconds(pid: int) -> float:
+    """CPU time of the processes ``pid`` started that ended and were reaped (its ``cutime`` and
+    ``cstime``: theirs and their own reaped children's), in clock ticks' resolution."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[13]) + int(fields[14])) / os.sysconf("SC_CLK_TCK")
+
+
 def tree_cpu_seconds(pid: int) -> float:
-    """CPU time of ``pid`` and of every live process under it: the bridge's cost with the stop
-    express's child (interfaces/mqtt/express.py rule 1), a second interpreter of its own."""
+    """CPU time of ``pid`` and of every process under it, alive or ended and reaped: the
+    bridge's cost with the stop express's child (interfaces/mqtt/express.py rule 1), a second
+    interpreter of its own, and the children before it (a restarted express: review 154)."""
     total = cpu_seconds(pid)
+    with contextlib.suppress(OSError, IndexError, ValueError):
+        total += reaped_cpu_seconds(pid)
     for kid in children(pid):
         with contextlib.suppress(OSError, BenchError):
             total += tree_cpu_seconds(kid)
