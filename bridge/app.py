@@ -1125,7 +1125,7 @@ def _serve(
         while not wait(poll_s) and not app.failed.is_set():
             if stop_event is not None and stop_event.is_set():
                 break
-        if ending.reason is not None:
+        if ending.reason is not None and not app.failed.is_set():  # (a failure says its own)
             log.info("%s received, shutting down", ending.reason)
     finally:
         app.stop()
