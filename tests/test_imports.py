@@ -66,9 +66,6 @@ def test_the_service_loads_neither_the_web_server_nor_the_astronomy_before_they_
     bridge takes to start (a second or more on a small single-board computer): importing the
     service loads none of them; the console imports its server when it is on, the sky its
     astronomy and sgp4 on first use (sky/positions.py rule 6, sky/bodies.py rule 5)."""
-    import subprocess
-    import sys
-
     heavy = [
         "aiohttp",
         "numpy",
@@ -77,14 +74,7 @@ def test_the_service_loads_neither_the_web_server_nor_the_astronomy_before_they_
         "bridge.interfaces.web.server",
         "bridge.interfaces.web.live",
     ]
-    check = "import sys, bridge.app, bridge.cli; print(sorted(m for m in sys.modules if m in W))"
-    out = subprocess.run(
-        [sys.executable, "-c", f"W = {set(heavy)!r}; {check}"],
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    assert out.stdout.strip() == "[]"
+    assert loaded_of(heavy, "bridge.app, bridge.cli") == "[]"
 
 
 def test_the_stop_express_child_loads_no_table_but_the_brokers() -> None:
@@ -92,9 +82,6 @@ def test_the_stop_express_child_loads_no_table_but_the_brokers() -> None:
     started with the bridge and again after each of its ends: it takes the broker's table
     (settings/mqtt.py) and nothing of the rest of the configuration, pydantic-settings among it
     (a third of what it took to start, the package importing every table at once)."""
-    import subprocess
-    import sys
-
     heavy = [
         "pydantic_settings",
         "bridge.settings.config",
@@ -103,14 +90,20 @@ def test_the_stop_express_child_loads_no_table_but_the_brokers() -> None:
         "bridge.session",
         "bridge.runtime",
     ]
-    check = (
-        "import sys, bridge.interfaces.mqtt.express;"
-        " print(sorted(m for m in sys.modules if m in W))"
-    )
+    assert loaded_of(heavy, "bridge.interfaces.mqtt.express") == "[]"
+
+
+def loaded_of(heavy: list[str], imported: str) -> str:
+    """Which of ``heavy`` a fresh interpreter has loaded once it imported ``imported`` (a
+    comma-separated list of modules), as Python prints a sorted list."""
+    import subprocess
+    import sys
+
+    check = f"import sys, {imported}; print(sorted(m for m in sys.modules if m in W))"
     out = subprocess.run(
         [sys.executable, "-c", f"W = {set(heavy)!r}; {check}"],
         capture_output=True,
         text=True,
         check=True,
     )
-    assert out.stdout.strip() == "[]"
+    return out.stdout.strip()

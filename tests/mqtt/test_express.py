@@ -1202,6 +1202,22 @@ def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
         assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
 
 
+def reader_asleep(e: Express) -> threading.Event:
+    """Set each time the express's reader judges that nothing waits (rule 1: its next wait has
+    no end but a word sent to it); cleared by the test."""
+    asleep = threading.Event()
+    tick = e._tick
+
+    def watched(*args: Any) -> bool:
+        waits = tick(*args)
+        if not waits:
+            asleep.set()
+        return waits
+
+    e._tick = watched  # type: ignore[method-assign]
+    return asleep
+
+
 def test_a_sleeping_reader_is_woken_by_a_hold_and_finds_the_express_hung(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
@@ -1212,16 +1228,7 @@ def test_a_sleeping_reader_is_woken_by_a_hold_and_finds_the_express_hung(
     with up_on_a_fake_clock([sys.executable, "-c", UP_THEN_HUNG], problems, holds, now) as e:
         child = e._child
         assert child is not None
-        asleep = threading.Event()
-        tick = e._tick
-
-        def watched(*args: Any) -> bool:
-            waits = tick(*args)
-            if not waits:
-                asleep.set()  # (the reader's next wait has no end but a word)
-            return waits
-
-        e._tick = watched  # type: ignore[method-assign]
+        asleep = reader_asleep(e)
         wait_until(asleep.is_set, 10, "the reader asleep, nothing to look at")
         with caplog.at_level(logging.ERROR, logger=express_module.__name__):
             e.hold("a")

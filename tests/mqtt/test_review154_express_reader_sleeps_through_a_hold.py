@@ -19,7 +19,7 @@ import pytest
 
 import bridge.interfaces.mqtt.express as express_module
 from bridge.interfaces.mqtt.express import LONG_HOLD_S, RESEND_S
-from tests.mqtt.test_express import Holds, Problems, up_on_a_fake_clock
+from tests.mqtt.test_express import Holds, Problems, reader_asleep, up_on_a_fake_clock
 from tests.support.waiting import wait_until
 
 READS_WHEN_TOLD_ANSWERS_NOTHING = (  # up; reads nothing until SIGUSR1, then all, answers none
@@ -42,16 +42,7 @@ def test_a_hold_put_while_the_reader_judges_nothing_waits_is_still_looked_at(
     with up_on_a_fake_clock(cmd, problems, holds, now) as e:
         child = e._child
         assert child is not None
-        asleep = threading.Event()
-        tick = e._tick
-
-        def watched(*args: Any) -> bool:
-            waits = tick(*args)
-            if not waits:
-                asleep.set()
-            return waits
-
-        e._tick = watched  # type: ignore[method-assign]
+        asleep = reader_asleep(e)
         wait_until(asleep.is_set, 10, "the reader asleep, nothing to look at")
         asleep.clear()
 
