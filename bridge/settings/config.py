@@ -143,7 +143,6 @@ from bridge.feature import topic_words
 from bridge.protocols.axes import bearing_is_elevation
 from bridge.settings import errors as settings_errors
 from bridge.settings.base import plain_value
-from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
 from bridge.settings.groups import GroupSettings, reserved, station_words
 from bridge.settings.mqtt import (
@@ -151,31 +150,11 @@ from bridge.settings.mqtt import (
     TOPIC_ROOM,
     HomeAssistantSettings,
     MqttSettings,
-    TlsSettings,
 )
 from bridge.settings.pointing import StationSettings, TrackingSettings
 from bridge.settings.rotator import EMULATION_KEYS, RotatorSettings
 from bridge.settings.web import WebSettings
 from bridge.settings.wsjtx import WsjtxSettings
-
-__all__ = [
-    "DEFAULT_SILENCE_TIMEOUT_S",
-    "ENV_PREFIX",
-    "ConfigError",
-    "HomeAssistantSettings",
-    "MqttSettings",
-    "RotatorSettings",
-    "Settings",
-    "StationSettings",
-    "TlsSettings",
-    "TrackingSettings",
-    "WebSettings",
-    "WsjtxSettings",
-    "DxClusterSettings",
-    "GroupSettings",
-    "format_validation_error",
-    "load_settings",
-]
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
 CONFIG_FILE_MAX = 16 << 20  # rule 5: the most of a configuration file read
